@@ -1,0 +1,270 @@
+"""Denavit-Hartenberg tables and serial chains written out as URDF.
+
+The papers describe their arms by DH tables; Pinocchio reads URDF. This module turns a table (standard or
+modified/Craig convention, revolute, prismatic or fixed rows, per-joint offsets and limits) into a URDF
+whose joint ``i`` moves exactly like row ``i``, with simple visual geometry (a cylinder per joint axis, a
+box per link) so the arm renders in meshcat.
+
+Conventions (lengths in metres, angles in radians):
+
+* standard DH, row i = (a_i, alpha_i, d_i, theta_i):  ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
+* modified DH (Craig), row i = (a_{i-1}, alpha_{i-1}, d_i, theta_i):
+  ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
+
+For a revolute row the joint variable adds to ``theta`` (the row's ``theta`` is the constant offset); for
+a prismatic row it adds to ``d``. A fixed row contributes its constant transform. The frame after the last
+row is the ``tool`` link, the default tip.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from xml.sax.saxutils import escape
+
+import numpy as np
+
+from .errors import RobotLoadError
+
+__all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform"]
+
+_KINDS = ("revolute", "prismatic", "fixed")
+
+
+def _rot(axis: str, angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    T = np.eye(4)
+    if axis == "x":
+        T[1:3, 1:3] = [[c, -s], [s, c]]
+    else:  # z
+        T[0:2, 0:2] = [[c, -s], [s, c]]
+    return T
+
+
+def _trans(axis: str, dist: float) -> np.ndarray:
+    T = np.eye(4)
+    T["xyz".index(axis), 3] = dist
+    return T
+
+
+@dataclass(frozen=True)
+class DHRow:
+    """One row of a DH table.
+
+    Attributes:
+        a: link length (m); ``a_i`` (standard) or ``a_{i-1}`` (modified).
+        alpha: link twist (rad); ``alpha_i`` (standard) or ``alpha_{i-1}`` (modified).
+        d: link offset (m); for a prismatic row, the constant added to the joint variable.
+        theta: joint angle (rad); for a revolute row, the constant offset added to the joint variable.
+        kind: ``"revolute"``, ``"prismatic"`` or ``"fixed"``.
+        lower, upper: joint limits (rad or m) of the joint *variable*; ignored for fixed rows.
+        name: joint name; defaults to ``joint<i>``.
+    """
+
+    a: float
+    alpha: float
+    d: float
+    theta: float = 0.0
+    kind: str = "revolute"
+    lower: float = -np.pi
+    upper: float = np.pi
+    name: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in _KINDS:
+            raise RobotLoadError(f"DH row kind {self.kind!r} is not one of {_KINDS}")
+        if self.kind != "fixed" and not (np.isfinite(self.lower) and np.isfinite(self.upper)):
+            raise RobotLoadError(f"DH row limits must be finite, got [{self.lower}, {self.upper}]")
+        if self.kind != "fixed" and self.lower > self.upper:
+            raise RobotLoadError(f"DH row limits are inverted: lower {self.lower} > upper {self.upper}")
+
+
+def dh_transform(row: DHRow, q: float = 0.0, convention: str = "standard") -> np.ndarray:
+    """Homogeneous transform (4, 4) of one DH row at joint value ``q`` (rad or m)."""
+    theta = row.theta + (q if row.kind == "revolute" else 0.0)
+    d = row.d + (q if row.kind == "prismatic" else 0.0)
+    if convention == "standard":
+        return _rot("z", theta) @ _trans("z", d) @ _trans("x", row.a) @ _rot("x", row.alpha)
+    if convention == "modified":
+        return _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", theta) @ _trans("z", d)
+    raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    """A joint of a serial chain: where it sits on its parent link and how it moves.
+
+    Attributes:
+        name: joint name.
+        kind: ``"revolute"``, ``"prismatic"`` or ``"fixed"``.
+        origin: (4, 4) transform from the parent link frame to the joint frame at zero joint value.
+        axis: (3,) unit axis in the joint frame.
+        lower, upper: limits of the joint variable (rad or m).
+    """
+
+    name: str
+    kind: str
+    origin: np.ndarray
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    lower: float = -np.pi
+    upper: float = np.pi
+
+
+def dh_to_urdf(
+    name: str,
+    rows: list[DHRow],
+    convention: str = "standard",
+    base: np.ndarray | None = None,
+    link_radius: float = 0.01,
+    comment: str = "",
+) -> str:
+    """URDF text of the arm described by a DH table.
+
+    Args:
+        name: robot name.
+        rows: the table, base to tool.
+        convention: ``"standard"`` or ``"modified"`` (Craig).
+        base: optional (4, 4) transform from ``base_link`` to the first DH frame.
+        link_radius: radius (m) of the visual cylinders; boxes are a little thinner.
+        comment: text placed in an XML comment at the top (source of the table, units, choices).
+
+    Returns:
+        The URDF document. Joint ``k`` (k = 1, 2, ...) drives the k-th movable row; the last frame is
+        the link ``tool``.
+    """
+    if convention not in ("standard", "modified"):
+        raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
+    if not rows:
+        raise RobotLoadError("a DH table needs at least one row")
+    pending = np.eye(4) if base is None else np.asarray(base, dtype=float)
+    joints: list[JointSpec] = []
+    for row in rows:
+        const_q = DHRow(row.a, row.alpha, row.d, row.theta, "fixed")
+        if row.kind == "fixed":
+            pending = pending @ dh_transform(const_q, 0.0, convention)
+            continue
+        # Split the row into (fixed part before the joint motion) * (motion along/about z) * (fixed after).
+        if convention == "standard":
+            before = _rot("z", row.theta) @ _trans("z", row.d)
+            after = _trans("x", row.a) @ _rot("x", row.alpha)
+        else:
+            before = _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", row.theta) @ _trans("z", row.d)
+            after = np.eye(4)
+        joints.append(
+            JointSpec(
+                name=row.name or f"joint{len(joints) + 1}",
+                kind=row.kind,
+                origin=pending @ before,
+                lower=row.lower,
+                upper=row.upper,
+            )
+        )
+        pending = after
+    joints.append(JointSpec(name="tool_joint", kind="fixed", origin=pending))
+    return chain_to_urdf(name, joints, link_radius=link_radius, comment=comment)
+
+
+def _fmt(x: float) -> str:
+    """Full precision for kinematics (FK must match the DH product to 1e-12 m)."""
+    x = 0.0 if abs(x) < 1e-15 else float(x)
+    return repr(x)
+
+
+def _short(x: float) -> str:
+    """Six significant digits: enough for display-only sizes."""
+    return f"{float(x):.6g}"
+
+
+def _rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """Roll-pitch-yaw (URDF convention, R = Rz(y) Ry(p) Rx(r)) of a rotation matrix."""
+    pitch = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
+    if np.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: put everything into roll
+        return float(np.arctan2(-R[1, 2], R[1, 1])), float(pitch), 0.0
+    return float(np.arctan2(R[2, 1], R[2, 2])), float(pitch), float(np.arctan2(R[1, 0], R[0, 0]))
+
+
+def _origin_xml(T: np.ndarray) -> str:
+    xyz = " ".join(_fmt(v) for v in T[:3, 3])
+    rpy = " ".join(_fmt(v) for v in _rpy(T[:3, :3]))
+    return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
+
+
+def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
+    """A box from the link origin to point ``p`` (m), for rendering."""
+    length = float(np.linalg.norm(p))
+    if length < 1e-9:
+        return ""
+    z = p / length
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = p / 2
+    w = 1.4 * radius
+    return (
+        f"    <visual>{_origin_xml(T)}<geometry><box size=\"{_short(w)} {_short(w)} {_short(length)}\"/>"
+        f"</geometry><material name=\"{material}\"/></visual>\n"
+    )
+
+
+def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
+    """A cylinder along a revolute axis (or a small box on a prismatic one) at the joint origin."""
+    z = np.asarray(axis, float)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    if kind == "revolute":
+        geom = f'<cylinder radius="{_short(1.6 * radius)}" length="{_short(5 * radius)}"/>'
+    else:
+        geom = f'<box size="{_short(3 * radius)} {_short(3 * radius)} {_short(3 * radius)}"/>'
+    return f'    <visual>{_origin_xml(T)}<geometry>{geom}</geometry><material name="joint"/></visual>\n'
+
+
+def chain_to_urdf(name: str, joints: list[JointSpec], link_radius: float = 0.01, comment: str = "") -> str:
+    """URDF text of a serial chain ``base_link -> link1 -> ... -> tool``.
+
+    Each link carries a box from its origin to the next joint's origin and a cylinder on its joint axis,
+    so the arm is visible in meshcat without meshes. The last joint of ``joints`` is usually a fixed
+    ``tool`` joint; its child link is named ``tool``.
+    """
+    if not joints:
+        raise RobotLoadError("a chain needs at least one joint")
+    lines = ['<?xml version="1.0"?>']
+    if comment:
+        lines.append("<!--\n" + escape(comment).replace("--", "- -") + "\n-->")
+    lines.append(f'<robot name="{escape(name)}">')
+    lines.append('  <material name="link"><color rgba="0.55 0.6 0.7 1"/></material>')
+    lines.append('  <material name="joint"><color rgba="0.9 0.5 0.1 1"/></material>')
+    link_names = ["base_link"] + [
+        "tool" if (j.kind == "fixed" and k == len(joints) - 1) else f"link{k + 1}" for k, j in enumerate(joints)
+    ]
+    for k, link in enumerate(link_names):
+        body = ""
+        if k > 0 and joints[k - 1].kind != "fixed":
+            body += _axis_visual(np.asarray(joints[k - 1].axis), joints[k - 1].kind, link_radius)
+        if k < len(joints):
+            body += _segment_visual(np.asarray(joints[k].origin)[:3, 3], link_radius, "link")
+        if link == "tool":
+            body += (
+                f'    <visual><origin xyz="0 0 0" rpy="0 0 0"/><geometry><sphere radius="{_short(link_radius)}"/>'
+                '</geometry><material name="joint"/></visual>\n'
+            )
+        lines.append(f'  <link name="{link}">\n{body}  </link>' if body else f'  <link name="{link}"/>')
+    for k, j in enumerate(joints):
+        parts = [
+            f'  <joint name="{escape(j.name)}" type="{j.kind}">',
+            f'    <parent link="{link_names[k]}"/>',
+            f'    <child link="{link_names[k + 1]}"/>',
+            f"    {_origin_xml(np.asarray(j.origin, float))}",
+        ]
+        if j.kind != "fixed":
+            parts.append(f'    <axis xyz="{" ".join(_fmt(v) for v in j.axis)}"/>')
+            parts.append(
+                f'    <limit lower="{_fmt(j.lower)}" upper="{_fmt(j.upper)}" effort="10.0" velocity="2.0"/>'
+            )
+        parts.append("  </joint>")
+        lines.append("\n".join(parts))
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,53 @@
+"""Exceptions raised at evoik_pin's boundary.
+
+Every error names what was wrong and what is accepted. Each class subclasses the built-in exception a
+Python user would expect (``ValueError``, ``KeyError``, ``FileNotFoundError``) so ``except ValueError``
+keeps working, and :class:`EvoikError` so ``except EvoikError`` catches all of ours.
+"""
+
+from __future__ import annotations
+
+
+class EvoikError(Exception):
+    """Base class of every error evoik_pin raises on purpose."""
+
+
+class RobotLoadError(EvoikError, ValueError):
+    """A URDF could not be parsed or does not describe a usable serial chain."""
+
+
+class RobotNotFoundError(EvoikError, FileNotFoundError):
+    """A robot name or URDF path does not resolve to a file."""
+
+    def __str__(self) -> str:  # FileNotFoundError would otherwise print a tuple
+        return str(self.args[0]) if self.args else ""
+
+
+class FrameError(EvoikError, KeyError):
+    """A tip or base frame is unknown or not on a chain."""
+
+    def __str__(self) -> str:  # KeyError would otherwise quote the message
+        return str(self.args[0]) if self.args else ""
+
+
+class ConfigurationError(EvoikError, ValueError):
+    """A joint vector or population has the wrong shape or non-finite entries."""
+
+
+class BoundsError(EvoikError, ValueError):
+    """Joint bounds are inverted, non-finite or of the wrong length."""
+
+
+class TargetError(EvoikError, ValueError):
+    """An IK target has the wrong shape, non-finite entries or a non-rotation matrix."""
+
+
+class OptionError(EvoikError, ValueError):
+    """A solver option is unknown or out of its accepted range."""
+
+
+class MethodError(EvoikError, KeyError):
+    """A solver method name is unknown or does not apply to this robot or call."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""

@@ -1,0 +1,619 @@
+"""The robot layer: one serial chain of a URDF, as Pinocchio sees it.
+
+This is the only module that talks to Pinocchio's ``Model``/``Data``. It loads a URDF (a path, an XML
+string, a bundled paper arm or an ``example-robot-data`` arm), picks the chain from a base frame to a tip
+frame, locks every other joint (``pin.buildReducedModel``) and offers forward kinematics, Jacobians and
+manipulability, one configuration at a time (through Pinocchio) or a whole population at once (a NumPy
+recursion built from the same Pinocchio model, checked against it in the tests).
+
+The joint vector ``q`` users and solvers see has one entry per degree of freedom (rad for revolute joints,
+m for prismatic ones). Pinocchio stores a continuous (unbounded revolute) joint as two numbers
+(cos, sin); :meth:`Robot.to_pinocchio` and :meth:`Robot.from_pinocchio` map between the two.
+
+Poses are those of the tip frame expressed in the base frame (the world frame when no base is chosen).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import BoundsError, ConfigurationError, FrameError, RobotLoadError, RobotNotFoundError
+
+__all__ = [
+    "BUNDLED_ROBOTS",
+    "EXAMPLE_ARMS",
+    "Robot",
+    "bundled_robots_dir",
+    "example_robot_data_dir",
+    "list_robots",
+    "load_robot",
+]
+
+#: The papers' arms shipped with evoik_pin (``robots/<name>.urdf``), with the paper each comes from.
+BUNDLED_ROBOTS: dict[str, str] = {
+    "ax18": "000: Crustcrawler AX-18, 4R + tool (standard DH, Table 1)",
+    "planar2r": "001: planar 2R elbow arm, a1 = 0.25 m, a2 = 0.16 m",
+    "puma3r": "001: PUMA 560 positioning chain (wrist point, eq. 20)",
+    "redundant7r": "002: redundant 7R arm (standard DH, eqs. 3-9)",
+    "vehicle_arm": "003: planar vehicle (prismatic x, y) carrying a 3R arm",
+    "aerial6r": "004: 6R human-like arm of an aerial manipulator (Table 1, standard DH)",
+}
+
+
+@dataclass(frozen=True)
+class _ExampleArm:
+    urdf: str  # path below example-robot-data's robots/ directory
+    tip: str
+    base: str | None = None
+
+
+#: Arms of the ``example-robot-data`` wheel reachable by name, with their default tip frames.
+EXAMPLE_ARMS: dict[str, _ExampleArm] = {
+    "panda": _ExampleArm("panda_description/urdf/panda.urdf", "panda_hand_tcp"),
+    "ur3": _ExampleArm("ur_description/urdf/ur3_robot.urdf", "tool0"),
+    "ur5": _ExampleArm("ur_description/urdf/ur5_robot.urdf", "tool0"),
+    "ur10": _ExampleArm("ur_description/urdf/ur10_robot.urdf", "tool0"),
+    "kinova": _ExampleArm("kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
+    "z1": _ExampleArm("z1_description/urdf/z1.urdf", "gripperStator"),
+    "xarm": _ExampleArm("xarm_description/urdf/xarm7.urdf", "link_eef"),
+    "so_arm": _ExampleArm("so_arm_description/urdf/so101.urdf", "gripper_frame_link"),
+}
+
+#: Search interval (m) used for prismatic joints whose URDF gives no finite limits.
+DEFAULT_PRISMATIC_RANGE = 1.0
+#: Limits at or beyond this magnitude are treated as "no limit" (URDF readers use 1e308-style sentinels).
+_UNBOUNDED = 1e10
+
+_MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
+                        "planar": [0, 1, 5]}
+
+
+def example_robot_data_dir() -> Path:
+    """The ``robots/`` directory of the installed ``example-robot-data`` wheel.
+
+    Found from the installed distribution's file list, so it works in any virtual environment.
+    """
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
+        raise RobotNotFoundError(
+            "the 'example-robot-data' package is not installed; install it (pip install example-robot-data) "
+            "to load arms such as panda or ur5 by name"
+        ) from exc
+    for f in dist.files or []:
+        parts = Path(str(f)).parts
+        if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):
+            k = parts.index("robots")
+            return Path(dist.locate_file(Path(*parts[: k + 1]))).resolve()
+    raise RobotNotFoundError("the installed 'example-robot-data' package ships no robots/ directory")
+
+
+def bundled_robots_dir() -> Path:
+    """Directory holding the bundled paper arms (package data in a wheel, ``robots/`` in a checkout)."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "robots", here.parents[1] / "robots"):
+        if (candidate / "ax18.urdf").is_file():
+            return candidate
+    raise RobotNotFoundError(f"bundled robots not found next to {here} (looked for robots/ax18.urdf)")
+
+
+def list_robots() -> list[str]:
+    """Names accepted by :func:`load_robot`: the bundled paper arms, then the example-robot-data arms."""
+    return list(BUNDLED_ROBOTS) + list(EXAMPLE_ARMS)
+
+
+def load_robot(
+    source: str | os.PathLike,
+    tip: str | None = None,
+    base: str | None = None,
+    joints: list[str] | None = None,
+    bounds: tuple[np.ndarray, np.ndarray] | None = None,
+) -> Robot:
+    """Load one serial chain of a URDF.
+
+    Args:
+        source: a URDF path, a URDF XML string, the name of a bundled paper arm (``ax18``, ``planar2r``,
+            ``puma3r``, ``redundant7r``, ``vehicle_arm``, ``aerial6r``) or of an example-robot-data arm
+            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``).
+        tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for named
+            arms, otherwise the deepest link of the URDF.
+        base: frame the chain starts from and poses are expressed in. Default: the URDF's root (world).
+        joints: optional subset of the chain's joint names to keep free; the rest of the chain is locked.
+        bounds: optional ``(lower, upper)`` search bounds, each of length ``n`` (rad or m).
+
+    Returns:
+        A :class:`Robot`. Joints outside the base->tip chain are locked at their neutral value
+        (clipped into their limits).
+    """
+    name, path, xml = _resolve_source(source)
+    if tip is None and name in EXAMPLE_ARMS:
+        tip = EXAMPLE_ARMS[name].tip
+    if tip is None and name in BUNDLED_ROBOTS:
+        tip = "tool"
+    package_dirs = [str(example_robot_data_dir())]
+    if path is not None:
+        package_dirs = [str(path.parent), str(path.parent.parent), *package_dirs]
+    robot = Robot(_parse_urdf(xml, path), tip=tip, base=base, joints=joints, name=name, urdf_path=path,
+                  urdf_xml=xml, package_dirs=package_dirs)
+    if bounds is not None:
+        robot.set_bounds(*bounds)
+    return robot
+
+
+def _resolve_source(source: str | os.PathLike) -> tuple[str, Path | None, str]:
+    """(name, path or None, URDF text) of a load_robot source."""
+    if isinstance(source, str) and source.lstrip().startswith("<"):
+        return "urdf", None, source
+    if not isinstance(source, (str, os.PathLike)):
+        raise RobotLoadError(
+            f"robot source must be a URDF path, a URDF XML string or a robot name, got {type(source).__name__}"
+        )
+    text = os.fspath(source)
+    if text in BUNDLED_ROBOTS:
+        path = bundled_robots_dir() / f"{text}.urdf"
+    elif text in EXAMPLE_ARMS:
+        path = example_robot_data_dir() / EXAMPLE_ARMS[text].urdf
+    else:
+        path = Path(text).expanduser()
+        if not path.is_file():
+            if path.suffix or os.sep in text or path.exists():
+                raise RobotNotFoundError(f"URDF file not found: {text!r} (no such file)")
+            raise RobotNotFoundError(
+                f"unknown robot {text!r}: give a URDF path, a URDF XML string or one of "
+                f"{', '.join(list_robots())}"
+            )
+    try:
+        xml = path.read_text()
+    except OSError as exc:
+        raise RobotNotFoundError(f"cannot read URDF file {str(path)!r}: {exc.strerror}") from exc
+    name = text if (text in BUNDLED_ROBOTS or text in EXAMPLE_ARMS) else path.stem
+    return name, path.resolve(), xml
+
+
+def _parse_urdf(xml: str, path: Path | None) -> pin.Model:
+    where = str(path) if path is not None else "URDF string"
+    try:
+        root = ET.fromstring(xml)
+    except ET.ParseError as exc:
+        raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
+    if root.tag != "robot":
+        raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
+    try:
+        return pin.buildModelFromXML(xml)
+    except (RuntimeError, ValueError) as exc:
+        raise RobotLoadError(f"Pinocchio could not build a model from {where}: {exc}") from exc
+
+
+def _find_frame(model: pin.Model, name: str) -> int:
+    """Frame id of ``name``, preferring the BODY frame when a joint and a link share the name."""
+    ids = [i for i, f in enumerate(model.frames) if f.name == name]
+    if not ids:
+        return -1
+    bodies = [i for i in ids if model.frames[i].type == pin.FrameType.BODY]
+    return (bodies or ids)[0]
+
+
+def _frame_names(model: pin.Model) -> list[str]:
+    seen: dict[str, None] = {}
+    for f in model.frames:
+        if f.type == pin.FrameType.BODY:
+            seen.setdefault(f.name, None)
+    return list(seen)
+
+
+def _rotation_to_z(axis: np.ndarray) -> np.ndarray:
+    """A rotation B (3, 3) whose third column is the unit vector ``axis`` (identity when axis = +z)."""
+    z = axis / np.linalg.norm(axis)
+    if np.allclose(z, [0.0, 0.0, 1.0], atol=1e-15):
+        return np.eye(3)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+class Robot:
+    """A serial chain of a URDF: forward kinematics, Jacobians and manipulability of its tip frame.
+
+    Attributes:
+        name: robot name (bundled or example name, or the URDF file's stem).
+        n: number of degrees of freedom of the chain.
+        joint_names: the chain's joint names, base to tip (length n).
+        lower, upper: search bounds (n,) in rad or m; finite; see :meth:`set_bounds`.
+        tip, base: frame names; ``base`` is the URDF root when none was chosen.
+        model: the reduced Pinocchio model holding only the chain's joints.
+        full_model: the Pinocchio model of the whole URDF.
+        urdf_path: the URDF file (None when loaded from an XML string); ``urdf_xml`` holds its text.
+        revolute: (n,) bool, True for revolute joints (rad), False for prismatic ones (m).
+        continuous: (n,) bool, True for joints Pinocchio stores as (cos, sin).
+    """
+
+    def __init__(
+        self,
+        full_model: pin.Model,
+        tip: str | None = None,
+        base: str | None = None,
+        joints: list[str] | None = None,
+        name: str = "robot",
+        urdf_path: Path | None = None,
+        urdf_xml: str | None = None,
+        package_dirs: list[str] | None = None,
+    ) -> None:
+        self.full_model = full_model
+        self.name = name
+        self.urdf_path = urdf_path
+        self.urdf_xml = urdf_xml
+        self.package_dirs = list(package_dirs or [])
+        frames = _frame_names(full_model)
+
+        if tip is None:
+            tip = self._deepest_body(full_model)
+        tip_id = _find_frame(full_model, tip)
+        if tip_id < 0:
+            raise FrameError(f"unknown tip frame {tip!r}; frames of {name}: {', '.join(frames)}")
+        root_name = self._root_link(full_model) if base is None else base
+        base_id = 0 if base is None else _find_frame(full_model, base)
+        if base_id < 0:
+            raise FrameError(f"unknown base frame {base!r}; frames of {name}: {', '.join(frames)}")
+
+        support = list(full_model.supports[full_model.frames[tip_id].parentJoint])
+        base_joint = full_model.frames[base_id].parentJoint
+        if base_joint not in support:
+            raise FrameError(
+                f"tip frame {tip!r} is not downstream of base frame {root_name!r}: no kinematic chain joins "
+                "them from base to tip"
+            )
+        chain = support[support.index(base_joint) + 1:]
+        chain_names = [full_model.names[j] for j in chain]
+        if joints is not None:
+            unknown = [j for j in joints if j not in chain_names]
+            if unknown:
+                raise FrameError(
+                    f"joints {unknown} are not on the chain {root_name!r} -> {tip!r}; its joints are "
+                    f"{', '.join(chain_names) or '(none)'}"
+                )
+            chain = [j for j in chain if full_model.names[j] in joints]
+        bad = [full_model.names[j] for j in chain if full_model.joints[j].nv != 1]
+        if bad:
+            raise RobotLoadError(
+                f"joints {bad} of the chain are not 1-DOF revolute or prismatic joints; only those are "
+                "supported (lock them with joints=[...])"
+            )
+        if not chain:
+            raise RobotLoadError(
+                f"the chain {root_name!r} -> {tip!r} of {name} has no movable joint; pick another tip or base"
+            )
+
+        q_ref = pin.neutral(full_model)
+        for j in range(1, full_model.njoints):
+            jm = full_model.joints[j]
+            if jm.nq == 1:  # keep locked joints inside their limits
+                lo, hi = full_model.lowerPositionLimit[jm.idx_q], full_model.upperPositionLimit[jm.idx_q]
+                if lo <= hi:
+                    q_ref[jm.idx_q] = np.clip(q_ref[jm.idx_q], lo, hi)
+        to_lock = [j for j in range(1, full_model.njoints) if j not in chain]
+        self._q_ref_full = q_ref
+        self._locked = to_lock
+        self.model = pin.buildReducedModel(full_model, to_lock, q_ref) if to_lock else pin.Model(full_model)
+        self.data = self.model.createData()
+        self.tip = tip
+        self.base = root_name
+        self._tip_id = _find_frame(self.model, tip)
+        self._base_id = 0 if base is None else _find_frame(self.model, base)
+        self.n = self.model.nv
+        self.joint_names = [self.model.names[j] for j in range(1, self.model.njoints)]
+        self._idx_q = np.array([self.model.joints[j].idx_q for j in range(1, self.model.njoints)])
+        self.continuous = np.array([self.model.joints[j].nq == 2 for j in range(1, self.model.njoints)])
+
+        # Base placement is constant: every free joint is downstream of the base frame.
+        q0 = pin.neutral(self.model)
+        pin.framesForwardKinematics(self.model, self.data, q0)
+        self._oMbase = self.data.oMf[self._base_id].copy() if base is not None else pin.SE3.Identity()
+        self._baseMo = self._oMbase.inverse()
+
+        self.revolute = np.zeros(self.n, dtype=bool)
+        axes = np.zeros((self.n, 3))
+        pin.forwardKinematics(self.model, self.data, q0)
+        for k in range(self.n):
+            S = np.asarray(self.data.joints[k + 1].S).reshape(6)
+            lin, ang = S[:3], S[3:]
+            self.revolute[k] = np.linalg.norm(ang) > 0.5
+            axes[k] = ang if self.revolute[k] else lin
+        self._axes = axes
+        self._set_default_bounds()
+        self._build_batch_chain()
+
+    # ------------------------------------------------------------------ construction helpers
+    @staticmethod
+    def _root_link(model: pin.Model) -> str:
+        """Name of the URDF's root link (the first body frame fixed to the universe)."""
+        for f in model.frames:
+            if f.type == pin.FrameType.BODY and f.parentJoint == 0:
+                return f.name
+        return model.frames[0].name
+
+    @staticmethod
+    def _deepest_body(model: pin.Model) -> str:
+        best, depth = model.frames[0].name, -1
+        for f in model.frames:
+            if f.type == pin.FrameType.BODY:
+                d = len(model.supports[f.parentJoint])
+                if d >= depth:  # last deepest wins: a tool link fixed after the last joint's link
+                    best, depth = f.name, d
+        return best
+
+    def _set_default_bounds(self) -> None:
+        lower = np.empty(self.n)
+        upper = np.empty(self.n)
+        for k in range(self.n):
+            jm = self.model.joints[k + 1]
+            lo = float(self.model.lowerPositionLimit[jm.idx_q])
+            hi = float(self.model.upperPositionLimit[jm.idx_q])
+            unbounded = self.continuous[k] or not (abs(lo) < _UNBOUNDED and abs(hi) < _UNBOUNDED) or lo >= hi
+            if unbounded:
+                half = np.pi if self.revolute[k] else DEFAULT_PRISMATIC_RANGE
+                lo, hi = -half, half
+            lower[k], upper[k] = lo, hi
+        self.lower, self.upper = lower, upper
+
+    def _build_batch_chain(self) -> None:
+        """Precompute the fixed transforms F_0..F_n of ``T(q) = F_0 Z(q_1) F_1 ... Z(q_n) F_n``.
+
+        Z(q) is a rotation about (or translation along) the local z axis: every joint axis a_k is turned
+        into z by a constant rotation B_k folded into the neighbouring fixed transforms, so the batched
+        recursion needs only cheap column updates per joint.
+        """
+        B = [_rotation_to_z(a) for a in self._axes]
+        Rs, ps = [], []
+        prev_B = np.eye(3)
+        for k in range(self.n):
+            M = self.model.jointPlacements[k + 1]
+            if k == 0:
+                M = self._baseMo * M
+            Rs.append(prev_B.T @ M.rotation @ B[k])
+            ps.append(prev_B.T @ M.translation)
+            prev_B = B[k]
+        tip_frame = self.model.frames[self._tip_id]
+        if tip_frame.parentJoint != self.n:  # pragma: no cover - guaranteed by the reduction
+            raise RobotLoadError(f"tip frame {self.tip!r} is not attached to the last chain joint")
+        Rs.append(prev_B.T @ tip_frame.placement.rotation)
+        ps.append(prev_B.T @ tip_frame.placement.translation)
+        self._F_R = np.array(Rs)  # (n+1, 3, 3)
+        self._F_p = np.array(ps)  # (n+1, 3)
+
+    # ------------------------------------------------------------------ bounds and validation
+    def set_bounds(self, lower, upper) -> None:
+        """Replace the search bounds (rad or m), each of length ``n``; finite, lower <= upper."""
+        lower = np.asarray(lower, dtype=float).reshape(-1)
+        upper = np.asarray(upper, dtype=float).reshape(-1)
+        if lower.shape != (self.n,) or upper.shape != (self.n,):
+            raise BoundsError(
+                f"bounds of {self.name} need {self.n} values each (one per joint), got {lower.size} and "
+                f"{upper.size}"
+            )
+        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+            raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
+        bad = np.nonzero(lower > upper)[0]
+        if bad.size:
+            k = int(bad[0])
+            raise BoundsError(
+                f"inverted bounds for joint {self.joint_names[k]!r}: lower {lower[k]:.6g} > upper {upper[k]:.6g}"
+            )
+        self.lower, self.upper = lower, upper
+
+    def check_q(self, q) -> np.ndarray:
+        """``q`` as a float array of shape (n,), or a ConfigurationError naming the problem."""
+        arr = np.asarray(q, dtype=float)
+        if arr.ndim != 1 or arr.shape[0] != self.n:
+            raise ConfigurationError(
+                f"{self.name} has {self.n} joints ({', '.join(self.joint_names)}); got a joint vector of "
+                f"shape {arr.shape}, expected ({self.n},)"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
+        return arr
+
+    def check_population(self, Q) -> np.ndarray:
+        """``Q`` as a float array of shape (N, n), or a ConfigurationError naming the problem."""
+        arr = np.asarray(Q, dtype=float)
+        if arr.ndim == 1 and arr.shape[0] == self.n:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != self.n:
+            raise ConfigurationError(
+                f"{self.name} needs configurations of shape (N, {self.n}); got shape {arr.shape}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError("configurations contain NaN or inf")
+        return arr
+
+    def within_bounds(self, q, tol: float = 0.0) -> bool:
+        """True when every joint value lies inside [lower - tol, upper + tol]."""
+        q = np.asarray(q, dtype=float)
+        return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
+
+    def clip(self, Q) -> np.ndarray:
+        """``Q`` (..., n) clipped into the search bounds."""
+        return np.clip(Q, self.lower, self.upper)
+
+    def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        """``count`` configurations drawn uniformly inside the search bounds, shape (count, n)."""
+        return rng.uniform(self.lower, self.upper, size=(count, self.n))
+
+    # ------------------------------------------------------------------ Pinocchio mapping
+    def to_pinocchio(self, q) -> np.ndarray:
+        """Pinocchio configuration (nq,) of a joint vector (n,): continuous joints become (cos, sin)."""
+        q = np.asarray(q, dtype=float)
+        out = np.empty(self.model.nq)
+        for k in range(self.n):
+            i = self._idx_q[k]
+            if self.continuous[k]:
+                out[i], out[i + 1] = np.cos(q[k]), np.sin(q[k])
+            else:
+                out[i] = q[k]
+        return out
+
+    def from_pinocchio(self, q_pin) -> np.ndarray:
+        """Joint vector (n,) of a Pinocchio configuration (nq,); continuous joints via atan2(sin, cos)."""
+        q_pin = np.asarray(q_pin, dtype=float)
+        out = np.empty(self.n)
+        for k in range(self.n):
+            i = self._idx_q[k]
+            out[k] = np.arctan2(q_pin[i + 1], q_pin[i]) if self.continuous[k] else q_pin[i]
+        return out
+
+    def full_configuration(self, q) -> np.ndarray:
+        """Configuration (full_model.nq,) of the whole URDF: the chain at ``q``, locked joints at rest."""
+        q = self.check_q(q)
+        out = self._q_ref_full.copy()
+        for k, jname in enumerate(self.joint_names):
+            jm = self.full_model.joints[self.full_model.getJointId(jname)]
+            if self.continuous[k]:
+                out[jm.idx_q], out[jm.idx_q + 1] = np.cos(q[k]), np.sin(q[k])
+            else:
+                out[jm.idx_q] = q[k]
+        return out
+
+    # ------------------------------------------------------------------ kinematics, one configuration
+    def fk(self, q) -> pin.SE3:
+        """Pose of the tip frame in the base frame at joint vector ``q`` (n,), as a ``pin.SE3`` (m)."""
+        q = self.check_q(q)
+        pin.framesForwardKinematics(self.model, self.data, self.to_pinocchio(q))
+        return self._baseMo * self.data.oMf[self._tip_id]
+
+    def jacobian(self, q, frame: str = "world") -> np.ndarray:
+        """Frame Jacobian (6, n) of the tip: rows (vx, vy, vz, wx, wy, wz), columns joints.
+
+        ``frame="world"``: linear velocity of the tip origin and angular velocity, both in the base
+        frame's axes (the derivative of :meth:`fk`'s translation is ``J[:3]``).
+        ``frame="local"``: both expressed in the tip frame.
+        """
+        q = self.check_q(q)
+        if frame not in ("world", "local"):
+            raise ConfigurationError(f"jacobian frame must be 'world' or 'local', got {frame!r}")
+        ref = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if frame == "world" else pin.ReferenceFrame.LOCAL
+        J = pin.computeFrameJacobian(self.model, self.data, self.to_pinocchio(q), self._tip_id, ref)
+        if frame == "world" and self._base_id != 0:
+            Rt = self._oMbase.rotation.T
+            J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
+        return np.array(J)
+
+    @staticmethod
+    def _rows(rows) -> list[int]:
+        if isinstance(rows, str):
+            if rows not in _MANIPULABILITY_ROWS:
+                raise ConfigurationError(
+                    f"manipulability rows {rows!r} unknown; use one of {list(_MANIPULABILITY_ROWS)} or a list of "
+                    "row indices 0-5 (vx, vy, vz, wx, wy, wz)"
+                )
+            return _MANIPULABILITY_ROWS[rows]
+        out = [int(r) for r in rows]
+        if not out or any(r < 0 or r > 5 for r in out) or len(set(out)) != len(out):
+            raise ConfigurationError(f"manipulability rows must be distinct indices 0-5, got {rows!r}")
+        return out
+
+    def manipulability(self, q, rows="translation") -> float:
+        """Yoshikawa manipulability sqrt(det(J J^T)) of the chosen rows of the world-frame Jacobian.
+
+        ``rows``: ``"translation"`` (vx, vy, vz), ``"rotation"``, ``"full"`` (all six), ``"planar"``
+        (vx, vy, wz: paper 003's x, y, yaw) or an explicit list of row indices.
+        """
+        J = self.jacobian(q, "world")[self._rows(rows)]
+        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+
+    # ------------------------------------------------------------------ kinematics, whole populations
+    def fk_batch(self, Q) -> tuple[np.ndarray, np.ndarray]:
+        """Tip poses of a population ``Q`` (N, n): positions (N, 3) in m and rotations (N, 3, 3)."""
+        Q = self.check_population(Q)
+        R, p, _, _ = self._forward(Q, want_joints=False)
+        return p, R
+
+    def positions_batch(self, Q) -> np.ndarray:
+        """Tip positions (N, 3) in m of a population ``Q`` (N, n); cheaper than :meth:`fk_batch`.
+
+        Walks the chain from the tip back to the base, carrying only a point, so each joint costs a
+        handful of (N,)-array operations. Not validated: solvers call it in their inner loop with
+        populations they built themselves.
+        """
+        FR, Fp = self._F_R, self._F_p
+        N = Q.shape[0]
+        x = np.full(N, Fp[-1, 0])
+        y = np.full(N, Fp[-1, 1])
+        z = np.full(N, Fp[-1, 2])
+        cos, sin = np.cos(Q), np.sin(Q)
+        for k in range(self.n - 1, -1, -1):
+            if self.revolute[k]:
+                c, s = cos[:, k], sin[:, k]
+                x, y = c * x - s * y, s * x + c * y
+            else:
+                z = z + Q[:, k]
+            R, t = FR[k], Fp[k]
+            x, y, z = (R[0, 0] * x + R[0, 1] * y + R[0, 2] * z + t[0],
+                       R[1, 0] * x + R[1, 1] * y + R[1, 2] * z + t[1],
+                       R[2, 0] * x + R[2, 1] * y + R[2, 2] * z + t[2])
+        return np.stack([x, y, z], axis=1)
+
+    def jacobian_batch(self, Q) -> np.ndarray:
+        """World-frame Jacobians (N, 6, n) of a population, equal to :meth:`jacobian` row by row."""
+        Q = self.check_population(Q)
+        _, p_tip, z_axes, origins = self._forward(Q, want_joints=True)
+        J = np.zeros((Q.shape[0], 6, self.n))
+        rev = self.revolute
+        lever = p_tip[:, None, :] - origins  # (N, n, 3)
+        J[:, :3, rev] = np.cross(z_axes[:, rev], lever[:, rev]).transpose(0, 2, 1)
+        J[:, 3:, rev] = z_axes[:, rev].transpose(0, 2, 1)
+        J[:, :3, ~rev] = z_axes[:, ~rev].transpose(0, 2, 1)
+        return J
+
+    def manipulability_batch(self, Q, rows="translation") -> np.ndarray:
+        """:meth:`manipulability` of every row of ``Q`` (N, n), shape (N,)."""
+        J = self.jacobian_batch(Q)[:, self._rows(rows)]
+        det = np.linalg.det(J @ J.transpose(0, 2, 1))
+        return np.sqrt(np.maximum(det, 0.0))
+
+    def _forward(self, Q: np.ndarray, want_joints: bool):
+        """Base-to-tip recursion over a population; optionally the joint axes and origins (N, n, 3)."""
+        N = Q.shape[0]
+        FR, Fp = self._F_R, self._F_p
+        R = np.broadcast_to(FR[0], (N, 3, 3)).copy()
+        p = np.broadcast_to(Fp[0], (N, 3)).copy()
+        cos, sin = np.cos(Q), np.sin(Q)
+        z_axes = np.empty((N, self.n, 3)) if want_joints else None
+        origins = np.empty((N, self.n, 3)) if want_joints else None
+        for k in range(self.n):
+            if want_joints:
+                z_axes[:, k] = R[:, :, 2]
+                origins[:, k] = p
+            if self.revolute[k]:
+                c, s = cos[:, k, None], sin[:, k, None]
+                c0, c1 = R[:, :, 0].copy(), R[:, :, 1]
+                R[:, :, 0] = c * c0 + s * c1
+                R[:, :, 1] = c * c1 - s * c0
+            else:
+                p = p + Q[:, k, None] * R[:, :, 2]
+            p = p + (R.reshape(N * 3, 3) @ Fp[k + 1]).reshape(N, 3)
+            R = (R.reshape(N * 3, 3) @ FR[k + 1]).reshape(N, 3, 3)
+        return R, p, z_axes, origins
+
+    # ------------------------------------------------------------------ geometry for display
+    @cached_property
+    def visual_model(self) -> pin.GeometryModel:
+        """Visual geometry of the chain (meshes resolved through ``package_dirs``), for viz.py."""
+        if self.urdf_xml is None:  # pragma: no cover
+            raise RobotLoadError("this robot has no URDF text to read visual geometry from")
+        geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf_xml, pin.GeometryType.VISUAL,
+                                           package_dirs=self.package_dirs)
+        if self._locked:
+            _, geoms = pin.buildReducedModel(self.full_model, [geom], self._locked, self._q_ref_full)
+            geom = geoms[0]
+        return geom
+
+    def __repr__(self) -> str:
+        return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, tip={self.tip!r})"
