@@ -1,10 +1,27 @@
 """evoik_pin: inverse kinematics by evolutionary computation, on Pinocchio.
 
-Load any serial-chain URDF (or one of the papers' arms) with :func:`load_robot`, then solve with the
-evolutionary methods of five research papers or the memetic default. See README.md.
+Load any serial-chain URDF (or one of the papers' arms) with :func:`load_robot`, then :func:`solve` with
+the evolutionary methods of five research papers or the memetic default. See README.md.
 """
 
+from .api import make_problem, solve, solve_all, solve_trajectory
+from .problem import IKProblem, Target
+from .result import Front, Result
 from .robot import Robot, list_robots, load_robot
+from .solvers import methods
 
-__all__ = ["Robot", "list_robots", "load_robot"]
+__all__ = [
+    "Front",
+    "IKProblem",
+    "Result",
+    "Robot",
+    "Target",
+    "list_robots",
+    "load_robot",
+    "make_problem",
+    "methods",
+    "solve",
+    "solve_all",
+    "solve_trajectory",
+]
 __version__ = "0.1.0"

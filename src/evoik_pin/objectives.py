@@ -1,0 +1,294 @@
+"""Vectorized IK objectives: every cost maps a population ``Q`` (N, n) to costs (N,) in one call.
+
+Terms share one forward-kinematics pass through :class:`PopulationKinematics` (positions only when no
+term needs rotations) and compose as weighted sums: ``PositionError(t) + 0.5 * OrientationError(t)``.
+
+Terms and their units:
+
+* :class:`PositionError` (m), :class:`OrientationError` (rad, angle of ``log3(R_target^T R)``; planar:
+  wrapped yaw difference), :class:`PoseError` = position + weight x orientation;
+* :class:`RPYPoseError`: paper 004's ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` with O the
+  roll-pitch-yaw angles (wrapped differences);
+* :class:`MaxJointDisplacement`: paper 000's ``max_k |q_k - q_init,k|`` (rad);
+* :class:`WeightedJointDisplacement`: ``sqrt(sum_k K_k (q_k - q_prev,k)^2)`` (papers 001, 002 eq. 21, 003);
+* :class:`Manipulability`: paper 003's ``1 / (Y + 1)`` with Y = sqrt(det(J J^T)) of chosen rows, or -Y;
+* :class:`JointLimitMargin`: 1 - (smallest normalized distance to a limit), 0 at mid-range, 1 at a limit.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from .errors import OptionError
+
+__all__ = [
+    "JointLimitMargin",
+    "Manipulability",
+    "MaxJointDisplacement",
+    "Objective",
+    "OrientationError",
+    "PopulationKinematics",
+    "PoseError",
+    "PositionError",
+    "RPYPoseError",
+    "WeightedJointDisplacement",
+    "default_objective",
+    "orientation_errors",
+    "position_errors",
+    "rpy_batch",
+]
+
+
+class PopulationKinematics:
+    """Lazily computed kinematics of one population, shared by every term of an objective.
+
+    Attributes (computed on first use): ``positions`` (N, 3) m, ``rotations`` (N, 3, 3),
+    ``jacobians`` (N, 6, n) in the base frame.
+    """
+
+    def __init__(self, robot, Q: np.ndarray) -> None:
+        self.robot = robot
+        self.Q = Q
+        self._full = None
+
+    def _fk(self):
+        if self._full is None:
+            R, p, _, _ = self.robot._forward(self.Q, want_joints=False)
+            self._full = (p, R)
+        return self._full
+
+    @cached_property
+    def positions(self) -> np.ndarray:
+        if self._full is not None:
+            return self._full[0]
+        return self.robot.positions_batch(self.Q)
+
+    @cached_property
+    def rotations(self) -> np.ndarray:
+        return self._fk()[1]
+
+    @cached_property
+    def jacobians(self) -> np.ndarray:
+        return self.robot.jacobian_batch(self.Q)
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles wrapped into [-pi, pi)."""
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
+def rpy_batch(R: np.ndarray) -> np.ndarray:
+    """Roll-pitch-yaw (N, 3) in rad of rotations (N, 3, 3), R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    pitch = np.arctan2(-R[:, 2, 0], np.hypot(R[:, 0, 0], R[:, 1, 0]))
+    roll = np.arctan2(R[:, 2, 1], R[:, 2, 2])
+    yaw = np.arctan2(R[:, 1, 0], R[:, 0, 0])
+    return np.stack([roll, pitch, yaw], axis=1)
+
+
+def _rotation_angles(R_target: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Angle (N,) in rad of ``log3(R_target^T R)``, computed stably for small and large angles."""
+    E = np.einsum("ji,njk->nik", R_target, R)
+    trace = E[:, 0, 0] + E[:, 1, 1] + E[:, 2, 2]
+    axis = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
+    # atan2(|sin|, cos) keeps full precision near 0 (where acos loses half the digits) and near pi.
+    return np.arctan2(0.5 * np.linalg.norm(axis, axis=1), 0.5 * (trace - 1.0))
+
+
+def position_errors(target, kin: PopulationKinematics) -> np.ndarray:
+    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane)."""
+    if target.planar:
+        return np.linalg.norm(kin.positions[:, :2] - target.position, axis=1)
+    return np.linalg.norm(kin.positions - target.position, axis=1)
+
+
+def orientation_errors(target, kin: PopulationKinematics) -> np.ndarray:
+    """Orientation error (N,) in rad: rotation angle to the target (planar: |wrapped yaw difference|)."""
+    if target.planar:
+        R = kin.rotations
+        return np.abs(_wrap(np.arctan2(R[:, 1, 0], R[:, 0, 0]) - target.yaw))
+    return _rotation_angles(target.rotation, kin.rotations)
+
+
+class Objective:
+    """A vectorized cost. Subclasses implement :meth:`value`; ``+`` and scalar ``*`` build weighted sums."""
+
+    def value(self, Q: np.ndarray, kin: PopulationKinematics) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __call__(self, Q: np.ndarray, kin: PopulationKinematics | None = None, robot=None) -> np.ndarray:
+        """Costs (N,) of ``Q`` (N, n). Pass ``kin`` to share kinematics, or ``robot`` to compute them."""
+        if kin is None:
+            if robot is None:
+                raise OptionError("evaluate an objective with kin=PopulationKinematics(...) or robot=...")
+            kin = PopulationKinematics(robot, Q)
+        return self.value(Q, kin)
+
+    def __add__(self, other: Objective) -> WeightedSum:
+        if not isinstance(other, Objective):
+            return NotImplemented
+        return WeightedSum(self._terms() + other._terms())
+
+    def __mul__(self, weight: float) -> WeightedSum:
+        w = float(weight)
+        return WeightedSum([(w * c, t) for c, t in self._terms()])
+
+    __rmul__ = __mul__
+
+    def _terms(self) -> list[tuple[float, Objective]]:
+        return [(1.0, self)]
+
+
+class WeightedSum(Objective):
+    """``sum_i w_i f_i(Q)``; build it with ``+`` and ``*`` on objectives."""
+
+    def __init__(self, terms: list[tuple[float, Objective]]) -> None:
+        self.terms = terms
+
+    def _terms(self) -> list[tuple[float, Objective]]:
+        return list(self.terms)
+
+    def value(self, Q, kin):
+        total = np.zeros(Q.shape[0])
+        for w, term in self.terms:
+            if w != 0.0:
+                total += w * term.value(Q, kin)
+        return total
+
+    def __repr__(self) -> str:
+        return " + ".join(f"{w:g}*{t!r}" for w, t in self.terms)
+
+
+class PositionError(Objective):
+    """Distance (m) from the tip to the target position."""
+
+    def __init__(self, target) -> None:
+        self.target = target
+
+    def value(self, Q, kin):
+        return position_errors(self.target, kin)
+
+    def __repr__(self) -> str:
+        return "PositionError()"
+
+
+class OrientationError(Objective):
+    """Rotation angle (rad) between the tip and the target orientation."""
+
+    def __init__(self, target) -> None:
+        if not target.has_orientation:
+            raise OptionError("OrientationError needs a target with a rotation (or a planar yaw)")
+        self.target = target
+
+    def value(self, Q, kin):
+        return orientation_errors(self.target, kin)
+
+    def __repr__(self) -> str:
+        return "OrientationError()"
+
+
+def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 1.0) -> Objective:  # noqa: N802
+    """``position_weight`` x position error (m) + ``orientation_weight`` x rotation angle (rad)."""
+    return position_weight * PositionError(target) + orientation_weight * OrientationError(target)
+
+
+class RPYPoseError(Objective):
+    """Paper 004: ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||``, O = roll-pitch-yaw (rad), wrapped.
+
+    Defaults sigma = 0.3, epsilon = 0.7 as in the paper. Position in m.
+    """
+
+    def __init__(self, target, sigma: float = 0.3, epsilon: float = 0.7) -> None:
+        if target.rotation is None:
+            raise OptionError("RPYPoseError needs a pose target (position and rotation)")
+        self.target, self.sigma, self.epsilon = target, float(sigma), float(epsilon)
+        self._rpy_target = rpy_batch(target.rotation[None])[0]
+
+    def value(self, Q, kin):
+        d_rpy = _wrap(rpy_batch(kin.rotations) - self._rpy_target)
+        pos = np.linalg.norm(kin.positions - self.target.position, axis=1)
+        return self.sigma * pos + self.epsilon * np.linalg.norm(d_rpy, axis=1)
+
+    def __repr__(self) -> str:
+        return f"RPYPoseError(sigma={self.sigma:g}, epsilon={self.epsilon:g})"
+
+
+class MaxJointDisplacement(Objective):
+    """Paper 000's f2: ``max_k |q_k - q_init,k|`` (rad or m) from an initial configuration."""
+
+    def __init__(self, q_init) -> None:
+        self.q_init = np.asarray(q_init, dtype=float)
+
+    def value(self, Q, kin):
+        return np.abs(Q - self.q_init).max(axis=1)
+
+    def __repr__(self) -> str:
+        return "MaxJointDisplacement()"
+
+
+class WeightedJointDisplacement(Objective):
+    """``sqrt(sum_k K_k (q_k - q_prev,k)^2)``: paper 003's smoothness S, paper 002's ``||q - q0||``.
+
+    ``gains`` K (n,) default to ones.
+    """
+
+    def __init__(self, q_prev, gains=None) -> None:
+        self.q_prev = np.asarray(q_prev, dtype=float)
+        self.gains = np.ones_like(self.q_prev) if gains is None else np.asarray(gains, dtype=float)
+        if self.gains.shape != self.q_prev.shape or np.any(self.gains < 0) or not np.all(np.isfinite(self.gains)):
+            raise OptionError(f"gains must be {self.q_prev.size} finite values >= 0, got {gains!r}")
+
+    def value(self, Q, kin):
+        return np.sqrt(((Q - self.q_prev) ** 2 * self.gains).sum(axis=1))
+
+    def __repr__(self) -> str:
+        return f"WeightedJointDisplacement(gains={self.gains.tolist()})"
+
+
+class Manipulability(Objective):
+    """Manipulability cost of paper 003.
+
+    ``form="inverse"``: ``1 / (Y + 1)`` (to minimize); ``form="negative"``: ``-Y``; ``form="value"``: Y.
+    Y = sqrt(det(J J^T)) of the chosen rows of the base-frame Jacobian (``rows`` as in
+    ``Robot.manipulability``: "translation", "rotation", "full", "planar" or a list of row indices).
+    """
+
+    _FORMS = ("inverse", "negative", "value")
+
+    def __init__(self, rows="translation", form: str = "inverse") -> None:
+        if form not in self._FORMS:
+            raise OptionError(f"manipulability form {form!r} is not one of {self._FORMS}")
+        self.rows, self.form = rows, form
+
+    def value(self, Q, kin):
+        J = kin.jacobians[:, kin.robot._rows(self.rows)]
+        Y = np.sqrt(np.maximum(np.linalg.det(J @ J.transpose(0, 2, 1)), 0.0))
+        if self.form == "inverse":
+            return 1.0 / (Y + 1.0)
+        return -Y if self.form == "negative" else Y
+
+    def __repr__(self) -> str:
+        return f"Manipulability(rows={self.rows!r}, form={self.form!r})"
+
+
+class JointLimitMargin(Objective):
+    """``1 - min_k(distance of q_k to its nearer limit / half-range_k)``: 0 at mid-range, 1 at a limit."""
+
+    def __init__(self, lower, upper) -> None:
+        self.lower, self.upper = np.asarray(lower, float), np.asarray(upper, float)
+        self.half = np.maximum((self.upper - self.lower) / 2, 1e-12)
+
+    def value(self, Q, kin):
+        margin = np.minimum(Q - self.lower, self.upper - Q) / self.half
+        return 1.0 - margin.min(axis=1)
+
+    def __repr__(self) -> str:
+        return "JointLimitMargin()"
+
+
+def default_objective(target, orientation_weight: float = 1.0) -> Objective:
+    """Position error for position targets; position + weight x orientation error for pose targets."""
+    if target.has_orientation:
+        return PoseError(target, 1.0, orientation_weight)
+    return PositionError(target)

@@ -1,0 +1,235 @@
+"""IK targets and problems: what a solver is asked to reach, within which bounds, to which tolerance.
+
+A solver sees only an :class:`IKProblem`: the robot, the :class:`Target`, the objective (a vectorized
+cost over a population), the search box and the tolerances. ``IKProblem.evaluate`` computes the cost and
+the position / orientation errors of a whole population from one forward-kinematics pass.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import BoundsError, ConfigurationError, OptionError, TargetError
+from .objectives import Objective, PopulationKinematics, default_objective, orientation_errors, position_errors
+from .robot import Robot
+
+__all__ = ["DEFAULT_PRO_DELTA", "Evaluation", "IKProblem", "Target"]
+
+#: Half-width (rad) of paper 002's "Pro" search box around the previous trajectory solution.
+DEFAULT_PRO_DELTA = np.pi / 100
+
+
+def _vector(value, name: str, sizes: tuple[int, ...]) -> np.ndarray:
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TargetError(f"{name} must be numbers, got {value!r}") from exc
+    if arr.ndim != 1 or arr.shape[0] not in sizes:
+        raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise TargetError(f"{name} contains NaN or inf: {arr}")
+    return arr
+
+
+def _rotation(value) -> np.ndarray:
+    try:
+        R = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TargetError(f"target rotation must be a 3 x 3 matrix of numbers, got {value!r}") from exc
+    if R.shape != (3, 3):
+        raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
+    if not np.all(np.isfinite(R)):
+        raise TargetError("target rotation contains NaN or inf")
+    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+        raise TargetError(
+            "target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
+            "orthonormalize it or pass roll-pitch-yaw angles"
+        )
+    return R
+
+
+@dataclass(frozen=True)
+class Target:
+    """An IK target for the tip frame, in the robot's base frame.
+
+    Attributes:
+        position: (3,) tip position in m; for a planar target (2,) = (x, y).
+        rotation: (3, 3) tip orientation, or None for a position-only target.
+        planar: True for a planar target (x, y[, yaw]) of an arm moving in the base xy-plane.
+        yaw: planar heading in rad (rotation about base z), or None.
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray | None = None
+    planar: bool = False
+    yaw: float | None = None
+
+    def __post_init__(self) -> None:
+        pos = _vector(self.position, "target position", (2,) if self.planar else (3,))
+        object.__setattr__(self, "position", pos)
+        if self.rotation is not None:
+            if self.planar:
+                raise TargetError("a planar target takes a yaw angle, not a rotation matrix")
+            object.__setattr__(self, "rotation", _rotation(self.rotation))
+        if self.yaw is not None:
+            if not self.planar:
+                raise TargetError("yaw applies to planar targets only; give a rotation for 3-D targets")
+            if not np.isfinite(self.yaw):
+                raise TargetError(f"target yaw must be finite, got {self.yaw}")
+
+    @classmethod
+    def planar_target(cls, x: float, y: float, yaw: float | None = None) -> Target:
+        """Planar target (x, y in m, optional yaw in rad) for arms moving in the base xy-plane."""
+        return cls(position=np.array([x, y], dtype=float), planar=True, yaw=None if yaw is None else float(yaw))
+
+    @classmethod
+    def from_rpy(cls, position, rpy) -> Target:
+        """Pose target from a position (m) and roll-pitch-yaw angles (rad), R = Rz(yaw) Ry(pitch) Rx(roll)."""
+        rpy = _vector(rpy, "target roll-pitch-yaw", (3,))
+        return cls(position=position, rotation=pin.rpy.rpyToMatrix(*rpy))
+
+    @classmethod
+    def coerce(cls, target) -> Target:
+        """A Target from a Target, a ``pin.SE3``, a (4, 4) homogeneous matrix or a 3-vector position."""
+        if isinstance(target, Target):
+            return target
+        if isinstance(target, pin.SE3):
+            return cls(position=np.array(target.translation), rotation=np.array(target.rotation))
+        try:
+            arr = np.asarray(target, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise TargetError(
+                f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target; "
+                f"got {target!r}"
+            ) from exc
+        if arr.shape == (4, 4):
+            return cls(position=arr[:3, 3], rotation=arr[:3, :3])
+        if arr.ndim == 1 and arr.shape[0] == 3:
+            return cls(position=arr)
+        raise TargetError(
+            f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target "
+            f"(Target.planar_target(x, y, yaw) for planar arms); got an array of shape {arr.shape}"
+        )
+
+    @property
+    def has_orientation(self) -> bool:
+        """True when the target constrains orientation (a rotation, or a planar yaw)."""
+        return self.rotation is not None or self.yaw is not None
+
+    def se3(self) -> pin.SE3:
+        """The target as a ``pin.SE3`` (identity rotation for position-only targets; planar: z = 0)."""
+        if self.planar:
+            R = pin.rpy.rpyToMatrix(0.0, 0.0, self.yaw or 0.0)
+            return pin.SE3(R, np.array([self.position[0], self.position[1], 0.0]))
+        return pin.SE3(np.eye(3) if self.rotation is None else self.rotation, self.position.copy())
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Cost and errors of a population (each (N,)); ``orientation_error`` is None for position targets."""
+
+    cost: np.ndarray
+    position_error: np.ndarray
+    orientation_error: np.ndarray | None
+
+
+@dataclass
+class IKProblem:
+    """Robot + target + objective + search box + tolerances: everything a solver sees.
+
+    Attributes:
+        robot: the chain to solve for.
+        target: the :class:`Target` (coerced from the accepted target forms).
+        objective: vectorized cost; default: position error (m) plus, for pose targets,
+            ``orientation_weight`` x rotation angle (rad).
+        lower, upper: (n,) search box (rad or m); default the robot's bounds.
+        tolerance: success threshold on the position error (m).
+        rotation_tolerance: success threshold on the orientation error (rad); defaults to ``tolerance``.
+        q0: optional (n,) initial / previous configuration (seeds the population; used by displacement
+            objectives).
+        orientation_weight: m per rad in the default pose objective.
+        evaluations: number of configurations evaluated so far (every call of :meth:`evaluate` adds N).
+    """
+
+    robot: Robot
+    target: Target
+    objective: Objective | None = None
+    lower: np.ndarray | None = None
+    upper: np.ndarray | None = None
+    tolerance: float = 1e-6
+    rotation_tolerance: float | None = None
+    q0: np.ndarray | None = None
+    orientation_weight: float = 1.0
+    evaluations: int = field(default=0, compare=False)
+
+    def __post_init__(self) -> None:
+        self.target = Target.coerce(self.target)
+        for name in ("tolerance", "orientation_weight"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value >= 0):
+                raise OptionError(f"{name} must be a finite number >= 0, got {value!r}")
+        if self.rotation_tolerance is None:
+            self.rotation_tolerance = self.tolerance
+        if not (np.isfinite(self.rotation_tolerance) and self.rotation_tolerance >= 0):
+            raise OptionError(f"rotation_tolerance must be a finite number >= 0, got {self.rotation_tolerance!r}")
+        lower = self.robot.lower if self.lower is None else np.asarray(self.lower, dtype=float)
+        upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
+        self.lower, self.upper = self._checked_bounds(lower, upper)
+        if self.q0 is not None:
+            try:
+                self.q0 = self.robot.check_q(self.q0)
+            except ConfigurationError as exc:
+                raise ConfigurationError(f"q0: {exc}") from None
+        if self.objective is None:
+            self.objective = default_objective(self.target, self.orientation_weight)
+
+    def _checked_bounds(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n = self.robot.n
+        lower, upper = lower.reshape(-1), upper.reshape(-1)
+        if lower.shape != (n,) or upper.shape != (n,):
+            raise BoundsError(f"bounds need {n} values each (one per joint), got {lower.size} and {upper.size}")
+        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+            raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
+        if np.any(lower > upper):
+            k = int(np.nonzero(lower > upper)[0][0])
+            raise BoundsError(f"inverted bounds for joint {self.robot.joint_names[k]!r}: {lower[k]} > {upper[k]}")
+        return lower.copy(), upper.copy()
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.robot.n
+
+    def evaluate(self, Q: np.ndarray) -> Evaluation:
+        """Cost and errors of a population ``Q`` (N, n), from one kinematics pass."""
+        kin = PopulationKinematics(self.robot, Q)
+        self.evaluations += Q.shape[0]
+        cost = self.objective(Q, kin)
+        pos = position_errors(self.target, kin)
+        rot = orientation_errors(self.target, kin) if self.target.has_orientation else None
+        return Evaluation(cost, pos, rot)
+
+    def cost(self, Q: np.ndarray) -> np.ndarray:
+        """Objective values (N,) of a population ``Q`` (N, n)."""
+        kin = PopulationKinematics(self.robot, Q)
+        self.evaluations += Q.shape[0]
+        return self.objective(Q, kin)
+
+    def succeeded(self, position_error, orientation_error=None) -> np.ndarray:
+        """Elementwise success: position error <= tolerance and orientation error <= rotation_tolerance."""
+        ok = np.asarray(position_error) <= self.tolerance
+        if orientation_error is not None:
+            ok = ok & (np.asarray(orientation_error) <= self.rotation_tolerance)
+        return ok
+
+    def with_pro_box(self, q_prev, delta: float = DEFAULT_PRO_DELTA) -> IKProblem:
+        """Paper 002's "Pro" problem: the search box is ``q_prev +- delta`` intersected with the bounds."""
+        q_prev = self.robot.check_q(q_prev)
+        if not (np.isfinite(delta) and delta > 0):
+            raise OptionError(f"Pro box half-width delta must be > 0 rad, got {delta!r}")
+        lower = np.clip(np.maximum(self.lower, q_prev - delta), self.lower, self.upper)
+        upper = np.clip(np.minimum(self.upper, q_prev + delta), self.lower, self.upper)
+        return replace(self, lower=lower, upper=upper, q0=np.clip(q_prev, lower, upper), evaluations=0)

@@ -1,0 +1,65 @@
+"""What every solver returns: a :class:`Result` (and, for multi-objective methods, a :class:`Front`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Front", "Result"]
+
+
+@dataclass
+class Front:
+    """A Pareto set: ``q`` (M, n) joint vectors, ``objectives`` (M, k) values, ``violation`` (M,) >= 0."""
+
+    q: np.ndarray
+    objectives: np.ndarray
+    violation: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.q.shape[0])
+
+
+@dataclass
+class Result:
+    """Outcome of one IK solve.
+
+    Attributes:
+        q: (n,) best joint vector (rad or m), inside the search bounds.
+        position_error: tip position error of ``q`` (m).
+        orientation_error: tip orientation error of ``q`` (rad); None for position-only targets.
+        cost: objective value of ``q``.
+        success: True when the errors are within the problem's tolerances.
+        generations: generations (iterations) run.
+        evaluations: configurations evaluated (forward kinematics of one joint vector = 1).
+        time_s: wall-clock time (s).
+        history: per-generation series, each an array of length ``generations + 1`` (the initial
+            population first): ``best_cost``, ``mean_cost``, ``diversity``, plus method-specific ones.
+        message: why the solver stopped, or what went wrong.
+        method: registered name of the solver.
+        solutions: distinct IK solutions (each a Result), best first, for all-solutions methods.
+        front: the final Pareto set, for multi-objective methods.
+    """
+
+    q: np.ndarray
+    position_error: float
+    orientation_error: float | None
+    cost: float
+    success: bool
+    generations: int
+    evaluations: int
+    time_s: float
+    history: dict[str, np.ndarray] = field(default_factory=dict)
+    message: str = ""
+    method: str = ""
+    solutions: list[Result] | None = None
+    front: Front | None = None
+
+    def __repr__(self) -> str:
+        rot = "" if self.orientation_error is None else f", orientation_error={self.orientation_error:.3g} rad"
+        return (
+            f"Result(method={self.method!r}, success={self.success}, position_error={self.position_error:.3g} m"
+            f"{rot}, generations={self.generations}, evaluations={self.evaluations}, time_s={self.time_s:.4g}, "
+            f"message={self.message!r})"
+        )

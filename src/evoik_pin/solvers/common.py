@@ -1,0 +1,171 @@
+"""Pieces every population solver shares: the initial population, bound handling, diversity, and a
+:class:`SolverRun` that keeps time, history and the stopping rules and builds the :class:`Result`."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import OptionError
+from ..problem import Evaluation, IKProblem
+from ..result import Result
+
+__all__ = ["BOUND_HANDLING", "SolverRun", "check_positive_int", "diversity", "enforce_bounds", "initial_population"]
+
+#: Accepted ``bound_handling`` option values.
+BOUND_HANDLING = ("clip", "reflect", "resample")
+
+
+def check_positive_int(name: str, value, minimum: int = 1) -> int:
+    """``value`` as an int >= ``minimum``, or an OptionError naming the option."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise OptionError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def check_fraction(name: str, value, low: float = 0.0, high: float = 1.0) -> float:
+    """``value`` as a float in [low, high], or an OptionError naming the option."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be a number in [{low}, {high}], got {value!r}") from None
+    if not (low <= v <= high):
+        raise OptionError(f"{name} must be in [{low}, {high}], got {value!r}")
+    return v
+
+
+def initial_population(problem: IKProblem, rng: np.random.Generator, size: int) -> np.ndarray:
+    """(size, n) configurations uniform in the search box; ``problem.q0`` (clipped) is the first one."""
+    Q = rng.uniform(problem.lower, problem.upper, size=(size, problem.n))
+    if problem.q0 is not None:
+        Q[0] = np.clip(problem.q0, problem.lower, problem.upper)
+    return Q
+
+
+def enforce_bounds(
+    trial: np.ndarray, problem: IKProblem, rng: np.random.Generator, method: str = "clip",
+    parent: np.ndarray | None = None,
+) -> np.ndarray:
+    """Bring a population (N, n) back into the search box.
+
+    ``"clip"``: onto the violated bound (paper 004); ``"reflect"``: mirrored back inside (folded as many
+    times as needed); ``"resample"``: violating entries re-drawn uniformly in the box (``parent`` unused).
+    """
+    lo, hi = problem.lower, problem.upper
+    if method == "clip":
+        return np.clip(trial, lo, hi)
+    if method == "reflect":
+        width = hi - lo
+        safe = np.where(width > 0, width, 1.0)
+        y = np.mod(trial - lo, 2 * safe)
+        y = np.where(y > safe, 2 * safe - y, y)
+        return np.where(width > 0, lo + y, lo)
+    if method == "resample":
+        bad = (trial < lo) | (trial > hi)
+        if bad.any():
+            trial = trial.copy()
+            fresh = rng.uniform(lo, hi, size=trial.shape)
+            trial[bad] = fresh[bad]
+        return trial
+    raise OptionError(f"bound_handling {method!r} is not one of {BOUND_HANDLING}")
+
+
+def diversity(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
+    """Mean distance of the individuals to the population centroid, each joint scaled by its range.
+
+    0 for a collapsed population; about 0.29 sqrt(n) for a uniform one.
+    """
+    width = np.where(upper > lower, upper - lower, 1.0)
+    Z = Q / width
+    return float(np.linalg.norm(Z - Z.mean(axis=0), axis=1).mean())
+
+
+class SolverRun:
+    """Time, history and stopping rules of one population-solver run.
+
+    Stopping rules, checked by :meth:`stop_reason` after every generation: the best individual meets the
+    problem's tolerances; its cost is at most ``cost_tolerance`` (when given); ``max_generations``
+    reached; no improvement of the best cost for ``stall_generations`` generations (when given).
+    """
+
+    def __init__(self, problem: IKProblem, max_generations: int, stall_generations: int | None = None,
+                 cost_tolerance: float | None = None) -> None:
+        self.problem = problem
+        self.max_generations = check_positive_int("max_generations", max_generations, 0)
+        self.stall_generations = None if stall_generations is None else check_positive_int(
+            "stall_generations", stall_generations)
+        if cost_tolerance is not None and not np.isfinite(cost_tolerance):
+            raise OptionError(f"cost_tolerance must be a finite number, got {cost_tolerance!r}")
+        self.cost_tolerance = cost_tolerance
+        self.t0 = time.perf_counter()
+        self.generation = 0
+        self.best_q: np.ndarray | None = None
+        self.best_cost = np.inf
+        self._stall = 0
+        self.history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
+
+    def record(self, Q: np.ndarray, ev: Evaluation, **extra: float) -> int:
+        """Log one generation's population ``Q`` (N, n) and its evaluation; returns the best index.
+
+        Extra keyword values become additional history series (e.g. ``w1=...``).
+        """
+        i = int(np.argmin(ev.cost))
+        if ev.cost[i] < self.best_cost:
+            self.best_cost = float(ev.cost[i])
+            self.best_q = Q[i].copy()
+            self._best_pos = float(ev.position_error[i])
+            self._best_rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
+            self._stall = 0
+        else:
+            self._stall += 1
+        self.history["best_cost"].append(self.best_cost)
+        self.history["mean_cost"].append(float(np.mean(ev.cost)))
+        self.history["diversity"].append(diversity(Q, self.problem.lower, self.problem.upper))
+        for key, value in extra.items():
+            self.history.setdefault(key, []).append(float(value))
+        return i
+
+    def offer(self, q: np.ndarray, cost: float, position_error: float, orientation_error: float | None) -> None:
+        """Consider one configuration outside the generational log (e.g. after a local polish)."""
+        if cost < self.best_cost:
+            self.best_cost, self.best_q = float(cost), np.asarray(q, float).copy()
+            self._best_pos, self._best_rot = float(position_error), orientation_error
+
+    @property
+    def best_succeeded(self) -> bool:
+        return self.best_q is not None and bool(self.problem.succeeded(self._best_pos, self._best_rot))
+
+    def stop_reason(self) -> str | None:
+        """Why to stop now, or None to go on."""
+        if self.best_succeeded:
+            return "tolerance reached"
+        if self.cost_tolerance is not None and self.best_cost <= self.cost_tolerance:
+            return f"cost <= cost_tolerance ({self.cost_tolerance:g})"
+        if self.generation >= self.max_generations:
+            return f"max_generations ({self.max_generations}) reached"
+        if self.stall_generations is not None and self._stall >= self.stall_generations:
+            return f"no improvement for {self.stall_generations} generations"
+        return None
+
+    def result(self, method: str, message: str, **fields) -> Result:
+        """The :class:`Result` of the best configuration met (errors recomputed from one FK)."""
+        problem = self.problem
+        q = np.clip(self.best_q, problem.lower, problem.upper)
+        evaluations = problem.evaluations
+        ev = problem.evaluate(q[None])
+        problem.evaluations = evaluations  # the final check is bookkeeping, not search
+        pos = float(ev.position_error[0])
+        rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
+        success = bool(problem.succeeded(pos, rot))
+        if not success and "tolerance" in message:
+            message = "stopped"
+        if not success:
+            message += (f"; best position error {pos:.3g} m" + ("" if rot is None else f", orientation error "
+                        f"{rot:.3g} rad") + f" exceeds the tolerance ({problem.tolerance:g})")
+        return Result(
+            q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
+            generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,
+            history={k: np.asarray(v) for k, v in self.history.items()}, message=message, method=method,
+            **fields,
+        )
