@@ -55,8 +55,7 @@ class PopulationKinematics:
 
     def _fk(self):
         if self._full is None:
-            R, p, _, _ = self.robot._forward(self.Q, want_joints=False)
-            self._full = (p, R)
+            self._full = self.robot.fk_batch(self.Q, validate=False)
         return self._full
 
     @cached_property
@@ -71,7 +70,7 @@ class PopulationKinematics:
 
     @cached_property
     def jacobians(self) -> np.ndarray:
-        return self.robot.jacobian_batch(self.Q)
+        return self.robot.jacobian_batch(self.Q, validate=False)
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:
@@ -262,7 +261,7 @@ class Manipulability(Objective):
         self.rows, self.form = rows, form
 
     def value(self, Q, kin):
-        J = kin.jacobians[:, kin.robot._rows(self.rows)]
+        J = kin.jacobians[:, kin.robot.task_rows(self.rows)]
         Y = np.sqrt(np.maximum(np.linalg.det(J @ J.transpose(0, 2, 1)), 0.0))
         if self.form == "inverse":
             return 1.0 / (Y + 1.0)

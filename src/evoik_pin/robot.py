@@ -506,7 +506,8 @@ class Robot:
         return np.array(J)
 
     @staticmethod
-    def _rows(rows) -> list[int]:
+    def task_rows(rows) -> list[int]:
+        """Jacobian row indices of a row selection: "translation", "rotation", "full", "planar" or a list."""
         if isinstance(rows, str):
             if rows not in _MANIPULABILITY_ROWS:
                 raise ConfigurationError(
@@ -525,13 +526,18 @@ class Robot:
         ``rows``: ``"translation"`` (vx, vy, vz), ``"rotation"``, ``"full"`` (all six), ``"planar"``
         (vx, vy, wz: paper 003's x, y, yaw) or an explicit list of row indices.
         """
-        J = self.jacobian(q, "world")[self._rows(rows)]
+        J = self.jacobian(q, "world")[self.task_rows(rows)]
         return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
 
     # ------------------------------------------------------------------ kinematics, whole populations
-    def fk_batch(self, Q) -> tuple[np.ndarray, np.ndarray]:
-        """Tip poses of a population ``Q`` (N, n): positions (N, 3) in m and rotations (N, 3, 3)."""
-        Q = self.check_population(Q)
+    def fk_batch(self, Q, validate: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Tip poses of a population ``Q`` (N, n): positions (N, 3) in m and rotations (N, 3, 3).
+
+        ``validate=False`` skips the shape/finiteness check, for solvers' inner loops on populations
+        they built themselves.
+        """
+        if validate:
+            Q = self.check_population(Q)
         R, p, _, _ = self._forward(Q, want_joints=False)
         return p, R
 
@@ -560,9 +566,10 @@ class Robot:
                        R[2, 0] * x + R[2, 1] * y + R[2, 2] * z + t[2])
         return np.stack([x, y, z], axis=1)
 
-    def jacobian_batch(self, Q) -> np.ndarray:
+    def jacobian_batch(self, Q, validate: bool = True) -> np.ndarray:
         """World-frame Jacobians (N, 6, n) of a population, equal to :meth:`jacobian` row by row."""
-        Q = self.check_population(Q)
+        if validate:
+            Q = self.check_population(Q)
         _, p_tip, z_axes, origins = self._forward(Q, want_joints=True)
         J = np.zeros((Q.shape[0], 6, self.n))
         rev = self.revolute
@@ -574,7 +581,7 @@ class Robot:
 
     def manipulability_batch(self, Q, rows="translation") -> np.ndarray:
         """:meth:`manipulability` of every row of ``Q`` (N, n), shape (N,)."""
-        J = self.jacobian_batch(Q)[:, self._rows(rows)]
+        J = self.jacobian_batch(Q)[:, self.task_rows(rows)]
         det = np.linalg.det(J @ J.transpose(0, 2, 1))
         return np.sqrt(np.maximum(det, 0.0))
 
