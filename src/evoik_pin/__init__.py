@@ -4,13 +4,14 @@ Load any serial-chain URDF (or one of the papers' arms) with :func:`load_robot`,
 the evolutionary methods of five research papers or the memetic default. See README.md.
 """
 
-from .api import make_problem, solve, solve_all, solve_trajectory
+from .api import BatchResults, make_problem, solve, solve_all, solve_many, solve_trajectory
 from .problem import IKProblem, Target
 from .result import Front, Result
 from .robot import Robot, list_robots, load_robot
 from .solvers import methods
 
 __all__ = [
+    "BatchResults",
     "Front",
     "IKProblem",
     "Result",
@@ -22,6 +23,7 @@ __all__ = [
     "methods",
     "solve",
     "solve_all",
+    "solve_many",
     "solve_trajectory",
 ]
 __version__ = "0.1.0"

@@ -7,15 +7,18 @@ problem to the registered solver.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
-from .errors import ConfigurationError, MethodError, OptionError
+from .errors import ConfigurationError, MethodError, OptionError, TargetError
 from .problem import DEFAULT_PRO_DELTA, IKProblem, Target
 from .result import Result
 from .robot import Robot, load_robot
 from .solvers import get_solver, methods
 
-__all__ = ["DEFAULT_METHOD", "make_problem", "methods", "solve", "solve_all", "solve_trajectory"]
+__all__ = ["DEFAULT_METHOD", "BatchResults", "make_problem", "methods", "solve", "solve_all", "solve_many",
+           "solve_trajectory"]
 
 #: Method used when none is named.
 DEFAULT_METHOD = "memetic"
@@ -118,4 +121,167 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
             problem = problem.with_pro_box(previous, delta)
         results.append(_run(problem, method, rng, solver_options))
         previous = results[-1].q
+    return results
+
+
+class BatchResults(list):
+    """The list of :class:`Result` that :func:`solve_many` returns, one per target in order, plus ``stats``.
+
+    ``stats`` (a dict): ``n`` targets, ``solved``, ``success_rate``, ``time_s`` (wall clock of the whole
+    call), ``throughput`` (targets per second, ``n / time_s``), ``batched`` (targets solved by the batched
+    LM rounds) and ``fallback`` (targets handed to the per-target solver, and of those ``fallback_solved``).
+    """
+
+    stats: dict
+
+
+def _coerce_targets(targets) -> list[Target]:
+    """Targets as a list of :class:`Target`; a (N, 4, 4) array of poses is checked in one vectorized pass."""
+    if isinstance(targets, np.ndarray) and targets.ndim == 3 and targets.shape[1:] == (4, 4):
+        targets = targets.astype(float)
+        if not np.isfinite(targets).all():
+            bad = int(np.nonzero(~np.isfinite(targets).all(axis=(1, 2)))[0][0])
+            raise TargetError(f"target {bad} contains NaN or inf")
+        R = targets[:, :3, :3]
+        ortho = np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)).max(axis=(1, 2))
+        bad = np.nonzero((ortho > 1e-6) | (np.linalg.det(R) < 0))[0]
+        if bad.size:
+            raise TargetError(f"target {int(bad[0])}: rotation is not a rotation matrix (R^T R must be I and "
+                              "det R = +1 to 1e-6)")
+        out = []
+        for T in targets:  # already checked: skip Target's per-instance validation
+            t = object.__new__(Target)
+            object.__setattr__(t, "position", T[:3, 3].copy())
+            object.__setattr__(t, "rotation", T[:3, :3].copy())
+            object.__setattr__(t, "planar", False)
+            object.__setattr__(t, "yaw", None)
+            out.append(t)
+        return out
+    out = []
+    for i, t in enumerate(targets):
+        try:
+            out.append(Target.coerce(t))
+        except TargetError as exc:
+            raise TargetError(f"target {i}: {exc}") from None
+    return out
+
+
+def _target_kind(t: Target) -> str:
+    if t.planar:
+        return "planar" if t.yaw is None else "planar_yaw"
+    return "position" if t.rotation is None else "pose"
+
+
+def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None, **options) -> BatchResults:
+    """Solve many independent IK targets, amortizing the per-call overhead.
+
+    With ``method="memetic"`` (the default) the targets are solved in batched rounds first: every
+    unsolved target starts from its nearest seed-table entry (from ``q0`` in the first round when given),
+    and one batched Levenberg-Marquardt (:func:`~evoik_pin.solvers.polish.batch_levenberg_marquardt`:
+    one NumPy kinematics pass and one batched 6 x 6 solve per iteration for all unsolved targets at once)
+    runs per round, each round trying the next-nearest table entry for the targets still unsolved. The
+    targets left after ``table_seeds`` rounds go to the per-target ``memetic`` solver (with the same
+    options, e.g. ``timeout``). Other methods, or a custom ``objective``, solve the targets one by one.
+
+    Args:
+        robot: a :class:`Robot` or anything :func:`load_robot` accepts.
+        targets: a sequence of targets (anything :func:`solve` accepts: poses, positions, planar
+            targets, all of one kind or mixed), or an array of N homogeneous poses (N, 4, 4), checked in one
+            vectorized pass.
+        method: solver name. seed: int or Generator; one generator serves all targets, so a seed fixes
+            every result (up to the per-target time budget, as for :func:`solve`).
+        q0: None, one (n,) start for every target, or (N, n) starts.
+        **options: as for :func:`solve` (``tolerance``, ``rotation_tolerance``, ``bounds``,
+            ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...).
+
+    Returns:
+        A :class:`BatchResults`: ``list[Result]`` in target order, plus ``stats`` with the throughput
+        (``results.stats["throughput"]`` targets per second). A batch-solved target's ``time_s`` is its
+        share of the batched rounds (their wall time divided by the targets they processed).
+    """
+    t_start = time.perf_counter()
+    robot = _robot(robot)
+    rng = _rng(seed)
+    targets = _coerce_targets(targets)
+    N = len(targets)
+    if N == 0:
+        raise ConfigurationError("solve_many needs at least one target")
+    Q0 = None
+    if q0 is not None:
+        Q0 = np.asarray(q0, dtype=float)
+        if Q0.ndim == 1:
+            Q0 = np.broadcast_to(robot.check_q(Q0), (N, robot.n))
+        elif Q0.shape != (N, robot.n) or not np.isfinite(Q0).all():
+            raise ConfigurationError(f"q0 must be one joint vector ({robot.n},) or one per target ({N}, {robot.n}) "
+                                     f"of finite numbers, got shape {Q0.shape}")
+    info = get_solver(method)
+    if method != "memetic" or options.get("objective") is not None or options.get("polish"):
+        results = BatchResults()
+        for i, t in enumerate(targets):
+            problem, solver_options = make_problem(robot, t, q0=None if Q0 is None else Q0[i], **dict(options))
+            results.append(_run(problem, method, rng, solver_options))
+        return _with_stats(results, t_start, batched=0, fallback=N)
+
+    # One template problem checks the shared options once (tolerances, bounds, weights).
+    template, solver_options = make_problem(robot, targets[0], **dict(options))
+    info.check_options(solver_options)
+    from .solvers.memetic import default_table_size, seed_table
+    from .solvers.polish import batch_levenberg_marquardt
+
+    table_size = solver_options.get("table_size")
+    table_size = default_table_size(robot.n) if table_size is None else int(table_size)
+    rounds = int(solver_options.get("table_seeds", 4))
+    lower, upper = template.lower, template.upper
+    tol, rtol, w = template.tolerance, template.rotation_tolerance, template.orientation_weight
+    results: list[Result | None] = [None] * N
+    n_batched = 0
+    by_kind: dict[str, list[int]] = {}
+    for i, t in enumerate(targets):
+        by_kind.setdefault(_target_kind(t), []).append(i)
+    table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
+    for members in by_kind.values():
+        members = np.array(members)
+        pending = members
+        plan = [("q0", None)] if Q0 is not None else []
+        plan += [("seed table", r) for r in range(rounds if table is not None else 0)]
+        for label, rank in plan:
+            if pending.size == 0:
+                break
+            t0 = time.perf_counter()
+            group = [targets[i] for i in pending]
+            if rank is None:
+                Qs = Q0[pending]
+            else:
+                Qs = table.Q[table.nearest(group, rank + 1)[:, rank]]
+            out = batch_levenberg_marquardt(robot, Qs, group, lower, upper, tol, rtol)
+            share = (time.perf_counter() - t0) / pending.size
+            for j in np.nonzero(out.converged)[0]:
+                pos = float(out.position_error[j])
+                rot = None if out.orientation_error is None else float(out.orientation_error[j])
+                cost = pos + (0.0 if rot is None else w * rot)
+                results[pending[j]] = Result(
+                    q=out.q[j].copy(), position_error=pos, orientation_error=rot, cost=cost, success=True,
+                    generations=0, evaluations=int(out.evaluations[j]), time_s=share,
+                    history={"best_cost": np.array([cost]), "mean_cost": np.array([cost]),
+                             "diversity": np.array([0.0])},
+                    message=f"tolerance reached by batched LM from {label} (solve_many)", method="memetic")
+            n_batched += int(out.converged.sum())
+            pending = pending[~out.converged]
+    fallback = [i for i in range(N) if results[i] is None]
+    for i in fallback:  # the per-target memetic solver, with every option (and q0) of the call
+        problem, opts = make_problem(robot, targets[i], q0=None if Q0 is None else Q0[i], **dict(options))
+        results[i] = _run(problem, "memetic", rng, opts)
+    out_list = BatchResults(results)
+    return _with_stats(out_list, t_start, batched=n_batched, fallback=len(fallback))
+
+
+def _with_stats(results: BatchResults, t_start: float, batched: int, fallback: int) -> BatchResults:
+    elapsed = time.perf_counter() - t_start
+    solved = sum(r.success for r in results)
+    n = len(results)
+    results.stats = {
+        "n": n, "solved": solved, "success_rate": solved / n, "time_s": elapsed,
+        "throughput": n / elapsed if elapsed > 0 else float("inf"), "batched": batched, "fallback": fallback,
+        "fallback_solved": solved - batched,
+    }
     return results

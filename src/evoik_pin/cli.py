@@ -73,6 +73,45 @@ def _cmd_fk(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    from .viz import Viewer
+
+    robot = _load(args)
+    q = robot.check_q(_joint_values(args.q, args.rad)) if args.q else np.zeros(robot.n)
+    with Viewer(robot) as viewer:
+        viewer.show(q)
+        viewer.show_target(robot.fk(q))
+        print(f"meshcat viewer of {robot.name}: {viewer.url}", flush=True)
+        if args.html:
+            print(f"wrote {viewer.save_html(args.html)}")
+        if not args.no_block:
+            print("Press Ctrl-C to stop the viewer.", flush=True)
+            viewer.block()
+    return 0
+
+
+def _cmd_reproduce(args: argparse.Namespace) -> int:
+    from .experiments import run_papers
+    from .experiments.common import check_output_file, show_animation
+
+    html = check_output_file(args.html) if args.html else None  # before any work starts
+    reports = run_papers(args.paper, out=args.out, quick=args.quick, seed=args.seed, progress=not args.no_progress)
+    for r in reports:
+        mode = "quick" if r.quick else "full"
+        print(f"paper {r.paper_id} ({mode}, seed {r.seed}): {r.wall_time_s:.1f} s -> {args.out}/{r.paper_id}/report.md",
+              flush=True)
+    if html is not None or args.view:
+        shown = [r for r in reports if r.animation is not None]
+        if not shown:
+            print("no reproduced paper has an animation to show (paper 002 has the spiral)", file=sys.stderr)
+        for r in shown:
+            path = html if html is None or len(shown) == 1 else html.with_name(f"{html.stem}_{r.paper_id}{html.suffix}")
+            written = show_animation(r.animation, html=path, view=args.view)
+            if written is not None:
+                print(f"wrote {written}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="evoik", description="Inverse kinematics by evolutionary computation on Pinocchio."
@@ -88,6 +127,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rad", action="store_true", help="joint values in radians")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_fk)
+
+    p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
+    _add_robot_args(p)
+    p.add_argument("--q", type=float, nargs="+", help="joint values (degrees, or radians with --rad); default 0")
+    p.add_argument("--rad", action="store_true", help="joint values in radians")
+    p.add_argument("--html", metavar="PATH", help="also write the scene as a self-contained HTML file")
+    p.add_argument("--no-block", action="store_true",
+                   help="return at once (the server stops with evoik; useful with --html)")
+    p.set_defaults(func=_cmd_view)
+    p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
+    p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
+    p.add_argument("--quick", action="store_true", help="reduced-size runs (well under a minute per paper)")
+    p.add_argument("--seed", type=int, default=0, help="master seed of every random choice (default 0)")
+    p.add_argument("--out", default="reproduction", help="output directory; each paper writes OUT/<id>/")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--html", metavar="PATH", help="save the paper's animation (002: Pro-ISADE spiral) as HTML")
+    p.add_argument("--view", action="store_true", help="play the paper's animation in meshcat until Ctrl-C")
+    p.set_defaults(func=_cmd_reproduce)
     return parser
 
 

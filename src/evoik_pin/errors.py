@@ -46,8 +46,23 @@ class OptionError(EvoikError, ValueError):
     """A solver option is unknown or out of its accepted range."""
 
 
+class ViewerError(EvoikError, RuntimeError):
+    """The meshcat viewer could not start or reach its server, or could not write its HTML export."""
+
+
 class MethodError(EvoikError, KeyError):
     """A solver method name is unknown or does not apply to this robot or call."""
 
     def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
+class ReproductionError(EvoikError, ValueError):
+    """A paper reproduction was asked for with an unknown paper id or an unusable option."""
+
+
+class OutputError(EvoikError, OSError):
+    """An output directory or file cannot be created or written."""
+
+    def __str__(self) -> str:  # OSError would otherwise format (errno, strerror)
         return str(self.args[0]) if self.args else ""

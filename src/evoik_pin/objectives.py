@@ -53,6 +53,14 @@ class PopulationKinematics:
         self.Q = Q
         self._full = None
 
+    @classmethod
+    def from_poses(cls, robot, Q: np.ndarray, positions: np.ndarray, rotations: np.ndarray) -> PopulationKinematics:
+        """Kinematics of ``Q`` (N, n) whose tip poses are already known: positions (N, 3) m, rotations
+        (N, 3, 3), e.g. from a local solver's own forward kinematics, so no batch pass is repeated."""
+        kin = cls(robot, Q)
+        kin._full = (positions, rotations)
+        return kin
+
     def _fk(self):
         if self._full is None:
             self._full = self.robot.fk_batch(self.Q, validate=False)
@@ -96,10 +104,17 @@ def _rotation_angles(R_target: np.ndarray, R: np.ndarray) -> np.ndarray:
 
 
 def position_errors(target, kin: PopulationKinematics) -> np.ndarray:
-    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane)."""
-    if target.planar:
-        return np.linalg.norm(kin.positions[:, :2] - target.position, axis=1)
-    return np.linalg.norm(kin.positions - target.position, axis=1)
+    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane).
+
+    Cached on ``kin`` per target: ``IKProblem.evaluate`` asks for it twice (objective and errors).
+    """
+    cached = kin.__dict__.get("_position_errors")
+    if cached is not None and cached[0] is target:
+        return cached[1]
+    d = (kin.positions[:, :2] if target.planar else kin.positions) - target.position
+    err = np.sqrt((d * d).sum(axis=1))
+    kin._position_errors = (target, err)
+    return err
 
 
 def orientation_errors(target, kin: PopulationKinematics) -> np.ndarray:

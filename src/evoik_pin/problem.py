@@ -29,9 +29,12 @@ def _vector(value, name: str, sizes: tuple[int, ...]) -> np.ndarray:
         raise TargetError(f"{name} must be numbers, got {value!r}") from exc
     if arr.ndim != 1 or arr.shape[0] not in sizes:
         raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():  # the method, not np.all: this runs once per solve
         raise TargetError(f"{name} contains NaN or inf: {arr}")
     return arr
+
+
+_EYE3 = np.eye(3)
 
 
 def _rotation(value) -> np.ndarray:
@@ -41,9 +44,12 @@ def _rotation(value) -> np.ndarray:
         raise TargetError(f"target rotation must be a 3 x 3 matrix of numbers, got {value!r}") from exc
     if R.shape != (3, 3):
         raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
-    if not np.all(np.isfinite(R)):
+    if not np.isfinite(R).all():
         raise TargetError("target rotation contains NaN or inf")
-    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+    # det R = R[0] . (R[1] x R[2]); written out, as np.linalg.det costs more than the rest of the check
+    det = (R[0, 0] * (R[1, 1] * R[2, 2] - R[1, 2] * R[2, 1]) - R[0, 1] * (R[1, 0] * R[2, 2] - R[1, 2] * R[2, 0])
+           + R[0, 2] * (R[1, 0] * R[2, 1] - R[1, 1] * R[2, 0]))
+    if np.abs(R.T.dot(R) - _EYE3).max() > 1e-6 or det < 0:
         raise TargetError(
             "target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
             "orthonormalize it or pass roll-pitch-yaw angles"
@@ -191,9 +197,9 @@ class IKProblem:
         lower, upper = lower.reshape(-1), upper.reshape(-1)
         if lower.shape != (n,) or upper.shape != (n,):
             raise BoundsError(f"bounds need {n} values each (one per joint), got {lower.size} and {upper.size}")
-        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
             raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
-        if np.any(lower > upper):
+        if (lower > upper).any():
             k = int(np.nonzero(lower > upper)[0][0])
             raise BoundsError(f"inverted bounds for joint {self.robot.joint_names[k]!r}: {lower[k]} > {upper[k]}")
         return lower.copy(), upper.copy()

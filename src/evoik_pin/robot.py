@@ -388,6 +388,24 @@ class Robot:
         ps.append(prev_B.T @ tip_frame.placement.translation)
         self._F_R = np.array(Rs)  # (n+1, 3, 3)
         self._F_p = np.array(ps)  # (n+1, 3)
+        # positions_batch: the homogeneous map of joint k is H_k(q) = a(q) A_k + b(q) B_k + C_k (4 x 4) with
+        # a = cos q, b = sin q (revolute) or a = q, b = 0 (prismatic). With Y = [a p; b p; p] (12, N) for the
+        # homogeneous points p (4, N), H_k p = [A_k B_k C_k] Y; stacking that (4, 12) block three times
+        # makes one BLAS product return p' already copied into all three slots of the next Y.
+        S = np.zeros((self.n, 4, 12))
+        for k in range(self.n):
+            R, t = self._F_R[k], self._F_p[k]
+            if self.revolute[k]:
+                S[k, 0:3, 0], S[k, 0:3, 1] = R[:, 0], R[:, 1]
+                S[k, 0:3, 4], S[k, 0:3, 5] = R[:, 1], -R[:, 0]
+                S[k, 0:3, 10] = R[:, 2]
+            else:
+                S[k, 0:3, 3] = R[:, 2]
+                S[k, 0:3, 8:11] = R
+            S[k, 0:3, 11], S[k, 3, 11] = t, 1.0
+        self._S3 = [np.ascontiguousarray(np.vstack([S[k]] * 3)) for k in range(self.n)]  # (12, 12) each
+        self._p_tip = np.tile(np.append(self._F_p[-1], 1.0), 3)[:, None]  # (12, 1)
+        self._all_revolute = bool(self.revolute.all())
 
     # ------------------------------------------------------------------ bounds and validation
     def set_bounds(self, lower, upper) -> None:
@@ -505,6 +523,49 @@ class Robot:
             J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
         return np.array(J)
 
+    # ------------------------------------------------------------------ hot path of local solvers
+    @cached_property
+    def _continuous_idx(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Index arrays mapping a joint vector into Pinocchio's q: (plain joints, their idx_q, continuous)."""
+        plain = np.nonzero(~self.continuous)[0]
+        cont = np.nonzero(self.continuous)[0]
+        return plain, self._idx_q[plain], cont
+
+    @cached_property
+    def _has_continuous(self) -> bool:
+        return bool(self.continuous.any())
+
+    def _pin_q(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`to_pinocchio` without the per-joint Python loop (``q`` itself when nothing is continuous)."""
+        if not self._has_continuous:
+            return q
+        plain, idx_plain, cont = self._continuous_idx
+        out = np.empty(self.model.nq)
+        out[idx_plain] = q[plain]
+        i = self._idx_q[cont]
+        out[i], out[i + 1] = np.cos(q[cont]), np.sin(q[cont])
+        return out
+
+    def fk_unchecked(self, q: np.ndarray) -> pin.SE3:
+        """:meth:`fk` without validation, for local solvers' inner loops.
+
+        ``q`` must already be a finite float array of shape (n,). Returns the tip pose in the base frame
+        (a ``pin.SE3`` owned by the caller).
+        """
+        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
+        if self._base_id == 0:
+            return self.data.oMf[self._tip_id].copy()
+        return self._baseMo * self.data.oMf[self._tip_id]
+
+    def jacobian_local_unchecked(self, q: np.ndarray) -> np.ndarray:
+        """``jacobian(q, "local")`` without validation: the tip Jacobian (6, n) in the tip frame.
+
+        Rows (vx, vy, vz, wx, wy, wz): ``T(q + dq) ~ T(q) exp(J dq)`` for small dq. ``q`` as in
+        :meth:`fk_unchecked`.
+        """
+        return pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), self._tip_id,
+                                        pin.ReferenceFrame.LOCAL)
+
     @staticmethod
     def task_rows(rows) -> list[int]:
         """Jacobian row indices of a row selection: "translation", "rotation", "full", "planar" or a list."""
@@ -544,40 +605,49 @@ class Robot:
     def positions_batch(self, Q) -> np.ndarray:
         """Tip positions (N, 3) in m of a population ``Q`` (N, n); cheaper than :meth:`fk_batch`.
 
-        Walks the chain from the tip back to the base, carrying only a point, so each joint costs a
-        handful of (N,)-array operations. Not validated: solvers call it in their inner loop with
-        populations they built themselves.
+        Walks the chain from the tip back to the base carrying homogeneous points in a (12, N) buffer
+        ``Y = [a p; b p; p]``: per joint one in-place product with the joint's (cos, sin) rows and one BLAS
+        product with a constant (12, 12) matrix (see ``_build_batch_chain``), so a joint costs two NumPy
+        calls whatever N is. Not validated: solvers call it in their inner loop with populations they
+        built themselves.
         """
-        FR, Fp = self._F_R, self._F_p
         N = Q.shape[0]
-        x = np.full(N, Fp[-1, 0])
-        y = np.full(N, Fp[-1, 1])
-        z = np.full(N, Fp[-1, 2])
-        cos, sin = np.cos(Q), np.sin(Q)
+        QT = Q.T
+        AB = np.empty((self.n, 8, N))  # rows 0-3: a = cos q (or q), rows 4-7: b = sin q (or 0)
+        AB[:, 0:4] = np.cos(QT)[:, None, :]
+        AB[:, 4:8] = np.sin(QT)[:, None, :]
+        if not self._all_revolute:
+            AB[~self.revolute, 0:4] = QT[~self.revolute][:, None, :]
+        Y = np.empty((12, N))
+        Z = np.empty((12, N))
+        Y[:] = self._p_tip
+        S3 = self._S3
         for k in range(self.n - 1, -1, -1):
-            if self.revolute[k]:
-                c, s = cos[:, k], sin[:, k]
-                x, y = c * x - s * y, s * x + c * y
-            else:
-                z = z + Q[:, k]
-            R, t = FR[k], Fp[k]
-            x, y, z = (R[0, 0] * x + R[0, 1] * y + R[0, 2] * z + t[0],
-                       R[1, 0] * x + R[1, 1] * y + R[1, 2] * z + t[1],
-                       R[2, 0] * x + R[2, 1] * y + R[2, 2] * z + t[2])
-        return np.stack([x, y, z], axis=1)
+            Y[0:8] *= AB[k]
+            np.matmul(S3[k], Y, out=Z)
+            Y, Z = Z, Y
+        return Y[8:11].T.copy()
 
     def jacobian_batch(self, Q, validate: bool = True) -> np.ndarray:
         """World-frame Jacobians (N, 6, n) of a population, equal to :meth:`jacobian` row by row."""
+        return self.fk_jacobian_batch(Q, validate)[2]
+
+    def fk_jacobian_batch(self, Q, validate: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tip positions (N, 3), rotations (N, 3, 3) and world-frame Jacobians (N, 6, n) from one pass.
+
+        What :meth:`fk_batch` and :meth:`jacobian_batch` return, for batched Newton-type solvers that need
+        both at every iteration.
+        """
         if validate:
             Q = self.check_population(Q)
-        _, p_tip, z_axes, origins = self._forward(Q, want_joints=True)
+        R_tip, p_tip, z_axes, origins = self._forward(Q, want_joints=True)
         J = np.zeros((Q.shape[0], 6, self.n))
         rev = self.revolute
         lever = p_tip[:, None, :] - origins  # (N, n, 3)
         J[:, :3, rev] = np.cross(z_axes[:, rev], lever[:, rev]).transpose(0, 2, 1)
         J[:, 3:, rev] = z_axes[:, rev].transpose(0, 2, 1)
         J[:, :3, ~rev] = z_axes[:, ~rev].transpose(0, 2, 1)
-        return J
+        return p_tip, R_tip, J
 
     def manipulability_batch(self, Q, rows="translation") -> np.ndarray:
         """:meth:`manipulability` of every row of ``Q`` (N, n), shape (N,)."""

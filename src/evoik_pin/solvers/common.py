@@ -11,7 +11,8 @@ from ..errors import OptionError
 from ..problem import Evaluation, IKProblem
 from ..result import Result
 
-__all__ = ["BOUND_HANDLING", "SolverRun", "check_positive_int", "diversity", "enforce_bounds", "initial_population"]
+__all__ = ["BOUND_HANDLING", "SolverRun", "check_positive_int", "diversity", "enforce_bounds", "initial_population",
+           "run_with_restarts"]
 
 #: Accepted ``bound_handling`` option values.
 BOUND_HANDLING = ("clip", "reflect", "resample")
@@ -54,7 +55,7 @@ def enforce_bounds(
     """
     lo, hi = problem.lower, problem.upper
     if method == "clip":
-        return np.clip(trial, lo, hi)
+        return np.minimum(np.maximum(trial, lo), hi)  # = np.clip, with less call overhead
     if method == "reflect":
         width = hi - lo
         safe = np.where(width > 0, width, 1.0)
@@ -76,9 +77,15 @@ def diversity(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
 
     0 for a collapsed population; about 0.29 sqrt(n) for a uniform one.
     """
+    return float(_diversities(np.asarray(Q, dtype=float)[None], lower, upper)[0])
+
+
+def _diversities(Qs: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """:func:`diversity` of a stack of equally sized populations (G, N, n), shape (G,), in one pass."""
     width = np.where(upper > lower, upper - lower, 1.0)
-    Z = Q / width
-    return float(np.linalg.norm(Z - Z.mean(axis=0), axis=1).mean())
+    Z = Qs / width
+    Z -= Z.mean(axis=1, keepdims=True)
+    return np.sqrt((Z * Z).sum(axis=2)).mean(axis=1)
 
 
 class SolverRun:
@@ -87,7 +94,13 @@ class SolverRun:
     Stopping rules, checked by :meth:`stop_reason` after every generation: the best individual meets the
     problem's tolerances; its cost is at most ``cost_tolerance`` (when given); ``max_generations``
     reached; no improvement of the best cost for ``stall_generations`` generations (when given).
+
+    ``history["diversity"]`` is computed in batches (a copy of each population is kept until then): it
+    may lag a few dozen generations behind during the run and is complete in :meth:`result`.
     """
+
+    #: Populations kept before their diversities are computed in one vectorized pass.
+    _DIVERSITY_BATCH = 64
 
     def __init__(self, problem: IKProblem, max_generations: int, stall_generations: int | None = None,
                  cost_tolerance: float | None = None) -> None:
@@ -104,13 +117,14 @@ class SolverRun:
         self.best_cost = np.inf
         self._stall = 0
         self.history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
+        self._pending: list[np.ndarray] = []  # populations whose diversity is not computed yet
 
     def record(self, Q: np.ndarray, ev: Evaluation, **extra: float) -> int:
         """Log one generation's population ``Q`` (N, n) and its evaluation; returns the best index.
 
         Extra keyword values become additional history series (e.g. ``w1=...``).
         """
-        i = int(np.argmin(ev.cost))
+        i = int(ev.cost.argmin())
         if ev.cost[i] < self.best_cost:
             self.best_cost = float(ev.cost[i])
             self.best_q = Q[i].copy()
@@ -120,11 +134,20 @@ class SolverRun:
         else:
             self._stall += 1
         self.history["best_cost"].append(self.best_cost)
-        self.history["mean_cost"].append(float(np.mean(ev.cost)))
-        self.history["diversity"].append(diversity(Q, self.problem.lower, self.problem.upper))
+        self.history["mean_cost"].append(float(ev.cost.sum() / ev.cost.shape[0]))
+        # diversity is computed in batches: one vectorized pass instead of a handful of calls per generation
+        if self._pending and (len(self._pending) >= self._DIVERSITY_BATCH or Q.shape != self._pending[0].shape):
+            self._flush_diversity()
+        self._pending.append(np.array(Q, dtype=float))
         for key, value in extra.items():
             self.history.setdefault(key, []).append(float(value))
         return i
+
+    def _flush_diversity(self) -> None:
+        if self._pending:
+            values = _diversities(np.stack(self._pending), self.problem.lower, self.problem.upper)
+            self.history["diversity"].extend(values.tolist())
+            self._pending = []
 
     def offer(self, q: np.ndarray, cost: float, position_error: float, orientation_error: float | None) -> None:
         """Consider one configuration outside the generational log (e.g. after a local polish)."""
@@ -151,6 +174,7 @@ class SolverRun:
     def result(self, method: str, message: str, **fields) -> Result:
         """The :class:`Result` of the best configuration met (errors recomputed from one FK)."""
         problem = self.problem
+        self._flush_diversity()
         q = np.clip(self.best_q, problem.lower, problem.upper)
         evaluations = problem.evaluations
         ev = problem.evaluate(q[None])
@@ -158,7 +182,7 @@ class SolverRun:
         pos = float(ev.position_error[0])
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
         success = bool(problem.succeeded(pos, rot))
-        if not success and "tolerance" in message:
+        if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
             message = "stopped"
         if not success:
             message += (f"; best position error {pos:.3g} m" + ("" if rot is None else f", orientation error "
@@ -169,3 +193,35 @@ class SolverRun:
             history={k: np.asarray(v) for k, v in self.history.items()}, message=message, method=method,
             **fields,
         )
+
+
+def run_with_restarts(solve_once, problem: IKProblem, runs: int) -> Result:
+    """Paper 002's rho: up to ``runs`` independent runs of ``solve_once()`` (a fresh population each), stopping
+    at the first run that meets the tolerances; the best run's answer is returned.
+
+    Paper 002 (section 3.4, Table 2) re-runs every algorithm up to 10 times on a point until its fitness
+    threshold is met. The returned Result counts every run: ``generations``, ``evaluations`` and ``time_s``
+    are totals, ``history`` concatenates the runs' series (each run starts with its initial population, so
+    its length is ``generations + runs``) and adds ``run`` (the run index of each entry). A run stopped by
+    its callback ends the restarts.
+    """
+    runs = check_positive_int("runs", runs)
+    results = []
+    for _ in range(runs):
+        res = solve_once()
+        results.append(res)
+        if res.success or res.message.startswith("stopped by callback"):
+            break
+    if len(results) == 1:
+        return results[0]
+    k = min(range(len(results)), key=lambda i: (not results[i].success, results[i].cost))
+    best = results[k]
+    history = {key: np.concatenate([r.history[key] for r in results if key in r.history])
+               for key in best.history}
+    history["run"] = np.concatenate([np.full(len(r.history["best_cost"]), float(i)) for i, r in enumerate(results)])
+    best.history = history
+    best.generations = sum(r.generations for r in results)
+    best.evaluations = problem.evaluations
+    best.time_s = sum(r.time_s for r in results)
+    best.message = f"{best.message} (run {k + 1} of {len(results)})"
+    return best

@@ -1,0 +1,435 @@
+"""Shared machinery of the paper reproductions: run context, tables, reports, figures, machine facts.
+
+A paper module receives a :class:`RunContext` (output directory, quick flag, seed, progress switch) and
+returns a :class:`PaperReport` (settings, :class:`Table` objects with the paper's numbers beside ours,
+figures, notes, raw data). :meth:`PaperReport.write` turns the report into ``report.md``,
+``results.json`` and one CSV per table in the context's output directory.
+
+Units: everything computed in SI (m, rad, s); tables may show mm, cm, deg or ms, and say so in their
+column names.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import platform
+import sys
+import tempfile
+import time
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import OutputError, ReproductionError
+
+__all__ = [
+    "Animation",
+    "Figure",
+    "PaperReport",
+    "RunContext",
+    "Table",
+    "check_output_dir",
+    "check_seed",
+    "fmt",
+    "jsonable",
+    "machine_info",
+]
+
+
+# --------------------------------------------------------------------------------------------------
+# input checks (done before any work starts)
+
+
+def check_seed(seed) -> int:
+    """``seed`` as a non-negative int, or a :class:`ReproductionError`."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ReproductionError(f"seed must be a non-negative integer, got {seed!r}")
+    return int(seed)
+
+
+def check_output_dir(path) -> Path:
+    """Create ``path`` (and parents) if needed and prove it is writable; returns it resolved.
+
+    Raises:
+        OutputError: the path is a file, cannot be created, or a file cannot be written in it.
+    """
+    out = Path(path).expanduser()
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"output path {str(out)!r} exists and is not a directory; choose a directory for --out")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=out, prefix=".evoik-write-test-", delete=True) as fh:
+            fh.write(b"ok")
+    except OSError as exc:
+        raise OutputError(
+            f"output directory {str(out)!r} is not writable ({exc.strerror or exc}); choose another with --out"
+        ) from None
+    return out.resolve()
+
+
+# --------------------------------------------------------------------------------------------------
+# formatting
+
+
+def fmt(value, spec: str | None = None) -> str:
+    """A table cell: numbers with ``spec`` (default: 4 significant digits, scientific when tiny or huge)."""
+    if value is None:
+        return ""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (bool, np.bool_)):
+        return "yes" if value else "no"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value)) if spec is None else format(int(value), spec)
+    v = float(value)
+    if math.isnan(v):
+        return "n/a"
+    if spec is not None:
+        return format(v, spec)
+    if v == 0.0:
+        return "0"
+    if abs(v) < 1e-3 or abs(v) >= 1e5:
+        return f"{v:.3e}"
+    return f"{v:.4g}"
+
+
+def jsonable(obj: Any) -> Any:
+    """``obj`` with numpy scalars / arrays, paths and tuples turned into plain JSON types (NaN -> None)."""
+    if isinstance(obj, dict):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return None if not math.isfinite(v) else v
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+# --------------------------------------------------------------------------------------------------
+# machine
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.lower().startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def machine_info() -> dict[str, Any]:
+    """Facts about the machine and software a run used (for the report header and results.json)."""
+    import matplotlib
+    import pinocchio
+
+    from .. import __version__
+
+    try:
+        load = [round(x, 2) for x in os.getloadavg()]
+    except (OSError, AttributeError):  # pragma: no cover - not on Linux/macOS
+        load = None
+    return {
+        "cpu": _cpu_model(),
+        "cores": os.cpu_count(),
+        "load_average_at_start": load,
+        "platform": platform.platform(),
+        "python": sys.version.split()[0],
+        "numpy": np.__version__,
+        "pinocchio": pinocchio.__version__,
+        "matplotlib": matplotlib.__version__,
+        "evoik_pin": __version__,
+    }
+
+
+# --------------------------------------------------------------------------------------------------
+# tables, figures, report
+
+
+@dataclass
+class Table:
+    """One table of a reproduction: our numbers and, when the paper has the same table, the paper's.
+
+    Attributes:
+        key: file stem of the CSV (``<key>.csv``) and key in results.json, e.g. ``"table4"``.
+        title: caption, e.g. ``"Table 4 - Scenario 2: 100 random points, from q = 0"``.
+        columns: column names, units included (``"avg. error (m)"``).
+        rows: our rows, same length as ``columns``; cells are numbers or strings (raw values; the CSV keeps
+            full precision, the markdown uses :func:`fmt`).
+        paper_rows: the paper's rows with the same columns (None when the paper has no such table);
+            empty cells (None) where the paper reports nothing.
+        formats: optional per-column format specs for the markdown (None = :func:`fmt`'s default).
+        note: one paragraph printed under the table.
+    """
+
+    key: str
+    title: str
+    columns: list[str]
+    rows: list[list]
+    paper_rows: list[list] | None = None
+    formats: list[str | None] | None = None
+    note: str = ""
+
+    def __post_init__(self) -> None:
+        for rows in (self.rows, self.paper_rows or []):
+            for row in rows:
+                if len(row) != len(self.columns):
+                    raise ValueError(f"table {self.key}: row {row!r} has {len(row)} cells, expected "
+                                     f"{len(self.columns)} ({self.columns})")
+
+    def _markdown_block(self, rows: list[list]) -> list[str]:
+        specs = self.formats or [None] * len(self.columns)
+        lines = ["| " + " | ".join(self.columns) + " |", "|" + " --- |" * len(self.columns)]
+        for row in rows:
+            lines.append("| " + " | ".join(fmt(v, s) for v, s in zip(row, specs, strict=True)) + " |")
+        return lines
+
+    def markdown(self) -> str:
+        """The table as markdown: the paper's block (when given) above ours, same rows and columns."""
+        out = [f"**{self.title}**", ""]
+        if self.paper_rows is not None:
+            out += ["Paper (as reported):", "", *self._markdown_block(self.paper_rows), "", "This reproduction:", ""]
+        out += self._markdown_block(self.rows)
+        if self.note:
+            out += ["", self.note]
+        return "\n".join(out)
+
+    def write_csv(self, path: Path) -> Path:
+        """CSV with a leading ``source`` column (``paper`` / ``ours``), full-precision numbers."""
+        with open(path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["source", *self.columns])
+            for row in self.paper_rows or []:
+                w.writerow(["paper", *("" if v is None else v for v in row)])
+            for row in self.rows:
+                w.writerow(["ours", *("" if v is None else v for v in row)])
+        return path
+
+    def as_dict(self) -> dict[str, Any]:
+        return jsonable({"title": self.title, "columns": self.columns, "rows": self.rows,
+                         "paper_rows": self.paper_rows, "note": self.note})
+
+
+@dataclass
+class Figure:
+    """A PNG written by the run: ``path`` and a one-line caption (what the paper's figure it mirrors)."""
+
+    path: Path
+    caption: str
+
+
+@dataclass
+class Animation:
+    """A joint trajectory a viewer can play (``evoik reproduce ... --html/--view``).
+
+    Attributes:
+        robot: robot name for :func:`evoik_pin.load_robot`.
+        q: (T, n) joint vectors (rad), one per frame.
+        targets: (T, 3) target positions (m) to draw as the path.
+        label: what is shown, e.g. ``"Pro-ISADE on the spiral (Scenario 3.2)"``.
+        fps: frames per second for playback.
+    """
+
+    robot: str
+    q: np.ndarray
+    targets: np.ndarray
+    label: str
+    fps: float = 10.0
+
+
+@dataclass
+class PaperReport:
+    """Everything a paper reproduction produced; :meth:`write` saves it.
+
+    Attributes:
+        paper_id: ``"002"`` etc.
+        title: the paper's short title.
+        quick: whether the reduced-size quick mode ran.
+        seed: the master seed every random choice of the run derives from.
+        settings: the settings used (JSON-able), paper values and our choices where the paper is silent.
+        tables: the tables, in the paper's order.
+        figures: the PNGs written.
+        notes: short paragraphs of discussion (deviations, inconsistencies, floating-point floors).
+        data: raw per-point / per-run numbers (JSON-able) for anyone re-plotting.
+        machine: :func:`machine_info` of this run.
+        wall_time_s: wall time of the whole run (s).
+        command: the command line that reproduces this run.
+        animation: optional trajectory for a viewer.
+    """
+
+    paper_id: str
+    title: str
+    quick: bool
+    seed: int
+    settings: dict[str, Any] = field(default_factory=dict)
+    tables: list[Table] = field(default_factory=list)
+    figures: list[Figure] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    data: dict[str, Any] = field(default_factory=dict)
+    machine: dict[str, Any] = field(default_factory=dict)
+    wall_time_s: float = float("nan")
+    command: str = ""
+    animation: Animation | None = None
+
+    def table(self, key: str) -> Table:
+        """The table with ``key``."""
+        for t in self.tables:
+            if t.key == key:
+                return t
+        raise KeyError(f"no table {key!r} in the report of paper {self.paper_id}; have "
+                       f"{[t.key for t in self.tables]}")
+
+    def markdown(self, out_dir: Path | None = None) -> str:
+        """The report as markdown (figure links relative to ``out_dir`` when given)."""
+        mode = "quick (reduced size)" if self.quick else "full (paper settings)"
+        lines = [f"# Paper {self.paper_id}: {self.title}", "",
+                 f"- mode: {mode}", f"- seed: {self.seed}", f"- command: `{self.command}`",
+                 f"- wall time: {self.wall_time_s:.1f} s",
+                 "- machine: " + ", ".join(f"{k} {v}" for k, v in self.machine.items()), "",
+                 "## Settings", "", "```json", json.dumps(jsonable(self.settings), indent=1), "```", ""]
+        lines += ["## Tables", ""]
+        for t in self.tables:
+            lines += [t.markdown(), ""]
+        if self.figures:
+            lines += ["## Figures", ""]
+            for f in self.figures:
+                rel = f.path.name if out_dir is None else os.path.relpath(f.path, out_dir)
+                lines += [f"![{f.caption}]({rel})", "", f"*{f.caption}*", ""]
+        if self.notes:
+            lines += ["## Notes", ""] + [f"- {n}" for n in self.notes] + [""]
+        return "\n".join(lines)
+
+    def as_dict(self) -> dict[str, Any]:
+        return jsonable({
+            "paper_id": self.paper_id, "title": self.title, "quick": self.quick, "seed": self.seed,
+            "command": self.command, "wall_time_s": self.wall_time_s, "machine": self.machine,
+            "settings": self.settings, "tables": {t.key: t.as_dict() for t in self.tables},
+            "figures": [{"path": f.path.name, "caption": f.caption} for f in self.figures],
+            "notes": self.notes, "data": self.data,
+        })
+
+    def write(self, out_dir: Path) -> dict[str, Path]:
+        """Write ``report.md``, ``results.json`` and ``<table key>.csv`` files into ``out_dir``."""
+        out_dir = Path(out_dir)
+        written: dict[str, Path] = {}
+        for t in self.tables:
+            written[t.key] = t.write_csv(out_dir / f"{t.key}.csv")
+        written["results.json"] = out_dir / "results.json"
+        written["results.json"].write_text(json.dumps(self.as_dict(), indent=1, allow_nan=False))
+        written["report.md"] = out_dir / "report.md"
+        written["report.md"].write_text(self.markdown(out_dir))
+        return written
+
+
+# --------------------------------------------------------------------------------------------------
+# run context
+
+
+@dataclass
+class RunContext:
+    """What a paper module's ``run(ctx)`` gets.
+
+    Attributes:
+        out_dir: directory for this paper's files (already created and checked writable).
+        quick: run the reduced-size version (well under a minute) instead of the paper's settings.
+        seed: master seed; :meth:`rng` derives one independent stream per label from it.
+        progress: show tqdm progress bars (on stderr).
+        dpi: resolution of the PNG figures (small, commit-able files).
+        command: the command line shown in the report.
+    """
+
+    out_dir: Path
+    quick: bool = False
+    seed: int = 0
+    progress: bool = True
+    dpi: int = 90
+    command: str = ""
+    t0: float = field(default_factory=time.perf_counter)
+
+    def rng(self, *labels: str) -> np.random.Generator:
+        """An independent generator for one named part of the experiment, derived from :attr:`seed`.
+
+        The stream depends only on the seed and the labels (CRC-32 of each), so adding an experiment does
+        not change the random numbers of another.
+        """
+        keys = [zlib.crc32(str(label).encode()) for label in labels]
+        return np.random.default_rng(np.random.SeedSequence([self.seed, *keys]))
+
+    def bar(self, iterable=None, total: int | None = None, desc: str = ""):
+        """A tqdm progress bar (disabled when :attr:`progress` is False)."""
+        from tqdm.auto import tqdm
+
+        return tqdm(iterable, total=total, desc=desc, disable=not self.progress, leave=False,
+                    dynamic_ncols=True, file=sys.stderr)
+
+    def new_figure(self, *args, **kwargs):
+        """``matplotlib.pyplot.subplots`` on the non-interactive Agg backend."""
+        import matplotlib
+
+        matplotlib.use("Agg", force=True)
+        import matplotlib.pyplot as plt
+
+        return plt.subplots(*args, **kwargs)
+
+    def save_figure(self, fig, name: str, caption: str) -> Figure:
+        """Save ``fig`` as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it, return a :class:`Figure`."""
+        import matplotlib.pyplot as plt
+
+        path = self.out_dir / f"{name}.png"
+        fig.savefig(path, dpi=self.dpi)
+        plt.close(fig)
+        return Figure(path, caption)
+
+    def elapsed(self) -> float:
+        """Seconds since the context was created."""
+        return time.perf_counter() - self.t0
+
+
+def check_output_file(path) -> Path:
+    """Check that a file can be written at ``path`` (its directory exists and is writable, it is no directory)."""
+    p = Path(path).expanduser()
+    if p.is_dir():
+        raise OutputError(f"{str(p)!r} is a directory; give a file path such as {str(p / 'scene.html')!r}")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise OutputError(f"directory {str(parent)!r} of {str(p)!r} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise OutputError(f"directory {str(parent)!r} is not writable; cannot write {str(p)!r}")
+    return p.resolve()
+
+
+def show_animation(animation: Animation, html=None, view: bool = False) -> Path | None:
+    """Play ``animation`` in the meshcat viewer (``view``: until Ctrl-C) and/or save it as a static HTML file.
+
+    Returns the HTML path when one was written. Needs :mod:`evoik_pin.viz`.
+    """
+    from ..robot import load_robot
+    from ..viz import Viewer
+
+    robot = load_robot(animation.robot)
+    written = None
+    with Viewer(robot) as viewer:
+        viewer.draw_path(np.asarray(animation.targets), name="targets")
+        viewer.show_target(np.asarray(animation.targets)[-1])
+        viewer.animate(np.asarray(animation.q), dt=1.0 / animation.fps)
+        if html is not None:
+            written = viewer.save_html(html)
+        if view:
+            print(f"{animation.label}: {viewer.url} (Ctrl-C to stop)", flush=True)
+            viewer.block()
+    return written

@@ -1,0 +1,416 @@
+"""Closed-form IK of the papers' small arms, as references and as the ``algebraic`` method.
+
+* :func:`planar2r_ik`: paper 001's planar 2R elbow arm (a1 = 0.25 m, a2 = 0.16 m), both elbows.
+* :func:`puma_ik`: paper 001's PUMA wrist point (eq. 20: a2 = 0.4318 m, d = 0.149 m, a3 = 0.0203 m,
+  d4 = 0.433 m), all four solutions (left/right shoulder x elbow up/down).
+* :func:`ax18_ik`: paper 000's AX-18 for a chosen tool pitch phi = t2 + t3 + t4 (section III-B), and
+  :func:`ax18_algebraic`: the paper's "algebraic method" (AM), which searches phi for the least position
+  error with the joints kept inside their limits.
+
+Everything is in metres and radians. The registered ``algebraic`` method recognizes the bundled robots by
+name and checks that the loaded chain's forward kinematics equals the closed form before using it; other
+robots raise :class:`~evoik_pin.errors.MethodError`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from ..errors import MethodError, OptionError, TargetError
+from ..problem import IKProblem
+from ..result import Result
+from . import register
+from .clustering import leader_clusters
+from .common import SolverRun
+
+__all__ = [
+    "AX18",
+    "PLANAR2R",
+    "PUMA3R",
+    "AX18Solution",
+    "ax18_algebraic",
+    "ax18_fk",
+    "ax18_ik",
+    "planar2r_fk",
+    "planar2r_ik",
+    "puma_fk",
+    "puma_ik",
+    "solution_results",
+]
+
+_CM = 0.01
+#: Paper 000, Table 1 (m): d1, a1, a2, a3, d2, a4 of the Crustcrawler AX-18.
+AX18 = {"d1": 4.36 * _CM, "a1": 6.75 * _CM, "a2": 17.23 * _CM, "a3": 6.3 * _CM, "d2": 2.0 * _CM, "a4": 11.7 * _CM}
+#: Paper 000's AX-18 joint limits (rad): t1 [-150, 150] deg, t2 [-60, 240], t3, t4 [-150, 150].
+AX18_LIMITS = (np.radians([-150.0, -60.0, -150.0, -150.0]), np.radians([150.0, 240.0, 150.0, 150.0]))
+#: Paper 001's planar 2R link lengths (m).
+PLANAR2R = {"a1": 25 * _CM, "a2": 16 * _CM}
+#: Paper 001's PUMA positioning-chain lengths (m), eq. 20 (a3 = 2.03 cm as in its Table 2).
+PUMA3R = {"a2": 43.18 * _CM, "d": 14.90 * _CM, "a3": 2.03 * _CM, "d4": 43.30 * _CM}
+
+_SAME = 1e-9  # rad: closed-form branches closer than this are one solution (singular configurations)
+
+
+def _wrap(a):
+    return (np.asarray(a, float) + np.pi) % (2 * np.pi) - np.pi
+
+
+def _distinct(candidates: list[np.ndarray]) -> list[np.ndarray]:
+    out: list[np.ndarray] = []
+    for q in candidates:
+        if all(np.abs(_wrap(q - p)).max() > _SAME for p in out):
+            out.append(q)
+    return out
+
+
+def _snap(c: float) -> float:
+    """``c`` clipped into [-1, 1] and snapped onto +-1 within 1e-12, so a rounding error at a boundary
+    configuration does not split one solution into two about 1e-8 rad apart."""
+    c = float(np.clip(c, -1.0, 1.0))
+    return float(np.sign(c)) if abs(c) > 1.0 - 1e-12 else c
+
+
+def _point(p, size: int, name: str) -> np.ndarray:
+    arr = np.asarray(p, dtype=float).reshape(-1)
+    if arr.shape != (size,) or not np.all(np.isfinite(arr)):
+        raise TargetError(f"{name} needs a finite position of {size} numbers (m), got {p!r}")
+    return arr
+
+
+# ---------------------------------------------------------------------------------------------- planar 2R
+def planar2r_fk(Q, a1: float = PLANAR2R["a1"], a2: float = PLANAR2R["a2"]) -> np.ndarray:
+    """Paper 001 eqs. 16-17: tip (x, y) in m of joint vectors ``Q`` (..., 2) in rad, shape (..., 2)."""
+    Q = np.asarray(Q, float)
+    t1, t12 = Q[..., 0], Q[..., 0] + Q[..., 1]
+    return np.stack([a1 * np.cos(t1) + a2 * np.cos(t12), a1 * np.sin(t1) + a2 * np.sin(t12)], axis=-1)
+
+
+def _planar2r_candidates(x: float, y: float, a1: float, a2: float, clamp: bool) -> tuple[list[np.ndarray], bool]:
+    c2 = (x * x + y * y - a1 * a1 - a2 * a2) / (2 * a1 * a2)
+    exact = abs(c2) <= 1.0 + 1e-12
+    if not exact and not clamp:
+        return [], False
+    c2 = _snap(c2)
+    out = []
+    for sign in (1.0, -1.0):
+        s2 = sign * np.sqrt(max(0.0, 1.0 - c2 * c2))
+        t2 = np.arctan2(s2, c2)
+        t1 = np.arctan2(y, x) - np.arctan2(a2 * s2, a1 + a2 * c2)
+        out.append(_wrap([t1, t2]))
+    return _distinct(out), exact
+
+
+def planar2r_ik(x: float, y: float, a1: float = PLANAR2R["a1"], a2: float = PLANAR2R["a2"]) -> list[np.ndarray]:
+    """Both IK solutions (t1, t2) in rad, wrapped into [-pi, pi), of the planar 2R arm for tip (x, y) m.
+
+    Elbow ``t2 > 0`` first. One solution on the workspace boundary, none outside it (empty list).
+    """
+    x, y = _point([x, y], 2, "planar2r_ik")
+    return _planar2r_candidates(x, y, a1, a2, clamp=False)[0]
+
+
+# ---------------------------------------------------------------------------------------------- PUMA 3R
+def puma_fk(Q, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUMA3R["a3"],
+            d4: float = PUMA3R["d4"]) -> np.ndarray:
+    """Paper 001 eq. 20: PUMA wrist point (..., 3) in m of joint vectors ``Q`` (..., 3) in rad."""
+    Q = np.asarray(Q, float)
+    t1, t2, t23 = Q[..., 0], Q[..., 1], Q[..., 1] + Q[..., 2]
+    reach = np.sin(t23) * d4 + a3 * np.cos(t23) + a2 * np.cos(t2)
+    return np.stack([np.cos(t1) * reach - d * np.sin(t1), np.sin(t1) * reach + d * np.cos(t1),
+                     d4 * np.cos(t23) - a3 * np.sin(t23) - a2 * np.sin(t2)], axis=-1)
+
+
+def _puma_candidates(p: np.ndarray, a2: float, d: float, a3: float, d4: float,
+                     clamp: bool) -> tuple[list[np.ndarray], bool]:
+    px, py, pz = p
+    # px^2 + py^2 = r^2 + d^2 with r = S23 d4 + a3 C23 + a2 C2 (the in-plane reach, either sign).
+    r2 = px * px + py * py - d * d
+    # r^2 + pz^2 = a2^2 + a3^2 + d4^2 + 2 a2 (d4 S3 + a3 C3) = ... + 2 a2 rho sin(t3 + gamma).
+    rho, gamma = np.hypot(a3, d4), np.arctan2(a3, d4)
+    exact = r2 >= -1e-15
+    out = []
+    for r in (np.sqrt(max(r2, 0.0)), -np.sqrt(max(r2, 0.0))):
+        t1 = np.arctan2(py, px) - np.arctan2(d, r)
+        k = (r * r + pz * pz - a2 * a2 - a3 * a3 - d4 * d4) / (2 * a2 * rho)
+        ok = abs(k) <= 1.0 + 1e-12
+        exact = exact and ok
+        if not ok and not clamp:
+            continue
+        k = _snap(k)
+        for t3_plus_gamma in (np.arcsin(k), np.pi - np.arcsin(k)):
+            t3 = t3_plus_gamma - gamma
+            s3, c3 = np.sin(t3), np.cos(t3)
+            # r = u C2 + v S2 and pz = v C2 - u S2 with u = a2 + d4 S3 + a3 C3, v = d4 C3 - a3 S3.
+            u, v = a2 + d4 * s3 + a3 * c3, d4 * c3 - a3 * s3
+            t2 = np.arctan2(v * r - u * pz, u * r + v * pz)
+            out.append(_wrap([t1, t2, t3]))
+    if not exact and not clamp:
+        return [], False
+    return _distinct(out), bool(exact)
+
+
+def puma_ik(p, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUMA3R["a3"],
+            d4: float = PUMA3R["d4"]) -> list[np.ndarray]:
+    """All IK solutions (t1, t2, t3) in rad, wrapped into [-pi, pi), of paper 001's PUMA wrist point.
+
+    ``p``: wrist position (3,) in m. Up to four solutions (two shoulders x two elbows); an empty list when
+    the point is out of reach. Derived from eq. 20: ``px^2 + py^2 - d^2`` fixes the in-plane reach r (either
+    sign, giving t1), ``r^2 + pz^2`` fixes ``d4 S3 + a3 C3`` (two t3), then t2 solves a 2 x 2 linear system.
+    """
+    return _puma_candidates(_point(p, 3, "puma_ik"), a2, d, a3, d4, clamp=False)[0]
+
+
+# ---------------------------------------------------------------------------------------------- AX-18
+def ax18_fk(Q, d1: float = AX18["d1"], a1: float = AX18["a1"], a2: float = AX18["a2"], a3: float = AX18["a3"],
+            d2: float = AX18["d2"], a4: float = AX18["a4"]) -> np.ndarray:
+    """Paper 000, section III-A: AX-18 tool position (..., 3) in m of joint vectors ``Q`` (..., 4) in rad."""
+    Q = np.asarray(Q, float)
+    t1, t2 = Q[..., 0], Q[..., 1]
+    t23, phi = t2 + Q[..., 2], t2 + Q[..., 2] + Q[..., 3]
+    r = (a3 + a4) * np.cos(phi) + d2 * np.sin(phi) + a1 * np.cos(t2) + a2 * np.cos(t23)
+    z = d1 + a1 * np.sin(t2) + a2 * np.sin(t23) + (a3 + a4) * np.sin(phi) - d2 * np.cos(phi)
+    return np.stack([np.cos(t1) * r, np.sin(t1) * r, z], axis=-1)
+
+
+def _ax18_branches(p: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form candidates (4, G, 4) for tool pitches ``phi`` (G,): shoulder (front, back) x elbow (+, -).
+
+    Section III-B: t1 = atan2(py, px); B = radial reach - (a3 + a4) cos phi - d2 sin phi and
+    C = pz - d1 - (a3 + a4) sin phi + d2 cos phi are reached by the 2R sub-chain (a1, a2); t4 = phi - t2 - t3.
+    The "back" shoulder (t1 + pi, negative reach) is the second branch the paper's atan leaves out.
+    Returns the candidates, with cos t3 clamped into [-1, 1] (the nearest the 2R sub-chain gets), and a
+    (4, G) mask of the exact ones (|cos t3| <= 1 before clamping).
+    """
+    d1, a1, a2, a3, d2, a4 = (AX18[k] for k in ("d1", "a1", "a2", "a3", "d2", "a4"))
+    px, py, pz = p
+    rho = np.hypot(px, py)
+    cphi, sphi = np.cos(phi), np.sin(phi)
+    C = pz - d1 - (a3 + a4) * sphi + d2 * cphi
+    out, exact = [], []
+    for t1, r in ((np.arctan2(py, px), rho), (np.arctan2(py, px) + np.pi, -rho)):
+        B = r - (a3 + a4) * cphi - d2 * sphi
+        c3 = (B * B + C * C - a1 * a1 - a2 * a2) / (2 * a1 * a2)
+        ok = np.abs(c3) <= 1.0 + 1e-12
+        c3 = np.clip(c3, -1.0, 1.0)
+        for sign in (1.0, -1.0):
+            t3 = sign * np.arccos(c3)
+            t2 = np.arctan2(C, B) - np.arctan2(a2 * np.sin(t3), a1 + a2 * np.cos(t3))
+            t4 = phi - t2 - t3
+            out.append(np.stack([np.full_like(phi, t1), t2, t3, t4], axis=-1))
+            exact.append(ok)
+    return np.array(out), np.array(exact)
+
+
+def ax18_ik(p, phi: float) -> list[np.ndarray]:
+    """Exact AX-18 solutions (rad, wrapped into [-pi, pi)) for tool position ``p`` (m) and pitch ``phi`` (rad).
+
+    Up to four (shoulder front/back x elbow up/down); joint limits are not applied (see
+    :func:`ax18_algebraic`). Empty when the wrist point for this phi is out of the 2R sub-chain's reach.
+    """
+    p = _point(p, 3, "ax18_ik")
+    Q, ok = _ax18_branches(p, np.array([float(phi)]))
+    return _distinct([_wrap(Q[b, 0]) for b in range(4) if ok[b, 0]])
+
+
+@dataclass(frozen=True)
+class AX18Solution:
+    """Result of :func:`ax18_algebraic`: joint vector ``q`` (4,) rad, pitch ``phi`` rad, error (m)."""
+
+    q: np.ndarray
+    phi: float
+    position_error: float
+    branch: int
+
+
+def _into_limits(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Each angle moved by a multiple of 2 pi into [lower, lower + 2 pi), then clamped onto the limits."""
+    Q = lower + np.mod(Q - lower, 2 * np.pi)
+    return np.clip(Q, lower, upper)
+
+
+def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, upper=None,
+                   fk=None) -> list[AX18Solution]:
+    """Paper 000's algebraic method: search the tool pitch phi for the least position error.
+
+    For every phi on a grid of step ``phi_step`` (rad) over [-pi, pi) and every branch, the closed form
+    of :func:`ax18_ik` is evaluated with the 2R sub-problem clamped to its reach and the joints moved into
+    their limits (``lower``, ``upper``, default the paper's servo ranges); the best phi of each branch is
+    then refined by a bounded scalar search within one grid step. Ties in error (a reachable target is
+    reached exactly by a whole interval of phi) go to the smallest maximum displacement from ``q0``
+    (default zeros), i.e. paper 000's second objective.
+
+    Args:
+        p: tool position (3,) in m.
+        fk: optional vectorized forward kinematics ``(N, 4) -> (N, 3)``; default :func:`ax18_fk`.
+
+    Returns:
+        One :class:`AX18Solution` per branch (up to four), least error first.
+    """
+    p = _point(p, 3, "ax18_algebraic")
+    if not (np.isfinite(phi_step) and 0 < phi_step <= np.pi / 4):
+        raise OptionError(f"phi_step must be in (0, pi/4] rad, got {phi_step!r}")
+    lower = AX18_LIMITS[0] if lower is None else np.asarray(lower, float)
+    upper = AX18_LIMITS[1] if upper is None else np.asarray(upper, float)
+    q0 = np.zeros(4) if q0 is None else np.asarray(q0, float)
+    fk = ax18_fk if fk is None else fk
+
+    def score(Q):
+        err = np.linalg.norm(fk(Q) - p, axis=-1)
+        disp = np.abs(Q - q0).max(axis=-1)
+        return err, disp
+
+    phis = np.arange(-np.pi, np.pi, phi_step)
+    Q, _ = _ax18_branches(p, phis)
+    Q = _into_limits(Q, lower, upper)
+    err, disp = score(Q.reshape(-1, 4))
+    err, disp = err.reshape(4, -1), disp.reshape(4, -1)
+    out = []
+    for b in range(4):
+        # Least error first; among errors equal to 1e-12 m, least displacement.
+        key = np.round(err[b] / 1e-12) * 1e3 + disp[b] / (2 * np.pi)
+        g = int(np.argmin(key))
+
+        def err_at(phi, b=b):
+            Qb = _into_limits(_ax18_branches(p, np.array([phi]))[0][b, 0], lower, upper)
+            return float(np.linalg.norm(fk(Qb[None])[0] - p))
+
+        phi = float(phis[g])
+        if err[b, g] > 1e-12:
+            ref = minimize_scalar(err_at, bounds=(phi - phi_step, phi + phi_step), method="bounded",
+                                  options={"xatol": 1e-10})
+            if ref.fun < err[b, g]:
+                phi = float(ref.x)
+        q = _into_limits(_ax18_branches(p, np.array([phi]))[0][b, 0], lower, upper)
+        out.append(AX18Solution(q=q, phi=phi, position_error=float(np.linalg.norm(fk(q[None])[0] - p)), branch=b))
+    out.sort(key=lambda s: (round(s.position_error / 1e-12), float(np.abs(s.q - q0).max())))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- registry
+#: Fixed joint vectors (rad) at which a loaded chain must match the closed form to be recognized.
+_PROBES = np.array([[0.3, -0.7, 1.1, -0.4], [-1.2, 0.5, -0.2, 2.0], [2.5, 1.9, -2.2, 0.6]])
+#: Largest FK mismatch (m) tolerated between the loaded chain and the closed form.
+_MATCH_TOL = 1e-9
+
+
+def _closed_form_for(robot):
+    """The closed form matching ``robot`` (name and kinematics), or a MethodError."""
+    forms = {"planar2r": (2, lambda Q: np.concatenate([planar2r_fk(Q), np.zeros(Q.shape[:-1] + (1,))], -1)),
+             "puma3r": (3, puma_fk), "ax18": (4, ax18_fk)}
+    if robot.name not in forms:
+        raise MethodError(
+            f"method 'algebraic' has closed forms for the bundled robots {', '.join(forms)} only, not for "
+            f"{robot.name!r}; use an evolutionary method (see evoik_pin.methods())"
+        )
+    n, fk = forms[robot.name]
+    if robot.n != n:
+        raise MethodError(f"method 'algebraic': robot {robot.name!r} has {robot.n} joints, its closed form {n}")
+    probes = _PROBES[:, :n]
+    mismatch = np.abs(robot.positions_batch(probes) - fk(probes)).max()
+    if mismatch > _MATCH_TOL:
+        raise MethodError(
+            f"method 'algebraic': the loaded {robot.name!r} chain (tip {robot.tip!r}) does not match the paper's "
+            f"closed form (forward kinematics differ by {mismatch:.3g} m); load the bundled robot unchanged"
+        )
+    return robot.name
+
+
+def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations: int, evaluations: int,
+                     time_s: float, only_successful: bool = True) -> list[Result]:
+    """One :class:`Result` per row of ``Q`` (M, n), best (lowest cost) first.
+
+    Rows are evaluated once more for their errors; that bookkeeping does not count as evaluations.
+    With ``only_successful``, rows that miss the problem's tolerances are left out.
+    """
+    if len(Q) == 0:
+        return []
+    Q = np.atleast_2d(np.asarray(Q, float))
+    before = problem.evaluations
+    ev = problem.evaluate(Q)
+    problem.evaluations = before
+    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    out = []
+    for i in np.argsort(ev.cost, kind="stable"):
+        if only_successful and not ok[i]:
+            continue
+        rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
+        out.append(Result(q=Q[i].copy(), position_error=float(ev.position_error[i]), orientation_error=rot,
+                          cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations,
+                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method))
+    return out
+
+
+def _target_point(problem: IKProblem, robot_name: str) -> np.ndarray:
+    t = problem.target
+    if t.planar:
+        if robot_name != "planar2r":
+            raise TargetError(f"a planar target applies to planar arms; {robot_name} needs a 3-D position (m)")
+        return np.array([t.position[0], t.position[1], 0.0])
+    return t.position
+
+
+@register("algebraic", "closed-form IK: paper 000's algebraic method (ax18, phi search), planar2r (both "
+          "elbows) and the puma3r wrist point (four solutions)", multi_solution=True)
+def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float = np.radians(0.5)) -> Result:
+    """Closed-form IK of ``planar2r``, ``puma3r`` (every solution) and ``ax18`` (paper 000's AM).
+
+    ``rng`` is unused (the method is deterministic). Candidates are brought into the search box by
+    multiples of 2 pi; those still outside are dropped. For an unreachable target the result is the
+    closed form with its square roots clamped (the nearest it gets), ``success=False`` and a message;
+    ``solutions`` then is empty. ``phi_step`` (rad): grid step of the AX-18 phi search.
+
+    Returns:
+        :class:`Result` with ``q`` the best candidate and ``solutions`` every distinct exact one inside the
+        bounds, best first (ties in cost broken by the smaller maximum displacement from ``q0``).
+    """
+    robot = problem.robot
+    name = _closed_form_for(robot)
+    run = SolverRun(problem, 0)
+    p = _target_point(problem, name)
+    if name == "planar2r":
+        cands, exact = _planar2r_candidates(p[0], p[1], PLANAR2R["a1"], PLANAR2R["a2"], clamp=True)
+        if abs(p[2]) > 0:
+            exact = False
+        Q = np.array(cands)
+    elif name == "puma3r":
+        cands, exact = _puma_candidates(p, PUMA3R["a2"], PUMA3R["d"], PUMA3R["a3"], PUMA3R["d4"], clamp=True)
+        Q = np.array(cands)
+    else:
+        def counted_fk(Q):
+            problem.evaluations += Q.shape[0]  # the phi search's forward kinematics are evaluations too
+            return robot.positions_batch(Q)
+
+        sols = ax18_algebraic(p, q0=problem.q0, phi_step=phi_step, lower=problem.lower, upper=problem.upper,
+                              fk=counted_fk)
+        Q = np.array([s.q for s in sols])
+        exact = sols[0].position_error <= problem.tolerance
+    lo, hi = problem.lower, problem.upper
+    Q = np.where(robot.revolute, lo + np.mod(Q - lo, 2 * np.pi), Q)
+    inside = np.all((Q >= lo - 1e-12) & (Q <= hi + 1e-12), axis=1)
+    ev = problem.evaluate(np.clip(Q, lo, hi))
+    q0 = np.zeros(robot.n) if problem.q0 is None else problem.q0
+    disp = np.abs(Q - q0).max(axis=1)
+    order = np.lexsort((disp, np.round(ev.cost / 1e-12), ~inside))
+    best = order[0]
+    rot = None if ev.orientation_error is None else float(ev.orientation_error[best])
+    run.offer(np.clip(Q[best], lo, hi), float(ev.cost[best]), float(ev.position_error[best]), rot)
+    keep = Q[order][inside[order]]
+    if len(keep):
+        leaders, _ = leader_clusters(keep, np.arange(len(keep), dtype=float), 1e-6, robot.revolute)
+        keep = keep[np.sort(leaders)]
+    solutions = solution_results(problem, keep, "algebraic", 0, problem.evaluations,
+                                 0.0) if exact else []
+    if exact and solutions:
+        message = f"closed form: {len(solutions)} solution(s) inside the bounds"
+    elif exact:
+        message = "closed form: every exact solution lies outside the search bounds"
+    else:
+        message = f"target out of reach of {name}: no exact closed-form solution (nearest approximation returned)"
+    result = run.result("algebraic", message, solutions=solutions)
+    for s in solutions:
+        s.time_s = result.time_s
+    return result
+

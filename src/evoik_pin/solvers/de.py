@@ -1,0 +1,213 @@
+"""Differential evolution (Storn & Price) with the mutation schemes of papers 002, 004 and 000.
+
+Registered as ``de``. One generation, all individuals at once: draw distinct random indices for every
+individual, build donors with the chosen mutation (:mod:`.de_ops`), cross them with the targets
+(binomial or exponential), bring the trials back into the search box, evaluate the trial population in
+one kinematics pass and keep each trial that is no worse than its target (greedy one-to-one selection).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import OptionError
+from ..problem import Evaluation, IKProblem
+from ..result import Result
+from . import register
+from .common import (
+    BOUND_HANDLING,
+    SolverRun,
+    check_fraction,
+    check_positive_int,
+    enforce_bounds,
+    initial_population,
+    run_with_restarts,
+)
+from .de_ops import (
+    MUTATIONS,
+    SCHEME_NUMBERS,
+    binomial_crossover,
+    distinct_indices,
+    either_or,
+    exponential_crossover,
+    exponential_lengths,
+    mutate,
+    rand1,
+    trigonometric,
+)
+
+__all__ = ["CROSSOVERS", "DE_MUTATIONS", "check_callback", "de", "greedy_selection", "parse_strategy"]
+
+#: Mutations accepted by ``de``: paper 002's eight (also by number 1-8), paper 004's either-or, trigonometric.
+DE_MUTATIONS = (*MUTATIONS, "eitheror", "trig")
+#: Crossovers: binomial (``bin``) and exponential (``exp``).
+CROSSOVERS = ("bin", "exp")
+
+
+def parse_strategy(strategy: str) -> tuple[str, str]:
+    """(mutation, crossover) of a scipy-style strategy name such as ``best1bin`` or ``randtobest1exp``.
+
+    Accepted: any of :data:`DE_MUTATIONS` followed by ``bin`` or ``exp`` (``currenttobest1bin``,
+    ``rand2exp``, ``eitherorbin``, ``trigbin``, ...). ``either-or`` and ``/`` or ``-`` separators are tolerated
+    (``DE/best/1/bin``).
+    """
+    if not isinstance(strategy, str):
+        raise OptionError(f"strategy must be a string such as 'best1bin', got {strategy!r}")
+    key = strategy.lower().replace("de/", "").replace("/", "").replace("-", "").replace("_", "")
+    for cx in CROSSOVERS:
+        if key.endswith(cx) and key[: -len(cx)] in DE_MUTATIONS:
+            return key[: -len(cx)], cx
+    names = [m + c for m in DE_MUTATIONS for c in CROSSOVERS]
+    raise OptionError(f"unknown DE strategy {strategy!r}; accepted: {', '.join(names)}")
+
+
+def _mutation_name(mutation) -> str:
+    if isinstance(mutation, (int, np.integer)) and not isinstance(mutation, bool):
+        if int(mutation) not in SCHEME_NUMBERS:
+            raise OptionError(f"mutation scheme number must be 1-8 (paper 002, eq. 12), got {mutation}")
+        return SCHEME_NUMBERS[int(mutation)]
+    key = str(mutation).lower().replace("de/", "").replace("/", "").replace("-", "").replace("_", "")
+    if key not in DE_MUTATIONS:
+        raise OptionError(f"unknown mutation {mutation!r}; accepted: {', '.join(DE_MUTATIONS)} or 1-8")
+    return key
+
+
+def _check_positive(name: str, value, upper: float = np.inf) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be a number > 0, got {value!r}") from None
+    if not (np.isfinite(v) and 0 < v <= upper):
+        raise OptionError(f"{name} must be a finite number in (0, {upper:g}], got {value!r}")
+    return v
+
+
+def check_callback(callback) -> Callable | None:
+    """``callback`` if it is None or callable, else an OptionError."""
+    if callback is not None and not callable(callback):
+        raise OptionError(f"callback must be callable as callback(generation, population), got {callback!r}")
+    return callback
+
+
+@register("de", "differential evolution: paper 002's eight schemes (default best/1, F 0.5, CR 0.9), paper 004's "
+                "either-or, trigonometric mutation; binomial or exponential crossover")
+def de(
+    problem: IKProblem,
+    rng: np.random.Generator,
+    *,
+    population: int = 30,
+    max_generations: int = 600,
+    stall_generations: int | None = None,
+    cost_tolerance: float | None = None,
+    strategy: str | None = None,
+    mutation: str | int = "best1",
+    crossover: str = "bin",
+    F: float = 0.5,
+    CR: float = 0.9,
+    p_F: float = 0.5,
+    K: float | None = None,
+    trig_probability: float = 0.05,
+    bound_handling: str = "clip",
+    runs: int = 10,
+    callback: Callable | None = None,
+) -> Result:
+    """Differential evolution over the joint vector, vectorized over the population.
+
+    Defaults follow paper 002 (Table 2): scheme 2 of eq. 12 (DE/best/1), F = 0.5, CR = 0.9, binomial
+    crossover (eq. 13), 600 generations. Paper 004's settings are ``mutation="rand1"``, ``F=0.9``,
+    ``CR=0.95``, ``bound_handling="clip"``.
+
+    Args:
+        problem: the IK problem (its tolerances stop the run; ``q0`` seeds the population).
+        rng: the only source of randomness.
+        population: number of individuals N (>= 3, and >= the mutation's indices + 1).
+        max_generations: generation budget (paper 002: 600).
+        stall_generations: stop after this many generations without improvement of the best cost.
+        cost_tolerance: also stop once the best cost is at most this value.
+        strategy: scipy-style name (``best1bin``, ``rand1exp``, ``currenttobest1bin``, ``randtobest1bin``,
+            ``best2bin``, ``rand2bin``, ``eitherorbin``, ``trigbin``, ...); overrides ``mutation`` and
+            ``crossover``.
+        mutation: one of paper 002's eq. 12 schemes by name or number (1 ``rand1``, 2 ``best1``, 3 ``rand2``,
+            4 ``best2``, 5 ``currenttobest1``, 6 ``currenttobest2``, 7 ``randtobest1``, 8 ``currenttorand1``),
+            ``eitheror`` (paper 004) or ``trig`` (paper 000: trigonometric mutation with probability
+            ``trig_probability``, DE/rand/1 otherwise).
+        crossover: ``bin`` (binomial, paper 002 eq. 13 / paper 004) or ``exp`` (exponential, paper 004 Alg. 2).
+        F: scale factor (> 0, at most 2).
+        CR: crossover rate in [0, 1].
+        p_F: either-or probability of using DE/rand/1 (paper 004's p_f).
+        K: either-or recombination factor; default 0.5 (F + 1) (Price, Storn & Lampinen 2005).
+        trig_probability: probability Mt of the trigonometric donor for ``mutation="trig"`` (Fan & Lampinen
+            suggest 0.05).
+        bound_handling: ``clip`` (paper 004), ``reflect`` or ``resample`` (see ``common.enforce_bounds``).
+        runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
+            ``common.run_with_restarts``; totals are reported).
+        callback: ``callback(generation, population)`` after the initial population (generation 0) and after
+            every generation, with the (N, n) population (rad or m); a truthy return value stops the run.
+
+    Returns:
+        A :class:`Result`; ``history`` adds nothing beyond best/mean cost and diversity.
+    """
+    if strategy is not None:
+        mutation, crossover = parse_strategy(strategy)
+    scheme = _mutation_name(mutation)
+    if crossover not in CROSSOVERS:
+        raise OptionError(f"crossover must be one of {CROSSOVERS}, got {crossover!r}")
+    if bound_handling not in BOUND_HANDLING:
+        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
+    k = MUTATIONS.get(scheme, 3)
+    N = check_positive_int("population", population, k + 1)
+    F = _check_positive("F", F, 2.0)
+    CR = check_fraction("CR", CR)
+    p_F = check_fraction("p_F", p_F)
+    K = 0.5 * (F + 1.0) if K is None else _check_positive("K", K, 2.0)
+    trig_probability = check_fraction("trig_probability", trig_probability)
+    check_callback(callback)
+    check_positive_int("runs", runs)
+    SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
+    D = problem.n
+
+    def once() -> Result:
+        run = SolverRun(problem, max_generations, stall_generations, cost_tolerance)
+
+        X = initial_population(problem, rng, N)
+        ev = problem.evaluate(X)
+        best = run.record(X, ev)
+        reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
+        while reason is None and (reason := run.stop_reason()) is None:
+            idx = distinct_indices(rng, N, k)
+            if scheme in MUTATIONS:
+                V = mutate(X, scheme, F, idx, best)
+            elif scheme == "eitheror":
+                V = either_or(X, F, K, idx, rng.random(N) < p_F)
+            else:  # trig: Fan & Lampinen's trigonometric donor with probability Mt, DE/rand/1 otherwise
+                use_trig = rng.random(N) < trig_probability
+                V = np.where(use_trig[:, None], trigonometric(X, ev.cost, idx), rand1(X, F, idx))
+            if crossover == "bin":
+                U = binomial_crossover(X, V, CR, rng.random((N, D)), rng.integers(0, D, size=N))
+            else:
+                U = exponential_crossover(X, V, rng.integers(0, D, size=N), exponential_lengths(CR, rng.random((N, D))))
+            U = enforce_bounds(U, problem, rng, bound_handling)
+            X, ev = greedy_selection(X, ev, U, problem.evaluate(U))
+            run.generation += 1
+            best = run.record(X, ev)
+            if callback is not None and callback(run.generation, X.copy()):
+                reason = "stopped by callback"
+        return run.result("de", reason)
+
+    return run_with_restarts(once, problem, runs)
+
+
+def greedy_selection(X: np.ndarray, ev: Evaluation, U: np.ndarray, ev_u: Evaluation) -> tuple[np.ndarray, Evaluation]:
+    """DE's one-to-one selection: each trial U_i replaces its target X_i when its cost is no larger.
+
+    Accepting ties lets the population drift across flat regions (Storn & Price). Returns the new
+    population (N, n) and its evaluation.
+    """
+    better = ev_u.cost <= ev.cost
+    X = np.where(better[:, None], U, X)
+    cost = np.where(better, ev_u.cost, ev.cost)
+    pos = np.where(better, ev_u.position_error, ev.position_error)
+    rot = None if ev.orientation_error is None else np.where(better, ev_u.orientation_error, ev.orientation_error)
+    return X, Evaluation(cost, pos, rot)

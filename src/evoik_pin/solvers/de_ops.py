@@ -1,0 +1,199 @@
+"""Differential-evolution operators on whole populations, as plain vectorized functions.
+
+Every operator takes its random draws as arguments (index matrices, uniform matrices, start positions),
+so tests can inject fixed draws and check each formula, and every solver draws them from its own
+``numpy.random.Generator``. Shapes: a population ``X`` is (N, D); index matrices are (N, k) integers
+into the population; ``F`` is a scalar or an (N,) array (one scale factor per individual).
+
+Mutation schemes (paper 002, eq. 12, numbered as there; the paper writes ``F_w`` for F):
+
+====  ======================  ==================================================================
+ #    name                    donor vector V
+====  ======================  ==================================================================
+ 1    ``rand1``               X_r1 + F (X_r2 - X_r3)
+ 2    ``best1``               X_best + F (X_r1 - X_r2)
+ 3    ``rand2``               X_r1 + F (X_r2 - X_r3) + F (X_r4 - X_r5)
+ 4    ``best2``               X_best + F (X_r1 - X_r2) + F (X_r3 - X_r4)
+ 5    ``currenttobest1``      X + F (X_r1 - X_r2) + F (X_best - X)
+ 6    ``currenttobest2``      X + F (X_r1 - X_r2) + F (X_r3 - X_r4) + F (X_best - X)
+ 7    ``randtobest1``         X_r1 + F (X_r2 - X_r3) + F (X_best - X_r1)
+ 8    ``currenttorand1``      X + F (X_r2 - X_r3) + F (X_r1 - X)
+====  ======================  ==================================================================
+
+plus paper 004's "either-or" (:func:`either_or`: rand/1 with probability p_F, else
+X_r1 + K (X_r2 + X_r3 - 2 X_r1)) and Fan & Lampinen's trigonometric mutation used by paper 000
+(:func:`trigonometric`). Crossovers: :func:`binomial_crossover` and :func:`exponential_crossover`
+(paper 004, Algorithm 2). Index sampling: :func:`distinct_indices`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import OptionError
+
+__all__ = [
+    "MUTATIONS",
+    "SCHEME_NUMBERS",
+    "binomial_crossover",
+    "distinct_indices",
+    "either_or",
+    "exponential_crossover",
+    "exponential_lengths",
+    "indices_from_uniform",
+    "mutate",
+    "n_indices",
+    "rand1",
+    "trigonometric",
+]
+
+#: Paper 002's eq. 12 schemes in the paper's order, with the number of random indices each needs.
+MUTATIONS: dict[str, int] = {
+    "rand1": 3,
+    "best1": 2,
+    "rand2": 5,
+    "best2": 4,
+    "currenttobest1": 2,
+    "currenttobest2": 4,
+    "randtobest1": 3,
+    "currenttorand1": 3,
+}
+#: Paper 002's scheme numbers (1-8) -> names.
+SCHEME_NUMBERS: dict[int, str] = {i + 1: name for i, name in enumerate(MUTATIONS)}
+
+
+def n_indices(scheme: str) -> int:
+    """Number of distinct random indices (besides the individual itself) ``scheme`` needs."""
+    if scheme not in MUTATIONS:
+        raise OptionError(f"unknown mutation scheme {scheme!r}; known: {', '.join(MUTATIONS)}")
+    return MUTATIONS[scheme]
+
+
+def distinct_indices(rng: np.random.Generator, size: int, k: int) -> np.ndarray:
+    """(size, k) indices: row i holds k distinct members of {0..size-1}, none equal to i, in random order.
+
+    Needs ``size >= k + 1``. See :func:`indices_from_uniform`, which does the work on a (size, size)
+    uniform matrix drawn here.
+    """
+    if size < k + 1:
+        raise OptionError(f"this mutation needs a population of at least {k + 1} individuals, got {size}")
+    return indices_from_uniform(rng.random((size, size)), k)
+
+
+def indices_from_uniform(R: np.ndarray, k: int) -> np.ndarray:
+    """k distinct indices per row, none equal to the row, from a uniform (N, N) matrix ``R`` (overwritten).
+
+    All rows at once: the argsort of a row of iid uniforms is a uniform random permutation; pushing the
+    diagonal to 2 puts the individual itself last, so the first k columns are k distinct others.
+    """
+    np.fill_diagonal(R, 2.0)
+    return np.argsort(R, axis=1)[:, :k]
+
+
+def _as_column(F) -> np.ndarray | float:
+    F = np.asarray(F, dtype=float)
+    return F[:, None] if F.ndim == 1 else float(F)
+
+
+def mutate(X: np.ndarray, scheme: str, F, idx: np.ndarray, best: int) -> np.ndarray:
+    """Donor vectors (N, D) of paper 002's eq. 12 scheme ``scheme`` (see the module table).
+
+    Args:
+        X: population (N, D).
+        scheme: one of :data:`MUTATIONS`.
+        F: scale factor, a scalar or (N,) (one per individual).
+        idx: (N, k) distinct random indices (k >= :func:`n_indices`); column j is r_(j+1).
+        best: row of the best individual.
+    """
+    n_needed = n_indices(scheme)
+    if idx.ndim != 2 or idx.shape[0] != X.shape[0] or idx.shape[1] < n_needed:
+        raise OptionError(f"mutation {scheme!r} needs an index matrix of shape ({X.shape[0]}, >={n_needed}), "
+                          f"got {idx.shape}")
+    f = _as_column(F)
+    r = [X[idx[:, j]] for j in range(n_needed)]
+    Xb = X[best]
+    if scheme == "rand1":
+        return r[0] + f * (r[1] - r[2])
+    if scheme == "best1":
+        return Xb + f * (r[0] - r[1])
+    if scheme == "rand2":
+        return r[0] + f * (r[1] - r[2]) + f * (r[3] - r[4])
+    if scheme == "best2":
+        return Xb + f * (r[0] - r[1]) + f * (r[2] - r[3])
+    if scheme == "currenttobest1":
+        return X + f * (r[0] - r[1]) + f * (Xb - X)
+    if scheme == "currenttobest2":
+        return X + f * (r[0] - r[1]) + f * (r[2] - r[3]) + f * (Xb - X)
+    if scheme == "randtobest1":
+        return r[0] + f * (r[1] - r[2]) + f * (Xb - r[0])
+    # currenttorand1
+    return X + f * (r[1] - r[2]) + f * (r[0] - X)
+
+
+def rand1(X: np.ndarray, F, idx: np.ndarray) -> np.ndarray:
+    """DE/rand/1 donors (N, D): ``X_r1 + F (X_r2 - X_r3)``, idx (N, >=3)."""
+    f = _as_column(F)
+    return X[idx[:, 0]] + f * (X[idx[:, 1]] - X[idx[:, 2]])
+
+
+def either_or(X: np.ndarray, F, K, idx: np.ndarray, use_rand1: np.ndarray) -> np.ndarray:
+    """Paper 004's "either-or" donors (N, D) (Price, Storn & Lampinen 2005).
+
+    Where ``use_rand1`` (N,) bool is True (drawn with probability p_F): DE/rand/1,
+    ``X_r1 + F (X_r2 - X_r3)``; elsewhere the recombinant ``X_r1 + K (X_r2 - X_r1 + X_r3 - X_r1)``.
+    """
+    a, b, c = X[idx[:, 0]], X[idx[:, 1]], X[idx[:, 2]]
+    v_f = a + _as_column(F) * (b - c)
+    v_k = a + _as_column(K) * (b + c - 2.0 * a)
+    return np.where(np.asarray(use_rand1, bool)[:, None], v_f, v_k)
+
+
+def trigonometric(X: np.ndarray, costs: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Fan & Lampinen's (2003) trigonometric donors (N, D), as in paper 000 (section III, "Mutation").
+
+    ``V = (X_r1 + X_r2 + X_r3) / 3 + (p2 - p1)(X_r1 - X_r2) + (p3 - p2)(X_r2 - X_r3) + (p1 - p3)(X_r3 - X_r1)``
+    with ``p_k = |f(X_rk)| / (|f(X_r1)| + |f(X_r2)| + |f(X_r3)|)``: the centre of the triangle pulled towards
+    its lower-cost corners. Where the three costs are all zero, p_k = 1/3 (the centre).
+    """
+    i1, i2, i3 = idx[:, 0], idx[:, 1], idx[:, 2]
+    x1, x2, x3 = X[i1], X[i2], X[i3]
+    f = np.abs(np.stack([costs[i1], costs[i2], costs[i3]], axis=1))
+    total = f.sum(axis=1, keepdims=True)
+    p = np.divide(f, total, out=np.full_like(f, 1.0 / 3.0), where=total > 0)
+    p1, p2, p3 = p[:, 0:1], p[:, 1:2], p[:, 2:3]
+    return (x1 + x2 + x3) / 3.0 + (p2 - p1) * (x1 - x2) + (p3 - p2) * (x2 - x3) + (p1 - p3) * (x3 - x1)
+
+
+def binomial_crossover(X: np.ndarray, V: np.ndarray, CR, u: np.ndarray, jrand: np.ndarray) -> np.ndarray:
+    """Binomial (uniform) crossover: trial ``U[i, j] = V[i, j]`` if ``u[i, j] <= CR_i`` or ``j == jrand_i``.
+
+    Args:
+        X, V: targets and donors (N, D).
+        CR: crossover rate, scalar or (N,).
+        u: (N, D) uniform draws in [0, 1).
+        jrand: (N,) one coordinate per individual always taken from the donor (so U differs from X).
+    """
+    take = u <= _as_column(CR)
+    take[np.arange(X.shape[0]), jrand] = True
+    return np.where(take, V, X)
+
+
+def exponential_lengths(CR, u: np.ndarray) -> np.ndarray:
+    """Lengths L (N,) of paper 004's Algorithm 2: ``L = 1``, then ``L += 1`` while ``u < CR`` and ``L < D``.
+
+    ``u`` (N, D) uniform draws; only its first D - 1 columns are used. So P(L >= m) = CR^(m-1).
+    """
+    D = u.shape[1]
+    go_on = u[:, : D - 1] < _as_column(CR)
+    # L - 1 = number of leading True values of each row
+    stopped = ~go_on
+    first_stop = np.where(stopped.any(axis=1), stopped.argmax(axis=1), D - 1)
+    return first_stop + 1
+
+
+def exponential_crossover(X: np.ndarray, V: np.ndarray, start: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """Exponential crossover: the trial takes ``length_i`` consecutive donor coordinates from ``start_i``
+    (circularly), the rest from the target. ``start`` (N,) in [0, D), ``length`` (N,) in [1, D]."""
+    D = X.shape[1]
+    offset = (np.arange(D)[None, :] - np.asarray(start)[:, None]) % D
+    return np.where(offset < np.asarray(length)[:, None], V, X)

@@ -1,0 +1,344 @@
+"""Genetic algorithms: paper 001's real-coded niching GA (``ga``) and paper 000's binary GA (``ga-binary``).
+
+``ga`` (paper 001, section 3.1): real-coded individuals, binary tournament selection with the niching
+rule of Oei, Goldberg & Chang (1991) as used by Deb: each contestant's niche count
+``nc_i = sum_j Sh(d_ij)`` (eqs. 6-7, triangular sharing function with alpha = 1 on the Euclidean distance
+of the joint vectors scaled to [0, 1]) with ``sigma_share = sqrt(n) / (2 r^(1/n))`` (eq. 8, n variables,
+r niches); if both niche counts are below the niche size n*, the lower cost wins, otherwise the less
+crowded one. Then SBX crossover (eqs. 9-10, eta = 5, probability 0.9) and mutation whose probability
+rises from 1/n to 1 while its perturbation (polynomial mutation, eta_m = 100 + t) shrinks from about 1 %
+of the range (eq. 11, following Deb 2000). The final population holds one cluster per solution family;
+its leaders are the method's ``solutions``.
+
+``ga-binary`` (paper 000, section III-B): every joint angle is a 9-bit string, a sign bit (1 = positive)
+and 8 magnitude bits, decoded as ``theta = +-(sum_n b_n 2^n) * 180 / 255`` deg; roulette-wheel selection,
+single-point crossover, bit-flip mutation and elitism (the best ``elite`` individuals survive unchanged).
+A general encoding maps ``bits`` unsigned bits linearly onto each joint's bounds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import OptionError
+from ..problem import IKProblem
+from ..result import Result
+from . import register
+from .analytic import solution_results
+from .clustering import leader_clusters
+from .common import SolverRun, check_fraction, check_positive_int, initial_population
+
+__all__ = [
+    "ENCODINGS",
+    "decode_bits",
+    "decode_bounds",
+    "decode_sign_magnitude",
+    "niche_counts",
+    "niching_tournament",
+    "polynomial_mutation",
+    "run_niching_ga",
+    "sbx_pairs",
+    "sharing_radius",
+]
+
+#: ``ga-binary`` encodings: the paper's sign + magnitude in degrees, or unsigned bits over the bounds.
+ENCODINGS = ("sign-magnitude", "bounds")
+
+
+# ------------------------------------------------------------------------------------------ real-coded GA
+def sharing_radius(n: int, niches: int) -> float:
+    """Paper 001 eq. 8: ``sigma_share = sqrt(n) / (2 r^(1/n))`` in the unit hypercube of n variables.
+
+    It splits the normalized search space into ``r`` equal hyperspheres (Deb & Goldberg 1989).
+    """
+    return float(np.sqrt(n) / (2.0 * niches ** (1.0 / n)))
+
+
+def niche_counts(Z: np.ndarray, sigma: float) -> np.ndarray:
+    """Paper 001 eqs. 6-7: ``nc_i = sum_j Sh(d_ij)``, ``Sh(d) = 1 - d / sigma`` for d < sigma (alpha = 1).
+
+    ``Z`` (N, n) are normalized individuals; the sum includes j = i (Sh(0) = 1). All pairs at once:
+    (N, N) distances from ``|a|^2 + |b|^2 - 2 a.b``.
+    """
+    sq = np.einsum("ij,ij->i", Z, Z)
+    d2 = np.maximum(sq[:, None] + sq[None, :] - 2.0 * (Z @ Z.T), 0.0)
+    sh = np.maximum(1.0 - np.sqrt(d2) / sigma, 0.0)
+    return sh.sum(axis=1)
+
+
+def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pairs: np.ndarray,
+                       niching: bool = True) -> np.ndarray:
+    """Winners (M,) of binary tournaments ``pairs`` (M, 2) under paper 001's niching rule.
+
+    Both niche counts below ``niche_size`` (n*): the lower cost wins; otherwise the smaller niche count
+    wins ("if one solution is overly crowded, and the other is not, the second is selected"). With
+    ``niching=False`` it is a plain binary tournament on cost. Ties go to the first contestant.
+    """
+    a, b = pairs[:, 0], pairs[:, 1]
+    by_cost = np.where(cost[b] < cost[a], b, a)
+    if not niching:
+        return by_cost
+    by_crowd = np.where(nc[b] < nc[a], b, a)
+    return np.where((nc[a] < niche_size) & (nc[b] < niche_size), by_cost, by_crowd)
+
+
+def sbx_pairs(P1: np.ndarray, P2: np.ndarray, eta: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Paper 001 eqs. 9-10, simulated binary crossover (Deb & Agrawal 1995) of parents (M, n).
+
+    ``beta = (2u)^(1/(eta+1))`` if u < 0.5 else ``(1/(2 - 2u))^(1/(eta+1))``, ``u`` (M, n) uniform; children
+    ``0.5 [(p1 + p2) -+ beta |p2 - p1|]``.
+    """
+    beta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)),
+                    (1.0 / np.maximum(2.0 - 2.0 * u, 1e-300)) ** (1.0 / (eta + 1.0)))
+    mean, half = 0.5 * (P1 + P2), 0.5 * beta * np.abs(P2 - P1)
+    return mean - half, mean + half
+
+
+def polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, mask: np.ndarray,
+                        u: np.ndarray) -> np.ndarray:
+    """Polynomial mutation (Deb & Goyal 1996) of the entries of ``X`` (N, n) where ``mask`` is True.
+
+    ``delta = (2u)^(1/(eta+1)) - 1`` if u < 0.5 else ``1 - (2 (1 - u))^(1/(eta+1))``, and
+    ``x += delta (upper - lower)``; the mean |delta| is about 1 / (eta + 2), so eta = 100 perturbs by ~1 %.
+    """
+    delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
+                     1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
+    return np.where(mask, X + delta * (upper - lower), X)
+
+
+def _check_ga_options(problem: IKProblem, population, max_generations, niches, niche_size, eta,
+                      crossover_probability) -> tuple[int, int, int, float, float, float]:
+    population = check_positive_int("population", population, 4)
+    max_generations = check_positive_int("max_generations", max_generations, 0)
+    niches = check_positive_int("niches", niches, 1)
+    if niche_size is None:
+        # Paper 001: n* = 200 for a population of 750; keep that proportion for other sizes.
+        niche_size = 200.0 * population / 750.0
+    try:
+        niche_size = float(niche_size)
+    except (TypeError, ValueError):
+        raise OptionError(f"niche_size must be a number > 0 (n*), got {niche_size!r}") from None
+    if not (np.isfinite(niche_size) and niche_size > 0):
+        raise OptionError(f"niche_size must be a number > 0 (n*), got {niche_size!r}")
+    try:
+        eta = float(eta)
+    except (TypeError, ValueError):
+        raise OptionError(f"eta (SBX distribution index) must be a number >= 0, got {eta!r}") from None
+    if not (np.isfinite(eta) and eta >= 0):
+        raise OptionError(f"eta (SBX distribution index) must be a number >= 0, got {eta!r}")
+    crossover_probability = check_fraction("crossover_probability", crossover_probability)
+    return population, max_generations, niches, niche_size, eta, crossover_probability
+
+
+def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int, max_generations: int,
+                   niches: int, niche_size: float, eta: float, crossover_probability: float,
+                   niching: bool = True, normalize: bool = True, archive: list | None = None,
+                   ) -> tuple[SolverRun, np.ndarray, np.ndarray]:
+    """Paper 001's real-coded GA; returns the run and the final population (N, n) with its costs (N,).
+
+    Runs exactly ``max_generations`` generations (the paper's termination rule): stopping at the first
+    individual within tolerance would cut the other solution families short. Options as in :func:`ga`;
+    ``normalize`` measures niche distances in the unit hypercube of the bounds (eq. 8's sigma_share is
+    derived for it); ``archive``, when a list, receives ``(Q, cost)`` of every generation.
+    History: ``best_cost``, ``mean_cost``, ``diversity``, ``mutation_probability`` (p_m of eq. 11) and
+    ``mean_niche_count``.
+    """
+    n, lo, hi = problem.n, problem.lower, problem.upper
+    width = np.where(hi > lo, hi - lo, 1.0)
+    scale = width if normalize else np.ones(n)
+    sigma = sharing_radius(n, niches)
+    run = SolverRun(problem, max_generations)
+    Q = initial_population(problem, rng, population)
+    ev = problem.evaluate(Q)
+    nc = niche_counts(Q / scale, sigma)
+    run.record(Q, ev, mutation_probability=1.0 / n, mean_niche_count=float(nc.mean()))
+    if archive is not None:
+        archive.append((Q, ev.cost))
+    half = (population + 1) // 2
+    while run.generation < max_generations:
+        t = run.generation
+        winners = niching_tournament(ev.cost, nc, niche_size, rng.integers(0, population, (2 * half, 2)), niching)
+        P1, P2 = Q[winners[:half]], Q[winners[half:]]
+        C1, C2 = sbx_pairs(P1, P2, eta, rng.random(P1.shape))
+        cross = (rng.random(half) < crossover_probability)[:, None]
+        children = np.concatenate([np.where(cross, C1, P1), np.where(cross, C2, P2)])[:population]
+        # Eq. 11 (Deb 2000): p_m grows from 1/n to 1 while eta_m = 100 + t shrinks the perturbation.
+        p_m = 1.0 / n + (t / max(max_generations, 1)) * (1.0 - 1.0 / n)
+        mask = rng.random(children.shape) < p_m
+        children = polynomial_mutation(children, lo, hi, 100.0 + t, mask, rng.random(children.shape))
+        Q = np.clip(children, lo, hi)
+        ev = problem.evaluate(Q)
+        nc = niche_counts(Q / scale, sigma)
+        run.generation += 1
+        run.record(Q, ev, mutation_probability=p_m, mean_niche_count=float(nc.mean()))
+        if archive is not None:
+            archive.append((Q, ev.cost))
+    return run, Q, ev.cost
+
+
+def solution_leaders(problem: IKProblem, Q: np.ndarray, cost: np.ndarray, radius: float,
+                     max_clusters: int | None = None, min_members: int = 1) -> np.ndarray:
+    """Leaders (M, n) of the joint-space clusters of a final population, best first.
+
+    Clusters come from :func:`~evoik_pin.solvers.clustering.leader_clusters` (wrapped distance, ``radius``
+    rad); those with fewer than ``min_members`` members are dropped (stragglers, not niches).
+    """
+    leaders, labels = leader_clusters(Q, cost, radius, problem.robot.revolute, max_clusters)
+    sizes = np.bincount(labels[labels >= 0], minlength=len(leaders))
+    return Q[leaders[sizes >= min_members]]
+
+
+@register("ga", "paper 001: real-coded GA with SBX and niching binary tournament; the final population's "
+          "niches give several IK solutions", multi_solution=True)
+def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, max_generations: int = 12,
+       niches: int = 2, niche_size: float | None = None, eta: float = 5.0, crossover_probability: float = 0.9,
+       niching: bool = True, cluster_radius: float = 0.35, min_niche_fraction: float = 0.005,
+       max_solutions: int = 8) -> Result:
+    """Paper 001's real-coded niching GA (section 3.1).
+
+    Options (defaults: paper 001's planar 2R settings, Table 1):
+        population: individuals (750; the paper uses 1000 for the PUMA).
+        max_generations: generations run, always all of them (12).
+        niches: expected number of solutions r, sets sigma_share (eq. 8) (2; the paper uses 4 for the PUMA).
+        niche_size: n*, niche-count threshold of the tournament (default 200 x population / 750, i.e. the
+            paper's 200 at population 750).
+        eta: SBX distribution index (5). crossover_probability: per pair of parents (0.9).
+        niching: False gives a plain binary tournament (for comparison).
+        cluster_radius: joint-space radius (rad, wrapped) grouping the final population into solutions.
+        min_niche_fraction: a cluster counts as a solution when it holds at least this share of the
+            population (0.005, i.e. 4 of the paper's 750).
+        max_solutions: at most this many niche leaders are returned, best first (8).
+
+    Returns:
+        :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche
+        (its best member), best first. The GA alone is approximate (the paper reports 0.4-3.6 deg errors):
+        solutions carry ``success=False`` unless they meet the tolerance; ``hga`` polishes them.
+    """
+    population, max_generations, niches, niche_size, eta, crossover_probability = _check_ga_options(
+        problem, population, max_generations, niches, niche_size, eta, crossover_probability)
+    min_niche_fraction = check_fraction("min_niche_fraction", min_niche_fraction)
+    max_solutions = check_positive_int("max_solutions", max_solutions)
+    run, Q, cost = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
+                                  crossover_probability, bool(niching))
+    leaders = solution_leaders(problem, Q, cost, cluster_radius,
+                               min_members=max(1, int(np.ceil(min_niche_fraction * population))))[:max_solutions]
+    result = run.result("ga", f"max_generations ({max_generations}) run; {len(leaders)} niche(s) found")
+    result.solutions = solution_results(problem, leaders, "ga", result.generations, result.evaluations,
+                                        result.time_s, only_successful=False)
+    return result
+
+
+# ------------------------------------------------------------------------------------------ binary GA
+def decode_sign_magnitude(bits: np.ndarray) -> np.ndarray:
+    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B).
+
+    ``bits[..., 0]`` is the sign (1 = positive, 0 = negative), ``bits[..., 1:]`` the magnitude, most
+    significant bit first: ``theta = +-(sum_n b_n 2^n) * 180 / (2^(B-1) - 1)`` deg. With the paper's
+    B = 9 that is ``+-(sum_{n=0..7} b_n 2^n) * 180 / 255`` deg, in steps of 0.706 deg over [-180, 180].
+    """
+    bits = np.asarray(bits)
+    mag_bits = bits[..., 1:].astype(np.int64)
+    m = mag_bits.shape[-1]
+    value = mag_bits @ (1 << np.arange(m - 1, -1, -1, dtype=np.int64))
+    sign = np.where(bits[..., 0] == 1, 1.0, -1.0)
+    return np.radians(sign * value * 180.0 / (2 ** m - 1))
+
+
+def decode_bounds(bits: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """Unsigned bit strings ``bits`` (N, n, B), most significant first, mapped linearly onto the bounds.
+
+    ``q = lower + k / (2^B - 1) (upper - lower)`` with k the unsigned integer of the bits (rad or m).
+    """
+    bits = np.asarray(bits).astype(np.int64)
+    B = bits.shape[-1]
+    k = bits @ (1 << np.arange(B - 1, -1, -1, dtype=np.int64))
+    return lower + k / (2 ** B - 1) * (upper - lower)
+
+
+def decode_bits(chromosomes: np.ndarray, n: int, encoding: str, lower: np.ndarray,
+                upper: np.ndarray) -> np.ndarray:
+    """Joint vectors (N, n) of chromosomes (N, n * B) under ``encoding``, clipped into the bounds."""
+    bits = chromosomes.reshape(chromosomes.shape[0], n, -1)
+    Q = decode_sign_magnitude(bits) if encoding == "sign-magnitude" else decode_bounds(bits, lower, upper)
+    return np.clip(Q, lower, upper)
+
+
+@register("ga-binary", "paper 000: binary GA (9-bit sign + magnitude angles), roulette wheel, single-point "
+          "crossover, bit mutation, elitism")
+def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int = 200, elite: int = 100,
+              max_generations: int = 400, bits: int = 9, encoding: str = "sign-magnitude",
+              crossover_probability: float = 0.9, mutation_probability: float | None = None,
+              fitness_scale: float = 0.01) -> Result:
+    """Paper 000's binary GA (section III-B).
+
+    Options:
+        population: chromosomes per generation (200). elite: best chromosomes kept unchanged each
+            generation (100: the paper's "each generation we allow the best 100"); the other
+            ``population - elite`` are offspring.
+        max_generations: 400 (paper). Stops earlier when the best meets the tolerances.
+        bits: bits per joint (9). encoding: ``"sign-magnitude"`` (paper: sign bit + (bits - 1) magnitude
+            bits over +-180 deg, revolute joints only) or ``"bounds"`` (unsigned, linear over each
+            joint's bounds; works for prismatic joints). Decoded values are clipped into the bounds
+            (the paper's code cannot express the AX-18's t2 above 180 deg).
+        crossover_probability: single-point crossover per pair (0.9). mutation_probability: per bit
+            (default 1 / chromosome length).
+        fitness_scale: roulette fitness is ``exp(-cost / fitness_scale)``; with the default 0.01 m it is
+            the paper's ``exp(-error)`` with the error in cm, the paper's unit.
+
+    Returns:
+        :class:`Result`; its resolution is limited by the encoding (0.7 deg at 9 bits).
+    """
+    population = check_positive_int("population", population, 2)
+    elite = check_positive_int("elite", elite, 0)
+    if elite >= population:
+        raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, "
+                          f"got {elite}")
+    max_generations = check_positive_int("max_generations", max_generations, 0)
+    bits = check_positive_int("bits", bits, 2)
+    if bits > 62:
+        raise OptionError(f"bits per joint must be at most 62, got {bits}")
+    if encoding not in ENCODINGS:
+        raise OptionError(f"encoding {encoding!r} is not one of {ENCODINGS}")
+    if encoding == "sign-magnitude" and not problem.robot.revolute.all():
+        raise OptionError(f"{problem.robot.name} has prismatic joints, which the sign-magnitude angle encoding "
+                          "cannot represent; use encoding='bounds'")
+    crossover_probability = check_fraction("crossover_probability", crossover_probability)
+    n, lo, hi = problem.n, problem.lower, problem.upper
+    length = n * bits
+    p_bit = 1.0 / length if mutation_probability is None else check_fraction("mutation_probability",
+                                                                              mutation_probability)
+    if not (np.isfinite(fitness_scale) and fitness_scale > 0):
+        raise OptionError(f"fitness_scale must be a number > 0 (m), got {fitness_scale!r}")
+
+    run = SolverRun(problem, max_generations)
+    G = rng.integers(0, 2, size=(population, length), dtype=np.uint8)
+    if problem.q0 is not None and encoding == "bounds":  # seed q0 as the other solvers do
+        k = np.rint((np.clip(problem.q0, lo, hi) - lo) / np.where(hi > lo, hi - lo, 1.0) * (2 ** bits - 1))
+        G[0] = ((k.astype(np.int64)[:, None] >> np.arange(bits - 1, -1, -1)) & 1).reshape(-1)
+    Q = decode_bits(G, n, encoding, lo, hi)
+    ev = problem.evaluate(Q)
+    cost = ev.cost
+    run.record(Q, ev)
+    n_child = population - elite
+    half = (n_child + 1) // 2
+    while (reason := run.stop_reason()) is None:
+        # Roulette wheel (paper: p_i = f_i / sum f): fitness relative to the best keeps exp() finite.
+        fit = np.exp(-(cost - cost.min()) / fitness_scale)
+        parents = rng.choice(population, size=2 * half, p=fit / fit.sum())
+        A, B = G[parents[:half]], G[parents[half:]]
+        cut = rng.integers(1, length, size=half)
+        swap = (np.arange(length)[None, :] >= cut[:, None]) & (rng.random(half) < crossover_probability)[:, None]
+        kids = np.concatenate([np.where(swap, B, A), np.where(swap, A, B)])[:n_child]
+        kids ^= (rng.random(kids.shape) < p_bit).astype(np.uint8)
+        Qk = decode_bits(kids, n, encoding, lo, hi)
+        evk = problem.evaluate(Qk)
+        keep = np.argsort(cost, kind="stable")[:elite]
+        G = np.concatenate([G[keep], kids])
+        Q = np.concatenate([Q[keep], Qk])
+        cost = np.concatenate([cost[keep], evk.cost])
+        rot = None if ev.orientation_error is None else np.concatenate([ev.orientation_error[keep],
+                                                                        evk.orientation_error])
+        ev = type(ev)(cost, np.concatenate([ev.position_error[keep], evk.position_error]), rot)
+        run.generation += 1
+        run.record(Q, ev)
+    return run.result("ga-binary", reason)

@@ -1,0 +1,115 @@
+"""Paper 001's hybrid GA (``hga``): the niching GA finds the good regions, Nelder-Mead polishes them.
+
+Exploration (section 3.1): :func:`~evoik_pin.solvers.ga.run_niching_ga` for the paper's 12 generations.
+Exploitation (section 3.2): every individual the GA evaluated is split into joint-space clusters (wrapped
+distances, :mod:`~evoik_pin.solvers.clustering`); the best member of each of the best ``max_starts`` clusters is
+polished by ``scipy.optimize.minimize(method="Nelder-Mead")``, whose coefficients are exactly the paper's
+(reflection 1, expansion 2, contraction 0.5, shrink 0.5), inside the search box. Polished points that
+meet the tolerances are merged again (they often converge to the same solution) and returned as the
+distinct IK solutions, best first.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..errors import OptionError
+from ..problem import IKProblem
+from ..result import Result
+from . import register
+from .analytic import solution_results
+from .clustering import leader_clusters
+from .common import check_positive_int
+from .ga import _check_ga_options, run_niching_ga, solution_leaders
+
+__all__ = ["nelder_mead_polish"]
+
+
+def _positive(name: str, value) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be a number > 0, got {value!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise OptionError(f"{name} must be a number > 0, got {value!r}")
+    return v
+
+
+def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 0.05, xatol: float = 1e-10,
+                       fatol: float = 1e-13, max_evaluations: int = 2000) -> np.ndarray:
+    """Nelder-Mead from ``q`` (n,) on the problem's cost, inside the search box; returns the polished q.
+
+    The initial simplex is ``q`` plus ``simplex_size`` (rad or m) along each joint axis, stepping inwards
+    at an upper bound, so it spans the GA's niche rather than scipy's default 5 % of |q|, which collapses
+    for joints near zero. Evaluations count towards ``problem.evaluations``.
+    """
+    lo, hi = problem.lower, problem.upper
+    q = np.clip(np.asarray(q, float), lo, hi)
+    step = np.where(q + simplex_size <= hi, simplex_size, -simplex_size)
+    simplex = np.vstack([q, q + np.diag(step)])
+    res = minimize(lambda x: float(problem.cost(x[None])[0]), q, method="Nelder-Mead",
+                   bounds=list(zip(lo, hi, strict=True)),
+                   options={"initial_simplex": np.clip(simplex, lo, hi), "xatol": xatol, "fatol": fatol,
+                            "maxfev": max_evaluations, "adaptive": False})
+    return np.clip(res.x, lo, hi)
+
+
+@register("hga", "paper 001: niching GA + Nelder-Mead polish of every niche; all distinct IK solutions",
+          multi_solution=True)
+def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, max_generations: int = 12,
+        niches: int = 2, niche_size: float | None = None, eta: float = 5.0, crossover_probability: float = 0.9,
+        cluster_radius: float = 0.35, max_starts: int = 24, simplex_size: float = 0.05, xatol: float = 1e-10,
+        fatol: float = 1e-13, max_polish_evaluations: int = 2000, solution_radius: float = 1e-4) -> Result:
+    """Paper 001's hybrid GA (section 3.2): every IK solution at once.
+
+    Options: the GA's (``population``, ``max_generations``, ``niches``, ``niche_size``, ``eta``,
+    ``crossover_probability``: see ``ga``; defaults are paper 001's 2R settings, Table 1; its PUMA
+    settings are population 1000 and 4 niches), and:
+        cluster_radius: joint-space radius (rad, wrapped) of the clusters whose leaders are polished.
+        max_starts: polish at most this many cluster leaders, best first (24).
+        simplex_size: initial Nelder-Mead simplex edge (rad or m) (0.05).
+        xatol, fatol: Nelder-Mead stopping tolerances on the simplex (rad) and its costs (1e-10, 1e-13).
+        max_polish_evaluations: cost evaluations allowed per polish (2000).
+        solution_radius: polished solutions closer than this (rad, wrapped) are one solution (1e-4).
+
+    Returns:
+        :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution
+        that meets the tolerances, best first (empty, with a message, when none does, e.g. an unreachable
+        target).
+    """
+    population, max_generations, niches, niche_size, eta, crossover_probability = _check_ga_options(
+        problem, population, max_generations, niches, niche_size, eta, crossover_probability)
+    max_starts = check_positive_int("max_starts", max_starts)
+    max_polish_evaluations = check_positive_int("max_polish_evaluations", max_polish_evaluations)
+    simplex_size, xatol, fatol, solution_radius = (_positive(k, v) for k, v in (
+        ("simplex_size", simplex_size), ("xatol", xatol), ("fatol", fatol), ("solution_radius", solution_radius)))
+    archive: list = []
+    run, _, _ = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
+                               crossover_probability, archive=archive)
+    # The good areas are taken from every individual the GA evaluated, not only the last generation: in
+    # 12 generations the population may drift away from one of the solution families it had found
+    # (on the PUMA targets, the last generation alone misses about a quarter of the solutions).
+    Q = np.concatenate([a[0] for a in archive])
+    cost = np.concatenate([a[1] for a in archive])
+    starts = solution_leaders(problem, Q, cost, cluster_radius, max_clusters=max_starts)
+    polished = np.array([nelder_mead_polish(problem, q, simplex_size, xatol, fatol, max_polish_evaluations)
+                         for q in starts])
+    before = problem.evaluations
+    ev = problem.evaluate(polished)
+    problem.evaluations = before  # bookkeeping, not search
+    for i in range(len(polished)):
+        rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
+        run.offer(polished[i], float(ev.cost[i]), float(ev.position_error[i]), rot)
+    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    good, good_cost = polished[ok], ev.cost[ok]
+    if len(good):
+        leaders, _ = leader_clusters(good, good_cost, solution_radius, problem.robot.revolute)
+        good = good[leaders]
+    message = (f"{len(good)} distinct solution(s) from {len(starts)} polished niche leader(s)" if len(good) else
+               f"no polished niche leader (of {len(starts)}) reaches the target: it is out of reach, or "
+               "the GA missed it")
+    result = run.result("hga", message)
+    result.solutions = solution_results(problem, good, "hga", result.generations, result.evaluations,
+                                        result.time_s)
+    return result

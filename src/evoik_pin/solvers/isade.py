@@ -1,0 +1,273 @@
+"""ISADE: DE with self-adapted strategies, scale factors and crossover rates (paper 002, section 3.3).
+
+Registered as ``isade``. ISADE (Bui, Pham & Hasegawa) is DE in which, every generation and for every
+individual at once:
+
+* the mutation strategy is drawn among DE/best/1 (eq. 14), DE/best/2 (eq. 15) and DE/rand-to-best/1
+  (eq. 16) with probabilities adapted from each strategy's success rate, as in SaDE (Qin & Suganthan
+  2005), which ISADE borrows: at the end of every learning period of ``learning_period`` generations,
+  ``p_k`` becomes proportional to (successes / trials of strategy k during the period) + a small floor,
+  so no strategy dies out; the counts then restart;
+* the scale factor combines a sigmoid of the individual's fitness rank (eq. 17) with a population mean
+  that decays from F_max to F_min with a nonlinear index (eq. 18);
+* each individual carries its own crossover rate, re-drawn with probability tau (eq. 20).
+
+Eq. 19 of paper 002 is misprinted: it reads ``F_i^iter = (F_i - F_mean^iter) / 2``, which is negative for
+most individuals. The original ISADE averages the two, ``F_i^iter = (F_i + F_mean^iter) / 2``, and so do
+we (:func:`scale_factors`).
+
+Rank convention of eq. 17 (the paper only says particles are sorted by fitness and labelled with their
+rank): individuals sorted by ascending cost get ranks i = 1 (best) .. N (worst), so the best individuals
+take the largest steps around the best vector and the worst ones the smallest; on our tuning points this
+converged in fewer generations than the reverse order (see docs/BENCHMARKS.md).
+
+Eq. 20 is applied jDE-style (Brest et al. 2006, where it comes from): the re-drawn CR_i is used for the
+individual's trial and kept only if that trial survives selection. The paper draws the new CR in [0, 1];
+``CR_low`` (default from our tuning, see docs/BENCHMARKS.md) raises the lower end: low crossover rates
+barely move a non-separable IK objective and cost generations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import OptionError
+from ..problem import IKProblem
+from ..result import Result
+from . import register
+from .common import (
+    BOUND_HANDLING,
+    SolverRun,
+    check_fraction,
+    check_positive_int,
+    enforce_bounds,
+    initial_population,
+    run_with_restarts,
+)
+from .de import check_callback, greedy_selection
+from .de_ops import binomial_crossover, indices_from_uniform
+
+__all__ = [
+    "ISADE_STRATEGIES",
+    "adapt_crossover_rates",
+    "isade",
+    "isade_donors",
+    "mean_scale_factor",
+    "rank_scale_factors",
+    "scale_factors",
+    "sigmoid_by_rank",
+    "strategy_probabilities",
+]
+
+#: ISADE's candidate strategies, in the order of paper 002's eqs. 14-16.
+ISADE_STRATEGIES = ("best1", "best2", "randtobest1")
+
+
+def sigmoid_by_rank(N: int, alpha: float) -> np.ndarray:
+    """Eq. 17 for ranks i = 1..N: ``F_i = 1 / (1 + exp(alpha (i - N/2) / N))``, shape (N,), decreasing in i."""
+    i = np.arange(1, N + 1)
+    return 1.0 / (1.0 + np.exp(alpha * (i - N / 2) / N))
+
+
+def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None = None) -> np.ndarray:
+    """Eq. 17 per individual: the sigmoid of its fitness rank (:func:`sigmoid_by_rank`), shape (N,).
+
+    Ranks run from the best individual (i = 1, largest F) to the worst (i = N, smallest F); among equal
+    costs the earlier individual ranks first. ``table`` = ``sigmoid_by_rank(N, alpha)`` may be passed to
+    save its cost.
+    """
+    if table is None:
+        table = sigmoid_by_rank(costs.shape[0], alpha)
+    F = np.empty(costs.shape[0])
+    F[np.argsort(costs, kind="stable")] = table
+    return F
+
+
+def mean_scale_factor(generation: int, max_generations: int, F_min: float, F_max: float, n_iter: float) -> float:
+    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter``.
+
+    ``generation`` is the generation being produced (1..max_generations): F_mean decays from nearly F_max
+    to F_min, faster early on for larger ``n_iter``.
+    """
+    frac = max(max_generations - generation, 0) / max(max_generations, 1)
+    return F_min + (F_max - F_min) * frac**n_iter
+
+
+def scale_factors(F_rank: np.ndarray, F_mean: float) -> np.ndarray:
+    """Eq. 19 as in the original ISADE: ``F_i^iter = (F_i + F_mean^iter) / 2`` (paper 002 prints a minus)."""
+    return 0.5 * (F_rank + F_mean)
+
+
+def adapt_crossover_rates(CR: np.ndarray, u1: np.ndarray, u2: np.ndarray, tau: float, CR_low: float = 0.0
+                          ) -> np.ndarray:
+    """Eq. 20: ``CR_i <- CR_low + (1 - CR_low) u2_i`` where ``u1_i <= tau``, else unchanged.
+
+    u1, u2 (N,) uniform draws in [0, 1); the paper's ``rand_2`` is ``u2`` (``CR_low = 0``).
+    """
+    return np.where(u1 <= tau, CR_low + (1.0 - CR_low) * u2, CR)
+
+
+def strategy_probabilities(successes: np.ndarray, trials: np.ndarray, floor: float = 0.01) -> np.ndarray:
+    """Strategy probabilities (K,) from success and trial counts (K,) of one learning period (SaDE).
+
+    ``p_k`` is proportional to ``successes_k / trials_k + floor``; a strategy not tried counts as fully
+    successful (rate 1), so it gets tried.
+    """
+    rate = (np.asarray(successes, float) + 1e-12) / (np.asarray(trials, float) + 1e-12)
+    w = rate + floor
+    return w / w.sum()
+
+
+# Columns of E = [r1, r2, r3, r4, best] forming (base, a, b, c, d) of V = X_base + F (X_a - X_b) + F (X_c - X_d)
+# for each strategy; DE/best/1 uses X_c = X_d = X_r4 so its second difference is exactly zero.
+_DONOR_TEMPLATE = np.array([
+    [4, 0, 1, 3, 3],  # DE/best/1, eq. 14: X_best + F (X_r1 - X_r2)
+    [4, 0, 1, 2, 3],  # DE/best/2, eq. 15: X_best + F (X_r1 - X_r2) + F (X_r3 - X_r4)
+    [0, 4, 0, 1, 2],  # DE/rand-to-best/1, eq. 16: X_r1 + F (X_best - X_r1) + F (X_r2 - X_r3)
+])
+
+
+def isade_donors(X: np.ndarray, F: np.ndarray, E: np.ndarray, strategy: np.ndarray) -> np.ndarray:
+    """Donors (N, D) with a per-individual strategy: 0 = DE/best/1 (eq. 14), 1 = DE/best/2 (eq. 15),
+    2 = DE/rand-to-best/1 (eq. 16).
+
+    Args:
+        X: population (N, D).
+        F: (N,) scale factors.
+        E: (N, 5) indices: distinct random r1..r4 (none equal to the row) in columns 0-3, the best
+            individual in column 4.
+        strategy: (N,) ints in {0, 1, 2}.
+
+    All three are written as ``X_base + F (X_a - X_b) + F (X_c - X_d)`` so the whole population is built
+    from one gather whatever the mix of strategies.
+    """
+    N = X.shape[0]
+    G = X[E[np.arange(N)[:, None], _DONOR_TEMPLATE[strategy]]]  # (N, 5, D)
+    return G[:, 0] + F[:, None] * ((G[:, 1] - G[:, 2]) + (G[:, 3] - G[:, 4]))
+
+
+def _check_number(name: str, value, low: float, high: float, open_low: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be a number, got {value!r}") from None
+    ok = np.isfinite(v) and (v > low if open_low else v >= low) and v <= high
+    if not ok:
+        bracket = "(" if open_low else "["
+        raise OptionError(f"{name} must be in {bracket}{low:g}, {high:g}], got {value!r}")
+    return v
+
+
+@register("isade", "ISADE (paper 002): DE with adaptive strategy choice among best/1, best/2, rand-to-best/1, "
+                   "rank-sigmoid F blended with a decaying mean F, self-adapted CR")
+def isade(
+    problem: IKProblem,
+    rng: np.random.Generator,
+    *,
+    population: int = 60,
+    max_generations: int = 130,
+    stall_generations: int | None = None,
+    cost_tolerance: float | None = None,
+    F_min: float = 0.02,
+    F_max: float = 0.3,
+    n_iter: float = 6.0,
+    alpha: float = 4.0,
+    tau: float = 0.1,
+    CR_init: float = 1.0,
+    CR_low: float = 0.95,
+    learning_period: int = 10,
+    bound_handling: str = "clip",
+    runs: int = 10,
+    callback: Callable | None = None,
+) -> Result:
+    """ISADE over the joint vector, vectorized over the population (paper 002, eqs. 14-20).
+
+    Args:
+        problem: the IK problem (its tolerances stop the run; ``q0`` seeds the population).
+        rng: the only source of randomness.
+        population: number of individuals N (>= 6).
+        max_generations: generation budget iter_max (paper 002: 130); it also sets the F schedule (eq. 18).
+        stall_generations: stop after this many generations without improvement of the best cost.
+        cost_tolerance: also stop once the best cost is at most this value.
+        F_min, F_max: bounds of the mean scale factor (eq. 18), 0 < F_min <= F_max <= 2.
+        n_iter: nonlinear modulation index of eq. 18 (> 0).
+        alpha: gain of the rank sigmoid (eq. 17), >= 0 (0 gives F_i = 0.5 for everyone).
+        tau: probability of re-drawing an individual's CR (eq. 20).
+        CR_init: every individual's crossover rate at the start, in [0, 1].
+        CR_low: lower end of the uniform re-draw of eq. 20 (the paper: 0), in [0, 1].
+        learning_period: generations between updates of the strategy probabilities.
+        bound_handling: ``clip``, ``reflect`` or ``resample`` (see ``common.enforce_bounds``).
+        runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
+            ``common.run_with_restarts``; totals are reported).
+        callback: ``callback(generation, population)`` after the initial population (generation 0) and after
+            every generation, with the (N, n) population; a truthy return value stops the run.
+
+    Returns:
+        A :class:`Result` whose ``history`` adds ``F_mean`` (eq. 18), ``CR_mean`` and the strategy
+        probabilities ``p_best1``, ``p_best2``, ``p_randtobest1`` per generation.
+    """
+    N = check_positive_int("population", population, 6)
+    F_min = _check_number("F_min", F_min, 0.0, 2.0, open_low=True)
+    F_max = _check_number("F_max", F_max, F_min, 2.0)
+    n_iter = _check_number("n_iter", n_iter, 0.0, 100.0, open_low=True)
+    alpha = _check_number("alpha", alpha, 0.0, 1e3)
+    tau = check_fraction("tau", tau)
+    CR_init = check_fraction("CR_init", CR_init)
+    CR_low = check_fraction("CR_low", CR_low)
+    learning_period = check_positive_int("learning_period", learning_period)
+    if bound_handling not in BOUND_HANDLING:
+        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
+    check_callback(callback)
+    check_positive_int("runs", runs)
+    SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
+
+    def once() -> Result:
+        run = SolverRun(problem, max_generations, stall_generations, cost_tolerance)
+        iter_max = run.max_generations
+
+        K = len(ISADE_STRATEGIES)
+        counts = np.zeros(2 * K)  # trials that failed (0..K-1) and succeeded (K..2K-1) per strategy this period
+        probs = np.full(K, 1.0 / K)
+        cum_probs = np.cumsum(probs)[:-1]
+        CR = np.full(N, CR_init)
+        D = problem.n
+        table = sigmoid_by_rank(N, alpha)
+        X = initial_population(problem, rng, N)
+        ev = problem.evaluate(X)
+        best = run.record(X, ev, F_mean=F_max, CR_mean=CR_init, p_best1=probs[0], p_best2=probs[1],
+                          p_randtobest1=probs[2])
+        reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
+        c_jrand, c_strategy, c_tau, c_cr = N + D, N + D + 1, N + D + 2, N + D + 3
+        while reason is None and (reason := run.stop_reason()) is None:
+            g = run.generation + 1
+            # One uniform draw serves the generation: index sampling (N x N), crossover (N x D), the
+            # crossover's forced coordinate, the strategy choice and the CR adaptation (4 x N).
+            u = rng.random((N, N + D + 4))
+            E = indices_from_uniform(u[:, :N], 5)
+            E[:, 4] = best
+            strategy = np.searchsorted(cum_probs, u[:, c_strategy], side="right")
+            F_mean = mean_scale_factor(g, iter_max, F_min, F_max, n_iter)
+            F = scale_factors(rank_scale_factors(ev.cost, alpha, table), F_mean)
+            CR_trial = adapt_crossover_rates(CR, u[:, c_tau], u[:, c_cr], tau, CR_low)
+            V = isade_donors(X, F, E, strategy)
+            U = binomial_crossover(X, V, CR_trial, u[:, N:N + D], (u[:, c_jrand] * D).astype(np.intp))
+            U = enforce_bounds(U, problem, rng, bound_handling)
+            ev_u = problem.evaluate(U)
+            won = ev_u.cost < ev.cost  # strict improvement counts as a strategy success
+            counts += np.bincount(strategy + K * won, minlength=2 * K)
+            CR = np.where(ev_u.cost <= ev.cost, CR_trial, CR)  # a CR survives with its trial (jDE)
+            X, ev = greedy_selection(X, ev, U, ev_u)
+            if g % learning_period == 0:
+                probs = strategy_probabilities(counts[K:], counts[:K] + counts[K:])
+                cum_probs = np.cumsum(probs)[:-1]
+                counts[:] = 0.0
+            run.generation = g
+            best = run.record(X, ev, F_mean=F_mean, CR_mean=CR.sum() / N, p_best1=probs[0], p_best2=probs[1],
+                              p_randtobest1=probs[2])
+            if callback is not None and callback(g, X.copy()):
+                reason = "stopped by callback"
+        return run.result("isade", reason)
+
+    return run_with_restarts(once, problem, runs)

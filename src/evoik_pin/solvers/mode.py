@@ -1,0 +1,225 @@
+"""Paper 000's multi-objective differential evolution (``mode``), Pseudocode 1.
+
+Two objectives of a configuration q (section IV), both minimized:
+
+* ``f1 = 1 - exp(-||P - P_e(q)|| / l)``: position error squashed into [0, 1); l = ``length_scale``,
+  1 m by default, i.e. the paper's ``1 - exp(-error)`` with the error in SI units;
+* ``f2 = max_k |q_k - q_init,k|``: maximum angular displacement (rad) from the initial configuration
+  (``problem.q0``, zeros when none is given).
+
+They are combined as ``f = w1 f1 + w2 f2`` with weights recomputed every generation from the previous
+generation's best individual b by Gabli et al.'s equitable treatment
+``w_h(g) = sum_{k != h} |f_k(b)| / ((H - 1) sum_k |f_k(b)|)``, so ``0 <= w_h <= 1`` and ``sum_h w_h = 1``.
+"Best" is read as the individual closest to the target (the IK goal); with f1 small and f2 not, w1 grows
+towards 1 and the search closes in on the target while the w2 f2 term, about as large as w1 f1 near b,
+prefers the smaller displacement among nearly equal positions.
+
+Per generation and individual (Pseudocode 1): a draw m ~ U(0, 1); if ``m < P_m`` the donor is Fan &
+Lampinen's trigonometric mutation when ``m <= Mt`` (variant with trigonometric mutation) and DE/rand/1
+otherwise, else the individual is left as it is; the trial takes the donor's coordinates by binomial
+crossover with probability ``P_c`` (or, in the "fixed" variant, the whole donor with probability Cr);
+greedy selection keeps the better of target and trial under the current weights. ``P_c`` and ``P_m``
+adapt per individual as in Zhao & Qiao (after Srinivas & Patnaik): with f minimized,
+``P = C (f - f_min) / (f_avg - f_min)`` for ``f <= f_avg`` and ``P = C`` otherwise (C = Cr or M), the
+paper's ``C (f_max - f) / (f_max - f_avg)`` for its maximized fitness: good individuals are disturbed less.
+
+Readings we measured and rejected (docs/BENCHMARKS.md): b = the best weighted individual makes the weights
+a positive feedback onto whichever objective is smaller at b, and every AX-18 run collapsed onto q_init
+(errors 34-49 cm); the formula applied to the pseudocode's maximized ``exp(-error)``, ``exp(-f2)`` makes
+the weights flip between two extreme individuals every generation (median errors of 18-180 mm after 200
+generations, for length scales of 1-10 cm).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import OptionError
+from ..objectives import MaxJointDisplacement
+from ..problem import Evaluation, IKProblem
+from ..result import Front, Result
+from . import register
+from .common import BOUND_HANDLING, SolverRun, check_fraction, check_positive_int, enforce_bounds, initial_population
+from .de_ops import binomial_crossover, distinct_indices, rand1, trigonometric
+from .nsga2 import crowding_distance
+
+__all__ = ["VARIANTS", "adaptive_probability", "equitable_weights", "nondominated_2d"]
+
+#: Paper 000's three configurations (Figs. 3-6): (crossover, trigonometric mutation).
+VARIANTS: dict[str, tuple[str, bool]] = {
+    "fixed": ("fixed", False),  # (a) fixed crossover and normal (DE/rand/1) mutation
+    "binomial": ("binomial", False),  # (b) binomial crossover, without trigonometric mutation
+    "binomial-trigonometric": ("binomial", True),  # (c) binomial crossover and trigonometric mutation
+}
+
+
+def equitable_weights(f_best: np.ndarray, previous: np.ndarray | None = None) -> np.ndarray:
+    """Gabli et al.'s equitable weights (H,) from the objective values (H,) of the previous best.
+
+    ``w_h = sum_{k != h} |f_k| / ((H - 1) sum_k |f_k|)``. When every |f_k| is 0 the weights are undefined;
+    ``previous`` (or equal weights) is returned.
+    """
+    f = np.abs(np.asarray(f_best, float))
+    H = f.size
+    total = f.sum()
+    if not total > 0:
+        return np.full(H, 1.0 / H) if previous is None else np.asarray(previous, float)
+    return (total - f) / ((H - 1) * total)
+
+
+def adaptive_probability(cost: np.ndarray, C: float) -> np.ndarray:
+    """Zhao & Qiao's adaptive probability (N,) for minimized ``cost`` (N,) and base probability ``C``.
+
+    ``C (f - f_min) / (f_avg - f_min)`` where ``f <= f_avg``, ``C`` elsewhere (and everywhere when all
+    costs are equal): the best individual is never disturbed, the worse half always with probability C.
+    """
+    f_min, f_avg = cost.min(), cost.mean()
+    if not f_avg > f_min:
+        return np.full(cost.shape, C)
+    return np.where(cost <= f_avg, C * (cost - f_min) / (f_avg - f_min), C)
+
+
+def nondominated_2d(F: np.ndarray) -> np.ndarray:
+    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized), sorted by the first objective.
+
+    Sort by (f1, f2); a point is kept when its f2 is below every f2 before it. Exact duplicates keep one.
+    """
+    order = np.lexsort((F[:, 1], F[:, 0]))
+    f2 = F[order, 1]
+    prev_min = np.concatenate([[np.inf], np.minimum.accumulate(f2)[:-1]])
+    return order[f2 < prev_min]
+
+
+class _Archive:
+    """The non-dominated (position error, max displacement) set met during a run, at most ``size`` points."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.Q = np.empty((0, 0))
+        self.F = np.empty((0, 2))
+
+    def add(self, Q: np.ndarray, F: np.ndarray) -> None:
+        Q = np.concatenate([self.Q, Q]) if self.Q.size else Q
+        F = np.concatenate([self.F, F])
+        keep = nondominated_2d(F)
+        if keep.size > self.size:
+            # Thin a crowded front by crowding distance (Deb 2002), keeping its extremes.
+            cd = crowding_distance(F[keep])
+            keep = keep[np.sort(np.argsort(-cd, kind="stable")[: self.size])]
+        self.Q, self.F = Q[keep], F[keep]
+
+
+@register("mode", "paper 000: multi-objective DE (position error and max joint displacement, equitable "
+          "weights, trigonometric mutation, adaptive Pc/Pm)", multi_objective=True)
+def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150, max_generations: int = 200,
+         variant: str = "binomial-trigonometric", mutation_probability: float = 0.2, crossover_rate: float = 0.8,
+         scale_factor: float = 0.2, trigonometric_probability: float = 0.05, adaptive: bool = True,
+         bound_handling: str = "clip", front_size: int = 100, length_scale: float = 1.0) -> Result:
+    """Paper 000's multi-objective DE (Pseudocode 1; defaults are its parameters).
+
+    Options:
+        population: Np (150). max_generations: g_max (200); the run also stops when the best meets the
+            tolerances.
+        variant: ``"binomial-trigonometric"`` (c, the paper's method), ``"binomial"`` (b, no
+            trigonometric mutation) or ``"fixed"`` (a: the whole donor is taken with the fixed probability
+            Cr, DE/rand/1 donors).
+        mutation_probability: M (0.2). crossover_rate: Cr (0.8). scale_factor: F (0.2).
+        trigonometric_probability: Mt (0.05, Fan & Lampinen's value; the paper gives none): a mutated
+            individual (m < P_m) gets a trigonometric donor when m <= Mt.
+        adaptive: Zhao & Qiao's adaptive P_c and P_m (True); False keeps P_c = Cr and P_m = M.
+        bound_handling: ``"clip"``, ``"reflect"`` or ``"resample"`` for donors outside the bounds.
+        front_size: at most this many points kept in the non-dominated archive (100).
+        length_scale: l (m) of ``f1 = 1 - exp(-error / l)`` (1.0).
+
+    Returns:
+        :class:`Result` with ``q`` the final generation's best weighted individual (the paper's
+        ``argmax f``), ``cost`` the problem's own objective at q, ``front`` the non-dominated set of
+        (position error m, max displacement rad) met during the run, and history series ``w1``, ``w2``
+        (weights used in each generation), ``best_fitness`` (least weighted cost f of the generation),
+        ``best_position_error`` (m), ``best_displacement`` (rad), beside ``diversity`` (mean normalized
+        distance to the centroid).
+    """
+    population = check_positive_int("population", population, 5)
+    max_generations = check_positive_int("max_generations", max_generations, 0)
+    if variant not in VARIANTS:
+        raise OptionError(f"variant {variant!r} is not one of {', '.join(VARIANTS)}")
+    M = check_fraction("mutation_probability", mutation_probability)
+    Cr = check_fraction("crossover_rate", crossover_rate)
+    F = check_fraction("scale_factor", scale_factor, 0.0, 2.0)
+    Mt = check_fraction("trigonometric_probability", trigonometric_probability)
+    if bound_handling not in BOUND_HANDLING:
+        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
+    front_size = check_positive_int("front_size", front_size, 2)
+    if not (np.isfinite(length_scale) and length_scale > 0):
+        raise OptionError(f"length_scale must be a number > 0 (m), got {length_scale!r}")
+    crossover, use_trig = VARIANTS[variant]
+
+    q_init = np.zeros(problem.n) if problem.q0 is None else problem.q0
+    displacement = MaxJointDisplacement(q_init)
+
+    def objectives(Q):
+        """Evaluation, objectives (N, 2) f1, f2, and the front's (position error m, f2 rad)."""
+        ev = problem.evaluate(Q)
+        raw = np.column_stack([ev.position_error, displacement(Q, robot=problem.robot)])
+        return ev, np.column_stack([1.0 - np.exp(-raw[:, 0] / length_scale), raw[:, 1]]), raw
+
+    run = SolverRun(problem, max_generations)
+    archive = _Archive(front_size)
+    X = initial_population(problem, rng, population)
+    ev, Fx, raw = objectives(X)
+    pos, rot, disp = ev.position_error, ev.orientation_error, raw[:, 1]
+    archive.add(X, raw)
+    w = np.array([0.5, 0.5])  # Pseudocode 1, step 2
+    cost = Fx @ w
+    best = int(np.argmin(pos))
+
+    def record():
+        run.record(X, Evaluation(cost, pos, rot), w1=w[0], w2=w[1], best_fitness=cost.min(),
+                   best_position_error=pos[best], best_displacement=disp[best])
+
+    record()
+    while (reason := run.stop_reason()) is None:
+        w = equitable_weights(Fx[best], w)
+        cost = Fx @ w
+        if adaptive:
+            P_m, P_c = adaptive_probability(cost, M), adaptive_probability(cost, Cr)
+        else:
+            P_m, P_c = np.full(population, M), np.full(population, Cr)
+        m = rng.random(population)
+        mutated = m < P_m
+        idx = distinct_indices(rng, population, 3)
+        V = rand1(X, F, idx)
+        if use_trig:
+            trig = mutated & (m <= Mt)
+            if trig.any():
+                V[trig] = trigonometric(X, cost, idx[trig])
+        u, jrand = rng.random(X.shape), rng.integers(0, problem.n, population)
+        if crossover == "binomial":
+            U = binomial_crossover(X, V, P_c, u, jrand)
+        else:
+            U = np.where((u[:, 0] < P_c)[:, None], V, X)
+        changed = mutated & np.any(U != X, axis=1)
+        if changed.any():
+            trial = enforce_bounds(U[changed], problem, rng, bound_handling)
+            ev_t, F_t, raw_t = objectives(trial)
+            archive.add(trial, raw_t)
+            better = F_t @ w <= cost[changed]
+            rows = np.nonzero(changed)[0][better]
+            X[rows], Fx[rows], pos, disp = trial[better], F_t[better], pos.copy(), disp.copy()
+            pos[rows], disp[rows] = ev_t.position_error[better], raw_t[better, 1]
+            if rot is not None:
+                rot = rot.copy()
+                rot[rows] = ev_t.orientation_error[better]
+            cost = Fx @ w
+        best = int(np.argmin(pos))
+        run.generation += 1
+        record()
+    # The paper's answer is the best weighted individual of the last generation (argmax f), not the best
+    # ever met under other weights: reset the run's best to it.
+    final = int(np.argmin(cost))
+    run.best_cost = np.inf
+    run.offer(X[final], cost[final], pos[final], None if rot is None else rot[final])
+    result = run.result("mode", reason)
+    order = np.argsort(archive.F[:, 0], kind="stable")
+    result.front = Front(q=archive.Q[order], objectives=archive.F[order], violation=np.zeros(len(order)))
+    return result

@@ -1,0 +1,453 @@
+"""NSGA-II (Deb et al. 2002) with constraint domination, vectorized over the population (paper 003).
+
+:func:`nsga2_minimize` is a generic box-constrained multi-objective minimizer (usable on test problems
+such as ZDT1); the registered ``nsga2`` IK method builds paper 003's problem on top of it:
+
+* objectives ``g = 1 / (Y + 1)`` (Yoshikawa manipulability Y of the task rows of the Jacobian) and
+  ``S = sqrt(sum_i K_i (q_i - q_prev,i)^2)`` (smoothness with gains K relative to ``problem.q0``);
+* the equality ``f(q) = x_d`` as a constraint with a tolerance: the violation is the position error above
+  ``problem.tolerance`` (m) plus the orientation error above ``problem.rotation_tolerance`` (rad);
+* the final pick: the first-front member with the best smoothness S.
+
+Pieces, each one call over the whole population: :func:`dominance_matrix` (constraint domination: a
+feasible point dominates an infeasible one; two infeasible points compare by total violation; two
+feasible ones by Pareto dominance), :func:`nondominated_ranks` (fast non-dominated sorting, one pass per
+front), :func:`crowding_distance`, :func:`sbx` (bounded simulated binary crossover) and
+:func:`polynomial_mutation` (bounded), as in Deb's reference implementation.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import BoundsError, OptionError
+from ..objectives import (
+    Manipulability,
+    Objective,
+    PopulationKinematics,
+    WeightedJointDisplacement,
+    orientation_errors,
+    position_errors,
+)
+from ..problem import IKProblem
+from ..result import Front, Result
+from . import register
+from .common import SolverRun, check_fraction, check_positive_int, diversity, initial_population
+
+__all__ = [
+    "NSGA2Result",
+    "crowding_distance",
+    "dominance_matrix",
+    "nondominated_ranks",
+    "nsga2_minimize",
+    "polynomial_mutation",
+    "sbx",
+    "survival",
+]
+
+
+# ---------------------------------------------------------------------------------------------- operators
+def dominance_matrix(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
+    """``D[i, j]`` True when row i constraint-dominates row j; ``F`` (N, k) minimized, ``violation`` (N,) >= 0.
+
+    Feasible (violation 0) beats infeasible; two infeasible rows compare by violation; two feasible rows
+    by Pareto dominance (no worse in every objective, better in one).
+    """
+    le = np.all(F[:, None, :] <= F[None, :, :], axis=2)
+    lt = np.any(F[:, None, :] < F[None, :, :], axis=2)
+    D = le & lt
+    if violation is None:
+        return D
+    cv = np.asarray(violation, float)
+    feas = cv <= 0
+    both_feasible = feas[:, None] & feas[None, :]
+    return np.where(both_feasible, D, (feas[:, None] & ~feas[None, :]) | (~feas[:, None] & ~feas[None, :]
+                                                                           & (cv[:, None] < cv[None, :])))
+
+
+def nondominated_ranks(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
+    """Fast non-dominated sorting: front index (N,) of every row, 0 for the first front.
+
+    Counts each row's dominators from :func:`dominance_matrix`, peels the rows with none, subtracts what
+    they dominate, and repeats: one vectorized pass per front.
+    """
+    D = dominance_matrix(F, violation)
+    count = D.sum(axis=0)
+    rank = np.full(F.shape[0], -1)
+    current = np.nonzero(count == 0)[0]
+    r = 0
+    while current.size:
+        rank[current] = r
+        count = count - D[current].sum(axis=0)
+        count[rank >= 0] = -1
+        current = np.nonzero(count == 0)[0]
+        r += 1
+    return rank
+
+
+def crowding_distance(F: np.ndarray) -> np.ndarray:
+    """Crowding distance (M,) of the points ``F`` (M, k) of one front; extremes get inf (Deb 2002).
+
+    For each objective the points are sorted and each gets the gap between its two neighbours divided
+    by the objective's range; the distances add up over the objectives.
+    """
+    M, k = F.shape
+    if M <= 2:
+        return np.full(M, np.inf)
+    order = np.argsort(F, axis=0, kind="stable")
+    Fs = np.take_along_axis(F, order, axis=0)
+    span = Fs[-1] - Fs[0]
+    gap = np.where(span > 0, (Fs[2:] - Fs[:-2]) / np.where(span > 0, span, 1.0), 0.0)
+    dist_sorted = np.vstack([np.full((1, k), np.inf), gap, np.full((1, k), np.inf)])
+    dist = np.zeros((M, k))
+    np.put_along_axis(dist, order, dist_sorted, axis=0)
+    return dist.sum(axis=1)
+
+
+def sbx(P1: np.ndarray, P2: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, rng: np.random.Generator,
+        crossover_probability: float = 0.9, variable_probability: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """Bounded simulated binary crossover (Deb & Agrawal 1995; Deb's NSGA-II code) of parents (M, n).
+
+    Each pair crosses with ``crossover_probability``, each variable with ``variable_probability``; the
+    spread factor's distribution is truncated so children stay inside [lower, upper]; children are
+    swapped with probability 1/2 per variable.
+    """
+    M, n = P1.shape
+    y1, y2 = np.minimum(P1, P2), np.maximum(P1, P2)
+    diff = y2 - y1
+    active = ((rng.random((M, 1)) < crossover_probability) & (rng.random((M, n)) < variable_probability)
+              & (diff > 1e-14))
+    safe = np.where(diff > 1e-14, diff, 1.0)
+    u = rng.random((M, n))
+    e1 = 1.0 / (eta + 1.0)
+
+    def betaq(beta):
+        alpha = 2.0 - beta ** -(eta + 1.0)
+        return np.where(u <= 1.0 / alpha, (u * alpha) ** e1, (1.0 / np.maximum(2.0 - u * alpha, 1e-300)) ** e1)
+
+    c1 = 0.5 * (y1 + y2 - betaq(1.0 + 2.0 * (y1 - lower) / safe) * diff)
+    c2 = 0.5 * (y1 + y2 + betaq(1.0 + 2.0 * (upper - y2) / safe) * diff)
+    c1, c2 = np.clip(c1, lower, upper), np.clip(c2, lower, upper)
+    swap = rng.random((M, n)) < 0.5
+    c1, c2 = np.where(swap, c2, c1), np.where(swap, c1, c2)
+    return np.where(active, c1, P1), np.where(active, c2, P2)
+
+
+def polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, probability: float,
+                        rng: np.random.Generator) -> np.ndarray:
+    """Bounded polynomial mutation (Deb & Goyal 1996; Deb's NSGA-II code) of each entry with ``probability``."""
+    width = np.where(upper > lower, upper - lower, 1.0)
+    mask = rng.random(X.shape) < probability
+    u = rng.random(X.shape)
+    d1, d2 = (X - lower) / width, (upper - X) / width
+    power = 1.0 / (eta + 1.0)
+    left = (2.0 * u + (1.0 - 2.0 * u) * (1.0 - d1) ** (eta + 1.0)) ** power - 1.0
+    right = 1.0 - (2.0 * (1.0 - u) + 2.0 * (u - 0.5) * (1.0 - d2) ** (eta + 1.0)) ** power
+    delta = np.where(u < 0.5, left, right)
+    return np.clip(np.where(mask, X + delta * width, X), lower, upper)
+
+
+def survival(F: np.ndarray, violation: np.ndarray | None, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """NSGA-II's elitist survival: indices of the ``size`` survivors, with their ranks and crowding distances.
+
+    Whole fronts are taken in rank order; the front that overflows is cut by crowding distance.
+    """
+    rank = nondominated_ranks(F, violation)
+    cd = np.zeros(F.shape[0])
+    chosen = []
+    for r in range(rank.max() + 1):
+        members = np.nonzero(rank == r)[0]
+        cd[members] = crowding_distance(F[members])
+        room = size - sum(len(c) for c in chosen)
+        if members.size <= room:
+            chosen.append(members)
+        else:
+            chosen.append(members[np.argsort(-cd[members], kind="stable")[:room]])
+        if sum(len(c) for c in chosen) >= size:
+            break
+    keep = np.concatenate(chosen)
+    return keep, rank[keep], cd[keep]
+
+
+def _tournament(rank: np.ndarray, cd: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Binary tournaments (crowded comparison): lower rank wins, then larger crowding distance."""
+    a, b = pairs[:, 0], pairs[:, 1]
+    b_wins = (rank[b] < rank[a]) | ((rank[b] == rank[a]) & (cd[b] > cd[a]))
+    return np.where(b_wins, b, a)
+
+
+# ---------------------------------------------------------------------------------------------- generic loop
+@dataclass
+class NSGA2Result:
+    """Outcome of :func:`nsga2_minimize`.
+
+    Attributes: final population ``X`` (N, n), objectives ``F`` (N, k), ``violation`` (N,), ``rank`` (N,)
+    (0 = first front); ``generations``, ``evaluations``, ``time_s``; ``history`` per generation (index 0 =
+    initial population): ``front_size``, ``feasible_fraction``, ``min_violation``.
+    """
+
+    X: np.ndarray
+    F: np.ndarray
+    violation: np.ndarray
+    rank: np.ndarray
+    generations: int
+    evaluations: int
+    time_s: float
+    history: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def front(self) -> np.ndarray:
+        """Indices of the first front (feasible non-dominated points when any is feasible)."""
+        return np.nonzero(self.rank == 0)[0]
+
+
+def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generator, *, population: int = 100,
+                   generations: int = 250, eta_c: float = 15.0, eta_m: float = 20.0,
+                   crossover_probability: float = 0.9, mutation_probability: float | None = None,
+                   initial: np.ndarray | None = None, repair: Callable | None = None,
+                   callback: Callable | None = None) -> NSGA2Result:
+    """Minimize ``n_obj`` objectives over the box [lower, upper] with NSGA-II (Deb et al. 2002).
+
+    Args:
+        f: vectorized ``f(X)`` for a population X (N, n): objectives (N, n_obj), or a pair
+            ``(objectives, violation)`` with violation (N,) >= 0 (0 = feasible) for constrained problems.
+        lower, upper: (n,) finite bounds.
+        n_obj: number of objectives.
+        rng: the only source of randomness.
+        population: N (even numbers pair up exactly). generations: offspring generations.
+        eta_c, eta_m: distribution indices of SBX and polynomial mutation (15, 20: pymoo's defaults).
+        crossover_probability: per pair (0.9). mutation_probability: per variable (default 1/n).
+        initial: optional (N0, n) points for the first population (the rest uniform in the box).
+        repair: optional ``repair(X) -> X`` applied to every new point before evaluation (and to the
+            initial population), e.g. projecting onto an equality constraint.
+        callback: optional ``callback(generation, X, F, violation)`` with the survivors of every generation
+            (generation 0: the initial population).
+
+    Returns:
+        :class:`NSGA2Result`: the final population, its ranks, and per-generation history.
+    """
+    lower = np.asarray(lower, float).reshape(-1)
+    upper = np.asarray(upper, float).reshape(-1)
+    if lower.shape != upper.shape or not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+        raise BoundsError("nsga2_minimize needs finite lower and upper bounds of equal length")
+    if np.any(lower > upper):
+        raise BoundsError("nsga2_minimize: some lower bound exceeds its upper bound")
+    n = lower.size
+    population = check_positive_int("population", population, 4)
+    generations = check_positive_int("generations", generations, 0)
+    n_obj = check_positive_int("n_obj", n_obj, 1)
+    crossover_probability = check_fraction("crossover_probability", crossover_probability)
+    p_m = 1.0 / n if mutation_probability is None else check_fraction("mutation_probability", mutation_probability)
+    for name, value in (("eta_c", eta_c), ("eta_m", eta_m)):
+        if not (np.isfinite(value) and value >= 0):
+            raise OptionError(f"{name} (distribution index) must be a number >= 0, got {value!r}")
+    t0 = time.perf_counter()
+    evaluations = 0
+
+    def evaluate(X):
+        nonlocal evaluations
+        out = f(X)
+        F, cv = out if isinstance(out, tuple) else (out, np.zeros(X.shape[0]))
+        F = np.asarray(F, float).reshape(X.shape[0], -1)
+        if F.shape[1] != n_obj:
+            raise OptionError(f"f returned {F.shape[1]} objectives per point, n_obj is {n_obj}")
+        evaluations += X.shape[0]
+        return F, np.maximum(np.asarray(cv, float).reshape(-1), 0.0)
+
+    X = rng.uniform(lower, upper, size=(population, n))
+    if initial is not None:
+        init = np.clip(np.atleast_2d(np.asarray(initial, float)), lower, upper)[:population]
+        X[: init.shape[0]] = init
+    if repair is not None:
+        X = np.clip(repair(X), lower, upper)
+    F, cv = evaluate(X)
+    keep, rank, cd = survival(F, cv, population)
+    X, F, cv = X[keep], F[keep], cv[keep]
+    history: dict[str, list[float]] = {"front_size": [], "feasible_fraction": [], "min_violation": []}
+
+    def log():
+        history["front_size"].append(float(np.sum(rank == 0)))
+        history["feasible_fraction"].append(float(np.mean(cv <= 0)))
+        history["min_violation"].append(float(cv.min()))
+
+    log()
+    if callback is not None:
+        callback(0, X, F, cv)
+    half = (population + 1) // 2
+    for g in range(generations):
+        winners = _tournament(rank, cd, rng.integers(0, X.shape[0], (2 * half, 2)))
+        C1, C2 = sbx(X[winners[:half]], X[winners[half:]], lower, upper, eta_c, rng, crossover_probability)
+        Y = polynomial_mutation(np.concatenate([C1, C2])[:population], lower, upper, eta_m, p_m, rng)
+        if repair is not None:
+            Y = np.clip(repair(Y), lower, upper)
+        FY, cvY = evaluate(Y)
+        XA, FA, cvA = np.concatenate([X, Y]), np.concatenate([F, FY]), np.concatenate([cv, cvY])
+        keep, rank, cd = survival(FA, cvA, population)
+        X, F, cv = XA[keep], FA[keep], cvA[keep]
+        log()
+        if callback is not None:
+            callback(g + 1, X, F, cv)
+    return NSGA2Result(X=X, F=F, violation=cv, rank=rank, generations=generations, evaluations=evaluations,
+                       time_s=time.perf_counter() - t0, history={k: np.asarray(v) for k, v in history.items()})
+
+
+# ---------------------------------------------------------------------------------------------- IK method
+def _task_rows(problem: IKProblem) -> list[int]:
+    """Jacobian rows of the task: planar (vx, vy[, wz]); 3-D (vx, vy, vz[, wx, wy, wz])."""
+    t = problem.target
+    if t.planar:
+        return [0, 1, 5] if t.yaw is not None else [0, 1]
+    return [0, 1, 2, 3, 4, 5] if t.rotation is not None else [0, 1, 2]
+
+
+def _task_errors(problem: IKProblem, Q: np.ndarray) -> np.ndarray:
+    """Task-space error vectors (N, m) target - current, in the rows of :func:`_task_rows` (m, rad)."""
+    t = problem.target
+    p, R = problem.robot.fk_batch(Q)
+    if t.planar:
+        e = [t.position[0] - p[:, 0], t.position[1] - p[:, 1]]
+        if t.yaw is not None:
+            yaw = np.arctan2(R[:, 1, 0], R[:, 0, 0])
+            e.append((t.yaw - yaw + np.pi) % (2 * np.pi) - np.pi)
+        return np.stack(e, axis=1)
+    e = t.position - p
+    if t.rotation is None:
+        return e
+    # Rotation error as the world-frame rotation vector of R_target R^T (small-angle accurate; a
+    # direction good enough for Newton steps at any angle).
+    E = np.einsum("ij,nkj->nik", t.rotation, R)
+    v = 0.5 * np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
+    s = np.linalg.norm(v, axis=1)
+    angle = np.arctan2(s, 0.5 * (np.trace(E, axis1=1, axis2=2) - 1.0))
+    scale = np.where(s > 1e-12, angle / np.maximum(s, 1e-300), 1.0)
+    return np.concatenate([e, v * scale[:, None]], axis=1)
+
+
+def dls_repair(problem: IKProblem, Q: np.ndarray, steps: int, damping: float = 1e-4,
+               weights: np.ndarray | None = None) -> np.ndarray:
+    """``steps`` damped-least-squares Newton steps (N, n) towards the target, all individuals at once.
+
+    ``dq = W J^T (J W J^T + damping^2 I)^-1 e`` on the task rows of the base-frame Jacobian, then clipped
+    into the box: the step of least ``dq^T W^-1 dq``. ``weights`` W (n,) default ones; ``nsga2`` passes
+    1 / K so the repair, like the smoothness S, moves high-gain joints (the vehicle) least. Each step
+    costs one batched FK and Jacobian and counts N evaluations.
+    """
+    rows = _task_rows(problem)
+    lam2 = damping ** 2 * np.eye(len(rows))
+    W = np.ones(problem.n) if weights is None else np.asarray(weights, float)
+    for _ in range(steps):
+        e = _task_errors(problem, Q)
+        J = problem.robot.jacobian_batch(Q)[:, rows]
+        problem.evaluations += Q.shape[0]
+        JW = J * W
+        y = np.linalg.solve(JW @ J.transpose(0, 2, 1) + lam2, e[:, :, None])[..., 0]
+        Q = np.clip(Q + np.einsum("nji,nj->ni", JW, y), problem.lower, problem.upper)
+    return Q
+
+
+@register("nsga2", "paper 003: NSGA-II with constraint domination; Pareto front of manipulability and "
+          "weighted joint displacement under the pose constraint", multi_objective=True)
+def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200, max_generations: int = 100,
+          gains=None, manipulability_rows=None, objectives: list[Objective] | None = None, pick: int = -1,
+          repair_steps: int = 3, eta_c: float = 15.0, eta_m: float = 20.0, crossover_probability: float = 0.9,
+          mutation_probability: float | None = None) -> Result:
+    """Paper 003's NSGA-II IK (section 3): a Pareto front under the constraint ``f(q) = x_d``.
+
+    Options:
+        population: 200 (paper). max_generations: offspring generations (100), always all run.
+        gains: K (n,) of the smoothness ``S = sqrt(sum K_i (q_i - q_prev,i)^2)`` (default ones); q_prev is
+            ``problem.q0`` (``solve_trajectory`` passes the previous solution), zeros when none.
+        manipulability_rows: Jacobian rows of ``Y = sqrt(det(J J^T))`` (default the task's rows:
+            "planar" (vx, vy, wz) for planar yaw targets, translation for 3-D positions, all six for poses).
+        objectives: replace the default ``[Manipulability(rows, "inverse"), WeightedJointDisplacement]``
+            with any list of :class:`~evoik_pin.objectives.Objective` (all minimized).
+        pick: objective index minimized when choosing ``q`` from the front (-1: the last, S).
+        repair_steps: damped-least-squares steps towards the target applied to every new individual
+            (3; the initial population gets four times as many, as the paper starts from a feasible
+            population), weighted by 1 / K so they too spare the high-gain joints. 0 runs the plain
+            algorithm, whose random individuals almost never meet a tight
+            equality tolerance: then loosen ``tolerance``.
+        eta_c, eta_m, crossover_probability, mutation_probability: SBX / polynomial mutation (15, 20, 0.9,
+            1/n).
+
+    Returns:
+        :class:`Result` whose ``front`` holds the first front (q (M, n), objectives (M, k), violation (M,)
+        with violation = position error above ``tolerance`` (m) + orientation error above
+        ``rotation_tolerance`` (rad)), sorted by the first objective, and whose ``q`` is its member with the
+        least objective ``pick`` among the feasible ones (the least violation when none is feasible).
+        History per generation: ``best_cost`` (least objective ``pick`` among feasible survivors, NaN when
+        none), ``mean_cost`` (its mean), ``diversity``, ``front_size``, ``feasible_fraction``,
+        ``min_violation``.
+    """
+    robot = problem.robot
+    repair_steps = check_positive_int("repair_steps", repair_steps, 0)
+    q_prev = np.zeros(problem.n) if problem.q0 is None else problem.q0
+    repair_weights = None
+    if objectives is None:
+        if gains is not None:
+            gains = np.asarray(gains, float).reshape(-1)
+            if gains.shape != (problem.n,):
+                raise OptionError(f"gains must have {problem.n} values (one per joint), got {gains.size}")
+            if np.any(gains < 0) or not np.all(np.isfinite(gains)):
+                raise OptionError(f"gains must be finite values >= 0, got {gains.tolist()}")
+            repair_weights = 1.0 / np.maximum(gains, 1e-12)
+        rows = _task_rows(problem) if manipulability_rows is None else manipulability_rows
+        robot.task_rows(rows)  # validates names and indices with a clear error
+        objectives = [Manipulability(rows, "inverse"), WeightedJointDisplacement(q_prev, gains)]
+    elif gains is not None or manipulability_rows is not None:
+        raise OptionError("gains and manipulability_rows shape the default objectives; with objectives=[...] "
+                          "put them into your own objective terms")
+    objectives = list(objectives)
+    if not objectives or not all(isinstance(o, Objective) for o in objectives):
+        raise OptionError("objectives must be a non-empty list of evoik_pin.objectives.Objective terms")
+    k = len(objectives)
+    if isinstance(pick, bool) or not isinstance(pick, (int, np.integer)) or not -k <= pick < k:
+        raise OptionError(f"pick must be an objective index in [{-k}, {k - 1}], got {pick!r}")
+    target = problem.target
+    run = SolverRun(problem, max_generations)
+
+    def f(Q):
+        kin = PopulationKinematics(robot, Q)
+        problem.evaluations += Q.shape[0]
+        F = np.column_stack([obj(Q, kin) for obj in objectives])
+        cv = np.maximum(position_errors(target, kin) - problem.tolerance, 0.0)
+        if target.has_orientation:
+            cv = cv + np.maximum(orientation_errors(target, kin) - problem.rotation_tolerance, 0.0)
+        return F, cv
+
+    init = initial_population(problem, rng, population)
+    best_pick: list[float] = []
+
+    def callback(g, X, F, cv):
+        ok = cv <= 0
+        best_pick.append(float(F[ok, pick].min()) if ok.any() else np.nan)
+        run.history["mean_cost"].append(float(np.mean(F[:, pick])))
+        run.history["diversity"].append(diversity(X, problem.lower, problem.upper))
+
+    first_repair = None if repair_steps == 0 else 4 * repair_steps
+    out = nsga2_minimize(
+        f, problem.lower, problem.upper, k, rng, population=population, generations=max_generations, eta_c=eta_c,
+        eta_m=eta_m, crossover_probability=crossover_probability, mutation_probability=mutation_probability,
+        initial=init if first_repair is None else dls_repair(problem, init, first_repair, weights=repair_weights),
+        repair=None if repair_steps == 0 else (lambda Y: dls_repair(problem, Y, repair_steps, weights=repair_weights)),
+        callback=callback)
+    run.generation = out.generations
+    front = out.front
+    order = front[np.argsort(out.F[front, 0], kind="stable")]
+    feasible = order[out.violation[order] <= 0]
+    chosen = (feasible[np.argmin(out.F[feasible, pick])] if feasible.size
+              else order[np.argmin(out.violation[order])])
+    run.best_q = out.X[chosen].copy()
+    run.history["best_cost"] = best_pick
+    run.history.update({key: list(v) for key, v in out.history.items()})
+    if feasible.size:
+        message = f"{max_generations} generations; {len(order)} point(s) on the front, all feasible"
+    else:
+        message = f"{max_generations} generations; no individual meets the pose constraint"
+    result = run.result("nsga2", message,
+                        front=Front(q=out.X[order], objectives=out.F[order], violation=out.violation[order]))
+    return result

@@ -1,0 +1,172 @@
+"""Particle swarm optimization with a linearly varying inertia weight (paper 002, section 3.1).
+
+Registered as ``pso``. Every particle i has a position x_i (a joint vector), a velocity v_i and its best
+position so far p_i; g is the swarm's best. One iteration, all particles at once (paper 002, eq. 11):
+
+    v_i <- w v_i + c1 r1 (p_i - x_i) + c2 r2 (g - x_i),        x_i <- x_i + v_i
+
+with r1, r2 uniform in [0, 1) per particle and coordinate, c1 = c2 = 1.5 and the inertia weight varied
+linearly over the iterations, ``w = w_start + (iter / iter_max)(w_end - w_start)`` (paper 002, Table 2).
+Velocities are clamped to ``velocity_clamp`` x (upper - lower) per joint, the classic guard against
+swarm explosion (the paper does not give its clamp).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import OptionError
+from ..problem import IKProblem
+from ..result import Result
+from . import register
+from .common import BOUND_HANDLING, SolverRun, check_positive_int, enforce_bounds, initial_population, run_with_restarts
+from .de import check_callback
+
+__all__ = ["TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
+
+#: Accepted ``topology`` values.
+TOPOLOGIES = ("global", "ring")
+
+
+def inertia_weight(iteration: int, max_iterations: int, w_start: float, w_end: float) -> float:
+    """Paper 002 (Table 2): ``w = w_start + (iter / iter_max)(w_end - w_start)``, iter = 1..iter_max."""
+    return w_start + (iteration / max(max_iterations, 1)) * (w_end - w_start)
+
+
+def pso_step(X: np.ndarray, V: np.ndarray, P: np.ndarray, g: np.ndarray, w: float, c1: float, c2: float,
+             r1: np.ndarray, r2: np.ndarray, v_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One velocity and position update (eq. 11) of a swarm, with velocity clamping.
+
+    Args:
+        X, V, P: positions, velocities and personal bests (N, D); g: global best (D,) or each particle's
+            neighbourhood best (N, D).
+        w, c1, c2: inertia weight, cognitive and social coefficients.
+        r1, r2: (N, D) uniform draws in [0, 1).
+        v_max: (D,) velocity limit per coordinate (rad/iteration or m/iteration).
+
+    Returns:
+        The new positions and velocities (N, D), before any bound handling.
+    """
+    V = w * V + c1 * r1 * (P - X) + c2 * r2 * (g - X)
+    V = np.minimum(np.maximum(V, -v_max), v_max)
+    return X + V, V
+
+
+def ring_best(p_cost: np.ndarray) -> np.ndarray:
+    """Index (N,) of the best personal best among particle i and its ring neighbours i - 1 and i + 1."""
+    N = p_cost.shape[0]
+    i = np.arange(N)
+    cand = np.stack([(i - 1) % N, i, (i + 1) % N])  # (3, N)
+    return cand[p_cost[cand].argmin(axis=0), i]
+
+
+def _check_coefficient(name: str, value, high: float = 10.0) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be a number in [0, {high:g}], got {value!r}") from None
+    if not (np.isfinite(v) and 0.0 <= v <= high):
+        raise OptionError(f"{name} must be a number in [0, {high:g}], got {value!r}")
+    return v
+
+
+@register("pso", "particle swarm (paper 002): inertia weight linear from w_start to w_end, c1 = c2 = 1.5, "
+                 "velocity clamping")
+def pso(
+    problem: IKProblem,
+    rng: np.random.Generator,
+    *,
+    population: int = 30,
+    max_generations: int = 600,
+    stall_generations: int | None = None,
+    cost_tolerance: float | None = None,
+    w_start: float = 0.9,
+    w_end: float = 0.4,
+    c1: float = 1.5,
+    c2: float = 1.5,
+    velocity_clamp: float = 0.2,
+    topology: str = "global",
+    bound_handling: str = "clip",
+    runs: int = 10,
+    callback: Callable | None = None,
+) -> Result:
+    """Particle swarm optimization over the joint vector, vectorized over the swarm (paper 002, eq. 11).
+
+    Args:
+        problem: the IK problem (its tolerances stop the run; ``q0`` seeds the swarm).
+        rng: the only source of randomness.
+        population: number of particles N (>= 2).
+        max_generations: iteration budget iter_max (paper 002: 600); it also sets the inertia schedule.
+        stall_generations: stop after this many iterations without improvement of the best cost.
+        cost_tolerance: also stop once the best cost is at most this value.
+        w_start, w_end: inertia weight at the first and the last iteration (Shi & Eberhart's 0.9 -> 0.4).
+        c1, c2: cognitive and social coefficients (paper 002: 1.5 and 1.5).
+        velocity_clamp: velocity limit as a fraction of each joint's search range, in (0, 1].
+        topology: ``global`` (paper 002: every particle follows the swarm's best g) or ``ring`` (lbest: each
+            particle follows the best personal best among itself and its two ring neighbours, which
+            slows the swarm's collapse on multimodal problems such as 6-D pose targets).
+        bound_handling: ``clip`` (particles stop at the violated bound and lose that velocity component),
+            ``reflect`` or ``resample`` (see ``common.enforce_bounds``; velocities unchanged).
+        runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
+            ``common.run_with_restarts``; totals are reported).
+        callback: ``callback(generation, positions)`` after the initial swarm (generation 0) and after every
+            iteration, with the (N, n) positions; a truthy return value stops the run.
+
+    Returns:
+        A :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
+    """
+    N = check_positive_int("population", population, 2)
+    w_start = _check_coefficient("w_start", w_start, 2.0)
+    w_end = _check_coefficient("w_end", w_end, 2.0)
+    c1 = _check_coefficient("c1", c1)
+    c2 = _check_coefficient("c2", c2)
+    try:
+        velocity_clamp = float(velocity_clamp)
+    except (TypeError, ValueError):
+        raise OptionError(f"velocity_clamp must be a number in (0, 1], got {velocity_clamp!r}") from None
+    if not (0.0 < velocity_clamp <= 1.0):
+        raise OptionError(f"velocity_clamp must be a number in (0, 1], got {velocity_clamp!r}")
+    if bound_handling not in BOUND_HANDLING:
+        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
+    if topology not in TOPOLOGIES:
+        raise OptionError(f"topology {topology!r} is not one of {TOPOLOGIES}")
+    check_callback(callback)
+    check_positive_int("runs", runs)
+    SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
+
+    def once() -> Result:
+        run = SolverRun(problem, max_generations, stall_generations, cost_tolerance)
+        iter_max = run.max_generations
+
+        D = problem.n
+        v_max = velocity_clamp * (problem.upper - problem.lower)
+        X = initial_population(problem, rng, N)
+        V = rng.uniform(-v_max, v_max, size=(N, D))
+        ev = problem.evaluate(X)
+        P, p_cost = X.copy(), ev.cost.copy()
+        run.record(X, ev, w=w_start)
+        g_best = run.best_q
+        reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
+        while reason is None and (reason := run.stop_reason()) is None:
+            it = run.generation + 1
+            w = inertia_weight(it, iter_max, w_start, w_end)
+            r = rng.random((2, N, D))
+            guide = g_best if topology == "global" else P[ring_best(p_cost)]
+            X_new, V = pso_step(X, V, P, guide, w, c1, c2, r[0], r[1], v_max)
+            X = enforce_bounds(X_new, problem, rng, bound_handling)
+            if bound_handling == "clip":
+                V = np.where(X == X_new, V, 0.0)  # absorbing walls: a particle stopped at a bound loses that speed
+            ev = problem.evaluate(X)
+            improved = ev.cost < p_cost
+            P = np.where(improved[:, None], X, P)
+            p_cost = np.where(improved, ev.cost, p_cost)
+            run.generation = it
+            run.record(X, ev, w=w)
+            g_best = run.best_q  # the best position any particle has visited
+            if callback is not None and callback(it, X.copy()):
+                reason = "stopped by callback"
+        return run.result("pso", reason)
+
+    return run_with_restarts(once, problem, runs)

@@ -1,0 +1,341 @@
+"""The memetic solver (LM from q0 / seed table / DE populations), its LM polish, solve_many, and the robot
+hot-path kinematics they use.
+
+Success tests use a deterministic budget (``timeout=None``, ``max_restarts``) so they do not depend on the
+machine's load; the time-budget test checks the wall-clock contract separately.
+"""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import evoik_pin as ev
+from evoik_pin.errors import OptionError, TargetError
+from evoik_pin.problem import IKProblem, Target
+from evoik_pin.result import Result
+from evoik_pin.robot import list_robots, load_robot
+from evoik_pin.solvers.memetic import SeedTable, polish_result
+from evoik_pin.solvers.polish import LevenbergMarquardt, batch_levenberg_marquardt
+
+#: Arms with fewer than 6 joints (or 5, so_arm) get position targets; planar2r a planar one.
+POSITION_ONLY = {"ax18", "puma3r", "vehicle_arm", "so_arm"}
+PLANAR = {"planar2r"}
+BUDGET = {"timeout": None, "max_restarts": 30}  # deterministic: independent of machine load
+
+
+@pytest.fixture(scope="module")
+def robots():
+    return {name: load_robot(name) for name in list_robots()}
+
+
+def _pose_error(robot, q, T):
+    Tq = robot.fk(q)
+    return np.linalg.norm(Tq.translation - T.translation), np.linalg.norm(pin.log3(T.rotation.T @ Tq.rotation))
+
+
+def _targets_for(name, robot, rng, count):
+    Q = robot.random_configurations(count, rng)
+    if name in PLANAR:
+        return [Target.planar_target(*robot.fk(q).translation[:2]) for q in Q]
+    if name in POSITION_ONLY:
+        return [robot.fk(q).translation for q in Q]
+    return [robot.fk(q) for q in Q]
+
+
+# ---------------------------------------------------------------------- every arm
+@pytest.mark.parametrize("name", list_robots())
+def test_solves_reachable_targets_on_every_arm(robots, name):
+    robot = robots[name]
+    rng = np.random.default_rng(7)
+    for i, target in enumerate(_targets_for(name, robot, rng, 4)):
+        res = ev.solve(robot, target, seed=i, **BUDGET)
+        assert res.success, (name, res)
+        assert res.method == "memetic"
+        assert res.position_error <= 1e-6
+        assert robot.within_bounds(res.q)
+        t = Target.coerce(target)
+        if t.planar:
+            assert np.hypot(*(robot.fk(res.q).translation[:2] - t.position)) <= 1e-6
+        elif t.rotation is None:
+            assert np.linalg.norm(robot.fk(res.q).translation - t.position) <= 1e-6
+        else:
+            pos, rot = _pose_error(robot, res.q, t.se3())
+            assert pos <= 1e-6 and rot <= 1e-6
+            assert res.orientation_error <= 1e-6
+
+
+def test_position_only_targets_on_ax18_and_planar2r(robots):
+    rng = np.random.default_rng(3)
+    ax18 = robots["ax18"]
+    for q in ax18.random_configurations(5, rng):
+        p = ax18.fk(q).translation
+        res = ev.solve(ax18, p, seed=1, **BUDGET)
+        assert res.success and res.orientation_error is None
+        assert np.linalg.norm(ax18.fk(res.q).translation - p) <= 1e-6
+        assert ax18.within_bounds(res.q)
+    planar = robots["planar2r"]
+    for q in planar.random_configurations(5, rng):
+        x, y = planar.fk(q).translation[:2]
+        res = ev.solve(planar, Target.planar_target(x, y), seed=2, **BUDGET)
+        assert res.success
+        assert np.hypot(*(planar.fk(res.q).translation[:2] - [x, y])) <= 1e-6
+
+
+def test_planar_target_with_yaw_on_vehicle_arm(robots):
+    robot = robots["vehicle_arm"]
+    rng = np.random.default_rng(4)
+    for q in robot.random_configurations(4, rng):
+        T = robot.fk(q)
+        yaw = np.arctan2(T.rotation[1, 0], T.rotation[0, 0])
+        res = ev.solve(robot, Target.planar_target(T.translation[0], T.translation[1], yaw), seed=0, **BUDGET)
+        assert res.success and res.orientation_error <= 1e-6
+        R = robot.fk(res.q).rotation
+        assert abs(np.angle(np.exp(1j * (np.arctan2(R[1, 0], R[0, 0]) - yaw)))) <= 1e-6
+
+
+def test_sub_chain_of_a_multi_arm_robot():
+    from evoik_pin.robot import example_robot_data_dir
+
+    robot = load_robot(example_robot_data_dir() / "baxter_description/urdf/baxter.urdf", base="torso",
+                       tip="left_gripper")
+    rng = np.random.default_rng(11)
+    for i, q in enumerate(robot.random_configurations(4, rng)):
+        T = robot.fk(q)
+        res = ev.solve(robot, T, seed=i, **BUDGET)
+        assert res.success and robot.within_bounds(res.q)
+        pos, rot = _pose_error(robot, res.q, T)
+        assert pos <= 1e-6 and rot <= 1e-6
+
+
+# ---------------------------------------------------------------------- precision, continuous joints, q0
+def test_tolerance_down_to_1e_12(robots):
+    robot = robots["panda"]
+    rng = np.random.default_rng(5)
+    for i, q in enumerate(robot.random_configurations(3, rng)):
+        T = robot.fk(q)
+        res = ev.solve(robot, T, seed=i, tolerance=1e-12, **BUDGET)
+        assert res.success
+        pos, rot = _pose_error(robot, res.q, T)
+        assert pos <= 1e-12 and rot <= 1e-12
+
+
+def test_continuous_joints_step_across_pi(robots):
+    """Kinova's joint 1 is continuous, bounds [-pi, pi]: from q0 at -3.0 the target at +3.0 is 0.28 rad away
+    across the seam, and LM must take that short way (wrapping), not be stopped by the 'bound' at -pi."""
+    robot = robots["kinova"]
+    assert robot.continuous[0]
+    q_target = np.array([3.0, 2.5, 3.0, 0.3, 2.0, -1.0])
+    q0 = q_target.copy()
+    q0[0] = -3.0
+    res = ev.solve(robot, robot.fk(q_target), q0=q0, seed=0, **BUDGET)
+    assert res.success and "from q0" in res.message
+    assert robot.within_bounds(res.q)
+    # the same physical joint angle as the target's, reached by wrapping
+    assert abs(np.angle(np.exp(1j * (res.q[0] - 3.0)))) < 1e-6
+
+
+def test_warm_start_from_a_nearby_q0_converges_from_q0(robots):
+    robot = robots["ur5"]
+    q = np.array([0.3, -1.2, 1.4, -0.5, 1.1, 0.2])
+    res = ev.solve(robot, robot.fk(q), q0=q + 0.05, seed=0, **BUDGET)
+    assert res.success and "from q0" in res.message
+    assert np.abs(res.q - q).max() < 1e-5  # the nearby solution, not another branch
+
+
+# ---------------------------------------------------------------------- unreachable, budget, determinism
+def test_unreachable_target_gives_best_approximation_within_the_time_budget(robots):
+    robot = robots["panda"]
+    T = pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.5]))  # 3 m away: the arm reaches about 0.9 m
+    res = ev.solve(robot, T, seed=0, timeout=0.02)
+    assert not res.success
+    assert "exceeds the tolerance" in res.message and "time budget" in res.message
+    assert robot.within_bounds(res.q)
+    assert 1.5 < res.position_error < 3.0  # the best approximation: stretched towards the target
+    assert res.time_s <= 0.02 + 0.05  # the budget is a contract (checked between LM iterations)
+
+
+def test_default_timeout_is_respected(robots):
+    res = ev.solve(robots["ur5"], [5.0, 5.0, 5.0], seed=1)
+    assert not res.success and res.time_s <= 0.005 + 0.05
+
+
+def test_same_seed_same_result(robots):
+    robot = robots["xarm"]
+    rng = np.random.default_rng(9)
+    for q in robot.random_configurations(3, rng):
+        T = robot.fk(q)
+        a = ev.solve(robot, T, seed=42, **BUDGET)
+        b = ev.solve(robot, T, seed=42, **BUDGET)
+        assert np.array_equal(a.q, b.q) and a.evaluations == b.evaluations and a.message == b.message
+
+
+def test_deterministic_budget_on_an_unreachable_target(robots):
+    """With timeout=None the restarts are the budget: the whole search, DE draws included, repeats exactly."""
+    robot = robots["z1"]
+    T = pin.SE3(pin.rpy.rpyToMatrix(0.3, 0.2, 0.1), np.array([2.0, 1.0, 0.0]))
+    a = ev.solve(robot, T, seed=3, timeout=None, max_restarts=2)
+    b = ev.solve(robot, T, seed=3, timeout=None, max_restarts=2)
+    assert not a.success and "max_restarts (2)" in a.message
+    assert np.array_equal(a.q, b.q) and a.generations == b.generations == 6
+    assert len(a.history["best_cost"]) == a.generations + 1
+    assert np.all(np.diff(a.history["best_cost"]) <= 0)  # elitism: the best cost never gets worse
+
+
+# ---------------------------------------------------------------------- bad input
+def test_bad_targets_raise_target_error(robots):
+    robot = robots["panda"]
+    with pytest.raises(TargetError):
+        ev.solve(robot, [np.nan, 0.0, 0.5])
+    bad = np.eye(4)
+    bad[:3, :3] = [[1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]  # not orthonormal
+    with pytest.raises(TargetError, match="not a rotation matrix"):
+        ev.solve(robot, bad)
+    with pytest.raises(TargetError):
+        ev.solve_many(robot, [robot.fk(np.zeros(7) + 0.1), bad])
+
+
+@pytest.mark.parametrize("options", [
+    {"timeout": 0}, {"timeout": -1.0}, {"timeout": float("nan")}, {"timeout": "fast"}, {"timeout": True},
+    {"max_restarts": -1}, {"max_restarts": 1.5}, {"max_restarts": True},
+    {"timeout": None, "max_restarts": None}, {"population": 2}, {"polish_count": 40}, {"iterations": 0},
+    {"table_seeds": -1}, {"batch": 0}, {"no_such_option": 1},
+])
+def test_bad_options_raise_option_error(robots, options):
+    robot = robots["ur5"]
+    with pytest.raises(OptionError):
+        ev.solve(robot, robot.fk(np.zeros(6) + 0.2), **options)
+
+
+# ---------------------------------------------------------------------- polish of other solvers' answers
+def test_polish_result_reaches_the_tolerance_and_keeps_the_history(robots):
+    robot = robots["panda"]
+    rng = np.random.default_rng(12)
+    q = robot.random_configurations(1, rng)[0]
+    problem = IKProblem(robot, robot.fk(q))
+    rough = np.clip(q + 0.02, robot.lower, robot.upper)
+    ev0 = problem.evaluate(rough[None])
+    history = {"best_cost": np.array([3.0, 2.0, float(ev0.cost[0])])}
+    before = Result(q=rough, position_error=float(ev0.position_error[0]),
+                    orientation_error=float(ev0.orientation_error[0]), cost=float(ev0.cost[0]), success=False,
+                    generations=2, evaluations=100, time_s=0.01, history=history, message="stopped",
+                    method="some_method")
+    after = polish_result(problem, before, np.random.default_rng(0))
+    assert after.success and after.position_error <= 1e-6 and after.orientation_error <= 1e-6
+    assert after.history is history and after.generations == 2 and after.method == "some_method"
+    assert after.evaluations > 100 and after.time_s >= 0.01
+    assert "polished" in after.message and after.message.startswith("stopped")
+    pos, rot = _pose_error(robot, after.q, robot.fk(q))
+    assert pos <= 1e-6 and rot <= 1e-6
+
+
+def test_polish_true_on_a_paper_solver(robots):
+    if "de" not in ev.methods():
+        pytest.skip("the de solver is not available")
+    robot = robots["redundant7r"]
+    p = robot.fk(robot.random_configurations(1, np.random.default_rng(1))[0]).translation
+    plain = ev.solve(robot, p, method="de", seed=5, max_generations=5)
+    polished = ev.solve(robot, p, method="de", seed=5, max_generations=5, polish=True)
+    assert polished.success and polished.position_error <= 1e-6
+    assert "polished" in polished.message
+    assert set(polished.history) == set(plain.history)
+    for key in plain.history:
+        assert np.array_equal(polished.history[key], plain.history[key])
+    assert polished.evaluations >= plain.evaluations
+
+
+# ---------------------------------------------------------------------- solve_many
+def test_solve_many_pose_targets(robots):
+    robot = robots["panda"]
+    rng = np.random.default_rng(21)
+    Q = robot.random_configurations(60, rng)
+    H = np.array([robot.fk(q).homogeneous for q in Q])
+    res = ev.solve_many(robot, H, seed=1, **BUDGET)
+    assert isinstance(res, list) and len(res) == 60
+    assert res.stats["n"] == 60 and res.stats["solved"] == 60 and res.stats["success_rate"] == 1.0
+    assert res.stats["throughput"] > 0 and res.stats["batched"] + res.stats["fallback"] == 60
+    assert res.stats["batched"] > 0
+    for r, T in zip(res, H, strict=True):  # results in target order
+        pos, rot = _pose_error(robot, r.q, pin.SE3(T))
+        assert r.success and pos <= 1e-6 and rot <= 1e-6 and robot.within_bounds(r.q)
+    again = ev.solve_many(robot, H, seed=1, **BUDGET)
+    assert all(np.array_equal(a.q, b.q) for a, b in zip(res, again, strict=True))
+
+
+def test_solve_many_mixed_kinds_q0_and_other_methods(robots):
+    robot = robots["ur5"]
+    rng = np.random.default_rng(22)
+    Q = robot.random_configurations(10, rng)
+    targets = [robot.fk(q) if i % 2 else robot.fk(q).translation for i, q in enumerate(Q)]
+    res = ev.solve_many(robot, targets, seed=0, q0=Q + 0.01, **BUDGET)
+    for i, (r, q) in enumerate(zip(res, Q, strict=True)):
+        assert r.success
+        assert (r.orientation_error is None) == (i % 2 == 0)
+        assert np.linalg.norm(robot.fk(r.q).translation - robot.fk(q).translation) <= 1e-6
+    if "de" in ev.methods():
+        seq = ev.solve_many(robot, targets[:2], method="de", seed=0, max_generations=2)
+        assert len(seq) == 2 and all(r.method == "de" for r in seq) and seq.stats["fallback"] == 2
+
+
+def test_solve_many_bad_input(robots):
+    robot = robots["panda"]
+    H = np.tile(np.eye(4), (3, 1, 1))
+    H[1, 0, 3] = np.nan
+    with pytest.raises(TargetError, match="target 1"):
+        ev.solve_many(robot, H)
+    with pytest.raises(ev.errors.ConfigurationError):
+        ev.solve_many(robot, [])
+    with pytest.raises(ev.errors.ConfigurationError):
+        ev.solve_many(robot, np.tile(np.eye(4), (3, 1, 1)), q0=np.zeros((2, 7)))
+
+
+# ---------------------------------------------------------------------- the LM engines and the seed table
+def test_batched_lm_agrees_with_fk(robots):
+    robot = robots["kinova"]
+    rng = np.random.default_rng(31)
+    Q = robot.random_configurations(40, rng)
+    targets = [Target.coerce(robot.fk(q)) for q in Q]
+    starts = np.clip(Q + rng.normal(0, 0.1, Q.shape), robot.lower, robot.upper)
+    out = batch_levenberg_marquardt(robot, starts, targets, robot.lower, robot.upper, 1e-9, 1e-9)
+    assert out.converged.mean() > 0.9
+    for k in np.nonzero(out.converged)[0]:
+        pos, rot = _pose_error(robot, out.q[k], targets[k].se3())
+        assert abs(pos - out.position_error[k]) < 1e-12 and pos <= 1e-9 and rot <= 1e-9
+        assert robot.within_bounds(out.q[k])
+
+
+def test_lockstep_runs_return_a_converged_start(robots):
+    robot = robots["panda"]
+    rng = np.random.default_rng(32)
+    q = robot.random_configurations(1, rng)[0]
+    lm = LevenbergMarquardt(IKProblem(robot, robot.fk(q)))
+    starts = robot.random_configurations(8, rng)
+    starts[5] = np.clip(q + 0.05, robot.lower, robot.upper)  # one start in the basin of the solution
+    out, k = lm.run_many(starts, 50)
+    assert out.converged and robot.within_bounds(out.q)
+    pos, rot = _pose_error(robot, out.q, robot.fk(q))
+    assert pos <= 1e-6 and rot <= 1e-6 and 0 <= k < 8
+
+
+def test_seed_table_is_deterministic_and_nearest_is_nearest(robots):
+    robot = robots["z1"]
+    a = SeedTable(robot, robot.lower, robot.upper, 512)
+    b = SeedTable(robot, robot.lower, robot.upper, 512)
+    assert np.array_equal(a.Q, b.Q)
+    assert np.all(a.Q >= robot.lower) and np.all(a.Q <= robot.upper)
+    t = Target.coerce(robot.fk(a.Q[100]))
+    assert a.nearest([t], 3)[0, 0] == 100 and next(a.ranked(t, 3)) == 100
+    assert list(a.ranked(t, 3)) == list(a.nearest([t], 3)[0])
+
+
+# ---------------------------------------------------------------------- robot hot path
+@pytest.mark.parametrize("name", ["panda", "kinova", "vehicle_arm"])
+def test_unchecked_kinematics_equal_the_checked_ones(robots, name):
+    robot = robots[name]
+    Q = robot.random_configurations(5, np.random.default_rng(41))
+    P, R, J = robot.fk_jacobian_batch(Q)
+    for i, q in enumerate(Q):
+        T = robot.fk(q)
+        assert np.abs(robot.fk_unchecked(q).homogeneous - T.homogeneous).max() < 1e-12
+        assert np.abs(robot.jacobian_local_unchecked(q) - robot.jacobian(q, "local")).max() < 1e-12
+        assert np.abs(P[i] - T.translation).max() < 1e-12 and np.abs(R[i] - T.rotation).max() < 1e-12
+        assert np.abs(J[i] - robot.jacobian(q, "world")).max() < 1e-12
