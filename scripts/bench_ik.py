@@ -70,17 +70,20 @@ def load(name: str) -> ev.Robot:
 
 
 @contextlib.contextmanager
-def quiet_stderr():
-    """Silence C++ libraries' stderr chatter (KDL's URDF parser) during setup."""
-    fd = sys.stderr.fileno()
-    saved = os.dup(fd)
+def quiet_output():
+    """Silence C++ libraries' chatter on stdout and stderr (KDL's URDF parser) during setup."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [(fd, os.dup(fd)) for fd in (1, 2)]
     with open(os.devnull, "w") as null:
-        os.dup2(null.fileno(), fd)
+        for fd, _ in saved:
+            os.dup2(null.fileno(), fd)
         try:
             yield
         finally:
-            os.dup2(saved, fd)
-            os.close(saved)
+            for fd, copy in saved:
+                os.dup2(copy, fd)
+                os.close(copy)
 
 
 # ---------------------------------------------------------------------- judging
@@ -145,7 +148,7 @@ class TracIK(Solver):
             self.available, self.why = False, "not installed (pip install pytracik)"
             return
         self._ik = pytracik.ik
-        with quiet_stderr():
+        with quiet_output():
             solver = _TracIK(robot.base, robot.tip, str(robot.urdf_path), timeout=timeout, epsilon=epsilon)
         if solver.dof != robot.n:
             self.available, self.why = False, f"chain has {solver.dof} joints, ours {robot.n}"

@@ -230,7 +230,7 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
 
     table_size = solver_options.get("table_size")
     table_size = default_table_size(robot.n) if table_size is None else int(table_size)
-    rounds = int(solver_options.get("table_seeds", 4))
+    rounds = int(solver_options.get("table_seeds", 8))
     lower, upper = template.lower, template.upper
     tol, rtol, w = template.tolerance, template.rotation_tolerance, template.orientation_weight
     results: list[Result | None] = [None] * N
