@@ -276,6 +276,27 @@ def test_solve_many_mixed_kinds_q0_and_other_methods(robots):
         assert len(seq) == 2 and all(r.method == "de" for r in seq) and seq.stats["fallback"] == 2
 
 
+def test_solve_many_hands_unreachable_targets_to_the_fallback(robots):
+    robot = robots["z1"]
+    rng = np.random.default_rng(23)
+    targets = [robot.fk(q) for q in robot.random_configurations(6, rng)]
+    targets.insert(2, pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.0])))  # out of reach
+    res = ev.solve_many(robot, targets, seed=0, timeout=None, max_restarts=1)
+    assert [r.success for r in res] == [True, True, False, True, True, True, True]
+    assert res.stats["fallback"] >= 1 and res.stats["solved"] == 6
+    assert "max_restarts (1)" in res[2].message and robot.within_bounds(res[2].q)
+
+
+def test_table_offset_skips_the_nearest_entries(robots):
+    robot = robots["panda"]
+    q = robot.random_configurations(1, np.random.default_rng(24))[0]
+    T = robot.fk(q)
+    a = ev.solve(robot, T, seed=0, **BUDGET)
+    b = ev.solve(robot, T, seed=0, table_offset=40, **BUDGET)
+    assert a.success and b.success
+    assert not np.array_equal(a.q, b.q)  # other seeds, so (for a redundant arm) another solution
+
+
 def test_solve_many_bad_input(robots):
     robot = robots["panda"]
     H = np.tile(np.eye(4), (3, 1, 1))

@@ -104,9 +104,11 @@ def test_quick_run_writes_report_json_csv_and_figures(quick_runs, pid):
     assert results["machine"]["cores"] >= 1 and results["wall_time_s"] > 0
     assert results["tables"] and results["figures"]
     for key, table in results["tables"].items():
-        rows = _csv(d / f"{key}.csv")
-        assert [k for k in rows[0] if k != "source"] == table["columns"]
-        assert sum(r["source"] == "ours" for r in rows) == len(table["rows"]) > 0
+        with open(d / f"{key}.csv", newline="") as fh:
+            header, *rows = list(csv.reader(fh))
+        assert header == ["source", *table["columns"]]
+        assert sum(r[0] == "ours" for r in rows) == len(table["rows"])
+        assert table["rows"] or key == "scenario3_unreachable"  # only that one may be empty in quick mode
     import matplotlib.image as mpimg
 
     for fig in results["figures"]:

@@ -253,7 +253,8 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
                 Qs = Q0[pending]
             else:
                 Qs = table.Q[table.nearest(group, rank + 1)[:, rank]]
-            out = batch_levenberg_marquardt(robot, Qs, group, lower, upper, tol, rtol)
+            # 15 steps: converging pairs need about 5-10; the rest are left to the next seed or the fallback
+            out = batch_levenberg_marquardt(robot, Qs, group, lower, upper, tol, rtol, max_iterations=15)
             share = (time.perf_counter() - t0) / pending.size
             for j in np.nonzero(out.converged)[0]:
                 pos = float(out.position_error[j])
@@ -268,8 +269,10 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
             n_batched += int(out.converged.sum())
             pending = pending[~out.converged]
     fallback = [i for i in range(N) if results[i] is None]
+    tried = rounds if table is not None else 0
     for i in fallback:  # the per-target memetic solver, with every option (and q0) of the call
         problem, opts = make_problem(robot, targets[i], q0=None if Q0 is None else Q0[i], **dict(options))
+        opts.setdefault("table_offset", tried)  # the batched rounds tried the nearest entries already
         results[i] = _run(problem, "memetic", rng, opts)
     out_list = BatchResults(results)
     return _with_stats(out_list, t_start, batched=n_batched, fallback=len(fallback))

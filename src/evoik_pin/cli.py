@@ -73,6 +73,65 @@ def _cmd_fk(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_solve(args: argparse.Namespace) -> int:
+    """IK for one target: xyz in metres, optional roll-pitch-yaw in degrees; exit 1 when not reached."""
+    import pinocchio as pin
+
+    from .api import DEFAULT_METHOD, solve
+    from .problem import Target
+
+    robot = _load(args)
+    position = np.asarray(args.xyz, dtype=float)
+    target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
+    options: dict = {}
+    if args.tolerance is not None:
+        options["tolerance"] = args.tolerance
+    if args.q0 is not None:
+        options["q0"] = robot.check_q(_joint_values(args.q0, args.rad))
+    if args.population is not None:
+        options["population"] = args.population
+    if args.max_generations is not None:
+        options["max_generations"] = args.max_generations
+    method = args.method or DEFAULT_METHOD
+    res = solve(robot, target, method=method, seed=args.seed, **options)
+    reached = robot.fk(res.q)
+    info = {
+        "robot": robot.name,
+        "method": res.method or method,
+        "success": bool(res.success),
+        "message": res.message,
+        "joint_names": list(robot.joint_names),
+        "q_rad": [float(v) for v in res.q],
+        "q_deg": [float(v) for v in np.degrees(res.q)],
+        "target_position_m": [float(v) for v in position],
+        "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
+        "reached_position_m": [float(v) for v in reached.translation],
+        "reached_rpy_deg": [float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))],
+        "position_error_m": res.position_error,
+        "orientation_error_rad": res.orientation_error,
+        "cost": res.cost,
+        "generations": res.generations,
+        "evaluations": res.evaluations,
+        "time_s": res.time_s,
+        "seed": args.seed,
+    }
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0 if res.success else 1
+    unit = "rad" if args.rad else "deg"
+    shown = res.q if args.rad else np.degrees(res.q)
+    print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
+          f"{'reached' if res.success else 'NOT reached'} ({res.message})")
+    print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in shown))
+    print(f"position error (m):   {res.position_error:.3e}")
+    if res.orientation_error is not None:
+        print(f"orientation error:    {res.orientation_error:.3e} rad ({np.degrees(res.orientation_error):.3e} deg)")
+    print(f"generations:          {res.generations}")
+    print(f"evaluations:          {res.evaluations}")
+    print(f"time:                 {res.time_s * 1e3:.2f} ms")
+    return 0 if res.success else 1
+
+
 def _cmd_view(args: argparse.Namespace) -> int:
     from .viz import Viewer
 
@@ -127,6 +186,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rad", action="store_true", help="joint values in radians")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_fk)
+
+    p = sub.add_parser("solve", help="inverse kinematics for one target (exit status 1 when not reached)")
+    _add_robot_args(p)
+    p.add_argument("--xyz", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"),
+                   help="target tip position in metres, in the base frame")
+    p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
+                   help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")
+    p.add_argument("--method", help="solver (evoik_pin.methods(); default: the memetic solver)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same answer")
+    p.add_argument("--tolerance", type=float, help="success threshold: position error in m (and orientation "
+                   "error in rad for pose targets); default 1e-6")
+    p.add_argument("--q0", type=float, nargs="+", help="initial configuration (degrees, or radians with --rad)")
+    p.add_argument("--population", type=int, help="population size of population-based solvers")
+    p.add_argument("--max-generations", type=int, help="generation budget of population-based solvers")
+    p.add_argument("--rad", action="store_true", help="joint values in radians (output and --q0)")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
     _add_robot_args(p)

@@ -530,7 +530,7 @@ class Viewer:
             limit: at most this many ghosts (evenly spaced, with a warning, when there are more).
             style: ``"mesh"`` (the robot's own visuals), ``"skeleton"`` (spheres and cylinders), or
                 ``"auto"``: meshes unless the ghosts' mesh files would exceed :data:`GHOST_MESH_BUDGET`
-                bytes in all (every ghost embeds a copy: about 11 MB per Panda).
+                bytes in all (every ghost embeds a copy: 11 MB of mesh files per Panda).
 
         Returns:
             The ghosts' node names.

@@ -35,6 +35,7 @@ import time
 import weakref
 
 import numpy as np
+from scipy.spatial import cKDTree
 from scipy.stats import qmc
 
 from ..errors import OptionError
@@ -79,6 +80,7 @@ class SeedTable:
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._trees: dict[str, cKDTree] = {}
 
     def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
         """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
@@ -117,7 +119,7 @@ class SeedTable:
             return
         key, f = self.target_features([target])
         F, sq = self._table_features(key)
-        d = sq - 2.0 * F.dot(f[0])
+        d = sq - 2.0 * (F @ f[0])
         first = int(d.argmin())
         yield first
         k = min(k, d.shape[0])
@@ -127,21 +129,19 @@ class SeedTable:
                 if i != first:
                     yield int(i)
 
-    def nearest(self, targets: list[Target], k: int, chunk: int = 512) -> np.ndarray:
-        """Indices (N, k) of the k table entries nearest to each target, nearest first."""
+    def nearest(self, targets: list[Target], k: int) -> np.ndarray:
+        """Indices (N, k) of the k table entries nearest to each target, nearest first.
+
+        Many targets at once go through a k-d tree of the table's features (built once per target kind):
+        O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
+        """
         key, f = self.target_features(targets)
-        F, sq = self._table_features(key)
-        k = min(k, F.shape[0])
-        out = np.empty((f.shape[0], k), dtype=np.intp)
-        for s in range(0, f.shape[0], chunk):  # chunks bound the (chunk, size) distance matrix
-            d = sq[None, :] - 2.0 * f[s:s + chunk].dot(F.T)  # |f|^2 is the same for a row: dropped
-            if k == 1:
-                out[s:s + chunk, 0] = d.argmin(axis=1)
-                continue
-            part = np.argpartition(d, k - 1, axis=1)[:, :k]
-            order = np.take_along_axis(d, part, axis=1).argsort(axis=1)
-            out[s:s + chunk] = np.take_along_axis(part, order, axis=1)
-        return out
+        tree = self._trees.get(key)
+        if tree is None:
+            tree = self._trees[key] = cKDTree(self._table_features(key)[0])
+        k = min(k, tree.n)
+        _, idx = tree.query(f, k=k)
+        return np.asarray(idx, dtype=np.intp).reshape(len(targets), k)
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -288,6 +288,7 @@ def memetic(
     polish_count: int = 8,
     table_size: int | None = None,
     table_seeds: int = 17,
+    table_offset: int = 0,
     batch: int = 8,
     iterations: int = DEFAULT_ITERATIONS,
 ) -> Result:
@@ -306,6 +307,7 @@ def memetic(
         table_size: seed-table size (0 disables stage 2); default 2^(n+5) clamped to [256, 4096].
         table_seeds: table entries tried in stage 2, nearest first: the nearest alone (it usually converges),
             the next ones ``batch`` at a time in lockstep.
+        table_offset: skip the nearest ``table_offset`` entries (already tried, e.g. by ``solve_many``).
         batch: LM runs polished together in lockstep (stage 2 after the first seed; >= 1).
         iterations: LM steps allowed per run (>= 1).
 
@@ -330,6 +332,7 @@ def memetic(
     table_size = default_table_size(robot.n) if table_size is None else check_positive_int("table_size",
                                                                                            table_size, 0)
     table_seeds = check_positive_int("table_seeds", table_seeds, 0)
+    table_offset = check_positive_int("table_offset", table_offset, 0)
     batch = check_positive_int("batch", batch, 1)
     iterations = check_positive_int("iterations", iterations, 1)
 
@@ -353,8 +356,11 @@ def memetic(
         table = seed_table(robot, problem.lower, problem.upper, table_size)
         if search.deadline is not None:
             search.deadline += time.perf_counter() - t_build
-        ranked = table.ranked(problem.target, table_seeds)  # lazy: the others are ranked only if needed
-        solved = search.polish(table.Q[next(ranked)], quick)
+        ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranked only if needed
+        if table_offset:
+            ranked = iter(list(ranked)[table_offset:])
+        first = next(ranked, None)
+        solved = first is not None and search.polish(table.Q[first], quick)
         if not solved and not search.out_of_time():
             rest = list(ranked)
             for s in range(0, len(rest), batch):

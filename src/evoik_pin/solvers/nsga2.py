@@ -57,8 +57,13 @@ def dominance_matrix(F: np.ndarray, violation: np.ndarray | None = None) -> np.n
     Feasible (violation 0) beats infeasible; two infeasible rows compare by violation; two feasible rows
     by Pareto dominance (no worse in every objective, better in one).
     """
-    le = np.all(F[:, None, :] <= F[None, :, :], axis=2)
-    lt = np.any(F[:, None, :] < F[None, :, :], axis=2)
+    F = np.asarray(F, float)
+    N = F.shape[0]
+    le = np.ones((N, N), bool)
+    lt = np.zeros((N, N), bool)
+    for column in F.T:  # one (N, N) comparison per objective: faster than reducing an (N, N, k) array
+        le &= column[:, None] <= column[None, :]
+        lt |= column[:, None] < column[None, :]
     D = le & lt
     if violation is None:
         return D
@@ -69,24 +74,54 @@ def dominance_matrix(F: np.ndarray, violation: np.ndarray | None = None) -> np.n
                                                                            & (cv[:, None] < cv[None, :])))
 
 
-def nondominated_ranks(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
-    """Fast non-dominated sorting: front index (N,) of every row, 0 for the first front.
-
-    Counts each row's dominators from :func:`dominance_matrix`, peels the rows with none, subtracts what
-    they dominate, and repeats: one vectorized pass per front.
-    """
-    D = dominance_matrix(F, violation)
+def _pareto_ranks(F: np.ndarray, stop: int | None = None) -> np.ndarray:
+    """Front index (N,) under plain Pareto dominance, by peeling; with ``stop``, peeling ends once at least
+    ``stop`` rows are ranked and the rest get the next rank (they are behind every ranked row)."""
+    D = dominance_matrix(F)
     count = D.sum(axis=0)
     rank = np.full(F.shape[0], -1)
     current = np.nonzero(count == 0)[0]
-    r = 0
+    r = done = 0
     while current.size:
         rank[current] = r
+        done += current.size
+        r += 1
+        if stop is not None and done >= stop:
+            break
         count = count - D[current].sum(axis=0)
         count[rank >= 0] = -1
         current = np.nonzero(count == 0)[0]
-        r += 1
+    rank[rank < 0] = r
     return rank
+
+
+def _ranks(F: np.ndarray, violation: np.ndarray | None, stop: int | None = None) -> np.ndarray:
+    """Constraint-domination ranks without the (N, N) constraint matrix: the feasible rows are sorted by
+    Pareto dominance, the infeasible ones follow, one front per distinct violation value (a row with less
+    violation dominates one with more). ``stop`` as in :func:`_pareto_ranks`."""
+    if violation is None:
+        return _pareto_ranks(F, stop)
+    cv = np.asarray(violation, float).reshape(-1)
+    feas = cv <= 0
+    rank = np.zeros(F.shape[0], dtype=int)
+    offset = 0
+    if feas.any():
+        rank[feas] = _pareto_ranks(F[feas], stop)
+        offset = rank[feas].max() + 1
+    if not feas.all():
+        rank[~feas] = offset + np.unique(cv[~feas], return_inverse=True)[1].reshape(-1)
+    return rank
+
+
+def nondominated_ranks(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
+    """Fast non-dominated sorting under constraint domination: front index (N,) of every row, 0 first.
+
+    The feasible rows are sorted by peeling (count each row's dominators, take the rows with none,
+    subtract what they dominate, repeat: one vectorized pass per front); the infeasible rows follow, one
+    front per distinct violation value in increasing order. This equals sorting by
+    :func:`dominance_matrix` (``violation`` given), without building its constraint part.
+    """
+    return _ranks(np.asarray(F, float), violation)
 
 
 def crowding_distance(F: np.ndarray) -> np.ndarray:
@@ -156,20 +191,22 @@ def survival(F: np.ndarray, violation: np.ndarray | None, size: int) -> tuple[np
 
     Whole fronts are taken in rank order; the front that overflows is cut by crowding distance.
     """
-    rank = nondominated_ranks(F, violation)
+    rank = _ranks(F, violation, stop=size)
+    order = np.argsort(rank, kind="stable")
+    last = rank[order[min(size, len(order)) - 1]]
     cd = np.zeros(F.shape[0])
-    chosen = []
-    for r in range(rank.max() + 1):
-        members = np.nonzero(rank == r)[0]
-        cd[members] = crowding_distance(F[members])
-        room = size - sum(len(c) for c in chosen)
-        if members.size <= room:
-            chosen.append(members)
-        else:
-            chosen.append(members[np.argsort(-cd[members], kind="stable")[:room]])
-        if sum(len(c) for c in chosen) >= size:
+    fronts, starts = np.unique(rank[order], return_index=True)
+    ends = np.append(starts[1:], len(order))
+    for r, a, b in zip(fronts, starts, ends):
+        if r > last:
             break
-    keep = np.concatenate(chosen)
+        members = order[a:b]
+        cd[members] = np.inf if b - a <= 2 else crowding_distance(F[members])
+    whole = order[rank[order] < last]
+    cut = order[rank[order] == last]
+    if cut.size > size - whole.size:
+        cut = cut[np.argsort(-cd[cut], kind="stable")[: size - whole.size]]
+    keep = np.concatenate([whole, cut])
     return keep, rank[keep], cd[keep]
 
 

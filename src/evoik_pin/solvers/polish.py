@@ -336,7 +336,8 @@ class LevenbergMarquardt:
         """One more step once the tolerances are met: at quadratic convergence it takes the error from
         about the tolerance to about 1e-12 or below for the price of one iteration (kept only if better)."""
         E = self.task_jacobian(q, extra)
-        qn, _ = self._step(q, False, E, E.dot(E.T), e, lam * _SHRINK)
+        # (almost) undamped: any damping left would cap the gain at lambda / (sigma^2 + lambda) per step
+        qn, _ = self._step(q, False, E, E.dot(E.T), e, _LAMBDA_MIN)
         en, _, pos_n, rot_n = self.residual(self.robot.fk_unchecked(qn))
         if en.dot(en) < c:
             return LMOutcome(qn, pos_n, rot_n, True, it + 1, evaluations + 1)

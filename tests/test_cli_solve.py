@@ -1,0 +1,66 @@
+"""``evoik solve``: text and JSON output, degrees/radians, pose targets, exit codes and bad input."""
+
+import json
+
+import numpy as np
+import pinocchio as pin
+
+from evoik_pin.cli import main
+from evoik_pin.robot import load_robot
+
+
+def test_solve_json_reaches_the_target(capsys):
+    code = main(["solve", "redundant7r", "--xyz", "0.4", "0.3", "0.7", "--method", "isade", "--seed", "1",
+                 "--tolerance", "1e-9", "--json"])
+    info = json.loads(capsys.readouterr().out)
+    assert code == 0 and info["success"] and info["method"] == "isade"
+    robot = load_robot("redundant7r")
+    assert np.linalg.norm(robot.fk(np.array(info["q_rad"])).translation - [0.4, 0.3, 0.7]) <= 1e-9
+    assert np.allclose(info["q_deg"], np.degrees(info["q_rad"]))
+    assert info["position_error_m"] <= 1e-9 and info["orientation_error_rad"] is None
+    assert info["generations"] >= 0 and info["evaluations"] > 0 and info["time_s"] > 0
+
+
+def test_solve_text_output_in_degrees_and_radians(capsys):
+    args = ["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--method", "isade", "--seed", "0"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "reached" in out and "q (deg)" in out and "position error (m)" in out and "generations" in out
+    assert main([*args, "--rad"]) == 0
+    assert "q (rad)" in capsys.readouterr().out
+
+
+def test_solve_pose_target_with_rpy_in_degrees(capsys):
+    robot = load_robot("aerial6r")
+    q = robot.random_configurations(1, np.random.default_rng(4))[0]
+    T = robot.fk(q)
+    rpy_deg = np.degrees(pin.rpy.matrixToRpy(T.rotation))
+    code = main(["solve", "aerial6r", "--xyz", *map(str, T.translation), "--rpy", *map(str, rpy_deg),
+                 "--method", "de", "--seed", "2", "--tolerance", "1e-5", "--population", "40", "--json"])
+    info = json.loads(capsys.readouterr().out)
+    assert info["target_rpy_deg"] == list(rpy_deg)
+    assert info["orientation_error_rad"] is not None
+    assert code == (0 if info["success"] else 1)
+    if info["success"]:
+        assert np.allclose(info["reached_position_m"], T.translation, atol=1e-5)
+
+
+def test_solve_q0_and_unreachable_exit_code(capsys):
+    code = main(["solve", "planar2r", "--xyz", "3", "0", "0", "--method", "isade", "--max-generations", "20",
+                 "--q0", "10", "20", "--json"])
+    info = json.loads(capsys.readouterr().out)
+    assert code == 1 and not info["success"]
+    assert abs(info["position_error_m"] - (3.0 - 0.41)) < 1e-6
+
+
+def test_solve_bad_input_is_a_clear_error(capsys):
+    assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--method", "nosuch"]) == 2
+    assert "unknown method 'nosuch'" in capsys.readouterr().err
+    assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "nan", "--method", "isade"]) == 2
+    assert "NaN" in capsys.readouterr().err
+    assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--method", "isade", "--q0", "1", "2"]) == 2
+    assert "expected (4,)" in capsys.readouterr().err
+    assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--method", "isade", "--population", "-4"]) == 2
+    assert "population" in capsys.readouterr().err
+    assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--method", "isade", "--tolerance", "-1"]) == 2
+    assert "tolerance" in capsys.readouterr().err
