@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pinocchio as pin
+import pytest
 
 from evoik_pin.cli import main
 from evoik_pin.robot import load_robot
@@ -36,13 +37,17 @@ def test_solve_pose_target_with_rpy_in_degrees(capsys):
     T = robot.fk(q)
     rpy_deg = np.degrees(pin.rpy.matrixToRpy(T.rotation))
     code = main(["solve", "aerial6r", "--xyz", *map(str, T.translation), "--rpy", *map(str, rpy_deg),
-                 "--method", "de", "--seed", "2", "--tolerance", "1e-5", "--population", "40", "--json"])
+                 "--method", "de", "--seed", "2", "--tolerance", "1e-5", "--population", "40", "--max-generations", "60",
+                 "--json"])
     info = json.loads(capsys.readouterr().out)
     assert info["target_rpy_deg"] == list(rpy_deg)
-    assert info["orientation_error_rad"] is not None
     assert code == (0 if info["success"] else 1)
-    if info["success"]:
-        assert np.allclose(info["reached_position_m"], T.translation, atol=1e-5)
+    # the degrees were read as roll-pitch-yaw: the reported errors are those of q against that pose
+    R_target = pin.rpy.rpyToMatrix(*np.radians(rpy_deg))
+    T_q = robot.fk(np.array(info["q_rad"]))
+    assert info["orientation_error_rad"] == pytest.approx(np.linalg.norm(pin.log3(R_target.T @ T_q.rotation)),
+                                                          abs=1e-9)
+    assert info["position_error_m"] == pytest.approx(np.linalg.norm(T_q.translation - T.translation), abs=1e-12)
 
 
 def test_solve_q0_and_unreachable_exit_code(capsys):

@@ -234,7 +234,9 @@ def test_restarts_of_paper_002():
     assert not res.success and res.generations == 30 and res.evaluations == 3 * 12 * 11
     assert len(res.history["best_cost"]) == 33 and res.history["run"].tolist() == [0.0] * 11 + [1.0] * 11 + [2.0] * 11
     assert "of 3)" in res.message
-    assert res.position_error == pytest.approx(5.0 - 0.41, abs=1e-6)  # the best approximation: arm stretched out
+    # the best of the three short runs: the arm nearly stretched towards the target (reach 0.41 m)
+    assert res.position_error == pytest.approx(5.0 - 0.41, abs=1e-3)
+    assert res.position_error == pytest.approx(min(res.history["best_cost"]), rel=1e-12)
     once = ek.solve(robot, [0.2, 0.2, 0.0], method="de", seed=0, runs=3)
     assert once.success and "run" not in once.history
 

@@ -93,6 +93,19 @@ def test_planar_target_with_yaw_on_vehicle_arm(robots):
         assert abs(np.angle(np.exp(1j * (np.arctan2(R[1, 0], R[0, 0]) - yaw)))) <= 1e-6
 
 
+def test_five_dof_arm_reaches_reachable_poses(robots):
+    """so_arm has 5 joints: a 6-D pose is over-determined, but FK-generated poses are exactly reachable and
+    LM's least-squares step converges to them."""
+    robot = robots["so_arm"]
+    rng = np.random.default_rng(6)
+    for i, q in enumerate(robot.random_configurations(4, rng)):
+        T = robot.fk(q)
+        res = ev.solve(robot, T, seed=i, **BUDGET)
+        assert res.success and robot.within_bounds(res.q)
+        pos, rot = _pose_error(robot, res.q, T)
+        assert pos <= 1e-6 and rot <= 1e-6
+
+
 def test_sub_chain_of_a_multi_arm_robot():
     from evoik_pin.robot import example_robot_data_dir
 

@@ -1,6 +1,8 @@
 """The robot layer on every bundled and example arm: FK against an independent parser, batches,
 Jacobians, manipulability, continuous joints, sub-chains and bad input."""
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -245,3 +247,11 @@ def test_bad_bounds_leave_robot_unchanged():
     assert np.array_equal(robot.lower, before[0]) and np.array_equal(robot.upper, before[1])
     with pytest.raises(BoundsError, match="inverted"):
         load_robot("planar2r", bounds=([1, 1], [0, 0]))
+
+
+@pytest.mark.parametrize("name", list(EXAMPLE_ARMS))
+def test_example_arm_meshes_resolve(name):
+    """Mesh URIs of example-robot-data arms resolve through robot.package_dirs (for the meshcat viewer)."""
+    geom = load_robot(name).visual_model
+    assert geom.ngeoms > 0
+    assert all(not g.meshPath or Path(g.meshPath).is_file() for g in geom.geometryObjects)

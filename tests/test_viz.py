@@ -198,6 +198,18 @@ def test_robot_without_visual_geometry_is_drawn_as_a_skeleton(viewers, tmp_path)
     assert np.allclose(tip[:3, 3], robot.fk(q).translation, atol=1e-6)  # the tip sphere is on the tip
 
 
+def test_a_sub_chain_is_drawn_in_its_base_frame(viewers, tmp_path):
+    robot = load_robot("panda", base="panda_link2", tip="panda_link8")
+    v = viewers(robot, skeleton=True)
+    q = np.array([0.3, -0.4, 0.5, -1.0, 0.2])
+    v.show(q)
+    v.show_target(robot.fk(q))
+    cmds = _scene(v, tmp_path)
+    tip = _transform(cmds, "/meshcat/robot") @ _transform(cmds, "/meshcat/robot/visuals/skeleton_panda_link8")
+    assert np.allclose(tip[:3, 3], robot.fk(q).translation, atol=1e-6)  # where the target triad is drawn
+    assert np.allclose(_transform(cmds, "/meshcat/target")[:3, 3], robot.fk(q).translation)
+
+
 def test_missing_meshes_fall_back_to_a_skeleton_and_skeleton_can_be_forced(ax18, viewers):
     urdf = BARE_URDF.replace('<link name="b"/>', '<link name="b"><visual><geometry>'
                              '<mesh filename="package://nowhere/b.stl"/></geometry></visual></link>')

@@ -138,7 +138,9 @@ def load_robot(
         tip = EXAMPLE_ARMS[name].tip
     if tip is None and name in BUNDLED_ROBOTS:
         tip = "tool"
-    package_dirs = [str(example_robot_data_dir())]
+    erd = example_robot_data_dir()
+    # example-robot-data URDFs name meshes both package://<pkg>/... and package://example-robot-data/robots/...
+    package_dirs = [str(erd), str(erd.parents[1])]
     if path is not None:
         package_dirs = [str(path.parent), str(path.parent.parent), *package_dirs]
     robot = Robot(_parse_urdf(xml, path), tip=tip, base=base, joints=joints, name=name, urdf_path=path,

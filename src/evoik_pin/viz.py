@@ -57,7 +57,7 @@ import pinocchio as pin
 from .errors import ConfigurationError, TargetError, ViewerError
 from .robot import Robot, example_robot_data_dir
 
-__all__ = ["Viewer", "html_commands"]
+__all__ = ["GHOST_COLORS", "Viewer", "html_commands", "skeleton_model"]
 
 #: Ghost colours (RGB in [0, 1]), used in turn by :meth:`Viewer.show_solutions`.
 GHOST_COLORS: tuple[tuple[float, float, float], ...] = (
@@ -186,10 +186,7 @@ def _probe(zmq_url: str, timeout: float) -> str:
 def _connect(zmq_url: str, web_url: str):
     """A ``meshcat.Visualizer`` talking to the server at ``zmq_url``; a silent server raises instead of hanging."""
     import zmq
-
-    with warnings.catch_warnings():  # meshcat's server module imports a pyzmq module deprecated since pyzmq 17
-        warnings.simplefilter("ignore", DeprecationWarning)
-        from meshcat.visualizer import ViewerWindow, Visualizer
+    from meshcat.visualizer import ViewerWindow, Visualizer
 
     # ViewerWindow(zmq_url, start_server=False) would print the URL and leave a first socket open: the
     # server's URL is already known (probed, or printed by our own server), so set the window up directly.
@@ -199,6 +196,14 @@ def _connect(zmq_url: str, web_url: str):
     window.zmq_socket.setsockopt(zmq.RCVTIMEO, int(SERVER_TIMEOUT * 1000))
     window.zmq_socket.setsockopt(zmq.LINGER, 0)
     return Visualizer(window=window)
+
+
+def _import_meshcat() -> None:
+    """Import meshcat and Pinocchio's visualizer once, hiding the pyzmq deprecation meshcat's import triggers."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        import meshcat.visualizer  # noqa: F401
+        import pinocchio.visualize  # noqa: F401
 
 
 def _talks(method):
@@ -386,6 +391,7 @@ class Viewer:
     """
 
     def __init__(self, robot: Robot, zmq_url: str | None = None, open: bool = False, skeleton: bool | None = None):
+        _import_meshcat()
         self.robot = robot
         self.vis = None
         self._server: _Server | None = None

@@ -38,6 +38,7 @@ __all__ = [
     "check_seed",
     "fmt",
     "jsonable",
+    "least_squares_distance",
     "machine_info",
 ]
 
@@ -433,3 +434,23 @@ def show_animation(animation: Animation, html=None, view: bool = False) -> Path 
             print(f"{animation.label}: {viewer.url} (Ctrl-C to stop)", flush=True)
             viewer.block()
     return written
+
+
+def least_squares_distance(robot, p, lower, upper, rng, starts: int, x0=None) -> float:
+    """Smallest distance (m) from ``p`` that multi-start bounded least squares finds in the box [lower, upper].
+
+    An independent check of reachability (scipy's trust-region reflective method with Pinocchio's
+    Jacobian, tolerances 1e-15): the first start is ``x0`` when given, the others uniform in the box; it
+    stops early once a start gets within 1e-13 m.
+    """
+    from scipy.optimize import least_squares
+
+    best = np.inf
+    for k in range(starts):
+        x = np.clip(x0, lower, upper) if (k == 0 and x0 is not None) else rng.uniform(lower, upper)
+        sol = least_squares(lambda q: robot.fk(q).translation - p, x, jac=lambda q: robot.jacobian(q)[:3],
+                            bounds=(lower, upper), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        best = min(best, float(np.linalg.norm(sol.fun)))
+        if best <= 1e-13:
+            break
+    return best

@@ -23,7 +23,7 @@ How we read the paper where it is loose (all recorded in ``report.settings``):
 * Scenario 1 and 2 targets are FK of joint vectors drawn uniformly in the ranges (reachable by
   construction); the paper's Scenario 1 point is not given.
 * A spiral point whose error stays above 1 nm is re-checked by multi-start bounded least squares in
-  the same search box (:func:`least_squares_distance`): "missed" if that finds a solution, "no solution"
+  the same search box (``common.least_squares_distance``): "missed" if that finds a solution, "no solution"
   otherwise (outside the workspace, or outside the Pro box). "No solution" points are counted and left
   out of the averages.
 * Population sizes are not in the paper; the solvers' defaults are used and recorded. The solvers'
@@ -42,7 +42,7 @@ from ..objectives import PositionError, WeightedJointDisplacement
 from ..problem import DEFAULT_PRO_DELTA, Target
 from ..robot import load_robot
 from ..solvers import get_solver
-from .common import Animation, PaperReport, RunContext, Table
+from .common import Animation, PaperReport, RunContext, Table, least_squares_distance
 
 PAPER_ID = "002"
 TITLE = ("Use improved differential evolution algorithms to handle the inverse kinematics problem for robots "
@@ -168,26 +168,6 @@ def _stats(points: list[dict], fitness: float | None) -> dict:
 
 #: A point counts as reached when the distance error is at most this (m); far above every fitness value.
 REACHED_M = 1e-9
-
-
-def least_squares_distance(robot, p, lower, upper, rng, starts: int, x0=None) -> float:
-    """Smallest distance (m) from ``p`` that multi-start bounded least squares finds in the box [lower, upper].
-
-    An independent check of reachability (scipy's trust-region reflective method with Pinocchio's
-    Jacobian, tolerances 1e-15): the first start is ``x0`` when given, the others uniform in the box; it
-    stops early once a start gets within 1e-13 m.
-    """
-    from scipy.optimize import least_squares
-
-    best = np.inf
-    for k in range(starts):
-        x = np.clip(x0, lower, upper) if (k == 0 and x0 is not None) else rng.uniform(lower, upper)
-        sol = least_squares(lambda q: robot.fk(q).translation - p, x, jac=lambda q: robot.jacobian(q)[:3],
-                            bounds=(lower, upper), xtol=1e-15, ftol=1e-15, gtol=1e-15)
-        best = min(best, float(np.linalg.norm(sol.fun)))
-        if best <= 1e-13:
-            break
-    return best
 
 
 def _by_construction(points: list[dict]) -> list[dict]:

@@ -29,10 +29,10 @@ from .de_ops import (
     MUTATIONS,
     SCHEME_NUMBERS,
     binomial_crossover,
-    distinct_indices,
     either_or,
     exponential_crossover,
     exponential_lengths,
+    indices_from_uniform,
     mutate,
     rand1,
     trigonometric,
@@ -176,18 +176,22 @@ def de(
         best = run.record(X, ev)
         reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
         while reason is None and (reason := run.stop_reason()) is None:
-            idx = distinct_indices(rng, N, k)
+            # one uniform draw per generation: indices (N x N), crossover (N x D), its start/forced coordinate
+            # and the either-or / trigonometric choice (2 x N); fewer calls keep the generation cheap
+            u = rng.random((N, N + D + 2))
+            idx = indices_from_uniform(u[:, :N], k)
             if scheme in MUTATIONS:
                 V = mutate(X, scheme, F, idx, best)
             elif scheme == "eitheror":
-                V = either_or(X, F, K, idx, rng.random(N) < p_F)
+                V = either_or(X, F, K, idx, u[:, N + D + 1] < p_F)
             else:  # trig: Fan & Lampinen's trigonometric donor with probability Mt, DE/rand/1 otherwise
-                use_trig = rng.random(N) < trig_probability
+                use_trig = u[:, N + D + 1] < trig_probability
                 V = np.where(use_trig[:, None], trigonometric(X, ev.cost, idx), rand1(X, F, idx))
+            j = (u[:, N + D] * D).astype(np.intp)
             if crossover == "bin":
-                U = binomial_crossover(X, V, CR, rng.random((N, D)), rng.integers(0, D, size=N))
+                U = binomial_crossover(X, V, CR, u[:, N:N + D], j)
             else:
-                U = exponential_crossover(X, V, rng.integers(0, D, size=N), exponential_lengths(CR, rng.random((N, D))))
+                U = exponential_crossover(X, V, j, exponential_lengths(CR, u[:, N:N + D]))
             U = enforce_bounds(U, problem, rng, bound_handling)
             X, ev = greedy_selection(X, ev, U, problem.evaluate(U))
             run.generation += 1

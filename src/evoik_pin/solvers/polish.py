@@ -16,17 +16,23 @@ joints n)::
 
     (E E^T + lambda I) y = e,        dq = -E^T y  ( = -(E^T E + lambda I)^-1 E^T e )
 
-and is accepted only when it lowers ``|e|^2`` (Levenberg-Marquardt: ``lambda`` shrinks after a success,
-grows after a failure). Joint limits are respected exactly: joints whose step would leave the box are
-fixed at the bound they hit and the step is re-solved for the other joints (a small active set), so the
-remaining joints compensate instead of the whole step being cut. Revolute joints whose range spans at least
-2 pi (continuous joints, UR-style +-2 pi joints) are wrapped back into their range instead of being clipped,
-so a step across +-pi is never blocked.
+with the step length capped at ``max_step`` (a trust region), and is accepted only when it lowers
+``|e|^2`` (Levenberg-Marquardt: ``lambda`` shrinks after a success, grows after a failure). Joint limits
+are respected exactly, by a small active set: joints resting on a bound that the descent direction pushes
+outward are held there, and joints a step would carry past a bound are fixed at it while the step is
+re-solved once for the others, so the free joints compensate instead of the whole step being cut.
+Revolute joints whose range spans at least 2 pi (continuous joints, UR-style +-2 pi joints) are wrapped
+back into their range instead of being clipped, so a step across +-pi is never blocked. A run gives up
+on a stall (``|e|`` not halved in a few steps: a limit or a local minimum holds it), so the caller can
+restart elsewhere; once it meets the tolerances it takes one more, undamped step (quadratic convergence:
+about 1e-12 instead of just under the tolerance, for one iteration).
 
-:class:`LevenbergMarquardt` works on one configuration through Pinocchio (``Robot.fk_unchecked``,
-``Robot.jacobian_local_unchecked``): a handful of C++ calls and small NumPy products per iteration.
-:func:`batch_levenberg_marquardt` runs the same iteration on many (configuration, target) pairs at once
-with the NumPy batch kinematics (``Robot.fk_jacobian_batch``), for :func:`evoik_pin.solve_many`.
+:class:`LevenbergMarquardt` works through Pinocchio one configuration at a time (``Robot.fk_unchecked``,
+``Robot.jacobian_local_unchecked``): a handful of C++ calls and small NumPy products per step.
+:meth:`LevenbergMarquardt.run_many` runs K starts in lockstep (per-configuration kinematics, one batched
+NumPy pass for the linear algebra of all K). :func:`batch_levenberg_marquardt` runs the iteration on many
+(configuration, target) pairs at once with the NumPy batch kinematics (``Robot.fk_jacobian_batch``), for
+:func:`evoik_pin.solve_many`.
 """
 
 from __future__ import annotations
@@ -49,7 +55,7 @@ TWO_PI = 2.0 * np.pi
 DEFAULT_DAMPING = 1e-2
 #: Steps allowed to one LM run started from a seed (converging runs need about 5-15).
 DEFAULT_ITERATIONS = 30
-#: Largest change of one joint in one step (rad or m); longer steps are scaled down (trust region).
+#: Largest length |dq| of one step (rad or m, Euclidean); longer steps are scaled down (trust region).
 DEFAULT_MAX_STEP = 1.0
 _LAMBDA_MIN, _LAMBDA_MAX = 1e-12, 1e4
 _SHRINK, _GROW = 0.2, 8.0
@@ -187,11 +193,7 @@ class LevenbergMarquardt:
         ``T`` is the tip pose in the base frame.
         """
         if self.kind == "pose":
-            X = self.target_se3.actInv(T)
-            e = pin.log6(X).vector
-            t = X.translation
-            w = e[3:]
-            return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
+            return self._residual_pose(T)
         if self.kind == "position":
             e = T.translation - self.target_p
             return e, T, math.sqrt(e.dot(e)), None
