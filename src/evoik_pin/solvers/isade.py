@@ -25,6 +25,11 @@ Eq. 20 is applied jDE-style (Brest et al. 2006, where it comes from): the re-dra
 individual's trial and kept only if that trial survives selection. The paper draws the new CR in [0, 1];
 ``CR_low`` (default from our tuning, see docs/BENCHMARKS.md) raises the lower end: low crossover rates
 barely move a non-separable IK objective and cost generations.
+
+Paper 002 stops ISADE at a distance of 1e-17 m (DE 1e-15, PSO 1e-14). Forward kinematics in double
+precision of a tip about 1 m from the base is only exact to about 1e-16 m (one unit in the last place of
+the coordinates), so 1e-17 is met only by chance roundings and such runs end at their generation budget;
+use tolerances of 1e-15 m or more.
 """
 
 from __future__ import annotations
