@@ -8,7 +8,8 @@ position error in m, evaluated on whole populations), bounds, success tolerance 
 * ``de``, ``isade``, ``pso``: their defaults (paper 002's settings, tuned ISADE, see docs/BENCHMARKS.md), with
   ``runs`` (paper 002's restarts) capped so the worst case stays within the budget;
 * ``scipy``: ``scipy.optimize.differential_evolution`` with its defaults (best1bin, popsize 15 x n, dithered
-  F in [0.5, 1), CR 0.7), ``vectorized=True`` on the same population objective, q = 0 as ``x0``,
+  F in [0.5, 1), CR 0.7); ``scipy-002``: the same with paper 002's DE settings (best1bin, F 0.5, CR 0.9,
+  popsize 5 x n = 35). Both: ``vectorized=True`` on the same population objective, q = 0 as ``x0``,
   ``polish=False``, ``tol = atol = 0`` and a callback that stops it once the best error meets the tolerance,
   ``maxiter`` set from the budget.
 
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import sys
 import time
@@ -39,7 +41,12 @@ from evoik_pin.solvers import get_solver
 
 #: Points' seed (Scenario 2); ISADE's defaults were tuned on points of another seed (7).
 POINTS_SEED = 2026
-METHODS = ("isade", "de", "pso", "scipy")
+METHODS = ("isade", "de", "pso", "scipy", "scipy-002")
+#: scipy settings: its defaults, and paper 002's DE settings (best1bin, F 0.5, CR 0.9, about 30 individuals).
+SCIPY_SETTINGS = {
+    "scipy": dict(strategy="best1bin", popsize=15, mutation=(0.5, 1.0), recombination=0.7),
+    "scipy-002": dict(strategy="best1bin", popsize=5, mutation=0.5, recombination=0.9),
+}
 
 
 def cpu_model() -> str:
@@ -71,10 +78,10 @@ def run_ours(method: str, robot, target, tolerance: float, budget: int, seed: in
                 evaluations=res.evaluations, time_s=elapsed, runs_allowed=runs)
 
 
-def run_scipy(robot, target, tolerance: float, budget: int, seed: int) -> dict:
+def run_scipy(robot, target, tolerance: float, budget: int, seed: int, name: str = "scipy") -> dict:
     problem, _ = make_problem(robot, target, tolerance=tolerance, q0=np.zeros(robot.n))
-    popsize = 15
-    size = popsize * robot.n
+    settings = SCIPY_SETTINGS[name]
+    size = settings["popsize"] * robot.n
     maxiter = max(1, budget // size - 1)
 
     def objective(x: np.ndarray) -> np.ndarray:  # vectorized: x (n, S) -> (S,)
@@ -84,7 +91,7 @@ def run_scipy(robot, target, tolerance: float, budget: int, seed: int) -> dict:
         return bool(intermediate_result.fun <= tolerance)
 
     t0 = time.perf_counter()
-    res = differential_evolution(objective, list(zip(problem.lower, problem.upper, strict=True)), popsize=popsize,
+    res = differential_evolution(objective, list(zip(problem.lower, problem.upper, strict=True)), **settings,
                                  maxiter=maxiter, tol=0.0, atol=0.0, polish=False, vectorized=True,
                                  updating="deferred", x0=np.zeros(robot.n), callback=stop,
                                  rng=np.random.default_rng(seed))
@@ -108,14 +115,14 @@ def summarize(rows: list[dict]) -> dict:
 
 
 def markdown(summary: dict[str, dict], tolerance: float) -> str:
-    ref = summary.get("scipy")
+    ref = summary.get("scipy") or summary.get("scipy-002")
     lines = [f"| method | success (<= {tolerance:g} m) | mean error (m) | median error (m) | mean generations | "
              "mean evaluations | mean time / point (ms) | median time / point (ms) | time vs scipy | evals vs scipy |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for name, s in summary.items():
         t_ratio = f"{s['mean_time_ms'] / ref['mean_time_ms']:.2f}" if ref else "-"
         e_ratio = f"{s['mean_evaluations'] / ref['mean_evaluations']:.2f}" if ref else "-"
-        label = "scipy DE (best1bin)" if name == "scipy" else f"`{name}`"
+        label = {"scipy": "scipy DE, its defaults", "scipy-002": "scipy DE, paper 002 settings"}.get(name, f"`{name}`")
         lines.append(f"| {label} | {s['successes']}/{s['points']} | {s['mean_error']:.2e} | {s['median_error']:.2e} | "
                      f"{s['mean_generations']:.1f} | {s['mean_evaluations']:.0f} | {s['mean_time_ms']:.2f} | "
                      f"{s['median_time_ms']:.2f} | {t_ratio} | {e_ratio} |")
@@ -139,35 +146,39 @@ def main(argv: list[str] | None = None) -> int:
 
     robot = ek.load_robot("redundant7r")
     points = scenario2_points(robot, count)
+    load_before = tuple(round(v, 2) for v in os.getloadavg())
     # warm-up: imports, registry, first-call caches
     for m in args.methods:
-        (run_scipy(robot, points[0], 1e-3, 2000, 0) if m == "scipy" else
+        (run_scipy(robot, points[0], 1e-3, 2000, 0, m) if m.startswith("scipy") else
          run_ours(m, robot, points[0], 1e-3, 2000, 0))
 
     per_method: dict[str, list[dict]] = {}
     for m in args.methods:
         rows = []
         for i, target in enumerate(points):
-            if m == "scipy":
-                rows.append(run_scipy(robot, target, args.tolerance, args.budget, args.seed + i))
+            if m.startswith("scipy"):
+                rows.append(run_scipy(robot, target, args.tolerance, args.budget, args.seed + i, m))
             else:
                 rows.append(run_ours(m, robot, target, args.tolerance, args.budget, args.seed + i))
         per_method[m] = rows
         print(f"{m}: done ({count} points)", file=sys.stderr)
     summary = {m: summarize(rows) for m, rows in per_method.items()}
+    load_after = tuple(round(v, 2) for v in os.getloadavg())
     table = markdown(summary, args.tolerance)
     command = "python scripts/bench_solvers.py " + " ".join(argv if argv is not None else sys.argv[1:])
     print(f"Scenario 2 (paper 002) on redundant7r: {count} points (seed {POINTS_SEED}), each from q = 0, "
           f"tolerance {args.tolerance:g} m, budget {args.budget} evaluations per point")
     print(f"machine: {cpu_model()} (platform.processor() = {platform.processor()!r}), "
-          f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}")
+          f"python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}; "
+          f"load average (1, 5, 15 min) before {load_before}, after {load_after}")
     print()
     print(table)
     if args.json:
         out = dict(command=command.strip(), date=time.strftime("%Y-%m-%d"), cpu=cpu_model(),
                    processor=platform.processor(), python=platform.python_version(), numpy=np.__version__,
-                   scipy=scipy.__version__, points_seed=POINTS_SEED, tolerance=args.tolerance, budget=args.budget,
-                   points=points.tolist(), summary=summary, results=per_method)
+                   scipy=scipy.__version__, load_before=load_before, load_after=load_after, points_seed=POINTS_SEED,
+                   tolerance=args.tolerance, budget=args.budget, points=points.tolist(), summary=summary,
+                   results=per_method)
         Path(args.json).write_text(json.dumps(out, indent=2))
         print(f"\nwrote {args.json}", file=sys.stderr)
     return 0

@@ -6,7 +6,16 @@ import pytest
 import evoik_pin
 from evoik_pin import Target
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.nsga2 import crowding_distance, dominance_matrix, nondominated_ranks, nsga2_minimize
+from evoik_pin.solvers.nsga2 import (
+    _duplicate_rows,
+    _tournament,
+    _tournament_pairs,
+    crowding_distance,
+    dominance_matrix,
+    nondominated_ranks,
+    nsga2_minimize,
+    survival,
+)
 
 
 def zdt1(X):
@@ -45,6 +54,62 @@ def test_constraint_domination_and_sorting(rng):
         F = rng.random((40, 3))
         cv = np.where(rng.random(40) < 0.3, rng.random(40), 0.0)
         assert np.array_equal(nondominated_ranks(F, cv), _brute_force_ranks(F, cv))
+        F, cv = np.round(F, 1), np.where(rng.random(40) < 0.5, np.round(rng.random(40), 1), 0.0)  # ties
+        assert np.array_equal(nondominated_ranks(F, cv), _brute_force_ranks(F, cv))
+
+
+def test_survival_takes_whole_fronts_then_the_least_crowded(rng):
+    for _ in range(20):
+        F = np.round(rng.random((60, 2)), 2)
+        cv = np.where(rng.random(60) < 0.4, np.round(rng.random(60), 1), 0.0)
+        size = int(rng.integers(4, 60))
+        keep, rank, cd = survival(F, cv, size)
+        full = _brute_force_ranks(F, cv)
+        last = np.sort(full)[size - 1]
+        assert len(keep) == size and len(set(keep)) == size and np.array_equal(rank, full[keep])
+        assert set(np.nonzero(full < last)[0]) <= set(keep) and np.all(full[keep] <= last)
+        cut = np.nonzero(full == last)[0]
+        cd_cut = crowding_distance(F[cut])
+        kept = np.isin(cut, keep)
+        if not kept.all():  # the front that overflows keeps its largest crowding distances
+            assert cd_cut[kept].min() >= cd_cut[~kept].max()
+        for r in range(last + 1):
+            members = np.nonzero(full[keep] == r)[0]
+            assert np.allclose(cd[members], crowding_distance(F[keep[members]]) if r < last else
+                               cd_cut[np.searchsorted(cut, keep[members])])
+
+
+def test_tournament_rules_and_pairs(rng):
+    pairs = _tournament_pairs(10, 10, rng)
+    assert np.array_equal(np.bincount(pairs.ravel(), minlength=10), np.full(10, 2))  # each enters twice
+    assert np.all(pairs[:, 0] != pairs[:, 1])
+    rank, cd = np.array([0, 1, 0, 0]), np.array([0.5, np.inf, 0.7, 0.5])
+    assert _tournament(rank, cd, np.array([[0, 1], [1, 0]]), rng).tolist() == [0, 0]  # lower rank
+    assert _tournament(rank, cd, np.array([[0, 2], [2, 0]]), rng).tolist() == [2, 2]  # then larger distance
+    ties = _tournament(rank, cd, np.tile([0, 3], (200, 1)), rng)  # then a fair coin
+    assert 60 < np.sum(ties == 3) < 140
+
+
+def test_duplicate_offspring_are_bred_again():
+    X = np.array([[0.0, 1.0], [0.5, 0.5]])
+    Y = np.array([[0.5, 0.5], [0.2, 0.3], [0.2, 0.3], [-0.0, 1.0], [0.2, 0.31]])
+    assert _duplicate_rows(X, Y).tolist() == [True, False, True, True, False]
+
+    def run(eliminate):
+        seen = []
+
+        def f(X):
+            seen.append(X.copy())
+            return zdt1(X)
+
+        res = nsga2_minimize(f, np.zeros(2), np.ones(2), 2, np.random.default_rng(3), population=20, generations=30,
+                             eliminate_duplicates=eliminate)
+        assert res.evaluations == 20 * 31  # duplicates are bred again, never skipped: N per generation
+        Z = np.concatenate(seen)
+        return len(Z) - len(np.unique(Z, axis=0))
+
+    assert run(True) == 0
+    assert run(False) > 10  # with 2 variables, parents copied unchanged are frequent
 
 
 def test_crowding_distance():

@@ -12,8 +12,15 @@ such as ZDT1); the registered ``nsga2`` IK method builds paper 003's problem on 
 Pieces, each one call over the whole population: :func:`dominance_matrix` (constraint domination: a
 feasible point dominates an infeasible one; two infeasible points compare by total violation; two
 feasible ones by Pareto dominance), :func:`nondominated_ranks` (fast non-dominated sorting, one pass per
-front), :func:`crowding_distance`, :func:`sbx` (bounded simulated binary crossover) and
-:func:`polynomial_mutation` (bounded), as in Deb's reference implementation.
+front, the infeasible points ranked by violation directly), :func:`crowding_distance`, :func:`sbx`
+(bounded simulated binary crossover) and :func:`polynomial_mutation` (bounded), as in Deb's reference
+implementation.
+
+Implementation choices where Deb et al. (2002) leave room (see :func:`nsga2_minimize`): tournament
+contestants come from two random permutations of the population (Deb's reference code: everyone enters
+two tournaments); the tournament is the paper's crowded comparison (rank, then crowding distance) with a
+coin toss on full ties; offspring that duplicate a population member or each other are bred again before
+evaluation (as pymoo does), so no evaluation is spent on a copy.
 """
 
 from __future__ import annotations
@@ -197,7 +204,7 @@ def survival(F: np.ndarray, violation: np.ndarray | None, size: int) -> tuple[np
     cd = np.zeros(F.shape[0])
     fronts, starts = np.unique(rank[order], return_index=True)
     ends = np.append(starts[1:], len(order))
-    for r, a, b in zip(fronts, starts, ends):
+    for r, a, b in zip(fronts, starts, ends, strict=True):
         if r > last:
             break
         members = order[a:b]
@@ -210,11 +217,36 @@ def survival(F: np.ndarray, violation: np.ndarray | None, size: int) -> tuple[np
     return keep, rank[keep], cd[keep]
 
 
-def _tournament(rank: np.ndarray, cd: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-    """Binary tournaments (crowded comparison): lower rank wins, then larger crowding distance."""
+def _tournament_pairs(size: int, count: int, rng: np.random.Generator) -> np.ndarray:
+    """``count`` tournament pairs (count, 2) over ``size`` individuals, read off consecutive random
+    permutations as in Deb's reference code: for ``count = size`` (even) every individual enters exactly
+    two tournaments and never meets itself."""
+    k = -(-2 * count // size)
+    perms = np.argsort(rng.random((k, size)), axis=1).reshape(-1)
+    return perms[: 2 * count].reshape(count, 2)
+
+
+def _tournament(rank: np.ndarray, cd: np.ndarray, pairs: np.ndarray, rng: np.random.Generator | None = None
+                ) -> np.ndarray:
+    """Binary tournaments with Deb's crowded comparison: lower rank wins, then larger crowding distance;
+    a full tie (same rank and distance, e.g. two boundary points) is a fair coin toss from ``rng`` (the
+    first contestant without one)."""
     a, b = pairs[:, 0], pairs[:, 1]
     b_wins = (rank[b] < rank[a]) | ((rank[b] == rank[a]) & (cd[b] > cd[a]))
+    if rng is not None:
+        b_wins |= (rank[b] == rank[a]) & (cd[b] == cd[a]) & (rng.random(a.size) < 0.5)
     return np.where(b_wins, b, a)
+
+
+def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """Mask (len(Y),) of the rows of ``Y`` equal (bit for bit, -0.0 = 0.0) to a row of ``X`` or to an
+    earlier row of ``Y``; one sort of the rows viewed as byte strings."""
+    Z = np.ascontiguousarray(np.concatenate([X, Y]) + 0.0)
+    keys = Z.view(np.dtype((np.void, Z.dtype.itemsize * Z.shape[1]))).reshape(-1)
+    first = np.unique(keys, return_index=True)[1]  # first occurrences (numpy sorts stably for return_index)
+    unique = np.zeros(Z.shape[0], bool)
+    unique[first] = True
+    return ~unique[X.shape[0]:]
 
 
 # ---------------------------------------------------------------------------------------------- generic loop
@@ -246,8 +278,17 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
                    generations: int = 250, eta_c: float = 15.0, eta_m: float = 20.0,
                    crossover_probability: float = 0.9, mutation_probability: float | None = None,
                    initial: np.ndarray | None = None, repair: Callable | None = None,
-                   callback: Callable | None = None) -> NSGA2Result:
+                   callback: Callable | None = None, eliminate_duplicates: bool = True) -> NSGA2Result:
     """Minimize ``n_obj`` objectives over the box [lower, upper] with NSGA-II (Deb et al. 2002).
+
+    Each generation: binary tournaments with the crowded comparison (rank, then crowding distance, then a
+    coin), the contestants read off two random permutations of the population as in Deb's reference
+    code; SBX on consecutive winners; polynomial mutation; then the N offspring join the N parents and
+    :func:`survival` keeps N (constraint domination, fronts in order, the last one cut by crowding).
+    With ``eliminate_duplicates`` (as pymoo does), an offspring equal to a parent or to another offspring
+    (mostly parents copied when neither crossover nor mutation changed them) is bred again, for at most
+    10 rounds, before anything is evaluated: each generation still costs exactly N evaluations, and none
+    is spent on a point the population already holds.
 
     Args:
         f: vectorized ``f(X)`` for a population X (N, n): objectives (N, n_obj), or a pair
@@ -263,6 +304,8 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
             initial population), e.g. projecting onto an equality constraint.
         callback: optional ``callback(generation, X, F, violation)`` with the survivors of every generation
             (generation 0: the initial population).
+        eliminate_duplicates: breed again the offspring that duplicate a population member or each other
+            (checked before ``repair``; True).
 
     Returns:
         :class:`NSGA2Result`: the final population, its ranks, and per-generation history.
@@ -314,11 +357,21 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
     log()
     if callback is not None:
         callback(0, X, F, cv)
-    half = (population + 1) // 2
-    for g in range(generations):
-        winners = _tournament(rank, cd, rng.integers(0, X.shape[0], (2 * half, 2)))
+
+    def breed(m):
+        half = (m + 1) // 2
+        winners = _tournament(rank, cd, _tournament_pairs(X.shape[0], 2 * half, rng), rng)
         C1, C2 = sbx(X[winners[:half]], X[winners[half:]], lower, upper, eta_c, rng, crossover_probability)
-        Y = polynomial_mutation(np.concatenate([C1, C2])[:population], lower, upper, eta_m, p_m, rng)
+        return polynomial_mutation(np.concatenate([C1, C2])[:m], lower, upper, eta_m, p_m, rng)
+
+    for g in range(generations):
+        Y = breed(population)
+        if eliminate_duplicates:
+            for _ in range(10):
+                dup = _duplicate_rows(X, Y)
+                if not dup.any():
+                    break
+                Y[dup] = breed(int(dup.sum()))
         if repair is not None:
             Y = np.clip(repair(Y), lower, upper)
         FY, cvY = evaluate(Y)
