@@ -37,8 +37,8 @@ def test_solve_pose_target_with_rpy_in_degrees(capsys):
     T = robot.fk(q)
     rpy_deg = np.degrees(pin.rpy.matrixToRpy(T.rotation))
     code = main(["solve", "aerial6r", "--xyz", *map(str, T.translation), "--rpy", *map(str, rpy_deg),
-                 "--method", "de", "--seed", "2", "--tolerance", "1e-5", "--population", "40", "--max-generations", "60",
-                 "--json"])
+                 "--method", "de", "--seed", "2", "--tolerance", "1e-5", "--population", "40",
+                 "--max-generations", "60", "--json"])
     info = json.loads(capsys.readouterr().out)
     assert info["target_rpy_deg"] == list(rpy_deg)
     assert code == (0 if info["success"] else 1)

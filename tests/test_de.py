@@ -15,6 +15,7 @@ from evoik_pin.solvers.de_ops import (
     exponential_crossover,
     exponential_lengths,
     mutate,
+    permutation_indices,
     trigonometric,
 )
 
@@ -133,6 +134,23 @@ def test_distinct_indices():
                           distinct_indices(np.random.default_rng(1), 10, 5))
     with pytest.raises(OptionError, match="at least 6"):
         distinct_indices(rng, 5, 5)
+
+
+def test_permutation_indices():
+    rng = np.random.default_rng(3)
+    N, k = 12, 4
+    counts = np.zeros((N, N))
+    for _ in range(3000):
+        idx = permutation_indices(rng.random(N), rng.random(N - 1), k)
+        assert idx.shape == (N, k)
+        for i, row in enumerate(idx):
+            assert len(set(row.tolist())) == k and i not in row
+        for m in range(k):  # each column is a permutation: every individual serves once as r_m
+            assert sorted(idx[:, m].tolist()) == list(range(N))
+        counts[np.arange(N), idx[:, 0]] += 1
+    # r_1 of every individual is spread evenly over the N - 1 others (expected 3000 / 11 = 273 each)
+    off_diagonal = counts[~np.eye(N, dtype=bool)]
+    assert np.all(np.diag(counts) == 0) and off_diagonal.min() > 200 and off_diagonal.max() < 350
 
 
 @pytest.mark.parametrize("name, expected", [

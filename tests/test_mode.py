@@ -12,16 +12,28 @@ CM = 0.01
 TABLE2 = [(10, 10, 10), (0, 7.5, 12), (2, 13, -5), (-6, 9.5, 4.3), (3, -7, 13)]
 
 
-@pytest.mark.parametrize("target", TABLE2)
-def test_mode_reaches_table2_targets_within_1mm_inside_the_limits(target):
-    res = evoik_pin.solve("ax18", np.array(target) * CM, method="mode", seed=1)  # paper parameters
-    assert res.position_error < 1e-3
-    assert load_robot("ax18").within_bounds(res.q)
-    w1, w2 = res.history["w1"], res.history["w2"]
-    assert len(w1) == res.generations + 1
-    assert np.all((w1 >= 0) & (w1 <= 1) & (w2 >= 0) & (w2 <= 1))
-    assert np.allclose(w1 + w2, 1.0, atol=1e-12)
-    assert w1[-1] > 0.9  # the weight moves onto the position as the best closes in (paper Fig. 4)
+def test_mode_reaches_table2_targets_within_1mm_on_most_seeds():
+    """Paper parameters (Np 150, 200 generations, M 0.2, Cr 0.8, F 0.2; Mt 0.125), seeds 0-5 on each Table 2 target.
+
+    Measured rate (issue 5): 199 of 200 runs within 1 mm (seeds 0-39 x 5 targets; the miss at 1.5 mm), and
+    94 % (seeds 0-19) with the earlier Mt = 0.05. The test asks for at least 29 of its 30 runs, which a 99.5 %
+    rate meets with probability 0.99; it does not rest on one chosen seed.
+    """
+    robot = load_robot("ax18")
+    errors = []
+    for target in TABLE2:
+        for seed in range(6):
+            res = evoik_pin.solve(robot, np.array(target) * CM, method="mode", seed=seed)
+            errors.append(res.position_error)
+            assert robot.within_bounds(res.q)
+            w1, w2 = res.history["w1"], res.history["w2"]
+            assert len(w1) == res.generations + 1
+            assert np.all((w1 >= 0) & (w1 <= 1) & (w2 >= 0) & (w2 <= 1))
+            assert np.allclose(w1 + w2, 1.0, atol=1e-12)
+            assert w1[-1] > 0.9  # the weight moves onto the position as the best closes in (paper Fig. 4)
+    errors = np.array(errors)
+    assert (errors < 1e-3).sum() >= 29, np.round(errors * 1e3, 3)
+    assert errors.max() < 5e-3
 
 
 def test_equitable_weights_formula():

@@ -91,6 +91,8 @@ def test_unwritable_output_is_refused_before_work(tmp_path, capsys):
     assert "is a directory" in capsys.readouterr().err
     with pytest.raises(ReproductionError, match="seed"):
         run_papers("002", out=tmp_path, seed=-1)
+    with pytest.raises(ReproductionError, match="jobs"):
+        run_papers("002", out=tmp_path, jobs=0)
 
 
 # ------------------------------------------------------------------------------------ quick runs

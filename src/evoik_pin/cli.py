@@ -154,7 +154,8 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .experiments.common import check_output_file, show_animation
 
     html = check_output_file(args.html) if args.html else None  # before any work starts
-    reports = run_papers(args.paper, out=args.out, quick=args.quick, seed=args.seed, progress=not args.no_progress)
+    reports = run_papers(args.paper, out=args.out, quick=args.quick, seed=args.seed, progress=not args.no_progress,
+                         jobs=args.jobs)
     for r in reports:
         mode = "quick" if r.quick else "full"
         print(f"paper {r.paper_id} ({mode}, seed {r.seed}): {r.wall_time_s:.1f} s -> {args.out}/{r.paper_id}/report.md",
@@ -218,6 +219,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="master seed of every random choice (default 0)")
     p.add_argument("--out", default="reproduction", help="output directory; each paper writes OUT/<id>/")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes for independent parts (same numbers)")
     p.add_argument("--html", metavar="PATH", help="save the paper's animation (002: Pro-ISADE spiral) as HTML")
     p.add_argument("--view", action="store_true", help="play the paper's animation in meshcat until Ctrl-C")
     p.set_defaults(func=_cmd_reproduce)

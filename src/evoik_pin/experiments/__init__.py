@@ -19,6 +19,9 @@ exactly the modules that exist, so nothing else needs registering) and must defi
   - uses the paper's settings when ``ctx.quick`` is False, and a reduced size (fewer points / runs) that
     finishes in well under a minute when it is True; records every setting in ``report.settings``;
   - wraps long loops in ``ctx.bar(...)`` (tqdm, disabled with ``progress=False``);
+  - may run independent parts in ``ctx.jobs`` worker processes (paper002 shows how: a top-level job
+    function whose random streams come from ``derive_rng(seed, labels...)``, so results do not depend
+    on the number of processes);
   - makes figures with ``fig, ax = ctx.new_figure(...)`` (Agg backend) and saves them with
     ``ctx.save_figure(fig, "figN_name", caption)``, appending the returned :class:`Figure`;
   - fills :class:`Table` objects with our rows and, where the paper has the same table, ``paper_rows``
@@ -50,6 +53,7 @@ from .common import (
     Table,
     check_output_dir,
     check_seed,
+    derive_rng,
     machine_info,
 )
 
@@ -60,6 +64,7 @@ __all__ = [
     "PaperReport",
     "RunContext",
     "Table",
+    "derive_rng",
     "paper_ids",
     "run_paper",
     "run_papers",
@@ -106,13 +111,14 @@ def _resolve_ids(papers) -> list[str]:
     return ids
 
 
-def _default_command(pid: str, quick: bool, seed: int, out: Path) -> str:
-    parts = ["evoik", "reproduce", pid, *(["--quick"] if quick else []), "--seed", str(seed), "--out", str(out)]
+def _default_command(pid: str, quick: bool, seed: int, out: Path, jobs: int) -> str:
+    parts = ["evoik", "reproduce", pid, *(["--quick"] if quick else []), "--seed", str(seed), "--out", str(out),
+             *(["--jobs", str(jobs)] if jobs > 1 else [])]
     return shlex.join(parts)
 
 
 def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0, progress: bool = True,
-               dpi: int = 90, command: str | None = None) -> list[PaperReport]:
+               dpi: int = 90, command: str | None = None, jobs: int = 1) -> list[PaperReport]:
     """Reproduce one or more papers; each writes into ``out/<paper id>/``.
 
     Args:
@@ -123,6 +129,7 @@ def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0
         progress: show tqdm progress bars.
         dpi: resolution of the figures.
         command: command line recorded in the reports (default: the equivalent ``evoik reproduce``).
+        jobs: worker processes a paper may use for its independent parts (same numbers as 1, faster).
 
     Returns:
         The :class:`PaperReport` of each paper, in order.
@@ -133,6 +140,8 @@ def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0
     """
     ids = _resolve_ids(papers)
     seed = check_seed(seed)
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ReproductionError(f"jobs must be an integer >= 1, got {jobs!r}")
     out = check_output_dir(out)
     for pid in ids:
         check_output_dir(out / pid)
@@ -143,7 +152,7 @@ def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0
             raise ReproductionError(f"module {PAPERS[pid]} does not follow the paper-module contract "
                                     "(PAPER_ID, TITLE, run(ctx) -> PaperReport)")
         ctx = RunContext(out_dir=out / pid, quick=quick, seed=seed, progress=progress, dpi=dpi,
-                         command=command or _default_command(pid, quick, seed, out))
+                         command=command or _default_command(pid, quick, seed, out, jobs), jobs=jobs)
         machine = machine_info()
         t0 = time.perf_counter()
         report = module.run(ctx)
@@ -156,8 +165,9 @@ def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0
 
 
 def run_paper(paper: str, out=DEFAULT_OUT, quick: bool = False, seed: int = 0, progress: bool = True,
-              dpi: int = 90, command: str | None = None) -> PaperReport:
+              dpi: int = 90, command: str | None = None, jobs: int = 1) -> PaperReport:
     """Reproduce one paper (see :func:`run_papers`); returns its :class:`PaperReport`."""
     if str(paper).strip() == "all":
         raise ReproductionError("run_paper takes one paper id; use run_papers('all') for every paper")
-    return run_papers([paper], out=out, quick=quick, seed=seed, progress=progress, dpi=dpi, command=command)[0]
+    return run_papers([paper], out=out, quick=quick, seed=seed, progress=progress, dpi=dpi, command=command,
+                      jobs=jobs)[0]

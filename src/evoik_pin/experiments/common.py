@@ -36,6 +36,7 @@ __all__ = [
     "Table",
     "check_output_dir",
     "check_seed",
+    "derive_rng",
     "fmt",
     "jsonable",
     "least_squares_distance",
@@ -341,6 +342,16 @@ class PaperReport:
 # run context
 
 
+def derive_rng(seed: int, *labels: str) -> np.random.Generator:
+    """A generator for one named part of an experiment, from the master ``seed`` and the part's labels.
+
+    The stream depends only on the seed and the labels (CRC-32 of each), so adding an experiment does not
+    change the random numbers of another, and a part run in a worker process draws what it would serially.
+    """
+    keys = [zlib.crc32(str(label).encode()) for label in labels]
+    return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
+
+
 @dataclass
 class RunContext:
     """What a paper module's ``run(ctx)`` gets.
@@ -352,6 +363,8 @@ class RunContext:
         progress: show tqdm progress bars (on stderr).
         dpi: resolution of the PNG figures (small, commit-able files).
         command: the command line shown in the report.
+        jobs: worker processes a paper may use for independent parts (1: everything in this process).
+            Per-solve times are measured inside each process either way.
     """
 
     out_dir: Path
@@ -360,16 +373,12 @@ class RunContext:
     progress: bool = True
     dpi: int = 90
     command: str = ""
+    jobs: int = 1
     t0: float = field(default_factory=time.perf_counter)
 
     def rng(self, *labels: str) -> np.random.Generator:
-        """An independent generator for one named part of the experiment, derived from :attr:`seed`.
-
-        The stream depends only on the seed and the labels (CRC-32 of each), so adding an experiment does
-        not change the random numbers of another.
-        """
-        keys = [zlib.crc32(str(label).encode()) for label in labels]
-        return np.random.default_rng(np.random.SeedSequence([self.seed, *keys]))
+        """An independent generator for one named part of the experiment: :func:`derive_rng` of the seed."""
+        return derive_rng(self.seed, *labels)
 
     def bar(self, iterable=None, total: int | None = None, desc: str = ""):
         """A tqdm progress bar (disabled when :attr:`progress` is False)."""

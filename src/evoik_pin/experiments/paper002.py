@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import inspect
 import time
+from functools import lru_cache
 
 import numpy as np
 
@@ -42,7 +43,7 @@ from ..objectives import PositionError, WeightedJointDisplacement
 from ..problem import DEFAULT_PRO_DELTA, Target
 from ..robot import load_robot
 from ..solvers import get_solver
-from .common import Animation, PaperReport, RunContext, Table, least_squares_distance
+from .common import Animation, PaperReport, RunContext, Table, derive_rng, least_squares_distance
 
 PAPER_ID = "002"
 TITLE = ("Use improved differential evolution algorithms to handle the inverse kinematics problem for robots "
@@ -102,7 +103,8 @@ def _settings(quick: bool) -> dict:
         "reached_m": REACHED_M,
         "oracle": "points with error > reached_m are re-checked by multi-start bounded least squares in the same "
                   "search box; 'no solution' points (none within reached_m) are counted and left out of averages",
-        "oracle_starts": 5 if quick else 20,
+        "oracle_starts": 3 if quick else 10,
+        "oracle_starts_pro": 2 if quick else 3,
         "q_start": "zeros (Scenarios 1, 2 and the first spiral point)",
         "extra_row": "Pro-ISADE at Table 5's printed fitness value 1e-12 m (Table 2 says 1e-17 m)",
     }
@@ -141,17 +143,6 @@ def _pro_bounds(robot, q_prev, delta):
     return lo, hi
 
 
-def _trajectory(ctx, robot, targets, cfg, rng, *, rho, fitness, pro: bool, a_first: float, desc: str) -> list[dict]:
-    """Solve the spiral in sequence from q = 0 (first point full range with a = a_first)."""
-    out, q_prev = [], np.zeros(robot.n)
-    for i, p in enumerate(ctx.bar(targets, desc=desc)):
-        bounds = _pro_bounds(robot, q_prev, DEFAULT_PRO_DELTA) if (pro and i > 0) else None
-        out.append(_solve_point(robot, p, cfg, rng, rho=rho, fitness=fitness, q0=q_prev, bounds=bounds,
-                                a=a_first if i == 0 else 0.0))
-        q_prev = out[-1]["q"]
-    return out
-
-
 def _stats(points: list[dict], fitness: float | None) -> dict:
     counts = {k: sum(p.get("status") == k for p in points) for k in ("reached", "missed", "no solution")}
     points = [p for p in points if p.get("status") != "no solution"] or points
@@ -177,14 +168,38 @@ def _by_construction(points: list[dict]) -> list[dict]:
     return points
 
 
-def _classify(robot, points: list[dict], targets: np.ndarray, pro: bool, rng, starts: int) -> None:
-    """Mark each point ``reached`` / ``missed`` (a solution exists in its search box) / ``no solution``."""
+def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
+    """Full-range spiral points: ``reached``, ``missed`` (a solution exists) or ``no solution``.
+
+    The reachability check runs once per point (shared by the variants), starting from the closest
+    configuration any variant found, then from random configurations.
+    """
+    cache: dict[int, float] = {}
+    for pts in variants.values():
+        for i, pt in enumerate(pts):
+            pt["oracle"] = None
+            if pt["error"] <= REACHED_M:
+                pt["status"] = "reached"
+                continue
+            if i not in cache:
+                closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
+                cache[i] = min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper,
+                                                                        rng, starts, closest["q"]))
+            pt["oracle"] = min(pt["error"], cache[i])
+            pt["status"] = "missed" if pt["oracle"] <= REACHED_M else "no solution"
+
+
+def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: int) -> None:
+    """Pro-variant points: as :func:`_classify_full`, the check confined to each point's Pro box.
+
+    The first point (full range) is classified with the full-range check.
+    """
     for i, (pt, p) in enumerate(zip(points, targets, strict=True)):
         pt["oracle"] = None
         if pt["error"] <= REACHED_M:
             pt["status"] = "reached"
             continue
-        if pro and i > 0:
+        if i > 0:
             lo, hi = _pro_bounds(robot, points[i - 1]["q"], DEFAULT_PRO_DELTA)
             x0 = points[i - 1]["q"]
         else:
@@ -212,20 +227,30 @@ def spiral_targets(count: int) -> np.ndarray:
 # the experiment
 
 
-def run(ctx: RunContext) -> PaperReport:
-    """Reproduce paper 002's Tables 3-5 and Figs. 3-9 (see the module docstring)."""
-    s = _settings(ctx.quick)
-    robot = load_robot(ROBOT)
-    report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
-    rho = s["rho_runs_per_point"]
-    q_zero = np.zeros(robot.n)
+def _bar(iterable, desc: str, enabled: bool):
+    from tqdm.auto import tqdm
 
-    # -- Scenario 1: one random point --------------------------------------------------------------------
-    q_s1 = robot.random_configurations(1, ctx.rng("002", "s1-target"))[0]
-    p_s1 = np.asarray(robot.fk(q_s1).translation)
-    t3, curves = {}, {}
-    for name, cfg in ctx.bar(METHODS.items(), total=len(METHODS), desc="002 Scenario 1 / Table 3"):
-        rng = ctx.rng("002", "table3", name)
+    return tqdm(iterable, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True)
+
+
+@lru_cache(maxsize=1)
+def _robot():
+    return load_robot(ROBOT)
+
+
+def _job(spec: dict):
+    """One independent part of the experiment; top level so a process pool can run it.
+
+    Returns ``(key, output, wall time s)``. Every random stream derives from ``spec["seed"]`` and the
+    part's labels only, so serial and parallel runs give the same numbers.
+    """
+    t0 = time.perf_counter()
+    robot, s, kind, label = _robot(), spec["settings"], spec["kind"], spec["label"]
+    cfg = METHODS[label.removeprefix("Pro-").split(" ")[0]]
+    rng = derive_rng(spec["seed"], "002", kind, label)
+    q_zero = np.zeros(robot.n)
+    show = spec["progress"]
+    if kind == "table3":
         runs = []
         for _ in range(s["table3"]["runs"]):
             stamps: list[float] = []
@@ -234,47 +259,97 @@ def run(ctx: RunContext) -> PaperReport:
                 stamps.clear()
                 return lambda g, X: stamps.append(time.perf_counter()) and False
 
-            r = _solve_point(robot, p_s1, cfg, rng, rho=1, fitness=0.0, q0=q_zero, max_generations=85,
+            r = _solve_point(robot, spec["target"], cfg, rng, rho=1, fitness=0.0, q0=q_zero, max_generations=85,
                              callback=make_cb)
-            t = np.asarray(stamps) - stamps[0] if stamps else None
-            runs.append((r, t))
+            runs.append((r, np.asarray(stamps) - stamps[0] if stamps else None))
         best_r, best_t = min(runs, key=lambda rt: rt[0]["error"])
-        t3[name] = {"error": best_r["error"], "time": best_r["time"],
-                    "mean_time": float(np.mean([r["time"] for r, _ in runs])),
-                    "median_error": float(np.median([r["error"] for r, _ in runs]))}
-        curves[name] = (np.asarray(best_r["result"].history["best_cost"]), best_t)
-    s1 = {}
-    for name, cfg in METHODS.items():
-        rng = ctx.rng("002", "scenario1", name)
-        pts = [_solve_point(robot, p_s1, cfg, rng, rho=1, fitness=cfg["fitness_s1"], q0=q_zero)
-               for _ in ctx.bar(range(s["scenario1_runs"]), desc=f"002 Scenario 1 {name}")]
-        s1[name] = _stats(_by_construction(pts), cfg["fitness_s1"])
+        out = {"error": best_r["error"], "time": best_r["time"],
+               "mean_time": float(np.mean([r["time"] for r, _ in runs])),
+               "median_error": float(np.median([r["error"] for r, _ in runs])),
+               "curve": (np.asarray(best_r["result"].history["best_cost"]), best_t)}
+    elif kind == "scenario1":
+        out = [_solve_point(robot, spec["target"], cfg, rng, rho=1, fitness=cfg["fitness_s1"], q0=q_zero)
+               for _ in _bar(range(s["scenario1_runs"]), f"002 Scenario 1 {label}", show)]
+    elif kind == "scenario2":
+        out = [_solve_point(robot, p, cfg, rng, rho=s["rho_runs_per_point"], fitness=cfg["fitness"], q0=q_zero)
+               for p in _bar(spec["targets"], f"002 Scenario 2 {label}", show)]
+    else:  # scenario3: the spiral in sequence; Pro variants re-checked inside their boxes
+        pro, fitness = spec["pro"], spec["fitness"]
+        out, q_prev = [], q_zero
+        for i, p in enumerate(_bar(spec["targets"], f"002 Scenario 3 {label}", show)):
+            bounds = _pro_bounds(robot, q_prev, DEFAULT_PRO_DELTA) if (pro and i > 0) else None
+            out.append(_solve_point(robot, p, cfg, rng, rho=s["rho_runs_per_point"], fitness=fitness, q0=q_prev,
+                                    bounds=bounds, a=s["a_first"] if i == 0 else 0.0))
+            q_prev = out[-1]["q"]
+        if pro:
+            _classify_pro(robot, out, spec["targets"], derive_rng(spec["seed"], "002", "oracle", label),
+                          s["oracle_starts_pro"])
+    if kind != "table3":
+        for pt in out:
+            pt.pop("result", None)  # keep what crosses the process boundary small
+    return (kind, label), out, time.perf_counter() - t0
 
-    # -- Scenario 2: random points, each from q = 0 ------------------------------------------------------
+
+def _run_jobs(ctx: RunContext, specs: list[dict]) -> tuple[dict, dict]:
+    """Run the parts, serially or in ``ctx.jobs`` processes; returns outputs and wall times by key."""
+    outputs, times = {}, {}
+    if ctx.jobs <= 1:
+        for spec in specs:
+            key, out, dt = _job(spec)
+            outputs[key], times[key] = out, dt
+        return outputs, times
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=ctx.jobs) as pool:
+        futures = [pool.submit(_job, spec) for spec in specs]
+        for fut in ctx.bar(as_completed(futures), total=len(futures), desc=f"002 ({ctx.jobs} processes)"):
+            key, out, dt = fut.result()
+            outputs[key], times[key] = out, dt
+    return outputs, times
+
+
+def run(ctx: RunContext) -> PaperReport:
+    """Reproduce paper 002's Tables 3-5 and Figs. 3-9 (see the module docstring)."""
+    s = _settings(ctx.quick)
+    robot = _robot()
+    report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
+    rho = s["rho_runs_per_point"]
+    s["jobs"] = ctx.jobs
+
+    q_s1 = robot.random_configurations(1, ctx.rng("002", "s1-target"))[0]
+    p_s1 = np.asarray(robot.fk(q_s1).translation)
     q_s2 = robot.random_configurations(s["scenario2_points"], ctx.rng("002", "s2-targets"))
     p_s2 = robot.positions_batch(q_s2)
     p_s2_pin = np.array([robot.fk(q).translation for q in q_s2])
-    s2, s2_points = {}, {}
-    for name, cfg in METHODS.items():
-        rng = ctx.rng("002", "scenario2", name)
-        pts = [_solve_point(robot, p, cfg, rng, rho=rho, fitness=cfg["fitness"], q0=q_zero)
-               for p in ctx.bar(p_s2_pin, desc=f"002 Scenario 2 {name}")]
-        s2[name], s2_points[name] = _stats(_by_construction(pts), cfg["fitness"]), pts
-
-    # -- Scenario 3: the spiral, full range (3.1) and Pro box (3.2) ---------------------------------------
     p_s3 = spiral_targets(s["scenario3_points"])
-    s3, s3_points = {}, {}
     variants = [(name, False, cfg["fitness"]) for name, cfg in METHODS.items()]
     variants += [(f"Pro-{name}", True, cfg["fitness"]) for name, cfg in METHODS.items()]
     variants += [("Pro-ISADE (1e-12)", True, 1e-12)]
-    for label, pro, fitness in variants:
-        cfg = METHODS[label.removeprefix("Pro-").split(" ")[0]]
-        rng = ctx.rng("002", "scenario3", label)
-        pts = _trajectory(ctx, robot, p_s3, cfg, rng, rho=rho, fitness=fitness, pro=pro, a_first=s["a_first"],
-                          desc=f"002 Scenario 3 {label}")
-        _classify(robot, pts, p_s3, pro, ctx.rng("002", "oracle", label), s["oracle_starts"])
+
+    base = {"settings": s, "seed": ctx.seed, "progress": ctx.progress and ctx.jobs <= 1}
+    specs = [{**base, "kind": "table3", "label": n, "target": p_s1} for n in METHODS]
+    specs += [{**base, "kind": "scenario1", "label": n, "target": p_s1} for n in METHODS]
+    specs += [{**base, "kind": "scenario2", "label": n, "targets": p_s2_pin} for n in METHODS]
+    specs += [{**base, "kind": "scenario3", "label": label, "targets": p_s3, "pro": pro, "fitness": fitness}
+              for label, pro, fitness in variants]
+    # longest first, so a process pool finishes together
+    specs.sort(key=lambda sp: {"scenario3": 0, "scenario2": 1, "scenario1": 2, "table3": 3}[sp["kind"]])
+    outputs, job_times = _run_jobs(ctx, specs)
+    report.data["job_wall_time_s"] = {f"{k[0]} {k[1]}": v for k, v in job_times.items()}
+
+    t3 = {n: outputs[("table3", n)] for n in METHODS}
+    curves = {n: t3[n].pop("curve") for n in METHODS}
+    s1 = {n: _stats(_by_construction(outputs[("scenario1", n)]), METHODS[n]["fitness_s1"]) for n in METHODS}
+    s2_points = {n: outputs[("scenario2", n)] for n in METHODS}
+    s2 = {n: _stats(_by_construction(pts), METHODS[n]["fitness"]) for n, pts in s2_points.items()}
+    s3_points = {label: outputs[("scenario3", label)] for label, _, _ in variants}
+    _classify_full(robot, {k: s3_points[k] for k in METHODS}, p_s3, ctx.rng("002", "oracle", "full range"),
+                   s["oracle_starts"])
+    s3 = {}
+    for label, _, fitness in variants:
+        pts = s3_points[label]
         # averages over points 2..N: the first point carries eq. 21's a-term and cannot stop on the fitness value
-        s3[label], s3_points[label] = {**_stats(pts[1:] or pts, fitness), **_smoothness(pts)}, pts
+        s3[label] = {**_stats(pts[1:] or pts, fitness), **_smoothness(pts)}
 
     # -- tables ------------------------------------------------------------------------------------------
     report.tables.append(Table(

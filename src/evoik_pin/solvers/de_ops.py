@@ -23,7 +23,9 @@ Mutation schemes (paper 002, eq. 12, numbered as there; the paper writes ``F_w``
 plus paper 004's "either-or" (:func:`either_or`: rand/1 with probability p_F, else
 X_r1 + K (X_r2 + X_r3 - 2 X_r1)) and Fan & Lampinen's trigonometric mutation used by paper 000
 (:func:`trigonometric`). Crossovers: :func:`binomial_crossover` and :func:`exponential_crossover`
-(paper 004, Algorithm 2). Index sampling: :func:`distinct_indices`.
+(paper 004, Algorithm 2). Index sampling: :func:`distinct_indices` / :func:`indices_from_uniform`
+(independent tuples, O(N^2 log N)) and :func:`permutation_indices` (tuples coupled through permutations,
+O(N log N); ISADE uses it).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ __all__ = [
     "indices_from_uniform",
     "mutate",
     "n_indices",
+    "permutation_indices",
     "rand1",
     "trigonometric",
 ]
@@ -88,6 +91,25 @@ def indices_from_uniform(R: np.ndarray, k: int) -> np.ndarray:
     """
     np.fill_diagonal(R, 2.0)
     return np.argsort(R, axis=1)[:, :k]
+
+
+def permutation_indices(u_perm: np.ndarray, u_offsets: np.ndarray, k: int) -> np.ndarray:
+    """k distinct indices per individual, none equal to the individual, from two uniform vectors.
+
+    ``u_perm`` (N,) gives a random permutation P of the population (its argsort) and ``u_offsets``
+    (N - 1,) k distinct offsets o_1..o_k in {1..N-1} (the first k of the argsort of ``u_offsets``, plus 1);
+    the individual at position j of P gets ``r_m = P[(j + o_m) mod N]``. For every individual the tuple
+    (r_1..r_k) is uniform over ordered k-tuples of distinct other individuals, as with
+    :func:`indices_from_uniform`, but the tuples of different individuals are coupled (each column is a
+    permutation of the population, so every individual serves exactly once as r_m). Costs O(N log N)
+    instead of O(N^2 log N). Needs N >= k + 1. Returns (N, k).
+    """
+    N = u_perm.shape[0]
+    P = np.argsort(u_perm)
+    offsets = np.argsort(u_offsets)[:k] + 1
+    idx = np.empty((N, k), dtype=np.intp)
+    idx[P] = P[(np.arange(N)[:, None] + offsets) % N]
+    return idx
 
 
 def _as_column(F) -> np.ndarray | float:

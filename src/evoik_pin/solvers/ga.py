@@ -18,6 +18,8 @@ A general encoding maps ``bits`` unsigned bits linearly onto each joint's bounds
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..errors import OptionError
@@ -27,6 +29,7 @@ from . import register
 from .analytic import solution_results
 from .clustering import leader_clusters
 from .common import SolverRun, check_fraction, check_positive_int, initial_population
+from .de import check_callback
 
 __all__ = [
     "ENCODINGS",
@@ -133,13 +136,15 @@ def _check_ga_options(problem: IKProblem, population, max_generations, niches, n
 def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int, max_generations: int,
                    niches: int, niche_size: float, eta: float, crossover_probability: float,
                    niching: bool = True, normalize: bool = True, archive: list | None = None,
-                   ) -> tuple[SolverRun, np.ndarray, np.ndarray]:
+                   callback: Callable | None = None) -> tuple[SolverRun, np.ndarray, np.ndarray]:
     """Paper 001's real-coded GA; returns the run and the final population (N, n) with its costs (N,).
 
     Runs exactly ``max_generations`` generations (the paper's termination rule): stopping at the first
     individual within tolerance would cut the other solution families short. Options as in :func:`ga`;
     ``normalize`` measures niche distances in the unit hypercube of the bounds (eq. 8's sigma_share is
-    derived for it); ``archive``, when a list, receives ``(Q, cost)`` of every generation.
+    derived for it); ``archive``, when a list, receives ``(Q, cost)`` of every generation; ``callback``, when
+    given, is called as ``callback(generation, Q)`` with a copy of the population (N, n) after the initial
+    one (generation 0) and after every generation (its return value is ignored: all generations run).
     History: ``best_cost``, ``mean_cost``, ``diversity``, ``mutation_probability`` (p_m of eq. 11) and
     ``mean_niche_count``.
     """
@@ -154,6 +159,8 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
     run.record(Q, ev, mutation_probability=1.0 / n, mean_niche_count=float(nc.mean()))
     if archive is not None:
         archive.append((Q, ev.cost))
+    if callback is not None:
+        callback(0, Q.copy())
     half = (population + 1) // 2
     while run.generation < max_generations:
         t = run.generation
@@ -173,6 +180,8 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
         run.record(Q, ev, mutation_probability=p_m, mean_niche_count=float(nc.mean()))
         if archive is not None:
             archive.append((Q, ev.cost))
+        if callback is not None:
+            callback(run.generation, Q.copy())
     return run, Q, ev.cost
 
 
@@ -193,7 +202,7 @@ def solution_leaders(problem: IKProblem, Q: np.ndarray, cost: np.ndarray, radius
 def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, max_generations: int = 12,
        niches: int = 2, niche_size: float | None = None, eta: float = 5.0, crossover_probability: float = 0.9,
        niching: bool = True, cluster_radius: float = 0.35, min_niche_fraction: float = 0.005,
-       max_solutions: int = 8) -> Result:
+       max_solutions: int = 8, callback: Callable | None = None) -> Result:
     """Paper 001's real-coded niching GA (section 3.1).
 
     Options (defaults: paper 001's planar 2R settings, Table 1):
@@ -208,6 +217,9 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
         min_niche_fraction: a cluster counts as a solution when it holds at least this share of the
             population (0.005, i.e. 4 of the paper's 750).
         max_solutions: at most this many niche leaders are returned, best first (8).
+        callback: optional ``callback(generation, population)``, called with a copy of the population (N, n)
+            after the initial one (generation 0) and after every generation, e.g. to plot population
+            histories (paper 001, Figs. 7-11); its return value is ignored.
 
     Returns:
         :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche
@@ -218,8 +230,9 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
         problem, population, max_generations, niches, niche_size, eta, crossover_probability)
     min_niche_fraction = check_fraction("min_niche_fraction", min_niche_fraction)
     max_solutions = check_positive_int("max_solutions", max_solutions)
+    check_callback(callback)
     run, Q, cost = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
-                                  crossover_probability, bool(niching))
+                                  crossover_probability, bool(niching), callback=callback)
     leaders = solution_leaders(problem, Q, cost, cluster_radius,
                                min_members=max(1, int(np.ceil(min_niche_fraction * population))))[:max_solutions]
     result = run.result("ga", f"max_generations ({max_generations}) run; {len(leaders)} niche(s) found")

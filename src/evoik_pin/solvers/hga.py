@@ -11,6 +11,8 @@ distinct IK solutions, best first.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.optimize import minimize
 
@@ -21,6 +23,7 @@ from . import register
 from .analytic import solution_results
 from .clustering import leader_clusters
 from .common import check_positive_int
+from .de import check_callback
 from .ga import _check_ga_options, run_niching_ga, solution_leaders
 
 __all__ = ["nelder_mead_polish"]
@@ -60,7 +63,8 @@ def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 
 def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, max_generations: int = 12,
         niches: int = 2, niche_size: float | None = None, eta: float = 5.0, crossover_probability: float = 0.9,
         cluster_radius: float = 0.35, max_starts: int = 24, simplex_size: float = 0.05, xatol: float = 1e-10,
-        fatol: float = 1e-13, max_polish_evaluations: int = 2000, solution_radius: float = 1e-4) -> Result:
+        fatol: float = 1e-13, max_polish_evaluations: int = 2000, solution_radius: float = 1e-4,
+        callback: Callable | None = None) -> Result:
     """Paper 001's hybrid GA (section 3.2): every IK solution at once.
 
     Options: the GA's (``population``, ``max_generations``, ``niches``, ``niche_size``, ``eta``,
@@ -72,6 +76,8 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         xatol, fatol: Nelder-Mead stopping tolerances on the simplex (rad) and its costs (1e-10, 1e-13).
         max_polish_evaluations: cost evaluations allowed per polish (2000).
         solution_radius: polished solutions closer than this (rad, wrapped) are one solution (1e-4).
+        callback: optional ``callback(generation, population)`` on the GA phase, as for ``ga`` (a copy of
+            the population (N, n) after generation 0 and every generation; return value ignored).
 
     Returns:
         :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution
@@ -84,9 +90,10 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     max_polish_evaluations = check_positive_int("max_polish_evaluations", max_polish_evaluations)
     simplex_size, xatol, fatol, solution_radius = (_positive(k, v) for k, v in (
         ("simplex_size", simplex_size), ("xatol", xatol), ("fatol", fatol), ("solution_radius", solution_radius)))
+    check_callback(callback)
     archive: list = []
     run, _, _ = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
-                               crossover_probability, archive=archive)
+                               crossover_probability, archive=archive, callback=callback)
     # The good areas are taken from every individual the GA evaluated, not only the last generation: in
     # 12 generations the population may drift away from one of the solution families it had found
     # (on the PUMA targets, the last generation alone misses about a quarter of the solutions).

@@ -59,7 +59,7 @@ from .common import (
     run_with_restarts,
 )
 from .de import check_callback, greedy_selection
-from .de_ops import binomial_crossover, indices_from_uniform
+from .de_ops import binomial_crossover, permutation_indices
 
 __all__ = [
     "ISADE_STRATEGIES",
@@ -251,20 +251,21 @@ def isade(
         best = run.record(X, ev, F_mean=F_max, CR_mean=CR_init, p_best1=probs[0], p_best2=probs[1],
                           p_randtobest1=probs[2])
         reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
-        c_jrand, c_strategy, c_tau, c_cr = N + D, N + D + 1, N + D + 2, N + D + 3
+        c_jrand, c_strategy, c_tau, c_cr, c_perm, c_offsets = D, D + 1, D + 2, D + 3, D + 4, D + 5
         while reason is None and (reason := run.stop_reason()) is None:
             g = run.generation + 1
-            # One uniform draw serves the generation: index sampling (N x N), crossover (N x D), the
-            # crossover's forced coordinate, the strategy choice and the CR adaptation (4 x N).
-            u = rng.random((N, N + D + 4))
-            E = indices_from_uniform(u[:, :N], 5)
+            # One uniform draw serves the generation: crossover (N x D), the crossover's forced coordinate,
+            # the strategy choice, the CR adaptation (3 x N) and the index sampling (2 x N).
+            u = rng.random((N, D + 6))
+            E = np.empty((N, 5), dtype=np.intp)
+            E[:, :4] = permutation_indices(u[:, c_perm], u[: N - 1, c_offsets], 4)
             E[:, 4] = best
             strategy = np.searchsorted(cum_probs, u[:, c_strategy], side="right")
             F_mean = mean_scale_factor(g, iter_max, F_min, F_max, n_iter)
             F = scale_factors(rank_scale_factors(ev.cost, alpha, table), F_mean)
             CR_trial = adapt_crossover_rates(CR, u[:, c_tau], u[:, c_cr], tau, CR_low)
             V = isade_donors(X, F, E, strategy)
-            U = binomial_crossover(X, V, CR_trial, u[:, N:N + D], (u[:, c_jrand] * D).astype(np.intp))
+            U = binomial_crossover(X, V, CR_trial, u[:, :D], (u[:, c_jrand] * D).astype(np.intp))
             U = enforce_bounds(U, problem, rng, bound_handling)
             ev_u = problem.evaluate(U)
             won = ev_u.cost < ev.cost  # strict improvement counts as a strategy success
