@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
@@ -219,7 +220,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="master seed of every random choice (default 0)")
     p.add_argument("--out", default="reproduction", help="output directory; each paper writes OUT/<id>/")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--jobs", type=int, default=1, help="worker processes for independent parts (same numbers)")
+    p.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
+                   help="worker processes for independent parts; same numbers for any value (default: 2 if available)")
     p.add_argument("--html", metavar="PATH", help="save the paper's animation (002: Pro-ISADE spiral) as HTML")
     p.add_argument("--view", action="store_true", help="play the paper's animation in meshcat until Ctrl-C")
     p.set_defaults(func=_cmd_reproduce)
