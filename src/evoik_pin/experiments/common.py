@@ -135,6 +135,21 @@ def _cpu_model() -> str:
     return platform.processor() or platform.machine()
 
 
+def _git_commit() -> str | None:
+    """Commit of the evoik_pin checkout (with ``+dirty`` for uncommitted changes), or None outside git."""
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=here, capture_output=True, text=True,
+                              timeout=5, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here,
+                               capture_output=True, text=True, timeout=5, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return head + ("+dirty" if dirty else "") if head else None
+
+
 def machine_info() -> dict[str, Any]:
     """Facts about the machine and software a run used (for the report header and results.json)."""
     import matplotlib
@@ -147,6 +162,7 @@ def machine_info() -> dict[str, Any]:
     except (OSError, AttributeError):  # pragma: no cover - not on Linux/macOS
         load = None
     return {
+        "git_commit": _git_commit(),
         "cpu": _cpu_model(),
         "cores": os.cpu_count(),
         "load_average_at_start": load,

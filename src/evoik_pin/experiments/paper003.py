@@ -9,7 +9,8 @@ front member with the best S is kept. Fig. 2 draws the configurations along the 
 K = 100: with the larger gain the vehicle moves less between consecutive points. The paper gives no link
 lengths, bounds, path, generation count or numbers.
 
-What we run (``run(ctx)``), every random choice from ``ctx.rng``:
+What we run (``run(ctx)``), every random choice derived from the master seed and the part's labels
+(``derive_rng``, as ``ctx.rng``), so ``--jobs`` changes the speed, not the numbers:
 
 * ``vehicle_arm`` (our lengths l1, l2, l3 = 0.5, 0.4, 0.25 m; vehicle x, y in +-3 m; arm joints +-180 deg);
 * the path (our choice, stated in the settings): a vertical "hull" line x = 1.0 m, y = 0 to 1.2 m in
@@ -32,7 +33,8 @@ import numpy as np
 from ..api import solve_trajectory
 from ..problem import Target
 from ..robot import load_robot
-from .common import Animation, PaperReport, RunContext, Table
+from .common import Animation, PaperReport, RunContext, Table, derive_rng
+from .paper000 import run_parts
 
 PAPER_ID = "003"
 TITLE = "Inverse kinematic multiobjective optimization for a vehicle-arm robot system using evolutionary algorithms"
@@ -95,6 +97,17 @@ def _trajectory_stats(Q: np.ndarray, q_start: np.ndarray) -> dict:
     return {"vehicle_steps": veh, "vehicle_total": float(veh.sum()), "arm_steps": arm, "arm_total": float(arm.sum())}
 
 
+def _part(spec: dict) -> list:
+    """One trajectory for one gain K (a top-level job for ``run_parts``): the Result of every point."""
+    K, cfg = spec["K"], spec["cfg"]
+    targets = [Target.planar_target(x, y, 0.0) for x, y in spec["path"]]
+    return solve_trajectory(load_robot(ROBOT), targets, method="nsga2", q0=spec["q_start"],
+                            seed=derive_rng(spec["seed"], "003", f"K={K:g}", str(spec["i"])),
+                            gains=[K, K, 1.0, 1.0, 1.0], population=cfg["population"],
+                            max_generations=cfg["max_generations"], repair_steps=cfg["repair_steps"],
+                            tolerance=cfg["tolerance_m"], rotation_tolerance=cfg["rotation_tolerance_rad"])
+
+
 # --------------------------------------------------------------------------------------------------
 # the experiment
 
@@ -110,16 +123,13 @@ def run(ctx: RunContext) -> PaperReport:
     if check > 1e-9:
         raise RuntimeError(f"LINKS {LINKS} do not match the {ROBOT} URDF (tip differs by {check:.3g} m)")
     P = path_points(s["path"]["points"])
-    targets = [Target.planar_target(x, y, 0.0) for x, y in P]
     cfg = s["nsga2"]
 
     runs: dict[float, list[dict]] = {}
-    jobs = [(K, i) for K in GAINS for i in range(s["runs_per_gain"])]
-    for K, i in ctx.bar(jobs, desc="003 trajectories (K x runs)"):
-        res = solve_trajectory(robot, targets, method="nsga2", q0=q_start, seed=ctx.rng("003", f"K={K:g}", str(i)),
-                               gains=[K, K, 1.0, 1.0, 1.0], population=cfg["population"],
-                               max_generations=cfg["max_generations"], repair_steps=cfg["repair_steps"],
-                               tolerance=cfg["tolerance_m"], rotation_tolerance=cfg["rotation_tolerance_rad"])
+    s["jobs"] = int(getattr(ctx, "jobs", 1) or 1)
+    specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": cfg}
+             for K in GAINS for i in range(s["runs_per_gain"])]
+    for spec, res in zip(specs, run_parts(ctx, _part, specs, "003 trajectories (K x runs)"), strict=True):
         Q = np.array([r.q for r in res])
         entry = {"results": res, "Q": Q, **_trajectory_stats(Q, q_start),
                  "position_error": np.array([r.position_error for r in res]),
@@ -127,7 +137,7 @@ def run(ctx: RunContext) -> PaperReport:
                  "feasible": all(r.success for r in res),
                  "manipulability": np.array([robot.manipulability(q, rows="planar") for q in Q]),
                  "time": float(sum(r.time_s for r in res))}
-        runs.setdefault(K, []).append(entry)
+        runs.setdefault(spec["K"], []).append(entry)
 
     # -- tables ------------------------------------------------------------------------------------------
     mean_step = {K: float(np.mean([e["vehicle_steps"][1:].mean() for e in runs[K]])) for K in GAINS}
