@@ -191,7 +191,7 @@ def test_de_reaches_a_pose_target_on_aerial6r():
     robot = ek.load_robot("aerial6r")
     target = _reachable(robot, 8)
     # paper 004's DE for this arm: DE/rand/1/bin, F = 0.9, CR = 0.95 (exploratory; DE/best/1 stalls in local
-    # minima of 6-D pose targets); 12 of 12 other targets in trials
+    # minima of 6-D pose targets); 20 of 20 other targets in single runs (docs/BENCHMARKS.md)
     res = ek.solve(robot, target, method="de", seed=1, tolerance=1e-6, population=40, strategy="rand1bin", F=0.9,
                    CR=0.95, max_generations=1000)
     assert res.success, res

@@ -518,10 +518,12 @@ def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int) -> list[str]:
         edge = np.mean([(d.max(axis=1) > np.degrees(DEFAULT_PRO_DELTA) - 0.01).mean() for d in pro.values()])
         notes.append(
             f"Why the Pro- box loses the spiral: the spiral turns {azimuth:.1f} deg about the base axis per point, "
-            f"{azimuth / np.degrees(DEFAULT_PRO_DELTA):.1f} times the box half-width pi/100 = 1.8 deg. In the Pro- "
-            f"runs q1 turns {dq1:.2f} deg per point on average and {edge:.0%} of the steps have some joint at the edge "
-            "of its box: the other joints make up the difference until they reach their limits. With a = 0 nothing "
-            "anchors the 4 redundant directions either, so the solutions drift inside the box.")
+            f"{azimuth / np.degrees(DEFAULT_PRO_DELTA):.1f} times the box half-width pi/100 = 1.8 deg, so q1 alone "
+            f"cannot follow it (it turns {dq1:.2f} deg per point on average in the Pro- runs) and the other joints "
+            "must make up the difference. With a = 0 nothing keeps the 4 redundant directions away from the joint "
+            f"limits: the solutions drift inside the box ({edge:.0%} of the steps have some joint at the edge of its "
+            "box) until a joint reaches its limit and the box no longer contains a solution. How long the track "
+            "lasts depends on that drift, i.e. on the variant.")
         notes.append(
             "Pro- variants lose the track where the box previous +- pi/100 contains no solution (checked by bounded "
             "least squares inside the box): typically a joint sits at its limit or the step needs more than pi/100 "

@@ -269,8 +269,8 @@ def run(ctx: RunContext) -> PaperReport:
         "0.7); inside the library this is RPYPoseError(sigma = 30 per m, epsilon = 0.7). The paper's J column does "
         "not follow from its own reached poses either (e.g. test 1: its pose is 0.07 cm and 15 deg off, which gives "
         "J = 0.2, not 4.6).",
-        "Times: the paper's are from its own machine and code (LabVIEW/MATLAB-class); compare ratios between budgets, "
-        "not absolute values. Ours are single-threaded NumPy on the machine listed above.",
+        "Times: the paper does not state its machine or language; compare ratios between budgets, not absolute "
+        "values. Ours are single-threaded NumPy on the machine listed above.",
     ]
     report.data = {
         "paper_target_position_out_of_reach_cm": pos_gap_cm,
