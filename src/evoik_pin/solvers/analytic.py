@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from ..errors import MethodError, OptionError, TargetError
 from ..problem import IKProblem
@@ -279,6 +278,8 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
 
         phi = float(phis[g])
         if err[b, g] > 1e-12:
+            from scipy.optimize import minimize_scalar  # lazy: scipy.optimize costs ~0.4 s to import
+
             ref = minimize_scalar(err_at, bounds=(phi - phi_step, phi + phi_step), method="bounded",
                                   options={"xatol": 1e-10})
             if ref.fun < err[b, g]:

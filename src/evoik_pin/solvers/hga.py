@@ -14,7 +14,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..errors import OptionError
 from ..problem import IKProblem
@@ -51,6 +50,8 @@ def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 
     q = np.clip(np.asarray(q, float), lo, hi)
     step = np.where(q + simplex_size <= hi, simplex_size, -simplex_size)
     simplex = np.vstack([q, q + np.diag(step)])
+    from scipy.optimize import minimize  # lazy: importing scipy.optimize costs ~0.4 s
+
     res = minimize(lambda x: float(problem.cost(x[None])[0]), q, method="Nelder-Mead",
                    bounds=list(zip(lo, hi, strict=True)),
                    options={"initial_simplex": np.clip(simplex, lo, hi), "xatol": xatol, "fatol": fatol,

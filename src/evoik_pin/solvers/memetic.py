@@ -35,8 +35,6 @@ import time
 import weakref
 
 import numpy as np
-from scipy.spatial import cKDTree
-from scipy.stats import qmc
 
 from ..errors import OptionError
 from ..objectives import (
@@ -74,13 +72,15 @@ class SeedTable:
 
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
+        from scipy.stats import qmc  # lazy: scipy.stats costs ~0.4 s to import, paid on first table only
+
         u = qmc.Halton(robot.n, scramble=False).random(size + 1)[1:]
         self.Q = lower + u * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        self._trees: dict[str, cKDTree] = {}
+        self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
 
     def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
         """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
@@ -138,6 +138,8 @@ class SeedTable:
         key, f = self.target_features(targets)
         tree = self._trees.get(key)
         if tree is None:
+            from scipy.spatial import cKDTree
+
             tree = self._trees[key] = cKDTree(self._table_features(key)[0])
         k = min(k, tree.n)
         _, idx = tree.query(f, k=k)
