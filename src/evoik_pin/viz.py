@@ -38,7 +38,6 @@ Example::
 from __future__ import annotations
 
 import base64
-import contextlib
 import functools
 import os
 import re
@@ -55,7 +54,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import ConfigurationError, TargetError, ViewerError
-from .robot import Robot, example_robot_data_dir
+from .robot import Robot
 
 __all__ = ["GHOST_COLORS", "Viewer", "html_commands", "skeleton_model"]
 
@@ -324,12 +323,6 @@ def _reach(robot: Robot) -> float:
 
 def _visual_model(robot: Robot) -> tuple[pin.GeometryModel | None, str]:
     """(robot.visual_model or None, reason it is unusable)."""
-    # example-robot-data URDFs name meshes package://example-robot-data/robots/...: the directory that
-    # holds "example-robot-data" must be a package dir (load_robot only adds .../example-robot-data/robots).
-    with contextlib.suppress(Exception):
-        share = str(example_robot_data_dir().parents[1])
-        if share not in robot.package_dirs:
-            robot.package_dirs.append(share)
     try:
         geom = robot.visual_model
     except (ValueError, RuntimeError, OSError) as exc:
