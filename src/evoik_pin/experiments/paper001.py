@@ -401,12 +401,12 @@ def _fig_population_puma(ctx, hist, ref, cfg):
     import matplotlib.pyplot as plt
 
     gens = [0, cfg["max_generations"]]
-    fig = plt.figure(figsize=(11, 4.5))
+    fig = plt.figure(figsize=(10, 4.2))
     R = np.degrees(np.array(ref))
     for k, (g, num) in enumerate(zip(gens, (10, 11), strict=True)):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         Q = np.degrees(hist.get(g, np.empty((0, 3))))
-        ax.scatter(Q[:, 0], Q[:, 1], Q[:, 2], s=2, alpha=0.4, label="population members")
+        ax.scatter(Q[:, 0], Q[:, 1], Q[:, 2], s=2, c="tab:blue", linewidths=0, label="population members")
         ax.scatter(R[:, 0], R[:, 1], R[:, 2], s=60, c="tab:red", marker="o", label="closed-form solutions")
         ax.set_xlabel("q1 (deg)")
         ax.set_ylabel("q2 (deg)")

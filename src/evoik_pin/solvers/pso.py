@@ -88,6 +88,7 @@ def pso(
     c2: float = 1.5,
     velocity_clamp: float = 0.2,
     topology: str = "global",
+    reinit_stagnant: int | None = None,
     bound_handling: str = "clip",
     runs: int = 10,
     callback: Callable | None = None,
@@ -107,6 +108,9 @@ def pso(
         topology: ``global`` (paper 002: every particle follows the swarm's best g) or ``ring`` (lbest: each
             particle follows the best personal best among itself and its two ring neighbours, which
             slows the swarm's collapse on multimodal problems such as 6-D pose targets).
+        reinit_stagnant: when given, a particle whose personal best has not improved for this many iterations
+            is re-initialised (position uniform in the box, velocity uniform in the clamp, personal best
+            reset to the new position); the particle holding the swarm's best is never re-initialised.
         bound_handling: ``clip`` (particles stop at the violated bound and lose that velocity component),
             ``reflect`` or ``resample`` (see ``common.enforce_bounds``; velocities unchanged).
         runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
@@ -134,6 +138,8 @@ def pso(
         raise OptionError(f"topology {topology!r} is not one of {TOPOLOGIES}")
     check_callback(callback)
     check_positive_int("runs", runs)
+    if reinit_stagnant is not None:
+        reinit_stagnant = check_positive_int("reinit_stagnant", reinit_stagnant)
     SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
 
     def once() -> Result:
@@ -146,6 +152,7 @@ def pso(
         V = rng.uniform(-v_max, v_max, size=(N, D))
         ev = problem.evaluate(X)
         P, p_cost = X.copy(), ev.cost.copy()
+        stagnant = np.zeros(N, dtype=int)  # iterations since each personal best last improved
         run.record(X, ev, w=w_start)
         g_best = run.best_q
         reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
@@ -158,8 +165,18 @@ def pso(
             X = enforce_bounds(X_new, problem, rng, bound_handling)
             if bound_handling == "clip":
                 V = np.where(X == X_new, V, 0.0)  # absorbing walls: a particle stopped at a bound loses that speed
+            if reinit_stagnant is not None:
+                reset = stagnant >= reinit_stagnant
+                reset[p_cost.argmin()] = False  # the particle holding the swarm's best keeps it
+                if reset.any():
+                    k = int(reset.sum())
+                    X[reset] = rng.uniform(problem.lower, problem.upper, size=(k, D))
+                    V[reset] = rng.uniform(-v_max[None, :], v_max[None, :], size=(k, D))
             ev = problem.evaluate(X)
             improved = ev.cost < p_cost
+            if reinit_stagnant is not None:
+                improved |= reset  # a re-initialised particle's personal best restarts at its new position
+                stagnant = np.where(improved, 0, stagnant + 1)
             P = np.where(improved[:, None], X, P)
             p_cost = np.where(improved, ev.cost, p_cost)
             run.generation = it
