@@ -42,21 +42,29 @@ def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 
                        fatol: float = 1e-13, max_evaluations: int = 2000) -> np.ndarray:
     """Nelder-Mead from ``q`` (n,) on the problem's cost, inside the search box; returns the polished q.
 
+    Revolute joints whose box spans a full turn are searched unbounded and wrapped back into the box.
+
     The initial simplex is ``q`` plus ``simplex_size`` (rad or m) along each joint axis, stepping inwards
     at an upper bound, so it spans the GA's niche rather than scipy's default 5 % of |q|, which collapses
     for joints near zero. Evaluations count towards ``problem.evaluations``.
     """
     lo, hi = problem.lower, problem.upper
     q = np.clip(np.asarray(q, float), lo, hi)
-    step = np.where(q + simplex_size <= hi, simplex_size, -simplex_size)
+    # A revolute joint whose box is a full turn has no real bound: -pi and +pi are the same angle. Leave it
+    # unbounded for the simplex (a solution at -170 deg reached from +179 deg must not stop on +180) and
+    # wrap the result back into the box.
+    full_turn = problem.robot.revolute & (hi - lo >= 2 * np.pi - 1e-9)
+    step = np.where(full_turn | (q + simplex_size <= hi), simplex_size, -simplex_size)
     simplex = np.vstack([q, q + np.diag(step)])
+    simplex = np.where(full_turn, simplex, np.clip(simplex, lo, hi))
+    bounds = [(None, None) if f else (a, b) for f, a, b in zip(full_turn, lo, hi, strict=True)]
     from scipy.optimize import minimize  # lazy: importing scipy.optimize costs ~0.4 s
 
-    res = minimize(lambda x: float(problem.cost(x[None])[0]), q, method="Nelder-Mead",
-                   bounds=list(zip(lo, hi, strict=True)),
-                   options={"initial_simplex": np.clip(simplex, lo, hi), "xatol": xatol, "fatol": fatol,
+    res = minimize(lambda x: float(problem.cost(x[None])[0]), q, method="Nelder-Mead", bounds=bounds,
+                   options={"initial_simplex": simplex, "xatol": xatol, "fatol": fatol,
                             "maxfev": max_evaluations, "adaptive": False})
-    return np.clip(res.x, lo, hi)
+    x = np.where(full_turn, lo + np.mod(res.x - lo, 2 * np.pi), res.x)
+    return np.clip(x, lo, hi)
 
 
 @register("hga", "paper 001: niching GA + Nelder-Mead polish of every niche; all distinct IK solutions",
