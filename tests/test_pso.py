@@ -49,17 +49,34 @@ def test_pso_reaches_position_targets(name):
 
 
 def test_pso_on_a_pose_target_of_aerial6r_reports_what_it_reached():
-    # Measured (docs/BENCHMARKS.md): paper 002's gbest PSO stalls on 6-D pose targets of aerial6r (the swarm
-    # collapses on the exact-orientation manifold, mm to cm from the target), so no success is asserted here:
-    # only that it improves and reports its result consistently.
+    # Measured (docs/BENCHMARKS.md): paper 002's PSO is not reliable on 6-D pose targets of aerial6r. The pose
+    # objective (m + orientation_weight x rad) is a sum of two norms; the swarm collapses onto the manifold where
+    # one of them is zero (exact orientation at weight 1, exact position at 0.1) mm to cm from the target. Best
+    # found: 13 of 20 targets (N 40, orientation weight 0.1-0.15, runs 10); population, topology, inertia,
+    # re-initialisation and bound handling did not raise that. So no success is asserted here, only that it
+    # improves and reports its result consistently.
     robot = ek.load_robot("aerial6r")
     res = ek.solve(robot, _reachable(robot, 10), method="pso", seed=2, tolerance=1e-6, runs=1)
-    h = res.history["best_cost"]
-    assert h[-1] < h[0] and np.all(np.diff(h) <= 0)
+    h = res.history
+    assert h["best_cost"][-1] < h["best_cost"][0] and np.all(np.diff(h["best_cost"]) <= 0)
     assert robot.within_bounds(res.q)
     assert res.success == (res.position_error <= 1e-6 and res.orientation_error <= 1e-6)
     if not res.success:
         assert "exceeds the tolerance" in res.message
+
+
+def test_reinit_stagnant_restarts_particles_and_keeps_the_best():
+    robot = ek.load_robot("ax18")
+    target = _reachable(robot, 12).translation
+    res = ek.solve(robot, target, method="pso", seed=4, tolerance=1e-8, reinit_stagnant=3, runs=1,
+                   max_generations=200)
+    again = ek.solve(robot, target, method="pso", seed=4, tolerance=1e-8, reinit_stagnant=3, runs=1,
+                     max_generations=200)
+    assert np.array_equal(res.q, again.q) and robot.within_bounds(res.q)
+    assert np.all(np.diff(res.history["best_cost"]) <= 0)
+    plain = ek.solve(robot, target, method="pso", seed=4, tolerance=0.0, runs=1, max_generations=res.generations)
+    # late in the run re-drawn particles keep the swarm spread out, where the plain swarm has collapsed
+    assert res.history["diversity"][-1] > plain.history["diversity"][-1]
 
 
 @pytest.mark.parametrize("bound_handling", ["clip", "reflect", "resample"])
@@ -94,6 +111,7 @@ def test_same_seed_same_result_and_ring_topology():
     (dict(velocity_clamp=0.0), "velocity_clamp"),
     (dict(velocity_clamp="fast"), "velocity_clamp"),
     (dict(topology="star"), "topology"),
+    (dict(reinit_stagnant=0), "reinit_stagnant"),
     (dict(bound_handling="none"), "bound_handling"),
     (dict(runs=-2), "runs"),
 ])

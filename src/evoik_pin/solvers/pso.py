@@ -107,10 +107,11 @@ def pso(
         velocity_clamp: velocity limit as a fraction of each joint's search range, in (0, 1].
         topology: ``global`` (paper 002: every particle follows the swarm's best g) or ``ring`` (lbest: each
             particle follows the best personal best among itself and its two ring neighbours, which
-            slows the swarm's collapse on multimodal problems such as 6-D pose targets).
+            slows the swarm's collapse; it did not help on 6-D pose targets, docs/BENCHMARKS.md).
         reinit_stagnant: when given, a particle whose personal best has not improved for this many iterations
             is re-initialised (position uniform in the box, velocity uniform in the clamp, personal best
-            reset to the new position); the particle holding the swarm's best is never re-initialised.
+            reset to the new position); the particle with the best personal best is never re-initialised.
+            Default off (it did not help on 6-D pose targets either, docs/BENCHMARKS.md).
         bound_handling: ``clip`` (particles stop at the violated bound and lose that velocity component),
             ``reflect`` or ``resample`` (see ``common.enforce_bounds``; velocities unchanged).
         runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
