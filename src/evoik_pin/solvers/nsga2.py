@@ -287,8 +287,8 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
     :func:`survival` keeps N (constraint domination, fronts in order, the last one cut by crowding).
     With ``eliminate_duplicates`` (as pymoo does), an offspring equal to a parent or to another offspring
     (mostly parents copied when neither crossover nor mutation changed them) is bred again, for at most
-    10 rounds, before anything is evaluated: each generation still costs exactly N evaluations, and none
-    is spent on a point the population already holds.
+    10 rounds, before anything is evaluated: each generation still costs exactly N evaluations, and
+    (unless 10 rounds do not suffice, when the last copies are kept) none is spent on a known point.
 
     Args:
         f: vectorized ``f(X)`` for a population X (N, n): objectives (N, n_obj), or a pair
