@@ -373,3 +373,32 @@ def test_unchecked_kinematics_equal_the_checked_ones(robots, name):
         assert np.abs(robot.jacobian_local_unchecked(q) - robot.jacobian(q, "local")).max() < 1e-12
         assert np.abs(P[i] - T.translation).max() < 1e-12 and np.abs(R[i] - T.rotation).max() < 1e-12
         assert np.abs(J[i] - robot.jacobian(q, "world")).max() < 1e-12
+
+
+def test_geodesic_acceleration_vanishes_on_a_linear_error_and_is_refused_when_too_large(robots):
+    robot = robots["panda"]
+    rng = np.random.default_rng(41)
+    q, qt = robot.random_configurations(2, rng)
+    lm = LevenbergMarquardt(IKProblem(robot, robot.fk(qt)))
+    e, extra, _, _ = lm.residual(robot.fk_unchecked(q))
+    E = lm.task_jacobian(q, extra)
+    v = 0.01 * rng.standard_normal(robot.n)
+    # e(q + h v) exactly on the tangent line: no curvature, no acceleration
+    (a,) = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], (e + 0.1 * E @ v)[None])
+    assert a is not None and np.abs(a).max() < 1e-9
+    # the real error bends: a small correction, accepted and finite
+    (a,) = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], lm.residual(robot.fk_unchecked(q + 0.1 * v))[0][None])
+    assert a is None or (np.isfinite(a).all() and np.linalg.norm(a) <= 0.375 * np.linalg.norm(v) + 1e-15)
+    # a curvature far beyond the step's length is not trusted
+    (a,) = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], (e + 0.1 * E @ v + 1.0)[None])
+    assert a is None
+    # batched form (K configurations, E E^T computed inside) agrees with the single one
+    Q = np.stack([q, q])
+    eh = lm.residual(robot.fk_unchecked(q + 0.1 * v))[0]
+    single = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], eh[None])[0]
+    both = lm._geodesic(Q, np.stack([e, e]), np.stack([E, E]), None, np.array([1e-6, 1e-6]), np.stack([v, v]),
+                        np.stack([eh, eh]))
+    for b in both:
+        assert (b is None) == (single is None)
+        if b is not None:
+            np.testing.assert_allclose(b, single, atol=1e-12)

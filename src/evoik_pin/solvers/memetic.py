@@ -344,13 +344,13 @@ def memetic(
     n_gen = 0
     restarts = 0
     solved = False
-    # Stage 1: warm start.
-    # The single runs of stages 1-2 get half the steps: a start in the basin of a solution converges in
-    # about 5-10; one that needs more is usually held by a limit, and the lockstep runs take over.
-    quick = max(1, iterations // 2)
+    # Stage 1: warm start. Every single run gets the full step budget: a start in the basin of a solution
+    # converges in about 5-10 steps, one held by a limit or a local minimum is dropped by LM's stall test
+    # within a few, and one still gaining after 15 is mostly creeping towards a near-singular solution
+    # (LM's geodesic acceleration), cheaper to finish than to replace by 8 lockstep runs.
     if problem.q0 is not None:
         stage = "q0"
-        solved = search.polish(problem.q0, quick)
+        solved = search.polish(problem.q0)
     # Stage 2: the seed table; building it (once per robot and box) does not count against the budget.
     if not solved and table_size > 0 and table_seeds > 0 and not search.out_of_time():
         stage = "seed table"
@@ -362,7 +362,7 @@ def memetic(
         if table_offset:
             ranked = iter(list(ranked)[table_offset:])
         first = next(ranked, None)
-        solved = first is not None and search.polish(table.Q[first], quick)
+        solved = first is not None and search.polish(table.Q[first])
         if not solved and not search.out_of_time():
             rest = list(ranked)
             for s in range(0, len(rest), batch):
