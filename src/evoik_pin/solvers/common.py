@@ -11,8 +11,8 @@ from ..errors import OptionError
 from ..problem import Evaluation, IKProblem
 from ..result import Result
 
-__all__ = ["BOUND_HANDLING", "SolverRun", "check_positive_int", "diversity", "enforce_bounds", "initial_population",
-           "run_with_restarts"]
+__all__ = ["BOUND_HANDLING", "SolverRun", "check_positive", "check_positive_int", "diversity", "enforce_bounds",
+           "initial_population", "run_with_restarts"]
 
 #: Accepted ``bound_handling`` option values.
 BOUND_HANDLING = ("clip", "reflect", "resample")
@@ -23,6 +23,20 @@ def check_positive_int(name: str, value, minimum: int = 1) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise OptionError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
+
+
+def check_positive(name: str, value, upper: float = np.inf) -> float:
+    """``value`` as a finite float in (0, upper], or an OptionError naming the option."""
+    if isinstance(value, bool):
+        raise OptionError(f"{name} must be a number > 0, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be a number > 0, got {value!r}") from None
+    if not (np.isfinite(v) and 0 < v <= upper):
+        bound = "" if upper == np.inf else f" and <= {upper:g}"
+        raise OptionError(f"{name} must be a finite number > 0{bound}, got {value!r}")
+    return v
 
 
 def check_fraction(name: str, value, low: float = 0.0, high: float = 1.0) -> float:

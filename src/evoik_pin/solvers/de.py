@@ -20,6 +20,7 @@ from .common import (
     BOUND_HANDLING,
     SolverRun,
     check_fraction,
+    check_positive,
     check_positive_int,
     enforce_bounds,
     initial_population,
@@ -72,16 +73,6 @@ def _mutation_name(mutation) -> str:
     if key not in DE_MUTATIONS:
         raise OptionError(f"unknown mutation {mutation!r}; accepted: {', '.join(DE_MUTATIONS)} or 1-8")
     return key
-
-
-def _check_positive(name: str, value, upper: float = np.inf) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be a number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and 0 < v <= upper):
-        raise OptionError(f"{name} must be a finite number in (0, {upper:g}], got {value!r}")
-    return v
 
 
 def check_callback(callback) -> Callable | None:
@@ -158,10 +149,10 @@ def de(
         raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
     k = MUTATIONS.get(scheme, 3)
     N = check_positive_int("population", population, k + 1)
-    F = _check_positive("F", F, 2.0)
+    F = check_positive("F", F, 2.0)
     CR = check_fraction("CR", CR)
     p_F = check_fraction("p_F", p_F)
-    K = 0.5 * (F + 1.0) if K is None else _check_positive("K", K, 2.0)
+    K = 0.5 * (F + 1.0) if K is None else check_positive("K", K, 2.0)
     trig_probability = check_fraction("trig_probability", trig_probability)
     check_callback(callback)
     check_positive_int("runs", runs)

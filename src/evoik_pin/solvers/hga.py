@@ -15,27 +15,16 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import OptionError
 from ..problem import IKProblem
 from ..result import Result
 from . import register
 from .analytic import solution_results
 from .clustering import leader_clusters
-from .common import check_positive_int
+from .common import check_positive, check_positive_int
 from .de import check_callback
 from .ga import _check_ga_options, run_niching_ga, solution_leaders
 
 __all__ = ["nelder_mead_polish"]
-
-
-def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be a number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and v > 0):
-        raise OptionError(f"{name} must be a number > 0, got {value!r}")
-    return v
 
 
 def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 0.05, xatol: float = 1e-10,
@@ -97,7 +86,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         problem, population, max_generations, niches, niche_size, eta, crossover_probability)
     max_starts = check_positive_int("max_starts", max_starts)
     max_polish_evaluations = check_positive_int("max_polish_evaluations", max_polish_evaluations)
-    simplex_size, xatol, fatol, solution_radius = (_positive(k, v) for k, v in (
+    simplex_size, xatol, fatol, solution_radius = (check_positive(k, v) for k, v in (
         ("simplex_size", simplex_size), ("xatol", xatol), ("fatol", fatol), ("solution_radius", solution_radius)))
     check_callback(callback)
     archive: list = []

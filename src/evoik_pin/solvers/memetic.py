@@ -30,7 +30,6 @@ budget is not what stops them (every reachable target in practice); ``timeout=No
 
 from __future__ import annotations
 
-import math
 import time
 import weakref
 
@@ -48,7 +47,7 @@ from ..objectives import (
 from ..problem import IKProblem, Target
 from ..result import Result
 from . import register
-from .common import check_positive_int, diversity
+from .common import check_positive, check_positive_int, diversity
 from .de_ops import binomial_crossover, distinct_indices, mutate
 from .polish import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, wrapping_joints
 
@@ -174,17 +173,7 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
 
 # ---------------------------------------------------------------------- option checks
 def _check_timeout(timeout) -> float | None:
-    if timeout is None:
-        return None
-    if isinstance(timeout, bool):
-        raise OptionError(f"timeout must be a number of seconds > 0 or None, got {timeout!r}")
-    try:
-        t = float(timeout)
-    except (TypeError, ValueError):
-        raise OptionError(f"timeout must be a number of seconds > 0 or None, got {timeout!r}") from None
-    if not (math.isfinite(t) and t > 0):
-        raise OptionError(f"timeout must be a finite number of seconds > 0 (or None), got {timeout!r}")
-    return t
+    return None if timeout is None else check_positive("timeout (s; or None)", timeout)
 
 
 def _check_restarts(max_restarts) -> int | None:
