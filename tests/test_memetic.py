@@ -242,8 +242,6 @@ def test_polish_result_reaches_the_tolerance_and_keeps_the_history(robots):
 
 
 def test_polish_true_on_a_paper_solver(robots):
-    if "de" not in ev.methods():
-        pytest.skip("the de solver is not available")
     robot = robots["redundant7r"]
     p = robot.fk(robot.random_configurations(1, np.random.default_rng(1))[0]).translation
     plain = ev.solve(robot, p, method="de", seed=5, max_generations=5)
