@@ -4,7 +4,6 @@ by name with :func:`register`. ``evoik_pin.methods()`` lists them."""
 from __future__ import annotations
 
 import importlib
-import importlib.util
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -70,8 +69,7 @@ def _load_all() -> None:
     if _loaded:
         return
     for mod in _MODULES:
-        if importlib.util.find_spec(f"{__name__}.{mod}") is not None:
-            importlib.import_module(f"{__name__}.{mod}")
+        importlib.import_module(f"{__name__}.{mod}")
     _loaded = True
 
 
