@@ -69,3 +69,22 @@ def test_solve_bad_input_is_a_clear_error(capsys):
     assert "population" in capsys.readouterr().err
     assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--method", "isade", "--tolerance", "-1"]) == 2
     assert "tolerance" in capsys.readouterr().err
+
+
+def test_solve_html_writes_the_solution_and_target_scene(tmp_path, capsys):
+    """`evoik solve --html` (issue 6): the exported page holds the robot and the target triad."""
+    from evoik_pin.viz import html_commands
+
+    out = tmp_path / "solution.html"
+    assert main(["solve", "aerial6r", "--xyz", "0.1", "-0.2", "0.3", "--rpy", "0", "10", "15", "--method", "memetic",
+                 "--html", str(out)]) in (0, 1)
+    assert f"wrote {out}" in capsys.readouterr().err
+    paths = {c.get("path", "") for c in html_commands(out.read_text())}
+    assert any(p.startswith("/meshcat/robot") for p in paths)
+    assert any(p.startswith("/meshcat/target") for p in paths)
+
+
+def test_solve_html_to_a_missing_directory_fails_before_solving(tmp_path, capsys):
+    assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--html", str(tmp_path / "no" / "x.html")]) == 2
+    err = capsys.readouterr()
+    assert "does not exist" in err.err and "position error" not in err.out

@@ -79,9 +79,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     import pinocchio as pin
 
     from .api import DEFAULT_METHOD, solve
+    from .experiments.common import check_output_file
     from .problem import Target
 
     robot = _load(args)
+    html = check_output_file(args.html) if args.html else None  # before any work starts
     position = np.asarray(args.xyz, dtype=float)
     target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
     options: dict = {}
@@ -118,9 +120,30 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     }
     if args.json:
         print(json.dumps(info, indent=2))
-        return 0 if res.success else 1
-    unit = "rad" if args.rad else "deg"
-    shown = res.q if args.rad else np.degrees(res.q)
+    else:
+        _print_solution(robot, res, info, args.rad)
+    if html is not None or args.view:
+        _view_solution(robot, res, Target.coerce(target), html, args.view)
+    return 0 if res.success else 1
+
+
+def _view_solution(robot, res, target, html, view: bool) -> None:
+    """Show a solve's answer and its target in meshcat; write ``html`` and/or serve until Ctrl-C."""
+    from .viz import Viewer
+
+    with Viewer(robot) as viewer:
+        viewer.show(res)
+        viewer.show_target(target.position, target.rotation)
+        if html is not None:
+            print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
+        if view:
+            print(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr, flush=True)
+            viewer.block()
+
+
+def _print_solution(robot, res, info: dict, rad: bool) -> None:
+    unit = "rad" if rad else "deg"
+    shown = res.q if rad else np.degrees(res.q)
     print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
           f"{'reached' if res.success else 'NOT reached'} ({res.message})")
     print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in shown))
@@ -130,7 +153,6 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     print(f"generations:          {res.generations}")
     print(f"evaluations:          {res.evaluations}")
     print(f"time:                 {res.time_s * 1e3:.2f} ms")
-    return 0 if res.success else 1
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
@@ -204,6 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-generations", type=int, help="generation budget of population-based solvers")
     p.add_argument("--rad", action="store_true", help="joint values in radians (output and --q0)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
+    p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
