@@ -171,14 +171,10 @@ def test_unknown_strategy_lists_accepted():
 # ---------------------------------------------------------------------------- the solver
 
 
-def _reachable(robot, seed):
-    return robot.fk(robot.random_configurations(1, np.random.default_rng(seed))[0])
-
-
 @pytest.mark.parametrize("name", ["planar2r", "ax18", "redundant7r"])
-def test_de_reaches_position_targets(name):
+def test_de_reaches_position_targets(name, reachable_pose):
     robot = ek.load_robot(name)
-    target = _reachable(robot, 21).translation
+    target = reachable_pose(robot, 21).translation
     res = ek.solve(robot, target, method="de", seed=3, tolerance=1e-8)
     assert res.success, res
     assert res.position_error <= 1e-8
@@ -187,9 +183,9 @@ def test_de_reaches_position_targets(name):
     assert res.method == "de" and res.evaluations > 0 and len(res.history["best_cost"]) == res.generations + 1
 
 
-def test_de_reaches_a_pose_target_on_aerial6r():
+def test_de_reaches_a_pose_target_on_aerial6r(reachable_pose):
     robot = ek.load_robot("aerial6r")
-    target = _reachable(robot, 8)
+    target = reachable_pose(robot, 8)
     # paper 004's DE for this arm: DE/rand/1/bin, F = 0.9, CR = 0.95 (exploratory; DE/best/1 stalls in local
     # minima of 6-D pose targets); 20 of 20 other targets in single runs (docs/BENCHMARKS.md)
     res = ek.solve(robot, target, method="de", seed=1, tolerance=1e-6, population=40, strategy="rand1bin", F=0.9,
@@ -200,9 +196,9 @@ def test_de_reaches_a_pose_target_on_aerial6r():
 
 @pytest.mark.parametrize("strategy", ["rand1bin", "currenttobest1exp", "randtobest1bin", "best2bin",
                                       "rand2exp", "eitherorbin", "trigbin", "currenttobest2bin", "currenttorand1bin"])
-def test_every_strategy_makes_progress(strategy):
+def test_every_strategy_makes_progress(strategy, reachable_pose):
     robot = ek.load_robot("ax18")
-    target = _reachable(robot, 5).translation
+    target = reachable_pose(robot, 5).translation
     res = ek.solve(robot, target, method="de", seed=0, strategy=strategy, tolerance=1e-4, max_generations=300)
     assert res.history["best_cost"][-1] < 0.1 * res.history["best_cost"][0], res
 
@@ -223,9 +219,9 @@ def test_every_generation_stays_in_bounds(bound_handling):
     assert seen == list(range(41))
 
 
-def test_same_seed_same_result():
+def test_same_seed_same_result(reachable_pose):
     robot = ek.load_robot("redundant7r")
-    target = _reachable(robot, 30).translation
+    target = reachable_pose(robot, 30).translation
     a = ek.solve(robot, target, method="de", seed=42, tolerance=1e-9, q0=np.zeros(robot.n))
     b = ek.solve(robot, target, method="de", seed=42, tolerance=1e-9, q0=np.zeros(robot.n))
     c = ek.solve(robot, target, method="de", seed=43, tolerance=1e-9, q0=np.zeros(robot.n))

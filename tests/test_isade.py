@@ -82,35 +82,31 @@ def test_donors_follow_eqs_14_to_16():
     assert np.allclose(V[i], r1 + F[i] * (X[6] - r1) + F[i] * (r2 - r3))
 
 
-def _reachable(robot, seed):
-    return robot.fk(robot.random_configurations(1, np.random.default_rng(seed))[0])
-
-
 @pytest.mark.parametrize("name", ["planar2r", "ax18", "redundant7r"])
-def test_isade_reaches_position_targets(name):
+def test_isade_reaches_position_targets(name, reachable_pose):
     robot = ek.load_robot(name)
-    target = _reachable(robot, 22).translation
+    target = reachable_pose(robot, 22).translation
     res = ek.solve(robot, target, method="isade", seed=5, tolerance=1e-8)
     assert res.success, res
     assert np.linalg.norm(robot.fk(res.q).translation - target) <= 1e-8
     assert robot.within_bounds(res.q)
 
 
-def test_isade_reaches_a_pose_target_on_aerial6r():
+def test_isade_reaches_a_pose_target_on_aerial6r(reachable_pose):
     # 6-D pose targets are multimodal: ISADE's greedy default (small F late) can stall in a local minimum,
     # so a wider, slower-decaying F range and a larger population are used (18 of 20 other targets in single
     # runs, docs/BENCHMARKS.md; the default restarts cover the rest).
     robot = ek.load_robot("aerial6r")
-    target = _reachable(robot, 9)
+    target = reachable_pose(robot, 9)
     res = ek.solve(robot, target, method="isade", seed=1, tolerance=1e-6, population=60, F_max=0.9, F_min=0.3,
                    n_iter=2.0, max_generations=300)
     assert res.success, res
     assert res.position_error <= 1e-6 and res.orientation_error <= 1e-6
 
 
-def test_history_follows_the_schedules():
+def test_history_follows_the_schedules(reachable_pose):
     robot = ek.load_robot("ax18")
-    res = ek.solve(robot, _reachable(robot, 3).translation, method="isade", seed=0, tolerance=0.0,
+    res = ek.solve(robot, reachable_pose(robot, 3).translation, method="isade", seed=0, tolerance=0.0,
                    max_generations=40, F_min=0.1, F_max=0.7, n_iter=2.0, tau=0.2, CR_low=0.5, runs=1)
     h = res.history
     assert res.generations == 40 and len(h["F_mean"]) == 41
@@ -137,9 +133,9 @@ def test_every_generation_stays_in_bounds(bound_handling):
     assert generations == list(range(31)) and res.generations == 30
 
 
-def test_same_seed_same_result():
+def test_same_seed_same_result(reachable_pose):
     robot = ek.load_robot("redundant7r")
-    target = _reachable(robot, 31).translation
+    target = reachable_pose(robot, 31).translation
     a = ek.solve(robot, target, method="isade", seed=8, tolerance=1e-10, q0=np.zeros(robot.n))
     b = ek.solve(robot, target, method="isade", seed=8, tolerance=1e-10, q0=np.zeros(robot.n))
     c = ek.solve(robot, target, method="isade", seed=9, tolerance=1e-10, q0=np.zeros(robot.n))

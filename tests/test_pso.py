@@ -34,21 +34,17 @@ def test_ring_neighbourhood_best():
     assert ring_best(p_cost).tolist() == [1, 1, 3, 3, 3]
 
 
-def _reachable(robot, seed):
-    return robot.fk(robot.random_configurations(1, np.random.default_rng(seed))[0])
-
-
 @pytest.mark.parametrize("name", ["planar2r", "ax18", "redundant7r"])
-def test_pso_reaches_position_targets(name):
+def test_pso_reaches_position_targets(name, reachable_pose):
     robot = ek.load_robot(name)
-    target = _reachable(robot, 23).translation
+    target = reachable_pose(robot, 23).translation
     res = ek.solve(robot, target, method="pso", seed=6, tolerance=1e-8)
     assert res.success, res
     assert np.linalg.norm(robot.fk(res.q).translation - target) <= 1e-8
     assert len(res.history["w"]) == len(res.history["best_cost"])
 
 
-def test_pso_on_a_pose_target_of_aerial6r_reports_what_it_reached():
+def test_pso_on_a_pose_target_of_aerial6r_reports_what_it_reached(reachable_pose):
     # Measured (docs/BENCHMARKS.md): paper 002's PSO is not reliable on 6-D pose targets of aerial6r. The pose
     # objective (m + orientation_weight x rad) is a sum of two norms; the swarm collapses onto the manifold where
     # one of them is zero (exact orientation at weight 1, exact position at 0.1) mm to cm from the target. Best
@@ -56,7 +52,7 @@ def test_pso_on_a_pose_target_of_aerial6r_reports_what_it_reached():
     # re-initialisation and bound handling did not raise that. So no success is asserted here, only that it
     # improves and reports its result consistently.
     robot = ek.load_robot("aerial6r")
-    res = ek.solve(robot, _reachable(robot, 10), method="pso", seed=2, tolerance=1e-6, runs=1)
+    res = ek.solve(robot, reachable_pose(robot, 10), method="pso", seed=2, tolerance=1e-6, runs=1)
     h = res.history
     assert h["best_cost"][-1] < h["best_cost"][0] and np.all(np.diff(h["best_cost"]) <= 0)
     assert robot.within_bounds(res.q)
@@ -65,9 +61,9 @@ def test_pso_on_a_pose_target_of_aerial6r_reports_what_it_reached():
         assert "exceeds the tolerance" in res.message
 
 
-def test_reinit_stagnant_restarts_particles_and_keeps_the_best():
+def test_reinit_stagnant_restarts_particles_and_keeps_the_best(reachable_pose):
     robot = ek.load_robot("ax18")
-    target = _reachable(robot, 12).translation
+    target = reachable_pose(robot, 12).translation
     res = ek.solve(robot, target, method="pso", seed=4, tolerance=1e-8, reinit_stagnant=3, runs=1,
                    max_generations=200)
     again = ek.solve(robot, target, method="pso", seed=4, tolerance=1e-8, reinit_stagnant=3, runs=1,
@@ -94,9 +90,9 @@ def test_every_iteration_stays_in_bounds(bound_handling):
     assert seen == list(range(31))
 
 
-def test_same_seed_same_result_and_ring_topology():
+def test_same_seed_same_result_and_ring_topology(reachable_pose):
     robot = ek.load_robot("ax18")
-    target = _reachable(robot, 12).translation
+    target = reachable_pose(robot, 12).translation
     a = ek.solve(robot, target, method="pso", seed=3, tolerance=1e-8)
     b = ek.solve(robot, target, method="pso", seed=3, tolerance=1e-8)
     assert np.array_equal(a.q, b.q) and a.generations == b.generations
