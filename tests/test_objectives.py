@@ -11,6 +11,7 @@ from evoik_pin.objectives import (
     MaxJointDisplacement,
     OrientationError,
     PopulationKinematics,
+    PoseDistance,
     PoseError,
     PositionError,
     RPYPoseError,
@@ -56,6 +57,8 @@ def test_orientation_and_pose_error_match_log3(arm, population, pose_target):
     pose = PoseError(pose_target, position_weight=2.0, orientation_weight=0.25)(population, robot=arm)
     expected_pos = [np.linalg.norm(arm.fk(q).translation - pose_target.position) for q in population]
     assert np.allclose(pose, 2.0 * np.asarray(expected_pos) + 0.25 * np.asarray(expected_rot), atol=1e-10)
+    distance = PoseDistance(pose_target, orientation_weight=0.25)(population, robot=arm)
+    assert np.allclose(distance, np.hypot(expected_pos, 0.25 * np.asarray(expected_rot)), atol=1e-10)
 
 
 def test_rotation_angle_is_accurate_near_zero_and_near_pi(arm):
@@ -152,6 +155,13 @@ def test_default_objective_and_bad_use(arm, population, pose_target):
                        PositionError(position_only)(population, robot=arm))
     assert np.allclose(default_objective(pose_target, 0.5)(population, robot=arm),
                        PoseError(pose_target, 1.0, 0.5)(population, robot=arm))
+    euclidean = default_objective(pose_target, 0.5, "euclidean")
+    assert isinstance(euclidean, PoseDistance) and euclidean.orientation_weight == 0.5
+    assert isinstance(default_objective(position_only, 0.5, "euclidean"), PositionError)
+    with pytest.raises(OptionError, match="pose_metric 'l1' is not one of .*'sum', 'euclidean'"):
+        default_objective(pose_target, 1.0, "l1")
+    with pytest.raises(OptionError, match="rotation"):
+        PoseDistance(position_only)
     with pytest.raises(OptionError, match="rotation"):
         OrientationError(position_only)
     with pytest.raises(OptionError, match="pose target"):

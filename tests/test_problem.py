@@ -5,6 +5,7 @@ import pinocchio as pin
 import pytest
 
 from evoik_pin.errors import BoundsError, ConfigurationError, OptionError, TargetError
+from evoik_pin.objectives import PositionError
 from evoik_pin.problem import DEFAULT_PRO_DELTA, IKProblem, Target
 from evoik_pin.robot import load_robot
 
@@ -90,6 +91,15 @@ def test_evaluate_matches_fk_and_counts(arm):
     assert not problem.succeeded(ev.position_error, ev.orientation_error).any()
 
 
+def test_euclidean_pose_metric_combines_the_errors_as_a_norm(arm, rng):
+    target = arm.fk(arm.random_configurations(1, rng)[0])
+    Q = arm.random_configurations(12, rng)
+    ev = IKProblem(arm, target, orientation_weight=0.3, pose_metric="euclidean").evaluate(Q)
+    assert np.allclose(ev.cost, np.hypot(ev.position_error, 0.3 * ev.orientation_error), rtol=0, atol=1e-15)
+    summed = IKProblem(arm, target, orientation_weight=0.3).evaluate(Q)
+    assert np.allclose(summed.cost, summed.position_error + 0.3 * summed.orientation_error, rtol=0, atol=1e-15)
+
+
 def test_position_only_problem_and_tolerances(arm):
     problem = IKProblem(arm, [0.3, 0.2, 0.6], tolerance=1e-3)
     assert problem.rotation_tolerance == 1e-3
@@ -106,6 +116,8 @@ def test_position_only_problem_and_tolerances(arm):
     (dict(tolerance=np.nan), OptionError, "tolerance"),
     (dict(rotation_tolerance=-1e-3), OptionError, "rotation_tolerance"),
     (dict(orientation_weight=-2.0), OptionError, "orientation_weight"),
+    (dict(pose_metric="max"), OptionError, "pose_metric 'max' is not one of"),
+    (dict(pose_metric="max", objective=PositionError(Target(position=[0.3, 0.2, 0.6]))), OptionError, "pose_metric"),
     (dict(q0=np.zeros(3)), ConfigurationError, "q0"),
     (dict(q0=np.full(7, np.nan)), ConfigurationError, "NaN"),
     (dict(lower=np.zeros(3), upper=np.ones(3)), BoundsError, "7 values"),

@@ -24,7 +24,8 @@ __all__ = ["DEFAULT_METHOD", "BatchResults", "make_problem", "methods", "solve",
 DEFAULT_METHOD = "memetic"
 
 # Options consumed by the problem rather than by the solver.
-_PROBLEM_OPTIONS = ("tolerance", "rotation_tolerance", "q0", "bounds", "objective", "orientation_weight")
+_PROBLEM_OPTIONS = ("tolerance", "rotation_tolerance", "q0", "bounds", "objective", "orientation_weight",
+                    "pose_metric")
 
 
 def _rng(seed) -> np.random.Generator:
@@ -76,7 +77,7 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
         method: a name from :func:`methods` (default ``"memetic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same result.
         **options: shared ones (``tolerance`` m, ``rotation_tolerance`` rad, ``q0`` (n,), ``bounds``
-            (lower, upper), ``objective``, ``orientation_weight``, ``polish``) and the solver's own
+            (lower, upper), ``objective``, ``orientation_weight``, ``pose_metric``, ``polish``) and the solver's own
             (``population``, ``max_generations``, ...; see each solver's docstring).
 
     Returns:
@@ -259,7 +260,10 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
             for j in np.nonzero(out.converged)[0]:
                 pos = float(out.position_error[j])
                 rot = None if out.orientation_error is None else float(out.orientation_error[j])
-                cost = pos + (0.0 if rot is None else w * rot)
+                if rot is None:
+                    cost = pos
+                else:
+                    cost = pos + w * rot if template.pose_metric == "sum" else float(np.hypot(pos, w * rot))
                 results[pending[j]] = Result(
                     q=out.q[j].copy(), position_error=pos, orientation_error=rot, cost=cost, success=True,
                     generations=0, evaluations=int(out.evaluations[j]), time_s=share,

@@ -6,7 +6,8 @@ term needs rotations) and compose as weighted sums: ``PositionError(t) + 0.5 * O
 Terms and their units:
 
 * :class:`PositionError` (m), :class:`OrientationError` (rad, angle of ``log3(R_target^T R)``; planar:
-  wrapped yaw difference), :class:`PoseError` = position + weight x orientation;
+  wrapped yaw difference), :class:`PoseError` = position + weight x orientation, :class:`PoseDistance` =
+  sqrt(position^2 + (weight x orientation)^2), the Euclidean norm of the weighted 6-D error;
 * :class:`RPYPoseError`: paper 004's ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` with O the
   roll-pitch-yaw angles (wrapped differences);
 * :class:`MaxJointDisplacement`: paper 000's ``max_k |q_k - q_init,k|`` (rad);
@@ -30,6 +31,8 @@ __all__ = [
     "Objective",
     "OrientationError",
     "PopulationKinematics",
+    "POSE_METRICS",
+    "PoseDistance",
     "PoseError",
     "PositionError",
     "RPYPoseError",
@@ -207,6 +210,29 @@ def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 
     return position_weight * PositionError(target) + orientation_weight * OrientationError(target)
 
 
+class PoseDistance(Objective):
+    """``sqrt(position_error^2 + (orientation_weight x rotation_angle)^2)`` (m): the Euclidean norm of the
+    6-D error (position in m, rotation vector of ``log3`` in rad scaled by ``orientation_weight`` m/rad).
+
+    Same zero set and units as :func:`PoseError`, but smooth away from the solution: the sum of two norms
+    has a crease wherever one error is exactly zero, and a swarm collapses onto that crease (PSO on 6-D
+    poses, docs/BENCHMARKS.md); this norm has no crease.
+    """
+
+    def __init__(self, target, orientation_weight: float = 1.0) -> None:
+        if not target.has_orientation:
+            raise OptionError("PoseDistance needs a target with a rotation (or a planar yaw)")
+        self.target = target
+        self.orientation_weight = float(orientation_weight)
+
+    def value(self, Q, kin):
+        rotation = orientation_errors(self.target, kin)
+        return np.hypot(position_errors(self.target, kin), self.orientation_weight * rotation)
+
+    def __repr__(self) -> str:
+        return f"PoseDistance(orientation_weight={self.orientation_weight:g})"
+
+
 class RPYPoseError(Objective):
     """Paper 004: ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||``, O = roll-pitch-yaw (rad), wrapped.
 
@@ -301,8 +327,18 @@ class JointLimitMargin(Objective):
         return "JointLimitMargin()"
 
 
-def default_objective(target, orientation_weight: float = 1.0) -> Objective:
-    """Position error for position targets; position + weight x orientation error for pose targets."""
-    if target.has_orientation:
-        return PoseError(target, 1.0, orientation_weight)
-    return PositionError(target)
+#: How the default objective combines position and orientation errors of a pose target: ``sum`` (m + weight x
+#: rad, :func:`PoseError`) or ``euclidean`` (:class:`PoseDistance`).
+POSE_METRICS = ("sum", "euclidean")
+
+
+def default_objective(target, orientation_weight: float = 1.0, pose_metric: str = "sum") -> Objective:
+    """Position error for position targets; for pose targets position + weight x orientation error
+    (``pose_metric="sum"``) or the Euclidean norm of the two (``"euclidean"``)."""
+    if pose_metric not in POSE_METRICS:
+        raise OptionError(f"pose_metric {pose_metric!r} is not one of {POSE_METRICS}")
+    if not target.has_orientation:
+        return PositionError(target)
+    if pose_metric == "euclidean":
+        return PoseDistance(target, orientation_weight)
+    return PoseError(target, 1.0, orientation_weight)

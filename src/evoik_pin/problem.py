@@ -14,6 +14,7 @@ import pinocchio as pin
 
 from .errors import BoundsError, ConfigurationError, OptionError, TargetError
 from .objectives import (
+    POSE_METRICS,
     Objective,
     PopulationKinematics,
     PositionError,
@@ -164,6 +165,9 @@ class IKProblem:
         q0: optional (n,) initial / previous configuration (seeds the population; used by displacement
             objectives).
         orientation_weight: m per rad in the default pose objective.
+        pose_metric: how the default pose objective combines the two errors: ``"sum"`` (position +
+            weight x angle, the default) or ``"euclidean"`` (sqrt(position^2 + (weight x angle)^2),
+            :class:`~evoik_pin.objectives.PoseDistance`). Ignored for position targets and custom objectives.
         evaluations: number of configurations evaluated so far (every call of :meth:`evaluate` adds N).
     """
 
@@ -176,6 +180,7 @@ class IKProblem:
     rotation_tolerance: float | None = None
     q0: np.ndarray | None = None
     orientation_weight: float = 1.0
+    pose_metric: str = "sum"
     evaluations: int = field(default=0, compare=False)
 
     def __post_init__(self) -> None:
@@ -197,7 +202,9 @@ class IKProblem:
             except ConfigurationError as exc:
                 raise ConfigurationError(f"q0: {exc}") from None
         if self.objective is None:
-            self.objective = default_objective(self.target, self.orientation_weight)
+            self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
+        elif self.pose_metric not in POSE_METRICS:
+            raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
 
     def _checked_bounds(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n = self.robot.n

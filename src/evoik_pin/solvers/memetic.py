@@ -39,6 +39,7 @@ from ..errors import OptionError
 from ..objectives import (
     OrientationError,
     PopulationKinematics,
+    PoseDistance,
     PositionError,
     WeightedSum,
     orientation_errors,
@@ -211,11 +212,14 @@ def _default_cost(problem: IKProblem, pos: float, rot: float | None) -> float | 
     """The objective value from the errors when the objective is the default one (else None).
 
     Recognized structurally: ``PositionError(target)`` alone, or ``1 * PositionError(target) +
-    w * OrientationError(target)`` for the problem's own target (what ``default_objective`` builds).
+    w * OrientationError(target)`` or ``PoseDistance(target, w)`` for the problem's own target (what
+    ``default_objective`` builds).
     """
     obj, target = problem.objective, problem.target
     if isinstance(obj, PositionError):
         return pos if obj.target is target else None
+    if isinstance(obj, PoseDistance):
+        return float(np.hypot(pos, obj.orientation_weight * rot)) if obj.target is target and rot is not None else None
     if not isinstance(obj, WeightedSum) or rot is None or len(obj.terms) != 2:
         return None
     (w1, t1), (w2, t2) = obj.terms

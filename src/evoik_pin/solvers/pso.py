@@ -18,16 +18,19 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import OptionError
+from ..objectives import PoseDistance
 from ..problem import IKProblem
 from ..result import Result
 from . import register
 from .common import BOUND_HANDLING, SolverRun, check_positive_int, enforce_bounds, initial_population, run_with_restarts
 from .de import check_callback
 
-__all__ = ["TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
+__all__ = ["RANDOM_FACTORS", "TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
 
 #: Accepted ``topology`` values.
 TOPOLOGIES = ("global", "ring")
+#: Accepted ``random_factors`` values: how r1, r2 of eq. 11 are drawn.
+RANDOM_FACTORS = ("per-coordinate", "per-particle")
 
 
 def inertia_weight(iteration: int, max_iterations: int, w_start: float, w_end: float) -> float:
@@ -43,7 +46,7 @@ def pso_step(X: np.ndarray, V: np.ndarray, P: np.ndarray, g: np.ndarray, w: floa
         X, V, P: positions, velocities and personal bests (N, D); g: global best (D,) or each particle's
             neighbourhood best (N, D).
         w, c1, c2: inertia weight, cognitive and social coefficients.
-        r1, r2: (N, D) uniform draws in [0, 1).
+        r1, r2: uniform draws in [0, 1), (N, D) or one per particle (N, 1).
         v_max: (D,) velocity limit per coordinate (rad/iteration or m/iteration).
 
     Returns:
@@ -88,6 +91,7 @@ def pso(
     c2: float = 1.5,
     velocity_clamp: float = 0.2,
     topology: str = "global",
+    random_factors: str = "per-coordinate",
     reinit_stagnant: int | None = None,
     bound_handling: str = "clip",
     runs: int = 10,
@@ -108,6 +112,11 @@ def pso(
         topology: ``global`` (paper 002: every particle follows the swarm's best g) or ``ring`` (lbest: each
             particle follows the best personal best among itself and its two ring neighbours, which
             slows the swarm's collapse; it did not help on 6-D pose targets, docs/BENCHMARKS.md).
+        random_factors: ``per-coordinate`` (r1, r2 drawn for every particle and joint: eq. 11 indexes them
+            by coordinate d) or ``per-particle`` (one r1 and one r2 per particle, MATLAB's scalar ``rand``):
+            the step then stays in the plane of (p_i - x_i) and (g - x_i), so the swarm can follow a curved
+            valley that is not aligned with the joint axes. With ``pose_metric="euclidean"`` this is what
+            makes PSO reliable on 6-D pose targets (docs/BENCHMARKS.md).
         reinit_stagnant: when given, a particle whose personal best has not improved for this many iterations
             is re-initialised (position uniform in the box, velocity uniform in the clamp, personal best
             reset to the new position); the particle with the best personal best is never re-initialised.
@@ -137,6 +146,9 @@ def pso(
         raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
     if topology not in TOPOLOGIES:
         raise OptionError(f"topology {topology!r} is not one of {TOPOLOGIES}")
+    if random_factors not in RANDOM_FACTORS:
+        raise OptionError(f"random_factors {random_factors!r} is not one of {RANDOM_FACTORS}")
+    r_shape = (2, N, problem.n) if random_factors == "per-coordinate" else (2, N, 1)
     check_callback(callback)
     check_positive_int("runs", runs)
     if reinit_stagnant is not None:
@@ -160,7 +172,7 @@ def pso(
         while reason is None and (reason := run.stop_reason()) is None:
             it = run.generation + 1
             w = inertia_weight(it, iter_max, w_start, w_end)
-            r = rng.random((2, N, D))
+            r = rng.random(r_shape)
             guide = g_best if topology == "global" else P[ring_best(p_cost)]
             X_new, V = pso_step(X, V, P, guide, w, c1, c2, r[0], r[1], v_max)
             X = enforce_bounds(X_new, problem, rng, bound_handling)
@@ -187,4 +199,9 @@ def pso(
                 reason = "stopped by callback"
         return run.result("pso", reason)
 
-    return run_with_restarts(once, problem, runs)
+    result = run_with_restarts(once, problem, runs)
+    if (not result.success and problem.target.rotation is not None
+            and not (random_factors == "per-particle" and isinstance(problem.objective, PoseDistance))):
+        result.message += ("; on 6-D pose targets PSO is reliable with pose_metric='euclidean' and "
+                           "random_factors='per-particle' (docs/BENCHMARKS.md)")
+    return result
