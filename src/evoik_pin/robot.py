@@ -306,6 +306,7 @@ class Robot:
         self._locked = to_lock
         self.model = pin.buildReducedModel(full_model, to_lock, q_ref) if to_lock else pin.Model(full_model)
         self.data = self.model.createData()
+        self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
         self.tip = tip
         self.base = root_name
         self._tip_id = _find_frame(self.model, tip)
@@ -538,14 +539,22 @@ class Robot:
         return bool(self.continuous.any())
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`to_pinocchio` without the per-joint Python loop (``q`` itself when nothing is continuous)."""
+        """:meth:`to_pinocchio` without the per-joint Python loop (``q`` itself when nothing is continuous).
+
+        The last conversion is memoized by the bytes of ``q``: local solvers ask for the pose and then the
+        Jacobian of one configuration, and the (cos, sin) conversion costs more than the kinematics.
+        """
         if not self._has_continuous:
             return q
+        key = q.tobytes()
+        if key == self._pin_q_key:
+            return self._pin_q_value
         plain, idx_plain, cont = self._continuous_idx
         out = np.empty(self.model.nq)
         out[idx_plain] = q[plain]
         i = self._idx_q[cont]
         out[i], out[i + 1] = np.cos(q[cont]), np.sin(q[cont])
+        self._pin_q_key, self._pin_q_value = key, out
         return out
 
     def fk_unchecked(self, q: np.ndarray) -> pin.SE3:
@@ -558,6 +567,15 @@ class Robot:
         if self._base_id == 0:
             return self.data.oMf[self._tip_id].copy()
         return self._baseMo * self.data.oMf[self._tip_id]
+
+    def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
+        """``M * fk(q)``: the tip pose expressed in a frame whose inverse placement in the base frame is
+        ``M`` (e.g. ``M = T_target^-1`` gives the tip seen from the target), without validation and
+        without the copy :meth:`fk_unchecked` makes. ``q`` as in :meth:`fk_unchecked`; a new ``pin.SE3``."""
+        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
+        if self._base_id == 0:
+            return M * self.data.oMf[self._tip_id]
+        return M * (self._baseMo * self.data.oMf[self._tip_id])
 
     def jacobian_local_unchecked(self, q: np.ndarray) -> np.ndarray:
         """``jacobian(q, "local")`` without validation: the tip Jacobian (6, n) in the tip frame.

@@ -181,7 +181,9 @@ class LevenbergMarquardt:
             self.kind = "pose"
             self.m = 6
             self.residual = self._residual_pose
+            self.error_at = self._pose_error_at
             self.target_se3 = pin.SE3(target.rotation, target.position)
+            self.target_inv = self.target_se3.inverse()
         else:
             self.kind = "position"
             self.m = 3
@@ -196,6 +198,18 @@ class LevenbergMarquardt:
         t = X.translation
         w = e[3:]
         return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
+
+    def _pose_error_at(self, q: np.ndarray):
+        """:meth:`error_at` for pose targets: ``T_t^-1 T(q)`` straight from the robot, no intermediate copy."""
+        X = self.robot.tip_pose_seen_from_unchecked(q, self.target_inv)
+        e = pin.log6(X).vector
+        t = X.translation
+        w = e[3:]
+        return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
+
+    def error_at(self, q: np.ndarray):
+        """:meth:`residual` of the tip pose at ``q`` (n,) (bound per target kind in ``__init__``)."""
+        return self.residual(self.robot.fk_unchecked(q))
 
     def residual(self, T: pin.SE3):
         """Task error ``e`` (m,), the extra object the Jacobian needs, position error (m), orientation error.
@@ -250,7 +264,7 @@ class LevenbergMarquardt:
         if on_bound:
             g = E.T.dot(e)
             held = ((q <= lo) & (g > 0.0)) | ((q >= hi) & (g < 0.0))
-            if held.any():
+            if np.count_nonzero(held):  # (count_nonzero: a C call; ndarray.any() costs ~1 us of Python here)
                 E = E * ~held
                 EEt = E.dot(E.T)
             else:
@@ -261,9 +275,9 @@ class LevenbergMarquardt:
             dq *= self.max_step / math.sqrt(s2)
         qn = q - dq
         qc = np.minimum(np.maximum(qn, lo), hi)
-        clipped = (qc - qn).any()
+        fixed = qc != qn
+        clipped = np.count_nonzero(fixed) > 0
         if clipped:
-            fixed = qc != qn
             if held is not None:
                 fixed |= held
             dfix = np.where(fixed, qc - q, 0.0)
@@ -276,7 +290,7 @@ class LevenbergMarquardt:
         if self.any_wrap:
             lower, upper = self.lower, self.upper
             out = self.wrap & ((qc < lower) | (qc > upper))
-            if out.any():
+            if np.count_nonzero(out):
                 qc = _wrap_into(qc, lower, out)
         return qc, bool(clipped)
 
@@ -288,13 +302,12 @@ class LevenbergMarquardt:
         configuration (the best met).
         """
         q = self._into_box(np.asarray(q, dtype=float))
-        on_bound = bool(((q <= self.clip_lo) | (q >= self.clip_hi)).any())
-        fk = self.robot.fk_unchecked
-        residual = self.residual
+        on_bound = np.count_nonzero((q <= self.clip_lo) | (q >= self.clip_hi)) > 0
+        error_at = self.error_at
         jacobian = self.task_jacobian
         step = self._step
         tol_p, tol_r = self.tol_p, self.tol_r
-        e, extra, pos, rot = residual(fk(q))
+        e, extra, pos, rot = error_at(q)
         evaluations = 1
         c = e.dot(e)
         if pos <= tol_p and (rot is None or rot <= tol_r):
@@ -316,11 +329,11 @@ class LevenbergMarquardt:
             qn, on_bound_n = step(q, on_bound, E, EEt, e, lam)
             if creeping and not (on_bound or on_bound_n):
                 v = self._delta(qn, q)
-                a = self._geodesic(q, e, E, EEt, lam, v[None], residual(fk(q + _GEO_H * v))[0][None])[0]
+                a = self._geodesic(q, e, E, EEt, lam, v[None], error_at(q + _GEO_H * v)[0][None])[0]
                 evaluations += 1
                 if a is not None:
                     qn = self._into_box(q + v + 0.5 * a)
-            en, extra_n, pos_n, rot_n = residual(fk(qn))
+            en, extra_n, pos_n, rot_n = error_at(qn)
             evaluations += 1
             cn = en.dot(en)
             if cn < c:
@@ -379,7 +392,7 @@ class LevenbergMarquardt:
         q = np.minimum(np.maximum(q, self.clip_lo), self.clip_hi)
         if self.any_wrap:
             out = self.wrap & ((q < self.lower) | (q > self.upper))
-            if out.any():
+            if np.count_nonzero(out):
                 q = np.where(out, self.lower + np.mod(q - self.lower, TWO_PI), q)
         return q
 
@@ -389,7 +402,7 @@ class LevenbergMarquardt:
         E = self.task_jacobian(q, extra)
         # (almost) undamped: any damping left would cap the gain at lambda / (sigma^2 + lambda) per step
         qn, _ = self._step(q, False, E, E.dot(E.T), e, _LAMBDA_MIN)
-        en, _, pos_n, rot_n = self.residual(self.robot.fk_unchecked(qn))
+        en, _, pos_n, rot_n = self.error_at(qn)
         if en.dot(en) < c:
             return LMOutcome(qn, pos_n, rot_n, True, it + 1, evaluations + 1)
         return LMOutcome(q, pos, rot, True, it + 1, evaluations + 1)
@@ -410,7 +423,7 @@ class LevenbergMarquardt:
         """
         Q = self._into_box(np.array(Q, dtype=float, ndmin=2))
         K, n = Q.shape
-        fk, residual, jacobian = self.robot.fk_unchecked, self.residual, self.task_jacobian
+        error_at, jacobian = self.error_at, self.task_jacobian
         tol_p, tol_r = self.tol_p, self.tol_r
         m = self.m
         e = np.empty((K, m))
@@ -419,7 +432,7 @@ class LevenbergMarquardt:
         pos = np.empty(K)
         rot = np.empty(K) if self.target.has_orientation else None
         for k in range(K):
-            e[k], extra[k], pos[k], r = residual(fk(Q[k]))
+            e[k], extra[k], pos[k], r = error_at(Q[k])
             if rot is not None:
                 rot[k] = r
         evaluations = K
@@ -478,13 +491,13 @@ class LevenbergMarquardt:
             if geo.any():
                 f = np.nonzero(geo)[0]
                 v = self._delta(qc[f], q[f])
-                eh = np.array([residual(fk(q[j] + _GEO_H * v[i]))[0] for i, j in enumerate(f)])
+                eh = np.array([error_at(q[j] + _GEO_H * v[i])[0] for i, j in enumerate(f)])
                 evaluations += f.size
                 for i, a in enumerate(self._geodesic(q[f], ea[f], Ea[f], None, la[f], v, eh)):
                     if a is not None:
                         qc[f[i]] = self._into_box(q[f[i]] + v[i] + 0.5 * a)
             for j, k in enumerate(idx):
-                en, xn, pn, rn = residual(fk(qc[j]))
+                en, xn, pn, rn = error_at(qc[j])
                 evaluations += 1
                 cn = en.dot(en)
                 if cn < c[k]:
