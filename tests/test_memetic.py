@@ -371,6 +371,31 @@ def test_unchecked_kinematics_equal_the_checked_ones(robots, name):
         assert np.abs(robot.jacobian_local_unchecked(q) - robot.jacobian(q, "local")).max() < 1e-12
         assert np.abs(P[i] - T.translation).max() < 1e-12 and np.abs(R[i] - T.rotation).max() < 1e-12
         assert np.abs(J[i] - robot.jacobian(q, "world")).max() < 1e-12
+        M = pin.SE3(pin.exp3(np.array([0.3, -0.2, 0.5])), np.array([0.1, 0.2, -0.3]))
+        assert np.abs(robot.tip_pose_seen_from_unchecked(q, M).homogeneous - (M * T).homogeneous).max() < 1e-12
+
+
+@pytest.mark.parametrize("name", ["kinova", "panda"])
+def test_unchecked_kinematics_follow_an_array_changed_in_place(robots, name):
+    # the continuous-joint conversion is memoized (kinova): a caller reusing its buffer must still get the new pose
+    robot = robots[name]
+    Q = robot.random_configurations(2, np.random.default_rng(42))
+    buf = Q[0].copy()
+    robot.fk_unchecked(buf)
+    buf[:] = Q[1]
+    assert np.abs(robot.fk_unchecked(buf).homogeneous - robot.fk(Q[1]).homogeneous).max() < 1e-12
+    assert np.abs(robot.jacobian_local_unchecked(buf) - robot.jacobian(Q[1], "local")).max() < 1e-12
+
+
+def test_sub_chain_pose_seen_from_a_frame():
+    from evoik_pin.robot import example_robot_data_dir
+
+    robot = load_robot(example_robot_data_dir() / "baxter_description/urdf/baxter.urdf", tip="left_gripper",
+                       base="torso")
+    assert robot._base_id != 0
+    q = robot.random_configurations(1, np.random.default_rng(43))[0]
+    M = pin.SE3(pin.exp3(np.array([0.1, 0.2, 0.3])), np.array([0.4, -0.1, 0.2]))
+    assert np.abs(robot.tip_pose_seen_from_unchecked(q, M).homogeneous - (M * robot.fk(q)).homogeneous).max() < 1e-12
 
 
 def test_geodesic_acceleration_vanishes_on_a_linear_error_and_is_refused_when_too_large(robots):
