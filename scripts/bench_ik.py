@@ -265,6 +265,8 @@ def bench_robot(name: str, n_targets: int, n_slow: int, seed: int, paper: str | 
     out = {}
     for s, _ in solvers:
         row = rows[s.name]
+        if not row["t"]:  # --slow-targets 0: the slow solvers did not run
+            continue
         t = np.array(row["t"]) * 1e3
         pos, rot, inside = np.array(row["pos"]), np.array(row["rot"]), np.array(row["ok"])
 

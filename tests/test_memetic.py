@@ -425,3 +425,10 @@ def test_geodesic_acceleration_vanishes_on_a_linear_error_and_is_refused_when_to
         assert (b is None) == (single is None)
         if b is not None:
             np.testing.assert_allclose(b, single, atol=1e-12)
+    # and so does the one-configuration hot path of LevenbergMarquardt.run (Cholesky instead of LU)
+    for lam, eh_k in [(1e-6, eh), (1e-3, e + 0.1 * E @ v), (1e-6, e + 0.1 * E @ v + 1.0)]:
+        one = lm._geodesic_one(e, E, E @ E.T, lam, v, eh_k)
+        ref = lm._geodesic(q, e, E, E @ E.T, lam, v[None], eh_k[None])[0]
+        assert (one is None) == (ref is None)
+        if one is not None:
+            np.testing.assert_allclose(one, ref, rtol=1e-9, atol=1e-12)

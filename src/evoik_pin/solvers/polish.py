@@ -329,7 +329,7 @@ class LevenbergMarquardt:
             qn, on_bound_n = step(q, on_bound, E, EEt, e, lam)
             if creeping and not (on_bound or on_bound_n):
                 v = self._delta(qn, q)
-                a = self._geodesic(q, e, E, EEt, lam, v[None], error_at(q + _GEO_H * v)[0][None])[0]
+                a = self._geodesic_one(e, E, EEt, lam, v, error_at(q + _GEO_H * v)[0])
                 evaluations += 1
                 if a is not None:
                     qn = self._into_box(q + v + 0.5 * a)
@@ -362,6 +362,14 @@ class LevenbergMarquardt:
         if self.any_wrap:
             d = np.where(self.wrap, _angle_wrap(d), d)
         return d
+
+    def _geodesic_one(self, e, E, EEt, lam, v, eh):
+        """:meth:`_geodesic` for one configuration (``e`` (m,), ``E`` (m, n), ``EEt``, ``v`` (n,), ``eh``
+        (m,)), with one Cholesky solve: the hot path of :meth:`run`. Returns ``a`` (n,) or None."""
+        h = _GEO_H
+        rpp = (2.0 / h) * ((eh - e) / h - E.dot(v))
+        a = -E.T.dot(dposv(EEt + lam * self.eye, rpp)[1])
+        return a if 2.0 * math.sqrt(a.dot(a)) <= _GEO_ALPHA * math.sqrt(v.dot(v)) else None
 
     def _geodesic(self, q, e, E, EEt, lam, v, eh):
         """Geodesic accelerations (Transtrum & Sethna 2012) of K steps ``v`` (K, n) taken from one or K
