@@ -298,6 +298,18 @@ def test_solve_many_hands_unreachable_targets_to_the_fallback(robots):
     assert "max_restarts (1)" in res[2].message and robot.within_bounds(res[2].q)
 
 
+@pytest.mark.parametrize("batch, groups", [(1, 25), (4, 1 + 4 + 2), (8, 1 + 2 + 1)])
+def test_batch_sets_how_many_lm_runs_go_in_lockstep(robots, batch, groups):
+    # out of reach, one restart: the nearest seed alone, 16 more seeds, 8 polished DE members = 25 LM runs,
+    # one after the other (batch 1, the default) or `batch` at a time (one attempt_error entry per group)
+    robot = robots["z1"]
+    res = ev.solve(robot, pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.0])), seed=0, timeout=None, max_restarts=1,
+                   batch=batch)
+    assert not res.success and "after 25 LM run(s)" in res.message
+    assert len(res.history["attempt_error"]) == groups
+    assert robot.within_bounds(res.q)
+
+
 def test_table_offset_skips_the_nearest_entries(robots):
     robot = robots["panda"]
     q = robot.random_configurations(1, np.random.default_rng(24))[0]

@@ -528,11 +528,16 @@ class Robot:
 
     # ------------------------------------------------------------------ hot path of local solvers
     @cached_property
-    def _continuous_idx(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Index arrays mapping a joint vector into Pinocchio's q: (plain joints, their idx_q, continuous)."""
-        plain = np.nonzero(~self.continuous)[0]
-        cont = np.nonzero(self.continuous)[0]
-        return plain, self._idx_q[plain], cont
+    def _pin_gather(self) -> np.ndarray:
+        """(nq,) indices into ``[q, cos q, sin q]`` (3n,) that give Pinocchio's configuration vector."""
+        gather = np.empty(self.model.nq, dtype=np.intp)
+        for k in range(self.n):
+            i = self._idx_q[k]
+            if self.continuous[k]:
+                gather[i], gather[i + 1] = self.n + k, 2 * self.n + k
+            else:
+                gather[i] = k
+        return gather
 
     @cached_property
     def _has_continuous(self) -> bool:
@@ -549,11 +554,7 @@ class Robot:
         key = q.tobytes()
         if key == self._pin_q_key:
             return self._pin_q_value
-        plain, idx_plain, cont = self._continuous_idx
-        out = np.empty(self.model.nq)
-        out[idx_plain] = q[plain]
-        i = self._idx_q[cont]
-        out[i], out[i + 1] = np.cos(q[cont]), np.sin(q[cont])
+        out = np.concatenate((q, np.cos(q), np.sin(q)))[self._pin_gather]
         self._pin_q_key, self._pin_q_value = key, out
         return out
 

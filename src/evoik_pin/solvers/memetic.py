@@ -12,15 +12,15 @@ Stages, each tried only when the previous ones have not met the tolerances:
    numbers are drawn; its forward kinematics is computed once per robot and box and cached). Nearness is
    ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` with ``w`` a quarter of the arm's reach (m per unit of the
    Frobenius distance, which is ``2 sqrt(2) sin(angle / 2)``). The nearest entry is polished alone (it
-   converges for most targets); the next ones ``batch`` at a time in lockstep
-   (:meth:`~evoik_pin.solvers.polish.LevenbergMarquardt.run_many`: Pinocchio kinematics per configuration,
-   one batched NumPy pass for the linear algebra of all of them), which is cheaper than sequential
-   restarts when most of them fail. The table's one-time construction does not count against the budget.
+   converges for most targets); then the next ones, one LM run after the other (``batch=k`` runs them k at
+   a time in lockstep instead, :meth:`~evoik_pin.solvers.polish.LevenbergMarquardt.run_many`: measured
+   slower, as a lockstep iteration carries ~0.1 ms of fixed NumPy cost and a group runs until its slowest
+   useful member; docs/BENCHMARKS.md). The table's one-time construction does not count against the budget.
 3. **Memetic restarts** until the tolerances, the time budget ``timeout`` or ``max_restarts`` are reached:
    a population of ``population`` configurations (uniform in the box, drawn from ``rng``, plus ``q0`` and
    the best configuration met so far) evolves for ``generations`` generations of differential evolution
    (DE/current-to-best/1/bin from :mod:`.de_ops`, dithered F in [0.5, 1], CR = 0.9, greedy selection on
-   the problem's objective), and its ``polish_count`` best members are polished by LM in lockstep.
+   the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
 
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
@@ -237,8 +237,10 @@ def _errors_text(pos: float, rot: float | None) -> str:
 class _Search:
     """State of one memetic solve: the LM engine, the best configuration met, counters and the clock."""
 
-    def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int) -> None:
+    def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int,
+                 batch: int = 1) -> None:
         self.problem = problem
+        self.batch = batch
         self.lm = LevenbergMarquardt(problem)
         self.t0 = t0
         self.deadline = deadline
@@ -264,10 +266,19 @@ class _Search:
         return self._keep(self.lm.run(q, iterations or self.iterations, self.deadline), 1)
 
     def polish_many(self, Q: np.ndarray) -> bool:
-        """LM runs from the rows of ``Q`` (K, n) in lockstep (see ``LevenbergMarquardt.run_many``)."""
-        if Q.shape[0] == 1:
-            return self.polish(Q[0])
-        return self._keep(self.lm.run_many(Q, self.iterations, self.deadline)[0], Q.shape[0])
+        """LM runs from the rows of ``Q`` (K, n), in order, ``batch`` at a time (in lockstep when > 1, see
+        ``LevenbergMarquardt.run_many``), until one meets the tolerances or the time is up."""
+        for s in range(0, Q.shape[0], self.batch):
+            if s and self.out_of_time():
+                return False
+            chunk = Q[s:s + self.batch]
+            if chunk.shape[0] == 1:
+                solved = self.polish(chunk[0])
+            else:
+                solved = self._keep(self.lm.run_many(chunk, self.iterations, self.deadline)[0], chunk.shape[0])
+            if solved:
+                return True
+        return False
 
 
 @register("memetic", "Memetic IK: Levenberg-Marquardt on the SE(3) error from q0 and a seed table, then DE "
@@ -284,7 +295,7 @@ def memetic(
     table_size: int | None = None,
     table_seeds: int = 17,
     table_offset: int = 0,
-    batch: int = 8,
+    batch: int = 1,
     iterations: int = DEFAULT_ITERATIONS,
 ) -> Result:
     """Solve ``problem`` with LM from q0 and the seed table, then DE populations polished by LM.
@@ -298,12 +309,13 @@ def memetic(
         max_restarts: number of DE populations (stage 3) at most; None for no limit (then ``timeout``
             bounds the work); 0 runs stages 1-2 only.
         population: DE population size (>= 4). generations: DE generations per population (>= 0).
-        polish_count: members of each population polished by LM (in lockstep), best first (1..population).
+        polish_count: members of each population polished by LM, best first (1..population).
         table_size: seed-table size (0 disables stage 2); default 2^(n+5) clamped to [256, 4096].
         table_seeds: table entries tried in stage 2, nearest first: the nearest alone (it usually converges),
-            the next ones ``batch`` at a time in lockstep.
+            the next ones one by one (``batch`` at a time).
         table_offset: skip the nearest ``table_offset`` entries (already tried, e.g. by ``solve_many``).
-        batch: LM runs polished together in lockstep (stage 2 after the first seed; >= 1).
+        batch: LM runs polished together in lockstep (stages 2 and 3; >= 1); 1 (default): one after the
+            other, stopping at the first that meets the tolerances.
         iterations: LM steps allowed per run (>= 1).
 
     Returns:
@@ -331,7 +343,7 @@ def memetic(
     batch = check_positive_int("batch", batch, 1)
     iterations = check_positive_int("iterations", iterations, 1)
 
-    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations)
+    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
     stage = ""
     n_gen = 0
@@ -358,11 +370,8 @@ def memetic(
         solved = first is not None and search.polish(table.Q[first])
         if not solved and not search.out_of_time():
             rest = list(ranked)
-            for s in range(0, len(rest), batch):
-                if solved or search.out_of_time():
-                    break
-                solved = search.polish_many(table.Q[rest[s:s + batch]])
-    # Stage 3: DE populations, their best members polished by LM in lockstep.
+            solved = bool(rest) and search.polish_many(table.Q[rest])
+    # Stage 3: DE populations, their best members polished by LM, best first.
     if not solved and not search.out_of_time() and max_restarts != 0:
         if search.best is None:  # no q0 and no table: start from the box centre
             solved = search.polish(0.5 * (problem.lower + problem.upper))
@@ -408,7 +417,7 @@ def _memetic_restart(problem, rng, search: _Search, population: int, generations
     DE/current-to-best/1/bin (:mod:`.de_ops`) with a dithered scale factor F ~ U[0.5, 1] per individual
     and CR = 0.9; wrapping joints stay on their circle, the others are clipped; greedy selection on the
     problem's objective. Then the ``polish_count`` best members, except the elite (already polished), are
-    polished by LM in lockstep.
+    polished by LM, best first (``batch`` at a time).
     """
     lo, hi = problem.lower, problem.upper
     X = rng.uniform(lo, hi, size=(population, problem.n))
