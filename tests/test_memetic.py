@@ -14,7 +14,7 @@ from evoik_pin.errors import OptionError, TargetError
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.result import Result
 from evoik_pin.robot import list_robots, load_robot
-from evoik_pin.solvers.memetic import SeedTable, polish_result
+from evoik_pin.solvers.memetic import SeedTable, default_table_size, polish_result, seed_table
 from evoik_pin.solvers.polish import LevenbergMarquardt, batch_levenberg_marquardt
 
 #: Arms with fewer than 6 joints (or 5, so_arm) get position targets; planar2r a planar one.
@@ -308,6 +308,26 @@ def test_batch_sets_how_many_lm_runs_go_in_lockstep(robots, batch, groups):
     assert not res.success and "after 25 LM run(s)" in res.message
     assert len(res.history["attempt_error"]) == groups
     assert robot.within_bounds(res.q)
+
+
+def test_a_near_q0_goes_first_and_a_far_one_after_the_nearest_table_entry(robots):
+    robot = robots["panda"]
+    q_goal, q_far = robot.random_configurations(2, np.random.default_rng(25))
+    T = robot.fk(q_goal)
+    near = ev.solve(robot, T, seed=0, q0=q_goal + 0.01, **BUDGET)
+    assert near.success and near.message.startswith("tolerance reached by LM from q0 (1 LM run(s)")
+    assert np.abs(near.q - q_goal).max() < 0.05  # the solution next to q0, not another IK branch
+    table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
+    assert table.distance_sq(Target.coerce(T), robot.fk(q_far)) > table.typical_gap_sq(Target.coerce(T))
+    far = ev.solve(robot, T, seed=0, q0=q_far, **BUDGET)
+    plain = ev.solve(robot, T, seed=0, **BUDGET)
+    runs = [int(r.message.split("(")[1].split(" LM")[0]) for r in (far, plain)]
+    assert far.success and "from seed table" in far.message and plain.success
+    if runs[1] > 1:  # the nearest entry failed: q0 was tried right after it, then the same entries
+        assert runs[0] == runs[1] + 1
+    else:
+        assert runs[0] == 1  # q0 was never needed
+    assert np.array_equal(far.q, plain.q)
 
 
 def test_table_offset_skips_the_nearest_entries(robots):

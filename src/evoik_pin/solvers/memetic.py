@@ -6,7 +6,9 @@ proposes starting configurations with a local Newton-type search that takes them
 targets, the position for position targets, (x, y[, yaw]) for planar ones, within the joint limits).
 Stages, each tried only when the previous ones have not met the tolerances:
 
-1. **Warm start**: LM from ``q0`` when it is given (a previous solution usually converges in a few steps).
+1. **Warm start**: LM from ``q0`` when it is given (a previous solution usually converges in a few steps),
+   first when its tip pose is within the table's typical spacing of the target or nearer than the table's
+   nearest entry; a farther ``q0`` (a random guess) goes right after that entry.
 2. **Seed table**: LM from the configurations whose tip poses are nearest to the target in a table of
    ``table_size`` configurations spread over the search box (a deterministic Halton sequence, so no random
    numbers are drawn; its forward kinematics is computed once per robot and box and cached). Nearness is
@@ -34,6 +36,7 @@ import time
 import weakref
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import OptionError
 from ..objectives import (
@@ -81,6 +84,7 @@ class SeedTable:
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
+        self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
 
     def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
         """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
@@ -128,6 +132,35 @@ class SeedTable:
             for i in part[d[part].argsort()]:
                 if i != first:
                     yield int(i)
+
+    def distance_sq(self, target: Target, T: pin.SE3) -> float:
+        """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
+        key, f = self.target_features([target])
+        p, R = T.translation, T.rotation
+        if key == "pose":
+            g = np.concatenate([p, self.weight * R.reshape(9)])
+        elif key == "position":
+            g = p
+        elif key == "planar":
+            g = p[:2]
+        else:
+            g = np.array([p[0], p[1], self.weight * R[0, 0], self.weight * R[1, 0]])
+        d = f[0] - g
+        return float(d.dot(d))
+
+    def typical_gap_sq(self, target: Target) -> float:
+        """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
+        other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
+        as the table's nearest entry usually is."""
+        key = self.target_features([target])[0]
+        gap = self._gaps.get(key)
+        if gap is None:
+            F, sq = self._table_features(key)
+            sample = np.linspace(0, F.shape[0] - 1, min(64, F.shape[0])).astype(int)
+            D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
+            D[np.arange(sample.size), sample] = np.inf
+            gap = self._gaps[key] = float(np.median(D.min(axis=1)))
+        return gap
 
     def nearest(self, targets: list[Target], k: int) -> np.ndarray:
         """Indices (N, k) of the k table entries nearest to each target, nearest first.
@@ -349,27 +382,51 @@ def memetic(
     n_gen = 0
     restarts = 0
     solved = False
-    # Stage 1: warm start. Every single run gets the full step budget: a start in the basin of a solution
-    # converges in about 5-10 steps, one held by a limit or a local minimum is dropped by LM's stall test
-    # within a few, and one still gaining after 15 is mostly creeping towards a near-singular solution
-    # (LM's geodesic acceleration), cheaper to finish than to replace by 8 lockstep runs.
-    if problem.q0 is not None:
-        stage = "q0"
-        solved = search.polish(problem.q0)
-    # Stage 2: the seed table; building it (once per robot and box) does not count against the budget.
-    if not solved and table_size > 0 and table_seeds > 0 and not search.out_of_time():
-        stage = "seed table"
+    # Stages 1-2: LM from q0 and from the seed table's entries nearest to the target. Every single run gets
+    # the full step budget: a start in the basin of a solution converges in about 5-10 steps, one held by a
+    # limit or a local minimum is dropped by LM's stall test within a few, and one still gaining after 15 is
+    # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
+    # to replace. The table is built once per robot and box; building it does not count against the budget.
+    table = ranked = first = None
+    if table_size > 0 and table_seeds > 0:
         t_build = time.perf_counter()
         table = seed_table(robot, problem.lower, problem.upper, table_size)
         if search.deadline is not None:
             search.deadline += time.perf_counter() - t_build
-        ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranked only if needed
-        if table_offset:
-            ranked = iter(list(ranked)[table_offset:])
-        first = next(ranked, None)
+
+    def next_seeds():
+        nonlocal ranked, first
+        if ranked is None:
+            ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranked only if needed
+            if table_offset:
+                ranked = iter(list(ranked)[table_offset:])
+            first = next(ranked, None)
+
+    q0 = problem.q0
+    q0_first = q0 is not None
+    if q0 is not None and table is not None:
+        # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
+        # solution) goes second: a failed LM run from it costs as much as a converging one.
+        d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
+                                                                            problem.upper)))
+        if d0 > table.typical_gap_sq(problem.target):
+            next_seeds()
+            if first is not None:
+                T_first = pin.SE3(table.rotations[first], table.positions[first])
+                q0_first = d0 <= table.distance_sq(problem.target, T_first)
+    if q0_first:
+        stage = "q0"
+        solved = search.polish(q0)
+    if not solved and table is not None and not search.out_of_time():
+        next_seeds()
+        stage = "seed table"
         solved = first is not None and search.polish(table.Q[first])
+        if not solved and q0 is not None and not q0_first and not search.out_of_time():
+            stage = "q0"
+            solved = search.polish(q0)
         if not solved and not search.out_of_time():
             rest = list(ranked)
+            stage = "seed table"
             solved = bool(rest) and search.polish_many(table.Q[rest])
     # Stage 3: DE populations, their best members polished by LM, best first.
     if not solved and not search.out_of_time() and max_restarts != 0:
