@@ -226,6 +226,15 @@ class IKPy(Solver):
         return sol[self.mask]
 
 
+def cpu_model() -> str:
+    """The CPU's model name from /proc/cpuinfo (``platform.processor()`` is empty on many Linux VMs)."""
+    with contextlib.suppress(OSError):
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or "unknown CPU"
+
+
 # ---------------------------------------------------------------------- the run
 def bench_robot(name: str, n_targets: int, n_slow: int, seed: int, paper: str | None, log) -> dict:
     robot = load(name)
@@ -249,8 +258,12 @@ def bench_robot(name: str, n_targets: int, n_slow: int, seed: int, paper: str | 
             log(f"  {name}: {s.name} skipped: {s.why}")
     solvers = [(s, k) for s, k in solvers if s.available]
     rows = {s.name: {"t": [], "pos": [], "rot": [], "ok": []} for s, _ in solvers}
+    # Each target's solvers run in a fresh random order: whoever runs right after another solver on the same
+    # target finds the caches (CPU, allocator) in the state that one left, so a fixed order would favour some.
+    order_rng = np.random.default_rng([seed, 99])
     for i, T in enumerate(targets):
-        for s, limit in solvers:
+        for j in order_rng.permutation(len(solvers)):
+            s, limit = solvers[j]
             if i >= limit:
                 continue
             t0 = time.perf_counter()
@@ -339,7 +352,7 @@ def fmt(x, spec):
 def markdown(results: dict, tp: dict | None, command: str) -> str:
     lines = [
         f"Date: {datetime.date.today().isoformat()}. Command: `{command}`.",
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores ({platform.processor() or 'unknown CPU'}), "
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores ({cpu_model()}), "
         f"Python {platform.python_version()}, numpy {np.__version__}, pin {pin.__version__}; shared with other "
         "work, so compare solvers within one table (they ran interleaved), not across runs.",
         "",
