@@ -7,6 +7,7 @@ the position / orientation errors of a whole population from one forward-kinemat
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -37,7 +38,7 @@ def _vector(value, name: str, sizes: tuple[int, ...]) -> np.ndarray:
         raise TargetError(f"{name} must be numbers, got {value!r}") from exc
     if arr.ndim != 1 or arr.shape[0] not in sizes:
         raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
-    if not np.isfinite(arr).all():  # the method, not np.all: this runs once per solve
+    if not math.isfinite(arr.dot(arr)):  # NaN or inf anywhere; one C call, as this runs once per solve
         raise TargetError(f"{name} contains NaN or inf: {arr}")
     return arr
 
@@ -52,12 +53,14 @@ def _rotation(value) -> np.ndarray:
         raise TargetError(f"target rotation must be a 3 x 3 matrix of numbers, got {value!r}") from exc
     if R.shape != (3, 3):
         raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
-    if not np.isfinite(R).all():
+    v = R.reshape(9)
+    if not math.isfinite(v.dot(v)):
         raise TargetError("target rotation contains NaN or inf")
     # det R = R[0] . (R[1] x R[2]); written out, as np.linalg.det costs more than the rest of the check
     det = (R[0, 0] * (R[1, 1] * R[2, 2] - R[1, 2] * R[2, 1]) - R[0, 1] * (R[1, 0] * R[2, 2] - R[1, 2] * R[2, 0])
            + R[0, 2] * (R[1, 0] * R[2, 1] - R[1, 1] * R[2, 0]))
-    if np.abs(R.T.dot(R) - _EYE3).max() > 1e-6 or det < 0:
+    D = (R.T.dot(R) - _EYE3).reshape(9)
+    if D.dot(D) > 1e-12 or det < 0:  # |R^T R - I|_F <= 1e-6
         raise TargetError(
             "target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
             "orthonormalize it or pass roll-pitch-yaw angles"
@@ -150,6 +153,16 @@ class Evaluation:
     orientation_error: np.ndarray | None
 
 
+def _check_nonnegative(name: str, value) -> None:
+    """OptionError unless ``value`` is a finite number >= 0 (math.isfinite: this runs on every solve)."""
+    try:
+        ok = math.isfinite(value) and value >= 0
+    except TypeError:
+        ok = False
+    if not ok:
+        raise OptionError(f"{name} must be a finite number >= 0, got {value!r}")
+
+
 @dataclass
 class IKProblem:
     """Robot + target + objective + search box + tolerances: everything a solver sees.
@@ -185,17 +198,16 @@ class IKProblem:
 
     def __post_init__(self) -> None:
         self.target = Target.coerce(self.target)
-        for name in ("tolerance", "orientation_weight"):
-            value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise OptionError(f"{name} must be a finite number >= 0, got {value!r}")
         if self.rotation_tolerance is None:
             self.rotation_tolerance = self.tolerance
-        if not (np.isfinite(self.rotation_tolerance) and self.rotation_tolerance >= 0):
-            raise OptionError(f"rotation_tolerance must be a finite number >= 0, got {self.rotation_tolerance!r}")
-        lower = self.robot.lower if self.lower is None else np.asarray(self.lower, dtype=float)
-        upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
-        self.lower, self.upper = self._checked_bounds(lower, upper)
+        for name in ("tolerance", "orientation_weight", "rotation_tolerance"):
+            _check_nonnegative(name, getattr(self, name))
+        if self.lower is None and self.upper is None:  # the robot's own bounds, checked when they were set
+            self.lower, self.upper = self.robot.lower.copy(), self.robot.upper.copy()
+        else:
+            lower = self.robot.lower if self.lower is None else np.asarray(self.lower, dtype=float)
+            upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
+            self.lower, self.upper = self._checked_bounds(lower, upper)
         if self.q0 is not None:
             try:
                 self.q0 = self.robot.check_q(self.q0)
