@@ -321,6 +321,7 @@ class Robot:
         pin.framesForwardKinematics(self.model, self.data, q0)
         self._oMbase = self.data.oMf[self._base_id].copy() if base is not None else pin.SE3.Identity()
         self._baseMo = self._oMbase.inverse()
+        self._identity = pin.SE3.Identity()
 
         self.revolute = np.zeros(self.n, dtype=bool)
         axes = np.zeros((self.n, 3))
@@ -564,10 +565,7 @@ class Robot:
         ``q`` must already be a finite float array of shape (n,). Returns the tip pose in the base frame
         (a ``pin.SE3`` owned by the caller).
         """
-        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
-        if self._base_id == 0:
-            return self.data.oMf[self._tip_id].copy()
-        return self._baseMo * self.data.oMf[self._tip_id]
+        return self.tip_pose_seen_from_unchecked(q, self._identity)
 
     def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
         """``M * fk(q)``: the tip pose expressed in a frame whose inverse placement in the base frame is

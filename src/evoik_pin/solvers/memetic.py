@@ -86,19 +86,21 @@ class SeedTable:
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
 
+    def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
+        if key == "pose":
+            return np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
+        if key == "position":
+            return P
+        if key == "planar":
+            return P[:, :2]
+        return np.concatenate([P[:, :2], self.weight * R[:, :2, 0]], axis=1)  # heading, scaled like rotations
+
     def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
         """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
         if key not in self._features:
-            P, R = self.positions, self.rotations
-            if key == "pose":
-                F = np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
-            elif key == "position":
-                F = P.copy()
-            elif key == "planar":
-                F = P[:, :2].copy()
-            else:  # planar with yaw: heading as a unit vector scaled like rotations
-                F = np.concatenate([P[:, :2], self.weight * R[:, :2, 0]], axis=1)
-            self._features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
+            F = np.array(self._pose_features(key, self.positions, self.rotations), order="C")  # a copy
+            self._features[key] = (F, (F * F).sum(axis=1))
         return self._features[key]
 
     def target_features(self, targets: list[Target]) -> tuple[str, np.ndarray]:
@@ -136,16 +138,7 @@ class SeedTable:
     def distance_sq(self, target: Target, T: pin.SE3) -> float:
         """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
         key, f = self.target_features([target])
-        p, R = T.translation, T.rotation
-        if key == "pose":
-            g = np.concatenate([p, self.weight * R.reshape(9)])
-        elif key == "position":
-            g = p
-        elif key == "planar":
-            g = p[:2]
-        else:
-            g = np.array([p[0], p[1], self.weight * R[0, 0], self.weight * R[1, 0]])
-        d = f[0] - g
+        d = f[0] - self._pose_features(key, T.translation[None], T.rotation[None])[0]
         return float(d.dot(d))
 
     def typical_gap_sq(self, target: Target) -> float:

@@ -114,6 +114,14 @@ def _angle_wrap(a):
     return (a + np.pi) % TWO_PI - np.pi
 
 
+def _log6_error(X: pin.SE3):
+    """(``log6(X)`` (6,), X, position error m, orientation error rad) of the tip seen from the target, X."""
+    e = pin.log6(X).vector
+    t = X.translation
+    w = e[3:]
+    return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
+
+
 @dataclass
 class LMOutcome:
     """End state of one :meth:`LevenbergMarquardt.run`.
@@ -193,19 +201,11 @@ class LevenbergMarquardt:
     # ------------------------------------------------------------------ task error
     def _residual_pose(self, T: pin.SE3):
         """:meth:`residual` for pose targets (bound as ``self.residual``: the hot path skips the dispatch)."""
-        X = self.target_se3.actInv(T)
-        e = pin.log6(X).vector
-        t = X.translation
-        w = e[3:]
-        return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
+        return _log6_error(self.target_se3.actInv(T))
 
     def _pose_error_at(self, q: np.ndarray):
         """:meth:`error_at` for pose targets: ``T_t^-1 T(q)`` straight from the robot, no intermediate copy."""
-        X = self.robot.tip_pose_seen_from_unchecked(q, self.target_inv)
-        e = pin.log6(X).vector
-        t = X.translation
-        w = e[3:]
-        return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
+        return _log6_error(self.robot.tip_pose_seen_from_unchecked(q, self.target_inv))
 
     def error_at(self, q: np.ndarray):
         """:meth:`residual` of the tip pose at ``q`` (n,) (bound per target kind in ``__init__``)."""
