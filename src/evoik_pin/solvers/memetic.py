@@ -32,6 +32,7 @@ budget is not what stops them (every reachable target in practice); ``timeout=No
 
 from __future__ import annotations
 
+import itertools
 import time
 import weakref
 
@@ -386,15 +387,9 @@ def memetic(
         table = seed_table(robot, problem.lower, problem.upper, table_size)
         if search.deadline is not None:
             search.deadline += time.perf_counter() - t_build
-
-    def next_seeds():
-        nonlocal ranked, first
-        if ranked is None:
-            ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranked only if needed
-            if table_offset:
-                ranked = iter(list(ranked)[table_offset:])
-            first = next(ranked, None)
-
+        ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranks on the first next()
+        if table_offset:
+            ranked = itertools.islice(ranked, table_offset, None)
     q0 = problem.q0
     q0_first = q0 is not None
     if q0 is not None and table is not None:
@@ -403,15 +398,15 @@ def memetic(
         d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
                                                                             problem.upper)))
         if d0 > table.typical_gap_sq(problem.target):
-            next_seeds()
-            if first is not None:
-                T_first = pin.SE3(table.rotations[first], table.positions[first])
-                q0_first = d0 <= table.distance_sq(problem.target, T_first)
+            first = next(ranked, None)
+            q0_first = first is None or d0 <= table.distance_sq(
+                problem.target, pin.SE3(table.rotations[first], table.positions[first]))
     if q0_first:
         stage = "q0"
         solved = search.polish(q0)
     if not solved and table is not None and not search.out_of_time():
-        next_seeds()
+        if first is None:
+            first = next(ranked, None)
         stage = "seed table"
         solved = first is not None and search.polish(table.Q[first])
         if not solved and q0 is not None and not q0_first and not search.out_of_time():
