@@ -32,7 +32,8 @@ there (an accepted step that did not halve ``|e|`` while ``|e| < 1e-2``), the st
 acceleration (Transtrum & Sethna 2012: the error's second directional derivative from one extra FK),
 which bends it along the valley and cuts those runs to about a third of the steps.
 
-:class:`LevenbergMarquardt` works through Pinocchio one configuration at a time (``Robot.fk_unchecked``,
+:class:`LevenbergMarquardt` works through Pinocchio one configuration at a time
+(``Robot.tip_pose_seen_from_unchecked`` for pose targets, ``Robot.fk_unchecked``,
 ``Robot.jacobian_local_unchecked``): a handful of C++ calls and small NumPy products per step.
 :meth:`LevenbergMarquardt.run_many` runs K starts in lockstep (per-configuration kinematics, one batched
 NumPy pass for the linear algebra of all K). :func:`batch_levenberg_marquardt` runs the iteration on many
