@@ -33,6 +33,16 @@ def _pose_error(robot, q, T):
     return np.linalg.norm(Tq.translation - T.translation), np.linalg.norm(pin.log3(T.rotation.T @ Tq.rotation))
 
 
+def _assert_solves_reachable_poses(robot, rng, count=4):
+    """memetic (deterministic budget) meets 1e-6 m and rad within the limits on FK poses of random configurations."""
+    for i, q in enumerate(robot.random_configurations(count, rng)):
+        T = robot.fk(q)
+        res = ev.solve(robot, T, seed=i, **BUDGET)
+        assert res.success and robot.within_bounds(res.q)
+        pos, rot = _pose_error(robot, res.q, T)
+        assert pos <= 1e-6 and rot <= 1e-6
+
+
 def _targets_for(name, robot, rng, count):
     Q = robot.random_configurations(count, rng)
     if name in PLANAR:
@@ -96,14 +106,7 @@ def test_planar_target_with_yaw_on_vehicle_arm(robots):
 def test_five_dof_arm_reaches_reachable_poses(robots):
     """so_arm has 5 joints: a 6-D pose is over-determined, but FK-generated poses are exactly reachable and
     LM's least-squares step converges to them."""
-    robot = robots["so_arm"]
-    rng = np.random.default_rng(6)
-    for i, q in enumerate(robot.random_configurations(4, rng)):
-        T = robot.fk(q)
-        res = ev.solve(robot, T, seed=i, **BUDGET)
-        assert res.success and robot.within_bounds(res.q)
-        pos, rot = _pose_error(robot, res.q, T)
-        assert pos <= 1e-6 and rot <= 1e-6
+    _assert_solves_reachable_poses(robots["so_arm"], np.random.default_rng(6))
 
 
 def test_sub_chain_of_a_multi_arm_robot():
@@ -111,13 +114,7 @@ def test_sub_chain_of_a_multi_arm_robot():
 
     robot = load_robot(example_robot_data_dir() / "baxter_description/urdf/baxter.urdf", base="torso",
                        tip="left_gripper")
-    rng = np.random.default_rng(11)
-    for i, q in enumerate(robot.random_configurations(4, rng)):
-        T = robot.fk(q)
-        res = ev.solve(robot, T, seed=i, **BUDGET)
-        assert res.success and robot.within_bounds(res.q)
-        pos, rot = _pose_error(robot, res.q, T)
-        assert pos <= 1e-6 and rot <= 1e-6
+    _assert_solves_reachable_poses(robot, np.random.default_rng(11))
 
 
 # ---------------------------------------------------------------------- precision, continuous joints, q0
