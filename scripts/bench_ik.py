@@ -246,6 +246,8 @@ def bench_robot(name: str, n_targets: int, n_slow: int, seed: int, paper: str | 
         (Memetic(robot), n_targets), (Memetic(robot, use_q0=True), n_targets),
         # the same search with a deterministic budget instead of the 5 ms clock: what load costs it
         (Memetic(robot, timeout=None, max_restarts=20), n_targets),
+        # the same solver with the LM iteration as a Python loop over Pinocchio instead of the numba kernel
+        (Memetic(robot, engine="python"), n_targets),
         (TracIK(robot), n_targets), (IKPy(robot), n_slow)]
     methods = ev.methods()
     if paper:

@@ -390,8 +390,8 @@ class Robot:
             raise RobotLoadError(f"tip frame {self.tip!r} is not attached to the last chain joint")
         Rs.append(prev_B.T @ tip_frame.placement.rotation)
         ps.append(prev_B.T @ tip_frame.placement.translation)
-        self._F_R = np.array(Rs)  # (n+1, 3, 3)
-        self._F_p = np.array(ps)  # (n+1, 3)
+        self._F_R = np.ascontiguousarray(Rs, dtype=float)  # (n+1, 3, 3)
+        self._F_p = np.ascontiguousarray(ps, dtype=float)  # (n+1, 3)
         # positions_batch: the homogeneous map of joint k is H_k(q) = a(q) A_k + b(q) B_k + C_k (4 x 4) with
         # a = cos q, b = sin q (revolute) or a = q, b = 0 (prismatic). With Y = [a p; b p; p] (12, N) for the
         # homogeneous points p (4, N), H_k p = [A_k B_k C_k] Y; stacking that (4, 12) block three times
@@ -410,6 +410,15 @@ class Robot:
         self._S3 = [np.ascontiguousarray(np.vstack([S[k]] * 3)) for k in range(self.n)]  # (12, 12) each
         self._p_tip = np.tile(np.append(self._F_p[-1], 1.0), 3)[:, None]  # (12, 1)
         self._all_revolute = bool(self.revolute.all())
+
+    def chain_constants(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The folded chain ``T(q) = F_0 Z(q_1) F_1 ... Z(q_n) F_n`` (tip pose in the base frame), for compiled
+        kernels that evaluate it without Pinocchio: rotations F_R (n+1, 3, 3), translations F_p (n+1, 3) (m)
+        and the (n,) bool mask of revolute joints. Z(q) is a rotation by q about z (revolute) or a
+        translation by q along z (prismatic). C-contiguous float64 / bool arrays, owned by the robot: do
+        not modify them.
+        """
+        return self._F_R, self._F_p, self.revolute
 
     # ------------------------------------------------------------------ bounds and validation
     def set_bounds(self, lower, upper) -> None:

@@ -265,10 +265,10 @@ class _Search:
     """State of one memetic solve: the LM engine, the best configuration met, counters and the clock."""
 
     def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int,
-                 batch: int = 1) -> None:
+                 batch: int = 1, engine: str = "compiled") -> None:
         self.problem = problem
         self.batch = batch
-        self.lm = LevenbergMarquardt(problem)
+        self.lm = LevenbergMarquardt(problem, engine=engine)
         self.t0 = t0
         self.deadline = deadline
         self.iterations = iterations
@@ -324,6 +324,7 @@ def memetic(
     table_offset: int = 0,
     batch: int = 1,
     iterations: int = DEFAULT_ITERATIONS,
+    engine: str = "compiled",
 ) -> Result:
     """Solve ``problem`` with LM from q0 and the seed table, then DE populations polished by LM.
 
@@ -344,6 +345,9 @@ def memetic(
         batch: LM runs polished together in lockstep (stages 2 and 3; >= 1); 1 (default): one after the
             other, stopping at the first that meets the tolerances.
         iterations: LM steps allowed per run (>= 1).
+        engine: ``"compiled"`` (default): each LM run is one call of the numba kernel
+            (:mod:`.lm_kernel`, about 1-2 us per step); ``"python"``: the same iteration as a Python loop
+            over Pinocchio's kinematics (about 30 us per step). Planar targets always use the Python loop.
 
     Returns:
         A :class:`Result`. ``generations`` counts DE generations; ``evaluations`` counts forward-kinematics
@@ -370,7 +374,7 @@ def memetic(
     batch = check_positive_int("batch", batch, 1)
     iterations = check_positive_int("iterations", iterations, 1)
 
-    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch)
+    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
     stage = ""
     n_gen = 0
@@ -495,17 +499,18 @@ def _memetic_restart(problem, rng, search: _Search, population: int, generations
 
 
 def polish_result(problem: IKProblem, result: Result, rng: np.random.Generator | None = None,
-                  iterations: int = POLISH_ITERATIONS) -> Result:
+                  iterations: int = POLISH_ITERATIONS, engine: str = "compiled") -> Result:
     """``result`` with its configuration polished by Levenberg-Marquardt (the ``polish=True`` of every method).
 
     LM runs from ``result.q`` for at most ``iterations`` steps on the problem's task error; the polished
     configuration replaces ``result.q`` only when its error (position + orientation, m + rad) is lower.
     The history is kept; ``evaluations`` and ``time_s`` grow by the polish's; the message says what the
-    polish did. ``rng`` is accepted for the uniform hook signature; the polish draws no random numbers.
+    polish did. ``engine``: as memetic's. ``rng`` is accepted for the uniform hook signature; the polish draws
+    no random numbers.
     """
     t0 = time.perf_counter()
     iterations = check_positive_int("iterations", iterations, 1)
-    lm = LevenbergMarquardt(problem)
+    lm = LevenbergMarquardt(problem, engine=engine)
     out = lm.run(np.asarray(result.q, dtype=float), iterations)
     before = result.position_error + (result.orientation_error or 0.0)
     improved = out.error < before

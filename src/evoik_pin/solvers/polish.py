@@ -5,8 +5,9 @@ The task error ``e(q)`` and its Jacobian ``E(q) = de/dq`` depend on the target:
 * pose target (6 rows): ``e = log6(T_t^-1 T(q))``, the SE(3) logarithm (m, rad) of the tip pose seen from
   the target frame, and ``E = Jlog6(T_t^-1 T(q)) J_local(q)`` (Pinocchio's ``pin.log6`` / ``pin.Jlog6``
   and the tip-frame Jacobian): since ``T(q + dq) = T(q) exp(J_local dq)``, ``e(q + dq) = e + E dq + O(dq^2)``.
-  Its translational part has the norm of the position error and its rotational part is ``log3(R_t^T R)``,
-  whose norm is the rotation angle, so ``e = 0`` exactly at the target;
+  Its rotational part is ``log3(R_t^T R)``, whose norm is the rotation angle, and it vanishes exactly at
+  the target. (A decoupled error ``(R_t^T (p - p_t), log3(R_t^T R))``, whose parts are exactly the two
+  judged errors, was measured against it: slower in the Python loop and no better, docs/BENCHMARKS.md);
 * position target (3 rows): ``e = p(q) - p_t`` in the base frame, ``E = R(q) J_local[:3]``;
 * planar target (x, y[, yaw]): ``e = (p_x - x_t, p_y - y_t[, wrap(yaw(q) - yaw_t)])`` with the matching rows
   of the base-frame Jacobian.
@@ -52,11 +53,15 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
+from ..errors import OptionError
 from ..problem import IKProblem, Target
 
-__all__ = ["BatchOutcome", "LMOutcome", "LevenbergMarquardt", "batch_levenberg_marquardt", "wrapping_joints"]
+__all__ = ["ENGINES", "BatchOutcome", "LMOutcome", "LevenbergMarquardt", "batch_levenberg_marquardt", "wrapping_joints"]
 
 TWO_PI = 2.0 * np.pi
+#: LM engines: "compiled" runs pose and position targets in the numba kernel of :mod:`.lm_kernel` (planar
+#: targets always take the Python loop); "python" runs the Python loop over Pinocchio's kinematics.
+ENGINES = ("compiled", "python")
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
 DEFAULT_DAMPING = 1e-2
 #: Steps allowed to one LM run started from a seed (converging runs need about 5-15).
@@ -102,6 +107,20 @@ def _box_constants(robot, lower: np.ndarray, upper: np.ndarray):
             _BOX_CACHE.clear()
         _BOX_CACHE[key] = hit
     return hit[1]
+
+
+def _compiled_kernel():
+    """:func:`.lm_kernel.lm_run`, imported on first use (numba's import costs ~0.3 s; its first compilation a
+    few seconds, then it is loaded from numba's on-disk cache)."""
+    from .lm_kernel import lm_run
+
+    return lm_run
+
+
+def _kernel_box(robot, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The (5, n) box rows of :func:`.lm_kernel.lm_run`: lower, upper, clip lower, clip upper, wrap (0/1)."""
+    wrap, _, clip_lo, clip_hi = _box_constants(robot, lower, upper)
+    return np.ascontiguousarray([lower, upper, clip_lo, clip_hi, wrap.astype(float)], dtype=float)
 
 
 def _wrap_into(q: np.ndarray, lower: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -163,7 +182,11 @@ class LevenbergMarquardt:
     """
 
     def __init__(self, problem: IKProblem, damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
-                 stall_window: int = 4, stall_ratio: float = 0.5, finish: bool = True) -> None:
+                 stall_window: int = 4, stall_ratio: float = 0.5, finish: bool = True,
+                 engine: str = "compiled") -> None:
+        if engine not in ENGINES:
+            raise OptionError(f"LM engine {engine!r} unknown; use one of {list(ENGINES)}")
+        self.engine = engine
         self.finish = bool(finish)
         self.problem = problem
         robot = problem.robot
@@ -198,6 +221,16 @@ class LevenbergMarquardt:
             self.m = 3
             self.target_p = target.position.copy()
         self.eye = _EYES[self.m]
+        self._kernel = None
+        if engine == "compiled" and self.kind != "planar":
+            self._kernel = _compiled_kernel()
+            FR, Fp, rev = robot.chain_constants()
+            self._chain = (FR, Fp, rev)
+            self._box = _kernel_box(robot, lo, hi)
+            self._pt = np.ascontiguousarray(target.position, dtype=float)
+            self._Rt = np.ascontiguousarray(target.rotation if target.rotation is not None else _EYES[3], dtype=float)
+            self._params = np.array([self.tol_p, self.tol_r, self.damping, self.max_step, self.stall_window,
+                                     self.stall_ratio, float(self.finish), 0.0, float(self.kind == "pose")])
 
     # ------------------------------------------------------------------ task error
     def _residual_pose(self, T: pin.SE3):
@@ -300,8 +333,26 @@ class LevenbergMarquardt:
 
         Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall (see
         the class docstring) or at ``deadline`` (a ``time.perf_counter()`` value). Returns the last accepted
-        configuration (the best met).
+        configuration (the best met). The compiled engine (pose and position targets) runs the whole
+        iteration in one call of :func:`.lm_kernel.lm_run` and checks ``deadline`` only before it starts (a
+        run is at most ``max_iterations`` steps of about 1-2 us); the Python engine is :meth:`run_python`.
         """
+        if self._kernel is None:
+            return self.run_python(q, max_iterations, deadline)
+        if deadline is not None and time.perf_counter() >= deadline:
+            max_iterations = 0  # as run_python: the start is evaluated, no step taken
+        params = self._params
+        params[7] = max_iterations
+        out = np.empty(self.n)
+        FR, Fp, rev = self._chain
+        q = np.ascontiguousarray(q, dtype=float)
+        pos, rot, converged, it, evaluations = self._kernel(q, FR, Fp, rev, self._box, self.any_wrap, self._pt,
+                                                            self._Rt, params, out)
+        return LMOutcome(out, pos, rot if self.kind == "pose" else None, converged, it, evaluations)
+
+    def run_python(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
+        """:meth:`run` as a Python loop over Pinocchio's kinematics (the reference the compiled kernel is tested
+        against, and the engine of planar targets)."""
         q = self._into_box(np.asarray(q, dtype=float))
         on_bound = np.count_nonzero((q <= self.clip_lo) | (q >= self.clip_hi)) > 0
         error_at = self.error_at
