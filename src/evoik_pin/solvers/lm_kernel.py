@@ -27,7 +27,12 @@ import math
 import numpy as np
 from numba import njit
 
-# One definition of the iteration's constants: polish.py's (the Python loop's).
+# One definition of the iteration's constants and of lm_run's params / box layouts: polish.py's.
+from .polish import _B_CHI as B_CHI
+from .polish import _B_CLO as B_CLO
+from .polish import _B_HI as B_HI
+from .polish import _B_LO as B_LO
+from .polish import _B_WRAP as B_WRAP
 from .polish import _FINISHED as FINISHED
 from .polish import _GEO_ALPHA as GEO_ALPHA
 from .polish import _GEO_H as GEO_H
@@ -36,19 +41,21 @@ from .polish import _GEO_SLOW as GEO_SLOW
 from .polish import _GROW as GROW
 from .polish import _LAMBDA_MAX as LAMBDA_MAX
 from .polish import _LAMBDA_MIN as LAMBDA_MIN
+from .polish import _P_DAMPING as P_DAMPING
+from .polish import _P_FINISH as P_FINISH
+from .polish import _P_ITERATIONS as P_ITERATIONS
+from .polish import _P_MAX_STEP as P_MAX_STEP
+from .polish import _P_POSE as P_POSE
+from .polish import _P_RTOL as P_RTOL
+from .polish import _P_STALL_RATIO as P_STALL_RATIO
+from .polish import _P_STALL_WINDOW as P_STALL_WINDOW
+from .polish import _P_TOL as P_TOL
 from .polish import _SHRINK as SHRINK
 
 TWO_PI = 2.0 * math.pi
 
-#: Layout of the ``params`` vector of :func:`lm_run`.
-P_TOL, P_RTOL, P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS, P_POSE = range(9)
-N_PARAMS = 9
-#: Rows of the ``box`` array of :func:`lm_run`: lower, upper, clip lower, clip upper (+-inf for wrapping
-#: joints), wrap (1.0 for wrapping joints).
-B_LO, B_HI, B_CLO, B_CHI, B_WRAP = range(5)
 
-
-@njit(cache=True, fastmath=False, nogil=True)
+@njit(cache=True, nogil=True)
 def forward(FR, Fp, rev, q, R, p, Z, O):
     """Tip rotation R (3, 3) and position p (3,) at q (n,), and each joint's axis Z (n, 3) and origin O (n, 3),
     all in the base frame (written in place)."""
@@ -397,7 +404,7 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
         FR (n+1, 3, 3), Fp (n+1, 3), rev (n,) bool: the folded chain (``Robot.chain_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
         pt (3,), Rt (3, 3): target position (m) and rotation (ignored for position targets).
-        params (N_PARAMS,): tolerance (m), rotation tolerance (rad), initial damping, max step, stall window,
+        params (9,): tolerance (m), rotation tolerance (rad), initial damping, max step, stall window,
             stall ratio, finish (0/1), max iterations, pose target (0/1).
 
     Returns:

@@ -78,6 +78,9 @@ _FINISHED = 1e-24
 #: run creeping along a narrow curved valley, the signature of a near-singular target), so the fast,
 #: quadratic phase pays nothing; kept when |a| <= _GEO_ALPHA |v| / 2; _GEO_H is the finite-difference step.
 _GEO_SLOW, _GEO_NEAR, _GEO_ALPHA, _GEO_H = 0.25, 1e-4, 0.75, 0.1
+#: Layout of the compiled kernel's ``params`` vector (:func:`.lm_kernel.lm_run`) and rows of its ``box``.
+_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_STALL_WINDOW, _P_STALL_RATIO, _P_FINISH, _P_ITERATIONS, _P_POSE = range(9)
+_B_LO, _B_HI, _B_CLO, _B_CHI, _B_WRAP = range(5)
 
 
 def wrapping_joints(robot, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -93,34 +96,36 @@ _BOX_CACHE: dict = {}
 
 
 def _box_constants(robot, lower: np.ndarray, upper: np.ndarray):
-    """(wrap mask, any wrap, clip lower, clip upper) of a box, cached: the same box recurs every solve.
+    """(wrap mask, any wrap, clip lower, clip upper, kernel box) of a box, cached: the same box recurs every solve.
 
-    The clip bounds are the box with +-inf for wrapping joints, which are never clipped.
+    The clip bounds are the box with +-inf for wrapping joints, which are never clipped. The kernel box is
+    the (5, n) array of :func:`.lm_kernel.lm_run`: lower, upper, clip lower, clip upper, wrap (0/1).
     """
     key = (id(robot), lower.tobytes(), upper.tobytes())
     hit = _BOX_CACHE.get(key)
     if hit is None or hit[0]() is not robot:  # a weak reference: the cache must not keep robots alive
         wrap = wrapping_joints(robot, lower, upper)
         clip = (np.where(wrap, -np.inf, lower), np.where(wrap, np.inf, upper))
-        hit = (weakref.ref(robot), (wrap, bool(wrap.any()), *clip))
+        box = np.empty((5, robot.n))
+        box[[_B_LO, _B_HI, _B_CLO, _B_CHI, _B_WRAP]] = lower, upper, *clip, wrap
+        hit = (weakref.ref(robot), (wrap, bool(wrap.any()), *clip, box))
         if len(_BOX_CACHE) > 64:
             _BOX_CACHE.clear()
         _BOX_CACHE[key] = hit
     return hit[1]
 
 
+_KERNEL = []
+
+
 def _compiled_kernel():
     """:func:`.lm_kernel.lm_run`, imported on first use (numba's import costs ~0.3 s; its first compilation a
     few seconds, then it is loaded from numba's on-disk cache)."""
-    from .lm_kernel import lm_run
+    if not _KERNEL:
+        from .lm_kernel import lm_run
 
-    return lm_run
-
-
-def _kernel_box(robot, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """The (5, n) box rows of :func:`.lm_kernel.lm_run`: lower, upper, clip lower, clip upper, wrap (0/1)."""
-    wrap, _, clip_lo, clip_hi = _box_constants(robot, lower, upper)
-    return np.ascontiguousarray([lower, upper, clip_lo, clip_hi, wrap.astype(float)], dtype=float)
+        _KERNEL.append(lm_run)
+    return _KERNEL[0]
 
 
 def _wrap_into(q: np.ndarray, lower: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -201,7 +206,7 @@ class LevenbergMarquardt:
         self.stall_ratio = float(stall_ratio)
         lo, hi = problem.lower, problem.upper
         self.lower, self.upper = lo, hi
-        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi = _box_constants(robot, lo, hi)
+        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, box = _box_constants(robot, lo, hi)
         self.tol_p = float(problem.tolerance)
         self.tol_r = float(problem.rotation_tolerance)
         if target.planar:
@@ -226,11 +231,14 @@ class LevenbergMarquardt:
             self._kernel = _compiled_kernel()
             FR, Fp, rev = robot.chain_constants()
             self._chain = (FR, Fp, rev)
-            self._box = _kernel_box(robot, lo, hi)
+            self._box = box
             self._pt = np.ascontiguousarray(target.position, dtype=float)
             self._Rt = np.ascontiguousarray(target.rotation if target.rotation is not None else _EYES[3], dtype=float)
-            self._params = np.array([self.tol_p, self.tol_r, self.damping, self.max_step, self.stall_window,
-                                     self.stall_ratio, float(self.finish), 0.0, float(self.kind == "pose")])
+            params = np.zeros(9)
+            params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_STALL_WINDOW, _P_STALL_RATIO, _P_FINISH, _P_POSE]] = (
+                self.tol_p, self.tol_r, self.damping, self.max_step, self.stall_window, self.stall_ratio,
+                float(self.finish), float(self.kind == "pose"))
+            self._params = params
 
     # ------------------------------------------------------------------ task error
     def _residual_pose(self, T: pin.SE3):
@@ -342,7 +350,7 @@ class LevenbergMarquardt:
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0  # as run_python: the start is evaluated, no step taken
         params = self._params
-        params[7] = max_iterations
+        params[_P_ITERATIONS] = max_iterations
         out = np.empty(self.n)
         FR, Fp, rev = self._chain
         q = np.ascontiguousarray(q, dtype=float)
