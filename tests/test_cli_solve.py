@@ -88,3 +88,16 @@ def test_solve_html_to_a_missing_directory_fails_before_solving(tmp_path, capsys
     assert main(["solve", "ax18", "--xyz", "0.1", "0.1", "0.1", "--html", str(tmp_path / "no" / "x.html")]) == 2
     err = capsys.readouterr()
     assert "does not exist" in err.err and "position error" not in err.out
+
+
+def test_readme_main_job_in_a_fresh_process():
+    # The README's first command, as a new process runs it: the first solve imports numba and loads the
+    # compiled LM kernel (or compiles it), which must not eat the 5 ms time budget.
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "solve", "ax18", "--xyz", "0.1", "0.1", "0.1",
+                          "--seed", "0", "--json"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    info = json.loads(out.stdout)
+    assert info["success"] and info["position_error_m"] <= 1e-6 and info["method"] == "memetic"

@@ -56,7 +56,8 @@ from scipy.linalg.lapack import dposv
 from ..errors import OptionError
 from ..problem import IKProblem, Target
 
-__all__ = ["ENGINES", "BatchOutcome", "LMOutcome", "LevenbergMarquardt", "batch_levenberg_marquardt", "wrapping_joints"]
+__all__ = ["ENGINES", "BatchOutcome", "LMOutcome", "LevenbergMarquardt", "batch_levenberg_marquardt", "compiled_kernel",
+           "wrapping_joints"]
 
 TWO_PI = 2.0 * np.pi
 #: LM engines: "compiled" runs pose and position targets in the numba kernel of :mod:`.lm_kernel` (planar
@@ -118,12 +119,21 @@ def _box_constants(robot, lower: np.ndarray, upper: np.ndarray):
 _KERNEL = []
 
 
-def _compiled_kernel():
-    """:func:`.lm_kernel.lm_run`, imported on first use (numba's import costs ~0.3 s; its first compilation a
-    few seconds, then it is loaded from numba's on-disk cache)."""
+def compiled_kernel():
+    """:func:`.lm_kernel.lm_run`, ready to run: the first call imports numba (~0.3 s) and runs the kernel once on
+    a one-joint chain, so that numba loads its machine code from the on-disk cache (~0.4 s) or, the first
+    time after an install, compiles it (~15 s) here, and not inside a solve's time budget. Later calls
+    return at once. :func:`~evoik_pin.solvers.memetic.memetic` calls it before starting its clock."""
     if not _KERNEL:
         from .lm_kernel import lm_run
 
+        FR, Fp = np.tile(np.eye(3), (2, 1, 1)), np.zeros((2, 3))
+        box = np.zeros((5, 1))
+        box[[_B_LO, _B_CLO]], box[[_B_HI, _B_CHI]] = -1.0, 1.0
+        params = np.zeros(9)
+        params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_ITERATIONS, _P_POSE]] = 1e-6, 1e-6, 1e-2, 1.0, 1.0, 1.0
+        # the argument types of LevenbergMarquardt.run (C-contiguous float64 / bool arrays, a Python bool)
+        lm_run(np.zeros(1), FR, Fp, np.ones(1, dtype=bool), box, False, np.zeros(3), np.eye(3), params, np.empty(1))
         _KERNEL.append(lm_run)
     return _KERNEL[0]
 
@@ -228,7 +238,7 @@ class LevenbergMarquardt:
         self.eye = _EYES[self.m]
         self._kernel = None
         if engine == "compiled" and self.kind != "planar":
-            self._kernel = _compiled_kernel()
+            self._kernel = compiled_kernel()
             FR, Fp, rev = robot.chain_constants()
             self._chain = (FR, Fp, rev)
             self._box = box
