@@ -166,3 +166,36 @@ def test_engine_option(robots, reachable_pose):
     x, y = reachable_pose(planar, 5).translation[:2]
     res = ev.solve(planar, Target.planar_target(x, y), seed=1, engine="compiled", timeout=None, max_restarts=5)
     assert res.success and res.position_error <= 1e-6
+
+
+@pytest.mark.parametrize("name", ["panda", "ax18"])
+def test_compiled_pairs_equal_one_run_per_pair(robots, name):
+    # solve_many's compiled rounds: one kernel call over all pairs gives what one LM run per pair gives
+    from evoik_pin.solvers.polish import compiled_pairs
+
+    robot = robots[name]
+    rng = np.random.default_rng(21)
+    Qt, Q0 = robot.random_configurations(30, rng), robot.random_configurations(30, rng)
+    targets = [Target(robot.fk(q).translation) if name == "ax18" else Target.coerce(robot.fk(q)) for q in Qt]
+    out = compiled_pairs(robot, Q0, targets, robot.lower, robot.upper, 1e-6, 1e-6)
+    assert 0 < out.converged.sum() < 30
+    for i, t in enumerate(targets):
+        one = LevenbergMarquardt(IKProblem(robot, t)).run(Q0[i], 30)
+        assert np.array_equal(out.q[i], one.q) and out.converged[i] == one.converged
+        assert out.position_error[i] == one.position_error and out.evaluations[i] == one.evaluations
+        if name == "ax18":
+            assert out.orientation_error is None
+        else:
+            assert out.orientation_error[i] == one.orientation_error
+
+
+def test_solve_many_engines_agree_on_success(robots):
+    robot = robots["kinova"]
+    H = np.array([robot.fk(q).homogeneous for q in robot.random_configurations(200, np.random.default_rng(22))])
+    for engine in ("compiled", "python"):
+        res = ev.solve_many(robot, H, seed=3, engine=engine, timeout=None, max_restarts=10)
+        assert res.stats["success_rate"] == 1.0
+        for r, T in zip(res, H, strict=True):
+            Tq = robot.fk(r.q)
+            assert np.linalg.norm(Tq.translation - T[:3, 3]) <= 1e-6 and robot.within_bounds(r.q)
+            assert np.linalg.norm(pin.log3(T[:3, :3].T @ Tq.rotation)) <= 1e-6

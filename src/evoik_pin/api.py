@@ -199,9 +199,11 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
 
     With ``method="memetic"`` (the default) the targets are solved in batched rounds first: every
     unsolved target starts from its nearest seed-table entry (from ``q0`` in the first round when given),
-    and one batched Levenberg-Marquardt (:func:`~evoik_pin.solvers.polish.batch_levenberg_marquardt`:
-    one NumPy kinematics pass and one batched 6 x 6 solve per iteration for all unsolved targets at once)
-    runs per round, each round trying the next-nearest table entry for the targets still unsolved. The
+    and one call runs Levenberg-Marquardt on all of them per round, each round trying the next-nearest
+    table entry for the targets still unsolved: for pose and position targets one compiled loop over the
+    pairs (:func:`~evoik_pin.solvers.polish.compiled_pairs`, memetic's LM iteration), for planar targets or
+    ``engine="python"`` a NumPy batch LM (:func:`~evoik_pin.solvers.polish.batch_levenberg_marquardt`: one
+    kinematics pass and one batched solve per iteration for all unsolved targets at once). The
     targets left after ``table_seeds`` rounds go to the per-target ``memetic`` solver (with the same
     options, e.g. ``timeout``). Other methods, or a custom ``objective``, solve the targets one by one.
 
@@ -248,7 +250,7 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     template, solver_options = make_problem(robot, targets[0], **dict(options))
     info.check_options(solver_options)
     from .solvers.memetic import default_table_size, seed_table
-    from .solvers.polish import batch_levenberg_marquardt
+    from .solvers.polish import batch_levenberg_marquardt, compiled_pairs
 
     table_size = solver_options.get("table_size")
     table_size = default_table_size(robot.n) if table_size is None else int(table_size)
@@ -261,7 +263,10 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     for i, t in enumerate(targets):
         by_kind.setdefault(_target_kind(t), []).append(i)
     table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
-    for members in by_kind.values():
+    for kind, members in by_kind.items():
+        # pose and position targets: one compiled LM run per pair (the engine of memetic's LM); planar ones, or
+        # engine="python": NumPy batch LM over all pairs at once
+        compiled = kind in ("pose", "position") and solver_options.get("engine", "compiled") == "compiled"
         members = np.array(members)
         pending = members
         plan = [("q0", None)] if Q0 is not None else []
@@ -275,8 +280,11 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
                 Qs = Q0[pending]
             else:
                 Qs = table.Q[table.nearest(group, rank + 1)[:, rank]]
-            # 15 steps: converging pairs need about 5-10; the rest are left to the next seed or the fallback
-            out = batch_levenberg_marquardt(robot, Qs, group, lower, upper, tol, rtol, max_iterations=15)
+            if compiled:
+                out = compiled_pairs(robot, Qs, group, lower, upper, tol, rtol)
+            else:
+                # 15 steps: converging pairs need about 5-10; the rest are left to the next seed or the fallback
+                out = batch_levenberg_marquardt(robot, Qs, group, lower, upper, tol, rtol, max_iterations=15)
             share = (time.perf_counter() - t0) / pending.size
             for j in np.nonzero(out.converged)[0]:
                 pos = float(out.position_error[j])

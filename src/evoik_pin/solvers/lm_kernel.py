@@ -517,3 +517,16 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
             pos, rot = pos_n, rot_n
     q_out[:] = q
     return pos, rot if pose else np.nan, converged, it, evaluations
+
+
+@njit(cache=True, nogil=True)
+def lm_run_pairs(Q, FR, Fp, rev, box, any_wrap, P, Rts, params, Q_out, stats):
+    """:func:`lm_run` on M (start, target) pairs: starts Q (M, n), target positions P (M, 3) and rotations
+    Rts (M, 3, 3); end configurations to Q_out (M, n) and, per pair, (position error, orientation error,
+    converged, iterations, evaluations) to the rows of stats (M, 5). For ``solve_many``."""
+    for i in range(Q.shape[0]):
+        pos, rot, converged, it, evaluations = lm_run(Q[i], FR, Fp, rev, box, any_wrap, P[i], Rts[i], params,
+                                                      Q_out[i])
+        stats[i, 0], stats[i, 1] = pos, rot
+        stats[i, 2] = 1.0 if converged else 0.0
+        stats[i, 3], stats[i, 4] = it, evaluations

@@ -57,7 +57,7 @@ from ..errors import OptionError
 from ..problem import IKProblem, Target
 
 __all__ = ["ENGINES", "BatchOutcome", "LMOutcome", "LevenbergMarquardt", "batch_levenberg_marquardt", "compiled_kernel",
-           "wrapping_joints"]
+           "compiled_pairs", "wrapping_joints"]
 
 TWO_PI = 2.0 * np.pi
 #: LM engines: "compiled" runs pose and position targets in the numba kernel of :mod:`.lm_kernel` (planar
@@ -67,6 +67,9 @@ ENGINES = ("compiled", "python")
 DEFAULT_DAMPING = 1e-2
 #: Steps allowed to one LM run started from a seed (converging runs need about 5-15).
 DEFAULT_ITERATIONS = 30
+#: Stall test: a run stops when |e| has not dropped below DEFAULT_STALL_RATIO times its value
+#: DEFAULT_STALL_WINDOW accepted steps earlier.
+DEFAULT_STALL_WINDOW, DEFAULT_STALL_RATIO = 4, 0.5
 #: Largest length |dq| of one step (rad or m, Euclidean); longer steps are scaled down (trust region).
 DEFAULT_MAX_STEP = 1.0
 _LAMBDA_MIN, _LAMBDA_MAX = 1e-12, 1e4
@@ -120,21 +123,26 @@ _KERNEL = []
 
 
 def compiled_kernel():
-    """:func:`.lm_kernel.lm_run`, ready to run: the first call imports numba (~0.3 s) and runs the kernel once on
-    a one-joint chain, so that numba loads its machine code from the on-disk cache (~0.4 s) or, the first
-    time after an install, compiles it (~15 s) here, and not inside a solve's time budget. Later calls
-    return at once. :func:`~evoik_pin.solvers.memetic.memetic` calls it before starting its clock."""
+    """:func:`.lm_kernel.lm_run`, ready to run: the first call imports numba (~0.3 s) and runs the kernel (and
+    :func:`.lm_kernel.lm_run_pairs`) once on a one-joint chain, so that numba loads the machine code from its
+    on-disk cache (~0.5 s) or, the first time after an install, compiles it (~15 s) here, and not inside a
+    solve's time budget. Later calls return at once. :func:`~evoik_pin.solvers.memetic.memetic` calls it
+    before starting its clock."""
     if not _KERNEL:
-        from .lm_kernel import lm_run
+        from .lm_kernel import lm_run, lm_run_pairs
 
         FR, Fp = np.tile(np.eye(3), (2, 1, 1)), np.zeros((2, 3))
         box = np.zeros((5, 1))
         box[[_B_LO, _B_CLO]], box[[_B_HI, _B_CHI]] = -1.0, 1.0
         params = np.zeros(9)
         params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_ITERATIONS, _P_POSE]] = 1e-6, 1e-6, 1e-2, 1.0, 1.0, 1.0
-        # the argument types of LevenbergMarquardt.run (C-contiguous float64 / bool arrays, a Python bool)
-        lm_run(np.zeros(1), FR, Fp, np.ones(1, dtype=bool), box, False, np.zeros(3), np.eye(3), params, np.empty(1))
-        _KERNEL.append(lm_run)
+        # the argument types of LevenbergMarquardt.run and compiled_pairs (C-contiguous float64 / bool arrays,
+        # a Python bool)
+        rev = np.ones(1, dtype=bool)
+        lm_run(np.zeros(1), FR, Fp, rev, box, False, np.zeros(3), np.eye(3), params, np.empty(1))
+        lm_run_pairs(np.zeros((1, 1)), FR, Fp, rev, box, False, np.zeros((1, 3)), np.eye(3)[None].copy(), params,
+                     np.empty((1, 1)), np.empty((1, 5)))
+        _KERNEL.extend((lm_run, lm_run_pairs))
     return _KERNEL[0]
 
 
@@ -197,8 +205,8 @@ class LevenbergMarquardt:
     """
 
     def __init__(self, problem: IKProblem, damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
-                 stall_window: int = 4, stall_ratio: float = 0.5, finish: bool = True,
-                 engine: str = "compiled") -> None:
+                 stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
+                 finish: bool = True, engine: str = "compiled") -> None:
         if engine not in ENGINES:
             raise OptionError(f"LM engine {engine!r} unknown; use one of {list(ENGINES)}")
         self.engine = engine
@@ -598,6 +606,39 @@ class LevenbergMarquardt:
                 checkpoint = c.copy()
         err = pos + (0.0 if rot is None else rot)
         return outcome(int(err.argmin()), False, it)
+
+
+# ---------------------------------------------------------------------- many pairs, compiled
+def compiled_pairs(robot, Q: np.ndarray, targets: list[Target], lower: np.ndarray, upper: np.ndarray,
+                   tolerance: float, rotation_tolerance: float, max_iterations: int = DEFAULT_ITERATIONS,
+                   damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP) -> BatchOutcome:
+    """:meth:`LevenbergMarquardt.run` (compiled engine) on many (configuration, target) pairs in one call of
+    :func:`.lm_kernel.lm_run_pairs`: what :func:`batch_levenberg_marquardt` does for ``solve_many``, with the
+    full iteration (limit re-solve, stall test, finishing step) at about 1-2 us per step and pair.
+
+    Args:
+        robot: the chain. Q: (N, n) start configurations. targets: N targets, all pose or all position
+            (planar targets: :func:`batch_levenberg_marquardt`). lower, upper: (n,) box. tolerance (m),
+            rotation_tolerance (rad): success thresholds. max_iterations: steps per pair.
+    """
+    compiled_kernel()
+    lm_run_pairs = _KERNEL[1]
+    N = Q.shape[0]
+    pose = targets[0].rotation is not None
+    P = np.ascontiguousarray([t.position for t in targets], dtype=float)
+    Rts = np.ascontiguousarray([t.rotation for t in targets] if pose else np.broadcast_to(np.eye(3), (N, 3, 3)),
+                               dtype=float)
+    _, any_wrap, _, _, box = _box_constants(robot, lower, upper)
+    params = np.zeros(9)
+    params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_STALL_WINDOW, _P_STALL_RATIO, _P_FINISH, _P_ITERATIONS,
+            _P_POSE]] = (tolerance, rotation_tolerance, damping, max_step, DEFAULT_STALL_WINDOW,
+                         DEFAULT_STALL_RATIO, 1.0, max_iterations, float(pose))
+    FR, Fp, rev = robot.chain_constants()
+    Q_out = np.empty((N, robot.n))
+    stats = np.empty((N, 5))
+    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), FR, Fp, rev, box, any_wrap, P, Rts, params, Q_out, stats)
+    return BatchOutcome(Q_out, stats[:, 0].copy(), stats[:, 1].copy() if pose else None, stats[:, 2] != 0.0,
+                        stats[:, 4].astype(np.int64))
 
 
 # ---------------------------------------------------------------------- batched version
