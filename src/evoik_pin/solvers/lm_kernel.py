@@ -144,6 +144,17 @@ _PREC3, _PREC2 = np.finfo(np.float64).eps ** (1.0 / 3.0), np.finfo(np.float64).e
 
 
 @njit(cache=True, nogil=True)
+def _add_half_skew(v, A):
+    """A (3, 3) += [v / 2]x, the skew matrix of v / 2 (Pinocchio's ``addSkew(0.5 * v, A)``)."""
+    A[0, 1] -= 0.5 * v[2]
+    A[1, 0] += 0.5 * v[2]
+    A[0, 2] += 0.5 * v[1]
+    A[2, 0] -= 0.5 * v[1]
+    A[1, 2] -= 0.5 * v[0]
+    A[2, 1] += 0.5 * v[0]
+
+
+@njit(cache=True, nogil=True)
 def jlog3(theta, w, A):
     """``pin.Jlog3``: A (3, 3), the derivative of ``log3(R exp(dw))`` at dw = 0, from ``w = log3(R)`` (angle
     theta): ``alpha w w^T + d I + [w]x / 2``."""
@@ -158,12 +169,7 @@ def jlog3(theta, w, A):
         for j in range(3):
             A[i, j] = alpha * w[i] * w[j]
         A[i, i] += d
-    A[0, 1] -= 0.5 * w[2]
-    A[1, 0] += 0.5 * w[2]
-    A[0, 2] += 0.5 * w[1]
-    A[2, 0] -= 0.5 * w[1]
-    A[1, 2] -= 0.5 * w[0]
-    A[2, 1] += 0.5 * w[0]
+    _add_half_skew(w, A)
 
 
 @njit(cache=True, nogil=True)
@@ -212,12 +218,7 @@ def jlog6(theta, w, t, A, B):
         for j in range(3):
             C[i, j] = vi * w[j] + beta * w[i] * t[j]
         C[i, i] += wTp * beta
-    C[0, 1] -= 0.5 * t[2]
-    C[1, 0] += 0.5 * t[2]
-    C[0, 2] += 0.5 * t[1]
-    C[2, 0] -= 0.5 * t[1]
-    C[1, 2] -= 0.5 * t[0]
-    C[2, 1] += 0.5 * t[0]
+    _add_half_skew(t, C)
     for i in range(3):
         for j in range(3):
             B[i, j] = C[i, 0] * A[0, j] + C[i, 1] * A[1, j] + C[i, 2] * A[2, j]

@@ -33,9 +33,14 @@ there (an accepted step that did not halve ``|e|`` while ``|e| < 1e-2``), the st
 acceleration (Transtrum & Sethna 2012: the error's second directional derivative from one extra FK),
 which bends it along the valley and cuts those runs to about a third of the steps.
 
-:class:`LevenbergMarquardt` works through Pinocchio one configuration at a time
-(``Robot.tip_pose_seen_from_unchecked`` for pose targets, ``Robot.fk_unchecked``,
-``Robot.jacobian_local_unchecked``): a handful of C++ calls and small NumPy products per step.
+:class:`LevenbergMarquardt` has two engines for one iteration. ``engine="compiled"`` (the default, pose and
+position targets) runs a whole LM run in one call of the numba kernel :func:`.lm_kernel.lm_run` (about 1-2 us
+per step); ``engine="python"`` (:meth:`LevenbergMarquardt.run_python`, and every planar target) works
+through Pinocchio one configuration at a time (``Robot.tip_pose_seen_from_unchecked`` for pose targets,
+``Robot.fk_unchecked``, ``Robot.jacobian_local_unchecked``): a handful of C++ calls and small NumPy
+products per step, about 30 us. The tests hold the two to the same steps from the same starts.
+:func:`compiled_pairs` runs the kernel on many (start, target) pairs in one call, for
+:func:`evoik_pin.solve_many`.
 :meth:`LevenbergMarquardt.run_many` runs K starts in lockstep (per-configuration kinematics, one batched
 NumPy pass for the linear algebra of all K). :func:`batch_levenberg_marquardt` runs the iteration on many
 (configuration, target) pairs at once with the NumPy batch kinematics (``Robot.fk_jacobian_batch``), for
@@ -119,6 +124,18 @@ def _box_constants(robot, lower: np.ndarray, upper: np.ndarray):
     return hit[1]
 
 
+def _kernel_params(tolerance: float, rotation_tolerance: float, pose: bool, iterations: int = 0,
+                   damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
+                   stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
+                   finish: bool = True) -> np.ndarray:
+    """The (9,) ``params`` vector of :func:`.lm_kernel.lm_run` (layout: the ``_P_*`` indices)."""
+    params = np.empty(9)
+    params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_STALL_WINDOW, _P_STALL_RATIO, _P_FINISH, _P_ITERATIONS,
+            _P_POSE]] = (tolerance, rotation_tolerance, damping, max_step, stall_window, stall_ratio, float(finish),
+                         iterations, float(pose))
+    return params
+
+
 _KERNEL = []
 
 
@@ -134,8 +151,7 @@ def compiled_kernel():
         FR, Fp = np.tile(np.eye(3), (2, 1, 1)), np.zeros((2, 3))
         box = np.zeros((5, 1))
         box[[_B_LO, _B_CLO]], box[[_B_HI, _B_CHI]] = -1.0, 1.0
-        params = np.zeros(9)
-        params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_ITERATIONS, _P_POSE]] = 1e-6, 1e-6, 1e-2, 1.0, 1.0, 1.0
+        params = _kernel_params(1e-6, 1e-6, pose=True, iterations=1)
         # the argument types of LevenbergMarquardt.run and compiled_pairs (C-contiguous float64 / bool arrays,
         # a Python bool)
         rev = np.ones(1, dtype=bool)
@@ -252,11 +268,8 @@ class LevenbergMarquardt:
             self._box = box
             self._pt = np.ascontiguousarray(target.position, dtype=float)
             self._Rt = np.ascontiguousarray(target.rotation if target.rotation is not None else _EYES[3], dtype=float)
-            params = np.zeros(9)
-            params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_STALL_WINDOW, _P_STALL_RATIO, _P_FINISH, _P_POSE]] = (
-                self.tol_p, self.tol_r, self.damping, self.max_step, self.stall_window, self.stall_ratio,
-                float(self.finish), float(self.kind == "pose"))
-            self._params = params
+            self._params = _kernel_params(self.tol_p, self.tol_r, self.kind == "pose", 0, self.damping,
+                                          self.max_step, self.stall_window, self.stall_ratio, self.finish)
 
     # ------------------------------------------------------------------ task error
     def _residual_pose(self, T: pin.SE3):
@@ -629,10 +642,7 @@ def compiled_pairs(robot, Q: np.ndarray, targets: list[Target], lower: np.ndarra
     Rts = np.ascontiguousarray([t.rotation for t in targets] if pose else np.broadcast_to(np.eye(3), (N, 3, 3)),
                                dtype=float)
     _, any_wrap, _, _, box = _box_constants(robot, lower, upper)
-    params = np.zeros(9)
-    params[[_P_TOL, _P_RTOL, _P_DAMPING, _P_MAX_STEP, _P_STALL_WINDOW, _P_STALL_RATIO, _P_FINISH, _P_ITERATIONS,
-            _P_POSE]] = (tolerance, rotation_tolerance, damping, max_step, DEFAULT_STALL_WINDOW,
-                         DEFAULT_STALL_RATIO, 1.0, max_iterations, float(pose))
+    params = _kernel_params(tolerance, rotation_tolerance, pose, max_iterations, damping, max_step)
     FR, Fp, rev = robot.chain_constants()
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, 5))
