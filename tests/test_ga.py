@@ -9,6 +9,7 @@ from evoik_pin.errors import OptionError
 from evoik_pin.solvers.analytic import planar2r_ik
 from evoik_pin.solvers.clustering import joint_distances, leader_clusters
 from evoik_pin.solvers.ga import (
+    basic_polynomial_mutation,
     decode_bounds,
     decode_sign_magnitude,
     niche_counts,
@@ -58,6 +59,25 @@ def test_sbx_children_are_symmetric_about_the_parents():
     C1, C2 = sbx_pairs(P1, P2, 5.0, rng.random((50, 3)))
     assert np.allclose(C1 + C2, P1 + P2)
     assert np.allclose(sbx_pairs(P1, P2, 5.0, np.full((50, 3), 0.5))[0], np.minimum(P1, P2))  # beta = 1
+
+
+def test_basic_polynomial_mutation_is_eq_11():
+    """delta = (2u)^(1/(eta+1)) - 1 below u = 0.5, 1 - (2(1-u))^(1/(eta+1)) above; x += delta (upper - lower)."""
+    lo, hi = np.array([-1.0, 0.0]), np.array([1.0, 4.0])
+    X = np.array([[0.5, 1.0], [-1.0, 4.0]])
+    u = np.array([[0.1, 0.5], [0.2, 0.9]])
+    eta = 3.0
+    got = basic_polynomial_mutation(X, lo, hi, eta, np.ones_like(X, bool), u)
+    delta = np.where(u < 0.5, (2 * u) ** 0.25 - 1, 1 - (2 * (1 - u)) ** 0.25)
+    assert np.allclose(got, X + delta * (hi - lo), rtol=0, atol=1e-15)
+    assert got[0, 1] == X[0, 1]  # u = 0.5: no move
+    assert got[1, 0] < lo[0] and got[1, 1] > hi[1]  # the spread ignores the bounds (the GA clips afterwards)
+    mask = np.array([[True, False], [False, True]])
+    assert np.array_equal(basic_polynomial_mutation(X, lo, hi, eta, mask, u)[~mask], X[~mask])
+    # mean |delta| is 1 / (eta + 2): eta = 100 perturbs by about 1 % of the range
+    U = np.random.default_rng(0).random((200000, 1))
+    d = basic_polynomial_mutation(np.zeros((200000, 1)), np.zeros(1), np.ones(1), 100.0, np.ones((200000, 1), bool), U)
+    assert np.abs(d).mean() == pytest.approx(1 / 102, rel=0.01)
 
 
 @pytest.mark.parametrize("target", [(0.2, 0.2), (0.2, 0.25), (0.15, 0.3), (0.38, 0.0)])

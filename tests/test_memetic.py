@@ -14,8 +14,9 @@ from evoik_pin.errors import OptionError, TargetError
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.result import Result
 from evoik_pin.robot import list_robots, load_robot
-from evoik_pin.solvers.memetic import SeedTable, default_table_size, polish_result, seed_table
-from evoik_pin.solvers.polish import LevenbergMarquardt, batch_levenberg_marquardt
+from evoik_pin.solvers.lm.reference import ReferenceLM
+from evoik_pin.solvers.memetic import SeedTable, default_table_size, seed_table
+from evoik_pin.solvers.polish import polish_result
 
 #: Arms with fewer than 6 joints (or 5, so_arm) get position targets; planar2r a planar one.
 POSITION_ONLY = {"ax18", "puma3r", "vehicle_arm", "so_arm"}
@@ -167,6 +168,78 @@ def test_unreachable_target_gives_best_approximation_within_the_time_budget(robo
 def test_default_timeout_is_respected(robots):
     res = ev.solve(robots["ur5"], [5.0, 5.0, 5.0], seed=1)
     assert not res.success and res.time_s <= 0.005 + 0.05
+
+
+def test_a_minimum_of_work_is_done_whatever_the_clock_says(robots):
+    # a process descheduled past its budget (simulated by a budget that is over before it starts) still makes
+    # the guaranteed LM runs: the 4 nearest seed-table entries (and q0), exactly as a deterministic budget of
+    # 4 table seeds and no restart does
+    from evoik_pin.solvers.memetic import GUARANTEED_TABLE_RUNS
+
+    robot = robots["panda"]
+    rng = np.random.default_rng(26)
+    solved = 0
+    for i, q in enumerate(robot.random_configurations(30, rng)):
+        T = robot.fk(q)
+        late = ev.solve(robot, T, seed=i, timeout=1e-12)
+        ref = ev.solve(robot, T, seed=i, timeout=None, max_restarts=0, table_seeds=GUARANTEED_TABLE_RUNS)
+        assert late.success == ref.success and np.array_equal(late.q, ref.q)
+        solved += late.success
+        q0 = np.clip(q + 0.02, robot.lower, robot.upper)
+        assert ev.solve(robot, T, seed=i, timeout=1e-12, q0=q0).success  # q0 always gets its run
+    assert solved >= 25
+
+
+def test_halton_points_equal_scipys():
+    from scipy.stats import qmc
+
+    from evoik_pin.solvers.memetic import halton
+
+    for d in (1, 2, 6, 7, 9):
+        assert np.array_equal(halton(d, 1000, skip=1), qmc.Halton(d, scramble=False).random(1001)[1:])
+
+
+_FRESH_PROCESS = """
+import json, shutil, sys
+import numpy as np
+import evoik_pin as ev
+from evoik_pin.robot import example_robot_data_dir
+path = sys.argv[1]
+shutil.copy(example_robot_data_dir() / "panda_description/urdf/panda.urdf", path)
+robot = ev.load_robot(path, tip="panda_hand_tcp")  # a URDF path never loaded before
+rng = np.random.default_rng(int(sys.argv[2]))
+out = []
+for q, q0 in zip(robot.random_configurations(8, rng), robot.random_configurations(8, rng)):
+    r = ev.solve(robot, robot.fk(q), q0=q0, seed=0)  # default 5 ms budget, a random q0
+    out.append([r.success, r.time_s, r.setup_s, r.message])
+print(json.dumps(out))
+"""
+
+
+def test_first_solve_in_a_fresh_process_is_not_charged_for_set_up(robots, tmp_path):
+    # The first solve of a process loads numba and the compiled kernel and builds the seed table (0.5-2 s, ~15 s
+    # right after an install): that work happens before the clock starts and is reported as setup_s. The
+    # targets are chosen so that the guaranteed runs solve them (whatever the machine's load); before the fix,
+    # the first of them failed with "time budget exhausted after 1 LM run".
+    import json
+    import subprocess
+    import sys
+
+    seed = 5
+    robot = robots["panda"]
+    rng = np.random.default_rng(seed)
+    for q, q0 in zip(robot.random_configurations(8, rng), robot.random_configurations(8, rng), strict=True):
+        ref = ev.solve(robot, robot.fk(q), q0=q0, seed=0, timeout=None, max_restarts=0, table_seeds=4)
+        assert ref.success  # so the fresh process must succeed whatever the clock says
+    proc = subprocess.run([sys.executable, "-c", _FRESH_PROCESS, str(tmp_path / "my_arm.urdf"), str(seed)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    rows = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert all(ok for ok, _, _, _ in rows), rows
+    first_setup = rows[0][2]
+    assert first_setup > 0.05  # numba's import alone costs more; it is reported, not charged to time_s
+    assert all(setup < first_setup for _, _, setup, _ in rows[1:])
+    assert rows[0][1] < first_setup  # the first solve's own time excludes its set-up
 
 
 def test_same_seed_same_result(robots):
@@ -350,33 +423,6 @@ def test_solve_many_bad_input(robots):
 
 
 # ---------------------------------------------------------------------- the LM engines and the seed table
-def test_batched_lm_agrees_with_fk(robots):
-    robot = robots["kinova"]
-    rng = np.random.default_rng(31)
-    Q = robot.random_configurations(40, rng)
-    targets = [Target.coerce(robot.fk(q)) for q in Q]
-    starts = np.clip(Q + rng.normal(0, 0.1, Q.shape), robot.lower, robot.upper)
-    out = batch_levenberg_marquardt(robot, starts, targets, robot.lower, robot.upper, 1e-9, 1e-9)
-    assert out.converged.mean() > 0.9
-    for k in np.nonzero(out.converged)[0]:
-        pos, rot = _pose_error(robot, out.q[k], targets[k].se3())
-        assert abs(pos - out.position_error[k]) < 1e-12 and pos <= 1e-9 and rot <= 1e-9
-        assert robot.within_bounds(out.q[k])
-
-
-def test_lockstep_runs_return_a_converged_start(robots):
-    robot = robots["panda"]
-    rng = np.random.default_rng(32)
-    q = robot.random_configurations(1, rng)[0]
-    lm = LevenbergMarquardt(IKProblem(robot, robot.fk(q)))
-    starts = robot.random_configurations(8, rng)
-    starts[5] = np.clip(q + 0.05, robot.lower, robot.upper)  # one start in the basin of the solution
-    out, k = lm.run_many(starts, 50)
-    assert out.converged and robot.within_bounds(out.q)
-    pos, rot = _pose_error(robot, out.q, robot.fk(q))
-    assert pos <= 1e-6 and rot <= 1e-6 and 0 <= k < 8
-
-
 def test_seed_table_is_deterministic_and_nearest_is_nearest(robots):
     robot = robots["z1"]
     a = SeedTable(robot, robot.lower, robot.upper, 512)
@@ -431,33 +477,25 @@ def test_geodesic_acceleration_vanishes_on_a_linear_error_and_is_refused_when_to
     robot = robots["panda"]
     rng = np.random.default_rng(41)
     q, qt = robot.random_configurations(2, rng)
-    lm = LevenbergMarquardt(IKProblem(robot, robot.fk(qt)))
+    lm = ReferenceLM(IKProblem(robot, robot.fk(qt)))
     e, extra, _, _ = lm.residual(robot.fk_unchecked(q))
     E = lm.task_jacobian(q, extra)
     v = 0.01 * rng.standard_normal(robot.n)
     # e(q + h v) exactly on the tangent line: no curvature, no acceleration
-    (a,) = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], (e + 0.1 * E @ v)[None])
+    a = lm._geodesic(e, E, E @ E.T, 1e-6, v, e + 0.1 * E @ v)
     assert a is not None and np.abs(a).max() < 1e-9
     # the real error bends: a small correction, accepted and finite
-    (a,) = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], lm.residual(robot.fk_unchecked(q + 0.1 * v))[0][None])
+    a = lm._geodesic(e, E, E @ E.T, 1e-6, v, lm.residual(robot.fk_unchecked(q + 0.1 * v))[0])
     assert a is None or (np.isfinite(a).all() and np.linalg.norm(a) <= 0.375 * np.linalg.norm(v) + 1e-15)
     # a curvature far beyond the step's length is not trusted
-    (a,) = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], (e + 0.1 * E @ v + 1.0)[None])
-    assert a is None
-    # batched form (K configurations, E E^T computed inside) agrees with the single one
-    Q = np.stack([q, q])
+    assert lm._geodesic(e, E, E @ E.T, 1e-6, v, e + 0.1 * E @ v + 1.0) is None
+    # the formula: a = -(E^T E + lam I)^-1 E^T r'' with r'' = 2/h ((e(q + h v) - e)/h - E v), h = 0.1
     eh = lm.residual(robot.fk_unchecked(q + 0.1 * v))[0]
-    single = lm._geodesic(q, e, E, E @ E.T, 1e-6, v[None], eh[None])[0]
-    both = lm._geodesic(Q, np.stack([e, e]), np.stack([E, E]), None, np.array([1e-6, 1e-6]), np.stack([v, v]),
-                        np.stack([eh, eh]))
-    for b in both:
-        assert (b is None) == (single is None)
-        if b is not None:
-            np.testing.assert_allclose(b, single, atol=1e-12)
-    # and so does the one-configuration hot path of LevenbergMarquardt.run (Cholesky instead of LU)
-    for lam, eh_k in [(1e-6, eh), (1e-3, e + 0.1 * E @ v), (1e-6, e + 0.1 * E @ v + 1.0)]:
-        one = lm._geodesic_one(e, E, E @ E.T, lam, v, eh_k)
-        ref = lm._geodesic(q, e, E, E @ E.T, lam, v[None], eh_k[None])[0]
-        assert (one is None) == (ref is None)
-        if one is not None:
-            np.testing.assert_allclose(one, ref, rtol=1e-9, atol=1e-12)
+    for lam in (1e-6, 1e-3):
+        a = lm._geodesic(e, E, E @ E.T, lam, v, eh)
+        rpp = (2.0 / 0.1) * ((eh - e) / 0.1 - E @ v)
+        ref = -np.linalg.solve(E.T @ E + lam * np.eye(robot.n), E.T @ rpp)
+        if a is not None:
+            np.testing.assert_allclose(a, ref, rtol=1e-6, atol=1e-9)
+        else:
+            assert 2.0 * np.linalg.norm(ref) > 0.75 * np.linalg.norm(v)

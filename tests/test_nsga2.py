@@ -1,15 +1,20 @@
 """NSGA-II (paper 003): operators, ZDT1, and the vehicle-arm IK front."""
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import evoik_pin
-from evoik_pin import Target
+from evoik_pin import Target, lie
+from evoik_pin.api import make_problem
 from evoik_pin.errors import OptionError
+from evoik_pin.solvers.ga import basic_polynomial_mutation
 from evoik_pin.solvers.nsga2 import (
     _duplicate_rows,
+    _task_errors,
     _tournament,
     _tournament_pairs,
+    bounded_polynomial_mutation,
     crowding_distance,
     dominance_matrix,
     nondominated_ranks,
@@ -112,6 +117,51 @@ def test_duplicate_offspring_are_bred_again():
     assert run(False) > 10  # with 2 variables, parents copied unchanged are frequent
 
 
+def test_bounded_polynomial_mutation_stays_inside_and_differs_from_the_basic_one():
+    rng = np.random.default_rng(3)
+    lo, hi = np.array([-1.0, 0.0, 2.0]), np.array([1.0, 4.0, 2.5])
+    X = rng.uniform(lo, hi, size=(2000, 3))
+    X[:500] = lo  # entries on a bound are never pushed across it
+    X[500:1000] = hi
+    Y = bounded_polynomial_mutation(X, lo, hi, 20.0, 1.0, np.random.default_rng(4))
+    assert np.all((Y >= lo) & (Y <= hi))
+    on_lower = Y[:500][(Y[:500] != X[:500])]
+    assert on_lower.size and np.all(on_lower > np.broadcast_to(lo, (500, 3))[Y[:500] != X[:500]])
+    assert np.array_equal(bounded_polynomial_mutation(X, lo, hi, 20.0, 0.0, np.random.default_rng(4)), X)
+    # With the same draws, the basic operator of paper 001's GA gives other children: its spread ignores the
+    # bounds (an entry on the lower bound with u < 0.5 moves below it; the bounded one stays put).
+    r = np.random.default_rng(4)
+    mask, u = r.random(X.shape) < 1.0, r.random(X.shape)
+    basic = np.clip(basic_polynomial_mutation(X, lo, hi, 20.0, mask, u), lo, hi)
+    assert not np.array_equal(basic, Y)
+    assert np.array_equal(Y[:500][u[:500] < 0.5], X[:500][u[:500] < 0.5])
+
+
+def test_task_errors_are_log3_and_wrapped_yaw(reachable_pose):
+    problem, _ = make_problem("redundant7r", [0.4, 0.3, 0.7])
+    robot = problem.robot
+    goal = reachable_pose(robot, 3)
+    Q = robot.random_configurations(50, np.random.default_rng(5))
+    _, R = robot.fk_batch(Q)
+    # targets at random angles and at (or within 1e-9 rad of) pi from the first configuration's orientation
+    for R_goal in (goal.rotation, R[0] @ lie.exp3([[0.0, 0.0, np.pi]])[0], R[0] @ lie.exp3([[np.pi - 1e-9, 0, 0]])[0]):
+        problem, _ = make_problem(robot, Target(position=goal.translation, rotation=R_goal))
+        e = _task_errors(problem, Q)
+        P, R = robot.fk_batch(Q)
+        assert np.allclose(e[:, :3], goal.translation - P, rtol=0, atol=1e-15)
+        w = np.array([pin.log3(R_goal @ Rk.T) for Rk in R])
+        assert np.allclose(e[:, 3:], w, rtol=0, atol=1e-9)
+    assert np.linalg.norm(e[0, 3:]) == pytest.approx(np.pi - 1e-9, abs=1e-12)
+    planar, _ = make_problem("vehicle_arm", Target.planar_target(1.5, 0.5, 3.0))
+    Q = planar.robot.random_configurations(50, np.random.default_rng(6))
+    P, R = planar.robot.fk_batch(Q)
+    e = _task_errors(planar, Q)
+    assert np.allclose(e[:, :2], [1.5, 0.5] - P[:, :2], rtol=0, atol=1e-15)
+    dyaw = 3.0 - np.array([pin.rpy.matrixToRpy(Rk)[2] for Rk in R])
+    assert np.allclose(np.cos(e[:, 2]), np.cos(dyaw)) and np.allclose(np.sin(e[:, 2]), np.sin(dyaw))
+    assert np.all((-np.pi <= e[:, 2]) & (e[:, 2] < np.pi))
+
+
 def test_crowding_distance():
     F = np.array([[0.0, 1.0], [0.25, 0.5], [0.5, 0.4], [1.0, 0.0]])
     cd = crowding_distance(F)
@@ -144,7 +194,7 @@ def test_vehicle_arm_front_is_feasible_and_nondominated():
     robot = evoik_pin.load_robot("vehicle_arm")
     P, R = robot.fk_batch(front.q)
     assert np.abs(P[:, :2] - [1.5, 0.5]).max() <= 1e-6  # the problem's tolerance
-    assert np.abs(np.arctan2(R[:, 1, 0], R[:, 0, 0])).max() <= 1e-6
+    assert np.abs(lie.yaw(R)).max() <= 1e-6
     assert not _dominates_any(front.objectives)
     S = np.sqrt(((front.q ** 2) * [10, 10, 1, 1, 1]).sum(axis=1))  # q_prev = zeros
     assert np.allclose(front.objectives[:, 1], S)

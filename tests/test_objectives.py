@@ -4,6 +4,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from evoik_pin import lie
 from evoik_pin.errors import OptionError
 from evoik_pin.objectives import (
     JointLimitMargin,
@@ -17,7 +18,6 @@ from evoik_pin.objectives import (
     RPYPoseError,
     WeightedJointDisplacement,
     default_objective,
-    rpy_batch,
 )
 from evoik_pin.problem import Target
 from evoik_pin.robot import load_robot
@@ -81,7 +81,7 @@ def test_rpy_pose_error_of_paper_004_matches_row_by_row(arm, population, pose_ta
         expected.append(0.3 * np.linalg.norm(T.translation - pose_target.position) + 0.7 * np.linalg.norm(d))
     assert np.allclose(values, expected, atol=1e-10)
     R = np.array([arm.fk(q).rotation for q in population])
-    assert np.allclose(rpy_batch(R), [pin.rpy.matrixToRpy(r) for r in R], atol=1e-10)
+    assert np.allclose(lie.rpy(R), [pin.rpy.matrixToRpy(r) for r in R], atol=1e-10)
 
 
 def test_joint_displacement_terms(arm, population):

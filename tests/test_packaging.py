@@ -25,7 +25,8 @@ def test_wheel_contains_bundled_robots(tmp_path):
     names = set(zipfile.ZipFile(wheels[0]).namelist())
     for robot in BUNDLED_ROBOTS:
         assert f"evoik_pin/robots/{robot}.urdf" in names
-    assert "evoik_pin/robot.py" in names
+    for module in ("__init__", "loading", "kinematics", "frames"):
+        assert f"evoik_pin/robot/{module}.py" in names
 
 
 def test_installed_wheel_loads_bundled_robots(tmp_path):
@@ -43,3 +44,4 @@ def test_installed_wheel_loads_bundled_robots(tmp_path):
     assert proc.returncode == 0, proc.stderr
     module_file, robots_dir = proc.stdout.split()
     assert module_file.startswith(str(site)) and robots_dir.startswith(str(site))
+    assert Path(robots_dir) == Path(module_file).parent / "robots"  # evoik_pin/robots, found from evoik_pin/robot/

@@ -3,6 +3,7 @@
 import csv
 import importlib
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +56,15 @@ def test_context_streams_depend_on_seed_and_labels_only(tmp_path):
     assert np.array_equal(a, RunContext(tmp_path, seed=1).rng("002", "x").random(3))
     assert not np.array_equal(a, RunContext(tmp_path, seed=2).rng("002", "x").random(3))
     assert not np.array_equal(a, RunContext(tmp_path, seed=1).rng("002", "y").random(3))
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_map_parallel_returns_results_in_spec_order_and_raises_part_errors(tmp_path, jobs):
+    ctx = RunContext(tmp_path, progress=False, jobs=jobs)
+    assert ctx.map_parallel(math.sqrt, [9.0, 0.25, 4.0, 16.0, 1.0], "test") == [3.0, 0.5, 2.0, 4.0, 1.0]
+    assert ctx.map_parallel(math.sqrt, [], "test") == []
+    with pytest.raises(ValueError, match="math domain error"):
+        ctx.map_parallel(math.sqrt, [4.0, -1.0, 9.0], "test")
 
 
 def test_table_markdown_and_csv(tmp_path):

@@ -4,7 +4,7 @@ Load any serial-chain URDF (or one of the papers' arms) with :func:`load_robot`,
 the evolutionary methods of five research papers or the memetic default. See README.md.
 """
 
-from .api import BatchResults, make_problem, solve, solve_all, solve_many, solve_trajectory
+from .api import BatchResults, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
 from .problem import IKProblem, Target
 from .result import Front, Result
 from .robot import Robot, list_robots, load_robot
@@ -21,6 +21,7 @@ __all__ = [
     "load_robot",
     "make_problem",
     "methods",
+    "prepare",
     "solve",
     "solve_all",
     "solve_many",

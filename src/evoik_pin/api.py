@@ -1,4 +1,5 @@
-"""The public surface: :func:`solve`, :func:`solve_trajectory`, :func:`solve_all`, :func:`methods`.
+"""The public surface: :func:`solve`, :func:`solve_trajectory`, :func:`solve_all`, :func:`solve_many`,
+:func:`methods`. This module routes; solver logic lives in :mod:`evoik_pin.solvers`.
 
 Every call builds an :class:`~evoik_pin.problem.IKProblem` from the robot, the target and the shared
 options, draws all randomness from one ``numpy.random.Generator`` seeded by ``seed``, and hands the
@@ -11,13 +12,16 @@ import time
 
 import numpy as np
 
-from .errors import ConfigurationError, MethodError, OptionError, TargetError
+from .errors import ConfigurationError, MethodError, OptionError
 from .problem import DEFAULT_PRO_DELTA, IKProblem, Target
 from .result import Result
 from .robot import Robot, load_robot
-from .solvers import get_solver, methods
+from .solvers import batch, get_solver, methods
+from .solvers.batch import BatchResults
+from .solvers.lm import ENGINES
+from .solvers.options import check_int
 
-__all__ = ["DEFAULT_METHOD", "BatchResults", "make_problem", "methods", "solve", "solve_all", "solve_many",
+__all__ = ["DEFAULT_METHOD", "BatchResults", "make_problem", "methods", "prepare", "solve", "solve_all", "solve_many",
            "solve_trajectory"]
 
 #: Method used when none is named.
@@ -83,10 +87,35 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
     info.check_options(options)
     result = info.func(problem, rng, **options)
     if polish:
-        from .solvers.memetic import polish_result
+        from .solvers.polish import polish_result
 
         result = polish_result(problem, result, rng)
     return result
+
+
+def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "compiled") -> float:
+    """Do the one-time work of solving with ``robot`` now, so that no later solve pays for it.
+
+    Loads the compiled LM kernel (numba: about 0.5 s per process from its on-disk cache, about 15 s the first
+    time after an install) and builds the memetic solver's seed table for the search box (the robot's bounds,
+    or ``bounds=(lower, upper)``; ``table_size`` entries, default memetic's). :func:`solve` does this by
+    itself when needed, before its clock starts, and reports the time in ``Result.setup_s``; calling
+    ``prepare`` first moves that cost out of the first solve altogether.
+
+    Returns:
+        The seconds spent (about 0 when everything was ready).
+    """
+    from .solvers.memetic import default_table_size
+    from .solvers.memetic import prepare as prepare_memetic
+
+    t0 = time.perf_counter()
+    robot = _robot(robot)
+    problem, _ = make_problem(robot, np.zeros(3), bounds=bounds)
+    size = default_table_size(robot.n) if table_size is None else check_int("table_size", table_size, 0)
+    if engine not in ENGINES:
+        raise OptionError(f"LM engine {engine!r} unknown; use one of {list(ENGINES)}")
+    prepare_memetic(robot, problem.lower, problem.upper, size, engine)
+    return time.perf_counter() - t0
 
 
 def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> Result:
@@ -146,72 +175,21 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     return results
 
 
-class BatchResults(list):
-    """The list of :class:`Result` that :func:`solve_many` returns, one per target in order, plus ``stats``.
-
-    ``stats`` (a dict): ``n`` targets, ``solved``, ``success_rate``, ``time_s`` (wall clock of the whole
-    call), ``throughput`` (targets per second, ``n / time_s``), ``batched`` (targets solved by the batched
-    LM rounds) and ``fallback`` (targets handed to the per-target solver, and of those ``fallback_solved``).
-    """
-
-    stats: dict
-
-
-def _coerce_targets(targets) -> list[Target]:
-    """Targets as a list of :class:`Target`; a (N, 4, 4) array of poses is checked in one vectorized pass."""
-    if isinstance(targets, np.ndarray) and targets.ndim == 3 and targets.shape[1:] == (4, 4):
-        targets = targets.astype(float)
-        if not np.isfinite(targets).all():
-            bad = int(np.nonzero(~np.isfinite(targets).all(axis=(1, 2)))[0][0])
-            raise TargetError(f"target {bad} contains NaN or inf")
-        R = targets[:, :3, :3]
-        ortho = np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)).max(axis=(1, 2))
-        bad = np.nonzero((ortho > 1e-6) | (np.linalg.det(R) < 0))[0]
-        if bad.size:
-            raise TargetError(f"target {int(bad[0])}: rotation is not a rotation matrix (R^T R must be I and "
-                              "det R = +1 to 1e-6)")
-        out = []
-        for T in targets:  # already checked: skip Target's per-instance validation
-            t = object.__new__(Target)
-            object.__setattr__(t, "position", T[:3, 3].copy())
-            object.__setattr__(t, "rotation", T[:3, :3].copy())
-            object.__setattr__(t, "planar", False)
-            object.__setattr__(t, "yaw", None)
-            out.append(t)
-        return out
-    out = []
-    for i, t in enumerate(targets):
-        try:
-            out.append(Target.coerce(t))
-        except TargetError as exc:
-            raise TargetError(f"target {i}: {exc}") from None
-    return out
-
-
-def _target_kind(t: Target) -> str:
-    if t.planar:
-        return "planar" if t.yaw is None else "planar_yaw"
-    return "position" if t.rotation is None else "pose"
-
-
 def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None, **options) -> BatchResults:
-    """Solve many independent IK targets, amortizing the per-call overhead.
+    """Solve many independent IK targets, amortizing the per-call overhead (:mod:`evoik_pin.solvers.batch`).
 
-    With ``method="memetic"`` (the default) the targets are solved in batched rounds first: every
-    unsolved target starts from its nearest seed-table entry (from ``q0`` in the first round when given),
-    and one call runs Levenberg-Marquardt on all of them per round, each round trying the next-nearest
-    table entry for the targets still unsolved: for pose and position targets one compiled loop over the
-    pairs (:func:`~evoik_pin.solvers.polish.compiled_pairs`, memetic's LM iteration), for planar targets or
-    ``engine="python"`` a NumPy batch LM (:func:`~evoik_pin.solvers.polish.batch_levenberg_marquardt`: one
-    kinematics pass and one batched solve per iteration for all unsolved targets at once). The
-    targets left after ``table_seeds`` rounds go to the per-target ``memetic`` solver (with the same
-    options, e.g. ``timeout``). Other methods, or a custom ``objective``, solve the targets one by one.
+    With ``method="memetic"`` (the default) the targets are solved in batched rounds first: every unsolved
+    target starts from its nearest seed-table entry (from ``q0`` in the first round when given), and one
+    call of the compiled LM engine runs memetic's LM iteration on all of them, each round trying the
+    next-nearest table entry for the targets still unsolved (``table_seeds`` rounds, as many as memetic
+    tries). The targets left go to the per-target ``memetic`` solver (with the same options, e.g.
+    ``timeout``). Other methods, a custom ``objective`` or ``polish=True`` solve the targets one by one.
 
     Args:
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
         targets: a sequence of targets (anything :func:`solve` accepts: poses, positions, planar
             targets, all of one kind or mixed), or an array of N homogeneous poses (N, 4, 4), checked in one
-            vectorized pass.
+            vectorized pass (:meth:`Target.from_poses`).
         method: solver name. seed: int or Generator; one generator serves all targets, so a seed fixes
             every result (up to the per-target time budget, as for :func:`solve`).
         q0: None, one (n,) start for every target, or (N, n) starts.
@@ -223,101 +201,5 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         (``results.stats["throughput"]`` targets per second). A batch-solved target's ``time_s`` is its
         share of the batched rounds (their wall time divided by the targets they processed).
     """
-    t_start = time.perf_counter()
-    robot = _robot(robot)
-    rng = _rng(seed)
-    targets = _coerce_targets(targets)
-    N = len(targets)
-    if N == 0:
-        raise ConfigurationError("solve_many needs at least one target")
-    Q0 = None
-    if q0 is not None:
-        Q0 = np.asarray(q0, dtype=float)
-        if Q0.ndim == 1:
-            Q0 = np.broadcast_to(robot.check_q(Q0), (N, robot.n))
-        elif Q0.shape != (N, robot.n) or not np.isfinite(Q0).all():
-            raise ConfigurationError(f"q0 must be one joint vector ({robot.n},) or one per target ({N}, {robot.n}) "
-                                     f"of finite numbers, got shape {Q0.shape}")
-    info = get_solver(method)
-    if method != "memetic" or options.get("objective") is not None or options.get("polish"):
-        results = BatchResults()
-        for i, t in enumerate(targets):
-            problem, solver_options = make_problem(robot, t, q0=None if Q0 is None else Q0[i], **dict(options))
-            results.append(_run(problem, method, rng, solver_options))
-        return _with_stats(results, t_start, batched=0, fallback=N)
-
-    # One template problem checks the shared options once (tolerances, bounds, weights).
-    template, solver_options = make_problem(robot, targets[0], **dict(options))
-    info.check_options(solver_options)
-    from .solvers.memetic import default_table_size, seed_table
-    from .solvers.polish import batch_levenberg_marquardt, compiled_pairs
-
-    table_size = solver_options.get("table_size")
-    table_size = default_table_size(robot.n) if table_size is None else int(table_size)
-    rounds = int(solver_options.get("table_seeds", 8))
-    lower, upper = template.lower, template.upper
-    tol, rtol, w = template.tolerance, template.rotation_tolerance, template.orientation_weight
-    results: list[Result | None] = [None] * N
-    n_batched = 0
-    by_kind: dict[str, list[int]] = {}
-    for i, t in enumerate(targets):
-        by_kind.setdefault(_target_kind(t), []).append(i)
-    table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
-    for kind, members in by_kind.items():
-        # pose and position targets: one compiled LM run per pair (the engine of memetic's LM); planar ones, or
-        # engine="python": NumPy batch LM over all pairs at once
-        compiled = kind in ("pose", "position") and solver_options.get("engine", "compiled") == "compiled"
-        members = np.array(members)
-        pending = members
-        plan = [("q0", None)] if Q0 is not None else []
-        plan += [("seed table", r) for r in range(rounds if table is not None else 0)]
-        for label, rank in plan:
-            if pending.size == 0:
-                break
-            t0 = time.perf_counter()
-            group = [targets[i] for i in pending]
-            if rank is None:
-                Qs = Q0[pending]
-            else:
-                Qs = table.Q[table.nearest(group, rank + 1)[:, rank]]
-            if compiled:
-                out = compiled_pairs(robot, Qs, group, lower, upper, tol, rtol)
-            else:
-                # 15 steps: converging pairs need about 5-10; the rest are left to the next seed or the fallback
-                out = batch_levenberg_marquardt(robot, Qs, group, lower, upper, tol, rtol, max_iterations=15)
-            share = (time.perf_counter() - t0) / pending.size
-            for j in np.nonzero(out.converged)[0]:
-                pos = float(out.position_error[j])
-                rot = None if out.orientation_error is None else float(out.orientation_error[j])
-                if rot is None:
-                    cost = pos
-                else:
-                    cost = pos + w * rot if template.pose_metric == "sum" else float(np.hypot(pos, w * rot))
-                results[pending[j]] = Result(
-                    q=out.q[j].copy(), position_error=pos, orientation_error=rot, cost=cost, success=True,
-                    generations=0, evaluations=int(out.evaluations[j]), time_s=share,
-                    history={"best_cost": np.array([cost]), "mean_cost": np.array([cost]),
-                             "diversity": np.array([0.0])},
-                    message=f"tolerance reached by batched LM from {label} (solve_many)", method="memetic")
-            n_batched += int(out.converged.sum())
-            pending = pending[~out.converged]
-    fallback = [i for i in range(N) if results[i] is None]
-    tried = rounds if table is not None else 0
-    for i in fallback:  # the per-target memetic solver, with every option (and q0) of the call
-        problem, opts = make_problem(robot, targets[i], q0=None if Q0 is None else Q0[i], **dict(options))
-        opts.setdefault("table_offset", tried)  # the batched rounds tried the nearest entries already
-        results[i] = _run(problem, "memetic", rng, opts)
-    out_list = BatchResults(results)
-    return _with_stats(out_list, t_start, batched=n_batched, fallback=len(fallback))
-
-
-def _with_stats(results: BatchResults, t_start: float, batched: int, fallback: int) -> BatchResults:
-    elapsed = time.perf_counter() - t_start
-    solved = sum(r.success for r in results)
-    n = len(results)
-    results.stats = {
-        "n": n, "solved": solved, "success_rate": solved / n, "time_s": elapsed,
-        "throughput": n / elapsed if elapsed > 0 else float("inf"), "batched": batched, "fallback": fallback,
-        "fallback_solved": solved - batched,
-    }
-    return results
+    get_solver(method)  # an unknown method fails before any work
+    return batch.solve_many(_robot(robot), targets, make_problem, _run, method, _rng(seed), q0=q0, **options)

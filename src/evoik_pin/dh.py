@@ -23,6 +23,7 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
+from . import lie
 from .errors import RobotLoadError
 
 __all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform"]
@@ -174,17 +175,9 @@ def _short(x: float) -> str:
     return f"{float(x):.6g}"
 
 
-def _rpy(R: np.ndarray) -> tuple[float, float, float]:
-    """Roll-pitch-yaw (URDF convention, R = Rz(y) Ry(p) Rx(r)) of a rotation matrix."""
-    pitch = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
-    if np.hypot(R[0, 0], R[1, 0]) < 1e-12:  # gimbal lock: put everything into roll
-        return float(np.arctan2(-R[1, 2], R[1, 1])), float(pitch), 0.0
-    return float(np.arctan2(R[2, 1], R[2, 2])), float(pitch), float(np.arctan2(R[1, 0], R[0, 0]))
-
-
 def _origin_xml(T: np.ndarray) -> str:
     xyz = " ".join(_fmt(v) for v in T[:3, 3])
-    rpy = " ".join(_fmt(v) for v in _rpy(T[:3, :3]))
+    rpy = " ".join(_fmt(v) for v in lie.rpy(T[:3, :3])[0])  # URDF's R = Rz(yaw) Ry(pitch) Rx(roll)
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 

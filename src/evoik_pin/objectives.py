@@ -22,6 +22,7 @@ from functools import cached_property
 
 import numpy as np
 
+from . import lie
 from .errors import OptionError
 
 __all__ = [
@@ -37,10 +38,10 @@ __all__ = [
     "PositionError",
     "RPYPoseError",
     "WeightedJointDisplacement",
+    "default_cost",
     "default_objective",
     "orientation_errors",
     "position_errors",
-    "rpy_batch",
 ]
 
 
@@ -84,28 +85,6 @@ class PopulationKinematics:
         return self.robot.jacobian_batch(self.Q, validate=False)
 
 
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    """Angles wrapped into [-pi, pi)."""
-    return (angle + np.pi) % (2 * np.pi) - np.pi
-
-
-def rpy_batch(R: np.ndarray) -> np.ndarray:
-    """Roll-pitch-yaw (N, 3) in rad of rotations (N, 3, 3), R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    pitch = np.arctan2(-R[:, 2, 0], np.hypot(R[:, 0, 0], R[:, 1, 0]))
-    roll = np.arctan2(R[:, 2, 1], R[:, 2, 2])
-    yaw = np.arctan2(R[:, 1, 0], R[:, 0, 0])
-    return np.stack([roll, pitch, yaw], axis=1)
-
-
-def _rotation_angles(R_target: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """Angle (N,) in rad of ``log3(R_target^T R)``, computed stably for small and large angles."""
-    E = np.einsum("ji,njk->nik", R_target, R)
-    trace = E[:, 0, 0] + E[:, 1, 1] + E[:, 2, 2]
-    axis = np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
-    # atan2(|sin|, cos) keeps full precision near 0 (where acos loses half the digits) and near pi.
-    return np.arctan2(0.5 * np.linalg.norm(axis, axis=1), 0.5 * (trace - 1.0))
-
-
 def position_errors(target, kin: PopulationKinematics) -> np.ndarray:
     """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane).
 
@@ -123,9 +102,8 @@ def position_errors(target, kin: PopulationKinematics) -> np.ndarray:
 def orientation_errors(target, kin: PopulationKinematics) -> np.ndarray:
     """Orientation error (N,) in rad: rotation angle to the target (planar: |wrapped yaw difference|)."""
     if target.planar:
-        R = kin.rotations
-        return np.abs(_wrap(np.arctan2(R[:, 1, 0], R[:, 0, 0]) - target.yaw))
-    return _rotation_angles(target.rotation, kin.rotations)
+        return np.abs(lie.wrap_angle(lie.yaw(kin.rotations) - target.yaw))
+    return lie.relative_angle(target.rotation, kin.rotations)
 
 
 class Objective:
@@ -133,6 +111,15 @@ class Objective:
 
     def value(self, Q: np.ndarray, kin: PopulationKinematics) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
+
+    def from_errors(self, target, position_error: float, orientation_error: float | None) -> float | None:
+        """The cost of a configuration whose errors towards ``target`` are known (position m, orientation rad
+        or None), when the objective is a function of those errors alone; None otherwise (then evaluate it).
+
+        Lets a local solver, which has the errors from its own kinematics, report the cost without a second
+        kinematics pass.
+        """
+        return None
 
     def __call__(self, Q: np.ndarray, kin: PopulationKinematics | None = None, robot=None) -> np.ndarray:
         """Costs (N,) of ``Q`` (N, n). Pass ``kin`` to share kinematics, or ``robot`` to compute them."""
@@ -166,6 +153,15 @@ class WeightedSum(Objective):
     def _terms(self) -> list[tuple[float, Objective]]:
         return list(self.terms)
 
+    def from_errors(self, target, position_error, orientation_error):
+        total = 0.0
+        for w, term in self.terms:
+            v = term.from_errors(target, position_error, orientation_error)
+            if v is None:
+                return None
+            total += w * v
+        return total
+
     def value(self, Q, kin):
         total = np.zeros(Q.shape[0])
         for w, term in self.terms:
@@ -186,6 +182,9 @@ class PositionError(Objective):
     def value(self, Q, kin):
         return position_errors(self.target, kin)
 
+    def from_errors(self, target, position_error, orientation_error):
+        return position_error if target is self.target else None
+
     def __repr__(self) -> str:
         return "PositionError()"
 
@@ -200,6 +199,9 @@ class OrientationError(Objective):
 
     def value(self, Q, kin):
         return orientation_errors(self.target, kin)
+
+    def from_errors(self, target, position_error, orientation_error):
+        return orientation_error if target is self.target and orientation_error is not None else None
 
     def __repr__(self) -> str:
         return "OrientationError()"
@@ -229,6 +231,11 @@ class PoseDistance(Objective):
         rotation = orientation_errors(self.target, kin)
         return np.hypot(position_errors(self.target, kin), self.orientation_weight * rotation)
 
+    def from_errors(self, target, position_error, orientation_error):
+        if target is not self.target or orientation_error is None:
+            return None
+        return float(np.hypot(position_error, self.orientation_weight * orientation_error))
+
     def __repr__(self) -> str:
         return f"PoseDistance(orientation_weight={self.orientation_weight:g})"
 
@@ -243,10 +250,10 @@ class RPYPoseError(Objective):
         if target.rotation is None:
             raise OptionError("RPYPoseError needs a pose target (position and rotation)")
         self.target, self.sigma, self.epsilon = target, float(sigma), float(epsilon)
-        self._rpy_target = rpy_batch(target.rotation[None])[0]
+        self._rpy_target = lie.rpy(target.rotation)[0]
 
     def value(self, Q, kin):
-        d_rpy = _wrap(rpy_batch(kin.rotations) - self._rpy_target)
+        d_rpy = lie.wrap_angle(lie.rpy(kin.rotations) - self._rpy_target)
         pos = np.linalg.norm(kin.positions - self.target.position, axis=1)
         return self.sigma * pos + self.epsilon * np.linalg.norm(d_rpy, axis=1)
 
@@ -330,6 +337,19 @@ class JointLimitMargin(Objective):
 #: How the default objective combines position and orientation errors of a pose target: ``sum`` (m + weight x
 #: rad, :func:`PoseError`) or ``euclidean`` (:class:`PoseDistance`).
 POSE_METRICS = ("sum", "euclidean")
+
+
+def default_cost(position_error, orientation_error, orientation_weight: float = 1.0, pose_metric: str = "sum"):
+    """The value of :func:`default_objective` from the errors (scalars or arrays; ``orientation_error`` None for
+    position targets): position + weight x orientation (``"sum"``) or their Euclidean norm (``"euclidean"``).
+
+    For batch solvers, which have every target's errors and no per-target objective object.
+    """
+    if orientation_error is None:
+        return position_error
+    if pose_metric == "euclidean":
+        return np.hypot(position_error, orientation_weight * orientation_error)
+    return position_error + orientation_weight * orientation_error
 
 
 def default_objective(target, orientation_weight: float = 1.0, pose_metric: str = "sum") -> Objective:

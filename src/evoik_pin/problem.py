@@ -123,6 +123,9 @@ class Target:
                 f"got {target!r}"
             ) from exc
         if arr.shape == (4, 4):
+            if np.isfinite(arr[3]).all() and np.abs(arr[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9:
+                raise TargetError(f"the bottom row of a 4 x 4 homogeneous pose must be [0 0 0 1], got "
+                                  f"{arr[3].tolist()}")
             return cls(position=arr[:3, 3], rotation=arr[:3, :3])
         if arr.ndim == 1 and arr.shape[0] == 3:
             return cls(position=arr)
@@ -130,6 +133,52 @@ class Target:
             f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target "
             f"(Target.planar_target(x, y, yaw) for planar arms); got an array of shape {arr.shape}"
         )
+
+    @classmethod
+    def from_poses(cls, poses) -> list[Target]:
+        """Pose targets from an array of N homogeneous matrices (N, 4, 4) (m), checked in one vectorized pass:
+        finite numbers, rotation blocks orthonormal with det +1 (to 1e-6). A TargetError names the first bad
+        target's index."""
+        H = np.asarray(poses, dtype=float)
+        if H.ndim != 3 or H.shape[1:] != (4, 4):
+            raise TargetError(f"poses must be an array of shape (N, 4, 4), got shape {H.shape}")
+        finite = np.isfinite(H).all(axis=(1, 2))
+        if not finite.all():
+            raise TargetError(f"target {int(np.nonzero(~finite)[0][0])} contains NaN or inf")
+        R = H[:, :3, :3]
+        ortho = np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)).max(axis=(1, 2))
+        bad = np.nonzero((ortho > 1e-6) | (np.linalg.det(R) < 0))[0]
+        if bad.size:
+            raise TargetError(f"target {int(bad[0])}: rotation is not a rotation matrix (R^T R must be I and "
+                              "det R = +1 to 1e-6)")
+        bottom = np.abs(H[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1)
+        bad = np.nonzero(bottom > 1e-9)[0]
+        if bad.size:
+            raise TargetError(f"target {int(bad[0])}: the bottom row of a homogeneous pose must be [0 0 0 1], "
+                              f"got {H[int(bad[0]), 3].tolist()}")
+        out = []
+        for T in H:  # already checked: skip the per-instance validation of __post_init__
+            t = object.__new__(cls)
+            object.__setattr__(t, "position", T[:3, 3].copy())
+            object.__setattr__(t, "rotation", T[:3, :3].copy())
+            object.__setattr__(t, "planar", False)
+            object.__setattr__(t, "yaw", None)
+            out.append(t)
+        return out
+
+    @classmethod
+    def coerce_many(cls, targets) -> list[Target]:
+        """Targets from a sequence of anything :meth:`coerce` accepts, or from an (N, 4, 4) array of poses
+        (:meth:`from_poses`); a TargetError names the index of the first bad target."""
+        if isinstance(targets, np.ndarray) and targets.ndim == 3 and targets.shape[1:] == (4, 4):
+            return cls.from_poses(targets)
+        out = []
+        for i, t in enumerate(targets):
+            try:
+                out.append(cls.coerce(t))
+            except TargetError as exc:
+                raise TargetError(f"target {i}: {exc}") from None
+        return out
 
     @property
     def has_orientation(self) -> bool:
@@ -256,6 +305,28 @@ class IKProblem:
         kin = PopulationKinematics(self.robot, Q)
         self.evaluations += Q.shape[0]
         return self.objective(Q, kin)
+
+    def assess(self, q: np.ndarray, position_error: float | None = None, orientation_error: float | None = None
+               ) -> tuple[float, float | None, float]:
+        """(position error m, orientation error rad or None, objective cost) of one configuration ``q`` (n,).
+
+        Pass the errors when a local solver already has them at this very ``q`` (from its own kinematics):
+        they are reused, and so is the cost when the objective is a function of the errors alone
+        (:meth:`Objective.from_errors`); otherwise one forward-kinematics call fills the kinematics the
+        objective reads (no batch pass).
+        """
+        target = self.target
+        if position_error is not None:
+            cost = self.objective.from_errors(target, position_error, orientation_error)
+            if cost is not None:
+                return position_error, orientation_error, float(cost)
+        T = self.robot.fk_unchecked(q)
+        Q = q[None]
+        kin = PopulationKinematics.from_poses(self.robot, Q, np.array(T.translation)[None], np.array(T.rotation)[None])
+        if position_error is None:
+            position_error = float(position_errors(target, kin)[0])
+            orientation_error = float(orientation_errors(target, kin)[0]) if target.has_orientation else None
+        return position_error, orientation_error, float(self.objective(Q, kin)[0])
 
     def succeeded(self, position_error, orientation_error=None) -> np.ndarray:
         """Elementwise success: position error <= tolerance and orientation error <= rotation_tolerance."""

@@ -33,13 +33,15 @@ class Result:
         success: True when the errors are within the problem's tolerances.
         generations: generations (iterations) run.
         evaluations: configurations evaluated (forward kinematics of one joint vector = 1).
-        time_s: wall-clock time (s).
+        time_s: wall-clock time of the solve (s); one-time set-up is not part of it (see ``setup_s``).
         history: per-generation series, each an array of length ``generations + 1`` (the initial
             population first): ``best_cost``, ``mean_cost``, ``diversity``, plus method-specific ones.
         message: why the solver stopped, or what went wrong.
         method: registered name of the solver.
         solutions: distinct IK solutions (each a Result), best first, for all-solutions methods.
         front: the final Pareto set, for multi-objective methods.
+        setup_s: one-time set-up this call paid before its clock started (s): loading or compiling the LM
+            kernel, building a seed table. 0 once the process has done it (see :func:`evoik_pin.prepare`).
     """
 
     q: np.ndarray
@@ -55,6 +57,7 @@ class Result:
     method: str = ""
     solutions: list[Result] | None = None
     front: Front | None = None
+    setup_s: float = 0.0
 
     def __repr__(self) -> str:
         rot = "" if self.orientation_error is None else f", orientation_error={self.orientation_error:.3g} rad"

@@ -54,7 +54,9 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import ConfigurationError, TargetError, ViewerError
+from .lie import rotation_to_z
 from .robot import Robot
+from .robot.frames import find_frame
 
 __all__ = ["GHOST_COLORS", "Viewer", "html_commands", "skeleton_model"]
 
@@ -234,27 +236,11 @@ def _fcl():
         return hppfcl
 
 
-def _align_z(d: np.ndarray) -> np.ndarray:
-    """A rotation (3, 3) whose z column is the unit vector ``d``."""
-    z = d / np.linalg.norm(d)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
-
-
-def _frame_id(model: pin.Model, name: str) -> int:
-    """Frame id of ``name`` in ``model``, preferring the BODY frame (as robot.py does); -1 if absent."""
-    ids = [i for i, f in enumerate(model.frames) if f.name == name]
-    bodies = [i for i in ids if model.frames[i].type == pin.FrameType.BODY]
-    return (bodies or ids or [-1])[0]
-
-
 def _segments(robot: Robot) -> list[tuple[int, pin.SE3]]:
     """The skeleton's points: (parent joint, placement in that joint) of each joint origin and the tip."""
     model = robot.model
     points = [(model.parents[j], model.jointPlacements[j]) for j in range(1, model.njoints)]
-    tip = model.frames[_frame_id(model, robot.tip)]
+    tip = model.frames[find_frame(model, robot.tip)]
     points.append((tip.parentJoint, tip.placement))
     return points
 
@@ -278,7 +264,6 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
     joint_rgba = np.array([0.9, 0.5, 0.1, 1.0])
     link_rgba = np.array([0.55, 0.6, 0.7, 1.0])
     rail_rgba = np.array([0.3, 0.3, 0.35, 1.0])
-    axes = _joint_axes(model)
 
     def add(name: str, joint: int, placement: pin.SE3, shape, rgba: np.ndarray) -> None:
         frame = next(i for i, f in enumerate(model.frames) if f.parentJoint == joint)
@@ -289,7 +274,8 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
     def cylinder(name: str, joint: int, p0: np.ndarray, p1: np.ndarray, radius: float, rgba: np.ndarray) -> None:
         d = p1 - p0
         if np.linalg.norm(d) > 1e-9:
-            add(name, joint, pin.SE3(_align_z(d), (p0 + p1) / 2), fcl.Cylinder(radius, float(np.linalg.norm(d))), rgba)
+            length = float(np.linalg.norm(d))
+            add(name, joint, pin.SE3(rotation_to_z(d), (p0 + p1) / 2), fcl.Cylinder(radius, length), rgba)
 
     for k, (parent, M) in enumerate(_segments(robot)):
         is_tip = k == model.njoints - 1
@@ -300,18 +286,10 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
             fcl.Sphere(r * (0.8 if is_tip else 1.0)), joint_rgba)
         cylinder(f"skeleton_to_{name}", parent, np.zeros(3), M.translation, 0.6 * r, link_rgba)
         if not is_tip and not robot.revolute[k]:  # a prismatic joint slides along a rail spanning its bounds
-            a = M.rotation @ axes[k]
+            a = M.rotation @ robot.joint_axes[k]
             lo, hi = M.translation + robot.lower[k] * a, M.translation + robot.upper[k] * a
             cylinder(f"skeleton_rail_{name}", parent, lo, hi, 0.3 * r, rail_rgba)
     return geom
-
-
-def _joint_axes(model: pin.Model) -> np.ndarray:
-    """Unit axis (n, 3) of each joint in its own frame (rotation axis, or sliding direction if prismatic)."""
-    data = model.createData()
-    pin.forwardKinematics(model, data, pin.neutral(model))
-    S = [np.asarray(data.joints[j].S).reshape(6) for j in range(1, model.njoints)]
-    return np.array([s[3:] if np.linalg.norm(s[3:]) > 0.5 else s[:3] for s in S])
 
 
 def _reach(robot: Robot) -> float:
@@ -400,7 +378,7 @@ class Viewer:
         self._geom = geom
         self._skeleton_geom: pin.GeometryModel | None = None
         self._reach = _reach(robot)
-        self._baseMo = self._base_placement()
+        self._baseMo = robot.base_placement.inverse()  # the model's world frame seen from the base frame
         try:
             if zmq_url is None:
                 self._server = _Server()
@@ -477,16 +455,6 @@ class Viewer:
         return self.robot.check_population(arr)
 
     # ------------------------------------------------------------------ drawing
-    def _base_placement(self) -> pin.SE3:
-        """Placement of the model's world frame in the base frame (identity unless a base was chosen)."""
-        model = self.robot.model
-        fid = _frame_id(model, self.robot.base)
-        if fid <= 0:
-            return pin.SE3.Identity()
-        data = model.createData()
-        pin.framesForwardKinematics(model, data, pin.neutral(model))
-        return data.oMf[fid].inverse()
-
     def _load(self, node: str, rgba=None, geom: pin.GeometryModel | None = None):
         """Load the robot's geometry (or ``geom``) under ``node``, once; ``rgba`` colours every part (a ghost)."""
         vis = self._check_open()
@@ -648,13 +616,13 @@ class Viewer:
         vis = self._check_open()
         viz = self._load("robot")
         anim = meshcat.animation.Animation(default_framerate=1.0 / dt)
-        geom, gdata = viz.visual_model, viz.visual_data
+        geom = viz.visual_model
+        nodes = [viz.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]
         for k, q in enumerate(Q):
-            pin.forwardKinematics(viz.model, viz.data, self.robot.to_pinocchio(q))
-            pin.updateGeometryPlacements(viz.model, viz.data, geom, gdata)
+            placements = self.robot.geometry_placements(geom, q)
             with anim.at_frame(vis, k) as frame:
-                for i, g in enumerate(geom.geometryObjects):  # rigid poses: the mesh scale stays as loaded
-                    frame[viz.getViewerNodeName(g, pin.GeometryType.VISUAL)].set_transform(gdata.oMg[i].homogeneous)
+                for node, M in zip(nodes, placements, strict=True):  # rigid poses: the mesh scale stays as loaded
+                    frame[node].set_transform(M.homogeneous)
         self.show(Q[0])
         vis.set_animation(anim, play=True, repetitions=int(repetitions))
         self.scene["animation"] = f"{Q.shape[0]} frames, dt {dt:g} s"

@@ -19,9 +19,10 @@ exactly the modules that exist, so nothing else needs registering) and must defi
   - uses the paper's settings when ``ctx.quick`` is False, and a reduced size (fewer points / runs) that
     finishes in well under a minute when it is True; records every setting in ``report.settings``;
   - wraps long loops in ``ctx.bar(...)`` (tqdm, disabled with ``progress=False``);
-  - may run independent parts in ``ctx.jobs`` worker processes (paper002 shows how: a top-level job
-    function whose random streams come from ``derive_rng(seed, labels...)``, so results do not depend
-    on the number of processes);
+  - may run independent parts in ``ctx.jobs`` worker processes with ``ctx.map_parallel(func, specs,
+    desc)`` (results in the order of ``specs``): ``func`` is a top-level function whose random streams
+    come from ``derive_rng(spec seed, labels...)`` only, so results do not depend on the number of
+    processes;
   - makes figures with ``fig, ax = ctx.new_figure(...)`` (Agg backend) and saves them with
     ``ctx.save_figure(fig, "figN_name", caption)``, appending the returned :class:`Figure`;
   - fills :class:`Table` objects with our rows and, where the paper has the same table, ``paper_rows``

@@ -20,6 +20,7 @@ import sys
 import tempfile
 import time
 import zlib
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,6 +42,7 @@ __all__ = [
     "jsonable",
     "least_squares_distance",
     "machine_info",
+    "progress_bar",
 ]
 
 
@@ -358,6 +360,17 @@ class PaperReport:
 # run context
 
 
+def progress_bar(iterable: Iterable | None = None, total: int | None = None, desc: str = "", enabled: bool = True):
+    """A tqdm progress bar on stderr that disappears when done (disabled when ``enabled`` is False).
+
+    Usable in worker processes, which have no :class:`RunContext`.
+    """
+    from tqdm.auto import tqdm
+
+    return tqdm(iterable, total=total, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True,
+                file=sys.stderr)
+
+
 def derive_rng(seed: int, *labels: str) -> np.random.Generator:
     """A generator for one named part of an experiment, from the master ``seed`` and the part's labels.
 
@@ -397,11 +410,38 @@ class RunContext:
         return derive_rng(self.seed, *labels)
 
     def bar(self, iterable=None, total: int | None = None, desc: str = ""):
-        """A tqdm progress bar (disabled when :attr:`progress` is False)."""
-        from tqdm.auto import tqdm
+        """A tqdm progress bar (disabled when :attr:`progress` is False); see :func:`progress_bar`."""
+        return progress_bar(iterable, total, desc, self.progress)
 
-        return tqdm(iterable, total=total, desc=desc, disable=not self.progress, leave=False,
-                    dynamic_ncols=True, file=sys.stderr)
+    def map_parallel(self, func: Callable[[Any], Any], specs: list, desc: str) -> list:
+        """``[func(spec) for spec in specs]``, in :attr:`jobs` worker processes when ``jobs > 1``.
+
+        Results come back in the order of ``specs`` whatever order the workers finish in; a progress bar
+        labelled ``desc`` counts finished parts. With ``jobs == 1`` (or a single spec) everything runs in
+        this process, one spec after the other.
+
+        Workers are started with the ``spawn`` method (clean processes: no forked threads, open figures or
+        inherited random state), so ``func`` must be a top-level (picklable) function and ``specs``
+        picklable. For the numbers not to depend on ``jobs``, ``func`` must draw its randomness only from
+        ``derive_rng(spec seed, labels...)`` of its spec. A part that raises stops the run: the parts not
+        started yet are cancelled and the error is raised here.
+        """
+        workers = min(self.jobs, len(specs))
+        if workers <= 1:
+            return [func(spec) for spec in self.bar(specs, desc=desc)]
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = [pool.submit(func, spec) for spec in specs]
+            try:
+                for fut in self.bar(as_completed(futures), total=len(futures), desc=f"{desc} ({workers} processes)"):
+                    fut.result()  # a failed part raises now, not after all the others
+            except BaseException:
+                for fut in futures:
+                    fut.cancel()
+                raise
+            return [fut.result() for fut in futures]
 
     def new_figure(self, *args, **kwargs):
         """``matplotlib.pyplot.subplots`` on the non-interactive Agg backend."""

@@ -78,28 +78,8 @@ def _settings(quick: bool) -> dict:
 # runs
 
 
-def run_parts(ctx: RunContext, func, specs: list[dict], desc: str) -> list:
-    """``[func(spec) for spec in specs]``, serially or in ``ctx.jobs`` spawned processes.
-
-    ``func`` must be a top-level function drawing its randomness from ``derive_rng(spec["seed"], ...labels)``
-    only, so both ways give the same numbers. Also used by papers 001 and 003.
-    """
-    jobs = int(getattr(ctx, "jobs", 1) or 1)
-    if jobs <= 1 or len(specs) <= 1:
-        return [func(spec) for spec in ctx.bar(specs, desc=desc)]
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    context = multiprocessing.get_context("spawn")  # clean workers; they import this module and derive their streams
-    with ProcessPoolExecutor(max_workers=min(jobs, len(specs)), mp_context=context) as pool:
-        futures = [pool.submit(func, spec) for spec in specs]
-        for _ in ctx.bar(as_completed(futures), total=len(futures), desc=f"{desc} ({jobs} processes)"):
-            pass
-        return [f.result() for f in futures]
-
-
 def _part(spec: dict) -> list[dict]:
-    """``spec["runs"]`` runs of one method on one target (a top-level job for :func:`run_parts`)."""
+    """``spec["runs"]`` runs of one method on one target (a top-level job for ``ctx.map_parallel``)."""
     robot = load_robot(ROBOT)
     t_cm, method = spec["t_cm"], spec["method"]
     target = np.array(t_cm) * CM
@@ -152,7 +132,7 @@ def run(ctx: RunContext) -> PaperReport:
     robot = load_robot(ROBOT)
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs, q_init = s["runs_per_target_and_method"], np.zeros(robot.n)
-    s["jobs"] = int(getattr(ctx, "jobs", 1) or 1)
+    s["jobs"] = ctx.jobs
     mode_kw = {k: v for k, v in s["mode"].items() if k in ("population", "max_generations", "mutation_probability",
                                                             "crossover_rate", "scale_factor",
                                                             "trigonometric_probability", "adaptive")}
@@ -161,7 +141,7 @@ def run(ctx: RunContext) -> PaperReport:
     results: dict[tuple, dict[str, list[dict]]] = {}
     specs = [{"seed": ctx.seed, "t_cm": t, "method": m, "runs": runs, "mode_kw": mode_kw, "ga_kw": ga_kw}
              for m in ["GA", *CONFIGS.values()] for t in TARGETS_CM]  # the slow GA parts first
-    for spec, out in zip(specs, run_parts(ctx, _part, specs, "000 Table 2 / Figs. 3-6"), strict=True):
+    for spec, out in zip(specs, ctx.map_parallel(_part, specs, "000 Table 2 / Figs. 3-6"), strict=True):
         results.setdefault(spec["t_cm"], {})[spec["method"]] = out
     for t_cm in TARGETS_CM:
         res = solve(robot, np.array(t_cm) * CM, method="algebraic", q0=q_init)

@@ -32,7 +32,6 @@ from ..api import solve
 from ..robot import load_robot
 from ..solvers.analytic import planar2r_ik, puma_fk, puma_ik
 from .common import PaperReport, RunContext, Table, derive_rng
-from .paper000 import run_parts
 
 PAPER_ID = "001"
 TITLE = "Inverse kinematics solution of robot arms using genetic and hybrid genetic algorithms (all solutions)"
@@ -119,7 +118,7 @@ def _angles(q) -> list:
 
 
 def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
-    """``spec["runs"]`` runs of ``ga`` or ``hga`` on one target (a top-level job for ``run_parts``).
+    """``spec["runs"]`` runs of ``ga`` or ``hga`` on one target (a top-level job for ``ctx.map_parallel``).
 
     Returns the solutions (rad) each run returned and, when ``spec["history"]``, the first run's populations
     by generation (from the GA's ``callback``).
@@ -161,7 +160,7 @@ def run(ctx: RunContext) -> PaperReport:
     s = _settings(ctx.quick)
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs = s["runs_per_target_and_method"]
-    s["jobs"] = int(getattr(ctx, "jobs", 1) or 1)
+    s["jobs"] = ctx.jobs
     histories: dict[str, dict[int, np.ndarray]] = {}
     targets = {"planar2r": [np.array([t[0], t[1], 0.0]) * CM for t in TARGETS_2R_CM],
                "puma3r": [np.array(t) * CM for t in TARGETS_PUMA_CM]}
@@ -169,7 +168,7 @@ def run(ctx: RunContext) -> PaperReport:
               "history": k == 0 and method == "ga"}
              for arm in ("puma3r", "planar2r") for method in ("hga", "ga") for k, target in enumerate(targets[arm])]
     found: dict[tuple, list] = {}
-    for spec, (out, hist) in zip(specs, run_parts(ctx, _part, specs, "001 GA / HGA runs"), strict=True):
+    for spec, (out, hist) in zip(specs, ctx.map_parallel(_part, specs, "001 GA / HGA runs"), strict=True):
         found[(spec["arm"], spec["k"], spec["method"])] = out
         if spec["history"]:
             histories[spec["arm"]] = hist

@@ -43,7 +43,7 @@ from ..objectives import PositionError, WeightedJointDisplacement
 from ..problem import DEFAULT_PRO_DELTA, Target
 from ..robot import load_robot
 from ..solvers import get_solver
-from .common import Animation, PaperReport, RunContext, Table, derive_rng, least_squares_distance
+from .common import Animation, PaperReport, RunContext, Table, derive_rng, least_squares_distance, progress_bar
 
 PAPER_ID = "002"
 TITLE = ("Use improved differential evolution algorithms to handle the inverse kinematics problem for robots "
@@ -227,12 +227,6 @@ def spiral_targets(count: int) -> np.ndarray:
 # the experiment
 
 
-def _bar(iterable, desc: str, enabled: bool):
-    from tqdm.auto import tqdm
-
-    return tqdm(iterable, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True)
-
-
 @lru_cache(maxsize=1)
 def _robot():
     return load_robot(ROBOT)
@@ -269,14 +263,14 @@ def _job(spec: dict):
                "curve": (np.asarray(best_r["result"].history["best_cost"]), best_t)}
     elif kind == "scenario1":
         out = [_solve_point(robot, spec["target"], cfg, rng, rho=1, fitness=cfg["fitness_s1"], q0=q_zero)
-               for _ in _bar(range(s["scenario1_runs"]), f"002 Scenario 1 {label}", show)]
+               for _ in progress_bar(range(s["scenario1_runs"]), desc=f"002 Scenario 1 {label}", enabled=show)]
     elif kind == "scenario2":
         out = [_solve_point(robot, p, cfg, rng, rho=s["rho_runs_per_point"], fitness=cfg["fitness"], q0=q_zero)
-               for p in _bar(spec["targets"], f"002 Scenario 2 {label}", show)]
+               for p in progress_bar(spec["targets"], desc=f"002 Scenario 2 {label}", enabled=show)]
     else:  # scenario3: the spiral in sequence; Pro variants re-checked inside their boxes
         pro, fitness = spec["pro"], spec["fitness"]
         out, q_prev = [], q_zero
-        for i, p in enumerate(_bar(spec["targets"], f"002 Scenario 3 {label}", show)):
+        for i, p in enumerate(progress_bar(spec["targets"], desc=f"002 Scenario 3 {label}", enabled=show)):
             bounds = _pro_bounds(robot, q_prev, DEFAULT_PRO_DELTA) if (pro and i > 0) else None
             out.append(_solve_point(robot, p, cfg, rng, rho=s["rho_runs_per_point"], fitness=fitness, q0=q_prev,
                                     bounds=bounds, a=s["a_first"] if i == 0 else 0.0))
@@ -288,26 +282,6 @@ def _job(spec: dict):
         for pt in out:
             pt.pop("result", None)  # keep what crosses the process boundary small
     return (kind, label), out, time.perf_counter() - t0
-
-
-def _run_jobs(ctx: RunContext, specs: list[dict]) -> tuple[dict, dict]:
-    """Run the parts, serially or in ``ctx.jobs`` processes; returns outputs and wall times by key."""
-    outputs, times = {}, {}
-    if ctx.jobs <= 1:
-        for spec in specs:
-            key, out, dt = _job(spec)
-            outputs[key], times[key] = out, dt
-        return outputs, times
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    # spawn: clean workers (no forked threads or open figures); they import this module and draw their own streams
-    with ProcessPoolExecutor(max_workers=ctx.jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(_job, spec) for spec in specs]
-        for fut in ctx.bar(as_completed(futures), total=len(futures), desc=f"002 ({ctx.jobs} processes)"):
-            key, out, dt = fut.result()
-            outputs[key], times[key] = out, dt
-    return outputs, times
 
 
 def run(ctx: RunContext) -> PaperReport:
@@ -337,7 +311,9 @@ def run(ctx: RunContext) -> PaperReport:
     # longest first (Pro- spiral runs restart most), so the processes of a pool finish together
     specs.sort(key=lambda sp: ({"scenario3": 0, "scenario2": 1, "scenario1": 2, "table3": 3}[sp["kind"]],
                                not sp.get("pro", False)))
-    outputs, job_times = _run_jobs(ctx, specs)
+    done = ctx.map_parallel(_job, specs, "002 parts")
+    outputs = {key: out for key, out, _ in done}
+    job_times = {key: dt for key, _, dt in done}
     report.data["job_wall_time_s"] = {f"{k[0]} {k[1]}": v for k, v in job_times.items()}
 
     t3 = {n: outputs[("table3", n)] for n in METHODS}

@@ -34,7 +34,6 @@ from ..api import solve_trajectory
 from ..problem import Target
 from ..robot import load_robot
 from .common import Animation, PaperReport, RunContext, Table, derive_rng
-from .paper000 import run_parts
 
 PAPER_ID = "003"
 TITLE = "Inverse kinematic multiobjective optimization for a vehicle-arm robot system using evolutionary algorithms"
@@ -98,7 +97,7 @@ def _trajectory_stats(Q: np.ndarray, q_start: np.ndarray) -> dict:
 
 
 def _part(spec: dict) -> list:
-    """One trajectory for one gain K (a top-level job for ``run_parts``): the Result of every point."""
+    """One trajectory for one gain K (a top-level job for ``ctx.map_parallel``): the Result of every point."""
     K, cfg = spec["K"], spec["cfg"]
     targets = [Target.planar_target(x, y, 0.0) for x, y in spec["path"]]
     return solve_trajectory(load_robot(ROBOT), targets, method="nsga2", q0=spec["q_start"],
@@ -126,10 +125,10 @@ def run(ctx: RunContext) -> PaperReport:
     cfg = s["nsga2"]
 
     runs: dict[float, list[dict]] = {}
-    s["jobs"] = int(getattr(ctx, "jobs", 1) or 1)
+    s["jobs"] = ctx.jobs
     specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": cfg}
              for K in GAINS for i in range(s["runs_per_gain"])]
-    for spec, res in zip(specs, run_parts(ctx, _part, specs, "003 trajectories (K x runs)"), strict=True):
+    for spec, res in zip(specs, ctx.map_parallel(_part, specs, "003 trajectories (K x runs)"), strict=True):
         Q = np.array([r.q for r in res])
         entry = {"results": res, "Q": Q, **_trajectory_stats(Q, q_start),
                  "position_error": np.array([r.position_error for r in res]),

@@ -1,5 +1,8 @@
 """Solver registry: every method is a function ``solver(problem, rng, **options) -> Result`` registered
-by name with :func:`register`. ``evoik_pin.methods()`` lists them."""
+by name with :func:`register`. ``evoik_pin.methods()`` lists them.
+
+Option names are checked here against each solver's signature; option values by the solver itself, with
+the shared validators of :mod:`.options`."""
 
 from __future__ import annotations
 

@@ -18,12 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MethodError, OptionError, TargetError
+from .. import lie
+from ..errors import MethodError, TargetError
 from ..problem import IKProblem
 from ..result import Result
 from . import register
 from .clustering import leader_clusters
 from .common import SolverRun
+from .options import check_positive
 
 __all__ = [
     "AX18",
@@ -53,14 +55,10 @@ PUMA3R = {"a2": 43.18 * _CM, "d": 14.90 * _CM, "a3": 2.03 * _CM, "d4": 43.30 * _
 _SAME = 1e-9  # rad: closed-form branches closer than this are one solution (singular configurations)
 
 
-def _wrap(a):
-    return (np.asarray(a, float) + np.pi) % (2 * np.pi) - np.pi
-
-
 def _distinct(candidates: list[np.ndarray]) -> list[np.ndarray]:
     out: list[np.ndarray] = []
     for q in candidates:
-        if all(np.abs(_wrap(q - p)).max() > _SAME for p in out):
+        if all(np.abs(lie.wrap_angle(q - p)).max() > _SAME for p in out):
             out.append(q)
     return out
 
@@ -98,7 +96,7 @@ def _planar2r_candidates(x: float, y: float, a1: float, a2: float, clamp: bool) 
         s2 = sign * np.sqrt(max(0.0, 1.0 - c2 * c2))
         t2 = np.arctan2(s2, c2)
         t1 = np.arctan2(y, x) - np.arctan2(a2 * s2, a1 + a2 * c2)
-        out.append(_wrap([t1, t2]))
+        out.append(lie.wrap_angle([t1, t2]))
     return _distinct(out), exact
 
 
@@ -145,7 +143,7 @@ def _puma_candidates(p: np.ndarray, a2: float, d: float, a3: float, d4: float,
             # r = u C2 + v S2 and pz = v C2 - u S2 with u = a2 + d4 S3 + a3 C3, v = d4 C3 - a3 S3.
             u, v = a2 + d4 * s3 + a3 * c3, d4 * c3 - a3 * s3
             t2 = np.arctan2(v * r - u * pz, u * r + v * pz)
-            out.append(_wrap([t1, t2, t3]))
+            out.append(lie.wrap_angle([t1, t2, t3]))
     if not exact and not clamp:
         return [], False
     return _distinct(out), bool(exact)
@@ -211,7 +209,7 @@ def ax18_ik(p, phi: float) -> list[np.ndarray]:
     """
     p = _point(p, 3, "ax18_ik")
     Q, ok = _ax18_branches(p, np.array([float(phi)]))
-    return _distinct([_wrap(Q[b, 0]) for b in range(4) if ok[b, 0]])
+    return _distinct([lie.wrap_angle(Q[b, 0]) for b in range(4) if ok[b, 0]])
 
 
 @dataclass(frozen=True)
@@ -249,8 +247,7 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
         One :class:`AX18Solution` per branch (up to four), least error first.
     """
     p = _point(p, 3, "ax18_algebraic")
-    if not (np.isfinite(phi_step) and 0 < phi_step <= np.pi / 4):
-        raise OptionError(f"phi_step must be in (0, pi/4] rad, got {phi_step!r}")
+    phi_step = check_positive("phi_step (at most pi/4)", phi_step, np.pi / 4, unit="rad")
     lower = AX18_LIMITS[0] if lower is None else np.asarray(lower, float)
     upper = AX18_LIMITS[1] if upper is None else np.asarray(upper, float)
     q0 = np.zeros(4) if q0 is None else np.asarray(q0, float)

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import OptionError
+from .. import lie
+from .options import check_positive
 
 __all__ = ["joint_differences", "joint_distances", "leader_clusters"]
 
@@ -23,7 +24,7 @@ __all__ = ["joint_differences", "joint_distances", "leader_clusters"]
 def joint_differences(A: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.ndarray:
     """``A - b`` (N, n) with revolute columns wrapped into [-pi, pi) (rad); prismatic columns in m."""
     d = np.asarray(A, float) - np.asarray(b, float)
-    return np.where(revolute, (d + np.pi) % (2 * np.pi) - np.pi, d)
+    return np.where(revolute, lie.wrap_angle(d), d)
 
 
 def joint_distances(A: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.ndarray:
@@ -46,8 +47,7 @@ def leader_clusters(Q: np.ndarray, cost: np.ndarray, radius: float, revolute: np
         ``(leaders, labels)``: indices into ``Q`` of the cluster leaders, best first (M,), and the
         cluster label of every candidate (N,) in 0..M-1 (or -1 when ``max_clusters`` cut it off).
     """
-    if not (np.isfinite(radius) and radius > 0):
-        raise OptionError(f"cluster radius must be a finite number > 0 (rad), got {radius!r}")
+    radius = check_positive("cluster radius", radius, unit="rad")
     Q = np.asarray(Q, float)
     N = Q.shape[0]
     order = np.argsort(np.where(np.isnan(cost), np.inf, cost), kind="stable")

@@ -7,47 +7,14 @@ import time
 
 import numpy as np
 
-from ..errors import OptionError
 from ..problem import Evaluation, IKProblem
 from ..result import Result
+from .options import check_choice, check_int, check_number
 
-__all__ = ["BOUND_HANDLING", "SolverRun", "check_positive", "check_positive_int", "diversity", "enforce_bounds",
-           "initial_population", "run_with_restarts"]
+__all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "initial_population", "run_with_restarts"]
 
 #: Accepted ``bound_handling`` option values.
 BOUND_HANDLING = ("clip", "reflect", "resample")
-
-
-def check_positive_int(name: str, value, minimum: int = 1) -> int:
-    """``value`` as an int >= ``minimum``, or an OptionError naming the option."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise OptionError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
-
-
-def check_positive(name: str, value, upper: float = np.inf) -> float:
-    """``value`` as a finite float in (0, upper], or an OptionError naming the option."""
-    if isinstance(value, bool):
-        raise OptionError(f"{name} must be a number > 0, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be a number > 0, got {value!r}") from None
-    if not (np.isfinite(v) and 0 < v <= upper):
-        bound = "" if upper == np.inf else f" and <= {upper:g}"
-        raise OptionError(f"{name} must be a finite number > 0{bound}, got {value!r}")
-    return v
-
-
-def check_fraction(name: str, value, low: float = 0.0, high: float = 1.0) -> float:
-    """``value`` as a float in [low, high], or an OptionError naming the option."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be a number in [{low}, {high}], got {value!r}") from None
-    if not (low <= v <= high):
-        raise OptionError(f"{name} must be in [{low}, {high}], got {value!r}")
-    return v
 
 
 def initial_population(problem: IKProblem, rng: np.random.Generator, size: int) -> np.ndarray:
@@ -70,20 +37,20 @@ def enforce_bounds(
     lo, hi = problem.lower, problem.upper
     if method == "clip":
         return np.minimum(np.maximum(trial, lo), hi)  # = np.clip, with less call overhead
+    check_choice("bound_handling", method, BOUND_HANDLING)
     if method == "reflect":
         width = hi - lo
         safe = np.where(width > 0, width, 1.0)
         y = np.mod(trial - lo, 2 * safe)
         y = np.where(y > safe, 2 * safe - y, y)
         return np.where(width > 0, lo + y, lo)
-    if method == "resample":
-        bad = (trial < lo) | (trial > hi)
-        if bad.any():
-            trial = trial.copy()
-            fresh = rng.uniform(lo, hi, size=trial.shape)
-            trial[bad] = fresh[bad]
-        return trial
-    raise OptionError(f"bound_handling {method!r} is not one of {BOUND_HANDLING}")
+    # resample
+    bad = (trial < lo) | (trial > hi)
+    if bad.any():
+        trial = trial.copy()
+        fresh = rng.uniform(lo, hi, size=trial.shape)
+        trial[bad] = fresh[bad]
+    return trial
 
 
 def diversity(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
@@ -119,12 +86,10 @@ class SolverRun:
     def __init__(self, problem: IKProblem, max_generations: int, stall_generations: int | None = None,
                  cost_tolerance: float | None = None) -> None:
         self.problem = problem
-        self.max_generations = check_positive_int("max_generations", max_generations, 0)
-        self.stall_generations = None if stall_generations is None else check_positive_int(
+        self.max_generations = check_int("max_generations", max_generations, 0)
+        self.stall_generations = None if stall_generations is None else check_int(
             "stall_generations", stall_generations)
-        if cost_tolerance is not None and not np.isfinite(cost_tolerance):
-            raise OptionError(f"cost_tolerance must be a finite number, got {cost_tolerance!r}")
-        self.cost_tolerance = cost_tolerance
+        self.cost_tolerance = None if cost_tolerance is None else check_number("cost_tolerance", cost_tolerance)
         self.t0 = time.perf_counter()
         self.generation = 0
         self.best_q: np.ndarray | None = None
@@ -219,7 +184,7 @@ def run_with_restarts(solve_once, problem: IKProblem, runs: int) -> Result:
     its length is ``generations + runs``) and adds ``run`` (the run index of each entry). A run stopped by
     its callback ends the restarts.
     """
-    runs = check_positive_int("runs", runs)
+    runs = check_int("runs", runs)
     results = []
     for _ in range(runs):
         res = solve_once()

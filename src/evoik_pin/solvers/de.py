@@ -16,16 +16,7 @@ from ..errors import OptionError
 from ..problem import Evaluation, IKProblem
 from ..result import Result
 from . import register
-from .common import (
-    BOUND_HANDLING,
-    SolverRun,
-    check_fraction,
-    check_positive,
-    check_positive_int,
-    enforce_bounds,
-    initial_population,
-    run_with_restarts,
-)
+from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
 from .de_ops import (
     MUTATIONS,
     SCHEME_NUMBERS,
@@ -38,8 +29,9 @@ from .de_ops import (
     rand1,
     trigonometric,
 )
+from .options import check_callback, check_choice, check_fraction, check_int, check_positive
 
-__all__ = ["CROSSOVERS", "DE_MUTATIONS", "check_callback", "de", "greedy_selection", "parse_strategy"]
+__all__ = ["CROSSOVERS", "DE_MUTATIONS", "de", "greedy_selection", "parse_strategy"]
 
 #: Mutations accepted by ``de``: paper 002's eight (also by number 1-8), paper 004's either-or, trigonometric.
 DE_MUTATIONS = (*MUTATIONS, "eitheror", "trig")
@@ -73,13 +65,6 @@ def _mutation_name(mutation) -> str:
     if key not in DE_MUTATIONS:
         raise OptionError(f"unknown mutation {mutation!r}; accepted: {', '.join(DE_MUTATIONS)} or 1-8")
     return key
-
-
-def check_callback(callback) -> Callable | None:
-    """``callback`` if it is None or callable, else an OptionError."""
-    if callback is not None and not callable(callback):
-        raise OptionError(f"callback must be callable as callback(generation, population), got {callback!r}")
-    return callback
 
 
 @register("de", "differential evolution: paper 002's eight schemes (default best/1, F 0.5, CR 0.9), paper 004's "
@@ -143,19 +128,17 @@ def de(
     if strategy is not None:
         mutation, crossover = parse_strategy(strategy)
     scheme = _mutation_name(mutation)
-    if crossover not in CROSSOVERS:
-        raise OptionError(f"crossover must be one of {CROSSOVERS}, got {crossover!r}")
-    if bound_handling not in BOUND_HANDLING:
-        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
+    check_choice("crossover", crossover, CROSSOVERS)
+    check_choice("bound_handling", bound_handling, BOUND_HANDLING)
     k = MUTATIONS.get(scheme, 3)
-    N = check_positive_int("population", population, k + 1)
+    N = check_int("population", population, k + 1)
     F = check_positive("F", F, 2.0)
     CR = check_fraction("CR", CR)
     p_F = check_fraction("p_F", p_F)
     K = 0.5 * (F + 1.0) if K is None else check_positive("K", K, 2.0)
     trig_probability = check_fraction("trig_probability", trig_probability)
     check_callback(callback)
-    check_positive_int("runs", runs)
+    check_int("runs", runs)
     SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
     D = problem.n
 

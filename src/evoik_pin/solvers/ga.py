@@ -28,17 +28,18 @@ from ..result import Result
 from . import register
 from .analytic import solution_results
 from .clustering import leader_clusters
-from .common import SolverRun, check_fraction, check_positive_int, initial_population
-from .de import check_callback
+from .common import SolverRun, initial_population
+from .options import check_callback, check_choice, check_fraction, check_int, check_nonnegative, check_positive
 
 __all__ = [
     "ENCODINGS",
+    "basic_polynomial_mutation",
+    "check_niching_ga_options",
     "decode_bits",
     "decode_bounds",
     "decode_sign_magnitude",
     "niche_counts",
     "niching_tournament",
-    "polynomial_mutation",
     "run_niching_ga",
     "sbx_pairs",
     "sharing_radius",
@@ -97,38 +98,33 @@ def sbx_pairs(P1: np.ndarray, P2: np.ndarray, eta: float, u: np.ndarray) -> tupl
     return mean - half, mean + half
 
 
-def polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, mask: np.ndarray,
-                        u: np.ndarray) -> np.ndarray:
-    """Polynomial mutation (Deb & Goyal 1996) of the entries of ``X`` (N, n) where ``mask`` is True.
+def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, mask: np.ndarray,
+                              u: np.ndarray) -> np.ndarray:
+    """Paper 001 eq. 11: the basic polynomial mutation (Deb & Goyal 1996; Deb 2000) of the entries of ``X``
+    (N, n) where ``mask`` is True, with the caller's uniform draws ``u`` (N, n).
 
     ``delta = (2u)^(1/(eta+1)) - 1`` if u < 0.5 else ``1 - (2 (1 - u))^(1/(eta+1))``, and
     ``x += delta (upper - lower)``; the mean |delta| is about 1 / (eta + 2), so eta = 100 perturbs by ~1 %.
+    The spread ignores where x sits in the box (children may leave it: the GA clips them), unlike NSGA-II's
+    :func:`~evoik_pin.solvers.nsga2.bounded_polynomial_mutation`, whose spread shrinks towards the bounds.
     """
     delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
                      1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
     return np.where(mask, X + delta * (upper - lower), X)
 
 
-def _check_ga_options(problem: IKProblem, population, max_generations, niches, niche_size, eta,
-                      crossover_probability) -> tuple[int, int, int, float, float, float]:
-    population = check_positive_int("population", population, 4)
-    max_generations = check_positive_int("max_generations", max_generations, 0)
-    niches = check_positive_int("niches", niches, 1)
+def check_niching_ga_options(population, max_generations, niches, niche_size, eta, crossover_probability
+                             ) -> tuple[int, int, int, float, float, float]:
+    """The niching GA's options (shared by ``ga`` and ``hga``) checked and in canonical form; ``niche_size``
+    None becomes paper 001's proportion, n* = 200 per 750 individuals."""
+    population = check_int("population", population, 4)
+    max_generations = check_int("max_generations", max_generations, 0)
+    niches = check_int("niches", niches, 1)
     if niche_size is None:
         # Paper 001: n* = 200 for a population of 750; keep that proportion for other sizes.
         niche_size = 200.0 * population / 750.0
-    try:
-        niche_size = float(niche_size)
-    except (TypeError, ValueError):
-        raise OptionError(f"niche_size must be a number > 0 (n*), got {niche_size!r}") from None
-    if not (np.isfinite(niche_size) and niche_size > 0):
-        raise OptionError(f"niche_size must be a number > 0 (n*), got {niche_size!r}")
-    try:
-        eta = float(eta)
-    except (TypeError, ValueError):
-        raise OptionError(f"eta (SBX distribution index) must be a number >= 0, got {eta!r}") from None
-    if not (np.isfinite(eta) and eta >= 0):
-        raise OptionError(f"eta (SBX distribution index) must be a number >= 0, got {eta!r}")
+    niche_size = check_positive("niche_size (n*)", niche_size)
+    eta = check_nonnegative("eta (SBX distribution index)", eta)
     crossover_probability = check_fraction("crossover_probability", crossover_probability)
     return population, max_generations, niches, niche_size, eta, crossover_probability
 
@@ -172,7 +168,7 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
         # Eq. 11 (Deb 2000): p_m grows from 1/n to 1 while eta_m = 100 + t shrinks the perturbation.
         p_m = 1.0 / n + (t / max(max_generations, 1)) * (1.0 - 1.0 / n)
         mask = rng.random(children.shape) < p_m
-        children = polynomial_mutation(children, lo, hi, 100.0 + t, mask, rng.random(children.shape))
+        children = basic_polynomial_mutation(children, lo, hi, 100.0 + t, mask, rng.random(children.shape))
         Q = np.clip(children, lo, hi)
         ev = problem.evaluate(Q)
         nc = niche_counts(Q / scale, sigma)
@@ -226,10 +222,10 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
         (its best member), best first. The GA alone is approximate (the paper reports 0.4-3.6 deg errors):
         solutions carry ``success=False`` unless they meet the tolerance; ``hga`` polishes them.
     """
-    population, max_generations, niches, niche_size, eta, crossover_probability = _check_ga_options(
-        problem, population, max_generations, niches, niche_size, eta, crossover_probability)
+    population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
+        population, max_generations, niches, niche_size, eta, crossover_probability)
     min_niche_fraction = check_fraction("min_niche_fraction", min_niche_fraction)
-    max_solutions = check_positive_int("max_solutions", max_solutions)
+    max_solutions = check_int("max_solutions", max_solutions)
     check_callback(callback)
     run, Q, cost = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                   crossover_probability, bool(niching), callback=callback)
@@ -301,17 +297,14 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
     Returns:
         :class:`Result`; its resolution is limited by the encoding (0.7 deg at 9 bits).
     """
-    population = check_positive_int("population", population, 2)
-    elite = check_positive_int("elite", elite, 0)
+    population = check_int("population", population, 2)
+    elite = check_int("elite", elite, 0)
     if elite >= population:
         raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, "
                           f"got {elite}")
-    max_generations = check_positive_int("max_generations", max_generations, 0)
-    bits = check_positive_int("bits", bits, 2)
-    if bits > 62:
-        raise OptionError(f"bits per joint must be at most 62, got {bits}")
-    if encoding not in ENCODINGS:
-        raise OptionError(f"encoding {encoding!r} is not one of {ENCODINGS}")
+    max_generations = check_int("max_generations", max_generations, 0)
+    bits = check_int("bits (per joint)", bits, 2, 62)
+    check_choice("encoding", encoding, ENCODINGS)
     if encoding == "sign-magnitude" and not problem.robot.revolute.all():
         raise OptionError(f"{problem.robot.name} has prismatic joints, which the sign-magnitude angle encoding "
                           "cannot represent; use encoding='bounds'")
@@ -320,8 +313,7 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
     length = n * bits
     p_bit = 1.0 / length if mutation_probability is None else check_fraction("mutation_probability",
                                                                               mutation_probability)
-    if not (np.isfinite(fitness_scale) and fitness_scale > 0):
-        raise OptionError(f"fitness_scale must be a number > 0 (m), got {fitness_scale!r}")
+    fitness_scale = check_positive("fitness_scale", fitness_scale, unit="m")
 
     run = SolverRun(problem, max_generations)
     G = rng.integers(0, 2, size=(population, length), dtype=np.uint8)

@@ -20,9 +20,8 @@ from ..result import Result
 from . import register
 from .analytic import solution_results
 from .clustering import leader_clusters
-from .common import check_positive, check_positive_int
-from .de import check_callback
-from .ga import _check_ga_options, run_niching_ga, solution_leaders
+from .ga import check_niching_ga_options, run_niching_ga, solution_leaders
+from .options import check_callback, check_int, check_positive
 
 __all__ = ["nelder_mead_polish"]
 
@@ -82,10 +81,10 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         that meets the tolerances, best first (empty, with a message, when none does, e.g. an unreachable
         target).
     """
-    population, max_generations, niches, niche_size, eta, crossover_probability = _check_ga_options(
-        problem, population, max_generations, niches, niche_size, eta, crossover_probability)
-    max_starts = check_positive_int("max_starts", max_starts)
-    max_polish_evaluations = check_positive_int("max_polish_evaluations", max_polish_evaluations)
+    population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
+        population, max_generations, niches, niche_size, eta, crossover_probability)
+    max_starts = check_int("max_starts", max_starts)
+    max_polish_evaluations = check_int("max_polish_evaluations", max_polish_evaluations)
     simplex_size, xatol, fatol, solution_radius = (check_positive(k, v) for k, v in (
         ("simplex_size", simplex_size), ("xatol", xatol), ("fatol", fatol), ("solution_radius", solution_radius)))
     check_callback(callback)

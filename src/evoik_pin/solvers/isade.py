@@ -45,21 +45,21 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import OptionError
 from ..problem import IKProblem
 from ..result import Result
 from . import register
-from .common import (
-    BOUND_HANDLING,
-    SolverRun,
-    check_fraction,
-    check_positive_int,
-    enforce_bounds,
-    initial_population,
-    run_with_restarts,
-)
-from .de import check_callback, greedy_selection
+from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
+from .de import greedy_selection
 from .de_ops import binomial_crossover, permutation_indices
+from .options import (
+    check_callback,
+    check_choice,
+    check_fraction,
+    check_int,
+    check_nonnegative,
+    check_number,
+    check_positive,
+)
 
 __all__ = [
     "ISADE_STRATEGIES",
@@ -160,18 +160,6 @@ def isade_donors(X: np.ndarray, F: np.ndarray, E: np.ndarray, strategy: np.ndarr
     return G[:, 0] + F[:, None] * ((G[:, 1] - G[:, 2]) + (G[:, 3] - G[:, 4]))
 
 
-def _check_number(name: str, value, low: float, high: float, open_low: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be a number, got {value!r}") from None
-    ok = np.isfinite(v) and (v > low if open_low else v >= low) and v <= high
-    if not ok:
-        bracket = "(" if open_low else "["
-        raise OptionError(f"{name} must be in {bracket}{low:g}, {high:g}], got {value!r}")
-    return v
-
-
 @register("isade", "ISADE (paper 002): DE with adaptive strategy choice among best/1, best/2, rand-to-best/1, "
                    "rank-sigmoid F blended with a decaying mean F, self-adapted CR")
 def isade(
@@ -220,19 +208,18 @@ def isade(
         A :class:`Result` whose ``history`` adds ``F_mean`` (eq. 18), ``CR_mean`` and the strategy
         probabilities ``p_best1``, ``p_best2``, ``p_randtobest1`` per generation.
     """
-    N = check_positive_int("population", population, 6)
-    F_min = _check_number("F_min", F_min, 0.0, 2.0, open_low=True)
-    F_max = _check_number("F_max", F_max, F_min, 2.0)
-    n_iter = _check_number("n_iter", n_iter, 0.0, 100.0, open_low=True)
-    alpha = _check_number("alpha", alpha, 0.0, 1e3)
+    N = check_int("population", population, 6)
+    F_min = check_positive("F_min", F_min, 2.0)
+    F_max = check_number("F_max", F_max, F_min, 2.0)
+    n_iter = check_positive("n_iter", n_iter, 100.0)
+    alpha = check_nonnegative("alpha", alpha, 1e3)
     tau = check_fraction("tau", tau)
     CR_init = check_fraction("CR_init", CR_init)
     CR_low = check_fraction("CR_low", CR_low)
-    learning_period = check_positive_int("learning_period", learning_period)
-    if bound_handling not in BOUND_HANDLING:
-        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
+    learning_period = check_int("learning_period", learning_period)
+    check_choice("bound_handling", bound_handling, BOUND_HANDLING)
     check_callback(callback)
-    check_positive_int("runs", runs)
+    check_int("runs", runs)
     SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
 
     def once() -> Result:

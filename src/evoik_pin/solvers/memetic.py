@@ -2,10 +2,10 @@
 
 Registered as ``memetic``, the default method of :func:`evoik_pin.solve`. It pairs a global search that
 proposes starting configurations with a local Newton-type search that takes them to machine precision
-(:class:`~evoik_pin.solvers.polish.LevenbergMarquardt`, on the SE(3) error ``log6(T_t^-1 T(q))`` for pose
-targets, the position for position targets, (x, y[, yaw]) for planar ones, within the joint limits; each
-run of a pose or position target is one call of a numba-compiled function, :mod:`.lm_kernel`, about 1-2 us
-per step). Stages, each tried only when the previous ones have not met the tolerances:
+(the LM engine :class:`~evoik_pin.solvers.lm.LevenbergMarquardt`, on the SE(3) error ``log6(T_t^-1 T(q))``
+for pose targets, the position for position targets, (x, y[, yaw]) for planar ones, within the joint limits;
+each run is one call of a numba-compiled function, :mod:`.lm.kernel`, about 1-2 us per step).
+Stages, each tried only when the previous ones have not met the tolerances:
 
 1. **Warm start**: LM from ``q0`` when it is given (a previous solution usually converges in a few steps),
    first when its tip pose is within the table's typical spacing of the target or nearer than the table's
@@ -15,11 +15,11 @@ per step). Stages, each tried only when the previous ones have not met the toler
    numbers are drawn; its forward kinematics is computed once per robot and box and cached). Nearness is
    ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` with ``w`` a quarter of the arm's reach (m per unit of the
    Frobenius distance, which is ``2 sqrt(2) sin(angle / 2)``). The nearest entry is polished alone (it
-   converges for most targets); then the next ones, one LM run after the other (``batch=k`` runs them k at
-   a time in lockstep instead, :meth:`~evoik_pin.solvers.polish.LevenbergMarquardt.run_many`: measured
-   slower, as a lockstep iteration carries ~0.1 ms of fixed NumPy cost and a group runs until its slowest
-   useful member; docs/BENCHMARKS.md). One-time costs do not count against the budget: the table's
-   construction, and loading (or, once after an install, compiling) the compiled LM kernel.
+   converges for most targets); then the next ones, one LM run after the other, the clock checked between
+   runs (``batch=k`` hands them to the engine k at a time,
+   :meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.run_many`, the clock checked between groups). One-time
+   costs do not count against the budget: the table's construction, and loading (or, once after an install,
+   compiling) the compiled LM kernel.
 3. **Memetic restarts** until the tolerances, the time budget ``timeout`` or ``max_restarts`` are reached:
    a population of ``population`` configurations (uniform in the box, drawn from ``rng``, plus ``q0`` and
    the best configuration met so far) evolves for ``generations`` generations of differential evolution
@@ -42,28 +42,50 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError
-from ..objectives import (
-    OrientationError,
-    PopulationKinematics,
-    PoseDistance,
-    PositionError,
-    WeightedSum,
-    orientation_errors,
-    position_errors,
-)
 from ..problem import IKProblem, Target
 from ..result import Result
 from . import register
-from .common import check_positive, check_positive_int, diversity
+from .common import diversity
 from .de_ops import binomial_crossover, distinct_indices, mutate
-from .polish import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from .options import check_int, check_positive
+from .polish import errors_text
 
-__all__ = ["DEFAULT_TIMEOUT", "SeedTable", "memetic", "polish_result", "seed_table"]
+__all__ = ["DEFAULT_TABLE_SEEDS", "DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "SeedTable", "default_table_size",
+           "halton", "memetic", "prepare", "seed_table"]
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
-#: Steps allowed when polishing another solver's answer (already close: it converges or stalls quickly).
-POLISH_ITERATIONS = 100
+#: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
+DEFAULT_TABLE_SEEDS = 17
+#: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
+#: descheduled past the budget still gets this minimum of useful work (5 runs of at most 30 steps, about
+#: 0.3 ms of compiled LM at worst).
+GUARANTEED_TABLE_RUNS = 4
+#: Target kinds a seed table serves, each with its own nearness features.
+_KINDS = ("pose", "position", "planar", "planar_yaw")
+
+
+def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
+    """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence
+    (radical inverses of the point index in the first ``dimensions`` primes): deterministic and evenly spread.
+    The same points as ``scipy.stats.qmc.Halton(d, scramble=False)``, without importing scipy.stats (0.4-2 s)."""
+    primes: list[int] = []
+    k = 2
+    while len(primes) < dimensions:
+        if all(k % p for p in primes):
+            primes.append(k)
+        k += 1
+    index = np.arange(skip, skip + count, dtype=np.int64)
+    out = np.zeros((count, dimensions))
+    for d, base in enumerate(primes):
+        i = index.copy()
+        f = 1.0
+        while i.any():
+            f /= base
+            out[:, d] += f * (i % base)
+            i //= base
+    return out
 
 
 # ---------------------------------------------------------------------- seed table
@@ -78,16 +100,17 @@ class SeedTable:
 
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
-        from scipy.stats import qmc  # lazy: scipy.stats costs ~0.4 s to import, paid on first table only
-
-        u = qmc.Halton(robot.n, scramble=False).random(size + 1)[1:]
-        self.Q = lower + u * (upper - lower)
+        self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
+        if size:
+            for key in _KINDS:  # one-time work here, not inside a solve's time budget
+                self._table_features(key)
+                self._gap(key)
 
     def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
         """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
@@ -148,7 +171,9 @@ class SeedTable:
         """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
         other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
         as the table's nearest entry usually is."""
-        key = self.target_features([target])[0]
+        return self._gap(self.target_features([target])[0])
+
+    def _gap(self, key: str) -> float:
         gap = self._gaps.get(key)
         if gap is None:
             F, sq = self._table_features(key)
@@ -201,6 +226,18 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
     return table
 
 
+def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled"
+            ) -> SeedTable | None:
+    """Do memetic's one-time work for a robot and a search box: load (once per install: compile) the compiled
+    LM kernel and build the cached seed table of ``table_size`` entries (0: none). Returns the table.
+
+    :func:`memetic` calls it before starting its clock; :func:`evoik_pin.prepare` calls it ahead of time.
+    """
+    if engine == "compiled":
+        compiled_kernel()
+    return seed_table(robot, lower, upper, table_size) if table_size > 0 else None
+
+
 # ---------------------------------------------------------------------- option checks
 def _check_timeout(timeout) -> float | None:
     return None if timeout is None else check_positive("timeout (s; or None)", timeout)
@@ -209,57 +246,7 @@ def _check_timeout(timeout) -> float | None:
 def _check_restarts(max_restarts) -> int | None:
     if max_restarts is None:
         return None
-    return check_positive_int("max_restarts", max_restarts, 0)
-
-
-# ---------------------------------------------------------------------- results
-def _final_errors(problem: IKProblem, q: np.ndarray, known: LMOutcome | None = None
-                  ) -> tuple[float, float | None, float]:
-    """(position error m, orientation error rad or None, objective cost) of ``q``.
-
-    ``known``: an LM outcome at this very ``q``, whose errors (computed from one Pinocchio FK as the norms of
-    the task error's parts, equal to ``IKProblem.evaluate``'s up to rounding) are reused. The cost is
-    ``position + w * orientation`` when the objective is the default one; any other objective is evaluated
-    on a kinematics object filled from the single-configuration FK, so no batch pass is run.
-    """
-    target = problem.target
-    if known is not None:
-        pos, rot = known.position_error, known.orientation_error
-        cost = _default_cost(problem, pos, rot)
-        if cost is not None:
-            return pos, rot, cost
-    T = problem.robot.fk_unchecked(q)
-    Q = q[None]
-    kin = PopulationKinematics.from_poses(problem.robot, Q, np.array(T.translation)[None], np.array(T.rotation)[None])
-    if known is None:
-        pos = float(position_errors(target, kin)[0])
-        rot = float(orientation_errors(target, kin)[0]) if target.has_orientation else None
-    return pos, rot, float(problem.objective(Q, kin)[0])
-
-
-def _default_cost(problem: IKProblem, pos: float, rot: float | None) -> float | None:
-    """The objective value from the errors when the objective is the default one (else None).
-
-    Recognized structurally: ``PositionError(target)`` alone, or ``1 * PositionError(target) +
-    w * OrientationError(target)`` or ``PoseDistance(target, w)`` for the problem's own target (what
-    ``default_objective`` builds).
-    """
-    obj, target = problem.objective, problem.target
-    if isinstance(obj, PositionError):
-        return pos if obj.target is target else None
-    if isinstance(obj, PoseDistance):
-        return float(np.hypot(pos, obj.orientation_weight * rot)) if obj.target is target and rot is not None else None
-    if not isinstance(obj, WeightedSum) or rot is None or len(obj.terms) != 2:
-        return None
-    (w1, t1), (w2, t2) = obj.terms
-    if (isinstance(t1, PositionError) and isinstance(t2, OrientationError) and w1 == 1.0
-            and t1.target is target and t2.target is target):
-        return pos + w2 * rot
-    return None
-
-
-def _errors_text(pos: float, rot: float | None) -> str:
-    return f"position error {pos:.3g} m" + ("" if rot is None else f", orientation error {rot:.3g} rad")
+    return check_int("max_restarts", max_restarts, 0)
 
 
 # ---------------------------------------------------------------------- the solver
@@ -267,8 +254,9 @@ class _Search:
     """State of one memetic solve: the LM engine, the best configuration met, counters and the clock."""
 
     def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int,
-                 batch: int = 1, engine: str = "compiled") -> None:
+                 batch: int = 1, engine: str = "compiled", guaranteed: int = 0) -> None:
         self.problem = problem
+        self.guaranteed = guaranteed  # LM runs made whatever the clock says
         self.batch = batch
         self.lm = LevenbergMarquardt(problem, engine=engine)
         self.t0 = t0
@@ -280,7 +268,12 @@ class _Search:
         self.attempt_errors: list[float] = []
 
     def out_of_time(self) -> bool:
-        return self.deadline is not None and time.perf_counter() >= self.deadline
+        return (self.deadline is not None and self.attempts >= self.guaranteed
+                and time.perf_counter() >= self.deadline)
+
+    def _deadline(self) -> float | None:
+        """The deadline for the next LM run: none while the guaranteed runs are being made."""
+        return None if self.attempts < self.guaranteed else self.deadline
 
     def _keep(self, out: LMOutcome, runs: int) -> bool:
         self.evaluations += out.evaluations
@@ -292,11 +285,12 @@ class _Search:
 
     def polish(self, q: np.ndarray, iterations: int | None = None) -> bool:
         """One LM run from ``q`` (n,); keeps the best outcome; True when it meets the tolerances."""
-        return self._keep(self.lm.run(q, iterations or self.iterations, self.deadline), 1)
+        return self._keep(self.lm.run(q, iterations or self.iterations, self._deadline()), 1)
 
     def polish_many(self, Q: np.ndarray) -> bool:
-        """LM runs from the rows of ``Q`` (K, n), in order, ``batch`` at a time (in lockstep when > 1, see
-        ``LevenbergMarquardt.run_many``), until one meets the tolerances or the time is up."""
+        """LM runs from the rows of ``Q`` (K, n), in order, until one meets the tolerances or the time is up;
+        ``batch`` > 1 hands them to the engine ``batch`` at a time (``LevenbergMarquardt.run_many``: one kernel
+        call per group, the clock checked between groups)."""
         for s in range(0, Q.shape[0], self.batch):
             if s and self.out_of_time():
                 return False
@@ -304,7 +298,8 @@ class _Search:
             if chunk.shape[0] == 1:
                 solved = self.polish(chunk[0])
             else:
-                solved = self._keep(self.lm.run_many(chunk, self.iterations, self.deadline)[0], chunk.shape[0])
+                out, k = self.lm.run_many(chunk, self.iterations, self._deadline())
+                solved = self._keep(out, k + 1 if out.converged else chunk.shape[0])
             if solved:
                 return True
         return False
@@ -322,7 +317,7 @@ def memetic(
     generations: int = 3,
     polish_count: int = 8,
     table_size: int | None = None,
-    table_seeds: int = 17,
+    table_seeds: int = DEFAULT_TABLE_SEEDS,
     table_offset: int = 0,
     batch: int = 1,
     iterations: int = DEFAULT_ITERATIONS,
@@ -335,7 +330,11 @@ def memetic(
             reachable down to about 1e-12) decide success.
         rng: source of every random draw (stage 3 only).
         timeout: wall-clock budget in s (default 0.005, TRAC-IK's default), checked between LM runs and
-            generations; None for no time limit (then ``max_restarts`` bounds the work).
+            generations; None for no time limit (then ``max_restarts`` bounds the work). The clock starts
+            after the one-time set-up (the compiled kernel, the seed table: see ``Result.setup_s``), and a
+            minimum of work is always done, whatever the clock says (a process descheduled past the budget
+            still solves what that work solves): the LM runs from ``q0`` and from the
+            ``GUARANTEED_TABLE_RUNS`` (4) nearest seed-table entries, at most 30 steps each (about 0.3 ms).
         max_restarts: number of DE populations (stage 3) at most; None for no limit (then ``timeout``
             bounds the work); 0 runs stages 1-2 only.
         population: DE population size (>= 4). generations: DE generations per population (>= 0).
@@ -344,43 +343,47 @@ def memetic(
         table_seeds: table entries tried in stage 2, nearest first: the nearest alone (it usually converges),
             the next ones one by one (``batch`` at a time).
         table_offset: skip the nearest ``table_offset`` entries (already tried, e.g. by ``solve_many``).
-        batch: LM runs polished together in lockstep (stages 2 and 3; >= 1); 1 (default): one after the
-            other, stopping at the first that meets the tolerances.
+        batch: LM runs handed to the engine together (stages 2 and 3; >= 1): one kernel call per group of
+            ``batch`` starts, in order, stopping at the first that meets the tolerances; the clock is checked
+            between groups. 1 (default): between every two runs.
         iterations: LM steps allowed per run (>= 1).
         engine: ``"compiled"`` (default): each LM run is one call of the numba kernel
-            (:mod:`.lm_kernel`, about 1-2 us per step); ``"python"``: the same iteration as a Python loop
-            over Pinocchio's kinematics (about 30 us per step). Planar targets always use the Python loop.
+            (:mod:`.lm.kernel`, about 1-2 us per step); ``"python"``: the same iteration as the reference
+            Python loop over Pinocchio's kinematics (:mod:`.lm.reference`, about 30 us per step).
 
     Returns:
         A :class:`Result`. ``generations`` counts DE generations; ``evaluations`` counts forward-kinematics
         evaluations (LM steps and DE individuals; the cached seed table is not counted); ``history`` holds
         ``best_cost`` / ``mean_cost`` / ``diversity`` with one entry for stages 1-2 and one per DE
-        generation, and ``attempt_error`` (m + rad) after each LM run (or lockstep group). An unreachable
+        generation, and ``attempt_error`` (m + rad) after each LM run (or group of ``batch`` runs). An unreachable
         target gives the best approximation met, ``success=False`` and a message.
     """
-    t0 = time.perf_counter()
+    t_setup = time.perf_counter()
     timeout = _check_timeout(timeout)
     max_restarts = _check_restarts(max_restarts)
     if timeout is None and max_restarts is None:
         raise OptionError("memetic needs a finite budget: give timeout (s) or max_restarts (or both)")
-    population = check_positive_int("population", population, 4)
-    generations = check_positive_int("generations", generations, 0)
-    polish_count = check_positive_int("polish_count", polish_count, 1)
+    population = check_int("population", population, 4)
+    generations = check_int("generations", generations, 0)
+    polish_count = check_int("polish_count", polish_count, 1)
     if polish_count > population:
         raise OptionError(f"polish_count ({polish_count}) cannot exceed population ({population})")
     robot = problem.robot
-    table_size = default_table_size(robot.n) if table_size is None else check_positive_int("table_size",
+    table_size = default_table_size(robot.n) if table_size is None else check_int("table_size",
                                                                                            table_size, 0)
-    table_seeds = check_positive_int("table_seeds", table_seeds, 0)
-    table_offset = check_positive_int("table_offset", table_offset, 0)
-    batch = check_positive_int("batch", batch, 1)
-    iterations = check_positive_int("iterations", iterations, 1)
+    table_seeds = check_int("table_seeds", table_seeds, 0)
+    table_offset = check_int("table_offset", table_offset, 0)
+    batch = check_int("batch", batch, 1)
+    iterations = check_int("iterations", iterations, 1)
 
-    t_setup = time.perf_counter()
-    if engine == "compiled" and not problem.target.planar:
-        compiled_kernel()  # one-time: numba's import and the kernel's load (or compilation), outside the budget
-    setup = time.perf_counter() - t_setup
-    search = _Search(problem, t0, None if timeout is None else t0 + setup + timeout, iterations, batch, engine)
+    # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
+    # table of this box with its nearness features (cached per robot and box).
+    use_table = table_size > 0 and table_seeds > 0
+    table = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine)
+    t0 = time.perf_counter()
+    setup_s = t0 - t_setup
+    guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
+    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
     stage = ""
     n_gen = 0
@@ -390,13 +393,9 @@ def memetic(
     # the full step budget: a start in the basin of a solution converges in about 5-10 steps, one held by a
     # limit or a local minimum is dropped by LM's stall test within a few, and one still gaining after 15 is
     # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
-    # to replace. The table is built once per robot and box; building it does not count against the budget.
-    table = ranked = first = None
-    if table_size > 0 and table_seeds > 0:
-        t_build = time.perf_counter()
-        table = seed_table(robot, problem.lower, problem.upper, table_size)
-        if search.deadline is not None:
-            search.deadline += time.perf_counter() - t_build
+    # to replace.
+    ranked = first = None
+    if table is not None:
         ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranks on the first next()
         if table_offset:
             ranked = itertools.islice(ranked, table_offset, None)
@@ -430,7 +429,7 @@ def memetic(
     if not solved and not search.out_of_time() and max_restarts != 0:
         if search.best is None:  # no q0 and no table: start from the box centre
             solved = search.polish(0.5 * (problem.lower + problem.upper))
-        cost = _final_errors(problem, search.best.q, search.best)[2]
+        cost = problem.assess(search.best.q, search.best.position_error, search.best.orientation_error)[2]
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
@@ -443,7 +442,7 @@ def memetic(
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    pos, rot, cost = _final_errors(problem, q, search.best)
+    pos, rot, cost = problem.assess(q, search.best.position_error, search.best.orientation_error)
     if not history["best_cost"]:
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
@@ -454,13 +453,14 @@ def memetic(
     else:
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
-        message = (f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); best {_errors_text(pos, rot)}"
+        message = (f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); best {errors_text(pos, rot)}"
                    f" exceeds the tolerance ({problem.tolerance:g} m, {problem.rotation_tolerance:g} rad)")
     history["attempt_error"] = search.attempt_errors
     return Result(
         q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=n_gen,
         evaluations=search.evaluations + problem.evaluations, time_s=time.perf_counter() - t0,
         history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message, method="memetic",
+        setup_s=setup_s,
     )
 
 
@@ -502,41 +502,3 @@ def _memetic_restart(problem, rng, search: _Search, population: int, generations
     if not order:
         return False, n_gen, best_cost
     return search.polish_many(X[order]), n_gen, best_cost
-
-
-def polish_result(problem: IKProblem, result: Result, rng: np.random.Generator | None = None,
-                  iterations: int = POLISH_ITERATIONS, engine: str = "compiled") -> Result:
-    """``result`` with its configuration polished by Levenberg-Marquardt (the ``polish=True`` of every method).
-
-    LM runs from ``result.q`` for at most ``iterations`` steps on the problem's task error; the polished
-    configuration replaces ``result.q`` only when its error (position + orientation, m + rad) is lower.
-    The history is kept; ``evaluations`` and ``time_s`` grow by the polish's; the message says what the
-    polish did. ``engine``: as memetic's. ``rng`` is accepted for the uniform hook signature; the polish draws
-    no random numbers.
-    """
-    t0 = time.perf_counter()
-    iterations = check_positive_int("iterations", iterations, 1)
-    lm = LevenbergMarquardt(problem, engine=engine)
-    out = lm.run(np.asarray(result.q, dtype=float), iterations)
-    before = result.position_error + (result.orientation_error or 0.0)
-    improved = out.error < before
-    if improved:
-        q = out.q
-        pos, rot, cost = _final_errors(problem, q, out)
-    else:
-        q = np.asarray(result.q, dtype=float)
-        pos, rot, cost = result.position_error, result.orientation_error, result.cost
-    success = bool(problem.succeeded(pos, rot))
-    if improved:
-        note = f"polished by Levenberg-Marquardt ({out.iterations} steps): {_errors_text(pos, rot)}"
-    else:
-        note = f"polished by Levenberg-Marquardt ({out.iterations} steps): no improvement"
-    message = (result.message + "; " if result.message else "") + note
-    if success and not result.success:
-        message += "; tolerance reached"
-    return Result(
-        q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=success,
-        generations=result.generations, evaluations=result.evaluations + out.evaluations,
-        time_s=result.time_s + (time.perf_counter() - t0), history=result.history, message=message,
-        method=result.method, solutions=result.solutions, front=result.front,
-    )

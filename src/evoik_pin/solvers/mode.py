@@ -54,14 +54,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import OptionError
 from ..objectives import MaxJointDisplacement
 from ..problem import Evaluation, IKProblem
 from ..result import Front, Result
 from . import register
-from .common import BOUND_HANDLING, SolverRun, check_fraction, check_positive_int, enforce_bounds, initial_population
+from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population
 from .de_ops import binomial_crossover, distinct_indices, rand1, trigonometric
 from .nsga2 import crowding_distance
+from .options import check_choice, check_fraction, check_int, check_nonnegative, check_positive
 
 __all__ = ["VARIANTS", "adaptive_probability", "equitable_weights", "nondominated_2d"]
 
@@ -160,19 +160,16 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         ``best_position_error`` (m), ``best_displacement`` (rad), beside ``diversity`` (mean normalized
         distance to the centroid).
     """
-    population = check_positive_int("population", population, 5)
-    max_generations = check_positive_int("max_generations", max_generations, 0)
-    if variant not in VARIANTS:
-        raise OptionError(f"variant {variant!r} is not one of {', '.join(VARIANTS)}")
+    population = check_int("population", population, 5)
+    max_generations = check_int("max_generations", max_generations, 0)
+    check_choice("variant", variant, tuple(VARIANTS))
     M = check_fraction("mutation_probability", mutation_probability)
     Cr = check_fraction("crossover_rate", crossover_rate)
-    F = check_fraction("scale_factor", scale_factor, 0.0, 2.0)
+    F = check_nonnegative("scale_factor", scale_factor, 2.0)
     Mt = check_fraction("trigonometric_probability", trigonometric_probability)
-    if bound_handling not in BOUND_HANDLING:
-        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
-    front_size = check_positive_int("front_size", front_size, 2)
-    if not (np.isfinite(length_scale) and length_scale > 0):
-        raise OptionError(f"length_scale must be a number > 0 (m), got {length_scale!r}")
+    check_choice("bound_handling", bound_handling, BOUND_HANDLING)
+    front_size = check_int("front_size", front_size, 2)
+    length_scale = check_positive("length_scale", length_scale, unit="m")
     crossover, use_trig = VARIANTS[variant]
 
     q_init = np.zeros(problem.n) if problem.q0 is None else problem.q0

@@ -13,7 +13,7 @@ Pieces, each one call over the whole population: :func:`dominance_matrix` (const
 feasible point dominates an infeasible one; two infeasible points compare by total violation; two
 feasible ones by Pareto dominance), :func:`nondominated_ranks` (fast non-dominated sorting, one pass per
 front, the infeasible points ranked by violation directly), :func:`crowding_distance`, :func:`sbx`
-(bounded simulated binary crossover) and :func:`polynomial_mutation` (bounded), as in Deb's reference
+(bounded simulated binary crossover) and :func:`bounded_polynomial_mutation`, as in Deb's reference
 implementation.
 
 Implementation choices where Deb et al. (2002) leave room (see :func:`nsga2_minimize`): tournament
@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import lie
 from ..errors import BoundsError, OptionError
 from ..objectives import (
     Manipulability,
@@ -43,15 +44,16 @@ from ..objectives import (
 from ..problem import IKProblem
 from ..result import Front, Result
 from . import register
-from .common import SolverRun, check_fraction, check_positive_int, diversity, initial_population
+from .common import SolverRun, diversity, initial_population
+from .options import check_fraction, check_int, check_nonnegative, check_nonnegative_vector
 
 __all__ = [
     "NSGA2Result",
+    "bounded_polynomial_mutation",
     "crowding_distance",
     "dominance_matrix",
     "nondominated_ranks",
     "nsga2_minimize",
-    "polynomial_mutation",
     "sbx",
     "survival",
 ]
@@ -179,9 +181,16 @@ def sbx(P1: np.ndarray, P2: np.ndarray, lower: np.ndarray, upper: np.ndarray, et
     return np.where(active, c1, P1), np.where(active, c2, P2)
 
 
-def polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, probability: float,
-                        rng: np.random.Generator) -> np.ndarray:
-    """Bounded polynomial mutation (Deb & Goyal 1996; Deb's NSGA-II code) of each entry with ``probability``."""
+def bounded_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float,
+                                probability: float, rng: np.random.Generator) -> np.ndarray:
+    """Bounded polynomial mutation (Deb & Goyal 1996 as in Deb's NSGA-II code and pymoo) of each entry of ``X``
+    (N, n) with ``probability``, drawing from ``rng``; the result is clipped into [lower, upper].
+
+    The spread depends on the distances ``d1 = (x - lower) / (upper - lower)`` and ``d2 = (upper - x) /
+    (upper - lower)`` to the bounds: an entry on a bound is never pushed across it. Paper 001's GA uses
+    the basic form instead (:func:`~evoik_pin.solvers.ga.basic_polynomial_mutation`), whose spread ignores
+    the bounds; the two give different children.
+    """
     width = np.where(upper > lower, upper - lower, 1.0)
     mask = rng.random(X.shape) < probability
     u = rng.random(X.shape)
@@ -317,14 +326,13 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
     if np.any(lower > upper):
         raise BoundsError("nsga2_minimize: some lower bound exceeds its upper bound")
     n = lower.size
-    population = check_positive_int("population", population, 4)
-    generations = check_positive_int("generations", generations, 0)
-    n_obj = check_positive_int("n_obj", n_obj, 1)
+    population = check_int("population", population, 4)
+    generations = check_int("generations", generations, 0)
+    n_obj = check_int("n_obj", n_obj, 1)
     crossover_probability = check_fraction("crossover_probability", crossover_probability)
     p_m = 1.0 / n if mutation_probability is None else check_fraction("mutation_probability", mutation_probability)
-    for name, value in (("eta_c", eta_c), ("eta_m", eta_m)):
-        if not (np.isfinite(value) and value >= 0):
-            raise OptionError(f"{name} (distribution index) must be a number >= 0, got {value!r}")
+    eta_c = check_nonnegative("eta_c (SBX distribution index)", eta_c)
+    eta_m = check_nonnegative("eta_m (mutation distribution index)", eta_m)
     t0 = time.perf_counter()
     evaluations = 0
 
@@ -362,7 +370,7 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
         half = (m + 1) // 2
         winners = _tournament(rank, cd, _tournament_pairs(X.shape[0], 2 * half, rng), rng)
         C1, C2 = sbx(X[winners[:half]], X[winners[half:]], lower, upper, eta_c, rng, crossover_probability)
-        return polynomial_mutation(np.concatenate([C1, C2])[:m], lower, upper, eta_m, p_m, rng)
+        return bounded_polynomial_mutation(np.concatenate([C1, C2])[:m], lower, upper, eta_m, p_m, rng)
 
     for g in range(generations):
         Y = breed(population)
@@ -401,20 +409,13 @@ def _task_errors(problem: IKProblem, Q: np.ndarray) -> np.ndarray:
     if t.planar:
         e = [t.position[0] - p[:, 0], t.position[1] - p[:, 1]]
         if t.yaw is not None:
-            yaw = np.arctan2(R[:, 1, 0], R[:, 0, 0])
-            e.append((t.yaw - yaw + np.pi) % (2 * np.pi) - np.pi)
+            e.append(lie.wrap_angle(t.yaw - lie.yaw(R)))
         return np.stack(e, axis=1)
     e = t.position - p
     if t.rotation is None:
         return e
-    # Rotation error as the world-frame rotation vector of R_target R^T (small-angle accurate; a
-    # direction good enough for Newton steps at any angle).
-    E = np.einsum("ij,nkj->nik", t.rotation, R)
-    v = 0.5 * np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
-    s = np.linalg.norm(v, axis=1)
-    angle = np.arctan2(s, 0.5 * (np.trace(E, axis1=1, axis2=2) - 1.0))
-    scale = np.where(s > 1e-12, angle / np.maximum(s, 1e-300), 1.0)
-    return np.concatenate([e, v * scale[:, None]], axis=1)
+    # Rotation error: the world-frame rotation vector of R_target R^T.
+    return np.concatenate([e, lie.log3(np.einsum("ij,nkj->nik", t.rotation, R))], axis=1)
 
 
 def dls_repair(problem: IKProblem, Q: np.ndarray, steps: int, damping: float = 1e-4,
@@ -474,16 +475,12 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         ``min_violation``.
     """
     robot = problem.robot
-    repair_steps = check_positive_int("repair_steps", repair_steps, 0)
+    repair_steps = check_int("repair_steps", repair_steps, 0)
     q_prev = np.zeros(problem.n) if problem.q0 is None else problem.q0
     repair_weights = None
     if objectives is None:
         if gains is not None:
-            gains = np.asarray(gains, float).reshape(-1)
-            if gains.shape != (problem.n,):
-                raise OptionError(f"gains must have {problem.n} values (one per joint), got {gains.size}")
-            if np.any(gains < 0) or not np.all(np.isfinite(gains)):
-                raise OptionError(f"gains must be finite values >= 0, got {gains.tolist()}")
+            gains = check_nonnegative_vector("gains", gains, problem.n)
             repair_weights = 1.0 / np.maximum(gains, 1e-12)
         rows = _task_rows(problem) if manipulability_rows is None else manipulability_rows
         robot.task_rows(rows)  # validates names and indices with a clear error
@@ -495,8 +492,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     if not objectives or not all(isinstance(o, Objective) for o in objectives):
         raise OptionError("objectives must be a non-empty list of evoik_pin.objectives.Objective terms")
     k = len(objectives)
-    if isinstance(pick, bool) or not isinstance(pick, (int, np.integer)) or not -k <= pick < k:
-        raise OptionError(f"pick must be an objective index in [{-k}, {k - 1}], got {pick!r}")
+    pick = check_int("pick (objective index)", pick, -k, k - 1)
     target = problem.target
     run = SolverRun(problem, max_generations)
 

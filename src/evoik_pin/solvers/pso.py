@@ -17,13 +17,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import OptionError
 from ..objectives import PoseDistance
 from ..problem import IKProblem
 from ..result import Result
 from . import register
-from .common import BOUND_HANDLING, SolverRun, check_positive_int, enforce_bounds, initial_population, run_with_restarts
-from .de import check_callback
+from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
+from .options import check_callback, check_choice, check_int, check_nonnegative, check_positive
 
 __all__ = ["RANDOM_FACTORS", "TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
 
@@ -63,16 +62,6 @@ def ring_best(p_cost: np.ndarray) -> np.ndarray:
     i = np.arange(N)
     cand = np.stack([(i - 1) % N, i, (i + 1) % N])  # (3, N)
     return cand[p_cost[cand].argmin(axis=0), i]
-
-
-def _check_coefficient(name: str, value, high: float = 10.0) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be a number in [0, {high:g}], got {value!r}") from None
-    if not (np.isfinite(v) and 0.0 <= v <= high):
-        raise OptionError(f"{name} must be a number in [0, {high:g}], got {value!r}")
-    return v
 
 
 @register("pso", "particle swarm (paper 002): inertia weight linear from w_start to w_end, c1 = c2 = 1.5, "
@@ -131,28 +120,20 @@ def pso(
     Returns:
         A :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
     """
-    N = check_positive_int("population", population, 2)
-    w_start = _check_coefficient("w_start", w_start, 2.0)
-    w_end = _check_coefficient("w_end", w_end, 2.0)
-    c1 = _check_coefficient("c1", c1)
-    c2 = _check_coefficient("c2", c2)
-    try:
-        velocity_clamp = float(velocity_clamp)
-    except (TypeError, ValueError):
-        raise OptionError(f"velocity_clamp must be a number in (0, 1], got {velocity_clamp!r}") from None
-    if not (0.0 < velocity_clamp <= 1.0):
-        raise OptionError(f"velocity_clamp must be a number in (0, 1], got {velocity_clamp!r}")
-    if bound_handling not in BOUND_HANDLING:
-        raise OptionError(f"bound_handling {bound_handling!r} is not one of {BOUND_HANDLING}")
-    if topology not in TOPOLOGIES:
-        raise OptionError(f"topology {topology!r} is not one of {TOPOLOGIES}")
-    if random_factors not in RANDOM_FACTORS:
-        raise OptionError(f"random_factors {random_factors!r} is not one of {RANDOM_FACTORS}")
+    N = check_int("population", population, 2)
+    w_start = check_nonnegative("w_start", w_start, 2.0)
+    w_end = check_nonnegative("w_end", w_end, 2.0)
+    c1 = check_nonnegative("c1", c1, 10.0)
+    c2 = check_nonnegative("c2", c2, 10.0)
+    velocity_clamp = check_positive("velocity_clamp", velocity_clamp, 1.0)
+    check_choice("bound_handling", bound_handling, BOUND_HANDLING)
+    check_choice("topology", topology, TOPOLOGIES)
+    check_choice("random_factors", random_factors, RANDOM_FACTORS)
     r_shape = (2, N, problem.n) if random_factors == "per-coordinate" else (2, N, 1)
-    check_callback(callback)
-    check_positive_int("runs", runs)
+    check_callback(callback, "callback(generation, positions)")
+    check_int("runs", runs)
     if reinit_stagnant is not None:
-        reinit_stagnant = check_positive_int("reinit_stagnant", reinit_stagnant)
+        reinit_stagnant = check_int("reinit_stagnant", reinit_stagnant)
     SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
 
     def once() -> Result:

@@ -1,10 +1,11 @@
-"""The robot layer: one serial chain of a URDF, as Pinocchio sees it.
+"""The robot's kinematics: :class:`Robot`, one serial chain of a URDF as Pinocchio sees it.
 
-This is the only module that talks to Pinocchio's ``Model``/``Data``. It loads a URDF (a path, an XML
-string, a bundled paper arm or an ``example-robot-data`` arm), picks the chain from a base frame to a tip
-frame, locks every other joint (``pin.buildReducedModel``) and offers forward kinematics, Jacobians and
-manipulability, one configuration at a time (through Pinocchio) or a whole population at once (a NumPy
-recursion built from the same Pinocchio model, checked against it in the tests).
+This module is the only code in evoik_pin that runs Pinocchio's kinematics on a ``Model``/``Data``. A
+:class:`Robot` picks the chain from a base frame to a tip frame, locks every other joint
+(``pin.buildReducedModel``) and offers forward kinematics, Jacobians and manipulability, one configuration
+at a time (through Pinocchio) or a whole population at once (a NumPy recursion built from the same
+Pinocchio model, checked against it in the tests), the folded chain constants compiled kernels evaluate,
+and the placements the viewer draws. Loading a URDF is :mod:`.loading`'s job.
 
 The joint vector ``q`` users and solvers see has one entry per degree of freedom (rad for revolute joints,
 m for prismatic ones). Pinocchio stores a continuous (unbounded revolute) joint as two numbers
@@ -15,57 +16,17 @@ Poses are those of the tip frame expressed in the base frame (the world frame wh
 
 from __future__ import annotations
 
-import importlib.metadata
-import os
-import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from .errors import BoundsError, ConfigurationError, FrameError, RobotLoadError, RobotNotFoundError
+from ..errors import BoundsError, ConfigurationError, FrameError, RobotLoadError
+from ..lie import rotation_to_z
+from .frames import body_frame_names, deepest_body, find_frame, root_link
 
-__all__ = [
-    "BUNDLED_ROBOTS",
-    "EXAMPLE_ARMS",
-    "Robot",
-    "bundled_robots_dir",
-    "example_robot_data_dir",
-    "list_robots",
-    "load_robot",
-]
-
-#: The papers' arms shipped with evoik_pin (``robots/<name>.urdf``), with the paper each comes from.
-BUNDLED_ROBOTS: dict[str, str] = {
-    "ax18": "000: Crustcrawler AX-18, 4R + tool (standard DH, Table 1)",
-    "planar2r": "001: planar 2R elbow arm, a1 = 0.25 m, a2 = 0.16 m",
-    "puma3r": "001: PUMA 560 positioning chain (wrist point, eq. 20)",
-    "redundant7r": "002: redundant 7R arm (standard DH, eqs. 3-9)",
-    "vehicle_arm": "003: planar vehicle (prismatic x, y) carrying a 3R arm",
-    "aerial6r": "004: 6R human-like arm of an aerial manipulator (Table 1, standard DH)",
-}
-
-
-@dataclass(frozen=True)
-class _ExampleArm:
-    urdf: str  # path below example-robot-data's robots/ directory
-    tip: str
-    base: str | None = None
-
-
-#: Arms of the ``example-robot-data`` wheel reachable by name, with their default tip frames.
-EXAMPLE_ARMS: dict[str, _ExampleArm] = {
-    "panda": _ExampleArm("panda_description/urdf/panda.urdf", "panda_hand_tcp"),
-    "ur3": _ExampleArm("ur_description/urdf/ur3_robot.urdf", "tool0"),
-    "ur5": _ExampleArm("ur_description/urdf/ur5_robot.urdf", "tool0"),
-    "ur10": _ExampleArm("ur_description/urdf/ur10_robot.urdf", "tool0"),
-    "kinova": _ExampleArm("kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-    "z1": _ExampleArm("z1_description/urdf/z1.urdf", "gripperStator"),
-    "xarm": _ExampleArm("xarm_description/urdf/xarm7.urdf", "link_eef"),
-    "so_arm": _ExampleArm("so_arm_description/urdf/so101.urdf", "gripper_frame_link"),
-}
+__all__ = ["DEFAULT_PRISMATIC_RANGE", "Robot"]
 
 #: Search interval (m) used for prismatic joints whose URDF gives no finite limits.
 DEFAULT_PRISMATIC_RANGE = 1.0
@@ -74,152 +35,6 @@ _UNBOUNDED = 1e10
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
-
-
-def example_robot_data_dir() -> Path:
-    """The ``robots/`` directory of the installed ``example-robot-data`` wheel.
-
-    Found from the installed distribution's file list, so it works in any virtual environment.
-    """
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
-        raise RobotNotFoundError(
-            "the 'example-robot-data' package is not installed; install it (pip install example-robot-data) "
-            "to load arms such as panda or ur5 by name"
-        ) from exc
-    for f in dist.files or []:
-        parts = Path(str(f)).parts
-        if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):
-            k = parts.index("robots")
-            return Path(dist.locate_file(Path(*parts[: k + 1]))).resolve()
-    raise RobotNotFoundError("the installed 'example-robot-data' package ships no robots/ directory")
-
-
-def bundled_robots_dir() -> Path:
-    """Directory holding the bundled paper arms (package data in a wheel, ``robots/`` in a checkout)."""
-    here = Path(__file__).resolve().parent
-    for candidate in (here / "robots", here.parents[1] / "robots"):
-        if (candidate / "ax18.urdf").is_file():
-            return candidate
-    raise RobotNotFoundError(f"bundled robots not found next to {here} (looked for robots/ax18.urdf)")
-
-
-def list_robots() -> list[str]:
-    """Names accepted by :func:`load_robot`: the bundled paper arms, then the example-robot-data arms."""
-    return list(BUNDLED_ROBOTS) + list(EXAMPLE_ARMS)
-
-
-def load_robot(
-    source: str | os.PathLike,
-    tip: str | None = None,
-    base: str | None = None,
-    joints: list[str] | None = None,
-    bounds: tuple[np.ndarray, np.ndarray] | None = None,
-) -> Robot:
-    """Load one serial chain of a URDF.
-
-    Args:
-        source: a URDF path, a URDF XML string, the name of a bundled paper arm (``ax18``, ``planar2r``,
-            ``puma3r``, ``redundant7r``, ``vehicle_arm``, ``aerial6r``) or of an example-robot-data arm
-            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``).
-        tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for named
-            arms, otherwise the deepest link of the URDF.
-        base: frame the chain starts from and poses are expressed in. Default: the URDF's root (world).
-        joints: optional subset of the chain's joint names to keep free; the rest of the chain is locked.
-        bounds: optional ``(lower, upper)`` search bounds, each of length ``n`` (rad or m).
-
-    Returns:
-        A :class:`Robot`. Joints outside the base->tip chain are locked at their neutral value
-        (clipped into their limits).
-    """
-    name, path, xml = _resolve_source(source)
-    if tip is None and name in EXAMPLE_ARMS:
-        tip = EXAMPLE_ARMS[name].tip
-    if tip is None and name in BUNDLED_ROBOTS:
-        tip = "tool"
-    erd = example_robot_data_dir()
-    # example-robot-data URDFs name meshes both package://<pkg>/... and package://example-robot-data/robots/...
-    package_dirs = [str(erd), str(erd.parents[1])]
-    if path is not None:
-        package_dirs = [str(path.parent), str(path.parent.parent), *package_dirs]
-    robot = Robot(_parse_urdf(xml, path), tip=tip, base=base, joints=joints, name=name, urdf_path=path,
-                  urdf_xml=xml, package_dirs=package_dirs)
-    if bounds is not None:
-        robot.set_bounds(*bounds)
-    return robot
-
-
-def _resolve_source(source: str | os.PathLike) -> tuple[str, Path | None, str]:
-    """(name, path or None, URDF text) of a load_robot source."""
-    if isinstance(source, str) and source.lstrip().startswith("<"):
-        return "urdf", None, source
-    if not isinstance(source, (str, os.PathLike)):
-        raise RobotLoadError(
-            f"robot source must be a URDF path, a URDF XML string or a robot name, got {type(source).__name__}"
-        )
-    text = os.fspath(source)
-    if text in BUNDLED_ROBOTS:
-        path = bundled_robots_dir() / f"{text}.urdf"
-    elif text in EXAMPLE_ARMS:
-        path = example_robot_data_dir() / EXAMPLE_ARMS[text].urdf
-    else:
-        path = Path(text).expanduser()
-        if not path.is_file():
-            if path.suffix or os.sep in text or path.exists():
-                raise RobotNotFoundError(f"URDF file not found: {text!r} (no such file)")
-            raise RobotNotFoundError(
-                f"unknown robot {text!r}: give a URDF path, a URDF XML string or one of "
-                f"{', '.join(list_robots())}"
-            )
-    try:
-        xml = path.read_text()
-    except OSError as exc:
-        raise RobotNotFoundError(f"cannot read URDF file {str(path)!r}: {exc.strerror}") from exc
-    name = text if (text in BUNDLED_ROBOTS or text in EXAMPLE_ARMS) else path.stem
-    return name, path.resolve(), xml
-
-
-def _parse_urdf(xml: str, path: Path | None) -> pin.Model:
-    where = str(path) if path is not None else "URDF string"
-    try:
-        root = ET.fromstring(xml)
-    except ET.ParseError as exc:
-        raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
-    if root.tag != "robot":
-        raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
-    try:
-        return pin.buildModelFromXML(xml)
-    except (RuntimeError, ValueError) as exc:
-        raise RobotLoadError(f"Pinocchio could not build a model from {where}: {exc}") from exc
-
-
-def _find_frame(model: pin.Model, name: str) -> int:
-    """Frame id of ``name``, preferring the BODY frame when a joint and a link share the name."""
-    ids = [i for i, f in enumerate(model.frames) if f.name == name]
-    if not ids:
-        return -1
-    bodies = [i for i in ids if model.frames[i].type == pin.FrameType.BODY]
-    return (bodies or ids)[0]
-
-
-def _frame_names(model: pin.Model) -> list[str]:
-    seen: dict[str, None] = {}
-    for f in model.frames:
-        if f.type == pin.FrameType.BODY:
-            seen.setdefault(f.name, None)
-    return list(seen)
-
-
-def _rotation_to_z(axis: np.ndarray) -> np.ndarray:
-    """A rotation B (3, 3) whose third column is the unit vector ``axis`` (identity when axis = +z)."""
-    z = axis / np.linalg.norm(axis)
-    if np.allclose(z, [0.0, 0.0, 1.0], atol=1e-15):
-        return np.eye(3)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
 
 
 class Robot:
@@ -236,6 +51,8 @@ class Robot:
         urdf_path: the URDF file (None when loaded from an XML string); ``urdf_xml`` holds its text.
         revolute: (n,) bool, True for revolute joints (rad), False for prismatic ones (m).
         continuous: (n,) bool, True for joints Pinocchio stores as (cos, sin).
+        joint_axes: (n, 3) unit axis of each joint in its own frame: the rotation axis of a revolute joint,
+            the sliding direction of a prismatic one.
     """
 
     def __init__(
@@ -254,15 +71,15 @@ class Robot:
         self.urdf_path = urdf_path
         self.urdf_xml = urdf_xml
         self.package_dirs = list(package_dirs or [])
-        frames = _frame_names(full_model)
+        frames = body_frame_names(full_model)
 
         if tip is None:
-            tip = self._deepest_body(full_model)
-        tip_id = _find_frame(full_model, tip)
+            tip = deepest_body(full_model)
+        tip_id = find_frame(full_model, tip)
         if tip_id < 0:
             raise FrameError(f"unknown tip frame {tip!r}; frames of {name}: {', '.join(frames)}")
-        root_name = self._root_link(full_model) if base is None else base
-        base_id = 0 if base is None else _find_frame(full_model, base)
+        root_name = root_link(full_model) if base is None else base
+        base_id = 0 if base is None else find_frame(full_model, base)
         if base_id < 0:
             raise FrameError(f"unknown base frame {base!r}; frames of {name}: {', '.join(frames)}")
 
@@ -309,8 +126,8 @@ class Robot:
         self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
         self.tip = tip
         self.base = root_name
-        self._tip_id = _find_frame(self.model, tip)
-        self._base_id = 0 if base is None else _find_frame(self.model, base)
+        self._tip_id = find_frame(self.model, tip)
+        self._base_id = 0 if base is None else find_frame(self.model, base)
         self.n = self.model.nv
         self.joint_names = [self.model.names[j] for j in range(1, self.model.njoints)]
         self._idx_q = np.array([self.model.joints[j].idx_q for j in range(1, self.model.njoints)])
@@ -331,29 +148,11 @@ class Robot:
             lin, ang = S[:3], S[3:]
             self.revolute[k] = np.linalg.norm(ang) > 0.5
             axes[k] = ang if self.revolute[k] else lin
-        self._axes = axes
+        self.joint_axes = axes
         self._set_default_bounds()
         self._build_batch_chain()
 
     # ------------------------------------------------------------------ construction helpers
-    @staticmethod
-    def _root_link(model: pin.Model) -> str:
-        """Name of the URDF's root link (the first body frame fixed to the universe)."""
-        for f in model.frames:
-            if f.type == pin.FrameType.BODY and f.parentJoint == 0:
-                return f.name
-        return model.frames[0].name
-
-    @staticmethod
-    def _deepest_body(model: pin.Model) -> str:
-        best, depth = model.frames[0].name, -1
-        for f in model.frames:
-            if f.type == pin.FrameType.BODY:
-                d = len(model.supports[f.parentJoint])
-                if d >= depth:  # last deepest wins: a tool link fixed after the last joint's link
-                    best, depth = f.name, d
-        return best
-
     def _set_default_bounds(self) -> None:
         lower = np.empty(self.n)
         upper = np.empty(self.n)
@@ -375,7 +174,7 @@ class Robot:
         into z by a constant rotation B_k folded into the neighbouring fixed transforms, so the batched
         recursion needs only cheap column updates per joint.
         """
-        B = [_rotation_to_z(a) for a in self._axes]
+        B = [rotation_to_z(a) for a in self.joint_axes]
         Rs, ps = [], []
         prev_B = np.eye(3)
         for k in range(self.n):
@@ -708,6 +507,27 @@ class Robot:
         return R, p, z_axes, origins
 
     # ------------------------------------------------------------------ geometry for display
+    @property
+    def base_placement(self) -> pin.SE3:
+        """Placement (m) of the base frame in the world frame of :attr:`model` (the URDF's root), a new
+        ``pin.SE3``; the identity when no base was chosen. Constant: every free joint lies downstream of the
+        base, so it is taken at the neutral configuration."""
+        return self._oMbase.copy()
+
+    def geometry_placements(self, geometry_model: pin.GeometryModel, q) -> list[pin.SE3]:
+        """Placements (m) of every object of ``geometry_model`` at joint vector ``q`` (n,) in rad/m.
+
+        ``geometry_model`` must be attached to :attr:`model`'s joints (e.g. :attr:`visual_model`, or a
+        skeleton built on :attr:`model`). Returns one new ``pin.SE3`` per geometry object, in its order,
+        expressed in :attr:`model`'s world frame (compose with ``base_placement.inverse()`` for the base
+        frame).
+        """
+        q = self.check_q(q)
+        gdata = pin.GeometryData(geometry_model)
+        pin.forwardKinematics(self.model, self.data, self.to_pinocchio(q))
+        pin.updateGeometryPlacements(self.model, self.data, geometry_model, gdata)
+        return [M.copy() for M in gdata.oMg]
+
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
         """Visual geometry of the chain (meshes resolved through ``package_dirs``), for viz.py."""

@@ -1,7 +1,5 @@
-"""The robot layer on every bundled and example arm: FK against an independent parser, batches,
-Jacobians, manipulability, continuous joints, sub-chains and bad input."""
-
-from pathlib import Path
+"""robot/kinematics.py (Robot) on every bundled and example arm: FK against an independent parser, batches,
+Jacobians, manipulability, continuous joints, sub-chains, the placements the viewer draws, and bad input."""
 
 import numpy as np
 import pinocchio as pin
@@ -13,9 +11,8 @@ from evoik_pin.errors import (
     ConfigurationError,
     FrameError,
     RobotLoadError,
-    RobotNotFoundError,
 )
-from evoik_pin.robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, example_robot_data_dir, list_robots, load_robot
+from evoik_pin.robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, load_robot
 
 ALL = list(BUNDLED_ROBOTS) + list(EXAMPLE_ARMS)
 
@@ -23,13 +20,6 @@ ALL = list(BUNDLED_ROBOTS) + list(EXAMPLE_ARMS)
 @pytest.fixture(scope="module", params=ALL)
 def robot(request):
     return load_robot(request.param)
-
-
-def test_list_robots():
-    names = list_robots()
-    for required in ["ax18", "planar2r", "puma3r", "redundant7r", "vehicle_arm", "aerial6r",
-                     "panda", "ur3", "ur5", "ur10", "kinova", "z1", "xarm", "so_arm"]:
-        assert required in names
 
 
 def test_attributes(robot):
@@ -163,43 +153,58 @@ def test_joint_subset_and_bounds_override():
     assert np.allclose(r.lower, -1) and np.allclose(r.upper, 1)
 
 
-def test_example_robot_data_dir_from_metadata():
-    d = example_robot_data_dir()
-    assert (d / "panda_description" / "urdf" / "panda.urdf").is_file()
+# ---------------------------------------------------------------------------- placements for the viewer
+def test_joint_axes_are_the_jacobian_columns(robot, rng):
+    """Joint k's axis, turned into the base frame, is its angular (revolute) or linear (prismatic) column."""
+    assert robot.joint_axes.shape == (robot.n, 3)
+    assert np.allclose(np.linalg.norm(robot.joint_axes, axis=1), 1.0)
+    data = robot.model.createData()
+    Rt = robot.base_placement.rotation.T
+    for q in robot.random_configurations(3, rng):
+        pin.forwardKinematics(robot.model, data, robot.to_pinocchio(q))
+        J = robot.jacobian(q, "world")
+        for k in range(robot.n):
+            axis = Rt @ data.oMi[k + 1].rotation @ robot.joint_axes[k]
+            assert np.allclose(J[3:, k] if robot.revolute[k] else J[:3, k], axis, atol=1e-12)
 
 
-def test_urdf_string_and_path(tmp_path):
-    text = load_robot("planar2r").urdf_xml
-    r1 = load_robot(text)
-    assert r1.urdf_path is None and r1.n == 2 and r1.tip == "tool"
-    f = tmp_path / "arm.urdf"
-    f.write_text(text)
-    r2 = load_robot(f)
-    assert r2.urdf_path == f.resolve() and r2.name == "arm"
-    assert np.allclose(r2.fk([0.1, 0.2]).translation, r1.fk([0.1, 0.2]).translation)
+def test_base_placement(rng):
+    assert load_robot("ur5").base_placement.isIdentity()
+    robot = load_robot("panda", base="panda_link2", tip="panda_link8")
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, pin.neutral(robot.model))
+    oMbase = robot.base_placement
+    assert np.allclose(oMbase.homogeneous, data.oMf[robot.model.getFrameId("panda_link2")].homogeneous, atol=0)
+    oMbase.translation[:] = 1.0  # a copy: the robot's own placement stays
+    assert not np.allclose(robot.base_placement.translation, 1.0)
+    for q in robot.random_configurations(3, rng):
+        pin.framesForwardKinematics(robot.model, data, robot.to_pinocchio(q))
+        tip = robot.base_placement.inverse() * data.oMf[robot.model.getFrameId("panda_link8")]
+        assert np.allclose(tip.homogeneous, robot.fk(q).homogeneous, atol=1e-12)
+
+
+@pytest.mark.parametrize("name, kwargs", [("ax18", {}), ("vehicle_arm", {}), ("kinova", {}),
+                                          ("panda", {"base": "panda_link2", "tip": "panda_link8"})])
+
+
+def test_geometry_placements(name, kwargs, rng):
+    robot = load_robot(name, **kwargs)
+    geom = robot.visual_model
+    data = robot.model.createData()
+    for q in robot.random_configurations(3, rng):
+        placements = robot.geometry_placements(geom, q)
+        assert len(placements) == geom.ngeoms
+        pin.forwardKinematics(robot.model, data, robot.to_pinocchio(q))
+        for g, M in zip(geom.geometryObjects, placements, strict=True):
+            assert np.allclose(M.homogeneous, (data.oMi[g.parentJoint] * g.placement).homogeneous, atol=1e-12)
+    if name == "ax18":  # its tip sphere sits on the tip frame
+        (tool,) = [M for g, M in zip(geom.geometryObjects, placements, strict=True) if g.name == "tool_0"]
+        assert np.allclose(tool.translation, robot.fk(q).translation, atol=1e-12)
+    with pytest.raises(ConfigurationError, match=rf"expected \({robot.n},\)"):
+        robot.geometry_placements(geom, np.zeros(robot.n + 1))
 
 
 # ---------------------------------------------------------------------------- bad input
-def test_missing_file():
-    with pytest.raises(RobotNotFoundError, match="not found"):
-        load_robot("/no/such/arm.urdf")
-
-
-def test_unknown_name_lists_known_ones():
-    with pytest.raises(RobotNotFoundError, match="panda") as info:
-        load_robot("pandaa")
-    assert "ax18" in str(info.value)
-
-
-def test_malformed_xml(tmp_path):
-    f = tmp_path / "bad.urdf"
-    f.write_text("<robot name='x'><link name='a'></robot>")
-    with pytest.raises(RobotLoadError, match="malformed URDF XML"):
-        load_robot(f)
-    with pytest.raises(RobotLoadError, match="expected <robot>"):
-        load_robot("<sdf></sdf>")
-
-
 def test_unknown_frames_listed():
     with pytest.raises(FrameError, match="unknown tip frame 'hand'.*panda_link7"):
         load_robot("panda", tip="hand")
@@ -247,11 +252,3 @@ def test_bad_bounds_leave_robot_unchanged():
     assert np.array_equal(robot.lower, before[0]) and np.array_equal(robot.upper, before[1])
     with pytest.raises(BoundsError, match="inverted"):
         load_robot("planar2r", bounds=([1, 1], [0, 0]))
-
-
-@pytest.mark.parametrize("name", list(EXAMPLE_ARMS))
-def test_example_arm_meshes_resolve(name):
-    """Mesh URIs of example-robot-data arms resolve through robot.package_dirs (for the meshcat viewer)."""
-    geom = load_robot(name).visual_model
-    assert geom.ngeoms > 0
-    assert all(not g.meshPath or Path(g.meshPath).is_file() for g in geom.geometryObjects)

@@ -1,0 +1,37 @@
+"""The robot layer: one serial chain of a URDF, as Pinocchio sees it.
+
+This package is the only code in evoik_pin that runs Pinocchio's kinematics on a ``Model``/``Data`` (the
+viewer draws with the placements :class:`Robot` returns). Three modules, data flowing down:
+
+* :mod:`.loading`: finding and reading a robot (bundled paper arms, example-robot-data arms, URDF files and
+  strings, default tips, mesh package directories): :func:`load_robot`, :func:`list_robots`;
+* :mod:`.kinematics`: :class:`Robot`, the chain: bounds, the Pinocchio configuration mapping, forward
+  kinematics, Jacobians and manipulability, one configuration or a whole population, the folded chain
+  constants compiled kernels use, and the placements the viewer draws;
+* :mod:`.frames`: frame look-up in a Pinocchio model (names to ids, root link, deepest link).
+
+The joint vector ``q`` users and solvers see has one entry per degree of freedom (rad for revolute joints,
+m for prismatic ones); poses are those of the tip frame in the base frame (the world frame when no base
+is chosen).
+"""
+
+from .kinematics import DEFAULT_PRISMATIC_RANGE as DEFAULT_PRISMATIC_RANGE
+from .kinematics import Robot
+from .loading import (
+    BUNDLED_ROBOTS,
+    EXAMPLE_ARMS,
+    bundled_robots_dir,
+    example_robot_data_dir,
+    list_robots,
+    load_robot,
+)
+
+__all__ = [
+    "BUNDLED_ROBOTS",
+    "EXAMPLE_ARMS",
+    "Robot",
+    "bundled_robots_dir",
+    "example_robot_data_dir",
+    "list_robots",
+    "load_robot",
+]

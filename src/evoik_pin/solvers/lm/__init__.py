@@ -1,0 +1,17 @@
+"""The one Levenberg-Marquardt engine of evoik_pin.
+
+* :mod:`.engine`: :class:`LevenbergMarquardt` (one target; one start, or several in one call) and
+  :func:`solve_pairs` (many (start, target) pairs), the task errors and the iteration's description;
+* :mod:`.kernel`: the iteration compiled with numba (pose, position and planar targets), on the folded chain
+  of :mod:`.chain` and the closed forms of :mod:`evoik_pin.lie.compiled`;
+* :mod:`.reference`: the same iteration as a Python loop over Pinocchio, the reference the kernel is tested
+  against (``engine="python"``);
+* :mod:`.layout`: the constants and the kernel's memory layouts; :mod:`.outcome`: what runs return.
+"""
+
+from .engine import ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs
+from .layout import DEFAULT_ITERATIONS, wrapping_joints
+from .outcome import LMOutcome, PairsOutcome
+
+__all__ = ["DEFAULT_ITERATIONS", "ENGINES", "LMOutcome", "LevenbergMarquardt", "PairsOutcome", "compiled_kernel",
+           "solve_pairs", "wrapping_joints"]

@@ -1,0 +1,63 @@
+"""The folded serial chain evaluated in numba: tip pose, joint axes and origins, and the base-frame Jacobian.
+
+The robot layer exports the chain as constants (``Robot.chain_constants``): every joint axis turned onto z and
+folded into the fixed placements, ``T(q) = F_0 Z(q_1) F_1 ... Z(q_n) F_n`` with ``Z(q)`` a rotation by q about
+z (revolute) or a translation by q along z (prismatic). These functions evaluate it without Pinocchio, about
+0.3 us for 7 joints; tests check them against Pinocchio's ``fk`` and ``jacobian`` on every bundled arm.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+__all__ = ["forward", "jacobian"]
+
+
+@njit(cache=True, nogil=True)
+def forward(FR, Fp, rev, q, R, p, Z, O):
+    """Tip rotation R (3, 3) and position p (3,) at q (n,), and each joint's axis Z (n, 3) and origin O (n, 3),
+    all in the base frame (written in place)."""
+    n = q.shape[0]
+    for i in range(3):
+        p[i] = Fp[0, i]
+        for j in range(3):
+            R[i, j] = FR[0, i, j]
+    for k in range(n):
+        for i in range(3):
+            Z[k, i] = R[i, 2]
+            O[k, i] = p[i]
+        if rev[k]:
+            c, s = math.cos(q[k]), math.sin(q[k])
+            for i in range(3):
+                a, b = R[i, 0], R[i, 1]
+                R[i, 0] = c * a + s * b
+                R[i, 1] = c * b - s * a
+        else:
+            for i in range(3):
+                p[i] += q[k] * R[i, 2]
+        f0, f1, f2 = Fp[k + 1, 0], Fp[k + 1, 1], Fp[k + 1, 2]
+        for i in range(3):
+            r0, r1, r2 = R[i, 0], R[i, 1], R[i, 2]
+            p[i] += r0 * f0 + r1 * f1 + r2 * f2
+            R[i, 0] = r0 * FR[k + 1, 0, 0] + r1 * FR[k + 1, 1, 0] + r2 * FR[k + 1, 2, 0]
+            R[i, 1] = r0 * FR[k + 1, 0, 1] + r1 * FR[k + 1, 1, 1] + r2 * FR[k + 1, 2, 1]
+            R[i, 2] = r0 * FR[k + 1, 0, 2] + r1 * FR[k + 1, 1, 2] + r2 * FR[k + 1, 2, 2]
+
+
+@njit(cache=True, nogil=True)
+def jacobian(rev, p, Z, O, J):
+    """Base-frame Jacobian J (6, n) of the tip point p (3,) from the joint axes Z and origins O (n, 3)."""
+    n = Z.shape[0]
+    for k in range(n):
+        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+        if rev[k]:
+            l0, l1, l2 = p[0] - O[k, 0], p[1] - O[k, 1], p[2] - O[k, 2]
+            J[0, k] = z1 * l2 - z2 * l1
+            J[1, k] = z2 * l0 - z0 * l2
+            J[2, k] = z0 * l1 - z1 * l0
+            J[3, k], J[4, k], J[5, k] = z0, z1, z2
+        else:
+            J[0, k], J[1, k], J[2, k] = z0, z1, z2
+            J[3, k] = J[4, k] = J[5, k] = 0.0

@@ -1,0 +1,131 @@
+"""The LM iteration's constants and the memory layouts the compiled kernel reads, defined once.
+
+:mod:`.kernel` (numba) and :mod:`.reference` (the Python loop) both import from here; nothing here imports
+them, so there is no import circle.
+
+Kernel arguments built here:
+
+* ``params`` (PARAMS_SIZE,): the run's settings at the ``P_*`` indices (:func:`kernel_params`);
+* ``box`` (5, n): rows ``B_LO``, ``B_HI`` (the search box, rad or m), ``B_CLO``, ``B_CHI`` (the clip box:
+  +-inf on wrapping joints, which are never clipped) and ``B_WRAP`` (1.0 on wrapping joints)
+  (:func:`box_constants`);
+* a target as ``pt`` (3,) and ``Rt`` (3, 3) (:func:`encode_target`): pose (position m, rotation),
+  position (position, identity), planar (x, y, yaw rad or 0; identity).
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+__all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT_STALL_RATIO",
+           "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
+           "box_constants", "encode_target", "encode_targets", "kernel_params", "target_kind", "wrapping_joints"]
+
+TWO_PI = 2.0 * np.pi
+#: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
+DEFAULT_DAMPING = 1e-2
+#: Steps allowed to one LM run started from a seed (converging runs need about 5-15).
+DEFAULT_ITERATIONS = 30
+#: Stall test: a run stops when |e| has not dropped below DEFAULT_STALL_RATIO times its value
+#: DEFAULT_STALL_WINDOW accepted steps earlier.
+DEFAULT_STALL_WINDOW, DEFAULT_STALL_RATIO = 4, 0.5
+#: Largest length |dq| of one step (rad or m, Euclidean); longer steps are scaled down (trust region).
+DEFAULT_MAX_STEP = 1.0
+#: Damping bounds and its factors after an accepted / a rejected step.
+LAMBDA_MIN, LAMBDA_MAX = 1e-12, 1e4
+SHRINK, GROW = 0.2, 8.0
+#: |e|^2 below which a converged run needs no finishing step (|e| = 1e-12: about FK round-off for 1 m arms).
+FINISHED = 1e-24
+#: Geodesic acceleration: used after an accepted step that left |e|^2 above GEO_SLOW times its value (|e| not
+#: halved) while |e|^2 < GEO_NEAR (|e| < 1 cm + rad: a run creeping along a narrow curved valley, the signature
+#: of a near-singular target), so the fast, quadratic phase pays nothing; kept when |a| <= GEO_ALPHA |v| / 2;
+#: GEO_H is the finite-difference step.
+GEO_SLOW, GEO_NEAR, GEO_ALPHA, GEO_H = 0.25, 1e-4, 0.75, 0.1
+
+#: Target kinds (the kernel's ``params[P_KIND]``) and the rows of the base-frame Jacobian each task uses.
+KIND_POSITION, KIND_POSE, KIND_PLANAR, KIND_PLANAR_YAW = 0, 1, 2, 3
+TASK_ROWS = {KIND_POSITION: (0, 1, 2), KIND_POSE: (0, 1, 2, 3, 4, 5), KIND_PLANAR: (0, 1),
+             KIND_PLANAR_YAW: (0, 1, 5)}
+
+#: Layout of the kernel's ``params`` vector.
+P_TOL, P_RTOL, P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS, P_KIND = range(9)
+PARAMS_SIZE = 9
+#: Rows of the kernel's ``box``.
+B_LO, B_HI, B_CLO, B_CHI, B_WRAP = range(5)
+#: Columns of the per-run ``stats`` rows the batch kernels write: errors, converged, iterations, evaluations.
+S_POS, S_ROT, S_CONVERGED, S_ITERATIONS, S_EVALUATIONS = range(5)
+STATS_SIZE = 5
+
+
+def target_kind(target) -> int:
+    """The ``KIND_*`` of a :class:`~evoik_pin.problem.Target`."""
+    if target.planar:
+        return KIND_PLANAR if target.yaw is None else KIND_PLANAR_YAW
+    return KIND_POSITION if target.rotation is None else KIND_POSE
+
+
+def encode_target(target) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's ``(pt (3,), Rt (3, 3))`` of one target (see the module docstring)."""
+    if target.planar:
+        pt = np.array([target.position[0], target.position[1], target.yaw or 0.0])
+        return pt, np.eye(3)
+    Rt = np.eye(3) if target.rotation is None else np.ascontiguousarray(target.rotation, dtype=float)
+    return np.ascontiguousarray(target.position, dtype=float), Rt
+
+
+def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
+    """``(P (N, 3), Rts (N, 3, 3))`` of N targets of one kind, for the kernel's batch entry points."""
+    N = len(targets)
+    t0 = targets[0]
+    if t0.planar:
+        P = np.array([[t.position[0], t.position[1], t.yaw or 0.0] for t in targets], dtype=float)
+        return P, np.ascontiguousarray(np.broadcast_to(np.eye(3), (N, 3, 3)))
+    P = np.ascontiguousarray([t.position for t in targets], dtype=float)
+    if t0.rotation is None:
+        return P, np.ascontiguousarray(np.broadcast_to(np.eye(3), (N, 3, 3)))
+    return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
+
+
+def wrapping_joints(robot, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(n,) bool: revolute joints whose search range spans a full turn, so wrapping by 2 pi keeps them inside.
+
+    Every continuous joint qualifies (its range is [-pi, pi]), and so does a UR-style [-2 pi, 2 pi] joint.
+    """
+    return robot.revolute & ((upper - lower) >= TWO_PI - 1e-9)
+
+
+_BOX_CACHE: dict = {}
+
+
+def box_constants(robot, lower: np.ndarray, upper: np.ndarray):
+    """(wrap mask (n,), any wrap, clip lower, clip upper, kernel box (5, n)) of a search box, cached: the same
+    box recurs every solve.
+
+    The clip bounds are the box with +-inf for wrapping joints, which are never clipped.
+    """
+    key = (id(robot), lower.tobytes(), upper.tobytes())
+    hit = _BOX_CACHE.get(key)
+    if hit is None or hit[0]() is not robot:  # a weak reference: the cache must not keep robots alive
+        wrap = wrapping_joints(robot, lower, upper)
+        clip = (np.where(wrap, -np.inf, lower), np.where(wrap, np.inf, upper))
+        box = np.empty((5, robot.n))
+        box[[B_LO, B_HI, B_CLO, B_CHI, B_WRAP]] = lower, upper, *clip, wrap
+        hit = (weakref.ref(robot), (wrap, bool(wrap.any()), *clip, box))
+        if len(_BOX_CACHE) > 64:
+            _BOX_CACHE.clear()
+        _BOX_CACHE[key] = hit
+    return hit[1]
+
+
+def kernel_params(tolerance: float, rotation_tolerance: float, kind: int, iterations: int = 0,
+                  damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
+                  stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
+                  finish: bool = True) -> np.ndarray:
+    """The kernel's ``params`` vector (PARAMS_SIZE,) (layout: the ``P_*`` indices)."""
+    params = np.empty(PARAMS_SIZE)
+    params[[P_TOL, P_RTOL, P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS,
+            P_KIND]] = (tolerance, rotation_tolerance, damping, max_step, stall_window, stall_ratio, float(finish),
+                        iterations, kind)
+    return params

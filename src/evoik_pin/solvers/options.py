@@ -1,0 +1,151 @@
+"""Option validators shared by every solver: one home for "is this option value acceptable?".
+
+Each check takes the option's ``name`` (as the user typed it, optionally with a hint such as
+``"niche_size (n*)"``) and its ``value``, returns the value in canonical form (``int``, ``float``, the
+callable, ...) and otherwise raises :class:`~evoik_pin.errors.OptionError` naming the option, the accepted
+values and what was given. Solver-specific rules that tie several options together (e.g. ``elite <
+population``) stay in the solver's module, built from these primitives.
+
+Booleans are rejected wherever a number is expected (``True`` is an ``int`` to Python, rarely what was
+meant).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..errors import OptionError
+
+__all__ = [
+    "check_callback",
+    "check_choice",
+    "check_fraction",
+    "check_int",
+    "check_nonnegative",
+    "check_nonnegative_vector",
+    "check_number",
+    "check_positive",
+]
+
+
+def _with_unit(text: str, unit: str) -> str:
+    return f"{text} {unit}" if unit else text
+
+
+def check_int(name: str, value, minimum: int = 1, maximum: int | None = None) -> int:
+    """``value`` as an ``int`` in [minimum, maximum] (no upper limit when ``maximum`` is None).
+
+    Accepted: Python and NumPy integers (not ``bool``, not floats such as ``2.0``).
+
+    Raises:
+        OptionError: ``"<name> must be an integer >= <minimum>, got <value>"`` (or ``"... in [minimum,
+            maximum]"``).
+    """
+    ok = not isinstance(value, bool) and isinstance(value, (int, np.integer))
+    if ok and value >= minimum and (maximum is None or value <= maximum):
+        return int(value)
+    accepted = f">= {minimum}" if maximum is None else f"in [{minimum}, {maximum}]"
+    raise OptionError(f"{name} must be an integer {accepted}, got {value!r}")
+
+
+def _range_text(low: float, high: float, open_low: bool, open_high: bool) -> str:
+    """``"> 0"``, ``"in (0, 2]"``, ``"<= 1"`` or ``""`` for the interval between low and high."""
+    if np.isfinite(low) and np.isfinite(high):
+        return f"in {'(' if open_low else '['}{low:g}, {high:g}{')' if open_high else ']'}"
+    if np.isfinite(low):
+        return f"{'>' if open_low else '>='} {low:g}"
+    if np.isfinite(high):
+        return f"{'<' if open_high else '<='} {high:g}"
+    return ""
+
+
+def check_number(name: str, value, low: float = -np.inf, high: float = np.inf, *, open_low: bool = False,
+                 open_high: bool = False, unit: str = "") -> float:
+    """``value`` as a finite ``float`` in the interval from ``low`` to ``high``.
+
+    The interval is closed unless ``open_low`` / ``open_high``; infinite ends mean no limit on that side
+    (the value must be finite all the same). Accepted: anything ``float()`` takes except ``bool``
+    (Python and NumPy numbers, numeric strings).
+
+    Args:
+        name: option name shown in the error.
+        unit: unit shown after the accepted range (``"m"``, ``"rad"``), or ``""``.
+
+    Raises:
+        OptionError: ``"<name> must be a finite number in (low, high] <unit>, got <value>"`` (or ``"> low"``,
+            ``"<= high"`` for a one-sided range).
+    """
+    accepted = _with_unit(" ".join(filter(None, ["a finite number", _range_text(low, high, open_low, open_high)])),
+                          unit)
+    if isinstance(value, bool):
+        raise OptionError(f"{name} must be {accepted}, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be {accepted}, got {value!r}") from None
+    above = v > low if open_low else v >= low
+    below = v < high if open_high else v <= high
+    if not (np.isfinite(v) and above and below):
+        raise OptionError(f"{name} must be {accepted}, got {value!r}")
+    return v
+
+
+def check_positive(name: str, value, upper: float = np.inf, unit: str = "") -> float:
+    """``value`` as a finite ``float`` in (0, upper] (> 0 when ``upper`` is infinite); see :func:`check_number`."""
+    return check_number(name, value, 0.0, upper, open_low=True, unit=unit)
+
+
+def check_nonnegative(name: str, value, upper: float = np.inf, unit: str = "") -> float:
+    """``value`` as a finite ``float`` in [0, upper] (>= 0 when ``upper`` is infinite); see :func:`check_number`."""
+    return check_number(name, value, 0.0, upper, unit=unit)
+
+
+def check_fraction(name: str, value) -> float:
+    """``value`` as a ``float`` in [0, 1]: a probability, a rate or a share; see :func:`check_number`."""
+    return check_number(name, value, 0.0, 1.0)
+
+
+def check_choice(name: str, value, choices: Sequence):
+    """``value`` if it equals one of ``choices`` (e.g. ``bound_handling`` in ``("clip", "reflect", "resample")``).
+
+    Raises:
+        OptionError: ``"<name> <value> is not one of <choices>"``.
+    """
+    try:
+        ok = value in choices
+    except (TypeError, ValueError):  # e.g. an array compared with strings
+        ok = False
+    if not ok:
+        raise OptionError(f"{name} {value!r} is not one of {', '.join(repr(c) for c in choices)}")
+    return value
+
+
+def check_callback(callback, signature: str = "callback(generation, population)") -> Callable | None:
+    """``callback`` if it is None or callable (called as ``signature``).
+
+    Raises:
+        OptionError: ``"callback must be None or callable as callback(generation, population), got ..."``.
+    """
+    if callback is not None and not callable(callback):
+        raise OptionError(f"callback must be None or callable as {signature}, got {callback!r}")
+    return callback
+
+
+def check_nonnegative_vector(name: str, value, size: int) -> np.ndarray:
+    """``value`` as a float array (size,) of finite values >= 0 (e.g. per-joint ``gains``, one per joint).
+
+    Raises:
+        OptionError: ``"<name> must have <size> values (one per joint), got <k>"`` or ``"<name> must be
+            finite values >= 0, got [...]"``.
+    """
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise OptionError(f"{name} must be {size} finite numbers >= 0 (one per joint), got {value!r}") from None
+    if arr.shape != (size,):
+        raise OptionError(f"{name} must have {size} values (one per joint), got {arr.size}")
+    if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+        raise OptionError(f"{name} must be finite values >= 0, got {arr.tolist()}")
+    return arr
