@@ -139,7 +139,12 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
 
 
 def solve_all(robot, target, method: str = "hga", seed=None, **options) -> list[Result]:
-    """Every distinct IK solution a multi-solution method finds, best first (may be empty)."""
+    """Every distinct IK solution a multi-solution method finds, best first.
+
+    An empty list means the method found none: the target is out of reach, or the search missed it (``hga``
+    on 6-D poses of 6R arms finds only some of the solutions). ``solve(robot, target, method=...)`` returns
+    the same search's :class:`Result`, whose ``message`` says how close it came.
+    """
     info = get_solver(method)
     if not info.multi_solution:
         capable = [m for m in methods() if get_solver(m).multi_solution]
