@@ -193,7 +193,7 @@ def test_a_minimum_of_work_is_done_whatever_the_clock_says(robots):
 def test_halton_points_equal_scipys():
     from scipy.stats import qmc
 
-    from evoik_pin.solvers.memetic import halton
+    from evoik_pin.solvers.common import halton
 
     for d in (1, 2, 6, 7, 9):
         assert np.array_equal(halton(d, 1000, skip=1), qmc.Halton(d, scramble=False).random(1001)[1:])

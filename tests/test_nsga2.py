@@ -230,3 +230,20 @@ def test_plain_nsga2_without_repair_and_options():
         evoik_pin.solve("vehicle_arm", target, method="nsga2", gains=[1, 2])
     with pytest.raises(OptionError, match="pick"):
         evoik_pin.solve("vehicle_arm", target, method="nsga2", pick=5)
+
+
+def test_a_planar_chain_given_a_3d_target_uses_the_rows_it_can_move():
+    ek = evoik_pin
+    # vehicle_arm moves in the base plane: with a 3-D position target [x, y, 0] the translational Jacobian's z
+    # row is zero everywhere, det(J J^T) = 0 and 1 / (Y + 1) = 1 for every member; the default rows drop vz
+    robot = ek.load_robot("vehicle_arm")
+    res = ek.solve(robot, [1.2, 0.4, 0.0], method="nsga2", seed=0, population=40, max_generations=15,
+                   tolerance=1e-4)
+    g = res.front.objectives[:, 0]
+    assert (g < 0.99).all() and np.ptp(g) > 0  # a real manipulability, not the constant 1 of det = 0
+    assert len(np.unique(res.front.q.round(9), axis=0)) > 1  # the front did not collapse to one point
+    assert "never moves its tip along vz" in res.message
+    # a 3-D arm keeps all three translational rows, and says nothing
+    arm = ek.load_robot("puma3r")
+    assert "never moves" not in ek.solve(arm, [0.3, 0.2, 0.4], method="nsga2", seed=0, population=20,
+                                         max_generations=3, tolerance=1e-3).message

@@ -11,10 +11,33 @@ from ..problem import Evaluation, IKProblem
 from ..result import Result
 from .options import check_choice, check_int, check_number
 
-__all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "initial_population", "run_with_restarts"]
+__all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",
+           "run_with_restarts"]
 
 #: Accepted ``bound_handling`` option values.
 BOUND_HANDLING = ("clip", "reflect", "resample")
+
+
+def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
+    """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence
+    (radical inverses of the point index in the first ``dimensions`` primes): deterministic and evenly spread.
+    The same points as ``scipy.stats.qmc.Halton(d, scramble=False)``, without importing scipy.stats (0.4-2 s)."""
+    primes: list[int] = []
+    k = 2
+    while len(primes) < dimensions:
+        if all(k % p for p in primes):
+            primes.append(k)
+        k += 1
+    index = np.arange(skip, skip + count, dtype=np.int64)
+    out = np.zeros((count, dimensions))
+    for d, base in enumerate(primes):
+        i = index.copy()
+        f = 1.0
+        while i.any():
+            f /= base
+            out[:, d] += f * (i % base)
+            i //= base
+    return out
 
 
 def initial_population(problem: IKProblem, rng: np.random.Generator, size: int) -> np.ndarray:

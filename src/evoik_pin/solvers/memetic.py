@@ -45,14 +45,14 @@ from ..errors import OptionError
 from ..problem import IKProblem, Target
 from ..result import Result
 from . import register
-from .common import diversity
+from .common import diversity, halton
 from .de_ops import binomial_crossover, distinct_indices, mutate
 from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
 from .options import check_int, check_positive
 from .polish import errors_text
 
 __all__ = ["DEFAULT_TABLE_SEEDS", "DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "SeedTable", "default_table_size",
-           "halton", "memetic", "prepare", "seed_table"]
+           "memetic", "prepare", "seed_table"]
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
@@ -64,28 +64,6 @@ DEFAULT_TABLE_SEEDS = 17
 GUARANTEED_TABLE_RUNS = 4
 #: Target kinds a seed table serves, each with its own nearness features.
 _KINDS = ("pose", "position", "planar", "planar_yaw")
-
-
-def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
-    """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence
-    (radical inverses of the point index in the first ``dimensions`` primes): deterministic and evenly spread.
-    The same points as ``scipy.stats.qmc.Halton(d, scramble=False)``, without importing scipy.stats (0.4-2 s)."""
-    primes: list[int] = []
-    k = 2
-    while len(primes) < dimensions:
-        if all(k % p for p in primes):
-            primes.append(k)
-        k += 1
-    index = np.arange(skip, skip + count, dtype=np.int64)
-    out = np.zeros((count, dimensions))
-    for d, base in enumerate(primes):
-        i = index.copy()
-        f = 1.0
-        while i.any():
-            f /= base
-            out[:, d] += f * (i % base)
-            i //= base
-    return out
 
 
 # ---------------------------------------------------------------------- seed table

@@ -44,7 +44,7 @@ from ..objectives import (
 from ..problem import IKProblem
 from ..result import Front, Result
 from . import register
-from .common import SolverRun, diversity, initial_population
+from .common import SolverRun, diversity, halton, initial_population
 from .options import check_fraction, check_int, check_nonnegative, check_nonnegative_vector
 
 __all__ = [
@@ -402,6 +402,16 @@ def _task_rows(problem: IKProblem) -> list[int]:
     return [0, 1, 2, 3, 4, 5] if t.rotation is not None else [0, 1, 2]
 
 
+def _movable_rows(problem: IKProblem, rows: list[int]) -> tuple[list[int], list[int]]:
+    """Split Jacobian ``rows`` into those the chain can move its tip along and those it never can (a row of
+    zeros at 64 configurations spread over the box, e.g. vz for a planar chain): a zero row makes
+    ``det(J J^T)`` 0 for every configuration, so the manipulability objective would be constant."""
+    Q = problem.lower + halton(problem.n, 64, skip=1) * (problem.upper - problem.lower)
+    J = problem.robot.jacobian_batch(Q, validate=False)[:, rows]
+    moving = np.abs(J).max(axis=(0, 2)) > 1e-12
+    return [r for r, m in zip(rows, moving, strict=True) if m], [r for r, m in zip(rows, moving, strict=True) if not m]
+
+
 def _task_errors(problem: IKProblem, Q: np.ndarray) -> np.ndarray:
     """Task-space error vectors (N, m) target - current, in the rows of :func:`_task_rows` (m, rad)."""
     t = problem.target
@@ -453,7 +463,9 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         gains: K (n,) of the smoothness ``S = sqrt(sum K_i (q_i - q_prev,i)^2)`` (default ones); q_prev is
             ``problem.q0`` (``solve_trajectory`` passes the previous solution), zeros when none.
         manipulability_rows: Jacobian rows of ``Y = sqrt(det(J J^T))`` (default the task's rows:
-            "planar" (vx, vy, wz) for planar yaw targets, translation for 3-D positions, all six for poses).
+            "planar" (vx, vy, wz) for planar yaw targets, translation for 3-D positions, all six for poses,
+            less the rows along which the chain can never move its tip, such as vz for a planar arm given a
+            3-D target: those would make ``Y`` 0 everywhere; the message names them).
         objectives: replace the default ``[Manipulability(rows, "inverse"), WeightedJointDisplacement]``
             with any list of :class:`~evoik_pin.objectives.Objective` (all minimized).
         pick: objective index minimized when choosing ``q`` from the front (-1: the last, S).
@@ -478,11 +490,18 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     repair_steps = check_int("repair_steps", repair_steps, 0)
     q_prev = np.zeros(problem.n) if problem.q0 is None else problem.q0
     repair_weights = None
+    fixed_rows: list[int] = []
     if objectives is None:
         if gains is not None:
             gains = check_nonnegative_vector("gains", gains, problem.n)
             repair_weights = 1.0 / np.maximum(gains, 1e-12)
-        rows = _task_rows(problem) if manipulability_rows is None else manipulability_rows
+        if manipulability_rows is None:
+            rows, fixed_rows = _movable_rows(problem, _task_rows(problem))
+            if not rows:
+                raise OptionError("the chain cannot move its tip along any row of the task; give "
+                                  "manipulability_rows=[...] or objectives=[...]")
+        else:
+            rows = manipulability_rows
         robot.task_rows(rows)  # validates names and indices with a clear error
         objectives = [Manipulability(rows, "inverse"), WeightedJointDisplacement(q_prev, gains)]
     elif gains is not None or manipulability_rows is not None:
@@ -534,6 +553,9 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         message = f"{max_generations} generations; {len(order)} point(s) on the front, all feasible"
     else:
         message = f"{max_generations} generations; no individual meets the pose constraint"
+    if fixed_rows:
+        names = ", ".join(("vx", "vy", "vz", "wx", "wy", "wz")[r] for r in fixed_rows)
+        message += f"; manipulability on Jacobian rows {rows}: the chain never moves its tip along {names}"
     result = run.result("nsga2", message,
                         front=Front(q=out.X[order], objectives=out.F[order], violation=out.violation[order]))
     return result
