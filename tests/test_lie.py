@@ -60,6 +60,7 @@ def test_relative_angle_yaw_and_rpy_equal_pinocchio():
     for i, Rm in enumerate(ROTATIONS):
         assert np.abs(pin.rpy.rpyToMatrix(*rpy[i]) - Rm).max() < 1e-9
         assert lie.yaw(Rm[None])[0] == pytest.approx(np.arctan2(Rm[1, 0], Rm[0, 0]), abs=0)
+        assert C.yaw(np.ascontiguousarray(Rm)) == lie.yaw(Rm)[0]
     assert np.allclose(lie.rpy(ROTATIONS[:20]), [pin.rpy.matrixToRpy(R) for R in ROTATIONS[:20]], atol=1e-10)
     # gimbal lock: pitch = pi/2, the heading goes to roll and the matrix is still reproduced
     R = pin.rpy.rpyToMatrix(0.3, np.pi / 2, 0.0)

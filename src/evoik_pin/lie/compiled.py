@@ -15,7 +15,7 @@ from numba import njit
 
 from .so3 import NEAR_PI
 
-__all__ = ["jlog3", "jlog6", "log3", "log6", "wrap_angle"]
+__all__ = ["jlog3", "jlog6", "log3", "log6", "wrap_angle", "yaw"]
 
 #: Pinocchio's series thresholds (TaylorSeriesExpansion precision<3> and <2>: eps^(1/3), eps^(1/2)).
 _PREC3, _PREC2 = np.finfo(np.float64).eps ** (1.0 / 3.0), np.finfo(np.float64).eps ** 0.5
@@ -26,6 +26,12 @@ _TWO_PI = 2.0 * math.pi
 def wrap_angle(a):
     """The angle a (rad) wrapped into [-pi, pi)."""
     return (a + math.pi) % _TWO_PI - math.pi
+
+
+@njit(cache=True, nogil=True)
+def yaw(R):
+    """Heading (rad) of the rotation R (3, 3) about z: ``atan2(R[1, 0], R[0, 0])`` (see :func:`.so3.yaw`)."""
+    return math.atan2(R[1, 0], R[0, 0])
 
 
 @njit(cache=True, nogil=True)

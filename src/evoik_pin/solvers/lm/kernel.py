@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...lie.compiled import jlog6, log6, wrap_angle
+from ...lie.compiled import jlog6, log6, wrap_angle, yaw
 from .chain import forward, jacobian
 from .layout import (
     B_CHI,
@@ -90,7 +90,7 @@ def task_error(FR, Fp, rev, q, pt, Rt, kind, R, p, Z, O, M, t, e):
         pos = math.sqrt(d0 * d0 + d1 * d1)
         if kind != KIND_PLANAR_YAW:
             return d0 * d0 + d1 * d1, pos, 0.0
-        dyaw = wrap_angle(math.atan2(R[1, 0], R[0, 0]) - pt[2])
+        dyaw = wrap_angle(yaw(R) - pt[2])
         e[2] = dyaw
         return d0 * d0 + d1 * d1 + dyaw * dyaw, pos, abs(dyaw)
     d0, d1, d2 = p[0] - pt[0], p[1] - pt[1], p[2] - pt[2]

@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
-from ...lie import wrap_angle
+from ...lie import wrap_angle, yaw
 from ...problem import IKProblem
 from .layout import (
     DEFAULT_DAMPING,
@@ -117,8 +117,7 @@ class ReferenceLM:
         pos = math.hypot(ex, ey)
         if self.m == 2:
             return np.array([ex, ey]), T, pos, None
-        R = T.rotation
-        eyaw = float(wrap_angle(math.atan2(R[1, 0], R[0, 0]) - target.yaw))
+        eyaw = float(wrap_angle(yaw(T.rotation)[0] - target.yaw))
         return np.array([ex, ey, eyaw]), T, pos, abs(eyaw)
 
     def task_jacobian(self, q: np.ndarray, extra) -> np.ndarray:
