@@ -2,7 +2,8 @@
 
 Every error names what was wrong and what is accepted. Each class subclasses the built-in exception a
 Python user would expect (``ValueError``, ``KeyError``, ``FileNotFoundError``) so ``except ValueError``
-keeps working, and :class:`EvoikError` so ``except EvoikError`` catches all of ours.
+keeps working, and :class:`EvoikError` so ``except EvoikError`` catches all of ours. :class:`RobotLoadWarning`
+is the one warning: a URDF that loads with part of it ignored.
 """
 
 from __future__ import annotations
@@ -14,6 +15,11 @@ class EvoikError(Exception):
 
 class RobotLoadError(EvoikError, ValueError):
     """A URDF could not be parsed or does not describe a usable serial chain."""
+
+
+class RobotLoadWarning(UserWarning):
+    """A URDF loaded, but part of it was ignored: the warning names the file, the element and why (for example a
+    ``<mimic>`` naming no joint of the file, whose joint is then loaded as an independent joint)."""
 
 
 class RobotNotFoundError(EvoikError, FileNotFoundError):
@@ -66,3 +72,8 @@ class OutputError(EvoikError, OSError):
 
     def __str__(self) -> str:  # OSError would otherwise format (errno, strerror)
         return str(self.args[0]) if self.args else ""
+
+
+class SceneError(EvoikError, ValueError):
+    """A collision scene that cannot be built or used: a bad obstacle (size, pose, mesh file), an unknown
+    obstacle name, a scene file that does not parse, or a scene built for another robot."""
