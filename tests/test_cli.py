@@ -29,3 +29,48 @@ def test_fk_bad_input_is_a_clear_error(capsys):
     assert "expected (4,)" in capsys.readouterr().err
     assert main(["fk", "nosuchrobot"]) == 2
     assert "unknown robot" in capsys.readouterr().err
+
+
+def test_garbage_robot_files_are_bad_input_not_tracebacks(tmp_path, capsys):
+    """README: exit 1 means "not reached", 2 "bad input"; unreadable URDFs are bad input, the message says why."""
+    garbage = tmp_path / "garbage.urdf"
+    garbage.write_bytes(bytes(np.random.default_rng(1).integers(0, 256, 2048, dtype=np.uint8)))
+    empty = tmp_path / "empty.urdf"
+    empty.write_bytes(b"")
+    for path, message in ((garbage, "not decodable"), (empty, "is empty"), (tmp_path, "is a directory")):
+        assert main(["fk", str(path)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("evoik fk: error: ") and message in err and str(path) in err
+        assert "Traceback" not in err
+        assert main(["solve", str(path), "--xyz", "0.1", "0.1", "0.1"]) == 2
+        assert message in capsys.readouterr().err
+
+
+def test_cli_process_exit_status_and_stderr(tmp_path):
+    import subprocess
+    import sys
+
+    garbage = tmp_path / "garbage.urdf"
+    garbage.write_bytes(b"\x00\x01\x02binary\xff\xfe" * 50)
+    proc = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "fk", str(garbage)], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("evoik fk: error:") and "binary file" in proc.stderr
+    assert "Traceback" not in proc.stderr and "urdfdom" not in proc.stderr
+
+
+def test_load_warnings_are_one_line(tmp_path, capsys):
+    f = tmp_path / "arm.urdf"
+    f.write_text(load_robot("planar2r").urdf_xml.replace("</joint>", '<mimic joint="nowhere"/></joint>', 1))
+    assert main(["fk", str(f), "--q", "0", "0"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("evoik fk: warning: ") and "mimics 'nowhere'" in err and len(err.splitlines()) == 1
+
+
+def test_view_no_block_prints_the_written_file(tmp_path, capsys):
+    html = tmp_path / "scene.html"
+    assert main(["view", "planar2r", "--html", str(html), "--no-block"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"wrote {html}") and "stops when evoik exits" in out and html.is_file()
+    assert main(["view", "planar2r", "--no-block"]) == 2  # nothing would remain to look at
+    assert "--no-block without --html" in capsys.readouterr().err

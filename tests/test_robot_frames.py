@@ -1,9 +1,13 @@
-"""robot/frames.py: frame look-up by name (BODY frames first), the root link, the deepest link."""
+"""robot/frames.py: frame look-up by name (BODY frames first), the root link, the deepest link, and locking
+joints in models whose joints and links share names (anymal_c, b1-z1)."""
 
+import numpy as np
 import pinocchio as pin
+import pytest
+from urdf_helpers import yourdfpy_pose
 
-from evoik_pin.robot import load_robot
-from evoik_pin.robot.frames import body_frame_names, deepest_body, find_frame, root_link
+from evoik_pin.robot import example_robot_data_dir, load_robot
+from evoik_pin.robot.frames import body_frame_names, deepest_body, find_frame, reduced_model, root_link
 
 
 def _joint(name: str, kind: str, parent: str, child: str, xyz: str, axis: str = "0 0 1") -> str:
@@ -41,3 +45,37 @@ def test_robot_defaults_come_from_the_frames():
     assert robot.base == "a" and robot.tip == "tool" and robot.n == 2
     panda = load_robot("panda")
     assert panda.base == root_link(panda.full_model) == "panda_link0"
+
+
+# ------------------------------------------------------------------------- names shared by joints and links
+@pytest.mark.parametrize("urdf, tip, dofs, pin_fails", [
+    ("anymal_c_simple_description/urdf/anymal.urdf", "LF_FOOT", ["LF_HAA", "LF_HFE", "LF_KFE"], True),  # joint == link
+    ("anymal_c_simple_description/urdf/anymal.urdf", "RH_SHANK", ["RH_HAA", "RH_HFE", "RH_KFE"], True),
+    ("b1_description/urdf/b1-z1.urdf", "gripperMover", [f"joint{k}" for k in range(1, 7)] + ["jointGripper"],
+     True),  # the fixed joint gripperStator and the link gripperStator
+    ("b1_description/urdf/b1-z1.urdf", "gripperStator", [f"joint{k}" for k in range(1, 7)], False),
+])
+def test_frames_pinocchio_finds_ambiguous_load(urdf, tip, dofs, pin_fails, rng):
+    """pin.buildReducedModel looks frames up by name only ("Several frames match the filter"); reduced_model
+    renames the clashing joint frames around it, and the chain's FK still equals an independent parser's."""
+    path = example_robot_data_dir() / urdf
+    if pin_fails:
+        with pytest.raises(ValueError, match="Several frames match"):  # why reduced_model exists
+            full = pin.buildModelFromUrdf(str(path))
+            pin.buildReducedModel(full, [j for j in range(1, full.njoints) if full.names[j] not in dofs],
+                                  pin.neutral(full))
+    robot = load_robot(path, tip=tip)
+    assert robot.joint_names == dofs and robot.tip == tip
+    assert [robot.model.names[j] for j in range(1, robot.model.njoints)] == dofs  # names restored
+    for q in robot.random_configurations(5, rng):
+        assert np.abs(robot.fk(q).homogeneous - yourdfpy_pose(robot, q)).max() < 1e-9
+    if "anymal" in urdf:  # the geometry reduction goes through the same renaming (b1's meshes load slowly)
+        assert robot.visual_model.ngeoms > 0
+
+
+def test_reduced_model_keeps_every_frame_name():
+    model = pin.buildModelFromXML(URDF)
+    reduced = reduced_model(model, [model.getJointId("j2")], pin.neutral(model))
+    assert reduced.njoints == 2 and reduced.names[1] == "b"
+    assert {f.name for f in reduced.frames} == {f.name for f in model.frames}
+    assert [f.name for f in model.frames].count("b") == 2  # the input model is untouched

@@ -17,19 +17,23 @@ from .problem import DEFAULT_PRO_DELTA, IKProblem, Target
 from .result import Result
 from .robot import Robot, load_robot
 from .solvers import batch, get_solver, methods
+from .solvers.all_solutions import SolutionList  # also registers "memetic-all"
 from .solvers.batch import BatchResults
+from .solvers.collision_verdict import with_collision_verdict
 from .solvers.lm import ENGINES
 from .solvers.options import check_int
 
-__all__ = ["DEFAULT_METHOD", "BatchResults", "make_problem", "methods", "prepare", "solve", "solve_all", "solve_many",
-           "solve_trajectory"]
+__all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "BatchResults", "SolutionList", "make_problem", "methods", "prepare",
+           "solve", "solve_all", "solve_many", "solve_trajectory"]
 
 #: Method used when none is named.
 DEFAULT_METHOD = "memetic"
+#: Method :func:`solve_all` uses when none is named (every target kind).
+DEFAULT_ALL_METHOD = "memetic-all"
 
 # Options consumed by the problem rather than by the solver.
 _PROBLEM_OPTIONS = ("tolerance", "rotation_tolerance", "q0", "bounds", "objective", "orientation_weight",
-                    "pose_metric")
+                    "pose_metric", "scene", "margin")
 
 
 class _DeferredGenerator:
@@ -90,7 +94,7 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
         from .solvers.polish import polish_result
 
         result = polish_result(problem, result, rng)
-    return result
+    return with_collision_verdict(problem, result)
 
 
 def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "compiled") -> float:
@@ -138,12 +142,48 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
     return _run(problem, method, _rng(seed), solver_options)
 
 
-def solve_all(robot, target, method: str = "hga", seed=None, **options) -> list[Result]:
-    """Every distinct IK solution a multi-solution method finds, best first.
+def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **options) -> SolutionList:
+    """Every distinct IK solution of one target, best first.
 
-    An empty list means the method found none: the target is out of reach, or the search missed it (``hga``
-    on 6-D poses of 6R arms finds only some of the solutions). ``solve(robot, target, method=...)`` returns
-    the same search's :class:`Result`, whose ``message`` says how close it came.
+    The default method, ``"memetic-all"`` (:mod:`evoik_pin.solvers.all_solutions`), runs batched
+    Levenberg-Marquardt from ``q0`` and the seed-table entries nearest to the target, and clusters the
+    converged runs into distinct solutions:
+
+    * as many joints as task rows (a 6-D pose on a 6-joint arm, a position on a 3-joint arm, planar (x, y) on
+      a 2-joint arm): every solution, e.g. up to 8 on UR arms and spherical wrists, up to 16 on a general 6R;
+    * redundant arms (more joints than task rows: Panda on poses, a 6-DOF arm on positions): ``count``
+      solutions (default 8) spread over the self-motion manifold by farthest-point selection; the smallest
+      pairwise joint distance between them is in ``.message`` and ``.result.history["min_pairwise_distance"]``.
+
+    Distinct means more than ``class_radius`` (default 1e-3 rad) apart in joint space, compared modulo 2 pi on
+    joints whose range spans a full turn (continuous joints, UR's +-2 pi joints): one answer per class, never
+    two. Each answer is the representative of its class nearest to ``q0`` (to zero without ``q0``): on every
+    full-turn joint the multiple of 2 pi inside the box nearest to ``q0``'s value. Every answer lies inside
+    the bounds and meets the tolerances by the robot's forward kinematics, re-checked before it is returned.
+    "Best first" means nearest ``q0`` (or zero) first: every answer meets the tolerances, so the error does
+    not rank them. ``method="hga"`` (paper 001), ``"ga"`` and ``"algebraic"`` keep their own behaviour
+    (best = lowest cost first).
+
+    Args:
+        robot: a :class:`Robot` or anything :func:`load_robot` accepts.
+        target: a pose (``pin.SE3``, (4, 4)), a 3-vector position (m) or a :class:`Target` (planar too).
+        method: a multi-solution method (default ``"memetic-all"``; also ``"hga"``, ``"ga"``, ``"algebraic"``).
+        seed: int or ``numpy.random.Generator``; the same seed gives the same solutions (``memetic-all`` draws
+            random numbers only when its deterministic starts run out).
+        **options: shared ones (``tolerance``, ``rotation_tolerance``, ``q0``, ``bounds``, ...) and the method's
+            own; for ``memetic-all``: ``count`` (>= 1), ``timeout`` (s, default 0.02), ``max_starts``,
+            ``class_radius`` (rad), ``batch``, ``patience``, ``min_hits``, ``pool``, ``table_size``, ``iterations``,
+            ``engine`` (see :func:`evoik_pin.solvers.all_solutions.memetic_all`).
+
+    Returns:
+        A :class:`SolutionList`: a ``list`` of :class:`Result` (one per solution; plain list behaviour, ``[]``
+        when none was found) whose ``.result`` is the search's own :class:`Result` and ``.message`` its
+        message. An empty list is not an error: ``.message`` says why (an unreachable pose: "no solution after
+        ... LM start(s) ...; best position error ... m ... exceeds the tolerance ...: the target is out of
+        reach").
+
+    Raises:
+        MethodError: ``method`` returns one solution only. OptionError: a bad option (e.g. ``count`` < 1).
     """
     info = get_solver(method)
     if not info.multi_solution:
@@ -153,7 +193,7 @@ def solve_all(robot, target, method: str = "hga", seed=None, **options) -> list[
         )
     problem, solver_options = make_problem(robot, target, **options)
     result = _run(problem, method, _rng(seed), solver_options)
-    return list(result.solutions or [])
+    return SolutionList(result.solutions or [], result)
 
 
 def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro: bool = False,

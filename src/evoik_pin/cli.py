@@ -10,21 +10,30 @@ import argparse
 import json
 import os
 import sys
+import warnings
 
 import numpy as np
 
-from .errors import EvoikError
+from .errors import EvoikError, OptionError, RobotLoadWarning
 from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, load_robot
 
 
 def _add_robot_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("robot", help="bundled or example-robot-data name, or a URDF path")
+    p.add_argument("robot", help="bundled or example-robot-data name, or a URDF or xacro path")
     p.add_argument("--tip", help="tip frame (default: the arm's tool frame)")
     p.add_argument("--base", help="base frame (default: the URDF root)")
+    p.add_argument("--xacro-arg", action="append", default=[], metavar="NAME=VALUE",
+                   help="a <xacro:arg> value of a xacro file (repeatable); NAME:=VALUE also works")
 
 
 def _load(args: argparse.Namespace):
-    return load_robot(args.robot, tip=args.tip, base=args.base)
+    xacro_args = {}
+    for item in args.xacro_arg:
+        name, sep, value = item.partition(":=") if ":=" in item else item.partition("=")
+        if not sep or not name:
+            raise OptionError(f"--xacro-arg needs NAME=VALUE, got {item!r}")
+        xacro_args[name] = value
+    return load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None)
 
 
 def _joint_values(values: list[float], rad: bool) -> np.ndarray:
@@ -95,6 +104,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         options["population"] = args.population
     if args.max_generations is not None:
         options["max_generations"] = args.max_generations
+    if args.all:
+        return _solve_all(args, robot, target, options, html)
     method = args.method or DEFAULT_METHOD
     res = solve(robot, target, method=method, seed=args.seed, **options)
     reached = robot.fk(res.q)
@@ -127,18 +138,54 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     return 0 if res.success else 1
 
 
-def _view_solution(robot, res, target, html, view: bool) -> None:
-    """Show a solve's answer and its target in meshcat; write ``html`` and/or serve until Ctrl-C."""
+def _view_solution(robot, res, target, html, view: bool, ghosts=None) -> None:
+    """Show a solve's answer and its target in meshcat (and ``ghosts``, e.g. every solution of ``--all``, as
+    translucent robots); write ``html`` and/or serve until Ctrl-C."""
     from .viz import Viewer
 
     with Viewer(robot) as viewer:
         viewer.show(res)
+        if ghosts:
+            viewer.show_solutions(ghosts)
         viewer.show_target(target.position, target.rotation)
         if html is not None:
             print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
         if view:
             print(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr, flush=True)
             viewer.block()
+
+
+def _solve_all(args: argparse.Namespace, robot, target, options: dict, html) -> int:
+    """``evoik solve --all``: every solution (``solve_all``), printed one per line or as JSON; exit 1 when none."""
+    from .api import DEFAULT_ALL_METHOD, solve_all
+    from .problem import Target
+
+    method = args.method or DEFAULT_ALL_METHOD
+    sols = solve_all(robot, target, method=method, seed=args.seed, **options)
+    res = sols.result
+    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in np.degrees(s.q)],
+             "position_error_m": s.position_error, "orientation_error_rad": s.orientation_error} for s in sols]
+    info = {"robot": robot.name, "method": res.method or method, "success": bool(sols), "count": len(sols),
+            "message": sols.message, "joint_names": list(robot.joint_names), "solutions": rows,
+            "target_position_m": [float(v) for v in args.xyz],
+            "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
+            "time_s": res.time_s, "seed": args.seed}
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        unit = "rad" if args.rad else "deg"
+        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {len(sols)} solution(s) in "
+              f"{res.time_s * 1e3:.2f} ms ({sols.message})")
+        if sols:
+            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+        for k, s in enumerate(sols):
+            shown = s.q if args.rad else np.degrees(s.q)
+            rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
+            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in shown) + f"  (position error {s.position_error:.1e} m"
+                  f"{rot})")
+    if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
+        _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols)
+    return 0 if sols else 1
 
 
 def _print_solution(robot, res, info: dict, rad: bool) -> None:
@@ -160,15 +207,21 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
     robot = _load(args)
     q = robot.check_q(_joint_values(args.q, args.rad)) if args.q else np.zeros(robot.n)
+    if args.no_block and not args.html:
+        raise OptionError("--no-block without --html shows nothing: the viewer stops when evoik exits; add "
+                          "--html PATH to keep the scene as a file")
     with Viewer(robot) as viewer:
         viewer.show(q)
         viewer.show_target(robot.fk(q))
+        if args.no_block:  # the server stops when we return: the file is what stays
+            print(f"wrote {viewer.save_html(args.html)} (a self-contained page; the meshcat server "
+                  f"{viewer.url} that rendered it stops when evoik exits)", flush=True)
+            return 0
         print(f"meshcat viewer of {robot.name}: {viewer.url}", flush=True)
         if args.html:
             print(f"wrote {viewer.save_html(args.html)}")
-        if not args.no_block:
-            print("Press Ctrl-C to stop the viewer.", flush=True)
-            viewer.block()
+        print("Press Ctrl-C to stop the viewer.", flush=True)
+        viewer.block()
     return 0
 
 
@@ -228,6 +281,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
     p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
+    p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
+                   "memetic-all), one per line; with --html/--view drawn as ghosts; exit 1 when there is none")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
@@ -236,7 +291,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rad", action="store_true", help="joint values in radians")
     p.add_argument("--html", metavar="PATH", help="also write the scene as a self-contained HTML file")
     p.add_argument("--no-block", action="store_true",
-                   help="return at once (the server stops with evoik; useful with --html)")
+                   help="write --html PATH and return at once (the viewer's server stops with evoik)")
     p.set_defaults(func=_cmd_view)
     p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
     p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
@@ -253,13 +308,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one ``evoik`` command; exit status 0 (done, target reached), 1 (target not reached), 2 (bad input:
+    the message on stderr, no traceback)."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except EvoikError as exc:
-        print(f"evoik {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+    with warnings.catch_warnings():  # restores warnings.showwarning on exit
+        default_show = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, RobotLoadWarning):  # one line, no source location
+                print(f"evoik {args.command}: warning: {message}", file=sys.stderr)
+            else:
+                default_show(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = show
+        try:
+            return int(args.func(args) or 0)
+        except EvoikError as exc:
+            print(f"evoik {args.command}: error: {exc}", file=sys.stderr)
+            return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

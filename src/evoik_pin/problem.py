@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -25,8 +26,14 @@ from .objectives import (
 )
 from .robot import Robot
 
-__all__ = ["DEFAULT_PRO_DELTA", "Evaluation", "IKProblem", "Target"]
+if TYPE_CHECKING:
+    from .scene import Scene
 
+__all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "Evaluation", "IKProblem", "Target"]
+
+#: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
+#: of a reachable arm's configuration, so a search prefers every collision-free configuration.
+COLLISION_PENALTY = 10.0
 #: Half-width (rad) of paper 002's "Pro" search box around the previous trajectory solution.
 DEFAULT_PRO_DELTA = np.pi / 100
 
@@ -230,6 +237,11 @@ class IKProblem:
         pose_metric: how the default pose objective combines the two errors: ``"sum"`` (position +
             weight x angle, the default) or ``"euclidean"`` (sqrt(position^2 + (weight x angle)^2),
             :class:`~evoik_pin.objectives.PoseDistance`). Ignored for position targets and custom objectives.
+        scene: an optional :class:`~evoik_pin.scene.Scene` (the robot's body and obstacles): answers must be
+            collision-free; :meth:`evaluate` and :meth:`cost` add ``COLLISION_PENALTY`` to the cost of
+            configurations whose convex-hull proxies collide (steering every evolutionary method); the exact
+            mesh check judges every answer (:mod:`evoik_pin.solvers.collision_verdict`).
+        margin: clearance (m) an answer must keep from collisions (pairs closer than it count as colliding).
         evaluations: number of configurations evaluated so far (every call of :meth:`evaluate` adds N).
     """
 
@@ -243,6 +255,8 @@ class IKProblem:
     q0: np.ndarray | None = None
     orientation_weight: float = 1.0
     pose_metric: str = "sum"
+    scene: Scene | None = None
+    margin: float = 0.0
     evaluations: int = field(default=0, compare=False)
 
     def __post_init__(self) -> None:
@@ -262,6 +276,13 @@ class IKProblem:
                 self.q0 = self.robot.check_q(self.q0)
             except ConfigurationError as exc:
                 raise ConfigurationError(f"q0: {exc}") from None
+        _check_nonnegative("margin (m)", self.margin)
+        if self.scene is not None:
+            from .scene import Scene
+
+            if not isinstance(self.scene, Scene):
+                raise OptionError(f"scene must be an evoik_pin.Scene, got {type(self.scene).__name__}")
+            self.scene.check_robot(self.robot)
         if self.objective is None:
             self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
         elif self.pose_metric not in POSE_METRICS:
@@ -292,10 +313,10 @@ class IKProblem:
             d = self.robot.positions_batch(Q) - target.position
             err = np.sqrt((d * d).sum(axis=1))
             self.evaluations += Q.shape[0]
-            return Evaluation(err, err, None)
+            return Evaluation(self._penalized(Q, err), err, None)
         kin = PopulationKinematics(self.robot, Q)
         self.evaluations += Q.shape[0]
-        cost = self.objective(Q, kin)
+        cost = self._penalized(Q, self.objective(Q, kin))
         pos = position_errors(self.target, kin)
         rot = orientation_errors(self.target, kin) if self.target.has_orientation else None
         return Evaluation(cost, pos, rot)
@@ -304,7 +325,13 @@ class IKProblem:
         """Objective values (N,) of a population ``Q`` (N, n)."""
         kin = PopulationKinematics(self.robot, Q)
         self.evaluations += Q.shape[0]
-        return self.objective(Q, kin)
+        return self._penalized(Q, self.objective(Q, kin))
+
+    def _penalized(self, Q: np.ndarray, cost: np.ndarray) -> np.ndarray:
+        """``cost`` plus COLLISION_PENALTY where the scene's convex-hull proxies collide (no scene: ``cost``)."""
+        if self.scene is None:
+            return cost
+        return cost + COLLISION_PENALTY * self.scene.collides(Q, self.margin, proxy=True)
 
     def assess(self, q: np.ndarray, position_error: float | None = None, orientation_error: float | None = None
                ) -> tuple[float, float | None, float]:

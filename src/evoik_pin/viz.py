@@ -501,7 +501,16 @@ class Viewer:
 
         Returns:
             The ghosts' node names.
+
+        Raises:
+            ConfigurationError: no configuration to draw, e.g. the empty list :func:`evoik_pin.solve_all` returns
+                for an unreachable target (the error quotes that list's ``message``: why it is empty).
         """
+        empty = getattr(solutions, "solutions", solutions)
+        if isinstance(empty, list) and not empty:
+            why = getattr(solutions, "message", "")
+            raise ConfigurationError("show_solutions: no configurations given (an empty list of solutions)"
+                                     + (f": {why}" if why else ""))
         Q = self._qs(solutions)
         name = name.strip("/")
         if not name or not 0.0 < opacity <= 1.0 or limit < 1 or style not in ("auto", "mesh", "skeleton"):

@@ -1,15 +1,16 @@
-"""Frame look-up in a Pinocchio model: names to ids, the URDF's root link, its deepest link.
+"""Frame look-up in a Pinocchio model: names to ids, the URDF's root link, its deepest link; and locking joints.
 
 URDF links become BODY frames; a joint and a link may share a name, and then the BODY frame is the one
-meant (a tip or a base is a link). These helpers only read the model's frame list (no ``Data``, no
-kinematics); :class:`~evoik_pin.robot.kinematics.Robot` and the viewer use them.
+meant (a tip or a base is a link). The look-up helpers only read the model's frame list (no ``Data``, no
+kinematics); :class:`~evoik_pin.robot.kinematics.Robot` and the viewer use them. :func:`reduced_model` is
+``pin.buildReducedModel`` made safe for such shared names.
 """
 
 from __future__ import annotations
 
 import pinocchio as pin
 
-__all__ = ["body_frame_names", "deepest_body", "find_frame", "root_link"]
+__all__ = ["body_frame_names", "deepest_body", "find_frame", "reduced_model", "root_link"]
 
 
 def find_frame(model: pin.Model, name: str) -> int:
@@ -49,3 +50,42 @@ def deepest_body(model: pin.Model) -> str:
             if d >= depth:  # last deepest wins: a tool link fixed after the last joint's link
                 best, depth = f.name, d
     return best
+
+
+def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: tuple = ()):
+    """``pin.buildReducedModel(model, [geometry_models,] locked, q_ref)`` for models whose frames share names.
+
+    Pinocchio's reduction looks frames up by name alone, and fails with "Several frames match the filter" when
+    a joint and a link share one (anymal_c's ``LF_HAA`` joint and link, b1-z1's fixed joint and link
+    ``gripperStator``), whichever frame the user asked for. So the reduction runs on a copy in which every
+    non-BODY frame (and its joint) with a repeated name is renamed uniquely, and the names are put back in the
+    result. Returns the reduced model, or (model, list of geometry models) when ``geometry_models`` are given.
+    """
+    counts: dict[str, int] = {}
+    for f in model.frames:
+        counts[f.name] = counts.get(f.name, 0) + 1
+    renamed: dict[str, str] = {}
+    work = model
+    if any(c > 1 for c in counts.values()):
+        work = pin.Model(model)
+        taken = set(counts)
+        for i, f in enumerate(model.frames):
+            if counts[f.name] > 1 and f.type != pin.FrameType.BODY:
+                k = 0
+                while (alias := f"{f.name}#{f.type.name.lower()}{k}") in taken:
+                    k += 1
+                taken.add(alias)
+                renamed[alias] = f.name
+                work.frames[i].name = alias
+                if f.type == pin.FrameType.JOINT:
+                    work.names[f.parentJoint] = alias
+    if geometry_models:
+        out, geoms = pin.buildReducedModel(work, list(geometry_models), locked, q_ref)
+    else:
+        out, geoms = pin.buildReducedModel(work, locked, q_ref), []
+    if renamed:
+        for j in range(out.njoints):
+            out.names[j] = renamed.get(out.names[j], out.names[j])
+        for i in range(len(out.frames)):
+            out.frames[i].name = renamed.get(out.frames[i].name, out.frames[i].name)
+    return (out, list(geoms)) if geometry_models else out

@@ -7,9 +7,16 @@ at a time (through Pinocchio) or a whole population at once (a NumPy recursion b
 Pinocchio model, checked against it in the tests), the folded chain constants compiled kernels evaluate,
 and the placements the viewer draws. Loading a URDF is :mod:`.loading`'s job.
 
-The joint vector ``q`` users and solvers see has one entry per degree of freedom (rad for revolute joints,
-m for prismatic ones). Pinocchio stores a continuous (unbounded revolute) joint as two numbers
+The joint vector ``q`` users and solvers see has one entry per independent degree of freedom (rad for
+revolute joints, m for prismatic ones). Pinocchio stores a continuous (unbounded revolute) joint as two numbers
 (cos, sin); :meth:`Robot.to_pinocchio` and :meth:`Robot.from_pinocchio` map between the two.
+
+Mimic joints (URDF ``<mimic joint="k" multiplier="m" offset="c"/>``: ``q_j = m q_k + c``) are not entries of
+``q``: the reduced Pinocchio model holds the chain's *physical* joints (mimic joints included), and every
+physical joint's value is ``scale * q[index] + offset`` (1, its own entry, 0 for the others; see
+:meth:`Robot.chain_coupling`). The joint a chain mimic follows is an entry of ``q`` even when it lies off the
+base->tip chain (a gripper finger driven by the other finger), and Jacobians get the chain rule: column k
+gathers ``m`` times the column of each physical joint that follows q_k.
 
 Poses are those of the tip frame expressed in the base frame (the world frame when no base is chosen).
 """
@@ -24,14 +31,17 @@ import pinocchio as pin
 
 from ..errors import BoundsError, ConfigurationError, FrameError, RobotLoadError
 from ..lie import rotation_to_z
-from .frames import body_frame_names, deepest_body, find_frame, root_link
+from .frames import body_frame_names, deepest_body, find_frame, reduced_model, root_link
 
-__all__ = ["DEFAULT_PRISMATIC_RANGE", "Robot"]
+__all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "Robot"]
 
 #: Search interval (m) used for prismatic joints whose URDF gives no finite limits.
 DEFAULT_PRISMATIC_RANGE = 1.0
 #: Limits at or beyond this magnitude are treated as "no limit" (URDF readers use 1e308-style sentinels).
 _UNBOUNDED = 1e10
+#: Longest chain (physical joints) a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory
+#: (about 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
+MAX_CHAIN_JOINTS = 200
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
@@ -42,17 +52,23 @@ class Robot:
 
     Attributes:
         name: robot name (bundled or example name, or the URDF file's stem).
-        n: number of degrees of freedom of the chain.
-        joint_names: the chain's joint names, base to tip (length n).
-        lower, upper: search bounds (n,) in rad or m; finite; see :meth:`set_bounds`.
+        n: number of independent degrees of freedom of the chain (mimic joints are folded in).
+        joint_names: the joints of ``q``, base to tip (length n); a joint that chain mimic joints follow is
+            listed where the first of them sits when it is not on the chain itself.
+        lower, upper: search bounds (n,) in rad or m; finite; see :meth:`set_bounds`. A joint that mimic joints
+            follow is also bounded so that every such joint stays inside its own URDF limits.
         tip, base: frame names; ``base`` is the URDF root when none was chosen.
-        model: the reduced Pinocchio model holding only the chain's joints.
-        full_model: the Pinocchio model of the whole URDF.
-        urdf_path: the URDF file (None when loaded from an XML string); ``urdf_xml`` holds its text.
+        model: the reduced Pinocchio model holding the chain's physical joints (``model.nv == n`` unless mimic
+            joints are on the chain); map ``q`` to its configuration with :meth:`to_pinocchio`.
+        full_model: the Pinocchio model of the whole URDF (every joint independent).
+        urdf_path: the URDF file (None when loaded from an XML string); ``urdf_xml`` holds its text (the expanded
+            URDF for a xacro file).
         revolute: (n,) bool, True for revolute joints (rad), False for prismatic ones (m).
         continuous: (n,) bool, True for joints Pinocchio stores as (cos, sin).
         joint_axes: (n, 3) unit axis of each joint in its own frame: the rotation axis of a revolute joint,
             the sliding direction of a prismatic one.
+        mimic_joints: ``{physical chain joint: (joint it follows, multiplier, offset)}`` for the chain's mimic
+            joints: ``q_joint = multiplier * q_followed + offset``.
     """
 
     def __init__(
@@ -65,13 +81,21 @@ class Robot:
         urdf_path: Path | None = None,
         urdf_xml: str | None = None,
         package_dirs: list[str] | None = None,
+        mimic: dict | None = None,
     ) -> None:
+        """``mimic``: ``{joint: (followed joint, multiplier, offset)}`` (objects with ``joint``, ``multiplier``,
+        ``offset`` attributes also do), the URDF's mimic couplings resolved to joints no mimic drives
+        (:func:`~evoik_pin.robot.urdf_checks.check_urdf` returns them); entries naming no 1-DOF joint of
+        ``full_model`` are ignored."""
         self.full_model = full_model
         self.name = name
         self.urdf_path = urdf_path
         self.urdf_xml = urdf_xml
         self.package_dirs = list(package_dirs or [])
+        self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
         frames = body_frame_names(full_model)
+        couplings = _couplings(full_model, mimic)
+        self._full_couplings = couplings
 
         if tip is None:
             tip = deepest_body(full_model)
@@ -91,24 +115,50 @@ class Robot:
                 "them from base to tip"
             )
         chain = support[support.index(base_joint) + 1:]
-        chain_names = [full_model.names[j] for j in chain]
-        if joints is not None:
-            unknown = [j for j in joints if j not in chain_names]
-            if unknown:
-                raise FrameError(
-                    f"joints {unknown} are not on the chain {root_name!r} -> {tip!r}; its joints are "
-                    f"{', '.join(chain_names) or '(none)'}"
-                )
-            chain = [j for j in chain if full_model.names[j] in joints]
         bad = [full_model.names[j] for j in chain if full_model.joints[j].nv != 1]
         if bad:
             raise RobotLoadError(
                 f"joints {bad} of the chain are not 1-DOF revolute or prismatic joints; only those are "
                 "supported (lock them with joints=[...])"
             )
-        if not chain:
+        above_base = set(full_model.supports[base_joint])
+
+        def follows(j: int) -> tuple[int | None, float, float]:
+            """(joint whose q moves chain joint j, multiplier, offset); None when j is constant (it follows a
+            joint above the base, which stays locked, or has multiplier 0)."""
+            c = couplings.get(j)
+            if c is None:
+                return j, 1.0, 0.0
+            driver, m, off = c
+            return (None if driver in above_base or m == 0.0 else driver), m, off
+
+        dofs: list[int] = []
+        for j in chain:
+            d = follows(j)[0]
+            if d is not None and d not in dofs:
+                dofs.append(d)
+        dof_names = [full_model.names[d] for d in dofs]
+        if joints is not None:
+            unknown = [j for j in joints if j not in dof_names]
+            if unknown:
+                coupled = [f"{u!r} mimics {full_model.names[couplings[full_model.getJointId(u)][0]]!r}"
+                           for u in unknown if full_model.existJointName(u) and full_model.getJointId(u) in couplings]
+                hint = f" ({'; '.join(coupled)}: name the joint it follows)" if coupled else ""
+                raise FrameError(
+                    f"joints {unknown} are not on the chain {root_name!r} -> {tip!r}; its joints are "
+                    f"{', '.join(dof_names) or '(none)'}{hint}"
+                )
+            dofs = [d for d in dofs if full_model.names[d] in joints]
+        physical = [j for j in chain if follows(j)[0] in dofs]
+        if not physical:
             raise RobotLoadError(
                 f"the chain {root_name!r} -> {tip!r} of {name} has no movable joint; pick another tip or base"
+            )
+        if len(physical) > MAX_CHAIN_JOINTS:
+            raise RobotLoadError(
+                f"the chain {root_name!r} -> {tip!r} of {name} has {len(physical)} joints; at most "
+                f"{MAX_CHAIN_JOINTS} are supported (Pinocchio's data for an n-joint chain takes O(n^3) memory): pick "
+                "a nearer tip, a farther base, or keep fewer joints free with joints=[...]"
             )
 
         q_ref = pin.neutral(full_model)
@@ -118,20 +168,21 @@ class Robot:
                 lo, hi = full_model.lowerPositionLimit[jm.idx_q], full_model.upperPositionLimit[jm.idx_q]
                 if lo <= hi:
                     q_ref[jm.idx_q] = np.clip(q_ref[jm.idx_q], lo, hi)
-        to_lock = [j for j in range(1, full_model.njoints) if j not in chain]
+        for j, (d, m, off) in couplings.items():  # locked mimic joints sit where their driver's rest puts them
+            _set_joint_value(full_model, q_ref, j, m * _joint_value(full_model, q_ref, d) + off)
+        to_lock = [j for j in range(1, full_model.njoints) if j not in physical]
         self._q_ref_full = q_ref
         self._locked = to_lock
-        self.model = pin.buildReducedModel(full_model, to_lock, q_ref) if to_lock else pin.Model(full_model)
+        self.model = reduced_model(full_model, to_lock, q_ref) if to_lock else pin.Model(full_model)
         self.data = self.model.createData()
         self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
         self.tip = tip
         self.base = root_name
         self._tip_id = find_frame(self.model, tip)
         self._base_id = 0 if base is None else find_frame(self.model, base)
-        self.n = self.model.nv
-        self.joint_names = [self.model.names[j] for j in range(1, self.model.njoints)]
-        self._idx_q = np.array([self.model.joints[j].idx_q for j in range(1, self.model.njoints)])
-        self.continuous = np.array([self.model.joints[j].nq == 2 for j in range(1, self.model.njoints)])
+        self.n = len(dofs)
+        self.joint_names = [full_model.names[d] for d in dofs]
+        self._dof_ids = dofs  # full-model joint ids of the entries of q
 
         # Base placement is constant: every free joint is downstream of the base frame.
         q0 = pin.neutral(self.model)
@@ -140,44 +191,75 @@ class Robot:
         self._baseMo = self._oMbase.inverse()
         self._identity = pin.SE3.Identity()
 
-        self.revolute = np.zeros(self.n, dtype=bool)
-        axes = np.zeros((self.n, 3))
-        pin.forwardKinematics(self.model, self.data, q0)
-        for k in range(self.n):
-            S = np.asarray(self.data.joints[k + 1].S).reshape(6)
-            lin, ang = S[:3], S[3:]
-            self.revolute[k] = np.linalg.norm(ang) > 0.5
-            axes[k] = ang if self.revolute[k] else lin
+        # The physical chain: the reduced model's joints 1..m, base to tip, and how each follows q.
+        m_phys = self.model.njoints - 1
+        self._chain_idx_q = np.array([self.model.joints[k].idx_q for k in range(1, m_phys + 1)], dtype=np.intp)
+        self._chain_continuous = np.array([self.model.joints[k].nq == 2 for k in range(1, m_phys + 1)])
+        self._chain_revolute, self._chain_axes = _joint_motions(self.model, range(1, m_phys + 1))
+        index, scale, offset = [], [], []
+        self.mimic_joints: dict[str, tuple[str, float, float]] = {}
+        for j in physical:
+            d, m, off = follows(j)
+            index.append(dofs.index(d))
+            scale.append(m)
+            offset.append(off)
+            if d != j:
+                self.mimic_joints[full_model.names[j]] = (full_model.names[d], m, off)
+        self._chain_index = np.ascontiguousarray(index, dtype=np.int64)
+        self._chain_scale = np.ascontiguousarray(scale, dtype=float)
+        self._chain_offset = np.ascontiguousarray(offset, dtype=float)
+        self._coupled = bool(self.mimic_joints)
+        self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
+        self._G[np.arange(m_phys), self._chain_index] = self._chain_scale
+
+        # The entries of q: their own joint's motion (on the chain, or the off-chain joint mimics follow).
+        revolute, axes = _joint_motions(full_model, dofs)
+        self.revolute = revolute
         self.joint_axes = axes
-        self._set_default_bounds()
+        self.continuous = np.array([full_model.joints[d].nq == 2 for d in dofs])
+        self._set_default_bounds(couplings)
         self._build_batch_chain()
 
     # ------------------------------------------------------------------ construction helpers
-    def _set_default_bounds(self) -> None:
+    def _set_default_bounds(self, couplings: dict[int, tuple[int, float, float]]) -> None:
+        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE when it has none), narrowed
+        so that every mimic joint following it stays inside its own limits."""
+        fm = self.full_model
         lower = np.empty(self.n)
         upper = np.empty(self.n)
-        for k in range(self.n):
-            jm = self.model.joints[k + 1]
-            lo = float(self.model.lowerPositionLimit[jm.idx_q])
-            hi = float(self.model.upperPositionLimit[jm.idx_q])
-            unbounded = self.continuous[k] or not (abs(lo) < _UNBOUNDED and abs(hi) < _UNBOUNDED) or lo >= hi
-            if unbounded:
+        for k, d in enumerate(self._dof_ids):
+            lo, hi, limited = _joint_limits(fm, d)
+            if not limited:
                 half = np.pi if self.revolute[k] else DEFAULT_PRISMATIC_RANGE
                 lo, hi = -half, half
+            for j, (driver, m, off) in couplings.items():
+                jlo, jhi, jlimited = _joint_limits(fm, j)
+                if driver != d or not jlimited or m == 0.0:
+                    continue
+                a, b = sorted(((jlo - off) / m, (jhi - off) / m))
+                if max(lo, a) > min(hi, b):
+                    raise RobotLoadError(
+                        f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} = {m:g} "
+                        f"{fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in [{lo:g}, {hi:g}] keeps it in "
+                        f"its limits [{jlo:g}, {jhi:g}]"
+                    )
+                lo, hi = max(lo, a), min(hi, b)
             lower[k], upper[k] = lo, hi
         self.lower, self.upper = lower, upper
 
     def _build_batch_chain(self) -> None:
-        """Precompute the fixed transforms F_0..F_n of ``T(q) = F_0 Z(q_1) F_1 ... Z(q_n) F_n``.
+        """Precompute the fixed transforms F_0..F_m of ``T(q) = F_0 Z(x_1) F_1 ... Z(x_m) F_m`` over the m
+        physical chain joints (x_k = scale_k q[index_k] + offset_k).
 
-        Z(q) is a rotation about (or translation along) the local z axis: every joint axis a_k is turned
+        Z(x) is a rotation about (or translation along) the local z axis: every joint axis a_k is turned
         into z by a constant rotation B_k folded into the neighbouring fixed transforms, so the batched
         recursion needs only cheap column updates per joint.
         """
-        B = [rotation_to_z(a) for a in self.joint_axes]
+        m_phys = self._chain_index.size
+        B = [rotation_to_z(a) for a in self._chain_axes]
         Rs, ps = [], []
         prev_B = np.eye(3)
-        for k in range(self.n):
+        for k in range(m_phys):
             M = self.model.jointPlacements[k + 1]
             if k == 0:
                 M = self._baseMo * M
@@ -185,20 +267,20 @@ class Robot:
             ps.append(prev_B.T @ M.translation)
             prev_B = B[k]
         tip_frame = self.model.frames[self._tip_id]
-        if tip_frame.parentJoint != self.n:  # pragma: no cover - guaranteed by the reduction
+        if tip_frame.parentJoint != m_phys:  # pragma: no cover - guaranteed by the reduction
             raise RobotLoadError(f"tip frame {self.tip!r} is not attached to the last chain joint")
         Rs.append(prev_B.T @ tip_frame.placement.rotation)
         ps.append(prev_B.T @ tip_frame.placement.translation)
-        self._F_R = np.ascontiguousarray(Rs, dtype=float)  # (n+1, 3, 3)
-        self._F_p = np.ascontiguousarray(ps, dtype=float)  # (n+1, 3)
-        # positions_batch: the homogeneous map of joint k is H_k(q) = a(q) A_k + b(q) B_k + C_k (4 x 4) with
-        # a = cos q, b = sin q (revolute) or a = q, b = 0 (prismatic). With Y = [a p; b p; p] (12, N) for the
+        self._F_R = np.ascontiguousarray(Rs, dtype=float)  # (m+1, 3, 3)
+        self._F_p = np.ascontiguousarray(ps, dtype=float)  # (m+1, 3)
+        # positions_batch: the homogeneous map of joint k is H_k(x) = a(x) A_k + b(x) B_k + C_k (4 x 4) with
+        # a = cos x, b = sin x (revolute) or a = x, b = 0 (prismatic). With Y = [a p; b p; p] (12, N) for the
         # homogeneous points p (4, N), H_k p = [A_k B_k C_k] Y; stacking that (4, 12) block three times
         # makes one BLAS product return p' already copied into all three slots of the next Y.
-        S = np.zeros((self.n, 4, 12))
-        for k in range(self.n):
+        S = np.zeros((m_phys, 4, 12))
+        for k in range(m_phys):
             R, t = self._F_R[k], self._F_p[k]
-            if self.revolute[k]:
+            if self._chain_revolute[k]:
                 S[k, 0:3, 0], S[k, 0:3, 1] = R[:, 0], R[:, 1]
                 S[k, 0:3, 4], S[k, 0:3, 5] = R[:, 1], -R[:, 0]
                 S[k, 0:3, 10] = R[:, 2]
@@ -206,18 +288,33 @@ class Robot:
                 S[k, 0:3, 3] = R[:, 2]
                 S[k, 0:3, 8:11] = R
             S[k, 0:3, 11], S[k, 3, 11] = t, 1.0
-        self._S3 = [np.ascontiguousarray(np.vstack([S[k]] * 3)) for k in range(self.n)]  # (12, 12) each
+        self._S3 = [np.ascontiguousarray(np.vstack([S[k]] * 3)) for k in range(m_phys)]  # (12, 12) each
         self._p_tip = np.tile(np.append(self._F_p[-1], 1.0), 3)[:, None]  # (12, 1)
-        self._all_revolute = bool(self.revolute.all())
+        self._all_revolute = bool(self._chain_revolute.all())
+
+    def _physical(self, Q: np.ndarray) -> np.ndarray:
+        """Physical joint values (..., m) of joint vectors Q (..., n): ``scale * Q[..., index] + offset``."""
+        if not self._coupled:
+            return Q
+        return Q[..., self._chain_index] * self._chain_scale + self._chain_offset
 
     def chain_constants(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The folded chain ``T(q) = F_0 Z(q_1) F_1 ... Z(q_n) F_n`` (tip pose in the base frame), for compiled
-        kernels that evaluate it without Pinocchio: rotations F_R (n+1, 3, 3), translations F_p (n+1, 3) (m)
-        and the (n,) bool mask of revolute joints. Z(q) is a rotation by q about z (revolute) or a
-        translation by q along z (prismatic). C-contiguous float64 / bool arrays, owned by the robot: do
-        not modify them.
+        """The folded chain ``T = F_0 Z(x_1) F_1 ... Z(x_m) F_m`` (tip pose in the base frame) over the m
+        physical chain joints, for compiled kernels that evaluate it without Pinocchio: rotations F_R
+        (m+1, 3, 3), translations F_p (m+1, 3) (m) and the (m,) bool mask of revolute joints. Z(x) is a rotation
+        by x about z (revolute) or a translation by x along z (prismatic); the joint values x come from q by
+        :meth:`chain_coupling` (m == n and x == q unless mimic joints are on the chain). C-contiguous float64 /
+        bool arrays, owned by the robot: do not modify them.
         """
-        return self._F_R, self._F_p, self.revolute
+        return self._F_R, self._F_p, self._chain_revolute
+
+    def chain_coupling(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """How the physical chain joints of :meth:`chain_constants` follow q (n,): ``x_k = scale[k] *
+        q[index[k]] + offset[k]``. Returns index (m,) int64, scale (m,) and offset (m,) float64 (identity,
+        ones and zeros without mimic joints on the chain). The Jacobian with respect to q adds ``scale[k]``
+        times physical column k into column ``index[k]``. Owned by the robot: do not modify them.
+        """
+        return self._chain_index, self._chain_scale, self._chain_offset
 
     # ------------------------------------------------------------------ bounds and validation
     def set_bounds(self, lower, upper) -> None:
@@ -279,36 +376,41 @@ class Robot:
 
     # ------------------------------------------------------------------ Pinocchio mapping
     def to_pinocchio(self, q) -> np.ndarray:
-        """Pinocchio configuration (nq,) of a joint vector (n,): continuous joints become (cos, sin)."""
-        q = np.asarray(q, dtype=float)
+        """Configuration (model.nq,) of :attr:`model` at joint vector ``q`` (n,): mimic joints at their coupled
+        values, continuous joints as (cos, sin)."""
+        x = self._physical(np.asarray(q, dtype=float))
         out = np.empty(self.model.nq)
-        for k in range(self.n):
-            i = self._idx_q[k]
-            if self.continuous[k]:
-                out[i], out[i + 1] = np.cos(q[k]), np.sin(q[k])
+        for k, i in enumerate(self._chain_idx_q):
+            if self._chain_continuous[k]:
+                out[i], out[i + 1] = np.cos(x[k]), np.sin(x[k])
             else:
-                out[i] = q[k]
+                out[i] = x[k]
         return out
 
     def from_pinocchio(self, q_pin) -> np.ndarray:
-        """Joint vector (n,) of a Pinocchio configuration (nq,); continuous joints via atan2(sin, cos)."""
+        """Joint vector (n,) of a configuration (model.nq,) of :attr:`model`; continuous joints via
+        atan2(sin, cos), an entry that only mimic joints show through the first of them (``(x - offset) /
+        scale``)."""
         q_pin = np.asarray(q_pin, dtype=float)
-        out = np.empty(self.n)
-        for k in range(self.n):
-            i = self._idx_q[k]
-            out[k] = np.arctan2(q_pin[i + 1], q_pin[i]) if self.continuous[k] else q_pin[i]
+        out = np.full(self.n, np.nan)
+        for k, i in enumerate(self._chain_idx_q):
+            d, m = self._chain_index[k], self._chain_scale[k]
+            if np.isnan(out[d]) and m != 0.0:
+                x = np.arctan2(q_pin[i + 1], q_pin[i]) if self._chain_continuous[k] else q_pin[i]
+                out[d] = (x - self._chain_offset[k]) / m
         return out
 
     def full_configuration(self, q) -> np.ndarray:
-        """Configuration (full_model.nq,) of the whole URDF: the chain at ``q``, locked joints at rest."""
+        """Configuration (full_model.nq,) of the whole URDF: the entries of ``q`` on their joints, every mimic
+        joint of them at its coupled value, the other joints at rest (where the model locked them)."""
         q = self.check_q(q)
         out = self._q_ref_full.copy()
-        for k, jname in enumerate(self.joint_names):
-            jm = self.full_model.joints[self.full_model.getJointId(jname)]
-            if self.continuous[k]:
-                out[jm.idx_q], out[jm.idx_q + 1] = np.cos(q[k]), np.sin(q[k])
-            else:
-                out[jm.idx_q] = q[k]
+        fm = self.full_model
+        for k, d in enumerate(self._dof_ids):
+            _set_joint_value(fm, out, d, q[k])
+        for j, (d, m, off) in self._full_couplings.items():
+            if d in self._dof_ids:
+                _set_joint_value(fm, out, j, m * q[self._dof_ids.index(d)] + off)
         return out
 
     # ------------------------------------------------------------------ kinematics, one configuration
@@ -329,7 +431,10 @@ class Robot:
         if frame not in ("world", "local"):
             raise ConfigurationError(f"jacobian frame must be 'world' or 'local', got {frame!r}")
         ref = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if frame == "world" else pin.ReferenceFrame.LOCAL
-        J = pin.computeFrameJacobian(self.model, self.data, self.to_pinocchio(q), self._tip_id, ref)
+        # reshape: eigenpy returns a (6,) array for a one-joint chain
+        J = pin.computeFrameJacobian(self.model, self.data, self.to_pinocchio(q), self._tip_id, ref).reshape(6, -1)
+        if self._coupled:
+            J = J @ self._G  # chain rule: dx/dq
         if frame == "world" and self._base_id != 0:
             Rt = self._oMbase.rotation.T
             J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
@@ -338,32 +443,35 @@ class Robot:
     # ------------------------------------------------------------------ hot path of local solvers
     @cached_property
     def _pin_gather(self) -> np.ndarray:
-        """(nq,) indices into ``[q, cos q, sin q]`` (3n,) that give Pinocchio's configuration vector."""
+        """(nq,) indices into ``[x, cos x, sin x]`` (3m,) of the physical values x (m,) that give Pinocchio's
+        configuration vector."""
+        m_phys = self._chain_idx_q.size
         gather = np.empty(self.model.nq, dtype=np.intp)
-        for k in range(self.n):
-            i = self._idx_q[k]
-            if self.continuous[k]:
-                gather[i], gather[i + 1] = self.n + k, 2 * self.n + k
+        for k, i in enumerate(self._chain_idx_q):
+            if self._chain_continuous[k]:
+                gather[i], gather[i + 1] = m_phys + k, 2 * m_phys + k
             else:
                 gather[i] = k
         return gather
 
     @cached_property
     def _has_continuous(self) -> bool:
-        return bool(self.continuous.any())
+        return bool(self._chain_continuous.any())
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`to_pinocchio` without the per-joint Python loop (``q`` itself when nothing is continuous).
+        """:meth:`to_pinocchio` without the per-joint Python loop (``q`` itself when nothing is continuous and
+        no mimic joint is on the chain).
 
         The last conversion is memoized by the bytes of ``q``: local solvers ask for the pose and then the
         Jacobian of one configuration, and the (cos, sin) conversion costs more than the kinematics.
         """
-        if not self._has_continuous:
+        if not (self._has_continuous or self._coupled):
             return q
         key = q.tobytes()
         if key == self._pin_q_key:
             return self._pin_q_value
-        out = np.concatenate((q, np.cos(q), np.sin(q)))[self._pin_gather]
+        x = self._physical(q)
+        out = np.concatenate((x, np.cos(x), np.sin(x)))[self._pin_gather] if self._has_continuous else x
         self._pin_q_key, self._pin_q_value = key, out
         return out
 
@@ -390,8 +498,9 @@ class Robot:
         Rows (vx, vy, vz, wx, wy, wz): ``T(q + dq) ~ T(q) exp(J dq)`` for small dq. ``q`` as in
         :meth:`fk_unchecked`.
         """
-        return pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), self._tip_id,
-                                        pin.ReferenceFrame.LOCAL)
+        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), self._tip_id, pin.ReferenceFrame.LOCAL)
+        J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint chain
+        return J @ self._G if self._coupled else J
 
     @staticmethod
     def task_rows(rows) -> list[int]:
@@ -439,17 +548,19 @@ class Robot:
         built themselves.
         """
         N = Q.shape[0]
-        QT = Q.T
-        AB = np.empty((self.n, 8, N))  # rows 0-3: a = cos q (or q), rows 4-7: b = sin q (or 0)
-        AB[:, 0:4] = np.cos(QT)[:, None, :]
-        AB[:, 4:8] = np.sin(QT)[:, None, :]
+        XT = self._physical(Q).T
+        m_phys = XT.shape[0]
+        AB = np.empty((m_phys, 8, N))  # rows 0-3: a = cos x (or x), rows 4-7: b = sin x (or 0)
+        AB[:, 0:4] = np.cos(XT)[:, None, :]
+        AB[:, 4:8] = np.sin(XT)[:, None, :]
         if not self._all_revolute:
-            AB[~self.revolute, 0:4] = QT[~self.revolute][:, None, :]
+            prismatic = ~self._chain_revolute
+            AB[prismatic, 0:4] = XT[prismatic][:, None, :]
         Y = np.empty((12, N))
         Z = np.empty((12, N))
         Y[:] = self._p_tip
         S3 = self._S3
-        for k in range(self.n - 1, -1, -1):
+        for k in range(m_phys - 1, -1, -1):
             Y[0:8] *= AB[k]
             np.matmul(S3[k], Y, out=Z)
             Y, Z = Z, Y
@@ -468,13 +579,13 @@ class Robot:
         if validate:
             Q = self.check_population(Q)
         R_tip, p_tip, z_axes, origins = self._forward(Q, want_joints=True)
-        J = np.zeros((Q.shape[0], 6, self.n))
-        rev = self.revolute
-        lever = p_tip[:, None, :] - origins  # (N, n, 3)
+        J = np.zeros((Q.shape[0], 6, self._chain_index.size))
+        rev = self._chain_revolute
+        lever = p_tip[:, None, :] - origins  # (N, m, 3)
         J[:, :3, rev] = np.cross(z_axes[:, rev], lever[:, rev]).transpose(0, 2, 1)
         J[:, 3:, rev] = z_axes[:, rev].transpose(0, 2, 1)
         J[:, :3, ~rev] = z_axes[:, ~rev].transpose(0, 2, 1)
-        return p_tip, R_tip, J
+        return p_tip, R_tip, (J @ self._G if self._coupled else J)
 
     def manipulability_batch(self, Q, rows="translation") -> np.ndarray:
         """:meth:`manipulability` of every row of ``Q`` (N, n), shape (N,)."""
@@ -483,25 +594,28 @@ class Robot:
         return np.sqrt(np.maximum(det, 0.0))
 
     def _forward(self, Q: np.ndarray, want_joints: bool):
-        """Base-to-tip recursion over a population; optionally the joint axes and origins (N, n, 3)."""
+        """Base-to-tip recursion over a population Q (N, n); optionally the physical joints' axes and origins
+        (N, m, 3)."""
         N = Q.shape[0]
+        X = self._physical(Q)
+        m_phys = X.shape[1]
         FR, Fp = self._F_R, self._F_p
         R = np.broadcast_to(FR[0], (N, 3, 3)).copy()
         p = np.broadcast_to(Fp[0], (N, 3)).copy()
-        cos, sin = np.cos(Q), np.sin(Q)
-        z_axes = np.empty((N, self.n, 3)) if want_joints else None
-        origins = np.empty((N, self.n, 3)) if want_joints else None
-        for k in range(self.n):
+        cos, sin = np.cos(X), np.sin(X)
+        z_axes = np.empty((N, m_phys, 3)) if want_joints else None
+        origins = np.empty((N, m_phys, 3)) if want_joints else None
+        for k in range(m_phys):
             if want_joints:
                 z_axes[:, k] = R[:, :, 2]
                 origins[:, k] = p
-            if self.revolute[k]:
+            if self._chain_revolute[k]:
                 c, s = cos[:, k, None], sin[:, k, None]
                 c0, c1 = R[:, :, 0].copy(), R[:, :, 1]
                 R[:, :, 0] = c * c0 + s * c1
                 R[:, :, 1] = c * c1 - s * c0
             else:
-                p = p + Q[:, k, None] * R[:, :, 2]
+                p = p + X[:, k, None] * R[:, :, 2]
             p = p + (R.reshape(N * 3, 3) @ Fp[k + 1]).reshape(N, 3)
             R = (R.reshape(N * 3, 3) @ FR[k + 1]).reshape(N, 3, 3)
         return R, p, z_axes, origins
@@ -531,14 +645,83 @@ class Robot:
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
         """Visual geometry of the chain (meshes resolved through ``package_dirs``), for viz.py."""
+        return self._geometry_model(pin.GeometryType.VISUAL)
+
+    @cached_property
+    def collision_model(self) -> pin.GeometryModel:
+        """Collision geometry of the chain (the URDF's ``<collision>`` elements), attached to :attr:`model`'s
+        joints (locked parts fixed where they rest), for :class:`~evoik_pin.scene.Scene`."""
+        return self._geometry_model(pin.GeometryType.COLLISION)
+
+    def _geometry_model(self, kind) -> pin.GeometryModel:
+        """The URDF's geometry of one kind, reduced onto the chain's model like the model itself."""
         if self.urdf_xml is None:  # pragma: no cover
-            raise RobotLoadError("this robot has no URDF text to read visual geometry from")
-        geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf_xml, pin.GeometryType.VISUAL,
-                                           package_dirs=self.package_dirs)
+            raise RobotLoadError("this robot has no URDF text to read geometry from")
+        geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf_xml, kind, package_dirs=self.package_dirs)
         if self._locked:
-            _, geoms = pin.buildReducedModel(self.full_model, [geom], self._locked, self._q_ref_full)
+            _, geoms = reduced_model(self.full_model, self._locked, self._q_ref_full, (geom,))
             geom = geoms[0]
         return geom
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, tip={self.tip!r})"
+
+
+# ---------------------------------------------------------------------- joint helpers (full or reduced model)
+def _couplings(model: pin.Model, mimic: dict | None) -> dict[int, tuple[int, float, float]]:
+    """``{mimic joint id: (followed joint id, multiplier, offset)}`` of ``mimic`` entries whose two joints are
+    1-DOF joints of ``model``."""
+    out: dict[int, tuple[int, float, float]] = {}
+    for name, spec in (mimic or {}).items():
+        driver, m, off = (spec.joint, spec.multiplier, spec.offset) if hasattr(spec, "joint") else spec
+        if not (model.existJointName(name) and model.existJointName(driver)):
+            continue
+        j, d = model.getJointId(name), model.getJointId(driver)
+        if j != d and model.joints[j].nv == 1 and model.joints[d].nv == 1:
+            out[j] = (d, float(m), float(off))
+    return out
+
+
+def _joint_value(model: pin.Model, q: np.ndarray, j: int) -> float:
+    """Value (rad or m) of 1-DOF joint j in configuration q (model.nq,)."""
+    jm = model.joints[j]
+    return float(np.arctan2(q[jm.idx_q + 1], q[jm.idx_q])) if jm.nq == 2 else float(q[jm.idx_q])
+
+
+def _set_joint_value(model: pin.Model, q: np.ndarray, j: int, value: float) -> None:
+    """Write value (rad or m) of 1-DOF joint j into configuration q (model.nq,), as (cos, sin) if continuous."""
+    jm = model.joints[j]
+    if jm.nq == 2:
+        q[jm.idx_q], q[jm.idx_q + 1] = np.cos(value), np.sin(value)
+    else:
+        q[jm.idx_q] = value
+
+
+def _joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
+    """(revolute (k,) bool, unit axes (k, 3) in each joint's own frame) of 1-DOF joints, from their motion
+    subspace at the neutral configuration (joint by joint: no model-wide ``Data``, which is large)."""
+    ids = list(joint_ids)
+    q = pin.neutral(model)
+    revolute = np.zeros(len(ids), dtype=bool)
+    axes = np.zeros((len(ids), 3))
+    for k, j in enumerate(ids):
+        jm = model.joints[j]
+        jd = jm.createData()
+        jm.calc(jd, q)
+        S = np.asarray(jd.S).reshape(6)
+        lin, ang = S[:3], S[3:]
+        revolute[k] = np.linalg.norm(ang) > 0.5
+        axes[k] = ang if revolute[k] else lin
+    return revolute, axes
+
+
+def _joint_limits(model: pin.Model, j: int) -> tuple[float, float, bool]:
+    """(lower, upper, limited) of 1-DOF joint j: limited is False for continuous joints and for limits that
+    are absent (lower == upper, as urdfdom reads a <limit> without them), inverted or beyond 1e10."""
+    jm = model.joints[j]
+    if jm.nq != 1:
+        return -np.pi, np.pi, False
+    lo = float(model.lowerPositionLimit[jm.idx_q])
+    hi = float(model.upperPositionLimit[jm.idx_q])
+    limited = abs(lo) < _UNBOUNDED and abs(hi) < _UNBOUNDED and lo < hi
+    return lo, hi, limited

@@ -1,9 +1,13 @@
-"""Finding and reading a robot: bundled paper arms, ``example-robot-data`` arms, URDF files and strings.
+"""Finding and reading a robot: bundled paper arms, ``example-robot-data`` arms, URDF and xacro files and strings.
 
-:func:`load_robot` resolves a source (a URDF path, a URDF XML string, a bundled paper arm or an
-``example-robot-data`` arm by name) to URDF text, builds the Pinocchio model of the whole URDF, picks the
-arm's default tip frame and the directories its ``package://`` mesh URIs resolve against, and hands all
-of it to :class:`~evoik_pin.robot.kinematics.Robot`, which extracts the chain.
+:func:`load_robot` resolves a source (a URDF or xacro path, a URDF XML string, a bundled paper arm or an
+``example-robot-data`` arm by name) to URDF text (:mod:`.urdf_text`: encodings, binary files, xacro), checks
+it (:mod:`.urdf_checks`: one tree, usable joints, mimic couplings), builds the Pinocchio model of the whole
+URDF with urdfdom's stderr captured, picks a named arm's default tip frame and the directories its
+``package://`` mesh URIs resolve against, and hands all of it to
+:class:`~evoik_pin.robot.kinematics.Robot`, which extracts the chain. Anything wrong with the input is a
+:class:`~evoik_pin.errors.RobotLoadError` (or :class:`~evoik_pin.errors.RobotNotFoundError`) naming the
+file (or "URDF string") and what is accepted.
 """
 
 from __future__ import annotations
@@ -17,8 +21,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import RobotLoadError, RobotNotFoundError
+from ..errors import FrameError, RobotLoadError, RobotNotFoundError
 from .kinematics import Robot
+from .urdf_checks import UrdfSummary, check_urdf
+from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
 
 __all__ = [
     "BUNDLED_ROBOTS",
@@ -45,17 +51,20 @@ class _ExampleArm:
     urdf: str  # path below example-robot-data's robots/ directory
     tip: str
     base: str | None = None
+    srdf: str | None = None  # the SRDF (disabled collision pairs), below robots/ too
 
 
 #: Arms of the ``example-robot-data`` wheel reachable by name, with their default tip frames.
 EXAMPLE_ARMS: dict[str, _ExampleArm] = {
-    "panda": _ExampleArm("panda_description/urdf/panda.urdf", "panda_hand_tcp"),
+    "panda": _ExampleArm("panda_description/urdf/panda.urdf", "panda_hand_tcp",
+                         srdf="panda_description/srdf/panda.srdf"),
     "ur3": _ExampleArm("ur_description/urdf/ur3_robot.urdf", "tool0"),
-    "ur5": _ExampleArm("ur_description/urdf/ur5_robot.urdf", "tool0"),
+    "ur5": _ExampleArm("ur_description/urdf/ur5_robot.urdf", "tool0", srdf="ur_description/srdf/ur5.srdf"),
     "ur10": _ExampleArm("ur_description/urdf/ur10_robot.urdf", "tool0"),
-    "kinova": _ExampleArm("kinova_description/robots/kinova.urdf", "j2s6s200_end_effector"),
-    "z1": _ExampleArm("z1_description/urdf/z1.urdf", "gripperStator"),
-    "xarm": _ExampleArm("xarm_description/urdf/xarm7.urdf", "link_eef"),
+    "kinova": _ExampleArm("kinova_description/robots/kinova.urdf", "j2s6s200_end_effector",
+                          srdf="kinova_description/srdf/kinova.srdf"),
+    "z1": _ExampleArm("z1_description/urdf/z1.urdf", "gripperStator", srdf="z1_description/srdf/z1.srdf"),
+    "xarm": _ExampleArm("xarm_description/urdf/xarm7.urdf", "link_eef", srdf="xarm_description/srdf/xarm7.srdf"),
     "so_arm": _ExampleArm("so_arm_description/urdf/so101.urdf", "gripper_frame_link"),
 }
 
@@ -96,40 +105,74 @@ def list_robots() -> list[str]:
 
 
 def load_robot(
-    source: str | os.PathLike,
+    source: str | bytes | os.PathLike,
     tip: str | None = None,
     base: str | None = None,
     joints: list[str] | None = None,
     bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    xacro_args: dict | None = None,
+    srdf: str | os.PathLike | None = None,
 ) -> Robot:
     """Load one serial chain of a URDF.
 
     Args:
-        source: a URDF path, a URDF XML string, the name of a bundled paper arm (``ax18``, ``planar2r``,
+        source: a URDF path, a xacro path (``*.xacro``, ``*.urdf.xacro``), a URDF XML string (or bytes;
+            xacro text is expanded too), the name of a bundled paper arm (``ax18``, ``planar2r``,
             ``puma3r``, ``redundant7r``, ``vehicle_arm``, ``aerial6r``) or of an example-robot-data arm
-            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``).
-        tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for named
-            arms, otherwise the deepest link of the URDF.
+            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``). Files are read
+            as bytes and decoded as their XML declaration says (UTF-8 by default).
+        tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for the named
+            arms, otherwise the deepest link of the URDF (a file called ``panda.urdf`` is not the named arm).
         base: frame the chain starts from and poses are expressed in. Default: the URDF's root (world).
         joints: optional subset of the chain's joint names to keep free; the rest of the chain is locked.
         bounds: optional ``(lower, upper)`` search bounds, each of length ``n`` (rad or m).
+        xacro_args: values of a xacro file's ``<xacro:arg>`` (``{"name": value}``), as ``name:=value`` on
+            xacro's command line; only for xacro sources.
+        srdf: an SRDF file whose ``<disable_collisions>`` pairs collision scenes skip
+            (:class:`~evoik_pin.scene.Scene`); the named example-robot-data arms find their own.
 
     Returns:
         A :class:`Robot`. Joints outside the base->tip chain are locked at their neutral value
-        (clipped into their limits).
+        (clipped into their limits); mimic joints follow their joint (``q`` has one entry per independent
+        degree of freedom).
     """
-    name, path, xml = _resolve_source(source)
-    if tip is None:
+    name, path, xml, named = _resolve_source(source)
+    where = str(path) if path is not None else "URDF string"
+    if (path is not None and is_xacro_path(path)) or is_xacro_text(xml):
+        xml = expand_xacro(xml, where, path, xacro_args)
+    elif xacro_args:
+        raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
+                             "elements or ${...} / $(...) expressions)")
+    if tip is None and named:
         tip = _default_tip(name)
-    robot = Robot(_parse_urdf(xml, path), tip=tip, base=base, joints=joints, name=name, urdf_path=path,
-                  urdf_xml=xml, package_dirs=_package_dirs(path))
+    model, summary = _parse_urdf(xml, path)
+    try:
+        robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
+                      package_dirs=_package_dirs(path), mimic=summary.mimic)
+    except (RobotLoadError, FrameError) as exc:  # say which file the frames and joints were looked for in
+        raise type(exc)(f"{where}: {exc}") from None
     if bounds is not None:
         robot.set_bounds(*bounds)
+    robot.srdf = _srdf_path(srdf, name if named else None)
     return robot
 
 
+def _srdf_path(srdf, name: str | None) -> str | None:
+    """The SRDF file to use: ``srdf`` when given (it must exist), else a named example arm's own, else None."""
+    if srdf is not None:
+        p = Path(os.fspath(srdf)).expanduser()
+        if not p.is_file():
+            raise RobotNotFoundError(f"SRDF file not found: {str(srdf)!r}")
+        return str(p.resolve())
+    arm = EXAMPLE_ARMS.get(name) if name is not None else None
+    if arm is not None and arm.srdf is not None:
+        p = example_robot_data_dir() / arm.srdf
+        return str(p) if p.is_file() else None
+    return None
+
+
 def _default_tip(name: str) -> str | None:
-    """The usual tool frame of a named arm (``tool`` for the bundled paper arms); None for other URDFs."""
+    """The usual tool frame of a named arm (``tool`` for the bundled paper arms); None for other names."""
     if name in EXAMPLE_ARMS:
         return EXAMPLE_ARMS[name].tip
     if name in BUNDLED_ROBOTS:
@@ -148,47 +191,84 @@ def _package_dirs(path: Path | None) -> list[str]:
     return package_dirs
 
 
-def _resolve_source(source: str | os.PathLike) -> tuple[str, Path | None, str]:
-    """(name, path or None, URDF text) of a load_robot source."""
-    if isinstance(source, str) and source.lstrip().startswith("<"):
-        return "urdf", None, source
+def _looks_like_xml(text: str) -> bool:
+    """True for URDF (or xacro) text given as a string: it starts with "<" or holds an XML declaration or a
+    <robot> element (a path or a name does neither)."""
+    return text.lstrip("\ufeff \t\r\n").startswith("<") or "<?xml" in text or "<robot" in text
+
+
+def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None, str, bool]:
+    """(name, path or None, URDF or xacro text, whether the source was a robot name) of a load_robot source."""
+    if isinstance(source, (bytes, bytearray)):
+        return "urdf", None, decode_xml(bytes(source), "URDF string"), False
+    if isinstance(source, str) and _looks_like_xml(source):
+        stripped = source.lstrip("\ufeff \t\r\n")  # an XML declaration must come first
+        return "urdf", None, stripped if stripped.startswith("<") else source, False
     if not isinstance(source, (str, os.PathLike)):
         raise RobotLoadError(
             f"robot source must be a URDF path, a URDF XML string or a robot name, got {type(source).__name__}"
         )
     text = os.fspath(source)
-    if text in BUNDLED_ROBOTS:
+    if not isinstance(text, str) or not text.strip():
+        raise RobotLoadError(f"robot source {text!r} is empty: give a URDF path, a URDF XML string or one of "
+                             f"{', '.join(list_robots())}")
+    shown = repr(text) if len(text) <= 200 else repr(text[:200]) + "..."
+    named = isinstance(source, str) and (text in BUNDLED_ROBOTS or text in EXAMPLE_ARMS)
+    if named and text in BUNDLED_ROBOTS:
         path = bundled_robots_dir() / f"{text}.urdf"
-    elif text in EXAMPLE_ARMS:
+    elif named:
         path = example_robot_data_dir() / EXAMPLE_ARMS[text].urdf
     else:
         path = Path(text).expanduser()
-        if not path.is_file():
-            if path.suffix or os.sep in text or path.exists():
-                raise RobotNotFoundError(f"URDF file not found: {text!r} (no such file)")
+        try:
+            is_dir, is_file, exists = path.is_dir(), path.is_file(), path.exists()
+        except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL character
+            raise RobotNotFoundError(f"{shown} is not a usable path ({exc}): give a URDF path, a URDF XML string "
+                                     "or a robot name") from None
+        if is_dir:
+            inside = sorted(str(f.relative_to(path)) for pattern in ("*.urdf", "*.xacro", "urdf/*.urdf", "urdf/*.xacro")
+                            for f in path.glob(pattern))
+            hint = f"; URDF files in it: {', '.join(inside[:6])}" if inside else ""
+            raise RobotLoadError(f"{shown} is a directory, not a URDF file: give the path of a .urdf or .xacro "
+                                 f"file{hint}")
+        if not is_file:
+            if path.suffix or os.sep in text or exists or not isinstance(source, str):
+                raise RobotNotFoundError(f"URDF file not found: {shown} (no such file)")
             raise RobotNotFoundError(
-                f"unknown robot {text!r}: give a URDF path, a URDF XML string or one of "
-                f"{', '.join(list_robots())}"
+                f"unknown robot {shown}: give a URDF path, a URDF XML string or one of {', '.join(list_robots())}"
             )
     try:
-        xml = path.read_text()
+        data = path.read_bytes()
     except OSError as exc:
         raise RobotNotFoundError(f"cannot read URDF file {str(path)!r}: {exc.strerror}") from exc
-    name = text if (text in BUNDLED_ROBOTS or text in EXAMPLE_ARMS) else path.stem
-    return name, path.resolve(), xml
+    resolved = path.resolve()
+    xml = decode_xml(data, str(resolved))
+    stem = path.name
+    for suffix in (".xacro", ".urdf"):
+        stem = stem[: -len(suffix)] if stem.lower().endswith(suffix) and len(stem) > len(suffix) else stem
+    return (text if named else stem), resolved, xml, named
 
 
-def _parse_urdf(xml: str, path: Path | None) -> pin.Model:
-    """Pinocchio model of the whole URDF ``xml`` (read from ``path``, or None for a string), or a
-    RobotLoadError saying what is wrong with it."""
+def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, UrdfSummary]:
+    """Pinocchio model of the whole URDF ``xml`` (read from ``path``, or None for a string) and what
+    :func:`check_urdf` found in it, or a RobotLoadError saying what is wrong with it."""
     where = str(path) if path is not None else "URDF string"
     try:
         root = ET.fromstring(xml)
     except ET.ParseError as exc:
         raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
-    if root.tag != "robot":
-        raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
-    try:
-        return pin.buildModelFromXML(xml)
-    except (RuntimeError, ValueError) as exc:
-        raise RobotLoadError(f"Pinocchio could not build a model from {where}: {exc}") from exc
+    except (ValueError, RecursionError) as exc:  # e.g. characters XML does not allow
+        raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
+    summary = check_urdf(root, where)
+    failure: Exception | None = None
+    with captured_stderr() as err:  # urdfdom prints its reasons on stderr
+        try:
+            model = pin.buildModelFromXML(xml)  # mimic couplings are folded in by Robot, not by Pinocchio
+        except Exception as exc:  # RuntimeError, ValueError, ... from the C++ parsers
+            failure = exc
+    if failure is not None:  # urdfdom's reasons, without its "at line N in joint.cpp" locations
+        said = [line.strip().removeprefix("Error:").strip() for line in err[0].splitlines()]
+        said = [line for line in said if line and not line.startswith("at line ")]
+        detail = f" urdfdom said: {'; '.join(said)}" if said else ""
+        raise RobotLoadError(f"Pinocchio could not build a model from {where}: {failure}{detail}") from None
+    return model, summary

@@ -24,6 +24,7 @@ from ..errors import ConfigurationError
 from ..objectives import default_cost
 from ..problem import Target
 from ..result import Result
+from .collision_verdict import with_collision_verdict
 from .lm import solve_pairs
 from .lm.layout import target_kind
 from .memetic import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
@@ -98,7 +99,11 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
     by_kind: dict[int, list[int]] = {}
     for i, t in enumerate(targets):
         by_kind.setdefault(target_kind(t), []).append(i)
+    scene = template.scene
     table = seed_table(robot, lower, upper, table_size) if rounds else None
+    free = table.free_mask(scene, template.margin) if table is not None and scene is not None else None
+    if free is not None:
+        rounds = min(rounds, int(np.count_nonzero(free)))
     for members in by_kind.values():
         pending = np.array(members)
         plan = ([("q0", None)] if Q0 is not None else []) + [("seed table", r) for r in range(rounds)]
@@ -107,21 +112,25 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
                 break
             t0 = time.perf_counter()
             group = [targets[i] for i in pending]
-            Qs = Q0[pending] if rank is None else table.Q[table.nearest(group, rank + 1)[:, rank]]
+            Qs = Q0[pending] if rank is None else table.Q[table.nearest(group, rank + 1, free)[:, rank]]
             out = solve_pairs(robot, Qs, group, lower, upper, template.tolerance, template.rotation_tolerance,
                               engine=engine)
+            if scene is not None:  # the exact check: an answer in collision stays pending for the next round
+                for j in np.nonzero(out.converged)[0]:
+                    out.converged[j] = not scene.in_collision(out.q[j], template.margin)
             share = (time.perf_counter() - t0) / pending.size
             solved = np.nonzero(out.converged)[0]
             rot = out.orientation_error
             cost = default_cost(out.position_error, rot, template.orientation_weight, template.pose_metric)
             for j in solved:
                 c = float(cost[j])
-                results[pending[j]] = Result(
+                results[pending[j]] = with_collision_verdict(template, Result(
                     q=out.q[j].copy(), position_error=float(out.position_error[j]),
                     orientation_error=None if rot is None else float(rot[j]), cost=c, success=True,
                     generations=0, evaluations=int(out.evaluations[j]), time_s=share,
                     history={"best_cost": np.array([c]), "mean_cost": np.array([c]), "diversity": np.array([0.0])},
-                    message=f"tolerance reached by batched LM from {label} (solve_many)", method="memetic")
+                    message=f"tolerance reached by batched LM from {label} (solve_many)", method="memetic",
+                    collision_free=None if scene is None else True))  # passed the exact check above
             n_batched += solved.size
             pending = pending[~out.converged]
     fallback = [i for i in range(N) if results[i] is None]

@@ -45,6 +45,7 @@ from ..errors import OptionError
 from ..problem import IKProblem, Target
 from ..result import Result
 from . import register
+from .collision_verdict import pairs_text
 from .common import diversity, halton
 from .de_ops import binomial_crossover, distinct_indices, mutate
 from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
@@ -85,6 +86,7 @@ class SeedTable:
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
+        self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -122,14 +124,20 @@ class SeedTable:
         R = np.array([t.rotation for t in targets])
         return "pose", np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
 
-    def ranked(self, target: Target, k: int):
+    def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
-        costs one matrix-vector product and an argmin; the others are ranked only if asked for."""
+        costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
+        (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
         if k <= 0:
             return
         key, f = self.target_features([target])
         F, sq = self._table_features(key)
         d = sq - 2.0 * (F @ f[0])
+        if allowed is not None:
+            d = np.where(allowed, d, np.inf)
+            k = min(k, int(np.count_nonzero(allowed)))
+            if k <= 0:
+                return
         first = int(d.argmin())
         yield first
         k = min(k, d.shape[0])
@@ -138,6 +146,18 @@ class SeedTable:
             for i in part[d[part].argsort()]:
                 if i != first:
                     yield int(i)
+
+    def free_mask(self, scene, margin: float) -> np.ndarray:
+        """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
+        (conservative: every such entry is mesh-free), computed once per scene version and margin (about
+        20-60 us an entry: one-time set-up)."""
+        key = (id(scene), scene.version, float(margin))
+        hit = self._free.get(key)
+        if hit is None or hit[0]() is not scene:
+            if len(self._free) > 8:
+                self._free.clear()
+            hit = self._free[key] = (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True))
+        return hit[1]
 
     def distance_sq(self, target: Target, T: pin.SE3) -> float:
         """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
@@ -161,21 +181,29 @@ class SeedTable:
             gap = self._gaps[key] = float(np.median(D.min(axis=1)))
         return gap
 
-    def nearest(self, targets: list[Target], k: int) -> np.ndarray:
-        """Indices (N, k) of the k table entries nearest to each target, nearest first.
+    def nearest(self, targets: list[Target], k: int, allowed: np.ndarray | None = None) -> np.ndarray:
+        """Indices (N, k) of the k table entries nearest to each target, nearest first (only ``allowed``
+        entries when a (size,) bool mask is given; k is capped at their number).
 
-        Many targets at once go through a k-d tree of the table's features (built once per target kind):
-        O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
+        Many targets at once go through a k-d tree of the table's features (built once per target kind and
+        mask): O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
         """
         key, f = self.target_features(targets)
-        tree = self._trees.get(key)
-        if tree is None:
+        tree_key = (key, None if allowed is None else allowed.tobytes())
+        hit = self._trees.get(tree_key)
+        if hit is None:
             from scipy.spatial import cKDTree
 
-            tree = self._trees[key] = cKDTree(self._table_features(key)[0])
+            index = np.arange(self.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
+            if len(self._trees) > 16:
+                self._trees.clear()
+            hit = self._trees[tree_key] = (cKDTree(self._table_features(key)[0][index]), index)
+        tree, index = hit
         k = min(k, tree.n)
+        if k == 0:
+            return np.zeros((len(targets), 0), dtype=np.intp)
         _, idx = tree.query(f, k=k)
-        return np.asarray(idx, dtype=np.intp).reshape(len(targets), k)
+        return index[np.asarray(idx, dtype=np.intp).reshape(len(targets), k)]
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -204,16 +232,19 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
     return table
 
 
-def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled"
-            ) -> SeedTable | None:
+def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
+            margin: float = 0.0) -> tuple[SeedTable | None, np.ndarray | None]:
     """Do memetic's one-time work for a robot and a search box: load (once per install: compile) the compiled
-    LM kernel and build the cached seed table of ``table_size`` entries (0: none). Returns the table.
+    LM kernel, build the cached seed table of ``table_size`` entries (0: none) and, with a scene, find its
+    collision-free entries. Returns (the table, its free mask or None).
 
     :func:`memetic` calls it before starting its clock; :func:`evoik_pin.prepare` calls it ahead of time.
     """
     if engine == "compiled":
         compiled_kernel()
-    return seed_table(robot, lower, upper, table_size) if table_size > 0 else None
+    table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
+    free = table.free_mask(scene, margin) if table is not None and scene is not None else None
+    return table, free
 
 
 # ---------------------------------------------------------------------- option checks
@@ -244,6 +275,9 @@ class _Search:
         self.evaluations = 0
         self.attempts = 0
         self.attempt_errors: list[float] = []
+        self.scene = problem.scene
+        self.rejected = 0  # converged LM answers rejected by the scene's exact check
+        self.rejected_pairs: list[tuple[str, str]] = []  # the pairs in contact at the last one
 
     def out_of_time(self) -> bool:
         return (self.deadline is not None and self.attempts >= self.guaranteed
@@ -257,6 +291,16 @@ class _Search:
         self.evaluations += out.evaluations
         self.attempts += runs
         self.attempt_errors.append(out.error)
+        if out.converged and self.scene is not None:
+            margin = self.problem.margin
+            if self.scene.in_collision(out.q, margin):  # the exact check, ~90 us
+                # it reaches the target in collision: rejected; the search goes on from other starts
+                self.rejected += 1
+                self.rejected_pairs = self.scene.colliding_pairs(out.q, margin)
+                out.converged = False
+                if self.best is None:
+                    self.best = out
+                return False
         if self.best is None or out.converged or out.error < self.best.error:
             self.best = out
         return out.converged
@@ -357,7 +401,8 @@ def memetic(
     # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
     # table of this box with its nearness features (cached per robot and box).
     use_table = table_size > 0 and table_seeds > 0
-    table = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine)
+    table, free = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine,
+                          problem.scene, problem.margin)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
@@ -374,7 +419,8 @@ def memetic(
     # to replace.
     ranked = first = None
     if table is not None:
-        ranked = table.ranked(problem.target, table_offset + table_seeds)  # lazy: ranks on the first next()
+        # lazy: ranks on the first next(); with a scene, among the collision-free entries only
+        ranked = table.ranked(problem.target, table_offset + table_seeds, free)
         if table_offset:
             ranked = itertools.islice(ranked, table_offset, None)
     q0 = problem.q0
@@ -425,20 +471,27 @@ def memetic(
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    success = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
     else:
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
-        message = (f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); best {errors_text(pos, rot)}"
-                   f" exceeds the tolerance ({problem.tolerance:g} m, {problem.rotation_tolerance:g} rad)")
+        best = (f"best {errors_text(pos, rot)} exceeds the tolerance ({problem.tolerance:g} m, "
+                f"{problem.rotation_tolerance:g} rad)" if not within else "no collision-free answer met")
+        message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
+    if search.rejected and not success:
+        message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
+                    f"{pairs_text(search.rejected_pairs)}")
     history["attempt_error"] = search.attempt_errors
     return Result(
         q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=n_gen,
         evaluations=search.evaluations + problem.evaluations, time_s=time.perf_counter() - t0,
         history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message, method="memetic",
         setup_s=setup_s,
+        # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
+        collision_free=True if problem.scene is not None and search.best.converged else None,
     )
 
 

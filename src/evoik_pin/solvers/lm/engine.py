@@ -79,16 +79,17 @@ def compiled_kernel() -> dict:
     if not _KERNEL:
         from . import kernel
 
-        FR, Fp = np.tile(np.eye(3), (2, 1, 1)), np.zeros((2, 3))
-        rev = np.ones(1, dtype=bool)
+        # a one-joint chain: Robot.chain_constants() + Robot.chain_coupling()
+        chain = (np.tile(np.eye(3), (2, 1, 1)), np.zeros((2, 3)), np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64),
+                 np.ones(1), np.zeros(1))
         box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
         params = kernel_params(1e-6, 1e-6, KIND_POSE, iterations=1)
-        # the argument types the engine passes: C-contiguous float64 / bool arrays and a Python bool
-        kernel.lm_run(np.zeros(1), FR, Fp, rev, box, False, np.zeros(3), np.eye(3), params, np.empty(1))
+        # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
+        kernel.lm_run(np.zeros(1), *chain, box, False, np.zeros(3), np.eye(3), params, np.empty(1))
         stats = np.empty((1, STATS_SIZE))
-        kernel.lm_run_starts(np.zeros((1, 1)), FR, Fp, rev, box, False, np.zeros(3), np.eye(3), params,
+        kernel.lm_run_starts(np.zeros((1, 1)), *chain, box, False, np.zeros(3), np.eye(3), params,
                              np.empty((1, 1)), stats)
-        kernel.lm_run_pairs(np.zeros((1, 1)), FR, Fp, rev, box, False, np.zeros((1, 3)), np.eye(3)[None].copy(),
+        kernel.lm_run_pairs(np.zeros((1, 1)), *chain, box, False, np.zeros((1, 3)), np.eye(3)[None].copy(),
                             params, np.empty((1, 1)), stats)
         _KERNEL.update(lm_run=kernel.lm_run, lm_run_starts=kernel.lm_run_starts, lm_run_pairs=kernel.lm_run_pairs)
     return _KERNEL
@@ -134,7 +135,7 @@ class LevenbergMarquardt:
             return
         self._reference = None
         self._kernel = compiled_kernel()
-        self._chain = robot.chain_constants()
+        self._chain = robot.chain_constants() + robot.chain_coupling()  # folded chain, how it follows q
         _, self._any_wrap, _, _, self._box = box_constants(robot, problem.lower, problem.upper)
         self._pt, self._Rt = encode_target(problem.target)
         self._params = kernel_params(float(problem.tolerance), float(problem.rotation_tolerance), self.kind, 0,
@@ -155,9 +156,8 @@ class LevenbergMarquardt:
         params = self._params
         params[P_ITERATIONS] = max_iterations
         out = np.empty(self.n)
-        FR, Fp, rev = self._chain
         pos, rot, converged, it, evaluations = self._kernel["lm_run"](
-            np.ascontiguousarray(q, dtype=float), FR, Fp, rev, self._box, self._any_wrap, self._pt, self._Rt,
+            np.ascontiguousarray(q, dtype=float), *self._chain, self._box, self._any_wrap, self._pt, self._Rt,
             params, out)
         return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations)
 
@@ -190,8 +190,7 @@ class LevenbergMarquardt:
         K = Q.shape[0]
         Q_out = np.empty_like(Q)
         stats = np.empty((K, STATS_SIZE))
-        FR, Fp, rev = self._chain
-        k = self._kernel["lm_run_starts"](Q, FR, Fp, rev, self._box, self._any_wrap, self._pt, self._Rt, params,
+        k = self._kernel["lm_run_starts"](Q, *self._chain, self._box, self._any_wrap, self._pt, self._Rt, params,
                                           Q_out, stats)
         runs = k + 1 if k >= 0 else -(k + 1)
         s = stats[:runs]
@@ -231,10 +230,10 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target], lower: np.ndarray, 
     P, Rts = encode_targets(targets)
     _, any_wrap, _, _, box = box_constants(robot, lower, upper)
     params = kernel_params(tolerance, rotation_tolerance, kind, max_iterations, damping, max_step)
-    FR, Fp, rev = robot.chain_constants()
+    chain = robot.chain_constants() + robot.chain_coupling()
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), FR, Fp, rev, box, any_wrap, P, Rts, params, Q_out, stats)
+    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *chain, box, any_wrap, P, Rts, params, Q_out, stats)
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
 

@@ -27,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
-from .chain import forward, jacobian
+from .chain import coupled, expand, fold, forward, jacobian
 from .layout import (
     B_CHI,
     B_CLO,
@@ -77,13 +77,18 @@ def task_size(kind):
 
 
 @njit(cache=True, nogil=True)
-def task_error(FR, Fp, rev, q, pt, Rt, kind, R, p, Z, O, M, t, e):
+def task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, p, Z, O, M, t, e):
     """Task error e (m,) at q; returns (|e|^2, position error m, orientation error rad or 0).
 
-    Fills the kinematics buffers R, p, Z, O (see :func:`.chain.forward`), and for pose targets the tip pose seen
-    from the target, ``T_t^-1 T(q)`` = (M (3, 3), t (3,)), which :func:`task_jacobian` needs.
+    Fills the kinematics buffers R, p, Z, O (see :func:`.chain.forward`; with ``mimic``, the chain's joint values
+    x of :func:`.chain.expand` first), and for pose targets the tip pose seen from the target, ``T_t^-1 T(q)`` =
+    (M (3, 3), t (3,)), which :func:`task_jacobian` needs.
     """
-    forward(FR, Fp, rev, q, R, p, Z, O)
+    if mimic:
+        expand(index, scale, offset, q, x)
+        forward(FR, Fp, rev, x, R, p, Z, O)
+    else:
+        forward(FR, Fp, rev, q, R, p, Z, O)
     if kind == KIND_PLANAR or kind == KIND_PLANAR_YAW:  # (x, y[, yaw]) with pt = (x_t, y_t, yaw_t)
         d0, d1 = p[0] - pt[0], p[1] - pt[1]
         e[0], e[1] = d0, d1
@@ -110,13 +115,18 @@ def task_error(FR, Fp, rev, q, pt, Rt, kind, R, p, Z, O, M, t, e):
 
 
 @njit(cache=True, nogil=True)
-def task_jacobian(rev, R, p, Z, O, t, e, kind, J, A, B, E):
+def task_jacobian(rev, index, scale, mimic, R, p, Z, O, t, e, kind, Jx, J, A, B, E):
     """Task Jacobian E (m, n) from the buffers :func:`task_error` filled for the same configuration.
 
     Position: the base-frame translational rows; planar: rows vx, vy[, wz]. Pose: ``Jlog6(T_t^-1 T) J_local``
-    with ``J_local = (R^T J_v, R^T J_w)``. J (6, n), A, B (3, 3) are scratch.
+    with ``J_local = (R^T J_v, R^T J_w)``. Jx (6, chain joints), J (6, n), A, B (3, 3) are scratch; with
+    ``mimic`` the chain's columns Jx are folded into those of q (:func:`.chain.fold`).
     """
-    jacobian(rev, p, Z, O, J)
+    if mimic:
+        jacobian(rev, p, Z, O, Jx)
+        fold(index, scale, Jx, J)
+    else:
+        jacobian(rev, p, Z, O, J)
     n = J.shape[1]
     if kind != KIND_POSE:
         m = E.shape[0]
@@ -261,11 +271,13 @@ def _copy_kinematics(R, p, Z, O, R2, p2, Z2, O2):
 
 
 @njit(cache=True, nogil=True)
-def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
+def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, q_out):
     """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,).
 
     Args:
-        FR (n+1, 3, 3), Fp (n+1, 3), rev (n,) bool: the folded chain (``Robot.chain_constants``).
+        FR (m+1, 3, 3), Fp (m+1, 3), rev (m,) bool: the folded chain of the m physical joints
+            (``Robot.chain_constants``); index (m,) int64, scale, offset (m,): how they follow q
+            (``Robot.chain_coupling``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
         pt (3,), Rt (3, 3): the target as :func:`.layout.encode_target` writes it.
         params (PARAMS_SIZE,): tolerance (m), rotation tolerance (rad), initial damping, max step, stall window,
@@ -276,6 +288,8 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
         iterations, forward-kinematics evaluations), as :func:`.reference.reference_run` counts them.
     """
     n = q_start.shape[0]
+    nx = FR.shape[0] - 1  # physical joints (n unless mimic joints are on the chain)
+    mimic = coupled(index, scale, offset, n)
     kind = int(params[P_KIND])
     oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW
     m = task_size(kind)
@@ -291,8 +305,9 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
     held = np.empty(n, dtype=np.bool_)
     R, R2, R3 = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
     p, p2, p3 = np.empty(3), np.empty(3), np.empty(3)
-    Z, Z2, Z3 = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
-    O, O2, O3 = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    Z, Z2, Z3 = np.empty((nx, 3)), np.empty((nx, 3)), np.empty((nx, 3))
+    O, O2, O3 = np.empty((nx, 3)), np.empty((nx, 3)), np.empty((nx, 3))
+    x, Jx = np.empty(nx), np.empty((6, nx))
     e, en, eh = np.empty(m), np.empty(m), np.empty(m)
     E, W, J = np.empty((m, n)), np.empty((m, n)), np.empty((6, n))
     tx, tx2, tx3 = np.empty(3), np.empty(3), np.empty(3)
@@ -305,7 +320,7 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
     for k in range(n):
         if q[k] <= box[B_CLO, k] or q[k] >= box[B_CHI, k]:
             on_bound = True
-    c, pos, rot = task_error(FR, Fp, rev, q, pt, Rt, kind, R, p, Z, O, M, tx, e)
+    c, pos, rot = task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, p, Z, O, M, tx, e)
     evaluations = 1
     if pos <= tol_p and (not oriented or rot <= tol_r):
         q_out[:] = q
@@ -320,7 +335,7 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
     while it < max_it:
         it += 1
         if not have_E:
-            task_jacobian(rev, R, p, Z, O, tx, e, kind, J, A, Bm, E)
+            task_jacobian(rev, index, scale, mimic, R, p, Z, O, tx, e, kind, Jx, J, A, Bm, E)
             have_E = True
         on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         if creeping and not (on_bound or on_bound_n):
@@ -331,7 +346,7 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
                     d = (d + math.pi) % TWO_PI - math.pi
                 v[k] = d
                 qh[k] = q[k] + GEO_H * d
-            task_error(FR, Fp, rev, qh, pt, Rt, kind, R3, p3, Z3, O3, M, tx3, eh)
+            task_error(FR, Fp, rev, index, scale, offset, mimic, qh, x, pt, Rt, kind, R3, p3, Z3, O3, M, tx3, eh)
             evaluations += 1
             for i in range(m):
                 s = 0.0
@@ -348,7 +363,8 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
                     for k in range(n):
                         qh[k] = q[k] + v[k] - 0.5 * dq[k]
                     into_box(qh, box, any_wrap, qn)
-        cn, pos_n, rot_n = task_error(FR, Fp, rev, qn, pt, Rt, kind, R2, p2, Z2, O2, M, tx2, en)
+        cn, pos_n, rot_n = task_error(FR, Fp, rev, index, scale, offset, mimic, qn, x, pt, Rt, kind, R2, p2, Z2, O2,
+                                      M, tx2, en)
         evaluations += 1
         if cn < c:
             creeping = GEO_SLOW * c < cn < GEO_NEAR
@@ -372,9 +388,10 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
                 break
     if converged and finish and c > FINISHED:
         # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-        task_jacobian(rev, R, p, Z, O, tx, e, kind, J, A, Bm, E)
+        task_jacobian(rev, index, scale, mimic, R, p, Z, O, tx, e, kind, Jx, J, A, Bm, E)
         lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
-        cn, pos_n, rot_n = task_error(FR, Fp, rev, qn, pt, Rt, kind, R2, p2, Z2, O2, M, tx2, en)
+        cn, pos_n, rot_n = task_error(FR, Fp, rev, index, scale, offset, mimic, qn, x, pt, Rt, kind, R2, p2, Z2, O2,
+                                      M, tx2, en)
         it += 1
         evaluations += 1
         if cn < c:
@@ -385,27 +402,28 @@ def lm_run(q_start, FR, Fp, rev, box, any_wrap, pt, Rt, params, q_out):
 
 
 @njit(cache=True, nogil=True)
-def lm_run_pairs(Q, FR, Fp, rev, box, any_wrap, P, Rts, params, Q_out, stats):
+def lm_run_pairs(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, P, Rts, params, Q_out, stats):
     """:func:`lm_run` on M (start, target) pairs: starts Q (M, n), target positions P (M, 3) and rotations
     Rts (M, 3, 3) (:func:`.layout.encode_targets`); end configurations to Q_out (M, n) and, per pair, the
     ``S_*`` columns (errors, converged, iterations, evaluations) to the rows of stats (M, STATS_SIZE)."""
     for i in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations = lm_run(Q[i], FR, Fp, rev, box, any_wrap, P[i], Rts[i], params,
-                                                      Q_out[i])
+        pos, rot, converged, it, evaluations = lm_run(Q[i], FR, Fp, rev, index, scale, offset, box, any_wrap, P[i],
+                                                      Rts[i], params, Q_out[i])
         stats[i, S_POS], stats[i, S_ROT] = pos, rot
         stats[i, S_CONVERGED] = 1.0 if converged else 0.0
         stats[i, S_ITERATIONS], stats[i, S_EVALUATIONS] = it, evaluations
 
 
 @njit(cache=True, nogil=True)
-def lm_run_starts(Q, FR, Fp, rev, box, any_wrap, pt, Rt, params, Q_out, stats):
+def lm_run_starts(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, Q_out, stats):
     """:func:`lm_run` from the starts Q (K, n) for one target, in order, until one converges.
 
     Each run's end configuration goes to Q_out[k] and its ``S_*`` statistics to stats[k] (rows of starts not
     run are left untouched). Returns the index of the converged run, or -(1 + the number of runs) when none
     converged (every start was run then)."""
     for k in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations = lm_run(Q[k], FR, Fp, rev, box, any_wrap, pt, Rt, params, Q_out[k])
+        pos, rot, converged, it, evaluations = lm_run(Q[k], FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt,
+                                                      params, Q_out[k])
         stats[k, S_POS], stats[k, S_ROT] = pos, rot
         stats[k, S_CONVERGED] = 1.0 if converged else 0.0
         stats[k, S_ITERATIONS], stats[k, S_EVALUATIONS] = it, evaluations

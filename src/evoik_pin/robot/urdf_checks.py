@@ -1,0 +1,240 @@
+"""What a URDF must be before Pinocchio reads it: one tree of links and joints with usable numbers.
+
+urdfdom (the C++ parser under Pinocchio) rejects some broken files with a generic "not a valid URDF model" and
+its reasons printed on stderr, and accepts others that then give NaN or silently wrong kinematics (a zero
+joint axis, inverted limits, a NaN origin). :func:`check_urdf` reads the parsed XML first and raises a
+:class:`~evoik_pin.errors.RobotLoadError` naming the file, the joint or link, and what is accepted. It also
+collects the ``<mimic>`` couplings (``q_j = multiplier q_k + offset``), resolved to the joint that drives
+each chain of them, which :class:`~evoik_pin.robot.kinematics.Robot` folds into its joint vector.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+from ..errors import RobotLoadError, RobotLoadWarning
+
+__all__ = ["JOINT_TYPES", "Mimic", "UrdfSummary", "check_urdf"]
+
+#: The joint types of the URDF specification.
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+_MOVING = ("revolute", "continuous", "prismatic")  # 1-DOF joints: the only ones a mimic can couple
+
+
+@dataclass(frozen=True)
+class Mimic:
+    """A mimic joint's value: ``multiplier * q[joint] + offset`` (rad or m), ``joint`` a joint no mimic drives."""
+
+    joint: str
+    multiplier: float
+    offset: float
+
+
+@dataclass(frozen=True)
+class UrdfSummary:
+    """What :func:`check_urdf` learnt: the robot's name, joint types and the mimic couplings."""
+
+    name: str
+    joint_types: dict[str, str]
+    mimic: dict[str, Mimic]
+
+
+def check_urdf(root: ET.Element, where: str) -> UrdfSummary:
+    """Check the parsed URDF ``root`` (read from ``where``: a path or "URDF string"); return its summary.
+
+    Raises a RobotLoadError naming ``where`` for: a root element other than ``<robot>``, a missing or
+    duplicated link or joint name, an unknown joint type, a joint without parent or child or naming a link
+    the file lacks, an origin or axis that is not three finite numbers, a zero axis, a revolute or prismatic
+    joint without ``<limit>`` (or without its effort / velocity), limits that are not numbers or are inverted
+    (lower > upper), a link with two parents (a closed loop), several root links, a cycle, and a malformed or
+    circular ``<mimic>``. A ``<mimic>`` naming no 1-DOF joint of the file is ignored with a
+    :class:`~evoik_pin.errors.RobotLoadWarning` (its joint stays independent); one on a fixed joint is ignored.
+    """
+    if root.tag != "robot":
+        raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
+    name = root.get("name")
+    if not name:
+        raise RobotLoadError(f"{where}: the <robot> element has no name attribute (<robot name=\"...\">)")
+    links = _names(root.findall("link"), "link", where)
+    if not links:
+        raise RobotLoadError(f"{where} has no <link> element: a URDF needs at least one link")
+    joints = root.findall("joint")
+    _names(joints, "joint", where)
+    types: dict[str, str] = {}
+    parent_of: dict[str, tuple[str, str]] = {}  # child link -> (parent link, joint)
+    for j in joints:
+        jname = j.get("name")
+        jtype = j.get("type")
+        types[jname] = jtype
+        if jtype not in JOINT_TYPES:
+            raise RobotLoadError(f"{where}: joint {jname!r} has type {jtype!r}; URDF joint types are "
+                                 f"{', '.join(JOINT_TYPES)}")
+        ends = []
+        for tag in ("parent", "child"):
+            el = j.find(tag)
+            link = el.get("link") if el is not None else None
+            if not link:
+                raise RobotLoadError(f"{where}: joint {jname!r} has no <{tag} link=\"...\"/> element")
+            if link not in links:
+                raise RobotLoadError(f"{where}: joint {jname!r} names {tag} link {link!r}, which the file does not "
+                                     "define")
+            ends.append(link)
+        parent, child = ends
+        if parent == child:
+            raise RobotLoadError(f"{where}: joint {jname!r} joins link {parent!r} to itself")
+        if child in parent_of:
+            other = parent_of[child][1]
+            raise RobotLoadError(
+                f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r} (a closed loop); a "
+                "URDF must be a tree: every link has at most one parent joint. Model a closed chain by cutting it "
+                "open (drop one joint)"
+            )
+        parent_of[child] = (parent, jname)
+        _check_joint(j, jname, jtype, where)
+    _check_tree(links, parent_of, where)
+    return UrdfSummary(name, types, _mimic(joints, types, where))
+
+
+def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:
+    """The ``name`` of each element; a RobotLoadError for a missing or repeated one."""
+    names: list[str] = []
+    seen: set[str] = set()
+    for i, el in enumerate(elements):
+        n = el.get("name")
+        if not n:
+            raise RobotLoadError(f"{where}: <{kind}> number {i + 1} has no name attribute")
+        if n in seen:
+            raise RobotLoadError(f"{where}: two {kind}s are named {n!r}; {kind} names must be unique")
+        seen.add(n)
+        names.append(n)
+    return names
+
+
+def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...] | None = None,
+            finite: bool = True) -> tuple[float, ...]:
+    """``count`` numbers of a space-separated attribute; ``default`` when it is absent."""
+    if text is None:
+        if default is None:  # pragma: no cover - callers pass defaults for optional attributes
+            raise RobotLoadError(f"{where}: {what} is missing")
+        return default
+    parts = text.split()
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != count or any(math.isnan(v) or (finite and math.isinf(v)) for v in values):
+        kind = "finite numbers" if finite else "numbers"
+        raise RobotLoadError(f"{where}: {what} is {text!r}; expected {count} {kind} separated by spaces")
+    return values
+
+
+def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
+    """Origin, axis and limits of one joint."""
+    origin = j.find("origin")
+    if origin is not None:
+        _floats(origin.get("xyz"), 3, f"the origin xyz of joint {jname!r}", where, (0.0, 0.0, 0.0))
+        _floats(origin.get("rpy"), 3, f"the origin rpy of joint {jname!r}", where, (0.0, 0.0, 0.0))
+    if jtype in ("fixed", "floating"):
+        return
+    axis_el = j.find("axis")
+    if axis_el is not None:
+        axis = _floats(axis_el.get("xyz"), 3, f"the axis of joint {jname!r}", where, (1.0, 0.0, 0.0))
+        if math.sqrt(sum(a * a for a in axis)) < 1e-12:
+            raise RobotLoadError(
+                f"{where}: joint {jname!r} has a zero-length axis {axis_el.get('xyz')!r}; give its direction, e.g. "
+                "<axis xyz=\"0 0 1\"/> (omitting <axis> means 1 0 0)"
+            )
+    limit = j.find("limit")
+    if jtype in ("revolute", "prismatic"):
+        if limit is None:
+            hint = " (an unlimited revolute joint is type=\"continuous\")" if jtype == "revolute" else ""
+            raise RobotLoadError(
+                f"{where}: {jtype} joint {jname!r} has no <limit> element; URDF requires "
+                f"<limit lower=\"...\" upper=\"...\" effort=\"...\" velocity=\"...\"/> for {jtype} joints{hint}"
+            )
+        for attr in ("effort", "velocity"):
+            if limit.get(attr) is None:
+                raise RobotLoadError(f"{where}: the <limit> of joint {jname!r} has no {attr} attribute; URDF "
+                                     "requires effort and velocity (lower and upper default to 0)")
+    if limit is None:
+        return
+    values = {}
+    for attr in ("lower", "upper", "effort", "velocity"):
+        values[attr] = _floats(limit.get(attr), 1, f"the {attr} limit of joint {jname!r}", where, (0.0,),
+                               finite=False)[0]
+    if jtype in ("revolute", "prismatic") and values["lower"] > values["upper"]:
+        raise RobotLoadError(
+            f"{where}: joint {jname!r} has inverted limits: lower {values['lower']:g} > upper {values['upper']:g} "
+            "(lower must not exceed upper)"
+        )
+
+
+def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: str) -> None:
+    """One root, every link reachable from it (no cycle)."""
+    roots = [link for link in links if link not in parent_of]
+    if not roots:
+        raise RobotLoadError(f"{where}: every link has a parent joint, so its joints form a cycle; a URDF must be a "
+                             "tree with one root link")
+    if len(roots) > 1:
+        shown = ", ".join(repr(r) for r in roots[:5]) + (", ..." if len(roots) > 5 else "")
+        raise RobotLoadError(
+            f"{where} has {len(roots)} root links (links no joint has as child): {shown}; a URDF must be one tree: "
+            "join them with joints"
+        )
+    children: dict[str, list[str]] = {}
+    for child, (parent, _) in parent_of.items():
+        children.setdefault(parent, []).append(child)
+    seen = {roots[0]}
+    stack = [roots[0]]
+    while stack:
+        for c in children.get(stack.pop(), ()):
+            if c not in seen:
+                seen.add(c)
+                stack.append(c)
+    if len(seen) != len(links):
+        loop = [link for link in links if link not in seen]
+        shown = ", ".join(repr(x) for x in loop[:5]) + (", ..." if len(loop) > 5 else "")
+        raise RobotLoadError(f"{where}: links {shown} are not connected to the root link {roots[0]!r}: their joints "
+                             "form a cycle; a URDF must be a tree")
+
+
+def _mimic(joints: list[ET.Element], types: dict[str, str], where: str) -> dict[str, Mimic]:
+    """The mimic couplings, each resolved to the joint that drives its chain of mimics."""
+    direct: dict[str, Mimic] = {}
+    for j in joints:
+        el = j.find("mimic")
+        if el is None:
+            continue
+        jname, jtype = j.get("name"), j.get("type")
+        target = el.get("joint")
+        if not target:
+            raise RobotLoadError(f"{where}: the <mimic> of joint {jname!r} has no joint attribute "
+                                 "(<mimic joint=\"...\" multiplier=\"1\" offset=\"0\"/>)")
+        m = _floats(el.get("multiplier"), 1, f"the mimic multiplier of joint {jname!r}", where, (1.0,))[0]
+        c = _floats(el.get("offset"), 1, f"the mimic offset of joint {jname!r}", where, (0.0,))[0]
+        if jtype not in _MOVING:
+            continue  # a fixed (or floating, planar) joint has no value to couple; urdfdom ignores it too
+        if target == jname:
+            raise RobotLoadError(f"{where}: joint {jname!r} mimics itself")
+        if types.get(target) not in _MOVING:
+            what = "no joint of the file" if target not in types else f"a {types[target]} joint"
+            warnings.warn(f"{where}: joint {jname!r} mimics {target!r}, which is {what}; the <mimic> is ignored "
+                          f"and {jname!r} loads as an independent joint", RobotLoadWarning, stacklevel=4)
+            continue
+        direct[jname] = Mimic(target, m, c)
+    resolved: dict[str, Mimic] = {}
+    for jname in direct:
+        path = [jname]
+        mim = direct[jname]
+        while mim.joint in direct:  # j = m1 (m2 q + c2) + c1 = (m1 m2) q + (m1 c2 + c1)
+            if mim.joint in path:
+                raise RobotLoadError(f"{where}: mimic joints form a cycle: {' -> '.join(path + [mim.joint])}; one "
+                                     "of them must be driven by an independent joint")
+            path.append(mim.joint)
+            nxt = direct[mim.joint]
+            mim = Mimic(nxt.joint, mim.multiplier * nxt.multiplier, mim.multiplier * nxt.offset + mim.offset)
+        resolved[jname] = mim
+    return resolved

@@ -1,0 +1,197 @@
+"""Turning a file's bytes into URDF text: encodings, binary files, xacro, and the C++ parsers' stderr.
+
+* :func:`decode_xml`: bytes to text the way an XML parser would read them (a byte-order mark, else the
+  ``encoding`` of the ``<?xml ...?>`` declaration, else UTF-8), with a :class:`~evoik_pin.errors.RobotLoadError`
+  naming the file for empty, binary or undecodable input;
+* :func:`expand_xacro`: a ``.xacro`` file (or xacro text) expanded to URDF with ``xacrodoc`` (no ROS needed),
+  ``$(arg ...)`` values from ``xacro_args``, ``$(find pkg)`` resolved by walking up from the file to a
+  ``package.xml`` and through ``ROS_PACKAGE_PATH`` / ``AMENT_PREFIX_PATH``;
+* :func:`captured_stderr`: file descriptor 2 redirected while urdfdom (C++) and xacro parse, so their messages
+  end up in our errors instead of on the user's terminal.
+"""
+
+from __future__ import annotations
+
+import codecs
+import contextlib
+import io
+import os
+import re
+import sys
+import tempfile
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+from ..errors import RobotLoadError
+
+__all__ = ["captured_stderr", "decode_xml", "expand_xacro", "is_xacro_path", "is_xacro_text"]
+
+# Byte-order marks and the XML spec's (appendix F) signatures of "<?" in UTF-16 / UTF-32 without a mark.
+_SIGNATURES = (
+    (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
+    (codecs.BOM_UTF16_BE, "utf-16"), (codecs.BOM_UTF16_LE, "utf-16"),
+    (b"\x00\x00\x00<", "utf-32-be"), (b"<\x00\x00\x00", "utf-32-le"),
+    (b"\x00<\x00?", "utf-16-be"), (b"<\x00?\x00", "utf-16-le"),
+)
+_DECLARED = re.compile(rb"""^\s*<\?xml\s[^>]*?encoding\s*=\s*["']([A-Za-z][A-Za-z0-9._-]*)["']""")
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
+_XACRO = re.compile(r"<xacro:[A-Za-z]|\$\{|\$\(")
+_COMMENT = re.compile(r"<!--.*?-->", re.S)
+_STDERR_LOCK = threading.RLock()
+
+
+def decode_xml(data: bytes, where: str) -> str:
+    """Text of the XML document ``data`` read from ``where`` (a path, or "URDF string").
+
+    The encoding is the one an XML parser would use: a byte-order mark, else the ``encoding`` attribute of the
+    ``<?xml ...?>`` declaration (e.g. ISO-8859-1), else UTF-8. Empty, binary (NUL bytes, control characters)
+    and undecodable input raise a :class:`RobotLoadError` naming ``where``.
+    """
+    if not data.strip():
+        raise RobotLoadError(f"{where} is empty: expected URDF XML (a <robot name=...> element)")
+    encoding = next((enc for sig, enc in _SIGNATURES if data.startswith(sig)), None)
+    declared = False
+    if encoding is None:
+        m = _DECLARED.match(data[:1024])
+        encoding, declared = (m.group(1).decode("ascii"), True) if m else ("utf-8", False)
+    try:
+        codecs.lookup(encoding)
+    except LookupError:
+        raise RobotLoadError(
+            f"{where} declares an unknown encoding {encoding!r} in its <?xml ...?> declaration; use UTF-8 or a "
+            "standard name such as ISO-8859-1"
+        ) from None
+    source = f"{encoding} (declared in its <?xml ...?> line)" if declared else encoding
+    try:
+        text = data.decode(encoding)
+    except UnicodeDecodeError as exc:
+        kind = "a binary file, not URDF XML: " if _looks_binary(data) else ""
+        raise RobotLoadError(
+            f"{where} is {kind}not decodable as {source}: byte {data[exc.start]:#04x} at offset {exc.start}. A URDF "
+            "is XML text; declare a non-UTF-8 encoding in its first line, e.g. "
+            "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>"
+        ) from None
+    text = text.lstrip("\ufeff")
+    bad = _CONTROL.search(text)  # XML allows no control characters but tab, newline and carriage return
+    if bad is not None:
+        raise RobotLoadError(
+            f"{where} is a binary file, not URDF XML: control character {ord(bad.group()):#04x} at character "
+            f"{bad.start()}"
+        )
+    return text
+
+
+def _looks_binary(data: bytes) -> bool:
+    """True when the first KiB holds NUL bytes or many control bytes (and no UTF-16/32 signature matched)."""
+    head = data[:1024]
+    control = sum(b < 32 and b not in (9, 10, 13) for b in head)
+    return b"\x00" in head or control > len(head) // 20
+
+
+def is_xacro_path(path: Path) -> bool:
+    """True for ``*.xacro`` files (``arm.xacro``, ``arm.urdf.xacro``)."""
+    return path.suffix.lower() == ".xacro"
+
+
+def is_xacro_text(text: str) -> bool:
+    """True when ``text`` holds xacro constructs that need expanding, outside comments: ``<xacro:...>`` elements,
+    ``${...}`` expressions or ``$(...)`` substitutions. (The xacro namespace alone is not enough: URDFs generated
+    by xacro, panda's among them, keep it on their <robot> element.)"""
+    return _XACRO.search(_COMMENT.sub("", text)) is not None  # comments often keep xacro source around
+
+
+def expand_xacro(text: str, where: str, path: Path | None, args: dict | None) -> str:
+    """URDF text of the xacro document ``text`` (read from ``path``, or None for a string).
+
+    ``args`` sets ``<xacro:arg>`` values (``name: value``, values turned into strings). Relative
+    ``<xacro:include>`` files resolve against the file's folder (the working directory for a string);
+    ``$(find pkg)`` against packages found by walking up from the file to a ``package.xml``, then
+    ``ROS_PACKAGE_PATH`` / ``AMENT_PREFIX_PATH``. Any xacro failure (a missing package, arg, include or
+    property, bad syntax) is a :class:`RobotLoadError` naming ``where`` and what failed.
+    """
+    try:
+        import xacro
+        from xacrodoc import XacroDoc, packages
+    except ImportError as exc:  # pragma: no cover - a dependency
+        raise RobotLoadError(
+            f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc ({exc})"
+        ) from exc
+    mappings = {str(k): str(v) for k, v in (args or {}).items()}
+    # xacro and xacrodoc keep module-level state: the stack of files being read (relative includes resolve
+    # against its top) and the package finders and cache; each expansion sets them up and restores them.
+    finder = packages._finder
+    saved_finders, saved_cache = list(finder.finder_funcs), dict(finder.package_cache)
+    failure: Exception | None = None
+    with _STDERR_LOCK:
+        with captured_stderr() as err:
+            try:
+                xacro.init_stacks(str(path) if path is not None else None)
+                if path is not None:
+                    packages.walk_up_from(path.parent)
+                doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
+                                           rootdir=path.parent if path is not None else None)
+                urdf = doc.dom.toxml()
+            except Exception as exc:  # xacro raises XacroException, NameError, ValueError, ExpatError, ...
+                failure = exc
+            finally:
+                xacro.init_stacks(None)
+                finder.finder_funcs[:] = saved_finders
+                finder.package_cache.clear()
+                finder.package_cache.update(saved_cache)
+    if failure is not None:
+        raise RobotLoadError(_xacro_message(failure, where, err[0])) from None
+    return urdf
+
+
+def _xacro_message(exc: Exception, where: str, err: str) -> str:
+    """What went wrong while expanding the xacro document at ``where``, for a RobotLoadError."""
+    cause = getattr(exc, "exc", None) or exc
+    if type(cause).__name__ == "PackageNotFoundError":
+        pkg = cause.args[0] if cause.args else "?"
+        return (f"cannot expand xacro file {where}: package {pkg!r} not found (used as $(find {pkg})); a package "
+                "is found by walking up from the xacro file to a package.xml naming it, or on ROS_PACKAGE_PATH / "
+                "AMENT_PREFIX_PATH (set before evoik_pin first expands a xacro file)")
+    text = str(exc).strip() or type(exc).__name__
+    if cause is not exc and str(cause).strip() and str(cause).strip() not in text:
+        text += f" ({str(cause).strip()})"
+    missing = re.search(r"[Uu]ndefined substitution argument (\S+)", text)
+    if missing:
+        arg = missing.group(1)
+        text += f"; give it with xacro_args={{{arg!r}: value}} (or --xacro-arg {arg}=VALUE on the command line)"
+    noise = err.strip()
+    if noise:
+        text += f"\nxacro said: {noise}"
+    return f"cannot expand xacro file {where}: {text}"
+
+
+@contextlib.contextmanager
+def captured_stderr() -> Iterator[list[str]]:
+    """Redirect file descriptor 2 (C/C++ ``stderr``) and ``sys.stderr`` while the block runs.
+
+    Yields a list that, when the block ends, holds the captured text (one string). urdfdom prints its parse
+    errors there; we put them in our error messages instead of on the user's terminal. Process-wide (a lock
+    serializes users); when fd 2 cannot be duplicated (closed), only ``sys.stderr`` is captured.
+    """
+    out: list[str] = []
+    with _STDERR_LOCK, tempfile.TemporaryFile() as tmp:
+        py_err = io.StringIO()
+        try:
+            sys.stderr.flush()
+        except (AttributeError, OSError, ValueError):  # pragma: no cover - a closed or odd sys.stderr
+            pass
+        try:
+            saved = os.dup(2)
+        except OSError:  # pragma: no cover - no fd 2 to redirect
+            saved = None
+        if saved is not None:
+            os.dup2(tmp.fileno(), 2)
+        try:
+            with contextlib.redirect_stderr(py_err):
+                yield out
+        finally:
+            if saved is not None:
+                os.dup2(saved, 2)
+                os.close(saved)
+            tmp.seek(0)
+            out.append(tmp.read().decode("utf-8", "replace") + py_err.getvalue())

@@ -1,0 +1,50 @@
+"""Example scenes: a table and an open shelf in front of an arm (the collision benchmark's and the tests' scene),
+and random collision-free configurations to make targets from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .scene import Scene
+
+__all__ = ["SHELF_INTERIOR", "add_table_and_shelf", "free_configurations"]
+
+#: The shelf's free interior (m, base frame): (lower corner, upper corner), 2 cm inside its panels.
+SHELF_INTERIOR = (np.array([0.47, -0.28, 0.22]), np.array([0.74, 0.28, 0.58]))
+
+
+def _at(x: float, y: float, z: float) -> pin.SE3:
+    return pin.SE3(np.eye(3), np.array([x, y, z]))
+
+
+def add_table_and_shelf(scene: Scene) -> Scene:
+    """Add a 1.6 x 1.6 m table whose top is 1 cm below the base frame and, on it, an open shelf 0.45-0.77 m in
+    front of the base (x), 0.64 m wide (y), its interior from 0.2 to 0.6 m high (z), open towards the arm.
+    Sized for a Panda-class arm (reach 0.85 m). Returns the scene."""
+    scene.add_box("table", (1.6, 1.6, 0.04), _at(0.3, 0.0, -0.03))
+    scene.add_box("shelf_bottom", (0.32, 0.64, 0.02), _at(0.6, 0.0, 0.19))
+    scene.add_box("shelf_top", (0.32, 0.64, 0.02), _at(0.6, 0.0, 0.61))
+    scene.add_box("shelf_left", (0.32, 0.02, 0.44), _at(0.6, 0.31, 0.40))
+    scene.add_box("shelf_right", (0.32, 0.02, 0.44), _at(0.6, -0.31, 0.40))
+    scene.add_box("shelf_back", (0.02, 0.64, 0.44), _at(0.77, 0.0, 0.40))
+    return scene
+
+
+def free_configurations(scene: Scene, count: int, rng: np.random.Generator, tip_box=None,
+                        batch: int = 20000, max_draws: int = 2_000_000) -> np.ndarray:
+    """``count`` configurations (count, n) drawn uniformly in the robot's bounds that are collision-free in
+    ``scene`` (exact check) and, when ``tip_box`` = (lower (3,), upper (3,)) is given, put the tip inside it
+    (base frame, m). Their tip poses are reachable, collision-free targets. Fewer rows when ``max_draws``
+    draws did not find ``count``."""
+    robot = scene.robot
+    out, drawn = [], 0
+    while sum(len(x) for x in out) < count and drawn < max_draws:
+        Q = robot.random_configurations(batch, rng)
+        drawn += batch
+        if tip_box is not None:
+            P, _ = robot.fk_batch(Q)
+            Q = Q[((P >= tip_box[0]) & (P <= tip_box[1])).all(axis=1)]
+        out.append(Q[~scene.collides(Q)])
+    return np.concatenate(out)[:count] if out else np.zeros((0, robot.n))

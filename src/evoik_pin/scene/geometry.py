@@ -1,0 +1,89 @@
+"""A robot's collision geometry as Pinocchio and coal see it: the URDF's ``<collision>`` elements on the chain's
+reduced model, the pairs worth checking, and convex-hull proxies.
+
+Pairs: every pair of collision objects of the robot, less those on the same joint (rigidly attached: they
+never move relative to each other), those on adjacent joints (parent and child: touching by construction)
+and those an SRDF disables (``<disable_collisions link1= link2= />``, read by ``pin.removeCollisionPairs``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import SceneError
+
+__all__ = ["adjacent_joints", "convex_hulls", "robot_collision_model", "self_collision_pairs"]
+
+
+def robot_collision_model(robot) -> pin.GeometryModel:
+    """A fresh copy of the robot's collision geometry (``Robot.collision_model``), attached to ``robot.model``'s
+    joints; SceneError when the URDF has no ``<collision>`` element."""
+    geom = robot.collision_model
+    if geom.ngeoms == 0:
+        raise SceneError(f"{robot.name} has no <collision> geometry in its URDF: a scene needs the robot's "
+                         "collision shapes (add <collision> elements to the links)")
+    return geom.copy()
+
+
+def adjacent_joints(model: pin.Model) -> set[tuple[int, int]]:
+    """Pairs (i, j), i < j, of joints of ``model`` that are parent and child."""
+    return {(min(j, int(model.parents[j])), max(j, int(model.parents[j]))) for j in range(1, model.njoints)}
+
+
+def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> list[tuple[int, int]]:
+    """Index pairs (a, b), a < b, of the robot's collision objects worth checking (see the module docstring)."""
+    adjacent = adjacent_joints(robot.model)
+    objects = geom.geometryObjects
+    pairs = []
+    for a in range(geom.ngeoms):
+        for b in range(a + 1, geom.ngeoms):
+            ja, jb = int(objects[a].parentJoint), int(objects[b].parentJoint)
+            if ja != jb and (min(ja, jb), max(ja, jb)) not in adjacent:
+                pairs.append((a, b))
+    if srdf is None or not pairs:
+        return pairs
+    probe = geom.copy()
+    probe.removeAllCollisionPairs()
+    for a, b in pairs:
+        probe.addCollisionPair(pin.CollisionPair(a, b))
+    try:
+        pin.removeCollisionPairs(robot.model, probe, str(srdf))
+    except (RuntimeError, ValueError) as exc:
+        raise SceneError(f"cannot read the SRDF {srdf!r}: {exc}") from None
+    return [(int(p.first), int(p.second)) for p in probe.collisionPairs]
+
+
+def convex_hulls(geom: pin.GeometryModel) -> pin.GeometryModel:
+    """A copy of ``geom`` whose meshes are replaced by their convex hulls (primitives are kept).
+
+    A hull contains its mesh, so a hull check is conservative (no hull contact means no mesh contact) and
+    its distances are lower bounds of the meshes'; hull queries cost about a fifth of mesh collision checks
+    and a thirtieth of mesh distances (GJK on convex sets instead of BVH traversals).
+    """
+    hulls = geom.copy()
+    for obj in hulls.geometryObjects:
+        shape = obj.geometry
+        if hasattr(shape, "buildConvexHull") and getattr(shape, "num_vertices", 0) >= 4:
+            shape.buildConvexHull(True, "Qt")
+            obj.geometry = shape.convex
+    return hulls
+
+
+def as_placement(pose, what: str) -> pin.SE3:
+    """A ``pin.SE3`` from a ``pin.SE3`` or a (4, 4) homogeneous matrix (m); SceneError naming ``what`` when the
+    matrix is not a rigid transform (rotation block orthonormal with det +1, bottom row [0 0 0 1])."""
+    if isinstance(pose, pin.SE3):
+        return pin.SE3(pose)
+    try:
+        H = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):
+        raise SceneError(f"{what}: pose must be a pin.SE3 or a 4 x 4 homogeneous matrix, got {pose!r}") from None
+    if H.shape != (4, 4) or not np.isfinite(H).all():
+        raise SceneError(f"{what}: pose must be a finite 4 x 4 homogeneous matrix (or a pin.SE3), got shape {H.shape}")
+    R = H[:3, :3]
+    if (np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0
+            or np.abs(H[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9):
+        raise SceneError(f"{what}: pose is not a rigid transform (the rotation block must be orthonormal with "
+                         "det +1 and the bottom row [0 0 0 1]); scaling and shear are not accepted")
+    return pin.SE3(R, H[:3, 3])

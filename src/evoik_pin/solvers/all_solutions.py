@@ -1,0 +1,357 @@
+"""Every IK solution of one target: many Levenberg-Marquardt starts, clustered into distinct solutions.
+
+Registered as ``memetic-all``, the default method of :func:`evoik_pin.solve_all`. The starts are ``q0``, then
+the entries of memetic's cached seed table (a deterministic Halton set of configurations spread over the
+search box, with their tip poses: :func:`~evoik_pin.solvers.memetic.seed_table`) nearest to the target first
+(entries whose tip is near the target lie near the solution set, on every branch of it), then uniform draws
+from ``rng`` if the table runs out. ``batch`` starts at a time go through the compiled LM engine in one kernel
+call (:func:`~evoik_pin.solvers.lm.solve_pairs`, the same target repeated), and the converged runs are sorted
+into classes of distinct solutions (:class:`~evoik_pin.solvers.solution_classes.SolutionClasses`).
+
+**Distinct solutions.** Two configurations are one solution when their wrapped joint distance is at most
+``class_radius`` (1e-3 rad by default): joints whose range spans a full turn (continuous joints, UR's +-2 pi
+joints: :func:`~evoik_pin.solvers.lm.wrapping_joints`) are compared modulo 2 pi, the others (rad, or m on
+prismatic joints) as they are. A run that would open a class is first refined by a patient LM run to about
+1e-12, so that runs stopped anywhere along the flat valley of a near-singular solution (all within a 1e-6
+tolerance) count as that one solution; at a degenerate pose, where refinement cannot isolate the solution, a
+run joined to a class by a low-error joint-space segment joins that class (module :mod:`.solution_classes`).
+
+**What is returned** depends on the task:
+
+* a finite solution set (as many joints as task rows: a 6-D pose on a 6-joint arm, a position on a 3-joint
+  arm, (x, y) on a planar 2-joint arm): every class found. The search stops when ``patience`` consecutive
+  batches brought no new class and every class has been reached by at least ``min_hits`` runs (a class met
+  once hints at small basins that may hide more; that wait ends after ``4 x patience`` quiet batches), or at
+  the budget (``timeout``, ``max_starts``);
+* a redundant arm (more joints than task rows: a 7-DOF arm on poses, a 6-DOF arm on positions): its solutions
+  form self-motion manifolds, so ``count`` (default 8) solutions spread over them are returned. The search
+  collects ``pool`` x ``count`` distinct converged solutions (or stops after ``4 x patience`` batches without a
+  new one, or at the budget), then farthest-point
+  selection picks ``count`` of them: the one nearest the reference first, then each time the one farthest from
+  those picked. ``history["min_pairwise_distance"]`` and the message give the smallest wrapped joint distance
+  (rad) between two returned solutions.
+
+Each returned solution is the representative of its class nearest to the reference, ``q0`` (zero when no
+``q0`` is given): on every wrapping joint the multiple of 2 pi inside the box nearest to the reference's value.
+Every one is re-checked before it is returned: inside the box, and within the tolerances by the robot's
+forward kinematics. They are ordered nearest to the reference first: every one meets the tolerances, and most
+sit near 1e-12 after LM's finishing step, so the error does not rank them; the motion from ``q0`` does.
+
+At a degenerate pose, where a whole curve of configurations meets the tolerance and refinement cannot isolate
+one solution (e.g. a wrist centre a fraction of a millimetre from a singular line), the classes are valid
+samples of that curve and their number means little.
+
+When no run has converged after ``4 x patience`` batches, memetic's differential-evolution restarts
+(:func:`~evoik_pin.solvers.memetic.memetic` without its table stage, with the remaining budget) look for a
+solution. An unreachable pose gives no solution, ``success=False``, and a message with the best approximation.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..problem import IKProblem
+from ..result import Result
+from . import register
+from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
+from .lm.layout import TASK_ROWS, target_kind
+from .memetic import default_table_size, memetic, seed_table
+from .options import check_int, check_positive
+from .polish import errors_text
+from .solution_classes import (
+    REFINE_ITERATIONS,
+    SolutionClasses,
+    class_representatives,
+    farthest_point_selection,
+    min_pairwise_distance,
+)
+
+__all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
+           "memetic_all", "task_dimension"]
+
+#: Default time budget (s) of one search: a safety net; the stopping rule ends most UR5 / UR10 pose searches in
+#: 1-4 ms.
+DEFAULT_TIMEOUT = 0.02
+#: Default class radius (rad, wrapped joint distance): converged configurations closer than this are one solution.
+DEFAULT_CLASS_RADIUS = 1e-3
+#: Default bound on the LM starts of one search (128 kernel calls of 32).
+DEFAULT_MAX_STARTS = 4096
+#: Default number of solutions returned on redundant arms.
+DEFAULT_COUNT = 8
+#: Refinement of a run that opens a class: tolerance (m, rad) and a stall test that lets LM creep along a
+#: near-singular valley (|e| must drop by 10 % every 20 steps, instead of halve every 4).
+REFINE_TOLERANCE, REFINE_STALL = 1e-12, (20, 0.9)
+#: Runs that stalled with an error (m + rad) below this are continued by the patient LM (:func:`_rescued`).
+RESCUE_ERROR = 1e-3
+#: Batches without any converged run, in units of ``patience``, before the differential-evolution fallback; also
+#: the longest wait for the ``min_hits`` of a rare class, and for a new solution on a redundant arm.
+EMPTY_PATIENCE_FACTOR = 4
+
+
+class SolutionList(list):
+    """What :func:`evoik_pin.solve_all` returns: a plain ``list`` of :class:`Result` (one per solution, best
+    first) that also carries the search behind it.
+
+    Attributes:
+        result: the search's own :class:`Result` (or None): its ``message`` says why the list is empty (how close
+            the best approximation came, after how many starts) or how the solutions were found; its
+            ``history`` holds per-batch series.
+        message: ``result.message`` ("" without a result).
+
+    Slicing or copying gives a plain list.
+    """
+
+    def __init__(self, solutions=(), result: Result | None = None) -> None:
+        super().__init__(solutions)
+        self.result = result
+
+    @property
+    def message(self) -> str:
+        return "" if self.result is None else self.result.message
+
+
+def task_dimension(target) -> int:
+    """Rows of a target's task error: 6 (pose), 3 (position; planar with yaw), 2 (planar x, y)."""
+    return len(TASK_ROWS[target_kind(target)])
+
+
+def _check_options(count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size, iterations,
+                   n: int) -> tuple:
+    count = None if count is None else check_int("count", count, 1)
+    timeout = None if timeout is None else check_positive("timeout (s; or None)", timeout)
+    max_starts = None if max_starts is None else check_int("max_starts", max_starts, 1)
+    table_size = default_table_size(n) if table_size is None else check_int("table_size", table_size, 0)
+    return (count, timeout, max_starts, check_int("batch", batch, 1), check_int("patience", patience, 1),
+            check_int("min_hits", min_hits, 1), check_positive("class_radius", class_radius, unit="rad"),
+            check_int("pool", pool, 1), table_size, check_int("iterations", iterations, 1))
+
+
+class _Starts:
+    """The stream of LM starts: q0, the seed table nearest to the target first, then uniform draws."""
+
+    def __init__(self, problem: IKProblem, table, rng) -> None:
+        self.problem = problem
+        self.table = table
+        self.rng = rng
+        self.order = iter(()) if table is None else table.ranked(problem.target, table.Q.shape[0])
+        self.pending: list[np.ndarray] = [] if problem.q0 is None else [problem.q0]
+
+    def take(self, k: int) -> np.ndarray:
+        starts = self.pending[:k]
+        del self.pending[:k]
+        for i in self.order:
+            starts.append(self.table.Q[i])
+            if len(starts) >= k:
+                break
+        if len(starts) < k:
+            p = self.problem
+            starts.extend(self.rng.uniform(p.lower, p.upper, size=(k - len(starts), p.n)))
+        return np.array(starts)
+
+
+@register("memetic-all", "Every distinct IK solution: batched Levenberg-Marquardt from q0 and the seed table "
+          "(nearest first), clustered modulo 2 pi; count spread solutions on redundant arms", multi_solution=True)
+def memetic_all(
+    problem: IKProblem,
+    rng: np.random.Generator,
+    *,
+    count: int | None = None,
+    timeout: float | None = DEFAULT_TIMEOUT,
+    max_starts: int | None = DEFAULT_MAX_STARTS,
+    batch: int = 32,
+    patience: int = 2,
+    min_hits: int = 3,
+    class_radius: float = DEFAULT_CLASS_RADIUS,
+    pool: int = 4,
+    table_size: int | None = None,
+    iterations: int = DEFAULT_ITERATIONS,
+    engine: str = "compiled",
+) -> Result:
+    """Every distinct IK solution of ``problem`` (see the module docstring), in ``Result.solutions``.
+
+    Args:
+        problem: the IK problem; its tolerances (``tolerance`` m, ``rotation_tolerance`` rad; default 1e-6)
+            decide which runs converged, and every returned solution meets them.
+        rng: used only when the seed table runs out of entries (uniform starts in the box) and by the
+            differential-evolution fallback; the search is otherwise deterministic.
+        count: redundant arms: the number of spread solutions returned (>= 1; default 8). Finite solution sets:
+            at most this many, nearest the reference first (default: all).
+        timeout: wall-clock budget in s (default 0.02), checked between batches; None for none. The clock starts
+            after the one-time set-up (compiled kernel, seed table: ``Result.setup_s``).
+        max_starts: LM starts at most (>= 1; default 4096, about 60 ms of LM: a bound for ``timeout=None``);
+            None for no limit.
+        batch: LM starts per kernel call (default 32).
+        patience: finite sets: stop after this many consecutive batches without a new class (default 2)...
+        min_hits: ... once every class has been reached by at least this many runs (default 3).
+        class_radius: wrapped joint distance (rad; m on prismatic joints) within which two converged
+            configurations are one solution (default 1e-3).
+        pool: redundant arms: distinct converged solutions collected per returned one (default 4).
+        table_size: seed-table size (default memetic's: 2^(n+5) clamped to [256, 4096]); 0: uniform starts.
+        iterations: LM steps per start (default 30). engine: ``"compiled"`` or ``"python"`` (:mod:`.lm`).
+
+    Returns:
+        A :class:`Result`: ``q`` the first solution (or the best approximation met when there is none),
+        ``success`` True when there is at least one solution, ``solutions`` the distinct solutions (each a
+        Result with ``success=True``), ``generations`` the batches run, ``evaluations`` the forward kinematics
+        of every LM step; ``history`` per batch: ``starts`` (cumulative LM starts), ``solutions`` (classes so
+        far) and ``best_cost`` (lowest error met, m + rad); ``min_pairwise_distance`` (rad) on redundant arms.
+    """
+    t_setup = time.perf_counter()
+    robot = problem.robot
+    count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size, iterations = \
+        _check_options(count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size,
+                       iterations, robot.n)
+    lo, hi, target = problem.lower, problem.upper, problem.target
+    redundant = robot.n > task_dimension(target)
+    wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
+    if engine == "compiled":
+        compiled_kernel()  # loaded (or compiled, once per install) outside the clock, as memetic does
+    table = seed_table(robot, lo, hi, table_size) if table_size > 0 else None
+    wrap = wrapping_joints(robot, lo, hi)
+    reference = np.zeros(robot.n) if problem.q0 is None else problem.q0
+    patient = LevenbergMarquardt(
+        IKProblem(robot, target, lower=lo, upper=hi, tolerance=min(REFINE_TOLERANCE, problem.tolerance),
+                  rotation_tolerance=min(REFINE_TOLERANCE, problem.rotation_tolerance)),
+        stall_window=REFINE_STALL[0], stall_ratio=REFINE_STALL[1], engine=engine)
+    t0 = time.perf_counter()
+    deadline = None if timeout is None else t0 + timeout
+    # A finite set: isolate each solution by refinement (redundant arms have no isolated solutions).
+    classes = SolutionClasses(problem, wrap, class_radius, None if redundant else patient)
+    starts = _Starts(problem, table, rng)
+    history: dict[str, list[float]] = {"starts": [], "solutions": [], "best_cost": []}
+    evaluations = started = batches = quiet = 0
+    best = (np.inf, None, np.inf, None)  # error, q, position error, orientation error
+    fallback = ""
+    while True:
+        k = batch if max_starts is None else min(batch, max_starts - started)
+        if k <= 0:
+            stop = f"max_starts ({max_starts}) reached"
+            break
+        out = solve_pairs(robot, starts.take(k), [target] * k, lo, hi, problem.tolerance,
+                          problem.rotation_tolerance, iterations, engine=engine)
+        started += k
+        batches += 1
+        evaluations += int(out.evaluations.sum())
+        rot = np.zeros(k) if out.orientation_error is None else out.orientation_error
+        err = out.position_error + rot
+        i = int(err.argmin())
+        if err[i] < best[0]:
+            best = (float(err[i]), out.q[i].copy(), float(out.position_error[i]),
+                    None if out.orientation_error is None else float(rot[i]))
+        Q, E, work = _rescued(problem, patient, out.q, err, out.converged)
+        evaluations += work
+        quiet = 0 if classes.add(Q, E) else quiet + 1
+        history["starts"].append(started)
+        history["solutions"].append(len(classes))
+        history["best_cost"].append(best[0])
+        if redundant and len(classes) >= pool * wanted:
+            stop = f"{len(classes)} distinct solutions pooled"
+            break
+        if not redundant and len(classes) and quiet >= patience and (
+                min(classes.hits) >= min_hits or quiet >= EMPTY_PATIENCE_FACTOR * patience):
+            stop = f"no new solution in the last {quiet} batch(es) of {batch} starts"
+            break
+        if redundant and len(classes) and quiet >= EMPTY_PATIENCE_FACTOR * patience:
+            stop = f"no new distinct solution in the last {quiet} batch(es) of {batch} starts"
+            break
+        if not len(classes) and quiet >= EMPTY_PATIENCE_FACTOR * patience and not fallback:
+            fallback = _fallback(problem, rng, classes, deadline, iterations, engine)
+            if not len(classes):
+                stop = f"no LM start converged, {fallback}"
+                break
+            quiet = 0
+        if deadline is not None and time.perf_counter() >= deadline:
+            stop = f"time budget ({timeout:g} s) exhausted"
+            break
+    evaluations += classes.evaluations
+    pooled = len(classes)
+    Q = class_representatives(np.array(classes.reps).reshape(-1, robot.n), reference, lo, hi, wrap)
+    if redundant and Q.shape[0]:
+        Q = Q[farthest_point_selection(Q, wanted, int(np.linalg.norm(Q - reference, axis=1).argmin()), wrap)]
+    solutions = _checked_solutions(problem, Q, reference, evaluations, time.perf_counter() - t0, batches)
+    if count is not None:
+        solutions = solutions[:count]
+    spread = None
+    if redundant and solutions:
+        spread = min_pairwise_distance(np.array([s.q for s in solutions]), wrap)
+        history["min_pairwise_distance"] = [spread]
+    if solutions:
+        first = solutions[0]
+        q, pos, rot, cost = first.q, first.position_error, first.orientation_error, first.cost
+        message = _message(solutions, redundant, pooled, started, stop, spread)
+    else:
+        q = best[1] if best[1] is not None else np.minimum(np.maximum(reference, lo), hi)
+        pos, rot, cost = problem.assess(q)
+        message = (f"no solution after {started} LM start(s) ({stop}); best {errors_text(pos, rot)} exceeds the "
+                   f"tolerance ({problem.tolerance:g} m, {problem.rotation_tolerance:g} rad): the target is out of "
+                   "reach (or reachable only where no start led)")
+    return Result(q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(solutions),
+                  generations=batches, evaluations=evaluations, time_s=time.perf_counter() - t0,
+                  history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message,
+                  method="memetic-all", solutions=solutions, setup_s=t0 - t_setup)
+
+
+def _rescued(problem: IKProblem, patient: LevenbergMarquardt, Q: np.ndarray, E: np.ndarray, converged: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, int]:
+    """The converged runs of a batch (configurations, errors m + rad), plus the near misses (stalled with an
+    error below RESCUE_ERROR) that a patient LM run takes within the tolerances, and the FK evaluations spent.
+
+    LM's stall test gives up on a run whose error does not halve every few steps, so that a start in a poor
+    region costs little; near a singular solution every run creeps, and solutions with tiny basins would be
+    missed: those near misses are continued (rare elsewhere: about 1 run in 2000 on UR5 poses, 1 in 50 on Panda)."""
+    near = np.flatnonzero(~converged & (E < RESCUE_ERROR))
+    if not near.size:
+        return Q[converged], E[converged], 0
+    work = 0
+    Q, E, ok = Q.copy(), E.copy(), converged.copy()
+    for i in near:
+        out = patient.run(Q[i], REFINE_ITERATIONS)
+        work += out.evaluations
+        Q[i], E[i] = out.q, out.error
+        ok[i] = bool(problem.succeeded(out.position_error, out.orientation_error))
+    return Q[ok], E[ok], work
+
+
+def _fallback(problem: IKProblem, rng, classes: SolutionClasses, deadline: float | None, iterations: int,
+              engine: str) -> str:
+    """No start converged: memetic's differential-evolution restarts (no table stage: the table was tried) look
+    for one solution with the remaining budget (20 restarts without a timeout); a solution opens the first
+    class. Returns what happened, for the message."""
+    remaining = None if deadline is None else max(deadline - time.perf_counter(), 1e-4)
+    res = memetic(problem, rng, timeout=remaining, max_restarts=None if remaining else 20, table_seeds=0,
+                  iterations=iterations, engine=engine)
+    classes.evaluations += res.evaluations
+    what = f"memetic's differential-evolution restarts ({res.generations} generations, {res.time_s * 1e3:.3g} ms)"
+    if res.success:
+        classes.add(res.q[None], np.array([res.position_error + (res.orientation_error or 0.0)]))
+        return f"{what} found one"
+    return f"nor did {what}"
+
+
+def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray, evaluations: int, time_s: float,
+                       batches: int) -> list[Result]:
+    """One Result per row of ``Q`` (M, n) that lies in the box and meets the tolerances by the robot's forward
+    kinematics (evaluated afresh: bookkeeping, not counted as evaluations), nearest to ``reference`` first."""
+    if not Q.shape[0]:
+        return []
+    Q = Q[np.argsort(np.linalg.norm(Q - reference, axis=1), kind="stable")]
+    before = problem.evaluations
+    ev = problem.evaluate(Q)
+    problem.evaluations = before
+    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    ok &= np.all((Q >= problem.lower) & (Q <= problem.upper), axis=1)
+    return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),
+                   orientation_error=None if ev.orientation_error is None else float(ev.orientation_error[i]),
+                   cost=float(ev.cost[i]), success=True, generations=batches, evaluations=evaluations, time_s=time_s,
+                   message="distinct IK solution", method="memetic-all") for i in np.flatnonzero(ok)]
+
+
+def _message(solutions: list[Result], redundant: bool, pooled: int, started: int, stop: str,
+             spread: float | None) -> str:
+    if redundant:
+        return (f"{len(solutions)} solution(s) spread over the self-motion manifold, smallest pairwise joint "
+                f"distance {spread:.3g} rad, chosen among {pooled} distinct converged solutions from {started} LM "
+                f"start(s) ({stop})")
+    return f"{len(solutions)} distinct solution(s) from {started} LM start(s) ({stop})"
