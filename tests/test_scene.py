@@ -240,3 +240,15 @@ def test_no_scene_keeps_the_old_behaviour(panda):
     q = panda.random_configurations(1, np.random.default_rng(5))[0]
     a = ev.solve(panda, panda.fk(q), seed=0, timeout=None, max_restarts=3)
     assert a.collision_free is None and a.min_distance is None and a.success
+
+
+def test_solve_all_with_a_scene_returns_only_collision_free_solutions(panda, shelf_scene, shelf_targets):
+    blind_collisions = 0
+    for q in shelf_targets[:3]:
+        T = panda.fk(q)
+        sols = ev.solve_all(panda, T, scene=shelf_scene, seed=0, count=8)
+        assert len(sols) == 8 and all(s.collision_free for s in sols)
+        for s in sols:
+            assert not _reference_check(panda, shelf_scene, s.q)
+        blind_collisions += sum(shelf_scene.in_collision(s.q) for s in ev.solve_all(panda, T, seed=0, count=8))
+    assert blind_collisions > 0  # spread solutions without the scene do reach into the shelf's panels

@@ -53,7 +53,7 @@ class SolverInfo:
 _REGISTRY: dict[str, SolverInfo] = {}
 
 # One module per solver family; each registers its methods on import.
-_MODULES = ["de", "isade", "pso", "mode", "ga", "hga", "nsga2", "analytic", "memetic"]
+_MODULES = ["de", "isade", "pso", "mode", "ga", "hga", "nsga2", "analytic", "memetic", "all_solutions"]
 _loaded = False
 
 

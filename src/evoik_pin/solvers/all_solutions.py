@@ -268,6 +268,11 @@ def memetic_all(
     evaluations += classes.evaluations
     pooled = len(classes)
     Q = class_representatives(np.array(classes.reps).reshape(-1, robot.n), reference, lo, hi, wrap)
+    collided = 0
+    if problem.scene is not None and Q.shape[0]:  # with a scene, only collision-free solutions are candidates
+        free = ~problem.scene.collides(Q, problem.margin)
+        collided = int(np.count_nonzero(~free))
+        Q = Q[free]
     if redundant and Q.shape[0]:
         Q = Q[farthest_point_selection(Q, wanted, int(np.linalg.norm(Q - reference, axis=1).argmin()), wrap)]
     solutions = _checked_solutions(problem, Q, reference, evaluations, time.perf_counter() - t0, batches)
@@ -281,12 +286,19 @@ def memetic_all(
         first = solutions[0]
         q, pos, rot, cost = first.q, first.position_error, first.orientation_error, first.cost
         message = _message(solutions, redundant, pooled, started, stop, spread)
+        if collided:
+            message += f"; {collided} solution(s) in collision left out"
     else:
         q = best[1] if best[1] is not None else np.minimum(np.maximum(reference, lo), hi)
         pos, rot, cost = problem.assess(q)
         message = (f"no solution after {started} LM start(s) ({stop}); best {errors_text(pos, rot)} exceeds the "
                    f"tolerance ({problem.tolerance:g} m, {problem.rotation_tolerance:g} rad): the target is out of "
                    "reach (or reachable only where no start led)")
+        if collided:
+            message = (f"all {collided} solution(s) found after {started} LM start(s) are in collision; "
+                       f"the nearest to q0 is returned")
+            q = class_representatives(np.array(classes.reps).reshape(-1, robot.n), reference, lo, hi, wrap)[0]
+            pos, rot, cost = problem.assess(q)
     return Result(q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(solutions),
                   generations=batches, evaluations=evaluations, time_s=time.perf_counter() - t0,
                   history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message,

@@ -63,6 +63,8 @@ DEFAULT_TABLE_SEEDS = 17
 #: descheduled past the budget still gets this minimum of useful work (5 runs of at most 30 steps, about
 #: 0.3 ms of compiled LM at worst).
 GUARANTEED_TABLE_RUNS = 4
+#: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
+BOUND_SHARE = 0.4
 #: Target kinds a seed table serves, each with its own nearness features.
 _KINDS = ("pose", "position", "planar", "planar_yaw")
 
@@ -507,6 +509,10 @@ def _memetic_restart(problem, rng, search: _Search, population: int, generations
     """
     lo, hi = problem.lower, problem.upper
     X = rng.uniform(lo, hi, size=(population, problem.n))
+    # a share of the coordinates sits on a bound: targets whose solutions rest on joint limits (several at once
+    # near a corner of the box) are rare under uniform draws, and LM from the interior is held off by the limits
+    on_bound = rng.random(X.shape) < BOUND_SHARE
+    X = np.where(on_bound, np.where(rng.random(X.shape) < 0.5, lo, hi), X)
     X[0] = search.best.q
     if problem.q0 is not None:
         X[1] = np.minimum(np.maximum(problem.q0, lo), hi)
