@@ -146,3 +146,23 @@ def test_pro_box(arm):
         problem.with_pro_box(q_prev, delta=0.0)
     with pytest.raises(ConfigurationError):
         problem.with_pro_box(np.zeros(2))
+
+
+def test_a_4x4_target_must_be_a_homogeneous_pose():
+    import evoik_pin as ev
+    from evoik_pin.errors import TargetError
+
+    T = np.eye(4)
+    T[:3, 3] = [0.3, 0.1, 0.4]
+    assert np.array_equal(Target.coerce(T).position, [0.3, 0.1, 0.4])
+    bad = T.copy()
+    bad[3] = [0.0, 0.0, 0.0, 2.0]  # a scaled homogeneous matrix: not a pose
+    with pytest.raises(TargetError, match="bottom row"):
+        Target.coerce(bad)
+    bad[3] = [0.1, 0.0, 0.0, 1.0]  # a projective row
+    with pytest.raises(TargetError, match="bottom row"):
+        ev.solve("panda", bad)
+    H = np.stack([T, bad])
+    with pytest.raises(TargetError, match="target 1: the bottom row"):
+        Target.from_poses(H)
+    assert len(Target.from_poses(np.stack([T, T]))) == 2
