@@ -207,8 +207,9 @@ def mutated_urdfs(draw):
         elif kind == "root_tag":
             root.tag = draw(st.sampled_from(["sdf", "Robot", "robot", "urdf"]))
         elif kind == "large":  # a long chain appended below one link, or a huge comment
-            if draw(st.booleans()) and links:
-                parent = draw(st.sampled_from(links)).get("name")
+            named = [x.get("name") for x in links if x.get("name")]
+            if draw(st.booleans()) and named:
+                parent = draw(st.sampled_from(named))
                 for k in range(draw(st.integers(50, 600))):
                     ET.SubElement(root, "link", name=f"big{k}")
                     j = ET.SubElement(root, "joint", name=f"bigj{k}", type="revolute")

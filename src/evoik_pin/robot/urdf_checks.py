@@ -222,7 +222,7 @@ def _mimic(joints: list[ET.Element], types: dict[str, str], where: str) -> dict[
         if types.get(target) not in _MOVING:
             what = "no joint of the file" if target not in types else f"a {types[target]} joint"
             warnings.warn(f"{where}: joint {jname!r} mimics {target!r}, which is {what}; the <mimic> is ignored "
-                          f"and {jname!r} loads as an independent joint", RobotLoadWarning, stacklevel=4)
+                          f"and {jname!r} loads as an independent joint", RobotLoadWarning, stacklevel=5)
             continue
         direct[jname] = Mimic(target, m, c)
     resolved: dict[str, Mimic] = {}
