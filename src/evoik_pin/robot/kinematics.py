@@ -316,6 +316,14 @@ class Robot:
         """
         return self._chain_index, self._chain_scale, self._chain_offset
 
+    def chain_joints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The m physical joints of the chain (``model``'s joints: q's joints and the mimic joints on the chain):
+        revolute mask (m,), unit axes (m, 3) in each joint's frame, and the lower and upper values (m,) (rad or
+        m) they take when q spans its bounds. Equal to (revolute, joint_axes, lower, upper) without mimic joints."""
+        a = self._chain_scale * self.lower[self._chain_index] + self._chain_offset
+        b = self._chain_scale * self.upper[self._chain_index] + self._chain_offset
+        return self._chain_revolute, self._chain_axes, np.minimum(a, b), np.maximum(a, b)
+
     # ------------------------------------------------------------------ bounds and validation
     def set_bounds(self, lower, upper) -> None:
         """Replace the search bounds (rad or m), each of length ``n``; finite, lower <= upper."""
