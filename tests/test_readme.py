@@ -18,5 +18,6 @@ def test_the_readme_has_solve_examples():
 
 
 @pytest.mark.parametrize("line", SOLVE_LINES)
-def test_readme_solve_example_reaches_its_target(line, capsys):
+def test_readme_solve_example_reaches_its_target(line, capsys, monkeypatch):
+    monkeypatch.chdir(README.parent)  # the README's relative paths (examples/...) are from the repository root
     assert main(shlex.split(line)[1:]) == 0, capsys.readouterr()

@@ -202,3 +202,19 @@ def test_broken_mimic_tags():
         warnings.simplefilter("error")  # a mimic on a fixed joint means nothing: no warning
         load_robot(mimic_3r().replace('<origin xyz="0.1 0 0.02"', '<mimic joint="j1"/><origin xyz="0.1 0 0.02"'),
                    tip="tool")
+
+
+@pytest.mark.parametrize("make", [mimic_3r, gripper])
+def test_skeleton_of_a_mimic_chain_without_visuals(make):
+    # a chain with a mimic joint on it has more physical joints than entries of q: the skeleton (drawn for URDFs
+    # without <visual>) iterates the physical ones, with their travel
+    from evoik_pin.viz import skeleton_model
+
+    robot = load_robot(make(), tip="tool" if make is mimic_3r else "fb_tip")
+    geom = skeleton_model(robot)
+    revolute, axes, lower, upper = robot.chain_joints()
+    assert len(revolute) == robot.model.njoints - 1 > robot.n or make is gripper
+    names = {o.name for o in geom.geometryObjects}
+    assert {f"skeleton_{robot.model.names[j]}" for j in range(1, robot.model.njoints)} <= names
+    assert ("skeleton_rail_finger_b" in names) == (make is gripper)
+    assert (lower <= upper).all()

@@ -8,6 +8,7 @@ from .api import BatchResults, make_problem, prepare, solve, solve_all, solve_ma
 from .problem import IKProblem, Target
 from .result import Front, Result
 from .robot import Robot, list_robots, load_robot
+from .scene import Scene
 from .solvers import methods
 
 __all__ = [
@@ -16,6 +17,7 @@ __all__ = [
     "IKProblem",
     "Result",
     "Robot",
+    "Scene",
     "Target",
     "list_robots",
     "load_robot",

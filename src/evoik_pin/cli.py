@@ -93,6 +93,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
     robot = _load(args)
     html = check_output_file(args.html) if args.html else None  # before any work starts
+    scene, margin = _load_scene(args, robot)
     position = np.asarray(args.xyz, dtype=float)
     target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
     options: dict = {}
@@ -104,6 +105,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         options["population"] = args.population
     if args.max_generations is not None:
         options["max_generations"] = args.max_generations
+    if scene is not None:
+        options.update(scene=scene, margin=margin)
     if args.all:
         return _solve_all(args, robot, target, options, html)
     method = args.method or DEFAULT_METHOD
@@ -129,22 +132,63 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         "time_s": res.time_s,
         "seed": args.seed,
     }
+    if scene is not None:
+        info.update(_collision_info(args, scene, margin, res))
     if args.json:
         print(json.dumps(info, indent=2))
     else:
         _print_solution(robot, res, info, args.rad)
+        if scene is not None:
+            _print_collisions(info)
     if html is not None or args.view:
-        _view_solution(robot, res, Target.coerce(target), html, args.view)
+        _view_solution(robot, res, Target.coerce(target), html, args.view, scene=scene, margin=margin)
     return 0 if res.success else 1
 
 
-def _view_solution(robot, res, target, html, view: bool, ghosts=None) -> None:
+def _load_scene(args: argparse.Namespace, robot):
+    """(Scene of ``--scene FILE`` or None, ``--margin`` in m (default 0)); OptionError for a margin without a
+    scene or below 0, SceneError (exit 2) for a bad scene file."""
+    margin = getattr(args, "margin", None)
+    if args.scene is None:
+        if margin is not None:
+            raise OptionError("--margin needs --scene FILE: it is the clearance (m) kept from the scene's obstacles "
+                              "and the robot's own links")
+        return None, 0.0
+    if margin is not None and not (np.isfinite(margin) and margin >= 0):
+        raise OptionError(f"--margin must be a finite clearance >= 0 in m, got {margin:g}")
+    from .scene import Scene
+
+    return Scene.from_file(robot, args.scene), 0.0 if margin is None else float(margin)
+
+
+def _collision_pairs(scene, q, margin: float) -> list[list[str]]:
+    """The distinct (name, name) pairs in collision at ``q`` (a link with several collision shapes counts once)."""
+    return [list(p) for p in dict.fromkeys(scene.colliding_pairs(q, margin))]
+
+
+def _collision_info(args: argparse.Namespace, scene, margin: float, res) -> dict:
+    """The JSON fields of a solve with ``--scene``: the verdict of the exact mesh check on the answer."""
+    return {"scene": str(args.scene), "margin_m": margin, "collision_free": bool(res.collision_free),
+            "min_distance_m": float(res.min_distance), "colliding_pairs": _collision_pairs(scene, res.q, margin)}
+
+
+def _print_collisions(info: dict) -> None:
+    """``collision-free: yes/no``, the smallest clearance (mm) and the pairs in collision."""
+    where = f"scene {info['scene']}" + (f", margin {info['margin_m']:g} m" if info["margin_m"] > 0 else "")
+    print(f"collision-free: {'yes' if info['collision_free'] else 'no'} (min distance "
+          f"{info['min_distance_m'] * 1e3:.3f} mm; {where})")
+    if info["colliding_pairs"]:
+        print("in collision:   " + ", ".join(f"{a} - {b}" for a, b in info["colliding_pairs"]))
+
+
+def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None, margin: float = 0.0) -> None:
     """Show a solve's answer and its target in meshcat (and ``ghosts``, e.g. every solution of ``--all``, as
-    translucent robots); write ``html`` and/or serve until Ctrl-C."""
+    translucent robots; with a ``scene``, its obstacles and the answer's links in collision in red); write ``html``
+    and/or serve until Ctrl-C."""
     from .viz import Viewer
 
     with Viewer(robot) as viewer:
-        viewer.show(res)
+        viewer.show(res, scene=scene, margin=margin)
         if ghosts:
             viewer.show_solutions(ghosts)
         viewer.show_target(target.position, target.rotation)
@@ -165,11 +209,17 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html) -> 
     res = sols.result
     rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in np.degrees(s.q)],
              "position_error_m": s.position_error, "orientation_error_rad": s.orientation_error} for s in sols]
+    scene = options.get("scene")
+    if scene is not None:  # solve_all keeps the collision-free solutions only
+        for row, s in zip(rows, sols, strict=True):
+            row.update(collision_free=bool(s.collision_free), min_distance_m=float(s.min_distance))
     info = {"robot": robot.name, "method": res.method or method, "success": bool(sols), "count": len(sols),
             "message": sols.message, "joint_names": list(robot.joint_names), "solutions": rows,
             "target_position_m": [float(v) for v in args.xyz],
             "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
             "time_s": res.time_s, "seed": args.seed}
+    if scene is not None:
+        info.update(scene=str(args.scene), margin_m=options["margin"])
     if args.json:
         print(json.dumps(info, indent=2))
     else:
@@ -181,10 +231,12 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html) -> 
         for k, s in enumerate(sols):
             shown = s.q if args.rad else np.degrees(s.q)
             rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
+            free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
             print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in shown) + f"  (position error {s.position_error:.1e} m"
-                  f"{rot})")
+                  f"{rot}{free})")
     if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
-        _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols)
+        _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols,
+                       scene=scene, margin=options.get("margin", 0.0))
     return 0 if sols else 1
 
 
@@ -210,9 +262,14 @@ def _cmd_view(args: argparse.Namespace) -> int:
     if args.no_block and not args.html:
         raise OptionError("--no-block without --html shows nothing: the viewer stops when evoik exits; add "
                           "--html PATH to keep the scene as a file")
+    scene, _ = _load_scene(args, robot)
     with Viewer(robot) as viewer:
-        viewer.show(q)
+        pairs = viewer.show(q, scene=scene)
         viewer.show_target(robot.fk(q))
+        if scene is not None:
+            pairs = list(dict.fromkeys(pairs))
+            print(f"collision-free: {'no' if pairs else 'yes'} (scene {args.scene}"
+                  + (f"; in collision: {', '.join(f'{a} - {b}' for a, b in pairs)})" if pairs else ")"), flush=True)
         if args.no_block:  # the server stops when we return: the file is what stays
             print(f"wrote {viewer.save_html(args.html)} (a self-contained page; the meshcat server "
                   f"{viewer.url} that rendered it stops when evoik exits)", flush=True)
@@ -283,6 +340,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
     p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
                    "memetic-all), one per line; with --html/--view drawn as ghosts; exit 1 when there is none")
+    p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles, see Scene.from_file): "
+                   "answers must be free of collisions with it and with the robot itself; exit 1 when the answer "
+                   "collides; --html/--view draw the obstacles and the links in collision in red")
+    p.add_argument("--margin", type=float, metavar="M", help="with --scene: clearance in m the answer must keep "
+                   "(pairs closer than M count as colliding; default 0)")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
@@ -292,6 +354,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--html", metavar="PATH", help="also write the scene as a self-contained HTML file")
     p.add_argument("--no-block", action="store_true",
                    help="write --html PATH and return at once (the viewer's server stops with evoik)")
+    p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles) drawn in grey; links in "
+                   "collision at the configuration are red")
     p.set_defaults(func=_cmd_view)
     p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
     p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")

@@ -77,3 +77,8 @@ class OutputError(EvoikError, OSError):
 class SceneError(EvoikError, ValueError):
     """A collision scene that cannot be built or used: a bad obstacle (size, pose, mesh file), an unknown
     obstacle name, a scene file that does not parse, or a scene built for another robot."""
+
+
+class BackendError(EvoikError, RuntimeError):
+    """A compute backend that cannot be used: Ray not installed (``pip install 'evoik_pin[ray]'``), a cluster
+    address that cannot be reached, or a chunk of work that failed on every attempt."""

@@ -13,7 +13,9 @@ Scene tree (paths below meshcat's ``/meshcat`` root, each a checkbox in the brow
 - ``robot``: the robot at the configuration of :meth:`Viewer.show` (animated by :meth:`Viewer.animate`);
 - ``<name>/<k>`` (default ``solutions/0``, ``solutions/1``, ...): ghost robots of :meth:`Viewer.show_solutions`;
 - ``target``: a coordinate triad (x red, y green, z blue) or a point for a position-only target;
-- ``path``: a polyline, e.g. the end-effector path of an animated trajectory.
+- ``path``: a polyline, e.g. the end-effector path of an animated trajectory;
+- ``scene/visuals/<obstacle>``: the obstacles of a collision :class:`~evoik_pin.scene.Scene`, translucent grey
+  (:meth:`Viewer.show_scene`, or ``show(q, scene=scene)``, which also draws the robot's links in collision red).
 
 The meshcat server is a subprocess started per :class:`Viewer` (its web server and its ZeroMQ socket
 listen on 127.0.0.1 only; busy ports are skipped: ZeroMQ from 6000, HTTP from 7000). It stops with
@@ -32,6 +34,7 @@ Example::
         v.show_target(T.translation, T.rotation)
         v.show_solutions([q1, q2, q3])      # ghosts, one colour each
         v.animate(trajectory, dt=0.05)      # (N, n); draws the tip path too
+        v.show(q, scene=scene)              # obstacles in grey, links in collision at q in red
         v.save_html("scene.html")           # self-contained file, opens without a server or network
 """
 
@@ -58,13 +61,18 @@ from .lie import rotation_to_z
 from .robot import Robot
 from .robot.frames import find_frame
 
-__all__ = ["GHOST_COLORS", "Viewer", "html_commands", "skeleton_model"]
+__all__ = ["COLLISION_RGBA", "GHOST_COLORS", "OBSTACLE_RGBA", "Viewer", "html_commands", "obstacle_model",
+           "skeleton_model"]
 
 #: Ghost colours (RGB in [0, 1]), used in turn by :meth:`Viewer.show_solutions`.
 GHOST_COLORS: tuple[tuple[float, float, float], ...] = (
     (0.12, 0.47, 0.71), (1.00, 0.50, 0.05), (0.17, 0.63, 0.17), (0.84, 0.15, 0.16), (0.58, 0.40, 0.74),
     (0.55, 0.34, 0.29), (0.89, 0.47, 0.76), (0.50, 0.50, 0.50), (0.74, 0.74, 0.13), (0.09, 0.75, 0.81),
 )
+#: Obstacles of a scene (RGBA in [0, 1]): translucent grey.
+OBSTACLE_RGBA = (0.55, 0.55, 0.55, 0.6)
+#: Robot links in collision: opaque red.
+COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
 #: Most bytes of mesh files :meth:`Viewer.show_solutions` embeds for its ghosts before it draws skeletons.
 GHOST_MESH_BUDGET = 50_000_000
 #: Seconds to wait for the meshcat server to start or to answer one request.
@@ -277,6 +285,7 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
             length = float(np.linalg.norm(d))
             add(name, joint, pin.SE3(rotation_to_z(d), (p0 + p1) / 2), fcl.Cylinder(radius, length), rgba)
 
+    revolute, axes, lower, upper = robot.chain_joints()  # model's joints: mimic joints on the chain included
     for k, (parent, M) in enumerate(_segments(robot)):
         is_tip = k == model.njoints - 1
         child = k + 1 if not is_tip else parent
@@ -285,9 +294,9 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
         add(f"skeleton_{name}", child, pin.SE3.Identity() if not is_tip else M,
             fcl.Sphere(r * (0.8 if is_tip else 1.0)), joint_rgba)
         cylinder(f"skeleton_to_{name}", parent, np.zeros(3), M.translation, 0.6 * r, link_rgba)
-        if not is_tip and not robot.revolute[k]:  # a prismatic joint slides along a rail spanning its bounds
-            a = M.rotation @ robot.joint_axes[k]
-            lo, hi = M.translation + robot.lower[k] * a, M.translation + robot.upper[k] * a
+        if not is_tip and not revolute[k]:  # a prismatic joint slides along a rail spanning its bounds
+            a = M.rotation @ axes[k]
+            lo, hi = M.translation + lower[k] * a, M.translation + upper[k] * a
             cylinder(f"skeleton_rail_{name}", parent, lo, hi, 0.3 * r, rail_rgba)
     return geom
 
@@ -295,8 +304,30 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
 def _reach(robot: Robot) -> float:
     """Length (m) of the chain's polyline base -> joints -> tip at rest plus prismatic travel, >= 0.1 m."""
     links = sum(np.linalg.norm(M.translation) for _, M in _segments(robot))
-    travel = np.maximum(np.abs(robot.lower), np.abs(robot.upper))[~robot.revolute].sum()
+    revolute, _, lower, upper = robot.chain_joints()
+    travel = np.maximum(np.abs(lower), np.abs(upper))[~revolute].sum()
     return max(0.1, float(links + travel))
+
+
+def obstacle_model(scene) -> pin.GeometryModel:
+    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` attached to the universe of
+    ``scene.robot.model`` (boxes, spheres, cylinders and capsules along their pose's z, meshes at their scale),
+    one object per obstacle, named as the obstacle."""
+    fcl = _fcl()
+    base = scene.robot.base_placement
+    geom = pin.GeometryModel()
+    for ob in scene.obstacles.values():
+        p = ob.params
+        if ob.kind == "box":
+            shape = fcl.Box(*p["size"])
+        elif ob.kind == "sphere":
+            shape = fcl.Sphere(p["radius"])
+        elif ob.kind in ("cylinder", "capsule"):
+            shape = (fcl.Cylinder if ob.kind == "cylinder" else fcl.Capsule)(p["radius"], p["length"])
+        else:
+            shape = fcl.MeshLoader().load(p["path"], np.asarray(p["scale"], dtype=float))
+        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, shape))  # base frame -> world
+    return geom
 
 
 def _visual_model(robot: Robot) -> tuple[pin.GeometryModel | None, str]:
@@ -368,6 +399,8 @@ class Viewer:
         self._server: _Server | None = None
         self.scene: dict[str, str] = {}
         self._viz = {}  # node name -> pinocchio MeshcatVisualizer drawing the robot there
+        self._red: tuple[object, frozenset[str]] = (None, frozenset())  # (robot visualizer, its red geometry names)
+        self._drawn_scenes: dict[str, tuple[int, int]] = {}  # node -> (id, version) of the Scene drawn there
         geom, why = (None, "") if skeleton else _visual_model(robot)
         self.skeleton = geom is None
         if geom is None:
@@ -477,11 +510,98 @@ class Viewer:
         return sum(os.path.getsize(f) for f in paths if f and os.path.isfile(f))
 
     @_talks
-    def show(self, q) -> None:
-        """Draw the robot (node ``robot``) at joint vector ``q`` (n,) in rad/m, or a result's ``.q``."""
+    def show(self, q, scene=None, margin: float = 0.0) -> list[tuple[str, str]] | None:
+        """Draw the robot (node ``robot``) at joint vector ``q`` (n,) in rad/m, or a result's ``.q``.
+
+        With a collision ``scene`` (:class:`~evoik_pin.scene.Scene` of this robot): its obstacles are drawn too
+        (node ``scene``, as :meth:`show_scene`; again only when the scene changed), and the robot's links in
+        collision at ``q`` (closer than ``margin`` m) are drawn red (:data:`COLLISION_RGBA`); a later ``show``
+        gives links no longer in collision their own colours back.
+
+        Returns:
+            With a scene, the pairs in collision (``scene.colliding_pairs(q, margin)``: link or obstacle names,
+            empty when ``q`` is collision-free); None without.
+        """
         q = self._q(q)
-        self._load("robot").display(self.robot.to_pinocchio(q))
+        pairs = None
+        if scene is not None:
+            self._check_scene(scene)
+            pairs = scene.colliding_pairs(q, margin)
+        viz = self._load("robot")
+        viz.display(self.robot.to_pinocchio(q))
         self.scene["robot"] = "robot"
+        links: set[str] = set()
+        if scene is not None:
+            if "scene" not in self.scene or self._drawn_scenes.get("scene") != (id(scene), scene.version):
+                self.show_scene(scene)
+            links = {name for pair in pairs for name in pair} - set(scene.obstacles)
+        self._paint_links(viz, links)
+        if links:
+            self.scene["robot"] = f"robot, links in collision (red): {', '.join(sorted(links))}"
+        return pairs
+
+    def _check_scene(self, scene) -> None:
+        """SceneError unless ``scene`` is a Scene of this Viewer's robot (the same object, or the same chain)."""
+        from .errors import SceneError
+        from .scene import Scene
+
+        if not isinstance(scene, Scene):
+            raise SceneError(f"scene must be an evoik_pin.Scene, got {type(scene).__name__}")
+        other = scene.robot
+        if other is not self.robot and (other.name, other.base, list(other.joint_names)) != (
+                self.robot.name, self.robot.base, list(self.robot.joint_names)):
+            scene.check_robot(self.robot)  # raises, naming both robots
+
+    def _paint_links(self, viz, links: set[str]) -> None:
+        """Draw the visual geometry of ``links`` (link names) red and give the others their own colours back."""
+        model = self.robot.model
+        if self.skeleton:  # skeleton parts hang on joints: the joints that carry the links
+            joints = {model.frames[model.getFrameId(name)].parentJoint for name in links}
+            red = {g.name for g in viz.visual_model.geometryObjects if g.parentJoint in joints}
+        else:
+            red = {g.name for g in viz.visual_model.geometryObjects if model.frames[g.parentFrame].name in links}
+        before = self._red[1] if self._red[0] is viz else frozenset()
+        plain = viz.plain_meshes
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                for g in viz.visual_model.geometryObjects:
+                    if (g.name in red) != (g.name in before):  # reloaded: red plain geometry, or its own again
+                        viz.plain_meshes = g.name in red
+                        viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL,
+                                                     list(COLLISION_RGBA) if g.name in red else None)
+        finally:
+            viz.plain_meshes = plain
+        self._red = (viz, frozenset(red))
+
+    @_talks
+    def show_scene(self, scene, name: str = "scene", color=OBSTACLE_RGBA[:3],
+                   opacity: float = OBSTACLE_RGBA[3]) -> list[str]:
+        """Draw the obstacles of a collision :class:`~evoik_pin.scene.Scene` in the base frame: boxes, spheres,
+        cylinders and capsules (axis along their pose's z) and meshes, translucent grey by default.
+
+        Args:
+            scene: a Scene of this Viewer's robot (e.g. ``Scene.from_file(robot, "shelf.yaml")``).
+            name: group node; obstacle ``o`` is ``<name>/visuals/<o>``. Drawing the same name again replaces it.
+            color: RGB in [0, 1]. opacity: in (0, 1].
+
+        Returns:
+            The obstacles' node names (none for a scene without obstacles).
+        """
+        self._check_scene(scene)
+        name = name.strip("/")
+        if not name or not 0.0 < opacity <= 1.0:
+            raise ConfigurationError(f"show_scene needs a non-empty name and 0 < opacity <= 1; got name={name!r}, "
+                                     f"opacity={opacity}")
+        self.delete(name)
+        geom = obstacle_model(scene)
+        self._drawn_scenes[name] = (id(scene), scene.version)
+        self.scene[name] = f"{geom.ngeoms} obstacle(s)" + (f": {', '.join(scene.obstacles)}" if geom.ngeoms else "")
+        if geom.ngeoms == 0:
+            return []
+        viz = self._load(name, (*color, opacity), geom)
+        viz.display(pin.neutral(self.robot.model))
+        return [viz.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]
 
     @_talks
     def show_solutions(self, solutions, name: str = "solutions", opacity: float = 0.4, limit: int = 64,
@@ -588,6 +708,37 @@ class Viewer:
         if R is not None:
             T[:3, :3] = R
         node.set_transform(T)
+
+    @_talks
+    def show_points(self, points, values=None, name: str = "points", size: float | None = None,
+                    cmap: str = "viridis", vmin: float = 0.0, vmax: float = 1.0) -> None:
+        """Draw a point cloud (e.g. the voxels of a reachability map), coloured by ``values``.
+
+        Args:
+            points: (N, 3) positions in m in the base frame.
+            values: (N,) numbers mapped through the matplotlib colormap ``cmap`` over [vmin, vmax]; None: one colour.
+            name: node name. size: point size in m (default 2 % of the chain's length, within [5 mm, 5 cm]).
+        """
+        import matplotlib
+        import meshcat.geometry as mg
+
+        P = np.asarray(points, dtype=float)
+        if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 1 or not np.all(np.isfinite(P)):
+            raise TargetError(f"points must be a finite (N, 3) array with N >= 1 (m), got shape {P.shape}")
+        if values is None:
+            colors = np.tile(GHOST_COLORS[0], (P.shape[0], 1))
+        else:
+            v = np.asarray(values, dtype=float).reshape(-1)
+            if v.shape != (P.shape[0],) or not np.all(np.isfinite(v)) or not vmax > vmin:
+                raise ConfigurationError(f"values must be {P.shape[0]} finite numbers and vmax > vmin; got shape "
+                                         f"{v.shape}, vmin {vmin}, vmax {vmax}")
+            colors = matplotlib.colormaps[cmap](np.clip((v - vmin) / (vmax - vmin), 0.0, 1.0))[:, :3]
+        s = float(np.clip(0.02 * self._reach, 0.005, 0.05)) if size is None else float(size)
+        vis = self._check_open()
+        name = name.strip("/")
+        self.delete(name)
+        vis[name].set_object(mg.PointCloud(P.T.astype(np.float32), colors.T.astype(np.float32), size=s))
+        self.scene[name] = f"cloud of {P.shape[0]} points"
 
     @_talks
     def draw_path(self, points, name: str = "path", color=(0.85, 0.1, 0.6)) -> None:

@@ -2,7 +2,8 @@
 
 * :mod:`.scene`: :class:`Scene` (obstacles; exact, batched and proxy collision checks; signed distance);
 * :mod:`.geometry`: the robot's collision geometry, the pairs worth checking (adjacent and SRDF-disabled pairs
-  left out), convex-hull proxies, pose checks.
+  left out), convex-hull proxies, pose checks;
+* :mod:`.file`: scene files (YAML / JSON obstacles), read by ``Scene.from_file`` and written by ``Scene.to_file``.
 
 With :mod:`evoik_pin.robot`, this is the only code that runs Pinocchio on a Model/Data.
 """

@@ -172,6 +172,24 @@ class Scene:
         self._build()
         return self
 
+    # ------------------------------------------------------------------ scene files
+    @classmethod
+    def from_file(cls, robot, path: str | os.PathLike) -> Scene:
+        """A scene of ``robot`` read from a YAML (``.yaml``, ``.yml``) or JSON (``.json``) scene file: obstacles
+        (kind, size, pose in the base frame, m / rad), optional ``self_collision`` and ``srdf``. The format is
+        :mod:`evoik_pin.scene.file`'s docstring; a bad file is a SceneError naming the file, the obstacle and
+        the problem."""
+        from .file import read_scene
+
+        return read_scene(robot, path, cls)
+
+    def to_file(self, path: str | os.PathLike) -> Path:
+        """Write this scene as a scene file (YAML or JSON by the extension; :meth:`from_file` reads it back to the
+        same obstacles) and return its path."""
+        from .file import write_scene
+
+        return write_scene(self, path)
+
     # ------------------------------------------------------------------ geometry models
     def _object_name(self, i: int) -> str:
         """The name of collision object i: the robot link it belongs to, or the obstacle's name."""
@@ -242,11 +260,12 @@ class Scene:
         return self._check(self._q(q), self._margin_value(margin), hulls=False, stop_at_first=True)
 
     def colliding_pairs(self, q, margin: float = 0.0) -> list[tuple[str, str]]:
-        """The (name, name) pairs in contact at ``q`` (closer than ``margin`` m): robot links by link name,
-        obstacles by their name."""
+        """The (name, name) pairs in contact at ``q`` (closer than ``margin`` m), each once: robot links by link
+        name, obstacles by their name."""
         self._check(self._q(q), self._margin_value(margin), hulls=False, stop_at_first=False)
-        return [(self._object_name(a), self._object_name(b))
-                for (a, b), res in zip(self._pairs, self._gdata.collisionResults, strict=True) if res.isCollision()]
+        pairs = [(self._object_name(a), self._object_name(b))
+                 for (a, b), res in zip(self._pairs, self._gdata.collisionResults, strict=True) if res.isCollision()]
+        return list(dict.fromkeys(pairs))  # once per pair of names (a link may have several shapes)
 
     def collides(self, Q, margin: float = 0.0, proxy: bool = False) -> np.ndarray:
         """(N,) bool: :meth:`in_collision` of each row of ``Q`` (N, n). ``proxy=True`` checks the convex hulls

@@ -1,0 +1,266 @@
+"""Scene files: a :class:`~evoik_pin.scene.Scene`'s obstacles as YAML or JSON (``Scene.from_file``, ``Scene.to_file``).
+
+The format is chosen by the extension: ``.yaml`` / ``.yml`` (read with PyYAML's safe loader) or ``.json``. Lengths
+are in metres and angles in radians, every pose in the robot's base frame (the frame of ``Robot.fk``)::
+
+    units: m                 # optional; m is the only unit accepted
+    self_collision: true     # optional (default true): also check the robot against itself
+    srdf: panda.srdf         # optional: SRDF whose disabled pairs are not checked (default: the robot's own)
+    obstacles:
+      - name: table          # unique, not the name of one of the robot's links
+        kind: box
+        size: [1.6, 1.6, 0.04]                           # edge lengths x, y, z
+        pose: {xyz: [0.3, 0.0, -0.03], rpy: [0, 0, 0]}   # centre; rpy optional (R = Rz(y) Ry(p) Rx(r))
+      - {name: ball, kind: sphere, radius: 0.08, pose: {xyz: [0.5, 0.2, 0.4]}}
+      - {name: post, kind: cylinder, radius: 0.03, length: 0.8, pose: {xyz: [0.4, -0.4, 0.4]}}   # axis: pose z
+      - {name: bar, kind: capsule, radius: 0.02, length: 0.5, pose: {xyz: [0.5, 0, 0.7], rpy: [0, 1.5708, 0]}}
+      - name: bin
+        kind: mesh
+        path: meshes/bin.stl   # relative paths resolve against this file's folder; anything assimp reads
+        scale: 0.001           # optional (default 1): one factor or three (a mesh in mm -> m)
+        pose: [[1, 0, 0, 0.5], [0, 1, 0, -0.3], [0, 0, 1, 0.0], [0, 0, 0, 1]]   # or a 4 x 4 homogeneous matrix
+
+``obstacles`` may be missing or empty (self-collision only). Unknown keys are errors (a misspelt ``raduis`` is not
+silently ignored). Every error is a :class:`~evoik_pin.errors.SceneError` naming the file, the obstacle (index
+from 0 and name) and what is wrong; the scene is built only once the whole file has been read, so a bad file
+leaves nothing half-built. :func:`write_scene` writes the same format (poses as ``xyz`` + ``rpy``, mesh paths
+relative to the file's folder when the mesh lies below it); reading it back gives the same obstacles.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import SceneError
+from .geometry import as_placement
+from .scene import OBSTACLE_KINDS, Scene
+
+__all__ = ["SCENE_SUFFIXES", "read_scene", "write_scene"]
+
+#: File extensions and the format each selects.
+SCENE_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
+#: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional).
+_KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),
+              "capsule": (("radius", "length"), ()), "mesh": (("path",), ("scale",))}
+_TOP_KEYS = ("units", "self_collision", "srdf", "obstacles")
+_POSE_HELP = "pose: {xyz: [x, y, z] (m), rpy: [roll, pitch, yaw] (rad, optional)} or a 4 x 4 homogeneous matrix"
+assert set(_KIND_KEYS) == set(OBSTACLE_KINDS)
+
+
+def _format(path: Path) -> str:
+    fmt = SCENE_SUFFIXES.get(path.suffix.lower())
+    if fmt is None:
+        raise SceneError(f"scene file {str(path)!r}: unknown extension {path.suffix!r}; use "
+                         f"{', '.join(SCENE_SUFFIXES)} (YAML or JSON)")
+    return fmt
+
+
+def _parse(path: Path, text: str):
+    """The file's data (dicts, lists, numbers, strings); SceneError with the line of a syntax error."""
+    where = f"scene file {str(path)!r}"
+    if _format(path) == "json":
+        try:
+            return json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise SceneError(f"{where}: JSON syntax error at line {exc.lineno}, column {exc.colno}: "
+                             f"{exc.msg}") from None
+    import yaml
+
+    try:
+        return yaml.safe_load(text)
+    except yaml.MarkedYAMLError as exc:
+        mark, begun = exc.problem_mark or exc.context_mark, exc.context_mark
+        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+        context = exc.context
+        if context and begun is not None and begun is not mark:
+            context += f" (begun at line {begun.line + 1}, column {begun.column + 1})"
+        what = ": ".join(filter(None, [context, exc.problem]))
+        raise SceneError(f"{where}: YAML syntax error{at}: {what}") from None
+    except yaml.YAMLError as exc:
+        raise SceneError(f"{where}: YAML error: {exc}") from None
+
+
+def _number(value, what: str, positive: bool = False) -> float:
+    """A finite number (int or float, not a bool nor a string), > 0 when ``positive``."""
+    if (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
+            or (positive and value <= 0)):
+        raise SceneError(f"{what} must be a finite number{' > 0' if positive else ''}, got {value!r}")
+    return float(value)
+
+
+def _numbers(value, count: int, what: str, positive: bool = False) -> list[float]:
+    if not isinstance(value, list) or len(value) != count:
+        raise SceneError(f"{what} must be a list of {count} numbers{' > 0' if positive else ''}, got {value!r}")
+    return [_number(v, f"{what}[{k}]", positive) for k, v in enumerate(value)]
+
+
+def _unknown_keys(entry: dict, accepted, what: str) -> None:
+    unknown = [k for k in entry if k not in accepted]
+    if unknown:
+        raise SceneError(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: {', '.join(accepted)}")
+
+
+def _pose(value, what: str) -> pin.SE3:
+    """A base-frame placement from ``{xyz, rpy}`` or a 4 x 4 matrix (list of four rows)."""
+    if isinstance(value, dict):
+        _unknown_keys(value, ("xyz", "rpy"), f"{what}: pose")
+        if "xyz" not in value:
+            raise SceneError(f"{what}: pose needs xyz ({_POSE_HELP})")
+        xyz = _numbers(value["xyz"], 3, f"{what}: pose xyz (m)")
+        rpy = _numbers(value.get("rpy", [0, 0, 0]), 3, f"{what}: pose rpy (rad)")
+        return pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz))
+    if isinstance(value, list) and len(value) == 4 and all(isinstance(row, list) for row in value):
+        H = np.array([_numbers(row, 4, f"{what}: pose row {k}") for k, row in enumerate(value)])
+        return as_placement(H, what)
+    raise SceneError(f"{what}: bad pose {value!r}; expected {_POSE_HELP}")
+
+
+def _obstacle(entry, k: int, folder: Path, seen: dict[str, int]) -> tuple[str, str, dict, pin.SE3]:
+    """(name, kind, Scene.add_* keyword arguments, pose) of obstacle ``k``, checked."""
+    if not isinstance(entry, dict):
+        raise SceneError(f"obstacle {k}: expected a mapping with name, kind, pose and the kind's sizes, got {entry!r}")
+    name = entry.get("name")
+    what = f"obstacle {k}" + (f" ({name!r})" if name is not None else "")
+    if not isinstance(name, str) or not name.strip():
+        raise SceneError(f"{what}: missing or empty name (a unique string)")
+    if name in seen:
+        raise SceneError(f"{what}: the name {name!r} is already obstacle {seen[name]}'s; names must be unique")
+    kind = entry.get("kind")
+    if kind not in _KIND_KEYS:
+        raise SceneError(f"{what}: " + ("missing kind" if kind is None else f"unknown kind {kind!r}")
+                         + f"; accepted kinds: {', '.join(_KIND_KEYS)}")
+    required, optional = _KIND_KEYS[kind]
+    _unknown_keys(entry, ("name", "kind", *required, *optional, "pose"), f"{what}, a {kind}")
+    for key in (*required, "pose"):
+        if key not in entry:
+            hint = _POSE_HELP if key == "pose" else f"a {kind} needs {', '.join(required)}"
+            raise SceneError(f"{what}: missing field {key!r} ({hint})")
+    kw: dict = {}
+    if kind == "box":
+        kw["size"] = _numbers(entry["size"], 3, f"{what}: size (m)", positive=True)
+    elif kind == "mesh":
+        path = entry["path"]
+        if not isinstance(path, str) or not path:
+            raise SceneError(f"{what}: path must be a mesh file name, got {path!r}")
+        p = Path(path).expanduser()
+        kw["path"] = p if p.is_absolute() else folder / p
+        scale, label = entry.get("scale", 1.0), f"{what}: scale (one factor or three)"
+        kw["scale"] = _numbers(scale, 3, label, True) if isinstance(scale, list) else _number(scale, label, True)
+    else:
+        kw.update({key: _number(entry[key], f"{what}: {key} (m)", positive=True) for key in required})
+    pose = _pose(entry["pose"], what)
+    seen[name] = k
+    return name, kind, kw, pose
+
+
+def read_scene(robot, path: str | os.PathLike, cls=Scene) -> Scene:
+    """A new ``cls`` (:class:`Scene`) of ``robot`` with the self-collision setting, SRDF and obstacles of the scene
+    file ``path`` (format: the module docstring). SceneError naming the file, the obstacle and the problem."""
+    path = Path(os.fspath(path)).expanduser()
+    where = f"scene file {str(path)!r}"
+    _format(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise SceneError(f"{where}: not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{where}: cannot read it: {exc}") from None
+    data = _parse(path, text)
+    if data is None:
+        raise SceneError(f"{where}: the file is empty; expected a mapping with an 'obstacles:' list")
+    if not isinstance(data, dict):
+        raise SceneError(f"{where}: the top level must be a mapping (units, self_collision, srdf, obstacles), got "
+                         f"a {type(data).__name__}")
+    try:
+        _unknown_keys(data, _TOP_KEYS, "top level")
+        units = data.get("units", "m")
+        if units != "m":
+            raise SceneError(f"units: only 'm' is accepted (lengths in metres, angles in radians), got {units!r}")
+        self_collision = data.get("self_collision", True)
+        if not isinstance(self_collision, bool):
+            raise SceneError(f"self_collision must be true or false, got {self_collision!r}")
+        srdf = data.get("srdf")
+        if srdf is not None:
+            if not isinstance(srdf, str) or not srdf:
+                raise SceneError(f"srdf must be a file name, got {srdf!r}")
+            srdf = Path(srdf).expanduser()
+            srdf = srdf if srdf.is_absolute() else path.parent / srdf
+        entries = data.get("obstacles") or []
+        if not isinstance(entries, list):
+            raise SceneError(f"obstacles must be a list of obstacles, got {entries!r}")
+        seen: dict[str, int] = {}
+        obstacles = [_obstacle(entry, k, path.parent, seen) for k, entry in enumerate(entries)]
+        scene = cls(robot, self_collision=self_collision, srdf=srdf)
+        adders = {"box": scene.add_box, "sphere": scene.add_sphere, "cylinder": scene.add_cylinder,
+                  "capsule": scene.add_capsule, "mesh": scene.add_mesh}
+        for k, (name, kind, kw, pose) in enumerate(obstacles):
+            try:
+                adders[kind](name, pose=pose, **kw)
+            except SceneError as exc:
+                raise SceneError(f"obstacle {k} ({name!r}): {exc}") from None
+    except SceneError as exc:
+        raise SceneError(f"{where}: {exc}") from None
+    return scene
+
+
+class _Flow(dict):
+    """A mapping written on one line (a pose)."""
+
+
+def _clean(values) -> list[float]:
+    """Plain floats, -0.0 written as 0.0."""
+    return [float(v) + 0.0 for v in np.asarray(values, dtype=float).reshape(-1)]
+
+
+def write_scene(scene: Scene, path: str | os.PathLike) -> Path:
+    """Write ``scene`` to ``path`` (YAML or JSON by the extension) and return the path; see the module docstring."""
+    path = Path(os.fspath(path)).expanduser()
+    fmt = _format(path)
+    data: dict = {"units": "m", "self_collision": scene.self_collision}
+    if scene.srdf is not None and scene.srdf != getattr(scene.robot, "srdf", None):
+        data["srdf"] = _relative(Path(scene.srdf), path.parent)
+    obstacles = []
+    for ob in scene.obstacles.values():
+        entry: dict = {"name": ob.name, "kind": ob.kind}
+        if ob.kind == "box":
+            entry["size"] = _clean(ob.params["size"])
+        elif ob.kind == "mesh":
+            entry["path"] = _relative(Path(ob.params["path"]), path.parent)
+            scale = _clean(ob.params["scale"])
+            entry["scale"] = scale[0] if len(set(scale)) == 1 else scale
+        else:
+            entry.update({key: float(ob.params[key]) for key in _KIND_KEYS[ob.kind][0]})
+        entry["pose"] = _Flow(xyz=_clean(ob.pose.translation), rpy=_clean(pin.rpy.matrixToRpy(ob.pose.rotation)))
+        obstacles.append(entry)
+    data["obstacles"] = obstacles
+    if fmt == "json":
+        text = json.dumps(data, indent=2) + "\n"
+    else:
+        import yaml
+
+        class Dumper(yaml.SafeDumper):
+            pass
+
+        Dumper.add_representer(_Flow, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True))
+        text = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
+        text += yaml.dump(data, Dumper=Dumper, sort_keys=False, default_flow_style=None)
+    try:
+        path.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise SceneError(f"cannot write the scene file {str(path)!r}: {exc.strerror or exc}") from None
+    return path
+
+
+def _relative(file: Path, folder: Path) -> str:
+    """``file`` relative to ``folder`` when it lies below it, else absolute."""
+    file = file.resolve()
+    try:
+        return file.relative_to(folder.resolve()).as_posix()
+    except ValueError:
+        return str(file)
