@@ -252,3 +252,15 @@ def test_solve_all_with_a_scene_returns_only_collision_free_solutions(panda, she
             assert not _reference_check(panda, shelf_scene, s.q)
         blind_collisions += sum(shelf_scene.in_collision(s.q) for s in ev.solve_all(panda, T, seed=0, count=8))
     assert blind_collisions > 0  # spread solutions without the scene do reach into the shelf's panels
+
+
+def test_solve_trajectory_with_a_scene(panda, shelf_scene, shelf_targets):
+    # a short path between two shelf targets: every point collision-free, warm-started from the previous one
+    q0, q1 = shelf_targets[0], shelf_targets[1]
+    path = [panda.fk(q0 + s * (q1 - q0)) for s in np.linspace(0.0, 1.0, 5)]
+    results = ev.solve_trajectory(panda, path, scene=shelf_scene, seed=0, timeout=None, max_restarts=10)
+    for r in results:
+        assert r.collision_free is not None and r.success <= r.collision_free  # success implies collision-free
+        if r.success:
+            assert not _reference_check(panda, shelf_scene, r.q)
+    assert sum(r.success for r in results) >= 4
