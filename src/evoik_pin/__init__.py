@@ -6,6 +6,7 @@ the evolutionary methods of five research papers or the memetic default. See REA
 
 from .api import BatchResults, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
 from .problem import IKProblem, Target
+from .reach import ReachMap, reachability_map
 from .result import Front, Result
 from .robot import Robot, list_robots, load_robot
 from .scene import Scene
@@ -15,6 +16,7 @@ __all__ = [
     "BatchResults",
     "Front",
     "IKProblem",
+    "ReachMap",
     "Result",
     "Robot",
     "Scene",
@@ -24,6 +26,7 @@ __all__ = [
     "make_problem",
     "methods",
     "prepare",
+    "reachability_map",
     "solve",
     "solve_all",
     "solve_many",

@@ -220,8 +220,10 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     return results
 
 
-def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None, **options) -> BatchResults:
-    """Solve many independent IK targets, amortizing the per-call overhead (:mod:`evoik_pin.solvers.batch`).
+def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None, workers: int | None = None,
+               backend: str = "local", address: str | None = None, progress: bool = False,
+               **options) -> BatchResults:
+    """Solve many independent IK targets, on every core or on a Ray cluster (:mod:`evoik_pin.solvers.batch`).
 
     With ``method="memetic"`` (the default) the targets are solved in batched rounds first: every unsolved
     target starts from its nearest seed-table entry (from ``q0`` in the first round when given), and one
@@ -235,16 +237,33 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         targets: a sequence of targets (anything :func:`solve` accepts: poses, positions, planar
             targets, all of one kind or mixed), or an array of N homogeneous poses (N, 4, 4), checked in one
             vectorized pass (:meth:`Target.from_poses`).
-        method: solver name. seed: int or Generator; one generator serves all targets, so a seed fixes
-            every result (up to the per-target time budget, as for :func:`solve`).
+        method: solver name.
+        seed: int, None or Generator. A target solved one by one draws from its own generator,
+            ``SeedSequence(seed).spawn(N)[i]`` (a Generator ``seed`` gives one draw as the entropy), so a seed fixes
+            every result whatever ``workers`` and ``backend`` (up to a wall-clock ``timeout``, as for
+            :func:`solve`: ``timeout=None, max_restarts=k`` makes the budget machine-independent).
         q0: None, one (n,) start for every target, or (N, n) starts.
-        **options: as for :func:`solve` (``tolerance``, ``rotation_tolerance``, ``bounds``,
+        workers: local: threads running the batched rounds, default every core of the process's CPU affinity
+            (``1``: the calling thread only); ray: actors (one CPU each), default every CPU of the cluster.
+        backend: ``"local"`` (this process) or ``"ray"``: chunks of targets go to Ray actors that load the
+            robot once (``pip install 'evoik_pin[ray]'``); an existing cluster at ``address`` (or
+            ``RAY_ADDRESS``), else an already initialized Ray, else a new local instance of ``workers`` CPUs.
+            An actor that dies has its chunk re-run on a new one.
+        address: a Ray cluster's address (``"ray://head:10001"``, ``"head:6379"`` or ``"auto"``); ray only.
+        progress: show a tqdm progress bar over the chunks.
+        **options: as for :func:`solve` (``tolerance``, ``rotation_tolerance``, ``bounds``, ``scene``, ``margin``,
             ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...).
 
     Returns:
         A :class:`BatchResults`: ``list[Result]`` in target order, plus ``stats`` with the throughput
         (``results.stats["throughput"]`` targets per second). A batch-solved target's ``time_s`` is its
         share of the batched rounds (their wall time divided by the targets they processed).
+
+    Raises:
+        OptionError: ``workers`` < 1, an unknown ``backend``. BackendError: Ray not installed, a cluster address
+        that cannot be reached, a chunk that keeps failing.
     """
     get_solver(method)  # an unknown method fails before any work
-    return batch.solve_many(_robot(robot), targets, make_problem, _run, method, _rng(seed), q0=q0, **options)
+    _rng(seed)  # the seed's checks
+    return batch.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
+                            backend=backend, address=address, progress=progress, **options)

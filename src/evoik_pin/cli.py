@@ -1,4 +1,4 @@
-"""The ``evoik`` command line: robots, fk, solve, reproduce, view.
+"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view.
 
 Degrees (and metres) at the command line by default; ``--rad`` switches joint values to radians.
 Each sub-command is one ``_cmd_*`` function registered in :func:`build_parser`.
@@ -282,6 +282,28 @@ def _cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_reach(args: argparse.Namespace) -> int:
+    """``evoik reach``: a reachability map written to OUT (npz, png slices, meshcat html)."""
+    from .reach import output_dir, reachability_map
+
+    robot = _load(args)
+    output_dir(args.out)  # before the work: an unwritable OUT fails at once
+    scene, margin = _load_scene(args, robot)
+    options = {"margin": margin} if scene is not None else {}
+    rmap = reachability_map(robot, voxel=args.voxel, orientations=args.orientations, scene=scene,
+                            backend=args.backend, workers=args.workers, seed=args.seed, progress=not args.no_progress,
+                            address=args.address, **options)
+    paths = rmap.save(args.out, html=not args.no_html, robot=robot)
+    reached = int(rmap.reached.sum())
+    mean = float(rmap.index[rmap.reached].mean()) if reached else 0.0
+    print(f"{robot.name}: {reached} of {rmap.index.size} voxels of {args.voxel:g} m reached ({rmap.kind} map, "
+          f"{rmap.orientations} orientation(s) per voxel, mean index of those {mean:.3f}) in {rmap.time_s:.1f} s",
+          flush=True)
+    for path in paths.values():
+        print(f"wrote {path}")
+    return 0
+
+
 def _cmd_reproduce(args: argparse.Namespace) -> int:
     from .experiments import run_papers
     from .experiments.common import check_output_file, show_animation
@@ -357,6 +379,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles) drawn in grey; links in "
                    "collision at the configuration are red")
     p.set_defaults(func=_cmd_view)
+    p = sub.add_parser("reach", help="reachability map: fraction of orientations IK reaches per voxel (npz, png, html)")
+    _add_robot_args(p)
+    p.add_argument("--voxel", type=float, default=0.05, help="voxel edge in m (default 0.05)")
+    p.add_argument("--out", required=True, help="output directory: OUT/<robot>_reach.npz, .png and .html")
+    p.add_argument("--orientations", type=int, default=32,
+                   help="orientations asked per voxel (6-D arms; default 32); position-only and planar arms: 1")
+    p.add_argument("--scene", metavar="FILE", help="scene file (YAML/JSON obstacles): collision-free answers only")
+    p.add_argument("--margin", type=float, help="clearance in m kept from the scene (with --scene; default 0)")
+    p.add_argument("--backend", choices=["local", "ray"], default="local",
+                   help="local (threads, every core) or ray (actors; pip install 'evoik_pin[ray]')")
+    p.add_argument("--workers", type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")
+    p.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the workspace sampling (default 0)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-html", action="store_true", help="skip the meshcat HTML page")
+    p.set_defaults(func=_cmd_reach)
     p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
     p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
     p.add_argument("--quick", action="store_true", help="reduced-size runs (well under a minute per paper)")

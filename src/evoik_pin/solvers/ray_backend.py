@@ -1,0 +1,337 @@
+"""The Ray backend of :func:`evoik_pin.solve_many` (``backend="ray"``; ``pip install 'evoik_pin[ray]'``).
+
+:class:`RayBatch` starts ``workers`` actors (one CPU each). Each actor receives the robot once (a pickled
+:class:`~evoik_pin.robot.Robot` through Ray's object store), rebuilds the scene from its obstacles when there is
+one, and runs :class:`~.batch.BatchSolver` (the local backend, one thread) on the chunks it is handed: the
+targets as arrays (:func:`pack_targets`), the answers back as a :class:`~.batch.BatchOutcome` (arrays, plus the
+full :class:`~evoik_pin.Result` of the targets solved one by one). A target's answer depends only on the
+target, the options and ``(entropy, its index)``, so the answers are those of the local backend whatever the
+chunks and the actors.
+
+Cluster: an ``address`` (or ``RAY_ADDRESS``) connects to a running cluster (``ray start --head`` on one machine,
+``ray start --address=HEAD:6379`` on the others; see docs/SCALE.md); without one, an already initialized Ray is
+used, else a local instance of ``workers`` CPUs is started (and left running for later calls: ``ray.shutdown()``
+stops it). Every node needs the same evoik_pin installed, and the scene's mesh and SRDF files at the same paths.
+
+Failures: a chunk whose actor dies (the process is killed, the node lost) is re-run on a new actor, up to
+``attempts`` times; nothing is lost. An error raised by the solver itself (a bad option) is raised as is.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import pickle
+import socket
+import uuid
+from collections import deque
+from collections.abc import Callable
+from urllib.parse import urlsplit
+
+import numpy as np
+
+from ..errors import BackendError, TargetError
+from ..problem import Target
+from .batch import BatchOutcome, BatchSolver, TargetSource, check_workers, gc_paused, grow_bar, progress_bar
+
+__all__ = ["RayBatch", "RayPool", "connect", "import_ray", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
+           "unpack_targets"]
+
+#: Attempts per chunk before its failure is reported (an actor dying each time).
+DEFAULT_ATTEMPTS = 3
+#: Seconds to reach a cluster address before calling it unreachable.
+CONNECT_TIMEOUT = 5.0
+INSTALL_HINT = "pip install 'evoik_pin[ray]'"
+
+
+def import_ray():
+    """The ``ray`` module, or a BackendError naming the extra that installs it."""
+    try:
+        import ray
+    except ImportError:
+        raise BackendError(f"backend='ray' needs Ray, which is not installed: {INSTALL_HINT}") from None
+    return ray
+
+
+def _probe(address: str) -> None:
+    """BackendError unless something listens at a ``host:port`` / ``ray://host:port`` address (Ray's own
+    connection attempt would retry for minutes)."""
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if not host or port is None:
+        raise BackendError(f"Ray cluster address {address!r} is not host:port, ray://host:port or 'auto'")
+    try:
+        socket.create_connection((host, port), timeout=CONNECT_TIMEOUT).close()
+    except OSError as exc:
+        raise BackendError(f"cannot reach the Ray cluster at {address!r}: {exc.strerror or exc}") from None
+
+
+def connect(address: str | None = None, workers: int | None = None):
+    """Make sure Ray is initialized; return the ``ray`` module.
+
+    ``address`` (else ``RAY_ADDRESS``): connect to that cluster (``"auto"``: the one running on this machine); an
+    address nothing answers at is a BackendError at once, even when Ray is already initialized. Without one: an
+    already initialized Ray is kept, else a local instance with ``workers`` CPUs (default every core) is started.
+    """
+    ray = import_ray()
+    address = address or os.environ.get("RAY_ADDRESS") or None
+    if address is not None and address != "auto":
+        _probe(address)
+    if ray.is_initialized():
+        return ray
+    kwargs = {"log_to_driver": False, "configure_logging": False}
+    try:
+        if address is None:
+            ray.init(num_cpus=check_workers(workers), include_dashboard=False, **kwargs)
+        else:
+            ray.init(address=address, **kwargs)
+    except (ConnectionError, TimeoutError) as exc:
+        raise BackendError(f"cannot reach the Ray cluster at {address!r}: {exc}") from None
+    return ray
+
+
+# ---------------------------------------------------------------------- what travels to the actors
+def pack_targets(targets: list[Target]) -> dict:
+    """Targets as arrays (pickling Target objects costs about 20 us each): ``planar``, ``yaw`` (NaN: none),
+    ``has_rotation`` (N,) and ``position`` (N, 3) (planar: (x, y, 0)), ``rotation`` (N, 3, 3)."""
+    N = len(targets)
+    position = np.zeros((N, 3))
+    rotation = np.tile(np.eye(3), (N, 1, 1))
+    planar = np.fromiter((t.planar for t in targets), dtype=bool, count=N)
+    has_rotation = np.fromiter((t.rotation is not None for t in targets), dtype=bool, count=N)
+    yaw = np.array([np.nan if t.yaw is None else t.yaw for t in targets])
+    for i, t in enumerate(targets):
+        position[i, :t.position.shape[0]] = t.position
+    if has_rotation.any():
+        rotation[has_rotation] = [t.rotation for t in targets if t.rotation is not None]
+    return {"position": position, "rotation": rotation, "planar": planar, "has_rotation": has_rotation, "yaw": yaw}
+
+
+def unpack_targets(packed) -> list[Target]:
+    """The targets :func:`pack_targets` packed (poses through :meth:`Target.from_poses`, in one pass), or those of an
+    (N, 4, 4) array of poses (checked: a TargetError names a bad one)."""
+    if isinstance(packed, np.ndarray):
+        return Target.from_poses(packed)
+    P, R, planar, has_rotation, yaw = (packed[k] for k in ("position", "rotation", "planar", "has_rotation", "yaw"))
+    N = P.shape[0]
+    if has_rotation.all():
+        H = np.zeros((N, 4, 4))
+        H[:, :3, :3], H[:, :3, 3], H[:, 3, 3] = R, P, 1.0
+        return Target.from_poses(H)
+    return [Target(P[i, :2], planar=True, yaw=None if np.isnan(yaw[i]) else float(yaw[i])) if planar[i]
+            else Target(P[i], R[i] if has_rotation[i] else None) for i in range(N)]
+
+
+def scene_spec(scene) -> dict | None:
+    """What rebuilds ``scene`` on another process (a Scene holds Pinocchio data that does not pickle): its
+    settings and its obstacles (kind, parameters, pose)."""
+    if scene is None:
+        return None
+    return {"self_collision": scene.self_collision, "srdf": scene.srdf,
+            "obstacles": [(o.kind, o.name, dict(o.params), o.pose.homogeneous.copy())
+                          for o in scene.obstacles.values()]}
+
+
+def build_scene(robot, spec: dict):
+    """The :class:`~evoik_pin.scene.Scene` of ``robot`` that :func:`scene_spec` describes."""
+    import pinocchio as pin
+
+    from ..scene import Scene
+
+    scene = Scene(robot, self_collision=spec["self_collision"], srdf=spec["srdf"])
+    for kind, name, params, pose in spec["obstacles"]:
+        getattr(scene, f"add_{kind}")(name, pose=pin.SE3(pose), **params)
+    return scene
+
+
+class ChunkWorker:
+    """A Ray actor's state: the robot (received once) and the solver of the call in progress (built on the first
+    chunk of each call: options checked, scene rebuilt, seed table cached in the actor's process)."""
+
+    def __init__(self, robot) -> None:
+        self.robot = robot
+        self._key = None
+        self._solver: BatchSolver | None = None
+
+    def solve(self, key: str, job: tuple, packed: dict, Q0: np.ndarray | None, offset: int,
+              crash: bool = False) -> BatchOutcome:
+        """Solve one chunk (targets ``offset``, ``offset + 1``, ... of call ``key``; ``job``: (make_problem, run,
+        method, entropy, options, scene spec, fallback)). ``crash``: exit the process at once instead (tests: an actor
+        dying mid-run)."""
+        if crash:
+            os._exit(1)
+        if key != self._key:
+            make_problem, run, method, entropy, options, scene, fallback = job
+            options = dict(options)
+            if scene is not None:
+                options["scene"] = build_scene(self.robot, scene)
+            self._solver = BatchSolver(self.robot, make_problem, run, method, entropy, options, fallback)
+            self._key = key
+        with gc_paused():
+            targets = unpack_targets(packed)
+        out = self._solver.solve(targets, Q0, offset=offset)
+        for r in out.singles.values():  # a lazy min_distance holds this process's scene: the driver re-attaches
+            r.distance_source = None
+        return out
+
+
+class RayPool:
+    """Actors holding one robot, kept between calls (starting an actor costs seconds: a process importing
+    evoik_pin and loading the compiled kernel). One pool is alive at a time (:func:`pool_for`)."""
+
+    def __init__(self, ray, robot, workers: int, key: tuple) -> None:
+        self.ray, self.key, self.workers = ray, key, workers
+        self._robot = ray.put(robot)  # pickled once into the object store
+        self._actor_class = ray.remote(num_cpus=1)(ChunkWorker)
+        self.actors = [self.new_actor() for _ in range(workers)]
+        self.replaced = 0  # actors replaced after dying
+
+    def new_actor(self):
+        return self._actor_class.remote(self._robot)
+
+    def replace(self, actor):
+        """A new actor in place of ``actor`` (dead, or to be killed)."""
+        self.retire(actor)
+        self.replaced += 1
+        fresh = self.new_actor()
+        self.actors.append(fresh)
+        return fresh
+
+    def retire(self, actor) -> None:
+        if actor in self.actors:
+            self.actors.remove(actor)
+        try:
+            self.ray.kill(actor)
+        except Exception:  # noqa: BLE001 - already gone, or Ray already shut down
+            pass
+
+    def close(self) -> None:
+        for actor in list(self.actors):
+            self.retire(actor)
+
+
+_POOL: list[RayPool] = []  # the live pool, if any
+
+
+def pool_for(robot, workers: int | None = None, address: str | None = None) -> RayPool:
+    """The actor pool for ``robot`` (its pickled content, so a robot whose bounds changed gets new actors) and
+    ``workers`` (default every CPU of the cluster); a pool kept from an earlier call when it matches, else a new
+    one (the previous pool is closed: its actors would hold CPUs the new ones need)."""
+    ray = connect(address, workers)
+    workers = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
+    key = (ray.get_runtime_context().get_job_id(), hashlib.sha1(pickle.dumps(robot)).hexdigest(), workers)
+    if _POOL and _POOL[0].key == key:
+        return _POOL[0]
+    shutdown_pool()
+    _POOL.append(RayPool(ray, robot, workers, key))
+    return _POOL[0]
+
+
+def shutdown_pool() -> None:
+    """Stop the kept actors (``ray.shutdown()`` does too)."""
+    while _POOL:
+        _POOL.pop().close()
+
+
+class RayBatch:
+    """One call's work on a :class:`RayPool`: chunks of targets to the actors, outcomes back in target order.
+
+    Args:
+        robot, make_problem, run, method, entropy, options, fallback: as :class:`~.batch.BatchSolver`'s.
+        workers: actors (one CPU each); default every CPU of the cluster.
+        address: see :func:`connect`. chunk_size: targets per chunk (default: about four chunks per actor,
+            256 to 20,000 targets). attempts: tries per chunk when actors die.
+    """
+
+    def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int, options: dict,
+                 fallback: bool = True, workers: int | None = None, address: str | None = None,
+                 chunk_size: int | None = None, attempts: int = DEFAULT_ATTEMPTS) -> None:
+        if workers is not None:
+            workers = check_workers(workers)
+        # the driver's own solver checks every option before any actor sees them, and judges scenes at the end
+        self._local = BatchSolver(robot, make_problem, run, method, entropy, options, fallback)
+        self.pool = pool_for(robot, workers, address)
+        self.ray, self.workers = self.pool.ray, self.pool.workers
+        self.chunk_size = chunk_size
+        self.attempts = attempts
+        self._scene = options.get("scene")
+        remote_options = {k: v for k, v in options.items() if k != "scene"}
+        self._key = uuid.uuid4().hex
+        self._job = self.ray.put((make_problem, run, method, entropy, remote_options, scene_spec(self._scene),
+                                 fallback))
+        self.crash_hook: set[int] = set()  # tests: chunks whose first attempt kills its actor
+
+    def template(self, target: Target | None = None):
+        """The call's problem (the driver's; its scene judges the batched answers), made for ``target`` the first
+        time."""
+        if self._local.template is None:
+            self._local._prepare(target)
+        return self._local.template
+
+    def _chunks(self, N: int) -> list[tuple[int, int]]:
+        size = self.chunk_size or int(np.clip(-(-N // (4 * self.workers)), 256, 20_000))
+        return [(a, min(a + size, N)) for a in range(0, N, size)]
+
+    def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
+        """Solve ``targets`` (a list of :class:`Target` or a :class:`~.batch.TargetSource`) from ``Q0`` (N, n) when
+        given, on the actors; the outcome in target order. ``offset``: the index of the first target in the whole
+        work (it keys the per-target generators)."""
+        ray, pool = self.ray, self.pool
+        source = targets if isinstance(targets, TargetSource) else TargetSource(targets)
+        self.template(source.chunk(0, 1)[0])  # every option checked here, before the actors see them
+        poses = source.poses
+        chunks = self._chunks(len(source))
+        todo = deque((k, 0) for k in range(len(chunks)))  # (chunk, attempt)
+        idle = deque(pool.actors)
+        running: dict = {}  # future -> (chunk, attempt, actor)
+        parts: dict[int, BatchOutcome] = {}
+        bar = progress_bar(progress, "solve_many (ray)")
+        grow_bar(bar, len(chunks))
+        try:
+            while todo or running:
+                while todo and idle:
+                    k, attempt = todo.popleft()
+                    actor = idle.popleft()
+                    a, b = chunks[k]
+                    # an array of poses goes as it is (the actor makes and checks the Target objects)
+                    packed = poses[a:b] if poses is not None else pack_targets(source.chunk(a, b))
+                    future = actor.solve.remote(self._key, self._job, packed, None if Q0 is None else Q0[a:b],
+                                                offset + a, crash=k in self.crash_hook and attempt == 0)
+                    running[future] = (k, attempt, actor)
+                done, _ = ray.wait(list(running), num_returns=1)
+                for future in done:
+                    k, attempt, actor = running.pop(future)
+                    try:
+                        parts[k] = ray.get(future)
+                    except ray.exceptions.RayActorError as exc:  # the actor died: a new one re-runs the chunk
+                        if attempt + 1 >= self.attempts:
+                            pool.retire(actor)
+                            raise BackendError(f"chunk {k} (targets {chunks[k][0]}-{chunks[k][1] - 1}) failed "
+                                               f"{self.attempts} times: its Ray actor died ({exc})") from None
+                        actor = pool.replace(actor)
+                        todo.appendleft((k, attempt + 1))
+                    except TargetError:  # a bad pose in a chunk sent as it was: name it by its index in the call
+                        source.check()
+                        raise
+                    else:
+                        if bar is not None:
+                            bar.update(1)
+                    idle.append(actor)
+        finally:
+            if bar is not None:
+                bar.close()
+        out = BatchOutcome.concatenate([parts[k] for k in range(len(chunks))])
+        if self._scene is not None:
+            for r in out.singles.values():
+                r.distance_source = functools.partial(self._scene.distance, r.q.copy())
+        return out
+
+    def __enter__(self) -> RayBatch:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass  # the pool's actors stay for the next call

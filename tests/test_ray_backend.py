@@ -1,0 +1,106 @@
+"""solve_many(backend="ray") and reachability maps on Ray: one local 2-CPU Ray instance for the module (starting
+Ray costs seconds), the same answers as the local backend, a dying actor's chunk re-run, scenes rebuilt in the
+actors, clear errors for unreachable clusters."""
+
+import numpy as np
+import pytest
+from test_batch import mixed, same
+
+import evoik_pin as ev
+from evoik_pin.errors import BackendError
+from evoik_pin.problem import Target
+from evoik_pin.solvers import ray_backend
+
+BUDGET = {"timeout": None, "max_restarts": 2}
+
+
+@pytest.fixture(scope="module")
+def ray():
+    ray = pytest.importorskip("ray")
+    started = not ray.is_initialized()
+    if started:
+        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+    yield ray
+    ray_backend.shutdown_pool()
+    if started:
+        ray.shutdown()
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return ev.load_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def targets(panda):
+    return mixed(panda, 300, 11, every=4, far={3: [2.0, 0.0, 0.3]})
+
+
+def test_pack_and_unpack_targets_round_trip():
+    ts = [Target(np.array([0.1, 0.2, 0.3])), Target(np.array([0.3, 0.0, 0.1]), np.diag([1.0, -1.0, -1.0])),
+          Target.planar_target(0.2, -0.1, 0.5), Target.planar_target(0.1, 0.1)]
+    back = ray_backend.unpack_targets(ray_backend.pack_targets(ts))
+    for a, b in zip(ts, back, strict=True):
+        assert np.array_equal(a.position, b.position) and a.planar == b.planar and a.yaw == b.yaw
+        assert (a.rotation is None and b.rotation is None) or np.array_equal(a.rotation, b.rotation)
+
+
+def test_ray_gives_the_local_answers_in_target_order(ray, panda, targets, capsys):
+    local = ev.solve_many(panda, targets, seed=3, workers=2, **BUDGET)
+    remote = ev.solve_many(panda, targets, seed=3, backend="ray", workers=2, progress=True, **BUDGET)
+    same(local, remote)
+    assert "solve_many (ray)" in capsys.readouterr().err
+    assert remote.stats["backend"] == "ray" and remote.stats["workers"] == 2
+    assert not remote[3].success and "max_restarts (2)" in remote[3].message
+    assert remote.stats["solved"] == local.stats["solved"] >= 295
+    starts = np.array([r.q for r in local]) + 1e-3
+    same(ev.solve_many(panda, targets, q0=starts, seed=3, **BUDGET),
+          ev.solve_many(panda, targets, q0=starts, seed=3, backend="ray", **BUDGET))
+
+
+def test_a_dying_actor_has_its_chunk_re_run(ray, panda, targets):
+    work = Target.coerce_many(targets)
+    local = ev.solve_many(panda, targets, seed=5, workers=1, **BUDGET)
+    job = ray_backend.RayBatch(panda, ev.api.make_problem, ev.api._run, "memetic", 5, dict(BUDGET), workers=2,
+                               chunk_size=64)
+    replaced = job.pool.replaced
+    job.crash_hook = {1, 3}  # the first attempts of chunks 1 and 3 kill their actor (os._exit) mid-run
+    out = job.solve(work)
+    assert job.pool.replaced == replaced + 2 and len(job.pool.actors) == 2
+    same(local, out.results(job.template(work[0])))
+
+
+def test_a_scene_is_rebuilt_in_the_actors(ray, panda):
+    from evoik_pin.scene import Scene
+    from evoik_pin.scene.examples import SHELF_INTERIOR, add_table_and_shelf, free_configurations
+
+    scene = add_table_and_shelf(Scene(panda))
+    Q = free_configurations(scene, 12, np.random.default_rng(2), SHELF_INTERIOR)
+    H = np.array([panda.fk(q).homogeneous for q in Q])
+    H[5, :3, 3] = [0.6, 0.0, 0.4]  # inside the shelf's open interior, an orientation it cannot reach
+    local = ev.solve_many(panda, H, scene=scene, seed=0, **BUDGET)
+    remote = ev.solve_many(panda, H, scene=scene, seed=0, backend="ray", **BUDGET)
+    same(local, remote)
+    for r in remote:
+        assert r.collision_free == (not scene.in_collision(r.q))
+        assert r.min_distance == pytest.approx(scene.distance(r.q))
+
+
+def test_reachability_map_on_ray(ray):
+    from evoik_pin.reach import reachability_map
+
+    local = reachability_map("planar2r", voxel=0.05, progress=False)
+    remote = reachability_map("planar2r", voxel=0.05, backend="ray", workers=2, progress=False)
+    assert np.array_equal(local.index, remote.index) and np.array_equal(local.manipulability, remote.manipulability)
+    assert remote.settings["backend"] == "ray"
+
+
+def test_unreachable_cluster_address_is_a_clear_error(panda, monkeypatch):
+    pytest.importorskip("ray")
+    with pytest.raises(BackendError, match=r"cannot reach the Ray cluster at '127\.0\.0\.1:1'"):
+        ev.solve_many(panda, [np.array([0.3, 0.0, 0.5])], backend="ray", address="127.0.0.1:1")
+    monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:1")
+    with pytest.raises(BackendError, match="cannot reach"):
+        ray_backend.connect()
+    with pytest.raises(BackendError, match="not host:port"):
+        ray_backend.connect(address="nowhere")
