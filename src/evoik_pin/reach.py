@@ -123,7 +123,8 @@ class ReachMap:
         panels = [("xy", k) for k in layers] + ([("xz", int(np.abs(ys).argmin()))] if nz > 1 else [])
         cols = min(3, len(panels))
         rows = -(-len(panels) // cols)
-        fig, axes = plt.subplots(rows, cols, figsize=(max(6.0, 4.2 * cols), 3.8 * rows + 0.6), squeeze=False)
+        fig, axes = plt.subplots(rows, cols, figsize=(max(6.0, 4.2 * cols), 3.8 * rows + 0.6), squeeze=False,
+                                 layout="constrained")  # no label overlaps its neighbour panel
         image = None
         for ax, (plane, k) in zip(axes.ravel(), panels, strict=False):
             if plane == "xy":
