@@ -387,13 +387,9 @@ class Robot:
         """Configuration (model.nq,) of :attr:`model` at joint vector ``q`` (n,): mimic joints at their coupled
         values, continuous joints as (cos, sin)."""
         x = self._physical(np.asarray(q, dtype=float))
-        out = np.empty(self.model.nq)
-        for k, i in enumerate(self._chain_idx_q):
-            if self._chain_continuous[k]:
-                out[i], out[i + 1] = np.cos(x[k]), np.sin(x[k])
-            else:
-                out[i] = x[k]
-        return out
+        if not self._has_continuous:
+            return np.array(x)  # a copy: the caller owns it
+        return np.concatenate((x, np.cos(x), np.sin(x)))[self._pin_gather]
 
     def from_pinocchio(self, q_pin) -> np.ndarray:
         """Joint vector (n,) of a configuration (model.nq,) of :attr:`model`; continuous joints via
@@ -467,8 +463,8 @@ class Robot:
         return bool(self._chain_continuous.any())
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`to_pinocchio` without the per-joint Python loop (``q`` itself when nothing is continuous and
-        no mimic joint is on the chain).
+        """:meth:`to_pinocchio` for the hot path: ``q`` itself when nothing is continuous and no mimic joint is
+        on the chain, else the conversion.
 
         The last conversion is memoized by the bytes of ``q``: local solvers ask for the pose and then the
         Jacobian of one configuration, and the (cos, sin) conversion costs more than the kinematics.
@@ -478,8 +474,7 @@ class Robot:
         key = q.tobytes()
         if key == self._pin_q_key:
             return self._pin_q_value
-        x = self._physical(q)
-        out = np.concatenate((x, np.cos(x), np.sin(x)))[self._pin_gather] if self._has_continuous else x
+        out = self.to_pinocchio(q)
         self._pin_q_key, self._pin_q_value = key, out
         return out
 
