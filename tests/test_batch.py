@@ -177,3 +177,32 @@ def test_outcomes_concatenate_in_order(panda, mixed_targets):
                                             solver.solve(targets[11:], offset=11)])
     same(whole.results(), parts.results())
     assert sorted(parts.singles) == sorted(whole.singles) == [10]
+
+
+def test_results_are_a_lazy_sequence_with_the_same_answers_as_arrays(panda, mixed_targets):
+    """solve_many returns a sequence of Result made on first access, and the same answers as read-only arrays."""
+    res = ev.solve_many(panda, mixed_targets, seed=3, workers=1, **BUDGET)
+    N = len(mixed_targets)
+    assert len(res) == N and res.q.shape == (N, panda.n)
+    assert res[3] is res[3] and res[-1] is res[N - 1]  # made once, then kept
+    listed = list(res)
+    assert [r.q.tolist() for r in res[5:9]] == [r.q.tolist() for r in listed[5:9]]
+    with pytest.raises(IndexError):
+        res[N]
+    for i, r in enumerate(listed):
+        assert isinstance(r, Result) and np.array_equal(res.q[i], r.q)
+        assert res.success[i] == r.success and res.position_error[i] == r.position_error
+        assert res.cost[i] == r.cost and res.evaluations[i] == r.evaluations
+        if r.orientation_error is None:  # the position-only targets
+            assert np.isnan(res.orientation_error[i])
+        else:
+            assert res.orientation_error[i] == r.orientation_error
+    assert res.stats["solved"] == int(res.success.sum()) == sum(r.success for r in listed)
+    with pytest.raises(ValueError):
+        res.q[0, 0] = 1.0  # the arrays are views of the answers: read-only
+    # an (N, 4, 4) array of poses (no Target objects made) gives the answers of the same poses as Target objects
+    H = np.array([panda.fk(q).homogeneous for q in panda.random_configurations(40, np.random.default_rng(4))])
+    from_array = ev.solve_many(panda, H, seed=3, workers=1, **BUDGET)
+    from_objects = ev.solve_many(panda, [pin.SE3(T) for T in H], seed=3, workers=1, **BUDGET)
+    same(from_array, from_objects)
+    assert from_array.success.all()

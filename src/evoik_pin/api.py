@@ -236,7 +236,7 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
         targets: a sequence of targets (anything :func:`solve` accepts: poses, positions, planar
             targets, all of one kind or mixed), or an array of N homogeneous poses (N, 4, 4), checked in one
-            vectorized pass (:meth:`Target.from_poses`).
+            vectorized pass (:meth:`Target.check_poses`) and solved without a Target object per pose.
         method: solver name.
         seed: int, None or Generator. A target solved one by one draws from its own generator,
             ``SeedSequence(seed).spawn(N)[i]`` (a Generator ``seed`` gives one draw as the entropy), so a seed fixes
@@ -255,9 +255,12 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
             ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...).
 
     Returns:
-        A :class:`BatchResults`: ``list[Result]`` in target order, plus ``stats`` with the throughput
-        (``results.stats["throughput"]`` targets per second). A batch-solved target's ``time_s`` is its
-        share of the batched rounds (their wall time divided by the targets they processed).
+        A :class:`BatchResults`: a sequence of :class:`Result` in target order (each made when first read:
+        ``results[i]``, iteration, ``list(results)``), the same answers as read-only arrays (``results.q`` (N, n),
+        ``results.success``, ``results.position_error``, ``results.orientation_error``, ``results.cost``,
+        ``results.evaluations``), and ``stats`` with the throughput (``results.stats["throughput"]`` targets per
+        second). A batch-solved target's ``time_s`` is its share of the batched rounds (their wall time divided
+        by the targets they processed).
 
     Raises:
         OptionError: ``workers`` < 1, an unknown ``backend``. BackendError: Ray not installed, a cluster address

@@ -143,9 +143,24 @@ class Target:
 
     @classmethod
     def from_poses(cls, poses) -> list[Target]:
-        """Pose targets from an array of N homogeneous matrices (N, 4, 4) (m), checked in one vectorized pass:
-        finite numbers, rotation blocks orthonormal with det +1 (to 1e-6). A TargetError names the first bad
-        target's index."""
+        """Pose targets from an array of N homogeneous matrices (N, 4, 4) (m), checked in one vectorized pass
+        (:meth:`check_poses`)."""
+        H = cls.check_poses(poses)
+        out = []
+        for T in H:  # already checked: skip the per-instance validation of __post_init__
+            t = object.__new__(cls)
+            object.__setattr__(t, "position", T[:3, 3].copy())
+            object.__setattr__(t, "rotation", T[:3, :3].copy())
+            object.__setattr__(t, "planar", False)
+            object.__setattr__(t, "yaw", None)
+            out.append(t)
+        return out
+
+    @staticmethod
+    def check_poses(poses) -> np.ndarray:
+        """``poses`` as a float (N, 4, 4) array of homogeneous matrices (m), checked in one vectorized pass: finite
+        numbers, rotation blocks orthonormal with det +1 (to 1e-6), bottom rows [0 0 0 1]. A TargetError names the
+        first bad target's index."""
         H = np.asarray(poses, dtype=float)
         if H.ndim != 3 or H.shape[1:] != (4, 4):
             raise TargetError(f"poses must be an array of shape (N, 4, 4), got shape {H.shape}")
@@ -163,15 +178,7 @@ class Target:
         if bad.size:
             raise TargetError(f"target {int(bad[0])}: the bottom row of a homogeneous pose must be [0 0 0 1], "
                               f"got {H[int(bad[0]), 3].tolist()}")
-        out = []
-        for T in H:  # already checked: skip the per-instance validation of __post_init__
-            t = object.__new__(cls)
-            object.__setattr__(t, "position", T[:3, 3].copy())
-            object.__setattr__(t, "rotation", T[:3, :3].copy())
-            object.__setattr__(t, "planar", False)
-            object.__setattr__(t, "yaw", None)
-            out.append(t)
-        return out
+        return H
 
     @classmethod
     def coerce_many(cls, targets) -> list[Target]:

@@ -227,7 +227,8 @@ class _Engine:
             self._local = batch.BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
             self.workers = batch.check_workers(workers)
 
-    def solve(self, targets: list[Target]) -> batch.BatchOutcome:
+    def solve(self, targets) -> batch.BatchOutcome:
+        """Solve ``targets`` (a list of :class:`Target` or an (N, 4, 4) array of poses)."""
         if self.backend == "ray":
             return self._ray.solve(targets)
         return self._local.solve(targets, workers=self.workers)
@@ -305,11 +306,10 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 H[:, :, :3, :3] = R
                 H[:, :, :3, 3] = centers[part, None, :]
                 H[:, :, 3, 3] = 1.0
-                with batch.gc_paused():
-                    poses = Target.from_poses(H.reshape(-1, 4, 4))
+                poses = H.reshape(-1, 4, 4)  # solved as an array: no Target object per pose
                 res = engine.solve(poses)
                 if bar is not None:
-                    bar.update(len(poses))
+                    bar.update(poses.shape[0])
                 ok = res.success.reshape(part.size, orientations)
                 count[part] = ok.sum(axis=1)
                 m = np.zeros(ok.shape)

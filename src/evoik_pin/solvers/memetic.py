@@ -49,6 +49,7 @@ from .collision_verdict import pairs_text
 from .common import diversity, halton
 from .de_ops import binomial_crossover, distinct_indices, mutate
 from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from .lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
 from .options import check_int, check_positive
 from .polish import errors_text
 
@@ -67,6 +68,7 @@ GUARANTEED_TABLE_RUNS = 4
 BOUND_SHARE = 0.4
 #: Target kinds a seed table serves, each with its own nearness features.
 _KINDS = ("pose", "position", "planar", "planar_yaw")
+_KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
 
 
 # ---------------------------------------------------------------------- seed table
@@ -113,18 +115,16 @@ class SeedTable:
 
     def target_features(self, targets: list[Target]) -> tuple[str, np.ndarray]:
         """(kind key, features (N, d)) of targets that are all of one kind."""
-        t0 = targets[0]
-        if t0.planar:
-            xy = np.array([t.position for t in targets])
-            if t0.yaw is None:
-                return "planar", xy
-            yaw = np.array([t.yaw for t in targets])
-            return "planar_yaw", np.concatenate([xy, self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
-        P = np.array([t.position for t in targets])
-        if t0.rotation is None:
-            return "position", P
-        R = np.array([t.rotation for t in targets])
-        return "pose", np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
+        return self.encoded_features(target_kind(targets[0]), *encode_targets(targets))
+
+    def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
+        """(kind key, features (N, d)) of N targets of one ``KIND_*`` in the kernel's encoding
+        (:func:`~evoik_pin.solvers.lm.layout.encode_targets`: P (N, 3), Rts (N, 3, 3))."""
+        key = _KIND_KEYS[kind]
+        if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
+            yaw = P[:, 2]
+            return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
+        return key, self._pose_features(key, P, Rts)
 
     def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
@@ -190,7 +190,17 @@ class SeedTable:
         Many targets at once go through a k-d tree of the table's features (built once per target kind and
         mask): O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
         """
-        key, f = self.target_features(targets)
+        return self.nearest_encoded(target_kind(targets[0]), *encode_targets(targets), k, allowed)
+
+    def nearest_encoded(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
+                        eps: float = 0.0) -> np.ndarray:
+        """:meth:`nearest` for N targets of one ``KIND_*`` in the kernel's encoding (P (N, 3), Rts (N, 3, 3)).
+
+        ``eps`` > 0: approximate neighbours (``scipy.spatial.cKDTree.query``'s ``eps``: the i-th entry returned
+        is within (1 + eps) times the distance of the true i-th nearest), several times cheaper in these 12-D
+        features.
+        """
+        key, f = self.encoded_features(kind, P, Rts)
         tree_key = (key, None if allowed is None else allowed.tobytes())
         hit = self._trees.get(tree_key)
         if hit is None:
@@ -202,10 +212,11 @@ class SeedTable:
             hit = self._trees[tree_key] = (cKDTree(self._table_features(key)[0][index]), index)
         tree, index = hit
         k = min(k, tree.n)
-        if k == 0:
-            return np.zeros((len(targets), 0), dtype=np.intp)
-        _, idx = tree.query(f, k=k)
-        return index[np.asarray(idx, dtype=np.intp).reshape(len(targets), k)]
+        N = f.shape[0]
+        if k == 0 or N == 0:
+            return np.zeros((N, 0), dtype=np.intp)
+        _, idx = tree.query(f, k=k, eps=eps)
+        return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()

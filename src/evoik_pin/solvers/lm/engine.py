@@ -43,7 +43,10 @@ from .layout import (
     DEFAULT_MAX_STEP,
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
+    KIND_PLANAR,
+    KIND_PLANAR_YAW,
     KIND_POSE,
+    KIND_POSITION,
     P_ITERATIONS,
     S_CONVERGED,
     S_EVALUATIONS,
@@ -51,9 +54,9 @@ from .layout import (
     S_POS,
     S_ROT,
     STATS_SIZE,
+    TargetArrays,
     box_constants,
     encode_target,
-    encode_targets,
     kernel_params,
     target_kind,
 )
@@ -201,7 +204,7 @@ class LevenbergMarquardt:
                          int(s[:, S_ITERATIONS].sum()), int(s[:, S_EVALUATIONS].sum())), k
 
 
-def solve_pairs(robot, Q: np.ndarray, targets: list[Target], lower: np.ndarray, upper: np.ndarray,
+def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lower: np.ndarray, upper: np.ndarray,
                 tolerance: float, rotation_tolerance: float, max_iterations: int = DEFAULT_ITERATIONS,
                 damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
                 engine: str = "compiled") -> PairsOutcome:
@@ -209,32 +212,43 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target], lower: np.ndarray, 
     :meth:`LevenbergMarquardt.run`; with the compiled engine one kernel call for all pairs.
 
     Args:
-        robot: the chain. Q: (N, n) start configurations. targets: N targets, all of one kind. lower, upper:
-            (n,) box. tolerance (m), rotation_tolerance (rad): success thresholds. max_iterations: steps per
-            pair. engine: as :class:`LevenbergMarquardt`'s.
+        robot: the chain. Q: (N, n) start configurations. targets: N targets, all of one kind (a list of
+            :class:`~evoik_pin.problem.Target`, or their :class:`~.layout.TargetArrays`). lower, upper: (n,) box.
+            tolerance (m), rotation_tolerance (rad): success thresholds. max_iterations: steps per pair.
+            engine: as :class:`LevenbergMarquardt`'s.
     """
     _check_engine(engine)
     N = Q.shape[0]
-    kind = target_kind(targets[0])
-    oriented = targets[0].has_orientation
     if engine == "python":
         from .reference import ReferenceLM
 
+        listed = targets if not isinstance(targets, TargetArrays) else targets_of(targets)
+        oriented = listed[0].has_orientation
         outs = [ReferenceLM(IKProblem(robot, t, lower=lower, upper=upper, tolerance=tolerance,
                                       rotation_tolerance=rotation_tolerance), damping, max_step
-                            ).run(Q[i], max_iterations) for i, t in enumerate(targets)]
+                            ).run(Q[i], max_iterations) for i, t in enumerate(listed)]
         return PairsOutcome(np.array([o.q for o in outs]), np.array([o.position_error for o in outs]),
                             np.array([o.orientation_error for o in outs]) if oriented else None,
                             np.array([o.converged for o in outs]), np.array([o.evaluations for o in outs]))
+    arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
     lm_run_pairs = compiled_kernel()["lm_run_pairs"]
-    P, Rts = encode_targets(targets)
     _, any_wrap, _, _, box = box_constants(robot, lower, upper)
-    params = kernel_params(tolerance, rotation_tolerance, kind, max_iterations, damping, max_step)
+    params = kernel_params(tolerance, rotation_tolerance, arrays.kind, max_iterations, damping, max_step)
     chain = robot.chain_constants() + robot.chain_coupling()
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *chain, box, any_wrap, P, Rts, params, Q_out, stats)
-    return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if oriented else None,
+    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *chain, box, any_wrap, arrays.P, arrays.Rts, params, Q_out,
+                 stats)
+    return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
 
 
+def targets_of(arrays: TargetArrays) -> list[Target]:
+    """Target objects of :class:`~.layout.TargetArrays` (the reference engine works on them)."""
+    P, Rts = arrays.P, arrays.Rts
+    if arrays.kind in (KIND_PLANAR, KIND_PLANAR_YAW):
+        return [Target(P[i, :2], planar=True, yaw=float(P[i, 2]) if arrays.kind == KIND_PLANAR_YAW else None)
+                for i in range(len(arrays))]
+    if arrays.kind == KIND_POSITION:
+        return [Target(P[i]) for i in range(len(arrays))]
+    return [Target(P[i], Rts[i]) for i in range(len(arrays))]

@@ -16,12 +16,14 @@ Kernel arguments built here:
 from __future__ import annotations
 
 import weakref
+from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT_STALL_RATIO",
            "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
-           "box_constants", "encode_target", "encode_targets", "kernel_params", "target_kind", "wrapping_joints"]
+           "TargetArrays", "box_constants", "encode_target", "encode_targets", "kernel_params", "target_kind",
+           "wrapping_joints"]
 
 TWO_PI = 2.0 * np.pi
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
@@ -86,6 +88,44 @@ def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
     if t0.rotation is None:
         return P, np.ascontiguousarray(np.broadcast_to(np.eye(3), (N, 3, 3)))
     return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
+
+
+@dataclass(frozen=True)
+class TargetArrays:
+    """N targets of one kind as the kernel reads them (:func:`encode_targets`), without Target objects: how the
+    batch solver carries millions of targets (an (N, 4, 4) array of poses becomes one without a Python loop).
+
+    Attributes:
+        kind: their ``KIND_*``. P: (N, 3) positions (m; planar: x, y, yaw rad). Rts: (N, 3, 3) rotations
+            (identity for targets without one).
+    """
+
+    kind: int
+    P: np.ndarray
+    Rts: np.ndarray
+
+    @classmethod
+    def of(cls, targets) -> TargetArrays:
+        """The arrays of a list of :class:`~evoik_pin.problem.Target` of one kind."""
+        return cls(target_kind(targets[0]), *encode_targets(targets))
+
+    @classmethod
+    def from_poses(cls, H: np.ndarray) -> TargetArrays:
+        """Pose targets from (N, 4, 4) homogeneous matrices already checked (``Target.check_poses``)."""
+        return cls(KIND_POSE, np.ascontiguousarray(H[:, :3, 3], dtype=float),
+                   np.ascontiguousarray(H[:, :3, :3], dtype=float))
+
+    def __len__(self) -> int:
+        return int(self.P.shape[0])
+
+    @property
+    def oriented(self) -> bool:
+        """True when the targets constrain orientation (pose, planar with yaw)."""
+        return self.kind in (KIND_POSE, KIND_PLANAR_YAW)
+
+    def take(self, rows: np.ndarray) -> TargetArrays:
+        """The targets at ``rows`` (an index array), as new arrays."""
+        return TargetArrays(self.kind, self.P[rows], self.Rts[rows])
 
 
 def wrapping_joints(robot, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

@@ -1,0 +1,195 @@
+"""What a batch of targets came to: arrays (:class:`BatchOutcome`), and what :func:`~evoik_pin.solve_many`
+returns: :class:`BatchResults`, a sequence of :class:`~evoik_pin.Result` made on first access, with the same
+answers as arrays.
+
+Making a :class:`Result` costs about 2 us, a tenth of a whole batched solve: a dataset of millions of poses reads
+``results.q`` and ``results.success``; a script that reads ``results[i]`` pays for the targets it reads.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..result import Result
+from .collision_verdict import with_collision_verdict
+
+__all__ = ["SOURCE_Q0", "SOURCE_SINGLE", "SOURCE_TABLE", "BatchOutcome", "BatchResults"]
+
+#: ``BatchOutcome.source`` codes: solved by the batched rounds from q0 / from a seed-table entry, or one by one.
+SOURCE_Q0, SOURCE_TABLE, SOURCE_SINGLE = 0, 1, 2
+_LABELS = {SOURCE_Q0: "q0", SOURCE_TABLE: "seed table"}
+
+
+@dataclass
+class BatchOutcome:
+    """What a batch of N targets came to, as arrays (cheap to send between processes; :meth:`result` makes
+    a :class:`Result`).
+
+    Attributes:
+        q: (N, n) answers. position_error (m), orientation_error (rad; NaN for targets without orientation),
+            cost, time_s (s; a batched target's share of its rounds), evaluations: (N,).
+        success: (N,) bool. source: (N,) int8, ``SOURCE_Q0`` / ``SOURCE_TABLE`` (batched rounds) or
+            ``SOURCE_SINGLE`` (solved one by one: its full :class:`Result` is ``singles[i]``).
+        collision_checked: the batched answers passed a scene's exact check.
+    """
+
+    q: np.ndarray
+    position_error: np.ndarray
+    orientation_error: np.ndarray
+    cost: np.ndarray
+    success: np.ndarray
+    evaluations: np.ndarray
+    time_s: np.ndarray
+    source: np.ndarray
+    singles: dict[int, Result] = field(default_factory=dict)
+    collision_checked: bool = False
+
+    @classmethod
+    def empty(cls, N: int, n: int) -> BatchOutcome:
+        nan = np.full(N, np.nan)
+        return cls(np.zeros((N, n)), nan, nan.copy(), nan.copy(), np.zeros(N, dtype=bool), np.zeros(N, dtype=np.int64),
+                   np.zeros(N), np.full(N, SOURCE_SINGLE, dtype=np.int8))
+
+    def __len__(self) -> int:
+        return int(self.q.shape[0])
+
+    def set_single(self, i: int, r: Result) -> None:
+        self.singles[i] = r
+        self.q[i] = r.q
+        self.position_error[i] = r.position_error
+        self.orientation_error[i] = np.nan if r.orientation_error is None else r.orientation_error
+        self.cost[i], self.success[i], self.evaluations[i], self.time_s[i] = r.cost, r.success, r.evaluations, r.time_s
+        self.source[i] = SOURCE_SINGLE
+
+    @classmethod
+    def concatenate(cls, parts: list[BatchOutcome]) -> BatchOutcome:
+        """One outcome of consecutive parts (their ``singles`` re-indexed)."""
+        if len(parts) == 1:
+            return parts[0]
+        out = cls(*(np.concatenate([getattr(p, name) for p in parts]) for name in
+                    ("q", "position_error", "orientation_error", "cost", "success", "evaluations", "time_s",
+                     "source")), collision_checked=any(p.collision_checked for p in parts))
+        start = 0
+        for p in parts:
+            out.singles.update({start + i: r for i, r in p.singles.items()})
+            start += len(p)
+        return out
+
+    def result(self, j: int, template=None) -> Result | None:
+        """Target ``j``'s :class:`Result` (None for a target left unsolved without a per-target solve).
+        ``template``: the problem of the call (with a scene, a batched answer gets its collision verdict,
+        ``min_distance`` included)."""
+        single = self.singles.get(j)
+        if single is not None or self.source[j] == SOURCE_SINGLE:
+            return single
+        if "_made" not in self.__dict__:
+            # One real Result gives the field set; the others copy its __dict__ and change what differs (about
+            # three times cheaper than the dataclass __init__).
+            base = Result(q=self.q[0], position_error=0.0, orientation_error=None, cost=0.0, success=True,
+                          generations=0, evaluations=0, time_s=0.0, method="memetic",
+                          collision_free=True if self.collision_checked else None).__dict__
+            messages = {s: f"tolerance reached by batched LM from {label} (solve_many)" for s, label in _LABELS.items()}
+            self.__dict__["_made"] = (base, messages)
+        base, messages = self.__dict__["_made"]
+        cost = float(self.cost[j])
+        rot = float(self.orientation_error[j])
+        d = base.copy()
+        d.update(q=self.q[j], position_error=float(self.position_error[j]), orientation_error=None if math.isnan(rot)
+                 else rot, cost=cost, evaluations=int(self.evaluations[j]), time_s=float(self.time_s[j]),
+                 message=messages[int(self.source[j])],
+                 history={"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1)})
+        r = Result.__new__(Result)
+        r.__dict__ = d
+        if template is not None and template.scene is not None:
+            r = with_collision_verdict(template, r)
+        return r
+
+    def results(self, template=None) -> list[Result]:
+        """Every target's :class:`Result`, in order (see :meth:`result`)."""
+        return [self.result(j, template) for j in range(len(self))]
+
+
+class BatchResults(Sequence):
+    """What :func:`evoik_pin.solve_many` returns: one :class:`Result` per target, in order, made on first access
+    (``results[i]``, iteration, slices; ``list(results)`` makes them all), the same answers as arrays, and
+    ``stats``.
+
+    Arrays (read-only views, one row per target): ``q`` (N, n), ``success`` (N,) bool, ``position_error`` (N,) m,
+    ``orientation_error`` (N,) rad (NaN for targets without orientation), ``cost``, ``evaluations`` (N,).
+
+    ``stats`` (a dict): ``n`` targets, ``solved``, ``success_rate``, ``time_s`` (wall clock of the whole call),
+    ``throughput`` (targets per second, ``n / time_s``), ``batched`` (targets solved by the batched LM rounds),
+    ``fallback`` (targets handed to the per-target solver, and of those ``fallback_solved``), ``workers`` and
+    ``backend``.
+    """
+
+    def __init__(self, outcome: BatchOutcome, template=None, stats: dict | None = None) -> None:
+        self.outcome = outcome
+        self.template = template
+        self.stats = stats or {}
+        self._made: list[Result | None] = [None] * len(outcome)
+
+    def __len__(self) -> int:
+        return len(self._made)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        i = operator.index(i)
+        N = len(self._made)
+        if i < 0:
+            i += N
+        if not 0 <= i < N:
+            raise IndexError(f"target index {i} out of range for {N} results")
+        r = self._made[i]
+        if r is None:
+            r = self._made[i] = self.outcome.result(i, self.template)
+        return r
+
+    def __iter__(self) -> Iterator[Result]:
+        return (self[i] for i in range(len(self)))
+
+    def __repr__(self) -> str:
+        s = self.stats
+        return (f"<BatchResults: {len(self)} targets, {s.get('solved', int(self.success.sum()))} solved"
+                + (f", {s['throughput']:,.0f} targets/s" if "throughput" in s else "") + ">")
+
+    def _view(self, name: str) -> np.ndarray:
+        a = getattr(self.outcome, name).view()
+        a.flags.writeable = False
+        return a
+
+    @property
+    def q(self) -> np.ndarray:
+        """(N, n) answers (rad or m)."""
+        return self._view("q")
+
+    @property
+    def success(self) -> np.ndarray:
+        """(N,) bool: the answer meets the tolerances (and, with a scene, is collision-free)."""
+        return self._view("success")
+
+    @property
+    def position_error(self) -> np.ndarray:
+        """(N,) tip position errors (m)."""
+        return self._view("position_error")
+
+    @property
+    def orientation_error(self) -> np.ndarray:
+        """(N,) tip orientation errors (rad); NaN for targets without orientation."""
+        return self._view("orientation_error")
+
+    @property
+    def cost(self) -> np.ndarray:
+        """(N,) objective values."""
+        return self._view("cost")
+
+    @property
+    def evaluations(self) -> np.ndarray:
+        """(N,) forward-kinematics evaluations per target."""
+        return self._view("evaluations")

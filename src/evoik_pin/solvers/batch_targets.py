@@ -1,0 +1,104 @@
+"""The targets of a :func:`~evoik_pin.solve_many` call, chunk by chunk, as the batch solver reads them.
+
+A user's targets (an (N, 4, 4) array of poses, a sequence of anything :meth:`Target.coerce` accepts, or an
+iterable) become :class:`TargetBlock` objects of consecutive targets: the kernel's arrays
+(:class:`~.lm.layout.TargetArrays`), one group per target kind. An array of poses is checked and encoded in a
+few vectorized passes with no :class:`~evoik_pin.problem.Target` object made (they cost about 2 us each, the
+tenth of a whole batched solve); a Target is made only for a target that needs one: the few the batched rounds
+leave to the per-target solver.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..errors import TargetError
+from ..problem import Target
+from .lm.layout import TargetArrays, target_kind
+
+__all__ = ["TargetBlock", "TargetSource"]
+
+
+class TargetBlock:
+    """Consecutive targets of a call, grouped by kind for the kernel.
+
+    Attributes:
+        groups: ``[(rows, arrays)]``: the block's row indices (k,) of one target kind and their
+            :class:`~.lm.layout.TargetArrays`, in the order the kinds first appear.
+    """
+
+    def __init__(self, groups: list[tuple[np.ndarray, TargetArrays]], size: int,
+                 target: Callable[[int], Target]) -> None:
+        self.groups = groups
+        self._size = size
+        self._target = target
+
+    def __len__(self) -> int:
+        return self._size
+
+    def target(self, i: int) -> Target:
+        """Row ``i`` as a :class:`~evoik_pin.problem.Target` (made on demand for an array of poses)."""
+        return self._target(i)
+
+    @classmethod
+    def of_poses(cls, H: np.ndarray) -> TargetBlock:
+        """A block of (k, 4, 4) poses already checked (``Target.check_poses``)."""
+        return cls([(np.arange(H.shape[0]), TargetArrays.from_poses(H))], H.shape[0],
+                   lambda i: Target.from_poses(H[i:i + 1])[0])
+
+    @classmethod
+    def of_targets(cls, targets: list[Target]) -> TargetBlock:
+        """A block of Target objects (any mix of kinds)."""
+        by_kind: dict[int, list[int]] = {}
+        for i, t in enumerate(targets):
+            by_kind.setdefault(target_kind(t), []).append(i)
+        groups = [(np.array(rows), TargetArrays.of([targets[i] for i in rows])) for rows in by_kind.values()]
+        return cls(groups, len(targets), targets.__getitem__)
+
+
+class TargetSource:
+    """The user's targets, made into :class:`TargetBlock` objects chunk by chunk (the pipeline makes a chunk's
+    while worker threads solve the earlier ones).
+
+    ``targets``: an (N, 4, 4) array of poses, any sequence :meth:`Target.coerce_many` accepts, or an iterable
+    (listed first)."""
+
+    def __init__(self, targets) -> None:
+        self.raw = targets if isinstance(targets, (np.ndarray, list, tuple)) else list(targets)
+
+    def __len__(self) -> int:
+        return len(self.raw)
+
+    @property
+    def poses(self) -> np.ndarray | None:
+        """The (N, 4, 4) array when the targets are one (Ray sends its slices as they are), else None."""
+        raw = self.raw
+        return raw if isinstance(raw, np.ndarray) and raw.ndim == 3 and raw.shape[1:] == (4, 4) else None
+
+    def chunk(self, a: int, b: int) -> list[Target]:
+        """Targets a to b - 1 as :class:`Target` objects; a bad one is a TargetError naming its index in the whole
+        call."""
+        try:
+            return Target.coerce_many(self.raw[a:b])
+        except TargetError:
+            self.check()
+            raise
+
+    def block(self, a: int, b: int) -> TargetBlock:
+        """Targets a to b - 1 as a :class:`TargetBlock`; a bad one is a TargetError naming its index in the whole
+        call."""
+        poses = self.poses
+        if poses is None:
+            return TargetBlock.of_targets(self.chunk(a, b))
+        try:
+            H = Target.check_poses(poses[a:b])
+        except TargetError:
+            self.check()
+            raise
+        return TargetBlock.of_poses(H)
+
+    def check(self) -> None:
+        """Coerce every target: the TargetError (naming the first bad target's index) if there is one."""
+        Target.coerce_many(self.raw)
