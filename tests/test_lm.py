@@ -195,3 +195,74 @@ def test_solve_many_engines_agree_on_success(robots):
             Tq = robot.fk(r.q)
             assert np.linalg.norm(Tq.translation - T[:3, 3]) <= 1e-6 and robot.within_bounds(r.q)
             assert np.linalg.norm(pin.log3(T[:3, :3].T @ Tq.rotation)) <= 1e-6
+
+
+def _kernel_pairs(robot, kind, count, seed):
+    """Inputs of the kernel's batch entry points: ``count`` (start, target) pairs of one target kind, some
+    starts on or beyond the joint limits (clipping, holding, wrapping), and the pose kind's params."""
+    from evoik_pin.solvers.lm.layout import box_constants, encode_targets, kernel_params, target_kind
+
+    rng = np.random.default_rng(seed)
+    Qt, Q0 = robot.random_configurations(count, rng), robot.random_configurations(count, rng)
+    Q0[::5] = np.clip(Qt[::5] + 0.3 * rng.standard_normal(Q0[::5].shape), robot.lower, robot.upper)
+    Q0[1::5] = np.where(rng.random(Q0[1::5].shape) < 0.3, robot.upper, Q0[1::5])
+    Q0[2::5] += rng.uniform(-7.0, 7.0, Q0[2::5].shape)  # outside the box: clipped or wrapped first
+    targets = [Target.coerce(_target(kind, robot, q, yaw_offset=0.2)) for q in Qt]
+    P, Rts = encode_targets(targets)
+    _, any_wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
+    params = kernel_params(1e-6, 1e-6, target_kind(targets[0]), 30)
+    return (np.ascontiguousarray(Q0), *robot.chain_constants(), *robot.chain_coupling(), box, any_wrap, P, Rts,
+            params)
+
+
+@pytest.mark.parametrize("name, kind", [("panda", "pose"), ("ur5", "pose"), ("ax18", "position"),
+                                        ("vehicle_arm", "planar_yaw")])
+def test_kernel_runs_do_not_depend_on_earlier_runs(robots, name, kind):
+    # the batch entry points reuse one workspace for all their runs: each run must write every buffer before
+    # reading it, so a pair's result (bit for bit) does not depend on which runs came before it
+    from evoik_pin.solvers.lm.kernel import lm_run, lm_run_pairs, lm_run_starts
+
+    robot = robots[name]
+    Q0, *chain, box, any_wrap, P, Rts, params = _kernel_pairs(robot, kind, 60, 41)
+    N, n = Q0.shape
+    out, stats = np.empty((N, n)), np.empty((N, 5))
+    lm_run_pairs(Q0, *chain, box, any_wrap, P, Rts, params, out, stats)
+    back, back_stats = np.empty((N, n)), np.empty((N, 5))
+    lm_run_pairs(Q0[::-1].copy(), *chain, box, any_wrap, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats)
+    assert np.array_equal(out, back[::-1]) and np.array_equal(stats, back_stats[::-1], equal_nan=True)
+    assert stats[:, 2].any() and (stats[:, 4] > 2).any()  # converged runs, runs of several steps
+    for i in range(0, N, 7):  # a fresh workspace per run
+        one = np.empty(n)
+        assert lm_run(Q0[i], *chain, box, any_wrap, P[i], Rts[i], params, one)[3] == stats[i, 3]
+        assert np.array_equal(one, out[i])
+    # several starts for one target, after runs for other targets: the same runs again
+    starts, starts_stats = np.empty((N, n)), np.full((N, 5), -1.0)
+    k = lm_run_starts(Q0, *chain, box, any_wrap, P[0], Rts[0], params, starts, starts_stats)
+    runs = k + 1 if k >= 0 else -(k + 1)
+    for i in range(runs):
+        one = np.empty(n)
+        lm_run(Q0[i], *chain, box, any_wrap, P[0], Rts[0], params, one)
+        assert np.array_equal(one, starts[i])
+    assert (starts_stats[runs:] == -1.0).all()
+
+
+def test_kernel_batches_from_threads_equal_one_call(robots):
+    # the batch solver calls the kernel from several threads at once (it releases the GIL): each call has its
+    # own workspace, so chunks solved concurrently give what one call gives
+    from concurrent.futures import ThreadPoolExecutor
+
+    from evoik_pin.solvers.lm.kernel import lm_run_pairs
+
+    robot = robots["panda"]
+    Q0, *chain, box, any_wrap, P, Rts, params = _kernel_pairs(robot, "pose", 400, 43)
+    N, n = Q0.shape
+    out, stats = np.empty((N, n)), np.empty((N, 5))
+    lm_run_pairs(Q0, *chain, box, any_wrap, P, Rts, params, out, stats)
+    out_t, stats_t = np.empty((N, n)), np.empty((N, 5))
+
+    def chunk(s):
+        lm_run_pairs(Q0[s], *chain, box, any_wrap, P[s], Rts[s], params, out_t[s], stats_t[s])
+
+    with ThreadPoolExecutor(4) as pool:
+        list(pool.map(chunk, [slice(i, i + 50) for i in range(0, N, 50)]))
+    assert np.array_equal(out, out_t) and np.array_equal(stats, stats_t)

@@ -139,13 +139,25 @@ def jlog6(theta, w, t, A, B):
         beta = t2inv - st * tinv * inv_2_2ct
         beta_dot_over_theta = -2.0 * t2inv * t2inv + (1.0 + st * tinv) * t2inv * inv_2_2ct
     wTp = w[0] * t[0] + w[1] * t[1] + w[2] * t[2]
-    C = np.empty((3, 3))
+    h0, h1, h2 = 0.5 * t[0], 0.5 * t[1], 0.5 * t[2]
     for i in range(3):
+        # row i of C = vi w^T + beta w_i t^T + wTp beta I + [t / 2]x (as three scalars: no array to allocate
+        # per call), then row i of B = C A
         vi = beta_dot_over_theta * wTp * w[i] - (t2 * beta_dot_over_theta + 2.0 * beta) * t[i]
+        c0 = vi * w[0] + beta * w[i] * t[0]
+        c1 = vi * w[1] + beta * w[i] * t[1]
+        c2 = vi * w[2] + beta * w[i] * t[2]
+        if i == 0:
+            c0 += wTp * beta
+            c1 -= h2
+            c2 += h1
+        elif i == 1:
+            c0 += h2
+            c1 += wTp * beta
+            c2 -= h0
+        else:
+            c0 -= h1
+            c1 += h0
+            c2 += wTp * beta
         for j in range(3):
-            C[i, j] = vi * w[j] + beta * w[i] * t[j]
-        C[i, i] += wTp * beta
-    _add_half_skew(t, C)
-    for i in range(3):
-        for j in range(3):
-            B[i, j] = C[i, 0] * A[0, j] + C[i, 1] * A[1, j] + C[i, 2] * A[2, j]
+            B[i, j] = c0 * A[0, j] + c1 * A[1, j] + c2 * A[2, j]

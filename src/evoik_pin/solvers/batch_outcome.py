@@ -87,22 +87,26 @@ class BatchOutcome:
         single = self.singles.get(j)
         if single is not None or self.source[j] == SOURCE_SINGLE:
             return single
-        if "_made" not in self.__dict__:
+        made = self.__dict__.get("_made")
+        if made is None:
             # One real Result gives the field set; the others copy its __dict__ and change what differs (about
-            # three times cheaper than the dataclass __init__).
+            # three times cheaper than the dataclass __init__). The columns become Python lists once (a float of a
+            # NumPy scalar costs more than an item of a list) and the histories one array of views.
             base = Result(q=self.q[0], position_error=0.0, orientation_error=None, cost=0.0, success=True,
                           generations=0, evaluations=0, time_s=0.0, method="memetic",
                           collision_free=True if self.collision_checked else None).__dict__
             messages = {s: f"tolerance reached by batched LM from {label} (solve_many)" for s, label in _LABELS.items()}
-            self.__dict__["_made"] = (base, messages)
-        base, messages = self.__dict__["_made"]
-        cost = float(self.cost[j])
-        rot = float(self.orientation_error[j])
+            history = np.zeros((len(self), 3, 1))
+            history[:, 0, 0] = history[:, 1, 0] = self.cost
+            rot = [None if math.isnan(v) else v for v in self.orientation_error.tolist()]
+            made = self.__dict__["_made"] = (base, messages, history, rot, *(
+                a.tolist() for a in (self.position_error, self.cost, self.evaluations, self.time_s, self.source)))
+        base, messages, history, rot, pos, cost, evals, times, source = made
+        h = history[j]
         d = base.copy()
-        d.update(q=self.q[j], position_error=float(self.position_error[j]), orientation_error=None if math.isnan(rot)
-                 else rot, cost=cost, evaluations=int(self.evaluations[j]), time_s=float(self.time_s[j]),
-                 message=messages[int(self.source[j])],
-                 history={"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1)})
+        d.update(q=self.q[j], position_error=pos[j], orientation_error=rot[j], cost=cost[j], evaluations=evals[j],
+                 time_s=times[j], message=messages[source[j]],
+                 history={"best_cost": h[0], "mean_cost": h[1], "diversity": h[2]})
         r = Result.__new__(Result)
         r.__dict__ = d
         if template is not None and template.scene is not None:

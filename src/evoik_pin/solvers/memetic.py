@@ -4,7 +4,7 @@ Registered as ``memetic``, the default method of :func:`evoik_pin.solve`. It pai
 proposes starting configurations with a local Newton-type search that takes them to machine precision
 (the LM engine :class:`~evoik_pin.solvers.lm.LevenbergMarquardt`, on the SE(3) error ``log6(T_t^-1 T(q))``
 for pose targets, the position for position targets, (x, y[, yaw]) for planar ones, within the joint limits;
-each run is one call of a numba-compiled function, :mod:`.lm.kernel`, about 1-2 us per step).
+each run is one call of a numba-compiled function, :mod:`.lm.kernel`, about 1 us per step).
 Stages, each tried only when the previous ones have not met the tolerances:
 
 1. **Warm start**: LM from ``q0`` when it is given (a previous solution usually converges in a few steps),
@@ -383,7 +383,7 @@ def memetic(
             between groups. 1 (default): between every two runs.
         iterations: LM steps allowed per run (>= 1).
         engine: ``"compiled"`` (default): each LM run is one call of the numba kernel
-            (:mod:`.lm.kernel`, about 1-2 us per step); ``"python"``: the same iteration as the reference
+            (:mod:`.lm.kernel`, about 1 us per step); ``"python"``: the same iteration as the reference
             Python loop over Pinocchio's kinematics (:mod:`.lm.reference`, about 30 us per step).
 
     Returns:

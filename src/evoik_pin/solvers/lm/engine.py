@@ -25,7 +25,7 @@ tolerances it takes one more, undamped step (about 1e-12 instead of just under t
 targets get a geodesic acceleration (Transtrum & Sethna 2012) while a run creeps along a narrow valley.
 
 Two engines run that one iteration: ``engine="compiled"`` (the default) calls the numba kernel
-(:mod:`.kernel`, about 1-2 us per step, every target kind); ``engine="python"`` runs the reference loop
+(:mod:`.kernel`, about 1 us per step, every target kind); ``engine="python"`` runs the reference loop
 (:mod:`.reference`, about 30-40 us per step), which the tests hold the kernel to.
 """
 
@@ -149,7 +149,7 @@ class LevenbergMarquardt:
 
         Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at
         ``deadline`` (a ``time.perf_counter()`` value). The compiled engine checks ``deadline`` only before
-        the run starts (a run is at most ``max_iterations`` steps of about 1-2 us); when it has passed, the
+        the run starts (a run is at most ``max_iterations`` steps of about 1 us); when it has passed, the
         start is evaluated and no step is taken. Returns the last accepted configuration (the best met).
         """
         if self._reference is not None:

@@ -6,7 +6,7 @@ with the forward kinematics and Jacobian of :mod:`.chain` and the SO(3) / SE(3) 
 converges (memetic's restarts); :func:`lm_run_pairs` runs one start per (start, target) pair (batches).
 The iteration is the one of :func:`.reference.reference_run` line for line (same error, damping rule, trust
 region, active-set joint limits, wrapping, stall test, geodesic acceleration and finishing step); tests hold
-the two to the same steps from the same starts. About 1-2 us per step, against 30-40 us for the Python loop.
+the two to the same steps from the same starts. About 1 us per step, against 30-40 us for the Python loop.
 
 Task error ``e`` by target kind (``params[P_KIND]``, :mod:`.layout`):
 
@@ -17,11 +17,25 @@ Task error ``e`` by target kind (``params[P_KIND]``, :mod:`.layout`):
 The constants and the ``params`` / ``box`` layouts come from :mod:`.layout`. numba compiles this module on
 first use (about 15 s once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
 any time budget).
+
+Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
+it in the damped solves, whose divisions and square roots form one chain, 30 % in the forward kinematics with its
+sines and cosines). A run allocates nothing of its own: :func:`lm_run_pairs` and :func:`lm_run_starts` make one
+:data:`Workspace` per call and reuse it for every run. :func:`lm_run_in` and this module's helpers are compiled
+with ``_nrt=False`` (:data:`BORROWING`), numba's own option for functions that borrow their arrays
+(``numba.cpython.unicode`` uses it; a numba without it compiles them as usual, with the same results): they
+neither allocate nor count references to the arrays they are given, which their caller owns. Otherwise numba
+brackets nearly every call with an atomic increment and decrement per array argument (its pruning of those
+gives up across calls), a fifth of the run time; and a helper that allocated now fails to compile instead.
+:func:`task_error`, :func:`task_jacobian` and :func:`lm_step`, which take 16 to 19 arrays each, are moreover
+inlined into :func:`lm_run_in` (``inline="always"``): passing those arrays cost more than the calls (about 7 % of
+the run time), for about 1 s more compile time.
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
@@ -66,6 +80,21 @@ from .layout import (
 TWO_PI = 2.0 * math.pi
 
 
+def _borrowing_options() -> dict:
+    """``{"_nrt": False}`` where this numba has that option (every release since 0.60 does; it is numba's own, not
+    a documented one), else ``{}``: the kernel then counts references as usual, with the same results, about a
+    fifth slower."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:
+        return {}
+    return {"_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {}
+
+
+#: Options of the functions that borrow the arrays their caller owns (see the module docstring).
+BORROWING = _borrowing_options()
+
+
 @njit(cache=True, nogil=True)
 def task_size(kind):
     """Rows m of the task error of a target kind: 6 (pose), 3 (position, planar with yaw), 2 (planar)."""
@@ -76,7 +105,7 @@ def task_size(kind):
     return 2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, p, Z, O, M, t, e):
     """Task error e (m,) at q; returns (|e|^2, position error m, orientation error rad or 0).
 
@@ -114,7 +143,7 @@ def task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, 
     return c, pos, rot
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def task_jacobian(rev, index, scale, mimic, R, p, Z, O, t, e, kind, Jx, J, A, B, E):
     """Task Jacobian E (m, n) from the buffers :func:`task_error` filled for the same configuration.
 
@@ -149,7 +178,7 @@ def task_jacobian(rev, index, scale, mimic, R, p, Z, O, t, e, kind, Jx, J, A, B,
             E[3 + i, k] = A[i, 0] * w0 + A[i, 1] * w1 + A[i, 2] * w2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, **BORROWING)
 def damped_solve(E, lam, rhs, L, y, dq):
     """dq (n,) = E^T (E E^T + lam I)^-1 rhs by Cholesky (L (m, m), y (m,) scratch); False when not positive."""
     m, n = E.shape
@@ -186,7 +215,7 @@ def damped_solve(E, lam, rhs, L, y, dq):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, **BORROWING)
 def into_box(q, box, any_wrap, out):
     """out (n,) = q clipped into the box, wrapping joints shifted by 2 pi into [lower, lower + 2 pi)."""
     for k in range(q.shape[0]):
@@ -197,7 +226,7 @@ def into_box(q, box, any_wrap, out):
         out[k] = x
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, **BORROWING)
 def _scaled_to(dq, max_step):
     """Scale dq (n,) down to length max_step when longer (the trust region)."""
     s2 = 0.0
@@ -209,14 +238,24 @@ def _scaled_to(dq, max_step):
             dq[k] *= f
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, **BORROWING)
+def _copy(a, b):
+    """b (k,) = a (k,) (a slice assignment would check the two for overlap, with numba's runtime)."""
+    for i in range(a.shape[0]):
+        b[i] = a[i]
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn):
     """The next configuration qn (n,) (written in place) and whether a joint hit a bound: the damped step,
     trust region, active-set limits and wrapping of ``reference._step`` (its docstring says why).
     W (m, n), L (m, m), y, rhs (m,), dq, dfix (n,) and held (n,) bool are scratch."""
     m, n = E.shape
-    W[:, :] = E
-    held[:] = False
+    for i in range(m):
+        for k in range(n):
+            W[i, k] = E[i, k]
+    for k in range(n):
+        held[k] = False
     if on_bound:  # joints on a bound that the descent direction -E^T e pushes outward are held there
         for k in range(n):
             g = 0.0
@@ -227,7 +266,7 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
                 for i in range(m):
                     W[i, k] = 0.0
     if not damped_solve(W, lam, e, L, y, dq):
-        qn[:] = q
+        _copy(q, qn)
         return False
     _scaled_to(dq, max_step)
     clipped = False
@@ -252,7 +291,7 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
                 for i in range(m):
                     W[i, k] = 0.0
         if not damped_solve(W, lam, rhs, L, y, dq):
-            qn[:] = q
+            _copy(q, qn)
             return False
         _scaled_to(dq, max_step)
         for k in range(n):
@@ -262,12 +301,32 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
     return clipped
 
 
+#: The buffers of LM runs (:func:`make_workspace`) for n joints, nx chain joints and m task rows, reused from
+#: run to run. The kinematics come in three sets: the current configuration (q, R, p, Z, O, tx, e), a step's
+#: candidate (qn, R2, p2, Z2, O2, tx2, en) and the geodesic-acceleration probe (qh, R3, p3, Z3, O3, tx3, eh):
+#: R (3, 3) and p (3,) the tip pose, Z, O (nx, 3) the joint axes and origins (:func:`.chain.forward`), tx (3,)
+#: the tip position seen from the target (:func:`task_error`'s t), e (m,) the task error. Scratch: x (nx,),
+#: Jx (6, nx), J (6, n), E, W (m, n), A, Bm, M (3, 3), L (m, m), y, rhs (m,), v, dq, dfix (n,), held (n,)
+#: bool, and history (max_it + 1,), the |e|^2 after each accepted step.
+Workspace = namedtuple("Workspace", ["q", "R", "p", "Z", "O", "tx", "e", "qn", "R2", "p2", "Z2", "O2", "tx2", "en",
+                                     "qh", "R3", "p3", "Z3", "O3", "tx3", "eh", "x", "Jx", "J", "E", "W", "A", "Bm",
+                                     "M", "L", "y", "rhs", "v", "dq", "dfix", "held", "history"])
+
+
 @njit(cache=True, nogil=True)
-def _copy_kinematics(R, p, Z, O, R2, p2, Z2, O2):
-    R2[:, :] = R
-    p2[:] = p
-    Z2[:, :] = Z
-    O2[:, :] = O
+def make_workspace(n, nx, m, max_it):
+    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, nx chain joints and m task rows.
+
+    One workspace serves any number of runs one after the other (a run writes each buffer before it reads it),
+    never two at a time: the batch entry points make one per call, so concurrent calls share nothing.
+    """
+    return Workspace(
+        np.empty(n), np.empty((3, 3)), np.empty(3), np.empty((nx, 3)), np.empty((nx, 3)), np.empty(3), np.empty(m),
+        np.empty(n), np.empty((3, 3)), np.empty(3), np.empty((nx, 3)), np.empty((nx, 3)), np.empty(3), np.empty(m),
+        np.empty(n), np.empty((3, 3)), np.empty(3), np.empty((nx, 3)), np.empty((nx, 3)), np.empty(3), np.empty(m),
+        np.empty(nx), np.empty((6, nx)), np.empty((6, n)), np.empty((m, n)), np.empty((m, n)), np.empty((3, 3)),
+        np.empty((3, 3)), np.empty((3, 3)), np.empty((m, m)), np.empty(m), np.empty(m),
+        np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_), np.empty(max(max_it, 0) + 1))
 
 
 @njit(cache=True, nogil=True)
@@ -287,8 +346,16 @@ def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, pa
         (position error m, orientation error rad (nan when the target has no orientation), converged,
         iterations, forward-kinematics evaluations), as :func:`.reference.reference_run` counts them.
     """
+    ws = make_workspace(q_start.shape[0], FR.shape[0] - 1, task_size(int(params[P_KIND])), int(params[P_ITERATIONS]))
+    return lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, q_out)
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, q_out):
+    """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` for these n and chain
+    joints, the task rows of ``params[P_KIND]`` and at least ``params[P_ITERATIONS]`` steps); the other arguments
+    and the result are :func:`lm_run`'s."""
     n = q_start.shape[0]
-    nx = FR.shape[0] - 1  # physical joints (n unless mimic joints are on the chain)
     mimic = coupled(index, scale, offset, n)
     kind = int(params[P_KIND])
     oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW
@@ -299,21 +366,12 @@ def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, pa
     stall = params[P_STALL_RATIO] * params[P_STALL_RATIO]
     finish = params[P_FINISH] != 0.0
     max_it = int(params[P_ITERATIONS])
-    # buffers: current configuration (R, p, Z, O, e), candidate (R2, ..., en), scratch
-    q, qn, qh = np.empty(n), np.empty(n), np.empty(n)
-    v, dq, dfix = np.empty(n), np.empty(n), np.empty(n)
-    held = np.empty(n, dtype=np.bool_)
-    R, R2, R3 = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    p, p2, p3 = np.empty(3), np.empty(3), np.empty(3)
-    Z, Z2, Z3 = np.empty((nx, 3)), np.empty((nx, 3)), np.empty((nx, 3))
-    O, O2, O3 = np.empty((nx, 3)), np.empty((nx, 3)), np.empty((nx, 3))
-    x, Jx = np.empty(nx), np.empty((6, nx))
-    e, en, eh = np.empty(m), np.empty(m), np.empty(m)
-    E, W, J = np.empty((m, n)), np.empty((m, n)), np.empty((6, n))
-    tx, tx2, tx3 = np.empty(3), np.empty(3), np.empty(3)
-    A, Bm, M, L = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((m, m))
-    y, rhs = np.empty(m), np.empty(m)
-    history = np.empty(max_it + 1)
+    # the current configuration's buffers and the candidate's trade places when a step is accepted
+    q, R, p, Z, O, tx, e = ws.q, ws.R, ws.p, ws.Z, ws.O, ws.tx, ws.e
+    qn, R2, p2, Z2, O2, tx2, en = ws.qn, ws.R2, ws.p2, ws.Z2, ws.O2, ws.tx2, ws.en
+    qh, R3, p3, Z3, O3, tx3, eh = ws.qh, ws.R3, ws.p3, ws.Z3, ws.O3, ws.tx3, ws.eh
+    x, Jx, J, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.E, ws.W, ws.A, ws.Bm, ws.M
+    L, y, rhs, v, dq, dfix, held, history = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.dfix, ws.held, ws.history
 
     into_box(q_start, box, any_wrap, q)
     on_bound = False
@@ -323,7 +381,7 @@ def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, pa
     c, pos, rot = task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, p, Z, O, M, tx, e)
     evaluations = 1
     if pos <= tol_p and (not oriented or rot <= tol_r):
-        q_out[:] = q
+        _copy(q, q_out)
         return pos, rot if oriented else np.nan, True, 0, evaluations
     lam = params[P_DAMPING]
     have_E = False
@@ -368,10 +426,13 @@ def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, pa
         evaluations += 1
         if cn < c:
             creeping = GEO_SLOW * c < cn < GEO_NEAR
-            q[:] = qn
-            e[:] = en
-            _copy_kinematics(R2, p2, Z2, O2, R, p, Z, O)
-            tx[:] = tx2
+            q, qn = qn, q
+            R, R2 = R2, R
+            p, p2 = p2, p
+            Z, Z2 = Z2, Z
+            O, O2 = O2, O
+            tx, tx2 = tx2, tx
+            e, en = en, e
             on_bound, pos, rot, c = on_bound_n, pos_n, rot_n, cn
             if pos <= tol_p and (not oriented or rot <= tol_r):
                 converged = True
@@ -395,9 +456,9 @@ def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, pa
         it += 1
         evaluations += 1
         if cn < c:
-            q[:] = qn
+            q = qn
             pos, rot = pos_n, rot_n
-    q_out[:] = q
+    _copy(q, q_out)
     return pos, rot if oriented else np.nan, converged, it, evaluations
 
 
@@ -405,10 +466,12 @@ def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, pa
 def lm_run_pairs(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, P, Rts, params, Q_out, stats):
     """:func:`lm_run` on M (start, target) pairs: starts Q (M, n), target positions P (M, 3) and rotations
     Rts (M, 3, 3) (:func:`.layout.encode_targets`); end configurations to Q_out (M, n) and, per pair, the
-    ``S_*`` columns (errors, converged, iterations, evaluations) to the rows of stats (M, STATS_SIZE)."""
+    ``S_*`` columns (errors, converged, iterations, evaluations) to the rows of stats (M, STATS_SIZE). The runs
+    share one workspace, made here."""
+    ws = make_workspace(Q.shape[1], FR.shape[0] - 1, task_size(int(params[P_KIND])), int(params[P_ITERATIONS]))
     for i in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations = lm_run(Q[i], FR, Fp, rev, index, scale, offset, box, any_wrap, P[i],
-                                                      Rts[i], params, Q_out[i])
+        pos, rot, converged, it, evaluations = lm_run_in(ws, Q[i], FR, Fp, rev, index, scale, offset, box, any_wrap,
+                                                         P[i], Rts[i], params, Q_out[i])
         stats[i, S_POS], stats[i, S_ROT] = pos, rot
         stats[i, S_CONVERGED] = 1.0 if converged else 0.0
         stats[i, S_ITERATIONS], stats[i, S_EVALUATIONS] = it, evaluations
@@ -420,10 +483,11 @@ def lm_run_starts(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, p
 
     Each run's end configuration goes to Q_out[k] and its ``S_*`` statistics to stats[k] (rows of starts not
     run are left untouched). Returns the index of the converged run, or -(1 + the number of runs) when none
-    converged (every start was run then)."""
+    converged (every start was run then). The runs share one workspace, made here."""
+    ws = make_workspace(Q.shape[1], FR.shape[0] - 1, task_size(int(params[P_KIND])), int(params[P_ITERATIONS]))
     for k in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations = lm_run(Q[k], FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt,
-                                                      params, Q_out[k])
+        pos, rot, converged, it, evaluations = lm_run_in(ws, Q[k], FR, Fp, rev, index, scale, offset, box, any_wrap,
+                                                         pt, Rt, params, Q_out[k])
         stats[k, S_POS], stats[k, S_ROT] = pos, rot
         stats[k, S_CONVERGED] = 1.0 if converged else 0.0
         stats[k, S_ITERATIONS], stats[k, S_EVALUATIONS] = it, evaluations

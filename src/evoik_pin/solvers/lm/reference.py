@@ -2,7 +2,7 @@
 
 The one Python LM loop in evoik_pin. It states the algorithm readably and is what the compiled kernel is tested
 against (tests/test_lm.py: the same steps from the same starts); ``engine="python"`` runs it in production
-(about 30-40 us per step against 1-2 us compiled). Kinematics come from the robot layer
+(about 30-40 us per step against about 1 us compiled). Kinematics come from the robot layer
 (``Robot.tip_pose_seen_from_unchecked``, ``fk_unchecked``, ``jacobian_local_unchecked``), the error's
 logarithm and its Jacobian from Pinocchio (``pin.log6``, ``pin.Jlog6``).
 
