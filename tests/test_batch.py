@@ -151,7 +151,13 @@ def test_chunks_cover_every_target_once():
         bounds = batch.chunk_bounds(n, w)
         assert bounds[0][0] == 0 and bounds[-1][1] == n
         assert all(a < b and b == c for (a, b), (c, _) in zip(bounds, bounds[1:] + [(n, None)], strict=True))
-        assert len(bounds) == (1 if w == 1 else max(1, min(batch.CHUNKS_PER_WORKER * w, n // batch.MIN_CHUNK)))
+        sizes = [b - a for a, b in bounds]
+        if w == 1 or n <= batch.MIN_CHUNK:
+            assert len(bounds) == 1
+        else:  # guided: shrinking chunks, each at least MIN_CHUNK but the last, at most a 1 / (2 w) share of the rest
+            assert all(x >= y for x, y in zip(sizes, sizes[1:])) and min(sizes[:-1]) >= batch.MIN_CHUNK
+            assert all(b - a <= max(batch.MIN_CHUNK, -(-(n - a) // (batch.GUIDED_SHARE * w))) for a, b in bounds)
+            assert len(bounds) > 2 * w
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -10,14 +10,15 @@ custom ``objective`` or ``polish=True`` solve the targets one by one through the
 :func:`evoik_pin.solve`.
 
 Workers (``backend="local"``): the targets are cut into chunks (:func:`chunk_bounds`), and ``workers`` threads
-run the batched rounds of one chunk each (the compiled kernel and the k-d tree queries release the GIL), while the
-calling thread encodes the next chunks' targets as arrays (:mod:`.batch_targets`; no :class:`Target` object is made
-for an (N, 4, 4) array of poses) (:meth:`BatchSolver.pipeline`). The answers come back as arrays
+(the calling thread and ``workers - 1`` others) run the batched rounds of one chunk each: the compiled kernel and the
+k-d tree queries release the GIL. The calling thread also encodes the chunks' targets as arrays
+(:mod:`.batch_targets`; no :class:`Target` object is made for an (N, 4, 4) array of poses) and solves one by one the
+targets a finished chunk left, as soon as it is done (with a scene: after every chunk's rounds, since the scene's
+collision data is shared) (:meth:`BatchSolver.pipeline`). The answers come back as arrays
 (:class:`~.batch_outcome.BatchOutcome`); :class:`~.batch_outcome.BatchResults` makes a :class:`Result` when one is
-read. Threads were measured against numba ``prange`` and worker processes
-(docs/BENCHMARKS.md, ``scripts/bench_scale.py``). A target's rounds do not depend on the other targets of its
-chunk, so the answers do not depend on the chunking. The targets left go to the per-target solver afterwards, in
-the calling thread, alone (a wall-clock ``timeout`` gets a whole core).
+read. Threads were measured against numba ``prange`` and worker processes (docs/BENCHMARKS.md,
+``scripts/bench_scale.py``). A target's rounds do not depend on the other targets of its chunk, so the answers do
+not depend on the chunking.
 
 Randomness: a target solved one by one (the fallback, or another method) draws from its own generator,
 ``numpy.random.default_rng(SeedSequence(entropy, spawn_key=(i,)))`` with ``i`` its index in the call
@@ -38,7 +39,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 import numpy as np
 
@@ -59,9 +60,9 @@ __all__ = ["BACKENDS", "BatchOutcome", "BatchResults", "BatchSolver", "TargetSou
 
 #: Where :func:`solve_many` runs: threads of this process, or actors of a Ray cluster.
 BACKENDS = ("local", "ray")
-#: Chunks per worker (threads pick the next chunk when done: a slow chunk does not hold the others) and the
-#: smallest chunk worth a kernel call of its own (targets).
-CHUNKS_PER_WORKER = 4
+#: Guided chunks (:func:`chunk_bounds`): each a 1 / (GUIDED_SHARE * workers) share of the targets left, at least
+#: MIN_CHUNK targets (the smallest chunk worth a kernel call of its own).
+GUIDED_SHARE = 2
 MIN_CHUNK = 256
 #: The seed-table search of the batched rounds is approximate: ``cKDTree.query(eps=NEAREST_EPS)`` returns entries
 #: within (1 + eps) times the distance of the true nearest ones. Measured on 20,000 Panda poses
@@ -114,11 +115,18 @@ def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
 
 
 def chunk_bounds(n: int, workers: int) -> list[tuple[int, int]]:
-    """[start, stop) ranges cutting n items into about ``CHUNKS_PER_WORKER * workers`` chunks of at least
-    ``MIN_CHUNK`` (one chunk for one worker)."""
-    count = 1 if workers <= 1 else max(1, min(CHUNKS_PER_WORKER * workers, n // MIN_CHUNK))
-    edges = np.linspace(0, n, count + 1).round().astype(int)
-    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:], strict=True) if b > a]
+    """[start, stop) ranges cutting n items into chunks: one for one worker; for several, guided chunks, each a
+    ``1 / (GUIDED_SHARE * workers)`` share of the items not yet cut (at least ``MIN_CHUNK``), so that chunks shrink
+    toward the end and the workers finish together (a worker idle while another ends a large last chunk had cost
+    about 12 % of the wall time on 2 workers)."""
+    if workers <= 1 or n <= MIN_CHUNK:
+        return [(0, n)] if n > 0 else []
+    bounds, a = [], 0
+    while a < n:
+        b = min(n, a + max(MIN_CHUNK, -(-(n - a) // (GUIDED_SHARE * workers))))
+        bounds.append((a, b))
+        a = b
+    return bounds
 
 
 # ---------------------------------------------------------------------- the solver
@@ -185,12 +193,17 @@ class BatchSolver:
     def pipeline(self, source: TargetSource, Q0, offset: int, workers: int, progress, batched: Callable,
                  singles: Callable | None = None) -> None:
         """Solve ``source`` chunk by chunk: ``batched(start, stop, outcome)`` on each chunk in order once its
-        batched rounds are done, then, once every chunk's are, the targets left are solved one by one and
-        ``singles(start, outcome)`` is called on each chunk that had some (its ``outcome.singles`` filled).
+        batched rounds are done, and ``singles(start, outcome)`` on each chunk that had targets left for the
+        one-by-one solver, once they are solved (its ``outcome.singles`` filled).
 
-        ``workers`` threads run the batched rounds of one chunk each (the kernel and the k-d tree release the
-        GIL), while this thread encodes the next chunks' targets (:meth:`TargetSource.block`). The one-by-one
-        solves come last, alone, so that a wall-clock ``timeout`` gets a whole core.
+        ``workers`` threads share the work, this one and ``workers - 1`` others, so that no more threads run than
+        there are workers: the others run the batched rounds of one chunk each (the kernel and the k-d tree
+        release the GIL), a chunk queued ahead for each; this thread encodes the chunks' targets
+        (:meth:`TargetSource.block`), solves one by one the targets a finished chunk left as soon as it is done,
+        and otherwise runs the batched rounds of the next chunk itself. So a one-by-one solve (its wall-clock
+        ``timeout``) has a core to itself, and the few such targets do not wait for the end. Every one-by-one
+        solve runs in this thread: they share the robot's Pinocchio data. With a scene they come after every
+        chunk's rounds (they use its collision data, which the rounds' exact checks share under a lock).
         """
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
@@ -199,43 +212,60 @@ class BatchSolver:
         threads = workers if self.batched and self.engine == "compiled" else 1
         bounds = chunk_bounds(len(source), threads)
         grow_bar(progress, len(bounds))
-        pool = (ThreadPoolExecutor(min(threads, len(bounds)), thread_name_prefix="evoik-batch")
-                if threads > 1 and len(bounds) > 1 else None)
-        queued: deque = deque()
-        left: list = []  # (start, {row: target}, q0, outcome) of the chunks with targets for the one-by-one solver
+        helpers = min(threads, len(bounds)) - 1
+        pool = ThreadPoolExecutor(helpers, thread_name_prefix="evoik-batch") if helpers > 0 else None
+        overlap = self.template.scene is None  # one-by-one solves between chunks, not after all of them
+        jobs: dict[int, list] = {}  # chunk -> [block, q0, future or None, outcome or None]
+        left: deque = deque()  # (start, {row: target}, q0, outcome): chunks with targets for the one-by-one solver
+        handed = delivered = 0  # chunks handed out (to a thread or to this one), chunks delivered in order
 
-        def submit(k: int) -> None:
+        def take(k: int) -> list:
             a, b = bounds[k]
-            block = source.block(a, b)
-            q0 = None if Q0 is None else Q0[a:b]
-            job = None if pool is None else pool.submit(self._chunk_rounds, block, q0)
-            queued.append((a, b, block, q0, job))
+            return [source.block(a, b), None if Q0 is None else Q0[a:b], None, None]
+
+        def running() -> int:
+            return sum(1 for job in jobs.values() if job[2] is not None and not job[2].done())
 
         try:
-            for k in range(min(len(bounds), threads + 1)):  # a chunk ahead for every thread
-                submit(k)
-            following = len(queued)
-            while queued:
-                a, b, block, q0, job = queued.popleft()
-                out = self._chunk_rounds(block, q0) if job is None else job.result()
-                if following < len(bounds):  # keep the threads fed before this thread's own work
-                    submit(following)
-                    following += 1
-                rest = np.nonzero(out.source == SOURCE_SINGLE)[0] if self.fallback or not self.batched else ()
-                if len(rest):
-                    left.append((a, {int(i): block.target(int(i)) for i in rest}, q0, out))
-                batched(a, b, out)
-                if progress is not None:
-                    progress.update(1)
+            while delivered < len(bounds):
+                while pool is not None and handed < len(bounds) and running() < helpers + 1:
+                    job = jobs[handed] = take(handed)  # keep every thread fed before this thread's own work
+                    job[2] = pool.submit(self._chunk_rounds, job[0], job[1])
+                    handed += 1
+                while delivered in jobs and (jobs[delivered][3] is not None or jobs[delivered][2].done()):
+                    block, q0, future, out = jobs.pop(delivered)
+                    out = out if future is None else future.result()
+                    a, b = bounds[delivered]
+                    batched(a, b, out)
+                    rest = np.nonzero(out.source == SOURCE_SINGLE)[0] if self.fallback or not self.batched else ()
+                    if len(rest):
+                        left.append((a, {int(i): block.target(int(i)) for i in rest}, q0, out))
+                    if progress is not None:
+                        progress.update(1)
+                    delivered += 1
+                if overlap and left:
+                    self._singles(*left.popleft(), offset, singles)
+                elif handed < len(bounds):
+                    job = jobs[handed] = take(handed)
+                    job[3] = self._chunk_rounds(job[0], job[1])
+                    handed += 1
+                elif delivered in jobs:
+                    wait([jobs[delivered][2]], return_when=FIRST_COMPLETED)
         finally:
             if pool is not None:
-                for *_, job in queued:
-                    job.cancel()
+                for job in jobs.values():
+                    if job[2] is not None:
+                        job[2].cancel()
                 pool.shutdown(wait=True)
-        for a, targets, q0, out in left:
-            self._one_by_one(targets, q0, out, offset + a)
-            if singles is not None:
-                singles(a, out)
+        while left:
+            self._singles(*left.popleft(), offset, singles)
+
+    def _singles(self, a: int, targets: dict[int, Target], q0, out: BatchOutcome, offset: int,
+                 singles: Callable | None) -> None:
+        """The one-by-one solves of the chunk starting at ``a`` (see :meth:`pipeline`)."""
+        self._one_by_one(targets, q0, out, offset + a)
+        if singles is not None:
+            singles(a, out)
 
     def _one_by_one(self, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int) -> None:
         """The targets of a chunk the batched rounds left (all of them for other methods), ``{row: target}``, one
