@@ -213,14 +213,12 @@ def _process_init(robot_blob: bytes) -> None:
 
 
 def _process_chunk(H: np.ndarray, offset: int) -> batch.BatchOutcome:
-    with batch.gc_paused():
-        targets = Target.coerce_many(H)
-    return _WORKER["solver"].solve(targets, offset=offset)
+    return _WORKER["solver"].solve(H, offset=offset)  # the poses as they are: the local path's encoding
 
 
 def processes_option(robot, H, reps: int) -> dict:
     """The whole pipeline on two worker processes (a warm pool: robot loaded, kernel loaded): each solves half of
-    the poses with the batch engine and sends arrays back; the driver makes the Result objects."""
+    the poses with the batch engine and sends arrays back; the driver concatenates them (as solve_many does)."""
     import multiprocessing
     import pickle
 
@@ -235,8 +233,7 @@ def processes_option(robot, H, reps: int) -> dict:
         for _ in range(reps):
             t = time.perf_counter()
             parts = list(pool.map(_process_chunk, [H[:half], H[half:]], [0, half]))
-            with batch.gc_paused():
-                batch.BatchOutcome.concatenate(parts).results()
+            batch.BatchResults(batch.BatchOutcome.concatenate(parts))  # what solve_many returns: arrays
             walls.append(time.perf_counter() - t)
     return {"startup_s": startup, "median_s": float(np.median(walls)), "rate": len(H) / float(np.median(walls))}
 
@@ -331,7 +328,7 @@ def markdown(r: dict, command: str) -> str:
     if "processes" in r:
         p = r["processes"]
         lines += ["", f"Whole pipeline on 2 processes (warm pool of spawned workers, each the batch engine on half of "
-                  f"the poses, arrays back, Result objects in the driver): {p['rate']:,.0f} poses/s median, against "
+                  f"the poses, arrays back, concatenated in the driver): {p['rate']:,.0f} poses/s median, against "
                   f"{w[2]['median_rate']:,.0f} for 2 threads in the same run; starting the pool took "
                   f"{p['startup_s']:.1f} s, more than a whole call on {r['targets']:,} poses. Kept: threads (numba "
                   "prange gains no more than threads on the kernel, and a prange call must hold all of a round's "

@@ -155,9 +155,12 @@ def test_chunks_cover_every_target_once():
         if w == 1 or n <= batch.MIN_CHUNK:
             assert len(bounds) == 1
         else:  # guided: shrinking chunks, each at least MIN_CHUNK but the last, at most a 1 / (2 w) share of the rest
-            assert all(x >= y for x, y in zip(sizes, sizes[1:])) and min(sizes[:-1]) >= batch.MIN_CHUNK
+            assert all(x >= y for x, y in zip(sizes[:-1], sizes[1:], strict=True))
+            assert min(sizes[:-1]) >= batch.MIN_CHUNK
             assert all(b - a <= max(batch.MIN_CHUNK, -(-(n - a) // (batch.GUIDED_SHARE * w))) for a, b in bounds)
             assert len(bounds) > 2 * w
+    ray = batch.chunk_bounds(100_000, 4, minimum=1000, maximum=20_000)  # the Ray backend's guided chunks
+    assert ray[0] == (0, 12_500) and all(1000 <= b - a <= 20_000 for a, b in ray[:-1]) and ray[-1][1] == 100_000
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -114,16 +114,19 @@ def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
     return Q0
 
 
-def chunk_bounds(n: int, workers: int) -> list[tuple[int, int]]:
+def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int | None = None
+                 ) -> list[tuple[int, int]]:
     """[start, stop) ranges cutting n items into chunks: one for one worker; for several, guided chunks, each a
-    ``1 / (GUIDED_SHARE * workers)`` share of the items not yet cut (at least ``MIN_CHUNK``), so that chunks shrink
-    toward the end and the workers finish together (a worker idle while another ends a large last chunk had cost
-    about 12 % of the wall time on 2 workers)."""
-    if workers <= 1 or n <= MIN_CHUNK:
+    ``1 / (GUIDED_SHARE * workers)`` share of the items not yet cut, between ``minimum`` (default ``MIN_CHUNK``)
+    and ``maximum`` items (none: no cap), so that chunks shrink toward the end and the workers finish together (a
+    worker idle while another ends a large last chunk had cost about 12 % of the wall time on 2 workers)."""
+    minimum = MIN_CHUNK if minimum is None else minimum
+    if workers <= 1 or n <= minimum:
         return [(0, n)] if n > 0 else []
     bounds, a = [], 0
     while a < n:
-        b = min(n, a + max(MIN_CHUNK, -(-(n - a) // (GUIDED_SHARE * workers))))
+        size = max(minimum, -(-(n - a) // (GUIDED_SHARE * workers)))
+        b = min(n, a + (size if maximum is None else min(size, maximum)))
         bounds.append((a, b))
         a = b
     return bounds

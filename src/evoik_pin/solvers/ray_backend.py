@@ -33,13 +33,25 @@ import numpy as np
 
 from ..errors import BackendError, TargetError
 from ..problem import Target
-from .batch import BatchOutcome, BatchSolver, TargetSource, check_workers, gc_paused, grow_bar, progress_bar
+from .batch import (
+    BatchOutcome,
+    BatchSolver,
+    TargetSource,
+    check_workers,
+    chunk_bounds,
+    gc_paused,
+    grow_bar,
+    progress_bar,
+)
 
 __all__ = ["RayBatch", "RayPool", "connect", "import_ray", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
            "unpack_targets"]
 
 #: Attempts per chunk before its failure is reported (an actor dying each time).
 DEFAULT_ATTEMPTS = 3
+#: Guided chunks for the actors (:func:`~.batch.chunk_bounds`), between these sizes (targets): a remote call costs
+#: about a millisecond, so the smallest chunks are larger than the local backend's.
+RAY_MIN_CHUNK, RAY_MAX_CHUNK = 1000, 20_000
 #: Seconds to reach a cluster address before calling it unreachable.
 CONNECT_TIMEOUT = 5.0
 INSTALL_HINT = "pip install 'evoik_pin[ray]'"
@@ -243,8 +255,8 @@ class RayBatch:
     Args:
         robot, make_problem, run, method, entropy, options, fallback: as :class:`~.batch.BatchSolver`'s.
         workers: actors (one CPU each); default every CPU of the cluster.
-        address: see :func:`connect`. chunk_size: targets per chunk (default: about four chunks per actor,
-            256 to 20,000 targets). attempts: tries per chunk when actors die.
+        address: see :func:`connect`. chunk_size: targets per chunk (default: guided chunks, ``RAY_MIN_CHUNK`` to
+            ``RAY_MAX_CHUNK`` targets, shrinking toward the end). attempts: tries per chunk when actors die.
     """
 
     def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int, options: dict,
@@ -273,8 +285,9 @@ class RayBatch:
         return self._local.template
 
     def _chunks(self, N: int) -> list[tuple[int, int]]:
-        size = self.chunk_size or int(np.clip(-(-N // (4 * self.workers)), 256, 20_000))
-        return [(a, min(a + size, N)) for a in range(0, N, size)]
+        if self.chunk_size:
+            return [(a, min(a + self.chunk_size, N)) for a in range(0, N, self.chunk_size)]
+        return chunk_bounds(N, self.workers, RAY_MIN_CHUNK, RAY_MAX_CHUNK)
 
     def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
         """Solve ``targets`` (a list of :class:`Target` or a :class:`~.batch.TargetSource`) from ``Q0`` (N, n) when
