@@ -316,8 +316,9 @@ def markdown(r: dict, command: str) -> str:
     lines += ["", f"Two workers: **{w['speedup_median']:.2f}x** median (goal 1.8x: {verdict2}). The calling thread is "
               "one of the workers: it encodes each chunk's targets (vectorized), runs batched rounds like the other "
               "thread, and solves one by one the targets a finished chunk left as soon as it is done "
-              f"({w[2]['fallback']} poses here), on a core of its own (so their 5 ms clock is not shared: the same "
-              "success as one worker). Chunks are guided (each half of the remaining targets' share per worker), so "
+              f"({w[2]['fallback']} poses here), on a core of its own (their 5 ms clock is not shared with a batch "
+              f"thread; success {w[1]['success_rate']:.3%} on one worker, {w[2]['success_rate']:.3%} on two). "
+              "Chunks are guided (each half of the remaining targets' share per worker), so "
               "both threads finish together: with equal chunks, one thread idled for about 12 % of the wall time "
               "while the other ended the last chunk."]
     if "kernel_options" in r:
