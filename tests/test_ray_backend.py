@@ -7,7 +7,7 @@ import pytest
 from test_batch import mixed, same
 
 import evoik_pin as ev
-from evoik_pin.errors import BackendError
+from evoik_pin.errors import BackendError, TargetError
 from evoik_pin.problem import Target
 from evoik_pin.solvers import ray_backend
 
@@ -104,3 +104,14 @@ def test_unreachable_cluster_address_is_a_clear_error(panda, monkeypatch):
         ray_backend.connect()
     with pytest.raises(BackendError, match="not host:port"):
         ray_backend.connect(address="nowhere")
+
+
+def test_pose_arrays_go_to_the_actors_as_arrays_and_a_bad_pose_is_named_by_its_index(ray, panda):
+    """An (N, 4, 4) array is solved by the actors as an array (the local answers), and a bad pose in a later chunk
+    is a TargetError naming its index in the whole call."""
+    H = np.array([panda.fk(q).homogeneous for q in panda.random_configurations(1500, np.random.default_rng(2))])
+    local = ev.solve_many(panda, H, seed=4, workers=1, **BUDGET)
+    same(local, ev.solve_many(panda, H, seed=4, backend="ray", workers=2, **BUDGET))
+    H[1234, :3, :3] *= 2.0  # not a rotation
+    with pytest.raises(TargetError, match="target 1234"):
+        ev.solve_many(panda, H, seed=4, backend="ray", workers=2, **BUDGET)

@@ -183,8 +183,11 @@ class ChunkWorker:
                 options["scene"] = build_scene(self.robot, scene)
             self._solver = BatchSolver(self.robot, make_problem, run, method, entropy, options, fallback)
             self._key = key
-        with gc_paused():
-            targets = unpack_targets(packed)
+        if isinstance(packed, np.ndarray):  # poses: solved as the array they are (no Target object per pose)
+            targets = packed
+        else:
+            with gc_paused():
+                targets = unpack_targets(packed)
         out = self._solver.solve(targets, Q0, offset=offset)
         for r in out.singles.values():  # a lazy min_distance holds this process's scene: the driver re-attaches
             r.distance_source = None
