@@ -13,6 +13,7 @@ from evoik_pin.problem import IKProblem, Target
 from evoik_pin.robot import list_robots, load_robot
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs
 from evoik_pin.solvers.lm import chain as K
+from evoik_pin.solvers.lm.layout import TargetArrays
 from evoik_pin.solvers.lm.reference import ReferenceLM
 
 
@@ -151,6 +152,11 @@ def test_solve_pairs_equal_one_run_per_pair(robots, name, kind):
     ref = solve_pairs(robot, Q0, targets, robot.lower, robot.upper, 1e-6, 1e-6, engine="python")
     assert 0 < out.converged.sum()
     assert (out.converged == ref.converged).mean() >= 0.9
+    arrays = TargetArrays.of(targets)  # the batch solver's encoding gives the same pairs on both engines
+    for engine, listed in (("compiled", out), ("python", ref)):
+        enc = solve_pairs(robot, Q0, arrays, robot.lower, robot.upper, 1e-6, 1e-6, engine=engine)
+        assert np.array_equal(enc.q, listed.q) and np.array_equal(enc.converged, listed.converged)
+        assert np.array_equal(enc.position_error, listed.position_error)
     for i, t in enumerate(targets):
         one = LevenbergMarquardt(IKProblem(robot, t)).run(Q0[i], 30)
         assert np.array_equal(out.q[i], one.q) and out.converged[i] == one.converged

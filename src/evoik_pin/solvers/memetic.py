@@ -67,8 +67,8 @@ GUARANTEED_TABLE_RUNS = 4
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
 #: Target kinds a seed table serves, each with its own nearness features.
-_KINDS = ("pose", "position", "planar", "planar_yaw")
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
+_KINDS = tuple(_KIND_KEYS.values())
 
 
 # ---------------------------------------------------------------------- seed table
