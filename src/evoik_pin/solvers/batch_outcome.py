@@ -118,6 +118,17 @@ class BatchOutcome:
         return [self.result(j, template) for j in range(len(self))]
 
 
+def _column(name: str, doc: str) -> property:
+    """A read-only view of the outcome's array ``name``, as a property of :class:`BatchResults`."""
+
+    def view(self) -> np.ndarray:
+        a = getattr(self.outcome, name).view()
+        a.flags.writeable = False
+        return a
+
+    return property(view, doc=doc)
+
+
 class BatchResults(Sequence):
     """What :func:`evoik_pin.solve_many` returns: one :class:`Result` per target, in order, made on first access
     (``results[i]``, iteration, slices; ``list(results)`` makes them all), the same answers as arrays, and
@@ -163,37 +174,9 @@ class BatchResults(Sequence):
         return (f"<BatchResults: {len(self)} targets, {s.get('solved', int(self.success.sum()))} solved"
                 + (f", {s['throughput']:,.0f} targets/s" if "throughput" in s else "") + ">")
 
-    def _view(self, name: str) -> np.ndarray:
-        a = getattr(self.outcome, name).view()
-        a.flags.writeable = False
-        return a
-
-    @property
-    def q(self) -> np.ndarray:
-        """(N, n) answers (rad or m)."""
-        return self._view("q")
-
-    @property
-    def success(self) -> np.ndarray:
-        """(N,) bool: the answer meets the tolerances (and, with a scene, is collision-free)."""
-        return self._view("success")
-
-    @property
-    def position_error(self) -> np.ndarray:
-        """(N,) tip position errors (m)."""
-        return self._view("position_error")
-
-    @property
-    def orientation_error(self) -> np.ndarray:
-        """(N,) tip orientation errors (rad); NaN for targets without orientation."""
-        return self._view("orientation_error")
-
-    @property
-    def cost(self) -> np.ndarray:
-        """(N,) objective values."""
-        return self._view("cost")
-
-    @property
-    def evaluations(self) -> np.ndarray:
-        """(N,) forward-kinematics evaluations per target."""
-        return self._view("evaluations")
+    q = _column("q", "(N, n) answers (rad or m).")
+    success = _column("success", "(N,) bool: the answer meets the tolerances (and, with a scene, is collision-free).")
+    position_error = _column("position_error", "(N,) tip position errors (m).")
+    orientation_error = _column("orientation_error", "(N,) tip orientation errors (rad); NaN without orientation.")
+    cost = _column("cost", "(N,) objective values.")
+    evaluations = _column("evaluations", "(N,) forward-kinematics evaluations per target.")
