@@ -238,6 +238,16 @@ def _scaled_to(dq, max_step):
             dq[k] *= f
 
 
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def _trust_step(W, lam, rhs, L, y, dq, max_step):
+    """dq = the damped step of :func:`damped_solve` scaled into the trust region (:func:`_scaled_to`); False when
+    the damped system is not positive (dq is then meaningless)."""
+    if not damped_solve(W, lam, rhs, L, y, dq):
+        return False
+    _scaled_to(dq, max_step)
+    return True
+
+
 @njit(cache=True, nogil=True, **BORROWING)
 def _copy(a, b):
     """b (k,) = a (k,) (a slice assignment would check the two for overlap, with numba's runtime)."""
@@ -265,10 +275,9 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
                 held[k] = True
                 for i in range(m):
                     W[i, k] = 0.0
-    if not damped_solve(W, lam, e, L, y, dq):
+    if not _trust_step(W, lam, e, L, y, dq, max_step):
         _copy(q, qn)
         return False
-    _scaled_to(dq, max_step)
     clipped = False
     for k in range(n):
         x = q[k] - dq[k]
@@ -290,10 +299,9 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
             if held[k]:
                 for i in range(m):
                     W[i, k] = 0.0
-        if not damped_solve(W, lam, rhs, L, y, dq):
+        if not _trust_step(W, lam, rhs, L, y, dq, max_step):
             _copy(q, qn)
             return False
-        _scaled_to(dq, max_step)
         for k in range(n):
             qn[k] = min(max(q[k] + dfix[k] - dq[k], box[B_CLO, k]), box[B_CHI, k])
     if any_wrap:
