@@ -229,15 +229,15 @@ def frame_goals(model: pin.Model, data: pin.Data, q: np.ndarray, goals) -> list[
     return out
 
 
-def goal_errors(data: pin.Data, frame_ids: list[int], goals: list[dict]) -> np.ndarray:
-    """Errors of the goals at the frame placements already in ``data.oMf``: shape (n_goals, 2), each row the
-    position error (m, Euclidean) and the rotation error (rad, ``||log3(R_target^T R)||``; 0 for position goals).
+def placement_errors(placements, goals: list[dict]) -> np.ndarray:
+    """Errors of the goals at the given frame placements (``pin.SE3``, one per goal, in the world frame): shape
+    (n_goals, 2), each row the position error (m, Euclidean) and the rotation error (rad,
+    ``||log3(R_target^T R)||``; 0 for position goals).
 
     ``goals`` are dicts with ``kind`` and a numpy ``target`` ((4, 4) or (3,)), as :func:`parse_goals` returns.
     """
     err = np.zeros((len(goals), 2))
-    for k, (fid, goal) in enumerate(zip(frame_ids, goals, strict=True)):
-        placement = data.oMf[fid]
+    for k, (placement, goal) in enumerate(zip(placements, goals, strict=True)):
         target = goal["target"]
         if goal["kind"] == "pose":
             err[k, 0] = np.linalg.norm(placement.translation - target[:3, 3])
@@ -245,6 +245,11 @@ def goal_errors(data: pin.Data, frame_ids: list[int], goals: list[dict]) -> np.n
         else:
             err[k, 0] = np.linalg.norm(placement.translation - target)
     return err
+
+
+def goal_errors(data: pin.Data, frame_ids: list[int], goals: list[dict]) -> np.ndarray:
+    """:func:`placement_errors` at the frame placements already in ``data.oMf`` (forward kinematics done)."""
+    return placement_errors([data.oMf[i] for i in frame_ids], goals)
 
 
 def parse_goals(goals: list[dict]) -> list[dict]:

@@ -66,7 +66,7 @@ import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from goal_problems import goal_errors, load_problems, model_of, parse_goals  # noqa: E402
+from goal_problems import goal_errors, load_problems, model_of, parse_goals, placement_errors  # noqa: E402
 
 
 @dataclasses.dataclass
@@ -278,16 +278,7 @@ class PlacoPeer:
         self.solver = solver
 
     def _errors(self, goals: list[dict]) -> np.ndarray:
-        err = np.zeros((len(goals), 2))
-        for k, goal in enumerate(goals):
-            t = self.robot.get_T_world_frame(goal["frame"])
-            target = goal["target"]
-            if goal["kind"] == "pose":
-                err[k, 0] = np.linalg.norm(t[:3, 3] - target[:3, 3])
-                err[k, 1] = np.linalg.norm(pin.log3(target[:3, :3].T @ t[:3, :3]))
-            else:
-                err[k, 0] = np.linalg.norm(t[:3, 3] - target)
-        return err
+        return placement_errors([pin.SE3(self.robot.get_T_world_frame(g["frame"])) for g in goals], goals)
 
     def solve(self, goals: list[dict]) -> dict:
         stopper = _Stopper(self.common)
