@@ -124,3 +124,60 @@ def test_cli_reach(tmp_path, capsys):
 def test_bad_input(kwargs, match):
     with pytest.raises(OptionError, match=match):
         reachability_map("planar2r", progress=False, **kwargs)
+
+
+def _camera(commands: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """(position, target) (3,) in m, base frame, of the camera an exported page opens with: meshcat looks at the
+    world origin, where the last translation of the /meshcat tree puts the target."""
+    shift = [c["matrix"] for c in commands if c["type"] == "set_transform" and c["path"] == "/meshcat"]
+    target = -np.asarray(shift[-1], dtype=float).reshape(4, 4, order="F")[:3, 3] if shift else np.zeros(3)
+    cam = [c["value"] for c in commands if c["type"] == "set_property" and c["path"].startswith("/Cameras/default")
+           and c["property"] == "position"][-1]
+    return target + np.array([cam[0], -cam[2], cam[1]]), target  # meshcat's y-up (x, z, -y) back to z-up
+
+
+def test_html_frames_the_map_not_the_robot(tmp_path):
+    """A small map off to one side (1.2 m from the planar 2R's base; its reach is 0.41 m): the page's camera looks
+    at the map's box centre from a distance at which the box fills most of the view, the robot aside."""
+    from evoik_pin.viz import CAMERA_FOV_DEG
+
+    robot = ev.load_robot("planar2r")
+    voxel = 0.02
+    axis = (np.arange(5) + 0.5) * voxel
+    X, Y = np.meshgrid(1.2 + axis, -0.3 + axis, indexing="ij")
+    centers = np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], axis=1)
+    index = np.ones(len(centers))
+    index[0] = 0.0  # not reached: outside the box that is framed
+    rmap = ReachMap(centers, index, index.copy(), voxel, 1, "planar", 0, robot.name, robot.tip, robot.base, (5, 5, 1),
+                    0.0)
+    lo, hi = centers[1:].min(axis=0) - voxel / 2, centers[1:].max(axis=0) + voxel / 2
+    assert np.allclose(rmap.box(), (lo, hi))
+    commands = html_commands(rmap.save_html(tmp_path / "map.html", robot).read_text())
+    position, target = _camera(commands)
+    assert np.allclose(target, (lo + hi) / 2, atol=1e-6)
+    # the box's bounding sphere spans 0.8 of the vertical field of view
+    radius = np.linalg.norm(hi - lo) / 2
+    assert np.arcsin(radius / np.linalg.norm(position - target)) == pytest.approx(0.8 * np.radians(CAMERA_FOV_DEG) / 2)
+    # the grid and the axes moved with the drawing: the robot's base stays at the grid's centre
+    for node in ("/Grid", "/Axes"):
+        moved = [c["matrix"] for c in commands if c["type"] == "set_transform" and c["path"] == node]
+        M = np.asarray(moved[-1]).reshape(4, 4, order="F")
+        assert np.allclose(M[:3, 3], -target) and np.allclose(M[:3, :3], np.eye(3))
+
+
+def test_camera_target_defaults_to_the_origin_and_is_checked(tmp_path):
+    from evoik_pin.errors import ConfigurationError, TargetError
+    from evoik_pin.viz import Viewer
+
+    robot = ev.load_robot("planar2r")
+    with Viewer(robot) as v:
+        v.set_camera([1.0, 0.5, 0.5])
+        assert not any(c["path"] == "/meshcat" for c in html_commands(v.save_html(tmp_path / "a.html").read_text()))
+        v.set_camera([1.0, 0.5, 0.5], target=[0.2, 0.0, 0.1])
+        v.set_camera([1.0, 0.5, 0.5])  # back to the origin
+        position, target = _camera(html_commands(v.save_html(tmp_path / "b.html").read_text()))
+        assert np.allclose(target, 0.0) and np.allclose(position, [1.0, 0.5, 0.5])
+        with pytest.raises(ConfigurationError, match="camera target"):
+            v.set_camera(target=[0.0, np.nan, 0.0])
+        with pytest.raises(TargetError, match="points to frame"):
+            v.frame(np.zeros((0, 3)))

@@ -7,8 +7,10 @@ Each sub-command is one ``_cmd_*`` function registered in :func:`build_parser`.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import os
+import re
 import sys
 import warnings
 
@@ -41,6 +43,162 @@ def _joint_values(values: list[float], rad: bool) -> np.ndarray:
     return q if rad else np.radians(q)
 
 
+def _joint_flag(robot, values: list[float], rad: bool, flag: str) -> np.ndarray:
+    """The joint vector of ``flag`` (e.g. ``--q``) in rad; a ConfigurationError that names the flag."""
+    from .errors import ConfigurationError
+
+    try:
+        return robot.check_q(_joint_values(values, rad))
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"{flag}: {exc}") from None
+
+
+# ------------------------------------------------------------------ the options of the wrapped Python calls
+#: Option of the Python call (``solve``, ``solve_all``, ``reachability_map``; the shared problem options; the
+#: methods' common options) -> the named flag that sets it. Every other method option: ``--option NAME=VALUE``.
+CALL_FLAGS = {
+    "method": "--method", "seed": "--seed", "tolerance": "--tolerance", "rotation_tolerance": "--rotation-tolerance",
+    "q0": "--q0", "bounds": "--lower/--upper", "orientation_weight": "--orientation-weight",
+    "pose_metric": "--pose-metric", "scene": "--scene", "margin": "--margin", "polish": "--polish",
+    "population": "--population", "max_generations": "--max-generations", "timeout": "--timeout", "count": "--count",
+    "voxel": "--voxel", "orientations": "--orientations", "backend": "--backend", "workers": "--workers",
+    "address": "--address", "progress": "--no-progress", "batch_size": "--batch-size",
+}
+#: Options of ``solve``'s methods that no command-line value expresses, and why.
+NOT_ON_CLI = {"objective": "a Python callable objective(Q, kin) -> (N,) costs",
+              "callback": "a Python callable called every generation",
+              "objectives": "a list of evoik_pin.objectives.Objective instances"}
+#: Problem options ``evoik reach`` does not offer, and why.
+REACH_NOT_ON_CLI = {"q0": "every voxel starts from the seed table",
+                    "bounds": "the workspace is sampled in the robot's own bounds, so the map keeps them",
+                    "objective": NOT_ON_CLI["objective"]}
+#: Phrases the library's target checks start their messages with -> the flag that gave the value.
+_TARGET_FLAGS = {"target position": "--xyz", "target roll-pitch-yaw": "--rpy"}
+
+
+#: Options passed on as typed (the rest: q0 and bounds in degrees, scene and margin, the calls' own arguments).
+_PLAIN_OPTIONS = ("tolerance", "rotation_tolerance", "orientation_weight", "pose_metric", "polish", "population",
+                  "max_generations", "timeout", "count")
+#: ``--timeout none``: no wall-clock budget (None in Python; argparse's None means "not given").
+_NO_LIMIT = "none"
+
+
+def _seconds(text: str) -> float | str:
+    """``--timeout``'s value: seconds, or ``none`` for no wall-clock budget (the library checks the range)."""
+    if text.strip().lower() == _NO_LIMIT:
+        return _NO_LIMIT
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'none', got {text!r}") from None
+
+
+def _add_problem_args(p: argparse.ArgumentParser, q0: bool = True) -> None:
+    """The flags of the problem options every method takes (``tolerance``, ... ``pose_metric``; ``q0`` and the
+    bounds when ``q0``) and ``--option NAME=VALUE`` for any method option."""
+    p.add_argument("--tolerance", type=float, help="success threshold: position error in m (and orientation "
+                   "error in rad for pose targets); default 1e-6")
+    p.add_argument("--rotation-tolerance", type=float, metavar="RAD",
+                   help="success threshold on the orientation error in rad (default: --tolerance)")
+    p.add_argument("--orientation-weight", type=float, metavar="M_PER_RAD",
+                   help="m per rad of orientation error in the pose cost (default 1)")
+    p.add_argument("--pose-metric", help="how the pose cost combines the errors: sum (default) or euclidean")
+    if q0:
+        p.add_argument("--q0", type=float, nargs="+", help="initial configuration (degrees, or radians with --rad)")
+        p.add_argument("--lower", type=float, nargs="+", metavar="Q",
+                       help="lower joint bounds of the search (degrees, or radians with --rad; default the robot's)")
+        p.add_argument("--upper", type=float, nargs="+", metavar="Q",
+                       help="upper joint bounds of the search (degrees, or radians with --rad; default the robot's)")
+    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                   help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
+                   "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
+                   "--option strategy=rand1bin --option max_restarts=4")
+
+
+def _dest(flag: str) -> str:
+    return flag.split("/")[0].lstrip("-").replace("-", "_")
+
+
+def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, str]]:
+    """The options the user typed: {library name: (value in SI units, the flag as typed)}."""
+    given: dict[str, tuple[object, str]] = {}
+    for name in _PLAIN_OPTIONS:
+        value = getattr(args, _dest(CALL_FLAGS[name]), None)
+        if value is not None and value is not False:
+            given[name] = (None if value == _NO_LIMIT else value, CALL_FLAGS[name])
+    if getattr(args, "q0", None) is not None:
+        given["q0"] = (_joint_values(args.q0, args.rad), "--q0")  # its length is checked by the library
+    lower, upper = getattr(args, "lower", None), getattr(args, "upper", None)
+    if lower is not None or upper is not None:
+        bounds = (robot.lower if lower is None else _joint_values(lower, args.rad),
+                  robot.upper if upper is None else _joint_values(upper, args.rad))
+        given["bounds"] = (bounds, CALL_FLAGS["bounds"])
+    for item in getattr(args, "option", []):
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name.isidentifier():
+            raise OptionError(f"--option needs NAME=VALUE with NAME a Python keyword (e.g. runs=5), got {item!r}")
+        flag = f"--option {name}"
+        if name in CALL_FLAGS and hasattr(args, _dest(CALL_FLAGS[name])):
+            raise OptionError(f"{flag}: use {CALL_FLAGS[name]} (one way to set each option)")
+        if name in NOT_ON_CLI or name in given:
+            why = NOT_ON_CLI.get(name, "given twice")
+            raise OptionError(f"{flag}: not settable from the command line ({why})" if name in NOT_ON_CLI
+                              else f"{flag}: {why}")
+        try:
+            value = ast.literal_eval(text.strip())
+        except (ValueError, SyntaxError):
+            value = text.strip()  # a bare word: a string (e.g. strategy=rand1bin)
+        given[name] = (value, flag)
+    return given
+
+
+def _check_method_options(given: dict, method: str, pool: list[str] | None, command: str) -> None:
+    """OptionError naming the flag of an option ``method`` does not take, and the methods of ``pool`` that do
+    (``pool`` None: ``evoik command`` has this one method)."""
+    from .api import _PROBLEM_OPTIONS
+    from .solvers import get_solver
+
+    takes = get_solver(method).options
+    for name, (_, flag) in given.items():
+        if name in _PROBLEM_OPTIONS or name == "polish" or name in takes:
+            continue
+        if pool is None:
+            raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {command}); "
+                              f"it takes: {', '.join(takes)}")
+        takers = [m for m in pool if name in get_solver(m).options]
+        if takers:
+            raise OptionError(f"{flag} is not an option of method {method!r}; methods that take it: "
+                              f"{', '.join(takers)}")
+        raise OptionError(f"{flag}: no method takes an option {name!r}; method {method!r} takes: {', '.join(takes)}")
+
+
+def _call_options(args: argparse.Namespace, robot, method: str, pool: list[str] | None = None) -> dict:
+    """The keyword options of the wrapped call from the flags, checked against ``method`` (an option it does
+    not take names the flag and the methods of ``pool`` that take it). Records on ``args.typed_flags`` which
+    flag set which option, so that :func:`main` names the flag in the library's errors."""
+    given = _given_options(args, robot)
+    _check_method_options(given, method, pool, args.command)
+    args.typed_flags = {name: flag for name, (_, flag) in given.items()}
+    args.typed_flags.update(_TARGET_FLAGS)
+    if getattr(args, "seed", 0):  # the default 0 is always valid; a typed seed the library rejects is named
+        args.typed_flags["seed"] = "--seed"
+    return {name: value for name, (value, _) in given.items()}
+
+
+def _name_the_flag(message: str, flags: dict[str, str]) -> str:
+    """``message`` of a library error with the option it names replaced by the flag that set it ("population
+    must be ..." -> "--population must be ..."), or prefixed with the flag when it names the option later on."""
+    names = sorted(flags, key=len, reverse=True)
+    for name in names:
+        if re.match(rf"{re.escape(name)}(?![\w-])", message):
+            return flags[name] + message[len(name):]
+    for name in names:
+        if re.search(rf"(?<![\w-]){re.escape(name)}(?![\w-])", message):
+            return f"{flags[name]}: {message}"
+    return message
+
+
 def _cmd_robots(args: argparse.Namespace) -> int:
     print("Bundled paper arms:")
     for name, what in BUNDLED_ROBOTS.items():
@@ -68,7 +226,7 @@ def _pose_dict(robot, q) -> dict:
 
 def _cmd_fk(args: argparse.Namespace) -> int:
     robot = _load(args)
-    q = robot.check_q(_joint_values(args.q, args.rad)) if args.q else np.zeros(robot.n)
+    q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
     info = _pose_dict(robot, q)
     if args.json:
         print(json.dumps(info, indent=2))
@@ -87,29 +245,24 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     """IK for one target: xyz in metres, optional roll-pitch-yaw in degrees; exit 1 when not reached."""
     import pinocchio as pin
 
-    from .api import DEFAULT_METHOD, solve
+    from .api import DEFAULT_ALL_METHOD, DEFAULT_METHOD, solve
     from .experiments.common import check_output_file
     from .problem import Target
+    from .solvers import get_solver, methods
 
     robot = _load(args)
     html = check_output_file(args.html) if args.html else None  # before any work starts
     scene, margin = _load_scene(args, robot)
+    method = args.method or (DEFAULT_ALL_METHOD if args.all else DEFAULT_METHOD)
+    get_solver(method)  # an unknown method is named before its options are checked
+    pool = [m for m in methods() if get_solver(m).multi_solution or not args.all]
+    options = _call_options(args, robot, method, pool)
     position = np.asarray(args.xyz, dtype=float)
     target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
-    options: dict = {}
-    if args.tolerance is not None:
-        options["tolerance"] = args.tolerance
-    if args.q0 is not None:
-        options["q0"] = robot.check_q(_joint_values(args.q0, args.rad))
-    if args.population is not None:
-        options["population"] = args.population
-    if args.max_generations is not None:
-        options["max_generations"] = args.max_generations
     if scene is not None:
         options.update(scene=scene, margin=margin)
     if args.all:
-        return _solve_all(args, robot, target, options, html)
-    method = args.method or DEFAULT_METHOD
+        return _solve_all(args, robot, target, options, html, method)
     res = solve(robot, target, method=method, seed=args.seed, **options)
     reached = robot.fk(res.q)
     info = {
@@ -199,12 +352,11 @@ def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None
             viewer.block()
 
 
-def _solve_all(args: argparse.Namespace, robot, target, options: dict, html) -> int:
+def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, method: str) -> int:
     """``evoik solve --all``: every solution (``solve_all``), printed one per line or as JSON; exit 1 when none."""
-    from .api import DEFAULT_ALL_METHOD, solve_all
+    from .api import solve_all
     from .problem import Target
 
-    method = args.method or DEFAULT_ALL_METHOD
     sols = solve_all(robot, target, method=method, seed=args.seed, **options)
     res = sols.result
     rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in np.degrees(s.q)],
@@ -258,7 +410,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from .viz import Viewer
 
     robot = _load(args)
-    q = robot.check_q(_joint_values(args.q, args.rad)) if args.q else np.zeros(robot.n)
+    q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
     if args.no_block and not args.html:
         raise OptionError("--no-block without --html shows nothing: the viewer stops when evoik exits; add "
                           "--html PATH to keep the scene as a file")
@@ -289,10 +441,12 @@ def _cmd_reach(args: argparse.Namespace) -> int:
     robot = _load(args)
     output_dir(args.out)  # before the work: an unwritable OUT fails at once
     scene, margin = _load_scene(args, robot)
-    options = {"margin": margin} if scene is not None else {}
+    options = _call_options(args, robot, "memetic")  # the batch engine runs memetic's LM rounds
+    if scene is not None:
+        options["margin"] = margin
     rmap = reachability_map(robot, voxel=args.voxel, orientations=args.orientations, scene=scene,
                             backend=args.backend, workers=args.workers, seed=args.seed, progress=not args.no_progress,
-                            address=args.address, **options)
+                            address=args.address, batch_size=args.batch_size, **options)
     paths = rmap.save(args.out, html=not args.no_html, robot=robot)
     reached = int(rmap.reached.sum())
     mean = float(rmap.index[rmap.reached].mean()) if reached else 0.0
@@ -351,11 +505,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")
     p.add_argument("--method", help="solver (evoik_pin.methods(); default: the memetic solver)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same answer")
-    p.add_argument("--tolerance", type=float, help="success threshold: position error in m (and orientation "
-                   "error in rad for pose targets); default 1e-6")
-    p.add_argument("--q0", type=float, nargs="+", help="initial configuration (degrees, or radians with --rad)")
+    _add_problem_args(p)
+    p.add_argument("--polish", action="store_true", help="polish the method's answer with Levenberg-Marquardt")
     p.add_argument("--population", type=int, help="population size of population-based solvers")
     p.add_argument("--max-generations", type=int, help="generation budget of population-based solvers")
+    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock budget in seconds (memetic: default "
+                   "0.005; memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")
+    p.add_argument("--count", type=int, help="with --all (memetic-all): solutions wanted on a redundant arm "
+                   "(default 8)")
     p.add_argument("--rad", action="store_true", help="joint values in radians (output and --q0)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
@@ -392,6 +549,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")
     p.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")
     p.add_argument("--seed", type=int, default=0, help="seed of the workspace sampling (default 0)")
+    p.add_argument("--batch-size", type=int, default=50_000, help="targets per call of the batch engine "
+                   "(default 50000)")
+    _add_problem_args(p, q0=False)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-html", action="store_true", help="skip the meshcat HTML page")
     p.set_defaults(func=_cmd_reach)
@@ -426,8 +586,9 @@ def main(argv: list[str] | None = None) -> int:
         warnings.showwarning = show
         try:
             return int(args.func(args) or 0)
-        except EvoikError as exc:
-            print(f"evoik {args.command}: error: {exc}", file=sys.stderr)
+        except EvoikError as exc:  # the option the library names is shown as the flag the user typed
+            print(f"evoik {args.command}: error: {_name_the_flag(str(exc), getattr(args, 'typed_flags', {}))}",
+                  file=sys.stderr)
             return 2
 
 

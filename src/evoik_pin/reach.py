@@ -154,9 +154,15 @@ class ReachMap:
             plt.close(fig)
         return out
 
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) corners (3,) in m of the reached voxels' box (of every voxel when none is reached)."""
+        centers = self.centers[self.reached] if self.reached.any() else self.centers
+        return centers.min(axis=0) - self.voxel / 2, centers.max(axis=0) + self.voxel / 2
+
     def save_html(self, path, robot: Robot | None = None) -> Path:
         """A self-contained meshcat page: the reached voxels as a point cloud coloured by the index (viridis, 0
-        to 1), and ``robot`` at its zero configuration (clipped into its bounds) when given."""
+        to 1), and ``robot`` at its zero configuration (clipped into its bounds) when given. The camera frames the
+        map (:meth:`box`), not the robot."""
         from .viz import Viewer
 
         robot = robot or load_robot(self.robot, tip=self.tip, base=self.base)
@@ -166,6 +172,7 @@ class ReachMap:
             if reached.any():
                 viewer.show_points(self.centers[reached], self.index[reached], name="reach",
                                    size=0.4 * self.voxel)
+            viewer.frame(np.array(self.box()))
             return viewer.save_html(path)
 
 

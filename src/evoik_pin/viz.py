@@ -75,6 +75,8 @@ OBSTACLE_RGBA = (0.55, 0.55, 0.55, 0.6)
 COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
 #: Most bytes of mesh files :meth:`Viewer.show_solutions` embeds for its ghosts before it draws skeletons.
 GHOST_MESH_BUDGET = 50_000_000
+#: Vertical field of view (degrees) of meshcat's default camera.
+CAMERA_FOV_DEG = 75.0
 #: Seconds to wait for the meshcat server to start or to answer one request.
 SERVER_TIMEOUT = 20.0
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer its first request.
@@ -412,6 +414,7 @@ class Viewer:
         self._skeleton_geom: pin.GeometryModel | None = None
         self._reach = _reach(robot)
         self._baseMo = robot.base_placement.inverse()  # the model's world frame seen from the base frame
+        self._camera_target = np.zeros(3)  # the point the camera looks at (m, base frame)
         try:
             if zmq_url is None:
                 self._server = _Server()
@@ -805,17 +808,53 @@ class Viewer:
             del self._viz[key]
 
     @_talks
-    def set_camera(self, position=None) -> None:
-        """Place the camera at ``position`` (3,) in m (base frame), looking at the origin.
+    def set_camera(self, position=None, target=None) -> None:
+        """Place the camera at ``position`` (3,) in m (base frame), looking at ``target`` (3,) in m (default: the
+        origin, the robot's base).
 
-        Default: in front of, beside and above the robot, at 1.25 times the chain's stretched length.
+        Default position: ``target`` plus, in front of, beside and above it, 1.25 times the chain's stretched
+        length. Meshcat's orbit controls always look at (and turn about) the world origin, so a ``target`` other
+        than the origin moves the drawing instead: the ``/meshcat`` tree, the grid and the axes are translated
+        by ``-target`` (every object keeps its place relative to the others and to the grid).
         """
         vis = self._check_open()
-        c = self._reach * np.array([0.9, 0.7, 0.55]) if position is None else np.asarray(position, dtype=float)
+        t = np.zeros(3) if target is None else np.asarray(target, dtype=float)
+        if t.shape != (3,) or not np.all(np.isfinite(t)):
+            raise ConfigurationError(f"camera target must be 3 finite numbers (m), got {t}")
+        c = t + self._reach * np.array([0.9, 0.7, 0.55]) if position is None else np.asarray(position, dtype=float)
         if c.shape != (3,) or not np.all(np.isfinite(c)):
             raise ConfigurationError(f"camera position must be 3 finite numbers (m), got {c}")
+        if not np.array_equal(t, self._camera_target):  # unchanged: no command (the export stays as it was)
+            shift = np.eye(4)
+            shift[:3, 3] = -t
+            for node in ("/meshcat", "/Grid", "/Axes"):  # the grid's and the axes' own transforms are identities
+                vis[node].set_transform(shift)
+            self._camera_target = t.copy()
+        d = c - t
         # meshcat's camera lives in a y-up frame rotated onto the z-up world: world (x, y, z) -> (x, z, -y)
-        vis["/Cameras/default/rotated/<object>"].set_property("position", [float(c[0]), float(c[2]), float(-c[1])])
+        vis["/Cameras/default/rotated/<object>"].set_property("position", [float(d[0]), float(d[2]), float(-d[1])])
+
+    def frame(self, points, fill: float = 0.8) -> tuple[np.ndarray, np.ndarray]:
+        """Point the camera at the bounding box of ``points`` (N, 3) in m (base frame) and back it off until the
+        box fills about ``fill`` of the view's height, from the default direction (front, side, above).
+
+        Returns:
+            (position, target), each (3,) in m: the camera and the box centre it looks at.
+        """
+        P = np.asarray(points, dtype=float)
+        if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 1 or not np.all(np.isfinite(P)):
+            raise TargetError(f"points to frame must be a finite (N, 3) array with N >= 1 (m), got shape {P.shape}")
+        if not 0 < fill <= 1:
+            raise ConfigurationError(f"fill must be in (0, 1], got {fill}")
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        target = (lo + hi) / 2
+        radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.01)  # the box's bounding sphere; a point: 1 cm
+        # the sphere's silhouette spans 2 asin(radius / distance) of the vertical field of view
+        distance = radius / np.sin(fill * np.radians(CAMERA_FOV_DEG) / 2)
+        direction = np.array([0.9, 0.7, 0.55]) / np.linalg.norm([0.9, 0.7, 0.55])
+        position = target + distance * direction
+        self.set_camera(position, target)
+        return position, target
 
     @_talks
     def save_html(self, path: str | os.PathLike) -> Path:
