@@ -39,7 +39,7 @@ from evoik_pin.objectives import (
     orientation_errors,
     position_errors,
 )
-from evoik_pin.solvers.nsga2 import nsga2_minimize
+from evoik_pin.solvers.paper.nsga2 import nsga2_minimize
 
 GAINS = np.array([10.0, 10.0, 1.0, 1.0, 1.0])
 VEHICLE_TARGET = Target.planar_target(1.5, 0.5, 0.0)

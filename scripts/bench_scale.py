@@ -29,10 +29,12 @@ import numpy as np
 import evoik_pin as ev
 from evoik_pin.api import _run, make_problem
 from evoik_pin.problem import Target
-from evoik_pin.solvers import batch
+from evoik_pin.solvers.batch import threads
+from evoik_pin.solvers.batch.outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
+from evoik_pin.solvers.batch.targets import TargetSource
 from evoik_pin.solvers.lm import engine as lm_engine
 from evoik_pin.solvers.lm.layout import KIND_POSE, STATS_SIZE, box_constants, encode_targets, kernel_params
-from evoik_pin.solvers.memetic import SeedTable, default_table_size, seed_table
+from evoik_pin.solvers.search.seed_table import SeedTable, default_table_size, seed_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_ik import cpu_model  # noqa: E402
@@ -63,7 +65,7 @@ def workers_scaling(robot, H, reps: int, log) -> dict:
     for rep in range(reps):
         for w in (1, 2):
             res, wall, cpu = timed(lambda w=w: ev.solve_many(robot, H, seed=0, workers=w))
-            with batch.gc_paused():
+            with threads.gc_paused():
                 _, read, _ = timed(lambda res=res: list(res))  # every Result object made (they are made when read)
             runs[w].append((wall, cpu, res.stats["success_rate"], res.stats["fallback"], read))
             log(f"  rep {rep} workers={w}: {len(H) / wall:,.0f} poses/s (CPU/wall {cpu / wall:.2f}, "
@@ -87,7 +89,7 @@ def workers_scaling(robot, H, reps: int, log) -> dict:
 def breakdown(robot, H, reps: int) -> dict:
     """Per-target microseconds of each phase of a one-worker solve_many (the best of ``reps``)."""
     kernel_s, nearest_s = [0.0], [0.0]
-    real_pairs, real_nearest = batch.solve_pairs, SeedTable.nearest_encoded
+    real_pairs, real_nearest = threads.solve_pairs, SeedTable.nearest_encoded
 
     def pairs(*a, **k):
         t = time.perf_counter()
@@ -104,22 +106,22 @@ def breakdown(robot, H, reps: int) -> dict:
             nearest_s[0] += time.perf_counter() - t
 
     best: dict | None = None
-    batch.solve_pairs, SeedTable.nearest_encoded = pairs, nearest
+    threads.solve_pairs, SeedTable.nearest_encoded = pairs, nearest
     try:
         for _ in range(reps):
             kernel_s[0] = nearest_s[0] = 0.0
             t0 = time.perf_counter()
-            block = batch.TargetSource(H).block(0, len(H))
+            block = TargetSource(H).block(0, len(H))
             t1 = time.perf_counter()
-            solver = batch.BatchSolver(robot, make_problem, _run, "memetic", 0, {})
+            solver = threads.BatchSolver(robot, make_problem, _run, "memetic", 0, {})
             solver._prepare(block.target(0))
             t2 = time.perf_counter()
             out = solver._chunk_rounds(block, None)
             t3 = time.perf_counter()
-            rest = np.nonzero(out.source == batch.SOURCE_SINGLE)[0]
+            rest = np.nonzero(out.source == SOURCE_SINGLE)[0]
             solver._one_by_one({int(i): block.target(int(i)) for i in rest}, None, out, 0)
             t4 = time.perf_counter()
-            with batch.gc_paused():
+            with threads.gc_paused():
                 out.results(solver.template)
             t5 = time.perf_counter()
             row = {"targets (checked, encoded as arrays)": t1 - t0, "LM kernel (solve_pairs)": kernel_s[0],
@@ -130,7 +132,7 @@ def breakdown(robot, H, reps: int) -> dict:
             if best is None or row["total to the answers (arrays)"] < best["total to the answers (arrays)"]:
                 best = row
     finally:
-        batch.solve_pairs, SeedTable.nearest_encoded = real_pairs, real_nearest
+        threads.solve_pairs, SeedTable.nearest_encoded = real_pairs, real_nearest
     return {k: v / len(H) * 1e6 for k, v in best.items()}
 
 
@@ -211,10 +213,10 @@ _WORKER: dict = {}
 def _process_init(robot_blob: bytes) -> None:
     import pickle
 
-    _WORKER["solver"] = batch.BatchSolver(pickle.loads(robot_blob), make_problem, _run, "memetic", 0, {})
+    _WORKER["solver"] = threads.BatchSolver(pickle.loads(robot_blob), make_problem, _run, "memetic", 0, {})
 
 
-def _process_chunk(H: np.ndarray, offset: int) -> batch.BatchOutcome:
+def _process_chunk(H: np.ndarray, offset: int) -> BatchOutcome:
     return _WORKER["solver"].solve(H, offset=offset)  # the poses as they are: the local path's encoding
 
 
@@ -235,7 +237,7 @@ def processes_option(robot, H, reps: int) -> dict:
         for _ in range(reps):
             t = time.perf_counter()
             parts = list(pool.map(_process_chunk, [H[:half], H[half:]], [0, half]))
-            batch.BatchResults(batch.BatchOutcome.concatenate(parts))  # what solve_many returns: arrays
+            BatchResults(BatchOutcome.concatenate(parts))  # what solve_many returns: arrays
             walls.append(time.perf_counter() - t)
     return {"startup_s": startup, "median_s": float(np.median(walls)), "rate": len(H) / float(np.median(walls))}
 
@@ -244,7 +246,7 @@ def processes_option(robot, H, reps: int) -> dict:
 def ray_overhead(robot, H, reps: int, log) -> dict:
     import ray
 
-    from evoik_pin.solvers import ray_backend
+    from evoik_pin.solvers.batch import ray_actors
 
     t = time.perf_counter()
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
@@ -261,7 +263,7 @@ def ray_overhead(robot, H, reps: int, log) -> dict:
         b = ev.solve_many(robot, H[:2000], seed=0, backend="ray", workers=2, **fixed)
         same = all(np.array_equal(x.q, y.q) for x, y in zip(a, b, strict=True))
     finally:
-        ray_backend.shutdown_pool()
+        ray_actors.shutdown_pool()
         ray.shutdown()
     return {"init_s": init_s, "first_s": first_s, "local_median_s": float(np.median(local)),
             "ray_median_s": float(np.median(remote)), "ratio": float(np.median(remote) / np.median(local)),
@@ -396,7 +398,7 @@ def main(argv=None) -> int:
     robot = ev.load_robot("panda")
     H = panda_poses(robot, args.targets, seed=0)
     ev.solve_many(robot, H[:500], seed=0, workers=2)  # kernel, seed table, k-d tree: one-time set-up
-    r = {"date": datetime.date.today().isoformat(), "cpu": cpu_model(), "cores": batch.default_workers(),
+    r = {"date": datetime.date.today().isoformat(), "cpu": cpu_model(), "cores": threads.default_workers(),
          "python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
          "targets": args.targets, "reps": args.reps}
     log("workers 1 vs 2")

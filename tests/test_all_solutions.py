@@ -16,11 +16,11 @@ import evoik_pin
 from evoik_pin.dh import DHRow, dh_to_urdf
 from evoik_pin.errors import ConfigurationError, OptionError
 from evoik_pin.problem import IKProblem, Target
-from evoik_pin.solvers.all_solutions import DEFAULT_CLASS_RADIUS
-from evoik_pin.solvers.analytic import planar2r_ik, puma_ik
-from evoik_pin.solvers.clustering import joint_differences, leader_clusters
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs, wrapping_joints
-from evoik_pin.solvers.solution_classes import SolutionClasses, class_representatives, farthest_point_selection
+from evoik_pin.solvers.paper.analytic import planar2r_ik, puma_ik
+from evoik_pin.solvers.paper.clustering import joint_differences, leader_clusters
+from evoik_pin.solvers.search.all_solutions import DEFAULT_CLASS_RADIUS
+from evoik_pin.solvers.search.solution_classes import SolutionClasses, class_representatives, farthest_point_selection
 
 # ------------------------------------------------------------------------------------------ UR closed form
 #: UR standard DH parameters (m): d1, a2, a3, d4, d5, d6 (Universal Robots' published tables).

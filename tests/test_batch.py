@@ -1,4 +1,5 @@
-"""solve_many's batch engine (solvers/batch.py): workers, chunking, per-target generators, compact outcomes.
+"""solve_many's batch engine (solvers/batch/: api.py over threads.py): workers, chunking, per-target generators,
+compact outcomes.
 
 Every comparison uses a deterministic budget (``timeout=None``, ``max_restarts``), so the answers do not depend on
 the machine's load; speed is measured in scripts/bench_scale.py, never here.
@@ -17,8 +18,9 @@ from evoik_pin.problem import Target
 from evoik_pin.result import Result
 from evoik_pin.scene import Scene
 from evoik_pin.scene.examples import SHELF_INTERIOR, add_table_and_shelf, free_configurations
-from evoik_pin.solvers import batch
-from evoik_pin.solvers.memetic import DEFAULT_TABLE_SEEDS
+from evoik_pin.solvers.batch import threads
+from evoik_pin.solvers.batch.outcome import BatchOutcome
+from evoik_pin.solvers.search.seed_table import DEFAULT_TABLE_SEEDS
 
 BUDGET = {"timeout": None, "max_restarts": 2}
 
@@ -54,12 +56,12 @@ def mixed_targets(panda):
 @pytest.fixture
 def small_chunks(monkeypatch):
     """Chunks of 8 targets, so that 120 targets make many chunks (and threads really share the work)."""
-    monkeypatch.setattr(batch, "MIN_CHUNK", 8)
+    monkeypatch.setattr(threads, "MIN_CHUNK", 8)
 
 
 def test_same_answers_whatever_the_number_of_workers(panda, mixed_targets, small_chunks):
     runs = {w: ev.solve_many(panda, mixed_targets, seed=4, workers=w, **BUDGET) for w in (1, 2, 3)}
-    assert batch.chunk_bounds(120, 3) != batch.chunk_bounds(120, 1)  # the chunking differs ...
+    assert threads.chunk_bounds(120, 3) != threads.chunk_bounds(120, 1)  # the chunking differs ...
     same(runs[1], runs[2])  # ... the answers do not
     same(runs[1], runs[3])
     res = runs[3]
@@ -81,7 +83,7 @@ def test_a_fallback_target_draws_from_its_own_spawned_generator(panda, mixed_tar
     gens = [np.random.default_rng(s) for s in np.random.SeedSequence(4).spawn(len(mixed_targets))]
     alone = ev.solve(panda, mixed_targets[77], seed=gens[77], table_offset=DEFAULT_TABLE_SEEDS, **BUDGET)
     assert "restart" in res[77].message and np.array_equal(res[77].q, alone.q) and res[77].message == alone.message
-    assert np.array_equal(batch.target_generator(4, 77).random(3), np.random.default_rng(
+    assert np.array_equal(threads.target_generator(4, 77).random(3), np.random.default_rng(
         np.random.SeedSequence(4).spawn(100)[77]).random(3))
 
 
@@ -142,24 +144,24 @@ def test_progress_bar(panda, mixed_targets, capsys):
 
 
 def test_default_workers_follow_the_affinity(monkeypatch):
-    monkeypatch.setattr(batch.os, "sched_getaffinity", lambda pid: {0, 3, 5}, raising=False)
-    assert batch.default_workers() == 3 and batch.check_workers(None) == 3
+    monkeypatch.setattr(threads.os, "sched_getaffinity", lambda pid: {0, 3, 5}, raising=False)
+    assert threads.default_workers() == 3 and threads.check_workers(None) == 3
 
 
 def test_chunks_cover_every_target_once():
     for n, w in [(1, 4), (255, 2), (1000, 1), (5000, 2), (100_000, 16)]:
-        bounds = batch.chunk_bounds(n, w)
+        bounds = threads.chunk_bounds(n, w)
         assert bounds[0][0] == 0 and bounds[-1][1] == n
         assert all(a < b and b == c for (a, b), (c, _) in zip(bounds, bounds[1:] + [(n, None)], strict=True))
         sizes = [b - a for a, b in bounds]
-        if w == 1 or n <= batch.MIN_CHUNK:
+        if w == 1 or n <= threads.MIN_CHUNK:
             assert len(bounds) == 1
         else:  # guided: shrinking chunks, each at least MIN_CHUNK but the last, at most a 1 / (2 w) share of the rest
             assert all(x >= y for x, y in zip(sizes[:-1], sizes[1:], strict=True))
-            assert min(sizes[:-1]) >= batch.MIN_CHUNK
-            assert all(b - a <= max(batch.MIN_CHUNK, -(-(n - a) // (batch.GUIDED_SHARE * w))) for a, b in bounds)
+            assert min(sizes[:-1]) >= threads.MIN_CHUNK
+            assert all(b - a <= max(threads.MIN_CHUNK, -(-(n - a) // (threads.GUIDED_SHARE * w))) for a, b in bounds)
             assert len(bounds) > 2 * w
-    ray = batch.chunk_bounds(100_000, 4, minimum=1000, maximum=20_000)  # the Ray backend's guided chunks
+    ray = threads.chunk_bounds(100_000, 4, minimum=1000, maximum=20_000)  # the Ray backend's guided chunks
     assert ray[0] == (0, 12_500) and all(1000 <= b - a <= 20_000 for a, b in ray[:-1]) and ray[-1][1] == 100_000
 
 
@@ -179,10 +181,10 @@ def test_ray_missing_names_the_extra(panda, monkeypatch):
 
 
 def test_outcomes_concatenate_in_order(panda, mixed_targets):
-    solver = batch.BatchSolver(panda, ev.api.make_problem, ev.api._run, "memetic", 5, dict(BUDGET))
+    solver = threads.BatchSolver(panda, ev.api.make_problem, ev.api._run, "memetic", 5, dict(BUDGET))
     targets = Target.coerce_many(mixed_targets[:20])
     whole = solver.solve(targets)
-    parts = batch.BatchOutcome.concatenate([solver.solve(targets[:7]), solver.solve(targets[7:11], offset=7),
+    parts = BatchOutcome.concatenate([solver.solve(targets[:7]), solver.solve(targets[7:11], offset=7),
                                             solver.solve(targets[11:], offset=11)])
     same(whole.results(), parts.results())
     assert sorted(parts.singles) == sorted(whole.singles) == [10]

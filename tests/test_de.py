@@ -5,8 +5,8 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.de import parse_strategy
-from evoik_pin.solvers.de_ops import (
+from evoik_pin.solvers.paper.de import parse_strategy
+from evoik_pin.solvers.paper.de_ops import (
     MUTATIONS,
     SCHEME_NUMBERS,
     binomial_crossover,

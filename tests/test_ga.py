@@ -6,9 +6,9 @@ import pytest
 import evoik_pin
 from evoik_pin.api import make_problem
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.analytic import planar2r_ik
-from evoik_pin.solvers.clustering import joint_distances, leader_clusters
-from evoik_pin.solvers.ga import (
+from evoik_pin.solvers.paper.analytic import planar2r_ik
+from evoik_pin.solvers.paper.clustering import joint_distances, leader_clusters
+from evoik_pin.solvers.paper.ga import (
     basic_polynomial_mutation,
     decode_bounds,
     decode_sign_magnitude,

@@ -5,7 +5,7 @@ import pytest
 
 import evoik_pin
 from evoik_pin.errors import MethodError
-from evoik_pin.solvers.analytic import planar2r_ik, puma_ik
+from evoik_pin.solvers.paper.analytic import planar2r_ik, puma_ik
 
 CM = 0.01
 TARGETS_2R = [(20, 20), (20, 25), (15, 30), (38, 0)]

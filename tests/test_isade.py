@@ -5,8 +5,8 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.de_ops import mutate
-from evoik_pin.solvers.isade import (
+from evoik_pin.solvers.paper.de_ops import mutate
+from evoik_pin.solvers.paper.isade import (
     ISADE_STRATEGIES,
     adapt_crossover_rates,
     isade_donors,

@@ -16,9 +16,9 @@ from evoik_pin.errors import OptionError, TargetError
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.result import Result
 from evoik_pin.robot import list_robots, load_robot
+from evoik_pin.solvers.lm.polish import polish_result
 from evoik_pin.solvers.lm.reference import ReferenceLM
-from evoik_pin.solvers.memetic import SeedTable, default_table_size, seed_table
-from evoik_pin.solvers.polish import polish_result
+from evoik_pin.solvers.search.seed_table import SeedTable, default_table_size, seed_table
 
 #: Arms with fewer than 6 joints (or 5, so_arm) get position targets; planar2r a planar one.
 POSITION_ONLY = {"ax18", "puma3r", "vehicle_arm", "so_arm"}
@@ -176,7 +176,7 @@ def test_a_minimum_of_work_is_done_whatever_the_clock_says(robots):
     # a process descheduled past its budget (simulated by a budget that is over before it starts) still makes
     # the guaranteed LM runs: the 4 nearest seed-table entries (and q0), exactly as a deterministic budget of
     # 4 table seeds and no restart does
-    from evoik_pin.solvers.memetic import GUARANTEED_TABLE_RUNS
+    from evoik_pin.solvers.search.memetic import GUARANTEED_TABLE_RUNS
 
     robot = robots["panda"]
     rng = np.random.default_rng(26)
@@ -195,7 +195,7 @@ def test_a_minimum_of_work_is_done_whatever_the_clock_says(robots):
 def test_halton_points_equal_scipys():
     from scipy.stats import qmc
 
-    from evoik_pin.solvers.common import halton
+    from evoik_pin.solvers.paper.common import halton
 
     for d in (1, 2, 6, 7, 9):
         assert np.array_equal(halton(d, 1000, skip=1), qmc.Halton(d, scramble=False).random(1001)[1:])

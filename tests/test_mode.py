@@ -6,7 +6,7 @@ import pytest
 import evoik_pin
 from evoik_pin import load_robot
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.mode import adaptive_probability, equitable_weights, nondominated_2d
+from evoik_pin.solvers.paper.mode import adaptive_probability, equitable_weights, nondominated_2d
 
 CM = 0.01
 TABLE2 = [(10, 10, 10), (0, 7.5, 12), (2, 13, -5), (-6, 9.5, 4.3), (3, -7, 13)]

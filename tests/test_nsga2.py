@@ -8,8 +8,8 @@ import evoik_pin
 from evoik_pin import Target, lie
 from evoik_pin.api import make_problem
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.ga import basic_polynomial_mutation
-from evoik_pin.solvers.nsga2 import (
+from evoik_pin.solvers.paper.ga import basic_polynomial_mutation
+from evoik_pin.solvers.paper.nsga2 import (
     _duplicate_rows,
     _task_errors,
     _tournament,

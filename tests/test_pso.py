@@ -6,7 +6,7 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.errors import OptionError
-from evoik_pin.solvers.pso import inertia_weight, pso_step, ring_best
+from evoik_pin.solvers.paper.pso import inertia_weight, pso_step, ring_best
 
 
 def test_inertia_weight_is_linear():

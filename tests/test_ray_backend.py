@@ -9,7 +9,7 @@ from test_batch import mixed, same
 import evoik_pin as ev
 from evoik_pin.errors import BackendError, TargetError
 from evoik_pin.problem import Target
-from evoik_pin.solvers import ray_backend
+from evoik_pin.solvers.batch import ray_actors
 
 BUDGET = {"timeout": None, "max_restarts": 2}
 
@@ -21,7 +21,7 @@ def ray():
     if started:
         ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
     yield ray
-    ray_backend.shutdown_pool()
+    ray_actors.shutdown_pool()
     if started:
         ray.shutdown()
 
@@ -39,7 +39,7 @@ def targets(panda):
 def test_pack_and_unpack_targets_round_trip():
     ts = [Target(np.array([0.1, 0.2, 0.3])), Target(np.array([0.3, 0.0, 0.1]), np.diag([1.0, -1.0, -1.0])),
           Target.planar_target(0.2, -0.1, 0.5), Target.planar_target(0.1, 0.1)]
-    back = ray_backend.unpack_targets(ray_backend.pack_targets(ts))
+    back = ray_actors.unpack_targets(ray_actors.pack_targets(ts))
     for a, b in zip(ts, back, strict=True):
         assert np.array_equal(a.position, b.position) and a.planar == b.planar and a.yaw == b.yaw
         assert (a.rotation is None and b.rotation is None) or np.array_equal(a.rotation, b.rotation)
@@ -61,7 +61,7 @@ def test_ray_gives_the_local_answers_in_target_order(ray, panda, targets, capsys
 def test_a_dying_actor_has_its_chunk_re_run(ray, panda, targets):
     work = Target.coerce_many(targets)
     local = ev.solve_many(panda, targets, seed=5, workers=1, **BUDGET)
-    job = ray_backend.RayBatch(panda, ev.api.make_problem, ev.api._run, "memetic", 5, dict(BUDGET), workers=2,
+    job = ray_actors.RayBatch(panda, ev.api.make_problem, ev.api._run, "memetic", 5, dict(BUDGET), workers=2,
                                chunk_size=64)
     replaced = job.pool.replaced
     job.crash_hook = {1, 3}  # the first attempts of chunks 1 and 3 kill their actor (os._exit) mid-run
@@ -101,9 +101,9 @@ def test_unreachable_cluster_address_is_a_clear_error(panda, monkeypatch):
         ev.solve_many(panda, [np.array([0.3, 0.0, 0.5])], backend="ray", address="127.0.0.1:1")
     monkeypatch.setenv("RAY_ADDRESS", "127.0.0.1:1")
     with pytest.raises(BackendError, match="cannot reach"):
-        ray_backend.connect()
+        ray_actors.connect()
     with pytest.raises(BackendError, match="not host:port"):
-        ray_backend.connect(address="nowhere")
+        ray_actors.connect(address="nowhere")
 
 
 def test_pose_arrays_go_to_the_actors_as_arrays_and_a_bad_pose_is_named_by_its_index(ray, panda):

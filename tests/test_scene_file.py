@@ -109,6 +109,21 @@ def test_the_shipped_panda_shelf_equals_the_example_scene(panda):
     assert_same_obstacles(add_table_and_shelf(Scene(panda)), shipped)
 
 
+def test_the_file_format_knows_every_obstacle_kind_of_the_scene():
+    """The file module does not import the Scene (it parses into plain data): its kinds are held equal here."""
+    from evoik_pin.scene.scene import OBSTACLE_KINDS
+
+    assert list(file.KIND_KEYS) == list(OBSTACLE_KINDS)
+    for kind, (required, optional) in file.KIND_KEYS.items():
+        assert set(required + optional) == set(OBSTACLE_KINDS[kind])
+
+
+def test_reading_a_file_gives_plain_checked_data():
+    spec = file.read_scene(ROOT / "examples" / "panda_shelf.yaml")
+    assert isinstance(spec, file.SceneFile) and spec.self_collision is True
+    assert [kind for _, kind, _, _ in spec.obstacles] and all(isinstance(pose, pin.SE3) for *_, pose in spec.obstacles)
+
+
 def test_the_format_in_the_module_docstring_loads(panda, cube):
     """The documented example (every kind, both pose forms, a relative mesh path) is a valid scene file."""
     example = file.__doc__.split("::\n\n", 1)[1].split("\n\n", 1)[0]

@@ -16,12 +16,13 @@ from .errors import ConfigurationError, MethodError, OptionError
 from .problem import DEFAULT_PRO_DELTA, IKProblem, Target
 from .result import Result
 from .robot import Robot, load_robot
-from .solvers import batch, get_solver, methods
-from .solvers.all_solutions import SolutionList  # also registers "memetic-all"
-from .solvers.batch import BatchResults
+from .solvers import get_solver, methods
+from .solvers.batch import api as batch_api
+from .solvers.batch.outcome import BatchResults
 from .solvers.collision_verdict import with_collision_verdict
 from .solvers.lm import ENGINES
 from .solvers.options import check_int
+from .solvers.search.all_solutions import SolutionList  # also registers "memetic-all"
 
 __all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "BatchResults", "SolutionList", "make_problem", "methods", "prepare",
            "solve", "solve_all", "solve_many", "solve_trajectory"]
@@ -91,7 +92,7 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
     info.check_options(options)
     result = info.func(problem, rng, **options)
     if polish:
-        from .solvers.polish import polish_result
+        from .solvers.lm.polish import polish_result
 
         result = polish_result(problem, result, rng)
     return with_collision_verdict(problem, result)
@@ -109,8 +110,8 @@ def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "co
     Returns:
         The seconds spent (about 0 when everything was ready).
     """
-    from .solvers.memetic import default_table_size
-    from .solvers.memetic import prepare as prepare_memetic
+    from .solvers.search.memetic import prepare as prepare_memetic
+    from .solvers.search.seed_table import default_table_size
 
     t0 = time.perf_counter()
     robot = _robot(robot)
@@ -145,7 +146,7 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
 def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **options) -> SolutionList:
     """Every distinct IK solution of one target, best first.
 
-    The default method, ``"memetic-all"`` (:mod:`evoik_pin.solvers.all_solutions`), runs batched
+    The default method, ``"memetic-all"`` (:mod:`evoik_pin.solvers.search.all_solutions`), runs batched
     Levenberg-Marquardt from ``q0`` and the seed-table entries nearest to the target, and clusters the
     converged runs into distinct solutions:
 
@@ -173,7 +174,7 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         **options: shared ones (``tolerance``, ``rotation_tolerance``, ``q0``, ``bounds``, ...) and the method's
             own; for ``memetic-all``: ``count`` (>= 1), ``timeout`` (s, default 0.02), ``max_starts``,
             ``class_radius`` (rad), ``batch``, ``patience``, ``min_hits``, ``pool``, ``table_size``, ``iterations``,
-            ``engine`` (see :func:`evoik_pin.solvers.all_solutions.memetic_all`).
+            ``engine`` (see :func:`evoik_pin.solvers.search.all_solutions.memetic_all`).
 
     Returns:
         A :class:`SolutionList`: a ``list`` of :class:`Result` (one per solution; plain list behaviour, ``[]``
@@ -268,5 +269,5 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks
-    return batch.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
+    return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
                             backend=backend, address=address, progress=progress, **options)

@@ -10,7 +10,7 @@ orientations (a super-Fibonacci sample of SO(3): Alexa, CVPR 2022; the same set 
 * ``manipulability``: the best Yoshikawa manipulability ``sqrt(det(J J^T))`` among the answers (all six rows
   for poses, the translational rows for positions, vx and vy for planar arms); 0 where nothing is reached.
 
-It runs the batch engine of :func:`evoik_pin.solve_many` (:class:`~evoik_pin.solvers.batch.BatchSolver`, or
+It runs the batch engine of :func:`evoik_pin.solve_many` (:class:`~evoik_pin.solvers.batch.threads.BatchSolver`, or
 Ray actors with ``backend="ray"``) in batches of ``batch_size`` targets: first the voxel centres as position
 targets (a voxel whose centre no configuration reaches reaches no orientation either: its poses are not asked),
 then every orientation of the voxels reached. The per-target fallback search of ``solve_many`` is left out: a map
@@ -34,7 +34,9 @@ import numpy as np
 from .errors import OptionError, OutputError
 from .problem import Target
 from .robot import Robot, load_robot
-from .solvers import batch
+from .solvers.batch.api import BACKENDS
+from .solvers.batch.outcome import BatchOutcome
+from .solvers.batch.threads import BatchSolver, check_workers, gc_paused, grow_bar, progress_bar
 from .solvers.options import check_choice, check_int, check_positive
 
 __all__ = ["ReachMap", "output_dir", "reachability_map", "so3_samples"]
@@ -225,16 +227,16 @@ class _Engine:
 
         self.backend = backend
         if backend == "ray":
-            from .solvers.ray_backend import RayBatch
+            from .solvers.batch.ray_actors import RayBatch
 
             self._ray = RayBatch(robot, make_problem, _run, "memetic", entropy, options, fallback=False,
                                  workers=workers, address=address)
             self.workers = self._ray.workers
         else:
-            self._local = batch.BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
-            self.workers = batch.check_workers(workers)
+            self._local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
+            self.workers = check_workers(workers)
 
-    def solve(self, targets) -> batch.BatchOutcome:
+    def solve(self, targets) -> BatchOutcome:
         """Solve ``targets`` (a list of :class:`Target` or an (N, 4, 4) array of poses)."""
         if self.backend == "ray":
             return self._ray.solve(targets)
@@ -264,9 +266,9 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     orientations = check_int("orientations", orientations, 1)
     seed = check_int("seed", seed, 0)
     batch_size = check_int("batch_size", batch_size, 1)
-    backend = check_choice("backend", backend, batch.BACKENDS)
+    backend = check_choice("backend", backend, BACKENDS)
     if backend == "local":
-        workers = batch.check_workers(workers)
+        workers = check_workers(workers)
     if scene is not None:
         options["scene"] = scene
     rng = np.random.default_rng(seed)
@@ -277,21 +279,21 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     centers, shape = _grid(lo - voxel, hi + voxel, voxel, float(lo[2]) if planar else None)
     M = centers.shape[0]
     engine = _Engine(robot, backend, workers, address, seed, options)
-    bar = batch.progress_bar(progress, f"reach {robot.name}", unit="target")
+    bar = progress_bar(progress, f"reach {robot.name}", unit="target")
 
-    def run(targets: list[Target]) -> batch.BatchOutcome:
+    def run(targets: list[Target]) -> BatchOutcome:
         parts = []
         for a in range(0, len(targets), batch_size):
             parts.append(engine.solve(targets[a:a + batch_size]))
             if bar is not None:
                 bar.update(len(targets[a:a + batch_size]))
-        return batch.BatchOutcome.concatenate(parts)
+        return BatchOutcome.concatenate(parts)
 
     rows = [0, 1] if planar else ("translation" if kind == "position" else "full")
     asked = 0  # pose targets (after the position pass)
     try:
-        batch.grow_bar(bar, M)
-        with batch.gc_paused():
+        grow_bar(bar, M)
+        with gc_paused():
             first = ([Target.planar_target(x, y) for x, y in centers[:, :2]] if planar
                      else [Target(c) for c in centers])
         out = run(first)
@@ -305,7 +307,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
             R = so3_samples(orientations)
             cells = np.nonzero(reached)[0]
             asked = cells.size * orientations
-            batch.grow_bar(bar, asked)
+            grow_bar(bar, asked)
             step = max(1, batch_size // orientations)
             for a in range(0, cells.size, step):  # voxel after voxel, every orientation of each
                 part = cells[a:a + step]

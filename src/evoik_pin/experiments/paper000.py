@@ -64,7 +64,7 @@ def _settings(quick: bool) -> dict:
                  "scale_factor": 0.2, "trigonometric_probability": 0.125, "adaptive": True,
                  "variants": dict(CONFIGS), "tolerance_m": 0.0,
                  "note": "Mt is not given by the paper; 0.125 was measured on random reachable targets "
-                         "(see evoik_pin.solvers.mode)"},
+                         "(see evoik_pin.solvers.paper.mode)"},
         "ga_binary": {"population": 200, "elite": 100, "max_generations": 100 if quick else 400, "bits": 9,
                       "encoding": "sign-magnitude", "tolerance_m": 0.0},
         "algebraic": {"phi_step_deg": 0.5, "note": "deterministic: one run"},
@@ -225,7 +225,7 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
         "0-19, measured for issue 5) ended within 1 mm, the misses stalled with a still diverse population: the "
         "adaptive rule gives the best individual P_m = P_c = 0, so it never moves and only other individuals' "
         "trials can improve it. Mt = 0.125, measured on random reachable targets (not on Table 2), lets the "
-        "trigonometric donors contract the population fast enough; details in evoik_pin/solvers/mode.py.",
+        "trigonometric donors contract the population fast enough; details in evoik_pin/solvers/paper/mode.py.",
         f"GA: our binary GA's median errors per target are {min(g['median_error'] for g in ga) / MM:.2f}-"
         f"{max(g['median_error'] for g in ga) / MM:.2f} mm (worst run {max(g['max_error'] for g in ga) / MM:.2f} mm) "
         f"against the paper's {min(paper_ga):.1f}-{max(paper_ga):.1f} cm. Its 9-bit angles move in 0.7 deg steps "
@@ -250,8 +250,8 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
         "Diversity (Fig. 3) is the mean distance of the individuals to the population centroid with every joint "
         "scaled by its range (0.29 sqrt(4) = 0.58 for a uniform population); the paper does not define its measure, "
         "so compare shapes, not values.",
-        "Readings (evoik_pin.solvers.mode): f1 = 1 - exp(-error in m), f2 = max displacement in rad, minimized; the "
-        "weights' best individual b is the one closest to the target (the pseudocode's maximized exp(-error), "
+        "Readings (evoik_pin.solvers.paper.mode): f1 = 1 - exp(-error in m), f2 = max displacement in rad, minimized; "
+        "the weights' best individual b is the one closest to the target (the pseudocode's maximized exp(-error), "
         "exp(-displacement) and b = the best weighted individual both collapse the search, see docs/BENCHMARKS.md); "
         "the answer is the last generation's best weighted individual (the pseudocode's argmax f).",
     ]

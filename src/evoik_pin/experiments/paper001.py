@@ -13,8 +13,8 @@ What we run (``run(ctx)``), every random choice derived from the master seed and
 (``derive_rng``, as ``ctx.rng``), so ``--jobs`` changes the speed, not the numbers:
 
 * every target ``runs`` times (10 in the full run) with ``ga`` and with ``hga`` at the paper's settings;
-  each closed-form solution (our :func:`~evoik_pin.solvers.analytic.planar2r_ik` /
-  :func:`~evoik_pin.solvers.analytic.puma_ik`) is matched to the nearest solution the method returned
+  each closed-form solution (our :func:`~evoik_pin.solvers.paper.analytic.planar2r_ik` /
+  :func:`~evoik_pin.solvers.paper.analytic.puma_ik`) is matched to the nearest solution the method returned
   (wrapped joint distance) and its error is the largest joint difference (deg);
 * Tables 3, 4 and 6: the first run's matched angles and error next to the paper's, and over all runs the
   share of closed-form solutions found (GA within 5 deg, HGA within 0.001 deg, the paper's claim) and the
@@ -30,7 +30,7 @@ import numpy as np
 
 from ..api import solve
 from ..robot import load_robot
-from ..solvers.analytic import planar2r_ik, puma_fk, puma_ik
+from ..solvers.paper.analytic import planar2r_ik, puma_fk, puma_ik
 from .common import PaperReport, RunContext, Table, derive_rng
 
 PAPER_ID = "001"

@@ -1,5 +1,9 @@
 """Scene files: a :class:`~evoik_pin.scene.Scene`'s obstacles as YAML or JSON (``Scene.from_file``, ``Scene.to_file``).
 
+This module is the file format only: :func:`read_scene` parses and checks a file into plain data
+(:class:`SceneFile`), which ``Scene.from_file`` builds a scene from; :func:`write_scene` writes any object with a
+scene's attributes. It does not import :mod:`.scene` (the Scene reads files, not the other way round).
+
 The format is chosen by the extension: ``.yaml`` / ``.yml`` (read with PyYAML's safe loader) or ``.json``. Lengths
 are in metres and angles in radians, every pose in the robot's base frame (the frame of ``Robot.fk``)::
 
@@ -32,6 +36,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -39,18 +44,29 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from .geometry import as_placement
-from .scene import OBSTACLE_KINDS, Scene
 
-__all__ = ["SCENE_SUFFIXES", "read_scene", "write_scene"]
+__all__ = ["SCENE_SUFFIXES", "SceneFile", "read_scene", "write_scene"]
 
 #: File extensions and the format each selects.
 SCENE_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
-#: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional).
-_KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),
-              "capsule": (("radius", "length"), ()), "mesh": (("path",), ("scale",))}
+#: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional); the
+#: kinds are the Scene's (``scene.OBSTACLE_KINDS``; a test holds them equal).
+KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),
+             "capsule": (("radius", "length"), ()), "mesh": (("path",), ("scale",))}
 _TOP_KEYS = ("units", "self_collision", "srdf", "obstacles")
 _POSE_HELP = "pose: {xyz: [x, y, z] (m), rpy: [roll, pitch, yaw] (rad, optional)} or a 4 x 4 homogeneous matrix"
-assert set(_KIND_KEYS) == set(OBSTACLE_KINDS)
+
+
+@dataclass(frozen=True)
+class SceneFile:
+    """What a scene file holds, checked: ``path`` (the file), ``self_collision``, ``srdf`` (a path, relative ones
+    resolved against the file's folder, or None) and ``obstacles``, each ``(name, kind, keyword arguments of
+    Scene.add_<kind>, pose (pin.SE3, base frame))`` in file order."""
+
+    path: Path
+    self_collision: bool
+    srdf: Path | None
+    obstacles: list[tuple[str, str, dict, pin.SE3]]
 
 
 def _format(path: Path) -> str:
@@ -132,10 +148,10 @@ def _obstacle(entry, k: int, folder: Path, seen: dict[str, int]) -> tuple[str, s
     if name in seen:
         raise SceneError(f"{what}: the name {name!r} is already obstacle {seen[name]}'s; names must be unique")
     kind = entry.get("kind")
-    if kind not in _KIND_KEYS:
+    if kind not in KIND_KEYS:
         raise SceneError(f"{what}: " + ("missing kind" if kind is None else f"unknown kind {kind!r}")
-                         + f"; accepted kinds: {', '.join(_KIND_KEYS)}")
-    required, optional = _KIND_KEYS[kind]
+                         + f"; accepted kinds: {', '.join(KIND_KEYS)}")
+    required, optional = KIND_KEYS[kind]
     _unknown_keys(entry, ("name", "kind", *required, *optional, "pose"), f"{what}, a {kind}")
     for key in (*required, "pose"):
         if key not in entry:
@@ -159,9 +175,9 @@ def _obstacle(entry, k: int, folder: Path, seen: dict[str, int]) -> tuple[str, s
     return name, kind, kw, pose
 
 
-def read_scene(robot, path: str | os.PathLike, cls=Scene) -> Scene:
-    """A new ``cls`` (:class:`Scene`) of ``robot`` with the self-collision setting, SRDF and obstacles of the scene
-    file ``path`` (format: the module docstring). SceneError naming the file, the obstacle and the problem."""
+def read_scene(path: str | os.PathLike) -> SceneFile:
+    """The self-collision setting, SRDF and obstacles of the scene file ``path`` (format: the module docstring),
+    checked. SceneError naming the file, the obstacle and the problem."""
     path = Path(os.fspath(path)).expanduser()
     where = f"scene file {str(path)!r}"
     _format(path)
@@ -196,17 +212,9 @@ def read_scene(robot, path: str | os.PathLike, cls=Scene) -> Scene:
             raise SceneError(f"obstacles must be a list of obstacles, got {entries!r}")
         seen: dict[str, int] = {}
         obstacles = [_obstacle(entry, k, path.parent, seen) for k, entry in enumerate(entries)]
-        scene = cls(robot, self_collision=self_collision, srdf=srdf)
-        adders = {"box": scene.add_box, "sphere": scene.add_sphere, "cylinder": scene.add_cylinder,
-                  "capsule": scene.add_capsule, "mesh": scene.add_mesh}
-        for k, (name, kind, kw, pose) in enumerate(obstacles):
-            try:
-                adders[kind](name, pose=pose, **kw)
-            except SceneError as exc:
-                raise SceneError(f"obstacle {k} ({name!r}): {exc}") from None
     except SceneError as exc:
         raise SceneError(f"{where}: {exc}") from None
-    return scene
+    return SceneFile(path, self_collision, srdf, obstacles)
 
 
 class _Flow(dict):
@@ -218,8 +226,10 @@ def _clean(values) -> list[float]:
     return [float(v) + 0.0 for v in np.asarray(values, dtype=float).reshape(-1)]
 
 
-def write_scene(scene: Scene, path: str | os.PathLike) -> Path:
-    """Write ``scene`` to ``path`` (YAML or JSON by the extension) and return the path; see the module docstring."""
+def write_scene(scene, path: str | os.PathLike) -> Path:
+    """Write ``scene`` (a :class:`~evoik_pin.scene.Scene`: its ``robot``, ``self_collision``, ``srdf`` and
+    ``obstacles`` are read) to ``path`` (YAML or JSON by the extension) and return the path; see the module
+    docstring."""
     path = Path(os.fspath(path)).expanduser()
     fmt = _format(path)
     data: dict = {"units": "m", "self_collision": scene.self_collision}
@@ -235,7 +245,7 @@ def write_scene(scene: Scene, path: str | os.PathLike) -> Path:
             scale = _clean(ob.params["scale"])
             entry["scale"] = scale[0] if len(set(scale)) == 1 else scale
         else:
-            entry.update({key: float(ob.params[key]) for key in _KIND_KEYS[ob.kind][0]})
+            entry.update({key: float(ob.params[key]) for key in KIND_KEYS[ob.kind][0]})
         entry["pose"] = _Flow(xyz=_clean(ob.pose.translation), rpy=_clean(pin.rpy.matrixToRpy(ob.pose.rotation)))
         obstacles.append(entry)
     data["obstacles"] = obstacles

@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, SceneError
+from .file import read_scene, write_scene
 from .geometry import as_placement, convex_hulls, robot_collision_model, self_collision_pairs
 
 __all__ = ["Obstacle", "Scene"]
@@ -178,16 +179,22 @@ class Scene:
         """A scene of ``robot`` read from a YAML (``.yaml``, ``.yml``) or JSON (``.json``) scene file: obstacles
         (kind, size, pose in the base frame, m / rad), optional ``self_collision`` and ``srdf``. The format is
         :mod:`evoik_pin.scene.file`'s docstring; a bad file is a SceneError naming the file, the obstacle and
-        the problem."""
-        from .file import read_scene
-
-        return read_scene(robot, path, cls)
+        the problem. The whole file is read and checked before the scene is built."""
+        spec = read_scene(path)
+        try:
+            scene = cls(robot, self_collision=spec.self_collision, srdf=spec.srdf)
+            for k, (name, kind, kw, pose) in enumerate(spec.obstacles):
+                try:
+                    getattr(scene, f"add_{kind}")(name, pose=pose, **kw)
+                except SceneError as exc:
+                    raise SceneError(f"obstacle {k} ({name!r}): {exc}") from None
+        except SceneError as exc:
+            raise SceneError(f"scene file {str(spec.path)!r}: {exc}") from None
+        return scene
 
     def to_file(self, path: str | os.PathLike) -> Path:
         """Write this scene as a scene file (YAML or JSON by the extension; :meth:`from_file` reads it back to the
         same obstacles) and return its path."""
-        from .file import write_scene
-
         return write_scene(self, path)
 
     # ------------------------------------------------------------------ geometry models

@@ -2,7 +2,11 @@
 by name with :func:`register`. ``evoik_pin.methods()`` lists them.
 
 Option names are checked here against each solver's signature; option values by the solver itself, with
-the shared validators of :mod:`.options`."""
+the shared validators of :mod:`.options`.
+
+The solvers are grouped by role: :mod:`.paper` (the papers' methods), :mod:`.lm` (the one LM engine and
+``polish``), :mod:`.search` (seed table, ``memetic``, ``memetic-all``), :mod:`.batch` (``solve_many``'s API above
+its engines). :mod:`.collision_verdict` is the exact collision check every method's answer passes through."""
 
 from __future__ import annotations
 
@@ -52,8 +56,9 @@ class SolverInfo:
 
 _REGISTRY: dict[str, SolverInfo] = {}
 
-# One module per solver family; each registers its methods on import.
-_MODULES = ["de", "isade", "pso", "mode", "ga", "hga", "nsga2", "analytic", "memetic", "all_solutions"]
+# One module per solver family; each registers its methods on import (this order is methods()' order).
+_MODULES = ["paper.de", "paper.isade", "paper.pso", "paper.mode", "paper.ga", "paper.hga", "paper.nsga2",
+            "paper.analytic", "search.memetic", "search.all_solutions"]
 _loaded = False
 
 

@@ -6,7 +6,8 @@
   of :mod:`.chain` and the closed forms of :mod:`evoik_pin.lie.compiled`;
 * :mod:`.reference`: the same iteration as a Python loop over Pinocchio, the reference the kernel is tested
   against (``engine="python"``);
-* :mod:`.layout`: the constants and the kernel's memory layouts; :mod:`.outcome`: what runs return.
+* :mod:`.layout`: the constants and the kernel's memory layouts; :mod:`.outcome`: what runs return;
+* :mod:`.polish`: ``polish=True``, any solver's answer taken to machine precision by one LM run.
 """
 
 from .engine import ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs

@@ -4,7 +4,7 @@ Registered as ``memetic``, the default method of :func:`evoik_pin.solve`. It pai
 proposes starting configurations with a local Newton-type search that takes them to machine precision
 (the LM engine :class:`~evoik_pin.solvers.lm.LevenbergMarquardt`, on the SE(3) error ``log6(T_t^-1 T(q))``
 for pose targets, the position for position targets, (x, y[, yaw]) for planar ones, within the joint limits;
-each run is one call of a numba-compiled function, :mod:`.lm.kernel`, about 1 us per step).
+each run is one call of a numba-compiled function, :mod:`evoik_pin.solvers.lm.kernel`, about 1 us per step).
 Stages, each tried only when the previous ones have not met the tolerances:
 
 1. **Warm start**: LM from ``q0`` when it is given (a previous solution usually converges in a few steps),
@@ -23,8 +23,8 @@ Stages, each tried only when the previous ones have not met the tolerances:
 3. **Memetic restarts** until the tolerances, the time budget ``timeout`` or ``max_restarts`` are reached:
    a population of ``population`` configurations (uniform in the box, drawn from ``rng``, plus ``q0`` and
    the best configuration met so far) evolves for ``generations`` generations of differential evolution
-   (DE/current-to-best/1/bin from :mod:`.de_ops`, dithered F in [0.5, 1], CR = 0.9, greedy selection on
-   the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
+   (DE/current-to-best/1/bin from :mod:`evoik_pin.solvers.paper.de_ops`, dithered F in [0.5, 1], CR = 0.9,
+   greedy selection on the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
 
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
@@ -36,213 +36,32 @@ from __future__ import annotations
 
 import itertools
 import time
-import weakref
 
 import numpy as np
 import pinocchio as pin
 
-from ..errors import OptionError
-from ..problem import IKProblem, Target
-from ..result import Result
-from . import register
-from .collision_verdict import pairs_text
-from .common import diversity, halton
-from .de_ops import binomial_crossover, distinct_indices, mutate
-from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
-from .lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
-from .options import check_int, check_positive
-from .polish import errors_text
+from ...errors import OptionError
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..collision_verdict import pairs_text
+from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from ..lm.polish import errors_text
+from ..options import check_int, check_positive
+from ..paper.common import diversity
+from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
+from .seed_table import DEFAULT_TABLE_SEEDS, SeedTable, default_table_size, seed_table
 
-__all__ = ["DEFAULT_TABLE_SEEDS", "DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "SeedTable", "default_table_size",
-           "memetic", "prepare", "seed_table"]
+__all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "memetic", "prepare"]
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
-#: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
-DEFAULT_TABLE_SEEDS = 17
 #: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
 #: descheduled past the budget still gets this minimum of useful work (5 runs of at most 30 steps, about
 #: 0.3 ms of compiled LM at worst).
 GUARANTEED_TABLE_RUNS = 4
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
-#: Target kinds a seed table serves, each with its own nearness features.
-_KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
-_KINDS = tuple(_KIND_KEYS.values())
-
-
-# ---------------------------------------------------------------------- seed table
-class SeedTable:
-    """Configurations spread over a search box and their tip poses, searchable by nearness to a target.
-
-    Attributes:
-        Q: (size, n) configurations (a Halton sequence mapped onto the box; deterministic).
-        positions: (size, 3) tip positions (m); rotations: (size, 3, 3).
-        weight: m per unit of rotation-matrix (Frobenius) distance in the pose metric.
-    """
-
-    def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
-        # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
-        self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
-        self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
-        reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
-        self.weight = 0.25 * max(reach, 1e-3)
-        self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
-        self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
-        self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
-        if size:
-            for key in _KINDS:  # one-time work here, not inside a solve's time budget
-                self._table_features(key)
-                self._gap(key)
-
-    def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
-        if key == "pose":
-            return np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
-        if key == "position":
-            return P
-        if key == "planar":
-            return P[:, :2]
-        return np.concatenate([P[:, :2], self.weight * R[:, :2, 0]], axis=1)  # heading, scaled like rotations
-
-    def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
-        """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
-        if key not in self._features:
-            F = np.array(self._pose_features(key, self.positions, self.rotations), order="C")  # a copy
-            self._features[key] = (F, (F * F).sum(axis=1))
-        return self._features[key]
-
-    def target_features(self, targets: list[Target]) -> tuple[str, np.ndarray]:
-        """(kind key, features (N, d)) of targets that are all of one kind."""
-        return self.encoded_features(target_kind(targets[0]), *encode_targets(targets))
-
-    def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
-        """(kind key, features (N, d)) of N targets of one ``KIND_*`` in the kernel's encoding
-        (:func:`~evoik_pin.solvers.lm.layout.encode_targets`: P (N, 3), Rts (N, 3, 3))."""
-        key = _KIND_KEYS[kind]
-        if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
-            yaw = P[:, 2]
-            return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
-        return key, self._pose_features(key, P, Rts)
-
-    def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
-        """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
-        costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
-        (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
-        if k <= 0:
-            return
-        key, f = self.target_features([target])
-        F, sq = self._table_features(key)
-        d = sq - 2.0 * (F @ f[0])
-        if allowed is not None:
-            d = np.where(allowed, d, np.inf)
-            k = min(k, int(np.count_nonzero(allowed)))
-            if k <= 0:
-                return
-        first = int(d.argmin())
-        yield first
-        k = min(k, d.shape[0])
-        if k > 1:
-            part = np.argpartition(d, k - 1)[:k]
-            for i in part[d[part].argsort()]:
-                if i != first:
-                    yield int(i)
-
-    def free_mask(self, scene, margin: float) -> np.ndarray:
-        """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
-        (conservative: every such entry is mesh-free), computed once per scene version and margin (about
-        20-60 us an entry: one-time set-up)."""
-        key = (id(scene), scene.version, float(margin))
-        hit = self._free.get(key)
-        if hit is None or hit[0]() is not scene:
-            if len(self._free) > 8:
-                self._free.clear()
-            hit = self._free[key] = (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True))
-        return hit[1]
-
-    def distance_sq(self, target: Target, T: pin.SE3) -> float:
-        """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
-        key, f = self.target_features([target])
-        d = f[0] - self._pose_features(key, T.translation[None], T.rotation[None])[0]
-        return float(d.dot(d))
-
-    def typical_gap_sq(self, target: Target) -> float:
-        """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
-        other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
-        as the table's nearest entry usually is."""
-        return self._gap(self.target_features([target])[0])
-
-    def _gap(self, key: str) -> float:
-        gap = self._gaps.get(key)
-        if gap is None:
-            F, sq = self._table_features(key)
-            sample = np.linspace(0, F.shape[0] - 1, min(64, F.shape[0])).astype(int)
-            D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
-            D[np.arange(sample.size), sample] = np.inf
-            gap = self._gaps[key] = float(np.median(D.min(axis=1)))
-        return gap
-
-    def nearest(self, targets: list[Target], k: int, allowed: np.ndarray | None = None) -> np.ndarray:
-        """Indices (N, k) of the k table entries nearest to each target, nearest first (only ``allowed``
-        entries when a (size,) bool mask is given; k is capped at their number).
-
-        Many targets at once go through a k-d tree of the table's features (built once per target kind and
-        mask): O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
-        """
-        return self.nearest_encoded(target_kind(targets[0]), *encode_targets(targets), k, allowed)
-
-    def nearest_encoded(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
-                        eps: float = 0.0) -> np.ndarray:
-        """:meth:`nearest` for N targets of one ``KIND_*`` in the kernel's encoding (P (N, 3), Rts (N, 3, 3)).
-
-        ``eps`` > 0: approximate neighbours (``scipy.spatial.cKDTree.query``'s ``eps``: the i-th entry returned
-        is within (1 + eps) times the distance of the true i-th nearest), several times cheaper in these 12-D
-        features.
-        """
-        key, f = self.encoded_features(kind, P, Rts)
-        tree_key = (key, None if allowed is None else allowed.tobytes())
-        hit = self._trees.get(tree_key)
-        if hit is None:
-            from scipy.spatial import cKDTree
-
-            index = np.arange(self.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
-            if len(self._trees) > 16:
-                self._trees.clear()
-            hit = self._trees[tree_key] = (cKDTree(self._table_features(key)[0][index]), index)
-        tree, index = hit
-        k = min(k, tree.n)
-        N = f.shape[0]
-        if k == 0 or N == 0:
-            return np.zeros((N, 0), dtype=np.intp)
-        _, idx = tree.query(f, k=k, eps=eps)
-        return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
-
-
-_TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-_TABLES_PER_ROBOT = 4
-
-
-def default_table_size(n: int) -> int:
-    """Seed-table size for an n-joint chain: 2^(n+5), clamped to [256, 4096] (about 1-5 ms to build)."""
-    return int(min(4096, max(256, 2 ** (n + 5))))
-
-
-def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTable:
-    """The cached :class:`SeedTable` of ``robot`` over the box [lower, upper] (built on first use).
-
-    A few boxes are kept per robot (the most recent ones), so a trajectory solved in narrow moving boxes
-    does not grow the cache.
-    """
-    per_robot = _TABLES.setdefault(robot, {})
-    key = (lower.tobytes(), upper.tobytes(), int(size))
-    table = per_robot.get(key)
-    if table is None:
-        table = SeedTable(robot, lower, upper, size)
-        if len(per_robot) >= _TABLES_PER_ROBOT:
-            per_robot.pop(next(iter(per_robot)))
-        per_robot[key] = table
-    return table
 
 
 def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
@@ -383,8 +202,8 @@ def memetic(
             between groups. 1 (default): between every two runs.
         iterations: LM steps allowed per run (>= 1).
         engine: ``"compiled"`` (default): each LM run is one call of the numba kernel
-            (:mod:`.lm.kernel`, about 1 us per step); ``"python"``: the same iteration as the reference
-            Python loop over Pinocchio's kinematics (:mod:`.lm.reference`, about 30 us per step).
+            (:mod:`evoik_pin.solvers.lm.kernel`, about 1 us per step); ``"python"``: the same iteration as the reference
+            Python loop over Pinocchio's kinematics (:mod:`evoik_pin.solvers.lm.reference`, about 30 us per step).
 
     Returns:
         A :class:`Result`. ``generations`` counts DE generations; ``evaluations`` counts forward-kinematics
@@ -513,8 +332,8 @@ def _memetic_restart(problem, rng, search: _Search, population: int, generations
     """One stage-3 restart: a DE population, ``generations`` generations, its best members polished by LM.
 
     The population is uniform in the box plus the best configuration met so far (elitism) and ``q0``.
-    DE/current-to-best/1/bin (:mod:`.de_ops`) with a dithered scale factor F ~ U[0.5, 1] per individual
-    and CR = 0.9; wrapping joints stay on their circle, the others are clipped; greedy selection on the
+    DE/current-to-best/1/bin (:mod:`evoik_pin.solvers.paper.de_ops`) with a dithered scale factor F ~ U[0.5, 1] per
+    individual and CR = 0.9; wrapping joints stay on their circle, the others are clipped; greedy selection on the
     problem's objective. Then the ``polish_count`` best members, except the elite (already polished), are
     polished by LM, best first (``batch`` at a time).
     """

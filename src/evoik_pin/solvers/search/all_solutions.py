@@ -2,11 +2,11 @@
 
 Registered as ``memetic-all``, the default method of :func:`evoik_pin.solve_all`. The starts are ``q0``, then
 the entries of memetic's cached seed table (a deterministic Halton set of configurations spread over the
-search box, with their tip poses: :func:`~evoik_pin.solvers.memetic.seed_table`) nearest to the target first
+search box, with their tip poses: :func:`~evoik_pin.solvers.search.seed_table.seed_table`) nearest to the target first
 (entries whose tip is near the target lie near the solution set, on every branch of it), then uniform draws
 from ``rng`` if the table runs out. ``batch`` starts at a time go through the compiled LM engine in one kernel
 call (:func:`~evoik_pin.solvers.lm.solve_pairs`, the same target repeated), and the converged runs are sorted
-into classes of distinct solutions (:class:`~evoik_pin.solvers.solution_classes.SolutionClasses`).
+into classes of distinct solutions (:class:`~evoik_pin.solvers.search.solution_classes.SolutionClasses`).
 
 **Distinct solutions.** Two configurations are one solution when their wrapped joint distance is at most
 ``class_radius`` (1e-3 rad by default): joints whose range spans a full turn (continuous joints, UR's +-2 pi
@@ -42,7 +42,7 @@ one solution (e.g. a wrist centre a fraction of a millimetre from a singular lin
 samples of that curve and their number means little.
 
 When no run has converged after ``4 x patience`` batches, memetic's differential-evolution restarts
-(:func:`~evoik_pin.solvers.memetic.memetic` without its table stage, with the remaining budget) look for a
+(:func:`~evoik_pin.solvers.search.memetic.memetic` without its table stage, with the remaining budget) look for a
 solution. An unreachable pose gives no solution, ``success=False``, and a message with the best approximation.
 """
 
@@ -52,14 +52,15 @@ import time
 
 import numpy as np
 
-from ..problem import IKProblem
-from ..result import Result
-from . import register
-from .lm import DEFAULT_ITERATIONS, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
-from .lm.layout import TASK_ROWS, target_kind
-from .memetic import default_table_size, memetic, seed_table
-from .options import check_int, check_positive
-from .polish import errors_text
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
+from ..lm.layout import TASK_ROWS, target_kind
+from ..lm.polish import errors_text
+from ..options import check_int, check_positive
+from .memetic import memetic
+from .seed_table import default_table_size, seed_table
 from .solution_classes import (
     REFINE_ITERATIONS,
     SolutionClasses,
@@ -189,7 +190,8 @@ def memetic_all(
             configurations are one solution (default 1e-3).
         pool: redundant arms: distinct converged solutions collected per returned one (default 4).
         table_size: seed-table size (default memetic's: 2^(n+5) clamped to [256, 4096]); 0: uniform starts.
-        iterations: LM steps per start (default 30). engine: ``"compiled"`` or ``"python"`` (:mod:`.lm`).
+        iterations: LM steps per start (default 30). engine: ``"compiled"`` or ``"python"``
+            (:mod:`evoik_pin.solvers.lm`).
 
     Returns:
         A :class:`Result`: ``q`` the first solution (or the best approximation met when there is none),

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import OptionError
+from ...errors import OptionError
 
 __all__ = [
     "MUTATIONS",

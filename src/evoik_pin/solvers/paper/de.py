@@ -12,10 +12,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import OptionError
-from ..problem import Evaluation, IKProblem
-from ..result import Result
-from . import register
+from ...errors import OptionError
+from ...problem import Evaluation, IKProblem
+from ...result import Result
+from .. import register
+from ..options import check_callback, check_choice, check_fraction, check_int, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
 from .de_ops import (
     MUTATIONS,
@@ -29,7 +30,6 @@ from .de_ops import (
     rand1,
     trigonometric,
 )
-from .options import check_callback, check_choice, check_fraction, check_int, check_positive
 
 __all__ = ["CROSSOVERS", "DE_MUTATIONS", "de", "greedy_selection", "parse_strategy"]
 

@@ -18,14 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import lie
-from ..errors import MethodError, TargetError
-from ..problem import IKProblem
-from ..result import Result
-from . import register
+from ... import lie
+from ...errors import MethodError, TargetError
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..options import check_positive
 from .clustering import leader_clusters
 from .common import SolverRun
-from .options import check_positive
 
 __all__ = [
     "AX18",

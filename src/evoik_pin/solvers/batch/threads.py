@@ -1,21 +1,21 @@
-"""Batch solving: many independent IK targets in one call (:func:`solve_many`), on every core or a Ray cluster.
+"""The local engine of :func:`~evoik_pin.solve_many` (``backend="local"``): :class:`BatchSolver` and its worker threads.
 
 With the memetic method (the default) the targets are solved in batched rounds first: every unsolved target
-starts from its nearest seed-table entry (from ``q0`` in the first round when given), and one call of the LM
-engine (:func:`~evoik_pin.solvers.lm.solve_pairs`, one compiled kernel call over all (start, target) pairs)
-runs memetic's LM iteration on all of them; each further round tries the next-nearest table entry for the
-targets still unsolved. The targets left after ``table_seeds`` rounds go to the per-target ``memetic`` solver
-(with the same options, e.g. ``timeout``), told which table entries were already tried. Other methods, a
-custom ``objective`` or ``polish=True`` solve the targets one by one through the same route as
-:func:`evoik_pin.solve`.
+starts from its nearest seed-table entry (:mod:`evoik_pin.solvers.search.seed_table`; from ``q0`` in the first
+round when given), and one call of the LM engine (:func:`~evoik_pin.solvers.lm.solve_pairs`, one compiled kernel
+call over all (start, target) pairs) runs memetic's LM iteration on all of them; each further round tries the
+next-nearest table entry for the targets still unsolved. The targets left after ``table_seeds`` rounds go to the
+per-target ``memetic`` solver (with the same options, e.g. ``timeout``), told which table entries were already
+tried. Other methods, a custom ``objective`` or ``polish=True`` solve the targets one by one through the same route
+as :func:`evoik_pin.solve`.
 
-Workers (``backend="local"``): the targets are cut into chunks (:func:`chunk_bounds`), and ``workers`` threads
+Workers: the targets are cut into chunks (:func:`chunk_bounds`), and ``workers`` threads
 (the calling thread and ``workers - 1`` others) run the batched rounds of one chunk each: the compiled kernel and the
 k-d tree queries release the GIL. The calling thread also encodes the chunks' targets as arrays
-(:mod:`.batch_targets`; no :class:`Target` object is made for an (N, 4, 4) array of poses) and solves one by one the
+(:mod:`.targets`; no :class:`Target` object is made for an (N, 4, 4) array of poses) and solves one by one the
 targets a finished chunk left, as soon as it is done (with a scene: after every chunk's rounds, since the scene's
 collision data is shared) (:meth:`BatchSolver.pipeline`). The answers come back as arrays
-(:class:`~.batch_outcome.BatchOutcome`); :class:`~.batch_outcome.BatchResults` makes a :class:`Result` when one is
+(:class:`~.outcome.BatchOutcome`); :class:`~.outcome.BatchResults` makes a :class:`Result` when one is
 read. Threads were measured against numba ``prange`` and worker processes (docs/BENCHMARKS.md,
 ``scripts/bench_scale.py``). A target's rounds do not depend on the other targets of its chunk, so the answers do
 not depend on the chunking.
@@ -26,8 +26,8 @@ Randomness: a target solved one by one (the fallback, or another method) draws f
 workers, the chunks or the backend (up to a wall-clock ``timeout``, as for :func:`evoik_pin.solve`; give
 ``timeout=None, max_restarts=k`` for a budget independent of the machine).
 
-``backend="ray"`` hands chunks to Ray actors (:mod:`.ray_backend`), which run this module's
-:class:`BatchSolver` on their chunks and send back compact arrays (:class:`BatchOutcome`).
+The Ray actors (:mod:`.ray_actors`) run this module's :class:`BatchSolver` on their chunks (one thread each);
+:mod:`.api` (``solve_many``) chooses between the two. Nothing here imports either.
 """
 
 from __future__ import annotations
@@ -43,23 +43,20 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 import numpy as np
 
-from ..errors import ConfigurationError, OptionError
-from ..objectives import default_cost
-from ..problem import Target
-from ..result import Result
-from .batch_outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome, BatchResults
-from .batch_targets import TargetBlock, TargetSource
-from .lm import solve_pairs
-from .lm.layout import TargetArrays
-from .memetic import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
-from .options import check_choice, check_int
+from ...objectives import default_cost
+from ...problem import Target
+from ...result import Result
+from ..lm import solve_pairs
+from ..lm.layout import TargetArrays
+from ..options import check_int
+from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
+from .outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
+from .targets import TargetBlock, TargetSource
 
-__all__ = ["BACKENDS", "BatchOutcome", "BatchResults", "BatchSolver", "TargetSource", "check_workers", "chunk_bounds",
-           "default_workers", "gc_paused", "grow_bar", "progress_bar", "root_entropy", "solve_many",
-           "target_generator"]
+__all__ = ["BatchSolver", "ProgressBar", "check_workers", "chunk_bounds", "default_workers", "gc_paused", "grow_bar",
+           "progress_bar", "root_entropy", "target_generator"]
 
-#: Where :func:`solve_many` runs: threads of this process, or actors of a Ray cluster.
-BACKENDS = ("local", "ray")
+
 #: Guided chunks (:func:`chunk_bounds`): each a 1 / (GUIDED_SHARE * workers) share of the targets left, at least
 #: MIN_CHUNK targets (the smallest chunk worth a kernel call of its own).
 GUIDED_SHARE = 2
@@ -71,7 +68,7 @@ MIN_CHUNK = 256
 NEAREST_EPS = 1.0
 
 
-# ---------------------------------------------------------------------- workers, backends, randomness
+# ---------------------------------------------------------------------- workers, randomness, chunks
 def default_workers() -> int:
     """The cores this process may run on (its CPU affinity where the OS tells, else ``os.cpu_count()``)."""
     try:
@@ -99,19 +96,6 @@ def root_entropy(seed) -> int:
 def target_generator(entropy: int, i: int) -> np.random.Generator:
     """Target ``i``'s own generator: ``SeedSequence(entropy).spawn(N)[i]`` without spawning the N - 1 others."""
     return np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(int(i),)))
-
-
-def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
-    """q0 as (N, n) starts: None, one (n,) joint vector for every target, or one per target (N, n)."""
-    if q0 is None:
-        return None
-    Q0 = np.asarray(q0, dtype=float)
-    if Q0.ndim == 1:
-        return np.broadcast_to(robot.check_q(Q0), (N, robot.n))
-    if Q0.shape != (N, robot.n) or not np.isfinite(Q0).all():
-        raise ConfigurationError(f"q0 must be one joint vector ({robot.n},) or one per target ({N}, {robot.n}) of "
-                                 f"finite numbers, got shape {Q0.shape}")
-    return Q0
 
 
 def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int | None = None
@@ -166,8 +150,8 @@ class BatchSolver:
         self.template = template
         if not self.batched:
             return
-        from . import get_solver
-        from .lm import compiled_kernel
+        from .. import get_solver
+        from ..lm import compiled_kernel
 
         get_solver("memetic").check_options(solver_options)
         table_size = solver_options.get("table_size")
@@ -354,56 +338,6 @@ class BatchSolver:
             out.evaluations[left] = res.evaluations[~converged]
 
 
-def _check_backend(backend) -> str:
-    return check_choice("backend", backend, BACKENDS)
-
-
-def solve_many(robot, targets, make_problem: Callable, run: Callable, method: str, seed=None, q0=None,
-               workers=None, backend: str = "local", address: str | None = None, progress: bool = False,
-               **options) -> BatchResults:
-    """Solve many independent IK targets (see the module docstring); called by :func:`evoik_pin.solve_many`.
-
-    Args:
-        robot: a loaded :class:`~evoik_pin.robot.Robot`.
-        targets: anything :meth:`Target.coerce_many` accepts (a sequence of targets, or (N, 4, 4) poses).
-        make_problem, run: the API's problem builder and solver runner (``api.make_problem``, ``api._run``).
-        method: solver name. seed: int, None or Generator (:func:`root_entropy`).
-        q0: None, one (n,) start for every target, or (N, n) starts.
-        workers: threads (local) or actors (ray); None: every core (local) or every CPU of the cluster (ray).
-        backend: "local" or "ray". address: a Ray cluster's address (ray only; default ``RAY_ADDRESS``).
-        progress: a tqdm bar over chunks.
-        **options: as for :func:`evoik_pin.solve`.
-    """
-    t_start = time.perf_counter()
-    backend = _check_backend(backend)
-    if backend == "local" and address is not None:
-        raise OptionError("address names a Ray cluster: give it with backend='ray'")
-    workers = None if workers is None and backend == "ray" else check_workers(workers)
-    source = TargetSource(targets)
-    N = len(source)
-    if N == 0:
-        raise ConfigurationError("solve_many needs at least one target")
-    Q0 = _start_configurations(robot, q0, N)
-    entropy = root_entropy(seed)
-    if backend == "ray":
-        from .ray_backend import RayBatch
-
-        job = RayBatch(robot, make_problem, run, method, entropy, options, workers=workers, address=address)
-        outcome = job.solve(source, Q0, progress=progress)
-        template = job.template()
-        workers = job.workers
-    else:
-        solver = BatchSolver(robot, make_problem, run, method, entropy, options)
-        bar = progress_bar(progress, "solve_many")
-        try:
-            outcome = solver.solve(source, Q0, workers=workers, progress=bar)
-        finally:
-            if bar is not None:
-                bar.close()
-        template = solver.template
-    return BatchResults(outcome, template, _stats(outcome, t_start, workers, backend))
-
-
 @contextlib.contextmanager
 def gc_paused():
     """The cyclic garbage collector paused while millions of small acyclic objects (targets, results) are made:
@@ -452,16 +386,3 @@ def grow_bar(bar: ProgressBar | None, units: int) -> None:
     """Add ``units`` to a bar's total (None: nothing)."""
     if bar is not None and units:
         bar.grow(units)
-
-
-def _stats(outcome: BatchOutcome, t_start: float, workers: int | None, backend: str) -> dict:
-    """:class:`BatchResults`' ``stats`` of a call that started at ``t_start`` (``time.perf_counter()``)."""
-    elapsed = time.perf_counter() - t_start
-    n = len(outcome)
-    solved = int(np.count_nonzero(outcome.success))
-    batched = int(np.count_nonzero(outcome.source != SOURCE_SINGLE))
-    return {
-        "n": n, "solved": solved, "success_rate": solved / n, "time_s": elapsed,
-        "throughput": n / elapsed if elapsed > 0 else float("inf"), "batched": batched, "fallback": n - batched,
-        "fallback_solved": solved - batched, "workers": workers, "backend": backend,
-    }

@@ -54,14 +54,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..objectives import MaxJointDisplacement
-from ..problem import Evaluation, IKProblem
-from ..result import Front, Result
-from . import register
+from ...objectives import MaxJointDisplacement
+from ...problem import Evaluation, IKProblem
+from ...result import Front, Result
+from .. import register
+from ..options import check_choice, check_fraction, check_int, check_nonnegative, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population
 from .de_ops import binomial_crossover, distinct_indices, rand1, trigonometric
 from .nsga2 import crowding_distance
-from .options import check_choice, check_fraction, check_int, check_nonnegative, check_positive
 
 __all__ = ["VARIANTS", "adaptive_probability", "equitable_weights", "nondominated_2d"]
 

@@ -2,10 +2,10 @@
 
 A user's targets (an (N, 4, 4) array of poses, a sequence of anything :meth:`Target.coerce` accepts, or an
 iterable) become :class:`TargetBlock` objects of consecutive targets: the kernel's arrays
-(:class:`~.lm.layout.TargetArrays`), one group per target kind. An array of poses is checked and encoded in a
-few vectorized passes with no :class:`~evoik_pin.problem.Target` object made (they cost about 2 us each, the
-tenth of a whole batched solve); a Target is made only for a target that needs one: the few the batched rounds
-leave to the per-target solver.
+(:class:`~evoik_pin.solvers.lm.layout.TargetArrays`), one group per target kind. An array of poses is checked
+and encoded in a few vectorized passes with no :class:`~evoik_pin.problem.Target` object made (they cost about
+2 us each, the tenth of a whole batched solve); a Target is made only for a target that needs one: the few the
+batched rounds leave to the per-target solver.
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import TargetError
-from ..problem import Target
-from .lm.layout import TargetArrays, target_kind
+from ...errors import TargetError
+from ...problem import Target
+from ..lm.layout import TargetArrays, target_kind
 
 __all__ = ["TargetBlock", "TargetSource"]
 
@@ -26,7 +26,7 @@ class TargetBlock:
 
     Attributes:
         groups: ``[(rows, arrays)]``: the block's row indices (k,) of one target kind and their
-            :class:`~.lm.layout.TargetArrays`, in the order the kinds first appear.
+            :class:`~evoik_pin.solvers.lm.layout.TargetArrays`, in the order the kinds first appear.
     """
 
     def __init__(self, groups: list[tuple[np.ndarray, TargetArrays]], size: int,

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..result import Result
-from .collision_verdict import with_collision_verdict
+from ...result import Result
+from ..collision_verdict import with_collision_verdict
 
 __all__ = ["SOURCE_Q0", "SOURCE_SINGLE", "SOURCE_TABLE", "BatchOutcome", "BatchResults"]
 

@@ -1,7 +1,7 @@
 """Distinct IK solutions among converged LM runs: classes modulo 2 pi, their representatives, their spread.
 
 Used by :mod:`.all_solutions` (``memetic-all``). Distances are wrapped joint distances
-(:func:`~evoik_pin.solvers.clustering.joint_differences`) with a mask of the joints compared modulo 2 pi:
+(:func:`~evoik_pin.solvers.paper.clustering.joint_differences`) with a mask of the joints compared modulo 2 pi:
 those whose range spans a full turn (:func:`~evoik_pin.solvers.lm.wrapping_joints`); rad on revolute joints, m
 on prismatic ones.
 
@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..problem import IKProblem
-from .clustering import joint_differences, leader_clusters
-from .lm import LevenbergMarquardt
+from ...problem import IKProblem
+from ..lm import LevenbergMarquardt
+from ..paper.clustering import joint_differences, leader_clusters
 
 __all__ = ["EXACT_ERROR", "REFINE_ITERATIONS", "VALLEY_ERROR", "SolutionClasses", "class_representatives",
            "farthest_point_selection", "min_pairwise_distance"]

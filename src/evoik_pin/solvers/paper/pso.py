@@ -17,12 +17,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..objectives import PoseDistance
-from ..problem import IKProblem
-from ..result import Result
-from . import register
+from ...objectives import PoseDistance
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..options import check_callback, check_choice, check_int, check_nonnegative, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
-from .options import check_callback, check_choice, check_int, check_nonnegative, check_positive
 
 __all__ = ["RANDOM_FACTORS", "TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
 

@@ -2,8 +2,8 @@
 
 :class:`RayBatch` starts ``workers`` actors (one CPU each). Each actor receives the robot once (a pickled
 :class:`~evoik_pin.robot.Robot` through Ray's object store), rebuilds the scene from its obstacles when there is
-one, and runs :class:`~.batch.BatchSolver` (the local backend, one thread) on the chunks it is handed: the
-targets as arrays (:func:`pack_targets`), the answers back as a :class:`~.batch.BatchOutcome` (arrays, plus the
+one, and runs :class:`~.threads.BatchSolver` (the local backend, one thread) on the chunks it is handed: the
+targets as arrays (:func:`pack_targets`), the answers back as a :class:`~.outcome.BatchOutcome` (arrays, plus the
 full :class:`~evoik_pin.Result` of the targets solved one by one). A target's answer depends only on the
 target, the options and ``(entropy, its index)``, so the answers are those of the local backend whatever the
 chunks and the actors.
@@ -31,25 +31,18 @@ from urllib.parse import urlsplit
 
 import numpy as np
 
-from ..errors import BackendError, TargetError
-from ..problem import Target
-from .batch import (
-    BatchOutcome,
-    BatchSolver,
-    TargetSource,
-    check_workers,
-    chunk_bounds,
-    gc_paused,
-    grow_bar,
-    progress_bar,
-)
+from ...errors import BackendError, TargetError
+from ...problem import Target
+from .outcome import BatchOutcome
+from .targets import TargetSource
+from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
 
 __all__ = ["RayBatch", "RayPool", "connect", "import_ray", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
            "unpack_targets"]
 
 #: Attempts per chunk before its failure is reported (an actor dying each time).
 DEFAULT_ATTEMPTS = 3
-#: Guided chunks for the actors (:func:`~.batch.chunk_bounds`), between these sizes (targets): a remote call costs
+#: Guided chunks for the actors (:func:`~.threads.chunk_bounds`), between these sizes (targets): a remote call costs
 #: about a millisecond, so the smallest chunks are larger than the local backend's.
 RAY_MIN_CHUNK, RAY_MAX_CHUNK = 1000, 20_000
 #: Seconds to reach a cluster address before calling it unreachable.
@@ -152,7 +145,7 @@ def build_scene(robot, spec: dict):
     """The :class:`~evoik_pin.scene.Scene` of ``robot`` that :func:`scene_spec` describes."""
     import pinocchio as pin
 
-    from ..scene import Scene
+    from ...scene import Scene
 
     scene = Scene(robot, self_collision=spec["self_collision"], srdf=spec["srdf"])
     for kind, name, params, pose in spec["obstacles"]:
@@ -256,7 +249,7 @@ class RayBatch:
     """One call's work on a :class:`RayPool`: chunks of targets to the actors, outcomes back in target order.
 
     Args:
-        robot, make_problem, run, method, entropy, options, fallback: as :class:`~.batch.BatchSolver`'s.
+        robot, make_problem, run, method, entropy, options, fallback: as :class:`~.threads.BatchSolver`'s.
         workers: actors (one CPU each); default every CPU of the cluster.
         address: see :func:`connect`. chunk_size: targets per chunk (default: guided chunks, ``RAY_MIN_CHUNK`` to
             ``RAY_MAX_CHUNK`` targets, shrinking toward the end). attempts: tries per chunk when actors die.
@@ -293,7 +286,7 @@ class RayBatch:
         return chunk_bounds(N, self.workers, RAY_MIN_CHUNK, RAY_MAX_CHUNK)
 
     def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
-        """Solve ``targets`` (a list of :class:`Target` or a :class:`~.batch.TargetSource`) from ``Q0`` (N, n) when
+        """Solve ``targets`` (a list of :class:`Target` or a :class:`~.targets.TargetSource`) from ``Q0`` (N, n) when
         given, on the actors; the outcome in target order. ``offset``: the index of the first target in the whole
         work (it keys the per-target generators)."""
         ray, pool = self.ray, self.pool

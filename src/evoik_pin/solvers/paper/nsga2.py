@@ -31,9 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import lie
-from ..errors import BoundsError, OptionError
-from ..objectives import (
+from ... import lie
+from ...errors import BoundsError, OptionError
+from ...objectives import (
     Manipulability,
     Objective,
     PopulationKinematics,
@@ -41,11 +41,11 @@ from ..objectives import (
     orientation_errors,
     position_errors,
 )
-from ..problem import IKProblem
-from ..result import Front, Result
-from . import register
+from ...problem import IKProblem
+from ...result import Front, Result
+from .. import register
+from ..options import check_fraction, check_int, check_nonnegative, check_nonnegative_vector
 from .common import SolverRun, diversity, halton, initial_population
-from .options import check_fraction, check_int, check_nonnegative, check_nonnegative_vector
 
 __all__ = [
     "NSGA2Result",
@@ -188,7 +188,7 @@ def bounded_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndar
 
     The spread depends on the distances ``d1 = (x - lower) / (upper - lower)`` and ``d2 = (upper - x) /
     (upper - lower)`` to the bounds: an entry on a bound is never pushed across it. Paper 001's GA uses
-    the basic form instead (:func:`~evoik_pin.solvers.ga.basic_polynomial_mutation`), whose spread ignores
+    the basic form instead (:func:`~evoik_pin.solvers.paper.ga.basic_polynomial_mutation`), whose spread ignores
     the bounds; the two give different children.
     """
     width = np.where(upper > lower, upper - lower, 1.0)

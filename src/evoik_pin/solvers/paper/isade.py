@@ -45,13 +45,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..problem import IKProblem
-from ..result import Result
-from . import register
-from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
-from .de import greedy_selection
-from .de_ops import binomial_crossover, permutation_indices
-from .options import (
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..options import (
     check_callback,
     check_choice,
     check_fraction,
@@ -60,6 +57,9 @@ from .options import (
     check_number,
     check_positive,
 )
+from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
+from .de import greedy_selection
+from .de_ops import binomial_crossover, permutation_indices
 
 __all__ = [
     "ISADE_STRATEGIES",

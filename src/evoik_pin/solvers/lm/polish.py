@@ -12,10 +12,10 @@ import time
 
 import numpy as np
 
-from ..problem import IKProblem
-from ..result import Result
-from .lm import LevenbergMarquardt
-from .options import check_int
+from ...problem import IKProblem
+from ...result import Result
+from ..options import check_int
+from .engine import LevenbergMarquardt
 
 __all__ = ["POLISH_ITERATIONS", "errors_text", "polish_result"]
 
@@ -35,8 +35,8 @@ def polish_result(problem: IKProblem, result: Result, rng: np.random.Generator |
     LM runs from ``result.q`` for at most ``iterations`` steps on the problem's task error; the polished
     configuration replaces ``result.q`` only when its error (position + orientation, m + rad) is lower.
     The history is kept; ``evaluations`` and ``time_s`` grow by the polish's; the message says what the
-    polish did. ``engine``: ``"compiled"`` or ``"python"`` (:mod:`.lm`). ``rng`` is accepted for the uniform
-    hook signature; the polish draws no random numbers.
+    polish did. ``engine``: ``"compiled"`` or ``"python"`` (:mod:`evoik_pin.solvers.lm`). ``rng`` is accepted for
+    the uniform hook signature; the polish draws no random numbers.
     """
     t0 = time.perf_counter()
     iterations = check_int("iterations", iterations, 1)

@@ -7,9 +7,9 @@ import time
 
 import numpy as np
 
-from ..problem import Evaluation, IKProblem
-from ..result import Result
-from .options import check_choice, check_int, check_number
+from ...problem import Evaluation, IKProblem
+from ...result import Result
+from ..options import check_choice, check_int, check_number
 
 __all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",
            "run_with_restarts"]

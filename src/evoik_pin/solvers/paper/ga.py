@@ -22,14 +22,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import OptionError
-from ..problem import IKProblem
-from ..result import Result
-from . import register
+from ...errors import OptionError
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..options import check_callback, check_choice, check_fraction, check_int, check_nonnegative, check_positive
 from .analytic import solution_results
 from .clustering import leader_clusters
 from .common import SolverRun, initial_population
-from .options import check_callback, check_choice, check_fraction, check_int, check_nonnegative, check_positive
 
 __all__ = [
     "ENCODINGS",
@@ -106,7 +106,7 @@ def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarra
     ``delta = (2u)^(1/(eta+1)) - 1`` if u < 0.5 else ``1 - (2 (1 - u))^(1/(eta+1))``, and
     ``x += delta (upper - lower)``; the mean |delta| is about 1 / (eta + 2), so eta = 100 perturbs by ~1 %.
     The spread ignores where x sits in the box (children may leave it: the GA clips them), unlike NSGA-II's
-    :func:`~evoik_pin.solvers.nsga2.bounded_polynomial_mutation`, whose spread shrinks towards the bounds.
+    :func:`~evoik_pin.solvers.paper.nsga2.bounded_polynomial_mutation`, whose spread shrinks towards the bounds.
     """
     delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
                      1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
@@ -185,7 +185,7 @@ def solution_leaders(problem: IKProblem, Q: np.ndarray, cost: np.ndarray, radius
                      max_clusters: int | None = None, min_members: int = 1) -> np.ndarray:
     """Leaders (M, n) of the joint-space clusters of a final population, best first.
 
-    Clusters come from :func:`~evoik_pin.solvers.clustering.leader_clusters` (wrapped distance, ``radius``
+    Clusters come from :func:`~evoik_pin.solvers.paper.clustering.leader_clusters` (wrapped distance, ``radius``
     rad); those with fewer than ``min_members`` members are dropped (stragglers, not niches).
     """
     leaders, labels = leader_clusters(Q, cost, radius, problem.robot.revolute, max_clusters)

@@ -1,8 +1,8 @@
 """Paper 001's hybrid GA (``hga``): the niching GA finds the good regions, Nelder-Mead polishes them.
 
-Exploration (section 3.1): :func:`~evoik_pin.solvers.ga.run_niching_ga` for the paper's 12 generations.
+Exploration (section 3.1): :func:`~evoik_pin.solvers.paper.ga.run_niching_ga` for the paper's 12 generations.
 Exploitation (section 3.2): every individual the GA evaluated is split into joint-space clusters (wrapped
-distances, :mod:`~evoik_pin.solvers.clustering`); the best member of each of the best ``max_starts`` clusters is
+distances, :mod:`~evoik_pin.solvers.paper.clustering`); the best member of each of the best ``max_starts`` clusters is
 polished by ``scipy.optimize.minimize(method="Nelder-Mead")``, whose coefficients are exactly the paper's
 (reflection 1, expansion 2, contraction 0.5, shrink 0.5), inside the search box. Polished points that
 meet the tolerances are merged again (they often converge to the same solution) and returned as the
@@ -15,13 +15,13 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..problem import IKProblem
-from ..result import Result
-from . import register
+from ...problem import IKProblem
+from ...result import Result
+from .. import register
+from ..options import check_callback, check_int, check_positive
 from .analytic import solution_results
 from .clustering import leader_clusters
 from .ga import check_niching_ga_options, run_niching_ga, solution_leaders
-from .options import check_callback, check_int, check_positive
 
 __all__ = ["nelder_mead_polish"]
 

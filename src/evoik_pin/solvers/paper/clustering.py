@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import lie
-from .options import check_positive
+from ... import lie
+from ..options import check_positive
 
 __all__ = ["joint_differences", "joint_distances", "leader_clusters"]
 

@@ -1,0 +1,202 @@
+"""The seed table: configurations spread over a search box with their tip poses, searchable by nearness to a target.
+
+One table per robot and box (:func:`seed_table`, cached), built from a deterministic Halton sequence (no random
+numbers drawn) with its forward kinematics computed once. Read by the memetic solver (:mod:`.memetic`, its stage 2),
+by ``memetic-all`` (:mod:`.all_solutions`, its starts) and by :func:`~evoik_pin.solve_many`'s batched rounds
+(:mod:`evoik_pin.solvers.batch.threads`). Nearness is ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` with ``w`` a quarter of
+the arm's reach (m per unit of the Frobenius distance, which is ``2 sqrt(2) sin(angle / 2)``); position and planar
+targets use their own features.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+import pinocchio as pin
+
+from ...problem import Target
+from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
+from ..paper.common import halton
+
+__all__ = ["DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
+
+
+#: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
+DEFAULT_TABLE_SEEDS = 17
+#: Target kinds a seed table serves, each with its own nearness features.
+_KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
+_KINDS = tuple(_KIND_KEYS.values())
+
+
+class SeedTable:
+    """Configurations spread over a search box and their tip poses, searchable by nearness to a target.
+
+    Attributes:
+        Q: (size, n) configurations (a Halton sequence mapped onto the box; deterministic).
+        positions: (size, 3) tip positions (m); rotations: (size, 3, 3).
+        weight: m per unit of rotation-matrix (Frobenius) distance in the pose metric.
+    """
+
+    def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
+        # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
+        self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
+        self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
+        reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
+        self.weight = 0.25 * max(reach, 1e-3)
+        self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
+        self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
+        self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
+        if size:
+            for key in _KINDS:  # one-time work here, not inside a solve's time budget
+                self._table_features(key)
+                self._gap(key)
+
+    def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
+        if key == "pose":
+            return np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
+        if key == "position":
+            return P
+        if key == "planar":
+            return P[:, :2]
+        return np.concatenate([P[:, :2], self.weight * R[:, :2, 0]], axis=1)  # heading, scaled like rotations
+
+    def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
+        """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
+        if key not in self._features:
+            F = np.array(self._pose_features(key, self.positions, self.rotations), order="C")  # a copy
+            self._features[key] = (F, (F * F).sum(axis=1))
+        return self._features[key]
+
+    def target_features(self, targets: list[Target]) -> tuple[str, np.ndarray]:
+        """(kind key, features (N, d)) of targets that are all of one kind."""
+        return self.encoded_features(target_kind(targets[0]), *encode_targets(targets))
+
+    def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
+        """(kind key, features (N, d)) of N targets of one ``KIND_*`` in the kernel's encoding
+        (:func:`~evoik_pin.solvers.lm.layout.encode_targets`: P (N, 3), Rts (N, 3, 3))."""
+        key = _KIND_KEYS[kind]
+        if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
+            yaw = P[:, 2]
+            return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
+        return key, self._pose_features(key, P, Rts)
+
+    def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
+        """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
+        costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
+        (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
+        if k <= 0:
+            return
+        key, f = self.target_features([target])
+        F, sq = self._table_features(key)
+        d = sq - 2.0 * (F @ f[0])
+        if allowed is not None:
+            d = np.where(allowed, d, np.inf)
+            k = min(k, int(np.count_nonzero(allowed)))
+            if k <= 0:
+                return
+        first = int(d.argmin())
+        yield first
+        k = min(k, d.shape[0])
+        if k > 1:
+            part = np.argpartition(d, k - 1)[:k]
+            for i in part[d[part].argsort()]:
+                if i != first:
+                    yield int(i)
+
+    def free_mask(self, scene, margin: float) -> np.ndarray:
+        """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
+        (conservative: every such entry is mesh-free), computed once per scene version and margin (about
+        20-60 us an entry: one-time set-up)."""
+        key = (id(scene), scene.version, float(margin))
+        hit = self._free.get(key)
+        if hit is None or hit[0]() is not scene:
+            if len(self._free) > 8:
+                self._free.clear()
+            hit = self._free[key] = (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True))
+        return hit[1]
+
+    def distance_sq(self, target: Target, T: pin.SE3) -> float:
+        """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
+        key, f = self.target_features([target])
+        d = f[0] - self._pose_features(key, T.translation[None], T.rotation[None])[0]
+        return float(d.dot(d))
+
+    def typical_gap_sq(self, target: Target) -> float:
+        """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
+        other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
+        as the table's nearest entry usually is."""
+        return self._gap(self.target_features([target])[0])
+
+    def _gap(self, key: str) -> float:
+        gap = self._gaps.get(key)
+        if gap is None:
+            F, sq = self._table_features(key)
+            sample = np.linspace(0, F.shape[0] - 1, min(64, F.shape[0])).astype(int)
+            D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
+            D[np.arange(sample.size), sample] = np.inf
+            gap = self._gaps[key] = float(np.median(D.min(axis=1)))
+        return gap
+
+    def nearest(self, targets: list[Target], k: int, allowed: np.ndarray | None = None) -> np.ndarray:
+        """Indices (N, k) of the k table entries nearest to each target, nearest first (only ``allowed``
+        entries when a (size,) bool mask is given; k is capped at their number).
+
+        Many targets at once go through a k-d tree of the table's features (built once per target kind and
+        mask): O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
+        """
+        return self.nearest_encoded(target_kind(targets[0]), *encode_targets(targets), k, allowed)
+
+    def nearest_encoded(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
+                        eps: float = 0.0) -> np.ndarray:
+        """:meth:`nearest` for N targets of one ``KIND_*`` in the kernel's encoding (P (N, 3), Rts (N, 3, 3)).
+
+        ``eps`` > 0: approximate neighbours (``scipy.spatial.cKDTree.query``'s ``eps``: the i-th entry returned
+        is within (1 + eps) times the distance of the true i-th nearest), several times cheaper in these 12-D
+        features.
+        """
+        key, f = self.encoded_features(kind, P, Rts)
+        tree_key = (key, None if allowed is None else allowed.tobytes())
+        hit = self._trees.get(tree_key)
+        if hit is None:
+            from scipy.spatial import cKDTree
+
+            index = np.arange(self.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
+            if len(self._trees) > 16:
+                self._trees.clear()
+            hit = self._trees[tree_key] = (cKDTree(self._table_features(key)[0][index]), index)
+        tree, index = hit
+        k = min(k, tree.n)
+        N = f.shape[0]
+        if k == 0 or N == 0:
+            return np.zeros((N, 0), dtype=np.intp)
+        _, idx = tree.query(f, k=k, eps=eps)
+        return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
+
+
+_TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_TABLES_PER_ROBOT = 4
+
+
+def default_table_size(n: int) -> int:
+    """Seed-table size for an n-joint chain: 2^(n+5), clamped to [256, 4096] (about 1-5 ms to build)."""
+    return int(min(4096, max(256, 2 ** (n + 5))))
+
+
+def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTable:
+    """The cached :class:`SeedTable` of ``robot`` over the box [lower, upper] (built on first use).
+
+    A few boxes are kept per robot (the most recent ones), so a trajectory solved in narrow moving boxes
+    does not grow the cache.
+    """
+    per_robot = _TABLES.setdefault(robot, {})
+    key = (lower.tobytes(), upper.tobytes(), int(size))
+    table = per_robot.get(key)
+    if table is None:
+        table = SeedTable(robot, lower, upper, size)
+        if len(per_robot) >= _TABLES_PER_ROBOT:
+            per_robot.pop(next(iter(per_robot)))
+        per_robot[key] = table
+    return table
