@@ -45,7 +45,7 @@ import numpy as np
 
 from ..errors import ConfigurationError, OptionError
 from ..objectives import default_cost
-from ..problem import Target
+from ..problem import Target, coerce_scene
 from ..result import Result
 from .batch_outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome, BatchResults
 from .batch_targets import TargetBlock, TargetSource
@@ -54,7 +54,8 @@ from .lm.layout import TargetArrays
 from .memetic import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
 from .options import check_choice, check_int
 
-__all__ = ["BACKENDS", "BatchOutcome", "BatchResults", "BatchSolver", "TargetSource", "check_workers", "chunk_bounds",
+__all__ = ["BACKENDS", "BatchOutcome", "BatchResults", "BatchSolver", "TargetSource", "check_call", "check_workers",
+           "chunk_bounds",
            "default_workers", "gc_paused", "grow_bar", "progress_bar", "root_entropy", "solve_many",
            "target_generator"]
 
@@ -133,6 +134,27 @@ def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int 
 
 
 # ---------------------------------------------------------------------- the solver
+def check_call(robot, make_problem: Callable, method: str, options: dict) -> dict:
+    """Every option of a call solving many targets checked before any work, as :func:`evoik_pin.solve` checks
+    them: the problem's (a problem built for a probe target at the base origin), the method's names and, for a
+    method registered with its checks (memetic, memetic-all), their values; the scene, given as a file path, read
+    once. Returns the options to solve with (the scene a :class:`~evoik_pin.scene.Scene`).
+
+    Raises:
+        OptionError (and the problem's errors: BoundsError, ConfigurationError, SceneError) naming the option.
+    """
+    from . import get_solver
+
+    info = get_solver(method)
+    options = dict(options)
+    if options.get("scene") is not None:
+        options["scene"] = coerce_scene(robot, options["scene"])
+    _, solver_options = make_problem(robot, np.zeros(3), **dict(options))
+    solver_options.pop("polish", None)  # api._run's, not the solver's
+    info.check_options(solver_options, robot.n)
+    return options
+
+
 class BatchSolver:
     """Solves batches of targets for one robot, method and set of options (the set-up done once: option
     checks, seed table, collision-free entries); :meth:`solve` takes a batch.
@@ -152,7 +174,7 @@ class BatchSolver:
         self.robot = robot
         self.make_problem, self.run, self.method = make_problem, run, method
         self.entropy = entropy
-        self.options = options
+        self.options = check_call(robot, make_problem, method, options)
         self.fallback = fallback
         self.batched = method == "memetic" and options.get("objective") is None and not options.get("polish")
         self.template = None
@@ -166,11 +188,9 @@ class BatchSolver:
         self.template = template
         if not self.batched:
             return
-        from . import get_solver
         from .lm import compiled_kernel
 
-        get_solver("memetic").check_options(solver_options)
-        table_size = solver_options.get("table_size")
+        table_size = solver_options.get("table_size")  # checked by check_call
         table_size = default_table_size(self.robot.n) if table_size is None else int(table_size)
         rounds = min(int(solver_options.get("table_seeds", DEFAULT_TABLE_SEEDS)), table_size)
         self.engine = solver_options.get("engine", "compiled")
