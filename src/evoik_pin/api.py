@@ -13,12 +13,13 @@ import time
 import numpy as np
 
 from .errors import ConfigurationError, MethodError, OptionError
-from .problem import DEFAULT_PRO_DELTA, IKProblem, Target
+from .problem import DEFAULT_PRO_DELTA, IKProblem, Target, check_pro_delta
 from .result import Result
 from .robot import Robot, load_robot
 from .solvers import get_solver, methods
 from .solvers.batch import api as batch_api
 from .solvers.batch.outcome import BatchResults
+from .solvers.batch.threads import check_call
 from .solvers.collision_verdict import with_collision_verdict
 from .solvers.lm import ENGINES
 from .solvers.options import check_int
@@ -132,7 +133,8 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
         method: a name from :func:`methods` (default ``"memetic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same result.
         **options: shared ones (``tolerance`` m, ``rotation_tolerance`` rad, ``q0`` (n,), ``bounds``
-            (lower, upper), ``objective``, ``orientation_weight``, ``pose_metric``, ``polish``) and the solver's own
+            (lower, upper), ``objective``, ``orientation_weight``, ``pose_metric``, ``polish``, ``scene`` (a
+            :class:`Scene` or a scene file's path, str or Path), ``margin`` m) and the solver's own
             (``population``, ``max_generations``, ...; see each solver's docstring).
 
     Returns:
@@ -203,13 +205,18 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
 
     With ``pro=True`` (paper 002's "Pro-" variants) the search box of every point after the first is the
     previous solution +- ``delta`` rad, intersected with the bounds. One random generator serves the
-    whole trajectory, so a seed fixes every point.
+    whole trajectory, so a seed fixes every point. Every target and option is checked before the first point is
+    solved (a bad target named by its index).
     """
     robot = _robot(robot)
     rng = _rng(seed)
-    targets = list(targets)
+    # every target and option checked before the first point is solved
+    targets = Target.coerce_many(targets if isinstance(targets, np.ndarray) else list(targets))
     if not targets:
         raise ConfigurationError("solve_trajectory needs at least one target")
+    if pro:
+        delta = check_pro_delta(delta)
+    options = check_call(robot, make_problem, method, options)
     results: list[Result] = []
     previous = None if q0 is None else robot.check_q(q0)
     for i, target in enumerate(targets):
@@ -237,7 +244,8 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
         targets: a sequence of targets (anything :func:`solve` accepts: poses, positions, planar
             targets, all of one kind or mixed), or an array of N homogeneous poses (N, 4, 4), checked in one
-            vectorized pass (:meth:`Target.check_poses`) and solved without a Target object per pose.
+            vectorized pass (:meth:`Target.check_poses`) and solved without a Target object per pose. One target
+            alone (a ``pin.SE3``, one (4, 4) pose, one 3-vector, a :class:`Target`) is one target.
         method: solver name.
         seed: int, None or Generator. A target solved one by one draws from its own generator,
             ``SeedSequence(seed).spawn(N)[i]`` (a Generator ``seed`` gives one draw as the entropy), so a seed fixes
@@ -253,7 +261,8 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         address: a Ray cluster's address (``"ray://head:10001"``, ``"head:6379"`` or ``"auto"``); ray only.
         progress: show a tqdm progress bar over the chunks.
         **options: as for :func:`solve` (``tolerance``, ``rotation_tolerance``, ``bounds``, ``scene``, ``margin``,
-            ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...).
+            ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...), every one checked before
+            any work, as :func:`solve` checks it (:func:`evoik_pin.solvers.batch.threads.check_call`).
 
     Returns:
         A :class:`BatchResults`: a sequence of :class:`Result` in target order (each made when first read:
@@ -264,8 +273,9 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         by the targets they processed).
 
     Raises:
-        OptionError: ``workers`` < 1, an unknown ``backend``. BackendError: Ray not installed, a cluster address
-        that cannot be reached, a chunk that keeps failing.
+        OptionError: ``workers`` < 1, an unknown ``backend``, any option :func:`solve` refuses. TargetError: a bad
+        target or one beyond ``MAX_TARGET_NORM`` (1e6 m), named by its index. BackendError: Ray not installed, a
+        cluster address that cannot be reached, a chunk that keeps failing.
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks

@@ -8,6 +8,7 @@ the position / orientation errors of a whole population from one forward-kinemat
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -25,11 +26,17 @@ from .objectives import (
     position_errors,
 )
 from .robot import Robot
+from .solvers.options import check_positive
 
 if TYPE_CHECKING:
     from .scene import Scene
 
-__all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "Evaluation", "IKProblem", "Target"]
+__all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "Evaluation", "IKProblem", "Target",
+           "check_pro_delta", "coerce_scene"]
+
+#: Farthest target position accepted (m from the base origin): beyond any arm's reach by orders of magnitude, and
+#: low enough that squared distances (1e12 m^2) stay far from float overflow in every solver and feature space.
+MAX_TARGET_NORM = 1e6
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
 #: of a reachable arm's configuration, so a search prefers every collision-free configuration.
@@ -38,19 +45,35 @@ COLLISION_PENALTY = 10.0
 DEFAULT_PRO_DELTA = np.pi / 100
 
 
-def _vector(value, name: str, sizes: tuple[int, ...]) -> np.ndarray:
+def _beyond_text(position: np.ndarray) -> str:
+    """'target position (x, y, z) m is ... m from the base, beyond ...' for a position beyond MAX_TARGET_NORM."""
+    norm = math.hypot(*position.tolist())
+    return (f"target position ({', '.join(f'{x:.3g}' for x in position)}) m is {norm:.3g} m from the base, beyond "
+            f"any arm's reach (accepted: at most MAX_TARGET_NORM = {MAX_TARGET_NORM:g} m)")
+
+
+def _vector(value, name: str, sizes: tuple[int, ...], bound: float | None = None) -> np.ndarray:
+    """``value`` as a finite float vector with one of ``sizes`` entries; with ``bound``, a Euclidean norm at most
+    ``bound`` (a position, m)."""
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
         raise TargetError(f"{name} must be numbers, got {value!r}") from exc
     if arr.ndim != 1 or arr.shape[0] not in sizes:
         raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
-    if not math.isfinite(arr.dot(arr)):  # NaN or inf anywhere; one C call, as this runs once per solve
-        raise TargetError(f"{name} contains NaN or inf: {arr}")
+    # math.hypot scales, so huge finite entries give their norm rather than an overflow warning (a dot product
+    # would); NaN anywhere gives NaN, inf gives inf. One C call, as this runs once per solve.
+    norm = math.hypot(*arr.tolist())
+    if not norm <= (math.inf if bound is None else bound):
+        if not np.isfinite(arr).all():
+            raise TargetError(f"{name} contains NaN or inf: {arr}")
+        raise TargetError(_beyond_text(arr))
     return arr
 
 
 _EYE3 = np.eye(3)
+_NOT_ROTATION = ("target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
+                 "orthonormalize it or pass roll-pitch-yaw angles")
 
 
 def _rotation(value) -> np.ndarray:
@@ -61,17 +84,18 @@ def _rotation(value) -> np.ndarray:
     if R.shape != (3, 3):
         raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
     v = R.reshape(9)
-    if not math.isfinite(v.dot(v)):
-        raise TargetError("target rotation contains NaN or inf")
+    # Frobenius norm sqrt(3) for a rotation; math.hypot gives it without an overflow warning for huge entries (a
+    # dot product would warn), so the products below only ever see entries of a near-rotation
+    if not math.hypot(*v.tolist()) <= 2.0:
+        if not np.isfinite(v).all():
+            raise TargetError("target rotation contains NaN or inf")
+        raise TargetError(_NOT_ROTATION)
     # det R = R[0] . (R[1] x R[2]); written out, as np.linalg.det costs more than the rest of the check
     det = (R[0, 0] * (R[1, 1] * R[2, 2] - R[1, 2] * R[2, 1]) - R[0, 1] * (R[1, 0] * R[2, 2] - R[1, 2] * R[2, 0])
            + R[0, 2] * (R[1, 0] * R[2, 1] - R[1, 1] * R[2, 0]))
     D = (R.T.dot(R) - _EYE3).reshape(9)
     if D.dot(D) > 1e-12 or det < 0:  # |R^T R - I|_F <= 1e-6
-        raise TargetError(
-            "target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
-            "orthonormalize it or pass roll-pitch-yaw angles"
-        )
+        raise TargetError(_NOT_ROTATION)
     return R
 
 
@@ -92,7 +116,7 @@ class Target:
     yaw: float | None = None
 
     def __post_init__(self) -> None:
-        pos = _vector(self.position, "target position", (2,) if self.planar else (3,))
+        pos = _vector(self.position, "target position", (2,) if self.planar else (3,), MAX_TARGET_NORM)
         object.__setattr__(self, "position", pos)
         if self.rotation is not None:
             if self.planar:
@@ -159,15 +183,23 @@ class Target:
     @staticmethod
     def check_poses(poses) -> np.ndarray:
         """``poses`` as a float (N, 4, 4) array of homogeneous matrices (m), checked in one vectorized pass: finite
-        numbers, rotation blocks orthonormal with det +1 (to 1e-6), bottom rows [0 0 0 1]. A TargetError names the
-        first bad target's index."""
+        numbers, translations at most ``MAX_TARGET_NORM`` m from the base, rotation blocks orthonormal with det +1
+        (to 1e-6), bottom rows [0 0 0 1]. A TargetError names the first bad target's index."""
         H = np.asarray(poses, dtype=float)
         if H.ndim != 3 or H.shape[1:] != (4, 4):
             raise TargetError(f"poses must be an array of shape (N, 4, 4), got shape {H.shape}")
         finite = np.isfinite(H).all(axis=(1, 2))
         if not finite.all():
             raise TargetError(f"target {int(np.nonzero(~finite)[0][0])} contains NaN or inf")
-        R = H[:, :3, :3]
+        # entries clipped where they cannot change a verdict, so that no product overflows (and warns): a
+        # coordinate beyond 2 MAX_TARGET_NORM is beyond the bound either way, a rotation entry beyond 2 is no
+        # rotation's either way
+        P = np.minimum(np.abs(H[:, :3, 3]), 2.0 * MAX_TARGET_NORM)
+        far = np.nonzero((P * P).sum(axis=1) > MAX_TARGET_NORM**2)[0]
+        if far.size:
+            k = int(far[0])
+            raise TargetError(f"target {k}: {_beyond_text(H[k, :3, 3])}")
+        R = np.clip(H[:, :3, :3], -2.0, 2.0)
         ortho = np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)).max(axis=(1, 2))
         bad = np.nonzero((ortho > 1e-6) | (np.linalg.det(R) < 0))[0]
         if bad.size:
@@ -207,6 +239,29 @@ class Target:
         return pin.SE3(np.eye(3) if self.rotation is None else self.rotation, self.position.copy())
 
 
+def check_pro_delta(delta) -> float:
+    """The half-width (rad) of paper 002's "Pro" search box as a float > 0; OptionError otherwise."""
+    return check_positive("delta (the Pro box half-width)", delta, unit="rad")
+
+
+def coerce_scene(robot: Robot, scene) -> Scene | None:
+    """The :class:`~evoik_pin.scene.Scene` a ``scene`` argument names: a Scene as it is, a scene file's path
+    (``str`` or ``os.PathLike``; ``.yaml``, ``.yml`` or ``.json``) read by :meth:`Scene.from_file` for ``robot``,
+    None as None. Every entry point's scene goes through here (the ones solving many targets once, up front).
+
+    Raises:
+        OptionError: another type. SceneError: a file that is missing or does not parse (naming the file).
+    """
+    from .scene import Scene
+
+    if scene is None or isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, (str, os.PathLike)):
+        return Scene.from_file(robot, scene)
+    raise OptionError(f"scene must be an evoik_pin.Scene or the path of a scene file (str or pathlib.Path; "
+                      f".yaml, .yml or .json), got {type(scene).__name__}")
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """Cost and errors of a population (each (N,)); ``orientation_error`` is None for position targets."""
@@ -244,7 +299,8 @@ class IKProblem:
         pose_metric: how the default pose objective combines the two errors: ``"sum"`` (position +
             weight x angle, the default) or ``"euclidean"`` (sqrt(position^2 + (weight x angle)^2),
             :class:`~evoik_pin.objectives.PoseDistance`). Ignored for position targets and custom objectives.
-        scene: an optional :class:`~evoik_pin.scene.Scene` (the robot's body and obstacles): answers must be
+        scene: an optional :class:`~evoik_pin.scene.Scene` (the robot's body and obstacles), or a scene file's path
+            (:func:`coerce_scene`): answers must be
             collision-free; :meth:`evaluate` and :meth:`cost` add ``COLLISION_PENALTY`` to the cost of
             configurations whose convex-hull proxies collide (steering every evolutionary method); the exact
             mesh check judges every answer (:mod:`evoik_pin.solvers.collision_verdict`).
@@ -262,7 +318,7 @@ class IKProblem:
     q0: np.ndarray | None = None
     orientation_weight: float = 1.0
     pose_metric: str = "sum"
-    scene: Scene | None = None
+    scene: Scene | str | os.PathLike | None = None
     margin: float = 0.0
     evaluations: int = field(default=0, compare=False)
 
@@ -285,10 +341,7 @@ class IKProblem:
                 raise ConfigurationError(f"q0: {exc}") from None
         _check_nonnegative("margin (m)", self.margin)
         if self.scene is not None:
-            from .scene import Scene
-
-            if not isinstance(self.scene, Scene):
-                raise OptionError(f"scene must be an evoik_pin.Scene, got {type(self.scene).__name__}")
+            self.scene = coerce_scene(self.robot, self.scene)
             self.scene.check_robot(self.robot)
         if self.objective is None:
             self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
@@ -372,8 +425,7 @@ class IKProblem:
     def with_pro_box(self, q_prev, delta: float = DEFAULT_PRO_DELTA) -> IKProblem:
         """Paper 002's "Pro" problem: the search box is ``q_prev +- delta`` intersected with the bounds."""
         q_prev = self.robot.check_q(q_prev)
-        if not (np.isfinite(delta) and delta > 0):
-            raise OptionError(f"Pro box half-width delta must be > 0 rad, got {delta!r}")
+        delta = check_pro_delta(delta)
         lower = np.clip(np.maximum(self.lower, q_prev - delta), self.lower, self.upper)
         upper = np.clip(np.minimum(self.upper, q_prev + delta), self.lower, self.upper)
         return replace(self, lower=lower, upper=upper, q0=np.clip(q_prev, lower, upper), evaluations=0)

@@ -32,11 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from .errors import OptionError, OutputError
-from .problem import Target
+from .problem import Target, coerce_scene
 from .robot import Robot, load_robot
 from .solvers.batch.api import BACKENDS
 from .solvers.batch.outcome import BatchOutcome
-from .solvers.batch.threads import BatchSolver, check_workers, gc_paused, grow_bar, progress_bar
+from .solvers.batch.threads import BatchSolver, check_call, check_workers, gc_paused, grow_bar, progress_bar
 from .solvers.options import check_choice, check_int, check_positive
 
 __all__ = ["ReachMap", "output_dir", "reachability_map", "so3_samples"]
@@ -251,7 +251,8 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     Args:
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
         voxel: voxel edge (m). orientations: orientations asked per voxel for 6-D arms (>= 1).
-        scene: a :class:`~evoik_pin.scene.Scene`: only collision-free answers count.
+        scene: a :class:`~evoik_pin.scene.Scene` or a scene file's path (str or Path): only collision-free answers
+            count.
         backend, workers, address: as for :func:`evoik_pin.solve_many` (threads, or Ray actors).
         seed: seeds the workspace sampling (the orientation set and the LM starts are deterministic).
         progress: a tqdm bar over the targets. batch_size: targets per call of the batch engine.
@@ -269,8 +270,12 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     backend = check_choice("backend", backend, BACKENDS)
     if backend == "local":
         workers = check_workers(workers)
+    from .api import make_problem
+
+    scene = coerce_scene(robot, scene)
     if scene is not None:
         options["scene"] = scene
+    check_call(robot, make_problem, "memetic", options)  # every IK option, before any work (and Ray)
     rng = np.random.default_rng(seed)
     P = robot.positions_batch(robot.random_configurations(WORKSPACE_SAMPLES, rng))
     lo, hi = P.min(axis=0), P.max(axis=0)

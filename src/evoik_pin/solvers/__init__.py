@@ -6,7 +6,11 @@ the shared validators of :mod:`.options`.
 
 The solvers are grouped by role: :mod:`.paper` (the papers' methods), :mod:`.lm` (the one LM engine and
 ``polish``), :mod:`.search` (seed table, ``memetic``, ``memetic-all``), :mod:`.batch` (``solve_many``'s API above
-its engines). :mod:`.collision_verdict` is the exact collision check every method's answer passes through."""
+its engines). :mod:`.collision_verdict` is the exact collision check every method's answer passes through.
+
+A solver registered with ``check=`` also lets its value checks run without solving
+(:meth:`SolverInfo.check_options` with ``n``): the entry points that solve many targets (``solve_many``,
+``solve_trajectory``, ``reachability_map``) check every option that way before any work."""
 
 from __future__ import annotations
 
@@ -30,6 +34,9 @@ class SolverInfo:
     description: str
     multi_solution: bool = False
     multi_objective: bool = False
+    #: ``check(n=..., **options)``: the solver's own value checks (every keyword, defaults filled in, and the
+    #: robot's joint count ``n``), the very function the solver calls first; OptionError on a bad value.
+    check: Callable | None = None
 
     @property
     def options(self) -> list[str]:
@@ -38,13 +45,26 @@ class SolverInfo:
 
     @cached_property
     def _option_names(self) -> tuple[str, ...]:
-        # inspect.signature costs tens of microseconds: once per solver, not once per solve
-        params = list(inspect.signature(self.func).parameters.values())[2:]
-        return tuple(p.name for p in params if p.kind is inspect.Parameter.KEYWORD_ONLY)
+        return tuple(self._defaults)
 
-    def check_options(self, options: dict) -> None:
-        if not options:
-            return
+    @cached_property
+    def _defaults(self) -> dict:
+        """The keyword options and their defaults (inspect.signature costs tens of microseconds: once per solver,
+        not once per solve)."""
+        params = list(inspect.signature(self.func).parameters.values())[2:]
+        return {p.name: p.default for p in params if p.kind is inspect.Parameter.KEYWORD_ONLY}
+
+    def check_options(self, options: dict, n: int | None = None) -> None:
+        """OptionError for an option the solver does not take; with ``n`` (the robot's joints), also for a value
+        the solver would refuse (its ``check``, when registered), so that a call solving many targets fails
+        before any work, with the message :func:`evoik_pin.solve` gives."""
+        if n is not None and self.check is not None:
+            self._check_names(options)
+            self.check(n=n, **{**self._defaults, **options})
+        elif options:
+            self._check_names(options)
+
+    def _check_names(self, options: dict) -> None:
         unknown = sorted(set(options) - set(self._option_names))
         if unknown:
             raise OptionError(
@@ -62,11 +82,13 @@ _MODULES = ["paper.de", "paper.isade", "paper.pso", "paper.mode", "paper.ga", "p
 _loaded = False
 
 
-def register(name: str, description: str, multi_solution: bool = False, multi_objective: bool = False):
-    """Decorator registering ``func(problem, rng, *, option=default, ...) -> Result`` under ``name``."""
+def register(name: str, description: str, multi_solution: bool = False, multi_objective: bool = False,
+             check: Callable | None = None):
+    """Decorator registering ``func(problem, rng, *, option=default, ...) -> Result`` under ``name``; ``check``:
+    see :attr:`SolverInfo.check`."""
 
     def wrap(func: Callable) -> Callable:
-        _REGISTRY[name] = SolverInfo(name, func, description, multi_solution, multi_objective)
+        _REGISTRY[name] = SolverInfo(name, func, description, multi_solution, multi_objective, check)
         return func
 
     return wrap

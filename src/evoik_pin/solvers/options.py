@@ -12,6 +12,7 @@ meant).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -43,7 +44,8 @@ def check_int(name: str, value, minimum: int = 1, maximum: int | None = None) ->
         OptionError: ``"<name> must be an integer >= <minimum>, got <value>"`` (or ``"... in [minimum,
             maximum]"``).
     """
-    ok = not isinstance(value, bool) and isinstance(value, (int, np.integer))
+    # type(...) is int first: the common case, without isinstance's walk over numpy's abstract classes
+    ok = type(value) is int or (not isinstance(value, bool) and isinstance(value, (int, np.integer)))
     if ok and value >= minimum and (maximum is None or value <= maximum):
         return int(value)
     accepted = f">= {minimum}" if maximum is None else f"in [{minimum}, {maximum}]"
@@ -77,19 +79,20 @@ def check_number(name: str, value, low: float = -np.inf, high: float = np.inf, *
         OptionError: ``"<name> must be a finite number in (low, high] <unit>, got <value>"`` (or ``"> low"``,
             ``"<= high"`` for a one-sided range).
     """
+    if not isinstance(value, bool):
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            pass
+        else:
+            above = v > low if open_low else v >= low
+            below = v < high if open_high else v <= high
+            if above and below and math.isfinite(v):
+                return v
+    # the message only on failure: formatting it costs more than the check (this runs on every solve)
     accepted = _with_unit(" ".join(filter(None, ["a finite number", _range_text(low, high, open_low, open_high)])),
                           unit)
-    if isinstance(value, bool):
-        raise OptionError(f"{name} must be {accepted}, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise OptionError(f"{name} must be {accepted}, got {value!r}") from None
-    above = v > low if open_low else v >= low
-    below = v < high if open_high else v <= high
-    if not (np.isfinite(v) and above and below):
-        raise OptionError(f"{name} must be {accepted}, got {value!r}")
-    return v
+    raise OptionError(f"{name} must be {accepted}, got {value!r}")
 
 
 def check_positive(name: str, value, upper: float = np.inf, unit: str = "") -> float:

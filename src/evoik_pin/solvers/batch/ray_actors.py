@@ -266,6 +266,7 @@ class RayBatch:
         self.ray, self.workers = self.pool.ray, self.pool.workers
         self.chunk_size = chunk_size
         self.attempts = attempts
+        options = self._local.options  # checked, the scene read from its file if one was named
         self._scene = options.get("scene")
         remote_options = {k: v for k, v in options.items() if k != "scene"}
         self._key = uuid.uuid4().hex

@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import pinocchio as pin
 
 from ...errors import TargetError
 from ...problem import Target
@@ -58,14 +59,33 @@ class TargetBlock:
         return cls(groups, len(targets), targets.__getitem__)
 
 
+def _one_target(targets) -> bool:
+    """True when ``targets`` is a single target rather than a sequence of them: a ``pin.SE3``, a Target, or an
+    array of shape (4, 4) (a homogeneous pose: its rows, 4-vectors, are no targets) or (3,) (a position: its
+    numbers are no targets), also as nested lists."""
+    if isinstance(targets, (pin.SE3, Target)):
+        return True
+    if isinstance(targets, np.ndarray):
+        return targets.shape in ((4, 4), (3,))
+    if isinstance(targets, (list, tuple)) and len(targets) in (3, 4):  # short: the array costs nothing
+        try:
+            return np.asarray(targets, dtype=float).shape in ((4, 4), (3,))
+        except (TypeError, ValueError):  # targets of other kinds (SE3, Target) in a list
+            return False
+    return False
+
+
 class TargetSource:
     """The user's targets, made into :class:`TargetBlock` objects chunk by chunk (the pipeline makes a chunk's
     while worker threads solve the earlier ones).
 
     ``targets``: an (N, 4, 4) array of poses, any sequence :meth:`Target.coerce_many` accepts, or an iterable
-    (listed first)."""
+    (listed first); one target alone (a ``pin.SE3``, a :class:`Target`, one (4, 4) pose or one 3-vector
+    position) is one target, never its rows."""
 
     def __init__(self, targets) -> None:
+        if _one_target(targets):
+            targets = targets[None] if isinstance(targets, np.ndarray) and targets.ndim == 2 else [targets]
         self.raw = targets if isinstance(targets, (np.ndarray, list, tuple)) else list(targets)
 
     def __len__(self) -> int:

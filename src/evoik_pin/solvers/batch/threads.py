@@ -44,7 +44,7 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 import numpy as np
 
 from ...objectives import default_cost
-from ...problem import Target
+from ...problem import Target, coerce_scene
 from ...result import Result
 from ..lm import solve_pairs
 from ..lm.layout import TargetArrays
@@ -53,8 +53,8 @@ from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_ta
 from .outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
 from .targets import TargetBlock, TargetSource
 
-__all__ = ["BatchSolver", "ProgressBar", "check_workers", "chunk_bounds", "default_workers", "gc_paused", "grow_bar",
-           "progress_bar", "root_entropy", "target_generator"]
+__all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
+           "grow_bar", "progress_bar", "root_entropy", "target_generator"]
 
 
 #: Guided chunks (:func:`chunk_bounds`): each a 1 / (GUIDED_SHARE * workers) share of the targets left, at least
@@ -117,6 +117,27 @@ def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int 
 
 
 # ---------------------------------------------------------------------- the solver
+def check_call(robot, make_problem: Callable, method: str, options: dict) -> dict:
+    """Every option of a call solving many targets checked before any work, as :func:`evoik_pin.solve` checks
+    them: the problem's (a problem built for a probe target at the base origin), the method's names and, for a
+    method registered with its checks (memetic, memetic-all), their values; the scene, given as a file path, read
+    once. Returns the options to solve with (the scene a :class:`~evoik_pin.scene.Scene`).
+
+    Raises:
+        OptionError (and the problem's errors: BoundsError, ConfigurationError, SceneError) naming the option.
+    """
+    from .. import get_solver
+
+    info = get_solver(method)
+    options = dict(options)
+    if options.get("scene") is not None:
+        options["scene"] = coerce_scene(robot, options["scene"])
+    _, solver_options = make_problem(robot, np.zeros(3), **dict(options))
+    solver_options.pop("polish", None)  # api._run's, not the solver's
+    info.check_options(solver_options, robot.n)
+    return options
+
+
 class BatchSolver:
     """Solves batches of targets for one robot, method and set of options (the set-up done once: option
     checks, seed table, collision-free entries); :meth:`solve` takes a batch.
@@ -136,7 +157,7 @@ class BatchSolver:
         self.robot = robot
         self.make_problem, self.run, self.method = make_problem, run, method
         self.entropy = entropy
-        self.options = options
+        self.options = check_call(robot, make_problem, method, options)
         self.fallback = fallback
         self.batched = method == "memetic" and options.get("objective") is None and not options.get("polish")
         self.template = None
@@ -150,11 +171,9 @@ class BatchSolver:
         self.template = template
         if not self.batched:
             return
-        from .. import get_solver
         from ..lm import compiled_kernel
 
-        get_solver("memetic").check_options(solver_options)
-        table_size = solver_options.get("table_size")
+        table_size = solver_options.get("table_size")  # checked by check_call
         table_size = default_table_size(self.robot.n) if table_size is None else int(table_size)
         rounds = min(int(solver_options.get("table_seeds", DEFAULT_TABLE_SEEDS)), table_size)
         self.engine = solver_options.get("engine", "compiled")

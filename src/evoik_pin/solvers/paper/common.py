@@ -9,6 +9,7 @@ import numpy as np
 
 from ...problem import Evaluation, IKProblem
 from ...result import Result
+from ..lm.polish import shortfall_text
 from ..options import check_choice, check_int, check_number
 
 __all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",
@@ -187,8 +188,7 @@ class SolverRun:
         if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
             message = "stopped"
         if not success:
-            message += (f"; best position error {pos:.3g} m" + ("" if rot is None else f", orientation error "
-                        f"{rot:.3g} rad") + f" exceeds the tolerance ({problem.tolerance:g})")
+            message += f"; {shortfall_text(problem, pos, rot)}"
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
             generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,

@@ -55,10 +55,10 @@ import numpy as np
 from ...problem import IKProblem
 from ...result import Result
 from .. import register
-from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
+from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
 from ..lm.layout import TASK_ROWS, target_kind
-from ..lm.polish import errors_text
-from ..options import check_int, check_positive
+from ..lm.polish import shortfall_text
+from ..options import check_choice, check_int, check_positive
 from .memetic import memetic
 from .seed_table import default_table_size, seed_table
 from .solution_classes import (
@@ -118,15 +118,18 @@ def task_dimension(target) -> int:
     return len(TASK_ROWS[target_kind(target)])
 
 
-def _check_options(count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size, iterations,
-                   n: int) -> tuple:
+def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size,
+                   iterations, engine, n: int) -> tuple:
+    """memetic-all's options (every keyword of :func:`memetic_all`, ``n`` the robot's joints) in canonical form, in
+    the signature's order, ``table_size`` resolved; OptionError naming the option and its accepted range."""
     count = None if count is None else check_int("count", count, 1)
     timeout = None if timeout is None else check_positive("timeout (s; or None)", timeout)
     max_starts = None if max_starts is None else check_int("max_starts", max_starts, 1)
     table_size = default_table_size(n) if table_size is None else check_int("table_size", table_size, 0)
     return (count, timeout, max_starts, check_int("batch", batch, 1), check_int("patience", patience, 1),
             check_int("min_hits", min_hits, 1), check_positive("class_radius", class_radius, unit="rad"),
-            check_int("pool", pool, 1), table_size, check_int("iterations", iterations, 1))
+            check_int("pool", pool, 1), table_size, check_int("iterations", iterations, 1),
+            check_choice("engine", engine, ENGINES))
 
 
 class _Starts:
@@ -153,7 +156,8 @@ class _Starts:
 
 
 @register("memetic-all", "Every distinct IK solution: batched Levenberg-Marquardt from q0 and the seed table "
-          "(nearest first), clustered modulo 2 pi; count spread solutions on redundant arms", multi_solution=True)
+          "(nearest first), clustered modulo 2 pi; count spread solutions on redundant arms", multi_solution=True,
+          check=_check_options)
 def memetic_all(
     problem: IKProblem,
     rng: np.random.Generator,
@@ -202,9 +206,10 @@ def memetic_all(
     """
     t_setup = time.perf_counter()
     robot = problem.robot
-    count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size, iterations = \
-        _check_options(count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size,
-                       iterations, robot.n)
+    count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size, iterations, engine = \
+        _check_options(count=count, timeout=timeout, max_starts=max_starts, batch=batch, patience=patience,
+                       min_hits=min_hits, class_radius=class_radius, pool=pool, table_size=table_size,
+                       iterations=iterations, engine=engine, n=robot.n)
     lo, hi, target = problem.lower, problem.upper, problem.target
     redundant = robot.n > task_dimension(target)
     wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
@@ -293,9 +298,8 @@ def memetic_all(
     else:
         q = best[1] if best[1] is not None else np.minimum(np.maximum(reference, lo), hi)
         pos, rot, cost = problem.assess(q)
-        message = (f"no solution after {started} LM start(s) ({stop}); best {errors_text(pos, rot)} exceeds the "
-                   f"tolerance ({problem.tolerance:g} m, {problem.rotation_tolerance:g} rad): the target is out of "
-                   "reach (or reachable only where no start led)")
+        message = (f"no solution after {started} LM start(s) ({stop}); {shortfall_text(problem, pos, rot)}: the "
+                   "target is out of reach (or reachable only where no start led)")
         if collided:
             message = (f"all {collided} solution(s) found after {started} LM start(s) are in collision; "
                        f"the nearest to q0 is returned")

@@ -45,9 +45,9 @@ from ...problem import IKProblem
 from ...result import Result
 from .. import register
 from ..collision_verdict import pairs_text
-from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
-from ..lm.polish import errors_text
-from ..options import check_int, check_positive
+from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from ..lm.polish import shortfall_text
+from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
 from .seed_table import DEFAULT_TABLE_SEEDS, SeedTable, default_table_size, seed_table
@@ -80,14 +80,26 @@ def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine
 
 
 # ---------------------------------------------------------------------- option checks
-def _check_timeout(timeout) -> float | None:
-    return None if timeout is None else check_positive("timeout (s; or None)", timeout)
-
-
-def _check_restarts(max_restarts) -> int | None:
-    if max_restarts is None:
-        return None
-    return check_int("max_restarts", max_restarts, 0)
+def check_options(*, timeout, max_restarts, population, generations, polish_count, table_size, table_seeds,
+                  table_offset, batch, iterations, engine, n: int) -> tuple:
+    """memetic's options (every keyword of :func:`memetic`, ``n`` the robot's joints) in canonical form, in the
+    signature's order, ``table_size`` resolved (None: :func:`default_table_size`); OptionError naming the option
+    and its accepted range otherwise. :func:`memetic` calls it first, and the entry points solving many targets
+    call it (through the registry) before any work."""
+    timeout = None if timeout is None else check_positive("timeout (s; or None)", timeout)
+    max_restarts = None if max_restarts is None else check_int("max_restarts", max_restarts, 0)
+    if timeout is None and max_restarts is None:
+        raise OptionError("memetic needs a finite budget: give timeout (s) or max_restarts (or both)")
+    population = check_int("population", population, 4)
+    generations = check_int("generations", generations, 0)
+    polish_count = check_int("polish_count", polish_count, 1)
+    if polish_count > population:
+        raise OptionError(f"polish_count ({polish_count}) cannot exceed population ({population})")
+    table_size = default_table_size(n) if table_size is None else check_int("table_size", table_size, 0)
+    return (timeout, max_restarts, population, generations, polish_count, table_size,
+            check_int("table_seeds", table_seeds, 0), check_int("table_offset", table_offset, 0),
+            check_int("batch", batch, 1), check_int("iterations", iterations, 1),
+            check_choice("engine", engine, ENGINES))
 
 
 # ---------------------------------------------------------------------- the solver
@@ -160,7 +172,7 @@ class _Search:
 
 
 @register("memetic", "Memetic IK: Levenberg-Marquardt on the SE(3) error from q0 and a seed table, then DE "
-          "populations polished by LM until the tolerance or the time budget (default 5 ms)")
+          "populations polished by LM until the tolerance or the time budget (default 5 ms)", check=check_options)
 def memetic(
     problem: IKProblem,
     rng: np.random.Generator,
@@ -213,22 +225,12 @@ def memetic(
         target gives the best approximation met, ``success=False`` and a message.
     """
     t_setup = time.perf_counter()
-    timeout = _check_timeout(timeout)
-    max_restarts = _check_restarts(max_restarts)
-    if timeout is None and max_restarts is None:
-        raise OptionError("memetic needs a finite budget: give timeout (s) or max_restarts (or both)")
-    population = check_int("population", population, 4)
-    generations = check_int("generations", generations, 0)
-    polish_count = check_int("polish_count", polish_count, 1)
-    if polish_count > population:
-        raise OptionError(f"polish_count ({polish_count}) cannot exceed population ({population})")
     robot = problem.robot
-    table_size = default_table_size(robot.n) if table_size is None else check_int("table_size",
-                                                                                           table_size, 0)
-    table_seeds = check_int("table_seeds", table_seeds, 0)
-    table_offset = check_int("table_offset", table_offset, 0)
-    batch = check_int("batch", batch, 1)
-    iterations = check_int("iterations", iterations, 1)
+    (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
+     iterations, engine) = check_options(
+        timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
+        polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
+        batch=batch, iterations=iterations, engine=engine, n=robot.n)
 
     # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
     # table of this box with its nearness features (cached per robot and box).
@@ -310,8 +312,7 @@ def memetic(
     else:
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
-        best = (f"best {errors_text(pos, rot)} exceeds the tolerance ({problem.tolerance:g} m, "
-                f"{problem.rotation_tolerance:g} rad)" if not within else "no collision-free answer met")
+        best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"
         message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
     if search.rejected and not success:
         message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
