@@ -74,3 +74,20 @@ def test_view_no_block_prints_the_written_file(tmp_path, capsys):
     assert out.startswith(f"wrote {html}") and "stops when evoik exits" in out and html.is_file()
     assert main(["view", "planar2r", "--no-block"]) == 2  # nothing would remain to look at
     assert "--no-block without --html" in capsys.readouterr().err
+
+
+def test_prismatic_joint_values_are_metres_not_degrees(capsys):
+    """vehicle_arm's first two joints slide (m): --q gives them in m, only the revolute joints in degrees, and the
+    solve output shows them the same way (q_deg keeps metres for prismatic joints)."""
+    robot = load_robot("vehicle_arm")
+    assert list(robot.revolute[:2]) == [False, False] and robot.revolute[2:].all()
+    typed = [0.3, -0.2, 30.0, -45.0, 60.0]
+    q = np.array([0.3, -0.2, *np.radians([30.0, -45.0, 60.0])])
+    assert main(["fk", "vehicle_arm", "--q", *map(str, typed), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert np.allclose(info["position_m"], robot.fk(q).translation)
+    x, y = robot.fk(q).translation[:2]
+    assert main(["solve", "vehicle_arm", "--xyz", str(x), str(y), "0", "--q0", *map(str, typed), "--json"]) in (0, 1)
+    out = json.loads(capsys.readouterr().out)
+    assert np.allclose(out["q_deg"][:2], out["q_rad"][:2])
+    assert np.allclose(out["q_deg"][2:], np.degrees(out["q_rad"][2:]))

@@ -1,6 +1,7 @@
 """The ``evoik`` command line: robots, fk, solve, reach, reproduce, view.
 
-Degrees (and metres) at the command line by default; ``--rad`` switches joint values to radians.
+Degrees (and metres) at the command line by default: revolute joint values in degrees (``--rad`` switches them to
+radians), prismatic joint values and positions in metres; ``q_deg`` in JSON output follows the same rule.
 Each sub-command is one ``_cmd_*`` function registered in :func:`build_parser`.
 """
 
@@ -38,9 +39,21 @@ def _load(args: argparse.Namespace):
     return load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None)
 
 
-def _joint_values(values: list[float], rad: bool) -> np.ndarray:
+def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
+    """Joint values typed at the command line in SI: revolute joints in degrees (radians with ``--rad``),
+    prismatic joints in m either way. A list of the wrong length is converted whole (the library names it)."""
     q = np.asarray(values, dtype=float)
-    return q if rad else np.radians(q)
+    if rad:
+        return q
+    if q.shape == (robot.n,):
+        return np.where(robot.revolute, np.radians(q), q)
+    return np.radians(q)
+
+
+def _shown(robot, q: np.ndarray, rad: bool) -> np.ndarray:
+    """Joint values (n,) in SI as the command line shows them: revolute in degrees unless ``--rad``, prismatic in m."""
+    q = np.asarray(q, dtype=float)
+    return q if rad else np.where(robot.revolute, np.degrees(q), q)
 
 
 def _joint_flag(robot, values: list[float], rad: bool, flag: str) -> np.ndarray:
@@ -48,7 +61,7 @@ def _joint_flag(robot, values: list[float], rad: bool, flag: str) -> np.ndarray:
     from .errors import ConfigurationError
 
     try:
-        return robot.check_q(_joint_values(values, rad))
+        return robot.check_q(_joint_values(robot, values, rad))
     except ConfigurationError as exc:
         raise ConfigurationError(f"{flag}: {exc}") from None
 
@@ -104,11 +117,14 @@ def _add_problem_args(p: argparse.ArgumentParser, q0: bool = True) -> None:
                    help="m per rad of orientation error in the pose cost (default 1)")
     p.add_argument("--pose-metric", help="how the pose cost combines the errors: sum (default) or euclidean")
     if q0:
-        p.add_argument("--q0", type=float, nargs="+", help="initial configuration (degrees, or radians with --rad)")
+        p.add_argument("--q0", type=float, nargs="+", help="initial configuration (revolute joints in degrees, or "
+                       "radians with --rad; prismatic joints in m)")
         p.add_argument("--lower", type=float, nargs="+", metavar="Q",
-                       help="lower joint bounds of the search (degrees, or radians with --rad; default the robot's)")
+                       help="lower joint bounds of the search (revolute joints in degrees, or radians with --rad; "
+                       "prismatic in m; default the robot's)")
         p.add_argument("--upper", type=float, nargs="+", metavar="Q",
-                       help="upper joint bounds of the search (degrees, or radians with --rad; default the robot's)")
+                       help="upper joint bounds of the search (revolute joints in degrees, or radians with --rad; "
+                       "prismatic in m; default the robot's)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
                    "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
@@ -127,11 +143,11 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
         if value is not None and value is not False:
             given[name] = (None if value == _NO_LIMIT else value, CALL_FLAGS[name])
     if getattr(args, "q0", None) is not None:
-        given["q0"] = (_joint_values(args.q0, args.rad), "--q0")  # its length is checked by the library
+        given["q0"] = (_joint_values(robot, args.q0, args.rad), "--q0")  # its length is checked by the library
     lower, upper = getattr(args, "lower", None), getattr(args, "upper", None)
     if lower is not None or upper is not None:
-        bounds = (robot.lower if lower is None else _joint_values(lower, args.rad),
-                  robot.upper if upper is None else _joint_values(upper, args.rad))
+        bounds = (robot.lower if lower is None else _joint_values(robot, lower, args.rad),
+                  robot.upper if upper is None else _joint_values(robot, upper, args.rad))
         given["bounds"] = (bounds, CALL_FLAGS["bounds"])
     for item in getattr(args, "option", []):
         name, sep, text = item.partition("=")
@@ -233,7 +249,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         return 0
     print(f"{robot.name}: {robot.n} joints, base {robot.base!r} -> tip {robot.tip!r}")
     unit = "rad" if args.rad else "deg"
-    shown = q if args.rad else np.degrees(q)
+    shown = _shown(robot, q, args.rad)
     print(f"q ({unit}):        " + " ".join(f"{v:.4f}" for v in shown))
     print("position (m):   " + " ".join(f"{v:.6f}" for v in info["position_m"]))
     print("rpy (deg):      " + " ".join(f"{np.degrees(v):.4f}" for v in info["rpy_rad"]))
@@ -272,7 +288,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         "message": res.message,
         "joint_names": list(robot.joint_names),
         "q_rad": [float(v) for v in res.q],
-        "q_deg": [float(v) for v in np.degrees(res.q)],
+        "q_deg": [float(v) for v in _shown(robot, res.q, False)],
         "target_position_m": [float(v) for v in position],
         "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
         "reached_position_m": [float(v) for v in reached.translation],
@@ -359,7 +375,7 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
 
     sols = solve_all(robot, target, method=method, seed=args.seed, **options)
     res = sols.result
-    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in np.degrees(s.q)],
+    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
              "position_error_m": s.position_error, "orientation_error_rad": s.orientation_error} for s in sols]
     scene = options.get("scene")
     if scene is not None:  # solve_all keeps the collision-free solutions only
@@ -381,7 +397,7 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
         if sols:
             print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
         for k, s in enumerate(sols):
-            shown = s.q if args.rad else np.degrees(s.q)
+            shown = _shown(robot, s.q, args.rad)
             rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
             free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
             print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in shown) + f"  (position error {s.position_error:.1e} m"
@@ -394,7 +410,7 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
 
 def _print_solution(robot, res, info: dict, rad: bool) -> None:
     unit = "rad" if rad else "deg"
-    shown = res.q if rad else np.degrees(res.q)
+    shown = _shown(robot, res.q, rad)
     print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
           f"{'reached' if res.success else 'NOT reached'} ({res.message})")
     print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in shown))
@@ -492,7 +508,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("fk", help="forward kinematics: tip pose at a joint vector")
     _add_robot_args(p)
-    p.add_argument("--q", type=float, nargs="+", help="joint values (degrees, or radians with --rad)")
+    p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
+                   "--rad; prismatic joints in m)")
     p.add_argument("--rad", action="store_true", help="joint values in radians")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_fk)
@@ -528,7 +545,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
     _add_robot_args(p)
-    p.add_argument("--q", type=float, nargs="+", help="joint values (degrees, or radians with --rad); default 0")
+    p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
+                   "--rad; prismatic joints in m); default 0")
     p.add_argument("--rad", action="store_true", help="joint values in radians")
     p.add_argument("--html", metavar="PATH", help="also write the scene as a self-contained HTML file")
     p.add_argument("--no-block", action="store_true",
