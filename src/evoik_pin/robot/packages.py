@@ -156,6 +156,6 @@ class PackageResolver:
     def not_found(self, pkg: str, named_in: str, how: str) -> str:
         """Message of a package that cannot be found: the package, the file naming it (``how``: as what) and
         the folders searched, with what to do."""
-        return (f"package {pkg!r} not found (used as {how}), named in {named_in}; searched: {self.searched()}. Give the "
-                f"folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on the command line) or "
-                "ROS_PACKAGE_PATH")
+        return (f"package {pkg!r} not found (used as {how}), named in {named_in}; searched: {self.searched()}. "
+                f"Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on the command line) "
+                "or ROS_PACKAGE_PATH")
