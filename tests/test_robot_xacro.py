@@ -90,7 +90,7 @@ def test_missing_package_is_named(tmp_path, capfd):
     assert capfd.readouterr().err == ""
 
 
-def test_find_resolves_a_package_above_the_file(tmp_path):
+def test_find_resolves_a_package_above_the_file(tmp_path, tmp_path_factory):
     pkg = tmp_path / "my_arm_description"
     (pkg / "urdf" / "parts").mkdir(parents=True)
     (pkg / "package.xml").write_text("<package><name>my_arm_description</name></package>")
@@ -98,8 +98,9 @@ def test_find_resolves_a_package_above_the_file(tmp_path):
     (pkg / "urdf" / "arm.urdf.xacro").write_text(
         ARM.replace('filename="parts/parts.xacro"', 'filename="$(find my_arm_description)/urdf/parts/parts.xacro"'))
     assert load_robot(pkg / "urdf" / "arm.urdf.xacro").joint_names == ["j1", "j2"]
-    # the package finder is restored: another file does not see my_arm_description
-    other = tmp_path / "other.xacro"
+    # the package finder is restored: another file (in another tree: a folder named my_arm_description beside
+    # one of the file's folders would be found by its name) does not see my_arm_description
+    other = tmp_path_factory.mktemp("elsewhere") / "other.xacro"
     other.write_text(f'<robot name="o" {XACRO_NS}><xacro:include filename="$(find my_arm_description)/x.xacro"/>'
                      '</robot>')
     with pytest.raises(RobotLoadError, match="'my_arm_description' not found"):

@@ -27,6 +27,9 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--base", help="base frame (default: the URDF root)")
     p.add_argument("--xacro-arg", action="append", default=[], metavar="NAME=VALUE",
                    help="a <xacro:arg> value of a xacro file (repeatable); NAME:=VALUE also works")
+    p.add_argument("--package-dir", action="append", default=[], metavar="DIR",
+                   help="a folder holding the ROS packages a robot file names ($(find pkg), package://pkg/...), "
+                        "searched before ROS_PACKAGE_PATH and the file's own tree (repeatable)")
 
 
 def _load(args: argparse.Namespace):
@@ -36,7 +39,8 @@ def _load(args: argparse.Namespace):
         if not sep or not name:
             raise OptionError(f"--xacro-arg needs NAME=VALUE, got {item!r}")
         xacro_args[name] = value
-    return load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None)
+    return load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None,
+                      package_dirs=args.package_dir or None)
 
 
 def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:

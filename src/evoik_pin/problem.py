@@ -31,8 +31,8 @@ from .solvers.options import check_positive
 if TYPE_CHECKING:
     from .scene import Scene
 
-__all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "Evaluation", "IKProblem", "Target",
-           "check_pro_delta", "coerce_scene"]
+__all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
+           "Target", "check_pro_delta", "coerce_scene", "target_box"]
 
 #: Farthest target position accepted (m from the base origin): beyond any arm's reach by orders of magnitude, and
 #: low enough that squared distances (1e12 m^2) stay far from float overflow in every solver and feature space.
@@ -43,6 +43,10 @@ MAX_TARGET_NORM = 1e6
 COLLISION_PENALTY = 10.0
 #: Half-width (rad) of paper 002's "Pro" search box around the previous trajectory solution.
 DEFAULT_PRO_DELTA = np.pi / 100
+#: A joint whose bound reaches this far (``|lower|`` or ``|upper|`` >= 1000 m or rad) is near-unbounded: URDFs give
+#: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
+#: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
+NEAR_UNBOUNDED = 1e3
 
 
 def _beyond_text(position: np.ndarray) -> str:
@@ -290,7 +294,9 @@ class IKProblem:
         target: the :class:`Target` (coerced from the accepted target forms).
         objective: vectorized cost; default: position error (m) plus, for pose targets,
             ``orientation_weight`` x rotation angle (rad).
-        lower, upper: (n,) search box (rad or m); default the robot's bounds.
+        lower, upper: (n,) search box (rad or m); default the robot's bounds, except that near-unbounded joints
+            (:data:`NEAR_UNBOUNDED`) are searched within a box around the target (:func:`target_box`). Bounds
+            given are used as given.
         tolerance: success threshold on the position error (m).
         rotation_tolerance: success threshold on the orientation error (rad); defaults to ``tolerance``.
         q0: optional (n,) initial / previous configuration (seeds the population; used by displacement
@@ -329,7 +335,7 @@ class IKProblem:
         for name in ("tolerance", "orientation_weight", "rotation_tolerance"):
             _check_nonnegative(name, getattr(self, name))
         if self.lower is None and self.upper is None:  # the robot's own bounds, checked when they were set
-            self.lower, self.upper = self.robot.lower.copy(), self.robot.upper.copy()
+            self.lower, self.upper = target_box(self.robot, self.target, self.robot.lower, self.robot.upper)
         else:
             lower = self.robot.lower if self.lower is None else np.asarray(self.lower, dtype=float)
             upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
@@ -429,3 +435,77 @@ class IKProblem:
         lower = np.clip(np.maximum(self.lower, q_prev - delta), self.lower, self.upper)
         upper = np.clip(np.minimum(self.upper, q_prev + delta), self.lower, self.upper)
         return replace(self, lower=lower, upper=upper, q0=np.clip(q_prev, lower, upper), evaluations=0)
+
+
+def target_box(robot: Robot, target: Target, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The search box (lower, upper), each (n,) in rad or m, of ``robot`` for ``target``: [lower, upper] (copies),
+    with each near-unbounded joint (a bound beyond :data:`NEAR_UNBOUNDED`) narrowed to where answers lie.
+
+    * a revolute joint: one turn, [c - pi, c + pi] (c = 0 clipped into [lower + pi, upper - pi]): every angle
+      modulo 2 pi, so nothing is lost;
+    * a prismatic joint whose axis no revolute joint before it turns (a mobile base's virtual x, y, z): the
+      values that bring the tip to the target, ``pinv(A) (t - p_ref)`` (A: the axes of these joints (3, k) in the
+      base frame, p_ref: the tip position with them at 0 and the other joints at 0 clipped into their bounds),
+      +- the reach of the rest of the chain (twice the sum of its link offsets and prismatic travel, R, over A's
+      smallest singular value), plus a margin of max(0.1 m, 0.1 R);
+    * a prismatic joint a revolute joint turns: +- (|t| + R + margin), t the target position; when a
+      near-unbounded revolute joint turns it (a base's forward motion after its yaw), only the values pointing
+      it at the target, [|t| - R - margin, |t| + R + margin] (a far target is then not searched with the base
+      facing away from it; give ``bounds=`` to search there).
+
+    The result lies inside [lower, upper], so an answer inside it keeps the robot's nominal limits. Joints
+    driving mimic joints keep [lower, upper].
+    """
+    lower, upper = np.array(lower, dtype=float), np.array(upper, dtype=float)
+    far = (np.abs(lower) >= NEAR_UNBOUNDED) | (np.abs(upper) >= NEAR_UNBOUNDED)
+    if not far.any():
+        return lower, upper
+    F_R, F_p, revolute = robot.chain_constants()
+    index, scale, offset = robot.chain_coupling()
+    _, _, plo, phi = robot.chain_joints()
+    single = np.bincount(index, minlength=robot.n) == 1  # the entry moves one physical joint of the chain
+    phys_far = far[index] & single[index]
+    travel = np.where(~revolute & ~phys_far, np.maximum(np.abs(plo), np.abs(phi)), 0.0)
+    reach = float(np.linalg.norm(F_p, axis=1).sum() + travel.sum())
+    margin = max(0.1, 0.1 * reach)
+    t = target.se3().translation
+    box_lo, box_hi = lower.copy(), upper.copy()
+    fixed, axes, turned, full_turn = [], [], [], {}
+    R = F_R[0].copy()
+    turning = spun = False
+    for k in range(len(revolute)):
+        if phys_far[k] and not revolute[k]:
+            (turned if turning else fixed).append(k)
+            full_turn[k] = spun
+            if not turning:
+                axes.append(R[:, 2].copy())
+        turning = turning or bool(revolute[k])
+        spun = spun or bool(revolute[k] and phys_far[k])
+        R = R @ F_R[k + 1]  # a prismatic joint's Z(x) does not turn; after a revolute one R is no longer used
+    phys_lo, phys_hi = {}, {}
+    for k in np.nonzero(phys_far & revolute)[0]:
+        j = index[k]
+        c = float(np.clip(0.0, lower[j] + np.pi, upper[j] - np.pi))
+        phys_lo[k], phys_hi[k] = scale[k] * (c - np.pi) + offset[k], scale[k] * (c + np.pi) + offset[k]
+    h_turned = float(np.linalg.norm(t)) + reach + margin
+    for k in turned:
+        # The LM's steps are at most 1 m, so a symmetric +-|t| box leaves seeds far out of reach of a far target:
+        # after a full-turn joint, search the values that put the joint's far end within reach of the target with
+        # that turn pointing it there (both signs once the target is within reach of the base itself).
+        near = h_turned - 2.0 * (reach + margin) if full_turn[k] else -h_turned
+        phys_lo[k], phys_hi[k] = max(-h_turned, near), h_turned
+    if fixed:
+        A = np.array(axes).T  # (3, k)
+        q_ref = np.where(far, 0.0, np.clip(0.0, lower, upper))
+        p_ref = robot.fk(q_ref).translation
+        sigma = max(float(np.linalg.svd(A, compute_uv=False).min()), 1e-3)
+        centre = np.linalg.pinv(A) @ (t - p_ref)
+        h = (2.0 * reach + len(turned) * h_turned) / sigma + margin
+        for k, c in zip(fixed, centre, strict=True):
+            phys_lo[k], phys_hi[k] = c - h, c + h
+    for k, a in phys_lo.items():  # back from the physical joint's value to q's entry
+        j = index[k]
+        b = sorted(((a - offset[k]) / scale[k], (phys_hi[k] - offset[k]) / scale[k]))
+        box_lo[j] = min(max(b[0], lower[j]), upper[j])
+        box_hi[j] = max(min(b[1], upper[j]), box_lo[j])
+    return box_lo, box_hi

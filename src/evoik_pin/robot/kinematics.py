@@ -23,6 +23,7 @@ Poses are those of the tip frame expressed in the base frame (the world frame wh
 
 from __future__ import annotations
 
+import re
 from functools import cached_property
 from pathlib import Path
 
@@ -37,6 +38,8 @@ __all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "Robot"]
 
 #: Search interval (m) used for prismatic joints whose URDF gives no finite limits.
 DEFAULT_PRISMATIC_RANGE = 1.0
+#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
+_MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
 #: Limits at or beyond this magnitude are treated as "no limit" (URDF readers use 1e308-style sentinels).
 _UNBOUNDED = 1e10
 #: Longest chain (physical joints) a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory
@@ -82,16 +85,21 @@ class Robot:
         urdf_xml: str | None = None,
         package_dirs: list[str] | None = None,
         mimic: dict | None = None,
+        packages: dict[str, str] | None = None,
+        missing_packages: dict[str, str] | None = None,
     ) -> None:
         """``mimic``: ``{joint: (followed joint, multiplier, offset)}`` (objects with ``joint``, ``multiplier``,
         ``offset`` attributes also do), the URDF's mimic couplings resolved to joints no mimic drives
         (:func:`~evoik_pin.robot.urdf_checks.check_urdf` returns them); entries naming no 1-DOF joint of
-        ``full_model`` are ignored."""
+        ``full_model`` are ignored. ``packages``: ``{pkg: folder}`` that ``package://pkg/...`` mesh URIs resolve
+        to (before ``package_dirs``); ``missing_packages``: ``{pkg: error message}`` of those nothing found."""
         self.full_model = full_model
         self.name = name
         self.urdf_path = urdf_path
         self.urdf_xml = urdf_xml
         self.package_dirs = list(package_dirs or [])
+        self.packages = dict(packages or {})
+        self.missing_packages = dict(missing_packages or {})
         self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
         frames = body_frame_names(full_model)
         couplings = _couplings(full_model, mimic)
@@ -660,11 +668,25 @@ class Robot:
         """The URDF's geometry of one kind, reduced onto the chain's model like the model itself."""
         if self.urdf_xml is None:  # pragma: no cover
             raise RobotLoadError("this robot has no URDF text to read geometry from")
-        geom = pin.buildGeomFromUrdfString(self.full_model, self.urdf_xml, kind, package_dirs=self.package_dirs)
+        xml = _MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml
+        try:
+            geom = pin.buildGeomFromUrdfString(self.full_model, xml, kind, package_dirs=self.package_dirs)
+        except (ValueError, RuntimeError) as exc:  # a mesh Pinocchio could not find or read
+            said = str(exc).strip()
+            why = [m for pkg, m in self.missing_packages.items() if f"package://{pkg}/" in said]
+            raise RobotLoadError(f"{self.name}: {why[0] if why else said}") from None
         if self._locked:
             _, geoms = reduced_model(self.full_model, self._locked, self._q_ref_full, (geom,))
             geom = geoms[0]
         return geom
+
+    def _mesh_file(self, m: re.Match) -> str:
+        """The absolute file of one ``package://pkg/rel`` URI whose package was found and holds ``rel``; the URI
+        unchanged otherwise (Pinocchio then tries ``package_dirs``)."""
+        folder = self.packages.get(m.group(1))
+        if folder is not None and (Path(folder) / m.group(2)).is_file():
+            return (Path(folder) / m.group(2)).as_posix()
+        return m.group(0)
 
     def __repr__(self) -> str:
         return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, tip={self.tip!r})"

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import os
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +24,7 @@ import pinocchio as pin
 
 from ..errors import FrameError, RobotLoadError, RobotNotFoundError
 from .kinematics import Robot
+from .packages import PackageResolver, check_package_dirs, package_uris
 from .urdf_checks import UrdfSummary, check_urdf
 from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
 
@@ -112,6 +114,7 @@ def load_robot(
     bounds: tuple[np.ndarray, np.ndarray] | None = None,
     xacro_args: dict | None = None,
     srdf: str | os.PathLike | None = None,
+    package_dirs: str | os.PathLike | list | None = None,
 ) -> Robot:
     """Load one serial chain of a URDF.
 
@@ -130,6 +133,13 @@ def load_robot(
             xacro's command line; only for xacro sources.
         srdf: an SRDF file whose ``<disable_collisions>`` pairs collision scenes skip
             (:class:`~evoik_pin.scene.Scene`); the named example-robot-data arms find their own.
+        package_dirs: folders (one, or a list) holding the ROS packages the file names (``$(find pkg)`` in
+            xacro, ``package://pkg/...`` mesh URIs): ``pkg`` is ``DIR/pkg``, ``DIR`` itself, or a package.xml
+            naming it below ``DIR``. Searched first, then ``ROS_PACKAGE_PATH``, then the file's own tree (a
+            folder named ``pkg`` above the file or inside one of the folders above it), then a package.xml
+            naming ``pkg`` above the file (:mod:`evoik_pin.robot.packages`). A ``$(find pkg)`` nothing finds is a
+            RobotLoadError naming the package, the file naming it and the folders searched; a mesh package
+            nothing finds only matters to meshes (viewer, collision scenes), which then raise that error.
 
     Returns:
         A :class:`Robot`. Joints outside the base->tip chain are locked at their neutral value
@@ -138,17 +148,23 @@ def load_robot(
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
+    user_dirs = check_package_dirs(package_dirs)
+    resolver = PackageResolver(path, user_dirs)
     if (path is not None and is_xacro_path(path)) or is_xacro_text(xml):
-        xml = expand_xacro(xml, where, path, xacro_args)
+        source_text = xml
+        xml = expand_xacro(xml, where, path, xacro_args, resolver)
+        _check_instantiated(source_text, xml, where)
     elif xacro_args:
         raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
                              "elements or ${...} / $(...) expressions)")
     if tip is None and named:
         tip = _default_tip(name)
     model, summary = _parse_urdf(xml, path)
+    mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
     try:
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
-                      package_dirs=_package_dirs(path), mimic=summary.mimic)
+                      package_dirs=_package_dirs(path, resolver), mimic=summary.mimic,
+                      packages=mesh_packages, missing_packages=missing_packages)
     except (RobotLoadError, FrameError) as exc:  # say which file the frames and joints were looked for in
         raise type(exc)(f"{where}: {exc}") from None
     if bounds is not None:
@@ -180,15 +196,42 @@ def _default_tip(name: str) -> str | None:
     return None
 
 
-def _package_dirs(path: Path | None) -> list[str]:
-    """Directories ``package://`` mesh URIs resolve against: the URDF's folder and its parent (when loaded
-    from a file), then example-robot-data's."""
+def _package_dirs(path: Path | None, resolver: PackageResolver) -> list[str]:
+    """Directories Pinocchio tries ``package://pkg/...`` mesh URIs in (as ``DIR/pkg/...``) when
+    :func:`_mesh_packages` did not find ``pkg``: the given folders, ``ROS_PACKAGE_PATH``'s, the URDF's folder
+    and its parent (when loaded from a file), then example-robot-data's."""
     erd = example_robot_data_dir()
     # example-robot-data URDFs name meshes both package://<pkg>/... and package://example-robot-data/robots/...
     package_dirs = [str(erd), str(erd.parents[1])]
     if path is not None:
         package_dirs = [str(path.parent), str(path.parent.parent), *package_dirs]
-    return package_dirs
+    return [*(str(d) for d in (*resolver.user_dirs, *resolver.ros_dirs)), *package_dirs]
+
+
+def _mesh_packages(xml: str, resolver: PackageResolver, where: str) -> tuple[dict[str, str], dict[str, str]]:
+    """(``{pkg: folder}`` of the ``package://pkg/...`` URIs of the URDF that were found, ``{pkg: error
+    message}`` of those that were not: raised only when meshes are loaded, as IK needs none)."""
+    found: dict[str, str] = {}
+    missing: dict[str, str] = {}
+    for pkg in package_uris(xml):
+        folder = resolver.find(pkg)
+        if folder is not None:
+            found[pkg] = str(folder)
+        else:
+            missing[pkg] = resolver.not_found(pkg, where, f"package://{pkg}/... in a mesh URI")
+    return found, missing
+
+
+def _check_instantiated(source_text: str, urdf: str, where: str) -> None:
+    """A RobotLoadError for a xacro file that only defines macros (it has a robot name, but no link comes
+    out): name the macros, so that the user loads the file calling them."""
+    if re.search(r"<link\b", urdf):
+        return
+    macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)", source_text)
+    if macros:
+        raise RobotLoadError(
+            f"{where} defines the xacro macro(s) {', '.join(macros)} but calls none, so it has no <link>: load the "
+            f"xacro file that includes it and calls them (e.g. <xacro:{macros[0]} .../>)")
 
 
 def _looks_like_xml(text: str) -> bool:

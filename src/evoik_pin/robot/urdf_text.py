@@ -4,8 +4,9 @@
   ``encoding`` of the ``<?xml ...?>`` declaration, else UTF-8), with a :class:`~evoik_pin.errors.RobotLoadError`
   naming the file for empty, binary or undecodable input;
 * :func:`expand_xacro`: a ``.xacro`` file (or xacro text) expanded to URDF with ``xacrodoc`` (no ROS needed),
-  ``$(arg ...)`` values from ``xacro_args``, ``$(find pkg)`` resolved by walking up from the file to a
-  ``package.xml`` and through ``ROS_PACKAGE_PATH`` / ``AMENT_PREFIX_PATH``;
+  ``$(arg ...)`` values from ``xacro_args``, ``$(find pkg)`` resolved by a
+  :class:`~evoik_pin.robot.packages.PackageResolver` (given folders, ``ROS_PACKAGE_PATH``, the file's own tree,
+  a ``package.xml``), then by ROS's own look-up (``rospkg`` / ``ament``);
 * :func:`captured_stderr`: file descriptor 2 redirected while urdfdom (C++) and xacro parse, so their messages
   end up in our errors instead of on the user's terminal.
 """
@@ -24,6 +25,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import RobotLoadError
+from .packages import PackageResolver
 
 __all__ = ["captured_stderr", "decode_xml", "expand_xacro", "is_xacro_path", "is_xacro_text"]
 
@@ -101,34 +103,48 @@ def is_xacro_text(text: str) -> bool:
     return _XACRO.search(_COMMENT.sub("", text)) is not None  # comments often keep xacro source around
 
 
-def expand_xacro(text: str, where: str, path: Path | None, args: dict | None) -> str:
+def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
+                 packages: PackageResolver | None = None) -> str:
     """URDF text of the xacro document ``text`` (read from ``path``, or None for a string).
 
     ``args`` sets ``<xacro:arg>`` values (``name: value``, values turned into strings). Relative
     ``<xacro:include>`` files resolve against the file's folder (the working directory for a string);
-    ``$(find pkg)`` against packages found by walking up from the file to a ``package.xml``, then
-    ``ROS_PACKAGE_PATH`` / ``AMENT_PREFIX_PATH``. Any xacro failure (a missing package, arg, include or
-    property, bad syntax) is a :class:`RobotLoadError` naming ``where`` and what failed.
+    ``$(find pkg)`` through ``packages`` (default: a :class:`PackageResolver` of ``path`` alone), then ROS's
+    own look-up. Any xacro failure (a missing package, arg, include, macro or property, bad syntax) is a
+    :class:`RobotLoadError` naming ``where`` and what failed; a missing package also names the file that
+    names it and the folders searched.
     """
     try:
         import xacro
-        from xacrodoc import XacroDoc, packages
+        from xacrodoc import XacroDoc
+        from xacrodoc import packages as xacro_packages
     except ImportError as exc:  # pragma: no cover - a dependency
         raise RobotLoadError(
             f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc ({exc})"
         ) from exc
     mappings = {str(k): str(v) for k, v in (args or {}).items()}
+    resolver = packages if packages is not None else PackageResolver(path)
+    missing: list[tuple[str, str]] = []  # (package, file naming it) of failed look-ups
+
+    def find(pkg: str) -> str:
+        found = resolver.find(pkg)
+        if found is None:
+            naming = xacro.filestack[-1] if xacro.filestack else None  # the file whose $(find ...) this is
+            missing.append((pkg, str(naming) if naming else where))
+            raise xacro_packages.PackageNotFoundError(pkg)
+        return found.as_posix()
+
     # xacro and xacrodoc keep module-level state: the stack of files being read (relative includes resolve
     # against its top) and the package finders and cache; each expansion sets them up and restores them.
-    finder = packages._finder
+    finder = xacro_packages._finder
     saved_finders, saved_cache = list(finder.finder_funcs), dict(finder.package_cache)
     failure: Exception | None = None
     with _STDERR_LOCK:
         with captured_stderr() as err:
             try:
                 xacro.init_stacks(str(path) if path is not None else None)
-                if path is not None:
-                    packages.walk_up_from(path.parent)
+                finder.package_cache.clear()  # this file's packages, not those of an earlier expansion
+                finder.finder_funcs.insert(0, (find, xacro_packages.PackageNotFoundError))
                 doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
                                            rootdir=path.parent if path is not None else None)
                 urdf = doc.dom.toxml()
@@ -140,18 +156,18 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None) ->
                 finder.package_cache.clear()
                 finder.package_cache.update(saved_cache)
     if failure is not None:
-        raise RobotLoadError(_xacro_message(failure, where, err[0])) from None
+        raise RobotLoadError(_xacro_message(failure, where, err[0], resolver, missing)) from None
     return urdf
 
 
-def _xacro_message(exc: Exception, where: str, err: str) -> str:
+def _xacro_message(exc: Exception, where: str, err: str, resolver: PackageResolver,
+                   missing: list[tuple[str, str]]) -> str:
     """What went wrong while expanding the xacro document at ``where``, for a RobotLoadError."""
     cause = getattr(exc, "exc", None) or exc
     if type(cause).__name__ == "PackageNotFoundError":
         pkg = cause.args[0] if cause.args else "?"
-        return (f"cannot expand xacro file {where}: package {pkg!r} not found (used as $(find {pkg})); a package "
-                "is found by walking up from the xacro file to a package.xml naming it, or on ROS_PACKAGE_PATH / "
-                "AMENT_PREFIX_PATH (set before evoik_pin first expands a xacro file)")
+        naming = next((f for p, f in reversed(missing) if p == pkg), where)
+        return f"cannot expand xacro file {where}: {resolver.not_found(pkg, naming, f'$(find {pkg})')}"
     text = str(exc).strip() or type(exc).__name__
     if cause is not exc and str(cause).strip() and str(cause).strip() not in text:
         text += f" ({str(cause).strip()})"

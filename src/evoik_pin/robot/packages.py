@@ -1,0 +1,161 @@
+"""Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS.
+
+Robot files copied out of a ROS workspace (the rtb-data wheel, a vendor's download) name packages that have no
+``package.xml`` on disk, or whose folder is named differently. :class:`PackageResolver` finds a package ``pkg``
+for one robot file the way Pinocchio's ``package_dirs`` and ROS do, first match wins:
+
+a. the folders the user gives (``load_robot(path, package_dirs=[...])``, ``--package-dir DIR``),
+b. the folders of ``ROS_PACKAGE_PATH`` (read at each load, not once per process),
+c. the file's own tree: a folder named ``pkg`` among the file's ancestor folders, or inside one of them (beside
+   the file or beside one of its ancestors), nearest first; no ``package.xml`` needed,
+d. a ``package.xml`` whose ``<name>`` is ``pkg`` in the file's folder or above it (ROS's rule, and xacrodoc's).
+
+In a folder ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself when it is named ``pkg``, or a folder up to
+:data:`CRAWL_DEPTH` levels below ``D`` whose ``package.xml`` names ``pkg`` (a ROS workspace's ``src/``).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable
+from pathlib import Path
+
+from ..errors import RobotLoadError, RobotNotFoundError
+
+__all__ = ["CRAWL_DEPTH", "PackageResolver", "check_package_dirs", "package_uris"]
+
+#: How deep below a given folder (a) or a ROS_PACKAGE_PATH entry (b) package.xml files are looked for.
+CRAWL_DEPTH = 3
+_URI = re.compile(r"package://([^/\"'<>\s]+)/")
+
+
+def check_package_dirs(package_dirs) -> list[Path]:
+    """``package_dirs`` (one folder, or a list of folders: str or path-like) as resolved paths; each must be an
+    existing folder. None gives []."""
+    if package_dirs is None:
+        return []
+    if isinstance(package_dirs, (str, os.PathLike)):
+        package_dirs = [package_dirs]
+    try:
+        items = list(package_dirs)
+    except TypeError:
+        raise RobotLoadError(f"package_dirs must be a folder or a list of folders (str or path), got "
+                             f"{type(package_dirs).__name__}") from None
+    out = []
+    for d in items:
+        if not isinstance(d, (str, os.PathLike)) or not os.fspath(d):
+            raise RobotLoadError(f"package_dirs entries must be folder paths (str or path), got {d!r}")
+        p = Path(os.fspath(d)).expanduser()
+        if not p.is_dir():
+            raise RobotNotFoundError(f"package folder {os.fspath(d)!r} (package_dirs) is not an existing folder")
+        out.append(p.resolve())
+    return out
+
+
+def ros_package_path() -> list[Path]:
+    """The existing folders of ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated), in order."""
+    entries = os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep)
+    return [Path(e).expanduser().resolve() for e in entries if e.strip() and Path(e).expanduser().is_dir()]
+
+
+def package_uris(xml: str) -> list[str]:
+    """The package names of the ``package://pkg/...`` URIs in URDF text, in order of first appearance."""
+    return list(dict.fromkeys(_URI.findall(xml)))
+
+
+def _package_name(folder: Path) -> str | None:
+    """The ``<name>`` of ``folder/package.xml``, or None (no file, unreadable, no name)."""
+    f = folder / "package.xml"
+    if not f.is_file():
+        return None
+    try:
+        name = ET.parse(f).getroot().findtext("name")
+    except (ET.ParseError, OSError):
+        return None
+    return name.strip() if name else None
+
+
+def _crawl(folder: Path, pkg: str, depth: int) -> Path | None:
+    """A folder at most ``depth`` levels below ``folder`` whose package.xml names ``pkg`` (sorted order)."""
+    if depth <= 0:
+        return None
+    try:
+        children = sorted(c for c in folder.iterdir() if c.is_dir() and not c.name.startswith("."))
+    except OSError:
+        return None
+    for c in children:
+        if _package_name(c) == pkg:
+            return c
+    for c in children:
+        if (c / "package.xml").is_file():
+            continue  # ROS does not look for packages inside a package
+        found = _crawl(c, pkg, depth - 1)
+        if found is not None:
+            return found
+    return None
+
+
+class PackageResolver:
+    """Finds the packages one robot file names (see the module docstring for the rules and their order).
+
+    Args:
+        path: the robot file (None for a URDF string: rules (c) and (d) then do not apply).
+        package_dirs: folders the user gives (already checked by :func:`check_package_dirs`).
+    """
+
+    def __init__(self, path: Path | None, package_dirs: Iterable[Path] = ()) -> None:
+        self.path = path
+        self.user_dirs = list(package_dirs)
+        self.ros_dirs = ros_package_path()
+        self.ancestors = list(path.parent.resolve().parents) if path is not None else []
+        if path is not None:
+            self.ancestors.insert(0, path.parent.resolve())
+        self._found: dict[str, Path | None] = {}
+
+    def find(self, pkg: str) -> Path | None:
+        """The folder of package ``pkg``, or None."""
+        if pkg not in self._found:
+            self._found[pkg] = self._search(pkg)
+        return self._found[pkg]
+
+    def _search(self, pkg: str) -> Path | None:
+        if not pkg or "/" in pkg or pkg in (".", ".."):
+            return None
+        for d in (*self.user_dirs, *self.ros_dirs):  # (a), (b)
+            if (d / pkg).is_dir():
+                return d / pkg
+            if d.name == pkg:
+                return d
+            crawled = _crawl(d, pkg, CRAWL_DEPTH)
+            if crawled is not None:
+                return crawled
+        for a in self.ancestors:  # (c): the file's own tree, nearest first
+            if a.name == pkg:
+                return a
+            if (a / pkg).is_dir():
+                return a / pkg
+        for a in self.ancestors:  # (d): a package.xml naming it
+            if _package_name(a) == pkg:
+                return a
+        return None
+
+    def searched(self) -> str:
+        """Where a package was looked for, for error messages."""
+        parts = []
+        if self.user_dirs:
+            parts.append(f"package_dirs {[str(d) for d in self.user_dirs]}")
+        parts.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs
+                     else "ROS_PACKAGE_PATH (not set)")
+        if self.ancestors:
+            parts.append(f"the folders above the file ({self.ancestors[0]} up to {self.ancestors[-1]}) and the "
+                         "folders inside them, by name or by a package.xml naming it")
+        return "; ".join(parts)
+
+    def not_found(self, pkg: str, named_in: str, how: str) -> str:
+        """Message of a package that cannot be found: the package, the file naming it (``how``: as what) and
+        the folders searched, with what to do."""
+        return (f"package {pkg!r} not found (used as {how}), named in {named_in}; searched: {self.searched()}. "
+                f"Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on the command line) "
+                "or ROS_PACKAGE_PATH")
