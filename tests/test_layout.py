@@ -116,3 +116,22 @@ def test_no_folder_holds_more_than_15_modules():
     crowded = {str(folder.relative_to(PACKAGE.parent)): n for folder in sorted(folders)
                if (n := len(list(folder.glob("*.py")))) > MAX_MODULES_PER_FOLDER}
     assert not crowded, f"folders with more than {MAX_MODULES_PER_FOLDER} modules: {crowded}"
+
+
+#: The solver sub-packages and the ones each may import (docs/ARCHITECTURE.md: batch above search above lm and paper).
+SOLVER_LAYERS = {"batch": {"search", "lm"}, "search": {"lm", "paper"}, "paper": set(), "lm": set()}
+
+
+def test_solver_sub_packages_import_only_the_layers_below_them():
+    graph = import_graph(PACKAGE)
+    prefix = "evoik_pin.solvers."
+    wrong = []
+    for module, imported in graph.items():
+        if not module.startswith(prefix) or module[len(prefix):].split(".")[0] not in SOLVER_LAYERS:
+            continue
+        layer = module[len(prefix):].split(".")[0]
+        for target in imported:
+            other = target[len(prefix):].split(".")[0] if target.startswith(prefix) else None
+            if other in SOLVER_LAYERS and other != layer and other not in SOLVER_LAYERS[layer]:
+                wrong.append(f"{module} -> {target}")
+    assert not wrong, "solver layers imported upward or sideways: " + "; ".join(sorted(wrong))

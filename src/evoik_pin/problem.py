@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "target_box"]
+           "Target", "check_pro_delta", "coerce_scene", "errors_text", "shortfall_text", "target_box"]
 
 #: Farthest target position accepted (m from the base origin): beyond any arm's reach by orders of magnitude, and
 #: low enough that squared distances (1e12 m^2) stay far from float overflow in every solver and feature space.
@@ -509,3 +509,18 @@ def target_box(robot: Robot, target: Target, lower: np.ndarray, upper: np.ndarra
         box_lo[j] = min(max(b[0], lower[j]), upper[j])
         box_hi[j] = max(min(b[1], upper[j]), box_lo[j])
     return box_lo, box_hi
+
+
+# ---------------------------------------------------------------------- result messages
+def errors_text(pos: float, rot: float | None) -> str:
+    """'position error ... m[, orientation error ... rad]' for result messages."""
+    return f"position error {pos:.3g} m" + ("" if rot is None else f", orientation error {rot:.3g} rad")
+
+
+def shortfall_text(problem: IKProblem, pos: float, rot: float | None) -> str:
+    """'best position error ... m[, orientation error ... rad] exceeds the tolerance (position error <= ... m[,
+    orientation error <= ... rad])' for the messages of failed solves: each error and tolerance with its unit,
+    the orientation's only for a target that constrains it (``rot`` not None)."""
+    accepted = f"position error <= {problem.tolerance:g} m" + (
+        "" if rot is None else f", orientation error <= {problem.rotation_tolerance:g} rad")
+    return f"best {errors_text(pos, rot)} exceeds the tolerance ({accepted})"

@@ -12,29 +12,15 @@ import time
 
 import numpy as np
 
-from ...problem import IKProblem
+from ...problem import IKProblem, errors_text
 from ...result import Result
 from ..options import check_int
 from .engine import LevenbergMarquardt
 
-__all__ = ["POLISH_ITERATIONS", "errors_text", "polish_result", "shortfall_text"]
+__all__ = ["POLISH_ITERATIONS", "polish_result"]
 
 #: Steps allowed when polishing another solver's answer (already close: it converges or stalls quickly).
 POLISH_ITERATIONS = 100
-
-
-def errors_text(pos: float, rot: float | None) -> str:
-    """'position error ... m[, orientation error ... rad]' for result messages."""
-    return f"position error {pos:.3g} m" + ("" if rot is None else f", orientation error {rot:.3g} rad")
-
-
-def shortfall_text(problem: IKProblem, pos: float, rot: float | None) -> str:
-    """'best position error ... m[, orientation error ... rad] exceeds the tolerance (position error <= ... m[,
-    orientation error <= ... rad])' for the messages of failed solves: each error and tolerance with its unit,
-    the orientation's only for a target that constrains it (``rot`` not None)."""
-    accepted = f"position error <= {problem.tolerance:g} m" + (
-        "" if rot is None else f", orientation error <= {problem.rotation_tolerance:g} rad")
-    return f"best {errors_text(pos, rot)} exceeds the tolerance ({accepted})"
 
 
 def polish_result(problem: IKProblem, result: Result, rng: np.random.Generator | None = None,

@@ -7,9 +7,8 @@ import time
 
 import numpy as np
 
-from ...problem import Evaluation, IKProblem
+from ...problem import Evaluation, IKProblem, shortfall_text
 from ...result import Result
-from ..lm.polish import shortfall_text
 from ..options import check_choice, check_int, check_number
 
 __all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",

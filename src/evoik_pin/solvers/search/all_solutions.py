@@ -52,12 +52,11 @@ import time
 
 import numpy as np
 
-from ...problem import IKProblem
+from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import register
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
 from ..lm.layout import TASK_ROWS, target_kind
-from ..lm.polish import shortfall_text
 from ..options import check_choice, check_int, check_positive
 from .memetic import memetic
 from .seed_table import default_table_size, seed_table

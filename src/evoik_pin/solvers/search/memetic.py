@@ -41,12 +41,11 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import OptionError
-from ...problem import IKProblem
+from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import register
 from ..collision_verdict import pairs_text
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
-from ..lm.polish import shortfall_text
 from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
