@@ -58,8 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"meshcat viewer: {viewer.url}")
         print(f"wrote {viewer.save_html(args.html)}")
         if not args.no_block:
-            print("Press Ctrl-C to stop the viewer.")
-            viewer.block()
+            viewer.block("Press Ctrl-C to stop the viewer.")  # printed where Ctrl-C is already the clean stop
     return 0
 
 
