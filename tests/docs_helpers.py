@@ -108,6 +108,13 @@ def command_argv(line: str) -> list[str]:
     return argv
 
 
+def _default_sigint() -> None:
+    """In the child before exec: Ctrl-C's default action, so Python installs its KeyboardInterrupt handler. A test
+    run started in the background by a non-interactive shell (``pytest &``, CI) ignores SIGINT, children inherit
+    that, and the SIGINT sent to a serving command would be lost; a user at a terminal has the default."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @dataclass
 class CommandRun:
     returncode: int
@@ -119,7 +126,7 @@ def run_command(line: str, cwd: Path) -> CommandRun:
     """Run one documented command line in ``cwd``; a command that prints :data:`SERVING_MARK` while it runs is
     sent SIGINT (Ctrl-C) at that moment and is expected to stop by itself (exit status 0)."""
     proc = subprocess.Popen(command_argv(line), cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, text=True)
+                            stdin=subprocess.DEVNULL, text=True, preexec_fn=_default_sigint)
     out: list[str] = []
     event = threading.Event()  # set when the command says it serves, or when its output ends (it exited)
     served = threading.Event()
