@@ -11,6 +11,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shlex
@@ -90,8 +91,6 @@ for name, line, code in json.load(sys.stdin):
 
 def run_python_blocks(blocks: list[Block], cwd: Path) -> subprocess.CompletedProcess:
     """Run ``blocks`` top to bottom in one fresh ``python`` process in ``cwd`` (output captured as text)."""
-    import json
-
     payload = json.dumps([[os.path.relpath(b.file, ROOT), b.line, b.code] for b in blocks])
     return subprocess.run([sys.executable, "-c", _RUNNER], input=payload, cwd=cwd, capture_output=True, text=True,
                           timeout=HANG_TIMEOUT)

@@ -16,8 +16,7 @@ import re
 import shlex
 
 import pytest
-
-from docs_helpers import ROOT, python_sections, repo_mirror, run_command, run_python_blocks
+from docs_helpers import ROOT, code_blocks, python_sections, repo_mirror, run_command, run_python_blocks
 
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 SECTIONS = [(path, section, blocks) for path in DOCS for section, blocks in python_sections(path).items()]
@@ -30,15 +29,15 @@ NOT_RUN = {
     "evoik reproduce all --quick --out runs": "tests/test_reproduce.py runs it (quick_runs), once for the suite",
     "evoik reproduce 002 --html spiral.html": "paper 002's full settings: minutes",
     "evoik reach panda --voxel 0.05 --out maps": "874,000 pose targets: minutes on a loaded 2-core machine; the "
-                                                 "0.2 m, 8-orientation line above it runs the same code",
+                                                 "planar2r line above it runs the same command",
+    "python scripts/reproduce_004.py --quick": "the same run_paper call as tests/test_reproduce.py's quick run of "
+                                               "004 (quick_runs), seconds more for no new code",
 }
 
 
 def readme_commands() -> list[str]:
     """The command lines of README.md's ```bash blocks, without their comments; the set-up lines (``python3 -m
     venv ...``) are left out."""
-    from docs_helpers import code_blocks
-
     lines = []
     for block in code_blocks(README, "bash"):
         for text in block.code.splitlines():

@@ -18,7 +18,6 @@ import re
 import shlex
 
 import pytest
-
 from docs_helpers import ROOT, repo_mirror, run_command
 
 EXAMPLES = ROOT / "examples"
