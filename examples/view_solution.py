@@ -1,7 +1,7 @@
 """Solve one IK problem and look at it in the browser (meshcat), then save the scene as an HTML file.
 
-    python examples/view_solution.py                      # Panda; open the printed URL, Ctrl-C to stop
-    python examples/view_solution.py ax18 --html ax18.html --no-block
+    $ python examples/view_solution.py                      # Panda; open the printed URL, Ctrl-C to stop
+    $ python examples/view_solution.py ax18 --html ax18.html --no-block
 
 What it does:
 1. loads a robot (a name from ``evoik robots`` or a URDF path);
@@ -58,8 +58,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"meshcat viewer: {viewer.url}")
         print(f"wrote {viewer.save_html(args.html)}")
         if not args.no_block:
-            print("Press Ctrl-C to stop the viewer.")
-            viewer.block()
+            viewer.block("Press Ctrl-C to stop the viewer.")  # printed where Ctrl-C is already the clean stop
     return 0
 
 

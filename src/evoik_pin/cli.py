@@ -368,8 +368,7 @@ def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None
         if html is not None:
             print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
         if view:
-            print(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr, flush=True)
-            viewer.block()
+            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
 
 
 def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, method: str) -> int:
@@ -449,8 +448,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
         print(f"meshcat viewer of {robot.name}: {viewer.url}", flush=True)
         if args.html:
             print(f"wrote {viewer.save_html(args.html)}")
-        print("Press Ctrl-C to stop the viewer.", flush=True)
-        viewer.block()
+        viewer.block("Press Ctrl-C to stop the viewer.")
     return 0
 
 

@@ -56,7 +56,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import ConfigurationError, TargetError, ViewerError
+from .errors import ConfigurationError, OptionError, TargetError, ViewerError
 from .lie import rotation_to_z
 from .robot import Robot
 from .robot.frames import find_frame
@@ -451,9 +451,20 @@ class Viewer:
         """The meshcat server subprocess this Viewer started (None when it uses an external server)."""
         return self._server.proc if self._server is not None else None
 
-    def block(self) -> None:
-        """Keep the server running until Ctrl-C (or until the server exits), then close the Viewer."""
+    def block(self, message: str | None = None, file=None) -> None:
+        """Keep the server running until Ctrl-C (or until the server exits), then close the Viewer.
+
+        Args:
+            message: a line to print (and flush) to ``file`` (default ``sys.stdout``) once Ctrl-C stops the Viewer
+                cleanly, e.g. "Press Ctrl-C to stop the viewer.". Printed before the call, a Ctrl-C that came
+                between the print and the wait ended the program with a KeyboardInterrupt traceback.
+        """
+        if message is not None and not isinstance(message, str):
+            raise OptionError(f"Viewer.block: message must be a str (a line to print) or None, not "
+                              f"{type(message).__name__}")
         try:
+            if message is not None:
+                print(message, file=sys.stdout if file is None else file, flush=True)
             while self._server is None or self._server.proc.poll() is None:
                 time.sleep(0.5)
         except KeyboardInterrupt:

@@ -496,8 +496,7 @@ def show_animation(animation: Animation, html=None, view: bool = False) -> Path 
         if html is not None:
             written = viewer.save_html(html)
         if view:
-            print(f"{animation.label}: {viewer.url} (Ctrl-C to stop)", flush=True)
-            viewer.block()
+            viewer.block(f"{animation.label}: {viewer.url} (Ctrl-C to stop)")
     return written
 
 

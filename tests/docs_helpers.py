@@ -1,0 +1,170 @@
+"""Helpers of tests/test_docs.py and tests/test_docs_examples.py: the documentation's code blocks and commands.
+
+- :func:`python_sections`: the ```python blocks of a Markdown file, grouped by their ``##`` section;
+- :func:`run_python_blocks`: a section's blocks, in order, in one fresh interpreter (a subprocess);
+- :func:`run_command`: one shell-style command line (``evoik ...``, ``python ...``) in a subprocess, exit status 0
+  expected; a command that serves a meshcat viewer is interrupted with SIGINT (Ctrl-C) once it says so;
+- :func:`repo_mirror`: a temporary folder that looks like the repository root (a symbolic link to each of its
+  top-level entries), so the docs' relative paths (``examples/...``, ``robots/...``) resolve as from the root while
+  the files they write (``maps/``, ``scene.html``, ...) land in the temporary folder, not in the checkout.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shlex
+import signal
+import subprocess
+import sys
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Seconds one section or one command may take before it counts as hung (a safety net, not a speed check).
+HANG_TIMEOUT = 600.0
+#: A serving command prints a line containing this when it starts serving (``evoik view``, ``--view``,
+#: ``examples/view_solution.py``: "Press Ctrl-C to stop the viewer." / "(Ctrl-C to stop)").
+SERVING_MARK = "Ctrl-C"
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced code block: its file, the ``##`` section it is in, its first code line (1-based) and its text."""
+
+    file: Path
+    section: str
+    line: int
+    code: str
+
+
+def code_blocks(path: Path, language: str) -> list[Block]:
+    """The fenced blocks of ``language`` (e.g. ``"python"``) in a Markdown file, in order.
+
+    A block's section is the last ``## `` heading above it (``""`` before the first one); headings inside code
+    blocks (a ``#`` comment) are not headings.
+    """
+    blocks, section, fence, start, lines = [], "", None, 0, []
+    for number, text in enumerate(path.read_text().splitlines(), start=1):
+        if fence is None:
+            m = re.match(r"^```(\w*)\s*$", text)
+            if m:
+                fence, start, lines = m.group(1), number + 1, []
+            elif text.startswith("## "):
+                section = text[3:].strip()
+        elif text.startswith("```"):
+            if fence == language:
+                blocks.append(Block(path, section, start, "\n".join(lines) + "\n"))
+            fence = None
+        else:
+            lines.append(text)
+    assert fence is None, f"{path}: a ``` block opened at line {start - 1} is never closed"
+    return blocks
+
+
+def python_sections(path: Path) -> dict[str, list[Block]]:
+    """``{section: [its ```python blocks in order]}`` of a Markdown file (sections without one left out)."""
+    sections: dict[str, list[Block]] = {}
+    for block in code_blocks(path, "python"):
+        sections.setdefault(block.section, []).append(block)
+    return sections
+
+
+# Runs in the fresh interpreter: each block compiled under the Markdown file's name with its own line numbers
+# (a traceback then points at the line of README.md that failed), all of a section's blocks in one namespace,
+# as when they are pasted one after the other into one interpreter.
+_RUNNER = r"""
+import json, sys, traceback
+namespace = {"__name__": "__main__"}
+for name, line, code in json.load(sys.stdin):
+    try:
+        exec(compile("\n" * (line - 1) + code, name, "exec"), namespace)
+    except BaseException:
+        traceback.print_exc()
+        print(f"FAILED: the block at {name}:{line}", file=sys.stderr)
+        sys.exit(1)
+"""
+
+
+def run_python_blocks(blocks: list[Block], cwd: Path) -> subprocess.CompletedProcess:
+    """Run ``blocks`` top to bottom in one fresh ``python`` process in ``cwd`` (output captured as text)."""
+    payload = json.dumps([[os.path.relpath(b.file, ROOT), b.line, b.code] for b in blocks])
+    return subprocess.run([sys.executable, "-c", _RUNNER], input=payload, cwd=cwd, capture_output=True, text=True,
+                          timeout=HANG_TIMEOUT)
+
+
+def command_argv(line: str) -> list[str]:
+    """The argv of a documented command line: its words (shell quoting, ``#`` comments dropped), with ``python``
+    and ``evoik`` run by this interpreter (so the command runs in the environment the tests run in)."""
+    argv = shlex.split(line, comments=True)
+    if argv and argv[0] in ("python", "python3"):
+        return [sys.executable, *argv[1:]]
+    if argv and argv[0] == "evoik":
+        return [sys.executable, "-m", "evoik_pin.cli", *argv[1:]]
+    return argv
+
+
+def _default_sigint() -> None:
+    """In the child before exec: Ctrl-C's default action, so Python installs its KeyboardInterrupt handler. A test
+    run started in the background by a non-interactive shell (``pytest &``, CI) ignores SIGINT, children inherit
+    that, and the SIGINT sent to a serving command would be lost; a user at a terminal has the default."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@dataclass
+class CommandRun:
+    returncode: int
+    output: str  # stdout and stderr, interleaved
+    served: bool  # it said it serves a viewer (SERVING_MARK) and was sent SIGINT
+
+
+def run_command(line: str, cwd: Path) -> CommandRun:
+    """Run one documented command line in ``cwd``; a command that prints :data:`SERVING_MARK` while it runs is
+    sent SIGINT (Ctrl-C) at that moment and is expected to stop by itself (exit status 0)."""
+    proc = subprocess.Popen(command_argv(line), cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            stdin=subprocess.DEVNULL, text=True, preexec_fn=_default_sigint)
+    out: list[str] = []
+    event = threading.Event()  # set when the command says it serves, or when its output ends (it exited)
+    served = threading.Event()
+
+    def read():
+        for text in proc.stdout:
+            out.append(text)
+            if SERVING_MARK in text:
+                served.set()
+                event.set()
+        event.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    try:
+        if not event.wait(HANG_TIMEOUT):
+            raise AssertionError(f"{line!r} neither ended nor said it serves within {HANG_TIMEOUT:g} s:\n"
+                                 + "".join(out))
+        if served.is_set() and proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+        returncode = proc.wait(timeout=HANG_TIMEOUT)
+    finally:
+        if proc.poll() is None:  # only when an assertion above fired: leave no process behind
+            proc.kill()
+            proc.wait()
+    reader.join(timeout=10)
+    return CommandRun(returncode, "".join(out), served.is_set())
+
+
+def repo_mirror(path: Path) -> Path:
+    """Fill the empty folder ``path`` with a symbolic link to each top-level entry of the repository (not ``.git``)
+    and return it: a working directory where the docs' relative paths work and what they write stays out of the
+    checkout."""
+    try:  # the tracked entries: an untracked output folder of an earlier run (maps/, runs/) is not linked
+        names = set(subprocess.run(["git", "-C", str(ROOT), "ls-tree", "--name-only", "HEAD"], capture_output=True,
+                                   text=True, check=True).stdout.split())
+    except (OSError, subprocess.CalledProcessError):  # not a git checkout (an sdist): every entry
+        names = {entry.name for entry in ROOT.iterdir()} - {".git"}
+    for name in sorted(names):
+        if (ROOT / name).exists():
+            (path / name).symlink_to(ROOT / name)
+    return path
