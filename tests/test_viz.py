@@ -8,6 +8,7 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import threading
 import time
 import urllib.request
 from concurrent.futures import ThreadPoolExecutor
@@ -302,6 +303,26 @@ def test_server_stops_with_the_viewer_and_with_its_parent(ax18, tmp_path):
     while _alive(pid) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert not _alive(pid), "the meshcat server survived its parent"
+
+
+def test_own_server_is_waited_for_while_it_lives(ax18, viewers, monkeypatch, tmp_path):
+    """A loaded machine slows the Viewer's own server down, it does not make it an error: its answers are waited
+    for as long as the process lives (SERVER_TIMEOUT only bounds an external server's answers)."""
+    monkeypatch.setattr(viz, "SERVER_TIMEOUT", 0.3)  # far below a server's start-up (a Python start, tornado, zmq)
+    v = viewers(ax18)
+    proc = v.server_process
+    proc.send_signal(signal.SIGSTOP)  # a server that gets no CPU for a while, as under load
+    resume = threading.Timer(1.0, proc.send_signal, (signal.SIGCONT,))
+    resume.start()
+    try:
+        v.show(np.zeros(4))  # waits for the stopped server instead of giving up after SERVER_TIMEOUT
+    finally:
+        resume.join()
+    assert "/meshcat/robot/visuals/tool_0" in _objects(_scene(v, tmp_path))
+    proc.kill()
+    proc.wait()
+    with pytest.raises(ViewerError, match=r"exited \(code -9\)"):  # a dead server is an error at once
+        v.show(np.ones(4))
 
 
 def _alive(pid: int) -> bool:
