@@ -97,7 +97,8 @@ def _clone(repo: Path, commit: str, into: Path) -> Path:
     return into
 
 
-def run_once(index: int, fresh: bool, repo: Path, commit: str, log_dir: Path) -> Run:
+def run_once(index: int, fresh: bool, repo: Path, commit: str, log_dir: Path,
+             extra: list[str] | None = None) -> Run:
     """One run of the test command (fresh: in a new clone with an empty numba cache; warm: in ``repo``)."""
     with tempfile.TemporaryDirectory(prefix="evoik-stress-") as tmp:
         tmp = Path(tmp)
@@ -113,7 +114,7 @@ def run_once(index: int, fresh: bool, repo: Path, commit: str, log_dir: Path) ->
         t0 = time.monotonic()
         with open(log, "w") as out:
             proc = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", f"--junitxml={xml}",
-                                   "-rfE"], cwd=where, env=env, stdout=out, stderr=subprocess.STDOUT,
+                                   "-rfE", *(extra or [])], cwd=where, env=env, stdout=out, stderr=subprocess.STDOUT,
                                   stdin=subprocess.DEVNULL)
         run = Run(index, fresh, wall_s=time.monotonic() - t0, returncode=proc.returncode)
         if xml.is_file():
@@ -140,6 +141,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--commit", help="commit the fresh clones check out (default: the checkout's HEAD)")
     ap.add_argument("--append", type=Path, metavar="FILE", help="also append the table to FILE (docs/TESTING.md)")
     ap.add_argument("--logs", type=Path, help="directory for each run's pytest output (default: a temporary one)")
+    ap.add_argument("pytest_args", nargs="*", help="after --: extra pytest arguments (a test file for a quick try; "
+                    "the reliability runs use none)")
     args = ap.parse_args(argv)
     if args.runs < 1 or args.busy < 0:
         ap.error("--runs must be >= 1 and --busy >= 0")
@@ -154,7 +157,7 @@ def main(argv: list[str] | None = None) -> int:
     runs: list[Run] = []
     try:
         for i in range(1, args.runs + 1):
-            run = run_once(i, fresh=i % 2 == 1, repo=repo, commit=commit, log_dir=log_dir)
+            run = run_once(i, fresh=i % 2 == 1, repo=repo, commit=commit, log_dir=log_dir, extra=args.pytest_args)
             runs.append(run)
             print(f"run {i}/{args.runs} ({'fresh clone' if run.fresh else 'warm'}): {run.passed} passed, "
                   f"{run.failed} failed, {run.errors} errors in {run.wall_s:.0f} s", file=sys.stderr, flush=True)
