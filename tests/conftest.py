@@ -1,3 +1,7 @@
+import sys
+import time
+import types
+
 import numpy as np
 import pytest
 
@@ -15,3 +19,17 @@ def reachable_pose():
         return robot.fk(robot.random_configurations(1, np.random.default_rng(seed))[0])
 
     return pose
+
+
+@pytest.fixture
+def thread_cpu_clock(monkeypatch):
+    """Make evoik_pin's solvers read the calling thread's CPU time (``time.thread_time``) where they read
+    ``time.perf_counter``: their time budgets and ``time_s`` then count the work done, not the time the process
+    waited for a core, so a budget's contract can be checked on a loaded machine. Every loaded evoik_pin module
+    that imports ``time`` is patched (whatever package the solvers live in)."""
+    clock = types.SimpleNamespace(**{k: v for k, v in vars(time).items() if not k.startswith("__")})
+    clock.perf_counter = time.thread_time
+    for name, module in list(sys.modules.items()):
+        if name.startswith("evoik_pin") and getattr(module, "time", None) is time:
+            monkeypatch.setattr(module, "time", clock)
+    return clock

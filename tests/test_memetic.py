@@ -156,7 +156,9 @@ def test_warm_start_from_a_nearby_q0_converges_from_q0(robots):
 
 
 # ---------------------------------------------------------------------- unreachable, budget, determinism
-def test_unreachable_target_gives_best_approximation_within_the_time_budget(robots):
+def test_unreachable_target_gives_best_approximation_within_the_time_budget(robots, thread_cpu_clock):
+    # the budget is measured on the solving thread's CPU clock (thread_cpu_clock): what is checked is that the
+    # solver stops itself within 50 ms of its budget, not how long a loaded machine keeps it waiting for a core
     robot = robots["panda"]
     T = pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.5]))  # 3 m away: the arm reaches about 0.9 m
     res = ev.solve(robot, T, seed=0, timeout=0.02)
@@ -167,7 +169,7 @@ def test_unreachable_target_gives_best_approximation_within_the_time_budget(robo
     assert res.time_s <= 0.02 + 0.05  # the budget is a contract (checked between LM iterations)
 
 
-def test_default_timeout_is_respected(robots):
+def test_default_timeout_is_respected(robots, thread_cpu_clock):
     res = ev.solve(robots["ur5"], [5.0, 5.0, 5.0], seed=1)
     assert not res.success and res.time_s <= 0.005 + 0.05
 

@@ -19,7 +19,11 @@ def ray():
     ray = pytest.importorskip("ray")
     started = not ray.is_initialized()
     if started:
-        ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
+        # Ray starts its workers at nice 15: beside busy processes (a loaded CI machine) they got about 3 % of a
+        # core and this module took many minutes. The workers are the work under test: normal priority.
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("RAY_worker_niceness", "0")
+            ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
     yield ray
     ray_actors.shutdown_pool()
     if started:

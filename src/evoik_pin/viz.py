@@ -77,8 +77,13 @@ COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
 GHOST_MESH_BUDGET = 50_000_000
 #: Vertical field of view (degrees) of meshcat's default camera.
 CAMERA_FOV_DEG = 75.0
-#: Seconds to wait for the meshcat server to start or to answer one request.
+#: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer one request.
 SERVER_TIMEOUT = 20.0
+#: Seconds after which a Viewer's own server that neither answers (or prints its URLs) nor exits counts as
+#: wedged. While it runs, it is waited for: a loaded machine (or a cold disk cache) slows it, it is no error;
+#: its exit is noticed within :data:`_LIVENESS_POLL` s.
+OWN_SERVER_HANG_S = 600.0
+_LIVENESS_POLL = 0.25
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer its first request.
 PROBE_TIMEOUT = 5.0
 
@@ -135,8 +140,10 @@ def _stop_process(proc: subprocess.Popen) -> None:
 class _Server:
     """A meshcat server subprocess listening on 127.0.0.1; ``stop()`` ends it (idempotent)."""
 
-    def __init__(self, timeout: float = SERVER_TIMEOUT):
+    def __init__(self, timeout: float | None = None):
         import meshcat
+
+        timeout = OWN_SERVER_HANG_S if timeout is None else timeout
 
         self._out = tempfile.TemporaryFile()  # files, not pipes: a full pipe would block the server
         self._err = tempfile.TemporaryFile()
@@ -161,9 +168,10 @@ class _Server:
                 self._err.seek(0)
                 detail = self._err.read().decode(errors="replace").strip().splitlines()[-3:]
                 self.stop()
-                why = f"exited (code {self.proc.returncode})" if exited else f"did not start within {timeout:g} s"
+                why = (f"exited (code {self.proc.returncode})" if exited
+                       else f"ran {timeout:g} s without printing its URLs")
                 raise ViewerError(f"the meshcat server {why}: " + (" | ".join(detail) or "no output"))
-            time.sleep(0.02)
+            time.sleep(0.02)  # readiness is the URL lines; the deadline only catches a wedged server
         self.zmq_url, self.web_url = urls["zmq_url"], urls["web_url"]
 
     def stop(self) -> None:
@@ -194,8 +202,35 @@ def _probe(zmq_url: str, timeout: float) -> str:
         sock.close()
 
 
-def _connect(zmq_url: str, web_url: str):
-    """A ``meshcat.Visualizer`` talking to the server at ``zmq_url``; a silent server raises instead of hanging."""
+class _OwnServerSocket:
+    """The REQ socket to a Viewer's own server: ``recv`` waits as long as the server process runs (a busy machine
+    delays its answer) and raises ``zmq.ZMQError`` once it has exited (or ``zmq.Again`` after
+    :data:`OWN_SERVER_HANG_S` s without an answer). Everything else is the wrapped socket's."""
+
+    def __init__(self, sock, proc: subprocess.Popen):
+        self._sock, self._proc = sock, proc
+
+    def recv(self, *args, **kwargs):
+        import zmq
+
+        deadline = time.monotonic() + OWN_SERVER_HANG_S
+        while not self._sock.poll(int(_LIVENESS_POLL * 1000)):
+            if self._proc.poll() is not None:
+                raise zmq.error.ZMQError(msg=f"the server process exited (code {self._proc.returncode})")
+            if time.monotonic() > deadline:
+                raise zmq.error.Again()
+        return self._sock.recv(*args, **kwargs)
+
+    def __getattr__(self, name):
+        return getattr(self._sock, name)
+
+
+def _connect(zmq_url: str, web_url: str, proc: subprocess.Popen | None = None):
+    """A ``meshcat.Visualizer`` talking to the server at ``zmq_url``; a silent server raises instead of hanging.
+
+    ``proc``: the server process when it is the Viewer's own (answers are waited for while it runs); None for an
+    external server (:data:`SERVER_TIMEOUT` s per answer).
+    """
     import zmq
     from meshcat.visualizer import ViewerWindow, Visualizer
 
@@ -204,8 +239,11 @@ def _connect(zmq_url: str, web_url: str):
     window = ViewerWindow.__new__(ViewerWindow)
     window.server_proc, window.zmq_url, window.web_url = None, zmq_url, web_url
     window.connect_zmq()
-    window.zmq_socket.setsockopt(zmq.RCVTIMEO, int(SERVER_TIMEOUT * 1000))
     window.zmq_socket.setsockopt(zmq.LINGER, 0)
+    if proc is None:
+        window.zmq_socket.setsockopt(zmq.RCVTIMEO, int(SERVER_TIMEOUT * 1000))
+    else:
+        window.zmq_socket = _OwnServerSocket(window.zmq_socket, proc)
     return Visualizer(window=window)
 
 
@@ -421,7 +459,7 @@ class Viewer:
                 self.zmq_url, self.url = self._server.zmq_url, self._server.web_url
             else:
                 self.zmq_url, self.url = zmq_url, _probe(zmq_url, timeout=PROBE_TIMEOUT)
-            self.vis = _connect(self.zmq_url, self.url)
+            self.vis = _connect(self.zmq_url, self.url, self.server_process)
             self.set_camera()
         except BaseException:
             self.close()
