@@ -135,12 +135,12 @@ class Robot:
         base_id = 0 if base is None else find_frame(kin, base)
         if base_id < 0:
             raise FrameError(f"unknown base frame {base!r}{_suggest(base, kin)}; frames of {name}: "
-                             f"{', '.join(body_frame_names(full_model))}")
+                             f"{_listed(body_frame_names(full_model))}")
         base_joint = kin.frames[base_id].parentJoint
         for t in [tip, *(tip_names or [])]:
             if find_frame(kin, t) < 0:
                 raise FrameError(f"unknown tip frame {t!r}{_suggest(t, kin)}; frames of {name}: "
-                                 f"{', '.join(body_frame_names(full_model))}")
+                                 f"{_listed(body_frame_names(full_model))}")
 
         if whole:
             active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
@@ -740,6 +740,12 @@ def _frame_list(tips) -> list[str]:
     return out
 
 
+def _listed(names: list[str], most: int = 40) -> str:
+    """The first ``most`` names, comma-separated, and how many more there are."""
+    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
 def _suggest(name, model: pin.Model) -> str:
     """' (closest: a, b)' for a frame name not found in ``model``, or ''."""
     close = closest_names(str(name), frame_names(model))
@@ -753,5 +759,5 @@ def _check_fixed_root(model: pin.Model, name: str) -> None:
     if moving:
         j = moving[0]
         raise RobotLoadError(f"{name}'s root already moves (joint {model.names[j]!r} is a "
-                             f"{model.joints[j].shortname()} joint of {model.joints[j].nv} DOF): load it without "
+                             f"{model.joints[j].shortname()} of {model.joints[j].nv} DOF): load it without "
                              "floating_base=True")
