@@ -13,7 +13,7 @@ from evoik_pin.problem import IKProblem, Target
 from evoik_pin.robot import list_robots, load_robot
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs
 from evoik_pin.solvers.lm import chain as K
-from evoik_pin.solvers.lm.layout import TargetArrays
+from evoik_pin.solvers.lm.layout import STATS_SIZE, TargetArrays
 from evoik_pin.solvers.lm.reference import ReferenceLM
 
 
@@ -205,8 +205,8 @@ def test_solve_many_engines_agree_on_success(robots):
 
 def _kernel_pairs(robot, kind, count, seed):
     """Inputs of the kernel's batch entry points: ``count`` (start, target) pairs of one target kind, some
-    starts on or beyond the joint limits (clipping, holding, wrapping), and the pose kind's params."""
-    from evoik_pin.solvers.lm.layout import box_constants, encode_targets, kernel_params, target_kind
+    starts on or beyond the joint limits (clipping, holding, wrapping), the tip goal's stack and the params."""
+    from evoik_pin.solvers.lm.layout import GoalStack, box_constants, encode_targets, kernel_params, target_kind
 
     rng = np.random.default_rng(seed)
     Qt, Q0 = robot.random_configurations(count, rng), robot.random_configurations(count, rng)
@@ -216,9 +216,10 @@ def _kernel_pairs(robot, kind, count, seed):
     targets = [Target.coerce(_target(kind, robot, q, yaw_offset=0.2)) for q in Qt]
     P, Rts = encode_targets(targets)
     _, any_wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
-    params = kernel_params(1e-6, 1e-6, target_kind(targets[0]), 30)
-    return (np.ascontiguousarray(Q0), *robot.chain_constants(), *robot.chain_coupling(), box, any_wrap, P, Rts,
-            params)
+    stack = GoalStack.single(robot, target_kind(targets[0]), 1e-6, 1e-6)
+    params = kernel_params(30)
+    return (np.ascontiguousarray(Q0), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R, stack.p,
+            stack.support, P[:, None].copy(), Rts[:, None].copy(), params)
 
 
 @pytest.mark.parametrize("name, kind", [("panda", "pose"), ("ur5", "pose"), ("ax18", "position"),
@@ -229,25 +230,26 @@ def test_kernel_runs_do_not_depend_on_earlier_runs(robots, name, kind):
     from evoik_pin.solvers.lm.kernel import lm_run, lm_run_pairs, lm_run_starts
 
     robot = robots[name]
-    Q0, *chain, box, any_wrap, P, Rts, params = _kernel_pairs(robot, kind, 60, 41)
+    Q0, *args, P, Rts, params = _kernel_pairs(robot, kind, 60, 41)
     N, n = Q0.shape
-    out, stats = np.empty((N, n)), np.empty((N, 5))
-    lm_run_pairs(Q0, *chain, box, any_wrap, P, Rts, params, out, stats)
-    back, back_stats = np.empty((N, n)), np.empty((N, 5))
-    lm_run_pairs(Q0[::-1].copy(), *chain, box, any_wrap, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats)
+    out, stats, g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
+    lm_run_pairs(Q0, *args, P, Rts, params, out, stats, g)
+    back, back_stats, back_g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
+    lm_run_pairs(Q0[::-1].copy(), *args, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats, back_g)
     assert np.array_equal(out, back[::-1]) and np.array_equal(stats, back_stats[::-1], equal_nan=True)
+    assert np.array_equal(g, back_g[::-1], equal_nan=True)
     assert stats[:, 2].any() and (stats[:, 4] > 2).any()  # converged runs, runs of several steps
     for i in range(0, N, 7):  # a fresh workspace per run
         one = np.empty(n)
-        assert lm_run(Q0[i], *chain, box, any_wrap, P[i], Rts[i], params, one)[3] == stats[i, 3]
+        assert lm_run(Q0[i], *args, P[i], Rts[i], params, one, np.empty((1, 2)))[3] == stats[i, 3]
         assert np.array_equal(one, out[i])
     # several starts for one target, after runs for other targets: the same runs again
-    starts, starts_stats = np.empty((N, n)), np.full((N, 5), -1.0)
-    k = lm_run_starts(Q0, *chain, box, any_wrap, P[0], Rts[0], params, starts, starts_stats)
+    starts, starts_stats = np.empty((N, n)), np.full((N, STATS_SIZE), -1.0)
+    k = lm_run_starts(Q0, *args, P[0], Rts[0], params, starts, starts_stats, np.empty((N, 1, 2)))
     runs = k + 1 if k >= 0 else -(k + 1)
     for i in range(runs):
         one = np.empty(n)
-        lm_run(Q0[i], *chain, box, any_wrap, P[0], Rts[0], params, one)
+        lm_run(Q0[i], *args, P[0], Rts[0], params, one, np.empty((1, 2)))
         assert np.array_equal(one, starts[i])
     assert (starts_stats[runs:] == -1.0).all()
 
@@ -260,15 +262,15 @@ def test_kernel_batches_from_threads_equal_one_call(robots):
     from evoik_pin.solvers.lm.kernel import lm_run_pairs
 
     robot = robots["panda"]
-    Q0, *chain, box, any_wrap, P, Rts, params = _kernel_pairs(robot, "pose", 400, 43)
+    Q0, *args, P, Rts, params = _kernel_pairs(robot, "pose", 400, 43)
     N, n = Q0.shape
-    out, stats = np.empty((N, n)), np.empty((N, 5))
-    lm_run_pairs(Q0, *chain, box, any_wrap, P, Rts, params, out, stats)
-    out_t, stats_t = np.empty((N, n)), np.empty((N, 5))
+    out, stats, g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
+    lm_run_pairs(Q0, *args, P, Rts, params, out, stats, g)
+    out_t, stats_t, g_t = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
 
     def chunk(s):
-        lm_run_pairs(Q0[s], *chain, box, any_wrap, P[s], Rts[s], params, out_t[s], stats_t[s])
+        lm_run_pairs(Q0[s], *args, P[s], Rts[s], params, out_t[s], stats_t[s], g_t[s])
 
     with ThreadPoolExecutor(4) as pool:
         list(pool.map(chunk, [slice(i, i + 50) for i in range(0, N, 50)]))
-    assert np.array_equal(out, out_t) and np.array_equal(stats, stats_t)
+    assert np.array_equal(out, out_t) and np.array_equal(stats, stats_t) and np.array_equal(g, g_t)

@@ -7,7 +7,9 @@ Joint values x follow the joint vector q (n,) through the coupling of :mod:`.cha
 :func:`.chain.fold`). For a serial chain (``parent[k] = k - 1``) these functions do the floating-point operations
 of :func:`.chain.forward` and :func:`.chain.jacobian`, in the same order, so their results are identical bit for
 bit (tests/test_robot_tree.py compares them on every bundled arm); tests check them against Pinocchio on the
-example-robot-data trees, on random URDF trees, with mimic joints and with a floating base.
+example-robot-data trees, on random URDF trees, with mimic joints and with a floating base. All three are inlined
+into the kernel (``inline="always"``): a call passing their nine array arguments costs about 90 ns, a third of a
+7-joint recursion.
 """
 
 from __future__ import annotations
@@ -16,46 +18,82 @@ import math
 
 from numba import njit
 
-__all__ = ["frame_jacobian", "frame_pose", "tree_forward"]
+__all__ = ["BORROWING", "frame_jacobian", "frame_pose", "tree_forward"]
 
 
-@njit(cache=True, nogil=True)
+def _borrowing_options() -> dict:
+    """``{"_nrt": False}`` where this numba has that option (every release since 0.60 does; it is numba's own, not
+    a documented one), else ``{}``: the kernel then counts references as usual, with the same results, about a
+    fifth slower."""
+    try:
+        from numba.core.cpu import CPUTargetOptions
+    except ImportError:
+        return {}
+    return {"_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {}
+
+
+#: Options of the functions that borrow the arrays their caller owns (see :mod:`.kernel`'s docstring).
+BORROWING = _borrowing_options()
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O):
     """Joint poses at the physical joint values x (m,): Rj (m, 3, 3), pj (m, 3) (m) the pose of each joint's folded
     frame after its motion, Z (m, 3) and O (m, 3) each joint's axis and origin, all in the base frame (written in
     place). ``(R_k, p_k) = (R_parent, p_parent) (FR[k], Fp[k]) Z(x_k)``; a root joint (parent -1) starts from
-    (FR[k], Fp[k])."""
+    (FR[k], Fp[k]).
+
+    The pose being composed lives in local variables (registers) from one joint to the next and is read back from
+    Rj, pj only where the tree branches (a joint whose parent is not the joint before it): a chain's recursion
+    costs what the serial chain's does.
+    """
     m = x.shape[0]
+    r00 = r01 = r02 = r10 = r11 = r12 = r20 = r21 = r22 = p0 = p1 = p2 = 0.0
     for k in range(m):
         a = parent[k]
         if a < 0:
-            for i in range(3):
-                pj[k, i] = Fp[k, i]
-                for j in range(3):
-                    Rj[k, i, j] = FR[k, i, j]
+            r00, r01, r02 = FR[k, 0, 0], FR[k, 0, 1], FR[k, 0, 2]
+            r10, r11, r12 = FR[k, 1, 0], FR[k, 1, 1], FR[k, 1, 2]
+            r20, r21, r22 = FR[k, 2, 0], FR[k, 2, 1], FR[k, 2, 2]
+            p0, p1, p2 = Fp[k, 0], Fp[k, 1], Fp[k, 2]
         else:
+            if a != k - 1:  # a branch: start from the parent's pose
+                r00, r01, r02 = Rj[a, 0, 0], Rj[a, 0, 1], Rj[a, 0, 2]
+                r10, r11, r12 = Rj[a, 1, 0], Rj[a, 1, 1], Rj[a, 1, 2]
+                r20, r21, r22 = Rj[a, 2, 0], Rj[a, 2, 1], Rj[a, 2, 2]
+                p0, p1, p2 = pj[a, 0], pj[a, 1], pj[a, 2]
             f0, f1, f2 = Fp[k, 0], Fp[k, 1], Fp[k, 2]
-            for i in range(3):
-                r0, r1, r2 = Rj[a, i, 0], Rj[a, i, 1], Rj[a, i, 2]
-                pj[k, i] = pj[a, i] + (r0 * f0 + r1 * f1 + r2 * f2)
-                Rj[k, i, 0] = r0 * FR[k, 0, 0] + r1 * FR[k, 1, 0] + r2 * FR[k, 2, 0]
-                Rj[k, i, 1] = r0 * FR[k, 0, 1] + r1 * FR[k, 1, 1] + r2 * FR[k, 2, 1]
-                Rj[k, i, 2] = r0 * FR[k, 0, 2] + r1 * FR[k, 1, 2] + r2 * FR[k, 2, 2]
-        for i in range(3):
-            Z[k, i] = Rj[k, i, 2]
-            O[k, i] = pj[k, i]
+            a00, a01, a02 = FR[k, 0, 0], FR[k, 0, 1], FR[k, 0, 2]
+            a10, a11, a12 = FR[k, 1, 0], FR[k, 1, 1], FR[k, 1, 2]
+            a20, a21, a22 = FR[k, 2, 0], FR[k, 2, 1], FR[k, 2, 2]
+            p0 += r00 * f0 + r01 * f1 + r02 * f2
+            p1 += r10 * f0 + r11 * f1 + r12 * f2
+            p2 += r20 * f0 + r21 * f1 + r22 * f2
+            r00, r01, r02 = (r00 * a00 + r01 * a10 + r02 * a20, r00 * a01 + r01 * a11 + r02 * a21,
+                             r00 * a02 + r01 * a12 + r02 * a22)
+            r10, r11, r12 = (r10 * a00 + r11 * a10 + r12 * a20, r10 * a01 + r11 * a11 + r12 * a21,
+                             r10 * a02 + r11 * a12 + r12 * a22)
+            r20, r21, r22 = (r20 * a00 + r21 * a10 + r22 * a20, r20 * a01 + r21 * a11 + r22 * a21,
+                             r20 * a02 + r21 * a12 + r22 * a22)
+        Z[k, 0], Z[k, 1], Z[k, 2] = r02, r12, r22
+        O[k, 0], O[k, 1], O[k, 2] = p0, p1, p2
         if rev[k]:
             c, s = math.cos(x[k]), math.sin(x[k])
-            for i in range(3):
-                u, v = Rj[k, i, 0], Rj[k, i, 1]
-                Rj[k, i, 0] = c * u + s * v
-                Rj[k, i, 1] = c * v - s * u
+            r00, r01 = c * r00 + s * r01, c * r01 - s * r00
+            r10, r11 = c * r10 + s * r11, c * r11 - s * r10
+            r20, r21 = c * r20 + s * r21, c * r21 - s * r20
         else:
-            for i in range(3):
-                pj[k, i] += x[k] * Rj[k, i, 2]
+            v = x[k]
+            p0 += v * r02
+            p1 += v * r12
+            p2 += v * r22
+        Rj[k, 0, 0], Rj[k, 0, 1], Rj[k, 0, 2] = r00, r01, r02
+        Rj[k, 1, 0], Rj[k, 1, 1], Rj[k, 1, 2] = r10, r11, r12
+        Rj[k, 2, 0], Rj[k, 2, 1], Rj[k, 2, 2] = r20, r21, r22
+        pj[k, 0], pj[k, 1], pj[k, 2] = p0, p1, p2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def frame_pose(Rj, pj, j, Rf, pf, R, p):
     """Pose R (3, 3), p (3,) in the base frame of a frame at folded placement (Rf (3, 3), pf (3,)) on joint j
     (:func:`tree_forward`'s poses), or at the constant pose (Rf, pf) when j < 0 (written in place)."""
@@ -74,7 +112,7 @@ def frame_pose(Rj, pj, j, Rf, pf, R, p):
         R[i, 2] = r0 * Rf[0, 2] + r1 * Rf[1, 2] + r2 * Rf[2, 2]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def frame_jacobian(rev, support, p, Z, O, J):
     """Base-frame Jacobian J (6, m) of a frame's origin p (3,) with respect to the physical joint values: the
     columns of the joints that move it (``support`` (m,) bool: the frame's joint and its ancestors) from their
