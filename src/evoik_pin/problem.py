@@ -231,8 +231,13 @@ class IKProblem:
     """Robot + target + objective + search box + tolerances: everything a solver sees.
 
     Attributes:
-        robot: the chain to solve for.
-        target: the :class:`Target` (coerced from the accepted target forms).
+        robot: the robot to solve for.
+        target: the :class:`Target` (coerced from the accepted target forms) of the robot's tip; None for a goal
+            list.
+        goals: a list of goals on frames of the robot (:mod:`evoik_pin.goals`: ``Pose``, ``Position``), each with
+            its weight and tolerances, instead of one target (pass the list as ``target`` or as ``goals``); checked
+            against the robot (:func:`evoik_pin.goals.bind`). Its cost is the weighted sum over the goals of
+            position error + ``orientation_weight`` x rotation angle; its errors the largest over the goals.
         objective: vectorized cost; default: position error (m) plus, for pose targets,
             ``orientation_weight`` x rotation angle (rad).
         lower, upper: (n,) search box (rad or m); default the robot's bounds.
@@ -264,10 +269,21 @@ class IKProblem:
     pose_metric: str = "sum"
     scene: Scene | None = None
     margin: float = 0.0
+    goals: list | None = None
     evaluations: int = field(default=0, compare=False)
 
     def __post_init__(self) -> None:
-        self.target = Target.coerce(self.target)
+        from .goals import bind, is_goal_list
+
+        if self.goals is None and is_goal_list(self.target):
+            self.goals = self.target
+        if self.goals is not None:
+            if self.objective is not None:
+                raise OptionError("a goal list has its own cost (the goals' weighted errors); give no objective")
+            self.target = None
+            self.goals, *self._goal_stack = bind(self.robot, self.goals)
+        else:
+            self.target = Target.coerce(self.target)
         if self.rotation_tolerance is None:
             self.rotation_tolerance = self.tolerance
         for name in ("tolerance", "orientation_weight", "rotation_tolerance"):
@@ -290,7 +306,10 @@ class IKProblem:
             if not isinstance(self.scene, Scene):
                 raise OptionError(f"scene must be an evoik_pin.Scene, got {type(self.scene).__name__}")
             self.scene.check_robot(self.robot)
-        if self.objective is None:
+        if self.goals is not None:
+            if self.pose_metric not in POSE_METRICS:
+                raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
+        elif self.objective is None:
             self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
         elif self.pose_metric not in POSE_METRICS:
             raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
@@ -312,8 +331,50 @@ class IKProblem:
         """Number of joints."""
         return self.robot.n
 
+    # ------------------------------------------------------------------ goal lists
+    def goal_stack(self):
+        """(the LM kernel's :class:`~evoik_pin.solvers.lm.layout.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)) of a goal
+        list."""
+        return tuple(self._goal_stack)
+
+    def _goal_population_errors(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q``."""
+        from .lie import relative_angle
+
+        P, R = self.robot.fk_batch(Q, validate=False, frames=[g.frame for g in self.goals])
+        _, pt, Rt = self._goal_stack
+        d = P - pt
+        pos = np.sqrt((d * d).sum(axis=2))
+        rot = np.zeros_like(pos)
+        for g, goal in enumerate(self.goals):
+            if goal.has_orientation:
+                rot[:, g] = relative_angle(Rt[g], R[:, g])
+        return pos, rot
+
+    def _goal_cost(self, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """The goals' cost (N,) from their errors (N, G): the weighted sum of position + orientation_weight x angle."""
+        w = np.array([g.weight for g in self.goals])
+        return (pos + self.orientation_weight * rot) @ w
+
+    def goal_errors(self, q: np.ndarray) -> list[tuple[float, float | None]]:
+        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order."""
+        fids = [self.robot.frame_id(g.frame) for g in self.goals]
+        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        return [g.errors(T) for g, T in zip(self.goals, poses, strict=True)]
+
+    def goals_met(self, errors) -> bool:
+        """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""
+        return all(g.met(p, r) for g, (p, r) in zip(self.goals, errors, strict=True))
+
     def evaluate(self, Q: np.ndarray) -> Evaluation:
-        """Cost and errors of a population ``Q`` (N, n), from one kinematics pass."""
+        """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors
+        over the goals)."""
+        if self.goals is not None:
+            pos, rot = self._goal_population_errors(Q)
+            self.evaluations += Q.shape[0]
+            oriented = any(g.has_orientation for g in self.goals)
+            return Evaluation(self._penalized(Q, self._goal_cost(pos, rot)), pos.max(axis=1),
+                              rot.max(axis=1) if oriented else None)
         target = self.target
         if type(self.objective) is PositionError and self.objective.target is target and not target.planar:
             # the default position-only objective, in the solvers' inner loop: skip the generic machinery
@@ -330,6 +391,8 @@ class IKProblem:
 
     def cost(self, Q: np.ndarray) -> np.ndarray:
         """Objective values (N,) of a population ``Q`` (N, n)."""
+        if self.goals is not None:
+            return self.evaluate(Q).cost
         kin = PopulationKinematics(self.robot, Q)
         self.evaluations += Q.shape[0]
         return self._penalized(Q, self.objective(Q, kin))
@@ -349,6 +412,12 @@ class IKProblem:
         (:meth:`Objective.from_errors`); otherwise one forward-kinematics call fills the kinematics the
         objective reads (no batch pass).
         """
+        if self.goals is not None:
+            errors = self.goal_errors(q)
+            pos = np.array([[p for p, _ in errors]])
+            rot = np.array([[r or 0.0 for _, r in errors]])
+            rots = [r for _, r in errors if r is not None]
+            return float(pos.max()), (max(rots) if rots else None), float(self._goal_cost(pos, rot)[0])
         target = self.target
         if position_error is not None:
             cost = self.objective.from_errors(target, position_error, orientation_error)

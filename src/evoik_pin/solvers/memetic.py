@@ -85,6 +85,8 @@ class SeedTable:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
+        self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
+        self._goal_frames: dict = {}  # frame names -> (positions (size, G, 3), rotations (size, G, 3, 3))
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -148,6 +150,38 @@ class SeedTable:
             for i in part[d[part].argsort()]:
                 if i != first:
                     yield int(i)
+
+    def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
+        """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
+        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry (the
+        frames' poses over the table are computed once per frame list and cached)."""
+        if k <= 0:
+            return
+        frames = tuple(g.frame for g in problem.goals)
+        hit = self._goal_frames.get(frames)
+        if hit is None:
+            if len(self._goal_frames) > 8:
+                self._goal_frames.clear()
+            hit = self._goal_frames[frames] = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
+        P, R = hit
+        _, pt, Rt = problem.goal_stack()
+        d = np.zeros(self.Q.shape[0])
+        for g, goal in enumerate(problem.goals):
+            dp = P[:, g] - pt[g]
+            dg = (dp * dp).sum(axis=1)
+            if goal.has_orientation:
+                dR = (R[:, g] - Rt[g]).reshape(-1, 9)
+                dg += self.weight * self.weight * (dR * dR).sum(axis=1)
+            d += goal.weight * dg
+        if allowed is not None:
+            d = np.where(allowed, d, np.inf)
+            k = min(k, int(np.count_nonzero(allowed)))
+            if k <= 0:
+                return
+        k = min(k, d.shape[0])
+        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+        for i in part[d[part].argsort()]:
+            yield int(i)
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
@@ -314,7 +348,7 @@ class _Search:
                 if self.best is None:
                     self.best = out
                 return False
-        if self.best is None or out.converged or out.error < self.best.error:
+        if self.best is None or out.converged or out.rank < self.best.rank:
             self.best = out
         return out.converged
 
@@ -431,14 +465,16 @@ def memetic(
     # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
     # to replace.
     ranked = first = None
+    goals = problem.goals is not None
     if table is not None:
         # lazy: ranks on the first next(); with a scene, among the collision-free entries only
-        ranked = table.ranked(problem.target, table_offset + table_seeds, free)
+        ranked = (table.ranked_goals(problem, table_offset + table_seeds, free) if goals
+                  else table.ranked(problem.target, table_offset + table_seeds, free))
         if table_offset:
             ranked = itertools.islice(ranked, table_offset, None)
     q0 = problem.q0
     q0_first = q0 is not None
-    if q0 is not None and table is not None:
+    if q0 is not None and table is not None and not goals:
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
         d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
@@ -484,15 +520,23 @@ def memetic(
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    goal_errors = problem.goal_errors(q) if goals else None
+    if goals:
+        within = problem.goals_met(goal_errors)
+    else:
+        within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
     else:
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
-        best = (f"best {errors_text(pos, rot)} exceeds the tolerance ({problem.tolerance:g} m, "
-                f"{problem.rotation_tolerance:g} rad)" if not within else "no collision-free answer met")
+        if goals and not within:
+            unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
+            best = f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
+        else:
+            best = (f"best {errors_text(pos, rot)} exceeds the tolerance ({problem.tolerance:g} m, "
+                    f"{problem.rotation_tolerance:g} rad)" if not within else "no collision-free answer met")
         message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
     if search.rejected and not success:
         message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
@@ -505,6 +549,7 @@ def memetic(
         setup_s=setup_s,
         # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
         collision_free=True if problem.scene is not None and search.best.converged else None,
+        goal_errors=goal_errors,
     )
 
 
