@@ -62,6 +62,13 @@ class Goal:
     kind: int = field(default=-1, init=False, repr=False)
     has_orientation: bool = field(default=False, init=False, repr=False)
 
+    def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool) -> None:
+        """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__)."""
+        for name, value in (("frame", frame), ("weight", weight), ("tolerance", tolerance),
+                            ("rotation_tolerance", rotation_tolerance), ("kind", kind), ("has_orientation", oriented)):
+            object.__setattr__(self, name, value)
+        self._check_common()
+
     def _check_common(self) -> None:
         if not isinstance(self.frame, str) or not self.frame:
             raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {self.frame!r}")
@@ -114,14 +121,7 @@ class Pose(Goal):
                  rotation_tolerance: float | None = None) -> None:
         from .problem import Target
 
-        set_ = object.__setattr__
-        set_(self, "frame", frame)
-        set_(self, "weight", weight)
-        set_(self, "tolerance", tolerance)
-        set_(self, "rotation_tolerance", rotation_tolerance)
-        set_(self, "kind", KIND_POSE)
-        set_(self, "has_orientation", True)
-        self._check_common()
+        self._init_common(frame, weight, tolerance, rotation_tolerance, KIND_POSE, True)
         if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
             raise TargetError(f"Pose on {frame!r}: a 3-vector is a position; use Position({frame!r}, p) or give a "
                               "4 x 4 pose or a pin.SE3")
@@ -132,7 +132,7 @@ class Pose(Goal):
         if t.rotation is None or t.planar:
             raise TargetError(f"Pose on {frame!r} needs a target with a rotation (4 x 4 pose or pin.SE3); use "
                               f"Position({frame!r}, p) for a position alone")
-        set_(self, "target", pin.SE3(np.array(t.rotation), np.array(t.position)))
+        object.__setattr__(self, "target", pin.SE3(np.array(t.rotation), np.array(t.position)))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)
@@ -157,14 +157,7 @@ class Position(Goal):
     rotation_tolerance: float | None = None
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
-        set_ = object.__setattr__
-        set_(self, "frame", frame)
-        set_(self, "weight", weight)
-        set_(self, "tolerance", tolerance)
-        set_(self, "rotation_tolerance", None)
-        set_(self, "kind", KIND_POSITION)
-        set_(self, "has_orientation", False)
-        self._check_common()
+        self._init_common(frame, weight, tolerance, None, KIND_POSITION, False)
         if isinstance(target, pin.SE3) or np.shape(target) == (4, 4):
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m); use Pose({frame!r}, T) for a pose")
         try:
@@ -175,7 +168,7 @@ class Position(Goal):
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m), got shape {p.shape}")
         if not np.isfinite(p).all():
             raise TargetError(f"Position on {frame!r}: target contains NaN or inf: {p}")
-        set_(self, "target", p.copy())
+        object.__setattr__(self, "target", p.copy())
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)

@@ -243,13 +243,11 @@ def damped_solve(E, lam, rhs, L, y, dq):
     systems (task space when E (m, n) has m <= n rows, joint space otherwise); L (min(m, n), min(m, n)) and y
     (max(m, n),) are scratch. False when the system is not positive."""
     m, n = E.shape
-    if m > n:
-        return _damped_solve_joints(E, lam, rhs, L, y, dq)
-    for i in range(m):
+    joints = m > n
+    size = n if joints else m
+    for i in range(size):  # L L^T = Gram + lam I, the Gram matrix's entries made as they are needed
         for j in range(i + 1):
-            s = 0.0
-            for k in range(n):
-                s += E[i, k] * E[j, k]
+            s = _gram(E, i, j, joints)
             if i == j:
                 s += lam
             for k in range(j):
@@ -260,16 +258,25 @@ def damped_solve(E, lam, rhs, L, y, dq):
                 L[i, i] = math.sqrt(s)
             else:
                 L[i, j] = s / L[j, j]
-    for i in range(m):  # L z = rhs
-        s = rhs[i]
+    for i in range(size):  # L z = b: b = rhs (task space) or E^T rhs (joint space)
+        s = 0.0
+        if joints:
+            for k in range(m):
+                s += E[k, i] * rhs[k]
+        else:
+            s = rhs[i]
         for k in range(i):
             s -= L[i, k] * y[k]
         y[i] = s / L[i, i]
-    for i in range(m - 1, -1, -1):  # L^T y = z
+    for i in range(size - 1, -1, -1):  # L^T y = z
         s = y[i]
-        for k in range(i + 1, m):
+        for k in range(i + 1, size):
             s -= L[k, i] * y[k]
         y[i] = s / L[i, i]
+    if joints:
+        for k in range(n):
+            dq[k] = y[k]
+        return True
     for k in range(n):
         s = 0.0
         for i in range(m):
@@ -278,40 +285,17 @@ def damped_solve(E, lam, rhs, L, y, dq):
     return True
 
 
-@njit(cache=True, nogil=True, **BORROWING)
-def _damped_solve_joints(E, lam, rhs, L, y, dq):
-    """:func:`damped_solve` in joint space: (E^T E + lam I) dq = E^T rhs, for E (m, n) with m > n rows."""
-    m, n = E.shape
-    for i in range(n):
-        for j in range(i + 1):
-            s = 0.0
-            for k in range(m):
-                s += E[k, i] * E[k, j]
-            if i == j:
-                s += lam
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            if i == j:
-                if s <= 0.0:
-                    return False
-                L[i, i] = math.sqrt(s)
-            else:
-                L[i, j] = s / L[j, j]
-    for i in range(n):  # L z = E^T rhs
-        s = 0.0
-        for k in range(m):
-            s += E[k, i] * rhs[k]
-        for k in range(i):
-            s -= L[i, k] * y[k]
-        y[i] = s / L[i, i]
-    for i in range(n - 1, -1, -1):  # L^T dq = z
-        s = y[i]
-        for k in range(i + 1, n):
-            s -= L[k, i] * y[k]
-        y[i] = s / L[i, i]
-    for k in range(n):
-        dq[k] = y[k]
-    return True
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def _gram(E, i, j, joints):
+    """Entry (i, j) of E E^T (rows i, j of E) or, with ``joints``, of E^T E (columns i, j)."""
+    s = 0.0
+    if joints:
+        for k in range(E.shape[0]):
+            s += E[k, i] * E[k, j]
+    else:
+        for k in range(E.shape[1]):
+            s += E[i, k] * E[j, k]
+    return s
 
 
 @njit(cache=True, nogil=True, **BORROWING)
@@ -432,16 +416,9 @@ def workspace_size(n, m, G, rows, max_it):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def carve(buf, held, n, m, G, rows, max_it):
-    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
-    ``rows`` task rows, as views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,).
-
-    Inlined: in a reference-counting caller the views count references as usual; in a borrowing one they do not,
-    so a borrowing entry point that receives the two buffers passes two arrays, not some fifty (a reference-counting
-    caller brackets every array it passes with an atomic increment and decrement).
-    """
-    s = min(rows, n)
-    o = 0
+def _carve_set(buf, o, n, m, G, rows):
+    """One configuration's kinematics buffers (q, Rj, pj, Z, O, Rg, pg, tg, e, ge) from buf at offset o, and the
+    offset after them."""
     q, o = buf[o:o + n], o + n
     Rj, o = buf[o:o + 9 * m].reshape((m, 3, 3)), o + 9 * m
     pj, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
@@ -452,26 +429,22 @@ def carve(buf, held, n, m, G, rows, max_it):
     tg, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
     e, o = buf[o:o + rows], o + rows
     ge, o = buf[o:o + 2 * G].reshape((G, 2)), o + 2 * G
-    qn, o = buf[o:o + n], o + n
-    Rj2, o = buf[o:o + 9 * m].reshape((m, 3, 3)), o + 9 * m
-    pj2, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
-    Z2, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
-    O2, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
-    Rg2, o = buf[o:o + 9 * G].reshape((G, 3, 3)), o + 9 * G
-    pg2, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
-    tg2, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
-    en, o = buf[o:o + rows], o + rows
-    ge2, o = buf[o:o + 2 * G].reshape((G, 2)), o + 2 * G
-    qh, o = buf[o:o + n], o + n
-    Rj3, o = buf[o:o + 9 * m].reshape((m, 3, 3)), o + 9 * m
-    pj3, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
-    Z3, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
-    O3, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
-    Rg3, o = buf[o:o + 9 * G].reshape((G, 3, 3)), o + 9 * G
-    pg3, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
-    tg3, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
-    eh, o = buf[o:o + rows], o + rows
-    ge3, o = buf[o:o + 2 * G].reshape((G, 2)), o + 2 * G
+    return q, Rj, pj, Z, O, Rg, pg, tg, e, ge, o
+
+
+@njit(cache=True, nogil=True, inline="always")
+def carve(buf, held, n, m, G, rows, max_it):
+    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
+    ``rows`` task rows, as views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,).
+
+    Inlined: in a reference-counting caller the views count references as usual; in a borrowing one they do not,
+    so a borrowing entry point that receives the two buffers passes two arrays, not some fifty (a reference-counting
+    caller brackets every array it passes with an atomic increment and decrement).
+    """
+    s = min(rows, n)
+    q, Rj, pj, Z, O, Rg, pg, tg, e, ge, o = _carve_set(buf, 0, n, m, G, rows)
+    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2, o = _carve_set(buf, o, n, m, G, rows)
+    qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3, o = _carve_set(buf, o, n, m, G, rows)
     x, o = buf[o:o + m], o + m
     Jx, o = buf[o:o + 6 * m].reshape((6, m)), o + 6 * m
     J, o = buf[o:o + 6 * n].reshape((6, n)), o + 6 * n

@@ -18,7 +18,7 @@ import math
 
 from numba import njit
 
-__all__ = ["BORROWING", "frame_jacobian", "frame_pose", "tree_forward"]
+__all__ = ["BORROWING", "frame_jacobian", "frame_pose", "joint_column", "tree_forward"]
 
 
 def _borrowing_options() -> dict:
@@ -119,17 +119,24 @@ def frame_jacobian(rev, support, p, Z, O, J):
     axes Z and origins O (m, 3), zero columns for the others."""
     m = Z.shape[0]
     for k in range(m):
-        if not support[k]:
+        if support[k]:
+            joint_column(rev[k], p, Z, O, k, J)
+        else:
             for i in range(6):
                 J[i, k] = 0.0
-            continue
-        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
-        if rev[k]:
-            l0, l1, l2 = p[0] - O[k, 0], p[1] - O[k, 1], p[2] - O[k, 2]
-            J[0, k] = z1 * l2 - z2 * l1
-            J[1, k] = z2 * l0 - z0 * l2
-            J[2, k] = z0 * l1 - z1 * l0
-            J[3, k], J[4, k], J[5, k] = z0, z1, z2
-        else:
-            J[0, k], J[1, k], J[2, k] = z0, z1, z2
-            J[3, k] = J[4, k] = J[5, k] = 0.0
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def joint_column(revolute, p, Z, O, k, J):
+    """Column k of the base-frame Jacobian J (6, m) of the point p (3,): joint k's axis Z[k] and origin O[k] give
+    (z x (p - o), z) for a revolute joint, (z, 0) for a prismatic one."""
+    z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+    if revolute:
+        l0, l1, l2 = p[0] - O[k, 0], p[1] - O[k, 1], p[2] - O[k, 2]
+        J[0, k] = z1 * l2 - z2 * l1
+        J[1, k] = z2 * l0 - z0 * l2
+        J[2, k] = z0 * l1 - z1 * l0
+        J[3, k], J[4, k], J[5, k] = z0, z1, z2
+    else:
+        J[0, k], J[1, k], J[2, k] = z0, z1, z2
+        J[3, k] = J[4, k] = J[5, k] = 0.0
