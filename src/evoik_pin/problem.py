@@ -273,8 +273,6 @@ class IKProblem:
     evaluations: int = field(default=0, compare=False)
 
     def __post_init__(self) -> None:
-        from .goals import bind, is_goal_list
-
         if self.goals is None and is_goal_list(self.target):
             self.goals = self.target
         if self.goals is not None:
@@ -446,3 +444,7 @@ class IKProblem:
         lower = np.clip(np.maximum(self.lower, q_prev - delta), self.lower, self.upper)
         upper = np.clip(np.minimum(self.upper, q_prev + delta), self.lower, self.upper)
         return replace(self, lower=lower, upper=upper, q0=np.clip(q_prev, lower, upper), evaluations=0)
+
+
+# Imported last: goals reads the LM engine's layout, whose package imports this module (for IKProblem, Target).
+from .goals import bind, is_goal_list  # noqa: E402

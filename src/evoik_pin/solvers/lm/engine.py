@@ -35,12 +35,13 @@ Two engines run that one iteration: ``engine="compiled"`` (the default) calls th
 
 from __future__ import annotations
 
+import threading
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...errors import OptionError
-from ...problem import IKProblem, Target
 from .layout import (
     DEFAULT_DAMPING,
     DEFAULT_ITERATIONS,
@@ -67,6 +68,9 @@ from .layout import (
     problem_goals,
 )
 from .outcome import LMOutcome, PairsOutcome
+
+if TYPE_CHECKING:  # the problem module imports goals, which import this package's layout
+    from ...problem import IKProblem, Target
 
 __all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "problem_goals", "solve_pairs"]
 
@@ -165,20 +169,17 @@ class LevenbergMarquardt:
         G = len(stack.kinds)
         self._one = G == 1
         self._g_scratch = np.empty((G, 2))  # one goal: its errors are the outcome's own
-        self._buffers: tuple = ()  # the kernel's workspace, kept from run to run
+        self._buffers: tuple = ()  # the kernel's workspace (_workspace)
         self._buffers_for = -1  # the most steps those buffers hold
         # the kernel's constant arguments, unpacked from one tuple at each call
         self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
 
     def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
-        """The kernel's buffers for runs of up to ``max_iterations`` steps, made once (again when more steps are
-        asked for): an allocation per run would cost a tenth of a short one. (Hence one object, one run at a
-        time.)"""
-        if max_iterations > self._buffers_for:
-            size = self._kernel["workspace_size"](self.n, self._tree[0].shape[0], len(self.goals), self.goals.rows,
-                                                  max_iterations)
-            self._buffers = (np.empty(int(size)), np.empty(self.n, dtype=bool))
-            self._buffers_for = max_iterations
+        """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's buffers for this goal
+        stack, kept from solve to solve (:func:`_thread_buffers`), so a run neither allocates nor finds its memory
+        cold in the cache."""
+        self._buffers = _thread_buffers(self._kernel, self.goals, self.n, self._tree[0].shape[0], max_iterations)
+        self._buffers_for = max_iterations
         return self._buffers
 
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
@@ -248,6 +249,30 @@ class LevenbergMarquardt:
                          None if self._one else g_stats[k], float(s[k, S_COST])), k
 
 
+_LOCAL = threading.local()
+#: Goal stacks whose buffers a thread keeps (the most recently used ones).
+_BUFFERS_KEPT = 8
+
+
+def _thread_buffers(kernel: dict, stack: GoalStack, n: int, m: int, max_iterations: int):
+    """(float buffer, held (n,) bool) of the kernel's workspace for ``stack`` on this thread, for runs of up to
+    ``max_iterations`` steps (at least 30, the default, so that one pair serves every usual call): kept per thread
+    (two threads never share a workspace) for the last few goal stacks; the entry keeps its stack alive, so an id is
+    never reused while it is cached."""
+    cache = getattr(_LOCAL, "buffers", None)
+    if cache is None:
+        cache = _LOCAL.buffers = {}
+    key = (id(stack), n)
+    hit = cache.get(key)
+    if hit is None or hit[1] < max_iterations:
+        steps = max(max_iterations, DEFAULT_ITERATIONS)
+        size = int(kernel["workspace_size"](n, m, len(stack.kinds), stack.rows, steps))
+        if len(cache) >= _BUFFERS_KEPT:
+            cache.pop(next(iter(cache)))
+        hit = cache[key] = ((np.empty(size), np.empty(n, dtype=bool)), steps, stack)
+    return hit[0]
+
+
 def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lower: np.ndarray, upper: np.ndarray,
                 tolerance: float, rotation_tolerance: float, max_iterations: int = DEFAULT_ITERATIONS,
                 damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
@@ -264,6 +289,7 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lowe
     _check_engine(engine)
     N = Q.shape[0]
     if engine == "python":
+        from ...problem import IKProblem
         from .reference import ReferenceLM
 
         listed = targets if not isinstance(targets, TargetArrays) else targets_of(targets)
@@ -290,6 +316,8 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lowe
 
 def targets_of(arrays: TargetArrays) -> list[Target]:
     """Target objects of :class:`~.layout.TargetArrays` (the reference engine works on them)."""
+    from ...problem import Target
+
     P, Rts = arrays.P, arrays.Rts
     if arrays.kind in (KIND_PLANAR, KIND_PLANAR_YAW):
         return [Target(P[i, :2], planar=True, yaw=float(P[i, 2]) if arrays.kind == KIND_PLANAR_YAW else None)

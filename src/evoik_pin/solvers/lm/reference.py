@@ -19,13 +19,13 @@ from __future__ import annotations
 
 import math
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
 from ...lie import wrap_angle, yaw
-from ...problem import IKProblem
 from .layout import (
     DEFAULT_DAMPING,
     DEFAULT_MAX_STEP,
@@ -51,6 +51,9 @@ from .layout import (
     problem_goals,
 )
 from .outcome import LMOutcome
+
+if TYPE_CHECKING:
+    from ...problem import IKProblem
 
 __all__ = ["ReferenceLM"]
 
