@@ -110,7 +110,7 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
 def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "compiled") -> float:
     """Do the one-time work of solving with ``robot`` now, so that no later solve pays for it.
 
-    Loads the compiled LM kernel (numba: about 0.5 s per process from its on-disk cache, about 15 s the first
+    Loads the compiled LM kernel (numba: about 0.5 s per process from its on-disk cache, about 45 s the first
     time after an install) and builds the memetic solver's seed table for the search box (the robot's bounds,
     or ``bounds=(lower, upper)``; ``table_size`` entries, default memetic's). :func:`solve` does this by
     itself when needed, before its clock starts, and reports the time in ``Result.setup_s``; calling

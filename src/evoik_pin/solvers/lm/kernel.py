@@ -21,7 +21,7 @@ space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more row
 space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
 
 The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. numba compiles this module on
-first use (about 20 s once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
+first use (about 45 s once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
 any time budget).
 
 Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
