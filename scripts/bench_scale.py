@@ -33,7 +33,7 @@ from evoik_pin.solvers.batch import threads
 from evoik_pin.solvers.batch.outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
 from evoik_pin.solvers.batch.targets import TargetSource
 from evoik_pin.solvers.lm import engine as lm_engine
-from evoik_pin.solvers.lm.layout import KIND_POSE, STATS_SIZE, box_constants, encode_targets, kernel_params
+from evoik_pin.solvers.lm.layout import KIND_POSE, STATS_SIZE, GoalStack, box_constants, encode_targets, kernel_params
 from evoik_pin.solvers.search.seed_table import SeedTable, default_table_size, seed_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -148,11 +148,13 @@ def prange_kernel():
         from evoik_pin.solvers.lm.kernel import lm_run
 
         @njit(parallel=True, nogil=True, cache=True)
-        def run_pairs(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, P, Rts, params, Q_out, stats):
+        def run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts,
+                      params, Q_out, stats, g_stats):
             for i in prange(Q.shape[0]):
-                pos, rot, conv, it, ev_ = lm_run(Q[i], FR, Fp, rev, index, scale, offset, box, any_wrap, P[i],
-                                                 Rts[i], params, Q_out[i])
+                pos, rot, conv, it, ev_, c = lm_run(Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap,
+                                                    spec, gR, gp, support, P[i], Rts[i], params, Q_out[i], g_stats[i])
                 stats[i, 0], stats[i, 1], stats[i, 2], stats[i, 3], stats[i, 4] = pos, rot, conv, it, ev_
+                stats[i, 5] = c
 
         _PRANGE["f"] = run_pairs
     return _PRANGE["f"]
@@ -170,14 +172,18 @@ def kernel_options(robot, H, reps: int) -> dict:
     Qs = np.ascontiguousarray(table.Q[table.nearest(targets, 1)[:, 0]])
     P, Rts = encode_targets(targets)
     _, wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
-    params = kernel_params(1e-6, 1e-6, KIND_POSE, DEFAULT_ITERATIONS)
-    chain = robot.chain_constants() + robot.chain_coupling()
+    params = kernel_params(DEFAULT_ITERATIONS)
+    stack = GoalStack.single(robot, KIND_POSE, 1e-6, 1e-6)
+    tree = robot.tree_constants()
+    goals = (stack.spec, stack.R, stack.p, stack.support)
+    P, Rts = P[:, None].copy(), Rts[:, None].copy()  # one goal per pair
     serial = lm_engine.compiled_kernel()["lm_run_pairs"]
     parallel = prange_kernel()
     N = len(targets)
+    g_stats = np.empty((N, 1, 2))
 
     def call(kernel, a, b, Qo, st):
-        kernel(Qs[a:b], *chain, box, wrap, P[a:b], Rts[a:b], params, Qo[a:b], st[a:b])
+        kernel(Qs[a:b], *tree, box, wrap, *goals, P[a:b], Rts[a:b], params, Qo[a:b], st[a:b], g_stats[a:b])
 
     from concurrent.futures import ThreadPoolExecutor
 

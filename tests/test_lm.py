@@ -13,7 +13,7 @@ from evoik_pin.problem import IKProblem, Target
 from evoik_pin.robot import list_robots, load_robot
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs
 from evoik_pin.solvers.lm import chain as K
-from evoik_pin.solvers.lm.layout import TargetArrays
+from evoik_pin.solvers.lm.layout import STATS_SIZE, TargetArrays
 from evoik_pin.solvers.lm.reference import ReferenceLM
 
 
@@ -205,8 +205,8 @@ def test_solve_many_engines_agree_on_success(robots):
 
 def _kernel_pairs(robot, kind, count, seed):
     """Inputs of the kernel's batch entry points: ``count`` (start, target) pairs of one target kind, some
-    starts on or beyond the joint limits (clipping, holding, wrapping), and the pose kind's params."""
-    from evoik_pin.solvers.lm.layout import box_constants, encode_targets, kernel_params, target_kind
+    starts on or beyond the joint limits (clipping, holding, wrapping), the tip goal's stack and the params."""
+    from evoik_pin.solvers.lm.layout import GoalStack, box_constants, encode_targets, kernel_params, target_kind
 
     rng = np.random.default_rng(seed)
     Qt, Q0 = robot.random_configurations(count, rng), robot.random_configurations(count, rng)
@@ -216,9 +216,10 @@ def _kernel_pairs(robot, kind, count, seed):
     targets = [Target.coerce(_target(kind, robot, q, yaw_offset=0.2)) for q in Qt]
     P, Rts = encode_targets(targets)
     _, any_wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
-    params = kernel_params(1e-6, 1e-6, target_kind(targets[0]), 30)
-    return (np.ascontiguousarray(Q0), *robot.chain_constants(), *robot.chain_coupling(), box, any_wrap, P, Rts,
-            params)
+    stack = GoalStack.single(robot, target_kind(targets[0]), 1e-6, 1e-6)
+    params = kernel_params(30)
+    return (np.ascontiguousarray(Q0), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R, stack.p,
+            stack.support, P[:, None].copy(), Rts[:, None].copy(), params)
 
 
 @pytest.mark.parametrize("name, kind", [("panda", "pose"), ("ur5", "pose"), ("ax18", "position"),
@@ -229,25 +230,26 @@ def test_kernel_runs_do_not_depend_on_earlier_runs(robots, name, kind):
     from evoik_pin.solvers.lm.kernel import lm_run, lm_run_pairs, lm_run_starts
 
     robot = robots[name]
-    Q0, *chain, box, any_wrap, P, Rts, params = _kernel_pairs(robot, kind, 60, 41)
+    Q0, *args, P, Rts, params = _kernel_pairs(robot, kind, 60, 41)
     N, n = Q0.shape
-    out, stats = np.empty((N, n)), np.empty((N, 5))
-    lm_run_pairs(Q0, *chain, box, any_wrap, P, Rts, params, out, stats)
-    back, back_stats = np.empty((N, n)), np.empty((N, 5))
-    lm_run_pairs(Q0[::-1].copy(), *chain, box, any_wrap, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats)
+    out, stats, g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
+    lm_run_pairs(Q0, *args, P, Rts, params, out, stats, g)
+    back, back_stats, back_g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
+    lm_run_pairs(Q0[::-1].copy(), *args, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats, back_g)
     assert np.array_equal(out, back[::-1]) and np.array_equal(stats, back_stats[::-1], equal_nan=True)
+    assert np.array_equal(g, back_g[::-1], equal_nan=True)
     assert stats[:, 2].any() and (stats[:, 4] > 2).any()  # converged runs, runs of several steps
     for i in range(0, N, 7):  # a fresh workspace per run
         one = np.empty(n)
-        assert lm_run(Q0[i], *chain, box, any_wrap, P[i], Rts[i], params, one)[3] == stats[i, 3]
+        assert lm_run(Q0[i], *args, P[i], Rts[i], params, one, np.empty((1, 2)))[3] == stats[i, 3]
         assert np.array_equal(one, out[i])
     # several starts for one target, after runs for other targets: the same runs again
-    starts, starts_stats = np.empty((N, n)), np.full((N, 5), -1.0)
-    k = lm_run_starts(Q0, *chain, box, any_wrap, P[0], Rts[0], params, starts, starts_stats)
+    starts, starts_stats = np.empty((N, n)), np.full((N, STATS_SIZE), -1.0)
+    k = lm_run_starts(Q0, *args, P[0], Rts[0], params, starts, starts_stats, np.empty((N, 1, 2)))
     runs = k + 1 if k >= 0 else -(k + 1)
     for i in range(runs):
         one = np.empty(n)
-        lm_run(Q0[i], *chain, box, any_wrap, P[0], Rts[0], params, one)
+        lm_run(Q0[i], *args, P[0], Rts[0], params, one, np.empty((1, 2)))
         assert np.array_equal(one, starts[i])
     assert (starts_stats[runs:] == -1.0).all()
 
@@ -260,15 +262,107 @@ def test_kernel_batches_from_threads_equal_one_call(robots):
     from evoik_pin.solvers.lm.kernel import lm_run_pairs
 
     robot = robots["panda"]
-    Q0, *chain, box, any_wrap, P, Rts, params = _kernel_pairs(robot, "pose", 400, 43)
+    Q0, *args, P, Rts, params = _kernel_pairs(robot, "pose", 400, 43)
     N, n = Q0.shape
-    out, stats = np.empty((N, n)), np.empty((N, 5))
-    lm_run_pairs(Q0, *chain, box, any_wrap, P, Rts, params, out, stats)
-    out_t, stats_t = np.empty((N, n)), np.empty((N, 5))
+    out, stats, g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
+    lm_run_pairs(Q0, *args, P, Rts, params, out, stats, g)
+    out_t, stats_t, g_t = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
 
     def chunk(s):
-        lm_run_pairs(Q0[s], *chain, box, any_wrap, P[s], Rts[s], params, out_t[s], stats_t[s])
+        lm_run_pairs(Q0[s], *args, P[s], Rts[s], params, out_t[s], stats_t[s], g_t[s])
 
     with ThreadPoolExecutor(4) as pool:
         list(pool.map(chunk, [slice(i, i + 50) for i in range(0, N, 50)]))
-    assert np.array_equal(out, out_t) and np.array_equal(stats, stats_t)
+    assert np.array_equal(out, out_t) and np.array_equal(stats, stats_t) and np.array_equal(g, g_t)
+
+
+# ---------------------------------------------------------------------------------------------- goal stacks
+def _goal_problem(case, rng):
+    """(robot, goals factory q -> goal list) of a goal-stack case."""
+    from urdf_helpers import mimic_3r
+
+    from evoik_pin.goals import Pose, Position
+
+    if case == "baxter":  # two arms, two poses
+        robot = load_robot("baxter", tips=["left_gripper", "right_gripper"])
+        return robot, lambda q: [Pose(f, robot.fk(q, f)) for f in robot.tips]
+    if case == "talos":  # a floating base, three poses and a position, weights
+        robot = load_robot("talos", floating_base=True)
+        frames = ["left_sole_link", "right_sole_link", "arm_left_7_link", "arm_right_7_link"]
+        weights = (4.0, 4.0, 1.0)
+        return robot, lambda q: ([Pose(f, robot.fk(q, f), weight=w) for f, w in zip(frames[:3], weights, strict=True)]
+                                 + [Position(frames[3], robot.fk(q, frames[3]).translation, weight=0.5)])
+    if case == "allegro":  # four fingertips, positions
+        robot = load_robot("allegro_right")
+        tips = ["link_3.0_tip", "link_7.0_tip", "link_11.0_tip", "link_15.0_tip"]
+        return robot, lambda q: [Position(f, robot.fk(q, f).translation) for f in tips]
+    if case == "ur5_rows_over_joints":  # 9 rows on 6 joints: the damped step in joint space
+        robot = load_robot("ur5")
+        return robot, lambda q: [Pose("tool0", robot.fk(q)), Position("forearm_link", robot.fk(q, "forearm_link")
+                                                                      .translation, weight=2.0)]
+    if case == "mimic":  # a mimic joint on the chain, two goals
+        robot = load_robot(mimic_3r(), tip="tool")
+        return robot, lambda q: [Position("tool", robot.fk(q).translation),
+                                 Position("l2", robot.fk(q, "l2").translation)]
+    raise AssertionError(case)
+
+
+@pytest.mark.parametrize("case", ["baxter", "talos", "allegro", "ur5_rows_over_joints", "mimic"])
+def test_goal_stacks_compiled_equal_the_python_loop(case):
+    """The kernel on goal stacks (trees, floating base, weights, positions and poses, more rows than joints, mimic
+    joints) takes the reference loop's steps from the same starts; converged answers meet every goal by Pinocchio."""
+    rng = np.random.default_rng(23)
+    robot, make = _goal_problem(case, rng)
+    identical = converged = 0
+    runs = 16
+    for _ in range(runs):
+        qt, q0 = robot.random_configurations(2, rng)
+        q0 = np.clip(qt + 0.3 * rng.standard_normal(robot.n), robot.lower, robot.upper)  # near enough to converge
+        problem = IKProblem(robot, make(qt))
+        a = LevenbergMarquardt(problem).run(q0, 40)
+        b = ReferenceLM(problem).run(q0, 40)
+        assert a.converged == b.converged and robot.within_bounds(a.q)
+        identical += (a.iterations == b.iterations and a.evaluations == b.evaluations
+                      and np.allclose(a.q, b.q, atol=1e-8))
+        assert (a.goal_errors is None) == (len(problem.goals) == 1)
+        if a.converged:
+            converged += 1
+            errors = problem.goal_errors(a.q)
+            assert problem.goals_met(errors)
+            assert np.allclose(a.goal_errors[:, 0], [e[0] for e in errors], atol=1e-12)
+            assert a.position_error == pytest.approx(max(e[0] for e in errors), abs=1e-12)
+    assert identical >= runs - 2
+    assert converged >= runs // 2
+
+
+def test_a_goal_list_of_one_tip_goal_is_the_single_target(robots):
+    # [Pose(tip, T)] packs to the very goal stack of the target T: the same runs, bit for bit
+    from evoik_pin.goals import Pose, Position
+
+    robot = robots["panda"]
+    rng = np.random.default_rng(24)
+    for qt, q0 in zip(robot.random_configurations(10, rng), robot.random_configurations(10, rng), strict=True):
+        T = robot.fk(qt)
+        for single, listed in ((T, [Pose(robot.tip, T)]), (T.translation, [Position(robot.tip, T.translation)])):
+            a = LevenbergMarquardt(IKProblem(robot, single)).run(q0, 30)
+            b = LevenbergMarquardt(IKProblem(robot, listed)).run(q0, 30)
+            assert np.array_equal(a.q, b.q) and a.iterations == b.iterations and a.converged == b.converged
+            assert a.position_error == b.position_error and a.orientation_error == b.orientation_error
+
+
+def test_weights_set_the_compromise_between_goals_that_cannot_all_be_met():
+    # the planar 2R arm's tool stretched out along x (joint 1 at 0) and its elbow on the y axis (joint 1 at pi/2)
+    # cannot both hold: the heavier goal ends nearer its target, on both engines
+    from evoik_pin.goals import Position
+
+    robot = load_robot("planar2r")
+    results = {}
+    for w in (1.0, 9.0):
+        goals = [Position("tool", [0.41, 0.0, 0.0], weight=w), Position("link2", [0.0, 0.25, 0.0])]
+        problem = IKProblem(robot, goals)
+        a = LevenbergMarquardt(problem).run(np.array([0.3, 0.2]), 60)
+        b = ReferenceLM(problem).run(np.array([0.3, 0.2]), 60)
+        assert not a.converged and not b.converged
+        assert np.allclose(a.q, b.q, atol=1e-6)
+        results[w] = a.goal_errors[:, 0]
+    assert results[9.0][0] < results[1.0][0] and results[9.0][1] > results[1.0][1]

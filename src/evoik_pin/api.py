@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from .errors import ConfigurationError, MethodError, OptionError
+from .goals import is_goal_list
 from .problem import DEFAULT_PRO_DELTA, IKProblem, Target, check_pro_delta
 from .result import Result
 from .robot import Robot, load_robot
@@ -25,8 +26,8 @@ from .solvers.lm import ENGINES
 from .solvers.options import check_int
 from .solvers.search.all_solutions import SolutionList  # also registers "memetic-all"
 
-__all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "BatchResults", "SolutionList", "make_problem", "methods", "prepare",
-           "solve", "solve_all", "solve_many", "solve_trajectory"]
+__all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "GOAL_METHODS", "BatchResults", "SolutionList", "make_problem",
+           "methods", "prepare", "solve", "solve_all", "solve_many", "solve_trajectory"]
 
 #: Method used when none is named.
 DEFAULT_METHOD = "memetic"
@@ -84,11 +85,20 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
         problem_kw["lower"], problem_kw["upper"] = lower, upper
     if "q0" in problem_kw and problem_kw["q0"] is None:
         problem_kw.pop("q0")
+    if is_goal_list(target):  # a list of goals (evoik_pin.goals) on frames of the robot
+        return IKProblem(robot, list(target), **problem_kw), options
     return IKProblem(robot, Target.coerce(target), **problem_kw), options
+
+
+#: Methods that solve goal lists (:mod:`evoik_pin.goals`); the others take one target for the tip.
+GOAL_METHODS = ("memetic",)
 
 
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
     info = get_solver(method)
+    if problem.goals is not None and method not in GOAL_METHODS:
+        raise MethodError(f"method {method!r} solves one target for the tip; goal lists are solved by "
+                          f"{', '.join(repr(m) for m in GOAL_METHODS)}")
     polish = options.pop("polish", False)
     info.check_options(options)
     result = info.func(problem, rng, **options)
@@ -102,7 +112,7 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
 def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "compiled") -> float:
     """Do the one-time work of solving with ``robot`` now, so that no later solve pays for it.
 
-    Loads the compiled LM kernel (numba: about 0.5 s per process from its on-disk cache, about 15 s the first
+    Loads the compiled LM kernel (numba: about 0.5 s per process from its on-disk cache, about 45 s the first
     time after an install) and builds the memetic solver's seed table for the search box (the robot's bounds,
     or ``bounds=(lower, upper)``; ``table_size`` entries, default memetic's). :func:`solve` does this by
     itself when needed, before its clock starts, and reports the time in ``Result.setup_s``; calling
@@ -129,7 +139,9 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
 
     Args:
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
-        target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix or a :class:`Target`.
+        target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix or a :class:`Target` for the robot's tip;
+            or a list of goals on its frames (:mod:`evoik_pin.goals`: ``[Pose(frame, T), Position(frame, p),
+            ...]``, method ``"memetic"``), met together; ``Result.goal_errors`` then gives each goal's errors.
         method: a name from :func:`methods` (default ``"memetic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same result.
         **options: shared ones (``tolerance`` m, ``rotation_tolerance`` rad, ``q0`` (n,), ``bounds``

@@ -18,7 +18,7 @@ import warnings
 import numpy as np
 
 from .errors import EvoikError, OptionError, RobotLoadWarning
-from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, load_robot
+from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS, load_robot
 
 
 def _add_robot_args(p: argparse.ArgumentParser) -> None:
@@ -226,6 +226,9 @@ def _cmd_robots(args: argparse.Namespace) -> int:
     print("example-robot-data arms (default tip frame):")
     for name, arm in EXAMPLE_ARMS.items():
         print(f"  {name:12s} {arm.urdf} (tip {arm.tip})")
+    print("example-robot-data whole robots (every joint; floating_base=True adds a free-flying root):")
+    for name, whole in WHOLE_ROBOTS.items():
+        print(f"  {name:16s} {whole.what}")
     return 0
 
 

@@ -42,6 +42,9 @@ class Result:
         front: the final Pareto set, for multi-objective methods.
         setup_s: one-time set-up this call paid before its clock started (s): loading or compiling the LM
             kernel, building a seed table. 0 once the process has done it (see :func:`evoik_pin.prepare`).
+        goal_errors: for a goal list (:mod:`evoik_pin.goals`), each goal's (position error m, rotation angle rad or
+            None for a goal without orientation) at ``q``, in the goals' order; ``position_error`` and
+            ``orientation_error`` are then the largest of them. None for a single target.
         collision_free: with a scene, whether ``q`` passes the exact mesh check at the problem's margin
             (``success`` requires it); None when no scene was given.
         min_distance: with a scene, the signed distance (m) of the closest checked pair at ``q``
@@ -64,6 +67,7 @@ class Result:
     front: Front | None = None
     setup_s: float = 0.0
     collision_free: bool | None = None
+    goal_errors: list[tuple[float, float | None]] | None = None
     #: min_distance's value, or a callable computing it on first access (see ``min_distance``)
     distance_source: object = field(default=None, repr=False, compare=False)
 

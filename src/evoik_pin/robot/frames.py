@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import pinocchio as pin
 
-__all__ = ["body_frame_names", "deepest_body", "find_frame", "reduced_model", "root_link"]
+__all__ = ["body_frame_names", "closest_names", "deepest_body", "find_frame", "frame_names", "reduced_model",
+           "restore_frame_names", "root_link", "unique_frame_names"]
 
 
 def find_frame(model: pin.Model, name: str) -> int:
@@ -58,34 +59,68 @@ def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: t
     Pinocchio's reduction looks frames up by name alone, and fails with "Several frames match the filter" when
     a joint and a link share one (anymal_c's ``LF_HAA`` joint and link, b1-z1's fixed joint and link
     ``gripperStator``), whichever frame the user asked for. So the reduction runs on a copy in which every
-    non-BODY frame (and its joint) with a repeated name is renamed uniquely, and the names are put back in the
-    result. Returns the reduced model, or (model, list of geometry models) when ``geometry_models`` are given.
+    non-BODY frame (and its joint) with a repeated name is renamed uniquely (:func:`unique_frame_names`), and the
+    names are put back in the result. Returns the reduced model, or (model, list of geometry models) when
+    ``geometry_models`` are given.
     """
-    counts: dict[str, int] = {}
-    for f in model.frames:
-        counts[f.name] = counts.get(f.name, 0) + 1
-    renamed: dict[str, str] = {}
-    work = model
-    if any(c > 1 for c in counts.values()):
-        work = pin.Model(model)
-        taken = set(counts)
-        for i, f in enumerate(model.frames):
-            if counts[f.name] > 1 and f.type != pin.FrameType.BODY:
-                k = 0
-                while (alias := f"{f.name}#{f.type.name.lower()}{k}") in taken:
-                    k += 1
-                taken.add(alias)
-                renamed[alias] = f.name
-                work.frames[i].name = alias
-                if f.type == pin.FrameType.JOINT:
-                    work.names[f.parentJoint] = alias
+    work, renamed = unique_frame_names(model)
     if geometry_models:
         out, geoms = pin.buildReducedModel(work, list(geometry_models), locked, q_ref)
     else:
         out, geoms = pin.buildReducedModel(work, locked, q_ref), []
-    if renamed:
-        for j in range(out.njoints):
-            out.names[j] = renamed.get(out.names[j], out.names[j])
-        for i in range(len(out.frames)):
-            out.frames[i].name = renamed.get(out.frames[i].name, out.frames[i].name)
+    restore_frame_names(out, renamed)
     return (out, list(geoms)) if geometry_models else out
+
+
+def unique_frame_names(model: pin.Model) -> tuple[pin.Model, dict[str, str]]:
+    """(model, {}) when no two frames share a name; else (a copy in which every non-BODY frame with a repeated name,
+    and its joint for a JOINT frame, has a unique alias, {alias: name}): what Pinocchio's algorithms that look
+    frames up by name alone (``buildReducedModel``, ``appendModel``) need. :func:`restore_frame_names` undoes it."""
+    counts: dict[str, int] = {}
+    for f in model.frames:
+        counts[f.name] = counts.get(f.name, 0) + 1
+    renamed: dict[str, str] = {}
+    if not any(c > 1 for c in counts.values()):
+        return model, renamed
+    work = pin.Model(model)
+    taken = set(counts)
+    for i, f in enumerate(model.frames):
+        if counts[f.name] > 1 and f.type != pin.FrameType.BODY:
+            k = 0
+            while (alias := f"{f.name}#{f.type.name.lower()}{k}") in taken:
+                k += 1
+            taken.add(alias)
+            renamed[alias] = f.name
+            work.frames[i].name = alias
+            if f.type == pin.FrameType.JOINT:
+                work.names[f.parentJoint] = alias
+    return work, renamed
+
+
+def restore_frame_names(model: pin.Model, renamed: dict[str, str]) -> None:
+    """Put back in ``model`` (in place) the names :func:`unique_frame_names` replaced by aliases."""
+    if not renamed:
+        return
+    for j in range(model.njoints):
+        model.names[j] = renamed.get(model.names[j], model.names[j])
+    for i in range(len(model.frames)):
+        model.frames[i].name = renamed.get(model.frames[i].name, model.frames[i].name)
+
+def frame_names(model: pin.Model) -> list[str]:
+    """Names of every frame of ``model`` but the universe (links, joint frames, fixed and operational frames), in
+    model order, each once."""
+    seen: dict[str, None] = {}
+    for f in list(model.frames)[1:]:
+        seen.setdefault(f.name, None)
+    return list(seen)
+
+
+def closest_names(name: str, names: list[str], count: int = 5) -> list[str]:
+    """Up to ``count`` of ``names`` closest to ``name`` (difflib's ratio; a name containing ``name`` or contained in
+    it counts as close too), closest first."""
+    import difflib
+
+    close = difflib.get_close_matches(name, names, n=count, cutoff=0.6)
+    low = name.lower()
+    close += [x for x in names if x not in close and low and (low in x.lower() or x.lower() in low)]
+    return close[:count]

@@ -22,15 +22,17 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import FrameError, RobotLoadError, RobotNotFoundError
-from .kinematics import Robot
+from ..errors import BoundsError, FrameError, RobotLoadError, RobotNotFoundError
+from .catalog import WHOLE_ROBOTS
 from .packages import PackageResolver, check_package_dirs, package_uris
+from .robot import Robot
 from .urdf_checks import UrdfSummary, check_urdf
 from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
 
 __all__ = [
     "BUNDLED_ROBOTS",
     "EXAMPLE_ARMS",
+    "WHOLE_ROBOTS",
     "bundled_robots_dir",
     "example_robot_data_dir",
     "list_robots",
@@ -101,9 +103,15 @@ def bundled_robots_dir() -> Path:
     raise RobotNotFoundError(f"bundled robots not found next to {package} (looked for robots/ax18.urdf)")
 
 
-def list_robots() -> list[str]:
-    """Names accepted by :func:`load_robot`: the bundled paper arms, then the example-robot-data arms."""
-    return list(BUNDLED_ROBOTS) + list(EXAMPLE_ARMS)
+def list_robots(whole: bool = False, describe: bool = False) -> list[str] | dict[str, str]:
+    """Names accepted by :func:`load_robot`: the bundled paper arms, then the example-robot-data arms (serial
+    chains to a tool frame), then with ``whole=True`` the example-robot-data whole robots (humanoids, quadrupeds,
+    dual-arm robots, hands: :data:`~evoik_pin.robot.catalog.WHOLE_ROBOTS`). ``describe=True``: a dict of those
+    names to what each is."""
+    what = {**BUNDLED_ROBOTS, **{k: f"example-robot-data arm, tip {a.tip}" for k, a in EXAMPLE_ARMS.items()}}
+    if whole:
+        what.update({k: f"example-robot-data whole robot: {w.what}" for k, w in WHOLE_ROBOTS.items()})
+    return what if describe else list(what)
 
 
 def load_robot(
@@ -115,24 +123,30 @@ def load_robot(
     xacro_args: dict | None = None,
     srdf: str | os.PathLike | None = None,
     package_dirs: str | os.PathLike | list | None = None,
+    tips: list[str] | str | None = None,
+    floating_base: bool = False,
+    base_box=None,
 ) -> Robot:
-    """Load one serial chain of a URDF.
+    """Load a robot: one serial chain of a URDF, the chains to several frames, or the whole tree.
 
     Args:
         source: a URDF path, a xacro path (``*.xacro``, ``*.urdf.xacro``), a URDF XML string (or bytes;
             xacro text is expanded too), the name of a bundled paper arm (``ax18``, ``planar2r``,
-            ``puma3r``, ``redundant7r``, ``vehicle_arm``, ``aerial6r``) or of an example-robot-data arm
-            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``). Files are read
-            as bytes and decoded as their XML declaration says (UTF-8 by default).
+            ``puma3r``, ``redundant7r``, ``vehicle_arm``, ``aerial6r``), of an example-robot-data arm
+            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``) or of an
+            example-robot-data whole robot (``talos``, ``g1``, ``go2``, ``baxter``, ``pr2``, ``tiago_dual``,
+            ``allegro_right``, ...: ``list_robots(whole=True)``). Files are read as bytes and decoded as their XML
+            declaration says (UTF-8 by default).
         tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for the named
             arms, otherwise the deepest link of the URDF (a file called ``panda.urdf`` is not the named arm).
+            The active joints are those of the chain from the base to the tip.
         base: frame the chain starts from and poses are expressed in. Default: the URDF's root (world).
         joints: optional subset of the chain's joint names to keep free; the rest of the chain is locked.
         bounds: optional ``(lower, upper)`` search bounds, each of length ``n`` (rad or m).
         xacro_args: values of a xacro file's ``<xacro:arg>`` (``{"name": value}``), as ``name:=value`` on
             xacro's command line; only for xacro sources.
         srdf: an SRDF file whose ``<disable_collisions>`` pairs collision scenes skip
-            (:class:`~evoik_pin.scene.Scene`); the named example-robot-data arms find their own.
+            (:class:`~evoik_pin.scene.Scene`); the named example-robot-data robots find their own.
         package_dirs: folders (one, or a list) holding the ROS packages the file names (``$(find pkg)`` in
             xacro, ``package://pkg/...`` mesh URIs): ``pkg`` is ``DIR/pkg``, ``DIR`` itself, or a package.xml
             naming it below ``DIR``. Searched first, then ``ROS_PACKAGE_PATH``, then the file's own tree (a
@@ -140,6 +154,16 @@ def load_robot(
             naming ``pkg`` above the file (:mod:`evoik_pin.robot.packages`). A ``$(find pkg)`` nothing finds is a
             RobotLoadError naming the package, the file naming it and the folders searched; a mesh package
             nothing finds only matters to meshes (viewer, collision scenes), which then raise that error.
+        tips: frames (names) whose chains from the base make the active joints (their union), e.g. both grippers
+            of a dual-arm robot; ``tip`` defaults to the first. ``"all"``: every joint below the base (what a
+            whole robot loaded by name gets when neither ``tip``, ``tips`` nor ``joints`` is given).
+        floating_base: put a free-flying root in front of the URDF's root link: six more entries at the front of
+            q, the root link's position x, y, z (m) and yaw, pitch, roll (rad; its rotation is Rz(yaw) Ry(pitch)
+            Rx(roll)) in the world frame, where poses are then expressed. Bounds: ``base_box`` for the position,
+            yaw and roll a full turn (they wrap), pitch [-pi/2, pi/2]; ``Robot.full_configuration`` gives the
+            configuration of ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())``.
+        base_box: the floating base's position box: a half-width h (m; the box [-h, h]^3, default 1 m) or a pair
+            (lower (3,), upper (3,)) in m. (``robot.set_bounds`` changes it later: entries 0-2.)
 
     Returns:
         A :class:`Robot`. Joints outside the base->tip chain are locked at their neutral value
@@ -159,13 +183,16 @@ def load_robot(
                              "elements or ${...} / $(...) expressions)")
     if tip is None and named:
         tip = _default_tip(name)
+    if named and name in WHOLE_ROBOTS and tip is None and tips is None:
+        tips = "all"  # a whole robot by name: every joint, unless joints= says less
     model, summary = _parse_urdf(xml, path)
     mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
     try:
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
                       package_dirs=_package_dirs(path, resolver), mimic=summary.mimic,
-                      packages=mesh_packages, missing_packages=missing_packages)
-    except (RobotLoadError, FrameError) as exc:  # say which file the frames and joints were looked for in
+                      packages=mesh_packages, missing_packages=missing_packages, tips=tips,
+                      floating_base=floating_base, base_box=base_box)
+    except (RobotLoadError, FrameError, BoundsError) as exc:  # say which file the frames and joints were looked for in
         raise type(exc)(f"{where}: {exc}") from None
     if bounds is not None:
         robot.set_bounds(*bounds)
@@ -180,7 +207,7 @@ def _srdf_path(srdf, name: str | None) -> str | None:
         if not p.is_file():
             raise RobotNotFoundError(f"SRDF file not found: {str(srdf)!r}")
         return str(p.resolve())
-    arm = EXAMPLE_ARMS.get(name) if name is not None else None
+    arm = (EXAMPLE_ARMS.get(name) or WHOLE_ROBOTS.get(name)) if name is not None else None
     if arm is not None and arm.srdf is not None:
         p = example_robot_data_dir() / arm.srdf
         return str(p) if p.is_file() else None
@@ -254,13 +281,13 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
     text = os.fspath(source)
     if not isinstance(text, str) or not text.strip():
         raise RobotLoadError(f"robot source {text!r} is empty: give a URDF path, a URDF XML string or one of "
-                             f"{', '.join(list_robots())}")
+                             f"{', '.join(list_robots(whole=True))}")
     shown = repr(text) if len(text) <= 200 else repr(text[:200]) + "..."
-    named = isinstance(source, str) and (text in BUNDLED_ROBOTS or text in EXAMPLE_ARMS)
+    named = isinstance(source, str) and (text in BUNDLED_ROBOTS or text in EXAMPLE_ARMS or text in WHOLE_ROBOTS)
     if named and text in BUNDLED_ROBOTS:
         path = bundled_robots_dir() / f"{text}.urdf"
     elif named:
-        path = example_robot_data_dir() / EXAMPLE_ARMS[text].urdf
+        path = example_robot_data_dir() / (EXAMPLE_ARMS.get(text) or WHOLE_ROBOTS[text]).urdf
     else:
         path = Path(text).expanduser()
         try:
@@ -278,7 +305,8 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
             if path.suffix or os.sep in text or exists or not isinstance(source, str):
                 raise RobotNotFoundError(f"URDF file not found: {shown} (no such file)")
             raise RobotNotFoundError(
-                f"unknown robot {shown}: give a URDF path, a URDF XML string or one of {', '.join(list_robots())}"
+                f"unknown robot {shown}: give a URDF path, a URDF XML string or one of "
+                f"{', '.join(list_robots(whole=True))}"
             )
     try:
         data = path.read_bytes()

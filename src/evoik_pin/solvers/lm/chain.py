@@ -1,12 +1,15 @@
-"""The folded serial chain evaluated in numba: tip pose, joint axes and origins, and the base-frame Jacobian.
+"""The folded serial chain evaluated in numba (tip pose, joint axes and origins, base-frame Jacobian), and the
+coupling of physical joint values to the joint vector.
 
-The robot layer exports the chain as constants (``Robot.chain_constants``): every joint axis turned onto z and
-folded into the fixed placements, ``T = F_0 Z(x_1) F_1 ... Z(x_m) F_m`` with ``Z(x)`` a rotation by x about
-z (revolute) or a translation by x along z (prismatic), over the chain's m physical joints. Their values x
-follow the joint vector q (n,) through ``Robot.chain_coupling``: ``x_k = scale_k q[index_k] + offset_k``
-(mimic joints; x = q, m = n without them): :func:`expand` maps q to x and :func:`fold` the Jacobian columns of
-x to those of q (the chain rule). These functions evaluate it without Pinocchio, about 0.3 us for 7 joints;
-tests check them against Pinocchio's ``fk`` and ``jacobian`` on every bundled arm and on mimic chains.
+A serial chain's constants (``Robot.chain_constants``): every joint axis turned onto z and folded into the fixed
+placements, ``T = F_0 Z(x_1) F_1 ... Z(x_m) F_m`` with ``Z(x)`` a rotation by x about z (revolute) or a
+translation by x along z (prismatic), over the chain's m physical joints. :func:`forward` and :func:`jacobian`
+evaluate it; the kernel evaluates the general tree of :mod:`.tree` instead, whose operations on a chain are these,
+bit for bit (tests/test_robot_tree.py holds the two to it). The physical values x follow the joint vector q (n,)
+through ``Robot.chain_coupling`` / ``Robot.tree_constants``: ``x_k = scale_k q[index_k] + offset_k`` (mimic
+joints; x = q, m = n without them): :func:`expand` maps q to x and :func:`fold` the Jacobian columns of x to those
+of q (the chain rule); the kernel uses these. Tests check them against Pinocchio's ``fk`` and ``jacobian`` on every
+bundled arm and on mimic chains.
 """
 
 from __future__ import annotations
@@ -14,6 +17,8 @@ from __future__ import annotations
 import math
 
 from numba import njit
+
+from .tree import joint_column
 
 __all__ = ["coupled", "expand", "fold", "forward", "jacobian"]
 
@@ -52,18 +57,8 @@ def forward(FR, Fp, rev, q, R, p, Z, O):
 @njit(cache=True, nogil=True)
 def jacobian(rev, p, Z, O, J):
     """Base-frame Jacobian J (6, n) of the tip point p (3,) from the joint axes Z and origins O (n, 3)."""
-    n = Z.shape[0]
-    for k in range(n):
-        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
-        if rev[k]:
-            l0, l1, l2 = p[0] - O[k, 0], p[1] - O[k, 1], p[2] - O[k, 2]
-            J[0, k] = z1 * l2 - z2 * l1
-            J[1, k] = z2 * l0 - z0 * l2
-            J[2, k] = z0 * l1 - z1 * l0
-            J[3, k], J[4, k], J[5, k] = z0, z1, z2
-        else:
-            J[0, k], J[1, k], J[2, k] = z0, z1, z2
-            J[3, k] = J[4, k] = J[5, k] = 0.0
+    for k in range(Z.shape[0]):
+        joint_column(rev[k], p, Z, O, k, J)
 
 
 @njit(cache=True, nogil=True)

@@ -1,68 +1,78 @@
 """The Levenberg-Marquardt engine: every LM run in evoik_pin goes through :class:`LevenbergMarquardt`
-(one target, one or several starts) or :func:`solve_pairs` (many (start, target) pairs).
+(one problem, one or several starts) or :func:`solve_pairs` (many (start, target) pairs).
 
-The task error ``e(q)`` and its Jacobian ``E(q) = de/dq`` depend on the target:
+A problem is a stack of goals on frames of the robot (one goal, on the tip, for a single target): the task error
+``e(q)`` stacks each goal's rows, scaled by the square root of its weight, and ``E(q) = de/dq`` its Jacobian
+rows. By goal kind, for the goal frame's pose ``T_f(q)``:
 
-* pose target (6 rows): ``e = log6(T_t^-1 T(q))``, the SE(3) logarithm (m, rad) of the tip pose seen from
-  the target frame, and ``E = Jlog6(T_t^-1 T(q)) J_local(q)``: since ``T(q + dq) = T(q) exp(J_local dq)``,
+* pose (6 rows): ``e = log6(T_t^-1 T_f(q))``, the SE(3) logarithm (m, rad) of the frame's pose seen from the
+  target frame, and ``E = Jlog6(T_t^-1 T_f(q)) J_local(q)``: since ``T_f(q + dq) = T_f(q) exp(J_local dq)``,
   ``e(q + dq) = e + E dq + O(dq^2)``. Its rotational part is ``log3(R_t^T R)``, whose norm is the rotation
   angle, and it vanishes exactly at the target. (A decoupled error ``(R_t^T (p - p_t), log3(R_t^T R))`` was
   measured against it: slower and no better, docs/BENCHMARKS.md);
-* position target (3 rows): ``e = p(q) - p_t`` in the base frame with the translational Jacobian rows;
-* planar target (x, y[, yaw]): ``e = (p_x - x_t, p_y - y_t[, wrap(yaw(q) - yaw_t)])`` with the matching rows
+* position (3 rows): ``e = p_f(q) - p_t`` in the base frame with the translational Jacobian rows;
+* planar (x, y[, yaw]): ``e = (p_x - x_t, p_y - y_t[, wrap(yaw(q) - yaw_t)])`` with the matching rows
   of the base-frame Jacobian.
 
-One step solves the damped normal equations in task space (at most 6 x 6, whatever the number of joints)::
+One step solves the damped normal equations in the smaller of task space and joint space (at most 6 x 6 for one
+pose goal, whatever the number of joints)::
 
-    (E E^T + lambda I) y = e,        dq = -E^T y  ( = -(E^T E + lambda I)^-1 E^T e )
+    (E E^T + lambda I) y = e,  dq = -E^T y     (rows <= joints)
+    (E^T E + lambda I) dq = -E^T e               (rows > joints: the same step)
 
 with the step length capped at ``max_step`` (a trust region), accepted only when it lowers ``|e|^2``
 (``lambda`` shrinks after a success, grows after a failure). Joint limits are respected exactly by a small
 active set (held joints; joints a step carries past a bound fixed there and the step re-solved for the
 others). Revolute joints whose range spans a full turn wrap instead of being clipped. A run gives up on a
-stall (``|e|`` not halved in a few steps), so the caller can restart elsewhere; once it meets the
+stall (``|e|`` not halved in a few steps), so the caller can restart elsewhere; once every goal meets its
 tolerances it takes one more, undamped step (about 1e-12 instead of just under the tolerance). Near-singular
 targets get a geodesic acceleration (Transtrum & Sethna 2012) while a run creeps along a narrow valley.
 
 Two engines run that one iteration: ``engine="compiled"`` (the default) calls the numba kernel
-(:mod:`.kernel`, about 1 us per step, every target kind); ``engine="python"`` runs the reference loop
+(:mod:`.kernel`, about 1 us per step, every goal kind); ``engine="python"`` runs the reference loop
 (:mod:`.reference`, about 30-40 us per step), which the tests hold the kernel to.
 """
 
 from __future__ import annotations
 
+import threading
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ...errors import OptionError
-from ...problem import IKProblem, Target
 from .layout import (
     DEFAULT_DAMPING,
     DEFAULT_ITERATIONS,
     DEFAULT_MAX_STEP,
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
+    GOAL_SIZE,
     KIND_PLANAR,
     KIND_PLANAR_YAW,
     KIND_POSE,
     KIND_POSITION,
     P_ITERATIONS,
     S_CONVERGED,
+    S_COST,
     S_EVALUATIONS,
     S_ITERATIONS,
     S_POS,
     S_ROT,
     STATS_SIZE,
+    GoalStack,
     TargetArrays,
     box_constants,
-    encode_target,
     kernel_params,
-    target_kind,
+    problem_goals,
 )
 from .outcome import LMOutcome, PairsOutcome
 
-__all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "solve_pairs"]
+if TYPE_CHECKING:  # the problem module imports goals, which import this package's layout
+    from ...problem import IKProblem, Target
+
+__all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "problem_goals", "solve_pairs"]
 
 #: LM engines: "compiled" runs the numba kernel of :mod:`.kernel`; "python" the reference loop of
 #: :mod:`.reference` over Pinocchio's kinematics.
@@ -72,29 +82,41 @@ _KERNEL: dict = {}
 
 
 def compiled_kernel() -> dict:
-    """The kernel's entry points (``lm_run``, ``lm_run_starts``, ``lm_run_pairs``), ready to run.
+    """The kernel's entry points (``lm_run``, ``lm_run_starts``, ``lm_run_pairs``, and ``lm_run_buffers``,
+    ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run.
 
-    The first call imports numba (~0.3 s) and runs each entry point once on a one-joint chain, so that numba
+    The first call imports numba (~0.3 s) and runs each entry point once on a one-joint robot, so that numba
     loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install, compiles it
-    (~15 s) here, and not inside a solve's time budget. Later calls return at once. Solvers call it before
-    starting their clock.
+    (~45 s: the tree kinematics are inlined at each evaluation) here, and not inside a solve's time budget. Later
+    calls return at once. Solvers call it before starting their clock.
     """
     if not _KERNEL:
         from . import kernel
 
-        # a one-joint chain: Robot.chain_constants() + Robot.chain_coupling()
-        chain = (np.tile(np.eye(3), (2, 1, 1)), np.zeros((2, 3)), np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64),
-                 np.ones(1), np.zeros(1))
+        # a one-joint tree (Robot.tree_constants()) and one pose goal on it (GoalStack)
+        tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
+                np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
+        spec = np.zeros((1, GOAL_SIZE))
+        spec[0, :5] = KIND_POSE, 0, 1.0, 1e-6, 1e-6
+        goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool))
         box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
-        params = kernel_params(1e-6, 1e-6, KIND_POSE, iterations=1)
+        params = kernel_params(iterations=1)
+        pt, Rt = np.zeros((1, 3)), np.eye(3)[None].copy()
         # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
-        kernel.lm_run(np.zeros(1), *chain, box, False, np.zeros(3), np.eye(3), params, np.empty(1))
+        kernel.lm_run(np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1), np.empty((1, 2)))
         stats = np.empty((1, STATS_SIZE))
-        kernel.lm_run_starts(np.zeros((1, 1)), *chain, box, False, np.zeros(3), np.eye(3), params,
-                             np.empty((1, 1)), stats)
-        kernel.lm_run_pairs(np.zeros((1, 1)), *chain, box, False, np.zeros((1, 3)), np.eye(3)[None].copy(),
-                            params, np.empty((1, 1)), stats)
-        _KERNEL.update(lm_run=kernel.lm_run, lm_run_starts=kernel.lm_run_starts, lm_run_pairs=kernel.lm_run_pairs)
+        kernel.lm_run_starts(np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params, np.empty((1, 1)), stats,
+                             np.empty((1, 1, 2)))
+        kernel.lm_run_pairs(np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(), Rt[None].copy(), params,
+                            np.empty((1, 1)), stats, np.empty((1, 1, 2)))
+        buffers = (np.empty(int(kernel.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
+        kernel.lm_run_buffers(*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
+                              np.empty((1, 2)))
+        kernel.lm_run_starts_buffers(*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
+                                     np.empty((1, 1)), stats, np.empty((1, 1, 2)))
+        _KERNEL.update(lm_run=kernel.lm_run, lm_run_starts=kernel.lm_run_starts, lm_run_pairs=kernel.lm_run_pairs,
+                       lm_run_buffers=kernel.lm_run_buffers, lm_run_starts_buffers=kernel.lm_run_starts_buffers,
+                       workspace_size=kernel.workspace_size)
     return _KERNEL
 
 
@@ -104,11 +126,12 @@ def _check_engine(engine: str) -> None:
 
 
 class LevenbergMarquardt:
-    """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem` (see the module
-    docstring for the error and the iteration).
+    """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem`: its goals, or its single
+    target on the tip (see the module docstring for the error and the iteration).
 
     Args:
-        problem: robot, target, search box and tolerances (``tolerance`` m, ``rotation_tolerance`` rad).
+        problem: robot, goals (or target), search box and tolerances (``tolerance`` m, ``rotation_tolerance`` rad,
+            or each goal's own).
         damping: initial lambda (m^2 / rad^2 scale), adapted per step.
         max_step: largest length ``|dq|`` of one step (rad or m, Euclidean norm over the joints).
         stall_window, stall_ratio: give up when ``|e|`` has not dropped below ``stall_ratio`` times its value
@@ -129,8 +152,9 @@ class LevenbergMarquardt:
         robot = problem.robot
         self.robot = robot
         self.n = robot.n
-        self.kind = target_kind(problem.target)
-        self.oriented = problem.target.has_orientation
+        stack, self._pt, self._Rt = problem_goals(problem)
+        self.goals = stack
+        self.oriented = stack.any_oriented
         if engine == "python":
             from .reference import ReferenceLM
 
@@ -138,11 +162,25 @@ class LevenbergMarquardt:
             return
         self._reference = None
         self._kernel = compiled_kernel()
-        self._chain = robot.chain_constants() + robot.chain_coupling()  # folded chain, how it follows q
+        self._tree = robot.tree_constants()  # the folded tree, how it follows q
+        self._goal_arrays = (stack.spec, stack.R, stack.p, stack.support)
         _, self._any_wrap, _, _, self._box = box_constants(robot, problem.lower, problem.upper)
-        self._pt, self._Rt = encode_target(problem.target)
-        self._params = kernel_params(float(problem.tolerance), float(problem.rotation_tolerance), self.kind, 0,
-                                     damping, max_step, stall_window, stall_ratio, finish)
+        self._params = kernel_params(0, damping, max_step, stall_window, stall_ratio, finish)
+        G = len(stack.kinds)
+        self._one = G == 1
+        self._g_scratch = np.empty((G, 2))  # one goal: its errors are the outcome's own
+        self._buffers: tuple = ()  # the kernel's workspace (_workspace)
+        self._buffers_for = -1  # the most steps those buffers hold
+        # the kernel's constant arguments, unpacked from one tuple at each call
+        self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+
+    def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
+        """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's buffers for this goal
+        stack, kept from solve to solve (:func:`_thread_buffers`), so a run neither allocates nor finds its memory
+        cold in the cache."""
+        self._buffers = _thread_buffers(self._kernel, self.goals, self.n, self._tree[0].shape[0], max_iterations)
+        self._buffers_for = max_iterations
+        return self._buffers
 
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
         """One LM run from ``q`` (n,) (clipped / wrapped into the box first), at most ``max_iterations`` steps.
@@ -159,10 +197,12 @@ class LevenbergMarquardt:
         params = self._params
         params[P_ITERATIONS] = max_iterations
         out = np.empty(self.n)
-        pos, rot, converged, it, evaluations = self._kernel["lm_run"](
-            np.ascontiguousarray(q, dtype=float), *self._chain, self._box, self._any_wrap, self._pt, self._Rt,
-            params, out)
-        return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations)
+        g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
+        buffers = self._buffers if max_iterations <= self._buffers_for else self._workspace(max_iterations)
+        pos, rot, converged, it, evaluations, cost = self._kernel["lm_run_buffers"](
+            *buffers, np.ascontiguousarray(q, dtype=float), *self._args, params, out, g_err)
+        return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations,
+                         None if self._one else g_err, cost)
 
     def run_many(self, Q: np.ndarray, max_iterations: int, deadline: float | None = None
                  ) -> tuple[LMOutcome, int]:
@@ -172,8 +212,9 @@ class LevenbergMarquardt:
         ``deadline`` is checked before the group starts (compiled) or before every step (python).
 
         Returns:
-            (outcome of the converged run, or of the run with the lowest error; index of that start).
-            ``iterations`` and ``evaluations`` count every run made.
+            (outcome of the converged run, or of the run with the lowest error (one goal: position + orientation
+            error; several: the weighted |e|^2); index of that start). ``iterations`` and ``evaluations`` count
+            every run made.
         """
         Q = np.ascontiguousarray(np.array(Q, dtype=float, ndmin=2))
         if self._reference is not None:
@@ -182,10 +223,11 @@ class LevenbergMarquardt:
                 outs.append(self._reference.run(Q[k], max_iterations, deadline))
                 if outs[-1].converged:
                     break
-            best = len(outs) - 1 if outs[-1].converged else int(np.argmin([o.error for o in outs]))
+            best = len(outs) - 1 if outs[-1].converged else int(np.argmin([o.rank for o in outs]))
             o = outs[best]
             return LMOutcome(o.q, o.position_error, o.orientation_error, o.converged,
-                             sum(x.iterations for x in outs), sum(x.evaluations for x in outs)), best
+                             sum(x.iterations for x in outs), sum(x.evaluations for x in outs), o.goal_errors,
+                             o.cost), best
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
         params = self._params
@@ -193,15 +235,42 @@ class LevenbergMarquardt:
         K = Q.shape[0]
         Q_out = np.empty_like(Q)
         stats = np.empty((K, STATS_SIZE))
-        k = self._kernel["lm_run_starts"](Q, *self._chain, self._box, self._any_wrap, self._pt, self._Rt, params,
-                                          Q_out, stats)
+        g_stats = np.empty((K, len(self.goals), 2))
+        k = self._kernel["lm_run_starts_buffers"](*self._workspace(max_iterations), Q, *self._args, params, Q_out,
+                                                  stats, g_stats)
         runs = k + 1 if k >= 0 else -(k + 1)
         s = stats[:runs]
         if k < 0:
-            k = int(np.argmin(s[:, S_POS] + (s[:, S_ROT] if self.oriented else 0.0)))
+            rank = (s[:, S_POS] + (s[:, S_ROT] if self.oriented else 0.0)) if self._one else s[:, S_COST]
+            k = int(np.argmin(rank))
         rot = float(s[k, S_ROT]) if self.oriented else None
         return LMOutcome(Q_out[k], float(s[k, S_POS]), rot, bool(s[k, S_CONVERGED]),
-                         int(s[:, S_ITERATIONS].sum()), int(s[:, S_EVALUATIONS].sum())), k
+                         int(s[:, S_ITERATIONS].sum()), int(s[:, S_EVALUATIONS].sum()),
+                         None if self._one else g_stats[k], float(s[k, S_COST])), k
+
+
+_LOCAL = threading.local()
+#: Goal stacks whose buffers a thread keeps (the most recently used ones).
+_BUFFERS_KEPT = 8
+
+
+def _thread_buffers(kernel: dict, stack: GoalStack, n: int, m: int, max_iterations: int):
+    """(float buffer, held (n,) bool) of the kernel's workspace for ``stack`` on this thread, for runs of up to
+    ``max_iterations`` steps (at least 30, the default, so that one pair serves every usual call): kept per thread
+    (two threads never share a workspace) for the last few goal stacks; the entry keeps its stack alive, so an id is
+    never reused while it is cached."""
+    cache = getattr(_LOCAL, "buffers", None)
+    if cache is None:
+        cache = _LOCAL.buffers = {}
+    key = (id(stack), n)
+    hit = cache.get(key)
+    if hit is None or hit[1] < max_iterations:
+        steps = max(max_iterations, DEFAULT_ITERATIONS)
+        size = int(kernel["workspace_size"](n, m, len(stack.kinds), stack.rows, steps))
+        if len(cache) >= _BUFFERS_KEPT:
+            cache.pop(next(iter(cache)))
+        hit = cache[key] = ((np.empty(size), np.empty(n, dtype=bool)), steps, stack)
+    return hit[0]
 
 
 def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lower: np.ndarray, upper: np.ndarray,
@@ -220,6 +289,7 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lowe
     _check_engine(engine)
     N = Q.shape[0]
     if engine == "python":
+        from ...problem import IKProblem
         from .reference import ReferenceLM
 
         listed = targets if not isinstance(targets, TargetArrays) else targets_of(targets)
@@ -233,18 +303,21 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lowe
     arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
     lm_run_pairs = compiled_kernel()["lm_run_pairs"]
     _, any_wrap, _, _, box = box_constants(robot, lower, upper)
-    params = kernel_params(tolerance, rotation_tolerance, arrays.kind, max_iterations, damping, max_step)
-    chain = robot.chain_constants() + robot.chain_coupling()
+    params = kernel_params(max_iterations, damping, max_step)
+    stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *chain, box, any_wrap, arrays.P, arrays.Rts, params, Q_out,
-                 stats)
+    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R,
+                 stack.p, stack.support, arrays.P[:, None], arrays.Rts[:, None], params, Q_out, stats,
+                 np.empty((N, 1, 2)))
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
 
 
 def targets_of(arrays: TargetArrays) -> list[Target]:
     """Target objects of :class:`~.layout.TargetArrays` (the reference engine works on them)."""
+    from ...problem import Target
+
     P, Rts = arrays.P, arrays.Rts
     if arrays.kind in (KIND_PLANAR, KIND_PLANAR_YAW):
         return [Target(P[i, :2], planar=True, yaw=float(P[i, 2]) if arrays.kind == KIND_PLANAR_YAW else None)

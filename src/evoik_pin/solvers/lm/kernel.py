@@ -1,21 +1,27 @@
 """The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
 
-One call of :func:`lm_run` runs a whole LM iteration from one start for a pose, position or planar target,
-with the forward kinematics and Jacobian of :mod:`.chain` and the SO(3) / SE(3) closed forms of
-:mod:`evoik_pin.lie.compiled`. :func:`lm_run_starts` runs several starts for one target, in order, until one
-converges (memetic's restarts); :func:`lm_run_pairs` runs one start per (start, target) pair (batches).
-The iteration is the one of :func:`.reference.reference_run` line for line (same error, damping rule, trust
-region, active-set joint limits, wrapping, stall test, geodesic acceleration and finishing step); tests hold
-the two to the same steps from the same starts. About 1 us per step, against 30-40 us for the Python loop.
+One call of :func:`lm_run` runs a whole LM iteration from one start for a stack of goals (:class:`.layout.GoalStack`:
+pose, position or planar goals on frames of a kinematic tree), with the tree kinematics of :mod:`.tree`, the
+mimic coupling of :mod:`.chain` and the SO(3) / SE(3) closed forms of :mod:`evoik_pin.lie.compiled`.
+:func:`lm_run_starts` runs several starts for one problem, in order, until one converges (memetic's restarts);
+:func:`lm_run_pairs` runs one start per (start, targets) pair (batches). The iteration is the one of
+:class:`.reference.ReferenceLM` line for line (same errors, damping rule, trust region, active-set joint limits,
+wrapping, stall test, geodesic acceleration and finishing step); tests hold the two to the same steps from the
+same starts. About 1 us per step for a 7-joint arm, against 30-40 us for the Python loop.
 
-Task error ``e`` by target kind (``params[P_KIND]``, :mod:`.layout`):
+Task error ``e``: the goals' rows stacked (goal g's rows from ``spec[g, G_ROW]``), each goal's rows scaled by the
+square root of its weight; by goal kind (:mod:`.layout`), for the goal frame's pose ``T_f(q)``:
 
-* pose: ``e = log6(T_t^-1 T(q))`` (m, rad; Pinocchio's formula), ``E = Jlog6(T_t^-1 T(q)) J_local``;
-* position: ``e = p(q) - p_t`` with the base-frame translational Jacobian rows;
+* pose: ``e = log6(T_t^-1 T_f(q))`` (m, rad; Pinocchio's formula), ``E = Jlog6(T_t^-1 T_f(q)) J_local``;
+* position: ``e = p_f(q) - p_t`` with the base-frame translational Jacobian rows;
 * planar: ``e = (p_x - x_t, p_y - y_t[, wrap(yaw(q) - yaw_t)])`` with base-frame rows vx, vy[, wz].
 
-The constants and the ``params`` / ``box`` layouts come from :mod:`.layout`. numba compiles this module on
-first use (about 15 s once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
+A run has converged when every goal is within its own tolerances (m, rad). The damped step is solved in task
+space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more rows than joints, and in joint
+space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
+
+The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. numba compiles this module on
+first use (about 45 s once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
 any time budget).
 
 Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
@@ -27,7 +33,7 @@ with ``_nrt=False`` (:data:`BORROWING`), numba's own option for functions that b
 neither allocate nor count references to the arrays they are given, which their caller owns. Otherwise numba
 brackets nearly every call with an atomic increment and decrement per array argument (its pruning of those
 gives up across calls), a fifth of the run time; and a helper that allocated now fails to compile instead.
-:func:`task_error`, :func:`task_jacobian` and :func:`lm_step`, which take 16 to 19 arrays each, are moreover
+:func:`task_error`, :func:`task_jacobian` and :func:`lm_step`, which take 16 to 25 arrays each, are moreover
 inlined into :func:`lm_run_in` (``inline="always"``): passing those arrays cost more than the calls (about 7 % of
 the run time), for about 1 s more compile time.
 """
@@ -41,7 +47,7 @@ import numpy as np
 from numba import njit
 
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
-from .chain import coupled, expand, fold, forward, jacobian
+from .chain import coupled, expand, fold
 from .layout import (
     B_CHI,
     B_CLO,
@@ -49,6 +55,12 @@ from .layout import (
     B_LO,
     B_WRAP,
     FINISHED,
+    G_JOINT,
+    G_KIND,
+    G_ROW,
+    G_RTOL,
+    G_TOL,
+    G_WEIGHT,
     GEO_ALPHA,
     GEO_H,
     GEO_NEAR,
@@ -63,39 +75,23 @@ from .layout import (
     P_DAMPING,
     P_FINISH,
     P_ITERATIONS,
-    P_KIND,
     P_MAX_STEP,
-    P_RTOL,
     P_STALL_RATIO,
     P_STALL_WINDOW,
-    P_TOL,
     S_CONVERGED,
+    S_COST,
     S_EVALUATIONS,
     S_ITERATIONS,
     S_POS,
     S_ROT,
     SHRINK,
 )
+from .tree import BORROWING, frame_jacobian, frame_pose, tree_forward
 
 TWO_PI = 2.0 * math.pi
 
 
-def _borrowing_options() -> dict:
-    """``{"_nrt": False}`` where this numba has that option (every release since 0.60 does; it is numba's own, not
-    a documented one), else ``{}``: the kernel then counts references as usual, with the same results, about a
-    fifth slower."""
-    try:
-        from numba.core.cpu import CPUTargetOptions
-    except ImportError:
-        return {}
-    return {"_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {}
-
-
-#: Options of the functions that borrow the arrays their caller owns (see the module docstring).
-BORROWING = _borrowing_options()
-
-
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def task_size(kind):
     """Rows m of the task error of a target kind: 6 (pose), 3 (position, planar with yaw), 2 (planar)."""
     if kind == KIND_POSE:
@@ -106,18 +102,10 @@ def task_size(kind):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, p, Z, O, M, t, e):
-    """Task error e (m,) at q; returns (|e|^2, position error m, orientation error rad or 0).
-
-    Fills the kinematics buffers R, p, Z, O (see :func:`.chain.forward`; with ``mimic``, the chain's joint values
-    x of :func:`.chain.expand` first), and for pose targets the tip pose seen from the target, ``T_t^-1 T(q)`` =
-    (M (3, 3), t (3,)), which :func:`task_jacobian` needs.
-    """
-    if mimic:
-        expand(index, scale, offset, q, x)
-        forward(FR, Fp, rev, x, R, p, Z, O)
-    else:
-        forward(FR, Fp, rev, q, R, p, Z, O)
+def goal_error(kind, R, p, pt, Rt, M, t, e):
+    """One goal's error rows e (its task_size(kind) rows) for its frame's pose (R (3, 3), p (3,)) and target
+    (pt, Rt); returns (|e|^2, position error m, orientation error rad or 0). For pose goals also the frame pose
+    seen from the target, ``T_t^-1 T_f`` = (M (3, 3), t (3,)), which :func:`goal_jacobian` needs."""
     if kind == KIND_PLANAR or kind == KIND_PLANAR_YAW:  # (x, y[, yaw]) with pt = (x_t, y_t, yaw_t)
         d0, d1 = p[0] - pt[0], p[1] - pt[1]
         e[0], e[1] = d0, d1
@@ -144,28 +132,72 @@ def task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, 
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_jacobian(rev, index, scale, mimic, R, p, Z, O, t, e, kind, Jx, J, A, B, E):
-    """Task Jacobian E (m, n) from the buffers :func:`task_error` filled for the same configuration.
+def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, pt, Rt, Rj, pj, Z,
+               O, Rg, pg, tg, M, e, ge):
+    """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
+    orientation error rad or 0) to ge (G, 2).
 
-    Position: the base-frame translational rows; planar: rows vx, vy[, wz]. Pose: ``Jlog6(T_t^-1 T) J_local``
-    with ``J_local = (R^T J_v, R^T J_w)``. Jx (6, chain joints), J (6, n), A, B (3, 3) are scratch; with
-    ``mimic`` the chain's columns Jx are folded into those of q (:func:`.chain.fold`).
+    Fills the kinematics buffers Rj, pj, Z, O (:func:`.tree.tree_forward`; with ``mimic``, the physical joint
+    values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
+    its position seen from the target tg (G, 3), which :func:`task_jacobian` needs. M (3, 3) is scratch.
+    ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass: a scaling inside the
+    goal loop, even skipped, costs a fifth of the whole evaluation).
     """
     if mimic:
-        jacobian(rev, p, Z, O, Jx)
-        fold(index, scale, Jx, J)
+        expand(index, scale, offset, q, x)
+        tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O)
     else:
-        jacobian(rev, p, Z, O, J)
+        tree_forward(parent, FR, Fp, rev, q, Rj, pj, Z, O)
+    c = 0.0
+    for g in range(spec.shape[0]):
+        kind = int(spec[g, G_KIND])
+        r = int(spec[g, G_ROW])
+        R, p = Rg[g], pg[g]
+        frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
+        cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
+        c += cg
+        ge[g, 0], ge[g, 1] = pos, rot
+    if weighted:
+        c = 0.0
+        for g in range(spec.shape[0]):
+            r = int(spec[g, G_ROW])
+            w = spec[g, G_WEIGHT]
+            for i in range(r, r + task_size(int(spec[g, G_KIND]))):
+                e[i] *= w
+                c += e[i] * e[i]
+    return c
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def within(spec, ge):
+    """True when every goal's errors ge (G, 2) are within its tolerances (a NaN error is not)."""
+    for g in range(spec.shape[0]):
+        if not (ge[g, 0] <= spec[g, G_TOL] and ge[g, 1] <= spec[g, G_RTOL]):
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
+    """One goal's rows r.. of the task Jacobian E (unweighted) from its frame's base-frame Jacobian J (6, n), for the
+    buffers :func:`goal_error` filled (R the frame's rotation; e, t its error rows, scaled by w, and its
+    seen-from-target position).
+
+    Position: the base-frame translational rows; planar: rows vx, vy[, wz]. Pose: ``Jlog6(T_t^-1 T_f) J_local``
+    with ``J_local = (R^T J_v, R^T J_w)``, Jlog6 at the unscaled rotation vector rv (3,) = e[3:] / w. A, B (3, 3)
+    are scratch.
+    """
     n = J.shape[1]
     if kind != KIND_POSE:
-        m = E.shape[0]
-        for i in range(m):
+        for i in range(task_size(kind)):
             row = 5 if i == 2 and kind == KIND_PLANAR_YAW else i
             for k in range(n):
-                E[i, k] = J[row, k]
+                E[r + i, k] = J[row, k]
         return
-    theta = math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
-    jlog6(theta, e[3:], t, A, B)
+    for i in range(3):
+        rv[i] = e[3 + i] / w  # exactly e[3 + i] at weight 1
+    theta = math.sqrt(rv[0] * rv[0] + rv[1] * rv[1] + rv[2] * rv[2])
+    jlog6(theta, rv, t, A, B)
     for k in range(n):
         v0 = R[0, 0] * J[0, k] + R[1, 0] * J[1, k] + R[2, 0] * J[2, k]  # R^T J_v
         v1 = R[0, 1] * J[0, k] + R[1, 1] * J[1, k] + R[2, 1] * J[2, k]
@@ -174,19 +206,48 @@ def task_jacobian(rev, index, scale, mimic, R, p, Z, O, t, e, kind, Jx, J, A, B,
         w1 = R[0, 1] * J[3, k] + R[1, 1] * J[4, k] + R[2, 1] * J[5, k]
         w2 = R[0, 2] * J[3, k] + R[1, 2] * J[4, k] + R[2, 2] * J[5, k]
         for i in range(3):
-            E[i, k] = A[i, 0] * v0 + A[i, 1] * v1 + A[i, 2] * v2 + B[i, 0] * w0 + B[i, 1] * w1 + B[i, 2] * w2
-            E[3 + i, k] = A[i, 0] * w0 + A[i, 1] * w1 + A[i, 2] * w2
+            E[r + i, k] = A[i, 0] * v0 + A[i, 1] * v1 + A[i, 2] * v2 + B[i, 0] * w0 + B[i, 1] * w1 + B[i, 2] * w2
+            E[r + 3 + i, k] = A[i, 0] * w0 + A[i, 1] * w1 + A[i, 2] * w2
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def task_jacobian(rev, index, scale, mimic, spec, weighted, support, Rg, pg, Z, O, tg, e, Jx, J, rv, A, B, E):
+    """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
+    per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
+    with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
+    goal's rows (:func:`goal_jacobian`), scaled by the square root of its weight (when ``weighted``, in a second
+    pass, as :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
+    """
+    n = J.shape[1]
+    for g in range(spec.shape[0]):
+        kind = int(spec[g, G_KIND])
+        r = int(spec[g, G_ROW])
+        if mimic:
+            frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
+            fold(index, scale, Jx, J)
+        else:
+            frame_jacobian(rev, support[g], pg[g], Z, O, J)
+        goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
+    if weighted:
+        for g in range(spec.shape[0]):
+            r = int(spec[g, G_ROW])
+            w = spec[g, G_WEIGHT]
+            for i in range(r, r + task_size(int(spec[g, G_KIND]))):
+                for k in range(n):
+                    E[i, k] *= w
 
 
 @njit(cache=True, nogil=True, **BORROWING)
 def damped_solve(E, lam, rhs, L, y, dq):
-    """dq (n,) = E^T (E E^T + lam I)^-1 rhs by Cholesky (L (m, m), y (m,) scratch); False when not positive."""
+    """dq (n,) = E^T (E E^T + lam I)^-1 rhs = (E^T E + lam I)^-1 E^T rhs by Cholesky of the smaller of the two
+    systems (task space when E (m, n) has m <= n rows, joint space otherwise); L (min(m, n), min(m, n)) and y
+    (max(m, n),) are scratch. False when the system is not positive."""
     m, n = E.shape
-    for i in range(m):
+    joints = m > n
+    size = n if joints else m
+    for i in range(size):  # L L^T = Gram + lam I, the Gram matrix's entries made as they are needed
         for j in range(i + 1):
-            s = 0.0
-            for k in range(n):
-                s += E[i, k] * E[j, k]
+            s = _gram(E, i, j, joints)
             if i == j:
                 s += lam
             for k in range(j):
@@ -197,22 +258,44 @@ def damped_solve(E, lam, rhs, L, y, dq):
                 L[i, i] = math.sqrt(s)
             else:
                 L[i, j] = s / L[j, j]
-    for i in range(m):  # L z = rhs
-        s = rhs[i]
+    for i in range(size):  # L z = b: b = rhs (task space) or E^T rhs (joint space)
+        s = 0.0
+        if joints:
+            for k in range(m):
+                s += E[k, i] * rhs[k]
+        else:
+            s = rhs[i]
         for k in range(i):
             s -= L[i, k] * y[k]
         y[i] = s / L[i, i]
-    for i in range(m - 1, -1, -1):  # L^T y = z
+    for i in range(size - 1, -1, -1):  # L^T y = z
         s = y[i]
-        for k in range(i + 1, m):
+        for k in range(i + 1, size):
             s -= L[k, i] * y[k]
         y[i] = s / L[i, i]
+    if joints:
+        for k in range(n):
+            dq[k] = y[k]
+        return True
     for k in range(n):
         s = 0.0
         for i in range(m):
             s += E[i, k] * y[i]
         dq[k] = s
     return True
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def _gram(E, i, j, joints):
+    """Entry (i, j) of E E^T (rows i, j of E) or, with ``joints``, of E^T E (columns i, j)."""
+    s = 0.0
+    if joints:
+        for k in range(E.shape[0]):
+            s += E[k, i] * E[k, j]
+    else:
+        for k in range(E.shape[1]):
+            s += E[i, k] * E[j, k]
+    return s
 
 
 @njit(cache=True, nogil=True, **BORROWING)
@@ -309,76 +392,179 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
     return clipped
 
 
-#: The buffers of LM runs (:func:`make_workspace`) for n joints, nx chain joints and m task rows, reused from
-#: run to run. The kinematics come in three sets: the current configuration (q, R, p, Z, O, tx, e), a step's
-#: candidate (qn, R2, p2, Z2, O2, tx2, en) and the geodesic-acceleration probe (qh, R3, p3, Z3, O3, tx3, eh):
-#: R (3, 3) and p (3,) the tip pose, Z, O (nx, 3) the joint axes and origins (:func:`.chain.forward`), tx (3,)
-#: the tip position seen from the target (:func:`task_error`'s t), e (m,) the task error. Scratch: x (nx,),
-#: Jx (6, nx), J (6, n), E, W (m, n), A, Bm, M (3, 3), L (m, m), y, rhs (m,), v, dq, dfix (n,), held (n,)
-#: bool, and history (max_it + 1,), the |e|^2 after each accepted step.
-Workspace = namedtuple("Workspace", ["q", "R", "p", "Z", "O", "tx", "e", "qn", "R2", "p2", "Z2", "O2", "tx2", "en",
-                                     "qh", "R3", "p3", "Z3", "O3", "tx3", "eh", "x", "Jx", "J", "E", "W", "A", "Bm",
-                                     "M", "L", "y", "rhs", "v", "dq", "dfix", "held", "history"])
+#: The buffers of LM runs (:func:`make_workspace`) for n joints, m physical joints, G goals and `rows` task rows,
+#: reused from run to run. The kinematics come in three sets: the current configuration (q, Rj, pj, Z, O, Rg, pg,
+#: tg, e, ge), a step's candidate (qn, ..., en, ge2) and the geodesic-acceleration probe (qh, ..., eh, ge3): Rj (m,
+#: 3, 3), pj (m, 3) the joint poses, Z, O (m, 3) the joint axes and origins (:func:`.tree.tree_forward`), Rg (G, 3,
+#: 3), pg (G, 3) the goal frames' poses, tg (G, 3) their positions seen from their targets (:func:`goal_error`'s
+#: t), e (rows,) the task error, ge (G, 2) each goal's errors. Scratch: x (m,), Jx (6, m), J (6, n), rv (3,), E,
+#: W (rows, n), A, Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq, dfix (n,), held
+#: (n,) bool, and history (max_it + 1,), the |e|^2 after each accepted step.
+Workspace = namedtuple("Workspace", ["q", "Rj", "pj", "Z", "O", "Rg", "pg", "tg", "e", "ge",
+                                     "qn", "Rj2", "pj2", "Z2", "O2", "Rg2", "pg2", "tg2", "en", "ge2",
+                                     "qh", "Rj3", "pj3", "Z3", "O3", "Rg3", "pg3", "tg3", "eh", "ge3",
+                                     "x", "Jx", "J", "rv", "E", "W", "A", "Bm", "M", "L", "y", "rhs", "v", "dq",
+                                     "dfix", "held", "history"])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def workspace_size(n, m, G, rows, max_it):
+    """Length of the float buffer of a :data:`Workspace` (:func:`carve`)."""
+    s = min(rows, n)
+    per_set = n + 9 * m + 3 * m + 3 * m + 3 * m + 9 * G + 3 * G + 3 * G + rows + 2 * G
+    return 3 * per_set + m + 6 * m + 6 * n + 3 + 2 * rows * n + 27 + s * s + max(rows, n) + rows + 3 * n + max_it + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _carve_set(buf, o, n, m, G, rows):
+    """One configuration's kinematics buffers (q, Rj, pj, Z, O, Rg, pg, tg, e, ge) from buf at offset o, and the
+    offset after them."""
+    q, o = buf[o:o + n], o + n
+    Rj, o = buf[o:o + 9 * m].reshape((m, 3, 3)), o + 9 * m
+    pj, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
+    Z, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
+    O, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
+    Rg, o = buf[o:o + 9 * G].reshape((G, 3, 3)), o + 9 * G
+    pg, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
+    tg, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
+    e, o = buf[o:o + rows], o + rows
+    ge, o = buf[o:o + 2 * G].reshape((G, 2)), o + 2 * G
+    return q, Rj, pj, Z, O, Rg, pg, tg, e, ge, o
+
+
+@njit(cache=True, nogil=True, inline="always")
+def carve(buf, held, n, m, G, rows, max_it):
+    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
+    ``rows`` task rows, as views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,).
+
+    Inlined: in a reference-counting caller the views count references as usual; in a borrowing one they do not,
+    so a borrowing entry point that receives the two buffers passes two arrays, not some fifty (a reference-counting
+    caller brackets every array it passes with an atomic increment and decrement).
+    """
+    s = min(rows, n)
+    q, Rj, pj, Z, O, Rg, pg, tg, e, ge, o = _carve_set(buf, 0, n, m, G, rows)
+    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2, o = _carve_set(buf, o, n, m, G, rows)
+    qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3, o = _carve_set(buf, o, n, m, G, rows)
+    x, o = buf[o:o + m], o + m
+    Jx, o = buf[o:o + 6 * m].reshape((6, m)), o + 6 * m
+    J, o = buf[o:o + 6 * n].reshape((6, n)), o + 6 * n
+    rv, o = buf[o:o + 3], o + 3
+    E, o = buf[o:o + rows * n].reshape((rows, n)), o + rows * n
+    W, o = buf[o:o + rows * n].reshape((rows, n)), o + rows * n
+    A, o = buf[o:o + 9].reshape((3, 3)), o + 9
+    Bm, o = buf[o:o + 9].reshape((3, 3)), o + 9
+    M, o = buf[o:o + 9].reshape((3, 3)), o + 9
+    L, o = buf[o:o + s * s].reshape((s, s)), o + s * s
+    y, o = buf[o:o + max(rows, n)], o + max(rows, n)
+    rhs, o = buf[o:o + rows], o + rows
+    v, o = buf[o:o + n], o + n
+    dq, o = buf[o:o + n], o + n
+    dfix, o = buf[o:o + n], o + n
+    history = buf[o:o + max(max_it, 0) + 1]
+    return Workspace(q, Rj, pj, Z, O, Rg, pg, tg, e, ge, qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2,
+                     qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3, x, Jx, J, rv, E, W, A, Bm, M, L, y, rhs, v, dq,
+                     dfix, held, history)
 
 
 @njit(cache=True, nogil=True)
-def make_workspace(n, nx, m, max_it):
-    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, nx chain joints and m task rows.
+def make_workspace(n, m, G, rows, max_it):
+    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
+    ``rows`` task rows: views into one float buffer and the bool ``held`` (two allocations instead of some fifty).
 
     One workspace serves any number of runs one after the other (a run writes each buffer before it reads it),
-    never two at a time: the batch entry points make one per call, so concurrent calls share nothing.
+    never two at a time: the entry points make one per call, so concurrent calls share nothing.
     """
-    return Workspace(
-        np.empty(n), np.empty((3, 3)), np.empty(3), np.empty((nx, 3)), np.empty((nx, 3)), np.empty(3), np.empty(m),
-        np.empty(n), np.empty((3, 3)), np.empty(3), np.empty((nx, 3)), np.empty((nx, 3)), np.empty(3), np.empty(m),
-        np.empty(n), np.empty((3, 3)), np.empty(3), np.empty((nx, 3)), np.empty((nx, 3)), np.empty(3), np.empty(m),
-        np.empty(nx), np.empty((6, nx)), np.empty((6, n)), np.empty((m, n)), np.empty((m, n)), np.empty((3, 3)),
-        np.empty((3, 3)), np.empty((3, 3)), np.empty((m, m)), np.empty(m), np.empty(m),
-        np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_), np.empty(max(max_it, 0) + 1))
+    return carve(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), n, m, G, rows,
+                 max_it)
 
 
 @njit(cache=True, nogil=True)
-def lm_run(q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, q_out):
-    """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,).
+def stack_rows(spec):
+    """Total task rows of a goal stack: the last goal's first row plus its size."""
+    G = spec.shape[0]
+    return int(spec[G - 1, G_ROW]) + task_size(int(spec[G - 1, G_KIND]))
+
+
+@njit(cache=True, nogil=True)
+def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt, params,
+           q_out, g_out):
+    """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
+    g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
 
     Args:
-        FR (m+1, 3, 3), Fp (m+1, 3), rev (m,) bool: the folded chain of the m physical joints
-            (``Robot.chain_constants``); index (m,) int64, scale, offset (m,): how they follow q
-            (``Robot.chain_coupling``).
+        parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
+            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
-        pt (3,), Rt (3, 3): the target as :func:`.layout.encode_target` writes it.
-        params (PARAMS_SIZE,): tolerance (m), rotation tolerance (rad), initial damping, max step, stall window,
-            stall ratio, finish (0/1), max iterations, target kind (:mod:`.layout`).
+        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
+            (:class:`.layout.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets (:func:`.layout.encode_target`).
+        params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
+            (:mod:`.layout`).
 
     Returns:
-        (position error m, orientation error rad (nan when the target has no orientation), converged,
-        iterations, forward-kinematics evaluations), as :func:`.reference.reference_run` counts them.
+        (position error m, orientation error rad (nan when no goal has an orientation), converged, iterations,
+        forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals, as
+        :class:`.reference.ReferenceLM` counts them.
     """
-    ws = make_workspace(q_start.shape[0], FR.shape[0] - 1, task_size(int(params[P_KIND])), int(params[P_ITERATIONS]))
-    return lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, q_out)
+    n, m, G = q_start.shape[0], parent.shape[0], spec.shape[0]
+    rows, max_it = stack_rows(spec), int(params[P_ITERATIONS])
+    return lm_run_buffers(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), q_start,
+                          parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+                          params, q_out, g_out)
 
 
 @njit(cache=True, nogil=True, **BORROWING)
-def lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, q_out):
-    """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` for these n and chain
-    joints, the task rows of ``params[P_KIND]`` and at least ``params[P_ITERATIONS]`` steps); the other arguments
+def lm_run_buffers(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                   pt, Rt, params, q_out, g_out):
+    """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`) and held (n,) bool (see
+    :func:`carve`); a caller making many runs one after the other keeps them (no allocation per run)."""
+    ws = carve(buf, held, q_start.shape[0], parent.shape[0], spec.shape[0], stack_rows(spec),
+               int(params[P_ITERATIONS]))
+    return lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt,
+                     Rt, params, q_out, g_out)
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def _outcome(spec, ge, g_out):
+    """(largest position error, largest orientation error or nan) over the goals' errors ge (G, 2), copied to
+    g_out (G, 2) with nan orientation errors for goals without one."""
+    pos = 0.0
+    rot = np.nan
+    for g in range(spec.shape[0]):
+        kind = int(spec[g, G_KIND])
+        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW
+        g_out[g, 0] = ge[g, 0]
+        g_out[g, 1] = ge[g, 1] if oriented else np.nan
+        pos = max(pos, ge[g, 0]) if ge[g, 0] == ge[g, 0] else ge[g, 0]  # a NaN error stays NaN
+        if oriented:
+            rot = ge[g, 1] if rot != rot else max(rot, ge[g, 1])
+    return pos, rot
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+              params, q_out, g_out):
+    """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` or :func:`carve` for these n
+    joints, m physical joints, goals and task rows, and at least ``params[P_ITERATIONS]`` steps); the other arguments
     and the result are :func:`lm_run`'s."""
     n = q_start.shape[0]
     mimic = coupled(index, scale, offset, n)
-    kind = int(params[P_KIND])
-    oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW
-    m = task_size(kind)
-    tol_p, tol_r = params[P_TOL], params[P_RTOL]
+    weighted = False
+    for g in range(spec.shape[0]):
+        if spec[g, G_WEIGHT] != 1.0:
+            weighted = True
+    m = ws.E.shape[0]
     max_step = params[P_MAX_STEP]
     window = int(params[P_STALL_WINDOW])
     stall = params[P_STALL_RATIO] * params[P_STALL_RATIO]
     finish = params[P_FINISH] != 0.0
     max_it = int(params[P_ITERATIONS])
     # the current configuration's buffers and the candidate's trade places when a step is accepted
-    q, R, p, Z, O, tx, e = ws.q, ws.R, ws.p, ws.Z, ws.O, ws.tx, ws.e
-    qn, R2, p2, Z2, O2, tx2, en = ws.qn, ws.R2, ws.p2, ws.Z2, ws.O2, ws.tx2, ws.en
-    qh, R3, p3, Z3, O3, tx3, eh = ws.qh, ws.R3, ws.p3, ws.Z3, ws.O3, ws.tx3, ws.eh
-    x, Jx, J, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.E, ws.W, ws.A, ws.Bm, ws.M
+    q, Rj, pj, Z, O, Rg, pg, tg, e, ge = ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge
+    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2, ws.en,
+                                                    ws.ge2)
+    qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3 = (ws.qh, ws.Rj3, ws.pj3, ws.Z3, ws.O3, ws.Rg3, ws.pg3, ws.tg3, ws.eh,
+                                                    ws.ge3)
+    x, Jx, J, rv, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.rv, ws.E, ws.W, ws.A, ws.Bm, ws.M
     L, y, rhs, v, dq, dfix, held, history = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.dfix, ws.held, ws.history
 
     into_box(q_start, box, any_wrap, q)
@@ -386,11 +572,13 @@ def lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt,
     for k in range(n):
         if q[k] <= box[B_CLO, k] or q[k] >= box[B_CHI, k]:
             on_bound = True
-    c, pos, rot = task_error(FR, Fp, rev, index, scale, offset, mimic, q, x, pt, Rt, kind, R, p, Z, O, M, tx, e)
+    c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, pt, Rt, Rj, pj, Z, O,
+                   Rg, pg, tg, M, e, ge)
     evaluations = 1
-    if pos <= tol_p and (not oriented or rot <= tol_r):
+    if within(spec, ge):
         _copy(q, q_out)
-        return pos, rot if oriented else np.nan, True, 0, evaluations
+        pos, rot = _outcome(spec, ge, g_out)
+        return pos, rot, True, 0, evaluations, c
     lam = params[P_DAMPING]
     have_E = False
     history[0] = c
@@ -401,18 +589,19 @@ def lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt,
     while it < max_it:
         it += 1
         if not have_E:
-            task_jacobian(rev, index, scale, mimic, R, p, Z, O, tx, e, kind, Jx, J, A, Bm, E)
+            task_jacobian(rev, index, scale, mimic, spec, weighted, support, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E)
             have_E = True
         on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         if creeping and not (on_bound or on_bound_n):
-            # geodesic acceleration (reference._geodesic): r'' from one extra FK at q + h v
+            # geodesic acceleration (ReferenceLM._geodesic): r'' from one extra FK at q + h v
             for k in range(n):
                 d = qn[k] - q[k]
                 if any_wrap and box[B_WRAP, k] != 0.0:
                     d = (d + math.pi) % TWO_PI - math.pi
                 v[k] = d
                 qh[k] = q[k] + GEO_H * d
-            task_error(FR, Fp, rev, index, scale, offset, mimic, qh, x, pt, Rt, kind, R3, p3, Z3, O3, M, tx3, eh)
+            task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qh, x, spec, weighted, gR, gp, pt, Rt, Rj3,
+                       pj3, Z3, O3, Rg3, pg3, tg3, M, eh, ge3)
             evaluations += 1
             for i in range(m):
                 s = 0.0
@@ -429,20 +618,23 @@ def lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt,
                     for k in range(n):
                         qh[k] = q[k] + v[k] - 0.5 * dq[k]
                     into_box(qh, box, any_wrap, qn)
-        cn, pos_n, rot_n = task_error(FR, Fp, rev, index, scale, offset, mimic, qn, x, pt, Rt, kind, R2, p2, Z2, O2,
-                                      M, tx2, en)
+        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, pt, Rt, Rj2,
+                        pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
         evaluations += 1
         if cn < c:
             creeping = GEO_SLOW * c < cn < GEO_NEAR
             q, qn = qn, q
-            R, R2 = R2, R
-            p, p2 = p2, p
+            Rj, Rj2 = Rj2, Rj
+            pj, pj2 = pj2, pj
             Z, Z2 = Z2, Z
             O, O2 = O2, O
-            tx, tx2 = tx2, tx
+            Rg, Rg2 = Rg2, Rg
+            pg, pg2 = pg2, pg
+            tg, tg2 = tg2, tg
             e, en = en, e
-            on_bound, pos, rot, c = on_bound_n, pos_n, rot_n, cn
-            if pos <= tol_p and (not oriented or rot <= tol_r):
+            ge, ge2 = ge2, ge
+            on_bound, c = on_bound_n, cn
+            if within(spec, ge):
                 converged = True
                 break
             have_E = False
@@ -457,48 +649,88 @@ def lm_run_in(ws, q_start, FR, Fp, rev, index, scale, offset, box, any_wrap, pt,
                 break
     if converged and finish and c > FINISHED:
         # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-        task_jacobian(rev, index, scale, mimic, R, p, Z, O, tx, e, kind, Jx, J, A, Bm, E)
+        task_jacobian(rev, index, scale, mimic, spec, weighted, support, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E)
         lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
-        cn, pos_n, rot_n = task_error(FR, Fp, rev, index, scale, offset, mimic, qn, x, pt, Rt, kind, R2, p2, Z2, O2,
-                                      M, tx2, en)
+        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, pt, Rt, Rj2,
+                        pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
         it += 1
         evaluations += 1
         if cn < c:
             q = qn
-            pos, rot = pos_n, rot_n
+            ge = ge2
+            c = cn
     _copy(q, q_out)
-    return pos, rot if oriented else np.nan, converged, it, evaluations
+    pos, rot = _outcome(spec, ge, g_out)
+    return pos, rot, converged, it, evaluations, c
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def _record(stats, i, pos, rot, converged, it, evaluations, c):
+    """Row i of stats (the ``S_*`` columns) from one run's outcome."""
+    stats[i, S_POS], stats[i, S_ROT] = pos, rot
+    stats[i, S_CONVERGED] = 1.0 if converged else 0.0
+    stats[i, S_ITERATIONS], stats[i, S_EVALUATIONS] = it, evaluations
+    stats[i, S_COST] = c
 
 
 @njit(cache=True, nogil=True)
-def lm_run_pairs(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, P, Rts, params, Q_out, stats):
-    """:func:`lm_run` on M (start, target) pairs: starts Q (M, n), target positions P (M, 3) and rotations
-    Rts (M, 3, 3) (:func:`.layout.encode_targets`); end configurations to Q_out (M, n) and, per pair, the
-    ``S_*`` columns (errors, converged, iterations, evaluations) to the rows of stats (M, STATS_SIZE). The runs
-    share one workspace, made here."""
-    ws = make_workspace(Q.shape[1], FR.shape[0] - 1, task_size(int(params[P_KIND])), int(params[P_ITERATIONS]))
+def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts, params,
+                 Q_out, stats, g_stats):
+    """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
+    row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
+    pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
+    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here."""
+    ws = make_workspace(Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+    _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts, params,
+              Q_out, stats, g_stats)
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts, params,
+              Q_out, stats, g_stats):
+    """:func:`lm_run_pairs`'s loop, borrowing the workspace: each run's call passes some 70 arrays, which a
+    reference-counting caller would bracket with as many atomic increments and decrements (a third of a short
+    run's time)."""
     for i in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations = lm_run_in(ws, Q[i], FR, Fp, rev, index, scale, offset, box, any_wrap,
-                                                         P[i], Rts[i], params, Q_out[i])
-        stats[i, S_POS], stats[i, S_ROT] = pos, rot
-        stats[i, S_CONVERGED] = 1.0 if converged else 0.0
-        stats[i, S_ITERATIONS], stats[i, S_EVALUATIONS] = it, evaluations
+        pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box,
+                                                            any_wrap, spec, gR, gp, support, P[i], Rts[i], params,
+                                                            Q_out[i], g_stats[i])
+        _record(stats, i, pos, rot, converged, it, evaluations, c)
 
 
 @njit(cache=True, nogil=True)
-def lm_run_starts(Q, FR, Fp, rev, index, scale, offset, box, any_wrap, pt, Rt, params, Q_out, stats):
-    """:func:`lm_run` from the starts Q (K, n) for one target, in order, until one converges.
+def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt, params,
+                  Q_out, stats, g_stats):
+    """:func:`lm_run` from the starts Q (K, n) for one problem (targets pt (G, 3), Rt (G, 3, 3)), in order, until
+    one converges.
 
-    Each run's end configuration goes to Q_out[k] and its ``S_*`` statistics to stats[k] (rows of starts not
-    run are left untouched). Returns the index of the converged run, or -(1 + the number of runs) when none
-    converged (every start was run then). The runs share one workspace, made here."""
-    ws = make_workspace(Q.shape[1], FR.shape[0] - 1, task_size(int(params[P_KIND])), int(params[P_ITERATIONS]))
+    Each run's end configuration goes to Q_out[k], its ``S_*`` statistics to stats[k] and its goals' errors to
+    g_stats[k] (G, 2) (rows of starts not run are left untouched). Returns the index of the converged run, or
+    -(1 + the number of runs) when none converged (every start was run then). The runs share one workspace, made
+    here."""
+    ws = make_workspace(Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+                      params, Q_out, stats, g_stats)
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
+                          support, pt, Rt, params, Q_out, stats, g_stats):
+    """:func:`lm_run_starts` in the caller's buffers (as :func:`lm_run_buffers`)."""
+    ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+                      params, Q_out, stats, g_stats)
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt, params,
+               Q_out, stats, g_stats):
+    """:func:`lm_run_starts`'s loop, borrowing the workspace (see :func:`_pairs_in`)."""
     for k in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations = lm_run_in(ws, Q[k], FR, Fp, rev, index, scale, offset, box, any_wrap,
-                                                         pt, Rt, params, Q_out[k])
-        stats[k, S_POS], stats[k, S_ROT] = pos, rot
-        stats[k, S_CONVERGED] = 1.0 if converged else 0.0
-        stats[k, S_ITERATIONS], stats[k, S_EVALUATIONS] = it, evaluations
+        pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box,
+                                                            any_wrap, spec, gR, gp, support, pt, Rt, params, Q_out[k],
+                                                            g_stats[k])
+        _record(stats, k, pos, rot, converged, it, evaluations, c)
         if converged:
             return k
     return -(1 + Q.shape[0])

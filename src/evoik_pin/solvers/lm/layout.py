@@ -9,21 +9,26 @@ Kernel arguments built here:
 * ``box`` (5, n): rows ``B_LO``, ``B_HI`` (the search box, rad or m), ``B_CLO``, ``B_CHI`` (the clip box:
   +-inf on wrapping joints, which are never clipped) and ``B_WRAP`` (1.0 on wrapping joints)
   (:func:`box_constants`);
-* a target as ``pt`` (3,) and ``Rt`` (3, 3) (:func:`encode_target`): pose (position m, rotation),
-  position (position, identity), planar (x, y, yaw rad or 0; identity).
+* a goal stack (:class:`GoalStack`): per goal g, ``spec[g]`` (GOAL_SIZE,) at the ``G_*`` columns (kind, the
+  physical joint its frame sits on, the square root of its weight, its tolerances in m and rad, the first of
+  its rows in the stacked error), the frame's folded placement on that joint ``R[g]`` (3, 3), ``p[g]`` (3,),
+  and ``support[g]`` (m,) bool, the joints that move it;
+* a goal's target as ``pt`` (3,) and ``Rt`` (3, 3) (:func:`encode_target`): pose (position m, rotation),
+  position (position, identity), planar (x, y, yaw rad or 0; identity); a stack's targets as (G, 3) and
+  (G, 3, 3) arrays.
 """
 
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 __all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT_STALL_RATIO",
            "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
-           "TargetArrays", "box_constants", "encode_target", "encode_targets", "kernel_params", "target_kind",
-           "wrapping_joints"]
+           "GoalStack", "TargetArrays", "box_constants", "encode_target", "encode_targets", "kernel_params",
+           "problem_goals", "target_kind", "wrapping_joints"]
 
 TWO_PI = 2.0 * np.pi
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
@@ -46,19 +51,26 @@ FINISHED = 1e-24
 #: GEO_H is the finite-difference step.
 GEO_SLOW, GEO_NEAR, GEO_ALPHA, GEO_H = 0.25, 1e-4, 0.75, 0.1
 
-#: Target kinds (the kernel's ``params[P_KIND]``) and the rows of the base-frame Jacobian each task uses.
+#: Goal kinds (the ``G_KIND`` column of a goal's spec) and the rows of the base-frame Jacobian each uses.
 KIND_POSITION, KIND_POSE, KIND_PLANAR, KIND_PLANAR_YAW = 0, 1, 2, 3
 TASK_ROWS = {KIND_POSITION: (0, 1, 2), KIND_POSE: (0, 1, 2, 3, 4, 5), KIND_PLANAR: (0, 1),
              KIND_PLANAR_YAW: (0, 1, 5)}
+#: Kinds whose goals constrain orientation.
+ORIENTED_KINDS = (KIND_POSE, KIND_PLANAR_YAW)
 
 #: Layout of the kernel's ``params`` vector.
-P_TOL, P_RTOL, P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS, P_KIND = range(9)
-PARAMS_SIZE = 9
+P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS = range(6)
+PARAMS_SIZE = 6
+#: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
+#: first row in the stacked error.
+G_KIND, G_JOINT, G_WEIGHT, G_TOL, G_RTOL, G_ROW = range(6)
+GOAL_SIZE = 6
 #: Rows of the kernel's ``box``.
 B_LO, B_HI, B_CLO, B_CHI, B_WRAP = range(5)
-#: Columns of the per-run ``stats`` rows the batch kernels write: errors, converged, iterations, evaluations.
-S_POS, S_ROT, S_CONVERGED, S_ITERATIONS, S_EVALUATIONS = range(5)
-STATS_SIZE = 5
+#: Columns of the per-run ``stats`` rows the batch kernels write: errors (the largest over the goals), converged,
+#: iterations, evaluations, cost (the weighted |e|^2 of the end configuration).
+S_POS, S_ROT, S_CONVERGED, S_ITERATIONS, S_EVALUATIONS, S_COST = range(6)
+STATS_SIZE = 6
 
 
 def target_kind(target) -> int:
@@ -159,13 +171,90 @@ def box_constants(robot, lower: np.ndarray, upper: np.ndarray):
     return hit[1]
 
 
-def kernel_params(tolerance: float, rotation_tolerance: float, kind: int, iterations: int = 0,
-                  damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
+def kernel_params(iterations: int = 0, damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
                   stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
                   finish: bool = True) -> np.ndarray:
-    """The kernel's ``params`` vector (PARAMS_SIZE,) (layout: the ``P_*`` indices)."""
+    """The kernel's ``params`` vector (PARAMS_SIZE,) (layout: the ``P_*`` indices); the tolerances are the
+    goals' (:class:`GoalStack`)."""
     params = np.empty(PARAMS_SIZE)
-    params[[P_TOL, P_RTOL, P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS,
-            P_KIND]] = (tolerance, rotation_tolerance, damping, max_step, stall_window, stall_ratio, float(finish),
-                        iterations, kind)
+    params[[P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS]] = (
+        damping, max_step, stall_window, stall_ratio, float(finish), iterations)
     return params
+
+
+@dataclass(frozen=True)
+class GoalStack:
+    """G goals on frames of one robot as the kernel reads them (see the module docstring): which frame, which
+    kind, how much weight, which tolerances; the targets come apart (:func:`encode_target`), so one stack serves
+    any number of problems.
+
+    Attributes:
+        spec: (G, GOAL_SIZE) the ``G_*`` columns. R: (G, 3, 3), p: (G, 3) (m) each frame's folded placement on
+            its joint (``Robot.frame_constants``). support: (G, m) bool, the physical joints that move each frame.
+        rows: total rows of the stacked error. kinds: (G,) the ``KIND_*``. frames: the frame names.
+        any_oriented: some goal constrains orientation.
+    """
+
+    spec: np.ndarray
+    R: np.ndarray
+    p: np.ndarray
+    support: np.ndarray
+    rows: int
+    kinds: tuple
+    frames: tuple
+    any_oriented: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
+
+    @classmethod
+    def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances) -> GoalStack:
+        """The stack of goals on ``frames`` (names; None: the robot's tip) of ``kinds`` (``KIND_*``) with
+        ``weights`` (> 0), ``tolerances`` (m) and ``rotation_tolerances`` (rad), one each per goal."""
+        G = len(frames)
+        spec = np.empty((G, GOAL_SIZE))
+        R, p = np.empty((G, 3, 3)), np.empty((G, 3))
+        joints = []
+        row = 0
+        for g in range(G):
+            j, R[g], p[g] = robot.frame_constants(frames[g])
+            joints.append(j)
+            spec[g] = (kinds[g], j, np.sqrt(weights[g]), tolerances[g], rotation_tolerances[g], row)
+            row += len(TASK_ROWS[kinds[g]])
+        return cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
+                   tuple(robot.tip if f is None else f for f in frames))
+
+    @classmethod
+    def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
+        """The one goal of a single-target problem: the tip, weight 1 (cached per robot, kind and tolerances:
+        every single-target solve builds one)."""
+        key = (id(robot), kind, float(tolerance), float(rotation_tolerance))
+        hit = _SINGLE_CACHE.get(key)
+        if hit is None or hit[0]() is not robot:
+            stack = cls.of(robot, [None], [kind], [1.0], [tolerance], [rotation_tolerance])
+            if len(_SINGLE_CACHE) > 64:
+                _SINGLE_CACHE.clear()
+            hit = _SINGLE_CACHE[key] = (weakref.ref(robot), stack)
+        return hit[1]
+
+    def __len__(self) -> int:
+        return int(self.spec.shape[0])
+
+    @property
+    def oriented(self) -> np.ndarray:
+        """(G,) bool: the goals that constrain orientation."""
+        return np.array([k in ORIENTED_KINDS for k in self.kinds], dtype=bool)
+
+
+_SINGLE_CACHE: dict = {}
+
+
+def problem_goals(problem) -> tuple[GoalStack, np.ndarray, np.ndarray]:
+    """(goal stack, targets pt (G, 3), Rt (G, 3, 3)) of an :class:`~evoik_pin.problem.IKProblem`: its goal list
+    (``problem.goal_stack()``) when it has one, else its single target on the robot's tip."""
+    if getattr(problem, "goals", None) is not None:
+        return problem.goal_stack()
+    stack = GoalStack.single(problem.robot, target_kind(problem.target), float(problem.tolerance),
+                             float(problem.rotation_tolerance))
+    pt, Rt = encode_target(problem.target)
+    return stack, pt[None], Rt[None]

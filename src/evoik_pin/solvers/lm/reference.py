@@ -3,61 +3,118 @@
 The one Python LM loop in evoik_pin. It states the algorithm readably and is what the compiled kernel is tested
 against (tests/test_lm.py: the same steps from the same starts); ``engine="python"`` runs it in production
 (about 30-40 us per step against about 1 us compiled). Kinematics come from the robot layer
-(``Robot.tip_pose_seen_from_unchecked``, ``fk_unchecked``, ``jacobian_local_unchecked``), the error's
+(``Robot.tip_pose_seen_from_unchecked``, ``frame_poses_unchecked``, ``jacobian_local_unchecked``), the error's
 logarithm and its Jacobian from Pinocchio (``pin.log6``, ``pin.Jlog6``).
 
-The iteration (see :mod:`.engine` for the task errors): one step solves the damped normal equations in task
-space, ``(E E^T + lambda I) y = e, dq = -E^T y``, capped at ``max_step`` (a trust region), accepted only when
-it lowers ``|e|^2`` (lambda shrinks after a success, grows after a failure). Joint limits are an active set
-(:meth:`ReferenceLM._step`); full-turn joints wrap; a stall test gives up on a lost cause; near-singular
-targets get a geodesic acceleration; a converged run takes one finishing, undamped step.
+The iteration (see :mod:`.engine` for the task errors of a goal stack): one step solves the damped normal
+equations in the smaller of task space, ``(E E^T + lambda I) y = e, dq = -E^T y``, and joint space,
+``(E^T E + lambda I) dq = -E^T e``, capped at ``max_step`` (a trust region), accepted only when it lowers
+``|e|^2`` (lambda shrinks after a success, grows after a failure). Joint limits are an active set
+(:meth:`ReferenceLM._step`); full-turn joints wrap; a stall test gives up on a lost cause; near-singular targets
+get a geodesic acceleration; a converged run (every goal within its tolerances) takes one finishing, undamped
+step.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
 from ...lie import wrap_angle, yaw
-from ...problem import IKProblem
 from .layout import (
     DEFAULT_DAMPING,
     DEFAULT_MAX_STEP,
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
     FINISHED,
+    G_RTOL,
+    G_TOL,
+    G_WEIGHT,
     GEO_ALPHA,
     GEO_H,
     GEO_NEAR,
     GEO_SLOW,
     GROW,
+    KIND_PLANAR_YAW,
+    KIND_POSE,
+    KIND_POSITION,
     LAMBDA_MAX,
     LAMBDA_MIN,
     SHRINK,
     TWO_PI,
     box_constants,
+    problem_goals,
 )
 from .outcome import LMOutcome
 
-__all__ = ["ReferenceLM"]
+if TYPE_CHECKING:
+    from ...problem import IKProblem
 
-_EYES = {m: np.eye(m) for m in (2, 3, 6)}
+__all__ = ["ReferenceLM"]
 
 
 def _log6_error(X: pin.SE3):
-    """(``log6(X)`` (6,), X, position error m, orientation error rad) of the tip seen from the target, X."""
+    """(``log6(X)`` (6,), X, position error m, orientation error rad) of a frame seen from its target, X."""
     e = pin.log6(X).vector
     t = X.translation
     w = e[3:]
     return e, X, math.sqrt(t.dot(t)), math.sqrt(w.dot(w))
 
 
+class _Goal:
+    """One goal of the stack, as the Python loop reads it: its kind, frame, weight, tolerances and target."""
+
+    def __init__(self, robot, kind: int, frame: str, weight: float, tol: float, rtol: float, pt, Rt) -> None:
+        self.kind = kind
+        self.frame_id = robot.frame_id(frame)
+        self.sw = float(weight)  # the square root of the goal's weight
+        self.tol, self.rtol = float(tol), float(rtol)
+        self.m = {KIND_POSE: 6, KIND_POSITION: 3, KIND_PLANAR_YAW: 3}.get(kind, 2)
+        self.position = np.array(pt, dtype=float)
+        if kind == KIND_POSE:
+            self.target_inv = pin.SE3(np.array(Rt, dtype=float), self.position).inverse()
+
+    def residual(self, T: pin.SE3):
+        """(error rows (m,) unweighted, the extra object its Jacobian needs, position error m, orientation error rad
+        or None) for the goal frame's pose ``T`` in the base frame."""
+        if self.kind == KIND_POSE:
+            return _log6_error(self.target_inv * T)
+        if self.kind == KIND_POSITION:
+            e = T.translation - self.position
+            return e, T, math.sqrt(e.dot(e)), None
+        p = T.translation
+        ex, ey = p[0] - self.position[0], p[1] - self.position[1]
+        pos = math.hypot(ex, ey)
+        if self.kind != KIND_PLANAR_YAW:
+            return np.array([ex, ey]), T, pos, None
+        eyaw = float(wrap_angle(yaw(T.rotation)[0] - self.position[2]))
+        return np.array([ex, ey, eyaw]), T, pos, abs(eyaw)
+
+    def jacobian(self, J: np.ndarray, extra) -> np.ndarray:
+        """The goal's rows (m, n), unweighted, from its frame's local Jacobian J (6, n) and :meth:`residual`'s
+        extra."""
+        if self.kind == KIND_POSE:
+            return pin.Jlog6(extra).dot(J)
+        R = extra.rotation
+        if self.kind == KIND_POSITION:
+            return R.dot(J[:3])
+        Jv = R[:2].dot(J[:3])
+        if self.m == 2:
+            return Jv
+        return np.vstack([Jv, R[2].dot(J[3:])])
+
+    def within(self, pos: float, rot: float | None) -> bool:
+        return pos <= self.tol and (rot is None or rot <= self.rtol)
+
+
 class ReferenceLM:
-    """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem`, as a Python loop.
+    """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem` (its goals, or its
+    single target on the tip), as a Python loop.
 
     Args: as :class:`.engine.LevenbergMarquardt`'s (damping, max_step, stall_window, stall_ratio, finish).
     """
@@ -66,9 +123,7 @@ class ReferenceLM:
                  stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
                  finish: bool = True) -> None:
         self.problem = problem
-        self.robot = problem.robot
-        target = problem.target
-        self.target = target
+        robot = self.robot = problem.robot
         self.damping = float(damping)
         self.max_step = float(max_step)
         self.max_step2 = self.max_step**2
@@ -76,87 +131,101 @@ class ReferenceLM:
         self.stall_ratio = float(stall_ratio)
         self.finish = bool(finish)
         self.lower, self.upper = problem.lower, problem.upper
-        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(self.robot, self.lower, self.upper)
-        self.tol_p = float(problem.tolerance)
-        self.tol_r = float(problem.rotation_tolerance)
-        if target.planar:
-            self.kind = "planar"
-            self.m = 3 if target.yaw is not None else 2
-        elif target.rotation is not None:
-            self.kind = "pose"
-            self.m = 6
-            self.target_inv = pin.SE3(target.rotation, target.position).inverse()
-            self.error_at = self._pose_error_at
-        else:
-            self.kind = "position"
-            self.m = 3
-        self.eye = _EYES[self.m]
+        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(robot, self.lower, self.upper)
+        stack, pt, Rt = problem_goals(problem)
+        spec = stack.spec
+        self.goals = [_Goal(robot, stack.kinds[g], stack.frames[g], spec[g, G_WEIGHT], spec[g, G_TOL],
+                            spec[g, G_RTOL], pt[g], Rt[g]) for g in range(len(stack))]
+        self.frame_ids = [g.frame_id for g in self.goals]
+        self.oriented = stack.any_oriented
+        self.rows = stack.rows
+        # one goal on the tip: the robot's tip fast paths (for a pose goal, the tip seen from the target directly)
+        self._tip = len(self.goals) == 1 and self.frame_ids[0] == robot.frame_id(None) and self.goals[0].sw == 1.0
+        self.task_space = self.rows <= robot.n  # solve the smaller normal equations
+        self.eye = np.eye(min(self.rows, robot.n))
 
     # ------------------------------------------------------------------ task error
-    def _pose_error_at(self, q: np.ndarray):
-        """:meth:`error_at` for pose targets: ``T_t^-1 T(q)`` straight from the robot, no intermediate copy."""
-        return _log6_error(self.robot.tip_pose_seen_from_unchecked(q, self.target_inv))
-
     def error_at(self, q: np.ndarray):
-        """:meth:`residual` of the tip pose at ``q`` (n,) (pose targets bind a faster twin in ``__init__``)."""
-        return self.residual(self.robot.fk_unchecked(q))
+        """(e (rows,), extras (per goal), errors (per goal: (position m, orientation rad or None))) at ``q`` (n,)."""
+        if self._tip:
+            goal = self.goals[0]
+            if goal.kind == KIND_POSE:
+                e, X, pos, rot = _log6_error(self.robot.tip_pose_seen_from_unchecked(q, goal.target_inv))
+            else:
+                e, X, pos, rot = goal.residual(self.robot.fk_unchecked(q))
+            return e, (X,), ((pos, rot),)
+        parts, extras, errors = [], [], []
+        for goal, T in zip(self.goals, self.robot.frame_poses_unchecked(q, self.frame_ids), strict=True):
+            e, extra, pos, rot = goal.residual(T)
+            parts.append(e if goal.sw == 1.0 else goal.sw * e)
+            extras.append(extra)
+            errors.append((pos, rot))
+        return np.concatenate(parts), extras, errors
 
     def residual(self, T: pin.SE3):
-        """Task error ``e`` (m,), the extra object the Jacobian needs, position error (m), orientation error.
+        """(e, extra, position error m, orientation error rad or None) of a single-goal problem for its frame's pose
+        ``T`` in the base frame (unweighted)."""
+        return self.goals[0].residual(T)
 
-        ``T`` is the tip pose in the base frame.
-        """
-        target = self.target
-        if self.kind == "pose":
-            return _log6_error(self.target_inv * T)
-        if self.kind == "position":
-            e = T.translation - target.position
-            return e, T, math.sqrt(e.dot(e)), None
-        p = T.translation
-        ex, ey = p[0] - target.position[0], p[1] - target.position[1]
-        pos = math.hypot(ex, ey)
-        if self.m == 2:
-            return np.array([ex, ey]), T, pos, None
-        eyaw = float(wrap_angle(yaw(T.rotation)[0] - target.yaw))
-        return np.array([ex, ey, eyaw]), T, pos, abs(eyaw)
+    def task_jacobian(self, q: np.ndarray, extras) -> np.ndarray:
+        """``E = de/dq`` (rows, n) at ``q``; ``extras`` is what :meth:`error_at` returned for the same q (for a
+        single goal on the tip, also its one extra, as :meth:`residual` returns it)."""
+        if self._tip:
+            extra = extras[0] if isinstance(extras, (tuple, list)) else extras
+            return self.goals[0].jacobian(self.robot.jacobian_local_unchecked(q), extra)
+        blocks = []
+        for goal, extra in zip(self.goals, extras, strict=True):
+            E = goal.jacobian(self.robot.jacobian_local_unchecked(q, goal.frame_id), extra)
+            blocks.append(E if goal.sw == 1.0 else goal.sw * E)
+        return np.vstack(blocks)
 
-    def task_jacobian(self, q: np.ndarray, extra) -> np.ndarray:
-        """``E = de/dq`` (m, n) at ``q``; ``extra`` is what :meth:`residual` returned for the same q."""
-        J = self.robot.jacobian_local_unchecked(q)
-        if self.kind == "pose":
-            return pin.Jlog6(extra).dot(J)
-        R = extra.rotation
-        if self.kind == "position":
-            return R.dot(J[:3])
-        Jv = R[:2].dot(J[:3])
-        if self.m == 2:
-            return Jv
-        return np.vstack([Jv, R[2].dot(J[3:])])
+    def within(self, errors) -> bool:
+        """Every goal's errors within its tolerances."""
+        return all(goal.within(pos, rot) for goal, (pos, rot) in zip(self.goals, errors, strict=True))
+
+    def outcome(self, q, errors, converged: bool, it: int, evaluations: int, c: float) -> LMOutcome:
+        """The :class:`LMOutcome` of a run ending at ``q`` with per-goal ``errors`` and cost ``c``."""
+        pos = max(p for p, _ in errors)
+        rots = [r for _, r in errors if r is not None]
+        rot = max(rots) if rots else None
+        g_err = None
+        if len(errors) > 1:
+            g_err = np.array([(p, np.nan if r is None else r) for p, r in errors])
+        return LMOutcome(q, pos, rot, converged, it, evaluations, g_err, float(c))
+
+    def _normal(self, E: np.ndarray) -> np.ndarray:
+        """The normal matrix of the damped step: E E^T (task space) or E^T E (joint space)."""
+        return E.dot(E.T) if self.task_space else E.T.dot(E)
+
+    def _solve(self, E: np.ndarray, N: np.ndarray, rhs: np.ndarray, lam: float) -> np.ndarray:
+        """dq (n,) = E^T (E E^T + lam I)^-1 rhs = (E^T E + lam I)^-1 E^T rhs, ``N`` being :meth:`_normal` of E."""
+        if self.task_space:
+            return E.T.dot(dposv(N + lam * self.eye, rhs, overwrite_a=1)[1])
+        return dposv(N + lam * self.eye, E.T.dot(rhs), overwrite_a=1)[1]
 
     # ------------------------------------------------------------------ the iteration
-    def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, EEt: np.ndarray, e: np.ndarray,
+    def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, N: np.ndarray, e: np.ndarray,
               lam: float) -> tuple[np.ndarray, bool]:
         """The next configuration and whether it rests on a bound: damped step, trust region, joint limits.
 
-        Limits are an active set: joints resting on a bound (``on_bound`` says whether any does) that the
-        descent direction ``-E^T e`` pushes further out are held there, their columns of E zeroed, so the
-        free joints take the whole task error; if the step still carries joints past a bound, those are
-        fixed at the bound they hit and the step is re-solved once for the others (with the task error
-        the fixed joints' moves leave), so it keeps its effect instead of being cut by the clip. Wrapping
-        joints are never clipped: they are shifted by 2 pi back into their range.
+        ``N`` is :meth:`_normal` of ``E``. Limits are an active set: joints resting on a bound (``on_bound`` says
+        whether any does) that the descent direction ``-E^T e`` pushes further out are held there, their columns
+        of E zeroed, so the free joints take the whole task error; if the step still carries joints past a bound,
+        those are fixed at the bound they hit and the step is re-solved once for the others (with the task error
+        the fixed joints' moves leave), so it keeps its effect instead of being cut by the clip. Wrapping joints
+        are never clipped: they are shifted by 2 pi back into their range.
         """
         lo, hi = self.clip_lo, self.clip_hi
-        eye = self.eye
         held = None
         if on_bound:
             g = E.T.dot(e)
             held = ((q <= lo) & (g > 0.0)) | ((q >= hi) & (g < 0.0))
             if np.count_nonzero(held):
                 E = E * ~held
-                EEt = E.dot(E.T)
+                N = self._normal(E)
             else:
                 held = None
-        dq = E.T.dot(dposv(EEt + lam * eye, e, overwrite_a=1)[1])  # the step is -dq
+        dq = self._solve(E, N, e, lam)  # the step is -dq
         s2 = dq.dot(dq)
         if s2 > self.max_step2:
             dq *= self.max_step / math.sqrt(s2)
@@ -169,7 +238,7 @@ class ReferenceLM:
                 fixed |= held
             dfix = np.where(fixed, qc - q, 0.0)
             Ef = E * ~fixed
-            dq = Ef.T.dot(dposv(Ef.dot(Ef.T) + lam * eye, e + E.dot(dfix), overwrite_a=1)[1])
+            dq = self._solve(Ef, self._normal(Ef), e + E.dot(dfix), lam)
             s2 = dq.dot(dq)
             if s2 > self.max_step2:
                 dq *= self.max_step / math.sqrt(s2)
@@ -181,7 +250,7 @@ class ReferenceLM:
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
         """Iterate from ``q`` (n,) (clipped / wrapped into the box first) for at most ``max_iterations`` steps.
 
-        Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at
+        Stops as soon as every goal meets its tolerances, when the damping saturates, on a stall or at
         ``deadline`` (a ``time.perf_counter()`` value, checked before every step). Returns the last accepted
         configuration (the best met).
         """
@@ -190,14 +259,14 @@ class ReferenceLM:
         error_at = self.error_at
         jacobian = self.task_jacobian
         step = self._step
-        tol_p, tol_r = self.tol_p, self.tol_r
-        e, extra, pos, rot = error_at(q)
+        within = self.within
+        e, extras, errors = error_at(q)
         evaluations = 1
         c = e.dot(e)
-        if pos <= tol_p and (rot is None or rot <= tol_r):
-            return LMOutcome(q, pos, rot, True, 0, evaluations)
+        if within(errors):
+            return self.outcome(q, errors, True, 0, evaluations, c)
         lam = self.damping
-        E = EEt = None
+        E = N = None
         window = self.stall_window
         stall = self.stall_ratio**2  # compared on |e|^2
         history = [c]
@@ -208,25 +277,25 @@ class ReferenceLM:
                 break
             it += 1
             if E is None:
-                E = jacobian(q, extra)
-                EEt = E.dot(E.T)
-            qn, on_bound_n = step(q, on_bound, E, EEt, e, lam)
+                E = jacobian(q, extras)
+                N = self._normal(E)
+            qn, on_bound_n = step(q, on_bound, E, N, e, lam)
             if creeping and not (on_bound or on_bound_n):
                 v = self._delta(qn, q)
-                a = self._geodesic(e, E, EEt, lam, v, error_at(q + GEO_H * v)[0])
+                a = self._geodesic(e, E, N, lam, v, error_at(q + GEO_H * v)[0])
                 evaluations += 1
                 if a is not None:
                     qn = self._into_box(q + v + 0.5 * a)
-            en, extra_n, pos_n, rot_n = error_at(qn)
+            en, extras_n, errors_n = error_at(qn)
             evaluations += 1
             cn = en.dot(en)
             if cn < c:
                 creeping = GEO_SLOW * c < cn < GEO_NEAR
-                q, on_bound, e, extra, pos, rot, c = qn, on_bound_n, en, extra_n, pos_n, rot_n, cn
-                if pos <= tol_p and (rot is None or rot <= tol_r):
+                q, on_bound, e, extras, errors, c = qn, on_bound_n, en, extras_n, errors_n, cn
+                if within(errors):
                     if self.finish and c > FINISHED:
-                        return self._finish(q, e, extra, pos, rot, c, it, evaluations)
-                    return LMOutcome(q, pos, rot, True, it, evaluations)
+                        return self._finish(q, e, extras, errors, c, it, evaluations)
+                    return self.outcome(q, errors, True, it, evaluations, c)
                 E = None
                 lam *= SHRINK
                 if lam < LAMBDA_MIN:
@@ -238,7 +307,7 @@ class ReferenceLM:
                 lam *= GROW
                 if lam > LAMBDA_MAX:
                     break
-        return LMOutcome(q, pos, rot, False, it, evaluations)
+        return self.outcome(q, errors, False, it, evaluations, c)
 
     def _delta(self, qn: np.ndarray, q: np.ndarray) -> np.ndarray:
         """``qn - q`` with wrapping joints' differences taken on the circle (a wrapped step is no 2 pi jump)."""
@@ -247,11 +316,11 @@ class ReferenceLM:
             d = np.where(self.wrap, wrap_angle(d), d)
         return d
 
-    def _geodesic(self, e, E, EEt, lam, v, eh):
+    def _geodesic(self, e, E, N, lam, v, eh):
         """Geodesic acceleration (Transtrum & Sethna 2012) ``a`` (n,) of the step ``v`` (n,) taken from a
-        configuration with task error ``e`` (m,), Jacobian ``E`` (m, n), ``EEt = E E^T`` and damping ``lam``,
-        given the error ``eh`` (m,) at ``q + h v``; None when ``|a| > GEO_ALPHA |v| / 2`` (the second-order
-        model is not trusted).
+        configuration with task error ``e`` (rows,), Jacobian ``E`` (rows, n), its normal matrix ``N``
+        (:meth:`_normal`) and damping ``lam``, given the error ``eh`` (rows,) at ``q + h v``; None when
+        ``|a| > GEO_ALPHA |v| / 2`` (the second-order model is not trusted).
 
         The second directional derivative ``r'' = 2/h ((e(q + h v) - e) / h - E v)`` costs one FK; the
         acceleration ``a = -(E^T E + lam I)^-1 E^T r''`` bends the step ``v + a / 2`` along the valley's
@@ -260,7 +329,7 @@ class ReferenceLM:
         """
         h = GEO_H
         rpp = (2.0 / h) * ((eh - e) / h - E.dot(v))
-        a = -E.T.dot(dposv(EEt + lam * self.eye, rpp)[1])
+        a = -self._solve(E, N, rpp, lam)
         return a if 2.0 * math.sqrt(a.dot(a)) <= GEO_ALPHA * math.sqrt(v.dot(v)) else None
 
     def _into_box(self, q: np.ndarray) -> np.ndarray:
@@ -272,13 +341,14 @@ class ReferenceLM:
                 q = np.where(out, self.lower + np.mod(q - self.lower, TWO_PI), q)
         return q
 
-    def _finish(self, q, e, extra, pos, rot, c, it, evaluations) -> LMOutcome:
+    def _finish(self, q, e, extras, errors, c, it, evaluations) -> LMOutcome:
         """One more step once the tolerances are met: at quadratic convergence it takes the error from
         about the tolerance to about 1e-12 or below for the price of one iteration (kept only if better)."""
-        E = self.task_jacobian(q, extra)
+        E = self.task_jacobian(q, extras)
         # (almost) undamped: any damping left would cap the gain at lambda / (sigma^2 + lambda) per step
-        qn, _ = self._step(q, False, E, E.dot(E.T), e, LAMBDA_MIN)
-        en, _, pos_n, rot_n = self.error_at(qn)
-        if en.dot(en) < c:
-            return LMOutcome(qn, pos_n, rot_n, True, it + 1, evaluations + 1)
-        return LMOutcome(q, pos, rot, True, it + 1, evaluations + 1)
+        qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
+        en, _, errors_n = self.error_at(qn)
+        cn = en.dot(en)
+        if cn < c:
+            return self.outcome(qn, errors_n, True, it + 1, evaluations + 1, cn)
+        return self.outcome(q, errors, True, it + 1, evaluations + 1, c)

@@ -41,7 +41,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import OptionError
-from ...problem import IKProblem, shortfall_text
+from ...problem import IKProblem, errors_text, shortfall_text
 from ...result import Result
 from .. import register
 from ..collision_verdict import pairs_text
@@ -144,7 +144,7 @@ class _Search:
                 if self.best is None:
                     self.best = out
                 return False
-        if self.best is None or out.converged or out.error < self.best.error:
+        if self.best is None or out.converged or out.rank < self.best.rank:
             self.best = out
         return out.converged
 
@@ -251,14 +251,16 @@ def memetic(
     # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
     # to replace.
     ranked = first = None
+    goals = problem.goals is not None
     if table is not None:
         # lazy: ranks on the first next(); with a scene, among the collision-free entries only
-        ranked = table.ranked(problem.target, table_offset + table_seeds, free)
+        ranked = (table.ranked_goals(problem, table_offset + table_seeds, free) if goals
+                  else table.ranked(problem.target, table_offset + table_seeds, free))
         if table_offset:
             ranked = itertools.islice(ranked, table_offset, None)
     q0 = problem.q0
     q0_first = q0 is not None
-    if q0 is not None and table is not None:
+    if q0 is not None and table is not None and not goals:
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
         d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
@@ -304,14 +306,22 @@ def memetic(
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    goal_errors = problem.goal_errors(q) if goals else None
+    if goals:
+        within = problem.goals_met(goal_errors)
+    else:
+        within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
     else:
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
-        best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"
+        if goals and not within:
+            unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
+            best = f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
+        else:
+            best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"
         message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
     if search.rejected and not success:
         message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
@@ -324,6 +334,7 @@ def memetic(
         setup_s=setup_s,
         # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
         collision_free=True if problem.scene is not None and search.best.converged else None,
+        goal_errors=goal_errors,
     )
 
 

@@ -42,6 +42,8 @@ class SeedTable:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
+        self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
+        self._goal_frames: dict = {}  # frame names -> (positions (size, G, 3), rotations (size, G, 3, 3))
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -105,6 +107,38 @@ class SeedTable:
             for i in part[d[part].argsort()]:
                 if i != first:
                     yield int(i)
+
+    def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
+        """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
+        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry (the
+        frames' poses over the table are computed once per frame list and cached)."""
+        if k <= 0:
+            return
+        frames = tuple(g.frame for g in problem.goals)
+        hit = self._goal_frames.get(frames)
+        if hit is None:
+            if len(self._goal_frames) > 8:
+                self._goal_frames.clear()
+            hit = self._goal_frames[frames] = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
+        P, R = hit
+        _, pt, Rt = problem.goal_stack()
+        d = np.zeros(self.Q.shape[0])
+        for g, goal in enumerate(problem.goals):
+            dp = P[:, g] - pt[g]
+            dg = (dp * dp).sum(axis=1)
+            if goal.has_orientation:
+                dR = (R[:, g] - Rt[g]).reshape(-1, 9)
+                dg += self.weight * self.weight * (dR * dR).sum(axis=1)
+            d += goal.weight * dg
+        if allowed is not None:
+            d = np.where(allowed, d, np.inf)
+            k = min(k, int(np.count_nonzero(allowed)))
+            if k <= 0:
+                return
+        k = min(k, d.shape[0])
+        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+        for i in part[d[part].argsort()]:
+            yield int(i)
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m

@@ -1,0 +1,80 @@
+"""1-DOF joint helpers on a Pinocchio model: values in a configuration, motions (axes), limits, mimic couplings.
+
+A joint's *value* is one number (rad for revolute joints, m for prismatic ones) whatever Pinocchio stores: a
+continuous (unbounded revolute) joint is two numbers (cos, sin) in a configuration. These helpers read one joint
+at a time from the model (no model-wide ``Data``, which is large for big models); :mod:`.tree` and
+:class:`~evoik_pin.robot.robot.Robot` use them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+__all__ = ["DEFAULT_PRISMATIC_RANGE", "UNBOUNDED", "couplings", "joint_limits", "joint_motions", "joint_value",
+           "set_joint_value"]
+
+#: Search interval (m) used for prismatic joints whose URDF gives no finite limits.
+DEFAULT_PRISMATIC_RANGE = 1.0
+#: Limits at or beyond this magnitude are treated as "no limit" (URDF readers use 1e308-style sentinels).
+UNBOUNDED = 1e10
+
+
+def couplings(model: pin.Model, mimic: dict | None) -> dict[int, tuple[int, float, float]]:
+    """``{mimic joint id: (followed joint id, multiplier, offset)}`` of ``mimic`` entries whose two joints are
+    1-DOF joints of ``model`` (``mimic``: ``{joint: (followed joint, multiplier, offset)}``, or values with
+    ``joint``, ``multiplier``, ``offset`` attributes)."""
+    out: dict[int, tuple[int, float, float]] = {}
+    for name, spec in (mimic or {}).items():
+        driver, m, off = (spec.joint, spec.multiplier, spec.offset) if hasattr(spec, "joint") else spec
+        if not (model.existJointName(name) and model.existJointName(driver)):
+            continue
+        j, d = model.getJointId(name), model.getJointId(driver)
+        if j != d and model.joints[j].nv == 1 and model.joints[d].nv == 1:
+            out[j] = (d, float(m), float(off))
+    return out
+
+
+def joint_value(model: pin.Model, q: np.ndarray, j: int) -> float:
+    """Value (rad or m) of 1-DOF joint j in configuration q (model.nq,)."""
+    jm = model.joints[j]
+    return float(np.arctan2(q[jm.idx_q + 1], q[jm.idx_q])) if jm.nq == 2 else float(q[jm.idx_q])
+
+
+def set_joint_value(model: pin.Model, q: np.ndarray, j: int, value: float) -> None:
+    """Write value (rad or m) of 1-DOF joint j into configuration q (model.nq,), as (cos, sin) if continuous."""
+    jm = model.joints[j]
+    if jm.nq == 2:
+        q[jm.idx_q], q[jm.idx_q + 1] = np.cos(value), np.sin(value)
+    else:
+        q[jm.idx_q] = value
+
+
+def joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
+    """(revolute (k,) bool, unit axes (k, 3) in each joint's own frame) of 1-DOF joints, from their motion
+    subspace at the neutral configuration (joint by joint: no model-wide ``Data``, which is large)."""
+    ids = list(joint_ids)
+    q = pin.neutral(model)
+    revolute = np.zeros(len(ids), dtype=bool)
+    axes = np.zeros((len(ids), 3))
+    for k, j in enumerate(ids):
+        jm = model.joints[j]
+        jd = jm.createData()
+        jm.calc(jd, q)
+        S = np.asarray(jd.S).reshape(6)
+        lin, ang = S[:3], S[3:]
+        revolute[k] = np.linalg.norm(ang) > 0.5
+        axes[k] = ang if revolute[k] else lin
+    return revolute, axes
+
+
+def joint_limits(model: pin.Model, j: int) -> tuple[float, float, bool]:
+    """(lower, upper, limited) of 1-DOF joint j: limited is False for continuous joints and for limits that
+    are absent (lower == upper, as urdfdom reads a <limit> without them), inverted or beyond 1e10."""
+    jm = model.joints[j]
+    if jm.nq != 1:
+        return -np.pi, np.pi, False
+    lo = float(model.lowerPositionLimit[jm.idx_q])
+    hi = float(model.upperPositionLimit[jm.idx_q])
+    limited = abs(lo) < UNBOUNDED and abs(hi) < UNBOUNDED and lo < hi
+    return lo, hi, limited

@@ -1,0 +1,787 @@
+"""The robot: :class:`Robot`, the active joints of a URDF as Pinocchio sees them, a serial chain or a whole tree.
+
+This module (with :mod:`.tree` and :mod:`.population`) is the only code in evoik_pin that runs Pinocchio's
+kinematics on a ``Model``/``Data``. A :class:`Robot` picks its active joints (those that move its goal frames:
+the chain from a base frame to one tip frame, the union of the chains to several tips, or the whole tree), locks
+every other joint (``pin.buildReducedModel``) and offers forward kinematics and Jacobians of any frame,
+manipulability, one configuration at a time (through Pinocchio) or a whole population at once (NumPy, checked
+against Pinocchio in the tests), the folded tree constants compiled kernels evaluate, and the placements the
+viewer draws. Loading a URDF is :mod:`.loading`'s job.
+
+The joint vector ``q`` users and solvers see has one entry per independent degree of freedom (rad for revolute
+joints, m for prismatic ones), in Pinocchio's joint order (a serial chain: base to tip). Pinocchio stores a
+continuous (unbounded revolute) joint as two numbers (cos, sin); :meth:`Robot.to_pinocchio` and
+:meth:`Robot.from_pinocchio` map between the two.
+
+A floating base (``floating_base=True``) puts six entries at the front of ``q``: the root link's position x, y,
+z (m) in the world and its yaw, pitch, roll (rad), rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (:mod:`.tree`).
+:meth:`Robot.full_configuration` turns them into the seven numbers of Pinocchio's free-flyer joint (position,
+then the unit quaternion (x, y, z, w)).
+
+Mimic joints (URDF ``<mimic joint="k" multiplier="m" offset="c"/>``: ``q_j = m q_k + c``) are not entries of
+``q``: the reduced Pinocchio model holds the active *physical* joints (mimic joints included), and every
+physical joint's value is ``scale * q[index] + offset`` (1, its own entry, 0 for the others; see
+:meth:`Robot.tree_constants`). The joint a mimic follows is an entry of ``q`` even when it lies off the active
+joints (a gripper finger driven by the other finger), and Jacobians get the chain rule: column k gathers ``m``
+times the column of each physical joint that follows q_k.
+
+Poses are those of frames expressed in the base frame (the world frame when no base is chosen).
+"""
+
+from __future__ import annotations
+
+import re
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import BoundsError, ConfigurationError, FrameError, RobotLoadError
+from .frames import body_frame_names, closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
+from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_limits, joint_motions, joint_value, set_joint_value
+from .population import chain_forward, chain_jacobians, chain_positions
+from .tree import ChainView, KinematicTree, free_flyer_model, rpy_to_quaternion, with_floating_base
+
+#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
+_MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
+
+__all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "Robot"]
+
+#: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
+#: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
+MAX_CHAIN_JOINTS = 200
+
+_MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
+                        "planar": [0, 1, 5]}
+
+
+class Robot:
+    """The active joints of a URDF (a serial chain or a tree): forward kinematics, Jacobians and manipulability of
+    any of its frames.
+
+    Attributes:
+        name: robot name (bundled or example name, or the URDF file's stem).
+        n: number of independent degrees of freedom (mimic joints are folded in; a floating base counts 6).
+        joint_names: the joints of ``q`` (length n), in Pinocchio's joint order (a chain: base to tip); a joint
+            that mimic joints follow is listed where the first of them sits when it is not active itself. With a
+            floating base the first six are :data:`~evoik_pin.robot.tree.FLOATING_BASE_JOINTS`.
+        lower, upper: search bounds (n,) in rad or m; finite; see :meth:`set_bounds`. A joint that mimic joints
+            follow is also bounded so that every such joint stays inside its own URDF limits.
+        tip: the default goal frame (single-target solves, :meth:`fk` without a frame); ``tips``: the frames the
+            active joints were chosen for (``(tip,)`` for a chain; every frame for a whole tree is allowed).
+        base: frame name poses are expressed in; the URDF root when none was chosen (with a floating base: the
+            world frame the root link moves in).
+        floating_base: whether the first six entries of q move the root link.
+        model: the reduced Pinocchio model holding the active physical joints (``model.nv == n`` unless mimic
+            joints are active); map ``q`` to its configuration with :meth:`to_pinocchio`.
+        full_model: the Pinocchio model of the whole URDF (every joint independent; with a floating base, behind
+            Pinocchio's free-flyer ``root_joint``): :meth:`full_configuration` gives its configurations.
+        urdf_path: the URDF file (None when loaded from an XML string); ``urdf_xml`` holds its text (the expanded
+            URDF for a xacro file).
+        revolute: (n,) bool, True for revolute joints (rad), False for prismatic ones (m).
+        continuous: (n,) bool, True for joints Pinocchio stores as (cos, sin).
+        joint_axes: (n, 3) unit axis of each joint in its own frame: the rotation axis of a revolute joint,
+            the sliding direction of a prismatic one.
+        mimic_joints: ``{physical joint: (joint it follows, multiplier, offset)}`` for the active mimic joints:
+            ``q_joint = multiplier * q_followed + offset``.
+    """
+
+    def __init__(
+        self,
+        full_model: pin.Model,
+        tip: str | None = None,
+        base: str | None = None,
+        joints: list[str] | None = None,
+        name: str = "robot",
+        urdf_path: Path | None = None,
+        urdf_xml: str | None = None,
+        package_dirs: list[str] | None = None,
+        mimic: dict | None = None,
+        tips: list[str] | str | None = None,
+        floating_base: bool = False,
+        base_box=None,
+        packages: dict[str, str] | None = None,
+        missing_packages: dict[str, str] | None = None,
+    ) -> None:
+        """``full_model``: the URDF's fixed-base Pinocchio model. ``tips``: frames whose chains make the active
+        joints (``tip`` defaults to the first), or ``"all"`` for every joint downstream of the base. ``mimic``:
+        ``{joint: (followed joint, multiplier, offset)}`` (objects with ``joint``, ``multiplier``, ``offset``
+        attributes also do), the URDF's mimic couplings resolved to joints no mimic drives
+        (:func:`~evoik_pin.robot.urdf_checks.check_urdf` returns them); entries naming no 1-DOF joint of
+        ``full_model`` are ignored. ``floating_base``, ``base_box``: see :func:`~evoik_pin.robot.load_robot`.
+        ``packages``: ``{pkg: folder}`` that ``package://pkg/...`` mesh URIs resolve to (before ``package_dirs``);
+        ``missing_packages``: ``{pkg: error message}`` of those nothing found."""
+        self.name = name
+        self.urdf_path = urdf_path
+        self.urdf_xml = urdf_xml
+        self.package_dirs = list(package_dirs or [])
+        self.packages = dict(packages or {})
+        self.missing_packages = dict(missing_packages or {})
+        self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
+        self.floating_base = bool(floating_base)
+        if self.floating_base:
+            _check_fixed_root(full_model, name)
+            if base is not None:
+                raise FrameError(f"a floating base moves the root link of {name}: poses are in the world frame, so "
+                                 f"no base frame can be chosen (got base={base!r})")
+            kin = with_floating_base(full_model)
+            self.full_model = free_flyer_model(full_model)
+        else:
+            kin = full_model
+            self.full_model = full_model
+        self._kin_model = kin  # the model the reduced one is cut from: full_model, or six joints + full_model
+        coupling = couplings(kin, mimic)
+        self._full_couplings = coupling
+
+        whole = isinstance(tips, str) and tips == "all"
+        if tips is None or whole:
+            tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
+        else:
+            tip_names = _frame_list(tips)
+        if tip is None:
+            tip = tip_names[0] if tip_names else deepest_body(full_model)
+        root_name = root_link(full_model) if base is None else base
+        base_id = 0 if base is None else find_frame(kin, base)
+        if base_id < 0:
+            raise FrameError(f"unknown base frame {base!r}{_suggest(base, kin)}; frames of {name}: "
+                             f"{_listed(body_frame_names(full_model))}")
+        base_joint = kin.frames[base_id].parentJoint
+        for t in [tip, *(tip_names or [])]:
+            if find_frame(kin, t) < 0:
+                raise FrameError(f"unknown tip frame {t!r}{_suggest(t, kin)}; frames of {name}: "
+                                 f"{_listed(body_frame_names(full_model))}")
+
+        if whole:
+            active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
+        else:
+            chosen: set[int] = set()
+            for t in tip_names:
+                support = list(kin.supports[kin.frames[find_frame(kin, t)].parentJoint])
+                if base_joint not in support:
+                    raise FrameError(
+                        f"tip frame {t!r} is not downstream of base frame {root_name!r}: no kinematic chain joins "
+                        "them from base to tip"
+                    )
+                chosen.update(support[support.index(base_joint) + 1:])
+            active = sorted(chosen)
+        where = (f"the chain {root_name!r} -> {tip_names[0]!r}" if tip_names and len(tip_names) == 1
+                 else f"the joints below {root_name!r}" if whole else f"the chains {root_name!r} -> {tip_names}")
+        bad = [kin.names[j] for j in active if kin.joints[j].nv != 1]
+        if bad:
+            raise RobotLoadError(
+                f"joints {bad} of {where} are not 1-DOF revolute or prismatic joints; only those are "
+                "supported (lock them with joints=[...])"
+            )
+        above_base = set(kin.supports[base_joint])
+
+        def follows(j: int) -> tuple[int | None, float, float]:
+            """(joint whose q moves physical joint j, multiplier, offset); None when j is constant (it follows a
+            joint above the base, which stays locked, or has multiplier 0)."""
+            c = coupling.get(j)
+            if c is None:
+                return j, 1.0, 0.0
+            driver, m, off = c
+            return (None if driver in above_base or m == 0.0 else driver), m, off
+
+        dofs: list[int] = []
+        for j in active:
+            d = follows(j)[0]
+            if d is not None and d not in dofs:
+                dofs.append(d)
+        dof_names = [kin.names[d] for d in dofs]
+        if joints is not None:
+            unknown = [j for j in joints if j not in dof_names]
+            if unknown:
+                coupled = [f"{u!r} mimics {kin.names[coupling[kin.getJointId(u)][0]]!r}"
+                           for u in unknown if kin.existJointName(u) and kin.getJointId(u) in coupling]
+                hint = f" ({'; '.join(coupled)}: name the joint it follows)" if coupled else ""
+                raise FrameError(
+                    f"joints {unknown} are not on {where}; its joints are {', '.join(dof_names) or '(none)'}{hint}"
+                )
+            dofs = [d for d in dofs if kin.names[d] in joints]
+        # the physical joints: every joint q moves (below the base): the active ones, the joints their mimics follow
+        # and every other mimic of those, so that each link is where full_configuration(q) puts it
+        physical = [j for j in range(1, kin.njoints) if j not in above_base and follows(j)[0] in dofs]
+        if not physical:
+            raise RobotLoadError(f"{where} of {name} has no movable joint; pick another tip or base")
+        if len(physical) > MAX_CHAIN_JOINTS:
+            raise RobotLoadError(
+                f"{where} of {name} has {len(physical)} joints; at most {MAX_CHAIN_JOINTS} are supported "
+                "(Pinocchio's data for an n-joint chain takes O(n^3) memory): pick nearer tips, a farther base, or "
+                "keep fewer joints free with joints=[...]"
+            )
+
+        q_ref = pin.neutral(kin)
+        for j in range(1, kin.njoints):
+            jm = kin.joints[j]
+            if jm.nq == 1:  # keep locked joints inside their limits
+                lo, hi = kin.lowerPositionLimit[jm.idx_q], kin.upperPositionLimit[jm.idx_q]
+                if lo <= hi:
+                    q_ref[jm.idx_q] = np.clip(q_ref[jm.idx_q], lo, hi)
+        for j, (d, m, off) in coupling.items():  # locked mimic joints sit where their driver's rest puts them
+            set_joint_value(kin, q_ref, j, m * joint_value(kin, q_ref, d) + off)
+        to_lock = [j for j in range(1, kin.njoints) if j not in physical]
+        self._q_ref_full = q_ref
+        self._locked = to_lock
+        self.model = reduced_model(kin, to_lock, q_ref) if to_lock else pin.Model(kin)
+        self.data = self.model.createData()
+        self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
+        self.tip = tip
+        self.tips = tuple(tip_names) if tip_names else (tip,)
+        self.base = root_name
+        self._tip_id = find_frame(self.model, tip)
+        self._base_id = 0 if base is None else find_frame(self.model, base)
+        self.n = len(dofs)
+        self.joint_names = [kin.names[d] for d in dofs]
+        self._dof_ids = dofs  # kinematic-model joint ids of the entries of q
+
+        # Base placement is constant: every free joint is downstream of the base frame.
+        q0 = pin.neutral(self.model)
+        pin.framesForwardKinematics(self.model, self.data, q0)
+        self._oMbase = self.data.oMf[self._base_id].copy() if base is not None else pin.SE3.Identity()
+        self._baseMo = self._oMbase.inverse()
+        self._identity = pin.SE3.Identity()
+
+        # The physical joints: the reduced model's joints 1..m in topological order, and how each follows q.
+        m_phys = self.model.njoints - 1
+        self._phys_idx_q = np.array([self.model.joints[k].idx_q for k in range(1, m_phys + 1)], dtype=np.intp)
+        self._phys_continuous = np.array([self.model.joints[k].nq == 2 for k in range(1, m_phys + 1)])
+        self.tree = KinematicTree.of(self.model, self._baseMo)
+        index, scale, offset = [], [], []
+        self.mimic_joints: dict[str, tuple[str, float, float]] = {}
+        for j in physical:
+            d, m, off = follows(j)
+            index.append(dofs.index(d))
+            scale.append(m)
+            offset.append(off)
+            if d != j:
+                self.mimic_joints[kin.names[j]] = (kin.names[d], m, off)
+        self._phys_index = np.ascontiguousarray(index, dtype=np.int64)
+        self._phys_scale = np.ascontiguousarray(scale, dtype=float)
+        self._phys_offset = np.ascontiguousarray(offset, dtype=float)
+        self._coupled = bool(self.mimic_joints)
+        self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
+        self._G[np.arange(m_phys), self._phys_index] = self._phys_scale
+        self._views: dict[int, tuple[int, np.ndarray, np.ndarray, ChainView]] = {}
+        self._tip_view = self._frame_view(self._tip_id)[3]
+
+        # The entries of q: their own joint's motion (active, or the inactive joint mimics follow).
+        revolute, axes = joint_motions(kin, dofs)
+        self.revolute = revolute
+        self.joint_axes = axes
+        self.continuous = np.array([kin.joints[d].nq == 2 for d in dofs])
+        self._set_default_bounds(coupling)
+        if base_box is not None:
+            self._set_base_box(base_box)
+
+    # ------------------------------------------------------------------ construction helpers
+    def _set_default_bounds(self, coupling: dict[int, tuple[int, float, float]]) -> None:
+        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE when it has none), narrowed
+        so that every mimic joint following it stays inside its own limits."""
+        fm = self._kin_model
+        lower = np.empty(self.n)
+        upper = np.empty(self.n)
+        for k, d in enumerate(self._dof_ids):
+            lo, hi, limited = joint_limits(fm, d)
+            if not limited:
+                half = np.pi if self.revolute[k] else DEFAULT_PRISMATIC_RANGE
+                lo, hi = -half, half
+            for j, (driver, m, off) in coupling.items():
+                jlo, jhi, jlimited = joint_limits(fm, j)
+                if driver != d or not jlimited or m == 0.0:
+                    continue
+                a, b = sorted(((jlo - off) / m, (jhi - off) / m))
+                if max(lo, a) > min(hi, b):
+                    raise RobotLoadError(
+                        f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} = {m:g} "
+                        f"{fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in [{lo:g}, {hi:g}] keeps it in "
+                        f"its limits [{jlo:g}, {jhi:g}]"
+                    )
+                lo, hi = max(lo, a), min(hi, b)
+            lower[k], upper[k] = lo + 0.0, hi + 0.0  # + 0.0: no -0.0 bound (NumPy's uniform refuses [0, -0])
+        self.lower, self.upper = lower, upper
+
+    def _set_base_box(self, base_box) -> None:
+        """The floating base's translation bounds: ``base_box`` a half-width h (m; the box [-h, h]^3 around the
+        origin) or a pair (lower (3,), upper (3,)) in m."""
+        if not self.floating_base:
+            raise BoundsError("base_box bounds the floating base's position: give it with floating_base=True")
+        try:
+            if np.ndim(base_box) == 0:
+                h = float(base_box)
+                lo, hi = np.full(3, -h), np.full(3, h)
+            else:
+                lo, hi = (np.asarray(b, dtype=float).reshape(3) for b in base_box)
+        except (TypeError, ValueError) as exc:
+            raise BoundsError(f"base_box must be a half-width (m) or a pair (lower (3,), upper (3,)) in m, got "
+                              f"{base_box!r}") from exc
+        lower, upper = self.lower.copy(), self.upper.copy()
+        lower[:3], upper[:3] = lo, hi
+        self.set_bounds(lower, upper)
+
+    # ------------------------------------------------------------------ frames
+    @cached_property
+    def frames(self) -> list[str]:
+        """Names of every frame a goal or :meth:`fk` can name: the URDF's links, joint frames and fixed frames
+        (Pinocchio's names), each once, in model order."""
+        return frame_names(self.model)
+
+    def frame_id(self, frame: str | None) -> int:
+        """Pinocchio id in :attr:`model` of frame ``frame`` (None: the tip); a FrameError naming the closest frames
+        when there is no such frame."""
+        if frame is None:
+            return self._tip_id
+        fid = find_frame(self.model, frame) if isinstance(frame, str) else -1
+        if fid < 0:
+            if not isinstance(frame, str):
+                raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
+            raise FrameError(f"{self.name} has no frame {frame!r}{_suggest(frame, self.model)} (robot.frames lists "
+                             f"its {len(self.frames)} frames)")
+        return fid
+
+    def _frame_view(self, fid: int) -> tuple[int, np.ndarray, np.ndarray, ChainView]:
+        """(physical joint or -1, folded placement R (3, 3), p (3,), the chain from the base) of frame ``fid``."""
+        hit = self._views.get(fid)
+        if hit is None:
+            j, R, p = self.tree.frame(self.model, fid)
+            hit = self._views[fid] = (j, R, p, self.tree.chain_to(j, R, p))
+        return hit
+
+    def frame_constants(self, frame: str | None = None) -> tuple[int, np.ndarray, np.ndarray]:
+        """(physical joint j_f, R_f (3, 3), p_f (3,) m) of a frame (None: the tip) for compiled kernels: its folded
+        placement on physical joint j_f of :meth:`tree_constants`, or its constant pose in the base frame when no
+        active joint moves it (j_f = -1). Owned by the robot: do not modify them."""
+        j, R, p, _ = self._frame_view(self.frame_id(frame))
+        return j, R, p
+
+    def moving_joints(self, frame: str | None = None) -> list[str]:
+        """Names of the entries of ``q`` that move a frame (None: the tip); empty when no active joint moves it."""
+        j = self._frame_view(self.frame_id(frame))[0]
+        phys = self.tree.ancestors(j)
+        ks = sorted({int(self._phys_index[k]) for k in phys if self._phys_scale[k] != 0.0})
+        return [self.joint_names[k] for k in ks]
+
+    # ------------------------------------------------------------------ constants of compiled kernels
+    def tree_constants(self) -> tuple[np.ndarray, ...]:
+        """The folded tree of the m active physical joints and how they follow q, for compiled kernels that
+        evaluate it without Pinocchio (:mod:`.tree`): parent (m,) int64, FR (m, 3, 3), Fp (m, 3) (m), revolute
+        (m,) bool, then index (m,) int64, scale (m,), offset (m,): physical joint k's value is
+        ``scale[k] * q[index[k]] + offset[k]``. C-contiguous, owned by the robot: do not modify them."""
+        t = self.tree
+        return (t.parent, t.FR, t.Fp, t.revolute, self._phys_index, self._phys_scale, self._phys_offset)
+
+    def chain_constants(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The folded serial chain ``T = F_0 Z(x_1) F_1 ... Z(x_c) F_c`` (tip pose in the base frame) over the c
+        physical joints from the base to the tip: rotations F_R (c+1, 3, 3), translations F_p (c+1, 3) (m) and the
+        (c,) bool mask of revolute joints. Z(x) is a rotation by x about z (revolute) or a translation by x along z
+        (prismatic); the joint values x come from q by :meth:`chain_coupling`. (A whole tree's constants:
+        :meth:`tree_constants` and :meth:`frame_constants`.) Owned by the robot: do not modify them.
+        """
+        view = self._tip_view
+        return view.FR, view.Fp, view.revolute
+
+    def chain_coupling(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """How the c joints of :meth:`chain_constants` follow q (n,): ``x_k = scale[k] * q[index[k]] + offset[k]``.
+        Returns index (c,) int64, scale (c,) and offset (c,) float64 (identity, ones and zeros without mimic joints
+        on the chain). The Jacobian with respect to q adds ``scale[k]`` times physical column k into column
+        ``index[k]``.
+        """
+        joints = self._tip_view.joints
+        if joints.size == self.tree.m:  # the chain holds every physical joint (then 0..m-1 in order)
+            return self._phys_index, self._phys_scale, self._phys_offset
+        return self._phys_index[joints], self._phys_scale[joints], self._phys_offset[joints]
+
+    def chain_joints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The m physical joints (``model``'s joints: q's joints and the active mimic joints): revolute mask (m,),
+        unit axes (m, 3) in each joint's frame, and the lower and upper values (m,) (rad or m) they take when q
+        spans its bounds. Equal to (revolute, joint_axes, lower, upper) without mimic joints."""
+        a = self._phys_scale * self.lower[self._phys_index] + self._phys_offset
+        b = self._phys_scale * self.upper[self._phys_index] + self._phys_offset
+        return self.tree.revolute, self.tree.axes, np.minimum(a, b), np.maximum(a, b)
+
+    def _physical(self, Q: np.ndarray) -> np.ndarray:
+        """Physical joint values (..., m) of joint vectors Q (..., n): ``scale * Q[..., index] + offset``."""
+        if not self._coupled:
+            return Q
+        return Q[..., self._phys_index] * self._phys_scale + self._phys_offset
+
+    # ------------------------------------------------------------------ bounds and validation
+    def set_bounds(self, lower, upper) -> None:
+        """Replace the search bounds (rad or m), each of length ``n``; finite, lower <= upper. (A floating base's
+        first three entries are its position box, m.)"""
+        lower = np.asarray(lower, dtype=float).reshape(-1)
+        upper = np.asarray(upper, dtype=float).reshape(-1)
+        if lower.shape != (self.n,) or upper.shape != (self.n,):
+            raise BoundsError(
+                f"bounds of {self.name} need {self.n} values each (one per joint), got {lower.size} and "
+                f"{upper.size}"
+            )
+        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+            raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
+        bad = np.nonzero(lower > upper)[0]
+        if bad.size:
+            k = int(bad[0])
+            raise BoundsError(
+                f"inverted bounds for joint {self.joint_names[k]!r}: lower {lower[k]:.6g} > upper {upper[k]:.6g}"
+            )
+        self.lower, self.upper = lower, upper
+
+    def check_q(self, q) -> np.ndarray:
+        """``q`` as a float array of shape (n,), or a ConfigurationError naming the problem."""
+        arr = np.asarray(q, dtype=float)
+        if arr.ndim != 1 or arr.shape[0] != self.n:
+            names = ", ".join(self.joint_names) if self.n <= 12 else ", ".join(self.joint_names[:12]) + ", ..."
+            raise ConfigurationError(
+                f"{self.name} has {self.n} joints ({names}); got a joint vector of shape {arr.shape}, expected "
+                f"({self.n},)"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
+        return arr
+
+    def check_population(self, Q) -> np.ndarray:
+        """``Q`` as a float array of shape (N, n), or a ConfigurationError naming the problem."""
+        arr = np.asarray(Q, dtype=float)
+        if arr.ndim == 1 and arr.shape[0] == self.n:
+            arr = arr[None, :]
+        if arr.ndim != 2 or arr.shape[1] != self.n:
+            raise ConfigurationError(
+                f"{self.name} needs configurations of shape (N, {self.n}); got shape {arr.shape}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise ConfigurationError("configurations contain NaN or inf")
+        return arr
+
+    def within_bounds(self, q, tol: float = 0.0) -> bool:
+        """True when every joint value lies inside [lower - tol, upper + tol]."""
+        q = np.asarray(q, dtype=float)
+        return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
+
+    def clip(self, Q) -> np.ndarray:
+        """``Q`` (..., n) clipped into the search bounds."""
+        return np.clip(Q, self.lower, self.upper)
+
+    def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        """``count`` configurations drawn uniformly inside the search bounds, shape (count, n)."""
+        return rng.uniform(self.lower, self.upper, size=(count, self.n))
+
+    # ------------------------------------------------------------------ Pinocchio mapping
+    def to_pinocchio(self, q) -> np.ndarray:
+        """Configuration (model.nq,) of :attr:`model` at joint vector ``q`` (n,): mimic joints at their coupled
+        values, continuous joints as (cos, sin); a floating base as its six joints (x, y, z, yaw, pitch, roll)."""
+        x = self._physical(np.asarray(q, dtype=float))
+        if not self._has_continuous:
+            return np.array(x)  # a copy: the caller owns it
+        return np.concatenate((x, np.cos(x), np.sin(x)))[self._pin_gather]
+
+    def from_pinocchio(self, q_pin) -> np.ndarray:
+        """Joint vector (n,) of a configuration (model.nq,) of :attr:`model`; continuous joints via
+        atan2(sin, cos), an entry that only mimic joints show through the first of them (``(x - offset) /
+        scale``)."""
+        q_pin = np.asarray(q_pin, dtype=float)
+        out = np.full(self.n, np.nan)
+        for k, i in enumerate(self._phys_idx_q):
+            d, m = self._phys_index[k], self._phys_scale[k]
+            if np.isnan(out[d]) and m != 0.0:
+                x = np.arctan2(q_pin[i + 1], q_pin[i]) if self._phys_continuous[k] else q_pin[i]
+                out[d] = (x - self._phys_offset[k]) / m
+        return out
+
+    def full_configuration(self, q) -> np.ndarray:
+        """Configuration (full_model.nq,) of the whole URDF: the entries of ``q`` on their joints, every mimic
+        joint of them at its coupled value, the other joints at rest (where the model locked them), in
+        :attr:`full_model`'s joint order (that of ``pin.buildModelFromUrdf(path)``).
+
+        With a floating base, :attr:`full_model` is ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())``'s:
+        the configuration starts with the root link's position ``q[0:3]`` (m) and the unit quaternion (x, y, z, w),
+        w >= 0, of ``Rz(q[3]) Ry(q[4]) Rx(q[5])``, then the URDF's joints.
+        """
+        q = self.check_q(q)
+        out = self._q_ref_full.copy()
+        fm = self._kin_model
+        for k, d in enumerate(self._dof_ids):
+            set_joint_value(fm, out, d, q[k])
+        for j, (d, m, off) in self._full_couplings.items():
+            if d in self._dof_ids:
+                set_joint_value(fm, out, j, m * q[self._dof_ids.index(d)] + off)
+        if self.floating_base:  # the six base joints are the kinematic model's first six numbers
+            out = np.concatenate([out[:3], rpy_to_quaternion(*out[3:6]), out[6:]])
+        return out
+
+    # ------------------------------------------------------------------ kinematics, one configuration
+    def fk(self, q, frame: str | None = None) -> pin.SE3:
+        """Pose of a frame (a link, joint or fixed frame of the URDF, Pinocchio's name; None: the tip) in the base
+        frame at joint vector ``q`` (n,), as a ``pin.SE3`` (m)."""
+        q = self.check_q(q)
+        fid = self.frame_id(frame)
+        pin.framesForwardKinematics(self.model, self.data, self.to_pinocchio(q))
+        return self._baseMo * self.data.oMf[fid]
+
+    def jacobian(self, q, frame: str = "world", of: str | None = None) -> np.ndarray:
+        """Frame Jacobian (6, n) of a frame (``of``: a frame name; None: the tip): rows (vx, vy, vz, wx, wy, wz),
+        columns the entries of q.
+
+        ``frame="world"``: linear velocity of the frame's origin and angular velocity, both in the base
+        frame's axes (the derivative of :meth:`fk`'s translation is ``J[:3]``).
+        ``frame="local"``: both expressed in the frame itself.
+        """
+        q = self.check_q(q)
+        if frame not in ("world", "local"):
+            raise ConfigurationError(f"jacobian frame must be 'world' or 'local', got {frame!r} (name the frame "
+                                     "whose Jacobian you want with of=...)")
+        fid = self.frame_id(of)
+        ref = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if frame == "world" else pin.ReferenceFrame.LOCAL
+        # reshape: eigenpy returns a (6,) array for a one-joint model
+        J = pin.computeFrameJacobian(self.model, self.data, self.to_pinocchio(q), fid, ref).reshape(6, -1)
+        if self._coupled:
+            J = J @ self._G  # chain rule: dx/dq
+        if frame == "world" and self._base_id != 0:
+            Rt = self._oMbase.rotation.T
+            J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
+        return np.array(J)
+
+    # ------------------------------------------------------------------ hot path of local solvers
+    @cached_property
+    def _pin_gather(self) -> np.ndarray:
+        """(nq,) indices into ``[x, cos x, sin x]`` (3m,) of the physical values x (m,) that give Pinocchio's
+        configuration vector."""
+        m_phys = self._phys_idx_q.size
+        gather = np.empty(self.model.nq, dtype=np.intp)
+        for k, i in enumerate(self._phys_idx_q):
+            if self._phys_continuous[k]:
+                gather[i], gather[i + 1] = m_phys + k, 2 * m_phys + k
+            else:
+                gather[i] = k
+        return gather
+
+    @cached_property
+    def _has_continuous(self) -> bool:
+        return bool(self._phys_continuous.any())
+
+    def _pin_q(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`to_pinocchio` for the hot path: ``q`` itself when nothing is continuous and no mimic joint is
+        active, else the conversion.
+
+        The last conversion is memoized by the bytes of ``q``: local solvers ask for the pose and then the
+        Jacobian of one configuration, and the (cos, sin) conversion costs more than the kinematics.
+        """
+        if not (self._has_continuous or self._coupled):
+            return q
+        key = q.tobytes()
+        if key == self._pin_q_key:
+            return self._pin_q_value
+        out = self.to_pinocchio(q)
+        self._pin_q_key, self._pin_q_value = key, out
+        return out
+
+    def fk_unchecked(self, q: np.ndarray) -> pin.SE3:
+        """:meth:`fk` of the tip without validation, for local solvers' inner loops.
+
+        ``q`` must already be a finite float array of shape (n,). Returns the tip pose in the base frame
+        (a ``pin.SE3`` owned by the caller).
+        """
+        return self.tip_pose_seen_from_unchecked(q, self._identity)
+
+    def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
+        """``M * fk(q)``: the tip pose expressed in a frame whose inverse placement in the base frame is
+        ``M`` (e.g. ``M = T_target^-1`` gives the tip seen from the target), without validation and
+        without the copy :meth:`fk_unchecked` makes. ``q`` as in :meth:`fk_unchecked`; a new ``pin.SE3``."""
+        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
+        if self._base_id == 0:
+            return M * self.data.oMf[self._tip_id]
+        return M * (self._baseMo * self.data.oMf[self._tip_id])
+
+    def frame_poses_unchecked(self, q: np.ndarray, frame_ids) -> list[pin.SE3]:
+        """Poses in the base frame (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, from
+        one kinematics pass, without validation (``q`` as in :meth:`fk_unchecked`)."""
+        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
+        oMf = self.data.oMf
+        if self._base_id == 0:
+            return [oMf[f].copy() for f in frame_ids]
+        return [self._baseMo * oMf[f] for f in frame_ids]
+
+    def jacobian_local_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
+        """``jacobian(q, "local")`` of the tip (or of Pinocchio frame ``frame_id``) without validation (6, n), in
+        that frame.
+
+        Rows (vx, vy, vz, wx, wy, wz): ``T(q + dq) ~ T(q) exp(J dq)`` for small dq. ``q`` as in
+        :meth:`fk_unchecked`.
+        """
+        fid = self._tip_id if frame_id is None else frame_id
+        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, pin.ReferenceFrame.LOCAL)
+        J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
+        return J @ self._G if self._coupled else J
+
+    @staticmethod
+    def task_rows(rows) -> list[int]:
+        """Jacobian row indices of a row selection: "translation", "rotation", "full", "planar" or a list."""
+        if isinstance(rows, str):
+            if rows not in _MANIPULABILITY_ROWS:
+                raise ConfigurationError(
+                    f"manipulability rows {rows!r} unknown; use one of {list(_MANIPULABILITY_ROWS)} or a list of "
+                    "row indices 0-5 (vx, vy, vz, wx, wy, wz)"
+                )
+            return _MANIPULABILITY_ROWS[rows]
+        out = [int(r) for r in rows]
+        if not out or any(r < 0 or r > 5 for r in out) or len(set(out)) != len(out):
+            raise ConfigurationError(f"manipulability rows must be distinct indices 0-5, got {rows!r}")
+        return out
+
+    def manipulability(self, q, rows="translation") -> float:
+        """Yoshikawa manipulability sqrt(det(J J^T)) of the chosen rows of the tip's world-frame Jacobian.
+
+        ``rows``: ``"translation"`` (vx, vy, vz), ``"rotation"``, ``"full"`` (all six), ``"planar"``
+        (vx, vy, wz: paper 003's x, y, yaw) or an explicit list of row indices.
+        """
+        J = self.jacobian(q, "world")[self.task_rows(rows)]
+        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+
+    # ------------------------------------------------------------------ kinematics, whole populations
+    def _view(self, frame: str | None) -> ChainView:
+        return self._tip_view if frame is None else self._frame_view(self.frame_id(frame))[3]
+
+    def fk_batch(self, Q, validate: bool = True, frames=None):
+        """Frame poses of a population ``Q`` (N, n): positions (N, 3) in m and rotations (N, 3, 3) of the tip
+        (``frames=None``) or of one frame (a name); for a list of G frames, positions (N, G, 3) and rotations
+        (N, G, 3, 3).
+
+        ``validate=False`` skips the shape/finiteness check, for solvers' inner loops on populations
+        they built themselves.
+        """
+        if validate:
+            Q = self.check_population(Q)
+        X = self._physical(Q)
+        if frames is None or isinstance(frames, str):
+            R, p, _, _ = chain_forward(self._view(frames), X, want_joints=False)
+            return p, R
+        out = [chain_forward(self._view(f), X, want_joints=False) for f in frames]
+        N = Q.shape[0]
+        P = np.stack([o[1] for o in out], axis=1) if out else np.zeros((N, 0, 3))
+        R = np.stack([o[0] for o in out], axis=1) if out else np.zeros((N, 0, 3, 3))
+        return P, R
+
+    def positions_batch(self, Q, frame: str | None = None) -> np.ndarray:
+        """Positions (N, 3) in m of the tip (or of ``frame``) for a population ``Q`` (N, n); cheaper than
+        :meth:`fk_batch` (:func:`~evoik_pin.robot.population.chain_positions`). Not validated: solvers call it in
+        their inner loop with populations they built themselves.
+        """
+        return chain_positions(self._view(frame), self._physical(Q))
+
+    def jacobian_batch(self, Q, validate: bool = True, frame: str | None = None) -> np.ndarray:
+        """World-frame Jacobians (N, 6, n) of the tip (or of ``frame``) for a population, equal to
+        :meth:`jacobian` row by row."""
+        return self.fk_jacobian_batch(Q, validate, frame)[2]
+
+    def fk_jacobian_batch(self, Q, validate: bool = True, frame: str | None = None):
+        """Positions (N, 3), rotations (N, 3, 3) and world-frame Jacobians (N, 6, n) of the tip (or of ``frame``)
+        from one pass.
+
+        What :meth:`fk_batch` and :meth:`jacobian_batch` return, for batched Newton-type solvers that need
+        both at every iteration.
+        """
+        if validate:
+            Q = self.check_population(Q)
+        p, R, J = chain_jacobians(self._view(frame), self._physical(Q), self.tree.m)
+        return p, R, (J @ self._G if self._coupled else J)
+
+    def manipulability_batch(self, Q, rows="translation") -> np.ndarray:
+        """:meth:`manipulability` of every row of ``Q`` (N, n), shape (N,)."""
+        J = self.jacobian_batch(Q)[:, self.task_rows(rows)]
+        det = np.linalg.det(J @ J.transpose(0, 2, 1))
+        return np.sqrt(np.maximum(det, 0.0))
+
+    # ------------------------------------------------------------------ geometry for display
+    @property
+    def base_placement(self) -> pin.SE3:
+        """Placement (m) of the base frame in the world frame of :attr:`model` (the URDF's root), a new
+        ``pin.SE3``; the identity when no base was chosen. Constant: every free joint lies downstream of the
+        base, so it is taken at the neutral configuration."""
+        return self._oMbase.copy()
+
+    def geometry_placements(self, geometry_model: pin.GeometryModel, q) -> list[pin.SE3]:
+        """Placements (m) of every object of ``geometry_model`` at joint vector ``q`` (n,) in rad/m.
+
+        ``geometry_model`` must be attached to :attr:`model`'s joints (e.g. :attr:`visual_model`, or a
+        skeleton built on :attr:`model`). Returns one new ``pin.SE3`` per geometry object, in its order,
+        expressed in :attr:`model`'s world frame (compose with ``base_placement.inverse()`` for the base
+        frame).
+        """
+        q = self.check_q(q)
+        gdata = pin.GeometryData(geometry_model)
+        pin.forwardKinematics(self.model, self.data, self.to_pinocchio(q))
+        pin.updateGeometryPlacements(self.model, self.data, geometry_model, gdata)
+        return [M.copy() for M in gdata.oMg]
+
+    @cached_property
+    def visual_model(self) -> pin.GeometryModel:
+        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for viz.py."""
+        return self._geometry_model(pin.GeometryType.VISUAL)
+
+    @cached_property
+    def collision_model(self) -> pin.GeometryModel:
+        """Collision geometry (the URDF's ``<collision>`` elements), attached to :attr:`model`'s joints (locked
+        parts fixed where they rest), for :class:`~evoik_pin.scene.Scene`."""
+        return self._geometry_model(pin.GeometryType.COLLISION)
+
+    def _geometry_model(self, kind) -> pin.GeometryModel:
+        """The URDF's geometry of one kind, reduced onto :attr:`model` like the model itself."""
+        if self.urdf_xml is None:  # pragma: no cover
+            raise RobotLoadError("this robot has no URDF text to read geometry from")
+        xml = _MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml
+        try:
+            geom = pin.buildGeomFromUrdfString(self._kin_model, xml, kind, package_dirs=self.package_dirs)
+        except (ValueError, RuntimeError) as exc:  # a mesh Pinocchio could not find or read
+            said = str(exc).strip()
+            why = [m for pkg, m in self.missing_packages.items() if f"package://{pkg}/" in said]
+            raise RobotLoadError(f"{self.name}: {why[0] if why else said}") from None
+        if self._locked:
+            _, geoms = reduced_model(self._kin_model, self._locked, self._q_ref_full, (geom,))
+            geom = geoms[0]
+        return geom
+
+    def _mesh_file(self, m: re.Match) -> str:
+        """The absolute file of one ``package://pkg/rel`` URI whose package was found and holds ``rel``; the URI
+        unchanged otherwise (Pinocchio then tries ``package_dirs``)."""
+        folder = self.packages.get(m.group(1))
+        if folder is not None and (Path(folder) / m.group(2)).is_file():
+            return (Path(folder) / m.group(2)).as_posix()
+        return m.group(0)
+
+    def __repr__(self) -> str:
+        tips = f"tip={self.tip!r}" if len(self.tips) == 1 else f"tips={list(self.tips)}"
+        floating = ", floating_base=True" if self.floating_base else ""
+        return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, {tips}{floating})"
+
+
+def _frame_list(tips) -> list[str]:
+    """``tips`` as a non-empty list of frame names, or a FrameError."""
+    if isinstance(tips, str) or not hasattr(tips, "__iter__"):
+        raise FrameError(f"tips must be a list of frame names or 'all', got {tips!r}")
+    out = list(tips)
+    if not out or not all(isinstance(t, str) for t in out):
+        raise FrameError(f"tips must be a non-empty list of frame names (strings), got {tips!r}")
+    return out
+
+
+def _listed(names: list[str], most: int = 40) -> str:
+    """The first ``most`` names, comma-separated, and how many more there are."""
+    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
+def _suggest(name, model: pin.Model) -> str:
+    """' (closest: a, b)' for a frame name not found in ``model``, or ''."""
+    close = closest_names(str(name), frame_names(model))
+    return f" (closest: {', '.join(close)})" if close else ""
+
+
+def _check_fixed_root(model: pin.Model, name: str) -> None:
+    """A RobotLoadError when the URDF's root already moves (a floating or planar joint from its root link):
+    a floating base would then move it twice."""
+    moving = [j for j in range(1, model.njoints) if model.parents[j] == 0 and model.joints[j].nv > 1]
+    if moving:
+        j = moving[0]
+        raise RobotLoadError(f"{name}'s root already moves (joint {model.names[j]!r} is a "
+                             f"{model.joints[j].shortname()} of {model.joints[j].nv} DOF): load it without "
+                             "floating_base=True")

@@ -1,0 +1,216 @@
+"""IK targets: what a solver is asked to reach, as one checked value (:class:`Target`).
+
+A target is a position (3,) in m, a pose (position and rotation), or a planar (x, y[, yaw]) target, in the
+robot's base frame. Every entry point checks its targets here: finite numbers of the right shape, a rotation
+matrix, and a position within :data:`MAX_TARGET_NORM` of the base.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import TargetError
+
+__all__ = ["MAX_TARGET_NORM", "Target"]
+
+#: Farthest target position accepted (m from the base origin): beyond any arm's reach by orders of magnitude, and
+#: low enough that squared distances (1e12 m^2) stay far from float overflow in every solver and feature space.
+MAX_TARGET_NORM = 1e6
+
+
+def _beyond_text(position: np.ndarray) -> str:
+    """'target position (x, y, z) m is ... m from the base, beyond ...' for a position beyond MAX_TARGET_NORM."""
+    norm = math.hypot(*position.tolist())
+    return (f"target position ({', '.join(f'{x:.3g}' for x in position)}) m is {norm:.3g} m from the base, beyond "
+            f"any arm's reach (accepted: at most MAX_TARGET_NORM = {MAX_TARGET_NORM:g} m)")
+
+
+def _vector(value, name: str, sizes: tuple[int, ...], bound: float | None = None) -> np.ndarray:
+    """``value`` as a finite float vector with one of ``sizes`` entries; with ``bound``, a Euclidean norm at most
+    ``bound`` (a position, m)."""
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TargetError(f"{name} must be numbers, got {value!r}") from exc
+    if arr.ndim != 1 or arr.shape[0] not in sizes:
+        raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
+    # math.hypot scales, so huge finite entries give their norm rather than an overflow warning (a dot product
+    # would); NaN anywhere gives NaN, inf gives inf. One C call, as this runs once per solve.
+    norm = math.hypot(*arr.tolist())
+    if not norm <= (math.inf if bound is None else bound):
+        if not np.isfinite(arr).all():
+            raise TargetError(f"{name} contains NaN or inf: {arr}")
+        raise TargetError(_beyond_text(arr))
+    return arr
+
+
+_EYE3 = np.eye(3)
+_NOT_ROTATION = ("target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
+                 "orthonormalize it or pass roll-pitch-yaw angles")
+
+
+def _rotation(value) -> np.ndarray:
+    try:
+        R = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TargetError(f"target rotation must be a 3 x 3 matrix of numbers, got {value!r}") from exc
+    if R.shape != (3, 3):
+        raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
+    v = R.reshape(9)
+    # Frobenius norm sqrt(3) for a rotation; math.hypot gives it without an overflow warning for huge entries (a
+    # dot product would warn), so the products below only ever see entries of a near-rotation
+    if not math.hypot(*v.tolist()) <= 2.0:
+        if not np.isfinite(v).all():
+            raise TargetError("target rotation contains NaN or inf")
+        raise TargetError(_NOT_ROTATION)
+    # det R = R[0] . (R[1] x R[2]); written out, as np.linalg.det costs more than the rest of the check
+    det = (R[0, 0] * (R[1, 1] * R[2, 2] - R[1, 2] * R[2, 1]) - R[0, 1] * (R[1, 0] * R[2, 2] - R[1, 2] * R[2, 0])
+           + R[0, 2] * (R[1, 0] * R[2, 1] - R[1, 1] * R[2, 0]))
+    D = (R.T.dot(R) - _EYE3).reshape(9)
+    if D.dot(D) > 1e-12 or det < 0:  # |R^T R - I|_F <= 1e-6
+        raise TargetError(_NOT_ROTATION)
+    return R
+
+
+@dataclass(frozen=True)
+class Target:
+    """An IK target for the tip frame, in the robot's base frame.
+
+    Attributes:
+        position: (3,) tip position in m; for a planar target (2,) = (x, y).
+        rotation: (3, 3) tip orientation, or None for a position-only target.
+        planar: True for a planar target (x, y[, yaw]) of an arm moving in the base xy-plane.
+        yaw: planar heading in rad (rotation about base z), or None.
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray | None = None
+    planar: bool = False
+    yaw: float | None = None
+
+    def __post_init__(self) -> None:
+        pos = _vector(self.position, "target position", (2,) if self.planar else (3,), MAX_TARGET_NORM)
+        object.__setattr__(self, "position", pos)
+        if self.rotation is not None:
+            if self.planar:
+                raise TargetError("a planar target takes a yaw angle, not a rotation matrix")
+            object.__setattr__(self, "rotation", _rotation(self.rotation))
+        if self.yaw is not None:
+            if not self.planar:
+                raise TargetError("yaw applies to planar targets only; give a rotation for 3-D targets")
+            if not np.isfinite(self.yaw):
+                raise TargetError(f"target yaw must be finite, got {self.yaw}")
+
+    @classmethod
+    def planar_target(cls, x: float, y: float, yaw: float | None = None) -> Target:
+        """Planar target (x, y in m, optional yaw in rad) for arms moving in the base xy-plane."""
+        return cls(position=np.array([x, y], dtype=float), planar=True, yaw=None if yaw is None else float(yaw))
+
+    @classmethod
+    def from_rpy(cls, position, rpy) -> Target:
+        """Pose target from a position (m) and roll-pitch-yaw angles (rad), R = Rz(yaw) Ry(pitch) Rx(roll)."""
+        rpy = _vector(rpy, "target roll-pitch-yaw", (3,))
+        return cls(position=position, rotation=pin.rpy.rpyToMatrix(*rpy))
+
+    @classmethod
+    def coerce(cls, target) -> Target:
+        """A Target from a Target, a ``pin.SE3``, a (4, 4) homogeneous matrix or a 3-vector position."""
+        if isinstance(target, Target):
+            return target
+        if isinstance(target, pin.SE3):
+            return cls(position=np.array(target.translation), rotation=np.array(target.rotation))
+        try:
+            arr = np.asarray(target, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise TargetError(
+                f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target; "
+                f"got {target!r}"
+            ) from exc
+        if arr.shape == (4, 4):
+            if np.isfinite(arr[3]).all() and np.abs(arr[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9:
+                raise TargetError(f"the bottom row of a 4 x 4 homogeneous pose must be [0 0 0 1], got "
+                                  f"{arr[3].tolist()}")
+            return cls(position=arr[:3, 3], rotation=arr[:3, :3])
+        if arr.ndim == 1 and arr.shape[0] == 3:
+            return cls(position=arr)
+        raise TargetError(
+            f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target "
+            f"(Target.planar_target(x, y, yaw) for planar arms); got an array of shape {arr.shape}"
+        )
+
+    @classmethod
+    def from_poses(cls, poses) -> list[Target]:
+        """Pose targets from an array of N homogeneous matrices (N, 4, 4) (m), checked in one vectorized pass
+        (:meth:`check_poses`)."""
+        H = cls.check_poses(poses)
+        out = []
+        for T in H:  # already checked: skip the per-instance validation of __post_init__
+            t = object.__new__(cls)
+            object.__setattr__(t, "position", T[:3, 3].copy())
+            object.__setattr__(t, "rotation", T[:3, :3].copy())
+            object.__setattr__(t, "planar", False)
+            object.__setattr__(t, "yaw", None)
+            out.append(t)
+        return out
+
+    @staticmethod
+    def check_poses(poses) -> np.ndarray:
+        """``poses`` as a float (N, 4, 4) array of homogeneous matrices (m), checked in one vectorized pass: finite
+        numbers, translations at most ``MAX_TARGET_NORM`` m from the base, rotation blocks orthonormal with det +1
+        (to 1e-6), bottom rows [0 0 0 1]. A TargetError names the first bad target's index."""
+        H = np.asarray(poses, dtype=float)
+        if H.ndim != 3 or H.shape[1:] != (4, 4):
+            raise TargetError(f"poses must be an array of shape (N, 4, 4), got shape {H.shape}")
+        finite = np.isfinite(H).all(axis=(1, 2))
+        if not finite.all():
+            raise TargetError(f"target {int(np.nonzero(~finite)[0][0])} contains NaN or inf")
+        # entries clipped where they cannot change a verdict, so that no product overflows (and warns): a
+        # coordinate beyond 2 MAX_TARGET_NORM is beyond the bound either way, a rotation entry beyond 2 is no
+        # rotation's either way
+        P = np.minimum(np.abs(H[:, :3, 3]), 2.0 * MAX_TARGET_NORM)
+        far = np.nonzero((P * P).sum(axis=1) > MAX_TARGET_NORM**2)[0]
+        if far.size:
+            k = int(far[0])
+            raise TargetError(f"target {k}: {_beyond_text(H[k, :3, 3])}")
+        R = np.clip(H[:, :3, :3], -2.0, 2.0)
+        ortho = np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)).max(axis=(1, 2))
+        bad = np.nonzero((ortho > 1e-6) | (np.linalg.det(R) < 0))[0]
+        if bad.size:
+            raise TargetError(f"target {int(bad[0])}: rotation is not a rotation matrix (R^T R must be I and "
+                              "det R = +1 to 1e-6)")
+        bottom = np.abs(H[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1)
+        bad = np.nonzero(bottom > 1e-9)[0]
+        if bad.size:
+            raise TargetError(f"target {int(bad[0])}: the bottom row of a homogeneous pose must be [0 0 0 1], "
+                              f"got {H[int(bad[0]), 3].tolist()}")
+        return H
+
+    @classmethod
+    def coerce_many(cls, targets) -> list[Target]:
+        """Targets from a sequence of anything :meth:`coerce` accepts, or from an (N, 4, 4) array of poses
+        (:meth:`from_poses`); a TargetError names the index of the first bad target."""
+        if isinstance(targets, np.ndarray) and targets.ndim == 3 and targets.shape[1:] == (4, 4):
+            return cls.from_poses(targets)
+        out = []
+        for i, t in enumerate(targets):
+            try:
+                out.append(cls.coerce(t))
+            except TargetError as exc:
+                raise TargetError(f"target {i}: {exc}") from None
+        return out
+
+    @property
+    def has_orientation(self) -> bool:
+        """True when the target constrains orientation (a rotation, or a planar yaw)."""
+        return self.rotation is not None or self.yaw is not None
+
+    def se3(self) -> pin.SE3:
+        """The target as a ``pin.SE3`` (identity rotation for position-only targets; planar: z = 0)."""
+        if self.planar:
+            R = pin.rpy.rpyToMatrix(0.0, 0.0, self.yaw or 0.0)
+            return pin.SE3(R, np.array([self.position[0], self.position[1], 0.0]))
+        return pin.SE3(np.eye(3) if self.rotation is None else self.rotation, self.position.copy())
