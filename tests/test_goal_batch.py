@@ -211,7 +211,8 @@ def test_a_trajectory_of_goal_lists_is_warm_started_frame_to_frame(talos):
 
 
 # ---------------------------------------------------------------------------------------------- every method
-SMALL = {"de": {}, "isade": {}, "pso": {}, "mode": {}, "ga": {}, "ga-binary": {"population": 120, "elite": 10, "encoding": "bounds"}}
+SMALL = {"de": {}, "isade": {}, "pso": {}, "mode": {}, "ga": {},
+         "ga-binary": {"population": 120, "elite": 10, "encoding": "bounds"}}
 
 
 @pytest.mark.parametrize("method", sorted(SMALL))
