@@ -145,8 +145,11 @@ def test_lists_of_different_structures_are_grouped(talos, baxter):
     for r, goals in zip(res, mixed, strict=True):
         consistent(talos, goals, r)
     assert res[1].goal_errors[1][1] is None  # a position goal has no rotation error
-    w = ek.solve_many(baxter, [[Pose("left_gripper", baxter.fk(np.zeros(baxter.n), "left_gripper"))]], seed=0)
+    one = [Pose("left_gripper", baxter.fk(np.zeros(baxter.n), "left_gripper"))]
+    w = ek.solve_many(baxter, [one], seed=0)
     assert w.success.all() and len(w[0].goal_errors) == 1
+    alone = ek.solve_many(baxter, one, seed=0)  # one goal list alone is one problem, as one target alone is
+    assert len(alone) == 1 and np.array_equal(alone.q, w.q)
 
 
 @pytest.mark.parametrize("bad, error, match", [

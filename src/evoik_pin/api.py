@@ -336,7 +336,7 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks
-    if is_goal_batch(targets):
+    if is_goal_batch(targets) or is_goal_list(targets):
         _check_goal_method(method)
     return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
                             backend=backend, address=address, progress=progress, **options)

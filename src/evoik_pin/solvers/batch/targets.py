@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import TargetError
+from ...goals import is_goal_list
 from ...problem import Target
 from ..lm.layout import TargetArrays, target_kind
 from .goal_lists import GoalSource, is_goal_batch
@@ -132,7 +133,10 @@ class TargetSource:
 
 def source_of(robot, targets) -> TargetSource | GoalSource:
     """The source of a call's problems: a :class:`~.goal_lists.GoalSource` for a sequence of goal lists (every list
-    checked against ``robot`` here), else a :class:`TargetSource`; an existing source as it is."""
+    checked against ``robot`` here; one goal list alone is one problem), else a :class:`TargetSource`; an existing
+    source as it is."""
     if isinstance(targets, (TargetSource, GoalSource)):
         return targets
+    if is_goal_list(targets) and len(targets) > 0:
+        return GoalSource(robot, [targets])
     return GoalSource(robot, targets) if is_goal_batch(targets) else TargetSource(targets)
