@@ -19,6 +19,7 @@ from .result import Result
 from .robot import Robot, load_robot
 from .solvers import get_solver, methods
 from .solvers.batch import api as batch_api
+from .solvers.batch.goal_lists import GoalSource, is_goal_batch
 from .solvers.batch.outcome import BatchResults
 from .solvers.batch.threads import check_call
 from .solvers.collision_verdict import with_collision_verdict
@@ -90,15 +91,17 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
     return IKProblem(robot, Target.coerce(target), **problem_kw), options
 
 
-#: Methods that solve goal lists (:mod:`evoik_pin.goals`); the others take one target for the tip.
-GOAL_METHODS = ("memetic",)
+#: Methods that solve goal lists (:mod:`evoik_pin.goals`): memetic, and the evolutionary methods, which read a
+#: problem through ``IKProblem.evaluate`` (the goals' weighted cost and largest errors over a population). The
+#: others (closed forms, hga's and memetic-all's solution sets, NSGA-II's tip manipulability) take one target for
+#: the tip.
+GOAL_METHODS = ("memetic", "de", "isade", "pso", "mode", "ga", "ga-binary")
 
 
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
     info = get_solver(method)
-    if problem.goals is not None and method not in GOAL_METHODS:
-        raise MethodError(f"method {method!r} solves one target for the tip; goal lists are solved by "
-                          f"{', '.join(repr(m) for m in GOAL_METHODS)}")
+    if problem.goals is not None:
+        _check_goal_method(method)
     polish = options.pop("polish", False)
     info.check_options(options)
     result = info.func(problem, rng, **options)
@@ -106,7 +109,30 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
         from .solvers.lm.polish import polish_result
 
         result = polish_result(problem, result, rng)
+    if problem.goals is not None:
+        result = _with_goal_verdict(problem, result)
     return with_collision_verdict(problem, result)
+
+
+def _check_goal_method(method: str) -> None:
+    """MethodError unless ``method`` solves goal lists (:data:`GOAL_METHODS`)."""
+    if method not in GOAL_METHODS:
+        raise MethodError(f"method {method!r} solves one target for the tip; goal lists are solved by "
+                          f"{', '.join(repr(m) for m in GOAL_METHODS)}")
+
+
+def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
+    """A goal problem's result with each goal's errors at its ``q`` (``goal_errors``) and ``success`` judged goal by
+    goal, each within its own tolerances (the evolutionary methods compare the largest errors with the problem's
+    tolerance, and a polish makes a new Result); a scene's verdict comes after (:func:`with_collision_verdict`)."""
+    if result.goal_errors is None:
+        result.goal_errors = problem.goal_errors(result.q)
+    met = problem.goals_met(result.goal_errors)
+    if result.success and not met:
+        unmet = [g.frame for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]
+        result.message += f"; goals not met within their own tolerances: {', '.join(unmet)}"
+    result.success = met
+    return result
 
 
 def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "compiled") -> float:
@@ -198,9 +224,13 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         reach").
 
     Raises:
-        MethodError: ``method`` returns one solution only. OptionError: a bad option (e.g. ``count`` < 1).
+        MethodError: ``method`` returns one solution only, or ``target`` is a goal list. OptionError: a bad option
+        (e.g. ``count`` < 1).
     """
     info = get_solver(method)
+    if is_goal_list(target):
+        raise MethodError("solve_all takes one target for the robot's tip (every distinct solution of it); a goal list "
+                          f"(several goals at once) is solved by solve() with one of {', '.join(GOAL_METHODS)}")
     if not info.multi_solution:
         capable = [m for m in methods() if get_solver(m).multi_solution]
         raise MethodError(
@@ -213,17 +243,25 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
 
 def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro: bool = False,
                      delta: float = DEFAULT_PRO_DELTA, seed=None, **options) -> list[Result]:
-    """Solve a sequence of targets, each warm-started from the previous solution.
+    """Solve a sequence of targets, each warm-started from the previous solution (its ``q`` the next point's ``q0``).
 
-    With ``pro=True`` (paper 002's "Pro-" variants) the search box of every point after the first is the
-    previous solution +- ``delta`` rad, intersected with the bounds. One random generator serves the
-    whole trajectory, so a seed fixes every point. Every target and option is checked before the first point is
-    solved (a bad target named by its index).
+    ``targets``: targets of the tip (anything :func:`solve` accepts), or goal lists (:mod:`evoik_pin.goals`), one
+    per point: a whole robot's motion (e.g. retargeting), each list checked before the first point is solved (a bad
+    one named by its index), solved by a method of ``GOAL_METHODS``.
+
+    With ``pro=True`` (paper 002's "Pro-" variants) the search box of every point after the first is the previous
+    solution +- ``delta`` rad, intersected with the bounds. One random generator serves the whole trajectory, so a
+    seed fixes every point. Every target and option is checked before the first point is solved (a bad target named
+    by its index).
     """
     robot = _robot(robot)
     rng = _rng(seed)
     # every target and option checked before the first point is solved
-    targets = Target.coerce_many(targets if isinstance(targets, np.ndarray) else list(targets))
+    if is_goal_batch(targets):
+        targets = GoalSource(robot, targets).raw  # every goal list checked against the robot
+        _check_goal_method(method)
+    else:
+        targets = Target.coerce_many(targets if isinstance(targets, np.ndarray) else list(targets))
     if not targets:
         raise ConfigurationError("solve_trajectory needs at least one target")
     if pro:
@@ -244,6 +282,13 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
                backend: str = "local", address: str | None = None, progress: bool = False,
                **options) -> BatchResults:
     """Solve many independent IK targets, on every core or on a Ray cluster (:mod:`evoik_pin.solvers.batch`).
+
+    ``targets`` may be goal lists (:mod:`evoik_pin.goals`), one whole-robot problem each: lists of one structure
+    (the same frames, kinds, weights and tolerances; different targets) are batched together, lists of different
+    structures in groups of their own (:mod:`evoik_pin.solvers.batch.goal_lists`); every list is checked before any
+    work (a bad frame, an empty list, an entry that is no goal list: an error naming the list's index).
+    ``position_error`` and ``orientation_error`` are then the largest over each list's goals, and each
+    :class:`Result` has its ``goal_errors``.
 
     With ``method="memetic"`` (the default) the targets are solved in batched rounds first: every unsolved
     target starts from its nearest seed-table entry (from ``q0`` in the first round when given), and one
@@ -291,5 +336,7 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks
+    if is_goal_batch(targets) or is_goal_list(targets):
+        _check_goal_method(method)
     return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
                             backend=backend, address=address, progress=progress, **options)

@@ -20,7 +20,7 @@ import numpy as np
 from ...errors import ConfigurationError, OptionError
 from ..options import check_choice
 from .outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
-from .targets import TargetSource
+from .targets import source_of
 from .threads import BatchSolver, check_workers, progress_bar, root_entropy
 
 __all__ = ["BACKENDS", "solve_many"]
@@ -54,7 +54,8 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
 
     Args:
         robot: a loaded :class:`~evoik_pin.robot.Robot`.
-        targets: anything :meth:`Target.coerce_many` accepts (a sequence of targets, or (N, 4, 4) poses).
+        targets: anything :meth:`Target.coerce_many` accepts (a sequence of targets, or (N, 4, 4) poses), or a
+            sequence of goal lists (:mod:`.goal_lists`).
         make_problem, run: the API's problem builder and solver runner (``api.make_problem``, ``api._run``).
         method: solver name. seed: int, None or Generator (:func:`root_entropy`).
         q0: None, one (n,) start for every target, or (N, n) starts.
@@ -68,7 +69,7 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
     if backend == "local" and address is not None:
         raise OptionError("address names a Ray cluster: give it with backend='ray'")
     workers = None if workers is None and backend == "ray" else check_workers(workers)
-    source = TargetSource(targets)
+    source = source_of(robot, targets)  # goal lists: every one checked here, before any work
     N = len(source)
     if N == 0:
         raise ConfigurationError("solve_many needs at least one target")

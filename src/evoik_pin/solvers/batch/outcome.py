@@ -36,6 +36,8 @@ class BatchOutcome:
         success: (N,) bool. source: (N,) int8, ``SOURCE_Q0`` / ``SOURCE_TABLE`` (batched rounds) or
             ``SOURCE_SINGLE`` (solved one by one: its full :class:`Result` is ``singles[i]``).
         collision_checked: the batched answers passed a scene's exact check.
+        goal_errors: for goal lists, (N,) object array: each row's (G, 2) goal errors (position m, rotation rad or
+            NaN for a goal without orientation), the errors above being the largest of them; None for single targets.
     """
 
     q: np.ndarray
@@ -48,12 +50,15 @@ class BatchOutcome:
     source: np.ndarray
     singles: dict[int, Result] = field(default_factory=dict)
     collision_checked: bool = False
+    goal_errors: np.ndarray | None = None
 
     @classmethod
-    def empty(cls, N: int, n: int) -> BatchOutcome:
+    def empty(cls, N: int, n: int, goals: bool = False) -> BatchOutcome:
+        """An outcome of N rows left to the one-by-one solver; ``goals``: rows of goal lists (``goal_errors`` kept)."""
         nan = np.full(N, np.nan)
         return cls(np.zeros((N, n)), nan, nan.copy(), nan.copy(), np.zeros(N, dtype=bool), np.zeros(N, dtype=np.int64),
-                   np.zeros(N), np.full(N, SOURCE_SINGLE, dtype=np.int8))
+                   np.zeros(N), np.full(N, SOURCE_SINGLE, dtype=np.int8),
+                   goal_errors=np.full(N, None, dtype=object) if goals else None)
 
     def __len__(self) -> int:
         return int(self.q.shape[0])
@@ -65,6 +70,8 @@ class BatchOutcome:
         self.orientation_error[i] = np.nan if r.orientation_error is None else r.orientation_error
         self.cost[i], self.success[i], self.evaluations[i], self.time_s[i] = r.cost, r.success, r.evaluations, r.time_s
         self.source[i] = SOURCE_SINGLE
+        if self.goal_errors is not None and r.goal_errors is not None:
+            self.goal_errors[i] = np.array([(p, np.nan if o is None else o) for p, o in r.goal_errors], dtype=float)
 
     @classmethod
     def concatenate(cls, parts: list[BatchOutcome]) -> BatchOutcome:
@@ -73,7 +80,8 @@ class BatchOutcome:
             return parts[0]
         out = cls(*(np.concatenate([getattr(p, name) for p in parts]) for name in
                     ("q", "position_error", "orientation_error", "cost", "success", "evaluations", "time_s",
-                     "source")), collision_checked=any(p.collision_checked for p in parts))
+                     "source")), collision_checked=any(p.collision_checked for p in parts),
+                  goal_errors=None if parts[0].goal_errors is None else np.concatenate([p.goal_errors for p in parts]))
         start = 0
         for p in parts:
             out.singles.update({start + i: r for i, r in p.singles.items()})
@@ -107,6 +115,8 @@ class BatchOutcome:
         d.update(q=self.q[j], position_error=pos[j], orientation_error=rot[j], cost=cost[j], evaluations=evals[j],
                  time_s=times[j], message=messages[source[j]],
                  history={"best_cost": h[0], "mean_cost": h[1], "diversity": h[2]})
+        if self.goal_errors is not None:
+            d["goal_errors"] = [(p, None if math.isnan(o) else o) for p, o in self.goal_errors[j].tolist()]
         r = Result.__new__(Result)
         r.__dict__ = d
         if template is not None and template.scene is not None:

@@ -34,7 +34,7 @@ import numpy as np
 from ...errors import BackendError, TargetError
 from ...problem import Target
 from .outcome import BatchOutcome
-from .targets import TargetSource
+from .targets import source_of
 from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
 
 __all__ = ["RayBatch", "RayPool", "connect", "import_ray", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
@@ -176,7 +176,7 @@ class ChunkWorker:
                 options["scene"] = build_scene(self.robot, scene)
             self._solver = BatchSolver(self.robot, make_problem, run, method, entropy, options, fallback)
             self._key = key
-        if isinstance(packed, np.ndarray):  # poses: solved as the array they are (no Target object per pose)
+        if isinstance(packed, (np.ndarray, list)):  # poses (no Target object per pose) or goal lists, as they are
             targets = packed
         else:
             with gc_paused():
@@ -291,7 +291,7 @@ class RayBatch:
         given, on the actors; the outcome in target order. ``offset``: the index of the first target in the whole
         work (it keys the per-target generators)."""
         ray, pool = self.ray, self.pool
-        source = targets if isinstance(targets, TargetSource) else TargetSource(targets)
+        source = source_of(self._local.robot, targets)
         self.template(source.chunk(0, 1)[0])  # every option checked here, before the actors see them
         poses = source.poses
         chunks = self._chunks(len(source))
@@ -308,7 +308,10 @@ class RayBatch:
                     actor = idle.popleft()
                     a, b = chunks[k]
                     # an array of poses goes as it is (the actor makes and checks the Target objects)
-                    packed = poses[a:b] if poses is not None else pack_targets(source.chunk(a, b))
+                    if poses is not None or source.goals:  # goal lists pickle as they are
+                        packed = poses[a:b] if poses is not None else source.chunk(a, b)
+                    else:
+                        packed = pack_targets(source.chunk(a, b))
                     future = actor.solve.remote(self._key, self._job, packed, None if Q0 is None else Q0[a:b],
                                                 offset + a, crash=k in self.crash_hook and attempt == 0)
                     running[future] = (k, attempt, actor)

@@ -16,10 +16,12 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import TargetError
+from ...goals import is_goal_list
 from ...problem import Target
 from ..lm.layout import TargetArrays, target_kind
+from .goal_lists import GoalSource, is_goal_batch
 
-__all__ = ["TargetBlock", "TargetSource"]
+__all__ = ["TargetBlock", "TargetSource", "source_of"]
 
 
 class TargetBlock:
@@ -28,7 +30,10 @@ class TargetBlock:
     Attributes:
         groups: ``[(rows, arrays)]``: the block's row indices (k,) of one target kind and their
             :class:`~evoik_pin.solvers.lm.layout.TargetArrays`, in the order the kinds first appear.
+        goals: False (single targets; a block of goal lists is a :class:`~.goal_lists.GoalBlock`).
     """
+
+    goals = False
 
     def __init__(self, groups: list[tuple[np.ndarray, TargetArrays]], size: int,
                  target: Callable[[int], Target]) -> None:
@@ -83,6 +88,8 @@ class TargetSource:
     (listed first); one target alone (a ``pin.SE3``, a :class:`Target`, one (4, 4) pose or one 3-vector
     position) is one target, never its rows."""
 
+    goals = False  # single targets (goal lists: :class:`~.goal_lists.GoalSource`)
+
     def __init__(self, targets) -> None:
         if _one_target(targets):
             targets = targets[None] if isinstance(targets, np.ndarray) and targets.ndim == 2 else [targets]
@@ -122,3 +129,14 @@ class TargetSource:
     def check(self) -> None:
         """Coerce every target: the TargetError (naming the first bad target's index) if there is one."""
         Target.coerce_many(self.raw)
+
+
+def source_of(robot, targets) -> TargetSource | GoalSource:
+    """The source of a call's problems: a :class:`~.goal_lists.GoalSource` for a sequence of goal lists (every list
+    checked against ``robot`` here; one goal list alone is one problem), else a :class:`TargetSource`; an existing
+    source as it is."""
+    if isinstance(targets, (TargetSource, GoalSource)):
+        return targets
+    if is_goal_list(targets) and len(targets) > 0:
+        return GoalSource(robot, [targets])
+    return GoalSource(robot, targets) if is_goal_batch(targets) else TargetSource(targets)

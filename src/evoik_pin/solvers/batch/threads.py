@@ -43,15 +43,17 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 import numpy as np
 
+from ...goals import is_goal_list
 from ...objectives import default_cost
 from ...problem import Target, coerce_scene
 from ...result import Result
 from ..lm import solve_pairs
-from ..lm.layout import TargetArrays
+from ..lm.layout import G_WEIGHT, GoalArrays, TargetArrays
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
+from .goal_lists import GoalTree
 from .outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
-from .targets import TargetBlock, TargetSource
+from .targets import TargetBlock, TargetSource, source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
            "grow_bar", "progress_bar", "root_entropy", "target_generator"]
@@ -162,7 +164,8 @@ class BatchSolver:
         self.batched = method == "memetic" and options.get("objective") is None and not options.get("polish")
         self.template = None
         self.engine = "compiled"
-        self._trees: set[int] = set()  # target kinds whose k-d tree is built
+        self._trees: set = set()  # target kinds whose k-d tree is built
+        self._goal_trees: dict = {}  # goal structure -> GoalTree
         self._lock = threading.Lock()  # a scene's exact check is not thread-safe (one Pinocchio Data)
 
     def _prepare(self, target: Target) -> None:
@@ -179,6 +182,8 @@ class BatchSolver:
         self.engine = solver_options.get("engine", "compiled")
         if self.engine == "compiled":
             compiled_kernel()  # loaded once here, not by racing threads
+        if is_goal_list(target) and self.engine != "compiled":
+            rounds = 0  # the reference engine runs one goal problem at a time: the per-target solver does it
         self.table = seed_table(self.robot, template.lower, template.upper, table_size) if rounds else None
         self.free = (self.table.free_mask(template.scene, template.margin)
                      if self.table is not None and template.scene is not None else None)
@@ -192,8 +197,8 @@ class BatchSolver:
         from ``Q0`` (N, n) starts when given; ``offset``: the index of the first target in the user's call (it keys
         the per-target generators); ``progress``: a tqdm bar advanced chunk by chunk, or None."""
         parts: list[BatchOutcome] = []
-        self.pipeline(targets if isinstance(targets, TargetSource) else TargetSource(targets), Q0, offset, workers,
-                      progress, lambda a, b, out: parts.append(out))
+        self.pipeline(source_of(self.robot, targets), Q0, offset, workers, progress,
+                      lambda a, b, out: parts.append(out))
         return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now
 
     def pipeline(self, source: TargetSource, Q0, offset: int, workers: int, progress, batched: Callable,
@@ -288,26 +293,54 @@ class BatchSolver:
     def _chunk_rounds(self, block: TargetBlock, Q0) -> BatchOutcome:
         """The batched rounds of one chunk (each target kind apart): an outcome whose unsolved rows are
         ``SOURCE_SINGLE``."""
-        out = BatchOutcome.empty(len(block), self.robot.n)
+        out = BatchOutcome.empty(len(block), self.robot.n, block.goals)
         if not self.batched:
             return out
-        for rows, arrays in block.groups:
-            if self.table is not None and arrays.kind not in self._trees:
-                with self._lock:  # the k-d tree of this kind is built once, not by every thread
-                    self.table.nearest_encoded(arrays.kind, arrays.P[:1], arrays.Rts[:1], 1, self.free)
-                    self._trees.add(arrays.kind)
-            self._rounds(arrays, rows, Q0, out)
-        solved = out.source != SOURCE_SINGLE
         t = self.template
-        rot = out.orientation_error[solved]
-        out.cost[solved] = default_cost(out.position_error[solved], None if np.isnan(rot).all() else
-                                        np.nan_to_num(rot), t.orientation_weight, t.pose_metric)
+        for rows, arrays in block.groups:
+            key = self._tree_key(arrays)
+            if self.table is not None and key not in self._trees:
+                with self._lock:  # the k-d tree of this kind (goal structure) is built once, not by every thread
+                    self._nearest(arrays.take(np.arange(1)), 1)
+                    self._trees.add(key)
+            self._rounds(arrays, rows, Q0, out)
+            if block.goals:  # the goals' cost (IKProblem's): weighted sum of position + orientation_weight x angle
+                done = rows[out.source[rows] != SOURCE_SINGLE]
+                if done.size:
+                    E = np.nan_to_num(np.stack(out.goal_errors[done]))  # (k, G, 2)
+                    w = arrays.stack.spec[:, G_WEIGHT] ** 2
+                    out.cost[done] = (E[:, :, 0] + t.orientation_weight * E[:, :, 1]) @ w
+        solved = out.source != SOURCE_SINGLE
+        if not block.goals:
+            rot = out.orientation_error[solved]
+            out.cost[solved] = default_cost(out.position_error[solved], None if np.isnan(rot).all() else
+                                            np.nan_to_num(rot), t.orientation_weight, t.pose_metric)
         out.success[solved] = True
         out.collision_checked = t.scene is not None
         return out
 
-    def _rounds(self, arrays: TargetArrays, rows: np.ndarray, Q0, out: BatchOutcome) -> None:
-        """The batched rounds of the targets ``arrays`` (one kind), written into ``out``'s rows ``rows``."""
+    @staticmethod
+    def _tree_key(arrays: TargetArrays | GoalArrays):
+        """What a k-d tree of the table serves: a target kind, or a goal structure (frames, kinds, weights)."""
+        if isinstance(arrays, GoalArrays):
+            stack = arrays.stack
+            return stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes()
+        return arrays.kind
+
+    def _nearest(self, group: TargetArrays | GoalArrays, k: int) -> np.ndarray:
+        """Indices (N, k) of the table entries nearest to each target (goal list) of ``group``, nearest first (among
+        the collision-free entries with a scene)."""
+        if not isinstance(group, GoalArrays):
+            return self.table.nearest_encoded(group.kind, group.P, group.Rts, k, self.free, NEAREST_EPS)
+        key = self._tree_key(group)
+        tree = self._goal_trees.get(key)
+        if tree is None:
+            tree = self._goal_trees[key] = GoalTree(self.robot, self.table, group.stack, self.free)
+        return tree.nearest(group, k, NEAREST_EPS)
+
+    def _rounds(self, arrays: TargetArrays | GoalArrays, rows: np.ndarray, Q0, out: BatchOutcome) -> None:
+        """The batched rounds of the targets ``arrays`` (one kind, or goal lists of one structure), written into
+        ``out``'s rows ``rows``."""
         t = self.template
         scene, table = t.scene, self.table
         pending = np.arange(len(arrays))  # indices into arrays
@@ -322,11 +355,10 @@ class BatchSolver:
             if rank is None:
                 Qs = Q0[rows[pending]]
             elif rank == 0:  # most targets converge from their nearest entry: ask the k-d tree for one only
-                Qs = table.Q[table.nearest_encoded(group.kind, group.P, group.Rts, 1, self.free, NEAREST_EPS)[:, 0]]
+                Qs = table.Q[self._nearest(group, 1)[:, 0]]
             else:  # the rest: every further entry in one query (not one query per round)
                 if ranked is None:
-                    ranked = table.nearest_encoded(group.kind, group.P, group.Rts, self.rounds, self.free,
-                                                   NEAREST_EPS)
+                    ranked = self._nearest(group, self.rounds)
                 Qs = table.Q[ranked[:, rank]]
             res = solve_pairs(self.robot, Qs, group, t.lower, t.upper, t.tolerance, t.rotation_tolerance,
                               engine=self.engine)
@@ -341,6 +373,8 @@ class BatchSolver:
             if res.orientation_error is not None:
                 out.orientation_error[done] = res.orientation_error[converged]
             out.evaluations[done] = res.evaluations[converged]
+            if res.goal_errors is not None:
+                _put_rows(out.goal_errors, done, res.goal_errors[converged])
             out.time_s[done] = (time.perf_counter() - t0) / pending.size
             out.source[done] = source
             pending = pending[~converged]
@@ -355,6 +389,14 @@ class BatchSolver:
             if res.orientation_error is not None:
                 out.orientation_error[left] = res.orientation_error[~converged]
             out.evaluations[left] = res.evaluations[~converged]
+            if res.goal_errors is not None:
+                _put_rows(out.goal_errors, left, res.goal_errors[~converged])
+
+
+def _put_rows(column: np.ndarray, rows: np.ndarray, values: np.ndarray) -> None:
+    """``column[rows[i]] = values[i]`` for an object column of arrays (a slice assignment would broadcast them)."""
+    for r, v in zip(rows.tolist(), values, strict=True):
+        column[r] = v
 
 
 @contextlib.contextmanager

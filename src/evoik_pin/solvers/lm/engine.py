@@ -61,6 +61,7 @@ from .layout import (
     S_POS,
     S_ROT,
     STATS_SIZE,
+    GoalArrays,
     GoalStack,
     TargetArrays,
     box_constants,
@@ -273,21 +274,26 @@ def _thread_buffers(kernel: dict, stack: GoalStack, n: int, m: int, max_iteratio
     return hit[0]
 
 
-def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lower: np.ndarray, upper: np.ndarray,
-                tolerance: float, rotation_tolerance: float, max_iterations: int = DEFAULT_ITERATIONS,
-                damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
-                engine: str = "compiled") -> PairsOutcome:
+def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | GoalArrays, lower: np.ndarray,
+                upper: np.ndarray, tolerance: float, rotation_tolerance: float,
+                max_iterations: int = DEFAULT_ITERATIONS, damping: float = DEFAULT_DAMPING,
+                max_step: float = DEFAULT_MAX_STEP, engine: str = "compiled") -> PairsOutcome:
     """One LM run per (start, target) pair: ``Q[i]`` towards ``targets[i]``, the run of
     :meth:`LevenbergMarquardt.run`; with the compiled engine one kernel call for all pairs.
 
     Args:
-        robot: the chain. Q: (N, n) start configurations. targets: N targets, all of one kind (a list of
-            :class:`~evoik_pin.problem.Target`, or their :class:`~.layout.TargetArrays`). lower, upper: (n,) box.
-            tolerance (m), rotation_tolerance (rad): success thresholds. max_iterations: steps per pair.
-            engine: as :class:`LevenbergMarquardt`'s.
+        robot: the chain or tree. Q: (N, n) start configurations. targets: N targets, all of one kind (a list of
+            :class:`~evoik_pin.problem.Target`, or their :class:`~.layout.TargetArrays`), or N goal lists of one
+            structure (:class:`~.layout.GoalArrays`: their stack's tolerances apply; compiled engine only).
+            lower, upper: (n,) box. tolerance (m), rotation_tolerance (rad): success thresholds of single targets.
+            max_iterations: steps per pair. engine: as :class:`LevenbergMarquardt`'s.
     """
     _check_engine(engine)
     N = Q.shape[0]
+    if isinstance(targets, GoalArrays):
+        if engine == "python":
+            raise OptionError("solve_pairs runs goal stacks on the compiled engine only (engine='compiled')")
+        return _goal_pairs(robot, Q, targets, lower, upper, kernel_params(max_iterations, damping, max_step))
     if engine == "python":
         from ...problem import IKProblem
         from .reference import ReferenceLM
@@ -312,6 +318,23 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays, lowe
                  np.empty((N, 1, 2)))
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
+
+
+def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upper: np.ndarray,
+                params: np.ndarray) -> PairsOutcome:
+    """:func:`solve_pairs` on N goal lists of one stack: one kernel call, each goal's errors kept."""
+    stack = arrays.stack
+    N, G = len(arrays), len(stack)
+    _, any_wrap, _, _, box = box_constants(robot, lower, upper)
+    Q_out = np.empty((N, robot.n))
+    stats = np.empty((N, STATS_SIZE))
+    g_stats = np.empty((N, G, 2))
+    compiled_kernel()["lm_run_pairs"](
+        np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R, stack.p,
+        stack.support, np.ascontiguousarray(arrays.P), np.ascontiguousarray(arrays.Rts), params, Q_out, stats,
+        g_stats)
+    return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
+                        stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64), g_stats)
 
 
 def targets_of(arrays: TargetArrays) -> list[Target]:

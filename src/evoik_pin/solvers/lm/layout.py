@@ -27,8 +27,8 @@ import numpy as np
 
 __all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT_STALL_RATIO",
            "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
-           "GoalStack", "TargetArrays", "box_constants", "encode_target", "encode_targets", "kernel_params",
-           "problem_goals", "target_kind", "wrapping_joints"]
+           "GoalArrays", "GoalStack", "TargetArrays", "box_constants", "encode_target", "encode_targets",
+           "kernel_params", "problem_goals", "target_kind", "wrapping_joints"]
 
 TWO_PI = 2.0 * np.pi
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
@@ -247,6 +247,33 @@ class GoalStack:
 
 
 _SINGLE_CACHE: dict = {}
+
+
+@dataclass(frozen=True)
+class GoalArrays:
+    """N problems over one goal stack (the same frames, kinds, weights and tolerances; different targets) as the
+    kernel's pair entry point reads them: how :func:`~evoik_pin.solve_many` carries goal lists.
+
+    Attributes:
+        stack: the :class:`GoalStack` every problem shares. P: (N, G, 3) target positions (m). Rts: (N, G, 3, 3)
+            target rotations (identity for goals without one).
+    """
+
+    stack: GoalStack
+    P: np.ndarray
+    Rts: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.P.shape[0])
+
+    @property
+    def oriented(self) -> bool:
+        """True when some goal constrains orientation."""
+        return self.stack.any_oriented
+
+    def take(self, rows: np.ndarray) -> GoalArrays:
+        """The problems at ``rows`` (an index array), as new arrays."""
+        return GoalArrays(self.stack, self.P[rows], self.Rts[rows])
 
 
 def problem_goals(problem) -> tuple[GoalStack, np.ndarray, np.ndarray]:

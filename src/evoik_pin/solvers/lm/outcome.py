@@ -49,10 +49,12 @@ class LMOutcome:
 class PairsOutcome:
     """End state of LM runs on N (start, target) pairs: configurations (N, n), position errors (N,) m,
     orientation errors (N,) rad or None (targets without orientation), converged (N,) bool and
-    forward-kinematics evaluations (N,) per pair."""
+    forward-kinematics evaluations (N,) per pair; for goal stacks (several goals per pair) the errors are the
+    largest over the goals and ``goal_errors`` (N, G, 2) gives each goal's (position m, orientation rad or NaN)."""
 
     q: np.ndarray
     position_error: np.ndarray
     orientation_error: np.ndarray | None
     converged: np.ndarray
     evaluations: np.ndarray
+    goal_errors: np.ndarray | None = None

@@ -181,7 +181,7 @@ def pso(
         return run.result("pso", reason)
 
     result = run_with_restarts(once, problem, runs)
-    if (not result.success and problem.target.rotation is not None
+    if (not result.success and problem.target is not None and problem.target.rotation is not None
             and not (random_factors == "per-particle" and isinstance(problem.objective, PoseDistance))):
         result.message += ("; on 6-D pose targets PSO is reliable with pose_metric='euclidean' and "
                            "random_factors='per-particle' (docs/BENCHMARKS.md)")

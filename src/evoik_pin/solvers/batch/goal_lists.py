@@ -1,0 +1,165 @@
+"""Goal lists in :func:`~evoik_pin.solve_many` and :func:`~evoik_pin.solve_trajectory`: many whole-robot problems
+(:mod:`evoik_pin.goals`), each a list of goals on frames of the robot.
+
+Lists of one *structure* (the same frames, kinds, weights and tolerances in the same order; different targets) share
+one :class:`~evoik_pin.solvers.lm.layout.GoalStack`, so their problems go to the LM kernel's pair entry point
+together (:class:`~evoik_pin.solvers.lm.layout.GoalArrays`); lists of different structures form groups of their own,
+as targets of different kinds do. Every list is checked against the robot (:func:`evoik_pin.goals.bind`) when the
+:class:`GoalSource` is made, before any work: a bad one is named by its index in the call.
+
+The batched rounds start each problem from the seed-table entries nearest to it in memetic's goal metric
+(:meth:`~evoik_pin.solvers.search.seed_table.SeedTable.ranked_goals`: the sum over the goals of their weight times
+``|p - p_t|^2 (+ w^2 |R - R_t|_F^2`` for a pose)), found by a k-d tree over the concatenated goal-frame features
+(:class:`GoalTree`), as single targets use the table's tree over the tip's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import FrameError, TargetError
+from ...goals import Goal, bind, is_goal_list
+from ..lm.layout import G_WEIGHT, GoalArrays
+
+__all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
+
+
+def is_goal_batch(targets) -> bool:
+    """True when ``targets`` is a sequence of goal lists (some member a non-empty list or tuple of goals), not of
+    single targets; one goal list alone is one problem (:func:`is_goal_list`)."""
+    if not isinstance(targets, (list, tuple)) or not targets or is_goal_list(targets):
+        return False
+    return any(isinstance(t, (list, tuple)) and t and is_goal_list(t) for t in targets)
+
+
+def structure(goals) -> tuple:
+    """What problems sharing a goal stack have in common: each goal's (frame, kind, weight, tolerance m,
+    rotation tolerance rad), in order."""
+    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance) for g in goals)
+
+
+class GoalBlock:
+    """Consecutive goal lists of a call, grouped by structure (the :class:`~.targets.TargetBlock` of goal lists).
+
+    Attributes:
+        groups: ``[(rows, arrays)]``: the block's row indices (k,) of one structure and their
+            :class:`~evoik_pin.solvers.lm.layout.GoalArrays`, in the order the structures first appear.
+    """
+
+    goals = True
+
+    def __init__(self, groups: list[tuple[np.ndarray, GoalArrays]], lists: list) -> None:
+        self.groups = groups
+        self._lists = lists
+
+    def __len__(self) -> int:
+        return len(self._lists)
+
+    def target(self, i: int) -> list[Goal]:
+        """Row ``i``'s goal list."""
+        return self._lists[i]
+
+
+class GoalSource:
+    """The goal lists of a call, every one checked against ``robot`` when made (a TargetError or FrameError naming
+    the list's index: an entry that is no goal list, an empty list, an unknown frame, a frame no active joint
+    moves, one frame given clashing targets), then handed out chunk by chunk (:meth:`block`).
+
+    Args:
+        robot: the :class:`~evoik_pin.robot.Robot`. lists: a sequence of goal lists.
+    """
+
+    goals = True
+    poses = None  # no (N, 4, 4) array: Ray sends the lists themselves
+
+    def __init__(self, robot, lists) -> None:
+        self.raw = [list(goals) if isinstance(goals, (list, tuple)) else goals for goals in lists]
+        self._stacks: dict[tuple, object] = {}  # structure -> its GoalStack
+        self._keys: list[tuple] = []
+        self._targets: list[tuple[np.ndarray, np.ndarray]] = []  # per list: pt (G, 3), Rt (G, 3, 3)
+        for i, goals in enumerate(self.raw):
+            if not isinstance(goals, list) or not is_goal_list(goals):
+                raise TargetError(f"goal list {i} is a {type(goals).__name__}, not a list of goals: give each problem "
+                                  "as a list of Pose(frame, T) / Position(frame, p) (evoik_pin.goals)")
+            key = structure(goals)
+            first = key not in self._stacks
+            # a list repeating a frame is checked whole (its targets may clash); the others' frames, once per structure
+            if first or len({g.frame for g in goals}) < len(goals):
+                try:
+                    _, stack, pt, Rt = bind(robot, goals)
+                except (TargetError, FrameError) as exc:
+                    raise type(exc)(f"goal list {i}: {exc}") from None
+                self._stacks.setdefault(key, stack)
+            else:
+                encoded = [g.encode() for g in goals]
+                pt, Rt = np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])
+            self._keys.append(key)
+            self._targets.append((pt, Rt))
+
+    def __len__(self) -> int:
+        return len(self.raw)
+
+    @property
+    def structures(self) -> int:
+        """Number of distinct structures among the lists."""
+        return len(self._stacks)
+
+    def chunk(self, a: int, b: int) -> list[list[Goal]]:
+        """Lists a to b - 1 (already checked)."""
+        return self.raw[a:b]
+
+    def block(self, a: int, b: int) -> GoalBlock:
+        """Lists a to b - 1 as a :class:`GoalBlock`."""
+        by_key: dict[tuple, list[int]] = {}
+        for i in range(a, b):
+            by_key.setdefault(self._keys[i], []).append(i)
+        groups = []
+        for key, rows in by_key.items():
+            P = np.ascontiguousarray([self._targets[i][0] for i in rows], dtype=float)
+            Rts = np.ascontiguousarray([self._targets[i][1] for i in rows], dtype=float)
+            groups.append((np.array(rows) - a, GoalArrays(self._stacks[key], P, Rts)))
+        return GoalBlock(groups, self.raw[a:b])
+
+    def check(self) -> None:
+        """Nothing to do: every list was checked when the source was made."""
+
+
+class GoalTree:
+    """The seed table's entries searchable by nearness to goal lists of one stack: a k-d tree over the concatenated
+    features of the goal frames at each entry (goal g: ``sqrt(weight_g) p_g``, and for a pose
+    ``sqrt(weight_g) w R_g`` flattened, ``w`` the table's m per unit of Frobenius distance), so that its Euclidean
+    distance is memetic's goal metric (:meth:`SeedTable.ranked_goals`).
+
+    Args:
+        robot: the robot. table: the :class:`~evoik_pin.solvers.search.seed_table.SeedTable`. stack: the goal stack.
+        allowed: (size,) bool, the entries to search (a scene's collision-free ones), or None for all.
+    """
+
+    def __init__(self, robot, table, stack, allowed: np.ndarray | None = None) -> None:
+        from scipy.spatial import cKDTree
+
+        self.table = table
+        self.scale = stack.spec[:, G_WEIGHT]  # the square roots of the goals' weights
+        self.oriented = stack.oriented
+        P, R = robot.fk_batch(table.Q, validate=False, frames=list(stack.frames))
+        self.index = np.arange(table.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
+        self.tree = cKDTree(self.features(P[self.index], R[self.index]))
+
+    def features(self, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """Features (N, d) of the goal frames' poses: positions P (N, G, 3) m, rotations R (N, G, 3, 3)."""
+        cols = []
+        for g, s in enumerate(self.scale):
+            cols.append(s * P[:, g])
+            if self.oriented[g]:
+                cols.append((s * self.table.weight) * R[:, g].reshape(-1, 9))
+        return np.concatenate(cols, axis=1)
+
+    def nearest(self, arrays: GoalArrays, k: int, eps: float = 0.0) -> np.ndarray:
+        """Indices (N, k) of the table entries nearest to each problem, nearest first (k capped at the entries
+        searched); ``eps``: ``cKDTree.query``'s approximation factor."""
+        k = min(k, self.tree.n)
+        N = len(arrays)
+        if k == 0 or N == 0:
+            return np.zeros((N, 0), dtype=np.intp)
+        _, idx = self.tree.query(self.features(arrays.P, arrays.Rts), k=k, eps=eps)
+        return self.index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
