@@ -305,7 +305,7 @@ def test_server_stops_with_the_viewer_and_with_its_parent(ax18, tmp_path):
         print(server.pid, flush=True)
         os._exit(0)
     """)
-    out = subprocess.run([sys.executable, "-c", parent, viz._SERVER_SCRIPT], capture_output=True, text=True,
+    out = subprocess.run([sys.executable, "-c", parent, viz.server._SERVER_SCRIPT], capture_output=True, text=True,
                          timeout=HANG_S)
     pid = int(out.stdout.split()[0])
     deadline = time.monotonic() + HANG_S  # the watchdog looks every 0.5 s once it runs; a loaded machine delays it

@@ -1,5 +1,5 @@
-"""A robot's collision geometry as Pinocchio and coal see it: the URDF's ``<collision>`` elements on the chain's
-reduced model, the pairs worth checking, and convex-hull proxies.
+"""A robot's collision geometry as Pinocchio and coal see it: the URDF's ``<collision>`` elements on the robot's
+reduced model (a chain or a whole tree), the pairs worth checking, and convex-hull proxies.
 
 Pairs: every pair of collision objects of the robot, less those on the same joint (rigidly attached: they
 never move relative to each other), those on adjacent joints (parent and child: touching by construction)

@@ -1,0 +1,188 @@
+"""Markers of targets and goals: a coordinate triad (x red, y green, z blue) for a pose, a sphere for a position.
+
+``show_target`` draws one IK target (node ``target``); ``show_goals`` one marker per goal of a goal list
+(:mod:`evoik_pin.goals`; node ``goals/<frame>``), each labelled by its frame name (a text sprite facing the camera,
+node ``goals/<frame>/label``); ``show_solution`` draws a goal-list answer: the whole robot at ``result.q`` with its
+goals, the camera framing both. Every marker is in the base frame (for a floating base: the world frame), where
+the goals' targets are given.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import TargetError
+from .server import _talks
+
+__all__ = ["GOAL_LABEL_HEIGHT"]
+
+#: Height (m) of a goal's label as a fraction of its marker's size.
+GOAL_LABEL_HEIGHT = 0.5
+_POINT_COLOR = 0xE02020
+_ORIGIN_COLOR = 0xF0C020
+_AXIS_COLORS = (("x", 0xE02020), ("y", 0x20C020), ("z", 0x2040F0))
+
+
+def _check_rotation(rotation, what: str) -> np.ndarray:
+    """``rotation`` as a (3, 3) rotation matrix, or a TargetError naming ``what``."""
+    R = np.asarray(rotation, dtype=float)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise TargetError(f"{what} rotation must be a finite (3, 3) matrix, got shape {R.shape}")
+    if not (np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0):
+        raise TargetError(f"{what} rotation is not a rotation matrix (R^T R != I or det R != 1)")
+    return R
+
+
+def _draw_marker(node, p: np.ndarray, R: np.ndarray | None, size: float) -> str:
+    """Draw under meshcat node ``node`` a triad of axis length ``size`` (m) at (p, R), or a sphere of radius
+    ``size / 4`` at ``p`` when ``R`` is None; returns "triad" or "point"."""
+    import meshcat.geometry as mg
+
+    if R is None:
+        node["point"].set_object(mg.Sphere(size / 4), mg.MeshPhongMaterial(color=_POINT_COLOR))
+    else:
+        node["origin"].set_object(mg.Sphere(size / 12), mg.MeshPhongMaterial(color=_ORIGIN_COLOR))
+        turn = {"x": pin.utils.rotate("z", -np.pi / 2), "y": np.eye(3), "z": pin.utils.rotate("x", np.pi / 2)}
+        for axis, color in _AXIS_COLORS:
+            node[axis].set_object(mg.Cylinder(size, size / 30), mg.MeshPhongMaterial(color=color))
+            T = np.eye(4)
+            T[:3, :3] = turn[axis]  # meshcat's cylinder runs along y
+            T[:3, 3] = turn[axis] @ np.array([0.0, size / 2, 0.0])
+            node[axis].set_transform(T)
+    T = np.eye(4)
+    T[:3, 3] = p
+    if R is not None:
+        T[:3, :3] = R
+    node.set_transform(T)
+    return "point" if R is None else "triad"
+
+
+def _label(text: str):
+    """A meshcat object showing ``text`` on a sprite that always faces the camera (meshcat's viewer renders the
+    ``_text`` texture onto a 256 x 256 canvas; the python package has no class for it in this version)."""
+    import meshcat.geometry as mg
+
+    class _TextTexture(mg.Texture):
+        def lower(self, object_data):
+            return {"uuid": self.uuid, "type": "_text", "text": text, "font_size": 48, "font_face": "sans-serif"}
+
+    class _SpriteMaterial(mg.Material):
+        _type = "SpriteMaterial"
+
+        def lower(self, object_data):
+            return {"uuid": self.uuid, "type": self._type, "map": _TextTexture().lower_in_object(object_data),
+                    "transparent": True, "depthTest": False}
+
+    class _Sprite(mg.Object):
+        _type = "Sprite"
+
+        def lower(self):
+            data = super().lower()
+            data["object"]["renderOrder"] = 1  # after the meshes: a label is not hidden by the link it names
+            return data
+
+    # a Sprite takes no geometry of its own; meshcat's Object wants one, and three.js ignores it
+    return _Sprite(mg.Box([1e-3, 1e-3, 1e-3]), _SpriteMaterial())
+
+
+class MarkerDrawing:
+    """The Viewer's target and goal markers."""
+
+    def _marker_size(self, size: float | None) -> float:
+        """Axis length (m) of a triad: ``size``, or 15 % of the robot's reach within [2 cm, 20 cm]."""
+        return float(np.clip(0.15 * self._reach, 0.02, 0.2)) if size is None else float(size)
+
+    @_talks
+    def show_target(self, position, rotation=None, name: str = "target", size: float | None = None) -> None:
+        """Draw an IK target: a coordinate triad (x red, y green, z blue), or a point without ``rotation``.
+
+        Args:
+            position: (3,) in m in the base frame, or a ``pin.SE3`` (then its rotation is used too).
+            rotation: (3, 3) rotation matrix, or None for a position-only target (drawn as a point).
+            name: node name (draw several targets under different names).
+            size: axis length (m) of the triad; the point's radius is a quarter of it. Default: 15 % of
+                the robot's reach, within [2 cm, 20 cm].
+        """
+        if isinstance(position, pin.SE3):
+            position, rotation = position.translation, position.rotation if rotation is None else rotation
+        p = np.asarray(position, dtype=float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise TargetError(f"target position must be 3 finite numbers (m), got shape {p.shape}: {p}")
+        R = None if rotation is None else _check_rotation(rotation, "target")
+        s = self._marker_size(size)
+        vis = self._check_open()
+        name = name.strip("/")
+        self.delete(name)
+        self.scene[name] = "target " + _draw_marker(vis[name], p, R, s)
+
+    @_talks
+    def show_goals(self, goals, name: str = "goals", size: float | None = None, labels: bool = True) -> list[str]:
+        """Draw one marker per goal of a goal list: a triad for a :class:`~evoik_pin.goals.Pose`, a sphere for a
+        :class:`~evoik_pin.goals.Position`, at its target in the base frame, labelled by its frame name.
+
+        Args:
+            goals: a goal list of this Viewer's robot (``[Pose(frame, T), Position(frame, p), ...]``), checked as a
+                solve checks it (:func:`evoik_pin.goals.bind`: frames that exist and move, no clashing targets).
+            name: group node; the marker of the goal on frame ``f`` is ``<name>/<f>``, its label
+                ``<name>/<f>/label``. Drawing the same name again replaces the group.
+            size: axis length (m) of the triads (the spheres' radius is a quarter of it). Default: 15 % of the
+                robot's reach, within [2 cm, 20 cm].
+            labels: draw each goal's frame name beside its marker (a text sprite facing the camera).
+
+        Returns:
+            The markers' node names, in the goals' order.
+        """
+        from ..goals import bind
+
+        goals = bind(self.robot, goals)[0]
+        s = self._marker_size(size)
+        vis = self._check_open()
+        name = name.strip("/")
+        self.delete(name)
+        nodes = []
+        for goal in goals:
+            node = f"{name}/{goal.frame}"
+            if node in nodes:  # the same frame twice with the same target (bind refuses clashing ones)
+                continue
+            p, R = goal.encode()
+            kind = _draw_marker(vis[node], p, R if goal.has_orientation else None, s)
+            if labels:
+                label = vis[node]["label"]
+                label.set_object(_label(goal.frame))
+                # above the marker, in its own frame turned back to the base frame's axes (a sprite has no rotation
+                # of its own to keep, but its offset would turn with a pose's rotation)
+                T = np.diag([s * 4 * GOAL_LABEL_HEIGHT] * 3 + [1.0])  # the 256 px canvas: text ~ a quarter of it
+                T[:3, 3] = (R.T if goal.has_orientation else np.eye(3)) @ np.array([0.0, 0.0, 0.6 * s])
+                label.set_transform(T)
+            self.scene[node] = f"goal {kind}: {goal.frame}"
+            nodes.append(node)
+        return nodes
+
+    @_talks
+    def show_solution(self, result, goals, scene=None, margin: float = 0.0, name: str = "goals",
+                      frame: bool = True) -> list[tuple[str, str]] | None:
+        """Draw the answer of a goal-list solve: the robot at ``result.q`` (:meth:`show`, with a ``scene``: its
+        obstacles and the links in collision red), a marker per goal (:meth:`show_goals`), and, with ``frame``,
+        the camera framing the robot's links and the goals (:meth:`frame`).
+
+        Args:
+            result: a :class:`~evoik_pin.Result` of ``evoik_pin.solve(robot, goals, ...)`` (or a joint vector (n,)).
+            goals: the goal list it was solved for.
+            scene, margin: as for :meth:`show`.
+            name: the goals' group node.
+            frame: point the camera at the robot and the goals.
+
+        Returns:
+            What :meth:`show` returns: with a scene, the pairs in collision at ``result.q``; None without.
+        """
+        pairs = self.show(result, scene=scene, margin=margin)
+        self.show_goals(goals, name=name)
+        if frame:
+            q = self._q(result)
+            model = self.robot.model
+            links = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
+            poses = self.robot.frame_poses_unchecked(q, links)  # q checked by show
+            self.frame(np.array([M.translation for M in poses] + [g.encode()[0] for g in goals]))
+        return pairs
+

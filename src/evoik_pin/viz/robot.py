@@ -1,0 +1,221 @@
+"""Drawing a robot at a configuration: its URDF visuals or a skeleton, every link of the model.
+
+The geometry goes through ``pinocchio.visualize.MeshcatVisualizer`` with ``robot.model`` (the active joints;
+locked parts where they rest) and ``robot.visual_model``, one visualizer per node (``robot``, ``solutions/<k>``,
+...). A floating base is the model's first six joints, so ``to_pinocchio(q)`` places the whole robot in the world
+from q's six base entries. A URDF without usable visuals is drawn as :func:`skeleton_model`: coal spheres at the
+joint origins and the goal frames, cylinders from joint to joint and rails along prismatic ranges, attached to the
+model's joints. The viewer runs no kinematics of its own: placements come from the robot layer.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..lie import rotation_to_z
+from ..robot import Robot
+from ..robot.frames import find_frame
+from .server import _talks
+
+__all__ = ["skeleton_model"]
+
+
+def _fcl():
+    """Pinocchio's collision library module (``coal``; ``hppfcl`` before Pinocchio 3.4)."""
+    try:
+        import coal
+
+        return coal
+    except ImportError:  # pragma: no cover - older Pinocchio
+        import hppfcl
+
+        return hppfcl
+
+
+def _tip_frames(robot: Robot) -> list[str]:
+    """The frames a skeleton marks beyond the joint origins: the tip and the other frames the robot was loaded
+    for (``tips=``), each once."""
+    return list(dict.fromkeys([robot.tip, *robot.tips]))
+
+
+def _segments(robot: Robot) -> list[tuple[int, pin.SE3]]:
+    """The skeleton's points: (parent joint, placement in that joint) of each joint origin, then of each tip frame
+    (:func:`_tip_frames`)."""
+    model = robot.model
+    points = [(model.parents[j], model.jointPlacements[j]) for j in range(1, model.njoints)]
+    for name in _tip_frames(robot):
+        tip = model.frames[find_frame(model, name)]
+        points.append((tip.parentJoint, tip.placement))
+    return points
+
+
+def _base_joints(robot: Robot) -> int:
+    """How many of the model's first joints are a floating base's six (drawn as nothing: they only place the root
+    link)."""
+    return 6 if robot.floating_base else 0
+
+
+def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryModel:
+    """Simple visual geometry of ``robot``: spheres at the joint origins and the tip frames, cylinders between.
+
+    Args:
+        robot: the robot to draw (a chain, or a tree: every joint of ``robot.model``; a floating base's six joints
+            get nothing of their own, the root link's joints hang from where they place it).
+        radius: sphere radius (m); links get 0.6 of it, the rails prismatic joints slide on 0.3. Default:
+            2 % of the robot's reach (:func:`_reach`: with prismatic travel), within [3 mm, 30 mm].
+
+    Returns:
+        A ``pin.GeometryModel`` attached to ``robot.model``'s joints (usable as a visual model).
+    """
+    fcl = _fcl()
+    model = robot.model
+    reach = _reach(robot)
+    r = float(np.clip(0.02 * reach, 0.003, 0.03)) if radius is None else float(radius)
+    geom = pin.GeometryModel()
+    joint_rgba = np.array([0.9, 0.5, 0.1, 1.0])
+    link_rgba = np.array([0.55, 0.6, 0.7, 1.0])
+    rail_rgba = np.array([0.3, 0.3, 0.35, 1.0])
+
+    def add(name: str, joint: int, placement: pin.SE3, shape, rgba: np.ndarray) -> None:
+        frame = next(i for i, f in enumerate(model.frames) if f.parentJoint == joint)
+        obj = pin.GeometryObject(name, joint, frame, placement, shape)
+        obj.meshColor = rgba
+        geom.addGeometryObject(obj)
+
+    def cylinder(name: str, joint: int, p0: np.ndarray, p1: np.ndarray, radius: float, rgba: np.ndarray) -> None:
+        d = p1 - p0
+        if np.linalg.norm(d) > 1e-9:
+            length = float(np.linalg.norm(d))
+            add(name, joint, pin.SE3(rotation_to_z(d), (p0 + p1) / 2), fcl.Cylinder(radius, length), rgba)
+
+    revolute, axes, lower, upper = robot.chain_joints()  # model's joints: mimic joints on the chain included
+    skip = _base_joints(robot)
+    tips = _tip_frames(robot)
+    for k, (parent, M) in enumerate(_segments(robot)):
+        is_tip = k >= model.njoints - 1
+        if k < skip:
+            continue
+        child = k + 1 if not is_tip else parent
+        name = tips[k - (model.njoints - 1)] if is_tip else model.names[k + 1]
+        # sphere at this point, attached to the joint it moves with (the joint itself, or the tip's parent)
+        add(f"skeleton_{name}", child, pin.SE3.Identity() if not is_tip else M,
+            fcl.Sphere(r * (0.8 if is_tip else 1.0)), joint_rgba)
+        cylinder(f"skeleton_to_{name}", parent, np.zeros(3), M.translation, 0.6 * r, link_rgba)
+        if not is_tip and not revolute[k]:  # a prismatic joint slides along a rail spanning its bounds
+            a = M.rotation @ axes[k]
+            lo, hi = M.translation + lower[k] * a, M.translation + upper[k] * a
+            cylinder(f"skeleton_rail_{name}", parent, lo, hi, 0.3 * r, rail_rgba)
+    return geom
+
+
+def _reach(robot: Robot) -> float:
+    """The robot's size (m), >= 0.1 m, that sets default marker sizes and the camera distance.
+
+    A chain (every entry of q moves the tip, no floating base): the length of its polyline base -> joints -> tip
+    at rest plus prismatic travel. Any other tree: the longest such path from the root to a joint origin or a
+    tip frame (a floating base's six joints count for nothing).
+    """
+    model = robot.model
+    revolute, _, lower, upper = robot.chain_joints()
+    travel = np.where(revolute, 0.0, np.maximum(np.abs(lower), np.abs(upper)))
+    travel[:_base_joints(robot)] = 0.0
+    if not robot.floating_base and len(robot.moving_joints(robot.tip)) == robot.n:
+        links = sum(np.linalg.norm(M.translation) for _, M in _segments(robot))
+        return max(0.1, float(links + travel.sum()))
+    depth = np.zeros(model.njoints)  # path length from the root to each joint origin
+    for j in range(1, model.njoints):
+        own = 0.0 if j <= _base_joints(robot) else float(np.linalg.norm(model.jointPlacements[j].translation))
+        depth[j] = depth[model.parents[j]] + own + travel[j - 1]
+    ends = [depth[parent] + float(np.linalg.norm(M.translation)) for parent, M in _segments(robot)[model.njoints - 1:]]
+    return max(0.1, float(max([*depth, *ends])))
+
+
+def _visual_model(robot: Robot) -> tuple[pin.GeometryModel | None, str]:
+    """(robot.visual_model or None, reason it is unusable)."""
+    try:
+        geom = robot.visual_model
+    except (ValueError, RuntimeError, OSError) as exc:
+        return None, f"its visual geometry could not be loaded ({exc})"
+    if geom.ngeoms == 0:
+        return None, "its URDF has no <visual> geometry"
+    return geom, ""
+
+
+def _meshcat_visualizer_class():
+    from pinocchio.visualize import MeshcatVisualizer
+
+    class _Visualizer(MeshcatVisualizer):
+        """MeshcatVisualizer that can load Collada meshes as plain geometry, so a ghost colour applies."""
+
+        plain_meshes = False
+
+        def loadMeshFromFile(self, geometry_object):  # noqa: N802 - Pinocchio's name
+            if self.plain_meshes and Path(geometry_object.meshPath).suffix.lower() == ".dae":
+                import meshcat.geometry as mg
+
+                return mg.DaeMeshGeometry.from_file(geometry_object.meshPath)
+            return super().loadMeshFromFile(geometry_object)
+
+    return _Visualizer
+
+
+class RobotDrawing:
+    """The Viewer's robot nodes: loading the robot's geometry under a node and showing it at a configuration."""
+
+    def _load(self, node: str, rgba=None, geom: pin.GeometryModel | None = None):
+        """Load the robot's geometry (or ``geom``) under ``node``, once; ``rgba`` colours every part (a ghost)."""
+        vis = self._check_open()
+        if node in self._viz:
+            return self._viz[node]
+        cls = _meshcat_visualizer_class()
+        viz = cls(self.robot.model, visual_model=self._geom if geom is None else geom)
+        viz.plain_meshes = rgba is not None
+        viz.initViewer(viewer=vis)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # unsupported parts are skipped, as Pinocchio does
+            viz.loadViewerModel(rootNodeName=node, visual_color=None if rgba is None else list(rgba))
+        vis[node].set_transform(self._baseMo.homogeneous)
+        self._viz[node] = viz
+        return viz
+
+    def _mesh_bytes(self) -> int:
+        """Bytes of mesh files one copy of the robot's visual geometry embeds in the scene."""
+        paths = [g.meshPath for g in self._geom.geometryObjects]
+        return sum(os.path.getsize(f) for f in paths if f and os.path.isfile(f))
+
+    @_talks
+    def show(self, q, scene=None, margin: float = 0.0) -> list[tuple[str, str]] | None:
+        """Draw the robot (node ``robot``) at joint vector ``q`` (n,) in rad/m, or a result's ``.q``: every link
+        of the model (a whole robot: the whole tree, a floating base placed by q's six base entries).
+
+        With a collision ``scene`` (:class:`~evoik_pin.scene.Scene` of this robot): its obstacles are drawn too
+        (node ``scene``, as :meth:`show_scene`; again only when the scene changed), and the robot's links in
+        collision at ``q`` (closer than ``margin`` m) are drawn red (:data:`COLLISION_RGBA`); a later ``show``
+        gives links no longer in collision their own colours back.
+
+        Returns:
+            With a scene, the pairs in collision (``scene.colliding_pairs(q, margin)``: link or obstacle names,
+            empty when ``q`` is collision-free); None without.
+        """
+        q = self._q(q)
+        pairs = None
+        if scene is not None:
+            self._check_scene(scene)
+            pairs = scene.colliding_pairs(q, margin)
+        viz = self._load("robot")
+        viz.display(self.robot.to_pinocchio(q))
+        self.scene["robot"] = "robot"
+        links: set[str] = set()
+        if scene is not None:
+            if "scene" not in self.scene or self._drawn_scenes.get("scene") != (id(scene), scene.version):
+                self.show_scene(scene)
+            links = {name for pair in pairs for name in pair} - set(scene.obstacles)
+        self._paint_links(viz, links)
+        if links:
+            self.scene["robot"] = f"robot, links in collision (red): {', '.join(sorted(links))}"
+        return pairs
