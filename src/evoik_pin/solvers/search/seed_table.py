@@ -19,11 +19,16 @@ from ...problem import Target
 from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
 from ..paper.common import halton
 
-__all__ = ["DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
+__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
 DEFAULT_TABLE_SEEDS = 17
+#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`: composed starts and
+#: table entries alternately). On whole robots a start costs an LM run (~0.1 ms on Talos) and a DE generation a
+#: population's tree kinematics in numpy (~1 ms on Talos): with 48 starts every one of 200 Talos, Go2 and Baxter
+#: problems (scripts/bench_goals.py) was solved without a restart, against 199, 197 and 198 with 17.
+DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
 _KINDS = tuple(_KIND_KEYS.values())
@@ -43,7 +48,7 @@ class SeedTable:
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
-        self._goal_frames: dict = {}  # frame names -> (positions (size, G, 3), rotations (size, G, 3, 3))
+        self._goal_features: dict = {}  # (frame, oriented, weight) per goal -> (features (size, d), squared norms)
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -110,26 +115,16 @@ class SeedTable:
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
-        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry (the
-        frames' poses over the table are computed once per frame list and cached)."""
+        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry. The
+        goals' features over the table (the frames' poses, scaled by the square roots of the weights) are computed
+        once per frame list, kinds and weights and cached, so a ranking is one matrix-vector product."""
         if k <= 0:
             return
-        frames = tuple(g.frame for g in problem.goals)
-        hit = self._goal_frames.get(frames)
-        if hit is None:
-            if len(self._goal_frames) > 8:
-                self._goal_frames.clear()
-            hit = self._goal_frames[frames] = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
-        P, R = hit
+        goals = problem.goals
+        F, sq = self._goal_table_features(goals)
         _, pt, Rt = problem.goal_stack()
-        d = np.zeros(self.Q.shape[0])
-        for g, goal in enumerate(problem.goals):
-            dp = P[:, g] - pt[g]
-            dg = (dp * dp).sum(axis=1)
-            if goal.has_orientation:
-                dR = (R[:, g] - Rt[g]).reshape(-1, 9)
-                dg += self.weight * self.weight * (dR * dR).sum(axis=1)
-            d += goal.weight * dg
+        f = np.concatenate(self._goal_feature_blocks(goals, pt[:, None], Rt[:, None]), axis=1)[0]
+        d = sq - 2.0 * (F @ f)
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
@@ -139,6 +134,128 @@ class SeedTable:
         part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
         for i in part[d[part].argsort()]:
             yield int(i)
+
+    def prepare_goals(self, goals) -> None:
+        """Compute (once per frame list, kinds and weights; then cached) the goal features that
+        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up."""
+        self._goal_table_features(goals)
+        self._goal_parts(goals)
+
+    def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
+        """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed ones and table entries
+        alternately, a composed one first.
+
+        The j-th table entry is the j-th of :meth:`ranked_goals`. The j-th composed start is assembled goal by goal:
+        for each goal, the joints that move its frame (the floating base excepted) are taken from the table entry
+        whose pose of that frame *relative to the root link* is the nearest to the goal's target (its j-th nearest
+        on a fixed base; with a floating base, the nearest to the target seen from the j-th ranked entry's base,
+        which the composed start keeps); the other joints are that entry's. Each goal's chain thus gets its own
+        good table entry where one entry rarely suits every goal of a whole robot (on Talos's four poses the LM
+        run from the first composed start converges about 1.3 times as often as from the nearest entry). A joint
+        shared by several goals' chains (a torso) takes the value of the last of them.
+        """
+        if k <= 0:
+            return
+        ranked = self.ranked_goals(problem, k, allowed)
+        parts = self._goal_parts(problem.goals)
+        robot = self._robot
+        _, pt, Rt = problem.goal_stack()
+        fixed = None
+        made = 0
+        for j, row in enumerate(ranked):
+            q = self.Q[row].copy()
+            if robot.floating_base:  # the goals seen from this entry's base pose
+                R0 = pin.rpy.rpyToMatrix(q[5], q[4], q[3])
+                P_rel, R_rel = (pt - q[:3]) @ R0, np.einsum("ji,gjk->gik", R0, Rt)
+                picks = self._nearest_per_goal(problem.goals, parts, P_rel, R_rel, 1, allowed)[:, 0]
+            else:
+                if fixed is None:  # one ranking per goal serves every composed start
+                    fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, k, allowed)
+                if j >= fixed.shape[1]:
+                    picks = None
+                else:
+                    picks = fixed[:, j]
+            if picks is not None:
+                for (_, _, idx), e in zip(parts, picks, strict=True):
+                    q[idx] = self.Q[e, idx]
+                yield q
+                made += 1
+                if made >= k:
+                    return
+            yield self.Q[row]
+            made += 1
+            if made >= k:
+                return
+
+    def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per goal (cached per frame list, kinds and weights): the table's features of its frame's pose relative to
+        the root link (a floating base's six entries set to zero), their squared norms, and the indices of the
+        entries of q (the floating base's excepted) that move the frame."""
+        key = ("parts",) + tuple((g.frame, g.has_orientation, g.weight) for g in goals)
+        hit = self._goal_features.get(key)
+        if hit is None:
+            robot = self._robot
+            Q = self.Q
+            if robot.floating_base:
+                Q = Q.copy()
+                Q[:, :6] = 0.0
+            P, R = robot.fk_batch(Q, validate=False, frames=[g.frame for g in goals])
+            names = list(robot.joint_names)
+            first = 6 if robot.floating_base else 0
+            hit = []
+            for g, goal in enumerate(goals):
+                F = np.concatenate(self._goal_feature_blocks([goal], P[:, g][None], R[:, g][None]), axis=1)
+                idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first],
+                               dtype=np.intp)
+                hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
+            if len(self._goal_features) > 8:
+                self._goal_features.clear()
+            self._goal_features[key] = hit
+        return hit
+
+    def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
+                          allowed: np.ndarray | None) -> np.ndarray:
+        """(G, <= k) indices of the table entries nearest, goal by goal, to targets pt (G, 3), Rt (G, 3, 3) of the
+        frames' poses relative to the root link, nearest first."""
+        out = []
+        k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
+        for g, (F, sq, _) in enumerate(parts):
+            f = np.concatenate(self._goal_feature_blocks([goals[g]], pt[g][None, None], Rt[g][None, None]),
+                               axis=1)[0]
+            d = sq - 2.0 * (F @ f)
+            if allowed is not None:
+                d = np.where(allowed, d, np.inf)
+            if k == 1:
+                out.append([int(d.argmin())])
+                continue
+            part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+            out.append(part[d[part].argsort()])
+        return np.array(out, dtype=np.intp).reshape(len(parts), -1)
+
+    def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
+        """(features (size, d), squared norms (size,)) of the goals' frames over the table (:meth:`ranked_goals`),
+        cached per frame list, kinds and weights."""
+        key = tuple((g.frame, g.has_orientation, g.weight) for g in goals)
+        hit = self._goal_features.get(key)
+        if hit is None:
+            P, R = self._robot.fk_batch(self.Q, validate=False, frames=[g.frame for g in goals])
+            F = np.concatenate(self._goal_feature_blocks(goals, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)),
+                               axis=1)
+            if len(self._goal_features) > 8:
+                self._goal_features.clear()
+            hit = self._goal_features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
+        return hit
+
+    def _goal_feature_blocks(self, goals, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
+        """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3): ``sqrt(weight_g)``
+        times the position and, for a goal with orientation, ``self.weight`` times the rotation's entries."""
+        out = []
+        for g, goal in enumerate(goals):
+            s = np.sqrt(goal.weight)
+            out.append(s * P[g])
+            if goal.has_orientation:
+                out.append((s * self.weight) * R[g].reshape(-1, 9))
+        return out
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
