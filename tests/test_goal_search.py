@@ -74,25 +74,35 @@ def _relative_poses(robot, Q, frames):
     return robot.fk_batch(Q, frames=list(frames))
 
 
-@pytest.mark.parametrize("which", ["baxter", "go2"])
+@pytest.mark.parametrize("which", ["baxter", "go2", "go2 feet"])
 def test_composed_starts_take_each_goals_chain_from_its_own_nearest_entry(which, request):
-    robot = request.getfixturevalue(which)
+    """Baxter: a fixed base. Go2 with its trunk's pose among the goals: the base put where that goal says. Go2 with
+    its feet alone: the base of the nearest ranked entry."""
+    robot = request.getfixturevalue(which.split()[0])
     make = _baxter_goals if which == "baxter" else _go2_goals
     q = robot.random_configurations(1, np.random.default_rng(11))[0]
-    goals = make(robot, q)
+    q[:3] *= 0.2  # the trunk well inside the base box, so the base that meets its goal is not clipped
+    goals = make(robot, q)[1 if which == "go2 feet" else 0:]
     problem = IKProblem(robot, goals)
     table = _table(problem)
     starts = list(table.goal_starts(problem, 4))
     ranked = list(table.ranked_goals(problem, 2))
     assert len(starts) == 4
-    # composed and table entries alternate, a composed start first
-    assert np.array_equal(starts[1], table.Q[ranked[0]]) and np.array_equal(starts[3], table.Q[ranked[1]])
+    # composed and table entries alternate, a composed start first (a base set by a goal replaces the entries')
+    lo = 6 if which == "go2" else 0
+    assert np.array_equal(starts[1][lo:], table.Q[ranked[0], lo:])
+    assert np.array_equal(starts[3][lo:], table.Q[ranked[1], lo:])
     composed = starts[0]
+    if which == "go2":  # the trunk's goal met by the base alone, in every composed start and table entry
+        for start in starts:
+            T = robot.fk(start, "base")
+            assert np.allclose(T.homogeneous, goals[0].target.homogeneous, atol=1e-9)
+    elif which == "go2 feet":
+        assert np.array_equal(composed[:6], table.Q[ranked[0], :6])
     frames = [g.frame for g in goals]
-    # the goals seen from the root link: the first ranked entry's base for a floating base, the world otherwise
+    # the goals seen from the root link (the world on a fixed base)
     _, pt, Rt = problem.goal_stack()
     if robot.floating_base:
-        assert np.array_equal(composed[:6], table.Q[ranked[0], :6])
         B = robot.fk(np.concatenate([composed[:6], np.zeros(robot.n - 6)]), robot.base)
         pt = (pt - B.translation) @ B.rotation
         Rt = np.einsum("ji,gjk->gik", B.rotation, Rt)
@@ -105,7 +115,7 @@ def test_composed_starts_take_each_goals_chain_from_its_own_nearest_entry(which,
     assert got.sum() <= _distances(table, goals, P0, R0, pt, Rt)[0].sum() + 1e-12
 
 
-@pytest.mark.parametrize("which, index", [("baxter", 12), ("go2", 19)])
+@pytest.mark.parametrize("which, index", [("baxter", 12)])
 def test_goal_lists_get_more_table_starts_before_restarts(which, index, request):
     """Problems (found by search) that the 17 starts of one target leave unsolved and the goal lists' 48 solve,
     without a DE restart (max_restarts=0: a deterministic budget)."""

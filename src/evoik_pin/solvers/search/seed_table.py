@@ -15,6 +15,7 @@ import weakref
 import numpy as np
 import pinocchio as pin
 
+from ...lie import rpy
 from ...problem import Target
 from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
 from ..paper.common import halton
@@ -130,10 +131,14 @@ class SeedTable:
             k = min(k, int(np.count_nonzero(allowed)))
             if k <= 0:
                 return
+        first = int(d.argmin())  # the nearest alone is often all a solve needs: rank the others on demand
+        yield first
         k = min(k, d.shape[0])
-        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
-        for i in part[d[part].argsort()]:
-            yield int(i)
+        if k > 1:
+            part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+            for i in part[d[part].argsort()]:
+                if i != first:
+                    yield int(i)
 
     def prepare_goals(self, goals) -> None:
         """Compute (once per frame list, kinds and weights; then cached) the goal features that
@@ -149,7 +154,9 @@ class SeedTable:
         for each goal, the joints that move its frame (the floating base excepted) are taken from the table entry
         whose pose of that frame *relative to the root link* is the nearest to the goal's target (its j-th nearest
         on a fixed base; with a floating base, the nearest to the target seen from the j-th ranked entry's base,
-        which the composed start keeps); the other joints are that entry's. Each goal's chain thus gets its own
+        which the composed start keeps); the other joints are that entry's. A pose goal on a frame only the floating
+        base moves (a quadruped's trunk) sets the base of every start, composed or not, and the composed starts
+        then rank each goal's entries once, as on a fixed base. Each goal's chain thus gets its own
         good table entry where one entry rarely suits every goal of a whole robot (on Talos's four poses the LM
         run from the first composed start converges about 1.3 times as often as from the nearest entry). A joint
         shared by several goals' chains (a torso) takes the value of the last of them.
@@ -160,21 +167,22 @@ class SeedTable:
         parts = self._goal_parts(problem.goals)
         robot = self._robot
         _, pt, Rt = problem.goal_stack()
+        base = self._base_from_goals(problem, parts) if robot.floating_base else None
+        if base is not None:  # the goals seen from the base that goal sets
+            pt, Rt = _seen_from(base, pt, Rt)
         fixed = None
         made = 0
         for j, row in enumerate(ranked):
             q = self.Q[row].copy()
-            if robot.floating_base:  # the goals seen from this entry's base pose
-                R0 = pin.rpy.rpyToMatrix(q[5], q[4], q[3])
-                P_rel, R_rel = (pt - q[:3]) @ R0, np.einsum("ji,gjk->gik", R0, Rt)
+            if base is not None:
+                q[:6] = base
+            if robot.floating_base and base is None:  # the goals seen from this entry's base pose
+                P_rel, R_rel = _seen_from(q[:6], pt, Rt)
                 picks = self._nearest_per_goal(problem.goals, parts, P_rel, R_rel, 1, allowed)[:, 0]
-            else:
-                if fixed is None:  # one ranking per goal serves every composed start
-                    fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, k, allowed)
-                if j >= fixed.shape[1]:
-                    picks = None
-                else:
-                    picks = fixed[:, j]
+            else:  # the first composed start needs each goal's nearest entry; the next ones, one ranking per goal
+                if fixed is None or (j > 0 and fixed.shape[1] == 1):
+                    fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, 1 if j == 0 else k, allowed)
+                picks = fixed[:, j] if j < fixed.shape[1] else None
             if picks is not None:
                 for (_, _, idx), e in zip(parts, picks, strict=True):
                     q[idx] = self.Q[e, idx]
@@ -182,10 +190,28 @@ class SeedTable:
                 made += 1
                 if made >= k:
                     return
-            yield self.Q[row]
+            entry = self.Q[row]
+            if base is not None:
+                entry = entry.copy()
+                entry[:6] = base
+            yield entry
             made += 1
             if made >= k:
                 return
+
+    def _base_from_goals(self, problem, parts) -> np.ndarray | None:
+        """The floating base's six entries (clipped into the search box) that put the first pose goal on a frame
+        only the floating base moves (the root link or a frame fixed to it: a quadruped's trunk) exactly on its
+        target; None when no goal is such."""
+        _, pt, Rt = problem.goal_stack()
+        for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
+            if goal.has_orientation and idx.size == 0:
+                s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
+                p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
+                R = Rt[g] @ R_f.T
+                base = np.concatenate([pt[g] - R @ p_f, rpy(R)[0, ::-1]])  # x, y, z, yaw, pitch, roll
+                return np.minimum(np.maximum(base, problem.lower[:6]), problem.upper[:6])
+        return None
 
     def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Per goal (cached per frame list, kinds and weights): the table's features of its frame's pose relative to
@@ -325,6 +351,13 @@ class SeedTable:
             return np.zeros((N, 0), dtype=np.intp)
         _, idx = tree.query(f, k=k, eps=eps)
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
+
+
+def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Targets pt (G, 3), Rt (G, 3, 3) in the world seen from a floating base's pose (its six entries: x, y, z m,
+    yaw, pitch, roll rad; rotation ``Rz(yaw) Ry(pitch) Rx(roll)``): ``B^-1 T`` per target."""
+    R0 = pin.rpy.rpyToMatrix(base[5], base[4], base[3])
+    return (pt - base[:3]) @ R0, np.einsum("ji,gjk->gik", R0, Rt)
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
