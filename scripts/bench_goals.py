@@ -139,9 +139,9 @@ def _stats(rows: list[dict], times_s) -> dict:
 
 
 def robot_report(problems: dict, evoik: dict, peers: dict | None, model: pin.Model, loads: tuple,
-                 extra: dict | None = None) -> tuple[str, dict]:
+                 extra: dict | None = None, agreement: float = 0.0) -> tuple[str, dict]:
     """Markdown lines for one robot and the numbers behind them (``extra``: evoik_pin runs with other budgets, by
-    row name)."""
+    row name; ``agreement``: :func:`check_same_model`'s largest difference)."""
     n = len(problems["problems"])
     sides = {"evoik_pin (memetic)": _stats(jg.judge(problems, evoik["q"], model=model), evoik["wall_s"])}
     for name, run in (extra or {}).items():
@@ -163,7 +163,8 @@ def robot_report(problems: dict, evoik: dict, peers: dict | None, model: pin.Mod
     spec = gp.ROBOT_SETS[problems["robot"]]
     lines = [f"### {problems['robot']} ({n} problems; {spec.note})", "",
              f"Load average {loads[0]:.2f} before, {loads[1]:.2f} after; evoik_pin's one-time set-up (seed table, "
-             f"kernel load) {evoik['setup_s']:.2f} s, outside the times.", "",
+             f"kernel load) {evoik['setup_s']:.2f} s, outside the times; its answers mapped by "
+             f"`robot.full_configuration` onto the file's model (goal frames agree to {agreement:.0e} m).", "",
              "| solver | ok 1e-6 | ok 1e-5 | ok 1e-4 | median ms | p90 ms | out of limits |"
              " both solve: n | evoik ms | peer ms | peer / evoik |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
@@ -256,7 +257,7 @@ def main(argv: list[str] | None = None) -> int:
             problems = gp.load_problems(path)
             model = gp.model_of(problems)
             robot = load_evoik_robot(problems)
-            check_same_model(robot, problems, model)
+            agreement = check_same_model(robot, problems, model)
             load0 = os.getloadavg()[0]
             evoik = run_evoik(robot, problems, options)
             extra = {}
@@ -265,7 +266,8 @@ def main(argv: list[str] | None = None) -> int:
                                                                                  {"timeout": args.also_timeout})
             peers = None if args.no_peers else run_peers(path, Path(tmp) / f"{name}.peers.json",
                                                         args.peers_python, args.peer_budget)
-            text, numbers[name] = robot_report(problems, evoik, peers, model, (load0, os.getloadavg()[0]), extra)
+            text, numbers[name] = robot_report(problems, evoik, peers, model, (load0, os.getloadavg()[0]), extra,
+                                               agreement)
             if peers is not None:
                 settings = peers
             print(text, flush=True)
