@@ -225,6 +225,14 @@ class IKProblem:
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
         return [g.errors(T) for g, T in zip(self.goals, poses, strict=True)]
 
+    def goal_summary(self, errors) -> tuple[float, float | None, float]:
+        """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors
+        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list."""
+        pos = np.array([[p for p, _ in errors]])
+        rot = np.array([[r or 0.0 for _, r in errors]])
+        rots = [r for _, r in errors if r is not None]
+        return float(pos.max()), (max(rots) if rots else None), float(self._goal_cost(pos, rot)[0])
+
     def goals_met(self, errors) -> bool:
         """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""
         return all(g.met(p, r) for g, (p, r) in zip(self.goals, errors, strict=True))
@@ -276,11 +284,7 @@ class IKProblem:
         objective reads (no batch pass).
         """
         if self.goals is not None:
-            errors = self.goal_errors(q)
-            pos = np.array([[p for p, _ in errors]])
-            rot = np.array([[r or 0.0 for _, r in errors]])
-            rots = [r for _, r in errors if r is not None]
-            return float(pos.max()), (max(rots) if rots else None), float(self._goal_cost(pos, rot)[0])
+            return self.goal_summary(self.goal_errors(q))
         target = self.target
         if position_error is not None:
             cost = self.objective.from_errors(target, position_error, orientation_error)

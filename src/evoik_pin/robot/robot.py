@@ -264,6 +264,8 @@ class Robot:
         self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
         self._G[np.arange(m_phys), self._phys_index] = self._phys_scale
         self._views: dict[int, tuple[int, np.ndarray, np.ndarray, ChainView]] = {}
+        self._frame_ids: dict[str, int] = {}  # name -> id: a goal list names its frames several times per solve
+        self._moving: dict[int, list[str]] = {}  # frame id -> moving_joints
         self._tip_view = self._frame_view(self._tip_id)[3]
 
         # The entries of q: their own joint's motion (active, or the inactive joint mimics follow).
@@ -332,8 +334,13 @@ class Robot:
         when there is no such frame."""
         if frame is None:
             return self._tip_id
-        fid = find_frame(self.model, frame) if isinstance(frame, str) else -1
-        if fid < 0:
+        fid = self._frame_ids.get(frame, -1) if isinstance(frame, str) else -1
+        if fid >= 0:
+            return fid
+        fid = find_frame(self.model, frame) if isinstance(frame, str) else -1  # a scan of every frame
+        if fid >= 0:
+            self._frame_ids[frame] = fid
+        else:
             if not isinstance(frame, str):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
             raise FrameError(f"{self.name} has no frame {frame!r}{_suggest(frame, self.model)} (robot.frames lists "
@@ -357,10 +364,13 @@ class Robot:
 
     def moving_joints(self, frame: str | None = None) -> list[str]:
         """Names of the entries of ``q`` that move a frame (None: the tip); empty when no active joint moves it."""
-        j = self._frame_view(self.frame_id(frame))[0]
-        phys = self.tree.ancestors(j)
-        ks = sorted({int(self._phys_index[k]) for k in phys if self._phys_scale[k] != 0.0})
-        return [self.joint_names[k] for k in ks]
+        fid = self.frame_id(frame)
+        names = self._moving.get(fid)
+        if names is None:  # a goal list asks for each of its frames at every solve
+            phys = self.tree.ancestors(self._frame_view(fid)[0])
+            ks = sorted({int(self._phys_index[k]) for k in phys if self._phys_scale[k] != 0.0})
+            names = self._moving[fid] = [self.joint_names[k] for k in ks]
+        return list(names)
 
     # ------------------------------------------------------------------ constants of compiled kernels
     def tree_constants(self) -> tuple[np.ndarray, ...]:

@@ -19,7 +19,9 @@ Stages, each tried only when the previous ones have not met the tolerances:
    runs (``batch=k`` hands them to the engine k at a time,
    :meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.run_many`, the clock checked between groups). One-time
    costs do not count against the budget: the table's construction, and loading (or, once after an install,
-   compiling) the compiled LM kernel.
+   compiling) the compiled LM kernel. A goal list (a whole robot: several frames) gets 48 starts, a start composed
+   goal by goal (each goal's chain from the table entry nearest for that goal alone, relative to the root link)
+   and the next table entry by the goals' summed nearness, alternately (``SeedTable.goal_starts``).
 3. **Memetic restarts** until the tolerances, the time budget ``timeout`` or ``max_restarts`` are reached:
    a population of ``population`` configurations (uniform in the box, drawn from ``rng``, plus ``q0`` and
    the best configuration met so far) evolves for ``generations`` generations of differential evolution
@@ -49,7 +51,7 @@ from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, com
 from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
-from .seed_table import DEFAULT_TABLE_SEEDS, SeedTable, default_table_size, seed_table
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, SeedTable, default_table_size, seed_table
 
 __all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "memetic", "prepare"]
 
@@ -96,7 +98,8 @@ def check_options(*, timeout, max_restarts, population, generations, polish_coun
         raise OptionError(f"polish_count ({polish_count}) cannot exceed population ({population})")
     table_size = default_table_size(n) if table_size is None else check_int("table_size", table_size, 0)
     return (timeout, max_restarts, population, generations, polish_count, table_size,
-            check_int("table_seeds", table_seeds, 0), check_int("table_offset", table_offset, 0),
+            None if table_seeds is None else check_int("table_seeds", table_seeds, 0),
+            check_int("table_offset", table_offset, 0),
             check_int("batch", batch, 1), check_int("iterations", iterations, 1),
             check_choice("engine", engine, ENGINES))
 
@@ -152,6 +155,18 @@ class _Search:
         """One LM run from ``q`` (n,); keeps the best outcome; True when it meets the tolerances."""
         return self._keep(self.lm.run(q, iterations or self.iterations, self._deadline()), 1)
 
+    def polish_iter(self, starts) -> bool:
+        """:meth:`polish_many` over an iterable of starts (n,), drawn lazily, ``batch`` at a time: a start is
+        made only when the ones before it have failed; the clock is checked between groups."""
+        it = iter(starts)
+        for g in itertools.count():
+            chunk = list(itertools.islice(it, self.batch))
+            if not chunk or (g and self.out_of_time()):
+                return False
+            if self.polish_many(np.array(chunk)):
+                return True
+        return False  # pragma: no cover - the loop returns
+
     def polish_many(self, Q: np.ndarray) -> bool:
         """LM runs from the rows of ``Q`` (K, n), in order, until one meets the tolerances or the time is up;
         ``batch`` > 1 hands them to the engine ``batch`` at a time (``LevenbergMarquardt.run_many``: one kernel
@@ -182,7 +197,7 @@ def memetic(
     generations: int = 3,
     polish_count: int = 8,
     table_size: int | None = None,
-    table_seeds: int = DEFAULT_TABLE_SEEDS,
+    table_seeds: int | None = None,
     table_offset: int = 0,
     batch: int = 1,
     iterations: int = DEFAULT_ITERATIONS,
@@ -206,8 +221,11 @@ def memetic(
         polish_count: members of each population polished by LM, best first (1..population).
         table_size: seed-table size (0 disables stage 2); default 2^(n+5) clamped to [256, 4096].
         table_seeds: table entries tried in stage 2, nearest first: the nearest alone (it usually converges),
-            the next ones one by one (``batch`` at a time).
-        table_offset: skip the nearest ``table_offset`` entries (already tried, e.g. by ``solve_many``).
+            the next ones one by one (``batch`` at a time); default (None) 17 for one target. A goal list's
+            stage 2 alternates starts composed goal by goal and table entries
+            (:meth:`~evoik_pin.solvers.search.seed_table.SeedTable.goal_starts`), 48 by default.
+        table_offset: skip the nearest ``table_offset`` entries (already tried, e.g. by ``solve_many``); for a goal
+            list the first ``table_offset`` starts.
         batch: LM runs handed to the engine together (stages 2 and 3; >= 1): one kernel call per group of
             ``batch`` starts, in order, stopping at the first that meets the tolerances; the clock is checked
             between groups. 1 (default): between every two runs.
@@ -233,9 +251,13 @@ def memetic(
 
     # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
     # table of this box with its nearness features (cached per robot and box).
+    if table_seeds is None:
+        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if problem.goals is not None else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine,
                           problem.scene, problem.margin)
+    if table is not None and problem.goals is not None:
+        table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
@@ -254,7 +276,8 @@ def memetic(
     goals = problem.goals is not None
     if table is not None:
         # lazy: ranks on the first next(); with a scene, among the collision-free entries only
-        ranked = (table.ranked_goals(problem, table_offset + table_seeds, free) if goals
+        # a goal list: starting configurations, composed goal by goal and table entries alternately
+        ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if goals
                   else table.ranked(problem.target, table_offset + table_seeds, free))
         if table_offset:
             ranked = itertools.islice(ranked, table_offset, None)
@@ -272,7 +295,10 @@ def memetic(
     if q0_first:
         stage = "q0"
         solved = search.polish(q0)
-    if not solved and table is not None and not search.out_of_time():
+    if not solved and goals and table is not None and not search.out_of_time():
+        stage = "seed table"
+        solved = search.polish_iter(ranked)
+    elif not solved and table is not None and not search.out_of_time():
         if first is None:
             first = next(ranked, None)
         stage = "seed table"
@@ -301,12 +327,13 @@ def memetic(
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    pos, rot, cost = problem.assess(q, search.best.position_error, search.best.orientation_error)
+    goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
+    pos, rot, cost = (problem.goal_summary(goal_errors) if goals
+                      else problem.assess(q, search.best.position_error, search.best.orientation_error))
     if not history["best_cost"]:
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    goal_errors = problem.goal_errors(q) if goals else None
     if goals:
         within = problem.goals_met(goal_errors)
     else:

@@ -15,15 +15,21 @@ import weakref
 import numpy as np
 import pinocchio as pin
 
+from ...lie import rpy
 from ...problem import Target
 from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
 from ..paper.common import halton
 
-__all__ = ["DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
+__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
 DEFAULT_TABLE_SEEDS = 17
+#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`: composed starts and
+#: table entries alternately). On whole robots a start costs an LM run (~0.1 ms on Talos) and a DE generation a
+#: population's tree kinematics in numpy (~1 ms on Talos): with 48 starts every one of 200 Talos, Go2 and Baxter
+#: problems (scripts/bench_goals.py) was solved without a restart, against 199, 197 and 198 with 17.
+DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
 _KINDS = tuple(_KIND_KEYS.values())
@@ -43,7 +49,7 @@ class SeedTable:
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
-        self._goal_frames: dict = {}  # frame names -> (positions (size, G, 3), rotations (size, G, 3, 3))
+        self._goal_features: dict = {}  # (frame, oriented, weight) per goal -> (features (size, d), squared norms)
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -110,35 +116,172 @@ class SeedTable:
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
-        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry (the
-        frames' poses over the table are computed once per frame list and cached)."""
+        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry. The
+        goals' features over the table (the frames' poses, scaled by the square roots of the weights) are computed
+        once per frame list, kinds and weights and cached, so a ranking is one matrix-vector product."""
         if k <= 0:
             return
-        frames = tuple(g.frame for g in problem.goals)
-        hit = self._goal_frames.get(frames)
-        if hit is None:
-            if len(self._goal_frames) > 8:
-                self._goal_frames.clear()
-            hit = self._goal_frames[frames] = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
-        P, R = hit
+        goals = problem.goals
+        F, sq = self._goal_table_features(goals)
         _, pt, Rt = problem.goal_stack()
-        d = np.zeros(self.Q.shape[0])
-        for g, goal in enumerate(problem.goals):
-            dp = P[:, g] - pt[g]
-            dg = (dp * dp).sum(axis=1)
-            if goal.has_orientation:
-                dR = (R[:, g] - Rt[g]).reshape(-1, 9)
-                dg += self.weight * self.weight * (dR * dR).sum(axis=1)
-            d += goal.weight * dg
+        f = np.concatenate(self._goal_feature_blocks(goals, pt[:, None], Rt[:, None]), axis=1)[0]
+        d = sq - 2.0 * (F @ f)
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
             if k <= 0:
                 return
+        first = int(d.argmin())  # the nearest alone is often all a solve needs: rank the others on demand
+        yield first
         k = min(k, d.shape[0])
-        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
-        for i in part[d[part].argsort()]:
-            yield int(i)
+        if k > 1:
+            part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+            for i in part[d[part].argsort()]:
+                if i != first:
+                    yield int(i)
+
+    def prepare_goals(self, goals) -> None:
+        """Compute (once per frame list, kinds and weights; then cached) the goal features that
+        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up."""
+        self._goal_table_features(goals)
+        self._goal_parts(goals)
+
+    def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
+        """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed ones and table entries
+        alternately, a composed one first.
+
+        The j-th table entry is the j-th of :meth:`ranked_goals`. The j-th composed start is assembled goal by goal:
+        for each goal, the joints that move its frame (the floating base excepted) are taken from the table entry
+        whose pose of that frame *relative to the root link* is the nearest to the goal's target (its j-th nearest
+        on a fixed base; with a floating base, the nearest to the target seen from the j-th ranked entry's base,
+        which the composed start keeps); the other joints are that entry's. A pose goal on a frame only the floating
+        base moves (a quadruped's trunk) sets the base of every start, composed or not, and the composed starts
+        then rank each goal's entries once, as on a fixed base. Each goal's chain thus gets its own
+        good table entry where one entry rarely suits every goal of a whole robot (on Talos's four poses the LM
+        run from the first composed start converges about 1.3 times as often as from the nearest entry). A joint
+        shared by several goals' chains (a torso) takes the value of the last of them.
+        """
+        if k <= 0:
+            return
+        ranked = self.ranked_goals(problem, k, allowed)
+        parts = self._goal_parts(problem.goals)
+        robot = self._robot
+        _, pt, Rt = problem.goal_stack()
+        base = self._base_from_goals(problem, parts) if robot.floating_base else None
+        if base is not None:  # the goals seen from the base that goal sets
+            pt, Rt = _seen_from(base, pt, Rt)
+        fixed = None
+        made = 0
+        for j, row in enumerate(ranked):
+            q = self.Q[row].copy()
+            if base is not None:
+                q[:6] = base
+            if robot.floating_base and base is None:  # the goals seen from this entry's base pose
+                P_rel, R_rel = _seen_from(q[:6], pt, Rt)
+                picks = self._nearest_per_goal(problem.goals, parts, P_rel, R_rel, 1, allowed)[:, 0]
+            else:  # the first composed start needs each goal's nearest entry; the next ones, one ranking per goal
+                if fixed is None or (j > 0 and fixed.shape[1] == 1):
+                    fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, 1 if j == 0 else k, allowed)
+                picks = fixed[:, j] if j < fixed.shape[1] else None
+            if picks is not None:
+                for (_, _, idx), e in zip(parts, picks, strict=True):
+                    q[idx] = self.Q[e, idx]
+                yield q
+                made += 1
+                if made >= k:
+                    return
+            entry = self.Q[row]
+            if base is not None:
+                entry = entry.copy()
+                entry[:6] = base
+            yield entry
+            made += 1
+            if made >= k:
+                return
+
+    def _base_from_goals(self, problem, parts) -> np.ndarray | None:
+        """The floating base's six entries (clipped into the search box) that put the first pose goal on a frame
+        only the floating base moves (the root link or a frame fixed to it: a quadruped's trunk) exactly on its
+        target; None when no goal is such."""
+        _, pt, Rt = problem.goal_stack()
+        for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
+            if goal.has_orientation and idx.size == 0:
+                s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
+                p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
+                R = Rt[g] @ R_f.T
+                base = np.concatenate([pt[g] - R @ p_f, rpy(R)[0, ::-1]])  # x, y, z, yaw, pitch, roll
+                return np.minimum(np.maximum(base, problem.lower[:6]), problem.upper[:6])
+        return None
+
+    def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per goal (cached per frame list, kinds and weights): the table's features of its frame's pose relative to
+        the root link (a floating base's six entries set to zero), their squared norms, and the indices of the
+        entries of q (the floating base's excepted) that move the frame."""
+        key = ("parts",) + tuple((g.frame, g.has_orientation, g.weight) for g in goals)
+        hit = self._goal_features.get(key)
+        if hit is None:
+            robot = self._robot
+            Q = self.Q
+            if robot.floating_base:
+                Q = Q.copy()
+                Q[:, :6] = 0.0
+            P, R = robot.fk_batch(Q, validate=False, frames=[g.frame for g in goals])
+            names = list(robot.joint_names)
+            first = 6 if robot.floating_base else 0
+            hit = []
+            for g, goal in enumerate(goals):
+                F = np.concatenate(self._goal_feature_blocks([goal], P[:, g][None], R[:, g][None]), axis=1)
+                idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first],
+                               dtype=np.intp)
+                hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
+            if len(self._goal_features) > 8:
+                self._goal_features.clear()
+            self._goal_features[key] = hit
+        return hit
+
+    def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
+                          allowed: np.ndarray | None) -> np.ndarray:
+        """(G, <= k) indices of the table entries nearest, goal by goal, to targets pt (G, 3), Rt (G, 3, 3) of the
+        frames' poses relative to the root link, nearest first."""
+        out = []
+        k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
+        for g, (F, sq, _) in enumerate(parts):
+            f = np.concatenate(self._goal_feature_blocks([goals[g]], pt[g][None, None], Rt[g][None, None]),
+                               axis=1)[0]
+            d = sq - 2.0 * (F @ f)
+            if allowed is not None:
+                d = np.where(allowed, d, np.inf)
+            if k == 1:
+                out.append([int(d.argmin())])
+                continue
+            part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+            out.append(part[d[part].argsort()])
+        return np.array(out, dtype=np.intp).reshape(len(parts), -1)
+
+    def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
+        """(features (size, d), squared norms (size,)) of the goals' frames over the table (:meth:`ranked_goals`),
+        cached per frame list, kinds and weights."""
+        key = tuple((g.frame, g.has_orientation, g.weight) for g in goals)
+        hit = self._goal_features.get(key)
+        if hit is None:
+            P, R = self._robot.fk_batch(self.Q, validate=False, frames=[g.frame for g in goals])
+            F = np.concatenate(self._goal_feature_blocks(goals, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)),
+                               axis=1)
+            if len(self._goal_features) > 8:
+                self._goal_features.clear()
+            hit = self._goal_features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
+        return hit
+
+    def _goal_feature_blocks(self, goals, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
+        """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3): ``sqrt(weight_g)``
+        times the position and, for a goal with orientation, ``self.weight`` times the rotation's entries."""
+        out = []
+        for g, goal in enumerate(goals):
+            s = np.sqrt(goal.weight)
+            out.append(s * P[g])
+            if goal.has_orientation:
+                out.append((s * self.weight) * R[g].reshape(-1, 9))
+        return out
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
@@ -208,6 +351,13 @@ class SeedTable:
             return np.zeros((N, 0), dtype=np.intp)
         _, idx = tree.query(f, k=k, eps=eps)
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
+
+
+def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Targets pt (G, 3), Rt (G, 3, 3) in the world seen from a floating base's pose (its six entries: x, y, z m,
+    yaw, pitch, roll rad; rotation ``Rz(yaw) Ry(pitch) Rx(roll)``): ``B^-1 T`` per target."""
+    R0 = pin.rpy.rpyToMatrix(base[5], base[4], base[3])
+    return (pt - base[:3]) @ R0, np.einsum("ji,gjk->gik", R0, Rt)
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
