@@ -217,3 +217,13 @@ def test_results_are_a_lazy_sequence_with_the_same_answers_as_arrays(panda, mixe
     from_objects = ev.solve_many(panda, [pin.SE3(T) for T in H], seed=3, workers=1, **BUDGET)
     same(from_array, from_objects)
     assert from_array.success.all()
+
+
+def test_table_seeds_none_is_memetics_default():
+    """table_seeds=None means memetic's own default (17 for a target), in solve_many as in solve."""
+    robot = ev.load_robot("panda")
+    rng = np.random.default_rng(3)
+    poses = np.array([robot.fk(q).homogeneous for q in robot.random_configurations(20, rng)])
+    a = ev.solve_many(robot, poses, seed=1, workers=1, table_seeds=None, timeout=None, max_restarts=2)
+    b = ev.solve_many(robot, poses, seed=1, workers=1, timeout=None, max_restarts=2)
+    assert np.array_equal(a.q, b.q) and np.array_equal(a.success, b.success)

@@ -139,20 +139,15 @@ class GoalTree:
         from scipy.spatial import cKDTree
 
         self.table = table
-        self.scale = stack.spec[:, G_WEIGHT]  # the square roots of the goals' weights
-        self.oriented = stack.oriented
-        P, R = robot.fk_batch(table.Q, validate=False, frames=list(stack.frames))
+        # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
+        self.spec = tuple(zip(stack.spec[:, G_WEIGHT].tolist(), (bool(o) for o in stack.oriented), strict=True))
+        F, _ = table.goal_table_features(tuple(stack.frames), self.spec)
         self.index = np.arange(table.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
-        self.tree = cKDTree(self.features(P[self.index], R[self.index]))
+        self.tree = cKDTree(F[self.index])
 
     def features(self, P: np.ndarray, R: np.ndarray) -> np.ndarray:
         """Features (N, d) of the goal frames' poses: positions P (N, G, 3) m, rotations R (N, G, 3, 3)."""
-        cols = []
-        for g, s in enumerate(self.scale):
-            cols.append(s * P[:, g])
-            if self.oriented[g]:
-                cols.append((s * self.table.weight) * R[:, g].reshape(-1, 9))
-        return np.concatenate(cols, axis=1)
+        return self.table.goal_features(self.spec, P, R)
 
     def nearest(self, arrays: GoalArrays, k: int, eps: float = 0.0) -> np.ndarray:
         """Indices (N, k) of the table entries nearest to each problem, nearest first (k capped at the entries

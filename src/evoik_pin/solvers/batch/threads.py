@@ -178,7 +178,8 @@ class BatchSolver:
 
         table_size = solver_options.get("table_size")  # checked by check_call
         table_size = default_table_size(self.robot.n) if table_size is None else int(table_size)
-        rounds = min(int(solver_options.get("table_seeds", DEFAULT_TABLE_SEEDS)), table_size)
+        table_seeds = solver_options.get("table_seeds")  # None: memetic's default
+        rounds = min(DEFAULT_TABLE_SEEDS if table_seeds is None else int(table_seeds), table_size)
         self.engine = solver_options.get("engine", "compiled")
         if self.engine == "compiled":
             compiled_kernel()  # loaded once here, not by racing threads
@@ -281,8 +282,12 @@ class BatchSolver:
     def _one_by_one(self, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int) -> None:
         """The targets of a chunk the batched rounds left (all of them for other methods), ``{row: target}``, one
         by one: the per-target solver with the call's options and each target's own generator."""
-        extra = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
+        # A target's rounds tried its `rounds` nearest table entries: memetic skips them. A goal list's starts are
+        # composed ones and ranked entries alternately (SeedTable.goal_starts), and the rounds tried ranked entries
+        # only, so its fallback starts from the first composed start (offset 0).
+        offset_of = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
         for i, target in targets.items():
+            extra = {"table_offset": 0} if self.batched and is_goal_list(target) else offset_of
             out.set_single(i, self._one(target, None if Q0 is None else Q0[i], offset + i, extra))
 
     def _one(self, target: Target, q0, index: int, extra: dict) -> Result:

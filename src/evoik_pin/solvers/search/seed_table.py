@@ -124,7 +124,7 @@ class SeedTable:
         goals = problem.goals
         F, sq = self._goal_table_features(goals)
         _, pt, Rt = problem.goal_stack()
-        f = np.concatenate(self._goal_feature_blocks(goals, pt[:, None], Rt[:, None]), axis=1)[0]
+        f = np.concatenate(self._goal_feature_blocks(self.goal_spec(goals), pt[:, None], Rt[:, None]), axis=1)[0]
         d = sq - 2.0 * (F @ f)
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
@@ -230,7 +230,8 @@ class SeedTable:
             first = 6 if robot.floating_base else 0
             hit = []
             for g, goal in enumerate(goals):
-                F = np.concatenate(self._goal_feature_blocks([goal], P[:, g][None], R[:, g][None]), axis=1)
+                F = np.concatenate(self._goal_feature_blocks(self.goal_spec([goal]), P[:, g][None], R[:, g][None]),
+                                   axis=1)
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first],
                                dtype=np.intp)
                 hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
@@ -246,8 +247,8 @@ class SeedTable:
         out = []
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
         for g, (F, sq, _) in enumerate(parts):
-            f = np.concatenate(self._goal_feature_blocks([goals[g]], pt[g][None, None], Rt[g][None, None]),
-                               axis=1)[0]
+            spec = self.goal_spec([goals[g]])
+            f = np.concatenate(self._goal_feature_blocks(spec, pt[g][None, None], Rt[g][None, None]), axis=1)[0]
             d = sq - 2.0 * (F @ f)
             if allowed is not None:
                 d = np.where(allowed, d, np.inf)
@@ -259,29 +260,42 @@ class SeedTable:
         return np.array(out, dtype=np.intp).reshape(len(parts), -1)
 
     def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
-        """(features (size, d), squared norms (size,)) of the goals' frames over the table (:meth:`ranked_goals`),
-        cached per frame list, kinds and weights."""
-        key = tuple((g.frame, g.has_orientation, g.weight) for g in goals)
+        """:meth:`goal_table_features` of a goal list."""
+        return self.goal_table_features(tuple(g.frame for g in goals), self.goal_spec(goals))
+
+    def goal_table_features(self, frames, spec) -> tuple[np.ndarray, np.ndarray]:
+        """(features (size, d), squared norms (size,)) of the goal frames ``frames`` over the table
+        (:meth:`ranked_goals`, the batch engine's k-d tree), cached per frames and ``spec`` (:meth:`goal_spec`)."""
+        key = (tuple(frames), tuple(spec))
         hit = self._goal_features.get(key)
         if hit is None:
-            P, R = self._robot.fk_batch(self.Q, validate=False, frames=[g.frame for g in goals])
-            F = np.concatenate(self._goal_feature_blocks(goals, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)),
-                               axis=1)
+            P, R = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
+            F = self.goal_features(spec, P, R)
             if len(self._goal_features) > 8:
                 self._goal_features.clear()
             hit = self._goal_features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
         return hit
 
-    def _goal_feature_blocks(self, goals, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
+    @staticmethod
+    def goal_spec(goals) -> tuple[tuple[float, bool], ...]:
+        """Per goal, (sqrt(weight), has orientation): what the goal features depend on besides the frames."""
+        return tuple((float(np.sqrt(g.weight)), bool(g.has_orientation)) for g in goals)
+
+    def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
         """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3): ``sqrt(weight_g)``
-        times the position and, for a goal with orientation, ``self.weight`` times the rotation's entries."""
+        times the position and, for a goal with orientation, ``self.weight`` times the rotation's entries
+        (``spec``: :meth:`goal_spec`). Their Euclidean distance is memetic's goal metric."""
         out = []
-        for g, goal in enumerate(goals):
-            s = np.sqrt(goal.weight)
+        for g, (s, oriented) in enumerate(spec):
             out.append(s * P[g])
-            if goal.has_orientation:
+            if oriented:
                 out.append((s * self.weight) * R[g].reshape(-1, 9))
         return out
+
+    def goal_features(self, spec, P: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """Features (N, d) of N poses of G goal frames, positions P (N, G, 3) m and rotations R (N, G, 3, 3)
+        (``spec``: :meth:`goal_spec`): what :meth:`goal_table_features` holds for the table's entries."""
+        return np.concatenate(self._goal_feature_blocks(spec, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)), axis=1)
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
