@@ -80,7 +80,8 @@ def connect(address: str | None = None, workers: int | None = None):
 
     ``address`` (else ``RAY_ADDRESS``): connect to that cluster (``"auto"``: the one running on this machine); an
     address nothing answers at is a BackendError at once, even when Ray is already initialized. Without one: an
-    already initialized Ray is kept, else a local instance with ``workers`` CPUs (default every core) is started.
+    already initialized Ray is kept, else a local instance with ``workers`` CPUs (default every core) is started,
+    its workers at normal priority (``RAY_worker_niceness`` 0 unless set).
     """
     ray = import_ray()
     address = address or os.environ.get("RAY_ADDRESS") or None
@@ -91,6 +92,10 @@ def connect(address: str | None = None, workers: int | None = None):
     kwargs = {"log_to_driver": False, "configure_logging": False}
     try:
         if address is None:
+            # Ray starts its workers at nice 15; the workers of a local instance started for this call do the call's
+            # work, so they run at the caller's priority (beside any other busy process they starved: minutes for a
+            # few thousand poses). RAY_worker_niceness set by the user wins.
+            os.environ.setdefault("RAY_worker_niceness", "0")
             ray.init(num_cpus=check_workers(workers), include_dashboard=False, **kwargs)
         else:
             ray.init(address=address, **kwargs)
