@@ -61,7 +61,7 @@ from .errors import FrameError, GoalsFileError, OptionError, TargetError
 from .goals import DEFAULT_GOAL_TOLERANCE, Goal, Pose, Position, bind, is_goal_list
 from .target import Target
 
-__all__ = ["GOAL_KINDS", "GoalsFile", "load_goals", "load_problems", "read_goals_file", "save_goals"]
+__all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
 
 _TOP_KEYS = ("robot", "floating_base", "tips", "goals", "problems")
 #: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
@@ -347,3 +347,8 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
         data["goals"] = lists[0]
     header = "# evoik_pin goals (m and rad, in the robot's base frame; format: evoik_pin/goals_file.py)\n"
     return write_text(path, dump_data(data, fmt, header), "goals file", GoalsFileError)
+
+
+def goal_kind_name(goal: Goal) -> str:
+    """The ``kind:`` a goals file writes for ``goal`` (``"pose"``, ``"position"``)."""
+    return _kind_of(goal)[0]
