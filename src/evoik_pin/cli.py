@@ -332,22 +332,9 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
         "reached_position_m": [float(v) for v in reached.translation],
         "reached_rpy_deg": [float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))],
-        "position_error_m": res.position_error,
-        "orientation_error_rad": res.orientation_error,
-        "cost": res.cost,
-        "generations": res.generations,
-        "evaluations": res.evaluations,
-        "time_s": res.time_s,
-        "seed": args.seed,
+        **_answer_fields(args, res),
     }
-    if scene is not None:
-        info.update(_collision_info(args, scene, margin, res))
-    if args.json:
-        print(json.dumps(info, indent=2))
-    else:
-        _print_solution(robot, res, info, args.rad)
-        if scene is not None:
-            _print_collisions(info)
+    _report(args, robot, res, info, scene, margin)
     if html is not None or args.view:
         _view_solution(robot, res, Target.coerce(target), html, args.view, scene=scene, margin=margin)
     return 0 if res.success else 1
@@ -416,23 +403,9 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
         "q_deg": [float(v) for v in _shown(robot, res.q, False)],
         "q_pinocchio": [float(v) for v in robot.full_configuration(res.q)],
         "goal_errors": rows,
-        "position_error_m": res.position_error,
-        "orientation_error_rad": res.orientation_error,
-        "cost": res.cost,
-        "generations": res.generations,
-        "evaluations": res.evaluations,
-        "time_s": res.time_s,
-        "seed": args.seed,
+        **_answer_fields(args, res),
     }
-    if scene is not None:
-        info.update(_collision_info(args, scene, margin, res))
-    if args.json:
-        print(json.dumps(info, indent=2))
-    else:
-        _print_solution(robot, res, info, args.rad)
-        _print_goal_errors(rows)
-        if scene is not None:
-            _print_collisions(info)
+    _report(args, robot, res, info, scene, margin, rows)
     if html is not None:
         from .viz import save_solution_html
 
@@ -444,6 +417,27 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
             viewer.show_solution(res, goals, scene=scene, margin=margin)
             viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
     return 0 if res.success else 1
+
+
+def _answer_fields(args: argparse.Namespace, res) -> dict:
+    """The JSON fields every ``evoik solve`` answer ends with: its errors (m, rad), cost, effort and seed."""
+    return {"position_error_m": res.position_error, "orientation_error_rad": res.orientation_error, "cost": res.cost,
+            "generations": res.generations, "evaluations": res.evaluations, "time_s": res.time_s, "seed": args.seed}
+
+
+def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
+    """Print a solve's answer: ``info`` as JSON with ``--json`` (plus the scene's verdict), else as text, with one
+    line per goal of ``goal_rows`` and the scene's verdict."""
+    if scene is not None:
+        info.update(_collision_info(args, scene, margin, res))
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return
+    _print_solution(robot, res, info, args.rad)
+    if goal_rows is not None:
+        _print_goal_errors(goal_rows)
+    if scene is not None:
+        _print_collisions(info)
 
 
 def _print_goal_errors(rows: list[dict]) -> None:
