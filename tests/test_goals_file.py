@@ -12,8 +12,7 @@ from hypothesis import strategies as st
 
 from evoik_pin.errors import EvoikError, GoalsFileError
 from evoik_pin.goals import Pose, Position
-from evoik_pin.goals_file import (GOAL_KINDS, goal_kind_name, load_goals, load_problems, read_goals_file,
-                                  save_goals)
+from evoik_pin.goals_file import GOAL_KINDS, goal_kind_name, load_goals, load_problems, read_goals_file, save_goals
 from evoik_pin.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
