@@ -17,7 +17,7 @@ import warnings
 
 import numpy as np
 
-from .errors import EvoikError, OptionError, RobotLoadWarning
+from .errors import EvoikError, GoalsFileError, OptionError, RobotLoadWarning
 from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS, load_robot
 
 
@@ -25,6 +25,11 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("robot", help="bundled or example-robot-data name, or a URDF or xacro path")
     p.add_argument("--tip", help="tip frame (default: the arm's tool frame)")
     p.add_argument("--base", help="base frame (default: the URDF root)")
+    p.add_argument("--tips", nargs="+", metavar="FRAME", help="frames whose chains from the base are the active "
+                   "joints (their union), e.g. both grippers of a dual-arm robot; 'all' for every joint (what whole "
+                   "robots loaded by name get by default)")
+    p.add_argument("--floating-base", action="store_true", help="put a free-flying root in front of the URDF's "
+                   "root link: six more joints at the front of q (x, y, z in m; yaw, pitch, roll), poses in the world")
     p.add_argument("--xacro-arg", action="append", default=[], metavar="NAME=VALUE",
                    help="a <xacro:arg> value of a xacro file (repeatable); NAME:=VALUE also works")
     p.add_argument("--package-dir", action="append", default=[], metavar="DIR",
@@ -32,15 +37,36 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
                         "searched before ROS_PACKAGE_PATH and the file's own tree (repeatable)")
 
 
-def _load(args: argparse.Namespace):
+def _load(args: argparse.Namespace, goals_file=None):
+    """The robot of the robot arguments; with a goals file (:class:`~evoik_pin.goals_file.GoalsFile`), its
+    ``floating_base`` and ``tips`` fill in the flags not given, and a value given both ways that differs (the
+    file's ``robot`` another than ROBOT, ``--floating-base`` on a file saying false, other ``--tips``) is an
+    error naming the flag and the file."""
     xacro_args = {}
     for item in args.xacro_arg:
         name, sep, value = item.partition(":=") if ":=" in item else item.partition("=")
         if not sep or not name:
             raise OptionError(f"--xacro-arg needs NAME=VALUE, got {item!r}")
         xacro_args[name] = value
-    return load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None,
-                      package_dirs=args.package_dir or None)
+    tips = args.tips[0] if args.tips == ["all"] else args.tips
+    floating_base = args.floating_base
+    if goals_file is not None:
+        where = f"goals file {str(goals_file.path)!r}"
+        if goals_file.floating_base is not None:
+            if floating_base and not goals_file.floating_base:
+                raise GoalsFileError(f"--floating-base: {where} says floating_base: false")
+            floating_base = goals_file.floating_base
+        if goals_file.tips is not None:
+            if tips is not None and list(args.tips) != goals_file.tips:
+                raise GoalsFileError(f"--tips {' '.join(args.tips)}: {where} says tips: {goals_file.tips}; give "
+                                     "the same frames or leave --tips out")
+            tips = goals_file.tips[0] if goals_file.tips == ["all"] else goals_file.tips
+    robot = load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None,
+                       package_dirs=args.package_dir or None, tips=tips, floating_base=floating_base)
+    if goals_file is not None and goals_file.robot not in (None, args.robot, robot.name):
+        raise GoalsFileError(f"goals file {str(goals_file.path)!r} is for robot {goals_file.robot!r}, not "
+                             f"{args.robot!r}: give ROBOT {goals_file.robot} or change the file's robot:")
+    return robot
 
 
 def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
@@ -232,13 +258,15 @@ def _cmd_robots(args: argparse.Namespace) -> int:
     return 0
 
 
-def _pose_dict(robot, q) -> dict:
+def _pose_dict(robot, q, frame: str | None = None) -> dict:
+    """The pose of ``frame`` (default: the tip) at ``q``, as ``evoik fk --json`` prints it."""
     import pinocchio as pin
 
-    T = robot.fk(q)
+    T = robot.fk(q, frame=frame)
     return {
         "robot": robot.name,
         "tip": robot.tip,
+        "frame": frame or robot.tip,
         "base": robot.base,
         "q_rad": [float(v) for v in q],
         "position_m": [float(v) for v in T.translation],
@@ -250,11 +278,12 @@ def _pose_dict(robot, q) -> dict:
 def _cmd_fk(args: argparse.Namespace) -> int:
     robot = _load(args)
     q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
-    info = _pose_dict(robot, q)
+    info = _pose_dict(robot, q, args.frame)
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
-    print(f"{robot.name}: {robot.n} joints, base {robot.base!r} -> tip {robot.tip!r}")
+    what = f"tip {robot.tip!r}" if args.frame is None else f"frame {args.frame!r}"
+    print(f"{robot.name}: {robot.n} joints, base {robot.base!r} -> {what}")
     unit = "rad" if args.rad else "deg"
     shown = _shown(robot, q, args.rad)
     print(f"q ({unit}):        " + " ".join(f"{v:.4f}" for v in shown))
@@ -273,11 +302,14 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from .problem import Target
     from .solvers import get_solver, methods
 
-    robot = _load(args)
+    goals_file = _goals_arg(args)
+    robot = _load(args, goals_file)
     html = check_output_file(args.html) if args.html else None  # before any work starts
     scene, margin = _load_scene(args, robot)
     method = args.method or (DEFAULT_ALL_METHOD if args.all else DEFAULT_METHOD)
     get_solver(method)  # an unknown method is named before its options are checked
+    if goals_file is not None:
+        return _solve_goals(args, robot, goals_file, method, html, scene, margin)
     pool = [m for m in methods() if get_solver(m).multi_solution or not args.all]
     options = _call_options(args, robot, method, pool)
     position = np.asarray(args.xyz, dtype=float)
@@ -300,25 +332,122 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
         "reached_position_m": [float(v) for v in reached.translation],
         "reached_rpy_deg": [float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))],
-        "position_error_m": res.position_error,
-        "orientation_error_rad": res.orientation_error,
-        "cost": res.cost,
-        "generations": res.generations,
-        "evaluations": res.evaluations,
-        "time_s": res.time_s,
-        "seed": args.seed,
+        **_answer_fields(args, res),
     }
+    _report(args, robot, res, info, scene, margin)
+    if html is not None or args.view:
+        _view_solution(robot, res, Target.coerce(target), html, args.view, scene=scene, margin=margin)
+    return 0 if res.success else 1
+
+
+def _goals_arg(args: argparse.Namespace):
+    """The :class:`~evoik_pin.goals_file.GoalsFile` of ``--goals FILE`` (None without it), after checking that
+    the target is given one way: ``--goals`` or ``--xyz`` (with ``--rpy``), and that no flag of a one-target
+    solve comes with it."""
+    if args.goals is None:
+        if args.xyz is None:
+            raise OptionError("evoik solve needs a target: --xyz X Y Z (m; with --rpy R P Y in degrees for a pose) "
+                              "or --goals FILE (a goals file: frames, kinds, targets)")
+        return None
+    given = [flag for flag, value in (("--xyz", args.xyz), ("--rpy", args.rpy)) if value is not None]
+    if given:
+        raise OptionError(f"--goals and {'/'.join(given)}: give the targets one way, --goals FILE (every goal in "
+                          "the file) or --xyz X Y Z [--rpy R P Y] (one target for the tip)")
+    if args.all:
+        raise OptionError("--all and --goals: --all (solve_all) takes one target for the tip (--xyz/--rpy); a goal "
+                          "list is solved for one answer")
+    for flag, value in (("--tolerance", args.tolerance), ("--rotation-tolerance", args.rotation_tolerance)):
+        if value is not None:
+            raise OptionError(f"{flag} and --goals: each goal has its own tolerances, the goals file's tolerance: "
+                              "(m) and rotation_tolerance: (rad) of the goal (default 1e-6)")
+    from .goals_file import read_goals_file
+
+    goals_file = read_goals_file(args.goals)
+    if goals_file.several:
+        raise GoalsFileError(f"goals file {args.goals!r} holds {len(goals_file.problems)} problems (problems:); "
+                             "evoik solve solves one goal list (goals:): in Python, evoik_pin.goals_file."
+                             "load_problems with solve_many or solve_trajectory")
+    return goals_file
+
+
+def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html, scene, margin: float) -> int:
+    """``evoik solve ROBOT --goals FILE``: one answer meeting every goal of the file; each goal's errors printed
+    (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
+    from .api import GOAL_METHODS, solve
+    from .goals_file import goal_kind_name
+
+    goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
+    options = _call_options(args, robot, method, list(GOAL_METHODS))
+    for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
+        args.typed_flags.pop(phrase, None)
+    if scene is not None:
+        options.update(scene=scene, margin=margin)
+    goals = goals_file.problems[0]
+    res = solve(robot, goals, method=method, seed=args.seed, **options)
+    rows = []
+    for goal, (pos, rot) in zip(goals, res.goal_errors, strict=True):
+        rows.append({"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos,
+                     "rotation_error_rad": rot, "met": bool(goal.met(pos, rot)),
+                     "tolerance_m": goal.tolerance,
+                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.has_orientation else None,
+                     "weight": goal.weight})
+    info = {
+        "robot": robot.name,
+        "floating_base": robot.floating_base,
+        "method": res.method or method,
+        "success": bool(res.success),
+        "message": res.message,
+        "goals_file": str(args.goals),
+        "joint_names": list(robot.joint_names),
+        "q_rad": [float(v) for v in res.q],
+        "q_deg": [float(v) for v in _shown(robot, res.q, False)],
+        "q_pinocchio": [float(v) for v in robot.full_configuration(res.q)],
+        "goal_errors": rows,
+        **_answer_fields(args, res),
+    }
+    _report(args, robot, res, info, scene, margin, rows)
+    if html is not None:
+        from .viz import save_solution_html
+
+        print(f"wrote {save_solution_html(robot, res, goals, html, scene=scene, margin=margin)}", file=sys.stderr)
+    if args.view:
+        from .viz import Viewer
+
+        with Viewer(robot) as viewer:
+            viewer.show_solution(res, goals, scene=scene, margin=margin)
+            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+    return 0 if res.success else 1
+
+
+def _answer_fields(args: argparse.Namespace, res) -> dict:
+    """The JSON fields every ``evoik solve`` answer ends with: its errors (m, rad), cost, effort and seed."""
+    return {"position_error_m": res.position_error, "orientation_error_rad": res.orientation_error, "cost": res.cost,
+            "generations": res.generations, "evaluations": res.evaluations, "time_s": res.time_s, "seed": args.seed}
+
+
+def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
+    """Print a solve's answer: ``info`` as JSON with ``--json`` (plus the scene's verdict), else as text, with one
+    line per goal of ``goal_rows`` and the scene's verdict."""
     if scene is not None:
         info.update(_collision_info(args, scene, margin, res))
     if args.json:
         print(json.dumps(info, indent=2))
-    else:
-        _print_solution(robot, res, info, args.rad)
-        if scene is not None:
-            _print_collisions(info)
-    if html is not None or args.view:
-        _view_solution(robot, res, Target.coerce(target), html, args.view, scene=scene, margin=margin)
-    return 0 if res.success else 1
+        return
+    _print_solution(robot, res, info, args.rad)
+    if goal_rows is not None:
+        _print_goal_errors(goal_rows)
+    if scene is not None:
+        _print_collisions(info)
+
+
+def _print_goal_errors(rows: list[dict]) -> None:
+    """One line per goal: frame, kind, position error (m), rotation error (rad, or "free"), met."""
+    width = max(len("frame"), *(len(r["frame"]) for r in rows))
+    print(f"  #  {'frame':{width}s}  kind      position error (m)  rotation error (rad)  met")
+    for k, r in enumerate(rows):
+        rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
+        print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:8s}  {r['position_error_m']:<18.3e}  {rot:<20s}  "
+              f"{'yes' if r['met'] else 'NO'}")
 
 
 def _load_scene(args: argparse.Namespace, robot):
@@ -516,13 +645,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
                    "--rad; prismatic joints in m)")
     p.add_argument("--rad", action="store_true", help="joint values in radians")
+    p.add_argument("--frame", metavar="NAME", help="the frame whose pose is printed: any frame of the robot (link, "
+                   "joint or fixed frame; default the tip)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=_cmd_fk)
 
-    p = sub.add_parser("solve", help="inverse kinematics for one target (exit status 1 when not reached)")
+    p = sub.add_parser("solve", help="inverse kinematics for one target or a goals file (exit status 1 when not "
+                       "reached)")
     _add_robot_args(p)
-    p.add_argument("--xyz", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"),
+    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"),
                    help="target tip position in metres, in the base frame")
+    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.goals_file): several "
+                   "goals on any frames (pose or position, weights, tolerances), instead of --xyz/--rpy; the output "
+                   "gives each goal's errors and whether it is met; exit 1 when one is not")
     p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
                    help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")
     p.add_argument("--method", help="solver (evoik_pin.methods(); default: the memetic solver)")

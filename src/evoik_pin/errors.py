@@ -82,3 +82,9 @@ class SceneError(EvoikError, ValueError):
 class BackendError(EvoikError, RuntimeError):
     """A compute backend that cannot be used: Ray not installed (``pip install 'evoik_pin[ray]'``), a cluster
     address that cannot be reached, or a chunk of work that failed on every attempt."""
+
+
+class GoalsFileError(EvoikError, ValueError):
+    """A goals file (:mod:`evoik_pin.goals_file`) that cannot be read or used: it does not parse, a goal has an
+    unknown kind, a missing or bad field, or the file was written for another robot than the one it is used with.
+    The message names the file, the goal (its index from 0, and its frame) and the field."""

@@ -33,7 +33,6 @@ relative to the file's folder when the mesh lies below it); reading it back give
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass
@@ -42,13 +41,14 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..datafile import DATA_SUFFIXES, Flow, data_format, dump_data, read_data, write_text
 from ..errors import SceneError
 from .geometry import as_placement
 
 __all__ = ["SCENE_SUFFIXES", "SceneFile", "read_scene", "write_scene"]
 
 #: File extensions and the format each selects.
-SCENE_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
+SCENE_SUFFIXES = DATA_SUFFIXES
 #: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional); the
 #: kinds are the Scene's (``scene.OBSTACLE_KINDS``; a test holds them equal).
 KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),
@@ -70,36 +70,7 @@ class SceneFile:
 
 
 def _format(path: Path) -> str:
-    fmt = SCENE_SUFFIXES.get(path.suffix.lower())
-    if fmt is None:
-        raise SceneError(f"scene file {str(path)!r}: unknown extension {path.suffix!r}; use "
-                         f"{', '.join(SCENE_SUFFIXES)} (YAML or JSON)")
-    return fmt
-
-
-def _parse(path: Path, text: str):
-    """The file's data (dicts, lists, numbers, strings); SceneError with the line of a syntax error."""
-    where = f"scene file {str(path)!r}"
-    if _format(path) == "json":
-        try:
-            return json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise SceneError(f"{where}: JSON syntax error at line {exc.lineno}, column {exc.colno}: "
-                             f"{exc.msg}") from None
-    import yaml
-
-    try:
-        return yaml.safe_load(text)
-    except yaml.MarkedYAMLError as exc:
-        mark, begun = exc.problem_mark or exc.context_mark, exc.context_mark
-        at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        context = exc.context
-        if context and begun is not None and begun is not mark:
-            context += f" (begun at line {begun.line + 1}, column {begun.column + 1})"
-        what = ": ".join(filter(None, [context, exc.problem]))
-        raise SceneError(f"{where}: YAML syntax error{at}: {what}") from None
-    except yaml.YAMLError as exc:
-        raise SceneError(f"{where}: YAML error: {exc}") from None
+    return data_format(path, f"scene file {str(path)!r}", SceneError)
 
 
 def _number(value, what: str, positive: bool = False) -> float:
@@ -180,14 +151,7 @@ def read_scene(path: str | os.PathLike) -> SceneFile:
     checked. SceneError naming the file, the obstacle and the problem."""
     path = Path(os.fspath(path)).expanduser()
     where = f"scene file {str(path)!r}"
-    _format(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError(f"{where}: not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"{where}: cannot read it: {exc}") from None
-    data = _parse(path, text)
+    data = read_data(path, where, SceneError)
     if data is None:
         raise SceneError(f"{where}: the file is empty; expected a mapping with an 'obstacles:' list")
     if not isinstance(data, dict):
@@ -217,10 +181,6 @@ def read_scene(path: str | os.PathLike) -> SceneFile:
     return SceneFile(path, self_collision, srdf, obstacles)
 
 
-class _Flow(dict):
-    """A mapping written on one line (a pose)."""
-
-
 def _clean(values) -> list[float]:
     """Plain floats, -0.0 written as 0.0."""
     return [float(v) + 0.0 for v in np.asarray(values, dtype=float).reshape(-1)]
@@ -246,24 +206,11 @@ def write_scene(scene, path: str | os.PathLike) -> Path:
             entry["scale"] = scale[0] if len(set(scale)) == 1 else scale
         else:
             entry.update({key: float(ob.params[key]) for key in KIND_KEYS[ob.kind][0]})
-        entry["pose"] = _Flow(xyz=_clean(ob.pose.translation), rpy=_clean(pin.rpy.matrixToRpy(ob.pose.rotation)))
+        entry["pose"] = Flow(xyz=_clean(ob.pose.translation), rpy=_clean(pin.rpy.matrixToRpy(ob.pose.rotation)))
         obstacles.append(entry)
     data["obstacles"] = obstacles
-    if fmt == "json":
-        text = json.dumps(data, indent=2) + "\n"
-    else:
-        import yaml
-
-        class Dumper(yaml.SafeDumper):
-            pass
-
-        Dumper.add_representer(_Flow, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True))
-        text = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
-        text += yaml.dump(data, Dumper=Dumper, sort_keys=False, default_flow_style=None)
-    try:
-        path.write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise SceneError(f"cannot write the scene file {str(path)!r}: {exc.strerror or exc}") from None
+    header = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
+    write_text(path, dump_data(data, fmt, header), "scene file", SceneError)
     return path
 
 

@@ -1,0 +1,354 @@
+"""Goals files: goal lists (:mod:`evoik_pin.goals`) as YAML or JSON (:func:`load_goals`, :func:`save_goals`).
+
+The format is chosen by the extension (``.yaml`` / ``.yml``, read with PyYAML's safe loader, or ``.json``).
+Positions in metres, in the robot's base frame (the URDF root; with a floating base, the world), as ``Pose`` and
+``Position`` take them::
+
+    robot: talos              # optional: what the file is for (see "The robot" below)
+    floating_base: true       # optional
+    tips: [left_sole_link, right_sole_link, arm_left_7_link, arm_right_7_link]   # optional
+    goals:
+      - frame: left_sole_link             # any frame of the robot (link, joint or fixed frame)
+        kind: pose                        # pose | position
+        target: {position: [0.0, 0.085, 0.0], rpy: [0, 0, 0]}      # rpy in degrees, R = Rz(y) Ry(p) Rx(r)
+      - frame: arm_left_7_link
+        kind: pose
+        target: {position: [0.26, 0.41, 0.94], rpy_rad: [0.7, -1.1, -0.65]}   # or rpy_rad: radians
+        weight: 0.5                       # optional, > 0 (default 1)
+        tolerance: 1e-5                   # optional, m (default 1e-6)
+        rotation_tolerance: 1e-4          # optional, rad (pose only; default: tolerance)
+      - frame: arm_right_7_link
+        kind: position
+        target: {position: [0.26, -0.41, 0.94]}
+      - frame: right_sole_link
+        kind: pose
+        target: {matrix: [[1, 0, 0, 0.0], [0, 1, 0, -0.085], [0, 0, 1, 0.0], [0, 0, 0, 1]]}   # or a 4 x 4 pose
+
+A pose's target is ``position`` with one of ``rpy`` (degrees, as ``evoik solve --rpy``) and ``rpy_rad``
+(radians), or a ``matrix`` (4 x 4 homogeneous, m) alone; a position's target is ``position`` alone. The top level
+may also be the bare list of goals. Numbers written ``1e-6`` (which YAML 1.1 reads as text) are read as numbers.
+Unknown keys are errors (a misspelt ``tolerence`` is not silently ignored). Every error is a
+:class:`~evoik_pin.errors.GoalsFileError` naming the file, the goal (index from 0, and frame) and the field.
+
+Several problems: ``problems:`` instead of ``goals:``, a list of goal lists (each a list of goals as above), for
+:func:`evoik_pin.solve_many` or, in time order, :func:`evoik_pin.solve_trajectory`; read them with
+:func:`load_problems` (which reads a ``goals:`` file as one problem). :func:`load_goals` reads one goal list and
+refuses a ``problems:`` file, so a file of several problems is never silently cut to its first.
+
+The robot: ``robot``, ``floating_base`` and ``tips`` say what the file was written for. :func:`load_goals` does not
+load robots; ``evoik solve ROBOT --goals FILE`` uses them to fill in the flags not given (``--floating-base``,
+``--tips``), and a value given both ways that differs (another ROBOT, ``--tips`` other frames) is an error naming
+the flag and the file: a goals file is not silently used on a robot it was not written for.
+
+:func:`save_goals` writes the same format: a pose's target as its exact ``matrix`` (floats written in full, so
+reading the file back gives the same targets bit for bit), a position's as ``position``; ``weight``,
+``tolerance`` and ``rotation_tolerance`` only where they differ from their defaults.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .datafile import Flow, data_format, dump_data, read_data, write_text
+from .errors import FrameError, GoalsFileError, OptionError, TargetError
+from .goals import DEFAULT_GOAL_TOLERANCE, Goal, Pose, Position, bind, is_goal_list
+from .target import Target
+
+__all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
+
+_TOP_KEYS = ("robot", "floating_base", "tips", "goals", "problems")
+#: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
+_NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
+
+
+@dataclass(frozen=True)
+class GoalsFile:
+    """What a goals file holds, checked: ``path``; ``robot`` (a name or None), ``floating_base`` (bool or None)
+    and ``tips`` (frame names or None) as the file gives them; ``problems``, its goal lists (one for a ``goals:``
+    file); ``several``: whether the file has ``problems:``."""
+
+    path: Path
+    robot: str | None
+    floating_base: bool | None
+    tips: list[str] | None
+    problems: list[list[Goal]]
+    several: bool
+
+    def bind(self, robot) -> None:
+        """Check every goal list against ``robot`` (:func:`evoik_pin.goals.bind`: frames that exist and that an
+        active joint moves, no frame with two targets); GoalsFileError naming this file and the goal."""
+        for p, goals in enumerate(self.problems):
+            try:
+                bind(robot, goals)
+            except (FrameError, TargetError) as exc:
+                where = self._where(p)
+                for i, g in enumerate(goals):  # the goal that fails alone, when one does (a clash needs two)
+                    try:
+                        bind(robot, [g])
+                    except (FrameError, TargetError):
+                        where = self._where(p, i, g.frame)
+                        break
+                raise GoalsFileError(f"{where}: {exc}") from None
+
+    def _where(self, problem: int | None = None, index: int | None = None, frame: str | None = None) -> str:
+        text = f"goals file {str(self.path)!r}"
+        if self.several and problem is not None:
+            text += f": problem {problem}"
+        if index is not None:
+            text += f"{',' if self.several else ':'} goal {index}" + (f" ({frame})" if frame else "")
+        return text
+
+
+# ------------------------------------------------------------------ reading
+def _number(value, what: str) -> float:
+    """A finite number (int, float, or YAML 1.1's text of one such as ``1e-6``; not a bool)."""
+    if isinstance(value, str) and _NUMBER_TEXT.fullmatch(value.strip()):
+        value = float(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise GoalsFileError(f"{what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _numbers(value, count: int, what: str) -> np.ndarray:
+    if not isinstance(value, list) or len(value) != count:
+        raise GoalsFileError(f"{what} must be a list of {count} numbers, got {value!r}")
+    return np.array([_number(v, f"{what}[{k}]") for k, v in enumerate(value)])
+
+
+def _unknown_keys(entry: dict, accepted, what: str) -> None:
+    unknown = [k for k in entry if k not in accepted]
+    if unknown:
+        raise GoalsFileError(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: "
+                             f"{', '.join(accepted)}")
+
+
+def _pose_target(target: dict) -> Target:
+    """A pose's target: ``matrix`` alone, or ``position`` with ``rpy`` (degrees) or ``rpy_rad``."""
+    _unknown_keys(target, ("position", "rpy", "rpy_rad", "matrix"), "target")
+    if "matrix" in target:
+        if len(target) > 1:
+            raise GoalsFileError(f"target: matrix is the whole pose; give it alone, not with "
+                                 f"{', '.join(k for k in target if k != 'matrix')}")
+        rows = target["matrix"]
+        if not isinstance(rows, list) or len(rows) != 4:
+            raise GoalsFileError(f"target.matrix must be 4 rows of 4 numbers (a homogeneous pose, m), got {rows!r}")
+        return Target.coerce(np.array([_numbers(row, 4, f"target.matrix row {k}") for k, row in enumerate(rows)]))
+    if "position" not in target:
+        raise GoalsFileError("target of a pose needs position: [x, y, z] (m) with rpy: [r, p, y] (degrees) or "
+                             "rpy_rad: (rad), or matrix: a 4 x 4 pose")
+    angles = [k for k in ("rpy", "rpy_rad") if k in target]
+    if len(angles) != 1:
+        raise GoalsFileError("target of a pose needs one of rpy: [r, p, y] (degrees) and rpy_rad: (rad) with its "
+                             f"position, got {'both' if angles else 'neither'}; for a position alone use kind: "
+                             "position")
+    rpy = _numbers(target[angles[0]], 3, f"target.{angles[0]}")
+    return Target.from_rpy(_numbers(target["position"], 3, "target.position (m)"),
+                           np.radians(rpy) if angles[0] == "rpy" else rpy)
+
+
+def _position_target(target: dict) -> np.ndarray:
+    if any(k in target for k in ("rpy", "rpy_rad", "matrix")):
+        raise GoalsFileError("target: a position goal has no orientation (rpy, rpy_rad, matrix); use kind: pose "
+                             "for one")
+    _unknown_keys(target, ("position",), "target")
+    if "position" not in target:
+        raise GoalsFileError("target of a position goal needs position: [x, y, z] (m)")
+    return _numbers(target["position"], 3, "target.position (m)")
+
+
+def _matrix_text(goal: Pose) -> dict:
+    return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
+
+
+def _position_text(goal: Position) -> dict:
+    return Flow(position=[float(v) + 0.0 for v in goal.target])
+
+
+@dataclass(frozen=True)
+class GoalKind:
+    """One ``kind:`` of a goals file: its goal class, the optional fields it takes (besides frame, kind and
+    target), how its ``target:`` mapping is read and how a goal's target is written."""
+
+    cls: type
+    fields: tuple[str, ...]
+    read_target: Callable[[dict], object]
+    write_target: Callable[[Goal], dict]
+
+
+#: The goal kinds a goals file takes, by their ``kind:`` name.
+GOAL_KINDS = {
+    "pose": GoalKind(Pose, ("weight", "tolerance", "rotation_tolerance"), _pose_target, _matrix_text),
+    "position": GoalKind(Position, ("weight", "tolerance"), _position_target, _position_text),
+}
+
+
+def _goal(entry, what: str) -> Goal:
+    if not isinstance(entry, dict):
+        raise GoalsFileError(f"{what}: expected a mapping with frame, kind and target, got {entry!r}")
+    frame = entry.get("frame")
+    if frame is not None:
+        what += f" ({frame})"
+    kind_name = entry.get("kind")
+    if kind_name not in GOAL_KINDS:
+        raise GoalsFileError(f"{what}: kind: " + ("missing" if kind_name is None else f"unknown kind {kind_name!r}")
+                             + f"; accepted kinds: {', '.join(GOAL_KINDS)}")
+    kind = GOAL_KINDS[kind_name]
+    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields), f"{what}, a {kind_name} goal")
+    for key in ("frame", "target"):
+        if key not in entry:
+            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target)")
+    if not isinstance(frame, str) or not frame:
+        raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
+    if not isinstance(entry["target"], dict):
+        raise GoalsFileError(f"{what}: target must be a mapping (position, rpy / rpy_rad, matrix), got "
+                             f"{entry['target']!r}")
+    try:
+        target = kind.read_target(entry["target"])
+    except (GoalsFileError, TargetError) as exc:
+        text = str(exc)
+        raise GoalsFileError(f"{what}: {text if text.startswith('target') else 'target: ' + text}") from None
+    options = {key: _number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
+    try:
+        return kind.cls(frame, target, **options)
+    except (OptionError, TargetError) as exc:
+        raise GoalsFileError(f"{what}: {exc}") from None
+
+
+def _goal_list(entries, what: str, several: bool) -> list[Goal]:
+    key = "each problem" if several else "goals"
+    if not isinstance(entries, list):
+        raise GoalsFileError(f"{what}: {key} must be a list of goals (frame, kind, target), got {entries!r}")
+    if not entries:
+        raise GoalsFileError(f"{what}: {key} is empty; give at least one goal (frame, kind, target)")
+    sep = ", " if several else ": "
+    return [_goal(entry, f"{what}{sep}goal {i}" if several else f"goal {i}") for i, entry in enumerate(entries)]
+
+
+def read_goals_file(path: str | os.PathLike) -> GoalsFile:
+    """Everything a goals file holds (format: the module docstring), checked; GoalsFileError naming the file,
+    the goal and the field. The goals' frames are checked against a robot by :meth:`GoalsFile.bind`."""
+    path = Path(os.fspath(path)).expanduser()
+    where = f"goals file {str(path)!r}"
+    data = read_data(path, where, GoalsFileError)
+    if data is None:
+        raise GoalsFileError(f"{where}: the file is empty; expected a goals: list (or problems:)")
+    if isinstance(data, list):
+        data = {"goals": data}
+    if not isinstance(data, dict):
+        raise GoalsFileError(f"{where}: the top level must be a mapping ({', '.join(_TOP_KEYS)}) or a list of "
+                             f"goals, got a {type(data).__name__}")
+    try:
+        _unknown_keys(data, _TOP_KEYS, "top level")
+        robot = data.get("robot")
+        if robot is not None and (not isinstance(robot, str) or not robot):
+            raise GoalsFileError(f"robot must be a robot name or URDF path, got {robot!r}")
+        floating_base = data.get("floating_base")
+        if floating_base is not None and not isinstance(floating_base, bool):
+            raise GoalsFileError(f"floating_base must be true or false, got {floating_base!r}")
+        tips = data.get("tips")
+        if tips is not None and (not isinstance(tips, list) or not tips
+                                 or not all(isinstance(t, str) and t for t in tips)):
+            raise GoalsFileError(f"tips must be a list of frame names, got {tips!r}")
+        if ("goals" in data) == ("problems" in data):
+            raise GoalsFileError("give one of goals: (a goal list) and problems: (a list of goal lists), got "
+                                 + ("both" if "goals" in data else "neither"))
+        several = "problems" in data
+        if several:
+            problems = data["problems"]
+            if not isinstance(problems, list) or not problems:
+                raise GoalsFileError(f"problems must be a non-empty list of goal lists, got {problems!r}")
+            problems = [_goal_list(goals, f"problem {p}", True) for p, goals in enumerate(problems)]
+        else:
+            problems = [_goal_list(data["goals"], "goals", False)]
+    except GoalsFileError as exc:
+        raise GoalsFileError(f"{where}: {exc}") from None
+    return GoalsFile(path, robot, floating_base, tips, problems, several)
+
+
+def load_goals(path: str | os.PathLike) -> list[Goal]:
+    """The goal list of the goals file ``path`` (YAML or JSON; format: the module docstring), ready for
+    ``evoik_pin.solve(robot, goals)``. GoalsFileError naming the file, the goal and the field; a file of several
+    problems (``problems:``) is refused: read it with :func:`load_problems`."""
+    spec = read_goals_file(path)
+    if spec.several:
+        raise GoalsFileError(f"goals file {str(spec.path)!r} holds {len(spec.problems)} problems (problems:): read "
+                             "them with load_problems (for solve_many / solve_trajectory)")
+    return spec.problems[0]
+
+
+def load_problems(path: str | os.PathLike) -> list[list[Goal]]:
+    """The goal lists of the goals file ``path``: those of its ``problems:``, or its ``goals:`` as one list, for
+    ``evoik_pin.solve_many(robot, problems)`` or ``solve_trajectory``."""
+    return read_goals_file(path).problems
+
+
+# ------------------------------------------------------------------ writing
+def _kind_of(goal) -> tuple[str, GoalKind]:
+    for name, kind in GOAL_KINDS.items():
+        if type(goal) is kind.cls:
+            return name, kind
+    raise GoalsFileError(f"cannot write a {type(goal).__name__} to a goals file; goals files take "
+                         f"{', '.join(k.cls.__name__ for k in GOAL_KINDS.values())}")
+
+
+def _entry(goal: Goal) -> dict:
+    name, kind = _kind_of(goal)
+    entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
+    defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
+    for key in kind.fields:
+        if getattr(goal, key) != defaults[key]:
+            entry[key] = float(getattr(goal, key))
+    return entry
+
+
+def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool | None = None,
+               tips: list[str] | None = None) -> Path:
+    """Write ``goals`` to the goals file ``path`` (YAML or JSON by the extension) and return the path;
+    :func:`load_goals` reads it back to the same goals (targets bit for bit).
+
+    Args:
+        goals: a goal list (written as ``goals:``), or a list of goal lists (``problems:``, read back by
+            :func:`load_problems`).
+        path: the file to write.
+        robot: optional, what the file is for: a robot name, or a :class:`~evoik_pin.robot.Robot` (its name, and
+            its ``floating_base`` unless given).
+        floating_base, tips: optional, written as the file's ``floating_base`` and ``tips``.
+    """
+    path = Path(os.fspath(path)).expanduser()
+    fmt = data_format(path, f"goals file {str(path)!r}", GoalsFileError)
+    goals = list(goals) if isinstance(goals, (list, tuple)) else goals
+    several = isinstance(goals, list) and bool(goals) and all(isinstance(g, (list, tuple)) for g in goals)
+    problems = [list(g) for g in goals] if several else [goals]
+    for p, problem in enumerate(problems):
+        if not is_goal_list(problem) or not problem:
+            what = f"problem {p}" if several else "goals"
+            raise GoalsFileError(f"save_goals: {what} must be a non-empty list of goals (Pose, Position) or a list "
+                                 f"of such lists, got {problem!r}")
+    data: dict = {}
+    if robot is not None:
+        data["robot"] = robot if isinstance(robot, str) else robot.name
+        if floating_base is None and not isinstance(robot, str):
+            floating_base = bool(robot.floating_base)
+    if floating_base is not None:
+        data["floating_base"] = bool(floating_base)
+    if tips is not None:
+        data["tips"] = [str(t) for t in tips]
+    lists = [[_entry(g) for g in problem] for problem in problems]
+    if several:
+        data["problems"] = lists
+    else:
+        data["goals"] = lists[0]
+    header = "# evoik_pin goals (m and rad, in the robot's base frame; format: evoik_pin/goals_file.py)\n"
+    return write_text(path, dump_data(data, fmt, header), "goals file", GoalsFileError)
+
+
+def goal_kind_name(goal: Goal) -> str:
+    """The ``kind:`` a goals file writes for ``goal`` (``"pose"``, ``"position"``)."""
+    return _kind_of(goal)[0]
