@@ -33,3 +33,12 @@ def thread_cpu_clock(monkeypatch):
         if name.startswith("evoik_pin") and getattr(module, "time", None) is time:
             monkeypatch.setattr(module, "time", clock)
     return clock
+
+
+@pytest.fixture(scope="module")
+def root_mirror(tmp_path_factory):
+    """A folder mirroring the repository's tracked top-level entries (docs_helpers.repo_mirror): the docs' and
+    examples' commands run there as from the root, and what they write lands outside the checkout."""
+    from docs_helpers import repo_mirror
+
+    return repo_mirror(tmp_path_factory.mktemp("repo"))

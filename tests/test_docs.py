@@ -16,7 +16,7 @@ import re
 import shlex
 
 import pytest
-from docs_helpers import ROOT, code_blocks, python_sections, repo_mirror, run_command, run_python_blocks
+from docs_helpers import ROOT, code_blocks, python_sections, run_command, run_python_blocks
 
 DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 SECTIONS = [(path, section, blocks) for path in DOCS for section, blocks in python_sections(path).items()]
@@ -49,10 +49,6 @@ def readme_commands() -> list[str]:
 
 COMMANDS = readme_commands()
 
-
-@pytest.fixture(scope="module")
-def root_mirror(tmp_path_factory):
-    return repo_mirror(tmp_path_factory.mktemp("repo"))
 
 
 def test_the_docs_have_python_sections_and_commands():

@@ -18,7 +18,7 @@ import re
 import shlex
 
 import pytest
-from docs_helpers import ROOT, repo_mirror, run_command
+from docs_helpers import ROOT, run_command
 
 EXAMPLES = ROOT / "examples"
 MARKED = re.compile(r"^\s*(?:#\s*)?\$ (.+)$")
@@ -48,10 +48,6 @@ def example_commands() -> list[tuple[str, str]]:
 
 COMMANDS = example_commands()
 
-
-@pytest.fixture(scope="module")
-def root_mirror(tmp_path_factory):
-    return repo_mirror(tmp_path_factory.mktemp("repo"))
 
 
 def test_every_example_file_names_its_commands():
