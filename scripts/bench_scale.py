@@ -148,11 +148,12 @@ def prange_kernel():
         from evoik_pin.solvers.lm.kernel import lm_run
 
         @njit(parallel=True, nogil=True, cache=True)
-        def run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts,
+        def run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                       params, Q_out, stats, g_stats):
             for i in prange(Q.shape[0]):
                 pos, rot, conv, it, ev_, c = lm_run(Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap,
-                                                    spec, gR, gp, support, P[i], Rts[i], params, Q_out[i], g_stats[i])
+                                                    spec, gR, gp, support, gaux, P[i], Rts[i], params, Q_out[i],
+                                                    g_stats[i])
                 stats[i, 0], stats[i, 1], stats[i, 2], stats[i, 3], stats[i, 4] = pos, rot, conv, it, ev_
                 stats[i, 5] = c
 
@@ -175,7 +176,7 @@ def kernel_options(robot, H, reps: int) -> dict:
     params = kernel_params(DEFAULT_ITERATIONS)
     stack = GoalStack.single(robot, KIND_POSE, 1e-6, 1e-6)
     tree = robot.tree_constants()
-    goals = (stack.spec, stack.R, stack.p, stack.support)
+    goals = stack.arrays
     P, Rts = P[:, None].copy(), Rts[:, None].copy()  # one goal per pair
     serial = lm_engine.compiled_kernel()["lm_run_pairs"]
     parallel = prange_kernel()

@@ -218,8 +218,8 @@ def _kernel_pairs(robot, kind, count, seed):
     _, any_wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
     stack = GoalStack.single(robot, target_kind(targets[0]), 1e-6, 1e-6)
     params = kernel_params(30)
-    return (np.ascontiguousarray(Q0), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R, stack.p,
-            stack.support, P[:, None].copy(), Rts[:, None].copy(), params)
+    return (np.ascontiguousarray(Q0), *robot.tree_constants(), box, any_wrap, *stack.arrays,
+            P[:, None].copy(), Rts[:, None].copy(), params)
 
 
 @pytest.mark.parametrize("name, kind", [("panda", "pose"), ("ur5", "pose"), ("ax18", "position"),

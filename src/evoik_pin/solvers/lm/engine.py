@@ -99,7 +99,7 @@ def compiled_kernel() -> dict:
                 np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
         spec = np.zeros((1, GOAL_SIZE))
         spec[0, :5] = KIND_POSE, 0, 1.0, 1e-6, 1e-6
-        goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool))
+        goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool), np.zeros((1, 1)))
         box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
         params = kernel_params(iterations=1)
         pt, Rt = np.zeros((1, 3)), np.eye(3)[None].copy()
@@ -164,7 +164,7 @@ class LevenbergMarquardt:
         self._reference = None
         self._kernel = compiled_kernel()
         self._tree = robot.tree_constants()  # the folded tree, how it follows q
-        self._goal_arrays = (stack.spec, stack.R, stack.p, stack.support)
+        self._goal_arrays = stack.arrays
         _, self._any_wrap, _, _, self._box = box_constants(robot, problem.lower, problem.upper)
         self._params = kernel_params(0, damping, max_step, stall_window, stall_ratio, finish)
         G = len(stack.kinds)
@@ -313,8 +313,8 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
     stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R,
-                 stack.p, stack.support, arrays.P[:, None], arrays.Rts[:, None], params, Q_out, stats,
+    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, *stack.arrays,
+                 arrays.P[:, None], arrays.Rts[:, None], params, Q_out, stats,
                  np.empty((N, 1, 2)))
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
@@ -330,8 +330,8 @@ def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upp
     stats = np.empty((N, STATS_SIZE))
     g_stats = np.empty((N, G, 2))
     compiled_kernel()["lm_run_pairs"](
-        np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, stack.spec, stack.R, stack.p,
-        stack.support, np.ascontiguousarray(arrays.P), np.ascontiguousarray(arrays.Rts), params, Q_out, stats,
+        np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, *stack.arrays,
+        np.ascontiguousarray(arrays.P), np.ascontiguousarray(arrays.Rts), params, Q_out, stats,
         g_stats)
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64), g_stats)

@@ -132,7 +132,7 @@ def goal_error(kind, R, p, pt, Rt, M, t, e):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, pt, Rt, Rj, pj, Z,
+def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj, pj, Z,
                O, Rg, pg, tg, M, e, ge):
     """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
     orientation error rad or 0) to ge (G, 2).
@@ -211,7 +211,7 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_jacobian(rev, index, scale, mimic, spec, weighted, support, Rg, pg, Z, O, tg, e, Jx, J, rv, A, B, E):
+def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A, B, E):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
     per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
     with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
@@ -486,7 +486,8 @@ def stack_rows(spec):
 
 
 @njit(cache=True, nogil=True)
-def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt, params,
+def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
+           params,
            q_out, g_out):
     """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
     g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
@@ -508,18 +509,20 @@ def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
     n, m, G = q_start.shape[0], parent.shape[0], spec.shape[0]
     rows, max_it = stack_rows(spec), int(params[P_ITERATIONS])
     return lm_run_buffers(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), q_start,
-                          parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+                          parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
                           params, q_out, g_out)
 
 
 @njit(cache=True, nogil=True, **BORROWING)
-def lm_run_buffers(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+def lm_run_buffers(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
+                   support, gaux,
                    pt, Rt, params, q_out, g_out):
     """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`) and held (n,) bool (see
     :func:`carve`); a caller making many runs one after the other keeps them (no allocation per run)."""
     ws = carve(buf, held, q_start.shape[0], parent.shape[0], spec.shape[0], stack_rows(spec),
                int(params[P_ITERATIONS]))
-    return lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt,
+    return lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                     gaux, pt,
                      Rt, params, q_out, g_out)
 
 
@@ -541,7 +544,8 @@ def _outcome(spec, ge, g_out):
 
 
 @njit(cache=True, nogil=True, **BORROWING)
-def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
+              Rt,
               params, q_out, g_out):
     """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` or :func:`carve` for these n
     joints, m physical joints, goals and task rows, and at least ``params[P_ITERATIONS]`` steps); the other arguments
@@ -572,7 +576,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
     for k in range(n):
         if q[k] <= box[B_CLO, k] or q[k] >= box[B_CHI, k]:
             on_bound = True
-    c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, pt, Rt, Rj, pj, Z, O,
+    c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
+                   pj, Z, O,
                    Rg, pg, tg, M, e, ge)
     evaluations = 1
     if within(spec, ge):
@@ -589,7 +594,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
     while it < max_it:
         it += 1
         if not have_E:
-            task_jacobian(rev, index, scale, mimic, spec, weighted, support, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E)
+            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
+                          Bm, E)
             have_E = True
         on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         if creeping and not (on_bound or on_bound_n):
@@ -600,7 +606,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
                     d = (d + math.pi) % TWO_PI - math.pi
                 v[k] = d
                 qh[k] = q[k] + GEO_H * d
-            task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qh, x, spec, weighted, gR, gp, pt, Rt, Rj3,
+            task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qh, x, spec, weighted, gR, gp, gaux, pt, Rt,
+                       Rj3,
                        pj3, Z3, O3, Rg3, pg3, tg3, M, eh, ge3)
             evaluations += 1
             for i in range(m):
@@ -618,7 +625,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
                     for k in range(n):
                         qh[k] = q[k] + v[k] - 0.5 * dq[k]
                     into_box(qh, box, any_wrap, qn)
-        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, pt, Rt, Rj2,
+        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
+                        Rj2,
                         pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
         evaluations += 1
         if cn < c:
@@ -649,9 +657,10 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
                 break
     if converged and finish and c > FINISHED:
         # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-        task_jacobian(rev, index, scale, mimic, spec, weighted, support, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E)
+        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E)
         lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
-        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, pt, Rt, Rj2,
+        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
+                        Rj2,
                         pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
         it += 1
         evaluations += 1
@@ -674,32 +683,36 @@ def _record(stats, i, pos, rot, converged, it, evaluations, c):
 
 
 @njit(cache=True, nogil=True)
-def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts, params,
+def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
+                 params,
                  Q_out, stats, g_stats):
     """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
     row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
     pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
     and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here."""
     ws = make_workspace(Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts, params,
+    _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
+              params,
               Q_out, stats, g_stats)
 
 
 @njit(cache=True, nogil=True, **BORROWING)
-def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, P, Rts, params,
+def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
+              params,
               Q_out, stats, g_stats):
     """:func:`lm_run_pairs`'s loop, borrowing the workspace: each run's call passes some 70 arrays, which a
     reference-counting caller would bracket with as many atomic increments and decrements (a third of a short
     run's time)."""
     for i in range(Q.shape[0]):
         pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box,
-                                                            any_wrap, spec, gR, gp, support, P[i], Rts[i], params,
+                                                            any_wrap, spec, gR, gp, support, gaux, P[i], Rts[i], params,
                                                             Q_out[i], g_stats[i])
         _record(stats, i, pos, rot, converged, it, evaluations, c)
 
 
 @njit(cache=True, nogil=True)
-def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt, params,
+def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
+                  params,
                   Q_out, stats, g_stats):
     """:func:`lm_run` from the starts Q (K, n) for one problem (targets pt (G, 3), Rt (G, 3, 3)), in order, until
     one converges.
@@ -709,26 +722,30 @@ def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, s
     -(1 + the number of runs) when none converged (every start was run then). The runs share one workspace, made
     here."""
     ws = make_workspace(Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                      pt, Rt,
                       params, Q_out, stats, g_stats)
 
 
 @njit(cache=True, nogil=True, **BORROWING)
 def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
-                          support, pt, Rt, params, Q_out, stats, g_stats):
+                          support, gaux, pt, Rt, params, Q_out, stats, g_stats):
     """:func:`lm_run_starts` in the caller's buffers (as :func:`lm_run_buffers`)."""
     ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt,
+    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                      pt, Rt,
                       params, Q_out, stats, g_stats)
 
 
 @njit(cache=True, nogil=True, **BORROWING)
-def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, pt, Rt, params,
+def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
+               params,
                Q_out, stats, g_stats):
     """:func:`lm_run_starts`'s loop, borrowing the workspace (see :func:`_pairs_in`)."""
     for k in range(Q.shape[0]):
         pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box,
-                                                            any_wrap, spec, gR, gp, support, pt, Rt, params, Q_out[k],
+                                                            any_wrap, spec, gR, gp, support, gaux, pt, Rt, params,
+                                                                Q_out[k],
                                                             g_stats[k])
         _record(stats, k, pos, rot, converged, it, evaluations, c)
         if converged:

@@ -192,6 +192,8 @@ class GoalStack:
         spec: (G, GOAL_SIZE) the ``G_*`` columns. R: (G, 3, 3), p: (G, 3) (m) each frame's folded placement on
             its joint (``Robot.frame_constants``). support: (G, m) bool, the physical joints that move each frame.
         rows: total rows of the stacked error. kinds: (G,) the ``KIND_*``. frames: the frame names.
+        aux: (G, A) float, A >= 1: each goal's further numbers, read by its kind's code in the kernel (a band of
+            tolerances, an axis, a second frame, ...; zeros for kinds that need none).
         any_oriented: some goal constrains orientation.
     """
 
@@ -202,10 +204,18 @@ class GoalStack:
     rows: int
     kinds: tuple
     frames: tuple
+    aux: np.ndarray = None
     any_oriented: bool = field(init=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
+        if self.aux is None:
+            object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)))
+
+    @property
+    def arrays(self) -> tuple:
+        """The stack's arguments of the kernel's entry points, in their order: spec, R, p, support, aux."""
+        return self.spec, self.R, self.p, self.support, self.aux
 
     @classmethod
     def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances) -> GoalStack:

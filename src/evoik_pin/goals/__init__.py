@@ -1,0 +1,28 @@
+"""Goals of an IK problem on a whole robot: which frame goes where, with which weight and tolerances.
+
+A problem is a list of goals, each on one frame of the robot (any Pinocchio frame: a link, a joint frame, a fixed
+frame), with its target expressed in the robot's base frame (for a floating base: the world frame)::
+
+    from evoik_pin.goals import Pose, Position
+    goals = [Pose("left_sole_link", T_lf), Pose("right_sole_link", T_rf), Position("arm_right_7_link", p_rh)]
+    result = evoik_pin.solve(talos, goals)
+
+* :class:`Pose`: position and orientation (6 residual rows: the SE(3) logarithm of the frame seen from the
+  target, m and rad); its target a (4, 4) homogeneous matrix, a ``pin.SE3`` or a :class:`~evoik_pin.problem.Target`
+  with a rotation;
+* :class:`Position`: position only (3 rows, m); its target a 3-vector (m).
+
+Each goal checks its inputs when made (an :mod:`evoik_pin.errors` class naming what is wrong) and packs itself into
+the LM kernel's goal stack (:class:`~evoik_pin.solvers.lm.layout.GoalStack`: kind, frame, weight, tolerances);
+:func:`bind` checks a goal list against a robot (frames that exist and that some active joint moves, the same frame
+twice with clashing targets). A goal's ``weight`` (> 0) scales its rows by ``sqrt(weight)``, so goals that cannot
+all be met settle on the compromise the weights make; it is met when its position error is within ``tolerance``
+(m) and, for a pose, its rotation angle within ``rotation_tolerance`` (rad; default: ``tolerance``).
+"""
+
+from .binding import bind, is_goal_list
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .pose import Pose
+from .position import Position
+
+__all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "Pose", "Position", "bind", "is_goal_list"]
