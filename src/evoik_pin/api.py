@@ -95,7 +95,7 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
 #: problem through ``IKProblem.evaluate`` (the goals' weighted cost and largest errors over a population). The
 #: others (closed forms, hga's and memetic-all's solution sets, NSGA-II's tip manipulability) take one target for
 #: the tip.
-GOAL_METHODS = ("memetic", "de", "isade", "pso", "mode", "ga", "ga-binary")
+GOAL_METHODS = ("memetic", "memetic-all", "de", "isade", "pso", "mode", "ga", "ga-binary", "nsga2", "hga")
 
 
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
@@ -228,9 +228,6 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         (e.g. ``count`` < 1).
     """
     info = get_solver(method)
-    if is_goal_list(target):
-        raise MethodError("solve_all takes one target for the robot's tip (every distinct solution of it); a goal list "
-                          f"(several goals at once) is solved by solve() with one of {', '.join(GOAL_METHODS)}")
     if not info.multi_solution:
         capable = [m for m in methods() if get_solver(m).multi_solution]
         raise MethodError(

@@ -321,7 +321,8 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     """One :class:`Result` per row of ``Q`` (M, n), best (lowest cost) first.
 
     Rows are evaluated once more for their errors; that bookkeeping does not count as evaluations.
-    With ``only_successful``, rows that miss the problem's tolerances are left out.
+    With ``only_successful``, rows that miss the problem's tolerances are left out (a goal list: rows that miss a
+    goal's own tolerances; each Result then has its ``goal_errors``).
     """
     if len(Q) == 0:
         return []
@@ -329,7 +330,7 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     before = problem.evaluations
     ev = problem.evaluate(Q)
     problem.evaluations = before
-    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    ok = problem.rows_met(Q)
     out = []
     for i in np.argsort(ev.cost, kind="stable"):
         if only_successful and not ok[i]:
@@ -337,7 +338,8 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
         rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
         out.append(Result(q=Q[i].copy(), position_error=float(ev.position_error[i]), orientation_error=rot,
                           cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations,
-                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method))
+                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method,
+                          goal_errors=None if problem.goals is None else problem.goal_errors(Q[i])))
     return out
 
 
