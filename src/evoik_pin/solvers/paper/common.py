@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from ...problem import Evaluation, IKProblem, shortfall_text
+from ...problem import Evaluation, IKProblem, errors_text, shortfall_text
 from ...result import Result
 from ..options import check_choice, check_int, check_number
 
@@ -184,15 +184,22 @@ class SolverRun:
         pos = float(ev.position_error[0])
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
         success = bool(problem.succeeded(pos, rot))
+        goal_errors = None
+        if problem.goals is not None:  # every goal within its own tolerances
+            goal_errors = problem.goal_errors(q)
+            success = problem.goals_met(goal_errors)
         if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
             message = "stopped"
-        if not success:
+        if not success and goal_errors is not None:
+            unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
+            message += f"; best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
+        elif not success:
             message += f"; {shortfall_text(problem, pos, rot)}"
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
             generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,
             history={k: np.asarray(v) for k, v in self.history.items()}, message=message, method=method,
-            **fields,
+            goal_errors=goal_errors, **fields,
         )
 
 
