@@ -225,3 +225,15 @@ def test_the_closed_forms_take_one_goal_on_the_tip_and_refuse_other_goal_lists(t
             ek.solve(puma, goals, method="algebraic")
     with pytest.raises(MethodError, match="'algebraic' has closed forms for the bundled robots"):
         ek.solve(tree, tree_goals(tree)[:1], method="algebraic")  # a single goal, but on no closed-form arm
+
+
+# ---------------------------------------------------------------------------------------------- stopping rule
+def test_population_methods_stop_when_every_goal_meets_its_own_tolerance(tree):
+    """A population method stops once its best member meets every goal's own tolerance (1e-3 m here, not the
+    problem's 1e-6); a goal tighter than the problem's tolerance is not declared met early."""
+    r = ek.solve(tree, tree_goals(tree, tolerance=1e-3), method="de", seed=0, max_generations=300)
+    assert r.success and r.message == "tolerance reached" and r.generations < 300
+    assert meets_every_goal(tree, tree_goals(tree, tolerance=1e-3), r.q)
+    tight = ek.solve(tree, tree_goals(tree, tolerance=1e-9), method="de", seed=0, max_generations=30, tolerance=1e-2)
+    assert not tight.success and tight.position_error < 1e-2 and "goals not met: tip_a" in tight.message
+    assert "max_generations (30) reached" in tight.message  # every restart ran its generations

@@ -159,7 +159,11 @@ class SolverRun:
 
     @property
     def best_succeeded(self) -> bool:
-        return self.best_q is not None and bool(self.problem.succeeded(self._best_pos, self._best_rot))
+        if self.best_q is None:
+            return False
+        if self.problem.goals is not None:  # every goal within its own tolerances (not the problem's)
+            return bool(self.problem.rows_met(self.best_q[None])[0])
+        return bool(self.problem.succeeded(self._best_pos, self._best_rot))
 
     def stop_reason(self) -> str | None:
         """Why to stop now, or None to go on."""
