@@ -10,13 +10,17 @@ deterministic (populations, generations, LM starts), so the same seed gives the 
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from test_goal_batch import TALOS_FRAMES, consistent, pinocchio_errors
 from urdf_helpers import joint_xml, robot_xml
 
 import evoik_pin as ek
 from evoik_pin.errors import MethodError, OptionError
 from evoik_pin.goals import Pose, Position
+from evoik_pin.lie import wrap_angle
 from evoik_pin.problem import IKProblem
+from evoik_pin.solvers.paper.analytic import planar2r_ik
 from evoik_pin.solvers.paper.clustering import joint_differences
 from evoik_pin.solvers.paper.nsga2 import GoalManipulability
 from evoik_pin.solvers.search.all_solutions import DEFAULT_CLASS_RADIUS, goal_moving_joints
@@ -160,6 +164,41 @@ def test_solve_all_of_a_goal_list_with_finitely_many_solutions_finds_each_once(t
     r = ek.solve(tree, goals, method="memetic-all", seed=0)
     consistent(tree, goals, r)
     assert r.success and np.array_equal(r.q, Q[0]) and len(r.solutions) == 4
+
+
+def tree_closed_form(goals) -> np.ndarray:
+    """Every solution (M, 4) within the limits of the planar tree's two position goals, by two planar 2R closed
+    forms: tip_b fixes (j0, jb1) (links 0.3 and 0.35 m, jb1 after a fixed 1 rad turn), then tip_a, seen from l0's
+    end, fixes (ja1, ja2) (links 0.25 and 0.2 m)."""
+    pa, pb = (g.encode()[0][:2] for g in goals)
+    out = []
+    for j0, phi in planar2r_ik(pb[0], pb[1], 0.3, 0.35):
+        c, s = np.cos(j0), np.sin(j0)
+        d = np.array([[c, s], [-s, c]]) @ (pa - 0.3 * np.array([c, s]))
+        for ja1, ja2 in planar2r_ik(d[0], d[1], 0.25, 0.2):
+            out.append([j0, ja1, ja2, wrap_angle(phi - 1.0)])
+    Q = np.array(out).reshape(-1, 4)
+    return Q[np.all((Q >= [-3, -2.5, -2.5, -2.5]) & (Q <= [3, 2.5, 2.5, 2.5]), axis=1)]
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_solve_all_of_the_planar_tree_is_its_closed_form_set(tree, seed):
+    """Targets of a random configuration: solve_all returns exactly the closed-form solutions (matched one to one
+    within 1e-6 rad), away from the limits and the elbows' singular (straight) configurations."""
+    q = tree.random_configurations(1, np.random.default_rng(seed))[0]
+    goals = [Position(f, tree.fk(q, f).translation) for f in ("tip_a", "tip_b")]
+    reference = tree_closed_form(goals)
+    assert len(reference) and np.abs(reference - q).max(axis=1).min() < 1e-9  # q is among them
+    assume(np.all(np.abs(np.sin(reference[:, [2]])) > 0.05) and np.all(np.abs(np.sin(reference[:, 3] + 1.0)) > 0.05))
+    assume(np.all(np.minimum(reference - tree.lower, tree.upper - reference) > 1e-3))
+    for r in reference:
+        assert meets_every_goal(tree, goals, r)
+    sols = ek.solve_all(tree, goals, seed=0, timeout=None)
+    Q = np.array([s.q for s in sols])
+    assert len(Q) == len(reference), (Q, reference)
+    D = np.abs(Q[:, None] - reference[None]).max(axis=2)
+    assert np.all(D.min(axis=1) < 1e-6) and np.all(D.min(axis=0) < 1e-6)
 
 
 def test_solve_all_of_a_redundant_goal_list_returns_count_spread_solutions(baxter):
