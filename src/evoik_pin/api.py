@@ -189,7 +189,8 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
         target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix or a :class:`Target` for the robot's tip;
             or a list of goals on its frames (:mod:`evoik_pin.goals`: ``[Pose(frame, T), Position(frame, p),
-            ...]``, method ``"memetic"``), met together; ``Result.goal_errors`` then gives each goal's errors.
+            ...]``, any method of :data:`GOAL_METHODS`), met together; ``Result.goal_errors`` then gives each goal's
+            errors.
         method: a name from :func:`methods` (default ``"memetic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same result.
         **options: shared ones (``tolerance`` m, ``rotation_tolerance`` rad, ``q0`` (n,), ``bounds``
@@ -229,7 +230,10 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
 
     Args:
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
-        target: a pose (``pin.SE3``, (4, 4)), a 3-vector position (m) or a :class:`Target` (planar too).
+        target: a pose (``pin.SE3``, (4, 4)), a 3-vector position (m) or a :class:`Target` (planar too); or a goal
+            list (:mod:`evoik_pin.goals`): every solution meets every goal within its own tolerances (each with its
+            ``goal_errors``); ``memetic-all`` measures distinctness on the joints that move some goal frame and puts
+            the others at ``q0`` (zero without it), and a whole robot, redundant, gets ``count`` spread solutions.
         method: a multi-solution method (default ``"memetic-all"``; also ``"hga"``, ``"ga"``, ``"algebraic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same solutions (``memetic-all`` draws
             random numbers only when its deterministic starts run out).
@@ -246,8 +250,8 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         reach").
 
     Raises:
-        MethodError: ``method`` returns one solution only, or ``target`` is a goal list. OptionError: a bad option
-        (e.g. ``count`` < 1).
+        MethodError: ``method`` returns one solution only (or is ``"algebraic"`` on a goal list other than one goal
+        on the tip). OptionError: a bad option (e.g. ``count`` < 1).
     """
     info = get_solver(method)
     if not info.multi_solution:

@@ -354,8 +354,8 @@ def _goals_arg(args: argparse.Namespace):
         raise OptionError(f"--goals and {'/'.join(given)}: give the targets one way, --goals FILE (every goal in "
                           "the file) or --xyz X Y Z [--rpy R P Y] (one target for the tip)")
     if args.all:
-        raise OptionError("--all and --goals: --all (solve_all) takes one target for the tip (--xyz/--rpy); a goal "
-                          "list is solved for one answer")
+        raise OptionError("--all and --goals: evoik solve --all prints every solution of one target for the tip "
+                          "(--xyz/--rpy); every solution of a goal list: evoik_pin.solve_all(robot, goals) in Python")
     for flag, value in (("--tolerance", args.tolerance), ("--rotation-tolerance", args.rotation_tolerance)):
         if value is not None:
             raise OptionError(f"{flag} and --goals: each goal has its own tolerances, the goals file's tolerance: "
