@@ -146,6 +146,15 @@ def test_hga_finds_distinct_solutions_that_meet_every_goal(tree):
         ek.solve(tree, goals, method="hga", max_starts=0)
 
 
+def test_hga_on_a_whole_robot_that_it_does_not_solve_says_what_does(baxter):
+    goals = baxter_goals(baxter)
+    r = ek.solve(baxter, goals, method="hga", seed=0, population=20, max_generations=1, max_starts=2,
+                 max_polish_evaluations=20)
+    assert not r.success and r.solutions == [] and "goals not met: left_gripper" in r.message
+    assert "Nelder-Mead over 14 joints rarely meets a goal list's tolerances; memetic-all finds" in r.message
+    consistent(baxter, goals, r)
+
+
 # ---------------------------------------------------------------------------------------------- memetic-all
 def test_solve_all_of_a_goal_list_with_finitely_many_solutions_finds_each_once(tree):
     goals = tree_goals(tree)
