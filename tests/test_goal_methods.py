@@ -127,6 +127,18 @@ def test_nsga2_refuses_bad_options_on_goal_lists(baxter):
         ek.solve(baxter, goals, method="nsga2", population=2)
 
 
+def test_nsga2_repairs_pose_and_position_goals_and_refuses_to_repair_other_kinds(baxter):
+    class Marker(Position):  # a goal kind nsga2's repair does not know (its residual would be another one's)
+        pass
+
+    p = baxter.fk(np.zeros(baxter.n), "right_gripper").translation
+    goals = [baxter_goals(baxter)[0], Marker("right_gripper", p)]
+    with pytest.raises(OptionError, match="know Pose and Position goals, not Marker: give repair_steps=0"):
+        ek.solve(baxter, goals, method="nsga2")
+    r = ek.solve(baxter, goals, method="nsga2", seed=0, population=8, max_generations=1, repair_steps=0)
+    consistent(baxter, goals, r)
+
+
 # ---------------------------------------------------------------------------------------------- hga
 def test_hga_finds_distinct_solutions_that_meet_every_goal(tree):
     goals = tree_goals(tree)

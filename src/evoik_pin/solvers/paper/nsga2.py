@@ -33,6 +33,7 @@ import numpy as np
 
 from ... import lie
 from ...errors import BoundsError, OptionError
+from ...goals import Pose, Position
 from ...objectives import (
     Manipulability,
     Objective,
@@ -53,7 +54,7 @@ __all__ = [
     "bounded_polynomial_mutation",
     "crowding_distance",
     "dominance_matrix",
-    "goal_repair",
+    "goal_task",
     "goal_rows",
     "nondominated_ranks",
     "nsga2_minimize",
@@ -432,21 +433,28 @@ def _task_errors(problem: IKProblem, Q: np.ndarray) -> np.ndarray:
 
 
 def dls_repair(problem: IKProblem, Q: np.ndarray, steps: int, damping: float = 1e-4,
-               weights: np.ndarray | None = None) -> np.ndarray:
+               weights: np.ndarray | None = None, task=None) -> np.ndarray:
     """``steps`` damped-least-squares Newton steps (N, n) towards the target, all individuals at once.
 
     ``dq = W J^T (J W J^T + damping^2 I)^-1 e`` on the task rows of the base-frame Jacobian, then clipped
     into the box: the step of least ``dq^T W^-1 dq``. ``weights`` W (n,) default ones; ``nsga2`` passes
     1 / K so the repair, like the smoothness S, moves high-gain joints (the vehicle) least. Each step
-    costs one batched FK and Jacobian and counts N evaluations.
+    costs one batched FK and Jacobian and counts N evaluations. ``task(Q) -> (e (N, m), J (N, m, n))``: the
+    errors and Jacobian rows the steps zero (default the target's task rows; :func:`goal_task` for a goal list).
     """
-    rows = _task_rows(problem)
-    lam2 = damping ** 2 * np.eye(len(rows))
+    if task is None:
+        rows = _task_rows(problem)
+
+        def task(Q):
+            return _task_errors(problem, Q), problem.robot.jacobian_batch(Q)[:, rows]
+
     W = np.ones(problem.n) if weights is None else np.asarray(weights, float)
+    lam2 = None
     for _ in range(steps):
-        e = _task_errors(problem, Q)
-        J = problem.robot.jacobian_batch(Q)[:, rows]
+        e, J = task(Q)
         problem.evaluations += Q.shape[0]
+        if lam2 is None:
+            lam2 = damping ** 2 * np.eye(J.shape[1])
         JW = J * W
         y = np.linalg.solve(JW @ J.transpose(0, 2, 1) + lam2, e[:, :, None])[..., 0]
         Q = np.clip(Q + np.einsum("nji,nj->ni", JW, y), problem.lower, problem.upper)
@@ -528,21 +536,22 @@ def _goal_manipulability(problem: IKProblem, which) -> tuple[GoalManipulability,
     return GoalManipulability(frames, rows), fixed
 
 
-def goal_repair(problem: IKProblem, Q: np.ndarray, steps: int) -> np.ndarray:
-    """``steps`` Levenberg-Marquardt iterations (the compiled engine, :func:`~evoik_pin.solvers.lm.solve_pairs`) of
-    every row of ``Q`` (N, n) towards the problem's goal list, in one kernel call; each goal's own residual (every
-    goal kind), joint limits kept exactly, a row stops once every goal is met. The FK evaluations of the steps
-    count towards ``problem.evaluations``. The goal-list counterpart of :func:`dls_repair`."""
-    from ..lm import solve_pairs
-    from ..lm.layout import GoalArrays
-
-    stack, pt, Rt = problem.goal_stack()
-    N = Q.shape[0]
-    arrays = GoalArrays(stack, np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0))
-    out = solve_pairs(problem.robot, Q, arrays, problem.lower, problem.upper, problem.tolerance,
-                      problem.rotation_tolerance, max_iterations=steps)
-    problem.evaluations += int(out.evaluations.sum())
-    return out.q
+def goal_task(problem: IKProblem, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The task error ``e`` (N, m) and Jacobian ``J`` (N, m, n) of a goal list (Pose and Position goals) at ``Q``
+    (N, n), for :func:`dls_repair`: per goal, ``sqrt(weight)`` times its target position minus the frame's (m) and,
+    for a Pose, the base-frame rotation vector ``log3(R_t R^T)`` (rad), over the matching rows of the frame's
+    base-frame Jacobian (:func:`goal_rows`): the stacked counterpart of the one target's rows."""
+    _, pt, Rt = problem.goal_stack()
+    errors, rows = [], []
+    for g, goal in enumerate(problem.goals):
+        p, R, J = problem.robot.fk_jacobian_batch(Q, validate=False, frame=goal.frame)
+        e = pt[g] - p
+        if goal.has_orientation:
+            e = np.concatenate([e, lie.log3(np.einsum("ij,nkj->nik", Rt[g], R))], axis=1)
+        w = np.sqrt(goal.weight)
+        errors.append(w * e)
+        rows.append(w * J[:, goal_rows(goal)])
+    return np.concatenate(errors, axis=1), np.concatenate(rows, axis=1)
 
 
 @register("nsga2", "paper 003: NSGA-II with constraint domination; Pareto front of manipulability and "
@@ -558,8 +567,8 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     (:meth:`~evoik_pin.problem.IKProblem.goal_violation`), so a feasible point meets every goal; the objectives stay
     the paper's two, manipulability and smoothness, the manipulability Y taken over the stacked Jacobian rows of
     every goal frame (:class:`GoalManipulability`: the translation rows of each goal, the rotation rows of a Pose
-    too; ``manipulability_goals`` picks fewer goals), and the repair steps are Levenberg-Marquardt iterations of
-    the compiled engine towards every goal (:func:`goal_repair`; they do not read ``gains``).
+    too; ``manipulability_goals`` picks fewer goals), and the repair steps zero every goal's rows at once
+    (:func:`goal_task`: the stacked task error, each goal's rows scaled by the square root of its weight).
 
     Options:
         population: 200 (paper). max_generations: offspring generations (100), always all run.
@@ -600,6 +609,10 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     repair_weights = None
     fixed_rows: list[int] = []
     fixed_goal_rows: list[str] = []
+    if goals and repair_steps and any(type(g) not in (Pose, Position) for g in problem.goals):
+        kinds = sorted({type(g).__name__ for g in problem.goals} - {"Pose", "Position"})
+        raise OptionError(f"nsga2's repair steps (repair_steps={repair_steps}) know Pose and Position goals, not "
+                          f"{', '.join(kinds)}: give repair_steps=0 (and a looser tolerance) or use memetic")
     if goals and manipulability_rows is not None:
         raise OptionError("manipulability_rows selects rows of the tip's Jacobian for one target; for a goal list "
                           "give manipulability_goals=[...] (goal indices or frames: their rows count)")
@@ -646,9 +659,8 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         return F, cv
 
     def repair(Y, steps):
-        if goals:
-            return goal_repair(problem, Y, steps)
-        return dls_repair(problem, Y, steps, weights=repair_weights)
+        return dls_repair(problem, Y, steps, weights=repair_weights,
+                          task=(lambda Q: goal_task(problem, Q)) if goals else None)
 
     init = initial_population(problem, rng, population)
     best_pick: list[float] = []
