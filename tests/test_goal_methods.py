@@ -8,6 +8,8 @@ small (a 4-joint planar tree made here, Baxter's two grippers, one Talos floatin
 deterministic (populations, generations, LM starts), so the same seed gives the same answer.
 """
 
+import json
+
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings
@@ -16,14 +18,17 @@ from test_goal_batch import TALOS_FRAMES, consistent, pinocchio_errors
 from urdf_helpers import joint_xml, robot_xml
 
 import evoik_pin as ek
+from evoik_pin.cli import main
 from evoik_pin.errors import MethodError, OptionError
 from evoik_pin.goals import Pose, Position
+from evoik_pin.goals_file import save_goals
 from evoik_pin.lie import wrap_angle
 from evoik_pin.problem import IKProblem
 from evoik_pin.solvers.paper.analytic import planar2r_ik
 from evoik_pin.solvers.paper.clustering import joint_differences
 from evoik_pin.solvers.paper.nsga2 import GoalManipulability
 from evoik_pin.solvers.search.all_solutions import DEFAULT_CLASS_RADIUS, goal_moving_joints
+from evoik_pin.viz import html_commands
 
 # A planar tree: a shared joint j0, then branch a (ja1, ja2) to tip_a and branch b (jb1) to tip_b. Two position goals
 # (x, y on each tip; z stays 0) are 4 equations in 4 joints: finitely many solutions, 4 for Q_TREE (each branch's
@@ -297,3 +302,40 @@ def test_population_methods_stop_when_every_goal_meets_its_own_tolerance(tree):
     tight = ek.solve(tree, tree_goals(tree, tolerance=1e-9), method="de", seed=0, max_generations=30, tolerance=1e-2)
     assert not tight.success and tight.position_error < 1e-2 and "goals not met: tip_a" in tight.message
     assert "max_generations (30) reached" in tight.message  # every restart ran its generations
+
+
+# ---------------------------------------------------------------------------------------------- command line
+def test_evoik_solve_all_of_a_goals_file(baxter, tmp_path, capsys):
+    """``evoik solve baxter --tips ... --goals FILE --all``: every solution meets every goal by Pinocchio; the text
+    output has a line per solution; a method returning one answer is refused naming those that return several."""
+    goals = baxter_goals(baxter)
+    path = save_goals(goals, tmp_path / "grippers.yaml", robot="baxter", tips=["left_gripper", "right_gripper"])
+    argv = ["solve", "baxter", "--goals", str(path), "--all", "--count", "3", "--timeout", "none",
+            "--option", "max_starts=256"]
+    assert main([*argv, "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["success"] and info["count"] == 3 and info["method"] == "memetic-all"
+    for row in info["solutions"]:
+        q = np.array(row["q_rad"])
+        assert meets_every_goal(baxter, goals, q) and all(e["met"] for e in row["goal_errors"])
+        assert errors_match([(e["position_error_m"], e["rotation_error_rad"]) for e in row["goal_errors"]],
+                            pinocchio_errors(baxter, goals, q))
+        assert np.allclose(row["q_pinocchio"], baxter.full_configuration(q))
+    assert main(argv) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "3 solution(s) of 2 goals" in out[0] and len(out) == 5 and "every goal met" in out[-1]
+    assert main([*argv[:5], "--method", "de"]) == 2
+    assert "'de' returns one solution; solve_all needs one of" in capsys.readouterr().err
+
+
+@pytest.mark.filterwarnings("ignore:ytree. its URDF has no <visual> geometry")
+def test_evoik_solve_all_of_a_goals_file_draws_the_goals_and_every_solution(tree, tmp_path, capsys):
+    urdf = tmp_path / "ytree.urdf"
+    urdf.write_text(TREE)
+    path = save_goals(tree_goals(tree), tmp_path / "tips.yaml", tips=["tip_a", "tip_b"])
+    html = tmp_path / "all.html"
+    assert main(["solve", str(urdf), "--goals", str(path), "--all", "--html", str(html)]) == 0
+    assert f"wrote {html}" in capsys.readouterr().err
+    objects = {c["path"] for c in html_commands(html.read_text()) if c["type"] == "set_object"}
+    assert {"/meshcat/goals/tip_a/point", "/meshcat/goals/tip_b/point"} <= objects
+    assert {f"/meshcat/solutions/{k}" for k in range(4)} <= {"/".join(o.split("/")[:4]) for o in objects}
