@@ -439,15 +439,12 @@ def _solve_all_goals(args: argparse.Namespace, robot, goals, method: str, option
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        unit = "rad" if args.rad else "deg"
-        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {len(sols)} solution(s) of {len(goals)} "
-              f"goals in {res.time_s * 1e3:.2f} ms ({sols.message})")
-        if sols:
-            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
-        for k, s in enumerate(sols):
+        def errors(s):
             rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
-            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad))
-                  + f"  (every goal met; largest errors: position {s.position_error:.1e} m{rot})")
+            return f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
+
+        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) of {len(goals)} goals in "
+                         f"{res.time_s * 1e3:.2f} ms", errors)
     if html is not None or args.view:
         from .viz import Viewer
 
@@ -570,21 +567,28 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        unit = "rad" if args.rad else "deg"
-        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {len(sols)} solution(s) in "
-              f"{res.time_s * 1e3:.2f} ms ({sols.message})")
-        if sols:
-            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
-        for k, s in enumerate(sols):
-            shown = _shown(robot, s.q, args.rad)
+        def errors(s):
             rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
             free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
-            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in shown) + f"  (position error {s.position_error:.1e} m"
-                  f"{rot}{free})")
+            return f"position error {s.position_error:.1e} m{rot}{free}"
+
+        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) in {res.time_s * 1e3:.2f} ms",
+                         errors)
     if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
         _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols,
                        scene=scene, margin=options.get("margin", 0.0))
     return 0 if sols else 1
+
+
+def _print_solutions(args: argparse.Namespace, robot, sols, method: str, what: str, errors) -> None:
+    """``evoik solve --all``'s text: a heading (the method, ``what`` was found, the search's message), then a line
+    per solution: its index, q (deg, or rad with ``--rad``) and ``errors(solution)`` in parentheses."""
+    unit = "rad" if args.rad else "deg"
+    print(f"{robot.name} ({robot.n} joints), method {method}: {what} ({sols.message})")
+    if sols:
+        print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+    for k, s in enumerate(sols):
+        print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors(s)})")
 
 
 def _print_solution(robot, res, info: dict, rad: bool) -> None:
