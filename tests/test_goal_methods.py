@@ -118,6 +118,22 @@ def test_nsga2_on_a_planar_tree_leaves_out_the_rows_no_joint_moves(tree):
     assert "(tip_a:vz, tip_b:vz)" in r.message  # a planar tree's goal frames never move along z
 
 
+def test_nsga2_along_a_trajectory_of_goal_lists_stays_on_the_branch_of_the_previous_answer(tree):
+    """solve_trajectory hands each answer to the next point as q0, from which nsga2's smoothness S is measured: the
+    answers follow one branch (of the tree's four) in small steps; solve_many solves the same lists one by one."""
+    lists = [[Position(f, tree.fk(Q_TREE + 0.05 * k, f).translation) for f in ("tip_a", "tip_b")] for k in range(3)]
+    options = {"population": 16, "max_generations": 3}
+    path = ek.solve_trajectory(tree, lists, method="nsga2", seed=0, **options)
+    for goals, r in zip(lists, path, strict=True):
+        consistent(tree, goals, r)
+        assert r.success
+    assert max(np.abs(b.q - a.q).max() for a, b in zip(path[:-1], path[1:], strict=True)) < 0.2
+    many = ek.solve_many(tree, lists, method="nsga2", seed=0, workers=1, **options)
+    for goals, r in zip(lists, many, strict=True):
+        consistent(tree, goals, r)
+        assert r.success
+
+
 def test_nsga2_refuses_bad_options_on_goal_lists(baxter):
     goals = baxter_goals(baxter)
     with pytest.raises(OptionError, match="manipulability_goals"):
