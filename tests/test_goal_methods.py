@@ -77,6 +77,36 @@ def errors_match(errors, expected) -> bool:
         for (p, o), (pp, po) in zip(errors, expected, strict=True))
 
 
+# ---------------------------------------------------------------------------------------------- the problem's verdicts
+def test_goal_violation_and_rows_met_judge_each_goal_by_its_own_tolerances(baxter):
+    q = baxter.random_configurations(1, np.random.default_rng(11))[0]
+    goals = [Pose("left_gripper", baxter.fk(q, "left_gripper"), tolerance=1e-3, rotation_tolerance=1e-2),
+             Position("right_gripper", baxter.fk(q, "right_gripper").translation, tolerance=1e-4)]
+    Q = np.vstack([q + d for d in np.linspace(0.0, 2e-3, 8)[:, None] * np.ones(baxter.n)])  # met, then not
+    problem = IKProblem(baxter, goals)
+    violation = problem.goal_violation(Q)
+    assert problem.evaluations == len(Q)
+    for row, v in zip(Q, violation, strict=True):
+        (p0, o0), (p1, _) = pinocchio_errors(baxter, goals, row)
+        expected = max(p0 - 1e-3, 0.0) + max(o0 - 1e-2, 0.0) + max(p1 - 1e-4, 0.0)
+        assert v == pytest.approx(expected, abs=1e-12)
+    met = problem.rows_met(Q)
+    assert problem.evaluations == len(Q)  # bookkeeping, not search
+    assert met.tolist() == [meets_every_goal(baxter, goals, row) for row in Q] and met[0] and not met[-1]
+
+
+def test_a_tightened_goal_problem_runs_lm_to_the_smaller_tolerance(tree):
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+
+    goals = tree_goals(tree, tolerance=1e-3)
+    problem = IKProblem(tree, goals)
+    tight = problem.tightened(1e-12)
+    assert tight.goals == goals and [g.tolerance for g in tight.goals] == [1e-3, 1e-3]
+    start = Q_TREE + 0.05
+    loose, exact = LevenbergMarquardt(problem).run(start, 100), LevenbergMarquardt(tight).run(start, 100)
+    assert loose.converged and exact.converged and exact.position_error <= 1e-12 < loose.position_error
+
+
 # ---------------------------------------------------------------------------------------------- nsga2
 def test_nsga2_meets_every_goal_and_its_front_is_feasible(baxter):
     goals = baxter_goals(baxter)

@@ -33,7 +33,8 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "shortfall_text", "target_box"]
+           "Target", "check_pro_delta", "coerce_scene", "errors_text", "goals_shortfall_text", "shortfall_text",
+           "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
 #: of a reachable arm's configuration, so a search prefers every collision-free configuration.
@@ -441,4 +442,12 @@ def shortfall_text(problem: IKProblem, pos: float, rot: float | None) -> str:
     accepted = f"position error <= {problem.tolerance:g} m" + (
         "" if rot is None else f", orientation error <= {problem.rotation_tolerance:g} rad")
     return f"best {errors_text(pos, rot)} exceeds the tolerance ({accepted})"
+
+
+def goals_shortfall_text(problem: IKProblem, errors, pos: float, rot: float | None) -> str:
+    """'best position error ... m[, orientation error ... rad] (largest over the goals); goals not met: frame, ...'
+    for the messages of failed goal-list solves: ``errors`` each goal's (:meth:`IKProblem.goal_errors`), ``pos`` and
+    ``rot`` the largest of them."""
+    unmet = [g.frame for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
+    return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
 

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from ...problem import Evaluation, IKProblem, errors_text, shortfall_text
+from ...problem import Evaluation, IKProblem, goals_shortfall_text, shortfall_text
 from ...result import Result
 from ..options import check_choice, check_int, check_number
 
@@ -195,8 +195,7 @@ class SolverRun:
         if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
             message = "stopped"
         if not success and goal_errors is not None:
-            unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
-            message += f"; best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
+            message += f"; {goals_shortfall_text(problem, goal_errors, pos, rot)}"
         elif not success:
             message += f"; {shortfall_text(problem, pos, rot)}"
         return Result(

@@ -53,7 +53,7 @@ import time
 import numpy as np
 
 from ...errors import OptionError
-from ...problem import IKProblem, errors_text, shortfall_text
+from ...problem import IKProblem, goals_shortfall_text, shortfall_text
 from ...result import Result
 from .. import register
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
@@ -405,9 +405,7 @@ def _shortfall(problem: IKProblem, q: np.ndarray, pos: float, rot: float | None)
     """:func:`shortfall_text` of one target; for a goal list, the largest errors and the goals not met at ``q``."""
     if problem.goals is None:
         return shortfall_text(problem, pos, rot)
-    errors = problem.goal_errors(q)
-    unmet = [g.frame for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
-    return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
+    return goals_shortfall_text(problem, problem.goal_errors(q), pos, rot)
 
 
 def _message(solutions: list[Result], redundant: bool, pooled: int, started: int, stop: str,
