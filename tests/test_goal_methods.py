@@ -170,6 +170,8 @@ def test_nsga2_refuses_bad_options_on_goal_lists(baxter):
         ek.solve(baxter, goals, method="nsga2", manipulability_rows=[0, 1, 2])
     with pytest.raises(OptionError, match=r"indices 0..1 or the goals' frames \['left_gripper', 'right_gripper'\]"):
         ek.solve(baxter, goals, method="nsga2", manipulability_goals=["head"])
+    with pytest.raises(OptionError, match="got 1.5"):
+        ek.solve(baxter, goals, method="nsga2", manipulability_goals=1.5)
     with pytest.raises(OptionError, match="distinct goals"):
         ek.solve(baxter, goals, method="nsga2", manipulability_goals=[0, "left_gripper"])
     with pytest.raises(OptionError, match="manipulability_rows"):

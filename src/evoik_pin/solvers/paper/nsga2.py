@@ -502,7 +502,11 @@ def _chosen_goals(problem: IKProblem, which) -> list[int]:
         return list(range(len(goals)))
     frames = [g.frame for g in goals]
     picked: list[int] = []
-    for w in ([which] if isinstance(which, (str, int)) else list(which)):
+    try:
+        listed = [which] if isinstance(which, (str, int, np.integer)) else list(which)
+    except TypeError:
+        listed = [which]  # refused below, by name
+    for w in listed:
         if isinstance(w, str) and w in frames:
             picked.append(frames.index(w))
         elif isinstance(w, (int, np.integer)) and not isinstance(w, bool) and -len(goals) <= w < len(goals):
