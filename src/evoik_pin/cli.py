@@ -353,9 +353,6 @@ def _goals_arg(args: argparse.Namespace):
     if given:
         raise OptionError(f"--goals and {'/'.join(given)}: give the targets one way, --goals FILE (every goal in "
                           "the file) or --xyz X Y Z [--rpy R P Y] (one target for the tip)")
-    if args.all:
-        raise OptionError("--all and --goals: --all (solve_all) takes one target for the tip (--xyz/--rpy); a goal "
-                          "list is solved for one answer")
     for flag, value in (("--tolerance", args.tolerance), ("--rotation-tolerance", args.rotation_tolerance)):
         if value is not None:
             raise OptionError(f"{flag} and --goals: each goal has its own tolerances, the goals file's tolerance: "
@@ -375,14 +372,18 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
     from .api import GOAL_METHODS, solve
     from .goals_file import goal_kind_name
+    from .solvers import get_solver
 
     goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
-    options = _call_options(args, robot, method, list(GOAL_METHODS))
+    pool = [m for m in GOAL_METHODS if get_solver(m).multi_solution or not args.all]
+    options = _call_options(args, robot, method, pool)
     for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
         args.typed_flags.pop(phrase, None)
     if scene is not None:
         options.update(scene=scene, margin=margin)
     goals = goals_file.problems[0]
+    if args.all:
+        return _solve_all_goals(args, robot, goals, method, options, html)
     res = solve(robot, goals, method=method, seed=args.seed, **options)
     rows = []
     for goal, (pos, rot) in zip(goals, res.goal_errors, strict=True):
@@ -417,6 +418,46 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
             viewer.show_solution(res, goals, scene=scene, margin=margin)
             viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
     return 0 if res.success else 1
+
+
+def _solve_all_goals(args: argparse.Namespace, robot, goals, method: str, options: dict, html) -> int:
+    """``evoik solve ROBOT --goals FILE --all``: every solution of the goal list (``solve_all``), one line each with
+    its largest errors (JSON: each solution's q and per-goal errors); exit 1 when there is none. ``--html`` /
+    ``--view`` show the first solution (or the best approximation) with the goals, the others as ghosts."""
+    from .api import solve_all
+
+    sols = solve_all(robot, goals, method=method, seed=args.seed, **options)
+    res = sols.result
+    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
+             "q_pinocchio": [float(v) for v in robot.full_configuration(s.q)],
+             "goal_errors": [{"frame": g.frame, "position_error_m": p, "rotation_error_rad": o,
+                              "met": bool(g.met(p, o))} for g, (p, o) in zip(goals, s.goal_errors, strict=True)]}
+            for s in sols]
+    info = {"robot": robot.name, "floating_base": robot.floating_base, "method": res.method or method,
+            "success": bool(sols), "count": len(sols), "message": sols.message, "goals_file": str(args.goals),
+            "joint_names": list(robot.joint_names), "solutions": rows, "time_s": res.time_s, "seed": args.seed}
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        def errors(s):
+            rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
+            return f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
+
+        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) of {len(goals)} goals in "
+                         f"{res.time_s * 1e3:.2f} ms", errors)
+    if html is not None or args.view:
+        from .viz import Viewer
+
+        with Viewer(robot) as viewer:
+            viewer.show_solution(sols[0] if sols else res, goals, scene=options.get("scene"),
+                                 margin=options.get("margin", 0.0))
+            if sols:
+                viewer.show_solutions(sols)
+            if html is not None:
+                print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
+            if args.view:
+                viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+    return 0 if sols else 1
 
 
 def _answer_fields(args: argparse.Namespace, res) -> dict:
@@ -526,21 +567,28 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        unit = "rad" if args.rad else "deg"
-        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {len(sols)} solution(s) in "
-              f"{res.time_s * 1e3:.2f} ms ({sols.message})")
-        if sols:
-            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
-        for k, s in enumerate(sols):
-            shown = _shown(robot, s.q, args.rad)
+        def errors(s):
             rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
             free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
-            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in shown) + f"  (position error {s.position_error:.1e} m"
-                  f"{rot}{free})")
+            return f"position error {s.position_error:.1e} m{rot}{free}"
+
+        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) in {res.time_s * 1e3:.2f} ms",
+                         errors)
     if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
         _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols,
                        scene=scene, margin=options.get("margin", 0.0))
     return 0 if sols else 1
+
+
+def _print_solutions(args: argparse.Namespace, robot, sols, method: str, what: str, errors) -> None:
+    """``evoik solve --all``'s text: a heading (the method, ``what`` was found, the search's message), then a line
+    per solution: its index, q (deg, or rad with ``--rad``) and ``errors(solution)`` in parentheses."""
+    unit = "rad" if args.rad else "deg"
+    print(f"{robot.name} ({robot.n} joints), method {method}: {what} ({sols.message})")
+    if sols:
+        print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+    for k, s in enumerate(sols):
+        print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors(s)})")
 
 
 def _print_solution(robot, res, info: dict, rad: bool) -> None:
@@ -674,8 +722,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
     p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
-    p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
-                   "memetic-all), one per line; with --html/--view drawn as ghosts; exit 1 when there is none")
+    p.add_argument("--all", action="store_true", help="every distinct solution of the target or of the --goals "
+                   "list (solve_all; default method memetic-all), one per line; with --html/--view drawn as ghosts; "
+                   "exit 1 when there is none")
     p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles, see Scene.from_file): "
                    "answers must be free of collisions with it and with the robot itself; exit 1 when the answer "
                    "collides; --html/--view draw the obstacles and the links in collision in red")

@@ -33,7 +33,8 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "shortfall_text", "target_box"]
+           "Target", "check_pro_delta", "coerce_scene", "errors_text", "goals_shortfall_text", "shortfall_text",
+           "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
 #: of a reachable arm's configuration, so a search prefers every collision-free configuration.
@@ -237,6 +238,46 @@ class IKProblem:
         """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""
         return all(g.met(p, r) for g, (p, r) in zip(self.goals, errors, strict=True))
 
+    def goal_violation(self, Q: np.ndarray) -> np.ndarray:
+        """(N,) how far each row of ``Q`` (N, n) is from meeting every goal: the sum over the goals of the position
+        error beyond the goal's ``tolerance`` (m) plus the rotation angle beyond its ``rotation_tolerance`` (rad);
+        0 exactly where every goal is met. Counts N evaluations (NSGA-II's constraint over a goal list)."""
+        pos, rot = self._goal_population_errors(Q)
+        self.evaluations += Q.shape[0]
+        tol = np.array([g.tolerance for g in self.goals])
+        rtol = np.array([g.rotation_tolerance if g.has_orientation else np.inf for g in self.goals])
+        return (np.maximum(pos - tol, 0.0) + np.maximum(rot - rtol, 0.0)).sum(axis=1)
+
+    def rows_met(self, Q: np.ndarray) -> np.ndarray:
+        """(N,) bool: whether each row of ``Q`` (N, n) solves the problem, by the criterion of :func:`evoik_pin.solve`'s
+        verdict: every goal within its own tolerances (a goal list), or the errors within ``tolerance`` and
+        ``rotation_tolerance`` (one target). Bookkeeping: no evaluation is counted."""
+        before = self.evaluations
+        if self.goals is not None:
+            ok = self.goal_violation(Q) <= 0.0
+        else:
+            ev = self.evaluate(Q)
+            ok = np.asarray(self.succeeded(ev.position_error, ev.orientation_error), dtype=bool)
+        self.evaluations = before
+        return ok
+
+    def tightened(self, tolerance: float) -> IKProblem:
+        """This problem (robot, box, target or goals) with every tolerance at most ``tolerance`` (m and rad): for
+        refinement runs of the LM engine, which stop once the tolerances are met. A goal list keeps its goals (their
+        own tolerances still judge answers); only the kernel's goal stack gets the smaller tolerances."""
+        if self.goals is None:
+            return IKProblem(self.robot, self.target, lower=self.lower, upper=self.upper,
+                             tolerance=min(tolerance, self.tolerance),
+                             rotation_tolerance=min(tolerance, self.rotation_tolerance))
+        from .solvers.lm.layout import G_RTOL, G_TOL
+
+        tight = replace(self, goals=list(self.goals), evaluations=0)
+        stack, pt, Rt = tight._goal_stack
+        spec = stack.spec.copy()
+        spec[:, [G_TOL, G_RTOL]] = np.minimum(spec[:, [G_TOL, G_RTOL]], tolerance)
+        tight._goal_stack = [replace(stack, spec=spec), pt, Rt]
+        return tight
+
     def evaluate(self, Q: np.ndarray) -> Evaluation:
         """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors
         over the goals)."""
@@ -401,4 +442,12 @@ def shortfall_text(problem: IKProblem, pos: float, rot: float | None) -> str:
     accepted = f"position error <= {problem.tolerance:g} m" + (
         "" if rot is None else f", orientation error <= {problem.rotation_tolerance:g} rad")
     return f"best {errors_text(pos, rot)} exceeds the tolerance ({accepted})"
+
+
+def goals_shortfall_text(problem: IKProblem, errors, pos: float, rot: float | None) -> str:
+    """'best position error ... m[, orientation error ... rad] (largest over the goals); goals not met: frame, ...'
+    for the messages of failed goal-list solves: ``errors`` each goal's (:meth:`IKProblem.goal_errors`), ``pos`` and
+    ``rot`` the largest of them."""
+    unmet = [g.frame for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
+    return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
 
