@@ -35,7 +35,6 @@ from ..solvers.lm.layout import (
     KIND_POSE_AXES,
     KIND_POSITION_BAND,
 )
-from .goal import DEFAULT_GOAL_TOLERANCE
 
 __all__ = ["AXES", "band_aux", "band_errors", "parse_band", "parse_free"]
 
@@ -84,9 +83,10 @@ def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | Non
     return band
 
 
-def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...]) -> np.ndarray:
+def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:
     """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes`` (a slice of :data:`AXES`):
-    ``band`` (len(axes),) half-widths or None (a norm tolerance), ``free`` the free axes' names."""
+    ``band`` (len(axes),) half-widths or None (a norm tolerance), ``free`` the free axes' names; ``accuracy`` (m,
+    rad) the narrowest band (the goals' default tolerance)."""
     aux = np.full(AUX_SIZE, np.inf)
     aux[AUX_SWING] = -1.0
     for i, name in enumerate(AXES):
@@ -97,8 +97,8 @@ def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ..
         else:
             b = band[axes.index(name)]
             if np.isfinite(b):
-                b = max(b, DEFAULT_GOAL_TOLERANCE)
-                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * DEFAULT_GOAL_TOLERANCE, b
+                b = max(b, accuracy)
+                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * accuracy, b
     free_rot = [i for i in (3, 4, 5) if AXES[i] in free]
     if band is None and len(free_rot) == 1:
         aux[AUX_SWING] = free_rot[0] - 3

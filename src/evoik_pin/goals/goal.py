@@ -10,6 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError
+from .bands import band_errors
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "number"]
 
@@ -80,8 +81,6 @@ class Goal:
         aux = self.aux()
         if aux is None:
             return None
-        from .bands import band_errors  # bands imports this module
-
         return band_errors(self.kind, P, R, pt, Rt, aux)
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract

@@ -68,7 +68,7 @@ class Orientation(Goal):
         return np.zeros(3), self.target.copy()
 
     def aux(self) -> np.ndarray:
-        return band_aux(self.band, self.free, _ROTATION_AXES)
+        return band_aux(self.band, self.free, _ROTATION_AXES, DEFAULT_GOAL_TOLERANCE)
 
     def __repr__(self) -> str:
         rpy = np.round(pin.rpy.matrixToRpy(self.target), 6).tolist()

@@ -7,8 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import TargetError
-from ..errors import OptionError
+from ..errors import OptionError, TargetError
 from ..solvers.lm.layout import KIND_POSE, KIND_POSE_AXES
 from ..target import Target
 from .bands import AXES, band_aux, parse_band, parse_free
@@ -76,7 +75,7 @@ class Pose(Goal):
         return np.array(self.target.translation), np.array(self.target.rotation)
 
     def aux(self) -> np.ndarray | None:
-        return None if self.kind == KIND_POSE else band_aux(self.band, self.free, AXES)
+        return None if self.kind == KIND_POSE else band_aux(self.band, self.free, AXES, DEFAULT_GOAL_TOLERANCE)
 
     def __repr__(self) -> str:
         p = np.round(self.target.translation, 6).tolist()

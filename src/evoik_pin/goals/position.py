@@ -56,7 +56,7 @@ class Position(Goal):
         return self.target.copy(), np.eye(3)
 
     def aux(self) -> np.ndarray | None:
-        return None if self.band is None else band_aux(self.band, (), AXES[:3])
+        return None if self.band is None else band_aux(self.band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE)
 
     def __repr__(self) -> str:
         tol = f"{self.tolerance:g}" if self.band is None else f"{self.band.tolist()}"
