@@ -261,3 +261,36 @@ def test_de_reads_the_kinds_violations(ur5):
     """An evolutionary solver (DE) on a Direction goal: its population errors are the kind's angle."""
     r = ek.solve(ur5, [Direction(ur5.tip, [0, 0, 1], [0, 0, -1], tolerance=1e-2)], method="de", seed=1)
     assert r.success and _angle(ur5.fk(r.q).rotation[:, 2], [0, 0, -1]) <= 1e-2
+
+
+# ------------------------------------------------------------------------------------------- goals files
+@pytest.mark.parametrize("ext", ["yaml", "json"])
+def test_goals_files_keep_every_kind(tmp_path, ext):
+    from evoik_pin.goals_file import load_goals, save_goals
+
+    T = pin.SE3.Random()
+    goals = [Pose("a", T, free="rz"), Pose("b", T, tolerance=[0.002] * 3 + [0.1, 0.1, np.inf]),
+             Position("c", [1, 2, 3], tolerance=[0.1, np.inf, 0.2]), Orientation("d", T, free="rx"),
+             Orientation("e", T, tolerance=[0.1, 0.2, 0.3]), Direction("f", [0, 0, 1], [0, 0, -1], tolerance=1e-3),
+             LookAt("g", [1, 0, 0], [0.5, 0, 1.2], weight=2)]
+    back = load_goals(save_goals(goals, tmp_path / f"goals.{ext}"))
+    for a, b in zip(goals, back, strict=True):
+        assert type(a) is type(b) and repr(a) == repr(b)
+        assert (a.aux() is None and b.aux() is None) or np.array_equal(a.aux(), b.aux())
+
+
+def test_goals_files_name_what_is_wrong(tmp_path):
+    from evoik_pin.errors import GoalsFileError
+    from evoik_pin.goals_file import load_goals
+
+    cases = {"kind: direction\n    target: {direction: [0, 0, 1]}": "missing field 'axis'",
+             "kind: direction\n    axis: [0, 0]\n    target: {direction: [0, 0, 1]}": "axis must be a list of 3",
+             "kind: look_at\n    axis: [0, 0, 0]\n    target: {point: [0, 0, 1]}": "is zero, which points nowhere",
+             "kind: pose\n    free: w\n    target: {position: [0, 0, 0], rpy: [0, 0, 0]}": "unknown free axis 'w'",
+             "kind: pose\n    tolerance: [1, 2]\n    target: {position: [0, 0, 0], rpy: [0, 0, 0]}": "6 half-widths",
+             "kind: orientation\n    target: {position: [0, 0, 0]}": "unknown key"}
+    for text, match in cases.items():
+        path = tmp_path / "g.yaml"
+        path.write_text(f"goals:\n  - frame: tool0\n    {text}\n")
+        with pytest.raises(GoalsFileError, match=match):
+            load_goals(path)
