@@ -294,3 +294,18 @@ def test_goals_files_name_what_is_wrong(tmp_path):
         path.write_text(f"goals:\n  - frame: tool0\n    {text}\n")
         with pytest.raises(GoalsFileError, match=match):
             load_goals(path)
+
+
+def test_cli_solves_a_goals_file_of_new_kinds(tmp_path, capsys):
+    from evoik_pin.cli import main
+
+    path = tmp_path / "goals.yaml"
+    path.write_text("goals:\n"
+                    "  - {frame: tool0, kind: position, target: {position: [0.4, 0.1, 0.3]}}\n"
+                    "  - {frame: tool0, kind: direction, axis: [0, 0, 1], target: {direction: [0, 0, -1]}}\n")
+    assert main(["solve", "ur5", "--goals", str(path), "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "direction  free" in out and "kind       position error (m)" in out
+    assert main(["solve", "ur5", "--goals", str(path), "--seed", "1", "--json"]) == 0
+    rows = __import__("json").loads(capsys.readouterr().out)["goal_errors"]
+    assert rows[1]["position_error_m"] is None and rows[1]["rotation_error_rad"] <= 1e-6 and rows[1]["met"]
