@@ -41,15 +41,14 @@ class _Pointing(Goal):
     def _init_pointing(self, frame, axis, weight, tolerance, kind: int) -> None:
         self._init_common(frame, weight, tolerance, tolerance, kind, False)  # rad; the position error (None) is unused
         object.__setattr__(self, "axis", unit_vector(axis, f"{type(self).__name__} on {frame!r}: axis"))
+        aux = np.zeros(AUX_SIZE)
+        aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
+        self._set_aux(aux)
 
     @property
     def reports_angle(self) -> bool:
         return True
 
-    def aux(self) -> np.ndarray:
-        aux = np.zeros(AUX_SIZE)
-        aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
-        return aux
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -69,9 +69,14 @@ class Goal:
     has_position = True
 
     def aux(self) -> np.ndarray | None:
-        """The kernel's ``aux`` row of this goal (:mod:`evoik_pin.solvers.lm.layout`'s ``AUX_*``; None: its kind
-        reads none)."""
-        return None
+        """The kernel's ``aux`` row of this goal (:mod:`evoik_pin.solvers.lm.layout`'s ``AUX_*``, read-only; None:
+        its kind reads none), made once with the goal (:meth:`_set_aux`)."""
+        return self.__dict__.get("_aux")
+
+    def _set_aux(self, aux: np.ndarray | None) -> None:
+        if aux is not None:
+            aux.setflags(write=False)
+        object.__setattr__(self, "_aux", aux)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -92,9 +97,12 @@ class Goal:
         the kinds with bands, free axes or an axis to point, the errors their success test compares with the
         tolerances (:mod:`.bands`)."""
         pt, Rt = self.encode()
-        kinded = self.population_errors(np.array(T.translation)[None], np.array(T.rotation)[None], pt, Rt)
-        if kinded is not None:
-            pos, rot = float(kinded[0][0]), float(kinded[1][0])
+        aux = self.aux()
+        if aux is not None:  # the kernel's own errors (its success test's), by its compiled code for one pose
+            from ..solvers.lm.axes import axes_error
+
+            _, pos, rot = axes_error(self.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation),
+                                     pt, Rt, aux, np.empty((3, 3)), np.empty(3), np.empty(6))
             return (pos if self.has_position else None), (rot if self.reports_angle else None)
         pos = float(np.linalg.norm(T.translation - pt))
         if not self.has_orientation:

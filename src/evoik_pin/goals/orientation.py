@@ -63,12 +63,10 @@ class Orientation(Goal):
         object.__setattr__(self, "target", np.array(R))
         object.__setattr__(self, "band", band)
         object.__setattr__(self, "free", free)
+        self._set_aux(band_aux(band, free, _ROTATION_AXES, DEFAULT_GOAL_TOLERANCE))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(3), self.target.copy()
-
-    def aux(self) -> np.ndarray:
-        return band_aux(self.band, self.free, _ROTATION_AXES, DEFAULT_GOAL_TOLERANCE)
 
     def __repr__(self) -> str:
         rpy = np.round(pin.rpy.matrixToRpy(self.target), 6).tolist()

@@ -59,6 +59,7 @@ class Pose(Goal):
             band = np.where(np.isin(AXES, free), np.inf, band)
         object.__setattr__(self, "band", band)
         object.__setattr__(self, "free", free)
+        self._set_aux(None if kind == KIND_POSE else band_aux(band, free, AXES, DEFAULT_GOAL_TOLERANCE))
         if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
             raise TargetError(f"Pose on {frame!r}: a 3-vector is a position; use Position({frame!r}, p) or give a "
                               "4 x 4 pose or a pin.SE3")
@@ -73,9 +74,6 @@ class Pose(Goal):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)
-
-    def aux(self) -> np.ndarray | None:
-        return None if self.kind == KIND_POSE else band_aux(self.band, self.free, AXES, DEFAULT_GOAL_TOLERANCE)
 
     def __repr__(self) -> str:
         p = np.round(self.target.translation, 6).tolist()

@@ -40,6 +40,7 @@ class Position(Goal):
         else:  # the errors of a banded goal are its excess over the bands: met at 0
             self._init_common(frame, weight, 0.0, None, KIND_POSITION_BAND, False)
         object.__setattr__(self, "band", band)
+        self._set_aux(None if band is None else band_aux(band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE))
         if isinstance(target, pin.SE3) or np.shape(target) == (4, 4):
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m); use Pose({frame!r}, T) for a pose")
         try:
@@ -54,9 +55,6 @@ class Position(Goal):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)
-
-    def aux(self) -> np.ndarray | None:
-        return None if self.band is None else band_aux(self.band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE)
 
     def __repr__(self) -> str:
         tol = f"{self.tolerance:g}" if self.band is None else f"{self.band.tolist()}"
