@@ -29,7 +29,7 @@ __all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT
            "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
            "GoalArrays", "GoalStack", "TargetArrays", "box_constants", "encode_target", "encode_targets",
            "kernel_params", "problem_goals", "target_kind", "wrapping_joints", "KIND_POSE_AXES", "KIND_POSITION_BAND",
-           "KIND_ORIENTATION", "KIND_DIRECTION", "KIND_LOOK_AT", "ANGLE_KINDS"]
+           "KIND_ORIENTATION", "KIND_DIRECTION", "KIND_LOOK_AT", "ANGLE_KINDS", "POSITIONLESS_KINDS"]
 
 TWO_PI = 2.0 * np.pi
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
@@ -66,6 +66,8 @@ KIND_POSE_AXES, KIND_POSITION_BAND, KIND_ORIENTATION, KIND_DIRECTION, KIND_LOOK_
 TASK_ROWS.update({KIND_POSE_AXES: (0, 1, 2, 3, 4, 5), KIND_POSITION_BAND: (0, 1, 2), KIND_ORIENTATION: (3, 4, 5),
                   KIND_DIRECTION: (3, 4, 5), KIND_LOOK_AT: (3, 4, 5)})
 ORIENTED_KINDS += (KIND_POSE_AXES, KIND_ORIENTATION)
+#: Kinds whose goals put the frame's origin nowhere (their target's pt is a direction or a point to look at).
+POSITIONLESS_KINDS = (KIND_ORIENTATION, KIND_DIRECTION, KIND_LOOK_AT)
 #: Kinds whose errors include an angle (rad): the oriented ones and the pointing ones.
 ANGLE_KINDS = ORIENTED_KINDS + (KIND_DIRECTION, KIND_LOOK_AT)
 #: Their goals' ``aux`` columns. Bands (pose with axes, position with bands, orientation): AUX_INNER (6,) the
