@@ -354,3 +354,15 @@ def test_solve_many_keeps_each_lists_bands_and_axes(ur5):
             assert np.linalg.norm(Tq.translation - Tt.translation) <= 1e-6
         else:
             assert _angle(Tq.rotation[:, 0], Tt.rotation[:, 0]) <= 1e-6
+
+
+def test_viewer_marks_the_goals_that_have_a_place(ur5):
+    """show_goals: a LookAt's point gets a sphere; an Orientation or a Direction, no place, gets no marker."""
+    from evoik_pin.viz import Viewer
+
+    T = ur5.fk(np.zeros(ur5.n))
+    goals = [Direction(ur5.tip, [0, 0, 1], [0, 0, -1]), Orientation("wrist_3_link", T),
+             LookAt("wrist_2_link", [0, 0, 1], [0.5, 0.2, 0.3])]
+    with Viewer(ur5) as v:
+        assert v.show_goals(goals, labels=False) == ["goals/wrist_2_link"]
+        assert v.scene["goals/wrist_2_link"] == "goal point: wrist_2_link"
