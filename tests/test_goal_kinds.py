@@ -180,7 +180,7 @@ def test_kernel_errors_equal_the_numpy_twins(ur5, seed, which):
     goal = _goals_on(ur5.tip, ur5.fk(rng.uniform(ur5.lower, ur5.upper)), rng)[which]
     _, (pos, rot) = _residual(ur5, goal, q)
     p_err, r_err = goal.errors(ur5.fk(q))
-    assert (p_err is None) == (not goal.has_position) and r_err is not None or isinstance(goal, Position)
+    assert (p_err is None) == (not goal.has_position) and (r_err is None) == isinstance(goal, Position)
     assert (p_err or 0.0) == pytest.approx(pos, abs=1e-12) and (r_err or 0.0) == pytest.approx(rot, abs=1e-9)
     ev = IKProblem(ur5, [goal]).evaluate(q[None])
     assert ev.position_error[0] == pytest.approx(pos, abs=1e-12)
@@ -237,6 +237,11 @@ def test_position_band_and_orientation_and_direction(ur5):
     r = ek.solve(ur5, [Orientation(ur5.tip, T.rotation)], seed=1, **BUDGET)
     assert r.success and np.linalg.norm(pin.log3(T.rotation.T @ ur5.fk(r.q).rotation)) <= 1e-6
     assert r.goal_errors[0][0] is None and r.goal_errors[0][1] <= 1e-6
+    Tt = T * pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.05]))  # 5 cm along the tool's z, free to slide there
+    r = ek.solve(ur5, [Pose(ur5.tip, Tt, free="z")], seed=1, **BUDGET)
+    Tq = ur5.fk(r.q)
+    v = Tt.rotation.T @ (Tq.translation - Tt.translation)
+    assert r.success and np.linalg.norm(v[:2]) <= 1e-6 and np.linalg.norm(pin.log3(Tt.rotation.T @ Tq.rotation)) <= 1e-6
     goals = [Position(ur5.tip, T.translation), Direction(ur5.tip, [0, 0, 1], [0, 0, -1])]  # a tool pointing down
     r = ek.solve(ur5, goals, seed=1, **BUDGET)
     Tq = ur5.fk(r.q)
