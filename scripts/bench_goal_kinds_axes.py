@@ -173,7 +173,7 @@ def run(args) -> str:
               f"{stats['free'][2] / stats['pose'][2]:.2f}x the single target's (goal: <= 1.1x); "
               f"largest errors of the successful free answers: position {worst_free[0]:.1e} m, "
               f"z axis {worst_free[1]:.1e} rad.",
-              f"- band: the largest component over its half-width, over the successful answers: {worst_band:.3f} "
+              f"- band: the largest component over its half-width, over the successful answers: {worst_band:.6f} "
               "(<= 1: inside).",
               f"- LookAt: largest gaze-axis angle of the successful answers {worst_gaze:.1e} rad."]
     lines += [f"- failed: {text}" for text in FAILURES] or [
