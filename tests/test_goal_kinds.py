@@ -46,6 +46,9 @@ def _angle(a, b) -> float:
 def test_kinds_check_their_inputs():
     T = pin.SE3.Random()
     assert Pose("hand", T).kind == KIND_POSE and Position("hand", [0, 0, 0]).kind == KIND_POSITION
+    for goal in (Pose("hand", T, tolerance=None), Position("hand", [0, 0, 0], tolerance=None),
+                 Orientation("hand", T, tolerance=None), Direction("hand", [1, 0, 0], [0, 0, 1], tolerance=None)):
+        assert goal.tolerance == goal.rotation_tolerance == 1e-6  # None: the default
     g = Pose("hand", T, free="rz")
     assert g.kind == KIND_POSE_AXES and g.free == ("rz",) and g.tolerance == 1e-6 and "free='rz'" in repr(g)
     assert Pose("hand", T, free=["rx", "z"]).free == ("z", "rx")

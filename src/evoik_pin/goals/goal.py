@@ -54,7 +54,8 @@ class Goal:
         weight = number(self.weight, f"weight of the goal on {self.frame!r}", "a finite number > 0")
         if weight <= 0:
             raise OptionError(f"weight of the goal on {self.frame!r} must be > 0, got {self.weight!r}")
-        tol = number(self.tolerance, f"tolerance (m) of the goal on {self.frame!r}", "a finite number >= 0")
+        tol = DEFAULT_GOAL_TOLERANCE if self.tolerance is None else number(  # None: the default
+            self.tolerance, f"tolerance (m) of the goal on {self.frame!r}", "a finite number >= 0")
         rtol = tol if self.rotation_tolerance is None else number(
             self.rotation_tolerance, f"rotation_tolerance (rad) of the goal on {self.frame!r}", "a finite number >= 0")
         if tol < 0 or rtol < 0:

@@ -21,7 +21,7 @@ class Pose(Goal):
     """The frame's position and orientation at ``target``: a (4, 4) homogeneous matrix, a ``pin.SE3`` or a
     :class:`~evoik_pin.problem.Target` with a rotation, in the robot's base frame (m).
 
-    Args: frame, target, then ``weight`` (> 0, default 1), ``tolerance`` (m, default 1e-6),
+    Args: frame, target, then ``weight`` (> 0, default 1), ``tolerance`` (m, default (or None) 1e-6),
     ``rotation_tolerance`` (rad, default ``tolerance``) and ``free``.
 
     ``tolerance`` is either one number, the bound of the position error's norm (and ``rotation_tolerance`` of the

@@ -19,7 +19,7 @@ __all__ = ["Position"]
 class Position(Goal):
     """The frame's origin at ``target``, a 3-vector (m) in the robot's base frame; orientation free.
 
-    Args: frame, target, then ``weight`` (> 0, default 1) and ``tolerance`` (m, default 1e-6): one number, the
+    Args: frame, target, then ``weight`` (> 0, default 1) and ``tolerance`` (m, default (or None) 1e-6): one number, the
     bound of the position error's norm, or 3 numbers, half-widths of the error ``p - p_t`` along the BASE frame's
     x, y, z (a position target has no frame of its own; ``inf``: free), met when every component is within its
     band. See :mod:`evoik_pin.goals.bands`.
