@@ -87,7 +87,10 @@ problems:
 
 
 def test_goal_kinds_are_the_goal_classes():
-    assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {"pose": Pose, "position": Position}
+    from evoik_pin.goals import Direction, LookAt, Orientation
+
+    assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {
+        "pose": Pose, "position": Position, "orientation": Orientation, "direction": Direction, "look_at": LookAt}
 
 
 # ------------------------------------------------------------------ errors

@@ -389,8 +389,8 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     for goal, (pos, rot) in zip(goals, res.goal_errors, strict=True):
         rows.append({"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos,
                      "rotation_error_rad": rot, "met": bool(goal.met(pos, rot)),
-                     "tolerance_m": goal.tolerance,
-                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.has_orientation else None,
+                     "tolerance_m": goal.tolerance if goal.has_position else None,
+                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None,
                      "weight": goal.weight})
     info = {
         "robot": robot.name,
@@ -484,10 +484,12 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
 def _print_goal_errors(rows: list[dict]) -> None:
     """One line per goal: frame, kind, position error (m), rotation error (rad, or "free"), met."""
     width = max(len("frame"), *(len(r["frame"]) for r in rows))
-    print(f"  #  {'frame':{width}s}  kind      position error (m)  rotation error (rad)  met")
+    kw = max(len("kind"), *(len(r["kind"]) for r in rows))  # orientation, look_at, ...
+    print(f"  #  {'frame':{width}s}  {'kind':{kw}s}  position error (m)  rotation error (rad)  met")
     for k, r in enumerate(rows):
         rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
-        print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:8s}  {r['position_error_m']:<18.3e}  {rot:<20s}  "
+        pos = "free" if r["position_error_m"] is None else f"{r['position_error_m']:.3e}"  # orientation, pointing
+        print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  "
               f"{'yes' if r['met'] else 'NO'}")
 
 

@@ -24,6 +24,32 @@ Positions in metres, in the robot's base frame (the URDF root; with a floating b
         kind: pose
         target: {matrix: [[1, 0, 0, 0.0], [0, 1, 0, -0.085], [0, 0, 1, 0.0], [0, 0, 0, 1]]}   # or a 4 x 4 pose
 
+More kinds (:mod:`evoik_pin.goals`)::
+
+      - frame: tool0
+        kind: pose
+        target: {position: [0.4, 0.1, 0.3], rpy: [180, 0, 0]}
+        free: rz                          # optional: axes left free, any of x y z rx ry rz (a string or a list)
+      - frame: tool0
+        kind: pose
+        target: {position: [0.4, 0.1, 0.3], rpy: [180, 0, 0]}
+        tolerance: [0.002, 0.002, 0.002, 0.087, 0.087, .inf]   # per-axis half-widths (m x3, rad x3; .inf: free)
+      - frame: tool0
+        kind: orientation                 # target: rpy / rpy_rad alone, or a 3 x 3 (or 4 x 4) matrix
+        target: {rpy: [180, 0, 0]}
+      - frame: tool0
+        kind: direction                   # the frame's axis along a direction (base frame)
+        axis: [0, 0, 1]
+        target: {direction: [0, 0, -1]}
+      - frame: gaze
+        kind: look_at                     # the frame's axis pointing at a point (m, base frame)
+        axis: [1, 0, 0]
+        target: {point: [0.5, 0.0, 1.2]}
+
+A position's ``tolerance`` may be 3 half-widths (base frame x y z), an orientation's 3 (rx ry rz) with ``free``
+among rx ry rz; direction and look_at take ``weight`` and ``tolerance`` (rad). In JSON write ``"inf"`` for an
+infinite half-width.
+
 A pose's target is ``position`` with one of ``rpy`` (degrees, as ``evoik solve --rpy``) and ``rpy_rad``
 (radians), or a ``matrix`` (4 x 4 homogeneous, m) alone; a position's target is ``position`` alone. The top level
 may also be the bare list of goals. Numbers written ``1e-6`` (which YAML 1.1 reads as text) are read as numbers.
@@ -58,7 +84,7 @@ import numpy as np
 
 from .datafile import Flow, data_format, dump_data, read_data, write_text
 from .errors import FrameError, GoalsFileError, OptionError, TargetError
-from .goals import DEFAULT_GOAL_TOLERANCE, Goal, Pose, Position, bind, is_goal_list
+from .goals import DEFAULT_GOAL_TOLERANCE, Direction, Goal, LookAt, Orientation, Pose, Position, bind, is_goal_list
 from .target import Target
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
@@ -163,6 +189,54 @@ def _position_target(target: dict) -> np.ndarray:
     return _numbers(target["position"], 3, "target.position (m)")
 
 
+def _orientation_target(target: dict) -> np.ndarray:
+    """An orientation's target: ``rpy`` (degrees) or ``rpy_rad`` alone, or a 3 x 3 (or 4 x 4) ``matrix``."""
+    _unknown_keys(target, ("rpy", "rpy_rad", "matrix"), "target")
+    if len(target) != 1:
+        raise GoalsFileError("target of an orientation needs one of rpy: [r, p, y] (degrees), rpy_rad: (rad) and "
+                             f"matrix: a 3 x 3 rotation, got {', '.join(target) or 'none'}")
+    if "matrix" in target:
+        rows = target["matrix"]
+        if not isinstance(rows, list) or len(rows) not in (3, 4):
+            raise GoalsFileError(f"target.matrix must be 3 rows of 3 numbers (a rotation), got {rows!r}")
+        return np.array([_numbers(row, len(rows), f"target.matrix row {k}") for k, row in enumerate(rows)])
+    key = next(iter(target))
+    rpy = _numbers(target[key], 3, f"target.{key}")
+    return Target.from_rpy(np.zeros(3), np.radians(rpy) if key == "rpy" else rpy).rotation
+
+
+def _vector_target(name: str) -> Callable[[dict], np.ndarray]:
+    """The reader of a target that is one 3-vector under the key ``name`` (direction, point)."""
+    def read(target: dict) -> np.ndarray:
+        _unknown_keys(target, (name,), "target")
+        if name not in target:
+            raise GoalsFileError(f"target needs {name}: [x, y, z]")
+        return _numbers(target[name], 3, f"target.{name}")
+    return read
+
+
+def _tolerance(value, what: str):
+    """A tolerance: one number, or a list of half-widths (``.inf`` or ``"inf"``: free)."""
+    if not isinstance(value, list):
+        return _number(value, what)
+    return [math.inf if isinstance(v, str) and v.strip().lower() in ("inf", ".inf") or v == math.inf
+            else _number(v, f"{what}[{k}]") for k, v in enumerate(value)]
+
+
+def _free(value, what: str):
+    if isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value)):
+        return value
+    raise GoalsFileError(f"{what} must name axes (a string such as 'rz' or a list of names), got {value!r}")
+
+
+def _axis(value, what: str) -> np.ndarray:
+    return _numbers(value, 3, what)
+
+
+#: How the optional fields other than numbers are read (the others: :func:`_number`).
+_FIELD_READERS = {"tolerance": _tolerance, "free": _free, "axis": _axis}
+
+
 def _matrix_text(goal: Pose) -> dict:
     return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
 
@@ -174,18 +248,35 @@ def _position_text(goal: Position) -> dict:
 @dataclass(frozen=True)
 class GoalKind:
     """One ``kind:`` of a goals file: its goal class, the optional fields it takes (besides frame, kind and
-    target), how its ``target:`` mapping is read and how a goal's target is written."""
+    target), how its ``target:`` mapping is read and how a goal's target is written; ``make`` (frame, target,
+    **fields) -> goal where the class takes its arguments in another order (None: the class)."""
 
     cls: type
     fields: tuple[str, ...]
     read_target: Callable[[dict], object]
     write_target: Callable[[Goal], dict]
+    make: Callable | None = None
+
+
+def _pointing(cls) -> Callable:
+    """``make`` of a pointing kind: its required ``axis`` field first."""
+    def make(frame, target, axis=None, **options):
+        if axis is None:
+            raise GoalsFileError(f"missing field 'axis' (a {cls.__name__} goal points the frame's axis: [x, y, z])")
+        return cls(frame, axis, target, **options)
+    return make
 
 
 #: The goal kinds a goals file takes, by their ``kind:`` name.
 GOAL_KINDS = {
-    "pose": GoalKind(Pose, ("weight", "tolerance", "rotation_tolerance"), _pose_target, _matrix_text),
+    "pose": GoalKind(Pose, ("weight", "tolerance", "rotation_tolerance", "free"), _pose_target, _matrix_text),
     "position": GoalKind(Position, ("weight", "tolerance"), _position_target, _position_text),
+    "orientation": GoalKind(Orientation, ("weight", "tolerance", "free"), _orientation_target,
+                            lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]}),
+    "direction": GoalKind(Direction, ("weight", "tolerance", "axis"), _vector_target("direction"),
+                          lambda g: Flow(direction=[float(v) + 0.0 for v in g.direction]), _pointing(Direction)),
+    "look_at": GoalKind(LookAt, ("weight", "tolerance", "axis"), _vector_target("point"),
+                        lambda g: Flow(point=[float(v) + 0.0 for v in g.point]), _pointing(LookAt)),
 }
 
 
@@ -214,10 +305,11 @@ def _goal(entry, what: str) -> Goal:
     except (GoalsFileError, TargetError) as exc:
         text = str(exc)
         raise GoalsFileError(f"{what}: {text if text.startswith('target') else 'target: ' + text}") from None
-    options = {key: _number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
+    options = {key: _FIELD_READERS.get(key, _number)(entry[key], f"{what}: {key}") for key in kind.fields
+               if key in entry}
     try:
-        return kind.cls(frame, target, **options)
-    except (OptionError, TargetError) as exc:
+        return (kind.make or kind.cls)(frame, target, **options)
+    except (OptionError, TargetError, GoalsFileError) as exc:
         raise GoalsFileError(f"{what}: {exc}") from None
 
 
@@ -302,8 +394,16 @@ def _entry(goal: Goal) -> dict:
     name, kind = _kind_of(goal)
     entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
     defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
+    band = getattr(goal, "band", None)
     for key in kind.fields:
-        if getattr(goal, key) != defaults[key]:
+        if key == "tolerance" and band is not None:  # per-axis half-widths (inf: free)
+            entry[key] = [float(v) for v in band]
+        elif key == "free":
+            if goal.free:
+                entry[key] = " ".join(goal.free)
+        elif key == "axis":
+            entry[key] = [float(v) + 0.0 for v in goal.axis]
+        elif getattr(goal, key) != defaults[key]:
             entry[key] = float(getattr(goal, key))
     return entry
 
@@ -350,5 +450,6 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
 
 
 def goal_kind_name(goal: Goal) -> str:
-    """The ``kind:`` a goals file writes for ``goal`` (``"pose"``, ``"position"``)."""
+    """The ``kind:`` a goals file writes for ``goal`` (``"pose"``, ``"position"``, ``"orientation"``,
+    ``"direction"``, ``"look_at"``)."""
     return _kind_of(goal)[0]

@@ -211,7 +211,10 @@ class IKProblem:
         pos = np.sqrt((d * d).sum(axis=2))
         rot = np.zeros_like(pos)
         for g, goal in enumerate(self.goals):
-            if goal.has_orientation:
+            kinded = goal.population_errors(P[:, g], R[:, g], pt[g], Rt[g])  # bands, free axes, pointing
+            if kinded is not None:
+                pos[:, g], rot[:, g] = kinded
+            elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
         return pos, rot
 
@@ -228,8 +231,9 @@ class IKProblem:
 
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors
-        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list."""
-        pos = np.array([[p for p, _ in errors]])
+        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list. A goal's errors are those its success
+        test reads (for bands: the excess over them; for pointing goals: the angle as the rotation)."""
+        pos = np.array([[p or 0.0 for p, _ in errors]])  # None: a goal without a position (Orientation, ...)
         rot = np.array([[r or 0.0 for _, r in errors]])
         rots = [r for _, r in errors if r is not None]
         return float(pos.max()), (max(rots) if rots else None), float(self._goal_cost(pos, rot)[0])
@@ -284,7 +288,7 @@ class IKProblem:
         if self.goals is not None:
             pos, rot = self._goal_population_errors(Q)
             self.evaluations += Q.shape[0]
-            oriented = any(g.has_orientation for g in self.goals)
+            oriented = any(g.reports_angle for g in self.goals)
             return Evaluation(self._penalized(Q, self._goal_cost(pos, rot)), pos.max(axis=1),
                               rot.max(axis=1) if oriented else None)
         target = self.target

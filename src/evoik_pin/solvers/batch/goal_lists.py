@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import FrameError, TargetError
 from ...goals import Goal, bind, is_goal_list
-from ..lm.layout import G_WEIGHT, GoalArrays
+from ..lm.layout import G_WEIGHT, POSITIONLESS_KINDS, GoalArrays
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
@@ -34,8 +34,9 @@ def is_goal_batch(targets) -> bool:
 
 def structure(goals) -> tuple:
     """What problems sharing a goal stack have in common: each goal's (frame, kind, weight, tolerance m,
-    rotation tolerance rad), in order."""
-    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance) for g in goals)
+    rotation tolerance rad, and its aux row's bytes: bands, free axes, a pointing axis), in order."""
+    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                  None if g.aux() is None else g.aux().tobytes()) for g in goals)
 
 
 class GoalBlock:
@@ -140,7 +141,9 @@ class GoalTree:
 
         self.table = table
         # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
-        self.spec = tuple(zip(stack.spec[:, G_WEIGHT].tolist(), (bool(o) for o in stack.oriented), strict=True))
+        weights = stack.spec[:, G_WEIGHT].tolist()
+        self.spec = tuple((w, bool(o)) + ((False,) if k in POSITIONLESS_KINDS else ())  # SeedTable.goal_spec's
+                          for w, o, k in zip(weights, stack.oriented, stack.kinds, strict=True))
         F, _ = table.goal_table_features(tuple(stack.frames), self.spec)
         self.index = np.arange(table.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
         self.tree = cKDTree(F[self.index])

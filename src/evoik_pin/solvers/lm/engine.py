@@ -52,6 +52,7 @@ from .layout import (
     KIND_PLANAR,
     KIND_PLANAR_YAW,
     KIND_POSE,
+    KIND_POSE_AXES,
     KIND_POSITION,
     P_ITERATIONS,
     S_CONVERGED,
@@ -159,6 +160,10 @@ class LevenbergMarquardt:
         if engine == "python":
             from .reference import ReferenceLM
 
+            if any(k >= KIND_POSE_AXES for k in stack.kinds):  # bands, free axes, orientation, pointing
+                raise OptionError("the Python reference LM (engine='python') knows pose, position and planar goals "
+                                  "only; goals with tolerance bands or free axes, Orientation, Direction and LookAt "
+                                  "need the compiled engine (engine='compiled', the default)")
             self._reference = ReferenceLM(problem, damping, max_step, stall_window, stall_ratio, finish)
             return
         self._reference = None

@@ -47,6 +47,7 @@ import numpy as np
 from numba import njit
 
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
+from .axes import axes_error, axes_jacobian
 from .chain import coupled, expand, fold
 from .layout import (
     B_CHI,
@@ -66,9 +67,12 @@ from .layout import (
     GEO_NEAR,
     GEO_SLOW,
     GROW,
+    KIND_LOOK_AT,
+    KIND_ORIENTATION,
     KIND_PLANAR,
     KIND_PLANAR_YAW,
     KIND_POSE,
+    KIND_POSE_AXES,
     KIND_POSITION,
     LAMBDA_MAX,
     LAMBDA_MIN,
@@ -97,6 +101,10 @@ def task_size(kind):
     if kind == KIND_POSE:
         return 6
     if kind == KIND_POSITION or kind == KIND_PLANAR_YAW:
+        return 3
+    if kind == KIND_POSE_AXES:
+        return 6
+    if KIND_POSE_AXES < kind <= KIND_LOOK_AT:  # position with bands, orientation, direction, look-at
         return 3
     return 2
 
@@ -154,7 +162,10 @@ def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, wei
         r = int(spec[g, G_ROW])
         R, p = Rg[g], pg[g]
         frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
-        cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
+        if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # the kinds of .axes (tg[g], unused by them, as scratch)
+            cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g], e[r:r + task_size(kind)])
+        else:
+            cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
         c += cg
         ge[g, 0], ge[g, 1] = pos, rot
     if weighted:
@@ -211,12 +222,14 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A, B, E):
+def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
+                  B, E):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
     per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
     with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
-    goal's rows (:func:`goal_jacobian`), scaled by the square root of its weight (when ``weighted``, in a second
-    pass, as :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
+    goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G, 3, 3), for
+    its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
+    :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
     """
     n = J.shape[1]
     for g in range(spec.shape[0]):
@@ -227,7 +240,10 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, p
             fold(index, scale, Jx, J)
         else:
             frame_jacobian(rev, support[g], pg[g], Z, O, J)
-        goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
+        if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:
+            axes_jacobian(kind, Rg[g], pg[g], J, pt[g], Rt[g], gaux[g], rv, A, B, E, r)
+        else:
+            goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
     if weighted:
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
@@ -534,7 +550,8 @@ def _outcome(spec, ge, g_out):
     rot = np.nan
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
-        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW
+        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or (
+            kind == KIND_POSE_AXES or KIND_ORIENTATION <= kind <= KIND_LOOK_AT)  # an angle: .axes's kinds but one
         g_out[g, 0] = ge[g, 0]
         g_out[g, 1] = ge[g, 1] if oriented else np.nan
         pos = max(pos, ge[g, 0]) if ge[g, 0] == ge[g, 0] else ge[g, 0]  # a NaN error stays NaN
@@ -594,8 +611,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
     while it < max_it:
         it += 1
         if not have_E:
-            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-                          Bm, E)
+            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
+                          rv, A, Bm, E)
             have_E = True
         on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         if creeping and not (on_bound or on_bound_n):
@@ -657,7 +674,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
                 break
     if converged and finish and c > FINISHED:
         # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E)
+        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
+                      A, Bm, E)
         lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
                         Rj2,
