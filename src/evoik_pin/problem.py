@@ -249,7 +249,7 @@ class IKProblem:
         pos, rot = self._goal_population_errors(Q)
         self.evaluations += Q.shape[0]
         tol = np.array([g.tolerance for g in self.goals])
-        rtol = np.array([g.rotation_tolerance if g.has_orientation else np.inf for g in self.goals])
+        rtol = np.array([g.rotation_tolerance if g.reports_angle else np.inf for g in self.goals])
         return (np.maximum(pos - tol, 0.0) + np.maximum(rot - rtol, 0.0)).sum(axis=1)
 
     def rows_met(self, Q: np.ndarray) -> np.ndarray:
