@@ -44,6 +44,8 @@ DEFAULT_PRO_DELTA = np.pi / 100
 #: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
 #: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
 NEAR_UNBOUNDED = 1e3
+#: Most combinations of goal-set members a solve searches (:meth:`IKProblem.variants`).
+MAX_VARIANTS = 256
 
 
 def check_pro_delta(delta) -> float:
@@ -212,6 +214,14 @@ class IKProblem:
         for g, goal in enumerate(self.goals):
             if goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
+        for g in self.goal_sets:  # a goal set's violation: that of its member nearest by the goals' cost
+            for member in self.goals[g].alternatives[1:]:
+                pm, Rm = member.encode()
+                pos_m = np.linalg.norm(P[:, g] - pm, axis=1)
+                rot_m = relative_angle(Rm, R[:, g]) if member.has_orientation else np.zeros_like(pos_m)
+                better = pos_m + self.orientation_weight * rot_m < pos[:, g] + self.orientation_weight * rot[:, g]
+                pos[:, g] = np.where(better, pos_m, pos[:, g])
+                rot[:, g] = np.where(better, rot_m, rot[:, g])
         return pos, rot
 
     def _goal_cost(self, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
@@ -220,10 +230,77 @@ class IKProblem:
         return (pos + self.orientation_weight * rot) @ w
 
     def goal_errors(self, q: np.ndarray) -> list[tuple[float, float | None]]:
-        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order."""
+        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order (a goal
+        set's: those of its member :meth:`chosen` picks)."""
         fids = [self.robot.frame_id(g.frame) for g in self.goals]
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        if self.goal_sets:
+            return [self._member(g, T)[1] for g, T in zip(self.goals, poses, strict=True)]
         return [g.errors(T) for g, T in zip(self.goals, poses, strict=True)]
+
+    # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal_set)
+    @property
+    def goal_sets(self) -> list[int]:
+        """Indices of the goals that are goal sets (any one of several targets)."""
+        if self.goals is None:
+            return []
+        found = self.__dict__.get("_goal_set_indices")
+        if found is None or found[0] is not self.goals:
+            found = self.__dict__["_goal_set_indices"] = (self.goals, [i for i, g in enumerate(self.goals)
+                                                                       if g.alternatives is not None])
+        return found[1]
+
+    def _member(self, goal, T) -> tuple[int | None, tuple[float, float | None]]:
+        """(index of the member of ``goal`` its frame at pose ``T`` meets, or failing that is nearest to by
+        position + orientation_weight x angle; None for a single target), with that member's errors)."""
+        if goal.alternatives is None:
+            return None, goal.errors(T)
+        errs = [m.errors(T) for m in goal.alternatives]
+        met = [i for i, (m, e) in enumerate(zip(goal.alternatives, errs, strict=True)) if m.met(*e)]
+        i = met[0] if met else min(range(len(errs)), key=lambda k: errs[k][0] + self.orientation_weight
+                                   * (errs[k][1] or 0.0))
+        return i, errs[i]
+
+    def chosen(self, q: np.ndarray) -> list[int | None] | None:
+        """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
+        to), None for a goal with one target; None for a problem without a goal list."""
+        if self.goals is None:
+            return None
+        if not self.goal_sets:
+            return [None] * len(self.goals)
+        fids = [self.robot.frame_id(g.frame) for g in self.goals]
+        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        return [self._member(g, T)[0] for g, T in zip(self.goals, poses, strict=True)]
+
+    def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
+        """The single-target problems of a goal list with goal sets, one per combination of their members (the
+        in ``itertools.product`` order over the sets): (members chosen per goal, None for a
+        single target; the problem with those members as goals, sharing this one's box, q0 and scene). A list of
+        one (None choices, self) without goal sets. OptionError beyond ``most`` combinations."""
+        import copy
+        import itertools
+
+        sets = self.goal_sets
+        if not sets:
+            return [(tuple([None] * len(self.goals or ())), self)]
+        sizes = [len(self.goals[g].alternatives) for g in sets]
+        if math.prod(sizes) > most:
+            raise OptionError(f"goal sets of {' x '.join(map(str, sizes))} members make {math.prod(sizes)} "
+                              f"combinations; at most {most} are searched: give fewer members")
+        stack, pt, Rt = self._goal_stack
+        out = []
+        for combo in itertools.product(*[range(k) for k in sizes]):
+            goals, pt_c, Rt_c = list(self.goals), pt.copy(), Rt.copy()
+            choice = [None] * len(goals)
+            for g, m in zip(sets, combo, strict=True):
+                goals[g] = self.goals[g].alternatives[m]
+                pt_c[g], Rt_c[g] = goals[g].encode()
+                choice[g] = m
+            v = copy.copy(self)
+            v.goals, v._goal_stack, v.evaluations = goals, [stack, pt_c, Rt_c], 0
+            v.__dict__.pop("_goal_set_indices", None)
+            out.append((tuple(choice), v))
+        return out
 
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors

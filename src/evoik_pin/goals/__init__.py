@@ -12,6 +12,11 @@ frame), with its target expressed in the robot's base frame (for a floating base
   with a rotation;
 * :class:`Position`: position only (3 rows, m); its target a 3-vector (m).
 
+A goal set, ``Pose(frame, [T1, ..., Tk])`` or ``Position(frame, [p1, ..., pk])``, is met by any one of its members
+(:mod:`.goal_set`; ``Result.chosen``). Preferences (:mod:`.preferences`: :class:`Posture`,
+:class:`JointLimitMargin`, :class:`Manipulability`, :class:`MinimalDisplacement`) may join the list: met as well as
+the goals allow, never at their expense.
+
 Each goal checks its inputs when made (an :mod:`evoik_pin.errors` class naming what is wrong) and packs itself into
 the LM kernel's goal stack (:class:`~evoik_pin.solvers.lm.layout.GoalStack`: kind, frame, weight, tolerances);
 :func:`bind` checks a goal list against a robot (frames that exist and that some active joint moves, the same frame
@@ -24,5 +29,7 @@ from .binding import bind, is_goal_list
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .pose import Pose
 from .position import Position
+from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 
-__all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "Pose", "Position", "bind", "is_goal_list"]
+__all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "JointLimitMargin", "Manipulability", "MinimalDisplacement", "Pose",
+           "Position", "Posture", "Preference", "bind", "is_goal_list"]

@@ -10,6 +10,7 @@ import pinocchio as pin
 from ..errors import TargetError
 from ..solvers.lm.layout import KIND_POSE
 from ..target import Target
+from . import goal_set
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 
 __all__ = ["Pose"]
@@ -19,6 +20,9 @@ __all__ = ["Pose"]
 class Pose(Goal):
     """The frame's position and orientation at ``target``: a (4, 4) homogeneous matrix, a ``pin.SE3`` or a
     :class:`~evoik_pin.problem.Target` with a rotation, in the robot's base frame (m).
+
+    ``target`` may be a goal set: a list of poses or a (k, 4, 4) array, any one of which will do
+    (:mod:`.goal_set`).
 
     Args: frame, target, then ``weight`` (> 0, default 1), ``tolerance`` (m, default 1e-6) and
     ``rotation_tolerance`` (rad, default ``tolerance``).
@@ -32,6 +36,9 @@ class Pose(Goal):
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float = DEFAULT_GOAL_TOLERANCE,
                  rotation_tolerance: float | None = None) -> None:
         self._init_common(frame, weight, tolerance, rotation_tolerance, KIND_POSE, True)
+        if goal_set.is_set(target, (4, 4)):  # any one of several poses
+            return goal_set.init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance),
+                                     "Pose poses")
         if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
             raise TargetError(f"Pose on {frame!r}: a 3-vector is a position; use Position({frame!r}, p) or give a "
                               "4 x 4 pose or a pin.SE3")

@@ -1,0 +1,403 @@
+"""Choosing among answers: goal sets (any one of several targets), ``prefer="nearest" | "manipulability"``
+(TRAC-IK's Distance and Manip1) and preferences (:mod:`evoik_pin.goals.preferences`).
+
+* **Goal sets** (``Pose(frame, [T1, ..., Tk])``): the problem's combinations of members
+  (:meth:`~evoik_pin.problem.IKProblem.variants`) are ranked by the seed table's nearness (one matrix product for
+  all of them: the distance of each to its nearest table entry), then tried round by round: LM from ``q0`` and
+  each variant's nearest entry, then each one's next entries, the variants whose last run came nearest first. An
+  unreachable member costs a stalled LM run or two (about 10 us each), so ten members of which seven are out of
+  reach cost little more than one. When the table's starts are spent, memetic's own search runs on the variants
+  that came nearest, sharing the time left.
+* **prefer**: ``"first"`` stops at the first answer (memetic's behaviour); ``"nearest"`` and ``"manipulability"``
+  keep collecting answers for :data:`COLLECT_SHARE` of the budget (LM from ``q0`` first, then the table's
+  entries nearest each variant, then uniform random starts), then refine the best :data:`REFINE_COUNT` of them in
+  the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain) and return the best.
+  Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
+  box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.8 ms) unless given.
+* **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the first
+  answer is refined alone.
+
+Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
+the answers LM finds from random starts lie anywhere on the self-motion manifold, and a few projected steps take
+the best of them to the local optimum of the criterion (measured in ``scripts/bench_goal_kinds_prefer.py``: the
+refinement is what makes prefer="nearest" beat TRAC-IK's 5 ms Distance within 1 ms); on a non-redundant arm (UR10
+on a pose) the null space is empty and only the ranking of the distinct answers (at most 8 branches) acts.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ...errors import OptionError
+from ...goals.preferences import Manipulability, Posture
+from ...problem import errors_text, shortfall_text
+from ...result import Result
+from ..lm import LevenbergMarquardt, wrapping_joints
+from ..lm.layout import TASK_ROWS, target_kind
+from ..options import check_choice
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
+
+__all__ = ["COLLECT_SHARE", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "choose", "nearest_turn", "refine"]
+
+#: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
+PREFER = ("first", "nearest", "manipulability")
+#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead, a fifth of
+#: TRAC-IK's 5 ms Distance / Manip1 modes, which always spend their whole budget.
+DEFAULT_PREFER_TIMEOUT = 0.0008
+#: Share of the budget spent collecting answers before the best ones are refined.
+COLLECT_SHARE = 0.6
+#: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
+REFINE_COUNT = 3
+#: Null-space steps of one refinement at most; LM steps restoring the goals after each.
+REFINE_STEPS, RESTORE_ITERATIONS = 12, 10
+#: Largest null-space step (rad or m, Euclidean).
+MAX_REFINE_STEP = 0.5
+#: Table entries tried per variant of a goal set in the first rounds (at least).
+MIN_SEEDS_PER_VARIANT = 4
+
+
+def check_prefer(prefer) -> str:
+    """``prefer`` checked: one of :data:`PREFER`; OptionError naming them otherwise."""
+    return check_choice("prefer", prefer, PREFER)
+
+
+def nearest_turn(q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    """``q`` (n,) with each ``wrap`` joint (its range spans a full turn) moved by a multiple of 2 pi to the value
+    nearest ``q0`` that stays inside [lower, upper] (the same pose: a full turn)."""
+    if not wrap.any():
+        return q
+    two_pi = 2.0 * np.pi
+    shifted = q + two_pi * np.round((q0 - q) / two_pi)
+    shifted = np.where(shifted > upper, shifted - two_pi, shifted)
+    shifted = np.where(shifted < lower, shifted + two_pi, shifted)
+    ok = wrap & (shifted >= lower) & (shifted <= upper)
+    return np.where(ok, shifted, q)
+
+
+class Criterion:
+    """The sum of bound preferences (``prefer``'s term first), what answers are ranked and refined by."""
+
+    def __init__(self, terms: list) -> None:
+        self.terms = terms
+        self.curvature = sum(t.curvature for t in terms)
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    def cost(self, q: np.ndarray) -> float:
+        return float(sum(t.cost(q) for t in self.terms))
+
+    def null_gradient(self, q: np.ndarray, N: np.ndarray, f: float) -> np.ndarray:
+        """The cost's gradient in the null-space basis ``N`` (r, n) (orthonormal rows): analytic terms exactly,
+        the others (manipulability) by forward differences along each basis vector (``f``: the cost at q)."""
+        c = np.zeros(N.shape[0])
+        numeric = []
+        for t in self.terms:
+            g = t.gradient(q)
+            if g is None:
+                numeric.append(t)
+            else:
+                c += N @ g
+        if numeric:
+            h = 1e-6
+            f0 = sum(t.cost(q) for t in numeric)
+            for i in range(N.shape[0]):
+                c[i] += (sum(t.cost(q + h * N[i]) for t in numeric) - f0) / h
+        return c
+
+
+def _task_jacobian(problem, q: np.ndarray) -> np.ndarray:
+    """The goals' stacked base-frame Jacobian rows (LOCAL_WORLD_ALIGNED; rows, n) at ``q``: its null space is the
+    joint motion that leaves every goal where it is (a pose goal's log6 error has the same null space). Kinds not
+    in TASK_ROWS count all six rows (a smaller null space: safe)."""
+    robot = problem.robot
+    if problem.goals is None:
+        return robot.jacobian(q, "world")[list(TASK_ROWS[target_kind(problem.target)])]
+    blocks = [robot.jacobian(q, "world", of=g.frame)[list(TASK_ROWS.get(g.kind, range(6)))] for g in problem.goals]
+    return np.vstack(blocks)
+
+
+def _null_basis(E: np.ndarray) -> np.ndarray:
+    """Orthonormal basis (r, n) of the null space of ``E`` (rows, n)."""
+    _, s, Vt = np.linalg.svd(E)
+    rank = int(np.count_nonzero(s > 1e-9 * max(s[0], 1e-300))) if s.size else 0
+    return Vt[rank:]
+
+
+def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion, deadline: float | None,
+           steps: int = REFINE_STEPS) -> tuple[np.ndarray, float, int]:
+    """Lower ``criterion`` from an answer ``q`` (every goal met) by steps in the null space of the goals'
+    Jacobian: the projected gradient step (scaled by the criterion's curvature, so a quadratic term's step is
+    its minimum on the tangent plane; at most :data:`MAX_REFINE_STEP`), then an LM run from there restoring
+    every goal within its tolerance. A step is kept only when that run converges and the cost drops; otherwise
+    the step is halved. Returns (q, its cost, LM evaluations)."""
+    f = criterion.cost(q)
+    scale, evaluations = 1.0, 0
+    for _ in range(steps):
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
+        N = _null_basis(_task_jacobian(problem, q))
+        if N.shape[0] == 0:
+            break
+        c = criterion.null_gradient(q, N, f)
+        norm = float(np.linalg.norm(c))
+        if norm < 1e-12:
+            break
+        step = -(N.T @ c) / criterion.curvature if criterion.curvature > 0 else -(N.T @ c) * (0.2 / norm)
+        length = float(np.linalg.norm(step)) * scale
+        step *= scale * min(1.0, MAX_REFINE_STEP / max(length, 1e-300))
+        out = lm.run(q + step, RESTORE_ITERATIONS)
+        evaluations += out.evaluations
+        f_new = criterion.cost(out.q) if out.converged else np.inf
+        if f_new < f - 1e-15 * max(1.0, abs(f)):
+            q, f, scale = out.q, f_new, min(1.0, 2.0 * scale)
+        else:
+            scale *= 0.5
+            if scale < 1e-3:
+                break
+    return q, f, evaluations
+
+
+def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
+    """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
+    robot = problem.robot
+    first_frame = problem.goals[0].frame if problem.goals is not None else None
+    terms = []
+    if prefer == "nearest":
+        if problem.q0 is None:
+            raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+    elif prefer == "manipulability":
+        terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+    for p in preferences:
+        if isinstance(p, Manipulability):
+            terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap, first_frame))
+        else:
+            terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+    return Criterion(terms)
+
+
+def bind_preferences(problem, preferences) -> Criterion:
+    """The preferences checked against the problem's robot (errors naming the joint or frame), as a criterion."""
+    return _criterion(problem, "first", preferences, wrapping_joints(problem.robot, problem.lower, problem.upper))
+
+
+class _Variant:
+    """One combination of goal-set members (or the problem itself): its LM engine, its starts, its best run."""
+
+    def __init__(self, choice, problem, engine: str) -> None:
+        self.choice, self.problem = choice, problem
+        self.lm = LevenbergMarquardt(problem, engine=engine)
+        self.starts = iter(())
+        self.best_rank = np.inf
+        self.best = None
+
+
+def _variant_starts(table, variants, k: int, free) -> list[float]:
+    """Give each variant its lazy table starts (q0 comes before, from the caller) and return each one's distance to
+    its nearest table entry (the goals' summed nearness; inf without a table)."""
+    if table is None:
+        return [0.0] * len(variants)
+    first = variants[0].problem
+    if first.goals is None:  # one target on the tip (prefer= alone)
+        v = variants[0]
+        v.starts = (table.Q[i] for i in table.ranked(first.target, k, free))
+        return [0.0]
+    if len(first.goals) > 1:  # a whole robot: composed starts too (SeedTable.goal_starts)
+        for v in variants:
+            v.starts = table.goal_starts(v.problem, k, free)
+        return list(range(len(variants)))  # the sets' order
+    F, sq = table._goal_table_features(first.goals)
+    spec = table.goal_spec(first.goals)
+    P = np.stack([v.problem.goal_stack()[1] for v in variants])
+    R = np.stack([v.problem.goal_stack()[2] for v in variants])
+    f = table.goal_features(spec, P, R)  # (V, d)
+    D = sq[None] - 2.0 * (f @ F.T) + (f * f).sum(axis=1)[:, None]
+    if free is not None:
+        D[:, ~free] = np.inf
+    k = min(k, D.shape[1])
+    near = []
+    for v, d in zip(variants, D, strict=True):
+        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+        order = part[np.argsort(d[part])]
+        v.starts = (table.Q[i] for i in order)
+        near.append(float(d[order[0]]))
+    return near
+
+
+def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: float | None = None,
+           max_restarts: int | None = None, population: int = 32, generations: int = 3, polish_count: int = 8,
+           table_size: int | None = None, table_seeds: int | None = None, table_offset: int = 0, batch: int = 1,
+           iterations: int | None = None, engine: str = "compiled") -> Result:
+    """memetic over goal sets and with ``prefer`` / preferences (see the module docstring); memetic's options.
+
+    ``timeout`` (s): the budget; default memetic's (5 ms) for ``prefer="first"``, :data:`DEFAULT_PREFER_TIMEOUT`
+    for the others. ``table_offset`` is not used (the variants rank the table themselves).
+    """
+    from .memetic import DEFAULT_TIMEOUT, check_options, memetic, prepare
+
+    prefer = check_prefer(prefer)
+    if timeout is None and max_restarts is None:
+        timeout = DEFAULT_TIMEOUT if prefer == "first" else DEFAULT_PREFER_TIMEOUT
+    t_setup = time.perf_counter()
+    robot = problem.robot
+    from ..lm import DEFAULT_ITERATIONS
+
+    iterations = DEFAULT_ITERATIONS if iterations is None else iterations
+    (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, _, batch, iterations,
+     engine) = check_options(timeout=timeout, max_restarts=max_restarts, population=population,
+                             generations=generations, polish_count=polish_count, table_size=table_size,
+                             table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
+                             engine=engine, n=robot.n)
+    wrap = wrapping_joints(robot, problem.lower, problem.upper)
+    criterion = _criterion(problem, prefer, preferences, wrap)
+    goals = problem.goals is not None
+    variants = [_Variant(c, v, engine) for c, v in problem.variants()]
+    if table_seeds is None:
+        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals else DEFAULT_TABLE_SEEDS
+    use_table = table_size > 0 and table_seeds > 0
+    table, free = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine,
+                          problem.scene, problem.margin)
+    if table is not None and goals:
+        table.prepare_goals(problem.goals)
+    t0 = time.perf_counter()
+    deadline = None if timeout is None else t0 + timeout
+    collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
+    per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
+    near = _variant_starts(table, variants, per_variant, free)
+    order = sorted(range(len(variants)), key=lambda i: near[i])
+    q0 = problem.q0
+    scene = problem.scene
+    answers: list[tuple[float, np.ndarray, int]] = []  # (cost, q, variant)
+    runs = evaluations = rejected = 0
+    winner = None
+    stage = "q0" if q0 is not None else "seed table"
+
+    def run(i: int, q_start: np.ndarray) -> bool:
+        nonlocal runs, evaluations, rejected, winner
+        v = variants[i]
+        out = v.lm.run(q_start, iterations)
+        runs += 1
+        evaluations += out.evaluations
+        converged = out.converged
+        if converged and scene is not None and scene.in_collision(out.q, problem.margin):
+            converged, rejected = False, rejected + 1
+        if not converged:
+            if out.rank < v.best_rank:
+                v.best_rank, v.best = out.rank, out.q
+            return False
+        q = nearest_turn(out.q, q0, problem.lower, problem.upper, wrap) if q0 is not None else out.q
+        v.best_rank, v.best = -1.0, q
+        if prefer == "first" and not criterion:
+            winner = (q, i)
+            return True
+        answers.append((criterion.cost(q), q, i))
+        return prefer == "first"
+
+    def out_of(limit) -> bool:
+        return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
+
+    done = False
+    limit = deadline if prefer == "first" else collect_until
+    if q0 is not None:  # round 0: q0 towards every variant (prefer="nearest": the nearest answers start there)
+        for i in order:
+            if run(i, q0):
+                done = True
+                break
+    rnd = 0
+    while not done and not out_of(limit):
+        stage = "seed table"
+        progressed = False
+        for i in order:
+            q_start = next(variants[i].starts, None)
+            if q_start is None:
+                continue
+            progressed = True
+            if run(i, q_start):
+                done = True
+                break
+            if out_of(limit):
+                break
+        rnd += 1
+        if not progressed:
+            if prefer == "first" or deadline is None:  # no clock: the table's starts are the budget
+                break
+            stage = "random starts"  # prefer: keep collecting from uniform random starts until the budget
+            for i in order:
+                variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+        order = sorted(order, key=lambda i: variants[i].best_rank)  # the variants that came nearest first
+    if winner is None and answers:
+        answers.sort(key=lambda a: a[0])
+        refined, seen = [], []
+        for cost, q, i in answers:
+            if len(refined) >= REFINE_COUNT:
+                break
+            if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
+                continue
+            seen.append(q)
+            if criterion:
+                q_r, cost_r, ev = refine(variants[i].problem, variants[i].lm, q, criterion, deadline)
+                evaluations += ev
+                if scene is not None and scene.in_collision(q_r, problem.margin):
+                    q_r, cost_r = q, cost
+                if q0 is not None:
+                    q_r = nearest_turn(q_r, q0, problem.lower, problem.upper, wrap)
+                    cost_r = criterion.cost(q_r)
+                refined.append((cost_r, q_r, i))
+            else:
+                refined.append((cost, q, i))
+        cost, q, i = min(refined, key=lambda a: a[0])
+        winner = (q, i)
+    extra = ""
+    if winner is None:  # the table's starts are spent: memetic's search on the variants that came nearest
+        stage = "memetic restarts"
+        order = sorted(range(len(variants)), key=lambda i: variants[i].best_rank)[:3]
+        best = None
+        for k, i in enumerate(order):
+            left = None if deadline is None else max(deadline - time.perf_counter(), 1e-4) / (len(order) - k)
+            r = memetic(variants[i].problem, rng, timeout=left, max_restarts=max_restarts, population=population,
+                        generations=generations, polish_count=polish_count, table_size=0, table_seeds=0,
+                        batch=batch, iterations=iterations, engine=engine)
+            evaluations += r.evaluations
+            runs += 1
+            if best is None or r.success or r.cost < best[0].cost:
+                best = (r, i)
+            if r.success:
+                break
+        winner = (best[0].q, best[1])
+        if best[0].success and criterion:
+            q_r, _, ev = refine(variants[best[1]].problem, variants[best[1]].lm, best[0].q, criterion, None)
+            evaluations += ev
+            winner = (q_r, best[1])
+        extra = f"; {best[0].message}"
+    q = np.array(winner[0])
+    if goals:
+        goal_errors = problem.goal_errors(q)
+        pos, rot, cost = problem.goal_summary(goal_errors)
+        within = problem.goals_met(goal_errors)
+    else:
+        goal_errors = None
+        pos, rot, cost = problem.assess(q)
+        within = bool(problem.succeeded(pos, rot))
+    free_q = None if scene is None else not scene.in_collision(q, problem.margin)
+    success = within and free_q is not False
+    what = {"first": "the first answer", "nearest": "the answer nearest q0",
+            "manipulability": "the most dexterous answer"}[prefer]
+    if success:
+        message = (f"{what} of {max(len(answers), 1)} found by LM from {stage} ({runs} LM run(s), "
+                   f"{len(variants)} variant(s))")
+    else:
+        best = (f"best {errors_text(pos, rot)} (largest over the goals)" if goals
+                else shortfall_text(problem, pos, rot))
+        message = f"no answer within the budget after {runs} LM run(s) over {len(variants)} variant(s); {best}"
+    if rejected:
+        message += f"; {rejected} LM answer(s) reached the goals in collision"
+    message += extra
+    history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1)}
+    history["answers"] = np.array([a[0] for a in answers], dtype=float)
+    return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=0,
+                  evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0, history=history,
+                  message=message, method="memetic", setup_s=t0 - t_setup, collision_free=free_q,
+                  goal_errors=goal_errors)
