@@ -255,11 +255,14 @@ class IKProblem:
         position + orientation_weight x angle; None for a single target), with that member's errors)."""
         if goal.alternatives is None:
             return None, goal.errors(T)
-        errs = [m.errors(T) for m in goal.alternatives]
-        met = [i for i, (m, e) in enumerate(zip(goal.alternatives, errs, strict=True)) if m.met(*e)]
-        i = met[0] if met else min(range(len(errs)), key=lambda k: errs[k][0] + self.orientation_weight
-                                   * (errs[k][1] or 0.0))
-        return i, errs[i]
+        from .lie import relative_angle
+
+        P, R = goal.member_targets  # a vectorized screen, then the exact errors of the member picked
+        pos = np.linalg.norm(P - T.translation, axis=1)
+        rot = relative_angle(T.rotation, R) if goal.has_orientation else np.zeros_like(pos)
+        met = np.nonzero((pos <= goal.tolerance) & (rot <= goal.rotation_tolerance))[0]
+        i = int(met[0]) if met.size else int(np.argmin(pos + self.orientation_weight * rot))
+        return i, goal.alternatives[i].errors(T)
 
     def chosen(self, q: np.ndarray) -> list[int | None] | None:
         """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
@@ -272,35 +275,52 @@ class IKProblem:
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
         return [self._member(g, T)[0] for g, T in zip(self.goals, poses, strict=True)]
 
-    def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
-        """The single-target problems of a goal list with goal sets, one per combination of their members (the
-        in ``itertools.product`` order over the sets): (members chosen per goal, None for a
-        single target; the problem with those members as goals, sharing this one's box, q0 and scene). A list of
-        one (None choices, self) without goal sets. OptionError beyond ``most`` combinations."""
-        import copy
+    def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
+        """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen
+        per goal, None for a single target; targets pt (V, G, 3), Rt (V, G, 3, 3)). OptionError beyond ``most``."""
         import itertools
 
+        _, pt, Rt = self.goal_stack() if self.goals is not None else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
         sets = self.goal_sets
-        if not sets:
-            return [(tuple([None] * len(self.goals or ())), self)]
         sizes = [len(self.goals[g].alternatives) for g in sets]
         if math.prod(sizes) > most:
             raise OptionError(f"goal sets of {' x '.join(map(str, sizes))} members make {math.prod(sizes)} "
                               f"combinations; at most {most} are searched: give fewer members")
-        stack, pt, Rt = self._goal_stack
-        out = []
-        for combo in itertools.product(*[range(k) for k in sizes]):
-            goals, pt_c, Rt_c = list(self.goals), pt.copy(), Rt.copy()
-            choice = [None] * len(goals)
+        combos = list(itertools.product(*[range(k) for k in sizes]))
+        P = np.repeat(pt[None], len(combos), axis=0)
+        R = np.repeat(Rt[None], len(combos), axis=0)
+        choices = []
+        for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
+            P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
+        for combo in combos:
+            choice = [None] * len(self.goals or ())
             for g, m in zip(sets, combo, strict=True):
-                goals[g] = self.goals[g].alternatives[m]
-                pt_c[g], Rt_c[g] = goals[g].encode()
                 choice[g] = m
-            v = copy.copy(self)
-            v.goals, v._goal_stack, v.evaluations = goals, [stack, pt_c, Rt_c], 0
-            v.__dict__.pop("_goal_set_indices", None)
-            out.append((tuple(choice), v))
-        return out
+            choices.append(tuple(choice))
+        return choices, P, R
+
+    def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:
+        """The problem of one combination of goal-set members (:meth:`variant_targets`): those members as its goals,
+        sharing this problem's box, q0 and scene."""
+        import copy
+
+        if not self.goal_sets:
+            return self
+        goals = [g if m is None else g.alternatives[m] for g, m in zip(self.goals, choice, strict=True)]
+        v = copy.copy(self)
+        v.goals, v._goal_stack, v.evaluations = goals, [self._goal_stack[0], pt, Rt], 0
+        v.__dict__.pop("_goal_set_indices", None)
+        return v
+
+    def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
+        """The single-target problems of a goal list with goal sets, one per combination of their members (in
+        ``itertools.product`` order over the sets): (members chosen per goal, None for a single target; the problem
+        with those members as goals, sharing this one's box, q0 and scene). A list of one (None choices, self)
+        without goal sets. OptionError beyond ``most`` combinations."""
+        if not self.goal_sets:
+            return [(tuple([None] * len(self.goals or ())), self)]
+        choices, P, R = self.variant_targets(most)
+        return [(c, self.variant(c, P[v], R[v])) for v, c in enumerate(choices)]
 
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors

@@ -46,3 +46,5 @@ def init_set(goal, targets, single, what: str) -> None:
             raise TargetError(f"{kind} on {goal.frame!r}, member {i} of the goal set: {exc}") from None
     object.__setattr__(goal, "target", made[0].target)
     object.__setattr__(goal, "alternatives", tuple(made))
+    encoded = [m.encode() for m in made]  # the members' kernel targets, (k, 3) and (k, 3, 3), for vectorized use
+    object.__setattr__(goal, "member_targets", (np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])))

@@ -26,6 +26,7 @@ on a pose) the null space is empty and only the ranking of the distinct answers 
 
 from __future__ import annotations
 
+import copy
 import time
 
 import numpy as np
@@ -185,46 +186,75 @@ def bind_preferences(problem, preferences) -> Criterion:
 
 
 class _Variant:
-    """One combination of goal-set members (or the problem itself): its LM engine, its starts, its best run."""
+    """One combination of goal-set members (or the problem itself): its targets, its problem and LM engine (made on
+    first use: most variants of a goal set run once or twice), its starts, its best run."""
 
-    def __init__(self, choice, problem, engine: str) -> None:
-        self.choice, self.problem = choice, problem
-        self.lm = LevenbergMarquardt(problem, engine=engine)
+    def __init__(self, parent, choice, pt, Rt, base_lm: LevenbergMarquardt | None, engine: str) -> None:
+        self.parent, self.choice, self.pt, self.Rt = parent, choice, pt, Rt
+        self._base_lm, self._engine = base_lm, engine
+        self._problem = self._lm = None
         self.starts = iter(())
         self.best_rank = np.inf
-        self.best = None
+
+    @property
+    def problem(self):
+        if self._problem is None:
+            self._problem = self.parent.variant(self.choice, self.pt, self.Rt)
+        return self._problem
+
+    @property
+    def lm(self) -> LevenbergMarquardt:
+        if self._lm is None:
+            base = self._base_lm
+            if base is not None and base.engine == "compiled" and base._pt.shape == self.pt.shape:
+                # the same goal stack and box, other targets: the kernel's arguments with those swapped
+                lm = copy.copy(base)
+                lm._pt, lm._Rt = np.ascontiguousarray(self.pt), np.ascontiguousarray(self.Rt)
+                lm._args = (*base._args[:-2], lm._pt, lm._Rt)
+                lm.problem = self.problem if self.parent.goal_sets else self.parent
+                self._lm = lm
+            else:
+                self._lm = LevenbergMarquardt(self.problem, engine=self._engine)
+        return self._lm
 
 
-def _variant_starts(table, variants, k: int, free) -> list[float]:
-    """Give each variant its lazy table starts (q0 comes before, from the caller) and return each one's distance to
-    its nearest table entry (the goals' summed nearness; inf without a table)."""
+def _lazy_rest(table, d: np.ndarray, first: int, k: int):
+    """Table entries by ``d`` (T,): ``first`` (its argmin), then on demand the next ``k - 1`` nearest."""
+    yield table.Q[first]
+    k = min(k, d.shape[0])
+    if k > 1:
+        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+        for i in part[np.argsort(d[part])]:
+            if i != first and np.isfinite(d[i]):
+                yield table.Q[i]
+
+
+def _variant_starts(table, parent, variants, k: int, free) -> list[float]:
+    """Give each variant its lazy table starts (q0 comes before, from the caller) and return each one's squared
+    distance to its nearest table entry (the goals' summed nearness; zeros without a table)."""
     if table is None:
         return [0.0] * len(variants)
-    first = variants[0].problem
-    if first.goals is None:  # one target on the tip (prefer= alone)
-        v = variants[0]
-        v.starts = (table.Q[i] for i in table.ranked(first.target, k, free))
+    if parent.goals is None:  # one target on the tip (prefer= alone)
+        variants[0].starts = (table.Q[i] for i in table.ranked(parent.target, k, free))
         return [0.0]
-    if len(first.goals) > 1:  # a whole robot: composed starts too (SeedTable.goal_starts)
+    if len(parent.goals) > 1:  # a whole robot: composed starts too (SeedTable.goal_starts), the sets' order
         for v in variants:
             v.starts = table.goal_starts(v.problem, k, free)
-        return list(range(len(variants)))  # the sets' order
-    F, sq = table._goal_table_features(first.goals)
-    spec = table.goal_spec(first.goals)
-    P = np.stack([v.problem.goal_stack()[1] for v in variants])
-    R = np.stack([v.problem.goal_stack()[2] for v in variants])
+        return [float(i) for i in range(len(variants))]
+    F, sq = table._goal_table_features(parent.goals)
+    spec = table.goal_spec(parent.goals)
+    P = np.stack([v.pt for v in variants])
+    R = np.stack([v.Rt for v in variants])
     f = table.goal_features(spec, P, R)  # (V, d)
-    D = sq[None] - 2.0 * (f @ F.T) + (f * f).sum(axis=1)[:, None]
+    D = f @ F.T  # |F - f|^2 = sq - 2 F.f + |f|^2, in place; |f|^2 only where variants are compared
+    D *= -2.0
+    D += sq
     if free is not None:
         D[:, ~free] = np.inf
-    k = min(k, D.shape[1])
-    near = []
-    for v, d in zip(variants, D, strict=True):
-        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
-        order = part[np.argsort(d[part])]
-        v.starts = (table.Q[i] for i in order)
-        near.append(float(d[order[0]]))
-    return near
+    first = D.argmin(axis=1)
+    for v, d, i in zip(variants, D, first, strict=True):
+        v.starts = _lazy_rest(table, d, int(i), k)
+    return (D[np.arange(len(variants)), first] + (f * f).sum(axis=1)).tolist()
 
 
 def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: float | None = None,
@@ -254,7 +284,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     wrap = wrapping_joints(robot, problem.lower, problem.upper)
     criterion = _criterion(problem, prefer, preferences, wrap)
     goals = problem.goals is not None
-    variants = [_Variant(c, v, engine) for c, v in problem.variants()]
+    choices, P, R = (problem.variant_targets() if goals else ([()], [None], [None]))
+    base_lm = LevenbergMarquardt(problem, engine=engine)
+    variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
+    if len(variants) == 1:
+        variants[0]._problem, variants[0]._lm = problem, base_lm
     if table_seeds is None:
         table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
@@ -266,7 +300,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     deadline = None if timeout is None else t0 + timeout
     collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
     per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
-    near = _variant_starts(table, variants, per_variant, free)
+    near = _variant_starts(table, problem, variants, per_variant, free)
     order = sorted(range(len(variants)), key=lambda i: near[i])
     q0 = problem.q0
     scene = problem.scene
