@@ -169,7 +169,9 @@ def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion
     if prefer == "nearest":
         if problem.q0 is None:
             raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
-        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+        # plain differences: answers are taken to their turn nearest q0 inside the box first (nearest_turn), and
+        # a difference modulo 2 pi would count turns the limits forbid
+        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
     elif prefer == "manipulability":
         terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
     for p in preferences:
