@@ -178,7 +178,7 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
             (``population``, ``max_generations``, ...; see each solver's docstring).
             ``prefer``: ``"first"`` (default: the first answer found), ``"nearest"`` (the answer nearest ``q0``)
             or ``"manipulability"`` (the most dexterous) among the answers found within ``timeout`` (default
-            0.8 ms for the last two; method ``"memetic"``; :mod:`evoik_pin.solvers.search.choose`).
+            0.7 ms for the last two; method ``"memetic"``; :mod:`evoik_pin.solvers.search.choose`).
             ``locked``: ``{joint: value}`` (rad or m), joints held fixed for this call (:meth:`Robot.locked`);
             ``q0``, ``bounds`` and the answer's ``q`` stay in ``robot``'s full layout, the locked joints at
             their values. The goal list may hold preferences (:mod:`evoik_pin.goals.preferences`: ``Posture``,

@@ -52,7 +52,9 @@ def solve_choosing(robot, target, method: str, seed, prefer: str | None = None, 
         return api.solve(robot, goals, method, seed, **options)
     problem, solver_options = api.make_problem(robot, goals, **options)
     rng = api._rng(seed)
-    if method != "memetic":
+    if method != "memetic" or prefer == "first":
+        # preferences after the method's own search: the same answers as without them, then refined (the refinement
+        # keeps a step only when every goal is met after it), so they never cost success
         if prefer != "first":
             raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
                               "(use prefer='first', the default)")

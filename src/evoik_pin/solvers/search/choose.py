@@ -13,9 +13,9 @@
   entries nearest each variant, then uniform random starts), then refine the best :data:`REFINE_COUNT` of them in
   the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain) and return the best.
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
-  box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.8 ms) unless given.
-* **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the first
-  answer is refined alone.
+  box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
+* **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
+  own answer is refined alone (:func:`evoik_pin.choosing.solve_choosing`), so they never cost success.
 
 Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
 the answers LM finds from random starts lie anywhere on the self-motion manifold, and a few projected steps take
@@ -46,7 +46,7 @@ __all__ = ["COLLECT_SHARE", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", 
 PREFER = ("first", "nearest", "manipulability")
 #: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead, a fifth of
 #: TRAC-IK's 5 ms Distance / Manip1 modes, which always spend their whole budget.
-DEFAULT_PREFER_TIMEOUT = 0.0008
+DEFAULT_PREFER_TIMEOUT = 0.0007
 #: Share of the budget spent collecting answers before the best ones are refined.
 COLLECT_SHARE = 0.6
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
