@@ -36,7 +36,8 @@ def _checked(robot, values) -> dict[str, float]:
         lo, hi = robot.lower[k], robot.upper[k]
         if not np.isfinite(x) or x < lo or x > hi:
             unit = "rad" if robot.revolute[k] else "m"
-            raise BoundsError(f"cannot lock joint {name!r} at {value!r}: outside its limits [{lo:.6g}, {hi:.6g}] {unit}")
+            raise BoundsError(f"cannot lock joint {name!r} at {value!r}: outside its limits [{lo:.6g}, {hi:.6g}] "
+                              f"{unit}")
         out[name] = x
     if len(out) >= robot.n:
         raise ConfigurationError(f"locking {len(out)} joints leaves none of {robot.name}'s {robot.n} free")
