@@ -59,6 +59,10 @@ class Preference:
         """d cost / dq (n,), or None when it is taken by finite differences."""
         return None
 
+    def costs(self, Q: np.ndarray) -> np.ndarray:
+        """:meth:`cost` of each row of ``Q`` (N, n), shape (N,)."""
+        return np.array([self.cost(q) for q in Q])
+
 
 class Posture(Preference):
     """Stay near ``q_ref``: a joint vector like ``Result.q`` (n,), or a dict {joint name: value} (rad or m) for
@@ -111,6 +115,10 @@ class Posture(Preference):
 
     def gradient(self, q):
         return self.weight * np.where(self._mask, turn_difference(q, self._ref, self._wrap), 0.0)
+
+    def costs(self, Q):
+        d = np.where(self._mask, turn_difference(Q, self._ref, self._wrap), 0.0)
+        return 0.5 * self.weight * (d * d).sum(axis=-1)
 
     def __repr__(self) -> str:
         ref = self.q_ref if isinstance(self.q_ref, dict) else np.round(self.q_ref, 6).tolist()
@@ -189,6 +197,11 @@ class Manipulability(Preference):
 
     def cost(self, q):
         return -self.weight * float(np.log(max(self.measure(q), 1e-300)))
+
+    def costs(self, Q):
+        J = self._robot.jacobian_batch(Q, validate=False, frame=self.frame)
+        w = np.sqrt(np.maximum(np.linalg.det(J @ J.transpose(0, 2, 1)), 1e-600))
+        return -self.weight * np.log(np.maximum(w, 1e-300))
 
     def __repr__(self) -> str:
         return f"Manipulability({self.frame!r}, weight={self.weight:g})"

@@ -27,6 +27,7 @@ on a pose) the null space is empty and only the ranking of the distinct answers 
 from __future__ import annotations
 
 import copy
+import itertools
 import time
 
 import numpy as np
@@ -36,7 +37,17 @@ from ...goals.preferences import Manipulability, Posture
 from ...problem import errors_text, shortfall_text
 from ...result import Result
 from ..lm import LevenbergMarquardt, wrapping_joints
-from ..lm.layout import TASK_ROWS, target_kind
+from ..lm.layout import (
+    S_CONVERGED,
+    S_COST,
+    S_EVALUATIONS,
+    S_POS,
+    S_ROT,
+    STATS_SIZE,
+    TASK_ROWS,
+    kernel_params,
+    target_kind,
+)
 from ..options import check_choice
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
 
@@ -55,6 +66,8 @@ REFINE_COUNT = 3
 REFINE_STEPS, RESTORE_ITERATIONS = 12, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
+#: LM runs per kernel call while prefer collects answers.
+COLLECT_BATCH = 8
 #: Table entries tried per variant of a goal set in the first rounds (at least).
 MIN_SEEDS_PER_VARIANT = 4
 
@@ -90,6 +103,10 @@ class Criterion:
     def cost(self, q: np.ndarray) -> float:
         return float(sum(t.cost(q) for t in self.terms))
 
+    def costs(self, Q: np.ndarray) -> np.ndarray:
+        """:meth:`cost` of each row of ``Q`` (N, n)."""
+        return sum((t.costs(Q) for t in self.terms), np.zeros(Q.shape[0]))
+
     def null_gradient(self, q: np.ndarray, N: np.ndarray, f: float) -> np.ndarray:
         """The cost's gradient in the null-space basis ``N`` (r, n) (orthonormal rows): analytic terms exactly,
         the others (manipulability) by forward differences along each basis vector (``f``: the cost at q)."""
@@ -107,6 +124,15 @@ class Criterion:
             for i in range(N.shape[0]):
                 c[i] += (sum(t.cost(q + h * N[i]) for t in numeric) - f0) / h
         return c
+
+
+def _redundant(problem) -> bool:
+    """Whether the goals leave a null space to refine in: fewer task rows than joints."""
+    if problem.goals is None:
+        rows = len(TASK_ROWS[target_kind(problem.target)])
+    else:
+        rows = sum(len(TASK_ROWS.get(g.kind, range(6))) for g in problem.goals)
+    return rows < problem.robot.n
 
 
 def _task_jacobian(problem, q: np.ndarray) -> np.ndarray:
@@ -332,6 +358,42 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         answers.append((criterion.cost(q), q, i))
         return prefer == "first"
 
+    def run_batch(i: int, Q: np.ndarray) -> None:
+        """LM runs from every row of ``Q`` towards variant i, all to their end (one kernel call), each answer
+        kept."""
+        nonlocal runs, evaluations, rejected
+        v = variants[i]
+        lm = v.lm
+        if lm.engine != "compiled":
+            for q in Q:
+                run(i, q)
+            return
+        N = Q.shape[0]
+        pt, Rt = lm._pt, lm._Rt
+        P = np.ascontiguousarray(np.broadcast_to(pt, (N, *pt.shape)))
+        Rts = np.ascontiguousarray(np.broadcast_to(Rt, (N, *Rt.shape)))
+        Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
+        lm._kernel["lm_run_pairs"](np.ascontiguousarray(Q, dtype=float), *lm._args[:-2], P, Rts,
+                                   kernel_params(iterations), Q_out, stats, np.empty((N, pt.shape[0], 2)))
+        runs += N
+        evaluations += int(stats[:, S_EVALUATIONS].sum())
+        ok = stats[:, S_CONVERGED] != 0.0
+        if scene is not None:
+            for k in np.nonzero(ok)[0]:
+                if scene.in_collision(Q_out[k], problem.margin):
+                    ok[k], rejected = False, rejected + 1
+        if not ok.all():
+            rank = stats[~ok, S_COST] if pt.shape[0] > 1 else stats[~ok, S_POS] + stats[~ok, S_ROT]
+            j = int(np.argmin(rank))
+            if rank[j] < v.best_rank:
+                v.best_rank, v.best = float(rank[j]), Q_out[~ok][j]
+        if ok.any():
+            A = Q_out[ok]
+            if q0 is not None:
+                A = nearest_turn(A, q0, problem.lower, problem.upper, wrap)
+            v.best_rank = -1.0
+            answers.extend(zip(criterion.costs(A).tolist(), A, [i] * A.shape[0], strict=True))
+
     def out_of(limit) -> bool:
         return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
 
@@ -342,6 +404,30 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             if run(i, q0):
                 done = True
                 break
+    if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
+        if not _redundant(problem):  # no null space to refine in: the whole budget collects
+            limit = deadline
+        while True:
+            if limit is not None and time.perf_counter() >= (limit if answers else deadline):
+                break
+            progressed = False
+            for i in order:
+                chunk = list(itertools.islice(variants[i].starts, COLLECT_BATCH))
+                if chunk:
+                    progressed = True
+                    run_batch(i, np.array(chunk))
+                    if limit is not None and time.perf_counter() >= (limit if answers else deadline):
+                        break
+            if not progressed:
+                if deadline is None:  # no clock: the table's starts are the budget
+                    break
+                stage = "random starts"
+                for i in order:
+                    variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+            else:
+                stage = "seed table" if stage != "random starts" else stage
+            order = sorted(order, key=lambda i: variants[i].best_rank)
+        done = True
     rnd = 0
     while not done and not out_of(limit):
         stage = "seed table"
@@ -389,10 +475,12 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     extra = ""
     if winner is None:  # the table's starts are spent: memetic's search on the variants that came nearest
         stage = "memetic restarts"
+        # prefer's short budget bounds the choosing; with no answer yet, the search goes on as prefer="first"'s
+        last = None if deadline is None else max(deadline, t0 + (DEFAULT_TIMEOUT if prefer != "first" else 0.0))
         order = sorted(range(len(variants)), key=lambda i: variants[i].best_rank)[:3]
         best = None
         for k, i in enumerate(order):
-            left = None if deadline is None else max(deadline - time.perf_counter(), 1e-4) / (len(order) - k)
+            left = None if deadline is None else max(last - time.perf_counter(), 1e-4) / (len(order) - k)
             r = memetic(variants[i].problem, rng, timeout=left, max_restarts=max_restarts, population=population,
                         generations=generations, polish_count=polish_count, table_size=0, table_seeds=0,
                         batch=batch, iterations=iterations, engine=engine)
