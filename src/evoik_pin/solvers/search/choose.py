@@ -66,6 +66,9 @@ REFINE_COUNT = 3
 REFINE_STEPS, RESTORE_ITERATIONS = 12, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
+#: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
+#: half-range, at most pi) in turn.
+NEAR_SCALES = (0.1, 0.25, 0.5)
 #: LM runs per kernel call while prefer collects answers.
 COLLECT_BATCH = 8
 #: Table entries tried per variant of a goal set in the first rounds (at least).
@@ -106,6 +109,16 @@ class Criterion:
     def costs(self, Q: np.ndarray) -> np.ndarray:
         """:meth:`cost` of each row of ``Q`` (N, n)."""
         return sum((t.costs(Q) for t in self.terms), np.zeros(Q.shape[0]))
+
+    def analytic_gradient(self, q: np.ndarray) -> np.ndarray | None:
+        """d cost / dq (n,) when every term has it in closed form, else None."""
+        total = np.zeros(q.shape[0])
+        for t in self.terms:
+            g = t.gradient(q)
+            if g is None:
+                return None
+            total += g
+        return total
 
     def null_gradient(self, q: np.ndarray, N: np.ndarray, f: float) -> np.ndarray:
         """The cost's gradient in the null-space basis ``N`` (r, n) (orthonormal rows): analytic terms exactly,
@@ -165,14 +178,25 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
     for _ in range(steps):
         if deadline is not None and time.perf_counter() >= deadline:
             break
-        N = _null_basis(_task_jacobian(problem, q))
-        if N.shape[0] == 0:
+        E = _task_jacobian(problem, q)
+        if E.shape[0] >= E.shape[1]:
             break
-        c = criterion.null_gradient(q, N, f)
-        norm = float(np.linalg.norm(c))
+        g = criterion.analytic_gradient(q)
+        if g is not None:  # the gradient's projection on the null space: g - E^T (E E^T)^-1 E g
+            try:
+                proj = g - E.T @ np.linalg.solve(E @ E.T, E @ g)
+            except np.linalg.LinAlgError:  # a singular E: its null space by SVD
+                N = _null_basis(E)
+                proj = N.T @ (N @ g)
+        else:
+            N = _null_basis(E)
+            if N.shape[0] == 0:
+                break
+            proj = N.T @ criterion.null_gradient(q, N, f)
+        norm = float(np.linalg.norm(proj))
         if norm < 1e-12:
             break
-        step = -(N.T @ c) / criterion.curvature if criterion.curvature > 0 else -(N.T @ c) * (0.2 / norm)
+        step = -proj / criterion.curvature if criterion.curvature > 0 else -proj * (0.2 / norm)
         length = float(np.linalg.norm(step)) * scale
         step *= scale * min(1.0, MAX_REFINE_STEP / max(length, 1e-300))
         out = lm.run(q + step, RESTORE_ITERATIONS)
@@ -244,6 +268,23 @@ class _Variant:
             else:
                 self._lm = LevenbergMarquardt(self.problem, engine=self._engine)
         return self._lm
+
+
+def _around(starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, endless: bool):
+    """``starts`` interleaved with starts drawn around ``q0`` (normal, a standard deviation of
+    :data:`NEAR_SCALES` times each joint's half-range, at most pi, in turn; clipped into the box); once ``starts``
+    runs out, uniform random starts take its place when ``endless`` (a clock bounds the search), else the
+    interleaving ends with it."""
+    half = np.minimum(0.5 * (upper - lower), np.pi)
+    for k in itertools.count():
+        s = NEAR_SCALES[k % len(NEAR_SCALES)]
+        yield np.minimum(np.maximum(q0 + rng.normal(size=q0.shape) * s * half, lower), upper)
+        nxt = next(starts, None)
+        if nxt is None:
+            if not endless:
+                return
+            nxt = rng.uniform(lower, upper)
+        yield nxt
 
 
 def _lazy_rest(table, d: np.ndarray, first: int, k: int):
@@ -407,6 +448,9 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
         if not _redundant(problem):  # no null space to refine in: the whole budget collects
             limit = deadline
+        if prefer == "nearest":  # every other start near q0: answers near q0 come from there
+            for v in variants:
+                v.starts = _around(v.starts, rng, q0, problem.lower, problem.upper, deadline is not None)
         while True:
             if limit is not None and time.perf_counter() >= (limit if answers else deadline):
                 break
