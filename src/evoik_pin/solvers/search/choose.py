@@ -69,8 +69,9 @@ MAX_REFINE_STEP = 0.5
 #: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
 NEAR_SCALES = (0.1, 0.25, 0.5)
-#: LM runs per kernel call while prefer collects answers.
-COLLECT_BATCH = 8
+#: LM runs per kernel call while prefer collects answers, and their steps at most (None: memetic's iterations).
+COLLECT_BATCH = 16
+COLLECT_ITERATIONS = None
 #: Table entries tried per variant of a goal set in the first rounds (at least).
 MIN_SEEDS_PER_VARIANT = 4
 
@@ -415,7 +416,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         Rts = np.ascontiguousarray(np.broadcast_to(Rt, (N, *Rt.shape)))
         Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
         lm._kernel["lm_run_pairs"](np.ascontiguousarray(Q, dtype=float), *lm._args[:-2], P, Rts,
-                                   kernel_params(iterations), Q_out, stats, np.empty((N, pt.shape[0], 2)))
+                                   kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats, np.empty((N, pt.shape[0], 2)))
         runs += N
         evaluations += int(stats[:, S_EVALUATIONS].sum())
         ok = stats[:, S_CONVERGED] != 0.0
