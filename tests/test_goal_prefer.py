@@ -240,3 +240,46 @@ def test_solve_locked_returns_the_full_layout(panda):
     assert np.linalg.norm(M.translation - T.translation) <= 1e-6
     r2 = ev.solve(panda, [Pose(panda.tip, T)], locked={"panda_joint3": 0.25}, prefer="nearest", q0=q, seed=0)
     assert r2.success and r2.q[2] == 0.25
+
+
+# ---------------------------------------------------------------------- goals files and the command line
+def test_goals_file_round_trip_of_sets_and_preferences(tmp_path, panda):
+    from evoik_pin.errors import GoalsFileError
+    from evoik_pin.goals_file import load_goals, save_goals
+
+    T = panda.fk(np.full(panda.n, 0.3))
+    goals = [Pose(panda.tip, [_far(T, 0), T]), Posture({"panda_joint1": 0.2}, 0.5), JointLimitMargin(0.1),
+             Manipulability(), MinimalDisplacement(2.0), Posture(np.zeros(panda.n))]
+    for suffix in (".yaml", ".json"):
+        path = save_goals(goals, tmp_path / f"g{suffix}")
+        back = load_goals(path)
+        assert [type(g) for g in back] == [type(g) for g in goals]
+        assert np.array_equal(back[0].member_targets[0], goals[0].member_targets[0])
+        assert np.array_equal(back[0].member_targets[1], goals[0].member_targets[1])
+        assert back[1].q_ref == {"panda_joint1": 0.2} and back[1].weight == 0.5
+        assert back[2].margin == 0.1 and back[4].weight == 2.0
+        r = ev.solve(panda, back, q0=np.zeros(panda.n), seed=0)
+        assert r.success and r.chosen == [1]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("goals:\n  - {frame: panda_hand_tcp, kind: position, targets: []}\n")
+    with pytest.raises(GoalsFileError, match="non-empty list of targets"):
+        load_goals(bad)
+    bad.write_text("goals:\n  - {kind: posture}\n")
+    with pytest.raises(GoalsFileError, match="q_ref"):
+        load_goals(bad)
+
+
+def test_cli_prefer_and_locked(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "solve", "panda", "--xyz", "0.4", "0.1", "0.5",
+                          "--rpy", "180", "0", "0", "--prefer", "nearest", "--q0", "0", "0", "0", "-90", "0", "90",
+                          "45", "--locked", "panda_joint3=10", "--json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    info = json.loads(out.stdout)
+    assert info["success"] and abs(info["q_deg"][2] - 10.0) < 1e-9
+    bad = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "solve", "panda", "--xyz", "0.4", "0.1", "0.5",
+                          "--locked", "panda_joint9=1"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "panda_joint9" in bad.stderr

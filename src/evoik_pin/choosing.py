@@ -63,7 +63,12 @@ def solve_choosing(robot, target, method: str, seed, prefer: str | None = None, 
         if result.success:  # the preferences in the goals' null space, from the method's answer
             from .solvers.lm import LevenbergMarquardt
 
-            q, _, _ = refine(problem, LevenbergMarquardt(problem), result.q, criterion, None)
+            target = problem
+            if problem.goals is not None and problem.goal_sets:  # refine on the members the answer meets
+                choices, P, R = problem.variant_targets()
+                k = choices.index(tuple(problem.chosen(result.q)))
+                target = problem.variant(choices[k], P[k], R[k])
+            q, _, _ = refine(target, LevenbergMarquardt(target), result.q, criterion, None)
             pos, rot, cost = problem.assess(q)
             result.q, result.position_error, result.orientation_error, result.cost = q, pos, rot, cost
             result.goal_errors = None

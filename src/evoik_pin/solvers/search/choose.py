@@ -416,7 +416,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         Rts = np.ascontiguousarray(np.broadcast_to(Rt, (N, *Rt.shape)))
         Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
         lm._kernel["lm_run_pairs"](np.ascontiguousarray(Q, dtype=float), *lm._args[:-2], P, Rts,
-                                   kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats, np.empty((N, pt.shape[0], 2)))
+                                   kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats,
+                                   np.empty((N, pt.shape[0], 2)))
         runs += N
         evaluations += int(stats[:, S_EVALUATIONS].sum())
         ok = stats[:, S_CONVERGED] != 0.0
