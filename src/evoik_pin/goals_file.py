@@ -219,7 +219,7 @@ def _goal(entry, what: str) -> Goal:
         raise GoalsFileError(f"{what}: kind: " + ("missing" if kind_name is None else f"unknown kind {kind_name!r}")
                              + f"; accepted kinds: {', '.join([*GOAL_KINDS, *PREFERENCE_KINDS])}")
     kind = GOAL_KINDS[kind_name]
-    _unknown_keys(entry, ("frame", "kind", "target", "targets", *kind.fields), f"{what}, a {kind_name} goal")
+    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
     if "targets" in entry:  # a goal set: any one of several targets
         return _goal_set(entry, what, kind)
     for key in ("frame", "target"):
