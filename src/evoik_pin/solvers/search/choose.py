@@ -453,15 +453,22 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         if prefer == "nearest":  # every other start near q0: answers near q0 come from there
             for v in variants:
                 v.starts = _around(v.starts, rng, q0, problem.lower, problem.upper, deadline is not None)
+        per_run = 0.0  # seconds per LM run of the last batch
         while True:
             if limit is not None and time.perf_counter() >= (limit if answers else deadline):
                 break
             progressed = False
             for i in order:
-                chunk = list(itertools.islice(variants[i].starts, COLLECT_BATCH))
+                size = COLLECT_BATCH
+                if limit is not None and per_run > 0.0:  # a batch that ends near the limit, not far past it
+                    left = (limit if answers else deadline) - time.perf_counter()
+                    size = int(min(COLLECT_BATCH, max(1.0, left / per_run)))
+                chunk = list(itertools.islice(variants[i].starts, size))
                 if chunk:
                     progressed = True
+                    t_batch = time.perf_counter()
                     run_batch(i, np.array(chunk))
+                    per_run = (time.perf_counter() - t_batch) / len(chunk)
                     if limit is not None and time.perf_counter() >= (limit if answers else deadline):
                         break
             if not progressed:
