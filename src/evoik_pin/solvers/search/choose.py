@@ -60,6 +60,8 @@ PREFER = ("first", "nearest", "manipulability")
 DEFAULT_PREFER_TIMEOUT = 0.0007
 #: Share of the budget spent collecting answers before the best ones are refined.
 COLLECT_SHARE = 0.6
+#: Share of the budget left for making the answer (its errors, the result) after the refinement.
+FINISH_SHARE = 0.1
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 3
 #: Null-space steps of one refinement at most; LM steps restoring the goals after each.
@@ -369,6 +371,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     t0 = time.perf_counter()
     deadline = None if timeout is None else t0 + timeout
     collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
+    finish = None if timeout is None else t0 + (1.0 - FINISH_SHARE) * timeout  # then the answer is made
+    redundant = _redundant(problem)
     per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
     near = _variant_starts(table, problem, variants, per_variant, free)
     order = sorted(range(len(variants)), key=lambda i: near[i])
@@ -448,8 +452,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 done = True
                 break
     if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
-        if not _redundant(problem):  # no null space to refine in: the whole budget collects
-            limit = deadline
+        if not redundant:  # no null space to refine in: the whole budget collects
+            limit = finish
         if prefer == "nearest":  # every other start near q0: answers near q0 come from there
             for v in variants:
                 v.starts = _around(v.starts, rng, q0, problem.lower, problem.upper, deadline is not None)
@@ -512,8 +516,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
                 continue
             seen.append(q)
-            if criterion:
-                q_r, cost_r, ev = refine(variants[i].problem, variants[i].lm, q, criterion, deadline)
+            if criterion and redundant:
+                q_r, cost_r, ev = refine(variants[i].problem, variants[i].lm, q, criterion, finish)
                 evaluations += ev
                 if scene is not None and scene.in_collision(q_r, problem.margin):
                     q_r, cost_r = q, cost
