@@ -11,7 +11,8 @@
 * **prefer**: ``"first"`` stops at the first answer (memetic's behaviour); ``"nearest"`` and ``"manipulability"``
   keep collecting answers for :data:`COLLECT_SHARE` of the budget (LM from ``q0`` first, then the table's
   entries nearest each variant, then uniform random starts), then refine the best :data:`REFINE_COUNT` of them in
-  the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain) and return the best.
+  the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain; a few steps each, then
+  the rest of the time for the best) and return the best.
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
   box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
 * **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
@@ -63,9 +64,10 @@ COLLECT_SHARE = 0.6
 #: Share of the budget left for making the answer (its errors, the result) after the refinement.
 FINISH_SHARE = 0.1
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
-REFINE_COUNT = 3
-#: Null-space steps of one refinement at most; LM steps restoring the goals after each.
-REFINE_STEPS, RESTORE_ITERATIONS = 12, 10
+REFINE_COUNT = 4
+#: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
+#: steps restoring the goals after each.
+REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
 #: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
@@ -516,17 +518,22 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
                 continue
             seen.append(q)
-            if criterion and redundant:
-                q_r, cost_r, ev = refine(variants[i].problem, variants[i].lm, q, criterion, finish)
-                evaluations += ev
-                if scene is not None and scene.in_collision(q_r, problem.margin):
-                    q_r, cost_r = q, cost
-                if q0 is not None:
-                    q_r = nearest_turn(q_r, q0, problem.lower, problem.upper, wrap)
-                    cost_r = criterion.cost(q_r)
-                refined.append((cost_r, q_r, i))
-            else:
-                refined.append((cost, q, i))
+            refined.append((cost, q, i))
+
+        def improve(cost, q, i, steps):
+            nonlocal evaluations
+            q_r, cost_r, ev = refine(variants[i].problem, variants[i].lm, q, criterion, finish, steps)
+            evaluations += ev
+            if scene is not None and scene.in_collision(q_r, problem.margin):
+                return cost, q, i
+            if q0 is not None:
+                q_r = nearest_turn(q_r, q0, problem.lower, problem.upper, wrap)
+                cost_r = criterion.cost(q_r)
+            return cost_r, q_r, i
+
+        if criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
+            refined = [improve(*a, TRIAL_STEPS) for a in refined]
+            refined = [improve(*min(refined, key=lambda a: a[0]), REFINE_STEPS)]
         cost, q, i = min(refined, key=lambda a: a[0])
         winner = (q, i)
     extra = ""
