@@ -109,19 +109,20 @@ def problems(robot, n: int, seed: int):
     return [robot.fk(q) for q in Q], Q0
 
 
-def bench_prefer(name: str, n: int, seed: int, log) -> list[str]:
+def bench_prefer(name: str, n: int, seed: int, log, timeout: float | None = None) -> list[str]:
     robot = ev.load_robot(name)
     ev.prepare(robot)
     targets, Q0 = problems(robot, n, seed)
     wrap = wrapping_joints(robot, robot.lower, robot.upper)
+    extra = {} if timeout is None else {"timeout": timeout}
     rows = []
     for prefer, stype in (("nearest", "Distance"), ("manipulability", "Manip1")):
         trac = Trac(robot, stype)
-        ev.solve(robot, targets[0], q0=Q0[0], prefer=prefer, seed=0)  # warm
+        ev.solve(robot, targets[0], q0=Q0[0], prefer=prefer, seed=0, **extra)  # warm
         ours, theirs, t_ours, t_theirs = [], [], [], []
         for i, (T, q0) in enumerate(zip(targets, Q0, strict=True)):
             t = time.perf_counter()
-            r = ev.solve(robot, T, q0=q0, prefer=prefer, seed=i)
+            r = ev.solve(robot, T, q0=q0, prefer=prefer, seed=i, **extra)
             t_ours.append(time.perf_counter() - t)
             ours.append(r.q if r.success else None)
             t = time.perf_counter()
@@ -213,15 +214,17 @@ def run(args) -> str:
 
     load = os.getloadavg()
     lines = ["### Goal sets, prefer and preferences (issue 23)", "",
-             f"{datetime.date.today().isoformat()}, `python scripts/bench_goal_kinds_prefer.py --n {args.n}`, "
+             f"{datetime.date.today().isoformat()}, `python scripts/bench_goal_kinds_prefer.py --n {args.n}"
+             f"{f' --prefer-timeout {args.prefer_timeout:g}' if args.prefer_timeout else ''}`, "
              f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}; load average "
              f"{load[0]:.2f} at the start (a shared, loaded machine: times are indicative, ratios were taken in the "
-             f"same run, target by target interleaved). prefer's budget: the default `timeout` "
-             f"{DEFAULT_PREFER_TIMEOUT * 1e3:g} ms.", "",
+             f"same run, target by target interleaved). prefer's budget: `timeout` "
+             f"{(args.prefer_timeout or DEFAULT_PREFER_TIMEOUT) * 1e3:g} ms"
+             f"{'' if args.prefer_timeout else ' (the default)'}.", "",
              "| robot | prefer vs TRAC-IK | our success | TRAC-IK success | our answer | median (ours / TRAC-IK) "
              "| median time (ours / TRAC-IK) | speed-up |", "|---|---|---|---|---|---|---|---|"]
     for name in ("panda", "ur10"):
-        lines += bench_prefer(name, args.n, args.seed, log)
+        lines += bench_prefer(name, args.n, args.seed, log, args.prefer_timeout)
     lines += ["", "| robot | goal set | finds a reachable one | median time | single pose | ratio |",
               "|---|---|---|---|---|---|"]
     lines += bench_sets(args.n, args.seed + 1, log)
@@ -238,6 +241,7 @@ def main(argv=None) -> int:
     parser.add_argument("--n", type=int, default=200, help="targets per part (default 200)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--verbose", action="store_true", help="rows on stderr as they come")
+    parser.add_argument("--prefer-timeout", type=float, help="prefer's budget in s (default: the library's)")
     print(run(parser.parse_args(argv)))
     return 0
 
