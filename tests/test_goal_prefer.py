@@ -283,3 +283,18 @@ def test_cli_prefer_and_locked(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "solve", "panda", "--xyz", "0.4", "0.1", "0.5",
                           "--locked", "panda_joint9=1"], capture_output=True, text=True)
     assert bad.returncode == 2 and "panda_joint9" in bad.stderr
+
+
+def test_bench_script_runs_small():
+    """scripts/bench_goal_kinds_prefer.py's run(args) makes its section (3 targets a part)."""
+    import argparse
+    import importlib.util
+    from pathlib import Path
+
+    pytest.importorskip("pytracik")
+    path = Path(__file__).resolve().parents[1] / "scripts" / "bench_goal_kinds_prefer.py"
+    spec = importlib.util.spec_from_file_location("bench_goal_kinds_prefer", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    text = module.run(argparse.Namespace(n=3, seed=0, verbose=False, prefer_timeout=None))
+    assert "nearest vs Distance" in text and "10 grasps, 7 unreachable" in text and "JointLimitMargin" in text
