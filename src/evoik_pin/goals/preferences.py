@@ -186,13 +186,13 @@ class Manipulability(Preference):
 
     def bind(self, robot, q0, lower, upper, wrap, frame: str | None = None) -> Manipulability:
         out = Manipulability(self.frame or frame, self.weight)
-        robot.frame_id(out.frame)  # FrameError with the closest names
+        out._fid = robot.frame_id(out.frame)  # FrameError with the closest names
         out._robot = robot
         return out
 
     def measure(self, q) -> float:
-        """Yoshikawa's ``sqrt(det(J J^T))`` of the frame's 6 x n Jacobian at ``q``."""
-        J = self._robot.jacobian(q, "world", of=self.frame)
+        """Yoshikawa's ``sqrt(det(J J^T))`` of the frame's 6 x n Jacobian at ``q`` (finite, shape (n,))."""
+        J = self._robot.jacobian_world_unchecked(np.asarray(q, dtype=float), self._fid)
         return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
 
     def cost(self, q):

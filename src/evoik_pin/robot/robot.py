@@ -644,6 +644,19 @@ class Robot:
         J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
         return J @ self._G if self._coupled else J
 
+    def jacobian_world_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
+        """``jacobian(q, "world")`` of the tip (or of Pinocchio frame ``frame_id``) without validation (6, n), for
+        inner loops (``q`` as in :meth:`fk_unchecked`)."""
+        fid = self._tip_id if frame_id is None else frame_id
+        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid,
+                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, -1)
+        if self._coupled:
+            J = J @ self._G
+        if self._base_id != 0:
+            Rt = self._oMbase.rotation.T
+            J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
+        return J
+
     @staticmethod
     def task_rows(rows) -> list[int]:
         """Jacobian row indices of a row selection: "translation", "rotation", "full", "planar" or a list."""

@@ -159,8 +159,9 @@ def _task_jacobian(problem, q: np.ndarray) -> np.ndarray:
     in TASK_ROWS count all six rows (a smaller null space: safe)."""
     robot = problem.robot
     if problem.goals is None:
-        return robot.jacobian(q, "world")[list(TASK_ROWS[target_kind(problem.target)])]
-    blocks = [robot.jacobian(q, "world", of=g.frame)[list(TASK_ROWS.get(g.kind, range(6)))] for g in problem.goals]
+        return robot.jacobian_world_unchecked(q)[list(TASK_ROWS[target_kind(problem.target)])]
+    blocks = [robot.jacobian_world_unchecked(q, robot.frame_id(g.frame))[list(TASK_ROWS.get(g.kind, range(6)))]
+              for g in problem.goals]
     return np.vstack(blocks)
 
 
