@@ -298,3 +298,13 @@ def test_bench_script_runs_small():
     spec.loader.exec_module(module)
     text = module.run(argparse.Namespace(n=3, seed=0, verbose=False, prefer_timeout=None))
     assert "nearest vs Distance" in text and "10 grasps, 7 unreachable" in text and "JointLimitMargin" in text
+
+
+def test_jacobian_world_unchecked_equals_jacobian():
+    for robot in (ev.load_robot("panda"), ev.load_robot("panda", base="panda_link1")):
+        rng = np.random.default_rng(11)
+        for q in robot.random_configurations(3, rng):
+            for frame in (None, robot.frames[-3]):
+                fid = None if frame is None else robot.frame_id(frame)
+                assert np.allclose(robot.jacobian_world_unchecked(q, fid), robot.jacobian(q, "world", of=frame),
+                                   atol=1e-12)
