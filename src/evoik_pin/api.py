@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from .choosing import has_choices, solve_choosing
 from .errors import ConfigurationError, MethodError, OptionError
 from .goals import is_goal_list
 from .problem import DEFAULT_PRO_DELTA, IKProblem, Target, check_pro_delta
@@ -149,6 +150,7 @@ def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
     tolerance, and a polish makes a new Result); a scene's verdict comes after (:func:`with_collision_verdict`)."""
     if result.goal_errors is None:
         result.goal_errors = problem.goal_errors(result.q)
+    result.chosen = problem.chosen(result.q)  # goal sets: which member each goal meets
     met = problem.goals_met(result.goal_errors)
     if result.success and not met:
         unmet = [g.frame for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]
@@ -197,11 +199,20 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
             (lower, upper), ``objective``, ``orientation_weight``, ``pose_metric``, ``polish``, ``scene`` (a
             :class:`Scene` or a scene file's path, str or Path), ``margin`` m) and the solver's own
             (``population``, ``max_generations``, ...; see each solver's docstring).
+            ``prefer``: ``"first"`` (default: the first answer found), ``"nearest"`` (the answer nearest ``q0``)
+            or ``"manipulability"`` (the most dexterous) among the answers found within ``timeout`` (default
+            0.7 ms for the last two; method ``"memetic"``; :mod:`evoik_pin.solvers.search.choose`).
+            ``locked``: ``{joint: value}`` (rad or m), joints held fixed for this call (:meth:`Robot.locked`);
+            ``q0``, ``bounds`` and the answer's ``q`` stay in ``robot``'s full layout, the locked joints at
+            their values. The goal list may hold preferences (:mod:`evoik_pin.goals.preferences`: ``Posture``,
+            ``JointLimitMargin``, ``Manipulability``, ``MinimalDisplacement``), met as well as the goals allow.
 
     Returns:
         A :class:`Result`; an unreachable target gives ``success=False``, the best approximation and a
         message, not an exception.
     """
+    if has_choices(target, options):
+        return solve_choosing(robot, target, method, seed, **options)  # prefer=, preferences, locked=
     problem, solver_options = make_problem(robot, target, **options)
     return _run(problem, method, _rng(seed), solver_options)
 

@@ -80,6 +80,24 @@ def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
     return np.radians(q)
 
 
+def _locked_values(robot, items: list[str], rad: bool) -> dict[str, float]:
+    """``--locked NAME=VALUE`` flags as {joint: value in SI} (revolute in degrees unless ``--rad``); the library
+    checks the names and limits."""
+    out = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        try:
+            value = float(text)
+        except ValueError:
+            value = None
+        if not sep or not name or value is None:
+            raise OptionError(f"--locked needs NAME=VALUE (a joint and a number), got {item!r}")
+        revolute = name in robot.joint_names and bool(robot.revolute[robot.joint_names.index(name)])
+        out[name] = float(np.radians(value)) if revolute and not rad else value
+    return out
+
+
 def _shown(robot, q: np.ndarray, rad: bool) -> np.ndarray:
     """Joint values (n,) in SI as the command line shows them: revolute in degrees unless ``--rad``, prismatic in m."""
     q = np.asarray(q, dtype=float)
@@ -106,6 +124,7 @@ CALL_FLAGS = {
     "population": "--population", "max_generations": "--max-generations", "timeout": "--timeout", "count": "--count",
     "voxel": "--voxel", "orientations": "--orientations", "backend": "--backend", "workers": "--workers",
     "address": "--address", "progress": "--no-progress", "batch_size": "--batch-size",
+    "prefer": "--prefer", "locked": "--locked",
 }
 #: Options of ``solve``'s methods that no command-line value expresses, and why.
 NOT_ON_CLI = {"objective": "a Python callable objective(Q, kin) -> (N,) costs",
@@ -121,7 +140,7 @@ _TARGET_FLAGS = {"target position": "--xyz", "target roll-pitch-yaw": "--rpy"}
 
 #: Options passed on as typed (the rest: q0 and bounds in degrees, scene and margin, the calls' own arguments).
 _PLAIN_OPTIONS = ("tolerance", "rotation_tolerance", "orientation_weight", "pose_metric", "polish", "population",
-                  "max_generations", "timeout", "count")
+                  "max_generations", "timeout", "count", "prefer")
 #: ``--timeout none``: no wall-clock budget (None in Python; argparse's None means "not given").
 _NO_LIMIT = "none"
 
@@ -179,6 +198,8 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
         bounds = (robot.lower if lower is None else _joint_values(robot, lower, args.rad),
                   robot.upper if upper is None else _joint_values(robot, upper, args.rad))
         given["bounds"] = (bounds, CALL_FLAGS["bounds"])
+    if getattr(args, "locked", None):
+        given["locked"] = (_locked_values(robot, args.locked, args.rad), "--locked")
     for item in getattr(args, "option", []):
         name, sep, text = item.partition("=")
         name = name.strip()
@@ -207,7 +228,7 @@ def _check_method_options(given: dict, method: str, pool: list[str] | None, comm
 
     takes = get_solver(method).options
     for name, (_, flag) in given.items():
-        if name in _PROBLEM_OPTIONS or name == "polish" or name in takes:
+        if name in _PROBLEM_OPTIONS or name in ("polish", "prefer", "locked") or name in takes:
             continue
         if pool is None:
             raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {command}); "
@@ -371,6 +392,7 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     """``evoik solve ROBOT --goals FILE``: one answer meeting every goal of the file; each goal's errors printed
     (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
     from .api import GOAL_METHODS, solve
+    from .goals import Goal
     from .goals_file import goal_kind_name
     from .solvers import get_solver
 
@@ -385,13 +407,16 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     if args.all:
         return _solve_all_goals(args, robot, goals, method, options, html)
     res = solve(robot, goals, method=method, seed=args.seed, **options)
+    goals = [g for g in goals if isinstance(g, Goal)]  # the preferences have no errors to show
     rows = []
-    for goal, (pos, rot) in zip(goals, res.goal_errors, strict=True):
+    for i, (goal, (pos, rot)) in enumerate(zip(goals, res.goal_errors, strict=True)):
         rows.append({"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos,
                      "rotation_error_rad": rot, "met": bool(goal.met(pos, rot)),
                      "tolerance_m": goal.tolerance if goal.has_position else None,
                      "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None,
                      "weight": goal.weight})
+        if goal.alternatives is not None:  # a goal set: the member met
+            rows[-1]["chosen"] = res.chosen[i]
     info = {
         "robot": robot.name,
         "floating_base": robot.floating_base,
@@ -732,6 +757,12 @@ def build_parser() -> argparse.ArgumentParser:
                    "collides; --html/--view draw the obstacles and the links in collision in red")
     p.add_argument("--margin", type=float, metavar="M", help="with --scene: clearance in m the answer must keep "
                    "(pairs closer than M count as colliding; default 0)")
+    p.add_argument("--prefer", help="which answer: first (default: the first found), nearest (nearest --q0) or "
+                   "manipulability (the most dexterous), among those found within --timeout (default 0.7 ms for "
+                   "the last two)")
+    p.add_argument("--locked", action="append", default=[], metavar="NAME=VALUE",
+                   help="hold joint NAME at VALUE for this solve (repeatable; revolute in degrees, or radians with "
+                   "--rad; prismatic in m); --q0 and the answer keep every joint")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")

@@ -56,6 +56,12 @@ may also be the bare list of goals. Numbers written ``1e-6`` (which YAML 1.1 rea
 Unknown keys are errors (a misspelt ``tolerence`` is not silently ignored). Every error is a
 :class:`~evoik_pin.errors.GoalsFileError` naming the file, the goal (index from 0, and frame) and the field.
 
+A goal set (any one of several targets will do; ``Pose(frame, [T1, ...])``) has ``targets:``, a list of targets,
+instead of ``target:``. Preferences (:mod:`evoik_pin.goals.preferences`) are entries of the goal list too, with no
+frame and target: ``{kind: posture, q_ref: [...]}`` (rad or m) or ``{kind: posture, joints: {name: value}}``,
+``{kind: joint_limit_margin, margin: 0.1}``, ``{kind: manipulability}`` (optional ``frame``),
+``{kind: minimal_displacement}``, each with an optional ``weight``.
+
 Several problems: ``problems:`` instead of ``goals:``, a list of goal lists (each a list of goals as above), for
 :func:`evoik_pin.solve_many` or, in time order, :func:`evoik_pin.solve_trajectory`; read them with
 :func:`load_problems` (which reads a ``goals:`` file as one problem). :func:`load_goals` reads one goal list and
@@ -85,6 +91,7 @@ import numpy as np
 from .datafile import Flow, data_format, dump_data, read_data, write_text
 from .errors import FrameError, GoalsFileError, OptionError, TargetError
 from .goals import DEFAULT_GOAL_TOLERANCE, Direction, Goal, LookAt, Orientation, Pose, Position, bind, is_goal_list
+from .goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from .target import Target
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
@@ -111,6 +118,7 @@ class GoalsFile:
         """Check every goal list against ``robot`` (:func:`evoik_pin.goals.bind`: frames that exist and that an
         active joint moves, no frame with two targets); GoalsFileError naming this file and the goal."""
         for p, goals in enumerate(self.problems):
+            goals = [g for g in goals if isinstance(g, Goal)]  # preferences are checked when solving
             try:
                 bind(robot, goals)
             except (FrameError, TargetError) as exc:
@@ -280,6 +288,15 @@ GOAL_KINDS = {
 }
 
 
+#: Preferences a goal list may hold (:mod:`evoik_pin.goals.preferences`), by their ``kind:`` name: (class, fields).
+PREFERENCE_KINDS = {
+    "posture": (Posture, ("q_ref", "joints", "weight")),
+    "joint_limit_margin": (JointLimitMargin, ("margin", "weight")),
+    "manipulability": (Manipulability, ("frame", "weight")),
+    "minimal_displacement": (MinimalDisplacement, ("weight",)),
+}
+
+
 def _goal(entry, what: str) -> Goal:
     if not isinstance(entry, dict):
         raise GoalsFileError(f"{what}: expected a mapping with frame, kind and target, got {entry!r}")
@@ -287,14 +304,19 @@ def _goal(entry, what: str) -> Goal:
     if frame is not None:
         what += f" ({frame})"
     kind_name = entry.get("kind")
+    if kind_name in PREFERENCE_KINDS:
+        return _preference(entry, what, kind_name)
     if kind_name not in GOAL_KINDS:
         raise GoalsFileError(f"{what}: kind: " + ("missing" if kind_name is None else f"unknown kind {kind_name!r}")
-                             + f"; accepted kinds: {', '.join(GOAL_KINDS)}")
+                             + f"; accepted kinds: {', '.join([*GOAL_KINDS, *PREFERENCE_KINDS])}")
     kind = GOAL_KINDS[kind_name]
-    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields), f"{what}, a {kind_name} goal")
+    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
+    if "targets" in entry:  # a goal set: any one of several targets
+        return _goal_set(entry, what, kind)
     for key in ("frame", "target"):
         if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target)")
+            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target, or targets "
+                                 "for a goal set)")
     if not isinstance(frame, str) or not frame:
         raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
     if not isinstance(entry["target"], dict):
@@ -310,6 +332,68 @@ def _goal(entry, what: str) -> Goal:
     try:
         return (kind.make or kind.cls)(frame, target, **options)
     except (OptionError, TargetError, GoalsFileError) as exc:
+        raise GoalsFileError(f"{what}: {exc}") from None
+
+
+def _goal_set(entry: dict, what: str, kind: GoalKind) -> Goal:
+    """A goal set (``targets:``, a non-empty list of targets, instead of ``target:``)."""
+    frame, targets = entry.get("frame"), entry["targets"]
+    if "target" in entry:
+        raise GoalsFileError(f"{what}: give target (one) or targets (a goal set: any one will do), not both")
+    if not isinstance(frame, str) or not frame:
+        raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
+    if not isinstance(targets, list) or not targets:
+        raise GoalsFileError(f"{what}: targets must be a non-empty list of targets (a goal set), got {targets!r}")
+    read = []
+    for k, t in enumerate(targets):
+        if not isinstance(t, dict):
+            raise GoalsFileError(f"{what}: targets[{k}] must be a mapping (position, rpy / rpy_rad, matrix), got {t!r}")
+        try:
+            read.append(kind.read_target(t))
+        except (GoalsFileError, TargetError) as exc:
+            raise GoalsFileError(f"{what}: targets[{k}]: {exc}") from None
+    options = {key: _number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
+    if kind.cls is Pose:
+        read = [t.se3() for t in read]
+    try:
+        return kind.cls(frame, read, **options)
+    except (OptionError, TargetError) as exc:
+        raise GoalsFileError(f"{what}: {exc}") from None
+
+
+def _preference(entry: dict, what: str, kind_name: str):
+    """A preference entry (``kind: posture | joint_limit_margin | manipulability | minimal_displacement``)."""
+    cls, fields = PREFERENCE_KINDS[kind_name]
+    _unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
+    args = {}
+    for key in fields:
+        if key not in entry:
+            continue
+        value = entry[key]
+        if key == "q_ref":
+            if not isinstance(value, list):
+                raise GoalsFileError(f"{what}: q_ref must be a list of joint values (rad or m), got {value!r}")
+            value = [_number(v, f"{what}: q_ref[{k}]") for k, v in enumerate(value)]
+        elif key == "joints":
+            if not isinstance(value, dict) or not value:
+                raise GoalsFileError(f"{what}: joints must be a mapping {{joint name: value (rad or m)}}, got "
+                                     f"{value!r}")
+            value = {str(k): _number(v, f"{what}: joints.{k}") for k, v in value.items()}
+        elif key == "frame":
+            if not isinstance(value, str) or not value:
+                raise GoalsFileError(f"{what}: frame must be a frame name, got {value!r}")
+        else:
+            value = _number(value, f"{what}: {key}")
+        args[key] = value
+    if kind_name == "posture":
+        if ("q_ref" in args) == ("joints" in args):
+            raise GoalsFileError(f"{what}: a posture needs one of q_ref (a joint vector) and joints ({{name: value}})")
+        args["q_ref"] = args.pop("q_ref", None) or args.pop("joints")
+    if kind_name == "joint_limit_margin" and "margin" not in args:
+        raise GoalsFileError(f"{what}: a joint_limit_margin needs margin (rad or m)")
+    try:
+        return cls(**args)
+    except (OptionError, TargetError, ValueError) as exc:
         raise GoalsFileError(f"{what}: {exc}") from None
 
 
@@ -390,9 +474,32 @@ def _kind_of(goal) -> tuple[str, GoalKind]:
                          f"{', '.join(k.cls.__name__ for k in GOAL_KINDS.values())}")
 
 
+def _preference_entry(pref: Preference) -> dict:
+    """A preference as a goals file writes it."""
+    name = next(k for k, (cls, _) in PREFERENCE_KINDS.items() if type(pref) is cls)
+    entry: dict = {"kind": name}
+    if name == "posture":
+        if isinstance(pref.q_ref, dict):
+            entry["joints"] = {k: float(v) for k, v in pref.q_ref.items()}
+        else:
+            entry["q_ref"] = [float(v) for v in pref.q_ref]
+    elif name == "joint_limit_margin":
+        entry["margin"] = float(pref.margin)
+    elif name == "manipulability" and pref.frame is not None:
+        entry["frame"] = pref.frame
+    if pref.weight != 1.0:
+        entry["weight"] = float(pref.weight)
+    return entry
+
+
 def _entry(goal: Goal) -> dict:
+    if isinstance(goal, Preference):
+        return _preference_entry(goal)
     name, kind = _kind_of(goal)
     entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
+    if goal.alternatives is not None:  # a goal set
+        del entry["target"]
+        entry["targets"] = [kind.write_target(m) for m in goal.alternatives]
     defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
     band = getattr(goal, "band", None)
     for key in kind.fields:
@@ -427,7 +534,8 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
     several = isinstance(goals, list) and bool(goals) and all(isinstance(g, (list, tuple)) for g in goals)
     problems = [list(g) for g in goals] if several else [goals]
     for p, problem in enumerate(problems):
-        if not is_goal_list(problem) or not problem:
+        if not isinstance(problem, (list, tuple)) or not problem or not is_goal_list(
+                [g for g in problem if not isinstance(g, Preference)]):
             what = f"problem {p}" if several else "goals"
             raise GoalsFileError(f"save_goals: {what} must be a non-empty list of goals (Pose, Position) or a list "
                                  f"of such lists, got {problem!r}")

@@ -45,6 +45,8 @@ DEFAULT_PRO_DELTA = np.pi / 100
 #: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
 #: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
 NEAR_UNBOUNDED = 1e3
+#: Most combinations of goal-set members a solve searches (:meth:`IKProblem.variants`).
+MAX_VARIANTS = 256
 
 
 def check_pro_delta(delta) -> float:
@@ -216,6 +218,14 @@ class IKProblem:
                 pos[:, g], rot[:, g] = kinded
             elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
+        for g in self.goal_sets:  # a goal set's violation: that of its member nearest by the goals' cost
+            for member in self.goals[g].alternatives[1:]:
+                pm, Rm = member.encode()
+                pos_m = np.linalg.norm(P[:, g] - pm, axis=1)
+                rot_m = relative_angle(Rm, R[:, g]) if member.has_orientation else np.zeros_like(pos_m)
+                better = pos_m + self.orientation_weight * rot_m < pos[:, g] + self.orientation_weight * rot[:, g]
+                pos[:, g] = np.where(better, pos_m, pos[:, g])
+                rot[:, g] = np.where(better, rot_m, rot[:, g])
         return pos, rot
 
     def _goal_cost(self, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
@@ -224,10 +234,97 @@ class IKProblem:
         return (pos + self.orientation_weight * rot) @ w
 
     def goal_errors(self, q: np.ndarray) -> list[tuple[float, float | None]]:
-        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order."""
+        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order (a goal
+        set's: those of its member :meth:`chosen` picks)."""
         fids = [self.robot.frame_id(g.frame) for g in self.goals]
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        if self.goal_sets:
+            return [self._member(g, T)[1] for g, T in zip(self.goals, poses, strict=True)]
         return [g.errors(T) for g, T in zip(self.goals, poses, strict=True)]
+
+    # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal_set)
+    @property
+    def goal_sets(self) -> list[int]:
+        """Indices of the goals that are goal sets (any one of several targets)."""
+        if self.goals is None:
+            return []
+        found = self.__dict__.get("_goal_set_indices")
+        if found is None or found[0] is not self.goals:
+            found = self.__dict__["_goal_set_indices"] = (self.goals, [i for i, g in enumerate(self.goals)
+                                                                       if g.alternatives is not None])
+        return found[1]
+
+    def _member(self, goal, T) -> tuple[int | None, tuple[float, float | None]]:
+        """(index of the member of ``goal`` its frame at pose ``T`` meets, or failing that is nearest to by
+        position + orientation_weight x angle; None for a single target), with that member's errors)."""
+        if goal.alternatives is None:
+            return None, goal.errors(T)
+        from .lie import relative_angle
+
+        P, R = goal.member_targets  # a vectorized screen, then the exact errors of the member picked
+        pos = np.linalg.norm(P - T.translation, axis=1)
+        rot = relative_angle(T.rotation, R) if goal.has_orientation else np.zeros_like(pos)
+        met = np.nonzero((pos <= goal.tolerance) & (rot <= goal.rotation_tolerance))[0]
+        i = int(met[0]) if met.size else int(np.argmin(pos + self.orientation_weight * rot))
+        return i, goal.alternatives[i].errors(T)
+
+    def chosen(self, q: np.ndarray) -> list[int | None] | None:
+        """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
+        to), None for a goal with one target; None for a problem without a goal list."""
+        if self.goals is None:
+            return None
+        if not self.goal_sets:
+            return [None] * len(self.goals)
+        fids = [self.robot.frame_id(g.frame) for g in self.goals]
+        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        return [self._member(g, T)[0] for g, T in zip(self.goals, poses, strict=True)]
+
+    def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
+        """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen
+        per goal, None for a single target; targets pt (V, G, 3), Rt (V, G, 3, 3)). OptionError beyond ``most``."""
+        import itertools
+
+        _, pt, Rt = self.goal_stack() if self.goals is not None else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
+        sets = self.goal_sets
+        sizes = [len(self.goals[g].alternatives) for g in sets]
+        if math.prod(sizes) > most:
+            raise OptionError(f"goal sets of {' x '.join(map(str, sizes))} members make {math.prod(sizes)} "
+                              f"combinations; at most {most} are searched: give fewer members")
+        combos = list(itertools.product(*[range(k) for k in sizes]))
+        P = np.repeat(pt[None], len(combos), axis=0)
+        R = np.repeat(Rt[None], len(combos), axis=0)
+        choices = []
+        for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
+            P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
+        for combo in combos:
+            choice = [None] * len(self.goals or ())
+            for g, m in zip(sets, combo, strict=True):
+                choice[g] = m
+            choices.append(tuple(choice))
+        return choices, P, R
+
+    def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:
+        """The problem of one combination of goal-set members (:meth:`variant_targets`): those members as its goals,
+        sharing this problem's box, q0 and scene."""
+        import copy
+
+        if not self.goal_sets:
+            return self
+        goals = [g if m is None else g.alternatives[m] for g, m in zip(self.goals, choice, strict=True)]
+        v = copy.copy(self)
+        v.goals, v._goal_stack, v.evaluations = goals, [self._goal_stack[0], pt, Rt], 0
+        v.__dict__.pop("_goal_set_indices", None)
+        return v
+
+    def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
+        """The single-target problems of a goal list with goal sets, one per combination of their members (in
+        ``itertools.product`` order over the sets): (members chosen per goal, None for a single target; the problem
+        with those members as goals, sharing this one's box, q0 and scene). A list of one (None choices, self)
+        without goal sets. OptionError beyond ``most`` combinations."""
+        if not self.goal_sets:
+            return [(tuple([None] * len(self.goals or ())), self)]
+        choices, P, R = self.variant_targets(most)
+        return [(c, self.variant(c, P[v], R[v])) for v, c in enumerate(choices)]
 
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors

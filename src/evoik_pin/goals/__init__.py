@@ -18,6 +18,11 @@ frame), with its target expressed in the robot's base frame (for a floating base
 ``Pose``, ``Position`` and ``Orientation`` also take per-axis tolerance bands and free axes (``tolerance=`` 6 or 3
 half-widths, ``free="rz"``; :mod:`.bands`): met when every component of the error is within its band.
 
+A goal set, ``Pose(frame, [T1, ..., Tk])`` or ``Position(frame, [p1, ..., pk])``, is met by any one of its members
+(:mod:`.goal_set`; ``Result.chosen``). Preferences (:mod:`.preferences`: :class:`Posture`,
+:class:`JointLimitMargin`, :class:`Manipulability`, :class:`MinimalDisplacement`) may join the list: met as well as
+the goals allow, never at their expense.
+
 Each goal checks its inputs when made (an :mod:`evoik_pin.errors` class naming what is wrong) and packs itself into
 the LM kernel's goal stack (:class:`~evoik_pin.solvers.lm.layout.GoalStack`: kind, frame, weight, tolerances);
 :func:`bind` checks a goal list against a robot (frames that exist and that some active joint moves, the same frame
@@ -33,6 +38,7 @@ from .look_at import LookAt
 from .orientation import Orientation
 from .pose import Pose
 from .position import Position
+from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 
-__all__ = ["DEFAULT_GOAL_TOLERANCE", "Direction", "Goal", "LookAt", "Orientation", "Pose", "Position", "bind",
-           "is_goal_list"]
+__all__ = ["DEFAULT_GOAL_TOLERANCE", "Direction", "Goal", "JointLimitMargin", "LookAt", "Manipulability",
+           "MinimalDisplacement", "Orientation", "Pose", "Position", "Posture", "Preference", "bind", "is_goal_list"]

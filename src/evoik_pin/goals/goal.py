@@ -40,6 +40,8 @@ class Goal:
     #: The LM kernel's goal kind (``KIND_*``), and whether the goal constrains orientation.
     kind: int = field(default=-1, init=False, repr=False)
     has_orientation: bool = field(default=False, init=False, repr=False)
+    #: A goal set's members (:mod:`.goal_set`): one single-target goal each; None for one target.
+    alternatives: tuple | None = field(default=None, init=False, repr=False)
 
     def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool) -> None:
         """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__)."""

@@ -10,6 +10,7 @@ import pinocchio as pin
 from ..errors import OptionError, TargetError
 from ..solvers.lm.layout import KIND_POSE, KIND_POSE_AXES
 from ..target import Target
+from . import goal_set
 from .bands import AXES, band_aux, parse_band, parse_free
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 
@@ -31,6 +32,9 @@ class Pose(Goal):
     ``"x y z rx ry rz"`` (a string with spaces or a list): ``free="rz"``, any rotation about the target's z axis
     (a drill, a suction cup). With one number and one free rotation axis, the rotation error is the angle between
     the frame's and the target's axis of that name. See :mod:`evoik_pin.goals.bands`.
+
+    ``target`` may be a goal set: a list of poses or a (k, 4, 4) array, any one of which will do
+    (:mod:`.goal_set`).
     """
 
     target: object = None
@@ -60,6 +64,9 @@ class Pose(Goal):
         object.__setattr__(self, "band", band)
         object.__setattr__(self, "free", free)
         self._set_aux(None if kind == KIND_POSE else band_aux(band, free, AXES, DEFAULT_GOAL_TOLERANCE))
+        if goal_set.is_set(target, (4, 4)):  # any one of several poses
+            return goal_set.init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance,
+                                                                  free or None), "Pose poses")
         if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
             raise TargetError(f"Pose on {frame!r}: a 3-vector is a position; use Position({frame!r}, p) or give a "
                               "4 x 4 pose or a pin.SE3")

@@ -9,6 +9,7 @@ import pinocchio as pin
 
 from ..errors import TargetError
 from ..solvers.lm.layout import KIND_POSITION, KIND_POSITION_BAND
+from . import goal_set
 from .bands import AXES, band_aux, parse_band
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 
@@ -23,6 +24,9 @@ class Position(Goal):
     bound of the position error's norm, or 3 numbers, half-widths of the error ``p - p_t`` along the BASE frame's
     x, y, z (a position target has no frame of its own; ``inf``: free), met when every component is within its
     band. See :mod:`evoik_pin.goals.bands`.
+
+    ``target`` may be a goal set: a list of 3-vectors or a (k, 3) array, any one of which will do
+    (:mod:`.goal_set`).
     """
 
     target: object = None
@@ -41,6 +45,8 @@ class Position(Goal):
             self._init_common(frame, weight, 0.0, None, KIND_POSITION_BAND, False)
         object.__setattr__(self, "band", band)
         self._set_aux(None if band is None else band_aux(band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE))
+        if goal_set.is_set(target, (3,)):  # any one of several points
+            return goal_set.init_set(self, target, lambda p: Position(frame, p, weight, tolerance), "Position points")
         if isinstance(target, pin.SE3) or np.shape(target) == (4, 4):
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m); use Pose({frame!r}, T) for a pose")
         try:

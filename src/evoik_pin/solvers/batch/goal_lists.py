@@ -113,6 +113,8 @@ class GoalSource:
         """Lists a to b - 1 as a :class:`GoalBlock`."""
         by_key: dict[tuple, list[int]] = {}
         for i in range(a, b):
+            if any(g.alternatives is not None for g in self.raw[i]):
+                continue  # goal sets go to the one-by-one solver, which tries their members (search.choose)
             by_key.setdefault(self._keys[i], []).append(i)
         groups = []
         for key, rows in by_key.items():
