@@ -48,8 +48,6 @@ def locked_robot(robot, values):
     """:meth:`Robot.locked` (see there); the robots made are cached per robot and values (weakly)."""
     import weakref
 
-    from .robot import Robot
-
     values = _checked(robot, values)
     if not values:
         return robot
@@ -61,7 +59,7 @@ def locked_robot(robot, values):
     keep = [j for j in robot.joint_names if j not in values]
     args["joints"] = keep
     args["base_box"] = None  # the bounds are copied below
-    out = Robot(**args, rest={**robot.locked_values, **values})
+    out = type(robot)(**args, rest={**robot.locked_values, **values})  # a Robot, without importing robot.py
     out.srdf = robot.srdf
     idx = [robot.joint_names.index(j) for j in keep]
     out.set_bounds(robot.lower[idx], robot.upper[idx])

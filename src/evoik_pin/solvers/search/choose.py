@@ -16,7 +16,7 @@
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
   box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
 * **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
-  own answer is refined alone (:func:`evoik_pin.choosing.solve_choosing`), so they never cost success.
+  own answer is refined alone (:func:`evoik_pin.api._solve_choosing`), so they never cost success.
 
 Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
 the answers LM finds from random starts lie anywhere on the self-motion manifold, and a few projected steps take
@@ -50,6 +50,7 @@ from ..lm.layout import (
     target_kind,
 )
 from ..options import check_choice
+from . import memetic as memetic_module
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
 
 __all__ = ["COLLECT_SHARE", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "choose", "nearest_turn", "refine"]
@@ -590,3 +591,6 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                   evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0, history=history,
                   message=message, method="memetic", setup_s=t0 - t_setup, collision_free=free_q,
                   goal_errors=goal_errors)
+
+
+memetic_module.GOAL_SET_SEARCH["choose"] = choose  # memetic hands goal sets over to choose (see there)

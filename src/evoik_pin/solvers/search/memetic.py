@@ -45,7 +45,7 @@ import pinocchio as pin
 from ...errors import OptionError
 from ...problem import IKProblem, errors_text, shortfall_text
 from ...result import Result
-from .. import register
+from .. import get_solver, register
 from ..collision_verdict import pairs_text
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
 from ..options import check_choice, check_int, check_positive
@@ -185,6 +185,11 @@ class _Search:
         return False
 
 
+#: The search over goal sets (:func:`.choose.choose`), which puts itself here when imported (the solver registry
+#: imports it with the solvers): memetic cannot import it, choose builds on memetic.
+GOAL_SET_SEARCH: dict = {}
+
+
 @register("memetic", "Memetic IK: Levenberg-Marquardt on the SE(3) error from q0 and a seed table, then DE "
           "populations polished by LM until the tolerance or the time budget (default 5 ms)", check=check_options)
 def memetic(
@@ -242,12 +247,12 @@ def memetic(
         target gives the best approximation met, ``success=False`` and a message.
     """
     if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
-        from .choose import choose
-
-        return choose(problem, rng, timeout=timeout, max_restarts=max_restarts, population=population,
-                      generations=generations, polish_count=polish_count, table_size=table_size,
-                      table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
-                      engine=engine)
+        if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
+            get_solver("memetic")
+        return GOAL_SET_SEARCH["choose"](
+            problem, rng, timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
+            polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
+            batch=batch, iterations=iterations, engine=engine)
     t_setup = time.perf_counter()
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
