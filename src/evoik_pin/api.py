@@ -27,7 +27,8 @@ from .solvers.lm import ENGINES
 from .solvers.options import check_int
 from .solvers.search.all_solutions import SolutionList  # also registers "memetic-all"
 
-__all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "GOAL_METHODS", "BatchResults", "SolutionList", "make_problem",
+__all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "GOAL_METHODS", "BatchResults", "IKSolver", "SolutionList",
+           "make_problem",
            "methods", "prepare", "solve", "solve_all", "solve_many", "solve_trajectory"]
 
 #: Method used when none is named.
@@ -179,6 +180,9 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
         A :class:`Result`; an unreachable target gives ``success=False``, the best approximation and a
         message, not an exception.
     """
+    solver = cached_solver(robot, method, options)  # the IKSolver fast path (evoik_pin.ik_solver)
+    if solver is not None:
+        return solver.solve(target, options.get("q0"), seed)
     problem, solver_options = make_problem(robot, target, **options)
     return _run(problem, method, _rng(seed), solver_options)
 
@@ -340,3 +344,6 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         _check_goal_method(method)
     return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
                             backend=backend, address=address, progress=progress, **options)
+
+
+from .ik_solver import IKSolver, cached_solver  # noqa: E402  (it builds on the helpers above)

@@ -174,6 +174,27 @@ class LevenbergMarquardt:
         self._buffers_for = -1  # the most steps those buffers hold
         # the kernel's constant arguments, unpacked from one tuple at each call
         self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+        self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
+
+    def retarget(self, problem: IKProblem) -> bool:
+        """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
+        robot, goal stack and search box, as the problems of an :class:`~evoik_pin.IKSolver` do): the targets are
+        written into the kernel's argument arrays in place, so no constant is rebuilt. Returns False (the engine
+        unchanged) when ``problem`` needs an engine of its own, and for the python engine."""
+        if self._reference is not None or problem.robot is not self.robot:
+            return False
+        stack, pt, Rt = problem_goals(problem)
+        if stack is not self.goals or box_constants(self.robot, problem.lower, problem.upper)[4] is not self._box:
+            return False
+        if self._owned:
+            self._pt[...] = pt
+            self._Rt[...] = Rt
+        else:  # the first problem's arrays may be its target's own: copies from now on, never written through
+            self._pt, self._Rt = np.array(pt), np.array(Rt)
+            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._owned = True
+        self.problem = problem
+        return True
 
     def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
         """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's buffers for this goal

@@ -91,15 +91,25 @@ class SeedTable:
             return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
         return key, self._pose_features(key, P, Rts)
 
+    def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
+        """(kind key, features (d,)) of one target: :meth:`target_features`'s row, the same numbers, without the
+        batch encoding (this runs on every single-target solve)."""
+        if target.planar:
+            key, f = self.target_features([target])
+            return key, f[0]
+        if target.rotation is None:
+            return "position", np.ascontiguousarray(target.position)
+        return "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
+
     def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
         costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
         (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
         if k <= 0:
             return
-        key, f = self.target_features([target])
+        key, f = self.one_target_features(target)
         F, sq = self._table_features(key)
-        d = sq - 2.0 * (F @ f[0])
+        d = sq - 2.0 * (F @ f)
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
@@ -311,15 +321,15 @@ class SeedTable:
 
     def distance_sq(self, target: Target, T: pin.SE3) -> float:
         """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
-        key, f = self.target_features([target])
-        d = f[0] - self._pose_features(key, T.translation[None], T.rotation[None])[0]
+        key, f = self.one_target_features(target)
+        d = f - self._pose_features(key, T.translation[None], T.rotation[None])[0]
         return float(d.dot(d))
 
     def typical_gap_sq(self, target: Target) -> float:
         """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
         other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
         as the table's nearest entry usually is."""
-        return self._gap(self.target_features([target])[0])
+        return self._gap(self.one_target_features(target)[0])
 
     def _gap(self, key: str) -> float:
         gap = self._gaps.get(key)
