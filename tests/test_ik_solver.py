@@ -181,3 +181,23 @@ def test_se3_and_matrix_targets_agree(panda, cases):
     T = cases[0][0]
     solver = ek.IKSolver(panda)
     assert np.array_equal(solver.solve(T, seed=1).q, solver.solve(pin.SE3(T.homogeneous), seed=1).q)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.floats(-10.0, -3.0), st.booleans())
+def test_property_rotation_check_gives_the_numpy_verdict(seed, log_eps, mirror):
+    """Target's rotation check (written on Python floats) accepts exactly the matrices with |R^T R - I|_F <= 1e-6 and
+    det R > 0, as numpy computes them (away from the threshold's last bits)."""
+    rng = np.random.default_rng(seed)
+    R = pin.SE3.Random().rotation @ np.diag([1.0, 1.0, -1.0 if mirror else 1.0])
+    R = R + 10.0**log_eps * rng.standard_normal((3, 3))
+    D = R.T @ R - np.eye(3)
+    frob_sq = float((D * D).sum())
+    if abs(frob_sq - 1e-12) < 1e-15:
+        return
+    accepted = frob_sq <= 1e-12 and np.linalg.det(R) >= 0
+    try:
+        ek.Target(np.zeros(3), R)
+        assert accepted
+    except TargetError as exc:
+        assert not accepted and "not a rotation matrix" in str(exc)

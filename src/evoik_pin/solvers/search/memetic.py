@@ -40,7 +40,6 @@ import itertools
 import time
 
 import numpy as np
-import pinocchio as pin
 
 from ...errors import OptionError
 from ...problem import IKProblem, errors_text, shortfall_text
@@ -350,8 +349,7 @@ class MemeticPlan:
                                                                                 problem.upper)))
             if d0 > table.typical_gap_sq(problem.target):
                 first = next(ranked, None)
-                q0_first = first is None or d0 <= table.distance_sq(
-                    problem.target, pin.SE3(table.rotations[first], table.positions[first]))
+                q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
         if q0_first:
             stage = "q0"
             solved = search.polish(q0)

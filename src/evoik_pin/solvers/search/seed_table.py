@@ -56,6 +56,7 @@ class SeedTable:
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
+        self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -94,12 +95,18 @@ class SeedTable:
     def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
         """(kind key, features (d,)) of one target: :meth:`target_features`'s row, the same numbers, without the
         batch encoding (this runs on every single-target solve)."""
+        last = self._last
+        if last[0] is target:  # a solve asks up to four times (ranking, q0's nearness, the gap)
+            return last[1]
         if target.planar:
             key, f = self.target_features([target])
-            return key, f[0]
-        if target.rotation is None:
-            return "position", np.ascontiguousarray(target.position)
-        return "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
+            out = key, f[0]
+        elif target.rotation is None:
+            out = "position", np.ascontiguousarray(target.position)
+        else:
+            out = "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
+        self._last = (target, out)
+        return out
 
     def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
@@ -323,6 +330,13 @@ class SeedTable:
         """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
         key, f = self.one_target_features(target)
         d = f - self._pose_features(key, T.translation[None], T.rotation[None])[0]
+        return float(d.dot(d))
+
+    def entry_distance_sq(self, target: Target, i: int) -> float:
+        """:meth:`distance_sq` between a target and table entry ``i``'s tip pose, from the table's own features
+        (the same numbers: the features of ``i``'s pose are row ``i`` of the table's)."""
+        key, f = self.one_target_features(target)
+        d = f - self._table_features(key)[0][i]
         return float(d.dot(d))
 
     def typical_gap_sq(self, target: Target) -> float:
