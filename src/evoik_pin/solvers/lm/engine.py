@@ -175,6 +175,7 @@ class LevenbergMarquardt:
         # the kernel's constant arguments, unpacked from one tuple at each call
         self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
+        self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
 
     def retarget(self, problem: IKProblem) -> bool:
         """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
@@ -193,8 +194,25 @@ class LevenbergMarquardt:
             self._pt, self._Rt = np.array(pt), np.array(Rt)
             self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
             self._owned = True
+            self._direct = self._overload()
         self.problem = problem
         return True
+
+    def _overload(self):
+        """The machine code numba runs for :meth:`run`'s arguments, as a function called without numba's dispatch
+        (which types each of the kernel's 22 arguments on every call: about 1.4 us, an LM run's tenth), or None
+        where this numba does not expose it. Only for an engine that runs many problems: finding it costs tens of
+        microseconds. The argument types are fixed: the engine's own arrays, and ``q`` copied as
+        :meth:`run` does."""
+        buffers = self._buffers or self._workspace(DEFAULT_ITERATIONS)
+        g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
+        args = (*buffers, np.zeros(self.n), *self._args, self._params, np.empty(self.n), g_err)
+        try:
+            from numba import typeof
+
+            return self._kernel["lm_run_buffers"].overloads[tuple(typeof(a) for a in args)].entry_point
+        except (AttributeError, KeyError, ImportError):
+            return None
 
     def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
         """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's buffers for this goal
@@ -221,8 +239,12 @@ class LevenbergMarquardt:
         out = np.empty(self.n)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
         buffers = self._buffers if max_iterations <= self._buffers_for else self._workspace(max_iterations)
-        pos, rot, converged, it, evaluations, cost = self._kernel["lm_run_buffers"](
-            *buffers, np.ascontiguousarray(q, dtype=float), *self._args, params, out, g_err)
+        run = self._direct
+        if run is None:
+            run, q = self._kernel["lm_run_buffers"], np.ascontiguousarray(q, dtype=float)
+        else:  # the overload's argument type exactly: a C-contiguous, writable float64 vector of our own
+            q = np.array(q, dtype=float)
+        pos, rot, converged, it, evaluations, cost = run(*buffers, q, *self._args, params, out, g_err)
         return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations,
                          None if self._one else g_err, cost)
 
