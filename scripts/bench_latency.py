@@ -219,6 +219,11 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
             if original is not None:
                 setattr(owner, attr, original)
     us = {k: v / n / 1e3 for k, v in ns.items()}
+    # the boundary checks alone (part of "target and problem"): the pose's and q0's
+    t0 = time.perf_counter()
+    for i in range(n):
+        robot.check_q(Qs[i])
+    q0_check = (time.perf_counter() - t0) / n * 1e6
     stages = {
         "target and problem": us["problem"],
         "set-up look-ups": us["setup"],
@@ -229,7 +234,7 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         "cost and Result": us["result"],
     }
     stages["memetic's own Python"] = wrapped - sum(stages.values())
-    return {"stages_us": stages, "target_check_us": us["target"], "wrapped_mean_us": wrapped,
+    return {"stages_us": stages, "target_check_us": us["target"], "q0_check_us": q0_check, "wrapped_mean_us": wrapped,
             "plain_mean_us": plain, "q0": use_q0, "n": n}
 
 
@@ -287,6 +292,8 @@ def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str,
             lines.append(f"| {k} | {v:.1f} | {what[k]} |")
         lines.append(f"| (of the first: Target.coerce) | {p['target_check_us']:.1f} | the boundary checks of a "
                      "pose: finite, a rotation matrix, within reach of the base |")
+        lines.append(f"| (of the first: q0's check) | {p['q0_check_us']:.1f} | Robot.check_q: shape and finite "
+                     "(timed alone) |")
     if talos:
         lines += ["", f"Talos, floating base, four pose goals (both soles, both wrists; bench_goals_scale.py's "
                   f"problems), {next(iter(talos.values()))['n']} problems, interleaved:", "",

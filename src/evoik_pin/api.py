@@ -74,9 +74,9 @@ def _robot(robot) -> Robot:
     return robot if isinstance(robot, Robot) else load_robot(robot)
 
 
-def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
-    """Split ``options`` into an :class:`IKProblem` and the remaining solver options."""
-    robot = _robot(robot)
+def split_options(options: dict) -> dict:
+    """The problem's keywords (:class:`IKProblem`'s: ``bounds`` as ``lower``, ``upper``) popped from ``options``,
+    which keeps the solver's."""
     problem_kw = {k: options.pop(k) for k in _PROBLEM_OPTIONS if k in options}
     bounds = problem_kw.pop("bounds", None)
     if bounds is not None:
@@ -85,6 +85,13 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
         except (TypeError, ValueError):
             raise OptionError("bounds must be a pair (lower, upper) of arrays with one value per joint") from None
         problem_kw["lower"], problem_kw["upper"] = lower, upper
+    return problem_kw
+
+
+def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
+    """Split ``options`` into an :class:`IKProblem` and the remaining solver options."""
+    robot = _robot(robot)
+    problem_kw = split_options(options)
     if "q0" in problem_kw and problem_kw["q0"] is None:
         problem_kw.pop("q0")
     if is_goal_list(target):  # a list of goals (evoik_pin.goals) on frames of the robot

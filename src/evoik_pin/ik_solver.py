@@ -27,8 +27,8 @@ import threading
 
 import numpy as np
 
-from .api import _PROBLEM_OPTIONS, DEFAULT_METHOD, _check_goal_method, _rng, _robot, _with_goal_verdict
-from .errors import ConfigurationError, EvoikError, OptionError
+from .api import DEFAULT_METHOD, _check_goal_method, _rng, _robot, _with_goal_verdict, split_options
+from .errors import ConfigurationError, EvoikError
 from .goals import is_goal_list
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
@@ -73,14 +73,7 @@ class IKSolver:
         options = dict(options)
         self._polish = bool(options.pop("polish", False))
         q0 = options.pop("q0", None)
-        problem_kw = {k: options.pop(k) for k in _PROBLEM_OPTIONS if k in options}
-        bounds = problem_kw.pop("bounds", None)
-        if bounds is not None:
-            try:
-                problem_kw["lower"], problem_kw["upper"] = bounds
-            except (TypeError, ValueError):
-                raise OptionError("bounds must be a pair (lower, upper) of arrays with one value per joint") from None
-        self._problem_kw = problem_kw
+        self._problem_kw = problem_kw = split_options(options)
         # the template: every problem option checked once (a goal list's problems are made from the same options)
         self._template = template = IKProblem(robot, Target(np.zeros(3)), **problem_kw)
         self._q0 = None if q0 is None else self._checked_q0(q0)
