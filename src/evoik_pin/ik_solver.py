@@ -33,6 +33,7 @@ from .goals import is_goal_list
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
+from .robot import Robot
 from .solvers import get_solver
 from .solvers.collision_verdict import with_collision_verdict
 
@@ -174,8 +175,6 @@ def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
     """The IKSolver :func:`evoik_pin.solve` uses for these arguments (made on first use, then kept), or None when
     they take the general path: a robot given by name, options that are no plain values, or options the solver
     refuses (the general path then raises the error :func:`evoik_pin.solve` always raised, in its order)."""
-    from .robot import Robot
-
     if type(robot) is not Robot and not isinstance(robot, Robot):
         return None
     key = _key(robot, method, options)

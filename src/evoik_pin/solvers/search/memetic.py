@@ -246,7 +246,7 @@ def memetic(
                        generations=generations, polish_count=polish_count, table_size=table_size,
                        table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
                        engine=engine)
-    return plan.solve(problem, rng, t_setup)
+    return _solve(plan, problem, rng, t_setup)
 
 
 class MemeticPlan:
@@ -301,126 +301,130 @@ class MemeticPlan:
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` (posed on this plan's robot) with the plan's options; ``t_setup``: when
         the call began (``perf_counter``; default now), for ``Result.setup_s``."""
-        if t_setup is None:
-            t_setup = time.perf_counter()
-        robot = problem.robot
-        (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
-         iterations, engine) = self.options
+        return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
-        # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
-        # table of this box with its nearness features (cached per robot and box).
-        if table_seeds is None:
-            table_seeds = DEFAULT_GOAL_TABLE_SEEDS if problem.goals is not None else DEFAULT_TABLE_SEEDS
-        use_table = table_size > 0 and table_seeds > 0
-        table, free = self._prepare(problem, table_size if use_table else 0, engine)
-        if table is not None and problem.goals is not None:
-            table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
-        lm = self._engine(problem, engine)
-        t0 = time.perf_counter()
-        setup_s = t0 - t_setup
-        guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
-        search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine,
-                         guaranteed, lm)
-        history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
-        stage = ""
-        n_gen = 0
-        restarts = 0
-        solved = False
-        # Stages 1-2: LM from q0 and from the seed table's entries nearest to the target. Every single run gets
-        # the full step budget: a start in the basin of a solution converges in about 5-10 steps, one held by a
-        # limit or a local minimum is dropped by LM's stall test within a few, and one still gaining after 15 is
-        # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
-        # to replace.
-        ranked = first = None
-        goals = problem.goals is not None
-        if table is not None:
-            # lazy: ranks on the first next(); with a scene, among the collision-free entries only
-            # a goal list: starting configurations, composed goal by goal and table entries alternately
-            ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if goals
-                      else table.ranked(problem.target, table_offset + table_seeds, free))
-            if table_offset:
-                ranked = itertools.islice(ranked, table_offset, None)
-        q0 = problem.q0
-        q0_first = q0 is not None
-        if q0 is not None and table is not None and not goals:
-            # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
-            # solution) goes second: a failed LM run from it costs as much as a converging one.
-            d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
-                                                                                problem.upper)))
-            if d0 > table.typical_gap_sq(problem.target):
-                first = next(ranked, None)
-                q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
-        if q0_first:
+
+def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_setup: float) -> Result:
+    """memetic's search (see :func:`memetic`) with the options and set-up of ``plan``; ``t_setup``: when the call
+    began (``perf_counter``)."""
+    robot = problem.robot
+    (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
+     iterations, engine) = plan.options
+
+    # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
+    # table of this box with its nearness features (cached per robot and box).
+    if table_seeds is None:
+        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if problem.goals is not None else DEFAULT_TABLE_SEEDS
+    use_table = table_size > 0 and table_seeds > 0
+    table, free = plan._prepare(problem, table_size if use_table else 0, engine)
+    if table is not None and problem.goals is not None:
+        table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
+    lm = plan._engine(problem, engine)
+    t0 = time.perf_counter()
+    setup_s = t0 - t_setup
+    guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
+    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
+                     lm)
+    history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
+    stage = ""
+    n_gen = 0
+    restarts = 0
+    solved = False
+    # Stages 1-2: LM from q0 and from the seed table's entries nearest to the target. Every single run gets
+    # the full step budget: a start in the basin of a solution converges in about 5-10 steps, one held by a
+    # limit or a local minimum is dropped by LM's stall test within a few, and one still gaining after 15 is
+    # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
+    # to replace.
+    ranked = first = None
+    goals = problem.goals is not None
+    if table is not None:
+        # lazy: ranks on the first next(); with a scene, among the collision-free entries only
+        # a goal list: starting configurations, composed goal by goal and table entries alternately
+        ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if goals
+                  else table.ranked(problem.target, table_offset + table_seeds, free))
+        if table_offset:
+            ranked = itertools.islice(ranked, table_offset, None)
+    q0 = problem.q0
+    q0_first = q0 is not None
+    if q0 is not None and table is not None and not goals:
+        # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
+        # solution) goes second: a failed LM run from it costs as much as a converging one.
+        d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
+                                                                            problem.upper)))
+        if d0 > table.typical_gap_sq(problem.target):
+            first = next(ranked, None)
+            q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
+    if q0_first:
+        stage = "q0"
+        solved = search.polish(q0)
+    if not solved and goals and table is not None and not search.out_of_time():
+        stage = "seed table"
+        solved = search.polish_iter(ranked)
+    elif not solved and table is not None and not search.out_of_time():
+        if first is None:
+            first = next(ranked, None)
+        stage = "seed table"
+        solved = first is not None and search.polish(table.Q[first])
+        if not solved and q0 is not None and not q0_first and not search.out_of_time():
             stage = "q0"
             solved = search.polish(q0)
-        if not solved and goals and table is not None and not search.out_of_time():
+        if not solved and not search.out_of_time():
+            rest = list(ranked)
             stage = "seed table"
-            solved = search.polish_iter(ranked)
-        elif not solved and table is not None and not search.out_of_time():
-            if first is None:
-                first = next(ranked, None)
-            stage = "seed table"
-            solved = first is not None and search.polish(table.Q[first])
-            if not solved and q0 is not None and not q0_first and not search.out_of_time():
-                stage = "q0"
-                solved = search.polish(q0)
-            if not solved and not search.out_of_time():
-                rest = list(ranked)
-                stage = "seed table"
-                solved = bool(rest) and search.polish_many(table.Q[rest])
-        # Stage 3: DE populations, their best members polished by LM, best first.
-        if not solved and not search.out_of_time() and max_restarts != 0:
-            if search.best is None:  # no q0 and no table: start from the box centre
-                solved = search.polish(0.5 * (problem.lower + problem.upper))
-            cost = problem.assess(search.best.q, search.best.position_error, search.best.orientation_error)[2]
-            history["best_cost"].append(cost)
-            history["mean_cost"].append(cost)
-            history["diversity"].append(0.0)
-            wrap = wrapping_joints(robot, problem.lower, problem.upper)
-            while not solved and not search.out_of_time() and (max_restarts is None or restarts < max_restarts):
-                stage = "memetic restarts"
-                restarts += 1
-                solved, n_gen, cost = _memetic_restart(problem, rng, search, population, generations, polish_count,
-                                                       wrap, history, n_gen, cost)
-        if search.best is None:  # every stage disabled
-            search.polish(0.5 * (problem.lower + problem.upper))
-        q = search.best.q
-        goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
-        pos, rot, cost = (problem.goal_summary(goal_errors) if goals
-                          else problem.assess(q, search.best.position_error, search.best.orientation_error))
-        if not history["best_cost"]:
-            history["best_cost"].append(cost)
-            history["mean_cost"].append(cost)
-            history["diversity"].append(0.0)
-        if goals:
-            within = problem.goals_met(goal_errors)
+            solved = bool(rest) and search.polish_many(table.Q[rest])
+    # Stage 3: DE populations, their best members polished by LM, best first.
+    if not solved and not search.out_of_time() and max_restarts != 0:
+        if search.best is None:  # no q0 and no table: start from the box centre
+            solved = search.polish(0.5 * (problem.lower + problem.upper))
+        cost = problem.assess(search.best.q, search.best.position_error, search.best.orientation_error)[2]
+        history["best_cost"].append(cost)
+        history["mean_cost"].append(cost)
+        history["diversity"].append(0.0)
+        wrap = wrapping_joints(robot, problem.lower, problem.upper)
+        while not solved and not search.out_of_time() and (max_restarts is None or restarts < max_restarts):
+            stage = "memetic restarts"
+            restarts += 1
+            solved, n_gen, cost = _memetic_restart(problem, rng, search, population, generations, polish_count,
+                                                   wrap, history, n_gen, cost)
+    if search.best is None:  # every stage disabled
+        search.polish(0.5 * (problem.lower + problem.upper))
+    q = search.best.q
+    goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
+    pos, rot, cost = (problem.goal_summary(goal_errors) if goals
+                      else problem.assess(q, search.best.position_error, search.best.orientation_error))
+    if not history["best_cost"]:
+        history["best_cost"].append(cost)
+        history["mean_cost"].append(cost)
+        history["diversity"].append(0.0)
+    if goals:
+        within = problem.goals_met(goal_errors)
+    else:
+        within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
+    if success:
+        message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
+    else:
+        why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
+               else f"max_restarts ({max_restarts}) reached")
+        if goals and not within:
+            unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
+            best = f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
         else:
-            within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
-        success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
-        if success:
-            message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
-        else:
-            why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
-                   else f"max_restarts ({max_restarts}) reached")
-            if goals and not within:
-                unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
-                best = f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
-            else:
-                best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"
-            message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
-        if search.rejected and not success:
-            message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
-                        f"{pairs_text(search.rejected_pairs)}")
-        history["attempt_error"] = search.attempt_errors
-        return Result(
-            q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=n_gen,
-            evaluations=search.evaluations + problem.evaluations, time_s=time.perf_counter() - t0,
-            history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message, method="memetic",
-            setup_s=setup_s,
-            # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
-            collision_free=True if problem.scene is not None and search.best.converged else None,
-            goal_errors=goal_errors,
-        )
+            best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"
+        message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
+    if search.rejected and not success:
+        message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
+                    f"{pairs_text(search.rejected_pairs)}")
+    history["attempt_error"] = search.attempt_errors
+    return Result(
+        q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=n_gen,
+        evaluations=search.evaluations + problem.evaluations, time_s=time.perf_counter() - t0,
+        history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message, method="memetic",
+        setup_s=setup_s,
+        # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
+        collision_free=True if problem.scene is not None and search.best.converged else None,
+        goal_errors=goal_errors,
+    )
 
 
 def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,
