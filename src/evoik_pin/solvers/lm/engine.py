@@ -176,6 +176,7 @@ class LevenbergMarquardt:
         self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
         self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
+        self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
 
     def retarget(self, problem: IKProblem) -> bool:
         """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
@@ -184,6 +185,18 @@ class LevenbergMarquardt:
         unchanged) when ``problem`` needs an engine of its own, and for the python engine."""
         if self._reference is not None or problem.robot is not self.robot:
             return False
+        target = problem.target
+        same = self._same
+        if (same is not None and problem.goals is None and problem.lower is same[0] and problem.upper is same[1]
+                and not target.planar and (target.rotation is None) is same[2] and problem.tolerance == same[3]
+                and problem.rotation_tolerance == same[4]):
+            # the last problem's box arrays, kind and tolerances: the same goal stack and box (a single target's
+            # stack is GoalStack.single's, cached by kind and tolerances); a position target's Rt stays identity
+            self._pt[0] = target.position
+            if target.rotation is not None:
+                self._Rt[0] = target.rotation
+            self.problem = problem
+            return True
         stack, pt, Rt = problem_goals(problem)
         if stack is not self.goals or box_constants(self.robot, problem.lower, problem.upper)[4] is not self._box:
             return False
@@ -195,6 +208,8 @@ class LevenbergMarquardt:
             self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
             self._owned = True
             self._direct = self._overload()
+        self._same = None if problem.goals is not None or target.planar else (
+            problem.lower, problem.upper, target.rotation is None, problem.tolerance, problem.rotation_tolerance)
         self.problem = problem
         return True
 

@@ -329,7 +329,12 @@ class SeedTable:
     def distance_sq(self, target: Target, T: pin.SE3) -> float:
         """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
         key, f = self.one_target_features(target)
-        d = f - self._pose_features(key, T.translation[None], T.rotation[None])[0]
+        if key == "pose":  # _pose_features's row, without its batch reshapes (once per solve with a q0)
+            d = f - np.concatenate((T.translation, self.weight * T.rotation.reshape(9)))
+        elif key == "position":
+            d = f - T.translation
+        else:
+            d = f - self._pose_features(key, T.translation[None], T.rotation[None])[0]
         return float(d.dot(d))
 
     def entry_distance_sq(self, target: Target, i: int) -> float:
