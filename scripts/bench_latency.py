@@ -298,7 +298,9 @@ def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str,
         lines += ["", f"Where a call's microseconds go: IKSolver.solve on {p['robot']}"
                   f"{' with q0' if p['q0'] else ''}, {p['n']} poses, mean per call, each stage's functions wrapped "
                   f"with a clock (mean {p['wrapped_mean_us']:.1f} us wrapped, {p['plain_mean_us']:.1f} us without "
-                  "the wrappers):", "", "| stage | us per call | what |", "|---|---:|---|"]
+                  "the wrappers; the least loaded of three passes, whose wrapped means were "
+                  f"{', '.join(f'{x:.1f}' for x in p['passes_wrapped_mean_us'])} us):", "",
+                  "| stage | us per call | what |", "|---|---:|---|"]
         what = dict(STAGES)
         for k, v in p["stages_us"].items():
             lines.append(f"| {k} | {v:.1f} | {what[k]} |")
@@ -330,7 +332,7 @@ def main(argv=None) -> int:
     ap.add_argument("--targets", type=int, default=2000, help="poses per robot (default 2000)")
     ap.add_argument("--robots", nargs="+", choices=list(ARMS), default=list(ARMS))
     ap.add_argument("--profile-robot", default="panda", choices=list(ARMS), help="robot of the profile table")
-    ap.add_argument("--profile-targets", type=int, default=2000, help="poses of the profile table (0: none)")
+    ap.add_argument("--profile-targets", type=int, default=1000, help="poses of the profile table (0: none)")
     ap.add_argument("--talos", type=int, default=200, help="Talos problems (0: none)")
     ap.add_argument("--json", type=Path, help="write the numbers here")
     ap.add_argument("--no-docs", action="store_true", help="do not write docs/BENCHMARKS.md")
@@ -350,8 +352,13 @@ def main(argv=None) -> int:
         rng = np.random.default_rng([args.seed, 5])
         Qt = robot.random_configurations(args.profile_targets, rng)
         Qs = robot.random_configurations(args.profile_targets, rng)
-        profile = profile_stages(robot, [robot.fk(q) for q in Qt], Qs, use_q0=True)
+        targets = [robot.fk(q) for q in Qt]
+        # three passes, the least loaded one kept (the machine is shared: a pass that another process slowed down
+        # inflates every stage)
+        passes = [profile_stages(robot, targets, Qs, use_q0=True) for _ in range(3)]
+        profile = min(passes, key=lambda p: p["wrapped_mean_us"])
         profile["robot"] = args.profile_robot
+        profile["passes_wrapped_mean_us"] = [p["wrapped_mean_us"] for p in passes]
         print(json.dumps(profile, indent=1), flush=True)
     talos = bench_talos(args.talos, args.seed) if args.talos else None
     if talos:

@@ -201,3 +201,26 @@ def test_property_rotation_check_gives_the_numpy_verdict(seed, log_eps, mirror):
         assert accepted
     except TargetError as exc:
         assert not accepted and "not a rotation matrix" in str(exc)
+
+
+def test_seed_table_ranking_and_nearness_are_the_batch_formulas(panda, cases):
+    """The single-target shortcuts of the seed table (features without the batch encoding, the distances computed in
+    place) rank and measure exactly as the batch formulas do."""
+    from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
+
+    table = seed_table(panda, panda.lower, panda.upper, default_table_size(panda.n))
+    targets, Qs = cases
+    for T, q in zip(targets[:10], Qs[:10], strict=True):
+        for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
+            key, f = table.target_features([target])
+            F, sq = table._table_features(key)
+            d = sq - 2.0 * (F @ f[0])
+            part = np.argpartition(d, 16)[:17]
+            first = int(d.argmin())
+            reference = [first] + [int(i) for i in part[d[part].argsort()] if i != first]
+            assert list(table.ranked(target, 17)) == reference
+            Tq = panda.fk(q)
+            g = table._pose_features(key, Tq.translation[None], Tq.rotation[None])[0]
+            assert table.distance_sq(target, Tq) == float((f[0] - g).dot(f[0] - g))
+            assert table.entry_distance_sq(target, first) == table.distance_sq(
+                target, pin.SE3(table.rotations[first], table.positions[first]))

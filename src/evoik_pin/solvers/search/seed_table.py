@@ -116,7 +116,9 @@ class SeedTable:
             return
         key, f = self.one_target_features(target)
         F, sq = self._table_features(key)
-        d = sq - 2.0 * (F @ f)
+        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
+        d *= -2.0
+        d += sq
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
