@@ -76,13 +76,12 @@ class IKSolver:
         q0 = options.pop("q0", None)
         self._problem_kw = problem_kw = split_options(options)
         # the template: every problem option checked once (a goal list's problems are made from the same options)
-        self._template = template = IKProblem(robot, Target(np.zeros(3)), **problem_kw)
+        self._template = IKProblem(robot, Target(np.zeros(3)), **problem_kw)
         self._q0 = None if q0 is None else self._checked_q0(q0)
         self._objective = problem_kw.get("objective")  # a custom objective serves every target; None: the default
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
         self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
             ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
-        self._lower, self._upper = template.lower, template.upper
         self._options = options
         info.check_options(options, n=robot.n)
         self._plan = None
@@ -108,7 +107,8 @@ class IKSolver:
         p = object.__new__(IKProblem)
         p.__dict__.update(self._template.__dict__)
         p.target = target
-        p.objective = self._objective or default_objective(target, p.orientation_weight, p.pose_metric)
+        objective = self._objective
+        p.objective = default_objective(target, p.orientation_weight, p.pose_metric) if objective is None else objective
         p.q0 = self._q0 if q0 is None else self._checked_q0(q0)
         p.evaluations = 0
         if self._target_box:
