@@ -224,3 +224,21 @@ def test_seed_table_ranking_and_nearness_are_the_batch_formulas(panda, cases):
             assert table.distance_sq(target, Tq) == float((f[0] - g).dot(f[0] - g))
             assert table.entry_distance_sq(target, first) == table.distance_sq(
                 target, pin.SE3(table.rotations[first], table.positions[first]))
+
+
+def test_which_calls_of_solve_keep_a_solver(panda, tmp_path):
+    from pathlib import Path
+
+    from evoik_pin.ik_solver import cached_solver
+    from evoik_pin.scene import Scene
+
+    a = cached_solver(panda, "memetic", {"tolerance": 1e-8})
+    assert a is cached_solver(panda, "memetic", {"tolerance": 1e-8, "q0": np.zeros(7)})  # q0 is per call
+    assert a is not cached_solver(panda, "memetic", {"tolerance": 1e-7})
+    scene = Scene(panda)
+    assert cached_solver(panda, "memetic", {"scene": scene}) is cached_solver(panda, "memetic", {"scene": scene})
+    # the general path: a scene file (read on every call: it may change), array bounds, a robot by name, bad options
+    for options in ({"scene": str(tmp_path / "s.yaml")}, {"scene": Path(tmp_path / "s.yaml")},
+                    {"bounds": (panda.lower, panda.upper)}, {"population": 2}, {"tolerance": float("nan")}):
+        assert cached_solver(panda, "memetic", options) is None
+    assert cached_solver("panda", "memetic", {}) is None

@@ -34,6 +34,7 @@ from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
 from .robot import Robot
+from .scene import Scene
 from .solvers import get_solver
 from .solvers.collision_verdict import with_collision_verdict
 
@@ -163,7 +164,9 @@ def _key(robot, method: str, options: dict):
             if isinstance(value, float) and math.isnan(value):  # NaN != NaN: such a key would never hit
                 return None
             parts.append((name, type(value), value))
-        elif name in ("scene", "objective"):  # an object: by identity (the cached solver keeps it alive)
+        elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
+            # an object, by identity: the cached solver keeps it alive, so its id is not reused while cached (a
+            # scene file's path is read into a Scene anew on every call, as before: the file may change)
             parts.append((name, None, id(value)))
         else:
             return None
