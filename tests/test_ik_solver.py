@@ -242,3 +242,20 @@ def test_which_calls_of_solve_keep_a_solver(panda, tmp_path):
                     {"bounds": (panda.lower, panda.upper)}, {"population": 2}, {"tolerance": float("nan")}):
         assert cached_solver(panda, "memetic", options) is None
     assert cached_solver("panda", "memetic", {}) is None
+
+
+def test_solve_from_threads_gives_the_sequential_answers(panda, cases):
+    """evoik_pin.solve keeps one solver per thread: threads solving at once get the answers of a sequential loop."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    targets, Qs = cases
+    expected = [ek.solve(panda, T, q0=Qs[i], seed=i, **BUDGET).q for i, T in enumerate(targets)]
+
+    def work(offset):
+        return [(i, ek.solve(panda, targets[i], q0=Qs[i], seed=i, **BUDGET).q)
+                for i in range(offset, len(targets), 2)]
+
+    with ThreadPoolExecutor(2) as pool:
+        for chunk in pool.map(work, (0, 1)):
+            for i, q in chunk:
+                assert np.array_equal(q, expected[i])
