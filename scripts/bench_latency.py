@@ -139,21 +139,30 @@ class _Clock:
                     ns[stage] += clock() - t0
                     yield item
         else:
-            def timed(*args, **kwargs):
-                t0 = clock()
-                try:
-                    return original(*args, **kwargs)
-                finally:
-                    ns[stage] += clock() - t0
-
+            timed = self.timed(original, stage)
         setattr(owner, attr, timed)
         return original
+
+    def timed(self, function, stage: str):
+        """``function`` wrapped: its time added to ``stage``."""
+        ns = self.ns
+        ns.setdefault(stage, 0)
+        clock = time.perf_counter_ns
+
+        def timed(*args, **kwargs):
+            t0 = clock()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                ns[stage] += clock() - t0
+
+        return timed
 
 
 #: (stage label, what it covers), in the order of a call.
 STAGES = [
-    ("target and problem", "Target.coerce (the target's checks) + the problem copied from the template with q0 "
-     "checked (IKSolver.problem, Target.coerce excluded)"),
+    ("target and problem", "IKSolver.problem: Target.coerce (the pose's checks) and the template problem copied "
+     "with the target and q0 (checked)"),
     ("set-up look-ups", "the memetic plan's cached seed table and LM engine (retargeted in place)"),
     ("seed-table ranking", "nearness features of the target, ranking the table's entries (lazy), q0's distance"),
     ("q0's tip pose", "Pinocchio FK of q0 (is it nearer than the table's nearest entry?)"),
@@ -198,27 +207,11 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     ]
     k_original = kernel["lm_run_buffers"]
     ns = clock.ns
-    ns["kernel"] = 0
-
-    def timed_kernel(*args):
-        t = time.perf_counter_ns()
-        try:
-            return k_original(*args)
-        finally:
-            ns["kernel"] += time.perf_counter_ns() - t
-
-    kernel["lm_run_buffers"] = timed_kernel
+    kernel["lm_run_buffers"] = clock.timed(k_original, "kernel")
     lm = solver._plan._lm  # the solver's engine calls the kernel's overload directly (LevenbergMarquardt._direct)
     direct = lm._direct
     if direct is not None:
-        def timed_direct(*args):
-            t = time.perf_counter_ns()
-            try:
-                return direct(*args)
-            finally:
-                ns["kernel"] += time.perf_counter_ns() - t
-
-        lm._direct = timed_direct
+        lm._direct = clock.timed(direct, "kernel")
     try:
         t0 = time.perf_counter()
         for i in range(n):
