@@ -259,3 +259,26 @@ def test_solve_from_threads_gives_the_sequential_answers(panda, cases):
         for chunk in pool.map(work, (0, 1)):
             for i, q in chunk:
                 assert np.array_equal(q, expected[i])
+
+
+def test_a_solver_handed_to_another_thread_uses_that_threads_buffers(panda, cases):
+    """An IKSolver made and used in one thread, then used in another while the first keeps solving (the same goal
+    stack: the same kernel workspace key), gives the answers of the general path in both."""
+    import threading
+
+    targets, Qs = cases
+    solver = ek.IKSolver(panda, **BUDGET)
+    solver.solve(targets[0], seed=0)
+    out = {}
+
+    def other():
+        out["b"] = [solver.solve(targets[i], Qs[i], seed=i).q for i in range(0, 20, 2)]
+
+    thread = threading.Thread(target=other)
+    thread.start()
+    mine = [ek.solve(panda, targets[i], q0=Qs[i], seed=i, **BUDGET).q for i in range(1, 20, 2)]
+    thread.join()
+    for k, i in enumerate(range(0, 20, 2)):
+        assert np.array_equal(out["b"][k], general(panda, targets[i], seed=i, q0=Qs[i], **BUDGET).q)
+    for k, i in enumerate(range(1, 20, 2)):
+        assert np.array_equal(mine[k], general(panda, targets[i], seed=i, q0=Qs[i], **BUDGET).q)

@@ -172,6 +172,7 @@ class LevenbergMarquardt:
         self._g_scratch = np.empty((G, 2))  # one goal: its errors are the outcome's own
         self._buffers: tuple = ()  # the kernel's workspace (_workspace)
         self._buffers_for = -1  # the most steps those buffers hold
+        self._buffers_thread = -1  # the thread whose buffers they are (threading.get_ident)
         # the kernel's constant arguments, unpacked from one tuple at each call
         self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
@@ -235,6 +236,7 @@ class LevenbergMarquardt:
         cold in the cache."""
         self._buffers = _thread_buffers(self._kernel, self.goals, self.n, self._tree[0].shape[0], max_iterations)
         self._buffers_for = max_iterations
+        self._buffers_thread = threading.get_ident()
         return self._buffers
 
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
@@ -253,7 +255,10 @@ class LevenbergMarquardt:
         params[P_ITERATIONS] = max_iterations
         out = np.empty(self.n)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
-        buffers = self._buffers if max_iterations <= self._buffers_for else self._workspace(max_iterations)
+        # an engine kept from solve to solve (an IKSolver's) may be handed to another thread: the buffers are the
+        # running thread's
+        mine = self._buffers_thread == threading.get_ident()
+        buffers = self._buffers if max_iterations <= self._buffers_for and mine else self._workspace(max_iterations)
         run = self._direct
         if run is None:
             run, q = self._kernel["lm_run_buffers"], np.ascontiguousarray(q, dtype=float)
