@@ -186,6 +186,10 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
     Returns:
         A :class:`Result`; an unreachable target gives ``success=False``, the best approximation and a
         message, not an exception.
+
+    A call with a :class:`Robot` and plain options (numbers, strings, a Scene object) goes through an
+    :class:`~evoik_pin.IKSolver` kept for that robot, method and options (per thread): its checks and set-up are
+    made once; a loop of many solves can also make its own (``IKSolver(robot, **options).solve(T, q0, seed)``).
     """
     solver = cached_solver(robot, method, options)  # the IKSolver fast path (evoik_pin.ik_solver)
     if solver is not None:
