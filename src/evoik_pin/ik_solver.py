@@ -15,9 +15,9 @@ Everything else is :func:`evoik_pin.solve`'s own code, so the answers are the sa
 (:mod:`evoik_pin.goals`) and scenes go through the same path (a goal list is checked and bound per call; a scene's
 collision-free seed entries follow its version).
 
-:func:`evoik_pin.solve` itself keeps one ``IKSolver`` per robot, method and options (per thread, the most recent
-few) and calls it, when the options are plain values (numbers, strings, a :class:`~evoik_pin.Scene` or objective
-object); a scene file's path or array bounds take the general path.
+:func:`evoik_pin.solve` itself keeps one ``IKSolver`` per robot, method and options (per thread, the 8 made last,
+which keep their robots alive) and calls it, when the options are plain values (numbers, strings, a
+:class:`~evoik_pin.Scene` or objective object); a scene file's path or array bounds take the general path.
 """
 
 from __future__ import annotations
@@ -147,7 +147,8 @@ class IKSolver:
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
 _LOCAL = threading.local()
-#: IKSolvers evoik_pin.solve keeps per thread (the most recently used).
+#: IKSolvers evoik_pin.solve keeps per thread (the last ones made; each keeps its robot, seed table and scene alive,
+#: so the number is small).
 _CACHED = 8
 #: Option values keyed by value (by type too: population=32.0 must still be refused where 32 is accepted).
 _PLAIN = (bool, int, float, str, type(None), np.integer, np.floating)
