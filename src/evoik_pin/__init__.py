@@ -4,7 +4,7 @@ Load any serial-chain URDF (or one of the papers' arms) with :func:`load_robot`,
 the evolutionary methods of five research papers or the memetic default. See README.md.
 """
 
-from .api import BatchResults, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
+from .api import BatchResults, IKSolver, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
 from .problem import IKProblem, Target
 from .reach import ReachMap, reachability_map
 from .result import Front, Result
@@ -16,6 +16,7 @@ __all__ = [
     "BatchResults",
     "Front",
     "IKProblem",
+    "IKSolver",
     "ReachMap",
     "Result",
     "Robot",

@@ -209,7 +209,10 @@ class OrientationError(Objective):
 
 def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 1.0) -> Objective:  # noqa: N802
     """``position_weight`` x position error (m) + ``orientation_weight`` x rotation angle (rad)."""
-    return position_weight * PositionError(target) + orientation_weight * OrientationError(target)
+    # the WeightedSum that ``position_weight * PositionError(target) + ...`` builds, made directly: the default pose
+    # objective is made on every solve
+    return WeightedSum([(float(position_weight), PositionError(target)),
+                        (float(orientation_weight), OrientationError(target))])
 
 
 class PoseDistance(Objective):

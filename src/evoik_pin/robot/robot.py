@@ -467,7 +467,7 @@ class Robot:
                 f"{self.name} has {self.n} joints ({names}); got a joint vector of shape {arr.shape}, expected "
                 f"({self.n},)"
             )
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():  # the method: np.all's dispatch costs about a microsecond per solve
             raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
         return arr
 

@@ -177,8 +177,63 @@ class LevenbergMarquardt:
         self._g_scratch = np.empty((G, 2))  # one goal: its errors are the outcome's own
         self._buffers: tuple = ()  # the kernel's workspace (_workspace)
         self._buffers_for = -1  # the most steps those buffers hold
+        self._buffers_thread = -1  # the thread whose buffers they are (threading.get_ident)
         # the kernel's constant arguments, unpacked from one tuple at each call
         self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+        self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
+        self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
+        self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
+
+    def retarget(self, problem: IKProblem) -> bool:
+        """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
+        robot, goal stack and search box, as the problems of an :class:`~evoik_pin.IKSolver` do): the targets are
+        written into the kernel's argument arrays in place, so no constant is rebuilt. Returns False (the engine
+        unchanged) when ``problem`` needs an engine of its own, and for the python engine."""
+        if self._reference is not None or problem.robot is not self.robot:
+            return False
+        target = problem.target
+        same = self._same
+        if (same is not None and problem.goals is None and problem.lower is same[0] and problem.upper is same[1]
+                and not target.planar and (target.rotation is None) is same[2] and problem.tolerance == same[3]
+                and problem.rotation_tolerance == same[4]):
+            # the last problem's box arrays, kind and tolerances: the same goal stack and box (a single target's
+            # stack is GoalStack.single's, cached by kind and tolerances); a position target's Rt stays identity
+            self._pt[0] = target.position
+            if target.rotation is not None:
+                self._Rt[0] = target.rotation
+            self.problem = problem
+            return True
+        stack, pt, Rt = problem_goals(problem)
+        if stack is not self.goals or box_constants(self.robot, problem.lower, problem.upper)[4] is not self._box:
+            return False
+        if self._owned:
+            self._pt[...] = pt
+            self._Rt[...] = Rt
+        else:  # the first problem's arrays may be its target's own: copies from now on, never written through
+            self._pt, self._Rt = np.array(pt), np.array(Rt)
+            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._owned = True
+            self._direct = self._overload()
+        self._same = None if problem.goals is not None or target.planar else (
+            problem.lower, problem.upper, target.rotation is None, problem.tolerance, problem.rotation_tolerance)
+        self.problem = problem
+        return True
+
+    def _overload(self):
+        """The machine code numba runs for :meth:`run`'s arguments, as a function called without numba's dispatch
+        (which types each of the kernel's 22 arguments on every call: about 1.4 us, an LM run's tenth), or None
+        where this numba does not expose it. Only for an engine that runs many problems: finding it costs tens of
+        microseconds. The argument types are fixed: the engine's own arrays, and ``q`` copied as
+        :meth:`run` does."""
+        buffers = self._buffers or self._workspace(DEFAULT_ITERATIONS)
+        g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
+        args = (*buffers, np.zeros(self.n), *self._args, self._params, np.empty(self.n), g_err)
+        try:
+            from numba import typeof
+
+            return self._kernel["lm_run_buffers"].overloads[tuple(typeof(a) for a in args)].entry_point
+        except (AttributeError, KeyError, ImportError):
+            return None
 
     def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
         """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's buffers for this goal
@@ -186,6 +241,7 @@ class LevenbergMarquardt:
         cold in the cache."""
         self._buffers = _thread_buffers(self._kernel, self.goals, self.n, self._tree[0].shape[0], max_iterations)
         self._buffers_for = max_iterations
+        self._buffers_thread = threading.get_ident()
         return self._buffers
 
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
@@ -204,9 +260,16 @@ class LevenbergMarquardt:
         params[P_ITERATIONS] = max_iterations
         out = np.empty(self.n)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
-        buffers = self._buffers if max_iterations <= self._buffers_for else self._workspace(max_iterations)
-        pos, rot, converged, it, evaluations, cost = self._kernel["lm_run_buffers"](
-            *buffers, np.ascontiguousarray(q, dtype=float), *self._args, params, out, g_err)
+        # an engine kept from solve to solve (an IKSolver's) may be handed to another thread: the buffers are the
+        # running thread's
+        mine = self._buffers_thread == threading.get_ident()
+        buffers = self._buffers if max_iterations <= self._buffers_for and mine else self._workspace(max_iterations)
+        run = self._direct
+        if run is None:
+            run, q = self._kernel["lm_run_buffers"], np.ascontiguousarray(q, dtype=float)
+        else:  # the overload's argument type exactly: a C-contiguous, writable float64 vector of our own
+            q = np.array(q, dtype=float)
+        pos, rot, converged, it, evaluations, cost = run(*buffers, q, *self._args, params, out, g_err)
         return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations,
                          None if self._one else g_err, cost)
 

@@ -40,7 +40,6 @@ import itertools
 import time
 
 import numpy as np
-import pinocchio as pin
 
 from ...errors import OptionError
 from ...problem import IKProblem, errors_text, shortfall_text
@@ -53,7 +52,7 @@ from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, SeedTable, default_table_size, seed_table
 
-__all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "memetic", "prepare"]
+__all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticPlan", "memetic", "prepare"]
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
@@ -109,11 +108,12 @@ class _Search:
     """State of one memetic solve: the LM engine, the best configuration met, counters and the clock."""
 
     def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int,
-                 batch: int = 1, engine: str = "compiled", guaranteed: int = 0) -> None:
+                 batch: int = 1, engine: str = "compiled", guaranteed: int = 0,
+                 lm: LevenbergMarquardt | None = None) -> None:
         self.problem = problem
         self.guaranteed = guaranteed  # LM runs made whatever the clock says
         self.batch = batch
-        self.lm = LevenbergMarquardt(problem, engine=engine)
+        self.lm = LevenbergMarquardt(problem, engine=engine) if lm is None else lm
         self.t0 = t0
         self.deadline = deadline
         self.iterations = iterations
@@ -188,6 +188,9 @@ class _Search:
 #: The search over goal sets (:func:`.choose.choose`), which puts itself here when imported (the solver registry
 #: imports it with the solvers): memetic cannot import it, choose builds on memetic.
 GOAL_SET_SEARCH: dict = {}
+#: memetic's options in the order :func:`check_options` returns them (``MemeticPlan.options``).
+OPTION_NAMES = ("timeout", "max_restarts", "population", "generations", "polish_count", "table_size", "table_seeds",
+                "table_offset", "batch", "iterations", "engine")
 
 
 @register("memetic", "Memetic IK: Levenberg-Marquardt on the SE(3) error from q0 and a seed table, then DE "
@@ -246,34 +249,94 @@ def memetic(
         generation, and ``attempt_error`` (m + rad) after each LM run (or group of ``batch`` runs). An unreachable
         target gives the best approximation met, ``success=False`` and a message.
     """
-    if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
-        if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
-            get_solver("memetic")
-        return GOAL_SET_SEARCH["choose"](
-            problem, rng, timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
-            polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
-            batch=batch, iterations=iterations, engine=engine)
     t_setup = time.perf_counter()
+    plan = MemeticPlan(problem.robot, timeout=timeout, max_restarts=max_restarts, population=population,
+                       generations=generations, polish_count=polish_count, table_size=table_size,
+                       table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
+                       engine=engine)
+    return _solve(plan, problem, rng, t_setup)
+
+
+class MemeticPlan:
+    """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve.
+
+    :func:`memetic` makes one per call; an :class:`~evoik_pin.IKSolver` makes one and solves every target with it:
+    the options are not checked again, the seed table of the search box (and its collision-free mask, re-read per
+    scene version) is looked up once, and the LM engine is pointed at each new target in place
+    (:meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.retarget`) instead of being rebuilt. The answers are those of
+    :func:`memetic` with the same options and generator: :meth:`solve` is its body.
+
+    Not thread-safe: one plan per thread (its engine's target arrays are written by every solve).
+
+    Args:
+        robot: the robot every problem is posed on. options: :func:`memetic`'s keywords (OptionError here when
+            one is out of range).
+    """
+
+    def __init__(self, robot, *, timeout=DEFAULT_TIMEOUT, max_restarts=None, population=32, generations=3,
+                 polish_count=8, table_size=None, table_seeds=None, table_offset=0, batch=1,
+                 iterations=DEFAULT_ITERATIONS, engine="compiled") -> None:
+        self.robot = robot
+        self.options = check_options(
+            timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
+            polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
+            batch=batch, iterations=iterations, engine=engine, n=robot.n)
+        self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
+        self._table = None
+        self._lm: LevenbergMarquardt | None = None
+
+    def _prepare(self, problem: IKProblem, size: int, engine: str) -> tuple[SeedTable | None, np.ndarray | None]:
+        """:func:`prepare` for ``problem``, the table kept while the problems share their box arrays (an
+        IKSolver's problems do); the scene's free mask is looked up every time (it follows the scene's version)."""
+        box = self._box
+        if box is None or box[0] is not problem.lower or box[1] is not problem.upper or box[2] != size:
+            self._table, free = prepare(self.robot, problem.lower, problem.upper, size, engine, problem.scene,
+                                        problem.margin)
+            self._box = (problem.lower, problem.upper, size)
+            return self._table, free
+        table = self._table
+        free = table.free_mask(problem.scene, problem.margin) if table is not None and problem.scene is not None \
+            else None
+        return table, free
+
+    def _engine(self, problem: IKProblem, engine: str) -> LevenbergMarquardt:
+        """The LM engine of ``problem``: the last one, retargeted, when only the targets differ."""
+        lm = self._lm
+        if lm is None or lm.engine != engine or not lm.retarget(problem):
+            lm = self._lm = LevenbergMarquardt(problem, engine=engine)
+        return lm
+
+    def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
+        """:func:`memetic` on ``problem`` (posed on this plan's robot) with the plan's options; ``t_setup``: when
+        the call began (``perf_counter``; default now), for ``Result.setup_s``."""
+        if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
+            if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
+                get_solver("memetic")
+            return GOAL_SET_SEARCH["choose"](problem, rng, **dict(zip(OPTION_NAMES, self.options, strict=True)))
+        return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
+
+
+def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_setup: float) -> Result:
+    """memetic's search (see :func:`memetic`) with the options and set-up of ``plan``; ``t_setup``: when the call
+    began (``perf_counter``)."""
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
-     iterations, engine) = check_options(
-        timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
-        polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
-        batch=batch, iterations=iterations, engine=engine, n=robot.n)
+     iterations, engine) = plan.options
 
     # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
     # table of this box with its nearness features (cached per robot and box).
     if table_seeds is None:
         table_seeds = DEFAULT_GOAL_TABLE_SEEDS if problem.goals is not None else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
-    table, free = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine,
-                          problem.scene, problem.margin)
+    table, free = plan._prepare(problem, table_size if use_table else 0, engine)
     if table is not None and problem.goals is not None:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
+    lm = plan._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
-    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed)
+    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
+                     lm)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
     stage = ""
     n_gen = 0
@@ -302,8 +365,7 @@ def memetic(
                                                                             problem.upper)))
         if d0 > table.typical_gap_sq(problem.target):
             first = next(ranked, None)
-            q0_first = first is None or d0 <= table.distance_sq(
-                problem.target, pin.SE3(table.rotations[first], table.positions[first]))
+            q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
     if q0_first:
         stage = "q0"
         solved = search.polish(q0)

@@ -56,6 +56,7 @@ class SeedTable:
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
+        self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -91,15 +92,33 @@ class SeedTable:
             return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
         return key, self._pose_features(key, P, Rts)
 
+    def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
+        """(kind key, features (d,)) of one target: :meth:`target_features`'s row, the same numbers, without the
+        batch encoding (this runs on every single-target solve)."""
+        last = self._last
+        if last[0] is target:  # a solve asks up to four times (ranking, q0's nearness, the gap)
+            return last[1]
+        if target.planar:
+            key, f = self.target_features([target])
+            out = key, f[0]
+        elif target.rotation is None:
+            out = "position", np.ascontiguousarray(target.position)
+        else:
+            out = "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
+        self._last = (target, out)
+        return out
+
     def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
         costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
         (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
         if k <= 0:
             return
-        key, f = self.target_features([target])
+        key, f = self.one_target_features(target)
         F, sq = self._table_features(key)
-        d = sq - 2.0 * (F @ f[0])
+        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
+        d *= -2.0
+        d += sq
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
@@ -318,15 +337,27 @@ class SeedTable:
 
     def distance_sq(self, target: Target, T: pin.SE3) -> float:
         """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
-        key, f = self.target_features([target])
-        d = f[0] - self._pose_features(key, T.translation[None], T.rotation[None])[0]
+        key, f = self.one_target_features(target)
+        if key == "pose":  # _pose_features's row, without its batch reshapes (once per solve with a q0)
+            d = f - np.concatenate((T.translation, self.weight * T.rotation.reshape(9)))
+        elif key == "position":
+            d = f - T.translation
+        else:
+            d = f - self._pose_features(key, T.translation[None], T.rotation[None])[0]
+        return float(d.dot(d))
+
+    def entry_distance_sq(self, target: Target, i: int) -> float:
+        """:meth:`distance_sq` between a target and table entry ``i``'s tip pose, from the table's own features
+        (the same numbers: the features of ``i``'s pose are row ``i`` of the table's)."""
+        key, f = self.one_target_features(target)
+        d = f - self._table_features(key)[0][i]
         return float(d.dot(d))
 
     def typical_gap_sq(self, target: Target) -> float:
         """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
         other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
         as the table's nearest entry usually is."""
-        return self._gap(self.target_features([target])[0])
+        return self._gap(self.one_target_features(target)[0])
 
     def _gap(self, key: str) -> float:
         gap = self._gaps.get(key)

@@ -1,0 +1,372 @@
+#!/usr/bin/env python
+"""Single-solve latency (issue 24): IKSolver.solve and evoik_pin.solve against TRAC-IK, one pose at a time.
+
+For every robot, ``--targets`` random reachable poses (the tip poses of configurations drawn uniformly within the
+joint limits, a fixed seed), each with a random start configuration q0 (TRAC-IK's seed, our ``q0``). Per target the
+solvers run in a fresh random order, in one process, so machine load hits them alike:
+
+* ``IKSolver.solve``: ``solver = evoik_pin.IKSolver(robot)`` made once, ``solver.solve(T, q0=q0, seed=i)``;
+* ``IKSolver.solve (no q0)``: the same without q0 (the seed table's nearest entries first);
+* ``evoik_pin.solve``: ``evoik_pin.solve(robot, T, q0=q0, seed=i)``;
+* TRAC-IK (``pytracik``, 5 ms, epsilon 1e-5, Distance mode; joint limits from our model, targets in its base frame,
+  as in ``scripts/bench_ik.py``): its C++ call alone is timed (the quaternion conversion is not).
+
+Each answer is judged by our forward kinematics (Pinocchio): success at 1e-6 means position error <= 1e-6 m,
+rotation angle <= 1e-6 rad and the joints within limits (continuous joints wrapped first); success at 2e-5 (what
+TRAC-IK's epsilon 1e-5 per component gives) is reported too. Times are wall-clock per call, median and p99, and the
+ratio of each median to TRAC-IK's in the same run.
+
+Then: where a call's microseconds go (``--profile-robot``: each stage of IKSolver.solve timed by wrapping it, mean
+per call), and a whole-robot problem: Talos with a floating base, both soles and both wrists (poses), through
+IKSolver.solve and evoik_pin.solve.
+
+    python scripts/bench_latency.py                        # 2,000 poses per robot, writes docs/BENCHMARKS.md
+    python scripts/bench_latency.py --targets 200 --no-docs --json /tmp/lat.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import evoik_pin as ek
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_ik import ROBOTS, TracIK, cpu_model, judge  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs" / "BENCHMARKS.md"
+BEGIN, END = "<!-- bench_latency:begin -->", "<!-- bench_latency:end -->"
+
+#: name -> (load_robot source, base, tip): bench_ik's where it has the arm.
+ARMS = {"panda": ROBOTS["panda"], "ur10": ("ur10", None, None), "kinova": ROBOTS["kinova"],
+        "baxter_left": ROBOTS["baxter_left"], "tiago_dual_left": ROBOTS["tiago_dual_left"]}
+
+
+def load(name: str) -> ek.Robot:
+    source, base, tip = ARMS[name]
+    if source.endswith(".urdf"):
+        from evoik_pin.robot import example_robot_data_dir
+
+        source = str(example_robot_data_dir() / source)
+    return ek.load_robot(source, base=base, tip=tip)
+
+
+def bench_arm(name: str, n: int, seed: int) -> dict:
+    robot = load(name)
+    rng = np.random.default_rng([seed, sum(map(ord, name))])
+    Qt, Qs = robot.random_configurations(n, rng), robot.random_configurations(n, rng)
+    targets = [robot.fk(q) for q in Qt]
+    solver = ek.IKSolver(robot)
+    trac = TracIK(robot)
+    ek.solve(robot, targets[0], seed=0)  # one-time set-up (kernel, seed table) outside the timed calls
+    solver.solve(targets[0], seed=0)
+    calls = {
+        "IKSolver.solve": lambda T, q0, i: solver.solve(T, q0=q0, seed=i).q,
+        "IKSolver.solve (no q0)": lambda T, q0, i: solver.solve(T, seed=i).q,
+        "evoik_pin.solve": lambda T, q0, i: ek.solve(robot, T, q0=q0, seed=i).q,
+    }
+    if trac.available:
+        calls["TRAC-IK"] = trac
+    names = list(calls)
+    rows = {k: {"t": [], "pos": [], "rot": [], "ok": []} for k in names}
+    order = np.random.default_rng([seed, 99])
+    for i, T in enumerate(targets):
+        for j in order.permutation(len(names)):
+            k = names[j]
+            t0 = time.perf_counter()
+            q = calls[k](T, Qs[i], i)
+            dt = time.perf_counter() - t0
+            if k == "TRAC-IK":
+                dt = trac.elapsed
+            pos, rot, inside = judge(robot, T, q)
+            row = rows[k]
+            row["t"].append(dt)
+            row["pos"].append(pos)
+            row["rot"].append(rot)
+            row["ok"].append(inside)
+    out = {}
+    for k in names:
+        row = rows[k]
+        t = np.array(row["t"]) * 1e6
+        pos, rot, inside = np.array(row["pos"]), np.array(row["rot"]), np.array(row["ok"])
+        out[k] = {"n": int(t.size), "median_us": float(np.median(t)), "p99_us": float(np.percentile(t, 99)),
+                  "mean_us": float(t.mean()),
+                  "success_1e-6": float(np.mean((pos <= 1e-6) & (rot <= 1e-6) & inside)),
+                  "success_2e-5": float(np.mean((pos <= 2e-5) & (rot <= 2e-5) & inside))}
+    if "TRAC-IK" in out:
+        ref = out["TRAC-IK"]["median_us"]
+        for k in names:
+            out[k]["ratio_to_tracik"] = out[k]["median_us"] / ref
+    if not trac.available:
+        out["TRAC-IK skipped"] = trac.why
+    return out
+
+
+# ---------------------------------------------------------------------- where the microseconds go
+class _Clock:
+    """Accumulates the time spent in wrapped functions (perf_counter_ns), per stage name."""
+
+    def __init__(self) -> None:
+        self.ns: dict[str, int] = {}
+
+    def wrap(self, owner, attr: str, stage: str, generator: bool = False):
+        original = getattr(owner, attr)
+        ns = self.ns
+        ns.setdefault(stage, 0)
+        clock = time.perf_counter_ns
+
+        if generator:
+            def timed(*args, **kwargs):
+                t0 = clock()
+                it = original(*args, **kwargs)
+                ns[stage] += clock() - t0
+                while True:
+                    t0 = clock()
+                    try:
+                        item = next(it)
+                    except StopIteration:
+                        ns[stage] += clock() - t0
+                        return
+                    ns[stage] += clock() - t0
+                    yield item
+        else:
+            timed = self.timed(original, stage)
+        setattr(owner, attr, timed)
+        return original
+
+    def timed(self, function, stage: str):
+        """``function`` wrapped: its time added to ``stage``."""
+        ns = self.ns
+        ns.setdefault(stage, 0)
+        clock = time.perf_counter_ns
+
+        def timed(*args, **kwargs):
+            t0 = clock()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                ns[stage] += clock() - t0
+
+        return timed
+
+
+#: (stage label, what it covers), in the order of a call.
+STAGES = [
+    ("target and problem", "IKSolver.problem: Target.coerce (the pose's checks) and the template problem copied "
+     "with the target and q0 (checked)"),
+    ("set-up look-ups", "the memetic plan's cached seed table and LM engine (retargeted in place)"),
+    ("seed-table ranking", "nearness features of the target, ranking the table's entries (lazy), q0's distance"),
+    ("q0's tip pose", "Pinocchio FK of q0 (is it nearer than the table's nearest entry?)"),
+    ("LM kernel", "the compiled LM runs themselves (numba)"),
+    ("LM call wrapper", "LevenbergMarquardt.run around the kernel (buffers, outcome)"),
+    ("cost and Result", "problem.assess (the cost from the errors) and the Result object"),
+    ("memetic's own Python", "the rest: stage logic, bookkeeping of attempts, message, seed check, verdicts"),
+]
+
+
+def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
+    """Mean microseconds per IKSolver.solve call spent in each stage of :data:`STAGES` (each stage's functions
+    wrapped with a clock; the wrappers' own cost, about 0.1 us each, lands in their stages)."""
+    from evoik_pin import ik_solver
+    from evoik_pin.solvers.lm import engine
+    from evoik_pin.solvers.search import memetic, seed_table
+
+    solver = ek.IKSolver(robot)
+    n = len(targets)
+    for i in range(min(n, 200)):  # warm: caches, branch predictors
+        solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
+    t0 = time.perf_counter()
+    for i in range(n):
+        solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
+    plain = (time.perf_counter() - t0) / n * 1e6
+    clock = _Clock()
+    kernel = engine.compiled_kernel()
+    saved = [
+        (ek.Target, "coerce", clock.wrap(ek.Target, "coerce", "target")),
+        (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
+        (memetic.MemeticPlan, "_prepare", clock.wrap(memetic.MemeticPlan, "_prepare", "setup")),
+        (memetic.MemeticPlan, "_engine", clock.wrap(memetic.MemeticPlan, "_engine", "setup")),
+        (seed_table.SeedTable, "ranked", clock.wrap(seed_table.SeedTable, "ranked", "ranking", generator=True)),
+        (seed_table.SeedTable, "distance_sq", clock.wrap(seed_table.SeedTable, "distance_sq", "ranking")),
+        (seed_table.SeedTable, "typical_gap_sq", clock.wrap(seed_table.SeedTable, "typical_gap_sq", "ranking")),
+        (type(robot), "fk_unchecked", clock.wrap(type(robot), "fk_unchecked", "fk")),
+        (engine.LevenbergMarquardt, "run", clock.wrap(engine.LevenbergMarquardt, "run", "lm")),
+        (engine.LevenbergMarquardt, "run_many", clock.wrap(engine.LevenbergMarquardt, "run_many", "lm")),
+        (kernel, "lm_run_buffers", None),
+        (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
+        (memetic, "Result", clock.wrap(memetic, "Result", "result")),
+    ]
+    k_original = kernel["lm_run_buffers"]
+    ns = clock.ns
+    kernel["lm_run_buffers"] = clock.timed(k_original, "kernel")
+    lm = solver._plan._lm  # the solver's engine calls the kernel's overload directly (LevenbergMarquardt._direct)
+    direct = lm._direct
+    if direct is not None:
+        lm._direct = clock.timed(direct, "kernel")
+    try:
+        t0 = time.perf_counter()
+        for i in range(n):
+            solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
+        wrapped = (time.perf_counter() - t0) / n * 1e6
+    finally:
+        kernel["lm_run_buffers"] = k_original
+        lm._direct = direct
+        for owner, attr, original in saved:
+            if original is not None:
+                setattr(owner, attr, original)
+    us = {k: v / n / 1e3 for k, v in ns.items()}
+    # the boundary checks alone (part of "target and problem"): the pose's and q0's
+    t0 = time.perf_counter()
+    for i in range(n):
+        robot.check_q(Qs[i])
+    q0_check = (time.perf_counter() - t0) / n * 1e6
+    stages = {
+        "target and problem": us["problem"],
+        "set-up look-ups": us["setup"],
+        "seed-table ranking": us["ranking"],
+        "q0's tip pose": us["fk"],
+        "LM kernel": us["kernel"],
+        "LM call wrapper": us["lm"] - us["kernel"],
+        "cost and Result": us["result"],
+    }
+    stages["memetic's own Python"] = wrapped - sum(stages.values())
+    return {"stages_us": stages, "target_check_us": us["target"], "q0_check_us": q0_check, "wrapped_mean_us": wrapped,
+            "plain_mean_us": plain, "q0": use_q0, "n": n}
+
+
+def bench_talos(n: int, seed: int) -> dict:
+    from bench_goals_scale import problems
+
+    talos = ek.load_robot("talos", floating_base=True)
+    goal_lists = problems(talos, n, seed)
+    solver = ek.IKSolver(talos)
+    solver.solve(goal_lists[0], seed=0)
+    ek.solve(talos, goal_lists[0], seed=0)
+    calls = {"IKSolver.solve": lambda g, i: solver.solve(g, seed=i),
+             "evoik_pin.solve": lambda g, i: ek.solve(talos, g, seed=i)}
+    names = list(calls)
+    t = {k: [] for k in names}
+    ok = {k: [] for k in names}
+    order = np.random.default_rng([seed, 7])
+    for i, g in enumerate(goal_lists):
+        for j in order.permutation(len(names)):
+            k = names[j]
+            t0 = time.perf_counter()
+            r = calls[k](g, i)
+            t[k].append(time.perf_counter() - t0)
+            ok[k].append(r.success)
+    return {k: {"n": n, "median_us": float(np.median(t[k]) * 1e6), "p99_us": float(np.percentile(t[k], 99) * 1e6),
+                "success": float(np.mean(ok[k]))} for k in names}
+
+
+# ---------------------------------------------------------------------- report
+def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str, load: tuple) -> str:
+    lines = [f"### Single-solve latency (issue 24), {datetime.date.today().isoformat()}", "",
+             f"`{command}` on {cpu_model()} ({os.cpu_count()} cores), Python {platform.python_version()}; load "
+             f"average {load[0]} before, {load[1]} after (the machine is shared by about six sessions: every "
+             "figure is a loaded one; compare the ratios, measured in the same run, interleaved target by target).",
+             "", "Per robot: random reachable poses, a random q0 (TRAC-IK's seed) each; success within 1e-6 m and "
+             "rad by our FK (2e-5 too); wall time per call (TRAC-IK: its C++ call alone).", "",
+             "| robot | solver | poses | success 1e-6 | success 2e-5 | median us | p99 us | median / TRAC-IK's |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for name, rows in arms.items():
+        for k, r in rows.items():
+            if not isinstance(r, dict):
+                lines.append(f"| {name} | {k} | | | | | | {r} |")
+                continue
+            ratio = f"{r['ratio_to_tracik']:.3f}" if "ratio_to_tracik" in r else "-"
+            lines.append(f"| {name} | {k} | {r['n']} | {100 * r['success_1e-6']:.2f}% | "
+                         f"{100 * r['success_2e-5']:.2f}% | {r['median_us']:.1f} | {r['p99_us']:.0f} | {ratio} |")
+    if profile:
+        p = profile
+        lines += ["", f"Where a call's microseconds go: IKSolver.solve on {p['robot']}"
+                  f"{' with q0' if p['q0'] else ''}, {p['n']} poses, mean per call, each stage's functions wrapped "
+                  f"with a clock (mean {p['wrapped_mean_us']:.1f} us wrapped, {p['plain_mean_us']:.1f} us without "
+                  "the wrappers; the least loaded of three passes, whose wrapped means were "
+                  f"{', '.join(f'{x:.1f}' for x in p['passes_wrapped_mean_us'])} us):", "",
+                  "| stage | us per call | what |", "|---|---:|---|"]
+        what = dict(STAGES)
+        for k, v in p["stages_us"].items():
+            lines.append(f"| {k} | {v:.1f} | {what[k]} |")
+        lines.append(f"| (of the first: Target.coerce) | {p['target_check_us']:.1f} | the boundary checks of a "
+                     "pose: finite, a rotation matrix, within reach of the base |")
+        lines.append(f"| (of the first: q0's check) | {p['q0_check_us']:.1f} | Robot.check_q: shape and finite "
+                     "(timed alone) |")
+    if talos:
+        lines += ["", f"Talos, floating base, four pose goals (both soles, both wrists; bench_goals_scale.py's "
+                  f"problems), {next(iter(talos.values()))['n']} problems, interleaved:", "",
+                  "| solver | success | median us | p99 us |", "|---|---:|---:|---:|"]
+        for k, r in talos.items():
+            lines.append(f"| {k} | {100 * r['success']:.1f}% | {r['median_us']:.0f} | {r['p99_us']:.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def write_docs(text: str) -> None:
+    doc = DOCS.read_text()
+    block = f"{BEGIN}\n{text}{END}"
+    if BEGIN in doc and END in doc:
+        doc = doc[:doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
+    else:
+        doc = doc.rstrip("\n") + "\n\n" + block + "\n"
+    DOCS.write_text(doc)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--targets", type=int, default=2000, help="poses per robot (default 2000)")
+    ap.add_argument("--robots", nargs="+", choices=list(ARMS), default=list(ARMS))
+    ap.add_argument("--profile-robot", default="panda", choices=list(ARMS), help="robot of the profile table")
+    ap.add_argument("--profile-targets", type=int, default=1000, help="poses of the profile table (0: none)")
+    ap.add_argument("--talos", type=int, default=200, help="Talos problems (0: none)")
+    ap.add_argument("--json", type=Path, help="write the numbers here")
+    ap.add_argument("--no-docs", action="store_true", help="do not write docs/BENCHMARKS.md")
+    ap.add_argument("--seed", type=int, default=2026)
+    args = ap.parse_args(argv)
+    load0 = os.getloadavg()
+    arms = {}
+    for name in args.robots:
+        arms[name] = bench_arm(name, args.targets, args.seed)
+        for k, r in arms[name].items():
+            if isinstance(r, dict):
+                print(f"{name:16s} {k:24s} success {r['success_1e-6']:.4f} median {r['median_us']:7.1f} us "
+                      f"p99 {r['p99_us']:7.0f} us ratio {r.get('ratio_to_tracik', float('nan')):.3f}", flush=True)
+    profile = None
+    if args.profile_targets:
+        robot = load(args.profile_robot)
+        rng = np.random.default_rng([args.seed, 5])
+        Qt = robot.random_configurations(args.profile_targets, rng)
+        Qs = robot.random_configurations(args.profile_targets, rng)
+        targets = [robot.fk(q) for q in Qt]
+        # three passes, the least loaded one kept (the machine is shared: a pass that another process slowed down
+        # inflates every stage)
+        passes = [profile_stages(robot, targets, Qs, use_q0=True) for _ in range(3)]
+        profile = min(passes, key=lambda p: p["wrapped_mean_us"])
+        profile["robot"] = args.profile_robot
+        profile["passes_wrapped_mean_us"] = [p["wrapped_mean_us"] for p in passes]
+        print(json.dumps(profile, indent=1), flush=True)
+    talos = bench_talos(args.talos, args.seed) if args.talos else None
+    if talos:
+        print(json.dumps(talos, indent=1))
+    load1 = os.getloadavg()
+    loads = (f"{load0[0]:.2f}", f"{load1[0]:.2f}")
+    command = "python scripts/bench_latency.py " + " ".join(argv if argv is not None else sys.argv[1:])
+    text = markdown(arms, profile, talos, command.strip(), loads)
+    print(text)
+    if args.json:
+        args.json.write_text(json.dumps({"arms": arms, "profile": profile, "talos": talos, "load": loads}, indent=1))
+    if not args.no_docs:
+        write_docs(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,152 @@
+"""One call's plumbing, shared by :mod:`evoik_pin.api` and :mod:`evoik_pin.ik_solver`: the robot and the random
+generator of a call, its options split between the problem and the solver, the problem made, the solver run with
+its goal-list and collision verdicts."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import MethodError, OptionError
+from .goals import is_goal_list
+from .problem import IKProblem, Target
+from .result import Result
+from .robot import Robot, load_robot
+from .solvers import get_solver
+from .solvers.collision_verdict import with_collision_verdict
+
+__all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "GOAL_METHODS", "make_problem", "split_options"]
+
+
+#: Method used when none is named.
+DEFAULT_METHOD = "memetic"
+#: Method :func:`solve_all` uses when none is named (every target kind).
+DEFAULT_ALL_METHOD = "memetic-all"
+
+# Options consumed by the problem rather than by the solver.
+_PROBLEM_OPTIONS = ("tolerance", "rotation_tolerance", "q0", "bounds", "objective", "orientation_weight",
+                    "pose_metric", "scene", "margin")
+
+
+class _DeferredGenerator:
+    """A ``numpy.random.Generator`` for ``seed``, created on first use.
+
+    Seeding a generator costs 10-50 us, a tenth of a typical memetic solve, whose deterministic stages (q0
+    and the seed table) usually meet the tolerance without drawing a number. Solvers use the object like
+    the Generator itself (every attribute is forwarded), and the draws are exactly those of
+    ``np.random.default_rng(seed)``.
+    """
+
+    __slots__ = ("_seed", "_generator")
+
+    def __init__(self, seed) -> None:
+        self._seed = seed
+        self._generator = None
+
+    def __getattr__(self, name):
+        if self._generator is None:
+            self._generator = np.random.default_rng(self._seed)
+        return getattr(self._generator, name)
+
+
+def _rng(seed) -> np.random.Generator:
+    if isinstance(seed, (np.random.Generator, _DeferredGenerator)):
+        return seed
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+        raise OptionError(f"seed must be a non-negative integer, a numpy Generator or None, got {seed!r}")
+    return _DeferredGenerator(seed)
+
+
+def _robot(robot) -> Robot:
+    return robot if isinstance(robot, Robot) else load_robot(robot)
+
+
+def split_options(options: dict) -> dict:
+    """The problem's keywords (:class:`IKProblem`'s: ``bounds`` as ``lower``, ``upper``) popped from ``options``,
+    which keeps the solver's."""
+    problem_kw = {k: options.pop(k) for k in _PROBLEM_OPTIONS if k in options}
+    bounds = problem_kw.pop("bounds", None)
+    if bounds is not None:
+        try:
+            lower, upper = bounds
+        except (TypeError, ValueError):
+            raise OptionError("bounds must be a pair (lower, upper) of arrays with one value per joint") from None
+        problem_kw["lower"], problem_kw["upper"] = lower, upper
+    return problem_kw
+
+
+def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
+    """Split ``options`` into an :class:`IKProblem` and the remaining solver options."""
+    robot = _robot(robot)
+    problem_kw = split_options(options)
+    if "q0" in problem_kw and problem_kw["q0"] is None:
+        problem_kw.pop("q0")
+    if is_goal_list(target):  # a list of goals (evoik_pin.goals) on frames of the robot
+        return IKProblem(robot, list(target), **problem_kw), options
+    return IKProblem(robot, Target.coerce(target), **problem_kw), options
+
+
+#: Methods that solve goal lists (:mod:`evoik_pin.goals`): memetic and memetic-all (the LM engine over the goal
+#: stack), and the evolutionary methods, which read a problem through ``IKProblem.evaluate`` (the goals' weighted cost
+#: and largest errors over a population); nsga2 with every goal as its constraint, hga and memetic-all with every
+#: solution meeting every goal. The closed forms (``algebraic``) take one target for the tip, or a goal list that is
+#: that problem: one Pose or Position goal on the tip.
+GOAL_METHODS = ("memetic", "memetic-all", "de", "isade", "pso", "mode", "ga", "ga-binary", "nsga2", "hga")
+
+
+def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
+    info = get_solver(method)
+    goal_problem = problem.goals is not None and problem
+    if goal_problem:
+        problem = _goal_method_problem(method, problem)
+    polish = options.pop("polish", False)
+    info.check_options(options)
+    result = info.func(problem, rng, **options)
+    if polish:
+        from .solvers.lm.polish import polish_result
+
+        result = polish_result(problem, result, rng)
+    if goal_problem:
+        result = _with_goal_verdict(goal_problem, result)
+    return with_collision_verdict(problem, result)
+
+
+def _check_goal_method(method: str) -> None:
+    """MethodError unless ``method`` solves goal lists (:data:`GOAL_METHODS`; ``algebraic`` passes here, its goal
+    lists are checked one by one in :func:`_goal_method_problem`)."""
+    if method not in GOAL_METHODS and method != "algebraic":
+        raise MethodError(f"method {method!r} solves one target for the tip; goal lists are solved by "
+                          f"{', '.join(repr(m) for m in GOAL_METHODS)}")
+
+
+def _goal_method_problem(method: str, problem: IKProblem) -> IKProblem:
+    """The problem ``method`` solves for a goal list: the list itself (:data:`GOAL_METHODS`), or, for the closed forms
+    (``algebraic``), the one target on the tip that a single Pose or Position goal on the tip stands for; MethodError
+    naming the methods that take goal lists otherwise."""
+    if method in GOAL_METHODS:
+        return problem
+    if method == "algebraic":
+        from .solvers.paper.analytic import tip_target_problem
+
+        single = tip_target_problem(problem)
+        if single is not None:
+            return single
+        raise MethodError(f"method 'algebraic' solves one target for the tip (a closed form of one arm): a goal list "
+                          f"only when it is one Pose or Position goal on the tip {problem.robot.tip!r}; goal lists "
+                          f"are solved by {', '.join(repr(m) for m in GOAL_METHODS)}")
+    _check_goal_method(method)
+    return problem
+
+
+def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
+    """A goal problem's result with each goal's errors at its ``q`` (``goal_errors``) and ``success`` judged goal by
+    goal, each within its own tolerances (the evolutionary methods compare the largest errors with the problem's
+    tolerance, and a polish makes a new Result); a scene's verdict comes after (:func:`with_collision_verdict`)."""
+    if result.goal_errors is None:
+        result.goal_errors = problem.goal_errors(result.q)
+    result.chosen = problem.chosen(result.q)  # goal sets: which member each goal meets
+    met = problem.goals_met(result.goal_errors)
+    if result.success and not met:
+        unmet = [g.frame for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]
+        result.message += f"; goals not met within their own tolerances: {', '.join(unmet)}"
+    result.success = met
+    return result

@@ -1,0 +1,202 @@
+"""The single-solve fast path: :class:`IKSolver`, a solver set up once for one robot, method and options.
+
+A control loop, a planner sampling goal configurations or a grasp scorer solves one target at a time, thousands of
+times, with the same robot and options. :func:`evoik_pin.solve` would check the options, build the problem's
+constants and look up the method's set-up on every call; an ``IKSolver`` does that once:
+
+* the method and every option are checked when the solver is made (the errors :func:`evoik_pin.solve` raises);
+* the problem's constants (tolerances, search box, scene, objective settings) are checked into a template problem,
+  and each call copies it with the new target (checked: a NaN pose, a 5-vector, a q0 of the wrong length get the
+  errors they get from :func:`evoik_pin.solve`);
+* for ``memetic`` (the default), its :class:`~evoik_pin.solvers.search.memetic.MemeticPlan`: the compiled kernel
+  loaded, the seed table of the search box built, and one LM engine whose target arrays each call overwrites.
+
+Everything else is :func:`evoik_pin.solve`'s own code, so the answers are the same for the same seed. Goal lists
+(:mod:`evoik_pin.goals`) and scenes go through the same path (a goal list is checked and bound per call; a scene's
+collision-free seed entries follow its version).
+
+:func:`evoik_pin.solve` itself keeps one ``IKSolver`` per robot, method and options (per thread, the 8 made last,
+which keep their robots alive) and calls it, when the options are plain values (numbers, strings, a
+:class:`~evoik_pin.Scene` or objective object); a scene file's path or array bounds take the general path.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+
+from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goal_verdict, split_options
+from .errors import ConfigurationError, EvoikError
+from .goals import is_goal_list
+from .objectives import default_objective
+from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
+from .result import Result
+from .robot import Robot
+from .scene import Scene
+from .solvers import get_solver
+from .solvers.collision_verdict import with_collision_verdict
+
+__all__ = ["IKSolver"]
+
+
+class IKSolver:
+    """One robot, method and set of options, checked and prepared once; :meth:`solve` per target.
+
+    Args:
+        robot: a :class:`~evoik_pin.Robot` or anything :func:`~evoik_pin.load_robot` accepts.
+        method: a name from :func:`~evoik_pin.methods` (default ``"memetic"``).
+        **options: what :func:`evoik_pin.solve` takes (``tolerance`` m, ``rotation_tolerance`` rad, ``bounds``,
+            ``scene``, ``margin`` m, ``orientation_weight``, ``pose_metric``, ``objective``, ``polish``, the method's
+            own: ``timeout`` s, ``max_restarts``, ...); a ``q0`` (n,) here is the start of every :meth:`solve` not
+            given one.
+
+    Raises:
+        MethodError: an unknown method. OptionError, BoundsError, ConfigurationError, SceneError: an option
+        :func:`evoik_pin.solve` would refuse, with its message.
+
+    The robot's bounds (``bounds`` or the robot's own) are read when the solver is made. One solver is not to be
+    shared by threads that solve at the same time (each call writes the solver's target buffers): make one per
+    thread.
+
+    Example::
+
+        solver = IKSolver(panda, tolerance=1e-6)
+        for T in targets:
+            r = solver.solve(T, q0=q_now)     # a Result, as evoik_pin.solve returns
+    """
+
+    def __init__(self, robot, method: str = DEFAULT_METHOD, **options) -> None:
+        robot = _robot(robot)
+        self.robot = robot
+        self.method = method
+        self._info = info = get_solver(method)
+        options = dict(options)
+        self._polish = bool(options.pop("polish", False))
+        q0 = options.pop("q0", None)
+        self._problem_kw = problem_kw = split_options(options)
+        # the template: every problem option checked once (a goal list's problems are made from the same options)
+        self._template = IKProblem(robot, Target(np.zeros(3)), **problem_kw)
+        self._q0 = None if q0 is None else self._checked_q0(q0)
+        self._objective = problem_kw.get("objective")  # a custom objective serves every target; None: the default
+        # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
+        self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
+            ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
+        self._options = options
+        info.check_options(options, n=robot.n)
+        self._plan = None
+        if method == "memetic":
+            from .solvers.search.memetic import MemeticPlan
+
+            self._plan = MemeticPlan(robot, **options)
+
+    def _checked_q0(self, q0) -> np.ndarray:
+        try:
+            return self.robot.check_q(q0)
+        except ConfigurationError as exc:
+            raise ConfigurationError(f"q0: {exc}") from None
+
+    def problem(self, target, q0=None) -> IKProblem:
+        """The :class:`~evoik_pin.IKProblem` of one target (or goal list) and start ``q0`` (None: the solver's),
+        as :func:`evoik_pin.make_problem` would make it with the solver's options, checked the same way."""
+        if is_goal_list(target):
+            kw = self._problem_kw
+            q0 = self._q0 if q0 is None else q0
+            return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
+        target = Target.coerce(target)
+        p = object.__new__(IKProblem)
+        p.__dict__.update(self._template.__dict__)
+        p.target = target
+        objective = self._objective
+        p.objective = default_objective(target, p.orientation_weight, p.pose_metric) if objective is None else objective
+        p.q0 = self._q0 if q0 is None else self._checked_q0(q0)
+        p.evaluations = 0
+        if self._target_box:
+            p.lower, p.upper = target_box(self.robot, target, self.robot.lower, self.robot.upper)
+        return p
+
+    def solve(self, target, q0=None, seed=None) -> Result:
+        """Solve one target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix, a
+        :class:`~evoik_pin.Target`, or a goal list (:mod:`evoik_pin.goals`); from ``q0`` (n,) when given; ``seed``:
+        int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
+        solver's robot, method and options, the same for the same seed."""
+        problem = self.problem(target, q0)
+        return self.run(problem, _rng(seed))
+
+    def run(self, problem: IKProblem, rng) -> Result:
+        """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does
+        after it: ``polish``, the goals' verdict, the scene's exact check."""
+        goal_problem = problem if problem.goals is not None else None
+        if goal_problem is not None:  # the method's own problem of a goal list (the closed forms: one tip goal)
+            problem = _goal_method_problem(self.method, problem)
+        if self._plan is not None:
+            result = self._plan.solve(problem, rng)
+        else:
+            result = self._info.func(problem, rng, **self._options)
+        if self._polish:
+            from .solvers.lm.polish import polish_result
+
+            result = polish_result(problem, result, rng)
+        if goal_problem is not None:
+            result = _with_goal_verdict(goal_problem, result)
+        return with_collision_verdict(problem, result)
+
+    def __repr__(self) -> str:
+        return f"IKSolver({self.robot.name!r}, method={self.method!r})"
+
+
+# ---------------------------------------------------------------------- evoik_pin.solve's solvers
+_LOCAL = threading.local()
+#: IKSolvers evoik_pin.solve keeps per thread (the last ones made; each keeps its robot, seed table and scene alive,
+#: so the number is small).
+_CACHED = 8
+#: Option values keyed by value (by type too: population=32.0 must still be refused where 32 is accepted).
+_PLAIN = (bool, int, float, str, type(None), np.integer, np.floating)
+
+
+def _key(robot, method: str, options: dict):
+    """A hashable key of (robot, its bounds, method, options), or None when an option is not a plain value (a
+    scene file's path: the file may change between calls; arrays)."""
+    parts = []
+    for name, value in options.items():
+        if name == "q0":
+            continue
+        if isinstance(value, _PLAIN) and not (name == "scene" and isinstance(value, str)):
+            if isinstance(value, float) and math.isnan(value):  # NaN != NaN: such a key would never hit
+                return None
+            parts.append((name, type(value), value))
+        elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
+            # an object, by identity: the cached solver keeps it alive, so its id is not reused while cached (a
+            # scene file's path is read into a Scene anew on every call, as before: the file may change)
+            parts.append((name, None, id(value)))
+        else:
+            return None
+    parts.sort(key=lambda part: part[0])
+    return (id(robot), robot.lower.tobytes(), robot.upper.tobytes(), method, tuple(parts))
+
+
+def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
+    """The IKSolver :func:`evoik_pin.solve` uses for these arguments (made on first use, then kept), or None when
+    they take the general path: a robot given by name, options that are no plain values, or options the solver
+    refuses (the general path then raises the error :func:`evoik_pin.solve` always raised, in its order)."""
+    if type(robot) is not Robot and not isinstance(robot, Robot):
+        return None
+    key = _key(robot, method, options)
+    if key is None:
+        return None
+    cache = getattr(_LOCAL, "solvers", None)
+    if cache is None:
+        cache = _LOCAL.solvers = {}
+    solver = cache.get(key)
+    if solver is not None and solver.robot is robot:
+        return solver
+    try:
+        solver = IKSolver(robot, method, **{k: v for k, v in options.items() if k != "q0"})
+    except EvoikError:
+        return None
+    if len(cache) >= _CACHED:
+        cache.pop(next(iter(cache)))
+    cache[key] = solver
+    return solver
+

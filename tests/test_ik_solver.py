@@ -1,0 +1,284 @@
+"""IKSolver (issue 24): set up once, solve per target, the same answers as the general path of evoik_pin.solve
+(make_problem + the method, no cached set-up), the same errors for bad input."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import evoik_pin as ek
+from evoik_pin import api
+from evoik_pin.errors import ConfigurationError, MethodError, OptionError, TargetError
+from evoik_pin.goals import Pose, Position
+
+
+def general(robot, target, method="memetic", seed=None, **options):
+    """evoik_pin.solve's general path: a new problem and the method's whole set-up on every call."""
+    problem, solver_options = api.make_problem(robot, target, **options)
+    return api._run(problem, method, api._rng(seed), solver_options)
+
+
+def same(a: ek.Result, b: ek.Result) -> None:
+    assert np.array_equal(a.q, b.q)
+    assert (a.success, a.position_error, a.orientation_error, a.cost) == (b.success, b.position_error,
+                                                                          b.orientation_error, b.cost)
+    assert (a.evaluations, a.generations, a.goal_errors, a.collision_free) == (b.evaluations, b.generations,
+                                                                               b.goal_errors, b.collision_free)
+    assert a.message.split(" (")[0] == b.message.split(" (")[0]
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return ek.load_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def cases(panda):
+    rng = np.random.default_rng(7)
+    Qt, Qs = panda.random_configurations(40, rng), panda.random_configurations(40, rng)
+    return [panda.fk(q) for q in Qt], Qs
+
+
+# a deterministic budget, so that a loaded machine cannot change an answer (the clock is the one input that differs)
+BUDGET = {"timeout": None, "max_restarts": 3}
+
+
+def test_same_answers_as_the_general_path(panda, cases):
+    targets, Qs = cases
+    solver = ek.IKSolver(panda, **BUDGET)
+    for i, T in enumerate(targets):
+        q0 = Qs[i] if i % 2 else None
+        reference = general(panda, T, seed=i, q0=q0, **BUDGET)
+        same(solver.solve(T, q0=q0, seed=i), reference)
+        same(ek.solve(panda, T, seed=i, q0=q0, **BUDGET), reference)
+
+
+def test_target_forms_and_kinds_in_any_order(panda, cases):
+    """Poses as SE3, 4x4 arrays and Targets, and positions, alternating on one solver (one LM engine retargeted, a new
+    one when the kind changes)."""
+    targets, Qs = cases
+    solver = ek.IKSolver(panda, tolerance=1e-8, **BUDGET)
+    for i, T in enumerate(targets[:12]):
+        target = [T, T.homogeneous, ek.Target(T.translation, T.rotation), T.translation.copy()][i % 4]
+        same(solver.solve(target, Qs[i], seed=i), general(panda, target, seed=i, q0=Qs[i], tolerance=1e-8, **BUDGET))
+
+
+def test_a_target_array_is_not_written_through(panda, cases):
+    """The engine keeps its own target arrays: solving the next target leaves the caller's pose untouched."""
+    targets, _ = cases
+    H = targets[0].homogeneous
+    kept = H.copy()
+    solver = ek.IKSolver(panda)
+    solver.solve(H, seed=0)
+    solver.solve(targets[1], seed=0)
+    assert np.array_equal(H, kept)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.integers(0, 2**31 - 1), st.integers(0, 1000), st.booleans())
+def test_property_same_q_for_any_seed(panda, target_seed, seed, with_q0):
+    rng = np.random.default_rng(target_seed)
+    T = panda.fk(panda.random_configurations(1, rng)[0])
+    q0 = panda.random_configurations(1, rng)[0] if with_q0 else None
+    solver = _solver(panda)
+    assert np.array_equal(solver.solve(T, q0, seed).q, general(panda, T, seed=seed, q0=q0, **BUDGET).q)
+
+
+_SOLVERS: dict = {}
+
+
+def _solver(robot):
+    if robot not in _SOLVERS:
+        _SOLVERS[robot] = ek.IKSolver(robot, **BUDGET)
+    return _SOLVERS[robot]
+
+
+def test_other_methods_polish_and_far_joints(cases, panda):
+    targets, _ = cases
+    solver = ek.IKSolver(panda, method="de", polish=True, max_generations=20)
+    for i, T in enumerate(targets[:3]):
+        same(solver.solve(T, seed=i), general(panda, T, method="de", seed=i, polish=True, max_generations=20))
+    # a mobile base with near-unbounded joints: the search box follows each target (problem.target_box)
+    from test_near_unbounded import _arm, _targets
+
+    robot = ek.load_robot(_arm(["x", "y", "yaw"]))
+    solver = ek.IKSolver(robot, **BUDGET)
+    _, far = _targets(robot, 4, seed=3)
+    for i, T in enumerate(far):
+        same(solver.solve(T, seed=i), general(robot, T, seed=i, **BUDGET))
+
+
+def test_goal_lists_and_a_scene(cases):
+    from evoik_pin.scene import Scene
+    from evoik_pin.scene.examples import SHELF_INTERIOR, add_table_and_shelf, free_configurations
+
+    baxter = ek.load_robot("baxter")
+    rng = np.random.default_rng(3)
+    solver = ek.IKSolver(baxter, **BUDGET)
+    for i, q in enumerate(baxter.random_configurations(3, rng)):
+        goals = [Pose("left_gripper", baxter.fk(q, frame="left_gripper")),
+                 Position("right_gripper", baxter.fk(q, frame="right_gripper").translation)]
+        r = solver.solve(goals, seed=i)
+        same(r, general(baxter, goals, seed=i, **BUDGET))
+        assert r.goal_errors is not None
+    panda = ek.load_robot("panda")
+    scene = add_table_and_shelf(Scene(panda))
+    Q = free_configurations(scene, 3, np.random.default_rng(1), SHELF_INTERIOR)
+    solver = ek.IKSolver(panda, scene=scene, **BUDGET)
+    for i, q in enumerate(Q):
+        T = panda.fk(q)
+        r = solver.solve(T, seed=i)
+        same(r, general(panda, T, seed=i, scene=scene, **BUDGET))
+        assert r.collision_free is not None
+
+
+def test_bad_input_gets_the_errors_of_solve(panda, cases):
+    targets, _ = cases
+    solver = ek.IKSolver(panda)
+    bad_pose = targets[0].homogeneous.copy()
+    bad_pose[0, 3] = np.nan
+    for target, q0, error in [(bad_pose, None, TargetError), (np.zeros(5), None, TargetError),
+                              (targets[0], np.zeros(3), ConfigurationError),
+                              (targets[0], np.full(7, np.inf), ConfigurationError)]:
+        with pytest.raises(error) as by_solver:
+            solver.solve(target, q0)
+        with pytest.raises(error) as by_general:
+            general(panda, target, q0=q0)
+        assert str(by_solver.value) == str(by_general.value)
+    with pytest.raises(OptionError, match="seed"):
+        solver.solve(targets[0], seed=-1)
+    with pytest.raises(OptionError, match="population"):
+        ek.IKSolver(panda, population=2)
+    with pytest.raises(OptionError, match="unknown option"):
+        ek.IKSolver(panda, popsize=8)
+    with pytest.raises(MethodError):
+        ek.IKSolver(panda, method="nope")
+    with pytest.raises(MethodError):  # a goal list for a method that takes one target
+        ek.IKSolver(panda, method="algebraic").solve([Pose("panda_hand_tcp", targets[0])])
+
+
+def test_solve_keeps_refusing_what_it_refused(panda, cases):
+    """evoik_pin.solve's cached solvers are keyed by option types and values: 32.0 is no integer, 32 is."""
+    T = cases[0][0]
+    ek.solve(panda, T, seed=0, population=32)
+    with pytest.raises(OptionError, match="population"):
+        ek.solve(panda, T, seed=0, population=32.0)
+    with pytest.raises(TargetError):  # a bad target with a bad option: the target's error first, as always
+        ek.solve(panda, np.full(3, np.nan), seed=0, population=2)
+    # bounds changed on the robot: the next solve searches the new box
+    lower, upper = panda.lower.copy(), panda.upper.copy()
+    try:
+        panda.set_bounds(lower, np.minimum(upper, lower + 0.5))
+        r = ek.solve(panda, T, seed=0, **BUDGET)
+        assert panda.within_bounds(r.q)
+        same(r, general(panda, T, seed=0, **BUDGET))
+    finally:
+        panda.set_bounds(lower, upper)
+
+
+def test_se3_and_matrix_targets_agree(panda, cases):
+    T = cases[0][0]
+    solver = ek.IKSolver(panda)
+    assert np.array_equal(solver.solve(T, seed=1).q, solver.solve(pin.SE3(T.homogeneous), seed=1).q)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.floats(-10.0, -3.0), st.booleans())
+def test_property_rotation_check_gives_the_numpy_verdict(seed, log_eps, mirror):
+    """Target's rotation check (written on Python floats) accepts exactly the matrices with |R^T R - I|_F <= 1e-6 and
+    det R > 0, as numpy computes them (away from the threshold's last bits)."""
+    rng = np.random.default_rng(seed)
+    R = pin.SE3.Random().rotation @ np.diag([1.0, 1.0, -1.0 if mirror else 1.0])
+    R = R + 10.0**log_eps * rng.standard_normal((3, 3))
+    D = R.T @ R - np.eye(3)
+    frob_sq = float((D * D).sum())
+    if abs(frob_sq - 1e-12) < 1e-15:
+        return
+    accepted = frob_sq <= 1e-12 and np.linalg.det(R) >= 0
+    try:
+        ek.Target(np.zeros(3), R)
+        assert accepted
+    except TargetError as exc:
+        assert not accepted and "not a rotation matrix" in str(exc)
+
+
+def test_seed_table_ranking_and_nearness_are_the_batch_formulas(panda, cases):
+    """The single-target shortcuts of the seed table (features without the batch encoding, the distances computed in
+    place) rank and measure exactly as the batch formulas do."""
+    from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
+
+    table = seed_table(panda, panda.lower, panda.upper, default_table_size(panda.n))
+    targets, Qs = cases
+    for T, q in zip(targets[:10], Qs[:10], strict=True):
+        for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
+            key, f = table.target_features([target])
+            F, sq = table._table_features(key)
+            d = sq - 2.0 * (F @ f[0])
+            part = np.argpartition(d, 16)[:17]
+            first = int(d.argmin())
+            reference = [first] + [int(i) for i in part[d[part].argsort()] if i != first]
+            assert list(table.ranked(target, 17)) == reference
+            Tq = panda.fk(q)
+            g = table._pose_features(key, Tq.translation[None], Tq.rotation[None])[0]
+            assert table.distance_sq(target, Tq) == float((f[0] - g).dot(f[0] - g))
+            assert table.entry_distance_sq(target, first) == table.distance_sq(
+                target, pin.SE3(table.rotations[first], table.positions[first]))
+
+
+def test_which_calls_of_solve_keep_a_solver(panda, tmp_path):
+    from pathlib import Path
+
+    from evoik_pin.ik_solver import cached_solver
+    from evoik_pin.scene import Scene
+
+    a = cached_solver(panda, "memetic", {"tolerance": 1e-8})
+    assert a is cached_solver(panda, "memetic", {"tolerance": 1e-8, "q0": np.zeros(7)})  # q0 is per call
+    assert a is not cached_solver(panda, "memetic", {"tolerance": 1e-7})
+    scene = Scene(panda)
+    assert cached_solver(panda, "memetic", {"scene": scene}) is cached_solver(panda, "memetic", {"scene": scene})
+    # the general path: a scene file (read on every call: it may change), array bounds, a robot by name, bad options
+    for options in ({"scene": str(tmp_path / "s.yaml")}, {"scene": Path(tmp_path / "s.yaml")},
+                    {"bounds": (panda.lower, panda.upper)}, {"population": 2}, {"tolerance": float("nan")}):
+        assert cached_solver(panda, "memetic", options) is None
+    assert cached_solver("panda", "memetic", {}) is None
+
+
+def test_solve_from_threads_gives_the_sequential_answers(panda, cases):
+    """evoik_pin.solve keeps one solver per thread: threads solving at once get the answers of a sequential loop."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    targets, Qs = cases
+    expected = [ek.solve(panda, T, q0=Qs[i], seed=i, **BUDGET).q for i, T in enumerate(targets)]
+
+    def work(offset):
+        return [(i, ek.solve(panda, targets[i], q0=Qs[i], seed=i, **BUDGET).q)
+                for i in range(offset, len(targets), 2)]
+
+    with ThreadPoolExecutor(2) as pool:
+        for chunk in pool.map(work, (0, 1)):
+            for i, q in chunk:
+                assert np.array_equal(q, expected[i])
+
+
+def test_a_solver_handed_to_another_thread_uses_that_threads_buffers(panda, cases):
+    """An IKSolver made and used in one thread, then used in another while the first keeps solving (the same goal
+    stack: the same kernel workspace key), gives the answers of the general path in both."""
+    import threading
+
+    targets, Qs = cases
+    solver = ek.IKSolver(panda, **BUDGET)
+    solver.solve(targets[0], seed=0)
+    out = {}
+
+    def other():
+        out["b"] = [solver.solve(targets[i], Qs[i], seed=i).q for i in range(0, 20, 2)]
+
+    thread = threading.Thread(target=other)
+    thread.start()
+    mine = [ek.solve(panda, targets[i], q0=Qs[i], seed=i, **BUDGET).q for i in range(1, 20, 2)]
+    thread.join()
+    for k, i in enumerate(range(0, 20, 2)):
+        assert np.array_equal(out["b"][k], general(panda, targets[i], seed=i, q0=Qs[i], **BUDGET).q)
+    for k, i in enumerate(range(1, 20, 2)):
+        assert np.array_equal(mine[k], general(panda, targets[i], seed=i, q0=Qs[i], **BUDGET).q)
