@@ -282,3 +282,18 @@ def test_a_solver_handed_to_another_thread_uses_that_threads_buffers(panda, case
         assert np.array_equal(out["b"][k], general(panda, targets[i], seed=i, q0=Qs[i], **BUDGET).q)
     for k, i in enumerate(range(1, 20, 2)):
         assert np.array_equal(mine[k], general(panda, targets[i], seed=i, q0=Qs[i], **BUDGET).q)
+
+
+def test_goal_sets_and_a_closed_form_tip_goal_take_the_fast_path_too(panda):
+    """An IKSolver (and solve's kept one) hands a goal set to memetic's goal-set search, as memetic does, and a
+    closed form's one goal on the tip to that closed form (a failure of either before the fast path knew them)."""
+    T = panda.fk(np.full(panda.n, 0.3))
+    far = pin.SE3(T.rotation, T.translation + np.array([2.0, 0.0, 0.0]))  # beyond the Panda's reach
+    solver = ek.IKSolver(panda)
+    for r in (solver.solve([Pose(panda.tip, [far, T])], seed=0), ek.solve(panda, [Pose(panda.tip, [far, T])], seed=0)):
+        assert r.success and r.chosen == [1]
+        assert np.linalg.norm(panda.fk(r.q).translation - T.translation) <= 1e-6
+    puma = ek.load_robot("puma3r")
+    p = puma.fk(np.array([0.3, -0.5, 0.8])).translation
+    r = ek.IKSolver(puma, method="algebraic").solve([Position(puma.tip, p)])
+    assert r.success and len(r.solutions) == 4 and np.linalg.norm(puma.fk(r.q).translation - p) <= 1e-6

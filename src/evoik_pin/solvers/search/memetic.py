@@ -188,9 +188,6 @@ class _Search:
 #: The search over goal sets (:func:`.choose.choose`), which puts itself here when imported (the solver registry
 #: imports it with the solvers): memetic cannot import it, choose builds on memetic.
 GOAL_SET_SEARCH: dict = {}
-#: memetic's options in the order :func:`check_options` returns them (``MemeticPlan.options``).
-OPTION_NAMES = ("timeout", "max_restarts", "population", "generations", "polish_count", "table_size", "table_seeds",
-                "table_offset", "batch", "iterations", "engine")
 
 
 @register("memetic", "Memetic IK: Levenberg-Marquardt on the SE(3) error from q0 and a seed table, then DE "
@@ -254,7 +251,7 @@ def memetic(
                        generations=generations, polish_count=polish_count, table_size=table_size,
                        table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
                        engine=engine)
-    return _solve(plan, problem, rng, t_setup)
+    return plan.solve(problem, rng, t_setup)
 
 
 class MemeticPlan:
@@ -277,6 +274,10 @@ class MemeticPlan:
                  polish_count=8, table_size=None, table_seeds=None, table_offset=0, batch=1,
                  iterations=DEFAULT_ITERATIONS, engine="compiled") -> None:
         self.robot = robot
+        #: the options as given (choose reads None as its own defaults: a goal set's table size, prefer's steps)
+        self.given = dict(timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
+                          polish_count=polish_count, table_size=table_size, table_seeds=table_seeds,
+                          table_offset=table_offset, batch=batch, iterations=iterations, engine=engine)
         self.options = check_options(
             timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
             polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
@@ -312,7 +313,7 @@ class MemeticPlan:
         if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
             if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
                 get_solver("memetic")
-            return GOAL_SET_SEARCH["choose"](problem, rng, **dict(zip(OPTION_NAMES, self.options, strict=True)))
+            return GOAL_SET_SEARCH["choose"](problem, rng, **self.given)
         return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
 
