@@ -26,6 +26,7 @@ from .objectives import (
     position_errors,
 )
 from .robot import Robot
+from .solvers.lm.layout import KIND_BEYOND_FRAME
 from .solvers.options import check_positive
 from .target import MAX_TARGET_NORM, Target
 
@@ -210,7 +211,9 @@ class IKProblem:
         pos = np.sqrt((d * d).sum(axis=2))
         rot = np.zeros_like(pos)
         for g, goal in enumerate(self.goals):
-            if goal.has_orientation:
+            if goal.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: their own violation
+                pos[:, g], rot[:, g] = goal.population_errors(self.robot, Q)
+            elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
         return pos, rot
 
@@ -223,7 +226,8 @@ class IKProblem:
         """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order."""
         fids = [self.robot.frame_id(g.frame) for g in self.goals]
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
-        return [g.errors(T) for g, T in zip(self.goals, poses, strict=True)]
+        return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
+                for g, T in zip(self.goals, poses, strict=True)]
 
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors

@@ -11,6 +11,10 @@ frame), with its target expressed in the robot's base frame (for a floating base
   target, m and rad); its target a (4, 4) homogeneous matrix, a ``pin.SE3`` or a :class:`~evoik_pin.problem.Target`
   with a rotation;
 * :class:`Position`: position only (3 rows, m); its target a 3-vector (m).
+* :class:`CenterOfMass`: the whole robot's centre of mass at a point (on chosen axes), or its ground projection
+  inside the support polygon of contact points (``support={frame: points}`` or ``support=[frames]``), at least
+  ``margin`` (m) inside its edges;
+* :class:`RelativePose`: one frame's pose seen from another (``frame_a``, ``frame_b``, T: two hands holding a box).
 
 Each goal checks its inputs when made (an :mod:`evoik_pin.errors` class naming what is wrong) and packs itself into
 the LM kernel's goal stack (:class:`~evoik_pin.solvers.lm.layout.GoalStack`: kind, frame, weight, tolerances);
@@ -21,8 +25,11 @@ all be met settle on the compromise the weights make; it is met when its positio
 """
 
 from .binding import bind, is_goal_list
+from .center_of_mass import CenterOfMass
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .pose import Pose
 from .position import Position
+from .relative_pose import RelativePose
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "Pose", "Position", "bind", "is_goal_list"]
+__all__ += ["CenterOfMass", "RelativePose"]

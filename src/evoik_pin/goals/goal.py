@@ -50,14 +50,18 @@ class Goal:
     def _check_common(self) -> None:
         if not isinstance(self.frame, str) or not self.frame:
             raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {self.frame!r}")
-        weight = number(self.weight, f"weight of the goal on {self.frame!r}", "a finite number > 0")
+        self._check_numbers(f"the goal on {self.frame!r}")
+
+    def _check_numbers(self, what: str) -> None:
+        """Check and set weight and tolerances; ``what`` names the goal in the messages."""
+        weight = number(self.weight, f"weight of {what}", "a finite number > 0")
         if weight <= 0:
-            raise OptionError(f"weight of the goal on {self.frame!r} must be > 0, got {self.weight!r}")
-        tol = number(self.tolerance, f"tolerance (m) of the goal on {self.frame!r}", "a finite number >= 0")
+            raise OptionError(f"weight of {what} must be > 0, got {self.weight!r}")
+        tol = number(self.tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
         rtol = tol if self.rotation_tolerance is None else number(
-            self.rotation_tolerance, f"rotation_tolerance (rad) of the goal on {self.frame!r}", "a finite number >= 0")
+            self.rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
         if tol < 0 or rtol < 0:
-            raise OptionError(f"tolerances of the goal on {self.frame!r} must be >= 0, got {self.tolerance!r} m and "
+            raise OptionError(f"tolerances of {what} must be >= 0, got {self.tolerance!r} m and "
                               f"{self.rotation_tolerance!r} rad")
         object.__setattr__(self, "weight", weight)
         object.__setattr__(self, "tolerance", tol)
