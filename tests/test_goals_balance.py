@@ -52,7 +52,7 @@ def check_com(robot, q):
     model = robot.model
     if model.inertias[0].mass == robot.full_model.inertias[0].mass and not robot.mimic_joints:
         data = model.createData()
-        J = pin.jacobianCenterOfMass(model, data, robot.to_pinocchio(q))
+        J = np.reshape(pin.jacobianCenterOfMass(model, data, robot.to_pinocchio(q)), (3, -1))
         assert np.allclose(E, robot.tree.base_R @ J, atol=1e-10)
 
 
@@ -63,3 +63,151 @@ def test_compiled_center_of_mass_and_jacobian_equal_pinocchio(name, kw, rng):
     robot = ek.load_robot(name, **kw)
     for q in robot.random_configurations(2, rng):
         check_com(robot, q)
+
+
+@st.composite
+def massive_trees(draw):
+    """URDF of a random tree with random inertias: 1-8 joints (revolute, continuous, prismatic, fixed; some
+    mimicking an earlier one), each child of a random earlier link; every link with a random mass (some 0), centre
+    and inertia."""
+    count = draw(st.integers(1, 8))
+    names, links, joints, movable = ["root"], [], [], []
+    floats = st.floats(-0.4, 0.4)
+    for i in range(count):
+        parent = draw(st.sampled_from(names))
+        kind = draw(st.sampled_from(["revolute", "continuous", "prismatic", "fixed"]))
+        xyz = " ".join(f"{v:.6g}" for v in draw(st.lists(floats, min_size=3, max_size=3)))
+        rpy = " ".join(f"{v:.6g}" for v in draw(st.lists(st.floats(-3.1, 3.1), min_size=3, max_size=3)))
+        axis = np.array(draw(st.lists(st.floats(-1, 1), min_size=3, max_size=3)))
+        axis = axis if np.linalg.norm(axis) >= 0.1 else np.array([0.0, 0.0, 1.0])
+        mimic = None
+        if kind != "fixed" and movable and draw(st.integers(0, 3)) == 0:
+            mimic = (draw(st.sampled_from(movable)), draw(st.floats(-2, 2)), draw(st.floats(-0.3, 0.3)))
+        lo, hi = (-0.5, 0.5) if kind == "prismatic" else (-3.0, 3.0)
+        joints.append(joint_xml(f"j{i}", kind, parent, f"l{i}", xyz=xyz, rpy=rpy,
+                                axis=" ".join(f"{v:.6g}" for v in axis), lo=-50 if mimic else lo,
+                                hi=50 if mimic else hi, mimic=mimic))
+        names.append(f"l{i}")
+        if kind != "fixed" and mimic is None:
+            movable.append(f"j{i}")
+    if not movable:
+        joints.append(joint_xml("jm", "revolute", "root", "lm", xyz="0 0 0.1"))
+        names.append("lm")
+    for name in names:
+        mass = draw(st.sampled_from([0.0, draw(st.floats(0.1, 5.0))]))
+        c = " ".join(f"{v:.6g}" for v in draw(st.lists(floats, min_size=3, max_size=3)))
+        links.append(f'<link name="{name}"><inertial><origin xyz="{c}" rpy="0.1 0.2 0.3"/><mass value="{mass}"/>'
+                     '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>')
+    return f'<?xml version="1.0"?>\n<robot name="tree">{"".join(links)}{"".join(joints)}</robot>'
+
+
+@settings(max_examples=40, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
+@given(xml=massive_trees(), floating=st.booleans(), seed=st.integers(0, 2**16), data=st.data())
+def test_compiled_center_of_mass_of_random_trees_equals_pinocchio(xml, floating, seed, data):
+    links = [f"l{i}" for i in range(xml.count("<joint "))] if "lm" not in xml else ["lm"]
+    tips = data.draw(st.one_of(st.just("all"), st.lists(st.sampled_from(links), min_size=1, max_size=2, unique=True)))
+    try:
+        robot = ek.load_robot(xml, tips=tips, floating_base=floating)
+    except ek.errors.RobotLoadError:  # chains of fixed joints only
+        return
+    if not robot.mass_constants.total > 0:
+        with pytest.raises(TargetError, match="no mass"):
+            bind(robot, [CenterOfMass(point=np.zeros(3))])
+        return
+    for q in robot.random_configurations(2, np.random.default_rng(seed)):
+        check_com(robot, q)
+
+
+SOLES = ["left_sole_link", "right_sole_link"]
+
+
+def test_support_rows_are_the_distance_outside_the_shrunk_polygon(talos, rng):
+    """On Talos, whose soles move with the base: |e| is the distance from the CoM's ground point to the convex hull
+    of the soles' contact points shrunk by margin + tolerance (0 inside), Pinocchio's kinematics the judge."""
+    margin = 0.02
+    goal = CenterOfMass(support=SOLES, margin=margin)
+    inside = outside = 0
+    q0 = np.zeros(talos.n)
+    Q = np.vstack([q0, q0 + 0.3 * rng.standard_normal((30, talos.n))])
+    Q = np.clip(Q, talos.lower, talos.upper)
+    for q in Q:
+        e, E, ge = rows(talos, [goal], q)
+        ground = np.concatenate([contact_points(talos, f) @ talos.fk(q, f).rotation.T + talos.fk(q, f).translation
+                                 for f in SOLES])
+        d = polygon_distance(com_of(talos, q)[:2], ground, margin + goal.tolerance)
+        assert ge[0, 0] == pytest.approx(d, abs=1e-9) and np.linalg.norm(e) == pytest.approx(d, abs=1e-9)
+        if d == 0:
+            assert not E.any()
+            inside += 1
+        else:
+            outside += 1
+    assert inside and outside
+
+
+@pytest.mark.parametrize("square", [(-0.05, 0.05), (0.2, 0.3), (-0.4, 0.4)])
+def test_support_jacobian_is_the_finite_difference_over_fixed_contact_points(square, rng):
+    """Contact points on a frame no joint moves (Panda's base link): the 2 rows' Jacobian equals their finite
+    differences, inside (zero), on an edge and at a vertex of the shrunk square."""
+    robot = ek.load_robot("panda")
+    lo, hi = square
+    pts = np.array([[lo, lo, 0], [hi, lo, 0], [hi, hi, 0], [lo, hi, 0], [0.5 * (lo + hi), lo, 0]])
+    goal = CenterOfMass(support={"panda_link0": pts}, margin=0.01)
+    for q in robot.random_configurations(6, rng):
+        e, E, _ = rows(robot, [goal], q)
+        assert np.allclose(E, numeric_jacobian(lambda x: rows(robot, [goal], x)[0], q), atol=1e-6)
+
+
+def test_relative_pose_rows_are_log6_and_their_finite_differences(rng):
+    """Baxter's right gripper seen from its left one, and Talos's hands with a floating base: e = log6(T^-1 T_a^-1
+    T_b) by Pinocchio, E its finite differences, the errors (|position|, angle)."""
+    for robot, a, b in ((ek.load_robot("baxter", tips="all"), "left_gripper", "right_gripper"),
+                        (ek.load_robot("talos", floating_base=True), "arm_left_7_link", "arm_right_7_link")):
+        T = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.4, 2.9), np.array([0.05, -0.3, 0.02]))
+        goal = RelativePose(a, b, T, weight=2.0)
+        for q in robot.random_configurations(3, rng):
+            e, E, ge = rows(robot, [goal], q)
+            M = T.inverse() * robot.fk(q, a).inverse() * robot.fk(q, b)
+            assert np.allclose(e / np.sqrt(2.0), pin.log6(M).vector, atol=1e-10)
+            assert np.allclose(ge[0], goal.robot_errors(robot, q), atol=1e-10)
+            assert np.allclose(E, numeric_jacobian(lambda x: rows(robot, [goal], x)[0], q), atol=1e-6)
+            pos, rot = goal.population_errors(robot, q[None])
+            assert np.allclose([pos[0], rot[0]], ge[0], atol=1e-10)
+
+
+def test_goals_check_their_inputs(talos):
+    with pytest.raises(TargetError, match="exactly one"):
+        CenterOfMass()
+    with pytest.raises(TargetError, match="exactly one"):
+        CenterOfMass(point=[0, 0, 1], support=SOLES)
+    with pytest.raises(TargetError, match="3-vector"):
+        CenterOfMass(point=[0, 0])
+    for bad in ("xyw", "", "xx", 3):
+        with pytest.raises(OptionError, match="axes"):
+            CenterOfMass(point=[0, 0, 1], axes=bad)
+    assert CenterOfMass(point=[0, 0, 1], axes="yx").axes == "xy"
+    with pytest.raises(OptionError, match="margin .* >= 0"):
+        CenterOfMass(support=SOLES, margin=-0.01)
+    for bad in ({"foot": np.zeros((4, 2))}, {"foot": np.zeros((0, 3))}, {"foot": [[0, 0, np.nan]]}, {"foot": "x"}):
+        with pytest.raises(TargetError, match="support points of 'foot'"):
+            CenterOfMass(support=bad)
+    with pytest.raises(TargetError, match="names no frame"):
+        CenterOfMass(support=[])
+    with pytest.raises(OptionError, match="weight of the centre-of-mass goal"):
+        CenterOfMass(point=[0, 0, 1], weight=0)
+    with pytest.raises(FrameError, match="no frame 'left_sol'"):
+        bind(talos, [CenterOfMass(support=["left_sol"])])
+    T = np.eye(4)
+    with pytest.raises(FrameError, match="twice"):
+        RelativePose("a", "a", T)
+    with pytest.raises(TargetError, match="RelativePose of 'b' seen from 'a'"):
+        RelativePose("a", "b", [1, 2, 3])
+    with pytest.raises(FrameError, match="no frame 'hand'"):
+        bind(talos, [RelativePose("arm_left_7_link", "hand", T)])
+    with pytest.raises(FrameError, match="relative to"):
+        bind(talos, [RelativePose("left_sole_link", "leg_left_6_link", T)])
+    massless = ek.load_robot('<?xml version="1.0"?><robot name="m"><link name="a"/><link name="b"/>'
+                             + joint_xml("j", "revolute", "a", "b") + "</robot>")
+    with pytest.raises(TargetError, match="no mass"):
+        bind(massless, [CenterOfMass(point=[0, 0, 0])])
+    with pytest.raises(FrameError, match="carries no collision geometry"):
+        contact_points(massless, "b")
