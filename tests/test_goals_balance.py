@@ -4,6 +4,8 @@ with a floating base, a chain, and random trees with random inertias; the suppor
 relative pose's rows against finite differences; populations' violations; and memetic solves judged by
 Pinocchio."""
 
+import re
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -211,3 +213,43 @@ def test_goals_check_their_inputs(talos):
         bind(massless, [CenterOfMass(point=[0, 0, 0])])
     with pytest.raises(FrameError, match="carries no collision geometry"):
         contact_points(massless, "b")
+
+
+# ---------------------------------------------------------------------------------------------- files and CLI
+def test_goals_files_keep_the_new_kinds(tmp_path):
+    from evoik_pin.goals_file import load_goals, save_goals
+
+    T = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.1, 0), np.array([0.0, 0.01, 0.3]))
+    goals = [CenterOfMass(point=[0.1, -0.2, 0.9], axes="xy", weight=2.0),
+             CenterOfMass(support=SOLES, margin=0.02),
+             CenterOfMass(support={"left_sole_link": [[0.1, 0.05, 0], [-0.1, 0.05, 0], [0, -0.05, 0]]}, tolerance=1e-8),
+             RelativePose("left_gripper", "right_gripper", T, rotation_tolerance=1e-5)]
+    for ext in ("yaml", "json"):
+        back = load_goals(save_goals(goals, tmp_path / f"g.{ext}"))
+        assert [repr(g) for g in back] == [repr(g) for g in goals]
+        assert np.array_equal(back[3].target.homogeneous, T.homogeneous)
+        assert np.array_equal(back[2].support["left_sole_link"], goals[2].support["left_sole_link"])
+    bad = {"kind: center_of_mass\n  frame: x": "unknown key.*'frame'",
+           "kind: center_of_mass": "needs target",
+           "kind: center_of_mass\n  support: [a]\n  margin: -1": "margin",
+           "kind: center_of_mass\n  support: {a: [[1, 2]]}": "support points of 'a'",
+           "kind: center_of_mass\n  target: {position: [0, 0, 0]}\n  axes: w": "axes",
+           "kind: relative_pose\n  frame: b\n  target: {position: [0, 0, 0], rpy: [0, 0, 0]}": "missing field 'frame_a'"}
+    for text, match in bad.items():
+        path = tmp_path / "bad.yaml"
+        path.write_text(f"goals:\n- {text}\n")
+        with pytest.raises(ek.errors.GoalsFileError, match=match):
+            load_goals(path)
+
+
+def test_cli_solves_a_standing_goals_file(talos, tmp_path, capsys):
+    from evoik_pin.cli import main
+    from evoik_pin.goals_file import save_goals
+
+    q = np.zeros(talos.n)
+    q[2] = 1.02
+    goals = [Pose(f, talos.fk(q, f)) for f in SOLES] + [CenterOfMass(support=SOLES, margin=0.02)]
+    path = save_goals(goals, tmp_path / "stand.yaml", robot=talos)
+    code = main(["solve", "talos", "--goals", str(path), "--timeout", "none", "--option", "max_restarts=3"])
+    out = capsys.readouterr().out
+    assert code == 0 and re.search(r"2  \(whole robot\) +center_of_mass +0.000e\+00 +free +yes", out)

@@ -391,6 +391,8 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
                      "tolerance_m": goal.tolerance,
                      "rotation_tolerance_rad": goal.rotation_tolerance if goal.has_orientation else None,
                      "weight": goal.weight})
+        if getattr(goal, "frame_a", None):  # a relative pose: frame seen from frame_a
+            rows[-1]["frame_a"] = goal.frame_a
     info = {
         "robot": robot.name,
         "floating_base": robot.floating_base,
@@ -442,9 +444,12 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
 
 def _print_goal_errors(rows: list[dict]) -> None:
     """One line per goal: frame, kind, position error (m), rotation error (rad, or "free"), met."""
-    width = max(len("frame"), *(len(r["frame"]) for r in rows))
+    names = [r["frame"] if r["frame"] is not None else "(whole robot)" for r in rows]  # a centre of mass: no frame
+    names = [f"{r['frame_a']} -> {name}" if r.get("frame_a") else name for r, name in zip(rows, names, strict=True)]
+    width = max(len("frame"), *(len(name) for name in names))
     print(f"  #  {'frame':{width}s}  kind      position error (m)  rotation error (rad)  met")
-    for k, r in enumerate(rows):
+    for k, (r, name) in enumerate(zip(rows, names, strict=True)):
+        r = {**r, "frame": name}
         rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
         print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:8s}  {r['position_error_m']:<18.3e}  {rot:<20s}  "
               f"{'yes' if r['met'] else 'NO'}")
