@@ -253,3 +253,74 @@ def test_cli_solves_a_standing_goals_file(talos, tmp_path, capsys):
     code = main(["solve", "talos", "--goals", str(path), "--timeout", "none", "--option", "max_restarts=3"])
     out = capsys.readouterr().out
     assert code == 0 and re.search(r"2  \(whole robot\) +center_of_mass +0.000e\+00 +free +yes", out)
+
+
+# ---------------------------------------------------------------------------------------------- populations, solves
+def test_population_violations_follow_the_goals_errors(talos, rng):
+    T = pin.SE3(np.eye(3), np.array([0.0, -0.4, 0.0]))
+    goals = [CenterOfMass(point=[0.0, 0.0, 0.8], axes="xz"), CenterOfMass(support=SOLES, margin=0.01),
+             RelativePose("arm_left_7_link", "arm_right_7_link", T)]
+    problem = IKProblem(talos, goals)
+    q0 = np.zeros(talos.n)
+    Q = np.clip(q0 + 0.3 * rng.standard_normal((12, talos.n)), talos.lower, talos.upper)
+    pos, rot = problem._goal_population_errors(Q)
+    ev = problem.evaluate(Q)
+    assert np.allclose(ev.position_error, pos.max(axis=1)) and ev.orientation_error is not None
+    for q, p, r in zip(Q, pos, rot, strict=True):
+        errors = problem.goal_errors(q)
+        assert p[0] == pytest.approx(errors[0][0], abs=1e-12) and errors[0][1] is None
+        d = errors[1][0]
+        assert (p[1] == 0) == (d == 0) and p[1] <= d + 1e-12  # the half-plane violation: 0 inside, below the distance
+        assert p[2] == pytest.approx(errors[2][0], abs=1e-12) and r[2] == pytest.approx(errors[2][1], abs=1e-9)
+
+
+def standing(robot, margin=0.02):
+    q = np.zeros(robot.n)
+    q[2] = 1.02
+    return [Pose(f, robot.fk(q, f)) for f in SOLES] + [CenterOfMass(support=SOLES, margin=margin)]
+
+
+def test_memetic_stands_talos_with_its_hands_on_targets(talos, rng):
+    """Soles fixed, CoM over them (2 cm in), both hands on targets reached by a standing configuration: every answer
+    meets every goal by Pinocchio's kinematics, its CoM projection inside the shrunk polygon."""
+    stance = standing(talos)
+    for i in range(4):
+        start = talos.random_configurations(1, rng)[0]
+        start[:6] = 0.0, 0.0, 1.02, 0.0, 0.0, 0.0
+        reached = ek.solve(talos, stance, q0=start, seed=i, timeout=None, max_restarts=2)
+        assert reached.success
+        hands = [Pose(f, talos.fk(reached.q, f)) for f in ("arm_left_7_link", "arm_right_7_link")]
+        r = ek.solve(talos, stance + hands, seed=i, timeout=None, max_restarts=5)
+        assert r.success and talos.within_bounds(r.q)
+        ground = np.concatenate([contact_points(talos, f) @ talos.fk(r.q, f).rotation.T + talos.fk(r.q, f).translation
+                                 for f in SOLES])
+        assert polygon_distance(com_of(talos, r.q)[:2], ground, 0.02) == 0.0 and r.goal_errors[2] == (0.0, None)
+        for g in stance[:2] + hands:
+            T = talos.fk(r.q, g.frame)
+            assert np.linalg.norm(T.translation - g.target.translation) <= 1e-6
+            assert np.linalg.norm(pin.log3(g.target.rotation.T @ T.rotation)) <= 1e-6
+
+
+def test_memetic_and_de_put_the_centre_of_mass_on_a_point(rng):
+    robot = ek.load_robot("panda")
+    target = com_of(robot, robot.random_configurations(1, rng)[0])
+    for method, options in (("memetic", {"timeout": None, "max_restarts": 3}),
+                            ("de", {"tolerance": 1e-3})):
+        goal = CenterOfMass(point=target, axes="xyz", tolerance=options.pop("tolerance", 1e-6))
+        r = ek.solve(robot, [goal], method=method, seed=1, **options)
+        assert r.success and np.linalg.norm(com_of(robot, r.q) - target) <= goal.tolerance
+
+
+def test_memetic_holds_a_box_between_baxters_grippers(rng):
+    robot = ek.load_robot("baxter", tips=["left_gripper", "right_gripper"])
+    box = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0, 0), np.array([0.0, 0.0, 0.3]))
+    rel = RelativePose("left_gripper", "right_gripper", box)
+    for i in range(4):
+        held = ek.solve(robot, [rel], q0=robot.random_configurations(1, rng)[0], seed=i, timeout=None,
+                        max_restarts=2)
+        assert held.success
+        r = ek.solve(robot, [rel, Pose("left_gripper", robot.fk(held.q, "left_gripper"))], seed=i, timeout=None,
+                     max_restarts=5)
+        assert r.success
+        M = robot.fk(r.q, "left_gripper").actInv(robot.fk(r.q, "right_gripper"))
+        assert np.linalg.norm(pin.log6(box.actInv(M)).vector) <= 2e-6
