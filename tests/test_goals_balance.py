@@ -171,7 +171,7 @@ def test_relative_pose_rows_are_log6_and_their_finite_differences(rng):
             M = T.inverse() * robot.fk(q, a).inverse() * robot.fk(q, b)
             assert np.allclose(e / np.sqrt(2.0), pin.log6(M).vector, atol=1e-10)
             assert np.allclose(ge[0], goal.robot_errors(robot, q), atol=1e-10)
-            assert np.allclose(E, numeric_jacobian(lambda x: rows(robot, [goal], x)[0], q), atol=1e-6)
+            assert np.allclose(E, numeric_jacobian(lambda x, r=robot, g=goal: rows(r, [g], x)[0], q), atol=1e-6)
             pos, rot = goal.population_errors(robot, q[None])
             assert np.allclose([pos[0], rot[0]], ge[0], atol=1e-10)
 
@@ -234,7 +234,8 @@ def test_goals_files_keep_the_new_kinds(tmp_path):
            "kind: center_of_mass\n  support: [a]\n  margin: -1": "margin",
            "kind: center_of_mass\n  support: {a: [[1, 2]]}": "support points of 'a'",
            "kind: center_of_mass\n  target: {position: [0, 0, 0]}\n  axes: w": "axes",
-           "kind: relative_pose\n  frame: b\n  target: {position: [0, 0, 0], rpy: [0, 0, 0]}": "missing field 'frame_a'"}
+           "kind: relative_pose\n  frame: b\n  target: {position: [0, 0, 0], rpy: [0, 0, 0]}":
+               "missing field 'frame_a'"}
     for text, match in bad.items():
         path = tmp_path / "bad.yaml"
         path.write_text(f"goals:\n- {text}\n")

@@ -87,7 +87,10 @@ problems:
 
 
 def test_goal_kinds_are_the_goal_classes():
-    assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {"pose": Pose, "position": Position}
+    from evoik_pin.goals import CenterOfMass, RelativePose
+
+    assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {
+        "pose": Pose, "position": Position, "center_of_mass": CenterOfMass, "relative_pose": RelativePose}
 
 
 # ------------------------------------------------------------------ errors

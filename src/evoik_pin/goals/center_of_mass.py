@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -196,6 +197,18 @@ def contact_points(robot, frame: str) -> np.ndarray:
     through its placement). A sole frame (z up, on the foot) gets the corners of the foot's bottom.
 
     Raises FrameError when the frame's joint carries no collision geometry."""
+    known = _CONTACTS.setdefault(robot, {})
+    if frame not in known:  # every solve binds its goals and reports their errors: read the geometry once
+        known[frame] = _geometry_contacts(robot, frame)
+    return known[frame].copy()
+
+
+#: Contact points from collision geometry, per robot (weakly: the cache keeps no robot alive) and frame.
+_CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _geometry_contacts(robot, frame: str) -> np.ndarray:
+    """:func:`contact_points`, uncached."""
     model = robot.model
     f = model.frames[robot.frame_id(frame)]
     geom = robot.collision_model

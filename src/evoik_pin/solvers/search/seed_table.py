@@ -17,8 +17,16 @@ import pinocchio as pin
 
 from ...lie import rpy
 from ...problem import Target
-from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
-from ..lm.layout import KIND_BEYOND_FRAME, KIND_RELATIVE_POSE
+from ..lm.layout import (
+    KIND_BEYOND_FRAME,
+    KIND_PLANAR,
+    KIND_PLANAR_YAW,
+    KIND_POSE,
+    KIND_POSITION,
+    KIND_RELATIVE_POSE,
+    encode_targets,
+    target_kind,
+)
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
@@ -231,8 +239,8 @@ class SeedTable:
             first = 6 if robot.floating_base else 0
             hit = []
             for g, goal in enumerate(goals):
-                F = np.concatenate(self._goal_feature_blocks(self.goal_spec(goals)[g:g + 1], P[:, g][None], R[:, g][None]),
-                                   axis=1)
+                spec = self.goal_spec(goals)[g:g + 1]
+                F = np.concatenate(self._goal_feature_blocks(spec, P[:, g][None], R[:, g][None]), axis=1)
                 seeded = goal.kind < KIND_BEYOND_FRAME or _anchor(goal, goals) is not None
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
