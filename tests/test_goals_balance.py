@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_robot_tree import random_trees
 from urdf_helpers import joint_xml
 
 import evoik_pin as ek
@@ -69,38 +70,16 @@ def test_compiled_center_of_mass_and_jacobian_equal_pinocchio(name, kw, rng):
 
 @st.composite
 def massive_trees(draw):
-    """URDF of a random tree with random inertias: 1-8 joints (revolute, continuous, prismatic, fixed; some
-    mimicking an earlier one), each child of a random earlier link; every link with a random mass (some 0), centre
-    and inertia."""
-    count = draw(st.integers(1, 8))
-    names, links, joints, movable = ["root"], [], [], []
-    floats = st.floats(-0.4, 0.4)
-    for i in range(count):
-        parent = draw(st.sampled_from(names))
-        kind = draw(st.sampled_from(["revolute", "continuous", "prismatic", "fixed"]))
-        xyz = " ".join(f"{v:.6g}" for v in draw(st.lists(floats, min_size=3, max_size=3)))
-        rpy = " ".join(f"{v:.6g}" for v in draw(st.lists(st.floats(-3.1, 3.1), min_size=3, max_size=3)))
-        axis = np.array(draw(st.lists(st.floats(-1, 1), min_size=3, max_size=3)))
-        axis = axis if np.linalg.norm(axis) >= 0.1 else np.array([0.0, 0.0, 1.0])
-        mimic = None
-        if kind != "fixed" and movable and draw(st.integers(0, 3)) == 0:
-            mimic = (draw(st.sampled_from(movable)), draw(st.floats(-2, 2)), draw(st.floats(-0.3, 0.3)))
-        lo, hi = (-0.5, 0.5) if kind == "prismatic" else (-3.0, 3.0)
-        joints.append(joint_xml(f"j{i}", kind, parent, f"l{i}", xyz=xyz, rpy=rpy,
-                                axis=" ".join(f"{v:.6g}" for v in axis), lo=-50 if mimic else lo,
-                                hi=50 if mimic else hi, mimic=mimic))
-        names.append(f"l{i}")
-        if kind != "fixed" and mimic is None:
-            movable.append(f"j{i}")
-    if not movable:
-        joints.append(joint_xml("jm", "revolute", "root", "lm", xyz="0 0 0.1"))
-        names.append("lm")
-    for name in names:
+    """A random tree of test_robot_tree (revolute, continuous, prismatic, fixed and mimic joints) whose every link
+    gets a random mass (some 0) at a random centre, with an inertia."""
+    xml = draw(random_trees())
+    for name in re.findall(r'<link name="([^"]+)"/>', xml):
         mass = draw(st.sampled_from([0.0, draw(st.floats(0.1, 5.0))]))
-        c = " ".join(f"{v:.6g}" for v in draw(st.lists(floats, min_size=3, max_size=3)))
-        links.append(f'<link name="{name}"><inertial><origin xyz="{c}" rpy="0.1 0.2 0.3"/><mass value="{mass}"/>'
-                     '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>')
-    return f'<?xml version="1.0"?>\n<robot name="tree">{"".join(links)}{"".join(joints)}</robot>'
+        c = " ".join(f"{v:.6g}" for v in draw(st.lists(st.floats(-0.4, 0.4), min_size=3, max_size=3)))
+        inertial = (f'<inertial><origin xyz="{c}" rpy="0.1 0.2 0.3"/><mass value="{mass}"/>'
+                    '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial>')
+        xml = xml.replace(f'<link name="{name}"/>', f'<link name="{name}">{inertial}</link>')
+    return xml
 
 
 @settings(max_examples=40, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
