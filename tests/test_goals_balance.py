@@ -304,3 +304,25 @@ def test_memetic_holds_a_box_between_baxters_grippers(rng):
         assert r.success
         M = robot.fk(r.q, "left_gripper").actInv(robot.fk(r.q, "right_gripper"))
         assert np.linalg.norm(pin.log6(box.actInv(M)).vector) <= 2e-6
+
+
+def test_solve_many_batches_lists_of_the_new_kinds_by_their_numbers(talos, rng):
+    """Lists that differ only in a CoM goal's margin or axes, or a relative pose's first frame, are separate
+    structures (their kernel numbers differ); every answer meets its own goals by Pinocchio."""
+    q = np.zeros(talos.n)
+    q[:6] = 0.0, 0.0, 1.02, 0.0, 0.0, 0.0
+    soles = [Pose(f, talos.fk(q, f)) for f in SOLES]
+    T = talos.fk(q, "arm_left_7_link").actInv(talos.fk(q, "arm_right_7_link"))
+    lists = [soles + [CenterOfMass(support=SOLES, margin=m)] for m in (0.0, 0.03, 0.0)]
+    lists += [soles + [CenterOfMass(point=com_of(talos, q), axes=a)] for a in ("xy", "z")]
+    lists += [soles + [RelativePose(a, b, T)] for a, b in (("arm_left_7_link", "arm_right_7_link"),
+                                                           ("arm_right_7_link", "arm_left_7_link"))]
+    lists[-1][-1] = RelativePose("arm_right_7_link", "arm_left_7_link", T.inverse())
+    from evoik_pin.solvers.batch.goal_lists import structure
+
+    assert len({structure(g) for g in lists}) == 6
+    results = ek.solve_many(talos, lists, seed=0, workers=1)
+    for goals, r in zip(lists, results, strict=True):
+        assert r.success
+        for g, e in zip(goals, IKProblem(talos, goals).goal_errors(r.q), strict=True):
+            assert g.met(*e)

@@ -109,6 +109,12 @@ class CenterOfMass(Goal):
             aux[A_COM_BODIES + 5 * m:] = np.ravel(points)
         return aux, mc.subtree > 0.0
 
+    def batch_key(self) -> tuple:
+        """What this goal's kernel numbers depend on besides its target point (solve_many batches lists alike)."""
+        if self.support is None:
+            return (self.axes,)
+        return (self.margin, *((f, None if p is None else p.tobytes()) for f, p in self.support.items()))
+
     def robot_errors(self, robot, q) -> tuple[float, None]:
         """(error m, None) at ``q`` (n,), from Pinocchio's ``centerOfMass``: the distance over ``axes`` to the
         point, or the distance outside the support polygon shrunk by ``margin`` (0 inside)."""

@@ -79,6 +79,10 @@ class RelativePose(Goal):
         aux[A_REL_SIGNS:] = signs
         return aux, on_a | on_b
 
+    def batch_key(self) -> tuple:
+        """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
+        return (self.frame_a,)
+
     def robot_errors(self, robot, q) -> tuple[float, float]:
         """(position error m, rotation angle rad) at ``q`` (n,), from Pinocchio's kinematics."""
         rel = robot.fk(q, self.frame_a).actInv(robot.fk(q, self.frame))

@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import FrameError, TargetError
 from ...goals import Goal, bind, is_goal_list
-from ..lm.layout import G_WEIGHT, GoalArrays
+from ..lm.layout import G_WEIGHT, KIND_BEYOND_FRAME, GoalArrays
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
@@ -34,8 +34,10 @@ def is_goal_batch(targets) -> bool:
 
 def structure(goals) -> tuple:
     """What problems sharing a goal stack have in common: each goal's (frame, kind, weight, tolerance m,
-    rotation tolerance rad), in order."""
-    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance) for g in goals)
+    rotation tolerance rad), in order; for a goal beyond one frame also what its ``aux`` row holds
+    (``batch_key()``: a centre of mass's axes, margin and contact points, a relative pose's first frame)."""
+    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance)
+                 + (g.batch_key() if g.kind >= KIND_BEYOND_FRAME else ()) for g in goals)
 
 
 class GoalBlock:
@@ -140,7 +142,9 @@ class GoalTree:
 
         self.table = table
         # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
-        self.spec = tuple(zip(stack.spec[:, G_WEIGHT].tolist(), (bool(o) for o in stack.oriented), strict=True))
+        # (a goal beyond one frame has no target pose of its frame to rank by: weight 0)
+        weights = np.where(np.array(stack.kinds) >= KIND_BEYOND_FRAME, 0.0, stack.spec[:, G_WEIGHT]).tolist()
+        self.spec = tuple(zip(weights, (bool(o) for o in stack.oriented), strict=True))
         F, _ = table.goal_table_features(tuple(stack.frames), self.spec)
         self.index = np.arange(table.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
         self.tree = cKDTree(F[self.index])
