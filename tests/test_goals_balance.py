@@ -326,3 +326,15 @@ def test_solve_many_batches_lists_of_the_new_kinds_by_their_numbers(talos, rng):
         assert r.success
         for g, e in zip(goals, IKProblem(talos, goals).goal_errors(r.q), strict=True):
             assert g.met(*e)
+
+
+def test_viewer_marks_a_centre_of_mass_point_and_skips_goals_without_a_base_frame_target(talos):
+    from evoik_pin.viz import Viewer
+
+    q = np.zeros(talos.n)
+    q[2] = 1.02
+    goals = [Pose("left_sole_link", talos.fk(q, "left_sole_link")), CenterOfMass(point=[0.0, 0.0, 0.9]),
+             CenterOfMass(support=SOLES), RelativePose("arm_left_7_link", "arm_right_7_link", np.eye(4))]
+    with Viewer(talos) as v:
+        assert v.show_goals(goals, labels=False) == ["goals/left_sole_link", "goals/center_of_mass"]
+        assert v.scene["goals/center_of_mass"] == "goal point: center_of_mass"
