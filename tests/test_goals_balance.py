@@ -232,7 +232,7 @@ def test_cli_solves_a_standing_goals_file(talos, tmp_path, capsys):
     path = save_goals(goals, tmp_path / "stand.yaml", robot=talos)
     code = main(["solve", "talos", "--goals", str(path), "--timeout", "none", "--option", "max_restarts=3"])
     out = capsys.readouterr().out
-    assert code == 0 and re.search(r"2  \(whole robot\) +center_of_mass +0.000e\+00 +free +yes", out)
+    assert code == 0 and re.search(r"2  center of mass +center_of_mass +0.000e\+00 +free +yes", out)
 
 
 # ---------------------------------------------------------------------------------------------- populations, solves
@@ -338,3 +338,9 @@ def test_viewer_marks_a_centre_of_mass_point_and_skips_goals_without_a_base_fram
     with Viewer(talos) as v:
         assert v.show_goals(goals, labels=False) == ["goals/left_sole_link", "goals/center_of_mass"]
         assert v.scene["goals/center_of_mass"] == "goal point: center_of_mass"
+
+
+def test_an_unreachable_centre_of_mass_is_named_in_the_message(rng):
+    robot = ek.load_robot("panda")
+    r = ek.solve(robot, [CenterOfMass(point=[2.0, 0.0, 0.3])], seed=0, timeout=None, max_restarts=1)
+    assert not r.success and "goals not met: center of mass" in r.message and r.goal_errors[0][0] > 1.0

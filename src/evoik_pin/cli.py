@@ -391,8 +391,10 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
                      "tolerance_m": goal.tolerance,
                      "rotation_tolerance_rad": goal.rotation_tolerance if goal.has_orientation else None,
                      "weight": goal.weight})
-        if getattr(goal, "frame_a", None):  # a relative pose: frame seen from frame_a
-            rows[-1]["frame_a"] = goal.frame_a
+        if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
+            rows[-1]["label"] = goal.label
+            if getattr(goal, "frame_a", None):
+                rows[-1]["frame_a"] = goal.frame_a
     info = {
         "robot": robot.name,
         "floating_base": robot.floating_base,
@@ -444,8 +446,7 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
 
 def _print_goal_errors(rows: list[dict]) -> None:
     """One line per goal: frame, kind, position error (m), rotation error (rad, or "free"), met."""
-    names = [r["frame"] if r["frame"] is not None else "(whole robot)" for r in rows]  # a centre of mass: no frame
-    names = [f"{r['frame_a']} -> {name}" if r.get("frame_a") else name for r, name in zip(rows, names, strict=True)]
+    names = [r.get("label", r["frame"]) for r in rows]
     width = max(len("frame"), *(len(name) for name in names))
     print(f"  #  {'frame':{width}s}  kind      position error (m)  rotation error (rad)  met")
     for k, (r, name) in enumerate(zip(rows, names, strict=True)):

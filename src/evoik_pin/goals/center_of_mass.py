@@ -83,6 +83,11 @@ class CenterOfMass(Goal):
         """The frames this goal names (the support frames; none for a point)."""
         return [] if self.support is None else list(self.support)
 
+    @property
+    def label(self) -> str:
+        """How messages name this goal (it has no frame)."""
+        return "center of mass"
+
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
 

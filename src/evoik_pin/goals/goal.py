@@ -67,6 +67,11 @@ class Goal:
         object.__setattr__(self, "tolerance", tol)
         object.__setattr__(self, "rotation_tolerance", rtol)
 
+    @property
+    def label(self) -> str:
+        """How messages name this goal: its frame (goals beyond one frame say more)."""
+        return self.frame
+
     def encode(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
         """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal."""
         raise NotImplementedError

@@ -56,6 +56,11 @@ class RelativePose(Goal):
         """The frames this goal names: frame_a, frame_b."""
         return [self.frame_a, self.frame]
 
+    @property
+    def label(self) -> str:
+        """How messages name this goal: ``frame_a -> frame_b``."""
+        return f"{self.frame_a} -> {self.frame}"
+
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)
 
