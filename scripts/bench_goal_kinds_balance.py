@@ -197,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--n", type=int, default=200, help="problems per task (default 200)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--timeout", type=float, default=0.005, help="memetic's budget for Talos (s)")
+X
     parser.add_argument("--box-timeout", type=float, default=0.05, help="memetic's budget for Baxter (s)")
     parser.add_argument("--docs", action="store_true", help="append the report to docs/BENCHMARKS.md")
     args = parser.parse_args(argv)
