@@ -270,9 +270,15 @@ def _world_points(robot, q, support: dict) -> np.ndarray:
 def com_of(robot, q) -> np.ndarray:
     """The robot's centre of mass (m, base frame) at ``q`` (n,), Pinocchio's ``centerOfMass`` of the whole URDF
     (:attr:`~evoik_pin.robot.Robot.full_model` at ``full_configuration(q)``)."""
-    model = robot.full_model
-    c = pin.centerOfMass(model, model.createData(), robot.full_configuration(q))
+    data = _FULL_DATA.get(robot)
+    if data is None:  # a Talos data takes longer to make than the centre of mass
+        data = _FULL_DATA[robot] = robot.full_model.createData()
+    c = pin.centerOfMass(robot.full_model, data, robot.full_configuration(q))
     return robot.tree.base_R @ c + robot.tree.base_p
+
+
+#: Pinocchio data of each robot's full model (weakly: the cache keeps no robot alive).
+_FULL_DATA: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def com_batch(robot, Q) -> np.ndarray:
@@ -342,13 +348,24 @@ def polygon_distance(point, points, margin: float = 0.0) -> float:
 
 
 def _half_planes(P: np.ndarray):
-    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2): n.x <= o inside; (None, None) for
-    fewer than three points not on one line."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        hull = ConvexHull(P)
-    except (QhullError, ValueError):
+    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2) (Andrew's monotone chain,
+    counter-clockwise): n.x <= o inside, n unit; (None, None) for points that span no area."""
+    pts = sorted({(float(x), float(y)) for x, y in P})
+    if len(pts) < 3:
         return None, None
-    eq = hull.equations  # n.x + d <= 0 inside, n unit
-    return eq[:, :2], -eq[:, 2]
+
+    def chain(points):
+        out: list = []
+        for p in points:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    hull = np.array(chain(pts) + chain(pts[::-1]))
+    if len(hull) < 3:
+        return None, None
+    d = np.roll(hull, -1, axis=0) - hull
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]  # outward: right of each edge
+    return n, (n * hull).sum(axis=1)
