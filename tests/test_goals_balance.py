@@ -344,3 +344,46 @@ def test_an_unreachable_centre_of_mass_is_named_in_the_message(rng):
     robot = ek.load_robot("panda")
     r = ek.solve(robot, [CenterOfMass(point=[2.0, 0.0, 0.3])], seed=0, timeout=None, max_restarts=1)
     assert not r.success and "goals not met: center of mass" in r.message and r.goal_errors[0][0] > 1.0
+
+
+@settings(max_examples=60, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow])
+@given(points=st.lists(st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-0.2, 0.2)), min_size=1,
+                       max_size=10),
+       margin=st.sampled_from([0.0, 0.01, 0.1]), seed=st.integers(0, 2**16))
+def test_support_distance_of_random_polygons_equals_the_exact_one(points, margin, seed):
+    """Random contact points on Panda's fixed base link (any count, duplicates and collinear ones included): the
+    kernel's support error is the exact distance to their hull shrunk by margin + tolerance, and a shrunk hull that
+    is empty or has no area is never met."""
+    robot = _panda()
+    goal = CenterOfMass(support={"panda_link0": np.array(points)}, margin=margin)
+    q = robot.random_configurations(1, np.random.default_rng(seed))[0]
+    _, _, ge = rows(robot, [goal], q)
+    d = polygon_distance(com_of(robot, q)[:2], np.array(points), margin + goal.tolerance)
+    if np.isinf(d):
+        assert ge[0, 0] >= 1.0
+    else:
+        assert ge[0, 0] == pytest.approx(d, abs=1e-9)
+
+
+_PANDA = []
+
+
+def _panda():
+    if not _PANDA:
+        _PANDA.append(ek.load_robot("panda"))
+    return _PANDA[0]
+
+
+def test_the_benchmark_script_reports_both_tasks_and_their_peers():
+    import argparse
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    import bench_goal_kinds_balance as bench
+
+    report = bench.run(argparse.Namespace(n=3, seed=0, timeout=1.0, box_timeout=1.0))
+    assert report.startswith("## Balance and two-hand goals") and "Load average" in report
+    for row in ("Talos: soles + CoM over the soles + wrists", "Talos, peer", "Baxter: RelativePose", "Baxter, peer"):
+        assert re.search(re.escape(row) + r".*\| 3 / 3 \(100.0 %\)", report), row
+    assert "| 3 / 3 |" in report  # every Talos answer with the CoM goal: the CoM inside, by Pinocchio
