@@ -151,7 +151,7 @@ def test_relative_pose_rows_are_log6_and_their_finite_differences(rng):
             assert np.allclose(e / np.sqrt(2.0), pin.log6(M).vector, atol=1e-10)
             assert np.allclose(ge[0], goal.robot_errors(robot, q), atol=1e-10)
             assert np.allclose(E, numeric_jacobian(lambda x, r=robot, g=goal: rows(r, [g], x)[0], q), atol=1e-6)
-            pos, rot = goal.population_errors(robot, q[None])
+            pos, rot = goal.robot_population_errors(robot, q[None])
             assert np.allclose([pos[0], rot[0]], ge[0], atol=1e-10)
 
 
@@ -387,3 +387,8 @@ def test_the_benchmark_script_reports_both_tasks_and_their_peers():
     for row in ("Talos: soles + CoM over the soles + wrists", "Talos, peer", "Baxter: RelativePose", "Baxter, peer"):
         assert re.search(re.escape(row) + r".*\| 3 / 3 \(100.0 %\)", report), row
     assert "| 3 / 3 |" in report  # every Talos answer with the CoM goal: the CoM inside, by Pinocchio
+
+
+def test_tolerance_none_is_the_default():
+    assert RelativePose("a", "b", np.eye(4), tolerance=None).tolerance == 1e-6
+    assert CenterOfMass(point=[0, 0, 0], tolerance=None).tolerance == 1e-6

@@ -212,7 +212,7 @@ class IKProblem:
         rot = np.zeros_like(pos)
         for g, goal in enumerate(self.goals):
             if goal.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: their own violation
-                pos[:, g], rot[:, g] = goal.population_errors(self.robot, Q)
+                pos[:, g], rot[:, g] = goal.robot_population_errors(self.robot, Q)
             elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
         return pos, rot

@@ -129,7 +129,7 @@ class CenterOfMass(Goal):
             return float(np.linalg.norm((c - self.point)[mask])), None
         return polygon_distance(c[:2], _world_points(robot, q, self.support), self.margin), None
 
-    def population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
+    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
         """(errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation): the distance
         over ``axes`` to the point; for a support polygon the largest violation of the margin-shrunk hull's edge
         half-planes (0 exactly inside; at most the distance outside)."""

@@ -57,7 +57,8 @@ class Goal:
         weight = number(self.weight, f"weight of {what}", "a finite number > 0")
         if weight <= 0:
             raise OptionError(f"weight of {what} must be > 0, got {self.weight!r}")
-        tol = number(self.tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
+        tol = DEFAULT_GOAL_TOLERANCE if self.tolerance is None else number(  # None: the default
+            self.tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
         rtol = tol if self.rotation_tolerance is None else number(
             self.rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
         if tol < 0 or rtol < 0:

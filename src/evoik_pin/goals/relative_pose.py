@@ -94,7 +94,7 @@ class RelativePose(Goal):
         return (float(np.linalg.norm(rel.translation - self.target.translation)),
                 float(np.linalg.norm(pin.log3(self.target.rotation.T @ rel.rotation))))
 
-    def population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
+    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
         """(position errors (N,) m, rotation angles (N,) rad) of a population Q (N, n)."""
         from ..lie import relative_angle
 
