@@ -392,3 +392,9 @@ def test_the_benchmark_script_reports_both_tasks_and_their_peers():
 def test_tolerance_none_is_the_default():
     assert RelativePose("a", "b", np.eye(4), tolerance=None).tolerance == 1e-6
     assert CenterOfMass(point=[0, 0, 0], tolerance=None).tolerance == 1e-6
+
+
+def test_the_python_reference_lm_refuses_the_new_kinds_by_name():
+    robot = ek.load_robot("panda")
+    with pytest.raises(OptionError, match="CenterOfMass and RelativePose goals need the compiled engine"):
+        ek.solve(robot, [CenterOfMass(point=[0.0, 0.0, 0.3])], engine="python", seed=0)

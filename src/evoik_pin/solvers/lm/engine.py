@@ -49,6 +49,7 @@ from .layout import (
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
     GOAL_SIZE,
+    KIND_BEYOND_FRAME,
     KIND_PLANAR,
     KIND_PLANAR_YAW,
     KIND_POSE,
@@ -159,6 +160,10 @@ class LevenbergMarquardt:
         if engine == "python":
             from .reference import ReferenceLM
 
+            if any(k >= KIND_BEYOND_FRAME for k in stack.kinds):
+                raise OptionError("the Python reference LM (engine='python') runs goals on one frame only; "
+                                  "CenterOfMass and RelativePose goals need the compiled engine (engine='compiled', "
+                                  "the default)")
             self._reference = ReferenceLM(problem, damping, max_step, stall_window, stall_ratio, finish)
             return
         self._reference = None
