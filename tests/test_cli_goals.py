@@ -85,7 +85,6 @@ def test_unreachable_goals_exit_1_with_the_unmet_goal_marked(talos, tmp_path, ca
     (["--goals", EXAMPLE, "--xyz", "0.1", "0.2", "0.3", "--rpy", "0", "0", "0"], "--goals and --xyz/--rpy"),
     (["--goals", EXAMPLE, "--rpy", "0", "0", "0"], "--goals and --rpy"),
     ([], "needs a target: --xyz X Y Z"),
-    (["--goals", EXAMPLE, "--all"], "--all and --goals"),
     (["--goals", EXAMPLE, "--tolerance", "1e-4"], "--tolerance and --goals: each goal has its own tolerances"),
     (["--goals", EXAMPLE, "--rotation-tolerance", "1e-4"], "--rotation-tolerance and --goals"),
     (["--goals", EXAMPLE, "--tips", "arm_left_7_link"], None),  # the file says no tips: --tips is used

@@ -396,5 +396,5 @@ def test_tolerance_none_is_the_default():
 
 def test_the_python_reference_lm_refuses_the_new_kinds_by_name():
     robot = ek.load_robot("panda")
-    with pytest.raises(OptionError, match="CenterOfMass and RelativePose goals need the compiled engine"):
+    with pytest.raises(OptionError, match="CenterOfMass and RelativePose need the compiled engine"):
         ek.solve(robot, [CenterOfMass(point=[0.0, 0.0, 0.3])], engine="python", seed=0)

@@ -87,17 +87,18 @@ problems:
 
 
 def test_goal_kinds_are_the_goal_classes():
-    from evoik_pin.goals import CenterOfMass, RelativePose
+    from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, RelativePose
 
     assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {
-        "pose": Pose, "position": Position, "center_of_mass": CenterOfMass, "relative_pose": RelativePose}
+        "pose": Pose, "position": Position, "orientation": Orientation, "direction": Direction, "look_at": LookAt,
+        "center_of_mass": CenterOfMass, "relative_pose": RelativePose}
 
 
 # ------------------------------------------------------------------ errors
 GOOD = "{frame: hand, kind: pose, target: {position: [0, 0, 1], rpy: [0, 0, 0]}}"
 BAD_FILES = [
-    ("goals: [{frame: hand, kind: posture, target: {}}]", ["goal 0 (hand)", "unknown kind 'posture'",
-                                                          "accepted kinds: pose, position"]),
+    ("goals: [{frame: hand, kind: posse, target: {}}]", ["goal 0 (hand)", "unknown kind 'posse'",
+                                                        "accepted kinds: pose, position"]),
     ("goals: [{frame: hand, target: {position: [0, 0, 1]}}]", ["goal 0 (hand)", "kind: missing"]),
     (f"goals: [{GOOD}, {{frame: foot, kind: pose}}]", ["goal 1 (foot)", "missing field 'target'"]),
     ("goals: [{kind: position, target: {position: [0, 0, 1]}}]", ["goal 0", "missing field 'frame'"]),

@@ -12,6 +12,7 @@ import time
 
 import numpy as np
 
+from .choosing import has_choices, solve_choosing
 from .errors import ConfigurationError, MethodError, OptionError
 from .goals import is_goal_list
 from .problem import DEFAULT_PRO_DELTA, IKProblem, Target, check_pro_delta
@@ -91,17 +92,19 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
     return IKProblem(robot, Target.coerce(target), **problem_kw), options
 
 
-#: Methods that solve goal lists (:mod:`evoik_pin.goals`): memetic, and the evolutionary methods, which read a
-#: problem through ``IKProblem.evaluate`` (the goals' weighted cost and largest errors over a population). The
-#: others (closed forms, hga's and memetic-all's solution sets, NSGA-II's tip manipulability) take one target for
-#: the tip.
-GOAL_METHODS = ("memetic", "de", "isade", "pso", "mode", "ga", "ga-binary")
+#: Methods that solve goal lists (:mod:`evoik_pin.goals`): memetic and memetic-all (the LM engine over the goal
+#: stack), and the evolutionary methods, which read a problem through ``IKProblem.evaluate`` (the goals' weighted cost
+#: and largest errors over a population); nsga2 with every goal as its constraint, hga and memetic-all with every
+#: solution meeting every goal. The closed forms (``algebraic``) take one target for the tip, or a goal list that is
+#: that problem: one Pose or Position goal on the tip.
+GOAL_METHODS = ("memetic", "memetic-all", "de", "isade", "pso", "mode", "ga", "ga-binary", "nsga2", "hga")
 
 
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
     info = get_solver(method)
-    if problem.goals is not None:
-        _check_goal_method(method)
+    goal_problem = problem.goals is not None and problem
+    if goal_problem:
+        problem = _goal_method_problem(method, problem)
     polish = options.pop("polish", False)
     info.check_options(options)
     result = info.func(problem, rng, **options)
@@ -109,16 +112,36 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
         from .solvers.lm.polish import polish_result
 
         result = polish_result(problem, result, rng)
-    if problem.goals is not None:
-        result = _with_goal_verdict(problem, result)
+    if goal_problem:
+        result = _with_goal_verdict(goal_problem, result)
     return with_collision_verdict(problem, result)
 
 
 def _check_goal_method(method: str) -> None:
-    """MethodError unless ``method`` solves goal lists (:data:`GOAL_METHODS`)."""
-    if method not in GOAL_METHODS:
+    """MethodError unless ``method`` solves goal lists (:data:`GOAL_METHODS`; ``algebraic`` passes here, its goal
+    lists are checked one by one in :func:`_goal_method_problem`)."""
+    if method not in GOAL_METHODS and method != "algebraic":
         raise MethodError(f"method {method!r} solves one target for the tip; goal lists are solved by "
                           f"{', '.join(repr(m) for m in GOAL_METHODS)}")
+
+
+def _goal_method_problem(method: str, problem: IKProblem) -> IKProblem:
+    """The problem ``method`` solves for a goal list: the list itself (:data:`GOAL_METHODS`), or, for the closed forms
+    (``algebraic``), the one target on the tip that a single Pose or Position goal on the tip stands for; MethodError
+    naming the methods that take goal lists otherwise."""
+    if method in GOAL_METHODS:
+        return problem
+    if method == "algebraic":
+        from .solvers.paper.analytic import tip_target_problem
+
+        single = tip_target_problem(problem)
+        if single is not None:
+            return single
+        raise MethodError(f"method 'algebraic' solves one target for the tip (a closed form of one arm): a goal list "
+                          f"only when it is one Pose or Position goal on the tip {problem.robot.tip!r}; goal lists "
+                          f"are solved by {', '.join(repr(m) for m in GOAL_METHODS)}")
+    _check_goal_method(method)
+    return problem
 
 
 def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
@@ -127,6 +150,7 @@ def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
     tolerance, and a polish makes a new Result); a scene's verdict comes after (:func:`with_collision_verdict`)."""
     if result.goal_errors is None:
         result.goal_errors = problem.goal_errors(result.q)
+    result.chosen = problem.chosen(result.q)  # goal sets: which member each goal meets
     met = problem.goals_met(result.goal_errors)
     if result.success and not met:
         unmet = [g.label for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]
@@ -167,18 +191,28 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
         target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix or a :class:`Target` for the robot's tip;
             or a list of goals on its frames (:mod:`evoik_pin.goals`: ``[Pose(frame, T), Position(frame, p),
-            ...]``, method ``"memetic"``), met together; ``Result.goal_errors`` then gives each goal's errors.
+            ...]``, any method of :data:`GOAL_METHODS`), met together; ``Result.goal_errors`` then gives each goal's
+            errors.
         method: a name from :func:`methods` (default ``"memetic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same result.
         **options: shared ones (``tolerance`` m, ``rotation_tolerance`` rad, ``q0`` (n,), ``bounds``
             (lower, upper), ``objective``, ``orientation_weight``, ``pose_metric``, ``polish``, ``scene`` (a
             :class:`Scene` or a scene file's path, str or Path), ``margin`` m) and the solver's own
             (``population``, ``max_generations``, ...; see each solver's docstring).
+            ``prefer``: ``"first"`` (default: the first answer found), ``"nearest"`` (the answer nearest ``q0``)
+            or ``"manipulability"`` (the most dexterous) among the answers found within ``timeout`` (default
+            0.7 ms for the last two; method ``"memetic"``; :mod:`evoik_pin.solvers.search.choose`).
+            ``locked``: ``{joint: value}`` (rad or m), joints held fixed for this call (:meth:`Robot.locked`);
+            ``q0``, ``bounds`` and the answer's ``q`` stay in ``robot``'s full layout, the locked joints at
+            their values. The goal list may hold preferences (:mod:`evoik_pin.goals.preferences`: ``Posture``,
+            ``JointLimitMargin``, ``Manipulability``, ``MinimalDisplacement``), met as well as the goals allow.
 
     Returns:
         A :class:`Result`; an unreachable target gives ``success=False``, the best approximation and a
         message, not an exception.
     """
+    if has_choices(target, options):
+        return solve_choosing(robot, target, method, seed, **options)  # prefer=, preferences, locked=
     problem, solver_options = make_problem(robot, target, **options)
     return _run(problem, method, _rng(seed), solver_options)
 
@@ -207,7 +241,10 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
 
     Args:
         robot: a :class:`Robot` or anything :func:`load_robot` accepts.
-        target: a pose (``pin.SE3``, (4, 4)), a 3-vector position (m) or a :class:`Target` (planar too).
+        target: a pose (``pin.SE3``, (4, 4)), a 3-vector position (m) or a :class:`Target` (planar too); or a goal
+            list (:mod:`evoik_pin.goals`): every solution meets every goal within its own tolerances (each with its
+            ``goal_errors``); ``memetic-all`` measures distinctness on the joints that move some goal frame and puts
+            the others at ``q0`` (zero without it), and a whole robot, redundant, gets ``count`` spread solutions.
         method: a multi-solution method (default ``"memetic-all"``; also ``"hga"``, ``"ga"``, ``"algebraic"``).
         seed: int or ``numpy.random.Generator``; the same seed gives the same solutions (``memetic-all`` draws
             random numbers only when its deterministic starts run out).
@@ -224,13 +261,10 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         reach").
 
     Raises:
-        MethodError: ``method`` returns one solution only, or ``target`` is a goal list. OptionError: a bad option
-        (e.g. ``count`` < 1).
+        MethodError: ``method`` returns one solution only (or is ``"algebraic"`` on a goal list other than one goal
+        on the tip). OptionError: a bad option (e.g. ``count`` < 1).
     """
     info = get_solver(method)
-    if is_goal_list(target):
-        raise MethodError("solve_all takes one target for the robot's tip (every distinct solution of it); a goal list "
-                          f"(several goals at once) is solved by solve() with one of {', '.join(GOAL_METHODS)}")
     if not info.multi_solution:
         capable = [m for m in methods() if get_solver(m).multi_solution]
         raise MethodError(

@@ -80,6 +80,24 @@ def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
     return np.radians(q)
 
 
+def _locked_values(robot, items: list[str], rad: bool) -> dict[str, float]:
+    """``--locked NAME=VALUE`` flags as {joint: value in SI} (revolute in degrees unless ``--rad``); the library
+    checks the names and limits."""
+    out = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        try:
+            value = float(text)
+        except ValueError:
+            value = None
+        if not sep or not name or value is None:
+            raise OptionError(f"--locked needs NAME=VALUE (a joint and a number), got {item!r}")
+        revolute = name in robot.joint_names and bool(robot.revolute[robot.joint_names.index(name)])
+        out[name] = float(np.radians(value)) if revolute and not rad else value
+    return out
+
+
 def _shown(robot, q: np.ndarray, rad: bool) -> np.ndarray:
     """Joint values (n,) in SI as the command line shows them: revolute in degrees unless ``--rad``, prismatic in m."""
     q = np.asarray(q, dtype=float)
@@ -106,6 +124,7 @@ CALL_FLAGS = {
     "population": "--population", "max_generations": "--max-generations", "timeout": "--timeout", "count": "--count",
     "voxel": "--voxel", "orientations": "--orientations", "backend": "--backend", "workers": "--workers",
     "address": "--address", "progress": "--no-progress", "batch_size": "--batch-size",
+    "prefer": "--prefer", "locked": "--locked",
 }
 #: Options of ``solve``'s methods that no command-line value expresses, and why.
 NOT_ON_CLI = {"objective": "a Python callable objective(Q, kin) -> (N,) costs",
@@ -121,7 +140,7 @@ _TARGET_FLAGS = {"target position": "--xyz", "target roll-pitch-yaw": "--rpy"}
 
 #: Options passed on as typed (the rest: q0 and bounds in degrees, scene and margin, the calls' own arguments).
 _PLAIN_OPTIONS = ("tolerance", "rotation_tolerance", "orientation_weight", "pose_metric", "polish", "population",
-                  "max_generations", "timeout", "count")
+                  "max_generations", "timeout", "count", "prefer")
 #: ``--timeout none``: no wall-clock budget (None in Python; argparse's None means "not given").
 _NO_LIMIT = "none"
 
@@ -179,6 +198,8 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
         bounds = (robot.lower if lower is None else _joint_values(robot, lower, args.rad),
                   robot.upper if upper is None else _joint_values(robot, upper, args.rad))
         given["bounds"] = (bounds, CALL_FLAGS["bounds"])
+    if getattr(args, "locked", None):
+        given["locked"] = (_locked_values(robot, args.locked, args.rad), "--locked")
     for item in getattr(args, "option", []):
         name, sep, text = item.partition("=")
         name = name.strip()
@@ -207,7 +228,7 @@ def _check_method_options(given: dict, method: str, pool: list[str] | None, comm
 
     takes = get_solver(method).options
     for name, (_, flag) in given.items():
-        if name in _PROBLEM_OPTIONS or name == "polish" or name in takes:
+        if name in _PROBLEM_OPTIONS or name in ("polish", "prefer", "locked") or name in takes:
             continue
         if pool is None:
             raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {command}); "
@@ -353,9 +374,6 @@ def _goals_arg(args: argparse.Namespace):
     if given:
         raise OptionError(f"--goals and {'/'.join(given)}: give the targets one way, --goals FILE (every goal in "
                           "the file) or --xyz X Y Z [--rpy R P Y] (one target for the tip)")
-    if args.all:
-        raise OptionError("--all and --goals: --all (solve_all) takes one target for the tip (--xyz/--rpy); a goal "
-                          "list is solved for one answer")
     for flag, value in (("--tolerance", args.tolerance), ("--rotation-tolerance", args.rotation_tolerance)):
         if value is not None:
             raise OptionError(f"{flag} and --goals: each goal has its own tolerances, the goals file's tolerance: "
@@ -374,27 +392,35 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     """``evoik solve ROBOT --goals FILE``: one answer meeting every goal of the file; each goal's errors printed
     (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
     from .api import GOAL_METHODS, solve
+    from .goals import Goal
     from .goals_file import goal_kind_name
+    from .solvers import get_solver
 
     goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
-    options = _call_options(args, robot, method, list(GOAL_METHODS))
+    pool = [m for m in GOAL_METHODS if get_solver(m).multi_solution or not args.all]
+    options = _call_options(args, robot, method, pool)
     for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
         args.typed_flags.pop(phrase, None)
     if scene is not None:
         options.update(scene=scene, margin=margin)
     goals = goals_file.problems[0]
+    if args.all:
+        return _solve_all_goals(args, robot, goals, method, options, html)
     res = solve(robot, goals, method=method, seed=args.seed, **options)
+    goals = [g for g in goals if isinstance(g, Goal)]  # the preferences have no errors to show
     rows = []
-    for goal, (pos, rot) in zip(goals, res.goal_errors, strict=True):
+    for i, (goal, (pos, rot)) in enumerate(zip(goals, res.goal_errors, strict=True)):
         rows.append({"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos,
                      "rotation_error_rad": rot, "met": bool(goal.met(pos, rot)),
-                     "tolerance_m": goal.tolerance,
-                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.has_orientation else None,
+                     "tolerance_m": goal.tolerance if goal.has_position else None,
+                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None,
                      "weight": goal.weight})
         if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
             rows[-1]["label"] = goal.label
             if getattr(goal, "frame_a", None):
                 rows[-1]["frame_a"] = goal.frame_a
+        if goal.alternatives is not None:  # a goal set: the member met
+            rows[-1]["chosen"] = res.chosen[i]
     info = {
         "robot": robot.name,
         "floating_base": robot.floating_base,
@@ -423,6 +449,46 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     return 0 if res.success else 1
 
 
+def _solve_all_goals(args: argparse.Namespace, robot, goals, method: str, options: dict, html) -> int:
+    """``evoik solve ROBOT --goals FILE --all``: every solution of the goal list (``solve_all``), one line each with
+    its largest errors (JSON: each solution's q and per-goal errors); exit 1 when there is none. ``--html`` /
+    ``--view`` show the first solution (or the best approximation) with the goals, the others as ghosts."""
+    from .api import solve_all
+
+    sols = solve_all(robot, goals, method=method, seed=args.seed, **options)
+    res = sols.result
+    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
+             "q_pinocchio": [float(v) for v in robot.full_configuration(s.q)],
+             "goal_errors": [{"frame": g.frame, "position_error_m": p, "rotation_error_rad": o,
+                              "met": bool(g.met(p, o))} for g, (p, o) in zip(goals, s.goal_errors, strict=True)]}
+            for s in sols]
+    info = {"robot": robot.name, "floating_base": robot.floating_base, "method": res.method or method,
+            "success": bool(sols), "count": len(sols), "message": sols.message, "goals_file": str(args.goals),
+            "joint_names": list(robot.joint_names), "solutions": rows, "time_s": res.time_s, "seed": args.seed}
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        def errors(s):
+            rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
+            return f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
+
+        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) of {len(goals)} goals in "
+                         f"{res.time_s * 1e3:.2f} ms", errors)
+    if html is not None or args.view:
+        from .viz import Viewer
+
+        with Viewer(robot) as viewer:
+            viewer.show_solution(sols[0] if sols else res, goals, scene=options.get("scene"),
+                                 margin=options.get("margin", 0.0))
+            if sols:
+                viewer.show_solutions(sols)
+            if html is not None:
+                print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
+            if args.view:
+                viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+    return 0 if sols else 1
+
+
 def _answer_fields(args: argparse.Namespace, res) -> dict:
     """The JSON fields every ``evoik solve`` answer ends with: its errors (m, rad), cost, effort and seed."""
     return {"position_error_m": res.position_error, "orientation_error_rad": res.orientation_error, "cost": res.cost,
@@ -446,13 +512,15 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
 
 def _print_goal_errors(rows: list[dict]) -> None:
     """One line per goal: frame, kind, position error (m), rotation error (rad, or "free"), met."""
-    names = [r.get("label", r["frame"]) for r in rows]
+    names = [r.get("label", r["frame"]) for r in rows]  # a centre of mass has no frame; a relative pose two
     width = max(len("frame"), *(len(name) for name in names))
-    print(f"  #  {'frame':{width}s}  kind      position error (m)  rotation error (rad)  met")
+    kw = max(len("kind"), *(len(r["kind"]) for r in rows))  # orientation, look_at, ...
+    print(f"  #  {'frame':{width}s}  {'kind':{kw}s}  position error (m)  rotation error (rad)  met")
     for k, (r, name) in enumerate(zip(rows, names, strict=True)):
         r = {**r, "frame": name}
         rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
-        print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:8s}  {r['position_error_m']:<18.3e}  {rot:<20s}  "
+        pos = "free" if r["position_error_m"] is None else f"{r['position_error_m']:.3e}"  # orientation, pointing
+        print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  "
               f"{'yes' if r['met'] else 'NO'}")
 
 
@@ -532,21 +600,28 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        unit = "rad" if args.rad else "deg"
-        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {len(sols)} solution(s) in "
-              f"{res.time_s * 1e3:.2f} ms ({sols.message})")
-        if sols:
-            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
-        for k, s in enumerate(sols):
-            shown = _shown(robot, s.q, args.rad)
+        def errors(s):
             rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
             free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
-            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in shown) + f"  (position error {s.position_error:.1e} m"
-                  f"{rot}{free})")
+            return f"position error {s.position_error:.1e} m{rot}{free}"
+
+        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) in {res.time_s * 1e3:.2f} ms",
+                         errors)
     if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
         _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols,
                        scene=scene, margin=options.get("margin", 0.0))
     return 0 if sols else 1
+
+
+def _print_solutions(args: argparse.Namespace, robot, sols, method: str, what: str, errors) -> None:
+    """``evoik solve --all``'s text: a heading (the method, ``what`` was found, the search's message), then a line
+    per solution: its index, q (deg, or rad with ``--rad``) and ``errors(solution)`` in parentheses."""
+    unit = "rad" if args.rad else "deg"
+    print(f"{robot.name} ({robot.n} joints), method {method}: {what} ({sols.message})")
+    if sols:
+        print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+    for k, s in enumerate(sols):
+        print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors(s)})")
 
 
 def _print_solution(robot, res, info: dict, rad: bool) -> None:
@@ -680,13 +755,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
     p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
-    p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
-                   "memetic-all), one per line; with --html/--view drawn as ghosts; exit 1 when there is none")
+    p.add_argument("--all", action="store_true", help="every distinct solution of the target or of the --goals "
+                   "list (solve_all; default method memetic-all), one per line; with --html/--view drawn as ghosts; "
+                   "exit 1 when there is none")
     p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles, see Scene.from_file): "
                    "answers must be free of collisions with it and with the robot itself; exit 1 when the answer "
                    "collides; --html/--view draw the obstacles and the links in collision in red")
     p.add_argument("--margin", type=float, metavar="M", help="with --scene: clearance in m the answer must keep "
                    "(pairs closer than M count as colliding; default 0)")
+    p.add_argument("--prefer", help="which answer: first (default: the first found), nearest (nearest --q0) or "
+                   "manipulability (the most dexterous), among those found within --timeout (default 0.7 ms for "
+                   "the last two)")
+    p.add_argument("--locked", action="append", default=[], metavar="NAME=VALUE",
+                   help="hold joint NAME at VALUE for this solve (repeatable; revolute in degrees, or radians with "
+                   "--rad; prismatic in m); --q0 and the answer keep every joint")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")

@@ -24,6 +24,32 @@ Positions in metres, in the robot's base frame (the URDF root; with a floating b
         kind: pose
         target: {matrix: [[1, 0, 0, 0.0], [0, 1, 0, -0.085], [0, 0, 1, 0.0], [0, 0, 0, 1]]}   # or a 4 x 4 pose
 
+More kinds (:mod:`evoik_pin.goals`)::
+
+      - frame: tool0
+        kind: pose
+        target: {position: [0.4, 0.1, 0.3], rpy: [180, 0, 0]}
+        free: rz                          # optional: axes left free, any of x y z rx ry rz (a string or a list)
+      - frame: tool0
+        kind: pose
+        target: {position: [0.4, 0.1, 0.3], rpy: [180, 0, 0]}
+        tolerance: [0.002, 0.002, 0.002, 0.087, 0.087, .inf]   # per-axis half-widths (m x3, rad x3; .inf: free)
+      - frame: tool0
+        kind: orientation                 # target: rpy / rpy_rad alone, or a 3 x 3 (or 4 x 4) matrix
+        target: {rpy: [180, 0, 0]}
+      - frame: tool0
+        kind: direction                   # the frame's axis along a direction (base frame)
+        axis: [0, 0, 1]
+        target: {direction: [0, 0, -1]}
+      - frame: gaze
+        kind: look_at                     # the frame's axis pointing at a point (m, base frame)
+        axis: [1, 0, 0]
+        target: {point: [0.5, 0.0, 1.2]}
+
+A position's ``tolerance`` may be 3 half-widths (base frame x y z), an orientation's 3 (rx ry rz) with ``free``
+among rx ry rz; direction and look_at take ``weight`` and ``tolerance`` (rad). In JSON write ``"inf"`` for an
+infinite half-width.
+
 A pose's target is ``position`` with one of ``rpy`` (degrees, as ``evoik solve --rpy``) and ``rpy_rad``
 (radians), or a ``matrix`` (4 x 4 homogeneous, m) alone; a position's target is ``position`` alone. The top level
 may also be the bare list of goals. Numbers written ``1e-6`` (which YAML 1.1 reads as text) are read as numbers.
@@ -44,6 +70,11 @@ seen from another (``frame_a``; ``frame`` is frame b)::
         frame: right_gripper
         kind: relative_pose
         target: {position: [0, 0, 0.3], rpy: [180, 0, 0]}
+A goal set (any one of several targets will do; ``Pose(frame, [T1, ...])``) has ``targets:``, a list of targets,
+instead of ``target:``. Preferences (:mod:`evoik_pin.goals.preferences`) are entries of the goal list too, with no
+frame and target: ``{kind: posture, q_ref: [...]}`` (rad or m) or ``{kind: posture, joints: {name: value}}``,
+``{kind: joint_limit_margin, margin: 0.1}``, ``{kind: manipulability}`` (optional ``frame``),
+``{kind: minimal_displacement}``, each with an optional ``weight``.
 
 Several problems: ``problems:`` instead of ``goals:``, a list of goal lists (each a list of goals as above), for
 :func:`evoik_pin.solve_many` or, in time order, :func:`evoik_pin.solve_trajectory`; read them with
@@ -73,7 +104,20 @@ import numpy as np
 
 from .datafile import Flow, data_format, dump_data, read_data, write_text
 from .errors import FrameError, GoalsFileError, OptionError, TargetError
-from .goals import DEFAULT_GOAL_TOLERANCE, CenterOfMass, Goal, Pose, Position, RelativePose, bind, is_goal_list
+from .goals import (
+    DEFAULT_GOAL_TOLERANCE,
+    CenterOfMass,
+    Direction,
+    Goal,
+    LookAt,
+    Orientation,
+    Pose,
+    Position,
+    RelativePose,
+    bind,
+    is_goal_list,
+)
+from .goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from .target import Target
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
@@ -100,6 +144,7 @@ class GoalsFile:
         """Check every goal list against ``robot`` (:func:`evoik_pin.goals.bind`: frames that exist and that an
         active joint moves, no frame with two targets); GoalsFileError naming this file and the goal."""
         for p, goals in enumerate(self.problems):
+            goals = [g for g in goals if isinstance(g, Goal)]  # preferences are checked when solving
             try:
                 bind(robot, goals)
             except (FrameError, TargetError) as exc:
@@ -178,6 +223,54 @@ def _position_target(target: dict) -> np.ndarray:
     return _numbers(target["position"], 3, "target.position (m)")
 
 
+def _orientation_target(target: dict) -> np.ndarray:
+    """An orientation's target: ``rpy`` (degrees) or ``rpy_rad`` alone, or a 3 x 3 (or 4 x 4) ``matrix``."""
+    _unknown_keys(target, ("rpy", "rpy_rad", "matrix"), "target")
+    if len(target) != 1:
+        raise GoalsFileError("target of an orientation needs one of rpy: [r, p, y] (degrees), rpy_rad: (rad) and "
+                             f"matrix: a 3 x 3 rotation, got {', '.join(target) or 'none'}")
+    if "matrix" in target:
+        rows = target["matrix"]
+        if not isinstance(rows, list) or len(rows) not in (3, 4):
+            raise GoalsFileError(f"target.matrix must be 3 rows of 3 numbers (a rotation), got {rows!r}")
+        return np.array([_numbers(row, len(rows), f"target.matrix row {k}") for k, row in enumerate(rows)])
+    key = next(iter(target))
+    rpy = _numbers(target[key], 3, f"target.{key}")
+    return Target.from_rpy(np.zeros(3), np.radians(rpy) if key == "rpy" else rpy).rotation
+
+
+def _vector_target(name: str) -> Callable[[dict], np.ndarray]:
+    """The reader of a target that is one 3-vector under the key ``name`` (direction, point)."""
+    def read(target: dict) -> np.ndarray:
+        _unknown_keys(target, (name,), "target")
+        if name not in target:
+            raise GoalsFileError(f"target needs {name}: [x, y, z]")
+        return _numbers(target[name], 3, f"target.{name}")
+    return read
+
+
+def _tolerance(value, what: str):
+    """A tolerance: one number, or a list of half-widths (``.inf`` or ``"inf"``: free)."""
+    if not isinstance(value, list):
+        return _number(value, what)
+    return [math.inf if isinstance(v, str) and v.strip().lower() in ("inf", ".inf") or v == math.inf
+            else _number(v, f"{what}[{k}]") for k, v in enumerate(value)]
+
+
+def _free(value, what: str):
+    if isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value)):
+        return value
+    raise GoalsFileError(f"{what} must name axes (a string such as 'rz' or a list of names), got {value!r}")
+
+
+def _axis(value, what: str) -> np.ndarray:
+    return _numbers(value, 3, what)
+
+
+#: How the optional fields other than numbers are read (the others: :func:`_number`).
+_FIELD_READERS = {"tolerance": _tolerance, "free": _free, "axis": _axis}
+
+
 def _matrix_text(goal: Pose) -> dict:
     return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
 
@@ -189,22 +282,48 @@ def _position_text(goal: Position) -> dict:
 @dataclass(frozen=True)
 class GoalKind:
     """One ``kind:`` of a goals file: its goal class, the optional fields it takes (besides frame, kind and
-    target), how its ``target:`` mapping is read and how a goal's target is written."""
+    target), how its ``target:`` mapping is read and how a goal's target is written; ``make`` (frame, target,
+    **fields) -> goal where the class takes its arguments in another order (None: the class)."""
 
     cls: type
     fields: tuple[str, ...]
     read_target: Callable[[dict], object]
     write_target: Callable[[Goal], dict]
+    make: Callable | None = None
     #: Kinds whose entries are not (frame, target, numbers): the whole entry read (entry, what) -> Goal, and the
     #: whole entry written (goal) -> dict.
     read: Callable[[dict, str], Goal] | None = None
     write: Callable[[Goal], dict] | None = None
 
 
+def _pointing(cls) -> Callable:
+    """``make`` of a pointing kind: its required ``axis`` field first."""
+    def make(frame, target, axis=None, **options):
+        if axis is None:
+            raise GoalsFileError(f"missing field 'axis' (a {cls.__name__} goal points the frame's axis: [x, y, z])")
+        return cls(frame, axis, target, **options)
+    return make
+
+
 #: The goal kinds a goals file takes, by their ``kind:`` name.
 GOAL_KINDS = {
-    "pose": GoalKind(Pose, ("weight", "tolerance", "rotation_tolerance"), _pose_target, _matrix_text),
+    "pose": GoalKind(Pose, ("weight", "tolerance", "rotation_tolerance", "free"), _pose_target, _matrix_text),
     "position": GoalKind(Position, ("weight", "tolerance"), _position_target, _position_text),
+    "orientation": GoalKind(Orientation, ("weight", "tolerance", "free"), _orientation_target,
+                            lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]}),
+    "direction": GoalKind(Direction, ("weight", "tolerance", "axis"), _vector_target("direction"),
+                          lambda g: Flow(direction=[float(v) + 0.0 for v in g.direction]), _pointing(Direction)),
+    "look_at": GoalKind(LookAt, ("weight", "tolerance", "axis"), _vector_target("point"),
+                        lambda g: Flow(point=[float(v) + 0.0 for v in g.point]), _pointing(LookAt)),
+}
+
+
+#: Preferences a goal list may hold (:mod:`evoik_pin.goals.preferences`), by their ``kind:`` name: (class, fields).
+PREFERENCE_KINDS = {
+    "posture": (Posture, ("q_ref", "joints", "weight")),
+    "joint_limit_margin": (JointLimitMargin, ("margin", "weight")),
+    "manipulability": (Manipulability, ("frame", "weight")),
+    "minimal_displacement": (MinimalDisplacement, ("weight",)),
 }
 
 
@@ -215,16 +334,21 @@ def _goal(entry, what: str) -> Goal:
     if frame is not None:
         what += f" ({frame})"
     kind_name = entry.get("kind")
+    if kind_name in PREFERENCE_KINDS:
+        return _preference(entry, what, kind_name)
     if kind_name not in GOAL_KINDS:
         raise GoalsFileError(f"{what}: kind: " + ("missing" if kind_name is None else f"unknown kind {kind_name!r}")
-                             + f"; accepted kinds: {', '.join(GOAL_KINDS)}")
+                             + f"; accepted kinds: {', '.join([*GOAL_KINDS, *PREFERENCE_KINDS])}")
     kind = GOAL_KINDS[kind_name]
-    if kind.read is not None:
+    if kind.read is not None:  # kinds whose entries are not (frame, target, numbers)
         return kind.read(entry, what)
-    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields), f"{what}, a {kind_name} goal")
+    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
+    if "targets" in entry:  # a goal set: any one of several targets
+        return _goal_set(entry, what, kind)
     for key in ("frame", "target"):
         if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target)")
+            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target, or targets "
+                                 "for a goal set)")
     if not isinstance(frame, str) or not frame:
         raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
     if not isinstance(entry["target"], dict):
@@ -235,9 +359,36 @@ def _goal(entry, what: str) -> Goal:
     except (GoalsFileError, TargetError) as exc:
         text = str(exc)
         raise GoalsFileError(f"{what}: {text if text.startswith('target') else 'target: ' + text}") from None
-    options = {key: _number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
+    options = {key: _FIELD_READERS.get(key, _number)(entry[key], f"{what}: {key}") for key in kind.fields
+               if key in entry}
     try:
-        return kind.cls(frame, target, **options)
+        return (kind.make or kind.cls)(frame, target, **options)
+    except (OptionError, TargetError, GoalsFileError) as exc:
+        raise GoalsFileError(f"{what}: {exc}") from None
+
+
+def _goal_set(entry: dict, what: str, kind: GoalKind) -> Goal:
+    """A goal set (``targets:``, a non-empty list of targets, instead of ``target:``)."""
+    frame, targets = entry.get("frame"), entry["targets"]
+    if "target" in entry:
+        raise GoalsFileError(f"{what}: give target (one) or targets (a goal set: any one will do), not both")
+    if not isinstance(frame, str) or not frame:
+        raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
+    if not isinstance(targets, list) or not targets:
+        raise GoalsFileError(f"{what}: targets must be a non-empty list of targets (a goal set), got {targets!r}")
+    read = []
+    for k, t in enumerate(targets):
+        if not isinstance(t, dict):
+            raise GoalsFileError(f"{what}: targets[{k}] must be a mapping (position, rpy / rpy_rad, matrix), got {t!r}")
+        try:
+            read.append(kind.read_target(t))
+        except (GoalsFileError, TargetError) as exc:
+            raise GoalsFileError(f"{what}: targets[{k}]: {exc}") from None
+    options = {key: _number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
+    if kind.cls is Pose:
+        read = [t.se3() for t in read]
+    try:
+        return kind.cls(frame, read, **options)
     except (OptionError, TargetError) as exc:
         raise GoalsFileError(f"{what}: {exc}") from None
 
@@ -310,9 +461,44 @@ def _relative_entry(goal) -> dict:
 
 
 GOAL_KINDS.update({
-    "center_of_mass": GoalKind(CenterOfMass, (), _position_target, _com_entry, _com_goal, _com_entry),
-    "relative_pose": GoalKind(RelativePose, (), _pose_target, _matrix_text, _relative_goal, _relative_entry),
+    "center_of_mass": GoalKind(CenterOfMass, (), _position_target, _com_entry, read=_com_goal, write=_com_entry),
+    "relative_pose": GoalKind(RelativePose, (), _pose_target, _matrix_text, read=_relative_goal,
+                              write=_relative_entry),
 })
+def _preference(entry: dict, what: str, kind_name: str):
+    """A preference entry (``kind: posture | joint_limit_margin | manipulability | minimal_displacement``)."""
+    cls, fields = PREFERENCE_KINDS[kind_name]
+    _unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
+    args = {}
+    for key in fields:
+        if key not in entry:
+            continue
+        value = entry[key]
+        if key == "q_ref":
+            if not isinstance(value, list):
+                raise GoalsFileError(f"{what}: q_ref must be a list of joint values (rad or m), got {value!r}")
+            value = [_number(v, f"{what}: q_ref[{k}]") for k, v in enumerate(value)]
+        elif key == "joints":
+            if not isinstance(value, dict) or not value:
+                raise GoalsFileError(f"{what}: joints must be a mapping {{joint name: value (rad or m)}}, got "
+                                     f"{value!r}")
+            value = {str(k): _number(v, f"{what}: joints.{k}") for k, v in value.items()}
+        elif key == "frame":
+            if not isinstance(value, str) or not value:
+                raise GoalsFileError(f"{what}: frame must be a frame name, got {value!r}")
+        else:
+            value = _number(value, f"{what}: {key}")
+        args[key] = value
+    if kind_name == "posture":
+        if ("q_ref" in args) == ("joints" in args):
+            raise GoalsFileError(f"{what}: a posture needs one of q_ref (a joint vector) and joints ({{name: value}})")
+        args["q_ref"] = args.pop("q_ref", None) or args.pop("joints")
+    if kind_name == "joint_limit_margin" and "margin" not in args:
+        raise GoalsFileError(f"{what}: a joint_limit_margin needs margin (rad or m)")
+    try:
+        return cls(**args)
+    except (OptionError, TargetError, ValueError) as exc:
+        raise GoalsFileError(f"{what}: {exc}") from None
 
 
 def _goal_list(entries, what: str, several: bool) -> list[Goal]:
@@ -392,14 +578,45 @@ def _kind_of(goal) -> tuple[str, GoalKind]:
                          f"{', '.join(k.cls.__name__ for k in GOAL_KINDS.values())}")
 
 
+def _preference_entry(pref: Preference) -> dict:
+    """A preference as a goals file writes it."""
+    name = next(k for k, (cls, _) in PREFERENCE_KINDS.items() if type(pref) is cls)
+    entry: dict = {"kind": name}
+    if name == "posture":
+        if isinstance(pref.q_ref, dict):
+            entry["joints"] = {k: float(v) for k, v in pref.q_ref.items()}
+        else:
+            entry["q_ref"] = [float(v) for v in pref.q_ref]
+    elif name == "joint_limit_margin":
+        entry["margin"] = float(pref.margin)
+    elif name == "manipulability" and pref.frame is not None:
+        entry["frame"] = pref.frame
+    if pref.weight != 1.0:
+        entry["weight"] = float(pref.weight)
+    return entry
+
+
 def _entry(goal: Goal) -> dict:
+    if isinstance(goal, Preference):
+        return _preference_entry(goal)
     name, kind = _kind_of(goal)
     if kind.write is not None:
         return kind.write(goal)
     entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
+    if goal.alternatives is not None:  # a goal set
+        del entry["target"]
+        entry["targets"] = [kind.write_target(m) for m in goal.alternatives]
     defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
+    band = getattr(goal, "band", None)
     for key in kind.fields:
-        if getattr(goal, key) != defaults[key]:
+        if key == "tolerance" and band is not None:  # per-axis half-widths (inf: free)
+            entry[key] = [float(v) for v in band]
+        elif key == "free":
+            if goal.free:
+                entry[key] = " ".join(goal.free)
+        elif key == "axis":
+            entry[key] = [float(v) + 0.0 for v in goal.axis]
+        elif getattr(goal, key) != defaults[key]:
             entry[key] = float(getattr(goal, key))
     return entry
 
@@ -423,7 +640,8 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
     several = isinstance(goals, list) and bool(goals) and all(isinstance(g, (list, tuple)) for g in goals)
     problems = [list(g) for g in goals] if several else [goals]
     for p, problem in enumerate(problems):
-        if not is_goal_list(problem) or not problem:
+        if not isinstance(problem, (list, tuple)) or not problem or not is_goal_list(
+                [g for g in problem if not isinstance(g, Preference)]):
             what = f"problem {p}" if several else "goals"
             raise GoalsFileError(f"save_goals: {what} must be a non-empty list of goals (Pose, Position) or a list "
                                  f"of such lists, got {problem!r}")
@@ -446,5 +664,6 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
 
 
 def goal_kind_name(goal: Goal) -> str:
-    """The ``kind:`` a goals file writes for ``goal`` (``"pose"``, ``"position"``)."""
+    """The ``kind:`` a goals file writes for ``goal`` (``"pose"``, ``"position"``, ``"orientation"``,
+    ``"direction"``, ``"look_at"``)."""
     return _kind_of(goal)[0]

@@ -34,7 +34,8 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "shortfall_text", "target_box"]
+           "Target", "check_pro_delta", "coerce_scene", "errors_text", "goals_shortfall_text", "shortfall_text",
+           "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
 #: of a reachable arm's configuration, so a search prefers every collision-free configuration.
@@ -45,6 +46,8 @@ DEFAULT_PRO_DELTA = np.pi / 100
 #: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
 #: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
 NEAR_UNBOUNDED = 1e3
+#: Most combinations of goal-set members a solve searches (:meth:`IKProblem.variants`).
+MAX_VARIANTS = 256
 
 
 def check_pro_delta(delta) -> float:
@@ -213,8 +216,20 @@ class IKProblem:
         for g, goal in enumerate(self.goals):
             if goal.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: their own violation
                 pos[:, g], rot[:, g] = goal.robot_population_errors(self.robot, Q)
+                continue
+            kinded = goal.population_errors(P[:, g], R[:, g], pt[g], Rt[g])  # bands, free axes, pointing
+            if kinded is not None:
+                pos[:, g], rot[:, g] = kinded
             elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
+        for g in self.goal_sets:  # a goal set's violation: that of its member nearest by the goals' cost
+            for member in self.goals[g].alternatives[1:]:
+                pm, Rm = member.encode()
+                pos_m = np.linalg.norm(P[:, g] - pm, axis=1)
+                rot_m = relative_angle(Rm, R[:, g]) if member.has_orientation else np.zeros_like(pos_m)
+                better = pos_m + self.orientation_weight * rot_m < pos[:, g] + self.orientation_weight * rot[:, g]
+                pos[:, g] = np.where(better, pos_m, pos[:, g])
+                rot[:, g] = np.where(better, rot_m, rot[:, g])
         return pos, rot
 
     def _goal_cost(self, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
@@ -223,16 +238,105 @@ class IKProblem:
         return (pos + self.orientation_weight * rot) @ w
 
     def goal_errors(self, q: np.ndarray) -> list[tuple[float, float | None]]:
-        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order."""
+        """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order (a goal
+        set's: those of its member :meth:`chosen` picks)."""
         fids = [self.robot.frame_id(g.frame) for g in self.goals]
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        if self.goal_sets:
+            return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)[1]
+                    for g, T in zip(self.goals, poses, strict=True)]
         return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
                 for g, T in zip(self.goals, poses, strict=True)]
 
+    # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal_set)
+    @property
+    def goal_sets(self) -> list[int]:
+        """Indices of the goals that are goal sets (any one of several targets)."""
+        if self.goals is None:
+            return []
+        found = self.__dict__.get("_goal_set_indices")
+        if found is None or found[0] is not self.goals:
+            found = self.__dict__["_goal_set_indices"] = (self.goals, [i for i, g in enumerate(self.goals)
+                                                                       if g.alternatives is not None])
+        return found[1]
+
+    def _member(self, goal, T) -> tuple[int | None, tuple[float, float | None]]:
+        """(index of the member of ``goal`` its frame at pose ``T`` meets, or failing that is nearest to by
+        position + orientation_weight x angle; None for a single target), with that member's errors)."""
+        if goal.alternatives is None:
+            return None, goal.errors(T)
+        from .lie import relative_angle
+
+        P, R = goal.member_targets  # a vectorized screen, then the exact errors of the member picked
+        pos = np.linalg.norm(P - T.translation, axis=1)
+        rot = relative_angle(T.rotation, R) if goal.has_orientation else np.zeros_like(pos)
+        met = np.nonzero((pos <= goal.tolerance) & (rot <= goal.rotation_tolerance))[0]
+        i = int(met[0]) if met.size else int(np.argmin(pos + self.orientation_weight * rot))
+        return i, goal.alternatives[i].errors(T)
+
+    def chosen(self, q: np.ndarray) -> list[int | None] | None:
+        """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
+        to), None for a goal with one target; None for a problem without a goal list."""
+        if self.goals is None:
+            return None
+        if not self.goal_sets:
+            return [None] * len(self.goals)
+        fids = [self.robot.frame_id(g.frame) for g in self.goals]
+        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        return [self._member(g, T)[0] for g, T in zip(self.goals, poses, strict=True)]
+
+    def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
+        """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen
+        per goal, None for a single target; targets pt (V, G, 3), Rt (V, G, 3, 3)). OptionError beyond ``most``."""
+        import itertools
+
+        _, pt, Rt = self.goal_stack() if self.goals is not None else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
+        sets = self.goal_sets
+        sizes = [len(self.goals[g].alternatives) for g in sets]
+        if math.prod(sizes) > most:
+            raise OptionError(f"goal sets of {' x '.join(map(str, sizes))} members make {math.prod(sizes)} "
+                              f"combinations; at most {most} are searched: give fewer members")
+        combos = list(itertools.product(*[range(k) for k in sizes]))
+        P = np.repeat(pt[None], len(combos), axis=0)
+        R = np.repeat(Rt[None], len(combos), axis=0)
+        choices = []
+        for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
+            P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
+        for combo in combos:
+            choice = [None] * len(self.goals or ())
+            for g, m in zip(sets, combo, strict=True):
+                choice[g] = m
+            choices.append(tuple(choice))
+        return choices, P, R
+
+    def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:
+        """The problem of one combination of goal-set members (:meth:`variant_targets`): those members as its goals,
+        sharing this problem's box, q0 and scene."""
+        import copy
+
+        if not self.goal_sets:
+            return self
+        goals = [g if m is None else g.alternatives[m] for g, m in zip(self.goals, choice, strict=True)]
+        v = copy.copy(self)
+        v.goals, v._goal_stack, v.evaluations = goals, [self._goal_stack[0], pt, Rt], 0
+        v.__dict__.pop("_goal_set_indices", None)
+        return v
+
+    def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
+        """The single-target problems of a goal list with goal sets, one per combination of their members (in
+        ``itertools.product`` order over the sets): (members chosen per goal, None for a single target; the problem
+        with those members as goals, sharing this one's box, q0 and scene). A list of one (None choices, self)
+        without goal sets. OptionError beyond ``most`` combinations."""
+        if not self.goal_sets:
+            return [(tuple([None] * len(self.goals or ())), self)]
+        choices, P, R = self.variant_targets(most)
+        return [(c, self.variant(c, P[v], R[v])) for v, c in enumerate(choices)]
+
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors
-        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list."""
-        pos = np.array([[p for p, _ in errors]])
+        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list. A goal's errors are those its success
+        test reads (for bands: the excess over them; for pointing goals: the angle as the rotation)."""
+        pos = np.array([[p or 0.0 for p, _ in errors]])  # None: a goal without a position (Orientation, ...)
         rot = np.array([[r or 0.0 for _, r in errors]])
         rots = [r for _, r in errors if r is not None]
         return float(pos.max()), (max(rots) if rots else None), float(self._goal_cost(pos, rot)[0])
@@ -241,13 +345,53 @@ class IKProblem:
         """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""
         return all(g.met(p, r) for g, (p, r) in zip(self.goals, errors, strict=True))
 
+    def goal_violation(self, Q: np.ndarray) -> np.ndarray:
+        """(N,) how far each row of ``Q`` (N, n) is from meeting every goal: the sum over the goals of the position
+        error beyond the goal's ``tolerance`` (m) plus the rotation angle beyond its ``rotation_tolerance`` (rad);
+        0 exactly where every goal is met. Counts N evaluations (NSGA-II's constraint over a goal list)."""
+        pos, rot = self._goal_population_errors(Q)
+        self.evaluations += Q.shape[0]
+        tol = np.array([g.tolerance for g in self.goals])
+        rtol = np.array([g.rotation_tolerance if g.reports_angle else np.inf for g in self.goals])
+        return (np.maximum(pos - tol, 0.0) + np.maximum(rot - rtol, 0.0)).sum(axis=1)
+
+    def rows_met(self, Q: np.ndarray) -> np.ndarray:
+        """(N,) bool: whether each row of ``Q`` (N, n) solves the problem, by the criterion of :func:`evoik_pin.solve`'s
+        verdict: every goal within its own tolerances (a goal list), or the errors within ``tolerance`` and
+        ``rotation_tolerance`` (one target). Bookkeeping: no evaluation is counted."""
+        before = self.evaluations
+        if self.goals is not None:
+            ok = self.goal_violation(Q) <= 0.0
+        else:
+            ev = self.evaluate(Q)
+            ok = np.asarray(self.succeeded(ev.position_error, ev.orientation_error), dtype=bool)
+        self.evaluations = before
+        return ok
+
+    def tightened(self, tolerance: float) -> IKProblem:
+        """This problem (robot, box, target or goals) with every tolerance at most ``tolerance`` (m and rad): for
+        refinement runs of the LM engine, which stop once the tolerances are met. A goal list keeps its goals (their
+        own tolerances still judge answers); only the kernel's goal stack gets the smaller tolerances."""
+        if self.goals is None:
+            return IKProblem(self.robot, self.target, lower=self.lower, upper=self.upper,
+                             tolerance=min(tolerance, self.tolerance),
+                             rotation_tolerance=min(tolerance, self.rotation_tolerance))
+        from .solvers.lm.layout import G_RTOL, G_TOL
+
+        tight = replace(self, goals=list(self.goals), evaluations=0)
+        stack, pt, Rt = tight._goal_stack
+        spec = stack.spec.copy()
+        spec[:, [G_TOL, G_RTOL]] = np.minimum(spec[:, [G_TOL, G_RTOL]], tolerance)
+        tight._goal_stack = [replace(stack, spec=spec), pt, Rt]
+        return tight
+
     def evaluate(self, Q: np.ndarray) -> Evaluation:
         """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors
         over the goals)."""
         if self.goals is not None:
             pos, rot = self._goal_population_errors(Q)
             self.evaluations += Q.shape[0]
-            oriented = any(g.has_orientation for g in self.goals)
+            oriented = any(g.reports_angle for g in self.goals)
             return Evaluation(self._penalized(Q, self._goal_cost(pos, rot)), pos.max(axis=1),
                               rot.max(axis=1) if oriented else None)
         target = self.target
@@ -405,4 +549,12 @@ def shortfall_text(problem: IKProblem, pos: float, rot: float | None) -> str:
     accepted = f"position error <= {problem.tolerance:g} m" + (
         "" if rot is None else f", orientation error <= {problem.rotation_tolerance:g} rad")
     return f"best {errors_text(pos, rot)} exceeds the tolerance ({accepted})"
+
+
+def goals_shortfall_text(problem: IKProblem, errors, pos: float, rot: float | None) -> str:
+    """'best position error ... m[, orientation error ... rad] (largest over the goals); goals not met: frame, ...'
+    for the messages of failed goal-list solves: ``errors`` each goal's (:meth:`IKProblem.goal_errors`), ``pos`` and
+    ``rot`` the largest of them."""
+    unmet = [g.frame for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
+    return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
 

@@ -68,6 +68,9 @@ class Result:
     setup_s: float = 0.0
     collision_free: bool | None = None
     goal_errors: list[tuple[float, float | None]] | None = None
+    #: for a goal list, per goal the index of the member of its goal set ``q`` meets (``Pose(frame, [T1, ...])``),
+    #: None for a goal with one target (:meth:`~evoik_pin.problem.IKProblem.chosen`); None for a single target
+    chosen: list[int | None] | None = None
     #: min_distance's value, or a callable computing it on first access (see ``min_distance``)
     distance_source: object = field(default=None, repr=False, compare=False)
 

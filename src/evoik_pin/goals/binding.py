@@ -44,7 +44,7 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
             raise FrameError(f"no active joint of {robot.name} moves frame {g.frame!r}: load the robot with that frame "
                              f"among its tips (tips=[...]) or with tips='all', or aim at another frame")
         other = seen.get(fid)
-        if other is not None:
+        if other is not None and other.aux() is None and g.aux() is None:  # bands, free axes, pointing: no clash
             pa, Ra = other.encode()
             pb, Rb = g.encode()
             clash = np.linalg.norm(pa - pb) > _CLASH
@@ -55,7 +55,7 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
                                   f"{pb.round(6).tolist()}): give each frame one target")
         seen[fid] = g
     stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
-                         [g.tolerance for g in goals], [g.rotation_tolerance for g in goals])
+                         [g.tolerance for g in goals], [g.rotation_tolerance for g in goals], [g.aux() for g in goals])
     stack = _beyond_frame(robot, goals, stack)
     encoded = [g.encode() for g in goals]
     pt = np.ascontiguousarray([e[0] for e in encoded], dtype=float)

@@ -10,6 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError
+from .bands import band_errors
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "number"]
 
@@ -39,6 +40,8 @@ class Goal:
     #: The LM kernel's goal kind (``KIND_*``), and whether the goal constrains orientation.
     kind: int = field(default=-1, init=False, repr=False)
     has_orientation: bool = field(default=False, init=False, repr=False)
+    #: A goal set's members (:mod:`.goal_set`): one single-target goal each; None for one target.
+    alternatives: tuple | None = field(default=None, init=False, repr=False)
 
     def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool) -> None:
         """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__)."""
@@ -72,20 +75,57 @@ class Goal:
     def label(self) -> str:
         """How messages name this goal: its frame (goals beyond one frame say more)."""
         return self.frame
+    #: Whether the goal puts the frame's origin somewhere (False for orientation and pointing goals: their target
+    #: position pt is no place for the frame, and seed ranking leaves it out). A class attribute, not a field.
+    has_position = True
+
+    def aux(self) -> np.ndarray | None:
+        """The kernel's ``aux`` row of this goal (:mod:`evoik_pin.solvers.lm.layout`'s ``AUX_*``, read-only; None:
+        its kind reads none), made once with the goal (:meth:`_set_aux`)."""
+        return self.__dict__.get("_aux")
+
+    def _set_aux(self, aux: np.ndarray | None) -> None:
+        if aux is not None:
+            aux.setflags(write=False)
+        object.__setattr__(self, "_aux", aux)
+
+    def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray] | None:
+        """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for target
+        (pt, Rt), as the kernel's success test sees them, for the kinds with an ``aux`` row (None for the others,
+        whose errors are the distance and the rotation angle)."""
+        aux = self.aux()
+        if aux is None:
+            return None
+        return band_errors(self.kind, P, R, pt, Rt, aux)
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
         """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal."""
         raise NotImplementedError
 
     def errors(self, T: pin.SE3) -> tuple[float, float | None]:
-        """(position error m, rotation angle rad or None) of the goal frame at pose ``T`` (base frame)."""
+        """(position error m or None, rotation angle rad or None) of the goal frame at pose ``T`` (base frame); for
+        the kinds with bands, free axes or an axis to point, the errors their success test compares with the
+        tolerances (:mod:`.bands`)."""
         pt, Rt = self.encode()
+        aux = self.aux()
+        if aux is not None:  # the kernel's own errors (its success test's), by its compiled code for one pose
+            from ..solvers.lm.axes import axes_error
+
+            _, pos, rot = axes_error(self.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation),
+                                     pt, Rt, aux, np.empty((3, 3)), np.empty(3), np.empty(6))
+            return (pos if self.has_position else None), (rot if self.reports_angle else None)
         pos = float(np.linalg.norm(T.translation - pt))
         if not self.has_orientation:
             return pos, None
         return pos, float(np.linalg.norm(pin.log3(Rt.T @ T.rotation)))
 
-    def met(self, position_error: float, orientation_error: float | None) -> bool:
-        """Whether errors (m, rad or None) are within this goal's tolerances."""
-        return position_error <= self.tolerance and (orientation_error is None
+    @property
+    def reports_angle(self) -> bool:
+        """Whether the goal's errors include an angle (rad): it constrains orientation, or it points an axis."""
+        return self.has_orientation
+
+    def met(self, position_error: float | None, orientation_error: float | None) -> bool:
+        """Whether errors (m or None, rad or None) are within this goal's tolerances."""
+        return (position_error is None or position_error <= self.tolerance) and (orientation_error is None
                                                      or orientation_error <= self.rotation_tolerance)

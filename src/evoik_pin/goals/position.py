@@ -8,7 +8,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..solvers.lm.layout import KIND_POSITION
+from ..solvers.lm.layout import KIND_POSITION, KIND_POSITION_BAND
+from . import goal_set
+from .bands import AXES, band_aux, parse_band
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 
 __all__ = ["Position"]
@@ -18,16 +20,33 @@ __all__ = ["Position"]
 class Position(Goal):
     """The frame's origin at ``target``, a 3-vector (m) in the robot's base frame; orientation free.
 
-    Args: frame, target, then ``weight`` (> 0, default 1) and ``tolerance`` (m, default 1e-6).
+    Args: frame, target, then ``weight`` (> 0, default 1) and ``tolerance`` (m, default (or None) 1e-6): one number, the
+    bound of the position error's norm, or 3 numbers, half-widths of the error ``p - p_t`` along the BASE frame's
+    x, y, z (a position target has no frame of its own; ``inf``: free), met when every component is within its
+    band. See :mod:`evoik_pin.goals.bands`.
+
+    ``target`` may be a goal set: a list of 3-vectors or a (k, 3) array, any one of which will do
+    (:mod:`.goal_set`).
     """
 
     target: object = None
     weight: float = 1.0
     tolerance: float = DEFAULT_GOAL_TOLERANCE
     rotation_tolerance: float | None = None
+    #: The per-axis half-widths (3,) (m, base frame; inf: free) of a banded position, else None.
+    band: object = None
 
-    def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
-        self._init_common(frame, weight, tolerance, None, KIND_POSITION, False)
+    def __init__(self, frame: str, target, weight: float = 1.0,
+                 tolerance: float | object = DEFAULT_GOAL_TOLERANCE) -> None:
+        band = parse_band(tolerance, AXES[:3], f"Position on {frame!r}")
+        if band is None:
+            self._init_common(frame, weight, tolerance, None, KIND_POSITION, False)
+        else:  # the errors of a banded goal are its excess over the bands: met at 0
+            self._init_common(frame, weight, 0.0, None, KIND_POSITION_BAND, False)
+        object.__setattr__(self, "band", band)
+        self._set_aux(None if band is None else band_aux(band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE))
+        if goal_set.is_set(target, (3,)):  # any one of several points
+            return goal_set.init_set(self, target, lambda p: Position(frame, p, weight, tolerance), "Position points")
         if isinstance(target, pin.SE3) or np.shape(target) == (4, 4):
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m); use Pose({frame!r}, T) for a pose")
         try:
@@ -44,5 +63,5 @@ class Position(Goal):
         return self.target.copy(), np.eye(3)
 
     def __repr__(self) -> str:
-        return (f"Position({self.frame!r}, {np.round(self.target, 6).tolist()}, weight={self.weight:g}, "
-                f"tolerance={self.tolerance:g})")
+        tol = f"{self.tolerance:g}" if self.band is None else f"{self.band.tolist()}"
+        return f"Position({self.frame!r}, {np.round(self.target, 6).tolist()}, weight={self.weight:g}, tolerance={tol})"

@@ -103,6 +103,7 @@ class Robot:
         base_box=None,
         packages: dict[str, str] | None = None,
         missing_packages: dict[str, str] | None = None,
+        rest: dict[str, float] | None = None,
     ) -> None:
         """``full_model``: the URDF's fixed-base Pinocchio model. ``tips``: frames whose chains make the active
         joints (``tip`` defaults to the first), or ``"all"`` for every joint downstream of the base. ``mimic``:
@@ -111,7 +112,13 @@ class Robot:
         (:func:`~evoik_pin.robot.urdf_checks.check_urdf` returns them); entries naming no 1-DOF joint of
         ``full_model`` are ignored. ``floating_base``, ``base_box``: see :func:`~evoik_pin.robot.load_robot`.
         ``packages``: ``{pkg: folder}`` that ``package://pkg/...`` mesh URIs resolve to (before ``package_dirs``);
-        ``missing_packages``: ``{pkg: error message}`` of those nothing found."""
+        ``missing_packages``: ``{pkg: error message}`` of those nothing found. ``rest``: ``{joint: value}`` (rad or
+        m) where joints left out of ``q`` stay instead of their neutral value (:meth:`locked`)."""
+        self._init_args = dict(full_model=full_model, tip=tip, base=base, joints=joints, name=name,
+                               urdf_path=urdf_path, urdf_xml=urdf_xml, package_dirs=package_dirs, mimic=mimic,
+                               tips=tips, floating_base=floating_base, base_box=base_box, packages=packages,
+                               missing_packages=missing_packages)
+        self.locked_values: dict[str, float] = dict(rest or {})
         self.name = name
         self.urdf_path = urdf_path
         self.urdf_xml = urdf_xml
@@ -219,6 +226,8 @@ class Robot:
                 lo, hi = kin.lowerPositionLimit[jm.idx_q], kin.upperPositionLimit[jm.idx_q]
                 if lo <= hi:
                     q_ref[jm.idx_q] = np.clip(q_ref[jm.idx_q], lo, hi)
+        for jname, value in (rest or {}).items():  # joints locked elsewhere than at rest (Robot.locked)
+            set_joint_value(kin, q_ref, kin.getJointId(jname), value)
         for j, (d, m, off) in coupling.items():  # locked mimic joints sit where their driver's rest puts them
             set_joint_value(kin, q_ref, j, m * joint_value(kin, q_ref, d) + off)
         to_lock = [j for j in range(1, kin.njoints) if j not in physical]
@@ -321,6 +330,18 @@ class Robot:
         lower, upper = self.lower.copy(), self.upper.copy()
         lower[:3], upper[:3] = lo, hi
         self.set_bounds(lower, upper)
+
+    def locked(self, values: dict[str, float]) -> Robot:
+        """A new Robot with the joints ``values`` names fixed at those values (rad or m): its ``q`` omits them (the
+        other joints in the same order), its :meth:`fk` and :meth:`full_configuration` put them there, its bounds are
+        this robot's on the joints left. Locking a locked robot locks more. See :mod:`.locking`.
+
+        Raises: FrameError for a name that is no joint of ``q`` (with this robot's joints); BoundsError for a value
+        outside the joint's bounds (naming them); ConfigurationError when every joint would be locked.
+        """
+        from .locking import locked_robot
+
+        return locked_robot(self, values)
 
     # ------------------------------------------------------------------ frames
     @cached_property
@@ -622,6 +643,19 @@ class Robot:
         J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, pin.ReferenceFrame.LOCAL)
         J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
         return J @ self._G if self._coupled else J
+
+    def jacobian_world_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
+        """``jacobian(q, "world")`` of the tip (or of Pinocchio frame ``frame_id``) without validation (6, n), for
+        inner loops (``q`` as in :meth:`fk_unchecked`)."""
+        fid = self._tip_id if frame_id is None else frame_id
+        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid,
+                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, -1)
+        if self._coupled:
+            J = J @ self._G
+        if self._base_id != 0:
+            Rt = self._oMbase.rotation.T
+            J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
+        return J
 
     @staticmethod
     def task_rows(rows) -> list[int]:

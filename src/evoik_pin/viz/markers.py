@@ -13,8 +13,12 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..solvers.lm.layout import KIND_BEYOND_FRAME, KIND_COM
+from ..solvers.lm.layout import KIND_BEYOND_FRAME, KIND_COM, KIND_DIRECTION, KIND_ORIENTATION
 from .server import _talks
+
+#: Goal kinds whose target is no place (an orientation, a direction): show_goals draws no marker for them (a
+#: LookAt's point gets a sphere).
+UNPLACED_KINDS = (KIND_ORIENTATION, KIND_DIRECTION)
 
 __all__ = ["GOAL_LABEL_HEIGHT"]
 
@@ -151,6 +155,8 @@ class MarkerDrawing:
             node = f"{name}/{frame}"
             if node in nodes:  # the same frame twice with the same target (bind refuses clashing ones)
                 continue
+            if goal.kind in UNPLACED_KINDS:  # an orientation or a direction alone: no place to mark
+                continue
             p, R = goal.encode()
             kind = _draw_marker(vis[node], p, R if goal.has_orientation else None, s)
             if labels:
@@ -189,6 +195,7 @@ class MarkerDrawing:
             model = self.robot.model
             links = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
             poses = self.robot.frame_poses_unchecked(q, links)  # q checked by show
-            self.frame(np.array([M.translation for M in poses] + [g.encode()[0] for g in goals]))
+            self.frame(np.array([M.translation for M in poses]
+                                + [g.encode()[0] for g in goals if g.kind not in UNPLACED_KINDS]))
         return pairs
 

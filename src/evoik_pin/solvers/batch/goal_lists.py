@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import FrameError, TargetError
 from ...goals import Goal, bind, is_goal_list
-from ..lm.layout import G_WEIGHT, KIND_BEYOND_FRAME, GoalArrays
+from ..lm.layout import G_WEIGHT, KIND_BEYOND_FRAME, POSITIONLESS_KINDS, GoalArrays
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
@@ -34,9 +34,11 @@ def is_goal_batch(targets) -> bool:
 
 def structure(goals) -> tuple:
     """What problems sharing a goal stack have in common: each goal's (frame, kind, weight, tolerance m,
-    rotation tolerance rad), in order; for a goal beyond one frame also what its ``aux`` row holds
-    (``batch_key()``: a centre of mass's axes, margin and contact points, a relative pose's first frame)."""
-    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance)
+    rotation tolerance rad, and its aux row's bytes: bands, free axes, a pointing axis), in order; for a goal beyond
+    one frame also what its robot-bound ``aux`` row holds (``batch_key()``: a centre of mass's axes, margin and contact
+    points, a relative pose's first frame)."""
+    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                  None if g.aux() is None else g.aux().tobytes())
                  + (g.batch_key() if g.kind >= KIND_BEYOND_FRAME else ()) for g in goals)
 
 
@@ -114,6 +116,8 @@ class GoalSource:
         """Lists a to b - 1 as a :class:`GoalBlock`."""
         by_key: dict[tuple, list[int]] = {}
         for i in range(a, b):
+            if any(g.alternatives is not None for g in self.raw[i]):
+                continue  # goal sets go to the one-by-one solver, which tries their members (search.choose)
             by_key.setdefault(self._keys[i], []).append(i)
         groups = []
         for key, rows in by_key.items():
@@ -144,7 +148,8 @@ class GoalTree:
         # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
         # (a goal beyond one frame has no target pose of its frame to rank by: weight 0)
         weights = np.where(np.array(stack.kinds) >= KIND_BEYOND_FRAME, 0.0, stack.spec[:, G_WEIGHT]).tolist()
-        self.spec = tuple(zip(weights, (bool(o) for o in stack.oriented), strict=True))
+        self.spec = tuple((w, bool(o)) + ((False,) if k in POSITIONLESS_KINDS else ())  # SeedTable.goal_spec's
+                          for w, o, k in zip(weights, stack.oriented, stack.kinds, strict=True))
         F, _ = table.goal_table_features(tuple(stack.frames), self.spec)
         self.index = np.arange(table.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
         self.tree = cKDTree(F[self.index])

@@ -71,7 +71,8 @@ class BatchOutcome:
         self.cost[i], self.success[i], self.evaluations[i], self.time_s[i] = r.cost, r.success, r.evaluations, r.time_s
         self.source[i] = SOURCE_SINGLE
         if self.goal_errors is not None and r.goal_errors is not None:
-            self.goal_errors[i] = np.array([(p, np.nan if o is None else o) for p, o in r.goal_errors], dtype=float)
+            self.goal_errors[i] = np.array([(np.nan if p is None else p, np.nan if o is None else o)
+                                            for p, o in r.goal_errors], dtype=float)
 
     @classmethod
     def concatenate(cls, parts: list[BatchOutcome]) -> BatchOutcome:
@@ -116,7 +117,8 @@ class BatchOutcome:
                  time_s=times[j], message=messages[source[j]],
                  history={"best_cost": h[0], "mean_cost": h[1], "diversity": h[2]})
         if self.goal_errors is not None:
-            d["goal_errors"] = [(p, None if math.isnan(o) else o) for p, o in self.goal_errors[j].tolist()]
+            d["goal_errors"] = [(None if math.isnan(p) else p, None if math.isnan(o) else o)
+                                for p, o in self.goal_errors[j].tolist()]
         r = Result.__new__(Result)
         r.__dict__ = d
         if template is not None and template.scene is not None:

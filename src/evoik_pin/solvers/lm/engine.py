@@ -49,10 +49,10 @@ from .layout import (
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
     GOAL_SIZE,
-    KIND_BEYOND_FRAME,
     KIND_PLANAR,
     KIND_PLANAR_YAW,
     KIND_POSE,
+    KIND_POSE_AXES,
     KIND_POSITION,
     P_ITERATIONS,
     S_CONVERGED,
@@ -160,10 +160,11 @@ class LevenbergMarquardt:
         if engine == "python":
             from .reference import ReferenceLM
 
-            if any(k >= KIND_BEYOND_FRAME for k in stack.kinds):
-                raise OptionError("the Python reference LM (engine='python') runs goals on one frame only; "
-                                  "CenterOfMass and RelativePose goals need the compiled engine (engine='compiled', "
-                                  "the default)")
+            if any(k >= KIND_POSE_AXES for k in stack.kinds):  # bands, free axes, orientation, pointing, beyond a frame
+                raise OptionError("the Python reference LM (engine='python') knows pose, position and planar goals "
+                                  "only; goals with tolerance bands or free axes, Orientation, Direction, LookAt, "
+                                  "CenterOfMass and RelativePose need the compiled engine (engine='compiled', the "
+                                  "default)")
             self._reference = ReferenceLM(problem, damping, max_step, stall_window, stall_ratio, finish)
             return
         self._reference = None

@@ -47,6 +47,7 @@ import numpy as np
 from numba import njit
 
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
+from .axes import axes_error, axes_jacobian
 from .balance import balance_columns, balance_error, com_rows
 from .chain import coupled, expand, fold
 from .layout import (
@@ -69,9 +70,12 @@ from .layout import (
     GROW,
     KIND_BEYOND_FRAME,
     KIND_COM_SUPPORT,
+    KIND_LOOK_AT,
+    KIND_ORIENTATION,
     KIND_PLANAR,
     KIND_PLANAR_YAW,
     KIND_POSE,
+    KIND_POSE_AXES,
     KIND_POSITION,
     KIND_RELATIVE_POSE,
     LAMBDA_MAX,
@@ -101,6 +105,10 @@ def task_size(kind):
     if kind == KIND_POSE:
         return 6
     if kind == KIND_POSITION or kind == KIND_PLANAR_YAW:
+        return 3
+    if kind == KIND_POSE_AXES:
+        return 6
+    if KIND_POSE_AXES < kind <= KIND_LOOK_AT:  # position with bands, orientation, direction, look-at
         return 3
     if kind >= KIND_BEYOND_FRAME:  # centre of mass 3, support polygon 2, relative pose 6
         return 2 if kind == KIND_COM_SUPPORT else (6 if kind == KIND_RELATIVE_POSE else 3)
@@ -164,7 +172,11 @@ def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, wei
                                          M, tg[g], e[r:r + task_size(kind)])
         else:
             frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
-            cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
+            if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # the kinds of .axes (tg[g], unused by them, as scratch)
+                cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g],
+                                          e[r:r + task_size(kind)])
+            else:
+                cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
         c += cg
         ge[g, 0], ge[g, 1] = pos, rot
     if weighted:
@@ -221,13 +233,14 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A, B, E,
-                  parent, Rj, pj):
+def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
+                  B, E, parent, Rj, pj):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
     per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
     with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
-    goal's rows (:func:`goal_jacobian`), scaled by the square root of its weight (when ``weighted``, in a second
-    pass, as :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
+    goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G, 3, 3), for
+    its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
+    :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
     parent (m,) and the joint poses Rj (m, 3, 3), pj (m, 3): for the kinds beyond one frame (:mod:`.balance`), which
     start from their own physical Jacobian.
     """
@@ -251,7 +264,10 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, p
             fold(index, scale, Jx, J)
         else:
             frame_jacobian(rev, support[g], pg[g], Z, O, J)
-        goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
+        if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:
+            axes_jacobian(kind, Rg[g], pg[g], J, pt[g], Rt[g], gaux[g], rv, A, B, E, r)
+        else:
+            goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
     if weighted:
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
@@ -558,7 +574,8 @@ def _outcome(spec, ge, g_out):
     rot = np.nan
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
-        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or kind == KIND_RELATIVE_POSE
+        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or kind == KIND_RELATIVE_POSE or (
+            kind == KIND_POSE_AXES or KIND_ORIENTATION <= kind <= KIND_LOOK_AT)  # an angle: .axes's kinds but one
         g_out[g, 0] = ge[g, 0]
         g_out[g, 1] = ge[g, 1] if oriented else np.nan
         pos = max(pos, ge[g, 0]) if ge[g, 0] == ge[g, 0] else ge[g, 0]  # a NaN error stays NaN
@@ -618,8 +635,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
     while it < max_it:
         it += 1
         if not have_E:
-            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-                          Bm, E, parent, Rj, pj)
+            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
+                          rv, A, Bm, E, parent, Rj, pj)
             have_E = True
         on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         if creeping and not (on_bound or on_bound_n):
@@ -681,8 +698,8 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
                 break
     if converged and finish and c > FINISHED:
         # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, pg, Z, O, tg, e, Jx, J, rv, A, Bm, E,
-                      parent, Rj, pj)
+        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
+                      A, Bm, E, parent, Rj, pj)
         lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
                         Rj2,
@@ -793,8 +810,8 @@ def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, suppor
             weighted = True
     c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, ws.x, spec, weighted, gR, gp, gaux, pt, Rt,
                    ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.M, ws.e, ws.ge)
-    task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, ws.Rg, ws.pg, ws.Z, ws.O, ws.tg, ws.e, ws.Jx,
-                  ws.J, ws.rv, ws.A, ws.Bm, ws.E, parent, ws.Rj, ws.pj)
+    task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, ws.Rg, ws.pg, ws.Z, ws.O, ws.tg,
+                  ws.e, ws.Jx, ws.J, ws.rv, ws.A, ws.Bm, ws.E, parent, ws.Rj, ws.pj)
     for i in range(ws.e.shape[0]):
         e_out[i] = ws.e[i]
         for k in range(n):

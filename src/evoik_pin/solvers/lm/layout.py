@@ -28,7 +28,8 @@ import numpy as np
 __all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT_STALL_RATIO",
            "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
            "GoalArrays", "GoalStack", "TargetArrays", "box_constants", "encode_target", "encode_targets",
-           "kernel_params", "problem_goals", "target_kind", "wrapping_joints"]
+           "kernel_params", "problem_goals", "target_kind", "wrapping_joints", "KIND_POSE_AXES", "KIND_POSITION_BAND",
+           "KIND_ORIENTATION", "KIND_DIRECTION", "KIND_LOOK_AT", "ANGLE_KINDS", "POSITIONLESS_KINDS"]
 
 TWO_PI = 2.0 * np.pi
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
@@ -64,7 +65,28 @@ KIND_COM, KIND_COM_SUPPORT, KIND_RELATIVE_POSE = 10, 11, 12
 KIND_BEYOND_FRAME = 10
 TASK_ROWS.update({KIND_COM: (0, 1, 2), KIND_COM_SUPPORT: (0, 1), KIND_RELATIVE_POSE: (0, 1, 2, 3, 4, 5)})
 #: Kinds whose goals constrain orientation.
-ORIENTED_KINDS = (KIND_POSE, KIND_PLANAR_YAW, KIND_RELATIVE_POSE)
+ORIENTED_KINDS = (KIND_POSE, KIND_PLANAR_YAW)
+#: Goal kinds on one frame beyond those (:mod:`.axes`; the goal classes of :mod:`evoik_pin.goals`): a pose with
+#: per-axis tolerance bands or free axes (6 rows: position in the target frame, then rotation), a position with
+#: bands (3 rows, base frame), an orientation alone (3 rows), a frame axis along a direction, a frame axis at a
+#: point (3 rows each: the axis minus the wanted unit direction, base frame).
+KIND_POSE_AXES, KIND_POSITION_BAND, KIND_ORIENTATION, KIND_DIRECTION, KIND_LOOK_AT = 4, 5, 6, 7, 8
+TASK_ROWS.update({KIND_POSE_AXES: (0, 1, 2, 3, 4, 5), KIND_POSITION_BAND: (0, 1, 2), KIND_ORIENTATION: (3, 4, 5),
+                  KIND_DIRECTION: (3, 4, 5), KIND_LOOK_AT: (3, 4, 5)})
+ORIENTED_KINDS += (KIND_POSE_AXES, KIND_ORIENTATION)
+#: Kinds whose goals put the frame's origin nowhere (their target's pt is a direction or a point to look at).
+POSITIONLESS_KINDS = (KIND_ORIENTATION, KIND_DIRECTION, KIND_LOOK_AT)
+#: Kinds whose errors include an angle (rad): the oriented ones and the pointing ones.
+ANGLE_KINDS = ORIENTED_KINDS + (KIND_DIRECTION, KIND_LOOK_AT)
+#: Their goals' ``aux`` columns. Bands (pose with axes, position with bands, orientation): AUX_INNER (6,) the
+#: residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
+#: the half-widths the success test accepts (inf free, 0 under a norm tolerance), AUX_SWING the one free rotation
+#: axis (0, 1, 2: x, y, z of the target frame) whose swing residual replaces the rotation vector, or -1.
+#: Pointing (direction, look-at): AUX_AXIS (3,) the frame's unit axis.
+AUX_INNER, AUX_BAND, AUX_SWING, AUX_AXIS = 0, 6, 12, 0
+AUX_SIZE = 13
+ORIENTED_KINDS += (KIND_RELATIVE_POSE,)
+ANGLE_KINDS += (KIND_RELATIVE_POSE,)
 #: aux of the centre-of-mass kinds (``goals.center_of_mass``): total mass M (kg), the first moment (kg m, base
 #: frame) of the bodies no joint moves, the axes mask (1.0 on the constrained axes; KIND_COM) or (KIND_COM_SUPPORT)
 #: the shrink s (m) of the support polygon and its number K of contact points; then A_COM_BODIES + 5 k (k < m):
@@ -237,9 +259,10 @@ class GoalStack:
         return self.spec, self.R, self.p, self.support, self.aux
 
     @classmethod
-    def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances) -> GoalStack:
+    def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux=None) -> GoalStack:
         """The stack of goals on ``frames`` (names; None: the robot's tip) of ``kinds`` (``KIND_*``) with
-        ``weights`` (> 0), ``tolerances`` (m) and ``rotation_tolerances`` (rad), one each per goal."""
+        ``weights`` (> 0), ``tolerances`` (m) and ``rotation_tolerances`` (rad), one each per goal; ``aux``: per
+        goal its further numbers (a 1-d array or None), packed into the (G, A) ``aux`` array (zero-padded)."""
         G = len(frames)
         spec = np.empty((G, GOAL_SIZE))
         R, p = np.empty((G, 3, 3)), np.empty((G, 3))
@@ -250,8 +273,15 @@ class GoalStack:
             joints.append(j)
             spec[g] = (kinds[g], j, np.sqrt(weights[g]), tolerances[g], rotation_tolerances[g], row)
             row += len(TASK_ROWS[kinds[g]])
+        packed = None
+        if aux is not None and any(a is not None for a in aux):
+            width = max(len(a) for a in aux if a is not None)
+            packed = np.zeros((G, width))
+            for g, a in enumerate(aux):
+                if a is not None:
+                    packed[g, :len(a)] = a
         return cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
-                   tuple(robot.tip if f is None else f for f in frames))
+                   tuple(robot.tip if f is None else f for f in frames), packed)
 
     @classmethod
     def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:

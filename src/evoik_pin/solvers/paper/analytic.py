@@ -9,7 +9,10 @@
 
 Everything is in metres and radians. The registered ``algebraic`` method recognizes the bundled robots by
 name and checks that the loaded chain's forward kinematics equals the closed form before using it; other
-robots raise :class:`~evoik_pin.errors.MethodError`.
+robots raise :class:`~evoik_pin.errors.MethodError`. A closed form solves one target for the tip: a goal list is
+accepted only when it is that problem, one ``Pose`` or ``Position`` goal on the robot's tip
+(:func:`tip_target_problem`); ``evoik_pin.solve`` refuses other goal lists with a MethodError naming the methods that
+take them.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ __all__ = [
     "puma_fk",
     "puma_ik",
     "solution_results",
+    "tip_target_problem",
 ]
 
 _CM = 0.01
@@ -321,7 +325,8 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     """One :class:`Result` per row of ``Q`` (M, n), best (lowest cost) first.
 
     Rows are evaluated once more for their errors; that bookkeeping does not count as evaluations.
-    With ``only_successful``, rows that miss the problem's tolerances are left out.
+    With ``only_successful``, rows that miss the problem's tolerances are left out (a goal list: rows that miss a
+    goal's own tolerances; each Result then has its ``goal_errors``).
     """
     if len(Q) == 0:
         return []
@@ -329,7 +334,7 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     before = problem.evaluations
     ev = problem.evaluate(Q)
     problem.evaluations = before
-    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    ok = problem.rows_met(Q)
     out = []
     for i in np.argsort(ev.cost, kind="stable"):
         if only_successful and not ok[i]:
@@ -337,8 +342,28 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
         rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
         out.append(Result(q=Q[i].copy(), position_error=float(ev.position_error[i]), orientation_error=rot,
                           cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations,
-                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method))
+                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method,
+                          goal_errors=None if problem.goals is None else problem.goal_errors(Q[i])))
     return out
+
+
+def tip_target_problem(problem: IKProblem) -> IKProblem | None:
+    """The one-target problem a goal list stands for when it is one Pose or Position goal on the robot's tip (the
+    closed forms' problem: the goal's target, tolerances and the problem's box), else None."""
+    from dataclasses import replace
+
+    from ...goals import Pose, Position
+    from ...target import Target
+
+    goals, robot = problem.goals, problem.robot
+    if len(goals) != 1 or type(goals[0]) not in (Pose, Position):
+        return None
+    if robot.frame_id(goals[0].frame) != robot.frame_id(None):  # a goal on another frame than the tip
+        return None
+    goal = goals[0]
+    pt, Rt = goal.encode()
+    return replace(problem, target=Target(pt, Rt if goal.has_orientation else None), goals=None,
+                   tolerance=goal.tolerance, rotation_tolerance=goal.rotation_tolerance, evaluations=0)
 
 
 def _target_point(problem: IKProblem, robot_name: str) -> np.ndarray:

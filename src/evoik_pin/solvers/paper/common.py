@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from ...problem import Evaluation, IKProblem, shortfall_text
+from ...problem import Evaluation, IKProblem, goals_shortfall_text, shortfall_text
 from ...result import Result
 from ..options import check_choice, check_int, check_number
 
@@ -159,7 +159,11 @@ class SolverRun:
 
     @property
     def best_succeeded(self) -> bool:
-        return self.best_q is not None and bool(self.problem.succeeded(self._best_pos, self._best_rot))
+        if self.best_q is None:
+            return False
+        if self.problem.goals is not None:  # every goal within its own tolerances (not the problem's)
+            return bool(self.problem.rows_met(self.best_q[None])[0])
+        return bool(self.problem.succeeded(self._best_pos, self._best_rot))
 
     def stop_reason(self) -> str | None:
         """Why to stop now, or None to go on."""
@@ -184,15 +188,21 @@ class SolverRun:
         pos = float(ev.position_error[0])
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
         success = bool(problem.succeeded(pos, rot))
+        goal_errors = None
+        if problem.goals is not None:  # every goal within its own tolerances
+            goal_errors = problem.goal_errors(q)
+            success = problem.goals_met(goal_errors)
         if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
             message = "stopped"
-        if not success:
+        if not success and goal_errors is not None:
+            message += f"; {goals_shortfall_text(problem, goal_errors, pos, rot)}"
+        elif not success:
             message += f"; {shortfall_text(problem, pos, rot)}"
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
             generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,
             history={k: np.asarray(v) for k, v in self.history.items()}, message=message, method=method,
-            **fields,
+            goal_errors=goal_errors, **fields,
         )
 
 

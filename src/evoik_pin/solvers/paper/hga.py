@@ -7,6 +7,9 @@ polished by ``scipy.optimize.minimize(method="Nelder-Mead")``, whose coefficient
 (reflection 1, expansion 2, contraction 0.5, shrink 0.5), inside the search box. Polished points that
 meet the tolerances are merged again (they often converge to the same solution) and returned as the
 distinct IK solutions, best first.
+
+A goal list (:mod:`evoik_pin.goals`) is searched the same way on its cost (``IKProblem.evaluate``: the goals'
+weighted errors), and a polished point is a solution when it meets every goal within that goal's tolerances.
 """
 
 from __future__ import annotations
@@ -78,8 +81,8 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
 
     Returns:
         :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution
-        that meets the tolerances, best first (empty, with a message, when none does, e.g. an unreachable
-        target).
+        that meets the tolerances (a goal list: every goal's, each solution with its ``goal_errors``), best first
+        (empty, with a message, when none does, e.g. an unreachable target).
     """
     population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
         population, max_generations, niches, niche_size, eta, crossover_probability)
@@ -105,7 +108,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     for i in range(len(polished)):
         rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
         run.offer(polished[i], float(ev.cost[i]), float(ev.position_error[i]), rot)
-    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    ok = problem.rows_met(polished)  # a goal list: every goal within its own tolerances
     good, good_cost = polished[ok], ev.cost[ok]
     if len(good):
         leaders, _ = leader_clusters(good, good_cost, solution_radius, problem.robot.revolute)
@@ -113,6 +116,9 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     message = (f"{len(good)} distinct solution(s) from {len(starts)} polished niche leader(s)" if len(good) else
                f"no polished niche leader (of {len(starts)}) reaches the target: it is out of reach, or "
                "the GA missed it")
+    if not len(good) and problem.goals is not None and problem.n > 6:
+        message += (f" (Nelder-Mead over {problem.n} joints rarely meets a goal list's tolerances; memetic-all finds "
+                    "the solutions of whole robots)")
     result = run.result("hga", message)
     result.solutions = solution_results(problem, good, "hga", result.generations, result.evaluations,
                                         result.time_s)

@@ -33,6 +33,7 @@ import numpy as np
 
 from ... import lie
 from ...errors import BoundsError, OptionError
+from ...goals import Pose, Position
 from ...objectives import (
     Manipulability,
     Objective,
@@ -48,10 +49,13 @@ from ..options import check_fraction, check_int, check_nonnegative, check_nonneg
 from .common import SolverRun, diversity, halton, initial_population
 
 __all__ = [
+    "GoalManipulability",
     "NSGA2Result",
     "bounded_polynomial_mutation",
     "crowding_distance",
     "dominance_matrix",
+    "goal_task",
+    "goal_rows",
     "nondominated_ranks",
     "nsga2_minimize",
     "sbx",
@@ -429,34 +433,146 @@ def _task_errors(problem: IKProblem, Q: np.ndarray) -> np.ndarray:
 
 
 def dls_repair(problem: IKProblem, Q: np.ndarray, steps: int, damping: float = 1e-4,
-               weights: np.ndarray | None = None) -> np.ndarray:
+               weights: np.ndarray | None = None, task=None) -> np.ndarray:
     """``steps`` damped-least-squares Newton steps (N, n) towards the target, all individuals at once.
 
     ``dq = W J^T (J W J^T + damping^2 I)^-1 e`` on the task rows of the base-frame Jacobian, then clipped
     into the box: the step of least ``dq^T W^-1 dq``. ``weights`` W (n,) default ones; ``nsga2`` passes
     1 / K so the repair, like the smoothness S, moves high-gain joints (the vehicle) least. Each step
-    costs one batched FK and Jacobian and counts N evaluations.
+    costs one batched FK and Jacobian and counts N evaluations. ``task(Q) -> (e (N, m), J (N, m, n))``: the
+    errors and Jacobian rows the steps zero (default the target's task rows; :func:`goal_task` for a goal list).
     """
-    rows = _task_rows(problem)
-    lam2 = damping ** 2 * np.eye(len(rows))
+    if task is None:
+        rows = _task_rows(problem)
+
+        def task(Q):
+            return _task_errors(problem, Q), problem.robot.jacobian_batch(Q)[:, rows]
+
     W = np.ones(problem.n) if weights is None else np.asarray(weights, float)
+    lam2 = None
     for _ in range(steps):
-        e = _task_errors(problem, Q)
-        J = problem.robot.jacobian_batch(Q)[:, rows]
+        e, J = task(Q)
         problem.evaluations += Q.shape[0]
+        if lam2 is None:
+            lam2 = damping ** 2 * np.eye(J.shape[1])
         JW = J * W
         y = np.linalg.solve(JW @ J.transpose(0, 2, 1) + lam2, e[:, :, None])[..., 0]
         Q = np.clip(Q + np.einsum("nji,nj->ni", JW, y), problem.lower, problem.upper)
     return Q
 
 
+# ---------------------------------------------------------------------------------------------- goal lists
+def goal_rows(goal) -> list[int]:
+    """Rows (of the frame's base-frame Jacobian: vx, vy, vz, wx, wy, wz) a goal constrains, as its manipulability
+    reads them: the translation rows, and the rotation rows too for a goal that constrains orientation (a Pose)."""
+    return [0, 1, 2, 3, 4, 5] if goal.has_orientation else [0, 1, 2]
+
+
+class GoalManipulability(Objective):
+    """Paper 003's manipulability cost over several goal frames (a goal list): Y is the product of the singular
+    values of the stacked Jacobian rows ``rows[i]`` of ``frames[i]`` (base frame, (sum of rows, n)), that is
+    ``sqrt(det(J J^T))`` while there are at most as many rows as joints (the tip's :class:`Manipulability` for one
+    frame) and ``sqrt(det(J^T J))`` otherwise. ``form`` as :class:`Manipulability`'s: ``"inverse"`` 1 / (Y + 1)
+    (minimized), ``"negative"`` -Y, ``"value"`` Y. Y has the units of the rows' product (m per rad for translation
+    rows, 1 for rotation rows)."""
+
+    def __init__(self, frames, rows, form: str = "inverse") -> None:
+        self._form = Manipulability("translation", form).form  # the form's check
+        self.frames, self.rows = list(frames), [list(r) for r in rows]
+
+    def value(self, Q, kin):
+        robot = kin.robot
+        J = np.concatenate([robot.jacobian_batch(Q, validate=False, frame=f)[:, r]
+                            for f, r in zip(self.frames, self.rows, strict=True)], axis=1)
+        M = J @ J.transpose(0, 2, 1) if J.shape[1] <= J.shape[2] else J.transpose(0, 2, 1) @ J
+        Y = np.sqrt(np.maximum(np.linalg.det(M), 0.0))
+        if self._form == "inverse":
+            return 1.0 / (Y + 1.0)
+        return -Y if self._form == "negative" else Y
+
+    def __repr__(self) -> str:
+        return f"GoalManipulability(frames={self.frames!r}, rows={self.rows!r}, form={self._form!r})"
+
+
+def _chosen_goals(problem: IKProblem, which) -> list[int]:
+    """Indices of the goals whose rows the manipulability reads: every goal (``which`` None), or ``which``: goal
+    indices or frame names of the goal list; OptionError otherwise."""
+    goals = problem.goals
+    if which is None:
+        return list(range(len(goals)))
+    frames = [g.frame for g in goals]
+    picked: list[int] = []
+    try:
+        listed = [which] if isinstance(which, (str, int, np.integer)) else list(which)
+    except TypeError:
+        listed = [which]  # refused below, by name
+    for w in listed:
+        if isinstance(w, str) and w in frames:
+            picked.append(frames.index(w))
+        elif isinstance(w, (int, np.integer)) and not isinstance(w, bool) and -len(goals) <= w < len(goals):
+            picked.append(int(w) % len(goals))
+        else:
+            raise OptionError(f"manipulability_goals names the goals whose Jacobian rows the manipulability reads: "
+                              f"goal indices 0..{len(goals) - 1} or the goals' frames {frames}; got {w!r}")
+    if not picked or len(set(picked)) != len(picked):
+        raise OptionError(f"manipulability_goals must name distinct goals (indices or frames of {frames}), got "
+                          f"{which!r}")
+    return picked
+
+
+def _goal_manipulability(problem: IKProblem, which) -> tuple[GoalManipulability, list[str]]:
+    """The default manipulability objective of a goal list (the goals ``which`` picks, :func:`_chosen_goals`) less
+    the rows its frames never move (zero at 64 configurations spread over the box: they would make Y 0 everywhere,
+    as :func:`_movable_rows` for one target); and the names of the rows left out, for the message."""
+    goals = problem.goals
+    Q = problem.lower + halton(problem.n, 64, skip=1) * (problem.upper - problem.lower)
+    frames, rows, fixed = [], [], []
+    for i in _chosen_goals(problem, which):
+        J = problem.robot.jacobian_batch(Q, validate=False, frame=goals[i].frame)
+        moving = [r for r in goal_rows(goals[i]) if np.abs(J[:, r]).max() > 1e-12]
+        fixed += [f"{goals[i].frame}:{('vx', 'vy', 'vz', 'wx', 'wy', 'wz')[r]}"
+                  for r in goal_rows(goals[i]) if r not in moving]
+        if moving:
+            frames.append(goals[i].frame)
+            rows.append(moving)
+    if not frames:
+        raise OptionError("no goal frame of the goal list moves along any of its rows; give objectives=[...]")
+    return GoalManipulability(frames, rows), fixed
+
+
+def goal_task(problem: IKProblem, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The task error ``e`` (N, m) and Jacobian ``J`` (N, m, n) of a goal list (Pose and Position goals) at ``Q``
+    (N, n), for :func:`dls_repair`: per goal, ``sqrt(weight)`` times its target position minus the frame's (m) and,
+    for a Pose, the base-frame rotation vector ``log3(R_t R^T)`` (rad), over the matching rows of the frame's
+    base-frame Jacobian (:func:`goal_rows`): the stacked counterpart of the one target's rows."""
+    _, pt, Rt = problem.goal_stack()
+    errors, rows = [], []
+    for g, goal in enumerate(problem.goals):
+        p, R, J = problem.robot.fk_jacobian_batch(Q, validate=False, frame=goal.frame)
+        e = pt[g] - p
+        if goal.has_orientation:
+            e = np.concatenate([e, lie.log3(np.einsum("ij,nkj->nik", Rt[g], R))], axis=1)
+        w = np.sqrt(goal.weight)
+        errors.append(w * e)
+        rows.append(w * J[:, goal_rows(goal)])
+    return np.concatenate(errors, axis=1), np.concatenate(rows, axis=1)
+
+
 @register("nsga2", "paper 003: NSGA-II with constraint domination; Pareto front of manipulability and "
-          "weighted joint displacement under the pose constraint", multi_objective=True)
+          "weighted joint displacement under the pose constraint (every goal of a goal list)", multi_objective=True)
 def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200, max_generations: int = 100,
-          gains=None, manipulability_rows=None, objectives: list[Objective] | None = None, pick: int = -1,
-          repair_steps: int = 3, eta_c: float = 15.0, eta_m: float = 20.0, crossover_probability: float = 0.9,
-          mutation_probability: float | None = None) -> Result:
+          gains=None, manipulability_rows=None, manipulability_goals=None, objectives: list[Objective] | None = None,
+          pick: int = -1, repair_steps: int = 3, eta_c: float = 15.0, eta_m: float = 20.0,
+          crossover_probability: float = 0.9, mutation_probability: float | None = None) -> Result:
     """Paper 003's NSGA-II IK (section 3): a Pareto front under the constraint ``f(q) = x_d``.
+
+    A goal list (:mod:`evoik_pin.goals`, several frames) is the same problem with ``f(q) = x_d`` for every goal:
+    the constraint's violation is the sum over the goals of each one's error beyond its own tolerances
+    (:meth:`~evoik_pin.problem.IKProblem.goal_violation`), so a feasible point meets every goal; the objectives stay
+    the paper's two, manipulability and smoothness, the manipulability Y taken over the stacked Jacobian rows of
+    every goal frame (:class:`GoalManipulability`: the translation rows of each goal, the rotation rows of a Pose
+    too; ``manipulability_goals`` picks fewer goals), and the repair steps zero every goal's rows at once
+    (:func:`goal_task`: the stacked task error, each goal's rows scaled by the square root of its weight).
 
     Options:
         population: 200 (paper). max_generations: offspring generations (100), always all run.
@@ -465,10 +581,14 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         manipulability_rows: Jacobian rows of ``Y = sqrt(det(J J^T))`` (default the task's rows:
             "planar" (vx, vy, wz) for planar yaw targets, translation for 3-D positions, all six for poses,
             less the rows along which the chain can never move its tip, such as vz for a planar arm given a
-            3-D target: those would make ``Y`` 0 everywhere; the message names them).
+            3-D target: those would make ``Y`` 0 everywhere; the message names them). One target only.
+        manipulability_goals: a goal list: the goals (indices into the list, or their frames) whose rows the
+            manipulability reads (default every goal), less the rows their frames never move.
         objectives: replace the default ``[Manipulability(rows, "inverse"), WeightedJointDisplacement]``
             with any list of :class:`~evoik_pin.objectives.Objective` (all minimized).
         pick: objective index minimized when choosing ``q`` from the front (-1: the last, S).
+            (Custom objectives of a goal list receive the kinematics of the robot's tip: terms of ``q`` alone,
+            such as :class:`~evoik_pin.objectives.WeightedJointDisplacement`, or :class:`GoalManipulability`.)
         repair_steps: damped-least-squares steps towards the target applied to every new individual
             (3; the initial population gets four times as many, as the paper starts from a feasible
             population), weighted by 1 / K so they too spare the high-gain joints. 0 runs the plain
@@ -489,24 +609,40 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     robot = problem.robot
     repair_steps = check_int("repair_steps", repair_steps, 0)
     q_prev = np.zeros(problem.n) if problem.q0 is None else problem.q0
+    goals = problem.goals is not None
     repair_weights = None
     fixed_rows: list[int] = []
+    fixed_goal_rows: list[str] = []
+    if goals and repair_steps and any(type(g) not in (Pose, Position) for g in problem.goals):
+        kinds = sorted({type(g).__name__ for g in problem.goals} - {"Pose", "Position"})
+        raise OptionError(f"nsga2's repair steps (repair_steps={repair_steps}) know Pose and Position goals, not "
+                          f"{', '.join(kinds)}: give repair_steps=0 (and a looser tolerance) or use memetic")
+    if goals and manipulability_rows is not None:
+        raise OptionError("manipulability_rows selects rows of the tip's Jacobian for one target; for a goal list "
+                          "give manipulability_goals=[...] (goal indices or frames: their rows count)")
+    if not goals and manipulability_goals is not None:
+        raise OptionError("manipulability_goals picks goals of a goal list; for one target give "
+                          "manipulability_rows=[...]")
     if objectives is None:
         if gains is not None:
             gains = check_nonnegative_vector("gains", gains, problem.n)
             repair_weights = 1.0 / np.maximum(gains, 1e-12)
-        if manipulability_rows is None:
-            rows, fixed_rows = _movable_rows(problem, _task_rows(problem))
-            if not rows:
-                raise OptionError("the chain cannot move its tip along any row of the task; give "
-                                  "manipulability_rows=[...] or objectives=[...]")
+        if goals:
+            manipulability, fixed_goal_rows = _goal_manipulability(problem, manipulability_goals)
         else:
-            rows = manipulability_rows
-        robot.task_rows(rows)  # validates names and indices with a clear error
-        objectives = [Manipulability(rows, "inverse"), WeightedJointDisplacement(q_prev, gains)]
-    elif gains is not None or manipulability_rows is not None:
-        raise OptionError("gains and manipulability_rows shape the default objectives; with objectives=[...] "
-                          "put them into your own objective terms")
+            if manipulability_rows is None:
+                rows, fixed_rows = _movable_rows(problem, _task_rows(problem))
+                if not rows:
+                    raise OptionError("the chain cannot move its tip along any row of the task; give "
+                                      "manipulability_rows=[...] or objectives=[...]")
+            else:
+                rows = manipulability_rows
+            robot.task_rows(rows)  # validates names and indices with a clear error
+            manipulability = Manipulability(rows, "inverse")
+        objectives = [manipulability, WeightedJointDisplacement(q_prev, gains)]
+    elif gains is not None or manipulability_rows is not None or manipulability_goals is not None:
+        raise OptionError("gains, manipulability_rows and manipulability_goals shape the default objectives; with "
+                          "objectives=[...] put them into your own objective terms")
     objectives = list(objectives)
     if not objectives or not all(isinstance(o, Objective) for o in objectives):
         raise OptionError("objectives must be a non-empty list of evoik_pin.objectives.Objective terms")
@@ -517,12 +653,18 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
 
     def f(Q):
         kin = PopulationKinematics(robot, Q)
-        problem.evaluations += Q.shape[0]
         F = np.column_stack([obj(Q, kin) for obj in objectives])
+        if goals:  # every goal within its own tolerances (counts the evaluations)
+            return F, problem.goal_violation(Q)
+        problem.evaluations += Q.shape[0]
         cv = np.maximum(position_errors(target, kin) - problem.tolerance, 0.0)
         if target.has_orientation:
             cv = cv + np.maximum(orientation_errors(target, kin) - problem.rotation_tolerance, 0.0)
         return F, cv
+
+    def repair(Y, steps):
+        return dls_repair(problem, Y, steps, weights=repair_weights,
+                          task=(lambda Q: goal_task(problem, Q)) if goals else None)
 
     init = initial_population(problem, rng, population)
     best_pick: list[float] = []
@@ -537,8 +679,8 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     out = nsga2_minimize(
         f, problem.lower, problem.upper, k, rng, population=population, generations=max_generations, eta_c=eta_c,
         eta_m=eta_m, crossover_probability=crossover_probability, mutation_probability=mutation_probability,
-        initial=init if first_repair is None else dls_repair(problem, init, first_repair, weights=repair_weights),
-        repair=None if repair_steps == 0 else (lambda Y: dls_repair(problem, Y, repair_steps, weights=repair_weights)),
+        initial=init if first_repair is None else repair(init, first_repair),
+        repair=None if repair_steps == 0 else (lambda Y: repair(Y, repair_steps)),
         callback=callback)
     run.generation = out.generations
     front = out.front
@@ -552,10 +694,13 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     if feasible.size:
         message = f"{max_generations} generations; {len(order)} point(s) on the front, all feasible"
     else:
-        message = f"{max_generations} generations; no individual meets the pose constraint"
+        message = (f"{max_generations} generations; no individual meets "
+                   + ("every goal" if goals else "the pose constraint"))
     if fixed_rows:
         names = ", ".join(("vx", "vy", "vz", "wx", "wy", "wz")[r] for r in fixed_rows)
         message += f"; manipulability on Jacobian rows {rows}: the chain never moves its tip along {names}"
+    if fixed_goal_rows:
+        message += f"; manipulability without the rows no joint moves ({', '.join(fixed_goal_rows)})"
     result = run.result("nsga2", message,
                         front=Front(q=out.X[order], objectives=out.F[order], violation=out.violation[order]))
     return result

@@ -52,11 +52,12 @@ import time
 
 import numpy as np
 
-from ...problem import IKProblem, shortfall_text
+from ...errors import OptionError
+from ...problem import IKProblem, goals_shortfall_text, shortfall_text
 from ...result import Result
 from .. import register
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
-from ..lm.layout import TASK_ROWS, target_kind
+from ..lm.layout import TASK_ROWS, GoalArrays, target_kind
 from ..options import check_choice, check_int, check_positive
 from .memetic import memetic
 from .seed_table import default_table_size, seed_table
@@ -69,7 +70,7 @@ from .solution_classes import (
 )
 
 __all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
-           "memetic_all", "task_dimension"]
+           "goal_moving_joints", "memetic_all", "task_dimension"]
 
 #: Default time budget (s) of one search: a safety net; the stopping rule ends most UR5 / UR10 pose searches in
 #: 1-4 ms.
@@ -132,20 +133,26 @@ def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, cla
 
 
 class _Starts:
-    """The stream of LM starts: q0, the seed table nearest to the target first, then uniform draws."""
+    """The stream of LM starts: q0, the seed table nearest to the target first (a goal list: memetic's goal starts,
+    composed goal by goal and table entries alternately, :meth:`SeedTable.goal_starts`), then uniform draws."""
 
     def __init__(self, problem: IKProblem, table, rng) -> None:
         self.problem = problem
         self.table = table
         self.rng = rng
-        self.order = iter(()) if table is None else table.ranked(problem.target, table.Q.shape[0])
+        if table is None:
+            self.order = iter(())
+        elif problem.goals is not None:
+            self.order = table.goal_starts(problem, table.Q.shape[0])  # configurations (n,)
+        else:
+            self.order = (table.Q[i] for i in table.ranked(problem.target, table.Q.shape[0]))
         self.pending: list[np.ndarray] = [] if problem.q0 is None else [problem.q0]
 
     def take(self, k: int) -> np.ndarray:
         starts = self.pending[:k]
         del self.pending[:k]
-        for i in self.order:
-            starts.append(self.table.Q[i])
+        for q in self.order:
+            starts.append(q)
             if len(starts) >= k:
                 break
         if len(starts) < k:
@@ -210,17 +217,28 @@ def memetic_all(
                        min_hits=min_hits, class_radius=class_radius, pool=pool, table_size=table_size,
                        iterations=iterations, engine=engine, n=robot.n)
     lo, hi, target = problem.lower, problem.upper, problem.target
-    redundant = robot.n > task_dimension(target)
+    goals = problem.goals is not None
+    if goals:
+        if engine != "compiled":
+            raise OptionError("memetic-all solves goal lists on the compiled LM engine only (engine='compiled')")
+        stack, pt, Rt = problem.goal_stack()
+        moving = goal_moving_joints(robot, stack)
+        redundant = int(moving.sum()) > stack.rows
+    else:
+        redundant = robot.n > task_dimension(target)
     wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
     if engine == "compiled":
         compiled_kernel()  # loaded (or compiled, once per install) outside the clock, as memetic does
     table = seed_table(robot, lo, hi, table_size) if table_size > 0 else None
+    if table is not None and goals:
+        table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     wrap = wrapping_joints(robot, lo, hi)
     reference = np.zeros(robot.n) if problem.q0 is None else problem.q0
-    patient = LevenbergMarquardt(
-        IKProblem(robot, target, lower=lo, upper=hi, tolerance=min(REFINE_TOLERANCE, problem.tolerance),
-                  rotation_tolerance=min(REFINE_TOLERANCE, problem.rotation_tolerance)),
-        stall_window=REFINE_STALL[0], stall_ratio=REFINE_STALL[1], engine=engine)
+    if goals:  # joints that move no goal frame stay where LM leaves them: put them at the reference instead
+        still = np.flatnonzero(~moving)
+        rest_at = np.minimum(np.maximum(reference, lo), hi)[still]
+    patient = LevenbergMarquardt(problem.tightened(REFINE_TOLERANCE), stall_window=REFINE_STALL[0],
+                                 stall_ratio=REFINE_STALL[1], engine=engine)
     t0 = time.perf_counter()
     deadline = None if timeout is None else t0 + timeout
     # A finite set: isolate each solution by refinement (redundant arms have no isolated solutions).
@@ -235,8 +253,12 @@ def memetic_all(
         if k <= 0:
             stop = f"max_starts ({max_starts}) reached"
             break
-        out = solve_pairs(robot, starts.take(k), [target] * k, lo, hi, problem.tolerance,
-                          problem.rotation_tolerance, iterations, engine=engine)
+        pairs = GoalArrays(stack, np.repeat(pt[None], k, axis=0), np.repeat(Rt[None], k, axis=0)) if goals else (
+            [target] * k)
+        out = solve_pairs(robot, starts.take(k), pairs, lo, hi, problem.tolerance, problem.rotation_tolerance,
+                          iterations, engine=engine)
+        if goals and still.size:
+            out.q[:, still] = rest_at
         started += k
         batches += 1
         evaluations += int(out.evaluations.sum())
@@ -274,6 +296,8 @@ def memetic_all(
     evaluations += classes.evaluations
     pooled = len(classes)
     Q = class_representatives(np.array(classes.reps).reshape(-1, robot.n), reference, lo, hi, wrap)
+    if goals and still.size:  # the fallback's answers too
+        Q[:, still] = rest_at
     collided = 0
     if problem.scene is not None and Q.shape[0]:  # with a scene, only collision-free solutions are candidates
         free = ~problem.scene.collides(Q, problem.margin)
@@ -297,8 +321,8 @@ def memetic_all(
     else:
         q = best[1] if best[1] is not None else np.minimum(np.maximum(reference, lo), hi)
         pos, rot, cost = problem.assess(q)
-        message = (f"no solution after {started} LM start(s) ({stop}); {shortfall_text(problem, pos, rot)}: the "
-                   "target is out of reach (or reachable only where no start led)")
+        message = (f"no solution after {started} LM start(s) ({stop}); {_shortfall(problem, q, pos, rot)}: the "
+                   f"{'goals are' if goals else 'target is'} out of reach (or reachable only where no start led)")
         if collided:
             message = (f"all {collided} solution(s) found after {started} LM start(s) are in collision; "
                        f"the nearest to q0 is returned")
@@ -327,7 +351,8 @@ def _rescued(problem: IKProblem, patient: LevenbergMarquardt, Q: np.ndarray, E: 
         out = patient.run(Q[i], REFINE_ITERATIONS)
         work += out.evaluations
         Q[i], E[i] = out.q, out.error
-        ok[i] = bool(problem.succeeded(out.position_error, out.orientation_error))
+        ok[i] = bool(problem.rows_met(out.q[None])[0] if problem.goals is not None
+                     else problem.succeeded(out.position_error, out.orientation_error))
     return Q[ok], E[ok], work
 
 
@@ -357,12 +382,30 @@ def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray,
     before = problem.evaluations
     ev = problem.evaluate(Q)
     problem.evaluations = before
-    ok = problem.succeeded(ev.position_error, ev.orientation_error)
+    goals = problem.goals is not None
+    ok = problem.rows_met(Q) if goals else problem.succeeded(ev.position_error, ev.orientation_error)
     ok &= np.all((Q >= problem.lower) & (Q <= problem.upper), axis=1)
     return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),
                    orientation_error=None if ev.orientation_error is None else float(ev.orientation_error[i]),
                    cost=float(ev.cost[i]), success=True, generations=batches, evaluations=evaluations, time_s=time_s,
-                   message="distinct IK solution", method="memetic-all") for i in np.flatnonzero(ok)]
+                   message="distinct IK solution", method="memetic-all",
+                   goal_errors=problem.goal_errors(Q[i]) if goals else None) for i in np.flatnonzero(ok)]
+
+
+def goal_moving_joints(robot, stack) -> np.ndarray:
+    """(n,) bool: the entries of q that move some goal frame of a goal ``stack`` (the union of the goals' supports,
+    through the robot's coupling of q to its physical joints)."""
+    index, scale = robot.tree_constants()[4:6]
+    moving = np.zeros(robot.n, dtype=bool)
+    moving[index[stack.support.any(axis=0) & (scale != 0.0)]] = True
+    return moving
+
+
+def _shortfall(problem: IKProblem, q: np.ndarray, pos: float, rot: float | None) -> str:
+    """:func:`shortfall_text` of one target; for a goal list, the largest errors and the goals not met at ``q``."""
+    if problem.goals is None:
+        return shortfall_text(problem, pos, rot)
+    return goals_shortfall_text(problem, problem.goal_errors(q), pos, rot)
 
 
 def _message(solutions: list[Result], redundant: bool, pooled: int, started: int, stop: str,

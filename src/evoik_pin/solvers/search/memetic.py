@@ -241,6 +241,13 @@ def memetic(
         generation, and ``attempt_error`` (m + rad) after each LM run (or group of ``batch`` runs). An unreachable
         target gives the best approximation met, ``success=False`` and a message.
     """
+    if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
+        from .choose import choose
+
+        return choose(problem, rng, timeout=timeout, max_restarts=max_restarts, population=population,
+                      generations=generations, polish_count=polish_count, table_size=table_size,
+                      table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
+                      engine=engine)
     t_setup = time.perf_counter()
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,

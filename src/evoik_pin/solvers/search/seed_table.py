@@ -214,7 +214,7 @@ class SeedTable:
         target; None when no goal is such."""
         pt, Rt = seed_targets(problem)
         for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
-            if goal.has_orientation and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
+            if goal.has_orientation and goal.has_position and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
                 s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
                 p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
                 R = Rt[g] @ R_f.T
@@ -226,7 +226,7 @@ class SeedTable:
         """Per goal (cached per frame list, kinds and weights): the table's features of its frame's pose relative to
         the root link (a floating base's six entries set to zero), their squared norms, and the indices of the
         entries of q (the floating base's excepted) that move the frame."""
-        key = ("parts",) + tuple((g.frame, g.has_orientation, g.weight) for g in goals)
+        key = ("parts",) + tuple((g.frame, g.has_orientation, g.has_position, g.weight) for g in goals)
         hit = self._goal_features.get(key)
         if hit is None:
             robot = self._robot
@@ -287,22 +287,27 @@ class SeedTable:
         return hit
 
     @staticmethod
-    def goal_spec(goals) -> tuple[tuple[float, bool], ...]:
-        """Per goal, (sqrt(weight), has orientation): what the goal features depend on besides the frames. A goal
-        beyond one frame without a target pose of its frame (a centre of mass, a relative pose whose first frame
-        has no pose goal: :func:`seed_targets`) weighs 0: it ranks nothing."""
+    def goal_spec(goals) -> tuple[tuple, ...]:
+        """Per goal, (sqrt(weight), has orientation), and False third for a goal without a position (orientation,
+        pointing: its target's pt is no place for the frame): what the goal features depend on besides the
+        frames. A goal beyond one frame without a target pose of its frame (a centre of mass, a relative pose whose
+        first frame has no pose goal: :func:`seed_targets`) weighs 0: it ranks nothing."""
         return tuple((float(np.sqrt(g.weight)) if g.kind < KIND_BEYOND_FRAME or _anchor(g, goals) is not None
-                      else 0.0, bool(g.has_orientation)) for g in goals)
+                      else 0.0, bool(g.has_orientation)) + (() if g.has_position else (False,)) for g in goals)
 
     def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
         """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3): ``sqrt(weight_g)``
         times the position and, for a goal with orientation, ``self.weight`` times the rotation's entries
         (``spec``: :meth:`goal_spec`). Their Euclidean distance is memetic's goal metric."""
         out = []
-        for g, (s, oriented) in enumerate(spec):
-            out.append(s * P[g])
+        for g, entry in enumerate(spec):
+            s, oriented = entry[0], entry[1]
+            if len(entry) < 3 or entry[2]:  # a goal with a position
+                out.append(s * P[g])
             if oriented:
                 out.append((s * self.weight) * R[g].reshape(-1, 9))
+        if not out:  # pointing goals alone: no feature ranks the entries (all equally near)
+            out.append(np.zeros((len(P[0]), 1)))
         return out
 
     def goal_features(self, spec, P: np.ndarray, R: np.ndarray) -> np.ndarray:

@@ -1,0 +1,141 @@
+"""Per-axis tolerance bands and free axes of the goals on one frame (:class:`Pose`, :class:`Position`,
+:class:`Orientation`), their packing into the kernel's ``aux`` row, and the NumPy twin of the kernel's errors of
+the kinds of :mod:`evoik_pin.solvers.lm.axes` (populations for the evolutionary solvers, ``Result.goal_errors``).
+
+A pose's error has six components: the position error seen in the target frame, ``R_t^T (p - p_t)`` (m), then the
+rotation vector ``log3(R_t^T R)`` (rad); a position's three are ``p - p_t`` in the base frame (a position target
+has no frame of its own); an orientation's three are the rotation vector's. The axis names are
+``x y z rx ry rz``.
+
+* A scalar ``tolerance`` keeps the norm test: the position error's norm (over the axes not free) within it, and
+  the rotation's (the angle; over the axes not free) within ``rotation_tolerance``. With exactly one free rotation
+  axis a the rotation's error is the swing angle between the frame's a axis and the target's (the same zero set
+  as the rotation vector's other two components, and smooth through a twist of pi about a).
+* A vector ``tolerance`` gives each component a band ``|v_i| <= b_i`` (half-widths, m or rad; ``inf``: free); a
+  band narrower than :data:`~evoik_pin.goals.goal.DEFAULT_GOAL_TOLERANCE` counts as that wide (the accuracy of an
+  exact goal). The goal's errors are then how far the components lie beyond their bands (the norm of the excess,
+  m and rad): 0 when met. The kernel's residual is a dead zone at half a tolerance inside each band, so LM ends
+  inside the band, not on its edge.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import OptionError
+from ..lie import log3
+from ..solvers.lm.layout import (
+    AUX_AXIS,
+    AUX_BAND,
+    AUX_INNER,
+    AUX_SIZE,
+    AUX_SWING,
+    KIND_DIRECTION,
+    KIND_LOOK_AT,
+    KIND_POSE_AXES,
+    KIND_POSITION_BAND,
+)
+
+__all__ = ["AXES", "band_aux", "band_errors", "parse_band", "parse_free"]
+
+#: The axis names of a pose's six error components, in their order.
+AXES = ("x", "y", "z", "rx", "ry", "rz")
+
+
+def parse_free(free, allowed: tuple[str, ...], where: str) -> tuple[str, ...]:
+    """The free axes named by ``free`` (None, a string of names separated by spaces or commas, or a list of
+    names), each one of ``allowed``, in :data:`AXES` order; OptionError for an unknown or repeated name."""
+    if free is None:
+        return ()
+    if isinstance(free, str):
+        names = free.replace(",", " ").split()
+    else:
+        try:
+            names = list(free)
+        except TypeError:
+            raise OptionError(f"{where}: free must name axes among {' '.join(allowed)} (a string or a list), "
+                              f"got {free!r}") from None
+    for name in names:
+        if name not in allowed:
+            raise OptionError(f"{where}: unknown free axis {name!r}; accepted: {' '.join(allowed)}")
+    if len(set(names)) != len(names):
+        raise OptionError(f"{where}: free names an axis twice: {names}")
+    return tuple(a for a in AXES if a in names)
+
+
+def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | None:
+    """None for a scalar ``tolerance`` (the norm test, checked by the goal), else its half-widths, one per axis of
+    ``axes``, as a float array (m or rad, >= 0; inf: free); OptionError for a wrong length, NaN or a negative
+    half-width."""
+    count = len(axes)
+    if np.ndim(tolerance) == 0:
+        return None
+    try:
+        band = np.array(tolerance, dtype=float)
+    except (TypeError, ValueError):
+        raise OptionError(f"{where}: tolerance must be a number or {count} numbers (half-widths), "
+                          f"got {tolerance!r}") from None
+    if band.shape != (count,):
+        raise OptionError(f"{where}: a tolerance band takes {count} half-widths ({' '.join(axes)}), "
+                          f"got shape {band.shape}")
+    if np.isnan(band).any() or (band < 0).any():
+        raise OptionError(f"{where}: tolerance half-widths must be >= 0 (inf: free), got {band.tolist()}")
+    return band
+
+
+def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:
+    """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes`` (a slice of :data:`AXES`):
+    ``band`` (len(axes),) half-widths or None (a norm tolerance), ``free`` the free axes' names; ``accuracy`` (m,
+    rad) the narrowest band (the goals' default tolerance)."""
+    aux = np.full(AUX_SIZE, np.inf)
+    aux[AUX_SWING] = -1.0
+    for i, name in enumerate(AXES):
+        if name not in axes or name in free:
+            continue
+        if band is None:
+            aux[AUX_INNER + i] = aux[AUX_BAND + i] = 0.0
+        else:
+            b = band[axes.index(name)]
+            if np.isfinite(b):
+                b = max(b, accuracy)
+                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * accuracy, b
+    free_rot = [i for i in (3, 4, 5) if AXES[i] in free]
+    if band is None and len(free_rot) == 1:
+        aux[AUX_SWING] = free_rot[0] - 3
+    return aux
+
+
+def _excess_norm(V: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """Norm (N,) of how far the components V (N, 3) lie beyond the half-widths band (3,) (inf: never)."""
+    X = np.maximum(np.abs(V) - band, 0.0)
+    return np.sqrt((X * X).sum(axis=1))
+
+
+def _angles(A: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """Angles (N,) rad between the vectors A (N, 3) and D (N, 3), by atan2 (accurate near 0 and pi)."""
+    return np.arctan2(np.linalg.norm(np.cross(A, D), axis=1), (A * D).sum(axis=1))
+
+
+def band_errors(kind: int, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray,
+                aux: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for a goal of a
+    kind of :mod:`evoik_pin.solvers.lm.axes` with target (pt (3,), Rt (3, 3)) and aux row ``aux``: the numbers its
+    success test compares with the goal's tolerances, as the kernel computes them (0 where a kind has none)."""
+    N = P.shape[0]
+    zeros = np.zeros(N)
+    if kind in (KIND_DIRECTION, KIND_LOOK_AT):
+        A = R @ aux[AUX_AXIS:AUX_AXIS + 3]
+        if kind == KIND_DIRECTION:
+            return zeros, _angles(A, np.broadcast_to(pt, A.shape))
+        D = pt - P
+        rho = np.linalg.norm(D, axis=1)
+        return zeros, np.where(rho < 1e-12, np.pi, _angles(A, D))
+    pos = zeros
+    if kind == KIND_POSITION_BAND:
+        return _excess_norm(P - pt, aux[AUX_BAND:AUX_BAND + 3]), zeros
+    if kind == KIND_POSE_AXES:
+        pos = _excess_norm((P - pt) @ Rt, aux[AUX_BAND:AUX_BAND + 3])  # rows: R_t^T (p - p_t)
+    j = int(aux[AUX_SWING])
+    if j >= 0:
+        return pos, _angles(R[:, :, j], np.broadcast_to(Rt[:, j], (N, 3)))
+    return pos, _excess_norm(log3(Rt.T @ R), aux[AUX_BAND + 3:AUX_BAND + 6])

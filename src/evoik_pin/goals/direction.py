@@ -1,0 +1,80 @@
+"""Direction: a frame's axis along a direction (see :mod:`evoik_pin.goals`); what it shares with :class:`LookAt`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import TargetError
+from ..solvers.lm.layout import AUX_AXIS, AUX_SIZE, KIND_DIRECTION
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+
+__all__ = ["Direction", "unit_vector"]
+
+
+def unit_vector(value, what: str) -> np.ndarray:
+    """``value`` (3 finite numbers, not all zero) normalised to length 1, or a TargetError naming ``what``."""
+    try:
+        v = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TargetError(f"{what} must be 3 numbers (a direction), got {value!r}") from None
+    if v.shape != (3,):
+        raise TargetError(f"{what} must be 3 numbers (a direction), got shape {v.shape}")
+    if not np.isfinite(v).all():
+        raise TargetError(f"{what} must be 3 finite numbers, got {v.tolist()}")
+    norm = float(np.linalg.norm(v))
+    if norm < 1e-12:
+        raise TargetError(f"{what} is zero, which points nowhere: give 3 numbers not all zero (e.g. [0, 0, 1])")
+    return v / norm
+
+
+@dataclass(frozen=True, eq=False)
+class _Pointing(Goal):
+    """A frame's axis aimed along a direction (:class:`Direction`) or at a point (:class:`LookAt`): the error is the
+    angle (rad) between the axis (turned with the frame) and the wanted direction; the kernel's residual
+    ``R a - d`` (3 rows, base frame) is zero only when they are aligned."""
+
+    axis: object = None
+    has_position = False
+
+    def _init_pointing(self, frame, axis, weight, tolerance, kind: int) -> None:
+        self._init_common(frame, weight, tolerance, tolerance, kind, False)  # rad; the position error (None) is unused
+        object.__setattr__(self, "axis", unit_vector(axis, f"{type(self).__name__} on {frame!r}: axis"))
+        aux = np.zeros(AUX_SIZE)
+        aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
+        self._set_aux(aux)
+
+    @property
+    def reports_angle(self) -> bool:
+        return True
+
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Direction(_Pointing):
+    """The frame's ``axis`` (3 numbers in the frame, normalised) parallel to ``direction`` (3 numbers in the base
+    frame, normalised; the same way round, not opposite): a tool pointing down is ``Direction(tool, [0, 0, 1],
+    [0, 0, -1])``. Position and the rotation about the axis free.
+
+    Args: frame, axis, direction, then ``weight`` (> 0, default 1) and ``tolerance`` (rad, default 1e-6), the
+    bound of the angle between the two.
+    """
+
+    direction: object = None
+    weight: float = 1.0
+    tolerance: float = DEFAULT_GOAL_TOLERANCE
+    rotation_tolerance: float | None = None
+
+    def __init__(self, frame: str, axis, direction, weight: float = 1.0,
+                 tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+        self._init_pointing(frame, axis, weight, tolerance, KIND_DIRECTION)
+        object.__setattr__(self, "direction", unit_vector(direction, f"Direction on {frame!r}: direction"))
+
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.direction.copy(), np.eye(3)
+
+    def __repr__(self) -> str:
+        return (f"Direction({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "
+                f"direction={np.round(self.direction, 6).tolist()}, weight={self.weight:g}, "
+                f"tolerance={self.rotation_tolerance:g})")

@@ -1,0 +1,75 @@
+"""Orientation: a frame's orientation at a target rotation, position free (see :mod:`evoik_pin.goals`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import OptionError, TargetError
+from ..solvers.lm.layout import KIND_ORIENTATION
+from ..target import _rotation
+from .bands import AXES, band_aux, parse_band, parse_free
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+
+__all__ = ["Orientation"]
+
+#: The error components of an orientation: the rotation vector's.
+_ROTATION_AXES = AXES[3:]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Orientation(Goal):
+    """The frame's orientation at ``target``: a (3, 3) rotation matrix, a ``pin.SE3`` or a (4, 4) pose (its
+    rotation; the position is ignored), in the robot's base frame; position free.
+
+    Args: frame, target, then ``weight`` (> 0, default 1), ``tolerance`` (rad, default 1e-6): one number, the
+    bound of the rotation angle, or 3 numbers, half-widths of the components rx, ry, rz of ``log3(R_t^T R)``
+    (``inf``: free), and ``free``: rotation axes left free, any of ``"rx ry rz"`` (``free="rz"``: any rotation
+    about the target's z axis; with one number as tolerance its error is then the angle between the frame's and
+    the target's z axes). See :mod:`evoik_pin.goals.bands`.
+    """
+
+    target: object = None
+    weight: float = 1.0
+    tolerance: float = DEFAULT_GOAL_TOLERANCE
+    rotation_tolerance: float | None = None
+    band: object = None
+    free: tuple = ()
+    has_position = False
+
+    def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
+                 free=None) -> None:
+        where = f"Orientation on {frame!r}"
+        band = parse_band(tolerance, _ROTATION_AXES, where)
+        free = parse_free(free, _ROTATION_AXES, where)
+        if len(free) == 3:
+            raise OptionError(f"{where}: free names all three rotation axes, which leaves nothing to meet; drop the "
+                              "goal")
+        if band is None:  # rad; the position error (None) is unused
+            self._init_common(frame, weight, tolerance, tolerance, KIND_ORIENTATION, True)
+        else:  # the errors of a banded goal are its excess over the bands: met at 0
+            self._init_common(frame, weight, 0.0, 0.0, KIND_ORIENTATION, True)
+            band = np.where(np.isin(_ROTATION_AXES, free), np.inf, band)
+        if isinstance(target, pin.SE3):
+            target = target.rotation
+        elif np.shape(target) == (4, 4):
+            target = np.asarray(target, dtype=float)[:3, :3]
+        try:
+            R = _rotation(target)
+        except TargetError as exc:
+            raise TargetError(f"{where} takes a 3 x 3 rotation, a pin.SE3 or a 4 x 4 pose: {exc}") from None
+        object.__setattr__(self, "target", np.array(R))
+        object.__setattr__(self, "band", band)
+        object.__setattr__(self, "free", free)
+        self._set_aux(band_aux(band, free, _ROTATION_AXES, DEFAULT_GOAL_TOLERANCE))
+
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.zeros(3), self.target.copy()
+
+    def __repr__(self) -> str:
+        rpy = np.round(pin.rpy.matrixToRpy(self.target), 6).tolist()
+        tol = f"{self.rotation_tolerance:g}" if self.band is None else f"{self.band.tolist()}"
+        free = f", free={' '.join(self.free)!r}" if self.free else ""
+        return f"Orientation({self.frame!r}, rpy={rpy}, weight={self.weight:g}, tolerance={tol}{free})"

@@ -1,0 +1,592 @@
+"""Choosing among answers: goal sets (any one of several targets), ``prefer="nearest" | "manipulability"``
+(TRAC-IK's Distance and Manip1) and preferences (:mod:`evoik_pin.goals.preferences`).
+
+* **Goal sets** (``Pose(frame, [T1, ..., Tk])``): the problem's combinations of members
+  (:meth:`~evoik_pin.problem.IKProblem.variants`) are ranked by the seed table's nearness (one matrix product for
+  all of them: the distance of each to its nearest table entry), then tried round by round: LM from ``q0`` and
+  each variant's nearest entry, then each one's next entries, the variants whose last run came nearest first. An
+  unreachable member costs a stalled LM run or two (about 10 us each), so ten members of which seven are out of
+  reach cost little more than one. When the table's starts are spent, memetic's own search runs on the variants
+  that came nearest, sharing the time left.
+* **prefer**: ``"first"`` stops at the first answer (memetic's behaviour); ``"nearest"`` and ``"manipulability"``
+  keep collecting answers for :data:`COLLECT_SHARE` of the budget (LM from ``q0`` first, then the table's
+  entries nearest each variant, then uniform random starts), then refine the best :data:`REFINE_COUNT` of them in
+  the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain; a few steps each, then
+  the rest of the time for the best) and return the best.
+  Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
+  box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
+* **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
+  own answer is refined alone (:func:`evoik_pin.choosing.solve_choosing`), so they never cost success.
+
+Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
+the answers LM finds from random starts lie anywhere on the self-motion manifold, and a few projected steps take
+the best of them to the local optimum of the criterion (measured in ``scripts/bench_goal_kinds_prefer.py``: the
+refinement is what makes prefer="nearest" beat TRAC-IK's 5 ms Distance within 1 ms); on a non-redundant arm (UR10
+on a pose) the null space is empty and only the ranking of the distinct answers (at most 8 branches) acts.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import time
+
+import numpy as np
+
+from ...errors import OptionError
+from ...goals.preferences import Manipulability, Posture
+from ...problem import errors_text, shortfall_text
+from ...result import Result
+from ..lm import LevenbergMarquardt, wrapping_joints
+from ..lm.layout import (
+    S_CONVERGED,
+    S_COST,
+    S_EVALUATIONS,
+    S_POS,
+    S_ROT,
+    STATS_SIZE,
+    TASK_ROWS,
+    kernel_params,
+    target_kind,
+)
+from ..options import check_choice
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
+
+__all__ = ["COLLECT_SHARE", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "choose", "nearest_turn", "refine"]
+
+#: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
+PREFER = ("first", "nearest", "manipulability")
+#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead, a fifth of
+#: TRAC-IK's 5 ms Distance / Manip1 modes, which always spend their whole budget.
+DEFAULT_PREFER_TIMEOUT = 0.0007
+#: Share of the budget spent collecting answers before the best ones are refined.
+COLLECT_SHARE = 0.6
+#: Share of the budget left for making the answer (its errors, the result) after the refinement.
+FINISH_SHARE = 0.1
+#: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
+REFINE_COUNT = 4
+#: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
+#: steps restoring the goals after each.
+REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
+#: Largest null-space step (rad or m, Euclidean).
+MAX_REFINE_STEP = 0.5
+#: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
+#: half-range, at most pi) in turn.
+NEAR_SCALES = (0.1, 0.25, 0.5)
+#: LM runs per kernel call while prefer collects answers, and their steps at most (None: memetic's iterations).
+COLLECT_BATCH = 16
+COLLECT_ITERATIONS = None
+#: Table entries tried per variant of a goal set in the first rounds (at least).
+MIN_SEEDS_PER_VARIANT = 4
+
+
+def check_prefer(prefer) -> str:
+    """``prefer`` checked: one of :data:`PREFER`; OptionError naming them otherwise."""
+    return check_choice("prefer", prefer, PREFER)
+
+
+def nearest_turn(q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    """``q`` (n,) with each ``wrap`` joint (its range spans a full turn) moved by a multiple of 2 pi to the value
+    nearest ``q0`` that stays inside [lower, upper] (the same pose: a full turn)."""
+    if not wrap.any():
+        return q
+    two_pi = 2.0 * np.pi
+    shifted = q + two_pi * np.round((q0 - q) / two_pi)
+    shifted = np.where(shifted > upper, shifted - two_pi, shifted)
+    shifted = np.where(shifted < lower, shifted + two_pi, shifted)
+    ok = wrap & (shifted >= lower) & (shifted <= upper)
+    return np.where(ok, shifted, q)
+
+
+class Criterion:
+    """The sum of bound preferences (``prefer``'s term first), what answers are ranked and refined by."""
+
+    def __init__(self, terms: list) -> None:
+        self.terms = terms
+        self.curvature = sum(t.curvature for t in terms)
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    def cost(self, q: np.ndarray) -> float:
+        return float(sum(t.cost(q) for t in self.terms))
+
+    def costs(self, Q: np.ndarray) -> np.ndarray:
+        """:meth:`cost` of each row of ``Q`` (N, n)."""
+        return sum((t.costs(Q) for t in self.terms), np.zeros(Q.shape[0]))
+
+    def analytic_gradient(self, q: np.ndarray) -> np.ndarray | None:
+        """d cost / dq (n,) when every term has it in closed form, else None."""
+        total = np.zeros(q.shape[0])
+        for t in self.terms:
+            g = t.gradient(q)
+            if g is None:
+                return None
+            total += g
+        return total
+
+    def null_gradient(self, q: np.ndarray, N: np.ndarray, f: float) -> np.ndarray:
+        """The cost's gradient in the null-space basis ``N`` (r, n) (orthonormal rows): analytic terms exactly,
+        the others (manipulability) by forward differences along each basis vector (``f``: the cost at q)."""
+        c = np.zeros(N.shape[0])
+        numeric = []
+        for t in self.terms:
+            g = t.gradient(q)
+            if g is None:
+                numeric.append(t)
+            else:
+                c += N @ g
+        if numeric:
+            h = 1e-6
+            f0 = sum(t.cost(q) for t in numeric)
+            for i in range(N.shape[0]):
+                c[i] += (sum(t.cost(q + h * N[i]) for t in numeric) - f0) / h
+        return c
+
+
+def _redundant(problem) -> bool:
+    """Whether the goals leave a null space to refine in: fewer task rows than joints."""
+    if problem.goals is None:
+        rows = len(TASK_ROWS[target_kind(problem.target)])
+    else:
+        rows = sum(len(TASK_ROWS.get(g.kind, range(6))) for g in problem.goals)
+    return rows < problem.robot.n
+
+
+def _task_jacobian(problem, q: np.ndarray) -> np.ndarray:
+    """The goals' stacked base-frame Jacobian rows (LOCAL_WORLD_ALIGNED; rows, n) at ``q``: its null space is the
+    joint motion that leaves every goal where it is (a pose goal's log6 error has the same null space). Kinds not
+    in TASK_ROWS count all six rows (a smaller null space: safe)."""
+    robot = problem.robot
+    if problem.goals is None:
+        return robot.jacobian_world_unchecked(q)[list(TASK_ROWS[target_kind(problem.target)])]
+    blocks = [robot.jacobian_world_unchecked(q, robot.frame_id(g.frame))[list(TASK_ROWS.get(g.kind, range(6)))]
+              for g in problem.goals]
+    return np.vstack(blocks)
+
+
+def _null_basis(E: np.ndarray) -> np.ndarray:
+    """Orthonormal basis (r, n) of the null space of ``E`` (rows, n)."""
+    _, s, Vt = np.linalg.svd(E)
+    rank = int(np.count_nonzero(s > 1e-9 * max(s[0], 1e-300))) if s.size else 0
+    return Vt[rank:]
+
+
+def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion, deadline: float | None,
+           steps: int = REFINE_STEPS) -> tuple[np.ndarray, float, int]:
+    """Lower ``criterion`` from an answer ``q`` (every goal met) by steps in the null space of the goals'
+    Jacobian: the projected gradient step (scaled by the criterion's curvature, so a quadratic term's step is
+    its minimum on the tangent plane; at most :data:`MAX_REFINE_STEP`), then an LM run from there restoring
+    every goal within its tolerance. A step is kept only when that run converges and the cost drops; otherwise
+    the step is halved. Returns (q, its cost, LM evaluations)."""
+    f = criterion.cost(q)
+    scale, evaluations = 1.0, 0
+    for _ in range(steps):
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
+        E = _task_jacobian(problem, q)
+        if E.shape[0] >= E.shape[1]:
+            break
+        g = criterion.analytic_gradient(q)
+        if g is not None:  # the gradient's projection on the null space: g - E^T (E E^T)^-1 E g
+            try:
+                proj = g - E.T @ np.linalg.solve(E @ E.T, E @ g)
+            except np.linalg.LinAlgError:  # a singular E: its null space by SVD
+                N = _null_basis(E)
+                proj = N.T @ (N @ g)
+        else:
+            N = _null_basis(E)
+            if N.shape[0] == 0:
+                break
+            proj = N.T @ criterion.null_gradient(q, N, f)
+        norm = float(np.linalg.norm(proj))
+        if norm < 1e-12:
+            break
+        step = -proj / criterion.curvature if criterion.curvature > 0 else -proj * (0.2 / norm)
+        length = float(np.linalg.norm(step)) * scale
+        step *= scale * min(1.0, MAX_REFINE_STEP / max(length, 1e-300))
+        out = lm.run(q + step, RESTORE_ITERATIONS)
+        evaluations += out.evaluations
+        f_new = criterion.cost(out.q) if out.converged else np.inf
+        if f_new < f - 1e-15 * max(1.0, abs(f)):
+            q, f, scale = out.q, f_new, min(1.0, 2.0 * scale)
+        else:
+            scale *= 0.5
+            if scale < 1e-3:
+                break
+    return q, f, evaluations
+
+
+def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
+    """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
+    robot = problem.robot
+    first_frame = problem.goals[0].frame if problem.goals is not None else None
+    terms = []
+    if prefer == "nearest":
+        if problem.q0 is None:
+            raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+        # plain differences: answers are taken to their turn nearest q0 inside the box first (nearest_turn), and
+        # a difference modulo 2 pi would count turns the limits forbid
+        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
+    elif prefer == "manipulability":
+        terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+    for p in preferences:
+        if isinstance(p, Manipulability):
+            terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap, first_frame))
+        else:
+            terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+    return Criterion(terms)
+
+
+def bind_preferences(problem, preferences) -> Criterion:
+    """The preferences checked against the problem's robot (errors naming the joint or frame), as a criterion."""
+    return _criterion(problem, "first", preferences, wrapping_joints(problem.robot, problem.lower, problem.upper))
+
+
+class _Variant:
+    """One combination of goal-set members (or the problem itself): its targets, its problem and LM engine (made on
+    first use: most variants of a goal set run once or twice), its starts, its best run."""
+
+    def __init__(self, parent, choice, pt, Rt, base_lm: LevenbergMarquardt | None, engine: str) -> None:
+        self.parent, self.choice, self.pt, self.Rt = parent, choice, pt, Rt
+        self._base_lm, self._engine = base_lm, engine
+        self._problem = self._lm = None
+        self.starts = iter(())
+        self.best_rank = np.inf
+
+    @property
+    def problem(self):
+        if self._problem is None:
+            self._problem = self.parent.variant(self.choice, self.pt, self.Rt)
+        return self._problem
+
+    @property
+    def lm(self) -> LevenbergMarquardt:
+        if self._lm is None:
+            base = self._base_lm
+            if base is not None and base.engine == "compiled" and base._pt.shape == self.pt.shape:
+                # the same goal stack and box, other targets: the kernel's arguments with those swapped
+                lm = copy.copy(base)
+                lm._pt, lm._Rt = np.ascontiguousarray(self.pt), np.ascontiguousarray(self.Rt)
+                lm._args = (*base._args[:-2], lm._pt, lm._Rt)
+                lm.problem = self.problem if self.parent.goal_sets else self.parent
+                self._lm = lm
+            else:
+                self._lm = LevenbergMarquardt(self.problem, engine=self._engine)
+        return self._lm
+
+
+def _around(starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, endless: bool):
+    """``starts`` interleaved with starts drawn around ``q0`` (normal, a standard deviation of
+    :data:`NEAR_SCALES` times each joint's half-range, at most pi, in turn; clipped into the box); once ``starts``
+    runs out, uniform random starts take its place when ``endless`` (a clock bounds the search), else the
+    interleaving ends with it."""
+    half = np.minimum(0.5 * (upper - lower), np.pi)
+    for k in itertools.count():
+        s = NEAR_SCALES[k % len(NEAR_SCALES)]
+        yield np.minimum(np.maximum(q0 + rng.normal(size=q0.shape) * s * half, lower), upper)
+        nxt = next(starts, None)
+        if nxt is None:
+            if not endless:
+                return
+            nxt = rng.uniform(lower, upper)
+        yield nxt
+
+
+def _lazy_rest(table, d: np.ndarray, first: int, k: int):
+    """Table entries by ``d`` (T,): ``first`` (its argmin), then on demand the next ``k - 1`` nearest."""
+    yield table.Q[first]
+    k = min(k, d.shape[0])
+    if k > 1:
+        part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
+        for i in part[np.argsort(d[part])]:
+            if i != first and np.isfinite(d[i]):
+                yield table.Q[i]
+
+
+def _variant_starts(table, parent, variants, k: int, free) -> list[float]:
+    """Give each variant its lazy table starts (q0 comes before, from the caller) and return each one's squared
+    distance to its nearest table entry (the goals' summed nearness; zeros without a table)."""
+    if table is None:
+        return [0.0] * len(variants)
+    if parent.goals is None:  # one target on the tip (prefer= alone)
+        variants[0].starts = (table.Q[i] for i in table.ranked(parent.target, k, free))
+        return [0.0]
+    if len(parent.goals) > 1:  # a whole robot: composed starts too (SeedTable.goal_starts), the sets' order
+        for v in variants:
+            v.starts = table.goal_starts(v.problem, k, free)
+        return [float(i) for i in range(len(variants))]
+    F, sq = table._goal_table_features(parent.goals)
+    spec = table.goal_spec(parent.goals)
+    P = np.stack([v.pt for v in variants])
+    R = np.stack([v.Rt for v in variants])
+    f = table.goal_features(spec, P, R)  # (V, d)
+    D = f @ F.T  # |F - f|^2 = sq - 2 F.f + |f|^2, in place; |f|^2 only where variants are compared
+    D *= -2.0
+    D += sq
+    if free is not None:
+        D[:, ~free] = np.inf
+    first = D.argmin(axis=1)
+    for v, d, i in zip(variants, D, first, strict=True):
+        v.starts = _lazy_rest(table, d, int(i), k)
+    return (D[np.arange(len(variants)), first] + (f * f).sum(axis=1)).tolist()
+
+
+def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: float | None = None,
+           max_restarts: int | None = None, population: int = 32, generations: int = 3, polish_count: int = 8,
+           table_size: int | None = None, table_seeds: int | None = None, table_offset: int = 0, batch: int = 1,
+           iterations: int | None = None, engine: str = "compiled") -> Result:
+    """memetic over goal sets and with ``prefer`` / preferences (see the module docstring); memetic's options.
+
+    ``timeout`` (s): the budget; default memetic's (5 ms) for ``prefer="first"``, :data:`DEFAULT_PREFER_TIMEOUT`
+    for the others. ``table_offset`` is not used (the variants rank the table themselves).
+    """
+    from .memetic import DEFAULT_TIMEOUT, check_options, memetic, prepare
+
+    prefer = check_prefer(prefer)
+    if timeout is None and max_restarts is None:
+        timeout = DEFAULT_TIMEOUT if prefer == "first" else DEFAULT_PREFER_TIMEOUT
+    t_setup = time.perf_counter()
+    robot = problem.robot
+    from ..lm import DEFAULT_ITERATIONS
+
+    iterations = DEFAULT_ITERATIONS if iterations is None else iterations
+    (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, _, batch, iterations,
+     engine) = check_options(timeout=timeout, max_restarts=max_restarts, population=population,
+                             generations=generations, polish_count=polish_count, table_size=table_size,
+                             table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
+                             engine=engine, n=robot.n)
+    wrap = wrapping_joints(robot, problem.lower, problem.upper)
+    criterion = _criterion(problem, prefer, preferences, wrap)
+    goals = problem.goals is not None
+    choices, P, R = (problem.variant_targets() if goals else ([()], [None], [None]))
+    base_lm = LevenbergMarquardt(problem, engine=engine)
+    variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
+    if len(variants) == 1:
+        variants[0]._problem, variants[0]._lm = problem, base_lm
+    if table_seeds is None:
+        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals else DEFAULT_TABLE_SEEDS
+    use_table = table_size > 0 and table_seeds > 0
+    table, free = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine,
+                          problem.scene, problem.margin)
+    if table is not None and goals:
+        table.prepare_goals(problem.goals)
+    t0 = time.perf_counter()
+    deadline = None if timeout is None else t0 + timeout
+    collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
+    finish = None if timeout is None else t0 + (1.0 - FINISH_SHARE) * timeout  # then the answer is made
+    redundant = _redundant(problem)
+    per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
+    near = _variant_starts(table, problem, variants, per_variant, free)
+    order = sorted(range(len(variants)), key=lambda i: near[i])
+    q0 = problem.q0
+    scene = problem.scene
+    answers: list[tuple[float, np.ndarray, int]] = []  # (cost, q, variant)
+    runs = evaluations = rejected = 0
+    winner = None
+    stage = "q0" if q0 is not None else "seed table"
+
+    def run(i: int, q_start: np.ndarray) -> bool:
+        nonlocal runs, evaluations, rejected, winner
+        v = variants[i]
+        out = v.lm.run(q_start, iterations)
+        runs += 1
+        evaluations += out.evaluations
+        converged = out.converged
+        if converged and scene is not None and scene.in_collision(out.q, problem.margin):
+            converged, rejected = False, rejected + 1
+        if not converged:
+            if out.rank < v.best_rank:
+                v.best_rank, v.best = out.rank, out.q
+            return False
+        q = nearest_turn(out.q, q0, problem.lower, problem.upper, wrap) if q0 is not None else out.q
+        v.best_rank, v.best = -1.0, q
+        if prefer == "first" and not criterion:
+            winner = (q, i)
+            return True
+        answers.append((criterion.cost(q), q, i))
+        return prefer == "first"
+
+    def run_batch(i: int, Q: np.ndarray) -> None:
+        """LM runs from every row of ``Q`` towards variant i, all to their end (one kernel call), each answer
+        kept."""
+        nonlocal runs, evaluations, rejected
+        v = variants[i]
+        lm = v.lm
+        if lm.engine != "compiled":
+            for q in Q:
+                run(i, q)
+            return
+        N = Q.shape[0]
+        pt, Rt = lm._pt, lm._Rt
+        P = np.ascontiguousarray(np.broadcast_to(pt, (N, *pt.shape)))
+        Rts = np.ascontiguousarray(np.broadcast_to(Rt, (N, *Rt.shape)))
+        Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
+        lm._kernel["lm_run_pairs"](np.ascontiguousarray(Q, dtype=float), *lm._args[:-2], P, Rts,
+                                   kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats,
+                                   np.empty((N, pt.shape[0], 2)))
+        runs += N
+        evaluations += int(stats[:, S_EVALUATIONS].sum())
+        ok = stats[:, S_CONVERGED] != 0.0
+        if scene is not None:
+            for k in np.nonzero(ok)[0]:
+                if scene.in_collision(Q_out[k], problem.margin):
+                    ok[k], rejected = False, rejected + 1
+        if not ok.all():
+            rank = stats[~ok, S_COST] if pt.shape[0] > 1 else stats[~ok, S_POS] + stats[~ok, S_ROT]
+            j = int(np.argmin(rank))
+            if rank[j] < v.best_rank:
+                v.best_rank, v.best = float(rank[j]), Q_out[~ok][j]
+        if ok.any():
+            A = Q_out[ok]
+            if q0 is not None:
+                A = nearest_turn(A, q0, problem.lower, problem.upper, wrap)
+            v.best_rank = -1.0
+            answers.extend(zip(criterion.costs(A).tolist(), A, [i] * A.shape[0], strict=True))
+
+    def out_of(limit) -> bool:
+        return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
+
+    done = False
+    limit = deadline if prefer == "first" else collect_until
+    if q0 is not None:  # round 0: q0 towards every variant (prefer="nearest": the nearest answers start there)
+        for i in order:
+            if run(i, q0):
+                done = True
+                break
+    if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
+        if not redundant:  # no null space to refine in: the whole budget collects
+            limit = finish
+        if prefer == "nearest":  # every other start near q0: answers near q0 come from there
+            for v in variants:
+                v.starts = _around(v.starts, rng, q0, problem.lower, problem.upper, deadline is not None)
+        per_run = 0.0  # seconds per LM run of the last batch
+        while True:
+            if limit is not None and time.perf_counter() >= (limit if answers else deadline):
+                break
+            progressed = False
+            for i in order:
+                size = COLLECT_BATCH
+                if limit is not None and per_run > 0.0:  # a batch that ends near the limit, not far past it
+                    left = (limit if answers else deadline) - time.perf_counter()
+                    size = int(min(COLLECT_BATCH, max(1.0, left / per_run)))
+                chunk = list(itertools.islice(variants[i].starts, size))
+                if chunk:
+                    progressed = True
+                    t_batch = time.perf_counter()
+                    run_batch(i, np.array(chunk))
+                    per_run = (time.perf_counter() - t_batch) / len(chunk)
+                    if limit is not None and time.perf_counter() >= (limit if answers else deadline):
+                        break
+            if not progressed:
+                if deadline is None:  # no clock: the table's starts are the budget
+                    break
+                stage = "random starts"
+                for i in order:
+                    variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+            else:
+                stage = "seed table" if stage != "random starts" else stage
+            order = sorted(order, key=lambda i: variants[i].best_rank)
+        done = True
+    rnd = 0
+    while not done and not out_of(limit):
+        stage = "seed table"
+        progressed = False
+        for i in order:
+            q_start = next(variants[i].starts, None)
+            if q_start is None:
+                continue
+            progressed = True
+            if run(i, q_start):
+                done = True
+                break
+            if out_of(limit):
+                break
+        rnd += 1
+        if not progressed:
+            if prefer == "first" or deadline is None:  # no clock: the table's starts are the budget
+                break
+            stage = "random starts"  # prefer: keep collecting from uniform random starts until the budget
+            for i in order:
+                variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+        order = sorted(order, key=lambda i: variants[i].best_rank)  # the variants that came nearest first
+    if winner is None and answers:
+        answers.sort(key=lambda a: a[0])
+        refined, seen = [], []
+        for cost, q, i in answers:
+            if len(refined) >= REFINE_COUNT:
+                break
+            if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
+                continue
+            seen.append(q)
+            refined.append((cost, q, i))
+
+        def improve(cost, q, i, steps):
+            nonlocal evaluations
+            q_r, cost_r, ev = refine(variants[i].problem, variants[i].lm, q, criterion, finish, steps)
+            evaluations += ev
+            if scene is not None and scene.in_collision(q_r, problem.margin):
+                return cost, q, i
+            if q0 is not None:
+                q_r = nearest_turn(q_r, q0, problem.lower, problem.upper, wrap)
+                cost_r = criterion.cost(q_r)
+            return cost_r, q_r, i
+
+        if criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
+            refined = [improve(*a, TRIAL_STEPS) for a in refined]
+            refined = [improve(*min(refined, key=lambda a: a[0]), REFINE_STEPS)]
+        cost, q, i = min(refined, key=lambda a: a[0])
+        winner = (q, i)
+    extra = ""
+    if winner is None:  # the table's starts are spent: memetic's search on the variants that came nearest
+        stage = "memetic restarts"
+        # prefer's short budget bounds the choosing; with no answer yet, the search goes on as prefer="first"'s
+        last = None if deadline is None else max(deadline, t0 + (DEFAULT_TIMEOUT if prefer != "first" else 0.0))
+        order = sorted(range(len(variants)), key=lambda i: variants[i].best_rank)[:3]
+        best = None
+        for k, i in enumerate(order):
+            left = None if deadline is None else max(last - time.perf_counter(), 1e-4) / (len(order) - k)
+            r = memetic(variants[i].problem, rng, timeout=left, max_restarts=max_restarts, population=population,
+                        generations=generations, polish_count=polish_count, table_size=0, table_seeds=0,
+                        batch=batch, iterations=iterations, engine=engine)
+            evaluations += r.evaluations
+            runs += 1
+            if best is None or r.success or r.cost < best[0].cost:
+                best = (r, i)
+            if r.success:
+                break
+        winner = (best[0].q, best[1])
+        if best[0].success and criterion:
+            q_r, _, ev = refine(variants[best[1]].problem, variants[best[1]].lm, best[0].q, criterion, None)
+            evaluations += ev
+            winner = (q_r, best[1])
+        extra = f"; {best[0].message}"
+    q = np.array(winner[0])
+    if goals:
+        goal_errors = problem.goal_errors(q)
+        pos, rot, cost = problem.goal_summary(goal_errors)
+        within = problem.goals_met(goal_errors)
+    else:
+        goal_errors = None
+        pos, rot, cost = problem.assess(q)
+        within = bool(problem.succeeded(pos, rot))
+    free_q = None if scene is None else not scene.in_collision(q, problem.margin)
+    success = within and free_q is not False
+    what = {"first": "the first answer", "nearest": "the answer nearest q0",
+            "manipulability": "the most dexterous answer"}[prefer]
+    if success:
+        message = (f"{what} of {max(len(answers), 1)} found by LM from {stage} ({runs} LM run(s), "
+                   f"{len(variants)} variant(s))")
+    else:
+        best = (f"best {errors_text(pos, rot)} (largest over the goals)" if goals
+                else shortfall_text(problem, pos, rot))
+        message = f"no answer within the budget after {runs} LM run(s) over {len(variants)} variant(s); {best}"
+    if rejected:
+        message += f"; {rejected} LM answer(s) reached the goals in collision"
+    message += extra
+    history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1)}
+    history["answers"] = np.array([a[0] for a in answers], dtype=float)
+    return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=0,
+                  evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0, history=history,
+                  message=message, method="memetic", setup_s=t0 - t_setup, collision_free=free_q,
+                  goal_errors=goal_errors)

@@ -1,0 +1,310 @@
+"""Goal sets, prefer=, preferences and locking (issue 23): behaviour, judged by Pinocchio's kinematics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import evoik_pin as ev
+from evoik_pin.errors import BoundsError, ConfigurationError, FrameError, MethodError, OptionError, TargetError
+from evoik_pin.goals import JointLimitMargin, Manipulability, MinimalDisplacement, Pose, Position, Posture
+from evoik_pin.solvers.lm import wrapping_joints
+from evoik_pin.solvers.search.choose import nearest_turn
+
+
+@pytest.fixture(scope="module")
+def panda():
+    robot = ev.load_robot("panda")
+    ev.prepare(robot)
+    return robot
+
+
+@pytest.fixture(scope="module")
+def ur5():
+    return ev.load_robot("ur5")
+
+
+def _pin_pose(robot, q, frame=None):
+    """The frame's pose by Pinocchio directly (the reference)."""
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, robot.to_pinocchio(q))
+    return data.oMf[robot.model.getFrameId(frame or robot.tip)]
+
+
+def _far(T, k):
+    return pin.SE3(T.rotation, T.translation + np.array([1.5 + 0.1 * k, 0.0, 0.0]))
+
+
+# ---------------------------------------------------------------------- goal sets
+def test_goal_set_forms_and_errors():
+    T = np.eye(4)
+    g = Pose("f", [T, pin.SE3.Identity()])
+    assert len(g.alternatives) == 2 and g.alternatives[1].target == pin.SE3.Identity()
+    assert len(Pose("f", np.stack([T, T, T])).alternatives) == 3
+    assert Pose("f", T.tolist()).alternatives is None  # a nested (4, 4) list is one pose
+    assert len(Position("f", [[0, 0, 1], [0, 1, 0]]).alternatives) == 2
+    assert Position("f", [0, 0, 1]).alternatives is None
+    with pytest.raises(TargetError, match="goal set with no poses"):
+        Pose("f", [])
+    with pytest.raises(TargetError, match="goal set with no points"):
+        Position("f", np.zeros((0, 3)))
+    bad = np.eye(4)
+    bad[3] = 1.0
+    with pytest.raises(TargetError, match="member 1 of the goal set"):
+        Pose("f", [T, bad])
+
+
+def test_goal_set_finds_the_reachable_member(panda):
+    rng = np.random.default_rng(3)
+    for i in range(5):
+        q = panda.random_configurations(1, rng)[0]
+        T = panda.fk(q)
+        members = [_far(T, k) for k in range(4)] + [T] + [_far(T, 9)]
+        r = ev.solve(panda, [Pose(panda.tip, members)], seed=i)
+        assert r.success, r.message
+        assert r.chosen == [4]
+        M = _pin_pose(panda, r.q)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+
+
+def test_chosen_is_none_for_single_targets(panda):
+    q = np.zeros(panda.n)
+    r = ev.solve(panda, [Pose(panda.tip, panda.fk(q))], seed=0)
+    assert r.success and r.chosen == [None]
+    assert ev.solve(panda, panda.fk(q), seed=0).chosen is None
+
+
+def test_goal_set_positions_and_mixed_goals(panda):
+    q = np.full(panda.n, 0.3)
+    p = panda.fk(q).translation
+    r = ev.solve(panda, [Position(panda.tip, [p + [2, 0, 0], p])], seed=0)
+    assert r.success and r.chosen == [1]
+
+
+def test_goal_set_evolutionary_violation_is_the_min(panda):
+    q = np.full(panda.n, 0.2)
+    T = panda.fk(q)
+    problem, _ = ev.make_problem(panda, [Pose(panda.tip, [_far(T, 0), T])])
+    ev_set = problem.evaluate(q[None])
+    assert ev_set.position_error[0] <= 1e-12 and ev_set.orientation_error[0] <= 1e-6
+    single, _ = ev.make_problem(panda, [Pose(panda.tip, _far(T, 0))])
+    assert single.evaluate(q[None]).position_error[0] > 1.0
+    r = ev.solve(panda, [Pose(panda.tip, [_far(T, 0), T], tolerance=1e-3)], method="de", seed=0, q0=q)
+    assert r.chosen == [1]
+
+
+# ---------------------------------------------------------------------- prefer
+def test_prefer_checks(panda):
+    T = panda.fk(np.zeros(panda.n))
+    with pytest.raises(OptionError, match="prefer"):
+        ev.solve(panda, T, prefer="closest")
+    with pytest.raises(OptionError, match="q0"):
+        ev.solve(panda, T, prefer="nearest")
+    with pytest.raises(MethodError, match="memetic"):
+        ev.solve(panda, T, prefer="nearest", q0=np.zeros(panda.n), method="de")
+
+
+def test_prefer_nearest_is_no_farther_than_first(panda):
+    rng = np.random.default_rng(5)
+    for i in range(6):
+        q, q0 = panda.random_configurations(2, rng)
+        T = panda.fk(q)
+        first = ev.solve(panda, T, q0=q0, seed=i, timeout=None, max_restarts=2)
+        near = ev.solve(panda, T, q0=q0, prefer="nearest", seed=i, timeout=0.005)
+        assert near.success, near.message
+        M = _pin_pose(panda, near.q)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert panda.within_bounds(near.q)
+        assert np.linalg.norm(near.q - q0) <= np.linalg.norm(first.q - q0) + 1e-9
+
+
+def test_prefer_manipulability_beats_first(panda):
+    rng = np.random.default_rng(6)
+    for i in range(4):
+        q = panda.random_configurations(1, rng)[0]
+        T = panda.fk(q)
+        first = ev.solve(panda, T, seed=i)
+        best = ev.solve(panda, T, prefer="manipulability", seed=i, timeout=0.005)
+        assert best.success, best.message
+        assert panda.manipulability(best.q, "full") >= panda.manipulability(first.q, "full") * (1 - 1e-9)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(-30, 30), min_size=6, max_size=6), st.lists(st.floats(-6, 6), min_size=6, max_size=6))
+def test_nearest_turn_same_pose_within_limits_and_no_farther(q, q0):
+    robot = ev.load_robot("ur5")
+    lo, hi = robot.lower, robot.upper
+    wrap = wrapping_joints(robot, lo, hi)
+    q = np.clip(np.array(q), lo, hi)
+    q0 = np.array(q0)
+    out = nearest_turn(q, q0, lo, hi, wrap)
+    assert np.all(out >= lo) and np.all(out <= hi)
+    k = (out - q) / (2 * np.pi)
+    assert np.allclose(k, np.round(k), atol=1e-9)
+    assert np.all(np.abs(out - q0) <= np.abs(q - q0) + 1e-12)
+
+
+# ---------------------------------------------------------------------- preferences
+def test_preferences_keep_goals_and_lower_their_cost(panda):
+    rng = np.random.default_rng(7)
+    mid = (panda.lower + panda.upper) / 2
+    for i in range(4):
+        T = panda.fk(panda.random_configurations(1, rng)[0])
+        plain = ev.solve(panda, [Pose(panda.tip, T)], seed=i)
+        pref = ev.solve(panda, [Pose(panda.tip, T), Posture(mid, 1.0)], seed=i)
+        assert pref.success, pref.message
+        M = _pin_pose(panda, pref.q)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+        assert np.linalg.norm(pref.q - mid) <= np.linalg.norm(plain.q - mid) + 1e-9
+
+
+def test_joint_limit_margin_and_posture_by_name(panda):
+    T = panda.fk(np.full(panda.n, 0.1))
+    r = ev.solve(panda, [Pose(panda.tip, T), JointLimitMargin(0.1), Posture({"panda_joint1": 0.5}, 0.5)], seed=0)
+    assert r.success
+
+
+def test_minimal_displacement_and_manipulability_preferences(panda):
+    rng = np.random.default_rng(8)
+    q, q0 = panda.random_configurations(2, rng)
+    T = panda.fk(q)
+    r = ev.solve(panda, [Pose(panda.tip, T), MinimalDisplacement()], q0=q0, seed=0)
+    assert r.success
+    r2 = ev.solve(panda, [Pose(panda.tip, T), Manipulability()], seed=0)
+    assert r2.success
+    r3 = ev.solve(panda, [Pose(panda.tip, T), Posture(np.zeros(panda.n))], method="de", seed=0, q0=q,
+                  max_generations=5)
+    assert r3.success, r3.message
+
+
+def test_preference_errors(panda):
+    T = panda.fk(np.zeros(panda.n))
+    with pytest.raises(OptionError, match="margin"):
+        JointLimitMargin(-0.1)
+    with pytest.raises(OptionError, match="weight"):
+        Posture(np.zeros(7), 0.0)
+    with pytest.raises(FrameError, match="nope"):
+        ev.solve(panda, [Pose(panda.tip, T), Posture({"nope": 0.0})])
+    with pytest.raises(ConfigurationError, match="Posture"):
+        ev.solve(panda, [Pose(panda.tip, T), Posture(np.zeros(3))])
+    with pytest.raises(OptionError, match="q0"):
+        ev.solve(panda, [Pose(panda.tip, T), MinimalDisplacement()])
+    with pytest.raises(TargetError, match="preferences only"):
+        ev.solve(panda, [Posture(np.zeros(7))])
+
+
+# ---------------------------------------------------------------------- locking
+def test_locked_robot_kinematics_match_pinocchio(panda):
+    locked = panda.locked({"panda_joint1": 0.4, "panda_joint4": -1.2})
+    assert locked.n == panda.n - 2
+    assert locked.joint_names == [j for j in panda.joint_names if j not in ("panda_joint1", "panda_joint4")]
+    rng = np.random.default_rng(9)
+    for q in locked.random_configurations(5, rng):
+        full = np.insert(np.insert(q, 0, 0.4), 3, -1.2)
+        assert np.allclose(locked.fk(q).homogeneous, panda.fk(full).homogeneous, atol=1e-12)
+        assert np.allclose(locked.full_configuration(q), panda.full_configuration(full), atol=1e-12)
+        J_fd = np.empty((3, locked.n))
+        for k in range(locked.n):
+            dq = np.zeros(locked.n)
+            dq[k] = 1e-7
+            J_fd[:, k] = (locked.fk(q + dq).translation - locked.fk(q - dq).translation) / 2e-7
+        assert np.allclose(locked.jacobian(q)[:3], J_fd, atol=1e-6)
+    again = locked.locked({"panda_joint2": 0.1})
+    assert again.n == panda.n - 3 and np.allclose(
+        again.fk(np.zeros(4)).homogeneous, panda.fk([0.4, 0.1, 0, -1.2, 0, 0, 0]).homogeneous)
+
+
+def test_locked_errors(panda):
+    with pytest.raises(FrameError, match="panda_joint9"):
+        panda.locked({"panda_joint9": 0.0})
+    with pytest.raises(BoundsError, match=r"panda_joint4.*limits"):
+        panda.locked({"panda_joint4": 1.0})
+    with pytest.raises(OptionError):
+        panda.locked([("panda_joint1", 0.0)])
+
+
+def test_solve_locked_returns_the_full_layout(panda):
+    rng = np.random.default_rng(10)
+    q = panda.random_configurations(1, rng)[0]
+    q[2] = 0.25
+    T = panda.fk(q)
+    r = ev.solve(panda, T, locked={"panda_joint3": 0.25}, seed=0, q0=np.zeros(panda.n))
+    assert r.success, r.message
+    assert r.q.shape == (panda.n,) and r.q[2] == 0.25
+    M = _pin_pose(panda, r.q)
+    assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+    r2 = ev.solve(panda, [Pose(panda.tip, T)], locked={"panda_joint3": 0.25}, prefer="nearest", q0=q, seed=0)
+    assert r2.success and r2.q[2] == 0.25
+
+
+# ---------------------------------------------------------------------- goals files and the command line
+def test_goals_file_round_trip_of_sets_and_preferences(tmp_path, panda):
+    from evoik_pin.errors import GoalsFileError
+    from evoik_pin.goals_file import load_goals, save_goals
+
+    T = panda.fk(np.full(panda.n, 0.3))
+    goals = [Pose(panda.tip, [_far(T, 0), T]), Posture({"panda_joint1": 0.2}, 0.5), JointLimitMargin(0.1),
+             Manipulability(), MinimalDisplacement(2.0), Posture(np.zeros(panda.n))]
+    for suffix in (".yaml", ".json"):
+        path = save_goals(goals, tmp_path / f"g{suffix}")
+        back = load_goals(path)
+        assert [type(g) for g in back] == [type(g) for g in goals]
+        assert np.array_equal(back[0].member_targets[0], goals[0].member_targets[0])
+        assert np.array_equal(back[0].member_targets[1], goals[0].member_targets[1])
+        assert back[1].q_ref == {"panda_joint1": 0.2} and back[1].weight == 0.5
+        assert back[2].margin == 0.1 and back[4].weight == 2.0
+        r = ev.solve(panda, back, q0=np.zeros(panda.n), seed=0)
+        assert r.success and r.chosen == [1]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("goals:\n  - {frame: panda_hand_tcp, kind: position, targets: []}\n")
+    with pytest.raises(GoalsFileError, match="non-empty list of targets"):
+        load_goals(bad)
+    bad.write_text("goals:\n  - {kind: posture}\n")
+    with pytest.raises(GoalsFileError, match="q_ref"):
+        load_goals(bad)
+
+
+def test_cli_prefer_and_locked(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "solve", "panda", "--xyz", "0.4", "0.1", "0.5",
+                          "--rpy", "180", "0", "0", "--prefer", "nearest", "--q0", "0", "0", "0", "-90", "0", "90",
+                          "45", "--locked", "panda_joint3=10", "--json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    info = json.loads(out.stdout)
+    assert info["success"] and abs(info["q_deg"][2] - 10.0) < 1e-9
+    bad = subprocess.run([sys.executable, "-m", "evoik_pin.cli", "solve", "panda", "--xyz", "0.4", "0.1", "0.5",
+                          "--locked", "panda_joint9=1"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "panda_joint9" in bad.stderr
+
+
+def test_bench_script_runs_small():
+    """scripts/bench_goal_kinds_prefer.py's run(args) makes its section (3 targets a part)."""
+    import argparse
+    import importlib.util
+    from pathlib import Path
+
+    pytest.importorskip("pytracik")
+    path = Path(__file__).resolve().parents[1] / "scripts" / "bench_goal_kinds_prefer.py"
+    spec = importlib.util.spec_from_file_location("bench_goal_kinds_prefer", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    text = module.run(argparse.Namespace(n=3, seed=0, verbose=False, prefer_timeout=None))
+    assert "nearest vs Distance" in text and "10 grasps, 7 unreachable" in text and "JointLimitMargin" in text
+
+
+def test_jacobian_world_unchecked_equals_jacobian():
+    for robot in (ev.load_robot("panda"), ev.load_robot("panda", base="panda_link1")):
+        rng = np.random.default_rng(11)
+        for q in robot.random_configurations(3, rng):
+            for frame in (None, robot.frames[-3]):
+                fid = None if frame is None else robot.frame_id(frame)
+                assert np.allclose(robot.jacobian_world_unchecked(q, fid), robot.jacobian(q, "world", of=frame),
+                                   atol=1e-12)
