@@ -87,10 +87,11 @@ problems:
 
 
 def test_goal_kinds_are_the_goal_classes():
-    from evoik_pin.goals import Direction, LookAt, Orientation
+    from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, RelativePose
 
     assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {
-        "pose": Pose, "position": Position, "orientation": Orientation, "direction": Direction, "look_at": LookAt}
+        "pose": Pose, "position": Position, "orientation": Orientation, "direction": Direction, "look_at": LookAt,
+        "center_of_mass": CenterOfMass, "relative_pose": RelativePose}
 
 
 # ------------------------------------------------------------------ errors

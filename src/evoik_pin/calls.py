@@ -146,7 +146,7 @@ def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
     result.chosen = problem.chosen(result.q)  # goal sets: which member each goal meets
     met = problem.goals_met(result.goal_errors)
     if result.success and not met:
-        unmet = [g.frame for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]
+        unmet = [g.label for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]
         result.message += f"; goals not met within their own tolerances: {', '.join(unmet)}"
     result.success = met
     return result

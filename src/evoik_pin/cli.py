@@ -415,6 +415,10 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
                      "tolerance_m": goal.tolerance if goal.has_position else None,
                      "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None,
                      "weight": goal.weight})
+        if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
+            rows[-1]["label"] = goal.label
+            if getattr(goal, "frame_a", None):
+                rows[-1]["frame_a"] = goal.frame_a
         if goal.alternatives is not None:  # a goal set: the member met
             rows[-1]["chosen"] = res.chosen[i]
     info = {
@@ -508,10 +512,12 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
 
 def _print_goal_errors(rows: list[dict]) -> None:
     """One line per goal: frame, kind, position error (m), rotation error (rad, or "free"), met."""
-    width = max(len("frame"), *(len(r["frame"]) for r in rows))
+    names = [r.get("label", r["frame"]) for r in rows]  # a centre of mass has no frame; a relative pose two
+    width = max(len("frame"), *(len(name) for name in names))
     kw = max(len("kind"), *(len(r["kind"]) for r in rows))  # orientation, look_at, ...
     print(f"  #  {'frame':{width}s}  {'kind':{kw}s}  position error (m)  rotation error (rad)  met")
-    for k, r in enumerate(rows):
+    for k, (r, name) in enumerate(zip(rows, names, strict=True)):
+        r = {**r, "frame": name}
         rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
         pos = "free" if r["position_error_m"] is None else f"{r['position_error_m']:.3e}"  # orientation, pointing
         print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  "

@@ -56,6 +56,20 @@ may also be the bare list of goals. Numbers written ``1e-6`` (which YAML 1.1 rea
 Unknown keys are errors (a misspelt ``tolerence`` is not silently ignored). Every error is a
 :class:`~evoik_pin.errors.GoalsFileError` naming the file, the goal (index from 0, and frame) and the field.
 
+Beyond one frame: the robot's centre of mass (no ``frame``) at a point, on chosen axes, or over a support polygon
+(contact points in each support frame, m, or the frames alone: their collision geometry's), and one frame's pose
+seen from another (``frame_a``; ``frame`` is frame b)::
+
+      - kind: center_of_mass
+        target: {position: [0.0, 0.0, 0.0]}
+        axes: xy                          # optional: any of x, y, z (default xyz)
+      - kind: center_of_mass
+        support: [left_sole_link, right_sole_link]      # or {left_sole_link: [[0.1, 0.05, 0], ...], ...}
+        margin: 0.02                      # optional, m (default 0)
+      - frame_a: left_gripper
+        frame: right_gripper
+        kind: relative_pose
+        target: {position: [0, 0, 0.3], rpy: [180, 0, 0]}
 A goal set (any one of several targets will do; ``Pose(frame, [T1, ...])``) has ``targets:``, a list of targets,
 instead of ``target:``. Preferences (:mod:`evoik_pin.goals.preferences`) are entries of the goal list too, with no
 frame and target: ``{kind: posture, q_ref: [...]}`` (rad or m) or ``{kind: posture, joints: {name: value}}``,
@@ -90,7 +104,19 @@ import numpy as np
 
 from .datafile import Flow, data_format, dump_data, read_data, write_text
 from .errors import FrameError, GoalsFileError, OptionError, TargetError
-from .goals import DEFAULT_GOAL_TOLERANCE, Direction, Goal, LookAt, Orientation, Pose, Position, bind, is_goal_list
+from .goals import (
+    DEFAULT_GOAL_TOLERANCE,
+    CenterOfMass,
+    Direction,
+    Goal,
+    LookAt,
+    Orientation,
+    Pose,
+    Position,
+    RelativePose,
+    bind,
+    is_goal_list,
+)
 from .goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from .target import Target
 
@@ -264,6 +290,10 @@ class GoalKind:
     read_target: Callable[[dict], object]
     write_target: Callable[[Goal], dict]
     make: Callable | None = None
+    #: Kinds whose entries are not (frame, target, numbers): the whole entry read (entry, what) -> Goal, and the
+    #: whole entry written (goal) -> dict.
+    read: Callable[[dict, str], Goal] | None = None
+    write: Callable[[Goal], dict] | None = None
 
 
 def _pointing(cls) -> Callable:
@@ -310,6 +340,8 @@ def _goal(entry, what: str) -> Goal:
         raise GoalsFileError(f"{what}: kind: " + ("missing" if kind_name is None else f"unknown kind {kind_name!r}")
                              + f"; accepted kinds: {', '.join([*GOAL_KINDS, *PREFERENCE_KINDS])}")
     kind = GOAL_KINDS[kind_name]
+    if kind.read is not None:  # kinds whose entries are not (frame, target, numbers)
+        return kind.read(entry, what)
     _unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
     if "targets" in entry:  # a goal set: any one of several targets
         return _goal_set(entry, what, kind)
@@ -361,6 +393,78 @@ def _goal_set(entry: dict, what: str, kind: GoalKind) -> Goal:
         raise GoalsFileError(f"{what}: {exc}") from None
 
 
+def _com_goal(entry: dict, what: str) -> Goal:
+    """A ``kind: center_of_mass`` entry: ``target: {position: [x, y, z]}`` (m) with optional ``axes`` (e.g. xy),
+    or ``support:`` ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m)."""
+    _unknown_keys(entry, ("kind", "target", "axes", "support", "margin", "weight", "tolerance"),
+                  f"{what}, a center_of_mass goal (it has no frame)")
+    options = {key: _number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "margin")
+               if key in entry}
+    try:
+        if "target" in entry:
+            if not isinstance(entry["target"], dict):
+                raise GoalsFileError(f"target must be a mapping (position), got {entry['target']!r}")
+            if "axes" in entry:
+                options["axes"] = entry["axes"]
+            return CenterOfMass(point=_position_target(entry["target"]), **options)
+        if "support" not in entry:
+            raise GoalsFileError("a center_of_mass goal needs target: {position: [x, y, z]} (m) or support: "
+                                 "{frame: [[x, y, z], ...]} or [frames]")
+        return CenterOfMass(support=entry["support"], **options)
+    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
+        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+
+
+def _com_entry(goal) -> dict:
+    entry: dict = {"kind": "center_of_mass"}
+    if goal.support is None:
+        entry["target"] = Flow(position=[float(v) + 0.0 for v in goal.point])
+        entry["axes"] = goal.axes
+    else:
+        given = {f: p for f, p in goal.support.items() if p is not None}
+        entry["support"] = ({f: [[float(v) + 0.0 for v in row] for row in given.get(f, [])] for f in goal.support}
+                            if given else list(goal.support))
+        if goal.margin:
+            entry["margin"] = float(goal.margin)
+    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE)):
+        if getattr(goal, key) != default:
+            entry[key] = float(getattr(goal, key))
+    return entry
+
+
+def _relative_goal(entry: dict, what: str) -> Goal:
+    """A ``kind: relative_pose`` entry: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a)."""
+    _unknown_keys(entry, ("frame_a", "frame", "kind", "target", "weight", "tolerance", "rotation_tolerance"),
+                  f"{what}, a relative_pose goal")
+    for key in ("frame_a", "frame", "target"):
+        if key not in entry:
+            raise GoalsFileError(f"{what}: missing field {key!r} (a relative_pose goal has frame_a, frame and target: "
+                                 "frame's pose seen from frame_a)")
+    if not isinstance(entry["target"], dict):
+        raise GoalsFileError(f"{what}: target must be a mapping (position, rpy / rpy_rad, matrix), got "
+                             f"{entry['target']!r}")
+    options = {key: _number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "rotation_tolerance")
+               if key in entry}
+    try:
+        return RelativePose(entry["frame_a"], entry["frame"], _pose_target(entry["target"]), **options)
+    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
+        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+
+
+def _relative_entry(goal) -> dict:
+    entry = {"frame_a": goal.frame_a, "frame": goal.frame, "kind": "relative_pose", "target": _matrix_text(goal)}
+    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE),
+                         ("rotation_tolerance", goal.tolerance)):
+        if getattr(goal, key) != default:
+            entry[key] = float(getattr(goal, key))
+    return entry
+
+
+GOAL_KINDS.update({
+    "center_of_mass": GoalKind(CenterOfMass, (), _position_target, _com_entry, read=_com_goal, write=_com_entry),
+    "relative_pose": GoalKind(RelativePose, (), _pose_target, _matrix_text, read=_relative_goal,
+                              write=_relative_entry),
+})
 def _preference(entry: dict, what: str, kind_name: str):
     """A preference entry (``kind: posture | joint_limit_margin | manipulability | minimal_displacement``)."""
     cls, fields = PREFERENCE_KINDS[kind_name]
@@ -496,6 +600,8 @@ def _entry(goal: Goal) -> dict:
     if isinstance(goal, Preference):
         return _preference_entry(goal)
     name, kind = _kind_of(goal)
+    if kind.write is not None:
+        return kind.write(goal)
     entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
     if goal.alternatives is not None:  # a goal set
         del entry["target"]

@@ -26,6 +26,7 @@ from .objectives import (
     position_errors,
 )
 from .robot import Robot
+from .solvers.lm.layout import KIND_BEYOND_FRAME
 from .solvers.options import check_positive
 from .target import MAX_TARGET_NORM, Target
 
@@ -213,6 +214,9 @@ class IKProblem:
         pos = np.sqrt((d * d).sum(axis=2))
         rot = np.zeros_like(pos)
         for g, goal in enumerate(self.goals):
+            if goal.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: their own violation
+                pos[:, g], rot[:, g] = goal.robot_population_errors(self.robot, Q)
+                continue
             kinded = goal.population_errors(P[:, g], R[:, g], pt[g], Rt[g])  # bands, free axes, pointing
             if kinded is not None:
                 pos[:, g], rot[:, g] = kinded
@@ -239,8 +243,10 @@ class IKProblem:
         fids = [self.robot.frame_id(g.frame) for g in self.goals]
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
         if self.goal_sets:
-            return [self._member(g, T)[1] for g, T in zip(self.goals, poses, strict=True)]
-        return [g.errors(T) for g, T in zip(self.goals, poses, strict=True)]
+            return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)[1]
+                    for g, T in zip(self.goals, poses, strict=True)]
+        return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
+                for g, T in zip(self.goals, poses, strict=True)]
 
     # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal_set)
     @property
@@ -549,6 +555,6 @@ def goals_shortfall_text(problem: IKProblem, errors, pos: float, rot: float | No
     """'best position error ... m[, orientation error ... rad] (largest over the goals); goals not met: frame, ...'
     for the messages of failed goal-list solves: ``errors`` each goal's (:meth:`IKProblem.goal_errors`), ``pos`` and
     ``rot`` the largest of them."""
-    unmet = [g.frame for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
+    unmet = [g.label for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
     return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
 

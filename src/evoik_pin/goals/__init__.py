@@ -13,7 +13,11 @@ frame), with its target expressed in the robot's base frame (for a floating base
 * :class:`Position`: position only (3 rows, m); its target a 3-vector (m);
 * :class:`Orientation`: orientation only (3 rows, rad); its target a rotation (3 x 3, ``pin.SE3``, 4 x 4);
 * :class:`Direction`: a frame axis along a direction (3 rows; error the angle between them, rad);
-* :class:`LookAt`: a frame axis pointing at a point (3 rows; error the angle to the line to the point, rad).
+* :class:`LookAt`: a frame axis pointing at a point (3 rows; error the angle to the line to the point, rad);
+* :class:`CenterOfMass`: the whole robot's centre of mass at a point (on chosen axes), or its ground projection
+  inside the support polygon of contact points (``support={frame: points}`` or ``support=[frames]``), at least
+  ``margin`` (m) inside its edges;
+* :class:`RelativePose`: one frame's pose seen from another (``frame_a``, ``frame_b``, T: two hands holding a box).
 
 ``Pose``, ``Position`` and ``Orientation`` also take per-axis tolerance bands and free axes (``tolerance=`` 6 or 3
 half-widths, ``free="rz"``; :mod:`.bands`): met when every component of the error is within its band.
@@ -32,6 +36,7 @@ all be met settle on the compromise the weights make; it is met when its positio
 """
 
 from .binding import bind, is_goal_list
+from .center_of_mass import CenterOfMass
 from .direction import Direction
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .look_at import LookAt
@@ -39,6 +44,8 @@ from .orientation import Orientation
 from .pose import Pose
 from .position import Position
 from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
+from .relative_pose import RelativePose
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Direction", "Goal", "JointLimitMargin", "LookAt", "Manipulability",
            "MinimalDisplacement", "Orientation", "Pose", "Position", "Posture", "Preference", "bind", "is_goal_list"]
+__all__ += ["CenterOfMass", "RelativePose"]

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..errors import FrameError, TargetError
-from ..solvers.lm.layout import GoalStack
+from ..solvers.lm.layout import KIND_BEYOND_FRAME, GoalStack
 from .goal import Goal
 
 __all__ = ["bind", "is_goal_list"]
@@ -35,6 +37,8 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
                               "Position(frame, p) from evoik_pin.goals")
     seen: dict[int, Goal] = {}
     for g in goals:
+        if g.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: checked as they pack (_beyond_frame)
+            continue
         fid = robot.frame_id(g.frame)  # FrameError with the closest names
         if not robot.moving_joints(g.frame):
             raise FrameError(f"no active joint of {robot.name} moves frame {g.frame!r}: load the robot with that frame "
@@ -52,7 +56,24 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
         seen[fid] = g
     stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
                          [g.tolerance for g in goals], [g.rotation_tolerance for g in goals], [g.aux() for g in goals])
+    stack = _beyond_frame(robot, goals, stack)
     encoded = [g.encode() for g in goals]
     pt = np.ascontiguousarray([e[0] for e in encoded], dtype=float)
     Rt = np.ascontiguousarray([e[1] for e in encoded], dtype=float)
     return goals, stack, pt, Rt
+
+
+def _beyond_frame(robot, goals, stack: GoalStack) -> GoalStack:
+    """``stack`` with the ``aux`` and ``support`` rows of the goals beyond one frame (:class:`CenterOfMass`,
+    :class:`RelativePose`: their ``pack(robot)``, which checks their frames and the robot's masses)."""
+    packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if goal.kind >= KIND_BEYOND_FRAME}
+    if not packed:
+        return stack
+    width = max(max(a.size for a, _ in packed.values()), stack.aux.shape[1])
+    aux = np.zeros((len(goals), width))
+    aux[:, :stack.aux.shape[1]] = stack.aux
+    support = stack.support.copy()
+    for g, (row, moved) in packed.items():
+        aux[g, :row.size] = row
+        support[g] = moved
+    return dataclasses.replace(stack, aux=aux, support=support)

@@ -53,20 +53,28 @@ class Goal:
     def _check_common(self) -> None:
         if not isinstance(self.frame, str) or not self.frame:
             raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {self.frame!r}")
-        weight = number(self.weight, f"weight of the goal on {self.frame!r}", "a finite number > 0")
+        self._check_numbers(f"the goal on {self.frame!r}")
+
+    def _check_numbers(self, what: str) -> None:
+        """Check and set weight and tolerances; ``what`` names the goal in the messages."""
+        weight = number(self.weight, f"weight of {what}", "a finite number > 0")
         if weight <= 0:
-            raise OptionError(f"weight of the goal on {self.frame!r} must be > 0, got {self.weight!r}")
+            raise OptionError(f"weight of {what} must be > 0, got {self.weight!r}")
         tol = DEFAULT_GOAL_TOLERANCE if self.tolerance is None else number(  # None: the default
-            self.tolerance, f"tolerance (m) of the goal on {self.frame!r}", "a finite number >= 0")
+            self.tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
         rtol = tol if self.rotation_tolerance is None else number(
-            self.rotation_tolerance, f"rotation_tolerance (rad) of the goal on {self.frame!r}", "a finite number >= 0")
+            self.rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
         if tol < 0 or rtol < 0:
-            raise OptionError(f"tolerances of the goal on {self.frame!r} must be >= 0, got {self.tolerance!r} m and "
+            raise OptionError(f"tolerances of {what} must be >= 0, got {self.tolerance!r} m and "
                               f"{self.rotation_tolerance!r} rad")
         object.__setattr__(self, "weight", weight)
         object.__setattr__(self, "tolerance", tol)
         object.__setattr__(self, "rotation_tolerance", rtol)
 
+    @property
+    def label(self) -> str:
+        """How messages name this goal: its frame (goals beyond one frame say more)."""
+        return self.frame
     #: Whether the goal puts the frame's origin somewhere (False for orientation and pointing goals: their target
     #: position pt is no place for the frame, and seed ranking leaves it out). A class attribute, not a field.
     has_position = True

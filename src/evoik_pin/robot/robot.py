@@ -735,6 +735,14 @@ class Robot:
         det = np.linalg.det(J @ J.transpose(0, 2, 1))
         return np.sqrt(np.maximum(det, 0.0))
 
+    @cached_property
+    def mass_constants(self):
+        """The masses of the physical joints' bodies for compiled kernels (centre-of-mass goals):
+        :class:`~evoik_pin.robot.mass.MassConstants`. Owned by the robot: do not modify them."""
+        from .mass import mass_constants
+
+        return mass_constants(self)
+
     # ------------------------------------------------------------------ geometry for display
     @property
     def base_placement(self) -> pin.SE3:

@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..solvers.lm.layout import KIND_DIRECTION, KIND_ORIENTATION
+from ..solvers.lm.layout import KIND_BEYOND_FRAME, KIND_COM, KIND_DIRECTION, KIND_ORIENTATION
 from .server import _talks
 
 #: Goal kinds whose target is no place (an orientation, a direction): show_goals draws no marker for them (a
@@ -136,7 +136,9 @@ class MarkerDrawing:
             labels: draw each goal's frame name beside its marker (a text sprite facing the camera).
 
         Returns:
-            The markers' node names, in the goals' order.
+            The markers' node names, in the goals' order. A centre-of-mass point is a sphere named
+            ``<name>/center_of_mass``; a support polygon and a relative pose have no target in the base frame and
+            get no marker.
         """
         from ..goals import bind
 
@@ -147,7 +149,10 @@ class MarkerDrawing:
         self.delete(name)
         nodes = []
         for goal in goals:
-            node = f"{name}/{goal.frame}"
+            if goal.kind >= KIND_BEYOND_FRAME and goal.kind != KIND_COM:
+                continue  # a support polygon, a relative pose: no target in the base frame to mark
+            frame = "center_of_mass" if goal.kind == KIND_COM else goal.frame
+            node = f"{name}/{frame}"
             if node in nodes:  # the same frame twice with the same target (bind refuses clashing ones)
                 continue
             if goal.kind in UNPLACED_KINDS:  # an orientation or a direction alone: no place to mark
@@ -156,13 +161,13 @@ class MarkerDrawing:
             kind = _draw_marker(vis[node], p, R if goal.has_orientation else None, s)
             if labels:
                 label = vis[node]["label"]
-                label.set_object(_label(goal.frame))
+                label.set_object(_label(frame))
                 # above the marker, in its own frame turned back to the base frame's axes (a sprite has no rotation
                 # of its own to keep, but its offset would turn with a pose's rotation)
                 T = np.diag([s * 4 * GOAL_LABEL_HEIGHT] * 3 + [1.0])  # the 256 px canvas: text ~ a quarter of it
                 T[:3, 3] = (R.T if goal.has_orientation else np.eye(3)) @ np.array([0.0, 0.0, 0.6 * s])
                 label.set_transform(T)
-            self.scene[node] = f"goal {kind}: {goal.frame}"
+            self.scene[node] = f"goal {kind}: {frame}"
             nodes.append(node)
         return nodes
 

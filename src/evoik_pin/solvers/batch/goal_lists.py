@@ -19,7 +19,7 @@ import numpy as np
 
 from ...errors import FrameError, TargetError
 from ...goals import Goal, bind, is_goal_list
-from ..lm.layout import G_WEIGHT, POSITIONLESS_KINDS, GoalArrays
+from ..lm.layout import G_WEIGHT, KIND_BEYOND_FRAME, POSITIONLESS_KINDS, GoalArrays
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
@@ -34,9 +34,12 @@ def is_goal_batch(targets) -> bool:
 
 def structure(goals) -> tuple:
     """What problems sharing a goal stack have in common: each goal's (frame, kind, weight, tolerance m,
-    rotation tolerance rad, and its aux row's bytes: bands, free axes, a pointing axis), in order."""
+    rotation tolerance rad, and its aux row's bytes: bands, free axes, a pointing axis), in order; for a goal beyond
+    one frame also what its robot-bound ``aux`` row holds (``batch_key()``: a centre of mass's axes, margin and contact
+    points, a relative pose's first frame)."""
     return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
-                  None if g.aux() is None else g.aux().tobytes()) for g in goals)
+                  None if g.aux() is None else g.aux().tobytes())
+                 + (g.batch_key() if g.kind >= KIND_BEYOND_FRAME else ()) for g in goals)
 
 
 class GoalBlock:
@@ -143,7 +146,8 @@ class GoalTree:
 
         self.table = table
         # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
-        weights = stack.spec[:, G_WEIGHT].tolist()
+        # (a goal beyond one frame has no target pose of its frame to rank by: weight 0)
+        weights = np.where(np.array(stack.kinds) >= KIND_BEYOND_FRAME, 0.0, stack.spec[:, G_WEIGHT]).tolist()
         self.spec = tuple((w, bool(o)) + ((False,) if k in POSITIONLESS_KINDS else ())  # SeedTable.goal_spec's
                           for w, o, k in zip(weights, stack.oriented, stack.kinds, strict=True))
         F, _ = table.goal_table_features(tuple(stack.frames), self.spec)

@@ -160,10 +160,11 @@ class LevenbergMarquardt:
         if engine == "python":
             from .reference import ReferenceLM
 
-            if any(k >= KIND_POSE_AXES for k in stack.kinds):  # bands, free axes, orientation, pointing
+            if any(k >= KIND_POSE_AXES for k in stack.kinds):  # bands, free axes, orientation, pointing, beyond a frame
                 raise OptionError("the Python reference LM (engine='python') knows pose, position and planar goals "
-                                  "only; goals with tolerance bands or free axes, Orientation, Direction and LookAt "
-                                  "need the compiled engine (engine='compiled', the default)")
+                                  "only; goals with tolerance bands or free axes, Orientation, Direction, LookAt, "
+                                  "CenterOfMass and RelativePose need the compiled engine (engine='compiled', the "
+                                  "default)")
             self._reference = ReferenceLM(problem, damping, max_step, stall_window, stall_ratio, finish)
             return
         self._reference = None

@@ -48,6 +48,7 @@ from numba import njit
 
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
 from .axes import axes_error, axes_jacobian
+from .balance import balance_columns, balance_error, com_rows
 from .chain import coupled, expand, fold
 from .layout import (
     B_CHI,
@@ -67,6 +68,8 @@ from .layout import (
     GEO_NEAR,
     GEO_SLOW,
     GROW,
+    KIND_BEYOND_FRAME,
+    KIND_COM_SUPPORT,
     KIND_LOOK_AT,
     KIND_ORIENTATION,
     KIND_PLANAR,
@@ -74,6 +77,7 @@ from .layout import (
     KIND_POSE,
     KIND_POSE_AXES,
     KIND_POSITION,
+    KIND_RELATIVE_POSE,
     LAMBDA_MAX,
     LAMBDA_MIN,
     P_DAMPING,
@@ -106,6 +110,8 @@ def task_size(kind):
         return 6
     if KIND_POSE_AXES < kind <= KIND_LOOK_AT:  # position with bands, orientation, direction, look-at
         return 3
+    if kind >= KIND_BEYOND_FRAME:  # centre of mass 3, support polygon 2, relative pose 6
+        return 2 if kind == KIND_COM_SUPPORT else (6 if kind == KIND_RELATIVE_POSE else 3)
     return 2
 
 
@@ -161,11 +167,16 @@ def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, wei
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
         R, p = Rg[g], pg[g]
-        frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
-        if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # the kinds of .axes (tg[g], unused by them, as scratch)
-            cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g], e[r:r + task_size(kind)])
+        if kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+            cg, pos, rot = balance_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g], R, p,
+                                         M, tg[g], e[r:r + task_size(kind)])
         else:
-            cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
+            frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
+            if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # the kinds of .axes (tg[g], unused by them, as scratch)
+                cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g],
+                                          e[r:r + task_size(kind)])
+            else:
+                cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
         c += cg
         ge[g, 0], ge[g, 1] = pos, rot
     if weighted:
@@ -223,18 +234,31 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
 def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-                  B, E):
+                  B, E, parent, Rj, pj):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
     per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
     with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
     goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G, 3, 3), for
     its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
     :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
+    parent (m,) and the joint poses Rj (m, 3, 3), pj (m, 3): for the kinds beyond one frame (:mod:`.balance`), which
+    start from their own physical Jacobian.
     """
     n = J.shape[1]
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
+        if kind >= KIND_BEYOND_FRAME:
+            balance_columns(kind, parent, rev, Rj, pj, Z, O, gaux[g], pg[g], Jx)
+            src = Jx
+            if mimic:
+                fold(index, scale, Jx, J)
+                src = J
+            if kind == KIND_RELATIVE_POSE:
+                goal_jacobian(KIND_POSE, Rg[g], src, tg[g], e[r:r + 6], spec[g, G_WEIGHT], rv, A, B, E, r)
+            else:
+                com_rows(kind, gaux[g], tg[g], src, E, r)
+            continue
         if mimic:
             frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
             fold(index, scale, Jx, J)
@@ -550,7 +574,7 @@ def _outcome(spec, ge, g_out):
     rot = np.nan
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
-        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or (
+        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or kind == KIND_RELATIVE_POSE or (
             kind == KIND_POSE_AXES or KIND_ORIENTATION <= kind <= KIND_LOOK_AT)  # an angle: .axes's kinds but one
         g_out[g, 0] = ge[g, 0]
         g_out[g, 1] = ge[g, 1] if oriented else np.nan
@@ -612,7 +636,7 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
         it += 1
         if not have_E:
             task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                          rv, A, Bm, E)
+                          rv, A, Bm, E, parent, Rj, pj)
             have_E = True
         on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         if creeping and not (on_bound or on_bound_n):
@@ -675,7 +699,7 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
     if converged and finish and c > FINISHED:
         # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
         task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
-                      A, Bm, E)
+                      A, Bm, E, parent, Rj, pj)
         lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
         cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
                         Rj2,
@@ -769,3 +793,29 @@ def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, 
         if converged:
             return k
     return -(1 + Q.shape[0])
+
+
+@njit(cache=True, nogil=True)
+def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, pt, Rt, e_out, E_out, g_out):
+    """What one LM step reads at q (n,), for tests and diagnostics: the stacked task error e_out (rows,) and its
+    Jacobian E_out (rows, n) (each goal's rows scaled by the square root of its weight), each goal's errors to
+    g_out (G, 2) (position m, orientation rad or 0); returns the weighted |e|^2. The arguments are
+    :func:`lm_run`'s."""
+    n, G = q.shape[0], spec.shape[0]
+    ws = make_workspace(n, parent.shape[0], G, stack_rows(spec), 0)
+    mimic = coupled(index, scale, offset, n)
+    weighted = False
+    for g in range(G):
+        if spec[g, G_WEIGHT] != 1.0:
+            weighted = True
+    c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, ws.x, spec, weighted, gR, gp, gaux, pt, Rt,
+                   ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.M, ws.e, ws.ge)
+    task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, ws.Rg, ws.pg, ws.Z, ws.O, ws.tg,
+                  ws.e, ws.Jx, ws.J, ws.rv, ws.A, ws.Bm, ws.E, parent, ws.Rj, ws.pj)
+    for i in range(ws.e.shape[0]):
+        e_out[i] = ws.e[i]
+        for k in range(n):
+            E_out[i, k] = ws.E[i, k]
+    for g in range(G):
+        g_out[g, 0], g_out[g, 1] = ws.ge[g, 0], ws.ge[g, 1]
+    return c

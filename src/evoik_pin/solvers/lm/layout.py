@@ -56,6 +56,14 @@ GEO_SLOW, GEO_NEAR, GEO_ALPHA, GEO_H = 0.25, 1e-4, 0.75, 0.1
 KIND_POSITION, KIND_POSE, KIND_PLANAR, KIND_PLANAR_YAW = 0, 1, 2, 3
 TASK_ROWS = {KIND_POSITION: (0, 1, 2), KIND_POSE: (0, 1, 2, 3, 4, 5), KIND_PLANAR: (0, 1),
              KIND_PLANAR_YAW: (0, 1, 5)}
+#: Kinds beyond one frame (codes 10-15; the kernel's :func:`~.kernel.balance_error` branch, which the kinds above
+#: never enter): the whole robot's centre of mass at a point on chosen axes (3 rows, the others zeroed), its ground
+#: projection inside a support polygon (2 rows), and one frame's pose seen from another (6 rows). Their numbers
+#: (masses, contact points, the second frame) are in the goal's ``aux`` row at the ``A_*`` offsets below.
+KIND_COM, KIND_COM_SUPPORT, KIND_RELATIVE_POSE = 10, 11, 12
+#: The first kind code handled beyond one frame.
+KIND_BEYOND_FRAME = 10
+TASK_ROWS.update({KIND_COM: (0, 1, 2), KIND_COM_SUPPORT: (0, 1), KIND_RELATIVE_POSE: (0, 1, 2, 3, 4, 5)})
 #: Kinds whose goals constrain orientation.
 ORIENTED_KINDS = (KIND_POSE, KIND_PLANAR_YAW)
 #: Goal kinds on one frame beyond those (:mod:`.axes`; the goal classes of :mod:`evoik_pin.goals`): a pose with
@@ -77,6 +85,19 @@ ANGLE_KINDS = ORIENTED_KINDS + (KIND_DIRECTION, KIND_LOOK_AT)
 #: Pointing (direction, look-at): AUX_AXIS (3,) the frame's unit axis.
 AUX_INNER, AUX_BAND, AUX_SWING, AUX_AXIS = 0, 6, 12, 0
 AUX_SIZE = 13
+ORIENTED_KINDS += (KIND_RELATIVE_POSE,)
+ANGLE_KINDS += (KIND_RELATIVE_POSE,)
+#: aux of the centre-of-mass kinds (``goals.center_of_mass``): total mass M (kg), the first moment (kg m, base
+#: frame) of the bodies no joint moves, the axes mask (1.0 on the constrained axes; KIND_COM) or (KIND_COM_SUPPORT)
+#: the shrink s (m) of the support polygon and its number K of contact points; then A_COM_BODIES + 5 k (k < m):
+#: physical joint k's body mass m_k (kg), first moment m_k c_k (kg m, in the joint's folded frame) and the mass of
+#: its whole subtree (kg); then, for KIND_COM_SUPPORT, A_COM_BODIES + 5 m + 4 i: contact point i's physical joint
+#: (-1: none) and its position (m) in that joint's folded frame (in the base frame for -1).
+A_COM_MASS, A_COM_MOMENT, A_COM_AXES, A_COM_SHRINK, A_COM_POINTS, A_COM_BODIES = 0, 1, 4, 4, 5, 7
+#: aux of KIND_RELATIVE_POSE: frame a's physical joint (-1: the base), its folded placement R (9, row-major), p (3);
+#: then A_REL_SIGNS + k (k < m): +1 for joints that move frame b only, -1 for those that move frame a only, else 0.
+A_REL_JOINT, A_REL_R, A_REL_P, A_REL_SIGNS = 0, 1, 10, 13
+__all__ += ["KIND_BEYOND_FRAME", "KIND_COM", "KIND_COM_SUPPORT", "KIND_RELATIVE_POSE"]
 
 #: Layout of the kernel's ``params`` vector.
 P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS = range(6)

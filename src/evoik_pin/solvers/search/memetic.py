@@ -420,7 +420,7 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
         if goals and not within:
-            unmet = [g.frame for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
+            unmet = [g.label for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
             best = f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
         else:
             best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"

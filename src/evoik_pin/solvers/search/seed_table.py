@@ -17,7 +17,16 @@ import pinocchio as pin
 
 from ...lie import rpy
 from ...problem import Target
-from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
+from ..lm.layout import (
+    KIND_BEYOND_FRAME,
+    KIND_PLANAR,
+    KIND_PLANAR_YAW,
+    KIND_POSE,
+    KIND_POSITION,
+    KIND_RELATIVE_POSE,
+    encode_targets,
+    target_kind,
+)
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
@@ -142,7 +151,7 @@ class SeedTable:
             return
         goals = problem.goals
         F, sq = self._goal_table_features(goals)
-        _, pt, Rt = problem.goal_stack()
+        pt, Rt = seed_targets(problem)
         f = np.concatenate(self._goal_feature_blocks(self.goal_spec(goals), pt[:, None], Rt[:, None]), axis=1)[0]
         d = sq - 2.0 * (F @ f)
         if allowed is not None:
@@ -185,7 +194,7 @@ class SeedTable:
         ranked = self.ranked_goals(problem, k, allowed)
         parts = self._goal_parts(problem.goals)
         robot = self._robot
-        _, pt, Rt = problem.goal_stack()
+        pt, Rt = seed_targets(problem)
         base = self._base_from_goals(problem, parts) if robot.floating_base else None
         if base is not None:  # the goals seen from the base that goal sets
             pt, Rt = _seen_from(base, pt, Rt)
@@ -222,9 +231,9 @@ class SeedTable:
         """The floating base's six entries (clipped into the search box) that put the first pose goal on a frame
         only the floating base moves (the root link or a frame fixed to it: a quadruped's trunk) exactly on its
         target; None when no goal is such."""
-        _, pt, Rt = problem.goal_stack()
+        pt, Rt = seed_targets(problem)
         for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
-            if goal.has_orientation and goal.has_position and idx.size == 0:
+            if goal.has_orientation and goal.has_position and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
                 s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
                 p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
                 R = Rt[g] @ R_f.T
@@ -249,10 +258,11 @@ class SeedTable:
             first = 6 if robot.floating_base else 0
             hit = []
             for g, goal in enumerate(goals):
-                F = np.concatenate(self._goal_feature_blocks(self.goal_spec([goal]), P[:, g][None], R[:, g][None]),
-                                   axis=1)
-                idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first],
-                               dtype=np.intp)
+                spec = self.goal_spec(goals)[g:g + 1]
+                F = np.concatenate(self._goal_feature_blocks(spec, P[:, g][None], R[:, g][None]), axis=1)
+                seeded = goal.kind < KIND_BEYOND_FRAME or _anchor(goal, goals) is not None
+                idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
+                                and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
                 hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
             if len(self._goal_features) > 8:
                 self._goal_features.clear()
@@ -266,7 +276,7 @@ class SeedTable:
         out = []
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
         for g, (F, sq, _) in enumerate(parts):
-            spec = self.goal_spec([goals[g]])
+            spec = self.goal_spec(goals)[g:g + 1]
             f = np.concatenate(self._goal_feature_blocks(spec, pt[g][None, None], Rt[g][None, None]), axis=1)[0]
             d = sq - 2.0 * (F @ f)
             if allowed is not None:
@@ -299,9 +309,10 @@ class SeedTable:
     def goal_spec(goals) -> tuple[tuple, ...]:
         """Per goal, (sqrt(weight), has orientation), and False third for a goal without a position (orientation,
         pointing: its target's pt is no place for the frame): what the goal features depend on besides the
-        frames."""
-        return tuple((float(np.sqrt(g.weight)), bool(g.has_orientation)) + (() if g.has_position else (False,))
-                     for g in goals)
+        frames. A goal beyond one frame without a target pose of its frame (a centre of mass, a relative pose whose
+        first frame has no pose goal: :func:`seed_targets`) weighs 0: it ranks nothing."""
+        return tuple((float(np.sqrt(g.weight)) if g.kind < KIND_BEYOND_FRAME or _anchor(g, goals) is not None
+                      else 0.0, bool(g.has_orientation)) + (() if g.has_position else (False,)) for g in goals)
 
     def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
         """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3): ``sqrt(weight_g)``
@@ -436,3 +447,28 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
             per_robot.pop(next(iter(per_robot)))
         per_robot[key] = table
     return table
+
+
+def _anchor(goal, goals):
+    """For a relative pose goal, the index of a pose goal on its first frame (None when there is none, or for any
+    other goal)."""
+    if goal.kind != KIND_RELATIVE_POSE:
+        return None
+    return next((i for i, g in enumerate(goals) if g.kind == KIND_POSE and g.frame == goal.frame_a), None)
+
+
+def seed_targets(problem) -> tuple[np.ndarray, np.ndarray]:
+    """The goals' targets pt (G, 3), Rt (G, 3, 3) as the seed table ranks them: a relative pose ``T_a^-1 T_b = T``
+    whose frame a has a pose goal ``T_a = T_1`` (two hands holding a box, one of them placed) is frame b's pose
+    ``T_1 T``, which the table can match like any pose goal."""
+    _, pt, Rt = problem.goal_stack()
+    goals = problem.goals
+    out = None
+    for g, goal in enumerate(goals):
+        a = _anchor(goal, goals)
+        if a is not None:
+            if out is None:
+                out = pt.copy(), Rt.copy()
+            out[0][g] = pt[a] + Rt[a] @ pt[g]
+            out[1][g] = Rt[a] @ Rt[g]
+    return (pt, Rt) if out is None else out

@@ -1,0 +1,371 @@
+"""CenterOfMass: the whole robot's centre of mass at a point, or its ground projection over a support polygon (see
+:mod:`evoik_pin.goals`)."""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import FrameError, OptionError, TargetError
+from ..solvers.lm.layout import (
+    A_COM_AXES,
+    A_COM_BODIES,
+    A_COM_MASS,
+    A_COM_MOMENT,
+    A_COM_POINTS,
+    A_COM_SHRINK,
+    KIND_COM,
+    KIND_COM_SUPPORT,
+)
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, number
+
+__all__ = ["CenterOfMass", "com_of", "contact_points", "polygon_distance"]
+
+_AXES = "xyz"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class CenterOfMass(Goal):
+    """The robot's centre of mass (every body its joints carry; masses from the URDF's inertias) at a point, or
+    its ground projection inside a support polygon. Exactly one of:
+
+    * ``point``: a 3-vector (m, the robot's base frame; the world with a floating base); the CoM meets it on
+      ``axes`` (any of "x", "y", "z", default "xyz": ``axes="xy"`` puts the CoM above the point). Met when the
+      distance over those axes is within ``tolerance`` (m).
+    * ``support``: ``{frame: points}`` with points a (k, 3) array (m) in that frame (the corners of a sole, the
+      tips of a quadruped's feet), or a list of frames whose contact points come from their collision geometry
+      (:func:`contact_points`). The CoM's ground (x, y) projection lies inside the convex hull of every contact
+      point's ground projection, at least ``margin`` (m, >= 0) inside each edge. The contact points move with their
+      frames. Met when the projection is inside (the solver aims ``tolerance`` further in, so an answer is inside
+      the margin, not merely within ``tolerance`` of it); its error is the distance (m) outside, 0 inside.
+
+    Args (all by keyword): point, axes, support, margin, then ``weight`` (> 0, default 1) and ``tolerance`` (m,
+    default 1e-6).
+    """
+
+    point: np.ndarray | None = None
+    axes: str = _AXES
+    support: dict | None = None
+    margin: float = 0.0
+    weight: float = 1.0
+    tolerance: float = DEFAULT_GOAL_TOLERANCE
+    rotation_tolerance: float | None = None
+
+    def __init__(self, point=None, axes: str = _AXES, support=None, margin: float = 0.0, weight: float = 1.0,
+                 tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+        if (point is None) == (support is None):
+            raise TargetError("CenterOfMass takes a point (point=p, a 3-vector in m) or a support polygon "
+                              "(support={frame: points} or support=[frames]), exactly one of the two")
+        kind = KIND_COM if support is None else KIND_COM_SUPPORT
+        for name, value in (("frame", None), ("weight", weight), ("tolerance", tolerance),
+                            ("rotation_tolerance", None), ("kind", kind), ("has_orientation", False)):
+            object.__setattr__(self, name, value)
+        self._check_numbers("the centre-of-mass goal")
+        if support is None:
+            object.__setattr__(self, "point", _point(point))
+            object.__setattr__(self, "axes", _axes(axes))
+            object.__setattr__(self, "support", None)
+            object.__setattr__(self, "margin", 0.0)
+        else:
+            object.__setattr__(self, "point", None)
+            object.__setattr__(self, "axes", "xy")
+            object.__setattr__(self, "support", _support(support))
+            margin = number(margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0")
+            if margin < 0:
+                raise OptionError(f"margin (m) of the centre-of-mass support goal must be >= 0, got {margin!r}")
+            object.__setattr__(self, "margin", margin)
+
+    @property
+    def frames(self) -> list[str]:
+        """The frames this goal names (the support frames; none for a point)."""
+        return [] if self.support is None else list(self.support)
+
+    @property
+    def label(self) -> str:
+        """How messages name this goal (it has no frame)."""
+        return "center of mass"
+
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
+
+    def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout of
+        :mod:`~evoik_pin.solvers.lm.layout`). Raises TargetError for a robot without mass, FrameError for an
+        unknown support frame or one without collision geometry."""
+        mc = robot.mass_constants
+        if not mc.total > 0.0:
+            raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "
+                              "CenterOfMass goal needs the links' masses")
+        m = robot.tree.m
+        points = [] if self.support is None else _bound_points(robot, self.support)
+        aux = np.zeros(A_COM_BODIES + 5 * m + 4 * len(points))
+        aux[A_COM_MASS] = mc.total
+        aux[A_COM_MOMENT:A_COM_MOMENT + 3] = mc.fixed_moment
+        body = aux[A_COM_BODIES:A_COM_BODIES + 5 * m].reshape(m, 5)
+        body[:, 0], body[:, 1:4], body[:, 4] = mc.masses, mc.moments, mc.subtree
+        if self.support is None:
+            aux[A_COM_AXES:A_COM_AXES + 3] = [1.0 if a in self.axes else 0.0 for a in _AXES]
+        else:
+            aux[A_COM_SHRINK] = self.margin + self.tolerance
+            aux[A_COM_POINTS] = len(points)
+            aux[A_COM_BODIES + 5 * m:] = np.ravel(points)
+        return aux, mc.subtree > 0.0
+
+    def batch_key(self) -> tuple:
+        """What this goal's kernel numbers depend on besides its target point (solve_many batches lists alike)."""
+        if self.support is None:
+            return (self.axes,)
+        return (self.margin, *((f, None if p is None else p.tobytes()) for f, p in self.support.items()))
+
+    def robot_errors(self, robot, q) -> tuple[float, None]:
+        """(error m, None) at ``q`` (n,), from Pinocchio's ``centerOfMass``: the distance over ``axes`` to the
+        point, or the distance outside the support polygon shrunk by ``margin`` (0 inside)."""
+        c = com_of(robot, q)
+        if self.support is None:
+            mask = np.array([a in self.axes for a in _AXES])
+            return float(np.linalg.norm((c - self.point)[mask])), None
+        return polygon_distance(c[:2], _world_points(robot, q, self.support), self.margin), None
+
+    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
+        """(errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation): the distance
+        over ``axes`` to the point; for a support polygon the largest violation of the margin-shrunk hull's edge
+        half-planes (0 exactly inside; at most the distance outside)."""
+        c = com_batch(robot, Q)
+        if self.support is None:
+            mask = np.array([a in self.axes for a in _AXES])
+            return np.linalg.norm((c - self.point)[:, mask], axis=1), np.zeros(len(Q))
+        frames = _frame_points(robot, self.support)
+        P, R = robot.fk_batch(Q, validate=False, frames=[f for f, _ in frames])
+        ground = np.concatenate([np.einsum("nij,kj->nki", R[:, g], pts) + P[:, g, None] for g, (_, pts)
+                                 in enumerate(frames)], axis=1)[:, :, :2]  # (N, K, 2)
+        return _hull_violation(c[:, :2], ground, self.margin), np.zeros(len(Q))
+
+    def __repr__(self) -> str:
+        if self.support is None:
+            return (f"CenterOfMass(point={np.round(self.point, 6).tolist()}, axes={self.axes!r}, "
+                    f"weight={self.weight:g}, tolerance={self.tolerance:g})")
+        frames = list(self.support)
+        return (f"CenterOfMass(support={frames}, margin={self.margin:g}, weight={self.weight:g}, "
+                f"tolerance={self.tolerance:g})")
+
+
+def _point(point) -> np.ndarray:
+    try:
+        p = np.asarray(point, dtype=float)
+    except (TypeError, ValueError):
+        raise TargetError(f"CenterOfMass's point is a 3-vector (m), got {point!r}") from None
+    if p.shape != (3,) or not np.isfinite(p).all():
+        raise TargetError(f"CenterOfMass's point is a 3-vector of finite numbers (m), got {point!r}")
+    return p.copy()
+
+
+def _axes(axes) -> str:
+    if not isinstance(axes, str) or not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
+        raise OptionError(f"CenterOfMass's axes name each of x, y, z at most once (e.g. 'xyz', 'xy', 'z'), "
+                          f"got {axes!r}")
+    return "".join(a for a in _AXES if a in axes)
+
+
+def _support(support) -> dict:
+    """{frame: (k, 3) points or None (from the collision geometry)} of a support argument, checked."""
+    if isinstance(support, dict):
+        items = list(support.items())
+    elif isinstance(support, (list, tuple)):
+        items = [(f, None) for f in support]
+    else:
+        raise TargetError(f"CenterOfMass's support is {{frame: points (k x 3, m)}} or a list of frames, got "
+                          f"{type(support).__name__}")
+    if not items:
+        raise TargetError("CenterOfMass's support names no frame: give {frame: points (k x 3, m)} or [frames]")
+    out = {}
+    for frame, pts in items:
+        if not isinstance(frame, str) or not frame:
+            raise FrameError(f"CenterOfMass's support frames are frame names (strings), got {frame!r}")
+        if pts is not None:
+            try:
+                a = np.asarray(pts, dtype=float)
+            except (TypeError, ValueError):
+                raise TargetError(f"support points of {frame!r} are a k x 3 array (m), got {pts!r}") from None
+            if a.ndim == 1 and a.size == 3:
+                a = a[None]
+            if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0:
+                raise TargetError(f"support points of {frame!r} are a k x 3 array (m) with k >= 1, got shape "
+                                  f"{a.shape}")
+            if not np.isfinite(a).all():
+                raise TargetError(f"support points of {frame!r} contain NaN or inf")
+            pts = a.copy()
+        out[frame] = pts
+    return out
+
+
+def contact_points(robot, frame: str) -> np.ndarray:
+    """(4, 3) contact points (m, in ``frame``) from the collision geometry of the rigid body ``frame`` is on: the
+    four corners of the lowest face (least z in the frame) of the box, aligned with the frame's axes, that bounds
+    every collision geometry on the frame's joint (each geometry's own bounding box, ``coal``'s ``aabb_local``,
+    through its placement). A sole frame (z up, on the foot) gets the corners of the foot's bottom.
+
+    Raises FrameError when the frame's joint carries no collision geometry."""
+    known = _CONTACTS.setdefault(robot, {})
+    if frame not in known:  # every solve binds its goals and reports their errors: read the geometry once
+        known[frame] = _geometry_contacts(robot, frame)
+    return known[frame].copy()
+
+
+#: Contact points from collision geometry, per robot (weakly: the cache keeps no robot alive) and frame.
+_CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _geometry_contacts(robot, frame: str) -> np.ndarray:
+    """:func:`contact_points`, uncached."""
+    model = robot.model
+    f = model.frames[robot.frame_id(frame)]
+    geom = robot.collision_model
+    fMj = f.placement.inverse()
+    corners = []
+    for g in geom.geometryObjects:
+        if g.parentJoint != f.parentJoint:
+            continue
+        shape = g.geometry
+        shape.computeLocalAABB()
+        lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
+        box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        M = fMj * g.placement
+        corners.append(box @ np.asarray(M.rotation).T + np.asarray(M.translation))
+    if not corners:
+        raise FrameError(f"frame {frame!r} of {robot.name} carries no collision geometry to take contact points "
+                         f"from: give its points, support={{{frame!r}: points (k x 3, m)}}")
+    c = np.concatenate(corners)
+    lo, hi = c.min(axis=0), c.max(axis=0)
+    return np.array([[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]], [lo[0], hi[1], lo[2]]])
+
+
+def _frame_points(robot, support: dict) -> list[tuple[str, np.ndarray]]:
+    """(frame, its (k, 3) points in it) of each support frame (collision geometry where none were given)."""
+    return [(f, contact_points(robot, f) if pts is None else pts) for f, pts in support.items()]
+
+
+def _bound_points(robot, support: dict) -> np.ndarray:
+    """(K, 4): per contact point, its physical joint (-1: none) and position (m) in that joint's folded frame (the
+    base frame for -1)."""
+    rows = []
+    for frame, pts in _frame_points(robot, support):
+        j, R, p = robot.frame_constants(frame)  # FrameError with the closest names
+        for x in pts:
+            rows.append([j, *(R @ x + p)])
+    return np.array(rows, dtype=float)
+
+
+def _world_points(robot, q, support: dict) -> np.ndarray:
+    """(K, 3) the contact points (m, base frame) at ``q`` (Pinocchio's kinematics)."""
+    out = []
+    for frame, pts in _frame_points(robot, support):
+        T = robot.fk(q, frame)
+        out.append(pts @ np.asarray(T.rotation).T + np.asarray(T.translation))
+    return np.concatenate(out)
+
+
+def com_of(robot, q) -> np.ndarray:
+    """The robot's centre of mass (m, base frame) at ``q`` (n,), Pinocchio's ``centerOfMass`` of the whole URDF
+    (:attr:`~evoik_pin.robot.Robot.full_model` at ``full_configuration(q)``)."""
+    data = _FULL_DATA.get(robot)
+    if data is None:  # a Talos data takes longer to make than the centre of mass
+        data = _FULL_DATA[robot] = robot.full_model.createData()
+    c = pin.centerOfMass(robot.full_model, data, robot.full_configuration(q))
+    return robot.tree.base_R @ c + robot.tree.base_p
+
+
+#: Pinocchio data of each robot's full model (weakly: the cache keeps no robot alive).
+_FULL_DATA: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def com_batch(robot, Q) -> np.ndarray:
+    """Centres of mass (N, 3) (m, base frame) of a population Q (N, n): the folded tree's joint poses in one
+    vectorized pass (:mod:`evoik_pin.solvers.lm.tree`'s recursion) and the :attr:`Robot.mass_constants`."""
+    parent, FR, Fp, rev = robot.tree_constants()[:4]
+    mc = robot.mass_constants
+    X = robot._physical(np.asarray(Q, dtype=float))
+    N, m = X.shape[0], parent.size
+    Rj, pj = np.empty((m, N, 3, 3)), np.empty((m, N, 3))
+    total = np.broadcast_to(mc.fixed_moment, (N, 3)).copy()
+    for k in range(m):
+        a = parent[k]
+        if a < 0:
+            R, p = np.broadcast_to(FR[k], (N, 3, 3)).copy(), np.broadcast_to(Fp[k], (N, 3)).copy()
+        else:
+            R, p = Rj[a] @ FR[k], pj[a] + Rj[a] @ Fp[k]
+        x = X[:, k]
+        if rev[k]:
+            c, s = np.cos(x)[:, None], np.sin(x)[:, None]
+            R[:, :, 0], R[:, :, 1] = c * R[:, :, 0] + s * R[:, :, 1], c * R[:, :, 1] - s * R[:, :, 0]
+        else:
+            p = p + x[:, None] * R[:, :, 2]
+        Rj[k], pj[k] = R, p
+        total += mc.masses[k] * p + R @ mc.moments[k]
+    return total / mc.total
+
+
+def _hull_violation(c: np.ndarray, ground: np.ndarray, margin: float) -> np.ndarray:
+    """Largest violation (N,) (m, >= 0) of the point c (N, 2) against the edge half-planes of the convex hull of
+    each row's points ground (N, K, 2) shrunk by ``margin``: an edge i -> j has every point on its left."""
+    d = ground[:, None, :, :] - ground[:, :, None, :]  # (N, K, K, 2): p_j - p_i
+    L = np.linalg.norm(d, axis=3)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        n = np.stack([d[..., 1], -d[..., 0]], axis=3) / L[..., None]  # outward (right-hand) unit normals
+    rel = ground[:, None, None, :, :] - ground[:, :, None, None, :]  # (N, K, 1, K, 2): p_l - p_i
+    side = np.einsum("nijd,nikld->nijl", n, np.broadcast_to(rel, rel.shape))
+    edge = (L > 1e-12) & (side <= 1e-12).all(axis=3)
+    v = np.einsum("nijd,nid->nij", n, c[:, None, :] - ground) + margin
+    v = np.where(edge, v, -np.inf).max(axis=(1, 2))
+    return np.where(np.isfinite(v), np.maximum(v, 0.0), np.inf)
+
+
+def polygon_distance(point, points, margin: float = 0.0) -> float:
+    """Distance (m) from ``point`` (2,) to the convex hull of ``points`` (K, >= 2) (their x, y) shrunk by
+    ``margin`` (m): 0 inside; inf when the shrunk hull is empty (a polygon narrower than 2 x margin) or the points
+    span no area. Exact: the nearest of the feet on the shrunk edges' lines and of their crossings that lie in it."""
+    P = np.asarray(points, dtype=float)[:, :2]
+    normals, offsets = _half_planes(P)
+    if normals is None:
+        return float("inf")
+    b = offsets - margin
+    c = np.asarray(point, dtype=float)
+    if (normals @ c <= b).all():
+        return 0.0
+    slack = 1e-12 * (1.0 + np.abs(b).max())
+    candidates = [c - (normals[i] @ c - b[i]) * normals[i] for i in range(len(b))]
+    for i in range(len(b)):
+        for j in range(i + 1, len(b)):
+            A = np.array([normals[i], normals[j]])
+            if abs(np.linalg.det(A)) > 1e-12:
+                candidates.append(np.linalg.solve(A, [b[i], b[j]]))
+    inside = [x for x in candidates if (normals @ x <= b + slack).all()]
+    if not inside:
+        return float("inf")
+    return float(min(np.linalg.norm(x - c) for x in inside))
+
+
+def _half_planes(P: np.ndarray):
+    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2) (Andrew's monotone chain,
+    counter-clockwise): n.x <= o inside, n unit; (None, None) for points that span no area."""
+    pts = sorted({(float(x), float(y)) for x, y in P})
+    if len(pts) < 3:
+        return None, None
+
+    def chain(points):
+        out: list = []
+        for p in points:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    hull = np.array(chain(pts) + chain(pts[::-1]))
+    if len(hull) < 3:
+        return None, None
+    d = np.roll(hull, -1, axis=0) - hull
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]  # outward: right of each edge
+    return n, (n * hull).sum(axis=1)

@@ -1,0 +1,346 @@
+"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``KIND_COM``, ``KIND_COM_SUPPORT``,
+``KIND_RELATIVE_POSE`` of :mod:`.layout`), which :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call
+in a branch the one-frame kinds never enter.
+
+* Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
+  c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree.tree_forward`), s_0 the first moment of the
+  bodies no joint moves and M the total mass. Its Jacobian in one backward pass over the tree: with S_k the first
+  moment of joint k's whole subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
+  ``M_k z_k / M`` (prismatic). Rows of axes a goal leaves free are zero.
+* Support polygon: the ground (x, y) projection of c inside the convex hull of the contact points (gift wrapping,
+  counter-clockwise), shrunk by s = margin + tolerance (m); the 2 rows are ``c_xy - proj(c_xy)``, zero inside.
+  The goal is met when that distance is within its tolerance, which then puts c at least ``margin`` inside
+  every edge (the s-shrunk polygon grown by the tolerance lies inside the margin-shrunk one).
+* Relative pose: frame b seen from frame a against the target T, ``e = log6(T^-1 T_a^-1 T_b)``; its Jacobian is
+  ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``, the second term the velocity of the point p_b carried by frame a's joints
+  (the body twist of ``T_a^-1 T_b``), through the pose kind's :func:`.kernel.goal_jacobian`.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ...lie.compiled import log6
+from .layout import (
+    A_COM_AXES,
+    A_COM_BODIES,
+    A_COM_MASS,
+    A_COM_MOMENT,
+    A_COM_POINTS,
+    A_COM_SHRINK,
+    A_REL_JOINT,
+    A_REL_P,
+    A_REL_R,
+    A_REL_SIGNS,
+    KIND_COM,
+    KIND_COM_SUPPORT,
+)
+from .tree import BORROWING, joint_column
+
+#: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
+#: counts as parallel to another.
+_SAME2, _PARALLEL = 1e-24, 1e-12
+#: Added (m) to the error of a support goal whose shrunk polygon is empty or degenerate: never met.
+EMPTY_POLYGON = 1.0
+#: Codes of the support goal's active piece (kept in its tg row for the Jacobian).
+_INSIDE, _EDGE, _VERTEX = 0.0, 1.0, 2.0
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def com_position(Rj, pj, aux):
+    """The centre of mass (x, y, z) (m, base frame) at the joint poses Rj (m, 3, 3), pj (m, 3)."""
+    s0, s1, s2 = aux[A_COM_MOMENT], aux[A_COM_MOMENT + 1], aux[A_COM_MOMENT + 2]
+    for k in range(Rj.shape[0]):
+        b = A_COM_BODIES + 5 * k
+        mk = aux[b]
+        if mk != 0.0:
+            c0, c1, c2 = aux[b + 1], aux[b + 2], aux[b + 3]
+            s0 += mk * pj[k, 0] + Rj[k, 0, 0] * c0 + Rj[k, 0, 1] * c1 + Rj[k, 0, 2] * c2
+            s1 += mk * pj[k, 1] + Rj[k, 1, 0] * c0 + Rj[k, 1, 1] * c1 + Rj[k, 1, 2] * c2
+            s2 += mk * pj[k, 2] + Rj[k, 2, 0] * c0 + Rj[k, 2, 1] * c1 + Rj[k, 2, 2] * c2
+    inv = 1.0 / aux[A_COM_MASS]
+    return s0 * inv, s1 * inv, s2 * inv
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def com_jacobian(parent, rev, Rj, pj, Z, O, aux, Jx):
+    """Rows 0-2 of Jx (6, m): the centre of mass's Jacobian (m per rad or m per m) with respect to the physical
+    joint values; rows 3-5 hold each subtree's first moment (scratch)."""
+    m = parent.shape[0]
+    for k in range(m):
+        b = A_COM_BODIES + 5 * k
+        mk, c0, c1, c2 = aux[b], aux[b + 1], aux[b + 2], aux[b + 3]
+        for i in range(3):
+            Jx[3 + i, k] = mk * pj[k, i] + Rj[k, i, 0] * c0 + Rj[k, i, 1] * c1 + Rj[k, i, 2] * c2
+    for k in range(m - 1, -1, -1):  # a joint comes after its parent: its subtree is complete when reached
+        a = parent[k]
+        if a >= 0:
+            for i in range(3):
+                Jx[3 + i, a] += Jx[3 + i, k]
+    inv = 1.0 / aux[A_COM_MASS]
+    for k in range(m):
+        mass = aux[A_COM_BODIES + 5 * k + 4]
+        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+        if rev[k]:
+            l0 = (Jx[3, k] - mass * O[k, 0]) * inv
+            l1 = (Jx[4, k] - mass * O[k, 1]) * inv
+            l2 = (Jx[5, k] - mass * O[k, 2]) * inv
+            Jx[0, k] = z1 * l2 - z2 * l1
+            Jx[1, k] = z2 * l0 - z0 * l2
+            Jx[2, k] = z0 * l1 - z1 * l0
+        else:
+            Jx[0, k], Jx[1, k], Jx[2, k] = z0 * mass * inv, z1 * mass * inv, z2 * mass * inv
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def _contact(aux, base, i, Rj, pj):
+    """Ground (x, y) (m) of contact point i (its aux entries from ``base``) at the joint poses Rj, pj."""
+    o = base + 4 * i
+    j = int(aux[o])
+    l0, l1, l2 = aux[o + 1], aux[o + 2], aux[o + 3]
+    if j < 0:
+        return l0, l1
+    return (pj[j, 0] + Rj[j, 0, 0] * l0 + Rj[j, 0, 1] * l1 + Rj[j, 0, 2] * l2,
+            pj[j, 1] + Rj[j, 1, 0] * l0 + Rj[j, 1, 1] * l1 + Rj[j, 1, 2] * l2)
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def _hull_start(aux, base, K, Rj, pj):
+    """(index, x, y) of the contact point with the least x (then y): a vertex of their convex hull."""
+    best, bx, by = 0, 0.0, 0.0
+    for i in range(K):
+        x, y = _contact(aux, base, i, Rj, pj)
+        if i == 0 or x < bx or (x == bx and y < by):
+            best, bx, by = i, x, y
+    return best, bx, by
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def _hull_next(aux, base, K, i, xi, yi, Rj, pj):
+    """(index, x, y) of the hull vertex after vertex i (at xi, yi) counter-clockwise: the point with every other
+    point on the left of the edge (of collinear ones the farthest); index -1 when every point coincides with i."""
+    best, bx, by, bd = -1, 0.0, 0.0, 0.0
+    for k in range(K):
+        if k == i:
+            continue
+        x, y = _contact(aux, base, k, Rj, pj)
+        dx, dy = x - xi, y - yi
+        d = dx * dx + dy * dy
+        if d <= _SAME2:
+            continue
+        if best < 0:
+            best, bx, by, bd = k, x, y, d
+            continue
+        cr = (bx - xi) * dy - (by - yi) * dx
+        if cr < 0.0 or (cr == 0.0 and d > bd):
+            best, bx, by, bd = k, x, y, d
+    return best, bx, by
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def support_error(Rj, pj, aux, cx, cy, e, tg):
+    """The support goal's 2 rows e = c_xy - (nearest point of the shrunk hull) for the CoM's ground point (cx, cy)
+    (zero inside), and its distance (m); tg (3,) keeps the active piece (code, outward normal) for
+    :func:`balance_jacobian`."""
+    m = Rj.shape[0]
+    K = int(aux[A_COM_POINTS])
+    base = A_COM_BODIES + 5 * m
+    s = aux[A_COM_SHRINK]
+    i0, x0, y0 = _hull_start(aux, base, K, Rj, pj)
+    # pass 1: the largest violation of the shrunk edges' half-planes n.x <= n.P - s, and the hull's size
+    worst = -1e300
+    edges = 0
+    i, xi, yi = i0, x0, y0
+    mx, my = 0.0, 0.0
+    while edges <= K:
+        j, xj, yj = _hull_next(aux, base, K, i, xi, yi, Rj, pj)
+        if j < 0:
+            break
+        L = math.sqrt((xj - xi) ** 2 + (yj - yi) ** 2)
+        n0, n1 = (yj - yi) / L, -(xj - xi) / L
+        worst = max(worst, n0 * (cx - xi) + n1 * (cy - yi) + s)
+        mx += xi
+        my += yi
+        edges += 1
+        i, xi, yi = j, xj, yj
+        if i == i0:
+            break
+    if edges >= 3 and worst <= 0.0:
+        e[0] = e[1] = 0.0
+        tg[0] = _INSIDE
+        return 0.0
+    # pass 2: the nearest point over the shrunk edges, each clipped by every other edge's half-plane
+    best = -1.0
+    bx = by = bn0 = bn1 = 0.0
+    code = _VERTEX
+    if edges >= 3:
+        i, xi, yi = i0, x0, y0
+        for _ in range(edges):
+            j, xj, yj = _hull_next(aux, base, K, i, xi, yi, Rj, pj)
+            L = math.sqrt((xj - xi) ** 2 + (yj - yi) ** 2)
+            u0, u1 = (xj - xi) / L, (yj - yi) / L
+            n0, n1 = u1, -u0
+            a0, a1 = xi - s * n0, yi - s * n1  # a point of the shrunk edge's line
+            lo, hi = -1e300, 1e300
+            feasible = True
+            f, xf, yf = i0, x0, y0
+            for _ in range(edges):
+                g, xg, yg = _hull_next(aux, base, K, f, xf, yf, Rj, pj)
+                if f != i:
+                    Lf = math.sqrt((xg - xf) ** 2 + (yg - yf) ** 2)
+                    m0, m1 = (yg - yf) / Lf, -(xg - xf) / Lf
+                    den = m0 * u0 + m1 * u1
+                    rhs = m0 * (xf - a0) + m1 * (yf - a1) - s
+                    if abs(den) < _PARALLEL:
+                        if rhs < -_PARALLEL:
+                            feasible = False
+                    elif den > 0.0:
+                        hi = min(hi, rhs / den)
+                    else:
+                        lo = max(lo, rhs / den)
+                f, xf, yf = g, xg, yg
+            if feasible and lo <= hi:
+                t0 = u0 * (cx - a0) + u1 * (cy - a1)
+                t = min(max(t0, lo), hi)
+                px, py = a0 + t * u0, a1 + t * u1
+                d = (cx - px) ** 2 + (cy - py) ** 2
+                if best < 0.0 or d < best:
+                    best, bx, by, bn0, bn1 = d, px, py, n0, n1
+                    code = _EDGE if lo < t0 < hi else _VERTEX
+            i, xi, yi = j, xj, yj
+    extra = 0.0
+    if best < 0.0:  # an empty (margin too large) or degenerate polygon: towards its vertices' mean, never met
+        bx, by = mx / max(edges, 1), my / max(edges, 1)
+        if edges == 0:
+            bx, by = x0, y0
+        code = _VERTEX
+        extra = EMPTY_POLYGON
+    e[0], e[1] = cx - bx, cy - by
+    tg[0], tg[1], tg[2] = code, bn0, bn1
+    return math.sqrt(e[0] * e[0] + e[1] * e[1]) + extra
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
+    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``: frame b (on physical joint jb at folded
+    placement Rbf, pbf) into Rb, pb; ``T_t^-1 T_a^-1 T_b`` into M (3, 3), t (3,); returns (position error m,
+    rotation angle rad)."""
+    ja = int(aux[A_REL_JOINT])
+    # frame a's rotation into M, its origin into locals
+    if ja < 0:
+        for i in range(3):
+            for c in range(3):
+                M[i, c] = aux[A_REL_R + 3 * i + c]
+        pa0, pa1, pa2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
+    else:
+        f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
+        pa0 = pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2
+        pa1 = pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2
+        pa2 = pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2
+        for i in range(3):
+            for c in range(3):
+                M[i, c] = (Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
+                           + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
+    # frame b's pose, as a one-frame goal's
+    if jb < 0:
+        for i in range(3):
+            pb[i] = pbf[i]
+            for c in range(3):
+                Rb[i, c] = Rbf[i, c]
+    else:
+        f0, f1, f2 = pbf[0], pbf[1], pbf[2]
+        for i in range(3):
+            r0, r1, r2 = Rj[jb, i, 0], Rj[jb, i, 1], Rj[jb, i, 2]
+            pb[i] = pj[jb, i] + (r0 * f0 + r1 * f1 + r2 * f2)
+            for c in range(3):
+                Rb[i, c] = r0 * Rbf[0, c] + r1 * Rbf[1, c] + r2 * Rbf[2, c]
+    # W = R_a R_t row by row (in place in M); then M = W^T R_b and t = W^T (p_b - p_a) - R_t^T p_t
+    for i in range(3):
+        w0 = M[i, 0] * Rt[0, 0] + M[i, 1] * Rt[1, 0] + M[i, 2] * Rt[2, 0]
+        w1 = M[i, 0] * Rt[0, 1] + M[i, 1] * Rt[1, 1] + M[i, 2] * Rt[2, 1]
+        w2 = M[i, 0] * Rt[0, 2] + M[i, 1] * Rt[1, 2] + M[i, 2] * Rt[2, 2]
+        M[i, 0], M[i, 1], M[i, 2] = w0, w1, w2
+    d0, d1, d2 = pb[0] - pa0, pb[1] - pa1, pb[2] - pa2
+    for i in range(3):
+        t[i] = (M[0, i] * d0 + M[1, i] * d1 + M[2, i] * d2) - (Rt[0, i] * pt[0] + Rt[1, i] * pt[1]
+                                                               + Rt[2, i] * pt[2])
+    w00, w01, w02 = M[0, 0], M[0, 1], M[0, 2]
+    w10, w11, w12 = M[1, 0], M[1, 1], M[1, 2]
+    w20, w21, w22 = M[2, 0], M[2, 1], M[2, 2]
+    for c in range(3):
+        b0, b1, b2 = Rb[0, c], Rb[1, c], Rb[2, c]
+        M[0, c] = w00 * b0 + w10 * b1 + w20 * b2
+        M[1, c] = w01 * b0 + w11 * b1 + w21 * b2
+        M[2, c] = w02 * b0 + w12 * b1 + w22 * b2
+    pos = math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2])
+    rot = log6(M, t, e)
+    return pos, rot
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
+    """Rows e of a goal of a kind beyond one frame (see the module docstring); returns (|e|^2, position error m,
+    orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
+    p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t)."""
+    if kind == KIND_COM:
+        c0, c1, c2 = com_position(Rj, pj, aux)
+        p[0], p[1], p[2] = c0, c1, c2
+        e[0] = aux[A_COM_AXES] * (c0 - pt[0])
+        e[1] = aux[A_COM_AXES + 1] * (c1 - pt[1])
+        e[2] = aux[A_COM_AXES + 2] * (c2 - pt[2])
+        c = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
+        return c, math.sqrt(c), 0.0
+    if kind == KIND_COM_SUPPORT:
+        c0, c1, c2 = com_position(Rj, pj, aux)
+        p[0], p[1], p[2] = c0, c1, c2
+        pos = support_error(Rj, pj, aux, c0, c1, e, t)
+        return e[0] * e[0] + e[1] * e[1], pos, 0.0
+    pos, rot = relative_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
+    c = 0.0
+    for i in range(6):
+        c += e[i] * e[i]
+    return c, pos, rot
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
+    """The physical Jacobian Jx (6, m) a goal of a kind beyond one frame starts from: the centre of mass's (rows
+    0-2, :func:`com_jacobian`) or, for a relative pose, ``J_b(p_b) - J_a(p_b)`` at frame b's origin p (3,)."""
+    if kind == KIND_COM or kind == KIND_COM_SUPPORT:
+        com_jacobian(parent, rev, Rj, pj, Z, O, aux, Jx)
+        return
+    for k in range(Jx.shape[1]):
+        sign = aux[A_REL_SIGNS + k]
+        if sign == 0.0:
+            for i in range(6):
+                Jx[i, k] = 0.0
+        else:
+            joint_column(rev[k], p, Z, O, k, Jx)
+            if sign < 0.0:
+                for i in range(6):
+                    Jx[i, k] = -Jx[i, k]
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def com_rows(kind, aux, t, J, E, r):
+    """Rows r.. of the task Jacobian E (unweighted) of a CoM goal from the CoM's Jacobian (rows 0-2 of J (6, n)):
+    the constrained axes (KIND_COM), or the support goal's active piece (t: code, outward normal): zero inside,
+    ``n n^T`` on an edge, the ground rows at a vertex."""
+    n = E.shape[1]
+    if kind == KIND_COM:
+        for i in range(3):
+            a = aux[A_COM_AXES + i]
+            for k in range(n):
+                E[r + i, k] = a * J[i, k]
+        return
+    code, n0, n1 = t[0], t[1], t[2]
+    for k in range(n):
+        if code == _INSIDE:
+            E[r, k] = E[r + 1, k] = 0.0
+        elif code == _EDGE:
+            d = n0 * J[0, k] + n1 * J[1, k]
+            E[r, k], E[r + 1, k] = n0 * d, n1 * d
+        else:
+            E[r, k], E[r + 1, k] = J[0, k], J[1, k]
