@@ -310,8 +310,9 @@ def _relative_entry(goal) -> dict:
 
 
 GOAL_KINDS.update({
-    "center_of_mass": GoalKind(CenterOfMass, (), _position_target, _com_entry, _com_goal, _com_entry),
-    "relative_pose": GoalKind(RelativePose, (), _pose_target, _matrix_text, _relative_goal, _relative_entry),
+    "center_of_mass": GoalKind(CenterOfMass, (), _position_target, _com_entry, read=_com_goal, write=_com_entry),
+    "relative_pose": GoalKind(RelativePose, (), _pose_target, _matrix_text, read=_relative_goal,
+                              write=_relative_entry),
 })
 
 
