@@ -235,20 +235,16 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, p
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
+        if kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+            beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
+                                  e[r:r + task_size(kind)], spec[g, G_WEIGHT], Jx, J, rv, A, B, E, r)
+            continue
         if mimic:
             frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
             fold(index, scale, Jx, J)
         else:
             frame_jacobian(rev, support[g], pg[g], Z, O, J)
         goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
-    # the goals beyond one frame (.balance) in a pass of their own, over the rows the loop above left meaningless:
-    # a branch inside that loop makes the one-frame kinds' runs about 10 % slower (scripts/bench_chain_kernel.py)
-    for g in range(spec.shape[0]):
-        kind = int(spec[g, G_KIND])
-        if kind >= KIND_BEYOND_FRAME:
-            r = int(spec[g, G_ROW])
-            beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
-                                  e[r:r + task_size(kind)], spec[g, G_WEIGHT], Jx, J, rv, A, B, E, r)
     if weighted:
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
