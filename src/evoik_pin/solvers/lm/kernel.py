@@ -257,7 +257,8 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, Rg, p
 @njit(cache=True, nogil=True, **BORROWING)
 def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """:func:`.balance.balance_error` behind a call, not inlined: :func:`task_error`, inlined four times into
-    :func:`lm_run_in`, keeps the size the one-frame kinds compile to (their runs stay as fast)."""
+    :func:`lm_run_in`, keeps the size the one-frame kinds compile to (with this branch alone their runs are as fast
+    as before; docs/BENCHMARKS.md, scripts/bench_chain_kernel.py)."""
     return balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
 
 
