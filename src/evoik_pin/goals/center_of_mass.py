@@ -10,16 +10,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
-from ..solvers.lm.layout import (
-    A_COM_AXES,
-    A_COM_BODIES,
-    A_COM_MASS,
-    A_COM_MOMENT,
-    A_COM_POINTS,
-    A_COM_SHRINK,
-    KIND_COM,
-    KIND_COM_SUPPORT,
-)
+from ..solvers.lm import layout as L  # the aux row's A_COM_* offsets, read by solvers/lm/balance.py
+from ..solvers.lm.layout import KIND_COM, KIND_COM_SUPPORT
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, number
 
 __all__ = ["CenterOfMass", "com_of", "contact_points", "polygon_distance"]
@@ -101,17 +93,17 @@ class CenterOfMass(Goal):
                               "CenterOfMass goal needs the links' masses")
         m = robot.tree.m
         points = [] if self.support is None else _bound_points(robot, self.support)
-        aux = np.zeros(A_COM_BODIES + 5 * m + 4 * len(points))
-        aux[A_COM_MASS] = mc.total
-        aux[A_COM_MOMENT:A_COM_MOMENT + 3] = mc.fixed_moment
-        body = aux[A_COM_BODIES:A_COM_BODIES + 5 * m].reshape(m, 5)
+        aux = np.zeros(L.A_COM_BODIES + 5 * m + 4 * len(points))
+        aux[L.A_COM_MASS] = mc.total
+        aux[L.A_COM_MOMENT:L.A_COM_MOMENT + 3] = mc.fixed_moment
+        body = aux[L.A_COM_BODIES:L.A_COM_BODIES + 5 * m].reshape(m, 5)
         body[:, 0], body[:, 1:4], body[:, 4] = mc.masses, mc.moments, mc.subtree
         if self.support is None:
-            aux[A_COM_AXES:A_COM_AXES + 3] = [1.0 if a in self.axes else 0.0 for a in _AXES]
+            aux[L.A_COM_AXES:L.A_COM_AXES + 3] = [1.0 if a in self.axes else 0.0 for a in _AXES]
         else:
-            aux[A_COM_SHRINK] = self.margin + self.tolerance
-            aux[A_COM_POINTS] = len(points)
-            aux[A_COM_BODIES + 5 * m:] = np.ravel(points)
+            aux[L.A_COM_SHRINK] = self.margin + self.tolerance
+            aux[L.A_COM_POINTS] = len(points)
+            aux[L.A_COM_BODIES + 5 * m:] = np.ravel(points)
         return aux, mc.subtree > 0.0
 
     def batch_key(self) -> tuple:

@@ -168,8 +168,8 @@ def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, wei
         r = int(spec[g, G_ROW])
         R, p = Rg[g], pg[g]
         if kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
-            cg, pos, rot = balance_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g], R, p,
-                                         M, tg[g], e[r:r + task_size(kind)])
+            cg, pos, rot = beyond_frame_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g],
+                                              R, p, M, tg[g], e[r:r + task_size(kind)])
         else:
             frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
             if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # the kinds of .axes (tg[g], unused by them, as scratch)
@@ -248,16 +248,9 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, R
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
-        if kind >= KIND_BEYOND_FRAME:
-            balance_columns(kind, parent, rev, Rj, pj, Z, O, gaux[g], pg[g], Jx)
-            src = Jx
-            if mimic:
-                fold(index, scale, Jx, J)
-                src = J
-            if kind == KIND_RELATIVE_POSE:
-                goal_jacobian(KIND_POSE, Rg[g], src, tg[g], e[r:r + 6], spec[g, G_WEIGHT], rv, A, B, E, r)
-            else:
-                com_rows(kind, gaux[g], tg[g], src, E, r)
+        if kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+            beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
+                                  e[r:r + task_size(kind)], spec[g, G_WEIGHT], Jx, J, rv, A, B, E, r)
             continue
         if mimic:
             frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
@@ -275,6 +268,32 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, R
             for i in range(r, r + task_size(int(spec[g, G_KIND]))):
                 for k in range(n):
                     E[i, k] *= w
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
+    """:func:`.balance.balance_error` behind a call, not inlined: :func:`task_error`, inlined four times into
+    :func:`lm_run_in`, keeps the size the one-frame kinds compile to (with this branch alone their runs are as fast
+    as before; docs/BENCHMARKS.md, scripts/bench_chain_kernel.py)."""
+    return balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
+
+
+@njit(cache=True, nogil=True, **BORROWING)
+def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, aux, R, p, t, e, w, Jx, J, rv, A, B, E,
+                          r):
+    """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): its
+    physical Jacobian (:func:`.balance.balance_columns`, folded with ``mimic``) turned into its rows, a relative
+    pose's by the pose kind's :func:`goal_jacobian` (R, p, t: frame b's rotation and origin, the translation of
+    ``T^-1 T_a^-1 T_b``), a centre of mass's by :func:`.balance.com_rows`."""
+    balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx)
+    src = Jx
+    if mimic:
+        fold(index, scale, Jx, J)
+        src = J
+    if kind == KIND_RELATIVE_POSE:
+        goal_jacobian(KIND_POSE, R, src, t, e, w, rv, A, B, E, r)
+    else:
+        com_rows(kind, aux, t, src, E, r)
 
 
 @njit(cache=True, nogil=True, **BORROWING)
