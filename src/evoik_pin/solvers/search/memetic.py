@@ -285,6 +285,8 @@ class MemeticPlan:
         self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
         self._table = None
         self._lm: LevenbergMarquardt | None = None
+        self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
+        self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
 
     def _prepare(self, problem: IKProblem, size: int, engine: str) -> tuple[SeedTable | None, np.ndarray | None]:
         """:func:`prepare` for ``problem``, the table kept while the problems share their box arrays (an
@@ -294,6 +296,7 @@ class MemeticPlan:
             self._table, free = prepare(self.robot, problem.lower, problem.upper, size, engine, problem.scene,
                                         problem.margin)
             self._box = (problem.lower, problem.upper, size)
+            self._bounds = (np.array(problem.lower, dtype=float), np.array(problem.upper, dtype=float))
             return self._table, free
         table = self._table
         free = table.free_mask(problem.scene, problem.margin) if table is not None and problem.scene is not None \
@@ -306,6 +309,33 @@ class MemeticPlan:
         if lm is None or lm.engine != engine or not lm.retarget(problem):
             lm = self._lm = LevenbergMarquardt(problem, engine=engine)
         return lm
+
+    def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
+        """(:func:`~.first_runs.first_runs` on ``args``, the seconds spent loading it). The process's first call
+        loads (once after an install: compiles) the function, timed as set-up, and then makes the runs. A plan that
+        solves again (an IKSolver's) calls its compiled entry directly from its second solve on: numba's dispatch
+        types each of the 37 arguments on every call (about 3 us); the entry is found once per engine arguments
+        and table (the other arguments are arrays of fixed types and Python scalars)."""
+        kept_args, kept_table, entry = self._entry
+        if entry is not None and kept_args is lm._args and kept_table is table:
+            return entry(*args), 0.0
+        from .first_runs import first_runs
+
+        loading = 0.0
+        if not _LOADED:
+            t = time.perf_counter()
+            first_runs(*args)  # the runs are made again below (they only write args' buffers)
+            loading = time.perf_counter() - t
+            _LOADED.append(True)
+        if kept_table is not None:  # not this plan's first solve: it is kept
+            from numba import typeof
+
+            try:
+                entry = first_runs.overloads[tuple(typeof(a) for a in args)].entry_point
+            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
+                entry = first_runs
+        self._entry = (lm._args, table, entry)
+        return first_runs(*args), loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` (posed on this plan's robot) with the plan's options; ``t_setup``: when
@@ -335,6 +365,13 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     lm = plan._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
+    if (FIRST_RUNS and table is not None and problem.goals is None and problem.scene is None and engine == "compiled"
+            and batch == 1 and table_offset == 0 and not problem.target.planar):
+        result, loading = _first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds)
+        if result is not None:
+            return result
+        t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
+        setup_s += loading
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
     search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
                      lm)
@@ -438,6 +475,50 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         collision_free=True if problem.scene is not None and search.best.converged else None,
         goal_errors=goal_errors,
     )
+
+
+_LOADED: list = []  # [True] once first_runs is loaded in this process
+
+#: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
+#: turn it off to compare with the runs made one by one.
+FIRST_RUNS = True
+
+
+def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
+                setup_s: float, iterations: int, table_seeds: int) -> tuple[Result | None, float]:
+    """:func:`_solve`'s stages 1-2 for one pose or position target (no scene, ``batch=1``, no ``table_offset``) up
+    to its guaranteed runs (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call
+    (:mod:`.first_runs`) in _solve's order and with its decisions: the Result _solve returns when one of them meets
+    the tolerances, None when none does (_solve then searches from the start: the same runs, then the rest); and the
+    seconds spent loading the compiled function (on a plan's first solve), set-up rather than budget."""
+    key, f = table.one_target_features(problem.target)
+    F, lead, dims, sq, margin = table._compiled_features(key)
+    buffers, args, params = lm.kernel_arguments(iterations)
+    q0 = problem.q0
+    n = problem.n
+    table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
+    lower, upper = plan._bounds
+    q_out = np.empty(n)
+    errors = np.empty(table_runs + 1)
+    (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
+        (*buffers, np.zeros(n) if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
+         table._gap(key), table.Q, F, lead, dims, sq, f, table.weight, table_runs, margin, *args, params, q_out,
+         np.empty((1, 2)), errors), lm, table)
+    if stage < 0:
+        return None, loading
+    from .first_runs import STAGE_Q0  # (imported with numba: loaded on first use, as the kernel is)
+
+    pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
+    if not (pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)):
+        return None, loading  # converged by the kernel's test but not by the problem's: _solve says why
+    history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
+               "attempt_error": errors[:runs].copy()}
+    return Result(
+        q=q_out, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
+        evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0 - loading, history=history,
+        message=f"tolerance reached by LM from {'q0' if stage == STAGE_Q0 else 'seed table'} ({runs} LM run(s), 0 "
+                "restart(s))",
+        method="memetic", setup_s=setup_s + loading), loading
 
 
 def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,
