@@ -1,26 +1,14 @@
-"""The compiled single-target fast path (issue 24): the seed table's compiled ranking (solvers/search/nearest.py) ranks
-as NumPy's formula does, and memetic's guaranteed runs made in one compiled call (solvers/search/first_runs.py) give
-the Results of the runs made one by one, bit for bit, over many targets."""
+"""The compiled single-target fast path (issue 24): the compiled selection of the nearest seed-table entries
+(solvers/search/nearest.py) gives the table's ranking, and memetic's guaranteed runs made in one compiled call
+(solvers/search/first_runs.py) give the Results of the runs made one by one, bit for bit, over many targets."""
 
 import numpy as np
 import pytest
 
 import evoik_pin as ek
 from evoik_pin.solvers.search import memetic
-from evoik_pin.solvers.search.seed_table import COMPILED_K, default_table_size, seed_table
-
-
-def numpy_ranking(table, target, k, allowed=None):
-    """The ranking before the compiled one: NumPy's sq - 2 F f (BLAS), argmin, then argpartition and argsort."""
-    key, f = table.target_features([target])
-    F, sq = table._table_features(key)
-    d = sq - 2.0 * (F @ f[0])
-    if allowed is not None:
-        d = np.where(allowed, d, np.inf)
-        k = min(k, int(np.count_nonzero(allowed)))
-    first = int(d.argmin())
-    part = np.argpartition(d, k - 1)[:k]
-    return [first] + [int(i) for i in part[d[part].argsort()] if i != first]
+from evoik_pin.solvers.search.nearest import select_k
+from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
 
 
 def targets(robot, count, seed):
@@ -28,42 +16,35 @@ def targets(robot, count, seed):
     return [robot.fk(q) for q in robot.random_configurations(count, rng)], robot.random_configurations(count, rng)
 
 
-@pytest.mark.parametrize("name", ["panda", "ur5", "redundant7r"])
-def test_compiled_ranking_is_numpys_over_many_targets(name):
+@pytest.mark.parametrize("name", ["panda", "ur5"])
+def test_compiled_selection_is_the_rankings_order(name):
+    """select_k on the table's distances gives SeedTable.ranked's order (argmin, argpartition, argsort), over many
+    targets, poses and positions, with and without a mask."""
     robot = ek.load_robot(name)
     table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
-    poses, _ = targets(robot, 1500, 11)
+    poses, _ = targets(robot, 1000, 11)
     allowed = np.random.default_rng(3).random(table.Q.shape[0]) < 0.3
+    out = np.empty(17, dtype=np.int64)
     for i, T in enumerate(poses):
         for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
-            k = (1, 4, 17, COMPILED_K)[i % 4]
-            assert list(table.ranked(target, k)) == numpy_ranking(table, target, k)
-            if i % 10 == 0:  # with a mask (a scene's collision-free entries)
-                assert list(table.ranked(target, k, allowed)) == numpy_ranking(table, target, k, allowed)
+            d = table.distances(*table.one_target_features(target))
+            for k in (1, 4, 17):
+                m = select_k(d, np.zeros(0, dtype=bool), k, out)
+                assert out[:m].tolist() == list(table.ranked(target, k))
+            if i % 10 == 0:
+                m = select_k(d, allowed, 17, out)
+                assert out[:m].tolist() == list(table.ranked(target, 17, allowed))
 
 
-def test_compiled_ranking_of_planar_targets():
-    robot = ek.load_robot("planar2r")
-    table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
-    rng = np.random.default_rng(5)
-    for x, y, yaw in rng.uniform(-1.0, 1.0, (300, 3)):
-        for target in (ek.Target.planar_target(x, y), ek.Target.planar_target(x, y, yaw)):
-            assert list(table.ranked(target, 17)) == numpy_ranking(table, target, 17)
-
-
-def test_ranking_edge_cases():
-    robot = ek.load_robot("panda")
-    table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
-    T = robot.fk(np.zeros(robot.n))
-    target = ek.Target(T.translation, T.rotation)
-    assert list(table.ranked(target, 0)) == []
-    none = np.zeros(table.Q.shape[0], dtype=bool)
-    assert list(table.ranked(target, 5, none)) == []
-    two = none.copy()
-    two[[10, 20]] = True
-    assert sorted(table.ranked(target, 5, two)) == [10, 20]  # k capped at the allowed entries
-    whole = list(table.ranked(target, table.Q.shape[0]))  # above COMPILED_K: NumPy's sort
-    assert sorted(whole) == list(range(table.Q.shape[0])) and whole[:17] == list(table.ranked(target, 17))
+def test_selection_edge_cases():
+    d = np.array([3.0, 1.0, 2.0, 1.0, 0.5])
+    out = np.empty(5, dtype=np.int64)
+    every = np.zeros(0, dtype=bool)
+    assert select_k(d, every, 0, out) == 0
+    assert select_k(d, every, 5, out) == 5 and out.tolist() == [4, 1, 3, 2, 0]  # ties: the lower index first
+    assert select_k(d, every, 2, out) == 2 and out[:2].tolist() == [4, 1]
+    assert select_k(d, np.zeros(5, dtype=bool), 3, out) == 0
+    assert select_k(d, np.array([True, False, True, False, False]), 3, out) == 2 and out[:2].tolist() == [2, 0]
 
 
 def same(a, b):

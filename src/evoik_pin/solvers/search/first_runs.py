@@ -3,17 +3,18 @@ and the runs, in the order :func:`~evoik_pin.solvers.search.memetic._solve` make
 
 A single-target solve that one of its first runs solves (nearly every one: the run from the table's nearest entry
 or a near q0 converges) spent most of its time in Python around those runs: q0's tip pose from Pinocchio and its
-nearness, the ranking's dispatches, an engine call and an outcome object per run (about 15-25 us). Here they are
+nearness, the ranking's dispatches, an engine call and an outcome object per run (about 10-20 us). Here they are
 one call. The runs are those memetic makes whatever the clock says (``guaranteed``: q0's and the
 ``GUARANTEED_TABLE_RUNS`` nearest entries'), so the clock plays no part; when none of them converges, memetic
 solves the problem its own way from the start (the same runs again, then the clock-checked rest), and the answer
 is its own.
 
 The decisions are memetic's: q0 first when its tip pose is within the table's typical gap of the target, or nearer
-than the nearest entry; then the nearest entry, q0 (when it went second), the next entries. q0's tip pose comes
-from the kernel's kinematics and the distances are summed in the features' order, where memetic used Pinocchio
-and BLAS: the numbers can differ in their last bits, so a decision can only differ when q0 is within a few ulps of
-the gap or of the entry's distance (tests/test_first_runs.py holds the answers equal over thousands of targets).
+than the nearest entry; then the nearest entry, q0 (when it went second), the next entries. q0's tip pose comes from
+the kernel's kinematics and its distances are summed in the features' order, where memetic used Pinocchio and BLAS:
+the numbers can differ in their last bits, so a decision can only differ when q0 is within a few ulps of the gap or
+of the entry's distance (the ranking is NumPy's own numbers, :func:`~.nearest.select_k`) (tests/test_first_runs.py
+holds the answers equal over thousands of targets).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers
 from ..lm.layout import G_JOINT
 from ..lm.tree import frame_pose, tree_forward
-from .nearest import nearest_k
+from .nearest import select_k
 
 __all__ = ["STAGE_Q0", "STAGE_TABLE", "first_runs"]
 
@@ -34,7 +35,7 @@ STAGE_Q0, STAGE_TABLE = 0, 1
 
 
 @njit(cache=True, nogil=True)
-def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, lead, dims, sq, f, weight, table_runs, margin, parent,
+def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, f, d, weight, table_runs, parent,
                FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out,
                g_out, errors):  # pragma: no cover - compiled
     """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
@@ -43,9 +44,10 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, lead, dims, sq, f
     Args:
         buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``). lower, upper (n,): the
             search box (q0's tip pose is taken at q0 clipped into it). gap: the table's typical squared gap
-            (``SeedTable.typical_gap_sq``). Q (size, n): the table's configurations. F, lead, dims, sq, margin:
-            the table's features (:func:`~.nearest.nearest_k`); f (D,): the target's (D = 12 for a pose, 3 for a
-            position). weight: the table's rotation weight (m). table_runs: the entries run at most (>= 1).
+            (``SeedTable.typical_gap_sq``). Q (size, n): the table's configurations; F (size, D) their features,
+            f (D,) the target's (D = 12 for a pose, 3 for a position), d (size,) the entries' distances to it
+            (:meth:`SeedTable.distances`: what the ranking sorts). weight: the table's rotation weight (m).
+            table_runs: the entries run at most (>= 1).
         parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on the tip.
         q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's
             position error + orientation error (m + rad), in order.
@@ -58,7 +60,6 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, lead, dims, sq, f
     D = F.shape[1]
     oriented = D > 3
     out = np.empty(max(table_runs, 1), dtype=np.int64)
-    d = np.empty(F.shape[0])
     first = -1
     q0_first = has_q0
     if has_q0:
@@ -85,7 +86,7 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, lead, dims, sq, f
                 c = f[3 + j] - weight * R[j // 3, j % 3]
                 d0 += c * c
         if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
-            if nearest_k(F, lead, dims, sq, f, np.zeros(0, dtype=np.bool_), 1, margin, d, out) > 0:
+            if select_k(d, np.zeros(0, dtype=np.bool_), 1, out) > 0:
                 first = out[0]
                 de = 0.0
                 for j in range(D):
@@ -106,7 +107,7 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, lead, dims, sq, f
         evaluations += ev
         if converged:
             return STAGE_Q0, runs, evaluations, pos, rot, cost
-    k = nearest_k(F, lead, dims, sq, f, np.zeros(0, dtype=np.bool_), table_runs, margin, d, out)
+    k = select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)
     for r in range(k):
         pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, Q[out[r]], parent, FR, Fp, rev, index, scale,
                                                            offset, box, any_wrap, spec, gR, gp, support, gaux, pt,

@@ -492,7 +492,6 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     the tolerances, None when none does (_solve then searches from the start: the same runs, then the rest); and the
     seconds spent loading the compiled function (on a plan's first solve), set-up rather than budget."""
     key, f = table.one_target_features(problem.target)
-    F, lead, dims, sq, margin = table._compiled_features(key)
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
     n = problem.n
@@ -502,7 +501,8 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     errors = np.empty(table_runs + 1)
     (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
         (*buffers, np.zeros(n) if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
-         table._gap(key), table.Q, F, lead, dims, sq, f, table.weight, table_runs, margin, *args, params, q_out,
+         table._gap(key), table.Q, table._table_features(key)[0], f, table.distances(key, f), table.weight, table_runs,
+         *args, params, q_out,
          np.empty((1, 2)), errors), lm, table)
     if stage < 0:
         return None, loading

@@ -19,7 +19,6 @@ from ...lie import rpy
 from ...problem import Target
 from ..lm.layout import KIND_PLANAR, KIND_PLANAR_YAW, KIND_POSE, KIND_POSITION, encode_targets, target_kind
 from ..paper.common import halton
-from .nearest import nearest_k
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
 
@@ -34,9 +33,6 @@ DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
 _KINDS = tuple(_KIND_KEYS.values())
-#: Largest k :meth:`SeedTable.ranked` ranks by the compiled selection (k insertions); above, NumPy's sort.
-COMPILED_K = 64
-_EVERY = np.zeros(0, dtype=bool)  # nearest_k's "every entry"
 
 
 class SeedTable:
@@ -61,10 +57,9 @@ class SeedTable:
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
-        self._compiled: dict = {}  # feature key -> nearest_k's table arguments
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
-                self._compiled_features(key)
+                self._table_features(key)
                 self._gap(key)
 
     def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
@@ -115,32 +110,11 @@ class SeedTable:
 
     def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
-        is found alone (one compiled pass over the table, :func:`~.nearest.nearest_k`); the others are ranked only
-        if asked for. ``allowed`` (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
+        costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
+        (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
         if k <= 0:
             return
-        key, f = self.one_target_features(target)
-        if k > COMPILED_K:  # a whole order (memetic-all's): one sort beats k insertions
-            yield from self._ranked_sort(key, f, k, allowed)
-            return
-        F, lead, dims, sq, margin = self._compiled_features(key)
-        mask = _EVERY if allowed is None else allowed
-        d = np.empty(F.shape[0])  # per call (not per table): threads may rank on one table at once
-        out = np.empty(k, dtype=np.int64)
-        if nearest_k(F, lead, dims, sq, f, mask, 1, margin, d, out) == 0:
-            return
-        first = int(out[0])
-        yield first
-        if k > 1:
-            m = nearest_k(F, lead, dims, sq, f, mask, k, margin, d, out)
-            yield from out[1:m].tolist()
-
-    def _ranked_sort(self, key: str, f: np.ndarray, k: int, allowed: np.ndarray | None):
-        """:meth:`ranked` by NumPy's sort, for large k."""
-        F, sq = self._table_features(key)
-        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
-        d *= -2.0
-        d += sq
+        d = self.distances(*self.one_target_features(target))
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
@@ -155,18 +129,14 @@ class SeedTable:
                 if i != first:
                     yield int(i)
 
-    def _compiled_features(self, key: str) -> tuple[np.ndarray, np.ndarray, int, np.ndarray, float]:
-        """:func:`~.nearest.nearest_k`'s table arguments for one target kind (built once): the features (size, d),
-        their leading position features (size, 3; a planar kind's 2 padded with zeros) and how many they are,
-        the squared norms, and the bound's margin (1e-9 of the features' squared norms, orders above rounding)."""
-        hit = self._compiled.get(key)
-        if hit is None:
-            F, sq = self._table_features(key)
-            dims = 2 if key.startswith("planar") else 3
-            lead = np.zeros((F.shape[0], 3))
-            lead[:, :dims] = F[:, :dims]
-            hit = self._compiled[key] = (F, lead, dims, sq, 1e-9 * (1.0 + float(sq.max(initial=0.0))))
-        return hit
+    def distances(self, key: str, f: np.ndarray) -> np.ndarray:
+        """The table's squared distances (size,) to features ``f`` (d,) of kind ``key`` (:meth:`one_target_features`)
+        less ``|f|^2`` (the same for every entry): what :meth:`ranked` sorts (memetic's first runs too)."""
+        F, sq = self._table_features(key)
+        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
+        d *= -2.0
+        d += sq
+        return d
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
