@@ -1,5 +1,5 @@
-"""The compiled single-target fast path (issue 24): the compiled selection of the nearest seed-table entries
-(solvers/search/nearest.py) gives the table's ranking, and memetic's guaranteed runs made in one compiled call
+"""The compiled single-target fast path (issue 24): the compiled ranking of the seed table (solvers/search/nearest.py)
+gives the table's ranking, and memetic's guaranteed runs made in one compiled call
 (solvers/search/first_runs.py) give the Results of the runs made one by one, bit for bit, over many targets."""
 
 import numpy as np
@@ -7,7 +7,7 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.solvers.search import memetic
-from evoik_pin.solvers.search.nearest import select_k
+from evoik_pin.solvers.search.nearest import select_k, table_distances
 from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
 
 
@@ -16,23 +16,31 @@ def targets(robot, count, seed):
     return [robot.fk(q) for q in robot.random_configurations(count, rng)], robot.random_configurations(count, rng)
 
 
-@pytest.mark.parametrize("name", ["panda", "ur5"])
-def test_compiled_selection_is_the_rankings_order(name):
-    """select_k on the table's distances gives SeedTable.ranked's order (argmin, argpartition, argsort), over many
-    targets, poses and positions, with and without a mask."""
+@pytest.mark.parametrize("name", ["panda", "ur5", "redundant7r"])
+def test_compiled_ranking_is_the_tables_over_many_targets(name):
+    """table_distances + select_k (first_runs's ranking: the same formula summed in the features' order, where NumPy
+    uses BLAS) rank the entries as SeedTable.ranked does, over thousands of poses and positions; select_k on NumPy's
+    own distances too, with and without a mask."""
     robot = ek.load_robot(name)
     table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
-    poses, _ = targets(robot, 1000, 11)
+    poses, _ = targets(robot, 2000, 11)
     allowed = np.random.default_rng(3).random(table.Q.shape[0]) < 0.3
     out = np.empty(17, dtype=np.int64)
+    every = np.zeros(0, dtype=bool)
+    d = np.empty(table.Q.shape[0])
     for i, T in enumerate(poses):
         for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
-            d = table.distances(*table.one_target_features(target))
-            for k in (1, 4, 17):
-                m = select_k(d, np.zeros(0, dtype=bool), k, out)
-                assert out[:m].tolist() == list(table.ranked(target, k))
+            key, f = table.one_target_features(target)
+            _, FT, sq = table.compiled_features(key)
+            table_distances(FT, sq, f, d)
+            reference = list(table.ranked(target, 17))
+            m = select_k(d, every, 17, out)
+            assert out[:m].tolist() == reference
+            assert np.allclose(d, table.distances(key, f), rtol=0.0, atol=1e-12)
             if i % 10 == 0:
-                m = select_k(d, allowed, 17, out)
+                m = select_k(table.distances(key, f), every, 4, out)
+                assert out[:m].tolist() == reference[:4]
+                m = select_k(table.distances(key, f), allowed, 17, out)
                 assert out[:m].tolist() == list(table.ranked(target, 17, allowed))
 
 

@@ -13,8 +13,8 @@ The decisions are memetic's: q0 first when its tip pose is within the table's ty
 than the nearest entry; then the nearest entry, q0 (when it went second), the next entries. q0's tip pose comes from
 the kernel's kinematics and its distances are summed in the features' order, where memetic used Pinocchio and BLAS:
 the numbers can differ in their last bits, so a decision can only differ when q0 is within a few ulps of the gap or
-of the entry's distance (the ranking is NumPy's own numbers, :func:`~.nearest.select_k`) (tests/test_first_runs.py
-holds the answers equal over thousands of targets).
+of the entry's distance (and the ranking only where two entries' distances are, :mod:`.nearest`):
+tests/test_first_runs.py holds the answers equal over thousands of targets.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers
 from ..lm.layout import G_JOINT
 from ..lm.tree import frame_pose, tree_forward
-from .nearest import select_k
+from .nearest import select_k, table_distances
 
 __all__ = ["STAGE_Q0", "STAGE_TABLE", "first_runs"]
 
@@ -35,7 +35,7 @@ STAGE_Q0, STAGE_TABLE = 0, 1
 
 
 @njit(cache=True, nogil=True)
-def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, f, d, weight, table_runs, parent,
+def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, table_runs, parent,
                FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out,
                g_out, errors):  # pragma: no cover - compiled
     """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
@@ -44,9 +44,9 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, f, d, weight, tab
     Args:
         buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``). lower, upper (n,): the
             search box (q0's tip pose is taken at q0 clipped into it). gap: the table's typical squared gap
-            (``SeedTable.typical_gap_sq``). Q (size, n): the table's configurations; F (size, D) their features,
-            f (D,) the target's (D = 12 for a pose, 3 for a position), d (size,) the entries' distances to it
-            (:meth:`SeedTable.distances`: what the ranking sorts). weight: the table's rotation weight (m).
+            (``SeedTable.typical_gap_sq``). Q (size, n): the table's configurations; F (size, D) their features
+            (D = 12 for a pose, 3 for a position), FT (D, size) the same transposed, sq (size,) their squared norms
+            (the ranking: :func:`~.nearest.table_distances`). weight: the table's rotation weight (m).
             table_runs: the entries run at most (>= 1).
         parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on the tip.
         q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's
@@ -59,6 +59,15 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, f, d, weight, tab
     n = q0.shape[0]
     D = F.shape[1]
     oriented = D > 3
+    # the target's features (SeedTable.one_target_features: its position, then weight x its rotation's entries)
+    f = np.empty(D)
+    for j in range(3):
+        f[j] = pt[0, j]
+    if oriented:
+        for j in range(9):
+            f[3 + j] = weight * Rt[0, j // 3, j % 3]
+    d = np.empty(F.shape[0])
+    table_distances(FT, sq, f, d)
     out = np.empty(max(table_runs, 1), dtype=np.int64)
     first = -1
     q0_first = has_q0

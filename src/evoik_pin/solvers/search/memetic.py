@@ -491,7 +491,8 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     (:mod:`.first_runs`) in _solve's order and with its decisions: the Result _solve returns when one of them meets
     the tolerances, None when none does (_solve then searches from the start: the same runs, then the rest); and the
     seconds spent loading the compiled function (on a plan's first solve), set-up rather than budget."""
-    key, f = table.one_target_features(problem.target)
+    key = "position" if problem.target.rotation is None else "pose"
+    F, FT, sq = table.compiled_features(key)
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
     n = problem.n
@@ -501,8 +502,7 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     errors = np.empty(table_runs + 1)
     (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
         (*buffers, np.zeros(n) if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
-         table._gap(key), table.Q, table._table_features(key)[0], f, table.distances(key, f), table.weight, table_runs,
-         *args, params, q_out,
+         table._gap(key), table.Q, F, FT, sq, table.weight, table_runs, *args, params, q_out,
          np.empty((1, 2)), errors), lm, table)
     if stage < 0:
         return None, loading

@@ -57,10 +57,13 @@ class SeedTable:
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
+        self._transposed: dict = {}  # feature key -> compiled_features
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
                 self._gap(key)
+            for key in ("pose", "position"):
+                self.compiled_features(key)
 
     def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
         """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
@@ -128,6 +131,15 @@ class SeedTable:
             for i in part[d[part].argsort()]:
                 if i != first:
                     yield int(i)
+
+    def compiled_features(self, key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(features (size, d), the same transposed (d, size), squared norms (size,)) of one target kind, for the
+        compiled ranking (:mod:`.nearest`); built once."""
+        hit = self._transposed.get(key)
+        if hit is None:
+            F, sq = self._table_features(key)
+            hit = self._transposed[key] = (F, np.ascontiguousarray(F.T), sq)
+        return hit
 
     def distances(self, key: str, f: np.ndarray) -> np.ndarray:
         """The table's squared distances (size,) to features ``f`` (d,) of kind ``key`` (:meth:`one_target_features`)
