@@ -99,4 +99,7 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
     stages = {r.message.split(" (")[0] for r in fast}
     assert {"tolerance reached by LM from q0", "tolerance reached by LM from seed table"} <= stages
     assert sum(not r.success for r in fast) >= 5
+    from evoik_pin.solvers.search.first_runs import STAGE_Q0
+
+    assert memetic._FROM_Q0 == STAGE_Q0
 

@@ -287,6 +287,9 @@ class MemeticPlan:
         self._lm: LevenbergMarquardt | None = None
         self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
+        # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
+        # never read (no q0 given)
+        self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n))
 
     def _prepare(self, problem: IKProblem, size: int, engine: str) -> tuple[SeedTable | None, np.ndarray | None]:
         """:func:`prepare` for ``problem``, the table kept while the problems share their box arrays (an
@@ -478,6 +481,7 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
 
 
 _LOADED: list = []  # [True] once first_runs is loaded in this process
+_FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
 
 #: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
 #: turn it off to compare with the runs made one by one.
@@ -499,15 +503,13 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
     lower, upper = plan._bounds
     q_out = np.empty(n)
-    errors = np.empty(table_runs + 1)
+    errors, g_out, zeros = plan._scratch
     (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
-        (*buffers, np.zeros(n) if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
-         table._gap(key), table.Q, F, FT, sq, table.weight, table_runs, *args, params, q_out,
-         np.empty((1, 2)), errors), lm, table)
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
+         table._gap(key), table.Q, F, FT, sq, table.weight, table_runs, *args, params, q_out, g_out, errors), lm,
+        table)
     if stage < 0:
         return None, loading
-    from .first_runs import STAGE_Q0  # (imported with numba: loaded on first use, as the kernel is)
-
     pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
     if not (pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)):
         return None, loading  # converged by the kernel's test but not by the problem's: _solve says why
@@ -516,7 +518,7 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     return Result(
         q=q_out, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
         evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0 - loading, history=history,
-        message=f"tolerance reached by LM from {'q0' if stage == STAGE_Q0 else 'seed table'} ({runs} LM run(s), 0 "
+        message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
                 "restart(s))",
         method="memetic", setup_s=setup_s + loading), loading
 
