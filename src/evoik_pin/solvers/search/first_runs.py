@@ -104,35 +104,28 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, t
                 q0_first = d0 <= de
             else:
                 q0_first = True
-    runs = 0
+    # the starts in memetic's order: q0 first or after the nearest entry, then the next entries (-1: q0)
+    order = np.empty(table_runs + 1, dtype=np.int64)
+    count = 0
+    if q0_first:
+        order[count] = -1
+        count += 1
+    for r in range(select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)):
+        order[count] = out[r]
+        count += 1
+        if r == 0 and has_q0 and not q0_first:
+            order[count] = -1
+            count += 1
     evaluations = 0
     pos = rot = cost = np.nan
-    if q0_first:
-        pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, q0, parent, FR, Fp, rev, index, scale,
+    for s in range(count):
+        row = order[s]
+        start = q0 if row < 0 else Q[row]
+        pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, parent, FR, Fp, rev, index, scale,
                                                            offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
                                                            Rt, params, q_out, g_out)
-        errors[runs] = pos + (rot if oriented else 0.0)
-        runs += 1
+        errors[s] = pos + (rot if oriented else 0.0)
         evaluations += ev
         if converged:
-            return STAGE_Q0, runs, evaluations, pos, rot, cost
-    k = select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)
-    for r in range(k):
-        pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, Q[out[r]], parent, FR, Fp, rev, index, scale,
-                                                           offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
-                                                           Rt, params, q_out, g_out)
-        errors[runs] = pos + (rot if oriented else 0.0)
-        runs += 1
-        evaluations += ev
-        if converged:
-            return STAGE_TABLE, runs, evaluations, pos, rot, cost
-        if r == 0 and has_q0 and not q0_first:
-            pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, q0, parent, FR, Fp, rev, index,
-                                                               scale, offset, box, any_wrap, spec, gR, gp, support,
-                                                               gaux, pt, Rt, params, q_out, g_out)
-            errors[runs] = pos + (rot if oriented else 0.0)
-            runs += 1
-            evaluations += ev
-            if converged:
-                return STAGE_Q0, runs, evaluations, pos, rot, cost
-    return -1, runs, evaluations, pos, rot, cost
+            return (STAGE_Q0 if row < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
+    return -1, count, evaluations, pos, rot, cost
