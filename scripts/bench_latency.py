@@ -164,12 +164,10 @@ STAGES = [
     ("target and problem", "IKSolver.problem: Target.coerce (the pose's checks) and the template problem copied "
      "with the target and q0 (checked)"),
     ("set-up look-ups", "the memetic plan's cached seed table and LM engine (retargeted in place)"),
-    ("seed-table distances", "the target's nearness features and the table's distances to them (NumPy: "
-     "SeedTable.one_target_features, SeedTable.distances)"),
-    ("first runs (compiled)", "one numba call: q0's tip pose and nearness, the selection of the nearest entries, "
-     "the guaranteed LM runs (MemeticPlan.first_runs, its compiled entry)"),
-    ("memetic's later stages", "when no first run converged: the search from the start (ranking, q0's pose, LM runs "
-     "one by one, DE restarts)"),
+    ("first runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, q0's "
+     "tip pose and nearness, the guaranteed LM runs (MemeticPlan.first_runs, its compiled entry)"),
+    ("memetic's later stages", "when no first run converged: the search from the start (NumPy ranking, q0's pose, "
+     "LM runs one by one, DE restarts), rare but long"),
     ("cost and Result", "problem.assess (the cost from the errors) and the Result object"),
     ("the rest (Python)", "IKSolver.solve/run, the generator, memetic's stage logic, history, message, verdicts"),
 ]
@@ -179,7 +177,7 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     """Mean microseconds per IKSolver.solve call spent in each stage of :data:`STAGES` (each stage's functions
     wrapped with a clock; the wrappers' own cost, about 0.1 us each, lands in their stages)."""
     from evoik_pin import ik_solver
-    from evoik_pin.solvers.search import memetic, seed_table
+    from evoik_pin.solvers.search import memetic
 
     solver = ek.IKSolver(robot)
     n = len(targets)
@@ -195,9 +193,6 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
         (memetic.MemeticPlan, "_prepare", clock.wrap(memetic.MemeticPlan, "_prepare", "setup")),
         (memetic.MemeticPlan, "_engine", clock.wrap(memetic.MemeticPlan, "_engine", "setup")),
-        (seed_table.SeedTable, "one_target_features",
-         clock.wrap(seed_table.SeedTable, "one_target_features", "distances")),
-        (seed_table.SeedTable, "distances", clock.wrap(seed_table.SeedTable, "distances", "distances")),
         (memetic.MemeticPlan, "first_runs", clock.wrap(memetic.MemeticPlan, "first_runs", "first")),
         (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
         (memetic, "Result", clock.wrap(memetic, "Result", "result")),
@@ -240,7 +235,6 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     stages = {
         "target and problem": us["problem"],
         "set-up look-ups": us["setup"],
-        "seed-table distances": us["distances"],
         "first runs (compiled)": us["first"],
         "memetic's later stages": us["later"],
         "cost and Result": us["result"],

@@ -67,7 +67,8 @@ def same(a, b):
 @pytest.mark.parametrize("name", ["panda", "ur5", "redundant7r"])
 def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
     """Over many poses and positions, from random q0s, near q0s and none, on an IKSolver (the compiled entry) and
-    through evoik_pin.solve: the Results of the runs made one by one (FIRST_RUNS off), bit for bit."""
+    through evoik_pin.solve: the Results of the runs made one by one (FIRST_RUNS off), bit for bit; also where no
+    first run converges and memetic goes on from their state (later entries, DE restarts, out-of-reach targets)."""
     robot = ek.load_robot(name)
     poses, Qs = targets(robot, 300, 23)
     budget = {"timeout": None, "max_restarts": 2}  # deterministic: the clock cannot change an answer
@@ -99,6 +100,9 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
     stages = {r.message.split(" (")[0] for r in fast}
     assert {"tolerance reached by LM from q0", "tolerance reached by LM from seed table"} <= stages
     assert sum(not r.success for r in fast) >= 5
+    # and some solved after the guaranteed runs (memetic went on from the compiled runs' state)
+    runs = [int(r.message.split(" LM run(s)")[0].split("(")[-1]) for r in fast if r.success]
+    assert any(k > memetic.GUARANTEED_TABLE_RUNS + 1 for k in runs)
     from evoik_pin.solvers.search.first_runs import STAGE_Q0
 
     assert memetic._FROM_Q0 == STAGE_Q0

@@ -37,7 +37,7 @@ STAGE_Q0, STAGE_TABLE = 0, 1
 @njit(cache=True, nogil=True)
 def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, table_runs, parent,
                FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out,
-               g_out, errors):  # pragma: no cover - compiled
+               g_out, errors, best_q, best):  # pragma: no cover - compiled
     """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
     nearest table entries, stopping at the first that converges.
 
@@ -50,11 +50,14 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, t
             table_runs: the entries run at most (>= 1).
         parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on the tip.
         q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's
-            position error + orientation error (m + rad), in order.
+            position error + orientation error (m + rad), in order. best_q (n,), best (6,): when none converges,
+            the run memetic keeps as its best (the first of the lowest errors): its configuration, and its position
+            error, orientation error, weighted |e|^2, iterations, evaluations and index among the runs (best: (6,)).
 
     Returns:
         (STAGE_Q0 or STAGE_TABLE: the start that converged, or -1; runs made; their forward-kinematics evaluations
-        summed; the last run's position error m, orientation error rad (nan for a position), weighted |e|^2).
+        summed; the converged (or last) run's position error m, orientation error rad (nan for a position),
+        weighted |e|^2).
     """
     n = q0.shape[0]
     D = F.shape[1]
@@ -124,8 +127,12 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, t
         pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, parent, FR, Fp, rev, index, scale,
                                                            offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
                                                            Rt, params, q_out, g_out)
-        errors[s] = pos + (rot if oriented else 0.0)
+        error = pos + (rot if oriented else 0.0)
+        errors[s] = error
         evaluations += ev
         if converged:
             return (STAGE_Q0 if row < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
+        if s == 0 or error < errors[int(best[5])]:  # memetic's _Search._keep: a strictly lower error replaces
+            best_q[:] = q_out
+            best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
     return -1, count, evaluations, pos, rot, cost
