@@ -164,12 +164,12 @@ STAGES = [
     ("target and problem", "IKSolver.problem: Target.coerce (the pose's checks) and the template problem copied "
      "with the target and q0 (checked)"),
     ("set-up look-ups", "the memetic plan's cached seed table and LM engine (retargeted in place)"),
-    ("seed-table ranking", "nearness features of the target, ranking the table's entries (lazy), q0's distance"),
-    ("q0's tip pose", "Pinocchio FK of q0 (is it nearer than the table's nearest entry?)"),
-    ("LM kernel", "the compiled LM runs themselves (numba)"),
-    ("LM call wrapper", "LevenbergMarquardt.run around the kernel (buffers, outcome)"),
+    ("first runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, q0's "
+     "tip pose and nearness, the guaranteed LM runs (MemeticPlan.first_runs, its compiled entry)"),
+    ("memetic's later stages", "when no first run converged: the search from the start (NumPy ranking, q0's pose, "
+     "LM runs one by one, DE restarts), rare but long"),
     ("cost and Result", "problem.assess (the cost from the errors) and the Result object"),
-    ("memetic's own Python", "the rest: stage logic, bookkeeping of attempts, message, seed check, verdicts"),
+    ("the rest (Python)", "IKSolver.solve/run, the generator, memetic's stage logic, history, message, verdicts"),
 ]
 
 
@@ -177,8 +177,7 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     """Mean microseconds per IKSolver.solve call spent in each stage of :data:`STAGES` (each stage's functions
     wrapped with a clock; the wrappers' own cost, about 0.1 us each, lands in their stages)."""
     from evoik_pin import ik_solver
-    from evoik_pin.solvers.lm import engine
-    from evoik_pin.solvers.search import memetic, seed_table
+    from evoik_pin.solvers.search import memetic
 
     solver = ek.IKSolver(robot)
     n = len(targets)
@@ -189,40 +188,44 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
     plain = (time.perf_counter() - t0) / n * 1e6
     clock = _Clock()
-    kernel = engine.compiled_kernel()
     saved = [
         (ek.Target, "coerce", clock.wrap(ek.Target, "coerce", "target")),
         (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
         (memetic.MemeticPlan, "_prepare", clock.wrap(memetic.MemeticPlan, "_prepare", "setup")),
         (memetic.MemeticPlan, "_engine", clock.wrap(memetic.MemeticPlan, "_engine", "setup")),
-        (seed_table.SeedTable, "ranked", clock.wrap(seed_table.SeedTable, "ranked", "ranking", generator=True)),
-        (seed_table.SeedTable, "distance_sq", clock.wrap(seed_table.SeedTable, "distance_sq", "ranking")),
-        (seed_table.SeedTable, "typical_gap_sq", clock.wrap(seed_table.SeedTable, "typical_gap_sq", "ranking")),
-        (type(robot), "fk_unchecked", clock.wrap(type(robot), "fk_unchecked", "fk")),
-        (engine.LevenbergMarquardt, "run", clock.wrap(engine.LevenbergMarquardt, "run", "lm")),
-        (engine.LevenbergMarquardt, "run_many", clock.wrap(engine.LevenbergMarquardt, "run_many", "lm")),
-        (kernel, "lm_run_buffers", None),
+        (memetic.MemeticPlan, "first_runs", clock.wrap(memetic.MemeticPlan, "first_runs", "first")),
         (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
         (memetic, "Result", clock.wrap(memetic, "Result", "result")),
     ]
-    k_original = kernel["lm_run_buffers"]
     ns = clock.ns
-    kernel["lm_run_buffers"] = clock.timed(k_original, "kernel")
-    lm = solver._plan._lm  # the solver's engine calls the kernel's overload directly (LevenbergMarquardt._direct)
-    direct = lm._direct
-    if direct is not None:
-        lm._direct = clock.timed(direct, "kernel")
+    ns["later"] = 0
+    # the later stages: a _solve whose first runs did not converge, less the wrapped stages inside it
+    first_runs, solve = memetic._first_runs, memetic._solve
+    fell_back = [False]
+
+    def first_timed(*args):
+        out = first_runs(*args)
+        fell_back[0] = out[0] is None
+        return out
+
+    def solve_timed(*args):
+        before, t = sum(ns.values()), time.perf_counter_ns()
+        fell_back[0] = False
+        out = solve(*args)
+        if fell_back[0]:
+            ns["later"] += time.perf_counter_ns() - t - (sum(ns.values()) - before)
+        return out
+
+    memetic._first_runs, memetic._solve = first_timed, solve_timed
     try:
         t0 = time.perf_counter()
         for i in range(n):
             solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
         wrapped = (time.perf_counter() - t0) / n * 1e6
     finally:
-        kernel["lm_run_buffers"] = k_original
-        lm._direct = direct
+        memetic._first_runs, memetic._solve = first_runs, solve
         for owner, attr, original in saved:
-            if original is not None:
-                setattr(owner, attr, original)
+            setattr(owner, attr, original)
     us = {k: v / n / 1e3 for k, v in ns.items()}
     # the boundary checks alone (part of "target and problem"): the pose's and q0's
     t0 = time.perf_counter()
@@ -232,13 +235,11 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     stages = {
         "target and problem": us["problem"],
         "set-up look-ups": us["setup"],
-        "seed-table ranking": us["ranking"],
-        "q0's tip pose": us["fk"],
-        "LM kernel": us["kernel"],
-        "LM call wrapper": us["lm"] - us["kernel"],
+        "first runs (compiled)": us["first"],
+        "memetic's later stages": us["later"],
         "cost and Result": us["result"],
     }
-    stages["memetic's own Python"] = wrapped - sum(stages.values())
+    stages["the rest (Python)"] = wrapped - sum(stages.values())
     return {"stages_us": stages, "target_check_us": us["target"], "q0_check_us": q0_check, "wrapped_mean_us": wrapped,
             "plain_mean_us": plain, "q0": use_q0, "n": n}
 

@@ -274,6 +274,16 @@ class LevenbergMarquardt:
         return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations,
                          None if self._one else g_err, cost)
 
+    def kernel_arguments(self, max_iterations: int) -> tuple[tuple, tuple, np.ndarray]:
+        """(workspace buffers, the kernel's constant arguments from ``parent`` to ``Rt``, params) for compiled code
+        that makes :meth:`run`'s runs itself (memetic's first runs, :mod:`..search.first_runs`), ``max_iterations``
+        steps per run set in params. Compiled engine only."""
+        params = self._params
+        params[P_ITERATIONS] = max_iterations
+        mine = self._buffers_thread == threading.get_ident()
+        buffers = self._buffers if max_iterations <= self._buffers_for and mine else self._workspace(max_iterations)
+        return buffers, self._args, params
+
     def run_many(self, Q: np.ndarray, max_iterations: int, deadline: float | None = None
                  ) -> tuple[LMOutcome, int]:
         """LM runs from the starts ``Q`` (K, n), in order, until one meets the tolerances: one kernel call

@@ -28,6 +28,11 @@ Stages, each tried only when the previous ones have not met the tolerances:
    (DE/current-to-best/1/bin from :mod:`evoik_pin.solvers.paper.de_ops`, dithered F in [0.5, 1], CR = 0.9,
    greedy selection on the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
 
+For one pose or position target (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock says (q0's
+and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the table's ranking,
+q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its state when none of
+them converges.
+
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
 budget is not what stops them (every reachable target in practice); ``timeout=None`` with
@@ -285,6 +290,12 @@ class MemeticPlan:
         self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
         self._table = None
         self._lm: LevenbergMarquardt | None = None
+        self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
+        self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
+        # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
+        # never read (no q0 given), the best failed run's configuration and numbers
+        self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
+                         np.empty(6))
 
     def _prepare(self, problem: IKProblem, size: int, engine: str) -> tuple[SeedTable | None, np.ndarray | None]:
         """:func:`prepare` for ``problem``, the table kept while the problems share their box arrays (an
@@ -294,6 +305,7 @@ class MemeticPlan:
             self._table, free = prepare(self.robot, problem.lower, problem.upper, size, engine, problem.scene,
                                         problem.margin)
             self._box = (problem.lower, problem.upper, size)
+            self._bounds = (np.array(problem.lower, dtype=float), np.array(problem.upper, dtype=float))
             return self._table, free
         table = self._table
         free = table.free_mask(problem.scene, problem.margin) if table is not None and problem.scene is not None \
@@ -306,6 +318,33 @@ class MemeticPlan:
         if lm is None or lm.engine != engine or not lm.retarget(problem):
             lm = self._lm = LevenbergMarquardt(problem, engine=engine)
         return lm
+
+    def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
+        """(:func:`~.first_runs.first_runs` on ``args``, the seconds spent loading it). The process's first call
+        loads (once after an install: compiles) the function, timed as set-up, and then makes the runs. A plan that
+        solves again (an IKSolver's) calls its compiled entry directly from its second solve on: numba's dispatch
+        types each of the 37 arguments on every call (about 3 us); the entry is found once per engine arguments
+        and table (the other arguments are arrays of fixed types and Python scalars)."""
+        kept_args, kept_table, entry = self._entry
+        if entry is not None and kept_args is lm._args and kept_table is table:
+            return entry(*args), 0.0
+        from .first_runs import first_runs
+
+        loading = 0.0
+        if not _LOADED:
+            t = time.perf_counter()
+            first_runs(*args)  # the runs are made again below (they only write args' buffers)
+            loading = time.perf_counter() - t
+            _LOADED.append(True)
+        if kept_table is not None:  # not this plan's first solve: it is kept
+            from numba import typeof
+
+            try:
+                entry = first_runs.overloads[tuple(typeof(a) for a in args)].entry_point
+            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
+                entry = first_runs
+        self._entry = (lm._args, table, entry)
+        return first_runs(*args), loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` (posed on this plan's robot) with the plan's options; ``t_setup``: when
@@ -335,6 +374,14 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     lm = plan._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
+    resumed = None  # the guaranteed runs' state, when the compiled first runs made them and none converged
+    if (FIRST_RUNS and table is not None and problem.goals is None and problem.scene is None and engine == "compiled"
+            and batch == 1 and table_offset == 0 and not problem.target.planar):
+        result, loading, resumed = _first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds)
+        if result is not None:
+            return result
+        t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
+        setup_s += loading
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
     search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
                      lm)
@@ -359,7 +406,15 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
             ranked = itertools.islice(ranked, table_offset, None)
     q0 = problem.q0
     q0_first = q0 is not None
-    if q0 is not None and table is not None and not goals:
+    if resumed is not None:
+        # the compiled first runs made the guaranteed runs (q0's and the nearest entries') in this order: on from
+        # there, the next entries one by one, the clock checked between runs
+        search.attempts, search.evaluations, search.attempt_errors, search.best, made = resumed
+        stage = "seed table"
+        rest = list(itertools.islice(ranked, made, None))
+        if rest and not search.out_of_time():
+            solved = search.polish_many(table.Q[rest])
+    elif q0 is not None and table is not None and not goals:
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
         d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
@@ -367,10 +422,12 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         if d0 > table.typical_gap_sq(problem.target):
             first = next(ranked, None)
             q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
-    if q0_first:
+    if q0_first and resumed is None:
         stage = "q0"
         solved = search.polish(q0)
-    if not solved and goals and table is not None and not search.out_of_time():
+    if resumed is not None:
+        pass
+    elif not solved and goals and table is not None and not search.out_of_time():
         stage = "seed table"
         solved = search.polish_iter(ranked)
     elif not solved and table is not None and not search.out_of_time():
@@ -438,6 +495,53 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         collision_free=True if problem.scene is not None and search.best.converged else None,
         goal_errors=goal_errors,
     )
+
+
+_LOADED: list = []  # [True] once first_runs is loaded in this process
+_FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
+
+#: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
+#: turn it off to compare with the runs made one by one.
+FIRST_RUNS = True
+
+
+def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
+                setup_s: float, iterations: int, table_seeds: int) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_solve`'s stages 1-2 for one pose or position target (no scene, ``batch=1``, no ``table_offset``) up
+    to its guaranteed runs (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call
+    (:mod:`.first_runs`) in _solve's order and with its decisions: the Result _solve returns when one of them meets
+    the tolerances, None when none does; the seconds spent loading the compiled function (on a plan's first solve),
+    set-up rather than budget; and when none converged, the state _solve goes on from (runs made, their evaluations,
+    their errors, the best of them as an LMOutcome, the table entries run), else None."""
+    key = "position" if problem.target.rotation is None else "pose"
+    F, FT, sq = table.compiled_features(key)
+    buffers, args, params = lm.kernel_arguments(iterations)
+    q0 = problem.q0
+    n = problem.n
+    table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
+    lower, upper = plan._bounds
+    q_out = np.empty(n)
+    errors, g_out, zeros, best_q, best = plan._scratch
+    (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
+         table._gap(key), table.Q, F, FT, sq, table.weight, table_runs, *args, params, q_out, g_out, errors, best_q,
+         best), lm, table)
+    if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
+        b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
+        kept = LMOutcome(best_q.copy(), b_pos, b_rot if lm.oriented else None, False, int(b_it), int(b_ev), None,
+                         b_cost)
+        return None, loading, (runs, evaluations, errors[:runs].tolist(), kept, table_runs)
+    pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
+    if not (pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)):
+        return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
+    history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
+               "attempt_error": errors[:runs].copy()}
+    return Result(
+        q=q_out, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
+        evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0 - loading, history=history,
+        message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
+                "restart(s))",
+        method="memetic", setup_s=setup_s + loading), loading, None
 
 
 def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,

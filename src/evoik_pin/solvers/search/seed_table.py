@@ -66,10 +66,13 @@ class SeedTable:
         self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
+        self._transposed: dict = {}  # feature key -> compiled_features
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
                 self._gap(key)
+            for key in ("pose", "position"):
+                self.compiled_features(key)
 
     def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
         """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
@@ -111,7 +114,7 @@ class SeedTable:
             key, f = self.target_features([target])
             out = key, f[0]
         elif target.rotation is None:
-            out = "position", np.ascontiguousarray(target.position)
+            out = "position", np.array(target.position, dtype=float)  # our own (compiled callers fix its type)
         else:
             out = "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
         self._last = (target, out)
@@ -123,11 +126,7 @@ class SeedTable:
         (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
         if k <= 0:
             return
-        key, f = self.one_target_features(target)
-        F, sq = self._table_features(key)
-        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
-        d *= -2.0
-        d += sq
+        d = self.distances(*self.one_target_features(target))
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
@@ -141,6 +140,24 @@ class SeedTable:
             for i in part[d[part].argsort()]:
                 if i != first:
                     yield int(i)
+
+    def compiled_features(self, key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(features (size, d), the same transposed (d, size), squared norms (size,)) of one target kind, for the
+        compiled ranking (:mod:`.nearest`); built once."""
+        hit = self._transposed.get(key)
+        if hit is None:
+            F, sq = self._table_features(key)
+            hit = self._transposed[key] = (F, np.ascontiguousarray(F.T), sq)
+        return hit
+
+    def distances(self, key: str, f: np.ndarray) -> np.ndarray:
+        """The table's squared distances (size,) to features ``f`` (d,) of kind ``key`` (:meth:`one_target_features`)
+        less ``|f|^2`` (the same for every entry): what :meth:`ranked` sorts (memetic's first runs too)."""
+        F, sq = self._table_features(key)
+        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
+        d *= -2.0
+        d += sq
+        return d
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their

@@ -1,0 +1,63 @@
+"""The seed table's ranking for one target, compiled (numba): memetic's first runs (:mod:`.first_runs`) rank the
+table inside their one compiled call.
+
+:func:`table_distances` computes :meth:`~.seed_table.SeedTable.distances`'s formula, ``sq - 2 F f``, each entry's
+product summed in the features' order (the loop over the entries vectorizes without reordering any sum; no
+fastmath). NumPy's product goes through BLAS, whose summation order is its own, so a distance can differ from
+NumPy's in its last bits, and two entries' order only where their distances are within a few ulps of each other
+(tests/test_first_runs.py holds the rankings equal over thousands of targets). :func:`select_k` keeps the k smallest
+in one pass, in order, the lower index first between equal ones (``argmin``'s rule).
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+__all__ = ["select_k", "table_distances"]
+
+
+@njit(cache=True, nogil=True)
+def select_k(d, allowed, k, out):  # pragma: no cover - compiled
+    """Write into ``out[:m]`` the indices of the ``m = min(k, allowed entries)`` smallest of the distances ``d``
+    (N,), smallest first (ties: the lower index first); returns m. ``allowed``: (N,) bool, or (0,) for every
+    entry. ``out``: (>= k,) int64."""
+    N = d.shape[0]
+    if k <= 0:
+        return 0
+    masked = allowed.shape[0] == N
+    m = 0
+    thr = 0.0  # the k-th smallest so far, once there are k
+    for i in range(N):
+        if masked and not allowed[i]:
+            continue
+        v = d[i]
+        if m == k:
+            if not v < thr:  # the usual case: one predictable branch per entry
+                continue
+            pos = m - 1
+        else:
+            pos = m
+            m += 1
+        while pos > 0 and d[out[pos - 1]] > v:
+            out[pos] = out[pos - 1]
+            pos -= 1
+        out[pos] = i
+        if m == k:
+            thr = d[out[m - 1]]
+    return m
+
+
+@njit(cache=True, nogil=True)
+def table_distances(FT, sq, f, d):  # pragma: no cover - compiled
+    """The table's squared distances less ``|f|^2`` into ``d`` (N,): ``sq - 2 F f`` with FT (D, N) the table's
+    features transposed, sq (N,) their squared norms and f (D,) the target's features."""
+    D, N = FT.shape
+    f0 = f[0]
+    for i in range(N):
+        d[i] = FT[0, i] * f0
+    for j in range(1, D):
+        fj = f[j]
+        for i in range(N):
+            d[i] += FT[j, i] * fj
+    for i in range(N):
+        d[i] = d[i] * -2.0 + sq[i]
