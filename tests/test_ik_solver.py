@@ -297,3 +297,79 @@ def test_goal_sets_and_a_closed_form_tip_goal_take_the_fast_path_too(panda):
     p = puma.fk(np.array([0.3, -0.5, 0.8])).translation
     r = ek.IKSolver(puma, method="algebraic").solve([Position(puma.tip, p)])
     assert r.success and len(r.solutions) == 4 and np.linalg.norm(puma.fk(r.q).translation - p) <= 1e-6
+
+
+def _outcome(make):
+    """(the Target's position and rotation, or None; the error's type and message, or None) of ``make()``."""
+    try:
+        t = make()
+    except (TargetError, ConfigurationError) as exc:
+        return None, (type(exc), str(exc))
+    return (t.position.tolist(), None if t.rotation is None else t.rotation.tolist()), None
+
+
+BAD_POSES = {
+    "nan position": (0, 3, np.nan), "inf position": (1, 3, np.inf), "nan rotation": (0, 0, np.nan),
+    "inf rotation": (2, 1, -np.inf), "not a rotation": (0, 1, 0.3), "huge rotation entry": (1, 1, 1e300),
+    "beyond MAX_TARGET_NORM": (2, 3, 2e6), "huge position": (0, 3, 1e308), "bottom row": (3, 0, 0.5),
+    "nan bottom row": (3, 3, np.nan),
+}
+
+
+@pytest.mark.parametrize("bad", sorted(BAD_POSES))
+def test_pose_forms_get_the_checks_of_the_target_constructor(panda, cases, bad):
+    """SE3 and 4x4 poses, good or bad, give what Target's own checks give (the same position and rotation, or the
+    same error and message), and IKSolver.solve raises what the general path raises."""
+    i, j, value = BAD_POSES[bad]
+    H = cases[0][0].homogeneous.copy()
+    mirrored = H.copy()
+    mirrored[:3, 2] *= -1.0
+    H[i, j] = value
+    for pose in (H, mirrored):
+        reference = _outcome(lambda pose=pose: ek.Target(pose[:3, 3], pose[:3, :3]))
+        if pose[3].tolist() != [0.0, 0.0, 0.0, 1.0] and np.isfinite(pose[3]).all():
+            reference = _outcome(lambda pose=pose: (_ for _ in ()).throw(TargetError(
+                f"the bottom row of a 4 x 4 homogeneous pose must be [0 0 0 1], got {pose[3].tolist()}")))
+        assert _outcome(lambda pose=pose: ek.Target.coerce(pose)) == reference
+        if i < 3:  # an SE3 has no bottom row
+            se3 = pin.SE3(pose[:3, :3].copy(), pose[:3, 3].copy())
+            assert _outcome(lambda se3=se3: ek.Target.coerce(se3)) == reference
+        solver = ek.IKSolver(panda, **BUDGET)
+        by_solver = _outcome(lambda pose=pose: solver.solve(pose, seed=1) and ek.Target.coerce(pose))
+        by_general = _outcome(lambda pose=pose: general(panda, pose, seed=1, **BUDGET) and ek.Target.coerce(pose))
+        assert by_solver == by_general
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.floats(-10.0, 1.0), st.booleans(), st.floats(-7.0, 7.0))
+def test_property_coerce_of_a_pose_is_the_constructors_verdict(seed, log_eps, mirror, log_norm):
+    """Target.coerce of an SE3 or a 4x4 pose accepts and refuses exactly what Target(position, rotation) does, with
+    the same message, and keeps the same numbers."""
+    rng = np.random.default_rng(seed)
+    R = pin.SE3.Random().rotation @ np.diag([1.0, 1.0, -1.0 if mirror else 1.0])
+    R = R + 10.0**log_eps * rng.standard_normal((3, 3))
+    p = rng.standard_normal(3)
+    p *= 10.0**log_norm / np.linalg.norm(p)
+    H = np.eye(4)
+    H[:3, :3], H[:3, 3] = R, p
+    reference = _outcome(lambda: ek.Target(p.copy(), R.copy()))
+    assert _outcome(lambda: ek.Target.coerce(H)) == reference
+    assert _outcome(lambda: ek.Target.coerce(pin.SE3(R, p))) == reference
+
+
+@pytest.mark.parametrize("q0", [np.zeros(3), np.full(7, np.nan), np.full(7, np.inf), [0.0] * 6 + [-np.inf],
+                                np.zeros((1, 7)), "abc", [1e308] * 7, [0.1] * 7, np.arange(7), [True] * 7])
+def test_q0_gets_the_checks_of_the_general_path(panda, cases, q0):
+    """A q0 of the wrong shape, with NaN or inf, of huge finite entries (their sum overflows), a list, integers:
+    the solver's verdict and answer are the general path's."""
+    T = cases[0][0]
+    solver = ek.IKSolver(panda, **BUDGET)
+
+    def run(solve):
+        try:
+            r = solve()
+        except (ConfigurationError, TargetError, ValueError) as exc:
+            return type(exc), str(exc)
+        return r.q.tolist(), r.message.split(" (")[0]
+
+    assert run(lambda: solver.solve(T, q0, seed=3)) == run(lambda: general(panda, T, seed=3, q0=q0, **BUDGET))
