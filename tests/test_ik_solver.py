@@ -325,6 +325,7 @@ def test_pose_forms_get_the_checks_of_the_target_constructor(panda, cases, bad):
     mirrored = H.copy()
     mirrored[:3, 2] *= -1.0
     H[i, j] = value
+    solver = ek.IKSolver(panda, **BUDGET)
     for pose in (H, mirrored):
         reference = _outcome(lambda pose=pose: ek.Target(pose[:3, 3], pose[:3, :3]))
         if pose[3].tolist() != [0.0, 0.0, 0.0, 1.0] and np.isfinite(pose[3]).all():
@@ -334,7 +335,6 @@ def test_pose_forms_get_the_checks_of_the_target_constructor(panda, cases, bad):
         if i < 3:  # an SE3 has no bottom row
             se3 = pin.SE3(pose[:3, :3].copy(), pose[:3, 3].copy())
             assert _outcome(lambda se3=se3: ek.Target.coerce(se3)) == reference
-        solver = ek.IKSolver(panda, **BUDGET)
         by_solver = _outcome(lambda pose=pose: solver.solve(pose, seed=1) and ek.Target.coerce(pose))
         by_general = _outcome(lambda pose=pose: general(panda, pose, seed=1, **BUDGET) and ek.Target.coerce(pose))
         assert by_solver == by_general

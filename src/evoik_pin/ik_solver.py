@@ -78,6 +78,7 @@ class IKSolver:
         self._problem_kw = problem_kw = split_options(options)
         # the template: every problem option checked once (a goal list's problems are made from the same options)
         self._template = IKProblem(robot, Target(np.zeros(3)), **problem_kw)
+        self._q_shape = (robot.n,)
         self._q0 = None if q0 is None else self._checked_q0(q0)
         self._objective = problem_kw.get("objective")  # a custom objective serves every target; None: the default
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
@@ -92,6 +93,12 @@ class IKSolver:
             self._plan = MemeticPlan(robot, **options)
 
     def _checked_q0(self, q0) -> np.ndarray:
+        arr = np.asarray(q0, dtype=float)
+        # Robot.check_q's verdict for the usual q0 in a fraction of its microsecond: of shape (n,) and a finite sum
+        # (a NaN or inf makes the sum NaN or inf); anything else, huge finite entries whose sum overflows too, gets
+        # check_q itself, which accepts or raises its error
+        if arr.shape == self._q_shape and math.isfinite(sum(arr.tolist())):
+            return arr
         try:
             return self.robot.check_q(q0)
         except ConfigurationError as exc:

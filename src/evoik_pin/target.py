@@ -59,22 +59,40 @@ def _rotation(value) -> np.ndarray:
         raise TargetError(f"target rotation must be a 3 x 3 matrix of numbers, got {value!r}") from exc
     if R.shape != (3, 3):
         raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
-    v = R.reshape(9).tolist()
-    # Frobenius norm sqrt(3) for a rotation; math.hypot gives it without an overflow warning for huge entries (a
-    # product would), so the products below only ever see entries of a near-rotation
-    if not math.hypot(*v) <= 2.0:
+    if not _is_rotation(R.reshape(9).tolist()):
+        # a NaN or inf fails the test's first line; which of the two it was is looked up only here
         if not np.isfinite(R).all():
             raise TargetError("target rotation contains NaN or inf")
         raise TargetError(_NOT_ROTATION)
+    return R
+
+
+def _is_rotation(v: list) -> bool:
+    """Whether the 9 Python floats ``v`` (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and
+    det R >= 0 (False for NaN or inf)."""
+    # Frobenius norm sqrt(3) for a rotation; math.hypot gives it without an overflow warning for huge entries (a
+    # product would), so the products below only ever see entries of a near-rotation
+    if not math.hypot(*v) <= 2.0:
+        return False
     # det R and R^T R - I written out on Python floats: numpy's per-element indexing and small products cost
     # about 3 us, which is a tenth of a solve
     a, b, c, d, e, f, g, h, i = v
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     n0, n1, n2 = a * a + d * d + g * g - 1.0, b * b + e * e + h * h - 1.0, c * c + f * f + i * i - 1.0
     m01, m02, m12 = a * b + d * e + g * h, a * c + d * f + g * i, b * c + e * f + h * i
-    if n0 * n0 + n1 * n1 + n2 * n2 + 2.0 * (m01 * m01 + m02 * m02 + m12 * m12) > 1e-12 or det < 0:
-        raise TargetError(_NOT_ROTATION)  # |R^T R - I|_F <= 1e-6 and det R = +1
-    return R
+    return not (n0 * n0 + n1 * n1 + n2 * n2 + 2.0 * (m01 * m01 + m02 * m02 + m12 * m12) > 1e-12 or det < 0)
+
+
+def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
+    """A ``cls`` (Target) of the float arrays ``position`` (3,) m and ``rotation`` (3, 3) when they pass
+    :class:`Target`'s checks, built without its ``__post_init__`` (the checks made here on Python floats, about 1 us
+    in place of 3); None when they do not: the caller then builds the Target the slow way, which raises the error
+    with its message."""
+    if not (math.hypot(*position.tolist()) <= MAX_TARGET_NORM and _is_rotation(rotation.reshape(9).tolist())):
+        return None
+    t = object.__new__(cls)
+    t.__dict__.update(position=position, rotation=rotation, planar=False, yaw=None)  # frozen: no __setattr__
+    return t
 
 
 @dataclass(frozen=True)
@@ -123,7 +141,8 @@ class Target:
         if isinstance(target, Target):
             return target
         if isinstance(target, pin.SE3):
-            return cls(position=np.array(target.translation), rotation=np.array(target.rotation))
+            position, rotation = np.array(target.translation), np.array(target.rotation)
+            return _checked_pose(cls, position, rotation) or cls(position=position, rotation=rotation)
         try:
             arr = np.asarray(target, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -132,10 +151,14 @@ class Target:
                 f"got {target!r}"
             ) from exc
         if arr.shape == (4, 4):
-            if np.isfinite(arr[3]).all() and np.abs(arr[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9:
-                raise TargetError(f"the bottom row of a 4 x 4 homogeneous pose must be [0 0 0 1], got "
-                                  f"{arr[3].tolist()}")
-            return cls(position=arr[:3, 3], rotation=arr[:3, :3])
+            a, b, c, d = arr[3].tolist()
+            # the bottom row on Python floats first (a NaN fails every comparison: numpy's test then decides)
+            if not (abs(a) <= 1e-9 and abs(b) <= 1e-9 and abs(c) <= 1e-9 and abs(d - 1.0) <= 1e-9):
+                if np.isfinite(arr[3]).all() and np.abs(arr[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9:
+                    raise TargetError(f"the bottom row of a 4 x 4 homogeneous pose must be [0 0 0 1], got "
+                                      f"{arr[3].tolist()}")
+            position, rotation = arr[:3, 3], arr[:3, :3]
+            return _checked_pose(cls, position, rotation) or cls(position=position, rotation=rotation)
         if arr.ndim == 1 and arr.shape[0] == 3:
             return cls(position=arr)
         raise TargetError(
