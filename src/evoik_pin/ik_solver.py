@@ -91,6 +91,7 @@ class IKSolver:
             from .solvers.search.memetic import MemeticPlan
 
             self._plan = MemeticPlan(robot, **options)
+        self._plain = self._plan is not None and not self._polish  # solve may call the plan directly
 
     def _checked_q0(self, q0) -> np.ndarray:
         arr = np.asarray(q0, dtype=float)
@@ -113,12 +114,12 @@ class IKSolver:
             return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
         target = Target.coerce(target)
         p = object.__new__(IKProblem)
-        p.__dict__.update(self._template.__dict__)
-        p.target = target
+        template = self._template
         objective = self._objective
-        p.objective = default_objective(target, p.orientation_weight, p.pose_metric) if objective is None else objective
-        p.q0 = self._q0 if q0 is None else self._checked_q0(q0)
-        p.evaluations = 0
+        # the template's fields with this call's: one dict built, no attribute set one by one
+        p.__dict__ = {**template.__dict__, "target": target, "objective": default_objective(
+            target, template.orientation_weight, template.pose_metric) if objective is None else objective,
+            "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0}
         if self._target_box:
             p.lower, p.upper = target_box(self.robot, target, self.robot.lower, self.robot.upper)
         return p
@@ -129,6 +130,9 @@ class IKSolver:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
         problem = self.problem(target, q0)
+        if self._plain and problem.scene is None and problem.goals is None:
+            # what run does for such a problem, without its tests and calls (no polish, no goals' verdict, no scene)
+            return self._plan.solve(problem, _rng(seed))
         return self.run(problem, _rng(seed))
 
     def run(self, problem: IKProblem, rng) -> Result:
