@@ -230,7 +230,7 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     # the boundary checks alone (part of "target and problem"): the pose's and q0's
     t0 = time.perf_counter()
     for i in range(n):
-        robot.check_q(Qs[i])
+        solver._checked_q0(Qs[i])  # what IKSolver.problem runs on a q0
     q0_check = (time.perf_counter() - t0) / n * 1e6
     stages = {
         "target and problem": us["problem"],
@@ -300,7 +300,7 @@ def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str,
             lines.append(f"| {k} | {v:.1f} | {what[k]} |")
         lines.append(f"| (of the first: Target.coerce) | {p['target_check_us']:.1f} | the boundary checks of a "
                      "pose: finite, a rotation matrix, within reach of the base |")
-        lines.append(f"| (of the first: q0's check) | {p['q0_check_us']:.1f} | Robot.check_q: shape and finite "
+        lines.append(f"| (of the first: q0's check) | {p['q0_check_us']:.1f} | IKSolver's q0 check: shape and finite "
                      "(timed alone) |")
     if talos:
         lines += ["", f"Talos, floating base, four pose goals (both soles, both wrists; bench_goals_scale.py's "
