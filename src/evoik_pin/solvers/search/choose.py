@@ -49,6 +49,7 @@ from ..lm.layout import (
     kernel_params,
     target_kind,
 )
+from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 from . import memetic as memetic_module
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
@@ -71,6 +72,9 @@ REFINE_COUNT = 4
 REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
+#: The compiled descent (prefer alone, :func:`_descend`): answers descended DESCEND_TRIAL steps each, of which the
+#: best DESCEND_FINAL go on for DESCEND_STEPS more.
+DESCEND_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS = 6, 5, 2, 40
 #: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
 NEAR_SCALES = (0.1, 0.25, 0.5)
@@ -216,6 +220,57 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
             if scale < 1e-3:
                 break
     return q, f, evaluations
+
+
+def _descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
+    """The compiled descent's mode (:mod:`..lm.nullspace`) for prefer="nearest" | "manipulability" alone (no
+    further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
+    if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
+        return None
+    return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+
+
+def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
+             finish: float | None) -> tuple[list, int]:
+    """prefer's answers (cost, q, variant), best first, taken along their self-motion manifolds by the compiled
+    descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` distinct ones
+    :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps more
+    (unless the clock says ``finish``). A descended answer in collision keeps its start. Returns the refined
+    answers and the kinematics evaluations."""
+    descend = nullspace_kernel()["descend_batch"]
+    target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else np.ascontiguousarray(q0, dtype=float)
+    picked, seen = [], []
+    for cost, q, i in answers:
+        if len(picked) >= DESCEND_COUNT:
+            break
+        if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
+            continue
+        seen.append(q)
+        picked.append((cost, q, i))
+    evaluations = 0
+
+    def run(batch, steps):
+        nonlocal evaluations
+        out = []
+        for i in sorted({a[2] for a in batch}):
+            mine = [a for a in batch if a[2] == i]
+            Q = np.array([a[1] for a in mine])
+            Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
+            evaluations += int(descend(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
+                                       MAX_REFINE_STEP, Q_out, f))
+            for a, q_new in zip(mine, Q_out, strict=True):
+                if scene is not None and scene.in_collision(q_new, problem.margin):
+                    out.append(a)
+                    continue
+                if q0 is not None:
+                    q_new = nearest_turn(q_new, q0, problem.lower, problem.upper, wrap)
+                out.append((criterion.cost(q_new), q_new, i))
+        return sorted(out, key=lambda a: a[0])
+
+    picked = run(picked, DESCEND_TRIAL)
+    if finish is None or time.perf_counter() < finish:
+        picked = run(picked[:DESCEND_FINAL], DESCEND_STEPS) + picked[DESCEND_FINAL:]
+    return picked, evaluations
 
 
 def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
@@ -372,6 +427,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                           problem.scene, problem.margin)
     if table is not None and goals:
         table.prepare_goals(problem.goals)
+    if prefer != "first" and engine == "compiled":
+        nullspace_kernel()  # compiled or loaded before the clock starts
     t0 = time.perf_counter()
     deadline = None if timeout is None else t0 + timeout
     collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
@@ -533,7 +590,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 cost_r = criterion.cost(q_r)
             return cost_r, q_r, i
 
-        if criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
+        mode = _descent_mode(prefer, criterion, variants)
+        if redundant and mode is not None:  # compiled: a first pass over more answers, then the best further
+            refined, ev = _descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish)
+            evaluations += ev
+        elif criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
             refined = [improve(*a, TRIAL_STEPS) for a in refined]
             refined = [improve(*min(refined, key=lambda a: a[0]), REFINE_STEPS)]
         cost, q, i = min(refined, key=lambda a: a[0])
