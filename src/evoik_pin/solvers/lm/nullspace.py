@@ -13,7 +13,8 @@ which picking among a few discrete LM answers only approximates. :func:`descend_
    ``MANIP_STEP`` rad first for manipulability), shortened to stay inside the box and within ``max_step``;
 3. Gauss-Newton steps from there until every goal is within its tolerances again (at most ``restore``);
 4. the step is kept only when step 3 met every goal and the criterion improved (then t doubles, up to 1 for
-   nearness); otherwise t halves, and the descent ends when t is below 1e-3 of its start.
+   nearness); otherwise t halves. The descent ends when t is below 1e-3 of its start or a kept step was shorter
+   than :data:`MIN_STEP`.
 
 So the criterion never gets worse and every kept configuration meets every goal (the kernel's own test,
 :func:`.kernel.within`). About 3-5 kinematics evaluations per step (1 us each for Panda): tens of steps on a few
@@ -41,6 +42,8 @@ MODE_NEAREST, MODE_MANIPULABILITY = 0, 1
 MANIP_STEP = 0.2
 #: Forward-difference step (rad or m) of the manipulability gradient.
 MANIP_H = 1e-6
+#: A kept step shorter than this (rad or m) ends the descent.
+MIN_STEP = 1e-9
 #: A joint closer than this to a bound (rad or m) counts as on it.
 ON_BOUND = 1e-12
 
@@ -233,6 +236,8 @@ def _descend(ws, JJ, p, q_start, q0, mode, parent, FR, Fp, rev, index, scale, of
             f = f_new
             have_v = False
             t = min(2.0 * t, 1.0) if mode == MODE_NEAREST else 2.0 * t
+            if s * norm < MIN_STEP:  # converged: further steps would not move q beyond the goals' own accuracy
+                break
         else:
             t *= 0.5
             if t < 1e-3 * t0:

@@ -10,19 +10,25 @@
   that came nearest, sharing the time left.
 * **prefer**: ``"first"`` stops at the first answer (memetic's behaviour); ``"nearest"`` and ``"manipulability"``
   keep collecting answers for :data:`COLLECT_SHARE` of the budget (LM from ``q0`` first, then the table's
-  entries nearest each variant, then uniform random starts), then refine the best :data:`REFINE_COUNT` of them in
-  the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain; a few steps each, then
-  the rest of the time for the best) and return the best.
+  entries nearest each variant, every other start drawn around q0 for "nearest", then uniform random starts), then
+  take the best of them along the goals' self-motion manifold and return the best. prefer acting alone on the
+  compiled engine: the compiled descent (:mod:`..lm.nullspace`, :func:`_descend`: projected criterion steps, each
+  restored onto the goals by Gauss-Newton and kept only when every goal is met and the criterion improved; a few
+  steps for each of the best :data:`DESCEND_COUNT`, then rounds for the best two while the clock allows); with
+  further preferences (or the Python engine): :func:`refine`, the same step in Python, on the best
+  :data:`REFINE_COUNT`.
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
   box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
 * **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
   own answer is refined alone (:func:`evoik_pin.api._solve_choosing`), so they never cost success.
 
 Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
-the answers LM finds from random starts lie anywhere on the self-motion manifold, and a few projected steps take
-the best of them to the local optimum of the criterion (measured in ``scripts/bench_goal_kinds_prefer.py``: the
-refinement is what makes prefer="nearest" beat TRAC-IK's 5 ms Distance within 1 ms); on a non-redundant arm (UR10
-on a pose) the null space is empty and only the ranking of the distinct answers (at most 8 branches) acts.
+the answers LM finds from random starts lie anywhere on the self-motion manifold, and projected steps take the best
+of them to the local optimum of the criterion on their branch (measured in ``scripts/bench_goal_kinds_prefer.py``:
+the Python refinement, 30 us a step, got a few steps within 0.7 ms, and Panda's answer was no farther than TRAC-IK's
+5 ms Distance's on 80-89 % of the targets; the compiled descent, 1-2 us a step, converges on several answers and
+reaches 95-97 %, the misses being branches the collection did not find); on a non-redundant arm (UR10 on a pose)
+the null space is empty and only the ranking of the distinct answers (at most 8 branches) acts.
 """
 
 from __future__ import annotations
@@ -72,12 +78,18 @@ REFINE_COUNT = 4
 REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
-#: The compiled descent (prefer alone, :func:`_descend`): answers descended DESCEND_TRIAL steps each, of which the
-#: best DESCEND_FINAL go on for DESCEND_STEPS more.
-DESCEND_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS = 6, 5, 2, 40
+#: The compiled descent (prefer alone, :func:`_descend`): the best DESCEND_COUNT distinct answers (MANIP_COUNT for
+#: manipulability, whose gradient costs n kinematics evaluations a step) descended DESCEND_TRIAL steps each, of which
+#: the best DESCEND_FINAL go on in rounds of DESCEND_STEPS steps while the clock allows (DESCEND_ROUNDS at most);
+#: steps of DESCEND_MAX_STEP (rad or m) at most (measured: 0.5 converges more slowly, 2 lands on worse branches
+#: more often).
+DESCEND_COUNT, MANIP_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 4, 2, 10, 4
+DESCEND_MAX_STEP = 1.0
 #: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
 NEAR_SCALES = (0.1, 0.25, 0.5)
+#: Starts around q0 drawn at once (a multiple of len(NEAR_SCALES)).
+AROUND_BLOCK = 24
 #: LM runs per kernel call while prefer collects answers, and their steps at most (None: memetic's iterations).
 COLLECT_BATCH = 16
 COLLECT_ITERATIONS = None
@@ -233,20 +245,21 @@ def _descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
 def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
              finish: float | None) -> tuple[list, int]:
     """prefer's answers (cost, q, variant), best first, taken along their self-motion manifolds by the compiled
-    descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` distinct ones
-    :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps more
-    (unless the clock says ``finish``). A descended answer in collision keeps its start. Returns the refined
-    answers and the kinematics evaluations."""
+    descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct
+    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps
+    more a round, in rounds while the clock allows (until ``finish``) and they move. A descended answer in
+    collision keeps its start. Returns the refined answers, best first, and the kinematics evaluations."""
     descend = nullspace_kernel()["descend_batch"]
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else np.ascontiguousarray(q0, dtype=float)
-    picked, seen = [], []
-    for cost, q, i in answers:
-        if len(picked) >= DESCEND_COUNT:
+    picked = []
+    Q = np.array([a[1] for a in answers])
+    free = np.ones(len(answers), dtype=bool)  # not within 1e-3 of an answer picked before
+    for k in range(len(answers)):
+        if len(picked) >= (DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT):
             break
-        if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
-            continue
-        seen.append(q)
-        picked.append((cost, q, i))
+        if free[k]:
+            picked.append(answers[k])
+            free &= np.einsum("ij,ij->i", Q - Q[k], Q - Q[k]) >= 1e-6
     evaluations = 0
 
     def run(batch, steps):
@@ -257,7 +270,7 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
             Q = np.array([a[1] for a in mine])
             Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
             evaluations += int(descend(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
-                                       MAX_REFINE_STEP, Q_out, f))
+                                       DESCEND_MAX_STEP, Q_out, f))
             for a, q_new in zip(mine, Q_out, strict=True):
                 if scene is not None and scene.in_collision(q_new, problem.margin):
                     out.append(a)
@@ -268,8 +281,13 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
         return sorted(out, key=lambda a: a[0])
 
     picked = run(picked, DESCEND_TRIAL)
-    if finish is None or time.perf_counter() < finish:
-        picked = run(picked[:DESCEND_FINAL], DESCEND_STEPS) + picked[DESCEND_FINAL:]
+    for _ in range(DESCEND_ROUNDS):
+        if finish is not None and time.perf_counter() >= finish:
+            break
+        before = [a[0] for a in picked[:DESCEND_FINAL]]
+        picked = sorted(run(picked[:DESCEND_FINAL], DESCEND_STEPS) + picked[DESCEND_FINAL:], key=lambda a: a[0])
+        if [a[0] for a in picked[:DESCEND_FINAL]] == before:  # converged
+            break
     return picked, evaluations
 
 
@@ -338,9 +356,12 @@ def _around(starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, e
     runs out, uniform random starts take its place when ``endless`` (a clock bounds the search), else the
     interleaving ends with it."""
     half = np.minimum(0.5 * (upper - lower), np.pi)
+    scales = np.resize(np.asarray(NEAR_SCALES, dtype=float), AROUND_BLOCK)[:, None] * half
+    near = ()
     for k in itertools.count():
-        s = NEAR_SCALES[k % len(NEAR_SCALES)]
-        yield np.minimum(np.maximum(q0 + rng.normal(size=q0.shape) * s * half, lower), upper)
+        if k % AROUND_BLOCK == 0:  # a block at a time: one draw per start cost as much as a short LM run
+            near = np.minimum(np.maximum(q0 + rng.normal(size=(AROUND_BLOCK, q0.shape[0])) * scales, lower), upper)
+        yield near[k % AROUND_BLOCK]
         nxt = next(starts, None)
         if nxt is None:
             if not endless:
