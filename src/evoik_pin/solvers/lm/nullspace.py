@@ -128,9 +128,11 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
         if spec[g, G_WEIGHT] != 1.0:
             weighted = True
     m = ws.E.shape[0]
-    q, Rj, pj, Z, O, Rg, pg, tg, e, ge = ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge
-    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2, ws.en,
-                                                    ws.ge2)
+    # the kept configuration's kinematics buffers and the candidate's, traded when a step is kept
+    cur = (ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge)
+    cand = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2, ws.en, ws.ge2)
+    q, Rj, pj, Z, O, Rg, pg, tg, e, ge = cur
+    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = cand
     x, Jx, J, rv, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.rv, ws.E, ws.W, ws.A, ws.Bm, ws.M
     L, y, rhs, v, dq, held = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.held
     if coupled(index, scale, offset, n):  # left as it is (see above): a criterion of inf says so
@@ -151,6 +153,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
     have_v = False
     have_prev = False  # q_prev, p_prev: the last kept step's start and its direction (the secant step's data)
     for _ in range(iterations):
+        q, Rj, pj, Z, O, Rg, pg, tg, e, ge = cur
+        qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = cand
         if not have_v:
             # the descent direction v at q, then the task Jacobian at q (the gradient's probes overwrite the
             # candidate's buffers only)
@@ -241,16 +245,7 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
             _copy(q, q_prev)
             _copy(p, p_prev)
             have_prev = True
-            q, qn = qn, q
-            Rj, Rj2 = Rj2, Rj
-            pj, pj2 = pj2, pj
-            Z, Z2 = Z2, Z
-            O, O2 = O2, O
-            Rg, Rg2 = Rg2, Rg
-            pg, pg2 = pg2, pg
-            tg, tg2 = tg2, tg
-            e, en = en, e
-            ge, ge2 = ge2, ge
+            cur, cand = cand, cur
             f = f_new
             have_v = False
             t = min(2.0 * t, 1.0) if mode == MODE_NEAREST else 2.0 * t
@@ -260,7 +255,7 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
             t *= 0.5
             if t < 1e-3 * t0:
                 break
-    _copy(q, q_out)
+    _copy(cur[0], q_out)
     f_out[i] = f
     return evaluations
 
@@ -269,15 +264,10 @@ def nullspace_kernel() -> dict:
     """:func:`descend_batch`, compiled (or loaded from numba's disk cache) on a one-joint robot, outside any time
     budget."""
     if not _KERNEL:
-        from .layout import GOAL_SIZE, KIND_POSE
+        from .engine import warmup_problem
 
-        tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
-                np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
-        spec = np.zeros((1, GOAL_SIZE))
-        spec[0, :5] = KIND_POSE, 0, 1.0, 1e-6, 1e-6
-        goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool), np.zeros((1, 1)))
-        box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
-        descend_batch(np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, np.zeros((1, 3)),
-                      np.eye(3)[None].copy(), 1, 1, 0.5, np.empty((1, 1)), np.empty(1))
+        tree, box, goals, pt, Rt = warmup_problem()
+        descend_batch(np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, pt, Rt, 1, 1, 0.5,
+                      np.empty((1, 1)), np.empty(1))
         _KERNEL["descend_batch"] = descend_batch
     return _KERNEL
