@@ -23,6 +23,7 @@ So the criterion never gets worse and every kept configuration meets every goal 
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
@@ -52,6 +53,24 @@ MIN_STEP = 1e-9
 ON_BOUND = 1e-12
 
 _KERNEL: dict = {}
+
+if "parent" in inspect.signature(task_jacobian.py_func).parameters:  # kinds whose rows need the joint poses
+
+    @njit(cache=True, nogil=True, inline="always")
+    def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
+                  B, E, parent, Rj, pj):
+        """:func:`.kernel.task_jacobian` at the configuration whose buffers these are."""
+        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
+                      rv, A, B, E, parent, Rj, pj)
+
+else:  # a kernel whose task Jacobian takes the frames' buffers only
+
+    @njit(cache=True, nogil=True, inline="always")
+    def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
+                  B, E, parent, Rj, pj):
+        """:func:`.kernel.task_jacobian` at the configuration whose buffers these are."""
+        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
+                      rv, A, B, E)
 
 
 @njit(cache=True, nogil=True)
@@ -169,8 +188,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
                                pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
                     v[k] = (-_criterion(mode, qn, q0, rev, support, pg2, Z2, O2, J, JJ) + f) / MANIP_H
                 evaluations += n
-            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                          rv, A, Bm, E)
+            _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
+                      A, Bm, E, parent, Rj, pj)
             # p: v projected on the null space of E, joints on a bound that p pushes outward held (twice: holding
             # one joint changes the others' motion)
             for k in range(n):
@@ -234,8 +253,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
                 break
             if _r == restore:
                 break
-            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg2, pg2, Z2, O2, tg2, en,
-                          Jx, J, rv, A, Bm, W)
+            _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg2, pg2, Z2, O2, tg2, en, Jx,
+                      J, rv, A, Bm, W, parent, Rj2, pj2)
             if not damped_solve(W, LAMBDA_MIN, en, L, y, dq):
                 break
             for k in range(n):
