@@ -380,3 +380,22 @@ def test_prefer_is_reproducible_without_a_clock(panda):
         a, b = (ev.solve(panda, T, q0=q0, prefer=prefer, seed=4, timeout=None, max_restarts=8) for _ in range(2))
         assert a.success
         np.testing.assert_array_equal(a.q, b.q)
+
+
+
+def test_descent_mode_skips_mimic_trees(panda):
+    """The compiled descent works on q as the physical joints: a tree with mimic joints keeps the Python refine."""
+    from types import SimpleNamespace
+
+    from urdf_helpers import mimic_3r
+
+    from evoik_pin.robot import load_robot
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
+    from evoik_pin.solvers.search.choose import _criterion, _descent_mode
+
+    for robot, expected in ((load_robot(mimic_3r(), tip="tool"), None), (panda, MODE_NEAREST)):
+        q = robot.random_configurations(1, np.random.default_rng(0))[0]
+        problem = ev.make_problem(robot, robot.fk(q), q0=q)[0]
+        criterion = _criterion(problem, "nearest", (), wrapping_joints(robot, robot.lower, robot.upper))
+        assert _descent_mode("nearest", criterion, [SimpleNamespace(lm=LevenbergMarquardt(problem))]) == expected

@@ -238,7 +238,16 @@ def _descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
     further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
     if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
         return None
+    lm = variants[0].lm
+    if lm._tree[4].shape[0] != lm.n or _mimic(lm):  # mimic joints: the descent leaves answers as they are
+        return None
     return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+
+
+def _mimic(lm: LevenbergMarquardt) -> bool:
+    """Whether the engine's tree couples physical joints to q (mimic joints; ``Robot.tree_constants``)."""
+    index, scale, offset = lm._tree[4:7]
+    return bool(np.any(index != np.arange(index.shape[0])) or np.any(scale != 1.0) or np.any(offset != 0.0))
 
 
 def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
