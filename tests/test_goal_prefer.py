@@ -308,3 +308,94 @@ def test_jacobian_world_unchecked_equals_jacobian():
                 fid = None if frame is None else robot.frame_id(frame)
                 assert np.allclose(robot.jacobian_world_unchecked(q, fid), robot.jacobian(q, "world", of=frame),
                                    atol=1e-12)
+
+
+# ---------------------------------------------------------------------- the compiled null-space descent
+def _answers(robot, problem, rng, k):
+    """k LM answers of the problem (every goal met) from uniform random starts."""
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+
+    lm = LevenbergMarquardt(problem)
+    out = []
+    while len(out) < k:
+        run = lm.run(rng.uniform(robot.lower, robot.upper), 100)
+        if run.converged:
+            out.append(run.q)
+    return lm, np.array(out)
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["nearest", "manipulability"]))
+def test_descent_never_worsens_the_criterion_and_keeps_the_goals(panda, seed, prefer):
+    from evoik_pin.solvers.lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
+
+    rng = np.random.default_rng(seed)
+    q_target, q0 = panda.random_configurations(2, rng)
+    T = panda.fk(q_target)
+    problem = ev.make_problem(panda, T, q0=q0)[0]
+    lm, Q = _answers(panda, problem, rng, 3)
+    mode = MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+    Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
+    nullspace_kernel()["descend_batch"](Q, q0, mode, *lm._args, 30, 4, 0.5, Q_out, f)
+
+    def criterion(q):  # the reference: NumPy distance, Pinocchio's Jacobian
+        if prefer == "nearest":
+            return float(np.sum((q - q0) ** 2))
+        J = panda.jacobian(q, "world")
+        return -float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+
+    for q_in, q_out, f_out in zip(Q, Q_out, f, strict=True):
+        assert criterion(q_out) <= criterion(q_in) + 1e-12
+        assert f_out == pytest.approx(criterion(q_out), rel=1e-9, abs=1e-12)
+        assert panda.within_bounds(q_out)
+        M = _pin_pose(panda, q_out)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+
+
+def test_nearest_no_farther_than_lm_from_q0(panda):
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+
+    rng = np.random.default_rng(11)
+    checked = 0
+    for i in range(12):
+        q, q0 = panda.random_configurations(2, rng)
+        q0 = np.clip(q + rng.normal(size=panda.n) * 0.4, panda.lower, panda.upper)  # LM from q0 often converges
+        T = panda.fk(q)
+        run = LevenbergMarquardt(ev.make_problem(panda, T, q0=q0)[0]).run(q0, 100)
+        if not run.converged:
+            continue
+        checked += 1
+        near = ev.solve(panda, T, q0=q0, prefer="nearest", seed=i)
+        assert near.success, near.message
+        assert np.linalg.norm(near.q - q0) <= np.linalg.norm(run.q - q0) + 1e-9
+    assert checked >= 6
+
+
+def test_prefer_is_reproducible_without_a_clock(panda):
+    rng = np.random.default_rng(12)
+    q, q0 = panda.random_configurations(2, rng)
+    T = panda.fk(q)
+    for prefer in ("nearest", "manipulability"):
+        a, b = (ev.solve(panda, T, q0=q0, prefer=prefer, seed=4, timeout=None, max_restarts=8) for _ in range(2))
+        assert a.success
+        np.testing.assert_array_equal(a.q, b.q)
+
+
+
+def test_descent_mode_skips_mimic_trees(panda):
+    """The compiled descent works on q as the physical joints: a tree with mimic joints keeps the Python refine."""
+    from types import SimpleNamespace
+
+    from urdf_helpers import mimic_3r
+
+    from evoik_pin.robot import load_robot
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
+    from evoik_pin.solvers.search.choose import _criterion, _descent_mode
+
+    for robot, expected in ((load_robot(mimic_3r(), tip="tool"), None), (panda, MODE_NEAREST)):
+        q = robot.random_configurations(1, np.random.default_rng(0))[0]
+        problem = ev.make_problem(robot, robot.fk(q), q0=q)[0]
+        criterion = _criterion(problem, "nearest", (), wrapping_joints(robot, robot.lower, robot.upper))
+        assert _descent_mode("nearest", criterion, [SimpleNamespace(lm=LevenbergMarquardt(problem))]) == expected

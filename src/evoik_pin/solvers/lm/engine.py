@@ -83,6 +83,19 @@ ENGINES = ("compiled", "python")
 _KERNEL: dict = {}
 
 
+def warmup_problem() -> tuple:
+    """A one-joint tree (``Robot.tree_constants()``), its box and one pose goal on it (``GoalStack``'s arrays) with
+    its targets pt, Rt: (tree, box, goals, pt, Rt), the kernels' arguments of the types the engine passes
+    (C-contiguous float64 / int64 / bool arrays), for compiling or loading them outside any time budget."""
+    tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
+            np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
+    spec = np.zeros((1, GOAL_SIZE))
+    spec[0, :5] = KIND_POSE, 0, 1.0, 1e-6, 1e-6
+    goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool), np.zeros((1, 1)))
+    box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
+    return tree, box, goals, np.zeros((1, 3)), np.eye(3)[None].copy()
+
+
 def compiled_kernel() -> dict:
     """The kernel's entry points (``lm_run``, ``lm_run_starts``, ``lm_run_pairs``, and ``lm_run_buffers``,
     ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run.
@@ -95,15 +108,8 @@ def compiled_kernel() -> dict:
     if not _KERNEL:
         from . import kernel
 
-        # a one-joint tree (Robot.tree_constants()) and one pose goal on it (GoalStack)
-        tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
-                np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
-        spec = np.zeros((1, GOAL_SIZE))
-        spec[0, :5] = KIND_POSE, 0, 1.0, 1e-6, 1e-6
-        goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool), np.zeros((1, 1)))
-        box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
+        tree, box, goals, pt, Rt = warmup_problem()
         params = kernel_params(iterations=1)
-        pt, Rt = np.zeros((1, 3)), np.eye(3)[None].copy()
         # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
         kernel.lm_run(np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1), np.empty((1, 2)))
         stats = np.empty((1, STATS_SIZE))

@@ -10,19 +10,25 @@
   that came nearest, sharing the time left.
 * **prefer**: ``"first"`` stops at the first answer (memetic's behaviour); ``"nearest"`` and ``"manipulability"``
   keep collecting answers for :data:`COLLECT_SHARE` of the budget (LM from ``q0`` first, then the table's
-  entries nearest each variant, then uniform random starts), then refine the best :data:`REFINE_COUNT` of them in
-  the goals' null space (:func:`refine`: what a redundant arm's self-motion can still gain; a few steps each, then
-  the rest of the time for the best) and return the best.
+  entries nearest each variant, every other start drawn around q0 for "nearest", then uniform random starts), then
+  take the best of them along the goals' self-motion manifold and return the best. prefer acting alone on the
+  compiled engine: the compiled descent (:mod:`..lm.nullspace`, :func:`_descend`: projected criterion steps, each
+  restored onto the goals by Gauss-Newton and kept only when every goal is met and the criterion improved; a few
+  steps for each of the best :data:`DESCEND_COUNT`, then rounds for the best two while the clock allows); with
+  further preferences (or the Python engine): :func:`refine`, the same step in Python, on the best
+  :data:`REFINE_COUNT`.
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
   box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
 * **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
   own answer is refined alone (:func:`evoik_pin.api._solve_choosing`), so they never cost success.
 
 Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
-the answers LM finds from random starts lie anywhere on the self-motion manifold, and a few projected steps take
-the best of them to the local optimum of the criterion (measured in ``scripts/bench_goal_kinds_prefer.py``: the
-refinement is what makes prefer="nearest" beat TRAC-IK's 5 ms Distance within 1 ms); on a non-redundant arm (UR10
-on a pose) the null space is empty and only the ranking of the distinct answers (at most 8 branches) acts.
+the answers LM finds from random starts lie anywhere on the self-motion manifold, and projected steps take the best
+of them to the local optimum of the criterion on their branch (measured in ``scripts/bench_goal_kinds_prefer.py``:
+the Python refinement, 30 us a step, got a few steps within 0.7 ms, and Panda's answer was no farther than TRAC-IK's
+5 ms Distance's on 80-89 % of the targets; the compiled descent, 1-2 us a step, converges on several answers and
+reaches 95-97 %, the misses being branches the collection did not find); on a non-redundant arm (UR10 on a pose)
+the null space is empty and only the ranking of the distinct answers (at most 8 branches) acts.
 """
 
 from __future__ import annotations
@@ -49,6 +55,7 @@ from ..lm.layout import (
     kernel_params,
     target_kind,
 )
+from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 from . import memetic as memetic_module
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
@@ -71,9 +78,17 @@ REFINE_COUNT = 4
 REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
-#: prefer="nearest" draws every other start around q0, with these standard deviations (times each joint's
+#: The compiled descent (prefer alone, :func:`_descend`): the best DESCEND_COUNT distinct answers (MANIP_COUNT for
+#: manipulability, whose gradient costs n kinematics evaluations a step) descended DESCEND_TRIAL steps each, of which
+#: the best DESCEND_FINAL go on in rounds of DESCEND_STEPS steps while the clock allows (DESCEND_ROUNDS at most);
+#: steps of DESCEND_MAX_STEP (rad or m) at most (measured: 0.5 converges more slowly, 2 lands on worse branches
+#: more often).
+DESCEND_COUNT, MANIP_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 4, 2, 10, 4
+DESCEND_MAX_STEP = 1.0
+#: prefer="nearest" draws one start in NEAR_EVERY around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
 NEAR_SCALES = (0.1, 0.25, 0.5)
+NEAR_EVERY = 2
 #: LM runs per kernel call while prefer collects answers, and their steps at most (None: memetic's iterations).
 COLLECT_BATCH = 16
 COLLECT_ITERATIONS = None
@@ -218,6 +233,72 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
     return q, f, evaluations
 
 
+def _descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
+    """The compiled descent's mode (:mod:`..lm.nullspace`) for prefer="nearest" | "manipulability" alone (no
+    further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
+    if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
+        return None
+    lm = variants[0].lm
+    if lm._tree[4].shape[0] != lm.n or _mimic(lm):  # mimic joints: the descent leaves answers as they are
+        return None
+    return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+
+
+def _mimic(lm: LevenbergMarquardt) -> bool:
+    """Whether the engine's tree couples physical joints to q (mimic joints; ``Robot.tree_constants``)."""
+    index, scale, offset = lm._tree[4:7]
+    return bool(np.any(index != np.arange(index.shape[0])) or np.any(scale != 1.0) or np.any(offset != 0.0))
+
+
+def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
+             finish: float | None) -> tuple[list, int]:
+    """prefer's answers (cost, q, variant), best first, taken along their self-motion manifolds by the compiled
+    descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct
+    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps
+    more a round, in rounds while the clock allows (until ``finish``) and they move. A descended answer in
+    collision keeps its start. Returns the refined answers, best first, and the kinematics evaluations."""
+    descend = nullspace_kernel()["descend_batch"]
+    target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else np.ascontiguousarray(q0, dtype=float)
+    picked = []
+    Q = np.array([a[1] for a in answers])
+    free = np.ones(len(answers), dtype=bool)  # not within 1e-3 of an answer picked before
+    for k in range(len(answers)):
+        if len(picked) >= (DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT):
+            break
+        if free[k]:
+            picked.append(answers[k])
+            free &= np.einsum("ij,ij->i", Q - Q[k], Q - Q[k]) >= 1e-6
+    evaluations = 0
+
+    def run(batch, steps):
+        nonlocal evaluations
+        out = []
+        for i in sorted({a[2] for a in batch}):
+            mine = [a for a in batch if a[2] == i]
+            Q = np.array([a[1] for a in mine])
+            Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
+            evaluations += int(descend(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
+                                       DESCEND_MAX_STEP, Q_out, f))
+            for a, q_new in zip(mine, Q_out, strict=True):
+                if scene is not None and scene.in_collision(q_new, problem.margin):
+                    out.append(a)
+                    continue
+                if q0 is not None:
+                    q_new = nearest_turn(q_new, q0, problem.lower, problem.upper, wrap)
+                out.append((criterion.cost(q_new), q_new, i))
+        return sorted(out, key=lambda a: a[0])
+
+    picked = run(picked, DESCEND_TRIAL)
+    for _ in range(DESCEND_ROUNDS):
+        if finish is not None and time.perf_counter() >= finish:
+            break
+        before = [a[0] for a in picked[:DESCEND_FINAL]]
+        picked = sorted(run(picked[:DESCEND_FINAL], DESCEND_STEPS) + picked[DESCEND_FINAL:], key=lambda a: a[0])
+        if [a[0] for a in picked[:DESCEND_FINAL]] == before:  # converged
+            break
+    return picked, evaluations
+
+
 def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
     """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
     robot = problem.robot
@@ -277,21 +358,42 @@ class _Variant:
         return self._lm
 
 
-def _around(starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, endless: bool):
-    """``starts`` interleaved with starts drawn around ``q0`` (normal, a standard deviation of
-    :data:`NEAR_SCALES` times each joint's half-range, at most pi, in turn; clipped into the box); once ``starts``
-    runs out, uniform random starts take its place when ``endless`` (a clock bounds the search), else the
-    interleaving ends with it."""
-    half = np.minimum(0.5 * (upper - lower), np.pi)
-    for k in itertools.count():
-        s = NEAR_SCALES[k % len(NEAR_SCALES)]
-        yield np.minimum(np.maximum(q0 + rng.normal(size=q0.shape) * s * half, lower), upper)
-        nxt = next(starts, None)
-        if nxt is None:
-            if not endless:
-                return
-            nxt = rng.uniform(lower, upper)
-        yield nxt
+class _Around:
+    """``starts`` with every :data:`NEAR_EVERY`-th start drawn around ``q0`` instead (normal, a standard deviation
+    of :data:`NEAR_SCALES` times each joint's half-range, at most pi, in turn; clipped into the box); once ``starts``
+    runs out, uniform random starts take its place when ``endless`` (a clock bounds the search), else the starts
+    end with it. Taken a batch at a time (:meth:`take`): drawn one by one, the starts cost as much Python time as
+    the LM runs took (measured)."""
+
+    def __init__(self, starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, endless: bool) -> None:
+        self.starts, self.rng, self.q0, self.lower, self.upper, self.endless = starts, rng, q0, lower, upper, endless
+        self.half = np.minimum(0.5 * (upper - lower), np.pi)
+        self.k = 0  # near starts drawn so far (the scale cycles with it)
+        self.done = False
+
+    def take(self, size: int) -> np.ndarray:
+        """Up to ``size`` starts (rows; none once the starts have ended)."""
+        n = self.q0.shape[0]
+        if self.done or size <= 0:
+            return np.empty((0, n))
+        m = -(-size // NEAR_EVERY)  # near q0: every NEAR_EVERY-th, the first included
+        scales = np.take(NEAR_SCALES, np.arange(self.k, self.k + m) % len(NEAR_SCALES))[:, None] * self.half
+        self.k += m
+        near = np.minimum(np.maximum(self.q0 + self.rng.normal(size=(m, n)) * scales, self.lower), self.upper)
+        rest = list(itertools.islice(self.starts, size - m))
+        if len(rest) < size - m:
+            if self.endless:
+                rest += list(self.rng.uniform(self.lower, self.upper, size=(size - m - len(rest), n)))
+            else:
+                self.done = True
+        return np.concatenate([near, np.array(rest).reshape(-1, n)])
+
+
+def _take(starts, size: int, n: int) -> np.ndarray:
+    """Up to ``size`` starts (rows) from a start iterator or an :class:`_Around`."""
+    if isinstance(starts, _Around):
+        return starts.take(size)
+    return np.array(list(itertools.islice(starts, size))).reshape(-1, n)
 
 
 def _lazy_rest(table, d: np.ndarray, first: int, k: int):
@@ -372,6 +474,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                           problem.scene, problem.margin)
     if table is not None and goals:
         table.prepare_goals(problem.goals)
+    if prefer != "first" and engine == "compiled":
+        nullspace_kernel()  # compiled or loaded before the clock starts
     t0 = time.perf_counter()
     deadline = None if timeout is None else t0 + timeout
     collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
@@ -460,7 +564,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             limit = finish
         if prefer == "nearest":  # every other start near q0: answers near q0 come from there
             for v in variants:
-                v.starts = _around(v.starts, rng, q0, problem.lower, problem.upper, deadline is not None)
+                v.starts = _Around(v.starts, rng, q0, problem.lower, problem.upper, deadline is not None)
         per_run = 0.0  # seconds per LM run of the last batch
         while True:
             if limit is not None and time.perf_counter() >= (limit if answers else deadline):
@@ -471,11 +575,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 if limit is not None and per_run > 0.0:  # a batch that ends near the limit, not far past it
                     left = (limit if answers else deadline) - time.perf_counter()
                     size = int(min(COLLECT_BATCH, max(1.0, left / per_run)))
-                chunk = list(itertools.islice(variants[i].starts, size))
-                if chunk:
+                chunk = _take(variants[i].starts, size, robot.n)
+                if chunk.shape[0]:
                     progressed = True
                     t_batch = time.perf_counter()
-                    run_batch(i, np.array(chunk))
+                    run_batch(i, chunk)
                     per_run = (time.perf_counter() - t_batch) / len(chunk)
                     if limit is not None and time.perf_counter() >= (limit if answers else deadline):
                         break
@@ -533,7 +637,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 cost_r = criterion.cost(q_r)
             return cost_r, q_r, i
 
-        if criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
+        mode = _descent_mode(prefer, criterion, variants)
+        if redundant and mode is not None:  # compiled: a first pass over more answers, then the best further
+            refined, ev = _descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish)
+            evaluations += ev
+        elif criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
             refined = [improve(*a, TRIAL_STEPS) for a in refined]
             refined = [improve(*min(refined, key=lambda a: a[0]), REFINE_STEPS)]
         cost, q, i = min(refined, key=lambda a: a[0])
