@@ -146,8 +146,8 @@ def goal_error(kind, R, p, pt, Rt, M, t, e):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj, pj, Z,
-               O, Rg, pg, tg, M, e, ge):
+def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
+               pj, Z, O, Rg, pg, tg, M, e, ge):
     """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
     orientation error rad or 0) to ge (G, 2).
 
@@ -155,7 +155,9 @@ def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, wei
     values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
     its position seen from the target tg (G, 3), which :func:`task_jacobian` needs. M (3, 3) is scratch.
     ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass: a scaling inside the
-    goal loop, even skipped, costs a fifth of the whole evaluation).
+    goal loop, even skipped, costs a fifth of the whole evaluation). ``extra``: the stack may hold goals of the kinds
+    after the first four (:mod:`.axes`'s, :mod:`.balance`'s); a constant False (:func:`lm_run_basic`) leaves their
+    branches out of the compiled code (:func:`lm_run_in` says why).
     """
     if mimic:
         expand(index, scale, offset, q, x)
@@ -167,12 +169,12 @@ def task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, wei
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
         R, p = Rg[g], pg[g]
-        if kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+        if extra and kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
             cg, pos, rot = beyond_frame_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g],
                                               R, p, M, tg[g], e[r:r + task_size(kind)])
         else:
             frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
-            if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # the kinds of .axes (tg[g], unused by them, as scratch)
+            if extra and KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # .axes's kinds (tg[g], unused by them, as scratch)
                 cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g],
                                           e[r:r + task_size(kind)])
             else:
@@ -233,8 +235,8 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 
 
 @njit(cache=True, nogil=True, inline="always", **BORROWING)
-def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-                  B, E, parent, Rj, pj):
+def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
+                  rv, A, B, E, parent, Rj, pj):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
     per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
     with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
@@ -242,13 +244,13 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, R
     its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
     :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
     parent (m,) and the joint poses Rj (m, 3, 3), pj (m, 3): for the kinds beyond one frame (:mod:`.balance`), which
-    start from their own physical Jacobian.
+    start from their own physical Jacobian. ``extra``: as :func:`task_error`'s.
     """
     n = J.shape[1]
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
-        if kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+        if extra and kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
             beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
                                   e[r:r + task_size(kind)], spec[g, G_WEIGHT], Jx, J, rv, A, B, E, r)
             continue
@@ -257,7 +259,7 @@ def task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, R
             fold(index, scale, Jx, J)
         else:
             frame_jacobian(rev, support[g], pg[g], Z, O, J)
-        if KIND_POSE_AXES <= kind <= KIND_LOOK_AT:
+        if extra and KIND_POSE_AXES <= kind <= KIND_LOOK_AT:
             axes_jacobian(kind, Rg[g], pg[g], J, pt[g], Rt[g], gaux[g], rv, A, B, E, r)
         else:
             goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
@@ -603,135 +605,169 @@ def _outcome(spec, ge, g_out):
     return pos, rot
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
+def extra_kinds(spec):
+    """True when the stack spec (G, GOAL_SIZE) holds a goal of the kinds after the first four (pose, position,
+    planar, planar with yaw): :mod:`.axes`'s (codes 4-9) or :mod:`.balance`'s (from ``KIND_BEYOND_FRAME``)."""
+    for g in range(spec.shape[0]):
+        if spec[g, G_KIND] >= KIND_POSE_AXES:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
-              Rt,
-              params, q_out, g_out):
+              Rt, params, q_out, g_out):
     """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` or :func:`carve` for these n
     joints, m physical joints, goals and task rows, and at least ``params[P_ITERATIONS]`` steps); the other arguments
-    and the result are :func:`lm_run`'s."""
-    n = q_start.shape[0]
-    mimic = coupled(index, scale, offset, n)
-    weighted = False
-    for g in range(spec.shape[0]):
-        if spec[g, G_WEIGHT] != 1.0:
-            weighted = True
-    m = ws.E.shape[0]
-    max_step = params[P_MAX_STEP]
-    window = int(params[P_STALL_WINDOW])
-    stall = params[P_STALL_RATIO] * params[P_STALL_RATIO]
-    finish = params[P_FINISH] != 0.0
-    max_it = int(params[P_ITERATIONS])
-    # the current configuration's buffers and the candidate's trade places when a step is accepted
-    q, Rj, pj, Z, O, Rg, pg, tg, e, ge = ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge
-    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2, ws.en,
-                                                    ws.ge2)
-    qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3 = (ws.qh, ws.Rj3, ws.pj3, ws.Z3, ws.O3, ws.Rg3, ws.pg3, ws.tg3, ws.eh,
-                                                    ws.ge3)
-    x, Jx, J, rv, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.rv, ws.E, ws.W, ws.A, ws.Bm, ws.M
-    L, y, rhs, v, dq, dfix, held, history = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.dfix, ws.held, ws.history
+    and the result are :func:`lm_run`'s.
 
-    into_box(q_start, box, any_wrap, q)
-    on_bound = False
-    for k in range(n):
-        if q[k] <= box[B_CLO, k] or q[k] >= box[B_CHI, k]:
-            on_bound = True
-    c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
-                   pj, Z, O,
-                   Rg, pg, tg, M, e, ge)
-    evaluations = 1
-    if within(spec, ge):
+    Runs :func:`lm_run_basic` when every goal is of the first four kinds, :func:`lm_run_all` otherwise: the same run
+    (:func:`_run`) compiled twice, the first without the branches of :func:`task_error` and :func:`task_jacobian`
+    for the later kinds. With those branches (inlined, behind calls, or in a loop of their own alike) LLVM compiles
+    the run's loops differently, and the single-pose chain case took 6-17 % longer (docs/BENCHMARKS.md,
+    scripts/bench_chain_kernel.py)."""
+    if extra_kinds(spec):
+        return lm_run_all(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                          gaux, pt, Rt, params, q_out, g_out)
+    return lm_run_basic(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                        gaux, pt, Rt, params, q_out, g_out)
+
+
+def _run(extra, name, doc):
+    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: the run compiled with ``extra`` (the stack may
+    hold goals of the later kinds, :func:`task_error`) a constant of its closure, which LLVM folds (inlining one
+    body into both instead took numba over 8 GB and 10 minutes). numba's disk cache keys closures by their cells'
+    contents: the two are cached apart."""
+
+    def run(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
+            params, q_out, g_out):
+        n = q_start.shape[0]
+        mimic = coupled(index, scale, offset, n)
+        weighted = False
+        for g in range(spec.shape[0]):
+            if spec[g, G_WEIGHT] != 1.0:
+                weighted = True
+        m = ws.E.shape[0]
+        max_step = params[P_MAX_STEP]
+        window = int(params[P_STALL_WINDOW])
+        stall = params[P_STALL_RATIO] * params[P_STALL_RATIO]
+        finish = params[P_FINISH] != 0.0
+        max_it = int(params[P_ITERATIONS])
+        # the current configuration's buffers and the candidate's trade places when a step is accepted
+        q, Rj, pj, Z, O, Rg, pg, tg, e, ge = ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge
+        qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2,
+                                                        ws.en, ws.ge2)
+        qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3 = (ws.qh, ws.Rj3, ws.pj3, ws.Z3, ws.O3, ws.Rg3, ws.pg3, ws.tg3,
+                                                        ws.eh, ws.ge3)
+        x, Jx, J, rv, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.rv, ws.E, ws.W, ws.A, ws.Bm, ws.M
+        L, y, rhs, v, dq, dfix, held, history = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.dfix, ws.held, ws.history
+
+        into_box(q_start, box, any_wrap, q)
+        on_bound = False
+        for k in range(n):
+            if q[k] <= box[B_CLO, k] or q[k] >= box[B_CHI, k]:
+                on_bound = True
+        c = task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt,
+                       Rt, Rj, pj, Z, O, Rg, pg, tg, M, e, ge)
+        evaluations = 1
+        if within(spec, ge):
+            _copy(q, q_out)
+            pos, rot = _outcome(spec, ge, g_out)
+            return pos, rot, True, 0, evaluations, c
+        lam = params[P_DAMPING]
+        have_E = False
+        history[0] = c
+        hlen = 1
+        it = 0
+        creeping = False  # the last accepted step did not halve |e| near the target: accelerate the next
+        converged = False
+        while it < max_it:
+            it += 1
+            if not have_E:
+                task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg,
+                              e, Jx, J, rv, A, Bm, E, parent, Rj, pj)
+                have_E = True
+            on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
+            if creeping and not (on_bound or on_bound_n):
+                # geodesic acceleration (ReferenceLM._geodesic): r'' from one extra FK at q + h v
+                for k in range(n):
+                    d = qn[k] - q[k]
+                    if any_wrap and box[B_WRAP, k] != 0.0:
+                        d = (d + math.pi) % TWO_PI - math.pi
+                    v[k] = d
+                    qh[k] = q[k] + GEO_H * d
+                task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, qh, x, spec, weighted, gR, gp, gaux,
+                           pt, Rt, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, M, eh, ge3)
+                evaluations += 1
+                for i in range(m):
+                    s = 0.0
+                    for k in range(n):
+                        s += E[i, k] * v[k]
+                    rhs[i] = (2.0 / GEO_H) * ((eh[i] - e[i]) / GEO_H - s)
+                if damped_solve(E, lam, rhs, L, y, dq):  # dq = -a
+                    a2 = 0.0
+                    v2 = 0.0
+                    for k in range(n):
+                        a2 += dq[k] * dq[k]
+                        v2 += v[k] * v[k]
+                    if 2.0 * math.sqrt(a2) <= GEO_ALPHA * math.sqrt(v2):
+                        for k in range(n):
+                            qh[k] = q[k] + v[k] - 0.5 * dq[k]
+                        into_box(qh, box, any_wrap, qn)
+            cn = task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp,
+                            gaux, pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+            evaluations += 1
+            if cn < c:
+                creeping = GEO_SLOW * c < cn < GEO_NEAR
+                q, qn = qn, q
+                Rj, Rj2 = Rj2, Rj
+                pj, pj2 = pj2, pj
+                Z, Z2 = Z2, Z
+                O, O2 = O2, O
+                Rg, Rg2 = Rg2, Rg
+                pg, pg2 = pg2, pg
+                tg, tg2 = tg2, tg
+                e, en = en, e
+                ge, ge2 = ge2, ge
+                on_bound, c = on_bound_n, cn
+                if within(spec, ge):
+                    converged = True
+                    break
+                have_E = False
+                lam = max(lam * SHRINK, LAMBDA_MIN)
+                history[hlen] = c
+                hlen += 1
+                if hlen > window and c > stall * history[hlen - 1 - window]:
+                    break
+            else:
+                lam *= GROW
+                if lam > LAMBDA_MAX:
+                    break
+        if converged and finish and c > FINISHED:
+            # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
+            task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e,
+                          Jx, J, rv, A, Bm, E, parent, Rj, pj)
+            lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
+            cn = task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp,
+                            gaux, pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+            it += 1
+            evaluations += 1
+            if cn < c:
+                q = qn
+                ge = ge2
+                c = cn
         _copy(q, q_out)
         pos, rot = _outcome(spec, ge, g_out)
-        return pos, rot, True, 0, evaluations, c
-    lam = params[P_DAMPING]
-    have_E = False
-    history[0] = c
-    hlen = 1
-    it = 0
-    creeping = False  # the last accepted step did not halve |e| near the target: accelerate the next
-    converged = False
-    while it < max_it:
-        it += 1
-        if not have_E:
-            task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                          rv, A, Bm, E, parent, Rj, pj)
-            have_E = True
-        on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
-        if creeping and not (on_bound or on_bound_n):
-            # geodesic acceleration (ReferenceLM._geodesic): r'' from one extra FK at q + h v
-            for k in range(n):
-                d = qn[k] - q[k]
-                if any_wrap and box[B_WRAP, k] != 0.0:
-                    d = (d + math.pi) % TWO_PI - math.pi
-                v[k] = d
-                qh[k] = q[k] + GEO_H * d
-            task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qh, x, spec, weighted, gR, gp, gaux, pt, Rt,
-                       Rj3,
-                       pj3, Z3, O3, Rg3, pg3, tg3, M, eh, ge3)
-            evaluations += 1
-            for i in range(m):
-                s = 0.0
-                for k in range(n):
-                    s += E[i, k] * v[k]
-                rhs[i] = (2.0 / GEO_H) * ((eh[i] - e[i]) / GEO_H - s)
-            if damped_solve(E, lam, rhs, L, y, dq):  # dq = -a
-                a2 = 0.0
-                v2 = 0.0
-                for k in range(n):
-                    a2 += dq[k] * dq[k]
-                    v2 += v[k] * v[k]
-                if 2.0 * math.sqrt(a2) <= GEO_ALPHA * math.sqrt(v2):
-                    for k in range(n):
-                        qh[k] = q[k] + v[k] - 0.5 * dq[k]
-                    into_box(qh, box, any_wrap, qn)
-        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
-                        Rj2,
-                        pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
-        evaluations += 1
-        if cn < c:
-            creeping = GEO_SLOW * c < cn < GEO_NEAR
-            q, qn = qn, q
-            Rj, Rj2 = Rj2, Rj
-            pj, pj2 = pj2, pj
-            Z, Z2 = Z2, Z
-            O, O2 = O2, O
-            Rg, Rg2 = Rg2, Rg
-            pg, pg2 = pg2, pg
-            tg, tg2 = tg2, tg
-            e, en = en, e
-            ge, ge2 = ge2, ge
-            on_bound, c = on_bound_n, cn
-            if within(spec, ge):
-                converged = True
-                break
-            have_E = False
-            lam = max(lam * SHRINK, LAMBDA_MIN)
-            history[hlen] = c
-            hlen += 1
-            if hlen > window and c > stall * history[hlen - 1 - window]:
-                break
-        else:
-            lam *= GROW
-            if lam > LAMBDA_MAX:
-                break
-    if converged and finish and c > FINISHED:
-        # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
-                      A, Bm, E, parent, Rj, pj)
-        lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
-        cn = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
-                        Rj2,
-                        pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
-        it += 1
-        evaluations += 1
-        if cn < c:
-            q = qn
-            ge = ge2
-            c = cn
-    _copy(q, q_out)
-    pos, rot = _outcome(spec, ge, g_out)
-    return pos, rot, converged, it, evaluations, c
+        return pos, rot, converged, it, evaluations, c
+
+    run.__name__ = run.__qualname__ = name
+    run.__doc__ = doc
+    return njit(cache=True, nogil=True, **BORROWING)(run)
+
+
+lm_run_basic = _run(False, "lm_run_basic", """:func:`lm_run_in` for stacks of the first four kinds only.""")
+lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_in` for any stack.""")
 
 
 @njit(cache=True, nogil=True, **BORROWING)
@@ -827,10 +863,10 @@ def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, suppor
     for g in range(G):
         if spec[g, G_WEIGHT] != 1.0:
             weighted = True
-    c = task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, ws.x, spec, weighted, gR, gp, gaux, pt, Rt,
-                   ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.M, ws.e, ws.ge)
-    task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, ws.Rg, ws.pg, ws.Z, ws.O, ws.tg,
-                  ws.e, ws.Jx, ws.J, ws.rv, ws.A, ws.Bm, ws.E, parent, ws.Rj, ws.pj)
+    c = task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, q, ws.x, spec, weighted, gR, gp, gaux, pt,
+                   Rt, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.M, ws.e, ws.ge)
+    task_jacobian(True, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, ws.Rg, ws.pg, ws.Z, ws.O,
+                  ws.tg, ws.e, ws.Jx, ws.J, ws.rv, ws.A, ws.Bm, ws.E, parent, ws.Rj, ws.pj)
     for i in range(ws.e.shape[0]):
         e_out[i] = ws.e[i]
         for k in range(n):
