@@ -23,7 +23,6 @@ So the criterion never gets worse and every kept configuration meets every goal 
 
 from __future__ import annotations
 
-import inspect
 import math
 
 import numpy as np
@@ -54,23 +53,13 @@ ON_BOUND = 1e-12
 
 _KERNEL: dict = {}
 
-if "parent" in inspect.signature(task_jacobian.py_func).parameters:  # kinds whose rows need the joint poses
-
-    @njit(cache=True, nogil=True, inline="always")
-    def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-                  B, E, parent, Rj, pj):
-        """:func:`.kernel.task_jacobian` at the configuration whose buffers these are."""
-        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                      rv, A, B, E, parent, Rj, pj)
-
-else:  # a kernel whose task Jacobian takes the frames' buffers only
-
-    @njit(cache=True, nogil=True, inline="always")
-    def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-                  B, E, parent, Rj, pj):
-        """:func:`.kernel.task_jacobian` at the configuration whose buffers these are."""
-        task_jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                      rv, A, B, E)
+@njit(cache=True, nogil=True, inline="always")
+def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
+              B, E, parent, Rj, pj):
+    """:func:`.kernel.task_jacobian` at the configuration whose buffers these are, compiled for every goal kind
+    (``extra``: the descent serves any goal list)."""
+    task_jacobian(True, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
+                  rv, A, B, E, parent, Rj, pj)
 
 
 @njit(cache=True, nogil=True)
@@ -159,8 +148,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
         f_out[i] = np.inf
         return 0
     _copy(q_start, q)
-    task_error(parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj, pj,
-               Z, O, Rg, pg, tg, M, e, ge)
+    task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
+               pj, Z, O, Rg, pg, tg, M, e, ge)
     evaluations = 1
     f = _criterion(mode, q, q0, rev, support, pg, Z, O, J, JJ)
     _copy(q, q_out)
@@ -184,8 +173,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
                 for k in range(n):
                     _copy(q, qn)
                     qn[k] += MANIP_H
-                    task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux,
-                               pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+                    task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp,
+                               gaux, pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
                     v[k] = (-_criterion(mode, qn, q0, rev, support, pg2, Z2, O2, J, JJ) + f) / MANIP_H
                 evaluations += n
             _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
@@ -245,8 +234,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
         # Gauss-Newton back onto the goals
         met = False
         for _r in range(restore + 1):
-            task_error(parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt, Rt,
-                       Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+            task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt,
+                       Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
             evaluations += 1
             if within(spec, ge2):
                 met = True
