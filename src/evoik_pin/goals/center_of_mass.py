@@ -12,7 +12,7 @@ import pinocchio as pin
 from ..errors import FrameError, OptionError, TargetError
 from ..solvers.lm import layout as L  # the aux row's A_COM_* offsets, read by solvers/lm/balance.py
 from ..solvers.lm.layout import KIND_COM, KIND_COM_SUPPORT
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal, number
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, number, point3
 
 __all__ = ["CenterOfMass", "com_of", "contact_points", "polygon_distance"]
 
@@ -57,7 +57,7 @@ class CenterOfMass(Goal):
             object.__setattr__(self, name, value)
         self._check_numbers("the centre-of-mass goal")
         if support is None:
-            object.__setattr__(self, "point", _point(point))
+            object.__setattr__(self, "point", point3(point, "CenterOfMass's point"))
             object.__setattr__(self, "axes", _axes(axes))
             object.__setattr__(self, "support", None)
             object.__setattr__(self, "margin", 0.0)
@@ -144,14 +144,6 @@ class CenterOfMass(Goal):
                 f"tolerance={self.tolerance:g})")
 
 
-def _point(point) -> np.ndarray:
-    try:
-        p = np.asarray(point, dtype=float)
-    except (TypeError, ValueError):
-        raise TargetError(f"CenterOfMass's point is a 3-vector (m), got {point!r}") from None
-    if p.shape != (3,) or not np.isfinite(p).all():
-        raise TargetError(f"CenterOfMass's point is a 3-vector of finite numbers (m), got {point!r}")
-    return p.copy()
 
 
 def _axes(axes) -> str:

@@ -9,10 +9,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..errors import FrameError, OptionError
+from ..errors import FrameError, OptionError, TargetError
 from .bands import band_errors
 
-__all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "number"]
+__all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "number", "point3"]
 
 #: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation).
 DEFAULT_GOAL_TOLERANCE = 1e-6
@@ -28,6 +28,17 @@ def number(value, what: str, accepted: str) -> float:
         raise OptionError(f"{what} must be {accepted}, got {value!r}")
     return x
 
+
+
+def point3(value, what: str) -> np.ndarray:
+    """``value`` as 3 finite numbers (m), or a TargetError naming ``what``."""
+    try:
+        p = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TargetError(f"{what} must be 3 finite numbers (m) (a 3-vector), got {value!r}") from None
+    if p.shape != (3,) or not np.isfinite(p).all():
+        raise TargetError(f"{what} must be 3 finite numbers (m) (a 3-vector), got {value!r}")
+    return p
 
 @dataclass(frozen=True, eq=False)
 class Goal:

@@ -6,23 +6,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import TargetError
 from ..solvers.lm.layout import KIND_LOOK_AT
 from .direction import _Pointing
-from .goal import DEFAULT_GOAL_TOLERANCE
+from .goal import DEFAULT_GOAL_TOLERANCE, point3
 
 __all__ = ["LookAt"]
-
-
-def _point(value, what: str) -> np.ndarray:
-    """``value`` as 3 finite numbers (m), or a TargetError naming ``what``."""
-    try:
-        p = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise TargetError(f"{what} must be 3 numbers (m), got {value!r}") from None
-    if p.shape != (3,) or not np.isfinite(p).all():
-        raise TargetError(f"{what} must be 3 finite numbers (m), got {value!r}")
-    return p
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -43,7 +31,7 @@ class LookAt(_Pointing):
     def __init__(self, frame: str, axis, point, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
         self._init_pointing(frame, axis, weight, tolerance, KIND_LOOK_AT)
-        object.__setattr__(self, "point", _point(point, f"LookAt on {frame!r}: point"))
+        object.__setattr__(self, "point", point3(point, f"LookAt on {frame!r}: point"))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.point.copy(), np.eye(3)
