@@ -22,19 +22,19 @@ _PREC3, _PREC2 = np.finfo(np.float64).eps ** (1.0 / 3.0), np.finfo(np.float64).e
 _TWO_PI = 2.0 * math.pi
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def wrap_angle(a):
     """The angle a (rad) wrapped into [-pi, pi)."""
     return (a + math.pi) % _TWO_PI - math.pi
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def yaw(R):
     """Heading (rad) of the rotation R (3, 3) about z: ``atan2(R[1, 0], R[0, 0])`` (see :func:`.so3.yaw`)."""
     return math.atan2(R[1, 0], R[0, 0])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def log3(M, phi):
     """Rotation vector phi (3,) (rad) of the rotation M (3, 3), stable near 0 and near pi; returns the angle."""
     ax0, ax1, ax2 = M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]
@@ -70,7 +70,7 @@ def log3(M, phi):
     return theta
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def _add_half_skew(v, A):
     """A (3, 3) += [v / 2]x, the skew matrix of v / 2 (Pinocchio's ``addSkew(0.5 * v, A)``)."""
     A[0, 1] -= 0.5 * v[2]
@@ -81,7 +81,7 @@ def _add_half_skew(v, A):
     A[2, 1] += 0.5 * v[0]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def jlog3(theta, w, A):
     """``pin.Jlog3``: A (3, 3), the derivative of ``log3(R exp(dw))`` at dw = 0, from ``w = log3(R)`` (angle
     theta): ``alpha w w^T + d I + [w]x / 2``."""
@@ -99,7 +99,7 @@ def jlog3(theta, w, A):
     _add_half_skew(w, A)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def log6(M, t, e):
     """``pin.log6`` of the pose (M (3, 3), t (3,)): e (6,) = (v, w) with ``w = log3(M)``; returns the angle."""
     theta = log3(M, e[3:])
@@ -122,7 +122,7 @@ def log6(M, t, e):
     return theta
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def jlog6(theta, w, t, A, B):
     """``pin.Jlog6`` of the pose whose log is (., w) (angle theta) and translation t (3,): the (6, 6) matrix
     ``[[A, B], [0, A]]`` as its blocks A = ``Jlog3`` and B (3, 3) (Pinocchio's formula)."""

@@ -1,7 +1,7 @@
 """The compiled residuals and Jacobians of the goal kinds on one frame beyond pose, position and planar: per-axis
 tolerance bands and free axes, orientation alone, a frame axis along a direction or at a point.
 
-Inlined into :mod:`.kernel` (``inline="always"``: numba's disk cache does not see edits here; delete the kernel's
+Inlined into :mod:`.kernel` (``forceinline=True``: numba's disk cache does not see edits here; delete the kernel's
 cached ``*.nbi`` / ``*.nbc`` after one). :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call these only
 for the kinds ``KIND_POSE_AXES`` .. ``KIND_LOOK_AT`` (:mod:`.layout`), so pose, position and planar goals never run
 a line of them. For the goal frame's pose (R (3, 3), p (3,) m, base frame), its target (pt (3,), Rt (3, 3)) and the
@@ -42,7 +42,7 @@ from .tree import BORROWING
 _NEAR_POINT = 1e-12
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, forceinline=True)
 def _dead(v, h):
     """The dead zone of v beyond half-width h: v - h above, v + h below, 0 inside (always 0 for h = inf)."""
     if v > h:
@@ -52,21 +52,21 @@ def _dead(v, h):
     return 0.0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, forceinline=True)
 def _excess(v, b):
     """How far |v| lies beyond half-width b (0 inside; always 0 for b = inf)."""
     x = abs(v) - b
     return x if x > 0.0 else 0.0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, forceinline=True)
 def _angle(a0, a1, a2, d0, d1, d2):
     """Angle (rad, in [0, pi]) between the vectors a and d, by atan2 (accurate near 0 and pi)."""
     c0, c1, c2 = a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0
     return math.atan2(math.sqrt(c0 * c0 + c1 * c1 + c2 * c2), a0 * d0 + a1 * d1 + a2 * d2)
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _direction(kind, R, p, pt, aux, u):
     """u (3,) = the wanted unit direction of a pointing goal (pt itself, or from p towards the point pt; with the
     frame on the point, the opposite of its axis, so the goal is unmet there); returns the distance (m) to the
@@ -84,7 +84,7 @@ def _direction(kind, R, p, pt, aux, u):
     return rho
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
     """One goal's error rows e (task_size(kind)) of the kinds of this module (see the module docstring); returns
     (|e|^2 unweighted, position error m, orientation error rad), the errors those the success test compares with
@@ -129,7 +129,7 @@ def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
     return c, math.sqrt(pos2), math.sqrt(rot2)
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def axes_jacobian(kind, R, p, J, pt, Rt, aux, rv, A, B, E, r):
     """One goal's rows r.. of the task Jacobian E (unweighted) of the kinds of this module, from its frame's
     base-frame Jacobian J (6, n) at the pose (R, p) :func:`axes_error` saw. rv (3,), A, B (3, 3) are scratch."""

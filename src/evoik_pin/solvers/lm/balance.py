@@ -48,7 +48,7 @@ EMPTY_POLYGON = 1.0
 _INSIDE, _EDGE, _VERTEX = 0.0, 1.0, 2.0
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def com_position(Rj, pj, aux):
     """The centre of mass (x, y, z) (m, base frame) at the joint poses Rj (m, 3, 3), pj (m, 3)."""
     s0, s1, s2 = aux[A_COM_MOMENT], aux[A_COM_MOMENT + 1], aux[A_COM_MOMENT + 2]
@@ -64,7 +64,7 @@ def com_position(Rj, pj, aux):
     return s0 * inv, s1 * inv, s2 * inv
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def com_jacobian(parent, rev, Rj, pj, Z, O, aux, Jx):
     """Rows 0-2 of Jx (6, m): the centre of mass's Jacobian (m per rad or m per m) with respect to the physical
     joint values; rows 3-5 hold each subtree's first moment (scratch)."""
@@ -94,7 +94,7 @@ def com_jacobian(parent, rev, Rj, pj, Z, O, aux, Jx):
             Jx[0, k], Jx[1, k], Jx[2, k] = z0 * mass * inv, z1 * mass * inv, z2 * mass * inv
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _contact(aux, base, i, Rj, pj):
     """Ground (x, y) (m) of contact point i (its aux entries from ``base``) at the joint poses Rj, pj."""
     o = base + 4 * i
@@ -106,7 +106,7 @@ def _contact(aux, base, i, Rj, pj):
             pj[j, 1] + Rj[j, 1, 0] * l0 + Rj[j, 1, 1] * l1 + Rj[j, 1, 2] * l2)
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _hull_start(aux, base, K, Rj, pj):
     """(index, x, y) of the contact point with the least x (then y): a vertex of their convex hull."""
     best, bx, by = 0, 0.0, 0.0
@@ -117,7 +117,7 @@ def _hull_start(aux, base, K, Rj, pj):
     return best, bx, by
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _hull_next(aux, base, K, i, xi, yi, Rj, pj):
     """(index, x, y) of the hull vertex after vertex i (at xi, yi) counter-clockwise: the point with every other
     point on the left of the edge (of collinear ones the farthest); index -1 when every point coincides with i."""
@@ -139,7 +139,7 @@ def _hull_next(aux, base, K, i, xi, yi, Rj, pj):
     return best, bx, by
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def support_error(Rj, pj, aux, cx, cy, e, tg):
     """The support goal's 2 rows e = c_xy - (nearest point of the shrunk hull) for the CoM's ground point (cx, cy)
     (zero inside), and its distance (m); tg (3,) keeps the active piece (code, outward normal) for
@@ -222,7 +222,7 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
     return math.sqrt(e[0] * e[0] + e[1] * e[1]) + extra
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
     """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``: frame b (on physical joint jb at folded
     placement Rbf, pbf) into Rb, pb; ``T_t^-1 T_a^-1 T_b`` into M (3, 3), t (3,); returns (position error m,
@@ -279,7 +279,7 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
     return pos, rot
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """Rows e of a goal of a kind beyond one frame (see the module docstring); returns (|e|^2, position error m,
     orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
@@ -304,7 +304,7 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     return c, pos, rot
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
     """The physical Jacobian Jx (6, m) a goal of a kind beyond one frame starts from: the centre of mass's (rows
     0-2, :func:`com_jacobian`) or, for a relative pose, ``J_b(p_b) - J_a(p_b)`` at frame b's origin p (3,)."""
@@ -323,7 +323,7 @@ def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
                     Jx[i, k] = -Jx[i, k]
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def com_rows(kind, aux, t, J, E, r):
     """Rows r.. of the task Jacobian E (unweighted) of a CoM goal from the CoM's Jacobian (rows 0-2 of J (6, n)):
     the constrained axes (KIND_COM), or the support goal's active piece (t: code, outward normal): zero inside,

@@ -23,7 +23,7 @@ from .tree import joint_column
 __all__ = ["coupled", "expand", "fold", "forward", "jacobian"]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def forward(FR, Fp, rev, q, R, p, Z, O):
     """Tip rotation R (3, 3) and position p (3,) at q (n,), and each joint's axis Z (n, 3) and origin O (n, 3),
     all in the base frame (written in place)."""
@@ -54,14 +54,14 @@ def forward(FR, Fp, rev, q, R, p, Z, O):
             R[i, 2] = r0 * FR[k + 1, 0, 2] + r1 * FR[k + 1, 1, 2] + r2 * FR[k + 1, 2, 2]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def jacobian(rev, p, Z, O, J):
     """Base-frame Jacobian J (6, n) of the tip point p (3,) from the joint axes Z and origins O (n, 3)."""
     for k in range(Z.shape[0]):
         joint_column(rev[k], p, Z, O, k, J)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def expand(index, scale, offset, q, x):
     """Physical joint values x (m,) of the joint vector q (n,): ``x[k] = scale[k] * q[index[k]] + offset[k]``
     (exactly q when index, scale, offset are the identity, ones and zeros)."""
@@ -69,7 +69,7 @@ def expand(index, scale, offset, q, x):
         x[k] = scale[k] * q[index[k]] + offset[k]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def fold(index, scale, Jx, J):
     """Jacobian J (6, n) with respect to q from Jx (6, m) with respect to the physical values x: column
     index[k] of J gathers scale[k] times column k of Jx (exactly Jx for the identity coupling)."""
@@ -82,7 +82,7 @@ def fold(index, scale, Jx, J):
             J[i, c] += s * Jx[i, k]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def coupled(index, scale, offset, n):
     """False when the coupling is the identity (m == n, x == q): kernels then skip :func:`expand` and :func:`fold`."""
     if index.shape[0] != n:

@@ -102,7 +102,7 @@ def compiled_kernel() -> dict:
 
     The first call imports numba (~0.3 s) and runs each entry point once on a one-joint robot, so that numba
     loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install, compiles it
-    (~45 s: the tree kinematics are inlined at each evaluation) here, and not inside a solve's time budget. Later
+    (about a minute) here, and not inside a solve's time budget. Later
     calls return at once. Solvers call it before starting their clock.
     """
     if not _KERNEL:

@@ -21,7 +21,7 @@ space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more row
 space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
 
 The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. numba compiles this module on
-first use (about 45 s once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
+first use (about a minute once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
 any time budget).
 
 Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
@@ -34,8 +34,19 @@ neither allocate nor count references to the arrays they are given, which their 
 brackets nearly every call with an atomic increment and decrement per array argument (its pruning of those
 gives up across calls), a fifth of the run time; and a helper that allocated now fails to compile instead.
 :func:`task_error`, :func:`task_jacobian` and :func:`lm_step`, which take 16 to 25 arrays each, are moreover
-inlined into :func:`lm_run_in` (``inline="always"``): passing those arrays cost more than the calls (about 7 % of
-the run time), for about 1 s more compile time.
+inlined into the run (passing those arrays cost more than the calls, about 7 % of the run time), and so are the
+kinematics of :mod:`.tree` and the goal kinds' rows of :mod:`.axes` and :mod:`.balance` that are not behind a call.
+
+Inlining is LLVM's, not numba's: the inlined helpers are compiled with ``forceinline=True`` (numba's option for
+LLVM's ``alwaysinline``), each once, and LLVM inlines them into each caller. numba's own ``inline="always"`` (which
+inlines at the level of numba's IR and types the caller again after each call it inlines) took 60 s to compile
+:func:`lm_run_basic` and 90 s for :func:`lm_run_all`, against 5 s and 18 s now, for the same machine code as far as
+the results go (scripts/bench_chain_kernel.py: equal md5, a run 5-10 % faster). Every other compiled function of
+the engine says ``forceinline=False`` explicitly: numba's flags are inherited by a callee that does not set them,
+so a helper kept behind a call (:func:`beyond_frame_error`, :func:`damped_solve`, ...) would otherwise be inlined
+too when a forced-inline caller compiles it first. numba's disk cache keys an entry point on its own file only:
+after editing an inlined helper in another file (:mod:`.tree`, :mod:`.axes`, :mod:`.balance`), delete the kernel's
+cached ``*.nbi`` / ``*.nbc``.
 """
 
 from __future__ import annotations
@@ -99,7 +110,7 @@ from .tree import BORROWING, frame_jacobian, frame_pose, tree_forward
 TWO_PI = 2.0 * math.pi
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, forceinline=True)
 def task_size(kind):
     """Rows m of the task error of a target kind: 6 (pose), 3 (position, planar with yaw), 2 (planar)."""
     if kind == KIND_POSE:
@@ -115,7 +126,7 @@ def task_size(kind):
     return 2
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def goal_error(kind, R, p, pt, Rt, M, t, e):
     """One goal's error rows e (its task_size(kind) rows) for its frame's pose (R (3, 3), p (3,)) and target
     (pt, Rt); returns (|e|^2, position error m, orientation error rad or 0). For pose goals also the frame pose
@@ -145,7 +156,7 @@ def goal_error(kind, R, p, pt, Rt, M, t, e):
     return c, pos, rot
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
                pj, Z, O, Rg, pg, tg, M, e, ge):
     """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
@@ -192,7 +203,7 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
     return c
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def within(spec, ge):
     """True when every goal's errors ge (G, 2) are within its tolerances (a NaN error is not)."""
     for g in range(spec.shape[0]):
@@ -201,7 +212,7 @@ def within(spec, ge):
     return True
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
     """One goal's rows r.. of the task Jacobian E (unweighted) from its frame's base-frame Jacobian J (6, n), for the
     buffers :func:`goal_error` filled (R the frame's rotation; e, t its error rows, scaled by w, and its
@@ -234,7 +245,7 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
             E[r + 3 + i, k] = A[i, 0] * w0 + A[i, 1] * w1 + A[i, 2] * w2
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
                   rv, A, B, E, parent, Rj, pj):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
@@ -272,7 +283,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
                     E[i, k] *= w
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """:func:`.balance.balance_error` behind a call, not inlined: :func:`task_error`, inlined four times into
     :func:`lm_run_in`, keeps the size the one-frame kinds compile to (with this branch alone their runs are as fast
@@ -280,7 +291,7 @@ def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     return balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, aux, R, p, t, e, w, Jx, J, rv, A, B, E,
                           r):
     """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): its
@@ -298,7 +309,7 @@ def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, 
         com_rows(kind, aux, t, src, E, r)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def damped_solve(E, lam, rhs, L, y, dq):
     """dq (n,) = E^T (E E^T + lam I)^-1 rhs = (E^T E + lam I)^-1 E^T rhs by Cholesky of the smaller of the two
     systems (task space when E (m, n) has m <= n rows, joint space otherwise); L (min(m, n), min(m, n)) and y
@@ -346,7 +357,7 @@ def damped_solve(E, lam, rhs, L, y, dq):
     return True
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _gram(E, i, j, joints):
     """Entry (i, j) of E E^T (rows i, j of E) or, with ``joints``, of E^T E (columns i, j)."""
     s = 0.0
@@ -359,7 +370,7 @@ def _gram(E, i, j, joints):
     return s
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def into_box(q, box, any_wrap, out):
     """out (n,) = q clipped into the box, wrapping joints shifted by 2 pi into [lower, lower + 2 pi)."""
     for k in range(q.shape[0]):
@@ -370,7 +381,7 @@ def into_box(q, box, any_wrap, out):
         out[k] = x
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _scaled_to(dq, max_step):
     """Scale dq (n,) down to length max_step when longer (the trust region)."""
     s2 = 0.0
@@ -382,7 +393,7 @@ def _scaled_to(dq, max_step):
             dq[k] *= f
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _trust_step(W, lam, rhs, L, y, dq, max_step):
     """dq = the damped step of :func:`damped_solve` scaled into the trust region (:func:`_scaled_to`); False when
     the damped system is not positive (dq is then meaningless)."""
@@ -392,14 +403,14 @@ def _trust_step(W, lam, rhs, L, y, dq, max_step):
     return True
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _copy(a, b):
     """b (k,) = a (k,) (a slice assignment would check the two for overlap, with numba's runtime)."""
     for i in range(a.shape[0]):
         b[i] = a[i]
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn):
     """The next configuration qn (n,) (written in place) and whether a joint hit a bound: the damped step,
     trust region, active-set limits and wrapping of ``reference._step`` (its docstring says why).
@@ -527,7 +538,7 @@ def carve(buf, held, n, m, G, rows, max_it):
                      dfix, held, history)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def make_workspace(n, m, G, rows, max_it):
     """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
     ``rows`` task rows: views into one float buffer and the bool ``held`` (two allocations instead of some fifty).
@@ -539,14 +550,14 @@ def make_workspace(n, m, G, rows, max_it):
                  max_it)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def stack_rows(spec):
     """Total task rows of a goal stack: the last goal's first row plus its size."""
     G = spec.shape[0]
     return int(spec[G - 1, G_ROW]) + task_size(int(spec[G - 1, G_KIND]))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
            params,
            q_out, g_out):
@@ -574,7 +585,7 @@ def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
                           params, q_out, g_out)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def lm_run_buffers(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
                    support, gaux,
                    pt, Rt, params, q_out, g_out):
@@ -587,7 +598,7 @@ def lm_run_buffers(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset
                      Rt, params, q_out, g_out)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _outcome(spec, ge, g_out):
     """(largest position error, largest orientation error or nan) over the goals' errors ge (G, 2), copied to
     g_out (G, 2) with nan orientation errors for goals without one."""
@@ -605,7 +616,7 @@ def _outcome(spec, ge, g_out):
     return pos, rot
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def extra_kinds(spec):
     """True when the stack spec (G, GOAL_SIZE) holds a goal of the kinds after the first four (pose, position,
     planar, planar with yaw): :mod:`.axes`'s (codes 4-9) or :mod:`.balance`'s (from ``KIND_BEYOND_FRAME``)."""
@@ -615,7 +626,7 @@ def extra_kinds(spec):
     return False
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
               Rt, params, q_out, g_out):
     """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` or :func:`carve` for these n
@@ -763,14 +774,14 @@ def _run(extra, name, doc):
 
     run.__name__ = run.__qualname__ = name
     run.__doc__ = doc
-    return njit(cache=True, nogil=True, **BORROWING)(run)
+    return njit(cache=True, nogil=True, forceinline=False, **BORROWING)(run)
 
 
 lm_run_basic = _run(False, "lm_run_basic", """:func:`lm_run_in` for stacks of the first four kinds only.""")
 lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_in` for any stack.""")
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _record(stats, i, pos, rot, converged, it, evaluations, c):
     """Row i of stats (the ``S_*`` columns) from one run's outcome."""
     stats[i, S_POS], stats[i, S_ROT] = pos, rot
@@ -779,7 +790,7 @@ def _record(stats, i, pos, rot, converged, it, evaluations, c):
     stats[i, S_COST] = c
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                  params,
                  Q_out, stats, g_stats):
@@ -793,7 +804,7 @@ def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
               Q_out, stats, g_stats)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
               params,
               Q_out, stats, g_stats):
@@ -807,7 +818,7 @@ def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, s
         _record(stats, i, pos, rot, converged, it, evaluations, c)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
                   params,
                   Q_out, stats, g_stats):
@@ -824,7 +835,7 @@ def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, s
                       params, Q_out, stats, g_stats)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
                           support, gaux, pt, Rt, params, Q_out, stats, g_stats):
     """:func:`lm_run_starts` in the caller's buffers (as :func:`lm_run_buffers`)."""
@@ -834,7 +845,7 @@ def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offse
                       params, Q_out, stats, g_stats)
 
 
-@njit(cache=True, nogil=True, **BORROWING)
+@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
                params,
                Q_out, stats, g_stats):
@@ -850,7 +861,7 @@ def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, 
     return -(1 + Q.shape[0])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, pt, Rt, e_out, E_out, g_out):
     """What one LM step reads at q (n,), for tests and diagnostics: the stacked task error e_out (rows,) and its
     Jacobian E_out (rows, n) (each goal's rows scaled by the square root of its weight), each goal's errors to

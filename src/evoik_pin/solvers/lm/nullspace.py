@@ -53,7 +53,7 @@ ON_BOUND = 1e-12
 
 _KERNEL: dict = {}
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, forceinline=True)
 def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
               B, E, parent, Rj, pj):
     """:func:`.kernel.task_jacobian` at the configuration whose buffers these are, compiled for every goal kind
@@ -62,7 +62,7 @@ def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, R
                   rv, A, B, E, parent, Rj, pj)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def _manipulability(rev, support, pg, Z, O, J, JJ):
     """sqrt(det(J J^T)) of the first goal frame's base-frame (LOCAL_WORLD_ALIGNED) Jacobian J (6, n), from the
     kinematics buffers :func:`.kernel.task_error` filled (pg its frame's position, Z, O the joint axes and origins);
@@ -91,7 +91,7 @@ def _manipulability(rev, support, pg, Z, O, J, JJ):
     return math.exp(0.5 * logdet)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def _criterion(mode, q, q0, rev, support, pg, Z, O, J, JJ):
     """The criterion at q (lower is better), from q's kinematics buffers."""
     if mode == MODE_NEAREST:
@@ -103,7 +103,7 @@ def _criterion(mode, q, q0, rev, support, pg, Z, O, J, JJ):
     return -_manipulability(rev, support, pg, Z, O, J, JJ)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def descend_batch(Q, q0, mode, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
                   pt, Rt, iterations, restore, max_step, Q_out, f_out):
     """Each answer Q[i] (N, n) taken along its self-motion manifold to a local optimum of the criterion (``mode``,
@@ -125,7 +125,7 @@ def descend_batch(Q, q0, mode, parent, FR, Fp, rev, index, scale, offset, box, a
     return evaluations
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, index, scale, offset, box, any_wrap,
              spec, gR, gp, support, gaux, pt, Rt, iterations, restore, max_step, q_out, f_out, i):
     """:func:`descend_batch` for one answer; returns its kinematics evaluations."""

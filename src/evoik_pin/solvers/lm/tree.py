@@ -8,8 +8,8 @@ Joint values x follow the joint vector q (n,) through the coupling of :mod:`.cha
 of :func:`.chain.forward` and :func:`.chain.jacobian`, in the same order, so their results are identical bit for
 bit (tests/test_robot_tree.py compares them on every bundled arm); tests check them against Pinocchio on the
 example-robot-data trees, on random URDF trees, with mimic joints and with a floating base. All three are inlined
-into the kernel (``inline="always"``): a call passing their nine array arguments costs about 90 ns, a third of a
-7-joint recursion.
+into the kernel (``forceinline=True``, LLVM's inlining; :mod:`.kernel` says why): a call passing their nine array
+arguments costs about 90 ns, a third of a 7-joint recursion.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def _borrowing_options() -> dict:
 BORROWING = _borrowing_options()
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O):
     """Joint poses at the physical joint values x (m,): Rj (m, 3, 3), pj (m, 3) (m) the pose of each joint's folded
     frame after its motion, Z (m, 3) and O (m, 3) each joint's axis and origin, all in the base frame (written in
@@ -93,7 +93,7 @@ def tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O):
         pj[k, 0], pj[k, 1], pj[k, 2] = p0, p1, p2
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def frame_pose(Rj, pj, j, Rf, pf, R, p):
     """Pose R (3, 3), p (3,) in the base frame of a frame at folded placement (Rf (3, 3), pf (3,)) on joint j
     (:func:`tree_forward`'s poses), or at the constant pose (Rf, pf) when j < 0 (written in place)."""
@@ -112,7 +112,7 @@ def frame_pose(Rj, pj, j, Rf, pf, R, p):
         R[i, 2] = r0 * Rf[0, 2] + r1 * Rf[1, 2] + r2 * Rf[2, 2]
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def frame_jacobian(rev, support, p, Z, O, J):
     """Base-frame Jacobian J (6, m) of a frame's origin p (3,) with respect to the physical joint values: the
     columns of the joints that move it (``support`` (m,) bool: the frame's joint and its ancestors) from their
@@ -126,7 +126,7 @@ def frame_jacobian(rev, support, p, Z, O, J):
                 J[i, k] = 0.0
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def joint_column(revolute, p, Z, O, k, J):
     """Column k of the base-frame Jacobian J (6, m) of the point p (3,): joint k's axis Z[k] and origin O[k] give
     (z x (p - o), z) for a revolute joint, (z, 0) for a prismatic one."""

@@ -34,7 +34,7 @@ __all__ = ["STAGE_Q0", "STAGE_TABLE", "first_runs"]
 STAGE_Q0, STAGE_TABLE = 0, 1
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, table_runs, parent,
                FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out,
                g_out, errors, best_q, best):  # pragma: no cover - compiled

@@ -16,7 +16,7 @@ from numba import njit
 __all__ = ["select_k", "table_distances"]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def select_k(d, allowed, k, out):  # pragma: no cover - compiled
     """Write into ``out[:m]`` the indices of the ``m = min(k, allowed entries)`` smallest of the distances ``d``
     (N,), smallest first (ties: the lower index first); returns m. ``allowed``: (N,) bool, or (0,) for every
@@ -47,7 +47,7 @@ def select_k(d, allowed, k, out):  # pragma: no cover - compiled
     return m
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, forceinline=False)
 def table_distances(FT, sq, f, d):  # pragma: no cover - compiled
     """The table's squared distances less ``|f|^2`` into ``d`` (N,): ``sq - 2 F f`` with FT (D, N) the table's
     features transposed, sq (N,) their squared norms and f (D,) the target's features."""
