@@ -67,6 +67,7 @@ from .layout import (
     TargetArrays,
     box_constants,
     kernel_params,
+    owned,
     problem_goals,
 )
 from .outcome import LMOutcome, PairsOutcome
@@ -98,7 +99,9 @@ def warmup_problem() -> tuple:
 
 def compiled_kernel() -> dict:
     """The kernel's entry points (``lm_run``, ``lm_run_starts``, ``lm_run_pairs``, and ``lm_run_buffers``,
-    ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run.
+    ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run: three
+    compiled entries (each compiles the whole run: half a minute from an empty cache), the first two Python
+    wrappers that make a workspace and call the ``*_buffers`` ones.
 
     The first call imports numba (~0.3 s) and runs each entry point once on a one-joint robot, so that numba
     loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install, compiles it
@@ -111,10 +114,8 @@ def compiled_kernel() -> dict:
         tree, box, goals, pt, Rt = warmup_problem()
         params = kernel_params(iterations=1)
         # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
-        kernel.lm_run(np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1), np.empty((1, 2)))
+        # (lm_run and lm_run_starts are Python wrappers of the two *_buffers entries: nothing of their own to compile)
         stats = np.empty((1, STATS_SIZE))
-        kernel.lm_run_starts(np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params, np.empty((1, 1)), stats,
-                             np.empty((1, 1, 2)))
         kernel.lm_run_pairs(np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(), Rt[None].copy(), params,
                             np.empty((1, 1)), stats, np.empty((1, 1, 2)))
         buffers = (np.empty(int(kernel.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
@@ -160,7 +161,8 @@ class LevenbergMarquardt:
         robot = problem.robot
         self.robot = robot
         self.n = robot.n
-        stack, self._pt, self._Rt = problem_goals(problem)
+        stack, pt, Rt = problem_goals(problem)
+        self._pt, self._Rt = owned(pt, float), owned(Rt, float)
         self.goals = stack
         self.oriented = stack.any_oriented
         if engine == "python":
@@ -175,8 +177,9 @@ class LevenbergMarquardt:
             return
         self._reference = None
         self._kernel = compiled_kernel()
-        self._tree = robot.tree_constants()  # the folded tree, how it follows q
-        self._goal_arrays = stack.arrays
+        # the folded tree, how it follows q (read-only in a Ray worker: owned's docstring says why they are copied)
+        self._tree = tuple(owned(a) for a in robot.tree_constants())
+        self._goal_arrays = tuple(owned(a) for a in stack.arrays)
         _, self._any_wrap, _, _, self._box = box_constants(robot, problem.lower, problem.upper)
         self._params = kernel_params(0, damping, max_step, stall_window, stall_ratio, finish)
         G = len(stack.kinds)
@@ -273,7 +276,7 @@ class LevenbergMarquardt:
         buffers = self._buffers if max_iterations <= self._buffers_for and mine else self._workspace(max_iterations)
         run = self._direct
         if run is None:
-            run, q = self._kernel["lm_run_buffers"], np.ascontiguousarray(q, dtype=float)
+            run, q = self._kernel["lm_run_buffers"], owned(q, float)
         else:  # the overload's argument type exactly: a C-contiguous, writable float64 vector of our own
             q = np.array(q, dtype=float)
         pos, rot, converged, it, evaluations, cost = run(*buffers, q, *self._args, params, out, g_err)
@@ -398,9 +401,9 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
     stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, *stack.arrays,
-                 arrays.P[:, None], arrays.Rts[:, None], params, Q_out, stats,
-                 np.empty((N, 1, 2)))
+    lm_run_pairs(owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
+                 *(owned(a) for a in stack.arrays), owned(arrays.P[:, None], float), owned(arrays.Rts[:, None], float),
+                 params, Q_out, stats, np.empty((N, 1, 2)))
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
 
@@ -415,8 +418,8 @@ def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upp
     stats = np.empty((N, STATS_SIZE))
     g_stats = np.empty((N, G, 2))
     compiled_kernel()["lm_run_pairs"](
-        np.ascontiguousarray(Q, dtype=float), *robot.tree_constants(), box, any_wrap, *stack.arrays,
-        np.ascontiguousarray(arrays.P), np.ascontiguousarray(arrays.Rts), params, Q_out, stats,
+        owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
+        *(owned(a) for a in stack.arrays), owned(arrays.P, float), owned(arrays.Rts, float), params, Q_out, stats,
         g_stats)
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64), g_stats)

@@ -557,7 +557,6 @@ def stack_rows(spec):
     return int(spec[G - 1, G_ROW]) + task_size(int(spec[G - 1, G_KIND]))
 
 
-@njit(cache=True, nogil=True, forceinline=False)
 def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
            params,
            q_out, g_out):
@@ -578,11 +577,16 @@ def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
         forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals, as
         :class:`.reference.ReferenceLM` counts them.
     """
-    n, m, G = q_start.shape[0], parent.shape[0], spec.shape[0]
-    rows, max_it = stack_rows(spec), int(params[P_ITERATIONS])
-    return lm_run_buffers(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), q_start,
+    n = q_start.shape[0]
+    return lm_run_buffers(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), q_start,
                           parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
                           params, q_out, g_out)
+
+
+def _workspace_buffer(n: int, parent: np.ndarray, spec: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """The float buffer of a :data:`Workspace` for n joints and the tree, goal stack and step budget of a call."""
+    return np.empty(int(workspace_size(n, parent.shape[0], spec.shape[0], int(stack_rows(spec)),
+                                       int(params[P_ITERATIONS]))))
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
@@ -818,7 +822,6 @@ def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, s
         _record(stats, i, pos, rot, converged, it, evaluations, c)
 
 
-@njit(cache=True, nogil=True, forceinline=False)
 def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
                   params,
                   Q_out, stats, g_stats):
@@ -829,10 +832,10 @@ def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, s
     g_stats[k] (G, 2) (rows of starts not run are left untouched). Returns the index of the converged run, or
     -(1 + the number of runs) when none converged (every start was run then). The runs share one workspace, made
     here."""
-    ws = make_workspace(Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                      pt, Rt,
-                      params, Q_out, stats, g_stats)
+    n = Q.shape[1]
+    return lm_run_starts_buffers(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent,
+                                 FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
+                                 params, Q_out, stats, g_stats)
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)

@@ -29,7 +29,7 @@ __all__ = ["DEFAULT_DAMPING", "DEFAULT_ITERATIONS", "DEFAULT_MAX_STEP", "DEFAULT
            "DEFAULT_STALL_WINDOW", "KIND_PLANAR", "KIND_PLANAR_YAW", "KIND_POSE", "KIND_POSITION", "TASK_ROWS",
            "GoalArrays", "GoalStack", "TargetArrays", "box_constants", "encode_target", "encode_targets",
            "kernel_params", "problem_goals", "target_kind", "wrapping_joints", "KIND_POSE_AXES", "KIND_POSITION_BAND",
-           "KIND_ORIENTATION", "KIND_DIRECTION", "KIND_LOOK_AT", "ANGLE_KINDS", "POSITIONLESS_KINDS"]
+           "KIND_ORIENTATION", "KIND_DIRECTION", "KIND_LOOK_AT", "ANGLE_KINDS", "POSITIONLESS_KINDS", "owned"]
 
 TWO_PI = 2.0 * np.pi
 #: Initial damping lambda (m^2, rad^2): small against the entries of E E^T (about reach^2 ~ 0.1-1 m^2).
@@ -114,6 +114,19 @@ S_POS, S_ROT, S_CONVERGED, S_ITERATIONS, S_EVALUATIONS, S_COST = range(6)
 STATS_SIZE = 6
 
 
+def owned(a: np.ndarray, dtype=None) -> np.ndarray:
+    """``a`` as the kernel's entry points are compiled for it: a C-contiguous, writable array (of ``dtype`` when
+    given): ``a`` itself when it is one, else a copy.
+
+    numba compiles a function once per argument type, and a read-only array is a type of its own (a NumPy broadcast
+    or a C-contiguous view of one, an array from Ray's object store, a memory-mapped file): one reaching an entry
+    point would have numba compile the whole kernel again for it (half a minute to a minute and a half, inside the
+    caller's time budget, and again in every fresh process). The engine passes every array through here once."""
+    if a.flags.writeable and a.flags.c_contiguous and (dtype is None or a.dtype == dtype):
+        return a
+    return np.array(a, dtype=dtype, order="C")
+
+
 def target_kind(target) -> int:
     """The ``KIND_*`` of a :class:`~evoik_pin.problem.Target`."""
     if target.planar:
@@ -126,8 +139,8 @@ def encode_target(target) -> tuple[np.ndarray, np.ndarray]:
     if target.planar:
         pt = np.array([target.position[0], target.position[1], target.yaw or 0.0])
         return pt, np.eye(3)
-    Rt = np.eye(3) if target.rotation is None else np.ascontiguousarray(target.rotation, dtype=float)
-    return np.ascontiguousarray(target.position, dtype=float), Rt
+    Rt = np.eye(3) if target.rotation is None else owned(target.rotation, float)
+    return owned(target.position, float), Rt
 
 
 def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
@@ -136,10 +149,10 @@ def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
     t0 = targets[0]
     if t0.planar:
         P = np.array([[t.position[0], t.position[1], t.yaw or 0.0] for t in targets], dtype=float)
-        return P, np.ascontiguousarray(np.broadcast_to(np.eye(3), (N, 3, 3)))
+        return P, np.repeat(np.eye(3)[None], N, axis=0)
     P = np.ascontiguousarray([t.position for t in targets], dtype=float)
     if t0.rotation is None:
-        return P, np.ascontiguousarray(np.broadcast_to(np.eye(3), (N, 3, 3)))
+        return P, np.repeat(np.eye(3)[None], N, axis=0)
     return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
 
 

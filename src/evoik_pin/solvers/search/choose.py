@@ -53,6 +53,7 @@ from ..lm.layout import (
     STATS_SIZE,
     TASK_ROWS,
     kernel_params,
+    owned,
     target_kind,
 )
 from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
@@ -258,7 +259,7 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
     more a round, in rounds while the clock allows (until ``finish``) and they move. A descended answer in
     collision keeps its start. Returns the refined answers, best first, and the kinematics evaluations."""
     descend = nullspace_kernel()["descend_batch"]
-    target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else np.ascontiguousarray(q0, dtype=float)
+    target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
     picked = []
     Q = np.array([a[1] for a in answers])
     free = np.ones(len(answers), dtype=bool)  # not within 1e-3 of an answer picked before
@@ -524,10 +525,9 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             return
         N = Q.shape[0]
         pt, Rt = lm._pt, lm._Rt
-        P = np.ascontiguousarray(np.broadcast_to(pt, (N, *pt.shape)))
-        Rts = np.ascontiguousarray(np.broadcast_to(Rt, (N, *Rt.shape)))
+        P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)  # writable: layout.owned says why
         Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
-        lm._kernel["lm_run_pairs"](np.ascontiguousarray(Q, dtype=float), *lm._args[:-2], P, Rts,
+        lm._kernel["lm_run_pairs"](owned(Q, float), *lm._args[:-2], P, Rts,
                                    kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats,
                                    np.empty((N, pt.shape[0], 2)))
         runs += N
