@@ -165,8 +165,10 @@ def test_preferences_keep_goals_and_lower_their_cost(panda):
 
 def test_joint_limit_margin_and_posture_by_name(panda):
     T = panda.fk(np.full(panda.n, 0.1))
-    r = ev.solve(panda, [Pose(panda.tip, T), JointLimitMargin(0.1), Posture({"panda_joint1": 0.5}, 0.5)], seed=0)
-    assert r.success
+    # a budget of restarts, not of wall-clock time: the verdict must not depend on the machine's load
+    r = ev.solve(panda, [Pose(panda.tip, T), JointLimitMargin(0.1), Posture({"panda_joint1": 0.5}, 0.5)], seed=0,
+                 timeout=None, max_restarts=20)
+    assert r.success, r.message
 
 
 def test_minimal_displacement_and_manipulability_preferences(panda):
