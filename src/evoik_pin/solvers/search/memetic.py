@@ -291,8 +291,10 @@ class MemeticPlan:
         self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
         self._table = None
         self._lm: LevenbergMarquardt | None = None
+        self._engines: list[LevenbergMarquardt] = []  # the last few engines made, newest first (_engine)
         self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
+        self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
         # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
         # never read (no q0 given), the best failed run's configuration and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
@@ -314,10 +316,18 @@ class MemeticPlan:
         return table, free
 
     def _engine(self, problem: IKProblem, engine: str) -> LevenbergMarquardt:
-        """The LM engine of ``problem``: the last one, retargeted, when only the targets differ."""
+        """The LM engine of ``problem``: the last one, retargeted, when only the targets differ; else one of the
+        last few engines (a solver alternating single targets and goal lists: one engine per goal stack), else a
+        new one."""
         lm = self._lm
-        if lm is None or lm.engine != engine or not lm.retarget(problem):
-            lm = self._lm = LevenbergMarquardt(problem, engine=engine)
+        if lm is not None and lm.engine == engine and lm.retarget(problem):
+            return lm
+        for other in self._engines:
+            if other is not lm and other.engine == engine and other.retarget(problem):
+                self._lm = other
+                return other
+        lm = self._lm = LevenbergMarquardt(problem, engine=engine)
+        self._engines = [lm, *self._engines[:3]]
         return lm
 
     def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
@@ -329,6 +339,10 @@ class MemeticPlan:
         kept_args, kept_table, entry = self._entry
         if entry is not None and kept_args is lm._args and kept_table is table:
             return entry(*args), 0.0
+        for kept in self._entries:  # an engine used before (a solver alternating goal stacks)
+            if kept[0] is lm._args and kept[1] is table:
+                self._entry = kept
+                return kept[2](*args), 0.0
         from .first_runs import first_runs
 
         loading = 0.0
@@ -345,6 +359,8 @@ class MemeticPlan:
             except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
                 entry = first_runs
         self._entry = (lm._args, table, entry)
+        if entry is not first_runs:
+            self._entries = [self._entry, *self._entries[:3]]
         return first_runs(*args), loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
@@ -541,8 +557,9 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
                 setup_s: float, iterations: int, table_seeds: int,
                 one_goal: bool = False) -> tuple[Result | None, float, tuple | None]:
     """:func:`_solve`'s stages 1-2 for one pose or position target, or a goal list of one goal on one frame
-    (``one_goal``: :func:`one_frame_goal`) (no scene, ``batch=1``, no ``table_offset``) up to its guaranteed runs (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call
-    (:mod:`.first_runs`) in _solve's order and with its decisions: the Result _solve returns when one of them meets
+    (``one_goal``: :func:`one_frame_goal`) (no scene, ``batch=1``, no ``table_offset``) up to its guaranteed runs
+    (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call (:mod:`.first_runs`) in
+    _solve's order and with its decisions: the Result _solve returns when one of them meets
     the tolerances, None when none does; the seconds spent loading the compiled function (on a plan's first solve),
     set-up rather than budget; and when none converged, the state _solve goes on from (runs made, their evaluations,
     their errors, the best of them as an LMOutcome, the table entries run), else None."""
