@@ -1,5 +1,6 @@
-"""memetic's guaranteed LM runs for one target in one compiled call (numba): q0's nearness, the seed table's ranking
-and the runs, in the order :func:`~evoik_pin.solvers.search.memetic._solve` makes them.
+"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame) in one compiled call
+(numba): q0's nearness, the seed table's ranking and the runs, in the order
+:func:`~evoik_pin.solvers.search.memetic._solve` makes them.
 
 A single-target solve that one of its first runs solves (nearly every one: the run from the table's nearest entry
 or a near q0 converges) spent most of its time in Python around those runs: q0's tip pose from Pinocchio and its

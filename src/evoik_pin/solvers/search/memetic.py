@@ -28,10 +28,11 @@ Stages, each tried only when the previous ones have not met the tolerances:
    (DE/current-to-best/1/bin from :mod:`evoik_pin.solvers.paper.de_ops`, dithered F in [0.5, 1], CR = 0.9,
    greedy selection on the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
 
-For one pose or position target (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock says (q0's
-and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the table's ranking,
-q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its state when none of
-them converges.
+For one pose or position target, or a goal list of one goal on one frame (:func:`one_frame_goal`, searched as a
+single target is, in its frame's features) (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock
+says (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the
+table's ranking, q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its
+state when none of them converges.
 
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
