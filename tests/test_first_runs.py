@@ -107,3 +107,71 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
 
     assert memetic._FROM_Q0 == STAGE_Q0
 
+
+
+def one_goal(kind, frame, T):
+    from evoik_pin.goals import Orientation, Pose, Position
+
+    if kind == "pose":
+        return [Pose(frame, T)]
+    if kind == "free":
+        return [Pose(frame, T, free="rz")]
+    if kind == "band":
+        return [Pose(frame, T, tolerance=[0.002] * 3 + [0.05] * 3, weight=2.0)]
+    if kind == "position":
+        return [Position(frame, T.translation.copy(), weight=0.5)]
+    return [Orientation(frame, T.rotation.copy())]
+
+
+@pytest.mark.parametrize("name, frame", [("ur5", None), ("panda", "panda_link6")])
+def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name, frame, monkeypatch):
+    """A goal list of one goal on one frame (a Pose, with free axes or bands, a Position, an Orientation; on the tip
+    and on a frame before it) goes through the compiled first runs (issue 23 gap a), with the Results of memetic's
+    runs made one by one (FIRST_RUNS off), bit for bit, goal errors and chosen members included: from random q0s,
+    near ones and none, where a first run converges and where memetic goes on from their state."""
+    robot = ek.load_robot(name)
+    frame = frame or robot.tip
+    _, Qs = targets(robot, 150, 31)
+    kinds = ("pose", "free", "band", "position", "orientation")
+    budget = {"timeout": None, "max_restarts": 2}
+    solver = ek.IKSolver(robot, **budget)
+    rng = np.random.default_rng(4)
+    calls = []
+    for i, q in enumerate(robot.random_configurations(len(Qs), np.random.default_rng(32))):
+        T = robot.fk(q, frame)
+        q0 = None if i % 2 else Qs[i]
+        if i % 5 == 0:  # a q0 near a solution: tried first
+            q0 = np.clip(q + 0.01 * rng.standard_normal(robot.n), robot.lower, robot.upper)
+        if i % 30 == 1:  # out of reach: memetic goes on from the first runs' state
+            T = T.copy()
+            T.translation = 3.0 * T.translation
+        calls.append((one_goal(kinds[i % len(kinds)], frame, T), q0, i))
+    made = []
+    one_call = memetic._first_runs
+    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(args[-1]) or one_call(*args))
+    fast = [solver.solve(g, q0=q0, seed=i) for g, q0, i in calls]
+    general = [ek.solve(robot, g, q0=q0, seed=i, **budget) for g, q0, i in calls[::7]]
+    assert made == [True] * (len(calls) + len(general))
+    monkeypatch.setattr(memetic, "FIRST_RUNS", False)
+    slow = [ek.IKSolver(robot, **budget).solve(g, q0=q0, seed=i) for g, q0, i in calls]
+    for a, b in zip(fast + general, slow + slow[::7], strict=True):
+        same(a, b)
+        assert a.goal_errors == b.goal_errors and a.chosen == b.chosen == [None]
+    stages = {r.message.split(" (")[0] for r in fast}
+    assert {"tolerance reached by LM from q0", "tolerance reached by LM from seed table"} <= stages
+    assert sum(r.success for r in fast) >= 0.8 * len(fast) and sum(not r.success for r in fast) >= 3
+
+
+def test_several_goals_keep_the_general_path(monkeypatch):
+    """Two goals, a goal set, a pointing goal: not one goal on one frame, so no compiled first runs."""
+    from evoik_pin.goals import Direction, Pose, Position
+
+    robot = ek.load_robot("panda")
+    T = robot.fk(robot.random_configurations(1, np.random.default_rng(0))[0])
+    made = []
+    one_call = memetic._first_runs
+    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
+    for goals in ([Pose(robot.tip, T), Position("panda_link4", robot.fk(np.zeros(robot.n)).translation)],
+                  [Direction(robot.tip, [0, 0, 1], T.rotation[:, 2])], [Pose(robot.tip, [T, T])]):
+        ek.solve(robot, goals, seed=1)
+    assert made == []

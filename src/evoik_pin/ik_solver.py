@@ -30,6 +30,7 @@ import numpy as np
 from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goal_verdict, split_options
 from .errors import ConfigurationError, EvoikError
 from .goals import is_goal_list
+from .goals.binding import bind
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
@@ -84,6 +85,9 @@ class IKSolver:
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
         self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
             ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
+        # a goal list's box: the bounds given, else the robot's (IKProblem's for a goal list: no target box)
+        self._goal_box = ((self._template.lower, self._template.upper) if "lower" in problem_kw or "upper" in problem_kw
+                          else (robot.lower.copy(), robot.upper.copy()))
         self._options = options
         info.check_options(options, n=robot.n)
         self._plan = None
@@ -108,14 +112,25 @@ class IKSolver:
     def problem(self, target, q0=None) -> IKProblem:
         """The :class:`~evoik_pin.IKProblem` of one target (or goal list) and start ``q0`` (None: the solver's),
         as :func:`evoik_pin.make_problem` would make it with the solver's options, checked the same way."""
-        if is_goal_list(target):
-            kw = self._problem_kw
-            q0 = self._q0 if q0 is None else q0
-            return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
-        target = Target.coerce(target)
-        p = object.__new__(IKProblem)
         template = self._template
         objective = self._objective
+        if is_goal_list(target):
+            if objective is not None:  # refused for a goal list: IKProblem raises its error
+                kw = self._problem_kw
+                q0 = self._q0 if q0 is None else q0
+                return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
+            # IKProblem's checks of a goal list (bind: the goals against the robot, their stack, which GoalStack.of
+            # keeps for equal goals), then q0's; the box the solver's own arrays, the same every call (the plan
+            # keeps its seed table and engine while the box arrays are the same)
+            goals, stack, pt, Rt = bind(self.robot, target)
+            p = object.__new__(IKProblem)
+            lower, upper = self._goal_box
+            p.__dict__ = {**template.__dict__, "target": None, "goals": goals, "_goal_stack": [stack, pt, Rt],
+                          "objective": None, "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0,
+                          "lower": lower, "upper": upper}
+            return p
+        target = Target.coerce(target)
+        p = object.__new__(IKProblem)
         # the template's fields with this call's: one dict built, no attribute set one by one
         p.__dict__ = {**template.__dict__, "target": target, "objective": default_objective(
             target, template.orientation_weight, template.pose_metric) if objective is None else objective,

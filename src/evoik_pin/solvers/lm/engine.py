@@ -193,6 +193,7 @@ class LevenbergMarquardt:
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
         self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
         self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
+        self._same_box = (problem.lower, problem.upper)  # box arrays known to give this engine's box constants
 
     def retarget(self, problem: IKProblem) -> bool:
         """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
@@ -214,8 +215,11 @@ class LevenbergMarquardt:
             self.problem = problem
             return True
         stack, pt, Rt = problem_goals(problem)
-        if stack is not self.goals or box_constants(self.robot, problem.lower, problem.upper)[4] is not self._box:
+        box = self._same_box
+        if stack is not self.goals or ((problem.lower is not box[0] or problem.upper is not box[1]) and box_constants(
+                self.robot, problem.lower, problem.upper)[4] is not self._box):
             return False
+        self._same_box = (problem.lower, problem.upper)  # the box arrays checked last (an IKSolver's, every call)
         if self._owned:
             self._pt[...] = pt
             self._Rt[...] = Rt

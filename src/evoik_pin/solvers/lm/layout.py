@@ -275,7 +275,28 @@ class GoalStack:
     def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux=None) -> GoalStack:
         """The stack of goals on ``frames`` (names; None: the robot's tip) of ``kinds`` (``KIND_*``) with
         ``weights`` (> 0), ``tolerances`` (m) and ``rotation_tolerances`` (rad), one each per goal; ``aux``: per
-        goal its further numbers (a 1-d array or None), packed into the (G, A) ``aux`` array (zero-padded)."""
+        goal its further numbers (a 1-d array or None), packed into the (G, A) ``aux`` array (zero-padded).
+
+        Cached per robot and these values (the last 64 stacks): a goal list solved again with new targets (an
+        :class:`~evoik_pin.IKSolver`'s calls, a trajectory) gets the same stack object, so an LM engine kept from
+        solve to solve is retargeted in place instead of rebuilt. A stack is never written (a tightened copy is
+        made with ``dataclasses.replace``)."""
+        key = (id(robot), tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
+               tuple(float(t) for t in tolerances), tuple(float(t) for t in rotation_tolerances),
+               None if aux is None else tuple(None if a is None else np.asarray(a, dtype=float).tobytes()
+                                              for a in aux))
+        hit = _STACK_CACHE.get(key)
+        if hit is not None and hit[0]() is robot:
+            return hit[1]
+        stack = cls._made(robot, frames, kinds, weights, tolerances, rotation_tolerances, aux)
+        if len(_STACK_CACHE) >= 64:
+            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
+        _STACK_CACHE[key] = (weakref.ref(robot), stack)
+        return stack
+
+    @classmethod
+    def _made(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux) -> GoalStack:
+        """:meth:`of`'s stack, built."""
         G = len(frames)
         spec = np.empty((G, GOAL_SIZE))
         R, p = np.empty((G, 3, 3)), np.empty((G, 3))
@@ -319,6 +340,7 @@ class GoalStack:
 
 
 _SINGLE_CACHE: dict = {}
+_STACK_CACHE: dict = {}  # GoalStack.of's: key -> (weak reference to the robot, stack)
 
 
 @dataclass(frozen=True)

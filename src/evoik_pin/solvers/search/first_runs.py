@@ -1,5 +1,6 @@
-"""memetic's guaranteed LM runs for one target in one compiled call (numba): q0's nearness, the seed table's ranking
-and the runs, in the order :func:`~evoik_pin.solvers.search.memetic._solve` makes them.
+"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame) in one compiled call
+(numba): q0's nearness, the seed table's ranking and the runs, in the order
+:func:`~evoik_pin.solvers.search.memetic._solve` makes them.
 
 A single-target solve that one of its first runs solves (nearly every one: the run from the table's nearest entry
 or a near q0 converges) spent most of its time in Python around those runs: q0's tip pose from Pinocchio and its
@@ -35,7 +36,7 @@ STAGE_Q0, STAGE_TABLE = 0, 1
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, table_runs, parent,
+def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, parent,
                FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out,
                g_out, errors, best_q, best):  # pragma: no cover - compiled
     """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
@@ -45,10 +46,15 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, t
         buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``). lower, upper (n,): the
             search box (q0's tip pose is taken at q0 clipped into it). gap: the table's typical squared gap
             (``SeedTable.typical_gap_sq``). Q (size, n): the table's configurations; F (size, D) their features
-            (D = 12 for a pose, 3 for a position), FT (D, size) the same transposed, sq (size,) their squared norms
-            (the ranking: :func:`~.nearest.table_distances`). weight: the table's rotation weight (m).
+            (the goal frame's position, then its rotation's 9 entries: D = 12; position alone: D = 3; rotation
+            alone: D = 9), FT (D, size) the same transposed, sq (size,) their squared norms (the ranking:
+            :func:`~.nearest.table_distances`). sp, sr: the features' scales of a position (1 for a single target,
+            sqrt(weight) for a goal) and of a rotation's entries (the table's rotation weight (m), times
+            sqrt(weight) for a goal). oriented: whether the engine counts the orientation error (``lm.oriented``:
+            a run's error is position + orientation error, else position error).
             table_runs: the entries run at most (>= 1).
-        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on the tip.
+        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on one frame (the
+            tip's for a single target).
         q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's
             position error + orientation error (m + rad), in order. best_q (n,), best (6,): when none converges,
             the run memetic keeps as its best (the first of the lowest errors): its configuration, and its position
@@ -61,14 +67,17 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, t
     """
     n = q0.shape[0]
     D = F.shape[1]
-    oriented = D > 3
-    # the target's features (SeedTable.one_target_features: its position, then weight x its rotation's entries)
+    has_position = D != 9
+    ro = 3 if has_position else 0  # where the rotation's entries start (D > 3: they are features)
+    # the target's features (SeedTable.one_target_features, .one_goal_features: sp x its position, then sr x its
+    # rotation's entries; the products NumPy makes, so the same numbers)
     f = np.empty(D)
-    for j in range(3):
-        f[j] = pt[0, j]
-    if oriented:
+    if has_position:
+        for j in range(3):
+            f[j] = sp * pt[0, j]
+    if D > 3:
         for j in range(9):
-            f[3 + j] = weight * Rt[0, j // 3, j % 3]
+            f[ro + j] = sr * Rt[0, j // 3, j % 3]
     d = np.empty(F.shape[0])
     table_distances(FT, sq, f, d)
     out = np.empty(max(table_runs, 1), dtype=np.int64)
@@ -90,12 +99,13 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, weight, t
         R, p = np.empty((3, 3)), np.empty(3)
         frame_pose(Rj, pj, int(spec[0, G_JOINT]), gR[0], gp[0], R, p)
         d0 = 0.0
-        for j in range(3):
-            c = f[j] - p[j]
-            d0 += c * c
-        if oriented:
+        if has_position:
+            for j in range(3):
+                c = f[j] - sp * p[j]
+                d0 += c * c
+        if D > 3:
             for j in range(9):
-                c = f[3 + j] - weight * R[j // 3, j % 3]
+                c = f[ro + j] - sr * R[j // 3, j % 3]
                 d0 += c * c
         if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
             if select_k(d, np.zeros(0, dtype=np.bool_), 1, out) > 0:

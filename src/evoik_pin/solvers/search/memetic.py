@@ -28,10 +28,11 @@ Stages, each tried only when the previous ones have not met the tolerances:
    (DE/current-to-best/1/bin from :mod:`evoik_pin.solvers.paper.de_ops`, dithered F in [0.5, 1], CR = 0.9,
    greedy selection on the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
 
-For one pose or position target (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock says (q0's
-and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the table's ranking,
-q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its state when none of
-them converges.
+For one pose or position target, or a goal list of one goal on one frame (:func:`one_frame_goal`, searched as a
+single target is, in its frame's features) (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock
+says (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the
+table's ranking, q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its
+state when none of them converges.
 
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
@@ -52,6 +53,7 @@ from ...result import Result
 from .. import get_solver, register
 from ..collision_verdict import pairs_text
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from ..lm.layout import KIND_BEYOND_FRAME
 from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
@@ -290,8 +292,10 @@ class MemeticPlan:
         self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
         self._table = None
         self._lm: LevenbergMarquardt | None = None
+        self._engines: list[LevenbergMarquardt] = []  # the last few engines made, newest first (_engine)
         self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
+        self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
         # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
         # never read (no q0 given), the best failed run's configuration and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
@@ -313,10 +317,18 @@ class MemeticPlan:
         return table, free
 
     def _engine(self, problem: IKProblem, engine: str) -> LevenbergMarquardt:
-        """The LM engine of ``problem``: the last one, retargeted, when only the targets differ."""
+        """The LM engine of ``problem``: the last one, retargeted, when only the targets differ; else one of the
+        last few engines (a solver alternating single targets and goal lists: one engine per goal stack), else a
+        new one."""
         lm = self._lm
-        if lm is None or lm.engine != engine or not lm.retarget(problem):
-            lm = self._lm = LevenbergMarquardt(problem, engine=engine)
+        if lm is not None and lm.engine == engine and lm.retarget(problem):
+            return lm
+        for other in self._engines:
+            if other is not lm and other.engine == engine and other.retarget(problem):
+                self._lm = other
+                return other
+        lm = self._lm = LevenbergMarquardt(problem, engine=engine)
+        self._engines = [lm, *self._engines[:3]]
         return lm
 
     def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
@@ -328,6 +340,10 @@ class MemeticPlan:
         kept_args, kept_table, entry = self._entry
         if entry is not None and kept_args is lm._args and kept_table is table:
             return entry(*args), 0.0
+        for kept in self._entries:  # an engine used before (a solver alternating goal stacks)
+            if kept[0] is lm._args and kept[1] is table:
+                self._entry = kept
+                return kept[2](*args), 0.0
         from .first_runs import first_runs
 
         loading = 0.0
@@ -344,6 +360,8 @@ class MemeticPlan:
             except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
                 entry = first_runs
         self._entry = (lm._args, table, entry)
+        if entry is not first_runs:
+            self._entries = [self._entry, *self._entries[:3]]
         return first_runs(*args), loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
@@ -365,19 +383,22 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
 
     # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
     # table of this box with its nearness features (cached per robot and box).
+    goals = problem.goals is not None
+    one_goal = goals and one_frame_goal(problem)  # searched as a single target is, in its goal frame's features
     if table_seeds is None:
-        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if problem.goals is not None else DEFAULT_TABLE_SEEDS
+        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals and not one_goal else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = plan._prepare(problem, table_size if use_table else 0, engine)
-    if table is not None and problem.goals is not None:
+    if table is not None and goals and not one_goal:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     lm = plan._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     resumed = None  # the guaranteed runs' state, when the compiled first runs made them and none converged
-    if (FIRST_RUNS and table is not None and problem.goals is None and problem.scene is None and engine == "compiled"
-            and batch == 1 and table_offset == 0 and not problem.target.planar):
-        result, loading, resumed = _first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds)
+    if (FIRST_RUNS and table is not None and (one_goal or not (goals or problem.target.planar))
+            and problem.scene is None and engine == "compiled" and batch == 1 and table_offset == 0):
+        result, loading, resumed = _first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds,
+                                               one_goal)
         if result is not None:
             return result
         t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
@@ -396,11 +417,12 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
     # to replace.
     ranked = first = None
-    goals = problem.goals is not None
     if table is not None:
         # lazy: ranks on the first next(); with a scene, among the collision-free entries only
-        # a goal list: starting configurations, composed goal by goal and table entries alternately
-        ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if goals
+        # a goal list: starting configurations, composed goal by goal and table entries alternately; one goal on
+        # one frame: the entries nearest in its frame's features
+        ranked = (table.ranked_goals(problem, table_offset + table_seeds, free) if one_goal
+                  else table.goal_starts(problem, table_offset + table_seeds, free) if goals
                   else table.ranked(problem.target, table_offset + table_seeds, free))
         if table_offset:
             ranked = itertools.islice(ranked, table_offset, None)
@@ -414,20 +436,32 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         rest = list(itertools.islice(ranked, made, None))
         if rest and not search.out_of_time():
             solved = search.polish_many(table.Q[rest])
-    elif q0 is not None and table is not None and not goals:
+    elif q0 is not None and table is not None and (one_goal or not goals):
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
-        d0 = table.distance_sq(problem.target, robot.fk_unchecked(np.minimum(np.maximum(q0, problem.lower),
-                                                                            problem.upper)))
-        if d0 > table.typical_gap_sq(problem.target):
-            first = next(ranked, None)
-            q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
+        qc = np.minimum(np.maximum(q0, problem.lower), problem.upper)
+        if one_goal:  # the same in the goal frame's features
+            goal = problem.goals[0]
+            F, _, _, gap, _, _ = table.one_goal_features(goal)
+            _, pt, Rt = problem.goal_stack()
+            f = table.one_goal_point(goal, pt[0], Rt[0])
+            T = robot.frame_poses_unchecked(qc, [robot.frame_id(goal.frame)])[0]
+            d = f - table.one_goal_point(goal, T.translation, T.rotation)
+            d0 = float(d.dot(d))
+            if d0 > gap:
+                first = next(ranked, None)
+                q0_first = first is None or d0 <= float((f - F[first]).dot(f - F[first]))
+        else:
+            d0 = table.distance_sq(problem.target, robot.fk_unchecked(qc))
+            if d0 > table.typical_gap_sq(problem.target):
+                first = next(ranked, None)
+                q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
     if q0_first and resumed is None:
         stage = "q0"
         solved = search.polish(q0)
     if resumed is not None:
         pass
-    elif not solved and goals and table is not None and not search.out_of_time():
+    elif not solved and goals and not one_goal and table is not None and not search.out_of_time():
         stage = "seed table"
         solved = search.polish_iter(ranked)
     elif not solved and table is not None and not search.out_of_time():
@@ -505,16 +539,37 @@ _FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first 
 FIRST_RUNS = True
 
 
+def one_frame_goal(problem: IKProblem) -> bool:
+    """Whether a goal list is one goal on one frame with a position or an orientation to match (a Pose with or
+    without free axes or bands, a Position with or without a band, an Orientation; not a goal set, a pointing goal
+    or a goal beyond one frame): memetic searches it as it does a single target (:func:`_solve`): q0 first or after
+    the nearest entry, the entries nearest in the goal frame's features (:meth:`SeedTable.one_goal_features`),
+    ``DEFAULT_TABLE_SEEDS`` of them, the guaranteed runs in one compiled call. A start composed goal by goal
+    (:meth:`SeedTable.goal_starts`) is then the table entry itself, and a random q0 tried first a lost run."""
+    goals = problem.goals
+    if goals is None or len(goals) != 1:
+        return False
+    goal = goals[0]
+    return goal.kind < KIND_BEYOND_FRAME and goal.alternatives is None and (goal.has_position or
+                                                                            goal.has_orientation)
+
+
 def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
-                setup_s: float, iterations: int, table_seeds: int) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_solve`'s stages 1-2 for one pose or position target (no scene, ``batch=1``, no ``table_offset``) up
-    to its guaranteed runs (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call
-    (:mod:`.first_runs`) in _solve's order and with its decisions: the Result _solve returns when one of them meets
+                setup_s: float, iterations: int, table_seeds: int,
+                one_goal: bool = False) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_solve`'s stages 1-2 for one pose or position target, or a goal list of one goal on one frame
+    (``one_goal``: :func:`one_frame_goal`) (no scene, ``batch=1``, no ``table_offset``) up to its guaranteed runs
+    (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call (:mod:`.first_runs`) in
+    _solve's order and with its decisions: the Result _solve returns when one of them meets
     the tolerances, None when none does; the seconds spent loading the compiled function (on a plan's first solve),
     set-up rather than budget; and when none converged, the state _solve goes on from (runs made, their evaluations,
     their errors, the best of them as an LMOutcome, the table entries run), else None."""
-    key = "position" if problem.target.rotation is None else "pose"
-    F, FT, sq = table.compiled_features(key)
+    if one_goal:
+        F, FT, sq, gap, sp, sr = table.one_goal_features(problem.goals[0])
+    else:
+        key = "position" if problem.target.rotation is None else "pose"
+        F, FT, sq = table.compiled_features(key)
+        gap, sp, sr = table._gap(key), 1.0, table.weight
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
     n = problem.n
@@ -524,15 +579,22 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     errors, g_out, zeros, best_q, best = plan._scratch
     (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
         (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
-         table._gap(key), table.Q, F, FT, sq, table.weight, table_runs, *args, params, q_out, g_out, errors, best_q,
+         gap, table.Q, F, FT, sq, sp, sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q,
          best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
         kept = LMOutcome(best_q.copy(), b_pos, b_rot if lm.oriented else None, False, int(b_it), int(b_ev), None,
                          b_cost)
         return None, loading, (runs, evaluations, errors[:runs].tolist(), kept, table_runs)
-    pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
-    if not (pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)):
+    goal_errors = None
+    if one_goal:  # _solve's verdict on a goal list: each goal's errors at q (one kinematics pass)
+        goal_errors = problem.goal_errors(q_out)
+        pos, rot, cost = problem.goal_summary(goal_errors)
+        met = problem.goals_met(goal_errors)
+    else:
+        pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
+        met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    if not met:
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
     history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
                "attempt_error": errors[:runs].copy()}
@@ -541,7 +603,7 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
         evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0 - loading, history=history,
         message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
                 "restart(s))",
-        method="memetic", setup_s=setup_s + loading), loading, None
+        method="memetic", setup_s=setup_s + loading, goal_errors=goal_errors), loading, None
 
 
 def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,

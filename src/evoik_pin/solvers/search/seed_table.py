@@ -67,6 +67,7 @@ class SeedTable:
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         self._transposed: dict = {}  # feature key -> compiled_features
+        self._one_goal: dict = {}  # (frame, goal_spec) -> one_goal_features
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -390,12 +391,36 @@ class SeedTable:
     def _gap(self, key: str) -> float:
         gap = self._gaps.get(key)
         if gap is None:
-            F, sq = self._table_features(key)
-            sample = np.linspace(0, F.shape[0] - 1, min(64, F.shape[0])).astype(int)
-            D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
-            D[np.arange(sample.size), sample] = np.inf
-            gap = self._gaps[key] = float(np.median(D.min(axis=1)))
+            gap = self._gaps[key] = _typical_gap(*self._table_features(key))
         return gap
+
+    def one_goal_features(self, goal) -> tuple:
+        """For a goal list of one goal on one frame (memetic searches it as a single target: :mod:`.memetic`,
+        :mod:`.first_runs`), the table's features of the goal's frame (:meth:`goal_table_features`: ``sp`` x the
+        frame's position when the goal has one, then ``sr`` x its rotation's entries when it has an orientation):
+        (F (size, D), FT (D, size), sq (size,), the typical squared gap between entries (:meth:`typical_gap_sq`'s,
+        in these features), sp, sr), cached per frame, weight and kind. ``sp = sqrt(weight)``,
+        ``sr = sqrt(weight) x self.weight``: :meth:`ranked_goals`'s metric."""
+        spec = self.goal_spec([goal])
+        key = (goal.frame, spec)
+        hit = self._one_goal.get(key)
+        if hit is None:
+            F, sq = self.goal_table_features((goal.frame,), spec)
+            s = spec[0][0]
+            if len(self._one_goal) > 8:
+                self._one_goal.clear()
+            hit = self._one_goal[key] = (F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), s, s * self.weight)
+        return hit
+
+    def one_goal_point(self, goal, p: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The features (D,) of the pose (p (3,) m, R (3, 3)) of ``goal``'s frame (or of its target) in
+        :meth:`one_goal_features`'s metric: the products :meth:`_goal_feature_blocks` makes, so the same numbers."""
+        spec = self.goal_spec([goal])[0]
+        s, oriented = spec[0], spec[1]
+        parts = [s * p] if len(spec) < 3 or spec[2] else []
+        if oriented:
+            parts.append((s * self.weight) * R.reshape(9))
+        return np.concatenate(parts)
 
     def nearest(self, targets: list[Target], k: int, allowed: np.ndarray | None = None) -> np.ndarray:
         """Indices (N, k) of the k table entries nearest to each target, nearest first (only ``allowed``
@@ -431,6 +456,15 @@ class SeedTable:
             return np.zeros((N, 0), dtype=np.intp)
         _, idx = tree.query(f, k=k, eps=eps)
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
+
+
+def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
+    """Median squared distance from an entry to its nearest other entry, over 64 entries sampled evenly, in
+    features F (size, d) with squared norms sq (size,)."""
+    sample = np.linspace(0, F.shape[0] - 1, min(64, F.shape[0])).astype(int)
+    D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
+    D[np.arange(sample.size), sample] = np.inf
+    return float(np.median(D.min(axis=1)))
 
 
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
