@@ -206,6 +206,16 @@ class IKProblem:
 
     def _goal_population_errors(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q``."""
+        return self._goal_population_members(Q)[:2]
+
+    def nearest_members(self, Q: np.ndarray) -> np.ndarray:
+        """(N, G) int: per row of ``Q`` (N, n) and goal, the index of the goal set's member whose errors the
+        violation (:meth:`goal_violation`) reads, the one nearest by position + orientation_weight x angle (0 for a
+        goal with one target). Bookkeeping: no evaluation is counted."""
+        return self._goal_population_members(Q)[2]
+
+    def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_goal_population_errors` of ``Q`` and the goal-set members they are of (:meth:`nearest_members`)."""
         from .lie import relative_angle
 
         P, R = self.robot.fk_batch(Q, validate=False, frames=[g.frame for g in self.goals])
@@ -222,15 +232,17 @@ class IKProblem:
                 pos[:, g], rot[:, g] = kinded
             elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
+        members = np.zeros(pos.shape, dtype=np.intp)
         for g in self.goal_sets:  # a goal set's violation: that of its member nearest by the goals' cost
-            for member in self.goals[g].alternatives[1:]:
+            for m, member in enumerate(self.goals[g].alternatives[1:], start=1):
                 pm, Rm = member.encode()
                 pos_m = np.linalg.norm(P[:, g] - pm, axis=1)
                 rot_m = relative_angle(Rm, R[:, g]) if member.has_orientation else np.zeros_like(pos_m)
                 better = pos_m + self.orientation_weight * rot_m < pos[:, g] + self.orientation_weight * rot[:, g]
                 pos[:, g] = np.where(better, pos_m, pos[:, g])
                 rot[:, g] = np.where(better, rot_m, rot[:, g])
-        return pos, rot
+                members[:, g] = np.where(better, m, members[:, g])
+        return pos, rot, members
 
     def _goal_cost(self, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         """The goals' cost (N,) from their errors (N, G): the weighted sum of position + orientation_weight x angle."""
