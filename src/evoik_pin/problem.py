@@ -214,6 +214,26 @@ class IKProblem:
         goal with one target). Bookkeeping: no evaluation is counted."""
         return self._goal_population_members(Q)[2]
 
+    def goal_rows(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The LM kernel's task rows of a goal list at each row of ``Q`` (N, n): the stacked error e (N, rows) and its
+        Jacobian E (N, rows, n), ``e = f(q) - target`` and ``E = de/dq`` for every goal kind, each goal's rows scaled
+        by the square root of its weight (zero for a goal inside its dead-zone bands); a goal set's rows are those of
+        the member each configuration is nearest to (:meth:`nearest_members`). One compiled call for the population
+        (:func:`~evoik_pin.solvers.lm.population.task_rows_batch`). Bookkeeping: no evaluation is counted."""
+        from .solvers.lm.population import task_rows_batch
+
+        stack, pt, Rt = self._goal_stack
+        Q = np.ascontiguousarray(Q, dtype=float)
+        N = Q.shape[0]
+        P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)
+        if self.goal_sets:
+            members = self.nearest_members(Q)
+            for g in self.goal_sets:
+                P[:, g], Rts[:, g] = (t[members[:, g]] for t in self.goals[g].member_targets)
+        e, E = np.empty((N, stack.rows)), np.empty((N, stack.rows, self.n))
+        task_rows_batch(Q, *self.robot.tree_constants(), *stack.arrays, P, Rts, e, E, np.empty((N, len(self.goals), 2)))
+        return e, E
+
     def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_goal_population_errors` of ``Q`` and the goal-set members they are of (:meth:`nearest_members`)."""
         from .lie import relative_angle

@@ -44,7 +44,6 @@ from ...objectives import (
 from ...problem import IKProblem
 from ...result import Front, Result
 from .. import register
-from ..lm.population import task_rows_batch
 from ..options import check_fraction, check_int, check_nonnegative, check_nonnegative_vector
 from .common import SolverRun, diversity, halton, initial_population
 
@@ -542,23 +541,12 @@ def _goal_manipulability(problem: IKProblem, which) -> tuple[GoalManipulability,
 
 def goal_task(problem: IKProblem, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The task error ``e`` (N, rows) and Jacobian ``J`` (N, rows, n) of a goal list at ``Q`` (N, n), for
-    :func:`dls_repair`: the LM kernel's own rows of every goal kind (:func:`.lm.population.task_rows_batch`: pose,
-    position, bands and free axes, orientation, direction, look-at, centre of mass, support polygon, relative pose;
-    each goal's rows scaled by the square root of its weight, zero for a goal inside its dead-zone bands), with the
-    sign :func:`dls_repair` reads, target minus current: ``e = -(f(q) - target)``, ``J = d(f(q) - target)/dq``.
-    A goal set's rows are those of the member each configuration is nearest to
-    (:meth:`~evoik_pin.problem.IKProblem.nearest_members`, the member whose errors its violation reads)."""
-    stack, pt, Rt = problem.goal_stack()
-    Q = np.ascontiguousarray(Q, dtype=float)
-    N = Q.shape[0]
-    P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)
-    if problem.goal_sets:
-        members = problem.nearest_members(Q)
-        for g in problem.goal_sets:
-            P[:, g], Rts[:, g] = (t[members[:, g]] for t in problem.goals[g].member_targets)
-    e, E = np.empty((N, stack.rows)), np.empty((N, stack.rows, problem.n))
-    task_rows_batch(Q, *problem.robot.tree_constants(), *stack.arrays, P, Rts, e, E,
-                    np.empty((N, len(problem.goals), 2)))
+    :func:`dls_repair`: the LM kernel's own rows of every goal kind (:meth:`~evoik_pin.problem.IKProblem.goal_rows`:
+    pose, position, bands and free axes, orientation, direction, look-at, centre of mass, support polygon, relative
+    pose; each goal's rows scaled by the square root of its weight, zero inside dead-zone bands; a goal set's those
+    of the member each configuration is nearest to) with the sign :func:`dls_repair` reads, target minus current:
+    ``e = -(f(q) - target)``, ``J = d(f(q) - target)/dq``."""
+    e, E = problem.goal_rows(Q)
     return -e, E
 
 
@@ -576,7 +564,8 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     the paper's two, manipulability and smoothness, the manipulability Y taken over the stacked Jacobian rows of
     every goal frame (:class:`GoalManipulability`: the translation rows of each goal, the rotation rows of a Pose
     too; ``manipulability_goals`` picks fewer goals), and the repair steps zero every goal's rows at once
-    (:func:`goal_task`: the stacked task error, each goal's rows scaled by the square root of its weight).
+    (:func:`goal_task`: the LM kernel's rows of every goal kind, each goal's rows scaled by the square root of its
+    weight; a goal set's those of the member each individual is nearest to).
 
     Options:
         population: 200 (paper). max_generations: offspring generations (100), always all run.
