@@ -11,8 +11,11 @@ URDF (the frames' placements), not by the solver's own numbers.
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import evoik_pin as ek
+from evoik_pin.errors import OptionError
 from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Pose, Position, RelativePose, bind
 from evoik_pin.goals.center_of_mass import com_of
 from evoik_pin.problem import IKProblem
@@ -63,8 +66,11 @@ def kernel_error(problem, Q) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------------- the batch rows
-def test_batch_rows_equal_the_kernel_rows_one_configuration_at_a_time(talos, rng):
+@settings(max_examples=8, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_batch_rows_equal_the_kernel_rows_one_configuration_at_a_time(talos, seed):
     """Every goal kind the kernel knows, one goal weighted, each configuration with its own targets."""
+    rng = np.random.default_rng(seed)
     q = talos.random_configurations(1, rng)[0]
     A, B = talos.fk(q, "arm_left_7_link"), talos.fk(q, "arm_right_7_link")
     goals = [Pose(SOLES[0], talos.fk(q, SOLES[0]), weight=2.5), Pose(SOLES[1], talos.fk(q, SOLES[1]), free="rz"),
@@ -84,6 +90,15 @@ def test_batch_rows_equal_the_kernel_rows_one_configuration_at_a_time(talos, rng
         e1, E1, ge1 = one_rows(talos, stack, Q[i], P[i], Rts[i])
         assert np.array_equal(e[i], e1) and np.array_equal(E[i], E1) and np.array_equal(ge[i], ge1)
     assert np.abs(E).max() > 0 and np.abs(e).max() > 0  # rows of every configuration were written
+
+
+def test_goal_rows_and_nearest_members_need_a_goal_list(baxter):
+    problem = IKProblem(baxter, [0.5, 0.2, 0.3])
+    Q = np.zeros((2, baxter.n))
+    with pytest.raises(OptionError, match="IKProblem.goal_rows reads the goals of a goal list"):
+        problem.goal_rows(Q)
+    with pytest.raises(OptionError, match="IKProblem.nearest_members reads the goals of a goal list"):
+        problem.nearest_members(Q)
 
 
 def test_goal_task_is_the_kernel_rows_with_the_repair_sign(talos, rng):

@@ -212,7 +212,13 @@ class IKProblem:
         """(N, G) int: per row of ``Q`` (N, n) and goal, the index of the goal set's member whose errors the
         violation (:meth:`goal_violation`) reads, the one nearest by position + orientation_weight x angle (0 for a
         goal with one target). Bookkeeping: no evaluation is counted."""
+        self._need_goal_list("nearest_members")
         return self._goal_population_members(Q)[2]
+
+    def _need_goal_list(self, what: str) -> None:
+        if self.goals is None:
+            raise OptionError(f"IKProblem.{what} reads the goals of a goal list; this problem has one target: make it "
+                              "with a list of goals (evoik_pin.goals: Pose(frame, T), Position(frame, p), ...)")
 
     def goal_rows(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The LM kernel's task rows of a goal list at each row of ``Q`` (N, n): the stacked error e (N, rows) and its
@@ -222,6 +228,7 @@ class IKProblem:
         (:func:`~evoik_pin.solvers.lm.population.task_rows_batch`). Bookkeeping: no evaluation is counted."""
         from .solvers.lm.population import task_rows_batch
 
+        self._need_goal_list("goal_rows")
         stack, pt, Rt = self._goal_stack
         Q = np.ascontiguousarray(Q, dtype=float)
         N = Q.shape[0]
