@@ -206,6 +206,43 @@ class IKProblem:
 
     def _goal_population_errors(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q``."""
+        return self._goal_population_members(Q)[:2]
+
+    def nearest_members(self, Q: np.ndarray) -> np.ndarray:
+        """(N, G) int: per row of ``Q`` (N, n) and goal, the index of the goal set's member whose errors the
+        violation (:meth:`goal_violation`) reads, the one nearest by position + orientation_weight x angle (0 for a
+        goal with one target). Bookkeeping: no evaluation is counted."""
+        self._need_goal_list("nearest_members")
+        return self._goal_population_members(Q)[2]
+
+    def _need_goal_list(self, what: str) -> None:
+        if self.goals is None:
+            raise OptionError(f"IKProblem.{what} reads the goals of a goal list; this problem has one target: make it "
+                              "with a list of goals (evoik_pin.goals: Pose(frame, T), Position(frame, p), ...)")
+
+    def goal_rows(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The LM kernel's task rows of a goal list at each row of ``Q`` (N, n): the stacked error e (N, rows) and its
+        Jacobian E (N, rows, n), ``e = f(q) - target`` and ``E = de/dq`` for every goal kind, each goal's rows scaled
+        by the square root of its weight (zero for a goal inside its dead-zone bands); a goal set's rows are those of
+        the member each configuration is nearest to (:meth:`nearest_members`). One compiled call for the population
+        (:func:`~evoik_pin.solvers.lm.population.task_rows_batch`). Bookkeeping: no evaluation is counted."""
+        from .solvers.lm.population import task_rows_batch
+
+        self._need_goal_list("goal_rows")
+        stack, pt, Rt = self._goal_stack
+        Q = np.ascontiguousarray(Q, dtype=float)
+        N = Q.shape[0]
+        P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)
+        if self.goal_sets:
+            members = self.nearest_members(Q)
+            for g in self.goal_sets:
+                P[:, g], Rts[:, g] = (t[members[:, g]] for t in self.goals[g].member_targets)
+        e, E = np.empty((N, stack.rows)), np.empty((N, stack.rows, self.n))
+        task_rows_batch(Q, *self.robot.tree_constants(), *stack.arrays, P, Rts, e, E, np.empty((N, len(self.goals), 2)))
+        return e, E
+
+    def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_goal_population_errors` of ``Q`` and the goal-set members they are of (:meth:`nearest_members`)."""
         from .lie import relative_angle
 
         P, R = self.robot.fk_batch(Q, validate=False, frames=[g.frame for g in self.goals])
@@ -222,15 +259,17 @@ class IKProblem:
                 pos[:, g], rot[:, g] = kinded
             elif goal.has_orientation:
                 rot[:, g] = relative_angle(Rt[g], R[:, g])
+        members = np.zeros(pos.shape, dtype=np.intp)
         for g in self.goal_sets:  # a goal set's violation: that of its member nearest by the goals' cost
-            for member in self.goals[g].alternatives[1:]:
+            for m, member in enumerate(self.goals[g].alternatives[1:], start=1):
                 pm, Rm = member.encode()
                 pos_m = np.linalg.norm(P[:, g] - pm, axis=1)
                 rot_m = relative_angle(Rm, R[:, g]) if member.has_orientation else np.zeros_like(pos_m)
                 better = pos_m + self.orientation_weight * rot_m < pos[:, g] + self.orientation_weight * rot[:, g]
                 pos[:, g] = np.where(better, pos_m, pos[:, g])
                 rot[:, g] = np.where(better, rot_m, rot[:, g])
-        return pos, rot
+                members[:, g] = np.where(better, m, members[:, g])
+        return pos, rot, members
 
     def _goal_cost(self, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         """The goals' cost (N,) from their errors (N, G): the weighted sum of position + orientation_weight x angle."""

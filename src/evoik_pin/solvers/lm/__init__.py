@@ -7,6 +7,7 @@
 * :mod:`.reference`: the same iteration as a Python loop over Pinocchio, the reference the kernel is tested
   against (``engine="python"``);
 * :mod:`.layout`: the constants and the kernel's memory layouts; :mod:`.outcome`: what runs return;
+* :mod:`.population`: the kernel's task rows of a whole population in one compiled call (NSGA-II's repair);
 * :mod:`.polish`: ``polish=True``, any solver's answer taken to machine precision by one LM run.
 """
 

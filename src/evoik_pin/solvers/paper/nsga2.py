@@ -33,7 +33,6 @@ import numpy as np
 
 from ... import lie
 from ...errors import BoundsError, OptionError
-from ...goals import Pose, Position
 from ...objectives import (
     Manipulability,
     Objective,
@@ -541,21 +540,14 @@ def _goal_manipulability(problem: IKProblem, which) -> tuple[GoalManipulability,
 
 
 def goal_task(problem: IKProblem, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The task error ``e`` (N, m) and Jacobian ``J`` (N, m, n) of a goal list (Pose and Position goals) at ``Q``
-    (N, n), for :func:`dls_repair`: per goal, ``sqrt(weight)`` times its target position minus the frame's (m) and,
-    for a Pose, the base-frame rotation vector ``log3(R_t R^T)`` (rad), over the matching rows of the frame's
-    base-frame Jacobian (:func:`goal_rows`): the stacked counterpart of the one target's rows."""
-    _, pt, Rt = problem.goal_stack()
-    errors, rows = [], []
-    for g, goal in enumerate(problem.goals):
-        p, R, J = problem.robot.fk_jacobian_batch(Q, validate=False, frame=goal.frame)
-        e = pt[g] - p
-        if goal.has_orientation:
-            e = np.concatenate([e, lie.log3(np.einsum("ij,nkj->nik", Rt[g], R))], axis=1)
-        w = np.sqrt(goal.weight)
-        errors.append(w * e)
-        rows.append(w * J[:, goal_rows(goal)])
-    return np.concatenate(errors, axis=1), np.concatenate(rows, axis=1)
+    """The task error ``e`` (N, rows) and Jacobian ``J`` (N, rows, n) of a goal list at ``Q`` (N, n), for
+    :func:`dls_repair`: the LM kernel's own rows of every goal kind (:meth:`~evoik_pin.problem.IKProblem.goal_rows`:
+    pose, position, bands and free axes, orientation, direction, look-at, centre of mass, support polygon, relative
+    pose; each goal's rows scaled by the square root of its weight, zero inside dead-zone bands; a goal set's those
+    of the member each configuration is nearest to) with the sign :func:`dls_repair` reads, target minus current:
+    ``e = -(f(q) - target)``, ``J = d(f(q) - target)/dq``."""
+    e, E = problem.goal_rows(Q)
+    return -e, E
 
 
 @register("nsga2", "paper 003: NSGA-II with constraint domination; Pareto front of manipulability and "
@@ -572,7 +564,8 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     the paper's two, manipulability and smoothness, the manipulability Y taken over the stacked Jacobian rows of
     every goal frame (:class:`GoalManipulability`: the translation rows of each goal, the rotation rows of a Pose
     too; ``manipulability_goals`` picks fewer goals), and the repair steps zero every goal's rows at once
-    (:func:`goal_task`: the stacked task error, each goal's rows scaled by the square root of its weight).
+    (:func:`goal_task`: the LM kernel's rows of every goal kind, each goal's rows scaled by the square root of its
+    weight; a goal set's those of the member each individual is nearest to).
 
     Options:
         population: 200 (paper). max_generations: offspring generations (100), always all run.
@@ -613,10 +606,6 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     repair_weights = None
     fixed_rows: list[int] = []
     fixed_goal_rows: list[str] = []
-    if goals and repair_steps and any(type(g) not in (Pose, Position) for g in problem.goals):
-        kinds = sorted({type(g).__name__ for g in problem.goals} - {"Pose", "Position"})
-        raise OptionError(f"nsga2's repair steps (repair_steps={repair_steps}) know Pose and Position goals, not "
-                          f"{', '.join(kinds)}: give repair_steps=0 (and a looser tolerance) or use memetic")
     if goals and manipulability_rows is not None:
         raise OptionError("manipulability_rows selects rows of the tip's Jacobian for one target; for a goal list "
                           "give manipulability_goals=[...] (goal indices or frames: their rows count)")
