@@ -1,5 +1,6 @@
-"""solve_many and solve_trajectory with prefer=, locked= and preferences in goal lists (issue 23, gap e): the answers
-:func:`evoik_pin.solve` gives one by one, whatever the workers; locked joints held; bad input refused before any work."""
+"""solve_many and solve_trajectory with prefer=, locked= and preferences in goal lists (issue 23, gap e): the
+answers :func:`evoik_pin.solve` gives one by one, whatever the workers; locked joints held; bad input refused before
+any work."""
 
 from __future__ import annotations
 
@@ -104,7 +105,7 @@ def test_trajectory_pro_box_with_prefer(panda, path):
     Q, targets = path
     out = ev.solve_trajectory(panda, targets, q0=Q[0], prefer="nearest", pro=True, delta=0.3, seed=0, **BUDGET)
     assert all(r.success for r in out)
-    for previous, r in zip(out, out[1:]):
+    for previous, r in zip(out[:-1], out[1:], strict=True):
         assert np.all(np.abs(r.q - previous.q) <= 0.3 + 1e-12)  # inside the previous answer's box
 
 
@@ -164,13 +165,13 @@ def test_many_locked_holds_the_joints_and_meets_the_goals(panda, poses, workers)
     np.testing.assert_array_equal(np.delete(out.q, 2, axis=1), on_sub.q)
     # locked with prefer: solve's answers one by one; q0 and bounds in the full layout
     q0 = np.where(np.arange(panda.n) == 2, 0.25, 0.1)
-    bounds = (panda.lower, np.minimum(panda.upper, 2.6))
+    bounds = (panda.lower, np.minimum(panda.upper, Q.max(axis=0) + 0.2))  # narrower, every target inside
     both = ev.solve_many(panda, targets, locked=LOCK, prefer="nearest", q0=q0, bounds=bounds, seed=6,
                          workers=workers, **BUDGET)
     ref = _one_by_one(panda, targets, 6, q0=q0, locked=LOCK, prefer="nearest", bounds=bounds, **BUDGET)
     for k, r in enumerate(ref):
         np.testing.assert_array_equal(both.q[k], r.q)
-        assert both.q[k, 2] == 0.25 and both.success[k] and np.all(both.q[k] <= 2.6)
+        assert both.q[k, 2] == 0.25 and both.success[k] and np.all(both.q[k] <= bounds[1])
 
 
 @pytest.mark.parametrize("workers", [1, 2])
@@ -186,6 +187,8 @@ def test_many_goal_lists_with_preferences_equal_solve(panda, poses, workers):
         np.testing.assert_array_equal(out.q[k], ref[k].q)
         assert out[k].goal_errors == ref[k].goal_errors
     assert out.success.all() and all(_meets(panda, out.q[k], targets[k]) for k in (0, 1, 2))
+    # locked: the preferences are the locked robot's (a Posture by joint name; a vector would have its 6 joints)
+    lists = [[Pose(panda.tip, T), Posture({"panda_joint1": 0.3}, 0.5)] for T in targets]
     with_prefer = ev.solve_many(panda, lists, q0=Q[0], prefer="nearest", locked=LOCK, seed=8, workers=workers,
                                 **BUDGET)
     ref = _one_by_one(panda, lists, 8, q0=Q[0], prefer="nearest", locked=LOCK, **BUDGET)
@@ -221,7 +224,7 @@ def test_many_bad_input_before_any_work(panda, poses, monkeypatch):
         ev.solve_many(panda, targets, locked={"panda_joint4": 1.0})
     with pytest.raises(OptionError, match="locked"):
         ev.solve_many(panda, targets, locked=[("panda_joint1", 0.0)])
-    with pytest.raises(ConfigurationError, match="q0"):
+    with pytest.raises(ConfigurationError, match="7 joints"):  # q0 in the full layout
         ev.solve_many(panda, targets, locked=LOCK, q0=np.zeros(6))
     lists = [[Pose(panda.tip, T)] for T in targets]
     with pytest.raises(FrameError, match="goal list 1.*nope"):

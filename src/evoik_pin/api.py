@@ -28,13 +28,13 @@ from .calls import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, ... are rea
     split_options,
 )
 from .errors import ConfigurationError, MethodError, OptionError
-from .goals import is_goal_list
+from .goals.preferences import split_preferences
 from .ik_solver import IKSolver, cached_solver
 from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta
 from .result import Result
 from .solvers import get_solver, methods
 from .solvers.batch import api as batch_api
-from .solvers.batch.goal_lists import GoalSource, is_goal_batch
+from .solvers.batch.goal_lists import GoalSource, is_goal_batch, is_problem_list
 from .solvers.batch.outcome import BatchResults
 from .solvers.batch.threads import check_call
 from .solvers.collision_verdict import with_collision_verdict
@@ -185,8 +185,15 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     robot = _robot(robot)
     rng = _rng(seed)
     # every target and option checked before the first point is solved
+    prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
+    locked = options.pop("locked", None)
+    solved_on = robot.locked(locked) if locked else robot  # an unknown joint, a value beyond its limits
+    preferences = False
     if is_goal_batch(targets):
-        targets = GoalSource(robot, targets).raw  # every goal list checked against the robot
+        source = GoalSource(solved_on, targets)  # every goal list (and its preferences) checked against the robot
+        if q0 is None:
+            source.require_q0([0])  # the later points start from the one before
+        targets, preferences = source.raw, bool(source.preferences)
         _check_goal_method(method)
     else:
         targets = Target.coerce_many(targets if isinstance(targets, np.ndarray) else list(targets))
@@ -197,11 +204,17 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     options = check_call(robot, make_problem, method, options)
     results: list[Result] = []
     previous = None if q0 is None else robot.check_q(q0)
+    choosing = prefer is not None or bool(locked) or preferences
     for i, target in enumerate(targets):
-        problem, solver_options = make_problem(robot, target, q0=previous, **dict(options))
+        goals = split_preferences(target)[0]
+        problem, solver_options = make_problem(robot, goals, q0=previous, **dict(options))
         if pro and i > 0:
             problem = problem.with_pro_box(previous, delta)
-        results.append(_run(problem, method, rng, solver_options))
+        if choosing:  # solve's path for prefer=, locked=, preferences: its box and q0 those of the problem above
+            results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
+                                           **{**options, "q0": problem.q0, "bounds": (problem.lower, problem.upper)}))
+        else:
+            results.append(_run(problem, method, rng, solver_options))
         previous = results[-1].q
     return results
 
@@ -264,15 +277,34 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks
-    if is_goal_batch(targets) or is_goal_list(targets):
+    if is_goal_batch(targets) or is_problem_list(targets):
         _check_goal_method(method)
+    prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
     return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
-                            backend=backend, address=address, progress=progress, **options)
+                                backend=backend, address=address, progress=progress, choose=_solve_choosing,
+                                prefer=prefer, locked=options.pop("locked", None), **options)
 
 
 
 
 # ------------------------------------------------ solve's choices beyond one answer: prefer=, preferences, locked=
+def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
+    """``prefer`` checked as :func:`solve` checks it, before any work: None for the first answer (None or
+    ``"first"``), else ``"nearest"`` or ``"manipulability"``. OptionError: an unknown value, or "nearest" without
+    q0; MethodError: a method other than memetic (it gives one answer, nothing to choose among)."""
+    from .solvers.search.choose import check_prefer
+
+    prefer = check_prefer("first" if prefer is None else prefer)
+    if prefer == "first":
+        return None
+    if method != "memetic":
+        raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
+                          "(use prefer='first', the default)")
+    if prefer == "nearest" and not q0_given:
+        raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+    return prefer
+
+
 def _has_choices(target, options: dict) -> bool:
     """Whether a solve call needs :func:`_solve_choosing`: ``prefer`` or ``locked`` given, or preferences among the
     goals."""
@@ -290,7 +322,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
     among the goals, and ``locked`` ({joint: value}: those joints fixed for this call; ``q0``, ``bounds`` and the
     answer ``q`` stay in ``robot``'s layout, the locked joints at their values)."""
     from .goals.preferences import split_preferences
-    from .robot.locking import expand_q, locked_robot, shrink_q
+    from .robot.locking import expand_result, locked_robot, shrink_q
     from .solvers.search.choose import bind_preferences, check_prefer, choose, refine
 
     robot = _robot(robot)
@@ -303,12 +335,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
         if options.get("bounds") is not None:
             lower, upper = options["bounds"]
             options["bounds"] = (shrink_q(robot, sub, lower), shrink_q(robot, sub, upper))
-        result = _solve_choosing(sub, target, method, seed, prefer=prefer, **options)
-        result.q = expand_q(robot, sub, values, result.q)
-        for s in result.solutions or ():
-            s.q = expand_q(robot, sub, values, s.q)
-        result.message += f"; joints locked: {', '.join(f'{k}={v:g}' for k, v in values.items())}"
-        return result
+        return expand_result(robot, sub, values, _solve_choosing(sub, target, method, seed, prefer=prefer, **options))
     goals, prefs = split_preferences(target)
     if prefer == "first" and not prefs:
         return solve(robot, goals, method, seed, **options)
@@ -317,9 +344,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
     if method != "memetic" or prefer == "first":
         # preferences after the method's own search: the same answers as without them, then refined (the refinement
         # keeps a step only when every goal is met after it), so they never cost success
-        if prefer != "first":
-            raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
-                              "(use prefer='first', the default)")
+        _checked_prefer(prefer, method, True)  # prefer="nearest" etc. with another method: the MethodError
         criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
         result = _run(problem, method, rng, solver_options)
         if result.success:  # the preferences in the goals' null space, from the method's answer
