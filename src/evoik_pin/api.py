@@ -181,6 +181,13 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     solution +- ``delta`` rad, intersected with the bounds. One random generator serves the whole trajectory, so a
     seed fixes every point. Every target and option is checked before the first point is solved (a bad target named
     by its index).
+
+    ``prefer``, ``locked`` and goal lists holding preferences (:mod:`evoik_pin.goals.preferences`) are :func:`solve`'s:
+    each point is ``solve(robot, target, method, rng, prefer=..., locked=..., q0=previous q)`` (the rng shared, the
+    Pro box as ``bounds``). ``prefer="nearest"``: each answer nearest the previous point's (the first point's nearest
+    ``q0``, then required), a continuous joint path from a redundant arm; ``"manipulability"``: the most dexterous.
+    ``locked``: ``{joint: value}`` (rad or m) held at every point; ``q0`` and the answers' ``q`` in ``robot``'s
+    layout.
     """
     robot = _robot(robot)
     rng = _rng(seed)
@@ -261,6 +268,14 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         **options: as for :func:`solve` (``tolerance``, ``rotation_tolerance``, ``bounds``, ``scene``, ``margin``,
             ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...), every one checked before
             any work, as :func:`solve` checks it (:func:`evoik_pin.solvers.batch.threads.check_call`).
+            ``prefer``: ``"nearest"`` (``q0`` required) or ``"manipulability"`` (method memetic): every target solved
+            one by one as :func:`solve` solves it, with its own generator, so ``results[i]`` is ``solve(robot,
+            targets[i], seed=default_rng(SeedSequence(seed).spawn(N)[i]), prefer=..., q0=...)`` (in the calling
+            thread with ``backend="local"``; on the actors with ``"ray"``). Goal lists holding preferences
+            (``Posture``, ``JointLimitMargin``, ``Manipulability``, ``MinimalDisplacement``) are solved the same
+            way, the other lists in batched rounds. ``locked``: ``{joint: value}`` (rad or m): the call is solved on
+            ``robot.locked(locked)`` (the batched rounds too); ``q0``, ``bounds`` and ``results.q`` (N, n) are in
+            ``robot``'s layout, the locked joints at their values.
 
     Returns:
         A :class:`BatchResults`: a sequence of :class:`Result` in target order (each made when first read:
@@ -271,9 +286,11 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         by the targets they processed).
 
     Raises:
-        OptionError: ``workers`` < 1, an unknown ``backend``, any option :func:`solve` refuses. TargetError: a bad
-        target or one beyond ``MAX_TARGET_NORM`` (1e6 m), named by its index. BackendError: Ray not installed, a
-        cluster address that cannot be reached, a chunk that keeps failing.
+        OptionError: ``workers`` < 1, an unknown ``backend``, any option :func:`solve` refuses (an unknown
+        ``prefer``, ``prefer="nearest"`` without ``q0``). MethodError: ``prefer`` with a method other than memetic.
+        FrameError / BoundsError: a ``locked`` joint that does not exist / a value beyond its limits. TargetError: a
+        bad target or one beyond ``MAX_TARGET_NORM`` (1e6 m), a goal list of preferences alone, named by its index.
+        BackendError: Ray not installed, a cluster address that cannot be reached, a chunk that keeps failing.
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks
