@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import evoik_pin as ev
 from evoik_pin import api
@@ -235,3 +237,24 @@ def test_many_bad_input_before_any_work(panda, poses, monkeypatch):
         ev.solve_many(panda, [lists[0], lists[1] + [MinimalDisplacement()]])
     with pytest.raises(TargetError, match="goal list 1.*preferences only"):
         ev.solve_many(panda, [lists[0], [Posture(np.zeros(7))]])
+
+
+# ---------------------------------------------------------------------- the layouts
+@settings(max_examples=10, deadline=None)
+@given(st.sets(st.integers(0, 6), min_size=1, max_size=3), st.integers(0, 2**32 - 1))
+def test_expand_rows_and_shrink_q_are_inverse(joints, seed):
+    from evoik_pin.robot.locking import expand_q, expand_rows, kept_columns, locked_robot, shrink_q
+
+    robot = ev.load_robot("panda")
+    rng = np.random.default_rng(seed)
+    q_full = robot.random_configurations(1, rng)[0]
+    values = {robot.joint_names[k]: float(q_full[k]) for k in sorted(joints)}
+    sub = locked_robot(robot, values)
+    Q = sub.random_configurations(5, rng)
+    full = expand_rows(robot, sub, values, Q)
+    assert full.shape == (5, robot.n)
+    assert np.array_equal(full[:, sorted(joints)], np.broadcast_to(q_full[sorted(joints)], (5, len(joints))))
+    assert np.array_equal(full[:, kept_columns(robot, sub)], Q)
+    for q, row in zip(Q, full, strict=True):
+        assert np.array_equal(shrink_q(robot, sub, row), q) and np.array_equal(expand_q(robot, sub, values, q), row)
+        assert np.allclose(sub.fk(q).homogeneous, robot.fk(row).homogeneous, atol=1e-12)

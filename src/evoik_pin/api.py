@@ -213,11 +213,15 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     previous = None if q0 is None else robot.check_q(q0)
     choosing = prefer is not None or bool(locked) or preferences
     for i, target in enumerate(targets):
-        goals = split_preferences(target)[0]
-        problem, solver_options = make_problem(robot, goals, q0=previous, **dict(options))
+        if choosing and not (pro and i > 0):  # solve's path for prefer=, locked=, preferences
+            results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
+                                           **{**options, "q0": previous}))
+            previous = results[-1].q
+            continue
+        problem, solver_options = make_problem(robot, split_preferences(target)[0], q0=previous, **dict(options))
         if pro and i > 0:
             problem = problem.with_pro_box(previous, delta)
-        if choosing:  # solve's path for prefer=, locked=, preferences: its box and q0 those of the problem above
+        if choosing:  # the Pro box as the bounds of solve's path, q0 clipped into it
             results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
                                            **{**options, "q0": problem.q0, "bounds": (problem.lower, problem.upper)}))
         else:
