@@ -98,6 +98,7 @@ class GoalSource:
         self.preferences: dict[int, list] = {}
         self._frames: dict[int, str] = {}  # the first goal's frame of each list holding preferences
         self._robot = robot
+        checked: set[tuple] = set()
         for i, goals in enumerate(self.raw):
             if not isinstance(goals, list) or not is_problem_list(goals):
                 raise TargetError(f"goal list {i} is a {type(goals).__name__}, not a list of goals: give each problem "
@@ -105,7 +106,10 @@ class GoalSource:
             if holds_preferences(goals):
                 try:
                     goals, prefs = split_preferences(goals)
-                    check_preferences(robot, prefs, goals[0].frame, with_q0=True)
+                    seen = (goals[0].frame, *map(id, prefs))  # lists sharing their preference objects: checked once
+                    if seen not in checked:
+                        check_preferences(robot, prefs, goals[0].frame, with_q0=True)
+                        checked.add(seen)
                 except (TargetError, FrameError, ConfigurationError, OptionError) as exc:
                     raise type(exc)(f"goal list {i}: {exc}") from None
                 self.preferences[i] = prefs
