@@ -119,3 +119,19 @@ def test_pose_arrays_go_to_the_actors_as_arrays_and_a_bad_pose_is_named_by_its_i
     H[1234, :3, :3] *= 2.0  # not a rotation
     with pytest.raises(TargetError, match="target 1234"):
         ev.solve_many(panda, H, seed=4, backend="ray", workers=2, **BUDGET)
+
+
+def test_prefer_locked_and_preferences_on_ray_give_the_local_answers(ray, panda):
+    """prefer=, locked= and goal lists holding preferences reach the actors: the local backend's answers."""
+    from evoik_pin.goals import Pose, Posture
+
+    Q = panda.random_configurations(6, np.random.default_rng(31))
+    Q[:, 2] = 0.25
+    poses = [panda.fk(q) for q in Q]
+    lists = [[Pose(panda.tip, T), Posture({"panda_joint1": 0.3}, 0.5)] for T in poses]
+    for targets, options in ((poses, {"prefer": "nearest", "q0": np.full(7, 0.1)}),
+                             (lists, {"locked": {"panda_joint3": 0.25}, "prefer": "manipulability"})):
+        local = ev.solve_many(panda, targets, seed=9, workers=1, **options, **BUDGET)
+        remote = ev.solve_many(panda, targets, seed=9, backend="ray", workers=2, **options, **BUDGET)
+        np.testing.assert_array_equal(local.q, remote.q)
+        assert remote.success.all() and [r.message for r in local] == [r.message for r in remote]

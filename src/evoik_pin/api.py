@@ -28,13 +28,13 @@ from .calls import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, ... are rea
     split_options,
 )
 from .errors import ConfigurationError, MethodError, OptionError
-from .goals import is_goal_list
+from .goals.preferences import split_preferences
 from .ik_solver import IKSolver, cached_solver
 from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta
 from .result import Result
 from .solvers import get_solver, methods
 from .solvers.batch import api as batch_api
-from .solvers.batch.goal_lists import GoalSource, is_goal_batch
+from .solvers.batch.goal_lists import GoalSource, is_goal_batch, is_problem_list
 from .solvers.batch.outcome import BatchResults
 from .solvers.batch.threads import check_call
 from .solvers.collision_verdict import with_collision_verdict
@@ -181,12 +181,26 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     solution +- ``delta`` rad, intersected with the bounds. One random generator serves the whole trajectory, so a
     seed fixes every point. Every target and option is checked before the first point is solved (a bad target named
     by its index).
+
+    ``prefer``, ``locked`` and goal lists holding preferences (:mod:`evoik_pin.goals.preferences`) are :func:`solve`'s:
+    each point is ``solve(robot, target, method, rng, prefer=..., locked=..., q0=previous q)`` (the rng shared, the
+    Pro box as ``bounds``). ``prefer="nearest"``: each answer nearest the previous point's (the first point's nearest
+    ``q0``, then required), a continuous joint path from a redundant arm; ``"manipulability"``: the most dexterous.
+    ``locked``: ``{joint: value}`` (rad or m) held at every point; ``q0`` and the answers' ``q`` in ``robot``'s
+    layout.
     """
     robot = _robot(robot)
     rng = _rng(seed)
     # every target and option checked before the first point is solved
+    prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
+    locked = options.pop("locked", None)
+    solved_on = robot.locked(locked) if locked else robot  # an unknown joint, a value beyond its limits
+    preferences = False
     if is_goal_batch(targets):
-        targets = GoalSource(robot, targets).raw  # every goal list checked against the robot
+        source = GoalSource(solved_on, targets)  # every goal list (and its preferences) checked against the robot
+        if q0 is None:
+            source.require_q0([0])  # the later points start from the one before
+        targets, preferences = source.raw, bool(source.preferences)
         _check_goal_method(method)
     else:
         targets = Target.coerce_many(targets if isinstance(targets, np.ndarray) else list(targets))
@@ -197,11 +211,21 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     options = check_call(robot, make_problem, method, options)
     results: list[Result] = []
     previous = None if q0 is None else robot.check_q(q0)
+    choosing = prefer is not None or bool(locked) or preferences
     for i, target in enumerate(targets):
-        problem, solver_options = make_problem(robot, target, q0=previous, **dict(options))
+        if choosing and not (pro and i > 0):  # solve's path for prefer=, locked=, preferences
+            results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
+                                           **{**options, "q0": previous}))
+            previous = results[-1].q
+            continue
+        problem, solver_options = make_problem(robot, split_preferences(target)[0], q0=previous, **dict(options))
         if pro and i > 0:
             problem = problem.with_pro_box(previous, delta)
-        results.append(_run(problem, method, rng, solver_options))
+        if choosing:  # the Pro box as the bounds of solve's path, q0 clipped into it
+            results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
+                                           **{**options, "q0": problem.q0, "bounds": (problem.lower, problem.upper)}))
+        else:
+            results.append(_run(problem, method, rng, solver_options))
         previous = results[-1].q
     return results
 
@@ -248,6 +272,14 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         **options: as for :func:`solve` (``tolerance``, ``rotation_tolerance``, ``bounds``, ``scene``, ``margin``,
             ``orientation_weight``, ``timeout``, ``max_restarts``, ``table_seeds``, ...), every one checked before
             any work, as :func:`solve` checks it (:func:`evoik_pin.solvers.batch.threads.check_call`).
+            ``prefer``: ``"nearest"`` (``q0`` required) or ``"manipulability"`` (method memetic): every target solved
+            one by one as :func:`solve` solves it, with its own generator, so ``results[i]`` is ``solve(robot,
+            targets[i], seed=default_rng(SeedSequence(seed).spawn(N)[i]), prefer=..., q0=...)`` (in the calling
+            thread with ``backend="local"``; on the actors with ``"ray"``). Goal lists holding preferences
+            (``Posture``, ``JointLimitMargin``, ``Manipulability``, ``MinimalDisplacement``) are solved the same
+            way, the other lists in batched rounds. ``locked``: ``{joint: value}`` (rad or m): the call is solved on
+            ``robot.locked(locked)`` (the batched rounds too); ``q0``, ``bounds`` and ``results.q`` (N, n) are in
+            ``robot``'s layout, the locked joints at their values.
 
     Returns:
         A :class:`BatchResults`: a sequence of :class:`Result` in target order (each made when first read:
@@ -258,21 +290,42 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         by the targets they processed).
 
     Raises:
-        OptionError: ``workers`` < 1, an unknown ``backend``, any option :func:`solve` refuses. TargetError: a bad
-        target or one beyond ``MAX_TARGET_NORM`` (1e6 m), named by its index. BackendError: Ray not installed, a
-        cluster address that cannot be reached, a chunk that keeps failing.
+        OptionError: ``workers`` < 1, an unknown ``backend``, any option :func:`solve` refuses (an unknown
+        ``prefer``, ``prefer="nearest"`` without ``q0``). MethodError: ``prefer`` with a method other than memetic.
+        FrameError / BoundsError: a ``locked`` joint that does not exist / a value beyond its limits. TargetError: a
+        bad target or one beyond ``MAX_TARGET_NORM`` (1e6 m), a goal list of preferences alone, named by its index.
+        BackendError: Ray not installed, a cluster address that cannot be reached, a chunk that keeps failing.
     """
     get_solver(method)  # an unknown method fails before any work
     _rng(seed)  # the seed's checks
-    if is_goal_batch(targets) or is_goal_list(targets):
+    if is_goal_batch(targets) or is_problem_list(targets):
         _check_goal_method(method)
+    prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
     return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
-                            backend=backend, address=address, progress=progress, **options)
+                                backend=backend, address=address, progress=progress, choose=_solve_choosing,
+                                prefer=prefer, locked=options.pop("locked", None), **options)
 
 
 
 
 # ------------------------------------------------ solve's choices beyond one answer: prefer=, preferences, locked=
+def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
+    """``prefer`` checked as :func:`solve` checks it, before any work: None for the first answer (None or
+    ``"first"``), else ``"nearest"`` or ``"manipulability"``. OptionError: an unknown value, or "nearest" without
+    q0; MethodError: a method other than memetic (it gives one answer, nothing to choose among)."""
+    from .solvers.search.choose import check_prefer
+
+    prefer = check_prefer("first" if prefer is None else prefer)
+    if prefer == "first":
+        return None
+    if method != "memetic":
+        raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
+                          "(use prefer='first', the default)")
+    if prefer == "nearest" and not q0_given:
+        raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+    return prefer
+
+
 def _has_choices(target, options: dict) -> bool:
     """Whether a solve call needs :func:`_solve_choosing`: ``prefer`` or ``locked`` given, or preferences among the
     goals."""
@@ -290,7 +343,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
     among the goals, and ``locked`` ({joint: value}: those joints fixed for this call; ``q0``, ``bounds`` and the
     answer ``q`` stay in ``robot``'s layout, the locked joints at their values)."""
     from .goals.preferences import split_preferences
-    from .robot.locking import expand_q, locked_robot, shrink_q
+    from .robot.locking import expand_result, locked_robot, shrink_q
     from .solvers.search.choose import bind_preferences, check_prefer, choose, refine
 
     robot = _robot(robot)
@@ -303,12 +356,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
         if options.get("bounds") is not None:
             lower, upper = options["bounds"]
             options["bounds"] = (shrink_q(robot, sub, lower), shrink_q(robot, sub, upper))
-        result = _solve_choosing(sub, target, method, seed, prefer=prefer, **options)
-        result.q = expand_q(robot, sub, values, result.q)
-        for s in result.solutions or ():
-            s.q = expand_q(robot, sub, values, s.q)
-        result.message += f"; joints locked: {', '.join(f'{k}={v:g}' for k, v in values.items())}"
-        return result
+        return expand_result(robot, sub, values, _solve_choosing(sub, target, method, seed, prefer=prefer, **options))
     goals, prefs = split_preferences(target)
     if prefer == "first" and not prefs:
         return solve(robot, goals, method, seed, **options)
@@ -317,9 +365,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
     if method != "memetic" or prefer == "first":
         # preferences after the method's own search: the same answers as without them, then refined (the refinement
         # keeps a step only when every goal is met after it), so they never cost success
-        if prefer != "first":
-            raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
-                              "(use prefer='first', the default)")
+        _checked_prefer(prefer, method, True)  # prefer="nearest" etc. with another method: the MethodError
         criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
         result = _run(problem, method, rng, solver_options)
         if result.success:  # the preferences in the goals' null space, from the method's answer

@@ -19,10 +19,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConfigurationError, FrameError, OptionError
-from .goal import number
+from .goal import Goal, number
 
-__all__ = ["JointLimitMargin", "Manipulability", "MinimalDisplacement", "Posture", "Preference", "is_preference",
-           "split_preferences"]
+__all__ = ["JointLimitMargin", "Manipulability", "MinimalDisplacement", "Posture", "Preference", "check_preferences",
+           "holds_preferences", "is_preference", "split_preferences"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -209,6 +209,26 @@ class Manipulability(Preference):
 
 def is_preference(value) -> bool:
     return isinstance(value, Preference)
+
+
+def holds_preferences(value) -> bool:
+    """True for a goal list holding preferences: a list or tuple of goals and preferences, at least one of them a
+    preference (a list of preferences alone too: :func:`split_preferences` refuses it by name)."""
+    return (isinstance(value, (list, tuple)) and any(isinstance(x, Preference) for x in value)
+            and all(isinstance(x, (Goal, Preference)) for x in value))
+
+
+def check_preferences(robot, preferences, frame: str | None, with_q0: bool) -> None:
+    """Each preference bound to ``robot`` once, for its errors before any work (a joint or frame it names that
+    ``robot`` lacks, a Posture of the wrong length; without ``with_q0``, a MinimalDisplacement, which is measured
+    from q0); ``frame``: the goal frame a Manipulability without one measures."""
+    wrap = np.zeros(robot.n, dtype=bool)
+    q0 = np.clip(np.zeros(robot.n), robot.lower, robot.upper) if with_q0 else None
+    for p in preferences:
+        if isinstance(p, Manipulability):
+            p.bind(robot, q0, robot.lower, robot.upper, wrap, frame)
+        else:
+            p.bind(robot, q0, robot.lower, robot.upper, wrap)
 
 
 def split_preferences(target):

@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import BoundsError, ConfigurationError, FrameError, OptionError
 from .frames import closest_names
 
-__all__ = ["expand_q", "locked_robot", "shrink_q"]
+__all__ = ["expand_q", "expand_result", "expand_rows", "kept_columns", "locked_note", "locked_robot", "shrink_q"]
 
 _CACHE: dict = {}
 
@@ -70,15 +70,43 @@ def locked_robot(robot, values):
     return out
 
 
+def kept_columns(robot, sub) -> np.ndarray:
+    """The indices (sub.n,) in ``robot``'s q of ``sub``'s joints (``sub = robot.locked(...)``), in ``sub``'s order."""
+    return np.array([robot.joint_names.index(name) for name in sub.joint_names], dtype=np.intp)
+
+
+def expand_rows(robot, sub, values: dict[str, float], Q) -> np.ndarray:
+    """``robot``'s q of each row of ``sub``'s ``Q`` (N, sub.n) -> (N, robot.n): the locked joints at their
+    ``values`` (rad or m)."""
+    Q = np.asarray(Q, dtype=float)
+    out = np.empty((Q.shape[0], robot.n))
+    for name, value in values.items():
+        out[:, robot.joint_names.index(name)] = value
+    out[:, kept_columns(robot, sub)] = Q
+    return out
+
+
 def expand_q(robot, sub, values: dict[str, float], q) -> np.ndarray:
     """``robot``'s q (n,) of ``sub``'s ``q`` (a robot ``robot.locked(values)``): the locked joints at their values."""
-    out = np.empty(robot.n)
-    for k, name in enumerate(robot.joint_names):
-        out[k] = values[name] if name in values else q[sub.joint_names.index(name)]
-    return out
+    return expand_rows(robot, sub, values, np.asarray(q, dtype=float)[None])[0]
+
+
+def locked_note(values: dict[str, float]) -> str:
+    """What a result's message says of the joints a call locked (rad or m)."""
+    return f"; joints locked: {', '.join(f'{k}={v:g}' for k, v in values.items())}"
+
+
+def expand_result(robot, sub, values: dict[str, float], result):
+    """A :class:`~evoik_pin.result.Result` of ``sub`` (``robot.locked(values)``) in ``robot``'s layout, in place:
+    its ``q`` and its solutions' ``q`` expanded (the locked joints at their values), :func:`locked_note` added to
+    its message. Returns it."""
+    result.q = expand_q(robot, sub, values, result.q)
+    for s in result.solutions or ():
+        s.q = expand_q(robot, sub, values, s.q)
+    result.message += locked_note(values)
+    return result
 
 
 def shrink_q(robot, sub, q) -> np.ndarray:
     """``sub``'s entries of ``robot``'s ``q`` (n,)."""
-    q = robot.check_q(q)
-    return np.array([q[robot.joint_names.index(name)] for name in sub.joint_names])
+    return robot.check_q(q)[kept_columns(robot, sub)]

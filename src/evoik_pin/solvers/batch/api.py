@@ -18,6 +18,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ...errors import ConfigurationError, OptionError
+from ...robot.locking import expand_result, expand_rows, kept_columns, locked_note, locked_robot, shrink_q
 from ..options import check_choice
 from .outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
 from .targets import source_of
@@ -49,6 +50,7 @@ def _check_backend(backend) -> str:
 
 def solve_many(robot, targets, make_problem: Callable, run: Callable, method: str, seed=None, q0=None,
                workers=None, backend: str = "local", address: str | None = None, progress: bool = False,
+               choose: Callable | None = None, prefer: str | None = None, locked: dict | None = None,
                **options) -> BatchResults:
     """Solve many independent IK targets (see the module docstring); called by :func:`evoik_pin.solve_many`.
 
@@ -62,6 +64,11 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
         workers: threads (local) or actors (ray); None: every core (local) or every CPU of the cluster (ray).
         backend: "local" or "ray". address: a Ray cluster's address (ray only; default ``RAY_ADDRESS``).
         progress: a tqdm bar over chunks.
+        choose, prefer: see :class:`~.threads.BatchSolver` (``prefer`` checked by the caller; None: the first
+            answer).
+        locked: ``{joint: value}`` (rad or m): the call solved on ``robot.locked(locked)``
+            (:func:`~evoik_pin.robot.locking.locked_robot`), ``q0`` and ``bounds`` given and the answers' ``q``
+            returned in ``robot``'s layout, the locked joints at their values.
         **options: as for :func:`evoik_pin.solve`.
     """
     t_start = time.perf_counter()
@@ -69,21 +76,33 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
     if backend == "local" and address is not None:
         raise OptionError("address names a Ray cluster: give it with backend='ray'")
     workers = None if workers is None and backend == "ray" else check_workers(workers)
+    full = robot
+    if locked:  # checked here (an unknown joint, a value beyond its limits); the batch solved on the locked robot
+        robot = locked_robot(full, locked)
+        values = {k: float(v) for k, v in locked.items()}
+        if options.get("bounds") is not None:
+            lower, upper = options["bounds"]
+            options["bounds"] = (shrink_q(full, robot, lower), shrink_q(full, robot, upper))
     source = source_of(robot, targets)  # goal lists: every one checked here, before any work
     N = len(source)
     if N == 0:
         raise ConfigurationError("solve_many needs at least one target")
-    Q0 = _start_configurations(robot, q0, N)
+    Q0 = _start_configurations(full, q0, N)
+    if Q0 is None and source.goals:
+        source.require_q0(range(N))  # MinimalDisplacement is measured from q0
+    if locked and Q0 is not None:
+        Q0 = np.ascontiguousarray(Q0[:, kept_columns(full, robot)])
     entropy = root_entropy(seed)
     if backend == "ray":
         from .ray_actors import RayBatch
 
-        job = RayBatch(robot, make_problem, run, method, entropy, options, workers=workers, address=address)
+        job = RayBatch(robot, make_problem, run, method, entropy, options, workers=workers, address=address,
+                       choose=choose, prefer=prefer)
         outcome = job.solve(source, Q0, progress=progress)
         template = job.template()
         workers = job.workers
     else:
-        solver = BatchSolver(robot, make_problem, run, method, entropy, options)
+        solver = BatchSolver(robot, make_problem, run, method, entropy, options, choose=choose, prefer=prefer)
         bar = progress_bar(progress, "solve_many")
         try:
             outcome = solver.solve(source, Q0, workers=workers, progress=bar)
@@ -91,6 +110,11 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
             if bar is not None:
                 bar.close()
         template = solver.template
+    if locked:
+        outcome.q = expand_rows(full, robot, values, outcome.q)
+        outcome.note = locked_note(values)
+        for r in outcome.singles.values():
+            expand_result(full, robot, values, r)
     return BatchResults(outcome, template, _stats(outcome, t_start, workers, backend))
 
 

@@ -17,19 +17,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...errors import FrameError, TargetError
+from ...errors import ConfigurationError, FrameError, OptionError, TargetError
 from ...goals import Goal, bind, is_goal_list
+from ...goals.preferences import check_preferences, holds_preferences, split_preferences
 from ..lm.layout import G_WEIGHT, KIND_BEYOND_FRAME, POSITIONLESS_KINDS, GoalArrays
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
 
+def is_problem_list(value) -> bool:
+    """True for one whole-robot problem: a list or tuple of goals (:func:`is_goal_list`), preferences among them
+    or not (:func:`~evoik_pin.goals.preferences.holds_preferences`)."""
+    return is_goal_list(value) or holds_preferences(value)
+
+
 def is_goal_batch(targets) -> bool:
-    """True when ``targets`` is a sequence of goal lists (some member a non-empty list or tuple of goals), not of
-    single targets; one goal list alone is one problem (:func:`is_goal_list`)."""
-    if not isinstance(targets, (list, tuple)) or not targets or is_goal_list(targets):
+    """True when ``targets`` is a sequence of goal lists (some member a non-empty list or tuple of goals, preferences
+    among them or not), not of single targets; one goal list alone is one problem (:func:`is_problem_list`)."""
+    if not isinstance(targets, (list, tuple)) or not targets or is_problem_list(targets):
         return False
-    return any(isinstance(t, (list, tuple)) and t and is_goal_list(t) for t in targets)
+    return any(isinstance(t, (list, tuple)) and t and is_problem_list(t) for t in targets)
 
 
 def structure(goals) -> tuple:
@@ -67,10 +74,17 @@ class GoalBlock:
 class GoalSource:
     """The goal lists of a call, every one checked against ``robot`` when made (a TargetError or FrameError naming
     the list's index: an entry that is no goal list, an empty list, an unknown frame, a frame no active joint
-    moves, one frame given clashing targets), then handed out chunk by chunk (:meth:`block`).
+    moves, one frame given clashing targets; its preferences' errors, :func:`check_preferences`), then handed out
+    chunk by chunk (:meth:`block`).
+
+    A list holding preferences (:mod:`evoik_pin.goals.preferences`) is solved one by one, through the choosing path
+    of :func:`evoik_pin.solve` (:class:`~.threads.BatchSolver`): its rows are left out of the batched groups.
 
     Args:
         robot: the :class:`~evoik_pin.robot.Robot`. lists: a sequence of goal lists.
+
+    Attributes:
+        preferences: ``{index: [preference, ...]}`` of the lists holding preferences.
     """
 
     goals = True
@@ -81,10 +95,25 @@ class GoalSource:
         self._stacks: dict[tuple, object] = {}  # structure -> its GoalStack
         self._keys: list[tuple] = []
         self._targets: list[tuple[np.ndarray, np.ndarray]] = []  # per list: pt (G, 3), Rt (G, 3, 3)
+        self.preferences: dict[int, list] = {}
+        self._frames: dict[int, str] = {}  # the first goal's frame of each list holding preferences
+        self._robot = robot
+        checked: set[tuple] = set()
         for i, goals in enumerate(self.raw):
-            if not isinstance(goals, list) or not is_goal_list(goals):
+            if not isinstance(goals, list) or not is_problem_list(goals):
                 raise TargetError(f"goal list {i} is a {type(goals).__name__}, not a list of goals: give each problem "
                                   "as a list of Pose(frame, T) / Position(frame, p) (evoik_pin.goals)")
+            if holds_preferences(goals):
+                try:
+                    goals, prefs = split_preferences(goals)
+                    seen = (goals[0].frame, *map(id, prefs))  # lists sharing their preference objects: checked once
+                    if seen not in checked:
+                        check_preferences(robot, prefs, goals[0].frame, with_q0=True)
+                        checked.add(seen)
+                except (TargetError, FrameError, ConfigurationError, OptionError) as exc:
+                    raise type(exc)(f"goal list {i}: {exc}") from None
+                self.preferences[i] = prefs
+                self._frames[i] = goals[0].frame
             key = structure(goals)
             first = key not in self._stacks
             # a list repeating a frame is checked whole (its targets may clash); the others' frames, once per structure
@@ -116,8 +145,8 @@ class GoalSource:
         """Lists a to b - 1 as a :class:`GoalBlock`."""
         by_key: dict[tuple, list[int]] = {}
         for i in range(a, b):
-            if any(g.alternatives is not None for g in self.raw[i]):
-                continue  # goal sets go to the one-by-one solver, which tries their members (search.choose)
+            if i in self.preferences or any(g.alternatives is not None for g in self.raw[i]):
+                continue  # goal sets and preferences go to the one-by-one solver (search.choose)
             by_key.setdefault(self._keys[i], []).append(i)
         groups = []
         for key, rows in by_key.items():
@@ -128,6 +157,17 @@ class GoalSource:
 
     def check(self) -> None:
         """Nothing to do: every list was checked when the source was made."""
+
+    def require_q0(self, rows) -> None:
+        """The OptionError of the first list among ``rows`` (indices) whose preferences need the q0 it is solved
+        without (MinimalDisplacement), named by its index."""
+        for i in rows:
+            prefs = self.preferences.get(i)
+            if prefs:
+                try:
+                    check_preferences(self._robot, prefs, self._frames[i], with_q0=False)
+                except OptionError as exc:
+                    raise OptionError(f"goal list {i}: {exc}") from None
 
 
 class GoalTree:

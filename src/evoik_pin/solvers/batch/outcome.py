@@ -38,6 +38,7 @@ class BatchOutcome:
         collision_checked: the batched answers passed a scene's exact check.
         goal_errors: for goal lists, (N,) object array: each row's (G, 2) goal errors (position m, rotation rad or
             NaN for a goal without orientation), the errors above being the largest of them; None for single targets.
+        note: appended to the message of every batched row's :class:`Result` (e.g. the joints a call locked).
     """
 
     q: np.ndarray
@@ -51,6 +52,7 @@ class BatchOutcome:
     singles: dict[int, Result] = field(default_factory=dict)
     collision_checked: bool = False
     goal_errors: np.ndarray | None = None
+    note: str = ""
 
     @classmethod
     def empty(cls, N: int, n: int, goals: bool = False) -> BatchOutcome:
@@ -104,7 +106,8 @@ class BatchOutcome:
             base = Result(q=self.q[0], position_error=0.0, orientation_error=None, cost=0.0, success=True,
                           generations=0, evaluations=0, time_s=0.0, method="memetic",
                           collision_free=True if self.collision_checked else None).__dict__
-            messages = {s: f"tolerance reached by batched LM from {label} (solve_many)" for s, label in _LABELS.items()}
+            messages = {s: f"tolerance reached by batched LM from {label} (solve_many){self.note}"
+                        for s, label in _LABELS.items()}
             history = np.zeros((len(self), 3, 1))
             history[:, 0, 0] = history[:, 1, 0] = self.cost
             rot = [None if math.isnan(v) else v for v in self.orientation_error.tolist()]

@@ -170,16 +170,17 @@ class ChunkWorker:
     def solve(self, key: str, job: tuple, packed: dict, Q0: np.ndarray | None, offset: int,
               crash: bool = False) -> BatchOutcome:
         """Solve one chunk (targets ``offset``, ``offset + 1``, ... of call ``key``; ``job``: (make_problem, run,
-        method, entropy, options, scene spec, fallback)). ``crash``: exit the process at once instead (tests: an actor
-        dying mid-run)."""
+        method, entropy, options, scene spec, fallback, choose, prefer)). ``crash``: exit the process at once instead
+        (tests: an actor dying mid-run)."""
         if crash:
             os._exit(1)
         if key != self._key:
-            make_problem, run, method, entropy, options, scene, fallback = job
+            make_problem, run, method, entropy, options, scene, fallback, choose, prefer = job
             options = dict(options)
             if scene is not None:
                 options["scene"] = build_scene(self.robot, scene)
-            self._solver = BatchSolver(self.robot, make_problem, run, method, entropy, options, fallback)
+            self._solver = BatchSolver(self.robot, make_problem, run, method, entropy, options, fallback, choose,
+                                       prefer)
             self._key = key
         if isinstance(packed, (np.ndarray, list)):  # poses (no Target object per pose) or goal lists, as they are
             targets = packed
@@ -254,7 +255,8 @@ class RayBatch:
     """One call's work on a :class:`RayPool`: chunks of targets to the actors, outcomes back in target order.
 
     Args:
-        robot, make_problem, run, method, entropy, options, fallback: as :class:`~.threads.BatchSolver`'s.
+        robot, make_problem, run, method, entropy, options, fallback, choose, prefer: as
+            :class:`~.threads.BatchSolver`'s.
         workers: actors (one CPU each); default every CPU of the cluster.
         address: see :func:`connect`. chunk_size: targets per chunk (default: guided chunks, ``RAY_MIN_CHUNK`` to
             ``RAY_MAX_CHUNK`` targets, shrinking toward the end). attempts: tries per chunk when actors die.
@@ -262,11 +264,12 @@ class RayBatch:
 
     def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int, options: dict,
                  fallback: bool = True, workers: int | None = None, address: str | None = None,
-                 chunk_size: int | None = None, attempts: int = DEFAULT_ATTEMPTS) -> None:
+                 chunk_size: int | None = None, attempts: int = DEFAULT_ATTEMPTS, choose: Callable | None = None,
+                 prefer: str | None = None) -> None:
         if workers is not None:
             workers = check_workers(workers)
         # the driver's own solver checks every option before any actor sees them, and judges scenes at the end
-        self._local = BatchSolver(robot, make_problem, run, method, entropy, options, fallback)
+        self._local = BatchSolver(robot, make_problem, run, method, entropy, options, fallback, choose, prefer)
         self.pool = pool_for(robot, workers, address)
         self.ray, self.workers = self.pool.ray, self.pool.workers
         self.chunk_size = chunk_size
@@ -276,7 +279,7 @@ class RayBatch:
         remote_options = {k: v for k, v in options.items() if k != "scene"}
         self._key = uuid.uuid4().hex
         self._job = self.ray.put((make_problem, run, method, entropy, remote_options, scene_spec(self._scene),
-                                 fallback))
+                                 fallback, choose, prefer))
         self.crash_hook: set[int] = set()  # tests: chunks whose first attempt kills its actor
 
     def template(self, target: Target | None = None):

@@ -16,10 +16,9 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import TargetError
-from ...goals import is_goal_list
 from ...problem import Target
 from ..lm.layout import TargetArrays, target_kind
-from .goal_lists import GoalSource, is_goal_batch
+from .goal_lists import GoalSource, is_goal_batch, is_problem_list
 
 __all__ = ["TargetBlock", "TargetSource", "source_of"]
 
@@ -137,6 +136,6 @@ def source_of(robot, targets) -> TargetSource | GoalSource:
     source as it is."""
     if isinstance(targets, (TargetSource, GoalSource)):
         return targets
-    if is_goal_list(targets) and len(targets) > 0:
+    if is_problem_list(targets) and len(targets) > 0:
         return GoalSource(robot, [targets])
     return GoalSource(robot, targets) if is_goal_batch(targets) else TargetSource(targets)

@@ -44,6 +44,7 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 import numpy as np
 
 from ...goals import is_goal_list
+from ...goals.preferences import holds_preferences, split_preferences
 from ...objectives import default_cost
 from ...problem import Target, coerce_scene
 from ...result import Result
@@ -152,16 +153,24 @@ class BatchSolver:
         options: as for :func:`evoik_pin.solve` (``scene`` included).
         fallback: hand the targets the batched rounds leave to the per-target solver (False: they stay
             unsolved, with the best batched answer; reachability maps want a verdict, not a 5 ms search).
+        choose: the API's choosing solve (``api._solve_choosing``: ``choose(robot, target, method, seed, prefer=,
+            **options)``), which solves one by one every target when ``prefer`` is given and every goal list holding
+            preferences (the batched rounds skip those), as :func:`evoik_pin.solve` would.
+        prefer: ``"nearest"`` or ``"manipulability"`` (checked by the caller), or None (the first answer).
     """
 
     def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int,
-                 options: dict, fallback: bool = True) -> None:
+                 options: dict, fallback: bool = True, choose: Callable | None = None,
+                 prefer: str | None = None) -> None:
         self.robot = robot
         self.make_problem, self.run, self.method = make_problem, run, method
         self.entropy = entropy
         self.options = check_call(robot, make_problem, method, options)
         self.fallback = fallback
-        self.batched = method == "memetic" and options.get("objective") is None and not options.get("polish")
+        self.choose, self.prefer = choose, prefer
+        # prefer="nearest" | "manipulability" collects and ranks answers: every target one by one
+        self.batched = (method == "memetic" and options.get("objective") is None and not options.get("polish")
+                        and prefer is None)
         self.template = None
         self.engine = "compiled"
         self._trees: set = set()  # target kinds whose k-d tree is built
@@ -170,6 +179,7 @@ class BatchSolver:
 
     def _prepare(self, target: Target) -> None:
         """The template problem (it checks the shared options once), the seed table and its free entries."""
+        target, _ = split_preferences(target)  # a goal list's preferences: the choosing solve's, not the template's
         template, solver_options = self.make_problem(self.robot, target, **dict(self.options))
         self.template = template
         if not self.batched:
@@ -291,6 +301,9 @@ class BatchSolver:
             out.set_single(i, self._one(target, None if Q0 is None else Q0[i], offset + i, extra))
 
     def _one(self, target: Target, q0, index: int, extra: dict) -> Result:
+        if self.prefer is not None or holds_preferences(target):  # solve's choosing path, without memetic's extra
+            return self.choose(self.robot, target, self.method, target_generator(self.entropy, index),
+                               prefer=self.prefer, **{**self.options, "q0": q0})
         problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
         solver_options.update(extra)
         return self.run(problem, self.method, target_generator(self.entropy, index), solver_options)
