@@ -123,8 +123,8 @@ def _band_goals(robot, q, rng):
     """Relative pose goals of every form about the relative pose at q: free rz (a target twisted about its z),
     free x and ry, and bands some of whose components hold the pose inside (zero rows), some not."""
     M = _relative(robot, q)
-    twisted = M * pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, 2.0), np.zeros(3)) * pin.SE3(pin.exp3(np.array([0.1, -0.2, 0.0])),
-                                                                                       np.array([0.01, 0, -0.02]))
+    twist = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, 2.0), np.zeros(3))
+    twisted = M * twist * pin.SE3(pin.exp3(np.array([0.1, -0.2, 0.0])), np.array([0.01, 0, -0.02]))
     off = M * pin.SE3(pin.exp3(rng.uniform(-0.1, 0.1, 3)), rng.uniform(-0.01, 0.01, 3))
     return [RelativePose(LEFT, RIGHT, twisted, free="rz"), RelativePose(LEFT, RIGHT, off, free="x ry", weight=2.0),
             RelativePose(LEFT, RIGHT, off, tolerance=[0.005, 0.0, np.inf, 0.02, 0.5, 0.0]),
@@ -137,9 +137,10 @@ def test_band_jacobians_equal_finite_differences_on_two_moving_frames(baxter, rn
     talos = ek.load_robot("talos", floating_base=True)
     for robot, a, b in ((baxter, LEFT, RIGHT), (talos, "arm_left_7_link", "arm_right_7_link")):
         for q in robot.random_configurations(2, rng):
-            for goal in _band_goals(robot, q, rng) if robot is baxter else [
-                    RelativePose(a, b, _relative(robot, q, a, b) * pin.SE3(pin.exp3(np.array([0.3, 0.1, 1.0])), np.ones(3) / 9),
-                                 free=f) for f in ("rz", "y rx")]:
+            off = _relative(robot, q, a, b) * pin.SE3(pin.exp3(np.array([0.3, 0.1, 1.0])), np.ones(3) / 9)
+            goals = _band_goals(robot, q, rng) if robot is baxter else [RelativePose(a, b, off, free=f)
+                                                                        for f in ("rz", "y rx")]
+            for goal in goals:
                 _, E, _ = rows(robot, [goal], q)
                 F = numeric_jacobian(lambda x, r=robot, g=goal: rows(r, [g], x)[0], q)
                 assert np.abs(E - F).max() <= 1e-6 * max(1.0, np.abs(F).max()), goal
