@@ -252,3 +252,25 @@ def test_cli_solves_a_box_free_about_its_axis(baxter, tmp_path, capsys):
                  "--option", "max_restarts=10"]) == 0
     out = capsys.readouterr().out
     assert re.search(r"left_gripper -> right_gripper +relative_pose +\S+ +\S+ +yes", out), out
+
+
+def test_solve_many_keeps_each_lists_bands_and_free_axes(baxter):
+    """Lists alike but for a relative pose's free axes or bands are different structures (their aux rows): each
+    solved as its own, every answer meeting its own goal by Pinocchio's components."""
+    from evoik_pin.solvers.batch.goal_lists import structure
+
+    lists = [[RelativePose(LEFT, RIGHT, BOX, free=f)] for f in (None, "rz", "rx")]
+    lists += [[RelativePose(LEFT, RIGHT, BOX, tolerance=b)] for b in (BAND, 2 * BAND)]
+    assert len({structure(g) for g in lists}) == len(lists)
+    for goals, r in zip(lists, ek.solve_many(baxter, lists, seed=0, workers=1), strict=True):
+        goal = goals[0]
+        assert r.success and goal.met(*IKProblem(baxter, goals).goal_errors(r.q)[0])
+        v = _components(baxter, r.q, goal)
+        if goal.band is not None:
+            assert (np.abs(v) <= goal.band).all()
+        elif goal.free:  # one free rotation axis j: frame b's axis j seen from a along T's
+            j = "xyz".index(goal.free[0][1])
+            M = _relative(baxter, r.q)
+            assert np.linalg.norm(v[:3]) <= 1e-6 and _angle(M.rotation[:, j], BOX.rotation[:, j]) <= 1e-6
+        else:
+            assert np.linalg.norm(v[:3]) <= 1e-6 and np.linalg.norm(v[3:]) <= 1e-6
