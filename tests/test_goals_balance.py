@@ -384,7 +384,8 @@ def test_the_benchmark_script_reports_both_tasks_and_their_peers():
 
     report = bench.run(argparse.Namespace(n=3, seed=0, timeout=1.0, box_timeout=1.0))
     assert report.startswith("## Balance and two-hand goals") and "Load average" in report
-    for row in ("Talos: soles + CoM over the soles + wrists", "Talos, peer", "Baxter: RelativePose", "Baxter, peer"):
+    for row in ("Talos: soles + CoM over the soles + wrists", "Talos, peer", "Baxter: RelativePose", "Baxter, peer",
+                'Baxter: RelativePose free="rz"'):
         assert re.search(re.escape(row) + r".*\| 3 / 3 \(100.0 %\)", report), row
     assert "| 3 / 3 |" in report  # every Talos answer with the CoM goal: the CoM inside, by Pinocchio
 

@@ -70,6 +70,7 @@ seen from another (``frame_a``; ``frame`` is frame b)::
         frame: right_gripper
         kind: relative_pose
         target: {position: [0, 0, 0.3], rpy: [180, 0, 0]}
+        free: rz                          # optional: tolerance, rotation_tolerance and free as a pose's (target frame)
 A goal set (any one of several targets will do; ``Pose(frame, [T1, ...])``) has ``targets:``, a list of targets,
 instead of ``target:``. Preferences (:mod:`evoik_pin.goals.preferences`) are entries of the goal list too, with no
 frame and target: ``{kind: posture, q_ref: [...]}`` (rad or m) or ``{kind: posture, joints: {name: value}}``,
@@ -432,10 +433,13 @@ def _com_entry(goal) -> dict:
     return entry
 
 
+#: The optional fields of a relative_pose entry: Pose's.
+_RELATIVE_FIELDS = ("weight", "tolerance", "rotation_tolerance", "free")
+
+
 def _relative_goal(entry: dict, what: str) -> Goal:
     """A ``kind: relative_pose`` entry: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a)."""
-    _unknown_keys(entry, ("frame_a", "frame", "kind", "target", "weight", "tolerance", "rotation_tolerance"),
-                  f"{what}, a relative_pose goal")
+    _unknown_keys(entry, ("frame_a", "frame", "kind", "target", *_RELATIVE_FIELDS), f"{what}, a relative_pose goal")
     for key in ("frame_a", "frame", "target"):
         if key not in entry:
             raise GoalsFileError(f"{what}: missing field {key!r} (a relative_pose goal has frame_a, frame and target: "
@@ -443,7 +447,7 @@ def _relative_goal(entry: dict, what: str) -> Goal:
     if not isinstance(entry["target"], dict):
         raise GoalsFileError(f"{what}: target must be a mapping (position, rpy / rpy_rad, matrix), got "
                              f"{entry['target']!r}")
-    options = {key: _number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "rotation_tolerance")
+    options = {key: _FIELD_READERS.get(key, _number)(entry[key], f"{what}: {key}") for key in _RELATIVE_FIELDS
                if key in entry}
     try:
         return RelativePose(entry["frame_a"], entry["frame"], _pose_target(entry["target"]), **options)
@@ -453,11 +457,8 @@ def _relative_goal(entry: dict, what: str) -> Goal:
 
 def _relative_entry(goal) -> dict:
     entry = {"frame_a": goal.frame_a, "frame": goal.frame, "kind": "relative_pose", "target": _matrix_text(goal)}
-    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE),
-                         ("rotation_tolerance", goal.tolerance)):
-        if getattr(goal, key) != default:
-            entry[key] = float(getattr(goal, key))
-    return entry
+    return entry | _field_entries(goal, _RELATIVE_FIELDS)
+
 
 
 GOAL_KINDS.update({
@@ -606,9 +607,16 @@ def _entry(goal: Goal) -> dict:
     if goal.alternatives is not None:  # a goal set
         del entry["target"]
         entry["targets"] = [kind.write_target(m) for m in goal.alternatives]
+    return entry | _field_entries(goal, kind.fields)
+
+
+def _field_entries(goal: Goal, fields: tuple[str, ...]) -> dict:
+    """The entries of ``goal``'s optional ``fields`` as a goals file writes them: numbers where they differ from
+    their defaults, bands (per-axis half-widths, inf: free), free axes, a pointing axis."""
+    entry: dict = {}
     defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
     band = getattr(goal, "band", None)
-    for key in kind.fields:
+    for key in fields:
         if key == "tolerance" and band is not None:  # per-axis half-widths (inf: free)
             entry[key] = [float(v) for v in band]
         elif key == "free":

@@ -36,7 +36,7 @@ from ..solvers.lm.layout import (
     KIND_POSITION_BAND,
 )
 
-__all__ = ["AXES", "band_aux", "band_errors", "parse_band", "parse_free"]
+__all__ = ["AXES", "band_aux", "band_errors", "parse_band", "parse_free", "parse_pose_axes", "tolerance_text"]
 
 #: The axis names of a pose's six error components, in their order.
 AXES = ("x", "y", "z", "rx", "ry", "rz")
@@ -81,6 +81,30 @@ def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | Non
     if np.isnan(band).any() or (band < 0).any():
         raise OptionError(f"{where}: tolerance half-widths must be >= 0 (inf: free), got {band.tolist()}")
     return band
+
+
+def parse_pose_axes(tolerance, rotation_tolerance, free, where: str) -> tuple[np.ndarray | None, tuple[str, ...]]:
+    """(band (6,) or None, free axes) of a pose-like goal (:class:`Pose`, :class:`RelativePose`): ``tolerance`` one
+    number (None: a norm tolerance, checked by the goal) or 6 half-widths (:func:`parse_band`; the free axes' set to
+    inf), ``free`` the names of :data:`AXES` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or
+    free axis, a ``rotation_tolerance`` beside 6 half-widths, or all six axes free."""
+    band = parse_band(tolerance, AXES, where)
+    free = parse_free(free, AXES, where)
+    if band is not None and rotation_tolerance is not None:
+        raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
+                          "already holds the rotation's half-widths (rx ry rz, rad)")
+    if len(free) == len(AXES):
+        raise OptionError(f"{where}: free names all six axes, which leaves nothing to meet; drop the goal")
+    if band is not None:
+        band = np.where(np.isin(AXES, free), np.inf, band)
+    return band, free
+
+
+def tolerance_text(goal) -> str:
+    """How a pose-like goal's repr shows its tolerances and free axes (its ``band``, ``free``, tolerances)."""
+    tol = (f"tolerance={goal.tolerance:g}, rotation_tolerance={goal.rotation_tolerance:g}" if goal.band is None
+           else f"tolerance={goal.band.tolist()}")
+    return tol + (f", free={' '.join(goal.free)!r}" if goal.free else "")
 
 
 def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:

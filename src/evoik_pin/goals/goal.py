@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
-from .bands import band_errors
+from .bands import AXES, band_aux, band_errors, parse_pose_axes
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "number", "point3"]
 
@@ -60,6 +60,22 @@ class Goal:
                             ("rotation_tolerance", rotation_tolerance), ("kind", kind), ("has_orientation", oriented)):
             object.__setattr__(self, name, value)
         self._check_common()
+
+    def _init_pose_axes(self, frame, weight, tolerance, rotation_tolerance, free, kinds: tuple[int, int],
+                        where: str) -> None:
+        """Set and check the fields of a pose-like goal (:class:`Pose`, :class:`RelativePose`): those of
+        :meth:`_init_common`, its ``band`` and ``free`` (:func:`.bands.parse_pose_axes`; ``where`` names the goal in
+        the messages) and its aux row; kind ``kinds[0]`` under a norm tolerance with no free axis, else
+        ``kinds[1]``, whose errors under bands are their excess over them (tolerances 0)."""
+        band, free = parse_pose_axes(tolerance, rotation_tolerance, free, where)
+        plain = band is None and not free
+        if band is None:
+            self._init_common(frame, weight, tolerance, rotation_tolerance, kinds[0] if plain else kinds[1], True)
+        else:  # the errors of a banded goal are its excess over the bands: met at 0
+            self._init_common(frame, weight, 0.0, 0.0, kinds[1], True)
+        object.__setattr__(self, "band", band)
+        object.__setattr__(self, "free", free)
+        self._set_aux(None if plain else band_aux(band, free, AXES, DEFAULT_GOAL_TOLERANCE))
 
     def _check_common(self) -> None:
         if not isinstance(self.frame, str) or not self.frame:

@@ -7,11 +7,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import OptionError, TargetError
+from ..errors import TargetError
 from ..solvers.lm.layout import KIND_POSE, KIND_POSE_AXES
 from ..target import Target
 from . import goal_set
-from .bands import AXES, band_aux, parse_band, parse_free
+from .bands import tolerance_text
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 
 __all__ = ["Pose"]
@@ -47,23 +47,9 @@ class Pose(Goal):
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  rotation_tolerance: float | None = None, free=None) -> None:
-        where = f"Pose on {frame!r}"
-        band = parse_band(tolerance, AXES, where)
-        free = parse_free(free, AXES, where)
-        if band is not None and rotation_tolerance is not None:
-            raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
-                              "already holds the rotation's half-widths (rx ry rz, rad)")
-        if len(free) == len(AXES):
-            raise OptionError(f"{where}: free names all six axes, which leaves nothing to meet; drop the goal")
-        kind = KIND_POSE if band is None and not free else KIND_POSE_AXES
-        if band is None:
-            self._init_common(frame, weight, tolerance, rotation_tolerance, kind, True)
-        else:  # the errors of a banded goal are its excess over the bands: met at 0
-            self._init_common(frame, weight, 0.0, 0.0, kind, True)
-            band = np.where(np.isin(AXES, free), np.inf, band)
-        object.__setattr__(self, "band", band)
-        object.__setattr__(self, "free", free)
-        self._set_aux(None if kind == KIND_POSE else band_aux(band, free, AXES, DEFAULT_GOAL_TOLERANCE))
+        self._init_pose_axes(frame, weight, tolerance, rotation_tolerance, free, (KIND_POSE, KIND_POSE_AXES),
+                             f"Pose on {frame!r}")
+        free = self.free
         if goal_set.is_set(target, (4, 4)):  # any one of several poses
             return goal_set.init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance,
                                                                   free or None), "Pose poses")
@@ -85,7 +71,4 @@ class Pose(Goal):
     def __repr__(self) -> str:
         p = np.round(self.target.translation, 6).tolist()
         rpy = np.round(pin.rpy.matrixToRpy(self.target.rotation), 6).tolist()
-        tol = (f"tolerance={self.tolerance:g}, rotation_tolerance={self.rotation_tolerance:g}" if self.band is None
-               else f"tolerance={self.band.tolist()}")
-        free = f", free={' '.join(self.free)!r}" if self.free else ""
-        return f"Pose({self.frame!r}, position={p}, rpy={rpy}, weight={self.weight:g}, {tol}{free})"
+        return f"Pose({self.frame!r}, position={p}, rpy={rpy}, weight={self.weight:g}, {tolerance_text(self)})"

@@ -1,6 +1,6 @@
 """The compiled residuals and Jacobians of the goal kinds beyond one frame (``KIND_COM``, ``KIND_COM_SUPPORT``,
-``KIND_RELATIVE_POSE`` of :mod:`.layout`), which :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call
-in a branch the one-frame kinds never enter.
+``KIND_RELATIVE_POSE``, ``KIND_RELATIVE_POSE_AXES`` of :mod:`.layout`), which :func:`.kernel.task_error` and
+:func:`.kernel.task_jacobian` call in a branch the one-frame kinds never enter.
 
 * Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
   c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree.tree_forward`), s_0 the first moment of the
@@ -14,6 +14,10 @@ in a branch the one-frame kinds never enter.
 * Relative pose: frame b seen from frame a against the target T, ``e = log6(T^-1 T_a^-1 T_b)``; its Jacobian is
   ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``, the second term the velocity of the point p_b carried by frame a's joints
   (the body twist of ``T_a^-1 T_b``), through the pose kind's :func:`.kernel.goal_jacobian`.
+* Relative pose with bands or free axes (``KIND_RELATIVE_POSE_AXES``): the rows of a pose with axes
+  (:mod:`.axes`: dead zones in the target frame, the swing of one free rotation axis) for frame b's pose seen from
+  frame a, ``(R_a^T R_b, R_a^T (p_b - p_a))``, against T; its Jacobian those rows' from the same
+  ``J_b(p_b) - J_a(p_b)`` turned into frame a's coordinates (the twist of b relative to a, as frame a sees it).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ import math
 from numba import njit
 
 from ...lie.compiled import log6
+from .axes import axes_error, axes_jacobian
 from .layout import (
     A_COM_AXES,
     A_COM_BODIES,
@@ -30,14 +35,18 @@ from .layout import (
     A_COM_MOMENT,
     A_COM_POINTS,
     A_COM_SHRINK,
+    A_REL_BAND,
     A_REL_JOINT,
     A_REL_P,
     A_REL_R,
     A_REL_SIGNS,
+    AUX_SIZE,
     KIND_COM,
     KIND_COM_SUPPORT,
+    KIND_POSE_AXES,
+    KIND_RELATIVE_POSE_AXES,
 )
-from .tree import BORROWING, joint_column
+from .tree import BORROWING, frame_pose, joint_column
 
 #: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
 #: counts as parallel to another.
@@ -223,39 +232,33 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
-    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``: frame b (on physical joint jb at folded
-    placement Rbf, pbf) into Rb, pb; ``T_t^-1 T_a^-1 T_b`` into M (3, 3), t (3,); returns (position error m,
-    rotation angle rad)."""
+def frame_a_pose(Rj, pj, aux, M):
+    """Frame a's rotation (base frame) into M (3, 3) and its origin (m) returned, from its physical joint and
+    folded placement in a relative pose goal's aux row and the joint poses Rj (m, 3, 3), pj (m, 3)."""
     ja = int(aux[A_REL_JOINT])
-    # frame a's rotation into M, its origin into locals
     if ja < 0:
         for i in range(3):
             for c in range(3):
                 M[i, c] = aux[A_REL_R + 3 * i + c]
-        pa0, pa1, pa2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
-    else:
-        f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
-        pa0 = pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2
-        pa1 = pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2
-        pa2 = pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2
-        for i in range(3):
-            for c in range(3):
-                M[i, c] = (Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
-                           + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
-    # frame b's pose, as a one-frame goal's
-    if jb < 0:
-        for i in range(3):
-            pb[i] = pbf[i]
-            for c in range(3):
-                Rb[i, c] = Rbf[i, c]
-    else:
-        f0, f1, f2 = pbf[0], pbf[1], pbf[2]
-        for i in range(3):
-            r0, r1, r2 = Rj[jb, i, 0], Rj[jb, i, 1], Rj[jb, i, 2]
-            pb[i] = pj[jb, i] + (r0 * f0 + r1 * f1 + r2 * f2)
-            for c in range(3):
-                Rb[i, c] = r0 * Rbf[0, c] + r1 * Rbf[1, c] + r2 * Rbf[2, c]
+        return aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
+    f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
+    pa0 = pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2
+    pa1 = pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2
+    pa2 = pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2
+    for i in range(3):
+        for c in range(3):
+            M[i, c] = (Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
+                       + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
+    return pa0, pa1, pa2
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
+    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``: frame b (on physical joint jb at folded
+    placement Rbf, pbf) into Rb, pb; ``T_t^-1 T_a^-1 T_b`` into M (3, 3), t (3,); returns (position error m,
+    rotation angle rad)."""
+    pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
+    frame_pose(Rj, pj, jb, Rbf, pbf, Rb, pb)  # frame b's pose, as a one-frame goal's
     # W = R_a R_t row by row (in place in M); then M = W^T R_b and t = W^T (p_b - p_a) - R_t^T p_t
     for i in range(3):
         w0 = M[i, 0] * Rt[0, 0] + M[i, 1] * Rt[1, 0] + M[i, 2] * Rt[2, 0]
@@ -280,10 +283,52 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
+    """The 6 rows e of a relative pose with bands or free axes: those of a pose with axes (:func:`.axes.axes_error`,
+    ``KIND_POSE_AXES``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
+    (into R (3, 3)) and ``t = R_a^T (p_b - p_a)`` (into t (3,)), against the target (pt, Rt): the error of
+    ``T_t^-1 T_a^-1 T_b`` in the target frame. p (3,) ends as frame b's origin (base frame, m) for
+    :func:`balance_columns` (scratch before); M (3, 3) scratch. Returns (|e|^2, position error m, rotation error
+    rad) as axes_error's."""
+    pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
+    frame_pose(Rj, pj, jb, Rbf, pbf, R, p)
+    d0, d1, d2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
+    for i in range(3):
+        t[i] = M[0, i] * d0 + M[1, i] * d1 + M[2, i] * d2
+    for c in range(3):  # R = R_a^T R_b, column by column in place
+        b0, b1, b2 = R[0, c], R[1, c], R[2, c]
+        for i in range(3):
+            p[i] = M[0, i] * b0 + M[1, i] * b1 + M[2, i] * b2
+        R[0, c], R[1, c], R[2, c] = p[0], p[1], p[2]
+    band = aux[A_REL_BAND:A_REL_BAND + AUX_SIZE]
+    c, pos, rot = axes_error(KIND_POSE_AXES, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
+    frame_pose(Rj, pj, jb, Rbf, pbf, M, p)  # frame b's origin again (M: scratch)
+    return c, pos, rot
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
+    """Rows r.. of the task Jacobian E (unweighted) of a relative pose with bands or free axes, from
+    ``J = J_b(p_b) - J_a(p_b)`` (6, n) (:func:`balance_columns`, base frame), for the buffers
+    :func:`relative_axes_error` filled (R = R_a^T R_b, t = R_a^T (p_b - p_a)): J turned into frame a's coordinates
+    (in place; the twist of frame b relative to frame a), then the pose-with-axes rows of
+    :func:`.axes.axes_jacobian`. rv (3,), A, B (3, 3) scratch."""
+    frame_a_pose(Rj, pj, aux, A)
+    for k in range(J.shape[1]):  # J <- diag(R_a^T, R_a^T) J
+        v0, v1, v2 = J[0, k], J[1, k], J[2, k]
+        w0, w1, w2 = J[3, k], J[4, k], J[5, k]
+        for i in range(3):
+            J[i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
+            J[3 + i, k] = A[0, i] * w0 + A[1, i] * w1 + A[2, i] * w2
+    axes_jacobian(KIND_POSE_AXES, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """Rows e of a goal of a kind beyond one frame (see the module docstring); returns (|e|^2, position error m,
     orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
-    p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t)."""
+    p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t; the relative
+    pose with axes frame b's pose seen from frame a in R, t and frame b's origin in p)."""
     if kind == KIND_COM:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2
@@ -297,6 +342,8 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
         p[0], p[1], p[2] = c0, c1, c2
         pos = support_error(Rj, pj, aux, c0, c1, e, t)
         return e[0] * e[0] + e[1] * e[1], pos, 0.0
+    if kind == KIND_RELATIVE_POSE_AXES:
+        return relative_axes_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
     pos, rot = relative_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
     c = 0.0
     for i in range(6):

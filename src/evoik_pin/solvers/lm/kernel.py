@@ -59,7 +59,7 @@ from numba import njit
 
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
 from .axes import axes_error, axes_jacobian
-from .balance import balance_columns, balance_error, com_rows
+from .balance import balance_columns, balance_error, com_rows, relative_axes_jacobian
 from .chain import coupled, expand, fold
 from .layout import (
     B_CHI,
@@ -89,6 +89,7 @@ from .layout import (
     KIND_POSE_AXES,
     KIND_POSITION,
     KIND_RELATIVE_POSE,
+    KIND_RELATIVE_POSE_AXES,
     LAMBDA_MAX,
     LAMBDA_MIN,
     P_DAMPING,
@@ -121,8 +122,8 @@ def task_size(kind):
         return 6
     if KIND_POSE_AXES < kind <= KIND_LOOK_AT:  # position with bands, orientation, direction, look-at
         return 3
-    if kind >= KIND_BEYOND_FRAME:  # centre of mass 3, support polygon 2, relative pose 6
-        return 2 if kind == KIND_COM_SUPPORT else (6 if kind == KIND_RELATIVE_POSE else 3)
+    if kind >= KIND_BEYOND_FRAME:  # centre of mass 3, support polygon 2, relative pose (with axes or not) 6
+        return 2 if kind == KIND_COM_SUPPORT else (6 if kind >= KIND_RELATIVE_POSE else 3)
     return 2
 
 
@@ -263,7 +264,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
         r = int(spec[g, G_ROW])
         if extra and kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
             beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
-                                  e[r:r + task_size(kind)], spec[g, G_WEIGHT], Jx, J, rv, A, B, E, r)
+                                  e[r:r + task_size(kind)], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
             continue
         if mimic:
             frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
@@ -292,12 +293,13 @@ def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, aux, R, p, t, e, w, Jx, J, rv, A, B, E,
-                          r):
+def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, aux, R, p, t, e, w, pt, Rt, Jx, J, rv,
+                          A, B, E, r):
     """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): its
     physical Jacobian (:func:`.balance.balance_columns`, folded with ``mimic``) turned into its rows, a relative
     pose's by the pose kind's :func:`goal_jacobian` (R, p, t: frame b's rotation and origin, the translation of
-    ``T^-1 T_a^-1 T_b``), a centre of mass's by :func:`.balance.com_rows`."""
+    ``T^-1 T_a^-1 T_b``), a relative pose with axes's by :func:`.balance.relative_axes_jacobian` (R, t: frame b's
+    pose seen from frame a; target pt, Rt), a centre of mass's by :func:`.balance.com_rows`."""
     balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx)
     src = Jx
     if mimic:
@@ -305,6 +307,8 @@ def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, 
         src = J
     if kind == KIND_RELATIVE_POSE:
         goal_jacobian(KIND_POSE, R, src, t, e, w, rv, A, B, E, r)
+    elif kind == KIND_RELATIVE_POSE_AXES:
+        relative_axes_jacobian(Rj, pj, aux, R, t, src, pt, Rt, rv, A, B, E, r)
     else:
         com_rows(kind, aux, t, src, E, r)
 
@@ -610,7 +614,7 @@ def _outcome(spec, ge, g_out):
     rot = np.nan
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
-        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or kind == KIND_RELATIVE_POSE or (
+        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or kind >= KIND_RELATIVE_POSE or (
             kind == KIND_POSE_AXES or KIND_ORIENTATION <= kind <= KIND_LOOK_AT)  # an angle: .axes's kinds but one
         g_out[g, 0] = ge[g, 0]
         g_out[g, 1] = ge[g, 1] if oriented else np.nan

@@ -85,8 +85,12 @@ ANGLE_KINDS = ORIENTED_KINDS + (KIND_DIRECTION, KIND_LOOK_AT)
 #: Pointing (direction, look-at): AUX_AXIS (3,) the frame's unit axis.
 AUX_INNER, AUX_BAND, AUX_SWING, AUX_AXIS = 0, 6, 12, 0
 AUX_SIZE = 13
-ORIENTED_KINDS += (KIND_RELATIVE_POSE,)
-ANGLE_KINDS += (KIND_RELATIVE_POSE,)
+#: One frame's pose seen from another with per-axis tolerance bands or free axes (6 rows: those of KIND_POSE_AXES
+#: for frame b's pose in frame a's coordinates against the target).
+KIND_RELATIVE_POSE_AXES = 13
+TASK_ROWS[KIND_RELATIVE_POSE_AXES] = (0, 1, 2, 3, 4, 5)
+ORIENTED_KINDS += (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES)
+ANGLE_KINDS += (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES)
 #: aux of the centre-of-mass kinds (``goals.center_of_mass``): total mass M (kg), the first moment (kg m, base
 #: frame) of the bodies no joint moves, the axes mask (1.0 on the constrained axes; KIND_COM) or (KIND_COM_SUPPORT)
 #: the shrink s (m) of the support polygon and its number K of contact points; then A_COM_BODIES + 5 k (k < m):
@@ -94,10 +98,13 @@ ANGLE_KINDS += (KIND_RELATIVE_POSE,)
 #: its whole subtree (kg); then, for KIND_COM_SUPPORT, A_COM_BODIES + 5 m + 4 i: contact point i's physical joint
 #: (-1: none) and its position (m) in that joint's folded frame (in the base frame for -1).
 A_COM_MASS, A_COM_MOMENT, A_COM_AXES, A_COM_SHRINK, A_COM_POINTS, A_COM_BODIES = 0, 1, 4, 4, 5, 7
-#: aux of KIND_RELATIVE_POSE: frame a's physical joint (-1: the base), its folded placement R (9, row-major), p (3);
-#: then A_REL_SIGNS + k (k < m): +1 for joints that move frame b only, -1 for those that move frame a only, else 0.
-A_REL_JOINT, A_REL_R, A_REL_P, A_REL_SIGNS = 0, 1, 10, 13
-__all__ += ["KIND_BEYOND_FRAME", "KIND_COM", "KIND_COM_SUPPORT", "KIND_RELATIVE_POSE"]
+#: aux of KIND_RELATIVE_POSE and KIND_RELATIVE_POSE_AXES: frame a's physical joint (-1: the base), its folded
+#: placement R (9, row-major), p (3); the AUX_SIZE band columns of a pose with axes from A_REL_BAND (the AUX_*
+#: layout above; unused by KIND_RELATIVE_POSE); then A_REL_SIGNS + k (k < m): +1 for joints that move frame b only,
+#: -1 for those that move frame a only, else 0.
+A_REL_JOINT, A_REL_R, A_REL_P, A_REL_BAND = 0, 1, 10, 13
+A_REL_SIGNS = A_REL_BAND + AUX_SIZE
+__all__ += ["KIND_BEYOND_FRAME", "KIND_COM", "KIND_COM_SUPPORT", "KIND_RELATIVE_POSE", "KIND_RELATIVE_POSE_AXES"]
 
 #: Layout of the kernel's ``params`` vector.
 P_DAMPING, P_MAX_STEP, P_STALL_WINDOW, P_STALL_RATIO, P_FINISH, P_ITERATIONS = range(6)

@@ -24,6 +24,7 @@ from ..lm.layout import (
     KIND_POSE,
     KIND_POSITION,
     KIND_RELATIVE_POSE,
+    KIND_RELATIVE_POSE_AXES,
     encode_targets,
     target_kind,
 )
@@ -503,7 +504,7 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
 def _anchor(goal, goals):
     """For a relative pose goal, the index of a pose goal on its first frame (None when there is none, or for any
     other goal)."""
-    if goal.kind != KIND_RELATIVE_POSE:
+    if goal.kind not in (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES):  # with bands or free axes: T_1 T seeds too
         return None
     return next((i for i, g in enumerate(goals) if g.kind == KIND_POSE and g.frame == goal.frame_a), None)
 
