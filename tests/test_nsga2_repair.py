@@ -128,13 +128,15 @@ def talos_lists(talos):
         "pose_free_rz": [Pose("arm_left_7_link", A, free="rz")],
         "orientation": [Orientation("arm_left_7_link", A.rotation)],
         "relative_pose": [RelativePose("arm_left_7_link", "arm_right_7_link", (A.inverse() * B).homogeneous)],
+        "relative_pose_free_rz": [RelativePose("arm_left_7_link", "arm_right_7_link", (A.inverse() * B).homogeneous,
+                                               free="rz")],
         "center_of_mass": [CenterOfMass(point=com_of(talos, q))],
         "support": soles + [CenterOfMass(support=SOLES, margin=0.02)],
     }
 
 
 @pytest.mark.parametrize("kind", ["direction", "look_at", "pose_free_rz", "orientation", "relative_pose",
-                                  "center_of_mass", "support"])
+                                  "relative_pose_free_rz", "center_of_mass", "support"])
 def test_repair_steps_bring_random_starts_towards_every_goal_kind(talos, kind):
     """The initial population's repair (4 x the default 3 steps) lowers the kernel's error of every start, the median
     at least tenfold (uniform random starts; near the standing pose for the support polygon)."""

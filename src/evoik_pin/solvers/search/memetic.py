@@ -389,8 +389,11 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals and not one_goal else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = plan._prepare(problem, table_size if use_table else 0, engine)
-    if table is not None and goals and not one_goal:
-        table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
+    if table is not None and goals:
+        if one_goal:  # the goal frame's features over the table (cached): set-up, not the budget's
+            table.one_goal_features(problem.goals[0])
+        else:
+            table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     lm = plan._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
