@@ -104,7 +104,7 @@ def _com_inside(talos, q) -> bool:
 
 def talos_judged(talos, q, stance: list, wrists: list) -> tuple[bool, bool]:
     """(the soles and wrists within 1e-6 m and rad and the joints within bounds, that and the CoM inside the
-    shrunk support polygon) of Talos's answer ``q`` (``stance``: :func:`stance_goals`'s goals, ``wrists``: two Poses)."""
+    shrunk support polygon) of Talos's answer ``q`` (``stance``: :func:`stance_goals`, ``wrists``: two Poses)."""
     ok = bool(_poses_met(talos, q, stance[:2] + wrists) and talos.within_bounds(q))
     return ok, ok and _com_inside(talos, q)
 

@@ -162,7 +162,8 @@ def prefer_benches(n: int, seed: int) -> list[Bench]:
     def set_judge(members):
         return lambda q: any(prefer.met(panda, T, q, TOL) for T in members)
 
-    problems = [Problem(goals, {"seed": i}, set_judge([m.target for m in goals[0].alternatives])) for i, goals in enumerate(sets)]
+    problems = [Problem(goals, {"seed": i}, set_judge([m.target for m in goals[0].alternatives]))
+                for i, goals in enumerate(sets)]
     out.append(Bench("Panda goal sets (10 grasps, 7 unreachable)", panda, problems, {}))
     return out
 

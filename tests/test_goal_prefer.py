@@ -10,7 +10,19 @@ from hypothesis import strategies as st
 
 import evoik_pin as ev
 from evoik_pin.errors import BoundsError, ConfigurationError, FrameError, MethodError, OptionError, TargetError
-from evoik_pin.goals import JointLimitMargin, Manipulability, MinimalDisplacement, Pose, Position, Posture
+from evoik_pin.goals import (
+    CenterOfMass,
+    Direction,
+    JointLimitMargin,
+    LookAt,
+    Manipulability,
+    MinimalDisplacement,
+    Pose,
+    Position,
+    Posture,
+    RelativePose,
+)
+from evoik_pin.goals.preferences import turn_difference
 from evoik_pin.solvers.lm import wrapping_joints
 from evoik_pin.solvers.search.choose import nearest_turn
 
@@ -161,6 +173,79 @@ def test_preferences_keep_goals_and_lower_their_cost(panda):
         assert np.linalg.norm(M.translation - T.translation) <= 1e-6
         assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
         assert np.linalg.norm(pref.q - mid) <= np.linalg.norm(plain.q - mid) + 1e-9
+
+
+def _posture_cost(q, q_ref, wrap):
+    d = turn_difference(q, q_ref, wrap)
+    return 0.5 * float(d @ d)
+
+
+def test_posture_refines_along_a_free_axis(ur5):
+    """UR5 on a pose with its z rotation free (``free="rz"``): 5 rows on 6 joints leave a turn about the tool's z
+    axis, along which Posture moves the answer (the refinement once took the goal's six rows for a full pose and
+    left every answer where it was)."""
+    rng = np.random.default_rng(3)
+    q_ref = (ur5.lower + ur5.upper) / 2
+    wrap = wrapping_joints(ur5, ur5.lower, ur5.upper)
+    for i in range(3):
+        T = ur5.fk(ur5.random_configurations(1, rng)[0])
+        goal = Pose(ur5.tip, T, free="rz")
+        plain = ev.solve(ur5, [goal], seed=i, timeout=None, max_restarts=2)
+        pref = ev.solve(ur5, [goal, Posture(q_ref, 1.0)], seed=i, timeout=None, max_restarts=2)
+        assert plain.success and pref.success, pref.message
+        M = _pin_pose(ur5, pref.q)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert np.arccos(np.clip(M.rotation[:, 2] @ T.rotation[:, 2], -1, 1)) <= 1e-6
+        assert _posture_cost(pref.q, q_ref, wrap) < _posture_cost(plain.q, q_ref, wrap) - 1e-3
+
+
+def test_posture_refines_inside_a_tolerance_band(ur5):
+    """A +-2 mm / +-5 degree band on UR5 (6 joints, 6 rows): inside the band no row binds, so Posture moves the
+    answer (the refinement once counted six rows on six joints and stopped), which stays inside the band."""
+    rng = np.random.default_rng(4)
+    half = np.array([0.002] * 3 + [np.radians(5)] * 3)
+    q_ref = (ur5.lower + ur5.upper) / 2
+    wrap = wrapping_joints(ur5, ur5.lower, ur5.upper)
+    for i in range(3):
+        T = ur5.fk(ur5.random_configurations(1, rng)[0])
+        goal = Pose(ur5.tip, T, tolerance=half)
+        plain = ev.solve(ur5, [goal], seed=i, timeout=None, max_restarts=2)
+        pref = ev.solve(ur5, [goal, Posture(q_ref, 1.0)], seed=i, timeout=None, max_restarts=2)
+        assert plain.success and pref.success, pref.message
+        M = _pin_pose(ur5, pref.q)
+        v = np.concatenate([T.rotation.T @ (M.translation - T.translation), pin.log3(T.rotation.T @ M.rotation)])
+        assert (np.abs(v) <= half * (1 + 1e-9)).all(), v / half
+        assert _posture_cost(pref.q, q_ref, wrap) < _posture_cost(plain.q, q_ref, wrap) - 1e-4
+
+
+@pytest.mark.parametrize(("make", "free"), [
+    (lambda r, q, T: [Pose(r.tip, T, free="rz")], 2),
+    (lambda r, q, T: [Position(r.tip, T.translation), LookAt(r.tip, [0, 0, 1], T.act(np.array([0, 0, 0.4])))], 2),
+    (lambda r, q, T: [Direction(r.tip, [0, 0, 1], T.rotation[:, 2])], 5),
+    (lambda r, q, T: [RelativePose("panda_link1", r.tip, r.fk(q, "panda_link1").actInv(T))], 1),
+    (lambda r, q, T: [CenterOfMass(point=r.fk(q, "panda_link4").translation, axes="xy")], 5),
+], ids=["free axis", "position + LookAt", "Direction", "RelativePose", "CenterOfMass"])
+def test_refine_steps_where_every_goal_kind_stays_met(panda, make, free):
+    """The null space refine steps in is that of every goal kind's own error: moving an answer 1e-4 along any of
+    its directions changes no goal's error by more than second order, and it has the dimension the goals leave
+    (7 joints less the rows that bind: a free axis 5, a position 3 and a gaze 2, a direction 2, a relative pose of
+    the six joints after link1 6, a CoM over a point 2)."""
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.search.choose import _null_basis, _task_jacobian
+
+    q_true = np.array([0.3, -0.4, 0.2, -1.9, 0.1, 1.6, 0.4])
+    T = panda.fk(q_true)
+    goals = make(panda, q_true, T)
+    r = ev.solve(panda, goals, q0=q_true + 0.05, seed=0, timeout=None, max_restarts=2)
+    assert r.success, r.message
+    problem, _ = ev.make_problem(panda, goals)
+    N = _null_basis(_task_jacobian(problem, r.q, LevenbergMarquardt(problem)))
+    assert N.shape[0] == free
+    h = 1e-4
+    for v in N:
+        for sign in (-1.0, 1.0):
+            errors = problem.goal_errors(r.q + sign * h * v)
+            assert max(max(p or 0.0, a or 0.0) for p, a in errors) < 20 * h * h, errors
 
 
 def test_joint_limit_margin_and_posture_by_name(panda):

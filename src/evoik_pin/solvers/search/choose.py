@@ -169,10 +169,19 @@ def _redundant(problem) -> bool:
     return rows < problem.robot.n
 
 
-def _task_jacobian(problem, q: np.ndarray) -> np.ndarray:
-    """The goals' stacked base-frame Jacobian rows (LOCAL_WORLD_ALIGNED; rows, n) at ``q``: its null space is the
-    joint motion that leaves every goal where it is (a pose goal's log6 error has the same null space). Kinds not
-    in TASK_ROWS count all six rows (a smaller null space: safe)."""
+def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
+    """The goals' stacked task Jacobian (rows, n) at ``q``: its null space is the joint motion that leaves every goal
+    met to first order. On the compiled engine, the rows LM's own step reads (:func:`..lm.kernel.task_rows`), right
+    for every kind: a free axis's swing rows (the turn about it is free), a band's and a support polygon's rows zero
+    where inactive (inside), a relative pose's and a centre of mass's from their own Jacobians, LookAt's with the
+    frame's motion across the line of sight. The Python engine (pose, position and planar goals only): the frames'
+    base-frame rows (LOCAL_WORLD_ALIGNED; a pose goal's log6 error has the same null space)."""
+    if lm.engine == "compiled":
+        stack = lm.goals
+        e, E, ge = np.empty(stack.rows), np.empty((stack.rows, lm.n)), np.empty((len(stack.kinds), 2))
+        nullspace_kernel()["task_rows"](np.ascontiguousarray(q, dtype=float), *lm._tree, *lm._goal_arrays, lm._pt,
+                                        lm._Rt, e, E, ge)
+        return E
     robot = problem.robot
     if problem.goals is None:
         return robot.jacobian_world_unchecked(q)[list(TASK_ROWS[target_kind(problem.target)])]
@@ -188,6 +197,28 @@ def _null_basis(E: np.ndarray) -> np.ndarray:
     return Vt[rank:]
 
 
+#: Smallest pivot of the Cholesky factor of E E^T, relative to its largest, for which :func:`_null_projection` trusts
+#: it (a condition number of E E^T up to 1e8); below it, the SVD.
+GRAM_PIVOT = 1e-4
+
+
+def _null_projection(E: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``g`` (n,) projected on the null space of ``E`` (rows, n): ``g - E^T (E E^T)^-1 E g`` when E's rows are well
+    independent (E E^T's Cholesky pivots within :data:`GRAM_PIVOT` of each other: a few microseconds), else by the
+    SVD's null basis (tens to hundreds of microseconds), since E is rank-deficient by design for some kinds (an
+    inactive band's zero rows, a free axis's three swing rows of rank two, LookAt's near its answer)."""
+    if E.shape[0] < E.shape[1]:
+        A = E @ E.T
+        try:
+            pivots = np.diagonal(np.linalg.cholesky(A))
+            if pivots.min() > GRAM_PIVOT * pivots.max():
+                return g - E.T @ np.linalg.solve(A, E @ g)
+        except np.linalg.LinAlgError:  # not positive definite: dependent rows
+            pass
+    N = _null_basis(E)
+    return N.T @ (N @ g)
+
+
 def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion, deadline: float | None,
            steps: int = REFINE_STEPS) -> tuple[np.ndarray, float, int]:
     """Lower ``criterion`` from an answer ``q`` (every goal met) by steps in the null space of the goals'
@@ -200,16 +231,10 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
     for _ in range(steps):
         if deadline is not None and time.perf_counter() >= deadline:
             break
-        E = _task_jacobian(problem, q)
-        if E.shape[0] >= E.shape[1]:
-            break
+        E = _task_jacobian(problem, q, lm)
         g = criterion.analytic_gradient(q)
-        if g is not None:  # the gradient's projection on the null space: g - E^T (E E^T)^-1 E g
-            try:
-                proj = g - E.T @ np.linalg.solve(E @ E.T, E @ g)
-            except np.linalg.LinAlgError:  # a singular E: its null space by SVD
-                N = _null_basis(E)
-                proj = N.T @ (N @ g)
+        if g is not None:
+            proj = _null_projection(E, g)
         else:
             N = _null_basis(E)
             if N.shape[0] == 0:
