@@ -26,8 +26,10 @@ middle of its +-1 m box). Two budgets, each over all the problems:
 Reported per benchmark and budget: success of each way, the problems the preference lost and gained against the
 goals alone, median wall time of each and its ratio to the goals alone, and the preference's own effect on the
 problems all three solved: mean over the joints of ``|q - q_ref|`` (joints whose range spans a full turn at the
-nearest turn), the goals alone against ``+ Posture``; the smallest distance of any joint to its limits, the goals
-alone against ``+ JointLimitMargin`` (median over the problems, and the share of answers keeping 0.1 rad).
+nearest turn), the goals alone against ``+ Posture``; the smallest distance of any joint to its limits (median over
+the problems) and the summed shortfall ``sum max(0, 0.1 - distance)`` over the joints (mean over the problems), the
+goals alone against ``+ JointLimitMargin`` (joints whose range spans a full turn have no limit: UR arms have none).
+Then the problems a preference lost, with its message.
 """
 
 from __future__ import annotations
@@ -61,6 +63,8 @@ TITLE = "## Preferences on every goal-kind benchmark (issue 23; scripts/bench_go
 TOL = 1e-6
 MARGIN = 0.1
 WAYS = ("goals alone", "+ Posture", "+ JointLimitMargin")
+#: The problems a preference lost (solved alone, not with it): "benchmark [budget] way, problem i: message".
+LOST: list[str] = []
 
 
 @dataclass
@@ -183,11 +187,14 @@ def posture_distance(q: np.ndarray, q_ref: np.ndarray, wrap: np.ndarray) -> floa
     return float(np.mean(np.abs(turn_difference(q, q_ref, wrap))))
 
 
-def limit_margin(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> float:
-    """The smallest distance (rad or m) of a joint to its limits, the full-turn joints (no limit to keep off)
-    left out."""
+def limit_margins(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> tuple[float, float]:
+    """(the smallest distance (rad or m) of a joint to its limits, the summed shortfall of the joints closer than
+    :data:`MARGIN`: ``sum max(0, MARGIN - distance)``), the full-turn joints (no limit to keep off) left out;
+    (nan, nan) when every joint turns fully."""
     d = np.minimum(q - lower, upper - q)[~wrap]
-    return float(d.min()) if d.size else np.inf
+    if not d.size:
+        return np.nan, np.nan
+    return float(d.min()), float(np.maximum(0.0, MARGIN - d).sum())
 
 
 def run_bench(bench: Bench, budgets: dict, log) -> None:
@@ -207,7 +214,7 @@ def run_bench(bench: Bench, budgets: dict, log) -> None:
                 t = time.perf_counter()
                 r = ek.solve(robot, p.goals + prefs[way], **{**p.options, **options})
                 dt = time.perf_counter() - t
-                rows[way].append((bool(r.success and p.judge(r.q)), dt, r.q))
+                rows[way].append((bool(r.success and p.judge(r.q)), dt, r.q, r.message))
         log(f"{bench.name} [{budget}]: " + ", ".join(f"{w} {sum(r[0] for r in rows[w])}/{len(rows[w])}"
                                                     for w in WAYS))
     bench.wrap = wrap
@@ -231,16 +238,21 @@ def report_rows(bench: Bench) -> list[str]:
 
         dist = [np.mean([posture_distance(q, bench.q_ref, bench.wrap) for q in qs(w)]) if idx.size else np.nan
                 for w in WAYS[:2]]
-        marg = [[limit_margin(q, robot.lower, robot.upper, bench.wrap) for q in qs(w)] for w in (WAYS[0], WAYS[2])]
-        kept = [100 * np.mean(np.array(m) >= MARGIN - 1e-9) if m else np.nan for m in marg]
-        medm = [float(np.median(m)) if m else np.nan for m in marg]
+        marg = [np.array([limit_margins(q, robot.lower, robot.upper, bench.wrap) for q in qs(w)]).reshape(-1, 2)
+                for w in (WAYS[0], WAYS[2])]
+        medm = [float(np.median(m[:, 0])) if m.size else np.nan for m in marg]
+        short = [float(np.mean(m[:, 1])) if m.size else np.nan for m in marg]
+        effect = ("- (no joint with limits)" if np.isnan(medm[0]) and idx.size else
+                  f"{medm[0]:.3f} -> {medm[1]:.3f} ({short[0]:.3f} -> {short[1]:.3f})")
         success = " / ".join(f"{100 * ok[w].mean():.1f}" for w in WAYS)
         changes = " / ".join(f"-{lost[w]} +{gained[w]}" for w in WAYS[1:])
         times = " / ".join(f"{med[w]:.2f}" for w in WAYS)
         ratios = " / ".join(f"{med[w] / med[WAYS[0]]:.2f}x" for w in WAYS[1:])
         out.append(f"| {bench.name} | {budget} | {n} | {success} | {changes} | {times} | {ratios} | "
-                   f"{dist[0]:.3f} -> {dist[1]:.3f} | {medm[0]:.3f} -> {medm[1]:.3f} ({kept[0]:.0f} -> "
-                   f"{kept[1]:.0f} %) |")
+                   f"{dist[0]:.3f} -> {dist[1]:.3f} | {effect} |")
+        for w in WAYS[1:]:
+            out_lost = [i for i in range(n) if rows[WAYS[0]][i][0] and not rows[w][i][0]]
+            LOST.extend(f"{bench.name} [{budget}] {w}, problem {i}: {rows[w][i][3]}" for i in out_lost)
     return out
 
 
@@ -275,9 +287,12 @@ def run(args) -> str:
             "benchmark's own judge of the answer (see the script's docstring).", "",
             "| benchmark | budget | problems | success % (alone / + Posture / + JointLimitMargin) | lost, gained "
             "against alone (+ Posture / + JLM) | median ms (alone / + Posture / + JLM) | time ratio (+ Posture / "
-            "+ JLM) | mean abs(q - q_ref), alone -> + Posture | min margin to limits, alone -> + JLM (share >= 0.1) |",
+            "+ JLM) | mean abs(q - q_ref), alone -> + Posture | min distance to a limit, alone -> + JLM (mean summed "
+            "shortfall below 0.1) |",
             "|---|---|---|---|---|---|---|---|---|"]
-    return "\n".join(head + lines) + "\n"
+    tail = ["", "Problems a preference lost (solved by the goals alone, not with it):"]
+    tail += [f"- {text}" for text in LOST] or ["- none."]
+    return "\n".join(head + lines + tail) + "\n"
 
 
 def write_docs(text: str) -> None:
