@@ -385,6 +385,26 @@ def test_bench_script_runs_small():
     assert "nearest vs Distance" in text and "10 grasps, 7 unreachable" in text and "JointLimitMargin" in text
 
 
+def test_preferences_bench_runs_small(monkeypatch):
+    """scripts/bench_goal_kinds_preferences.py on two UR5 free="rz" problems, the fixed budget: the three ways
+    interleaved, each answer judged by the benchmark's geometry, no problem lost, Posture's distance lowered."""
+    import importlib
+    from pathlib import Path
+
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "scripts"))
+    module = importlib.import_module("bench_goal_kinds_preferences")
+    bench = module.axes_benches(2, 23)[0]
+    module.run_bench(bench, {"fixed": {"timeout": None, "max_restarts": 2}}, lambda msg: None)
+    rows = bench.rows["fixed"]
+    assert [[r[0] for r in rows[w]] for w in module.WAYS] == [[True, True]] * 3
+    plain, posture = ([module.posture_distance(r[2], bench.q_ref, bench.wrap) for r in rows[w]]
+                      for w in module.WAYS[:2])
+    assert all(b < a for a, b in zip(plain, posture, strict=True)), (plain, posture)
+    line = module.report_rows(bench)[0]
+    assert line.startswith("| UR5 `free=\"rz\"` | fixed | 2 | 100.0 / 100.0 / 100.0 | -0 +0 / -0 +0 |")
+    assert line.endswith("| - (no joint with limits) |")
+
+
 def test_jacobian_world_unchecked_equals_jacobian():
     for robot in (ev.load_robot("panda"), ev.load_robot("panda", base="panda_link1")):
         rng = np.random.default_rng(11)
