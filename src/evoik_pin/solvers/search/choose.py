@@ -203,10 +203,14 @@ GRAM_PIVOT = 1e-4
 
 
 def _null_projection(E: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """``g`` (n,) projected on the null space of ``E`` (rows, n): ``g - E^T (E E^T)^-1 E g`` when E's rows are well
+    """``g`` (n,) projected on the null space of ``E`` (rows, n). Zero rows (an inactive band's, a support polygon's
+    with the CoM inside) bind nothing and are dropped; then ``g - E^T (E E^T)^-1 E g`` when the rows left are well
     independent (E E^T's Cholesky pivots within :data:`GRAM_PIVOT` of each other: a few microseconds), else by the
-    SVD's null basis (tens to hundreds of microseconds), since E is rank-deficient by design for some kinds (an
-    inactive band's zero rows, a free axis's three swing rows of rank two, LookAt's near its answer)."""
+    SVD's null basis (tens to hundreds of microseconds): some kinds' rows are dependent by design (a free axis's
+    three swing rows have rank two, LookAt's too near its answer)."""
+    E = E[np.any(E != 0.0, axis=1)]
+    if E.shape[0] == 0:
+        return g
     if E.shape[0] < E.shape[1]:
         A = E @ E.T
         try:
