@@ -248,6 +248,31 @@ def test_refine_steps_where_every_goal_kind_stays_met(panda, make, free):
             assert max(max(p or 0.0, a or 0.0) for p, a in errors) < 20 * h * h, errors
 
 
+def test_preferences_never_step_into_collision(panda):
+    """A ball where Posture's refinement would take Panda's elbow (link4's origin in the answer refined without a
+    scene): with the scene, the refined answer stays out of it, says so truthfully, and is no worse for Posture than
+    the plain answer (the refinement once walked into the ball and kept the search's stale collision_free=True:
+    a colliding answer reported as a success)."""
+    from evoik_pin.scene import Scene
+
+    mid = (panda.lower + panda.upper) / 2
+    rng = np.random.default_rng(5)
+    T = [panda.fk(panda.random_configurations(1, rng)[0]) for _ in range(5)][-1]
+    options = {"seed": 4, "timeout": None, "max_restarts": 2}
+    free = ev.solve(panda, [Pose(panda.tip, T), Posture(mid)], **options)
+    scene = Scene(panda).add_sphere("ball", 0.04, pin.SE3(np.eye(3), panda.fk(free.q, "panda_link4").translation))
+    assert scene.in_collision(free.q, 0.0)  # the ball is where the refinement goes
+    plain = ev.solve(panda, [Pose(panda.tip, T)], scene=scene, **options)
+    pref = ev.solve(panda, [Pose(panda.tip, T), Posture(mid)], scene=scene, **options)
+    assert plain.success and not scene.in_collision(plain.q, 0.0)
+    assert pref.success, pref.message
+    assert not scene.in_collision(pref.q, 0.0)
+    assert pref.collision_free is True
+    M = _pin_pose(panda, pref.q)
+    assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+    assert 0.5 * np.sum((pref.q - mid) ** 2) <= 0.5 * np.sum((plain.q - mid) ** 2) + 1e-12
+
+
 def test_joint_limit_margin_and_posture_by_name(panda):
     T = panda.fk(np.full(panda.n, 0.1))
     r = ev.solve(panda, [Pose(panda.tip, T), JointLimitMargin(0.1), Posture({"panda_joint1": 0.5}, 0.5)], seed=0)

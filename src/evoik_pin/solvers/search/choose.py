@@ -228,10 +228,12 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
     """Lower ``criterion`` from an answer ``q`` (every goal met) by steps in the null space of the goals'
     Jacobian: the projected gradient step (scaled by the criterion's curvature, so a quadratic term's step is
     its minimum on the tangent plane; at most :data:`MAX_REFINE_STEP`), then an LM run from there restoring
-    every goal within its tolerance. A step is kept only when that run converges and the cost drops; otherwise
-    the step is halved. Returns (q, its cost, LM evaluations)."""
+    every goal within its tolerance. A step is kept only when that run converges, the cost drops and, with a
+    scene, the configuration is collision-free (``problem.margin``); otherwise the step is halved. Returns (q, its
+    cost, LM evaluations)."""
     f = criterion.cost(q)
     scale, evaluations = 1.0, 0
+    scene = problem.scene
     for _ in range(steps):
         if deadline is not None and time.perf_counter() >= deadline:
             break
@@ -253,7 +255,7 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
         out = lm.run(q + step, RESTORE_ITERATIONS)
         evaluations += out.evaluations
         f_new = criterion.cost(out.q) if out.converged else np.inf
-        if f_new < f - 1e-15 * max(1.0, abs(f)):
+        if f_new < f - 1e-15 * max(1.0, abs(f)) and (scene is None or not scene.in_collision(out.q, problem.margin)):
             q, f, scale = out.q, f_new, min(1.0, 2.0 * scale)
         else:
             scale *= 0.5
