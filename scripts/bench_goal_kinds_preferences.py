@@ -78,18 +78,22 @@ class Problem:
 
 @dataclass
 class Bench:
-    """One benchmark: a robot, its problems, its own time budget (solve's options) and the Posture's ``q_ref``."""
+    """One benchmark: a robot, its problems, its own time budget (solve's options), the Posture's ``q_ref`` (n,)
+    (default the middle of the limits), the robot's full-turn joints ``wrap`` (n,) bool, and once run, ``rows``
+    (:func:`run_bench`)."""
 
     name: str
     robot: object
     problems: list[Problem]
     budget: dict
     q_ref: np.ndarray = None
+    wrap: np.ndarray = field(init=False)
     rows: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.q_ref is None:
             self.q_ref = (self.robot.lower + self.robot.upper) / 2
+        self.wrap = wrapping_joints(self.robot, self.robot.lower, self.robot.upper)
 
 
 # ------------------------------------------------------------------ the benchmarks (each part's problems)
@@ -202,7 +206,6 @@ def run_bench(bench: Bench, budgets: dict, log) -> None:
     interleaved problem by problem; ``bench.rows[budget][way]`` = list of (solved, wall s, q)."""
     robot = bench.robot
     ek.prepare(robot)
-    wrap = wrapping_joints(robot, robot.lower, robot.upper)
     prefs = {WAYS[0]: [], WAYS[1]: [Posture(bench.q_ref, 1.0)], WAYS[2]: [JointLimitMargin(MARGIN)]}
     first = bench.problems[0]
     for way in WAYS:  # one-time set-up (seed tables, the null-space kernel) before any clock
@@ -217,7 +220,6 @@ def run_bench(bench: Bench, budgets: dict, log) -> None:
                 rows[way].append((bool(r.success and p.judge(r.q)), dt, r.q, r.message))
         log(f"{bench.name} [{budget}]: " + ", ".join(f"{w} {sum(r[0] for r in rows[w])}/{len(rows[w])}"
                                                     for w in WAYS))
-    bench.wrap = wrap
 
 
 def report_rows(bench: Bench) -> list[str]:
