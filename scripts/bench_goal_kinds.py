@@ -5,6 +5,7 @@ options), run here one after the other in fresh interpreters, their reports prin
     python scripts/bench_goal_kinds.py              # 200 problems per part, stdout
     python scripts/bench_goal_kinds.py --n 30       # quick
     python scripts/bench_goal_kinds.py --parts axes prefer
+    python scripts/bench_goal_kinds.py --parts preferences --n 100
 
 Parts:
 
@@ -15,6 +16,10 @@ Parts:
 * ``prefer`` (scripts/bench_goal_kinds_prefer.py): ``prefer="nearest"`` / ``"manipulability"`` on Panda and UR10
   against TRAC-IK's Distance / Manip1, goal sets of 10 Panda grasps of which 7 are unreachable, preferences never
   costing success.
+* ``preferences`` (scripts/bench_goal_kinds_preferences.py): every benchmark above (the same problems, made by the
+  parts' own functions) solved alone, with ``Posture`` and with ``JointLimitMargin`` added, interleaved problem by
+  problem, under each benchmark's time budget and a fixed one (``timeout=None, max_restarts=5``): success, time and
+  what the preference changed.
 
 Each part's section of docs/BENCHMARKS.md is written by that part's script (see its docstring).
 """
@@ -30,7 +35,8 @@ HERE = Path(__file__).resolve().parent
 #: Each part's script and the flags that make it print its report without writing docs/BENCHMARKS.md.
 PARTS = {"axes": ("bench_goal_kinds_axes.py", ["--no-docs"]),
          "balance": ("bench_goal_kinds_balance.py", []),
-         "prefer": ("bench_goal_kinds_prefer.py", [])}
+         "prefer": ("bench_goal_kinds_prefer.py", []),
+         "preferences": ("bench_goal_kinds_preferences.py", [])}
 
 
 def main(argv: list[str] | None = None) -> int:

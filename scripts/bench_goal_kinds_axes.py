@@ -61,6 +61,26 @@ def _timed(robot, target, seed):
     return r, time.perf_counter() - t0
 
 
+def free_axis_targets(ur5, n: int, rng) -> list[tuple[pin.SE3, float]]:
+    """Part 1's targets: (a reachable pose turned about its own z, the twist angle rad), ``n`` of them."""
+    out = []
+    for i in range(n):
+        T = ur5.fk(rng.uniform(ur5.lower, ur5.upper))
+        angle = (np.pi, -np.pi + 1e-9)[i % 2] if i % 10 == 0 else rng.uniform(-np.pi, np.pi)
+        out.append((T * pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, angle), np.zeros(3)), angle))
+    return out
+
+
+def free_axis_errors(ur5, Tt: pin.SE3, q, free: bool) -> tuple[float, float]:
+    """(position error m, angle rad) of ``q`` against ``Tt``: the angle between the z axes when ``free`` (free="rz"),
+    else the full rotation's."""
+    Tq = ur5.fk(q)
+    pos = float(np.linalg.norm(Tq.translation - Tt.translation))
+    rot = (_angle(Tq.rotation[:, 2], Tt.rotation[:, 2]) if free
+           else float(np.linalg.norm(pin.log3(Tt.rotation.T @ Tq.rotation))))
+    return pos, rot
+
+
 def free_axis(n: int, rng) -> dict:
     """Part 1: free="rz" against the full pose, same targets."""
     ur5 = ek.load_robot("ur5")
@@ -68,37 +88,49 @@ def free_axis(n: int, rng) -> dict:
     ek.solve(ur5, [Pose(tip, ur5.fk(np.zeros(ur5.n)), free="rz")], seed=0)  # seed table, kernel: one-time set-up
     ek.solve(ur5, ur5.fk(np.zeros(ur5.n)), seed=0)
     rows = {"free": [], "pose_goal": [], "pose": []}
-    for i in range(n):
-        T = ur5.fk(rng.uniform(ur5.lower, ur5.upper))
-        angle = (np.pi, -np.pi + 1e-9)[i % 2] if i % 10 == 0 else rng.uniform(-np.pi, np.pi)
-        Tt = T * pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, angle), np.zeros(3))
+    for i, (Tt, angle) in enumerate(free_axis_targets(ur5, n, rng)):
         for name, target in (("free", [Pose(tip, Tt, free="rz")]), ("pose_goal", [Pose(tip, Tt)]), ("pose", Tt)):
             r, dt = _timed(ur5, target, i)
-            Tq = ur5.fk(r.q)
-            pos = float(np.linalg.norm(Tq.translation - Tt.translation))
-            rot = (_angle(Tq.rotation[:, 2], Tt.rotation[:, 2]) if name == "free"
-                   else float(np.linalg.norm(pin.log3(Tt.rotation.T @ Tq.rotation))))
+            pos, rot = free_axis_errors(ur5, Tt, r.q, name == "free")
             rows[name].append((bool(r.success), pos <= TOL and rot <= TOL, dt, pos, rot))
             if not r.success:
                 FAILURES.append(f"{name} target {i} (twist {angle:.6f} rad): {r.message}")
     return rows
 
 
+#: Part 2's band: half-widths (m x3, rad x3).
+HALF = np.array([0.002] * 3 + [np.radians(5)] * 3)
+
+
+def band_targets(ur5, n: int, rng) -> list[pin.SE3]:
+    """Part 2's targets: each moved off a reachable pose T so that T lies inside the band :data:`HALF` around it."""
+    out = []
+    for _ in range(n):
+        T = ur5.fk(rng.uniform(ur5.lower, ur5.upper))
+        v = rng.uniform(-0.9, 0.9, 6) * HALF  # T's components seen from the target: inside the band
+        Rt = T.rotation @ pin.exp3(v[3:]).T  # log3(R_t^T R) = v[3:]
+        out.append(pin.SE3(Rt, T.translation - Rt @ v[:3]))  # R_t^T (p - p_t) = v[:3]
+    return out
+
+
+def band_ratio(ur5, Tt: pin.SE3, q) -> float:
+    """The largest of ``q``'s six components against ``Tt`` (target-frame position error, ``log3(R_t^T R)``) over
+    its half-width in :data:`HALF` (<= 1: inside the band)."""
+    Tq = ur5.fk(q)
+    v = np.concatenate([Tt.rotation.T @ (Tq.translation - Tt.translation), pin.log3(Tt.rotation.T @ Tq.rotation)])
+    return float(np.max(np.abs(v) / HALF))
+
+
 def band(n: int, rng) -> dict:
     """Part 2: +-2 mm, +-5 degrees."""
     ur5 = ek.load_robot("ur5")
     tip = ur5.tip
-    half = np.array([0.002] * 3 + [np.radians(5)] * 3)
+    half = HALF
     rows, exact = [], []
-    for i in range(n):
-        T = ur5.fk(rng.uniform(ur5.lower, ur5.upper))
-        v = rng.uniform(-0.9, 0.9, 6) * half  # T's components seen from the target: inside the band
-        Rt = T.rotation @ pin.exp3(v[3:]).T  # log3(R_t^T R) = v[3:]
-        Tt = pin.SE3(Rt, T.translation - Rt @ v[:3])  # R_t^T (p - p_t) = v[:3]
+    for i, Tt in enumerate(band_targets(ur5, n, rng)):
         r, dt = _timed(ur5, [Pose(tip, Tt, tolerance=half)], i)
-        Tq = ur5.fk(r.q)
-        v = np.concatenate([Tt.rotation.T @ (Tq.translation - Tt.translation), pin.log3(Tt.rotation.T @ Tq.rotation)])
-        rows.append((bool(r.success), bool((np.abs(v) <= half).all()), dt, float(np.max(np.abs(v) / half))))
+        ratio = band_ratio(ur5, Tt, r.q)
+        rows.append((bool(r.success), ratio <= 1.0, dt, ratio))
         if not r.success:
             FAILURES.append(f"band target {i}: {r.message}")
         r, dt = _timed(ur5, [Pose(tip, Tt)], i)
@@ -108,23 +140,47 @@ def band(n: int, rng) -> dict:
     return {"band": rows, "band_exact": exact}
 
 
-def look_at(n: int, rng) -> dict:
-    """Part 3: Romeo's gaze at a point with a right-wrist pose."""
+def load_romeo():
+    """Romeo as part 3 solves it: fixed base, tips the gaze frame and the right wrist."""
     romeo = ek.load_robot("romeo", tips=["gaze", "r_wrist"], floating_base=False)
     q0 = np.clip(np.zeros(romeo.n), romeo.lower, romeo.upper)
     assert _angle(romeo.fk(q0, "gaze").rotation[:, 0], [1.0, 0.0, 0.0]) < 1e-6  # x: the line of sight
-    rows = []
-    for i in range(n):
+    return romeo
+
+
+def look_at_problems(romeo, n: int, rng) -> list[tuple[pin.SE3, np.ndarray]]:
+    """Part 3's problems: (the right wrist's pose, the point (3,) m to look at), ``n`` of them."""
+    out = []
+    for _ in range(n):
         q = rng.uniform(romeo.lower, romeo.upper)
         G, W = romeo.fk(q, "gaze"), romeo.fk(q, "r_wrist")
-        point = G.translation + rng.uniform(0.3, 1.5) * G.rotation[:, 0]
+        out.append((W, G.translation + rng.uniform(0.3, 1.5) * G.rotation[:, 0]))
+    return out
+
+
+def look_at_goals(W: pin.SE3, point: np.ndarray) -> list:
+    """Part 3's goal list: the wrist's pose, the gaze frame's x axis at the point."""
+    return [Pose("r_wrist", W), LookAt("gaze", [1, 0, 0], point)]
+
+
+def look_at_errors(romeo, W: pin.SE3, point: np.ndarray, q) -> tuple[float, float]:
+    """(gaze-axis angle to the point rad, the wrist's larger pose error m or rad) of ``q``."""
+    Gq, Wq = romeo.fk(q, "gaze"), romeo.fk(q, "r_wrist")
+    gaze = _angle(Gq.rotation[:, 0], point - Gq.translation)
+    wrist = max(float(np.linalg.norm(Wq.translation - W.translation)),
+                float(np.linalg.norm(pin.log3(W.rotation.T @ Wq.rotation))))
+    return gaze, wrist
+
+
+def look_at(n: int, rng) -> dict:
+    """Part 3: Romeo's gaze at a point with a right-wrist pose."""
+    romeo = load_romeo()
+    rows = []
+    for i, (W, point) in enumerate(look_at_problems(romeo, n, rng)):
         if i == 0:
-            ek.solve(romeo, [Pose("r_wrist", W), LookAt("gaze", [1, 0, 0], point)], seed=0)  # one-time set-up
-        r, dt = _timed(romeo, [Pose("r_wrist", W), LookAt("gaze", [1, 0, 0], point)], i)
-        Gq, Wq = romeo.fk(r.q, "gaze"), romeo.fk(r.q, "r_wrist")
-        gaze = _angle(Gq.rotation[:, 0], point - Gq.translation)
-        wrist = max(float(np.linalg.norm(Wq.translation - W.translation)),
-                    float(np.linalg.norm(pin.log3(W.rotation.T @ Wq.rotation))))
+            ek.solve(romeo, look_at_goals(W, point), seed=0)  # one-time set-up
+        r, dt = _timed(romeo, look_at_goals(W, point), i)
+        gaze, wrist = look_at_errors(romeo, W, point, r.q)
         rows.append((bool(r.success), gaze <= TOL and wrist <= TOL, dt, gaze, wrist))
         if not r.success:
             FAILURES.append(f"look_at problem {i}: {r.message}")

@@ -58,7 +58,7 @@ BOX = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.0, 0.0), np.array([0.0, 0.0, 0.3]))
 TOL = 1e-6
 
 
-def _stance(talos) -> list:
+def stance_goals(talos) -> list:
     q = np.zeros(talos.n)
     q[:6] = STANCE_BASE
     return [Pose(f, talos.fk(q, f)) for f in SOLES] + [CenterOfMass(support=list(SOLES), margin=MARGIN)]
@@ -66,7 +66,7 @@ def _stance(talos) -> list:
 
 def talos_problems(talos, n: int, seed: int) -> list[list]:
     """``n`` wrist pose pairs reached by standing configurations (see the module docstring)."""
-    stance, rng, out, tries = _stance(talos), np.random.default_rng(seed), [], 0
+    stance, rng, out, tries = stance_goals(talos), np.random.default_rng(seed), [], 0
     while len(out) < n:
         tries += 1
         start = talos.random_configurations(1, rng)[0]
@@ -104,6 +104,22 @@ def _com_inside(talos, q) -> bool:
     return polygon_distance(com_of(talos, q)[:2], ground, MARGIN) == 0.0
 
 
+def talos_judged(talos, q, stance: list, wrists: list) -> tuple[bool, bool]:
+    """(the soles and wrists within 1e-6 m and rad and the joints within bounds, that and the CoM inside the
+    shrunk support polygon) of Talos's answer ``q`` (``stance``: :func:`stance_goals`, ``wrists``: two Poses)."""
+    ok = bool(_poses_met(talos, q, stance[:2] + wrists) and talos.within_bounds(q))
+    return ok, ok and _com_inside(talos, q)
+
+
+def box_held(baxter, q, T: pin.SE3) -> bool:
+    """Whether Baxter's answer ``q`` holds the box (``RelativePose`` within 1e-6 m and rad) with the left gripper at
+    ``T`` (within 1e-6 m and rad)."""
+    M = baxter.fk(q, "left_gripper").actInv(baxter.fk(q, "right_gripper"))
+    held = np.linalg.norm(pin.log6(BOX.actInv(M)).vector[:3]) <= TOL and np.linalg.norm(
+        pin.log3(BOX.rotation.T @ M.rotation)) <= TOL
+    return bool(held and _poses_met(baxter, q, [Pose("left_gripper", T)]))
+
+
 def _timed(robot, goals, seed: int, timeout: float):
     t = time.perf_counter()
     r = ek.solve(robot, goals, seed=seed, timeout=timeout)
@@ -112,18 +128,18 @@ def _timed(robot, goals, seed: int, timeout: float):
 
 def run_talos(n: int, seed: int, timeout: float) -> dict:
     talos = ek.load_robot("talos", floating_base=True)
-    stance = _stance(talos)
+    stance = stance_goals(talos)
     t0 = time.perf_counter()
     problems = talos_problems(talos, n, seed)
     made = time.perf_counter() - t0
     rows = {"com": [], "plain": []}
     for i, wrists in enumerate(problems):  # the two formulations alternate: machine load hits them alike
         r, t = _timed(talos, stance + wrists, i, timeout)
-        ok = r.success and _poses_met(talos, r.q, stance[:2] + wrists) and talos.within_bounds(r.q)
-        rows["com"].append((ok, ok and _com_inside(talos, r.q), t))
+        ok, inside = talos_judged(talos, r.q, stance, wrists)
+        rows["com"].append((r.success and ok, r.success and inside, t))
         r, t = _timed(talos, stance[:2] + wrists, i, timeout)
-        ok = r.success and _poses_met(talos, r.q, stance[:2] + wrists) and talos.within_bounds(r.q)
-        rows["plain"].append((ok, ok and _com_inside(talos, r.q), t))
+        ok, inside = talos_judged(talos, r.q, stance, wrists)
+        rows["plain"].append((r.success and ok, r.success and inside, t))
     return {"rows": rows, "made": made}
 
 
@@ -138,10 +154,7 @@ def run_baxter(n: int, seed: int, timeout: float) -> dict:
     for i, T in enumerate(problems):
         left = Pose("left_gripper", T)
         r, t = _timed(baxter, [rel, left], i, timeout)
-        M = baxter.fk(r.q, "left_gripper").actInv(baxter.fk(r.q, "right_gripper"))
-        held = np.linalg.norm(pin.log6(BOX.actInv(M)).vector[:3]) <= TOL and np.linalg.norm(
-            pin.log3(BOX.rotation.T @ M.rotation)) <= TOL
-        rows["relative"].append((bool(r.success and held and _poses_met(baxter, r.q, [left])), True, t))
+        rows["relative"].append((bool(r.success and box_held(baxter, r.q, T)), True, t))
         both = [left, Pose("right_gripper", T * BOX)]
         r, t = _timed(baxter, both, i, timeout)
         rows["absolute"].append((bool(r.success and _poses_met(baxter, r.q, both)), True, t))

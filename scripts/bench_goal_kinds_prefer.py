@@ -151,9 +151,9 @@ def bench_prefer(name: str, n: int, seed: int, log, timeout: float | None = None
     return rows
 
 
-def bench_sets(n: int, seed: int, log) -> list[str]:
-    robot = ev.load_robot("panda")
-    ev.prepare(robot)
+def goal_set_problems(robot, n: int, seed: int) -> tuple[list, list]:
+    """Part 2's problems: (``n`` goal lists ``[Pose(tip, [10 grasps])]``, 3 reachable and 7 not, shuffled; the
+    single-pose lists ``[Pose(tip, T)]`` of each set's first reachable grasp)."""
     rng = np.random.default_rng(seed)
     sets, singles = [], []
     for _ in range(n):
@@ -168,6 +168,13 @@ def bench_sets(n: int, seed: int, log) -> list[str]:
         order = rng.permutation(10)
         sets.append([Pose(robot.tip, [members[k] for k in order])])
         singles.append([Pose(robot.tip, reach[0])])
+    return sets, singles
+
+
+def bench_sets(n: int, seed: int, log) -> list[str]:
+    robot = ev.load_robot("panda")
+    ev.prepare(robot)
+    sets, singles = goal_set_problems(robot, n, seed)
     ev.solve(robot, sets[0], seed=0)
     ok, t_set, t_one, ok_one = 0, [], [], 0
     for i, (gs, g1) in enumerate(zip(sets, singles, strict=True)):

@@ -10,7 +10,19 @@ from hypothesis import strategies as st
 
 import evoik_pin as ev
 from evoik_pin.errors import BoundsError, ConfigurationError, FrameError, MethodError, OptionError, TargetError
-from evoik_pin.goals import JointLimitMargin, Manipulability, MinimalDisplacement, Pose, Position, Posture
+from evoik_pin.goals import (
+    CenterOfMass,
+    Direction,
+    JointLimitMargin,
+    LookAt,
+    Manipulability,
+    MinimalDisplacement,
+    Pose,
+    Position,
+    Posture,
+    RelativePose,
+)
+from evoik_pin.goals.preferences import turn_difference
 from evoik_pin.solvers.lm import wrapping_joints
 from evoik_pin.solvers.search.choose import nearest_turn
 
@@ -163,6 +175,104 @@ def test_preferences_keep_goals_and_lower_their_cost(panda):
         assert np.linalg.norm(pref.q - mid) <= np.linalg.norm(plain.q - mid) + 1e-9
 
 
+def _posture_cost(q, q_ref, wrap):
+    d = turn_difference(q, q_ref, wrap)
+    return 0.5 * float(d @ d)
+
+
+def test_posture_refines_along_a_free_axis(ur5):
+    """UR5 on a pose with its z rotation free (``free="rz"``): 5 rows on 6 joints leave a turn about the tool's z
+    axis, along which Posture moves the answer (the refinement once took the goal's six rows for a full pose and
+    left every answer where it was)."""
+    rng = np.random.default_rng(3)
+    q_ref = (ur5.lower + ur5.upper) / 2
+    wrap = wrapping_joints(ur5, ur5.lower, ur5.upper)
+    for i in range(3):
+        T = ur5.fk(ur5.random_configurations(1, rng)[0])
+        goal = Pose(ur5.tip, T, free="rz")
+        plain = ev.solve(ur5, [goal], seed=i, timeout=None, max_restarts=2)
+        pref = ev.solve(ur5, [goal, Posture(q_ref, 1.0)], seed=i, timeout=None, max_restarts=2)
+        assert plain.success and pref.success, pref.message
+        M = _pin_pose(ur5, pref.q)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert np.arccos(np.clip(M.rotation[:, 2] @ T.rotation[:, 2], -1, 1)) <= 1e-6
+        assert _posture_cost(pref.q, q_ref, wrap) < _posture_cost(plain.q, q_ref, wrap) - 1e-3
+
+
+def test_posture_refines_inside_a_tolerance_band(ur5):
+    """A +-2 mm / +-5 degree band on UR5 (6 joints, 6 rows): inside the band no row binds, so Posture moves the
+    answer (the refinement once counted six rows on six joints and stopped), which stays inside the band."""
+    rng = np.random.default_rng(4)
+    half = np.array([0.002] * 3 + [np.radians(5)] * 3)
+    q_ref = (ur5.lower + ur5.upper) / 2
+    wrap = wrapping_joints(ur5, ur5.lower, ur5.upper)
+    for i in range(3):
+        T = ur5.fk(ur5.random_configurations(1, rng)[0])
+        goal = Pose(ur5.tip, T, tolerance=half)
+        plain = ev.solve(ur5, [goal], seed=i, timeout=None, max_restarts=2)
+        pref = ev.solve(ur5, [goal, Posture(q_ref, 1.0)], seed=i, timeout=None, max_restarts=2)
+        assert plain.success and pref.success, pref.message
+        M = _pin_pose(ur5, pref.q)
+        v = np.concatenate([T.rotation.T @ (M.translation - T.translation), pin.log3(T.rotation.T @ M.rotation)])
+        assert (np.abs(v) <= half * (1 + 1e-9)).all(), v / half
+        assert _posture_cost(pref.q, q_ref, wrap) < _posture_cost(plain.q, q_ref, wrap) - 1e-4
+
+
+@pytest.mark.parametrize(("make", "free"), [
+    (lambda r, q, T: [Pose(r.tip, T, free="rz")], 2),
+    (lambda r, q, T: [Position(r.tip, T.translation), LookAt(r.tip, [0, 0, 1], T.act(np.array([0, 0, 0.4])))], 2),
+    (lambda r, q, T: [Direction(r.tip, [0, 0, 1], T.rotation[:, 2])], 5),
+    (lambda r, q, T: [RelativePose("panda_link1", r.tip, r.fk(q, "panda_link1").actInv(T))], 1),
+    (lambda r, q, T: [CenterOfMass(point=r.fk(q, "panda_link4").translation, axes="xy")], 5),
+], ids=["free axis", "position + LookAt", "Direction", "RelativePose", "CenterOfMass"])
+def test_refine_steps_where_every_goal_kind_stays_met(panda, make, free):
+    """The null space refine steps in is that of every goal kind's own error: moving an answer 1e-4 along any of
+    its directions changes no goal's error by more than second order, and it has the dimension the goals leave
+    (7 joints less the rows that bind: a free axis 5, a position 3 and a gaze 2, a direction 2, a relative pose of
+    the six joints after link1 6, a CoM over a point 2)."""
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.search.choose import _null_basis, _task_jacobian
+
+    q_true = np.array([0.3, -0.4, 0.2, -1.9, 0.1, 1.6, 0.4])
+    T = panda.fk(q_true)
+    goals = make(panda, q_true, T)
+    r = ev.solve(panda, goals, q0=q_true + 0.05, seed=0, timeout=None, max_restarts=2)
+    assert r.success, r.message
+    problem, _ = ev.make_problem(panda, goals)
+    N = _null_basis(_task_jacobian(problem, r.q, LevenbergMarquardt(problem)))
+    assert N.shape[0] == free
+    h = 1e-4
+    for v in N:
+        for sign in (-1.0, 1.0):
+            errors = problem.goal_errors(r.q + sign * h * v)
+            assert max(max(p or 0.0, a or 0.0) for p, a in errors) < 20 * h * h, errors
+
+
+def test_preferences_never_step_into_collision(panda):
+    """A ball where Posture's refinement would take Panda's elbow (link4's origin in the answer refined without a
+    scene): with the scene, the refined answer stays out of it, says so truthfully, and is no worse for Posture than
+    the plain answer (the refinement once walked into the ball and kept the search's stale collision_free=True:
+    a colliding answer reported as a success)."""
+    from evoik_pin.scene import Scene
+
+    mid = (panda.lower + panda.upper) / 2
+    rng = np.random.default_rng(5)
+    T = [panda.fk(panda.random_configurations(1, rng)[0]) for _ in range(5)][-1]
+    options = {"seed": 4, "timeout": None, "max_restarts": 2}
+    free = ev.solve(panda, [Pose(panda.tip, T), Posture(mid)], **options)
+    scene = Scene(panda).add_sphere("ball", 0.04, pin.SE3(np.eye(3), panda.fk(free.q, "panda_link4").translation))
+    assert scene.in_collision(free.q, 0.0)  # the ball is where the refinement goes
+    plain = ev.solve(panda, [Pose(panda.tip, T)], scene=scene, **options)
+    pref = ev.solve(panda, [Pose(panda.tip, T), Posture(mid)], scene=scene, **options)
+    assert plain.success and not scene.in_collision(plain.q, 0.0)
+    assert pref.success, pref.message
+    assert not scene.in_collision(pref.q, 0.0)
+    assert pref.collision_free is True
+    M = _pin_pose(panda, pref.q)
+    assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+    assert 0.5 * np.sum((pref.q - mid) ** 2) <= 0.5 * np.sum((plain.q - mid) ** 2) + 1e-12
+
+
 def test_joint_limit_margin_and_posture_by_name(panda):
     T = panda.fk(np.full(panda.n, 0.1))
     # a budget of restarts, not of wall-clock time: the verdict must not depend on the machine's load
@@ -300,6 +410,26 @@ def test_bench_script_runs_small():
     spec.loader.exec_module(module)
     text = module.run(argparse.Namespace(n=3, seed=0, verbose=False, prefer_timeout=None))
     assert "nearest vs Distance" in text and "10 grasps, 7 unreachable" in text and "JointLimitMargin" in text
+
+
+def test_preferences_bench_runs_small(monkeypatch):
+    """scripts/bench_goal_kinds_preferences.py on two UR5 free="rz" problems, the fixed budget: the three ways
+    interleaved, each answer judged by the benchmark's geometry, no problem lost, Posture's distance lowered."""
+    import importlib
+    from pathlib import Path
+
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "scripts"))
+    module = importlib.import_module("bench_goal_kinds_preferences")
+    bench = module.axes_benches(2, 23)[0]
+    module.run_bench(bench, {"fixed": {"timeout": None, "max_restarts": 2}}, lambda msg: None)
+    rows = bench.rows["fixed"]
+    assert [[r[0] for r in rows[w]] for w in module.WAYS] == [[True, True]] * 3
+    plain, posture = ([module.posture_distance(r[2], bench.q_ref, bench.wrap) for r in rows[w]]
+                      for w in module.WAYS[:2])
+    assert all(b < a for a, b in zip(plain, posture, strict=True)), (plain, posture)
+    line = module.report_rows(bench)[0]
+    assert line.startswith("| UR5 `free=\"rz\"` | fixed | 2 | 100.0 / 100.0 / 100.0 | -0 +0 / -0 +0 |")
+    assert line.endswith("| - (no joint with limits) |")
 
 
 def test_jacobian_world_unchecked_equals_jacobian():

@@ -380,6 +380,7 @@ def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None,
             pos, rot, cost = problem.assess(q)
             result.q, result.position_error, result.orientation_error, result.cost = q, pos, rot, cost
             result.goal_errors = None
+            result.collision_free = None  # the search's verdict was on its answer, not the refined one
             if problem.goals is not None:
                 result = _with_goal_verdict(problem, result)
             result = with_collision_verdict(problem, result)

@@ -170,10 +170,19 @@ def _redundant(problem) -> bool:
     return rows < problem.robot.n
 
 
-def _task_jacobian(problem, q: np.ndarray) -> np.ndarray:
-    """The goals' stacked base-frame Jacobian rows (LOCAL_WORLD_ALIGNED; rows, n) at ``q``: its null space is the
-    joint motion that leaves every goal where it is (a pose goal's log6 error has the same null space). Kinds not
-    in TASK_ROWS count all six rows (a smaller null space: safe)."""
+def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
+    """The goals' stacked task Jacobian (rows, n) at ``q``: its null space is the joint motion that leaves every goal
+    met to first order. On the compiled engine, the rows LM's own step reads (:func:`..lm.kernel.task_rows`), right
+    for every kind: a free axis's swing rows (the turn about it is free), a band's and a support polygon's rows zero
+    where inactive (inside), a relative pose's and a centre of mass's from their own Jacobians, LookAt's with the
+    frame's motion across the line of sight. The Python engine (pose, position and planar goals only): the frames'
+    base-frame rows (LOCAL_WORLD_ALIGNED; a pose goal's log6 error has the same null space)."""
+    if lm.engine == "compiled":
+        stack = lm.goals
+        e, E, ge = np.empty(stack.rows), np.empty((stack.rows, lm.n)), np.empty((len(stack.kinds), 2))
+        nullspace_kernel()["task_rows"](np.ascontiguousarray(q, dtype=float), *lm._tree, *lm._goal_arrays, lm._pt,
+                                        lm._Rt, e, E, ge)
+        return E
     robot = problem.robot
     if problem.goals is None:
         return robot.jacobian_world_unchecked(q)[list(TASK_ROWS[target_kind(problem.target)])]
@@ -189,28 +198,50 @@ def _null_basis(E: np.ndarray) -> np.ndarray:
     return Vt[rank:]
 
 
+#: Smallest pivot of the Cholesky factor of E E^T, relative to its largest, for which :func:`_null_projection` trusts
+#: it (a condition number of E E^T up to 1e8); below it, the SVD.
+GRAM_PIVOT = 1e-4
+
+
+def _null_projection(E: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``g`` (n,) projected on the null space of ``E`` (rows, n). Zero rows (an inactive band's, a support polygon's
+    with the CoM inside) bind nothing and are dropped; then ``g - E^T (E E^T)^-1 E g`` when the rows left are well
+    independent (E E^T's Cholesky pivots within :data:`GRAM_PIVOT` of each other: a few microseconds), else by the
+    SVD's null basis (tens to hundreds of microseconds): some kinds' rows are dependent by design (a free axis's
+    three swing rows have rank two, LookAt's too near its answer)."""
+    E = E[np.any(E != 0.0, axis=1)]
+    if E.shape[0] == 0:
+        return g
+    if E.shape[0] < E.shape[1]:
+        A = E @ E.T
+        try:
+            pivots = np.diagonal(np.linalg.cholesky(A))
+            if pivots.min() > GRAM_PIVOT * pivots.max():
+                return g - E.T @ np.linalg.solve(A, E @ g)
+        except np.linalg.LinAlgError:  # not positive definite: dependent rows
+            pass
+    N = _null_basis(E)
+    return N.T @ (N @ g)
+
+
 def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion, deadline: float | None,
            steps: int = REFINE_STEPS) -> tuple[np.ndarray, float, int]:
     """Lower ``criterion`` from an answer ``q`` (every goal met) by steps in the null space of the goals'
     Jacobian: the projected gradient step (scaled by the criterion's curvature, so a quadratic term's step is
     its minimum on the tangent plane; at most :data:`MAX_REFINE_STEP`), then an LM run from there restoring
-    every goal within its tolerance. A step is kept only when that run converges and the cost drops; otherwise
-    the step is halved. Returns (q, its cost, LM evaluations)."""
+    every goal within its tolerance. A step is kept only when that run converges, the cost drops and, with a
+    scene, the configuration is collision-free (``problem.margin``); otherwise the step is halved. Returns (q, its
+    cost, LM evaluations)."""
     f = criterion.cost(q)
     scale, evaluations = 1.0, 0
+    scene = problem.scene
     for _ in range(steps):
         if deadline is not None and time.perf_counter() >= deadline:
             break
-        E = _task_jacobian(problem, q)
-        if E.shape[0] >= E.shape[1]:
-            break
+        E = _task_jacobian(problem, q, lm)
         g = criterion.analytic_gradient(q)
-        if g is not None:  # the gradient's projection on the null space: g - E^T (E E^T)^-1 E g
-            try:
-                proj = g - E.T @ np.linalg.solve(E @ E.T, E @ g)
-            except np.linalg.LinAlgError:  # a singular E: its null space by SVD
-                N = _null_basis(E)
-                proj = N.T @ (N @ g)
+        if g is not None:
+            proj = _null_projection(E, g)
         else:
             N = _null_basis(E)
             if N.shape[0] == 0:
@@ -225,7 +256,7 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
         out = lm.run(q + step, RESTORE_ITERATIONS)
         evaluations += out.evaluations
         f_new = criterion.cost(out.q) if out.converged else np.inf
-        if f_new < f - 1e-15 * max(1.0, abs(f)):
+        if f_new < f - 1e-15 * max(1.0, abs(f)) and (scene is None or not scene.in_collision(out.q, problem.margin)):
             q, f, scale = out.q, f_new, min(1.0, 2.0 * scale)
         else:
             scale *= 0.5
