@@ -254,23 +254,18 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
              finish: float | None) -> tuple[list, int]:
     """prefer's answers (cost, q, variant), best first, taken along their self-motion manifolds by the compiled
     descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct
-    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps
-    more a round, in rounds while the clock allows (until ``finish``) and they move. A descended answer in
-    collision keeps its start. Returns the refined answers, best first, and the kinematics evaluations."""
+    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those on to their optimum
+    (:data:`DESCEND_STEPS` times :data:`DESCEND_ROUNDS` steps at most), in as many steps as the clock allows (until
+    ``finish``, at the trial's pace). A descended answer in collision keeps its start. Returns the refined answers,
+    best first, and the kinematics evaluations."""
     descend = nullspace_kernel()["descend_batch"]
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else np.ascontiguousarray(q0, dtype=float)
-    picked = []
-    Q = np.array([a[1] for a in answers])
-    free = np.ones(len(answers), dtype=bool)  # not within 1e-3 of an answer picked before
-    for k in range(len(answers)):
-        if len(picked) >= (DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT):
-            break
-        if free[k]:
-            picked.append(answers[k])
-            free &= np.einsum("ij,ij->i", Q - Q[k], Q - Q[k]) >= 1e-6
+    picked = _distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
     evaluations = 0
 
     def run(batch, steps):
+        """Each answer of ``batch`` descended ``steps`` steps at most: one kernel call per variant, the answers'
+        turns and costs for all of them at once (a Python call per answer cost as much as the descent)."""
         nonlocal evaluations
         out = []
         for i in sorted({a[2] for a in batch}):
@@ -279,24 +274,40 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
             Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
             evaluations += int(descend(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
                                        DESCEND_MAX_STEP, Q_out, f))
-            for a, q_new in zip(mine, Q_out, strict=True):
-                if scene is not None and scene.in_collision(q_new, problem.margin):
-                    out.append(a)
-                    continue
-                if q0 is not None:
-                    q_new = nearest_turn(q_new, q0, problem.lower, problem.upper, wrap)
-                out.append((criterion.cost(q_new), q_new, i))
+            if scene is not None:
+                for k in range(Q.shape[0]):
+                    if scene.in_collision(Q_out[k], problem.margin):
+                        Q_out[k] = Q[k]
+            if q0 is not None:
+                Q_out = nearest_turn(Q_out, q0, problem.lower, problem.upper, wrap)
+            out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q.shape[0], strict=True))
         return sorted(out, key=lambda a: a[0])
 
+    t = time.perf_counter()
     picked = run(picked, DESCEND_TRIAL)
-    for _ in range(DESCEND_ROUNDS):
-        if finish is not None and time.perf_counter() >= finish:
-            break
-        before = [a[0] for a in picked[:DESCEND_FINAL]]
-        picked = sorted(run(picked[:DESCEND_FINAL], DESCEND_STEPS) + picked[DESCEND_FINAL:], key=lambda a: a[0])
-        if [a[0] for a in picked[:DESCEND_FINAL]] == before:  # converged
-            break
+    per_step = (time.perf_counter() - t) / (DESCEND_TRIAL * len(picked))  # s per answer-step, the trial's pace
+    steps = DESCEND_STEPS * DESCEND_ROUNDS
+    if finish is not None:
+        steps = min(steps, int((finish - time.perf_counter()) / (per_step * min(DESCEND_FINAL, len(picked)))))
+    if steps > 0:  # the kernel stops each descent at its optimum: one call, no rounds
+        picked = sorted(run(picked[:DESCEND_FINAL], steps) + picked[DESCEND_FINAL:], key=lambda a: a[0])
     return picked, evaluations
+
+
+def _distinct(answers, count: int) -> list:
+    """The first ``count`` of ``answers`` (cost, q, variant; best first) no two of which are within 1e-3 (rad or
+    m, Euclidean) of each other."""
+    picked = []
+    Q = np.array([a[1] for a in answers])
+    free = np.ones(len(answers), dtype=bool)  # not within 1e-3 of an answer picked before
+    for k in range(len(answers)):
+        if len(picked) >= count:
+            break
+        if free[k]:
+            picked.append(answers[k])
+            d = Q - Q[k]
+            free &= np.einsum("ij,ij->i", d, d) >= 1e-6
+    return picked
 
 
 def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
@@ -554,12 +565,15 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
 
     done = False
     limit = deadline if prefer == "first" else collect_until
-    if q0 is not None:  # round 0: q0 towards every variant (prefer="nearest": the nearest answers start there)
+    if q0 is not None and prefer == "first":  # round 0: q0 towards every variant
         for i in order:
             if run(i, q0):
                 done = True
                 break
     if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
+        if q0 is not None:  # q0 in each variant's first batch (a call of its own cost as much as the batch's runs)
+            for v in variants:
+                v.starts = itertools.chain([q0], v.starts)
         if not redundant:  # no null space to refine in: the whole budget collects
             limit = finish
         if prefer == "nearest":  # every other start near q0: answers near q0 come from there
