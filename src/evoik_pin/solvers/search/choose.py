@@ -296,17 +296,21 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
 
 def _distinct(answers, count: int) -> list:
     """The first ``count`` of ``answers`` (cost, q, variant; best first) no two of which are within 1e-3 (rad or
-    m, Euclidean) of each other."""
-    picked = []
+    m, Euclidean) of each other. One matrix of the pairs' distances, then plain Python: an array operation per
+    answer cost some 100 us on 20 answers (measured)."""
+    if len(answers) <= 1:
+        return list(answers[:count])
     Q = np.array([a[1] for a in answers])
-    free = np.ones(len(answers), dtype=bool)  # not within 1e-3 of an answer picked before
-    for k in range(len(answers)):
+    G = Q @ Q.T
+    sq = np.diag(G)
+    close = ((sq[:, None] + sq[None, :] - 2.0 * G) < 1e-6).tolist()
+    picked, taken = [], []
+    for k, row in enumerate(close):
         if len(picked) >= count:
             break
-        if free[k]:
+        if not any(row[j] for j in taken):
             picked.append(answers[k])
-            d = Q - Q[k]
-            free &= np.einsum("ij,ij->i", d, d) >= 1e-6
+            taken.append(k)
     return picked
 
 
@@ -631,14 +635,6 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         order = sorted(order, key=lambda i: variants[i].best_rank)  # the variants that came nearest first
     if winner is None and answers:
         answers.sort(key=lambda a: a[0])
-        refined, seen = [], []
-        for cost, q, i in answers:
-            if len(refined) >= REFINE_COUNT:
-                break
-            if any(np.linalg.norm(q - s) < 1e-3 for s in seen):
-                continue
-            seen.append(q)
-            refined.append((cost, q, i))
 
         def improve(cost, q, i, steps):
             nonlocal evaluations
@@ -656,8 +652,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             refined, ev = _descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish)
             evaluations += ev
         elif criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
-            refined = [improve(*a, TRIAL_STEPS) for a in refined]
+            refined = [improve(*a, TRIAL_STEPS) for a in _distinct(answers, REFINE_COUNT)]
             refined = [improve(*min(refined, key=lambda a: a[0]), REFINE_STEPS)]
+        else:  # nothing to refine in (or by): the best answer
+            refined = answers[:1]
         cost, q, i = min(refined, key=lambda a: a[0])
         winner = (q, i)
     extra = ""
