@@ -399,3 +399,50 @@ def test_descent_mode_skips_mimic_trees(panda):
         problem = ev.make_problem(robot, robot.fk(q), q0=q)[0]
         criterion = _criterion(problem, "nearest", (), wrapping_joints(robot, robot.lower, robot.upper))
         assert _descent_mode("nearest", criterion, [SimpleNamespace(lm=LevenbergMarquardt(problem))]) == expected
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 12), st.integers(1, 20))
+def test_distinct_keeps_the_order_and_drops_near_duplicates(seed, count, size):
+    from evoik_pin.solvers.search.choose import _distinct
+
+    rng = np.random.default_rng(seed)
+    Q = rng.normal(size=(size, 3))
+    for k in range(1, size):  # some answers repeat an earlier one within 1e-3
+        if rng.random() < 0.4:
+            Q[k] = Q[rng.integers(k)] + rng.normal(size=3) * 1e-5
+    answers = [(float(k), q, 0) for k, q in enumerate(Q)]
+    picked = _distinct(answers, count)
+    keys = [a[0] for a in picked]
+    assert keys == sorted(keys) and len(picked) <= count
+    P = np.array([a[1] for a in picked])
+    assert all(np.linalg.norm(P[a] - P[b]) >= 1e-3 for a in range(len(P)) for b in range(a))
+    last = int(keys[-1])
+    for k in range(last + 1):  # every answer up to the last pick is picked or near an earlier pick
+        if float(k) not in keys:
+            assert min(np.linalg.norm(Q[k] - Q[int(j)]) for j in keys if j < k) < 1e-3
+    if len(picked) < count:  # fewer than asked: every answer is near a pick
+        assert all(min(np.linalg.norm(q - p) for p in P) < 1e-3 for q in Q)
+
+
+def test_nearest_without_a_clock_reaches_its_branch_optimum(panda):
+    """No clock (max_restarts): q0's own run and the starts around it and from the table are collected, and the
+    best answers descend to the optimum of their branch: the answer is no farther than a known answer near q0,
+    and |q - q0| is stationary along the self-motion manifold (the gradient q - q0 has no component in the null
+    space of the tip's Jacobian) wherever no joint is on a bound."""
+    rng = np.random.default_rng(23)
+    stationary = 0
+    for i in range(8):
+        q_known = panda.random_configurations(1, rng)[0]
+        q0 = np.clip(q_known + rng.normal(size=panda.n) * 0.5, panda.lower, panda.upper)
+        T = panda.fk(q_known)
+        r = ev.solve(panda, T, q0=q0, prefer="nearest", seed=i, timeout=None, max_restarts=8)
+        assert r.success, r.message
+        assert np.linalg.norm(r.q - q0) <= np.linalg.norm(q_known - q0) + 1e-9
+        if np.min(np.minimum(r.q - panda.lower, panda.upper - r.q)) > 1e-6:
+            J = panda.jacobian(r.q, "world")
+            g = r.q - q0
+            along = g - np.linalg.pinv(J) @ (J @ g)  # the gradient's null-space component
+            assert np.linalg.norm(along) <= 1e-5 * max(1.0, np.linalg.norm(g)), (i, np.linalg.norm(along))
+            stationary += 1
+    assert stationary >= 4

@@ -85,6 +85,7 @@ MAX_REFINE_STEP = 0.5
 #: more often).
 DESCEND_COUNT, MANIP_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 4, 2, 10, 4
 DESCEND_MAX_STEP = 1.0
+DESCEND_MIN_FINAL = 10
 #: prefer="nearest" draws one start in NEAR_EVERY around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
 NEAR_SCALES = (0.1, 0.25, 0.5)
@@ -288,7 +289,8 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
     per_step = (time.perf_counter() - t) / (DESCEND_TRIAL * len(picked))  # s per answer-step, the trial's pace
     steps = DESCEND_STEPS * DESCEND_ROUNDS
     if finish is not None:
-        steps = min(steps, int((finish - time.perf_counter()) / (per_step * min(DESCEND_FINAL, len(picked)))))
+        fit = int((finish - time.perf_counter()) / (per_step * min(DESCEND_FINAL, len(picked))))
+        steps = min(steps, max(fit, DESCEND_MIN_FINAL))
     if steps > 0:  # the kernel stops each descent at its optimum: one call, no rounds
         picked = sorted(run(picked[:DESCEND_FINAL], steps) + picked[DESCEND_FINAL:], key=lambda a: a[0])
     return picked, evaluations
