@@ -150,6 +150,23 @@ class SeedTable:
             hit = self._transposed[key] = (F, np.ascontiguousarray(F.T), sq)
         return hit
 
+    def joint_distances(self, q0: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+        """Each entry's squared joint-space distance (size,) to ``q0`` (n,) (rad^2 or m^2), the ``wrap`` joints
+        (bool (n,): their range spans a full turn) by their turn nearest q0. Without wrapping joints one
+        matrix-vector product (the entries' squared norms are kept)."""
+        if wrap.any():
+            d = self.Q - q0
+            d[:, wrap] = (d[:, wrap] + np.pi) % (2.0 * np.pi) - np.pi
+            return np.einsum("ij,ij->i", d, d)
+        sq = self.__dict__.get("_joint_sq")
+        if sq is None:
+            sq = self._joint_sq = np.einsum("ij,ij->i", self.Q, self.Q)
+        d = self.Q @ q0
+        d *= -2.0
+        d += sq
+        d += q0 @ q0
+        return d
+
     def distances(self, key: str, f: np.ndarray) -> np.ndarray:
         """The table's squared distances (size,) to features ``f`` (d,) of kind ``key`` (:meth:`one_target_features`)
         less ``|f|^2`` (the same for every entry): what :meth:`ranked` sorts (memetic's first runs too)."""
