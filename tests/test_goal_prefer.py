@@ -446,3 +446,21 @@ def test_nearest_without_a_clock_reaches_its_branch_optimum(panda):
             assert np.linalg.norm(along) <= 1e-5 * max(1.0, np.linalg.norm(g)), (i, np.linalg.norm(along))
             stationary += 1
     assert stationary >= 4
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["panda", "ur5"]))
+def test_seed_table_joint_distances(seed, name):
+    """SeedTable.joint_distances: |Q - q0|^2 per entry, the full-turn joints (UR5's) by their nearest turn; the
+    matrix-vector form (Panda: none wrap) equal to the plain one."""
+    from evoik_pin.solvers.search.memetic import prepare
+
+    robot = ev.load_robot(name)
+    table, _ = prepare(robot, robot.lower, robot.upper, 256)
+    wrap = wrapping_joints(robot, robot.lower, robot.upper)
+    assert wrap.any() == (name == "ur5")
+    q0 = robot.random_configurations(1, np.random.default_rng(seed))[0]
+    d = table.Q - q0
+    d = np.where(wrap, np.mod(d + np.pi, 2 * np.pi) - np.pi, d)
+    for _ in range(2):  # the first call keeps the entries' squared norms, the second reads them
+        np.testing.assert_allclose(table.joint_distances(q0, wrap), (d * d).sum(axis=1), rtol=1e-9, atol=1e-9)
