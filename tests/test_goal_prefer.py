@@ -464,3 +464,31 @@ def test_seed_table_joint_distances(seed, name):
     d = np.where(wrap, np.mod(d + np.pi, 2 * np.pi) - np.pi, d)
     for _ in range(2):  # the first call keeps the entries' squared norms, the second reads them
         np.testing.assert_allclose(table.joint_distances(q0, wrap), (d * d).sum(axis=1), rtol=1e-9, atol=1e-9)
+
+
+def test_nearest_ranks_table_entries_near_q0_first(panda):
+    """prefer="nearest" starts LM from table entries near the target's pose *and* near q0: the first entries are
+    nearer q0 in joint space than those ranked by pose alone, and the joint term scales the ranking, not replaces
+    it (the entries stay near the pose: within the pose-only ranking's first 200 of 4096)."""
+    from types import SimpleNamespace
+
+    from evoik_pin.solvers.search.choose import NEAR_JOINT_WEIGHT, _variant_starts
+    from evoik_pin.solvers.search.memetic import prepare
+    from evoik_pin.solvers.search.seed_table import default_table_size
+
+    table, _ = prepare(panda, panda.lower, panda.upper, default_table_size(panda.n))
+    wrap = wrapping_joints(panda, panda.lower, panda.upper)
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        q, q0 = panda.random_configurations(2, rng)
+        problem = ev.make_problem(panda, panda.fk(q), q0=q0)[0]
+        by_pose, by_both = SimpleNamespace(), SimpleNamespace()
+        _variant_starts(table, problem, [by_pose], 8, None)
+        joint = NEAR_JOINT_WEIGHT * table.weight**2 * table.joint_distances(q0, wrap)
+        _variant_starts(table, problem, [by_both], 8, None, joint)
+        pose_first, both_first = np.array(list(by_pose.starts)), np.array(list(by_both.starts))
+        assert len(pose_first) == len(both_first) == 8
+        assert np.linalg.norm(both_first - q0, axis=1).mean() < np.linalg.norm(pose_first - q0, axis=1).mean()
+        order = np.argsort(table.distances(*table.one_target_features(problem.target)))
+        rank = {tuple(table.Q[k]): r for r, k in enumerate(order)}
+        assert max(rank[tuple(s)] for s in both_first) < 200  # of 4096 (measured: 20-50)
