@@ -451,8 +451,8 @@ def test_nearest_without_a_clock_reaches_its_branch_optimum(panda):
 @settings(max_examples=20, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.sampled_from(["panda", "ur5"]))
 def test_seed_table_joint_distances(seed, name):
-    """SeedTable.joint_distances: |Q - q0|^2 per entry, the full-turn joints (UR5's) by their nearest turn; the
-    matrix-vector form (Panda: none wrap) equal to the plain one."""
+    """SeedTable.joint_distances: |Q - q0|^2 per entry, the full-turn joints (UR5's) by their chord on the unit
+    circle (2 - 2 cos d, the same for every turn of d); its matrix-vector form equal to the plain one."""
     from evoik_pin.solvers.search.memetic import prepare
 
     robot = ev.load_robot(name)
@@ -461,9 +461,11 @@ def test_seed_table_joint_distances(seed, name):
     assert wrap.any() == (name == "ur5")
     q0 = robot.random_configurations(1, np.random.default_rng(seed))[0]
     d = table.Q - q0
-    d = np.where(wrap, np.mod(d + np.pi, 2 * np.pi) - np.pi, d)
-    for _ in range(2):  # the first call keeps the entries' squared norms, the second reads them
-        np.testing.assert_allclose(table.joint_distances(q0, wrap), (d * d).sum(axis=1), rtol=1e-9, atol=1e-9)
+    expected = np.where(wrap, 2.0 - 2.0 * np.cos(d), d * d).sum(axis=1)
+    for _ in range(2):  # the first call keeps the entries' features, the second reads them
+        np.testing.assert_allclose(table.joint_distances(q0, wrap), expected, rtol=1e-9, atol=1e-9)
+    turned = np.where(wrap, q0 + 2 * np.pi, q0)  # a full turn of the wrapping joints: the same distances
+    np.testing.assert_allclose(table.joint_distances(turned, wrap), expected, rtol=1e-9, atol=1e-9)
 
 
 def test_nearest_ranks_table_entries_near_q0_first(panda):

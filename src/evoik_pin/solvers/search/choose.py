@@ -85,6 +85,9 @@ MAX_REFINE_STEP = 0.5
 #: more often).
 DESCEND_COUNT, MANIP_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 4, 2, 10, 4
 DESCEND_MAX_STEP = 1.0
+#: prefer="nearest": steps the best DESCEND_FINAL make on towards their optimum whatever the clock says (about 30
+#: kinematics evaluations each; a loaded machine's clock otherwise cut them off after the trial's steps).
+#: Manipulability's steps cost n evaluations more each: none guaranteed.
 DESCEND_MIN_FINAL = 10
 #: prefer="nearest" draws one start in NEAR_EVERY around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
@@ -294,7 +297,7 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
     steps = DESCEND_STEPS * DESCEND_ROUNDS
     if finish is not None:
         fit = int((finish - time.perf_counter()) / (per_step * min(DESCEND_FINAL, len(picked))))
-        steps = min(steps, max(fit, DESCEND_MIN_FINAL))
+        steps = min(steps, max(fit, DESCEND_MIN_FINAL if mode == MODE_NEAREST else 0))
     if steps > 0:  # the kernel stops each descent at its optimum: one call, no rounds
         picked = sorted(run(picked[:DESCEND_FINAL], steps) + picked[DESCEND_FINAL:], key=lambda a: a[0])
     return picked, evaluations
