@@ -594,15 +594,12 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
 
     done = False
     limit = deadline if prefer == "first" else collect_until
-    if q0 is not None and prefer == "first":  # round 0: q0 towards every variant
+    if q0 is not None:  # round 0: q0 towards every variant (prefer="nearest": the nearest answers start there)
         for i in order:
             if run(i, q0):
                 done = True
                 break
     if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
-        if q0 is not None:  # q0 in each variant's first batch (a call of its own cost as much as the batch's runs)
-            for v in variants:
-                v.starts = itertools.chain([q0], v.starts)
         if not redundant:  # no null space to refine in: the whole budget collects
             limit = finish
         if prefer == "nearest":  # every other start near q0: answers near q0 come from there
