@@ -494,3 +494,13 @@ def test_nearest_ranks_table_entries_near_q0_first(panda):
         order = np.argsort(table.distances(*table.one_target_features(problem.target)))
         rank = {tuple(table.Q[k]): r for r, k in enumerate(order)}
         assert max(rank[tuple(s)] for s in both_first) < 200  # of 4096 (measured: 20-50)
+
+
+@pytest.mark.parametrize("rows", [0, 3, 40])
+def test_manipulability_costs_equal_cost_row_by_row(panda, rows):
+    """Manipulability.costs (rows one by one up to SMALL_BATCH, batched above) equals cost on each row."""
+    pref = Manipulability().bind(panda, None, panda.lower, panda.upper, np.zeros(panda.n, dtype=bool), panda.tip)
+    Q = panda.random_configurations(rows, np.random.default_rng(rows))
+    costs = pref.costs(Q)
+    assert costs.shape == (rows,)
+    np.testing.assert_allclose(costs, [pref.cost(q) for q in Q], rtol=1e-9, atol=1e-12)

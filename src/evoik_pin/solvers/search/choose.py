@@ -88,10 +88,6 @@ MAX_REFINE_STEP = 0.5
 #: more often).
 DESCEND_COUNT, MANIP_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 4, 2, 10, 4
 DESCEND_MAX_STEP = 1.0
-#: prefer="nearest": steps the best DESCEND_FINAL make on towards their optimum whatever the clock says (about 30
-#: kinematics evaluations each; a loaded machine's clock otherwise cut them off after the trial's steps).
-#: Manipulability's steps cost n evaluations more each: none guaranteed.
-DESCEND_MIN_FINAL = 10
 #: prefer="nearest" draws one start in NEAR_EVERY around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
 NEAR_SCALES = (0.1, 0.25, 0.5)
@@ -265,10 +261,10 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
              finish: float | None) -> tuple[list, int]:
     """prefer's answers (cost, q, variant), best first, taken along their self-motion manifolds by the compiled
     descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct
-    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those on to their optimum
-    (:data:`DESCEND_STEPS` times :data:`DESCEND_ROUNDS` steps at most), in as many steps as the clock allows (until
-    ``finish``, at the trial's pace). A descended answer in collision keeps its start. Returns the refined answers,
-    best first, and the kinematics evaluations."""
+    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps
+    more a round, in rounds while the clock allows (until ``finish``; nearest's first round whatever it says: some
+    30 kinematics evaluations an answer, where manipulability's steps cost n more each) and they move. A descended
+    answer in collision keeps its start. Returns the refined answers, best first, and the kinematics evaluations."""
     descend = nullspace_kernel()["descend_batch"]
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else np.ascontiguousarray(q0, dtype=float)
     picked = _distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
@@ -294,15 +290,14 @@ def _descend(answers, variants, q0, mode: int, criterion: Criterion, scene, prob
             out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q.shape[0], strict=True))
         return sorted(out, key=lambda a: a[0])
 
-    t = time.perf_counter()
     picked = run(picked, DESCEND_TRIAL)
-    per_step = (time.perf_counter() - t) / (DESCEND_TRIAL * len(picked))  # s per answer-step, the trial's pace
-    steps = DESCEND_STEPS * DESCEND_ROUNDS
-    if finish is not None:
-        fit = int((finish - time.perf_counter()) / (per_step * min(DESCEND_FINAL, len(picked))))
-        steps = min(steps, max(fit, DESCEND_MIN_FINAL if mode == MODE_NEAREST else 0))
-    if steps > 0:  # the kernel stops each descent at its optimum: one call, no rounds
-        picked = sorted(run(picked[:DESCEND_FINAL], steps) + picked[DESCEND_FINAL:], key=lambda a: a[0])
+    for k in range(DESCEND_ROUNDS):  # rounds of the best on towards their optimum while the clock allows
+        if finish is not None and time.perf_counter() >= finish and not (k == 0 and mode == MODE_NEAREST):
+            break  # nearest's first round runs whatever the clock says (a loaded machine's clock cut it off)
+        before = [a[0] for a in picked[:DESCEND_FINAL]]
+        picked = sorted(run(picked[:DESCEND_FINAL], DESCEND_STEPS) + picked[DESCEND_FINAL:], key=lambda a: a[0])
+        if [a[0] for a in picked[:DESCEND_FINAL]] == before:  # converged
+            break
     return picked, evaluations
 
 
