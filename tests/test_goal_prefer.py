@@ -531,3 +531,108 @@ def test_descent_mode_skips_mimic_trees(panda):
         problem = ev.make_problem(robot, robot.fk(q), q0=q)[0]
         criterion = _criterion(problem, "nearest", (), wrapping_joints(robot, robot.lower, robot.upper))
         assert _descent_mode("nearest", criterion, [SimpleNamespace(lm=LevenbergMarquardt(problem))]) == expected
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 12), st.integers(1, 20))
+def test_distinct_keeps_the_order_and_drops_near_duplicates(seed, count, size):
+    from evoik_pin.solvers.search.choose import _distinct
+
+    rng = np.random.default_rng(seed)
+    Q = rng.normal(size=(size, 3))
+    for k in range(1, size):  # some answers repeat an earlier one within 1e-3
+        if rng.random() < 0.4:
+            Q[k] = Q[rng.integers(k)] + rng.normal(size=3) * 1e-5
+    answers = [(float(k), q, 0) for k, q in enumerate(Q)]
+    picked = _distinct(answers, count)
+    keys = [a[0] for a in picked]
+    assert keys == sorted(keys) and len(picked) <= count
+    P = np.array([a[1] for a in picked])
+    assert all(np.linalg.norm(P[a] - P[b]) >= 1e-3 for a in range(len(P)) for b in range(a))
+    last = int(keys[-1])
+    for k in range(last + 1):  # every answer up to the last pick is picked or near an earlier pick
+        if float(k) not in keys:
+            assert min(np.linalg.norm(Q[k] - Q[int(j)]) for j in keys if j < k) < 1e-3
+    if len(picked) < count:  # fewer than asked: every answer is near a pick
+        assert all(min(np.linalg.norm(q - p) for p in P) < 1e-3 for q in Q)
+
+
+def test_nearest_without_a_clock_reaches_its_branch_optimum(panda):
+    """No clock (max_restarts): q0's own run and the starts around it and from the table are collected, and the
+    best answers descend to the optimum of their branch: the answer is no farther than a known answer near q0,
+    and |q - q0| is stationary along the self-motion manifold (the gradient q - q0 has no component in the null
+    space of the tip's Jacobian) wherever no joint is on a bound."""
+    rng = np.random.default_rng(23)
+    stationary = 0
+    for i in range(8):
+        q_known = panda.random_configurations(1, rng)[0]
+        q0 = np.clip(q_known + rng.normal(size=panda.n) * 0.5, panda.lower, panda.upper)
+        T = panda.fk(q_known)
+        r = ev.solve(panda, T, q0=q0, prefer="nearest", seed=i, timeout=None, max_restarts=8)
+        assert r.success, r.message
+        assert np.linalg.norm(r.q - q0) <= np.linalg.norm(q_known - q0) + 1e-9
+        if np.min(np.minimum(r.q - panda.lower, panda.upper - r.q)) > 1e-6:
+            J = panda.jacobian(r.q, "world")
+            g = r.q - q0
+            along = g - np.linalg.pinv(J) @ (J @ g)  # the gradient's null-space component
+            assert np.linalg.norm(along) <= 1e-5 * max(1.0, np.linalg.norm(g)), (i, np.linalg.norm(along))
+            stationary += 1
+    assert stationary >= 4
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["panda", "ur5"]))
+def test_seed_table_joint_distances(seed, name):
+    """SeedTable.joint_distances: |Q - q0|^2 per entry, the full-turn joints (UR5's) by their chord on the unit
+    circle (2 - 2 cos d, the same for every turn of d); its matrix-vector form equal to the plain one."""
+    from evoik_pin.solvers.search.memetic import prepare
+
+    robot = ev.load_robot(name)
+    table, _ = prepare(robot, robot.lower, robot.upper, 256)
+    wrap = wrapping_joints(robot, robot.lower, robot.upper)
+    assert wrap.any() == (name == "ur5")
+    q0 = robot.random_configurations(1, np.random.default_rng(seed))[0]
+    d = table.Q - q0
+    expected = np.where(wrap, 2.0 - 2.0 * np.cos(d), d * d).sum(axis=1)
+    for _ in range(2):  # the first call keeps the entries' features, the second reads them
+        np.testing.assert_allclose(table.joint_distances(q0, wrap), expected, rtol=1e-9, atol=1e-9)
+    turned = np.where(wrap, q0 + 2 * np.pi, q0)  # a full turn of the wrapping joints: the same distances
+    np.testing.assert_allclose(table.joint_distances(turned, wrap), expected, rtol=1e-9, atol=1e-9)
+
+
+def test_nearest_ranks_table_entries_near_q0_first(panda):
+    """prefer="nearest" starts LM from table entries near the target's pose *and* near q0: the first entries are
+    nearer q0 in joint space than those ranked by pose alone, and the joint term scales the ranking, not replaces
+    it (the entries stay near the pose: within the pose-only ranking's first 200 of 4096)."""
+    from types import SimpleNamespace
+
+    from evoik_pin.solvers.search.choose import NEAR_JOINT_WEIGHT, _variant_starts
+    from evoik_pin.solvers.search.memetic import prepare
+    from evoik_pin.solvers.search.seed_table import default_table_size
+
+    table, _ = prepare(panda, panda.lower, panda.upper, default_table_size(panda.n))
+    wrap = wrapping_joints(panda, panda.lower, panda.upper)
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        q, q0 = panda.random_configurations(2, rng)
+        problem = ev.make_problem(panda, panda.fk(q), q0=q0)[0]
+        by_pose, by_both = SimpleNamespace(), SimpleNamespace()
+        _variant_starts(table, problem, [by_pose], 8, None)
+        joint = NEAR_JOINT_WEIGHT * table.weight**2 * table.joint_distances(q0, wrap)
+        _variant_starts(table, problem, [by_both], 8, None, joint)
+        pose_first, both_first = np.array(list(by_pose.starts)), np.array(list(by_both.starts))
+        assert len(pose_first) == len(both_first) == 8
+        assert np.linalg.norm(both_first - q0, axis=1).mean() < np.linalg.norm(pose_first - q0, axis=1).mean()
+        order = np.argsort(table.distances(*table.one_target_features(problem.target)))
+        rank = {tuple(table.Q[k]): r for r, k in enumerate(order)}
+        assert max(rank[tuple(s)] for s in both_first) < 200  # of 4096 (measured: 20-50)
+
+
+@pytest.mark.parametrize("rows", [0, 3, 40])
+def test_manipulability_costs_equal_cost_row_by_row(panda, rows):
+    """Manipulability.costs (rows one by one up to SMALL_BATCH, batched above) equals cost on each row."""
+    pref = Manipulability().bind(panda, None, panda.lower, panda.upper, np.zeros(panda.n, dtype=bool), panda.tip)
+    Q = panda.random_configurations(rows, np.random.default_rng(rows))
+    costs = pref.costs(Q)
+    assert costs.shape == (rows,)
+    np.testing.assert_allclose(costs, [pref.cost(q) for q in Q], rtol=1e-9, atol=1e-12)

@@ -69,6 +69,7 @@ class SeedTable:
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         self._transposed: dict = {}  # feature key -> compiled_features
         self._one_goal: dict = {}  # (frame, goal_spec) -> one_goal_features
+        self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -151,6 +152,25 @@ class SeedTable:
             F, sq = self._table_features(key)
             hit = self._transposed[key] = (F, np.ascontiguousarray(F.T), sq)
         return hit
+
+    def joint_distances(self, q0: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+        """Each entry's squared joint-space distance (size,) to ``q0`` (n,) (rad^2 or m^2), a ``wrap`` joint (bool
+        (n,): its range spans a full turn) by its chord on the unit circle, ``2 - 2 cos d`` (d^2 near 0, at most 4
+        at half a turn: the difference taken to its nearest turn, without a modulo). One matrix-vector product over
+        features kept per ``wrap`` (the joints, the wrapping ones as cos and sin; their squared norms): the modulo
+        over the table took 100 us on UR10, the product 5."""
+        key = wrap.tobytes()
+        kept = self._joint_features.get(key)
+        if kept is None:
+            F = np.concatenate([self.Q[:, ~wrap], np.cos(self.Q[:, wrap]), np.sin(self.Q[:, wrap])], axis=1)
+            kept = self._joint_features[key] = (F, np.einsum("ij,ij->i", F, F))
+        F, sq = kept
+        f = np.concatenate([q0[~wrap], np.cos(q0[wrap]), np.sin(q0[wrap])])
+        d = F @ f
+        d *= -2.0
+        d += sq
+        d += f @ f
+        return d
 
     def distances(self, key: str, f: np.ndarray) -> np.ndarray:
         """The table's squared distances (size,) to features ``f`` (d,) of kind ``key`` (:meth:`one_target_features`)
