@@ -634,7 +634,7 @@ def extra_kinds(spec):
     return False
 
 
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+@njit(cache=True, nogil=True, inline="always", **BORROWING)
 def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
               Rt, params, q_out, g_out):
     """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` or :func:`carve` for these n
@@ -645,7 +645,11 @@ def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_w
     (:func:`_run`) compiled twice, the first without the branches of :func:`task_error` and :func:`task_jacobian`
     for the later kinds. With those branches (inlined, behind calls, or in a loop of their own alike) LLVM compiles
     the run's loops differently, and the single-pose chain case took 6-17 % longer (docs/BENCHMARKS.md,
-    scripts/bench_chain_kernel.py)."""
+    scripts/bench_chain_kernel.py).
+
+    Inlined by numba (``inline="always"``), not by LLVM: it only picks one of two calls, cheap for numba to type in
+    its callers, while a compiled function of its own would have LLVM optimize both runs, linked into it, once more
+    (7 s of the kernel's first compilation)."""
     if extra_kinds(spec):
         return lm_run_all(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
                           gaux, pt, Rt, params, q_out, g_out)
@@ -798,27 +802,26 @@ def _record(stats, i, pos, rot, converged, it, evaluations, c):
     stats[i, S_COST] = c
 
 
-@njit(cache=True, nogil=True, forceinline=False)
 def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
-                 params,
-                 Q_out, stats, g_stats):
+                 params, Q_out, stats, g_stats):
     """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
     row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
     pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
-    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here."""
-    ws = make_workspace(Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
-              params,
-              Q_out, stats, g_stats)
+    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python wrapper of
+    :func:`lm_run_pairs_buffers`)."""
+    n = Q.shape[1]
+    lm_run_pairs_buffers(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent, FR, Fp,
+                         rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts, params, Q_out,
+                         stats, g_stats)
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def _pairs_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
-              params,
-              Q_out, stats, g_stats):
-    """:func:`lm_run_pairs`'s loop, borrowing the workspace: each run's call passes some 70 arrays, which a
-    reference-counting caller would bracket with as many atomic increments and decrements (a third of a short
-    run's time)."""
+def lm_run_pairs_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
+                         support, gaux, P, Rts, params, Q_out, stats, g_stats):
+    """:func:`lm_run_pairs` in the caller's buffers (as :func:`lm_run_buffers`). Borrowing, as every entry here: a
+    run's call passes some 70 arrays (the workspace's views), which a reference-counting caller would bracket with
+    as many atomic increments and decrements (a third of a short run's time)."""
+    ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
     for i in range(Q.shape[0]):
         pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box,
                                                             any_wrap, spec, gR, gp, support, gaux, P[i], Rts[i], params,
@@ -847,21 +850,10 @@ def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offse
                           support, gaux, pt, Rt, params, Q_out, stats, g_stats):
     """:func:`lm_run_starts` in the caller's buffers (as :func:`lm_run_buffers`)."""
     ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    return _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                      pt, Rt,
-                      params, Q_out, stats, g_stats)
-
-
-@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def _starts_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-               params,
-               Q_out, stats, g_stats):
-    """:func:`lm_run_starts`'s loop, borrowing the workspace (see :func:`_pairs_in`)."""
     for k in range(Q.shape[0]):
         pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box,
                                                             any_wrap, spec, gR, gp, support, gaux, pt, Rt, params,
-                                                                Q_out[k],
-                                                            g_stats[k])
+                                                            Q_out[k], g_stats[k])
         _record(stats, k, pos, rot, converged, it, evaluations, c)
         if converged:
             return k

@@ -43,7 +43,7 @@ def task_rows_batch(Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, 
 def _rows_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, P, Rts, e_out, E_out,
              g_out):
     """:func:`task_rows_batch`'s loop, borrowing the workspace (no reference counting of the some 40 arrays each
-    inlined call reads, as :func:`.kernel._pairs_in`)."""
+    inlined call reads, as the kernel's entries)."""
     n, G = Q.shape[1], spec.shape[0]
     mimic = coupled(index, scale, offset, n)
     weighted = False
