@@ -366,3 +366,39 @@ def test_weights_set_the_compromise_between_goals_that_cannot_all_be_met():
         assert np.allclose(a.q, b.q, atol=1e-6)
         results[w] = a.goal_errors[:, 0]
     assert results[9.0][0] < results[1.0][0] and results[9.0][1] > results[1.0][1]
+
+
+def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
+    """Every array reaching the kernel's compiled entries is a writable C array (layout.owned): a read-only one (a
+    q0 the caller froze, a broadcast target, an array from Ray's object store) is another numba type, for which the
+    whole LM run would compile again (about a minute, inside the caller's budget). So after solves fed read-only
+    arrays through every path (a single run, runs from several starts, pairs, prefer's collection), no entry holds a
+    read-only signature."""
+    from numba import types
+
+    from evoik_pin.solvers.lm import kernel
+    from evoik_pin.solvers.search import first_runs
+
+    panda = robots["panda"]
+    rng = np.random.default_rng(3)
+    Q = panda.random_configurations(4, rng)
+    frozen = [q.copy() for q in Q]
+    for q in frozen:
+        q.setflags(write=False)
+    H = np.stack([panda.fk(q).homogeneous for q in Q])
+    H.setflags(write=False)
+    ev.solve(panda, H[0], q0=frozen[1], seed=0)
+    ev.IKSolver(panda).solve(H[1], q0=frozen[2], seed=0)
+    ev.solve(panda, H[2], q0=frozen[0], prefer="nearest", seed=0)
+    ev.solve_many(panda, H, q0=np.broadcast_to(frozen[3], (4, panda.n)), seed=0, workers=1)
+    problem = IKProblem(panda, Target(H[3][:3, 3], H[3][:3, :3]), q0=frozen[0])
+    lm = LevenbergMarquardt(problem)
+    lm.run(frozen[1], 30)
+    lm.run_many(np.broadcast_to(frozen[2], (2, panda.n)), 30)
+    solve_pairs(panda, np.broadcast_to(frozen[3], (1, panda.n)), [Target(H[0][:3, 3], H[0][:3, :3])],
+                panda.lower, panda.upper, 1e-6, 1e-6)
+    entries = [kernel.lm_run_buffers, kernel.lm_run_starts_buffers, kernel.lm_run_pairs_buffers,
+               kernel.lm_run_basic, kernel.lm_run_all, first_runs.first_runs]
+    for entry in entries:
+        for sig in entry.signatures:
+            assert not any(isinstance(t, types.Array) and not t.mutable for t in sig), (entry.__name__, sig)
