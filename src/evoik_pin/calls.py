@@ -141,9 +141,10 @@ def _with_goal_verdict(problem: IKProblem, result: Result) -> Result:
     """A goal problem's result with each goal's errors at its ``q`` (``goal_errors``) and ``success`` judged goal by
     goal, each within its own tolerances (the evolutionary methods compare the largest errors with the problem's
     tolerance, and a polish makes a new Result); a scene's verdict comes after (:func:`with_collision_verdict`)."""
-    if result.goal_errors is None:
-        result.goal_errors = problem.goal_errors(result.q)
-    result.chosen = problem.chosen(result.q)  # goal sets: which member each goal meets
+    if result.goal_errors is None:  # goal sets: which member each goal meets, from the same pass
+        result.goal_errors, result.chosen = problem.goal_errors_and_chosen(result.q)
+    elif result.chosen is None:  # the method gave the errors at its q, not the members
+        result.chosen = problem.chosen(result.q)
     met = problem.goals_met(result.goal_errors)
     if result.success and not met:
         unmet = [g.label for g, e in zip(problem.goals, result.goal_errors, strict=True) if not g.met(*e)]

@@ -279,13 +279,19 @@ class IKProblem:
     def goal_errors(self, q: np.ndarray) -> list[tuple[float, float | None]]:
         """Each goal's (position error m, rotation angle rad or None) at ``q`` (n,), in the goals' order (a goal
         set's: those of its member :meth:`chosen` picks)."""
+        return self.goal_errors_and_chosen(q)[0]
+
+    def goal_errors_and_chosen(self, q: np.ndarray) -> tuple[list[tuple[float, float | None]], list[int | None]]:
+        """(:meth:`goal_errors`, :meth:`chosen`) at ``q`` (n,) from one kinematics pass: a goal set's member is
+        picked once for both."""
         fids = [self.robot.frame_id(g.frame) for g in self.goals]
         poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
         if self.goal_sets:
-            return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)[1]
-                    for g, T in zip(self.goals, poses, strict=True)]
-        return [g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
-                for g, T in zip(self.goals, poses, strict=True)]
+            picked = [(None, g.robot_errors(self.robot, q)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
+                      for g, T in zip(self.goals, poses, strict=True)]
+            return [p[1] for p in picked], [p[0] for p in picked]
+        return ([g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
+                 for g, T in zip(self.goals, poses, strict=True)], [None] * len(self.goals))
 
     # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal_set)
     @property

@@ -469,11 +469,12 @@ def _lazy_rest(table, d: np.ndarray, first: int, k: int):
                 yield table.Q[i]
 
 
-def _variant_starts(table, parent, variants, k: int, free, joint=None) -> list[float]:
+def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R=None) -> list[float]:
     """Give each variant its lazy table starts (q0 comes before, from the caller) and return each one's squared
     distance to its nearest table entry (the goals' summed nearness; zeros without a table). ``joint``: the
     entries' squared joint distances to q0 (size,) times :data:`NEAR_JOINT_WEIGHT` (m^2), added to their pose
-    nearness (prefer="nearest"; a single target or one goal)."""
+    nearness (prefer="nearest"; a single target or one goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets
+    when the caller has them stacked."""
     if table is None:
         return [0.0] * len(variants)
     if parent.goals is None:  # one target on the tip (prefer= alone)
@@ -489,14 +490,14 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None) -> list[f
         for v in variants:
             v.starts = table.goal_starts(v.problem, k, free)
         return [float(i) for i in range(len(variants))]
-    F, sq = table._goal_table_features(parent.goals)
     spec = table.goal_spec(parent.goals)
-    P = np.stack([v.pt for v in variants])
-    R = np.stack([v.Rt for v in variants])
+    frames = tuple(g.frame for g in parent.goals)
+    if P is None:
+        P, R = np.stack([v.pt for v in variants]), np.stack([v.Rt for v in variants])
     f = table.goal_features(spec, P, R)  # (V, d)
-    D = f @ F.T  # |F - f|^2 = sq - 2 F.f + |f|^2, in place; |f|^2 only where variants are compared
-    D *= -2.0
-    D += sq
+    # |F - f|^2 = sq - 2 F.f + |f|^2: its first two terms in one product (the table's [F, sq], cached), |f|^2 only
+    # where variants are compared
+    D = np.concatenate([-2.0 * f, np.ones((f.shape[0], 1))], axis=1) @ table.goal_distance_operand(frames, spec)
     if joint is not None:
         D += joint
     if free is not None:
@@ -560,7 +561,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         # descend to an answer no farther than TRAC-IK's Distance's, 26 % by pose alone)
         joint = table.joint_distances(problem.q0, wrap)
         joint *= NEAR_JOINT_WEIGHT * table.weight**2
-    near = _variant_starts(table, problem, variants, per_variant, free, joint)
+    near = _variant_starts(table, problem, variants, per_variant, free, joint, *((P, R) if goals else ()))
     order = sorted(range(len(variants)), key=lambda i: near[i])
     q0 = problem.q0
     scene = problem.scene
@@ -744,8 +745,9 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             winner = (q_r, best[1])
         extra = f"; {best[0].message}"
     q = np.array(winner[0])
+    chosen = None
     if goals:
-        goal_errors = problem.goal_errors(q)
+        goal_errors, chosen = problem.goal_errors_and_chosen(q)
         pos, rot, cost = problem.goal_summary(goal_errors)
         within = problem.goals_met(goal_errors)
     else:
@@ -771,7 +773,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=0,
                   evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0, history=history,
                   message=message, method="memetic", setup_s=t0 - t_setup, collision_free=free_q,
-                  goal_errors=goal_errors)
+                  goal_errors=goal_errors, chosen=chosen)
 
 
 memetic_module.GOAL_SET_SEARCH["choose"] = choose  # memetic hands goal sets over to choose (see there)
