@@ -145,9 +145,17 @@ class IKSolver:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
         problem = self.problem(target, q0)
-        if self._plain and problem.scene is None and problem.goals is None:
-            # what run does for such a problem, without its tests and calls (no polish, no goals' verdict, no scene)
-            return self._plan.solve(problem, _rng(seed))
+        if self._plain and problem.scene is None:
+            goals = problem.goals
+            # what run does for such a problem, without its tests and calls (no polish, no scene)
+            if goals is None:
+                return self._plan.solve(problem, _rng(seed))
+            if not problem.goal_sets:
+                # the goals' verdict (_with_goal_verdict) is memetic's own here: memetic judged each goal by
+                # goals_met on the goal_errors it returns, and every goal has one target (chosen: None each)
+                result = self._plan.solve(problem, _rng(seed))
+                result.chosen = [None] * len(goals)
+                return result
         return self.run(problem, _rng(seed))
 
     def run(self, problem: IKProblem, rng) -> Result:

@@ -493,7 +493,10 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
+    if one_goal:  # the kernel's errors of the best run, at q: trusted as a single target's are (_first_runs)
+        goal_errors = [problem.goals[0].reported(search.best.position_error, search.best.orientation_error)]
+    else:
+        goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
     pos, rot, cost = (problem.goal_summary(goal_errors) if goals
                       else problem.assess(q, search.best.position_error, search.best.orientation_error))
     if not history["best_cost"]:
@@ -587,10 +590,14 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
                          b_cost)
         return None, loading, (runs, evaluations, errors[:runs].tolist(), kept, table_runs)
     goal_errors = None
-    if one_goal:  # _solve's verdict on a goal list: each goal's errors at q (one kinematics pass)
-        goal_errors = problem.goal_errors(q_out)
+    if one_goal:
+        # the goal's errors are the kernel's at q_out (its success test's numbers), as a single target's are: the
+        # kernel computes them exactly as Goal.errors does (the same maths, its own kinematics, equal to Pinocchio's
+        # within rounding), and the goal's tolerances are tested on them again here, as a single target's are below
+        goal = problem.goals[0]
+        goal_errors = [goal.reported(pos, rot)]
         pos, rot, cost = problem.goal_summary(goal_errors)
-        met = problem.goals_met(goal_errors)
+        met = goal.met(*goal_errors[0])
     else:
         pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
         met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
