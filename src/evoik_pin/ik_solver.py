@@ -85,8 +85,13 @@ class IKSolver:
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
         self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
             ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
-        # a goal list's box: the bounds given, else the robot's (IKProblem's for a goal list: no target box)
-        self._goal_box = ((self._template.lower, self._template.upper) if "lower" in problem_kw or "upper" in problem_kw
+        # a goal list's box: the bounds given, else the robot's (IKProblem's for a goal list: no target box); the
+        # template's own arrays whenever they hold those values, so that single targets and goal lists share one box
+        # (the plan keeps one seed table per box arrays: a solver alternating them would look the table up anew)
+        template = self._template
+        given = "lower" in problem_kw or "upper" in problem_kw
+        self._goal_box = ((template.lower, template.upper) if given or (
+            np.array_equal(template.lower, robot.lower) and np.array_equal(template.upper, robot.upper))
                           else (robot.lower.copy(), robot.upper.copy()))
         self._options = options
         info.check_options(options, n=robot.n)
