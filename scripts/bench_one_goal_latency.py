@@ -54,11 +54,38 @@ def _time(problems, call):
     return times, ok
 
 
+def stage_table(robot, problems) -> None:
+    """Print a markdown table: per stage of :func:`bench_latency.profile_stages`, the mean microseconds per
+    IKSolver.solve call of each kind (the least loaded of three passes per kind, passes interleaved by kind)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from bench_latency import STAGES, profile_stages
+
+    Qs = [q0 for _, q0 in problems]
+    best = {}
+    for _ in range(3):
+        for k, kind in enumerate(KINDS):
+            p = profile_stages(robot, [targets[k] for targets, _ in problems], Qs, use_q0=True)
+            if kind not in best or p["wrapped_mean_us"] < best[kind]["wrapped_mean_us"]:
+                best[kind] = p
+    print("| stage | " + " | ".join(KINDS) + " |\n|---|" + "---:|" * len(KINDS))
+    for stage, _ in STAGES:
+        print(f"| {stage} | " + " | ".join(f"{best[k]['stages_us'][stage]:.1f}" for k in KINDS) + " |")
+    print("| (of the first: Target.coerce / bind) | " + " | ".join(f"{best[k]['target_check_us']:.1f}" for k in KINDS)
+          + " |")
+    print("| mean per call, wrapped (plain) | " + " | ".join(
+        f"{best[k]['wrapped_mean_us']:.1f} ({best[k]['plain_mean_us']:.1f})" for k in KINDS) + " |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=2000, help="targets (default 2000)")
     ap.add_argument("--seed", type=int, default=24)
     ap.add_argument("--profile", action="store_true", help="cProfile each kind through IKSolver (top 25 by tottime)")
+    ap.add_argument("--stages", action="store_true", help="where each kind's microseconds go: bench_latency.py's "
+                    "per-stage clocks, the least loaded of three passes")
     args = ap.parse_args()
     ur5 = ek.load_robot("ur5")
     problems = _problems(ur5, args.n, args.seed)
@@ -81,6 +108,8 @@ def main() -> None:
                   f"success {ok[k]}/{args.n}  ratio {np.median(times[k]) / base:.3f}")
     load1 = open("/proc/loadavg").read().split()[0] if os.path.exists("/proc/loadavg") else "?"
     print(f"load average {load0} -> {load1}")
+    if args.stages:
+        stage_table(ur5, problems)
     if args.profile:
         for k in KINDS:
             prof = cProfile.Profile()
