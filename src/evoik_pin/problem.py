@@ -375,7 +375,8 @@ class IKProblem:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors
         (:meth:`goal_errors`): what :meth:`assess` returns for a goal list. A goal's errors are those its success
         test reads (for bands: the excess over them; for pointing goals: the angle as the rotation)."""
-        # plain floats: a goal list has a few goals, and NumPy's arrays for them cost more than the sums (5 us)
+        # _goal_cost's sum for one row, in plain floats: a goal list has a few goals, and NumPy's arrays for them
+        # cost more than the sums (5 us)
         ow = self.orientation_weight
         pos = cost = 0.0
         rot = None
