@@ -175,7 +175,9 @@ STAGES = [
 
 def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     """Mean microseconds per IKSolver.solve call spent in each stage of :data:`STAGES` (each stage's functions
-    wrapped with a clock; the wrappers' own cost, about 0.1 us each, lands in their stages)."""
+    wrapped with a clock; the wrappers' own cost, about 0.1 us each, lands in their stages). ``targets`` may be goal
+    lists (scripts/bench_one_goal_latency.py): their checks and packing (bind) are the target's check, their
+    summary (IKProblem.goal_summary) part of the cost and Result."""
     from evoik_pin import ik_solver
     from evoik_pin.solvers.search import memetic
 
@@ -190,11 +192,13 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     clock = _Clock()
     saved = [
         (ek.Target, "coerce", clock.wrap(ek.Target, "coerce", "target")),
+        (ik_solver, "bind", clock.wrap(ik_solver, "bind", "target")),  # a goal list's checks and packing
         (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
         (memetic.MemeticPlan, "_prepare", clock.wrap(memetic.MemeticPlan, "_prepare", "setup")),
         (memetic.MemeticPlan, "_engine", clock.wrap(memetic.MemeticPlan, "_engine", "setup")),
         (memetic.MemeticPlan, "first_runs", clock.wrap(memetic.MemeticPlan, "first_runs", "first")),
         (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
+        (ek.IKProblem, "goal_summary", clock.wrap(ek.IKProblem, "goal_summary", "result")),  # a goal list's
         (memetic, "Result", clock.wrap(memetic, "Result", "result")),
     ]
     ns = clock.ns

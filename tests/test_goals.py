@@ -5,6 +5,8 @@ forward kinematics of the answer, within the joint limits, each goal's errors in
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import evoik_pin as ek
 from evoik_pin.errors import FrameError, MethodError, OptionError, TargetError
@@ -83,6 +85,58 @@ def test_goal_lists_bound_to_a_robot():
     with pytest.raises(TargetError, match="frame 'left_gripper' has two goals with different targets"):
         bind(baxter, [Pose("left_gripper", T), Position("left_gripper", T.translation + 0.01)])
     bind(baxter, [Pose("left_gripper", T), Position("left_gripper", T.translation)])  # the same target: fine
+
+
+def test_a_list_bound_again_packs_its_new_targets_and_keeps_every_check():
+    """A list with the goals of one bound before (new targets: an IKSolver's calls) gets the same stack and its own
+    targets; the checks that read the targets (a frame's two goals clashing) still run, and the others still refuse
+    what they refused."""
+    baxter = ek.load_robot("baxter", tips=["left_gripper"])
+    Ts = [baxter.fk(q, "left_gripper") for q in baxter.random_configurations(3, np.random.default_rng(5))]
+    bound = [bind(baxter, [Pose("left_gripper", T), Position("left_wrist", T.translation)]) for T in Ts]
+    assert all(b[1] is bound[0][1] for b in bound)
+    for (_, _, pt, Rt), T in zip(bound, Ts, strict=True):
+        assert np.array_equal(pt, [T.translation, T.translation]) and np.array_equal(Rt[0], T.rotation)
+    same_frame = [bind(baxter, [Pose("left_gripper", T), Position("left_gripper", T.translation)]) for T in Ts]
+    assert same_frame[1][1] is same_frame[0][1]
+    with pytest.raises(TargetError, match="frame 'left_gripper' has two goals with different targets"):
+        bind(baxter, [Pose("left_gripper", Ts[0]), Position("left_gripper", Ts[0].translation + 0.01)])
+    with pytest.raises(FrameError, match=r"no frame 'left_grip' \(closest: left_gripper"):
+        bind(baxter, [Pose("left_grip", Ts[0])])
+    with pytest.raises(FrameError, match="no active joint of baxter moves frame 'right_gripper'"):
+        bind(baxter, [Pose("right_gripper", Ts[0])])
+    other = ek.load_robot("baxter", tips=["right_gripper"])  # another robot: its own checks and stack
+    with pytest.raises(FrameError, match="no active joint of baxter moves frame 'left_gripper'"):
+        bind(other, [Pose("left_gripper", Ts[0]), Position("left_wrist", Ts[0].translation)])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.one_of(st.none(), st.floats(0, 10)), st.one_of(st.none(), st.floats(0, 4)),
+                          st.floats(0.1, 5)), min_size=1, max_size=5), st.floats(0, 2))
+def test_property_goal_summary_is_the_population_formulas(errors, orientation_weight):
+    """goal_summary (plain floats) gives what the population's formulas give for one row: the largest position
+    error, the largest angle (None when no goal has one) and _goal_cost's weighted sum."""
+    baxter = _baxter_left()
+    T = baxter.fk(np.zeros(baxter.n), "left_gripper")
+    goals = [Pose("left_gripper", T, weight=w) if r is not None else Position("left_gripper", T.translation, weight=w)
+             for _, r, w in errors]
+    problem = IKProblem(baxter, goals, orientation_weight=orientation_weight)
+    pairs = [(p, r) for p, r, _ in errors]
+    pos, rot, cost = problem.goal_summary(pairs)
+    P = np.array([[p or 0.0 for p, _ in pairs]])
+    R = np.array([[r or 0.0 for _, r in pairs]])
+    assert pos == P.max()
+    assert rot == (None if all(r is None for _, r in pairs) else max(r for _, r in pairs if r is not None))
+    assert cost == pytest.approx(float(problem._goal_cost(P, R)[0]), rel=1e-14, abs=1e-300)
+
+
+_BAXTER: list = []
+
+
+def _baxter_left():
+    if not _BAXTER:
+        _BAXTER.append(ek.load_robot("baxter", tips=["left_gripper"]))
+    return _BAXTER[0]
 
 
 def test_a_problem_over_goals(talos):

@@ -373,3 +373,28 @@ def test_q0_gets_the_checks_of_the_general_path(panda, cases, q0):
         return r.q.tolist(), r.message.split(" (")[0]
 
     assert run(lambda: solver.solve(T, q0, seed=3)) == run(lambda: general(panda, T, seed=3, q0=q0, **BUDGET))
+
+
+def test_goal_lists_take_memetics_own_verdict(panda):
+    """IKSolver.solve hands memetic's Result of a goal list without goal sets back as it is (memetic judged each goal
+    on the errors it returns; the general path's _with_goal_verdict recomputes them): the same success, message,
+    goal errors and chosen members as the general path, for one goal of each kind and for two goals, met or not."""
+    from evoik_pin.goals import Orientation, Pose, Position
+
+    solver = ek.IKSolver(panda, **BUDGET)
+    rng = np.random.default_rng(12)
+    unmet = 0
+    for i, q in enumerate(panda.random_configurations(12, rng)):
+        T = panda.fk(q)
+        if i % 4 == 3:  # out of reach: goals not met, the message names them
+            T = T.copy()
+            T.translation = 3.0 * T.translation
+        lists = ([Pose(panda.tip, T)], [Pose(panda.tip, T, free="rz")], [Position(panda.tip, T.translation)],
+                 [Orientation(panda.tip, T.rotation)],
+                 [Pose(panda.tip, T), Position("panda_link4", panda.fk(q, "panda_link4").translation)])
+        goals = lists[i % len(lists)]
+        a, b = solver.solve(goals, seed=i), general(panda, goals, seed=i, **BUDGET)
+        same(a, b)
+        assert a.message == b.message and a.chosen == b.chosen == [None] * len(goals)
+        unmet += not a.success
+    assert unmet >= 2

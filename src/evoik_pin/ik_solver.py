@@ -85,8 +85,13 @@ class IKSolver:
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
         self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
             ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
-        # a goal list's box: the bounds given, else the robot's (IKProblem's for a goal list: no target box)
-        self._goal_box = ((self._template.lower, self._template.upper) if "lower" in problem_kw or "upper" in problem_kw
+        # a goal list's box: the bounds given, else the robot's (IKProblem's for a goal list: no target box); the
+        # template's own arrays whenever they hold those values, so that single targets and goal lists share one box
+        # (the plan keeps one seed table per box arrays: a solver alternating them would look the table up anew)
+        template = self._template
+        given = "lower" in problem_kw or "upper" in problem_kw
+        self._goal_box = ((template.lower, template.upper) if given or (
+            np.array_equal(template.lower, robot.lower) and np.array_equal(template.upper, robot.upper))
                           else (robot.lower.copy(), robot.upper.copy()))
         self._options = options
         info.check_options(options, n=robot.n)
@@ -145,9 +150,17 @@ class IKSolver:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
         problem = self.problem(target, q0)
-        if self._plain and problem.scene is None and problem.goals is None:
-            # what run does for such a problem, without its tests and calls (no polish, no goals' verdict, no scene)
-            return self._plan.solve(problem, _rng(seed))
+        if self._plain and problem.scene is None:
+            goals = problem.goals
+            # what run does for such a problem, without its tests and calls (no polish, no scene)
+            if goals is None:
+                return self._plan.solve(problem, _rng(seed))
+            if not problem.goal_sets:
+                # the goals' verdict (_with_goal_verdict) is memetic's own here: memetic judged each goal by
+                # goals_met on the goal_errors it returns, and every goal has one target (chosen: None each)
+                result = self._plan.solve(problem, _rng(seed))
+                result.chosen = [None] * len(goals)
+                return result
         return self.run(problem, _rng(seed))
 
     def run(self, problem: IKProblem, rng) -> Result:

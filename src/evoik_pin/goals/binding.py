@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import weakref
 
 import numpy as np
 
@@ -25,6 +26,11 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     """Check ``goals`` against ``robot`` and pack them for the LM kernel: (the goals as a list, their
     :class:`~evoik_pin.solvers.lm.layout.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)).
 
+    A list of goals on frames (no goal beyond one frame) with the frames, kinds, weights, tolerances and ``aux``
+    rows of a list bound before on this robot (an :class:`~evoik_pin.IKSolver`'s calls: new targets, the same
+    goals) takes its checked stack from :data:`_BOUND`: only the targets are packed (and, for a frame given two
+    goals, their clash checked: it reads the targets).
+
     Raises: TargetError for an empty list, a member that is no goal, or one frame given clashing targets;
     FrameError for an unknown frame (with the closest names) or a frame no active joint moves.
     """
@@ -35,6 +41,51 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
         if not isinstance(g, Goal):
             raise TargetError(f"goal {i} is a {type(g).__name__}, not a goal: use Pose(frame, T) or "
                               "Position(frame, p) from evoik_pin.goals")
+    key = _signature(robot, goals)
+    hit = _BOUND.get(key) if key is not None else None
+    if hit is not None and hit[0]() is robot:
+        stack = hit[1]
+        if len(stack.frames) > len(set(stack.frames)):
+            _check_frames(robot, goals)  # the clash test reads the targets
+    else:
+        _check_frames(robot, goals)
+        stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
+                             [g.tolerance for g in goals], [g.rotation_tolerance for g in goals],
+                             [g.aux() for g in goals])
+        stack = _beyond_frame(robot, goals, stack)
+        if key is not None:
+            if len(_BOUND) >= 64:
+                _BOUND.pop(next(iter(_BOUND)))
+            _BOUND[key] = (weakref.ref(robot), stack)
+    G = len(goals)
+    pt, Rt = np.empty((G, 3)), np.empty((G, 3, 3))
+    for g, goal in enumerate(goals):
+        pt[g], Rt[g] = goal.encode()
+    return goals, stack, pt, Rt
+
+
+#: Stacks of goal lists bound before, by robot and the goals' :func:`_signature` (the last 64): a hit skips the
+#: frames' checks (their verdict depends on the robot and the frame names alone) and GoalStack.of's key.
+_BOUND: dict = {}
+
+
+def _signature(robot, goals) -> tuple | None:
+    """What :func:`bind`'s checks and stack read of ``goals`` besides their targets, with the robot's id: per goal
+    its class, frame, kind, weight, tolerances and ``aux`` row; None when a goal packs itself against the robot
+    (a goal beyond one frame: :func:`_beyond_frame`)."""
+    parts = [id(robot)]
+    for g in goals:
+        if g.kind >= KIND_BEYOND_FRAME:
+            return None
+        aux = g.aux()
+        parts.append((type(g), g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                      None if aux is None else aux.tobytes()))
+    return tuple(parts)
+
+
+def _check_frames(robot, goals) -> None:
+    """FrameError for a goal's unknown frame (with the closest names) or one no active joint moves; TargetError
+    for one frame given two goals with clashing targets."""
     seen: dict[int, Goal] = {}
     for g in goals:
         if g.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: checked as they pack (_beyond_frame)
@@ -54,13 +105,6 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
                 raise TargetError(f"frame {g.frame!r} has two goals with different targets ({pa.round(6).tolist()} and "
                                   f"{pb.round(6).tolist()}): give each frame one target")
         seen[fid] = g
-    stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
-                         [g.tolerance for g in goals], [g.rotation_tolerance for g in goals], [g.aux() for g in goals])
-    stack = _beyond_frame(robot, goals, stack)
-    encoded = [g.encode() for g in goals]
-    pt = np.ascontiguousarray([e[0] for e in encoded], dtype=float)
-    Rt = np.ascontiguousarray([e[1] for e in encoded], dtype=float)
-    return goals, stack, pt, Rt
 
 
 def _beyond_frame(robot, goals, stack: GoalStack) -> GoalStack:

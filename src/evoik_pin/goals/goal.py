@@ -141,11 +141,18 @@ class Goal:
 
             _, pos, rot = axes_error(self.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation),
                                      pt, Rt, aux, np.empty((3, 3)), np.empty(3), np.empty(6))
-            return (pos if self.has_position else None), (rot if self.reports_angle else None)
+            return self.reported(pos, rot)
         pos = float(np.linalg.norm(T.translation - pt))
         if not self.has_orientation:
             return pos, None
         return pos, float(np.linalg.norm(pin.log3(Rt.T @ T.rotation)))
+
+    def reported(self, position_error: float, rotation_error: float | None) -> tuple[float | None, float | None]:
+        """The errors :meth:`errors` reports from the LM kernel's errors of this goal (position m, rotation rad or
+        None/NaN: the kernel's success test's numbers, :func:`~evoik_pin.solvers.lm.kernel.task_error`): the
+        position error None for a goal without a position, the rotation None for one that reports no angle."""
+        return ((float(position_error) if self.has_position else None),
+                (float(rotation_error) if self.reports_angle else None))
 
     @property
     def reports_angle(self) -> bool:
