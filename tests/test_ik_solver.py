@@ -398,3 +398,33 @@ def test_goal_lists_take_memetics_own_verdict(panda):
         assert a.message == b.message and a.chosen == b.chosen == [None] * len(goals)
         unmet += not a.success
     assert unmet >= 2
+
+
+def test_one_solver_alternating_single_targets_goal_sets_and_goal_lists(panda):
+    """One IKSolver (its plan keeps a few engines and compiled entries) fed single targets, goal sets and one-goal
+    lists in turn: every answer meets its goal by Pinocchio, and a goal set's errors and member (the kernel's, from
+    the run that met it) are those the general verdict computes at the answer."""
+    from evoik_pin.problem import IKProblem
+
+    rng = np.random.default_rng(11)
+    solver = ek.IKSolver(panda)
+    for i in range(6):
+        Q = panda.random_configurations(3, rng)
+        far = pin.SE3(pin.exp3(rng.normal(size=3)), np.array([1.5, 0.0, 0.4]))  # out of the arm's reach
+        members = [far, panda.fk(Q[0]), far, panda.fk(Q[1])]
+        calls = [[Pose(panda.tip, members)], [Pose(panda.tip, panda.fk(Q[1]))], panda.fk(Q[2])]
+        for target in calls if i % 2 == 0 else calls[1:] + calls[:1]:
+            r = solver.solve(target, seed=i)
+            assert r.success, r.message
+            M = panda.fk(r.q)
+            if isinstance(target, list) and target[0].alternatives is not None:  # the goal set
+                problem = IKProblem(panda, target)
+                errors, chosen = problem.goal_errors_and_chosen(r.q)
+                assert r.chosen == chosen and r.chosen[0] in (1, 3)
+                assert np.allclose(np.array(r.goal_errors, dtype=float), np.array(errors, dtype=float),
+                                   rtol=0, atol=1e-12)
+                T = members[r.chosen[0]]
+            else:
+                T = target[0].target if isinstance(target, list) else target
+            assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+            assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6

@@ -2,8 +2,8 @@
 (TRAC-IK's Distance and Manip1) and preferences (:mod:`evoik_pin.goals.preferences`).
 
 * **Goal sets** (``Pose(frame, [T1, ..., Tk])``): the problem's combinations of members
-  (:meth:`~evoik_pin.problem.IKProblem.variants`) are ranked by the seed table's nearness (one matrix product for
-  all of them: the distance of each to its nearest table entry), then tried round by round: LM from ``q0`` and
+  (:meth:`~evoik_pin.problem.IKProblem.variants`) are ranked by the seed table's nearness (one compiled call for
+  all of them, :func:`.nearest.table_distances_many`: the distance of each to its nearest table entry), then tried round by round: LM from ``q0`` and
   each variant's nearest entry, then each one's next entries, the variants whose last run came nearest first. An
   unreachable member costs a stalled LM run or two (about 10 us each), so ten members of which seven are out of
   reach cost little more than one. When the table's starts are spent, memetic's own search runs on the variants
@@ -48,6 +48,7 @@ from ...problem import errors_text, shortfall_text
 from ...result import Result
 from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.layout import (
+    KIND_BEYOND_FRAME,
     S_CONVERGED,
     S_COST,
     S_EVALUATIONS,
@@ -62,6 +63,7 @@ from ..lm.layout import (
 from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 from . import memetic as memetic_module
+from .nearest import table_distances_many
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
 
 __all__ = ["COLLECT_SHARE", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "choose", "nearest_turn", "refine"]
@@ -491,13 +493,14 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
             v.starts = table.goal_starts(v.problem, k, free)
         return [float(i) for i in range(len(variants))]
     spec = table.goal_spec(parent.goals)
-    frames = tuple(g.frame for g in parent.goals)
     if P is None:
         P, R = np.stack([v.pt for v in variants]), np.stack([v.Rt for v in variants])
     f = table.goal_features(spec, P, R)  # (V, d)
-    # |F - f|^2 = sq - 2 F.f + |f|^2: its first two terms in one product (the table's [F, sq], cached), |f|^2 only
-    # where variants are compared
-    D = np.concatenate([-2.0 * f, np.ones((f.shape[0], 1))], axis=1) @ table.goal_distance_operand(frames, spec)
+    _, FT, sq, _, _, _ = table.one_goal_features(parent.goals[0])  # the table's features of the goal's frame
+    # |F - f|^2 = sq - 2 F.f + |f|^2: its first two terms compiled (nearest.table_distances_many says why not
+    # NumPy's product), |f|^2 only where variants are compared
+    D = np.empty((f.shape[0], FT.shape[1]))
+    table_distances_many(FT, sq, np.ascontiguousarray(f), D)
     if joint is not None:
         D += joint
     if free is not None:
@@ -511,11 +514,13 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
 def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: float | None = None,
            max_restarts: int | None = None, population: int = 32, generations: int = 3, polish_count: int = 8,
            table_size: int | None = None, table_seeds: int | None = None, table_offset: int = 0, batch: int = 1,
-           iterations: int | None = None, engine: str = "compiled") -> Result:
+           iterations: int | None = None, engine: str = "compiled", plan=None) -> Result:
     """memetic over goal sets and with ``prefer`` / preferences (see the module docstring); memetic's options.
 
     ``timeout`` (s): the budget; default memetic's (5 ms) for ``prefer="first"``, :data:`DEFAULT_PREFER_TIMEOUT`
-    for the others. ``table_offset`` is not used (the variants rank the table themselves).
+    for the others. ``table_offset`` is not used (the variants rank the table themselves). ``plan``: the
+    :class:`~.memetic.MemeticPlan` handing a goal set over (an IKSolver's), whose LM engine is retargeted to the
+    problem instead of a new one made.
     """
     from .memetic import DEFAULT_TIMEOUT, check_options, memetic, prepare
 
@@ -536,7 +541,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     criterion = _criterion(problem, prefer, preferences, wrap)
     goals = problem.goals is not None
     choices, P, R = (problem.variant_targets() if goals else ([()], [None], [None]))
-    base_lm = LevenbergMarquardt(problem, engine=engine)
+    base_lm = LevenbergMarquardt(problem, engine=engine) if plan is None else plan._engine(problem, engine)
     variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
     if len(variants) == 1:
         variants[0]._problem, variants[0]._lm = problem, base_lm
@@ -586,7 +591,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         q = nearest_turn(out.q, q0, problem.lower, problem.upper, wrap) if q0 is not None else out.q
         v.best_rank, v.best = -1.0, q
         if prefer == "first" and not criterion:
-            winner = (q, i)
+            winner = (q, i, out)
             return True
         answers.append((criterion.cost(q), q, i))
         return prefer == "first"
@@ -746,7 +751,23 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         extra = f"; {best[0].message}"
     q = np.array(winner[0])
     chosen = None
-    if goals:
+    members = None
+    if goals and len(winner) > 2:
+        choice = variants[winner[1]].choice
+        members = [g if m is None else g.alternatives[m] for g, m in zip(problem.goals, choice, strict=True)]
+        if not all(g.kind < KIND_BEYOND_FRAME and (g.has_position or g.has_orientation) for g in members):
+            members = None  # kinds whose errors the general verdict computes on its own (memetic.one_frame_goal)
+    if members is not None:
+        # the first answer, met by one LM run: each goal's errors are the kernel's of that run (its success test's
+        # numbers, as a single target's and a one-goal list's are, memetic), each goal set's member the variant's
+        out = winner[2]
+        errors = ([(out.position_error, out.orientation_error)] if out.goal_errors is None
+                  else out.goal_errors.tolist())
+        goal_errors = [g.reported(p, np.nan if r is None else r) for g, (p, r) in zip(members, errors, strict=True)]
+        chosen = list(choice)
+        pos, rot, cost = problem.goal_summary(goal_errors)
+        within = all(g.met(*e) for g, e in zip(members, goal_errors, strict=True))
+    elif goals:
         goal_errors, chosen = problem.goal_errors_and_chosen(q)
         pos, rot, cost = problem.goal_summary(goal_errors)
         within = problem.goals_met(goal_errors)

@@ -360,7 +360,7 @@ class MemeticPlan:
             except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
                 entry = first_runs
         self._entry = (lm._args, table, entry)
-        if entry is not first_runs:
+        if entry is not None and entry is not first_runs:  # a compiled entry found (not on the plan's first solve)
             self._entries = [self._entry, *self._entries[:3]]
         return first_runs(*args), loading
 
@@ -370,7 +370,7 @@ class MemeticPlan:
         if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
             if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
                 get_solver("memetic")
-            return GOAL_SET_SEARCH["choose"](problem, rng, **self.given)
+            return GOAL_SET_SEARCH["choose"](problem, rng, plan=self, **self.given)
         return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from numba import njit
 
-__all__ = ["select_k", "table_distances"]
+__all__ = ["select_k", "table_distances", "table_distances_many"]
 
 
 @njit(cache=True, nogil=True, forceinline=False)
@@ -61,3 +61,24 @@ def table_distances(FT, sq, f, d):  # pragma: no cover - compiled
             d[i] += FT[j, i] * fj
     for i in range(N):
         d[i] = d[i] * -2.0 + sq[i]
+
+
+@njit(cache=True, nogil=True, forceinline=False, fastmath={"contract"})
+def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
+    """:func:`table_distances` of V targets: D (V, N) for their features f (V, D), with fused multiply-adds (the
+    goal sets' ranking, which no other path has to match bit for bit). Compiled rather than one NumPy product:
+    OpenBLAS runs a product of this size on several threads, and on a busy machine (or beside ``solve_many``'s
+    threads) waiting for them took 15 ms instead of 30 us (measured: a goal set of 10 Panda grasps, 2 cores, load
+    2)."""
+    Dn, N = FT.shape
+    for v in range(f.shape[0]):
+        d = D[v]
+        f0 = f[v, 0]
+        for i in range(N):
+            d[i] = FT[0, i] * f0
+        for j in range(1, Dn):
+            fj = f[v, j]
+            for i in range(N):
+                d[i] += FT[j, i] * fj
+        for i in range(N):
+            d[i] = d[i] * -2.0 + sq[i]

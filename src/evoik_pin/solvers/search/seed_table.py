@@ -69,7 +69,6 @@ class SeedTable:
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         self._transposed: dict = {}  # feature key -> compiled_features
         self._one_goal: dict = {}  # (frame, weight, has_orientation, has_position) -> one_goal_features
-        self._goal_operands: dict = {}  # (frames, goal_spec) -> goal_distance_operand, (d + 1, size)
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
@@ -343,19 +342,6 @@ class SeedTable:
             if len(self._goal_features) > 8:
                 self._goal_features.clear()
             hit = self._goal_features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
-        return hit
-
-    def goal_distance_operand(self, frames, spec) -> np.ndarray:
-        """``[F, sq]`` (size, d + 1) of :meth:`goal_table_features`, cached: ``[-2 f, 1] @ [F, sq]^T`` is
-        ``|F - f|^2 - |f|^2`` for goal-feature rows f (V, d) in one matrix product (a goal set's members ranked
-        against the whole table at once: :func:`~.choose._variant_starts`)."""
-        key = (tuple(frames), tuple(spec))
-        hit = self._goal_operands.get(key)
-        if hit is None:
-            F, sq = self.goal_table_features(frames, spec)
-            if len(self._goal_operands) > 8:
-                self._goal_operands.clear()
-            hit = self._goal_operands[key] = np.ascontiguousarray(np.concatenate([F, sq[:, None]], axis=1).T)
         return hit
 
     @staticmethod
