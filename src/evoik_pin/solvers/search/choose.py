@@ -3,7 +3,8 @@
 
 * **Goal sets** (``Pose(frame, [T1, ..., Tk])``): the problem's combinations of members
   (:meth:`~evoik_pin.problem.IKProblem.variants`) are ranked by the seed table's nearness (one compiled call for
-  all of them, :func:`.nearest.table_distances_many`: the distance of each to its nearest table entry), then tried round by round: LM from ``q0`` and
+  all of them, :func:`.nearest.table_distances_many`: the distance of each to its nearest table entry), then
+  tried round by round: LM from ``q0`` and
   each variant's nearest entry, then each one's next entries, the variants whose last run came nearest first. An
   unreachable member costs a stalled LM run or two (about 10 us each), so ten members of which seven are out of
   reach cost little more than one. When the table's starts are spent, memetic's own search runs on the variants
