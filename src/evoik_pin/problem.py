@@ -344,11 +344,14 @@ class IKProblem:
         combos = list(itertools.product(*[range(k) for k in sizes]))
         P = np.repeat(pt[None], len(combos), axis=0)
         R = np.repeat(Rt[None], len(combos), axis=0)
-        choices = []
         for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
             P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
+        G = len(self.goals or ())
+        if len(sets) == G:  # every goal a set (a grasp set alone): the combinations are the choices
+            return combos, P, R
+        choices = []
         for combo in combos:
-            choice = [None] * len(self.goals or ())
+            choice = [None] * G
             for g, m in zip(sets, combo, strict=True):
                 choice[g] = m
             choices.append(tuple(choice))

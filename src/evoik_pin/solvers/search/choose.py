@@ -497,11 +497,11 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     if P is None:
         P, R = np.stack([v.pt for v in variants]), np.stack([v.Rt for v in variants])
     f = table.goal_features(spec, P, R)  # (V, d)
-    _, FT, sq, _, _, _ = table.one_goal_features(parent.goals[0])  # the table's features of the goal's frame
-    # |F - f|^2 = sq - 2 F.f + |f|^2: its first two terms compiled (nearest.table_distances_many says why not
-    # NumPy's product), |f|^2 only where variants are compared
-    D = np.empty((f.shape[0], FT.shape[1]))
-    table_distances_many(FT, sq, np.ascontiguousarray(f), D)
+    FT, sq = table.one_goal_features32(parent.goals[0])  # the table's features of the goal's frame
+    # |F - f|^2 = sq - 2 F.f + |f|^2: its first two terms compiled, in single precision (nearest.table_distances_many
+    # says why), |f|^2 only where variants are compared
+    D = np.empty((f.shape[0], FT.shape[1]), dtype=np.float32)
+    table_distances_many(FT, sq, f.astype(np.float32), D)
     if joint is not None:
         D += joint
     if free is not None:

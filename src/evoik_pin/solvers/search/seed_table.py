@@ -70,6 +70,7 @@ class SeedTable:
         self._transposed: dict = {}  # feature key -> compiled_features
         self._one_goal: dict = {}  # (frame, weight, has_orientation, has_position) -> one_goal_features
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
+        self._one_goal32: dict = {}  # id(one_goal_features' FT) -> (that FT, its float32 copy, sq's)
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -433,6 +434,17 @@ class SeedTable:
                 self._one_goal.clear()
             hit = self._one_goal[key] = (F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), s, s * self.weight)
         return hit
+
+    def one_goal_features32(self, goal) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`one_goal_features`'s FT (D, size) and sq (size,) in single precision (cached): a goal set's members
+        ranked against the table (:func:`~.nearest.table_distances_many`)."""
+        F, FT, sq = self.one_goal_features(goal)[:3]
+        hit = self._one_goal32.get(id(FT))
+        if hit is None or hit[0] is not FT:
+            if len(self._one_goal32) > 8:
+                self._one_goal32.clear()
+            hit = self._one_goal32[id(FT)] = (FT, FT.astype(np.float32), sq.astype(np.float32))
+        return hit[1], hit[2]
 
     def one_goal_point(self, goal, p: np.ndarray, R: np.ndarray) -> np.ndarray:
         """The features (D,) of the pose (p (3,) m, R (3, 3)) of ``goal``'s frame (or of its target) in
