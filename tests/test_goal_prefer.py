@@ -636,3 +636,48 @@ def test_manipulability_costs_equal_cost_row_by_row(panda, rows):
     costs = pref.costs(Q)
     assert costs.shape == (rows,)
     np.testing.assert_allclose(costs, [pref.cost(q) for q in Q], rtol=1e-9, atol=1e-12)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(1, 40), st.integers(1, 60), st.lists(st.integers(1, 9), min_size=1,
+                                                                                    max_size=12))
+def test_table_starts_hand_out_the_k_nearest_in_order(seed, size, k, chunks):
+    """_TableStarts (prefer's table starts): the entry at d's argmin first, then the others of the k nearest by d,
+    nearest first, entries at d = inf never; each once, whether taken in batches of any size or one by one."""
+    from evoik_pin.solvers.search.choose import _TableStarts
+
+    rng = np.random.default_rng(seed)
+    Q = rng.normal(size=(size, 3))
+    d = rng.permutation(size).astype(float)  # distinct distances: one order
+    d[rng.random(size) < 0.2] = np.inf
+    d[rng.integers(size)] = -1.0  # at least one finite entry, the argmin
+    first = int(d.argmin())
+    expected = [first] + [int(i) for i in np.argsort(d)[:min(k, size)] if i != first and np.isfinite(d[i])]
+    starts = _TableStarts(Q, d, first, k)
+    got = [next(starts)]  # q0's neighbour alone first, as prefer="first" takes it
+    for c in chunks:
+        rows = starts.take(c)
+        assert rows.shape[0] <= c and rows.shape[1] == 3
+        got.extend(rows)
+    got.extend(starts)  # the rest one by one
+    assert np.array_equal(np.array(got), Q[expected])
+    assert starts.take(5).shape == (0, 3)
+
+
+@pytest.mark.parametrize("name", ["panda", "ur10"])
+@pytest.mark.parametrize("prefer", ["nearest", "manipulability"])
+def test_prefer_result_errors_are_the_answers_own(name, prefer):
+    """prefer's Result reports the errors (and cost, success) of the q it returns: equal to the problem's own
+    assessment of that q (the errors come from one LM evaluation at q, not a kinematics pass of their own)."""
+    robot = ev.load_robot(name)
+    rng = np.random.default_rng(7)
+    for i in range(4):
+        q, q0 = robot.random_configurations(2, rng)
+        T = robot.fk(q)
+        r = ev.solve(robot, T, q0=q0, prefer=prefer, seed=i, timeout=None, max_restarts=4)
+        problem = ev.make_problem(robot, T, q0=q0)[0]
+        pos, rot, cost = problem.assess(r.q)
+        assert r.success == bool(problem.succeeded(pos, rot)), r.message
+        assert r.success, r.message
+        assert abs(r.position_error - pos) <= 1e-12 and abs(r.orientation_error - rot) <= 1e-12
+        assert abs(r.cost - cost) <= 1e-12
