@@ -407,7 +407,7 @@ def test_one_solver_alternating_single_targets_goal_sets_and_goal_lists(panda):
     from evoik_pin.problem import IKProblem
 
     rng = np.random.default_rng(11)
-    solver = ek.IKSolver(panda)
+    solver = ek.IKSolver(panda, timeout=None, max_restarts=20)  # verdicts independent of the machine's load
     for i in range(6):
         Q = panda.random_configurations(3, rng)
         far = pin.SE3(pin.exp3(rng.normal(size=3)), np.array([1.5, 0.0, 0.4]))  # out of the arm's reach

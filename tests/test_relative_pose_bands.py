@@ -262,7 +262,8 @@ def test_solve_many_keeps_each_lists_bands_and_free_axes(baxter):
     lists = [[RelativePose(LEFT, RIGHT, BOX, free=f)] for f in (None, "rz", "rx")]
     lists += [[RelativePose(LEFT, RIGHT, BOX, tolerance=b)] for b in (BAND, 2 * BAND)]
     assert len({structure(g) for g in lists}) == len(lists)
-    for goals, r in zip(lists, ek.solve_many(baxter, lists, seed=0, workers=1), strict=True):
+    for goals, r in zip(lists, ek.solve_many(baxter, lists, seed=0, workers=1, timeout=None, max_restarts=20),
+                        strict=True):
         goal = goals[0]
         assert r.success and goal.met(*IKProblem(baxter, goals).goal_errors(r.q)[0])
         v = _components(baxter, r.q, goal)
