@@ -402,3 +402,26 @@ def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
     for entry in entries:
         for sig in entry.signatures:
             assert not any(isinstance(t, types.Array) and not t.mutable for t in sig), (entry.__name__, sig)
+
+
+def test_goal_errors_use_the_compiled_signature_loaded_before_any_clock(robots):
+    """``Goal.errors`` of the kinds with bands, free axes or an axis to point calls the kernel's compiled
+    ``axes_error`` from Python; ``compiled_kernel()`` (made before any solve's clock) loads the one signature those
+    calls use, so memetic's later stages, which judge goal errors this way, never compile or load it mid-search
+    (its loading had made a first band solve run out of its 5 ms)."""
+    from evoik_pin.goals import Direction, Pose
+    from evoik_pin.solvers.lm.axes import axes_error
+    from evoik_pin.solvers.lm.engine import compiled_kernel
+
+    compiled_kernel()
+    loaded = list(axes_error.signatures)
+    panda = robots["panda"]
+    rng = np.random.default_rng(4)
+    for q in panda.random_configurations(3, rng):
+        T = panda.fk(q)  # Pinocchio's rotation: Fortran-ordered, as a user's target usually is
+        goals = [Pose(panda.tip, T, tolerance=[0.002] * 3 + [0.05] * 3), Pose(panda.tip, T, free="rz"),
+                 Direction(panda.tip, [0, 0, 1], T.rotation[:, 2])]
+        for goal in goals:
+            pos, rot = IKProblem(panda, [goal]).goal_errors(q)[0]
+            assert (pos is None or pos <= 1e-9) and rot <= 1e-9
+    assert list(axes_error.signatures) == loaded

@@ -139,8 +139,11 @@ class Goal:
         if aux is not None:  # the kernel's own errors (its success test's), by its compiled code for one pose
             from ..solvers.lm.axes import axes_error
 
+            # C-contiguous arrays, the one signature compiled_kernel() loads before any clock (a target's rotation
+            # from Pinocchio is Fortran-ordered: another numba type, compiled or loaded mid-search)
             _, pos, rot = axes_error(self.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation),
-                                     pt, Rt, aux, np.empty((3, 3)), np.empty(3), np.empty(6))
+                                     np.ascontiguousarray(pt), np.ascontiguousarray(Rt), aux, np.empty((3, 3)),
+                                     np.empty(3), np.empty(6))
             return self.reported(pos, rot)
         pos = float(np.linalg.norm(T.translation - pt))
         if not self.has_orientation:

@@ -43,6 +43,7 @@ import numpy as np
 
 from ...errors import OptionError
 from .layout import (
+    AUX_SIZE,
     DEFAULT_DAMPING,
     DEFAULT_ITERATIONS,
     DEFAULT_MAX_STEP,
@@ -123,6 +124,15 @@ def compiled_kernel() -> dict:
                               np.empty((1, 2)))
         kernel.lm_run_starts_buffers(*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
                                      np.empty((1, 1)), stats, np.empty((1, 1, 2)))
+        # Goal.errors' compiled errors of the kinds with bands, free axes or an axis to point (a read-only aux row:
+        # the goal's own), loaded here too: first called mid-search (memetic's later stages), its loading from the
+        # disk cache (3-4 ms) had been charged to that solve's budget
+        from .axes import axes_error
+
+        aux = np.zeros(AUX_SIZE)
+        aux.setflags(write=False)
+        axes_error(KIND_POSE_AXES, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux, np.empty((3, 3)), np.empty(3),
+                   np.empty(6))
         _KERNEL.update(lm_run=kernel.lm_run, lm_run_starts=kernel.lm_run_starts, lm_run_pairs=kernel.lm_run_pairs,
                        lm_run_buffers=kernel.lm_run_buffers, lm_run_starts_buffers=kernel.lm_run_starts_buffers,
                        workspace_size=kernel.workspace_size)
