@@ -100,9 +100,10 @@ def warmup_problem() -> tuple:
 
 def compiled_kernel() -> dict:
     """The kernel's entry points (``lm_run``, ``lm_run_starts``, ``lm_run_pairs``, and ``lm_run_buffers``,
-    ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run: three
-    compiled entries (each compiles the whole run: half a minute from an empty cache), the first two Python
-    wrappers that make a workspace and call the ``*_buffers`` ones.
+    ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run. Three of
+    kernel.py's functions are compiled entries (``lm_run_buffers``, ``lm_run_starts_buffers``,
+    ``lm_run_pairs_buffers``: each compiles the whole run, about 20 s from an empty cache); ``lm_run``,
+    ``lm_run_starts`` and ``lm_run_pairs`` are Python wrappers that make a workspace and call them.
 
     The first call imports numba (~0.3 s) and runs each entry point once on a one-joint robot, so that numba
     loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install, compiles it
@@ -115,7 +116,7 @@ def compiled_kernel() -> dict:
         tree, box, goals, pt, Rt = warmup_problem()
         params = kernel_params(iterations=1)
         # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
-        # (lm_run and lm_run_starts are Python wrappers of the two *_buffers entries: nothing of their own to compile)
+        # (lm_run, lm_run_starts, lm_run_pairs: Python wrappers of the *_buffers entries, which these calls compile)
         stats = np.empty((1, STATS_SIZE))
         kernel.lm_run_pairs(np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(), Rt[None].copy(), params,
                             np.empty((1, 1)), stats, np.empty((1, 1, 2)))
