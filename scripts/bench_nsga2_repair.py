@@ -28,7 +28,7 @@ import numpy as np
 import evoik_pin as ek
 from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Pose, Position, RelativePose
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm import kernel as K
+from evoik_pin.solvers.lm.population import task_rows
 
 Z = np.array([0.0, 0.0, 1.0])
 SOLES = ["left_sole_link", "right_sole_link"]
@@ -49,7 +49,7 @@ def rows_timing(talos, N: int, repeats: int) -> str:
 
     def loop():
         for q in Q:
-            K.task_rows(q, *consts, *stack.arrays, pt, Rt, e, E, ge)
+            task_rows(q, *consts, *stack.arrays, pt, Rt, e, E, ge)
 
     loop(), problem.goal_rows(Q)  # compiled and loaded before timing
     batch_s, loop_s = [], []

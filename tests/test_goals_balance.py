@@ -19,7 +19,7 @@ from evoik_pin.errors import FrameError, OptionError, TargetError
 from evoik_pin.goals import CenterOfMass, Pose, RelativePose, bind
 from evoik_pin.goals.center_of_mass import com_batch, com_of, contact_points, polygon_distance
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm import kernel as K
+from evoik_pin.solvers.lm.population import task_rows
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +31,7 @@ def rows(robot, goals, q):
     """(e, E, goal errors (G, 2)) of the compiled kernel at q for a goal list."""
     _, stack, pt, Rt = bind(robot, goals)
     e, E, ge = np.empty(stack.rows), np.empty((stack.rows, robot.n)), np.empty((len(goals), 2))
-    K.task_rows(np.asarray(q, dtype=float), *robot.tree_constants(), *stack.arrays, pt, Rt, e, E, ge)
+    task_rows(np.asarray(q, dtype=float), *robot.tree_constants(), *stack.arrays, pt, Rt, e, E, ge)
     return e, E, ge
 
 

@@ -20,8 +20,7 @@ from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Pose, 
 from evoik_pin.goals.center_of_mass import com_of
 from evoik_pin.problem import IKProblem
 from evoik_pin.robot.frames import find_frame
-from evoik_pin.solvers.lm import kernel as K
-from evoik_pin.solvers.lm.population import task_rows_batch
+from evoik_pin.solvers.lm.population import task_rows, task_rows_batch
 from evoik_pin.solvers.paper.nsga2 import dls_repair, goal_task
 
 SOLES = ["left_sole_link", "right_sole_link"]
@@ -42,7 +41,7 @@ def one_rows(robot, stack, q, pt, Rt):
     """(e, E, goal errors) of the kernel's task_rows at one configuration q for targets pt (G, 3), Rt (G, 3, 3)."""
     G = stack.spec.shape[0]
     e, E, ge = np.empty(stack.rows), np.empty((stack.rows, robot.n)), np.empty((G, 2))
-    K.task_rows(np.asarray(q, dtype=float), *robot.tree_constants(), *stack.arrays, pt, Rt, e, E, ge)
+    task_rows(np.asarray(q, dtype=float), *robot.tree_constants(), *stack.arrays, pt, Rt, e, E, ge)
     return e, E, ge
 
 

@@ -26,7 +26,7 @@ from .objectives import (
     position_errors,
 )
 from .robot import Robot
-from .solvers.lm.layout import KIND_BEYOND_FRAME
+from .solvers.lm.layout import KIND_BEYOND_FRAME, owned
 from .solvers.options import check_positive
 from .target import MAX_TARGET_NORM, Target
 
@@ -230,7 +230,7 @@ class IKProblem:
 
         self._need_goal_list("goal_rows")
         stack, pt, Rt = self._goal_stack
-        Q = np.ascontiguousarray(Q, dtype=float)
+        Q = owned(np.asarray(Q), float)  # writable C arrays throughout: the entry's one compiled signature
         N = Q.shape[0]
         P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)
         if self.goal_sets:
@@ -238,7 +238,8 @@ class IKProblem:
             for g in self.goal_sets:
                 P[:, g], Rts[:, g] = (t[members[:, g]] for t in self.goals[g].member_targets)
         e, E = np.empty((N, stack.rows)), np.empty((N, stack.rows, self.n))
-        task_rows_batch(Q, *self.robot.tree_constants(), *stack.arrays, P, Rts, e, E, np.empty((N, len(self.goals), 2)))
+        task_rows_batch(Q, *(owned(a) for a in self.robot.tree_constants()), *(owned(a) for a in stack.arrays), P, Rts,
+                        e, E, np.empty((N, len(self.goals), 2)))
         return e, E
 
     def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -858,29 +858,3 @@ def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offse
         if converged:
             return k
     return -(1 + Q.shape[0])
-
-
-@njit(cache=True, nogil=True, forceinline=False)
-def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, pt, Rt, e_out, E_out, g_out):
-    """What one LM step reads at q (n,), for tests and diagnostics: the stacked task error e_out (rows,) and its
-    Jacobian E_out (rows, n) (each goal's rows scaled by the square root of its weight), each goal's errors to
-    g_out (G, 2) (position m, orientation rad or 0); returns the weighted |e|^2. The arguments are
-    :func:`lm_run`'s."""
-    n, G = q.shape[0], spec.shape[0]
-    ws = make_workspace(n, parent.shape[0], G, stack_rows(spec), 0)
-    mimic = coupled(index, scale, offset, n)
-    weighted = False
-    for g in range(G):
-        if spec[g, G_WEIGHT] != 1.0:
-            weighted = True
-    c = task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, q, ws.x, spec, weighted, gR, gp, gaux, pt,
-                   Rt, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.M, ws.e, ws.ge)
-    task_jacobian(True, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, ws.Rg, ws.pg, ws.Z, ws.O,
-                  ws.tg, ws.e, ws.Jx, ws.J, ws.rv, ws.A, ws.Bm, ws.E, parent, ws.Rj, ws.pj)
-    for i in range(ws.e.shape[0]):
-        e_out[i] = ws.e[i]
-        for k in range(n):
-            E_out[i, k] = ws.E[i, k]
-    for g in range(G):
-        g_out[g, 0], g_out[g, 1] = ws.ge[g, 0], ws.ge[g, 1]
-    return c

@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from .chain import coupled
-from .kernel import _copy, damped_solve, make_workspace, stack_rows, task_error, task_jacobian, task_rows, within
+from .kernel import _copy, damped_solve, make_workspace, stack_rows, task_error, task_jacobian, within
 from .layout import B_CHI, B_CLO, G_WEIGHT, LAMBDA_MIN
 from .tree import frame_jacobian
 
@@ -269,11 +269,12 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch` and :func:`.kernel.task_rows` (the task Jacobian whose null space
+    """:func:`descend_batch` and :func:`.population.task_rows` (the task Jacobian whose null space
     :func:`evoik_pin.solvers.search.choose.refine` steps in), compiled (or loaded from numba's disk cache) on a
     one-joint robot, outside any time budget."""
     if not _KERNEL:
         from .engine import warmup_problem
+        from .population import task_rows
 
         tree, box, goals, pt, Rt = warmup_problem()
         descend_batch(np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, pt, Rt, 1, 1, 0.5,
