@@ -321,9 +321,7 @@ def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
     if method != "memetic":
         raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
                           "(use prefer='first', the default)")
-    if prefer == "nearest" and not q0_given:
-        raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
-    return prefer
+    return check_prefer(prefer, q0_given)
 
 
 def _has_choices(target, options: dict) -> bool:

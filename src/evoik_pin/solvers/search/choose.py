@@ -118,9 +118,13 @@ COLLECT_BATCH_BRANCHES = 32
 MIN_SEEDS_PER_VARIANT = 4
 
 
-def check_prefer(prefer) -> str:
-    """``prefer`` checked: one of :data:`PREFER`; OptionError naming them otherwise."""
-    return check_choice("prefer", prefer, PREFER)
+def check_prefer(prefer, q0_given: bool = True) -> str:
+    """``prefer`` checked: one of :data:`PREFER`; OptionError naming them otherwise, or for "nearest" without a q0
+    (``q0_given`` False)."""
+    prefer = check_choice("prefer", prefer, PREFER)
+    if prefer == "nearest" and not q0_given:
+        raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+    return prefer
 
 
 def nearest_turn(q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
@@ -376,8 +380,7 @@ def _criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion
     first_frame = problem.goals[0].frame if problem.goals is not None else None
     terms = []
     if prefer == "nearest":
-        if problem.q0 is None:
-            raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+        check_prefer(prefer, problem.q0 is not None)
         # plain differences: answers are taken to their turn nearest q0 inside the box first (nearest_turn), and
         # a difference modulo 2 pi would count turns the limits forbid
         terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
