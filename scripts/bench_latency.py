@@ -113,77 +113,67 @@ def bench_arm(name: str, n: int, seed: int) -> dict:
 
 # ---------------------------------------------------------------------- where the microseconds go
 class _Clock:
-    """Accumulates the time spent in wrapped functions (perf_counter_ns), per stage name."""
+    """Accumulates the time spent in wrapped functions (perf_counter_ns), per stage name, exclusive: the time a
+    wrapped function spends in other wrapped functions is theirs (a Result made inside first_runs_result counts
+    once, the checks inside IKSolver.problem are the checks')."""
 
     def __init__(self) -> None:
         self.ns: dict[str, int] = {}
+        self._inner = [0]  # per open wrapped call: the time spent in wrapped calls inside it
 
-    def wrap(self, owner, attr: str, stage: str, generator: bool = False):
+    def wrap(self, owner, attr: str, stage: str):
         original = getattr(owner, attr)
-        ns = self.ns
-        ns.setdefault(stage, 0)
-        clock = time.perf_counter_ns
-
-        if generator:
-            def timed(*args, **kwargs):
-                t0 = clock()
-                it = original(*args, **kwargs)
-                ns[stage] += clock() - t0
-                while True:
-                    t0 = clock()
-                    try:
-                        item = next(it)
-                    except StopIteration:
-                        ns[stage] += clock() - t0
-                        return
-                    ns[stage] += clock() - t0
-                    yield item
-        else:
-            timed = self.timed(original, stage)
-        setattr(owner, attr, timed)
+        setattr(owner, attr, self.timed(original, stage))
         return original
 
     def timed(self, function, stage: str):
-        """``function`` wrapped: its time added to ``stage``."""
-        ns = self.ns
+        """``function`` wrapped: its exclusive time added to ``stage``."""
+        ns, inner = self.ns, self._inner
         ns.setdefault(stage, 0)
         clock = time.perf_counter_ns
 
         def timed(*args, **kwargs):
+            inner.append(0)
             t0 = clock()
             try:
                 return function(*args, **kwargs)
             finally:
-                ns[stage] += clock() - t0
+                spent = clock() - t0
+                ns[stage] += spent - inner.pop()
+                inner[-1] += spent
 
         return timed
 
 
 #: (stage label, what it covers), in the order of a call.
 STAGES = [
-    ("target and problem", "IKSolver.problem: Target.coerce (the pose's checks) and the template problem copied "
-     "with the target and q0 (checked)"),
-    ("set-up look-ups", "the memetic plan's cached seed table and LM engine (retargeted in place)"),
-    ("first runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, q0's "
-     "tip pose and nearness, the guaranteed LM runs (MemeticPlan.first_runs, its compiled entry)"),
-    ("memetic's later stages", "when no first run converged: the search from the start (NumPy ranking, q0's pose, "
-     "LM runs one by one, DE restarts), rare but long"),
-    ("cost and Result", "problem.assess (the cost from the errors) and the Result object"),
-    ("the rest (Python)", "IKSolver.solve/run, the generator, memetic's stage logic, history, message, verdicts"),
+    ("target's checks", "a single target's on its lane: pose_arrays (finite, a rotation matrix, within reach of the "
+     "base); else Target.coerce, or a goal list's bind (the goals' checks and packing)"),
+    ("q0's check", "IKSolver's q0 check: shape and finite"),
+    ("problem", "the general path only: the template problem copied with the target and q0 (IKProblem)"),
+    ("set-up look-ups", "the general path only: the memetic plan's cached seed table and LM engine (retargeted)"),
+    ("first runs (compiled)", "one numba call: the target written into the engine, the table's distances to it and "
+     "the nearest entries, q0's tip pose and nearness, the guaranteed LM runs (the lane's compiled entry, or "
+     "MemeticPlan.first_runs)"),
+    ("memetic's later stages", "when no first run converged: the search going on (LM runs one by one, DE restarts), "
+     "rare but long"),
+    ("cost and Result", "the cost from the errors (the objective's from_errors; problem.assess) and the Result"),
+    ("the rest (Python)", "IKSolver.solve, the lane's or memetic's own logic, its clock"),
 ]
 
 
 def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     """Mean microseconds per IKSolver.solve call spent in each stage of :data:`STAGES` (each stage's functions
-    wrapped with a clock; the wrappers' own cost, about 0.1 us each, lands in their stages). ``targets`` may be goal
-    lists (scripts/bench_one_goal_latency.py): their checks and packing (bind) are the target's check, their
-    summary (IKProblem.goal_summary) part of the cost and Result."""
+    wrapped with an exclusive clock; the wrappers' own cost, about 0.15 us each, lands in their stages). Single
+    targets take the solver's lane (solvers/search/single_target_lane.py) from the second of their kind; ``targets``
+    may be goal lists (scripts/bench_one_goal_latency.py), which take the general path: their checks and packing
+    (bind) are the target's checks, their summary (IKProblem.goal_summary) part of the cost and Result."""
     from evoik_pin import ik_solver
-    from evoik_pin.solvers.search import memetic
+    from evoik_pin.solvers.search import memetic, single_target_lane
 
     solver = ek.IKSolver(robot)
     n = len(targets)
-    for i in range(min(n, 200)):  # warm: caches, branch predictors
+    for i in range(min(n, 200)):  # warm: caches, branch predictors; the lanes made
         solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
     t0 = time.perf_counter()
     for i in range(n):
@@ -191,19 +181,28 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     plain = (time.perf_counter() - t0) / n * 1e6
     clock = _Clock()
     saved = [
+        (ik_solver, "pose_arrays", clock.wrap(ik_solver, "pose_arrays", "target")),
         (ek.Target, "coerce", clock.wrap(ek.Target, "coerce", "target")),
-        (ik_solver, "bind", clock.wrap(ik_solver, "bind", "target")),  # a goal list's checks and packing
+        (ik_solver, "bind", clock.wrap(ik_solver, "bind", "target")),
+        (ik_solver.IKSolver, "_checked_q0", clock.wrap(ik_solver.IKSolver, "_checked_q0", "q0")),
         (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
         (memetic.MemeticPlan, "_prepare", clock.wrap(memetic.MemeticPlan, "_prepare", "setup")),
         (memetic.MemeticPlan, "_engine", clock.wrap(memetic.MemeticPlan, "_engine", "setup")),
         (memetic.MemeticPlan, "first_runs", clock.wrap(memetic.MemeticPlan, "first_runs", "first")),
+        (memetic.MemeticPlan, "resume", clock.wrap(memetic.MemeticPlan, "resume", "later")),
         (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
         (ek.IKProblem, "goal_summary", clock.wrap(ek.IKProblem, "goal_summary", "result")),  # a goal list's
         (memetic, "Result", clock.wrap(memetic, "Result", "result")),
+        (single_target_lane, "first_runs_result", clock.wrap(single_target_lane, "first_runs_result", "result")),
     ]
+    lanes = list(solver._lanes.values())
+    entries = [lane._entry for lane in lanes]
+    for lane in lanes:  # the lane's own compiled entry and objective
+        lane._entry = clock.timed(lane._entry, "first")
+        lane._objective.from_errors = clock.timed(lane._objective.from_errors, "result")
     ns = clock.ns
-    ns["later"] = 0
-    # the later stages: a _solve whose first runs did not converge, less the wrapped stages inside it
+    ns["later"] = ns.get("later", 0)
+    # the general path's later stages: a _solve whose first runs did not converge, less the wrapped stages inside it
     first_runs, solve = memetic._first_runs, memetic._solve
     fell_back = [False]
 
@@ -230,22 +229,16 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         memetic._first_runs, memetic._solve = first_runs, solve
         for owner, attr, original in saved:
             setattr(owner, attr, original)
+        for lane, entry in zip(lanes, entries, strict=True):
+            lane._entry = entry
+            del lane._objective.from_errors
     us = {k: v / n / 1e3 for k, v in ns.items()}
-    # the boundary checks alone (part of "target and problem"): the pose's and q0's
-    t0 = time.perf_counter()
-    for i in range(n):
-        solver._checked_q0(Qs[i])  # what IKSolver.problem runs on a q0
-    q0_check = (time.perf_counter() - t0) / n * 1e6
-    stages = {
-        "target and problem": us["problem"],
-        "set-up look-ups": us["setup"],
-        "first runs (compiled)": us["first"],
-        "memetic's later stages": us["later"],
-        "cost and Result": us["result"],
-    }
+    stages = {"target's checks": us["target"], "q0's check": us["q0"], "problem": us["problem"],
+              "set-up look-ups": us["setup"], "first runs (compiled)": us["first"],
+              "memetic's later stages": us["later"], "cost and Result": us["result"]}
     stages["the rest (Python)"] = wrapped - sum(stages.values())
-    return {"stages_us": stages, "target_check_us": us["target"], "q0_check_us": q0_check, "wrapped_mean_us": wrapped,
-            "plain_mean_us": plain, "q0": use_q0, "n": n}
+    return {"stages_us": stages, "wrapped_mean_us": wrapped, "plain_mean_us": plain, "q0": use_q0, "n": n,
+            "lane": bool(lanes)}
 
 
 def bench_talos(n: int, seed: int) -> dict:
@@ -302,10 +295,6 @@ def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str,
         what = dict(STAGES)
         for k, v in p["stages_us"].items():
             lines.append(f"| {k} | {v:.1f} | {what[k]} |")
-        lines.append(f"| (of the first: Target.coerce) | {p['target_check_us']:.1f} | the boundary checks of a "
-                     "pose: finite, a rotation matrix, within reach of the base |")
-        lines.append(f"| (of the first: q0's check) | {p['q0_check_us']:.1f} | IKSolver's q0 check: shape and finite "
-                     "(timed alone) |")
     if talos:
         lines += ["", f"Talos, floating base, four pose goals (both soles, both wrists; bench_goals_scale.py's "
                   f"problems), {next(iter(talos.values()))['n']} problems, interleaved:", "",

@@ -73,8 +73,6 @@ def stage_table(robot, problems) -> None:
     print("| stage | " + " | ".join(KINDS) + " |\n|---|" + "---:|" * len(KINDS))
     for stage, _ in STAGES:
         print(f"| {stage} | " + " | ".join(f"{best[k]['stages_us'][stage]:.1f}" for k in KINDS) + " |")
-    print("| (of the first: Target.coerce / bind) | " + " | ".join(f"{best[k]['target_check_us']:.1f}" for k in KINDS)
-          + " |")
     print("| mean per call, wrapped (plain) | " + " | ".join(
         f"{best[k]['wrapped_mean_us']:.1f} ({best[k]['plain_mean_us']:.1f})" for k in KINDS) + " |")
 

@@ -9,6 +9,7 @@ import evoik_pin as ek
 from evoik_pin.solvers.search import memetic
 from evoik_pin.solvers.search.nearest import select_k, table_distances
 from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
+from evoik_pin.solvers.search.single_target_lane import SingleTargetLane
 
 
 def targets(robot, count, seed):
@@ -85,12 +86,14 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
         if i % 50 == 1:  # out of reach: no first run converges, memetic searches from the start
             target = 3.0 * T.translation
         calls.append((target, q0, i))
-    made = []
-    one_call = memetic._first_runs
+    made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
+    one_call, lane_call = memetic._first_runs, SingleTargetLane.solve
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
+    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: made.append(2) or lane_call(*args))
     fast = [solver.solve(t, q0=q0, seed=i) for t, q0, i in calls]
     general = [ek.solve(robot, t, q0=q0, seed=i, **budget) for t, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general)
+    assert made.count(2) >= len(calls) - 4  # the lanes (one per kind) open after a target of their kind
     monkeypatch.setattr(memetic, "FIRST_RUNS", False)
     slow = [ek.IKSolver(robot, **budget).solve(t, q0=q0, seed=i) for t, q0, i in calls]
     for a, b in zip(fast, slow, strict=True):
@@ -168,9 +171,10 @@ def test_several_goals_keep_the_general_path(monkeypatch):
 
     robot = ek.load_robot("panda")
     T = robot.fk(robot.random_configurations(1, np.random.default_rng(0))[0])
-    made = []
-    one_call = memetic._first_runs
+    made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
+    one_call, lane_call = memetic._first_runs, SingleTargetLane.solve
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
+    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: made.append(2) or lane_call(*args))
     for goals in ([Pose(robot.tip, T), Position("panda_link4", robot.fk(np.zeros(robot.n)).translation)],
                   [Direction(robot.tip, [0, 0, 1], T.rotation[:, 2])], [Pose(robot.tip, [T, T])]):
         ek.solve(robot, goals, seed=1)

@@ -38,6 +38,7 @@ from .robot import Robot
 from .scene import Scene
 from .solvers import get_solver
 from .solvers.collision_verdict import with_collision_verdict
+from .target import pose_arrays
 
 __all__ = ["IKSolver"]
 
@@ -101,6 +102,12 @@ class IKSolver:
 
             self._plan = MemeticPlan(robot, **options)
         self._plain = self._plan is not None and not self._polish  # solve may call the plan directly
+        # single targets' per-call path (memetic's compiled first runs and little else), one per kind (True: poses,
+        # False: positions), made after the general path has solved a target of that kind: for the default
+        # objective in a box that does not move with the target (a custom objective may need the Target; a target
+        # box is remade per target)
+        self._lanes: dict = {}
+        self._lanes_open = self._plain and not self._target_box and self._objective is None
 
     def _checked_q0(self, q0) -> np.ndarray:
         arr = np.asarray(q0, dtype=float)
@@ -149,12 +156,28 @@ class IKSolver:
         :class:`~evoik_pin.Target`, or a goal list (:mod:`evoik_pin.goals`); from ``q0`` (n,) when given; ``seed``:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
+        if self._lanes:  # a pose or position on its lane (single_target_lane): the same answer, less Python around
+            arrays = pose_arrays(target)
+            lane = None if arrays is None else self._lanes.get(arrays[1] is not None)
+            if lane is not None and lane.usable():
+                q0 = self._q0 if q0 is None else self._checked_q0(q0)
+                if seed is not None and not (type(seed) is int and seed >= 0):
+                    _rng(seed)  # its check: the general path's error for a bad seed
+                out = lane.solve(arrays[0], arrays[1], q0)
+                if type(out) is Result:
+                    return out
+                problem = self.problem(target, q0)  # none of the first runs met the tolerances: memetic goes on
+                rng = _rng(seed)
+                return self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
         problem = self.problem(target, q0)
         if self._plain and problem.scene is None:
             goals = problem.goals
             # what run does for such a problem, without its tests and calls (no polish, no scene)
             if goals is None:
-                return self._plan.solve(problem, _rng(seed))
+                result = self._plan.solve(problem, _rng(seed))
+                if self._lanes_open:
+                    self._open_lane(problem)
+                return result
             if not problem.goal_sets:
                 # the goals' verdict (_with_goal_verdict) is memetic's own here: memetic judged each goal by
                 # goals_met on the goal_errors it returns, and every goal has one target (chosen: None each)
@@ -162,6 +185,17 @@ class IKSolver:
                 result.chosen = [None] * len(goals)
                 return result
         return self.run(problem, _rng(seed))
+
+    def _open_lane(self, problem: IKProblem) -> None:
+        """After the plan solved ``problem`` (a single target), make the lane of its kind when there is none, or when
+        the one kept no longer holds (its engine remade; another thread's)."""
+        kept = self._lanes.get(problem.target.rotation is not None)
+        if kept is None or not kept.usable():
+            from .solvers.search.single_target_lane import SingleTargetLane
+
+            lane = SingleTargetLane.of_plan(self._plan, problem)
+            if lane is not None:
+                self._lanes[lane.oriented] = lane
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does

@@ -15,7 +15,7 @@ import pinocchio as pin
 
 from .errors import TargetError
 
-__all__ = ["MAX_TARGET_NORM", "Target"]
+__all__ = ["MAX_TARGET_NORM", "Target", "pose_arrays"]
 
 #: Farthest target position accepted (m from the base origin): beyond any arm's reach by orders of magnitude, and
 #: low enough that squared distances (1e12 m^2) stay far from float overflow in every solver and feature space.
@@ -83,16 +83,45 @@ def _is_rotation(v: list) -> bool:
     return not (n0 * n0 + n1 * n1 + n2 * n2 + 2.0 * (m01 * m01 + m02 * m02 + m12 * m12) > 1e-12 or det < 0)
 
 
+def _pose_ok(position: np.ndarray, rotation: np.ndarray) -> bool:
+    """Whether float arrays ``position`` (3,) m and ``rotation`` (3, 3) pass :class:`Target`'s checks (finite, within
+    :data:`MAX_TARGET_NORM` of the base, a rotation matrix), on Python floats (about 1 us)."""
+    return math.hypot(*position.tolist()) <= MAX_TARGET_NORM and _is_rotation(rotation.reshape(9).tolist())
+
+
 def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
     """A ``cls`` (Target) of the float arrays ``position`` (3,) m and ``rotation`` (3, 3) when they pass
     :class:`Target`'s checks, built without its ``__post_init__`` (the checks made here on Python floats, about 1 us
     in place of 3); None when they do not: the caller then builds the Target the slow way, which raises the error
     with its message."""
-    if not (math.hypot(*position.tolist()) <= MAX_TARGET_NORM and _is_rotation(rotation.reshape(9).tolist())):
+    if not _pose_ok(position, rotation):
         return None
     t = object.__new__(cls)
     t.__dict__.update(position=position, rotation=rotation, planar=False, yaw=None)  # frozen: no __setattr__
     return t
+
+
+def pose_arrays(target) -> tuple[np.ndarray, np.ndarray | None] | None:
+    """(position (3,) m, rotation (3, 3) or None for a position) of a target given as a ``pin.SE3``, a float64
+    (4, 4) homogeneous matrix with the exact bottom row [0 0 0 1], a float64 3-vector position or a 3-D
+    :class:`Target`, when it passes :class:`Target`'s checks; None for any other form, or when a check fails
+    (:meth:`Target.coerce` then gives the verdict: it accepts what this accepts, with the same numbers, and
+    raises the error of what this refuses). No Target is made: an IKSolver's per-call path copies the arrays
+    into its engine at once. The arrays may be views of ``target``'s own."""
+    kind = type(target)
+    if kind is pin.SE3:
+        position, rotation = target.translation, target.rotation
+    elif kind is np.ndarray and target.dtype == np.float64:
+        if target.shape == (3,):
+            return (target, None) if math.hypot(*target.tolist()) <= MAX_TARGET_NORM else None
+        if target.shape != (4, 4) or target[3].tolist() != [0.0, 0.0, 0.0, 1.0]:
+            return None
+        position, rotation = target[:3, 3], target[:3, :3]
+    elif kind is Target and not target.planar:
+        return target.position, target.rotation  # checked when it was made
+    else:
+        return None
+    return (position, rotation) if _pose_ok(position, rotation) else None
 
 
 @dataclass(frozen=True)

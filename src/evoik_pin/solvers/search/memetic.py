@@ -373,10 +373,19 @@ class MemeticPlan:
             return GOAL_SET_SEARCH["choose"](problem, rng, plan=self, **self.given)
         return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
+    def resume(self, problem: IKProblem, rng: np.random.Generator, resumed: tuple) -> Result:
+        """:meth:`solve` on ``problem`` going on from the compiled first runs a
+        :class:`~.single_target_lane.SingleTargetLane` made for it, none of which converged (``resumed``: the lane's
+        (clock start, runs' state))."""
+        return _solve(self, problem, rng, resumed[0], resumed)
 
-def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_setup: float) -> Result:
+
+def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_setup: float,
+           resumed: tuple | None = None) -> Result:
     """memetic's search (see :func:`memetic`) with the options and set-up of ``plan``; ``t_setup``: when the call
-    began (``perf_counter``)."""
+    began (``perf_counter``). ``resumed``: (when the clock started, :func:`resumed_state`) when the compiled first
+    runs were made for this very problem before (an IKSolver's single-target lane) and none converged: the search
+    goes on from there, on that clock."""
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
      iterations, engine) = plan.options
@@ -398,8 +407,10 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     lm = plan._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
-    resumed = None  # the guaranteed runs' state, when the compiled first runs made them and none converged
-    if (FIRST_RUNS and table is not None and (one_goal or not (goals or problem.target.planar))
+    if resumed is not None:  # the guaranteed runs' state: the compiled first runs made them and none converged
+        t0, resumed = resumed
+        setup_s = 0.0
+    elif (FIRST_RUNS and table is not None and (one_goal or not (goals or problem.target.planar))
             and problem.scene is None and engine == "compiled" and batch == 1 and table_offset == 0):
         result, loading, resumed = _first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds,
                                                one_goal)
@@ -569,8 +580,8 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
     (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call (:mod:`.first_runs`) in
     _solve's order and with its decisions: the Result _solve returns when one of them meets
     the tolerances, None when none does; the seconds spent loading the compiled function (on a plan's first solve),
-    set-up rather than budget; and when none converged, the state _solve goes on from (runs made, their evaluations,
-    their errors, the best of them as an LMOutcome, the table entries run), else None."""
+    set-up rather than budget; and when none converged, the state _solve goes on from (:func:`resumed_state`), else
+    None. :class:`~.single_target_lane.SingleTargetLane` makes the same call for an IKSolver's single targets."""
     if one_goal:
         F, FT, sq, gap, sp, sr = table.one_goal_features(problem.goals[0])
     else:
@@ -589,10 +600,7 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
          gap, table.Q, F, FT, sq, sp, sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q,
          best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
-        b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
-        kept = LMOutcome(best_q.copy(), b_pos, b_rot if lm.oriented else None, False, int(b_it), int(b_ev), None,
-                         b_cost)
-        return None, loading, (runs, evaluations, errors[:runs].tolist(), kept, table_runs)
+        return None, loading, resumed_state(plan, lm.oriented, runs, evaluations, table_runs)
     goal_errors = None
     if one_goal:
         # the goal's errors are the kernel's at q_out (its success test's numbers), as a single target's are: the
@@ -607,14 +615,34 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
         met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
     if not met:
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
+    return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
+                             time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None
+
+
+def resumed_state(plan: MemeticPlan, oriented: bool, runs: int, evaluations: int, table_runs: int) -> tuple:
+    """The state :func:`_solve` goes on from after compiled first runs none of which converged (read from the
+    plan's scratch arrays, which the runs wrote): (runs made, their evaluations, each run's error, the best run as
+    an LMOutcome, the table entries run)."""
+    errors, _, _, best_q, best = plan._scratch
+    b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
+    kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), None, b_cost)
+    return runs, evaluations, errors[:runs].tolist(), kept, table_runs
+
+
+def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float, stage: int, runs: int,
+                      evaluations: int, errors: np.ndarray, time_s: float, setup_s: float,
+                      goal_errors: list | None = None) -> Result:
+    """memetic's Result when the compiled first runs met the tolerances: ``q`` (n,) the converged run's answer, its
+    errors (m, rad or None) and cost, ``stage`` the start that converged (:mod:`.first_runs`' STAGE_Q0 or
+    STAGE_TABLE), ``runs`` made, ``errors`` (>= runs,) each run's error (m + rad)."""
     history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
                "attempt_error": errors[:runs].copy()}
     return Result(
-        q=q_out, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
-        evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0 - loading, history=history,
+        q=q, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
+        evaluations=evaluations, time_s=time_s, history=history,
         message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
                 "restart(s))",
-        method="memetic", setup_s=setup_s + loading, goal_errors=goal_errors), loading, None
+        method="memetic", setup_s=setup_s, goal_errors=goal_errors)
 
 
 def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,

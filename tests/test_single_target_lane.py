@@ -1,0 +1,231 @@
+"""IKSolver's per-call lane for single targets (issue 24, solvers/search/single_target_lane.py): once a solver has
+solved a pose (or a position) through memetic's compiled first runs, the next ones of that kind take the lane. Its
+answers are the general path's, bit for bit; it refuses exactly what the general path refuses, with the same
+errors; it hands a target none of its first runs solves to memetic, which goes on from their state."""
+
+import threading
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import evoik_pin as ek
+from evoik_pin import api
+from evoik_pin.errors import ConfigurationError, OptionError, TargetError
+from evoik_pin.goals import Pose
+from evoik_pin.solvers.search.single_target_lane import SingleTargetLane
+from evoik_pin.target import pose_arrays
+
+BUDGET = {"timeout": None, "max_restarts": 2}  # deterministic: the clock cannot change an answer
+
+
+def general(robot, target, seed=None, **options):
+    """evoik_pin.solve's general path: a new problem and memetic's whole set-up on every call."""
+    problem, solver_options = api.make_problem(robot, target, **options)
+    return api._run(problem, "memetic", api._rng(seed), solver_options)
+
+
+def same(a, b):
+    assert np.array_equal(a.q, b.q)
+    assert (a.success, a.position_error, a.orientation_error, a.cost, a.evaluations, a.generations, a.message) == (
+        b.success, b.position_error, b.orientation_error, b.cost, b.evaluations, b.generations, b.message)
+    assert a.history.keys() == b.history.keys()
+    for key in a.history:
+        assert np.array_equal(a.history[key], b.history[key])
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return ek.load_robot("panda")
+
+
+def laned(robot, **options):
+    """An IKSolver whose two lanes (poses, positions) are open: two targets of each kind solved first."""
+    solver = ek.IKSolver(robot, **options)
+    rng = np.random.default_rng(99)
+    for q in robot.random_configurations(2, rng):
+        T = robot.fk(q)
+        solver.solve(T, seed=0)
+        solver.solve(T.translation.copy(), seed=0)
+    assert set(solver._lanes) == {True, False}
+    return solver
+
+
+@pytest.fixture
+def counted(monkeypatch):
+    """The number of lane solves made (a list, one entry per call)."""
+    calls = []
+    lane_solve = SingleTargetLane.solve
+    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: calls.append(1) or lane_solve(*args))
+    return calls
+
+
+def test_lane_answers_are_the_general_paths(panda, counted):
+    """Poses (SE3, 4x4, Target) and positions, with q0 near, far and none, and targets out of reach (memetic goes on
+    from the first runs' state: later entries, DE restarts): the general path's Results, bit for bit."""
+    rng = np.random.default_rng(5)
+    solver = laned(panda, **BUDGET)
+    counted.clear()
+    Q, Qs = panda.random_configurations(60, rng), panda.random_configurations(60, rng)
+    calls = []
+    for i, q in enumerate(Q):
+        T = panda.fk(q)
+        target = [T, T.homogeneous, ek.Target(T.translation, T.rotation), T.translation.copy()][i % 4]
+        q0 = [None, Qs[i], np.clip(q + 0.02, panda.lower, panda.upper)][i % 3]
+        if i % 10 == 7:  # out of reach: none of the first runs converges
+            target = [pin.SE3(T.rotation, 3.0 * T.translation), 3.0 * T.translation][i % 2]
+        calls.append((target, q0, i))
+    results = [solver.solve(t, q0, seed=i) for t, q0, i in calls]
+    assert len(counted) == len(calls)  # every call took a lane
+    for (t, q0, i), r in zip(calls, results, strict=True):
+        same(r, general(panda, t, seed=i, q0=q0, **BUDGET))
+    assert sum(not r.success for r in results) >= 4  # most of the six out of reach (3x the position)
+    assert {r.message.split(" (")[0] for r in results if r.success} == {
+        "tolerance reached by LM from q0", "tolerance reached by LM from seed table"}
+    assert all(r.setup_s == 0.0 for r in results if r.success)  # a lane pays no set-up
+
+
+def test_the_solvers_q0_and_options_hold_on_the_lane(panda, counted):
+    """A solver's own q0 is every call's start; tolerances, orientation_weight and pose_metric give the general
+    path's verdicts and costs."""
+    rng = np.random.default_rng(8)
+    Q = panda.random_configurations(12, rng)
+    options = dict(q0=Q[0], tolerance=1e-4, rotation_tolerance=1e-3, orientation_weight=0.3, pose_metric="euclidean",
+                   **BUDGET)
+    solver = laned(panda, **options)
+    counted.clear()
+    for i, q in enumerate(Q[1:]):
+        T = panda.fk(q)
+        target = T if i % 2 else T.translation.copy()
+        r = solver.solve(target, seed=i)
+        same(r, general(panda, target, seed=i, **options))
+        assert r.success
+    assert len(counted) == 11
+
+
+BAD = [("nan position", (0, 3, np.nan)), ("inf rotation", (2, 1, -np.inf)), ("not a rotation", (0, 1, 0.3)),
+       ("huge rotation entry", (1, 1, 1e300)), ("beyond MAX_TARGET_NORM", (2, 3, 2e6)),
+       ("bottom row", (3, 0, 0.5)), ("bottom row within 1e-9", (3, 3, 1.0 + 1e-12)), ("a mirror", None)]
+
+
+@pytest.mark.parametrize("name,change", BAD, ids=[b[0] for b in BAD])
+def test_bad_poses_on_a_laned_solver_get_the_general_errors(panda, name, change):
+    """A solver with its lanes open refuses (or accepts) a pose exactly as the general path does, with its error."""
+    solver = laned(panda, **BUDGET)
+    H = panda.fk(np.full(panda.n, 0.2)).homogeneous
+    if change is None:
+        H[:3, 2] *= -1.0
+    else:
+        i, j, value = change
+        H[i, j] = value
+    forms = [H] + ([pin.SE3(H[:3, :3].copy(), H[:3, 3].copy())] if change is None or change[0] < 3 else [])
+    for target in forms:
+        outcomes = []
+        for solve in (lambda: solver.solve(target, seed=1), lambda: general(panda, target, seed=1, **BUDGET)):
+            try:
+                outcomes.append(solve().q.tolist())
+            except TargetError as exc:
+                outcomes.append(str(exc))
+        assert outcomes[0] == outcomes[1]
+    assert name != "bottom row within 1e-9" or isinstance(outcomes[0], list)  # accepted, as Target.coerce does
+
+
+def test_bad_q0_seed_and_forms_on_a_laned_solver(panda, counted):
+    solver = laned(panda, **BUDGET)
+    T = panda.fk(np.full(panda.n, 0.3))
+
+    def outcome(solve):
+        try:
+            return solve().q.tolist()
+        except (ConfigurationError, ValueError) as exc:
+            return type(exc), str(exc)
+
+    refused = 0
+    for q0 in (np.zeros(3), np.full(7, np.nan), [1e308] * 7, "abc", np.zeros((1, 7))):
+        lane, reference = outcome(lambda: solver.solve(T, q0, seed=1)), outcome(
+            lambda: general(panda, T, seed=1, q0=q0, **BUDGET))
+        assert lane == reference
+        refused += isinstance(lane, tuple) and lane[0] is ConfigurationError
+    assert refused >= 3  # the wrong shapes and the NaN at least
+    for seed in (-1, 1.5, True, "x"):
+        with pytest.raises(OptionError, match="seed"):
+            solver.solve(T, seed=seed)
+    counted.clear()
+    # a list, integers, a 3-vector list: the general path, the same answers
+    for target in (T.translation.tolist(), np.round(T.translation * 10).astype(int), T.homogeneous.tolist()):
+        same(solver.solve(target, seed=2), general(panda, target, seed=2, **BUDGET))
+    assert not counted
+    # q0 as a list or an int array, a Generator seed: on the lane
+    for q0, seed in (([0.1] * 7, 3), (np.arange(7) % 2, np.random.default_rng(4))):
+        same(solver.solve(T, q0, seed=seed), general(panda, T, seed=3, q0=q0, **BUDGET))
+    assert len(counted) == 2
+
+
+def test_a_lane_follows_the_plan_and_the_thread(panda, counted):
+    """Goal lists and goal sets solved between single targets (other engines, the engine's step budget changed by
+    the later stages), and the solver used from another thread: the answers stay the general path's."""
+    rng = np.random.default_rng(21)
+    solver = laned(panda, **BUDGET)
+    Q = panda.random_configurations(12, rng)
+    for i, q in enumerate(Q):
+        T = panda.fk(q)
+        same(solver.solve(T, seed=i), general(panda, T, seed=i, **BUDGET))
+        same(solver.solve(3.0 * T.translation, seed=i), general(panda, 3.0 * T.translation, seed=i, **BUDGET))
+        solver.solve([Pose(panda.tip, T, free="rz")], seed=i)
+        solver.solve([Pose(panda.tip, [T, panda.fk(Q[i - 1])])], seed=i)
+    out = {}
+
+    def other():
+        out["q"] = [solver.solve(panda.fk(q), seed=i).q for i, q in enumerate(Q)]
+
+    thread = threading.Thread(target=other)
+    thread.start()
+    thread.join()
+    for i, q in enumerate(Q):
+        assert np.array_equal(out["q"][i], general(panda, panda.fk(q), seed=i, **BUDGET).q)
+        same(solver.solve(panda.fk(q), seed=i), general(panda, panda.fk(q), seed=i, **BUDGET))
+
+
+def test_no_lane_where_the_first_runs_do_not_serve(panda):
+    """A scene, a custom objective, a polish, another method: no lane (the general path's own)."""
+    from evoik_pin.objectives import PoseError
+    from evoik_pin.scene import Scene
+
+    T = panda.fk(np.full(panda.n, 0.2))
+    objective = PoseError(ek.Target(T.translation, T.rotation))
+    for options in ({"scene": Scene(panda)}, {"objective": objective}, {"polish": True}, {"method": "de"},
+                    {"batch": 2}, {"table_offset": 1}, {"engine": "python"}, {"table_size": 0}):
+        solver = ek.IKSolver(panda, **options)
+        for i in range(3):
+            solver.solve(T, seed=i)
+        assert not solver._lanes, options
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.floats(-10.0, 1.0), st.booleans(), st.floats(-7.0, 7.0), st.booleans())
+def test_property_pose_arrays_accept_what_coerce_accepts(seed, log_eps, mirror, log_norm, as_matrix):
+    """pose_arrays (the lane's checks) accepts a pose only where Target.coerce accepts it, with the same numbers,
+    and gives None wherever coerce refuses."""
+    rng = np.random.default_rng(seed)
+    R = pin.SE3.Random().rotation @ np.diag([1.0, 1.0, -1.0 if mirror else 1.0])
+    R = R + 10.0**log_eps * rng.standard_normal((3, 3))
+    p = rng.standard_normal(3)
+    p *= 10.0**log_norm / np.linalg.norm(p)
+    if as_matrix:
+        target = np.eye(4)
+        target[:3, :3], target[:3, 3] = R, p
+    else:
+        target = pin.SE3(R, p)
+    arrays = pose_arrays(target)
+    try:
+        t = ek.Target.coerce(target)
+    except TargetError:
+        assert arrays is None
+        return
+    assert arrays is not None
+    assert np.array_equal(arrays[0], t.position) and np.array_equal(arrays[1], t.rotation)
+    positions = pose_arrays(p.copy())
+    assert positions is not None and np.array_equal(positions[0], ek.Target.coerce(p.copy()).position)
+    assert positions[1] is None
