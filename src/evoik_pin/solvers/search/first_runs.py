@@ -80,8 +80,10 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, o
             f[ro + j] = sr * Rt[0, j // 3, j % 3]
     d = np.empty(F.shape[0])
     table_distances(FT, sq, f, d)
+    # the nearest entries, nearest first, in one pass over the distances (the nearest alone, which q0's decision
+    # reads, is the first of them: select_k keeps argmin's order)
     out = np.empty(max(table_runs, 1), dtype=np.int64)
-    first = -1
+    ranked = select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)
     q0_first = has_q0
     if has_q0:
         # q0's tip pose (clipped into the box) and its squared distance to the target in the table's metric
@@ -108,7 +110,7 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, o
                 c = f[ro + j] - sr * R[j // 3, j % 3]
                 d0 += c * c
         if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
-            if select_k(d, np.zeros(0, dtype=np.bool_), 1, out) > 0:
+            if ranked > 0:
                 first = out[0]
                 de = 0.0
                 for j in range(D):
@@ -123,7 +125,7 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, o
     if q0_first:
         order[count] = -1
         count += 1
-    for r in range(select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)):
+    for r in range(ranked):
         order[count] = out[r]
         count += 1
         if r == 0 and has_q0 and not q0_first:
