@@ -57,8 +57,9 @@ def laned(robot, **options):
 def counted(monkeypatch):
     """The number of lane solves made (a list, one entry per call)."""
     calls = []
-    lane_solve = SingleTargetLane.solve
+    lane_solve, lane_goals = SingleTargetLane.solve, SingleTargetLane.solve_goals
     monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: calls.append(1) or lane_solve(*args))
+    monkeypatch.setattr(SingleTargetLane, "solve_goals", lambda *args: calls.append(2) or lane_goals(*args))
     return calls
 
 
@@ -123,7 +124,7 @@ def test_bad_poses_on_a_laned_solver_get_the_general_errors(panda, name, change)
     forms = [H] + ([pin.SE3(H[:3, :3].copy(), H[:3, 3].copy())] if change is None or change[0] < 3 else [])
     for target in forms:
         outcomes = []
-        for solve in (lambda: solver.solve(target, seed=1), lambda: general(panda, target, seed=1, **BUDGET)):
+        for solve in (lambda t=target: solver.solve(t, seed=1), lambda t=target: general(panda, t, seed=1, **BUDGET)):
             try:
                 outcomes.append(solve().q.tolist())
             except TargetError as exc:
@@ -144,8 +145,8 @@ def test_bad_q0_seed_and_forms_on_a_laned_solver(panda, counted):
 
     refused = 0
     for q0 in (np.zeros(3), np.full(7, np.nan), [1e308] * 7, "abc", np.zeros((1, 7))):
-        lane, reference = outcome(lambda: solver.solve(T, q0, seed=1)), outcome(
-            lambda: general(panda, T, seed=1, q0=q0, **BUDGET))
+        lane, reference = outcome(lambda q0=q0: solver.solve(T, q0, seed=1)), outcome(
+            lambda q0=q0: general(panda, T, seed=1, q0=q0, **BUDGET))
         assert lane == reference
         refused += isinstance(lane, tuple) and lane[0] is ConfigurationError
     assert refused >= 3  # the wrong shapes and the NaN at least
@@ -229,3 +230,49 @@ def test_property_pose_arrays_accept_what_coerce_accepts(seed, log_eps, mirror, 
     positions = pose_arrays(p.copy())
     assert positions is not None and np.array_equal(positions[0], ek.Target.coerce(p.copy()).position)
     assert positions[1] is None
+
+
+def goal_lists(robot, T, q):
+    """One-goal lists of each kind on the tip, and on another frame, for the pose T = fk(q)."""
+    from evoik_pin.goals import Orientation, Position
+
+    return [[Pose(robot.tip, T)], [Pose(robot.tip, T, free="rz")],
+            [Pose(robot.tip, T, tolerance=[2e-3, 2e-3, 2e-3, 0.05, 0.05, 0.05])], [Position(robot.tip, T.translation)],
+            [Orientation(robot.tip, T.rotation)], [Pose("panda_link6", robot.fk(q, "panda_link6"))]]
+
+
+def test_one_goal_lists_take_a_lane_with_the_general_answers(panda, counted):
+    """A one-goal list of each kind (a pose, free axes, bands, a position, an orientation, another frame), solved
+    again with new targets, takes the lane of its goal stack: the general path's Results (goal errors and chosen
+    too), bit for bit, from q0s near, far and none, and out of reach (memetic goes on from the runs' state)."""
+    rng = np.random.default_rng(31)
+    solver = ek.IKSolver(panda, **BUDGET)
+    Q, Qs = panda.random_configurations(36, rng), panda.random_configurations(36, rng)
+    results = []
+    for i, q in enumerate(Q):
+        T = panda.fk(q)
+        if i % 6 == 5:  # out of reach
+            T = pin.SE3(T.rotation, 3.0 * T.translation)
+        goals = goal_lists(panda, T, q)[i // 6]  # six targets of each kind in turn, as a loop over targets makes
+        q0 = [None, Qs[i], np.clip(q + 0.02, panda.lower, panda.upper)][i % 3]
+        r = solver.solve(goals, q0, seed=i)
+        reference = general(panda, goals, seed=i, q0=q0, **BUDGET)
+        same(r, reference)
+        assert r.goal_errors == reference.goal_errors and r.chosen == reference.chosen == [None]
+        results.append(r)
+    assert len(counted) >= len(Q) - 2 * 6  # each stack's lane opens after its first (or second) solve
+    assert sum(r.success for r in results) >= len(Q) - 6
+
+
+def test_a_goal_set_never_takes_a_one_goal_lane(panda, counted):
+    """A goal set binds to the stack of a one-goal Pose (the members are targets): it still goes to the goal-set
+    search, and the member it meets is reported."""
+    rng = np.random.default_rng(32)
+    solver = ek.IKSolver(panda, **BUDGET)
+    Q = panda.random_configurations(6, rng)
+    for i, q in enumerate(Q):
+        solver.solve([Pose(panda.tip, panda.fk(q))], seed=i)  # the one-goal Pose's lane opens
+    counted.clear()
+    far = pin.SE3(np.eye(3), np.array([2.0, 0.0, 0.5]))
+    r = solver.solve([Pose(panda.tip, [far, panda.fk(Q[0])])], seed=0)
+    assert not counted and r.success and r.chosen == [1]

@@ -31,6 +31,7 @@ from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goa
 from .errors import ConfigurationError, EvoikError
 from .goals import is_goal_list
 from .goals.binding import bind
+from .goals.goal import Goal
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
@@ -131,16 +132,7 @@ class IKSolver:
                 kw = self._problem_kw
                 q0 = self._q0 if q0 is None else q0
                 return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
-            # IKProblem's checks of a goal list (bind: the goals against the robot, their stack, which GoalStack.of
-            # keeps for equal goals), then q0's; the box the solver's own arrays, the same every call (the plan
-            # keeps its seed table and engine while the box arrays are the same)
-            goals, stack, pt, Rt = bind(self.robot, target)
-            p = object.__new__(IKProblem)
-            lower, upper = self._goal_box
-            p.__dict__ = {**template.__dict__, "target": None, "goals": goals, "_goal_stack": [stack, pt, Rt],
-                          "objective": None, "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0,
-                          "lower": lower, "upper": upper}
-            return p
+            return self._goal_problem(bind(self.robot, target), q0)
         target = Target.coerce(target)
         p = object.__new__(IKProblem)
         # the template's fields with this call's: one dict built, no attribute set one by one
@@ -151,25 +143,53 @@ class IKSolver:
             p.lower, p.upper = target_box(self.robot, target, self.robot.lower, self.robot.upper)
         return p
 
+    def _goal_problem(self, bound: tuple, q0) -> IKProblem:
+        """:meth:`problem` of a goal list bound to the robot (``bound``: :func:`~evoik_pin.goals.binding.bind`'s
+        (goals, stack, pt, Rt): the goals' checks made, the stack cached for equal goals), q0 checked; the box is the
+        solver's own arrays, the same every call (the plan keeps its seed table and engine while the box arrays are
+        the same)."""
+        goals, stack, pt, Rt = bound
+        p = object.__new__(IKProblem)
+        lower, upper = self._goal_box
+        p.__dict__ = {**self._template.__dict__, "target": None, "goals": goals, "_goal_stack": [stack, pt, Rt],
+                      "objective": None, "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0,
+                      "lower": lower, "upper": upper}
+        return p
+
     def solve(self, target, q0=None, seed=None) -> Result:
         """Solve one target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix, a
         :class:`~evoik_pin.Target`, or a goal list (:mod:`evoik_pin.goals`); from ``q0`` (n,) when given; ``seed``:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
-        if self._lanes:  # a pose or position on its lane (single_target_lane): the same answer, less Python around
+        lanes = self._lanes
+        problem = None
+        if lanes:  # a pose, a position or a one-goal list on its lane (single_target_lane): the same answer, faster
             arrays = pose_arrays(target)
-            lane = None if arrays is None else self._lanes.get(arrays[1] is not None)
-            if lane is not None and lane.usable():
-                q0 = self._q0 if q0 is None else self._checked_q0(q0)
-                if seed is not None and not (type(seed) is int and seed >= 0):
-                    _rng(seed)  # its check: the general path's error for a bad seed
-                out = lane.solve(arrays[0], arrays[1], q0)
-                if type(out) is Result:
-                    return out
-                problem = self.problem(target, q0)  # none of the first runs met the tolerances: memetic goes on
-                rng = _rng(seed)
-                return self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
-        problem = self.problem(target, q0)
+            if arrays is not None:
+                lane = lanes.get(arrays[1] is not None)
+                if lane is not None and lane.usable():
+                    q0 = self._q0 if q0 is None else self._checked_q0(q0)
+                    if seed is not None and not (type(seed) is int and seed >= 0):
+                        _rng(seed)  # its check: the general path's error for a bad seed
+                    out = lane.solve(arrays[0], arrays[1], q0)
+                    if type(out) is Result:
+                        return out
+                    return self._go_on(self.problem(target, q0), seed, out)
+            elif (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
+                  and target[0].alternatives is None and self._objective is None):
+                bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
+                lane = lanes.get(id(bound[1]))
+                if lane is not None and lane.key is bound[1] and lane.usable():
+                    q0 = self._q0 if q0 is None else self._checked_q0(q0)
+                    if seed is not None and not (type(seed) is int and seed >= 0):
+                        _rng(seed)
+                    out = lane.solve_goals(bound[0], bound[2], bound[3], q0)
+                    if type(out) is Result:
+                        return out
+                    return self._go_on(self._goal_problem(bound, q0), seed, out)
+                problem = self._goal_problem(bound, q0)
+        if problem is None:
+            problem = self.problem(target, q0)
         if self._plain and problem.scene is None:
             goals = problem.goals
             # what run does for such a problem, without its tests and calls (no polish, no scene)
@@ -183,19 +203,37 @@ class IKSolver:
                 # goals_met on the goal_errors it returns, and every goal has one target (chosen: None each)
                 result = self._plan.solve(problem, _rng(seed))
                 result.chosen = [None] * len(goals)
+                if self._lanes_open and len(goals) == 1:
+                    self._open_lane(problem)
                 return result
         return self.run(problem, _rng(seed))
 
+    def _go_on(self, problem: IKProblem, seed, out) -> Result:
+        """The general path after a lane's first runs none of which met the tolerances: memetic goes on from their
+        state (``out``: the lane's), or solves ``problem`` from the start (``out`` None: a run converged by the
+        kernel's test but not by the problem's tolerances)."""
+        rng = _rng(seed)
+        result = self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
+        if problem.goals is not None:
+            result.chosen = [None] * len(problem.goals)
+        return result
+
     def _open_lane(self, problem: IKProblem) -> None:
-        """After the plan solved ``problem`` (a single target), make the lane of its kind when there is none, or when
-        the one kept no longer holds (its engine remade; another thread's)."""
-        kept = self._lanes.get(problem.target.rotation is not None)
+        """After the plan solved ``problem`` (a single target or a one-goal list), make the lane of its kind (or goal
+        stack) when there is none, or when the one kept no longer holds (its engine remade; another thread's). The
+        lanes of goal stacks are the last few kept."""
+        key = problem.target.rotation is not None if problem.goals is None else id(problem.goal_stack()[0])
+        kept = self._lanes.get(key)
         if kept is None or not kept.usable():
             from .solvers.search.single_target_lane import SingleTargetLane
 
             lane = SingleTargetLane.of_plan(self._plan, problem)
             if lane is not None:
-                self._lanes[lane.oriented] = lane
+                if problem.goals is not None:
+                    stacks = [k for k in self._lanes if k is not True and k is not False]
+                    if len(stacks) >= _GOAL_LANES:
+                        del self._lanes[stacks[0]]
+                self._lanes[key] = lane
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does
@@ -220,6 +258,8 @@ class IKSolver:
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
+#: One-goal lists' lanes an IKSolver keeps (one per goal stack: frame, kind, weight, tolerances; the last made).
+_GOAL_LANES = 8
 _LOCAL = threading.local()
 #: IKSolvers evoik_pin.solve keeps per thread (the last ones made; each keeps its robot, seed table and scene alive,
 #: so the number is small).

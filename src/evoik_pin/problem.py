@@ -73,6 +73,25 @@ def coerce_scene(robot: Robot, scene) -> Scene | None:
                       f".yaml, .yml or .json), got {type(scene).__name__}")
 
 
+def goal_summary(goals, errors, orientation_weight: float) -> tuple[float, float | None, float]:
+    """(largest position error m, largest rotation angle rad or None, cost) of the errors ``errors`` (per goal:
+    position m or None, angle rad or None; :meth:`IKProblem.goal_errors`) of ``goals``: the cost is the sum over
+    the goals of ``weight x (position error + orientation_weight x angle)``. A goal's errors are those its success
+    test reads (for bands: the excess over them; for pointing goals: the angle as the rotation)."""
+    # _goal_cost's sum for one row, in plain floats: a goal list has a few goals, and NumPy's arrays for them
+    # cost more than the sums (5 us)
+    pos = cost = 0.0
+    rot = None
+    for g, (p, r) in zip(goals, errors, strict=True):
+        p, r = p or 0.0, r or 0.0  # None: a goal without a position (Orientation, ...) or an angle
+        pos = pos if pos != pos else (p if p != p else max(pos, p))  # NumPy's max: a NaN error stays NaN
+        cost += (p + orientation_weight * r) * g.weight
+    rots = [r for _, r in errors if r is not None]
+    if rots:
+        rot = max(rots)
+    return float(pos), rot, float(cost)
+
+
 @dataclass(frozen=True)
 class Evaluation:
     """Cost and errors of a population (each (N,)); ``orientation_error`` is None for position targets."""
@@ -383,21 +402,8 @@ class IKProblem:
 
     def goal_summary(self, errors) -> tuple[float, float | None, float]:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors
-        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list. A goal's errors are those its success
-        test reads (for bands: the excess over them; for pointing goals: the angle as the rotation)."""
-        # _goal_cost's sum for one row, in plain floats: a goal list has a few goals, and NumPy's arrays for them
-        # cost more than the sums (5 us)
-        ow = self.orientation_weight
-        pos = cost = 0.0
-        rot = None
-        for g, (p, r) in zip(self.goals, errors, strict=True):
-            p, r = p or 0.0, r or 0.0  # None: a goal without a position (Orientation, ...) or an angle
-            pos = pos if pos != pos else (p if p != p else max(pos, p))  # NumPy's max: a NaN error stays NaN
-            cost += (p + ow * r) * g.weight
-        rots = [r for _, r in errors if r is not None]
-        if rots:
-            rot = max(rots)
-        return float(pos), rot, float(cost)
+        (:meth:`goal_errors`): what :meth:`assess` returns for a goal list (:func:`goal_summary`)."""
+        return goal_summary(self.goals, errors, self.orientation_weight)
 
     def goals_met(self, errors) -> bool:
         """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""

@@ -32,6 +32,7 @@ import time
 import numpy as np
 
 from ...objectives import default_objective
+from ...problem import goal_summary
 from ...target import Target
 from ..lm.layout import P_ITERATIONS
 from . import memetic
@@ -43,42 +44,64 @@ __all__ = ["SingleTargetLane"]
 
 class SingleTargetLane:
     """The per-call path of one plan (:class:`~.memetic.MemeticPlan`) for single targets of one kind (poses, or
-    positions), in the search box, tolerances and objective settings of the problem it was made from.
+    positions), or for goal lists of one goal on one frame bound to one goal stack (:func:`~.memetic.one_frame_goal`:
+    a Pose with or without free axes or bands, a Position, an Orientation), in the search box, tolerances and
+    objective settings of the problem it was made from.
 
     Args:
-        plan: the memetic plan. problem: a single-target problem the plan has just solved (its box, tolerances,
+        plan: the memetic plan. problem: a problem the plan has just solved (its box, tolerances, goal stack,
             ``orientation_weight`` and ``pose_metric`` are the lane's; no scene). lm: the plan's engine for it.
             table: the plan's seed table. entry: :func:`~.first_runs.first_runs`' compiled entry for ``lm``'s
             arguments.
+
+    Attributes:
+        key: what the lane serves: True (poses), False (positions), or the goal stack a one-goal list is bound to
+            (:func:`~evoik_pin.goals.binding.bind`).
     """
 
     @classmethod
     def of_plan(cls, plan, problem) -> SingleTargetLane | None:
-        """A lane for targets of ``problem``'s kind (a pose or a position): ``problem`` is the one the plan has just
-        solved through the compiled first runs, with their compiled entry found. None when such problems do not take
-        the compiled first runs (a scene, a planar target, a goal list, options that change the first runs), when
-        the entry is not known yet (a plan's first solve), or while the engine's target arrays may still be the
-        first problem's own (a lane writes into them)."""
+        """A lane for problems like ``problem`` (a pose, a position, or a one-goal list bound to the same stack):
+        ``problem`` is the one the plan has just solved through the compiled first runs, with their compiled entry
+        found. None when such problems do not take the compiled first runs (a scene, a planar target, several goals,
+        a goal set, options that change the first runs), when the entry is not known yet (a plan's first solve), or
+        while the engine's target arrays may still be the first problem's own (a lane writes into them)."""
         (_, _, _, _, _, table_size, table_seeds, table_offset, batch, _, engine) = plan.options
         lm, table = plan._lm, plan._table
         args, kept_table, entry = plan._entry
-        if not (memetic.FIRST_RUNS and problem.goals is None and problem.scene is None and not problem.target.planar
-                and engine == "compiled" and batch == 1 and table_offset == 0 and table_size > 0
-                and table_seeds != 0 and table is not None and lm is not None and lm.problem is problem and lm._owned
+        goals = problem.goals
+        if not (memetic.FIRST_RUNS and problem.scene is None and engine == "compiled" and batch == 1
+                and table_offset == 0 and table_size > 0 and table_seeds != 0 and table is not None
+                and lm is not None and lm.problem is problem and lm._owned
                 and args is lm._args and kept_table is table and entry is not None
-                and not hasattr(entry, "overloads")):  # a compiled entry, not numba's dispatcher
+                and not hasattr(entry, "overloads")  # a compiled entry, not numba's dispatcher
+                and (not problem.target.planar if goals is None else
+                     memetic.one_frame_goal(problem) and not problem.goal_sets)):
             return None
         return cls(plan, problem, lm, table, entry)
 
     def __init__(self, plan, problem, lm, table, entry) -> None:
         self.plan = plan
-        self.oriented = problem.target.rotation is not None
-        key = "pose" if self.oriented else "position"
-        F, FT, sq = table.compiled_features(key)
+        goals = problem.goals
+        if goals is None:
+            self.key = self.oriented = problem.target.rotation is not None
+            key = "pose" if self.oriented else "position"
+            F, FT, sq = table.compiled_features(key)
+            gap, sp, sr = table._gap(key), 1.0, table.weight
+            # the cost of the lane's answers: the objective the solver's options make for a target of this kind,
+            # asked for its value from the errors (as IKProblem.assess asks it) with the target it was made for
+            dummy = Target(np.zeros(3), np.eye(3) if self.oriented else None)
+            self._objective = default_objective(dummy, problem.orientation_weight, problem.pose_metric)
+            self._dummy = dummy
+        else:
+            self.key = problem.goal_stack()[0]
+            self.oriented = None
+            F, FT, sq, gap, sp, sr = table.one_goal_features(goals[0])
         options = plan.options
         self._iterations = options[9]
         self._tolerance = problem.tolerance
         self._rotation_tolerance = problem.rotation_tolerance
+        self._orientation_weight = problem.orientation_weight
         self._lm = lm
         self._args = lm._args
         self._pt, self._Rt = lm._pt[0], lm._Rt[0]  # (3,) and (3, 3) views of the engine's own target arrays
@@ -88,21 +111,26 @@ class SingleTargetLane:
         self._errors, self._g_out, self._zeros, self._best_q, self._best = plan._scratch
         self._head = tuple(buffers)
         table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if options[6] is None else options[6])
-        self._box = (lower, upper, table._gap(key), table.Q, F, FT, sq, 1.0, table.weight, lm.oriented, table_runs,
-                     *args, params)
+        self._box = (lower, upper, gap, table.Q, F, FT, sq, sp, sr, lm.oriented, table_runs, *args, params)
         self._entry = entry
         self._thread = threading.get_ident()
         self._n = problem.n
-        # the cost of the lane's answers: the objective the solver's options make for a target of this kind, asked
-        # for its value from the errors (as IKProblem.assess asks it) with the target it was made for
-        dummy = Target(np.zeros(3), np.eye(3) if self.oriented else None)
-        self._objective = default_objective(dummy, problem.orientation_weight, problem.pose_metric)
-        self._dummy = dummy
 
     def usable(self) -> bool:
         """Whether the lane's engine and compiled entry still hold (the engine's arguments not remade) in the thread
         that made it."""
         return self._lm._args is self._args and threading.get_ident() == self._thread
+
+    def _runs(self, q0: np.ndarray | None) -> tuple:
+        """The compiled first runs from ``q0`` (n,) or none, towards the target written into the engine's arrays:
+        (stage, runs, evaluations, position error, rotation error, the answer (n,))."""
+        self._params[P_ITERATIONS] = self._iterations  # another path may have run the engine with another budget
+        q_out = np.empty(self._n)
+        has_q0 = q0 is not None
+        stage, runs, evaluations, pos, rot, _ = self._entry(
+            *self._head, np.array(q0, dtype=float) if has_q0 else self._zeros, has_q0, *self._box, q_out,
+            self._g_out, self._errors, self._best_q, self._best)
+        return stage, runs, evaluations, pos, rot, q_out
 
     def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None):
         """Solve one checked target (``position`` (3,) m, ``rotation`` (3, 3) or None: of the lane's kind) from
@@ -117,14 +145,9 @@ class SingleTargetLane:
         self._pt[:] = position
         if rotation is not None:
             self._Rt[:] = rotation
-        self._params[P_ITERATIONS] = self._iterations  # another path may have run the engine with another budget
-        q_out = np.empty(self._n)
-        has_q0 = q0 is not None
-        stage, runs, evaluations, pos, rot, _ = self._entry(
-            *self._head, np.array(q0, dtype=float) if has_q0 else self._zeros, has_q0, *self._box, q_out,
-            self._g_out, self._errors, self._best_q, self._best)
+        stage, runs, evaluations, pos, rot, q = self._runs(q0)
         if stage < 0:
-            return t0, resumed_state(self.plan, self.oriented, runs, evaluations, self._box[10])
+            return t0, resumed_state(self.plan, self._box[9], runs, evaluations, self._box[10])
         if not self.oriented:
             rot = None
         elif not rot <= self._rotation_tolerance:
@@ -132,5 +155,25 @@ class SingleTargetLane:
         if not pos <= self._tolerance:
             return None
         cost = self._objective.from_errors(self._dummy, pos, rot)
-        return first_runs_result(q_out, pos, rot, float(cost), stage, runs, evaluations, self._errors,
+        return first_runs_result(q, pos, rot, float(cost), stage, runs, evaluations, self._errors,
                                  time.perf_counter() - t0, 0.0)
+
+    def solve_goals(self, goals: list, pt: np.ndarray, Rt: np.ndarray, q0: np.ndarray | None):
+        """:meth:`solve` for a one-goal list bound to the lane's stack (``goals``: the bound list, ``pt`` (1, 3),
+        ``Rt`` (1, 3, 3): its targets, :func:`~evoik_pin.goals.binding.bind`'s). The goal's errors are the kernel's
+        (``Goal.reported``), judged by ``Goal.met``, as memetic judges them; ``chosen`` is ``[None]``."""
+        t0 = time.perf_counter()
+        self._pt[:] = pt[0]
+        self._Rt[:] = Rt[0]
+        stage, runs, evaluations, pos, rot, q = self._runs(q0)
+        if stage < 0:
+            return t0, resumed_state(self.plan, self._box[9], runs, evaluations, self._box[10])
+        goal = goals[0]
+        goal_errors = [goal.reported(pos, rot)]
+        pos, rot, cost = goal_summary(goals, goal_errors, self._orientation_weight)
+        if not goal.met(*goal_errors[0]):
+            return None
+        result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
+                                   time.perf_counter() - t0, 0.0, goal_errors)
+        result.chosen = [None]
+        return result
