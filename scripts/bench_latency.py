@@ -152,13 +152,13 @@ STAGES = [
     ("q0's check", "IKSolver's q0 check: shape and finite"),
     ("problem", "the general path only: the template problem copied with the target and q0 (IKProblem)"),
     ("set-up look-ups", "the general path only: the memetic plan's cached seed table and LM engine (retargeted)"),
-    ("first runs (compiled)", "one numba call: the target written into the engine, the table's distances to it and "
-     "the nearest entries, q0's tip pose and nearness, the guaranteed LM runs (the lane's compiled entry, or "
-     "MemeticPlan.first_runs)"),
+    ("first runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, q0's tip "
+     "pose and nearness, the guaranteed LM runs (the lane's compiled entry, or MemeticPlan.first_runs)"),
     ("memetic's later stages", "when no first run converged: the search going on (LM runs one by one, DE restarts), "
      "rare but long"),
     ("cost and Result", "the cost from the errors (the objective's from_errors; problem.assess) and the Result"),
-    ("the rest (Python)", "IKSolver.solve, the lane's or memetic's own logic, its clock"),
+    ("the rest (Python)", "IKSolver.solve and the lane's own logic: the target written into the engine's arrays, "
+     "q0's copy, the compiled call's arguments, the tolerances' test, the clock"),
 ]
 
 
