@@ -10,6 +10,7 @@ import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_first_runs import same  # the Results equal bit for bit, history too
 
 import evoik_pin as ek
 from evoik_pin import api
@@ -25,15 +26,6 @@ def general(robot, target, seed=None, **options):
     """evoik_pin.solve's general path: a new problem and memetic's whole set-up on every call."""
     problem, solver_options = api.make_problem(robot, target, **options)
     return api._run(problem, "memetic", api._rng(seed), solver_options)
-
-
-def same(a, b):
-    assert np.array_equal(a.q, b.q)
-    assert (a.success, a.position_error, a.orientation_error, a.cost, a.evaluations, a.generations, a.message) == (
-        b.success, b.position_error, b.orientation_error, b.cost, b.evaluations, b.generations, b.message)
-    assert a.history.keys() == b.history.keys()
-    for key in a.history:
-        assert np.array_equal(a.history[key], b.history[key])
 
 
 @pytest.fixture(scope="module")

@@ -168,9 +168,7 @@ class IKSolver:
             if arrays is not None:
                 lane = lanes.get(arrays[1] is not None)
                 if lane is not None and lane.usable():
-                    q0 = self._q0 if q0 is None else self._checked_q0(q0)
-                    if seed is not None and not (type(seed) is int and seed >= 0):
-                        _rng(seed)  # its check: the general path's error for a bad seed
+                    q0 = self._lane_q0(q0, seed)
                     out = lane.solve(arrays[0], arrays[1], q0)
                     if type(out) is Result:
                         return out
@@ -180,9 +178,7 @@ class IKSolver:
                 bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
                 lane = lanes.get(id(bound[1]))
                 if lane is not None and lane.key is bound[1] and lane.usable():
-                    q0 = self._q0 if q0 is None else self._checked_q0(q0)
-                    if seed is not None and not (type(seed) is int and seed >= 0):
-                        _rng(seed)
+                    q0 = self._lane_q0(q0, seed)
                     out = lane.solve_goals(bound[0], bound[2], bound[3], q0)
                     if type(out) is Result:
                         return out
@@ -207,6 +203,14 @@ class IKSolver:
                     self._open_lane(problem)
                 return result
         return self.run(problem, _rng(seed))
+
+    def _lane_q0(self, q0, seed):
+        """A lane call's q0 (checked; None: the solver's own) after the seed's check: the general path's errors for
+        a bad q0 or seed, in its order (the target's checks came first)."""
+        q0 = self._q0 if q0 is None else self._checked_q0(q0)
+        if seed is not None and not (type(seed) is int and seed >= 0):
+            _rng(seed)  # a Generator passes; anything else raises the general path's error
+        return q0
 
     def _go_on(self, problem: IKProblem, seed, out) -> Result:
         """The general path after a lane's first runs none of which met the tolerances: memetic goes on from their
