@@ -315,9 +315,10 @@ class SeedTable:
         frames' poses relative to the root link, nearest first."""
         out = []
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
+        specs = self.goal_spec(goals)
         for g, (F, sq, _) in enumerate(parts):
-            spec = self.goal_spec(goals)[g:g + 1]
-            f = np.concatenate(self._goal_feature_blocks(spec, pt[g][None, None], Rt[g][None, None]), axis=1)[0]
+            f = np.concatenate(self._goal_feature_blocks(specs[g:g + 1], pt[g][None, None], Rt[g][None, None]),
+                               axis=1)[0]
             d = sq - 2.0 * (F @ f)
             if allowed is not None:
                 d = np.where(allowed, d, np.inf)
