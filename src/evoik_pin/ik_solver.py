@@ -15,6 +15,11 @@ Everything else is :func:`evoik_pin.solve`'s own code, so the answers are the sa
 (:mod:`evoik_pin.goals`) and scenes go through the same path (a goal list is checked and bound per call; a scene's
 collision-free seed entries follow its version).
 
+Once memetic has solved a pose (a position, a one-goal list of some goal structure) this way, the next ones of that
+kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`): the target's and q0's checks, memetic's
+compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the general
+path's, bit for bit; a target the first runs do not solve goes on in memetic from their state.
+
 :func:`evoik_pin.solve` itself keeps one ``IKSolver`` per robot, method and options (per thread, the 8 made last,
 which keep their robots alive) and calls it, when the options are plain values (numbers, strings, a
 :class:`~evoik_pin.Scene` or objective object); a scene file's path or array bounds take the general path.
@@ -103,10 +108,10 @@ class IKSolver:
 
             self._plan = MemeticPlan(robot, **options)
         self._plain = self._plan is not None and not self._polish  # solve may call the plan directly
-        # single targets' per-call path (memetic's compiled first runs and little else), one per kind (True: poses,
-        # False: positions), made after the general path has solved a target of that kind: for the default
-        # objective in a box that does not move with the target (a custom objective may need the Target; a target
-        # box is remade per target)
+        # the per-call lanes (memetic's compiled first runs and little else), one per kind (True: poses, False:
+        # positions) and per one-goal list's goal stack (by id; the last _GOAL_LANES), made after the general path
+        # has solved a target of that kind: for the default objective in a box that does not move with the target (a
+        # custom objective may need the Target; a target box is remade per target)
         self._lanes: dict = {}
         self._lanes_open = self._plain and not self._target_box and self._objective is None
 
