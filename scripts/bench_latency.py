@@ -266,8 +266,45 @@ def bench_talos(n: int, seed: int) -> dict:
                 "success": float(np.mean(ok[k]))} for k in names}
 
 
+def bench_trajectory(name: str, n: int, seed: int, rounds: int = 3) -> dict:
+    """``evoik_pin.solve_trajectory`` along a smooth path of ``n`` poses (a random walk in joint space, steps of 0.01
+    rad per joint, from a random configuration; q0 zeros), against TRAC-IK seeded with its previous answer: the
+    whole call's wall time per point (the least of ``rounds``), success within 1e-6 (ours) and of TRAC-IK's calls."""
+    robot = load(name)
+    rng = np.random.default_rng([seed, 11])
+    q = robot.random_configurations(1, rng)[0]
+    path = []
+    for _ in range(n):
+        q = np.clip(q + 0.01 * rng.standard_normal(robot.n), robot.lower, robot.upper)
+        path.append(robot.fk(q))
+    ek.solve_trajectory(robot, path[:10], seed=0)  # one-time set-up outside the clock
+    times, out = [], None
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        out = ek.solve_trajectory(robot, path, seed=1, q0=np.zeros(robot.n))
+        times.append(time.perf_counter() - t0)
+    ok = []
+    for T, r in zip(path, out, strict=True):
+        pos, rot, inside = judge(robot, T, r.q)
+        ok.append(pos <= 1e-6 and rot <= 1e-6 and inside)
+    row = {"n": n, "us_per_point": min(times) / n * 1e6, "rounds_ms": [t * 1e3 for t in times],
+           "success_1e-6": float(np.mean(ok))}
+    trac = TracIK(robot)
+    if trac.available:
+        spent, solved, previous = [], [], np.zeros(robot.n)
+        for T in path:
+            answer = trac(T, previous, 0)
+            spent.append(trac.elapsed)
+            solved.append(answer is not None)
+            previous = answer if answer is not None else previous
+        row["tracik_us_per_point"] = float(np.sum(spent)) / n * 1e6
+        row["tracik_success"] = float(np.mean(solved))
+    return row
+
+
 # ---------------------------------------------------------------------- report
-def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str, load: tuple) -> str:
+def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str, load: tuple,
+             trajectory: dict | None = None) -> str:
     lines = [f"### Single-solve latency (issue 24), {datetime.date.today().isoformat()}", "",
              f"`{command}` on {cpu_model()} ({os.cpu_count()} cores), Python {platform.python_version()}; load "
              f"average {load[0]} before, {load[1]} after (the machine is shared by about six sessions: every "
@@ -295,6 +332,15 @@ def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str,
         what = dict(STAGES)
         for k, v in p["stages_us"].items():
             lines.append(f"| {k} | {v:.1f} | {what[k]} |")
+    if trajectory:
+        t = trajectory
+        peer = "" if "tracik_us_per_point" not in t else (
+            f"; TRAC-IK seeded with its previous answer: {t['tracik_us_per_point']:.1f} us a point (its calls alone), "
+            f"{100 * t['tracik_success']:.1f} % of its calls solved (1e-5)")
+        lines += ["", f"`evoik_pin.solve_trajectory` on {t['robot']}, {t['n']} poses along a smooth path (joint steps "
+                  f"of 0.01 rad), the whole call: {t['us_per_point']:.1f} us a point (the least of rounds of "
+                  f"{', '.join(f'{x:.1f}' for x in t['rounds_ms'])} ms), {100 * t['success_1e-6']:.1f} % within "
+                  f"1e-6{peer}."]
     if talos:
         lines += ["", f"Talos, floating base, four pose goals (both soles, both wrists; bench_goals_scale.py's "
                   f"problems), {next(iter(talos.values()))['n']} problems, interleaved:", "",
@@ -321,6 +367,7 @@ def main(argv=None) -> int:
     ap.add_argument("--profile-robot", default="panda", choices=list(ARMS), help="robot of the profile table")
     ap.add_argument("--profile-targets", type=int, default=1000, help="poses of the profile table (0: none)")
     ap.add_argument("--talos", type=int, default=200, help="Talos problems (0: none)")
+    ap.add_argument("--trajectory", type=int, default=1000, help="solve_trajectory points on Panda (0: none)")
     ap.add_argument("--json", type=Path, help="write the numbers here")
     ap.add_argument("--no-docs", action="store_true", help="do not write docs/BENCHMARKS.md")
     ap.add_argument("--seed", type=int, default=2026)
@@ -347,16 +394,22 @@ def main(argv=None) -> int:
         profile["robot"] = args.profile_robot
         profile["passes_wrapped_mean_us"] = [p["wrapped_mean_us"] for p in passes]
         print(json.dumps(profile, indent=1), flush=True)
+    trajectory = None
+    if args.trajectory:
+        trajectory = bench_trajectory("panda", args.trajectory, args.seed)
+        trajectory["robot"] = "panda"
+        print(json.dumps(trajectory, indent=1), flush=True)
     talos = bench_talos(args.talos, args.seed) if args.talos else None
     if talos:
         print(json.dumps(talos, indent=1))
     load1 = os.getloadavg()
     loads = (f"{load0[0]:.2f}", f"{load1[0]:.2f}")
     command = "python scripts/bench_latency.py " + " ".join(argv if argv is not None else sys.argv[1:])
-    text = markdown(arms, profile, talos, command.strip(), loads)
+    text = markdown(arms, profile, talos, command.strip(), loads, trajectory)
     print(text)
     if args.json:
-        args.json.write_text(json.dumps({"arms": arms, "profile": profile, "talos": talos, "load": loads}, indent=1))
+        args.json.write_text(json.dumps({"arms": arms, "profile": profile, "talos": talos, "trajectory": trajectory,
+                                         "load": loads}, indent=1))
     if not args.no_docs:
         write_docs(text)
     return 0

@@ -268,3 +268,32 @@ def test_a_goal_set_never_takes_a_one_goal_lane(panda, counted):
     far = pin.SE3(np.eye(3), np.array([2.0, 0.0, 0.5]))
     r = solver.solve([Pose(panda.tip, [far, panda.fk(Q[0])])], seed=0)
     assert not counted and r.success and r.chosen == [1]
+
+
+def test_a_trajectory_gives_the_answers_of_its_points_solved_one_by_one(panda):
+    """solve_trajectory (plain options: it solves through the kept IKSolver and its lanes) gives, point by point, the
+    general path's answer from the previous point's q with the one shared generator, for poses, positions, one-goal
+    lists and another method; memetic's later stages draw from that generator (out-of-reach points)."""
+    from evoik_pin.problem import Target
+
+    rng = np.random.default_rng(41)
+    q = panda.random_configurations(1, rng)[0]
+    path = []
+    for k in range(24):
+        q = np.clip(q + 0.05 * rng.standard_normal(panda.n), panda.lower, panda.upper)
+        T = panda.fk(q)
+        path.append(pin.SE3(T.rotation, 3.0 * T.translation) if k % 8 == 5 else T)
+    cases = [(path, "memetic", BUDGET), ([T.translation.copy() for T in path], "memetic", BUDGET),
+             ([[Pose(panda.tip, T, free="rz")] for T in path], "memetic", BUDGET),
+             (path[:4], "de", {"max_generations": 10})]
+    for targets, method, options in cases:
+        got = ek.solve_trajectory(panda, targets, method=method, seed=3, q0=np.zeros(panda.n), **options)
+        shared = api._rng(3)
+        previous = np.zeros(panda.n)
+        for target, r in zip(targets, got, strict=True):
+            t = target if isinstance(target, list) else Target.coerce(target)
+            problem, solver_options = api.make_problem(panda, t, q0=previous, **options)
+            reference = api._run(problem, method, shared, solver_options)
+            same(r, reference)
+            previous = reference.q
+        assert method != "memetic" or sum(not r.success for r in got) >= 2

@@ -212,7 +212,14 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     results: list[Result] = []
     previous = None if q0 is None else robot.check_q(q0)
     choosing = prefer is not None or bool(locked) or preferences
+    # plain options: the points go through the IKSolver solve keeps (its lanes: a point costs little more than its
+    # search), which gives the general path's answers with the shared generator
+    solver = None if choosing or pro else cached_solver(robot, method, options)
     for i, target in enumerate(targets):
+        if solver is not None:
+            results.append(solver.solve(target, previous, rng))
+            previous = results[-1].q
+            continue
         if choosing and not (pro and i > 0):  # solve's path for prefer=, locked=, preferences
             results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
                                            **{**options, "q0": previous}))
