@@ -234,3 +234,40 @@ def test_a_goal_frames_table_features_are_set_up_before_the_clock(monkeypatch):
         r = ek.IKSolver(robot, timeout=None, max_restarts=1).solve(goals, seed=0)
         assert r.success
     assert seen == [True, True]
+
+
+@pytest.mark.parametrize("name", ["baxter", "talos"])
+def test_compiled_per_goal_ranking_is_numpys_over_many_targets(name):
+    """SeedTable._nearest_per_goal (one compiled call for every goal: the composed starts of whole robots) gives each
+    goal's ranking by NumPy's product of the goal's own features, over many targets, k = 1 and k = 17, with and without
+    a mask, goals with and without orientation."""
+    from evoik_pin.goals import Orientation, Pose, Position
+    from evoik_pin.problem import IKProblem
+
+    robot = ek.load_robot(name, floating_base=name == "talos")
+    frames = (["left_gripper", "right_gripper", "head"] if name == "baxter"
+              else ["left_sole_link", "right_sole_link", "gripper_left_joint", "torso_2_link"])
+    rng = np.random.default_rng(4)
+    table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
+    allowed = rng.random(table.Q.shape[0]) < 0.4
+    for trial, q in enumerate(robot.random_configurations(60, rng)):
+        kinds = [Pose, Position, Orientation]
+        goals = []
+        for g, frame in enumerate(frames):
+            T = robot.fk(q, frame=frame)
+            kind = kinds[(trial + g) % 3]
+            goals.append(kind(frame, T) if kind is Pose else kind(frame, T.translation) if kind is Position
+                         else kind(frame, T.rotation))
+        problem = IKProblem(robot, goals)
+        parts = table._goal_parts(goals)
+        _, pt, Rt = problem.goal_stack()
+        spec = table.goal_spec(goals)
+        for k, mask in ((1, None), (17, None), (1, allowed), (17, allowed)):
+            got = table._nearest_per_goal(goals, parts, pt, Rt, k, mask)
+            for g, (F, sq, _) in enumerate(parts):
+                f = np.concatenate(table._goal_feature_blocks(spec[g:g + 1], pt[g][None, None], Rt[g][None, None]),
+                                   axis=1)[0]
+                d = sq - 2.0 * (F @ f)
+                if mask is not None:
+                    d = np.where(mask, d, np.inf)
+                assert got[g].tolist() == np.argsort(d, kind="stable")[:k].tolist()

@@ -11,9 +11,10 @@ in one pass, in order, the lower index first between equal ones (``argmin``'s ru
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
-__all__ = ["select_k", "table_distances", "table_distances_many"]
+__all__ = ["nearest_per_goal", "select_k", "table_distances", "table_distances_many"]
 
 
 @njit(cache=True, nogil=True, forceinline=False)
@@ -84,3 +85,39 @@ def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
                 d[i] += FT[j, i] * fj
         for i in range(N):
             d[i] = sq[i] - (d[i] + d[i])
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def nearest_per_goal(FT, sq, start, scale, positioned, oriented, weight, pt, Rt, allowed, k, out):  # pragma: no cover
+    """Per goal g, the indices of the ``k`` table entries nearest to its target by the goal's own features, nearest
+    first (ties: the lower index first), into ``out[g]``: the composed starts of a goal list
+    (:meth:`~.seed_table.SeedTable.goal_starts`), one call for every goal.
+
+    Args:
+        FT (D, N): the goals' table features transposed and stacked, goal g's in rows ``start[g]:start[g + 1]``
+            (``scale[g]`` x its frame's position when ``positioned[g]``, then ``scale[g] x weight`` x its rotation's
+            entries when ``oriented[g]``); sq (G, N): their squared norms per goal. scale (G,): sqrt of each goal's
+            weight; positioned, oriented (G,) bool. weight: m per unit of the rotation's Frobenius distance.
+        pt (G, 3), Rt (G, 3, 3): the goals' targets (m). allowed: (N,) bool, or (0,) for every entry.
+        k: entries per goal (<= the allowed entries). out: (G, >= k) int64.
+    """
+    G, N = pt.shape[0], FT.shape[1]
+    d = np.empty(N)
+    f = np.empty(12)
+    for g in range(G):
+        D = 0
+        s = scale[g]
+        if positioned[g]:  # the products SeedTable._goal_feature_blocks makes, in its order: the same numbers
+            for j in range(3):
+                f[D] = s * pt[g, j]
+                D += 1
+        if oriented[g]:
+            sw = s * weight
+            for j in range(9):
+                f[D] = sw * Rt[g, j // 3, j % 3]
+                D += 1
+        if D == 0:  # a goal without a position or an orientation to match: every entry as near
+            d[:] = 0.0
+        else:
+            table_distances(FT[start[g]:start[g] + D], sq[g], f[:D], d)
+        select_k(d, allowed, k, out[g])

@@ -71,6 +71,7 @@ class SeedTable:
         self._one_goal: dict = {}  # (frame, weight, has_orientation, has_position) -> one_goal_features
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
         self._one_goal32: dict = {}  # id(one_goal_features' FT) -> (that FT, its float32 copy, sq's)
+        self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, its features stacked: _stacked_parts)
         if size:
             for key in _KINDS:  # one-time work here, not inside a solve's time budget
                 self._table_features(key)
@@ -312,22 +313,37 @@ class SeedTable:
     def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
                           allowed: np.ndarray | None) -> np.ndarray:
         """(G, <= k) indices of the table entries nearest, goal by goal, to targets pt (G, 3), Rt (G, 3, 3) of the
-        frames' poses relative to the root link, nearest first."""
-        out = []
+        frames' poses relative to the root link, nearest first (ties: the lower index first): one compiled call
+        for every goal (:func:`~.nearest.nearest_per_goal`; NumPy's products and rankings goal by goal took 15 us a
+        goal, the composed starts a third of a Talos solve)."""
+        from .nearest import nearest_per_goal  # numba, loaded on first use (as the kernel is)
+
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
-        specs = self.goal_spec(goals)
-        for g, (F, sq, _) in enumerate(parts):
-            f = np.concatenate(self._goal_feature_blocks(specs[g:g + 1], pt[g][None, None], Rt[g][None, None]),
-                               axis=1)[0]
-            d = sq - 2.0 * (F @ f)
-            if allowed is not None:
-                d = np.where(allowed, d, np.inf)
-            if k == 1:
-                out.append([int(d.argmin())])
-                continue
-            part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
-            out.append(part[d[part].argsort()])
-        return np.array(out, dtype=np.intp).reshape(len(parts), -1)
+        FT, sq, start, scale, positioned, oriented = self._stacked_parts(goals, parts)
+        out = np.empty((len(parts), k), dtype=np.int64)
+        if k > 0:
+            nearest_per_goal(FT, sq, start, scale, positioned, oriented, self.weight, np.ascontiguousarray(pt),
+                             np.ascontiguousarray(Rt), _EVERY if allowed is None else allowed, k, out)
+        return out.astype(np.intp, copy=False)
+
+    def _stacked_parts(self, goals, parts) -> tuple:
+        """:meth:`_goal_parts`' features of every goal stacked for :func:`~.nearest.nearest_per_goal` (cached with
+        them): (FT (D, size) the goals' features transposed, goal g's rows from start[g]; sq (G, size); start (G + 1,);
+        scale (G,) sqrt(weight); positioned, oriented (G,) bool), as :meth:`goal_spec` gives them."""
+        key = id(parts)
+        hit = self._stacked.get(key)
+        if hit is None or hit[0] is not parts:
+            spec = self.goal_spec(goals)
+            FT = np.ascontiguousarray(np.concatenate([F for F, _, _ in parts], axis=1).T)
+            sq = np.ascontiguousarray(np.stack([q for _, q, _ in parts]))
+            start = np.cumsum([0] + [F.shape[1] for F, _, _ in parts]).astype(np.int64)
+            scale = np.array([e[0] for e in spec], dtype=float)
+            positioned = np.array([len(e) < 3 or bool(e[2]) for e in spec])
+            oriented = np.array([bool(e[1]) for e in spec])
+            if len(self._stacked) > 8:
+                self._stacked.clear()
+            hit = self._stacked[key] = (parts, (FT, sq, start, scale, positioned, oriented))
+        return hit[1]
 
     def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`goal_table_features` of a goal list."""
@@ -509,6 +525,7 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
     return (pt - base[:3]) @ R0, np.einsum("ji,gjk->gik", R0, Rt)
 
 
+_EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _TABLES_PER_ROBOT = 4
 
