@@ -1,5 +1,5 @@
-"""An :class:`~evoik_pin.IKSolver`'s per-call path for one pose or position target: memetic's compiled first runs
-with nothing around them but the target's and q0's checks and the Result.
+"""An :class:`~evoik_pin.IKSolver`'s per-call path for one pose or position target, or a goal list of one goal on one
+frame: memetic's compiled first runs with nothing around them but the target's and q0's checks and the Result.
 
 A single target that one of memetic's guaranteed first runs solves (nearly every one) costs one compiled call,
 :func:`~.first_runs.first_runs` (the table's ranking, q0's nearness, the LM runs: 12 us on UR10), and the Python
@@ -9,8 +9,9 @@ plan's look-ups (seed table, engine retargeted, compiled entry), the cost from a
 tasks; TRAC-IK's calls in the latency benchmark). A lane does the part that changes from call to call only:
 
 * the target's checks (:func:`~evoik_pin.target.pose_arrays`: those of :class:`~evoik_pin.Target`, on Python
-  floats) and q0's (the solver's); any other form of target, or a target a check refuses, goes the general way,
-  which accepts what the lane accepts and raises the error of what it refuses;
+  floats; a goal list's are :func:`~evoik_pin.goals.binding.bind`'s) and q0's (the solver's); any other form of
+  target, or a target a check refuses, goes the general way, which accepts what the lane accepts and raises the
+  error of what it refuses;
 * the target written into its engine's own arrays, and the compiled entry called with the arguments it keeps;
 * the cost from the objective the solver's options make (its ``from_errors``, as ``IKProblem.assess`` computes
   it), the tolerances tested, and the Result :func:`~.memetic.first_runs_result` makes for the general path.
