@@ -334,6 +334,37 @@ def test_own_server_is_waited_for_while_it_lives(ax18, viewers, monkeypatch, tmp
         v.show(np.ones(4))
 
 
+def test_server_output_is_read_without_moving_the_servers_write_offset():
+    """The Viewer reads its server's output (a temporary file) while the server writes to it through the same open
+    file, whose offset the two share: a reader that seeks to 0 lets a line written meanwhile land at the start, over
+    the first one (a server's zmq_url line lost that way kept a Viewer waiting for its 600 s hang guard). Here a
+    writer thread appends numbered lines through a duplicate of the file's descriptor (a shared offset, as the
+    server's stdout) while the reader reads again and again: every line arrives, whole and in order."""
+    import os
+    import tempfile
+
+    f = tempfile.TemporaryFile()
+    writer_fd = os.dup(f.fileno())
+    lines = [f"line {i:05d} " + "x" * (i % 40) for i in range(4000)]
+    done = threading.Event()
+
+    def write():
+        for line in lines:
+            os.write(writer_fd, (line + "\n").encode())
+        done.set()
+
+    thread = threading.Thread(target=write)
+    thread.start()
+    looks = 0
+    while not done.is_set() or looks == 0:
+        viz.server._printed(f)
+        looks += 1
+    thread.join()
+    os.close(writer_fd)
+    assert viz.server._printed(f).splitlines() == lines
+    f.close()
+
+
 def _alive(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0]

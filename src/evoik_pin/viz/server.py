@@ -46,6 +46,21 @@ zmqserver.main()
 """
 
 
+def _printed(f) -> str:
+    """What a subprocess has written so far to ``f`` (the temporary file given it as stdout or stderr), read without
+    moving the file's offset: the subprocess writes at that offset, which the two share (one open file), so a
+    ``seek(0)`` before a read let a line the server printed meanwhile land at the start of the file, over its first
+    line; a server whose ``zmq_url`` line was overwritten that way by its ``web_url`` line was waited for until the
+    hang guard (600 s)."""
+    chunks, offset = [], 0
+    while True:
+        chunk = os.pread(f.fileno(), 1 << 16, offset)
+        if not chunk:
+            return b"".join(chunks).decode(errors="replace")
+        chunks.append(chunk)
+        offset += len(chunk)
+
+
 def _stop_process(proc: subprocess.Popen) -> None:
     if proc.poll() is None:
         proc.terminate()
@@ -77,8 +92,7 @@ class _Server:
         deadline = time.monotonic() + timeout
         urls: dict[str, str] = {}
         while len(urls) < 2:
-            self._out.seek(0)
-            for line in self._out.read().decode(errors="replace").splitlines():
+            for line in _printed(self._out).splitlines():
                 key, _, value = line.strip().partition("=")
                 if key in ("zmq_url", "web_url") and value:
                     urls[key] = value
@@ -86,8 +100,7 @@ class _Server:
                 break
             exited = self.proc.poll() is not None
             if exited or time.monotonic() > deadline:
-                self._err.seek(0)
-                detail = self._err.read().decode(errors="replace").strip().splitlines()[-3:]
+                detail = _printed(self._err).strip().splitlines()[-3:]
                 self.stop()
                 why = (f"exited (code {self.proc.returncode})" if exited
                        else f"ran {timeout:g} s without printing its URLs")
