@@ -100,11 +100,13 @@ class _Server:
                 break
             exited = self.proc.poll() is not None
             if exited or time.monotonic() > deadline:
+                printed = _printed(self._out).strip().splitlines()[-2:]  # what it did print, to diagnose
                 detail = _printed(self._err).strip().splitlines()[-3:]
                 self.stop()
                 why = (f"exited (code {self.proc.returncode})" if exited
-                       else f"ran {timeout:g} s without printing its URLs")
-                raise ViewerError(f"the meshcat server {why}: " + (" | ".join(detail) or "no output"))
+                       else f"ran {timeout:g} s without printing both of its URLs")
+                raise ViewerError(f"the meshcat server {why}: " + (" | ".join(detail) or "nothing on stderr")
+                                  + f"; stdout: {' | '.join(printed) or 'nothing'}")
             time.sleep(0.02)  # readiness is the URL lines; the deadline only catches a wedged server
         self.zmq_url, self.web_url = urls["zmq_url"], urls["web_url"]
 
