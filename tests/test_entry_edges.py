@@ -41,13 +41,14 @@ def pose(panda):
 
 @pytest.fixture
 def no_work(monkeypatch):
-    """Any solving (a per-target solve through api._run, a batched LM round) fails the test: the options must be
-    refused before."""
+    """Any solving (a per-target solve through api._run or through a kept IKSolver, as solve and solve_trajectory
+    make them, a batched LM round) fails the test: the options must be refused before."""
 
     def work(*args, **kwargs):
         raise AssertionError("work started before every option was checked")
 
     monkeypatch.setattr(api, "_run", work)
+    monkeypatch.setattr(ek.IKSolver, "solve", work)
     monkeypatch.setattr(batch_threads, "solve_pairs", work)
 
 
