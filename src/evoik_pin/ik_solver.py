@@ -44,6 +44,7 @@ from .robot import Robot
 from .scene import Scene
 from .solvers import get_solver
 from .solvers.collision_verdict import with_collision_verdict
+from .solvers.search.memetic import KEPT_ENGINES
 from .target import pose_arrays
 
 __all__ = ["IKSolver"]
@@ -267,8 +268,9 @@ class IKSolver:
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
-#: One-goal lists' lanes an IKSolver keeps (one per goal stack: frame, kind, weight, tolerances; the last made).
-_GOAL_LANES = 8
+#: One-goal lists' lanes an IKSolver keeps (one per goal stack: frame, kind, weight, tolerances; the last made): as
+#: many as the plan keeps engines (a lane opens at its engine's second problem).
+_GOAL_LANES = KEPT_ENGINES
 _LOCAL = threading.local()
 #: IKSolvers evoik_pin.solve keeps per thread (the last ones made; each keeps its robot, seed table and scene alive,
 #: so the number is small).

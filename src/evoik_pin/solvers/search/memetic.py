@@ -67,6 +67,10 @@ DEFAULT_TIMEOUT = 0.005
 #: descheduled past the budget still gets this minimum of useful work (5 runs of at most 30 steps, about
 #: 0.3 ms of compiled LM at worst).
 GUARANTEED_TABLE_RUNS = 4
+#: LM engines (and their compiled first-runs entries) a MemeticPlan keeps, one per goal stack: a solver alternating
+#: single targets and several goal structures retargets them instead of rebuilding (an engine's target arrays become
+#: its own at its second problem, which an IKSolver's lane needs: ik_solver keeps as many goal lanes).
+KEPT_ENGINES = 8
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
 
@@ -328,7 +332,7 @@ class MemeticPlan:
                 self._lm = other
                 return other
         lm = self._lm = LevenbergMarquardt(problem, engine=engine)
-        self._engines = [lm, *self._engines[:3]]
+        self._engines = [lm, *self._engines[:KEPT_ENGINES - 1]]
         return lm
 
     def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
@@ -361,7 +365,7 @@ class MemeticPlan:
                 entry = first_runs
         self._entry = (lm._args, table, entry)
         if entry is not None and entry is not first_runs:  # a compiled entry found (not on the plan's first solve)
-            self._entries = [self._entry, *self._entries[:3]]
+            self._entries = [self._entry, *self._entries[:KEPT_ENGINES - 1]]
         return first_runs(*args), loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
