@@ -1,4 +1,4 @@
-"""Write the papers' arms to robots/<name>.urdf from their DH tables (src/evoik_pin/paper_robots.py).
+"""Write the papers' arms to robots/<name>.urdf from their DH tables (src/evoik_pin/papers/robots.py).
 
 Usage: python scripts/make_paper_robots.py [--check]
   --check  exit 1 (and write nothing) when a committed file differs from the generator's output.
@@ -10,7 +10,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from evoik_pin.paper_robots import PAPER_ROBOTS
+from evoik_pin.papers.robots import PAPER_ROBOTS
 
 ROBOTS_DIR = Path(__file__).resolve().parents[1] / "robots"
 

@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import evoik_pin
-from evoik_pin.dh import DHRow, dh_to_urdf
 from evoik_pin.errors import ConfigurationError, OptionError
+from evoik_pin.papers.dh import DHRow, dh_to_urdf
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs, wrapping_joints
 from evoik_pin.solvers.paper.analytic import planar2r_ik, puma_ik

@@ -6,7 +6,7 @@ import pytest
 import evoik_pin
 from evoik_pin import load_robot
 from evoik_pin.errors import MethodError
-from evoik_pin.paper_robots import paper_robot_urdf
+from evoik_pin.papers.robots import paper_robot_urdf
 from evoik_pin.solvers.paper.analytic import (
     AX18_LIMITS,
     ax18_algebraic,

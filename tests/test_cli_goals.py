@@ -10,7 +10,7 @@ import pytest
 
 from evoik_pin.cli import main
 from evoik_pin.goals import Position
-from evoik_pin.goals_file import load_goals, save_goals
+from evoik_pin.io.goals_file import load_goals, save_goals
 from evoik_pin.robot import load_robot
 from evoik_pin.viz import html_commands
 

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from evoik_pin.dh import DHRow, dh_to_urdf, dh_transform
 from evoik_pin.errors import RobotLoadError
+from evoik_pin.papers.dh import DHRow, dh_to_urdf, dh_transform
 from evoik_pin.robot import load_robot
 
 

@@ -277,7 +277,7 @@ def test_de_reads_the_kinds_violations(ur5):
 # ------------------------------------------------------------------------------------------- goals files
 @pytest.mark.parametrize("ext", ["yaml", "json"])
 def test_goals_files_keep_every_kind(tmp_path, ext):
-    from evoik_pin.goals_file import load_goals, save_goals
+    from evoik_pin.io.goals_file import load_goals, save_goals
 
     T = pin.SE3.Random()
     goals = [Pose("a", T, free="rz"), Pose("b", T, tolerance=[0.002] * 3 + [0.1, 0.1, np.inf]),
@@ -292,7 +292,7 @@ def test_goals_files_keep_every_kind(tmp_path, ext):
 
 def test_goals_files_name_what_is_wrong(tmp_path):
     from evoik_pin.errors import GoalsFileError
-    from evoik_pin.goals_file import load_goals
+    from evoik_pin.io.goals_file import load_goals
 
     cases = {"kind: direction\n    target: {direction: [0, 0, 1]}": "missing field 'axis'",
              "kind: direction\n    axis: [0, 0]\n    target: {direction: [0, 0, 1]}": "axis must be a list of 3",

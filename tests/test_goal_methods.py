@@ -21,7 +21,7 @@ import evoik_pin as ek
 from evoik_pin.cli import main
 from evoik_pin.errors import MethodError, OptionError
 from evoik_pin.goals import Pose, Position
-from evoik_pin.goals_file import save_goals
+from evoik_pin.io.goals_file import save_goals
 from evoik_pin.lie import wrap_angle
 from evoik_pin.problem import IKProblem
 from evoik_pin.solvers.paper.analytic import planar2r_ik

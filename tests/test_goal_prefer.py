@@ -357,7 +357,7 @@ def test_solve_locked_returns_the_full_layout(panda):
 # ---------------------------------------------------------------------- goals files and the command line
 def test_goals_file_round_trip_of_sets_and_preferences(tmp_path, panda):
     from evoik_pin.errors import GoalsFileError
-    from evoik_pin.goals_file import load_goals, save_goals
+    from evoik_pin.io.goals_file import load_goals, save_goals
 
     T = panda.fk(np.full(panda.n, 0.3))
     goals = [Pose(panda.tip, [_far(T, 0), T]), Posture({"panda_joint1": 0.2}, 0.5), JointLimitMargin(0.1),

@@ -196,7 +196,7 @@ def test_goals_check_their_inputs(talos):
 
 # ---------------------------------------------------------------------------------------------- files and CLI
 def test_goals_files_keep_the_new_kinds(tmp_path):
-    from evoik_pin.goals_file import load_goals, save_goals
+    from evoik_pin.io.goals_file import load_goals, save_goals
 
     T = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.1, 0), np.array([0.0, 0.01, 0.3]))
     goals = [CenterOfMass(point=[0.1, -0.2, 0.9], axes="xy", weight=2.0),
@@ -224,7 +224,7 @@ def test_goals_files_keep_the_new_kinds(tmp_path):
 
 def test_cli_solves_a_standing_goals_file(talos, tmp_path, capsys):
     from evoik_pin.cli import main
-    from evoik_pin.goals_file import save_goals
+    from evoik_pin.io.goals_file import save_goals
 
     q = np.zeros(talos.n)
     q[2] = 1.02

@@ -1,4 +1,4 @@
-"""Goals files (evoik_pin.goals_file): the format (YAML and JSON, rpy in degrees or radians, 4 x 4 matrices,
+"""Goals files (evoik_pin.io.goals_file): the format (YAML and JSON, rpy in degrees or radians, 4 x 4 matrices,
 problems), errors naming the file, the goal and the field, and save_goals -> load_goals round trips."""
 
 import json
@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from evoik_pin.errors import EvoikError, GoalsFileError
 from evoik_pin.goals import Pose, Position
-from evoik_pin.goals_file import GOAL_KINDS, goal_kind_name, load_goals, load_problems, read_goals_file, save_goals
+from evoik_pin.io.goals_file import GOAL_KINDS, goal_kind_name, load_goals, load_problems, read_goals_file, save_goals
 from evoik_pin.robot import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from evoik_pin.dh import DHRow, dh_transform
-from evoik_pin.paper_robots import PAPER_ROBOTS, VEHICLE_ARM_LENGTHS
+from evoik_pin.papers.dh import DHRow, dh_transform
+from evoik_pin.papers.robots import PAPER_ROBOTS, VEHICLE_ARM_LENGTHS
 from evoik_pin.robot import bundled_robots_dir, load_robot
 
 CM = 0.01

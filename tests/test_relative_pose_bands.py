@@ -222,7 +222,7 @@ def test_de_meets_a_wide_relative_band(baxter):
 # ------------------------------------------------------------------------------------------- files and CLI
 @pytest.mark.parametrize("ext", ["yaml", "json"])
 def test_goals_files_keep_tolerance_bands_and_free_axes(tmp_path, ext):
-    from evoik_pin.goals_file import load_goals, save_goals
+    from evoik_pin.io.goals_file import load_goals, save_goals
 
     goals = [RelativePose(LEFT, RIGHT, BOX, free="rz"), RelativePose(LEFT, RIGHT, BOX, tolerance=BAND, free="x"),
              RelativePose(LEFT, RIGHT, BOX, tolerance=[0.002] * 3 + [0.1, 0.1, np.inf], weight=2.0),
@@ -244,7 +244,7 @@ def test_goals_files_keep_tolerance_bands_and_free_axes(tmp_path, ext):
 
 def test_cli_solves_a_box_free_about_its_axis(baxter, tmp_path, capsys):
     from evoik_pin.cli import main
-    from evoik_pin.goals_file import save_goals
+    from evoik_pin.io.goals_file import save_goals
 
     path = save_goals([RelativePose(LEFT, RIGHT, BOX, free="rz")], tmp_path / "box.yaml", robot=baxter)
     assert "free: rz" in path.read_text()

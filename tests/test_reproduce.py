@@ -1,4 +1,4 @@
-"""Paper reproductions (evoik_pin.experiments, ``evoik reproduce``): quick runs produce sane tables and figures."""
+"""Paper reproductions (evoik_pin.papers, ``evoik reproduce``): quick runs produce sane tables and figures."""
 
 import csv
 import importlib
@@ -11,8 +11,8 @@ import pytest
 
 from evoik_pin.cli import main
 from evoik_pin.errors import OutputError, ReproductionError
-from evoik_pin.experiments import PAPERS, RunContext, Table, paper_ids, run_paper, run_papers
-from evoik_pin.experiments.common import check_output_file, fmt
+from evoik_pin.papers import PAPERS, RunContext, Table, paper_ids, run_paper, run_papers
+from evoik_pin.papers.reporting import check_output_file, fmt
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -173,8 +173,8 @@ def test_quick_004_numbers_are_sane(quick_runs):
 def test_animation_exports_html(tmp_path):
     viz = pytest.importorskip("evoik_pin.viz")
     from evoik_pin.errors import EvoikError
-    from evoik_pin.experiments.common import Animation, show_animation
-    from evoik_pin.experiments.paper002 import spiral_targets
+    from evoik_pin.papers.paper002 import spiral_targets
+    from evoik_pin.papers.reporting import Animation, show_animation
 
     anim = Animation("redundant7r", np.zeros((3, 7)) + np.linspace(0, 0.1, 3)[:, None], spiral_targets(3), "test")
     try:

@@ -13,9 +13,9 @@ import pytest
 
 import evoik_pin
 from evoik_pin.errors import OptionError
-from evoik_pin.experiments import run_papers
-from evoik_pin.experiments.paper001 import PAPER_TABLE5, TARGETS_PUMA_CM, _match, _order_like
-from evoik_pin.experiments.paper003 import LINKS, path_points, planar_chain, vehicle_path_lower_bound
+from evoik_pin.papers import run_papers
+from evoik_pin.papers.paper001 import PAPER_TABLE5, TARGETS_PUMA_CM, _match, _order_like
+from evoik_pin.papers.paper003 import LINKS, path_points, planar_chain, vehicle_path_lower_bound
 from evoik_pin.solvers.paper.analytic import puma_fk, puma_ik
 
 

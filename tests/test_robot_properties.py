@@ -23,8 +23,8 @@ from hypothesis import strategies as st
 from urdf_helpers import dh_chain_urdf, dh_product, gripper, mimic_3r, yourdfpy_pose
 
 import evoik_pin as ev
-from evoik_pin.dh import DHRow
 from evoik_pin.errors import EvoikError
+from evoik_pin.papers.dh import DHRow
 from evoik_pin.robot import list_robots, load_robot
 
 # ---------------------------------------------------------------------------------------------- (a) DH chains

@@ -11,7 +11,8 @@ import pytest
 
 import evoik_pin as ev
 from evoik_pin.errors import SceneError
-from evoik_pin.scene import Scene, file
+from evoik_pin.io import scene_file as file
+from evoik_pin.scene import Scene
 from evoik_pin.scene.examples import add_table_and_shelf
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,7 +12,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import yourdfpy
 
-from evoik_pin.dh import DHRow, dh_to_urdf
+from evoik_pin.papers.dh import DHRow, dh_to_urdf
 
 LIMIT = '<limit lower="{lo}" upper="{hi}" effort="1" velocity="1"/>'
 
@@ -107,7 +107,7 @@ def dh_chain_urdf(rows, kinds, mimic, name="dh"):
 
 def dh_product(rows, values):
     """Tool pose (4, 4) of the standard-DH chain at per-row joint values (0 for fixed rows)."""
-    from evoik_pin.dh import dh_transform
+    from evoik_pin.papers.dh import dh_transform
 
     T = np.eye(4)
     for r, v in zip(rows, values, strict=True):

@@ -38,7 +38,7 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
 
 
 def _load(args: argparse.Namespace, goals_file=None):
-    """The robot of the robot arguments; with a goals file (:class:`~evoik_pin.goals_file.GoalsFile`), its
+    """The robot of the robot arguments; with a goals file (:class:`~evoik_pin.io.goals_file.GoalsFile`), its
     ``floating_base`` and ``tips`` fill in the flags not given, and a value given both ways that differs (the
     file's ``robot`` another than ROBOT, ``--floating-base`` on a file saying false, other ``--tips``) is an
     error naming the flag and the file."""
@@ -319,7 +319,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     import pinocchio as pin
 
     from .api import DEFAULT_ALL_METHOD, DEFAULT_METHOD, solve
-    from .experiments.common import check_output_file
+    from .papers.reporting import check_output_file
     from .problem import Target
     from .solvers import get_solver, methods
 
@@ -362,7 +362,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 
 
 def _goals_arg(args: argparse.Namespace):
-    """The :class:`~evoik_pin.goals_file.GoalsFile` of ``--goals FILE`` (None without it), after checking that
+    """The :class:`~evoik_pin.io.goals_file.GoalsFile` of ``--goals FILE`` (None without it), after checking that
     the target is given one way: ``--goals`` or ``--xyz`` (with ``--rpy``), and that no flag of a one-target
     solve comes with it."""
     if args.goals is None:
@@ -378,12 +378,12 @@ def _goals_arg(args: argparse.Namespace):
         if value is not None:
             raise OptionError(f"{flag} and --goals: each goal has its own tolerances, the goals file's tolerance: "
                               "(m) and rotation_tolerance: (rad) of the goal (default 1e-6)")
-    from .goals_file import read_goals_file
+    from .io.goals_file import read_goals_file
 
     goals_file = read_goals_file(args.goals)
     if goals_file.several:
         raise GoalsFileError(f"goals file {args.goals!r} holds {len(goals_file.problems)} problems (problems:); "
-                             "evoik solve solves one goal list (goals:): in Python, evoik_pin.goals_file."
+                             "evoik solve solves one goal list (goals:): in Python, evoik_pin.io.goals_file."
                              "load_problems with solve_many or solve_trajectory")
     return goals_file
 
@@ -393,7 +393,7 @@ def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html,
     (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
     from .api import GOAL_METHODS, solve
     from .goals import Goal
-    from .goals_file import goal_kind_name
+    from .io.goals_file import goal_kind_name
     from .solvers import get_solver
 
     goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
@@ -690,8 +690,8 @@ def _cmd_reach(args: argparse.Namespace) -> int:
 
 
 def _cmd_reproduce(args: argparse.Namespace) -> int:
-    from .experiments import run_papers
-    from .experiments.common import check_output_file, show_animation
+    from .papers import run_papers
+    from .papers.reporting import check_output_file, show_animation
 
     html = check_output_file(args.html) if args.html else None  # before any work starts
     reports = run_papers(args.paper, out=args.out, quick=args.quick, seed=args.seed, progress=not args.no_progress,
@@ -736,7 +736,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_robot_args(p)
     p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"),
                    help="target tip position in metres, in the base frame")
-    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.goals_file): several "
+    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file): several "
                    "goals on any frames (pose or position, weights, tolerances), instead of --xyz/--rpy; the output "
                    "gives each goal's errors and whether it is met; exit 1 when one is not")
     p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),

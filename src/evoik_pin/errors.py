@@ -85,6 +85,6 @@ class BackendError(EvoikError, RuntimeError):
 
 
 class GoalsFileError(EvoikError, ValueError):
-    """A goals file (:mod:`evoik_pin.goals_file`) that cannot be read or used: it does not parse, a goal has an
+    """A goals file (:mod:`evoik_pin.io.goals_file`) that cannot be read or used: it does not parse, a goal has an
     unknown kind, a missing or bad field, or the file was written for another robot than the one it is used with.
     The message names the file, the goal (its index from 0, and its frame) and the field."""

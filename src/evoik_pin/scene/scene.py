@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, SceneError
-from .file import read_scene, write_scene
+from ..io.scene_file import read_scene, write_scene
 from .geometry import as_placement, convex_hulls, robot_collision_model, self_collision_pairs
 
 __all__ = ["Obstacle", "Scene"]
@@ -178,7 +178,7 @@ class Scene:
     def from_file(cls, robot, path: str | os.PathLike) -> Scene:
         """A scene of ``robot`` read from a YAML (``.yaml``, ``.yml``) or JSON (``.json``) scene file: obstacles
         (kind, size, pose in the base frame, m / rad), optional ``self_collision`` and ``srdf``. The format is
-        :mod:`evoik_pin.scene.file`'s docstring; a bad file is a SceneError naming the file, the obstacle and
+        :mod:`evoik_pin.io.scene_file`'s docstring; a bad file is a SceneError naming the file, the obstacle and
         the problem. The whole file is read and checked before the scene is built."""
         spec = read_scene(path)
         try:

@@ -43,7 +43,7 @@ from ..objectives import PositionError, WeightedJointDisplacement
 from ..problem import DEFAULT_PRO_DELTA, Target
 from ..robot import load_robot
 from ..solvers import get_solver
-from .common import Animation, PaperReport, RunContext, Table, derive_rng, least_squares_distance, progress_bar
+from .reporting import Animation, PaperReport, RunContext, Table, derive_rng, least_squares_distance, progress_bar
 
 PAPER_ID = "002"
 TITLE = ("Use improved differential evolution algorithms to handle the inverse kinematics problem for robots "

@@ -29,7 +29,7 @@ from ..api import solve
 from ..objectives import RPYPoseError
 from ..problem import Target
 from ..robot import load_robot
-from .common import PaperReport, RunContext, Table, least_squares_distance
+from .reporting import PaperReport, RunContext, Table, least_squares_distance
 
 PAPER_ID = "004"
 TITLE = "Solving the kinematics of an aerial human-like manipulator using the differential evolution algorithm"

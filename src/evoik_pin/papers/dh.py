@@ -23,8 +23,8 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from . import lie
-from .errors import RobotLoadError
+from .. import lie
+from ..errors import RobotLoadError
 
 __all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform"]
 

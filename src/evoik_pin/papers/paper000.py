@@ -28,7 +28,7 @@ import numpy as np
 
 from ..api import solve
 from ..robot import load_robot
-from .common import PaperReport, RunContext, Table, derive_rng
+from .reporting import PaperReport, RunContext, Table, derive_rng
 
 PAPER_ID = "000"
 TITLE = "A multi-objective differential evolution algorithm for robot inverse kinematics"

@@ -41,9 +41,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..datafile import DATA_SUFFIXES, Flow, data_format, dump_data, read_data, write_text
 from ..errors import SceneError
-from .geometry import as_placement
+from ..scene.geometry import as_placement
+from .datafile import DATA_SUFFIXES, Flow, data_format, dump_data, read_data, write_text
 
 __all__ = ["SCENE_SUFFIXES", "SceneFile", "read_scene", "write_scene"]
 

@@ -33,7 +33,7 @@ import numpy as np
 from ..api import solve_trajectory
 from ..problem import Target
 from ..robot import load_robot
-from .common import Animation, PaperReport, RunContext, Table, derive_rng
+from .reporting import Animation, PaperReport, RunContext, Table, derive_rng
 
 PAPER_ID = "003"
 TITLE = "Inverse kinematic multiobjective optimization for a vehicle-arm robot system using evolutionary algorithms"

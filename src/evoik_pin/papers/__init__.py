@@ -8,7 +8,7 @@ and the figures as PNG.
 
 Contract for a paper module (how to add paper NNN)
 --------------------------------------------------
-Create ``evoik_pin/experiments/paperNNN.py``; it is discovered by its file name (:data:`PAPERS` lists
+Create ``evoik_pin/papers/paperNNN.py``; it is discovered by its file name (:data:`PAPERS` lists
 exactly the modules that exist, so nothing else needs registering) and must define:
 
 * ``PAPER_ID = "NNN"`` and ``TITLE = "..."`` (short title of the paper);
@@ -46,7 +46,7 @@ import time
 from pathlib import Path
 
 from ..errors import ReproductionError
-from .common import (
+from .reporting import (
     Animation,
     Figure,
     PaperReport,

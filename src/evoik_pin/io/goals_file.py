@@ -103,9 +103,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .datafile import Flow, data_format, dump_data, read_data, write_text
-from .errors import FrameError, GoalsFileError, OptionError, TargetError
-from .goals import (
+from ..errors import FrameError, GoalsFileError, OptionError, TargetError
+from ..goals import (
     DEFAULT_GOAL_TOLERANCE,
     CenterOfMass,
     Direction,
@@ -118,8 +117,9 @@ from .goals import (
     bind,
     is_goal_list,
 )
-from .goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
-from .target import Target
+from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
+from ..target import Target
+from .datafile import Flow, data_format, dump_data, read_data, write_text
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
 
@@ -667,7 +667,7 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
         data["problems"] = lists
     else:
         data["goals"] = lists[0]
-    header = "# evoik_pin goals (m and rad, in the robot's base frame; format: evoik_pin/goals_file.py)\n"
+    header = "# evoik_pin goals (m and rad, in the robot's base frame; format: evoik_pin/io/goals_file.py)\n"
     return write_text(path, dump_data(data, fmt, header), "goals file", GoalsFileError)
 
 

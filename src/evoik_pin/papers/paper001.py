@@ -31,7 +31,7 @@ import numpy as np
 from ..api import solve
 from ..robot import load_robot
 from ..solvers.paper.analytic import planar2r_ik, puma_fk, puma_ik
-from .common import PaperReport, RunContext, Table, derive_rng
+from .reporting import PaperReport, RunContext, Table, derive_rng
 
 PAPER_ID = "001"
 TITLE = "Inverse kinematics solution of robot arms using genetic and hybrid genetic algorithms (all solutions)"

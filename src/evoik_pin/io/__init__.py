@@ -1,0 +1,1 @@
+"""File formats: goals files, scene files and the YAML / JSON reading and writing they share."""
