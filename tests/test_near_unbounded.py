@@ -100,3 +100,25 @@ def test_a_target_box_outside_one_sided_limits_stays_inside_them():
     far_behind = Target(position=target.position - [5000.0, 0, 0], rotation=target.rotation)
     lo, hi = target_box(robot, far_behind, robot.lower, robot.upper)
     assert lo[0] == hi[0] == 0.0  # the nearest the joint's limits allow
+
+
+def test_a_mimic_finger_off_the_tip_chain_does_not_break_the_box():
+    """A mobile base carrying an arm whose gripper's second finger mimics the first, the tip on the first (rtb-data's
+    frankie_arm_hand: the tree has one physical joint more than the base->tip chain): target_box read the tree's
+    joint ranges against the chain's joints and raised a broadcasting ValueError on the first solve."""
+    arm = _arm(["x", "y"])
+    fingers = (
+        '<link name="fa"/><link name="fb"/>'
+        '<joint name="fa_joint" type="prismatic"><parent link="tool"/><child link="fa"/><origin xyz="0 0.02 0"/>'
+        '<axis xyz="0 1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>'
+        '<joint name="fb_joint" type="prismatic"><parent link="tool"/><child link="fb"/><origin xyz="0 -0.02 0"/>'
+        '<axis xyz="0 -1 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/><mimic joint="fa_joint"/></joint>')
+    robot = load_robot(arm.replace("</robot>", fingers + "</robot>"), tip="fa")
+    assert robot.n == 6  # x, y, the 3R arm and the driving finger; the mimic finger follows it
+    Q, targets = _targets(robot, 3, seed=4)
+    for i, T in enumerate(targets):
+        lower, upper = target_box(robot, Target.coerce(T), robot.lower, robot.upper)
+        assert np.all(lower <= upper) and np.all(robot.lower <= lower) and np.all(upper <= robot.upper)
+        res = ev.solve(robot, T, seed=i, timeout=None, max_restarts=3)
+        assert res.success, (i, res.message)
+        assert np.allclose(robot.fk(res.q).homogeneous, T.homogeneous, atol=1e-5)

@@ -551,7 +551,10 @@ def target_box(robot: Robot, target: Target, lower: np.ndarray, upper: np.ndarra
         return lower, upper
     F_R, F_p, revolute = robot.chain_constants()
     index, scale, offset = robot.chain_coupling()
-    _, _, plo, phi = robot.chain_joints()
+    # the chain's physical joints' ranges (robot.chain_joints() holds every physical joint of the tree: a mimic finger
+    # off the base->tip chain is one more)
+    a, b = scale * lower[index] + offset, scale * upper[index] + offset
+    plo, phi = np.minimum(a, b), np.maximum(a, b)
     single = np.bincount(index, minlength=robot.n) == 1  # the entry moves one physical joint of the chain
     phys_far = far[index] & single[index]
     travel = np.where(~revolute & ~phys_far, np.maximum(np.abs(plo), np.abs(phi)), 0.0)
