@@ -112,15 +112,18 @@ def _check_frames(robot, goals) -> None:
 
 def _check_not_base_only(robot, frame: str) -> None:
     """LockedJointsError for a goal frame that only the floating base's six entries move while joints between the
-    root and it are locked (another branch than the robot's tips): the base moves every frame, so the frame passes
-    the "some active joint moves it" test, yet no joint below the base can reach for it and the goal binds."""
+    root and it are locked (another branch than the robot's tips, or left out by ``joints=[...]``): the base moves
+    every frame, so the frame passes the "some active joint moves it" test, yet no joint below the base can reach
+    for it and the goal binds."""
     if not robot.floating_base:
         return
     base = set(robot.joint_names[:6])  # a floating base's entries come first in q
     if not set(robot.moving_joints(frame)) <= base:
         return
-    locked = robot.locked_joints(frame)
-    if not locked:  # only fixed joints between the root and the frame (the pelvis, a torso): the base's job
+    # joints fixed at values the caller chose (Robot.locked, solve's locked=) are placed on purpose: a leg held in a
+    # posture may be carried by the base. Only fixed joints between the root and the frame: the base's job too.
+    locked = [j for j in robot.locked_joints(frame) if j not in robot.locked_values]
+    if not locked:
         return
     tips = ", ".join(map(repr, robot.tips))
     shown = ", ".join(locked[:12]) + (f", ... ({len(locked) - 12} more)" if len(locked) > 12 else "")
