@@ -175,9 +175,8 @@ def load_robot(
 
     Returns:
         A :class:`Robot`. Joints outside the active ones (the base->tip chain, the tips' chains) are locked at their
-        neutral value
-        (clipped into their limits); mimic joints follow their joint (``q`` has one entry per independent
-        degree of freedom).
+        neutral value (clipped into their limits); mimic joints follow their joint (``q`` has one entry per
+        independent degree of freedom).
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"

@@ -398,7 +398,7 @@ class Robot:
         """Names of the URDF's joints between the base and a frame (None: the tip) that ``q`` does not move: locked
         because they are off the active joints (another branch than the tips'), left out by ``joints=[...]`` or
         fixed by :meth:`locked`. A mimic joint is named by the joint it follows (the one to free); joints above the
-        base frame are not counted (nothing can free them). Empty when ``q`` moves every joint to the frame.
+        base frame are not counted (the base frame holds them). Empty when ``q`` moves every joint to the frame.
 
         What tells a goal on a frame only a floating base moves (its six entries) apart from one the joints should
         move: :func:`~evoik_pin.goals.binding.bind` refuses the latter with the names this returns.
