@@ -87,7 +87,10 @@ def test_unreachable_goals_exit_1_with_the_unmet_goal_marked(talos, tmp_path, ca
     ([], "needs a target: --xyz X Y Z"),
     (["--goals", EXAMPLE, "--tolerance", "1e-4"], "--tolerance and --goals: each goal has its own tolerances"),
     (["--goals", EXAMPLE, "--rotation-tolerance", "1e-4"], "--rotation-tolerance and --goals"),
-    (["--goals", EXAMPLE, "--tips", "arm_left_7_link"], None),  # the file says no tips: --tips is used
+    # the file says no tips: --tips is used; the chains to the four goal frames free every joint a goal needs
+    (["--goals", EXAMPLE, "--tips", "left_sole_link", "right_sole_link", "arm_left_7_link", "arm_right_7_link"], None),
+    # one arm's chain leaves the legs locked, and the file's floating base would carry the soles alone
+    (["--goals", EXAMPLE, "--tips", "arm_left_7_link"], "only the floating base moves frame 'left_sole_link'"),
 ])
 def test_flag_errors_name_the_flags(capsys, argv, expected):
     code, _, err = _run(capsys, "solve", "talos", *argv, "--timeout", "0.001", "--json")

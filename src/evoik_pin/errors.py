@@ -36,6 +36,12 @@ class FrameError(EvoikError, KeyError):
         return str(self.args[0]) if self.args else ""
 
 
+class LockedJointsError(FrameError):
+    """A goal on a frame that only a floating base moves, while joints between the root and that frame are
+    locked (off the robot's active joints): the base alone would have to reach it. The message names the locked
+    joints and how to free them (``tips=[...]``, ``joints=[...]`` or ``tips="all"`` when loading)."""
+
+
 class ConfigurationError(EvoikError, ValueError):
     """A joint vector or population has the wrong shape or non-finite entries."""
 

@@ -7,7 +7,7 @@ import weakref
 
 import numpy as np
 
-from ..errors import FrameError, TargetError
+from ..errors import FrameError, LockedJointsError, TargetError
 from ..solvers.lm.layout import KIND_BEYOND_FRAME, GoalStack
 from .goal import Goal
 
@@ -32,7 +32,8 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     goals, their clash checked: it reads the targets).
 
     Raises: TargetError for an empty list, a member that is no goal, or one frame given clashing targets;
-    FrameError for an unknown frame (with the closest names) or a frame no active joint moves.
+    FrameError for an unknown frame (with the closest names) or a frame no active joint moves; LockedJointsError
+    (a FrameError) for a frame only a floating base moves while joints between the root and it are locked.
     """
     goals = list(goals)
     if not goals:
@@ -84,8 +85,9 @@ def _signature(robot, goals) -> tuple | None:
 
 
 def _check_frames(robot, goals) -> None:
-    """FrameError for a goal's unknown frame (with the closest names) or one no active joint moves; TargetError
-    for one frame given two goals with clashing targets."""
+    """FrameError for a goal's unknown frame (with the closest names) or one no active joint moves;
+    :func:`_check_not_base_only` for one only a floating base moves; TargetError for one frame given two goals
+    with clashing targets."""
     seen: dict[int, Goal] = {}
     for g in goals:
         if g.kind >= KIND_BEYOND_FRAME:  # centre of mass, relative pose: checked as they pack (_beyond_frame)
@@ -94,6 +96,7 @@ def _check_frames(robot, goals) -> None:
         if not robot.moving_joints(g.frame):
             raise FrameError(f"no active joint of {robot.name} moves frame {g.frame!r}: load the robot with that frame "
                              f"among its tips (tips=[...]) or with tips='all', or aim at another frame")
+        _check_not_base_only(robot, g.frame)
         other = seen.get(fid)
         if other is not None and other.aux() is None and g.aux() is None:  # bands, free axes, pointing: no clash
             pa, Ra = other.encode()
@@ -105,6 +108,30 @@ def _check_frames(robot, goals) -> None:
                 raise TargetError(f"frame {g.frame!r} has two goals with different targets ({pa.round(6).tolist()} and "
                                   f"{pb.round(6).tolist()}): give each frame one target")
         seen[fid] = g
+
+
+def _check_not_base_only(robot, frame: str) -> None:
+    """LockedJointsError for a goal frame that only the floating base's six entries move while joints between the
+    root and it are locked (another branch than the robot's tips, or left out by ``joints=[...]``): the base moves
+    every frame, so the frame passes the "some active joint moves it" test, yet no joint below the base can reach
+    for it and the goal binds."""
+    if not robot.floating_base:
+        return
+    base = set(robot.joint_names[:6])  # a floating base's entries come first in q
+    if not set(robot.moving_joints(frame)) <= base:
+        return
+    # joints fixed at values the caller chose (Robot.locked, solve's locked=) are placed on purpose: a leg held in a
+    # posture may be carried by the base. Only fixed joints between the root and the frame: the base's job too.
+    locked = [j for j in robot.locked_joints(frame) if j not in robot.locked_values]
+    if not locked:
+        return
+    tips = ", ".join(map(repr, robot.tips))
+    shown = ", ".join(locked[:12]) + (f", ... ({len(locked) - 12} more)" if len(locked) > 12 else "")
+    raise LockedJointsError(
+        f"only the floating base moves frame {frame!r} of {robot.name}: the joints between the root and it are "
+        f"locked ({shown}), so the base alone would have to reach it. Free them when loading the robot: "
+        f"tips=[{tips}, {frame!r}] (the chains to each), joints=[...] naming them with the others to keep free, "
+        f"or tips='all' (the whole tree; what a branching URDF gets without tip=/tips=)")
 
 
 def _beyond_frame(robot, goals, stack: GoalStack) -> GoalStack:

@@ -4,7 +4,8 @@ This package is the only code in evoik_pin that runs Pinocchio's kinematics on a
 viewer draws with the placements :class:`Robot` returns). Its modules, data flowing down:
 
 * :mod:`.loading`: finding and reading a robot (bundled paper arms, example-robot-data arms and whole robots,
-  URDF and xacro files and strings, default tips of named arms, mesh package directories): :func:`load_robot`,
+  URDF and xacro files and strings, default tips of named arms, the whole tree of a whole robot or of a URDF whose
+  joints branch, mesh package directories): :func:`load_robot`,
   :func:`list_robots`; :mod:`.catalog`: the whole robots of example-robot-data that load by name;
 * :mod:`.urdf_text`: bytes to URDF text (the XML declaration's encoding; empty and binary files refused),
   xacro expansion (xacrodoc), and urdfdom's stderr captured into our errors;
@@ -17,8 +18,9 @@ viewer draws with the placements :class:`Robot` returns). Its modules, data flow
   on joints, the chain to one frame, the floating base's six joints), what compiled kernels evaluate;
 * :mod:`.population`: forward kinematics and Jacobians of whole populations (NumPy) along the chain to a frame;
 * :mod:`.joints`: 1-DOF joint helpers (values, axes, limits, mimic couplings);
-* :mod:`.frames`: frame look-up in a Pinocchio model (names to ids, root link, deepest link, closest names) and
-  joint locking (``buildReducedModel``) that survives joints and links sharing a name.
+* :mod:`.frames`: frame look-up in a Pinocchio model (names to ids, root link, deepest link, closest names,
+  whether its joints branch) and joint locking (``buildReducedModel``) that survives joints and links sharing a
+  name.
 
 The joint vector ``q`` users and solvers see has one entry per independent degree of freedom (rad for revolute
 joints, m for prismatic ones; a mimic joint follows the joint it mimics; a floating base is six entries in

@@ -1,4 +1,5 @@
-"""Frame look-up in a Pinocchio model: names to ids, the URDF's root link, its deepest link; and locking joints.
+"""Frame look-up in a Pinocchio model: names to ids, the URDF's root link, its deepest link, whether its movable
+joints branch (a tree, not a serial chain); and locking joints.
 
 URDF links become BODY frames; a joint and a link may share a name, and then the BODY frame is the one
 meant (a tip or a base is a link). The look-up helpers only read the model's frame list (no ``Data``, no
@@ -10,8 +11,8 @@ from __future__ import annotations
 
 import pinocchio as pin
 
-__all__ = ["body_frame_names", "closest_names", "deepest_body", "find_frame", "frame_names", "reduced_model",
-           "restore_frame_names", "root_link", "unique_frame_names"]
+__all__ = ["body_frame_names", "closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
+           "reduced_model", "restore_frame_names", "root_link", "unique_frame_names"]
 
 
 def find_frame(model: pin.Model, name: str) -> int:
@@ -51,6 +52,23 @@ def deepest_body(model: pin.Model) -> str:
             if d >= depth:  # last deepest wins: a tool link fixed after the last joint's link
                 best, depth = f.name, d
     return best
+
+
+def is_branched(model: pin.Model, coupling: dict[int, tuple[int, float, float]]) -> bool:
+    """True when the movable joints of ``model`` form a real tree: two of its links are each moved by a joint
+    that does not move the other (legs and arms, or fingers moving on their own), so that no single chain holds
+    every joint. False for a serial chain, also one ending in a gripper whose fingers follow one joint.
+
+    ``coupling``: ``{mimic joint id: (followed joint id, multiplier, offset)}``
+    (:func:`~evoik_pin.robot.joints.couplings`); a mimic joint counts as the joint it follows, so a second
+    finger that mimics the first is no branch of its own.
+    """
+    def moved_by(j: int) -> frozenset[int]:  # the independent joints that move joint j's link
+        return frozenset(coupling.get(k, (k,))[0] for k in list(model.supports[j])[1:])
+
+    # a chain iff these sets are nested; sorted by size, each must then hold the one before it
+    nested = sorted({moved_by(j) for j in range(model.njoints)}, key=len)
+    return any(not smaller <= larger for smaller, larger in zip(nested, nested[1:], strict=False))
 
 
 def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: tuple = ()):

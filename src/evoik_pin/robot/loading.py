@@ -3,11 +3,11 @@
 :func:`load_robot` resolves a source (a URDF or xacro path, a URDF XML string, a bundled paper arm or an
 ``example-robot-data`` arm by name) to URDF text (:mod:`.urdf_text`: encodings, binary files, xacro), checks
 it (:mod:`.urdf_checks`: one tree, usable joints, mimic couplings), builds the Pinocchio model of the whole
-URDF with urdfdom's stderr captured, picks a named arm's default tip frame and the directories its
-``package://`` mesh URIs resolve against, and hands all of it to
-:class:`~evoik_pin.robot.kinematics.Robot`, which extracts the chain. Anything wrong with the input is a
-:class:`~evoik_pin.errors.RobotLoadError` (or :class:`~evoik_pin.errors.RobotNotFoundError`) naming the
-file (or "URDF string") and what is accepted.
+URDF with urdfdom's stderr captured, picks a named arm's default tip frame (or, for a whole robot by name and a
+URDF whose joints branch, the whole tree) and the directories its ``package://`` mesh URIs resolve against, and
+hands all of it to :class:`~evoik_pin.robot.kinematics.Robot`, which extracts the active joints. Anything wrong
+with the input is a :class:`~evoik_pin.errors.RobotLoadError` (or :class:`~evoik_pin.errors.RobotNotFoundError`)
+naming the file (or "URDF string") and what is accepted.
 """
 
 from __future__ import annotations
@@ -24,6 +24,8 @@ import pinocchio as pin
 
 from ..errors import BoundsError, FrameError, RobotLoadError, RobotNotFoundError
 from .catalog import WHOLE_ROBOTS
+from .frames import is_branched
+from .joints import couplings
 from .packages import PackageResolver, check_package_dirs, package_uris
 from .robot import Robot
 from .urdf_checks import UrdfSummary, check_urdf
@@ -139,9 +141,13 @@ def load_robot(
             declaration says (UTF-8 by default).
         tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for the named
             arms, otherwise the deepest link of the URDF (a file called ``panda.urdf`` is not the named arm).
-            The active joints are those of the chain from the base to the tip.
+            Given, the active joints are those of the chain from the base to the tip. Not given (nor ``tips``),
+            a whole robot by name and a URDF whose movable joints branch (a tree: legs, arms, a head; a file or a
+            string) activate the whole tree, as ``tips="all"``, and ``tip`` is only the default goal frame; a
+            serial chain (a gripper whose fingers mimic one joint included) activates the chain to its tip.
         base: frame the chain starts from and poses are expressed in. Default: the URDF's root (world).
-        joints: optional subset of the chain's joint names to keep free; the rest of the chain is locked.
+        joints: optional subset of the active joints' names (the chain's, or the whole tree's) to keep free; the
+            rest is locked.
         bounds: optional ``(lower, upper)`` search bounds, each of length ``n`` (rad or m).
         xacro_args: values of a xacro file's ``<xacro:arg>`` (``{"name": value}``), as ``name:=value`` on
             xacro's command line; only for xacro sources.
@@ -156,19 +162,21 @@ def load_robot(
             nothing finds only matters to meshes (viewer, collision scenes), which then raise that error.
         tips: frames (names) whose chains from the base make the active joints (their union), e.g. both grippers
             of a dual-arm robot; ``tip`` defaults to the first. ``"all"``: every joint below the base (what a
-            whole robot loaded by name gets when neither ``tip``, ``tips`` nor ``joints`` is given).
+            whole robot by name, or a URDF whose joints branch, gets when neither ``tip`` nor ``tips`` is given).
         floating_base: put a free-flying root in front of the URDF's root link: six more entries at the front of
             q, the root link's position x, y, z (m) and yaw, pitch, roll (rad; its rotation is Rz(yaw) Ry(pitch)
             Rx(roll)) in the world frame, where poses are then expressed. Bounds: ``base_box`` for the position,
             yaw and roll a full turn (they wrap), pitch [-pi/2, pi/2]; ``Robot.full_configuration`` gives the
-            configuration of ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())``.
+            configuration of ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())``. The base moves every
+            frame, so a goal on a frame that only the base moves while joints between the root and that frame
+            are locked (off the active joints) is an error naming them (:class:`~evoik_pin.errors.LockedJointsError`).
         base_box: the floating base's position box: a half-width h (m; the box [-h, h]^3, default 1 m) or a pair
             (lower (3,), upper (3,)) in m. (``robot.set_bounds`` changes it later: entries 0-2.)
 
     Returns:
-        A :class:`Robot`. Joints outside the base->tip chain are locked at their neutral value
-        (clipped into their limits); mimic joints follow their joint (``q`` has one entry per independent
-        degree of freedom).
+        A :class:`Robot`. Joints outside the active ones (the base->tip chain, the tips' chains) are locked at their
+        neutral value (clipped into their limits); mimic joints follow their joint (``q`` has one entry per
+        independent degree of freedom).
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
@@ -183,9 +191,13 @@ def load_robot(
                              "elements or ${...} / $(...) expressions)")
     if tip is None and named:
         tip = _default_tip(name)
-    if named and name in WHOLE_ROBOTS and tip is None and tips is None:
-        tips = "all"  # a whole robot by name: every joint, unless joints= says less
     model, summary = _parse_urdf(xml, path)
+    if tip is None and tips is None and (named and name in WHOLE_ROBOTS
+                                         or not named and is_branched(model, couplings(model, summary.mimic))):
+        # a whole robot, by name or from a file or string whose joints branch: every joint, unless joints= says
+        # less. Never the chain to one arbitrary deepest link: with a floating base, goals on the other branches
+        # would bind to locked joints (the base moves every frame, so nothing else refuses them).
+        tips = "all"
     mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
     try:
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,

@@ -233,6 +233,7 @@ class Robot:
         to_lock = [j for j in range(1, kin.njoints) if j not in physical]
         self._q_ref_full = q_ref
         self._locked = to_lock
+        self._above_base = above_base  # kinematic-model joints that stay put whatever q is (the base's chain)
         self.model = reduced_model(kin, to_lock, q_ref) if to_lock else pin.Model(kin)
         self.data = self.model.createData()
         self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
@@ -392,6 +393,28 @@ class Robot:
             ks = sorted({int(self._phys_index[k]) for k in phys if self._phys_scale[k] != 0.0})
             names = self._moving[fid] = [self.joint_names[k] for k in ks]
         return list(names)
+
+    def locked_joints(self, frame: str | None = None) -> list[str]:
+        """Names of the URDF's joints between the base and a frame (None: the tip) that ``q`` does not move: locked
+        because they are off the active joints (another branch than the tips'), left out by ``joints=[...]`` or
+        fixed by :meth:`locked`. A mimic joint is named by the joint it follows (the one to free); joints above the
+        base frame are not counted (the base frame holds them). Empty when ``q`` moves every joint to the frame.
+
+        What tells a goal on a frame only a floating base moves (its six entries) apart from one the joints should
+        move: :func:`~evoik_pin.goals.binding.bind` refuses the latter with the names this returns.
+        """
+        name = self.model.frames[self.frame_id(frame)].name
+        kin = self._kin_model
+        path = kin.supports[kin.frames[find_frame(kin, name)].parentJoint]
+        locked = set(self._locked)
+        names: list[str] = []
+        for j in path:
+            if j not in locked or j in self._above_base:
+                continue
+            driver = self._full_couplings.get(j, (j,))[0]
+            if driver not in self._above_base and kin.names[driver] not in names:
+                names.append(kin.names[driver])
+        return names
 
     # ------------------------------------------------------------------ constants of compiled kernels
     def tree_constants(self) -> tuple[np.ndarray, ...]:
