@@ -122,3 +122,28 @@ def test_a_mimic_finger_off_the_tip_chain_does_not_break_the_box():
         res = ev.solve(robot, T, seed=i, timeout=None, max_restarts=3)
         assert res.success, (i, res.message)
         assert np.allclose(robot.fk(res.q).homogeneous, T.homogeneous, atol=1e-5)
+
+
+@pytest.mark.parametrize("base", [["x", "y", "yaw"], ["yaw", "fwd"], ["x", "y"]])
+def test_random_configurations_are_ones_the_library_solves_for(base):
+    """rtb-data's ridgeback: random_configurations drew the base's +-999999 m joints anywhere in their range, so
+    solve(robot, robot.fk(q)) of the library's own random configuration was refused as out of reach (1.16e6 m)."""
+    robot = load_robot(_arm(base))
+    lower, upper = robot.sampling_box()
+    assert np.all(robot.lower <= lower) and np.all(upper <= robot.upper)
+    assert np.abs(np.concatenate([lower, upper])).max() < 10.0  # reach 1.0 m: +-(2 R + 0.1) m, one turn
+    Q = robot.random_configurations(8, np.random.default_rng(3))
+    assert np.all((lower <= Q) & (Q <= upper))
+    for i, q in enumerate(Q):
+        T = robot.fk(q)
+        res = ev.solve(robot, T, seed=i)
+        assert res.success, (i, res.message)
+        assert np.allclose(robot.fk(res.q).homogeneous, T.homogeneous, atol=1e-5)
+
+
+def test_bounded_robots_draw_from_their_bounds_as_before():
+    robot = load_robot("ur5")
+    lower, upper = robot.sampling_box()
+    assert np.array_equal(lower, robot.lower) and np.array_equal(upper, robot.upper)
+    expected = np.random.default_rng(7).uniform(robot.lower, robot.upper, size=(4, robot.n))
+    assert np.array_equal(robot.random_configurations(4, np.random.default_rng(7)), expected)

@@ -26,6 +26,7 @@ from .objectives import (
     position_errors,
 )
 from .robot import Robot
+from .robot.robot import NEAR_UNBOUNDED
 from .solvers.lm.layout import KIND_BEYOND_FRAME, owned
 from .solvers.options import check_positive
 from .target import MAX_TARGET_NORM, Target
@@ -42,10 +43,6 @@ __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UN
 COLLISION_PENALTY = 10.0
 #: Half-width (rad) of paper 002's "Pro" search box around the previous trajectory solution.
 DEFAULT_PRO_DELTA = np.pi / 100
-#: A joint whose bound reaches this far (``|lower|`` or ``|upper|`` >= 1000 m or rad) is near-unbounded: URDFs give
-#: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
-#: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
-NEAR_UNBOUNDED = 1e3
 #: Most combinations of goal-set members a solve searches (:meth:`IKProblem.variants`).
 MAX_VARIANTS = 256
 

@@ -46,11 +46,15 @@ from .tree import ChainView, KinematicTree, free_flyer_model, rpy_to_quaternion,
 #: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
 _MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
 
-__all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "Robot"]
+__all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
 
 #: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
 #: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
 MAX_CHAIN_JOINTS = 200
+#: A joint whose bound reaches this far (``|lower|`` or ``|upper|`` >= 1000 m or rad) is near-unbounded: URDFs give
+#: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
+#: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
+NEAR_UNBOUNDED = 1e3
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
@@ -517,8 +521,30 @@ class Robot:
         return np.clip(Q, self.lower, self.upper)
 
     def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        """``count`` configurations drawn uniformly inside the search bounds, shape (count, n)."""
-        return rng.uniform(self.lower, self.upper, size=(count, self.n))
+        """``count`` configurations drawn uniformly inside :meth:`sampling_box`, shape (count, n): inside the search
+        bounds, and ones the library solves for (a mobile base's +-999999 m joints are not drawn 1e5 m away)."""
+        lower, upper = self.sampling_box()
+        return rng.uniform(lower, upper, size=(count, self.n))
+
+    def sampling_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper), each (n,) in rad or m: the search bounds with every near-unbounded entry (a bound beyond
+        :data:`NEAR_UNBOUNDED`) narrowed to where a search finds answers for targets near the base: a revolute one to
+        one turn [c - pi, c + pi] (c = 0 clipped into [lower + pi, upper - pi]), a prismatic one to +-(2 R + max(0.1,
+        0.1 R)) m around 0 (clipped into its bounds), R the robot's reach: the lengths of its joint offsets and the
+        travel of its bounded prismatic joints, summed. :func:`evoik_pin.problem.target_box` narrows such joints around
+        each target the same way."""
+        lower, upper = self.lower.copy(), self.upper.copy()
+        far = (np.abs(lower) >= NEAR_UNBOUNDED) | (np.abs(upper) >= NEAR_UNBOUNDED)
+        if not far.any():
+            return lower, upper
+        prismatic_travel = np.where(~self.revolute & ~far, np.maximum(np.abs(lower), np.abs(upper)), 0.0)
+        reach = float(np.linalg.norm(self.tree.Fp, axis=1).sum() + prismatic_travel.sum())
+        half = 2.0 * reach + max(0.1, 0.1 * reach)
+        centre = np.where(self.revolute, np.clip(0.0, lower + np.pi, upper - np.pi), 0.0)
+        width = np.where(self.revolute, np.pi, half)
+        lower[far] = np.clip(centre - width, self.lower, self.upper)[far]
+        upper[far] = np.clip(centre + width, self.lower, self.upper)[far]
+        return lower, upper
 
     # ------------------------------------------------------------------ Pinocchio mapping
     def to_pinocchio(self, q) -> np.ndarray:
