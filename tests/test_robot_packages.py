@@ -174,3 +174,48 @@ def test_bad_package_dirs(tmp_path):
     with pytest.raises(RobotLoadError, match="package_dirs"):
         load_robot("planar2r", package_dirs=[3])
     assert main(["fk", "planar2r", "--package-dir", str(tmp_path / "nope"), "--q", "0", "0"]) != 0
+
+
+def test_a_package_shipped_under_another_name_loads_with_an_alias(tmp_path, monkeypatch, capsys):
+    """rtb-data ships the packages its KUKA and irb140 xacros name (kuka_<model>_support, abb_irb140) under other
+    folder names with no package.xml naming them: an alias says which name to look for."""
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    pkg = _package(tmp_path / "ws" / "arm_files")
+    top = _top(tmp_path / "ws" / "robots")
+    with pytest.raises(RobotLoadError) as e:
+        load_robot(top)
+    assert "package_aliases={'my_pkg': 'that_name'}" in str(e.value) and "--package-alias my_pkg=" in str(e.value)
+    robot = load_robot(top, package_aliases={"my_pkg": "arm_files"})
+    assert robot.joint_names == ["j1", "j2"]
+    assert robot.packages == {"my_pkg": str(pkg.resolve())}  # the mesh URIs resolve through the alias too
+    assert _mesh_files(robot) == [str((pkg / "meshes" / "l1.stl").resolve())]
+    with pytest.raises(RobotLoadError, match=r"looked for as 'nowhere_pkg': package_aliases"):
+        load_robot(top, package_aliases={"my_pkg": "nowhere_pkg"})
+    for bad in ({"my_pkg": ""}, {"my_pkg": "a/b"}, ["my_pkg"], {3: "x"}):
+        with pytest.raises(RobotLoadError, match="package_aliases"):
+            load_robot(top, package_aliases=bad)
+    assert main(["fk", str(top), "--package-alias", "my_pkg=arm_files", "--rad", "--q", "0.1", "0.2",
+                 "--json"]) == 0
+    assert np.allclose(json.loads(capsys.readouterr().out)["position_m"], robot.fk([0.1, 0.2]).translation)
+    assert main(["fk", str(top), "--package-alias", "my_pkg", "--q", "0", "0"]) != 0
+    assert "--package-alias needs NAME=SHIPPED_AS" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("named", "shipped"), [("my_pkg_support", "my_pkg"), ("my_pkg", "my_pkg_description"),
+                                                ("my_pkg_support", "my_pkg_description")])
+def test_a_package_shipped_under_a_sibling_name_is_found_without_an_alias(tmp_path, monkeypatch, named, shipped):
+    """ROS-Industrial's <robot>_support and <robot>_description packages are shipped one as the other (rtb-data's
+    KUKA and irb140 xacros): a package no rule finds is looked for under those names."""
+    from evoik_pin.robot.packages import sibling_names
+
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    pkg = _package(tmp_path / "ws" / shipped)
+    (pkg / "urdf" / "arm.xacro").write_text(ARM_MACRO.replace("package://my_pkg/", f"package://{named}/"))
+    top = _top(tmp_path / "ws" / "robots", TOP.replace("$(find my_pkg)", f"$(find {named})"))
+    robot = load_robot(top)
+    assert robot.packages == {named: str(pkg.resolve())}
+    assert shipped in sibling_names(named) and named not in sibling_names(named)
+    exact = _package(tmp_path / "ws" / named, length=0.5)  # a package of the exact name wins over a sibling
+    (exact / "urdf" / "arm.xacro").write_text(ARM_MACRO.replace("package://my_pkg/", f"package://{named}/")
+                                              .replace("${length}", "0.5"))
+    assert load_robot(top).packages == {named: str(exact.resolve())}

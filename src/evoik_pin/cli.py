@@ -35,6 +35,9 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--package-dir", action="append", default=[], metavar="DIR",
                    help="a folder holding the ROS packages a robot file names ($(find pkg), package://pkg/...), "
                         "searched before ROS_PACKAGE_PATH and the file's own tree (repeatable)")
+    p.add_argument("--package-alias", action="append", default=[], metavar="NAME=SHIPPED_AS",
+                   help="a package the robot file names that is shipped under another name, e.g. "
+                        "abb_irb140=abb_irb140_description (repeatable)")
 
 
 def _load(args: argparse.Namespace, goals_file=None):
@@ -48,6 +51,12 @@ def _load(args: argparse.Namespace, goals_file=None):
         if not sep or not name:
             raise OptionError(f"--xacro-arg needs NAME=VALUE, got {item!r}")
         xacro_args[name] = value
+    aliases = {}
+    for item in args.package_alias:
+        name, sep, value = item.partition("=")
+        if not sep or not name or not value:
+            raise OptionError(f"--package-alias needs NAME=SHIPPED_AS, got {item!r}")
+        aliases[name] = value
     tips = args.tips[0] if args.tips == ["all"] else args.tips
     floating_base = args.floating_base
     if goals_file is not None:
@@ -62,7 +71,8 @@ def _load(args: argparse.Namespace, goals_file=None):
                                      "the same frames or leave --tips out")
             tips = goals_file.tips[0] if goals_file.tips == ["all"] else goals_file.tips
     robot = load_robot(args.robot, tip=args.tip, base=args.base, xacro_args=xacro_args or None,
-                       package_dirs=args.package_dir or None, tips=tips, floating_base=floating_base)
+                       package_dirs=args.package_dir or None, tips=tips, floating_base=floating_base,
+                       package_aliases=aliases or None)
     if goals_file is not None and goals_file.robot not in (None, args.robot, robot.name):
         raise GoalsFileError(f"goals file {str(goals_file.path)!r} is for robot {goals_file.robot!r}, not "
                              f"{args.robot!r}: give ROBOT {goals_file.robot} or change the file's robot:")

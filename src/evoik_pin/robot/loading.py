@@ -26,7 +26,7 @@ from ..errors import BoundsError, FrameError, RobotLoadError, RobotNotFoundError
 from .catalog import WHOLE_ROBOTS
 from .frames import is_branched
 from .joints import couplings
-from .packages import PackageResolver, check_package_dirs, package_uris
+from .packages import PackageResolver, check_package_aliases, check_package_dirs, package_uris
 from .robot import Robot
 from .urdf_checks import UrdfSummary, check_urdf
 from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
@@ -128,6 +128,7 @@ def load_robot(
     tips: list[str] | str | None = None,
     floating_base: bool = False,
     base_box=None,
+    package_aliases: dict[str, str] | None = None,
 ) -> Robot:
     """Load a robot: one serial chain of a URDF, the chains to several frames, or the whole tree.
 
@@ -160,6 +161,9 @@ def load_robot(
             naming ``pkg`` above the file (:mod:`evoik_pin.robot.packages`). A ``$(find pkg)`` nothing finds is a
             RobotLoadError naming the package, the file naming it and the folders searched; a mesh package
             nothing finds only matters to meshes (viewer, collision scenes), which then raise that error.
+        package_aliases: ``{package named in the file: the name it is shipped under}``, e.g.
+            ``{"abb_irb140": "abb_irb140_description"}``: the package is looked for under that name by the rules
+            above (a robot file copied out of its ROS workspace whose packages were renamed).
         tips: frames (names) whose chains from the base make the active joints (their union), e.g. both grippers
             of a dual-arm robot; ``tip`` defaults to the first. ``"all"``: every joint below the base (what a
             whole robot by name, or a URDF whose joints branch, gets when neither ``tip`` nor ``tips`` is given).
@@ -181,7 +185,7 @@ def load_robot(
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
     user_dirs = check_package_dirs(package_dirs)
-    resolver = PackageResolver(path, user_dirs)
+    resolver = PackageResolver(path, user_dirs, check_package_aliases(package_aliases))
     if (path is not None and is_xacro_path(path)) or is_xacro_text(xml):
         source_text = xml
         xml = expand_xacro(xml, where, path, xacro_args, resolver)

@@ -12,6 +12,13 @@ d. a ``package.xml`` whose ``<name>`` is ``pkg`` in the file's folder or above i
 
 In a folder ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself when it is named ``pkg``, or a folder up to
 :data:`CRAWL_DEPTH` levels below ``D`` whose ``package.xml`` names ``pkg`` (a ROS workspace's ``src/``).
+
+Aliases (``load_robot(path, package_aliases={"abb_irb140": "abb_irb140_description"})``, ``--package-alias
+abb_irb140=abb_irb140_description``) say that a package the file names is shipped under another name: the rules
+above then look for that other name. Without an alias, a package none of the rules finds is looked for, by the same
+rules, under its sibling names (:func:`sibling_names`): ROS-Industrial's ``<robot>_support`` packages and the
+``<robot>_description`` packages are often shipped one as the other (rtb-data ships ``kuka_kr10_support`` as
+``kuka_kr10`` and ``abb_irb140`` as ``abb_irb140_description``, with no package.xml naming them).
 """
 
 from __future__ import annotations
@@ -24,7 +31,8 @@ from pathlib import Path
 
 from ..errors import RobotLoadError, RobotNotFoundError
 
-__all__ = ["CRAWL_DEPTH", "PackageResolver", "check_package_dirs", "package_uris"]
+__all__ = ["CRAWL_DEPTH", "SIBLING_SUFFIXES", "PackageResolver", "check_package_aliases", "check_package_dirs",
+           "package_uris", "sibling_names"]
 
 #: How deep below a given folder (a) or a ROS_PACKAGE_PATH entry (b) package.xml files are looked for.
 CRAWL_DEPTH = 3
@@ -52,6 +60,22 @@ def check_package_dirs(package_dirs) -> list[Path]:
             raise RobotNotFoundError(f"package folder {os.fspath(d)!r} (package_dirs) is not an existing folder")
         out.append(p.resolve())
     return out
+
+
+def check_package_aliases(aliases) -> dict[str, str]:
+    """``aliases`` ({package named in the file: package name to look for instead}) checked: both names non-empty
+    strings without "/"; None gives {}."""
+    if aliases is None:
+        return {}
+    if not isinstance(aliases, dict):
+        raise RobotLoadError("package_aliases must be a dict {package named in the file: the name it is shipped "
+                             f"under}}, got {type(aliases).__name__}")
+    for name, target in aliases.items():
+        for what in (name, target):
+            if not isinstance(what, str) or not what or "/" in what or what in (".", ".."):
+                raise RobotLoadError(f"package_aliases entry {name!r}: {target!r}: package names must be non-empty "
+                                     "strings without '/'")
+    return dict(aliases)
 
 
 def ros_package_path() -> list[Path]:
@@ -97,17 +121,32 @@ def _crawl(folder: Path, pkg: str, depth: int) -> Path | None:
     return None
 
 
+#: Suffixes of ROS package names that robot files and the folders shipping them use for one another.
+SIBLING_SUFFIXES = ("_support", "_description")
+
+
+def sibling_names(pkg: str) -> list[str]:
+    """Other names package ``pkg`` may be shipped under: without its ``_support`` / ``_description`` suffix, then
+    with ``_description`` in its place (``kuka_kr10_support`` -> ``kuka_kr10``, ``kuka_kr10_description``;
+    ``abb_irb140`` -> ``abb_irb140_description``)."""
+    stem = next((pkg[: -len(x)] for x in SIBLING_SUFFIXES if pkg.endswith(x) and len(pkg) > len(x)), pkg)
+    return [name for name in dict.fromkeys((stem, stem + "_description")) if name != pkg]
+
+
 class PackageResolver:
     """Finds the packages one robot file names (see the module docstring for the rules and their order).
 
     Args:
         path: the robot file (None for a URDF string: rules (c) and (d) then do not apply).
         package_dirs: folders the user gives (already checked by :func:`check_package_dirs`).
+        aliases: {package named in the file: the name it is shipped under} (checked by
+            :func:`check_package_aliases`).
     """
 
-    def __init__(self, path: Path | None, package_dirs: Iterable[Path] = ()) -> None:
+    def __init__(self, path: Path | None, package_dirs: Iterable[Path] = (), aliases: dict | None = None) -> None:
         self.path = path
         self.user_dirs = list(package_dirs)
+        self.aliases = dict(aliases or {})
         self.ros_dirs = ros_package_path()
         self.ancestors = list(path.parent.resolve().parents) if path is not None else []
         if path is not None:
@@ -117,10 +156,20 @@ class PackageResolver:
     def find(self, pkg: str) -> Path | None:
         """The folder of package ``pkg``, or None."""
         if pkg not in self._found:
-            self._found[pkg] = self._search(pkg)
+            self._found[pkg] = self._search(self.aliases.get(pkg, pkg))
         return self._found[pkg]
 
     def _search(self, pkg: str) -> Path | None:
+        """Rules (a) to (d) for ``pkg``, then for its sibling names (none for an aliased package)."""
+        found = self._search_name(pkg)
+        if found is None and pkg not in self.aliases.values():
+            for sibling in sibling_names(pkg):
+                found = self._search_name(sibling)
+                if found is not None:
+                    break
+        return found
+
+    def _search_name(self, pkg: str) -> Path | None:
         if not pkg or "/" in pkg or pkg in (".", ".."):
             return None
         for d in (*self.user_dirs, *self.ros_dirs):  # (a), (b)
@@ -156,6 +205,8 @@ class PackageResolver:
     def not_found(self, pkg: str, named_in: str, how: str) -> str:
         """Message of a package that cannot be found: the package, the file naming it (``how``: as what) and
         the folders searched, with what to do."""
-        return (f"package {pkg!r} not found (used as {how}), named in {named_in}; searched: {self.searched()}. "
-                f"Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on the command line) "
-                "or ROS_PACKAGE_PATH")
+        looked_for = f" (looked for as {self.aliases[pkg]!r}: package_aliases)" if pkg in self.aliases else ""
+        return (f"package {pkg!r} not found{looked_for} (used as {how}), named in {named_in}; searched: "
+                f"{self.searched()}. Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on "
+                f"the command line) or ROS_PACKAGE_PATH, or, when it is shipped under another name, "
+                f"package_aliases={{{pkg!r}: 'that_name'}} (--package-alias {pkg}=that_name)")
