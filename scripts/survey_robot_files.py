@@ -6,8 +6,9 @@ Finds the URDF and xacro files (``*.urdf``, ``*.xacro``) under a folder whose ``
 
 * loads it with :func:`evoik_pin.load_robot` and nothing else (the default tip: the deepest link of the URDF;
   the default base: its root), plus ``package_dirs`` when ``--package-dir`` is given;
-* draws ``--poses`` configurations uniformly within the robot's bounds (``robot.lower`` / ``robot.upper``,
-  ``numpy.random.default_rng(--seed)``), takes their forward kinematics as 6-D pose targets (so each is
+* draws ``--poses`` configurations with ``robot.random_configurations`` (uniformly within the robot's bounds,
+  near-unbounded joints within ``robot.sampling_box()``; ``numpy.random.default_rng(--seed)``), takes their
+  forward kinematics as 6-D pose targets (so each is
   reachable) and solves each with :func:`evoik_pin.solve` at its defaults (memetic, tolerance 1e-6 m and
   1e-6 rad, seed = the pose's index);
 * counts ``Result.success``.
@@ -82,7 +83,7 @@ def survey_one(path: Path, poses: int, seed: int, package_dirs: list[str]) -> di
         return row
     row.update(loads=True, n=robot.n, tip=robot.tip)
     rng = np.random.default_rng(seed)
-    Q = rng.uniform(robot.lower, robot.upper, size=(poses, robot.n))
+    Q = robot.random_configurations(poses, rng)  # uniform within the bounds; a mobile base's +-999999 m joints near it
     failures = []
     for i, q in enumerate(Q):
         try:
