@@ -14,7 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["nearest_per_goal", "select_k", "table_distances", "table_distances_many"]
+__all__ = ["goal_target_features", "nearest_per_goal", "rank_goal_entries", "seen_from", "select_k", "table_distances",
+           "table_distances_many"]
 
 
 @njit(cache=True, nogil=True, forceinline=False)
@@ -121,3 +122,68 @@ def nearest_per_goal(FT, sq, start, scale, positioned, oriented, weight, pt, Rt,
         else:
             table_distances(FT[start[g]:start[g] + D], sq[g], f[:D], d)
         select_k(d, allowed, k, out[g])
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def goal_target_features(scale, positioned, oriented, weight, pt, Rt, f):  # pragma: no cover - compiled
+    """The goals' targets' features into ``f`` (>= D,), goal after goal (``scale[g]`` x its position when
+    ``positioned[g]``, then ``scale[g] x weight`` x its rotation's entries when ``oriented[g]``: the products
+    :meth:`~.seed_table.SeedTable._goal_feature_blocks` makes, so the same numbers); returns D, their number.
+    scale, positioned, oriented (G,): :meth:`~.seed_table.SeedTable.goal_spec`'s; weight: m per unit of the
+    rotation's Frobenius distance; pt (G, 3) m, Rt (G, 3, 3)."""
+    D = 0
+    for g in range(pt.shape[0]):
+        s = scale[g]
+        if positioned[g]:
+            for j in range(3):
+                f[D] = s * pt[g, j]
+                D += 1
+        if oriented[g]:
+            sw = s * weight
+            for j in range(9):
+                f[D] = sw * Rt[g, j // 3, j % 3]
+                D += 1
+    return D
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def rank_goal_entries(FT, sq, scale, positioned, oriented, weight, pt, Rt, allowed, k, out):  # pragma: no cover
+    """The ``k`` table entries nearest to a goal list's targets in the sum over the goals of their weighted squared
+    distances (:meth:`~.seed_table.SeedTable.ranked_goals`' metric), nearest first (ties: the lower index first),
+    into ``out``; returns how many (k or fewer: the allowed entries).
+
+    Args:
+        FT (D, N), sq (N,): the goal list's table features transposed (:meth:`~.seed_table.SeedTable.goal_features`
+            of every entry's frame poses) and their squared norms. scale, positioned, oriented (G,), weight, pt
+            (G, 3), Rt (G, 3, 3): as :func:`goal_target_features` reads them. allowed: (N,) bool, or (0,) for
+            every entry. out: (>= k,) int64.
+    """
+    N = FT.shape[1]
+    f = np.empty(12 * pt.shape[0] + 1)
+    D = goal_target_features(scale, positioned, oriented, weight, pt, Rt, f)
+    d = np.empty(N)
+    if D == 0:  # no goal has a position or an orientation to match: every entry as near (features all zero)
+        d[:] = 0.0
+    else:
+        table_distances(FT, sq, f[:D], d)
+    return select_k(d, allowed, k, out)
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def seen_from(base, pt, Rt, P_out, R_out):  # pragma: no cover - compiled
+    """Targets pt (G, 3) m, Rt (G, 3, 3) in the world seen from a floating base's pose ``base`` (its six entries:
+    x, y, z m, yaw, pitch, roll rad; rotation ``B = Rz(yaw) Ry(pitch) Rx(roll)``): ``B^-1 T`` per target, into
+    P_out (G, 3) and R_out (G, 3, 3)."""
+    cy, sy = np.cos(base[3]), np.sin(base[3])
+    cp, sp = np.cos(base[4]), np.sin(base[4])
+    cr, sr = np.cos(base[5]), np.sin(base[5])
+    B = np.empty((3, 3))
+    B[0, 0], B[0, 1], B[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    B[1, 0], B[1, 1], B[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    B[2, 0], B[2, 1], B[2, 2] = -sp, cp * sr, cp * cr
+    for g in range(pt.shape[0]):
+        d0, d1, d2 = pt[g, 0] - base[0], pt[g, 1] - base[1], pt[g, 2] - base[2]
+        for i in range(3):
+            P_out[g, i] = d0 * B[0, i] + d1 * B[1, i] + d2 * B[2, i]
+            for c in range(3):
+                R_out[g, i, c] = B[0, i] * Rt[g, 0, c] + B[1, i] * Rt[g, 1, c] + B[2, i] * Rt[g, 2, c]
