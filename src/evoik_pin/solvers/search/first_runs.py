@@ -169,9 +169,10 @@ def goal_first_runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, g
 
     Args:
         buf, held: the kernel's workspace. q0 (n,): the start given (run first when ``has_q0``). Q (N, n): the
-            table's configurations. FT (D, N), sq (N,): the goal list's table features transposed and their squared
-            norms (:meth:`~.seed_table.SeedTable.ranked_goals`' metric). PT (E, N), psq (G, N), pstart (G + 1,): each
-            goal's features of its frame's pose relative to the root link, stacked (SeedTable._stacked_parts).
+            table's configurations. FT (D, N), sq (N,) float32: the goal list's table features transposed and their
+            squared norms (:meth:`~.seed_table.SeedTable.ranked_goals`' metric). PT (E, N), psq (G, N) float32, pstart
+            (G + 1,): each goal's features of its frame's pose relative to the root link, stacked
+            (:meth:`~.seed_table.SeedTable.goal_layout`).
             gscale, gpos, gori (G,): sqrt of each goal's weight, whether it has a position, an orientation
             (SeedTable.goal_spec). weight: the table's rotation weight (m). wpt (G, 3), wRt (G, 3, 3): the goals'
             targets as the table ranks them (:func:`~.seed_table.seed_targets`), in the world.

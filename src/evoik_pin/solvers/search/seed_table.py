@@ -331,9 +331,10 @@ class SeedTable:
     def goal_layout(self, goals, parts=None) -> tuple:
         """Everything the compiled ranking and composition of a goal list's starts read (:func:`~.nearest.
         rank_goal_entries`, :func:`~.nearest.nearest_per_goal`, :func:`~.first_runs.goal_first_runs`), cached with
-        :meth:`_goal_parts` (per frame list, kinds and weights): (FT (D, size), sq (size,): the goal list's table
-        features transposed (:meth:`goal_table_features`) and their squared norms; PT (E, size), psq (G, size),
-        pstart (G + 1,): each goal's features relative to the root link, stacked, goal g's rows from pstart[g];
+        :meth:`_goal_parts` (per frame list, kinds and weights): (FT (D, size), sq (size,) float32: the goal list's
+        table features transposed (:meth:`goal_table_features`) and their squared norms; PT (E, size), psq (G, size)
+        float32, pstart (G + 1,): each goal's features relative to the root link, stacked, goal g's rows from
+        pstart[g] (single precision: a start's order is all they decide, :func:`~.nearest.table_distances32`);
         scale (G,) sqrt(weight); positioned, oriented (G,) bool (:meth:`goal_spec`); idx (I,) int64, idx_start
         (G + 1,): the entries of q each goal's chain sets in a composed start, goal g's
         ``idx[idx_start[g]:idx_start[g + 1]]``)."""
@@ -355,7 +356,9 @@ class SeedTable:
             idx_start = np.cumsum([0] + [i.size for _, _, i in parts]).astype(np.int64)
             if len(self._stacked) > 8:
                 self._stacked.clear()
-            hit = self._stacked[key] = (parts, (FT, np.ascontiguousarray(sq_rank), PT, sq, start, scale, positioned,
+            # single precision for the rankings (nearest.table_distances32): a start's order only
+            hit = self._stacked[key] = (parts, (FT.astype(np.float32), sq_rank.astype(np.float32),
+                                                PT.astype(np.float32), sq.astype(np.float32), start, scale, positioned,
                                                 oriented, idx, idx_start))
         return hit[1]
 
