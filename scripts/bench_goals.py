@@ -6,11 +6,10 @@
     python scripts/bench_goals.py --docs                   # also writes docs/BENCHMARKS.md's bench_goals block
     python scripts/bench_goals.py --no-peers --n 50        # evoik alone (profiling)
 
-For each robot of ``goal_problems.ROBOT_SETS`` (talos, baxter, go2, allegro, pr2, tiago_dual, g1, solo12: their
-frames and kinds) it
-generates ``--n`` problems (``goal_problems.make_problems``: targets by forward kinematics of random
-configurations within the limits, a free-flyer base within a 0.5 m cube and 30 deg of upright), then, interleaved
-robot by robot so that both sides see the same machine state:
+For each robot of ``goal_problems.ROBOT_SETS`` (talos, baxter, go2, allegro, pr2, tiago_dual (TIAGo++), g1,
+solo12: their frames and kinds) it generates ``--n`` problems (``goal_problems.make_problems``: targets by forward
+kinematics of random configurations within the limits, a free-flyer base within a 0.5 m cube and 30 deg of
+upright), then, interleaved robot by robot so that both sides see the same machine state:
 
 1. evoik_pin: ``evoik_pin.solve(robot, goals, seed=i)`` with the library's defaults (memetic, its 5 ms budget per
    problem), the robot loaded by name with the goal frames as its tips (active joints: the union of their chains,
