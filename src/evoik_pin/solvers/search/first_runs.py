@@ -1,6 +1,6 @@
-"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame) in one compiled call
-(numba): q0's nearness, the seed table's ranking and the runs, in the order
-:func:`~evoik_pin.solvers.search.memetic._solve` makes them.
+"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame), or for a goal list of
+several goals, in one compiled call (numba): q0's nearness, the seed table's ranking (and a goal list's composed
+starts) and the runs, in the order :func:`~evoik_pin.solvers.search.memetic._solve` makes them.
 
 A single-target solve that one of its first runs solves (nearly every one: the run from the table's nearest entry
 or a near q0 converges) spent most of its time in Python around those runs: q0's tip pose from Pinocchio and its
@@ -16,6 +16,13 @@ the kernel's kinematics and its distances are summed in the features' order, whe
 the numbers can differ in their last bits, so a decision can only differ when q0 is within a few ulps of the gap or
 of the entry's distance (and the ranking only where two entries' distances are, :mod:`.nearest`):
 tests/test_first_runs.py holds the answers equal over thousands of targets.
+
+:func:`goal_first_runs` does the same for a goal list of several goals (a whole robot: both soles and both wrists
+of a humanoid), whose starts (:meth:`~.seed_table.SeedTable.goal_starts`: a start composed goal by goal, the next
+entry by the goals' summed nearness, alternately) took more Python than their runs: the ranking, each goal's
+nearest entries, the floating base's view of the goals and the composition are here compiled helpers that
+goal_starts calls too (:mod:`.nearest`), so both make the same starts from the same numbers and memetic's answers
+are those of its runs made one by one (tests/test_goal_first_runs.py).
 """
 
 from __future__ import annotations

@@ -32,7 +32,9 @@ For one pose or position target, or a goal list of one goal on one frame (:func:
 single target is, in its frame's features) (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock
 says (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the
 table's ranking, q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its
-state when none of them converges.
+state when none of them converges. A goal list of several goals (a whole robot) gets the same: q0's run and the
+first ``GUARANTEED_TABLE_RUNS`` of its starts (the ranking, the composed starts, the LM runs) in one compiled call
+(:func:`~.first_runs.goal_first_runs`), on the numbers ``SeedTable.goal_starts`` gives the runs made one by one.
 
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
