@@ -64,6 +64,7 @@ from .seed_table import (
     DEFAULT_TABLE_SEEDS,
     SeedTable,
     default_table_size,
+    load_goal_helpers,
     seed_table,
     seed_targets,
 )
@@ -443,6 +444,8 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals and not one_goal else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = plan._prepare(problem, table_size if use_table else 0, engine)
+    if table is not None and goals:
+        load_goal_helpers()  # the compiled rankings goal lists' starts call from Python (once per process)
     if table is not None and goals and not one_goal:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     elif table is not None and one_goal:

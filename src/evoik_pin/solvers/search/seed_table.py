@@ -30,7 +30,8 @@ from ..lm.layout import (
 )
 from ..paper.common import halton
 
-__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
+__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "load_goal_helpers",
+           "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
@@ -524,6 +525,29 @@ class SeedTable:
             return np.zeros((N, 0), dtype=np.intp)
         _, idx = tree.query(f, k=k, eps=eps)
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
+
+
+_GOAL_HELPERS_LOADED: list = []  # [True] once load_goal_helpers has run in this process
+
+
+def load_goal_helpers() -> None:
+    """Load (once per process; once after an install: compile) the compiled helpers a goal list's starts call from
+    Python (:meth:`SeedTable.ranked_goals`, :meth:`SeedTable.goal_starts`: :func:`~.nearest.rank_goal_entries`,
+    :func:`~.nearest.nearest_per_goal`, :func:`~.nearest.seen_from`), each on tiny arrays of the types those calls
+    pass: one-time set-up that memetic makes before its clock starts, where the first ranking of a process's first
+    goal list otherwise loaded them from its budget (a few ms each)."""
+    if _GOAL_HELPERS_LOADED:
+        return
+    from .nearest import nearest_per_goal, rank_goal_entries, seen_from
+
+    FT, sq = np.zeros((3, 2), dtype=np.float32), np.zeros((1, 2), dtype=np.float32)
+    scale, yes, no = np.ones(1), np.ones(1, dtype=bool), np.zeros(1, dtype=bool)
+    pt, Rt = np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1))
+    rank_goal_entries(FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))
+    nearest_per_goal(FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
+                     np.empty((1, 1), dtype=np.int64))
+    seen_from(np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3)))
+    _GOAL_HELPERS_LOADED.append(True)
 
 
 def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
