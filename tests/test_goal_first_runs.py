@@ -148,3 +148,30 @@ def test_goal_ranking_is_the_summed_nearness(name):
             exact += got.tolist() == reference.tolist()
             rankings += 1
     assert exact >= 0.9 * rankings
+
+
+def test_the_helpers_goal_starts_call_are_loaded_before_the_clock():
+    """load_goal_helpers (memetic's set-up for a goal list, before its clock) loads the specializations of the compiled
+    helpers that goal_starts and ranked_goals then call from Python: the starts of goal lists on a fixed base, a
+    floating base set by a goal and one taken from each entry, with and without a mask, add none (a new one would
+    be loaded, or compiled, inside a solve's budget)."""
+    from evoik_pin.problem import IKProblem
+    from evoik_pin.solvers.search import nearest
+    from evoik_pin.solvers.search.seed_table import load_goal_helpers
+
+    load_goal_helpers()
+    helpers = (nearest.rank_goal_entries, nearest.nearest_per_goal, nearest.seen_from)
+    loaded = [len(f.signatures) for f in helpers]
+    assert all(count >= 1 for count in loaded)
+    for name in WHOLE_ROBOTS:
+        robot, goals = whole_robot(name)
+        table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
+        mask = np.random.default_rng(1).random(table.Q.shape[0]) < 0.5
+        lists, _, _ = goal_lists(robot, goals, 2, 9)
+        for goal_list in lists:
+            problem = IKProblem(robot, goal_list)
+            for allowed in (None, mask):
+                starts = list(table.goal_starts(problem, 6, allowed))
+                assert len(starts) == 6 and all(q.shape == (robot.n,) for q in starts)
+                assert len(list(table.ranked_goals(problem, 3, allowed))) == 3
+    assert [len(f.signatures) for f in helpers] == loaded
