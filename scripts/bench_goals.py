@@ -6,10 +6,10 @@
     python scripts/bench_goals.py --docs                   # also writes docs/BENCHMARKS.md's bench_goals block
     python scripts/bench_goals.py --no-peers --n 50        # evoik alone (profiling)
 
-For each robot of ``goal_problems.ROBOT_SETS`` (talos, baxter, go2, allegro, pr2: their frames and kinds) it
-generates ``--n`` problems (``goal_problems.make_problems``: targets by forward kinematics of random
-configurations within the limits, a free-flyer base within a 0.5 m cube and 30 deg of upright), then, interleaved
-robot by robot so that both sides see the same machine state:
+For each robot of ``goal_problems.ROBOT_SETS`` (talos, baxter, go2, allegro, pr2, tiago_dual (TIAGo++), g1,
+solo12: their frames and kinds) it generates ``--n`` problems (``goal_problems.make_problems``: targets by forward
+kinematics of random configurations within the limits, a free-flyer base within a 0.5 m cube and 30 deg of
+upright), then, interleaved robot by robot so that both sides see the same machine state:
 
 1. evoik_pin: ``evoik_pin.solve(robot, goals, seed=i)`` with the library's defaults (memetic, its 5 ms budget per
    problem), the robot loaded by name with the goal frames as its tips (active joints: the union of their chains,
@@ -59,7 +59,8 @@ ROOT = SCRIPTS.parent
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
 BEGIN, END = "<!-- bench_goals:begin -->", "<!-- bench_goals:end -->"
 #: The benchmark's robots (goal_problems' names) and the names evoik_pin loads them by.
-EVOIK_NAMES = {"talos": "talos", "baxter": "baxter", "go2": "go2", "allegro": "allegro_right", "pr2": "pr2"}
+EVOIK_NAMES = {"talos": "talos", "baxter": "baxter", "go2": "go2", "allegro": "allegro_right", "pr2": "pr2",
+               "tiago_dual": "tiago_dual", "g1": "g1", "solo12": "solo12"}
 PEERS_PYTHON = Path(os.environ.get("PEERS_VENV", "/work/peers-venv")) / "bin" / "python"
 TOL = jg.TOLERANCES[0]
 

@@ -85,6 +85,23 @@ ROBOT_SETS: dict[str, RobotSet] = {
         (("l_gripper_tool_frame", "pose"), ("r_gripper_tool_frame", "pose")),
         "fixed base; both gripper tool frames, poses; the torso lift is shared by both arms",
     ),
+    "tiago_dual": RobotSet(
+        "tiago_description/robots/tiago_dual.urdf", False,
+        (("arm_left_tool_link", "pose"), ("arm_right_tool_link", "pose")),
+        "TIAGo++, fixed base; both arms' tool frames, poses; the torso lift is shared by both arms",
+    ),
+    "g1": RobotSet(
+        "g1_description/urdf/g1_29dof_rev_1_0.urdf", True,
+        (("left_ankle_roll_link", "pose"), ("right_ankle_roll_link", "pose"),
+         ("left_wrist_yaw_link", "pose"), ("right_wrist_yaw_link", "pose")),
+        "Unitree G1, free-flyer; both feet (ankle roll links) and both wrists (last arm links), poses",
+    ),
+    "solo12": RobotSet(
+        "solo_description/robots/solo12.urdf", True,
+        (("base_link", "pose"), ("FL_FOOT", "position"), ("FR_FOOT", "position"),
+         ("HL_FOOT", "position"), ("HR_FOOT", "position")),
+        "ODRI Solo12, free-flyer; base pose and four feet positions",
+    ),
 }
 
 

@@ -1,6 +1,6 @@
-"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame) in one compiled call
-(numba): q0's nearness, the seed table's ranking and the runs, in the order
-:func:`~evoik_pin.solvers.search.memetic._solve` makes them.
+"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame), or for a goal list of
+several goals, in one compiled call (numba): q0's nearness, the seed table's ranking (and a goal list's composed
+starts) and the runs, in the order :func:`~evoik_pin.solvers.search.memetic._solve` makes them.
 
 A single-target solve that one of its first runs solves (nearly every one: the run from the table's nearest entry
 or a near q0 converges) spent most of its time in Python around those runs: q0's tip pose from Pinocchio and its
@@ -16,6 +16,13 @@ the kernel's kinematics and its distances are summed in the features' order, whe
 the numbers can differ in their last bits, so a decision can only differ when q0 is within a few ulps of the gap or
 of the entry's distance (and the ranking only where two entries' distances are, :mod:`.nearest`):
 tests/test_first_runs.py holds the answers equal over thousands of targets.
+
+:func:`goal_first_runs` does the same for a goal list of several goals (a whole robot: both soles and both wrists
+of a humanoid), whose starts (:meth:`~.seed_table.SeedTable.goal_starts`: a start composed goal by goal, the next
+entry by the goals' summed nearness, alternately) took more Python than their runs: the ranking, each goal's
+nearest entries, the floating base's view of the goals and the composition are here compiled helpers that
+goal_starts calls too (:mod:`.nearest`), so both make the same starts from the same numbers and memetic's answers
+are those of its runs made one by one (tests/test_goal_first_runs.py).
 """
 
 from __future__ import annotations
@@ -27,12 +34,17 @@ from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers
 from ..lm.layout import G_JOINT
 from ..lm.tree import frame_pose, tree_forward
-from .nearest import select_k, table_distances
+from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_k, table_distances
 
-__all__ = ["STAGE_Q0", "STAGE_TABLE", "first_runs"]
+__all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "STAGE_Q0", "STAGE_TABLE", "first_runs",
+           "goal_first_runs"]
 
 #: Which start solved the problem (first_runs's first return value; -1: none did).
 STAGE_Q0, STAGE_TABLE = 0, 1
+#: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``, SeedTable.goal_starts's cases):
+#: a fixed base (the targets as they are), a floating base set by a goal (the targets seen from that base), a
+#: floating base each composed start takes from its table entry (the targets seen from that entry's base).
+BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
 
 
 @njit(cache=True, nogil=True, forceinline=False)
@@ -148,3 +160,93 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, o
             best_q[:] = q_out
             best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
     return -1, count, evaluations, pos, rot, cost
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def goal_first_runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, gpos, gori, weight, wpt, wRt, idx,
+                    idx_start, base, base_mode, allowed, oriented, table_runs, parent, FR, Fp, rev, index, scale,
+                    offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out, errors, best_q,
+                    best, best_g):  # pragma: no cover - compiled
+    """memetic's guaranteed LM runs for a goal list of several goals (or goals beyond one frame) in one call: q0's
+    run, then up to ``table_runs`` of :meth:`~.seed_table.SeedTable.goal_starts`' starts in its order (a start
+    composed goal by goal, the next table entry by the goals' summed nearness, alternately), stopping at the first
+    run that converges. The ranking, the composition and the runs are those of memetic's runs one by one, on the
+    same numbers (goal_starts uses the same compiled helpers: :func:`~.nearest.rank_goal_entries`,
+    :func:`~.nearest.seen_from`, :func:`~.nearest.nearest_per_goal`), so the answers are the same.
+
+    Args:
+        buf, held: the kernel's workspace. q0 (n,): the start given (run first when ``has_q0``). Q (N, n): the
+            table's configurations. FT (D, N), sq (N,) float32: the goal list's table features transposed and their
+            squared norms (:meth:`~.seed_table.SeedTable.ranked_goals`' metric). PT (E, N), psq (G, N) float32, pstart
+            (G + 1,): each goal's features of its frame's pose relative to the root link, stacked
+            (:meth:`~.seed_table.SeedTable.goal_layout`).
+            gscale, gpos, gori (G,): sqrt of each goal's weight, whether it has a position, an orientation
+            (SeedTable.goal_spec). weight: the table's rotation weight (m). wpt (G, 3), wRt (G, 3, 3): the goals'
+            targets as the table ranks them (:func:`~.seed_table.seed_targets`), in the world.
+            idx, idx_start (G + 1,): the entries of q each goal's chain sets in a composed start, goal g's
+            ``idx[idx_start[g]:idx_start[g + 1]]``. base (6,), base_mode: BASE_FIXED, BASE_FROM_GOAL (``base``: the
+            floating base every start takes) or BASE_EACH_ENTRY. allowed: (N,) bool or (0,) for every entry.
+            oriented: whether the engine counts orientation errors (``lm.oriented``: a run's error is position +
+            orientation error, else position error). table_runs: the starts run at most after q0's.
+        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`) for the goal list.
+        q_out (n,), g_out (G, 2): the converged (or last) run's configuration and each goal's errors. errors
+            (>= runs,): each run's position + orientation error (m + rad, the largest over the goals). best_q (n,),
+            best (6,), best_g (G, 2): when none converges, the run memetic keeps as its best (the first of the
+            lowest weighted |e|^2, LMOutcome.rank for several goals): its configuration; its position error,
+            orientation error, weighted |e|^2, iterations, evaluations and index among the runs; its goals' errors.
+
+    Returns:
+        (STAGE_Q0 or STAGE_TABLE: the start that converged, or -1; runs made; their forward-kinematics evaluations
+        summed; the converged (or last) run's position error m, orientation error rad, weighted |e|^2).
+    """
+    N, n = Q.shape
+    G = wpt.shape[0]
+    composed = (table_runs + 1) // 2  # starts 2j (composed j) and 2j + 1 (entry j) read the j-th ranked entry
+    rows = np.empty(max(composed, 1), dtype=np.int64)
+    ranked = rank_goal_entries(FT, sq, gscale, gpos, gori, weight, wpt, wRt, allowed, composed, rows)
+    rpt, rRt = np.empty((G, 3)), np.empty((G, 3, 3))
+    picks = np.empty((G, max(composed, 1)), dtype=np.int64)
+    if base_mode != BASE_EACH_ENTRY and ranked > 0:  # each goal's nearest entries, once for every composed start
+        if base_mode == BASE_FROM_GOAL:
+            seen_from(base, wpt, wRt, rpt, rRt)
+        else:
+            rpt[:], rRt[:] = wpt, wRt
+        nearest_per_goal(PT, psq, pstart, gscale, gpos, gori, weight, rpt, rRt, allowed, ranked, picks)
+    start = np.empty(n)
+    total = has_q0 + min(table_runs, 2 * ranked)
+    evaluations = 0
+    pos = rot = cost = np.nan
+    for s in range(total):
+        t = s - has_q0  # the start's place among goal_starts' (-1: q0)
+        if t < 0:
+            start[:] = q0
+        else:
+            j = t // 2
+            row = rows[j]
+            start[:] = Q[row]
+            if base_mode == BASE_FROM_GOAL:
+                start[:6] = base
+            if t % 2 == 0:  # composed: each goal's chain from the entry nearest for that goal alone
+                column = j
+                if base_mode == BASE_EACH_ENTRY:  # the goals seen from this entry's base
+                    seen_from(Q[row, :6], wpt, wRt, rpt, rRt)
+                    nearest_per_goal(PT, psq, pstart, gscale, gpos, gori, weight, rpt, rRt, allowed, 1, picks)
+                    column = 0
+                for g in range(G):
+                    e = picks[g, column]
+                    for a in range(idx_start[g], idx_start[g + 1]):
+                        i = idx[a]
+                        start[i] = Q[e, i]
+        pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, parent, FR, Fp, rev, index, scale,
+                                                           offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
+                                                           Rt, params, q_out, g_out)
+        errors[s] = pos + (rot if oriented else 0.0)
+        evaluations += ev
+        if converged:
+            return (STAGE_Q0 if t < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
+        if s == 0 or cost < best[2]:  # memetic's _Search._keep: a strictly lower rank (weighted |e|^2) replaces
+            best_q[:] = q_out
+            best_g[:] = g_out
+            best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
+    return -1, total, evaluations, pos, rot, cost
+

@@ -32,7 +32,9 @@ For one pose or position target, or a goal list of one goal on one frame (:func:
 single target is, in its frame's features) (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock
 says (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the
 table's ranking, q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its
-state when none of them converges.
+state when none of them converges. A goal list of several goals (a whole robot) gets the same: q0's run and the
+first ``GUARANTEED_TABLE_RUNS`` of its starts (the ranking, the composed starts, the LM runs) in one compiled call
+(:func:`~.first_runs.goal_first_runs`), on the numbers ``SeedTable.goal_starts`` gives the runs made one by one.
 
 Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
 between LM runs and generations, so two runs with the same seed give identical results whenever the
@@ -57,7 +59,15 @@ from ..lm.layout import KIND_BEYOND_FRAME
 from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
-from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, SeedTable, default_table_size, seed_table
+from .seed_table import (
+    DEFAULT_GOAL_TABLE_SEEDS,
+    DEFAULT_TABLE_SEEDS,
+    SeedTable,
+    default_table_size,
+    load_goal_helpers,
+    seed_table,
+    seed_targets,
+)
 
 __all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticPlan", "memetic", "prepare"]
 
@@ -300,6 +310,7 @@ class MemeticPlan:
         self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
         self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
+        self._goal_entries: list[tuple] = []  # the same for goal_first_runs (goal lists of several goals), newest first
         # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
         # never read (no q0 given), the best failed run's configuration and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
@@ -352,10 +363,10 @@ class MemeticPlan:
         from .first_runs import first_runs  # the first time: its module and numba's imports, set-up too (~5 ms)
 
         loading = 0.0
-        if not _LOADED:
+        if "first_runs" not in _LOADED:
             first_runs(*args)  # the runs are made again below (they only write args' buffers)
             loading = time.perf_counter() - t
-            _LOADED.append(True)
+            _LOADED.append("first_runs")
         if kept_table is not None:  # not this plan's first solve: it is kept
             from numba import typeof
 
@@ -367,6 +378,37 @@ class MemeticPlan:
         if entry is not None and entry is not first_runs:  # a compiled entry found (not on the plan's first solve)
             self._entries = [self._entry, *self._entries[:KEPT_ENGINES - 1]]
         return first_runs(*args), loading
+
+    def goal_first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
+        """:meth:`first_runs` for :func:`~.first_runs.goal_first_runs` (a goal list of several goals): (its
+        return on ``args``, the seconds spent loading it: the process's first call, set-up). From a plan's second
+        solve of a goal stack on, its compiled entry is called directly (found once per engine arguments and
+        table; the last ``KEPT_ENGINES`` kept), without numba's typing of the 50 arguments on every call."""
+        entries = self._goal_entries
+        for kept in entries:
+            if kept[0] is lm._args and kept[1] is table:
+                if kept is not entries[0]:
+                    entries.remove(kept)
+                    entries.insert(0, kept)
+                return kept[2](*args), 0.0
+        t = time.perf_counter()
+        from .first_runs import goal_first_runs  # the first time: its module and numba's imports, set-up too
+
+        loading = 0.0
+        if "goal_first_runs" not in _LOADED:
+            goal_first_runs(*args)  # the runs are made again below (they only write args' buffers)
+            loading = time.perf_counter() - t
+            _LOADED.append("goal_first_runs")
+        out = goal_first_runs(*args)
+        if lm._owned:  # the engine's arrays are its own (its second problem on): its arguments stay, keep the entry
+            from numba import typeof
+
+            try:
+                entry = goal_first_runs.overloads[tuple(typeof(a) for a in args)].entry_point
+            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
+                entry = goal_first_runs
+            self._goal_entries = [(lm._args, table, entry), *entries[:KEPT_ENGINES - 1]]
+        return out, loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` (posed on this plan's robot) with the plan's options; ``t_setup``: when
@@ -402,6 +444,8 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals and not one_goal else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = plan._prepare(problem, table_size if use_table else 0, engine)
+    if table is not None and goals:
+        load_goal_helpers()  # the compiled rankings goal lists' starts call from Python (once per process)
     if table is not None and goals and not one_goal:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     elif table is not None and one_goal:
@@ -421,6 +465,13 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         if result is not None:
             return result
         t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
+        setup_s += loading
+    elif (FIRST_RUNS and table is not None and goals and problem.scene is None and engine == "compiled"
+            and batch == 1 and table_offset == 0):
+        result, loading, resumed = _goal_first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds)
+        if result is not None:
+            return result
+        t0 += loading
         setup_s += loading
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
     search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
@@ -452,9 +503,13 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         # there, the next entries one by one, the clock checked between runs
         search.attempts, search.evaluations, search.attempt_errors, search.best, made = resumed
         stage = "seed table"
-        rest = list(itertools.islice(ranked, made, None))
-        if rest and not search.out_of_time():
-            solved = search.polish_many(table.Q[rest])
+        if goals and not one_goal:  # goal_starts' starts (configurations), lazily, after the ones made
+            if not search.out_of_time():
+                solved = search.polish_iter(itertools.islice(ranked, made, None))
+        else:
+            rest = list(itertools.islice(ranked, made, None))
+            if rest and not search.out_of_time():
+                solved = search.polish_many(table.Q[rest])
     elif q0 is not None and table is not None and (one_goal or not goals):
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
@@ -553,8 +608,11 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     )
 
 
-_LOADED: list = []  # [True] once first_runs is loaded in this process
+_LOADED: list = []  # the names of first_runs' compiled functions loaded in this process
 _FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
+BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # first_runs' base modes (goal_first_runs)
+_NO_BASE = np.zeros(6)  # goal_first_runs' base where no goal sets one (never read)
+_EVERY = np.zeros(0, dtype=bool)  # every table entry (goal_first_runs' allowed: no scene on that path)
 
 #: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
 #: turn it off to compare with the runs made one by one.
@@ -618,6 +676,47 @@ def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: Lev
         pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
         met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
     if not met:
+        return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
+    return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
+                             time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None
+
+
+def _goal_first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
+                     setup_s: float, iterations: int, table_seeds: int) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_first_runs` for a goal list of several goals (no scene, ``batch=1``, no ``table_offset``): _solve's
+    guaranteed runs (q0's, then the first ``GUARANTEED_TABLE_RUNS`` of :meth:`SeedTable.goal_starts`) in one compiled
+    call (:func:`~.first_runs.goal_first_runs`: the ranking, the composed starts and the LM runs, in _solve's order
+    on the same numbers). Returns (the Result _solve returns when one of them meets the tolerances, else None; the
+    seconds spent loading the compiled function, set-up; when none converged, the state _solve goes on from)."""
+    goals = problem.goals
+    robot = problem.robot
+    layout = table.goal_layout(goals)
+    pt, Rt = seed_targets(problem)
+    base_mode, base = BASE_FIXED, _NO_BASE
+    if robot.floating_base:
+        found = table._base_from_goals(problem, table._goal_parts(goals))
+        base_mode, base = (BASE_EACH_ENTRY, _NO_BASE) if found is None else (BASE_FROM_GOAL, found)
+    buffers, args, params = lm.kernel_arguments(iterations)
+    q0 = problem.q0
+    n = problem.n
+    G = len(goals)
+    table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
+    q_out = np.empty(n)
+    errors, _, zeros, best_q, best = plan._scratch
+    g_out, best_g = np.empty((G, 2)), np.empty((G, 2))
+    (stage, runs, evaluations, pos, rot, cost), loading = plan.goal_first_runs(
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, table.Q, *layout[:8],
+         table.weight, np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float), *layout[8:],
+         base, base_mode, _EVERY, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best,
+         best_g), lm, table)
+    if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them (ranked by
+        # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank)
+        runs_, evaluations_, errs, kept, _ = resumed_state(plan, lm.oriented, runs, evaluations, table_runs)
+        kept.goal_errors = best_g
+        return None, loading, (runs_, evaluations_, errs, kept, runs - (q0 is not None))
+    goal_errors = problem.goal_errors(q_out)  # Pinocchio's, as _solve's: the answer's verdict is the same
+    pos, rot, cost = problem.goal_summary(goal_errors)
+    if not problem.goals_met(goal_errors):
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
     return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
                              time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None

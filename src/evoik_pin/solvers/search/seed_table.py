@@ -30,7 +30,8 @@ from ..lm.layout import (
 )
 from ..paper.common import halton
 
-__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "seed_table"]
+__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "load_goal_helpers",
+           "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
@@ -185,29 +186,25 @@ class SeedTable:
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
-        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry. The
-        goals' features over the table (the frames' poses, scaled by the square roots of the weights) are computed
-        once per frame list, kinds and weights and cached, so a ranking is one matrix-vector product."""
+        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry, nearest
+        first (ties: the lower index first). The goals' features over the table (the frames' poses, scaled by the
+        square roots of the weights) are computed once per frame list, kinds and weights and cached, so a ranking
+        is one compiled pass over them (:func:`~.nearest.rank_goal_entries`, which memetic's compiled first runs of
+        a goal list make too: the same order)."""
         if k <= 0:
             return
-        goals = problem.goals
-        F, sq = self._goal_table_features(goals)
+        from .nearest import rank_goal_entries  # numba, loaded on first use (as the kernel is)
+
+        layout = self.goal_layout(problem.goals)
+        k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
+        if k <= 0:
+            return
         pt, Rt = seed_targets(problem)
-        f = np.concatenate(self._goal_feature_blocks(self.goal_spec(goals), pt[:, None], Rt[:, None]), axis=1)[0]
-        d = sq - 2.0 * (F @ f)
-        if allowed is not None:
-            d = np.where(allowed, d, np.inf)
-            k = min(k, int(np.count_nonzero(allowed)))
-            if k <= 0:
-                return
-        first = int(d.argmin())  # the nearest alone is often all a solve needs: rank the others on demand
-        yield first
-        k = min(k, d.shape[0])
-        if k > 1:
-            part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
-            for i in part[d[part].argsort()]:
-                if i != first:
-                    yield int(i)
+        out = np.empty(k, dtype=np.int64)
+        m = rank_goal_entries(layout[0], layout[1], layout[5], layout[6], layout[7], self.weight,
+                              np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float),
+                              _EVERY if allowed is None else allowed, k, out)
+        yield from out[:m].tolist()
 
     def prepare_goals(self, goals) -> None:
         """Compute (once per frame list, kinds and weights; then cached) the goal features that
@@ -327,22 +324,43 @@ class SeedTable:
         return out.astype(np.intp, copy=False)
 
     def _stacked_parts(self, goals, parts) -> tuple:
-        """:meth:`_goal_parts`' features of every goal stacked for :func:`~.nearest.nearest_per_goal` (cached with
-        them): (FT (D, size) the goals' features transposed, goal g's rows from start[g]; sq (G, size); start (G + 1,);
-        scale (G,) sqrt(weight); positioned, oriented (G,) bool), as :meth:`goal_spec` gives them."""
+        """:meth:`_goal_parts`' features of every goal stacked for :func:`~.nearest.nearest_per_goal`: (FT (D, size)
+        the goals' features transposed, goal g's rows from start[g]; sq (G, size); start (G + 1,); scale (G,)
+        sqrt(weight); positioned, oriented (G,) bool), as :meth:`goal_spec` gives them (:meth:`goal_layout`'s)."""
+        return self.goal_layout(goals, parts)[2:8]
+
+    def goal_layout(self, goals, parts=None) -> tuple:
+        """Everything the compiled ranking and composition of a goal list's starts read (:func:`~.nearest.
+        rank_goal_entries`, :func:`~.nearest.nearest_per_goal`, :func:`~.first_runs.goal_first_runs`), cached with
+        :meth:`_goal_parts` (per frame list, kinds and weights): (FT (D, size), sq (size,) float32: the goal list's
+        table features transposed (:meth:`goal_table_features`) and their squared norms; PT (E, size), psq (G, size)
+        float32, pstart (G + 1,): each goal's features relative to the root link, stacked, goal g's rows from
+        pstart[g] (single precision: a start's order is all they decide, :func:`~.nearest.table_distances32`);
+        scale (G,) sqrt(weight); positioned, oriented (G,) bool (:meth:`goal_spec`); idx (I,) int64, idx_start
+        (G + 1,): the entries of q each goal's chain sets in a composed start, goal g's
+        ``idx[idx_start[g]:idx_start[g + 1]]``)."""
+        if parts is None:
+            parts = self._goal_parts(goals)
         key = id(parts)
         hit = self._stacked.get(key)
         if hit is None or hit[0] is not parts:
             spec = self.goal_spec(goals)
-            FT = np.ascontiguousarray(np.concatenate([F for F, _, _ in parts], axis=1).T)
+            F, sq_rank = self.goal_table_features(tuple(g.frame for g in goals), spec)
+            FT = np.ascontiguousarray(F.T)
+            PT = np.ascontiguousarray(np.concatenate([F for F, _, _ in parts], axis=1).T)
             sq = np.ascontiguousarray(np.stack([q for _, q, _ in parts]))
             start = np.cumsum([0] + [F.shape[1] for F, _, _ in parts]).astype(np.int64)
             scale = np.array([e[0] for e in spec], dtype=float)
             positioned = np.array([len(e) < 3 or bool(e[2]) for e in spec])
             oriented = np.array([bool(e[1]) for e in spec])
+            idx = np.concatenate([np.zeros(0, dtype=np.int64)] + [i.astype(np.int64) for _, _, i in parts])
+            idx_start = np.cumsum([0] + [i.size for _, _, i in parts]).astype(np.int64)
             if len(self._stacked) > 8:
                 self._stacked.clear()
-            hit = self._stacked[key] = (parts, (FT, sq, start, scale, positioned, oriented))
+            # single precision for the rankings (nearest.table_distances32): a start's order only
+            hit = self._stacked[key] = (parts, (FT.astype(np.float32), sq_rank.astype(np.float32),
+                                                PT.astype(np.float32), sq.astype(np.float32), start, scale, positioned,
+                                                oriented, idx, idx_start))
         return hit[1]
 
     def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
@@ -509,6 +527,29 @@ class SeedTable:
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
 
 
+_GOAL_HELPERS_LOADED: list = []  # [True] once load_goal_helpers has run in this process
+
+
+def load_goal_helpers() -> None:
+    """Load (once per process; once after an install: compile) the compiled helpers a goal list's starts call from
+    Python (:meth:`SeedTable.ranked_goals`, :meth:`SeedTable.goal_starts`: :func:`~.nearest.rank_goal_entries`,
+    :func:`~.nearest.nearest_per_goal`, :func:`~.nearest.seen_from`), each on tiny arrays of the types those calls
+    pass: one-time set-up that memetic makes before its clock starts, where the first ranking of a process's first
+    goal list otherwise loaded them from its budget (a few ms each)."""
+    if _GOAL_HELPERS_LOADED:
+        return
+    from .nearest import nearest_per_goal, rank_goal_entries, seen_from
+
+    FT, sq = np.zeros((3, 2), dtype=np.float32), np.zeros((1, 2), dtype=np.float32)
+    scale, yes, no = np.ones(1), np.ones(1, dtype=bool), np.zeros(1, dtype=bool)
+    pt, Rt = np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1))
+    rank_goal_entries(FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))
+    nearest_per_goal(FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
+                     np.empty((1, 1), dtype=np.int64))
+    seen_from(np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3)))
+    _GOAL_HELPERS_LOADED.append(True)
+
+
 def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
     """Median squared distance from an entry to its nearest other entry, over 64 entries sampled evenly, in
     features F (size, d) with squared norms sq (size,)."""
@@ -520,9 +561,14 @@ def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
 
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Targets pt (G, 3), Rt (G, 3, 3) in the world seen from a floating base's pose (its six entries: x, y, z m,
-    yaw, pitch, roll rad; rotation ``Rz(yaw) Ry(pitch) Rx(roll)``): ``B^-1 T`` per target."""
-    R0 = pin.rpy.rpyToMatrix(base[5], base[4], base[3])
-    return (pt - base[:3]) @ R0, np.einsum("ji,gjk->gik", R0, Rt)
+    yaw, pitch, roll rad; rotation ``Rz(yaw) Ry(pitch) Rx(roll)``): ``B^-1 T`` per target, by the compiled
+    :func:`~.nearest.seen_from` that memetic's compiled first runs use (the same numbers)."""
+    from .nearest import seen_from  # numba, loaded on first use (as the kernel is)
+
+    P_out, R_out = np.empty((pt.shape[0], 3)), np.empty((pt.shape[0], 3, 3))
+    seen_from(np.ascontiguousarray(base, dtype=float), np.ascontiguousarray(pt, dtype=float),
+              np.ascontiguousarray(Rt, dtype=float), P_out, R_out)
+    return P_out, R_out
 
 
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
