@@ -16,13 +16,11 @@ from .motion import Motion
 
 __all__ = ["CLIPS", "clip_path", "list_clips", "load_clip", "motions_dir"]
 
-#: Bundled clips: name -> (file below motions/, what it shows, CMU subject_trial).
+#: Bundled clips: name -> (file below motions/, what it shows and its CMU subject_trial).
 CLIPS: dict[str, tuple[str, str]] = {
-    "walk": ("cmu/walk.bvh", "walk forward (CMU 02_01)"),
-    "run": ("cmu/run.bvh", "run/jog (CMU 02_03)"),
-    "jump": ("cmu/jump.bvh", "jump, balance (CMU 02_04)"),
-    "dance": ("cmu/dance.bvh", "modern dance (CMU 05_xx)"),
-    "getup": ("cmu/getup.bvh", "getting up from the ground (CMU)"),
+    "walk": ("cmu/walk.bvh", "walk forward, 1.0 s: right stance, then left stance (CMU 07_01)"),
+    "run": ("cmu/run.bvh", "run, 0.63 s: right stance, flight, left stance (CMU 02_03)"),
+    "jump": ("cmu/jump.bvh", "jump on the spot, 0.87 s: push-off, flight, landing in a crouch (CMU 02_04)"),
 }
 
 

@@ -21,7 +21,7 @@ __all__ = ["CONTACT_HEIGHT_M", "CONTACT_SPEED_MPS", "DEFAULT_FEET", "detect_cont
 #: A foot keypoint within this height (m) of the floor can be in contact.
 CONTACT_HEIGHT_M = 0.05
 #: A foot keypoint slower than this (m/s) can be in contact.
-CONTACT_SPEED_MPS = 0.6
+CONTACT_SPEED_MPS = 0.7
 #: Foot keypoint names tried in turn when none are given: CMU/LAFAN BVH ankles, then SMPL's ankles.
 DEFAULT_FEET: tuple[tuple[str, str], ...] = (("LeftFoot", "RightFoot"), ("left_ankle", "right_ankle"))
 #: Percentile (%) of the feet's heights taken as the floor: low, but above a few glitched frames.
