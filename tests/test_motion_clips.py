@@ -15,7 +15,7 @@ def clips():
 
 
 def test_clip_files_are_bundled_and_small():
-    assert list_clips() == list(CLIPS) and len(CLIPS) >= 3
+    assert list_clips() == list(CLIPS) and len(CLIPS) >= 5
     assert set(list_clips(describe=True)) == set(CLIPS)
     assert (motions_dir() / "README.md").read_text().count("NSF EIA-0196217") == 1
     for name in list_clips():
@@ -72,3 +72,10 @@ def test_jump_takes_off_and_lands(clips):
     assert not c["LeftFoot"][apex] and not c["RightFoot"][apex]
     assert c["LeftFoot"][0] and c["RightFoot"][0] and c["LeftFoot"][-1] and c["RightFoot"][-1]
     assert m.trajectory("Hips")[apex, 2] - m.trajectory("Hips")[-1, 2] > 0.4  # a real jump, landed in a crouch
+
+
+def test_getup_rises_and_dance_moves(clips):
+    hips = clips["getup"].trajectory("Hips")[:, 2]
+    assert hips[0] < 0.6 and hips[-1] > 0.8 and (np.diff(hips) > 0).all()  # squat to standing
+    d = clips["dance"]
+    assert np.linalg.norm(d.trajectory("LeftHand")[-1] - d.trajectory("LeftHand")[0]) > 0.2

@@ -21,6 +21,8 @@ CLIPS: dict[str, tuple[str, str]] = {
     "walk": ("cmu/walk.bvh", "walk forward, 1.0 s: right stance, then left stance (CMU 07_01)"),
     "run": ("cmu/run.bvh", "run, 0.63 s: right stance, flight, left stance (CMU 02_03)"),
     "jump": ("cmu/jump.bvh", "jump on the spot, 0.87 s: push-off, flight, landing in a crouch (CMU 02_04)"),
+    "dance": ("cmu/dance.bvh", "modern dance, 0.5 s: rising from a bend, arms sweeping (CMU 05_04)"),
+    "getup": ("cmu/getup.bvh", "getting up from the ground, 0.5 s: squat to standing (CMU 140_03)"),
 }
 
 
