@@ -39,6 +39,18 @@ def test_read_only():
         m.fps = 60.0
 
 
+def test_pickle_and_deepcopy_round_trip():
+    import copy
+    import pickle
+
+    m = standing()
+    for twin in (pickle.loads(pickle.dumps(m)), copy.deepcopy(m)):
+        np.testing.assert_array_equal(twin.positions, m.positions)
+        assert twin.names == m.names and twin.fps == m.fps
+        with pytest.raises(AttributeError):
+            twin.fps = 1.0
+
+
 def test_input_is_copied():
     p = np.zeros((2, 1, 3))
     m = Motion(p, ["a"], 10)

@@ -3,8 +3,12 @@ humanoids, their limb pairs, and the check of a mapping against a robot and a mo
 
 A mapping is ``{robot frame: motion keypoint}``. The presets pair the pelvis/base, hips, knees, ankles, torso,
 head, shoulders, elbows and wrists; each robot frame is the link whose origin sits at that joint centre (checked
-at the robot's neutral configuration by tests/test_motion_mapping.py: hips above knees above ankles, the left side
-at +y, shoulders above the torso frame).
+at the robot's neutral configuration by tests/test_motion_mapping.py: hips above knees above ankles, head above
+torso, the left frames on one side and the right frames on the other).
+
+Facing: with the floating base at the identity, G1, Talos and Romeo face +x with their left on +y, as the motions
+of :func:`~evoik_pin.motion.load_bvh` do; iCub's root frame has x backward, so iCub faces -x with its left on -y and
+a retargeter must turn its base by pi about z.
 """
 
 from __future__ import annotations
@@ -15,7 +19,8 @@ from ..errors import MappingError
 from ..robot.frames import closest_names, frame_names
 from .motion import Motion
 
-__all__ = ["LIMBS", "MAPPING_PRESETS", "SKELETON_JOINTS", "limb_pairs", "mapping_preset", "resolve_mapping"]
+__all__ = ["LIMBS", "MAPPING_PRESETS", "ROBOT_JOINTS", "SKELETON_JOINTS", "limb_pairs", "mapping_preset",
+           "resolve_mapping"]
 
 #: The joints a preset pairs, in order, with their names in each source skeleton.
 SKELETON_JOINTS: dict[str, dict[str, str]] = {

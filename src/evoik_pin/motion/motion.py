@@ -69,6 +69,9 @@ class Motion:
             raise AttributeError(f"Motion is read-only: make a new Motion instead of setting {name}")
         object.__setattr__(self, name, value)
 
+    def __reduce__(self):  # pickle and deepcopy through the checked constructor (the attributes are read-only)
+        return (Motion, (self.positions, self.names, self.fps))
+
     def __repr__(self) -> str:
         return f"Motion({self.frames} frames x {len(self.names)} keypoints at {self.fps:g} fps, {self.duration:.2f} s)"
 
