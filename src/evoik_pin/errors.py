@@ -94,3 +94,25 @@ class GoalsFileError(EvoikError, ValueError):
     """A goals file (:mod:`evoik_pin.io.goals_file`) that cannot be read or used: it does not parse, a goal has an
     unknown kind, a missing or bad field, or the file was written for another robot than the one it is used with.
     The message names the file, the goal (its index from 0, and its frame) and the field."""
+
+
+class MotionError(EvoikError, ValueError):
+    """A motion (:class:`evoik_pin.motion.Motion`) that cannot be made or used: keypoints of the wrong shape or
+    with NaN/inf entries, an empty motion (no frame or no keypoint), duplicate keypoint names, an fps that is not a
+    finite number > 0, a frame range or rate out of what the motion has. The message names the field and what is
+    accepted."""
+
+
+class BvhError(MotionError):
+    """A BVH file that cannot be read: no ``HIERARCHY`` or ``MOTION`` section, a bad ``CHANNELS`` line, a frame
+    whose value count differs from the hierarchy's channel count, a value that is not a number, a ``Frame Time``
+    <= 0, an unknown unit. The message names the file and the line (from 1)."""
+
+
+class MappingError(MotionError, KeyError):
+    """A robot-to-motion keypoint mapping that cannot be used: an unknown preset, a robot frame absent from the
+    robot or a keypoint absent from the motion (the message lists the closest names), or a robot without a
+    floating base (load it with ``floating_base=True``)."""
+
+    def __str__(self) -> str:  # KeyError would otherwise quote the message
+        return str(self.args[0]) if self.args else ""
