@@ -13,9 +13,11 @@ from hypothesis import strategies as st
 import evoik_pin as ek
 from evoik_pin.errors import OptionError, TargetError
 from evoik_pin.goals import Direction, LookAt, Orientation, Pose, Position
+from evoik_pin.goals.pose import KIND_POSE, KIND_POSE_AXES
+from evoik_pin.goals.position import KIND_POSITION
+from evoik_pin.goals.registry import TASK_ROWS
 from evoik_pin.problem import IKProblem
 from evoik_pin.solvers.lm.axes import axes_error, axes_jacobian
-from evoik_pin.solvers.lm.layout import KIND_POSE, KIND_POSE_AXES, KIND_POSITION, TASK_ROWS
 
 TALOS_HAND, TALOS_HEAD = "arm_right_7_link", "rgbd_optical_frame"
 #: Solves bounded by restarts, not by the wall clock (the machine may be busy).

@@ -92,6 +92,7 @@ def test_goal_kinds_are_the_goal_classes():
     assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {
         "pose": Pose, "position": Position, "orientation": Orientation, "direction": Direction, "look_at": LookAt,
         "center_of_mass": CenterOfMass, "relative_pose": RelativePose}
+    assert all(kind.name == name for name, kind in GOAL_KINDS.items())  # each kind class declares its entry
 
 
 # ------------------------------------------------------------------ errors

@@ -16,6 +16,8 @@ import numpy as np
 
 from .errors import BoundsError, ConfigurationError, OptionError
 from .goals import bind, is_goal_list
+from .goals.registry import KIND_BEYOND_FRAME
+from .goals.stack import owned
 from .objectives import (
     POSE_METRICS,
     Objective,
@@ -26,7 +28,6 @@ from .objectives import (
     position_errors,
 )
 from .robot import Robot
-from .solvers.lm.layout import KIND_BEYOND_FRAME, owned
 from .solvers.options import check_positive
 from .target import MAX_TARGET_NORM, Target
 
@@ -440,7 +441,7 @@ class IKProblem:
             return IKProblem(self.robot, self.target, lower=self.lower, upper=self.upper,
                              tolerance=min(tolerance, self.tolerance),
                              rotation_tolerance=min(tolerance, self.rotation_tolerance))
-        from .solvers.lm.layout import G_RTOL, G_TOL
+        from .goals.stack import G_RTOL, G_TOL
 
         tight = replace(self, goals=list(self.goals), evaluations=0)
         stack, pt, Rt = tight._goal_stack

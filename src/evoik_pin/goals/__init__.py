@@ -23,28 +23,30 @@ frame), with its target expressed in the robot's base frame (for a floating base
 half-widths, ``free="rz"``; :mod:`.bands`): met when every component of the error is within its band.
 
 A goal set, ``Pose(frame, [T1, ..., Tk])`` or ``Position(frame, [p1, ..., pk])``, is met by any one of its members
-(:mod:`.goal_set`; ``Result.chosen``). Preferences (:mod:`.preferences`: :class:`Posture`,
+(:func:`.goal.init_set`; ``Result.chosen``). Preferences (:mod:`.preferences`: :class:`Posture`,
 :class:`JointLimitMargin`, :class:`Manipulability`, :class:`MinimalDisplacement`) may join the list: met as well as
 the goals allow, never at their expense.
 
 Each goal checks its inputs when made (an :mod:`evoik_pin.errors` class naming what is wrong) and packs itself into
-the LM kernel's goal stack (:class:`~evoik_pin.solvers.lm.layout.GoalStack`: kind, frame, weight, tolerances);
+the LM kernel's goal stack (:class:`.stack.GoalStack`: kind, frame, weight, tolerances; each kind declares itself,
+:mod:`.registry`);
 :func:`bind` checks a goal list against a robot (frames that exist and that some active joint moves, the same frame
 twice with clashing targets). A goal's ``weight`` (> 0) scales its rows by ``sqrt(weight)``, so goals that cannot
 all be met settle on the compromise the weights make; it is met when its position error is within ``tolerance``
 (m) and, for a pose, its rotation angle within ``rotation_tolerance`` (rad; default: ``tolerance``).
 """
 
-from .binding import bind, is_goal_list
-from .center_of_mass import CenterOfMass
-from .direction import Direction
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal
-from .look_at import LookAt
-from .orientation import Orientation
-from .pose import Pose
+# The kinds in the order they are declared (registered: evoik_pin.goals.registry), which goals files list them in.
+from .pose import Pose  # noqa: I001
 from .position import Position
-from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
+from .orientation import Orientation
+from .direction import Direction
+from .look_at import LookAt
+from .center_of_mass import CenterOfMass
 from .relative_pose import RelativePose
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
+from .stack import bind, is_goal_list
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Direction", "Goal", "JointLimitMargin", "LookAt", "Manipulability",
            "MinimalDisplacement", "Orientation", "Pose", "Position", "Posture", "Preference", "bind", "is_goal_list"]

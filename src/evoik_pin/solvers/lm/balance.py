@@ -1,6 +1,7 @@
-"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``KIND_COM``, ``KIND_COM_SUPPORT``,
-``KIND_RELATIVE_POSE``, ``KIND_RELATIVE_POSE_AXES`` of :mod:`.layout`), which :func:`.kernel.task_error` and
-:func:`.kernel.task_jacobian` call in a branch the one-frame kinds never enter.
+"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``COM_POINT``, ``COM_SUPPORT``,
+``RELATIVE_LOG6``, ``RELATIVE_BANDED_LOG6`` of :mod:`evoik_pin.goals.registry`), which :func:`.kernel.task_error`
+and :func:`.kernel.task_jacobian` call in a branch the one-frame kinds never enter (their declared family, the
+spec's ``G_FAMILY``).
 
 * Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
   c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree.tree_forward`), s_0 the first moment of the
@@ -14,7 +15,7 @@
 * Relative pose: frame b seen from frame a against the target T, ``e = log6(T^-1 T_a^-1 T_b)``; its Jacobian is
   ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``, the second term the velocity of the point p_b carried by frame a's joints
   (the body twist of ``T_a^-1 T_b``), through the pose kind's :func:`.kernel.goal_jacobian`.
-* Relative pose with bands or free axes (``KIND_RELATIVE_POSE_AXES``): the rows of a pose with axes
+* Relative pose with bands or free axes (``RELATIVE_BANDED_LOG6``): the rows of a pose with axes
   (:mod:`.axes`: dead zones in the target frame, the swing of one free rotation axis) for frame b's pose seen from
   frame a, ``(R_a^T R_b, R_a^T (p_b - p_a))``, against T; its Jacobian those rows' from the same
   ``J_b(p_b) - J_a(p_b)`` turned into frame a's coordinates (the twist of b relative to a, as frame a sees it).
@@ -26,26 +27,17 @@ import math
 
 from numba import njit
 
+from ...goals.bands import AUX_SIZE
+from ...goals.center_of_mass import A_COM_AXES, A_COM_BODIES, A_COM_MASS, A_COM_MOMENT, A_COM_POINTS, A_COM_SHRINK
+from ...goals.goal import A_REL_BAND, A_REL_JOINT, A_REL_P, A_REL_R, A_REL_SIGNS
+from ...goals.registry import (
+    BANDED_LOG6,
+    COM_POINT,
+    COM_SUPPORT,
+    RELATIVE_BANDED_LOG6,
+)
 from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
-from .layout import (
-    A_COM_AXES,
-    A_COM_BODIES,
-    A_COM_MASS,
-    A_COM_MOMENT,
-    A_COM_POINTS,
-    A_COM_SHRINK,
-    A_REL_BAND,
-    A_REL_JOINT,
-    A_REL_P,
-    A_REL_R,
-    A_REL_SIGNS,
-    AUX_SIZE,
-    KIND_COM,
-    KIND_COM_SUPPORT,
-    KIND_POSE_AXES,
-    KIND_RELATIVE_POSE_AXES,
-)
 from .tree import BORROWING, frame_pose, joint_column
 
 #: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
@@ -285,7 +277,7 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
     """The 6 rows e of a relative pose with bands or free axes: those of a pose with axes (:func:`.axes.axes_error`,
-    ``KIND_POSE_AXES``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
+    ``BANDED_LOG6``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
     (into R (3, 3)) and ``t = R_a^T (p_b - p_a)`` (into t (3,)), against the target (pt, Rt): the error of
     ``T_t^-1 T_a^-1 T_b`` in the target frame. p (3,) ends as frame b's origin (base frame, m) for
     :func:`balance_columns` (scratch before); M (3, 3) scratch. Returns (|e|^2, position error m, rotation error
@@ -301,7 +293,7 @@ def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
             p[i] = M[0, i] * b0 + M[1, i] * b1 + M[2, i] * b2
         R[0, c], R[1, c], R[2, c] = p[0], p[1], p[2]
     band = aux[A_REL_BAND:A_REL_BAND + AUX_SIZE]
-    c, pos, rot = axes_error(KIND_POSE_AXES, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
+    c, pos, rot = axes_error(BANDED_LOG6, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
     frame_pose(Rj, pj, jb, Rbf, pbf, M, p)  # frame b's origin again (M: scratch)
     return c, pos, rot
 
@@ -320,7 +312,7 @@ def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
         for i in range(3):
             J[i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
             J[3 + i, k] = A[0, i] * w0 + A[1, i] * w1 + A[2, i] * w2
-    axes_jacobian(KIND_POSE_AXES, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
+    axes_jacobian(BANDED_LOG6, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
@@ -329,7 +321,7 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
     p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t; the relative
     pose with axes frame b's pose seen from frame a in R, t and frame b's origin in p)."""
-    if kind == KIND_COM:
+    if kind == COM_POINT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2
         e[0] = aux[A_COM_AXES] * (c0 - pt[0])
@@ -337,12 +329,12 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
         e[2] = aux[A_COM_AXES + 2] * (c2 - pt[2])
         c = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
         return c, math.sqrt(c), 0.0
-    if kind == KIND_COM_SUPPORT:
+    if kind == COM_SUPPORT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2
         pos = support_error(Rj, pj, aux, c0, c1, e, t)
         return e[0] * e[0] + e[1] * e[1], pos, 0.0
-    if kind == KIND_RELATIVE_POSE_AXES:
+    if kind == RELATIVE_BANDED_LOG6:
         return relative_axes_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
     pos, rot = relative_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
     c = 0.0
@@ -355,7 +347,7 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
 def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
     """The physical Jacobian Jx (6, m) a goal of a kind beyond one frame starts from: the centre of mass's (rows
     0-2, :func:`com_jacobian`) or, for a relative pose, ``J_b(p_b) - J_a(p_b)`` at frame b's origin p (3,)."""
-    if kind == KIND_COM or kind == KIND_COM_SUPPORT:
+    if kind == COM_POINT or kind == COM_SUPPORT:
         com_jacobian(parent, rev, Rj, pj, Z, O, aux, Jx)
         return
     for k in range(Jx.shape[1]):
@@ -373,10 +365,10 @@ def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def com_rows(kind, aux, t, J, E, r):
     """Rows r.. of the task Jacobian E (unweighted) of a CoM goal from the CoM's Jacobian (rows 0-2 of J (6, n)):
-    the constrained axes (KIND_COM), or the support goal's active piece (t: code, outward normal): zero inside,
+    the constrained axes (COM_POINT), or the support goal's active piece (t: code, outward normal): zero inside,
     ``n n^T`` on an edge, the ground rows at a vertex."""
     n = E.shape[1]
-    if kind == KIND_COM:
+    if kind == COM_POINT:
         for i in range(3):
             a = aux[A_COM_AXES + i]
             for k in range(n):
@@ -391,3 +383,15 @@ def com_rows(kind, aux, t, J, E, r):
             E[r, k], E[r + 1, k] = n0 * d, n1 * d
         else:
             E[r, k], E[r + 1, k] = J[0, k], J[1, k]
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def balance_rows(kind, Rj, pj, aux, R, p, t, J, pt, Rt, rv, A, B, E, r):
+    """Rows r.. of the task Jacobian E (unweighted) of a goal beyond one frame other than a plain relative pose,
+    from the physical Jacobian J :func:`balance_columns` made (folded with mimic joints): a banded relative
+    pose's (:func:`relative_axes_jacobian`), a centre of mass's (:func:`com_rows`). R, p, t: the goal's pose
+    buffers :func:`balance_error` filled; rv (3,), A, B (3, 3) scratch."""
+    if kind == RELATIVE_BANDED_LOG6:
+        relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r)
+    else:
+        com_rows(kind, aux, t, J, E, r)
