@@ -17,7 +17,9 @@ frame), with its target expressed in the robot's base frame (for a floating base
 * :class:`CenterOfMass`: the whole robot's centre of mass at a point (on chosen axes), or its ground projection
   inside the support polygon of contact points (``support={frame: points}`` or ``support=[frames]``), at least
   ``margin`` (m) inside its edges;
-* :class:`RelativePose`: one frame's pose seen from another (``frame_a``, ``frame_b``, T: two hands holding a box).
+* :class:`RelativePose`: one frame's pose seen from another (``frame_a``, ``frame_b``, T: two hands holding a box);
+* :class:`RelativePosition`: one frame's origin relative to another's (``frame_a``, ``frame_b``, p, m), in frame a's
+  axes or the world's (``expressed_in="a" | "world"``).
 
 ``Pose``, ``Position`` and ``Orientation`` also take per-axis tolerance bands and free axes (``tolerance=`` 6 or 3
 half-widths, ``free="rz"``; :mod:`.bands`): met when every component of the error is within its band.
@@ -44,10 +46,11 @@ from .direction import Direction
 from .look_at import LookAt
 from .center_of_mass import CenterOfMass
 from .relative_pose import RelativePose
+from .relative_position import RelativePosition
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from .stack import bind, is_goal_list
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Direction", "Goal", "JointLimitMargin", "LookAt", "Manipulability",
            "MinimalDisplacement", "Orientation", "Pose", "Position", "Posture", "Preference", "bind", "is_goal_list"]
-__all__ += ["CenterOfMass", "RelativePose"]
+__all__ += ["CenterOfMass", "RelativePose", "RelativePosition"]
