@@ -106,6 +106,17 @@ from .tree import BORROWING, frame_jacobian, frame_pose, tree_forward
 TWO_PI = 2.0 * math.pi
 
 
+@njit(cache=True, nogil=True, forceinline=True)
+def frame_rows(kind):
+    """Rows of the residuals :func:`goal_error` computes (its own codes, the frame family's): 6 (the SE(3)
+    logarithm), 2 (planar), 3 (a point, planar with yaw), as the kinds declare them (tests hold the two equal).
+
+    The runs of :func:`lm_run_basic`, which hold frame-family goals only, take a goal's row count from here rather
+    than from its spec's ``G_ROWS``: known from the code the branch already tests, the count lets LLVM unroll the
+    rows' loops (reading it from the spec cost the single-pose chain case 3-4 %, scripts/bench_chain_kernel.py)."""
+    return 6 if kind == LOG6 else (2 if kind == PLANAR else 3)
+
+
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def goal_error(kind, R, p, pt, Rt, M, t, e):
     """One goal's error rows e (its ``G_ROWS`` rows) for its frame's pose (R (3, 3), p (3,)) and target
@@ -160,7 +171,7 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
         kind = int(spec[g, G_KIND])
         family = int(spec[g, G_FAMILY])
         r = int(spec[g, G_ROW])
-        rows = int(spec[g, G_ROWS])
+        rows = int(spec[g, G_ROWS]) if extra else frame_rows(kind)  # frame_rows says why
         R, p = Rg[g], pg[g]
         if extra and family == FAMILY_BEYOND_FRAME:  # centre of mass, support polygon, two frames (.balance)
             cg, pos, rot = beyond_frame_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g],
@@ -178,7 +189,7 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
             w = spec[g, G_WEIGHT]
-            for i in range(r, r + int(spec[g, G_ROWS])):
+            for i in range(r, r + (int(spec[g, G_ROWS]) if extra else frame_rows(int(spec[g, G_KIND])))):
                 e[i] *= w
                 c += e[i] * e[i]
     return c
@@ -205,7 +216,7 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
     """
     n = J.shape[1]
     if kind != LOG6:
-        for i in range(e.shape[0]):  # its rows: e holds as many
+        for i in range(frame_rows(kind)):
             row = 5 if i == 2 and kind == PLANAR_YAW else i
             for k in range(n):
                 E[r + i, k] = J[row, k]
@@ -243,7 +254,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
         kind = int(spec[g, G_KIND])
         family = int(spec[g, G_FAMILY])
         r = int(spec[g, G_ROW])
-        rows = int(spec[g, G_ROWS])
+        rows = int(spec[g, G_ROWS]) if extra else frame_rows(kind)  # frame_rows says why
         if extra and family == FAMILY_BEYOND_FRAME:  # centre of mass, support polygon, two frames (.balance)
             beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
                                   e[r:r + rows], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
@@ -261,7 +272,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
             w = spec[g, G_WEIGHT]
-            for i in range(r, r + int(spec[g, G_ROWS])):
+            for i in range(r, r + (int(spec[g, G_ROWS]) if extra else frame_rows(int(spec[g, G_KIND])))):
                 for k in range(n):
                     E[i, k] *= w
 
