@@ -1,5 +1,6 @@
 """The base of every goal kind: the frame it is on, its weight and tolerances, checked when the goal is made
-(see :mod:`evoik_pin.goals`); and goal sets.
+(see :mod:`evoik_pin.goals`); goal sets; and what the kinds on two frames share (their checks, ``aux`` row and
+placements over a population: :func:`check_frame_pair`, :func:`pack_frame_pair`, :func:`pair_placements`).
 
 Goal sets: one goal whose target is any one of several (``Pose(frame, [T1, ..., Tk])``,
 ``Position(frame, [p1, ..., pk])``), the grasps a planner offers of which any will do.

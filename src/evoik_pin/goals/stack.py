@@ -12,7 +12,8 @@ against a robot and packs it), and the targets' encoding.
 
 The kernel reads the row count, family and angle flag from the spec (filled here from the declarations when a
 stack is built), never from the tables of :mod:`.registry`: numba compiles a module's globals into its code and
-its disk cache does not see another module's tables change.
+its disk cache does not see another module's tables change. (Its runs of frame-family goals alone take the row
+count from the code of the residual they compute, ``kernel.frame_rows``, for speed; tests hold the two equal.)
 """
 
 from __future__ import annotations
