@@ -20,8 +20,10 @@ import time
 import numpy as np
 
 import evoik_pin as ek
+from evoik_pin.goals.pose import KIND_POSE
+from evoik_pin.goals.stack import GoalStack
 from evoik_pin.solvers.lm import kernel as K
-from evoik_pin.solvers.lm.layout import KIND_POSE, STATS_SIZE, GoalStack, box_constants, kernel_params
+from evoik_pin.solvers.lm.layout import STATS_SIZE, box_constants, kernel_params
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -33,7 +33,7 @@ import numpy as np
 import evoik_pin
 from evoik_pin import Target, load_robot
 from evoik_pin.objectives import (
-    Manipulability,
+    ManipulabilityCost,
     PopulationKinematics,
     WeightedJointDisplacement,
     orientation_errors,
@@ -56,7 +56,7 @@ def zdt1(X):
 
 def vehicle_functions(robot):
     """f(X) -> (F, G) of the vehicle-arm problem, shared by both libraries (G <= 0 feasible)."""
-    objectives = [Manipulability("planar", "inverse"), WeightedJointDisplacement(np.zeros(5), GAINS)]
+    objectives = [ManipulabilityCost("planar", "inverse"), WeightedJointDisplacement(np.zeros(5), GAINS)]
 
     def f(X):
         kin = PopulationKinematics(robot, X)

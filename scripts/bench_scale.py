@@ -28,12 +28,14 @@ import numpy as np
 
 import evoik_pin as ev
 from evoik_pin.api import _run, make_problem
+from evoik_pin.goals.pose import KIND_POSE
+from evoik_pin.goals.stack import GoalStack, encode_targets
 from evoik_pin.problem import Target
 from evoik_pin.solvers.batch import threads
 from evoik_pin.solvers.batch.outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
 from evoik_pin.solvers.batch.targets import TargetSource
 from evoik_pin.solvers.lm import engine as lm_engine
-from evoik_pin.solvers.lm.layout import KIND_POSE, STATS_SIZE, GoalStack, box_constants, encode_targets, kernel_params
+from evoik_pin.solvers.lm.layout import STATS_SIZE, box_constants, kernel_params
 from evoik_pin.solvers.search.seed_table import SeedTable, default_table_size, seed_table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

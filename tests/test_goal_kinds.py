@@ -13,9 +13,11 @@ from hypothesis import strategies as st
 import evoik_pin as ek
 from evoik_pin.errors import OptionError, TargetError
 from evoik_pin.goals import Direction, LookAt, Orientation, Pose, Position
+from evoik_pin.goals.pose import KIND_POSE, KIND_POSE_AXES
+from evoik_pin.goals.position import KIND_POSITION
+from evoik_pin.goals.registry import TASK_ROWS
 from evoik_pin.problem import IKProblem
 from evoik_pin.solvers.lm.axes import axes_error, axes_jacobian
-from evoik_pin.solvers.lm.layout import KIND_POSE, KIND_POSE_AXES, KIND_POSITION, TASK_ROWS
 
 TALOS_HAND, TALOS_HEAD = "arm_right_7_link", "rgbd_optical_frame"
 #: Solves bounded by restarts, not by the wall clock (the machine may be busy).
@@ -374,3 +376,23 @@ def test_viewer_marks_the_goals_that_have_a_place(ur5):
     with Viewer(ur5) as v:
         assert v.show_goals(goals, labels=False) == ["goals/wrist_2_link"]
         assert v.scene["goals/wrist_2_link"] == "goal point: wrist_2_link"
+
+
+def test_the_declarations_fill_the_stack_the_kernel_dispatches_on(ur5):
+    """Every registered kind code's row count, compiled family and angle flag reach the stack's spec from its
+    declaration, and the frame family's compiled row counts (kernel.frame_rows, which the first-four-kinds runs read
+    instead of the spec) are the declared ones."""
+    from evoik_pin.goals.registry import ANGLE_KINDS, FAMILY_FRAME, KINDS, kind_classes
+    from evoik_pin.goals.stack import G_ANGLE, G_FAMILY, G_ROWS, spec_row
+    from evoik_pin.solvers.lm.kernel import frame_rows
+
+    assert {Pose, Position, Orientation, Direction, LookAt} <= set(kind_classes())
+    for code, declared in KINDS.items():
+        spec = spec_row(code, 0, 4.0, 1e-6, 1e-6, 0)
+        assert spec[G_ROWS] == len(TASK_ROWS[code]) == len(declared.rows) and spec[G_FAMILY] == declared.family
+        assert spec[G_ANGLE] == (code in ANGLE_KINDS) and spec[1] == 0 and spec[2] == 2.0
+        if declared.family == FAMILY_FRAME:
+            assert frame_rows(code) == len(declared.rows)
+    goals = [Pose(ur5.tip, ur5.fk(np.zeros(ur5.n))), Direction(ur5.tip, [0, 0, 1], [0, 0, -1])]
+    stack = ek.goals.bind(ur5, goals)[1]
+    assert stack.spec[:, G_ROWS].tolist() == [6, 3] and stack.rows == 9

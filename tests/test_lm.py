@@ -9,11 +9,12 @@ import pytest
 import evoik_pin as ev
 from evoik_pin import lie
 from evoik_pin.errors import OptionError
+from evoik_pin.goals.stack import TargetArrays
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.robot import list_robots, load_robot
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs
 from evoik_pin.solvers.lm import chain as K
-from evoik_pin.solvers.lm.layout import STATS_SIZE, TargetArrays
+from evoik_pin.solvers.lm.layout import STATS_SIZE
 from evoik_pin.solvers.lm.reference import ReferenceLM
 
 
@@ -206,7 +207,8 @@ def test_solve_many_engines_agree_on_success(robots):
 def _kernel_pairs(robot, kind, count, seed):
     """Inputs of the kernel's batch entry points: ``count`` (start, target) pairs of one target kind, some
     starts on or beyond the joint limits (clipping, holding, wrapping), the tip goal's stack and the params."""
-    from evoik_pin.solvers.lm.layout import GoalStack, box_constants, encode_targets, kernel_params, target_kind
+    from evoik_pin.goals.stack import GoalStack, encode_targets, target_kind
+    from evoik_pin.solvers.lm.layout import box_constants, kernel_params
 
     rng = np.random.default_rng(seed)
     Qt, Q0 = robot.random_configurations(count, rng), robot.random_configurations(count, rng)

@@ -8,7 +8,7 @@ from evoik_pin import lie
 from evoik_pin.errors import OptionError
 from evoik_pin.objectives import (
     JointLimitMargin,
-    Manipulability,
+    ManipulabilityCost,
     MaxJointDisplacement,
     OrientationError,
     PopulationKinematics,
@@ -100,13 +100,13 @@ def test_joint_displacement_terms(arm, population):
 
 def test_manipulability_terms_match_robot_manipulability(arm, population):
     Y = np.array([arm.manipulability(q, "translation") for q in population])
-    assert np.allclose(Manipulability("translation", "value")(population, robot=arm), Y, atol=1e-12)
-    assert np.allclose(Manipulability("translation", "inverse")(population, robot=arm), 1 / (Y + 1), atol=1e-12)
-    assert np.allclose(Manipulability("translation", "negative")(population, robot=arm), -Y, atol=1e-12)
+    assert np.allclose(ManipulabilityCost("translation", "value")(population, robot=arm), Y, atol=1e-12)
+    assert np.allclose(ManipulabilityCost("translation", "inverse")(population, robot=arm), 1 / (Y + 1), atol=1e-12)
+    assert np.allclose(ManipulabilityCost("translation", "negative")(population, robot=arm), -Y, atol=1e-12)
     Y_full = np.array([arm.manipulability(q, "full") for q in population])
-    assert np.allclose(Manipulability("full", "value")(population, robot=arm), Y_full, atol=1e-12)
+    assert np.allclose(ManipulabilityCost("full", "value")(population, robot=arm), Y_full, atol=1e-12)
     with pytest.raises(OptionError, match="form"):
-        Manipulability(form="squared")
+        ManipulabilityCost(form="squared")
 
 
 def test_joint_limit_margin(arm, population):

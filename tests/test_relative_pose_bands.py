@@ -18,8 +18,8 @@ import evoik_pin as ek
 from evoik_pin.errors import GoalsFileError, OptionError
 from evoik_pin.goals import Pose, RelativePose
 from evoik_pin.goals.bands import AXES
+from evoik_pin.goals.relative_pose import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm.layout import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
 
 LEFT, RIGHT = "left_gripper", "right_gripper"
 #: The right gripper seen from the left one holding a 0.3 m box: 0.3 m along the left's z, facing it.

@@ -12,8 +12,7 @@ from urdf_helpers import gripper, joint_xml, robot_xml
 
 import evoik_pin
 from evoik_pin.errors import EvoikError, FrameError, LockedJointsError
-from evoik_pin.goals import Pose
-from evoik_pin.goals.binding import bind
+from evoik_pin.goals import Pose, bind
 from evoik_pin.robot import EXAMPLE_ARMS, WHOLE_ROBOTS, bundled_robots_dir, example_robot_data_dir, load_robot
 from evoik_pin.robot.frames import deepest_body, is_branched
 from evoik_pin.robot.joints import couplings

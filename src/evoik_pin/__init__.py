@@ -5,6 +5,7 @@ the evolutionary methods of five research papers or the memetic default. See REA
 """
 
 from .api import BatchResults, IKSolver, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
+from .goals import RelativePosition
 from .problem import IKProblem, Target
 from .reach import ReachMap, reachability_map
 from .result import Front, Result
@@ -19,6 +20,7 @@ __all__ = [
     "IKSolver",
     "ReachMap",
     "Result",
+    "RelativePosition",
     "Robot",
     "Scene",
     "Target",

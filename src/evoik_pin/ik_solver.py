@@ -35,8 +35,8 @@ import numpy as np
 from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goal_verdict, split_options
 from .errors import ConfigurationError, EvoikError
 from .goals import is_goal_list
-from .goals.binding import bind
 from .goals.goal import Goal
+from .goals.stack import bind
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
@@ -150,7 +150,7 @@ class IKSolver:
         return p
 
     def _goal_problem(self, bound: tuple, q0) -> IKProblem:
-        """:meth:`problem` of a goal list bound to the robot (``bound``: :func:`~evoik_pin.goals.binding.bind`'s
+        """:meth:`problem` of a goal list bound to the robot (``bound``: :func:`~evoik_pin.goals.stack.bind`'s
         (goals, stack, pt, Rt): the goals' checks made, the stack cached for equal goals), q0 checked; the box is the
         solver's own arrays, the same every call (the plan keeps its seed table and engine while the box arrays are
         the same)."""

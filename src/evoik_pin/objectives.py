@@ -12,7 +12,7 @@ Terms and their units:
   roll-pitch-yaw angles (wrapped differences);
 * :class:`MaxJointDisplacement`: paper 000's ``max_k |q_k - q_init,k|`` (rad);
 * :class:`WeightedJointDisplacement`: ``sqrt(sum_k K_k (q_k - q_prev,k)^2)`` (papers 001, 002 eq. 21, 003);
-* :class:`Manipulability`: paper 003's ``1 / (Y + 1)`` with Y = sqrt(det(J J^T)) of chosen rows, or -Y;
+* :class:`ManipulabilityCost`: paper 003's ``1 / (Y + 1)`` with Y = sqrt(det(J J^T)) of chosen rows, or -Y;
 * :class:`JointLimitMargin`: 1 - (smallest normalized distance to a limit), 0 at mid-range, 1 at a limit.
 """
 
@@ -27,7 +27,7 @@ from .errors import OptionError
 
 __all__ = [
     "JointLimitMargin",
-    "Manipulability",
+    "ManipulabilityCost",
     "MaxJointDisplacement",
     "Objective",
     "OrientationError",
@@ -296,7 +296,7 @@ class WeightedJointDisplacement(Objective):
         return f"WeightedJointDisplacement(gains={self.gains.tolist()})"
 
 
-class Manipulability(Objective):
+class ManipulabilityCost(Objective):
     """Manipulability cost of paper 003.
 
     ``form="inverse"``: ``1 / (Y + 1)`` (to minimize); ``form="negative"``: ``-Y``; ``form="value"``: Y.
@@ -319,7 +319,7 @@ class Manipulability(Objective):
         return -Y if self.form == "negative" else Y
 
     def __repr__(self) -> str:
-        return f"Manipulability(rows={self.rows!r}, form={self.form!r})"
+        return f"ManipulabilityCost(rows={self.rows!r}, form={self.form!r})"
 
 
 class JointLimitMargin(Objective):

@@ -16,6 +16,8 @@ import numpy as np
 
 from .errors import BoundsError, ConfigurationError, OptionError
 from .goals import bind, is_goal_list
+from .goals.registry import KIND_BEYOND_FRAME
+from .goals.stack import owned
 from .objectives import (
     POSE_METRICS,
     Objective,
@@ -27,7 +29,6 @@ from .objectives import (
 )
 from .robot import Robot
 from .robot.robot import NEAR_UNBOUNDED
-from .solvers.lm.layout import KIND_BEYOND_FRAME, owned
 from .solvers.options import check_positive
 from .target import MAX_TARGET_NORM, Target
 
@@ -310,7 +311,7 @@ class IKProblem:
         return ([g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
                  for g, T in zip(self.goals, poses, strict=True)], [None] * len(self.goals))
 
-    # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal_set)
+    # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal)
     @property
     def goal_sets(self) -> list[int]:
         """Indices of the goals that are goal sets (any one of several targets)."""
@@ -437,7 +438,7 @@ class IKProblem:
             return IKProblem(self.robot, self.target, lower=self.lower, upper=self.upper,
                              tolerance=min(tolerance, self.tolerance),
                              rotation_tolerance=min(tolerance, self.rotation_tolerance))
-        from .solvers.lm.layout import G_RTOL, G_TOL
+        from .goals.stack import G_RTOL, G_TOL
 
         tight = replace(self, goals=list(self.goals), evaluations=0)
         stack, pt, Rt = tight._goal_stack

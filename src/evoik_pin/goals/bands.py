@@ -1,6 +1,6 @@
 """Per-axis tolerance bands and free axes of the goals on one frame (:class:`Pose`, :class:`Position`,
 :class:`Orientation`), their packing into the kernel's ``aux`` row, and the NumPy twin of the kernel's errors of
-the kinds of :mod:`evoik_pin.solvers.lm.axes` (populations for the evolutionary solvers, ``Result.goal_errors``).
+the banded kinds (``solvers/lm/axes.py``; populations for the evolutionary solvers, ``Result.goal_errors``).
 
 A pose's error has six components: the position error seen in the target frame, ``R_t^T (p - p_t)`` (m), then the
 rotation vector ``log3(R_t^T R)`` (rad); a position's three are ``p - p_t`` in the base frame (a position target
@@ -24,19 +24,17 @@ import numpy as np
 
 from ..errors import OptionError
 from ..lie import log3
-from ..solvers.lm.layout import (
-    AUX_AXIS,
-    AUX_BAND,
-    AUX_INNER,
-    AUX_SIZE,
-    AUX_SWING,
-    KIND_DIRECTION,
-    KIND_LOOK_AT,
-    KIND_POSE_AXES,
-    KIND_POSITION_BAND,
-)
+from .registry import BANDED_LOG6, BANDED_POINT
 
-__all__ = ["AXES", "band_aux", "band_errors", "parse_band", "parse_free", "parse_pose_axes", "tolerance_text"]
+__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_band",
+           "parse_free", "parse_pose_axes", "tolerance_text"]
+
+#: The ``aux`` row of a goal with bands or free axes (read by the compiled ``solvers/lm/axes.py``): AUX_INNER (6,)
+#: the residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
+#: the half-widths the success test accepts (inf free, 0 under a norm tolerance), AUX_SWING the one free rotation
+#: axis (0, 1, 2: x, y, z of the target frame) whose swing residual replaces the rotation vector, or -1.
+AUX_INNER, AUX_BAND, AUX_SWING = 0, 6, 12
+AUX_SIZE = 13
 
 #: The axis names of a pose's six error components, in their order.
 AXES = ("x", "y", "z", "rx", "ry", "rz")
@@ -135,31 +133,25 @@ def _excess_norm(V: np.ndarray, band: np.ndarray) -> np.ndarray:
     return np.sqrt((X * X).sum(axis=1))
 
 
-def _angles(A: np.ndarray, D: np.ndarray) -> np.ndarray:
+def angles(A: np.ndarray, D: np.ndarray) -> np.ndarray:
     """Angles (N,) rad between the vectors A (N, 3) and D (N, 3), by atan2 (accurate near 0 and pi)."""
     return np.arctan2(np.linalg.norm(np.cross(A, D), axis=1), (A * D).sum(axis=1))
 
 
 def band_errors(kind: int, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray,
                 aux: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for a goal of a
-    kind of :mod:`evoik_pin.solvers.lm.axes` with target (pt (3,), Rt (3, 3)) and aux row ``aux``: the numbers its
-    success test compares with the goal's tolerances, as the kernel computes them (0 where a kind has none)."""
+    """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for a goal with
+    bands or free axes (kind ``BANDED_LOG6``, ``BANDED_POINT`` or ``BANDED_ROTATION``) with target (pt (3,), Rt
+    (3, 3)) and aux row ``aux``: the numbers its success test compares with the goal's tolerances, as the compiled
+    ``solvers/lm/axes.py`` computes them (0 where a kind has none)."""
     N = P.shape[0]
     zeros = np.zeros(N)
-    if kind in (KIND_DIRECTION, KIND_LOOK_AT):
-        A = R @ aux[AUX_AXIS:AUX_AXIS + 3]
-        if kind == KIND_DIRECTION:
-            return zeros, _angles(A, np.broadcast_to(pt, A.shape))
-        D = pt - P
-        rho = np.linalg.norm(D, axis=1)
-        return zeros, np.where(rho < 1e-12, np.pi, _angles(A, D))
     pos = zeros
-    if kind == KIND_POSITION_BAND:
+    if kind == BANDED_POINT:
         return _excess_norm(P - pt, aux[AUX_BAND:AUX_BAND + 3]), zeros
-    if kind == KIND_POSE_AXES:
+    if kind == BANDED_LOG6:
         pos = _excess_norm((P - pt) @ Rt, aux[AUX_BAND:AUX_BAND + 3])  # rows: R_t^T (p - p_t)
     j = int(aux[AUX_SWING])
     if j >= 0:
-        return pos, _angles(R[:, :, j], np.broadcast_to(Rt[:, j], (N, 3)))
+        return pos, angles(R[:, :, j], np.broadcast_to(Rt[:, j], (N, 3)))
     return pos, _excess_norm(log3(Rt.T @ R), aux[AUX_BAND + 3:AUX_BAND + 6])

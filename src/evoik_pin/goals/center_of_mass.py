@@ -9,12 +9,26 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import FrameError, OptionError, TargetError
-from ..solvers.lm import layout as L  # the aux row's A_COM_* offsets, read by solvers/lm/balance.py
-from ..solvers.lm.layout import KIND_COM, KIND_COM_SUPPORT
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal, number, point3
+from ..errors import FrameError, GoalsFileError, OptionError, TargetError
+from ..io.datafile import Flow
+from .file_entries import FileKind, number, position_target, unknown_keys
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
+from .goal import number as goal_number
+from .registry import COM_POINT, COM_SUPPORT, FAMILY_BEYOND_FRAME, KindCode
 
-__all__ = ["CenterOfMass", "com_of", "contact_points", "polygon_distance"]
+__all__ = ["A_COM_AXES", "A_COM_BODIES", "A_COM_MASS", "A_COM_MOMENT", "A_COM_POINTS", "A_COM_SHRINK", "KIND_COM",
+           "KIND_COM_SUPPORT", "CenterOfMass", "com_of", "contact_points", "polygon_distance"]
+
+#: The kernel codes of the centre of mass at a point on chosen axes (3 rows, the others zeroed) and of its ground
+#: projection inside a support polygon (2 rows).
+KIND_COM, KIND_COM_SUPPORT = COM_POINT, COM_SUPPORT
+#: Their ``aux`` row (read by the compiled ``solvers/lm/balance.py``): total mass M (kg), the first moment (kg m, base
+#: frame) of the bodies no joint moves, the axes mask (1.0 on the constrained axes; KIND_COM) or (KIND_COM_SUPPORT)
+#: the shrink s (m) of the support polygon and its number K of contact points; then A_COM_BODIES + 5 k (k < m):
+#: physical joint k's body mass m_k (kg), first moment m_k c_k (kg m, in the joint's folded frame) and the mass of
+#: its whole subtree (kg); then, for KIND_COM_SUPPORT, A_COM_BODIES + 5 m + 4 i: contact point i's physical joint
+#: (-1: none) and its position (m) in that joint's folded frame (in the base frame for -1).
+A_COM_MASS, A_COM_MOMENT, A_COM_AXES, A_COM_SHRINK, A_COM_POINTS, A_COM_BODIES = 0, 1, 4, 4, 5, 7
 
 _AXES = "xyz"
 
@@ -45,6 +59,8 @@ class CenterOfMass(Goal):
     weight: float = 1.0
     tolerance: float = DEFAULT_GOAL_TOLERANCE
     rotation_tolerance: float | None = None
+    KIND_CODES = (KindCode(KIND_COM, (0, 1, 2), FAMILY_BEYOND_FRAME),
+                  KindCode(KIND_COM_SUPPORT, (0, 1), FAMILY_BEYOND_FRAME))
 
     def __init__(self, point=None, axes: str = _AXES, support=None, margin: float = 0.0, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
@@ -65,7 +81,7 @@ class CenterOfMass(Goal):
             object.__setattr__(self, "point", None)
             object.__setattr__(self, "axes", "xy")
             object.__setattr__(self, "support", _support(support))
-            margin = number(margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0")
+            margin = goal_number(margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0")
             if margin < 0:
                 raise OptionError(f"margin (m) of the centre-of-mass support goal must be >= 0, got {margin!r}")
             object.__setattr__(self, "margin", margin)
@@ -84,8 +100,8 @@ class CenterOfMass(Goal):
         return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout of
-        :mod:`~evoik_pin.solvers.lm.layout`). Raises TargetError for a robot without mass, FrameError for an
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout
+        above). Raises TargetError for a robot without mass, FrameError for an
         unknown support frame or one without collision geometry."""
         mc = robot.mass_constants
         if not mc.total > 0.0:
@@ -93,18 +109,28 @@ class CenterOfMass(Goal):
                               "CenterOfMass goal needs the links' masses")
         m = robot.tree.m
         points = [] if self.support is None else _bound_points(robot, self.support)
-        aux = np.zeros(L.A_COM_BODIES + 5 * m + 4 * len(points))
-        aux[L.A_COM_MASS] = mc.total
-        aux[L.A_COM_MOMENT:L.A_COM_MOMENT + 3] = mc.fixed_moment
-        body = aux[L.A_COM_BODIES:L.A_COM_BODIES + 5 * m].reshape(m, 5)
+        aux = np.zeros(A_COM_BODIES + 5 * m + 4 * len(points))
+        aux[A_COM_MASS] = mc.total
+        aux[A_COM_MOMENT:A_COM_MOMENT + 3] = mc.fixed_moment
+        body = aux[A_COM_BODIES:A_COM_BODIES + 5 * m].reshape(m, 5)
         body[:, 0], body[:, 1:4], body[:, 4] = mc.masses, mc.moments, mc.subtree
         if self.support is None:
-            aux[L.A_COM_AXES:L.A_COM_AXES + 3] = [1.0 if a in self.axes else 0.0 for a in _AXES]
+            aux[A_COM_AXES:A_COM_AXES + 3] = [1.0 if a in self.axes else 0.0 for a in _AXES]
         else:
-            aux[L.A_COM_SHRINK] = self.margin + self.tolerance
-            aux[L.A_COM_POINTS] = len(points)
-            aux[L.A_COM_BODIES + 5 * m:] = np.ravel(points)
+            aux[A_COM_SHRINK] = self.margin + self.tolerance
+            aux[A_COM_POINTS] = len(points)
+            aux[A_COM_BODIES + 5 * m:] = np.ravel(points)
         return aux, mc.subtree > 0.0
+
+    def marker(self) -> tuple[str, np.ndarray, None] | None:
+        """A sphere at the point (node ``center_of_mass``); None for a support polygon (no point to mark)."""
+        return None if self.point is None else ("center_of_mass", self.point.copy(), None)
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: center_of_mass`` (no frame): ``target: {position}`` (m) with optional ``axes``, or ``support:``
+        ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m); weight, tolerance."""
+        return FileKind("center_of_mass", cls, (), position_target, _file_entry, read=_file_goal, write=_file_entry)
 
     def batch_key(self) -> tuple:
         """What this goal's kernel numbers depend on besides its target point (solve_many batches lists alike)."""
@@ -353,3 +379,42 @@ def _half_planes(P: np.ndarray):
     d = np.roll(hull, -1, axis=0) - hull
     n = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]  # outward: right of each edge
     return n, (n * hull).sum(axis=1)
+
+
+def _file_goal(entry: dict, what: str) -> CenterOfMass:
+    """A ``kind: center_of_mass`` entry of a goals file (:meth:`CenterOfMass.file_kind`)."""
+    unknown_keys(entry, ("kind", "target", "axes", "support", "margin", "weight", "tolerance"),
+                 f"{what}, a center_of_mass goal (it has no frame)")
+    options = {key: number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "margin")
+               if key in entry}
+    try:
+        if "target" in entry:
+            if not isinstance(entry["target"], dict):
+                raise GoalsFileError(f"target must be a mapping (position), got {entry['target']!r}")
+            if "axes" in entry:
+                options["axes"] = entry["axes"]
+            return CenterOfMass(point=position_target(entry["target"]), **options)
+        if "support" not in entry:
+            raise GoalsFileError("a center_of_mass goal needs target: {position: [x, y, z]} (m) or support: "
+                                 "{frame: [[x, y, z], ...]} or [frames]")
+        return CenterOfMass(support=entry["support"], **options)
+    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
+        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+
+
+def _file_entry(goal: CenterOfMass) -> dict:
+    """A centre-of-mass goal as a goals file writes it."""
+    entry: dict = {"kind": "center_of_mass"}
+    if goal.support is None:
+        entry["target"] = Flow(position=[float(v) + 0.0 for v in goal.point])
+        entry["axes"] = goal.axes
+    else:
+        given = {f: p for f, p in goal.support.items() if p is not None}
+        entry["support"] = ({f: [[float(v) + 0.0 for v in row] for row in given.get(f, [])] for f in goal.support}
+                            if given else list(goal.support))
+        if goal.margin:
+            entry["margin"] = float(goal.margin)
+    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE)):
+        if getattr(goal, key) != default:
+            entry[key] = float(getattr(goal, key))
+    return entry

@@ -7,10 +7,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import TargetError
-from ..solvers.lm.layout import AUX_AXIS, AUX_SIZE, KIND_DIRECTION
+from ..io.datafile import Flow
+from .bands import AUX_SIZE, angles
+from .file_entries import FileKind, pointing, vector_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .registry import AXIS_ALONG, FAMILY_AXES, KindCode
 
-__all__ = ["Direction", "unit_vector"]
+__all__ = ["AUX_AXIS", "KIND_DIRECTION", "Direction", "unit_vector"]
+
+#: A direction's kernel code: the frame's axis minus the wanted unit direction (3 rows, base frame).
+KIND_DIRECTION = AXIS_ALONG
+#: The ``aux`` row of a pointing goal (read by the compiled ``solvers/lm/axes.py``): AUX_AXIS (3,) the frame's unit
+#: axis.
+AUX_AXIS = 0
 
 
 def unit_vector(value, what: str) -> np.ndarray:
@@ -49,6 +58,18 @@ class _Pointing(Goal):
     def reports_angle(self) -> bool:
         return True
 
+    def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
+                          ) -> tuple[np.ndarray, np.ndarray]:
+        """(zeros (N,), angles (N,) rad) between the axis of the frames (N, 3, 3) and the wanted direction (for
+        a point pt: the line from each origin P (N, 3) to it; pi on the point), as the compiled kernel's."""
+        A = R @ self.axis
+        zeros = np.zeros(P.shape[0])
+        if not self.has_point:
+            return zeros, angles(A, np.broadcast_to(pt, A.shape))
+        D = pt - P
+        rho = np.linalg.norm(D, axis=1)
+        return zeros, np.where(rho < 1e-12, np.pi, angles(A, D))
+
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -65,6 +86,8 @@ class Direction(_Pointing):
     weight: float = 1.0
     tolerance: float = DEFAULT_GOAL_TOLERANCE
     rotation_tolerance: float | None = None
+    has_point = False
+    KIND_CODES = (KindCode(KIND_DIRECTION, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
 
     def __init__(self, frame: str, axis, direction, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
@@ -73,6 +96,16 @@ class Direction(_Pointing):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.direction.copy(), np.eye(3)
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: direction``: ``axis`` and ``target: {direction}``; weight, tolerance (rad)."""
+        return FileKind("direction", cls, ("weight", "tolerance", "axis"), vector_target("direction"),
+                        lambda g: Flow(direction=[float(v) + 0.0 for v in g.direction]), pointing(cls))
+
+    def marker(self) -> None:
+        """None: a direction has no place to mark."""
+        return None
 
     def __repr__(self) -> str:
         return (f"Direction({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "

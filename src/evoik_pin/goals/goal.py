@@ -1,5 +1,15 @@
 """The base of every goal kind: the frame it is on, its weight and tolerances, checked when the goal is made
-(see :mod:`evoik_pin.goals`)."""
+(see :mod:`evoik_pin.goals`); goal sets; and what the kinds on two frames share (their checks, ``aux`` row and
+placements over a population: :func:`check_frame_pair`, :func:`pack_frame_pair`, :func:`pair_placements`).
+
+Goal sets: one goal whose target is any one of several (``Pose(frame, [T1, ..., Tk])``,
+``Position(frame, [p1, ..., pk])``), the grasps a planner offers of which any will do.
+
+A goal set is a goal like the others (its frame, weight and tolerances), packed for the kernel with its first
+member's target; its ``alternatives`` hold one single-target goal per member, in the order given. Solvers try the
+members (:meth:`evoik_pin.problem.IKProblem.variants`); ``Result.chosen[i]`` is the index of the member goal ``i``
+meets.
+"""
 
 from __future__ import annotations
 
@@ -10,9 +20,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
-from .bands import AXES, band_aux, band_errors, parse_pose_axes
+from .bands import AUX_SIZE, AXES, band_aux, band_errors, parse_pose_axes
+from .registry import register
 
-__all__ = ["DEFAULT_GOAL_TOLERANCE", "Goal", "number", "point3"]
+__all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
+           "check_frame_pair", "init_set", "is_set", "number", "pack_frame_pair", "pair_placements", "point3"]
 
 #: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation).
 DEFAULT_GOAL_TOLERANCE = 1e-6
@@ -42,7 +54,20 @@ def point3(value, what: str) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Goal:
-    """A goal on one frame (abstract: :class:`Pose`, :class:`Position`). See the module docstring."""
+    """A goal on one frame (abstract: :class:`Pose`, :class:`Position`). See the module docstring.
+
+    A kind (a subclass) declares what the solvers need of it: ``KIND_CODES``, its kernel codes
+    (:class:`.registry.KindCode`: rows, compiled family, orientation, position, angle; registered when the class is
+    made), :meth:`population_errors` (its violation over a population, NumPy), :meth:`file_kind` (its entry in
+    goals files) and :meth:`marker` (its viewer marker)."""
+
+    #: The kind's kernel codes (:class:`.registry.KindCode`); a class attribute, registered by __init_subclass__.
+    KIND_CODES = ()
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        if "KIND_CODES" in cls.__dict__:
+            register(cls, *cls.KIND_CODES)
 
     frame: str
     weight: float = 1.0
@@ -51,7 +76,7 @@ class Goal:
     #: The LM kernel's goal kind (``KIND_*``), and whether the goal constrains orientation.
     kind: int = field(default=-1, init=False, repr=False)
     has_orientation: bool = field(default=False, init=False, repr=False)
-    #: A goal set's members (:mod:`.goal_set`): one single-target goal each; None for one target.
+    #: A goal set's members (:func:`init_set`): one single-target goal each; None for one target.
     alternatives: tuple | None = field(default=None, init=False, repr=False)
 
     def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool) -> None:
@@ -107,7 +132,7 @@ class Goal:
     has_position = True
 
     def aux(self) -> np.ndarray | None:
-        """The kernel's ``aux`` row of this goal (:mod:`evoik_pin.solvers.lm.layout`'s ``AUX_*``, read-only; None:
+        """The kernel's ``aux`` row of this goal (its kind's layout, e.g. :mod:`.bands`' ``AUX_*``, read-only; None:
         its kind reads none), made once with the goal (:meth:`_set_aux`)."""
         return self.__dict__.get("_aux")
 
@@ -126,6 +151,18 @@ class Goal:
             return None
         return band_errors(self.kind, P, R, pt, Rt, aux)
 
+    @classmethod
+    def file_kind(cls):
+        """This kind's entry in goals files (a :class:`.file_entries.FileKind`: its ``kind:`` name, fields, how its
+        target is read and written), or None for a kind goals files do not take."""
+        return None
+
+    def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:
+        """This goal's viewer marker: (node name, position (3,) m in the base frame, rotation (3, 3) for a triad or
+        None for a sphere), or None when its target is no place in the base frame. Default: its frame's target."""
+        p, R = self.encode()
+        return self.frame, p, (R if self.has_orientation else None)
+
     def encode(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
         """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal."""
         raise NotImplementedError
@@ -136,15 +173,9 @@ class Goal:
         tolerances (:mod:`.bands`)."""
         pt, Rt = self.encode()
         aux = self.aux()
-        if aux is not None:  # the kernel's own errors (its success test's), by its compiled code for one pose
-            from ..solvers.lm.axes import axes_error
-
-            # C-contiguous arrays, the one signature compiled_kernel() loads before any clock (a target's rotation
-            # from Pinocchio is Fortran-ordered: another numba type, compiled or loaded mid-search)
-            _, pos, rot = axes_error(self.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation),
-                                     np.ascontiguousarray(pt), np.ascontiguousarray(Rt), aux, np.empty((3, 3)),
-                                     np.empty(3), np.empty(6))
-            return self.reported(pos, rot)
+        if aux is not None:  # the kernel's own errors (its success test's), by their NumPy twin for one pose
+            pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], pt, Rt)
+            return self.reported(pos[0], rot[0])
         pos = float(np.linalg.norm(T.translation - pt))
         if not self.has_orientation:
             return pos, None
@@ -166,3 +197,95 @@ class Goal:
         """Whether errors (m or None, rad or None) are within this goal's tolerances."""
         return (position_error is None or position_error <= self.tolerance) and (orientation_error is None
                                                      or orientation_error <= self.rotation_tolerance)
+
+
+# ------------------------------------------------------------------ goal sets
+def is_set(target, single_shape: tuple[int, ...]) -> bool:
+    """Whether ``target`` is a list of targets rather than one: an array of shape (k, *single_shape), or a list
+    or tuple whose members are ``pin.SE3`` or arrays of ``single_shape`` (an empty one too, refused by
+    :func:`init_set`). A (4, 4) nested list is one pose, a 3-list of numbers one position."""
+    if isinstance(target, np.ndarray):
+        return target.ndim == len(single_shape) + 1 and target.shape[1:] == single_shape
+    if not isinstance(target, (list, tuple)):
+        return False
+    if not target:
+        return True
+    return all(isinstance(t, pin.SE3) or np.shape(t) == single_shape for t in target)
+
+
+def init_set(goal, targets, single, what: str) -> None:
+    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``: its target
+    is the first member's, its ``alternatives`` the members' goals. ``what`` names the kind and its members in
+    errors ("Pose" and "poses"). TargetError for an empty set, naming the member index of a bad one."""
+    kind, members = what.split()
+    if len(targets) == 0:
+        raise TargetError(f"{kind} on {goal.frame!r}: a goal set with no {members}; give at least one "
+                          f"(a list of {members}, or one)")
+    made = []
+    for i, t in enumerate(targets):
+        try:
+            made.append(single(t))
+        except TargetError as exc:
+            raise TargetError(f"{kind} on {goal.frame!r}, member {i} of the goal set: {exc}") from None
+    object.__setattr__(goal, "target", made[0].target)
+    object.__setattr__(goal, "alternatives", tuple(made))
+    encoded = [m.encode() for m in made]  # the members' kernel targets, (k, 3) and (k, 3, 3), for vectorized use
+    object.__setattr__(goal, "member_targets", (np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])))
+
+
+# ------------------------------------------------------------------ goals on two frames
+#: What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
+#: :class:`~.relative_position.RelativePosition`): frame b placed relative to frame a. Their ``aux`` row (read by the
+#: compiled ``solvers/lm/balance.py``): frame a's physical joint (-1: the base) at A_REL_JOINT, its folded placement
+#: R (9, row-major) at A_REL_R and p (3,) at A_REL_P; the AUX_SIZE band columns of a pose with axes from A_REL_BAND
+#: (:mod:`.bands`; unused by the kinds without bands); then A_REL_SIGNS + k (k < m), per physical joint k: +1 when it
+#: moves frame b only, -1 frame a only, :data:`BOTH` (or 0, as the kind asks) both, 0 neither.
+A_REL_JOINT, A_REL_R, A_REL_P, A_REL_BAND = 0, 1, 10, 13
+A_REL_SIGNS = A_REL_BAND + AUX_SIZE
+#: The sign of a joint that moves both frames, for a kind whose error sees them (a vector in the world's axes turns
+#: with them); kinds seen in frame a's axes mark those joints 0 (they move the two frames together).
+BOTH = 2.0
+
+
+def check_frame_pair(frame_a, frame_b, kind: str) -> None:
+    """FrameError unless ``frame_a`` and ``frame_b`` are two different frame names (non-empty strings); ``kind``
+    names the goal in the message."""
+    for name, value in (("frame_a", frame_a), ("frame_b", frame_b)):
+        if not isinstance(value, str) or not value:
+            raise FrameError(f"{kind}'s {name} is a frame name (a non-empty string), got {value!r}")
+    if frame_a == frame_b:
+        raise FrameError(f"{kind} needs two frames, got {frame_a!r} twice")
+
+
+def pack_frame_pair(robot, frame_a: str, frame_b: str, band: np.ndarray | None = None,
+                    both: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """(aux row, support row (m,) bool) of a goal on frames a and b of ``robot`` (the ``A_REL_*`` layout above):
+    frame a's joint and folded placement, the band columns ``band`` (AUX_SIZE,) when given, and each joint's sign
+    (``both`` for the joints moving both frames). Raises FrameError for an unknown frame or two frames no joint
+    moves apart."""
+    ja, Ra, pa = robot.frame_constants(frame_a)
+    jb = robot.frame_constants(frame_b)[0]
+    tree = robot.tree
+    on_a, on_b = np.zeros(tree.m, dtype=bool), np.zeros(tree.m, dtype=bool)
+    on_a[tree.ancestors(ja)], on_b[tree.ancestors(jb)] = True, True
+    signs = on_b.astype(float) - on_a.astype(float)  # joints moving both move the two frames together
+    if not signs.any():
+        raise FrameError(f"no active joint of {robot.name} moves frame {frame_b!r} relative to "
+                         f"{frame_a!r}: load the robot with both among its tips (tips=[...]) or tips='all'")
+    signs[on_a & on_b] = both
+    aux = np.zeros(A_REL_SIGNS + tree.m)
+    aux[A_REL_JOINT] = ja
+    aux[A_REL_R:A_REL_R + 9] = Ra.ravel()
+    aux[A_REL_P:A_REL_P + 3] = pa
+    if band is not None:  # bands, free axes
+        aux[A_REL_BAND:A_REL_BAND + AUX_SIZE] = band
+    aux[A_REL_SIGNS:] = signs
+    return aux, on_a | on_b
+
+
+def pair_placements(robot, Q: np.ndarray, frame_a: str, frame_b: str
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Over a population Q (N, n): frame a's rotations R_a (N, 3, 3) (base frame), the vectors p_b - p_a (N, 3)
+    (m, base frame) and frame b's rotations R_b (N, 3, 3), from the robot's batch kinematics."""
+    P, R = robot.fk_batch(Q, validate=False, frames=[frame_a, frame_b])
+    return R[:, 0], P[:, 1] - P[:, 0], R[:, 1]

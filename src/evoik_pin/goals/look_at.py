@@ -6,11 +6,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..solvers.lm.layout import KIND_LOOK_AT
+from ..io.datafile import Flow
 from .direction import _Pointing
+from .file_entries import FileKind, pointing, vector_target
 from .goal import DEFAULT_GOAL_TOLERANCE, point3
+from .registry import AXIS_AT, FAMILY_AXES, KindCode
 
-__all__ = ["LookAt"]
+__all__ = ["KIND_LOOK_AT", "LookAt"]
+
+#: A look-at's kernel code: the frame's axis minus the unit direction to the point (3 rows, base frame).
+KIND_LOOK_AT = AXIS_AT
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -27,6 +32,8 @@ class LookAt(_Pointing):
     weight: float = 1.0
     tolerance: float = DEFAULT_GOAL_TOLERANCE
     rotation_tolerance: float | None = None
+    has_point = True
+    KIND_CODES = (KindCode(KIND_LOOK_AT, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
 
     def __init__(self, frame: str, axis, point, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
@@ -35,6 +42,12 @@ class LookAt(_Pointing):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.point.copy(), np.eye(3)
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: look_at``: ``axis`` and ``target: {point}`` (m); weight, tolerance (rad)."""
+        return FileKind("look_at", cls, ("weight", "tolerance", "axis"), vector_target("point"),
+                        lambda g: Flow(point=[float(v) + 0.0 for v in g.point]), pointing(cls))
 
     def __repr__(self) -> str:
         return (f"LookAt({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "

@@ -8,12 +8,16 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError, TargetError
-from ..solvers.lm.layout import KIND_ORIENTATION
 from ..target import _rotation
 from .bands import AXES, band_aux, parse_band, parse_free
+from .file_entries import FileKind, orientation_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .registry import BANDED_ROTATION, FAMILY_AXES, KindCode
 
-__all__ = ["Orientation"]
+__all__ = ["KIND_ORIENTATION", "Orientation"]
+
+#: An orientation's kernel code: the rotation vector's components with bands (a norm tolerance: bands of 0).
+KIND_ORIENTATION = BANDED_ROTATION
 
 #: The error components of an orientation: the rotation vector's.
 _ROTATION_AXES = AXES[3:]
@@ -38,6 +42,7 @@ class Orientation(Goal):
     band: object = None
     free: tuple = ()
     has_position = False
+    KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  free=None) -> None:
@@ -67,6 +72,16 @@ class Orientation(Goal):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(3), self.target.copy()
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free."""
+        return FileKind("orientation", cls, ("weight", "tolerance", "free"), orientation_target,
+                        lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]})
+
+    def marker(self) -> None:
+        """None: an orientation alone has no place to mark."""
+        return None
 
     def __repr__(self) -> str:
         rpy = np.round(pin.rpy.matrixToRpy(self.target), 6).tolist()

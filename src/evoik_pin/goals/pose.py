@@ -8,13 +8,30 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..solvers.lm.layout import KIND_POSE, KIND_POSE_AXES
 from ..target import Target
-from . import goal_set
 from .bands import tolerance_text
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .file_entries import FileKind, matrix_text, pose_target
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
+from .registry import BANDED_LOG6, FAMILY_AXES, FAMILY_FRAME, LOG6, KindCode
 
-__all__ = ["Pose"]
+__all__ = ["KIND_POSE", "KIND_POSE_AXES", "Pose", "se3_target"]
+
+#: A pose's kernel codes: under a norm tolerance (the SE(3) logarithm), and with bands or free axes.
+KIND_POSE, KIND_POSE_AXES = LOG6, BANDED_LOG6
+
+
+def se3_target(target, where: str) -> pin.SE3:
+    """``target`` (a (4, 4) homogeneous matrix, a ``pin.SE3`` or a Target with a rotation; m) as a ``pin.SE3``, or
+    a TargetError naming ``where`` (a 3-vector is a position, not a pose)."""
+    if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
+        raise TargetError(f"{where}: a 3-vector is a position; give a 4 x 4 pose or a pin.SE3")
+    try:
+        t = Target.coerce(target)
+    except TargetError as exc:
+        raise TargetError(f"{where}: {exc}") from None
+    if t.rotation is None or t.planar:
+        raise TargetError(f"{where} needs a target with a rotation (4 x 4 pose or pin.SE3)")
+    return pin.SE3(np.array(t.rotation), np.array(t.position))
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -34,7 +51,7 @@ class Pose(Goal):
     the frame's and the target's axis of that name. See :mod:`evoik_pin.goals.bands`.
 
     ``target`` may be a goal set: a list of poses or a (k, 4, 4) array, any one of which will do
-    (:mod:`.goal_set`).
+    (:func:`.goal.init_set`).
     """
 
     target: object = None
@@ -44,14 +61,16 @@ class Pose(Goal):
     #: The per-axis half-widths (6,) (m, rad; inf on free axes) of a banded pose, else None; the free axes' names.
     band: object = None
     free: tuple = ()
+    KIND_CODES = (KindCode(KIND_POSE, (0, 1, 2, 3, 4, 5), FAMILY_FRAME, oriented=True, angle=True),
+                  KindCode(KIND_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_AXES, oriented=True, angle=True))
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  rotation_tolerance: float | None = None, free=None) -> None:
         self._init_pose_axes(frame, weight, tolerance, rotation_tolerance, free, (KIND_POSE, KIND_POSE_AXES),
                              f"Pose on {frame!r}")
         free = self.free
-        if goal_set.is_set(target, (4, 4)):  # any one of several poses
-            return goal_set.init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance,
+        if is_set(target, (4, 4)):  # any one of several poses
+            return init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance,
                                                                   free or None), "Pose poses")
         if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
             raise TargetError(f"Pose on {frame!r}: a 3-vector is a position; use Position({frame!r}, p) or give a "
@@ -67,6 +86,13 @@ class Pose(Goal):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; weight, tolerance (one number or 6
+        half-widths), rotation_tolerance, free."""
+        return FileKind("pose", cls, ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text,
+                        set_member=lambda t: t.se3())
 
     def __repr__(self) -> str:
         p = np.round(self.target.translation, 6).tolist()

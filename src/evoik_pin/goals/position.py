@@ -8,12 +8,15 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..solvers.lm.layout import KIND_POSITION, KIND_POSITION_BAND
-from . import goal_set
 from .bands import AXES, band_aux, parse_band
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .file_entries import FileKind, position_target, position_text
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
+from .registry import BANDED_POINT, FAMILY_AXES, FAMILY_FRAME, POINT, KindCode
 
-__all__ = ["Position"]
+__all__ = ["KIND_POSITION", "KIND_POSITION_BAND", "Position"]
+
+#: A position's kernel codes: under a norm tolerance, and with bands (base frame).
+KIND_POSITION, KIND_POSITION_BAND = POINT, BANDED_POINT
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -26,7 +29,7 @@ class Position(Goal):
     band. See :mod:`evoik_pin.goals.bands`.
 
     ``target`` may be a goal set: a list of 3-vectors or a (k, 3) array, any one of which will do
-    (:mod:`.goal_set`).
+    (:func:`.goal.init_set`).
     """
 
     target: object = None
@@ -35,6 +38,8 @@ class Position(Goal):
     rotation_tolerance: float | None = None
     #: The per-axis half-widths (3,) (m, base frame; inf: free) of a banded position, else None.
     band: object = None
+    KIND_CODES = (KindCode(KIND_POSITION, (0, 1, 2), FAMILY_FRAME),
+                  KindCode(KIND_POSITION_BAND, (0, 1, 2), FAMILY_AXES))
 
     def __init__(self, frame: str, target, weight: float = 1.0,
                  tolerance: float | object = DEFAULT_GOAL_TOLERANCE) -> None:
@@ -45,8 +50,8 @@ class Position(Goal):
             self._init_common(frame, weight, 0.0, None, KIND_POSITION_BAND, False)
         object.__setattr__(self, "band", band)
         self._set_aux(None if band is None else band_aux(band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE))
-        if goal_set.is_set(target, (3,)):  # any one of several points
-            return goal_set.init_set(self, target, lambda p: Position(frame, p, weight, tolerance), "Position points")
+        if is_set(target, (3,)):  # any one of several points
+            return init_set(self, target, lambda p: Position(frame, p, weight, tolerance), "Position points")
         if isinstance(target, pin.SE3) or np.shape(target) == (4, 4):
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m); use Pose({frame!r}, T) for a pose")
         try:
@@ -61,6 +66,11 @@ class Position(Goal):
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: position``: ``target: {position}`` (m); weight, tolerance (one number or 3 half-widths)."""
+        return FileKind("position", cls, ("weight", "tolerance"), position_target, position_text)
 
     def __repr__(self) -> str:
         tol = f"{self.tolerance:g}" if self.band is None else f"{self.band.tolist()}"

@@ -7,23 +7,19 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import FrameError, TargetError
-from ..solvers.lm.layout import (
-    A_REL_BAND,
-    A_REL_JOINT,
-    A_REL_P,
-    A_REL_R,
-    A_REL_SIGNS,
-    AUX_SIZE,
-    KIND_POSE_AXES,
-    KIND_RELATIVE_POSE,
-    KIND_RELATIVE_POSE_AXES,
-)
 from .bands import band_errors, tolerance_text
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal
-from .pose import Pose
+from .file_entries import FileKind, field_entries, matrix_text, pair_goal, pose_target
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, check_frame_pair, pack_frame_pair, pair_placements
+from .pose import se3_target
+from .registry import BANDED_LOG6, FAMILY_BEYOND_FRAME, RELATIVE_BANDED_LOG6, RELATIVE_LOG6, KindCode
 
-__all__ = ["RelativePose"]
+__all__ = ["KIND_RELATIVE_POSE", "KIND_RELATIVE_POSE_AXES", "RelativePose"]
+
+#: The kernel codes of one frame's pose seen from another (6 rows): under a norm tolerance (the SE(3) logarithm), and
+#: with bands or free axes (those of a pose with axes for frame b's pose in frame a's coordinates). Their ``aux`` row:
+#: ``goal.A_REL_*``.
+KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES = RELATIVE_LOG6, RELATIVE_BANDED_LOG6
+
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -51,6 +47,9 @@ class RelativePose(Goal):
     #: The per-axis half-widths (6,) (m, rad; inf on free axes) of a banded goal, else None; the free axes' names.
     band: object = None
     free: tuple = ()
+    KIND_CODES = (KindCode(KIND_RELATIVE_POSE, (0, 1, 2, 3, 4, 5), FAMILY_BEYOND_FRAME, oriented=True, angle=True),
+                  KindCode(KIND_RELATIVE_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_BEYOND_FRAME, oriented=True,
+                           angle=True))
 
     def __init__(self, frame_a: str, frame_b: str, target, weight: float = 1.0,
                  tolerance: float | object = DEFAULT_GOAL_TOLERANCE, rotation_tolerance: float | None = None,
@@ -58,16 +57,9 @@ class RelativePose(Goal):
         self._init_pose_axes(frame_b, weight, tolerance, rotation_tolerance, free,
                              (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES),
                              f"RelativePose of {frame_b!r} seen from {frame_a!r}")
-        if not isinstance(frame_a, str) or not frame_a:
-            raise FrameError(f"RelativePose's frame_a is a frame name (a non-empty string), got {frame_a!r}")
-        if frame_a == frame_b:
-            raise FrameError(f"RelativePose needs two frames, got {frame_a!r} twice")
-        try:
-            pose = Pose(frame_b, target)
-        except TargetError as exc:
-            raise TargetError(f"RelativePose of {frame_b!r} seen from {frame_a!r}: {exc}") from None
+        check_frame_pair(frame_a, frame_b, "RelativePose")
         object.__setattr__(self, "frame_a", frame_a)
-        object.__setattr__(self, "target", pose.target)
+        object.__setattr__(self, "target", se3_target(target, f"RelativePose of {frame_b!r} seen from {frame_a!r}"))
 
     @property
     def frame_b(self) -> str:
@@ -88,26 +80,27 @@ class RelativePose(Goal):
         return np.array(self.target.translation), np.array(self.target.rotation)
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) on ``robot`` (the ``A_REL_*`` layout of
-        :mod:`~evoik_pin.solvers.lm.layout`): frame a's joint and folded placement, and the sign of each joint in
-        the relative motion. Raises FrameError for an unknown frame or two frames no joint moves apart."""
-        ja, Ra, pa = robot.frame_constants(self.frame_a)
-        jb = robot.frame_constants(self.frame)[0]
-        tree = robot.tree
-        on_a, on_b = np.zeros(tree.m, dtype=bool), np.zeros(tree.m, dtype=bool)
-        on_a[tree.ancestors(ja)], on_b[tree.ancestors(jb)] = True, True
-        signs = on_b.astype(float) - on_a.astype(float)  # joints moving both move the two frames together
-        if not signs.any():
-            raise FrameError(f"no active joint of {robot.name} moves frame {self.frame!r} relative to "
-                             f"{self.frame_a!r}: load the robot with both among its tips (tips=[...]) or tips='all'")
-        aux = np.zeros(A_REL_SIGNS + tree.m)
-        aux[A_REL_JOINT] = ja
-        aux[A_REL_R:A_REL_R + 9] = Ra.ravel()
-        aux[A_REL_P:A_REL_P + 3] = pa
-        if self.aux() is not None:  # bands, free axes
-            aux[A_REL_BAND:A_REL_BAND + AUX_SIZE] = self.aux()
-        aux[A_REL_SIGNS:] = signs
-        return aux, on_a | on_b
+        """(aux row, support row (m,) bool) on ``robot`` (:func:`.goal.pack_frame_pair`: frame a's joint and
+        folded placement, the bands, the sign of each joint in the relative motion). Raises FrameError for an
+        unknown frame or two frames no joint moves apart."""
+        return pack_frame_pair(robot, self.frame_a, self.frame, self.aux())
+
+    def marker(self) -> None:
+        """None: the target is a pose in frame a, no place in the base frame."""
+        return None
+
+    #: The optional fields of its goals-file entry: Pose's.
+    FILE_FIELDS = ("weight", "tolerance", "rotation_tolerance", "free")
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: relative_pose``: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a), with
+        Pose's optional fields."""
+        return FileKind("relative_pose", cls, (), pose_target, matrix_text,
+                        read=lambda entry, what: pair_goal(cls, entry, what, "relative_pose", cls.FILE_FIELDS,
+                                                           pose_target),
+                        write=lambda g: ({"frame_a": g.frame_a, "frame": g.frame, "kind": "relative_pose",
+                                          "target": matrix_text(g)} | field_entries(g, cls.FILE_FIELDS)))
 
     def batch_key(self) -> tuple:
         """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
@@ -120,7 +113,7 @@ class RelativePose(Goal):
         rel = robot.fk(q, self.frame_a).actInv(robot.fk(q, self.frame))
         if self.aux() is not None:  # bands, free axes: Pose's errors for b's pose seen from a
             pt, Rt = self.encode()
-            pos, rot = band_errors(KIND_POSE_AXES, rel.translation[None], rel.rotation[None], pt, Rt, self.aux())
+            pos, rot = band_errors(BANDED_LOG6, rel.translation[None], rel.rotation[None], pt, Rt, self.aux())
             return float(pos[0]), float(rot[0])
         return (float(np.linalg.norm(rel.translation - self.target.translation)),
                 float(np.linalg.norm(pin.log3(self.target.rotation.T @ rel.rotation))))
@@ -129,13 +122,12 @@ class RelativePose(Goal):
         """(position errors (N,) m, rotation errors (N,) rad) of a population Q (N, n), as :meth:`robot_errors`."""
         from ..lie import relative_angle
 
-        P, R = robot.fk_batch(Q, validate=False, frames=[self.frame_a, self.frame])
-        Ra = R[:, 0]
-        p_rel = np.einsum("nji,nj->ni", Ra, P[:, 1] - P[:, 0])
-        R_rel = np.einsum("nji,njk->nik", Ra, R[:, 1])
+        Ra, d, Rb = pair_placements(robot, Q, self.frame_a, self.frame)
+        p_rel = np.einsum("nji,nj->ni", Ra, d)
+        R_rel = np.einsum("nji,njk->nik", Ra, Rb)
         pt, Rt = self.encode()
         if self.aux() is not None:  # bands, free axes: Pose's errors for b's pose seen from a
-            return band_errors(KIND_POSE_AXES, p_rel, R_rel, pt, Rt, self.aux())
+            return band_errors(BANDED_LOG6, p_rel, R_rel, pt, Rt, self.aux())
         return np.linalg.norm(p_rel - pt, axis=1), relative_angle(Rt, R_rel)
 
     def __repr__(self) -> str:

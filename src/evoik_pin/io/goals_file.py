@@ -94,38 +94,20 @@ reading the file back gives the same targets bit for bit), a position's as ``pos
 
 from __future__ import annotations
 
-import math
 import os
-import re
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
-from ..goals import (
-    DEFAULT_GOAL_TOLERANCE,
-    CenterOfMass,
-    Direction,
-    Goal,
-    LookAt,
-    Orientation,
-    Pose,
-    Position,
-    RelativePose,
-    bind,
-    is_goal_list,
-)
+from ..goals import Goal, bind, is_goal_list
+from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, number, unknown_keys
 from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
-from ..target import Target
-from .datafile import Flow, data_format, dump_data, read_data, write_text
+from ..goals.registry import kind_classes
+from .datafile import data_format, dump_data, read_data, write_text
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
 
 _TOP_KEYS = ("robot", "floating_base", "tips", "goals", "problems")
-#: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
-_NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 
 
 @dataclass(frozen=True)
@@ -168,155 +150,9 @@ class GoalsFile:
 
 
 # ------------------------------------------------------------------ reading
-def _number(value, what: str) -> float:
-    """A finite number (int, float, or YAML 1.1's text of one such as ``1e-6``; not a bool)."""
-    if isinstance(value, str) and _NUMBER_TEXT.fullmatch(value.strip()):
-        value = float(value)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise GoalsFileError(f"{what} must be a finite number, got {value!r}")
-    return float(value)
-
-
-def _numbers(value, count: int, what: str) -> np.ndarray:
-    if not isinstance(value, list) or len(value) != count:
-        raise GoalsFileError(f"{what} must be a list of {count} numbers, got {value!r}")
-    return np.array([_number(v, f"{what}[{k}]") for k, v in enumerate(value)])
-
-
-def _unknown_keys(entry: dict, accepted, what: str) -> None:
-    unknown = [k for k in entry if k not in accepted]
-    if unknown:
-        raise GoalsFileError(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: "
-                             f"{', '.join(accepted)}")
-
-
-def _pose_target(target: dict) -> Target:
-    """A pose's target: ``matrix`` alone, or ``position`` with ``rpy`` (degrees) or ``rpy_rad``."""
-    _unknown_keys(target, ("position", "rpy", "rpy_rad", "matrix"), "target")
-    if "matrix" in target:
-        if len(target) > 1:
-            raise GoalsFileError(f"target: matrix is the whole pose; give it alone, not with "
-                                 f"{', '.join(k for k in target if k != 'matrix')}")
-        rows = target["matrix"]
-        if not isinstance(rows, list) or len(rows) != 4:
-            raise GoalsFileError(f"target.matrix must be 4 rows of 4 numbers (a homogeneous pose, m), got {rows!r}")
-        return Target.coerce(np.array([_numbers(row, 4, f"target.matrix row {k}") for k, row in enumerate(rows)]))
-    if "position" not in target:
-        raise GoalsFileError("target of a pose needs position: [x, y, z] (m) with rpy: [r, p, y] (degrees) or "
-                             "rpy_rad: (rad), or matrix: a 4 x 4 pose")
-    angles = [k for k in ("rpy", "rpy_rad") if k in target]
-    if len(angles) != 1:
-        raise GoalsFileError("target of a pose needs one of rpy: [r, p, y] (degrees) and rpy_rad: (rad) with its "
-                             f"position, got {'both' if angles else 'neither'}; for a position alone use kind: "
-                             "position")
-    rpy = _numbers(target[angles[0]], 3, f"target.{angles[0]}")
-    return Target.from_rpy(_numbers(target["position"], 3, "target.position (m)"),
-                           np.radians(rpy) if angles[0] == "rpy" else rpy)
-
-
-def _position_target(target: dict) -> np.ndarray:
-    if any(k in target for k in ("rpy", "rpy_rad", "matrix")):
-        raise GoalsFileError("target: a position goal has no orientation (rpy, rpy_rad, matrix); use kind: pose "
-                             "for one")
-    _unknown_keys(target, ("position",), "target")
-    if "position" not in target:
-        raise GoalsFileError("target of a position goal needs position: [x, y, z] (m)")
-    return _numbers(target["position"], 3, "target.position (m)")
-
-
-def _orientation_target(target: dict) -> np.ndarray:
-    """An orientation's target: ``rpy`` (degrees) or ``rpy_rad`` alone, or a 3 x 3 (or 4 x 4) ``matrix``."""
-    _unknown_keys(target, ("rpy", "rpy_rad", "matrix"), "target")
-    if len(target) != 1:
-        raise GoalsFileError("target of an orientation needs one of rpy: [r, p, y] (degrees), rpy_rad: (rad) and "
-                             f"matrix: a 3 x 3 rotation, got {', '.join(target) or 'none'}")
-    if "matrix" in target:
-        rows = target["matrix"]
-        if not isinstance(rows, list) or len(rows) not in (3, 4):
-            raise GoalsFileError(f"target.matrix must be 3 rows of 3 numbers (a rotation), got {rows!r}")
-        return np.array([_numbers(row, len(rows), f"target.matrix row {k}") for k, row in enumerate(rows)])
-    key = next(iter(target))
-    rpy = _numbers(target[key], 3, f"target.{key}")
-    return Target.from_rpy(np.zeros(3), np.radians(rpy) if key == "rpy" else rpy).rotation
-
-
-def _vector_target(name: str) -> Callable[[dict], np.ndarray]:
-    """The reader of a target that is one 3-vector under the key ``name`` (direction, point)."""
-    def read(target: dict) -> np.ndarray:
-        _unknown_keys(target, (name,), "target")
-        if name not in target:
-            raise GoalsFileError(f"target needs {name}: [x, y, z]")
-        return _numbers(target[name], 3, f"target.{name}")
-    return read
-
-
-def _tolerance(value, what: str):
-    """A tolerance: one number, or a list of half-widths (``.inf`` or ``"inf"``: free)."""
-    if not isinstance(value, list):
-        return _number(value, what)
-    return [math.inf if isinstance(v, str) and v.strip().lower() in ("inf", ".inf") or v == math.inf
-            else _number(v, f"{what}[{k}]") for k, v in enumerate(value)]
-
-
-def _free(value, what: str):
-    if isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value)):
-        return value
-    raise GoalsFileError(f"{what} must name axes (a string such as 'rz' or a list of names), got {value!r}")
-
-
-def _axis(value, what: str) -> np.ndarray:
-    return _numbers(value, 3, what)
-
-
-#: How the optional fields other than numbers are read (the others: :func:`_number`).
-_FIELD_READERS = {"tolerance": _tolerance, "free": _free, "axis": _axis}
-
-
-def _matrix_text(goal: Pose) -> dict:
-    return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
-
-
-def _position_text(goal: Position) -> dict:
-    return Flow(position=[float(v) + 0.0 for v in goal.target])
-
-
-@dataclass(frozen=True)
-class GoalKind:
-    """One ``kind:`` of a goals file: its goal class, the optional fields it takes (besides frame, kind and
-    target), how its ``target:`` mapping is read and how a goal's target is written; ``make`` (frame, target,
-    **fields) -> goal where the class takes its arguments in another order (None: the class)."""
-
-    cls: type
-    fields: tuple[str, ...]
-    read_target: Callable[[dict], object]
-    write_target: Callable[[Goal], dict]
-    make: Callable | None = None
-    #: Kinds whose entries are not (frame, target, numbers): the whole entry read (entry, what) -> Goal, and the
-    #: whole entry written (goal) -> dict.
-    read: Callable[[dict, str], Goal] | None = None
-    write: Callable[[Goal], dict] | None = None
-
-
-def _pointing(cls) -> Callable:
-    """``make`` of a pointing kind: its required ``axis`` field first."""
-    def make(frame, target, axis=None, **options):
-        if axis is None:
-            raise GoalsFileError(f"missing field 'axis' (a {cls.__name__} goal points the frame's axis: [x, y, z])")
-        return cls(frame, axis, target, **options)
-    return make
-
-
-#: The goal kinds a goals file takes, by their ``kind:`` name.
-GOAL_KINDS = {
-    "pose": GoalKind(Pose, ("weight", "tolerance", "rotation_tolerance", "free"), _pose_target, _matrix_text),
-    "position": GoalKind(Position, ("weight", "tolerance"), _position_target, _position_text),
-    "orientation": GoalKind(Orientation, ("weight", "tolerance", "free"), _orientation_target,
-                            lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]}),
-    "direction": GoalKind(Direction, ("weight", "tolerance", "axis"), _vector_target("direction"),
-                          lambda g: Flow(direction=[float(v) + 0.0 for v in g.direction]), _pointing(Direction)),
-    "look_at": GoalKind(LookAt, ("weight", "tolerance", "axis"), _vector_target("point"),
-                        lambda g: Flow(point=[float(v) + 0.0 for v in g.point]), _pointing(LookAt)),
-}
+#: The goal kinds a goals file takes, by their ``kind:`` name: what each kind class declares (its ``file_kind()``),
+#: in the order the kinds were declared.
+GOAL_KINDS = {fk.name: fk for fk in (cls.file_kind() for cls in kind_classes()) if fk is not None}
 
 
 #: Preferences a goal list may hold (:mod:`evoik_pin.goals.preferences`), by their ``kind:`` name: (class, fields).
@@ -343,7 +179,7 @@ def _goal(entry, what: str) -> Goal:
     kind = GOAL_KINDS[kind_name]
     if kind.read is not None:  # kinds whose entries are not (frame, target, numbers)
         return kind.read(entry, what)
-    _unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
+    unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
     if "targets" in entry:  # a goal set: any one of several targets
         return _goal_set(entry, what, kind)
     for key in ("frame", "target"):
@@ -360,7 +196,7 @@ def _goal(entry, what: str) -> Goal:
     except (GoalsFileError, TargetError) as exc:
         text = str(exc)
         raise GoalsFileError(f"{what}: {text if text.startswith('target') else 'target: ' + text}") from None
-    options = {key: _FIELD_READERS.get(key, _number)(entry[key], f"{what}: {key}") for key in kind.fields
+    options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in kind.fields
                if key in entry}
     try:
         return (kind.make or kind.cls)(frame, target, **options)
@@ -368,7 +204,7 @@ def _goal(entry, what: str) -> Goal:
         raise GoalsFileError(f"{what}: {exc}") from None
 
 
-def _goal_set(entry: dict, what: str, kind: GoalKind) -> Goal:
+def _goal_set(entry: dict, what: str, kind: FileKind) -> Goal:
     """A goal set (``targets:``, a non-empty list of targets, instead of ``target:``)."""
     frame, targets = entry.get("frame"), entry["targets"]
     if "target" in entry:
@@ -385,91 +221,19 @@ def _goal_set(entry: dict, what: str, kind: GoalKind) -> Goal:
             read.append(kind.read_target(t))
         except (GoalsFileError, TargetError) as exc:
             raise GoalsFileError(f"{what}: targets[{k}]: {exc}") from None
-    options = {key: _number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
-    if kind.cls is Pose:
-        read = [t.se3() for t in read]
+    options = {key: number(entry[key], f"{what}: {key}") for key in kind.fields if key in entry}
+    if kind.set_member is not None:
+        read = [kind.set_member(t) for t in read]
     try:
         return kind.cls(frame, read, **options)
     except (OptionError, TargetError) as exc:
         raise GoalsFileError(f"{what}: {exc}") from None
 
 
-def _com_goal(entry: dict, what: str) -> Goal:
-    """A ``kind: center_of_mass`` entry: ``target: {position: [x, y, z]}`` (m) with optional ``axes`` (e.g. xy),
-    or ``support:`` ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m)."""
-    _unknown_keys(entry, ("kind", "target", "axes", "support", "margin", "weight", "tolerance"),
-                  f"{what}, a center_of_mass goal (it has no frame)")
-    options = {key: _number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "margin")
-               if key in entry}
-    try:
-        if "target" in entry:
-            if not isinstance(entry["target"], dict):
-                raise GoalsFileError(f"target must be a mapping (position), got {entry['target']!r}")
-            if "axes" in entry:
-                options["axes"] = entry["axes"]
-            return CenterOfMass(point=_position_target(entry["target"]), **options)
-        if "support" not in entry:
-            raise GoalsFileError("a center_of_mass goal needs target: {position: [x, y, z]} (m) or support: "
-                                 "{frame: [[x, y, z], ...]} or [frames]")
-        return CenterOfMass(support=entry["support"], **options)
-    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
-
-
-def _com_entry(goal) -> dict:
-    entry: dict = {"kind": "center_of_mass"}
-    if goal.support is None:
-        entry["target"] = Flow(position=[float(v) + 0.0 for v in goal.point])
-        entry["axes"] = goal.axes
-    else:
-        given = {f: p for f, p in goal.support.items() if p is not None}
-        entry["support"] = ({f: [[float(v) + 0.0 for v in row] for row in given.get(f, [])] for f in goal.support}
-                            if given else list(goal.support))
-        if goal.margin:
-            entry["margin"] = float(goal.margin)
-    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE)):
-        if getattr(goal, key) != default:
-            entry[key] = float(getattr(goal, key))
-    return entry
-
-
-#: The optional fields of a relative_pose entry: Pose's.
-_RELATIVE_FIELDS = ("weight", "tolerance", "rotation_tolerance", "free")
-
-
-def _relative_goal(entry: dict, what: str) -> Goal:
-    """A ``kind: relative_pose`` entry: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a)."""
-    _unknown_keys(entry, ("frame_a", "frame", "kind", "target", *_RELATIVE_FIELDS), f"{what}, a relative_pose goal")
-    for key in ("frame_a", "frame", "target"):
-        if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (a relative_pose goal has frame_a, frame and target: "
-                                 "frame's pose seen from frame_a)")
-    if not isinstance(entry["target"], dict):
-        raise GoalsFileError(f"{what}: target must be a mapping (position, rpy / rpy_rad, matrix), got "
-                             f"{entry['target']!r}")
-    options = {key: _FIELD_READERS.get(key, _number)(entry[key], f"{what}: {key}") for key in _RELATIVE_FIELDS
-               if key in entry}
-    try:
-        return RelativePose(entry["frame_a"], entry["frame"], _pose_target(entry["target"]), **options)
-    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
-
-
-def _relative_entry(goal) -> dict:
-    entry = {"frame_a": goal.frame_a, "frame": goal.frame, "kind": "relative_pose", "target": _matrix_text(goal)}
-    return entry | _field_entries(goal, _RELATIVE_FIELDS)
-
-
-
-GOAL_KINDS.update({
-    "center_of_mass": GoalKind(CenterOfMass, (), _position_target, _com_entry, read=_com_goal, write=_com_entry),
-    "relative_pose": GoalKind(RelativePose, (), _pose_target, _matrix_text, read=_relative_goal,
-                              write=_relative_entry),
-})
 def _preference(entry: dict, what: str, kind_name: str):
     """A preference entry (``kind: posture | joint_limit_margin | manipulability | minimal_displacement``)."""
     cls, fields = PREFERENCE_KINDS[kind_name]
-    _unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
+    unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
     args = {}
     for key in fields:
         if key not in entry:
@@ -478,17 +242,17 @@ def _preference(entry: dict, what: str, kind_name: str):
         if key == "q_ref":
             if not isinstance(value, list):
                 raise GoalsFileError(f"{what}: q_ref must be a list of joint values (rad or m), got {value!r}")
-            value = [_number(v, f"{what}: q_ref[{k}]") for k, v in enumerate(value)]
+            value = [number(v, f"{what}: q_ref[{k}]") for k, v in enumerate(value)]
         elif key == "joints":
             if not isinstance(value, dict) or not value:
                 raise GoalsFileError(f"{what}: joints must be a mapping {{joint name: value (rad or m)}}, got "
                                      f"{value!r}")
-            value = {str(k): _number(v, f"{what}: joints.{k}") for k, v in value.items()}
+            value = {str(k): number(v, f"{what}: joints.{k}") for k, v in value.items()}
         elif key == "frame":
             if not isinstance(value, str) or not value:
                 raise GoalsFileError(f"{what}: frame must be a frame name, got {value!r}")
         else:
-            value = _number(value, f"{what}: {key}")
+            value = number(value, f"{what}: {key}")
         args[key] = value
     if kind_name == "posture":
         if ("q_ref" in args) == ("joints" in args):
@@ -526,7 +290,7 @@ def read_goals_file(path: str | os.PathLike) -> GoalsFile:
         raise GoalsFileError(f"{where}: the top level must be a mapping ({', '.join(_TOP_KEYS)}) or a list of "
                              f"goals, got a {type(data).__name__}")
     try:
-        _unknown_keys(data, _TOP_KEYS, "top level")
+        unknown_keys(data, _TOP_KEYS, "top level")
         robot = data.get("robot")
         if robot is not None and (not isinstance(robot, str) or not robot):
             raise GoalsFileError(f"robot must be a robot name or URDF path, got {robot!r}")
@@ -571,7 +335,7 @@ def load_problems(path: str | os.PathLike) -> list[list[Goal]]:
 
 
 # ------------------------------------------------------------------ writing
-def _kind_of(goal) -> tuple[str, GoalKind]:
+def _kind_of(goal) -> tuple[str, FileKind]:
     for name, kind in GOAL_KINDS.items():
         if type(goal) is kind.cls:
             return name, kind
@@ -607,26 +371,7 @@ def _entry(goal: Goal) -> dict:
     if goal.alternatives is not None:  # a goal set
         del entry["target"]
         entry["targets"] = [kind.write_target(m) for m in goal.alternatives]
-    return entry | _field_entries(goal, kind.fields)
-
-
-def _field_entries(goal: Goal, fields: tuple[str, ...]) -> dict:
-    """The entries of ``goal``'s optional ``fields`` as a goals file writes them: numbers where they differ from
-    their defaults, bands (per-axis half-widths, inf: free), free axes, a pointing axis."""
-    entry: dict = {}
-    defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
-    band = getattr(goal, "band", None)
-    for key in fields:
-        if key == "tolerance" and band is not None:  # per-axis half-widths (inf: free)
-            entry[key] = [float(v) for v in band]
-        elif key == "free":
-            if goal.free:
-                entry[key] = " ".join(goal.free)
-        elif key == "axis":
-            entry[key] = [float(v) + 0.0 for v in goal.axis]
-        elif getattr(goal, key) != defaults[key]:
-            entry[key] = float(getattr(goal, key))
-    return entry
+    return entry | field_entries(goal, kind.fields)
 
 
 def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool | None = None,

@@ -405,7 +405,7 @@ class Robot:
         base frame are not counted (the base frame holds them). Empty when ``q`` moves every joint to the frame.
 
         What tells a goal on a frame only a floating base moves (its six entries) apart from one the joints should
-        move: :func:`~evoik_pin.goals.binding.bind` refuses the latter with the names this returns.
+        move: :func:`~evoik_pin.goals.stack.bind` refuses the latter with the names this returns.
         """
         name = self.model.frames[self.frame_id(frame)].name
         kin = self._kin_model

@@ -13,12 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..solvers.lm.layout import KIND_BEYOND_FRAME, KIND_COM, KIND_DIRECTION, KIND_ORIENTATION
 from .server import _talks
-
-#: Goal kinds whose target is no place (an orientation, a direction): show_goals draws no marker for them (a
-#: LookAt's point gets a sphere).
-UNPLACED_KINDS = (KIND_ORIENTATION, KIND_DIRECTION)
 
 __all__ = ["GOAL_LABEL_HEIGHT"]
 
@@ -149,23 +144,21 @@ class MarkerDrawing:
         self.delete(name)
         nodes = []
         for goal in goals:
-            if goal.kind >= KIND_BEYOND_FRAME and goal.kind != KIND_COM:
-                continue  # a support polygon, a relative pose: no target in the base frame to mark
-            frame = "center_of_mass" if goal.kind == KIND_COM else goal.frame
+            marker = goal.marker()  # what the goal's kind declares: (node name, point, rotation or None) or None
+            if marker is None:  # an orientation, a direction, a support polygon, a relative pose: no place to mark
+                continue
+            frame, p, R = marker
             node = f"{name}/{frame}"
             if node in nodes:  # the same frame twice with the same target (bind refuses clashing ones)
                 continue
-            if goal.kind in UNPLACED_KINDS:  # an orientation or a direction alone: no place to mark
-                continue
-            p, R = goal.encode()
-            kind = _draw_marker(vis[node], p, R if goal.has_orientation else None, s)
+            kind = _draw_marker(vis[node], p, R, s)
             if labels:
                 label = vis[node]["label"]
                 label.set_object(_label(frame))
                 # above the marker, in its own frame turned back to the base frame's axes (a sprite has no rotation
                 # of its own to keep, but its offset would turn with a pose's rotation)
                 T = np.diag([s * 4 * GOAL_LABEL_HEIGHT] * 3 + [1.0])  # the 256 px canvas: text ~ a quarter of it
-                T[:3, 3] = (R.T if goal.has_orientation else np.eye(3)) @ np.array([0.0, 0.0, 0.6 * s])
+                T[:3, 3] = (R.T if R is not None else np.eye(3)) @ np.array([0.0, 0.0, 0.6 * s])
                 label.set_transform(T)
             self.scene[node] = f"goal {kind}: {frame}"
             nodes.append(node)
@@ -196,6 +189,6 @@ class MarkerDrawing:
             links = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
             poses = self.robot.frame_poses_unchecked(q, links)  # q checked by show
             self.frame(np.array([M.translation for M in poses]
-                                + [g.encode()[0] for g in goals if g.kind not in UNPLACED_KINDS]))
+                                + [m[1] for m in (g.marker() for g in goals) if m is not None]))
         return pairs
 

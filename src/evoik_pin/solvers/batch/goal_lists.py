@@ -20,7 +20,8 @@ import numpy as np
 from ...errors import ConfigurationError, FrameError, OptionError, TargetError
 from ...goals import Goal, bind, is_goal_list
 from ...goals.preferences import check_preferences, holds_preferences, split_preferences
-from ..lm.layout import G_WEIGHT, KIND_BEYOND_FRAME, POSITIONLESS_KINDS, GoalArrays
+from ...goals.registry import KIND_BEYOND_FRAME, POSITIONLESS_KINDS
+from ...goals.stack import G_WEIGHT, GoalArrays
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 

@@ -16,8 +16,8 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import TargetError
+from ...goals.stack import TargetArrays, target_kind
 from ...problem import Target
-from ..lm.layout import TargetArrays, target_kind
 from .goal_lists import GoalSource, is_goal_batch, is_problem_list
 
 __all__ = ["TargetBlock", "TargetSource", "source_of"]

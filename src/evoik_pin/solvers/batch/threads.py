@@ -45,11 +45,11 @@ import numpy as np
 
 from ...goals import is_goal_list
 from ...goals.preferences import holds_preferences, split_preferences
+from ...goals.stack import G_WEIGHT, GoalArrays, TargetArrays
 from ...objectives import default_cost
 from ...problem import Target, coerce_scene
 from ...result import Result
 from ..lm import solve_pairs
-from ..lm.layout import G_WEIGHT, GoalArrays, TargetArrays
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
 from .goal_lists import GoalTree

@@ -3,9 +3,10 @@ tolerance bands and free axes, orientation alone, a frame axis along a direction
 
 Inlined into :mod:`.kernel` (``forceinline=True``: numba's disk cache does not see edits here; delete the kernel's
 cached ``*.nbi`` / ``*.nbc`` after one). :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call these only
-for the kinds ``KIND_POSE_AXES`` .. ``KIND_LOOK_AT`` (:mod:`.layout`), so pose, position and planar goals never run
-a line of them. For the goal frame's pose (R (3, 3), p (3,) m, base frame), its target (pt (3,), Rt (3, 3)) and the
-goal's ``aux`` row (:data:`.layout.AUX_INNER` ...):
+for the goals whose kind declares this family (``FAMILY_AXES`` of :mod:`evoik_pin.goals.registry`, the
+``G_FAMILY`` column of their spec), so pose, position and planar goals never run a line of them. For the goal
+frame's pose (R (3, 3), p (3,) m, base frame), its target (pt (3,), Rt (3, 3)) and the goal's ``aux`` row
+(``AUX_INNER`` ... of :mod:`evoik_pin.goals.bands`):
 
 * bands (pose with axes: 6 rows; position with bands: 3 rows; orientation: 3 rows): per component v_i of the error
   (position ``R_t^T (p - p_t)`` m for a pose, ``p - p_t`` for a position; rotation ``log3(R_t^T R)`` rad), the
@@ -25,17 +26,10 @@ import math
 
 from numba import njit
 
+from ...goals.bands import AUX_BAND, AUX_INNER, AUX_SWING
+from ...goals.direction import AUX_AXIS
+from ...goals.registry import AXIS_ALONG, AXIS_AT, BANDED_LOG6, BANDED_POINT
 from ...lie.compiled import jlog3, log3
-from .layout import (
-    AUX_AXIS,
-    AUX_BAND,
-    AUX_INNER,
-    AUX_SWING,
-    KIND_DIRECTION,
-    KIND_LOOK_AT,
-    KIND_POSE_AXES,
-    KIND_POSITION_BAND,
-)
 from .tree import BORROWING
 
 #: Below this distance (m) from its point a look-at frame has no direction to the point.
@@ -71,7 +65,7 @@ def _direction(kind, R, p, pt, aux, u):
     """u (3,) = the wanted unit direction of a pointing goal (pt itself, or from p towards the point pt; with the
     frame on the point, the opposite of its axis, so the goal is unmet there); returns the distance (m) to the
     point (1 for a direction)."""
-    if kind == KIND_DIRECTION:
+    if kind == AXIS_ALONG:
         u[0], u[1], u[2] = pt[0], pt[1], pt[2]
         return 1.0
     u0, u1, u2 = pt[0] - p[0], pt[1] - p[1], pt[2] - p[2]
@@ -86,10 +80,10 @@ def _direction(kind, R, p, pt, aux, u):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
-    """One goal's error rows e (task_size(kind)) of the kinds of this module (see the module docstring); returns
+    """One goal's error rows e (its ``G_ROWS``) of the kinds of this module (see the module docstring); returns
     (|e|^2 unweighted, position error m, orientation error rad), the errors those the success test compares with
     the goal's tolerances. M (3, 3) and rv (3,) are scratch."""
-    if kind == KIND_DIRECTION or kind == KIND_LOOK_AT:
+    if kind == AXIS_ALONG or kind == AXIS_AT:
         _direction(kind, R, p, pt, aux, rv)
         c = 0.0
         for i in range(3):
@@ -99,15 +93,15 @@ def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
     c = 0.0
     pos2 = 0.0
     o = 0  # first rotation row
-    if kind == KIND_POSITION_BAND or kind == KIND_POSE_AXES:
+    if kind == BANDED_POINT or kind == BANDED_LOG6:
         d0, d1, d2 = p[0] - pt[0], p[1] - pt[1], p[2] - pt[2]
         for i in range(3):
-            v = Rt[0, i] * d0 + Rt[1, i] * d1 + Rt[2, i] * d2 if kind == KIND_POSE_AXES else p[i] - pt[i]
+            v = Rt[0, i] * d0 + Rt[1, i] * d1 + Rt[2, i] * d2 if kind == BANDED_LOG6 else p[i] - pt[i]
             e[i] = _dead(v, aux[AUX_INNER + i])
             c += e[i] * e[i]
             x = _excess(v, aux[AUX_BAND + i])
             pos2 += x * x
-        if kind == KIND_POSITION_BAND:
+        if kind == BANDED_POINT:
             return c, math.sqrt(pos2), 0.0
         o = 3
     j = int(aux[AUX_SWING])
@@ -134,7 +128,7 @@ def axes_jacobian(kind, R, p, J, pt, Rt, aux, rv, A, B, E, r):
     """One goal's rows r.. of the task Jacobian E (unweighted) of the kinds of this module, from its frame's
     base-frame Jacobian J (6, n) at the pose (R, p) :func:`axes_error` saw. rv (3,), A, B (3, 3) are scratch."""
     n = J.shape[1]
-    if kind == KIND_DIRECTION or kind == KIND_LOOK_AT:
+    if kind == AXIS_ALONG or kind == AXIS_AT:
         rho = _direction(kind, R, p, pt, aux, rv)
         a0 = R[0, 0] * aux[AUX_AXIS] + R[0, 1] * aux[AUX_AXIS + 1] + R[0, 2] * aux[AUX_AXIS + 2]  # R a
         a1 = R[1, 0] * aux[AUX_AXIS] + R[1, 1] * aux[AUX_AXIS + 1] + R[1, 2] * aux[AUX_AXIS + 2]
@@ -144,16 +138,16 @@ def axes_jacobian(kind, R, p, J, pt, Rt, aux, rv, A, B, E, r):
             E[r, k] = w1 * a2 - w2 * a1
             E[r + 1, k] = w2 * a0 - w0 * a2
             E[r + 2, k] = w0 * a1 - w1 * a0
-            if kind == KIND_LOOK_AT and rho > 0.0:  # -d(u) = (I - u u^T) J_v / rho
+            if kind == AXIS_AT and rho > 0.0:  # -d(u) = (I - u u^T) J_v / rho
                 s = rv[0] * J[0, k] + rv[1] * J[1, k] + rv[2] * J[2, k]
                 for i in range(3):
                     E[r + i, k] += (J[i, k] - rv[i] * s) / rho
         return
     o = 0
-    if kind == KIND_POSITION_BAND or kind == KIND_POSE_AXES:
+    if kind == BANDED_POINT or kind == BANDED_LOG6:
         d0, d1, d2 = p[0] - pt[0], p[1] - pt[1], p[2] - pt[2]
         for i in range(3):
-            if kind == KIND_POSE_AXES:
+            if kind == BANDED_LOG6:
                 v = Rt[0, i] * d0 + Rt[1, i] * d1 + Rt[2, i] * d2
                 live = aux[AUX_INNER + i] == 0.0 or abs(v) > aux[AUX_INNER + i]  # h = 0: no dead zone
                 for k in range(n):
@@ -162,7 +156,7 @@ def axes_jacobian(kind, R, p, J, pt, Rt, aux, rv, A, B, E, r):
                 live = aux[AUX_INNER + i] == 0.0 or abs(p[i] - pt[i]) > aux[AUX_INNER + i]
                 for k in range(n):
                     E[r + i, k] = J[i, k] if live else 0.0
-        if kind == KIND_POSITION_BAND:
+        if kind == BANDED_POINT:
             return
         o = 3
     j = int(aux[AUX_SWING])

@@ -1,6 +1,7 @@
-"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``KIND_COM``, ``KIND_COM_SUPPORT``,
-``KIND_RELATIVE_POSE``, ``KIND_RELATIVE_POSE_AXES`` of :mod:`.layout`), which :func:`.kernel.task_error` and
-:func:`.kernel.task_jacobian` call in a branch the one-frame kinds never enter.
+"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``COM_POINT``, ``COM_SUPPORT``,
+``RELATIVE_LOG6``, ``RELATIVE_BANDED_LOG6``, ``RELATIVE_POINT_WORLD``, ``RELATIVE_POINT_IN_A`` of
+:mod:`evoik_pin.goals.registry`), which :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call in a
+branch the one-frame kinds never enter (their declared family, the spec's ``G_FAMILY``).
 
 * Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
   c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree.tree_forward`), s_0 the first moment of the
@@ -14,10 +15,14 @@
 * Relative pose: frame b seen from frame a against the target T, ``e = log6(T^-1 T_a^-1 T_b)``; its Jacobian is
   ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``, the second term the velocity of the point p_b carried by frame a's joints
   (the body twist of ``T_a^-1 T_b``), through the pose kind's :func:`.kernel.goal_jacobian`.
-* Relative pose with bands or free axes (``KIND_RELATIVE_POSE_AXES``): the rows of a pose with axes
+* Relative pose with bands or free axes (``RELATIVE_BANDED_LOG6``): the rows of a pose with axes
   (:mod:`.axes`: dead zones in the target frame, the swing of one free rotation axis) for frame b's pose seen from
   frame a, ``(R_a^T R_b, R_a^T (p_b - p_a))``, against T; its Jacobian those rows' from the same
   ``J_b(p_b) - J_a(p_b)`` turned into frame a's coordinates (the twist of b relative to a, as frame a sees it).
+* Relative position: frame b's origin relative to frame a's against the target point p (m), in frame a's axes
+  ``e = R_a^T (p_b - p_a) - p`` with Jacobian ``R_a^T (J_b(p_b) - J_a(p_b))_v`` (the translational rows of the
+  relative pose's), or in the world's ``e = (p_b - p_a) - p`` with Jacobian ``J_b,v - J_a,v`` (each at its own
+  frame's origin; a joint moving both frames turns the vector: ``z x (p_b - p_a)``).
 """
 
 from __future__ import annotations
@@ -26,26 +31,19 @@ import math
 
 from numba import njit
 
+from ...goals.bands import AUX_SIZE
+from ...goals.center_of_mass import A_COM_AXES, A_COM_BODIES, A_COM_MASS, A_COM_MOMENT, A_COM_POINTS, A_COM_SHRINK
+from ...goals.goal import A_REL_BAND, A_REL_JOINT, A_REL_P, A_REL_R, A_REL_SIGNS, BOTH
+from ...goals.registry import (
+    BANDED_LOG6,
+    COM_POINT,
+    COM_SUPPORT,
+    RELATIVE_BANDED_LOG6,
+    RELATIVE_POINT_IN_A,
+    RELATIVE_POINT_WORLD,
+)
 from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
-from .layout import (
-    A_COM_AXES,
-    A_COM_BODIES,
-    A_COM_MASS,
-    A_COM_MOMENT,
-    A_COM_POINTS,
-    A_COM_SHRINK,
-    A_REL_BAND,
-    A_REL_JOINT,
-    A_REL_P,
-    A_REL_R,
-    A_REL_SIGNS,
-    AUX_SIZE,
-    KIND_COM,
-    KIND_COM_SUPPORT,
-    KIND_POSE_AXES,
-    KIND_RELATIVE_POSE_AXES,
-)
 from .tree import BORROWING, frame_pose, joint_column
 
 #: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
@@ -285,7 +283,7 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
     """The 6 rows e of a relative pose with bands or free axes: those of a pose with axes (:func:`.axes.axes_error`,
-    ``KIND_POSE_AXES``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
+    ``BANDED_LOG6``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
     (into R (3, 3)) and ``t = R_a^T (p_b - p_a)`` (into t (3,)), against the target (pt, Rt): the error of
     ``T_t^-1 T_a^-1 T_b`` in the target frame. p (3,) ends as frame b's origin (base frame, m) for
     :func:`balance_columns` (scratch before); M (3, 3) scratch. Returns (|e|^2, position error m, rotation error
@@ -301,7 +299,7 @@ def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
             p[i] = M[0, i] * b0 + M[1, i] * b1 + M[2, i] * b2
         R[0, c], R[1, c], R[2, c] = p[0], p[1], p[2]
     band = aux[A_REL_BAND:A_REL_BAND + AUX_SIZE]
-    c, pos, rot = axes_error(KIND_POSE_AXES, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
+    c, pos, rot = axes_error(BANDED_LOG6, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
     frame_pose(Rj, pj, jb, Rbf, pbf, M, p)  # frame b's origin again (M: scratch)
     return c, pos, rot
 
@@ -320,7 +318,89 @@ def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
         for i in range(3):
             J[i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
             J[3 + i, k] = A[0, i] * w0 + A[1, i] * w1 + A[2, i] * w2
-    axes_jacobian(KIND_POSE_AXES, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
+    axes_jacobian(BANDED_LOG6, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def frame_a_origin(Rj, pj, aux):
+    """Frame a's origin (m, base frame) of a two-frame goal's aux row at the joint poses Rj, pj."""
+    ja = int(aux[A_REL_JOINT])
+    f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
+    if ja < 0:
+        return f0, f1, f2
+    return (pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2,
+            pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2,
+            pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2)
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def relative_point_error(kind, Rj, pj, aux, jb, Rbf, pbf, pt, R, p, M, e):
+    """The relative position goal's 3 rows e (see the module docstring; in frame a's axes for
+    ``RELATIVE_POINT_IN_A``): frame b's pose into R (3, 3), p (3,) (its origin for :func:`balance_columns`);
+    M (3, 3) ends as frame a's rotation. Returns (|e|^2, position error m, 0)."""
+    pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
+    frame_pose(Rj, pj, jb, Rbf, pbf, R, p)
+    d0, d1, d2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
+    c = 0.0
+    for i in range(3):
+        if kind == RELATIVE_POINT_IN_A:
+            e[i] = M[0, i] * d0 + M[1, i] * d1 + M[2, i] * d2 - pt[i]
+        else:
+            e[i] = (d0 if i == 0 else (d1 if i == 1 else d2)) - pt[i]
+        c += e[i] * e[i]
+    return c, math.sqrt(c), 0.0
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def relative_point_columns(rev, Rj, pj, Z, O, aux, p, Jx):
+    """Rows 0-2 of Jx (6, m): ``J_b,v - J_a,v`` of a relative position in the world's axes, frame b's origin p (3,)
+    and frame a's from its aux row: per joint k by its sign, its column at p_b (+1), minus its column at p_a (-1),
+    or ``z x (p_b - p_a)`` (:data:`~evoik_pin.goals.goal.BOTH`; 0 for a prismatic joint)."""
+    pa0, pa1, pa2 = frame_a_origin(Rj, pj, aux)
+    for k in range(Jx.shape[1]):
+        sign = aux[A_REL_SIGNS + k]
+        if sign == 0.0:
+            for i in range(6):
+                Jx[i, k] = 0.0
+        elif sign == BOTH:
+            z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+            for i in range(6):
+                Jx[i, k] = 0.0
+            if rev[k]:
+                l0, l1, l2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
+                Jx[0, k] = z1 * l2 - z2 * l1
+                Jx[1, k] = z2 * l0 - z0 * l2
+                Jx[2, k] = z0 * l1 - z1 * l0
+        elif sign > 0.0:
+            joint_column(rev[k], p, Z, O, k, Jx)
+        else:
+            z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+            for i in range(6):
+                Jx[i, k] = 0.0
+            if rev[k]:
+                l0, l1, l2 = pa0 - O[k, 0], pa1 - O[k, 1], pa2 - O[k, 2]
+                Jx[0, k] = -(z1 * l2 - z2 * l1)
+                Jx[1, k] = -(z2 * l0 - z0 * l2)
+                Jx[2, k] = -(z0 * l1 - z1 * l0)
+            else:
+                Jx[0, k], Jx[1, k], Jx[2, k] = -z0, -z1, -z2
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def relative_point_rows(kind, Rj, pj, aux, J, A, E, r):
+    """Rows r..r+2 of the task Jacobian E (unweighted) of a relative position from rows 0-2 of J (6, n)
+    (:func:`balance_columns`): as they are in the world's axes, turned by R_a^T in frame a's. A (3, 3) scratch."""
+    n = E.shape[1]
+    if kind == RELATIVE_POINT_WORLD:
+        for i in range(3):
+            for k in range(n):
+                E[r + i, k] = J[i, k]
+        return
+    frame_a_pose(Rj, pj, aux, A)
+    for k in range(n):
+        v0, v1, v2 = J[0, k], J[1, k], J[2, k]
+        for i in range(3):
+            E[r + i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
@@ -329,7 +409,7 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
     p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t; the relative
     pose with axes frame b's pose seen from frame a in R, t and frame b's origin in p)."""
-    if kind == KIND_COM:
+    if kind == COM_POINT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2
         e[0] = aux[A_COM_AXES] * (c0 - pt[0])
@@ -337,13 +417,15 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
         e[2] = aux[A_COM_AXES + 2] * (c2 - pt[2])
         c = e[0] * e[0] + e[1] * e[1] + e[2] * e[2]
         return c, math.sqrt(c), 0.0
-    if kind == KIND_COM_SUPPORT:
+    if kind == COM_SUPPORT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2
         pos = support_error(Rj, pj, aux, c0, c1, e, t)
         return e[0] * e[0] + e[1] * e[1], pos, 0.0
-    if kind == KIND_RELATIVE_POSE_AXES:
+    if kind == RELATIVE_BANDED_LOG6:
         return relative_axes_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
+    if kind == RELATIVE_POINT_WORLD or kind == RELATIVE_POINT_IN_A:
+        return relative_point_error(kind, Rj, pj, aux, jf, Rf, pf, pt, R, p, M, e)
     pos, rot = relative_error(Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
     c = 0.0
     for i in range(6):
@@ -355,8 +437,11 @@ def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
 def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
     """The physical Jacobian Jx (6, m) a goal of a kind beyond one frame starts from: the centre of mass's (rows
     0-2, :func:`com_jacobian`) or, for a relative pose, ``J_b(p_b) - J_a(p_b)`` at frame b's origin p (3,)."""
-    if kind == KIND_COM or kind == KIND_COM_SUPPORT:
+    if kind == COM_POINT or kind == COM_SUPPORT:
         com_jacobian(parent, rev, Rj, pj, Z, O, aux, Jx)
+        return
+    if kind == RELATIVE_POINT_WORLD:
+        relative_point_columns(rev, Rj, pj, Z, O, aux, p, Jx)
         return
     for k in range(Jx.shape[1]):
         sign = aux[A_REL_SIGNS + k]
@@ -373,10 +458,10 @@ def balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def com_rows(kind, aux, t, J, E, r):
     """Rows r.. of the task Jacobian E (unweighted) of a CoM goal from the CoM's Jacobian (rows 0-2 of J (6, n)):
-    the constrained axes (KIND_COM), or the support goal's active piece (t: code, outward normal): zero inside,
+    the constrained axes (COM_POINT), or the support goal's active piece (t: code, outward normal): zero inside,
     ``n n^T`` on an edge, the ground rows at a vertex."""
     n = E.shape[1]
-    if kind == KIND_COM:
+    if kind == COM_POINT:
         for i in range(3):
             a = aux[A_COM_AXES + i]
             for k in range(n):
@@ -391,3 +476,18 @@ def com_rows(kind, aux, t, J, E, r):
             E[r, k], E[r + 1, k] = n0 * d, n1 * d
         else:
             E[r, k], E[r + 1, k] = J[0, k], J[1, k]
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def balance_rows(kind, Rj, pj, aux, R, p, t, J, pt, Rt, rv, A, B, E, r):
+    """Rows r.. of the task Jacobian E (unweighted) of a goal beyond one frame other than a plain relative pose, from
+    the physical Jacobian J :func:`balance_columns` made (folded with mimic joints): a banded relative pose's
+    (:func:`relative_axes_jacobian`), a relative position's (:func:`relative_point_rows`), a centre of mass's
+    (:func:`com_rows`). R, p, t: the goal's pose buffers :func:`balance_error` filled; rv (3,), A, B (3, 3)
+    scratch."""
+    if kind == RELATIVE_BANDED_LOG6:
+        relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r)
+    elif kind == RELATIVE_POINT_WORLD or kind == RELATIVE_POINT_IN_A:
+        relative_point_rows(kind, Rj, pj, aux, J, A, E, r)
+    else:
+        com_rows(kind, aux, t, J, E, r)

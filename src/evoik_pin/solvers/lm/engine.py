@@ -42,19 +42,26 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...errors import OptionError
+from ...goals.bands import AUX_SIZE
+from ...goals.pose import KIND_POSE
+from ...goals.position import KIND_POSITION
+from ...goals.registry import BANDED_LOG6, FAMILY_FRAME, KINDS
+from ...goals.stack import (
+    KIND_PLANAR,
+    KIND_PLANAR_YAW,
+    GoalArrays,
+    GoalStack,
+    TargetArrays,
+    owned,
+    problem_goals,
+    spec_row,
+)
 from .layout import (
-    AUX_SIZE,
     DEFAULT_DAMPING,
     DEFAULT_ITERATIONS,
     DEFAULT_MAX_STEP,
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
-    GOAL_SIZE,
-    KIND_PLANAR,
-    KIND_PLANAR_YAW,
-    KIND_POSE,
-    KIND_POSE_AXES,
-    KIND_POSITION,
     P_ITERATIONS,
     S_CONVERGED,
     S_COST,
@@ -63,13 +70,8 @@ from .layout import (
     S_POS,
     S_ROT,
     STATS_SIZE,
-    GoalArrays,
-    GoalStack,
-    TargetArrays,
     box_constants,
     kernel_params,
-    owned,
-    problem_goals,
 )
 from .outcome import LMOutcome, PairsOutcome
 
@@ -91,8 +93,7 @@ def warmup_problem() -> tuple:
     (C-contiguous float64 / int64 / bool arrays), for compiling or loading them outside any time budget."""
     tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
             np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
-    spec = np.zeros((1, GOAL_SIZE))
-    spec[0, :5] = KIND_POSE, 0, 1.0, 1e-6, 1e-6
+    spec = spec_row(KIND_POSE, 0, 1.0, 1e-6, 1e-6, 0)[None]
     goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool), np.zeros((1, 1)))
     box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
     return tree, box, goals, np.zeros((1, 3)), np.eye(3)[None].copy()
@@ -132,7 +133,7 @@ def compiled_kernel() -> dict:
 
         aux = np.zeros(AUX_SIZE)
         aux.setflags(write=False)
-        axes_error(KIND_POSE_AXES, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux, np.empty((3, 3)), np.empty(3),
+        axes_error(BANDED_LOG6, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux, np.empty((3, 3)), np.empty(3),
                    np.empty(6))
         _KERNEL.update(lm_run=kernel.lm_run, lm_run_starts=kernel.lm_run_starts, lm_run_pairs=kernel.lm_run_pairs,
                        lm_run_buffers=kernel.lm_run_buffers, lm_run_starts_buffers=kernel.lm_run_starts_buffers,
@@ -179,7 +180,7 @@ class LevenbergMarquardt:
         if engine == "python":
             from .reference import ReferenceLM
 
-            if any(k >= KIND_POSE_AXES for k in stack.kinds):  # bands, free axes, orientation, pointing, beyond a frame
+            if any(KINDS[k].family != FAMILY_FRAME for k in stack.kinds):  # bands, free axes, pointing, beyond a frame
                 raise OptionError("the Python reference LM (engine='python') knows pose, position and planar goals "
                                   "only; goals with tolerance bands or free axes, Orientation, Direction, LookAt, "
                                   "CenterOfMass and RelativePose need the compiled engine (engine='compiled', the "

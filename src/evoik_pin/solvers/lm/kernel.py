@@ -1,6 +1,6 @@
 """The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
 
-One call of :func:`lm_run` runs a whole LM iteration from one start for a stack of goals (:class:`.layout.GoalStack`:
+One call of :func:`lm_run` runs a whole LM iteration from one start for a stack of goals (``goals.stack.GoalStack``:
 pose, position or planar goals on frames of a kinematic tree), with the tree kinematics of :mod:`.tree`, the
 mimic coupling of :mod:`.chain` and the SO(3) / SE(3) closed forms of :mod:`evoik_pin.lie.compiled`.
 :func:`lm_run_starts` runs several starts for one problem, in order, until one converges (memetic's restarts);
@@ -10,7 +10,7 @@ wrapping, stall test, geodesic acceleration and finishing step); tests hold the 
 same starts. About 1 us per step for a 7-joint arm, against 30-40 us for the Python loop.
 
 Task error ``e``: the goals' rows stacked (goal g's rows from ``spec[g, G_ROW]``), each goal's rows scaled by the
-square root of its weight; by goal kind (:mod:`.layout`), for the goal frame's pose ``T_f(q)``:
+square root of its weight; by goal kind (:mod:`evoik_pin.goals`), for the goal frame's pose ``T_f(q)``:
 
 * pose: ``e = log6(T_t^-1 T_f(q))`` (m, rad; Pinocchio's formula), ``E = Jlog6(T_t^-1 T_f(q)) J_local``;
 * position: ``e = p_f(q) - p_t`` with the base-frame translational Jacobian rows;
@@ -20,9 +20,10 @@ A run has converged when every goal is within its own tolerances (m, rad). The d
 space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more rows than joints, and in joint
 space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
 
-The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. numba compiles this module on
-first use (about a minute once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
-any time budget).
+The constants and the ``params`` / ``box`` layouts come from :mod:`.layout`, the goal stack's ``G_*`` columns and
+the compiled residuals' codes from :mod:`evoik_pin.goals` (``goals.stack``, ``goals.registry``). numba compiles
+this module on first use (about a minute once per install, then cached on disk; :func:`.engine.compiled_kernel`
+loads it outside any time budget).
 
 Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
 it in the damped solves, whose divisions and square roots form one chain, 30 % in the forward kinematics with its
@@ -57,9 +58,20 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from ...goals.registry import (
+    FAMILY_AXES,
+    FAMILY_BEYOND_FRAME,
+    FAMILY_FRAME,
+    LOG6,
+    PLANAR,
+    PLANAR_YAW,
+    POINT,
+    RELATIVE_LOG6,
+)
+from ...goals.stack import G_ANGLE, G_FAMILY, G_JOINT, G_KIND, G_ROW, G_ROWS, G_RTOL, G_TOL, G_WEIGHT
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
 from .axes import axes_error, axes_jacobian
-from .balance import balance_columns, balance_error, com_rows, relative_axes_jacobian
+from .balance import balance_columns, balance_error, balance_rows
 from .chain import coupled, expand, fold
 from .layout import (
     B_CHI,
@@ -68,28 +80,11 @@ from .layout import (
     B_LO,
     B_WRAP,
     FINISHED,
-    G_JOINT,
-    G_KIND,
-    G_ROW,
-    G_RTOL,
-    G_TOL,
-    G_WEIGHT,
     GEO_ALPHA,
     GEO_H,
     GEO_NEAR,
     GEO_SLOW,
     GROW,
-    KIND_BEYOND_FRAME,
-    KIND_COM_SUPPORT,
-    KIND_LOOK_AT,
-    KIND_ORIENTATION,
-    KIND_PLANAR,
-    KIND_PLANAR_YAW,
-    KIND_POSE,
-    KIND_POSE_AXES,
-    KIND_POSITION,
-    KIND_RELATIVE_POSE,
-    KIND_RELATIVE_POSE_AXES,
     LAMBDA_MAX,
     LAMBDA_MIN,
     P_DAMPING,
@@ -112,38 +107,33 @@ TWO_PI = 2.0 * math.pi
 
 
 @njit(cache=True, nogil=True, forceinline=True)
-def task_size(kind):
-    """Rows m of the task error of a target kind: 6 (pose), 3 (position, planar with yaw), 2 (planar)."""
-    if kind == KIND_POSE:
-        return 6
-    if kind == KIND_POSITION or kind == KIND_PLANAR_YAW:
-        return 3
-    if kind == KIND_POSE_AXES:
-        return 6
-    if KIND_POSE_AXES < kind <= KIND_LOOK_AT:  # position with bands, orientation, direction, look-at
-        return 3
-    if kind >= KIND_BEYOND_FRAME:  # centre of mass 3, support polygon 2, relative pose (with axes or not) 6
-        return 2 if kind == KIND_COM_SUPPORT else (6 if kind >= KIND_RELATIVE_POSE else 3)
-    return 2
+def frame_rows(kind):
+    """Rows of the residuals :func:`goal_error` computes (its own codes, the frame family's): 6 (the SE(3)
+    logarithm), 2 (planar), 3 (a point, planar with yaw), as the kinds declare them (tests hold the two equal).
+
+    The runs of :func:`lm_run_basic`, which hold frame-family goals only, take a goal's row count from here rather
+    than from its spec's ``G_ROWS``: known from the code the branch already tests, the count lets LLVM unroll the
+    rows' loops (reading it from the spec cost the single-pose chain case 3-4 %, scripts/bench_chain_kernel.py)."""
+    return 6 if kind == LOG6 else (2 if kind == PLANAR else 3)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def goal_error(kind, R, p, pt, Rt, M, t, e):
-    """One goal's error rows e (its task_size(kind) rows) for its frame's pose (R (3, 3), p (3,)) and target
+    """One goal's error rows e (its ``G_ROWS`` rows) for its frame's pose (R (3, 3), p (3,)) and target
     (pt, Rt); returns (|e|^2, position error m, orientation error rad or 0). For pose goals also the frame pose
     seen from the target, ``T_t^-1 T_f`` = (M (3, 3), t (3,)), which :func:`goal_jacobian` needs."""
-    if kind == KIND_PLANAR or kind == KIND_PLANAR_YAW:  # (x, y[, yaw]) with pt = (x_t, y_t, yaw_t)
+    if kind == PLANAR or kind == PLANAR_YAW:  # (x, y[, yaw]) with pt = (x_t, y_t, yaw_t)
         d0, d1 = p[0] - pt[0], p[1] - pt[1]
         e[0], e[1] = d0, d1
         pos = math.sqrt(d0 * d0 + d1 * d1)
-        if kind != KIND_PLANAR_YAW:
+        if kind != PLANAR_YAW:
             return d0 * d0 + d1 * d1, pos, 0.0
         dyaw = wrap_angle(yaw(R) - pt[2])
         e[2] = dyaw
         return d0 * d0 + d1 * d1 + dyaw * dyaw, pos, abs(dyaw)
     d0, d1, d2 = p[0] - pt[0], p[1] - pt[1], p[2] - pt[2]
     pos = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-    if kind == KIND_POSITION:
+    if kind == POINT:
         e[0], e[1], e[2] = d0, d1, d2
         return pos * pos, pos, 0.0
     for i in range(3):
@@ -179,18 +169,19 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
     c = 0.0
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
+        family = int(spec[g, G_FAMILY])
         r = int(spec[g, G_ROW])
+        rows = int(spec[g, G_ROWS]) if extra else frame_rows(kind)  # frame_rows says why
         R, p = Rg[g], pg[g]
-        if extra and kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+        if extra and family == FAMILY_BEYOND_FRAME:  # centre of mass, support polygon, two frames (.balance)
             cg, pos, rot = beyond_frame_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g],
-                                              R, p, M, tg[g], e[r:r + task_size(kind)])
+                                              R, p, M, tg[g], e[r:r + rows])
         else:
             frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
-            if extra and KIND_POSE_AXES <= kind <= KIND_LOOK_AT:  # .axes's kinds (tg[g], unused by them, as scratch)
-                cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g],
-                                          e[r:r + task_size(kind)])
+            if extra and family == FAMILY_AXES:  # .axes's kinds (tg[g], unused by them, as scratch)
+                cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g], e[r:r + rows])
             else:
-                cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + task_size(kind)])
+                cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + rows])
         c += cg
         ge[g, 0], ge[g, 1] = pos, rot
     if weighted:
@@ -198,7 +189,7 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
             w = spec[g, G_WEIGHT]
-            for i in range(r, r + task_size(int(spec[g, G_KIND]))):
+            for i in range(r, r + (int(spec[g, G_ROWS]) if extra else frame_rows(int(spec[g, G_KIND])))):
                 e[i] *= w
                 c += e[i] * e[i]
     return c
@@ -224,9 +215,9 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
     are scratch.
     """
     n = J.shape[1]
-    if kind != KIND_POSE:
-        for i in range(task_size(kind)):
-            row = 5 if i == 2 and kind == KIND_PLANAR_YAW else i
+    if kind != LOG6:
+        for i in range(frame_rows(kind)):
+            row = 5 if i == 2 and kind == PLANAR_YAW else i
             for k in range(n):
                 E[r + i, k] = J[row, k]
         return
@@ -261,25 +252,27 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
     n = J.shape[1]
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
+        family = int(spec[g, G_FAMILY])
         r = int(spec[g, G_ROW])
-        if extra and kind >= KIND_BEYOND_FRAME:  # centre of mass, support polygon, relative pose (.balance)
+        rows = int(spec[g, G_ROWS]) if extra else frame_rows(kind)  # frame_rows says why
+        if extra and family == FAMILY_BEYOND_FRAME:  # centre of mass, support polygon, two frames (.balance)
             beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
-                                  e[r:r + task_size(kind)], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
+                                  e[r:r + rows], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
             continue
         if mimic:
             frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
             fold(index, scale, Jx, J)
         else:
             frame_jacobian(rev, support[g], pg[g], Z, O, J)
-        if extra and KIND_POSE_AXES <= kind <= KIND_LOOK_AT:
+        if extra and family == FAMILY_AXES:
             axes_jacobian(kind, Rg[g], pg[g], J, pt[g], Rt[g], gaux[g], rv, A, B, E, r)
         else:
-            goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + task_size(kind)], spec[g, G_WEIGHT], rv, A, B, E, r)
+            goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + rows], spec[g, G_WEIGHT], rv, A, B, E, r)
     if weighted:
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
             w = spec[g, G_WEIGHT]
-            for i in range(r, r + task_size(int(spec[g, G_KIND]))):
+            for i in range(r, r + (int(spec[g, G_ROWS]) if extra else frame_rows(int(spec[g, G_KIND])))):
                 for k in range(n):
                     E[i, k] *= w
 
@@ -305,12 +298,10 @@ def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, 
     if mimic:
         fold(index, scale, Jx, J)
         src = J
-    if kind == KIND_RELATIVE_POSE:
-        goal_jacobian(KIND_POSE, R, src, t, e, w, rv, A, B, E, r)
-    elif kind == KIND_RELATIVE_POSE_AXES:
-        relative_axes_jacobian(Rj, pj, aux, R, t, src, pt, Rt, rv, A, B, E, r)
-    else:
-        com_rows(kind, aux, t, src, E, r)
+    if kind == RELATIVE_LOG6:
+        goal_jacobian(LOG6, R, src, t, e, w, rv, A, B, E, r)
+    else:  # a banded relative pose, a relative position, a centre of mass (.balance)
+        balance_rows(kind, Rj, pj, aux, R, p, t, src, pt, Rt, rv, A, B, E, r)
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
@@ -558,7 +549,7 @@ def make_workspace(n, m, G, rows, max_it):
 def stack_rows(spec):
     """Total task rows of a goal stack: the last goal's first row plus its size."""
     G = spec.shape[0]
-    return int(spec[G - 1, G_ROW]) + task_size(int(spec[G - 1, G_KIND]))
+    return int(spec[G - 1, G_ROW]) + int(spec[G - 1, G_ROWS])
 
 
 def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
@@ -572,7 +563,7 @@ def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
             index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
         spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
-            (:class:`.layout.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets (:func:`.layout.encode_target`).
+            (``goals.stack.GoalStack``); pt (G, 3), Rt (G, 3, 3): its targets (``goals.stack.encode_target``).
         params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
             (:mod:`.layout`).
 
@@ -613,9 +604,7 @@ def _outcome(spec, ge, g_out):
     pos = 0.0
     rot = np.nan
     for g in range(spec.shape[0]):
-        kind = int(spec[g, G_KIND])
-        oriented = kind == KIND_POSE or kind == KIND_PLANAR_YAW or kind >= KIND_RELATIVE_POSE or (
-            kind == KIND_POSE_AXES or KIND_ORIENTATION <= kind <= KIND_LOOK_AT)  # an angle: .axes's kinds but one
+        oriented = spec[g, G_ANGLE] != 0.0  # its kind reports an angle (its declaration)
         g_out[g, 0] = ge[g, 0]
         g_out[g, 1] = ge[g, 1] if oriented else np.nan
         pos = max(pos, ge[g, 0]) if ge[g, 0] == ge[g, 0] else ge[g, 0]  # a NaN error stays NaN
@@ -626,10 +615,10 @@ def _outcome(spec, ge, g_out):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def extra_kinds(spec):
-    """True when the stack spec (G, GOAL_SIZE) holds a goal of the kinds after the first four (pose, position,
-    planar, planar with yaw): :mod:`.axes`'s (codes 4-9) or :mod:`.balance`'s (from ``KIND_BEYOND_FRAME``)."""
+    """True when the stack spec (G, GOAL_SIZE) holds a goal its kind declares of a compiled family beyond
+    :func:`goal_error`'s (pose, position, planar): :mod:`.axes`'s or :mod:`.balance`'s (its ``G_FAMILY`` column)."""
     for g in range(spec.shape[0]):
-        if spec[g, G_KIND] >= KIND_POSE_AXES:
+        if spec[g, G_FAMILY] != FAMILY_FRAME:
             return True
     return False
 
@@ -805,7 +794,7 @@ def _record(stats, i, pos, rot, converged, it, evaluations, c):
 def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                  params, Q_out, stats, g_stats):
     """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
-    row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
+    row the stack's targets, ``goals.stack.encode_targets`` for one goal); end configurations to Q_out (N, n), per
     pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
     and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python wrapper of
     :func:`lm_run_pairs_buffers`)."""

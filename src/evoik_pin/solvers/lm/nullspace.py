@@ -28,9 +28,10 @@ import math
 import numpy as np
 from numba import njit
 
+from ...goals.stack import G_WEIGHT
 from .chain import coupled
 from .kernel import _copy, damped_solve, make_workspace, stack_rows, task_error, task_jacobian, within
-from .layout import B_CHI, B_CLO, G_WEIGHT, LAMBDA_MIN
+from .layout import B_CHI, B_CLO, LAMBDA_MIN
 from .tree import frame_jacobian
 
 __all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "nullspace_kernel"]

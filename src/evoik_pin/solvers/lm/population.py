@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...goals.stack import G_WEIGHT
 from .chain import coupled
 from .kernel import make_workspace, stack_rows, task_error, task_jacobian
-from .layout import G_WEIGHT
 from .tree import BORROWING
 
 __all__ = ["task_rows", "task_rows_batch"]

@@ -25,6 +25,9 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
+from ...goals.pose import KIND_POSE
+from ...goals.position import KIND_POSITION
+from ...goals.stack import G_RTOL, G_TOL, G_WEIGHT, KIND_PLANAR_YAW, problem_goals
 from ...lie import wrap_angle, yaw
 from .layout import (
     DEFAULT_DAMPING,
@@ -32,23 +35,16 @@ from .layout import (
     DEFAULT_STALL_RATIO,
     DEFAULT_STALL_WINDOW,
     FINISHED,
-    G_RTOL,
-    G_TOL,
-    G_WEIGHT,
     GEO_ALPHA,
     GEO_H,
     GEO_NEAR,
     GEO_SLOW,
     GROW,
-    KIND_PLANAR_YAW,
-    KIND_POSE,
-    KIND_POSITION,
     LAMBDA_MAX,
     LAMBDA_MIN,
     SHRINK,
     TWO_PI,
     box_constants,
-    problem_goals,
 )
 from .outcome import LMOutcome
 

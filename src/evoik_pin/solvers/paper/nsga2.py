@@ -34,7 +34,7 @@ import numpy as np
 from ... import lie
 from ...errors import BoundsError, OptionError
 from ...objectives import (
-    Manipulability,
+    ManipulabilityCost,
     Objective,
     PopulationKinematics,
     WeightedJointDisplacement,
@@ -470,13 +470,13 @@ def goal_rows(goal) -> list[int]:
 class GoalManipulability(Objective):
     """Paper 003's manipulability cost over several goal frames (a goal list): Y is the product of the singular
     values of the stacked Jacobian rows ``rows[i]`` of ``frames[i]`` (base frame, (sum of rows, n)), that is
-    ``sqrt(det(J J^T))`` while there are at most as many rows as joints (the tip's :class:`Manipulability` for one
-    frame) and ``sqrt(det(J^T J))`` otherwise. ``form`` as :class:`Manipulability`'s: ``"inverse"`` 1 / (Y + 1)
+    ``sqrt(det(J J^T))`` while there are at most as many rows as joints (the tip's :class:`ManipulabilityCost` for one
+    frame) and ``sqrt(det(J^T J))`` otherwise. ``form`` as :class:`ManipulabilityCost`'s: ``"inverse"`` 1 / (Y + 1)
     (minimized), ``"negative"`` -Y, ``"value"`` Y. Y has the units of the rows' product (m per rad for translation
     rows, 1 for rotation rows)."""
 
     def __init__(self, frames, rows, form: str = "inverse") -> None:
-        self._form = Manipulability("translation", form).form  # the form's check
+        self._form = ManipulabilityCost("translation", form).form  # the form's check
         self.frames, self.rows = list(frames), [list(r) for r in rows]
 
     def value(self, Q, kin):
@@ -577,7 +577,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
             3-D target: those would make ``Y`` 0 everywhere; the message names them). One target only.
         manipulability_goals: a goal list: the goals (indices into the list, or their frames) whose rows the
             manipulability reads (default every goal), less the rows their frames never move.
-        objectives: replace the default ``[Manipulability(rows, "inverse"), WeightedJointDisplacement]``
+        objectives: replace the default ``[ManipulabilityCost(rows, "inverse"), WeightedJointDisplacement]``
             with any list of :class:`~evoik_pin.objectives.Objective` (all minimized).
         pick: objective index minimized when choosing ``q`` from the front (-1: the last, S).
             (Custom objectives of a goal list receive the kinematics of the robot's tip: terms of ``q`` alone,
@@ -627,7 +627,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
             else:
                 rows = manipulability_rows
             robot.task_rows(rows)  # validates names and indices with a clear error
-            manipulability = Manipulability(rows, "inverse")
+            manipulability = ManipulabilityCost(rows, "inverse")
         objectives = [manipulability, WeightedJointDisplacement(q_prev, gains)]
     elif gains is not None or manipulability_rows is not None or manipulability_goals is not None:
         raise OptionError("gains, manipulability_rows and manipulability_goals shape the default objectives; with "

@@ -53,11 +53,12 @@ import time
 import numpy as np
 
 from ...errors import OptionError
+from ...goals.registry import TASK_ROWS
+from ...goals.stack import GoalArrays, target_kind
 from ...problem import IKProblem, goals_shortfall_text, shortfall_text
 from ...result import Result
 from .. import register
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
-from ..lm.layout import TASK_ROWS, GoalArrays, target_kind
 from ..options import check_choice, check_int, check_positive
 from .memetic import memetic
 from .seed_table import default_table_size, seed_table

@@ -45,22 +45,12 @@ import numpy as np
 
 from ...errors import OptionError
 from ...goals.preferences import Manipulability, Posture
+from ...goals.registry import KIND_BEYOND_FRAME, TASK_ROWS
+from ...goals.stack import owned, target_kind
 from ...problem import errors_text, shortfall_text
 from ...result import Result
 from ..lm import LevenbergMarquardt, wrapping_joints
-from ..lm.layout import (
-    KIND_BEYOND_FRAME,
-    S_CONVERGED,
-    S_COST,
-    S_EVALUATIONS,
-    S_POS,
-    S_ROT,
-    STATS_SIZE,
-    TASK_ROWS,
-    kernel_params,
-    owned,
-    target_kind,
-)
+from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
 from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 from . import memetic as memetic_module

@@ -30,9 +30,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...goals.stack import G_JOINT
 from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers
-from ..lm.layout import G_JOINT
 from ..lm.tree import frame_pose, tree_forward
 from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_k, table_distances
 

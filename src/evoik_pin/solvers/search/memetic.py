@@ -50,12 +50,12 @@ import time
 import numpy as np
 
 from ...errors import OptionError
+from ...goals.registry import KIND_BEYOND_FRAME
 from ...problem import IKProblem, errors_text, shortfall_text
 from ...result import Result
 from .. import get_solver, register
 from ..collision_verdict import pairs_text
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
-from ..lm.layout import KIND_BEYOND_FRAME
 from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate

@@ -15,19 +15,13 @@ import weakref
 import numpy as np
 import pinocchio as pin
 
+from ...goals.pose import KIND_POSE
+from ...goals.position import KIND_POSITION
+from ...goals.registry import KIND_BEYOND_FRAME
+from ...goals.relative_pose import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
+from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW, encode_targets, target_kind
 from ...lie import rpy
 from ...problem import Target
-from ..lm.layout import (
-    KIND_BEYOND_FRAME,
-    KIND_PLANAR,
-    KIND_PLANAR_YAW,
-    KIND_POSE,
-    KIND_POSITION,
-    KIND_RELATIVE_POSE,
-    KIND_RELATIVE_POSE_AXES,
-    encode_targets,
-    target_kind,
-)
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "load_goal_helpers",

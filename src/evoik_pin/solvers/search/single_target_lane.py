@@ -9,7 +9,7 @@ plan's look-ups (seed table, engine retargeted, compiled entry), the cost from a
 tasks; TRAC-IK's calls in the latency benchmark). A lane does the part that changes from call to call only:
 
 * the target's checks (:func:`~evoik_pin.target.pose_arrays`: those of :class:`~evoik_pin.Target`, on Python
-  floats; a goal list's are :func:`~evoik_pin.goals.binding.bind`'s) and q0's (the solver's); any other form of
+  floats; a goal list's are :func:`~evoik_pin.goals.stack.bind`'s) and q0's (the solver's); any other form of
   target, or a target a check refuses, goes the general way, which accepts what the lane accepts and raises the
   error of what it refuses;
 * the target written into its engine's own arrays, and the compiled entry called with the arguments it keeps;
@@ -57,7 +57,7 @@ class SingleTargetLane:
 
     Attributes:
         key: what the lane serves: True (poses), False (positions), or the goal stack a one-goal list is bound to
-            (:func:`~evoik_pin.goals.binding.bind`).
+            (:func:`~evoik_pin.goals.stack.bind`).
     """
 
     @classmethod
@@ -161,7 +161,7 @@ class SingleTargetLane:
 
     def solve_goals(self, goals: list, pt: np.ndarray, Rt: np.ndarray, q0: np.ndarray | None):
         """:meth:`solve` for a one-goal list bound to the lane's stack (``goals``: the bound list, ``pt`` (1, 3),
-        ``Rt`` (1, 3, 3): its targets, :func:`~evoik_pin.goals.binding.bind`'s). The goal's errors are the kernel's
+        ``Rt`` (1, 3, 3): its targets, :func:`~evoik_pin.goals.stack.bind`'s). The goal's errors are the kernel's
         (``Goal.reported``), judged by ``Goal.met``, as memetic judges them; ``chosen`` is ``[None]``."""
         t0 = time.perf_counter()
         self._pt[:] = pt[0]

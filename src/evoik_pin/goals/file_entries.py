@@ -1,0 +1,214 @@
+"""The pieces of a goals file's entries (:mod:`evoik_pin.io.goals_file`) that goal kinds declare theirs with: each
+kind's :meth:`~evoik_pin.goals.goal.Goal.file_kind` returns a :class:`FileKind` (its ``kind:`` name, its optional
+fields, how its target is read and written) built from the readers and writers here. Every error is a
+:class:`~evoik_pin.errors.GoalsFileError` naming the field; :mod:`evoik_pin.io.goals_file` adds the file and the goal.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import FrameError, GoalsFileError, OptionError, TargetError
+from ..io.datafile import Flow
+from ..target import Target
+from .goal import DEFAULT_GOAL_TOLERANCE
+
+__all__ = ["FIELD_READERS", "FileKind", "axis_entry", "field_entries", "matrix_text", "name_entry", "number", "numbers",
+           "orientation_target", "pair_goal", "pointing", "pose_target", "position_target", "position_text",
+           "unknown_keys", "vector_target"]
+
+#: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
+_NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
+
+
+def number(value, what: str) -> float:
+    """A finite number (int, float, or YAML 1.1's text of one such as ``1e-6``; not a bool)."""
+    if isinstance(value, str) and _NUMBER_TEXT.fullmatch(value.strip()):
+        value = float(value)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise GoalsFileError(f"{what} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def numbers(value, count: int, what: str) -> np.ndarray:
+    if not isinstance(value, list) or len(value) != count:
+        raise GoalsFileError(f"{what} must be a list of {count} numbers, got {value!r}")
+    return np.array([number(v, f"{what}[{k}]") for k, v in enumerate(value)])
+
+
+def unknown_keys(entry: dict, accepted, what: str) -> None:
+    unknown = [k for k in entry if k not in accepted]
+    if unknown:
+        raise GoalsFileError(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: "
+                             f"{', '.join(accepted)}")
+
+
+def pose_target(target: dict) -> Target:
+    """A pose's target: ``matrix`` alone, or ``position`` with ``rpy`` (degrees) or ``rpy_rad``."""
+    unknown_keys(target, ("position", "rpy", "rpy_rad", "matrix"), "target")
+    if "matrix" in target:
+        if len(target) > 1:
+            raise GoalsFileError(f"target: matrix is the whole pose; give it alone, not with "
+                                 f"{', '.join(k for k in target if k != 'matrix')}")
+        rows = target["matrix"]
+        if not isinstance(rows, list) or len(rows) != 4:
+            raise GoalsFileError(f"target.matrix must be 4 rows of 4 numbers (a homogeneous pose, m), got {rows!r}")
+        return Target.coerce(np.array([numbers(row, 4, f"target.matrix row {k}") for k, row in enumerate(rows)]))
+    if "position" not in target:
+        raise GoalsFileError("target of a pose needs position: [x, y, z] (m) with rpy: [r, p, y] (degrees) or "
+                             "rpy_rad: (rad), or matrix: a 4 x 4 pose")
+    angles = [k for k in ("rpy", "rpy_rad") if k in target]
+    if len(angles) != 1:
+        raise GoalsFileError("target of a pose needs one of rpy: [r, p, y] (degrees) and rpy_rad: (rad) with its "
+                             f"position, got {'both' if angles else 'neither'}; for a position alone use kind: "
+                             "position")
+    rpy = numbers(target[angles[0]], 3, f"target.{angles[0]}")
+    return Target.from_rpy(numbers(target["position"], 3, "target.position (m)"),
+                           np.radians(rpy) if angles[0] == "rpy" else rpy)
+
+
+def position_target(target: dict) -> np.ndarray:
+    if any(k in target for k in ("rpy", "rpy_rad", "matrix")):
+        raise GoalsFileError("target: a position goal has no orientation (rpy, rpy_rad, matrix); use kind: pose "
+                             "for one")
+    unknown_keys(target, ("position",), "target")
+    if "position" not in target:
+        raise GoalsFileError("target of a position goal needs position: [x, y, z] (m)")
+    return numbers(target["position"], 3, "target.position (m)")
+
+
+def orientation_target(target: dict) -> np.ndarray:
+    """An orientation's target: ``rpy`` (degrees) or ``rpy_rad`` alone, or a 3 x 3 (or 4 x 4) ``matrix``."""
+    unknown_keys(target, ("rpy", "rpy_rad", "matrix"), "target")
+    if len(target) != 1:
+        raise GoalsFileError("target of an orientation needs one of rpy: [r, p, y] (degrees), rpy_rad: (rad) and "
+                             f"matrix: a 3 x 3 rotation, got {', '.join(target) or 'none'}")
+    if "matrix" in target:
+        rows = target["matrix"]
+        if not isinstance(rows, list) or len(rows) not in (3, 4):
+            raise GoalsFileError(f"target.matrix must be 3 rows of 3 numbers (a rotation), got {rows!r}")
+        return np.array([numbers(row, len(rows), f"target.matrix row {k}") for k, row in enumerate(rows)])
+    key = next(iter(target))
+    rpy = numbers(target[key], 3, f"target.{key}")
+    return Target.from_rpy(np.zeros(3), np.radians(rpy) if key == "rpy" else rpy).rotation
+
+
+def vector_target(name: str) -> Callable[[dict], np.ndarray]:
+    """The reader of a target that is one 3-vector under the key ``name`` (direction, point)."""
+    def read(target: dict) -> np.ndarray:
+        unknown_keys(target, (name,), "target")
+        if name not in target:
+            raise GoalsFileError(f"target needs {name}: [x, y, z]")
+        return numbers(target[name], 3, f"target.{name}")
+    return read
+
+
+def tolerance_entry(value, what: str):
+    """A tolerance: one number, or a list of half-widths (``.inf`` or ``"inf"``: free)."""
+    if not isinstance(value, list):
+        return number(value, what)
+    return [math.inf if isinstance(v, str) and v.strip().lower() in ("inf", ".inf") or v == math.inf
+            else number(v, f"{what}[{k}]") for k, v in enumerate(value)]
+
+
+def free_entry(value, what: str):
+    if isinstance(value, str) or (isinstance(value, list) and all(isinstance(v, str) for v in value)):
+        return value
+    raise GoalsFileError(f"{what} must name axes (a string such as 'rz' or a list of names), got {value!r}")
+
+
+def axis_entry(value, what: str) -> np.ndarray:
+    return numbers(value, 3, what)
+
+
+#: How the optional fields other than numbers are read (the others: :func:`_number`).
+def name_entry(value, what: str) -> str:
+    """A name (a non-empty string), such as ``expressed_in: world``; the goal checks which names it accepts."""
+    if not isinstance(value, str) or not value:
+        raise GoalsFileError(f"{what} must be a name (a string), got {value!r}")
+    return value
+
+
+FIELD_READERS = {"tolerance": tolerance_entry, "free": free_entry, "axis": axis_entry, "expressed_in": name_entry}
+
+
+def matrix_text(goal) -> dict:
+    """A pose target as its 4 x 4 ``matrix`` (m)."""
+    return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
+
+
+def position_text(goal) -> dict:
+    """A position target as its ``position`` (m)."""
+    return Flow(position=[float(v) + 0.0 for v in goal.target])
+
+
+@dataclass(frozen=True)
+class FileKind:
+    """One ``kind:`` of a goals file, as a goal kind declares it (:meth:`~evoik_pin.goals.goal.Goal.file_kind`): its
+    ``name``, its goal class, the optional fields it takes (besides frame, kind and target), how its ``target:``
+    mapping is read and how a goal's target is written; ``make`` (frame, target, **fields) -> goal where the class
+    takes its arguments in another order (None: the class)."""
+
+    name: str
+    cls: type
+    fields: tuple[str, ...]
+    read_target: Callable[[dict], object]
+    write_target: Callable[[object], dict]
+    make: Callable | None = None
+    #: Kinds whose entries are not (frame, target, numbers): the whole entry read (entry, what) -> Goal, and the
+    #: whole entry written (goal) -> dict.
+    read: Callable[[dict, str], object] | None = None
+    write: Callable[[object], dict] | None = None
+    #: How the targets a goal set's ``targets:`` reads become the class's members (None: as read).
+    set_member: Callable | None = None
+
+
+def pointing(cls) -> Callable:
+    """``make`` of a pointing kind: its required ``axis`` field first."""
+    def make(frame, target, axis=None, **options):
+        if axis is None:
+            raise GoalsFileError(f"missing field 'axis' (a {cls.__name__} goal points the frame's axis: [x, y, z])")
+        return cls(frame, axis, target, **options)
+    return make
+
+
+def field_entries(goal, fields: tuple[str, ...]) -> dict:
+    """The entries of ``goal``'s optional ``fields`` as a goals file writes them: numbers where they differ from
+    their defaults, bands (per-axis half-widths, inf: free), free axes, a pointing axis."""
+    entry: dict = {}
+    defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
+    band = getattr(goal, "band", None)
+    for key in fields:
+        if key == "tolerance" and band is not None:  # per-axis half-widths (inf: free)
+            entry[key] = [float(v) for v in band]
+        elif key == "free":
+            if goal.free:
+                entry[key] = " ".join(goal.free)
+        elif key == "axis":
+            entry[key] = [float(v) + 0.0 for v in goal.axis]
+        elif getattr(goal, key) != defaults[key]:
+            entry[key] = float(getattr(goal, key))
+    return entry
+
+
+def pair_goal(cls, entry: dict, what: str, name: str, fields: tuple[str, ...], read_target: Callable) -> object:
+    """A two-frame ``kind: <name>`` entry (:class:`RelativePose`, :class:`RelativePosition`): ``frame_a``, ``frame``
+    (frame b) and a ``target`` (read by ``read_target``), with the optional ``fields``; ``cls(frame_a, frame,
+    target, **fields)``."""
+    unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
+    for key in ("frame_a", "frame", "target"):
+        if key not in entry:
+            raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
+                                 "frame's placement relative to frame_a)")
+    if not isinstance(entry["target"], dict):
+        raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
+    options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
+    try:
+        return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
+    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
+        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None

@@ -1,0 +1,133 @@
+"""RelativePosition: one frame's origin placed relative to another's (two hands holding a box; a limb vector when
+retargeting a motion) (see :mod:`evoik_pin.goals`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import OptionError
+from ..io.datafile import Flow
+from .file_entries import FileKind, field_entries, pair_goal, vector_target
+from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, Goal, check_frame_pair, pack_frame_pair, pair_placements, point3
+from .registry import FAMILY_BEYOND_FRAME, RELATIVE_POINT_IN_A, RELATIVE_POINT_WORLD, KindCode
+
+__all__ = ["EXPRESSED_IN", "KIND_RELATIVE_POSITION", "KIND_RELATIVE_POSITION_IN_A", "RelativePosition"]
+
+#: Its kernel codes (3 rows each, the compiled ``solvers/lm/balance.py``): ``p_b - p_a - p`` in the world's axes,
+#: and ``R_a^T (p_b - p_a) - p`` in frame a's. Their ``aux`` row: ``goal.A_REL_*``.
+KIND_RELATIVE_POSITION, KIND_RELATIVE_POSITION_IN_A = RELATIVE_POINT_WORLD, RELATIVE_POINT_IN_A
+#: The axes ``p`` may be given in: frame a's, or the world's (the robot's base frame).
+EXPRESSED_IN = ("a", "world")
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class RelativePosition(Goal):
+    """Frame ``frame_b``'s origin at ``p`` (3 numbers, m) from frame ``frame_a``'s origin, wherever the two frames
+    are: ``p_b - p_a = p`` in the world's axes (``expressed_in="world"``: the robot's base frame; the vector keeps its
+    direction in space), or ``R_a^T (p_b - p_a) = p`` in frame a's axes (``expressed_in="a"``, the default: the
+    vector turns with frame a). Two hands holding a box 0.3 m wide: ``RelativePosition("left_hand", "right_hand",
+    [0, -0.3, 0])``; a limb vector when retargeting a motion: ``expressed_in="world"``. Orientation free.
+
+    Its error is ``|e|`` (m) of that equation's residual e; met when within ``tolerance`` (m, > 0, default 1e-6).
+
+    Args: frame_a, frame_b, p, then ``expressed_in`` ("a" or "world"), ``weight`` (> 0, default 1) and ``tolerance``.
+    """
+
+    frame_a: str = ""
+    target: object = None
+    expressed_in: str = "a"
+    weight: float = 1.0
+    tolerance: float = DEFAULT_GOAL_TOLERANCE
+    rotation_tolerance: float | None = None
+    KIND_CODES = (KindCode(KIND_RELATIVE_POSITION, (0, 1, 2), FAMILY_BEYOND_FRAME),
+                  KindCode(KIND_RELATIVE_POSITION_IN_A, (0, 1, 2), FAMILY_BEYOND_FRAME))
+    #: The optional fields of its goals-file entry.
+    FILE_FIELDS = ("expressed_in", "weight", "tolerance")
+
+    def __init__(self, frame_a: str, frame_b: str, p, expressed_in: str = "a", weight: float = 1.0,
+                 tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+        if expressed_in not in EXPRESSED_IN:
+            raise OptionError(f"RelativePosition's expressed_in must be one of {', '.join(map(repr, EXPRESSED_IN))} "
+                              f"(frame a's axes or the world's), got {expressed_in!r}")
+        kind = KIND_RELATIVE_POSITION_IN_A if expressed_in == "a" else KIND_RELATIVE_POSITION
+        self._init_common(frame_b, weight, tolerance, None, kind, False)
+        check_frame_pair(frame_a, frame_b, "RelativePosition")
+        if not self.tolerance > 0:
+            raise OptionError(f"tolerance (m) of the RelativePosition of {frame_b!r} from {frame_a!r} must be > 0, "
+                              f"got {tolerance!r}")
+        object.__setattr__(self, "frame_a", frame_a)
+        object.__setattr__(self, "expressed_in", expressed_in)
+        object.__setattr__(self, "target", point3(p, f"RelativePosition of {frame_b!r} from {frame_a!r}: p"))
+
+    @property
+    def frame_b(self) -> str:
+        """The frame placed relative to ``frame_a`` (the goal's ``frame``)."""
+        return self.frame
+
+    @property
+    def p(self) -> np.ndarray:
+        """The wanted position (3,) (m) of frame b's origin from frame a's, in the axes ``expressed_in`` names."""
+        return self.target
+
+    @property
+    def frames(self) -> list[str]:
+        """The frames this goal names: frame_a, frame_b."""
+        return [self.frame_a, self.frame]
+
+    @property
+    def label(self) -> str:
+        """How messages name this goal: ``frame_a -> frame_b``."""
+        return f"{self.frame_a} -> {self.frame}"
+
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.target.copy(), np.eye(3)
+
+    def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
+        """(aux row, support row (m,) bool) on ``robot`` (:func:`.goal.pack_frame_pair`). In the world's axes
+        a joint moving both frames turns the vector (its sign :data:`.goal.BOTH`); in frame a's it moves them
+        together (0). Raises FrameError for an unknown frame or two frames no joint moves apart."""
+        return pack_frame_pair(robot, self.frame_a, self.frame, both=BOTH if self.expressed_in == "world" else 0.0)
+
+    def batch_key(self) -> tuple:
+        """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
+        return (self.frame_a,)
+
+    def marker(self) -> None:
+        """None, as for a relative pose: the target is a vector from frame a, no place in the base frame."""
+        return None
+
+    def vectors(self, Ra: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """The vectors (N, 3) (m) compared with ``p``, in the axes ``expressed_in`` names, from frame a's rotations
+        Ra (N, 3, 3) and the vectors p_b - p_a (N, 3) (base frame)."""
+        return np.einsum("nji,nj->ni", Ra, d) if self.expressed_in == "a" else d
+
+    def robot_errors(self, robot, q) -> tuple[float, None]:
+        """(position error m, None) at ``q`` (n,), from Pinocchio's kinematics."""
+        return float(self.robot_population_errors(robot, np.asarray(q, dtype=float)[None])[0][0]), None
+
+    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
+        """(position errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation)."""
+        Ra, d, _ = pair_placements(robot, Q, self.frame_a, self.frame)
+        return np.linalg.norm(self.vectors(Ra, d) - self.target, axis=1), np.zeros(len(Q))
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: relative_position``: ``frame_a``, ``frame`` (frame b) and ``target: {position: [x, y, z]}`` (m),
+        with optional ``expressed_in`` (a | world), ``weight`` and ``tolerance``."""
+        def read(entry: dict, what: str) -> RelativePosition:
+            return pair_goal(cls, entry, what, "relative_position", cls.FILE_FIELDS, vector_target("position"))
+
+        def write(goal: RelativePosition) -> dict:
+            entry = {"frame_a": goal.frame_a, "frame": goal.frame, "kind": "relative_position",
+                     "target": Flow(position=[float(v) + 0.0 for v in goal.target])}
+            if goal.expressed_in != "a":
+                entry["expressed_in"] = goal.expressed_in
+            return entry | field_entries(goal, ("weight", "tolerance"))
+
+        return FileKind("relative_position", cls, (), vector_target("position"), write, read=read, write=write)
+
+    def __repr__(self) -> str:
+        return (f"RelativePosition({self.frame_a!r}, {self.frame!r}, {np.round(self.target, 6).tolist()}, "
+                f"expressed_in={self.expressed_in!r}, weight={self.weight:g}, tolerance={self.tolerance:g})")

@@ -1,0 +1,434 @@
+"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:func:`bind` checks a goal list
+against a robot and packs it), and the targets' encoding.
+
+* a goal stack (:class:`GoalStack`): per goal g, ``spec[g]`` (GOAL_SIZE,) at the ``G_*`` columns (kind, the
+  physical joint its frame sits on, the square root of its weight, its tolerances in m and rad, the first of its
+  rows in the stacked error, and from its kind's declaration (:mod:`.registry`) its row count, the compiled family
+  that evaluates it and whether it reports an angle), the frame's folded placement on that joint ``R[g]`` (3, 3),
+  ``p[g]`` (3,), ``support[g]`` (m,) bool, the joints that move it, and ``aux[g]``, its kind's further numbers;
+* a goal's target as ``pt`` (3,) and ``Rt`` (3, 3) (:func:`encode_target`): pose (position m, rotation),
+  position (position, identity), planar (x, y, yaw rad or 0; identity); a stack's targets as (G, 3) and
+  (G, 3, 3) arrays (:class:`GoalArrays`), N single targets of one kind as :class:`TargetArrays`.
+
+The kernel reads the row count, family and angle flag from the spec (filled here from the declarations when a
+stack is built), never from the tables of :mod:`.registry`: numba compiles a module's globals into its code and
+its disk cache does not see another module's tables change. (Its runs of frame-family goals alone take the row
+count from the code of the residual they compute, ``kernel.frame_rows``, for speed; tests hold the two equal.)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import weakref
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import FrameError, LockedJointsError, TargetError
+from .goal import Goal
+from .pose import KIND_POSE
+from .position import KIND_POSITION
+from .registry import (
+    FAMILY_BEYOND_FRAME,
+    FAMILY_FRAME,
+    KINDS,
+    ORIENTED_KINDS,
+    PLANAR,
+    PLANAR_YAW,
+    TASK_ROWS,
+    KindCode,
+    register,
+)
+
+__all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_ROWS", "G_RTOL", "G_TOL", "G_WEIGHT",
+           "KIND_PLANAR", "KIND_PLANAR_YAW", "GoalArrays", "GoalStack", "TargetArrays", "bind", "encode_target",
+           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "target_kind"]
+
+#: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
+#: first row in the stacked error; then its kind's declaration: its row count, its compiled family (``FAMILY_*``)
+#: and 1.0 when its errors include an angle.
+G_KIND, G_JOINT, G_WEIGHT, G_TOL, G_RTOL, G_ROW, G_ROWS, G_FAMILY, G_ANGLE = range(9)
+GOAL_SIZE = 9
+
+#: The planar target kinds of a single-target problem (no goal class): x, y (2 rows) and x, y, yaw (3 rows).
+KIND_PLANAR, KIND_PLANAR_YAW = PLANAR, PLANAR_YAW
+register(None, KindCode(KIND_PLANAR, (0, 1), FAMILY_FRAME),
+         KindCode(KIND_PLANAR_YAW, (0, 1, 5), FAMILY_FRAME, oriented=True, angle=True))
+
+
+def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_tolerance: float,
+             row: int) -> np.ndarray:
+    """One goal's spec (GOAL_SIZE,): the given columns (``weight`` > 0, tolerances m and rad) and those its kind
+    declares (row count, compiled family, angle flag)."""
+    code = KINDS[int(kind)]
+    return np.array([kind, joint, np.sqrt(weight), tolerance, rotation_tolerance, row, len(code.rows), code.family,
+                     1.0 if code.angle else 0.0])
+
+
+def owned(a: np.ndarray, dtype=None) -> np.ndarray:
+    """``a`` as the kernel's entry points are compiled for it: a C-contiguous, writable array (of ``dtype`` when
+    given): ``a`` itself when it is one, else a copy.
+
+    numba compiles a function once per argument type, and a read-only array is a type of its own (a NumPy broadcast
+    or a C-contiguous view of one, an array from Ray's object store, a memory-mapped file): one reaching an entry
+    point would have numba compile the whole kernel again for it (half a minute to a minute and a half, inside the
+    caller's time budget, and again in every fresh process). The engine passes every array through here once."""
+    if a.flags.writeable and a.flags.c_contiguous and (dtype is None or a.dtype == dtype):
+        return a
+    return np.array(a, dtype=dtype, order="C")
+
+
+def target_kind(target) -> int:
+    """The ``KIND_*`` of a :class:`~evoik_pin.problem.Target`."""
+    if target.planar:
+        return KIND_PLANAR if target.yaw is None else KIND_PLANAR_YAW
+    return KIND_POSITION if target.rotation is None else KIND_POSE
+
+
+def encode_target(target) -> tuple[np.ndarray, np.ndarray]:
+    """The kernel's ``(pt (3,), Rt (3, 3))`` of one target (see the module docstring)."""
+    if target.planar:
+        pt = np.array([target.position[0], target.position[1], target.yaw or 0.0])
+        return pt, np.eye(3)
+    Rt = np.eye(3) if target.rotation is None else owned(target.rotation, float)
+    return owned(target.position, float), Rt
+
+
+def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
+    """``(P (N, 3), Rts (N, 3, 3))`` of N targets of one kind, for the kernel's batch entry points."""
+    N = len(targets)
+    t0 = targets[0]
+    if t0.planar:
+        P = np.array([[t.position[0], t.position[1], t.yaw or 0.0] for t in targets], dtype=float)
+        return P, np.repeat(np.eye(3)[None], N, axis=0)
+    P = np.ascontiguousarray([t.position for t in targets], dtype=float)
+    if t0.rotation is None:
+        return P, np.repeat(np.eye(3)[None], N, axis=0)
+    return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
+
+
+@dataclass(frozen=True)
+class TargetArrays:
+    """N targets of one kind as the kernel reads them (:func:`encode_targets`), without Target objects: how the
+    batch solver carries millions of targets (an (N, 4, 4) array of poses becomes one without a Python loop).
+
+    Attributes:
+        kind: their ``KIND_*``. P: (N, 3) positions (m; planar: x, y, yaw rad). Rts: (N, 3, 3) rotations
+            (identity for targets without one).
+    """
+
+    kind: int
+    P: np.ndarray
+    Rts: np.ndarray
+
+    @classmethod
+    def of(cls, targets) -> TargetArrays:
+        """The arrays of a list of :class:`~evoik_pin.problem.Target` of one kind."""
+        return cls(target_kind(targets[0]), *encode_targets(targets))
+
+    @classmethod
+    def from_poses(cls, H: np.ndarray) -> TargetArrays:
+        """Pose targets from (N, 4, 4) homogeneous matrices already checked (``Target.check_poses``)."""
+        return cls(KIND_POSE, np.ascontiguousarray(H[:, :3, 3], dtype=float),
+                   np.ascontiguousarray(H[:, :3, :3], dtype=float))
+
+    def __len__(self) -> int:
+        return int(self.P.shape[0])
+
+    @property
+    def oriented(self) -> bool:
+        """True when the targets constrain orientation (pose, planar with yaw)."""
+        return self.kind in ORIENTED_KINDS
+
+    def take(self, rows: np.ndarray) -> TargetArrays:
+        """The targets at ``rows`` (an index array), as new arrays."""
+        return TargetArrays(self.kind, self.P[rows], self.Rts[rows])
+
+
+@dataclass(frozen=True)
+class GoalStack:
+    """G goals on frames of one robot as the kernel reads them (see the module docstring): which frame, which
+    kind, how much weight, which tolerances; the targets come apart (:func:`encode_target`), so one stack serves
+    any number of problems.
+
+    Attributes:
+        spec: (G, GOAL_SIZE) the ``G_*`` columns. R: (G, 3, 3), p: (G, 3) (m) each frame's folded placement on
+            its joint (``Robot.frame_constants``). support: (G, m) bool, the physical joints that move each frame.
+        rows: total rows of the stacked error. kinds: (G,) the ``KIND_*``. frames: the frame names.
+        aux: (G, A) float, A >= 1: each goal's further numbers, read by its kind's code in the kernel (a band of
+            tolerances, an axis, a second frame, ...; zeros for kinds that need none).
+        any_oriented: some goal constrains orientation.
+    """
+
+    spec: np.ndarray
+    R: np.ndarray
+    p: np.ndarray
+    support: np.ndarray
+    rows: int
+    kinds: tuple
+    frames: tuple
+    aux: np.ndarray = None
+    any_oriented: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
+        if self.aux is None:
+            object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)))
+
+    @property
+    def arrays(self) -> tuple:
+        """The stack's arguments of the kernel's entry points, in their order: spec, R, p, support, aux."""
+        return self.spec, self.R, self.p, self.support, self.aux
+
+    @classmethod
+    def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux=None) -> GoalStack:
+        """The stack of goals on ``frames`` (names; None: the robot's tip) of ``kinds`` (``KIND_*``) with
+        ``weights`` (> 0), ``tolerances`` (m) and ``rotation_tolerances`` (rad), one each per goal; ``aux``: per
+        goal its further numbers (a 1-d array or None), packed into the (G, A) ``aux`` array (zero-padded).
+
+        Cached per robot and these values (the last 64 stacks): a goal list solved again with new targets (an
+        :class:`~evoik_pin.IKSolver`'s calls, a trajectory) gets the same stack object, so an LM engine kept from
+        solve to solve is retargeted in place instead of rebuilt. A stack is never written (a tightened copy is
+        made with ``dataclasses.replace``)."""
+        key = (id(robot), tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
+               tuple(float(t) for t in tolerances), tuple(float(t) for t in rotation_tolerances),
+               None if aux is None else tuple(None if a is None else np.asarray(a, dtype=float).tobytes()
+                                              for a in aux))
+        hit = _STACK_CACHE.get(key)
+        if hit is not None and hit[0]() is robot:
+            return hit[1]
+        stack = cls._made(robot, frames, kinds, weights, tolerances, rotation_tolerances, aux)
+        if len(_STACK_CACHE) >= 64:
+            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
+        _STACK_CACHE[key] = (weakref.ref(robot), stack)
+        return stack
+
+    @classmethod
+    def _made(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux) -> GoalStack:
+        """:meth:`of`'s stack, built."""
+        G = len(frames)
+        spec = np.empty((G, GOAL_SIZE))
+        R, p = np.empty((G, 3, 3)), np.empty((G, 3))
+        joints = []
+        row = 0
+        for g in range(G):
+            j, R[g], p[g] = robot.frame_constants(frames[g])
+            joints.append(j)
+            spec[g] = spec_row(kinds[g], j, weights[g], tolerances[g], rotation_tolerances[g], row)
+            row += len(TASK_ROWS[kinds[g]])
+        packed = None
+        if aux is not None and any(a is not None for a in aux):
+            width = max(len(a) for a in aux if a is not None)
+            packed = np.zeros((G, width))
+            for g, a in enumerate(aux):
+                if a is not None:
+                    packed[g, :len(a)] = a
+        return cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
+                   tuple(robot.tip if f is None else f for f in frames), packed)
+
+    @classmethod
+    def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
+        """The one goal of a single-target problem: the tip, weight 1 (cached per robot, kind and tolerances:
+        every single-target solve builds one)."""
+        key = (id(robot), kind, float(tolerance), float(rotation_tolerance))
+        hit = _SINGLE_CACHE.get(key)
+        if hit is None or hit[0]() is not robot:
+            stack = cls.of(robot, [None], [kind], [1.0], [tolerance], [rotation_tolerance])
+            if len(_SINGLE_CACHE) > 64:
+                _SINGLE_CACHE.clear()
+            hit = _SINGLE_CACHE[key] = (weakref.ref(robot), stack)
+        return hit[1]
+
+    def __len__(self) -> int:
+        return int(self.spec.shape[0])
+
+    @property
+    def oriented(self) -> np.ndarray:
+        """(G,) bool: the goals that constrain orientation."""
+        return np.array([k in ORIENTED_KINDS for k in self.kinds], dtype=bool)
+
+
+_SINGLE_CACHE: dict = {}
+_STACK_CACHE: dict = {}  # GoalStack.of's: key -> (weak reference to the robot, stack)
+
+
+@dataclass(frozen=True)
+class GoalArrays:
+    """N problems over one goal stack (the same frames, kinds, weights and tolerances; different targets) as the
+    kernel's pair entry point reads them: how :func:`~evoik_pin.solve_many` carries goal lists.
+
+    Attributes:
+        stack: the :class:`GoalStack` every problem shares. P: (N, G, 3) target positions (m). Rts: (N, G, 3, 3)
+            target rotations (identity for goals without one).
+    """
+
+    stack: GoalStack
+    P: np.ndarray
+    Rts: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.P.shape[0])
+
+    @property
+    def oriented(self) -> bool:
+        """True when some goal constrains orientation."""
+        return self.stack.any_oriented
+
+    def take(self, rows: np.ndarray) -> GoalArrays:
+        """The problems at ``rows`` (an index array), as new arrays."""
+        return GoalArrays(self.stack, self.P[rows], self.Rts[rows])
+
+
+def problem_goals(problem) -> tuple[GoalStack, np.ndarray, np.ndarray]:
+    """(goal stack, targets pt (G, 3), Rt (G, 3, 3)) of an :class:`~evoik_pin.problem.IKProblem`: its goal list
+    (``problem.goal_stack()``) when it has one, else its single target on the robot's tip."""
+    if getattr(problem, "goals", None) is not None:
+        return problem.goal_stack()
+    stack = GoalStack.single(problem.robot, target_kind(problem.target), float(problem.tolerance),
+                             float(problem.rotation_tolerance))
+    pt, Rt = encode_target(problem.target)
+    return stack, pt[None], Rt[None]
+
+
+# ------------------------------------------------------------------ binding a goal list
+#: Two goals on one frame clash when their target positions (m) or rotations (Frobenius norm) differ by more.
+_CLASH = 1e-9
+
+
+def is_goal_list(value) -> bool:
+    """True for a list or tuple of goals (an empty one too: :func:`bind` refuses it by name)."""
+    return isinstance(value, (list, tuple)) and all(isinstance(g, Goal) for g in value)
+
+
+def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
+    """Check ``goals`` against ``robot`` and pack them for the LM kernel: (the goals as a list, their
+    :class:`~evoik_pin.goals.stack.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)).
+
+    A list of goals on frames (no goal beyond one frame) with the frames, kinds, weights, tolerances and ``aux``
+    rows of a list bound before on this robot (an :class:`~evoik_pin.IKSolver`'s calls: new targets, the same
+    goals) takes its checked stack from :data:`_BOUND`: only the targets are packed (and, for a frame given two
+    goals, their clash checked: it reads the targets).
+
+    Raises: TargetError for an empty list, a member that is no goal, or one frame given clashing targets;
+    FrameError for an unknown frame (with the closest names) or a frame no active joint moves; LockedJointsError
+    (a FrameError) for a frame only a floating base moves while joints between the root and it are locked.
+    """
+    goals = list(goals)
+    if not goals:
+        raise TargetError("the goal list is empty: give at least one goal (Pose(frame, T), Position(frame, p))")
+    for i, g in enumerate(goals):
+        if not isinstance(g, Goal):
+            raise TargetError(f"goal {i} is a {type(g).__name__}, not a goal: use Pose(frame, T) or "
+                              "Position(frame, p) from evoik_pin.goals")
+    key = _signature(robot, goals)
+    hit = _BOUND.get(key) if key is not None else None
+    if hit is not None and hit[0]() is robot:
+        stack = hit[1]
+        if len(stack.frames) > len(set(stack.frames)):
+            _check_frames(robot, goals)  # the clash test reads the targets
+    else:
+        _check_frames(robot, goals)
+        stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
+                             [g.tolerance for g in goals], [g.rotation_tolerance for g in goals],
+                             [g.aux() for g in goals])
+        stack = _beyond_frame(robot, goals, stack)
+        if key is not None:
+            if len(_BOUND) >= 64:
+                _BOUND.pop(next(iter(_BOUND)))
+            _BOUND[key] = (weakref.ref(robot), stack)
+    G = len(goals)
+    pt, Rt = np.empty((G, 3)), np.empty((G, 3, 3))
+    for g, goal in enumerate(goals):
+        pt[g], Rt[g] = goal.encode()
+    return goals, stack, pt, Rt
+
+
+#: Stacks of goal lists bound before, by robot and the goals' :func:`_signature` (the last 64): a hit skips the
+#: frames' checks (their verdict depends on the robot and the frame names alone) and GoalStack.of's key.
+_BOUND: dict = {}
+
+
+def _signature(robot, goals) -> tuple | None:
+    """What :func:`bind`'s checks and stack read of ``goals`` besides their targets, with the robot's id: per goal
+    its class, frame, kind, weight, tolerances and ``aux`` row; None when a goal packs itself against the robot
+    (a goal beyond one frame: :func:`_beyond_frame`)."""
+    parts = [id(robot)]
+    for g in goals:
+        if _packs_itself(g):
+            return None
+        aux = g.aux()
+        parts.append((type(g), g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                      None if aux is None else aux.tobytes()))
+    return tuple(parts)
+
+
+def _packs_itself(goal: Goal) -> bool:
+    """Whether ``goal`` is of a kind beyond one frame (its declaration's family), which packs its own ``aux`` and
+    ``support`` rows against the robot (``goal.pack(robot)``) and checks its frames as it does."""
+    return KINDS[goal.kind].family == FAMILY_BEYOND_FRAME
+
+
+def _check_frames(robot, goals) -> None:
+    """FrameError for a goal's unknown frame (with the closest names) or one no active joint moves;
+    :func:`_check_not_base_only` for one only a floating base moves; TargetError for one frame given two goals
+    with clashing targets."""
+    seen: dict[int, Goal] = {}
+    for g in goals:
+        if _packs_itself(g):  # centre of mass, relative pose: checked as they pack (_beyond_frame)
+            continue
+        fid = robot.frame_id(g.frame)  # FrameError with the closest names
+        if not robot.moving_joints(g.frame):
+            raise FrameError(f"no active joint of {robot.name} moves frame {g.frame!r}: load the robot with that frame "
+                             f"among its tips (tips=[...]) or with tips='all', or aim at another frame")
+        _check_not_base_only(robot, g.frame)
+        other = seen.get(fid)
+        if other is not None and other.aux() is None and g.aux() is None:  # bands, free axes, pointing: no clash
+            pa, Ra = other.encode()
+            pb, Rb = g.encode()
+            clash = np.linalg.norm(pa - pb) > _CLASH
+            if other.has_orientation and g.has_orientation:
+                clash = clash or np.linalg.norm(Ra - Rb) > _CLASH
+            if clash:
+                raise TargetError(f"frame {g.frame!r} has two goals with different targets ({pa.round(6).tolist()} and "
+                                  f"{pb.round(6).tolist()}): give each frame one target")
+        seen[fid] = g
+
+
+def _check_not_base_only(robot, frame: str) -> None:
+    """LockedJointsError for a goal frame that only the floating base's six entries move while joints between the
+    root and it are locked (another branch than the robot's tips, or left out by ``joints=[...]``): the base moves
+    every frame, so the frame passes the "some active joint moves it" test, yet no joint below the base can reach
+    for it and the goal binds."""
+    if not robot.floating_base:
+        return
+    base = set(robot.joint_names[:6])  # a floating base's entries come first in q
+    if not set(robot.moving_joints(frame)) <= base:
+        return
+    # joints fixed at values the caller chose (Robot.locked, solve's locked=) are placed on purpose: a leg held in a
+    # posture may be carried by the base. Only fixed joints between the root and the frame: the base's job too.
+    locked = [j for j in robot.locked_joints(frame) if j not in robot.locked_values]
+    if not locked:
+        return
+    tips = ", ".join(map(repr, robot.tips))
+    shown = ", ".join(locked[:12]) + (f", ... ({len(locked) - 12} more)" if len(locked) > 12 else "")
+    raise LockedJointsError(
+        f"only the floating base moves frame {frame!r} of {robot.name}: the joints between the root and it are "
+        f"locked ({shown}), so the base alone would have to reach it. Free them when loading the robot: "
+        f"tips=[{tips}, {frame!r}] (the chains to each), joints=[...] naming them with the others to keep free, "
+        f"or tips='all' (the whole tree; what a branching URDF gets without tip=/tips=)")
+
+
+def _beyond_frame(robot, goals, stack: GoalStack) -> GoalStack:
+    """``stack`` with the ``aux`` and ``support`` rows of the goals beyond one frame (:class:`CenterOfMass`,
+    :class:`RelativePose`: their ``pack(robot)``, which checks their frames and the robot's masses)."""
+    packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
+    if not packed:
+        return stack
+    width = max(max(a.size for a, _ in packed.values()), stack.aux.shape[1])
+    aux = np.zeros((len(goals), width))
+    aux[:, :stack.aux.shape[1]] = stack.aux
+    support = stack.support.copy()
+    for g, (row, moved) in packed.items():
+        aux[g, :row.size] = row
+        support[g] = moved
+    return dataclasses.replace(stack, aux=aux, support=support)
