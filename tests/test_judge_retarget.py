@@ -200,3 +200,26 @@ def test_the_cli_reads_a_saved_case_and_prints_the_same_verdict(tiny, tmp_path, 
 
 def judge_clip_of(case):
     return jr.judge_clip(**{**case, "contacts": {k: np.array(v) for k, v in case["contacts"].items()}})
+
+
+def test_the_bench_pelvis_orientation_is_the_identity_for_a_person_facing_x_and_turns_with_the_hips():
+    import bench_retarget as br
+
+    names = ["Hips", "LeftUpLeg", "RightUpLeg", "Spine1"]
+    keys = np.array([[[0, 0, 1], [0, 0.1, 1], [0, -0.1, 1], [0.02, 0, 1.3]]], dtype=float)  # a slight lean
+    R = br.pelvis_rotations(keys.copy(), names)[0]
+    assert np.allclose(R.T @ R, np.eye(3)) and np.linalg.det(R) == pytest.approx(1.0)
+    assert np.allclose(R[:, 1], [0, 1, 0]) and R[0, 0] > 0.99  # left along +y, facing +x
+    turned = keys @ pin.utils.rpyToMatrix(0, 0, np.pi / 2).T  # the person turned to face +y
+    assert np.allclose(br.pelvis_rotations(turned, names)[0], pin.utils.rpyToMatrix(0, 0, np.pi / 2) @ R)
+
+
+def test_the_bench_scales_the_walk_so_its_stance_ankles_stand_at_the_robots_ankle_height():
+    import bench_retarget as br
+
+    case = br.prepare("walk", "g1")
+    robot = br.robot_geometry("g1")
+    assert 0.5 < case["scale"] < 1.0  # G1 (1.3 m) is shorter than the CMU subject
+    ankles = [case["frames"].index(f) for f in ("left_ankle_roll_link", "right_ankle_roll_link")]
+    stance = np.concatenate([case["targets"][case["contacts"][case["frames"][a]], a, 2] for a in ankles])
+    assert np.median(stance) == pytest.approx(robot["ankle_height"], abs=0.015)

@@ -1,0 +1,258 @@
+#!/usr/bin/env python
+"""Retargeting (issue 31): the bundled CMU clips onto G1 and Talos, judged by ``judge_retarget.py``.
+
+    python scripts/bench_retarget.py                          # every clip x (g1, talos), pink baseline (+ evoik)
+    python scripts/bench_retarget.py --clips walk --robots g1 --sweep 1,2,3,5,10,20   # pink's tracking vs K
+
+For each clip (``evoik_pin.motion.load_clip``) and robot:
+
+1. scale: one factor per clip and robot, the robot's leg length over the source's. The robot's leg length is
+   hip-to-knee plus knee-to-ankle of its mapped frames at its neutral configuration, averaged over both legs;
+   the source's is the same sum over its keypoints, averaged over both legs and all frames (a BVH's bones are
+   rigid, so the bend of the knee does not change it). Positions are scaled about the origin, then shifted
+   vertically so that the source ankles' floor level (``ground_height``) lands at the robot's ankle height above
+   its soles at neutral (the lowest point of its foot collision geometry): the judged floor is z = 0.
+2. targets: the mapped keypoints (``mapping_preset("cmu", robot)``) of the scaled motion, one per mapped frame;
+   the base frame also gets the source pelvis's orientation (x forward = the hips' left-right axis crossed with the
+   spine's up axis, y = left hip minus right hip, z completing), which GMR also tracks.
+3. pink, GMR's method (``retarget_pink.py`` in the peers' venv, subprocess): from the neutral configuration with
+   the base at the first pelvis target, ``--steps`` QP steps per frame (default 5, the fewest that keep its
+   tracking: see the K sweep in docs/BENCHMARKS.md).
+4. evoik_pin: :func:`retarget_evoik` (the hook the lead fills in when ``evoik_pin.retarget`` lands).
+5. each answer judged by ``judge_retarget.judge_clip`` with the source contacts (``detect_contacts``) on the
+   robot's ankle frames, the limbs of ``limb_pairs("cmu")`` and the SRDF where the robot has one (Talos).
+
+Frames per second are the clip's frames over the method's wall time (pink: its own per-frame clock in its
+subprocess, first frame's settling included; process start and model loading excluded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from evoik_pin.motion import detect_contacts, ground_height, limb_pairs, list_clips, load_clip, mapping_preset
+
+SCRIPTS = Path(__file__).resolve().parent
+sys.path.insert(0, str(SCRIPTS))
+import goal_problems as gp  # noqa: E402
+import judge_retarget as jr  # noqa: E402
+
+PEERS_PYTHON = Path(os.environ.get("PEERS_VENV", "/work/peers-venv")) / "bin" / "python"
+#: The robots: URDF and SRDF below example-robot-data's robots/ (as evoik_pin's catalog loads them).
+ROBOTS = {
+    "g1": ("g1_description/urdf/g1_29dof_rev_1_0.urdf", None),
+    "talos": ("talos_data/robots/talos_reduced.urdf", "talos_data/srdf/talos.srdf"),
+}
+FEET = {"LeftFoot": "LeftFoot", "RightFoot": "RightFoot"}  # CMU's ankle keypoints (contacts)
+
+
+def robot_files(robot_name: str) -> tuple[Path, Path | None]:
+    """(URDF, SRDF or None) of a benchmark robot."""
+    root = gp.example_robot_data_dir()
+    urdf, srdf = ROBOTS[robot_name]
+    return root / urdf, (root / srdf if srdf else None)
+
+
+def _legs(mapping: dict[str, str]) -> list[tuple[str, str, str]]:
+    """(hip, knee, ankle) robot frames per leg, from the preset's CMU keypoints."""
+    by_key = {k: f for f, k in mapping.items()}
+    return [(by_key[f"{side}UpLeg"], by_key[f"{side}Leg"], by_key[f"{side}Foot"]) for side in ("Left", "Right")]
+
+
+def robot_geometry(robot_name: str) -> dict:
+    """Neutral leg length (m) and ankle height above the soles (m) of the robot, from its mapped frames."""
+    urdf, _ = robot_files(robot_name)
+    model = jr.build_model(urdf)
+    data = model.createData()
+    geom = jr.collision_model(model, urdf)
+    gdata = geom.createData()
+    q = pin.neutral(model)
+    pin.framesForwardKinematics(model, data, q)
+    pin.updateGeometryPlacements(model, data, geom, gdata)
+    mapping = mapping_preset("cmu", robot_name)
+    p = {f: data.oMf[model.getFrameId(f)].translation.copy() for f in mapping}
+    legs = _legs(mapping)
+    length = np.mean([np.linalg.norm(p[h] - p[k]) + np.linalg.norm(p[k] - p[a]) for h, k, a in legs])
+    heights = []
+    for _, _, ankle in legs:
+        joint = model.frames[model.getFrameId(ankle)].parentJoint
+        lows = [jr.lowest_point_z(o.geometry, gdata.oMg[i]) for i, o in enumerate(geom.geometryObjects)
+                if o.parentJoint == joint]
+        heights.append(p[ankle][2] - min(lows))
+    return {"leg_length": float(length), "ankle_height": float(np.mean(heights)), "mapping": mapping,
+            "q_neutral": q, "model": model}
+
+
+def source_leg_length(motion) -> float:
+    """Mean over frames and legs of hip-knee plus knee-ankle, m."""
+    total = []
+    for side in ("Left", "Right"):
+        h, k, a = (motion.trajectory(f"{side}{b}") for b in ("UpLeg", "Leg", "Foot"))
+        total.append(np.linalg.norm(h - k, axis=1) + np.linalg.norm(k - a, axis=1))
+    return float(np.mean(total))
+
+
+def pelvis_rotations(keypoints: np.ndarray, names: list[str]) -> np.ndarray:
+    """(N, 3, 3) source pelvis orientations: y = left hip - right hip, z = up along the spine, x = y x z."""
+    ix = {n: i for i, n in enumerate(names)}
+    y = keypoints[:, ix["LeftUpLeg"]] - keypoints[:, ix["RightUpLeg"]]
+    up = keypoints[:, ix["Spine1"]] - keypoints[:, ix["Hips"]]
+    y /= np.linalg.norm(y, axis=1, keepdims=True)
+    x = np.cross(y, up)
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    z = np.cross(x, y)
+    return np.stack([x, y, z], axis=2)  # columns: the pelvis axes in the world
+
+
+def prepare(clip: str, robot_name: str) -> dict:
+    """The clip scaled for the robot: keypoints, targets, contacts, limbs and the judge's arguments."""
+    motion = load_clip(clip)
+    robot = robot_geometry(robot_name)
+    scale = robot["leg_length"] / source_leg_length(motion)
+    keys = motion.positions * scale
+    keys[:, :, 2] += robot["ankle_height"] - ground_height(motion) * scale
+    mapping = robot["mapping"]
+    frames = list(mapping)
+    names = list(motion.names)
+    targets = keys[:, [names.index(mapping[f]) for f in frames]]
+    by_key = {k: f for f, k in mapping.items()}
+    contacts = {by_key[k]: flags for k, flags in detect_contacts(motion, feet=tuple(FEET)).items()}
+    limbs = {g: [(by_key[a], by_key[b], a, b) for a, b in pairs] for g, pairs in limb_pairs("cmu").items()}
+    q_init = robot["q_neutral"].copy()
+    q_init[:3] = targets[0, frames.index(by_key["Hips"])]
+    return {"motion": motion, "scale": scale, "keypoints": keys, "names": names, "frames": frames,
+            "targets": targets, "contacts": contacts, "limbs": limbs, "q_init": q_init,
+            "base_frame": by_key["Hips"], "base_rotations": pelvis_rotations(keys, names),
+            "mapping": [(f, mapping[f]) for f in frames]}
+
+
+def run_pink(robot_name: str, case: dict, steps: int, extra: list[str] | None = None, timeout: float = 900.0) -> dict:
+    """GMR's method in the peers' venv: configurations (N, nq), wall_s (N,), settings, failures."""
+    urdf, _ = robot_files(robot_name)
+    with tempfile.TemporaryDirectory() as tmp:
+        src, out = Path(tmp) / "targets.npz", Path(tmp) / "out.npz"
+        np.savez(src, urdf_path=str(urdf), frames=json.dumps(case["frames"]), targets=case["targets"],
+                 fps=case["motion"].fps, q_init=case["q_init"], base_frame=case["base_frame"],
+                 base_rotations=case["base_rotations"])
+        subprocess.run([str(PEERS_PYTHON), str(SCRIPTS / "retarget_pink.py"), str(src), "-o", str(out),
+                        "--steps", str(steps), *(extra or [])], check=True, timeout=timeout)
+        z = np.load(out, allow_pickle=False)
+        names = json.loads(str(z["joint_names"]))
+        model = jr.build_model(urdf)
+        if names != list(model.names)[1:]:
+            raise ValueError(f"the peers' Pinocchio orders {robot_name}'s joints otherwise than ours")
+        return {"configurations": z["configurations"], "wall_s": z["wall_s"], "failures": int(z["failures"]),
+                "settings": json.loads(str(z["settings"]))}
+
+
+# ------------------------------------------------------------------------------------------------ evoik hook
+def retarget_evoik(robot_name: str, motion, scale: float):
+    """HOOK for the lead: evoik_pin's retargeter on ``motion`` at ``scale``, as (configurations (N, nq) of
+    ``pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())``, wall seconds), or None while
+    ``evoik_pin.retarget`` does not exist. Fill in the call (and the mapping of its answer to that layout) when
+    the retargeter lands; it must target the same mapped frames at the same scale as :func:`prepare`."""
+    import evoik_pin
+
+    if not hasattr(evoik_pin, "retarget"):
+        return None
+    start = time.perf_counter()
+    result = evoik_pin.retarget(evoik_pin.load_robot(robot_name, floating_base=True), motion, mapping="cmu",
+                                scale=scale)  # TODO(lead): the real signature
+    seconds = time.perf_counter() - start
+    return np.asarray(result.configurations), seconds  # TODO(lead): map to the judge's layout if it differs
+
+
+def judge(robot_name: str, case: dict, configurations: np.ndarray) -> dict:
+    urdf, srdf = robot_files(robot_name)
+    return jr.judge_clip(urdf, srdf, configurations, case["motion"].fps, case["keypoints"], case["mapping"],
+                         case["contacts"], 0.0, case["limbs"], keypoint_names=case["names"])
+
+
+HEADER = ("| clip | robot | method | frames | fps | limit | vel | coll | skate mm | pen mm | legs deg (worst) "
+          "| trunk deg (worst) | arms deg (worst) | track mm |")
+
+
+def row(clip: str, robot: str, method: str, verdict: dict, fps: float) -> str:
+    def group(g):
+        v = verdict["limbs"][g]
+        return f"{v['mean_deg']:.1f} ({v['worst_limb_mean_deg']:.1f})"
+    return (f"| {clip} | {robot} | {method} | {verdict['frames']} | {fps:.0f} | {verdict['joint_limit_frames']} "
+            f"| {verdict['velocity_limit_frames']} | {verdict['self_collision_frames']} "
+            f"| {verdict['foot_skating_mm_mean']:.1f} | {verdict['ground_penetration_mm_max']:.1f} "
+            f"| {group('legs')} | {group('trunk')} | {group('arms')} | {verdict['tracking_mm_mean']:.1f} |")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--clips", nargs="+", default=list_clips())
+    parser.add_argument("--robots", nargs="+", default=list(ROBOTS), choices=list(ROBOTS))
+    parser.add_argument("--steps", type=int, default=5, help="pink's QP steps per frame (5: see the K sweep)")
+    parser.add_argument("--pink-args", default="", help="more retarget_pink.py options, e.g. '--posture-cost 1e-3'")
+    parser.add_argument("--sweep", default="", help="comma-separated K values: pink's tracking vs K instead")
+    parser.add_argument("--json", help="also write every verdict to this file")
+    args = parser.parse_args(argv)
+    now = datetime.datetime.now(datetime.UTC)
+    print(f"# {now:%Y-%m-%d %H:%M} UTC, {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"load {os.getloadavg()[0]:.2f}")
+    out = []
+    if args.sweep:
+        print("| clip | robot | K | fps | track mm mean | track mm max | legs | trunk | arms | vel | limit "
+              "| QP fails |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for clip in args.clips:
+            for robot in args.robots:
+                case = prepare(clip, robot)
+                for k in (int(s) for s in args.sweep.split(",")):
+                    run = run_pink(robot, case, k, args.pink_args.split())
+                    v = judge(robot, case, run["configurations"])
+                    fps = len(run["wall_s"]) / run["wall_s"].sum()
+                    print(f"| {clip} | {robot} | {k} | {fps:.0f} | {v['tracking_mm_mean']:.1f} "
+                          f"| {v['tracking_mm_max']:.1f} | {v['limbs']['legs']['mean_deg']:.1f} "
+                          f"| {v['limbs']['trunk']['mean_deg']:.1f} | {v['limbs']['arms']['mean_deg']:.1f} "
+                          f"| {v['velocity_limit_frames']} | {v['joint_limit_frames']} | {run['failures']} |",
+                          flush=True)
+                    out.append({"clip": clip, "robot": robot, "steps": k, "fps": fps, "verdict": v})
+    else:
+        print(HEADER)
+        print("|" + "---|" * (HEADER.count("|") - 1))
+        settings = None
+        for clip in args.clips:
+            for robot in args.robots:
+                case = prepare(clip, robot)
+                run = run_pink(robot, case, args.steps, args.pink_args.split())
+                settings = run["settings"]
+                v = judge(robot, case, run["configurations"])
+                fps = len(run["wall_s"]) / run["wall_s"].sum()
+                print(row(clip, robot, f"pink K={args.steps}", v, fps), flush=True)
+                out.append({"clip": clip, "robot": robot, "method": "pink", "scale": case["scale"], "fps": fps,
+                            "failures": run["failures"], "verdict": v})
+                ours = retarget_evoik(robot, case["motion"], case["scale"])
+                if ours is None:
+                    print(f"| {clip} | {robot} | evoik_pin | not built yet | | | | | | | | | | |", flush=True)
+                else:
+                    configurations, seconds = ours
+                    v = judge(robot, case, configurations)
+                    print(row(clip, robot, "evoik_pin", v, len(configurations) / seconds), flush=True)
+                    out.append({"clip": clip, "robot": robot, "method": "evoik_pin", "fps": len(configurations)
+                                / seconds, "verdict": v})
+        print(f"# pink settings: {json.dumps(settings)}")
+        print(f"# load after: {os.getloadavg()[0]:.2f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(out, indent=1), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
