@@ -14,7 +14,9 @@ For each clip (``evoik_pin.motion.load_clip``) and robot:
    its soles at neutral (the lowest point of its foot collision geometry): the judged floor is z = 0.
 2. targets: the mapped keypoints (``mapping_preset("cmu", robot)``) of the scaled motion, one per mapped frame;
    the base frame also gets the source pelvis's orientation (x forward = the hips' left-right axis crossed with the
-   spine's up axis, y = left hip minus right hip, z completing), which GMR also tracks.
+   spine's up axis, y = left hip minus right hip, z completing), which GMR also tracks. With
+   ``--feet-orientation`` the ankle frames get the source feet's orientations too (:func:`foot_rotations`), as
+   GMR's configurations do; off by default (the brief's baseline: positions and the pelvis's orientation).
 3. pink, GMR's method (``retarget_pink.py`` in the peers' venv, subprocess): from the neutral configuration with
    the base at the first pelvis target, ``--steps`` QP steps per frame (default 5, the fewest that keep its
    tracking: see the K sweep in docs/BENCHMARKS.md).
@@ -116,7 +118,19 @@ def pelvis_rotations(keypoints: np.ndarray, names: list[str]) -> np.ndarray:
     return np.stack([x, y, z], axis=2)  # columns: the pelvis axes in the world
 
 
-def prepare(clip: str, robot_name: str) -> dict:
+def foot_rotations(keypoints: np.ndarray, names: list[str], side: str, contact: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) source foot orientations for a robot foot that is flat at rest: the heading of ankle -> toe
+    (``{side}Foot`` -> ``{side}ToeBase``) and its pitch below the horizontal less the median pitch while in
+    contact (a person's ankle stands above the toe: about 13 deg on the walk clip), no roll."""
+    ix = {n: i for i, n in enumerate(names)}
+    v = keypoints[:, ix[f"{side}ToeBase"]] - keypoints[:, ix[f"{side}Foot"]]
+    yaw = np.arctan2(v[:, 1], v[:, 0])
+    pitch = np.arctan2(-v[:, 2], np.linalg.norm(v[:, :2], axis=1))
+    pitch = pitch - np.median(pitch[contact] if contact.any() else pitch)
+    return np.array([pin.utils.rpyToMatrix(0.0, p, y) for p, y in zip(pitch, yaw, strict=True)])
+
+
+def prepare(clip: str, robot_name: str, feet_orientation: bool = False) -> dict:
     """The clip scaled for the robot: keypoints, targets, contacts, limbs and the judge's arguments."""
     motion = load_clip(clip)
     robot = robot_geometry(robot_name)
@@ -132,9 +146,15 @@ def prepare(clip: str, robot_name: str) -> dict:
     limbs = {g: [(by_key[a], by_key[b], a, b) for a, b in pairs] for g, pairs in limb_pairs("cmu").items()}
     q_init = robot["q_neutral"].copy()
     q_init[:3] = targets[0, frames.index(by_key["Hips"])]
+    oriented, rotations = [by_key["Hips"]], [pelvis_rotations(keys, names)]
+    if feet_orientation:
+        for side in ("Left", "Right"):
+            foot = by_key[f"{side}Foot"]
+            oriented.append(foot)
+            rotations.append(foot_rotations(keys, names, side, contacts[foot]))
     return {"motion": motion, "scale": scale, "keypoints": keys, "names": names, "frames": frames,
             "targets": targets, "contacts": contacts, "limbs": limbs, "q_init": q_init,
-            "base_frame": by_key["Hips"], "base_rotations": pelvis_rotations(keys, names),
+            "oriented": oriented, "rotations": np.stack(rotations, axis=1),
             "mapping": [(f, mapping[f]) for f in frames]}
 
 
@@ -144,8 +164,8 @@ def run_pink(robot_name: str, case: dict, steps: int, extra: list[str] | None = 
     with tempfile.TemporaryDirectory() as tmp:
         src, out = Path(tmp) / "targets.npz", Path(tmp) / "out.npz"
         np.savez(src, urdf_path=str(urdf), frames=json.dumps(case["frames"]), targets=case["targets"],
-                 fps=case["motion"].fps, q_init=case["q_init"], base_frame=case["base_frame"],
-                 base_rotations=case["base_rotations"])
+                 fps=case["motion"].fps, q_init=case["q_init"], oriented=json.dumps(case["oriented"]),
+                 rotations=case["rotations"])
         subprocess.run([str(PEERS_PYTHON), str(SCRIPTS / "retarget_pink.py"), str(src), "-o", str(out),
                         "--steps", str(steps), *(extra or [])], check=True, timeout=timeout)
         z = np.load(out, allow_pickle=False)
@@ -201,6 +221,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=5, help="pink's QP steps per frame (5: see the K sweep)")
     parser.add_argument("--pink-args", default="", help="more retarget_pink.py options, e.g. '--posture-cost 1e-3'")
     parser.add_argument("--sweep", default="", help="comma-separated K values: pink's tracking vs K instead")
+    parser.add_argument("--feet-orientation", action="store_true",
+                        help="pink also tracks the source feet's orientations (flat at rest; see foot_rotations)")
     parser.add_argument("--json", help="also write every verdict to this file")
     args = parser.parse_args(argv)
     now = datetime.datetime.now(datetime.UTC)
@@ -213,7 +235,7 @@ def main(argv: list[str] | None = None) -> int:
         print("|---|---|---|---|---|---|---|---|---|---|---|---|")
         for clip in args.clips:
             for robot in args.robots:
-                case = prepare(clip, robot)
+                case = prepare(clip, robot, args.feet_orientation)
                 for k in (int(s) for s in args.sweep.split(",")):
                     run = run_pink(robot, case, k, args.pink_args.split())
                     v = judge(robot, case, run["configurations"])
@@ -230,12 +252,13 @@ def main(argv: list[str] | None = None) -> int:
         settings = None
         for clip in args.clips:
             for robot in args.robots:
-                case = prepare(clip, robot)
+                case = prepare(clip, robot, args.feet_orientation)
                 run = run_pink(robot, case, args.steps, args.pink_args.split())
                 settings = run["settings"]
                 v = judge(robot, case, run["configurations"])
                 fps = len(run["wall_s"]) / run["wall_s"].sum()
-                print(row(clip, robot, f"pink K={args.steps}", v, fps), flush=True)
+                method = f"pink K={args.steps}" + (" +feet" if args.feet_orientation else "")
+                print(row(clip, robot, method, v, fps), flush=True)
                 out.append({"clip": clip, "robot": robot, "method": "pink", "scale": case["scale"], "fps": fps,
                             "failures": run["failures"], "verdict": v})
                 ours = retarget_evoik(robot, case["motion"], case["scale"])

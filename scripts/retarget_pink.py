@@ -9,8 +9,8 @@ few differential-IK steps from the previous frame's answer, with frame tasks on 
 that method with pink's QP (solver daqp) on the whole free-flyer model:
 
 - a ``FrameTask`` per mapped frame: position cost 1 (per m) on the frame's target position, orientation cost 0,
-  except the base frame, whose orientation follows ``base_rotations`` when the file gives them (the source
-  pelvis's heading and tilt from its hips and spine; ``--base-orientation-cost``, per rad);
+  except the frames the file gives orientations for (``oriented``: the base, from the source pelvis's hips and
+  spine; optionally the feet), whose orientation cost is ``--orientation-cost`` (per rad);
 - a ``PostureTask`` (``--posture-cost``, per rad; small) towards ``q_init``'s joints, which only decides what the
   frame tasks leave free (a wrist's roll, the elbow's swivel);
 - pink's ``ConfigurationLimit`` (the URDF position limits; pink's default gain 0.5) and ``VelocityLimit`` (the
@@ -23,9 +23,9 @@ that method with pink's QP (solver daqp) on the whole free-flyer model:
 
 Input (.npz): ``urdf_path`` (str), ``frames`` (JSON list of M robot frame names), ``targets`` (N, M, 3) m,
 ``fps``, ``q_init`` (nq,) in the layout of ``pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())``, and
-optionally ``base_frame`` (str) with ``base_rotations`` (N, 3, 3). Output (.npz): ``configurations`` (N, nq),
-``wall_s`` (N,) per frame, ``joint_names`` (JSON), ``settings`` (JSON), ``failures`` (QP steps that failed and
-were skipped).
+optionally ``oriented`` (JSON list of J mapped frames) with ``rotations`` (N, J, 3, 3), their world
+orientations. Output (.npz): ``configurations`` (N, nq), ``wall_s`` (N,) per frame, ``joint_names`` (JSON),
+``settings`` (JSON), ``failures`` (QP steps that failed and were skipped).
 """
 
 from __future__ import annotations
@@ -48,9 +48,8 @@ import pinocchio as pin  # noqa: E402
 
 
 def retarget(urdf_path: str, frames: list[str], targets: np.ndarray, fps: float, q_init: np.ndarray, *,
-             steps: int = 5, settle: int = 50, posture_cost: float = 1e-2, base_frame: str = "",
-             base_rotations: np.ndarray | None = None, base_orientation_cost: float = 0.5,
-             damping: float = 1e-6) -> dict:
+             steps: int = 5, settle: int = 50, posture_cost: float = 1e-2, oriented: list[str] = (),
+             rotations: np.ndarray | None = None, orientation_cost: float = 0.5, damping: float = 1e-6) -> dict:
     """Per-frame differential IK (see the module docstring). Returns configurations (N, nq), wall_s (N,),
     joint_names and the number of failed QP steps."""
     import pink
@@ -66,9 +65,10 @@ def retarget(urdf_path: str, frames: list[str], targets: np.ndarray, fps: float,
     q = np.asarray(q_init, dtype=float).copy()
     if q.shape != (model.nq,):
         raise ValueError(f"q_init must have nq={model.nq} numbers; got {q.shape}")
-    oriented = base_rotations is not None and bool(base_frame)
-    tasks = [FrameTask(f, position_cost=1.0,
-                       orientation_cost=base_orientation_cost if oriented and f == base_frame else 0.0)
+    oriented = list(oriented) if rotations is not None else []
+    if oriented and np.shape(rotations) != (n, len(oriented), 3, 3):
+        raise ValueError(f"rotations must be (N={n}, J={len(oriented)}, 3, 3); got {np.shape(rotations)}")
+    tasks = [FrameTask(f, position_cost=1.0, orientation_cost=orientation_cost if f in oriented else 0.0)
              for f in frames]
     posture = PostureTask(cost=posture_cost)
     posture.set_target(q)
@@ -91,7 +91,8 @@ def retarget(urdf_path: str, frames: list[str], targets: np.ndarray, fps: float,
     for i in range(n):
         t0 = time.perf_counter()
         for k, task in enumerate(tasks):
-            rotation = base_rotations[i] if oriented and frames[k] == base_frame else np.eye(3)
+            f = frames[k]
+            rotation = rotations[i, oriented.index(f)] if f in oriented else np.eye(3)
             task.set_target(pin.SE3(np.asarray(rotation, dtype=float), targets[i, k]))
         if i == 0:
             for _ in range(settle):
@@ -110,21 +111,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=5, help="QP steps per frame (K)")
     parser.add_argument("--settle", type=int, default=50, help="extra steps of dt on the first frame")
     parser.add_argument("--posture-cost", type=float, default=1e-2, help="PostureTask cost per rad")
-    parser.add_argument("--base-orientation-cost", type=float, default=0.5, help="per rad, base frame only")
+    parser.add_argument("--orientation-cost", type=float, default=0.5, help="per rad, oriented frames only")
     parser.add_argument("--damping", type=float, default=1e-6, help="solve_ik's Tikhonov damping")
     args = parser.parse_args(argv)
     if args.steps < 1 or args.settle < 0:
         parser.error("--steps must be >= 1 and --settle >= 0")
     logging.getLogger().setLevel(logging.ERROR)  # pink warns on every step a joint touches its limit
     z = np.load(args.targets, allow_pickle=False)
-    base_rotations = z["base_rotations"] if "base_rotations" in z.files else None
+    rotations = z["rotations"] if "rotations" in z.files else None
+    oriented = json.loads(str(z["oriented"])) if "oriented" in z.files else []
     settings = {"steps": args.steps, "settle": args.settle, "posture_cost": args.posture_cost,
-                "base_orientation_cost": args.base_orientation_cost, "damping": args.damping,
+                "orientation_cost": args.orientation_cost, "oriented": oriented, "damping": args.damping,
                 "position_cost": 1.0, "solver": "daqp", "limits": "ConfigurationLimit(gain 0.5), VelocityLimit"}
     result = retarget(str(z["urdf_path"]), json.loads(str(z["frames"])), z["targets"], float(z["fps"]), z["q_init"],
                       steps=args.steps, settle=args.settle, posture_cost=args.posture_cost,
-                      base_frame=str(z["base_frame"]) if "base_frame" in z.files else "",
-                      base_rotations=base_rotations, base_orientation_cost=args.base_orientation_cost,
+                      oriented=oriented, rotations=rotations, orientation_cost=args.orientation_cost,
                       damping=args.damping)
     versions = {name: md.version(name) for name in ("pin-pink", "daqp", "pin", "numpy")}
     np.savez(args.output, configurations=result["configurations"], wall_s=result["wall_s"],
