@@ -223,3 +223,29 @@ def test_the_bench_scales_the_walk_so_its_stance_ankles_stand_at_the_robots_ankl
     ankles = [case["frames"].index(f) for f in ("left_ankle_roll_link", "right_ankle_roll_link")]
     stance = np.concatenate([case["targets"][case["contacts"][case["frames"][a]], a, 2] for a in ankles])
     assert np.median(stance) == pytest.approx(robot["ankle_height"], abs=0.015)
+
+
+@pytest.mark.skipif(not Path("/work/peers-venv/bin/python").exists(), reason="needs the peers' venv (pink)")
+def test_the_pink_baseline_follows_a_moving_target_within_its_velocity_limits_and_the_judge_agrees():
+    import bench_retarget as br
+
+    case = br.prepare("walk", "g1")
+    n = 6
+    model = jr.build_model(G1_URDF)
+    data = model.createData()
+    q0 = pin.neutral(model)
+    q0[2] = 0.8
+    pin.framesForwardKinematics(model, data, q0)
+    still = np.array([data.oMf[model.getFrameId(f)].translation for f in case["frames"]])
+    shift = np.zeros((n, 1, 3))
+    shift[:, 0, 0] = 0.01 * np.arange(n)  # the whole body 10 mm further forward each frame, along x
+    small = {**case, "targets": still[None] + shift, "q_init": q0, "motion": case["motion"].slice(0, n),
+             "rotations": np.tile(np.eye(3), (n, 1, 1, 1))}
+    run = br.run_pink("g1", small, steps=5)
+    assert run["configurations"].shape == (n, model.nq) and run["failures"] == 0
+    assert np.allclose(np.diff(run["configurations"][:, 0]), 0.01, atol=1e-3)  # the base follows
+    keys = still[None] + shift  # the targets, keypoint k = mapped frame k
+    verdict = jr.judge_clip(G1_URDF, None, run["configurations"], 30.0, keys,
+                            [(f, k) for k, f in enumerate(case["frames"])], {}, 0.0, {})
+    assert verdict["velocity_limit_frames"] == 0 and verdict["joint_limit_frames"] == 0
+    assert verdict["tracking_mm_mean"] < 2.0
