@@ -213,7 +213,17 @@ class SeedTable:
         """Compute (once per frame list, kinds and weights; then cached) the goal features that
         :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up."""
         self._goal_table_features(goals)
-        self._goal_parts(goals)
+        parts = self._goal_parts(goals)
+        if not _RANKING_LOADED and len(goals) > 1:  # goal_starts' compiled ranking, loaded (or compiled) here too
+            from ..lm.compiling import load
+            from .nearest import nearest_per_goal
+
+            FT, sq, start, scale, positioned, oriented = self._stacked_parts(goals, parts)
+            G = len(parts)
+            args = (FT, sq, start, scale, positioned, oriented, self.weight, np.zeros((G, 3)),
+                    np.tile(np.eye(3), (G, 1, 1)), _EVERY, 1, np.empty((G, 1), dtype=np.int64))
+            load("the seed table's ranking for goal lists", [(nearest_per_goal, args)], RANKING_COMPILE_SECONDS)
+            _RANKING_LOADED.append(True)
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
         """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed ones and table entries
@@ -526,6 +536,9 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
 
 
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
+_RANKING_LOADED: list = []  # [True] once prepare_goals has loaded nearest_per_goal in this process
+#: About how long (s, one core) compiling goal_starts' ranking (nearest.nearest_per_goal) takes from an empty cache.
+RANKING_COMPILE_SECONDS = 3.0
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _TABLES_PER_ROBOT = 4
 
