@@ -407,8 +407,9 @@ def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
 def test_goal_errors_use_the_compiled_signature_loaded_before_any_clock(robots):
     """``Goal.errors`` of the kinds with bands, free axes or an axis to point calls the kernel's compiled
     ``axes_error`` from Python; ``compiled_kernel(True)`` (the kernel of such goals, which their LM engine loads
-    when made, before any solve's clock) loads the one signature those calls use, so memetic's later stages, which judge goal errors this way, never compile or load it mid-search
-    (its loading had made a first band solve run out of its 5 ms)."""
+    when made, before any solve's clock) loads the one signature those calls use, so memetic's later stages, which
+    judge goal errors this way, never compile or load it mid-search (its loading had made a first band solve run out
+    of its 5 ms)."""
     from evoik_pin.goals import Direction, Pose
     from evoik_pin.solvers.lm.axes import axes_error
     from evoik_pin.solvers.lm.engine import compiled_kernel

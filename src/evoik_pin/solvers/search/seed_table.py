@@ -211,19 +211,34 @@ class SeedTable:
 
     def prepare_goals(self, goals) -> None:
         """Compute (once per frame list, kinds and weights; then cached) the goal features that
-        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up."""
+        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up; and
+        load (once per process; once per install: compile) the compiled rankings a search of these goals calls
+        (:mod:`.nearest`), so that no solve's clock pays for that."""
         self._goal_table_features(goals)
         parts = self._goal_parts(goals)
-        if not _RANKING_LOADED and len(goals) > 1:  # goal_starts' compiled ranking, loaded (or compiled) here too
-            from ..lm.compiling import load
+        # the compiled rankings the search calls on its clock, loaded (once per install: compiled) here: goal_starts'
+        # (several goals) and a goal set's members' (choose: nearest.table_distances_many)
+        calls = []
+        if "starts" not in _RANKING_LOADED and len(goals) > 1:
             from .nearest import nearest_per_goal
 
             FT, sq, start, scale, positioned, oriented = self._stacked_parts(goals, parts)
             G = len(parts)
-            args = (FT, sq, start, scale, positioned, oriented, self.weight, np.zeros((G, 3)),
-                    np.tile(np.eye(3), (G, 1, 1)), _EVERY, 1, np.empty((G, 1), dtype=np.int64))
-            load("the seed table's ranking for goal lists", [(nearest_per_goal, args)], RANKING_COMPILE_SECONDS)
-            _RANKING_LOADED.append(True)
+            calls.append(("starts", nearest_per_goal, (FT, sq, start, scale, positioned, oriented, self.weight,
+                                                       np.zeros((G, 3)), np.tile(np.eye(3), (G, 1, 1)), _EVERY, 1,
+                                                       np.empty((G, 1), dtype=np.int64))))
+        if "sets" not in _RANKING_LOADED and any(g.alternatives is not None for g in goals):
+            from .nearest import table_distances_many
+
+            one = np.zeros((1, 1), dtype=np.float32)
+            calls.append(("sets", table_distances_many, (one, np.zeros(1, dtype=np.float32), one.copy(),
+                                                         np.empty((1, 1), dtype=np.float32))))
+        if calls:
+            from ..lm.compiling import load
+
+            load("the seed table's rankings for goal lists", [(f, args) for _, f, args in calls],
+                 RANKING_COMPILE_SECONDS)
+            _RANKING_LOADED.extend(name for name, _, _ in calls)
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
         """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed ones and table entries
@@ -536,8 +551,8 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
 
 
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
-_RANKING_LOADED: list = []  # [True] once prepare_goals has loaded nearest_per_goal in this process
-#: About how long (s, one core) compiling goal_starts' ranking (nearest.nearest_per_goal) takes from an empty cache.
+_RANKING_LOADED: list = []  # the compiled rankings prepare_goals has loaded in this process ("starts", "sets")
+#: About how long (s, one core) compiling the goal lists' rankings (nearest.py) takes from an empty cache.
 RANKING_COMPILE_SECONDS = 3.0
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _TABLES_PER_ROBOT = 4
