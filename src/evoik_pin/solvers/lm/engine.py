@@ -83,7 +83,7 @@ __all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "later_kinds", "p
 ENGINES = ("compiled", "python")
 
 #: About how long (s, one core) compiling a variant's entries takes from an empty cache (scripts/compile_time.py).
-KERNEL_COMPILE_SECONDS = {False: 20.0, True: 60.0}
+KERNEL_COMPILE_SECONDS = {False: 20.0, True: 35.0}
 #: The loaded kernels: per variant (False: stacks of the first four kinds, True: any stack), compiled_kernel's dict.
 _KERNELS: dict = {}
 

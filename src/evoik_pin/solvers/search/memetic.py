@@ -74,7 +74,7 @@ GUARANTEED_TABLE_RUNS = 4
 #: its own at its second problem, which an IKSolver's lane needs: ik_solver keeps as many goal lanes).
 KEPT_ENGINES = 8
 #: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
-FIRST_RUNS_COMPILE_SECONDS = 10.0
+FIRST_RUNS_COMPILE_SECONDS = 5.0
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
 

@@ -553,7 +553,7 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
 _RANKING_LOADED: list = []  # the compiled rankings prepare_goals has loaded in this process ("starts", "sets")
 #: About how long (s, one core) compiling the goal lists' rankings (nearest.py) takes from an empty cache.
-RANKING_COMPILE_SECONDS = 3.0
+RANKING_COMPILE_SECONDS = 1.0
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _TABLES_PER_ROBOT = 4
 
