@@ -86,6 +86,7 @@ ENGINES = ("compiled", "python")
 KERNEL_COMPILE_SECONDS = {False: 20.0, True: 35.0}
 #: The loaded kernels: per variant (False: stacks of the first four kinds, True: any stack), compiled_kernel's dict.
 _KERNELS: dict = {}
+_LOADING = threading.Lock()
 
 
 def warmup_problem() -> tuple:
@@ -124,38 +125,45 @@ def compiled_kernel(extra: bool = False) -> dict:
     """
     kernel = _KERNELS.get(extra)
     if kernel is None:
-        from . import kernel as K
-        from .compiling import load
-
-        tree, box, goals, pt, Rt = warmup_problem()
-        params = kernel_params(iterations=1)
-        entries = K.ALL if extra else K.BASIC
-        # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
-        buffers = (np.empty(int(K.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
-        stats = np.empty((1, STATS_SIZE))
-        calls = [(entries.run, (*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
-                                np.empty((1, 2)))),
-                 (entries.starts, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
-                                   np.empty((1, 1)), stats, np.empty((1, 1, 2)))),
-                 (entries.pairs, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(),
-                                  Rt[None].copy(), params, np.empty((1, 1)), stats, np.empty((1, 1, 2))))]
-        if extra:
-            # Goal.errors' compiled errors of the kinds with bands, free axes or an axis to point (a read-only aux
-            # row: the goal's own), loaded here too: first called mid-search (memetic's later stages), its loading
-            # from the disk cache (3-4 ms) had been charged to that solve's budget
-            from .axes import axes_error
-
-            aux = np.zeros(AUX_SIZE)
-            aux.setflags(write=False)
-            calls.append((axes_error, (KIND_POSE_AXES, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux,
-                                       np.empty((3, 3)), np.empty(3), np.empty(6))))
-        load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
-             KERNEL_COMPILE_SECONDS[extra])
-        kernel = dict(lm_run=K.lm_run, lm_run_starts=K.lm_run_starts, lm_run_pairs=K.lm_run_pairs,
-                      lm_run_buffers=entries.run, lm_run_starts_buffers=entries.starts,
-                      lm_run_pairs_buffers=entries.pairs, workspace_size=K.workspace_size)
-        _KERNELS[extra] = kernel
+        with _LOADING:  # threads wanting it at once (solve_many's workers): one loads it, one notice
+            kernel = _KERNELS.get(extra)
+            if kernel is None:
+                kernel = _KERNELS[extra] = _load_kernel(extra)
     return kernel
+
+
+def _load_kernel(extra: bool) -> dict:
+    """:func:`compiled_kernel`'s work for one variant: each entry run once (compiled with a notice, or loaded)."""
+    from . import kernel as K
+    from .compiling import load
+
+    tree, box, goals, pt, Rt = warmup_problem()
+    params = kernel_params(iterations=1)
+    entries = K.ALL if extra else K.BASIC
+    # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
+    buffers = (np.empty(int(K.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
+    stats = np.empty((1, STATS_SIZE))
+    calls = [(entries.run, (*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
+                            np.empty((1, 2)))),
+             (entries.starts, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
+                               np.empty((1, 1)), stats, np.empty((1, 1, 2)))),
+             (entries.pairs, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(),
+                              Rt[None].copy(), params, np.empty((1, 1)), stats, np.empty((1, 1, 2))))]
+    if extra:
+        # Goal.errors' compiled errors of the kinds with bands, free axes or an axis to point (a read-only aux
+        # row: the goal's own), loaded here too: first called mid-search (memetic's later stages), its loading
+        # from the disk cache (3-4 ms) had been charged to that solve's budget
+        from .axes import axes_error
+
+        aux = np.zeros(AUX_SIZE)
+        aux.setflags(write=False)
+        calls.append((axes_error, (KIND_POSE_AXES, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux,
+                                   np.empty((3, 3)), np.empty(3), np.empty(6))))
+    load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
+         KERNEL_COMPILE_SECONDS[extra])
+    return dict(lm_run=K.lm_run, lm_run_starts=K.lm_run_starts, lm_run_pairs=K.lm_run_pairs,
+                lm_run_buffers=entries.run, lm_run_starts_buffers=entries.starts, lm_run_pairs_buffers=entries.pairs,
+                workspace_size=K.workspace_size)
 
 
 def _check_engine(engine: str) -> None:

@@ -20,9 +20,12 @@ A run has converged when every goal is within its own tolerances (m, rad). The d
 space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more rows than joints, and in joint
 space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
 
-The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. numba compiles this module on
-first use (about a minute once per install, then cached on disk; :func:`.engine.compiled_kernel` loads it outside
-any time budget).
+The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. The run is compiled in two
+variants (:func:`_run`: :func:`lm_run_basic` for pose, position and planar goals, :func:`lm_run_all` for any goal),
+each with its own three entries (:func:`_entries`: :data:`BASIC`, :data:`ALL`; :func:`entries_for` picks one for a
+stack). numba compiles a variant on its first use (about 20 s of CPU for :data:`BASIC`, 35 s for :data:`ALL`, once
+per install, then cached on disk); :func:`.engine.compiled_kernel` loads it outside any time budget, announcing a
+compilation in one line (:mod:`.compiling`).
 
 Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
 it in the damped solves, whose divisions and square roots form one chain, 30 % in the forward kinematics with its
