@@ -24,12 +24,12 @@ import numpy as np
 from numba import njit
 
 from ..lm.chain import coupled, expand
-from ..lm.kernel import has_later_kinds, lm_run_buffers, lm_run_buffers_basic
+from ..lm.kernel import lm_run_buffers, lm_run_buffers_basic
 from ..lm.layout import G_JOINT
 from ..lm.tree import frame_pose, tree_forward
 from .nearest import select_k, table_distances
 
-__all__ = ["STAGE_Q0", "STAGE_TABLE", "first_runs", "first_runs_basic", "first_runs_for"]
+__all__ = ["STAGE_Q0", "STAGE_TABLE", "first_runs", "first_runs_basic"]
 
 #: Which start solved the problem (first_runs's first return value; -1: none did).
 STAGE_Q0, STAGE_TABLE = 0, 1
@@ -168,12 +168,8 @@ def _first_runs(extra, name):
     return njit(cache=True, nogil=True, forceinline=False)(runs)
 
 
-#: memetic's first runs for stacks of the first four kinds (the kernel's ``lm_run_basic``) and for any stack.
+#: memetic's first runs for stacks of the first four kinds (the kernel's ``lm_run_basic``) and for any stack
+#: (``lm_run_all``): :meth:`.memetic.MemeticPlan.first_runs` picks the one of its engine's kernel.
 first_runs_basic = _first_runs(None, "first_runs_basic")
 first_runs = _first_runs(True, "first_runs")
 
-
-def first_runs_for(spec: np.ndarray):
-    """The compiled first runs for the goal stack spec (G, GOAL_SIZE): :data:`first_runs_basic` when it holds the first
-    four kinds only, else :data:`first_runs` (:func:`~..lm.kernel.entries_for`'s choice)."""
-    return first_runs if has_later_kinds(spec) else first_runs_basic

@@ -564,7 +564,7 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     )
 
 
-_LOADED: list = []  # the variants of first_runs loaded in this process (first_runs_for)
+_LOADED: list = []  # the variants of first_runs loaded in this process (first_runs, first_runs_basic)
 _FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
 
 #: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
