@@ -584,6 +584,18 @@ def _outcome(spec, ge, g_out):
     return pos, rot
 
 
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def _weighted(spec):
+    """Whether some goal of the stack spec (G, GOAL_SIZE) has a weight other than 1. A function rather than a flag
+    set in the run (``weighted = False``, then True in a loop): numba types the calls of such a flag with its
+    literal False while it infers the run's types and compiles each callee once more for it (task_error and
+    task_jacobian: seconds of the first compilation, for code the run never calls)."""
+    for g in range(spec.shape[0]):
+        if spec[g, G_WEIGHT] != 1.0:
+            return True
+    return False
+
+
 def _run(extra, name, doc):
     """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: the run compiled with ``extra`` (True: the
     stack may hold goals of the later kinds; None: it holds the first four only, :func:`task_error`) a constant of
@@ -600,10 +612,7 @@ def _run(extra, name, doc):
             params, q_out, g_out):
         n = q_start.shape[0]
         mimic = coupled(index, scale, offset, n)
-        weighted = False
-        for g in range(spec.shape[0]):
-            if spec[g, G_WEIGHT] != 1.0:
-                weighted = True
+        weighted = _weighted(spec)
         m = ws.E.shape[0]
         max_step = params[P_MAX_STEP]
         window = int(params[P_STALL_WINDOW])
