@@ -34,15 +34,28 @@ GOAL_SEED = 13
 
 #: A fresh interpreter's first whole-robot solves. The solvers' clock is the thread's CPU time (as conftest's
 #: thread_cpu_clock makes it), so that a loaded machine (2 cores, several sessions) cannot fail the test by keeping
-#: the process waiting. Loading from numba's cache is mostly waiting, not CPU work: on this clock the solves before
-#: the fix passed too, so this test is the end-to-end check of the issue's case, and the tests with slow_loading
-#: below are the ones that tell set-up charged to the budget from set-up kept apart.
+#: the process waiting; and every compiled function numba compiles or loads from its disk cache is recorded with the
+#: thread time it began at, so that the test sees directly whether any was loaded on a solve's clock (at or after
+#: the clock's start: the solve's end less its time_s). Loading from the cache is mostly waiting, little CPU work:
+#: before the fix these solves passed on this clock, but each loaded goal_starts' ranking on it.
 FIRST_SOLVES = textwrap.dedent("""
     import json, sys, time, types
     import numpy as np
+    from numba.core import sigutils
+    from numba.core.dispatcher import Dispatcher
     import evoik_pin as ek
     from evoik_pin.goals import Pose
 
+    loads = []  # (function, thread time at which numba began to compile or load it)
+    numba_compile = Dispatcher.compile
+
+    def compile(self, sig):
+        args, _ = sigutils.normalize_signature(sig)
+        if tuple(args) not in self.overloads:
+            loads.append((self.py_func.__qualname__, time.thread_time()))
+        return numba_compile(self, sig)
+
+    Dispatcher.compile = compile
     ek.methods()  # the solver modules loaded, so that their clocks can be patched below
     import evoik_pin.solvers.search.first_runs, evoik_pin.solvers.search.single_target_lane
     clock = types.SimpleNamespace(**{k: v for k, v in vars(time).items() if not k.startswith("__")})
@@ -56,8 +69,11 @@ FIRST_SOLVES = textwrap.dedent("""
         robot = ek.load_robot(name, floating_base=True)
         q = robot.random_configurations(1, np.random.default_rng(seed))[0]
         goals = [Pose(frame, robot.fk(q, frame)) for frame in names]
+        first = len(loads)
         r = ek.solve(robot, goals, seed=0)  # the default budget (5 ms)
-        out[name] = {"success": bool(r.success), "setup_s": r.setup_s, "time_s": r.time_s, "message": r.message}
+        clock_start = time.thread_time() - r.time_s
+        out[name] = {"success": bool(r.success), "setup_s": r.setup_s, "time_s": r.time_s, "message": r.message,
+                     "loaded_on_clock": [f for f, t in loads[first:] if t >= clock_start]}
     print(json.dumps(out))
 """)
 
@@ -79,6 +95,7 @@ def test_the_first_whole_robot_solve_of_a_fresh_process_succeeds_in_the_default_
     for name in FRAMES:
         r = out[name]
         assert r["success"], (name, r["message"])
+        assert r["loaded_on_clock"] == [], name  # nothing compiled or loaded on the solve's clock
         # the one-time set-up (seed table, the robot's goal features, loading the compiled kernel) is reported apart
         assert r["setup_s"] > 0.0, name
     assert "compiling" not in done.stderr  # the cache was warm: nothing to announce
