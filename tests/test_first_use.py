@@ -103,10 +103,11 @@ def test_the_first_whole_robot_solve_of_a_fresh_process_succeeds_in_the_default_
 
 # ---------------------------------------------------------------------- the clock starts after the set-up
 @pytest.fixture
-def slow_loading(monkeypatch):
+def slow_loading(monkeypatch, thread_cpu_clock):
     """Every compiled entry loaded anew (the process's loaded kernels, first runs and goal ranking forgotten) and
-    each load made 0.2 s slower, as a first use's loading from disk or compiling is: what a solve charged to its
-    budget would then exhaust it."""
+    each load made 0.2 s of CPU slower, as a first use's loading from disk or compiling is: what a solve charged to
+    its budget would then exhaust it. The solvers' clock is the thread's CPU time (conftest's thread_cpu_clock), so
+    that a loaded machine cannot exhaust a budget by keeping the process waiting; hence a busy wait, not a sleep."""
     from evoik_pin.solvers.search import seed_table
 
     delay = 0.2
@@ -115,7 +116,9 @@ def slow_loading(monkeypatch):
 
     def load(what, calls, seconds):
         loaded.append(what)
-        time.sleep(delay)
+        end = time.thread_time() + delay
+        while time.thread_time() < end:
+            pass
         return real(what, calls, seconds)
 
     monkeypatch.setattr(compiling, "load", load)
