@@ -399,8 +399,8 @@ def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
     lm.run_many(np.broadcast_to(frozen[2], (2, panda.n)), 30)
     solve_pairs(panda, np.broadcast_to(frozen[3], (1, panda.n)), [Target(H[0][:3, 3], H[0][:3, :3])],
                 panda.lower, panda.upper, 1e-6, 1e-6)
-    entries = [kernel.lm_run_buffers, kernel.lm_run_starts_buffers, kernel.lm_run_pairs_buffers,
-               kernel.lm_run_basic, kernel.lm_run_all, first_runs.first_runs]
+    entries = [*kernel.BASIC, *kernel.ALL, kernel.lm_run_basic, kernel.lm_run_all, first_runs.first_runs,
+               first_runs.first_runs_basic]
     for entry in entries:
         for sig in entry.signatures:
             assert not any(isinstance(t, types.Array) and not t.mutable for t in sig), (entry.__name__, sig)
@@ -408,14 +408,15 @@ def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
 
 def test_goal_errors_use_the_compiled_signature_loaded_before_any_clock(robots):
     """``Goal.errors`` of the kinds with bands, free axes or an axis to point calls the kernel's compiled
-    ``axes_error`` from Python; ``compiled_kernel()`` (made before any solve's clock) loads the one signature those
-    calls use, so memetic's later stages, which judge goal errors this way, never compile or load it mid-search
-    (its loading had made a first band solve run out of its 5 ms)."""
+    ``axes_error`` from Python; ``compiled_kernel(True)`` (the kernel of such goals, which their LM engine loads
+    when made, before any solve's clock) loads the one signature those calls use, so memetic's later stages, which
+    judge goal errors this way, never compile or load it mid-search (its loading had made a first band solve run out
+    of its 5 ms)."""
     from evoik_pin.goals import Direction, Pose
     from evoik_pin.solvers.lm.axes import axes_error
     from evoik_pin.solvers.lm.engine import compiled_kernel
 
-    compiled_kernel()
+    compiled_kernel(True)
     loaded = list(axes_error.signatures)
     panda = robots["panda"]
     rng = np.random.default_rng(4)

@@ -49,11 +49,13 @@ __all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "GOAL_METHODS", "BatchResults
 def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "compiled") -> float:
     """Do the one-time work of solving with ``robot`` now, so that no later solve pays for it.
 
-    Loads the compiled LM kernel (numba: about 0.5 s per process from its on-disk cache, about 45 s the first
-    time after an install) and builds the memetic solver's seed table for the search box (the robot's bounds,
-    or ``bounds=(lower, upper)``; ``table_size`` entries, default memetic's). :func:`solve` does this by
-    itself when needed, before its clock starts, and reports the time in ``Result.setup_s``; calling
-    ``prepare`` first moves that cost out of the first solve altogether.
+    Loads the compiled LM kernel for pose, position and planar goals (numba: about 0.5 s per process from its
+    on-disk cache; the first time after an install it is compiled, about 20 s, which one line on stderr announces:
+    ``evoik_pin.solvers.lm.compiling``; goals with tolerance bands, free axes, pointing, centre of mass or relative
+    poses load their own variant when first solved, before the clock) and builds the memetic solver's seed table
+    for the search box (the robot's bounds, or ``bounds=(lower, upper)``; ``table_size`` entries, default
+    memetic's). :func:`solve` does this by itself when needed, before its clock starts, and reports the time in
+    ``Result.setup_s``; calling ``prepare`` first moves that cost out of the first solve altogether.
 
     Returns:
         The seconds spent (about 0 when everything was ready).

@@ -40,8 +40,10 @@ class Result:
         method: registered name of the solver.
         solutions: distinct IK solutions (each a Result), best first, for all-solutions methods.
         front: the final Pareto set, for multi-objective methods.
-        setup_s: one-time set-up this call paid before its clock started (s): loading or compiling the LM
-            kernel, building a seed table. 0 once the process has done it (see :func:`evoik_pin.prepare`).
+        setup_s: one-time set-up this call paid outside its clock (s): loading (once per install: compiling) the
+            compiled code it uses (the LM kernel's variant for its goals, memetic's first runs, the goal lists'
+            rankings), building a seed table and its goal features. 0 once the process has done it (see
+            :func:`evoik_pin.prepare`).
         goal_errors: for a goal list (:mod:`evoik_pin.goals`), each goal's (position error m, rotation angle rad or
             None for a goal without orientation) at ``q``, in the goals' order; ``position_error`` and
             ``orientation_error`` are then the largest of them. None for a single target.

@@ -78,13 +78,17 @@ from .outcome import LMOutcome, PairsOutcome
 if TYPE_CHECKING:  # the problem module imports goals, which import this package's layout
     from ...problem import IKProblem, Target
 
-__all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "problem_goals", "solve_pairs"]
+__all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "later_kinds", "problem_goals", "solve_pairs"]
 
 #: LM engines: "compiled" runs the numba kernel of :mod:`.kernel`; "python" the reference loop of
 #: :mod:`.reference` over Pinocchio's kinematics.
 ENGINES = ("compiled", "python")
 
-_KERNEL: dict = {}
+#: About how long (s, one core) compiling a variant's entries takes from an empty cache (scripts/compile_time.py).
+KERNEL_COMPILE_SECONDS = {False: 20.0, True: 35.0}
+#: The loaded kernels: per variant (False: stacks of the first four kinds, True: any stack), compiled_kernel's dict.
+_KERNELS: dict = {}
+_LOADING = threading.Lock()
 
 
 def warmup_problem() -> tuple:
@@ -99,46 +103,68 @@ def warmup_problem() -> tuple:
     return tree, box, goals, np.zeros((1, 3)), np.eye(3)[None].copy()
 
 
-def compiled_kernel() -> dict:
-    """The kernel's entry points (``lm_run``, ``lm_run_starts``, ``lm_run_pairs``, and ``lm_run_buffers``,
-    ``lm_run_starts_buffers`` with ``workspace_size`` for callers that keep their buffers), ready to run. Three of
-    kernel.py's functions are compiled entries (``lm_run_buffers``, ``lm_run_starts_buffers``,
-    ``lm_run_pairs_buffers``: each compiles the whole run, about 20 s from an empty cache); ``lm_run``,
-    ``lm_run_starts`` and ``lm_run_pairs`` are Python wrappers that make a workspace and call them.
+def later_kinds(stack: GoalStack) -> bool:
+    """Whether ``stack`` holds a goal its kind declares of a compiled family beyond the frame family's (pose,
+    position, planar): :mod:`.axes`'s or :mod:`.balance`'s, which only the kernel's ``lm_run_all`` variant runs."""
+    return any(KINDS[k].family != FAMILY_FRAME for k in stack.kinds)
 
-    The first call imports numba (~0.3 s) and runs each entry point once on a one-joint robot, so that numba
-    loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install, compiles it
-    (about a minute) here, and not inside a solve's time budget. Later
-    calls return at once. Solvers call it before starting their clock.
+
+def compiled_kernel(extra: bool = False) -> dict:
+    """The kernel's entry points for one variant of the run, ready to run: ``extra`` False for goal stacks of the
+    first four kinds (pose, position, planar: ``lm_run_basic``), True for any stack (``lm_run_all``;
+    :func:`later_kinds` says which a stack needs). The dict holds ``lm_run_buffers``, ``lm_run_starts_buffers`` and
+    ``lm_run_pairs_buffers`` (the variant's compiled entries, :data:`.kernel.Entries`), ``lm_run``, ``lm_run_starts``
+    and ``lm_run_pairs`` (Python wrappers that make a workspace and call the entry of the stack they are given), and
+    ``workspace_size``.
+
+    The first call per variant imports numba (~0.3 s) and runs each of the variant's entries once on a one-joint
+    robot, so that numba loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install,
+    compiles it (one line on stderr says so: :mod:`.compiling`), here and not inside a solve's time budget: every
+    :class:`LevenbergMarquardt` calls it when made, which every solver does before starting its clock. Only the
+    variants used are compiled: a pose, position or planar problem never compiles the later kinds' code. Later
+    calls return at once.
     """
-    if not _KERNEL:
-        from . import kernel
+    kernel = _KERNELS.get(extra)
+    if kernel is None:
+        with _LOADING:  # threads wanting it at once (solve_many's workers): one loads it, one notice
+            kernel = _KERNELS.get(extra)
+            if kernel is None:
+                kernel = _KERNELS[extra] = _load_kernel(extra)
+    return kernel
 
-        tree, box, goals, pt, Rt = warmup_problem()
-        params = kernel_params(iterations=1)
-        # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
-        # (lm_run, lm_run_starts, lm_run_pairs: Python wrappers of the *_buffers entries, which these calls compile)
-        stats = np.empty((1, STATS_SIZE))
-        kernel.lm_run_pairs(np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(), Rt[None].copy(), params,
-                            np.empty((1, 1)), stats, np.empty((1, 1, 2)))
-        buffers = (np.empty(int(kernel.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
-        kernel.lm_run_buffers(*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
-                              np.empty((1, 2)))
-        kernel.lm_run_starts_buffers(*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
-                                     np.empty((1, 1)), stats, np.empty((1, 1, 2)))
-        # Goal.errors' compiled errors of the kinds with bands, free axes or an axis to point (a read-only aux row:
-        # the goal's own), loaded here too: first called mid-search (memetic's later stages), its loading from the
-        # disk cache (3-4 ms) had been charged to that solve's budget
+
+def _load_kernel(extra: bool) -> dict:
+    """:func:`compiled_kernel`'s work for one variant: each entry run once (compiled with a notice, or loaded)."""
+    from . import kernel as K
+    from .compiling import load
+
+    tree, box, goals, pt, Rt = warmup_problem()
+    params = kernel_params(iterations=1)
+    entries = K.ALL if extra else K.BASIC
+    # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
+    buffers = (np.empty(int(K.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
+    stats = np.empty((1, STATS_SIZE))
+    calls = [(entries.run, (*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
+                            np.empty((1, 2)))),
+             (entries.starts, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
+                               np.empty((1, 1)), stats, np.empty((1, 1, 2)))),
+             (entries.pairs, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(),
+                              Rt[None].copy(), params, np.empty((1, 1)), stats, np.empty((1, 1, 2))))]
+    if extra:
+        # Goal.errors' compiled errors of the kinds with bands, free axes or an axis to point (a read-only aux
+        # row: the goal's own), loaded here too: first called mid-search (memetic's later stages), its loading
+        # from the disk cache (3-4 ms) had been charged to that solve's budget
         from .axes import axes_error
 
         aux = np.zeros(AUX_SIZE)
         aux.setflags(write=False)
-        axes_error(BANDED_LOG6, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux, np.empty((3, 3)), np.empty(3),
-                   np.empty(6))
-        _KERNEL.update(lm_run=kernel.lm_run, lm_run_starts=kernel.lm_run_starts, lm_run_pairs=kernel.lm_run_pairs,
-                       lm_run_buffers=kernel.lm_run_buffers, lm_run_starts_buffers=kernel.lm_run_starts_buffers,
-                       workspace_size=kernel.workspace_size)
-    return _KERNEL
+        calls.append((axes_error, (BANDED_LOG6, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux,
+                                   np.empty((3, 3)), np.empty(3), np.empty(6))))
+    load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
+         KERNEL_COMPILE_SECONDS[extra])
+    return dict(lm_run=K.lm_run, lm_run_starts=K.lm_run_starts, lm_run_pairs=K.lm_run_pairs,
+                lm_run_buffers=entries.run, lm_run_starts_buffers=entries.starts, lm_run_pairs_buffers=entries.pairs,
+                workspace_size=K.workspace_size)
 
 
 def _check_engine(engine: str) -> None:
@@ -180,7 +206,7 @@ class LevenbergMarquardt:
         if engine == "python":
             from .reference import ReferenceLM
 
-            if any(KINDS[k].family != FAMILY_FRAME for k in stack.kinds):  # bands, free axes, pointing, beyond a frame
+            if later_kinds(stack):  # bands, free axes, orientation, pointing, beyond a frame
                 raise OptionError("the Python reference LM (engine='python') knows pose, position and planar goals "
                                   "only; goals with tolerance bands or free axes, Orientation, Direction, LookAt, "
                                   "CenterOfMass and RelativePose need the compiled engine (engine='compiled', the "
@@ -188,7 +214,7 @@ class LevenbergMarquardt:
             self._reference = ReferenceLM(problem, damping, max_step, stall_window, stall_ratio, finish)
             return
         self._reference = None
-        self._kernel = compiled_kernel()
+        self._kernel = compiled_kernel(later_kinds(stack))  # this stack's variant, loaded before any clock
         # the folded tree, how it follows q (read-only in a Ray worker: owned's docstring says why they are copied)
         self._tree = tuple(owned(a) for a in robot.tree_constants())
         self._goal_arrays = tuple(owned(a) for a in stack.arrays)
@@ -411,7 +437,7 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
                             np.array([o.orientation_error for o in outs]) if oriented else None,
                             np.array([o.converged for o in outs]), np.array([o.evaluations for o in outs]))
     arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
-    lm_run_pairs = compiled_kernel()["lm_run_pairs"]
+    lm_run_pairs = compiled_kernel(False)["lm_run_pairs"]  # a single target: pose, position or planar
     _, any_wrap, _, _, box = box_constants(robot, lower, upper)
     params = kernel_params(max_iterations, damping, max_step)
     stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
@@ -433,7 +459,7 @@ def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upp
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
     g_stats = np.empty((N, G, 2))
-    compiled_kernel()["lm_run_pairs"](
+    compiled_kernel(later_kinds(stack))["lm_run_pairs"](
         owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
         *(owned(a) for a in stack.arrays), owned(arrays.P, float), owned(arrays.Rts, float), params, Q_out, stats,
         g_stats)

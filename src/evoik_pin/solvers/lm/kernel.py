@@ -1,6 +1,6 @@
 """The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
 
-One call of :func:`lm_run` runs a whole LM iteration from one start for a stack of goals (``goals.stack.GoalStack``:
+One call of :func:`lm_run` runs a whole LM iteration from one start for a stack of goals (:class:`.layout.GoalStack`:
 pose, position or planar goals on frames of a kinematic tree), with the tree kinematics of :mod:`.tree`, the
 mimic coupling of :mod:`.chain` and the SO(3) / SE(3) closed forms of :mod:`evoik_pin.lie.compiled`.
 :func:`lm_run_starts` runs several starts for one problem, in order, until one converges (memetic's restarts);
@@ -10,7 +10,7 @@ wrapping, stall test, geodesic acceleration and finishing step); tests hold the 
 same starts. About 1 us per step for a 7-joint arm, against 30-40 us for the Python loop.
 
 Task error ``e``: the goals' rows stacked (goal g's rows from ``spec[g, G_ROW]``), each goal's rows scaled by the
-square root of its weight; by goal kind (:mod:`evoik_pin.goals`), for the goal frame's pose ``T_f(q)``:
+square root of its weight; by goal kind (:mod:`.layout`), for the goal frame's pose ``T_f(q)``:
 
 * pose: ``e = log6(T_t^-1 T_f(q))`` (m, rad; Pinocchio's formula), ``E = Jlog6(T_t^-1 T_f(q)) J_local``;
 * position: ``e = p_f(q) - p_t`` with the base-frame translational Jacobian rows;
@@ -20,15 +20,17 @@ A run has converged when every goal is within its own tolerances (m, rad). The d
 space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more rows than joints, and in joint
 space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
 
-The constants and the ``params`` / ``box`` layouts come from :mod:`.layout`, the goal stack's ``G_*`` columns and
-the compiled residuals' codes from :mod:`evoik_pin.goals` (``goals.stack``, ``goals.registry``). numba compiles
-this module on first use (about a minute once per install, then cached on disk; :func:`.engine.compiled_kernel`
-loads it outside any time budget).
+The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. The run is compiled in two
+variants (:func:`_run`: :func:`lm_run_basic` for pose, position and planar goals, :func:`lm_run_all` for any goal),
+each with its own three entries (:func:`_entries`: :data:`BASIC`, :data:`ALL`; :func:`entries_for` picks one for a
+stack). numba compiles a variant on its first use (about 20 s of CPU for :data:`BASIC`, 35 s for :data:`ALL`, once
+per install, then cached on disk); :func:`.engine.compiled_kernel` loads it outside any time budget, announcing a
+compilation in one line (:mod:`.compiling`).
 
 Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
 it in the damped solves, whose divisions and square roots form one chain, 30 % in the forward kinematics with its
 sines and cosines). A run allocates nothing of its own: :func:`lm_run_pairs` and :func:`lm_run_starts` make one
-:data:`Workspace` per call and reuse it for every run. :func:`lm_run_in` and this module's helpers are compiled
+:data:`Workspace` per call and reuse it for every run. The runs (:func:`_run`) and this module's helpers are compiled
 with ``_nrt=False`` (:data:`BORROWING`), numba's own option for functions that borrow their arrays
 (``numba.cpython.unicode`` uses it; a numba without it compiles them as usual, with the same results): they
 neither allocate nor count references to the arrays they are given, which their caller owns. Otherwise numba
@@ -157,9 +159,10 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
     values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
     its position seen from the target tg (G, 3), which :func:`task_jacobian` needs. M (3, 3) is scratch.
     ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass: a scaling inside the
-    goal loop, even skipped, costs a fifth of the whole evaluation). ``extra``: the stack may hold goals of the kinds
-    after the first four (:mod:`.axes`'s, :mod:`.balance`'s); a constant False (:func:`lm_run_basic`) leaves their
-    branches out of the compiled code (:func:`lm_run_in` says why).
+    goal loop, even skipped, costs a fifth of the whole evaluation). ``extra``: True when the stack may hold goals of
+    the kinds after the first four (:mod:`.axes`'s, :mod:`.balance`'s), None when it holds the first four only
+    (:func:`lm_run_basic`): numba prunes the branches tested on ``extra is not None`` before it types them, so with
+    a None their code is neither compiled nor linked (:func:`_run` says why).
     """
     if mimic:
         expand(index, scale, offset, q, x)
@@ -169,16 +172,17 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
     c = 0.0
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
-        family = int(spec[g, G_FAMILY])
         r = int(spec[g, G_ROW])
-        rows = int(spec[g, G_ROWS]) if extra else frame_rows(kind)  # frame_rows says why
+        rows = int(spec[g, G_ROWS]) if extra is not None else frame_rows(kind)  # frame_rows says why
         R, p = Rg[g], pg[g]
-        if extra and family == FAMILY_BEYOND_FRAME:  # centre of mass, support polygon, two frames (.balance)
+        # centre of mass, support polygon, two frames (.balance)
+        if extra is not None and int(spec[g, G_FAMILY]) == FAMILY_BEYOND_FRAME:
             cg, pos, rot = beyond_frame_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g],
                                               R, p, M, tg[g], e[r:r + rows])
         else:
             frame_pose(Rj, pj, int(spec[g, G_JOINT]), gR[g], gp[g], R, p)
-            if extra and family == FAMILY_AXES:  # .axes's kinds (tg[g], unused by them, as scratch)
+            # .axes's kinds (tg[g], unused by them, as scratch)
+            if extra is not None and int(spec[g, G_FAMILY]) == FAMILY_AXES:
                 cg, pos, rot = axes_error(kind, R, p, pt[g], Rt[g], gaux[g], M, tg[g], e[r:r + rows])
             else:
                 cg, pos, rot = goal_error(kind, R, p, pt[g], Rt[g], M, tg[g], e[r:r + rows])
@@ -189,7 +193,7 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
             w = spec[g, G_WEIGHT]
-            for i in range(r, r + (int(spec[g, G_ROWS]) if extra else frame_rows(int(spec[g, G_KIND])))):
+            for i in range(r, r + (int(spec[g, G_ROWS]) if extra is not None else frame_rows(int(spec[g, G_KIND])))):
                 e[i] *= w
                 c += e[i] * e[i]
     return c
@@ -252,10 +256,10 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
     n = J.shape[1]
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
-        family = int(spec[g, G_FAMILY])
         r = int(spec[g, G_ROW])
-        rows = int(spec[g, G_ROWS]) if extra else frame_rows(kind)  # frame_rows says why
-        if extra and family == FAMILY_BEYOND_FRAME:  # centre of mass, support polygon, two frames (.balance)
+        rows = int(spec[g, G_ROWS]) if extra is not None else frame_rows(kind)  # frame_rows says why
+        # centre of mass, support polygon, two frames (.balance)
+        if extra is not None and int(spec[g, G_FAMILY]) == FAMILY_BEYOND_FRAME:
             beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
                                   e[r:r + rows], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
             continue
@@ -264,7 +268,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
             fold(index, scale, Jx, J)
         else:
             frame_jacobian(rev, support[g], pg[g], Z, O, J)
-        if extra and family == FAMILY_AXES:
+        if extra is not None and int(spec[g, G_FAMILY]) == FAMILY_AXES:
             axes_jacobian(kind, Rg[g], pg[g], J, pt[g], Rt[g], gaux[g], rv, A, B, E, r)
         else:
             goal_jacobian(kind, Rg[g], J, tg[g], e[r:r + rows], spec[g, G_WEIGHT], rv, A, B, E, r)
@@ -272,7 +276,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
         for g in range(spec.shape[0]):
             r = int(spec[g, G_ROW])
             w = spec[g, G_WEIGHT]
-            for i in range(r, r + (int(spec[g, G_ROWS]) if extra else frame_rows(int(spec[g, G_KIND])))):
+            for i in range(r, r + (int(spec[g, G_ROWS]) if extra is not None else frame_rows(int(spec[g, G_KIND])))):
                 for k in range(n):
                     E[i, k] *= w
 
@@ -280,7 +284,7 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """:func:`.balance.balance_error` behind a call, not inlined: :func:`task_error`, inlined four times into
-    :func:`lm_run_in`, keeps the size the one-frame kinds compile to (with this branch alone their runs are as fast
+    the run, keeps the size the one-frame kinds compile to (with this branch alone their runs are as fast
     as before; docs/BENCHMARKS.md, scripts/bench_chain_kernel.py)."""
     return balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
 
@@ -291,8 +295,8 @@ def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, 
     """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): its
     physical Jacobian (:func:`.balance.balance_columns`, folded with ``mimic``) turned into its rows, a relative
     pose's by the pose kind's :func:`goal_jacobian` (R, p, t: frame b's rotation and origin, the translation of
-    ``T^-1 T_a^-1 T_b``), a relative pose with axes's by :func:`.balance.relative_axes_jacobian` (R, t: frame b's
-    pose seen from frame a; target pt, Rt), a centre of mass's by :func:`.balance.com_rows`."""
+    ``T^-1 T_a^-1 T_b``), the others' (a banded relative pose, a relative position, a centre of mass) by
+    :func:`.balance.balance_rows`."""
     balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx)
     src = Jx
     if mimic:
@@ -552,51 +556,6 @@ def stack_rows(spec):
     return int(spec[G - 1, G_ROW]) + int(spec[G - 1, G_ROWS])
 
 
-def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-           params,
-           q_out, g_out):
-    """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
-    g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
-
-    Args:
-        parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
-            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
-        box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
-        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
-            (``goals.stack.GoalStack``); pt (G, 3), Rt (G, 3, 3): its targets (``goals.stack.encode_target``).
-        params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
-            (:mod:`.layout`).
-
-    Returns:
-        (position error m, orientation error rad (nan when no goal has an orientation), converged, iterations,
-        forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals, as
-        :class:`.reference.ReferenceLM` counts them.
-    """
-    n = q_start.shape[0]
-    return lm_run_buffers(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), q_start,
-                          parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-                          params, q_out, g_out)
-
-
-def _workspace_buffer(n: int, parent: np.ndarray, spec: np.ndarray, params: np.ndarray) -> np.ndarray:
-    """The float buffer of a :data:`Workspace` for n joints and the tree, goal stack and step budget of a call."""
-    return np.empty(int(workspace_size(n, parent.shape[0], spec.shape[0], int(stack_rows(spec)),
-                                       int(params[P_ITERATIONS]))))
-
-
-@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def lm_run_buffers(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
-                   support, gaux,
-                   pt, Rt, params, q_out, g_out):
-    """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`) and held (n,) bool (see
-    :func:`carve`); a caller making many runs one after the other keeps them (no allocation per run)."""
-    ws = carve(buf, held, q_start.shape[0], parent.shape[0], spec.shape[0], stack_rows(spec),
-               int(params[P_ITERATIONS]))
-    return lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                     gaux, pt,
-                     Rt, params, q_out, g_out)
-
-
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _outcome(spec, ge, g_out):
     """(largest position error, largest orientation error or nan) over the goals' errors ge (G, 2), copied to
@@ -614,52 +573,34 @@ def _outcome(spec, ge, g_out):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def extra_kinds(spec):
-    """True when the stack spec (G, GOAL_SIZE) holds a goal its kind declares of a compiled family beyond
-    :func:`goal_error`'s (pose, position, planar): :mod:`.axes`'s or :mod:`.balance`'s (its ``G_FAMILY`` column)."""
+def _weighted(spec):
+    """Whether some goal of the stack spec (G, GOAL_SIZE) has a weight other than 1. A function rather than a flag
+    set in the run (``weighted = False``, then True in a loop): numba types the calls of such a flag with its
+    literal False while it infers the run's types and compiles each callee once more for it (task_error and
+    task_jacobian: seconds of the first compilation, for code the run never calls)."""
     for g in range(spec.shape[0]):
-        if spec[g, G_FAMILY] != FAMILY_FRAME:
+        if spec[g, G_WEIGHT] != 1.0:
             return True
     return False
 
 
-@njit(cache=True, nogil=True, inline="always", **BORROWING)
-def lm_run_in(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
-              Rt, params, q_out, g_out):
-    """:func:`lm_run` in the buffers of the workspace ``ws`` (:func:`make_workspace` or :func:`carve` for these n
-    joints, m physical joints, goals and task rows, and at least ``params[P_ITERATIONS]`` steps); the other arguments
-    and the result are :func:`lm_run`'s.
-
-    Runs :func:`lm_run_basic` when every goal is of the first four kinds, :func:`lm_run_all` otherwise: the same run
-    (:func:`_run`) compiled twice, the first without the branches of :func:`task_error` and :func:`task_jacobian`
-    for the later kinds. With those branches (inlined, behind calls, or in a loop of their own alike) LLVM compiles
-    the run's loops differently, and the single-pose chain case took 6-17 % longer (docs/BENCHMARKS.md,
-    scripts/bench_chain_kernel.py).
-
-    Inlined by numba (``inline="always"``), not by LLVM: it only picks one of two calls, cheap for numba to type in
-    its callers, while a compiled function of its own would have LLVM optimize both runs, linked into it, once more
-    (7 s of the kernel's first compilation)."""
-    if extra_kinds(spec):
-        return lm_run_all(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                          gaux, pt, Rt, params, q_out, g_out)
-    return lm_run_basic(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                        gaux, pt, Rt, params, q_out, g_out)
-
-
 def _run(extra, name, doc):
-    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: the run compiled with ``extra`` (the stack may
-    hold goals of the later kinds, :func:`task_error`) a constant of its closure, which LLVM folds (inlining one
-    body into both instead took numba over 8 GB and 10 minutes). numba's disk cache keys closures by their cells'
-    contents: the two are cached apart."""
+    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: the run compiled with ``extra`` (True: the
+    stack may hold goals of the later kinds; None: it holds the first four only, :func:`task_error`) a constant of
+    its closure (inlining one body into both instead took numba over 8 GB and 10 minutes). numba's disk cache keys
+    closures by their cells' contents: the two are cached apart.
+
+    Two runs rather than one: with the later kinds' branches (inlined, behind calls, or in a loop of their own alike)
+    LLVM compiles the run's loops differently, and the single-pose chain case took 6-17 % longer (docs/BENCHMARKS.md,
+    scripts/bench_chain_kernel.py). With ``extra`` None numba drops those branches before typing them (its
+    dead-branch pruning of a None argument): :func:`lm_run_basic` neither compiles nor links the code of
+    :mod:`.axes` and :mod:`.balance`, a third of the time :func:`lm_run_all` takes to compile."""
 
     def run(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
             params, q_out, g_out):
         n = q_start.shape[0]
         mimic = coupled(index, scale, offset, n)
-        weighted = False
-        for g in range(spec.shape[0]):
-            if spec[g, G_WEIGHT] != 1.0:
-                weighted = True
+        weighted = _weighted(spec)
         m = ws.E.shape[0]
         max_step = params[P_MAX_STEP]
         window = int(params[P_STALL_WINDOW])
@@ -778,8 +719,9 @@ def _run(extra, name, doc):
     return njit(cache=True, nogil=True, forceinline=False, **BORROWING)(run)
 
 
-lm_run_basic = _run(False, "lm_run_basic", """:func:`lm_run_in` for stacks of the first four kinds only.""")
-lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_in` for any stack.""")
+lm_run_basic = _run(None, "lm_run_basic", """One LM run in the workspace ``ws`` (:func:`carve`) for stacks of the
+first four kinds only; the other arguments and the result are :func:`lm_run`'s.""")
+lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_basic` for any stack.""")
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
@@ -791,59 +733,158 @@ def _record(stats, i, pos, rot, converged, it, evaluations, c):
     stats[i, S_COST] = c
 
 
+
+#: A variant's compiled entries: ``run`` (one run: :func:`lm_run` in the caller's buffers), ``starts``
+#: (:func:`lm_run_starts`'s) and ``pairs`` (:func:`lm_run_pairs`'s).
+Entries = namedtuple("Entries", ["run", "starts", "pairs"])
+
+
+def _entries(extra, suffix):
+    """The three compiled entries of one variant of the run (``extra``: :func:`_run`'s; the same source for both),
+    each a function of its own for numba's disk cache (``suffix`` names them apart).
+
+    Each entry links the run it calls and has LLVM optimize and emit it once more (numba optimizes a library's
+    module whole, the code it links included): an entry linking both runs, as one that picked a run per stack did,
+    compiled both runs again. One variant per entry, the variant picked in Python (:func:`entries_for`), makes a
+    problem of the first four kinds compile :func:`lm_run_basic` alone, and each entry only when first used
+    (:func:`.engine.compiled_kernel`). In each body the branch on ``extra`` (a closure constant) is pruned by numba
+    before typing, so the other run is not even typed. Every entry borrows its arrays (:data:`BORROWING`): a run's
+    call passes some 70 arrays (the workspace's views), which a reference-counting caller would bracket with as many
+    atomic increments and decrements (a third of a short run's time)."""
+
+    def run(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+            gaux, pt, Rt, params, q_out, g_out):
+        ws = carve(buf, held, q_start.shape[0], parent.shape[0], spec.shape[0], stack_rows(spec),
+                   int(params[P_ITERATIONS]))
+        if extra is not None:
+            return lm_run_all(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
+                              support, gaux, pt, Rt, params, q_out, g_out)
+        return lm_run_basic(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
+                            support, gaux, pt, Rt, params, q_out, g_out)
+
+    def starts(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+               pt, Rt, params, Q_out, stats, g_stats):
+        ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+        for k in range(Q.shape[0]):
+            if extra is not None:
+                pos, rot, converged, it, evaluations, c = lm_run_all(
+                    ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                    pt, Rt, params, Q_out[k], g_stats[k])
+            else:
+                pos, rot, converged, it, evaluations, c = lm_run_basic(
+                    ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                    pt, Rt, params, Q_out[k], g_stats[k])
+            _record(stats, k, pos, rot, converged, it, evaluations, c)
+            if converged:
+                return k
+        return -(1 + Q.shape[0])
+
+    def pairs(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+              P, Rts, params, Q_out, stats, g_stats):
+        ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+        for i in range(Q.shape[0]):
+            if extra is not None:
+                pos, rot, converged, it, evaluations, c = lm_run_all(
+                    ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                    P[i], Rts[i], params, Q_out[i], g_stats[i])
+            else:
+                pos, rot, converged, it, evaluations, c = lm_run_basic(
+                    ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                    P[i], Rts[i], params, Q_out[i], g_stats[i])
+            _record(stats, i, pos, rot, converged, it, evaluations, c)
+
+    named = ((run, "lm_run_buffers", """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`)
+        and held (n,) bool (see :func:`carve`); a caller making many runs one after the other keeps them (no
+        allocation per run)."""),
+             (starts, "lm_run_starts_buffers", """:func:`lm_run_starts` in the caller's buffers (as the ``run``
+        entry)."""),
+             (pairs, "lm_run_pairs_buffers", """:func:`lm_run_pairs` in the caller's buffers (as the ``run``
+        entry)."""))
+    compiled = []
+    for func, name, doc in named:
+        func.__name__ = func.__qualname__ = name + suffix
+        func.__doc__ = doc
+        compiled.append(njit(cache=True, nogil=True, forceinline=False, **BORROWING)(func))
+    return Entries(*compiled)
+
+
+#: The entries of the run for stacks of the first four kinds (:func:`lm_run_basic`) and for any stack
+#: (:func:`lm_run_all`); :func:`entries_for` picks one for a stack.
+BASIC = _entries(None, "_basic")
+ALL = _entries(True, "")
+# the entries for any stack under their names of old (tests, benchmarks and first_runs' compiled calls use them)
+lm_run_buffers, lm_run_starts_buffers, lm_run_pairs_buffers = ALL
+lm_run_buffers_basic, lm_run_starts_buffers_basic, lm_run_pairs_buffers_basic = BASIC
+
+
+def has_later_kinds(spec: np.ndarray) -> bool:
+    """Whether the goal stack spec (G, GOAL_SIZE) holds a goal its kind declares of a compiled family beyond
+    :func:`goal_error`'s (pose, position, planar): :mod:`.axes`'s or :mod:`.balance`'s (its ``G_FAMILY`` column),
+    which only :func:`lm_run_all` runs."""
+    return bool((spec[:, G_FAMILY] != FAMILY_FRAME).any())
+
+
+def entries_for(spec: np.ndarray) -> Entries:
+    """The compiled entries that run the goal stack spec (G, GOAL_SIZE): :data:`BASIC` when it holds the first four
+    kinds only (the faster run, and the only one compiled for such problems), else :data:`ALL`."""
+    return ALL if has_later_kinds(spec) else BASIC
+
+
+def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
+           params, q_out, g_out):
+    """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
+    g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
+
+    Args:
+        parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
+            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
+        box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
+        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
+            (:class:`.layout.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets (:func:`.layout.encode_target`).
+        params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
+            (:mod:`.layout`).
+
+    Returns:
+        (position error m, orientation error rad (nan when no goal has an orientation), converged, iterations,
+        forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals, as
+        :class:`.reference.ReferenceLM` counts them. A Python wrapper: the workspace made here, the entry of the
+        stack's variant called (:func:`entries_for`).
+    """
+    n = q_start.shape[0]
+    return entries_for(spec).run(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), q_start,
+                                 parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
+                                 pt, Rt, params, q_out, g_out)
+
+
+def _workspace_buffer(n: int, parent: np.ndarray, spec: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """The float buffer of a :data:`Workspace` for n joints and the tree, goal stack and step budget of a call."""
+    return np.empty(int(workspace_size(n, parent.shape[0], spec.shape[0], int(stack_rows(spec)),
+                                       int(params[P_ITERATIONS]))))
+
+
 def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                  params, Q_out, stats, g_stats):
     """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
-    row the stack's targets, ``goals.stack.encode_targets`` for one goal); end configurations to Q_out (N, n), per
+    row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
     pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
-    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python wrapper of
-    :func:`lm_run_pairs_buffers`)."""
+    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python wrapper of the
+    ``pairs`` entry of the stack's variant)."""
     n = Q.shape[1]
-    lm_run_pairs_buffers(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent, FR, Fp,
-                         rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts, params, Q_out,
-                         stats, g_stats)
-
-
-@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def lm_run_pairs_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
-                         support, gaux, P, Rts, params, Q_out, stats, g_stats):
-    """:func:`lm_run_pairs` in the caller's buffers (as :func:`lm_run_buffers`). Borrowing, as every entry here: a
-    run's call passes some 70 arrays (the workspace's views), which a reference-counting caller would bracket with
-    as many atomic increments and decrements (a third of a short run's time)."""
-    ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    for i in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box,
-                                                            any_wrap, spec, gR, gp, support, gaux, P[i], Rts[i], params,
-                                                            Q_out[i], g_stats[i])
-        _record(stats, i, pos, rot, converged, it, evaluations, c)
+    entries_for(spec).pairs(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent, FR,
+                            Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts, params,
+                            Q_out, stats, g_stats)
 
 
 def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-                  params,
-                  Q_out, stats, g_stats):
+                  params, Q_out, stats, g_stats):
     """:func:`lm_run` from the starts Q (K, n) for one problem (targets pt (G, 3), Rt (G, 3, 3)), in order, until
     one converges.
 
     Each run's end configuration goes to Q_out[k], its ``S_*`` statistics to stats[k] and its goals' errors to
     g_stats[k] (G, 2) (rows of starts not run are left untouched). Returns the index of the converged run, or
     -(1 + the number of runs) when none converged (every start was run then). The runs share one workspace, made
-    here."""
+    here (a Python wrapper of the ``starts`` entry of the stack's variant)."""
     n = Q.shape[1]
-    return lm_run_starts_buffers(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent,
-                                 FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-                                 params, Q_out, stats, g_stats)
-
-
-@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def lm_run_starts_buffers(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
-                          support, gaux, pt, Rt, params, Q_out, stats, g_stats):
-    """:func:`lm_run_starts` in the caller's buffers (as :func:`lm_run_buffers`)."""
-    ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-    for k in range(Q.shape[0]):
-        pos, rot, converged, it, evaluations, c = lm_run_in(ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box,
-                                                            any_wrap, spec, gR, gp, support, gaux, pt, Rt, params,
-                                                            Q_out[k], g_stats[k])
-        _record(stats, k, pos, rot, converged, it, evaluations, c)
-        if converged:
-            return k
-    return -(1 + Q.shape[0])
+    return entries_for(spec).starts(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q,
+                                    parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                                    gaux, pt, Rt, params, Q_out, stats, g_stats)

@@ -32,12 +32,12 @@ from numba import njit
 
 from ...goals.stack import G_JOINT
 from ..lm.chain import coupled, expand
-from ..lm.kernel import lm_run_buffers
+from ..lm.kernel import lm_run_buffers, lm_run_buffers_basic
 from ..lm.tree import frame_pose, tree_forward
 from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_k, table_distances
 
 __all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "STAGE_Q0", "STAGE_TABLE", "first_runs",
-           "goal_first_runs"]
+           "first_runs_basic", "goal_first_runs", "goal_first_runs_basic"]
 
 #: Which start solved the problem (first_runs's first return value; -1: none did).
 STAGE_Q0, STAGE_TABLE = 0, 1
@@ -47,11 +47,8 @@ STAGE_Q0, STAGE_TABLE = 0, 1
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
 
 
-@njit(cache=True, nogil=True, forceinline=False)
-def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, parent,
-               FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out,
-               g_out, errors, best_q, best):  # pragma: no cover - compiled
-    """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
+#: first_runs' docstring (both variants').
+_DOC = """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
     nearest table entries, stopping at the first that converges.
 
     Args:
@@ -77,97 +74,120 @@ def first_runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, o
         summed; the converged (or last) run's position error m, orientation error rad (nan for a position),
         weighted |e|^2).
     """
-    n = q0.shape[0]
-    D = F.shape[1]
-    has_position = D != 9
-    ro = 3 if has_position else 0  # where the rotation's entries start (D > 3: they are features)
-    # the target's features (SeedTable.one_target_features, .one_goal_features: sp x its position, then sr x its
-    # rotation's entries; the products NumPy makes, so the same numbers)
-    f = np.empty(D)
-    if has_position:
-        for j in range(3):
-            f[j] = sp * pt[0, j]
-    if D > 3:
-        for j in range(9):
-            f[ro + j] = sr * Rt[0, j // 3, j % 3]
-    d = np.empty(F.shape[0])
-    table_distances(FT, sq, f, d)
-    # the nearest entries, nearest first, in one pass over the distances (the nearest alone, which q0's decision
-    # reads, is the first of them: select_k keeps argmin's order)
-    out = np.empty(max(table_runs, 1), dtype=np.int64)
-    ranked = select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)
-    q0_first = has_q0
-    if has_q0:
-        # q0's tip pose (clipped into the box) and its squared distance to the target in the table's metric
-        qc = np.empty(n)
-        for i in range(n):
-            qc[i] = min(max(q0[i], lower[i]), upper[i])
-        m = parent.shape[0]
-        Rj, pj, Z, O = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
-        x = np.empty(m)
-        if coupled(index, scale, offset, n):
-            expand(index, scale, offset, qc, x)
-        else:
-            x[:] = qc
-        tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O)
-        R, p = np.empty((3, 3)), np.empty(3)
-        frame_pose(Rj, pj, int(spec[0, G_JOINT]), gR[0], gp[0], R, p)
-        d0 = 0.0
+
+
+def _first_runs(extra, name):
+    """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s: None
+    for stacks of the first four kinds, True for any), a constant of the closure whose branch numba prunes before
+    typing: each variant calls (and links) the one entry of its run, as the kernel's entries do."""
+
+    def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, parent, FR, Fp,
+             rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out,
+             errors, best_q, best):  # pragma: no cover - compiled
+        n = q0.shape[0]
+        D = F.shape[1]
+        has_position = D != 9
+        ro = 3 if has_position else 0  # where the rotation's entries start (D > 3: they are features)
+        # the target's features (SeedTable.one_target_features, .one_goal_features: sp x its position, then sr x its
+        # rotation's entries; the products NumPy makes, so the same numbers)
+        f = np.empty(D)
         if has_position:
             for j in range(3):
-                c = f[j] - sp * p[j]
-                d0 += c * c
+                f[j] = sp * pt[0, j]
         if D > 3:
             for j in range(9):
-                c = f[ro + j] - sr * R[j // 3, j % 3]
-                d0 += c * c
-        if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
-            if ranked > 0:
-                first = out[0]
-                de = 0.0
-                for j in range(D):
-                    c = f[j] - F[first, j]
-                    de += c * c
-                q0_first = d0 <= de
-            else:
-                q0_first = True
-    # the starts in memetic's order: q0 first or after the nearest entry, then the next entries (-1: q0)
-    order = np.empty(table_runs + 1, dtype=np.int64)
-    count = 0
-    if q0_first:
-        order[count] = -1
-        count += 1
-    for r in range(ranked):
-        order[count] = out[r]
-        count += 1
-        if r == 0 and has_q0 and not q0_first:
+                f[ro + j] = sr * Rt[0, j // 3, j % 3]
+        d = np.empty(F.shape[0])
+        table_distances(FT, sq, f, d)
+        # the nearest entries, nearest first, in one pass over the distances (the nearest alone, which q0's decision
+        # reads, is the first of them: select_k keeps argmin's order)
+        out = np.empty(max(table_runs, 1), dtype=np.int64)
+        ranked = select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)
+        q0_first = has_q0
+        if has_q0:
+            # q0's tip pose (clipped into the box) and its squared distance to the target in the table's metric
+            qc = np.empty(n)
+            for i in range(n):
+                qc[i] = min(max(q0[i], lower[i]), upper[i])
+            m = parent.shape[0]
+            Rj, pj, Z, O = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
+            x = np.empty(m)
+            if coupled(index, scale, offset, n):
+                expand(index, scale, offset, qc, x)
+            else:  # loops, not slice assignments: those compile numba's shape-mismatch message (seconds, once)
+                for i in range(m):
+                    x[i] = qc[i]
+            tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O)
+            R, p = np.empty((3, 3)), np.empty(3)
+            frame_pose(Rj, pj, int(spec[0, G_JOINT]), gR[0], gp[0], R, p)
+            d0 = 0.0
+            if has_position:
+                for j in range(3):
+                    c = f[j] - sp * p[j]
+                    d0 += c * c
+            if D > 3:
+                for j in range(9):
+                    c = f[ro + j] - sr * R[j // 3, j % 3]
+                    d0 += c * c
+            if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
+                if ranked > 0:
+                    first = out[0]
+                    de = 0.0
+                    for j in range(D):
+                        c = f[j] - F[first, j]
+                        de += c * c
+                    q0_first = d0 <= de
+                else:
+                    q0_first = True
+        # the starts in memetic's order: q0 first or after the nearest entry, then the next entries (-1: q0)
+        order = np.empty(table_runs + 1, dtype=np.int64)
+        count = 0
+        if q0_first:
             order[count] = -1
             count += 1
-    evaluations = 0
-    pos = rot = cost = np.nan
-    for s in range(count):
-        row = order[s]
-        start = q0 if row < 0 else Q[row]
-        pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, parent, FR, Fp, rev, index, scale,
-                                                           offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
-                                                           Rt, params, q_out, g_out)
-        error = pos + (rot if oriented else 0.0)
-        errors[s] = error
-        evaluations += ev
-        if converged:
-            return (STAGE_Q0 if row < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
-        if s == 0 or error < errors[int(best[5])]:  # memetic's _Search._keep: a strictly lower error replaces
-            best_q[:] = q_out
-            best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
-    return -1, count, evaluations, pos, rot, cost
+        for r in range(ranked):
+            order[count] = out[r]
+            count += 1
+            if r == 0 and has_q0 and not q0_first:
+                order[count] = -1
+                count += 1
+        evaluations = 0
+        pos = rot = cost = np.nan
+        for s in range(count):
+            row = order[s]
+            start = q0 if row < 0 else Q[row]
+            if extra is not None:
+                pos, rot, converged, it, ev, cost = lm_run_buffers(
+                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                    gaux, pt, Rt, params, q_out, g_out)
+            else:
+                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(
+                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                    gaux, pt, Rt, params, q_out, g_out)
+            error = pos + (rot if oriented else 0.0)
+            errors[s] = error
+            evaluations += ev
+            if converged:
+                return (STAGE_Q0 if row < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
+            if s == 0 or error < errors[int(best[5])]:  # memetic's _Search._keep: a strictly lower error replaces
+                for i in range(n):
+                    best_q[i] = q_out[i]
+                best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
+        return -1, count, evaluations, pos, rot, cost
+
+    runs.__name__ = runs.__qualname__ = name
+    runs.__doc__ = _DOC
+    return njit(cache=True, nogil=True, forceinline=False)(runs)
 
 
-@njit(cache=True, nogil=True, forceinline=False)
-def goal_first_runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, gpos, gori, weight, wpt, wRt, idx,
-                    idx_start, base, base_mode, allowed, oriented, table_runs, parent, FR, Fp, rev, index, scale,
-                    offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out, errors, best_q,
-                    best, best_g):  # pragma: no cover - compiled
-    """memetic's guaranteed LM runs for a goal list of several goals (or goals beyond one frame) in one call: q0's
+#: memetic's first runs for stacks of the first four kinds (the kernel's ``lm_run_basic``) and for any stack
+#: (``lm_run_all``): :meth:`.memetic.MemeticPlan.first_runs` picks the one of its engine's kernel.
+first_runs_basic = _first_runs(None, "first_runs_basic")
+first_runs = _first_runs(True, "first_runs")
+
+
+_GOAL_DOC = """memetic's guaranteed LM runs for a goal list of several goals (or goals beyond one frame) in one call:
+    q0's
     run, then up to ``table_runs`` of :meth:`~.seed_table.SeedTable.goal_starts`' starts in its order (a start
     composed goal by goal, the next table entry by the goals' summed nearness, alternately), stopping at the first
     run that converges. The ranking, the composition and the runs are those of memetic's runs one by one, on the
@@ -199,54 +219,77 @@ def goal_first_runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, g
         (STAGE_Q0 or STAGE_TABLE: the start that converged, or -1; runs made; their forward-kinematics evaluations
         summed; the converged (or last) run's position error m, orientation error rad, weighted |e|^2).
     """
-    N, n = Q.shape
-    G = wpt.shape[0]
-    composed = (table_runs + 1) // 2  # starts 2j (composed j) and 2j + 1 (entry j) read the j-th ranked entry
-    rows = np.empty(max(composed, 1), dtype=np.int64)
-    ranked = rank_goal_entries(FT, sq, gscale, gpos, gori, weight, wpt, wRt, allowed, composed, rows)
-    rpt, rRt = np.empty((G, 3)), np.empty((G, 3, 3))
-    picks = np.empty((G, max(composed, 1)), dtype=np.int64)
-    if base_mode != BASE_EACH_ENTRY and ranked > 0:  # each goal's nearest entries, once for every composed start
-        if base_mode == BASE_FROM_GOAL:
-            seen_from(base, wpt, wRt, rpt, rRt)
-        else:
-            rpt[:], rRt[:] = wpt, wRt
-        nearest_per_goal(PT, psq, pstart, gscale, gpos, gori, weight, rpt, rRt, allowed, ranked, picks)
-    start = np.empty(n)
-    total = has_q0 + min(table_runs, 2 * ranked)
-    evaluations = 0
-    pos = rot = cost = np.nan
-    for s in range(total):
-        t = s - has_q0  # the start's place among goal_starts' (-1: q0)
-        if t < 0:
-            start[:] = q0
-        else:
-            j = t // 2
-            row = rows[j]
-            start[:] = Q[row]
-            if base_mode == BASE_FROM_GOAL:
-                start[:6] = base
-            if t % 2 == 0:  # composed: each goal's chain from the entry nearest for that goal alone
-                column = j
-                if base_mode == BASE_EACH_ENTRY:  # the goals seen from this entry's base
-                    seen_from(Q[row, :6], wpt, wRt, rpt, rRt)
-                    nearest_per_goal(PT, psq, pstart, gscale, gpos, gori, weight, rpt, rRt, allowed, 1, picks)
-                    column = 0
-                for g in range(G):
-                    e = picks[g, column]
-                    for a in range(idx_start[g], idx_start[g + 1]):
-                        i = idx[a]
-                        start[i] = Q[e, i]
-        pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, parent, FR, Fp, rev, index, scale,
-                                                           offset, box, any_wrap, spec, gR, gp, support, gaux, pt,
-                                                           Rt, params, q_out, g_out)
-        errors[s] = pos + (rot if oriented else 0.0)
-        evaluations += ev
-        if converged:
-            return (STAGE_Q0 if t < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
-        if s == 0 or cost < best[2]:  # memetic's _Search._keep: a strictly lower rank (weighted |e|^2) replaces
-            best_q[:] = q_out
-            best_g[:] = g_out
-            best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
-    return -1, total, evaluations, pos, rot, cost
 
+
+def _goal_first_runs(extra, name):
+    """:func:`goal_first_runs` compiled for one variant of the kernel's run (as :func:`_first_runs`)."""
+
+    def runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, gpos, gori, weight, wpt, wRt, idx,
+             idx_start, base, base_mode, allowed, oriented, table_runs, parent, FR, Fp, rev, index, scale, offset, box,
+             any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out, errors, best_q, best,
+             best_g):  # pragma: no cover - compiled
+        N, n = Q.shape
+        G = wpt.shape[0]
+        composed = (table_runs + 1) // 2  # starts 2j (composed j) and 2j + 1 (entry j) read the j-th ranked entry
+        rows = np.empty(max(composed, 1), dtype=np.int64)
+        ranked = rank_goal_entries(FT, sq, gscale, gpos, gori, weight, wpt, wRt, allowed, composed, rows)
+        rpt, rRt = np.empty((G, 3)), np.empty((G, 3, 3))
+        picks = np.empty((G, max(composed, 1)), dtype=np.int64)
+        if base_mode != BASE_EACH_ENTRY and ranked > 0:  # each goal's nearest entries, once for every composed start
+            if base_mode == BASE_FROM_GOAL:
+                seen_from(base, wpt, wRt, rpt, rRt)
+            else:
+                rpt[:], rRt[:] = wpt, wRt
+            nearest_per_goal(PT, psq, pstart, gscale, gpos, gori, weight, rpt, rRt, allowed, ranked, picks)
+        start = np.empty(n)
+        total = has_q0 + min(table_runs, 2 * ranked)
+        evaluations = 0
+        pos = rot = cost = np.nan
+        for s in range(total):
+            t = s - has_q0  # the start's place among goal_starts' (-1: q0)
+            if t < 0:
+                start[:] = q0
+            else:
+                j = t // 2
+                row = rows[j]
+                start[:] = Q[row]
+                if base_mode == BASE_FROM_GOAL:
+                    start[:6] = base
+                if t % 2 == 0:  # composed: each goal's chain from the entry nearest for that goal alone
+                    column = j
+                    if base_mode == BASE_EACH_ENTRY:  # the goals seen from this entry's base
+                        seen_from(Q[row, :6], wpt, wRt, rpt, rRt)
+                        nearest_per_goal(PT, psq, pstart, gscale, gpos, gori, weight, rpt, rRt, allowed, 1, picks)
+                        column = 0
+                    for g in range(G):
+                        e = picks[g, column]
+                        for a in range(idx_start[g], idx_start[g + 1]):
+                            i = idx[a]
+                            start[i] = Q[e, i]
+            if extra is not None:
+                pos, rot, converged, it, ev, cost = lm_run_buffers(
+                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                    gaux, pt, Rt, params, q_out, g_out)
+            else:
+                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(
+                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
+                    gaux, pt, Rt, params, q_out, g_out)
+            errors[s] = pos + (rot if oriented else 0.0)
+            evaluations += ev
+            if converged:
+                return (STAGE_Q0 if t < 0 else STAGE_TABLE), s + 1, evaluations, pos, rot, cost
+            if s == 0 or cost < best[2]:  # memetic's _Search._keep: a strictly lower rank (weighted |e|^2) replaces
+                best_q[:] = q_out
+                best_g[:] = g_out
+                best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
+        return -1, total, evaluations, pos, rot, cost
+
+    runs.__name__ = runs.__qualname__ = name
+    runs.__doc__ = _GOAL_DOC
+    return njit(cache=True, nogil=True, forceinline=False)(runs)
+
+
+#: memetic's first runs for goal lists of several goals, per variant of the kernel's run (as first_runs_basic and
+#: first_runs).
+goal_first_runs_basic = _goal_first_runs(None, "goal_first_runs_basic")
+goal_first_runs = _goal_first_runs(True, "goal_first_runs")

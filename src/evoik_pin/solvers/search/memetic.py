@@ -56,6 +56,8 @@ from ...result import Result
 from .. import get_solver, register
 from ..collision_verdict import pairs_text
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
+from ..lm.compiling import load
+from ..lm.engine import later_kinds
 from ..options import check_choice, check_int, check_positive
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
@@ -81,19 +83,23 @@ GUARANTEED_TABLE_RUNS = 4
 #: single targets and several goal structures retargets them instead of rebuilding (an engine's target arrays become
 #: its own at its second problem, which an IKSolver's lane needs: ik_solver keeps as many goal lanes).
 KEPT_ENGINES = 8
+#: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
+FIRST_RUNS_COMPILE_SECONDS = 5.0
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
 
 
 def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
-            margin: float = 0.0) -> tuple[SeedTable | None, np.ndarray | None]:
+            margin: float = 0.0, kernel: bool = True) -> tuple[SeedTable | None, np.ndarray | None]:
     """Do memetic's one-time work for a robot and a search box: load (once per install: compile) the compiled
-    LM kernel, build the cached seed table of ``table_size`` entries (0: none) and, with a scene, find its
-    collision-free entries. Returns (the table, its free mask or None).
+    LM kernel for pose, position and planar goals (``kernel``; an LM engine loads its own variant when made), build
+    the cached seed table of ``table_size`` entries (0: none) and, with a scene, find its collision-free entries.
+    Returns (the table, its free mask or None).
 
-    :func:`memetic` calls it before starting its clock; :func:`evoik_pin.prepare` calls it ahead of time.
+    :func:`memetic` calls it before starting its clock (without the kernel: the engine it makes before the clock
+    loads the variant its goals need, and only that one); :func:`evoik_pin.prepare` calls it ahead of time.
     """
-    if engine == "compiled":
+    if engine == "compiled" and kernel:
         compiled_kernel()
     table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
     free = table.free_mask(scene, margin) if table is not None and scene is not None else None
@@ -322,7 +328,7 @@ class MemeticPlan:
         box = self._box
         if box is None or box[0] is not problem.lower or box[1] is not problem.upper or box[2] != size:
             self._table, free = prepare(self.robot, problem.lower, problem.upper, size, engine, problem.scene,
-                                        problem.margin)
+                                        problem.margin, kernel=False)
             self._box = (problem.lower, problem.upper, size)
             self._bounds = (np.array(problem.lower, dtype=float), np.array(problem.upper, dtype=float))
             return self._table, free
@@ -360,13 +366,18 @@ class MemeticPlan:
                 self._entry = kept
                 return kept[2](*args), 0.0
         t = time.perf_counter()
-        from .first_runs import first_runs  # the first time: its module and numba's imports, set-up too (~5 ms)
+        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
 
+        extra = later_kinds(lm.goals)  # the variant of the engine's kernel
+        first_runs = compiled.first_runs if extra else compiled.first_runs_basic
         loading = 0.0
-        if "first_runs" not in _LOADED:
-            first_runs(*args)  # the runs are made again below (they only write args' buffers)
+        if first_runs not in _LOADED:
+            # compiled (once per install, with a notice) or loaded from numba's cache; the runs are made again below
+            # (they only write args' buffers)
+            load("memetic's first runs for " + ("every goal kind" if extra else "pose, position and planar goals"),
+                 [(first_runs, args)], FIRST_RUNS_COMPILE_SECONDS)
             loading = time.perf_counter() - t
-            _LOADED.append("first_runs")
+            _LOADED.append(first_runs)
         if kept_table is not None:  # not this plan's first solve: it is kept
             from numba import typeof
 
@@ -392,13 +403,19 @@ class MemeticPlan:
                     entries.insert(0, kept)
                 return kept[2](*args), 0.0
         t = time.perf_counter()
-        from .first_runs import goal_first_runs  # the first time: its module and numba's imports, set-up too
+        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too
 
+        extra = later_kinds(lm.goals)  # the variant of the engine's kernel
+        goal_first_runs = compiled.goal_first_runs if extra else compiled.goal_first_runs_basic
         loading = 0.0
-        if "goal_first_runs" not in _LOADED:
-            goal_first_runs(*args)  # the runs are made again below (they only write args' buffers)
+        if goal_first_runs not in _LOADED:
+            # compiled (once per install, with a notice) or loaded from numba's cache; the runs are made again below
+            # (they only write args' buffers)
+            load("memetic's first runs of goal lists for " + ("every goal kind" if extra else
+                                                              "pose, position and planar goals"),
+                 [(goal_first_runs, args)], FIRST_RUNS_COMPILE_SECONDS)
             loading = time.perf_counter() - t
-            _LOADED.append("goal_first_runs")
+            _LOADED.append(goal_first_runs)
         out = goal_first_runs(*args)
         if lm._owned:  # the engine's arrays are its own (its second problem on): its arguments stay, keep the entry
             from numba import typeof
@@ -608,7 +625,7 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
     )
 
 
-_LOADED: list = []  # the names of first_runs' compiled functions loaded in this process
+_LOADED: list = []  # the compiled variants of first_runs and goal_first_runs loaded in this process
 _FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # first_runs' base modes (goal_first_runs)
 _NO_BASE = np.zeros(6)  # goal_first_runs' base where no goal sets one (never read)

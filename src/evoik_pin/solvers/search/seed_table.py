@@ -202,9 +202,23 @@ class SeedTable:
 
     def prepare_goals(self, goals) -> None:
         """Compute (once per frame list, kinds and weights; then cached) the goal features that
-        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up."""
+        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up; and
+        load (once per process; once per install: compile) the compiled rankings a search of these goals calls
+        (:func:`load_goal_helpers` for several goals; a goal set's members' ranking,
+        :func:`~.nearest.table_distances_many`, for choose), so that no solve's clock pays for that."""
         self._goal_table_features(goals)
         self._goal_parts(goals)
+        if len(goals) > 1:
+            load_goal_helpers()
+        if "sets" not in _RANKING_LOADED and any(g.alternatives is not None for g in goals):
+            from ..lm.compiling import load
+            from .nearest import table_distances_many
+
+            one = np.zeros((1, 1), dtype=np.float32)
+            load("the seed table's rankings for goal sets", [(table_distances_many, (
+                one, np.zeros(1, dtype=np.float32), one.copy(), np.empty((1, 1), dtype=np.float32)))],
+                 RANKING_COMPILE_SECONDS)
+            _RANKING_LOADED.append("sets")
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
         """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed ones and table entries
@@ -532,15 +546,17 @@ def load_goal_helpers() -> None:
     goal list otherwise loaded them from its budget (a few ms each)."""
     if _GOAL_HELPERS_LOADED:
         return
+    from ..lm.compiling import load
     from .nearest import nearest_per_goal, rank_goal_entries, seen_from
 
     FT, sq = np.zeros((3, 2), dtype=np.float32), np.zeros((1, 2), dtype=np.float32)
     scale, yes, no = np.ones(1), np.ones(1, dtype=bool), np.zeros(1, dtype=bool)
     pt, Rt = np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1))
-    rank_goal_entries(FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))
-    nearest_per_goal(FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
-                     np.empty((1, 1), dtype=np.int64))
-    seen_from(np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3)))
+    load("the seed table's rankings for goal lists", [
+        (rank_goal_entries, (FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))),
+        (nearest_per_goal, (FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
+                            np.empty((1, 1), dtype=np.int64))),
+        (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))], RANKING_COMPILE_SECONDS)
     _GOAL_HELPERS_LOADED.append(True)
 
 
@@ -566,6 +582,9 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
 
 
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
+_RANKING_LOADED: list = []  # the compiled rankings prepare_goals has loaded in this process ("sets")
+#: About how long (s, one core) compiling the goal lists' rankings (nearest.py) takes from an empty cache.
+RANKING_COMPILE_SECONDS = 1.0
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _TABLES_PER_ROBOT = 4
 
