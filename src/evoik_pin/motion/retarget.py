@@ -1,0 +1,505 @@
+"""Retargeting: a human motion (:class:`~evoik_pin.motion.Motion`) onto a floating-base humanoid, one warm-started
+goal-list solve per frame through the public :func:`evoik_pin.solve`.
+
+The method (:func:`retarget`):
+
+1. **Scale** (``scale="auto"``): the robot's leg length (hip -> knee -> ankle frames at the neutral pose, q = 0)
+   over the source's (the same keypoints, median over frames, both legs averaged). The source is scaled about the
+   ground point under its first frame's root (x, y of the pelvis keypoint, z of the floor), so the clip stays in
+   the source's world: the robot faces where the source faces and moves where it moves (scaled), no global turn.
+2. **Goals per frame** (targets from the scaled source):
+
+   * the root frame (mapped to the pelvis keypoint): a :class:`~evoik_pin.goals.Position` at the scaled source hip
+     centre less the robot's own hip-centre offset (turned by the source pelvis's axes), and a
+     :class:`~evoik_pin.goals.Direction` laying the robot's left axis (its hips' left-right line at neutral) along
+     the source's (heading and roll from the source hips);
+   * limb **directions**: a :class:`~evoik_pin.goals.RelativePosition` per limb (parent mapped frame -> child mapped
+     frame, :data:`~evoik_pin.motion.mapping.LIMBS`), target the source limb's unit vector times the robot's own
+     limb length at neutral, in the world's axes: limbs follow the source's directions whatever the proportions;
+   * feet (the frames mapped to the ankle keypoints): while the source foot is in contact, a Position at the point
+     where it landed (x, y of the scaled source ankle at touchdown; z the floor plus the robot's sole height at
+     neutral: ankle frame over the lowest corner of its collision boxes), held for the whole stance; otherwise a
+     one-sided band (a Position with per-axis tolerance, x, y free) keeping the sole above the floor;
+   * any other mapped frame: a Position at its scaled keypoint.
+
+   Each goal has a tolerance: what "met" means for that goal (:data:`TOLERANCES`); weights rank them when they
+   cannot all be met (a held foot first, then the root, then the limbs).
+3. **Warm start and velocity box**: each frame is solved from the previous answer (``q0``) within
+   ``bounds = [q_prev - v_max dt, q_prev + v_max dt]`` clipped to the robot's joint bounds, ``dt = 1 / fps``:
+   no flip, no jump. ``v_max``: the URDF's joint velocity limits (an entry of 0 or none: no limit); the floating
+   base :data:`BASE_LINEAR_SPEED` m/s on x, y, z and :data:`BASE_ANGULAR_SPEED` rad/s on yaw, pitch, roll. A frame
+   that cannot meet every goal gets the solver's best inside that box (``success=False`` recorded), never a jump.
+4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
+   SRDF-disabled pairs ignored); only a colliding frame is solved again with the scene (``scene=``), which costs
+   far more than the plain solve, and kept if it is collision-free (the report counts the frames left colliding).
+
+The first frame has no previous answer: it starts from the neutral pose with the base at its target and is
+solved within the robot's bounds (the base's translation box widened to the clip's extent), with a longer budget.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..errors import MappingError, OptionError
+from ..goals import Direction, Position, RelativePosition
+from .clip import Clip
+from .contacts import DEFAULT_FEET, detect_contacts, ground_height
+from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
+from .motion import Motion
+
+__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "velocity_limits_of"]
+
+#: Floating base speed limits used with ``velocity_limits=True``: m/s on x, y, z (a sprinter's pelvis moves
+#: at ~10 m/s, a humanoid robot's at ~2) and rad/s on yaw, pitch, roll (a full turn in a second).
+BASE_LINEAR_SPEED = 2.0
+BASE_ANGULAR_SPEED = 2.0 * np.pi
+#: What "met" means per goal family: m for positions, rad for the heading and a limb's direction (a limb's
+#: RelativePosition gets this angle times its length in m); a held foot's 1 mm keeps skating far below the 2 mm per
+#: frame a judge accepts.
+TOLERANCES = {"contact": 1e-3, "floor": 1e-3, "root": 0.01, "heading": 0.03, "limb": 0.035, "point": 0.02}
+#: Length (m) at which a limb's weight is WEIGHTS["limb"]: a thigh's.
+LIMB_REFERENCE_LENGTH = 0.3
+#: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
+WEIGHTS = {"contact": 100.0, "floor": 100.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
+#: Budget (s) of each frame's solve and of the first frame's (global) solve.
+FRAME_TIMEOUT = 0.005
+FIRST_FRAME_TIMEOUT = 0.05
+#: memetic's options per frame: the previous answer is the start (LM from q0); no seed table (a global search
+#: over the whole robot, ~60 ms of set-up per new goal list, for starts far outside the velocity box) and at most
+#: :data:`FRAME_RESTARTS` DE populations inside the box when LM from q0 does not meet every goal.
+FRAME_RESTARTS = 0
+FRAME_OPTIONS = {"table_size": 0, "max_restarts": FRAME_RESTARTS}
+FIRST_FRAME_OPTIONS = {"table_size": 0}
+#: A frame found colliding is solved again with the scene: DE populations inside the velocity box (the LM from q0
+#: alone stays in the colliding basin) for this many times the frame's budget.
+COLLISION_RETRY_FACTOR = 4
+COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": None}
+#: Half-height (m) of the above-floor band of a swing foot: its sole anywhere from the floor to twice this above.
+FLOOR_BAND = 2.0
+#: Slack (m) around the clip's extent for the floating base's translation bounds.
+BASE_BOX_SLACK = 2.0
+
+
+def _roles(pairs: list[tuple[str, str]]) -> dict[str, str]:
+    """``{role: robot frame}`` of the mapping's frames whose keypoint is a joint of a known skeleton (cmu, smpl):
+    role names are :data:`~evoik_pin.motion.mapping.SKELETON_JOINTS`' (``pelvis``, ``left_hip``, ...)."""
+    by_keypoint = {}
+    for names in SKELETON_JOINTS.values():
+        for role, keypoint in names.items():
+            by_keypoint.setdefault(keypoint, role)
+    roles = {}
+    for frame, keypoint in pairs:
+        role = by_keypoint.get(keypoint)
+        if role is not None and role not in roles:
+            roles[role] = frame
+    return roles
+
+
+def velocity_limits_of(robot, velocity_limits=True) -> np.ndarray:
+    """``v_max`` (n,) (rad/s, m/s; inf: none) of ``robot`` for ``velocity_limits``: True (the URDF's joint limits,
+    an entry of 0 or inf read as none; the floating base :data:`BASE_LINEAR_SPEED`, :data:`BASE_ANGULAR_SPEED`),
+    False (no limit), a number > 0 (that factor times True's), or an array (n,) of limits > 0."""
+    if velocity_limits is False or velocity_limits is None:
+        return np.full(robot.n, np.inf)
+    if velocity_limits is True or np.ndim(velocity_limits) == 0:
+        factor = 1.0
+        if velocity_limits is not True:
+            try:
+                factor = float(velocity_limits)
+            except (TypeError, ValueError):
+                factor = np.nan
+            if not (np.isfinite(factor) and factor > 0):
+                raise OptionError(f"velocity_limits must be True, False, a factor > 0 of the URDF's limits or an "
+                                  f"array ({robot.n},) of limits > 0 (rad/s, m/s); got {velocity_limits!r}")
+        model = robot.model
+        v = np.full(robot.n, np.inf)
+        for k, name in enumerate(robot.joint_names):
+            if model.existJointName(name):
+                joint = model.joints[model.getJointId(name)]
+                limit = float(model.velocityLimit[joint.idx_v])
+                if np.isfinite(limit) and limit > 0:
+                    v[k] = limit
+        if robot.floating_base:
+            v[:3], v[3:6] = BASE_LINEAR_SPEED, BASE_ANGULAR_SPEED
+        return v * factor
+    try:
+        v = np.asarray(velocity_limits, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (robot.n,) or not (v > 0).all() or np.isnan(v).any():
+        raise OptionError(f"velocity_limits must be True, False, a factor > 0 of the URDF's limits or an array "
+                          f"({robot.n},) of limits > 0 (rad/s, m/s); got {velocity_limits!r}")
+    return v
+
+
+def _choice(value, name: str, accepted: str):
+    raise OptionError(f"retarget: {name} must be {accepted}; got {value!r}")
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    """Rows of ``v`` (..., 3) normalised (a zero row stays zero)."""
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.divide(v, n, out=np.zeros_like(v), where=n > 1e-12)
+
+
+def _sole_height(robot, frame: str, q: np.ndarray) -> float:
+    """Height (m) of ``frame``'s origin over the lowest corner of the collision boxes moved by its joint, at q:
+    the sole's height under an ankle frame (0 when that joint carries no collision geometry)."""
+    joint = robot.model.frames[robot.frame_id(frame)].parentJoint
+    model = robot.collision_model
+    placements = robot.geometry_placements(model, q)
+    lowest = np.inf
+    for obj, placement in zip(model.geometryObjects, placements, strict=True):
+        if obj.parentJoint != joint:
+            continue
+        geometry = obj.geometry
+        geometry.computeLocalAABB()
+        lo, hi = np.asarray(geometry.aabb_local.min_), np.asarray(geometry.aabb_local.max_)
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        lowest = min(lowest, float((corners @ placement.rotation.T + placement.translation)[:, 2].min()))
+    z = float(robot.fk(q, frame).translation[2])
+    return z - lowest if np.isfinite(lowest) else 0.0
+
+
+class _Plan:
+    """Everything fixed over a clip: roles, scale, the source in the robot's world, contacts, floor, robot sizes."""
+
+    def __init__(self, robot, motion: Motion, mapping, scale, contacts, ground):
+        self.pairs = resolve_mapping(robot, motion, mapping)
+        self.roles = _roles(self.pairs)
+        if "pelvis" not in self.roles:
+            raise MappingError("retarget needs the root: map the robot's root frame to the motion's pelvis keypoint "
+                               f"(one of {sorted({s['pelvis'] for s in SKELETON_JOINTS.values()})})")
+        self.keypoint_of = dict(self.pairs)
+        q_neutral = np.zeros(robot.n)
+        self.neutral = {f: robot.fk(q_neutral, f) for f, _ in self.pairs}
+        src = motion.positions
+        self.src_index = {f: motion.index(k) for f, k in self.pairs}
+        self.limbs = {group: [(self.roles[a], self.roles[b]) for a, b in limbs
+                              if a in self.roles and b in self.roles]
+                      for group, limbs in LIMBS.items()}
+        #: limbs whose child no active joint moves relative to the parent (a head fixed on the torso)
+        #: (the child's direction in the parent's frame at neutral, the axis a Direction goal turns)
+        self.rigid = {(a, b): _unit(self.neutral[a].rotation.T
+                                    @ (self.neutral[b].translation - self.neutral[a].translation))
+                      for limbs in self.limbs.values() for a, b in limbs
+                      if not set(robot.moving_joints(b)) - set(robot.moving_joints(a))}
+        self.scale = self._scale(robot, motion, scale)
+        feet_keys = self._foot_keypoints(motion)
+        self.ground = self._ground(motion, ground, feet_keys)
+        origin = np.array([*src[0, self.src_index[self.roles["pelvis"]], :2],
+                           self.ground if self.ground is not None else ground_height(motion, feet_keys or None)])
+        self.origin = origin
+        self.points = origin + self.scale * (src - origin)  # (N, K, 3) the source in the robot's world, m
+        self.contacts = self._contacts(robot, motion, contacts, feet_keys)
+        self.sole = {f: _sole_height(robot, f, q_neutral) for f in self.contacts}
+        self.shift = self._vertical_shift()
+        self.points[..., 2] += self.shift
+        # the robot's own hip centre and left axis in its root frame at neutral
+        root = self.roles["pelvis"]
+        root_pose = self.neutral[root]
+        if "left_hip" in self.roles and "right_hip" in self.roles:
+            lh, rh = self.neutral[self.roles["left_hip"]].translation, self.neutral[self.roles["right_hip"]].translation
+            self.hip_offset = root_pose.rotation.T @ ((lh + rh) / 2 - root_pose.translation)
+            self.left_axis = _unit(root_pose.rotation.T @ (lh - rh))
+        else:
+            self.hip_offset, self.left_axis = np.zeros(3), None
+
+    def _scale(self, robot, motion: Motion, scale) -> float:
+        if isinstance(scale, str):
+            if scale != "auto":
+                _choice(scale, "scale", '"auto" or a number > 0')
+            legs = [(s + "_hip", s + "_knee", s + "_ankle") for s in ("left", "right")]
+            legs = [leg for leg in legs if all(j in self.roles for j in leg)]
+            if not legs:
+                raise MappingError('scale="auto" compares leg lengths: map the hip, knee and ankle keypoints of a '
+                                   "leg, or give scale= a number > 0")
+            robot_len, source_len = [], []
+            for leg in legs:
+                frames = [self.roles[j] for j in leg]
+                robot_len.append(sum(np.linalg.norm(self.neutral[b].translation - self.neutral[a].translation)
+                                     for a, b in zip(frames, frames[1:], strict=False)))
+                p = [motion.positions[:, self.src_index[f]] for f in frames]
+                source_len.append(float(np.median(np.linalg.norm(p[1] - p[0], axis=1)
+                                                  + np.linalg.norm(p[2] - p[1], axis=1))))
+            return float(np.mean(robot_len) / np.mean(source_len))
+        try:
+            value = float(scale)
+        except (TypeError, ValueError):
+            value = np.nan
+        if not (np.isfinite(value) and value > 0):
+            _choice(scale, "scale", '"auto" or a finite number > 0')
+        return value
+
+    def _foot_keypoints(self, motion: Motion) -> tuple[str, ...]:
+        """The motion's foot keypoints that the mapping follows (ankles), for the floor and contacts."""
+        mapped = {k for _, k in self.pairs}
+        for pair in DEFAULT_FEET:
+            if all(n in mapped for n in pair):
+                return pair
+        ankles = tuple(self.keypoint_of[self.roles[r]] for r in ("left_ankle", "right_ankle") if r in self.roles)
+        return ankles
+
+    def _ground(self, motion: Motion, ground, feet_keys) -> float | None:
+        if ground is None:
+            return None
+        if isinstance(ground, str):
+            if ground != "auto":
+                _choice(ground, "ground", '"auto", a height in m or None')
+            if not feet_keys:
+                raise MappingError('ground="auto" reads the feet: map the ankle keypoints, or give ground= a '
+                                   "height in m or None")
+            return ground_height(motion, feet_keys)
+        try:
+            value = float(ground)
+        except (TypeError, ValueError):
+            value = np.nan
+        if not np.isfinite(value):
+            _choice(ground, "ground", '"auto", a finite height in m or None')
+        return value
+
+    def _contacts(self, robot, motion: Motion, contacts, feet_keys) -> dict[str, np.ndarray]:
+        """``{robot foot frame: (N,) bool}``."""
+        if contacts is None:
+            return {}
+        if isinstance(contacts, str):
+            if contacts != "auto":
+                _choice(contacts, "contacts", '"auto", a dict {robot frame: (N,) bool} or None')
+            if not feet_keys:
+                return {}
+            by_key = detect_contacts(motion, feet_keys)
+            frame_of = {k: f for f, k in self.pairs}
+            return {frame_of[k]: v for k, v in by_key.items()}
+        if not isinstance(contacts, Mapping):
+            _choice(contacts, "contacts", '"auto", a dict {robot frame: (N,) bool} or None')
+        out = {}
+        frames = set(robot.frames) if hasattr(robot, "frames") else set()
+        for frame, flags in contacts.items():
+            if frames and frame not in frames:
+                raise MappingError(f"contacts entry {frame!r}: robot {robot.name!r} has no frame {frame!r}")
+            v = np.asarray(flags)
+            if v.shape != (motion.frames,) or v.dtype != bool:
+                raise OptionError(f"contacts[{frame!r}] must be a bool array of shape ({motion.frames},) (one flag "
+                                  f"per frame); got {v.dtype} {v.shape}")
+            out[frame] = v
+        return out
+
+    def _vertical_shift(self) -> float:
+        """Height (m) the scaled source is moved up so that a standing ankle keypoint sits at the robot's sole
+        height over the floor (a person's ankle joint stands ~8 cm up, a scaled one lower or higher than the
+        robot's ankle frame): without it the held feet and the limb directions would disagree by that much."""
+        if self.ground is None:
+            return 0.0
+        gaps = []
+        for frame, flags in self.contacts.items():
+            if frame in self.src_index and flags.any():
+                z = self.points[flags, self.src_index[frame], 2]
+                gaps.append(self.sole[frame] - float(np.median(z - self.ground)))
+        return float(np.mean(gaps)) if gaps else 0.0
+
+    # ------------------------------------------------------------------ per-frame targets
+    def src(self, frame: str, i: int) -> np.ndarray:
+        """The scaled source keypoint (3,) (m) robot ``frame`` follows at frame i."""
+        return self.points[i, self.src_index[frame]]
+
+    def pelvis_axes(self, i: int) -> np.ndarray | None:
+        """The source pelvis's axes (3, 3) at frame i (columns forward, left, up), or None without both hips."""
+        if "left_hip" not in self.roles or "right_hip" not in self.roles:
+            return None
+        left = _unit(self.src(self.roles["left_hip"], i) - self.src(self.roles["right_hip"], i))
+        up_hint = np.array([0.0, 0.0, 1.0])
+        if "torso" in self.roles:
+            centre = (self.src(self.roles["left_hip"], i) + self.src(self.roles["right_hip"], i)) / 2
+            up_hint = _unit(self.src(self.roles["torso"], i) - centre)
+        up = _unit(up_hint - (up_hint @ left) * left)
+        return np.column_stack([np.cross(left, up), left, up])
+
+    def root_target(self, i: int) -> np.ndarray:
+        """Where the root frame goes at frame i (m): the source hip centre less the robot's hip offset."""
+        axes = self.pelvis_axes(i)
+        if axes is None:
+            return self.src(self.roles["pelvis"], i)
+        centre = (self.src(self.roles["left_hip"], i) + self.src(self.roles["right_hip"], i)) / 2
+        # the robot's root axes ~ the source pelvis's, up to the robot's own facing (its left axis at neutral)
+        return centre - axes @ self._facing() @ self.hip_offset
+
+    def _facing(self) -> np.ndarray:
+        """Rotation about z taking the robot root's own axes to (forward, left, up) (iCub faces -x: a half turn)."""
+        if self.left_axis is None:
+            return np.eye(3)
+        a = np.arctan2(self.left_axis[1], self.left_axis[0]) - np.pi / 2
+        c, s = np.cos(a), np.sin(a)
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    def heading_yaw(self, i: int) -> float:
+        """Base yaw (rad) turning the robot's left axis onto the source's at frame i."""
+        axes = self.pelvis_axes(i)
+        if axes is None or self.left_axis is None:
+            return 0.0
+        return float(np.arctan2(axes[1, 1], axes[0, 1]) - np.arctan2(self.left_axis[1], self.left_axis[0]))
+
+    def limb_vector(self, a: str, b: str, i: int) -> np.ndarray:
+        """Target of frame b from frame a at frame i (m, world axes): the source direction, the robot's length."""
+        length = np.linalg.norm(self.neutral[b].translation - self.neutral[a].translation)
+        return _unit(self.src(b, i) - self.src(a, i)) * length
+
+
+def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray]) -> list:
+    goals = [Position(plan.roles["pelvis"], plan.root_target(i), WEIGHTS["root"], TOLERANCES["root"])]
+    axes = plan.pelvis_axes(i)
+    if axes is not None and plan.left_axis is not None:
+        goals.append(Direction(plan.roles["pelvis"], plan.left_axis, axes[:, 1], WEIGHTS["heading"],
+                               TOLERANCES["heading"]))
+    in_limbs = {plan.roles["pelvis"]}
+    for limbs in plan.limbs.values():
+        for a, b in limbs:
+            in_limbs.update((a, b))
+            vector = plan.limb_vector(a, b, i)
+            length = float(np.linalg.norm(vector))
+            # rows in m scale with the limb's length: weight 1 / length^2 makes every limb's residual an angle
+            # (rad, times LIMB_REFERENCE_LENGTH), so a short limb is steered as firmly as a long one
+            weight = WEIGHTS["limb"] * (LIMB_REFERENCE_LENGTH / max(length, 1e-3)) ** 2
+            if (a, b) in plan.rigid:  # b fixed on a (G1's head on its torso): frame a's axis towards b
+                goals.append(Direction(a, plan.rigid[(a, b)], vector, weight, TOLERANCES["limb"]))
+            else:
+                goals.append(RelativePosition(a, b, vector, "world", weight, TOLERANCES["limb"] * length))
+    for frame, flags in plan.contacts.items():
+        if flags[i] and frame in holds:
+            goals.append(Position(frame, holds[frame], WEIGHTS["contact"], TOLERANCES["contact"]))
+        elif plan.ground is not None:  # sole between the floor and 2 FLOOR_BAND above it; x, y free
+            xy = plan.src(frame, i)[:2] if frame in plan.src_index else np.zeros(2)
+            z = plan.ground + plan.sole[frame] + FLOOR_BAND
+            goals.append(Position(frame, [xy[0], xy[1], z], WEIGHTS["floor"], (np.inf, np.inf, FLOOR_BAND)))
+    for frame, _ in plan.pairs:
+        if frame not in in_limbs and frame not in plan.contacts:
+            goals.append(Position(frame, plan.src(frame, i), WEIGHTS["point"], TOLERANCES["point"]))
+    return goals
+
+
+def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray]) -> None:
+    """Touchdown at frame i: the foot's hold point is the scaled source ankle's x, y at that frame and z the floor
+    plus the sole (the scaled source height without a floor); lift-off drops it."""
+    for frame, flags in plan.contacts.items():
+        if not flags[i]:
+            holds.pop(frame, None)
+        elif frame not in holds:
+            p = plan.src(frame, i).copy() if frame in plan.src_index else None
+            if p is None:
+                continue
+            if plan.ground is not None:
+                p[2] = plan.ground + plan.sole[frame]
+            holds[frame] = p
+
+
+def _initial_q(robot, plan: _Plan) -> np.ndarray:
+    q = np.zeros(robot.n)
+    q[3] = plan.heading_yaw(0)
+    base = np.array(robot.fk(q, plan.roles["pelvis"]).translation)  # root frame at the base origin: offset 0
+    q[:3] = plan.root_target(0) - base
+    return q
+
+
+def _first_bounds(robot, plan: _Plan) -> tuple[np.ndarray, np.ndarray]:
+    lower, upper = robot.lower.copy(), robot.upper.copy()
+    root = plan.points[:, plan.src_index[plan.roles["pelvis"]]]
+    lower[:3] = root.min(axis=0) - BASE_BOX_SLACK
+    upper[:3] = root.max(axis=0) + BASE_BOX_SLACK
+    lower[3], upper[3] = -4 * np.pi, 4 * np.pi  # yaw unwrapped along the clip: no bound at +-pi to flip across
+    return lower, upper
+
+
+def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto", ground="auto",
+             self_collision: bool = True, velocity_limits=True, seed=0, timeout: float | None = None,
+             progress: bool = False) -> Clip:
+    """Retarget ``motion`` onto ``robot`` (a :class:`~evoik_pin.Robot` loaded with ``floating_base=True``).
+
+    Args:
+        robot: the humanoid; a fixed base raises :class:`~evoik_pin.errors.MappingError`.
+        motion: keypoints (N, K, 3) m, z up, at ``motion.fps``.
+        mapping: ``"cmu"`` or ``"smpl"`` (presets by ``robot.name``) or a dict ``{robot frame: keypoint}``; the
+            root frame must follow the pelvis keypoint (``Hips``/``pelvis``).
+        scale: ``"auto"`` (robot leg length over the source's) or a factor > 0.
+        contacts: ``"auto"`` (from the source ankles' height and speed, :func:`~evoik_pin.motion.detect_contacts`),
+            ``{robot frame: (N,) bool}`` or None (no foot held).
+        ground: ``"auto"`` (the floor under the source's feet), a height in m (source world), or None (no floor:
+            uneven terrain; contacts still hold the feet where they landed).
+        self_collision: check each frame on the collision meshes and solve the colliding ones again with a scene.
+        velocity_limits: True (URDF limits, base :data:`BASE_LINEAR_SPEED` m/s and :data:`BASE_ANGULAR_SPEED` rad/s),
+            False, a factor of True's, or an array (n,) rad/s, m/s.
+        seed: int; the same seed and inputs give the same clip.
+        timeout: each frame's solve budget in s (default :data:`FRAME_TIMEOUT`).
+        progress: print one line per 30 frames.
+
+    Returns:
+        A :class:`~evoik_pin.motion.Clip`; ``clip.report`` holds: ``success_rate`` (frames meeting every goal),
+        ``max_goal_error_m`` (per family: root, limb, contact), ``collision_frames``, ``joint_limit_frames``,
+        ``velocity_limit_frames`` (frame indices), ``foot_skating_mm`` (mean and max per frame of a held foot),
+        ``ground_penetration_mm`` (max sole depth below the floor), ``limb_angle_deg`` (per group legs, trunk,
+        arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second), ``scale``.
+    """
+    from .. import api  # the public solve; imported here: evoik_pin's top level imports this module
+    from ..scene import Scene
+
+    if not isinstance(motion, Motion):
+        raise OptionError(f"retarget takes a evoik_pin.motion.Motion (load_bvh, load_clip, Motion(...)); got "
+                          f"{type(motion).__name__}")
+    if not isinstance(self_collision, bool):
+        _choice(self_collision, "self_collision", "True or False")
+    frame_timeout = FRAME_TIMEOUT if timeout is None else float(timeout)
+    if not (np.isfinite(frame_timeout) and frame_timeout > 0):
+        _choice(timeout, "timeout", "None or a number of seconds > 0")
+    plan = _Plan(robot, motion, mapping, scale, contacts, ground)
+    v_max = velocity_limits_of(robot, velocity_limits)
+    dt = 1.0 / motion.fps
+    scene = Scene(robot, self_collision=True) if self_collision else None
+    rng = np.random.default_rng(seed)
+    first_lower, first_upper = _first_bounds(robot, plan)
+    n_frames = motion.frames
+    Q = np.zeros((n_frames, robot.n))
+    success = np.zeros(n_frames, dtype=bool)
+    errors: list[list] = []
+    collided = []
+    holds: dict[str, np.ndarray] = {}
+    q_prev = _initial_q(robot, plan)
+    start = time.perf_counter()
+    for i in range(n_frames):
+        _update_holds(plan, i, holds)
+        goals = _frame_goals(plan, i, holds)
+        if i == 0:
+            lower, upper, budget = first_lower, first_upper, max(FIRST_FRAME_TIMEOUT, frame_timeout)
+        else:
+            lower = np.maximum(q_prev - v_max * dt, first_lower)
+            upper = np.minimum(q_prev + v_max * dt, first_upper)
+            budget = frame_timeout
+        q0 = np.clip(q_prev, lower, upper)
+        result = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
+                           timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
+        if scene is not None and scene.in_collision(result.q):
+            again = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
+                              timeout=COLLISION_RETRY_FACTOR * budget, scene=scene, **COLLISION_RETRY_OPTIONS)
+            if not scene.in_collision(again.q):
+                result = again
+            else:
+                collided.append(i)
+        q_prev = np.clip(result.q, lower, upper)
+        Q[i], success[i] = q_prev, result.success
+        errors.append([(type(g).__name__, e[0] if e[0] is not None else e[1])  # m, or rad for a Direction
+                       for g, e in zip(goals, result.goal_errors or [], strict=False)])
+        if progress and (i % 30 == 0 or i == n_frames - 1):
+            print(f"retarget {robot.name}: frame {i + 1}/{n_frames}, success {success[:i + 1].mean():.2f}")
+    elapsed = time.perf_counter() - start
+    from .retarget_report import clip_report  # the quality figures: one concept per file
+
+    report = clip_report(robot, plan, Q, success, errors, v_max, dt, scene, collided, first_lower, first_upper)
+    report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
+    report["scale"] = plan.scale
+    configurations = np.array([robot.full_configuration(q) for q in Q])
+    fm = robot.full_model
+    joint_names = tuple(name for j, name in enumerate(fm.names) if j >= 2 for _ in range(fm.joints[j].nq))
+    return Clip(q=Q, configurations=configurations, fps=motion.fps, robot_name=robot.name, joint_names=joint_names,
+                frames=tuple(f for f, _ in plan.pairs), report=report, keypoints=plan.points,
+                keypoint_names=tuple(motion.names))
