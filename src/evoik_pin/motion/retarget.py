@@ -30,8 +30,11 @@ The method (:func:`retarget`):
    base :data:`BASE_LINEAR_SPEED` m/s on x, y, z and :data:`BASE_ANGULAR_SPEED` rad/s on yaw, pitch, roll. A frame
    that cannot meet every goal gets the solver's best inside that box (``success=False`` recorded), never a jump.
 4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
-   SRDF-disabled pairs ignored); only a colliding frame is solved again with the scene (``scene=``), which costs
-   far more than the plain solve, and kept if it is collision-free (the report counts the frames left colliding).
+   SRDF-disabled pairs ignored, ~0.2-0.4 ms a check); a colliding answer steps back towards the previous,
+   collision-free frame (:mod:`.collision_step`: the joints moving one link of the colliding pair first), so it
+   stays in the velocity box and free. A scene passed to the solve would not do it: the solvers judge collisions
+   on answers meeting every goal, and a frame's goals usually conflict a little. The first frame, if it collides,
+   is solved again with ``scene=``.
 
 The first frame has no previous answer: it starts from the neutral pose with the base at its target and is
 solved within the robot's bounds (the base's translation box widened to the clip's extent), with a longer budget.
@@ -41,12 +44,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 
 from ..errors import MappingError, OptionError
 from ..goals import Direction, Position, RelativePosition
 from .clip import Clip
+from .collision_step import step_back_free
 from .contacts import DEFAULT_FEET, detect_contacts, ground_height
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
@@ -61,6 +66,12 @@ BASE_ANGULAR_SPEED = 2.0 * np.pi
 #: RelativePosition gets this angle times its length in m); a held foot's 1 mm keeps skating far below the 2 mm per
 #: frame a judge accepts.
 TOLERANCES = {"contact": 1e-3, "floor": 1e-3, "root": 0.01, "heading": 0.03, "limb": 0.035, "point": 0.02}
+#: The tolerances of a colliding frame's second solve, with the scene: a scene judges the answers that meet every
+#: goal, so the limbs and the root get room (0.25 rad, 5 cm) for the search to find a collision-free one; a held
+#: foot keeps its 1 mm.
+RELAXED_TOLERANCES = {**TOLERANCES, "root": 0.05, "heading": 0.25, "limb": 0.25, "point": 0.1}
+#: Clearance (m) between the two legs' knee and ankle links kept by the stance widening.
+STANCE_CLEARANCE = 0.01
 #: Length (m) at which a limb's weight is WEIGHTS["limb"]: a thigh's.
 LIMB_REFERENCE_LENGTH = 0.3
 #: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
@@ -74,9 +85,9 @@ FIRST_FRAME_TIMEOUT = 0.05
 FRAME_RESTARTS = 0
 FRAME_OPTIONS = {"table_size": 0, "max_restarts": FRAME_RESTARTS}
 FIRST_FRAME_OPTIONS = {"table_size": 0}
-#: A frame found colliding is solved again with the scene: DE populations inside the velocity box (the LM from q0
-#: alone stays in the colliding basin) for this many times the frame's budget.
-COLLISION_RETRY_FACTOR = 4
+#: A colliding frame's second solve (relaxed tolerances, with the scene): DE populations inside the velocity box
+#: (LM from q0 alone stays in the colliding basin) for this many times the frame's budget.
+COLLISION_RETRY_FACTOR = 1
 COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": None}
 #: Half-height (m) of the above-floor band of a swing foot: its sole anywhere from the floor to twice this above.
 FLOOR_BAND = 2.0
@@ -156,13 +167,32 @@ def _sole_height(robot, frame: str, q: np.ndarray) -> float:
     for obj, placement in zip(model.geometryObjects, placements, strict=True):
         if obj.parentJoint != joint:
             continue
-        geometry = obj.geometry
-        geometry.computeLocalAABB()
-        lo, hi = np.asarray(geometry.aabb_local.min_), np.asarray(geometry.aabb_local.max_)
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        corners = _box_corners(obj.geometry)
         lowest = min(lowest, float((corners @ placement.rotation.T + placement.translation)[:, 2].min()))
     z = float(robot.fk(q, frame).translation[2])
     return z - lowest if np.isfinite(lowest) else 0.0
+
+
+def _half_width(robot, frame: str, axis: np.ndarray) -> float:
+    """Largest distance (m) along unit ``axis`` (world) from ``frame``'s origin to a corner of the collision boxes
+    its joint carries, at the neutral pose (0 without collision geometry)."""
+    q = np.zeros(robot.n)
+    joint = robot.model.frames[robot.frame_id(frame)].parentJoint
+    model = robot.collision_model
+    origin = robot.fk(q, frame).translation
+    widest = 0.0
+    for obj, placement in zip(model.geometryObjects, robot.geometry_placements(model, q), strict=True):
+        if obj.parentJoint == joint:
+            corners = _box_corners(obj.geometry) @ placement.rotation.T + placement.translation
+            widest = max(widest, float(np.abs((corners - origin) @ axis).max()))
+    return widest
+
+
+def _box_corners(geometry) -> np.ndarray:
+    """(8, 3) corners of a coal geometry's local axis-aligned bounding box (m, in its own frame)."""
+    geometry.computeLocalAABB()
+    lo, hi = np.asarray(geometry.aabb_local.min_), np.asarray(geometry.aabb_local.max_)
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
 
 
 class _Plan:
@@ -197,8 +227,14 @@ class _Plan:
         self.points = origin + self.scale * (src - origin)  # (N, K, 3) the source in the robot's world, m
         self.contacts = self._contacts(robot, motion, contacts, feet_keys)
         self.sole = {f: _sole_height(robot, f, q_neutral) for f in self.contacts}
+        #: bool (n,): the joints placing a foot frame (the floating base included), kept when a collision steps back
+        self.foot_joints = np.array([any(name in robot.moving_joints(f) for f in self.contacts)
+                                     for name in robot.joint_names])
         self.shift = self._vertical_shift()
         self.points[..., 2] += self.shift
+        #: (N, K, 3) the scaled source before the stance widening: what limb angles are measured against
+        self.source_points = self.points.copy()
+        self._widen_stance(robot)
         # the robot's own hip centre and left axis in its root frame at neutral
         root = self.roles["pelvis"]
         root_pose = self.neutral[root]
@@ -288,6 +324,35 @@ class _Plan:
             out[frame] = v
         return out
 
+    def _widen_stance(self, robot) -> None:
+        """Move the knee and ankle keypoints of the two legs apart, along the source hips' horizontal left-right
+        line, where they are closer than the robot's legs can be: the two links' lateral half-widths (their collision
+        boxes at neutral) plus :data:`STANCE_CLEARANCE`, at most their neutral distance, the largest over knees and
+        ankles (each side moves half the gap). A person walks with the feet almost on one line and crosses them when
+        dancing; a robot's legs are thicker and would collide."""
+        if not all(r in self.roles for r in ("left_hip", "right_hip")):
+            return
+        lh, rh = (self.points[:, self.src_index[self.roles[r]]] for r in ("left_hip", "right_hip"))
+        lateral = lh - rh
+        lateral[:, 2] = 0.0
+        lateral = _unit(lateral)  # (N, 3)
+        robot_left = (self.neutral[self.roles["left_hip"]].translation
+                      - self.neutral[self.roles["right_hip"]].translation)
+        robot_left = _unit(robot_left)
+        pairs = [(self.roles["left_" + j], self.roles["right_" + j]) for j in ("knee", "ankle")
+                 if "left_" + j in self.roles and "right_" + j in self.roles]
+        # one width for the whole leg (the widest link's need): a knee kept apart above ankles that are not would
+        # only tilt the shanks into each other
+        wanted = max((min(float((self.neutral[a].translation - self.neutral[b].translation) @ robot_left),
+                          _half_width(robot, a, robot_left) + _half_width(robot, b, robot_left) + STANCE_CLEARANCE)
+                      for a, b in pairs), default=0.0)
+        for left, right in pairs:
+            kl, kr = self.src_index[left], self.src_index[right]
+            gap = np.einsum("ij,ij->i", self.points[:, kl] - self.points[:, kr], lateral)
+            push = np.maximum(wanted - gap, 0.0)[:, None] / 2 * lateral
+            self.points[:, kl] += push
+            self.points[:, kr] -= push
+
     def _vertical_shift(self) -> float:
         """Height (m) the scaled source is moved up so that a standing ankle keypoint sits at the robot's sole
         height over the floor (a person's ankle joint stands ~8 cm up, a scaled one lower or higher than the
@@ -348,12 +413,13 @@ class _Plan:
         return _unit(self.src(b, i) - self.src(a, i)) * length
 
 
-def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray]) -> list:
-    goals = [Position(plan.roles["pelvis"], plan.root_target(i), WEIGHTS["root"], TOLERANCES["root"])]
+def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: dict = TOLERANCES) -> list:
+    """Frame i's goal list (see the module docstring), each goal met within its family's ``tolerances``."""
+    goals = [Position(plan.roles["pelvis"], plan.root_target(i), WEIGHTS["root"], tolerances["root"])]
     axes = plan.pelvis_axes(i)
     if axes is not None and plan.left_axis is not None:
         goals.append(Direction(plan.roles["pelvis"], plan.left_axis, axes[:, 1], WEIGHTS["heading"],
-                               TOLERANCES["heading"]))
+                               tolerances["heading"]))
     in_limbs = {plan.roles["pelvis"]}
     for limbs in plan.limbs.values():
         for a, b in limbs:
@@ -364,19 +430,19 @@ def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray]) -> list:
             # (rad, times LIMB_REFERENCE_LENGTH), so a short limb is steered as firmly as a long one
             weight = WEIGHTS["limb"] * (LIMB_REFERENCE_LENGTH / max(length, 1e-3)) ** 2
             if (a, b) in plan.rigid:  # b fixed on a (G1's head on its torso): frame a's axis towards b
-                goals.append(Direction(a, plan.rigid[(a, b)], vector, weight, TOLERANCES["limb"]))
+                goals.append(Direction(a, plan.rigid[(a, b)], vector, weight, tolerances["limb"]))
             else:
-                goals.append(RelativePosition(a, b, vector, "world", weight, TOLERANCES["limb"] * length))
+                goals.append(RelativePosition(a, b, vector, "world", weight, tolerances["limb"] * length))
     for frame, flags in plan.contacts.items():
         if flags[i] and frame in holds:
-            goals.append(Position(frame, holds[frame], WEIGHTS["contact"], TOLERANCES["contact"]))
+            goals.append(Position(frame, holds[frame], WEIGHTS["contact"], tolerances["contact"]))
         elif plan.ground is not None:  # sole between the floor and 2 FLOOR_BAND above it; x, y free
             xy = plan.src(frame, i)[:2] if frame in plan.src_index else np.zeros(2)
             z = plan.ground + plan.sole[frame] + FLOOR_BAND
             goals.append(Position(frame, [xy[0], xy[1], z], WEIGHTS["floor"], (np.inf, np.inf, FLOOR_BAND)))
     for frame, _ in plan.pairs:
         if frame not in in_limbs and frame not in plan.contacts:
-            goals.append(Position(frame, plan.src(frame, i), WEIGHTS["point"], TOLERANCES["point"]))
+            goals.append(Position(frame, plan.src(frame, i), WEIGHTS["point"], tolerances["point"]))
     return goals
 
 
@@ -427,7 +493,8 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
             ``{robot frame: (N,) bool}`` or None (no foot held).
         ground: ``"auto"`` (the floor under the source's feet), a height in m (source world), or None (no floor:
             uneven terrain; contacts still hold the feet where they landed).
-        self_collision: check each frame on the collision meshes and solve the colliding ones again with a scene.
+        self_collision: keep every frame free of self-collision (a colliding answer steps back towards the
+            previous frame); False: collisions are only counted in the report.
         velocity_limits: True (URDF limits, base :data:`BASE_LINEAR_SPEED` m/s and :data:`BASE_ANGULAR_SPEED` rad/s),
             False, a factor of True's, or an array (n,) rad/s, m/s.
         seed: int; the same seed and inputs give the same clip.
@@ -455,14 +522,14 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     plan = _Plan(robot, motion, mapping, scale, contacts, ground)
     v_max = velocity_limits_of(robot, velocity_limits)
     dt = 1.0 / motion.fps
-    scene = Scene(robot, self_collision=True) if self_collision else None
+    scene = Scene(robot, self_collision=True)  # the report counts collisions either way
     rng = np.random.default_rng(seed)
     first_lower, first_upper = _first_bounds(robot, plan)
     n_frames = motion.frames
     Q = np.zeros((n_frames, robot.n))
     success = np.zeros(n_frames, dtype=bool)
     errors: list[list] = []
-    collided = []
+    stepped_back = relaxed = 0
     holds: dict[str, np.ndarray] = {}
     q_prev = _initial_q(robot, plan)
     start = time.perf_counter()
@@ -478,14 +545,21 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         q0 = np.clip(q_prev, lower, upper)
         result = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
                            timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
-        if scene is not None and scene.in_collision(result.q):
-            again = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
-                              timeout=COLLISION_RETRY_FACTOR * budget, scene=scene, **COLLISION_RETRY_OPTIONS)
-            if not scene.in_collision(again.q):
-                result = again
+        q_new = np.clip(result.q, lower, upper)
+        if self_collision and scene.in_collision(q_new):
+            again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
+                              q0=q0, bounds=(lower, upper), timeout=COLLISION_RETRY_FACTOR * budget, scene=scene,
+                              **COLLISION_RETRY_OPTIONS)
+            free = again.q if not scene.in_collision(again.q) else None
+            if free is None and i > 0:
+                free = step_back_free(robot, scene, q_prev, q_new, plan.foot_joints)
+                stepped_back += free is not None
             else:
-                collided.append(i)
-        q_prev = np.clip(result.q, lower, upper)
+                relaxed += free is not None
+            if free is not None:
+                q_new = np.clip(free, lower, upper)
+                result = replace(result, success=False)
+        q_prev = q_new
         Q[i], success[i] = q_prev, result.success
         errors.append([(type(g).__name__, e[0] if e[0] is not None else e[1])  # m, or rad for a Direction
                        for g, e in zip(goals, result.goal_errors or [], strict=False)])
@@ -494,7 +568,8 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     elapsed = time.perf_counter() - start
     from .retarget_report import clip_report  # the quality figures: one concept per file
 
-    report = clip_report(robot, plan, Q, success, errors, v_max, dt, scene, collided, first_lower, first_upper)
+    report = clip_report(robot, plan, Q, success, errors, v_max, dt, scene, first_lower, first_upper)
+    report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back}
     report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
     report["scale"] = plan.scale
     configurations = np.array([robot.full_configuration(q) for q in Q])

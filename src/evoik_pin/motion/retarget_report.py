@@ -19,7 +19,7 @@ def _angle_deg(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 def clip_report(robot, plan, Q: np.ndarray, success: np.ndarray, errors: list, v_max: np.ndarray, dt: float,
-                scene, collided: list[int], lower: np.ndarray, upper: np.ndarray) -> dict:
+                scene, lower: np.ndarray, upper: np.ndarray) -> dict:
     """The figures listed in :func:`evoik_pin.motion.retarget.retarget`'s docstring, for joint rows ``Q`` (N, n).
 
     ``errors``: per frame, ``[(goal kind name, position error m), ...]``; ``lower``/``upper``: the bounds the
@@ -50,7 +50,7 @@ def clip_report(robot, plan, Q: np.ndarray, success: np.ndarray, errors: list, v
         if not limbs:
             continue
         a_robot = np.stack([P[:, at[b]] - P[:, at[a]] for a, b in limbs], axis=1)
-        a_source = np.stack([plan.points[:, plan.src_index[b]] - plan.points[:, plan.src_index[a]]
+        a_source = np.stack([plan.source_points[:, plan.src_index[b]] - plan.source_points[:, plan.src_index[a]]
                              for a, b in limbs], axis=1)
         ang = _angle_deg(a_robot, a_source)
         angles[group] = {"mean": float(ang.mean()), "max": float(ang.max())}
@@ -64,7 +64,7 @@ def clip_report(robot, plan, Q: np.ndarray, success: np.ndarray, errors: list, v
         "success_rate": float(success.mean()),
         "failed_frames": np.flatnonzero(~success).tolist(),
         "max_goal_error_m": worst,
-        "collision_frames": [int(i) for i in collided] if scene is not None else None,
+        "collision_frames": [i for i, q in enumerate(Q) if scene.in_collision(q)],
         "joint_limit_frames": np.flatnonzero(outside.any(axis=1)).tolist(),
         "velocity_limit_frames": (np.flatnonzero(too_fast) + 1).tolist(),
         "foot_skating_mm": {"mean": float(np.mean(skating)) if skating else 0.0,
