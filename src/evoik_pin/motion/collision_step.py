@@ -53,9 +53,9 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     """A collision-free configuration between collision-free ``q_prev`` and colliding ``q`` (n,), as near ``q`` as
     bisection finds: the joints moving only one link of the first colliding pair step back towards ``q_prev`` (the
     side that keeps more of the step; the checks cover every pair), else the joints moving only either link of
-    any colliding pair, else the whole configuration. ``keep`` (bool (n,)): joints that step back only in the
-    last resort (those placing a held foot: an arm gives way before a stance leg). None when ``q_prev`` itself
-    collides."""
+    any colliding pair, else the whole configuration. ``keep`` (bool (n,)): joints that do not step back (those
+    placing a held foot: an arm gives way before a stance leg); when nothing else frees the pair, the answer is
+    ``q_prev`` itself (interpolating a leg's joints would slide its foot). None when ``q_prev`` itself collides."""
     movable = np.ones(robot.n, dtype=bool) if keep is None else ~np.asarray(keep, dtype=bool)
     if scene.in_collision(q_prev):
         return None
@@ -81,4 +81,6 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
         t, candidate = _farthest_free(scene, q_prev, q, either)
         if t >= 0:
             return candidate
+    if keep is not None and np.any(keep):  # stepping the joints of a held foot back would slide it: no step
+        return np.array(q_prev, dtype=float)
     return _farthest_free(scene, q_prev, q, np.ones(robot.n, dtype=bool))[1]
