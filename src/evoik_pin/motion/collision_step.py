@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BISECTION_STEPS", "step_back_free"]
+__all__ = ["BISECTION_STEPS", "free_nearby", "step_back_free"]
 
 #: Bisection steps on the segment (the last free point is within 2^-8 of the segment's length of the contact).
 BISECTION_STEPS = 8
@@ -84,3 +84,30 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     if keep is not None and np.any(keep):  # stepping the joints of a held foot back would slide it: no step
         return np.array(q_prev, dtype=float)
     return _farthest_free(scene, q_prev, q, np.ones(robot.n, dtype=bool))[1]
+
+
+#: Random draws of :func:`free_nearby` per spread, and its spreads (rad, m) around the colliding configuration.
+NEARBY_DRAWS = 16
+NEARBY_SPREADS = (0.05, 0.1, 0.2, 0.4, 0.8)
+
+
+def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator,
+                keep: np.ndarray | None = None) -> np.ndarray | None:
+    """A collision-free configuration near colliding ``q`` (n,), inside [lower, upper], for :func:`step_back_free`
+    to step from when no free previous frame exists (a clip's first frame): the joints moving only one link of a
+    colliding pair (less ``keep``) drawn around ``q`` with a widening normal spread, the first free draw kept.
+    None when no draw is free."""
+    pairs = scene.colliding_pairs(q)
+    movable = np.zeros(robot.n, dtype=bool)
+    for a, b in pairs:
+        movable |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
+    if keep is not None:
+        movable &= ~np.asarray(keep, dtype=bool)
+    if not movable.any():
+        return None
+    for spread in NEARBY_SPREADS:
+        for _ in range(NEARBY_DRAWS):
+            candidate = np.clip(np.where(movable, q + rng.normal(0.0, spread, robot.n), q), lower, upper)
+            if not scene.in_collision(candidate):
+                return candidate
+    return None

@@ -51,7 +51,7 @@ import numpy as np
 from ..errors import MappingError, OptionError
 from ..goals import Direction, Position, RelativePosition
 from .clip import Clip
-from .collision_step import step_back_free
+from .collision_step import free_nearby, step_back_free
 from .contacts import DEFAULT_FEET, detect_contacts, ground_height
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
@@ -446,19 +446,36 @@ def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: 
     return goals
 
 
-def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray]) -> None:
-    """Touchdown at frame i: the foot's hold point is the scaled source ankle's x, y at that frame and z the floor
-    plus the sole (the scaled source height without a floor); lift-off drops it."""
+def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray], robot, q_prev) -> list[str]:
+    """Touchdown at frame i sets a foot's hold point: x, y where the robot's foot is at the previous frame (the
+    scaled source ankle's at frame 0), z the floor plus the sole (without a floor: that z as well); lift-off drops
+    it. Returns the feet that touched down (their holds are re-anchored on the answer, :func:`_anchor_holds`)."""
+    touched = []
     for frame, flags in plan.contacts.items():
         if not flags[i]:
             holds.pop(frame, None)
         elif frame not in holds:
-            p = plan.src(frame, i).copy() if frame in plan.src_index else None
-            if p is None:
+            if i > 0:
+                p = np.array(robot.fk(q_prev, frame).translation)
+            elif frame in plan.src_index:
+                p = plan.src(frame, i).copy()
+            else:
                 continue
             if plan.ground is not None:
                 p[2] = plan.ground + plan.sole[frame]
             holds[frame] = p
+            touched.append(frame)
+    return touched
+
+
+def _anchor_holds(plan: _Plan, touched: list[str], holds: dict[str, np.ndarray], robot, q) -> None:
+    """The feet that touched down at this frame are held where the answer ``q`` put them (x, y; z on the floor):
+    a touchdown the velocity box did not let the foot finish would otherwise slide it over the next frames."""
+    for frame in touched:
+        p = np.array(robot.fk(q, frame).translation)
+        if plan.ground is not None:
+            p[2] = plan.ground + plan.sole[frame]
+        holds[frame] = p
 
 
 def _initial_q(robot, plan: _Plan) -> np.ndarray:
@@ -534,7 +551,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     q_prev = _initial_q(robot, plan)
     start = time.perf_counter()
     for i in range(n_frames):
-        _update_holds(plan, i, holds)
+        touched = _update_holds(plan, i, holds, robot, q_prev)
         goals = _frame_goals(plan, i, holds)
         if i == 0:
             lower, upper, budget = first_lower, first_upper, max(FIRST_FRAME_TIMEOUT, frame_timeout)
@@ -551,14 +568,18 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
                               q0=q0, bounds=(lower, upper), timeout=COLLISION_RETRY_FACTOR * budget, scene=scene,
                               **COLLISION_RETRY_OPTIONS)
             free = again.q if not scene.in_collision(again.q) else None
-            if free is None and i > 0:
-                free = step_back_free(robot, scene, q_prev, q_new, plan.foot_joints)
+            if free is None:
+                # frame 0 has no collision-free previous frame: a free configuration near the answer stands in
+                start_free = q_prev if i > 0 else free_nearby(robot, scene, q_new, lower, upper, rng, plan.foot_joints)
+                if start_free is not None:
+                    free = step_back_free(robot, scene, start_free, q_new, plan.foot_joints)
                 stepped_back += free is not None
             else:
-                relaxed += free is not None
+                relaxed += 1
             if free is not None:
                 q_new = np.clip(free, lower, upper)
                 result = replace(result, success=False)
+        _anchor_holds(plan, touched, holds, robot, q_new)
         q_prev = q_new
         Q[i], success[i] = q_prev, result.success
         errors.append([(type(g).__name__, e[0] if e[0] is not None else e[1])  # m, or rad for a Direction
