@@ -37,7 +37,7 @@ The method (:func:`retarget`):
    is solved again with ``scene=``.
 
 The first frame has no previous answer: it starts from the neutral pose with the base at its target and is
-solved within the robot's bounds (the base's translation box widened to the clip's extent), with a longer budget.
+solved within the robot's bounds (the base's translation box widened to the clip's extent), with DE restarts.
 """
 
 from __future__ import annotations
@@ -76,19 +76,19 @@ STANCE_CLEARANCE = 0.01
 LIMB_REFERENCE_LENGTH = 0.3
 #: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
 WEIGHTS = {"contact": 100.0, "floor": 100.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
-#: Budget (s) of each frame's solve and of the first frame's (global) solve.
+#: Budget (s) of each frame's solve (its LM run from q0 is made whatever the clock says: see FRAME_OPTIONS).
 FRAME_TIMEOUT = 0.005
-FIRST_FRAME_TIMEOUT = 0.05
 #: memetic's options per frame: the previous answer is the start (LM from q0); no seed table (a global search
 #: over the whole robot, ~60 ms of set-up per new goal list, for starts far outside the velocity box) and at most
 #: :data:`FRAME_RESTARTS` DE populations inside the box when LM from q0 does not meet every goal.
 FRAME_RESTARTS = 0
+#: DE populations of the first frame (no previous answer; LM from the neutral pose placed on the root first). Counts,
+#: not a time budget, so that a loaded machine gives the same clip.
+FIRST_FRAME_RESTARTS = 4
 FRAME_OPTIONS = {"table_size": 0, "max_restarts": FRAME_RESTARTS}
-FIRST_FRAME_OPTIONS = {"table_size": 0}
-#: A colliding frame's second solve (relaxed tolerances, with the scene): DE populations inside the velocity box
-#: (LM from q0 alone stays in the colliding basin) for this many times the frame's budget.
-COLLISION_RETRY_FACTOR = 1
-COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": None}
+FIRST_FRAME_OPTIONS = {"table_size": 0, "max_restarts": FIRST_FRAME_RESTARTS}
+#: A colliding frame's second solve (relaxed tolerances, with the scene): LM from q0, whose answer the scene judges.
+COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": 0}
 #: Half-height (m) of the above-floor band of a swing foot: its sole anywhere from the floor to twice this above.
 FLOOR_BAND = 2.0
 #: Slack (m) around the clip's extent for the floating base's translation bounds.
@@ -554,7 +554,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         touched = _update_holds(plan, i, holds, robot, q_prev)
         goals = _frame_goals(plan, i, holds)
         if i == 0:
-            lower, upper, budget = first_lower, first_upper, max(FIRST_FRAME_TIMEOUT, frame_timeout)
+            lower, upper, budget = first_lower, first_upper, None  # FIRST_FRAME_RESTARTS bound the work
         else:
             lower = np.maximum(q_prev - v_max * dt, first_lower)
             upper = np.minimum(q_prev + v_max * dt, first_upper)
@@ -565,7 +565,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         q_new = np.clip(result.q, lower, upper)
         if self_collision and scene.in_collision(q_new):
             again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
-                              q0=q0, bounds=(lower, upper), timeout=COLLISION_RETRY_FACTOR * budget, scene=scene,
+                              q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
                               **COLLISION_RETRY_OPTIONS)
             free = again.q if not scene.in_collision(again.q) else None
             if free is None:
