@@ -214,3 +214,21 @@ def test_cli_writes_the_clip(tmp_path, capsys):
 
 def test_clip_is_exported_from_the_package():
     assert ek.retarget is ek.motion.retarget and Clip.__module__ == "evoik_pin.motion.clip"
+
+
+def test_same_seed_same_clip(walk):
+    robot = ek.load_robot("g1", floating_base=True)
+    short = walk.slice(0, 6)
+    np.testing.assert_array_equal(ek.retarget(robot, short, seed=3).q, ek.retarget(robot, short, seed=3).q)
+
+
+def test_given_contacts_hold_a_foot_without_a_floor(walk):
+    """contacts={frame: flags} and ground=None: the flagged foot (the source's stance foot) does not slide."""
+    robot = ek.load_robot("g1", floating_base=True)
+    short = walk.slice(0, 8)
+    flags = detect_contacts(short)["RightFoot"]
+    assert flags.sum() >= 6
+    clip = ek.retarget(robot, short, contacts={"right_ankle_roll_link": flags}, ground=None, self_collision=False)
+    p = _frame_positions(robot, clip.q, "right_ankle_roll_link")[flags]
+    assert np.linalg.norm(p - p[0], axis=1).max() < 2e-3
+    assert clip.report["ground_penetration_mm"] == 0.0  # no floor: nothing to measure against
