@@ -7,6 +7,11 @@ The method (:func:`retarget`):
    over the source's (the same keypoints, median over frames, both legs averaged). The source is scaled about the
    ground point under its first frame's root (x, y of the pelvis keypoint, z of the floor), so the clip stays in
    the source's world: the robot faces where the source faces and moves where it moves (scaled), no global turn.
+   Two corrections for the robot's body: the whole source moves up or down so that a standing ankle keypoint sits
+   at the robot's sole height (:meth:`_Plan._vertical_shift`), and knees and ankles closer together than the
+   robot's leg links can be are moved apart along the hips' line (:meth:`_Plan._widen_stance`: people walk with
+   their feet almost on one line and cross them dancing). Limb angles in the report are measured against the
+   source before that widening.
 2. **Goals per frame** (targets from the scaled source):
 
    * the root frame (mapped to the pelvis keypoint): a :class:`~evoik_pin.goals.Position` at the scaled source hip
@@ -15,29 +20,38 @@ The method (:func:`retarget`):
      the source's (heading and roll from the source hips);
    * limb **directions**: a :class:`~evoik_pin.goals.RelativePosition` per limb (parent mapped frame -> child mapped
      frame, :data:`~evoik_pin.motion.mapping.LIMBS`), target the source limb's unit vector times the robot's own
-     limb length at neutral, in the world's axes: limbs follow the source's directions whatever the proportions;
+     limb length at neutral, in the world's axes, weighted by 1 / length^2 so that each limb's residual reads as an
+     angle: limbs follow the source's directions whatever the proportions. A child frame no joint moves relative to
+     its parent (G1's head on its torso) gets a Direction on the parent's axis towards it instead;
    * feet (the frames mapped to the ankle keypoints): while the source foot is in contact, a Position at the point
-     where it landed (x, y of the scaled source ankle at touchdown; z the floor plus the robot's sole height at
-     neutral: ankle frame over the lowest corner of its collision boxes), held for the whole stance; otherwise a
-     one-sided band (a Position with per-axis tolerance, x, y free) keeping the sole above the floor;
+     where it landed, held for the whole stance: x, y where the robot's foot was at touchdown (then where that
+     frame's answer put it), z the floor plus the robot's sole height at neutral (ankle frame over the lowest corner
+     of its collision boxes); otherwise a one-sided band (a Position with per-axis tolerance, x, y free) keeping
+     the sole above the floor;
    * any other mapped frame: a Position at its scaled keypoint.
 
    Each goal has a tolerance: what "met" means for that goal (:data:`TOLERANCES`); weights rank them when they
-   cannot all be met (a held foot first, then the root, then the limbs).
+   cannot all be met (a held foot first, then the root, then the limbs). No posture preference: the warm start
+   from the previous frame (LM moves as little as the goals need) plays its part, at no cost.
 3. **Warm start and velocity box**: each frame is solved from the previous answer (``q0``) within
    ``bounds = [q_prev - v_max dt, q_prev + v_max dt]`` clipped to the robot's joint bounds, ``dt = 1 / fps``:
    no flip, no jump. ``v_max``: the URDF's joint velocity limits (an entry of 0 or none: no limit); the floating
    base :data:`BASE_LINEAR_SPEED` m/s on x, y, z and :data:`BASE_ANGULAR_SPEED` rad/s on yaw, pitch, roll. A frame
    that cannot meet every goal gets the solver's best inside that box (``success=False`` recorded), never a jump.
+   The per-frame solve is one LM run from q0 (no seed table, no DE restarts: :data:`FRAME_OPTIONS`), so the clip
+   does not depend on the machine's speed.
 4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
-   SRDF-disabled pairs ignored, ~0.2-0.4 ms a check); a colliding answer steps back towards the previous,
-   collision-free frame (:mod:`.collision_step`: the joints moving one link of the colliding pair first), so it
-   stays in the velocity box and free. A scene passed to the solve would not do it: the solvers judge collisions
-   on answers meeting every goal, and a frame's goals usually conflict a little. The first frame, if it collides,
-   is solved again with ``scene=``.
+   SRDF-disabled pairs ignored, ~0.2-0.4 ms a check). A colliding answer is solved again with relaxed tolerances
+   (:data:`RELAXED_TOLERANCES`) and ``scene=``, which judges the answers that meet every goal; if that answer
+   collides too, the frame steps back towards the previous, collision-free one (:mod:`.collision_step`: the joints
+   moving one link of the colliding pair, never those placing a foot), so it stays in the velocity box and free.
+   A scene passed to the first solve would not do it: a frame's goals usually conflict a little, its answer meets
+   them only within their weights, and the solvers judge collisions on answers meeting every goal.
 
 The first frame has no previous answer: it starts from the neutral pose with the base at its target and is
-solved within the robot's bounds (the base's translation box widened to the clip's extent), with DE restarts.
+solved within the robot's bounds (the base's translation box widened to the clip's extent), with
+:data:`FIRST_FRAME_RESTARTS` DE restarts; if it collides, it steps back from a collision-free configuration drawn
+near it (:func:`.collision_step.free_nearby`).
 """
 
 from __future__ import annotations
@@ -520,7 +534,9 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
 
     Returns:
         A :class:`~evoik_pin.motion.Clip`; ``clip.report`` holds: ``success_rate`` (frames meeting every goal),
-        ``max_goal_error_m`` (per family: root, limb, contact), ``collision_frames``, ``joint_limit_frames``,
+        ``max_goal_error_m`` (per goal kind, m or rad for a Direction, over the frames whose solver answer was kept:
+        not those a collision changed), ``collision_resolves`` (frames made collision-free by the relaxed solve or
+        by stepping back), ``collision_frames``, ``joint_limit_frames``,
         ``velocity_limit_frames`` (frame indices), ``foot_skating_mm`` (mean and max per frame of a held foot),
         ``ground_penetration_mm`` (max sole depth below the floor), ``limb_angle_deg`` (per group legs, trunk,
         arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second), ``scale``.
@@ -576,9 +592,9 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
                 stepped_back += free is not None
             else:
                 relaxed += 1
-            if free is not None:
+            if free is not None:  # the solver's goal errors were those of the colliding answer: not reported
                 q_new = np.clip(free, lower, upper)
-                result = replace(result, success=False)
+                result = replace(result, success=False, goal_errors=None)
         _anchor_holds(plan, touched, holds, robot, q_new)
         q_prev = q_new
         Q[i], success[i] = q_prev, result.success
