@@ -56,6 +56,7 @@ near it (:func:`.collision_step.free_nearby`).
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Mapping
 from dataclasses import replace
@@ -70,7 +71,8 @@ from .contacts import DEFAULT_FEET, detect_contacts, ground_height
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
 
-__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "velocity_limits_of"]
+__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "self_collision_scene",
+           "velocity_limits_of"]
 
 #: Floating base speed limits used with ``velocity_limits=True``: m/s on x, y, z (a sprinter's pelvis moves
 #: at ~10 m/s, a humanoid robot's at ~2) and rad/s on yaw, pitch, roll (a full turn in a second).
@@ -98,7 +100,7 @@ FRAME_TIMEOUT = 0.005
 FRAME_RESTARTS = 0
 #: DE populations of the first frame (no previous answer; LM from the neutral pose placed on the root first). Counts,
 #: not a time budget, so that a loaded machine gives the same clip.
-FIRST_FRAME_RESTARTS = 4
+FIRST_FRAME_RESTARTS = 1
 FRAME_OPTIONS = {"table_size": 0, "max_restarts": FRAME_RESTARTS}
 FIRST_FRAME_OPTIONS = {"table_size": 0, "max_restarts": FIRST_FRAME_RESTARTS}
 #: A colliding frame's second solve (relaxed tolerances, with the scene): LM from q0, whose answer the scene judges.
@@ -509,6 +511,15 @@ def _first_bounds(robot, plan: _Plan) -> tuple[np.ndarray, np.ndarray]:
     return lower, upper
 
 
+@functools.lru_cache(maxsize=4)
+def self_collision_scene(robot):
+    """``Scene(robot, self_collision=True)``, kept for the last few robots (building one takes 50-500 ms: the
+    collision meshes' convex hulls), read-only here. Not thread-safe (a Scene's Pinocchio data is shared)."""
+    from ..scene import Scene
+
+    return Scene(robot, self_collision=True)
+
+
 def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto", ground="auto",
              self_collision: bool = True, velocity_limits=True, seed=0, timeout: float | None = None,
              progress: bool = False) -> Clip:
@@ -542,7 +553,6 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second), ``scale``.
     """
     from .. import api  # the public solve; imported here: evoik_pin's top level imports this module
-    from ..scene import Scene
 
     if not isinstance(motion, Motion):
         raise OptionError(f"retarget takes a evoik_pin.motion.Motion (load_bvh, load_clip, Motion(...)); got "
@@ -555,7 +565,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     plan = _Plan(robot, motion, mapping, scale, contacts, ground)
     v_max = velocity_limits_of(robot, velocity_limits)
     dt = 1.0 / motion.fps
-    scene = Scene(robot, self_collision=True)  # the report counts collisions either way
+    scene = self_collision_scene(robot)  # the report counts collisions either way
     rng = np.random.default_rng(seed)
     first_lower, first_upper = _first_bounds(robot, plan)
     n_frames = motion.frames
