@@ -95,8 +95,8 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
                 keep: np.ndarray | None = None) -> np.ndarray | None:
     """A collision-free configuration near colliding ``q`` (n,), inside [lower, upper], for :func:`step_back_free`
     to step from when no free previous frame exists (a clip's first frame): the joints moving only one link of a
-    colliding pair (less ``keep``) drawn around ``q`` with a widening normal spread, the first free draw kept.
-    None when no draw is free."""
+    colliding pair (less ``keep``) drawn around ``q`` with a widening normal spread (:data:`NEARBY_DRAWS` a spread),
+    the free draw nearest ``q`` at the first spread that has one. None when no draw is free."""
     pairs = scene.colliding_pairs(q)
     movable = np.zeros(robot.n, dtype=bool)
     for a, b in pairs:
@@ -106,8 +106,8 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
     if not movable.any():
         return None
     for spread in NEARBY_SPREADS:
-        for _ in range(NEARBY_DRAWS):
-            candidate = np.clip(np.where(movable, q + rng.normal(0.0, spread, robot.n), q), lower, upper)
-            if not scene.in_collision(candidate):
-                return candidate
+        draws = np.clip(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q), lower, upper)
+        free = [d for d in draws if not scene.in_collision(d)]
+        if free:
+            return min(free, key=lambda d: float(np.linalg.norm(d - q)))
     return None

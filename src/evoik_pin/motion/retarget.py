@@ -91,7 +91,7 @@ STANCE_CLEARANCE = 0.01
 #: Length (m) at which a limb's weight is WEIGHTS["limb"]: a thigh's.
 LIMB_REFERENCE_LENGTH = 0.3
 #: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
-WEIGHTS = {"contact": 100.0, "floor": 100.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
+WEIGHTS = {"contact": 300.0, "floor": 300.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
 #: Budget (s) of each frame's solve (its LM run from q0 is made whatever the clock says: see FRAME_OPTIONS).
 FRAME_TIMEOUT = 0.005
 #: memetic's options per frame: the previous answer is the start (LM from q0); no seed table (a global search
@@ -105,6 +105,9 @@ FRAME_OPTIONS = {"table_size": 0, "max_restarts": FRAME_RESTARTS}
 FIRST_FRAME_OPTIONS = {"table_size": 0, "max_restarts": FIRST_FRAME_RESTARTS}
 #: A colliding frame's second solve (relaxed tolerances, with the scene): LM from q0, whose answer the scene judges.
 COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": 0}
+#: The first frame's, with DE restarts (once a clip): a first frame left colliding is stepped back from a random
+#: free configuration, where the limb may then stay caught behind the body for many frames.
+FIRST_COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": 8}
 #: Half-height (m) of the above-floor band of a swing foot: its sole anywhere from the floor to twice this above.
 FLOOR_BAND = 2.0
 #: Slack (m) around the clip's extent for the floating base's translation bounds.
@@ -592,7 +595,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         if self_collision and scene.in_collision(q_new):
             again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
                               q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
-                              **COLLISION_RETRY_OPTIONS)
+                              **(FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS))
             free = again.q if not scene.in_collision(again.q) else None
             if free is None:
                 # frame 0 has no collision-free previous frame: a free configuration near the answer stands in
