@@ -424,7 +424,8 @@ class _Plan:
         axes = self.pelvis_axes(i)
         if axes is None or self.left_axis is None:
             return 0.0
-        return float(np.arctan2(axes[1, 1], axes[0, 1]) - np.arctan2(self.left_axis[1], self.left_axis[0]))
+        yaw = np.arctan2(axes[1, 1], axes[0, 1]) - np.arctan2(self.left_axis[1], self.left_axis[0])
+        return float(np.angle(np.exp(1j * yaw)))  # in (-pi, pi]
 
     def limb_vector(self, a: str, b: str, i: int) -> np.ndarray:
         """Target of frame b from frame a at frame i (m, world axes): the source direction, the robot's length."""
@@ -510,7 +511,10 @@ def _first_bounds(robot, plan: _Plan) -> tuple[np.ndarray, np.ndarray]:
     root = plan.points[:, plan.src_index[plan.roles["pelvis"]]]
     lower[:3] = root.min(axis=0) - BASE_BOX_SLACK
     upper[:3] = root.max(axis=0) + BASE_BOX_SLACK
-    lower[3], upper[3] = -4 * np.pi, 4 * np.pi  # yaw unwrapped along the clip: no bound at +-pi to flip across
+    yaw = plan.heading_yaw(0)
+    # yaw unwrapped along the clip, two turns either way (no bound at +-pi to flip across); a warm-started frame's
+    # velocity box keeps it near the previous one
+    lower[3], upper[3] = yaw - 4 * np.pi, yaw + 4 * np.pi
     return lower, upper
 
 
@@ -582,8 +586,9 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     for i in range(n_frames):
         touched = _update_holds(plan, i, holds, robot, q_prev)
         goals = _frame_goals(plan, i, holds)
-        if i == 0:
-            lower, upper, budget = first_lower, first_upper, None  # FIRST_FRAME_RESTARTS bound the work
+        if i == 0:  # FIRST_FRAME_RESTARTS bound the work; the yaw within half a turn of the source's heading
+            lower, upper, budget = first_lower.copy(), first_upper.copy(), None
+            lower[3], upper[3] = q_prev[3] - np.pi, q_prev[3] + np.pi
         else:
             lower = np.maximum(q_prev - v_max * dt, first_lower)
             upper = np.minimum(q_prev + v_max * dt, first_upper)
