@@ -31,7 +31,9 @@ The method (:func:`retarget`):
    * any other mapped frame: a Position at its scaled keypoint.
 
    Each goal has a tolerance: what "met" means for that goal (:data:`TOLERANCES`); weights rank them when they
-   cannot all be met (a held foot first, then the root, then the limbs). No posture preference: the warm start
+   cannot all be met (a held foot first, then the root, then the limbs); a frame whose held foot still ends more
+   than :data:`HOLD_SLIP` from its point is solved once more from that answer with the feet weighing
+   :data:`FIRM_CONTACT_WEIGHT`. No posture preference: the warm start
    from the previous frame (LM moves as little as the goals need) plays its part, at no cost.
 3. **Warm start and velocity box**: each frame is solved from the previous answer (``q0``) within
    ``bounds = [q_prev - v_max dt, q_prev + v_max dt]`` clipped to the robot's joint bounds, ``dt = 1 / fps``:
@@ -44,7 +46,10 @@ The method (:func:`retarget`):
    SRDF-disabled pairs ignored, ~0.2-0.4 ms a check). A colliding answer is solved again with relaxed tolerances
    (:data:`RELAXED_TOLERANCES`) and ``scene=``, which judges the answers that meet every goal; if that answer
    collides too, the frame steps back towards the previous, collision-free one (:mod:`.collision_step`: the joints
-   moving one link of the colliding pair, never those placing a foot), so it stays in the velocity box and free.
+   moving one link of the colliding pair, never those placing a foot), so it stays in the velocity box and free;
+   when only the whole previous frame is free (a leg moved into where an arm was), it steps back from a
+   collision-free configuration drawn near the answer inside the box instead (:func:`.collision_step.free_nearby`),
+   so the robot does not stand still.
    A scene passed to the first solve would not do it: a frame's goals usually conflict a little, its answer meets
    them only within their weights, and the solvers judge collisions on answers meeting every goal.
 
@@ -88,6 +93,10 @@ TOLERANCES = {"contact": 1e-3, "floor": 1e-3, "root": 0.01, "heading": 0.03, "li
 RELAXED_TOLERANCES = {**TOLERANCES, "root": 0.05, "heading": 0.25, "limb": 0.25, "point": 0.1}
 #: Clearance (m) between the two legs' knee and ankle links kept by the stance widening.
 STANCE_CLEARANCE = 0.01
+#: A held foot farther than this (m) from its hold point gets its frame solved again with the feet weighing
+#: FIRM_CONTACT_WEIGHT (the goal's tolerance is 1 mm; a judge accepts 2 mm of skating per frame).
+HOLD_SLIP = 1.5e-3
+FIRM_CONTACT_WEIGHT = 3e4
 #: Length (m) at which a limb's weight is WEIGHTS["limb"]: a thigh's.
 LIMB_REFERENCE_LENGTH = 0.3
 #: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
@@ -433,8 +442,10 @@ class _Plan:
         return _unit(self.src(b, i) - self.src(a, i)) * length
 
 
-def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: dict = TOLERANCES) -> list:
-    """Frame i's goal list (see the module docstring), each goal met within its family's ``tolerances``."""
+def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: dict = TOLERANCES,
+                 contact_weight: float = WEIGHTS["contact"]) -> list:
+    """Frame i's goal list (see the module docstring), each goal met within its family's ``tolerances``; a held
+    foot weighs ``contact_weight``."""
     goals = [Position(plan.roles["pelvis"], plan.root_target(i), WEIGHTS["root"], tolerances["root"])]
     axes = plan.pelvis_axes(i)
     if axes is not None and plan.left_axis is not None:
@@ -455,7 +466,7 @@ def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: 
                 goals.append(RelativePosition(a, b, vector, "world", weight, tolerances["limb"] * length))
     for frame, flags in plan.contacts.items():
         if flags[i] and frame in holds:
-            goals.append(Position(frame, holds[frame], WEIGHTS["contact"], tolerances["contact"]))
+            goals.append(Position(frame, holds[frame], contact_weight, tolerances["contact"]))
         elif plan.ground is not None:  # sole between the floor and 2 FLOOR_BAND above it; x, y free
             xy = plan.src(frame, i)[:2] if frame in plan.src_index else np.zeros(2)
             z = plan.ground + plan.sole[frame] + FLOOR_BAND
@@ -486,6 +497,12 @@ def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray], robot, q_pr
             holds[frame] = p
             touched.append(frame)
     return touched
+
+
+def _hold_slip(robot, plan: _Plan, i: int, holds: dict[str, np.ndarray], q) -> float:
+    """Largest distance (m) of a held foot (in contact at frame i) from its hold point at ``q``; 0 without one."""
+    return max((float(np.linalg.norm(robot.fk(q, frame).translation - holds[frame]))
+                for frame, flags in plan.contacts.items() if flags[i] and frame in holds), default=0.0)
 
 
 def _anchor_holds(plan: _Plan, touched: list[str], holds: dict[str, np.ndarray], robot, q) -> None:
@@ -554,7 +571,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         A :class:`~evoik_pin.motion.Clip`; ``clip.report`` holds: ``success_rate`` (frames meeting every goal),
         ``max_goal_error_m`` (per goal kind, m or rad for a Direction, over the frames whose solver answer was kept:
         not those a collision changed), ``collision_resolves`` (frames made collision-free by the relaxed solve or
-        by stepping back), ``collision_frames``, ``joint_limit_frames``,
+        by stepping back; ``drawn``: of those, stepped back from a drawn configuration), ``firm_contact_frames``, ``collision_frames``, ``joint_limit_frames``,
         ``velocity_limit_frames`` (frame indices), ``foot_skating_mm`` (mean and max per frame of a held foot),
         ``ground_penetration_mm`` (max sole depth below the floor), ``limb_angle_deg`` (per group legs, trunk,
         arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second), ``scale``.
@@ -579,7 +596,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     Q = np.zeros((n_frames, robot.n))
     success = np.zeros(n_frames, dtype=bool)
     errors: list[list] = []
-    stepped_back = relaxed = 0
+    stepped_back = relaxed = firmed = drawn = 0
     holds: dict[str, np.ndarray] = {}
     q_prev = _initial_q(robot, plan)
     start = time.perf_counter()
@@ -597,16 +614,31 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         result = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
                            timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
         q_new = np.clip(result.q, lower, upper)
+        if _hold_slip(robot, plan, i, holds, q_new) > HOLD_SLIP:
+            # the other goals pulled a held foot off its point (a touchdown while the source foot still moves):
+            # once more from that answer with the feet weighing far more, kept if the feet end nearer their holds
+            firm = api.solve(robot, _frame_goals(plan, i, holds, contact_weight=FIRM_CONTACT_WEIGHT),
+                             seed=int(rng.integers(2**31)), q0=q_new, bounds=(lower, upper), timeout=budget,
+                             **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
+            q_firm = np.clip(firm.q, lower, upper)
+            if _hold_slip(robot, plan, i, holds, q_firm) < _hold_slip(robot, plan, i, holds, q_new):
+                result, q_new, firmed = firm, q_firm, firmed + 1
         if self_collision and scene.in_collision(q_new):
             again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
                               q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
                               **(FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS))
-            free = again.q if not scene.in_collision(again.q) else None
+            free = again.q if again.success and not scene.in_collision(again.q) else None
             if free is None:
-                # frame 0 has no collision-free previous frame: a free configuration near the answer stands in
-                start_free = q_prev if i > 0 else free_nearby(robot, scene, q_new, lower, upper, rng, plan.foot_joints)
-                if start_free is not None:
-                    free = step_back_free(robot, scene, start_free, q_new, plan.foot_joints)
+                if i > 0:
+                    free = step_back_free(robot, scene, q_prev, q_new, plan.foot_joints)
+                if free is None or np.array_equal(free, q_prev):
+                    # no free previous frame (frame 0), or only the whole previous frame is free (the legs moved
+                    # into where the arm was): step back from a free configuration drawn near the answer, inside
+                    # the box, with the feet's joints where the answer put them
+                    near = free_nearby(robot, scene, q_new, lower, upper, rng, plan.foot_joints)
+                    if near is not None:
+                        free = step_back_free(robot, scene, near, q_new, plan.foot_joints)
+                        drawn += 1
                 stepped_back += free is not None
             else:
                 relaxed += 1
@@ -624,7 +656,8 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     from .retarget_report import clip_report  # the quality figures: one concept per file
 
     report = clip_report(robot, plan, Q, success, errors, v_max, dt, scene, first_lower, first_upper)
-    report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back}
+    report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back, "drawn": drawn}
+    report["firm_contact_frames"] = firmed
     report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
     report["scale"] = plan.scale
     configurations = np.array([robot.full_configuration(q) for q in Q])
