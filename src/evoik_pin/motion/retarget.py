@@ -571,8 +571,9 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         A :class:`~evoik_pin.motion.Clip`; ``clip.report`` holds: ``success_rate`` (frames meeting every goal),
         ``max_goal_error_m`` (per goal kind, m or rad for a Direction, over the frames whose solver answer was kept:
         not those a collision changed), ``collision_resolves`` (frames made collision-free by the relaxed solve or
-        by stepping back; ``drawn``: of those, stepped back from a drawn configuration), ``firm_contact_frames``, ``collision_frames``, ``joint_limit_frames``,
-        ``velocity_limit_frames`` (frame indices), ``foot_skating_mm`` (mean and max per frame of a held foot),
+        by stepping back; ``drawn``: of those, stepped back from a drawn configuration), ``firm_contact_frames``
+        (frames re-solved with firm feet), ``collision_frames``, ``joint_limit_frames``, ``velocity_limit_frames``
+        (frame indices), ``foot_skating_mm`` (mean and max per frame of a held foot),
         ``ground_penetration_mm`` (max sole depth below the floor), ``limb_angle_deg`` (per group legs, trunk,
         arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second), ``scale``.
     """
