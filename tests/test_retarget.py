@@ -232,3 +232,17 @@ def test_given_contacts_hold_a_foot_without_a_floor(walk):
     p = _frame_positions(robot, clip.q, "right_ankle_roll_link")[flags]
     assert np.linalg.norm(p - p[0], axis=1).max() < 2e-3
     assert clip.report["ground_penetration_mm"] == 0.0  # no floor: nothing to measure against
+
+
+def test_html_plays_the_robot_and_the_source_keypoints(walk, tmp_path):
+    from evoik_pin.viz import html_commands
+    from evoik_pin.viz.clip_html import save_clip_html
+
+    robot = ek.load_robot("g1", floating_base=True)
+    clip = ek.retarget(robot, walk.slice(0, 3), self_collision=False)
+    commands = html_commands(save_clip_html(robot, clip, tmp_path / "clip.html").read_text())
+    spheres = {c["path"] for c in commands if c["type"] == "set_object" and "/keypoints/" in c["path"]}
+    assert spheres == {f"/meshcat/keypoints/{name}" for name in walk.names}
+    (animation,) = [c for c in commands if c["type"] == "set_animation"]
+    keyed = {a["path"] for a in animation["animations"]}
+    assert "/meshcat/keypoints/Hips" in keyed and any(p.startswith("/meshcat/robot") for p in keyed)
