@@ -6,6 +6,7 @@ the evolutionary methods of five research papers or the memetic default. See REA
 
 from .api import BatchResults, IKSolver, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
 from .goals import RelativePosition
+from .motion.retarget import retarget
 from .problem import IKProblem, Target
 from .reach import ReachMap, reachability_map
 from .result import Front, Result
@@ -30,6 +31,7 @@ __all__ = [
     "methods",
     "prepare",
     "reachability_map",
+    "retarget",
     "solve",
     "solve_all",
     "solve_many",

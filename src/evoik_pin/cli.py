@@ -1,4 +1,4 @@
-"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view.
+"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view, retarget.
 
 Degrees (and metres) at the command line by default: revolute joint values in degrees (``--rad`` switches them to
 radians), prismatic joint values and positions in metres; ``q_deg`` in JSON output follows the same rule.
@@ -722,6 +722,39 @@ def _cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_retarget(args: argparse.Namespace) -> int:
+    """``evoik retarget``: a BVH file (or a bundled clip's name) retargeted onto a humanoid, written to --out."""
+    from pathlib import Path
+
+    from .motion import list_clips, load_bvh, load_clip
+    from .motion.clip import SAVE_FORMATS
+    from .motion.retarget import retarget
+
+    out = Path(args.out)
+    if out.suffix.lower() not in SAVE_FORMATS:  # before the work: a wrong suffix fails at once
+        raise OptionError(f"--out {args.out!r}: accepted file types {', '.join(SAVE_FORMATS)}")
+    source = Path(args.file)
+    motion = load_clip(args.file) if args.file in list_clips() and not source.is_file() else load_bvh(source)
+    robot = load_robot(args.robot, floating_base=True)
+    scale = "auto" if args.scale is None else args.scale
+    clip = retarget(robot, motion, mapping=args.mapping, scale=scale, self_collision=not args.no_self_collision,
+                    velocity_limits=not args.no_velocity_limits, seed=args.seed, progress=args.progress)
+    report = clip.report
+    angles = ", ".join(f"{g} {v['mean']:.1f}" for g, v in report["limb_angle_deg"].items())
+    print(f"{robot.name}: {len(clip)} frames at {clip.fps:g} fps retargeted at {report['fps']:.0f} frames/s "
+          f"(scale {report['scale']:.3f}); every goal met in {report['success_rate']:.0%} of the frames")
+    print(f"self-collision frames {len(report['collision_frames'])}, joint-limit frames "
+          f"{len(report['joint_limit_frames'])}, velocity-limit frames {len(report['velocity_limit_frames'])}; "
+          f"foot skating {report['foot_skating_mm']['mean']:.2f} mm/frame (max {report['foot_skating_mm']['max']:.2f})"
+          f", ground penetration {report['ground_penetration_mm']:.1f} mm; mean limb angle (deg): {angles}")
+    print(f"wrote {clip.save(out)}")
+    if args.html:
+        from .viz.clip_html import save_clip_html
+
+        print(f"wrote {save_clip_html(robot, clip, args.html)}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="evoik", description="Inverse kinematics by evolutionary computation on Pinocchio."
@@ -811,6 +844,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-html", action="store_true", help="skip the meshcat HTML page")
     p.set_defaults(func=_cmd_reach)
+    p = sub.add_parser("retarget", help="retarget a human motion (BVH file or bundled clip) onto a humanoid: "
+                       "joint trajectory as npz, csv or pkl")
+    p.add_argument("file", help="a BVH file, or a bundled clip's name (walk, run, jump, dance, getup)")
+    p.add_argument("--robot", required=True, help="humanoid name (g1, talos, romeo, icub) or URDF path; loaded with a "
+                   "floating base")
+    p.add_argument("--mapping", default="cmu", help="keypoint mapping preset: cmu (BVH skeletons, default) or smpl")
+    p.add_argument("--out", required=True, help="output file: .npz, .csv or .pkl (GMR's layout)")
+    p.add_argument("--html", metavar="PATH", help="also write a self-contained HTML page playing the clip")
+    p.add_argument("--scale", type=float, help="source-to-robot length factor (default: leg lengths' ratio)")
+    p.add_argument("--no-self-collision", action="store_true", help="do not keep the frames free of self-collision")
+    p.add_argument("--no-velocity-limits", action="store_true", help="do not bound each step by the joint velocity "
+                   "limits")
+    p.add_argument("--seed", type=int, default=0, help="seed of the solves' random draws (default 0)")
+    p.add_argument("--progress", action="store_true", help="print progress every 30 frames")
+    p.set_defaults(func=_cmd_retarget)
     p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
     p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
     p.add_argument("--quick", action="store_true", help="reduced-size runs (well under a minute per paper)")

@@ -4,16 +4,21 @@
 
 * :mod:`.motion`: the :class:`Motion` class (positions (N, K, 3) m z up, names, fps) and its helpers;
 * :mod:`.bvh`: BVH parser and vectorized forward kinematics; :mod:`.units`: length units and their inference;
-* :mod:`.clips`: the bundled clips; :mod:`.contacts`: foot contacts; :mod:`.mapping`: mapping presets and checks.
+* :mod:`.clips`: the bundled clips; :mod:`.contacts`: foot contacts; :mod:`.mapping`: mapping presets and checks;
+* :mod:`.retarget`: :func:`retarget`, a motion onto a humanoid, returning a :class:`Clip` (:mod:`.clip`) with its
+  quality report (:mod:`.retarget_report`).
 """
 
 from .bvh import load_bvh
+from .clip import Clip
 from .clips import clip_path, list_clips, load_clip
 from .contacts import detect_contacts, ground_height
 from .mapping import limb_pairs, mapping_preset, resolve_mapping
 from .motion import Motion
+from .retarget import retarget
 
 __all__ = [
+    "Clip",
     "Motion",
     "clip_path",
     "detect_contacts",
@@ -24,4 +29,5 @@ __all__ = [
     "load_clip",
     "mapping_preset",
     "resolve_mapping",
+    "retarget",
 ]

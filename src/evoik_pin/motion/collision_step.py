@@ -1,0 +1,113 @@
+"""Stepping back out of self-collision: the farthest collision-free configuration on the way from a free one to a
+colliding one, for a retargeted frame whose answer collides.
+
+Why not a scene-aware solve: the solvers judge collisions on the answers that meet every goal (a scene rejects a
+converged answer that collides), and a retargeting frame's goals usually conflict a little (limb directions against
+held feet), so its answer never converges and the scene never steers it. Stepping back along the segment
+``q_prev -> q`` keeps what is known: ``q_prev`` is collision-free and inside the velocity box, so is every point of
+the segment (the box is convex), and the exact mesh check decides.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["BISECTION_STEPS", "free_nearby", "step_back_free"]
+
+#: Bisection steps on the segment (the last free point is within 2^-8 of the segment's length of the contact).
+BISECTION_STEPS = 8
+#: Colliding pairs whose links' joints step back together at most (the second attempt).
+MAX_PAIRS = 4
+
+
+def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray) -> tuple[float, np.ndarray]:
+    """The largest t in [0, 1] (bisection) with ``q_to`` but ``joints`` (bool (n,)) at ``q_from + t (q_to - q_from)``
+    collision-free, and that configuration; (-1, q_to) when even t = 0 collides."""
+
+    def at(t: float) -> np.ndarray:
+        return np.where(joints, q_from + t * (q_to - q_from), q_to)
+
+    if scene.in_collision(at(0.0)):
+        return -1.0, q_to
+    lo, hi = 0.0, 1.0
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (lo + hi)
+        if scene.in_collision(at(mid)):
+            hi = mid
+        else:
+            lo = mid
+    return lo, at(lo)
+
+
+def _joints_moving(robot, link: str, others: str) -> np.ndarray:
+    """bool (n,): the entries of q that move ``link`` but not ``others`` (a floating base moves both: never)."""
+    try:
+        mine, theirs = set(robot.moving_joints(link)), set(robot.moving_joints(others))
+    except Exception:  # a geometry name that is no frame: no joint known to move it alone
+        return np.zeros(robot.n, dtype=bool)
+    return np.array([name in mine and name not in theirs for name in robot.joint_names])
+
+
+def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.ndarray | None = None
+                   ) -> np.ndarray | None:
+    """A collision-free configuration between collision-free ``q_prev`` and colliding ``q`` (n,), as near ``q`` as
+    bisection finds: the joints moving only one link of the first colliding pair step back towards ``q_prev`` (the
+    side that keeps more of the step; the checks cover every pair), else the joints moving only either link of
+    any colliding pair, else the whole configuration. ``keep`` (bool (n,)): joints that do not step back (those
+    placing a held foot: an arm gives way before a stance leg); when nothing else frees the pair, the answer is
+    ``q_prev`` itself (interpolating a leg's joints would slide its foot). None when ``q_prev`` itself collides."""
+    movable = np.ones(robot.n, dtype=bool) if keep is None else ~np.asarray(keep, dtype=bool)
+    if scene.in_collision(q_prev):
+        return None
+    q = np.asarray(q, dtype=float)
+    pairs = scene.colliding_pairs(q)
+    if not pairs:
+        return q.copy()
+    a, b = pairs[0]
+    best_t, best_q = -1.0, None
+    for link, other in ((a, b), (b, a)):
+        joints = _joints_moving(robot, link, other) & movable
+        if joints.any():
+            t, candidate = _farthest_free(scene, q_prev, q, joints)
+            if t > best_t:
+                best_t, best_q = t, candidate
+    if best_q is not None and best_t >= 0:
+        return best_q
+    either = np.zeros(robot.n, dtype=bool)
+    for a, b in pairs[:MAX_PAIRS]:
+        either |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
+    either &= movable
+    if either.any():
+        t, candidate = _farthest_free(scene, q_prev, q, either)
+        if t >= 0:
+            return candidate
+    if keep is not None and np.any(keep):  # stepping the joints of a held foot back would slide it: no step
+        return np.array(q_prev, dtype=float)
+    return _farthest_free(scene, q_prev, q, np.ones(robot.n, dtype=bool))[1]
+
+
+#: Random draws of :func:`free_nearby` per spread, and its spreads (rad, m) around the colliding configuration.
+NEARBY_DRAWS = 16
+NEARBY_SPREADS = (0.05, 0.1, 0.2, 0.4, 0.8)
+
+
+def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator,
+                keep: np.ndarray | None = None) -> np.ndarray | None:
+    """A collision-free configuration near colliding ``q`` (n,), inside [lower, upper], for :func:`step_back_free`
+    to step from when no free previous frame exists (a clip's first frame): the joints moving only one link of a
+    colliding pair (less ``keep``) drawn around ``q`` with a widening normal spread (:data:`NEARBY_DRAWS` a spread),
+    the free draw nearest ``q`` at the first spread that has one. None when no draw is free."""
+    pairs = scene.colliding_pairs(q)
+    movable = np.zeros(robot.n, dtype=bool)
+    for a, b in pairs:
+        movable |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
+    if keep is not None:
+        movable &= ~np.asarray(keep, dtype=bool)
+    if not movable.any():
+        return None
+    for spread in NEARBY_SPREADS:
+        draws = np.clip(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q), lower, upper)
+        free = [d for d in draws if not scene.in_collision(d)]
+        if free:
+            return min(free, key=lambda d: float(np.linalg.norm(d - q)))
+    return None

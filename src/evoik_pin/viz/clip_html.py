@@ -1,0 +1,52 @@
+"""A retargeted clip as one self-contained HTML page: the robot playing the clip, the source's keypoints beside it
+as small spheres moving with it (one meshcat animation, so the static export keeps both)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+__all__ = ["KEYPOINT_COLOR", "KEYPOINT_RADIUS", "save_clip_html"]
+
+#: Radius (m) and colour (0xRRGGBB) of a source keypoint's sphere.
+KEYPOINT_RADIUS = 0.015
+KEYPOINT_COLOR = 0xFF8C00
+
+
+def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True) -> Path:
+    """Write ``clip`` (a :class:`~evoik_pin.motion.Clip` of ``robot``) as a self-contained HTML page playing it at
+    its fps, and return the path. ``keypoints``: also the source keypoints the robot followed (``clip.keypoints``,
+    scaled into the robot's world), as orange spheres under ``keypoints/<name>``."""
+    import meshcat.animation
+    import meshcat.geometry as mg
+
+    from . import Viewer
+
+    with Viewer(robot) as viewer:
+        Q = viewer._qs(clip.q)
+        vis = viewer._check_open()
+        drawing = viewer._load("robot")
+        geom = drawing.visual_model
+        nodes = [drawing.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]
+        points = clip.keypoints if keypoints and clip.keypoints is not None else None
+        if points is not None:
+            material = mg.MeshLambertMaterial(color=KEYPOINT_COLOR)
+            for name in clip.keypoint_names:
+                vis["keypoints"][name].set_object(mg.Sphere(KEYPOINT_RADIUS), material)
+        animation = meshcat.animation.Animation(default_framerate=float(clip.fps))
+        for k, q in enumerate(Q):
+            with animation.at_frame(vis, k) as frame:
+                for node, M in zip(nodes, robot.geometry_placements(geom, q), strict=True):
+                    frame[node].set_transform(M.homogeneous)
+                if points is not None:
+                    for name, p in zip(clip.keypoint_names, points[k], strict=True):
+                        T = np.eye(4)
+                        T[:3, 3] = p
+                        frame["keypoints"][name].set_transform(T)
+        viewer.show(Q[0])
+        vis.set_animation(animation, play=True, repetitions=1)
+        viewer.scene["animation"] = f"{Q.shape[0]} frames at {clip.fps:g} fps"
+        return viewer.save_html(path)

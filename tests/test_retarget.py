@@ -1,0 +1,248 @@
+"""retarget: the bundled CMU walk onto G1 and Talos, checked by forward kinematics and the collision meshes (not by
+the clip's own report): joint and velocity limits, planted feet, limb directions, no self-collision, the source's
+world kept; Clip files; bad input; the CLI."""
+
+import csv
+import pickle
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import evoik_pin as ek
+from evoik_pin.cli import main
+from evoik_pin.errors import MappingError, OptionError, OutputError
+from evoik_pin.motion import Clip, detect_contacts, limb_pairs, load_clip, mapping_preset
+from evoik_pin.motion.retarget import BASE_ANGULAR_SPEED, BASE_LINEAR_SPEED, velocity_limits_of
+
+#: Limb-direction bounds (deg, mean over frames and over the group's limbs) set from measured runs (G1: legs 2.3,
+#: trunk 1.2, arms 3.0; Talos: legs 4.4, trunk 7.0, arms 12.7) with room for solver noise. Talos's are wider for
+#: reasons of its body, not of the method: its waist turns and pitches but has no roll (a sideways lean of the
+#: person cannot be followed), and its hips are so wide that arms hanging as a person's do would pass through them:
+#: the collision-free frames hold its arms off the hips.
+ANGLE_BOUNDS = {"g1": {"legs": 5.0, "trunk": 4.0, "arms": 6.0}, "talos": {"legs": 7.0, "trunk": 10.0, "arms": 16.0}}
+#: Slack of the limit checks (rad, m): float rounding of the box arithmetic.
+EPS = 1e-9
+
+
+@pytest.fixture(scope="module")
+def walk():
+    return load_clip("walk").slice(0, 30)
+
+
+@pytest.fixture(scope="module", params=["g1", "talos"])
+def retargeted(request, walk):
+    robot = ek.load_robot(request.param, floating_base=True)
+    return robot, ek.retarget(robot, walk)
+
+
+def _frame_positions(robot, Q, frame):
+    return np.array([robot.fk(q, frame).translation for q in Q])
+
+
+def test_every_frame_within_the_joint_bounds(retargeted):
+    robot, clip = retargeted
+    assert clip.q.shape == (30, robot.n) and np.isfinite(clip.q).all()
+    joints = clip.q[:, 6:]
+    assert (joints >= robot.lower[6:] - EPS).all() and (joints <= robot.upper[6:] + EPS).all()
+    assert clip.report["joint_limit_frames"] == []
+
+
+def test_steps_within_the_velocity_limits(retargeted, walk):
+    robot, clip = retargeted
+    v_max = velocity_limits_of(robot, True)
+    assert np.isfinite(v_max).all()  # every joint of these URDFs has a limit, the base has its defaults
+    steps = np.abs(np.diff(clip.q, axis=0))
+    assert (steps <= v_max / walk.fps + EPS).all()
+    assert clip.report["velocity_limit_frames"] == []
+
+
+def test_feet_in_contact_stay_planted(retargeted, walk):
+    """A robot foot moves less than 2 mm between two frames in which the source foot is in contact."""
+    robot, clip = retargeted
+    frame_of = {keypoint: frame for frame, keypoint in mapping_preset("cmu", robot.name).items()}
+    contacts = detect_contacts(walk)
+    assert all(flags.sum() >= 5 for flags in contacts.values())  # the walk has stance phases to check
+    for keypoint, flags in contacts.items():
+        p = _frame_positions(robot, clip.q, frame_of[keypoint])
+        both = flags[1:] & flags[:-1]
+        moves = np.linalg.norm(np.diff(p, axis=0), axis=1)[both]
+        assert moves.max() < 2e-3, f"{frame_of[keypoint]} slides {moves.max() * 1e3:.2f} mm in a frame"
+
+
+def test_limb_directions_follow_the_source(retargeted, walk):
+    """Angle between each robot limb (mapped frame to mapped frame) and the source's (keypoint to keypoint), mean
+    over the frames and the group's limbs, below :data:`ANGLE_BOUNDS`."""
+    robot, clip = retargeted
+    frame_of = {keypoint: frame for frame, keypoint in mapping_preset("cmu", robot.name).items()}
+    for group, limbs in limb_pairs("cmu").items():
+        angles = []
+        for a, b in limbs:
+            u = _frame_positions(robot, clip.q, frame_of[b]) - _frame_positions(robot, clip.q, frame_of[a])
+            v = walk.trajectory(b) - walk.trajectory(a)
+            cos = np.einsum("ij,ij->i", u, v) / np.linalg.norm(u, axis=1) / np.linalg.norm(v, axis=1)
+            angles.append(np.degrees(np.arccos(np.clip(cos, -1, 1))))
+        mean = float(np.mean(angles))
+        assert mean < ANGLE_BOUNDS[robot.name][group], f"{robot.name} {group}: {mean:.2f} deg"
+
+
+def test_no_frame_in_self_collision(retargeted):
+    robot, clip = retargeted
+    scene = ek.Scene(robot, self_collision=True)
+    assert [i for i, q in enumerate(clip.q) if scene.in_collision(q)] == []
+
+
+def test_the_clip_stays_in_the_source_world(retargeted, walk):
+    """The robot walks where the person walks (scaled), facing the same way: no global turn."""
+    robot, clip = retargeted
+    src = walk.trajectory("Hips")[:, :2]
+    root = clip.q[:, :2]
+    d_src, d_robot = src[-1] - src[0], root[-1] - root[0]
+    cos = d_src @ d_robot / np.linalg.norm(d_src) / np.linalg.norm(d_robot)
+    assert cos > np.cos(np.radians(10))
+    assert np.linalg.norm(d_robot) == pytest.approx(clip.report["scale"] * np.linalg.norm(d_src), rel=0.2)
+    # facing: the robot's left (its base y axis, yaw) matches the source's hips, left minus right
+    left = walk.trajectory("LeftUpLeg") - walk.trajectory("RightUpLeg")
+    yaw_src = np.arctan2(left[:, 1], left[:, 0]) - np.pi / 2
+    turn = np.angle(np.exp(1j * (clip.q[:, 3] - yaw_src)))
+    assert np.abs(turn).max() < np.radians(15)
+
+
+def test_configurations_are_pinocchio_free_flyer_rows(retargeted):
+    robot, clip = retargeted
+    assert clip.configurations.shape == (30, robot.full_model.nq)
+    np.testing.assert_allclose(clip.configurations[7], robot.full_configuration(clip.q[7]))
+    np.testing.assert_allclose(np.linalg.norm(clip.root_rot, axis=1), 1.0)
+    assert len(clip.joint_names) == robot.full_model.nq - 7 and clip.fps == 30.0
+
+
+def test_save_round_trips(retargeted, tmp_path):
+    robot, clip = retargeted
+    data = np.load(clip.save(tmp_path / "c.npz"))
+    np.testing.assert_array_equal(data["q"], clip.q)
+    np.testing.assert_array_equal(data["configurations"], clip.configurations)
+    assert float(data["fps"]) == 30.0 and tuple(data["joint_names"]) == clip.joint_names
+    with open(clip.save(tmp_path / "c.csv"), newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0][:7] == ["root_x", "root_y", "root_z", "root_qx", "root_qy", "root_qz", "root_qw"]
+    assert tuple(rows[0][7:]) == clip.joint_names
+    np.testing.assert_array_equal(np.array(rows[1:], dtype=float), clip.configurations)  # repr: exact floats
+    with open(clip.save(tmp_path / "c.pkl"), "rb") as f:
+        gmr = pickle.load(f)
+    assert gmr["fps"] == 30.0
+    np.testing.assert_array_equal(gmr["root_pos"], clip.configurations[:, :3])
+    np.testing.assert_array_equal(gmr["root_rot"], clip.configurations[:, 3:7])
+    np.testing.assert_array_equal(gmr["dof_pos"], clip.configurations[:, 7:])
+    with pytest.raises(OutputError, match=r"\.npz, \.csv, \.pkl"):
+        clip.save(tmp_path / "c.json")
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.floats(0.01, 10.0))
+def test_velocity_limit_factor_scales_the_urdf_limits(factor):
+    robot = _talos()
+    np.testing.assert_allclose(velocity_limits_of(robot, factor), factor * velocity_limits_of(robot, True))
+
+
+def _talos():
+    if not hasattr(_talos, "robot"):
+        _talos.robot = ek.load_robot("talos", floating_base=True)
+    return _talos.robot
+
+
+def test_velocity_limits_read_the_urdf_and_the_base_defaults():
+    robot = _talos()
+    v = velocity_limits_of(robot, True)
+    assert (v[:3] == BASE_LINEAR_SPEED).all() and (v[3:6] == BASE_ANGULAR_SPEED).all()
+    k = robot.joint_names.index("leg_left_1_joint")
+    model = robot.model
+    assert v[k] == model.velocityLimit[model.joints[model.getJointId("leg_left_1_joint")].idx_v]
+    assert np.isinf(velocity_limits_of(robot, False)).all()
+    np.testing.assert_array_equal(velocity_limits_of(robot, np.full(robot.n, 3.0)), 3.0)
+
+
+def test_unlimited_steps_are_larger(walk):
+    """Without velocity limits the first frames' steps exceed the limited box somewhere: the limits bind."""
+    robot = ek.load_robot("g1", floating_base=True)
+    short = walk.slice(0, 4)
+    free = ek.retarget(robot, short, velocity_limits=False, self_collision=False)
+    tight = ek.retarget(robot, short, velocity_limits=0.05, self_collision=False)
+    v = velocity_limits_of(robot, 0.05)
+    assert (np.abs(np.diff(tight.q, axis=0)) <= v / short.fps + EPS).all()
+    assert (np.abs(np.diff(free.q, axis=0)) > v / short.fps + EPS).any()
+
+
+@pytest.mark.parametrize("option, value, match", [
+    ("scale", "big", "scale"), ("scale", -1.0, "scale"), ("ground", "floor", "ground"),
+    ("contacts", "yes", "contacts"), ("velocity_limits", "fast", "velocity_limits"),
+    ("velocity_limits", [1.0, 2.0], "velocity_limits"), ("timeout", 0.0, "timeout"),
+    ("self_collision", "yes", "self_collision"),
+])
+def test_unknown_option_values_are_refused(walk, option, value, match):
+    robot = _talos()
+    with pytest.raises(OptionError, match=match):
+        ek.retarget(robot, walk.slice(0, 2), **{option: value})
+
+
+def test_bad_mappings_and_robots_are_refused(walk):
+    robot = _talos()
+    with pytest.raises(MappingError, match="leg_left_9_link"):
+        ek.retarget(robot, walk, mapping={"base_link": "Hips", "leg_left_9_link": "LeftFoot"})
+    with pytest.raises(MappingError, match="closest"):
+        ek.retarget(robot, walk, mapping={"base_link": "Hipps"})
+    with pytest.raises(MappingError, match="pelvis keypoint"):
+        ek.retarget(robot, walk, mapping={"arm_left_7_link": "LeftHand"})
+    with pytest.raises(MappingError, match="floating_base=True"):
+        ek.retarget(ek.load_robot("talos"), walk)
+    with pytest.raises(OptionError, match="Motion"):
+        ek.retarget(robot, walk.positions)
+    with pytest.raises(OptionError, match="bool array"):
+        ek.retarget(robot, walk, contacts={"leg_left_6_link": np.ones(3, dtype=bool)})
+
+
+def test_cli_writes_the_clip(tmp_path, capsys):
+    out = tmp_path / "walk.npz"
+    assert main(["retarget", "walk", "--robot", "g1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "self-collision frames 0" in text and f"wrote {out}" in text
+    data = np.load(out)
+    assert data["configurations"].shape == (load_clip("walk").frames, 36)
+    assert main(["retarget", "walk", "--robot", "g1", "--out", str(tmp_path / "walk.txt")]) == 2
+    assert "accepted file types" in capsys.readouterr().err
+
+
+def test_clip_is_exported_from_the_package():
+    assert ek.retarget is ek.motion.retarget and Clip.__module__ == "evoik_pin.motion.clip"
+
+
+def test_same_seed_same_clip(walk):
+    robot = ek.load_robot("g1", floating_base=True)
+    short = walk.slice(0, 6)
+    np.testing.assert_array_equal(ek.retarget(robot, short, seed=3).q, ek.retarget(robot, short, seed=3).q)
+
+
+def test_given_contacts_hold_a_foot_without_a_floor(walk):
+    """contacts={frame: flags} and ground=None: the flagged foot (the source's stance foot) does not slide."""
+    robot = ek.load_robot("g1", floating_base=True)
+    short = walk.slice(0, 8)
+    flags = detect_contacts(short)["RightFoot"]
+    assert flags.sum() >= 6
+    clip = ek.retarget(robot, short, contacts={"right_ankle_roll_link": flags}, ground=None, self_collision=False)
+    p = _frame_positions(robot, clip.q, "right_ankle_roll_link")[flags]
+    assert np.linalg.norm(p - p[0], axis=1).max() < 2e-3
+    assert clip.report["ground_penetration_mm"] == 0.0  # no floor: nothing to measure against
+
+
+def test_html_plays_the_robot_and_the_source_keypoints(walk, tmp_path):
+    from evoik_pin.viz import html_commands
+    from evoik_pin.viz.clip_html import save_clip_html
+
+    robot = ek.load_robot("g1", floating_base=True)
+    clip = ek.retarget(robot, walk.slice(0, 3), self_collision=False)
+    commands = html_commands(save_clip_html(robot, clip, tmp_path / "clip.html").read_text())
+    spheres = {c["path"] for c in commands if c["type"] == "set_object" and "/keypoints/" in c["path"]}
+    assert spheres == {f"/meshcat/keypoints/{name}" for name in walk.names}
+    (animation,) = [c for c in commands if c["type"] == "set_animation"]
+    keyed = {a["path"] for a in animation["animations"]}
+    assert "/meshcat/keypoints/Hips" in keyed and any(p.startswith("/meshcat/robot") for p in keyed)
