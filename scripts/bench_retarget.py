@@ -180,19 +180,18 @@ def run_pink(robot_name: str, case: dict, steps: int, extra: list[str] | None = 
 
 # ------------------------------------------------------------------------------------------------ evoik hook
 def retarget_evoik(robot_name: str, motion, scale: float):
-    """HOOK for the lead: evoik_pin's retargeter on ``motion`` at ``scale``, as (configurations (N, nq) of
-    ``pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())``, wall seconds), or None while
-    ``evoik_pin.retarget`` does not exist. Fill in the call (and the mapping of its answer to that layout) when
-    the retargeter lands; it must target the same mapped frames at the same scale as :func:`prepare`."""
+    """evoik_pin's retargeter on ``motion`` at ``scale`` (the CMU preset: the mapped frames :func:`prepare` uses), as
+    (configurations (N, nq) of ``pin.buildModelFromUrdf(urdf, pin.JointModelFreeFlyer())``, wall seconds of the
+    retargeting alone, the robot loaded before the clock), or None without ``evoik_pin.retarget``."""
     import evoik_pin
 
     if not hasattr(evoik_pin, "retarget"):
         return None
+    robot = evoik_pin.load_robot(robot_name, floating_base=True)
     start = time.perf_counter()
-    result = evoik_pin.retarget(evoik_pin.load_robot(robot_name, floating_base=True), motion, mapping="cmu",
-                                scale=scale)  # TODO(lead): the real signature
+    clip = evoik_pin.retarget(robot, motion, mapping="cmu", scale=scale)
     seconds = time.perf_counter() - start
-    return np.asarray(result.configurations), seconds  # TODO(lead): map to the judge's layout if it differs
+    return np.asarray(clip.configurations), seconds
 
 
 def judge(robot_name: str, case: dict, configurations: np.ndarray) -> dict:
