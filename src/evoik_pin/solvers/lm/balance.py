@@ -44,7 +44,7 @@ from ...goals.registry import (
 )
 from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
-from .tree import BORROWING, frame_pose, joint_column
+from .tree_kinematics import BORROWING, frame_pose, joint_column
 
 #: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
 #: counts as parallel to another.
