@@ -43,12 +43,10 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import DATA_SUFFIXES, Flow, data_format, dump_data, read_data, write_text
+from .datafile import Flow, data_format, dump_data, read_data, write_text
 
-__all__ = ["SCENE_SUFFIXES", "SceneFile", "read_scene", "write_scene"]
+__all__ = ["SceneFile", "read_scene", "write_scene"]
 
-#: File extensions and the format each selects.
-SCENE_SUFFIXES = DATA_SUFFIXES
 #: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional); the
 #: kinds are the Scene's (``scene.OBSTACLE_KINDS``; a test holds them equal).
 KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),
