@@ -2,7 +2,7 @@
 
 This module is the file format only: :func:`read_scene` parses and checks a file into plain data
 (:class:`SceneFile`), which ``Scene.from_file`` builds a scene from; :func:`write_scene` writes any object with a
-scene's attributes. It does not import :mod:`.scene` (the Scene reads files, not the other way round).
+scene's attributes. It does not import :mod:`evoik_pin.scene.scene` (the Scene reads files, not the other way round).
 
 The format is chosen by the extension: ``.yaml`` / ``.yml`` (read with PyYAML's safe loader) or ``.json``. Lengths
 are in metres and angles in radians, every pose in the robot's base frame (the frame of ``Robot.fk``)::

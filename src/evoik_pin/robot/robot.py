@@ -813,7 +813,7 @@ class Robot:
 
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for viz.py."""
+        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for the viewer."""
         return self._geometry_model(pin.GeometryType.VISUAL)
 
     @cached_property
