@@ -1,7 +1,7 @@
 """NSGA-II's repair steps on goal lists of every goal kind (issue 23, gap f).
 
 The repair reads the LM kernel's own rows for a whole population (:func:`evoik_pin.solvers.lm.population_rows.
-task_rows_batch`, equal bit for bit to :func:`evoik_pin.solvers.lm.kernel.task_rows` one configuration at a time);
+task_rows_batch`, equal bit for bit to :func:`.task_rows` one configuration at a time);
 its damped-least-squares steps bring random starts onto Direction, LookAt, Orientation, Pose with a free axis,
 RelativePose and CenterOfMass goals; a goal set is repaired towards the member each configuration is nearest to; and
 NSGA-II with its default repair meets goal lists with pointing goals, judged by Pinocchio's kinematics of the whole

@@ -399,8 +399,9 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
 
     Args:
         robot: the chain or tree. Q: (N, n) start configurations. targets: N targets, all of one kind (a list of
-            :class:`~evoik_pin.problem.Target`, or their :class:`~.layout.TargetArrays`), or N goal lists of one
-            structure (:class:`~.layout.GoalArrays`: their stack's tolerances apply; compiled engine only).
+            :class:`~evoik_pin.problem.Target`, or their :class:`~evoik_pin.goals.stack.TargetArrays`), or N goal
+            lists of one structure (:class:`~evoik_pin.goals.stack.GoalArrays`: their stack's tolerances apply;
+            compiled engine only).
             lower, upper: (n,) box. tolerance (m), rotation_tolerance (rad): success thresholds of single targets.
             max_iterations: steps per pair. engine: as :class:`LevenbergMarquardt`'s.
     """
@@ -454,7 +455,7 @@ def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upp
 
 
 def targets_of(arrays: TargetArrays) -> list[Target]:
-    """Target objects of :class:`~.layout.TargetArrays` (the reference engine works on them)."""
+    """Target objects of :class:`~evoik_pin.goals.stack.TargetArrays` (the reference engine works on them)."""
     from ...problem import Target
 
     P, Rts = arrays.P, arrays.Rts

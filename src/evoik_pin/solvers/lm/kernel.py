@@ -133,8 +133,8 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
     """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
     orientation error rad or 0) to ge (G, 2).
 
-    Fills the kinematics buffers Rj, pj, Z, O (:func:`.tree.tree_forward`; with ``mimic``, the physical joint
-    values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
+    Fills the kinematics buffers Rj, pj, Z, O (:func:`.tree_kinematics.tree_forward`; with ``mimic``, the physical
+    joint values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
     its position seen from the target tg (G, 3), which :func:`task_jacobian` needs. M (3, 3) is scratch.
     ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass, which keeps the goal loop
     free of it). ``extra``: :func:`_run`'s (None: one-frame goals only, the other families' branches pruned).
@@ -220,10 +220,10 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
                   rv, A, B, E, parent, Rj, pj):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
-    per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
-    with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
-    goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G, 3, 3), for
-    its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
+    per goal, its frame's base-frame Jacobian (:func:`.tree_kinematics.frame_jacobian` over the joints
+    ``support[g]`` marks; with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`)
+    turned into the goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G,
+    3, 3), for its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
     :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
     parent (m,) and the joint poses Rj (m, 3, 3), pj (m, 3): for the kinds beyond one frame (:mod:`.balance`), which
     start from their own physical Jacobian. ``extra``: as :func:`task_error`'s.
@@ -440,11 +440,11 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
 #: The buffers of LM runs (:func:`make_workspace`) for n joints, m physical joints, G goals and `rows` task rows,
 #: reused from run to run. The kinematics come in three sets: the current configuration (q, Rj, pj, Z, O, Rg, pg,
 #: tg, e, ge), a step's candidate (qn, ..., en, ge2) and the geodesic-acceleration probe (qh, ..., eh, ge3): Rj (m,
-#: 3, 3), pj (m, 3) the joint poses, Z, O (m, 3) the joint axes and origins (:func:`.tree.tree_forward`), Rg (G, 3,
-#: 3), pg (G, 3) the goal frames' poses, tg (G, 3) their positions seen from their targets (:func:`goal_error`'s
-#: t), e (rows,) the task error, ge (G, 2) each goal's errors. Scratch: x (m,), Jx (6, m), J (6, n), rv (3,), E,
-#: W (rows, n), A, Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq, dfix (n,), held
-#: (n,) bool, and history (max_it + 1,), the |e|^2 after each accepted step.
+#: 3, 3), pj (m, 3) the joint poses, Z, O (m, 3) the joint axes and origins (:func:`.tree_kinematics.tree_forward`),
+#: Rg (G, 3, 3), pg (G, 3) the goal frames' poses, tg (G, 3) their positions seen from their targets
+#: (:func:`goal_error`'s t), e (rows,) the task error, ge (G, 2) each goal's errors. Scratch: x (m,), Jx (6, m), J (6,
+#: n), rv (3,), E, W (rows, n), A, Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq,
+#: dfix (n,), held (n,) bool, and history (max_it + 1,), the |e|^2 after each accepted step.
 Workspace = namedtuple("Workspace", ["q", "Rj", "pj", "Z", "O", "Rg", "pg", "tg", "e", "ge",
                                      "qn", "Rj2", "pj2", "Z2", "O2", "Rg2", "pg2", "tg2", "en", "ge2",
                                      "qh", "Rj3", "pj3", "Z3", "O3", "Rg3", "pg3", "tg3", "eh", "ge3",
@@ -800,7 +800,8 @@ def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
             index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
         spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
-            (:class:`.layout.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets (:func:`.layout.encode_target`).
+            (:class:`~evoik_pin.goals.stack.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets
+            (:func:`~evoik_pin.goals.stack.encode_target`).
         params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
             (:mod:`.layout`).
 
@@ -825,10 +826,10 @@ def _workspace_buffer(n: int, parent: np.ndarray, spec: np.ndarray, params: np.n
 def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                  params, Q_out, stats, g_stats):
     """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
-    row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
-    pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
-    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python wrapper of the
-    ``pairs`` entry of the stack's variant)."""
+    row the stack's targets, :func:`~evoik_pin.goals.stack.encode_targets` for one goal); end configurations to
+    Q_out (N, n), per pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats
+    (N, STATS_SIZE) and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python
+    wrapper of the ``pairs`` entry of the stack's variant)."""
     n = Q.shape[1]
     entries_for(spec).pairs(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent, FR,
                             Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts, params,
