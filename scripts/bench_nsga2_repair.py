@@ -5,7 +5,7 @@
     python scripts/bench_nsga2_repair.py --seeds 20 --population 40 --generations 20
 
 Part 1, the kernel's task rows of a population (what each repair step reads): one compiled call for the whole
-population (``lm.population.task_rows_batch``, through ``IKProblem.goal_rows``) against a Python loop of N calls of
+population (``lm.population_rows.task_rows_batch``, through ``IKProblem.goal_rows``) against a Python loop of N calls of
 ``lm.kernel.task_rows``, on Talos (floating base, 38 joints) with a goal list of both soles' poses, a LookAt and a
 support polygon (N = 100; the median of repeated timings, interleaved).
 
@@ -28,7 +28,7 @@ import numpy as np
 import evoik_pin as ek
 from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Pose, Position, RelativePose
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm.population import task_rows
+from evoik_pin.solvers.lm.population_rows import task_rows
 
 Z = np.array([0.0, 0.0, 1.0])
 SOLES = ["left_sole_link", "right_sole_link"]

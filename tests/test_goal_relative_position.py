@@ -14,7 +14,7 @@ from evoik_pin.errors import FrameError, GoalsFileError, OptionError, TargetErro
 from evoik_pin.goals import Pose, RelativePosition, bind
 from evoik_pin.io.goals_file import goal_kind_name, load_goals, save_goals
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm.population import task_rows
+from evoik_pin.solvers.lm.population_rows import task_rows
 
 HANDS = ("left_gripper", "right_gripper")
 

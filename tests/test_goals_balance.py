@@ -19,7 +19,7 @@ from evoik_pin.errors import FrameError, OptionError, TargetError
 from evoik_pin.goals import CenterOfMass, Pose, RelativePose, bind
 from evoik_pin.goals.center_of_mass import com_batch, com_of, contact_points, polygon_distance
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm.population import task_rows
+from evoik_pin.solvers.lm.population_rows import task_rows
 
 
 @pytest.fixture(scope="module")

@@ -1,7 +1,7 @@
 """NSGA-II's repair steps on goal lists of every goal kind (issue 23, gap f).
 
-The repair reads the LM kernel's own rows for a whole population (:func:`evoik_pin.solvers.lm.population.
-task_rows_batch`, equal bit for bit to :func:`evoik_pin.solvers.lm.kernel.task_rows` one configuration at a time);
+The repair reads the LM kernel's own rows for a whole population (:func:`evoik_pin.solvers.lm.population_rows.
+task_rows_batch`, equal bit for bit to :func:`.task_rows` one configuration at a time);
 its damped-least-squares steps bring random starts onto Direction, LookAt, Orientation, Pose with a free axis,
 RelativePose and CenterOfMass goals; a goal set is repaired towards the member each configuration is nearest to; and
 NSGA-II with its default repair meets goal lists with pointing goals, judged by Pinocchio's kinematics of the whole
@@ -20,7 +20,7 @@ from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Pose, 
 from evoik_pin.goals.center_of_mass import com_of
 from evoik_pin.problem import IKProblem
 from evoik_pin.robot.frames import find_frame
-from evoik_pin.solvers.lm.population import task_rows, task_rows_batch
+from evoik_pin.solvers.lm.population_rows import task_rows, task_rows_batch
 from evoik_pin.solvers.paper.nsga2 import dls_repair, goal_task
 
 SOLES = ["left_sole_link", "right_sole_link"]

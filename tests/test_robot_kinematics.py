@@ -1,4 +1,4 @@
-"""robot/kinematics.py (Robot) on every bundled and example arm: FK against an independent parser, batches,
+"""robot/robot.py (Robot) on every bundled and example arm: FK against an independent parser, batches,
 Jacobians, manipulability, continuous joints, sub-chains, the placements the viewer draws, and bad input."""
 
 import numpy as np

@@ -1,4 +1,4 @@
-"""Mimic joints (robot/kinematics.py, robot/urdf_checks.py): one entry of q per independent degree of freedom,
+"""Mimic joints (robot/robot.py, robot/urdf_checks.py): one entry of q per independent degree of freedom,
 the coupled joints in FK, batch FK, Jacobians (chain rule), the compiled chain and LM kernel, bounds, and the
 URDFs whose couplings cannot hold."""
 

@@ -1,7 +1,7 @@
-"""robot/tree.py and the compiled tree kinematics (solvers/lm/tree.py): the folded tree of a robot's active joints,
-frame poses and frame Jacobians, against Pinocchio on every example-robot-data robot with branches and on random
-URDF trees (revolute, prismatic, continuous, fixed and mimic joints), with and without a floating base; and bit
-for bit against the serial-chain kinematics on every arm."""
+"""robot/tree.py and the compiled tree kinematics (solvers/lm/tree_kinematics.py): the folded tree of a robot's
+active joints, frame poses and frame Jacobians, against Pinocchio on every example-robot-data robot with branches
+and on random URDF trees (revolute, prismatic, continuous, fixed and mimic joints), with and without a floating
+base; and bit for bit against the serial-chain kinematics on every arm."""
 
 import numpy as np
 import pinocchio as pin
@@ -15,7 +15,7 @@ from evoik_pin.robot import WHOLE_ROBOTS, list_robots, load_robot
 from evoik_pin.robot.frames import find_frame
 from evoik_pin.robot.tree import FLOATING_BASE_JOINTS
 from evoik_pin.solvers.lm import chain as C
-from evoik_pin.solvers.lm import tree as T
+from evoik_pin.solvers.lm import tree_kinematics as T
 
 #: Every example-robot-data robot that loads by name with branches (several limbs, fingers or arms; romeo's and the
 #: PR2's hands have mimic joints); a floating base on a few of each kind.

@@ -13,8 +13,15 @@ class EvoikError(Exception):
     """Base class of every error evoik_pin raises on purpose."""
 
 
+class _PlainMessage:
+    """Prints its message as given: KeyError would quote it, FileNotFoundError and OSError print a tuple."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""
+
+
 class RobotLoadError(EvoikError, ValueError):
-    """A URDF could not be parsed or does not describe a usable serial chain."""
+    """A robot source could not be read or does not describe a usable robot (the message names the file)."""
 
 
 class RobotLoadWarning(UserWarning):
@@ -22,18 +29,13 @@ class RobotLoadWarning(UserWarning):
     ``<mimic>`` naming no joint of the file, whose joint is then loaded as an independent joint)."""
 
 
-class RobotNotFoundError(EvoikError, FileNotFoundError):
+class RobotNotFoundError(_PlainMessage, EvoikError, FileNotFoundError):
     """A robot name or URDF path does not resolve to a file."""
 
-    def __str__(self) -> str:  # FileNotFoundError would otherwise print a tuple
-        return str(self.args[0]) if self.args else ""
 
-
-class FrameError(EvoikError, KeyError):
-    """A tip or base frame is unknown or not on a chain."""
-
-    def __str__(self) -> str:  # KeyError would otherwise quote the message
-        return str(self.args[0]) if self.args else ""
+class FrameError(_PlainMessage, EvoikError, KeyError):
+    """A frame name the robot does not have (the message lists the closest names), or a goal's frame that no
+    active joint moves."""
 
 
 class LockedJointsError(FrameError):
@@ -62,22 +64,16 @@ class ViewerError(EvoikError, RuntimeError):
     """The meshcat viewer could not start or reach its server, or could not write its HTML export."""
 
 
-class MethodError(EvoikError, KeyError):
+class MethodError(_PlainMessage, EvoikError, KeyError):
     """A solver method name is unknown or does not apply to this robot or call."""
-
-    def __str__(self) -> str:
-        return str(self.args[0]) if self.args else ""
 
 
 class ReproductionError(EvoikError, ValueError):
     """A paper reproduction was asked for with an unknown paper id or an unusable option."""
 
 
-class OutputError(EvoikError, OSError):
+class OutputError(_PlainMessage, EvoikError, OSError):
     """An output directory or file cannot be created or written."""
-
-    def __str__(self) -> str:  # OSError would otherwise format (errno, strerror)
-        return str(self.args[0]) if self.args else ""
 
 
 class SceneError(EvoikError, ValueError):
@@ -109,10 +105,7 @@ class BvhError(MotionError):
     <= 0, an unknown unit. The message names the file and the line (from 1)."""
 
 
-class MappingError(MotionError, KeyError):
+class MappingError(_PlainMessage, MotionError, KeyError):
     """A robot-to-motion keypoint mapping that cannot be used: an unknown preset, a robot frame absent from the
     robot or a keypoint absent from the motion (the message lists the closest names), or a robot without a
     floating base (load it with ``floating_base=True``)."""
-
-    def __str__(self) -> str:  # KeyError would otherwise quote the message
-        return str(self.args[0]) if self.args else ""

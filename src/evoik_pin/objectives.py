@@ -220,8 +220,7 @@ class PoseDistance(Objective):
     6-D error (position in m, rotation vector of ``log3`` in rad scaled by ``orientation_weight`` m/rad).
 
     Same zero set and units as :func:`PoseError`, but smooth away from the solution: the sum of two norms
-    has a crease wherever one error is exactly zero, and a swarm collapses onto that crease (PSO on 6-D
-    poses, docs/BENCHMARKS.md); this norm has no crease.
+    has a crease wherever one error is exactly zero, which a swarm collapses onto; this norm has none.
     """
 
     def __init__(self, target, orientation_weight: float = 1.0) -> None:

@@ -242,8 +242,8 @@ class IKProblem:
         Jacobian E (N, rows, n), ``e = f(q) - target`` and ``E = de/dq`` for every goal kind, each goal's rows scaled
         by the square root of its weight (zero for a goal inside its dead-zone bands); a goal set's rows are those of
         the member each configuration is nearest to (:meth:`nearest_members`). One compiled call for the population
-        (:func:`~evoik_pin.solvers.lm.population.task_rows_batch`). Bookkeeping: no evaluation is counted."""
-        from .solvers.lm.population import task_rows_batch
+        (:func:`~evoik_pin.solvers.lm.population_rows.task_rows_batch`). Bookkeeping: no evaluation is counted."""
+        from .solvers.lm.population_rows import task_rows_batch
 
         self._need_goal_list("goal_rows")
         stack, pt, Rt = self._goal_stack

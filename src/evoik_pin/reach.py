@@ -13,9 +13,9 @@ orientations (a super-Fibonacci sample of SO(3): Alexa, CVPR 2022; the same set 
 It runs the batch engine of :func:`evoik_pin.solve_many` (:class:`~evoik_pin.solvers.batch.threads.BatchSolver`, or
 Ray actors with ``backend="ray"``) in batches of ``batch_size`` targets: first the voxel centres as position
 targets (a voxel whose centre no configuration reaches reaches no orientation either: its poses are not asked),
-then every orientation of the voxels reached. The per-target fallback search of ``solve_many`` is left out: a map
-wants a verdict from the batched LM rounds (``table_seeds`` of them, every start a seed-table entry), not a 5 ms
-search per unreachable pose; a pose those rounds miss counts as not reached, so the index is a lower bound.
+then every orientation of the voxels reached. Only the batched LM rounds judge a target (``table_seeds`` of them,
+no per-target fallback search, which would dominate the cost on unreachable poses): a pose those rounds miss
+counts as not reached, so the index is a lower bound.
 
 :meth:`ReachMap.save` writes ``<robot>_reach.npz`` (``centers`` (M, 3), ``index`` (M,) in [0, 1],
 ``manipulability`` (M,), the settings and the seed), a PNG of slices and a meshcat HTML point cloud coloured by

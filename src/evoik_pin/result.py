@@ -50,8 +50,8 @@ class Result:
         collision_free: with a scene, whether ``q`` passes the exact mesh check at the problem's margin
             (``success`` requires it); None when no scene was given.
         min_distance: with a scene, the signed distance (m) of the closest checked pair at ``q``
-            (:meth:`Scene.distance`: exact on the meshes), computed on first access (it costs about 0.4 ms, so
-            a solve does not pay for it unless it is read); None when no scene was given.
+            (:meth:`Scene.distance`: exact on the meshes), computed on first access (a solve does not pay for it
+            unless it is read); None when no scene was given.
     """
 
     q: np.ndarray

@@ -293,7 +293,7 @@ _FULL_DATA: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def com_batch(robot, Q) -> np.ndarray:
     """Centres of mass (N, 3) (m, base frame) of a population Q (N, n): the folded tree's joint poses in one
-    vectorized pass (:mod:`evoik_pin.solvers.lm.tree`'s recursion) and the :attr:`Robot.mass_constants`."""
+    vectorized pass (:mod:`evoik_pin.solvers.lm.tree_kinematics`'s recursion) and the :attr:`Robot.mass_constants`."""
     parent, FR, Fp, rev = robot.tree_constants()[:4]
     mc = robot.mass_constants
     X = robot._physical(np.asarray(Q, dtype=float))

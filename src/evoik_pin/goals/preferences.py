@@ -22,7 +22,7 @@ from ..errors import ConfigurationError, FrameError, OptionError
 from .goal import Goal, number
 
 __all__ = ["JointLimitMargin", "Manipulability", "MinimalDisplacement", "Posture", "Preference", "check_preferences",
-           "holds_preferences", "is_preference", "split_preferences"]
+           "holds_preferences", "split_preferences"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -212,10 +212,6 @@ class Manipulability(Preference):
 
     def __repr__(self) -> str:
         return f"Manipulability({self.frame!r}, weight={self.weight:g})"
-
-
-def is_preference(value) -> bool:
-    return isinstance(value, Preference)
 
 
 def holds_preferences(value) -> bool:

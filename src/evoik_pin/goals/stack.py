@@ -67,12 +67,9 @@ def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_to
 
 def owned(a: np.ndarray, dtype=None) -> np.ndarray:
     """``a`` as the kernel's entry points are compiled for it: a C-contiguous, writable array (of ``dtype`` when
-    given): ``a`` itself when it is one, else a copy.
-
-    numba compiles a function once per argument type, and a read-only array is a type of its own (a NumPy broadcast
-    or a C-contiguous view of one, an array from Ray's object store, a memory-mapped file): one reaching an entry
-    point would have numba compile the whole kernel again for it (half a minute to a minute and a half, inside the
-    caller's time budget, and again in every fresh process). The engine passes every array through here once."""
+    given): ``a`` itself when it is one, else a copy. numba compiles a function once per argument type and a read-only
+    array (a broadcast, Ray's object store, a memory map) is a type of its own: one reaching an entry point would
+    recompile the whole kernel inside the caller's time budget. The engine passes every array through here once."""
     if a.flags.writeable and a.flags.c_contiguous and (dtype is None or a.dtype == dtype):
         return a
     return np.array(a, dtype=dtype, order="C")

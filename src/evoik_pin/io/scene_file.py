@@ -2,7 +2,7 @@
 
 This module is the file format only: :func:`read_scene` parses and checks a file into plain data
 (:class:`SceneFile`), which ``Scene.from_file`` builds a scene from; :func:`write_scene` writes any object with a
-scene's attributes. It does not import :mod:`.scene` (the Scene reads files, not the other way round).
+scene's attributes. It does not import :mod:`evoik_pin.scene.scene` (the Scene reads files, not the other way round).
 
 The format is chosen by the extension: ``.yaml`` / ``.yml`` (read with PyYAML's safe loader) or ``.json``. Lengths
 are in metres and angles in radians, every pose in the robot's base frame (the frame of ``Robot.fk``)::
@@ -43,12 +43,10 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import DATA_SUFFIXES, Flow, data_format, dump_data, read_data, write_text
+from .datafile import Flow, data_format, dump_data, read_data, write_text
 
-__all__ = ["SCENE_SUFFIXES", "SceneFile", "read_scene", "write_scene"]
+__all__ = ["SceneFile", "read_scene", "write_scene"]
 
-#: File extensions and the format each selects.
-SCENE_SUFFIXES = DATA_SUFFIXES
 #: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional); the
 #: kinds are the Scene's (``scene.OBSTACLE_KINDS``; a test holds them equal).
 KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),

@@ -1,9 +1,8 @@
 """SO(3) / SE(3) maths compiled with numba, one rotation at a time, written into caller-owned buffers.
 
 The same closed forms as :mod:`.so3` and :mod:`.se3` (Pinocchio's), for compiled kernels that cannot call
-NumPy per step (:mod:`evoik_pin.solvers.lm.kernel`). ``1 - cos(theta)`` is computed as ``2 sin^2(theta/2)``:
-no cancellation for small angles (the round trip through ``pin.exp6`` holds to 1e-12 where the textbook
-form loses 1e-8 near theta = 1e-4). numba compiles each function on first use and caches it on disk.
+NumPy per step (:mod:`evoik_pin.solvers.lm.kernel`). ``1 - cos(theta)`` is computed as ``2 sin^2(theta/2)``
+to avoid cancellation at small angles. numba compiles each function on first use and caches it on disk.
 """
 
 from __future__ import annotations

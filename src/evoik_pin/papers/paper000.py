@@ -9,17 +9,9 @@ w1 / w2 and the best fitness per generation for three configurations, (a) fixed 
 mutation, (b) binomial crossover without and (c) with trigonometric mutation; Fig. 6: (a) the Pareto front
 of position error vs maximum displacement, (b) the position error per generation of (a)-(c).
 
-What we run (``run(ctx)``), every random choice derived from the master seed and the part's labels
-(``derive_rng``, as ``ctx.rng``), so ``--jobs`` changes the speed, not the numbers:
-
-* each Table 2 target ``runs`` times (10 in the full run) with ``ga-binary`` and with ``mode`` in the three
-  configurations, and once with the deterministic ``algebraic`` method; q_init = 0 (the paper's
-  initial configuration is not given). Every run uses the paper's full budget (tolerance 0: the
-  pseudocode's ``while g <= g_max`` has no early stop);
-* Table 2: success rate within 1 mm, median and maximum error, and the reached position of the
-  median run, next to the paper's reached positions;
-* Figs. 3-5 and 6(b): medians over the runs of all five targets of each configuration's per-generation
-  series; Fig. 6(a): the non-dominated archive of the first configuration-(c) run on (10, 10, 10).
+What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
+"Paper 000" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
+seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
 """
 
 from __future__ import annotations

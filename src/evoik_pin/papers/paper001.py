@@ -9,19 +9,9 @@ population 1000, 4 niches, targets (-52.5, 39.3, -46.5), (-30, -20, 43), (-15, 7
 (-56.4, 49.7, -28.4) cm (Table 5: closed form, Table 6: HGA). Figs. 7-9: the 2R population at
 generations 0, 4 and 12; Figs. 10-11: the PUMA population at generations 0 and 12.
 
-What we run (``run(ctx)``), every random choice derived from the master seed and the part's labels
-(``derive_rng``, as ``ctx.rng``), so ``--jobs`` changes the speed, not the numbers:
-
-* every target ``runs`` times (10 in the full run) with ``ga`` and with ``hga`` at the paper's settings;
-  each closed-form solution (our :func:`~evoik_pin.solvers.paper.analytic.planar2r_ik` /
-  :func:`~evoik_pin.solvers.paper.analytic.puma_ik`) is matched to the nearest solution the method returned
-  (wrapped joint distance) and its error is the largest joint difference (deg);
-* Tables 3, 4 and 6: the first run's matched angles and error next to the paper's, and over all runs the
-  share of closed-form solutions found (GA within 5 deg, HGA within 0.001 deg, the paper's claim) and the
-  median / maximum error;
-* Table 5: our closed form next to the paper's Table 5, and how far FK (eq. 20, stated lengths) of the
-  paper's own Table 5 angles lands from its targets;
-* Figs. 7-11 from the first GA run of target 1 through ``ga``'s ``callback(generation, population)``.
+What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
+"Paper 001" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
+seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
 """
 
 from __future__ import annotations

@@ -8,26 +8,9 @@ fitness values 1e-9 / 1e-10 / 1e-12); 2, 100 random workspace points each solved
 3, 100 points of the spiral x = 200 cos(2z/100), y = 200 sin(2z/100), z = n pi (mm) solved in sequence
 over the full ranges (3.1) or inside the "Pro" box previous solution +- pi/100 (3.2) (Table 5, Figs. 7-9).
 
-How we read the paper where it is loose (all recorded in ``report.settings``):
-
-* rho: a point is re-solved (fresh random population) until a run meets the fitness value, at most rho
-  times, and the best run (lowest cost) is kept - the paper's "stop when Cost < e, or 600 iterations and
-  runs < 10". Generations and time in the tables are those of the kept run, as in the paper (its
-  averages, e.g. 85.6 generations for ISADE, are below one run's budget); the total over all runs is
-  reported too.
-* Cost (eq. 21): ``a ||q - q0|| + b d`` with d the distance (m); b = 1, a = 0 everywhere except the first
-  spiral point, where a = ``a_first`` (the paper gives no value) keeps the arm close to q0 = 0. Runs
-  stop on the distance (not the cost) reaching the fitness value.
-  The first spiral point therefore runs its whole budget; it gets its own table and Table 5 averages
-  points 2..N.
-* Scenario 1 and 2 targets are FK of joint vectors drawn uniformly in the ranges (reachable by
-  construction); the paper's Scenario 1 point is not given.
-* A spiral point whose error stays above 1 nm is re-checked by multi-start bounded least squares in
-  the same search box (``common.least_squares_distance``): "missed" if that finds a solution, "no solution"
-  otherwise (outside the workspace, or outside the Pro box). "No solution" points are counted and left
-  out of the averages.
-* Population sizes are not in the paper; the solvers' defaults are used and recorded. The solvers'
-  own ``runs`` option is set to 1: the rho loop is ours, so the kept run's numbers are known.
+What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
+"Paper 002" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
+seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
 """
 
 from __future__ import annotations

@@ -9,21 +9,9 @@ front member with the best S is kept. Fig. 2 draws the configurations along the 
 K = 100: with the larger gain the vehicle moves less between consecutive points. The paper gives no link
 lengths, bounds, path, generation count or numbers.
 
-What we run (``run(ctx)``), every random choice derived from the master seed and the part's labels
-(``derive_rng``, as ``ctx.rng``), so ``--jobs`` changes the speed, not the numbers:
-
-* ``vehicle_arm`` (our lengths l1, l2, l3 = 0.5, 0.4, 0.25 m; vehicle x, y in +-3 m; arm joints +-180 deg);
-* the path (our choice, stated in the settings): a vertical "hull" line x = 1.0 m, y = 0 to 1.2 m in
-  13 points 10 cm apart, yaw 0 (tool along +x), started from q = (0, 0, 0.6, -1.2, 0.6) (tip at
-  (0.99, 0.06) m, yaw 0). The arm alone reaches the line only up to y = 0.50 m with the vehicle at the
-  origin, so the vehicle has to move about 0.7 m over the path;
-* ``solve_trajectory(..., method="nsga2", gains=(K, K, 1, 1, 1))`` for K = 1 (reference), 10 and 100, each
-  ``runs`` times (3 in the full run); population 200, 100 generations, pose tolerance 1e-6 m / rad, and
-  our default repair (three damped-least-squares steps weighted by 1/K on every new individual, twelve on
-  the initial population, which the paper says it makes feasible);
-* tables: vehicle displacement per step and over the path for each K, arm joint motion, errors;
-  figures: the Fig. 2 analogue (configurations in the plane), the final Pareto front (g vs S) at the middle
-  point, and the vehicle step per point.
+What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
+"Paper 003" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
+seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
 """
 
 from __future__ import annotations

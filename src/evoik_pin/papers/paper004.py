@@ -6,16 +6,9 @@ rad, sigma = 0.3, epsilon = 0.7) for the target (x, y, z, roll, pitch, yaw) = (-
 (cm, deg); Table 4 sweeps population x iterations (J, time, reached pose); Tables 5/6 solve three more
 targets at population 12 and 100 iterations (Fig. 2, 4, 6: objective per iteration).
 
-What we run (``run(ctx)``):
-
-* Table 4 on the paper's own target, each (population, iterations) cell ``runs`` times (median and best);
-* the same sweep on targets reachable by construction (FK of joint values drawn uniformly in the
-  ranges), because the paper's target is not reachable by our reading of its DH table (PAPERS.md);
-* Tables 5/6: the paper's three targets as printed, and the poses that FK of the paper's own listed
-  joint values gives (reachable by construction), at the paper's setting (population 12, 100
-  iterations) and at a larger budget (population 30, 1000 iterations);
-* a consistency check: FK of Table 5's joint values against Table 5's poses;
-* Fig. 2 analogue: J per iteration, and a sweep figure (median J per budget).
+What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
+"Paper 004" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
+seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
 
 J is reported in the paper's units: position in cm (sigma = 0.3 per cm = 30 per m), orientation in rad.
 """

@@ -3,8 +3,7 @@ joints branch (a tree, not a serial chain); and locking joints.
 
 URDF links become BODY frames; a joint and a link may share a name, and then the BODY frame is the one
 meant (a tip or a base is a link). The look-up helpers only read the model's frame list (no ``Data``, no
-kinematics); :class:`~evoik_pin.robot.kinematics.Robot` and the viewer use them. :func:`reduced_model` is
-``pin.buildReducedModel`` made safe for such shared names.
+kinematics). :func:`reduced_model` is ``pin.buildReducedModel`` made safe for such shared names.
 """
 
 from __future__ import annotations

@@ -2,8 +2,7 @@
 
 A joint's *value* is one number (rad for revolute joints, m for prismatic ones) whatever Pinocchio stores: a
 continuous (unbounded revolute) joint is two numbers (cos, sin) in a configuration. These helpers read one joint
-at a time from the model (no model-wide ``Data``, which is large for big models); :mod:`.tree` and
-:class:`~evoik_pin.robot.robot.Robot` use them.
+at a time from the model (no model-wide ``Data``, which is large for big models).
 """
 
 from __future__ import annotations

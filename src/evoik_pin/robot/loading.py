@@ -1,14 +1,8 @@
-"""Finding and reading a robot: bundled paper arms, ``example-robot-data`` arms, URDF and xacro files and strings.
-
-:func:`load_robot` resolves a source (a URDF or xacro path, a URDF XML string, a bundled paper arm or an
-``example-robot-data`` arm by name) to URDF text (:mod:`.urdf_text`: encodings, binary files, xacro), checks
-it (:mod:`.urdf_checks`: one tree, usable joints, mimic couplings), builds the Pinocchio model of the whole
-URDF with urdfdom's stderr captured, picks a named arm's default tip frame (or, for a whole robot by name and a
-URDF whose joints branch, the whole tree) and the directories its ``package://`` mesh URIs resolve against, and
-hands all of it to :class:`~evoik_pin.robot.kinematics.Robot`, which extracts the active joints. Anything wrong
-with the input is a :class:`~evoik_pin.errors.RobotLoadError` (or :class:`~evoik_pin.errors.RobotNotFoundError`)
-naming the file (or "URDF string") and what is accepted.
-"""
+"""Finding and reading a robot (:func:`load_robot`, :func:`list_robots`): a source resolved to URDF text
+(:mod:`.urdf_text`), checked (:mod:`.urdf_checks`), built into the Pinocchio model of the whole URDF and handed,
+with its default tip and mesh package folders, to :class:`~evoik_pin.robot.robot.Robot`. Bad input raises
+:class:`~evoik_pin.errors.RobotLoadError` (or :class:`~evoik_pin.errors.RobotNotFoundError`) naming the file (or
+"URDF string") and what is accepted."""
 
 from __future__ import annotations
 

@@ -2,9 +2,7 @@
 
 Each function walks the serial chain from the base to the frame (:class:`~.tree.ChainView`: the frame's joint and
 its ancestors in a tree) for a population of physical joint values X (N, m) (rad or m) in one pass of NumPy
-calls per joint, whatever N is; evolutionary solvers evaluate their populations through them
-(:meth:`Robot.fk_batch <evoik_pin.robot.robot.Robot.fk_batch>` and its siblings). Tested against Pinocchio,
-configuration by configuration.
+calls per joint, whatever N is (:meth:`Robot.fk_batch <evoik_pin.robot.robot.Robot.fk_batch>` and its siblings).
 """
 
 from __future__ import annotations

@@ -1,12 +1,9 @@
 """The robot: :class:`Robot`, the active joints of a URDF as Pinocchio sees them, a serial chain or a whole tree.
 
-This module (with :mod:`.tree` and :mod:`.population`) is the only code in evoik_pin that runs Pinocchio's
-kinematics on a ``Model``/``Data``. A :class:`Robot` picks its active joints (those that move its goal frames:
-the chain from a base frame to one tip frame, the union of the chains to several tips, or the whole tree), locks
-every other joint (``pin.buildReducedModel``) and offers forward kinematics and Jacobians of any frame,
-manipulability, one configuration at a time (through Pinocchio) or a whole population at once (NumPy, checked
-against Pinocchio in the tests), the folded tree constants compiled kernels evaluate, and the placements the
-viewer draws. Loading a URDF is :mod:`.loading`'s job.
+A :class:`Robot` picks its active joints (the chain from a base frame to one tip, the union of the chains to several
+tips, or the whole tree), locks every other joint (``pin.buildReducedModel``) and offers forward kinematics and
+Jacobians of any frame, one configuration at a time (Pinocchio) or a whole population at once (NumPy), the folded
+tree constants compiled kernels evaluate, and the placements the viewer draws. Loading is :mod:`.loading`'s job.
 
 The joint vector ``q`` users and solvers see has one entry per independent degree of freedom (rad for revolute
 joints, m for prismatic ones), in Pinocchio's joint order (a serial chain: base to tip). Pinocchio stores a
@@ -816,7 +813,7 @@ class Robot:
 
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for viz.py."""
+        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for the viewer."""
         return self._geometry_model(pin.GeometryType.VISUAL)
 
     @cached_property

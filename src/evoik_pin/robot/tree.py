@@ -14,8 +14,7 @@ A frame f (a link, a joint frame or a fixed frame of the URDF) sits on one physi
 j_f = -1) at a constant placement, folded as ``B_j^T M_f``: its pose is ``(R_j R_f, p_j + R_j p_f)``; the
 joints that move it are j_f and its ancestors. A serial chain is the tree with ``parent[k] = k - 1``; the chain
 from the base to one frame (:meth:`KinematicTree.chain_to`) is what the population kinematics
-(:mod:`.population`) evaluate, with the same constants and the same floating-point operations as the chain
-kinematics always had.
+(:mod:`.population`) evaluate.
 
 A floating base (:func:`with_floating_base`) is six 1-DOF joints in front of the URDF's root link, so nothing
 downstream needs a special case: prismatic along the world x, y, z axes (m), then revolute about z (yaw), the
@@ -201,7 +200,7 @@ class KinematicTree:
 
     def ancestors(self, j: int) -> np.ndarray:
         """(c,) int64: the physical joints that move a frame on joint j (its ancestors and j), root first."""
-        parent = self.parent.tolist()  # Python ints: indexing the array joint by joint costs 0.2 us a joint
+        parent = self.parent.tolist()  # Python ints: cheaper than indexing the array joint by joint
         out = []
         while j >= 0:
             out.append(j)

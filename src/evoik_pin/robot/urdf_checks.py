@@ -5,7 +5,7 @@ its reasons printed on stderr, and accepts others that then give NaN or silently
 joint axis, inverted limits, a NaN origin). :func:`check_urdf` reads the parsed XML first and raises a
 :class:`~evoik_pin.errors.RobotLoadError` naming the file, the joint or link, and what is accepted. It also
 collects the ``<mimic>`` couplings (``q_j = multiplier q_k + offset``), resolved to the joint that drives
-each chain of them, which :class:`~evoik_pin.robot.kinematics.Robot` folds into its joint vector.
+each chain of them, which :class:`~evoik_pin.robot.robot.Robot` folds into its joint vector.
 """
 
 from __future__ import annotations

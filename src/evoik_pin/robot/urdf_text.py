@@ -1,15 +1,5 @@
-"""Turning a file's bytes into URDF text: encodings, binary files, xacro, and the C++ parsers' stderr.
-
-* :func:`decode_xml`: bytes to text the way an XML parser would read them (a byte-order mark, else the
-  ``encoding`` of the ``<?xml ...?>`` declaration, else UTF-8), with a :class:`~evoik_pin.errors.RobotLoadError`
-  naming the file for empty, binary or undecodable input;
-* :func:`expand_xacro`: a ``.xacro`` file (or xacro text) expanded to URDF with ``xacrodoc`` (no ROS needed),
-  ``$(arg ...)`` values from ``xacro_args``, ``$(find pkg)`` resolved by a
-  :class:`~evoik_pin.robot.packages.PackageResolver` (given folders, ``ROS_PACKAGE_PATH``, the file's own tree,
-  a ``package.xml``), then by ROS's own look-up (``rospkg`` / ``ament``);
-* :func:`captured_stderr`: file descriptor 2 redirected while urdfdom (C++) and xacro parse, so their messages
-  end up in our errors instead of on the user's terminal.
-"""
+"""Turning a file's bytes into URDF text: :func:`decode_xml` (encodings, binary files), :func:`expand_xacro` (xacro
+without ROS) and :func:`captured_stderr` (the C++ parsers' messages put into our errors, not on the terminal)."""
 
 from __future__ import annotations
 

@@ -58,8 +58,8 @@ def convex_hulls(geom: pin.GeometryModel) -> pin.GeometryModel:
     """A copy of ``geom`` whose meshes are replaced by their convex hulls (primitives are kept).
 
     A hull contains its mesh, so a hull check is conservative (no hull contact means no mesh contact) and
-    its distances are lower bounds of the meshes'; hull queries cost about a fifth of mesh collision checks
-    and a thirtieth of mesh distances (GJK on convex sets instead of BVH traversals).
+    its distances are lower bounds of the meshes'; hull queries are much cheaper (GJK on convex sets instead of
+    BVH traversals).
     """
     hulls = geom.copy()
     for obj in hulls.geometryObjects:

@@ -14,7 +14,7 @@ Queries (``q`` (n,) a joint vector, rad or m):
 * :meth:`Scene.distance`: the signed distance (m) of the closest pair: exact on the meshes when it is
   positive, bounded through the convex hulls when they overlap (see the method);
 * :meth:`Scene.collides`: a population (N, n) at once, exactly or on the convex-hull proxies (conservative,
-  about five times cheaper), for solvers steering a search.
+  cheaper), for solvers steering a search.
 """
 
 from __future__ import annotations

@@ -1,7 +1,6 @@
 """The exact collision verdict on a solver's answer: the one place where a scene's judgement enters a Result.
 
-Every method (memetic, the paper solvers, ``polish=True``, ``solve_many``, ``solve_all``,
-``solve_trajectory``) hands its result through :func:`with_collision_verdict` when the problem has a scene:
+Every method hands its result through :func:`with_collision_verdict` when the problem has a scene:
 ``collision_free`` and ``min_distance`` are filled from the exact mesh check
 (:meth:`~evoik_pin.problem.IKProblem.collision_verdict`), ``success`` requires ``collision_free``, a colliding
 answer's message names the pairs in contact, and multi-solution results keep only their collision-free

@@ -1,14 +1,9 @@
 """Meshcat web preview: a robot (a chain or a whole tree), IK targets and goals, several solutions, a trajectory,
 and a static HTML export.
 
-Built on :class:`pinocchio.visualize.MeshcatVisualizer`, which turns the robot's
-:attr:`~evoik_pin.robot.Robot.visual_model` into meshcat objects (meshes of the example-robot-data robots,
-the boxes/cylinders/spheres the papers' URDFs carry). A URDF without visual geometry is shown as a
-skeleton: a sphere at every joint origin and a cylinder from each joint to the next (and to the tips).
-
-Everything is drawn in the robot's base frame, the frame :meth:`Robot.fk` and the solvers use (m; with a floating
-base: the world frame the root link moves in), so a target, a goal or a path given in that frame lands where its
-frame does.
+Built on :class:`pinocchio.visualize.MeshcatVisualizer` (:mod:`.robot`; a URDF without visual geometry is drawn
+as a skeleton). Everything is drawn in the robot's base frame, the frame :meth:`Robot.fk` and the solvers use (m;
+with a floating base: the world frame the root link moves in).
 
 Scene tree (paths below meshcat's ``/meshcat`` root, each a checkbox in the browser's "Open Controls"):
 
@@ -27,11 +22,9 @@ listen on 127.0.0.1 only; busy ports are skipped: ZeroMQ from 6000, HTTP from 70
 :meth:`Viewer.close`, at the end of a ``with`` block, when the Viewer is garbage collected, at interpreter
 exit, or when the process that started it dies.
 
-The package, one concept a module: :mod:`.server` (the meshcat server: start, readiness, ports, external
-servers), :mod:`.robot` (the robot's visuals or skeleton at q), :mod:`.ghosts`, :mod:`.markers` (targets and goal
-frames), :mod:`.obstacles` (scenes, links in collision), :mod:`.paths` (point clouds, polylines, animation),
-:mod:`.camera`, :mod:`.html` (static export); this module holds the :class:`Viewer` they make up, its life cycle
-and inputs, and the time limits.
+Modules: :mod:`.server`, :mod:`.robot`, :mod:`.ghosts`, :mod:`.markers`, :mod:`.obstacles`, :mod:`.paths`,
+:mod:`.camera`, :mod:`.html`; this one holds the :class:`Viewer` they make up, its life cycle, inputs and time
+limits.
 
 Example::
 
@@ -182,9 +175,8 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
         """Keep the server running until Ctrl-C (or until the server exits), then close the Viewer.
 
         Args:
-            message: a line to print (and flush) to ``file`` (default ``sys.stdout``) once Ctrl-C stops the Viewer
-                cleanly, e.g. "Press Ctrl-C to stop the viewer.". Printed before the call, a Ctrl-C that came
-                between the print and the wait ended the program with a KeyboardInterrupt traceback.
+            message: a line to print (and flush) to ``file`` (default ``sys.stdout``) inside the wait, so a
+                Ctrl-C right after it still stops the Viewer cleanly, e.g. "Press Ctrl-C to stop the viewer."
         """
         if message is not None and not isinstance(message, str):
             raise OptionError(f"Viewer.block: message must be a str (a line to print) or None, not "

@@ -48,10 +48,8 @@ zmqserver.main()
 
 def _printed(f) -> str:
     """What a subprocess has written so far to ``f`` (the temporary file given it as stdout or stderr), read without
-    moving the file's offset: the subprocess writes at that offset, which the two share (one open file), so a
-    ``seek(0)`` before a read let a line the server printed meanwhile land at the start of the file, over its first
-    line; a server whose ``zmq_url`` line was overwritten that way by its ``web_url`` line was waited for until the
-    hang guard (600 s)."""
+    moving the file's offset: the subprocess writes at that shared offset, so a ``seek(0)`` would let its next line
+    overwrite its first."""
     chunks, offset = [], 0
     while True:
         chunk = os.pread(f.fileno(), 1 << 16, offset)

@@ -30,7 +30,7 @@ from ...goals.bands import AUX_BAND, AUX_INNER, AUX_SWING
 from ...goals.direction import AUX_AXIS
 from ...goals.registry import AXIS_ALONG, AXIS_AT, BANDED_LOG6, BANDED_POINT
 from ...lie.compiled import jlog3, log3
-from .tree import BORROWING
+from .tree_kinematics import BORROWING
 
 #: Below this distance (m) from its point a look-at frame has no direction to the point.
 _NEAR_POINT = 1e-12

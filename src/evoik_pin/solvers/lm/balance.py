@@ -4,9 +4,9 @@
 branch the one-frame kinds never enter (their declared family, the spec's ``G_FAMILY``).
 
 * Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
-  c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree.tree_forward`), s_0 the first moment of the
-  bodies no joint moves and M the total mass. Its Jacobian in one backward pass over the tree: with S_k the first
-  moment of joint k's whole subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
+  c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree_kinematics.tree_forward`), s_0 the first
+  moment of the bodies no joint moves and M the total mass. Its Jacobian in one backward pass over the tree: with S_k
+  the first moment of joint k's whole subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
   ``M_k z_k / M`` (prismatic). Rows of axes a goal leaves free are zero.
 * Support polygon: the ground (x, y) projection of c inside the convex hull of the contact points (gift wrapping,
   counter-clockwise), shrunk by s = margin + tolerance (m); the 2 rows are ``c_xy - proj(c_xy)``, zero inside.
@@ -44,7 +44,7 @@ from ...goals.registry import (
 )
 from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
-from .tree import BORROWING, frame_pose, joint_column
+from .tree_kinematics import BORROWING, frame_pose, joint_column
 
 #: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
 #: counts as parallel to another.

@@ -1,36 +1,26 @@
 """The Levenberg-Marquardt engine: every LM run in evoik_pin goes through :class:`LevenbergMarquardt`
 (one problem, one or several starts) or :func:`solve_pairs` (many (start, target) pairs).
 
-A problem is a stack of goals on frames of the robot (one goal, on the tip, for a single target): the task error
-``e(q)`` stacks each goal's rows, scaled by the square root of its weight, and ``E(q) = de/dq`` its Jacobian
-rows. By goal kind, for the goal frame's pose ``T_f(q)``:
+A problem is a stack of goals on frames of the robot: the task error ``e(q)`` stacks each goal's rows, scaled by
+the square root of its weight, and ``E(q) = de/dq``. For a pose goal (6 rows), ``e = log6(T_t^-1 T_f(q))`` (m, rad)
+and ``E = Jlog6(T_t^-1 T_f(q)) J_local(q)``; its rotational part's norm is the rotation angle and it vanishes
+exactly at the target. A position goal is ``p_f(q) - p_t`` in the base frame; the other kinds' rows are in
+:mod:`.axes` and :mod:`.balance`.
 
-* pose (6 rows): ``e = log6(T_t^-1 T_f(q))``, the SE(3) logarithm (m, rad) of the frame's pose seen from the
-  target frame, and ``E = Jlog6(T_t^-1 T_f(q)) J_local(q)``: since ``T_f(q + dq) = T_f(q) exp(J_local dq)``,
-  ``e(q + dq) = e + E dq + O(dq^2)``. Its rotational part is ``log3(R_t^T R)``, whose norm is the rotation
-  angle, and it vanishes exactly at the target. (A decoupled error ``(R_t^T (p - p_t), log3(R_t^T R))`` was
-  measured against it: slower and no better, docs/BENCHMARKS.md);
-* position (3 rows): ``e = p_f(q) - p_t`` in the base frame with the translational Jacobian rows;
-* planar (x, y[, yaw]): ``e = (p_x - x_t, p_y - y_t[, wrap(yaw(q) - yaw_t)])`` with the matching rows
-  of the base-frame Jacobian.
-
-One step solves the damped normal equations in the smaller of task space and joint space (at most 6 x 6 for one
-pose goal, whatever the number of joints)::
+One step solves the damped normal equations in the smaller of task space and joint space::
 
     (E E^T + lambda I) y = e,  dq = -E^T y     (rows <= joints)
     (E^T E + lambda I) dq = -E^T e               (rows > joints: the same step)
 
 with the step length capped at ``max_step`` (a trust region), accepted only when it lowers ``|e|^2``
-(``lambda`` shrinks after a success, grows after a failure). Joint limits are respected exactly by a small
-active set (held joints; joints a step carries past a bound fixed there and the step re-solved for the
-others). Revolute joints whose range spans a full turn wrap instead of being clipped. A run gives up on a
-stall (``|e|`` not halved in a few steps), so the caller can restart elsewhere; once every goal meets its
-tolerances it takes one more, undamped step (about 1e-12 instead of just under the tolerance). Near-singular
-targets get a geodesic acceleration (Transtrum & Sethna 2012) while a run creeps along a narrow valley.
+(``lambda`` shrinks after a success, grows after a failure). Joint limits are held exactly by an active set
+(joints a step carries past a bound are fixed there and the step re-solved for the others); revolute joints
+spanning a full turn wrap instead. A run gives up on a stall (``|e|`` not halved in a few steps) so the caller
+can restart elsewhere; once every goal meets its tolerances it takes one undamped finishing step. Near-singular
+targets get a geodesic acceleration (Transtrum & Sethna 2012).
 
-Two engines run that one iteration: ``engine="compiled"`` (the default) calls the numba kernel
-(:mod:`.kernel`, about 1 us per step, every goal kind); ``engine="python"`` runs the reference loop
-(:mod:`.reference`, about 30-40 us per step), which the tests hold the kernel to.
+``engine="compiled"`` (the default) runs the numba kernel (:mod:`.kernel`); ``engine="python"`` runs the
+reference loop (:mod:`.reference`) the tests hold the kernel to.
 """
 
 from __future__ import annotations
@@ -73,7 +63,7 @@ from .layout import (
     box_constants,
     kernel_params,
 )
-from .outcome import LMOutcome, PairsOutcome
+from .run_outcome import LMOutcome, PairsOutcome
 
 if TYPE_CHECKING:  # the problem module imports goals, which import this package's layout
     from ...problem import IKProblem, Target
@@ -86,7 +76,7 @@ ENGINES = ("compiled", "python")
 
 #: About how long (s, one core) compiling a variant's entries takes from an empty cache (scripts/compile_time.py).
 KERNEL_COMPILE_SECONDS = {False: 20.0, True: 35.0}
-#: The loaded kernels: per variant (False: stacks of the first four kinds, True: any stack), compiled_kernel's dict.
+#: The loaded kernels: per variant (False: one-frame goals only, True: any stack), compiled_kernel's dict.
 _KERNELS: dict = {}
 _LOADING = threading.Lock()
 
@@ -110,19 +100,16 @@ def later_kinds(stack: GoalStack) -> bool:
 
 
 def compiled_kernel(extra: bool = False) -> dict:
-    """The kernel's entry points for one variant of the run, ready to run: ``extra`` False for goal stacks of the
-    first four kinds (pose, position, planar: ``lm_run_basic``), True for any stack (``lm_run_all``;
-    :func:`later_kinds` says which a stack needs). The dict holds ``lm_run_buffers``, ``lm_run_starts_buffers`` and
-    ``lm_run_pairs_buffers`` (the variant's compiled entries, :data:`.kernel.Entries`), ``lm_run``, ``lm_run_starts``
-    and ``lm_run_pairs`` (Python wrappers that make a workspace and call the entry of the stack they are given), and
-    ``workspace_size``.
+    """The kernel's entry points for one variant of the run, ready to run: ``extra`` False for stacks of one-frame goals
+    (pose, position, planar: ``lm_run_basic``), True for any stack (``lm_run_all``; :func:`later_kinds` says which a
+    stack needs). The dict holds ``lm_run_buffers``, ``lm_run_starts_buffers`` and ``lm_run_pairs_buffers`` (the
+    variant's :data:`.kernel.Entries`), ``lm_run``, ``lm_run_starts`` and ``lm_run_pairs`` (Python wrappers that make a
+    workspace) and ``workspace_size``.
 
-    The first call per variant imports numba (~0.3 s) and runs each of the variant's entries once on a one-joint
-    robot, so that numba loads the machine code from its on-disk cache (~0.5 s) or, the first time after an install,
-    compiles it (one line on stderr says so: :mod:`.compiling`), here and not inside a solve's time budget: every
-    :class:`LevenbergMarquardt` calls it when made, which every solver does before starting its clock. Only the
-    variants used are compiled: a pose, position or planar problem never compiles the later kinds' code. Later
-    calls return at once.
+    The first call per variant runs each entry once on a one-joint robot, so that numba loads (or, once per install,
+    compiles, with a notice: :mod:`.compiling`) its machine code here rather than inside a solve's time budget; every
+    :class:`LevenbergMarquardt` calls it when made, before any solver starts its clock. Thread-safe; later calls
+    return at once.
     """
     kernel = _KERNELS.get(extra)
     if kernel is None:
@@ -151,9 +138,8 @@ def _load_kernel(extra: bool) -> dict:
              (entries.pairs, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(),
                               Rt[None].copy(), params, np.empty((1, 1)), stats, np.empty((1, 1, 2))))]
     if extra:
-        # Goal.errors' compiled errors of the kinds with bands, free axes or an axis to point (a read-only aux
-        # row: the goal's own), loaded here too: first called mid-search (memetic's later stages), its loading
-        # from the disk cache (3-4 ms) had been charged to that solve's budget
+        # Goal.errors' compiled errors (.axes, read-only aux row) are first called mid-search: load them here too,
+        # outside any time budget
         from .axes import axes_error
 
         aux = np.zeros(AUX_SIZE)
@@ -273,9 +259,9 @@ class LevenbergMarquardt:
 
     def _overload(self):
         """The machine code numba runs for :meth:`run`'s arguments, as a function called without numba's dispatch
-        (which types each of the kernel's 22 arguments on every call: about 1.4 us, an LM run's tenth), or None
-        where this numba does not expose it. Only for an engine that runs many problems: finding it costs tens of
-        microseconds. The argument types are fixed: the engine's own arrays, and ``q`` copied as
+        (which types each of the kernel's 22 arguments on every call, a noticeable share of a short run), or None
+        where this numba does not expose it. Only for an engine that runs many problems: finding it costs more than
+        a call. The argument types are fixed: the engine's own arrays, and ``q`` copied as
         :meth:`run` does."""
         buffers = self._buffers or self._workspace(DEFAULT_ITERATIONS)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
@@ -301,7 +287,7 @@ class LevenbergMarquardt:
 
         Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at
         ``deadline`` (a ``time.perf_counter()`` value). The compiled engine checks ``deadline`` only before
-        the run starts (a run is at most ``max_iterations`` steps of about 1 us); when it has passed, the
+        the run starts (a run is at most ``max_iterations`` short steps); when it has passed, the
         start is evaluated and no step is taken. Returns the last accepted configuration (the best met).
         """
         if self._reference is not None:
@@ -413,8 +399,9 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
 
     Args:
         robot: the chain or tree. Q: (N, n) start configurations. targets: N targets, all of one kind (a list of
-            :class:`~evoik_pin.problem.Target`, or their :class:`~.layout.TargetArrays`), or N goal lists of one
-            structure (:class:`~.layout.GoalArrays`: their stack's tolerances apply; compiled engine only).
+            :class:`~evoik_pin.problem.Target`, or their :class:`~evoik_pin.goals.stack.TargetArrays`), or N goal
+            lists of one structure (:class:`~evoik_pin.goals.stack.GoalArrays`: their stack's tolerances apply;
+            compiled engine only).
             lower, upper: (n,) box. tolerance (m), rotation_tolerance (rad): success thresholds of single targets.
             max_iterations: steps per pair. engine: as :class:`LevenbergMarquardt`'s.
     """
@@ -468,7 +455,7 @@ def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upp
 
 
 def targets_of(arrays: TargetArrays) -> list[Target]:
-    """Target objects of :class:`~.layout.TargetArrays` (the reference engine works on them)."""
+    """Target objects of :class:`~evoik_pin.goals.stack.TargetArrays` (the reference engine works on them)."""
     from ...problem import Target
 
     P, Rts = arrays.P, arrays.Rts

@@ -1,55 +1,36 @@
 """The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
 
-One call of :func:`lm_run` runs a whole LM iteration from one start for a stack of goals (:class:`.layout.GoalStack`:
-pose, position or planar goals on frames of a kinematic tree), with the tree kinematics of :mod:`.tree`, the
-mimic coupling of :mod:`.chain` and the SO(3) / SE(3) closed forms of :mod:`evoik_pin.lie.compiled`.
-:func:`lm_run_starts` runs several starts for one problem, in order, until one converges (memetic's restarts);
-:func:`lm_run_pairs` runs one start per (start, targets) pair (batches). The iteration is the one of
-:class:`.reference.ReferenceLM` line for line (same errors, damping rule, trust region, active-set joint limits,
-wrapping, stall test, geodesic acceleration and finishing step); tests hold the two to the same steps from the
-same starts. About 1 us per step for a 7-joint arm, against 30-40 us for the Python loop.
+:func:`lm_run` runs one LM iteration from one start for a stack of goals on frames of a kinematic tree (any goal
+kind: each kind's kernel codes and compiled family are declared in :mod:`evoik_pin.goals.registry` and the kind's
+own file; :mod:`evoik_pin.goals.stack` packs them into the ``spec`` rows read here). :func:`lm_run_starts` runs
+several starts for one problem, in order, until one converges; :func:`lm_run_pairs` runs one start per
+(start, targets) pair. The iteration is :class:`.reference.ReferenceLM`'s line for line (errors, damping rule, trust
+region, active-set joint limits, wrapping, stall test, geodesic acceleration, finishing step); tests hold the two to
+the same steps from the same starts.
 
-Task error ``e``: the goals' rows stacked (goal g's rows from ``spec[g, G_ROW]``), each goal's rows scaled by the
-square root of its weight; by goal kind (:mod:`.layout`), for the goal frame's pose ``T_f(q)``:
+Task error ``e``: the goals' rows stacked (goal g's rows from ``spec[g, G_ROW]``), each scaled by the square root of
+its weight, ``e = f(q) - target`` in m and rad; ``E = de/dq``. The one-frame family (:func:`goal_error`) is here
+(pose: ``log6(T_t^-1 T_f(q))``; position: ``p_f(q) - p_t``; planar: x, y and optionally the wrapped yaw); bands,
+free axes, orientation and pointing are in :mod:`.axes`, goals beyond one frame in :mod:`.balance`. A run has
+converged when every goal is within its own tolerances (m, rad). The damped step is solved in the smaller space:
+``(E E^T + lambda I) y = e, dq = -E^T y`` when there are no more rows than joints, else
+``(E^T E + lambda I) dq = -E^T e``.
 
-* pose: ``e = log6(T_t^-1 T_f(q))`` (m, rad; Pinocchio's formula), ``E = Jlog6(T_t^-1 T_f(q)) J_local``;
-* position: ``e = p_f(q) - p_t`` with the base-frame translational Jacobian rows;
-* planar: ``e = (p_x - x_t, p_y - y_t[, wrap(yaw(q) - yaw_t)])`` with base-frame rows vx, vy[, wz].
+Constants and the ``params`` / ``box`` / goal layouts: :mod:`.layout`. The run is compiled in two variants
+(:func:`_run`): :func:`lm_run_basic` for one-frame goals only, :func:`lm_run_all` for any; :func:`entries_for` picks
+a variant's entries (:data:`BASIC`, :data:`ALL`) for a stack, and :func:`.engine.compiled_kernel` loads them outside
+any time budget (:mod:`.compiling`). A run allocates nothing: the callers make one :data:`Workspace` per call.
 
-A run has converged when every goal is within its own tolerances (m, rad). The damped step is solved in task
-space, ``(E E^T + lambda I) y = e, dq = -E^T y``, when the stack has no more rows than joints, and in joint
-space, ``(E^T E + lambda I) dq = -E^T e``, otherwise (the same step: the smaller system).
+Rules for editing the compiled code:
 
-The constants and the ``params`` / ``box`` / goal layouts come from :mod:`.layout`. The run is compiled in two
-variants (:func:`_run`: :func:`lm_run_basic` for pose, position and planar goals, :func:`lm_run_all` for any goal),
-each with its own three entries (:func:`_entries`: :data:`BASIC`, :data:`ALL`; :func:`entries_for` picks one for a
-stack). numba compiles a variant on its first use (about 20 s of CPU for :data:`BASIC`, 35 s for :data:`ALL`, once
-per install, then cached on disk); :func:`.engine.compiled_kernel` loads it outside any time budget, announcing a
-compilation in one line (:mod:`.compiling`).
-
-Cost: about 7.5 us per run for Panda pose targets from seed-table starts (8 kinematics evaluations; some 30 % of
-it in the damped solves, whose divisions and square roots form one chain, 30 % in the forward kinematics with its
-sines and cosines). A run allocates nothing of its own: :func:`lm_run_pairs` and :func:`lm_run_starts` make one
-:data:`Workspace` per call and reuse it for every run. The runs (:func:`_run`) and this module's helpers are compiled
-with ``_nrt=False`` (:data:`BORROWING`), numba's own option for functions that borrow their arrays
-(``numba.cpython.unicode`` uses it; a numba without it compiles them as usual, with the same results): they
-neither allocate nor count references to the arrays they are given, which their caller owns. Otherwise numba
-brackets nearly every call with an atomic increment and decrement per array argument (its pruning of those
-gives up across calls), a fifth of the run time; and a helper that allocated now fails to compile instead.
-:func:`task_error`, :func:`task_jacobian` and :func:`lm_step`, which take 16 to 25 arrays each, are moreover
-inlined into the run (passing those arrays cost more than the calls, about 7 % of the run time), and so are the
-kinematics of :mod:`.tree` and the goal kinds' rows of :mod:`.axes` and :mod:`.balance` that are not behind a call.
-
-Inlining is LLVM's, not numba's: the inlined helpers are compiled with ``forceinline=True`` (numba's option for
-LLVM's ``alwaysinline``), each once, and LLVM inlines them into each caller. numba's own ``inline="always"`` (which
-inlines at the level of numba's IR and types the caller again after each call it inlines) took 60 s to compile
-:func:`lm_run_basic` and 90 s for :func:`lm_run_all`, against 5 s and 18 s now, for the same machine code as far as
-the results go (scripts/bench_chain_kernel.py: equal md5, a run 5-10 % faster). Every other compiled function of
-the engine says ``forceinline=False`` explicitly: numba's flags are inherited by a callee that does not set them,
-so a helper kept behind a call (:func:`beyond_frame_error`, :func:`damped_solve`, ...) would otherwise be inlined
-too when a forced-inline caller compiles it first. numba's disk cache keys an entry point on its own file only:
-after editing an inlined helper in another file (:mod:`.tree`, :mod:`.axes`, :mod:`.balance`), delete the kernel's
-cached ``*.nbi`` / ``*.nbc``.
+* The runs and helpers are compiled with :data:`BORROWING` (``_nrt=False``): they borrow their caller's arrays
+  without reference counting (otherwise a fifth of the run time), so a helper that allocates fails to compile.
+* :func:`task_error`, :func:`task_jacobian`, :func:`lm_step` and the kinematics of :mod:`.tree_kinematics`,
+  :mod:`.axes` and :mod:`.balance` are inlined by LLVM (``forceinline=True``; numba's ``inline="always"`` compiles
+  far slower). Every other compiled function says ``forceinline=False`` explicitly, since numba's flags are
+  inherited by a callee that does not set them.
+* numba's disk cache keys an entry point on its own file only: after editing an inlined helper in another file,
+  delete the kernel's cached ``*.nbi`` / ``*.nbc``.
 """
 
 from __future__ import annotations
@@ -103,19 +84,16 @@ from .layout import (
     S_ROT,
     SHRINK,
 )
-from .tree import BORROWING, frame_jacobian, frame_pose, tree_forward
+from .tree_kinematics import BORROWING, frame_jacobian, frame_pose, tree_forward
 
 TWO_PI = 2.0 * math.pi
 
 
 @njit(cache=True, nogil=True, forceinline=True)
 def frame_rows(kind):
-    """Rows of the residuals :func:`goal_error` computes (its own codes, the frame family's): 6 (the SE(3)
-    logarithm), 2 (planar), 3 (a point, planar with yaw), as the kinds declare them (tests hold the two equal).
-
-    The runs of :func:`lm_run_basic`, which hold frame-family goals only, take a goal's row count from here rather
-    than from its spec's ``G_ROWS``: known from the code the branch already tests, the count lets LLVM unroll the
-    rows' loops (reading it from the spec cost the single-pose chain case 3-4 %, scripts/bench_chain_kernel.py)."""
+    """Rows of :func:`goal_error`'s residuals (the frame family's codes): 6 (the SE(3) logarithm), 2 (planar), 3 (a
+    point, planar with yaw), as the kinds declare them (tests hold the two equal). :func:`lm_run_basic` reads a goal's
+    row count from here rather than from ``G_ROWS`` so that LLVM, knowing it, unrolls the rows' loops."""
     return 6 if kind == LOG6 else (2 if kind == PLANAR else 3)
 
 
@@ -155,14 +133,11 @@ def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, sp
     """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
     orientation error rad or 0) to ge (G, 2).
 
-    Fills the kinematics buffers Rj, pj, Z, O (:func:`.tree.tree_forward`; with ``mimic``, the physical joint
-    values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
+    Fills the kinematics buffers Rj, pj, Z, O (:func:`.tree_kinematics.tree_forward`; with ``mimic``, the physical
+    joint values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
     its position seen from the target tg (G, 3), which :func:`task_jacobian` needs. M (3, 3) is scratch.
-    ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass: a scaling inside the
-    goal loop, even skipped, costs a fifth of the whole evaluation). ``extra``: True when the stack may hold goals of
-    the kinds after the first four (:mod:`.axes`'s, :mod:`.balance`'s), None when it holds the first four only
-    (:func:`lm_run_basic`): numba prunes the branches tested on ``extra is not None`` before it types them, so with
-    a None their code is neither compiled nor linked (:func:`_run` says why).
+    ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass, which keeps the goal loop
+    free of it). ``extra``: :func:`_run`'s (None: one-frame goals only, the other families' branches pruned).
     """
     if mimic:
         expand(index, scale, offset, q, x)
@@ -245,10 +220,10 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
                   rv, A, B, E, parent, Rj, pj):
     """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
-    per goal, its frame's base-frame Jacobian (:func:`.tree.frame_jacobian` over the joints ``support[g]`` marks;
-    with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`) turned into the
-    goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G, 3, 3), for
-    its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
+    per goal, its frame's base-frame Jacobian (:func:`.tree_kinematics.frame_jacobian` over the joints
+    ``support[g]`` marks; with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`)
+    turned into the goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G,
+    3, 3), for its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
     :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
     parent (m,) and the joint poses Rj (m, 3, 3), pj (m, 3): for the kinds beyond one frame (:mod:`.balance`), which
     start from their own physical Jacobian. ``extra``: as :func:`task_error`'s.
@@ -283,9 +258,8 @@ def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
-    """:func:`.balance.balance_error` behind a call, not inlined: :func:`task_error`, inlined four times into
-    the run, keeps the size the one-frame kinds compile to (with this branch alone their runs are as fast
-    as before; docs/BENCHMARKS.md, scripts/bench_chain_kernel.py)."""
+    """:func:`.balance.balance_error` behind a call, not inlined, so that :func:`task_error` (inlined four times
+    into the run) keeps the size the one-frame kinds compile to."""
     return balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
 
 
@@ -466,11 +440,11 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
 #: The buffers of LM runs (:func:`make_workspace`) for n joints, m physical joints, G goals and `rows` task rows,
 #: reused from run to run. The kinematics come in three sets: the current configuration (q, Rj, pj, Z, O, Rg, pg,
 #: tg, e, ge), a step's candidate (qn, ..., en, ge2) and the geodesic-acceleration probe (qh, ..., eh, ge3): Rj (m,
-#: 3, 3), pj (m, 3) the joint poses, Z, O (m, 3) the joint axes and origins (:func:`.tree.tree_forward`), Rg (G, 3,
-#: 3), pg (G, 3) the goal frames' poses, tg (G, 3) their positions seen from their targets (:func:`goal_error`'s
-#: t), e (rows,) the task error, ge (G, 2) each goal's errors. Scratch: x (m,), Jx (6, m), J (6, n), rv (3,), E,
-#: W (rows, n), A, Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq, dfix (n,), held
-#: (n,) bool, and history (max_it + 1,), the |e|^2 after each accepted step.
+#: 3, 3), pj (m, 3) the joint poses, Z, O (m, 3) the joint axes and origins (:func:`.tree_kinematics.tree_forward`),
+#: Rg (G, 3, 3), pg (G, 3) the goal frames' poses, tg (G, 3) their positions seen from their targets
+#: (:func:`goal_error`'s t), e (rows,) the task error, ge (G, 2) each goal's errors. Scratch: x (m,), Jx (6, m), J (6,
+#: n), rv (3,), E, W (rows, n), A, Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq,
+#: dfix (n,), held (n,) bool, and history (max_it + 1,), the |e|^2 after each accepted step.
 Workspace = namedtuple("Workspace", ["q", "Rj", "pj", "Z", "O", "Rg", "pg", "tg", "e", "ge",
                                      "qn", "Rj2", "pj2", "Z2", "O2", "Rg2", "pg2", "tg2", "en", "ge2",
                                      "qh", "Rj3", "pj3", "Z3", "O3", "Rg3", "pg3", "tg3", "eh", "ge3",
@@ -575,9 +549,7 @@ def _outcome(spec, ge, g_out):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _weighted(spec):
     """Whether some goal of the stack spec (G, GOAL_SIZE) has a weight other than 1. A function rather than a flag
-    set in the run (``weighted = False``, then True in a loop): numba types the calls of such a flag with its
-    literal False while it infers the run's types and compiles each callee once more for it (task_error and
-    task_jacobian: seconds of the first compilation, for code the run never calls)."""
+    set in a loop, which numba would type as the literal False and compile each callee once more for."""
     for g in range(spec.shape[0]):
         if spec[g, G_WEIGHT] != 1.0:
             return True
@@ -585,16 +557,11 @@ def _weighted(spec):
 
 
 def _run(extra, name, doc):
-    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: the run compiled with ``extra`` (True: the
-    stack may hold goals of the later kinds; None: it holds the first four only, :func:`task_error`) a constant of
-    its closure (inlining one body into both instead took numba over 8 GB and 10 minutes). numba's disk cache keys
-    closures by their cells' contents: the two are cached apart.
-
-    Two runs rather than one: with the later kinds' branches (inlined, behind calls, or in a loop of their own alike)
-    LLVM compiles the run's loops differently, and the single-pose chain case took 6-17 % longer (docs/BENCHMARKS.md,
-    scripts/bench_chain_kernel.py). With ``extra`` None numba drops those branches before typing them (its
-    dead-branch pruning of a None argument): :func:`lm_run_basic` neither compiles nor links the code of
-    :mod:`.axes` and :mod:`.balance`, a third of the time :func:`lm_run_all` takes to compile."""
+    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`, named ``name`` with docstring ``doc``: the run
+    with ``extra`` a constant of its closure (True: the stack may hold goals of any family; None: one-frame goals
+    only). With None numba prunes the other families' branches before typing them, so :func:`lm_run_basic` neither
+    compiles :mod:`.axes` and :mod:`.balance` nor pays for their branches in its loops. numba's disk cache keys
+    closures by their cells' contents, so the two are cached apart."""
 
     def run(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
             params, q_out, g_out):
@@ -719,8 +686,8 @@ def _run(extra, name, doc):
     return njit(cache=True, nogil=True, forceinline=False, **BORROWING)(run)
 
 
-lm_run_basic = _run(None, "lm_run_basic", """One LM run in the workspace ``ws`` (:func:`carve`) for stacks of the
-first four kinds only; the other arguments and the result are :func:`lm_run`'s.""")
+lm_run_basic = _run(None, "lm_run_basic", """One LM run in the workspace ``ws`` (:func:`carve`) for stacks of
+one-frame goals only (``G_FAMILY`` = ``FAMILY_FRAME``); the other arguments and the result are :func:`lm_run`'s.""")
 lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_basic` for any stack.""")
 
 
@@ -740,17 +707,10 @@ Entries = namedtuple("Entries", ["run", "starts", "pairs"])
 
 
 def _entries(extra, suffix):
-    """The three compiled entries of one variant of the run (``extra``: :func:`_run`'s; the same source for both),
-    each a function of its own for numba's disk cache (``suffix`` names them apart).
-
-    Each entry links the run it calls and has LLVM optimize and emit it once more (numba optimizes a library's
-    module whole, the code it links included): an entry linking both runs, as one that picked a run per stack did,
-    compiled both runs again. One variant per entry, the variant picked in Python (:func:`entries_for`), makes a
-    problem of the first four kinds compile :func:`lm_run_basic` alone, and each entry only when first used
-    (:func:`.engine.compiled_kernel`). In each body the branch on ``extra`` (a closure constant) is pruned by numba
-    before typing, so the other run is not even typed. Every entry borrows its arrays (:data:`BORROWING`): a run's
-    call passes some 70 arrays (the workspace's views), which a reference-counting caller would bracket with as many
-    atomic increments and decrements (a third of a short run's time)."""
+    """The three compiled entries (:data:`Entries`) of one variant of the run (``extra``: :func:`_run`'s), each a
+    function of its own for numba's disk cache (``suffix`` names them apart). One variant per entry, picked in Python
+    (:func:`entries_for`), because numba re-optimizes every run an entry links: an entry linking both would compile
+    both. Every entry borrows its arrays (:data:`BORROWING`)."""
 
     def run(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
             gaux, pt, Rt, params, q_out, g_out):
@@ -808,11 +768,11 @@ def _entries(extra, suffix):
     return Entries(*compiled)
 
 
-#: The entries of the run for stacks of the first four kinds (:func:`lm_run_basic`) and for any stack
+#: The entries of the run for stacks of one-frame goals (:func:`lm_run_basic`) and for any stack
 #: (:func:`lm_run_all`); :func:`entries_for` picks one for a stack.
 BASIC = _entries(None, "_basic")
 ALL = _entries(True, "")
-# the entries for any stack under their names of old (tests, benchmarks and first_runs' compiled calls use them)
+# each entry under a name of its own
 lm_run_buffers, lm_run_starts_buffers, lm_run_pairs_buffers = ALL
 lm_run_buffers_basic, lm_run_starts_buffers_basic, lm_run_pairs_buffers_basic = BASIC
 
@@ -825,8 +785,8 @@ def has_later_kinds(spec: np.ndarray) -> bool:
 
 
 def entries_for(spec: np.ndarray) -> Entries:
-    """The compiled entries that run the goal stack spec (G, GOAL_SIZE): :data:`BASIC` when it holds the first four
-    kinds only (the faster run, and the only one compiled for such problems), else :data:`ALL`."""
+    """The compiled entries that run the goal stack spec (G, GOAL_SIZE): :data:`BASIC` when it holds one-frame goals
+    only (the faster run), else :data:`ALL`."""
     return ALL if has_later_kinds(spec) else BASIC
 
 
@@ -840,7 +800,8 @@ def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, sp
             index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
         spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
-            (:class:`.layout.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets (:func:`.layout.encode_target`).
+            (:class:`~evoik_pin.goals.stack.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets
+            (:func:`~evoik_pin.goals.stack.encode_target`).
         params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
             (:mod:`.layout`).
 
@@ -865,10 +826,10 @@ def _workspace_buffer(n: int, parent: np.ndarray, spec: np.ndarray, params: np.n
 def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                  params, Q_out, stats, g_stats):
     """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
-    row the stack's targets, :func:`.layout.encode_targets` for one goal); end configurations to Q_out (N, n), per
-    pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats (N, STATS_SIZE)
-    and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python wrapper of the
-    ``pairs`` entry of the stack's variant)."""
+    row the stack's targets, :func:`~evoik_pin.goals.stack.encode_targets` for one goal); end configurations to
+    Q_out (N, n), per pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats
+    (N, STATS_SIZE) and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python
+    wrapper of the ``pairs`` entry of the stack's variant)."""
     n = Q.shape[1]
     entries_for(spec).pairs(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent, FR,
                             Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts, params,

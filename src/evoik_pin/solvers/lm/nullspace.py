@@ -17,8 +17,7 @@ which picking among a few discrete LM answers only approximates. :func:`descend_
    of its start or a kept step was shorter than :data:`MIN_STEP`.
 
 So the criterion never gets worse and every kept configuration meets every goal (the kernel's own test,
-:func:`.kernel.within`). A step costs 1-5 kinematics evaluations (n more for manipulability's gradient), about
-1 us each for Panda, against some 30 us for a Python step of :func:`evoik_pin.solvers.search.choose.refine`.
+:func:`.kernel.within`). A step costs 1-5 kinematics evaluations (n more for manipulability's gradient).
 """
 
 from __future__ import annotations
@@ -32,7 +31,7 @@ from ...goals.stack import G_WEIGHT
 from .chain import coupled
 from .kernel import _copy, damped_solve, make_workspace, stack_rows, task_error, task_jacobian, within
 from .layout import B_CHI, B_CLO, LAMBDA_MIN
-from .tree import frame_jacobian
+from .tree_kinematics import frame_jacobian
 
 __all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "nullspace_kernel"]
 
@@ -270,12 +269,12 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch` and :func:`.population.task_rows` (the task Jacobian whose null space
+    """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian whose null space
     :func:`evoik_pin.solvers.search.choose.refine` steps in), compiled (or loaded from numba's disk cache) on a
     one-joint robot, outside any time budget."""
     if not _KERNEL:
         from .engine import warmup_problem
-        from .population import task_rows
+        from .population_rows import task_rows
 
         tree, box, goals, pt, Rt = warmup_problem()
         descend_batch(np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, pt, Rt, 1, 1, 0.5,

@@ -1,19 +1,7 @@
-"""The reference Levenberg-Marquardt loop: the iteration of :mod:`.kernel` in Python over Pinocchio.
-
-The one Python LM loop in evoik_pin. It states the algorithm readably and is what the compiled kernel is tested
-against (tests/test_lm.py: the same steps from the same starts); ``engine="python"`` runs it in production
-(about 30-40 us per step against about 1 us compiled). Kinematics come from the robot layer
-(``Robot.tip_pose_seen_from_unchecked``, ``frame_poses_unchecked``, ``jacobian_local_unchecked``), the error's
-logarithm and its Jacobian from Pinocchio (``pin.log6``, ``pin.Jlog6``).
-
-The iteration (see :mod:`.engine` for the task errors of a goal stack): one step solves the damped normal
-equations in the smaller of task space, ``(E E^T + lambda I) y = e, dq = -E^T y``, and joint space,
-``(E^T E + lambda I) dq = -E^T e``, capped at ``max_step`` (a trust region), accepted only when it lowers
-``|e|^2`` (lambda shrinks after a success, grows after a failure). Joint limits are an active set
-(:meth:`ReferenceLM._step`); full-turn joints wrap; a stall test gives up on a lost cause; near-singular targets
-get a geodesic acceleration; a converged run (every goal within its tolerances) takes one finishing, undamped
-step.
-"""
+"""The reference Levenberg-Marquardt loop: :mod:`.engine`'s iteration in Python over Pinocchio, step for step what
+:mod:`.kernel` compiles (tests/test_lm.py holds the two to the same steps from the same starts); ``engine="python"``.
+Kinematics come from the robot layer, the error's logarithm and its Jacobian from Pinocchio (``pin.log6``,
+``pin.Jlog6``)."""
 
 from __future__ import annotations
 
@@ -46,7 +34,7 @@ from .layout import (
     TWO_PI,
     box_constants,
 )
-from .outcome import LMOutcome
+from .run_outcome import LMOutcome
 
 if TYPE_CHECKING:
     from ...problem import IKProblem

@@ -1,10 +1,6 @@
-"""Differential evolution (Storn & Price) with the mutation schemes of papers 002, 004 and 000.
-
-Registered as ``de``. One generation, all individuals at once: draw distinct random indices for every
-individual, build donors with the chosen mutation (:mod:`.de_ops`), cross them with the targets
-(binomial or exponential), bring the trials back into the search box, evaluate the trial population in
-one kinematics pass and keep each trial that is no worse than its target (greedy one-to-one selection).
-"""
+"""Differential evolution (Storn & Price) with the mutation schemes of papers 002, 004 and 000 (``de``): per
+generation, donors by the chosen mutation (:mod:`.de_ops`), crossed with their targets, brought into the box,
+evaluated in one kinematics pass, and kept when no worse than their target (:func:`greedy_selection`)."""
 
 from __future__ import annotations
 

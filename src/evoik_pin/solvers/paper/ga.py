@@ -1,19 +1,11 @@
 """Genetic algorithms: paper 001's real-coded niching GA (``ga``) and paper 000's binary GA (``ga-binary``).
 
-``ga`` (paper 001, section 3.1): real-coded individuals, binary tournament selection with the niching
-rule of Oei, Goldberg & Chang (1991) as used by Deb: each contestant's niche count
-``nc_i = sum_j Sh(d_ij)`` (eqs. 6-7, triangular sharing function with alpha = 1 on the Euclidean distance
-of the joint vectors scaled to [0, 1]) with ``sigma_share = sqrt(n) / (2 r^(1/n))`` (eq. 8, n variables,
-r niches); if both niche counts are below the niche size n*, the lower cost wins, otherwise the less
-crowded one. Then SBX crossover (eqs. 9-10, eta = 5, probability 0.9) and mutation whose probability
-rises from 1/n to 1 while its perturbation (polynomial mutation, eta_m = 100 + t) shrinks from about 1 %
-of the range (eq. 11, following Deb 2000). The final population holds one cluster per solution family;
-its leaders are the method's ``solutions``.
-
-``ga-binary`` (paper 000, section III-B): every joint angle is a 9-bit string, a sign bit (1 = positive)
-and 8 magnitude bits, decoded as ``theta = +-(sum_n b_n 2^n) * 180 / 255`` deg; roulette-wheel selection,
-single-point crossover, bit-flip mutation and elitism (the best ``elite`` individuals survive unchanged).
-A general encoding maps ``bits`` unsigned bits linearly onto each joint's bounds.
+``ga`` (paper 001, section 3.1): binary tournaments under Oei, Goldberg & Chang's niching rule
+(:func:`niching_tournament`, :func:`niche_counts`, :func:`sharing_radius`), SBX (:func:`sbx_pairs`) and a
+mutation whose probability rises from 1/n to 1 while its spread shrinks (:func:`basic_polynomial_mutation`); the
+final population holds one cluster per solution family, whose leaders are the method's ``solutions``.
+``ga-binary`` (paper 000, section III-B): sign + magnitude bit strings per joint (:func:`decode_sign_magnitude`,
+or :func:`decode_bounds`), roulette-wheel selection, single-point crossover, bit-flip mutation and elitism.
 """
 
 from __future__ import annotations

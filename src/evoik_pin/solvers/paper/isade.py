@@ -16,27 +16,17 @@ Eq. 19 of paper 002 is misprinted: it reads ``F_i^iter = (F_i - F_mean^iter) / 2
 most individuals. The original ISADE averages the two, ``F_i^iter = (F_i + F_mean^iter) / 2``, and so do
 we (:func:`scale_factors`).
 
-Rank convention of eq. 17 (the paper only says particles are sorted by fitness and labelled with their
-rank): individuals sorted by ascending cost get ranks i = 1 (best) .. N (worst), so the best individuals
-take the largest steps around the best vector and the worst ones the smallest; on our tuning points this
-converged in fewer generations than the reverse order (see docs/BENCHMARKS.md).
+Rank convention of eq. 17 (the paper only says individuals are sorted by fitness): ascending cost gets ranks
+i = 1 (best) .. N (worst), so the best individuals take the largest steps around the best vector.
 
 Eq. 20 is applied jDE-style (Brest et al. 2006, where it comes from): the re-drawn CR_i is used for the
-individual's trial and kept only if that trial survives selection. The paper draws the new CR in [0, 1];
-``CR_low`` (default from our tuning, see docs/BENCHMARKS.md) raises the lower end: low crossover rates
-barely move a non-separable IK objective and cost generations.
+individual's trial and kept only if that trial survives selection. ``CR_low`` raises the paper's lower end of 0:
+low crossover rates barely move a non-separable IK objective.
 
-Defaults: paper 002 gives only iter_max = 130 and rho = 10 runs (``runs``, see
-``common.run_with_restarts``); population 60, F_mean from 0.3 to 0.02 with n_iter = 6, alpha = 4,
-CR_init = 1, CR re-drawn in [0.95, 1] with tau = 0.1 and a learning period of 10 generations were tuned
-for time to 1e-10 m on random reachable points of ``redundant7r`` (seed 7; the benchmark uses other
-points). They are greedy: for multimodal 6-D pose targets a wider F (``F_max=0.9, F_min=0.3, n_iter=2``,
-more generations) is more reliable.
-
-Paper 002 stops ISADE at a distance of 1e-17 m (DE 1e-15, PSO 1e-14). Forward kinematics in double
-precision of a tip about 1 m from the base is only exact to about 1e-16 m (one unit in the last place of
-the coordinates), so 1e-17 is met only by chance roundings and such runs end at their generation budget;
-use tolerances of 1e-15 m or more.
+Defaults beyond the paper's iter_max = 130 and rho = 10 runs (``runs``) are tuned for speed on reachable points
+(docs/BENCHMARKS.md) and are greedy: for multimodal 6-D pose targets a wider F (``F_max=0.9, F_min=0.3,
+n_iter=2``, more generations) is more reliable. Paper 002's stop at 1e-17 m is below what double-precision forward
+kinematics resolves (about 1e-16 m at 1 m from the base): use tolerances of 1e-15 m or more.
 """
 
 from __future__ import annotations

@@ -24,30 +24,12 @@ adapt per individual as in Zhao & Qiao (after Srinivas & Patnaik): with f minimi
 ``P = C (f - f_min) / (f_avg - f_min)`` for ``f <= f_avg`` and ``P = C`` otherwise (C = Cr or M), the
 paper's ``C (f_max - f) / (f_max - f_avg)`` for its maximized fitness: good individuals are disturbed less.
 
-The trigonometric share Mt (issue 5). The paper gives no value; its pseudocode nests ``m <= Mt`` inside
-``m < P_m`` on one draw, so Mt < M = 0.2 splits the mutation draw between the two donors (P_m = M for
-the worse half; P_m < Mt makes every donor of a near-best individual trigonometric). The adaptive rule
-sets P_m = P_c = 0 at the best individual and nearly 0 near it, so the best is never lost (greedy
-selection, and in our runs the closest individual's error never rose) but it is frozen: it improves only
-when another individual's trial lands closer. Progress then rests on how fast the population contracts,
-which the trigonometric donor (the centre of three members pulled towards the better ones) drives. With
-Fan & Lampinen's Mt = 0.05 runs stall with a diverse population (94 % of Table 2 runs, seeds 0-19, and
-83 % of 40 random reachable targets within 1 mm); with Mt >= M the population collapses early onto
-compromise points. We therefore measured Mt on random reachable targets, not on Table 2 (40 targets x
-5 seeds: Mt 0.05 / 0.075 / 0.1 / 0.125 / 0.15 -> 83 / 95 / 98.5 / 99.5 / 96 % within 1 mm; 60 fresh
-targets: 0.1 -> 95.7 %, 0.125 -> 97.3 %; the misses left there, 1.7-8 mm, are runs still converging at
-generation 200 and runs whose population contracted a few mm off the target, where the equitable
-weighting trades position error for displacement), and use Mt = 0.125.
-Table 2 at the paper's settings then gives 199 of 200 runs within 1 mm (seeds 0-39; one at 1.5 mm).
-Also measured and not adopted, with no gain: a floor (Srinivas & Patnaik's default rate, 0.005) on P_m and P_c,
-a constant per-coordinate Cr in the binomial crossover, the pseudocode's in-place (asynchronous) update,
-and Np = 200 (the paper's text; its pseudocode says 150).
-
-Readings we measured and rejected (docs/BENCHMARKS.md): b = the best weighted individual makes the weights
-a positive feedback onto whichever objective is smaller at b, and every AX-18 run collapsed onto q_init
-(errors 34-49 cm); the formula applied to the pseudocode's maximized ``exp(-error)``, ``exp(-f2)`` makes
-the weights flip between two extreme individuals every generation (median errors of 18-180 mm after 200
-generations, for length scales of 1-10 cm).
+The trigonometric share Mt: the paper gives no value; its pseudocode nests ``m <= Mt`` inside ``m < P_m`` on one
+draw, so Mt < M = 0.2 splits the mutation draw between the two donors. The adaptive rule freezes the best
+individual (P_m = P_c = 0), so progress rests on how fast the population contracts, which the trigonometric donor
+drives: too small an Mt stalls with a diverse population, Mt >= M collapses early onto compromise points. The
+default Mt = 0.125 was measured on random reachable targets (docs/BENCHMARKS.md, with the readings of "best" and
+the variants measured and not adopted).
 """
 
 from __future__ import annotations

@@ -1,26 +1,12 @@
 """NSGA-II (Deb et al. 2002) with constraint domination, vectorized over the population (paper 003).
 
-:func:`nsga2_minimize` is a generic box-constrained multi-objective minimizer (usable on test problems
-such as ZDT1); the registered ``nsga2`` IK method builds paper 003's problem on top of it:
-
-* objectives ``g = 1 / (Y + 1)`` (Yoshikawa manipulability Y of the task rows of the Jacobian) and
-  ``S = sqrt(sum_i K_i (q_i - q_prev,i)^2)`` (smoothness with gains K relative to ``problem.q0``);
-* the equality ``f(q) = x_d`` as a constraint with a tolerance: the violation is the position error above
-  ``problem.tolerance`` (m) plus the orientation error above ``problem.rotation_tolerance`` (rad);
-* the final pick: the first-front member with the best smoothness S.
-
-Pieces, each one call over the whole population: :func:`dominance_matrix` (constraint domination: a
-feasible point dominates an infeasible one; two infeasible points compare by total violation; two
-feasible ones by Pareto dominance), :func:`nondominated_ranks` (fast non-dominated sorting, one pass per
-front, the infeasible points ranked by violation directly), :func:`crowding_distance`, :func:`sbx`
-(bounded simulated binary crossover) and :func:`bounded_polynomial_mutation`, as in Deb's reference
-implementation.
-
-Implementation choices where Deb et al. (2002) leave room (see :func:`nsga2_minimize`): tournament
-contestants come from two random permutations of the population (Deb's reference code: everyone enters
-two tournaments); the tournament is the paper's crowded comparison (rank, then crowding distance) with a
-coin toss on full ties; offspring that duplicate a population member or each other are bred again before
-evaluation (as pymoo does), so no evaluation is spent on a copy.
+:func:`nsga2_minimize` is a generic box-constrained multi-objective minimizer (usable on test problems such as
+ZDT1), built from :func:`dominance_matrix`, :func:`nondominated_ranks`, :func:`crowding_distance`, :func:`sbx` and
+:func:`bounded_polynomial_mutation` as in Deb's reference implementation, each one call over the whole population.
+The registered ``nsga2`` IK method (:func:`nsga2`) builds paper 003's problem on top of it: objectives
+``g = 1 / (Y + 1)`` (Yoshikawa manipulability Y of the task rows) and the smoothness
+``S = sqrt(sum_i K_i (q_i - q_prev,i)^2)``, the equality ``f(q) = x_d`` as a constraint whose violation is the error
+above the tolerances, and the first-front member with the best S as the answer.
 """
 
 from __future__ import annotations

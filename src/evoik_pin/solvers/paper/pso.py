@@ -100,16 +100,16 @@ def pso(
         velocity_clamp: velocity limit as a fraction of each joint's search range, in (0, 1].
         topology: ``global`` (paper 002: every particle follows the swarm's best g) or ``ring`` (lbest: each
             particle follows the best personal best among itself and its two ring neighbours, which
-            slows the swarm's collapse; it did not help on 6-D pose targets, docs/BENCHMARKS.md).
+            slows the swarm's collapse).
         random_factors: ``per-coordinate`` (r1, r2 drawn for every particle and joint: eq. 11 indexes them
             by coordinate d) or ``per-particle`` (one r1 and one r2 per particle, MATLAB's scalar ``rand``):
             the step then stays in the plane of (p_i - x_i) and (g - x_i), so the swarm can follow a curved
-            valley that is not aligned with the joint axes. With ``pose_metric="euclidean"`` this is what
-            makes PSO reliable on 6-D pose targets (docs/BENCHMARKS.md).
+            valley that is not aligned with the joint axes (with ``pose_metric="euclidean"``, what 6-D pose
+            targets need).
         reinit_stagnant: when given, a particle whose personal best has not improved for this many iterations
             is re-initialised (position uniform in the box, velocity uniform in the clamp, personal best
             reset to the new position); the particle with the best personal best is never re-initialised.
-            Default off (it did not help on 6-D pose targets either, docs/BENCHMARKS.md).
+            Default off.
         bound_handling: ``clip`` (particles stop at the violated bound and lose that velocity component),
             ``reflect`` or ``resample`` (see ``common.enforce_bounds``; velocities unchanged).
         runs: paper 002's rho: up to this many independent runs until the tolerances are met (see

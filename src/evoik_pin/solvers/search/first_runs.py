@@ -33,7 +33,7 @@ from numba import njit
 from ...goals.stack import G_JOINT
 from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers, lm_run_buffers_basic
-from ..lm.tree import frame_pose, tree_forward
+from ..lm.tree_kinematics import frame_pose, tree_forward
 from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_k, table_distances
 
 __all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "STAGE_Q0", "STAGE_TABLE", "first_runs",

@@ -1,18 +1,13 @@
-"""The LM kernel's task rows of a whole population, one compiled call: what :func:`task_rows` gives for one
-configuration, for N configurations each with its own targets.
+"""The LM kernel's task rows of a whole population in one compiled call (NSGA-II's repair reads them through
+:meth:`evoik_pin.problem.IKProblem.goal_rows`).
 
-:func:`task_rows_batch` runs, per configuration, the kernel's (its :func:`.kernel.task_error` and
-:func:`.kernel.task_jacobian`, inlined here as in the LM run) over the rows of Q in one workspace, so every goal kind
-the kernel knows (pose, position, planar, bands and free axes, orientation, direction, look-at, centre of mass,
-support polygon, relative pose) gets the same rows, with the same sign convention ``e = f(q) - target`` and
-``E = de/dq``, each goal's rows scaled by the square root of its weight. NSGA-II's repair steps read them
-(through :meth:`evoik_pin.problem.IKProblem.goal_rows`). A Python loop of N one-configuration calls pays
-numba's dispatch (some 20 arrays to type-check and unbox) and a workspace per call: on Talos (38 joints, 17 rows)
-this entry takes 0.47 ms for N = 100, the loop 0.84 ms (docs/BENCHMARKS.md, scripts/bench_nsga2_repair.py).
+:func:`task_rows_batch` evaluates the kernel's :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` at each
+row of Q, so every goal kind gets the kernel's own rows (``e = f(q) - target``, ``E = de/dq``, each goal's rows
+scaled by the square root of its weight); one call avoids numba's per-call dispatch cost for a population.
 
-The kernel's helpers are inlined (``forceinline=True``): after editing them in :mod:`.kernel`, :mod:`.tree`,
-:mod:`.axes` or :mod:`.balance`, delete this module's cached ``*.nbi`` / ``*.nbc`` too (numba keys an entry point on
-its own file only).
+The kernel's helpers are inlined (``forceinline=True``): after editing them in :mod:`.kernel`,
+:mod:`.tree_kinematics`, :mod:`.axes` or :mod:`.balance`, delete this module's cached ``*.nbi`` / ``*.nbc`` too
+(numba keys an entry point on its own file only).
 """
 
 from __future__ import annotations
@@ -23,7 +18,7 @@ from numba import njit
 from ...goals.stack import G_WEIGHT
 from .chain import coupled
 from .kernel import make_workspace, stack_rows, task_error, task_jacobian
-from .tree import BORROWING
+from .tree_kinematics import BORROWING
 
 __all__ = ["task_rows", "task_rows_batch"]
 
@@ -43,8 +38,7 @@ def task_rows_batch(Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def _rows_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, P, Rts, e_out, E_out,
              g_out):
-    """:func:`task_rows_batch`'s loop, borrowing the workspace (no reference counting of the some 40 arrays each
-    inlined call reads, as the kernel's entries)."""
+    """:func:`task_rows_batch`'s loop, borrowing the workspace (:data:`.tree_kinematics.BORROWING`)."""
     n, G = Q.shape[1], spec.shape[0]
     mimic = coupled(index, scale, offset, n)
     weighted = False
@@ -66,10 +60,9 @@ def _rows_in(ws, Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, sup
 
 
 def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, pt, Rt, e_out, E_out, g_out):
-    """What one LM step reads at q (n,), for tests, diagnostics and prefer's refinement (the null space of
-    :func:`~evoik_pin.solvers.search.choose.refine`): :func:`task_rows_batch` on this one configuration, the stacked
-    task error e_out (rows,), its Jacobian E_out (rows, n) and each goal's errors g_out (G, 2), written in place.
-    Returns the weighted |e|^2. One compiled entry serves both (the population's signature: these are its rows)."""
+    """The kernel's task rows at one configuration q (n,): :func:`task_rows_batch` on a population of one. Writes the
+    stacked task error e_out (rows,), its Jacobian E_out (rows, n) and each goal's errors g_out (G, 2) in place;
+    returns the weighted |e|^2."""
     task_rows_batch(np.ascontiguousarray(q, dtype=float)[None], parent, FR, Fp, rev, index, scale, offset, spec, gR,
                     gp, support, gaux, pt[None], Rt[None], e_out[None], E_out[None], g_out[None])
     return float(e_out @ e_out)
