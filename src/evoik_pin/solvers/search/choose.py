@@ -187,7 +187,8 @@ def _redundant(problem) -> bool:
 
 def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
     """The goals' stacked task Jacobian (rows, n) at ``q``: its null space is the joint motion that leaves every goal
-    met to first order. On the compiled engine, the rows LM's own step reads (:func:`..lm.population_rows.task_rows`), right
+    met to first order. On the compiled engine, the rows LM's own step reads
+    (:func:`..lm.population_rows.task_rows`), right
     for every kind: a free axis's swing rows (the turn about it is free), a band's and a support polygon's rows zero
     where inactive (inside), a relative pose's and a centre of mass's from their own Jacobians, LookAt's with the
     frame's motion across the line of sight. The Python engine (pose, position and planar goals only): the frames'
