@@ -33,9 +33,7 @@ import numpy as np
 
 from ...errors import OptionError
 from ...goals.bands import AUX_SIZE
-from ...goals.pose import KIND_POSE
-from ...goals.position import KIND_POSITION
-from ...goals.registry import BANDED_LOG6, FAMILY_FRAME, KINDS
+from ...goals.registry import BANDED_LOG6, FAMILY_FRAME, KINDS, LOG6, POINT
 from ...goals.stack import (
     KIND_PLANAR,
     KIND_PLANAR_YAW,
@@ -87,7 +85,7 @@ def warmup_problem() -> tuple:
     (C-contiguous float64 / int64 / bool arrays), for compiling or loading them outside any time budget."""
     tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
             np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
-    spec = spec_row(KIND_POSE, 0, 1.0, 1e-6, 1e-6, 0)[None]
+    spec = spec_row(LOG6, 0, 1.0, 1e-6, 1e-6, 0)[None]
     goals = (spec, np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones((1, 1), dtype=bool), np.zeros((1, 1)))
     box = np.array([[-1.0], [1.0], [-1.0], [1.0], [0.0]])
     return tree, box, goals, np.zeros((1, 3)), np.eye(3)[None].copy()
@@ -462,6 +460,6 @@ def targets_of(arrays: TargetArrays) -> list[Target]:
     if arrays.kind in (KIND_PLANAR, KIND_PLANAR_YAW):
         return [Target(P[i, :2], planar=True, yaw=float(P[i, 2]) if arrays.kind == KIND_PLANAR_YAW else None)
                 for i in range(len(arrays))]
-    if arrays.kind == KIND_POSITION:
+    if arrays.kind == POINT:
         return [Target(P[i]) for i in range(len(arrays))]
     return [Target(P[i], Rts[i]) for i in range(len(arrays))]

@@ -13,8 +13,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
-from ...goals.pose import KIND_POSE
-from ...goals.position import KIND_POSITION
+from ...goals.registry import LOG6, POINT
 from ...goals.stack import G_RTOL, G_TOL, G_WEIGHT, KIND_PLANAR_YAW, problem_goals
 from ...lie import wrap_angle, yaw
 from .layout import (
@@ -58,17 +57,17 @@ class _Goal:
         self.frame_id = robot.frame_id(frame)
         self.sw = float(weight)  # the square root of the goal's weight
         self.tol, self.rtol = float(tol), float(rtol)
-        self.m = {KIND_POSE: 6, KIND_POSITION: 3, KIND_PLANAR_YAW: 3}.get(kind, 2)
+        self.m = {LOG6: 6, POINT: 3, KIND_PLANAR_YAW: 3}.get(kind, 2)
         self.position = np.array(pt, dtype=float)
-        if kind == KIND_POSE:
+        if kind == LOG6:
             self.target_inv = pin.SE3(np.array(Rt, dtype=float), self.position).inverse()
 
     def residual(self, T: pin.SE3):
         """(error rows (m,) unweighted, the extra object its Jacobian needs, position error m, orientation error rad
         or None) for the goal frame's pose ``T`` in the base frame."""
-        if self.kind == KIND_POSE:
+        if self.kind == LOG6:
             return _log6_error(self.target_inv * T)
-        if self.kind == KIND_POSITION:
+        if self.kind == POINT:
             e = T.translation - self.position
             return e, T, math.sqrt(e.dot(e)), None
         p = T.translation
@@ -82,10 +81,10 @@ class _Goal:
     def jacobian(self, J: np.ndarray, extra) -> np.ndarray:
         """The goal's rows (m, n), unweighted, from its frame's local Jacobian J (6, n) and :meth:`residual`'s
         extra."""
-        if self.kind == KIND_POSE:
+        if self.kind == LOG6:
             return pin.Jlog6(extra).dot(J)
         R = extra.rotation
-        if self.kind == KIND_POSITION:
+        if self.kind == POINT:
             return R.dot(J[:3])
         Jv = R[:2].dot(J[:3])
         if self.m == 2:
@@ -133,7 +132,7 @@ class ReferenceLM:
         """(e (rows,), extras (per goal), errors (per goal: (position m, orientation rad or None))) at ``q`` (n,)."""
         if self._tip:
             goal = self.goals[0]
-            if goal.kind == KIND_POSE:
+            if goal.kind == LOG6:
                 e, X, pos, rot = _log6_error(self.robot.tip_pose_seen_from_unchecked(q, goal.target_inv))
             else:
                 e, X, pos, rot = goal.residual(self.robot.fk_unchecked(q))
