@@ -25,8 +25,10 @@ def test_wheel_contains_bundled_robots(tmp_path):
     names = set(zipfile.ZipFile(wheels[0]).namelist())
     for robot in BUNDLED_ROBOTS:
         assert f"evoik_pin/robots/{robot}.urdf" in names
-    for module in ("__init__", "loading", "kinematics", "frames"):
+    for module in ("__init__", "loading", "robot", "frames"):
         assert f"evoik_pin/robot/{module}.py" in names
+    for package in ("goals", "io", "papers", "motion"):
+        assert f"evoik_pin/{package}/__init__.py" in names
 
 
 def test_installed_wheel_loads_bundled_robots(tmp_path):
