@@ -33,9 +33,10 @@ import threading
 import numpy as np
 
 from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goal_verdict, split_options
-from .errors import ConfigurationError, EvoikError
+from .errors import ConfigurationError, EvoikError, MethodError
 from .goals import is_goal_list
 from .goals.goal import Goal
+from .goals.preferences import Preference
 from .goals.stack import bind
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
@@ -76,12 +77,22 @@ class IKSolver:
             r = solver.solve(T, q0=q_now)     # a Result, as evoik_pin.solve returns
     """
 
-    def __init__(self, robot, method: str = DEFAULT_METHOD, **options) -> None:
+    def __init__(self, robot, method: str = DEFAULT_METHOD, *, prefer: str | None = None, locked: dict | None = None,
+                 **options) -> None:
+        from .solvers.search.choose import check_prefer
+
         robot = _robot(robot)
         self.robot = robot
         self.method = method
-        self._info = info = get_solver(method)
+        # prefer= and locked= checked first (evoik_pin.solve's order): an unknown prefer, then an unknown joint or a
+        # value beyond its limits
+        self._prefer = check_prefer("first" if prefer is None else prefer)
+        self._locked = None
         options = dict(options)
+        if locked:
+            self._locked = _Locked(robot, locked, method, self._prefer, options)
+            return
+        self._info = info = get_solver(method)
         self._polish = bool(options.pop("polish", False))
         q0 = options.pop("q0", None)
         self._problem_kw = problem_kw = split_options(options)
@@ -102,13 +113,17 @@ class IKSolver:
             np.array_equal(template.lower, robot.lower) and np.array_equal(template.upper, robot.upper))
                           else (robot.lower.copy(), robot.upper.copy()))
         self._options = options
+        if self._prefer != "first" and method != "memetic":
+            raise MethodError(f"prefer={self._prefer!r} collects answers with method 'memetic'; {method!r} gives one "
+                              "(use prefer='first', the default)")
         info.check_options(options, n=robot.n)
         self._plan = None
         if method == "memetic":
             from .solvers.search.memetic import MemeticPlan
 
             self._plan = MemeticPlan(robot, **options)
-        self._plain = self._plan is not None and not self._polish  # solve may call the plan directly
+        # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
+        self._plain = self._plan is not None and not self._polish and self._prefer == "first"
         # the per-call lanes (memetic's compiled first runs and little else), one per kind (True: poses, False:
         # positions) and per one-goal list's goal stack (by id; the last _GOAL_LANES), made after the general path
         # has solved a target of that kind: for the default objective in a box that does not move with the target (a
@@ -167,6 +182,8 @@ class IKSolver:
         :class:`~evoik_pin.Target`, or a goal list (:mod:`evoik_pin.goals`); from ``q0`` (n,) when given; ``seed``:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
+        if self._locked is not None:
+            return self._locked.solve(target, q0, seed)
         lanes = self._lanes
         problem = None
         if lanes:  # a pose, a position or a one-goal list on its lane (single_target_lane): the same answer, faster
@@ -191,7 +208,11 @@ class IKSolver:
                     return self._go_on(self._goal_problem(bound, q0), seed, out)
                 problem = self._goal_problem(bound, q0)
         if problem is None:
+            if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
+                return self._solve_choosing(target, q0, seed)
             problem = self.problem(target, q0)
+            if self._prefer != "first":
+                return self._solve_choosing(problem, q0, seed)
         if self._plain and problem.scene is None:
             goals = problem.goals
             # what run does for such a problem, without its tests and calls (no polish, no scene)
@@ -209,6 +230,44 @@ class IKSolver:
                     self._open_lane(problem)
                 return result
         return self.run(problem, _rng(seed))
+
+    def _solve_choosing(self, target, q0, seed) -> Result:
+        """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goal
+        list or target, or its problem already made). Preferences with ``prefer="first"`` (or another method than
+        memetic) come after the method's own search: the same answers as without them, then refined in the goals'
+        null space (a step kept only when every goal is still met), so they never cost success."""
+        from .goals.preferences import split_preferences
+        from .solvers.search.choose import bind_preferences, choose, refine
+
+        if isinstance(target, IKProblem):
+            problem, prefs = target, []
+        else:
+            goals, prefs = split_preferences(target)
+            problem = self.problem(goals, q0)
+        rng = _rng(seed)
+        if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
+            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options)
+            if problem.goals is not None:
+                result = _with_goal_verdict(problem, result)
+            return with_collision_verdict(problem, result)
+        criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
+        result = self.run(problem, rng)
+        if not result.success:
+            return result
+        from .solvers.lm import LevenbergMarquardt
+
+        refined = problem
+        if problem.goals is not None and problem.goal_sets:  # refined on the members the answer meets
+            choices, P, R = problem.variant_targets()
+            k = choices.index(tuple(problem.chosen(result.q)))
+            refined = problem.variant(choices[k], P[k], R[k])
+        q, _, _ = refine(refined, LevenbergMarquardt(refined), result.q, criterion, None)
+        result.q, result.position_error, result.orientation_error, result.cost = q, *problem.assess(q)
+        result.goal_errors = None
+        result.collision_free = None  # the search's verdict was on its answer, not the refined one
+        if problem.goals is not None:
+            result = _with_goal_verdict(problem, result)
+        return with_collision_verdict(problem, result)
 
     def _lane_q0(self, q0, seed):
         """A lane call's q0 (checked; None: the solver's own) after the seed's check: the general path's errors for
@@ -267,6 +326,32 @@ class IKSolver:
         return f"IKSolver({self.robot.name!r}, method={self.method!r})"
 
 
+class _Locked:
+    """An :class:`IKSolver`'s joints held fixed (``locked``: {joint: value}, rad or m): the solver of the robot without
+    them (:meth:`Robot.locked`), ``q0``, ``bounds`` and the answers in the full robot's layout, the locked joints at
+    their values."""
+
+    def __init__(self, robot, locked: dict, method: str, prefer: str, options: dict) -> None:
+        from .robot.locking import locked_robot, shrink_q
+
+        self.robot = robot
+        self.sub = sub = locked_robot(robot, locked)
+        self.values = {k: float(v) for k, v in locked.items()}
+        if options.get("q0") is not None:
+            options["q0"] = shrink_q(robot, sub, options["q0"])
+        if options.get("bounds") is not None:
+            lower, upper = options["bounds"]
+            options["bounds"] = (shrink_q(robot, sub, lower), shrink_q(robot, sub, upper))
+        self.solver = IKSolver(sub, method, prefer=prefer, **options)
+
+    def solve(self, target, q0, seed) -> Result:
+        from .robot.locking import expand_result, shrink_q
+
+        if q0 is not None:
+            q0 = shrink_q(self.robot, self.sub, q0)
+        return expand_result(self.robot, self.sub, self.values, self.solver.solve(target, q0, seed))
+
+
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
 #: One-goal lists' lanes an IKSolver keeps (one per goal stack: frame, kind, weight, tolerances; the last made): as
 #: many as the plan keeps engines (a lane opens at its engine's second problem).
@@ -290,6 +375,9 @@ def _key(robot, method: str, options: dict):
             if isinstance(value, float) and math.isnan(value):  # NaN != NaN: such a key would never hit
                 return None
             parts.append((name, type(value), value))
+        elif name == "locked" and isinstance(value, dict) and all(
+                type(k) is str and isinstance(v, _PLAIN) for k, v in value.items()):
+            parts.append((name, None, tuple(sorted((k, type(v), v) for k, v in value.items()))))
         elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
             # an object, by identity: the cached solver keeps it alive, so its id is not reused while cached (a
             # scene file's path is read into a Scene anew on every call, as before: the file may change)
@@ -324,3 +412,31 @@ def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
     cache[key] = solver
     return solver
 
+
+
+def solver_for(robot, method: str, options: dict, target) -> IKSolver:
+    """The IKSolver that solves ``target`` for :func:`evoik_pin.solve` with these arguments: the one kept for them
+    (:func:`cached_solver`), else a new one (a robot by name, a scene file's path, array bounds: options that are no
+    plain values). Bad arguments raise solve's errors in its order: the target's own checks (a NaN, a 5-vector) come
+    before the options'."""
+    solver = cached_solver(robot, method, options)
+    if solver is not None:
+        return solver
+    robot = _robot(robot)
+    try:
+        return IKSolver(robot, method, **{k: v for k, v in options.items() if k != "q0"})
+    except EvoikError:
+        # solve's order: prefer=, locked=, the target's own checks (a goal list's bound to the robot), the options
+        from .goals.preferences import split_preferences
+        from .robot.locking import locked_robot
+        from .solvers.search.choose import check_prefer
+
+        check_prefer("first" if options.get("prefer") is None else options["prefer"])
+        if options.get("locked"):
+            robot = locked_robot(robot, options["locked"])
+        goals = split_preferences(target)[0]
+        if not is_goal_list(goals):
+            Target.coerce(goals)
+        elif options.get("objective") is None:  # an objective with a goal list: the options' error
+            bind(robot, goals)
+        raise

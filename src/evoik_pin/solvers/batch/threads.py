@@ -153,7 +153,7 @@ class BatchSolver:
         options: as for :func:`evoik_pin.solve` (``scene`` included).
         fallback: hand the targets the batched rounds leave to the per-target solver (False: they stay
             unsolved, with the best batched answer; reachability maps want a verdict, not a 5 ms search).
-        choose: the API's choosing solve (``api._solve_choosing``: ``choose(robot, target, method, seed, prefer=,
+        choose: the API's solve (``api.solve``: ``choose(robot, target, method, seed, prefer=,
             **options)``), which solves one by one every target when ``prefer`` is given and every goal list holding
             preferences (the batched rounds skip those), as :func:`evoik_pin.solve` would.
         prefer: ``"nearest"`` or ``"manipulability"`` (checked by the caller), or None (the first answer).

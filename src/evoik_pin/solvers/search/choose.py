@@ -22,7 +22,7 @@
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
   box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
 * **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
-  own answer is refined alone (:func:`evoik_pin.api._solve_choosing`), so they never cost success.
+  own answer is refined alone (:meth:`evoik_pin.IKSolver.solve`), so they never cost success.
 
 Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
 the answers LM finds from random starts lie anywhere on the self-motion manifold, and projected steps take the best
