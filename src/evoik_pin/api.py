@@ -160,8 +160,7 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         raise MethodError(
             f"method {method!r} returns one solution; solve_all needs one of: {', '.join(capable) or '(none)'}"
         )
-    problem, solver_options = make_problem(robot, target, **options)
-    result = _run(problem, method, _rng(seed), solver_options)
+    result = solver_for(robot, method, options, target).solve(target, options.get("q0"), seed)  # solve's pipeline
     return SolutionList(result.solutions or [], result)
 
 

@@ -184,52 +184,39 @@ class IKSolver:
         solver's robot, method and options, the same for the same seed."""
         if self._locked is not None:
             return self._locked.solve(target, q0, seed)
-        lanes = self._lanes
-        problem = None
-        if lanes:  # a pose, a position or a one-goal list on its lane (single_target_lane): the same answer, faster
-            arrays = pose_arrays(target)
-            if arrays is not None:
-                lane = lanes.get(arrays[1] is not None)
-                if lane is not None and lane.usable():
-                    q0 = self._lane_q0(q0, seed)
-                    out = lane.solve(arrays[0], arrays[1], q0)
-                    if type(out) is Result:
-                        return out
-                    return self._go_on(self.problem(target, q0), seed, out)
-            elif (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
-                  and target[0].alternatives is None and self._objective is None):
-                bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
-                lane = lanes.get(id(bound[1]))
-                if lane is not None and lane.key is bound[1] and lane.usable():
-                    q0 = self._lane_q0(q0, seed)
-                    out = lane.solve_goals(bound[0], bound[2], bound[3], q0)
-                    if type(out) is Result:
-                        return out
-                    return self._go_on(self._goal_problem(bound, q0), seed, out)
-                problem = self._goal_problem(bound, q0)
+        problem = self._on_lane(target, q0, seed) if self._lanes else None
         if problem is None:
             if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
                 return self._solve_choosing(target, q0, seed)
             problem = self.problem(target, q0)
-            if self._prefer != "first":
-                return self._solve_choosing(problem, q0, seed)
-        if self._plain and problem.scene is None:
-            goals = problem.goals
-            # what run does for such a problem, without its tests and calls (no polish, no scene)
-            if goals is None:
-                result = self._plan.solve(problem, _rng(seed))
-                if self._lanes_open:
-                    self._open_lane(problem)
-                return result
-            if not problem.goal_sets:
-                # the goals' verdict (_with_goal_verdict) is memetic's own here: memetic judged each goal by
-                # goals_met on the goal_errors it returns, and every goal has one target (chosen: None each)
-                result = self._plan.solve(problem, _rng(seed))
-                result.chosen = [None] * len(goals)
-                if self._lanes_open and len(goals) == 1:
-                    self._open_lane(problem)
-                return result
+        elif type(problem) is Result:
+            return problem
+        if self._prefer != "first":
+            return self._solve_choosing(problem, q0, seed)
         return self.run(problem, _rng(seed))
+
+    def _on_lane(self, target, q0, seed) -> Result | IKProblem | None:
+        """A pose, a position or a one-goal list on the lane of its kind or goal stack (single_target_lane): the
+        Result (memetic going on from the lane's first runs when none met the tolerances); the problem of a one-goal
+        list without a lane (bound already); None for any other target."""
+        arrays = pose_arrays(target)
+        if arrays is not None:
+            lane = self._lanes.get(arrays[1] is not None)
+            if lane is None or not lane.usable():
+                return None
+            q0 = self._lane_q0(q0, seed)
+            out = lane.solve(arrays[0], arrays[1], q0)
+            return out if type(out) is Result else self._go_on(self.problem(target, q0), seed, out)
+        if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
+                and target[0].alternatives is None and self._objective is None):
+            return None
+        bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
+        lane = self._lanes.get(id(bound[1]))
+        if lane is None or lane.key is not bound[1] or not lane.usable():
+            return self._goal_problem(bound, q0)
+        q0 = self._lane_q0(q0, seed)
+        out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])
+        return out if type(out) is Result else self._go_on(self._goal_problem(bound, q0), seed, out)
 
     def _solve_choosing(self, target, q0, seed) -> Result:
         """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goal
@@ -307,7 +294,17 @@ class IKSolver:
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does
         after it: ``polish``, the goals' verdict, the scene's exact check."""
-        goal_problem = problem if problem.goals is not None else None
+        goals = problem.goals
+        if self._plain and problem.scene is None and (goals is None or not problem.goal_sets):
+            # memetic's plan alone (no polish, no scene): memetic judged each goal by goals_met on the goal_errors it
+            # returns, every goal with one target (chosen: None each), so the goals' verdict is its own
+            result = self._plan.solve(problem, rng)
+            if goals is not None:
+                result.chosen = [None] * len(goals)
+            if self._lanes_open and (goals is None or len(goals) == 1):
+                self._open_lane(problem)
+            return result
+        goal_problem = problem if goals is not None else None
         if goal_problem is not None:  # the method's own problem of a goal list (the closed forms: one tip goal)
             problem = _goal_method_problem(self.method, problem)
         if self._plan is not None:
