@@ -1,8 +1,8 @@
-"""The single-solve fast path: :class:`IKSolver`, a solver set up once for one robot, method and options.
+"""The one solve pipeline: :class:`IKSolver`, a solver set up once for one robot, method and options.
 
 A control loop, a planner sampling goal configurations or a grasp scorer solves one target at a time, thousands of
-times, with the same robot and options. :func:`evoik_pin.solve` would check the options, build the problem's
-constants and look up the method's set-up on every call; an ``IKSolver`` does that once:
+times, with the same robot and options. Checking the options, building the problem's constants and looking up the
+method's set-up on every call would cost more than the solve; an ``IKSolver`` does that once:
 
 * the method and every option are checked when the solver is made (the errors :func:`evoik_pin.solve` raises);
 * the problem's constants (tolerances, search box, scene, objective settings) are checked into a template problem,
@@ -11,18 +11,20 @@ constants and look up the method's set-up on every call; an ``IKSolver`` does th
 * for ``memetic`` (the default), its :class:`~evoik_pin.solvers.search.memetic.MemeticPlan`: the compiled kernel
   loaded, the seed table of the search box built, and one LM engine whose target arrays each call overwrites.
 
-Everything else is :func:`evoik_pin.solve`'s own code, so the answers are the same for the same seed. Goal lists
-(:mod:`evoik_pin.goals`) and scenes go through the same path (a goal list is checked and bound per call; a scene's
-collision-free seed entries follow its version).
+The pipeline of a call: the target (or goal list) checked and bound, its problem copied from the template, the
+method run (for memetic: q0, the seed table, LM, the evolutionary search; :mod:`evoik_pin.solvers.search.choose` for
+goal sets, ``prefer=`` and preferences), the goals' and the scene's verdicts. ``locked=`` makes it the pipeline of
+the robot without those joints, its answers put back in the full layout.
 
 Once memetic has solved a pose (a position, a one-goal list of some goal structure) this way, the next ones of that
 kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`): the target's and q0's checks, memetic's
-compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the general
-path's, bit for bit; a target the first runs do not solve goes on in memetic from their state.
+compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the pipeline's,
+bit for bit; a target the first runs do not solve goes on in memetic from their state.
 
-:func:`evoik_pin.solve` itself keeps one ``IKSolver`` per robot, method and options (per thread, the 8 made last,
-which keep their robots alive) and calls it, when the options are plain values (numbers, strings, a
-:class:`~evoik_pin.Scene` or objective object); a scene file's path or array bounds take the general path.
+:func:`evoik_pin.solve` is an IKSolver's solve: the one kept per robot, method and options (per thread, the 8 made
+last, which keep their robots alive) when the options are plain values (numbers, strings, a
+:class:`~evoik_pin.Scene` or objective object, a ``locked`` dict), else one made for the call (a robot by name, a
+scene file's path, array bounds).
 """
 
 from __future__ import annotations
@@ -57,14 +59,19 @@ class IKSolver:
     Args:
         robot: a :class:`~evoik_pin.Robot` or anything :func:`~evoik_pin.load_robot` accepts.
         method: a name from :func:`~evoik_pin.methods` (default ``"memetic"``).
+        prefer: ``"first"`` (None: the same), ``"nearest"`` (q0 required) or ``"manipulability"``: which answer
+            memetic returns among those it finds (:mod:`evoik_pin.solvers.search.choose`).
+        locked: ``{joint: value}`` (rad or m): those joints held at their values; ``q0``, ``bounds`` and the answers
+            stay in ``robot``'s layout.
         **options: what :func:`evoik_pin.solve` takes (``tolerance`` m, ``rotation_tolerance`` rad, ``bounds``,
             ``scene``, ``margin`` m, ``orientation_weight``, ``pose_metric``, ``objective``, ``polish``, the method's
             own: ``timeout`` s, ``max_restarts``, ...); a ``q0`` (n,) here is the start of every :meth:`solve` not
             given one.
 
     Raises:
-        MethodError: an unknown method. OptionError, BoundsError, ConfigurationError, SceneError: an option
-        :func:`evoik_pin.solve` would refuse, with its message.
+        MethodError: an unknown method, ``prefer`` other than "first" with a method other than memetic. OptionError,
+        BoundsError, ConfigurationError, SceneError, FrameError: an option :func:`evoik_pin.solve` would refuse (an
+        unknown ``prefer``, a ``locked`` joint that does not exist), with its message.
 
     The robot's bounds (``bounds`` or the robot's own) are read when the solver is made. One solver is not to be
     shared by threads that solve at the same time (each call writes the solver's target buffers): make one per
