@@ -466,3 +466,17 @@ def test_prefer_and_locked_are_checked_when_the_solver_is_made(panda):
         ek.solve(panda, np.full(3, np.nan), prefer="manipulability", population=2)
     with pytest.raises(OptionError, match="prefer"):  # and prefer's before the target's
         ek.solve(panda, np.full(3, np.nan), prefer="closest")
+
+
+def test_solve_all_takes_solves_locked_and_refuses_prefer(panda, cases):
+    """solve_all runs solve's pipeline: locked joints held in every solution (each q in the full layout, each meeting
+    the pose by the full robot's FK); prefer (one answer among many) stays an unknown option of memetic-all."""
+    T = cases[0][0]
+    values = {"panda_joint1": 0.2}
+    solutions = ek.solve_all(panda, T, seed=0, count=3, locked=values, timeout=None, max_starts=64)
+    assert solutions and all(s.q.shape == (panda.n,) and s.q[0] == 0.2 for s in solutions)
+    for s in solutions:
+        reached = panda.fk(s.q)
+        assert np.linalg.norm(reached.translation - T.translation) <= 1e-6 and panda.within_bounds(s.q)
+    with pytest.raises(OptionError, match=r"unknown option\(s\) prefer for method 'memetic-all'"):
+        ek.solve_all(panda, T, prefer="nearest", q0=np.zeros(panda.n))

@@ -141,7 +141,9 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         **options: shared ones (``tolerance``, ``rotation_tolerance``, ``q0``, ``bounds``, ...) and the method's
             own; for ``memetic-all``: ``count`` (>= 1), ``timeout`` (s, default 0.02), ``max_starts``,
             ``class_radius`` (rad), ``batch``, ``patience``, ``min_hits``, ``pool``, ``table_size``, ``iterations``,
-            ``engine`` (see :func:`evoik_pin.solvers.search.all_solutions.memetic_all`).
+            ``engine`` (see :func:`evoik_pin.solvers.search.all_solutions.memetic_all`). ``locked``: ``{joint:
+            value}`` (rad or m), as for :func:`solve`: the solutions of the robot with those joints held, each ``q``
+            in ``robot``'s layout.
 
     Returns:
         A :class:`SolutionList`: a ``list`` of :class:`Result` (one per solution; plain list behaviour, ``[]``
@@ -160,6 +162,8 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         raise MethodError(
             f"method {method!r} returns one solution; solve_all needs one of: {', '.join(capable) or '(none)'}"
         )
+    if "prefer" in options:  # which one answer to return is solve's choice; solve_all returns them all
+        info.check_options({k: v for k, v in options.items() if k not in (*_PROBLEM_OPTIONS, "locked", "polish")})
     result = solver_for(robot, method, options, target).solve(target, options.get("q0"), seed)  # solve's pipeline
     return SolutionList(result.solutions or [], result)
 
