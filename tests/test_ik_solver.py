@@ -166,6 +166,8 @@ def test_solve_keeps_refusing_what_it_refused(panda, cases):
         ek.solve(panda, T, seed=0, population=32.0)
     with pytest.raises(TargetError):  # a bad target with a bad option: the target's error first, as always
         ek.solve(panda, np.full(3, np.nan), seed=0, population=2)
+    with pytest.raises(ConfigurationError, match="q0"):  # the problem's checks (q0 here) before the method's options
+        ek.solve(panda, T, q0=np.zeros(3), seed=0, population=2)
     # bounds changed on the robot: the next solve searches the new box
     lower, upper = panda.lower.copy(), panda.upper.copy()
     try:

@@ -34,7 +34,16 @@ import threading
 
 import numpy as np
 
-from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goal_verdict, split_options
+from .calls import (
+    _PROBLEM_OPTIONS,
+    DEFAULT_METHOD,
+    _goal_method_problem,
+    _rng,
+    _robot,
+    _with_goal_verdict,
+    make_problem,
+    split_options,
+)
 from .errors import ConfigurationError, EvoikError, MethodError
 from .goals import is_goal_list
 from .goals.goal import Goal
@@ -436,11 +445,13 @@ def solver_for(robot, method: str, options: dict, target) -> IKSolver:
         from .solvers.search.choose import check_prefer
 
         check_prefer("first" if options.get("prefer") is None else options["prefer"])
+        goals = split_preferences(target)[0]
         if options.get("locked"):
             robot = locked_robot(robot, options["locked"])
-        goals = split_preferences(target)[0]
-        if not is_goal_list(goals):
-            Target.coerce(goals)
-        elif options.get("objective") is None:  # an objective with a goal list: the options' error
-            bind(robot, goals)
+            if not is_goal_list(goals):
+                Target.coerce(goals)
+            elif options.get("objective") is None:  # an objective with a goal list: the options' error
+                bind(robot, goals)
+        else:  # the problem's checks in their order: the target, tolerances, bounds, q0, margin, scene
+            make_problem(robot, goals, **{k: v for k, v in options.items() if k in _PROBLEM_OPTIONS})
         raise
