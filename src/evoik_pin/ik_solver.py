@@ -44,7 +44,7 @@ from .calls import (
     make_problem,
     split_options,
 )
-from .errors import ConfigurationError, EvoikError, MethodError
+from .errors import ConfigurationError, EvoikError
 from .goals import is_goal_list
 from .goals.goal import Goal
 from .goals.preferences import Preference
@@ -95,7 +95,7 @@ class IKSolver:
 
     def __init__(self, robot, method: str = DEFAULT_METHOD, *, prefer: str | None = None, locked: dict | None = None,
                  **options) -> None:
-        from .solvers.search.choose import check_prefer
+        from .solvers.search.choose import check_prefer, check_prefer_method
 
         robot = _robot(robot)
         self.robot = robot
@@ -129,9 +129,7 @@ class IKSolver:
             np.array_equal(template.lower, robot.lower) and np.array_equal(template.upper, robot.upper))
                           else (robot.lower.copy(), robot.upper.copy()))
         self._options = options
-        if self._prefer != "first" and method != "memetic":
-            raise MethodError(f"prefer={self._prefer!r} collects answers with method 'memetic'; {method!r} gives one "
-                              "(use prefer='first', the default)")
+        check_prefer_method(self._prefer, method)
         info.check_options(options, n=robot.n)
         self._plan = None
         if method == "memetic":
