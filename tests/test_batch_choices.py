@@ -117,7 +117,7 @@ def test_trajectory_bad_input_before_any_work(panda, path, monkeypatch):
     def no_work(*a, **k):
         raise AssertionError("a point was solved before the call's input was checked")
 
-    monkeypatch.setattr(api, "_solve_choosing", no_work)
+    monkeypatch.setattr(ev.IKSolver, "solve", no_work)
     monkeypatch.setattr(api, "_run", no_work)
     with pytest.raises(OptionError, match="prefer"):
         ev.solve_trajectory(panda, targets, prefer="closest", q0=np.zeros(7))
@@ -211,7 +211,7 @@ def test_many_bad_input_before_any_work(panda, poses, monkeypatch):
     def no_work(*a, **k):
         raise AssertionError("a target was solved before the call's input was checked")
 
-    monkeypatch.setattr(api, "_solve_choosing", no_work)
+    monkeypatch.setattr(ev.IKSolver, "solve", no_work)
     monkeypatch.setattr(api, "_run", no_work)
     q0 = np.zeros(panda.n)
     with pytest.raises(OptionError, match="prefer"):

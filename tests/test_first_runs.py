@@ -151,9 +151,9 @@ def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name,
         calls.append((one_goal(kinds[i % len(kinds)], frame, T), q0, i))
     made = []  # each call's compiled first runs: memetic's own (one_goal True), or a goal lane's (a solver alternating
     # five goal structures keeps a lane for each)
-    one_call, lane_call = memetic._first_runs, SingleTargetLane.solve_goals
+    one_call, lane_call = memetic._first_runs, SingleTargetLane.solve
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(args[-1]) or one_call(*args))
-    monkeypatch.setattr(SingleTargetLane, "solve_goals", lambda *args: made.append("lane") or lane_call(*args))
+    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: made.append("lane") or lane_call(*args))
     fast = [solver.solve(g, q0=q0, seed=i) for g, q0, i in calls]
     general = [ek.solve(robot, g, q0=q0, seed=i, **budget) for g, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general) and set(made) == {True, "lane"}

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import evoik_pin as ek
 from evoik_pin import api
-from evoik_pin.errors import ConfigurationError, MethodError, OptionError, TargetError
+from evoik_pin.errors import ConfigurationError, FrameError, MethodError, OptionError, TargetError
 from evoik_pin.goals import Pose, Position
 
 
@@ -166,6 +166,8 @@ def test_solve_keeps_refusing_what_it_refused(panda, cases):
         ek.solve(panda, T, seed=0, population=32.0)
     with pytest.raises(TargetError):  # a bad target with a bad option: the target's error first, as always
         ek.solve(panda, np.full(3, np.nan), seed=0, population=2)
+    with pytest.raises(ConfigurationError, match="q0"):  # the problem's checks (q0 here) before the method's options
+        ek.solve(panda, T, q0=np.zeros(3), seed=0, population=2)
     # bounds changed on the robot: the next solve searches the new box
     lower, upper = panda.lower.copy(), panda.upper.copy()
     try:
@@ -428,3 +430,55 @@ def test_one_solver_alternating_single_targets_goal_sets_and_goal_lists(panda):
                 T = target[0].target if isinstance(target, list) else target
             assert np.linalg.norm(M.translation - T.translation) <= 1e-6
             assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+
+
+def test_locked_joints_are_the_locked_robots_answers_in_the_full_layout(panda, cases):
+    """IKSolver(locked=...) solves on robot.locked(values): the same answers as the general path on that robot, the
+    locked joints put back at their values; solve keeps such a solver like any other (locked is a plain dict)."""
+    from evoik_pin.ik_solver import cached_solver
+
+    targets, Qs = cases
+    values = {"panda_joint1": 0.3, "panda_joint5": -0.2}
+    sub = panda.locked(values)
+    keep = [panda.joint_names.index(j) for j in sub.joint_names]
+    locked_at = [panda.joint_names.index(j) for j in values]
+    solver = ek.IKSolver(panda, locked=values, **BUDGET)
+    for i, T in enumerate(targets[:6]):
+        q0 = Qs[i] if i % 2 else None
+        reference = general(sub, T, seed=i, q0=None if q0 is None else q0[keep], **BUDGET)
+        r = solver.solve(T, q0=q0, seed=i)
+        assert r.q.shape == (panda.n,)
+        assert np.array_equal(r.q[keep], reference.q) and np.array_equal(r.q[locked_at], [0.3, -0.2])
+        assert (r.success, r.position_error, r.cost) == (reference.success, reference.position_error, reference.cost)
+        assert "joints locked: panda_joint1=0.3, panda_joint5=-0.2" in r.message
+        assert np.array_equal(ek.solve(panda, T, seed=i, q0=q0, locked=values, **BUDGET).q, r.q)
+    kept = cached_solver(panda, "memetic", {"locked": dict(values), **BUDGET})
+    assert kept is not None and kept is cached_solver(panda, "memetic", {"locked": dict(values), **BUDGET})
+    assert kept is not cached_solver(panda, "memetic", {"locked": {"panda_joint1": 0.3}, **BUDGET})
+
+
+def test_prefer_and_locked_are_checked_when_the_solver_is_made(panda):
+    with pytest.raises(OptionError, match="prefer"):
+        ek.IKSolver(panda, prefer="closest")
+    with pytest.raises(MethodError, match="prefer='nearest' collects answers with method 'memetic'"):
+        ek.IKSolver(panda, method="de", prefer="nearest")
+    with pytest.raises(FrameError):
+        ek.IKSolver(panda, locked={"no_such_joint": 0.0})
+    with pytest.raises(TargetError):  # solve's order: the target's error before the option's
+        ek.solve(panda, np.full(3, np.nan), prefer="manipulability", population=2)
+    with pytest.raises(OptionError, match="prefer"):  # and prefer's before the target's
+        ek.solve(panda, np.full(3, np.nan), prefer="closest")
+
+
+def test_solve_all_takes_solves_locked_and_refuses_prefer(panda, cases):
+    """solve_all runs solve's pipeline: locked joints held in every solution (each q in the full layout, each meeting
+    the pose by the full robot's FK); prefer (one answer among many) stays an unknown option of memetic-all."""
+    T = cases[0][0]
+    values = {"panda_joint1": 0.2}
+    solutions = ek.solve_all(panda, T, seed=0, count=3, locked=values, timeout=None, max_starts=64)
+    assert solutions and all(s.q.shape == (panda.n,) and s.q[0] == 0.2 for s in solutions)
+    for s in solutions:
+        reached = panda.fk(s.q)
+        assert np.linalg.norm(reached.translation - T.translation) <= 1e-6 and panda.within_bounds(s.q)
+    with pytest.raises(OptionError, match=r"unknown option\(s\) prefer for method 'memetic-all'"):
+        ek.solve_all(panda, T, prefer="nearest", q0=np.zeros(panda.n))

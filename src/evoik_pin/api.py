@@ -29,7 +29,7 @@ from .calls import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, ... are rea
 )
 from .errors import ConfigurationError, MethodError, OptionError
 from .goals.preferences import split_preferences
-from .ik_solver import IKSolver, cached_solver
+from .ik_solver import IKSolver, solver_for
 from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta
 from .result import Result
 from .solvers import get_solver, methods
@@ -37,7 +37,6 @@ from .solvers.batch import api as batch_api
 from .solvers.batch.goal_lists import GoalSource, is_goal_batch, is_problem_list
 from .solvers.batch.outcome import BatchResults
 from .solvers.batch.threads import check_call
-from .solvers.collision_verdict import with_collision_verdict
 from .solvers.lm import ENGINES
 from .solvers.options import check_int
 from .solvers.search.all_solutions import SolutionList  # also registers "memetic-all"
@@ -100,17 +99,12 @@ def solve(robot, target, method: str = DEFAULT_METHOD, seed=None, **options) -> 
         A :class:`Result`; an unreachable target gives ``success=False``, the best approximation and a
         message, not an exception.
 
-    A call with a :class:`Robot` and plain options (numbers, strings, a Scene object) goes through an
-    :class:`~evoik_pin.IKSolver` kept for that robot, method and options (per thread): its checks and set-up are
-    made once; a loop of many solves can also make its own (``IKSolver(robot, **options).solve(T, q0, seed)``).
+    Every call is an :class:`~evoik_pin.IKSolver`'s solve: the one kept for that robot, method and options (per
+    thread) when they are plain values (numbers, strings, a Scene object, ``locked``), whose checks and set-up are
+    made once; else one made for the call (a robot by name, a scene file's path, array bounds). A loop of many
+    solves can also make its own (``IKSolver(robot, **options).solve(T, q0, seed)``).
     """
-    if _has_choices(target, options):
-        return _solve_choosing(robot, target, method, seed, **options)  # prefer=, preferences, locked=
-    solver = cached_solver(robot, method, options)  # the IKSolver fast path (evoik_pin.ik_solver)
-    if solver is not None:
-        return solver.solve(target, options.get("q0"), seed)
-    problem, solver_options = make_problem(robot, target, **options)
-    return _run(problem, method, _rng(seed), solver_options)
+    return solver_for(robot, method, options, target).solve(target, options.get("q0"), seed)
 
 
 def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **options) -> SolutionList:
@@ -147,7 +141,9 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         **options: shared ones (``tolerance``, ``rotation_tolerance``, ``q0``, ``bounds``, ...) and the method's
             own; for ``memetic-all``: ``count`` (>= 1), ``timeout`` (s, default 0.02), ``max_starts``,
             ``class_radius`` (rad), ``batch``, ``patience``, ``min_hits``, ``pool``, ``table_size``, ``iterations``,
-            ``engine`` (see :func:`evoik_pin.solvers.search.all_solutions.memetic_all`).
+            ``engine`` (see :func:`evoik_pin.solvers.search.all_solutions.memetic_all`). ``locked``: ``{joint:
+            value}`` (rad or m), as for :func:`solve`: the solutions of the robot with those joints held, each ``q``
+            in ``robot``'s layout.
 
     Returns:
         A :class:`SolutionList`: a ``list`` of :class:`Result` (one per solution; plain list behaviour, ``[]``
@@ -166,8 +162,9 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
         raise MethodError(
             f"method {method!r} returns one solution; solve_all needs one of: {', '.join(capable) or '(none)'}"
         )
-    problem, solver_options = make_problem(robot, target, **options)
-    result = _run(problem, method, _rng(seed), solver_options)
+    if "prefer" in options:  # which one answer to return is solve's choice; solve_all returns them all
+        info.check_options({k: v for k, v in options.items() if k not in (*_PROBLEM_OPTIONS, "locked", "polish")})
+    result = solver_for(robot, method, options, target).solve(target, options.get("q0"), seed)  # solve's pipeline
     return SolutionList(result.solutions or [], result)
 
 
@@ -197,12 +194,11 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
     locked = options.pop("locked", None)
     solved_on = robot.locked(locked) if locked else robot  # an unknown joint, a value beyond its limits
-    preferences = False
     if is_goal_batch(targets):
         source = GoalSource(solved_on, targets)  # every goal list (and its preferences) checked against the robot
         if q0 is None:
             source.require_q0([0])  # the later points start from the one before
-        targets, preferences = source.raw, bool(source.preferences)
+        targets = source.raw
         _check_goal_method(method)
     else:
         targets = Target.coerce_many(targets if isinstance(targets, np.ndarray) else list(targets))
@@ -213,28 +209,17 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     options = check_call(robot, make_problem, method, options)
     results: list[Result] = []
     previous = None if q0 is None else robot.check_q(q0)
-    choosing = prefer is not None or bool(locked) or preferences
-    # plain options: the points go through the IKSolver solve keeps (its lanes: a point costs little more than its
-    # search), which gives the general path's answers with the shared generator
-    solver = None if choosing or pro else cached_solver(robot, method, options)
+    if locked:
+        options["locked"] = locked
+    if prefer is not None:
+        options["prefer"] = prefer
     for i, target in enumerate(targets):
-        if solver is not None:
-            results.append(solver.solve(target, previous, rng))
-            previous = results[-1].q
-            continue
-        if choosing and not (pro and i > 0):  # solve's path for prefer=, locked=, preferences
-            results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
-                                           **{**options, "q0": previous}))
-            previous = results[-1].q
-            continue
-        problem, solver_options = make_problem(robot, split_preferences(target)[0], q0=previous, **dict(options))
-        if pro and i > 0:
-            problem = problem.with_pro_box(previous, delta)
-        if choosing:  # the Pro box as the bounds of solve's path, q0 clipped into it
-            results.append(_solve_choosing(robot, target, method, rng, prefer=prefer, locked=locked,
-                                           **{**options, "q0": problem.q0, "bounds": (problem.lower, problem.upper)}))
-        else:
-            results.append(_run(problem, method, rng, solver_options))
+        point = {**options, "q0": previous}
+        if pro and i > 0:  # the previous answer's box: that point's problem's search box +- delta, q0 clipped into it
+            box, _ = make_problem(robot, split_preferences(target)[0], q0=previous, **options)
+            box = box.with_pro_box(previous, delta)
+            point.update(q0=box.q0, bounds=(box.lower, box.upper))
+        results.append(solve(robot, target, method, rng, **point))  # one generator for the whole trajectory
         previous = results[-1].q
     return results
 
@@ -311,7 +296,7 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
         _check_goal_method(method)
     prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
     return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
-                                backend=backend, address=address, progress=progress, choose=_solve_choosing,
+                                backend=backend, address=address, progress=progress, choose=solve,
                                 prefer=prefer, locked=options.pop("locked", None), **options)
 
 
@@ -322,81 +307,10 @@ def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
     """``prefer`` checked as :func:`solve` checks it, before any work: None for the first answer (None or
     ``"first"``), else ``"nearest"`` or ``"manipulability"``. OptionError: an unknown value, or "nearest" without
     q0; MethodError: a method other than memetic (it gives one answer, nothing to choose among)."""
-    from .solvers.search.choose import check_prefer
+    from .solvers.search.choose import check_prefer, check_prefer_method
 
     prefer = check_prefer("first" if prefer is None else prefer)
     if prefer == "first":
         return None
-    if method != "memetic":
-        raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
-                          "(use prefer='first', the default)")
+    check_prefer_method(prefer, method)
     return check_prefer(prefer, q0_given)
-
-
-def _has_choices(target, options: dict) -> bool:
-    """Whether a solve call needs :func:`_solve_choosing`: ``prefer`` or ``locked`` given, or preferences among the
-    goals."""
-    if options.get("prefer") is not None or options.get("locked") is not None:
-        return True
-    if isinstance(target, (list, tuple)) and target:
-        from .goals.preferences import Preference
-
-        return any(isinstance(x, Preference) for x in target)
-    return False
-
-
-def _solve_choosing(robot, target, method: str, seed, prefer: str | None = None, locked=None, **options):
-    """:func:`evoik_pin.solve` with ``prefer`` (``"first"``, ``"nearest"``, ``"manipulability"``), preferences
-    among the goals, and ``locked`` ({joint: value}: those joints fixed for this call; ``q0``, ``bounds`` and the
-    answer ``q`` stay in ``robot``'s layout, the locked joints at their values)."""
-    from .goals.preferences import split_preferences
-    from .robot.locking import expand_result, locked_robot, shrink_q
-    from .solvers.search.choose import bind_preferences, check_prefer, choose, refine
-
-    robot = _robot(robot)
-    prefer = check_prefer("first" if prefer is None else prefer)
-    if locked:
-        sub = locked_robot(robot, locked)
-        values = {k: float(v) for k, v in locked.items()}
-        if options.get("q0") is not None:
-            options["q0"] = shrink_q(robot, sub, options["q0"])
-        if options.get("bounds") is not None:
-            lower, upper = options["bounds"]
-            options["bounds"] = (shrink_q(robot, sub, lower), shrink_q(robot, sub, upper))
-        return expand_result(robot, sub, values, _solve_choosing(sub, target, method, seed, prefer=prefer, **options))
-    goals, prefs = split_preferences(target)
-    if prefer == "first" and not prefs:
-        return solve(robot, goals, method, seed, **options)
-    problem, solver_options = make_problem(robot, goals, **options)
-    rng = _rng(seed)
-    if method != "memetic" or prefer == "first":
-        # preferences after the method's own search: the same answers as without them, then refined (the refinement
-        # keeps a step only when every goal is met after it), so they never cost success
-        _checked_prefer(prefer, method, True)  # prefer="nearest" etc. with another method: the MethodError
-        criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
-        result = _run(problem, method, rng, solver_options)
-        if result.success:  # the preferences in the goals' null space, from the method's answer
-            from .solvers.lm import LevenbergMarquardt
-
-            target = problem
-            if problem.goals is not None and problem.goal_sets:  # refine on the members the answer meets
-                choices, P, R = problem.variant_targets()
-                k = choices.index(tuple(problem.chosen(result.q)))
-                target = problem.variant(choices[k], P[k], R[k])
-            q, _, _ = refine(target, LevenbergMarquardt(target), result.q, criterion, None)
-            pos, rot, cost = problem.assess(q)
-            result.q, result.position_error, result.orientation_error, result.cost = q, pos, rot, cost
-            result.goal_errors = None
-            result.collision_free = None  # the search's verdict was on its answer, not the refined one
-            if problem.goals is not None:
-                result = _with_goal_verdict(problem, result)
-            result = with_collision_verdict(problem, result)
-        return result
-    solver_options.pop("polish", None)
-    from .solvers import get_solver
-
-    get_solver("memetic").check_options(solver_options)  # unknown option names
-    result = choose(problem, rng, prefer=prefer, preferences=prefs, **solver_options)
-    if problem.goals is not None:
-        result = _with_goal_verdict(problem, result)
-    return with_collision_verdict(problem, result)

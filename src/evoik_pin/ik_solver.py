@@ -1,8 +1,8 @@
-"""The single-solve fast path: :class:`IKSolver`, a solver set up once for one robot, method and options.
+"""The one solve pipeline: :class:`IKSolver`, a solver set up once for one robot, method and options.
 
 A control loop, a planner sampling goal configurations or a grasp scorer solves one target at a time, thousands of
-times, with the same robot and options. :func:`evoik_pin.solve` would check the options, build the problem's
-constants and look up the method's set-up on every call; an ``IKSolver`` does that once:
+times, with the same robot and options. Checking the options, building the problem's constants and looking up the
+method's set-up on every call would cost more than the solve; an ``IKSolver`` does that once:
 
 * the method and every option are checked when the solver is made (the errors :func:`evoik_pin.solve` raises);
 * the problem's constants (tolerances, search box, scene, objective settings) are checked into a template problem,
@@ -11,18 +11,20 @@ constants and look up the method's set-up on every call; an ``IKSolver`` does th
 * for ``memetic`` (the default), its :class:`~evoik_pin.solvers.search.memetic.MemeticPlan`: the compiled kernel
   loaded, the seed table of the search box built, and one LM engine whose target arrays each call overwrites.
 
-Everything else is :func:`evoik_pin.solve`'s own code, so the answers are the same for the same seed. Goal lists
-(:mod:`evoik_pin.goals`) and scenes go through the same path (a goal list is checked and bound per call; a scene's
-collision-free seed entries follow its version).
+The pipeline of a call: the target (or goal list) checked and bound, its problem copied from the template, the
+method run (for memetic: q0, the seed table, LM, the evolutionary search; :mod:`evoik_pin.solvers.search.choose` for
+goal sets, ``prefer=`` and preferences), the goals' and the scene's verdicts. ``locked=`` makes it the pipeline of
+the robot without those joints, its answers put back in the full layout.
 
 Once memetic has solved a pose (a position, a one-goal list of some goal structure) this way, the next ones of that
 kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`): the target's and q0's checks, memetic's
-compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the general
-path's, bit for bit; a target the first runs do not solve goes on in memetic from their state.
+compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the pipeline's,
+bit for bit; a target the first runs do not solve goes on in memetic from their state.
 
-:func:`evoik_pin.solve` itself keeps one ``IKSolver`` per robot, method and options (per thread, the 8 made last,
-which keep their robots alive) and calls it, when the options are plain values (numbers, strings, a
-:class:`~evoik_pin.Scene` or objective object); a scene file's path or array bounds take the general path.
+:func:`evoik_pin.solve` is an IKSolver's solve: the one kept per robot, method and options (per thread, the 8 made
+last, which keep their robots alive) when the options are plain values (numbers, strings, a
+:class:`~evoik_pin.Scene` or objective object, a ``locked`` dict), else one made for the call (a robot by name, a
+scene file's path, array bounds).
 """
 
 from __future__ import annotations
@@ -32,10 +34,20 @@ import threading
 
 import numpy as np
 
-from .calls import DEFAULT_METHOD, _goal_method_problem, _rng, _robot, _with_goal_verdict, split_options
+from .calls import (
+    _PROBLEM_OPTIONS,
+    DEFAULT_METHOD,
+    _goal_method_problem,
+    _rng,
+    _robot,
+    _with_goal_verdict,
+    make_problem,
+    split_options,
+)
 from .errors import ConfigurationError, EvoikError
 from .goals import is_goal_list
 from .goals.goal import Goal
+from .goals.preferences import Preference
 from .goals.stack import bind
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
@@ -56,14 +68,19 @@ class IKSolver:
     Args:
         robot: a :class:`~evoik_pin.Robot` or anything :func:`~evoik_pin.load_robot` accepts.
         method: a name from :func:`~evoik_pin.methods` (default ``"memetic"``).
+        prefer: ``"first"`` (None: the same), ``"nearest"`` (q0 required) or ``"manipulability"``: which answer
+            memetic returns among those it finds (:mod:`evoik_pin.solvers.search.choose`).
+        locked: ``{joint: value}`` (rad or m): those joints held at their values; ``q0``, ``bounds`` and the answers
+            stay in ``robot``'s layout.
         **options: what :func:`evoik_pin.solve` takes (``tolerance`` m, ``rotation_tolerance`` rad, ``bounds``,
             ``scene``, ``margin`` m, ``orientation_weight``, ``pose_metric``, ``objective``, ``polish``, the method's
             own: ``timeout`` s, ``max_restarts``, ...); a ``q0`` (n,) here is the start of every :meth:`solve` not
             given one.
 
     Raises:
-        MethodError: an unknown method. OptionError, BoundsError, ConfigurationError, SceneError: an option
-        :func:`evoik_pin.solve` would refuse, with its message.
+        MethodError: an unknown method, ``prefer`` other than "first" with a method other than memetic. OptionError,
+        BoundsError, ConfigurationError, SceneError, FrameError: an option :func:`evoik_pin.solve` would refuse (an
+        unknown ``prefer``, a ``locked`` joint that does not exist), with its message.
 
     The robot's bounds (``bounds`` or the robot's own) are read when the solver is made. One solver is not to be
     shared by threads that solve at the same time (each call writes the solver's target buffers): make one per
@@ -76,12 +93,22 @@ class IKSolver:
             r = solver.solve(T, q0=q_now)     # a Result, as evoik_pin.solve returns
     """
 
-    def __init__(self, robot, method: str = DEFAULT_METHOD, **options) -> None:
+    def __init__(self, robot, method: str = DEFAULT_METHOD, *, prefer: str | None = None, locked: dict | None = None,
+                 **options) -> None:
+        from .solvers.search.choose import check_prefer, check_prefer_method
+
         robot = _robot(robot)
         self.robot = robot
         self.method = method
-        self._info = info = get_solver(method)
+        # prefer= and locked= checked first (evoik_pin.solve's order): an unknown prefer, then an unknown joint or a
+        # value beyond its limits
+        self._prefer = check_prefer("first" if prefer is None else prefer)
+        self._locked = None
         options = dict(options)
+        if locked:
+            self._locked = _Locked(robot, locked, method, self._prefer, options)
+            return
+        self._info = info = get_solver(method)
         self._polish = bool(options.pop("polish", False))
         q0 = options.pop("q0", None)
         self._problem_kw = problem_kw = split_options(options)
@@ -102,13 +129,15 @@ class IKSolver:
             np.array_equal(template.lower, robot.lower) and np.array_equal(template.upper, robot.upper))
                           else (robot.lower.copy(), robot.upper.copy()))
         self._options = options
+        check_prefer_method(self._prefer, method)
         info.check_options(options, n=robot.n)
         self._plan = None
         if method == "memetic":
             from .solvers.search.memetic import MemeticPlan
 
             self._plan = MemeticPlan(robot, **options)
-        self._plain = self._plan is not None and not self._polish  # solve may call the plan directly
+        # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
+        self._plain = self._plan is not None and not self._polish and self._prefer == "first"
         # the per-call lanes (memetic's compiled first runs and little else), one per kind (True: poses, False:
         # positions) and per one-goal list's goal stack (by id; the last _GOAL_LANES), made after the general path
         # has solved a target of that kind: for the default objective in a box that does not move with the target (a
@@ -167,48 +196,79 @@ class IKSolver:
         :class:`~evoik_pin.Target`, or a goal list (:mod:`evoik_pin.goals`); from ``q0`` (n,) when given; ``seed``:
         int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
         solver's robot, method and options, the same for the same seed."""
-        lanes = self._lanes
-        problem = None
-        if lanes:  # a pose, a position or a one-goal list on its lane (single_target_lane): the same answer, faster
-            arrays = pose_arrays(target)
-            if arrays is not None:
-                lane = lanes.get(arrays[1] is not None)
-                if lane is not None and lane.usable():
-                    q0 = self._lane_q0(q0, seed)
-                    out = lane.solve(arrays[0], arrays[1], q0)
-                    if type(out) is Result:
-                        return out
-                    return self._go_on(self.problem(target, q0), seed, out)
-            elif (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
-                  and target[0].alternatives is None and self._objective is None):
-                bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
-                lane = lanes.get(id(bound[1]))
-                if lane is not None and lane.key is bound[1] and lane.usable():
-                    q0 = self._lane_q0(q0, seed)
-                    out = lane.solve_goals(bound[0], bound[2], bound[3], q0)
-                    if type(out) is Result:
-                        return out
-                    return self._go_on(self._goal_problem(bound, q0), seed, out)
-                problem = self._goal_problem(bound, q0)
+        if self._locked is not None:
+            return self._locked.solve(target, q0, seed)
+        problem = self._on_lane(target, q0, seed) if self._lanes else None
         if problem is None:
+            if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
+                return self._solve_choosing(target, q0, seed)
             problem = self.problem(target, q0)
-        if self._plain and problem.scene is None:
-            goals = problem.goals
-            # what run does for such a problem, without its tests and calls (no polish, no scene)
-            if goals is None:
-                result = self._plan.solve(problem, _rng(seed))
-                if self._lanes_open:
-                    self._open_lane(problem)
-                return result
-            if not problem.goal_sets:
-                # the goals' verdict (_with_goal_verdict) is memetic's own here: memetic judged each goal by
-                # goals_met on the goal_errors it returns, and every goal has one target (chosen: None each)
-                result = self._plan.solve(problem, _rng(seed))
-                result.chosen = [None] * len(goals)
-                if self._lanes_open and len(goals) == 1:
-                    self._open_lane(problem)
-                return result
+        elif type(problem) is Result:
+            return problem
+        if self._prefer != "first":
+            return self._solve_choosing(problem, q0, seed)
         return self.run(problem, _rng(seed))
+
+    def _on_lane(self, target, q0, seed) -> Result | IKProblem | None:
+        """A pose, a position or a one-goal list on the lane of its kind or goal stack (single_target_lane): the
+        Result (memetic going on from the lane's first runs when none met the tolerances); the problem of a one-goal
+        list without a lane (bound already); None for any other target."""
+        arrays = pose_arrays(target)
+        if arrays is not None:
+            lane = self._lanes.get(arrays[1] is not None)
+            if lane is None or not lane.usable():
+                return None
+            q0 = self._lane_q0(q0, seed)
+            out = lane.solve(arrays[0], arrays[1], q0)
+            return out if type(out) is Result else self._go_on(self.problem(target, q0), seed, out)
+        if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
+                and target[0].alternatives is None and self._objective is None):
+            return None
+        bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
+        lane = self._lanes.get(id(bound[1]))
+        if lane is None or lane.key is not bound[1] or not lane.usable():
+            return self._goal_problem(bound, q0)
+        q0 = self._lane_q0(q0, seed)
+        out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])
+        return out if type(out) is Result else self._go_on(self._goal_problem(bound, q0), seed, out)
+
+    def _solve_choosing(self, target, q0, seed) -> Result:
+        """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goal
+        list or target, or its problem already made). Preferences with ``prefer="first"`` (or another method than
+        memetic) come after the method's own search: the same answers as without them, then refined in the goals'
+        null space (a step kept only when every goal is still met), so they never cost success."""
+        from .goals.preferences import split_preferences
+        from .solvers.search.choose import bind_preferences, choose, refine
+
+        if isinstance(target, IKProblem):
+            problem, prefs = target, []
+        else:
+            goals, prefs = split_preferences(target)
+            problem = self.problem(goals, q0)
+        rng = _rng(seed)
+        if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
+            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options)
+            if problem.goals is not None:
+                result = _with_goal_verdict(problem, result)
+            return with_collision_verdict(problem, result)
+        criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
+        result = self.run(problem, rng)
+        if not result.success:
+            return result
+        from .solvers.lm import LevenbergMarquardt
+
+        refined = problem
+        if problem.goals is not None and problem.goal_sets:  # refined on the members the answer meets
+            choices, P, R = problem.variant_targets()
+            k = choices.index(tuple(problem.chosen(result.q)))
+            refined = problem.variant(choices[k], P[k], R[k])
+        q, _, _ = refine(refined, LevenbergMarquardt(refined), result.q, criterion, None)
+        result.q, result.position_error, result.orientation_error, result.cost = q, *problem.assess(q)
+        result.goal_errors = None
+        result.collision_free = None  # the search's verdict was on its answer, not the refined one
+        if problem.goals is not None:
+            result = _with_goal_verdict(problem, result)
+        return with_collision_verdict(problem, result)
 
     def _lane_q0(self, q0, seed):
         """A lane call's q0 (checked; None: the solver's own) after the seed's check: the general path's errors for
@@ -248,7 +308,17 @@ class IKSolver:
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does
         after it: ``polish``, the goals' verdict, the scene's exact check."""
-        goal_problem = problem if problem.goals is not None else None
+        goals = problem.goals
+        if self._plain and problem.scene is None and (goals is None or not problem.goal_sets):
+            # memetic's plan alone (no polish, no scene): memetic judged each goal by goals_met on the goal_errors it
+            # returns, every goal with one target (chosen: None each), so the goals' verdict is its own
+            result = self._plan.solve(problem, rng)
+            if goals is not None:
+                result.chosen = [None] * len(goals)
+            if self._lanes_open and (goals is None or len(goals) == 1):
+                self._open_lane(problem)
+            return result
+        goal_problem = problem if goals is not None else None
         if goal_problem is not None:  # the method's own problem of a goal list (the closed forms: one tip goal)
             problem = _goal_method_problem(self.method, problem)
         if self._plan is not None:
@@ -265,6 +335,32 @@ class IKSolver:
 
     def __repr__(self) -> str:
         return f"IKSolver({self.robot.name!r}, method={self.method!r})"
+
+
+class _Locked:
+    """An :class:`IKSolver`'s joints held fixed (``locked``: {joint: value}, rad or m): the solver of the robot without
+    them (:meth:`Robot.locked`), ``q0``, ``bounds`` and the answers in the full robot's layout, the locked joints at
+    their values."""
+
+    def __init__(self, robot, locked: dict, method: str, prefer: str, options: dict) -> None:
+        from .robot.locking import locked_robot, shrink_q
+
+        self.robot = robot
+        self.sub = sub = locked_robot(robot, locked)
+        self.values = {k: float(v) for k, v in locked.items()}
+        if options.get("q0") is not None:
+            options["q0"] = shrink_q(robot, sub, options["q0"])
+        if options.get("bounds") is not None:
+            lower, upper = options["bounds"]
+            options["bounds"] = (shrink_q(robot, sub, lower), shrink_q(robot, sub, upper))
+        self.solver = IKSolver(sub, method, prefer=prefer, **options)
+
+    def solve(self, target, q0, seed) -> Result:
+        from .robot.locking import expand_result, shrink_q
+
+        if q0 is not None:
+            q0 = shrink_q(self.robot, self.sub, q0)
+        return expand_result(self.robot, self.sub, self.values, self.solver.solve(target, q0, seed))
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
@@ -290,6 +386,9 @@ def _key(robot, method: str, options: dict):
             if isinstance(value, float) and math.isnan(value):  # NaN != NaN: such a key would never hit
                 return None
             parts.append((name, type(value), value))
+        elif name == "locked" and isinstance(value, dict) and all(
+                type(k) is str and isinstance(v, _PLAIN) for k, v in value.items()):
+            parts.append((name, None, tuple(sorted((k, type(v), v) for k, v in value.items()))))
         elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
             # an object, by identity: the cached solver keeps it alive, so its id is not reused while cached (a
             # scene file's path is read into a Scene anew on every call, as before: the file may change)
@@ -324,3 +423,33 @@ def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
     cache[key] = solver
     return solver
 
+
+
+def solver_for(robot, method: str, options: dict, target) -> IKSolver:
+    """The IKSolver that solves ``target`` for :func:`evoik_pin.solve` with these arguments: the one kept for them
+    (:func:`cached_solver`), else a new one (a robot by name, a scene file's path, array bounds: options that are no
+    plain values). Bad arguments raise solve's errors in its order: the target's own checks (a NaN, a 5-vector) come
+    before the options'."""
+    solver = cached_solver(robot, method, options)
+    if solver is not None:
+        return solver
+    robot = _robot(robot)
+    try:
+        return IKSolver(robot, method, **{k: v for k, v in options.items() if k != "q0"})
+    except EvoikError:
+        # solve's order: prefer=, locked=, the target's own checks (a goal list's bound to the robot), the options
+        from .goals.preferences import split_preferences
+        from .robot.locking import locked_robot
+        from .solvers.search.choose import check_prefer
+
+        check_prefer("first" if options.get("prefer") is None else options["prefer"])
+        goals = split_preferences(target)[0]
+        if options.get("locked"):
+            robot = locked_robot(robot, options["locked"])
+            if not is_goal_list(goals):
+                Target.coerce(goals)
+            elif options.get("objective") is None:  # an objective with a goal list: the options' error
+                bind(robot, goals)
+        else:  # the problem's checks in their order: the target, tolerances, bounds, q0, margin, scene
+            make_problem(robot, goals, **{k: v for k, v in options.items() if k in _PROBLEM_OPTIONS})
+        raise

@@ -153,9 +153,9 @@ class BatchSolver:
         options: as for :func:`evoik_pin.solve` (``scene`` included).
         fallback: hand the targets the batched rounds leave to the per-target solver (False: they stay
             unsolved, with the best batched answer; reachability maps want a verdict, not a 5 ms search).
-        choose: the API's choosing solve (``api._solve_choosing``: ``choose(robot, target, method, seed, prefer=,
-            **options)``), which solves one by one every target when ``prefer`` is given and every goal list holding
-            preferences (the batched rounds skip those), as :func:`evoik_pin.solve` would.
+        choose: the API's solve (``api.solve``: ``choose(robot, target, method, seed, prefer=, **options)``), which
+            solves every target left to the one-by-one solves (all of them when ``prefer`` is given, every goal list
+            holding preferences); None: ``make_problem`` and ``run`` solve them (reachability maps).
         prefer: ``"nearest"`` or ``"manipulability"`` (checked by the caller), or None (the first answer).
     """
 
@@ -301,9 +301,11 @@ class BatchSolver:
             out.set_single(i, self._one(target, None if Q0 is None else Q0[i], offset + i, extra))
 
     def _one(self, target: Target, q0, index: int, extra: dict) -> Result:
-        if self.prefer is not None or holds_preferences(target):  # solve's choosing path, without memetic's extra
+        if self.choose is not None:  # evoik_pin.solve's pipeline (an IKSolver kept per thread)
+            if self.prefer is not None or holds_preferences(target):  # answers collected anew: no table offset
+                extra = {}
             return self.choose(self.robot, target, self.method, target_generator(self.entropy, index),
-                               prefer=self.prefer, **{**self.options, "q0": q0})
+                               prefer=self.prefer, **{**self.options, **extra, "q0": q0})
         problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
         solver_options.update(extra)
         return self.run(problem, self.method, target_generator(self.entropy, index), solver_options)

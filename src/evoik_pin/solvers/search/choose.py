@@ -22,7 +22,7 @@
   Nearness is ``|q - q0|`` with joints whose range spans a full turn taken to their turn nearest ``q0`` inside the
   box (:func:`nearest_turn`). The budget is ``timeout``, :data:`DEFAULT_PREFER_TIMEOUT` (0.7 ms) unless given.
 * **Preferences** add their costs to what answers are ranked and refined by; with ``prefer="first"`` the method's
-  own answer is refined alone (:func:`evoik_pin.api._solve_choosing`), so they never cost success.
+  own answer is refined alone (:meth:`evoik_pin.IKSolver.solve`), so they never cost success.
 
 Why a null-space step and a ranking, both: on a redundant arm (Panda on a pose: a one-dimensional self-motion)
 the answers LM finds from random starts lie anywhere on the self-motion manifold, and projected steps take the best
@@ -43,7 +43,7 @@ import time
 
 import numpy as np
 
-from ...errors import OptionError
+from ...errors import MethodError, OptionError
 from ...goals.preferences import Manipulability, Posture
 from ...goals.registry import KIND_BEYOND_FRAME, TASK_ROWS
 from ...goals.stack import owned, target_kind
@@ -115,6 +115,14 @@ def check_prefer(prefer, q0_given: bool = True) -> str:
     if prefer == "nearest" and not q0_given:
         raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
     return prefer
+
+
+def check_prefer_method(prefer: str, method: str) -> None:
+    """MethodError for ``prefer`` other than ``"first"`` with a method other than memetic: it gives one answer,
+    nothing to choose among."""
+    if prefer != "first" and method != "memetic":
+        raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
+                          "(use prefer='first', the default)")
 
 
 def nearest_turn(q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:

@@ -133,9 +133,11 @@ class SingleTargetLane:
             self._g_out, self._errors, self._best_q, self._best)
         return stage, runs, evaluations, pos, rot, q_out
 
-    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None):
-        """Solve one checked target (``position`` (3,) m, ``rotation`` (3, 3) or None: of the lane's kind) from
-        ``q0`` (n,) float (checked; None: none).
+    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None, goals=None):
+        """Solve one checked target of the lane's kind (``position`` (3,) m, ``rotation`` (3, 3) or None), or the
+        one-goal list ``goals`` bound to the lane's stack (:func:`~evoik_pin.goals.stack.bind`'s list, its target
+        ``position`` and ``rotation``), from ``q0`` (n,) float (checked; None: none). A goal's errors are the kernel's
+        (``Goal.reported``), judged by ``Goal.met``, as memetic judges them; ``chosen`` is ``[None]``.
 
         Returns:
             The Result when a first run met the tolerances; else (when the clock started, the runs' state) for
@@ -149,6 +151,16 @@ class SingleTargetLane:
         stage, runs, evaluations, pos, rot, q = self._runs(q0)
         if stage < 0:
             return t0, resumed_state(self.plan, self._box[9], runs, evaluations, self._box[10])
+        if goals is not None:
+            goal = goals[0]
+            goal_errors = [goal.reported(pos, rot)]
+            pos, rot, cost = goal_summary(goals, goal_errors, self._orientation_weight)
+            if not goal.met(*goal_errors[0]):
+                return None
+            result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
+                                       time.perf_counter() - t0, 0.0, goal_errors)
+            result.chosen = [None]
+            return result
         if not self.oriented:
             rot = None
         elif not rot <= self._rotation_tolerance:
@@ -158,23 +170,3 @@ class SingleTargetLane:
         cost = self._objective.from_errors(self._dummy, pos, rot)
         return first_runs_result(q, pos, rot, float(cost), stage, runs, evaluations, self._errors,
                                  time.perf_counter() - t0, 0.0)
-
-    def solve_goals(self, goals: list, pt: np.ndarray, Rt: np.ndarray, q0: np.ndarray | None):
-        """:meth:`solve` for a one-goal list bound to the lane's stack (``goals``: the bound list, ``pt`` (1, 3),
-        ``Rt`` (1, 3, 3): its targets, :func:`~evoik_pin.goals.stack.bind`'s). The goal's errors are the kernel's
-        (``Goal.reported``), judged by ``Goal.met``, as memetic judges them; ``chosen`` is ``[None]``."""
-        t0 = time.perf_counter()
-        self._pt[:] = pt[0]
-        self._Rt[:] = Rt[0]
-        stage, runs, evaluations, pos, rot, q = self._runs(q0)
-        if stage < 0:
-            return t0, resumed_state(self.plan, self._box[9], runs, evaluations, self._box[10])
-        goal = goals[0]
-        goal_errors = [goal.reported(pos, rot)]
-        pos, rot, cost = goal_summary(goals, goal_errors, self._orientation_weight)
-        if not goal.met(*goal_errors[0]):
-            return None
-        result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
-                                   time.perf_counter() - t0, 0.0, goal_errors)
-        result.chosen = [None]
-        return result
