@@ -24,7 +24,8 @@ from .bands import AUX_SIZE, AXES, band_aux, band_errors, parse_pose_axes
 from .registry import register
 
 __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
-           "check_frame_pair", "init_set", "is_set", "number", "pack_frame_pair", "pair_placements", "point3"]
+           "FramePair", "check_frame_pair", "init_set", "is_set", "number", "pack_frame_pair", "pair_placements",
+           "point3"]
 
 #: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation).
 DEFAULT_GOAL_TOLERANCE = 1e-6
@@ -245,6 +246,26 @@ A_REL_SIGNS = A_REL_BAND + AUX_SIZE
 #: The sign of a joint that moves both frames, for a kind whose error sees them (a vector in the world's axes turns
 #: with them); kinds seen in frame a's axes mark those joints 0 (they move the two frames together).
 BOTH = 2.0
+
+
+class FramePair:
+    """What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
+    :class:`~.relative_position.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``."""
+
+    @property
+    def frame_b(self) -> str:
+        """The frame placed relative to ``frame_a`` (the goal's ``frame``)."""
+        return self.frame
+
+    @property
+    def frames(self) -> list[str]:
+        """The frames this goal names: frame_a, frame_b."""
+        return [self.frame_a, self.frame]
+
+    @property
+    def label(self) -> str:
+        """How messages name this goal: ``frame_a -> frame_b``."""
+        return f"{self.frame_a} -> {self.frame}"
 
 
 def check_frame_pair(frame_a, frame_b, kind: str) -> None:

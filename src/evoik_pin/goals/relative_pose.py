@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from .bands import band_errors, tolerance_text
 from .file_entries import FileKind, field_entries, matrix_text, pair_goal, pose_target
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal, check_frame_pair, pack_frame_pair, pair_placements
+from .goal import DEFAULT_GOAL_TOLERANCE, FramePair, Goal, check_frame_pair, pack_frame_pair, pair_placements
 from .pose import se3_target
 from .registry import BANDED_LOG6, FAMILY_BEYOND_FRAME, RELATIVE_BANDED_LOG6, RELATIVE_LOG6, KindCode
 
@@ -23,7 +23,7 @@ KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES = RELATIVE_LOG6, RELATIVE_BANDED_LOG
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class RelativePose(Goal):
+class RelativePose(FramePair, Goal):
     """Frame ``frame_b``'s pose seen from frame ``frame_a`` equals ``target`` (a (4, 4) homogeneous matrix or a
     ``pin.SE3``, m): ``T_a^-1 T_b = T``, wherever the two frames are (a box of known size held by two hands: the
     second gripper's pose in the first's). Its error is ``log6(T^-1 T_a^-1 T_b)`` (m, rad): met when the position
@@ -60,21 +60,6 @@ class RelativePose(Goal):
         check_frame_pair(frame_a, frame_b, "RelativePose")
         object.__setattr__(self, "frame_a", frame_a)
         object.__setattr__(self, "target", se3_target(target, f"RelativePose of {frame_b!r} seen from {frame_a!r}"))
-
-    @property
-    def frame_b(self) -> str:
-        """The frame whose pose is seen from ``frame_a`` (the goal's ``frame``)."""
-        return self.frame
-
-    @property
-    def frames(self) -> list[str]:
-        """The frames this goal names: frame_a, frame_b."""
-        return [self.frame_a, self.frame]
-
-    @property
-    def label(self) -> str:
-        """How messages name this goal: ``frame_a -> frame_b``."""
-        return f"{self.frame_a} -> {self.frame}"
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)

@@ -10,7 +10,16 @@ import numpy as np
 from ..errors import OptionError
 from ..io.datafile import Flow
 from .file_entries import FileKind, field_entries, pair_goal, vector_target
-from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, Goal, check_frame_pair, pack_frame_pair, pair_placements, point3
+from .goal import (
+    BOTH,
+    DEFAULT_GOAL_TOLERANCE,
+    FramePair,
+    Goal,
+    check_frame_pair,
+    pack_frame_pair,
+    pair_placements,
+    point3,
+)
 from .registry import FAMILY_BEYOND_FRAME, RELATIVE_POINT_IN_A, RELATIVE_POINT_WORLD, KindCode
 
 __all__ = ["EXPRESSED_IN", "KIND_RELATIVE_POSITION", "KIND_RELATIVE_POSITION_IN_A", "RelativePosition"]
@@ -23,7 +32,7 @@ EXPRESSED_IN = ("a", "world")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class RelativePosition(Goal):
+class RelativePosition(FramePair, Goal):
     """Frame ``frame_b``'s origin at ``p`` (3 numbers, m) from frame ``frame_a``'s origin, wherever the two frames
     are: ``p_b - p_a = p`` in the world's axes (``expressed_in="world"``: the robot's base frame; the vector keeps its
     direction in space), or ``R_a^T (p_b - p_a) = p`` in frame a's axes (``expressed_in="a"``, the default: the
@@ -62,24 +71,9 @@ class RelativePosition(Goal):
         object.__setattr__(self, "target", point3(p, f"RelativePosition of {frame_b!r} from {frame_a!r}: p"))
 
     @property
-    def frame_b(self) -> str:
-        """The frame placed relative to ``frame_a`` (the goal's ``frame``)."""
-        return self.frame
-
-    @property
     def p(self) -> np.ndarray:
         """The wanted position (3,) (m) of frame b's origin from frame a's, in the axes ``expressed_in`` names."""
         return self.target
-
-    @property
-    def frames(self) -> list[str]:
-        """The frames this goal names: frame_a, frame_b."""
-        return [self.frame_a, self.frame]
-
-    @property
-    def label(self) -> str:
-        """How messages name this goal: ``frame_a -> frame_b``."""
-        return f"{self.frame_a} -> {self.frame}"
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)
