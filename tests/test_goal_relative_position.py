@@ -212,3 +212,18 @@ def test_the_viewer_draws_no_marker_for_it(baxter):
     goals = [Pose(HANDS[0], baxter.fk(q, HANDS[0])), RelativePosition(*HANDS, [0, -0.3, 0], expressed_in="world")]
     with Viewer(baxter) as v:
         assert v.show_goals(goals, labels=False) == [f"goals/{HANDS[0]}"]
+
+
+def test_two_frames_on_one_link_in_the_world_axes(baxter):
+    """Frames fixed on one link (the wrist and the gripper): no joint moves one relative to the other, yet in the
+    world's axes the joints above both turn the vector between them (a head's direction from its neck when
+    retargeting): a goal there binds and is met; in frame a's axes the vector never changes, so it is refused."""
+    q = baxter.random_configurations(1, np.random.default_rng(11))[0]
+    d = baxter.fk(q, "left_gripper").translation - baxter.fk(q, "left_wrist").translation
+    goal = RelativePosition("left_wrist", "left_gripper", d, expressed_in="world")
+    r = ek.solve(baxter, [goal], seed=0)
+    assert r.success, r.message
+    got = baxter.fk(r.q, "left_gripper").translation - baxter.fk(r.q, "left_wrist").translation
+    assert np.linalg.norm(got - d) <= 1e-6
+    with pytest.raises(FrameError, match="moves frame 'left_gripper' relative to 'left_wrist'"):
+        bind(baxter, [RelativePosition("left_wrist", "left_gripper", d, expressed_in="a")])

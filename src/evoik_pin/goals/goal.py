@@ -282,18 +282,21 @@ def pack_frame_pair(robot, frame_a: str, frame_b: str, band: np.ndarray | None =
                     both: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(aux row, support row (m,) bool) of a goal on frames a and b of ``robot`` (the ``A_REL_*`` layout above):
     frame a's joint and folded placement, the band columns ``band`` (AUX_SIZE,) when given, and each joint's sign
-    (``both`` for the joints moving both frames). Raises FrameError for an unknown frame or two frames no joint
-    moves apart."""
+    (``both`` for the joints moving both frames). Raises FrameError for an unknown frame, or two frames no joint
+    moves apart (nor, with ``both``, turns together)."""
     ja, Ra, pa = robot.frame_constants(frame_a)
     jb = robot.frame_constants(frame_b)[0]
     tree = robot.tree
     on_a, on_b = np.zeros(tree.m, dtype=bool), np.zeros(tree.m, dtype=bool)
     on_a[tree.ancestors(ja)], on_b[tree.ancestors(jb)] = True, True
     signs = on_b.astype(float) - on_a.astype(float)  # joints moving both move the two frames together
-    if not signs.any():
+    shared = on_a & on_b
+    # with ``both`` set (a vector in the world's axes) a revolute joint moving both frames turns the vector: two
+    # frames on one link still make a goal then (a head's direction from the neck)
+    if not signs.any() and not (both and (shared & tree.revolute).any()):
         raise FrameError(f"no active joint of {robot.name} moves frame {frame_b!r} relative to "
                          f"{frame_a!r}: load the robot with both among its tips (tips=[...]) or tips='all'")
-    signs[on_a & on_b] = both
+    signs[shared] = both
     aux = np.zeros(A_REL_SIGNS + tree.m)
     aux[A_REL_JOINT] = ja
     aux[A_REL_R:A_REL_R + 9] = Ra.ravel()
