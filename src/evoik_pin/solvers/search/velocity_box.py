@@ -1,0 +1,145 @@
+"""One solve inside a velocity box: the step of a trajectory a robot can follow, or of a tracking loop.
+
+Given the last configuration ``q_prev`` (n,) and the largest step per entry ``step = v_max dt`` (n,) (rad or m), the
+box is ``[q_prev - step, q_prev + step]`` clipped to the search bounds; joints whose range spans a full turn
+(continuous joints, a floating base's yaw and roll) are not clipped: their box is in unwrapped values around
+``q_prev``, so crossing +-pi is a small step, not a 2 pi jump. The answer lies inside the box by construction: the
+LM kernel holds every joint inside its box exactly (an active set), and the box's wrap row is 0.
+
+The stage is Levenberg-Marquardt from ``q_prev`` (the previous answer is the natural warm start, and the box is too
+small for another branch), then, when that run does not meet the goals, a few more starts drawn inside the box
+from the call's generator: the best run wins. A target that cannot be met within the box gets the answer closest
+to meeting it (the lowest task error LM reaches), its goal errors and ``success=False``: never a jump.
+
+With a scene, an answer in collision is pulled back along the segment from ``q_prev`` (collision-free when the
+previous answer was) to the farthest point the exact check passes (bisection): the robot stops short of the
+obstacle or of its own body instead of passing through, and ``success`` is False.
+
+The engine is the solver's own per goal stack (:class:`~evoik_pin.solvers.lm.LevenbergMarquardt`), its box and
+targets written in place every call (:meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.confine`, ``set_targets``): a
+new box per call rebuilds no seed table and no constant.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ...result import Result
+from ..lm.engine import LevenbergMarquardt, problem_goals
+from ..lm.layout import wrapping_joints
+
+__all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
+
+#: Starts drawn inside the box after the run from q_prev did not meet the goals.
+EXTRA_STARTS = 4
+#: LM steps per run: the box is small, the warm start close.
+BOX_ITERATIONS = 30
+#: Bisection steps pulling a colliding answer back towards q_prev (2^-8 of the segment).
+COLLISION_BISECTIONS = 8
+#: Goal stacks whose engines a stage keeps (a tracker alternating a few goal structures).
+_KEPT = 4
+
+
+class VelocityBoxStage:
+    """Levenberg-Marquardt inside a per-call box, one engine per goal stack kept from call to call.
+
+    Args:
+        robot: the :class:`~evoik_pin.Robot` the problems are of.
+        extra_starts: starts drawn inside the box when the run from ``q_prev`` does not meet the goals.
+    """
+
+    def __init__(self, robot, extra_starts: int = EXTRA_STARTS) -> None:
+        self.robot = robot
+        self.extra_starts = int(extra_starts)
+        self._engines: dict = {}  # id(goal stack) -> (stack, engine)
+        self._wrap_for = None  # (lower, upper) arrays the wrap mask is of
+        self._wrap = np.zeros(robot.n, dtype=bool)
+
+    def box(self, q_prev: np.ndarray, step: np.ndarray, lower: np.ndarray, upper: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) (n,) of the velocity box around ``q_prev`` (n,) with half-widths ``step`` (n,) inside the bounds
+        ``lower``, ``upper`` (n,); full-turn joints unclipped (unwrapped values around q_prev). A ``q_prev`` beyond a
+        bound (not on a full-turn joint) gets the box's side at the bound, so that lo <= hi always holds."""
+        if self._wrap_for is None or self._wrap_for[0] is not lower or self._wrap_for[1] is not upper:
+            self._wrap = wrapping_joints(self.robot, lower, upper)
+            self._wrap_for = (lower, upper)
+        lo = q_prev - step
+        hi = q_prev + step
+        wrap = self._wrap
+        lo_b = np.minimum(np.maximum(lo, lower), upper)
+        hi_b = np.maximum(np.minimum(hi, upper), lower)
+        return np.where(wrap, lo, lo_b), np.where(wrap, hi, hi_b)
+
+    def _engine(self, problem) -> LevenbergMarquardt:
+        stack, pt, Rt = problem_goals(problem)
+        kept = self._engines.get(id(stack))
+        if kept is None or kept[0] is not stack:
+            if len(self._engines) >= _KEPT:
+                self._engines.pop(next(iter(self._engines)))
+            kept = self._engines[id(stack)] = (stack, LevenbergMarquardt(problem))
+        engine = kept[1]
+        engine.set_targets(pt, Rt)
+        return engine
+
+    def solve(self, problem, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None,
+              method: str = "velocity-box") -> Result:
+        """The answer to ``problem`` (an :class:`~evoik_pin.IKProblem`: its goals or target, tolerances, bounds and
+        scene) inside the velocity box of ``q_prev`` (n,) and ``step`` (n,) (rad or m); ``rng`` draws the extra
+        starts (None: none drawn). A :class:`Result` whose ``q`` is inside the box, ``success`` when every goal
+        is met (and the answer collision-free, with a scene)."""
+        t0 = time.perf_counter()
+        lo, hi = self.box(q_prev, step, problem.lower, problem.upper)
+        engine = self._engine(problem)
+        engine.confine(lo, hi)
+        out = engine.run(q_prev, BOX_ITERATIONS)
+        evaluations = out.evaluations
+        runs = 1
+        if not out.converged and self.extra_starts > 0 and rng is not None:
+            Q = lo + (hi - lo) * rng.random((self.extra_starts, self.robot.n))
+            more, _ = engine.run_many(Q, BOX_ITERATIONS)
+            evaluations += more.evaluations
+            runs += self.extra_starts
+            if more.converged or more.rank < out.rank:
+                out = more
+        q = np.minimum(np.maximum(out.q, lo), hi)  # the kernel keeps q inside; this makes "by construction" literal
+        message = f"velocity box: {runs} LM run(s)"
+        collision_free = None
+        scene = problem.scene
+        if scene is not None:
+            collision_free = not scene.in_collision(q, problem.margin)
+            if not collision_free:
+                q = _pulled_back(scene, problem.margin, q_prev, q, lo, hi)
+                collision_free = not scene.in_collision(q, problem.margin)
+                message += "; the answer collided: pulled back towards the previous configuration"
+        chosen = None
+        if problem.goals is not None:
+            goal_errors, chosen = problem.goal_errors_and_chosen(q)
+            pos, rot, cost = problem.goal_summary(goal_errors)
+            met = problem.goals_met(goal_errors)
+        else:
+            goal_errors = None
+            pos, rot, cost = problem.assess(q)
+            met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+        success = bool(met and collision_free is not False)
+        if not met:
+            message += "; the goals are not met within the velocity box (the answer closest to them inside it)"
+        return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
+                      cost=float(cost), success=success, generations=0, evaluations=int(evaluations),
+                      time_s=time.perf_counter() - t0, message=message, method=method, collision_free=collision_free,
+                      goal_errors=goal_errors, chosen=chosen)
+
+
+def _pulled_back(scene, margin: float, q_prev: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                 ) -> np.ndarray:
+    """The point of the segment ``q_prev`` -> ``q`` farthest from ``q_prev`` that the exact check passes (bisection;
+    ``q_prev`` itself when none does), clipped into the box (q_prev may lie outside it only on a bound)."""
+    good, bad = 0.0, 1.0
+    for _ in range(COLLISION_BISECTIONS):
+        mid = 0.5 * (good + bad)
+        if scene.in_collision(q_prev + mid * (q - q_prev), margin):
+            bad = mid
+        else:
+            good = mid
+    return np.minimum(np.maximum(q_prev + good * (q - q_prev), lo), hi)
