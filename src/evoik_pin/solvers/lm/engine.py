@@ -45,6 +45,10 @@ from ...goals.stack import (
     spec_row,
 )
 from .layout import (
+    B_CHI,
+    B_CLO,
+    B_HI,
+    B_LO,
     DEFAULT_DAMPING,
     DEFAULT_ITERATIONS,
     DEFAULT_MAX_STEP,
@@ -58,10 +62,6 @@ from .layout import (
     S_POS,
     S_ROT,
     STATS_SIZE,
-    B_CHI,
-    B_CLO,
-    B_HI,
-    B_LO,
     box_constants,
     kernel_params,
 )
@@ -266,7 +266,8 @@ class LevenbergMarquardt:
         array, so a new box every call rebuilds nothing (the cached :func:`box_constants` arrays stay untouched).
         After it, :meth:`retarget` refuses other boxes (the engine's box is no longer theirs). Compiled engine only."""
         if self._reference is not None:
-            raise OptionError("a per-call box (velocity limits) runs on the compiled LM engine only (engine='compiled')")
+            raise OptionError("a per-call box (velocity limits) runs on the compiled LM engine only "
+                              "(engine='compiled')")
         box = self._box
         if not self._own_box:  # the first call: an array of our own (the cached one serves other engines)
             box = self._box = np.zeros_like(box)

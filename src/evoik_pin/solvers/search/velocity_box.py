@@ -60,16 +60,17 @@ class VelocityBoxStage:
     def box(self, q_prev: np.ndarray, step: np.ndarray, lower: np.ndarray, upper: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) (n,) of the velocity box around ``q_prev`` (n,) with half-widths ``step`` (n,) inside the bounds
-        ``lower``, ``upper`` (n,); full-turn joints unclipped (unwrapped values around q_prev). A ``q_prev`` beyond a
-        bound (not on a full-turn joint) gets the box's side at the bound, so that lo <= hi always holds."""
+        ``lower``, ``upper`` (n,); full-turn joints unclipped (unwrapped values around q_prev). A ``q_prev`` more than
+        ``step`` beyond a bound (not on a full-turn joint) gets the box's one point nearest that bound: the speed
+        limit holds first, the joint returns towards its range at full speed."""
         if self._wrap_for is None or self._wrap_for[0] is not lower or self._wrap_for[1] is not upper:
             self._wrap = wrapping_joints(self.robot, lower, upper)
             self._wrap_for = (lower, upper)
         lo = q_prev - step
         hi = q_prev + step
         wrap = self._wrap
-        lo_b = np.minimum(np.maximum(lo, lower), upper)
-        hi_b = np.maximum(np.minimum(hi, upper), lower)
+        lo_b = np.minimum(np.maximum(lo, lower), hi)
+        hi_b = np.maximum(np.minimum(hi, upper), lo)
         return np.where(wrap, lo, lo_b), np.where(wrap, hi, hi_b)
 
     def _engine(self, problem) -> LevenbergMarquardt:
@@ -107,20 +108,27 @@ class VelocityBoxStage:
         message = f"velocity box: {runs} LM run(s)"
         collision_free = None
         scene = problem.scene
+        kernel_errors = True  # the kernel's errors are q's (the memetic plan trusts them the same way)
         if scene is not None:
             collision_free = not scene.in_collision(q, problem.margin)
             if not collision_free:
                 q = _pulled_back(scene, problem.margin, q_prev, q, lo, hi)
                 collision_free = not scene.in_collision(q, problem.margin)
+                kernel_errors = False
                 message += "; the answer collided: pulled back towards the previous configuration"
         chosen = None
-        if problem.goals is not None:
-            goal_errors, chosen = problem.goal_errors_and_chosen(q)
+        goals = problem.goals
+        if goals is not None:
+            if kernel_errors and len(goals) == 1 and goals[0].alternatives is None:
+                goal_errors, chosen = [goals[0].reported(out.position_error, out.orientation_error)], [None]
+            else:  # several goals: their errors from one kinematics pass (memetic's own verdict)
+                goal_errors, chosen = problem.goal_errors_and_chosen(q)
             pos, rot, cost = problem.goal_summary(goal_errors)
             met = problem.goals_met(goal_errors)
         else:
             goal_errors = None
-            pos, rot, cost = problem.assess(q)
+            pos, rot, cost = (problem.assess(q, out.position_error, out.orientation_error) if kernel_errors
+                              else problem.assess(q))
             met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
         success = bool(met and collision_free is not False)
         if not met:
