@@ -7,9 +7,12 @@ box is ``[q_prev - step, q_prev + step]`` clipped to the search bounds; joints w
 LM kernel holds every joint inside its box exactly (an active set), and the box's wrap row is 0.
 
 The stage is Levenberg-Marquardt from ``q_prev`` (the previous answer is the natural warm start, and the box is too
-small for another branch), then, when that run does not meet the goals, a few more starts drawn inside the box
-from the call's generator: the best run wins. A target that cannot be met within the box gets the answer closest
-to meeting it (the lowest task error LM reaches), its goal errors and ``success=False``: never a jump.
+small for another branch). When that run does not meet the goals (LM's active set pinned a joint at the box early,
+or the goals are out of the box's reach), LM from ``q_prev`` in the full bounds finds the exact answer nearest
+``q_prev``: taken when it lies inside the box; else its share inside the box along the straight line, it clipped,
+and a few starts drawn inside the box from the call's generator start runs in the box: the best run wins.
+A target that cannot be met within the box gets the answer closest to meeting it (the lowest task error LM
+reaches), its goal errors and ``success=False``: never a jump.
 
 With a scene, an answer in collision is pulled back along the segment from ``q_prev`` (collision-free when the
 previous answer was) to the farthest point the exact check passes (bisection): the robot stops short of the
@@ -29,6 +32,7 @@ import numpy as np
 from ...result import Result
 from ..lm.engine import LevenbergMarquardt, problem_goals
 from ..lm.layout import wrapping_joints
+from ..lm.run_outcome import LMOutcome
 
 __all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
 
@@ -39,7 +43,7 @@ BOX_ITERATIONS = 30
 #: Bisection steps pulling a colliding answer back towards q_prev (2^-8 of the segment).
 COLLISION_BISECTIONS = 8
 #: Goal stacks whose engines a stage keeps (a tracker alternating a few goal structures).
-_KEPT = 4
+_KEPT = 8
 
 
 class VelocityBoxStage:
@@ -73,13 +77,17 @@ class VelocityBoxStage:
         hi_b = np.maximum(np.minimum(hi, upper), lo)
         return np.where(wrap, lo, lo_b), np.where(wrap, hi, hi_b)
 
-    def _engine(self, problem) -> LevenbergMarquardt:
+    def _engine(self, problem, free: bool = False) -> LevenbergMarquardt:
+        """The engine of ``problem``'s goal stack, its targets written in: the boxed one (``confine`` per call), or
+        with ``free`` the one searching the problem's bounds (its box fixed: the solver's arrays)."""
         stack, pt, Rt = problem_goals(problem)
-        kept = self._engines.get(id(stack))
-        if kept is None or kept[0] is not stack:
+        key = (id(stack), free)
+        kept = self._engines.get(key)
+        if kept is None or kept[0] is not stack or (free and (kept[2] is not problem.lower
+                                                               or kept[3] is not problem.upper)):
             if len(self._engines) >= _KEPT:
                 self._engines.pop(next(iter(self._engines)))
-            kept = self._engines[id(stack)] = (stack, LevenbergMarquardt(problem))
+            kept = self._engines[key] = (stack, LevenbergMarquardt(problem), problem.lower, problem.upper)
         engine = kept[1]
         engine.set_targets(pt, Rt)
         return engine
@@ -97,13 +105,28 @@ class VelocityBoxStage:
         out = engine.run(q_prev, BOX_ITERATIONS)
         evaluations = out.evaluations
         runs = 1
-        if not out.converged and self.extra_starts > 0 and rng is not None:
-            Q = lo + (hi - lo) * rng.random((self.extra_starts, self.robot.n))
-            more, _ = engine.run_many(Q, BOX_ITERATIONS)
-            evaluations += more.evaluations
-            runs += self.extra_starts
-            if more.converged or more.rank < out.rank:
-                out = more
+        if not out.converged:
+            # the run pinned a joint at the box early (LM's active set only grows) or the box is too small: the
+            # unboxed answer nearest q_prev (LM from q_prev in the bounds) shows where the goals are met; its
+            # part inside the box along the straight line, and it clipped, start runs in the box, then random ones
+            free = self._engine(problem, free=True).run(q_prev, BOX_ITERATIONS)
+            evaluations += free.evaluations
+            move = free.q - q_prev
+            move = np.where(self._wrap, (move + np.pi) % (2 * np.pi) - np.pi, move)  # the short way round
+            reach = q_prev + move
+            if free.converged and ((reach >= lo) & (reach <= hi)).all():
+                out = LMOutcome(reach, free.position_error, free.orientation_error, True, free.iterations,
+                                free.evaluations, free.goal_errors, free.cost)
+            else:
+                share = float(np.min(np.where(np.abs(move) > 0.0, step / np.maximum(np.abs(move), 1e-300), np.inf)))
+                starts = [q_prev + min(1.0, share) * move, np.minimum(np.maximum(reach, lo), hi)]
+                if self.extra_starts > 0 and rng is not None:
+                    starts.extend(lo + (hi - lo) * rng.random((self.extra_starts, self.robot.n)))
+                more, _ = engine.run_many(np.array(starts), BOX_ITERATIONS)
+                evaluations += more.evaluations
+                runs += len(starts)
+                if more.converged or more.rank < out.rank:
+                    out = more
         q = np.minimum(np.maximum(out.q, lo), hi)  # the kernel keeps q inside; this makes "by construction" literal
         message = f"velocity box: {runs} LM run(s)"
         collision_free = None
