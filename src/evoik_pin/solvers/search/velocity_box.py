@@ -60,6 +60,7 @@ class VelocityBoxStage:
         self._engines: dict = {}  # id(goal stack) -> (stack, engine)
         self._wrap_for = None  # (lower, upper) arrays the wrap mask is of
         self._wrap = np.zeros(robot.n, dtype=bool)
+        self._any_wrap = False
 
     def box(self, q_prev: np.ndarray, step: np.ndarray, lower: np.ndarray, upper: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray]:
@@ -69,13 +70,15 @@ class VelocityBoxStage:
         limit holds first, the joint returns towards its range at full speed."""
         if self._wrap_for is None or self._wrap_for[0] is not lower or self._wrap_for[1] is not upper:
             self._wrap = wrapping_joints(self.robot, lower, upper)
+            self._any_wrap = bool(self._wrap.any())
             self._wrap_for = (lower, upper)
         lo = q_prev - step
         hi = q_prev + step
-        wrap = self._wrap
         lo_b = np.minimum(np.maximum(lo, lower), hi)
         hi_b = np.maximum(np.minimum(hi, upper), lo)
-        return np.where(wrap, lo, lo_b), np.where(wrap, hi, hi_b)
+        if not self._any_wrap:
+            return lo_b, hi_b
+        return np.where(self._wrap, lo, lo_b), np.where(self._wrap, hi, hi_b)
 
     def _engine(self, problem, free: bool = False) -> LevenbergMarquardt:
         """The engine of ``problem``'s goal stack, its targets written in: the boxed one (``confine`` per call), or
@@ -142,9 +145,15 @@ class VelocityBoxStage:
         chosen = None
         goals = problem.goals
         if goals is not None:
-            if kernel_errors and len(goals) == 1 and goals[0].alternatives is None:
-                goal_errors, chosen = [goals[0].reported(out.position_error, out.orientation_error)], [None]
-            else:  # several goals: their errors from one kinematics pass (memetic's own verdict)
+            if kernel_errors and not problem.goal_sets:
+                # the kernel's errors of each goal at q, its success test's numbers (memetic's first runs trust them
+                # the same way): no kinematics pass in Python
+                if len(goals) == 1:
+                    goal_errors = [goals[0].reported(out.position_error, out.orientation_error)]
+                else:
+                    goal_errors = [g.reported(p, r) for g, (p, r) in zip(goals, out.goal_errors.tolist(), strict=True)]
+                chosen = [None] * len(goals)
+            else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)
                 goal_errors, chosen = problem.goal_errors_and_chosen(q)
             pos, rot, cost = problem.goal_summary(goal_errors)
             met = problem.goals_met(goal_errors)
