@@ -193,11 +193,10 @@ def trajectories(steps: int) -> list[str]:
                     start = steps // 3
                     back = start + 15 + int(np.argmax(ok[start + 15:])) if ok[start + 15:].any() else steps
                     reachable[start:back] = False
+                worst = max([r.position_error for r, m in zip(rs, reachable, strict=True) if m], default=0.0)
                 rows.append(f"| {name} | {seed} | {'yes' if stretch else 'no'} | {steps} | {violations} | "
                             f"{moves.max():.3f} | {int(ok[reachable].sum())} / {int(reachable.sum())} | "
-                            f"{int((~ok[reachable]).sum())} | "
-                            f"{max([r.position_error for r, m in zip(rs, reachable, strict=True) if m], default=0):.1e} | "
-                            f"{1e6 * wall / steps:.0f} |")
+                            f"{int((~ok[reachable]).sum())} | {worst:.1e} | {1e6 * wall / steps:.0f} |")
                 print(rows[-1], flush=True)
     return rows
 
@@ -252,8 +251,9 @@ def tracking_rows(name: str, result: dict, steps: int) -> list[str]:
         t = 1e6 * np.array(result[method]["wall_s"])
         e = result[method]["errors"]
         met = int(((e[:, 0] <= MET) & (e[:, 1] <= MET)).sum())
+        pos, rot = e[:, 0], e[:, 1]
         rows.append(f"| {name} | {method} | {np.median(t):.0f} | {np.percentile(t, 99):.0f} | {met} / {steps} | "
-                    f"{np.median(e[:, 0]):.1e} / {e[:, 0].max():.1e} | {np.median(e[:, 1]):.1e} / {e[:, 1].max():.1e} |")
+                    f"{np.median(pos):.1e} / {pos.max():.1e} | {np.median(rot):.1e} / {rot.max():.1e} |")
         print(rows[-1], flush=True)
     return rows
 

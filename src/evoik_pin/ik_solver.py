@@ -233,7 +233,7 @@ class IKSolver:
             raise OptionError("velocity limits meet goals only: a goal list with preferences (Posture, "
                               "JointLimitMargin, ...) is not accepted with velocity_limits; drop the preferences")
         q_prev = self._checked_q0(q_prev)
-        problem = self.problem(target, q_prev)
+        problem = self.problem(target)  # its q0 is not read: the stage starts from q_prev
         stage = self._box_stage
         if stage is None:
             from .solvers.search.velocity_box import VelocityBoxStage
