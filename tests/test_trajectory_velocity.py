@@ -183,3 +183,14 @@ def test_velocity_limits_array_and_factor(panda):
     assert np.array_equal(velocity_limits(panda, 0.5), 0.5 * urdf_velocity_limits(panda))
     assert np.array_equal(velocity_limits(panda, np.ones(7)), np.ones(7))
     assert np.array_equal(urdf_velocity_limits(panda), panda.model.velocityLimit)
+
+
+def test_preferences_refused_before_any_point(panda):
+    from evoik_pin.goals import Pose
+    from evoik_pin.goals.preferences import Posture
+
+    Q = smooth_path(panda, 3, DT, seed=0)
+    lists = [[Pose("panda_hand_tcp", T)] for T in _poses(panda, Q)]
+    lists[2] = lists[2] + [Posture(Q[2])]
+    with pytest.raises(OptionError, match="preferences"):
+        ek.solve_trajectory(panda, lists, dt=DT, velocity_limits=True, q0=Q[0])

@@ -344,6 +344,11 @@ def _velocity_trajectory(robot, targets, method: str, q0, step: np.ndarray, rng,
     """solve_trajectory's points within the velocity box of the one before (:meth:`IKSolver.solve_within`): the first
     one solved freely without ``q0``, inside the box of ``q0`` with it. One solver (and its box stage) for every
     point; one generator."""
+    from .goals.preferences import Preference
+
+    if any(type(t) in (list, tuple) and any(isinstance(x, Preference) for x in t) for t in targets):
+        raise OptionError("velocity limits meet goals only: a goal list with preferences (Posture, "
+                          "JointLimitMargin, ...) is not accepted with velocity_limits; drop the preferences")
     box_options = {k: v for k, v in options.items() if k != "prefer"}  # the box holds one answer: nothing to prefer
     solver = IKSolver(robot, method, **box_options)
     results: list[Result] = []
