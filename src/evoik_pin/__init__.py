@@ -7,6 +7,7 @@ the evolutionary methods of five research papers or the memetic default. See REA
 from .api import BatchResults, IKSolver, make_problem, prepare, solve, solve_all, solve_many, solve_trajectory
 from .goals import RelativePosition
 from .motion.retarget import retarget
+from .motion.tracker import Tracker
 from .problem import IKProblem, Target
 from .reach import ReachMap, reachability_map
 from .result import Front, Result
@@ -25,6 +26,7 @@ __all__ = [
     "Robot",
     "Scene",
     "Target",
+    "Tracker",
     "list_robots",
     "load_robot",
     "make_problem",

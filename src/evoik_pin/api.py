@@ -169,7 +169,8 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
 
 
 def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro: bool = False,
-                     delta: float = DEFAULT_PRO_DELTA, seed=None, **options) -> list[Result]:
+                     delta: float = DEFAULT_PRO_DELTA, seed=None, dt: float | None = None, velocity_limits=None,
+                     **options) -> list[Result]:
     """Solve a sequence of targets, each warm-started from the previous solution (its ``q`` the next point's ``q0``).
 
     ``targets``: targets of the tip (anything :func:`solve` accepts), or goal lists (:mod:`evoik_pin.goals`), one
@@ -187,6 +188,22 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     ``q0``, then required), a continuous joint path from a redundant arm; ``"manipulability"``: the most dexterous.
     ``locked``: ``{joint: value}`` (rad or m) held at every point; ``q0`` and the answers' ``q`` in ``robot``'s
     layout.
+
+    A trajectory a robot can follow: ``dt`` (s, > 0, between two points) with ``velocity_limits`` (``True``: the
+    URDF's; a factor > 0 of them; or an array (n,) in rad/s and m/s; :mod:`evoik_pin.robot.velocity_limits`, with
+    a floating base's linear (x, y, z) and Euler-rate (yaw, pitch, roll) limits) puts every answer after the first
+    inside ``|q_t - q_{t-1}| <= v_max dt`` of the one before (:meth:`IKSolver.solve_within`): no flip, no jump. A
+    point that cannot be reached within that box gets the answer inside it closest to meeting its goals, its goal
+    errors and ``success=False``; the next points go on from there. Full-turn joints move in unwrapped values (a
+    continuous joint crossing pi keeps going). The first point is solved freely (``method``, ``prefer``) when
+    ``q0`` is not given; with ``q0`` (the robot's current configuration) it too lies inside the box around ``q0``.
+    Scenes hold at every point (an answer that would collide stops short of the contact, ``success=False``). The
+    points after the first are Levenberg-Marquardt in the box whatever ``method`` (the box holds one branch);
+    ``pro`` is not accepted with it (the velocity box is the box).
+
+    Raises:
+        OptionError: one of ``dt`` and ``velocity_limits`` without the other, a bad ``dt`` or ``velocity_limits``,
+        ``pro=True`` with them; the errors of :func:`solve` for bad targets and options.
     """
     robot = _robot(robot)
     rng = _rng(seed)
@@ -206,6 +223,7 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
         raise ConfigurationError("solve_trajectory needs at least one target")
     if pro:
         delta = check_pro_delta(delta)
+    step = _velocity_step(robot, dt, velocity_limits, pro)
     options = check_call(robot, make_problem, method, options)
     results: list[Result] = []
     previous = None if q0 is None else robot.check_q(q0)
@@ -213,6 +231,8 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
         options["locked"] = locked
     if prefer is not None:
         options["prefer"] = prefer
+    if step is not None:
+        return _velocity_trajectory(robot, targets, method, previous, step, rng, options)
     for i, target in enumerate(targets):
         point = {**options, "q0": previous}
         if pro and i > 0:  # the previous answer's box: that point's problem's search box +- delta, q0 clipped into it
@@ -300,6 +320,46 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
                                 prefer=prefer, locked=options.pop("locked", None), **options)
 
 
+
+
+# ------------------------------------------------ solve_trajectory within velocity limits
+def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
+    """The largest step per entry, ``v_max dt`` (n,) (rad or m), of solve_trajectory's ``dt`` and
+    ``velocity_limits``; None when neither is given. OptionError: one without the other, bad values, with ``pro``."""
+    from .robot.velocity_limits import check_dt
+    from .robot.velocity_limits import velocity_limits as limits_of
+
+    if dt is None and velocity_limits is None:
+        return None
+    if dt is None or velocity_limits is None:
+        given, missing = ("dt", "velocity_limits") if velocity_limits is None else ("velocity_limits", "dt")
+        raise OptionError(f"solve_trajectory: {given} needs {missing} too (dt in s between points and velocity_limits "
+                          "True, a factor or an array (n,) of rad/s and m/s), or neither")
+    if pro:
+        raise OptionError("solve_trajectory: pro=True and velocity limits are two search boxes; give one of them")
+    return limits_of(robot, velocity_limits) * check_dt(dt)
+
+
+def _velocity_trajectory(robot, targets, method: str, q0, step: np.ndarray, rng, options: dict) -> list[Result]:
+    """solve_trajectory's points within the velocity box of the one before (:meth:`IKSolver.solve_within`): the first
+    one solved freely without ``q0``, inside the box of ``q0`` with it. One solver (and its box stage) for every
+    point; one generator."""
+    from .goals.preferences import Preference
+
+    if any(type(t) in (list, tuple) and any(isinstance(x, Preference) for x in t) for t in targets):
+        raise OptionError("velocity limits meet goals only: a goal list with preferences (Posture, "
+                          "JointLimitMargin, ...) is not accepted with velocity_limits; drop the preferences")
+    box_options = {k: v for k, v in options.items() if k != "prefer"}  # the box holds one answer: nothing to prefer
+    solver = IKSolver(robot, method, **box_options)
+    results: list[Result] = []
+    previous = q0
+    for i, target in enumerate(targets):
+        if i == 0 and previous is None:
+            results.append(solve(robot, target, method, rng, **options))
+        else:
+            results.append(solver.solve_within(target, previous, step, rng))
+        previous = results[-1].q
+    return results
 
 
 # ------------------------------------------------ solve's choices beyond one answer: prefer=, preferences, locked=

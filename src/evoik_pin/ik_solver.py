@@ -144,6 +144,7 @@ class IKSolver:
         # custom objective may need the Target; a target box is remade per target)
         self._lanes: dict = {}
         self._lanes_open = self._plain and not self._target_box and self._objective is None
+        self._box_stage = None  # solve_within's stage (velocity_box), made on its first call
 
     def _checked_q0(self, q0) -> np.ndarray:
         arr = np.asarray(q0, dtype=float)
@@ -208,6 +209,37 @@ class IKSolver:
         if self._prefer != "first":
             return self._solve_choosing(problem, q0, seed)
         return self.run(problem, _rng(seed))
+
+    def solve_within(self, target, q_prev, step, seed=None) -> Result:
+        """Solve one target (or goal list) inside the velocity box of the last configuration ``q_prev`` (n,):
+        ``[q_prev - step, q_prev + step]`` (``step`` (n,) rad or m: ``v_max dt``) within the solver's bounds,
+        full-turn joints in unwrapped values around ``q_prev`` (:mod:`evoik_pin.solvers.search.velocity_box`).
+
+        The answer is inside the box whatever the target: the one closest to meeting the goals, ``success=False`` and
+        its goal errors when they cannot be met within it. Levenberg-Marquardt from ``q_prev``, then a few starts
+        inside the box drawn from ``seed`` (int, Generator or None) when that run falls short; the solver's goals,
+        tolerances, bounds and scene, whatever its method (a box this small holds one branch: no global search).
+        The box is written into the stage's own engine per call: no seed table is built for it.
+
+        Raises:
+            OptionError: goal lists holding preferences (the box's stage meets goals only). The errors of
+            :meth:`solve` for a bad target or ``q_prev``.
+        """
+        if self._locked is not None:
+            return self._locked.solve_within(target, q_prev, step, seed)
+        if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
+            from .errors import OptionError
+
+            raise OptionError("velocity limits meet goals only: a goal list with preferences (Posture, "
+                              "JointLimitMargin, ...) is not accepted with velocity_limits; drop the preferences")
+        q_prev = self._checked_q0(q_prev)
+        problem = self.problem(target)  # its q0 is not read: the stage starts from q_prev
+        stage = self._box_stage
+        if stage is None:
+            from .solvers.search.velocity_box import VelocityBoxStage
+
+            stage = self._box_stage = VelocityBoxStage(self.robot)
+        return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
     def _on_lane(self, target, q0, seed) -> Result | IKProblem | None:
         """A pose, a position or a one-goal list on the lane of its kind or goal stack (single_target_lane): the
@@ -361,6 +393,13 @@ class _Locked:
         if q0 is not None:
             q0 = shrink_q(self.robot, self.sub, q0)
         return expand_result(self.robot, self.sub, self.values, self.solver.solve(target, q0, seed))
+
+    def solve_within(self, target, q_prev, step, seed) -> Result:
+        from .robot.locking import expand_result, kept_columns, shrink_q
+
+        step = np.asarray(step, dtype=float)[kept_columns(self.robot, self.sub)]
+        return expand_result(self.robot, self.sub, self.values, self.solver.solve_within(
+            target, shrink_q(self.robot, self.sub, q_prev), step, seed))
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers

@@ -45,6 +45,10 @@ from ...goals.stack import (
     spec_row,
 )
 from .layout import (
+    B_CHI,
+    B_CLO,
+    B_HI,
+    B_LO,
     DEFAULT_DAMPING,
     DEFAULT_ITERATIONS,
     DEFAULT_MAX_STEP,
@@ -216,13 +220,14 @@ class LevenbergMarquardt:
         self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
         self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
         self._same_box = (problem.lower, problem.upper)  # box arrays known to give this engine's box constants
+        self._own_box = False  # whether _box is this engine's own array (confine), no longer box_constants'
 
     def retarget(self, problem: IKProblem) -> bool:
         """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
         robot, goal stack and search box, as the problems of an :class:`~evoik_pin.IKSolver` do): the targets are
         written into the kernel's argument arrays in place, so no constant is rebuilt. Returns False (the engine
         unchanged) when ``problem`` needs an engine of its own, and for the python engine."""
-        if self._reference is not None or problem.robot is not self.robot:
+        if self._reference is not None or problem.robot is not self.robot or self._own_box:
             return False
         target = problem.target
         same = self._same
@@ -254,6 +259,37 @@ class LevenbergMarquardt:
             problem.lower, problem.upper, target.rotation is None, problem.tolerance, problem.rotation_tolerance)
         self.problem = problem
         return True
+
+    def confine(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Run inside ``[lower, upper]`` (n,) (rad or m) from now on, no joint wrapping: a per-call box (a velocity
+        box around the last configuration, :mod:`..search.velocity_box`) written in place into this engine's own box
+        array, so a new box every call rebuilds nothing (the cached :func:`box_constants` arrays stay untouched).
+        After it, :meth:`retarget` refuses other boxes (the engine's box is no longer theirs). Compiled engine only."""
+        if self._reference is not None:
+            raise OptionError("a per-call box (velocity limits) runs on the compiled LM engine only "
+                              "(engine='compiled')")
+        box = self._box
+        if not self._own_box:  # the first call: an array of our own (the cached one serves other engines)
+            box = self._box = np.zeros_like(box)
+            self._args = (*self._tree, box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._own_box = True
+        box[B_LO] = box[B_CLO] = lower
+        box[B_HI] = box[B_CHI] = upper  # the wrap row stays 0: the box is in unwrapped values
+
+    def set_targets(self, pt: np.ndarray, Rt: np.ndarray) -> None:
+        """Write the goals' targets ``pt`` (G, 3) m and ``Rt`` (G, 3, 3) into the kernel's argument arrays (the goal
+        stack unchanged): the per-step update of a tracking loop, nothing rebuilt."""
+        if self._reference is not None:
+            raise OptionError("set_targets runs on the compiled LM engine only (engine='compiled')")
+        if not self._owned:  # the first problem's arrays may be its target's own: copies, never written through
+            self._pt, self._Rt = np.array(pt, dtype=float), np.array(Rt, dtype=float)
+            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._owned = True
+            self._direct = self._overload()
+            self._same = None
+        else:
+            self._pt[...] = pt
+            self._Rt[...] = Rt
 
     def _overload(self):
         """The machine code numba runs for :meth:`run`'s arguments, as a function called without numba's dispatch

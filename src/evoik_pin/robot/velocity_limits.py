@@ -1,0 +1,98 @@
+"""A robot's speed limits per entry of ``q``, and the ``velocity_limits=`` / ``dt=`` options that read them.
+
+``velocity_limits`` is ``True`` (the URDF's ``<limit velocity=...>``), a positive factor of those, or an array (n,)
+of speeds (rad/s for revolute joints, m/s for prismatic ones and a floating base's x, y, z). Where the URDF gives
+none (0 or inf: a joint without ``velocity``, a floating base), a default stands in:
+:data:`DEFAULT_JOINT_SPEED` for joints, :data:`DEFAULT_BASE_LINEAR_SPEED` and :data:`DEFAULT_BASE_ANGULAR_SPEED`
+for a floating base.
+
+A floating base's rotation entries are Euler angles (yaw, pitch, roll: :mod:`.robot`), so its angular limit bounds
+each Euler rate, not the body's angular velocity: an approximation (exact for a rotation about one axis; near
+pitch = +-pi/2 the body may turn slower than the bound allows). Its linear limit bounds each of x, y, z, so the
+speed itself is within sqrt(3) times it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import OptionError
+
+__all__ = ["DEFAULT_BASE_ANGULAR_SPEED", "DEFAULT_BASE_LINEAR_SPEED", "DEFAULT_JOINT_SPEED", "check_dt",
+           "urdf_velocity_limits", "velocity_limits"]
+
+#: Speed (rad/s, m/s for prismatic joints) of a joint whose URDF gives no velocity limit.
+DEFAULT_JOINT_SPEED = 3.0
+#: A floating base's x, y, z speed (m/s) by default: faster than a running human (about 5 m/s), so that a
+#: retargeted motion is not held back by it.
+DEFAULT_BASE_LINEAR_SPEED = 5.0
+#: A floating base's yaw, pitch, roll rates (rad/s) by default (a turn per second).
+DEFAULT_BASE_ANGULAR_SPEED = 2.0 * math.pi
+
+
+def urdf_velocity_limits(robot) -> np.ndarray:
+    """(n,) speed limits of ``robot``'s entries of ``q`` (rad/s or m/s): the URDF's, the defaults where it has none.
+
+    A mimic joint's limit bounds the entry it follows through its multiplier (``|m| q_k' <= v_j``): an entry gets
+    the smallest of the bounds of the physical joints that follow it."""
+    n = robot.n
+    limits = np.full(n, np.inf)
+    v = np.asarray(robot.model.velocityLimit, dtype=float)
+    index, scale = robot.tree_constants()[4], robot.tree_constants()[5]
+    if v.shape[0] == n:
+        limits = v.copy()
+    elif v.shape[0] == index.shape[0]:  # one entry per physical joint of the folded tree
+        for j in range(index.shape[0]):
+            k = int(index[j])
+            if 0 <= k < n and scale[j] != 0.0:
+                limits[k] = min(limits[k], v[j] / abs(scale[j]))
+    missing = ~np.isfinite(limits) | (limits <= 0.0)
+    limits[missing] = DEFAULT_JOINT_SPEED
+    if robot.floating_base:  # x, y, z (m/s), yaw, pitch, roll (rad/s): a free flyer has no URDF limit
+        base = np.asarray(robot.model.velocityLimit[:6], dtype=float) if v.shape[0] == n else np.full(6, np.inf)
+        defaults = np.array([DEFAULT_BASE_LINEAR_SPEED] * 3 + [DEFAULT_BASE_ANGULAR_SPEED] * 3)
+        limits[:6] = np.where(np.isfinite(base) & (base > 0.0), base, defaults)
+    return limits
+
+
+def velocity_limits(robot, spec) -> np.ndarray:
+    """(n,) speed limits (rad/s, m/s) of ``velocity_limits=spec``: ``True`` the URDF's (:func:`urdf_velocity_limits`),
+    a factor (float > 0) times those, or an array (n,) of positive finite speeds.
+
+    Raises:
+        OptionError: anything else (False, a factor <= 0 or not finite, an array of the wrong length or with an entry
+            <= 0, NaN or inf), naming what is accepted.
+    """
+    accepted = (f"velocity_limits must be True (the URDF's limits), a factor > 0 of them, or an array of {robot.n} "
+                "speeds > 0 (rad/s for revolute joints, m/s for prismatic ones and a floating base's x, y, z)")
+    if spec is True:
+        return urdf_velocity_limits(robot)
+    if isinstance(spec, bool) or spec is None:
+        raise OptionError(f"{accepted}; got {spec!r}")
+    if isinstance(spec, (int, float, np.integer, np.floating)):
+        factor = float(spec)
+        if not (math.isfinite(factor) and factor > 0.0):
+            raise OptionError(f"{accepted}; got the factor {spec!r}")
+        return factor * urdf_velocity_limits(robot)
+    try:
+        arr = np.asarray(spec, dtype=float)
+    except (TypeError, ValueError):
+        raise OptionError(f"{accepted}; got {type(spec).__name__}") from None
+    if arr.shape != (robot.n,):
+        raise OptionError(f"{accepted}; got an array of shape {arr.shape}")
+    if not (np.isfinite(arr).all() and (arr > 0.0).all()):
+        raise OptionError(f"{accepted}; got entries {arr[~(np.isfinite(arr) & (arr > 0.0))].tolist()}")
+    return arr.copy()
+
+
+def check_dt(dt) -> float:
+    """``dt`` (s) between two points of a trajectory or two steps of a control loop: a finite number > 0.
+
+    Raises:
+        OptionError: anything else."""
+    if isinstance(dt, bool) or not isinstance(dt, (int, float, np.integer, np.floating)) or not (
+            math.isfinite(float(dt)) and float(dt) > 0.0):
+        raise OptionError(f"dt must be the time step in s, a finite number > 0; got {dt!r}")
+    return float(dt)

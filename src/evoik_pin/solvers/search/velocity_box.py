@@ -1,0 +1,190 @@
+"""One solve inside a velocity box: the step of a trajectory a robot can follow, or of a tracking loop.
+
+Given the last configuration ``q_prev`` (n,) and the largest step per entry ``step = v_max dt`` (n,) (rad or m), the
+box is ``[q_prev - step, q_prev + step]`` clipped to the search bounds; joints whose range spans a full turn
+(continuous joints, a floating base's yaw and roll) are not clipped: their box is in unwrapped values around
+``q_prev``, so crossing +-pi is a small step, not a 2 pi jump. The answer lies inside the box by construction: the
+LM kernel holds every joint inside its box exactly (an active set), and the box's wrap row is 0.
+
+The stage is Levenberg-Marquardt from ``q_prev`` (the previous answer is the natural warm start, and the box is too
+small for another branch). When that run does not meet the goals (LM's active set pinned a joint at the box early,
+or the goals are out of the box's reach), LM from ``q_prev`` in the full bounds finds the exact answer nearest
+``q_prev``: taken when it lies inside the box; else its share inside the box along the straight line, it clipped,
+and a few starts drawn inside the box from the call's generator start runs in the box: the best run wins.
+A target that cannot be met within the box gets the answer closest to meeting it (the lowest task error LM
+reaches), its goal errors and ``success=False``: never a jump.
+
+With a scene, an answer in collision is pulled back along the segment from ``q_prev`` (collision-free when the
+previous answer was) to the farthest point the exact check passes (bisection): the robot stops short of the
+obstacle or of its own body instead of passing through, and ``success`` is False.
+
+The engine is the solver's own per goal stack (:class:`~evoik_pin.solvers.lm.LevenbergMarquardt`), its box and
+targets written in place every call (:meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.confine`, ``set_targets``): a
+new box per call rebuilds no seed table and no constant.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ...result import Result
+from ..lm.engine import LevenbergMarquardt, problem_goals
+from ..lm.layout import wrapping_joints
+from ..lm.run_outcome import LMOutcome
+
+__all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
+
+#: Starts drawn inside the box after the run from q_prev did not meet the goals.
+EXTRA_STARTS = 4
+#: LM steps per run: the box is small, the warm start close.
+BOX_ITERATIONS = 30
+#: LM's initial damping in the box (the engine's default: 1e-2): the warm start is about one control step from the
+#: answer, where Gauss-Newton's full steps converge (Talos's four poses in 3 steps instead of 5-8); the damping still
+#: grows after a rejected step (near a singularity).
+BOX_DAMPING = 1e-6
+#: Bisection steps pulling a colliding answer back towards q_prev (2^-8 of the segment).
+COLLISION_BISECTIONS = 8
+#: Goal stacks whose engines a stage keeps (a tracker alternating a few goal structures).
+_KEPT = 8
+
+
+class VelocityBoxStage:
+    """Levenberg-Marquardt inside a per-call box, one engine per goal stack kept from call to call.
+
+    Args:
+        robot: the :class:`~evoik_pin.Robot` the problems are of.
+        extra_starts: starts drawn inside the box when the run from ``q_prev`` does not meet the goals.
+    """
+
+    def __init__(self, robot, extra_starts: int = EXTRA_STARTS) -> None:
+        self.robot = robot
+        self.extra_starts = int(extra_starts)
+        self._engines: dict = {}  # id(goal stack) -> (stack, engine)
+        self._wrap_for = None  # (lower, upper) arrays the wrap mask is of
+        self._wrap = np.zeros(robot.n, dtype=bool)
+        self._any_wrap = False
+
+    def box(self, q_prev: np.ndarray, step: np.ndarray, lower: np.ndarray, upper: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) (n,) of the velocity box around ``q_prev`` (n,) with half-widths ``step`` (n,) inside the bounds
+        ``lower``, ``upper`` (n,); full-turn joints unclipped (unwrapped values around q_prev). A ``q_prev`` more than
+        ``step`` beyond a bound (not on a full-turn joint) gets the box's one point nearest that bound: the speed
+        limit holds first, the joint returns towards its range at full speed."""
+        if self._wrap_for is None or self._wrap_for[0] is not lower or self._wrap_for[1] is not upper:
+            self._wrap = wrapping_joints(self.robot, lower, upper)
+            self._any_wrap = bool(self._wrap.any())
+            self._wrap_for = (lower, upper)
+        lo = q_prev - step
+        hi = q_prev + step
+        lo_b = np.minimum(np.maximum(lo, lower), hi)
+        hi_b = np.maximum(np.minimum(hi, upper), lo)
+        if not self._any_wrap:
+            return lo_b, hi_b
+        return np.where(self._wrap, lo, lo_b), np.where(self._wrap, hi, hi_b)
+
+    def _engine(self, problem, free: bool = False) -> LevenbergMarquardt:
+        """The engine of ``problem``'s goal stack, its targets written in: the boxed one (``confine`` per call), or
+        with ``free`` the one searching the problem's bounds (its box fixed: the solver's arrays)."""
+        stack, pt, Rt = problem_goals(problem)
+        key = (id(stack), free)
+        kept = self._engines.get(key)
+        if kept is None or kept[0] is not stack or (free and (kept[2] is not problem.lower
+                                                               or kept[3] is not problem.upper)):
+            if len(self._engines) >= _KEPT:
+                self._engines.pop(next(iter(self._engines)))
+            engine = LevenbergMarquardt(problem, damping=BOX_DAMPING)
+            kept = self._engines[key] = (stack, engine, problem.lower, problem.upper)
+        engine = kept[1]
+        engine.set_targets(pt, Rt)
+        return engine
+
+    def solve(self, problem, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None,
+              method: str = "velocity-box") -> Result:
+        """The answer to ``problem`` (an :class:`~evoik_pin.IKProblem`: its goals or target, tolerances, bounds and
+        scene) inside the velocity box of ``q_prev`` (n,) and ``step`` (n,) (rad or m); ``rng`` draws the extra
+        starts (None: none drawn). A :class:`Result` whose ``q`` is inside the box, ``success`` when every goal
+        is met (and the answer collision-free, with a scene)."""
+        t0 = time.perf_counter()
+        lo, hi = self.box(q_prev, step, problem.lower, problem.upper)
+        engine = self._engine(problem)
+        engine.confine(lo, hi)
+        out = engine.run(q_prev, BOX_ITERATIONS)
+        evaluations = out.evaluations
+        runs = 1
+        if not out.converged:
+            # the run pinned a joint at the box early (LM's active set only grows) or the box is too small: the
+            # unboxed answer nearest q_prev (LM from q_prev in the bounds) shows where the goals are met; its
+            # part inside the box along the straight line, and it clipped, start runs in the box, then random ones
+            free = self._engine(problem, free=True).run(q_prev, BOX_ITERATIONS)
+            evaluations += free.evaluations
+            move = free.q - q_prev
+            move = np.where(self._wrap, (move + np.pi) % (2 * np.pi) - np.pi, move)  # the short way round
+            reach = q_prev + move
+            if free.converged and ((reach >= lo) & (reach <= hi)).all():
+                out = LMOutcome(reach, free.position_error, free.orientation_error, True, free.iterations,
+                                free.evaluations, free.goal_errors, free.cost)
+            else:
+                share = float(np.min(np.where(np.abs(move) > 0.0, step / np.maximum(np.abs(move), 1e-300), np.inf)))
+                starts = [q_prev + min(1.0, share) * move, np.minimum(np.maximum(reach, lo), hi)]
+                if self.extra_starts > 0 and rng is not None:
+                    starts.extend(lo + (hi - lo) * rng.random((self.extra_starts, self.robot.n)))
+                more, _ = engine.run_many(np.array(starts), BOX_ITERATIONS)
+                evaluations += more.evaluations
+                runs += len(starts)
+                if more.converged or more.rank < out.rank:
+                    out = more
+        q = np.minimum(np.maximum(out.q, lo), hi)  # the kernel keeps q inside; this makes "by construction" literal
+        message = f"velocity box: {runs} LM run(s)"
+        collision_free = None
+        scene = problem.scene
+        kernel_errors = True  # the kernel's errors are q's (the memetic plan trusts them the same way)
+        if scene is not None:
+            collision_free = not scene.in_collision(q, problem.margin)
+            if not collision_free:
+                q = _pulled_back(scene, problem.margin, q_prev, q, lo, hi)
+                collision_free = not scene.in_collision(q, problem.margin)
+                kernel_errors = False
+                message += "; the answer collided: pulled back towards the previous configuration"
+        chosen = None
+        goals = problem.goals
+        if goals is not None:
+            if kernel_errors and not problem.goal_sets:
+                # the kernel's errors of each goal at q, its success test's numbers (memetic's first runs trust them
+                # the same way): no kinematics pass in Python
+                if len(goals) == 1:
+                    goal_errors = [goals[0].reported(out.position_error, out.orientation_error)]
+                else:
+                    goal_errors = [g.reported(p, r) for g, (p, r) in zip(goals, out.goal_errors.tolist(), strict=True)]
+                chosen = [None] * len(goals)
+            else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)
+                goal_errors, chosen = problem.goal_errors_and_chosen(q)
+            pos, rot, cost = problem.goal_summary(goal_errors)
+            met = problem.goals_met(goal_errors)
+        else:
+            goal_errors = None
+            pos, rot, cost = (problem.assess(q, out.position_error, out.orientation_error) if kernel_errors
+                              else problem.assess(q))
+            met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+        success = bool(met and collision_free is not False)
+        if not met:
+            message += "; the goals are not met within the velocity box (the answer closest to them inside it)"
+        return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
+                      cost=float(cost), success=success, generations=0, evaluations=int(evaluations),
+                      time_s=time.perf_counter() - t0, message=message, method=method, collision_free=collision_free,
+                      goal_errors=goal_errors, chosen=chosen)
+
+
+def _pulled_back(scene, margin: float, q_prev: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                 ) -> np.ndarray:
+    """The point of the segment ``q_prev`` -> ``q`` farthest from ``q_prev`` that the exact check passes (bisection;
+    ``q_prev`` itself when none does), clipped into the box (q_prev may lie outside it only on a bound)."""
+    good, bad = 0.0, 1.0
+    for _ in range(COLLISION_BISECTIONS):
+        mid = 0.5 * (good + bad)
+        if scene.in_collision(q_prev + mid * (q - q_prev), margin):
+            bad = mid
+        else:
+            good = mid
+    return np.minimum(np.maximum(q_prev + good * (q - q_prev), lo), hi)
