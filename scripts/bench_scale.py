@@ -112,12 +112,12 @@ def breakdown(robot, H, reps: int) -> dict:
     try:
         for _ in range(reps):
             kernel_s[0] = nearest_s[0] = 0.0
-            t0 = time.perf_counter()
-            block = TargetSource(H).block(0, len(H))
-            t1 = time.perf_counter()
             solver = threads.BatchSolver(robot, make_problem, _run, "memetic", 0, {})
-            solver._prepare(block.target(0))
-            t2 = time.perf_counter()
+            solver._prepare(TargetSource(robot, H).chunk(0, 1)[0])
+            t0 = time.perf_counter()
+            block = TargetSource(robot, H).block(0, len(H), (solver.template.tolerance,
+                                                             solver.template.rotation_tolerance))
+            t1 = t2 = time.perf_counter()
             out = solver._chunk_rounds(block, None)
             t3 = time.perf_counter()
             rest = np.nonzero(out.source == SOURCE_SINGLE)[0]
