@@ -196,7 +196,8 @@ class GoalTree:
     def __init__(self, robot, table, stack, allowed: np.ndarray | None = None, tip: bool = False) -> None:
         self.table, self.allowed = table, allowed
         self.tip_kind = stack.kinds[0] if tip else None
-        if tip:
+        if tip:  # the table's tree of the kind built now (BatchSolver makes its trees under a lock)
+            table.nearest_encoded(self.tip_kind, np.zeros((0, 3)), np.zeros((0, 3, 3)), 1, allowed)
             return
         from scipy.spatial import cKDTree
 

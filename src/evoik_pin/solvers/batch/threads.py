@@ -173,7 +173,7 @@ class BatchSolver:
                         and prefer is None)
         self.template = None
         self.engine = "compiled"
-        self._trees: dict = {}  # goal stack (a tip target's kind, a goal list's structure) -> its GoalTree
+        self._trees: dict = {}  # (tip targets?, goal stack: frames, kinds, weights) -> its GoalTree
         self._lock = threading.Lock()  # a scene's exact check is not thread-safe (one Pinocchio Data)
 
     def _prepare(self, target: Target) -> None:
@@ -319,7 +319,7 @@ class BatchSolver:
             return out
         t = self.template
         for rows, arrays in block.groups:
-            key = self._tree_key(arrays)
+            key = (block.tip, self._tree_key(arrays))
             if self.table is not None and key not in self._trees:
                 with self._lock:  # the k-d tree of this stack is built once, not by every thread
                     if key not in self._trees:
