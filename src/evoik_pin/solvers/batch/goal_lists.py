@@ -184,7 +184,7 @@ class GoalTree:
     concatenated features of the goal frames at each entry (goal g: ``sqrt(weight_g) p_g``, and for a pose
     ``sqrt(weight_g) w R_g`` flattened, ``w`` the table's m per unit of Frobenius distance), so that its Euclidean
     distance is memetic's goal metric (:meth:`SeedTable.ranked_goals`). A tip target's one-goal stack (``tip``) is
-    ranked by the table's own tip features of its kind (:meth:`SeedTable.nearest_encoded`: the same metric for a
+    ranked by the table's own tip features of its kind (:meth:`SeedTable.nearest`: the same metric for a
     pose or a position, and the planar kinds' x, y and heading).
 
     Args:
@@ -197,7 +197,7 @@ class GoalTree:
         self.table, self.allowed = table, allowed
         self.tip_kind = stack.kinds[0] if tip else None
         if tip:  # the table's tree of the kind built now (BatchSolver makes its trees under a lock)
-            table.nearest_encoded(self.tip_kind, np.zeros((0, 3)), np.zeros((0, 3, 3)), 1, allowed)
+            table.nearest(self.tip_kind, np.zeros((0, 3)), np.zeros((0, 3, 3)), 1, allowed)
             return
         from scipy.spatial import cKDTree
 
@@ -214,7 +214,7 @@ class GoalTree:
         """Indices (N, k) of the table entries nearest to each problem, nearest first (k capped at the entries
         searched); ``eps``: ``cKDTree.query``'s approximation factor."""
         if self.tip_kind is not None:
-            return self.table.nearest_encoded(self.tip_kind, arrays.P[:, 0], arrays.Rts[:, 0], k, self.allowed, eps)
+            return self.table.nearest(self.tip_kind, arrays.P[:, 0], arrays.Rts[:, 0], k, self.allowed, eps)
         k = min(k, self.tree.n)
         N = len(arrays)
         if k == 0 or N == 0:
