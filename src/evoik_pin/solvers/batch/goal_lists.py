@@ -10,7 +10,8 @@ as targets of different kinds do. Every list is checked against the robot (:func
 The batched rounds start each problem from the seed-table entries nearest to it in memetic's goal metric
 (:meth:`~evoik_pin.solvers.search.seed_table.SeedTable.ranked_goals`: the sum over the goals of their weight times
 ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2`` for a pose)), found by a k-d tree over the concatenated goal-frame features
-(:class:`GoalTree`), as single targets use the table's tree over the tip's.
+(:class:`GoalTree`). A call's tip targets take the same form (:mod:`.targets`: one-goal stacks), so
+:class:`GoalBlock` and :class:`GoalTree` are what the batch engine reads for every call.
 """
 
 from __future__ import annotations
