@@ -91,7 +91,7 @@ def workers_scaling(robot, H, reps: int, log) -> dict:
 def breakdown(robot, H, reps: int) -> dict:
     """Per-target microseconds of each phase of a one-worker solve_many (the best of ``reps``)."""
     kernel_s, nearest_s = [0.0], [0.0]
-    real_pairs, real_nearest = threads.solve_pairs, SeedTable.nearest_encoded
+    real_pairs, real_nearest = threads.solve_pairs, SeedTable.nearest
 
     def pairs(*a, **k):
         t = time.perf_counter()
@@ -108,16 +108,16 @@ def breakdown(robot, H, reps: int) -> dict:
             nearest_s[0] += time.perf_counter() - t
 
     best: dict | None = None
-    threads.solve_pairs, SeedTable.nearest_encoded = pairs, nearest
+    threads.solve_pairs, SeedTable.nearest = pairs, nearest
     try:
         for _ in range(reps):
             kernel_s[0] = nearest_s[0] = 0.0
-            t0 = time.perf_counter()
-            block = TargetSource(H).block(0, len(H))
-            t1 = time.perf_counter()
             solver = threads.BatchSolver(robot, make_problem, _run, "memetic", 0, {})
-            solver._prepare(block.target(0))
-            t2 = time.perf_counter()
+            solver._prepare(TargetSource(robot, H).chunk(0, 1)[0])
+            t0 = time.perf_counter()
+            block = TargetSource(robot, H).block(0, len(H), (solver.template.tolerance,
+                                                             solver.template.rotation_tolerance))
+            t1 = t2 = time.perf_counter()
             out = solver._chunk_rounds(block, None)
             t3 = time.perf_counter()
             rest = np.nonzero(out.source == SOURCE_SINGLE)[0]
@@ -134,7 +134,7 @@ def breakdown(robot, H, reps: int) -> dict:
             if best is None or row["total to the answers (arrays)"] < best["total to the answers (arrays)"]:
                 best = row
     finally:
-        threads.solve_pairs, SeedTable.nearest_encoded = real_pairs, real_nearest
+        threads.solve_pairs, SeedTable.nearest = real_pairs, real_nearest
     return {k: v / len(H) * 1e6 for k, v in best.items()}
 
 
@@ -172,8 +172,8 @@ def kernel_options(robot, H, reps: int) -> dict:
 
     targets = Target.coerce_many(H)
     table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
-    Qs = np.ascontiguousarray(table.Q[table.nearest(targets, 1)[:, 0]])
     P, Rts = encode_targets(targets)
+    Qs = np.ascontiguousarray(table.Q[table.nearest(KIND_POSE, P, Rts, 1)[:, 0]])
     _, wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
     params = kernel_params(DEFAULT_ITERATIONS)
     stack = GoalStack.single(robot, KIND_POSE, 1e-6, 1e-6)

@@ -125,6 +125,23 @@ def test_solve_many_solves_goal_lists_as_solve_does(talos, lists):
     assert res[17].goal_errors == alone.goal_errors and "goals not met: " in alone.message
 
 
+@pytest.mark.parametrize("kind", ["pose", "position"])
+def test_a_tip_target_and_its_one_goal_list_are_one_problem(baxter, kind):
+    """solve_many reads a tip target as the goal list [Pose(tip, T)] / [Position(tip, p)]: both forms give the same
+    answers, bit for bit (one engine, one seed-table ranking), and only the goal list reports per-goal errors."""
+    Q = baxter.random_configurations(40, np.random.default_rng(5))
+    poses = [baxter.fk(q) for q in Q]
+    if kind == "pose":
+        targets, lists = np.array([T.homogeneous for T in poses]), [[Pose(baxter.tip, T)] for T in poses]
+    else:
+        targets, lists = [T.translation for T in poses], [[Position(baxter.tip, T.translation)] for T in poses]
+    tip, goals = ek.solve_many(baxter, targets, seed=2), ek.solve_many(baxter, lists, seed=2)
+    assert tip.stats["batched"] == goals.stats["batched"] > 0
+    assert np.array_equal(tip.q, goals.q) and np.array_equal(tip.success, goals.success)
+    assert np.array_equal(tip.position_error, goals.position_error)
+    assert tip[0].goal_errors is None and len(goals[0].goal_errors) == 1
+
+
 def test_same_answers_whatever_the_number_of_workers(talos, lists, monkeypatch):
     monkeypatch.setattr(threads, "MIN_CHUNK", 8)
     one = ek.solve_many(talos, lists, seed=4, workers=1, **BUDGET)

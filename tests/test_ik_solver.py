@@ -208,13 +208,14 @@ def test_property_rotation_check_gives_the_numpy_verdict(seed, log_eps, mirror):
 def test_seed_table_ranking_and_nearness_are_the_batch_formulas(panda, cases):
     """The single-target shortcuts of the seed table (features without the batch encoding, the distances computed in
     place) rank and measure exactly as the batch formulas do."""
+    from evoik_pin.goals.stack import encode_targets, target_kind
     from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
 
     table = seed_table(panda, panda.lower, panda.upper, default_table_size(panda.n))
     targets, Qs = cases
     for T, q in zip(targets[:10], Qs[:10], strict=True):
         for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
-            key, f = table.target_features([target])
+            key, f = table.encoded_features(target_kind(target), *encode_targets([target]))
             F, sq = table._table_features(key)
             d = sq - 2.0 * (F @ f[0])
             part = np.argpartition(d, 16)[:17]

@@ -428,14 +428,17 @@ def test_solve_many_bad_input(robots):
 
 # ---------------------------------------------------------------------- the LM engines and the seed table
 def test_seed_table_is_deterministic_and_nearest_is_nearest(robots):
+    from evoik_pin.goals.stack import KIND_POSE, encode_targets
+
     robot = robots["z1"]
     a = SeedTable(robot, robot.lower, robot.upper, 512)
     b = SeedTable(robot, robot.lower, robot.upper, 512)
     assert np.array_equal(a.Q, b.Q)
     assert np.all(a.Q >= robot.lower) and np.all(a.Q <= robot.upper)
     t = Target.coerce(robot.fk(a.Q[100]))
-    assert a.nearest([t], 3)[0, 0] == 100 and next(a.ranked(t, 3)) == 100
-    assert list(a.ranked(t, 3)) == list(a.nearest([t], 3)[0])
+    nearest = a.nearest(KIND_POSE, *encode_targets([t]), 3)[0]
+    assert nearest[0] == 100 and next(a.ranked(t, 3)) == 100
+    assert list(a.ranked(t, 3)) == list(nearest)
 
 
 # ---------------------------------------------------------------------- robot hot path

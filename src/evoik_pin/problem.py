@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "goals_shortfall_text", "shortfall_text",
+           "Target", "check_pro_delta", "coerce_scene", "errors_text", "shortfall_text",
            "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
@@ -607,19 +607,16 @@ def errors_text(pos: float, rot: float | None) -> str:
     return f"position error {pos:.3g} m" + ("" if rot is None else f", orientation error {rot:.3g} rad")
 
 
-def shortfall_text(problem: IKProblem, pos: float, rot: float | None) -> str:
-    """'best position error ... m[, orientation error ... rad] exceeds the tolerance (position error <= ... m[,
-    orientation error <= ... rad])' for the messages of failed solves: each error and tolerance with its unit,
-    the orientation's only for a target that constrains it (``rot`` not None)."""
+def shortfall_text(problem: IKProblem, pos: float, rot: float | None, goal_errors=None) -> str:
+    """What a failed solve missed, for its message: 'best position error ... m[, orientation error ... rad] exceeds
+    the tolerance (position error <= ... m[, orientation error <= ... rad])', the orientation's only for a target
+    that constrains it (``rot`` not None); for a goal list (``goal_errors``: each goal's,
+    :meth:`IKProblem.goal_errors`; ``pos`` and ``rot`` the largest of them) 'best ... (largest over the goals);
+    goals not met: frame, ...'."""
+    if goal_errors is not None:
+        unmet = [g.label for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
+        return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
     accepted = f"position error <= {problem.tolerance:g} m" + (
         "" if rot is None else f", orientation error <= {problem.rotation_tolerance:g} rad")
     return f"best {errors_text(pos, rot)} exceeds the tolerance ({accepted})"
-
-
-def goals_shortfall_text(problem: IKProblem, errors, pos: float, rot: float | None) -> str:
-    """'best position error ... m[, orientation error ... rad] (largest over the goals); goals not met: frame, ...'
-    for the messages of failed goal-list solves: ``errors`` each goal's (:meth:`IKProblem.goal_errors`), ``pos`` and
-    ``rot`` the largest of them."""
-    unmet = [g.label for g, e in zip(problem.goals, errors, strict=True) if not g.met(*e)]
-    return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
 

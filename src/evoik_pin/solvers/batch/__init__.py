@@ -3,8 +3,10 @@
 * :mod:`.api`: :func:`~.api.solve_many` (argument checks, backend choice, the stats);
 * :mod:`.threads`: :class:`~.threads.BatchSolver`, the batched rounds on worker threads of this process;
 * :mod:`.ray_actors`: the same solver on Ray actors (``backend="ray"``);
-* :mod:`.targets`: the targets as the kernel's arrays, chunk by chunk; :mod:`.outcome`: the answers as arrays
-  (:class:`~.outcome.BatchOutcome`) and what ``solve_many`` returns (:class:`~.outcome.BatchResults`).
+* :mod:`.targets` (tip targets) and :mod:`.goal_lists` (goal lists): the call's problems chunk by chunk, in one form
+  (:class:`~.goal_lists.GoalBlock`: a tip target is the one-goal problem ``[Pose(tip, T)]``); :mod:`.outcome`: the
+  answers as arrays (:class:`~.outcome.BatchOutcome`) and what ``solve_many`` returns
+  (:class:`~.outcome.BatchResults`).
 
 Data flows down: ``api`` -> ``ray_actors`` -> ``threads`` -> ``targets``, ``outcome``; nothing below imports
 the API.

@@ -10,10 +10,13 @@ as targets of different kinds do. Every list is checked against the robot (:func
 The batched rounds start each problem from the seed-table entries nearest to it in memetic's goal metric
 (:meth:`~evoik_pin.solvers.search.seed_table.SeedTable.ranked_goals`: the sum over the goals of their weight times
 ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2`` for a pose)), found by a k-d tree over the concatenated goal-frame features
-(:class:`GoalTree`), as single targets use the table's tree over the tip's.
+(:class:`GoalTree`). A call's tip targets take the same form (:mod:`.targets`: one-goal stacks), so
+:class:`GoalBlock` and :class:`GoalTree` are what the batch engine reads for every call.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
@@ -51,25 +54,30 @@ def structure(goals) -> tuple:
 
 
 class GoalBlock:
-    """Consecutive goal lists of a call, grouped by structure (the :class:`~.targets.TargetBlock` of goal lists).
+    """Consecutive problems of a call, grouped by goal stack: the one form the batch engine solves. A call's tip
+    targets come as one-goal stacks (:meth:`~.targets.TargetSource.block`), its goal lists one stack per structure.
 
     Attributes:
-        groups: ``[(rows, arrays)]``: the block's row indices (k,) of one structure and their
-            :class:`~evoik_pin.solvers.lm.layout.GoalArrays`, in the order the structures first appear.
+        groups: ``[(rows, arrays)]``: the block's row indices (k,) of one stack and their
+            :class:`~evoik_pin.goals.stack.GoalArrays`, in the order the stacks first appear.
+        tip: True for tip targets (answers reported as single-target results: no goal errors, the target's cost),
+            False for goal lists.
     """
 
-    goals = True
-
-    def __init__(self, groups: list[tuple[np.ndarray, GoalArrays]], lists: list) -> None:
+    def __init__(self, groups: list[tuple[np.ndarray, GoalArrays]], size: int, problem: Callable[[int], object],
+                 tip: bool = False) -> None:
         self.groups = groups
-        self._lists = lists
+        self._size = size
+        self._problem = problem
+        self.tip = tip
 
     def __len__(self) -> int:
-        return len(self._lists)
+        return self._size
 
-    def target(self, i: int) -> list[Goal]:
-        """Row ``i``'s goal list."""
-        return self._lists[i]
+    def target(self, i: int):
+        """Row ``i``'s problem, for the one-by-one solver: its :class:`~evoik_pin.problem.Target` (made on demand for
+        an array of poses) or its goal list."""
+        return self._problem(i)
 
 
 class GoalSource:
@@ -142,8 +150,8 @@ class GoalSource:
         """Lists a to b - 1 (already checked)."""
         return self.raw[a:b]
 
-    def block(self, a: int, b: int) -> GoalBlock:
-        """Lists a to b - 1 as a :class:`GoalBlock`."""
+    def block(self, a: int, b: int, tolerances: tuple[float, float] | None = None) -> GoalBlock:
+        """Lists a to b - 1 as a :class:`GoalBlock` (``tolerances``: unused, each goal carries its own)."""
         by_key: dict[tuple, list[int]] = {}
         for i in range(a, b):
             if i in self.preferences or any(g.alternatives is not None for g in self.raw[i]):
@@ -154,7 +162,8 @@ class GoalSource:
             P = np.ascontiguousarray([self._targets[i][0] for i in rows], dtype=float)
             Rts = np.ascontiguousarray([self._targets[i][1] for i in rows], dtype=float)
             groups.append((np.array(rows) - a, GoalArrays(self._stacks[key], P, Rts)))
-        return GoalBlock(groups, self.raw[a:b])
+        lists = self.raw[a:b]
+        return GoalBlock(groups, len(lists), lists.__getitem__)
 
     def check(self) -> None:
         """Nothing to do: every list was checked when the source was made."""
@@ -172,20 +181,27 @@ class GoalSource:
 
 
 class GoalTree:
-    """The seed table's entries searchable by nearness to goal lists of one stack: a k-d tree over the concatenated
-    features of the goal frames at each entry (goal g: ``sqrt(weight_g) p_g``, and for a pose
+    """The seed table's entries searchable by nearness to problems of one goal stack: a k-d tree over the
+    concatenated features of the goal frames at each entry (goal g: ``sqrt(weight_g) p_g``, and for a pose
     ``sqrt(weight_g) w R_g`` flattened, ``w`` the table's m per unit of Frobenius distance), so that its Euclidean
-    distance is memetic's goal metric (:meth:`SeedTable.ranked_goals`).
+    distance is memetic's goal metric (:meth:`SeedTable.ranked_goals`). A tip target's one-goal stack (``tip``) is
+    ranked by the table's own tip features of its kind (:meth:`SeedTable.nearest`: the same metric for a
+    pose or a position, and the planar kinds' x, y and heading).
 
     Args:
         robot: the robot. table: the :class:`~evoik_pin.solvers.search.seed_table.SeedTable`. stack: the goal stack.
         allowed: (size,) bool, the entries to search (a scene's collision-free ones), or None for all.
+        tip: the stack is a tip target's (:meth:`GoalStack.single`).
     """
 
-    def __init__(self, robot, table, stack, allowed: np.ndarray | None = None) -> None:
+    def __init__(self, robot, table, stack, allowed: np.ndarray | None = None, tip: bool = False) -> None:
+        self.table, self.allowed = table, allowed
+        self.tip_kind = stack.kinds[0] if tip else None
+        if tip:  # the table's tree of the kind built now (BatchSolver makes its trees under a lock)
+            table.nearest(self.tip_kind, np.zeros((0, 3)), np.zeros((0, 3, 3)), 1, allowed)
+            return
         from scipy.spatial import cKDTree
 
-        self.table = table
         # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
         # (a goal beyond one frame has no target pose of its frame to rank by: weight 0)
         weights = np.where(np.array(stack.kinds) >= KIND_BEYOND_FRAME, 0.0, stack.spec[:, G_WEIGHT]).tolist()
@@ -195,16 +211,14 @@ class GoalTree:
         self.index = np.arange(table.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
         self.tree = cKDTree(F[self.index])
 
-    def features(self, P: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Features (N, d) of the goal frames' poses: positions P (N, G, 3) m, rotations R (N, G, 3, 3)."""
-        return self.table.goal_features(self.spec, P, R)
-
     def nearest(self, arrays: GoalArrays, k: int, eps: float = 0.0) -> np.ndarray:
         """Indices (N, k) of the table entries nearest to each problem, nearest first (k capped at the entries
         searched); ``eps``: ``cKDTree.query``'s approximation factor."""
+        if self.tip_kind is not None:
+            return self.table.nearest(self.tip_kind, arrays.P[:, 0], arrays.Rts[:, 0], k, self.allowed, eps)
         k = min(k, self.tree.n)
         N = len(arrays)
         if k == 0 or N == 0:
             return np.zeros((N, 0), dtype=np.intp)
-        _, idx = self.tree.query(self.features(arrays.P, arrays.Rts), k=k, eps=eps)
+        _, idx = self.tree.query(self.table.goal_features(self.spec, arrays.P, arrays.Rts), k=k, eps=eps)
         return self.index[np.asarray(idx, dtype=np.intp).reshape(N, k)]

@@ -1,66 +1,33 @@
-"""The targets of a :func:`~evoik_pin.solve_many` call, chunk by chunk, as the batch solver reads them.
+"""The tip targets of a :func:`~evoik_pin.solve_many` call, chunk by chunk, as the batch solver reads them.
 
 A user's targets (an (N, 4, 4) array of poses, a sequence of anything :meth:`Target.coerce` accepts, or an
-iterable) become :class:`TargetBlock` objects of consecutive targets: the kernel's arrays
-(:class:`~evoik_pin.solvers.lm.layout.TargetArrays`), one group per target kind. An array of poses is checked
-and encoded in a few vectorized passes with no :class:`~evoik_pin.problem.Target` object made (they cost about
-2 us each, the tenth of a whole batched solve); a Target is made only for a target that needs one: the few the
-batched rounds leave to the per-target solver.
+iterable) become :class:`~.goal_lists.GoalBlock` objects of consecutive targets, the form goal lists take too: each
+target a one-goal problem on the tip (``[Pose(tip, T)]``, ``[Position(tip, p)]``, the planar kinds), one
+:class:`~evoik_pin.goals.stack.GoalArrays` per target kind over :meth:`GoalStack.single`'s stack. An array of poses
+is checked and encoded in a few vectorized passes with no :class:`~evoik_pin.problem.Target` object made (they cost
+about 2 us each, the tenth of a whole batched solve); a Target is made only for a target that needs one: the few
+the batched rounds leave to the per-target solver.
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
 from ...errors import TargetError
-from ...goals.stack import TargetArrays, target_kind
+from ...goals.stack import GoalArrays, GoalStack, TargetArrays, target_kind
 from ...problem import Target
-from .goal_lists import GoalSource, is_goal_batch, is_problem_list
+from .goal_lists import GoalBlock, GoalSource, is_goal_batch, is_problem_list
 
-__all__ = ["TargetBlock", "TargetSource", "source_of"]
+__all__ = ["TargetSource", "source_of"]
 
 
-class TargetBlock:
-    """Consecutive targets of a call, grouped by kind for the kernel.
-
-    Attributes:
-        groups: ``[(rows, arrays)]``: the block's row indices (k,) of one target kind and their
-            :class:`~evoik_pin.solvers.lm.layout.TargetArrays`, in the order the kinds first appear.
-        goals: False (single targets; a block of goal lists is a :class:`~.goal_lists.GoalBlock`).
-    """
-
-    goals = False
-
-    def __init__(self, groups: list[tuple[np.ndarray, TargetArrays]], size: int,
-                 target: Callable[[int], Target]) -> None:
-        self.groups = groups
-        self._size = size
-        self._target = target
-
-    def __len__(self) -> int:
-        return self._size
-
-    def target(self, i: int) -> Target:
-        """Row ``i`` as a :class:`~evoik_pin.problem.Target` (made on demand for an array of poses)."""
-        return self._target(i)
-
-    @classmethod
-    def of_poses(cls, H: np.ndarray) -> TargetBlock:
-        """A block of (k, 4, 4) poses already checked (``Target.check_poses``)."""
-        return cls([(np.arange(H.shape[0]), TargetArrays.from_poses(H))], H.shape[0],
-                   lambda i: Target.from_poses(H[i:i + 1])[0])
-
-    @classmethod
-    def of_targets(cls, targets: list[Target]) -> TargetBlock:
-        """A block of Target objects (any mix of kinds)."""
-        by_kind: dict[int, list[int]] = {}
-        for i, t in enumerate(targets):
-            by_kind.setdefault(target_kind(t), []).append(i)
-        groups = [(np.array(rows), TargetArrays.of([targets[i] for i in rows])) for rows in by_kind.values()]
-        return cls(groups, len(targets), targets.__getitem__)
+def tip_group(robot, rows: np.ndarray, arrays: TargetArrays, tolerances: tuple[float, float]
+              ) -> tuple[np.ndarray, GoalArrays]:
+    """Rows (k,) of tip targets of one kind as one-goal problems: ``arrays`` (P (k, 3), Rts (k, 3, 3)) seen as
+    (k, 1, 3) and (k, 1, 3, 3) over the tip's one-goal stack with ``tolerances`` (m, rad)."""
+    stack = GoalStack.single(robot, arrays.kind, *tolerances)
+    return rows, GoalArrays(stack, arrays.P[:, None], arrays.Rts[:, None])
 
 
 def _one_target(targets) -> bool:
@@ -80,16 +47,17 @@ def _one_target(targets) -> bool:
 
 
 class TargetSource:
-    """The user's targets, made into :class:`TargetBlock` objects chunk by chunk (the pipeline makes a chunk's
-    while worker threads solve the earlier ones).
+    """The user's tip targets, made into :class:`~.goal_lists.GoalBlock` objects of one-goal problems chunk by chunk
+    (the pipeline makes a chunk's while worker threads solve the earlier ones).
 
     ``targets``: an (N, 4, 4) array of poses, any sequence :meth:`Target.coerce_many` accepts, or an iterable
     (listed first); one target alone (a ``pin.SE3``, a :class:`Target`, one (4, 4) pose or one 3-vector
     position) is one target, never its rows."""
 
-    goals = False  # single targets (goal lists: :class:`~.goal_lists.GoalSource`)
+    goals = False  # tip targets (goal lists: :class:`~.goal_lists.GoalSource`)
 
-    def __init__(self, targets) -> None:
+    def __init__(self, robot, targets) -> None:
+        self.robot = robot
         if _one_target(targets):
             targets = targets[None] if isinstance(targets, np.ndarray) and targets.ndim == 2 else [targets]
         self.raw = targets if isinstance(targets, (np.ndarray, list, tuple)) else list(targets)
@@ -112,18 +80,25 @@ class TargetSource:
             self.check()
             raise
 
-    def block(self, a: int, b: int) -> TargetBlock:
-        """Targets a to b - 1 as a :class:`TargetBlock`; a bad one is a TargetError naming its index in the whole
-        call."""
+    def block(self, a: int, b: int, tolerances: tuple[float, float]) -> GoalBlock:
+        """Targets a to b - 1 as one-goal problems with the call's ``tolerances`` (m, rad), grouped by kind; a bad
+        target is a TargetError naming its index in the whole call."""
         poses = self.poses
         if poses is None:
-            return TargetBlock.of_targets(self.chunk(a, b))
+            targets = self.chunk(a, b)
+            by_kind: dict[int, list[int]] = {}
+            for i, t in enumerate(targets):
+                by_kind.setdefault(target_kind(t), []).append(i)
+            groups = [tip_group(self.robot, np.array(rows), TargetArrays.of([targets[i] for i in rows]), tolerances)
+                      for rows in by_kind.values()]
+            return GoalBlock(groups, len(targets), targets.__getitem__, tip=True)
         try:
             H = Target.check_poses(poses[a:b])
         except TargetError:
             self.check()
             raise
-        return TargetBlock.of_poses(H)
+        return GoalBlock([tip_group(self.robot, np.arange(H.shape[0]), TargetArrays.from_poses(H), tolerances)],
+                         H.shape[0], lambda i: Target.from_poses(H[i:i + 1])[0], tip=True)
 
     def check(self) -> None:
         """Coerce every target: the TargetError (naming the first bad target's index) if there is one."""
@@ -138,4 +113,4 @@ def source_of(robot, targets) -> TargetSource | GoalSource:
         return targets
     if is_problem_list(targets) and len(targets) > 0:
         return GoalSource(robot, [targets])
-    return GoalSource(robot, targets) if is_goal_batch(targets) else TargetSource(targets)
+    return GoalSource(robot, targets) if is_goal_batch(targets) else TargetSource(robot, targets)

@@ -52,9 +52,9 @@ from ...result import Result
 from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
-from .goal_lists import GoalTree
+from .goal_lists import GoalBlock, GoalSource, GoalTree
 from .outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
-from .targets import TargetBlock, TargetSource, source_of
+from .targets import TargetSource, source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
            "grow_bar", "progress_bar", "root_entropy", "target_generator"]
@@ -173,8 +173,7 @@ class BatchSolver:
                         and prefer is None)
         self.template = None
         self.engine = "compiled"
-        self._trees: set = set()  # target kinds whose k-d tree is built
-        self._goal_trees: dict = {}  # goal structure -> GoalTree
+        self._trees: dict = {}  # (tip targets?, goal stack: frames, kinds, weights) -> its GoalTree
         self._lock = threading.Lock()  # a scene's exact check is not thread-safe (one Pinocchio Data)
 
     def _prepare(self, target: Target) -> None:
@@ -212,7 +211,7 @@ class BatchSolver:
                       lambda a, b, out: parts.append(out))
         return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now
 
-    def pipeline(self, source: TargetSource, Q0, offset: int, workers: int, progress, batched: Callable,
+    def pipeline(self, source: TargetSource | GoalSource, Q0, offset: int, workers: int, progress, batched: Callable,
                  singles: Callable | None = None) -> None:
         """Solve ``source`` chunk by chunk: ``batched(start, stop, outcome)`` on each chunk in order once its
         batched rounds are done, and ``singles(start, outcome)`` on each chunk that had targets left for the
@@ -220,15 +219,17 @@ class BatchSolver:
 
         ``workers`` threads share the work, this one and ``workers - 1`` others, so that no more threads run than
         there are workers: the others run the batched rounds of one chunk each (the kernel and the k-d tree
-        release the GIL), a chunk queued ahead for each; this thread encodes the chunks' targets
-        (:meth:`TargetSource.block`), solves one by one the targets a finished chunk left as soon as it is done,
-        and otherwise runs the batched rounds of the next chunk itself. So a one-by-one solve (its wall-clock
-        ``timeout``) has a core to itself, and the few such targets do not wait for the end. Every one-by-one
-        solve runs in this thread: they share the robot's Pinocchio data. With a scene they come after every
-        chunk's rounds (they use its collision data, which the rounds' exact checks share under a lock).
+        release the GIL), a chunk queued ahead for each; this thread encodes the chunks' problems
+        (:meth:`TargetSource.block`: one-goal problems; :meth:`GoalSource.block`), solves one by one the targets a
+        finished chunk left as soon as it is done, and otherwise runs the batched rounds of the next chunk itself.
+        So a one-by-one solve (its wall-clock ``timeout``) has a core to itself, and the few such targets do not
+        wait for the end. Every one-by-one solve runs in this thread: they share the robot's Pinocchio data. With a
+        scene they come after every chunk's rounds (they use its collision data, which the rounds' exact checks
+        share under a lock).
         """
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
+        tolerances = (self.template.tolerance, self.template.rotation_tolerance)  # a tip target's one goal's
         # threads only where they gain: batched rounds on the compiled kernel (the Python reference engine and the
         # one-by-one solvers hold the GIL, and use the robot's one Pinocchio Data)
         threads = workers if self.batched and self.engine == "compiled" else 1
@@ -243,7 +244,7 @@ class BatchSolver:
 
         def take(k: int) -> list:
             a, b = bounds[k]
-            return [source.block(a, b), None if Q0 is None else Q0[a:b], None, None]
+            return [source.block(a, b, tolerances), None if Q0 is None else Q0[a:b], None, None]
 
         def running() -> int:
             return sum(1 for job in jobs.values() if job[2] is not None and not job[2].done())
@@ -310,28 +311,28 @@ class BatchSolver:
         solver_options.update(extra)
         return self.run(problem, self.method, target_generator(self.entropy, index), solver_options)
 
-    def _chunk_rounds(self, block: TargetBlock, Q0) -> BatchOutcome:
-        """The batched rounds of one chunk (each target kind apart): an outcome whose unsolved rows are
+    def _chunk_rounds(self, block: GoalBlock, Q0) -> BatchOutcome:
+        """The batched rounds of one chunk (each goal stack apart): an outcome whose unsolved rows are
         ``SOURCE_SINGLE``."""
-        out = BatchOutcome.empty(len(block), self.robot.n, block.goals)
+        out = BatchOutcome.empty(len(block), self.robot.n, goals=not block.tip)
         if not self.batched:
             return out
         t = self.template
         for rows, arrays in block.groups:
-            key = self._tree_key(arrays)
+            key = (block.tip, self._tree_key(arrays))
             if self.table is not None and key not in self._trees:
-                with self._lock:  # the k-d tree of this kind (goal structure) is built once, not by every thread
-                    self._nearest(arrays.take(np.arange(1)), 1)
-                    self._trees.add(key)
-            self._rounds(arrays, rows, Q0, out)
-            if block.goals:  # the goals' cost (IKProblem's): weighted sum of position + orientation_weight x angle
+                with self._lock:  # the k-d tree of this stack is built once, not by every thread
+                    if key not in self._trees:
+                        self._trees[key] = GoalTree(self.robot, self.table, arrays.stack, self.free, block.tip)
+            self._rounds(arrays, rows, Q0, out, self._trees.get(key))
+            if not block.tip:  # the goals' cost (IKProblem's): weighted sum of position + orientation_weight x angle
                 done = rows[out.source[rows] != SOURCE_SINGLE]
                 if done.size:
                     E = np.nan_to_num(np.stack(out.goal_errors[done]))  # (k, G, 2)
                     w = arrays.stack.spec[:, G_WEIGHT] ** 2
                     out.cost[done] = (E[:, :, 0] + t.orientation_weight * E[:, :, 1]) @ w
         solved = out.source != SOURCE_SINGLE
-        if not block.goals:
+        if block.tip:  # a tip target's cost (its problem's objective)
             rot = out.orientation_error[solved]
             out.cost[solved] = default_cost(out.position_error[solved], None if np.isnan(rot).all() else
                                             np.nan_to_num(rot), t.orientation_weight, t.pose_metric)
@@ -340,27 +341,14 @@ class BatchSolver:
         return out
 
     @staticmethod
-    def _tree_key(arrays: TargetArrays | GoalArrays):
-        """What a k-d tree of the table serves: a target kind, or a goal structure (frames, kinds, weights)."""
-        if isinstance(arrays, GoalArrays):
-            stack = arrays.stack
-            return stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes()
-        return arrays.kind
+    def _tree_key(arrays: GoalArrays):
+        """What a k-d tree of the table serves: a goal stack's frames, kinds and weights."""
+        stack = arrays.stack
+        return stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes()
 
-    def _nearest(self, group: TargetArrays | GoalArrays, k: int) -> np.ndarray:
-        """Indices (N, k) of the table entries nearest to each target (goal list) of ``group``, nearest first (among
-        the collision-free entries with a scene)."""
-        if not isinstance(group, GoalArrays):
-            return self.table.nearest_encoded(group.kind, group.P, group.Rts, k, self.free, NEAREST_EPS)
-        key = self._tree_key(group)
-        tree = self._goal_trees.get(key)
-        if tree is None:
-            tree = self._goal_trees[key] = GoalTree(self.robot, self.table, group.stack, self.free)
-        return tree.nearest(group, k, NEAREST_EPS)
-
-    def _rounds(self, arrays: TargetArrays | GoalArrays, rows: np.ndarray, Q0, out: BatchOutcome) -> None:
-        """The batched rounds of the targets ``arrays`` (one kind, or goal lists of one structure), written into
-        ``out``'s rows ``rows``."""
+    def _rounds(self, arrays: GoalArrays, rows: np.ndarray, Q0, out: BatchOutcome, tree: GoalTree | None) -> None:
+        """The batched rounds of the problems ``arrays`` (of one goal stack), written into ``out``'s rows ``rows``;
+        ``tree``: the stack's search of the seed table (None without a table)."""
         t = self.template
         scene, table = t.scene, self.table
         pending = np.arange(len(arrays))  # indices into arrays
@@ -375,12 +363,13 @@ class BatchSolver:
             if rank is None:
                 Qs = Q0[rows[pending]]
             elif rank == 0:  # most targets converge from their nearest entry: ask the k-d tree for one only
-                Qs = table.Q[self._nearest(group, 1)[:, 0]]
+                Qs = table.Q[tree.nearest(group, 1, NEAREST_EPS)[:, 0]]
             else:  # the rest: every further entry in one query (not one query per round)
                 if ranked is None:
-                    ranked = self._nearest(group, self.rounds)
+                    ranked = tree.nearest(group, self.rounds, NEAREST_EPS)
                 Qs = table.Q[ranked[:, rank]]
-            res = solve_pairs(self.robot, Qs, group, t.lower, t.upper, t.tolerance, t.rotation_tolerance,
+            pairs = group if self.engine == "compiled" else tip_arrays(group)
+            res = solve_pairs(self.robot, Qs, pairs, t.lower, t.upper, t.tolerance, t.rotation_tolerance,
                               engine=self.engine)
             converged = res.converged
             if scene is not None:  # the exact check: an answer in collision stays pending for the next round
@@ -393,7 +382,7 @@ class BatchSolver:
             if res.orientation_error is not None:
                 out.orientation_error[done] = res.orientation_error[converged]
             out.evaluations[done] = res.evaluations[converged]
-            if res.goal_errors is not None:
+            if out.goal_errors is not None:
                 _put_rows(out.goal_errors, done, res.goal_errors[converged])
             out.time_s[done] = (time.perf_counter() - t0) / pending.size
             out.source[done] = source
@@ -409,8 +398,14 @@ class BatchSolver:
             if res.orientation_error is not None:
                 out.orientation_error[left] = res.orientation_error[~converged]
             out.evaluations[left] = res.evaluations[~converged]
-            if res.goal_errors is not None:
+            if out.goal_errors is not None:
                 _put_rows(out.goal_errors, left, res.goal_errors[~converged])
+
+
+def tip_arrays(group: GoalArrays) -> TargetArrays:
+    """One-goal tip problems as the single targets they are, for the Python reference engine (which runs goal lists
+    one at a time: :meth:`BatchSolver._prepare` leaves those to the one-by-one solver)."""
+    return TargetArrays(group.stack.kinds[0], group.P[:, 0], group.Rts[:, 0])
 
 
 def _put_rows(column: np.ndarray, rows: np.ndarray, values: np.ndarray) -> None:

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from ...problem import Evaluation, IKProblem, goals_shortfall_text, shortfall_text
+from ...problem import Evaluation, IKProblem, shortfall_text
 from ...result import Result
 from ..options import check_choice, check_int, check_number
 
@@ -194,10 +194,8 @@ class SolverRun:
             success = problem.goals_met(goal_errors)
         if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
             message = "stopped"
-        if not success and goal_errors is not None:
-            message += f"; {goals_shortfall_text(problem, goal_errors, pos, rot)}"
-        elif not success:
-            message += f"; {shortfall_text(problem, pos, rot)}"
+        if not success:
+            message += f"; {shortfall_text(problem, pos, rot, goal_errors)}"
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
             generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,

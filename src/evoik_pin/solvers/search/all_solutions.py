@@ -55,7 +55,7 @@ import numpy as np
 from ...errors import OptionError
 from ...goals.registry import TASK_ROWS
 from ...goals.stack import GoalArrays, target_kind
-from ...problem import IKProblem, goals_shortfall_text, shortfall_text
+from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import register
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
@@ -322,7 +322,8 @@ def memetic_all(
     else:
         q = best[1] if best[1] is not None else np.minimum(np.maximum(reference, lo), hi)
         pos, rot, cost = problem.assess(q)
-        message = (f"no solution after {started} LM start(s) ({stop}); {_shortfall(problem, q, pos, rot)}: the "
+        shortfall = shortfall_text(problem, pos, rot, problem.goal_errors(q) if goals else None)
+        message = (f"no solution after {started} LM start(s) ({stop}); {shortfall}: the "
                    f"{'goals are' if goals else 'target is'} out of reach (or reachable only where no start led)")
         if collided:
             message = (f"all {collided} solution(s) found after {started} LM start(s) are in collision; "
@@ -400,13 +401,6 @@ def goal_moving_joints(robot, stack) -> np.ndarray:
     moving = np.zeros(robot.n, dtype=bool)
     moving[index[stack.support.any(axis=0) & (scale != 0.0)]] = True
     return moving
-
-
-def _shortfall(problem: IKProblem, q: np.ndarray, pos: float, rot: float | None) -> str:
-    """:func:`shortfall_text` of one target; for a goal list, the largest errors and the goals not met at ``q``."""
-    if problem.goals is None:
-        return shortfall_text(problem, pos, rot)
-    return goals_shortfall_text(problem, problem.goal_errors(q), pos, rot)
 
 
 def _message(solutions: list[Result], redundant: bool, pooled: int, started: int, stop: str,

@@ -79,35 +79,13 @@ def table_distances(FT, sq, f, d):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, forceinline=False, fastmath={"contract"})
-def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
-    """:func:`table_distances` of V targets in single precision: D (V, N) float32 for their features f (V, D), with
-    FT (D, N) and sq (N,) float32 (:meth:`~.seed_table.SeedTable.one_goal_features32`), fused multiply-adds. For
-    the goal sets' ranking, which no other path has to match bit for bit: a start's order only, where single
-    precision's 1e-7 of the features' scale is far below the table's gaps, for half the time of double
-    precision (eight lanes a vector). Compiled rather than one NumPy product: OpenBLAS runs a product of this size
-    on several threads, and on a busy machine (or beside ``solve_many``'s threads) waiting for them took 15 ms
-    instead of 30 us (measured: a goal set of 10 Panda grasps, 2 cores, load 2)."""
-    Dn, N = FT.shape
-    for v in range(f.shape[0]):
-        d = D[v]
-        f0 = f[v, 0]
-        for i in range(N):
-            d[i] = FT[0, i] * f0
-        for j in range(1, Dn):
-            fj = f[v, j]
-            for i in range(N):
-                d[i] += FT[j, i] * fj
-        for i in range(N):
-            d[i] = sq[i] - (d[i] + d[i])
-
-
-@njit(cache=True, nogil=True, forceinline=False, fastmath={"contract"})
 def table_distances32(FT, sq, f, d):  # pragma: no cover - compiled
     """:func:`table_distances` in single precision: d (N,) float32 from FT (D, N), sq (N,) and f (D,) float32, fused
-    multiply-adds. A goal list's rankings (:func:`rank_goal_entries`, :func:`nearest_per_goal`), which decide a
-    start's order only: single precision's 1e-7 of the features' scale is far below the table's gaps, and its
-    eight lanes a vector and half the memory read made a Talos ranking (48 features of 4,096 entries) several times
-    faster than double precision's 30-50 us."""
+    multiply-adds. A goal list's rankings (:func:`rank_goal_entries`, :func:`nearest_per_goal`) and a goal set's
+    (:func:`table_distances_many`), which decide a start's order only (no other path has to match them bit for
+    bit): single precision's 1e-7 of the features' scale is far below the table's gaps, and its eight lanes a
+    vector and half the memory read made a Talos ranking (48 features of 4,096 entries) several times faster than
+    double precision's 30-50 us."""
     D, N = FT.shape
     f0 = f[0]
     for i in range(N):
@@ -118,6 +96,17 @@ def table_distances32(FT, sq, f, d):  # pragma: no cover - compiled
             d[i] += FT[j, i] * fj
     for i in range(N):
         d[i] = sq[i] - (d[i] + d[i])
+
+
+@njit(cache=True, nogil=True, forceinline=False, fastmath={"contract"})
+def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
+    """:func:`table_distances32` of V targets: D (V, N) float32 for their features f (V, D). For the goal sets'
+    ranking (FT (D, N) and sq (N,) float32: :meth:`~.seed_table.SeedTable.one_goal_features32`). Compiled rather
+    than one NumPy product: OpenBLAS runs a product of this size on several threads, and on a busy machine (or
+    beside ``solve_many``'s threads) waiting for them took 15 ms instead of 30 us (measured: a goal set of 10 Panda
+    grasps, 2 cores, load 2)."""
+    for v in range(f.shape[0]):
+        table_distances32(FT, sq, f[v], D[v])
 
 
 @njit(cache=True, nogil=True, forceinline=False)

@@ -91,13 +91,9 @@ class SeedTable:
             self._features[key] = (F, (F * F).sum(axis=1))
         return self._features[key]
 
-    def target_features(self, targets: list[Target]) -> tuple[str, np.ndarray]:
-        """(kind key, features (N, d)) of targets that are all of one kind."""
-        return self.encoded_features(target_kind(targets[0]), *encode_targets(targets))
-
     def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
-        """(kind key, features (N, d)) of N targets of one ``KIND_*`` in the kernel's encoding
-        (:func:`~evoik_pin.solvers.lm.layout.encode_targets`: P (N, 3), Rts (N, 3, 3))."""
+        """(kind key, features (N, d)) of N tip targets of one ``KIND_*`` in the kernel's encoding
+        (:func:`~evoik_pin.goals.stack.encode_targets`: P (N, 3), Rts (N, 3, 3))."""
         key = _KIND_KEYS[kind]
         if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
             yaw = P[:, 2]
@@ -105,13 +101,13 @@ class SeedTable:
         return key, self._pose_features(key, P, Rts)
 
     def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
-        """(kind key, features (d,)) of one target: :meth:`target_features`'s row, the same numbers, without the
+        """(kind key, features (d,)) of one target: :meth:`encoded_features`' row, the same numbers, without the
         batch encoding (this runs on every single-target solve)."""
         last = self._last
         if last[0] is target:  # a solve asks up to four times (ranking, q0's nearness, the gap)
             return last[1]
         if target.planar:
-            key, f = self.target_features([target])
+            key, f = self.encoded_features(target_kind(target), *encode_targets([target]))
             out = key, f[0]
         elif target.rotation is None:
             out = "position", np.array(target.position, dtype=float)  # our own (compiled callers fix its type)
@@ -499,19 +495,14 @@ class SeedTable:
             parts.append((s * self.weight) * R.reshape(9))
         return np.concatenate(parts)
 
-    def nearest(self, targets: list[Target], k: int, allowed: np.ndarray | None = None) -> np.ndarray:
-        """Indices (N, k) of the k table entries nearest to each target, nearest first (only ``allowed``
-        entries when a (size,) bool mask is given; k is capped at their number).
+    def nearest(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
+                eps: float = 0.0) -> np.ndarray:
+        """Indices (N, k) of the k table entries nearest to each of N tip targets of one ``KIND_*`` in the kernel's
+        encoding (P (N, 3), Rts (N, 3, 3): :class:`~evoik_pin.goals.stack.TargetArrays`), nearest first (only
+        ``allowed`` entries when a (size,) bool mask is given; k is capped at their number).
 
         Many targets at once go through a k-d tree of the table's features (built once per target kind and
         mask): O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
-        """
-        return self.nearest_encoded(target_kind(targets[0]), *encode_targets(targets), k, allowed)
-
-    def nearest_encoded(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
-                        eps: float = 0.0) -> np.ndarray:
-        """:meth:`nearest` for N targets of one ``KIND_*`` in the kernel's encoding (P (N, 3), Rts (N, 3, 3)).
-
         ``eps`` > 0: approximate neighbours (``scipy.spatial.cKDTree.query``'s ``eps``: the i-th entry returned
         is within (1 + eps) times the distance of the true i-th nearest), several times cheaper in these 12-D
         features.
