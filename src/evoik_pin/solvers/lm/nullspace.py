@@ -268,17 +268,25 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
     return evaluations
 
 
+#: About how long (s, one core) compiling the null-space descent takes from an empty cache (its first use after an
+#: install, announced by :func:`.compiling.load`).
+NULLSPACE_COMPILE_SECONDS = 25.0
+
+
 def nullspace_kernel() -> dict:
     """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian whose null space
     :func:`evoik_pin.solvers.search.choose.refine` steps in), compiled (or loaded from numba's disk cache) on a
     one-joint robot, outside any time budget."""
     if not _KERNEL:
+        from .compiling import load
         from .engine import warmup_problem
         from .population_rows import task_rows
 
         tree, box, goals, pt, Rt = warmup_problem()
-        descend_batch(np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, pt, Rt, 1, 1, 0.5,
-                      np.empty((1, 1)), np.empty(1))
-        task_rows(np.zeros(1), *tree, *goals, pt, Rt, np.empty(6), np.empty((6, 1)), np.empty((1, 2)))
+        load("the null-space descent of prefer= and preferences", [
+            (descend_batch, (np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, pt, Rt, 1, 1,
+                             0.5, np.empty((1, 1)), np.empty(1))),
+            (task_rows, (np.zeros(1), *tree, *goals, pt, Rt, np.empty(6), np.empty((6, 1)), np.empty((1, 2))))],
+             NULLSPACE_COMPILE_SECONDS)
         _KERNEL.update(descend_batch=descend_batch, task_rows=task_rows)
     return _KERNEL
