@@ -32,7 +32,7 @@ from evoik_pin.goals.pose import KIND_POSE
 from evoik_pin.goals.stack import GoalStack, encode_targets
 from evoik_pin.problem import Target
 from evoik_pin.solvers.batch import threads
-from evoik_pin.solvers.batch.outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
+from evoik_pin.solvers.batch.batch_results import SOURCE_SINGLE, BatchOutcome, BatchResults
 from evoik_pin.solvers.batch.targets import TargetSource
 from evoik_pin.solvers.lm import engine as lm_engine
 from evoik_pin.solvers.lm.layout import STATS_SIZE, box_constants, kernel_params

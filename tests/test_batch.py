@@ -19,7 +19,7 @@ from evoik_pin.result import Result
 from evoik_pin.scene import Scene
 from evoik_pin.scene.examples import SHELF_INTERIOR, add_table_and_shelf, free_configurations
 from evoik_pin.solvers.batch import threads
-from evoik_pin.solvers.batch.outcome import BatchOutcome
+from evoik_pin.solvers.batch.batch_results import BatchOutcome
 from evoik_pin.solvers.search.seed_table import DEFAULT_TABLE_SEEDS
 
 BUDGET = {"timeout": None, "max_restarts": 2}

@@ -10,10 +10,6 @@ from evoik_pin.api import make_problem
 from evoik_pin.errors import OptionError
 from evoik_pin.solvers.paper.ga import basic_polynomial_mutation
 from evoik_pin.solvers.paper.nsga2 import (
-    _duplicate_rows,
-    _task_errors,
-    _tournament,
-    _tournament_pairs,
     bounded_polynomial_mutation,
     crowding_distance,
     dominance_matrix,
@@ -21,6 +17,9 @@ from evoik_pin.solvers.paper.nsga2 import (
     nsga2_minimize,
     survival,
 )
+from evoik_pin.solvers.paper.nsga2_minimizer import _duplicate_rows
+from evoik_pin.solvers.paper.pareto_sorting import _tournament, _tournament_pairs
+from evoik_pin.solvers.paper.task_repair import _task_errors
 
 
 def zdt1(X):

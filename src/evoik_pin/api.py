@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from .calls import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, ... are read by reach.py, cli.py, tests)
+from .call_setup import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, ... are read by reach.py, cli.py, tests)
     _PROBLEM_OPTIONS,
     DEFAULT_ALL_METHOD,
     DEFAULT_METHOD,
@@ -33,9 +33,9 @@ from .ik_solver import IKSolver, solver_for
 from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta
 from .result import Result
 from .solvers import get_solver, methods
-from .solvers.batch import api as batch_api
+from .solvers.batch import solve_many_call
+from .solvers.batch.batch_results import BatchResults
 from .solvers.batch.goal_lists import GoalSource, is_goal_batch, is_problem_list
-from .solvers.batch.outcome import BatchResults
 from .solvers.batch.threads import check_call
 from .solvers.lm import ENGINES
 from .solvers.options import check_int
@@ -315,9 +315,9 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
     if is_goal_batch(targets) or is_problem_list(targets):
         _check_goal_method(method)
     prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
-    return batch_api.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0, workers=workers,
-                                backend=backend, address=address, progress=progress, choose=solve,
-                                prefer=prefer, locked=options.pop("locked", None), **options)
+    return solve_many_call.solve_many(_robot(robot), targets, make_problem, _run, method, seed=seed, q0=q0,
+                                      workers=workers, backend=backend, address=address, progress=progress,
+                                      choose=solve, prefer=prefer, locked=options.pop("locked", None), **options)
 
 
 

@@ -34,7 +34,7 @@ import threading
 
 import numpy as np
 
-from .calls import (
+from .call_setup import (
     _PROBLEM_OPTIONS,
     DEFAULT_METHOD,
     _goal_method_problem,

@@ -34,8 +34,8 @@ import numpy as np
 from .errors import OptionError, OutputError
 from .problem import Target, coerce_scene
 from .robot import Robot, load_robot
-from .solvers.batch.api import BACKENDS
-from .solvers.batch.outcome import BatchOutcome
+from .solvers.batch.batch_results import BatchOutcome
+from .solvers.batch.solve_many_call import BACKENDS
 from .solvers.batch.threads import BatchSolver, check_call, check_workers, gc_paused, grow_bar, progress_bar
 from .solvers.options import check_choice, check_int, check_positive
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..calls import _rng
+from ..call_setup import _rng
 from ..ik_solver import IKSolver
 from ..robot.velocity_limits import check_dt
 from ..robot.velocity_limits import velocity_limits as limits_of

@@ -34,9 +34,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import BoundsError, ConfigurationError, FrameError, RobotLoadError
+from ..errors import ConfigurationError, FrameError, RobotLoadError
 from .frames import body_frame_names, closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
-from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_limits, joint_motions, joint_value, set_joint_value
+from .joint_bounds import NEAR_UNBOUNDED, JointBounds
+from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
 from .population import chain_forward, chain_jacobians, chain_positions
 from .tree import ChainView, KinematicTree, free_flyer_model, rpy_to_quaternion, with_floating_base
 
@@ -48,16 +49,12 @@ __all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Rob
 #: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
 #: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
 MAX_CHAIN_JOINTS = 200
-#: A joint whose bound reaches this far (``|lower|`` or ``|upper|`` >= 1000 m or rad) is near-unbounded: URDFs give
-#: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
-#: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
-NEAR_UNBOUNDED = 1e3
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
 
 
-class Robot:
+class Robot(JointBounds):
     """The active joints of a URDF (a serial chain or a tree): forward kinematics, Jacobians and manipulability of
     any of its frames.
 
@@ -288,51 +285,7 @@ class Robot:
         if base_box is not None:
             self._set_base_box(base_box)
 
-    # ------------------------------------------------------------------ construction helpers
-    def _set_default_bounds(self, coupling: dict[int, tuple[int, float, float]]) -> None:
-        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE when it has none), narrowed
-        so that every mimic joint following it stays inside its own limits."""
-        fm = self._kin_model
-        lower = np.empty(self.n)
-        upper = np.empty(self.n)
-        for k, d in enumerate(self._dof_ids):
-            lo, hi, limited = joint_limits(fm, d)
-            if not limited:
-                half = np.pi if self.revolute[k] else DEFAULT_PRISMATIC_RANGE
-                lo, hi = -half, half
-            for j, (driver, m, off) in coupling.items():
-                jlo, jhi, jlimited = joint_limits(fm, j)
-                if driver != d or not jlimited or m == 0.0:
-                    continue
-                a, b = sorted(((jlo - off) / m, (jhi - off) / m))
-                if max(lo, a) > min(hi, b):
-                    raise RobotLoadError(
-                        f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} = {m:g} "
-                        f"{fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in [{lo:g}, {hi:g}] keeps it in "
-                        f"its limits [{jlo:g}, {jhi:g}]"
-                    )
-                lo, hi = max(lo, a), min(hi, b)
-            lower[k], upper[k] = lo + 0.0, hi + 0.0  # + 0.0: no -0.0 bound (NumPy's uniform refuses [0, -0])
-        self.lower, self.upper = lower, upper
-
-    def _set_base_box(self, base_box) -> None:
-        """The floating base's translation bounds: ``base_box`` a half-width h (m; the box [-h, h]^3 around the
-        origin) or a pair (lower (3,), upper (3,)) in m."""
-        if not self.floating_base:
-            raise BoundsError("base_box bounds the floating base's position: give it with floating_base=True")
-        try:
-            if np.ndim(base_box) == 0:
-                h = float(base_box)
-                lo, hi = np.full(3, -h), np.full(3, h)
-            else:
-                lo, hi = (np.asarray(b, dtype=float).reshape(3) for b in base_box)
-        except (TypeError, ValueError) as exc:
-            raise BoundsError(f"base_box must be a half-width (m) or a pair (lower (3,), upper (3,)) in m, got "
-                              f"{base_box!r}") from exc
-        lower, upper = self.lower.copy(), self.upper.copy()
-        lower[:3], upper[:3] = lo, hi
-        self.set_bounds(lower, upper)
-
+    # ------------------------------------------------------------------ locked copies
     def locked(self, values: dict[str, float]) -> Robot:
         """A new Robot with the joints ``values`` names fixed at those values (rad or m): its ``q`` omits them (the
         other joints in the same order), its :meth:`fk` and :meth:`full_configuration` put them there, its bounds are
@@ -460,88 +413,6 @@ class Robot:
         if not self._coupled:
             return Q
         return Q[..., self._phys_index] * self._phys_scale + self._phys_offset
-
-    # ------------------------------------------------------------------ bounds and validation
-    def set_bounds(self, lower, upper) -> None:
-        """Replace the search bounds (rad or m), each of length ``n``; finite, lower <= upper. (A floating base's
-        first three entries are its position box, m.)"""
-        lower = np.asarray(lower, dtype=float).reshape(-1)
-        upper = np.asarray(upper, dtype=float).reshape(-1)
-        if lower.shape != (self.n,) or upper.shape != (self.n,):
-            raise BoundsError(
-                f"bounds of {self.name} need {self.n} values each (one per joint), got {lower.size} and "
-                f"{upper.size}"
-            )
-        if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
-            raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
-        bad = np.nonzero(lower > upper)[0]
-        if bad.size:
-            k = int(bad[0])
-            raise BoundsError(
-                f"inverted bounds for joint {self.joint_names[k]!r}: lower {lower[k]:.6g} > upper {upper[k]:.6g}"
-            )
-        self.lower, self.upper = lower, upper
-
-    def check_q(self, q) -> np.ndarray:
-        """``q`` as a float array of shape (n,), or a ConfigurationError naming the problem."""
-        arr = np.asarray(q, dtype=float)
-        if arr.ndim != 1 or arr.shape[0] != self.n:
-            names = ", ".join(self.joint_names) if self.n <= 12 else ", ".join(self.joint_names[:12]) + ", ..."
-            raise ConfigurationError(
-                f"{self.name} has {self.n} joints ({names}); got a joint vector of shape {arr.shape}, expected "
-                f"({self.n},)"
-            )
-        if not np.isfinite(arr).all():  # the method: np.all's dispatch costs about a microsecond per solve
-            raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
-        return arr
-
-    def check_population(self, Q) -> np.ndarray:
-        """``Q`` as a float array of shape (N, n), or a ConfigurationError naming the problem."""
-        arr = np.asarray(Q, dtype=float)
-        if arr.ndim == 1 and arr.shape[0] == self.n:
-            arr = arr[None, :]
-        if arr.ndim != 2 or arr.shape[1] != self.n:
-            raise ConfigurationError(
-                f"{self.name} needs configurations of shape (N, {self.n}); got shape {arr.shape}"
-            )
-        if not np.all(np.isfinite(arr)):
-            raise ConfigurationError("configurations contain NaN or inf")
-        return arr
-
-    def within_bounds(self, q, tol: float = 0.0) -> bool:
-        """True when every joint value lies inside [lower - tol, upper + tol]."""
-        q = np.asarray(q, dtype=float)
-        return bool(np.all(q >= self.lower - tol) and np.all(q <= self.upper + tol))
-
-    def clip(self, Q) -> np.ndarray:
-        """``Q`` (..., n) clipped into the search bounds."""
-        return np.clip(Q, self.lower, self.upper)
-
-    def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        """``count`` configurations drawn uniformly inside :meth:`sampling_box`, shape (count, n): inside the search
-        bounds, and ones the library solves for (a mobile base's +-999999 m joints are not drawn 1e5 m away)."""
-        lower, upper = self.sampling_box()
-        return rng.uniform(lower, upper, size=(count, self.n))
-
-    def sampling_box(self) -> tuple[np.ndarray, np.ndarray]:
-        """(lower, upper), each (n,) in rad or m: the search bounds with every near-unbounded entry (a bound beyond
-        :data:`NEAR_UNBOUNDED`) narrowed to where a search finds answers for targets near the base: a revolute one to
-        one turn [c - pi, c + pi] (c = 0 clipped into [lower + pi, upper - pi]), a prismatic one to +-(2 R + max(0.1,
-        0.1 R)) m around 0 (clipped into its bounds), R the robot's reach: the lengths of its joint offsets and the
-        travel of its bounded prismatic joints, summed. :func:`evoik_pin.problem.target_box` narrows such joints around
-        each target the same way."""
-        lower, upper = self.lower.copy(), self.upper.copy()
-        far = (np.abs(lower) >= NEAR_UNBOUNDED) | (np.abs(upper) >= NEAR_UNBOUNDED)
-        if not far.any():
-            return lower, upper
-        prismatic_travel = np.where(~self.revolute & ~far, np.maximum(np.abs(lower), np.abs(upper)), 0.0)
-        reach = float(np.linalg.norm(self.tree.Fp, axis=1).sum() + prismatic_travel.sum())
-        half = 2.0 * reach + max(0.1, 0.1 * reach)
-        centre = np.where(self.revolute, np.clip(0.0, lower + np.pi, upper - np.pi), 0.0)
-        width = np.where(self.revolute, np.pi, half)
-        lower[far] = np.clip(centre - width, self.lower, self.upper)[far]
-        upper[far] = np.clip(centre + width, self.lower, self.upper)[far]
-        return lower, upper
 
     # ------------------------------------------------------------------ Pinocchio mapping
     def to_pinocchio(self, q) -> np.ndarray:

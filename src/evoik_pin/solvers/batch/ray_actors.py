@@ -3,7 +3,7 @@
 :class:`RayBatch` starts ``workers`` actors (one CPU each). Each actor receives the robot once (a pickled
 :class:`~evoik_pin.robot.Robot` through Ray's object store), rebuilds the scene from its obstacles when there is
 one, and runs :class:`~.threads.BatchSolver` (the local backend, one thread) on the chunks it is handed: the
-targets as arrays (:func:`pack_targets`), the answers back as a :class:`~.outcome.BatchOutcome` (arrays, plus the
+targets as arrays (:func:`pack_targets`), the answers back as a :class:`~.batch_results.BatchOutcome` (arrays, plus the
 full :class:`~evoik_pin.Result` of the targets solved one by one). A target's answer depends only on the
 target, the options and ``(entropy, its index)``, so the answers are those of the local backend whatever the
 chunks and the actors.
@@ -33,7 +33,7 @@ import numpy as np
 
 from ...errors import BackendError, TargetError
 from ...problem import Target
-from .outcome import BatchOutcome
+from .batch_results import BatchOutcome
 from .targets import source_of
 from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
 

@@ -15,7 +15,7 @@ k-d tree queries release the GIL. The calling thread also encodes the chunks' ta
 (:mod:`.targets`; no :class:`Target` object is made for an (N, 4, 4) array of poses) and solves one by one the
 targets a finished chunk left, as soon as it is done (with a scene: after every chunk's rounds, since the scene's
 collision data is shared) (:meth:`BatchSolver.pipeline`). The answers come back as arrays
-(:class:`~.outcome.BatchOutcome`); :class:`~.outcome.BatchResults` makes a :class:`Result` when one is
+(:class:`~.batch_results.BatchOutcome`); :class:`~.batch_results.BatchResults` makes a :class:`Result` when one is
 read. Threads were measured against numba ``prange`` and worker processes (docs/BENCHMARKS.md,
 ``scripts/bench_scale.py``). A target's rounds do not depend on the other targets of its chunk, so the answers do
 not depend on the chunking.
@@ -27,7 +27,7 @@ workers, the chunks or the backend (up to a wall-clock ``timeout``, as for :func
 ``timeout=None, max_restarts=k`` for a budget independent of the machine).
 
 The Ray actors (:mod:`.ray_actors`) run this module's :class:`BatchSolver` on their chunks (one thread each);
-:mod:`.api` (``solve_many``) chooses between the two. Nothing here imports either.
+:mod:`.solve_many_call` (``solve_many``) chooses between the two. Nothing here imports either.
 """
 
 from __future__ import annotations
@@ -52,8 +52,8 @@ from ...result import Result
 from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
+from .batch_results import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
 from .goal_lists import GoalBlock, GoalSource, GoalTree
-from .outcome import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
 from .targets import TargetSource, source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",

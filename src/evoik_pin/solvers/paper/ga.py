@@ -98,7 +98,8 @@ def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarra
     ``delta = (2u)^(1/(eta+1)) - 1`` if u < 0.5 else ``1 - (2 (1 - u))^(1/(eta+1))``, and
     ``x += delta (upper - lower)``; the mean |delta| is about 1 / (eta + 2), so eta = 100 perturbs by ~1 %.
     The spread ignores where x sits in the box (children may leave it: the GA clips them), unlike NSGA-II's
-    :func:`~evoik_pin.solvers.paper.nsga2.bounded_polynomial_mutation`, whose spread shrinks towards the bounds.
+    :func:`~evoik_pin.solvers.paper.nsga2_minimizer.bounded_polynomial_mutation`, whose spread shrinks towards
+    the bounds.
     """
     delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
                      1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))

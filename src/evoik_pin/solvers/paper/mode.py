@@ -43,7 +43,7 @@ from .. import register
 from ..options import check_choice, check_fraction, check_int, check_nonnegative, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population
 from .de_ops import binomial_crossover, distinct_indices, rand1, trigonometric
-from .nsga2 import crowding_distance
+from .pareto_sorting import crowding_distance
 
 __all__ = ["VARIANTS", "adaptive_probability", "equitable_weights", "nondominated_2d"]
 

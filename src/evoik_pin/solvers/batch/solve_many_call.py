@@ -2,7 +2,8 @@
 
 The top of the batch package: it checks the call's arguments (backend, workers, ``q0``), reads the targets
 (:class:`~.targets.TargetSource`), hands them to an engine below it, and wraps the engine's arrays
-(:class:`~.outcome.BatchOutcome`) as what :func:`evoik_pin.solve_many` returns (:class:`~.outcome.BatchResults`):
+(:class:`~.batch_results.BatchOutcome`) as what :func:`evoik_pin.solve_many` returns
+(:class:`~.batch_results.BatchResults`):
 
 * ``backend="local"``: :class:`~.threads.BatchSolver` on ``workers`` threads of this process (:mod:`.threads`
   explains the batched rounds, the chunks and the per-target generators);
@@ -20,7 +21,7 @@ import numpy as np
 from ...errors import ConfigurationError, OptionError
 from ...robot.locking import expand_result, expand_rows, kept_columns, locked_note, locked_robot, shrink_q
 from ..options import check_choice
-from .outcome import SOURCE_SINGLE, BatchOutcome, BatchResults
+from .batch_results import SOURCE_SINGLE, BatchOutcome, BatchResults
 from .targets import source_of
 from .threads import BatchSolver, check_workers, progress_bar, root_entropy
 
