@@ -76,8 +76,8 @@ from .contacts import DEFAULT_FEET, detect_contacts, ground_height
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
 
-__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "self_collision_scene",
-           "velocity_limits_of"]
+__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "self_collision_check",
+           "self_collision_scene", "velocity_limits_of"]
 
 #: Floating base speed limits used with ``velocity_limits=True``: m/s on x, y, z (a sprinter's pelvis moves
 #: at ~10 m/s, a humanoid robot's at ~2) and rad/s on yaw, pitch, roll (a full turn in a second).
@@ -544,6 +544,15 @@ def self_collision_scene(robot):
     return Scene(robot, self_collision=True)
 
 
+@functools.lru_cache(maxsize=4)
+def self_collision_check(robot):
+    """:class:`.self_collision_check.SelfCollisionCheck` of :func:`self_collision_scene` (the same verdicts, a broad
+    phase: ~3x cheaper on G1), kept for the last few robots. Not thread-safe."""
+    from .self_collision_check import SelfCollisionCheck
+
+    return SelfCollisionCheck(self_collision_scene(robot))
+
+
 def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto", ground="auto",
              self_collision: bool = True, velocity_limits=True, seed=0, timeout: float | None = None,
              progress: bool = False) -> Clip:
@@ -590,7 +599,8 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     plan = _Plan(robot, motion, mapping, scale, contacts, ground)
     v_max = velocity_limits_of(robot, velocity_limits)
     dt = 1.0 / motion.fps
-    scene = self_collision_scene(robot)  # the report counts collisions either way
+    scene = self_collision_scene(robot)  # the solver's (a colliding frame's retry); set-up, built once a robot
+    check = self_collision_check(robot)  # every other check, the report's too: collisions are counted either way
     rng = np.random.default_rng(seed)
     first_lower, first_upper = _first_bounds(robot, plan)
     n_frames = motion.frames
@@ -624,21 +634,21 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
             q_firm = np.clip(firm.q, lower, upper)
             if _hold_slip(robot, plan, i, holds, q_firm) < _hold_slip(robot, plan, i, holds, q_new):
                 result, q_new, firmed = firm, q_firm, firmed + 1
-        if self_collision and scene.in_collision(q_new):
+        if self_collision and check.in_collision(q_new):
             again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
                               q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
                               **(FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS))
-            free = again.q if again.success and not scene.in_collision(again.q) else None
+            free = again.q if again.success and not check.in_collision(again.q) else None
             if free is None:
                 if i > 0:
-                    free = step_back_free(robot, scene, q_prev, q_new, plan.foot_joints)
+                    free = step_back_free(robot, check, q_prev, q_new, plan.foot_joints)
                 if free is None or np.array_equal(free, q_prev):
                     # no free previous frame (frame 0), or only the whole previous frame is free (the legs moved
                     # into where the arm was): step back from a free configuration drawn near the answer, inside
                     # the box, with the feet's joints where the answer put them
-                    near = free_nearby(robot, scene, q_new, lower, upper, rng, plan.foot_joints)
+                    near = free_nearby(robot, check, q_new, lower, upper, rng, plan.foot_joints)
                     if near is not None:
-                        free = step_back_free(robot, scene, near, q_new, plan.foot_joints)
+                        free = step_back_free(robot, check, near, q_new, plan.foot_joints)
                         drawn += 1
                 stepped_back += free is not None
             else:
@@ -656,7 +666,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     elapsed = time.perf_counter() - start
     from .retarget_report import clip_report  # the quality figures: one concept per file
 
-    report = clip_report(robot, plan, Q, success, errors, v_max, dt, scene, first_lower, first_upper)
+    report = clip_report(robot, plan, Q, success, errors, v_max, dt, check, first_lower, first_upper)
     report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back, "drawn": drawn}
     report["firm_contact_frames"] = firmed
     report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
