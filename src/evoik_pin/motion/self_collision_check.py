@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..scene.geometry import convex_hulls, robot_collision_model, self_collision_pairs
+from ..errors import SceneError
 
 __all__ = ["SelfCollisionCheck"]
 
@@ -30,15 +30,16 @@ class SelfCollisionCheck:
     scene's (rare: a colliding frame). Not thread-safe (its Pinocchio data is its own, reused)."""
 
     def __init__(self, scene) -> None:
+        if scene.obstacles:
+            raise SceneError(f"SelfCollisionCheck takes a scene without obstacles (self-collision only); this one has "
+                             f"{', '.join(scene.obstacles)}")
         robot = self.robot = scene.robot
         self.scene = scene
-        geom = self._geom = robot_collision_model(robot)
-        pairs = self_collision_pairs(robot, geom, scene.srdf) if scene.self_collision else []
-        geom.removeAllCollisionPairs()
-        for a, b in pairs:
-            geom.addCollisionPair(pin.CollisionPair(a, b))
+        # the scene's own geometry models (meshes and their convex hulls: hulls take 0.2-0.5 s to build) and pairs,
+        # read-only; placements go to this check's own data
+        geom, self._hulls, pairs = scene._geom, scene._hulls, scene._pairs
+        self._geom = geom
         self._gdata = pin.GeometryData(geom)
-        self._hulls = convex_hulls(geom)  # the same objects and pairs, meshes replaced by their hulls
         self._hdata = pin.GeometryData(self._hulls)
         self._data = robot.model.createData()
         self._a = np.array([a for a, _ in pairs], dtype=np.intp)
