@@ -276,3 +276,13 @@ def test_broad_phase_check_sees_both_verdicts(g1_checks):
     verdicts = [check.in_collision(q) for q in Q]
     assert verdicts == [scene.in_collision(q) for q in Q]
     assert any(verdicts) and not all(verdicts)
+
+
+def test_report_gives_the_set_up_and_the_first_frame_apart(retargeted):
+    """Set-up (s), first frame (s) and the warm-started rate are reported apart; fps (frames over the loop's time)
+    agrees with them: N / fps = first frame + (N - 1) / steady fps."""
+    _, clip = retargeted
+    report = clip.report
+    assert report["setup_s"] > 0 and report["first_frame_s"] > 0 and report["steady_fps"] > 0
+    n = len(clip.q)
+    assert n / report["fps"] == pytest.approx(report["first_frame_s"] + (n - 1) / report["steady_fps"], rel=1e-9)
