@@ -43,7 +43,8 @@ The method (:func:`retarget`):
    The per-frame solve is one LM run from q0 (no seed table, no DE restarts: :data:`FRAME_OPTIONS`), so the clip
    does not depend on the machine's speed.
 4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
-   SRDF-disabled pairs ignored, ~0.2-0.4 ms a check). A colliding answer is solved again with relaxed tolerances
+   SRDF-disabled pairs ignored; its verdict through a broad phase, :mod:`.self_collision_check`: boxes, hulls, then
+   meshes, ~0.3-0.6 ms a check). A colliding answer is solved again with relaxed tolerances
    (:data:`RELAXED_TOLERANCES`) and ``scene=``, which judges the answers that meet every goal; if that answer
    collides too, the frame steps back towards the previous, collision-free one (:mod:`.collision_step`: the joints
    moving one link of the colliding pair, never those placing a foot), so it stays in the velocity box and free;
