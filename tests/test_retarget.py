@@ -246,3 +246,62 @@ def test_html_plays_the_robot_and_the_source_keypoints(walk, tmp_path):
     (animation,) = [c for c in commands if c["type"] == "set_animation"]
     keyed = {a["path"] for a in animation["animations"]}
     assert "/meshcat/keypoints/Hips" in keyed and any(p.startswith("/meshcat/robot") for p in keyed)
+
+
+@pytest.fixture(scope="module")
+def g1_checks():
+    from evoik_pin.motion.retarget import self_collision_check, self_collision_scene
+
+    robot = ek.load_robot("g1", floating_base=True)
+    return robot, self_collision_scene(robot), self_collision_check(robot)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), spread=st.sampled_from([0.3, 1.0, 3.0]))
+def test_broad_phase_check_gives_the_scene_verdict(g1_checks, seed, spread):
+    """The retargeter's self-collision check (bounding boxes, hulls, then meshes) says what the scene's exact check
+    over every pair says, on configurations from the neutral pose to anywhere in the bounds (many colliding)."""
+    robot, scene, check = g1_checks
+    rng = np.random.default_rng(seed)
+    lower, upper = np.maximum(robot.lower, -np.pi), np.minimum(robot.upper, np.pi)
+    q = np.clip(rng.normal(0.0, spread, robot.n), lower, upper)
+    assert check.in_collision(q) == scene.in_collision(q)
+
+
+def test_broad_phase_check_sees_both_verdicts(g1_checks):
+    """The drawn configurations hold colliding and free ones (the test above compares both kinds)."""
+    robot, scene, check = g1_checks
+    rng = np.random.default_rng(0)
+    Q = np.clip(rng.normal(0.0, 1.0, (40, robot.n)), robot.lower, robot.upper)
+    verdicts = [check.in_collision(q) for q in Q]
+    assert verdicts == [scene.in_collision(q) for q in Q]
+    assert any(verdicts) and not all(verdicts)
+
+
+def test_report_gives_the_set_up_and_the_first_frame_apart(retargeted):
+    """Set-up (s), first frame (s) and the warm-started rate are reported apart; fps (frames over the loop's time)
+    agrees with them: N / fps = first frame + (N - 1) / steady fps."""
+    _, clip = retargeted
+    report = clip.report
+    assert report["setup_s"] > 0 and report["first_frame_s"] > 0 and report["steady_fps"] > 0
+    n = len(clip.q)
+    assert n / report["fps"] == pytest.approx(report["first_frame_s"] + (n - 1) / report["steady_fps"], rel=1e-9)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_broad_phase_colliding_pairs_are_the_scene_ones(g1_checks, seed):
+    robot, scene, check = g1_checks
+    q = np.clip(np.random.default_rng(seed).normal(0.0, 1.0, robot.n), robot.lower, robot.upper)
+    assert check.colliding_pairs(q) == scene.colliding_pairs(q)
+
+
+def test_broad_phase_finds_a_contact_the_hulls_alone_miss(g1_checks):
+    """At this configuration the left knee's mesh is 70 um into the left shoulder roll link's while their Qhull hulls
+    are apart: the hull filter's margin keeps the pair, and the verdict is the scene's."""
+    robot, scene, check = g1_checks
+    q = np.clip(np.random.default_rng(27).normal(0.0, 3.0, robot.n), np.maximum(robot.lower, -np.pi),
+                np.minimum(robot.upper, np.pi))
+    pairs = check.colliding_pairs(q)
+    assert ("left_knee_link", "left_shoulder_roll_link") in pairs
+    assert pairs == scene.colliding_pairs(q)

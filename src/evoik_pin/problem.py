@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import BoundsError, ConfigurationError, OptionError
-from .goals import bind, is_goal_list
+from .goals import RelativePosition, bind, is_goal_list
 from .goals.registry import KIND_BEYOND_FRAME
 from .goals.stack import owned
 from .objectives import (
@@ -302,14 +302,29 @@ class IKProblem:
     def goal_errors_and_chosen(self, q: np.ndarray) -> tuple[list[tuple[float, float | None]], list[int | None]]:
         """(:meth:`goal_errors`, :meth:`chosen`) at ``q`` (n,) from one kinematics pass: a goal set's member is
         picked once for both."""
-        fids = [self.robot.frame_id(g.frame) for g in self.goals]
-        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
+        q = np.asarray(q, dtype=float)
+        robot, goals = self.robot, self.goals
+        # a RelativePosition's frame a joins the same Pinocchio pass: its error from the two poses, not from a
+        # population kinematics pass of its own per goal (a retarget frame has ~10 of them)
+        paired = [g for g in goals if type(g) is RelativePosition]
+        fids = [robot.frame_id(g.frame) for g in goals] + [robot.frame_id(g.frame_a) for g in paired]
+        poses = robot.frame_poses_unchecked(q, fids)
+        frame_a_pose = dict(zip(map(id, paired), poses[len(goals):], strict=True))
+
+        def beyond(g, T) -> tuple[float, float | None]:
+            Ta = frame_a_pose.get(id(g))
+            if Ta is None:
+                return g.robot_errors(robot, q)
+            d = (T.translation - Ta.translation)[None]
+            return float(np.linalg.norm(g.vectors(Ta.rotation[None], d)[0] - g.target)), None
+
+        poses = poses[:len(goals)]
         if self.goal_sets:
-            picked = [(None, g.robot_errors(self.robot, q)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
-                      for g, T in zip(self.goals, poses, strict=True)]
+            picked = [(None, beyond(g, T)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
+                      for g, T in zip(goals, poses, strict=True)]
             return [p[1] for p in picked], [p[0] for p in picked]
-        return ([g.robot_errors(self.robot, q) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
-                 for g, T in zip(self.goals, poses, strict=True)], [None] * len(self.goals))
+        return ([beyond(g, T) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
+                 for g, T in zip(goals, poses, strict=True)], [None] * len(goals))
 
     # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal)
     @property

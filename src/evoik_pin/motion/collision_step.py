@@ -6,6 +6,9 @@ converged answer that collides), and a retargeting frame's goals usually conflic
 held feet), so its answer never converges and the scene never steers it. Stepping back along the segment
 ``q_prev -> q`` keeps what is known: ``q_prev`` is collision-free and inside the velocity box, so is every point of
 the segment (the box is convex), and the exact mesh check decides.
+
+``scene`` below is anything with ``in_collision(q)`` and ``colliding_pairs(q)``: a :class:`~evoik_pin.Scene` or
+the retargeter's :class:`~evoik_pin.motion.self_collision_check.SelfCollisionCheck` (the same verdicts, cheaper).
 """
 
 from __future__ import annotations

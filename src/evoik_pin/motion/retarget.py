@@ -43,7 +43,8 @@ The method (:func:`retarget`):
    The per-frame solve is one LM run from q0 (no seed table, no DE restarts: :data:`FRAME_OPTIONS`), so the clip
    does not depend on the machine's speed.
 4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
-   SRDF-disabled pairs ignored, ~0.2-0.4 ms a check). A colliding answer is solved again with relaxed tolerances
+   SRDF-disabled pairs ignored; its verdict through a broad phase, :mod:`.self_collision_check`: boxes, hulls, then
+   meshes, ~0.3-0.6 ms a check). A colliding answer is solved again with relaxed tolerances
    (:data:`RELAXED_TOLERANCES`) and ``scene=``, which judges the answers that meet every goal; if that answer
    collides too, the frame steps back towards the previous, collision-free one (:mod:`.collision_step`: the joints
    moving one link of the colliding pair, never those placing a foot), so it stays in the velocity box and free;
@@ -76,8 +77,8 @@ from .contacts import DEFAULT_FEET, detect_contacts, ground_height
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
 
-__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "self_collision_scene",
-           "velocity_limits_of"]
+__all__ = ["BASE_ANGULAR_SPEED", "BASE_LINEAR_SPEED", "TOLERANCES", "WEIGHTS", "retarget", "self_collision_check",
+           "self_collision_scene", "velocity_limits_of"]
 
 #: Floating base speed limits used with ``velocity_limits=True``: m/s on x, y, z (a sprinter's pelvis moves
 #: at ~10 m/s, a humanoid robot's at ~2) and rad/s on yaw, pitch, roll (a full turn in a second).
@@ -544,6 +545,15 @@ def self_collision_scene(robot):
     return Scene(robot, self_collision=True)
 
 
+@functools.lru_cache(maxsize=4)
+def self_collision_check(robot):
+    """:class:`.self_collision_check.SelfCollisionCheck` of :func:`self_collision_scene` (the same verdicts, a broad
+    phase: ~3x cheaper on G1), kept for the last few robots. Not thread-safe."""
+    from .self_collision_check import SelfCollisionCheck
+
+    return SelfCollisionCheck(self_collision_scene(robot))
+
+
 def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto", ground="auto",
              self_collision: bool = True, velocity_limits=True, seed=0, timeout: float | None = None,
              progress: bool = False) -> Clip:
@@ -575,7 +585,10 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         (frames re-solved with firm feet), ``collision_frames``, ``joint_limit_frames``, ``velocity_limit_frames``
         (frame indices), ``foot_skating_mm`` (mean and max per frame of a held foot),
         ``ground_penetration_mm`` (max sole depth below the floor), ``limb_angle_deg`` (per group legs, trunk,
-        arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second), ``scale``.
+        arms: mean and max angle between robot and source limb), ``fps`` (frames solved per second, set-up
+        excluded), ``setup_s`` (s: the clip's plan and, on a robot's first clip, its collision scene's convex
+        hulls), ``first_frame_s`` (s: the first frame's search), ``steady_fps`` (frames per second after the first:
+        the warm-started rate; NaN for a one-frame clip), ``scale``.
     """
     from .. import api  # the public solve; imported here: evoik_pin's top level imports this module
 
@@ -587,10 +600,12 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     frame_timeout = FRAME_TIMEOUT if timeout is None else float(timeout)
     if not (np.isfinite(frame_timeout) and frame_timeout > 0):
         _choice(timeout, "timeout", "None or a number of seconds > 0")
+    setup_start = time.perf_counter()
     plan = _Plan(robot, motion, mapping, scale, contacts, ground)
     v_max = velocity_limits_of(robot, velocity_limits)
     dt = 1.0 / motion.fps
-    scene = self_collision_scene(robot)  # the report counts collisions either way
+    scene = self_collision_scene(robot)  # the solver's (a colliding frame's retry); set-up, built once a robot
+    check = self_collision_check(robot)  # every other check, the report's too: collisions are counted either way
     rng = np.random.default_rng(seed)
     first_lower, first_upper = _first_bounds(robot, plan)
     n_frames = motion.frames
@@ -601,6 +616,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     holds: dict[str, np.ndarray] = {}
     q_prev = _initial_q(robot, plan)
     start = time.perf_counter()
+    setup_s, first_frame_end = start - setup_start, start
     for i in range(n_frames):
         touched = _update_holds(plan, i, holds, robot, q_prev)
         goals = _frame_goals(plan, i, holds)
@@ -624,21 +640,21 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
             q_firm = np.clip(firm.q, lower, upper)
             if _hold_slip(robot, plan, i, holds, q_firm) < _hold_slip(robot, plan, i, holds, q_new):
                 result, q_new, firmed = firm, q_firm, firmed + 1
-        if self_collision and scene.in_collision(q_new):
+        if self_collision and check.in_collision(q_new):
             again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
                               q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
                               **(FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS))
-            free = again.q if again.success and not scene.in_collision(again.q) else None
+            free = again.q if again.success and not check.in_collision(again.q) else None
             if free is None:
                 if i > 0:
-                    free = step_back_free(robot, scene, q_prev, q_new, plan.foot_joints)
+                    free = step_back_free(robot, check, q_prev, q_new, plan.foot_joints)
                 if free is None or np.array_equal(free, q_prev):
                     # no free previous frame (frame 0), or only the whole previous frame is free (the legs moved
                     # into where the arm was): step back from a free configuration drawn near the answer, inside
                     # the box, with the feet's joints where the answer put them
-                    near = free_nearby(robot, scene, q_new, lower, upper, rng, plan.foot_joints)
+                    near = free_nearby(robot, check, q_new, lower, upper, rng, plan.foot_joints)
                     if near is not None:
-                        free = step_back_free(robot, scene, near, q_new, plan.foot_joints)
+                        free = step_back_free(robot, check, near, q_new, plan.foot_joints)
                         drawn += 1
                 stepped_back += free is not None
             else:
@@ -651,15 +667,23 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         Q[i], success[i] = q_prev, result.success
         errors.append([(type(g).__name__, e[0] if e[0] is not None else e[1])  # m, or rad for a Direction
                        for g, e in zip(goals, result.goal_errors or [], strict=False)])
+        if i == 0:
+            first_frame_end = time.perf_counter()
         if progress and (i % 30 == 0 or i == n_frames - 1):
             print(f"retarget {robot.name}: frame {i + 1}/{n_frames}, success {success[:i + 1].mean():.2f}")
     elapsed = time.perf_counter() - start
     from .retarget_report import clip_report  # the quality figures: one concept per file
 
-    report = clip_report(robot, plan, Q, success, errors, v_max, dt, scene, first_lower, first_upper)
+    report = clip_report(robot, plan, Q, success, errors, v_max, dt, check, first_lower, first_upper)
     report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back, "drawn": drawn}
     report["firm_contact_frames"] = firmed
     report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
+    # apart: the one-time set-up (the clip's plan; the scene's convex hulls on a robot's first clip) and the first
+    # frame (a search from the neutral pose), then the rate of the warm-started frames after it
+    report["setup_s"] = setup_s
+    report["first_frame_s"] = first_frame_end - start
+    later = elapsed - report["first_frame_s"]
+    report["steady_fps"] = (n_frames - 1) / later if n_frames > 1 and later > 0 else float("nan")
     report["scale"] = plan.scale
     configurations = np.array([robot.full_configuration(q) for q in Q])
     fm = robot.full_model
