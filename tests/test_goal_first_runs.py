@@ -181,14 +181,16 @@ def test_the_helpers_goal_starts_call_are_loaded_before_the_clock():
 @given(st.integers(1, 300), st.integers(0, 2**31), st.booleans(), st.sampled_from([np.float32, np.float64]))
 def test_select_k_keeps_the_k_smallest_lower_index_first(k, seed, masked, dtype):
     """select_k, by insertion (k <= 64) or by a stable sort (larger k: memetic-all's goal starts rank the whole table),
-    gives the k smallest allowed entries in (distance, index) order, as NumPy's stable argsort does, ties included."""
-    from evoik_pin.solvers.search.nearest import select_k
+    gives the k smallest allowed entries in (distance, index) order, as NumPy's stable argsort does, ties included;
+    so does its insertion alone (select_few, which memetic's first runs call directly) at any k."""
+    from evoik_pin.solvers.search.nearest import select_few, select_k
 
     rng = np.random.default_rng(seed)
     d = rng.integers(0, 40, 200).astype(dtype)  # many ties
     allowed = rng.random(200) < 0.6 if masked else np.zeros(0, dtype=bool)
-    out = np.empty(k, dtype=np.int64)
-    m = select_k(d, allowed, k, out)
     index = np.nonzero(allowed)[0] if masked else np.arange(200)
     reference = index[np.argsort(d[index], kind="stable")][:k]
-    assert m == reference.size and out[:m].tolist() == reference.tolist()
+    for select in (select_k, select_few):
+        out = np.empty(k, dtype=np.int64)
+        m = select(d, allowed, k, out)
+        assert m == reference.size and out[:m].tolist() == reference.tolist()

@@ -199,13 +199,25 @@ class IKSolver:
         solver's robot, method and options, the same for the same seed."""
         if self._locked is not None:
             return self._locked.solve(target, q0, seed)
-        problem = self._on_lane(target, q0, seed) if self._lanes else None
+        problem = None
+        if self._lanes:
+            # a pose or a position on the lane of its kind (single_target_lane), here rather than behind a call: the
+            # lane's whole Python is a few us, and a control loop's calls are nearly all of this kind
+            arrays = pose_arrays(target)
+            if arrays is not None:
+                lane = self._lanes.get(arrays[1] is not None)
+                if lane is not None and lane.usable():
+                    q0 = self._lane_q0(q0, seed)
+                    out = lane.solve(arrays[0], arrays[1], q0)
+                    return out if type(out) is Result else self._go_on(self.problem(target, q0), seed, out)
+            else:
+                problem = self._goal_on_lane(target, q0, seed)
+                if type(problem) is Result:
+                    return problem
         if problem is None:
             if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
                 return self._solve_choosing(target, q0, seed)
             problem = self.problem(target, q0)
-        elif type(problem) is Result:
-            return problem
         if self._prefer != "first":
             return self._solve_choosing(problem, q0, seed)
         return self.run(problem, _rng(seed))
@@ -241,18 +253,10 @@ class IKSolver:
             stage = self._box_stage = VelocityBoxStage(self.robot)
         return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
-    def _on_lane(self, target, q0, seed) -> Result | IKProblem | None:
-        """A pose, a position or a one-goal list on the lane of its kind or goal stack (single_target_lane): the
-        Result (memetic going on from the lane's first runs when none met the tolerances); the problem of a one-goal
-        list without a lane (bound already); None for any other target."""
-        arrays = pose_arrays(target)
-        if arrays is not None:
-            lane = self._lanes.get(arrays[1] is not None)
-            if lane is None or not lane.usable():
-                return None
-            q0 = self._lane_q0(q0, seed)
-            out = lane.solve(arrays[0], arrays[1], q0)
-            return out if type(out) is Result else self._go_on(self.problem(target, q0), seed, out)
+    def _goal_on_lane(self, target, q0, seed) -> Result | IKProblem | None:
+        """A one-goal list on the lane of its goal stack (single_target_lane; :meth:`solve` puts poses and positions
+        on theirs): the Result (memetic going on from the lane's first runs when none met the tolerances); the
+        problem of a one-goal list without a lane (bound already); None for any other target."""
         if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
                 and target[0].alternatives is None and self._objective is None):
             return None

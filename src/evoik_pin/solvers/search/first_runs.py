@@ -34,7 +34,7 @@ from ...goals.stack import G_JOINT
 from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers, lm_run_buffers_basic
 from ..lm.tree_kinematics import frame_pose, tree_forward
-from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_k, table_distances
+from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_few, table_distances
 
 __all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "STAGE_Q0", "STAGE_TABLE", "first_runs",
            "first_runs_basic", "goal_first_runs", "goal_first_runs_basic"]
@@ -100,9 +100,9 @@ def _first_runs(extra, name):
         d = np.empty(F.shape[0])
         table_distances(FT, sq, f, d)
         # the nearest entries, nearest first, in one pass over the distances (the nearest alone, which q0's decision
-        # reads, is the first of them: select_k keeps argmin's order)
+        # reads, is the first of them: select_k's order, argmin's); select_few directly, the few runs' insertions
         out = np.empty(max(table_runs, 1), dtype=np.int64)
-        ranked = select_k(d, np.zeros(0, dtype=np.bool_), table_runs, out)
+        ranked = select_few(d, np.zeros(0, dtype=np.bool_), table_runs, out)
         q0_first = has_q0
         if has_q0:
             # q0's tip pose (clipped into the box) and its squared distance to the target in the table's metric
