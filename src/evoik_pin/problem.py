@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import BoundsError, ConfigurationError, OptionError
-from .goals import RelativePosition, bind, is_goal_list
+from .goals import bind, is_goal_list
+from .goals.goal import FramePair
 from .goals.registry import KIND_BEYOND_FRAME
 from .goals.stack import owned
 from .objectives import (
@@ -304,19 +305,16 @@ class IKProblem:
         picked once for both."""
         q = np.asarray(q, dtype=float)
         robot, goals = self.robot, self.goals
-        # a RelativePosition's frame a joins the same Pinocchio pass: its error from the two poses, not from a
-        # population kinematics pass of its own per goal (a retarget frame has ~10 of them)
-        paired = [g for g in goals if type(g) is RelativePosition]
+        # a two-frame goal's frame a joins the same Pinocchio pass: its errors from the two poses (pair_errors), not
+        # from a kinematics pass of its own per goal (a retargeting frame has ~10 of them)
+        paired = [g for g in goals if isinstance(g, FramePair)]
         fids = [robot.frame_id(g.frame) for g in goals] + [robot.frame_id(g.frame_a) for g in paired]
         poses = robot.frame_poses_unchecked(q, fids)
         frame_a_pose = dict(zip(map(id, paired), poses[len(goals):], strict=True))
 
         def beyond(g, T) -> tuple[float, float | None]:
             Ta = frame_a_pose.get(id(g))
-            if Ta is None:
-                return g.robot_errors(robot, q)
-            d = (T.translation - Ta.translation)[None]
-            return float(np.linalg.norm(g.vectors(Ta.rotation[None], d)[0] - g.target)), None
+            return g.robot_errors(robot, q) if Ta is None else g.pair_errors(Ta, T)
 
         poses = poses[:len(goals)]
         if self.goal_sets:

@@ -267,6 +267,11 @@ class FramePair:
         """How messages name this goal: ``frame_a -> frame_b``."""
         return f"{self.frame_a} -> {self.frame}"
 
+    def pair_errors(self, Ta, Tb) -> tuple[float, float | None]:
+        """The goal's errors (position m, rotation rad or None) for frame a's and frame b's poses ``Ta``, ``Tb``
+        (``pin.SE3``, base frame): what ``robot_errors`` reports, from poses a caller already has."""
+        raise NotImplementedError
+
 
 def check_frame_pair(frame_a, frame_b, kind: str) -> None:
     """FrameError unless ``frame_a`` and ``frame_b`` are two different frame names (non-empty strings); ``kind``

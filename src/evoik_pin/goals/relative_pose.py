@@ -95,7 +95,12 @@ class RelativePose(FramePair, Goal):
         """(position error m, rotation error rad) at ``q`` (n,), from Pinocchio's kinematics: the distance and the
         rotation angle, or with bands or free axes the errors its success test compares with the tolerances
         (:func:`.bands.band_errors`)."""
-        rel = robot.fk(q, self.frame_a).actInv(robot.fk(q, self.frame))
+        return self.pair_errors(robot.fk(q, self.frame_a), robot.fk(q, self.frame))
+
+    def pair_errors(self, Ta: pin.SE3, Tb: pin.SE3) -> tuple[float, float]:
+        """(position error m, rotation error rad) for frame a's and frame b's poses ``Ta``, ``Tb`` (base frame), as
+        :meth:`robot_errors` reports them."""
+        rel = Ta.actInv(Tb)
         if self.aux() is not None:  # bands, free axes: Pose's errors for b's pose seen from a
             pt, Rt = self.encode()
             pos, rot = band_errors(BANDED_LOG6, rel.translation[None], rel.rotation[None], pt, Rt, self.aux())

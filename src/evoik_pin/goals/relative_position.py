@@ -101,6 +101,11 @@ class RelativePosition(FramePair, Goal):
         """(position error m, None) at ``q`` (n,), from Pinocchio's kinematics."""
         return float(self.robot_population_errors(robot, np.asarray(q, dtype=float)[None])[0][0]), None
 
+    def pair_errors(self, Ta, Tb) -> tuple[float, None]:
+        """(position error m, None) for frame a's and frame b's poses ``Ta``, ``Tb`` (``pin.SE3``, base frame)."""
+        d = (Tb.translation - Ta.translation)[None]
+        return float(np.linalg.norm(self.vectors(Ta.rotation[None], d)[0] - self.target)), None
+
     def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
         """(position errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation)."""
         Ra, d, _ = pair_placements(robot, Q, self.frame_a, self.frame)
