@@ -38,6 +38,9 @@ import pinocchio as pin
 
 import evoik_pin as ev
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from docs_block import write_block  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
 BEGIN, END = "<!-- bench_all_solutions:begin -->", "<!-- bench_all_solutions:end -->"
@@ -191,13 +194,7 @@ def markdown(results: dict, command: str) -> str:
 
 def write_docs(text: str) -> None:
     """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
-    doc = DOCS.read_text() if DOCS.exists() else "# Benchmarks\n"
-    block = f"{BEGIN}\n{text}\n{END}"
-    if BEGIN in doc and END in doc:
-        doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + f"\n\n{TITLE}\n\n{block}\n"
-    DOCS.write_text(doc)
+    write_block(DOCS, BEGIN, END, text, TITLE)
 
 
 def main(argv: list[str] | None = None) -> int:

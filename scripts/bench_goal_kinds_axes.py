@@ -41,6 +41,9 @@ import pinocchio as pin
 import evoik_pin as ek
 from evoik_pin.goals import LookAt, Pose
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from docs_block import write_block  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
 BEGIN, END = "<!-- bench_goal_kinds_axes:begin -->", "<!-- bench_goal_kinds_axes:end -->"
@@ -239,13 +242,7 @@ def run(args) -> str:
 
 def write_docs(text: str) -> None:
     """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
-    doc = DOCS.read_text() if DOCS.exists() else "# Benchmarks\n"
-    block = f"{BEGIN}\n{text}\n{END}"
-    if BEGIN in doc and END in doc:
-        doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + f"\n\n{TITLE}\n\n{block}\n"
-    DOCS.write_text(doc)
+    write_block(DOCS, BEGIN, END, text, TITLE)
 
 
 def main(argv: list[str] | None = None) -> int:

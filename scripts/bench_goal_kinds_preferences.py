@@ -56,6 +56,7 @@ import bench_goal_kinds_axes as axes  # noqa: E402
 import bench_goal_kinds_balance as balance  # noqa: E402
 import bench_goal_kinds_prefer as prefer  # noqa: E402
 from bench_ik import cpu_model  # noqa: E402
+from docs_block import write_block  # noqa: E402
 
 DOCS = SCRIPTS.parent / "docs" / "BENCHMARKS.md"
 BEGIN, END = "<!-- bench_goal_kinds_preferences:begin -->", "<!-- bench_goal_kinds_preferences:end -->"
@@ -298,14 +299,8 @@ def run(args) -> str:
 
 
 def write_docs(text: str) -> None:
-    """Replace this script's section of docs/BENCHMARKS.md (between its markers), or append it."""
-    doc = DOCS.read_text(encoding="utf-8")
-    block = f"{BEGIN}\n{text}{END}"
-    if BEGIN in doc and END in doc:
-        doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + f"\n\n{TITLE}\n\n{block}\n"
-    DOCS.write_text(doc, encoding="utf-8")
+    """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
+    write_block(DOCS, BEGIN, END, text, TITLE)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -54,6 +54,7 @@ SCRIPTS = Path(__file__).resolve().parent
 sys.path.insert(0, str(SCRIPTS))
 import goal_problems as gp  # noqa: E402
 import judge_goals as jg  # noqa: E402
+from docs_block import write_block  # noqa: E402
 
 ROOT = SCRIPTS.parent
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
@@ -218,14 +219,8 @@ def header(args, argv: list[str]) -> str:
 
 
 def write_docs(text: str) -> None:
-    block = f"{BEGIN}\n{text}\n{END}"
-    doc = DOCS.read_text(encoding="utf-8")
-    if BEGIN in doc and END in doc:
-        doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + "\n\n## Whole robots: evoik_pin against pink and PlaCo (scripts/bench_goals.py)\n\n" \
-            + block + "\n"
-    DOCS.write_text(doc, encoding="utf-8")
+    """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
+    write_block(DOCS, BEGIN, END, text, "## Whole robots: evoik_pin against pink and PlaCo (scripts/bench_goals.py)")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -44,6 +44,9 @@ import evoik_pin as ev
 import evoik_pin.solvers
 from evoik_pin.robot import example_robot_data_dir
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from docs_block import write_block  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
 BEGIN, END = "<!-- bench_ik:begin -->", "<!-- bench_ik:end -->"
@@ -385,17 +388,8 @@ def markdown(results: dict, tp: dict | None, command: str) -> str:
 
 
 def write_docs(text: str) -> None:
-    block = f"{BEGIN}\n{text}\n{END}"
-    if DOCS.exists():
-        doc = DOCS.read_text()
-        if BEGIN in doc and END in doc:
-            doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-        else:
-            doc = doc.rstrip() + "\n\n## IK solvers against TRAC-IK (scripts/bench_ik.py)\n\n" + block + "\n"
-    else:
-        doc = "# Benchmarks\n\n## IK solvers against TRAC-IK (scripts/bench_ik.py)\n\n" + block + "\n"
-    DOCS.parent.mkdir(parents=True, exist_ok=True)
-    DOCS.write_text(doc)
+    """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
+    write_block(DOCS, BEGIN, END, text, "## IK solvers against TRAC-IK (scripts/bench_ik.py)")
 
 
 def main(argv=None) -> int:

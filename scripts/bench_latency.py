@@ -41,6 +41,7 @@ import evoik_pin as ek
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_ik import ROBOTS, TracIK, cpu_model, judge  # noqa: E402
+from docs_block import write_block  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
@@ -351,13 +352,8 @@ def markdown(arms: dict, profile: dict | None, talos: dict | None, command: str,
 
 
 def write_docs(text: str) -> None:
-    doc = DOCS.read_text()
-    block = f"{BEGIN}\n{text}{END}"
-    if BEGIN in doc and END in doc:
-        doc = doc[:doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip("\n") + "\n\n" + block + "\n"
-    DOCS.write_text(doc)
+    """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
+    write_block(DOCS, BEGIN, END, text, None)
 
 
 def main(argv=None) -> int:

@@ -40,6 +40,7 @@ from evoik_pin.solvers.search.seed_table import SeedTable, default_table_size, s
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_ik import cpu_model  # noqa: E402
+from docs_block import write_block  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "BENCHMARKS.md"
@@ -374,13 +375,8 @@ def markdown(r: dict, command: str) -> str:
 
 
 def write_docs(text: str) -> None:
-    block = f"{BEGIN}\n{text}\n{END}"
-    doc = DOCS.read_text()
-    if BEGIN in doc and END in doc:
-        doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = doc.rstrip() + f"\n\n{TITLE}\n\n{block}\n"
-    DOCS.write_text(doc)
+    """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
+    write_block(DOCS, BEGIN, END, text, TITLE)
 
 
 def main(argv=None) -> int:

@@ -45,6 +45,7 @@ import pinocchio as pin
 SCRIPTS = Path(__file__).resolve().parent
 sys.path.insert(0, str(SCRIPTS))
 import goal_problems as gp  # noqa: E402
+from docs_block import write_block  # noqa: E402
 
 DOCS = SCRIPTS.parent / "docs" / "BENCHMARKS.md"
 BEGIN, END = "<!-- bench_tracker:begin -->", "<!-- bench_tracker:end -->"
@@ -259,14 +260,9 @@ def tracking_rows(name: str, result: dict, steps: int) -> list[str]:
 
 
 def write_docs(text: str) -> None:
-    block = f"{BEGIN}\n{text}\n{END}"
-    doc = DOCS.read_text(encoding="utf-8")
-    if BEGIN in doc and END in doc:
-        doc = doc[: doc.index(BEGIN)] + block + doc[doc.index(END) + len(END):]
-    else:
-        doc = (doc.rstrip() + "\n\n## Motions within velocity limits: trajectories and the Tracker against pink's and "
-               "PlaCo's differential-IK step (scripts/bench_tracker.py)\n\n" + block + "\n")
-    DOCS.write_text(doc, encoding="utf-8")
+    """Replace this script's own section of docs/BENCHMARKS.md (between its markers), or append it."""
+    write_block(DOCS, BEGIN, END, text, "## Motions within velocity limits: trajectories and the Tracker against "
+                "pink's and PlaCo's differential-IK step (scripts/bench_tracker.py)")
 
 
 def main(argv: list[str] | None = None) -> int:
