@@ -8,13 +8,13 @@ import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from kernel_helpers import numeric_jacobian, rows
 
 import evoik_pin as ek
 from evoik_pin.errors import FrameError, GoalsFileError, OptionError, TargetError
 from evoik_pin.goals import Pose, RelativePosition, bind
 from evoik_pin.io.goals_file import goal_kind_name, load_goals, save_goals
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm.population_rows import task_rows
 
 HANDS = ("left_gripper", "right_gripper")
 
@@ -27,24 +27,6 @@ def baxter():
 @pytest.fixture(scope="module")
 def talos():
     return ek.load_robot("talos", floating_base=True)
-
-
-def rows(robot, goals, q):
-    """(e, E, goal errors (G, 2)) of the compiled kernel at q for a goal list."""
-    _, stack, pt, Rt = bind(robot, goals)
-    e, E, ge = np.empty(stack.rows), np.empty((stack.rows, robot.n)), np.empty((len(goals), 2))
-    task_rows(np.asarray(q, dtype=float), *robot.tree_constants(), *stack.arrays, pt, Rt, e, E, ge)
-    return e, E, ge
-
-
-def numeric_jacobian(f, q, h=1e-6):
-    """Central differences (rows, n) of f at q."""
-    cols = []
-    for k in range(q.size):
-        d = np.zeros_like(q)
-        d[k] = h
-        cols.append((f(q + d) - f(q - d)) / (2 * h))
-    return np.array(cols).T
 
 
 def direct(robot, goal, q):

@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from kernel_helpers import numeric_jacobian, rows
 from test_robot_tree import random_trees
 from urdf_helpers import joint_xml
 
@@ -19,30 +20,11 @@ from evoik_pin.errors import FrameError, OptionError, TargetError
 from evoik_pin.goals import CenterOfMass, Pose, RelativePose, bind
 from evoik_pin.goals.center_of_mass import com_batch, com_of, contact_points, polygon_distance
 from evoik_pin.problem import IKProblem
-from evoik_pin.solvers.lm.population_rows import task_rows
 
 
 @pytest.fixture(scope="module")
 def talos():
     return ek.load_robot("talos", floating_base=True)
-
-
-def rows(robot, goals, q):
-    """(e, E, goal errors (G, 2)) of the compiled kernel at q for a goal list."""
-    _, stack, pt, Rt = bind(robot, goals)
-    e, E, ge = np.empty(stack.rows), np.empty((stack.rows, robot.n)), np.empty((len(goals), 2))
-    task_rows(np.asarray(q, dtype=float), *robot.tree_constants(), *stack.arrays, pt, Rt, e, E, ge)
-    return e, E, ge
-
-
-def numeric_jacobian(f, q, h=1e-6):
-    """Central differences (rows, n) of f at q."""
-    cols = []
-    for k in range(q.size):
-        d = np.zeros_like(q)
-        d[k] = h
-        cols.append((f(q + d) - f(q - d)) / (2 * h))
-    return np.array(cols).T
 
 
 def check_com(robot, q):
