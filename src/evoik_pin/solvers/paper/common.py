@@ -9,7 +9,7 @@ import numpy as np
 
 from ...problem import Evaluation, IKProblem, shortfall_text
 from ...result import Result
-from ..options import check_choice, check_int, check_number
+from ..options import check_callback, check_choice, check_int, check_number
 
 __all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",
            "run_with_restarts"]
@@ -19,9 +19,8 @@ BOUND_HANDLING = ("clip", "reflect", "resample")
 
 
 def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
-    """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence
-    (radical inverses of the point index in the first ``dimensions`` primes): deterministic and evenly spread.
-    The same points as ``scipy.stats.qmc.Halton(d, scramble=False)``, without importing scipy.stats (0.4-2 s)."""
+    """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence,
+    as ``scipy.stats.qmc.Halton(d, scramble=False)`` gives them, without importing scipy.stats (0.4-2 s)."""
     primes: list[int] = []
     k = 2
     while len(primes) < dimensions:
@@ -95,20 +94,21 @@ def _diversities(Qs: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.nda
 class SolverRun:
     """Time, history and stopping rules of one population-solver run.
 
-    Stopping rules, checked by :meth:`stop_reason` after every generation: the best individual meets the
-    problem's tolerances; its cost is at most ``cost_tolerance`` (when given); ``max_generations``
-    reached; no improvement of the best cost for ``stall_generations`` generations (when given).
-
-    ``history["diversity"]`` is computed in batches (a copy of each population is kept until then): it
-    may lag a few dozen generations behind during the run and is complete in :meth:`result`.
+    Stopping rules, checked by :meth:`stop_reason` after every generation: ``callback(generation, population)``
+    (given the (N, n) population after every :meth:`record`) returned a truthy value; the best individual meets
+    the problem's tolerances; its cost is at most ``cost_tolerance``; ``max_generations`` reached; no improvement
+    of the best cost for ``stall_generations`` generations. ``history["diversity"]`` is computed in batches: it
+    is complete in :meth:`result`.
     """
 
     #: Populations kept before their diversities are computed in one vectorized pass.
     _DIVERSITY_BATCH = 64
 
     def __init__(self, problem: IKProblem, max_generations: int, stall_generations: int | None = None,
-                 cost_tolerance: float | None = None) -> None:
+                 cost_tolerance: float | None = None, callback=None) -> None:
         self.problem = problem
+        self.callback = check_callback(callback)
+        self._stopped_by_callback = False
         self.max_generations = check_int("max_generations", max_generations, 0)
         self.stall_generations = None if stall_generations is None else check_int(
             "stall_generations", stall_generations)
@@ -143,6 +143,8 @@ class SolverRun:
         self._pending.append(np.array(Q, dtype=float))
         for key, value in extra.items():
             self.history.setdefault(key, []).append(float(value))
+        if self.callback is not None and self.callback(self.generation, Q.copy()):
+            self._stopped_by_callback = True
         return i
 
     def _flush_diversity(self) -> None:
@@ -167,6 +169,8 @@ class SolverRun:
 
     def stop_reason(self) -> str | None:
         """Why to stop now, or None to go on."""
+        if self._stopped_by_callback:
+            return "stopped by callback"
         if self.best_succeeded:
             return "tolerance reached"
         if self.cost_tolerance is not None and self.best_cost <= self.cost_tolerance:
@@ -204,20 +208,18 @@ class SolverRun:
         )
 
 
-def run_with_restarts(solve_once, problem: IKProblem, runs: int) -> Result:
-    """Paper 002's rho: up to ``runs`` independent runs of ``solve_once()`` (a fresh population each), stopping
-    at the first run that meets the tolerances; the best run's answer is returned.
-
-    Paper 002 (section 3.4, Table 2) re-runs every algorithm up to 10 times on a point until its fitness
-    threshold is met. The returned Result counts every run: ``generations``, ``evaluations`` and ``time_s``
-    are totals, ``history`` concatenates the runs' series (each run starts with its initial population, so
-    its length is ``generations + runs``) and adds ``run`` (the run index of each entry). A run stopped by
-    its callback ends the restarts.
+def run_with_restarts(solve_once, problem: IKProblem, runs: int, max_generations: int,
+                      stall_generations: int | None = None, cost_tolerance: float | None = None,
+                      callback=None) -> Result:
+    """Paper 002's rho (section 3.4): up to ``runs`` runs of ``solve_once(run)``, each on a fresh
+    :class:`SolverRun` of the stopping options, until one meets the tolerances or is stopped by its callback;
+    the best run's Result, with ``generations``, ``evaluations`` and ``time_s`` totals over the runs and
+    ``history`` their series concatenated, plus ``run`` (the run index of each entry).
     """
     runs = check_int("runs", runs)
     results = []
     for _ in range(runs):
-        res = solve_once()
+        res = solve_once(SolverRun(problem, max_generations, stall_generations, cost_tolerance, callback))
         results.append(res)
         if res.success or res.message.startswith("stopped by callback"):
             break

@@ -12,7 +12,7 @@ from ...errors import OptionError
 from ...problem import Evaluation, IKProblem
 from ...result import Result
 from .. import register
-from ..options import check_callback, check_choice, check_fraction, check_int, check_positive
+from ..options import check_choice, check_fraction, check_int, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
 from .de_ops import (
     MUTATIONS,
@@ -35,16 +35,17 @@ DE_MUTATIONS = (*MUTATIONS, "eitheror", "trig")
 CROSSOVERS = ("bin", "exp")
 
 
-def parse_strategy(strategy: str) -> tuple[str, str]:
-    """(mutation, crossover) of a scipy-style strategy name such as ``best1bin`` or ``randtobest1exp``.
+def _key(name) -> str:
+    """``name`` lower-cased without a ``de/`` prefix and ``/``, ``-``, ``_`` separators (``DE/best/1`` -> best1)."""
+    return str(name).lower().replace("de/", "").replace("/", "").replace("-", "").replace("_", "")
 
-    Accepted: any of :data:`DE_MUTATIONS` followed by ``bin`` or ``exp`` (``currenttobest1bin``,
-    ``rand2exp``, ``eitherorbin``, ``trigbin``, ...). ``either-or`` and ``/`` or ``-`` separators are tolerated
-    (``DE/best/1/bin``).
-    """
+
+def parse_strategy(strategy: str) -> tuple[str, str]:
+    """(mutation, crossover) of a scipy-style strategy name: any of :data:`DE_MUTATIONS` followed by ``bin`` or
+    ``exp`` (``best1bin``, ``randtobest1exp``, ``trigbin``, ``DE/best/1/bin``, ...)."""
     if not isinstance(strategy, str):
         raise OptionError(f"strategy must be a string such as 'best1bin', got {strategy!r}")
-    key = strategy.lower().replace("de/", "").replace("/", "").replace("-", "").replace("_", "")
+    key = _key(strategy)
     for cx in CROSSOVERS:
         if key.endswith(cx) and key[: -len(cx)] in DE_MUTATIONS:
             return key[: -len(cx)], cx
@@ -57,7 +58,7 @@ def _mutation_name(mutation) -> str:
         if int(mutation) not in SCHEME_NUMBERS:
             raise OptionError(f"mutation scheme number must be 1-8 (paper 002, eq. 12), got {mutation}")
         return SCHEME_NUMBERS[int(mutation)]
-    key = str(mutation).lower().replace("de/", "").replace("/", "").replace("-", "").replace("_", "")
+    key = _key(mutation)
     if key not in DE_MUTATIONS:
         raise OptionError(f"unknown mutation {mutation!r}; accepted: {', '.join(DE_MUTATIONS)} or 1-8")
     return key
@@ -87,39 +88,22 @@ def de(
 ) -> Result:
     """Differential evolution over the joint vector, vectorized over the population.
 
-    Defaults follow paper 002 (Table 2): scheme 2 of eq. 12 (DE/best/1), F = 0.5, CR = 0.9, binomial
-    crossover (eq. 13), 600 generations. Paper 004's settings are ``mutation="rand1"``, ``F=0.9``,
-    ``CR=0.95``, ``bound_handling="clip"``.
+    Defaults follow paper 002 (Table 2): DE/best/1, F = 0.5, CR = 0.9, binomial crossover, 600 generations;
+    paper 004's are ``mutation="rand1"``, ``F=0.9``, ``CR=0.95``.
 
     Args:
-        problem: the IK problem (its tolerances stop the run; ``q0`` seeds the population).
-        rng: the only source of randomness.
-        population: number of individuals N (>= 3, and >= the mutation's indices + 1).
-        max_generations: generation budget (paper 002: 600).
-        stall_generations: stop after this many generations without improvement of the best cost.
-        cost_tolerance: also stop once the best cost is at most this value.
-        strategy: scipy-style name (``best1bin``, ``rand1exp``, ``currenttobest1bin``, ``randtobest1bin``,
-            ``best2bin``, ``rand2bin``, ``eitherorbin``, ``trigbin``, ...); overrides ``mutation`` and
-            ``crossover``.
-        mutation: one of paper 002's eq. 12 schemes by name or number (1 ``rand1``, 2 ``best1``, 3 ``rand2``,
-            4 ``best2``, 5 ``currenttobest1``, 6 ``currenttobest2``, 7 ``randtobest1``, 8 ``currenttorand1``),
-            ``eitheror`` (paper 004) or ``trig`` (paper 000: trigonometric mutation with probability
-            ``trig_probability``, DE/rand/1 otherwise).
-        crossover: ``bin`` (binomial, paper 002 eq. 13 / paper 004) or ``exp`` (exponential, paper 004 Alg. 2).
-        F: scale factor (> 0, at most 2).
-        CR: crossover rate in [0, 1].
-        p_F: either-or probability of using DE/rand/1 (paper 004's p_f).
-        K: either-or recombination factor; default 0.5 (F + 1) (Price, Storn & Lampinen 2005).
-        trig_probability: probability Mt of the trigonometric donor for ``mutation="trig"`` (Fan & Lampinen
-            suggest 0.05).
-        bound_handling: ``clip`` (paper 004), ``reflect`` or ``resample`` (see ``common.enforce_bounds``).
-        runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
-            ``common.run_with_restarts``; totals are reported).
-        callback: ``callback(generation, population)`` after the initial population (generation 0) and after
-            every generation, with the (N, n) population (rad or m); a truthy return value stops the run.
-
-    Returns:
-        A :class:`Result`; ``history`` adds nothing beyond best/mean cost and diversity.
+        population: number of individuals N (>= the mutation's indices + 1).
+        max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
+            :class:`~.common.SolverRun` (``callback(generation, population)``, population (N, n)).
+        strategy: scipy-style name (:func:`parse_strategy`); overrides ``mutation`` and ``crossover``.
+        mutation: one of paper 002's eq. 12 schemes by name or number 1-8 (:mod:`.de_ops`), ``eitheror``
+            (paper 004) or ``trig`` (paper 000: trigonometric donor with probability ``trig_probability``,
+            DE/rand/1 otherwise).
+        crossover: ``bin`` (binomial) or ``exp`` (exponential, paper 004 Alg. 2).
+        F: scale factor in (0, 2]. CR: crossover rate in [0, 1].
+        p_F: either-or probability of DE/rand/1. K: either-or recombination factor (default 0.5 (F + 1)).
+        bound_handling: ``clip``, ``reflect`` or ``resample`` (:func:`~.common.enforce_bounds`).
+        runs: paper 002's rho (:func:`~.common.run_with_restarts`).
     """
     if strategy is not None:
         mutation, crossover = parse_strategy(strategy)
@@ -133,21 +117,15 @@ def de(
     p_F = check_fraction("p_F", p_F)
     K = 0.5 * (F + 1.0) if K is None else check_positive("K", K, 2.0)
     trig_probability = check_fraction("trig_probability", trig_probability)
-    check_callback(callback)
-    check_int("runs", runs)
-    SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
     D = problem.n
 
-    def once() -> Result:
-        run = SolverRun(problem, max_generations, stall_generations, cost_tolerance)
-
+    def once(run: SolverRun) -> Result:
         X = initial_population(problem, rng, N)
         ev = problem.evaluate(X)
         best = run.record(X, ev)
-        reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
-        while reason is None and (reason := run.stop_reason()) is None:
+        while (reason := run.stop_reason()) is None:
             # one uniform draw per generation: indices (N x N), crossover (N x D), its start/forced coordinate
-            # and the either-or / trigonometric choice (2 x N); fewer calls keep the generation cheap
+            # and the either-or / trigonometric choice (2 x N)
             u = rng.random((N, N + D + 2))
             idx = indices_from_uniform(u[:, :N], k)
             if scheme in MUTATIONS:
@@ -166,19 +144,14 @@ def de(
             X, ev = greedy_selection(X, ev, U, problem.evaluate(U))
             run.generation += 1
             best = run.record(X, ev)
-            if callback is not None and callback(run.generation, X.copy()):
-                reason = "stopped by callback"
         return run.result("de", reason)
 
-    return run_with_restarts(once, problem, runs)
+    return run_with_restarts(once, problem, runs, max_generations, stall_generations, cost_tolerance, callback)
 
 
 def greedy_selection(X: np.ndarray, ev: Evaluation, U: np.ndarray, ev_u: Evaluation) -> tuple[np.ndarray, Evaluation]:
-    """DE's one-to-one selection: each trial U_i replaces its target X_i when its cost is no larger.
-
-    Accepting ties lets the population drift across flat regions (Storn & Price). Returns the new
-    population (N, n) and its evaluation.
-    """
+    """DE's one-to-one selection: each trial U_i replaces its target X_i when its cost is no larger (ties let
+    the population drift across flat regions); returns the new population (N, n) and its evaluation."""
     better = ev_u.cost <= ev.cost
     X = np.where(better[:, None], U, X)
     cost = np.where(better, ev_u.cost, ev.cost)

@@ -1,31 +1,14 @@
 """Differential-evolution operators on whole populations, as plain vectorized functions.
 
-Every operator takes its random draws as arguments (index matrices, uniform matrices, start positions),
-so tests can inject fixed draws and check each formula, and every solver draws them from its own
-``numpy.random.Generator``. Shapes: a population ``X`` is (N, D); index matrices are (N, k) integers
-into the population; ``F`` is a scalar or an (N,) array (one scale factor per individual).
+Every operator takes its random draws as arguments, so tests can inject fixed draws. Shapes: a population
+``X`` is (N, D); index matrices are (N, k) integers into it; ``F`` is a scalar or (N,).
 
-Mutation schemes (paper 002, eq. 12, numbered as there; the paper writes ``F_w`` for F):
-
-====  ======================  ==================================================================
- #    name                    donor vector V
-====  ======================  ==================================================================
- 1    ``rand1``               X_r1 + F (X_r2 - X_r3)
- 2    ``best1``               X_best + F (X_r1 - X_r2)
- 3    ``rand2``               X_r1 + F (X_r2 - X_r3) + F (X_r4 - X_r5)
- 4    ``best2``               X_best + F (X_r1 - X_r2) + F (X_r3 - X_r4)
- 5    ``currenttobest1``      X + F (X_r1 - X_r2) + F (X_best - X)
- 6    ``currenttobest2``      X + F (X_r1 - X_r2) + F (X_r3 - X_r4) + F (X_best - X)
- 7    ``randtobest1``         X_r1 + F (X_r2 - X_r3) + F (X_best - X_r1)
- 8    ``currenttorand1``      X + F (X_r2 - X_r3) + F (X_r1 - X)
-====  ======================  ==================================================================
-
-plus paper 004's "either-or" (:func:`either_or`: rand/1 with probability p_F, else
-X_r1 + K (X_r2 + X_r3 - 2 X_r1)) and Fan & Lampinen's trigonometric mutation used by paper 000
-(:func:`trigonometric`). Crossovers: :func:`binomial_crossover` and :func:`exponential_crossover`
-(paper 004, Algorithm 2). Index sampling: :func:`distinct_indices` / :func:`indices_from_uniform`
-(independent tuples, O(N^2 log N)) and :func:`permutation_indices` (tuples coupled through permutations,
-O(N log N); ISADE uses it).
+Paper 002's eq. 12 schemes, numbered as there: 1 ``rand1`` X_r1 + F (X_r2 - X_r3); 2 ``best1`` X_best +
+F (X_r1 - X_r2); 3 ``rand2`` X_r1 + F (X_r2 - X_r3) + F (X_r4 - X_r5); 4 ``best2`` X_best + F (X_r1 - X_r2) +
+F (X_r3 - X_r4); 5 ``currenttobest1`` X + F (X_r1 - X_r2) + F (X_best - X); 6 ``currenttobest2`` X +
+F (X_r1 - X_r2) + F (X_r3 - X_r4) + F (X_best - X); 7 ``randtobest1`` X_r1 + F (X_r2 - X_r3) + F (X_best - X_r1);
+8 ``currenttorand1`` X + F (X_r2 - X_r3) + F (X_r1 - X). Besides: paper 004's :func:`either_or`, paper 000's
+:func:`trigonometric`, the binomial and exponential crossovers, and index sampling.
 """
 
 from __future__ import annotations
@@ -44,7 +27,6 @@ __all__ = [
     "exponential_lengths",
     "indices_from_uniform",
     "mutate",
-    "n_indices",
     "permutation_indices",
     "rand1",
     "trigonometric",
@@ -65,45 +47,26 @@ MUTATIONS: dict[str, int] = {
 SCHEME_NUMBERS: dict[int, str] = {i + 1: name for i, name in enumerate(MUTATIONS)}
 
 
-def n_indices(scheme: str) -> int:
-    """Number of distinct random indices (besides the individual itself) ``scheme`` needs."""
-    if scheme not in MUTATIONS:
-        raise OptionError(f"unknown mutation scheme {scheme!r}; known: {', '.join(MUTATIONS)}")
-    return MUTATIONS[scheme]
-
-
 def distinct_indices(rng: np.random.Generator, size: int, k: int) -> np.ndarray:
-    """(size, k) indices: row i holds k distinct members of {0..size-1}, none equal to i, in random order.
-
-    Needs ``size >= k + 1``. See :func:`indices_from_uniform`, which does the work on a (size, size)
-    uniform matrix drawn here.
-    """
+    """(size, k) indices: row i holds k distinct members of {0..size-1}, none equal to i, in random order
+    (:func:`indices_from_uniform` of a uniform matrix drawn here)."""
     if size < k + 1:
         raise OptionError(f"this mutation needs a population of at least {k + 1} individuals, got {size}")
     return indices_from_uniform(rng.random((size, size)), k)
 
 
 def indices_from_uniform(R: np.ndarray, k: int) -> np.ndarray:
-    """k distinct indices per row, none equal to the row, from a uniform (N, N) matrix ``R`` (overwritten).
-
-    All rows at once: the argsort of a row of iid uniforms is a uniform random permutation; pushing the
-    diagonal to 2 puts the individual itself last, so the first k columns are k distinct others.
-    """
+    """k distinct indices per row, none equal to the row, from a uniform (N, N) matrix ``R`` (overwritten): the
+    argsort of iid uniforms is a random permutation, and a diagonal of 2 puts the row itself last."""
     np.fill_diagonal(R, 2.0)
     return np.argsort(R, axis=1)[:, :k]
 
 
 def permutation_indices(u_perm: np.ndarray, u_offsets: np.ndarray, k: int) -> np.ndarray:
-    """k distinct indices per individual, none equal to the individual, from two uniform vectors.
-
-    ``u_perm`` (N,) gives a random permutation P of the population (its argsort) and ``u_offsets``
-    (N - 1,) k distinct offsets o_1..o_k in {1..N-1} (the first k of the argsort of ``u_offsets``, plus 1);
-    the individual at position j of P gets ``r_m = P[(j + o_m) mod N]``. For every individual the tuple
-    (r_1..r_k) is uniform over ordered k-tuples of distinct other individuals, as with
-    :func:`indices_from_uniform`, but the tuples of different individuals are coupled (each column is a
-    permutation of the population, so every individual serves exactly once as r_m). Costs O(N log N)
-    instead of O(N^2 log N). Needs N >= k + 1. Returns (N, k).
-    """
+    """(N, k) distinct indices per individual, none equal to it, in O(N log N) from uniform ``u_perm`` (N,)
+    and ``u_offsets`` (N - 1,): the individual at position j of the permutation P = argsort(u_perm) gets
+    ``P[(j + o_m) mod N]`` for the k offsets o_m = the first k of argsort(u_offsets) + 1. Each tuple is
+    uniform as with :func:`indices_from_uniform`, but each column is a permutation of the population."""
     N = u_perm.shape[0]
     P = np.argsort(u_perm)
     offsets = np.argsort(u_offsets)[:k] + 1
@@ -118,16 +81,12 @@ def _as_column(F) -> np.ndarray | float:
 
 
 def mutate(X: np.ndarray, scheme: str, F, idx: np.ndarray, best: int) -> np.ndarray:
-    """Donor vectors (N, D) of paper 002's eq. 12 scheme ``scheme`` (see the module table).
-
-    Args:
-        X: population (N, D).
-        scheme: one of :data:`MUTATIONS`.
-        F: scale factor, a scalar or (N,) (one per individual).
-        idx: (N, k) distinct random indices (k >= :func:`n_indices`); column j is r_(j+1).
-        best: row of the best individual.
-    """
-    n_needed = n_indices(scheme)
+    """Donors (N, D) of paper 002's eq. 12 ``scheme`` (one of :data:`MUTATIONS`) for population ``X`` (N, D),
+    scale factor ``F``, distinct random indices ``idx`` (N, >= the scheme's count; column j is r_(j+1)) and the
+    row ``best`` of the best individual."""
+    if scheme not in MUTATIONS:
+        raise OptionError(f"unknown mutation scheme {scheme!r}; known: {', '.join(MUTATIONS)}")
+    n_needed = MUTATIONS[scheme]
     if idx.ndim != 2 or idx.shape[0] != X.shape[0] or idx.shape[1] < n_needed:
         raise OptionError(f"mutation {scheme!r} needs an index matrix of shape ({X.shape[0]}, >={n_needed}), "
                           f"got {idx.shape}")
@@ -159,11 +118,8 @@ def rand1(X: np.ndarray, F, idx: np.ndarray) -> np.ndarray:
 
 
 def either_or(X: np.ndarray, F, K, idx: np.ndarray, use_rand1: np.ndarray) -> np.ndarray:
-    """Paper 004's "either-or" donors (N, D) (Price, Storn & Lampinen 2005).
-
-    Where ``use_rand1`` (N,) bool is True (drawn with probability p_F): DE/rand/1,
-    ``X_r1 + F (X_r2 - X_r3)``; elsewhere the recombinant ``X_r1 + K (X_r2 - X_r1 + X_r3 - X_r1)``.
-    """
+    """Paper 004's "either-or" donors (N, D): DE/rand/1 where ``use_rand1`` (N,) is True, elsewhere the
+    recombinant ``X_r1 + K (X_r2 - X_r1 + X_r3 - X_r1)`` (Price, Storn & Lampinen 2005)."""
     a, b, c = X[idx[:, 0]], X[idx[:, 1]], X[idx[:, 2]]
     v_f = a + _as_column(F) * (b - c)
     v_k = a + _as_column(K) * (b + c - 2.0 * a)
@@ -171,12 +127,9 @@ def either_or(X: np.ndarray, F, K, idx: np.ndarray, use_rand1: np.ndarray) -> np
 
 
 def trigonometric(X: np.ndarray, costs: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Fan & Lampinen's (2003) trigonometric donors (N, D), as in paper 000 (section III, "Mutation").
-
+    """Fan & Lampinen's (2003) trigonometric donors (N, D), as in paper 000:
     ``V = (X_r1 + X_r2 + X_r3) / 3 + (p2 - p1)(X_r1 - X_r2) + (p3 - p2)(X_r2 - X_r3) + (p1 - p3)(X_r3 - X_r1)``
-    with ``p_k = |f(X_rk)| / (|f(X_r1)| + |f(X_r2)| + |f(X_r3)|)``: the centre of the triangle pulled towards
-    its lower-cost corners. Where the three costs are all zero, p_k = 1/3 (the centre).
-    """
+    with ``p_k = |f(X_rk)| / sum_j |f(X_rj)|`` (1/3 where all three costs are 0)."""
     i1, i2, i3 = idx[:, 0], idx[:, 1], idx[:, 2]
     x1, x2, x3 = X[i1], X[i2], X[i3]
     f = np.abs(np.stack([costs[i1], costs[i2], costs[i3]], axis=1))
@@ -187,24 +140,16 @@ def trigonometric(X: np.ndarray, costs: np.ndarray, idx: np.ndarray) -> np.ndarr
 
 
 def binomial_crossover(X: np.ndarray, V: np.ndarray, CR, u: np.ndarray, jrand: np.ndarray) -> np.ndarray:
-    """Binomial (uniform) crossover: trial ``U[i, j] = V[i, j]`` if ``u[i, j] <= CR_i`` or ``j == jrand_i``.
-
-    Args:
-        X, V: targets and donors (N, D).
-        CR: crossover rate, scalar or (N,).
-        u: (N, D) uniform draws in [0, 1).
-        jrand: (N,) one coordinate per individual always taken from the donor (so U differs from X).
-    """
+    """Binomial crossover of targets ``X`` and donors ``V`` (N, D): ``U[i, j] = V[i, j]`` where ``u[i, j] <= CR_i``
+    (u (N, D) uniform, CR scalar or (N,)) or ``j == jrand_i`` (jrand (N,): one donor coordinate always taken)."""
     take = u <= _as_column(CR)
     take[np.arange(X.shape[0]), jrand] = True
     return np.where(take, V, X)
 
 
 def exponential_lengths(CR, u: np.ndarray) -> np.ndarray:
-    """Lengths L (N,) of paper 004's Algorithm 2: ``L = 1``, then ``L += 1`` while ``u < CR`` and ``L < D``.
-
-    ``u`` (N, D) uniform draws; only its first D - 1 columns are used. So P(L >= m) = CR^(m-1).
-    """
+    """Lengths L (N,) of paper 004's Algorithm 2: ``L = 1``, then ``L += 1`` while ``u < CR`` and ``L < D``, from
+    uniform draws ``u`` (N, D) (its first D - 1 columns)."""
     D = u.shape[1]
     go_on = u[:, : D - 1] < _as_column(CR)
     # L - 1 = number of leading True values of each row

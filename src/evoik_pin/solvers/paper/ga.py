@@ -1,11 +1,6 @@
-"""Genetic algorithms: paper 001's real-coded niching GA (``ga``) and paper 000's binary GA (``ga-binary``).
-
-``ga`` (paper 001, section 3.1): binary tournaments under Oei, Goldberg & Chang's niching rule
-(:func:`niching_tournament`, :func:`niche_counts`, :func:`sharing_radius`), SBX (:func:`sbx_pairs`) and a
-mutation whose probability rises from 1/n to 1 while its spread shrinks (:func:`basic_polynomial_mutation`); the
-final population holds one cluster per solution family, whose leaders are the method's ``solutions``.
-``ga-binary`` (paper 000, section III-B): sign + magnitude bit strings per joint (:func:`decode_sign_magnitude`,
-or :func:`decode_bounds`), roulette-wheel selection, single-point crossover, bit-flip mutation and elitism.
+"""Genetic algorithms: paper 001's real-coded niching GA (``ga``, section 3.1: niching binary tournaments, SBX,
+polynomial mutation; one solution per niche of the final population) and paper 000's binary GA (``ga-binary``,
+section III-B: sign + magnitude bit strings, roulette wheel, single-point crossover, bit flips, elitism).
 """
 
 from __future__ import annotations
@@ -43,19 +38,13 @@ ENCODINGS = ("sign-magnitude", "bounds")
 
 # ------------------------------------------------------------------------------------------ real-coded GA
 def sharing_radius(n: int, niches: int) -> float:
-    """Paper 001 eq. 8: ``sigma_share = sqrt(n) / (2 r^(1/n))`` in the unit hypercube of n variables.
-
-    It splits the normalized search space into ``r`` equal hyperspheres (Deb & Goldberg 1989).
-    """
+    """Paper 001 eq. 8: ``sigma_share = sqrt(n) / (2 r^(1/n))`` in the unit hypercube of n variables."""
     return float(np.sqrt(n) / (2.0 * niches ** (1.0 / n)))
 
 
 def niche_counts(Z: np.ndarray, sigma: float) -> np.ndarray:
-    """Paper 001 eqs. 6-7: ``nc_i = sum_j Sh(d_ij)``, ``Sh(d) = 1 - d / sigma`` for d < sigma (alpha = 1).
-
-    ``Z`` (N, n) are normalized individuals; the sum includes j = i (Sh(0) = 1). All pairs at once:
-    (N, N) distances from ``|a|^2 + |b|^2 - 2 a.b``.
-    """
+    """Paper 001 eqs. 6-7: ``nc_i = sum_j Sh(d_ij)`` (j = i included), ``Sh(d) = 1 - d / sigma`` for d < sigma,
+    of normalized individuals ``Z`` (N, n)."""
     sq = np.einsum("ij,ij->i", Z, Z)
     d2 = np.maximum(sq[:, None] + sq[None, :] - 2.0 * (Z @ Z.T), 0.0)
     sh = np.maximum(1.0 - np.sqrt(d2) / sigma, 0.0)
@@ -64,12 +53,9 @@ def niche_counts(Z: np.ndarray, sigma: float) -> np.ndarray:
 
 def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pairs: np.ndarray,
                        niching: bool = True) -> np.ndarray:
-    """Winners (M,) of binary tournaments ``pairs`` (M, 2) under paper 001's niching rule.
-
-    Both niche counts below ``niche_size`` (n*): the lower cost wins; otherwise the smaller niche count
-    wins ("if one solution is overly crowded, and the other is not, the second is selected"). With
-    ``niching=False`` it is a plain binary tournament on cost. Ties go to the first contestant.
-    """
+    """Winners (M,) of binary tournaments ``pairs`` (M, 2) under paper 001's niching rule: the lower cost when
+    both niche counts are below ``niche_size`` (n*), else the smaller niche count (``niching=False``: cost
+    only). Ties go to the first contestant."""
     a, b = pairs[:, 0], pairs[:, 1]
     by_cost = np.where(cost[b] < cost[a], b, a)
     if not niching:
@@ -79,11 +65,8 @@ def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pair
 
 
 def sbx_pairs(P1: np.ndarray, P2: np.ndarray, eta: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Paper 001 eqs. 9-10, simulated binary crossover (Deb & Agrawal 1995) of parents (M, n).
-
-    ``beta = (2u)^(1/(eta+1))`` if u < 0.5 else ``(1/(2 - 2u))^(1/(eta+1))``, ``u`` (M, n) uniform; children
-    ``0.5 [(p1 + p2) -+ beta |p2 - p1|]``.
-    """
+    """Paper 001 eqs. 9-10, unbounded simulated binary crossover of parents (M, n) with uniform draws ``u``
+    (M, n): children ``0.5 [(p1 + p2) -+ beta |p2 - p1|]``."""
     beta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)),
                     (1.0 / np.maximum(2.0 - 2.0 * u, 1e-300)) ** (1.0 / (eta + 1.0)))
     mean, half = 0.5 * (P1 + P2), 0.5 * beta * np.abs(P2 - P1)
@@ -92,15 +75,9 @@ def sbx_pairs(P1: np.ndarray, P2: np.ndarray, eta: float, u: np.ndarray) -> tupl
 
 def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, mask: np.ndarray,
                               u: np.ndarray) -> np.ndarray:
-    """Paper 001 eq. 11: the basic polynomial mutation (Deb & Goyal 1996; Deb 2000) of the entries of ``X``
-    (N, n) where ``mask`` is True, with the caller's uniform draws ``u`` (N, n).
-
-    ``delta = (2u)^(1/(eta+1)) - 1`` if u < 0.5 else ``1 - (2 (1 - u))^(1/(eta+1))``, and
-    ``x += delta (upper - lower)``; the mean |delta| is about 1 / (eta + 2), so eta = 100 perturbs by ~1 %.
-    The spread ignores where x sits in the box (children may leave it: the GA clips them), unlike NSGA-II's
-    :func:`~evoik_pin.solvers.paper.nsga2_minimizer.bounded_polynomial_mutation`, whose spread shrinks towards
-    the bounds.
-    """
+    """Paper 001 eq. 11: the basic polynomial mutation (Deb 2000) of the entries of ``X`` (N, n) where ``mask``
+    is True, with uniform draws ``u`` (N, n): ``x += delta (upper - lower)``. Its spread ignores the bounds,
+    unlike :func:`~.nsga2_minimizer.bounded_polynomial_mutation`."""
     delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
                      1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
     return np.where(mask, X + delta * (upper - lower), X)
@@ -108,13 +85,12 @@ def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarra
 
 def check_niching_ga_options(population, max_generations, niches, niche_size, eta, crossover_probability
                              ) -> tuple[int, int, int, float, float, float]:
-    """The niching GA's options (shared by ``ga`` and ``hga``) checked and in canonical form; ``niche_size``
-    None becomes paper 001's proportion, n* = 200 per 750 individuals."""
+    """The niching GA's options (shared by ``ga`` and ``hga``) checked; ``niche_size`` None becomes paper 001's
+    proportion, n* = 200 per 750 individuals."""
     population = check_int("population", population, 4)
     max_generations = check_int("max_generations", max_generations, 0)
     niches = check_int("niches", niches, 1)
     if niche_size is None:
-        # Paper 001: n* = 200 for a population of 750; keep that proportion for other sizes.
         niche_size = 200.0 * population / 750.0
     niche_size = check_positive("niche_size (n*)", niche_size)
     eta = check_nonnegative("eta (SBX distribution index)", eta)
@@ -126,16 +102,12 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
                    niches: int, niche_size: float, eta: float, crossover_probability: float,
                    niching: bool = True, normalize: bool = True, archive: list | None = None,
                    callback: Callable | None = None) -> tuple[SolverRun, np.ndarray, np.ndarray]:
-    """Paper 001's real-coded GA; returns the run and the final population (N, n) with its costs (N,).
+    """Paper 001's real-coded GA for exactly ``max_generations`` generations (stopping at the first solution
+    would cut the other families short); returns the run and the final population (N, n) with its costs (N,).
 
-    Runs exactly ``max_generations`` generations (the paper's termination rule): stopping at the first
-    individual within tolerance would cut the other solution families short. Options as in :func:`ga`;
-    ``normalize`` measures niche distances in the unit hypercube of the bounds (eq. 8's sigma_share is
-    derived for it); ``archive``, when a list, receives ``(Q, cost)`` of every generation; ``callback``, when
-    given, is called as ``callback(generation, Q)`` with a copy of the population (N, n) after the initial
-    one (generation 0) and after every generation (its return value is ignored: all generations run).
-    History: ``best_cost``, ``mean_cost``, ``diversity``, ``mutation_probability`` (p_m of eq. 11) and
-    ``mean_niche_count``.
+    Options as in :func:`ga`; ``normalize`` measures niche distances in the unit hypercube of the bounds;
+    ``archive`` (a list) receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value
+    is ignored. History adds ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
     """
     n, lo, hi = problem.n, problem.lower, problem.upper
     width = np.where(hi > lo, hi - lo, 1.0)
@@ -176,11 +148,8 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
 
 def solution_leaders(problem: IKProblem, Q: np.ndarray, cost: np.ndarray, radius: float,
                      max_clusters: int | None = None, min_members: int = 1) -> np.ndarray:
-    """Leaders (M, n) of the joint-space clusters of a final population, best first.
-
-    Clusters come from :func:`~evoik_pin.solvers.paper.clustering.leader_clusters` (wrapped distance, ``radius``
-    rad); those with fewer than ``min_members`` members are dropped (stragglers, not niches).
-    """
+    """Leaders (M, n), best first, of the :func:`~.clustering.leader_clusters` of radius ``radius`` (rad) of a
+    population that hold at least ``min_members`` members."""
     leaders, labels = leader_clusters(Q, cost, radius, problem.robot.revolute, max_clusters)
     sizes = np.bincount(labels[labels >= 0], minlength=len(leaders))
     return Q[leaders[sizes >= min_members]]
@@ -192,28 +161,23 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
        niches: int = 2, niche_size: float | None = None, eta: float = 5.0, crossover_probability: float = 0.9,
        niching: bool = True, cluster_radius: float = 0.35, min_niche_fraction: float = 0.005,
        max_solutions: int = 8, callback: Callable | None = None) -> Result:
-    """Paper 001's real-coded niching GA (section 3.1).
+    """Paper 001's real-coded niching GA (section 3.1; defaults: its planar 2R settings, Table 1).
 
-    Options (defaults: paper 001's planar 2R settings, Table 1):
-        population: individuals (750; the paper uses 1000 for the PUMA).
-        max_generations: generations run, always all of them (12).
-        niches: expected number of solutions r, sets sigma_share (eq. 8) (2; the paper uses 4 for the PUMA).
-        niche_size: n*, niche-count threshold of the tournament (default 200 x population / 750, i.e. the
-            paper's 200 at population 750).
-        eta: SBX distribution index (5). crossover_probability: per pair of parents (0.9).
-        niching: False gives a plain binary tournament (for comparison).
+    Options:
+        population: individuals. max_generations: generations, always all run.
+        niches: expected number of solutions r, sets sigma_share (eq. 8).
+        niche_size: n*, niche-count threshold of the tournament (default 200 x population / 750).
+        eta: SBX distribution index. crossover_probability: per pair of parents.
+        niching: False gives a plain binary tournament.
         cluster_radius: joint-space radius (rad, wrapped) grouping the final population into solutions.
-        min_niche_fraction: a cluster counts as a solution when it holds at least this share of the
-            population (0.005, i.e. 4 of the paper's 750).
-        max_solutions: at most this many niche leaders are returned, best first (8).
-        callback: optional ``callback(generation, population)``, called with a copy of the population (N, n)
-            after the initial one (generation 0) and after every generation, e.g. to plot population
-            histories (paper 001, Figs. 7-11); its return value is ignored.
+        min_niche_fraction: share of the population a cluster needs to count as a solution.
+        max_solutions: at most this many niche leaders are returned, best first.
+        callback: ``callback(generation, population)`` with a copy of the (N, n) population after every
+            generation (0 = initial); its return value is ignored.
 
     Returns:
-        :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche
-        (its best member), best first. The GA alone is approximate (the paper reports 0.4-3.6 deg errors):
-        solutions carry ``success=False`` unless they meet the tolerance; ``hga`` polishes them.
+        :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche, best
+        first (``success=False`` unless within tolerance: the GA alone is approximate; ``hga`` polishes).
     """
     population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
         population, max_generations, niches, niche_size, eta, crossover_probability)
@@ -232,12 +196,9 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
 
 # ------------------------------------------------------------------------------------------ binary GA
 def decode_sign_magnitude(bits: np.ndarray) -> np.ndarray:
-    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B).
-
-    ``bits[..., 0]`` is the sign (1 = positive, 0 = negative), ``bits[..., 1:]`` the magnitude, most
-    significant bit first: ``theta = +-(sum_n b_n 2^n) * 180 / (2^(B-1) - 1)`` deg. With the paper's
-    B = 9 that is ``+-(sum_{n=0..7} b_n 2^n) * 180 / 255`` deg, in steps of 0.706 deg over [-180, 180].
-    """
+    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B): ``bits[..., 0]`` the
+    sign (1 = positive), the rest the magnitude, most significant first, ``theta = +-m * 180 / (2^(B-1) - 1)``
+    deg."""
     bits = np.asarray(bits)
     mag_bits = bits[..., 1:].astype(np.int64)
     m = mag_bits.shape[-1]
@@ -247,10 +208,8 @@ def decode_sign_magnitude(bits: np.ndarray) -> np.ndarray:
 
 
 def decode_bounds(bits: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """Unsigned bit strings ``bits`` (N, n, B), most significant first, mapped linearly onto the bounds.
-
-    ``q = lower + k / (2^B - 1) (upper - lower)`` with k the unsigned integer of the bits (rad or m).
-    """
+    """Unsigned bit strings ``bits`` (N, n, B), most significant first, mapped linearly onto the bounds:
+    ``q = lower + k / (2^B - 1) (upper - lower)`` (rad or m)."""
     bits = np.asarray(bits).astype(np.int64)
     B = bits.shape[-1]
     k = bits @ (1 << np.arange(B - 1, -1, -1, dtype=np.int64))
@@ -271,24 +230,16 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
               max_generations: int = 400, bits: int = 9, encoding: str = "sign-magnitude",
               crossover_probability: float = 0.9, mutation_probability: float | None = None,
               fitness_scale: float = 0.01) -> Result:
-    """Paper 000's binary GA (section III-B).
+    """Paper 000's binary GA (section III-B; defaults are its settings).
 
     Options:
-        population: chromosomes per generation (200). elite: best chromosomes kept unchanged each
-            generation (100: the paper's "each generation we allow the best 100"); the other
-            ``population - elite`` are offspring.
-        max_generations: 400 (paper). Stops earlier when the best meets the tolerances.
-        bits: bits per joint (9). encoding: ``"sign-magnitude"`` (paper: sign bit + (bits - 1) magnitude
-            bits over +-180 deg, revolute joints only) or ``"bounds"`` (unsigned, linear over each
-            joint's bounds; works for prismatic joints). Decoded values are clipped into the bounds
-            (the paper's code cannot express the AX-18's t2 above 180 deg).
-        crossover_probability: single-point crossover per pair (0.9). mutation_probability: per bit
-            (default 1 / chromosome length).
-        fitness_scale: roulette fitness is ``exp(-cost / fitness_scale)``; with the default 0.01 m it is
-            the paper's ``exp(-error)`` with the error in cm, the paper's unit.
-
-    Returns:
-        :class:`Result`; its resolution is limited by the encoding (0.7 deg at 9 bits).
+        population: chromosomes per generation. elite: best chromosomes kept unchanged each generation.
+        max_generations: stops earlier when the best meets the tolerances.
+        bits: bits per joint. encoding: ``"sign-magnitude"`` (the paper's, revolute joints only) or
+            ``"bounds"`` (unsigned, linear over each joint's bounds); decoded values are clipped into the bounds.
+        crossover_probability: single-point crossover per pair. mutation_probability: per bit (default 1 /
+            chromosome length).
+        fitness_scale: roulette fitness ``exp(-cost / fitness_scale)`` (0.01 m: the paper's error in cm).
     """
     population = check_int("population", population, 2)
     elite = check_int("elite", elite, 0)

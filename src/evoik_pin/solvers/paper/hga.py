@@ -1,15 +1,6 @@
-"""Paper 001's hybrid GA (``hga``): the niching GA finds the good regions, Nelder-Mead polishes them.
-
-Exploration (section 3.1): :func:`~evoik_pin.solvers.paper.ga.run_niching_ga` for the paper's 12 generations.
-Exploitation (section 3.2): every individual the GA evaluated is split into joint-space clusters (wrapped
-distances, :mod:`~evoik_pin.solvers.paper.clustering`); the best member of each of the best ``max_starts`` clusters is
-polished by ``scipy.optimize.minimize(method="Nelder-Mead")``, whose coefficients are exactly the paper's
-(reflection 1, expansion 2, contraction 0.5, shrink 0.5), inside the search box. Polished points that
-meet the tolerances are merged again (they often converge to the same solution) and returned as the
-distinct IK solutions, best first.
-
-A goal list (:mod:`evoik_pin.goals`) is searched the same way on its cost (``IKProblem.evaluate``: the goals'
-weighted errors), and a polished point is a solution when it meets every goal within that goal's tolerances.
+"""Paper 001's hybrid GA (``hga``): the niching GA (:func:`~.ga.run_niching_ga`) finds the good regions among
+every individual it evaluated, clustered in joint space; Nelder-Mead (the paper's coefficients) polishes each
+cluster's best member, and the polished points within tolerance, merged, are the distinct IK solutions.
 """
 
 from __future__ import annotations
@@ -33,11 +24,8 @@ def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 
                        fatol: float = 1e-13, max_evaluations: int = 2000) -> np.ndarray:
     """Nelder-Mead from ``q`` (n,) on the problem's cost, inside the search box; returns the polished q.
 
-    Revolute joints whose box spans a full turn are searched unbounded and wrapped back into the box.
-
-    The initial simplex is ``q`` plus ``simplex_size`` (rad or m) along each joint axis, stepping inwards
-    at an upper bound, so it spans the GA's niche rather than scipy's default 5 % of |q|, which collapses
-    for joints near zero. Evaluations count towards ``problem.evaluations``.
+    The initial simplex is ``q`` plus ``simplex_size`` (rad or m) along each joint axis (inwards at an upper
+    bound): it spans the GA's niche, where scipy's default 5 % of |q| collapses for joints near zero.
     """
     lo, hi = problem.lower, problem.upper
     q = np.clip(np.asarray(q, float), lo, hi)
@@ -67,22 +55,16 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         callback: Callable | None = None) -> Result:
     """Paper 001's hybrid GA (section 3.2): every IK solution at once.
 
-    Options: the GA's (``population``, ``max_generations``, ``niches``, ``niche_size``, ``eta``,
-    ``crossover_probability``: see ``ga``; defaults are paper 001's 2R settings, Table 1; its PUMA
-    settings are population 1000 and 4 niches), and:
+    Options: the GA's and ``callback`` (see :func:`~.ga.ga`), and
         cluster_radius: joint-space radius (rad, wrapped) of the clusters whose leaders are polished.
-        max_starts: polish at most this many cluster leaders, best first (24).
-        simplex_size: initial Nelder-Mead simplex edge (rad or m) (0.05).
-        xatol, fatol: Nelder-Mead stopping tolerances on the simplex (rad) and its costs (1e-10, 1e-13).
-        max_polish_evaluations: cost evaluations allowed per polish (2000).
-        solution_radius: polished solutions closer than this (rad, wrapped) are one solution (1e-4).
-        callback: optional ``callback(generation, population)`` on the GA phase, as for ``ga`` (a copy of
-            the population (N, n) after generation 0 and every generation; return value ignored).
+        max_starts: polish at most this many cluster leaders, best first.
+        simplex_size, xatol, fatol: Nelder-Mead's initial simplex edge (rad or m) and stopping tolerances.
+        max_polish_evaluations: cost evaluations allowed per polish.
+        solution_radius: polished solutions closer than this (rad, wrapped) are one solution.
 
     Returns:
-        :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution
-        that meets the tolerances (a goal list: every goal's, each solution with its ``goal_errors``), best first
-        (empty, with a message, when none does, e.g. an unreachable target).
+        :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution that
+        meets the tolerances (a goal list: every goal's), best first; empty, with a message, when none does.
     """
     population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
         population, max_generations, niches, niche_size, eta, crossover_probability)
@@ -94,9 +76,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     archive: list = []
     run, _, _ = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                crossover_probability, archive=archive, callback=callback)
-    # The good areas are taken from every individual the GA evaluated, not only the last generation: in
-    # 12 generations the population may drift away from one of the solution families it had found
-    # (on the PUMA targets, the last generation alone misses about a quarter of the solutions).
+    # every individual the GA evaluated, not only the last generation, which may have drifted away from a family
     Q = np.concatenate([a[0] for a in archive])
     cost = np.concatenate([a[1] for a in archive])
     starts = solution_leaders(problem, Q, cost, cluster_radius, max_clusters=max_starts)

@@ -1,32 +1,11 @@
-"""ISADE: DE with self-adapted strategies, scale factors and crossover rates (paper 002, section 3.3).
+"""ISADE: DE with self-adapted strategies, scale factors and crossover rates (paper 002, section 3.3): ``isade``.
 
-Registered as ``isade``. ISADE (Bui, Pham & Hasegawa) is DE in which, every generation and for every
-individual at once:
-
-* the mutation strategy is drawn among DE/best/1 (eq. 14), DE/best/2 (eq. 15) and DE/rand-to-best/1
-  (eq. 16) with probabilities adapted from each strategy's success rate, as in SaDE (Qin & Suganthan
-  2005), which ISADE borrows: at the end of every learning period of ``learning_period`` generations,
-  ``p_k`` becomes proportional to (successes / trials of strategy k during the period) + a small floor,
-  so no strategy dies out; the counts then restart;
-* the scale factor combines a sigmoid of the individual's fitness rank (eq. 17) with a population mean
-  that decays from F_max to F_min with a nonlinear index (eq. 18);
-* each individual carries its own crossover rate, re-drawn with probability tau (eq. 20).
-
-Eq. 19 of paper 002 is misprinted: it reads ``F_i^iter = (F_i - F_mean^iter) / 2``, which is negative for
-most individuals. The original ISADE averages the two, ``F_i^iter = (F_i + F_mean^iter) / 2``, and so do
-we (:func:`scale_factors`).
-
-Rank convention of eq. 17 (the paper only says individuals are sorted by fitness): ascending cost gets ranks
-i = 1 (best) .. N (worst), so the best individuals take the largest steps around the best vector.
-
-Eq. 20 is applied jDE-style (Brest et al. 2006, where it comes from): the re-drawn CR_i is used for the
-individual's trial and kept only if that trial survives selection. ``CR_low`` raises the paper's lower end of 0:
-low crossover rates barely move a non-separable IK objective.
-
-Defaults beyond the paper's iter_max = 130 and rho = 10 runs (``runs``) are tuned for speed on reachable points
-(docs/BENCHMARKS.md) and are greedy: for multimodal 6-D pose targets a wider F (``F_max=0.9, F_min=0.3,
-n_iter=2``, more generations) is more reliable. Paper 002's stop at 1e-17 m is below what double-precision forward
-kinematics resolves (about 1e-16 m at 1 m from the base): use tolerances of 1e-15 m or more.
+Every generation, for every individual at once: the strategy is drawn among DE/best/1, DE/best/2 and
+DE/rand-to-best/1 (eqs. 14-16) with SaDE's success-rate probabilities, renewed every ``learning_period``
+generations; the scale factor blends a sigmoid of the fitness rank (eq. 17, rank 1 = best) with a decaying
+mean (eq. 18) by eq. 19 as in the original ISADE, ``(F_i + F_mean) / 2`` (paper 002 misprints a minus); each
+individual's crossover rate is re-drawn jDE-style (eq. 20), kept only when its trial survives.
+Paper 002's stop at 1e-17 m is below what double-precision kinematics resolves: use 1e-15 m or more.
 """
 
 from __future__ import annotations
@@ -39,7 +18,6 @@ from ...problem import IKProblem
 from ...result import Result
 from .. import register
 from ..options import (
-    check_callback,
     check_choice,
     check_fraction,
     check_int,
@@ -74,12 +52,8 @@ def sigmoid_by_rank(N: int, alpha: float) -> np.ndarray:
 
 
 def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None = None) -> np.ndarray:
-    """Eq. 17 per individual: the sigmoid of its fitness rank (:func:`sigmoid_by_rank`), shape (N,).
-
-    Ranks run from the best individual (i = 1, largest F) to the worst (i = N, smallest F); among equal
-    costs the earlier individual ranks first. ``table`` = ``sigmoid_by_rank(N, alpha)`` may be passed to
-    save its cost.
-    """
+    """Eq. 17 per individual (N,): the sigmoid of its fitness rank, best (i = 1, largest F) to worst, ties in
+    index order; ``table`` = ``sigmoid_by_rank(N, alpha)`` may be passed to save its cost."""
     if table is None:
         table = sigmoid_by_rank(costs.shape[0], alpha)
     F = np.empty(costs.shape[0])
@@ -88,11 +62,8 @@ def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None
 
 
 def mean_scale_factor(generation: int, max_generations: int, F_min: float, F_max: float, n_iter: float) -> float:
-    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter``.
-
-    ``generation`` is the generation being produced (1..max_generations): F_mean decays from nearly F_max
-    to F_min, faster early on for larger ``n_iter``.
-    """
+    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter`` for the generation
+    being produced (1..max_generations)."""
     frac = max(max_generations - generation, 0) / max(max_generations, 1)
     return F_min + (F_max - F_min) * frac**n_iter
 
@@ -104,19 +75,14 @@ def scale_factors(F_rank: np.ndarray, F_mean: float) -> np.ndarray:
 
 def adapt_crossover_rates(CR: np.ndarray, u1: np.ndarray, u2: np.ndarray, tau: float, CR_low: float = 0.0
                           ) -> np.ndarray:
-    """Eq. 20: ``CR_i <- CR_low + (1 - CR_low) u2_i`` where ``u1_i <= tau``, else unchanged.
-
-    u1, u2 (N,) uniform draws in [0, 1); the paper's ``rand_2`` is ``u2`` (``CR_low = 0``).
-    """
+    """Eq. 20: ``CR_i <- CR_low + (1 - CR_low) u2_i`` where ``u1_i <= tau``, else unchanged; u1, u2 (N,) uniform
+    draws in [0, 1) (the paper: ``CR_low = 0``)."""
     return np.where(u1 <= tau, CR_low + (1.0 - CR_low) * u2, CR)
 
 
 def strategy_probabilities(successes: np.ndarray, trials: np.ndarray, floor: float = 0.01) -> np.ndarray:
-    """Strategy probabilities (K,) from success and trial counts (K,) of one learning period (SaDE).
-
-    ``p_k`` is proportional to ``successes_k / trials_k + floor``; a strategy not tried counts as fully
-    successful (rate 1), so it gets tried.
-    """
+    """SaDE's strategy probabilities (K,): ``p_k`` proportional to ``successes_k / trials_k + floor`` over one
+    learning period's counts (K,); a strategy not tried counts as fully successful, so it gets tried."""
     rate = (np.asarray(successes, float) + 1e-12) / (np.asarray(trials, float) + 1e-12)
     w = rate + floor
     return w / w.sum()
@@ -132,19 +98,9 @@ _DONOR_TEMPLATE = np.array([
 
 
 def isade_donors(X: np.ndarray, F: np.ndarray, E: np.ndarray, strategy: np.ndarray) -> np.ndarray:
-    """Donors (N, D) with a per-individual strategy: 0 = DE/best/1 (eq. 14), 1 = DE/best/2 (eq. 15),
-    2 = DE/rand-to-best/1 (eq. 16).
-
-    Args:
-        X: population (N, D).
-        F: (N,) scale factors.
-        E: (N, 5) indices: distinct random r1..r4 (none equal to the row) in columns 0-3, the best
-            individual in column 4.
-        strategy: (N,) ints in {0, 1, 2}.
-
-    All three are written as ``X_base + F (X_a - X_b) + F (X_c - X_d)`` so the whole population is built
-    from one gather whatever the mix of strategies.
-    """
+    """Donors (N, D) of population ``X`` (N, D) with scale factors ``F`` (N,) and a per-individual ``strategy``
+    (N,): 0 = DE/best/1 (eq. 14), 1 = DE/best/2 (eq. 15), 2 = DE/rand-to-best/1 (eq. 16). ``E`` (N, 5): distinct
+    random others r1..r4 in columns 0-3, the best individual in column 4. All from one gather."""
     N = X.shape[0]
     G = X[E[np.arange(N)[:, None], _DONOR_TEMPLATE[strategy]]]  # (N, 5, D)
     return G[:, 0] + F[:, None] * ((G[:, 1] - G[:, 2]) + (G[:, 3] - G[:, 4]))
@@ -172,27 +128,24 @@ def isade(
     runs: int = 10,
     callback: Callable | None = None,
 ) -> Result:
-    """ISADE over the joint vector, vectorized over the population (paper 002, eqs. 14-20).
+    """ISADE over the joint vector, vectorized over the population (paper 002, eqs. 14-20). Defaults beyond the
+    paper's 130 generations and rho = 10 are tuned for speed on reachable points; multimodal 6-D pose targets
+    want a wider F (``F_max=0.9, F_min=0.3, n_iter=2``) and more generations.
 
     Args:
-        problem: the IK problem (its tolerances stop the run; ``q0`` seeds the population).
-        rng: the only source of randomness.
         population: number of individuals N (>= 6).
-        max_generations: generation budget iter_max (paper 002: 130); it also sets the F schedule (eq. 18).
-        stall_generations: stop after this many generations without improvement of the best cost.
-        cost_tolerance: also stop once the best cost is at most this value.
+        max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
+            :class:`~.common.SolverRun`; ``max_generations`` also sets the F schedule (eq. 18).
         F_min, F_max: bounds of the mean scale factor (eq. 18), 0 < F_min <= F_max <= 2.
         n_iter: nonlinear modulation index of eq. 18 (> 0).
         alpha: gain of the rank sigmoid (eq. 17), >= 0 (0 gives F_i = 0.5 for everyone).
         tau: probability of re-drawing an individual's CR (eq. 20).
         CR_init: every individual's crossover rate at the start, in [0, 1].
-        CR_low: lower end of the uniform re-draw of eq. 20 (the paper: 0), in [0, 1].
+        CR_low: lower end of the uniform re-draw of eq. 20 (the paper: 0; low rates barely move a
+            non-separable IK objective), in [0, 1].
         learning_period: generations between updates of the strategy probabilities.
-        bound_handling: ``clip``, ``reflect`` or ``resample`` (see ``common.enforce_bounds``).
-        runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
-            ``common.run_with_restarts``; totals are reported).
-        callback: ``callback(generation, population)`` after the initial population (generation 0) and after
-            every generation, with the (N, n) population; a truthy return value stops the run.
+        bound_handling: ``clip``, ``reflect`` or ``resample`` (:func:`~.common.enforce_bounds`).
+        runs: paper 002's rho (:func:`~.common.run_with_restarts`).
 
     Returns:
         A :class:`Result` whose ``history`` adds ``F_mean`` (eq. 18), ``CR_mean`` and the strategy
@@ -208,14 +161,8 @@ def isade(
     CR_low = check_fraction("CR_low", CR_low)
     learning_period = check_int("learning_period", learning_period)
     check_choice("bound_handling", bound_handling, BOUND_HANDLING)
-    check_callback(callback)
-    check_int("runs", runs)
-    SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
 
-    def once() -> Result:
-        run = SolverRun(problem, max_generations, stall_generations, cost_tolerance)
-        iter_max = run.max_generations
-
+    def once(run: SolverRun) -> Result:
         K = len(ISADE_STRATEGIES)
         counts = np.zeros(2 * K)  # trials that failed (0..K-1) and succeeded (K..2K-1) per strategy this period
         probs = np.full(K, 1.0 / K)
@@ -227,9 +174,8 @@ def isade(
         ev = problem.evaluate(X)
         best = run.record(X, ev, F_mean=F_max, CR_mean=CR_init, p_best1=probs[0], p_best2=probs[1],
                           p_randtobest1=probs[2])
-        reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
         c_jrand, c_strategy, c_tau, c_cr, c_perm, c_offsets = D, D + 1, D + 2, D + 3, D + 4, D + 5
-        while reason is None and (reason := run.stop_reason()) is None:
+        while (reason := run.stop_reason()) is None:
             g = run.generation + 1
             # One uniform draw serves the generation: crossover (N x D), the crossover's forced coordinate,
             # the strategy choice, the CR adaptation (3 x N) and the index sampling (2 x N).
@@ -238,7 +184,7 @@ def isade(
             E[:, :4] = permutation_indices(u[:, c_perm], u[: N - 1, c_offsets], 4)
             E[:, 4] = best
             strategy = np.searchsorted(cum_probs, u[:, c_strategy], side="right")
-            F_mean = mean_scale_factor(g, iter_max, F_min, F_max, n_iter)
+            F_mean = mean_scale_factor(g, run.max_generations, F_min, F_max, n_iter)
             F = scale_factors(rank_scale_factors(ev.cost, alpha, table), F_mean)
             CR_trial = adapt_crossover_rates(CR, u[:, c_tau], u[:, c_cr], tau, CR_low)
             V = isade_donors(X, F, E, strategy)
@@ -256,8 +202,6 @@ def isade(
             run.generation = g
             best = run.record(X, ev, F_mean=F_mean, CR_mean=CR.sum() / N, p_best1=probs[0], p_best2=probs[1],
                               p_randtobest1=probs[2])
-            if callback is not None and callback(g, X.copy()):
-                reason = "stopped by callback"
         return run.result("isade", reason)
 
-    return run_with_restarts(once, problem, runs)
+    return run_with_restarts(once, problem, runs, max_generations, stall_generations, cost_tolerance, callback)

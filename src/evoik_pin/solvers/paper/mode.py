@@ -1,35 +1,12 @@
 """Paper 000's multi-objective differential evolution (``mode``), Pseudocode 1.
 
-Two objectives of a configuration q (section IV), both minimized:
-
-* ``f1 = 1 - exp(-||P - P_e(q)|| / l)``: position error squashed into [0, 1); l = ``length_scale``,
-  1 m by default, i.e. the paper's ``1 - exp(-error)`` with the error in SI units;
-* ``f2 = max_k |q_k - q_init,k|``: maximum angular displacement (rad) from the initial configuration
-  (``problem.q0``, zeros when none is given).
-
-They are combined as ``f = w1 f1 + w2 f2`` with weights recomputed every generation from the previous
-generation's best individual b by Gabli et al.'s equitable treatment
-``w_h(g) = sum_{k != h} |f_k(b)| / ((H - 1) sum_k |f_k(b)|)``, so ``0 <= w_h <= 1`` and ``sum_h w_h = 1``.
-"Best" is read as the individual closest to the target (the IK goal); with f1 small and f2 not, w1 grows
-towards 1 and the search closes in on the target while the w2 f2 term, about as large as w1 f1 near b,
-prefers the smaller displacement among nearly equal positions.
-
-Per generation and individual (Pseudocode 1): a draw m ~ U(0, 1); if ``m < P_m`` the donor is Fan &
-Lampinen's trigonometric mutation when ``m <= Mt`` (variant with trigonometric mutation) and DE/rand/1
-otherwise, else the individual is left as it is; the trial takes the donor's coordinates by binomial
-crossover with probability ``P_c`` (or, in the "fixed" variant, the whole donor with probability ``P_c``,
-Pseudocode 1 steps 9-11);
-greedy selection keeps the better of target and trial under the current weights. ``P_c`` and ``P_m``
-adapt per individual as in Zhao & Qiao (after Srinivas & Patnaik): with f minimized,
-``P = C (f - f_min) / (f_avg - f_min)`` for ``f <= f_avg`` and ``P = C`` otherwise (C = Cr or M), the
-paper's ``C (f_max - f) / (f_max - f_avg)`` for its maximized fitness: good individuals are disturbed less.
-
-The trigonometric share Mt: the paper gives no value; its pseudocode nests ``m <= Mt`` inside ``m < P_m`` on one
-draw, so Mt < M = 0.2 splits the mutation draw between the two donors. The adaptive rule freezes the best
-individual (P_m = P_c = 0), so progress rests on how fast the population contracts, which the trigonometric donor
-drives: too small an Mt stalls with a diverse population, Mt >= M collapses early onto compromise points. The
-default Mt = 0.125 was measured on random reachable targets (docs/BENCHMARKS.md, with the readings of "best" and
-the variants measured and not adopted).
+Two minimized objectives of a configuration q (section IV): ``f1 = 1 - exp(-||P - P_e(q)|| / l)`` (position
+error, l = ``length_scale``) and ``f2 = max_k |q_k - q_init,k|`` (rad; q_init = ``problem.q0`` or zeros),
+combined as ``w1 f1 + w2 f2`` with Gabli et al.'s equitable weights (:func:`equitable_weights`) of the previous
+generation's individual closest to the target. Per individual: a draw m; if ``m < P_m`` a trigonometric donor
+(``m <= Mt``) or DE/rand/1, crossed binomially (or whole, the "fixed" variant) with probability ``P_c``; greedy
+selection under the current weights. ``P_c``, ``P_m`` adapt as in Zhao & Qiao (:func:`adaptive_probability`).
+The paper gives no Mt; the default 0.125 and the readings not adopted are measured in docs/BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -56,11 +33,8 @@ VARIANTS: dict[str, tuple[str, bool]] = {
 
 
 def equitable_weights(f_best: np.ndarray, previous: np.ndarray | None = None) -> np.ndarray:
-    """Gabli et al.'s equitable weights (H,) from the objective values (H,) of the previous best.
-
-    ``w_h = sum_{k != h} |f_k| / ((H - 1) sum_k |f_k|)``. When every |f_k| is 0 the weights are undefined;
-    ``previous`` (or equal weights) is returned.
-    """
+    """Gabli et al.'s equitable weights (H,) ``w_h = sum_{k != h} |f_k| / ((H - 1) sum_k |f_k|)`` of the previous
+    best's objective values (H,); ``previous`` (or equal weights) when every |f_k| is 0."""
     f = np.abs(np.asarray(f_best, float))
     H = f.size
     total = f.sum()
@@ -70,11 +44,8 @@ def equitable_weights(f_best: np.ndarray, previous: np.ndarray | None = None) ->
 
 
 def adaptive_probability(cost: np.ndarray, C: float) -> np.ndarray:
-    """Zhao & Qiao's adaptive probability (N,) for minimized ``cost`` (N,) and base probability ``C``.
-
-    ``C (f - f_min) / (f_avg - f_min)`` where ``f <= f_avg``, ``C`` elsewhere (and everywhere when all
-    costs are equal): the best individual is never disturbed, the worse half always with probability C.
-    """
+    """Zhao & Qiao's adaptive probability (N,) for minimized ``cost`` (N,): ``C (f - f_min) / (f_avg - f_min)``
+    where ``f <= f_avg``, ``C`` elsewhere (everywhere when all costs are equal)."""
     f_min, f_avg = cost.min(), cost.mean()
     if not f_avg > f_min:
         return np.full(cost.shape, C)
@@ -82,10 +53,8 @@ def adaptive_probability(cost: np.ndarray, C: float) -> np.ndarray:
 
 
 def nondominated_2d(F: np.ndarray) -> np.ndarray:
-    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized), sorted by the first objective.
-
-    Sort by (f1, f2); a point is kept when its f2 is below every f2 before it. Exact duplicates keep one.
-    """
+    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized), sorted by the first objective; exact
+    duplicates keep one."""
     order = np.lexsort((F[:, 1], F[:, 0]))
     f2 = F[order, 1]
     prev_min = np.concatenate([[np.inf], np.minimum.accumulate(f2)[:-1]])
@@ -120,27 +89,20 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     """Paper 000's multi-objective DE (Pseudocode 1; defaults are its parameters).
 
     Options:
-        population: Np (150). max_generations: g_max (200); the run also stops when the best meets the
-            tolerances.
-        variant: ``"binomial-trigonometric"`` (c, the paper's method), ``"binomial"`` (b, no
-            trigonometric mutation) or ``"fixed"`` (a: the whole donor is taken with the fixed probability
-            Cr, DE/rand/1 donors).
-        mutation_probability: M (0.2). crossover_rate: Cr (0.8). scale_factor: F (0.2).
-        trigonometric_probability: Mt (0.125; the paper gives none, Fan & Lampinen use 0.05, see the module
-            docstring for how it was measured): a mutated individual (m < P_m) gets a trigonometric donor
-            when m <= Mt, a DE/rand/1 donor otherwise.
-        adaptive: Zhao & Qiao's adaptive P_c and P_m (True); False keeps P_c = Cr and P_m = M.
+        population: Np. max_generations: g_max (the run also stops when the best meets the tolerances).
+        variant: ``"binomial-trigonometric"`` (c, the paper's method), ``"binomial"`` (b) or ``"fixed"`` (a: the
+            whole DE/rand/1 donor taken with probability Cr).
+        mutation_probability: M. crossover_rate: Cr. scale_factor: F. trigonometric_probability: Mt.
+        adaptive: Zhao & Qiao's adaptive P_c and P_m; False keeps P_c = Cr and P_m = M.
         bound_handling: ``"clip"``, ``"reflect"`` or ``"resample"`` for donors outside the bounds.
-        front_size: at most this many points kept in the non-dominated archive (100).
-        length_scale: l (m) of ``f1 = 1 - exp(-error / l)`` (1.0).
+        front_size: at most this many points kept in the non-dominated archive.
+        length_scale: l (m) of ``f1``.
 
     Returns:
-        :class:`Result` with ``q`` the final generation's best weighted individual (the paper's
-        ``argmax f``), ``cost`` the problem's own objective at q, ``front`` the non-dominated set of
-        (position error m, max displacement rad) met during the run, and history series ``w1``, ``w2``
-        (weights used in each generation), ``best_fitness`` (least weighted cost f of the generation),
-        ``best_position_error`` (m), ``best_displacement`` (rad), beside ``diversity`` (mean normalized
-        distance to the centroid).
+        :class:`Result` with ``q`` the final generation's best weighted individual (the paper's ``argmax f``),
+        ``front`` the non-dominated (position error m, max displacement rad) met during the run, and history
+        series ``w1``, ``w2``, ``best_fitness`` (least weighted cost), ``best_position_error`` (m),
+        ``best_displacement`` (rad).
     """
     population = check_int("population", population, 5)
     max_generations = check_int("max_generations", max_generations, 0)

@@ -1,14 +1,7 @@
-"""Particle swarm optimization with a linearly varying inertia weight (paper 002, section 3.1).
+"""Particle swarm optimization with a linearly varying inertia weight (paper 002, section 3.1, eq. 11): ``pso``.
 
-Registered as ``pso``. Every particle i has a position x_i (a joint vector), a velocity v_i and its best
-position so far p_i; g is the swarm's best. One iteration, all particles at once (paper 002, eq. 11):
-
-    v_i <- w v_i + c1 r1 (p_i - x_i) + c2 r2 (g - x_i),        x_i <- x_i + v_i
-
-with r1, r2 uniform in [0, 1) per particle and coordinate, c1 = c2 = 1.5 and the inertia weight varied
-linearly over the iterations, ``w = w_start + (iter / iter_max)(w_end - w_start)`` (paper 002, Table 2).
-Velocities are clamped to ``velocity_clamp`` x (upper - lower) per joint, the classic guard against
-swarm explosion (the paper does not give its clamp).
+``v_i <- w v_i + c1 r1 (p_i - x_i) + c2 r2 (g - x_i)``, ``x_i <- x_i + v_i`` for all particles at once, with
+velocities clamped per joint (the paper gives no clamp).
 """
 
 from __future__ import annotations
@@ -21,7 +14,7 @@ from ...objectives import PoseDistance
 from ...problem import IKProblem
 from ...result import Result
 from .. import register
-from ..options import check_callback, check_choice, check_int, check_nonnegative, check_positive
+from ..options import check_choice, check_int, check_nonnegative, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
 
 __all__ = ["RANDOM_FACTORS", "TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
@@ -39,18 +32,9 @@ def inertia_weight(iteration: int, max_iterations: int, w_start: float, w_end: f
 
 def pso_step(X: np.ndarray, V: np.ndarray, P: np.ndarray, g: np.ndarray, w: float, c1: float, c2: float,
              r1: np.ndarray, r2: np.ndarray, v_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One velocity and position update (eq. 11) of a swarm, with velocity clamping.
-
-    Args:
-        X, V, P: positions, velocities and personal bests (N, D); g: global best (D,) or each particle's
-            neighbourhood best (N, D).
-        w, c1, c2: inertia weight, cognitive and social coefficients.
-        r1, r2: uniform draws in [0, 1), (N, D) or one per particle (N, 1).
-        v_max: (D,) velocity limit per coordinate (rad/iteration or m/iteration).
-
-    Returns:
-        The new positions and velocities (N, D), before any bound handling.
-    """
+    """One update (eq. 11) of positions ``X``, velocities ``V`` given personal bests ``P`` (N, D), the guide
+    ``g`` (D,) or (N, D), uniform draws ``r1``, ``r2`` (N, D) or (N, 1) and the velocity limit ``v_max`` (D,)
+    (rad or m per iteration); returns the new positions and velocities (N, D), before bound handling."""
     V = w * V + c1 * r1 * (P - X) + c2 * r2 * (g - X)
     V = np.minimum(np.maximum(V, -v_max), v_max)
     return X + V, V
@@ -89,33 +73,22 @@ def pso(
     """Particle swarm optimization over the joint vector, vectorized over the swarm (paper 002, eq. 11).
 
     Args:
-        problem: the IK problem (its tolerances stop the run; ``q0`` seeds the swarm).
-        rng: the only source of randomness.
         population: number of particles N (>= 2).
-        max_generations: iteration budget iter_max (paper 002: 600); it also sets the inertia schedule.
-        stall_generations: stop after this many iterations without improvement of the best cost.
-        cost_tolerance: also stop once the best cost is at most this value.
-        w_start, w_end: inertia weight at the first and the last iteration (Shi & Eberhart's 0.9 -> 0.4).
-        c1, c2: cognitive and social coefficients (paper 002: 1.5 and 1.5).
+        max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
+            :class:`~.common.SolverRun`; ``max_generations`` also sets the inertia schedule.
+        w_start, w_end: inertia weight at the first and the last iteration (linear in between).
+        c1, c2: cognitive and social coefficients.
         velocity_clamp: velocity limit as a fraction of each joint's search range, in (0, 1].
-        topology: ``global`` (paper 002: every particle follows the swarm's best g) or ``ring`` (lbest: each
-            particle follows the best personal best among itself and its two ring neighbours, which
-            slows the swarm's collapse).
-        random_factors: ``per-coordinate`` (r1, r2 drawn for every particle and joint: eq. 11 indexes them
-            by coordinate d) or ``per-particle`` (one r1 and one r2 per particle, MATLAB's scalar ``rand``):
-            the step then stays in the plane of (p_i - x_i) and (g - x_i), so the swarm can follow a curved
-            valley that is not aligned with the joint axes (with ``pose_metric="euclidean"``, what 6-D pose
-            targets need).
-        reinit_stagnant: when given, a particle whose personal best has not improved for this many iterations
-            is re-initialised (position uniform in the box, velocity uniform in the clamp, personal best
-            reset to the new position); the particle with the best personal best is never re-initialised.
-            Default off.
-        bound_handling: ``clip`` (particles stop at the violated bound and lose that velocity component),
-            ``reflect`` or ``resample`` (see ``common.enforce_bounds``; velocities unchanged).
-        runs: paper 002's rho: up to this many independent runs until the tolerances are met (see
-            ``common.run_with_restarts``; totals are reported).
-        callback: ``callback(generation, positions)`` after the initial swarm (generation 0) and after every
-            iteration, with the (N, n) positions; a truthy return value stops the run.
+        topology: ``global`` (paper 002: the swarm's best guides) or ``ring`` (the best personal best among a
+            particle and its two ring neighbours guides it, which slows the swarm's collapse).
+        random_factors: ``per-coordinate`` (r1, r2 per particle and joint, eq. 11) or ``per-particle`` (one
+            each per particle: the step stays in the plane of (p_i - x_i) and (g - x_i), so the swarm follows
+            curved valleys; what 6-D pose targets need, with ``pose_metric="euclidean"``).
+        reinit_stagnant: re-initialise a particle whose personal best has not improved for this many
+            iterations (never the swarm's best); default off.
+        bound_handling: ``clip`` (a particle stops at the bound and loses that velocity component),
+            ``reflect`` or ``resample`` (:func:`~.common.enforce_bounds`).
+        runs: paper 002's rho (:func:`~.common.run_with_restarts`).
 
     Returns:
         A :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
@@ -130,16 +103,10 @@ def pso(
     check_choice("topology", topology, TOPOLOGIES)
     check_choice("random_factors", random_factors, RANDOM_FACTORS)
     r_shape = (2, N, problem.n) if random_factors == "per-coordinate" else (2, N, 1)
-    check_callback(callback, "callback(generation, positions)")
-    check_int("runs", runs)
     if reinit_stagnant is not None:
         reinit_stagnant = check_int("reinit_stagnant", reinit_stagnant)
-    SolverRun(problem, max_generations, stall_generations, cost_tolerance)  # validates the stopping options
 
-    def once() -> Result:
-        run = SolverRun(problem, max_generations, stall_generations, cost_tolerance)
-        iter_max = run.max_generations
-
+    def once(run: SolverRun) -> Result:
         D = problem.n
         v_max = velocity_clamp * (problem.upper - problem.lower)
         X = initial_population(problem, rng, N)
@@ -149,10 +116,9 @@ def pso(
         stagnant = np.zeros(N, dtype=int)  # iterations since each personal best last improved
         run.record(X, ev, w=w_start)
         g_best = run.best_q
-        reason = "stopped by callback" if callback is not None and callback(0, X.copy()) else None
-        while reason is None and (reason := run.stop_reason()) is None:
+        while (reason := run.stop_reason()) is None:
             it = run.generation + 1
-            w = inertia_weight(it, iter_max, w_start, w_end)
+            w = inertia_weight(it, run.max_generations, w_start, w_end)
             r = rng.random(r_shape)
             guide = g_best if topology == "global" else P[ring_best(p_cost)]
             X_new, V = pso_step(X, V, P, guide, w, c1, c2, r[0], r[1], v_max)
@@ -176,11 +142,9 @@ def pso(
             run.generation = it
             run.record(X, ev, w=w)
             g_best = run.best_q  # the best position any particle has visited
-            if callback is not None and callback(it, X.copy()):
-                reason = "stopped by callback"
         return run.result("pso", reason)
 
-    result = run_with_restarts(once, problem, runs)
+    result = run_with_restarts(once, problem, runs, max_generations, stall_generations, cost_tolerance, callback)
     if (not result.success and problem.target is not None and problem.target.rotation is not None
             and not (random_factors == "per-particle" and isinstance(problem.objective, PoseDistance))):
         result.message += ("; on 6-D pose targets PSO is reliable with pose_metric='euclidean' and "
