@@ -1,13 +1,7 @@
-"""Paper 003's NSGA-II IK method (``nsga2``): a Pareto front under the pose constraint, vectorized over the population.
-
-The registered method (:func:`nsga2`) builds paper 003's problem on the generic minimizer
-:func:`~.nsga2_minimizer.nsga2_minimize` (NSGA-II with constraint domination, Deb et al. 2002; its sorting and
-selection in :mod:`.pareto_sorting`): objectives ``g = 1 / (Y + 1)`` (Yoshikawa manipulability Y of the task rows)
-and the smoothness ``S = sqrt(sum_i K_i (q_i - q_prev,i)^2)``, the equality ``f(q) = x_d`` as a constraint whose
-violation is the error above the tolerances, every new individual repaired by damped-least-squares steps
-(:mod:`.task_repair`), and the first-front member with the best S as the answer. Here too: the goal-list form of
-the problem (:class:`GoalManipulability`, :func:`goal_task`). The minimizer's and the sorting's public names are
-re-exported, as they were defined here before.
+"""Paper 003's NSGA-II IK method (``nsga2``) on the generic :func:`~.nsga2_minimizer.nsga2_minimize`: objectives
+``g = 1 / (Y + 1)`` (Yoshikawa manipulability of the task rows) and the smoothness ``S``, the pose equality as a
+constraint, every new individual repaired by :func:`~.task_repair.dls_repair`; also for goal lists
+(:class:`GoalManipulability`, :func:`goal_task`). The minimizer's and the sorting's names are re-exported here.
 """
 
 from __future__ import annotations
@@ -27,7 +21,7 @@ from ...problem import IKProblem
 from ...result import Front, Result
 from .. import register
 from ..options import check_int, check_nonnegative_vector
-from .common import SolverRun, diversity, halton, initial_population
+from .common import SolverRun, diversity, initial_population
 from .nsga2_minimizer import NSGA2Result, bounded_polynomial_mutation, nsga2_minimize, sbx
 from .pareto_sorting import crowding_distance, dominance_matrix, nondominated_ranks, survival
 from .task_repair import _movable_rows, _task_rows, dls_repair
@@ -40,7 +34,6 @@ __all__ = [
     "dls_repair",
     "dominance_matrix",
     "goal_task",
-    "goal_rows",
     "nondominated_ranks",
     "nsga2_minimize",
     "sbx",
@@ -48,20 +41,14 @@ __all__ = [
 ]
 
 
-# ---------------------------------------------------------------------------------------------- goal lists
-def goal_rows(goal) -> list[int]:
-    """Rows (of the frame's base-frame Jacobian: vx, vy, vz, wx, wy, wz) a goal constrains, as its manipulability
-    reads them: the translation rows, and the rotation rows too for a goal that constrains orientation (a Pose)."""
-    return [0, 1, 2, 3, 4, 5] if goal.has_orientation else [0, 1, 2]
+#: Names of the rows of a base-frame Jacobian.
+ROW_NAMES = ("vx", "vy", "vz", "wx", "wy", "wz")
 
 
 class GoalManipulability(Objective):
-    """Paper 003's manipulability cost over several goal frames (a goal list): Y is the product of the singular
-    values of the stacked Jacobian rows ``rows[i]`` of ``frames[i]`` (base frame, (sum of rows, n)), that is
-    ``sqrt(det(J J^T))`` while there are at most as many rows as joints (the tip's :class:`ManipulabilityCost` for one
-    frame) and ``sqrt(det(J^T J))`` otherwise. ``form`` as :class:`ManipulabilityCost`'s: ``"inverse"`` 1 / (Y + 1)
-    (minimized), ``"negative"`` -Y, ``"value"`` Y. Y has the units of the rows' product (m per rad for translation
-    rows, 1 for rotation rows)."""
+    """Paper 003's manipulability over several goal frames: Y, the product of the singular values of the stacked
+    base-frame Jacobian rows ``rows[i]`` of ``frames[i]`` (``sqrt(det(J J^T))`` or ``sqrt(det(J^T J))``), in the
+    ``form`` of :class:`ManipulabilityCost` (``"inverse"`` 1 / (Y + 1), ``"negative"`` -Y, ``"value"`` Y)."""
 
     def __init__(self, frames, rows, form: str = "inverse") -> None:
         self._form = ManipulabilityCost("translation", form).form  # the form's check
@@ -82,8 +69,8 @@ class GoalManipulability(Objective):
 
 
 def _chosen_goals(problem: IKProblem, which) -> list[int]:
-    """Indices of the goals whose rows the manipulability reads: every goal (``which`` None), or ``which``: goal
-    indices or frame names of the goal list; OptionError otherwise."""
+    """Indices of the goals ``which`` names (indices or frames of the goal list; None: every goal), or
+    OptionError."""
     goals = problem.goals
     if which is None:
         return list(range(len(goals)))
@@ -108,19 +95,14 @@ def _chosen_goals(problem: IKProblem, which) -> list[int]:
 
 
 def _goal_manipulability(problem: IKProblem, which) -> tuple[GoalManipulability, list[str]]:
-    """The default manipulability objective of a goal list (the goals ``which`` picks, :func:`_chosen_goals`) less
-    the rows its frames never move (zero at 64 configurations spread over the box: they would make Y 0 everywhere,
-    as :func:`_movable_rows` for one target); and the names of the rows left out, for the message."""
-    goals = problem.goals
-    Q = problem.lower + halton(problem.n, 64, skip=1) * (problem.upper - problem.lower)
+    """A goal list's default manipulability objective, on the goals ``which`` picks, less the rows their frames
+    never move (:func:`~.task_repair._movable_rows`); and the names of the rows left out, for the message."""
     frames, rows, fixed = [], [], []
-    for i in _chosen_goals(problem, which):
-        J = problem.robot.jacobian_batch(Q, validate=False, frame=goals[i].frame)
-        moving = [r for r in goal_rows(goals[i]) if np.abs(J[:, r]).max() > 1e-12]
-        fixed += [f"{goals[i].frame}:{('vx', 'vy', 'vz', 'wx', 'wy', 'wz')[r]}"
-                  for r in goal_rows(goals[i]) if r not in moving]
+    for goal in (problem.goals[i] for i in _chosen_goals(problem, which)):
+        moving, still = _movable_rows(problem, [0, 1, 2, 3, 4, 5] if goal.has_orientation else [0, 1, 2], goal.frame)
+        fixed += [f"{goal.frame}:{ROW_NAMES[r]}" for r in still]
         if moving:
-            frames.append(goals[i].frame)
+            frames.append(goal.frame)
             rows.append(moving)
     if not frames:
         raise OptionError("no goal frame of the goal list moves along any of its rows; give objectives=[...]")
@@ -128,12 +110,8 @@ def _goal_manipulability(problem: IKProblem, which) -> tuple[GoalManipulability,
 
 
 def goal_task(problem: IKProblem, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The task error ``e`` (N, rows) and Jacobian ``J`` (N, rows, n) of a goal list at ``Q`` (N, n), for
-    :func:`dls_repair`: the LM kernel's own rows of every goal kind (:meth:`~evoik_pin.problem.IKProblem.goal_rows`:
-    pose, position, bands and free axes, orientation, direction, look-at, centre of mass, support polygon, relative
-    pose; each goal's rows scaled by the square root of its weight, zero inside dead-zone bands; a goal set's those
-    of the member each configuration is nearest to) with the sign :func:`dls_repair` reads, target minus current:
-    ``e = -(f(q) - target)``, ``J = d(f(q) - target)/dq``."""
+    """The task error ``e`` (N, rows) and Jacobian ``J`` (N, rows, n) of a goal list at ``Q`` (N, n) for
+    :func:`dls_repair`: :meth:`~evoik_pin.problem.IKProblem.goal_rows` with the sign it reads, ``e = target - f(q)``."""
     e, E = problem.goal_rows(Q)
     return -e, E
 
@@ -144,47 +122,27 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
           gains=None, manipulability_rows=None, manipulability_goals=None, objectives: list[Objective] | None = None,
           pick: int = -1, repair_steps: int = 3, eta_c: float = 15.0, eta_m: float = 20.0,
           crossover_probability: float = 0.9, mutation_probability: float | None = None) -> Result:
-    """Paper 003's NSGA-II IK (section 3): a Pareto front under the constraint ``f(q) = x_d``.
-
-    A goal list (:mod:`evoik_pin.goals`, several frames) is the same problem with ``f(q) = x_d`` for every goal:
-    the constraint's violation is the sum over the goals of each one's error beyond its own tolerances
-    (:meth:`~evoik_pin.problem.IKProblem.goal_violation`), so a feasible point meets every goal; the objectives stay
-    the paper's two, manipulability and smoothness, the manipulability Y taken over the stacked Jacobian rows of
-    every goal frame (:class:`GoalManipulability`: the translation rows of each goal, the rotation rows of a Pose
-    too; ``manipulability_goals`` picks fewer goals), and the repair steps zero every goal's rows at once
-    (:func:`goal_task`: the LM kernel's rows of every goal kind, each goal's rows scaled by the square root of its
-    weight; a goal set's those of the member each individual is nearest to).
+    """Paper 003's NSGA-II IK (section 3): a Pareto front under the constraint ``f(q) = x_d`` (a goal list: every
+    goal within its own tolerances, :meth:`~evoik_pin.problem.IKProblem.goal_violation`).
 
     Options:
-        population: 200 (paper). max_generations: offspring generations (100), always all run.
+        population, max_generations: offspring generations, always all run.
         gains: K (n,) of the smoothness ``S = sqrt(sum K_i (q_i - q_prev,i)^2)`` (default ones); q_prev is
-            ``problem.q0`` (``solve_trajectory`` passes the previous solution), zeros when none.
-        manipulability_rows: Jacobian rows of ``Y = sqrt(det(J J^T))`` (default the task's rows:
-            "planar" (vx, vy, wz) for planar yaw targets, translation for 3-D positions, all six for poses,
-            less the rows along which the chain can never move its tip, such as vz for a planar arm given a
-            3-D target: those would make ``Y`` 0 everywhere; the message names them). One target only.
-        manipulability_goals: a goal list: the goals (indices into the list, or their frames) whose rows the
-            manipulability reads (default every goal), less the rows their frames never move.
-        objectives: replace the default ``[ManipulabilityCost(rows, "inverse"), WeightedJointDisplacement]``
-            with any list of :class:`~evoik_pin.objectives.Objective` (all minimized).
+            ``problem.q0`` (zeros when none).
+        manipulability_rows: one target: Jacobian rows of ``Y = sqrt(det(J J^T))`` (default the task's rows, less
+            those along which the chain never moves its tip; the message names them).
+        manipulability_goals: a goal list: the goals (indices or frames) whose rows Y reads (default all).
+        objectives: replace the default ``[ManipulabilityCost(rows, "inverse"), WeightedJointDisplacement]`` by
+            any list of :class:`~evoik_pin.objectives.Objective` (all minimized).
         pick: objective index minimized when choosing ``q`` from the front (-1: the last, S).
-            (Custom objectives of a goal list receive the kinematics of the robot's tip: terms of ``q`` alone,
-            such as :class:`~evoik_pin.objectives.WeightedJointDisplacement`, or :class:`GoalManipulability`.)
-        repair_steps: damped-least-squares steps towards the target applied to every new individual
-            (3; the initial population gets four times as many, as the paper starts from a feasible
-            population), weighted by 1 / K so they too spare the high-gain joints. 0 runs the plain
-            algorithm, whose random individuals almost never meet a tight
-            equality tolerance: then loosen ``tolerance``.
-        eta_c, eta_m, crossover_probability, mutation_probability: SBX / polynomial mutation (15, 20, 0.9,
-            1/n).
+        repair_steps: damped-least-squares steps (weighted by 1 / K) applied to every new individual (the initial
+            population gets four times as many); 0 runs the plain algorithm.
+        eta_c, eta_m, crossover_probability, mutation_probability: SBX / polynomial mutation (default 1/n).
 
     Returns:
-        :class:`Result` whose ``front`` holds the first front (q (M, n), objectives (M, k), violation (M,)
-        with violation = position error above ``tolerance`` (m) + orientation error above
-        ``rotation_tolerance`` (rad)), sorted by the first objective, and whose ``q`` is its member with the
-        least objective ``pick`` among the feasible ones (the least violation when none is feasible).
-        History per generation: ``best_cost`` (least objective ``pick`` among feasible survivors, NaN when
-        none), ``mean_cost`` (its mean), ``diversity``, ``front_size``, ``feasible_fraction``,
+        :class:`Result` whose ``front`` holds the first front sorted by the first objective (violation = errors
+        above the tolerances, m + rad) and whose ``q`` is its feasible member with the least objective ``pick``
+        (the least violation when none is feasible). History adds ``front_size``, ``feasible_fraction``,
         ``min_violation``.
     """
     robot = problem.robot
@@ -274,7 +232,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         message = (f"{max_generations} generations; no individual meets "
                    + ("every goal" if goals else "the pose constraint"))
     if fixed_rows:
-        names = ", ".join(("vx", "vy", "vz", "wx", "wy", "wz")[r] for r in fixed_rows)
+        names = ", ".join(ROW_NAMES[r] for r in fixed_rows)
         message += f"; manipulability on Jacobian rows {rows}: the chain never moves its tip along {names}"
     if fixed_goal_rows:
         message += f"; manipulability without the rows no joint moves ({', '.join(fixed_goal_rows)})"

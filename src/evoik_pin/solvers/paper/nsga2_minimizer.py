@@ -1,10 +1,5 @@
-"""NSGA-II (Deb et al. 2002) as a generic box-constrained multi-objective minimizer: :func:`nsga2_minimize`.
-
-Usable on test problems such as ZDT1; the registered ``nsga2`` IK method (:mod:`.nsga2`) builds paper 003's problem
-on top of it. Its variation operators are here as in Deb's reference implementation, each one call over the whole
-population: bounded simulated binary crossover (:func:`sbx`) and bounded polynomial mutation
-(:func:`bounded_polynomial_mutation`); sorting and selection are :mod:`.pareto_sorting`'s.
-"""
+"""NSGA-II (Deb et al. 2002) as a generic box-constrained multi-objective minimizer (:func:`nsga2_minimize`), with
+its variation operators as in Deb's reference code, vectorized: bounded SBX and bounded polynomial mutation."""
 
 from __future__ import annotations
 
@@ -24,12 +19,8 @@ __all__ = ["NSGA2Result", "bounded_polynomial_mutation", "nsga2_minimize", "sbx"
 # ---------------------------------------------------------------------------------------------- operators
 def sbx(P1: np.ndarray, P2: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, rng: np.random.Generator,
         crossover_probability: float = 0.9, variable_probability: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
-    """Bounded simulated binary crossover (Deb & Agrawal 1995; Deb's NSGA-II code) of parents (M, n).
-
-    Each pair crosses with ``crossover_probability``, each variable with ``variable_probability``; the
-    spread factor's distribution is truncated so children stay inside [lower, upper]; children are
-    swapped with probability 1/2 per variable.
-    """
+    """Bounded simulated binary crossover (Deb's NSGA-II code) of parents (M, n): each pair crosses with
+    ``crossover_probability``, each variable with ``variable_probability``; children stay inside the bounds."""
     M, n = P1.shape
     y1, y2 = np.minimum(P1, P2), np.maximum(P1, P2)
     diff = y2 - y1
@@ -53,14 +44,8 @@ def sbx(P1: np.ndarray, P2: np.ndarray, lower: np.ndarray, upper: np.ndarray, et
 
 def bounded_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float,
                                 probability: float, rng: np.random.Generator) -> np.ndarray:
-    """Bounded polynomial mutation (Deb & Goyal 1996 as in Deb's NSGA-II code and pymoo) of each entry of ``X``
-    (N, n) with ``probability``, drawing from ``rng``; the result is clipped into [lower, upper].
-
-    The spread depends on the distances ``d1 = (x - lower) / (upper - lower)`` and ``d2 = (upper - x) /
-    (upper - lower)`` to the bounds: an entry on a bound is never pushed across it. Paper 001's GA uses
-    the basic form instead (:func:`~evoik_pin.solvers.paper.ga.basic_polynomial_mutation`), whose spread ignores
-    the bounds; the two give different children.
-    """
+    """Bounded polynomial mutation (Deb's NSGA-II code, pymoo) of each entry of ``X`` (N, n) with ``probability``:
+    the spread shrinks towards the bounds, and the result is clipped into them."""
     width = np.where(upper > lower, upper - lower, 1.0)
     mask = rng.random(X.shape) < probability
     u = rng.random(X.shape)
@@ -73,8 +58,7 @@ def bounded_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndar
 
 
 def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
-    """Mask (len(Y),) of the rows of ``Y`` equal (bit for bit, -0.0 = 0.0) to a row of ``X`` or to an
-    earlier row of ``Y``; one sort of the rows viewed as byte strings."""
+    """Mask (len(Y),) of the rows of ``Y`` equal (bit for bit, -0.0 = 0.0) to a row of ``X`` or an earlier row."""
     Z = np.ascontiguousarray(np.concatenate([X, Y]) + 0.0)
     keys = Z.view(np.dtype((np.void, Z.dtype.itemsize * Z.shape[1]))).reshape(-1)
     first = np.unique(keys, return_index=True)[1]  # first occurrences (numpy sorts stably for return_index)
@@ -86,12 +70,9 @@ def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------- generic loop
 @dataclass
 class NSGA2Result:
-    """Outcome of :func:`nsga2_minimize`.
-
-    Attributes: final population ``X`` (N, n), objectives ``F`` (N, k), ``violation`` (N,), ``rank`` (N,)
-    (0 = first front); ``generations``, ``evaluations``, ``time_s``; ``history`` per generation (index 0 =
-    initial population): ``front_size``, ``feasible_fraction``, ``min_violation``.
-    """
+    """Outcome of :func:`nsga2_minimize`: final population ``X`` (N, n), objectives ``F`` (N, k), ``violation``
+    (N,), ``rank`` (N,) (0 = first front), and ``history`` per generation (0 = initial): ``front_size``,
+    ``feasible_fraction``, ``min_violation``."""
 
     X: np.ndarray
     F: np.ndarray
@@ -113,16 +94,8 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
                    crossover_probability: float = 0.9, mutation_probability: float | None = None,
                    initial: np.ndarray | None = None, repair: Callable | None = None,
                    callback: Callable | None = None, eliminate_duplicates: bool = True) -> NSGA2Result:
-    """Minimize ``n_obj`` objectives over the box [lower, upper] with NSGA-II (Deb et al. 2002).
-
-    Each generation: binary tournaments with the crowded comparison (rank, then crowding distance, then a
-    coin), the contestants read off two random permutations of the population as in Deb's reference
-    code; SBX on consecutive winners; polynomial mutation; then the N offspring join the N parents and
-    :func:`survival` keeps N (constraint domination, fronts in order, the last one cut by crowding).
-    With ``eliminate_duplicates`` (as pymoo does), an offspring equal to a parent or to another offspring
-    (mostly parents copied when neither crossover nor mutation changed them) is bred again, for at most
-    10 rounds, before anything is evaluated: each generation still costs exactly N evaluations, and
-    (unless 10 rounds do not suffice, when the last copies are kept) none is spent on a known point.
+    """Minimize ``n_obj`` objectives over the box [lower, upper] with NSGA-II (Deb et al. 2002): crowded-comparison
+    tournaments, SBX, polynomial mutation, then :func:`~.pareto_sorting.survival` of N among parents and offspring.
 
     Args:
         f: vectorized ``f(X)`` for a population X (N, n): objectives (N, n_obj), or a pair
@@ -138,8 +111,8 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
             initial population), e.g. projecting onto an equality constraint.
         callback: optional ``callback(generation, X, F, violation)`` with the survivors of every generation
             (generation 0: the initial population).
-        eliminate_duplicates: breed again the offspring that duplicate a population member or each other
-            (checked before ``repair``; True).
+        eliminate_duplicates: breed again (up to 10 rounds, before ``repair`` and evaluation) the offspring that
+            duplicate a population member or each other, as pymoo does.
 
     Returns:
         :class:`NSGA2Result`: the final population, its ranks, and per-generation history.

@@ -1,9 +1,6 @@
-"""NSGA-II's sorting and selection (Deb et al. 2002), each one vectorized call over the whole population.
-
-Constraint domination (:func:`dominance_matrix`: feasible beats infeasible, less violation beats more, Pareto
-dominance between feasible rows), fast non-dominated sorting (:func:`nondominated_ranks`), crowding distance
-(:func:`crowding_distance`), and the two selections built on them: elitist :func:`survival` and binary tournaments
-with the crowded comparison. Objectives are minimized; ``F`` (N, k), ``violation`` (N,) >= 0 (0 = feasible).
+"""NSGA-II's sorting and selection (Deb et al. 2002), vectorized over the population: constraint domination,
+non-dominated sorting, crowding distance, survival and crowded tournaments. ``F`` (N, k) minimized, ``violation``
+(N,) >= 0 (0 = feasible).
 """
 
 from __future__ import annotations
@@ -14,11 +11,8 @@ __all__ = ["crowding_distance", "dominance_matrix", "nondominated_ranks", "survi
 
 
 def dominance_matrix(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
-    """``D[i, j]`` True when row i constraint-dominates row j; ``F`` (N, k) minimized, ``violation`` (N,) >= 0.
-
-    Feasible (violation 0) beats infeasible; two infeasible rows compare by violation; two feasible rows
-    by Pareto dominance (no worse in every objective, better in one).
-    """
+    """``D[i, j]`` True when row i constraint-dominates row j: feasible beats infeasible, less violation beats
+    more, two feasible rows compare by Pareto dominance."""
     F = np.asarray(F, float)
     N = F.shape[0]
     le = np.ones((N, N), bool)
@@ -76,22 +70,13 @@ def _ranks(F: np.ndarray, violation: np.ndarray | None, stop: int | None = None)
 
 
 def nondominated_ranks(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
-    """Fast non-dominated sorting under constraint domination: front index (N,) of every row, 0 first.
-
-    The feasible rows are sorted by peeling (count each row's dominators, take the rows with none,
-    subtract what they dominate, repeat: one vectorized pass per front); the infeasible rows follow, one
-    front per distinct violation value in increasing order. This equals sorting by
-    :func:`dominance_matrix` (``violation`` given), without building its constraint part.
-    """
+    """Front index (N,) of every row under constraint domination, 0 first (as sorting by :func:`dominance_matrix`,
+    without building its constraint part)."""
     return _ranks(np.asarray(F, float), violation)
 
 
 def crowding_distance(F: np.ndarray) -> np.ndarray:
-    """Crowding distance (M,) of the points ``F`` (M, k) of one front; extremes get inf (Deb 2002).
-
-    For each objective the points are sorted and each gets the gap between its two neighbours divided
-    by the objective's range; the distances add up over the objectives.
-    """
+    """Crowding distance (M,) of the points ``F`` (M, k) of one front (Deb 2002); extremes get inf."""
     M, k = F.shape
     if M <= 2:
         return np.full(M, np.inf)
@@ -106,10 +91,8 @@ def crowding_distance(F: np.ndarray) -> np.ndarray:
 
 
 def survival(F: np.ndarray, violation: np.ndarray | None, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """NSGA-II's elitist survival: indices of the ``size`` survivors, with their ranks and crowding distances.
-
-    Whole fronts are taken in rank order; the front that overflows is cut by crowding distance.
-    """
+    """NSGA-II's elitist survival: indices of the ``size`` survivors (whole fronts in rank order, the overflowing one
+    cut by crowding distance), with their ranks and crowding distances."""
     rank = _ranks(F, violation, stop=size)
     order = np.argsort(rank, kind="stable")
     last = rank[order[min(size, len(order)) - 1]]

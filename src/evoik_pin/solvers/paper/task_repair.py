@@ -1,7 +1,5 @@
-"""Paper 003's repair of one tip target: damped-least-squares Newton steps towards the target, all individuals at
-once (:func:`dls_repair`), on the task's rows of the base-frame Jacobian (planar (vx, vy[, wz]); 3-D (vx, vy, vz[,
-wx, wy, wz])); a goal list passes its own rows (:func:`~.nsga2.goal_task`).
-"""
+"""Paper 003's repair: damped-least-squares Newton steps towards the target, all individuals at once
+(:func:`dls_repair`)."""
 
 from __future__ import annotations
 
@@ -22,12 +20,12 @@ def _task_rows(problem: IKProblem) -> list[int]:
     return [0, 1, 2, 3, 4, 5] if t.rotation is not None else [0, 1, 2]
 
 
-def _movable_rows(problem: IKProblem, rows: list[int]) -> tuple[list[int], list[int]]:
-    """Split Jacobian ``rows`` into those the chain can move its tip along and those it never can (a row of
-    zeros at 64 configurations spread over the box, e.g. vz for a planar chain): a zero row makes
-    ``det(J J^T)`` 0 for every configuration, so the manipulability objective would be constant."""
+def _movable_rows(problem: IKProblem, rows: list[int], frame: str | None = None) -> tuple[list[int], list[int]]:
+    """Split Jacobian ``rows`` of ``frame`` (default the tip) into those the chain moves it along and those it never
+    does (zero at 64 configurations spread over the box, e.g. vz of a planar chain: they would make the
+    manipulability 0 everywhere)."""
     Q = problem.lower + halton(problem.n, 64, skip=1) * (problem.upper - problem.lower)
-    J = problem.robot.jacobian_batch(Q, validate=False)[:, rows]
+    J = problem.robot.jacobian_batch(Q, validate=False, frame=frame)[:, rows]
     moving = np.abs(J).max(axis=(0, 2)) > 1e-12
     return [r for r, m in zip(rows, moving, strict=True) if m], [r for r, m in zip(rows, moving, strict=True) if not m]
 
@@ -50,14 +48,9 @@ def _task_errors(problem: IKProblem, Q: np.ndarray) -> np.ndarray:
 
 def dls_repair(problem: IKProblem, Q: np.ndarray, steps: int, damping: float = 1e-4,
                weights: np.ndarray | None = None, task=None) -> np.ndarray:
-    """``steps`` damped-least-squares Newton steps (N, n) towards the target, all individuals at once.
-
-    ``dq = W J^T (J W J^T + damping^2 I)^-1 e`` on the task rows of the base-frame Jacobian, then clipped
-    into the box: the step of least ``dq^T W^-1 dq``. ``weights`` W (n,) default ones; ``nsga2`` passes
-    1 / K so the repair, like the smoothness S, moves high-gain joints (the vehicle) least. Each step
-    costs one batched FK and Jacobian and counts N evaluations. ``task(Q) -> (e (N, m), J (N, m, n))``: the
-    errors and Jacobian rows the steps zero (default the target's task rows; :func:`goal_task` for a goal list).
-    """
+    """``Q`` (N, n) after ``steps`` damped-least-squares steps ``dq = W J^T (J W J^T + damping^2 I)^-1 e``, each
+    clipped into the box (N evaluations a step). ``weights`` W (n,): default ones. ``task(Q) -> (e (N, m),
+    J (N, m, n))``: the errors and Jacobian rows to zero (default the target's :func:`_task_rows`)."""
     if task is None:
         rows = _task_rows(problem)
 
