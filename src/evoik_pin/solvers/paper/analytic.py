@@ -1,18 +1,8 @@
-"""Closed-form IK of the papers' small arms, as references and as the ``algebraic`` method.
-
-* :func:`planar2r_ik`: paper 001's planar 2R elbow arm (a1 = 0.25 m, a2 = 0.16 m), both elbows.
-* :func:`puma_ik`: paper 001's PUMA wrist point (eq. 20: a2 = 0.4318 m, d = 0.149 m, a3 = 0.0203 m,
-  d4 = 0.433 m), all four solutions (left/right shoulder x elbow up/down).
-* :func:`ax18_ik`: paper 000's AX-18 for a chosen tool pitch phi = t2 + t3 + t4 (section III-B), and
-  :func:`ax18_algebraic`: the paper's "algebraic method" (AM), which searches phi for the least position
-  error with the joints kept inside their limits.
-
-Everything is in metres and radians. The registered ``algebraic`` method recognizes the bundled robots by
-name and checks that the loaded chain's forward kinematics equals the closed form before using it; other
-robots raise :class:`~evoik_pin.errors.MethodError`. A closed form solves one target for the tip: a goal list is
-accepted only when it is that problem, one ``Pose`` or ``Position`` goal on the robot's tip
-(:func:`tip_target_problem`); ``evoik_pin.solve`` refuses other goal lists with a MethodError naming the methods that
-take them.
+"""Closed-form IK of the papers' small arms (m, rad), as references and as the ``algebraic`` method: paper 001's
+planar 2R (:func:`planar2r_ik`) and PUMA wrist point (:func:`puma_ik`), paper 000's AX-18 for a tool pitch
+(:func:`ax18_ik`) and its "algebraic method" searching the pitch (:func:`ax18_algebraic`). ``algebraic`` takes the
+bundled robots only, after checking their kinematics against the closed form, and of goal lists only one tip
+``Pose`` or ``Position`` (:func:`tip_target_problem`).
 """
 
 from __future__ import annotations
@@ -68,8 +58,7 @@ def _distinct(candidates: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _snap(c: float) -> float:
-    """``c`` clipped into [-1, 1] and snapped onto +-1 within 1e-12, so a rounding error at a boundary
-    configuration does not split one solution into two about 1e-8 rad apart."""
+    """``c`` clipped into [-1, 1] and snapped onto +-1 within 1e-12 (one boundary solution, not two 1e-8 rad apart)."""
     c = float(np.clip(c, -1.0, 1.0))
     return float(np.sign(c)) if abs(c) > 1.0 - 1e-12 else c
 
@@ -105,10 +94,8 @@ def _planar2r_candidates(x: float, y: float, a1: float, a2: float, clamp: bool) 
 
 
 def planar2r_ik(x: float, y: float, a1: float = PLANAR2R["a1"], a2: float = PLANAR2R["a2"]) -> list[np.ndarray]:
-    """Both IK solutions (t1, t2) in rad, wrapped into [-pi, pi), of the planar 2R arm for tip (x, y) m.
-
-    Elbow ``t2 > 0`` first. One solution on the workspace boundary, none outside it (empty list).
-    """
+    """The IK solutions (t1, t2) in rad, wrapped into [-pi, pi), of the planar 2R arm for tip (x, y) m: elbow
+    ``t2 > 0`` first; one on the workspace boundary, none outside it."""
     x, y = _point([x, y], 2, "planar2r_ik")
     return _planar2r_candidates(x, y, a1, a2, clamp=False)[0]
 
@@ -155,12 +142,8 @@ def _puma_candidates(p: np.ndarray, a2: float, d: float, a3: float, d4: float,
 
 def puma_ik(p, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUMA3R["a3"],
             d4: float = PUMA3R["d4"]) -> list[np.ndarray]:
-    """All IK solutions (t1, t2, t3) in rad, wrapped into [-pi, pi), of paper 001's PUMA wrist point.
-
-    ``p``: wrist position (3,) in m. Up to four solutions (two shoulders x two elbows); an empty list when
-    the point is out of reach. Derived from eq. 20: ``px^2 + py^2 - d^2`` fixes the in-plane reach r (either
-    sign, giving t1), ``r^2 + pz^2`` fixes ``d4 S3 + a3 C3`` (two t3), then t2 solves a 2 x 2 linear system.
-    """
+    """All IK solutions (t1, t2, t3) in rad, wrapped into [-pi, pi), of paper 001's PUMA wrist point ``p`` (3,) m:
+    up to four (two shoulders x two elbows), none out of reach."""
     return _puma_candidates(_point(p, 3, "puma_ik"), a2, d, a3, d4, clamp=False)[0]
 
 
@@ -177,14 +160,8 @@ def ax18_fk(Q, d1: float = AX18["d1"], a1: float = AX18["a1"], a2: float = AX18[
 
 
 def _ax18_branches(p: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Closed-form candidates (4, G, 4) for tool pitches ``phi`` (G,): shoulder (front, back) x elbow (+, -).
-
-    Section III-B: t1 = atan2(py, px); B = radial reach - (a3 + a4) cos phi - d2 sin phi and
-    C = pz - d1 - (a3 + a4) sin phi + d2 cos phi are reached by the 2R sub-chain (a1, a2); t4 = phi - t2 - t3.
-    The "back" shoulder (t1 + pi, negative reach) is the second branch the paper's atan leaves out.
-    Returns the candidates, with cos t3 clamped into [-1, 1] (the nearest the 2R sub-chain gets), and a
-    (4, G) mask of the exact ones (|cos t3| <= 1 before clamping).
-    """
+    """Closed-form candidates (4, G, 4) for tool pitches ``phi`` (G,): shoulder (front, back: the branch the
+    paper's atan leaves out) x elbow (+, -), cos t3 clamped into [-1, 1], and a (4, G) mask of the exact ones."""
     d1, a1, a2, a3, d2, a4 = (AX18[k] for k in ("d1", "a1", "a2", "a3", "d2", "a4"))
     px, py, pz = p
     rho = np.hypot(px, py)
@@ -206,11 +183,8 @@ def _ax18_branches(p: np.ndarray, phi: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 def ax18_ik(p, phi: float) -> list[np.ndarray]:
-    """Exact AX-18 solutions (rad, wrapped into [-pi, pi)) for tool position ``p`` (m) and pitch ``phi`` (rad).
-
-    Up to four (shoulder front/back x elbow up/down); joint limits are not applied (see
-    :func:`ax18_algebraic`). Empty when the wrist point for this phi is out of the 2R sub-chain's reach.
-    """
+    """Exact AX-18 solutions (rad, wrapped into [-pi, pi), joint limits not applied) for tool position ``p`` (m)
+    and pitch ``phi`` (rad): up to four, none when out of reach."""
     p = _point(p, 3, "ax18_ik")
     Q, ok = _ax18_branches(p, np.array([float(phi)]))
     return _distinct([lie.wrap_angle(Q[b, 0]) for b in range(4) if ok[b, 0]])
@@ -234,21 +208,12 @@ def _into_limits(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndar
 
 def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, upper=None,
                    fk=None) -> list[AX18Solution]:
-    """Paper 000's algebraic method: search the tool pitch phi for the least position error.
+    """Paper 000's algebraic method for tool position ``p`` (3,) m: the tool pitch phi of least position error.
 
-    For every phi on a grid of step ``phi_step`` (rad) over [-pi, pi) and every branch, the closed form
-    of :func:`ax18_ik` is evaluated with the 2R sub-problem clamped to its reach and the joints moved into
-    their limits (``lower``, ``upper``, default the paper's servo ranges); the best phi of each branch is
-    then refined by a bounded scalar search within one grid step. Ties in error (a reachable target is
-    reached exactly by a whole interval of phi) go to the smallest maximum displacement from ``q0``
-    (default zeros), i.e. paper 000's second objective.
-
-    Args:
-        p: tool position (3,) in m.
-        fk: optional vectorized forward kinematics ``(N, 4) -> (N, 3)``; default :func:`ax18_fk`.
-
-    Returns:
-        One :class:`AX18Solution` per branch (up to four), least error first.
+    Every branch of :func:`ax18_ik` (clamped to its reach, joints moved into ``lower``, ``upper``: default the
+    servo ranges) on a phi grid of step ``phi_step`` (rad), the best refined within one step; ties in error go
+    to the least maximum displacement from ``q0`` (default zeros). ``fk``: vectorized ``(N, 4) -> (N, 3)``
+    (default :func:`ax18_fk`). Returns one :class:`AX18Solution` per branch, least error first.
     """
     p = _point(p, 3, "ax18_algebraic")
     phi_step = check_positive("phi_step (at most pi/4)", phi_step, np.pi / 4, unit="rad")
@@ -322,12 +287,8 @@ def _closed_form_for(robot):
 
 def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations: int, evaluations: int,
                      time_s: float, only_successful: bool = True) -> list[Result]:
-    """One :class:`Result` per row of ``Q`` (M, n), best (lowest cost) first.
-
-    Rows are evaluated once more for their errors; that bookkeeping does not count as evaluations.
-    With ``only_successful``, rows that miss the problem's tolerances are left out (a goal list: rows that miss a
-    goal's own tolerances; each Result then has its ``goal_errors``).
-    """
+    """One :class:`Result` per row of ``Q`` (M, n), best first (the errors' evaluation is not counted); with
+    ``only_successful``, rows that miss the tolerances (a goal list: a goal's own) are left out."""
     if len(Q) == 0:
         return []
     Q = np.atleast_2d(np.asarray(Q, float))
@@ -378,16 +339,10 @@ def _target_point(problem: IKProblem, robot_name: str) -> np.ndarray:
 @register("algebraic", "closed-form IK: paper 000's algebraic method (ax18, phi search), planar2r (both "
           "elbows) and the puma3r wrist point (four solutions)", multi_solution=True)
 def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float = np.radians(0.5)) -> Result:
-    """Closed-form IK of ``planar2r``, ``puma3r`` (every solution) and ``ax18`` (paper 000's AM).
-
-    ``rng`` is unused (the method is deterministic). Candidates are brought into the search box by
-    multiples of 2 pi; those still outside are dropped. For an unreachable target the result is the
-    closed form with its square roots clamped (the nearest it gets), ``success=False`` and a message;
-    ``solutions`` then is empty. ``phi_step`` (rad): grid step of the AX-18 phi search.
-
-    Returns:
-        :class:`Result` with ``q`` the best candidate and ``solutions`` every distinct exact one inside the
-        bounds, best first (ties in cost broken by the smaller maximum displacement from ``q0``).
+    """Closed-form IK of ``planar2r``, ``puma3r`` (every solution) and ``ax18`` (paper 000's AM, ``phi_step`` rad);
+    ``rng`` is unused. Returns ``q`` the best candidate (an unreachable target: the clamped closed form,
+    ``success=False``) and ``solutions`` every distinct exact one inside the bounds (moved by multiples of
+    2 pi), best first, ties in cost broken by the least maximum displacement from ``q0``.
     """
     robot = problem.robot
     name = _closed_form_for(robot)

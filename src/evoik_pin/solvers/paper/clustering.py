@@ -1,14 +1,5 @@
-"""Joint-space clustering of IK candidates, respecting angle wrap-around.
-
-Two configurations whose revolute joints differ by 2 pi put every link in the same place, so distances
-between configurations use the wrapped difference ``(a - b + pi) mod 2 pi - pi`` on revolute joints (rad)
-and the plain difference on prismatic joints (m). The Euclidean norm of that difference vector is the
-distance used throughout (it mixes rad and m on mixed chains; both are O(1) on the arms we ship).
-
-:func:`leader_clusters` is the greedy "leader" clustering used by the all-solutions methods (``ga``,
-``hga``, ``algebraic``): candidates are visited best first; each one either lies within ``radius`` of an
-already chosen leader (and joins it) or becomes a new leader. The loop runs once per cluster, not once
-per candidate, so it stays cheap for populations of thousands.
+"""Joint-space clustering of IK candidates: distances are norms of differences wrapped into [-pi, pi) on revolute
+joints (rad), plain on prismatic ones (m); :func:`leader_clusters` groups the all-solutions methods' candidates.
 """
 
 from __future__ import annotations
@@ -34,19 +25,10 @@ def joint_distances(A: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.nd
 
 def leader_clusters(Q: np.ndarray, cost: np.ndarray, radius: float, revolute: np.ndarray,
                     max_clusters: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Greedy leader clustering of configurations, best (lowest cost) first.
-
-    Args:
-        Q: (N, n) configurations (rad or m).
-        cost: (N,) costs; lower is better. NaN costs are treated as worst.
-        radius: cluster radius in the wrapped joint-space distance (rad / m), > 0.
-        revolute: (n,) bool mask of revolute joints (wrapped differences).
-        max_clusters: stop after this many clusters (the remaining candidates get label -1).
-
-    Returns:
-        ``(leaders, labels)``: indices into ``Q`` of the cluster leaders, best first (M,), and the
-        cluster label of every candidate (N,) in 0..M-1 (or -1 when ``max_clusters`` cut it off).
-    """
+    """Greedy leader clustering of configurations ``Q`` (N, n), best (lowest ``cost`` (N,), NaN worst) first: each
+    joins the first leader within ``radius`` (wrapped distance on the ``revolute`` (n,) mask) or leads a new
+    cluster, at most ``max_clusters``. Returns the leaders' indices (M,), best first, and every candidate's
+    label (N,) in 0..M-1 (-1 when cut off)."""
     radius = check_positive("cluster radius", radius, unit="rad")
     Q = np.asarray(Q, float)
     N = Q.shape[0]

@@ -53,8 +53,8 @@ def enforce_bounds(
 ) -> np.ndarray:
     """Bring a population (N, n) back into the search box.
 
-    ``"clip"``: onto the violated bound (paper 004); ``"reflect"``: mirrored back inside (folded as many
-    times as needed); ``"resample"``: violating entries re-drawn uniformly in the box (``parent`` unused).
+    ``"clip"``: onto the violated bound; ``"reflect"``: mirrored back inside; ``"resample"``: violating entries
+    re-drawn uniformly in the box (``parent`` unused).
     """
     lo, hi = problem.lower, problem.upper
     if method == "clip":
@@ -76,10 +76,8 @@ def enforce_bounds(
 
 
 def diversity(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
-    """Mean distance of the individuals to the population centroid, each joint scaled by its range.
-
-    0 for a collapsed population; about 0.29 sqrt(n) for a uniform one.
-    """
+    """Mean distance of the individuals to the population centroid, each joint scaled by its range (0 for a
+    collapsed population, about 0.29 sqrt(n) for a uniform one)."""
     return float(_diversities(np.asarray(Q, dtype=float)[None], lower, upper)[0])
 
 
@@ -122,10 +120,8 @@ class SolverRun:
         self._pending: list[np.ndarray] = []  # populations whose diversity is not computed yet
 
     def record(self, Q: np.ndarray, ev: Evaluation, **extra: float) -> int:
-        """Log one generation's population ``Q`` (N, n) and its evaluation; returns the best index.
-
-        Extra keyword values become additional history series (e.g. ``w1=...``).
-        """
+        """Log one generation's population ``Q`` (N, n) and its evaluation, extra keywords as history series;
+        returns the best index."""
         i = int(ev.cost.argmin())
         if ev.cost[i] < self.best_cost:
             self.best_cost = float(ev.cost[i])
