@@ -1,17 +1,8 @@
 """Paper 000: multi-objective DE for the 4-DOF Crustcrawler AX-18 (Rodriguez, Saha, Romero-Hdz & Ortega, 2016).
 
-What the paper did: five targets (Table 2) solved by a binary GA (9-bit sign + magnitude angles, 400
-generations keeping the best 100), an algebraic method (closed form with the tool pitch phi chosen for the
-least error) and its multi-objective DE (Pseudocode 1: position error and maximum joint displacement from
-the initial configuration, equitable weights, trigonometric + DE/rand/1 donors, adaptive P_c / P_m;
-g_max = 200, M = 0.2, Cr = 0.8, F = 0.2, Np = 150). Figs. 3-5: mean population diversity, the weights
-w1 / w2 and the best fitness per generation for three configurations, (a) fixed crossover and normal
-mutation, (b) binomial crossover without and (c) with trigonometric mutation; Fig. 6: (a) the Pareto front
-of position error vs maximum displacement, (b) the position error per generation of (a)-(c).
-
-What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
-"Paper 000" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
-seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
+Table 2 (five targets: binary GA, algebraic method, the paper's ``mode``) and Figs. 3-6 (diversity, weights,
+fitness, front and error of three configurations). Our runs, readings and results: docs/REPRODUCTION.md,
+section "Paper 000".
 """
 
 from __future__ import annotations
@@ -20,7 +11,7 @@ import numpy as np
 
 from ..api import solve
 from ..robot import load_robot
-from .reporting import PaperReport, RunContext, Table, derive_rng
+from .reporting import PaperReport, RunContext, Table, derive_rng, dress
 
 PAPER_ID = "000"
 TITLE = "A multi-objective differential evolution algorithm for robot inverse kinematics"
@@ -260,12 +251,8 @@ def _fig_diversity(ctx, curves):
     fig, ax = ctx.new_figure(figsize=(6, 3.8))
     for label, c in curves.items():
         ax.plot(c["diversity"], label=label, color=_COLORS[label])
-    ax.set_xlabel("generation")
-    ax.set_ylabel("mean diversity (range-scaled)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Mean population diversity (median over runs and targets)", fontsize=9)
-    fig.tight_layout()
+    dress(ax, "generation", "mean diversity (range-scaled)",
+          "Mean population diversity (median over runs and targets)", legend=8)
     return ctx.save_figure(fig, "fig3_diversity", "Fig. 3 analogue: mean population diversity per generation, "
                                                   "three configurations")
 
@@ -275,12 +262,7 @@ def _fig_weights(ctx, curves):
     for ax, (label, c) in zip(axes, curves.items(), strict=True):
         ax.plot(c["w1"], label="w1 (position)")
         ax.plot(c["w2"], label="w2 (displacement)")
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("generation")
-        ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("weight (median)")
-    axes[0].legend(fontsize=8)
-    fig.tight_layout()
+        dress(ax, "generation", "weight (median)" if ax is axes[0] else "", label, legend=8 if ax is axes[0] else None)
     return ctx.save_figure(fig, "fig4_weights", "Fig. 4 analogue: equitable weights w1, w2 per generation for "
                                                 "(a) fixed crossover, (b) without and (c) with trigonometric mutation")
 
@@ -289,12 +271,8 @@ def _fig_fitness(ctx, curves):
     fig, ax = ctx.new_figure(figsize=(6, 3.8))
     for label, c in curves.items():
         ax.semilogy(np.maximum(c["best_fitness"], 1e-12), label=label, color=_COLORS[label])
-    ax.set_xlabel("generation")
-    ax.set_ylabel("best weighted cost w1 f1 + w2 f2 (minimized)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title("Best individual's weighted cost (median over runs and targets)", fontsize=9)
-    fig.tight_layout()
+    dress(ax, "generation", "best weighted cost w1 f1 + w2 f2 (minimized)",
+          "Best individual's weighted cost (median over runs and targets)", legend=8, grid="both")
     return ctx.save_figure(fig, "fig5_best_fitness", "Fig. 5 analogue: best individual's fitness per generation "
                                                      "(our cost is minimized; the paper plots a maximized fitness)")
 
@@ -303,19 +281,13 @@ def _fig_front(ctx, res, curves):
     fig, axes = ctx.new_figure(1, 2, figsize=(11, 4))
     F = res.front.objectives
     axes[0].semilogx(np.maximum(F[:, 0] / MM, 1e-6), np.degrees(F[:, 1]), ".", ms=4)
-    axes[0].set_xlabel("position error (mm)")
-    axes[0].set_ylabel("max joint displacement from q_init (deg)")
-    axes[0].set_title("(a) non-dominated set, (c) on target (10, 10, 10) cm", fontsize=9)
-    axes[0].grid(True, which="both", alpha=0.3)
+    dress(axes[0], "position error (mm)", "max joint displacement from q_init (deg)",
+          "(a) non-dominated set, (c) on target (10, 10, 10) cm", grid="both")
     for label, c in curves.items():
         axes[1].semilogy(np.maximum(c["best_position_error"] / MM, 1e-9), label=label, color=_COLORS[label])
     axes[1].axhline(1.0, color="k", lw=0.6, ls="--")
-    axes[1].set_xlabel("generation")
-    axes[1].set_ylabel("position error of the closest individual (mm)")
-    axes[1].set_title("(b) median over runs and targets", fontsize=9)
-    axes[1].grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
+    dress(axes[1], "generation", "position error of the closest individual (mm)",
+          "(b) median over runs and targets", legend=8, grid="both")
     return ctx.save_figure(fig, "fig6_front_and_error", "Fig. 6 analogue: (a) Pareto front of position error vs "
                                                         "maximum displacement; (b) position error per generation")
 

@@ -1,17 +1,7 @@
 """Paper 001: GA and hybrid GA (GA + Nelder-Mead) for all IK solutions (planar 2R and PUMA wrist point).
 
-What the paper did: a real-coded GA (binary tournament with a niching rule, SBX eta = 5, mutation whose
-probability grows while its perturbation shrinks) run for 12 generations finds the regions of every IK
-solution; the HGA polishes them with Nelder-Mead. Planar 2R elbow arm (a1 = 25, a2 = 16 cm): population
-750, 2 niches, n* = 200, targets (20, 20), (20, 25), (15, 30), (38, 0) cm (Tables 3 (GA) and 4 (HGA)
-against the closed form); PUMA wrist point (eq. 20: a2 = 43.18, d = 14.90, a3 = 2.03, d4 = 43.30 cm):
-population 1000, 4 niches, targets (-52.5, 39.3, -46.5), (-30, -20, 43), (-15, 79, -1.5),
-(-56.4, 49.7, -28.4) cm (Table 5: closed form, Table 6: HGA). Figs. 7-9: the 2R population at
-generations 0, 4 and 12; Figs. 10-11: the PUMA population at generations 0 and 12.
-
-What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
-"Paper 001" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
-seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
+Tables 3-4 (planar 2R, GA and HGA against the closed form), 5-6 (PUMA: closed form, HGA) and Figs. 7-11 (the
+GA's populations). Our runs, readings and results: docs/REPRODUCTION.md, section "Paper 001".
 """
 
 from __future__ import annotations

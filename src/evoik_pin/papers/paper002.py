@@ -1,16 +1,9 @@
 """Paper 002: ISADE, DE and PSO (and their "Pro-" variants) on a redundant 7R arm (Nguyen & Bui, 2021).
 
-The paper solves position-only IK of a 7R arm (``redundant7r``) with PSO, DE (best/1, F = 0.5, CR = 0.9)
-and ISADE, stopping each run when the distance error falls below a "fitness value" (PSO 1e-14 m,
-DE 1e-15 m, ISADE 1e-17 m) or at the generation budget (600 / 600 / 130), keeping the best of rho = 10
-runs. Scenarios: 1, one random point (Table 3 at 85 iterations; Table 5's Scenario 1 row at looser
-fitness values 1e-9 / 1e-10 / 1e-12); 2, 100 random workspace points each solved from q = 0 (Table 4);
-3, 100 points of the spiral x = 200 cos(2z/100), y = 200 sin(2z/100), z = n pi (mm) solved in sequence
-over the full ranges (3.1) or inside the "Pro" box previous solution +- pi/100 (3.2) (Table 5, Figs. 7-9).
-
-What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
-"Paper 002" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
-seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
+Position-only IK of ``redundant7r``, each run stopped at a "fitness value" or its generation budget, best of
+rho = 10 runs: Scenario 1 (one random point, Tables 3 and 5), 2 (100 random points from q = 0, Table 4) and 3 (a
+spiral in sequence, full range or inside the "Pro" box previous solution +- pi/100, Table 5, Figs. 7-9). Our
+runs, readings and results: docs/REPRODUCTION.md, section "Paper 002".
 """
 
 from __future__ import annotations

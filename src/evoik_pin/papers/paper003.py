@@ -1,17 +1,8 @@
 """Paper 003: NSGA-II for a planar vehicle-arm robot (5 DOF) (Rodriguez & Banfield).
 
-What the paper did: each point of a series of end-effector poses (positions with a fixed orientation pointing
-along +x) is solved by NSGA-II (population 200, infeasible individuals ranked below feasible ones and sorted
-by violation, the pose equality ``f(q) = x_d`` as the constraint) minimizing ``g = 1 / (Y + 1)`` (Y the
-Yoshikawa manipulability of the 3 x 5 planar Jacobian) and the smoothness
-``S = sqrt(sum_i K_i (q_i^t - q_i^(t-1))^2)`` with a larger gain K on the vehicle coordinates q0, q1; the
-front member with the best S is kept. Fig. 2 draws the configurations along the path for K = 10 and
-K = 100: with the larger gain the vehicle moves less between consecutive points. The paper gives no link
-lengths, bounds, path, generation count or numbers.
-
-What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
-"Paper 003" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
-seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
+A path of poses solved point by point by ``nsga2`` (manipulability and smoothness ``S`` with a gain K on the
+vehicle coordinates); Fig. 2: with K = 100 the vehicle moves less than with K = 10. Our path, lengths and
+results: docs/REPRODUCTION.md, section "Paper 003".
 """
 
 from __future__ import annotations

@@ -1,16 +1,8 @@
 """Paper 004: DE for the 6-DOF human-like arm of an aerial manipulator (Ibrahim & Al Akkad, 2019).
 
-What the paper did: DE/rand/1 with binomial crossover (F = 0.9, CR = 0.95, joint values clamped to
-their ranges) minimizing ``J = sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (O = roll-pitch-yaw in
-rad, sigma = 0.3, epsilon = 0.7) for the target (x, y, z, roll, pitch, yaw) = (-20, 3, 40, 0, 10, 15)
-(cm, deg); Table 4 sweeps population x iterations (J, time, reached pose); Tables 5/6 solve three more
-targets at population 12 and 100 iterations (Fig. 2, 4, 6: objective per iteration).
-
-What ``run(ctx)`` runs, our readings where the paper is loose, and the results: docs/REPRODUCTION.md, section
-"Paper 004" (every setting is also recorded in ``report.settings``). Every random choice comes from the master
-seed and the part's labels (``ctx.rng`` / ``derive_rng``), so ``--jobs`` changes the speed, not the numbers.
-
-J is reported in the paper's units: position in cm (sigma = 0.3 per cm = 30 per m), orientation in rad.
+DE/rand/1/bin minimizing ``J = sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (roll-pitch-yaw; J in the paper's
+units, cm and rad): Table 4 (population x iterations sweep), Tables 5/6 (three more targets) and Fig. 2. Our runs,
+readings and results: docs/REPRODUCTION.md, section "Paper 004".
 """
 
 from __future__ import annotations

@@ -1,12 +1,6 @@
-"""Shared machinery of the paper reproductions: run context, tables, reports, figures, machine facts.
-
-A paper module receives a :class:`RunContext` (output directory, quick flag, seed, progress switch) and
-returns a :class:`PaperReport` (settings, :class:`Table` objects with the paper's numbers beside ours,
-figures, notes, raw data). :meth:`PaperReport.write` turns the report into ``report.md``,
-``results.json`` and one CSV per table in the context's output directory.
-
-Units: everything computed in SI (m, rad, s); tables may show mm, cm, deg or ms, and say so in their
-column names.
+"""Shared machinery of the paper reproductions: a paper module's :class:`RunContext` in, its :class:`PaperReport`
+(settings, :class:`Table` objects with the paper's numbers beside ours, figures, notes, raw data) out, written as
+``report.md``, ``results.json`` and one CSV per table; and machine facts.
 """
 
 from __future__ import annotations
@@ -18,7 +12,6 @@ import os
 import platform
 import sys
 import tempfile
-import time
 import zlib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -38,16 +31,13 @@ __all__ = [
     "check_output_dir",
     "check_seed",
     "derive_rng",
+    "dress",
     "fmt",
     "jsonable",
     "least_squares_distance",
     "machine_info",
     "progress_bar",
 ]
-
-
-# --------------------------------------------------------------------------------------------------
-# input checks (done before any work starts)
 
 
 def check_seed(seed) -> int:
@@ -58,11 +48,8 @@ def check_seed(seed) -> int:
 
 
 def check_output_dir(path) -> Path:
-    """Create ``path`` (and parents) if needed and prove it is writable; returns it resolved.
-
-    Raises:
-        OutputError: the path is a file, cannot be created, or a file cannot be written in it.
-    """
+    """``path`` resolved, created (with parents) if needed; OutputError when it is a file, cannot be created or
+    is not writable."""
     out = Path(path).expanduser()
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {str(out)!r} exists and is not a directory; choose a directory for --out")
@@ -75,10 +62,6 @@ def check_output_dir(path) -> Path:
             f"output directory {str(out)!r} is not writable ({exc.strerror or exc}); choose another with --out"
         ) from None
     return out.resolve()
-
-
-# --------------------------------------------------------------------------------------------------
-# formatting
 
 
 def fmt(value, spec: str | None = None) -> str:
@@ -123,10 +106,6 @@ def jsonable(obj: Any) -> Any:
     return obj
 
 
-# --------------------------------------------------------------------------------------------------
-# machine
-
-
 def _cpu_model() -> str:
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -153,7 +132,7 @@ def _git_commit() -> str | None:
 
 
 def machine_info() -> dict[str, Any]:
-    """Facts about the machine and software a run used (for the report header and results.json)."""
+    """Facts about the machine and software a run used."""
     import matplotlib
     import pinocchio
 
@@ -177,25 +156,11 @@ def machine_info() -> dict[str, Any]:
     }
 
 
-# --------------------------------------------------------------------------------------------------
-# tables, figures, report
-
-
 @dataclass
 class Table:
-    """One table of a reproduction: our numbers and, when the paper has the same table, the paper's.
-
-    Attributes:
-        key: file stem of the CSV (``<key>.csv``) and key in results.json, e.g. ``"table4"``.
-        title: caption, e.g. ``"Table 4 - Scenario 2: 100 random points, from q = 0"``.
-        columns: column names, units included (``"avg. error (m)"``).
-        rows: our rows, same length as ``columns``; cells are numbers or strings (raw values; the CSV keeps
-            full precision, the markdown uses :func:`fmt`).
-        paper_rows: the paper's rows with the same columns (None when the paper has no such table);
-            empty cells (None) where the paper reports nothing.
-        formats: optional per-column format specs for the markdown (None = :func:`fmt`'s default).
-        note: one paragraph printed under the table.
-    """
+    """One table of a reproduction: ``key`` (CSV stem, results.json key), ``title``, ``columns`` (units in the
+    names), our ``rows`` of raw cells, the paper's ``paper_rows`` with the same columns (None: no such table in
+    the paper; None cells: not reported), markdown ``formats`` per column (None: :func:`fmt`'s) and a ``note``."""
 
     key: str
     title: str
@@ -247,7 +212,7 @@ class Table:
 
 @dataclass
 class Figure:
-    """A PNG written by the run: ``path`` and a one-line caption (what the paper's figure it mirrors)."""
+    """A PNG written by the run and its one-line caption."""
 
     path: Path
     caption: str
@@ -255,15 +220,8 @@ class Figure:
 
 @dataclass
 class Animation:
-    """A joint trajectory a viewer can play (``evoik reproduce ... --html/--view``).
-
-    Attributes:
-        robot: robot name for :func:`evoik_pin.load_robot`.
-        q: (T, n) joint vectors (rad), one per frame.
-        targets: (T, 3) target positions (m) to draw as the path.
-        label: what is shown, e.g. ``"Pro-ISADE on the spiral (Scenario 3.2)"``.
-        fps: frames per second for playback.
-    """
+    """A joint trajectory ``evoik reproduce ... --html/--view`` plays: ``robot`` name, ``q`` (T, n) rad, ``targets``
+    (T, 3) m drawn as the path, a ``label`` and the playback ``fps``."""
 
     robot: str
     q: np.ndarray
@@ -274,23 +232,8 @@ class Animation:
 
 @dataclass
 class PaperReport:
-    """Everything a paper reproduction produced; :meth:`write` saves it.
-
-    Attributes:
-        paper_id: ``"002"`` etc.
-        title: the paper's short title.
-        quick: whether the reduced-size quick mode ran.
-        seed: the master seed every random choice of the run derives from.
-        settings: the settings used (JSON-able), paper values and our choices where the paper is silent.
-        tables: the tables, in the paper's order.
-        figures: the PNGs written.
-        notes: short paragraphs of discussion (deviations, inconsistencies, floating-point floors).
-        data: raw per-point / per-run numbers (JSON-able) for anyone re-plotting.
-        machine: :func:`machine_info` of this run.
-        wall_time_s: wall time of the whole run (s).
-        command: the command line that reproduces this run.
-        animation: optional trajectory for a viewer.
-    """
+    """Everything a paper reproduction produced (JSON-able ``settings`` and raw ``data``, tables in the paper's
+    order, figures, discussion ``notes``, the run's machine, wall time and command); :meth:`write` saves it."""
 
     paper_id: str
     title: str
@@ -305,14 +248,6 @@ class PaperReport:
     wall_time_s: float = float("nan")
     command: str = ""
     animation: Animation | None = None
-
-    def table(self, key: str) -> Table:
-        """The table with ``key``."""
-        for t in self.tables:
-            if t.key == key:
-                return t
-        raise KeyError(f"no table {key!r} in the report of paper {self.paper_id}; have "
-                       f"{[t.key for t in self.tables]}")
 
     def markdown(self, out_dir: Path | None = None) -> str:
         """The report as markdown (figure links relative to ``out_dir`` when given)."""
@@ -356,15 +291,8 @@ class PaperReport:
         return written
 
 
-# --------------------------------------------------------------------------------------------------
-# run context
-
-
 def progress_bar(iterable: Iterable | None = None, total: int | None = None, desc: str = "", enabled: bool = True):
-    """A tqdm progress bar on stderr that disappears when done (disabled when ``enabled`` is False).
-
-    Usable in worker processes, which have no :class:`RunContext`.
-    """
+    """A tqdm progress bar on stderr that disappears when done (usable in worker processes)."""
     from tqdm.auto import tqdm
 
     return tqdm(iterable, total=total, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True,
@@ -372,29 +300,16 @@ def progress_bar(iterable: Iterable | None = None, total: int | None = None, des
 
 
 def derive_rng(seed: int, *labels: str) -> np.random.Generator:
-    """A generator for one named part of an experiment, from the master ``seed`` and the part's labels.
-
-    The stream depends only on the seed and the labels (CRC-32 of each), so adding an experiment does not
-    change the random numbers of another, and a part run in a worker process draws what it would serially.
-    """
+    """A generator for one named part of an experiment that depends only on the master ``seed`` and the part's
+    labels: adding a part changes no other's numbers, and a worker process draws what it would serially."""
     keys = [zlib.crc32(str(label).encode()) for label in labels]
     return np.random.default_rng(np.random.SeedSequence([int(seed), *keys]))
 
 
 @dataclass
 class RunContext:
-    """What a paper module's ``run(ctx)`` gets.
-
-    Attributes:
-        out_dir: directory for this paper's files (already created and checked writable).
-        quick: run the reduced-size version (well under a minute) instead of the paper's settings.
-        seed: master seed; :meth:`rng` derives one independent stream per label from it.
-        progress: show tqdm progress bars (on stderr).
-        dpi: resolution of the PNG figures (small, commit-able files).
-        command: the command line shown in the report.
-        jobs: worker processes a paper may use for independent parts (1: everything in this process).
-            Per-solve times are measured inside each process either way.
-    """
+    """What a paper module's ``run(ctx)`` gets: its checked ``out_dir``, the ``quick`` flag, the master ``seed``,
+    the ``progress`` switch, the figures' ``dpi``, the ``command`` shown and the worker processes ``jobs``."""
 
     out_dir: Path
     quick: bool = False
@@ -403,7 +318,6 @@ class RunContext:
     dpi: int = 90
     command: str = ""
     jobs: int = 1
-    t0: float = field(default_factory=time.perf_counter)
 
     def rng(self, *labels: str) -> np.random.Generator:
         """An independent generator for one named part of the experiment: :func:`derive_rng` of the seed."""
@@ -414,18 +328,9 @@ class RunContext:
         return progress_bar(iterable, total, desc, self.progress)
 
     def map_parallel(self, func: Callable[[Any], Any], specs: list, desc: str) -> list:
-        """``[func(spec) for spec in specs]``, in :attr:`jobs` worker processes when ``jobs > 1``.
-
-        Results come back in the order of ``specs`` whatever order the workers finish in; a progress bar
-        labelled ``desc`` counts finished parts. With ``jobs == 1`` (or a single spec) everything runs in
-        this process, one spec after the other.
-
-        Workers are started with the ``spawn`` method (clean processes: no forked threads, open figures or
-        inherited random state), so ``func`` must be a top-level (picklable) function and ``specs``
-        picklable. For the numbers not to depend on ``jobs``, ``func`` must draw its randomness only from
-        ``derive_rng(spec seed, labels...)`` of its spec. A part that raises stops the run: the parts not
-        started yet are cancelled and the error is raised here.
-        """
+        """``[func(spec) for spec in specs]``, in :attr:`jobs` spawned worker processes when ``jobs > 1``, in the
+        order of ``specs``. ``func`` must be top-level and draw only from ``derive_rng(spec seed, ...)``, so the
+        numbers do not depend on ``jobs``; a part that raises cancels the rest and raises here."""
         workers = min(self.jobs, len(specs))
         if workers <= 1:
             return [func(spec) for spec in self.bar(specs, desc=desc)]
@@ -453,17 +358,28 @@ class RunContext:
         return plt.subplots(*args, **kwargs)
 
     def save_figure(self, fig, name: str, caption: str) -> Figure:
-        """Save ``fig`` as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it, return a :class:`Figure`."""
+        """Lay ``fig`` out tightly, save it as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it, return a
+        :class:`Figure`."""
         import matplotlib.pyplot as plt
 
         path = self.out_dir / f"{name}.png"
+        fig.tight_layout()
         fig.savefig(path, dpi=self.dpi)
         plt.close(fig)
         return Figure(path, caption)
 
-    def elapsed(self) -> float:
-        """Seconds since the context was created."""
-        return time.perf_counter() - self.t0
+
+def dress(ax, xlabel: str = "", ylabel: str = "", title: str = "", legend: float | None = None,
+          grid: str = "major") -> None:
+    """Label a figure's axes ``ax``: axis labels, a 9 pt ``title``, a light grid on the ``grid`` ticks ("major" or
+    "both") and, when ``legend`` (a font size) is given, a legend."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title, fontsize=9)
+    ax.grid(True, which=grid, alpha=0.3)
+    if legend is not None:
+        ax.legend(fontsize=legend)
 
 
 def check_output_file(path) -> Path:
@@ -480,10 +396,7 @@ def check_output_file(path) -> Path:
 
 
 def show_animation(animation: Animation, html=None, view: bool = False) -> Path | None:
-    """Play ``animation`` in the meshcat viewer (``view``: until Ctrl-C) and/or save it as a static HTML file.
-
-    Returns the HTML path when one was written. Needs :mod:`evoik_pin.viz`.
-    """
+    """Play ``animation`` in the meshcat viewer (``view``: until Ctrl-C) and/or save it as HTML (the path returned)."""
     from ..robot import load_robot
     from ..viz import Viewer
 
@@ -501,14 +414,9 @@ def show_animation(animation: Animation, html=None, view: bool = False) -> Path 
 
 
 def least_squares_distance(robot, p, lower, upper, rng, starts: int, x0=None) -> float:
-    """Smallest distance (m) from ``p`` that multi-start bounded least squares finds in the box [lower, upper].
-
-    A check of reachability independent of the evolutionary solvers under test: scipy's trust-region
-    reflective method with Pinocchio's Jacobian (tolerances 1e-15; the first start is ``x0`` when given,
-    the others uniform in the box), then, unless a start got within 1e-13 m, the ``memetic`` solver with a
-    deterministic budget of 30 restarts in the same box (its seed table covers the box far better than a
-    few random starts: points that least squares alone declared unreachable were reached to 1e-14 m).
-    """
+    """Smallest distance (m) from ``p`` found in the box [lower, upper], a reachability check independent of the
+    solvers under test: bounded least squares from ``starts`` starts (the first ``x0`` when given), then, unless
+    within 1e-13 m, ``memetic`` with 30 restarts (whose seed table covers the box far better)."""
     from scipy.optimize import least_squares
 
     from ..api import solve
