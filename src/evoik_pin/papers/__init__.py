@@ -1,41 +1,15 @@
-"""Reproductions of the five papers' experiments with evoik_pin's solvers.
+"""Reproductions of the five papers' experiments: ``evoik reproduce`` and ``scripts/reproduce_NNN.py`` wrap
+:func:`run_papers`, which writes ``DIR/NNN/report.md``, ``results.json``, one CSV per table (``source``: ``paper`` or
+``ours``) and the figures.
 
-``evoik reproduce 002 [--quick] [--seed S] [--out DIR]`` and ``scripts/reproduce_NNN.py`` are thin
-wrappers over :func:`run_papers`. Each paper writes into ``DIR/NNN/``: ``report.md`` (settings, seed,
-machine, the paper's tables next to ours, figures, discussion), ``results.json`` (everything, including
-raw per-point numbers), one ``<table>.csv`` per table (a ``source`` column says ``paper`` or ``ours``)
-and the figures as PNG.
-
-Contract for a paper module (how to add paper NNN)
---------------------------------------------------
-Create ``evoik_pin/papers/paperNNN.py``; it is discovered by its file name (:data:`PAPERS` lists
-exactly the modules that exist, so nothing else needs registering) and must define:
-
-* ``PAPER_ID = "NNN"`` and ``TITLE = "..."`` (short title of the paper);
-* ``run(ctx: RunContext) -> PaperReport``, which
-
-  - takes every random choice from ``ctx.rng("label", ...)`` (independent streams derived from
-    ``ctx.seed``; pass the generator as ``seed=`` to :func:`evoik_pin.solve`), never from global state;
-  - uses the paper's settings when ``ctx.quick`` is False, and a reduced size (fewer points / runs) that
-    finishes in well under a minute when it is True; records every setting in ``report.settings``;
-  - wraps long loops in ``ctx.bar(...)`` (tqdm, disabled with ``progress=False``);
-  - may run independent parts in ``ctx.jobs`` worker processes with ``ctx.map_parallel(func, specs,
-    desc)`` (results in the order of ``specs``): ``func`` is a top-level function whose random streams
-    come from ``derive_rng(spec seed, labels...)`` only, so results do not depend on the number of
-    processes;
-  - makes figures with ``fig, ax = ctx.new_figure(...)`` (Agg backend) and saves them with
-    ``ctx.save_figure(fig, "figN_name", caption)``, appending the returned :class:`Figure`;
-  - fills :class:`Table` objects with our rows and, where the paper has the same table, ``paper_rows``
-    with the paper's numbers in the same columns (units in the column names; SI inside, cm / mm / deg /
-    ms only in tables);
-  - puts the honest discussion (deviations, inconsistencies in the paper, floating-point floors) in
-    ``report.notes``, and raw numbers in ``report.data``;
-  - optionally sets ``report.animation`` (an :class:`Animation`) for ``--html`` / ``--view``.
-
-  The framework fills in the seed, quick flag, machine facts, command line and wall time, and writes
-  the files; the module only computes.
-* Add ``scripts/reproduce_NNN.py`` (three lines, like ``scripts/reproduce_002.py``) and a section in
-  ``docs/REPRODUCTION.md``; ``tests/test_reproduce.py`` runs every paper in :data:`PAPERS` in quick mode.
+How to add paper NNN: ``evoik_pin/papers/paperNNN.py`` (found by its file name) defines ``PAPER_ID = "NNN"``,
+``TITLE`` and ``run(ctx: RunContext) -> PaperReport``, which draws every random number from ``ctx.rng(labels...)``
+(or, in a top-level part run by ``ctx.map_parallel``, from ``derive_rng(seed, labels...)``), uses the paper's
+settings unless ``ctx.quick`` (well under a minute) and records them in ``report.settings``, saves figures with
+``ctx.save_figure``, fills :class:`Table` objects with the paper's rows beside ours (units in the column names,
+SI inside), and puts the discussion in ``report.notes``, raw numbers in ``report.data``, optionally an
+:class:`Animation`. The framework adds the seed, machine, command and wall time and writes the files. Then add
+``scripts/reproduce_NNN.py`` and a section in docs/REPRODUCTION.md; tests/test_reproduce.py runs it quick.
 """
 
 from __future__ import annotations
@@ -120,24 +94,18 @@ def _default_command(pid: str, quick: bool, seed: int, out: Path, jobs: int) -> 
 
 def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0, progress: bool = True,
                dpi: int = 90, command: str | None = None, jobs: int = 1) -> list[PaperReport]:
-    """Reproduce one or more papers; each writes into ``out/<paper id>/``.
+    """Reproduce one or more papers, each into ``out/<paper id>/``; returns their :class:`PaperReport` in order.
 
     Args:
         papers: a paper id (``"002"``, ``"2"``), a list of ids, or ``"all"``.
-        out: output directory (created; must be writable).
-        quick: reduced-size runs (well under a minute per paper) instead of the papers' settings.
-        seed: master seed (non-negative int); every random choice derives from it.
-        progress: show tqdm progress bars.
-        dpi: resolution of the figures.
+        quick: reduced-size runs instead of the papers' settings.
+        seed: master seed (non-negative int) every random choice derives from.
+        progress, dpi: tqdm progress bars; the figures' resolution.
         command: command line recorded in the reports (default: the equivalent ``evoik reproduce``).
-        jobs: worker processes a paper may use for its independent parts (same numbers as 1, faster).
+        jobs: worker processes a paper may use for its independent parts (the same numbers, faster).
 
-    Returns:
-        The :class:`PaperReport` of each paper, in order.
-
-    Raises:
-        ReproductionError: unknown paper id or bad seed. OutputError: ``out`` is not a writable
-        directory. Both before any work starts.
+    Raises (before any work):
+        ReproductionError: unknown paper id, bad seed or jobs. OutputError: ``out`` is not a writable directory.
     """
     ids = _resolve_ids(papers)
     seed = check_seed(seed)

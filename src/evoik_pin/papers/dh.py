@@ -1,19 +1,12 @@
-"""Denavit-Hartenberg tables and serial chains written out as URDF.
-
-The papers describe their arms by DH tables; Pinocchio reads URDF. This module turns a table (standard or
-modified/Craig convention, revolute, prismatic or fixed rows, per-joint offsets and limits) into a URDF
-whose joint ``i`` moves exactly like row ``i``, with simple visual geometry (a cylinder per joint axis, a
-box per link) so the arm renders in meshcat.
-
-Conventions (lengths in metres, angles in radians):
+"""Denavit-Hartenberg tables and serial chains written out as URDF (joint ``i`` moves like row ``i``; a box per
+link and a cylinder per joint axis, so the arm renders in meshcat). Lengths in m, angles in rad:
 
 * standard DH, row i = (a_i, alpha_i, d_i, theta_i):  ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
 * modified DH (Craig), row i = (a_{i-1}, alpha_{i-1}, d_i, theta_i):
   ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
 
-For a revolute row the joint variable adds to ``theta`` (the row's ``theta`` is the constant offset); for
-a prismatic row it adds to ``d``. A fixed row contributes its constant transform. The frame after the last
-row is the ``tool`` link, the default tip.
+The joint variable adds to ``theta`` (revolute) or ``d`` (prismatic); the frame after the last row is the
+``tool`` link.
 """
 
 from __future__ import annotations
@@ -49,17 +42,9 @@ def _trans(axis: str, dist: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class DHRow:
-    """One row of a DH table.
-
-    Attributes:
-        a: link length (m); ``a_i`` (standard) or ``a_{i-1}`` (modified).
-        alpha: link twist (rad); ``alpha_i`` (standard) or ``alpha_{i-1}`` (modified).
-        d: link offset (m); for a prismatic row, the constant added to the joint variable.
-        theta: joint angle (rad); for a revolute row, the constant offset added to the joint variable.
-        kind: ``"revolute"``, ``"prismatic"`` or ``"fixed"``.
-        lower, upper: joint limits (rad or m) of the joint *variable*; ignored for fixed rows.
-        name: joint name; defaults to ``joint<i>``.
-    """
+    """One row of a DH table: link length ``a`` (m), twist ``alpha`` (rad), offset ``d`` (m), angle ``theta`` (rad;
+    both constants the joint variable adds to), ``kind`` (``"revolute"``, ``"prismatic"``, ``"fixed"``), the joint
+    variable's limits ``lower``, ``upper`` (rad or m) and its ``name`` (default ``joint<i>``)."""
 
     a: float
     alpha: float
@@ -92,15 +77,8 @@ def dh_transform(row: DHRow, q: float = 0.0, convention: str = "standard") -> np
 
 @dataclass(frozen=True)
 class JointSpec:
-    """A joint of a serial chain: where it sits on its parent link and how it moves.
-
-    Attributes:
-        name: joint name.
-        kind: ``"revolute"``, ``"prismatic"`` or ``"fixed"``.
-        origin: (4, 4) transform from the parent link frame to the joint frame at zero joint value.
-        axis: (3,) unit axis in the joint frame.
-        lower, upper: limits of the joint variable (rad or m).
-    """
+    """A joint of a serial chain: ``name``, ``kind`` (``"revolute"``, ``"prismatic"``, ``"fixed"``), ``origin`` (4, 4)
+    from the parent link frame at zero joint value, unit ``axis`` (3,) in the joint frame, limits (rad or m)."""
 
     name: str
     kind: str
@@ -118,20 +96,9 @@ def dh_to_urdf(
     link_radius: float = 0.01,
     comment: str = "",
 ) -> str:
-    """URDF text of the arm described by a DH table.
-
-    Args:
-        name: robot name.
-        rows: the table, base to tool.
-        convention: ``"standard"`` or ``"modified"`` (Craig).
-        base: optional (4, 4) transform from ``base_link`` to the first DH frame.
-        link_radius: radius (m) of the visual cylinders; boxes are a little thinner.
-        comment: text placed in an XML comment at the top (source of the table, units, choices).
-
-    Returns:
-        The URDF document. Joint ``k`` (k = 1, 2, ...) drives the k-th movable row; the last frame is
-        the link ``tool``.
-    """
+    """URDF text of the arm ``name`` described by DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
+    ``"modified"``): ``base`` (4, 4) from ``base_link`` to the first DH frame, ``link_radius`` (m) of the visuals,
+    ``comment`` placed in an XML comment at the top."""
     if convention not in ("standard", "modified"):
         raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
     if not rows:
@@ -181,18 +148,23 @@ def _origin_xml(T: np.ndarray) -> str:
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
-def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
-    """A box from the link origin to point ``p`` (m), for rendering."""
-    length = float(np.linalg.norm(p))
-    if length < 1e-9:
-        return ""
-    z = p / length
+def _frame_along(z: np.ndarray, origin=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """A (4, 4) frame at ``origin`` (m) whose z axis is the unit vector ``z`` (visuals are built along z)."""
     helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = np.cross(helper, z)
     x /= np.linalg.norm(x)
     T = np.eye(4)
     T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-    T[:3, 3] = p / 2
+    T[:3, 3] = origin
+    return T
+
+
+def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
+    """A box from the link origin to point ``p`` (m), for rendering."""
+    length = float(np.linalg.norm(p))
+    if length < 1e-9:
+        return ""
+    T = _frame_along(p / length, p / 2)
     w = 1.4 * radius
     return (
         f"    <visual>{_origin_xml(T)}<geometry><box size=\"{_short(w)} {_short(w)} {_short(length)}\"/>"
@@ -202,12 +174,7 @@ def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
 
 def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
     """A cylinder along a revolute axis (or a small box on a prismatic one) at the joint origin."""
-    z = np.asarray(axis, float)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = np.cross(helper, z)
-    x /= np.linalg.norm(x)
-    T = np.eye(4)
-    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T = _frame_along(np.asarray(axis, float))
     if kind == "revolute":
         geom = f'<cylinder radius="{_short(1.6 * radius)}" length="{_short(5 * radius)}"/>'
     else:
@@ -216,12 +183,7 @@ def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
 
 
 def chain_to_urdf(name: str, joints: list[JointSpec], link_radius: float = 0.01, comment: str = "") -> str:
-    """URDF text of a serial chain ``base_link -> link1 -> ... -> tool``.
-
-    Each link carries a box from its origin to the next joint's origin and a cylinder on its joint axis,
-    so the arm is visible in meshcat without meshes. The last joint of ``joints`` is usually a fixed
-    ``tool`` joint; its child link is named ``tool``.
-    """
+    """URDF text of a serial chain ``base_link -> link1 -> ... -> tool`` (a last fixed joint's child is ``tool``)."""
     if not joints:
         raise RobotLoadError("a chain needs at least one joint")
     lines = ['<?xml version="1.0"?>']
