@@ -11,7 +11,7 @@ import numpy as np
 from ..api import solve
 from ..robot import load_robot
 from ..solvers.paper.analytic import planar2r_ik, puma_fk, puma_ik
-from .reporting import PaperReport, RunContext, Table, derive_rng
+from .reporting import PaperReport, RunContext, Table, derive_rng, dress
 
 PAPER_ID = "001"
 TITLE = "Inverse kinematics solution of robot arms using genetic and hybrid genetic algorithms (all solutions)"
@@ -364,14 +364,9 @@ def _fig_population_2r(ctx, hist, ref, cfg):
         ax.plot(Q[:, 0], Q[:, 1], "+", ms=3, color="tab:blue", alpha=0.6, label="population members")
         R = np.degrees(np.array(ref))
         ax.plot(R[:, 0], R[:, 1], "o", ms=8, mfc="none", mec="tab:red", mew=2, label="closed-form solutions")
-        ax.set_title(f"Fig. {num}: generation {g}", fontsize=9)
-        ax.set_xlabel("theta1 (deg)")
-        ax.set_xlim(-180, 180)
-        ax.set_ylim(-180, 180)
-        ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("theta2 (deg)")
+        ax.set(xlim=(-180, 180), ylim=(-180, 180))
+        dress(ax, "theta1 (deg)", "theta2 (deg)" if ax is axes[0] else "", f"Fig. {num}: generation {g}")
     axes[0].legend(fontsize=7, loc="lower left")
-    fig.tight_layout()
     return ctx.save_figure(fig, "fig7_9_population_2r", "Figs. 7-9 analogue: planar 2R GA population at generations "
                                                         f"{gens[0]}, {gens[1]} and {gens[2]}, target (20, 20) cm")
 
@@ -387,12 +382,9 @@ def _fig_population_puma(ctx, hist, ref, cfg):
         Q = np.degrees(hist.get(g, np.empty((0, 3))))
         ax.scatter(Q[:, 0], Q[:, 1], Q[:, 2], s=2, c="tab:blue", linewidths=0, label="population members")
         ax.scatter(R[:, 0], R[:, 1], R[:, 2], s=60, c="tab:red", marker="o", label="closed-form solutions")
-        ax.set_xlabel("q1 (deg)")
-        ax.set_ylabel("q2 (deg)")
-        ax.set_zlabel("q3 (deg)")
+        ax.set(xlabel="q1 (deg)", ylabel="q2 (deg)", zlabel="q3 (deg)")
         ax.set_title(f"Fig. {num}: generation {g}", fontsize=9)
         if k == 0:
             ax.legend(fontsize=7, loc="upper left")
-    fig.tight_layout()
     return ctx.save_figure(fig, "fig10_11_population_puma", "Figs. 10-11 analogue: PUMA GA population at generations "
                                                             f"{gens[0]} and {gens[1]}, target (-52.5, 39.3, -46.5) cm")

@@ -19,7 +19,16 @@ from ..objectives import PositionError, WeightedJointDisplacement
 from ..problem import DEFAULT_PRO_DELTA, Target
 from ..robot import load_robot
 from ..solvers import get_solver
-from .reporting import Animation, PaperReport, RunContext, Table, derive_rng, least_squares_distance, progress_bar
+from .reporting import (
+    Animation,
+    PaperReport,
+    RunContext,
+    Table,
+    derive_rng,
+    dress,
+    least_squares_distance,
+    progress_bar,
+)
 
 PAPER_ID = "002"
 TITLE = ("Use improved differential evolution algorithms to handle the inverse kinematics problem for robots "
@@ -144,44 +153,43 @@ def _by_construction(points: list[dict]) -> list[dict]:
     return points
 
 
-def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
-    """Full-range spiral points: ``reached``, ``missed`` (a solution exists) or ``no solution``.
+def _classify(pt: dict, distance) -> None:
+    """A point's ``status``: ``reached``; ``missed`` when ``distance()`` (the least distance a reachability check
+    finds, m) is within REACHED_M; else ``no solution``."""
+    pt["oracle"] = None
+    if pt["error"] <= REACHED_M:
+        pt["status"] = "reached"
+        return
+    pt["oracle"] = min(pt["error"], distance())
+    pt["status"] = "missed" if pt["oracle"] <= REACHED_M else "no solution"
 
-    The reachability check runs once per point (shared by the variants), starting from the closest
-    configuration any variant found, then from random configurations.
-    """
+
+def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
+    """:func:`_classify` full-range spiral points, the check run once per point for all variants, starting from
+    the closest configuration any variant found."""
     cache: dict[int, float] = {}
+
+    def distance(i: int) -> float:
+        if i not in cache:
+            closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
+            cache[i] = min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper,
+                                                                    rng, starts, closest["q"]))
+        return cache[i]
+
     for pts in variants.values():
         for i, pt in enumerate(pts):
-            pt["oracle"] = None
-            if pt["error"] <= REACHED_M:
-                pt["status"] = "reached"
-                continue
-            if i not in cache:
-                closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
-                cache[i] = min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper,
-                                                                        rng, starts, closest["q"]))
-            pt["oracle"] = min(pt["error"], cache[i])
-            pt["status"] = "missed" if pt["oracle"] <= REACHED_M else "no solution"
+            _classify(pt, lambda i=i: distance(i))
 
 
 def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: int) -> None:
-    """Pro-variant points: as :func:`_classify_full`, the check confined to each point's Pro box.
-
-    The first point (full range) is classified with the full-range check.
-    """
+    """:func:`_classify` Pro-variant points, the check confined to each point's Pro box (the first: full range)."""
     for i, (pt, p) in enumerate(zip(points, targets, strict=True)):
-        pt["oracle"] = None
-        if pt["error"] <= REACHED_M:
-            pt["status"] = "reached"
-            continue
         if i > 0:
             lo, hi = _pro_bounds(robot, points[i - 1]["q"], DEFAULT_PRO_DELTA)
             x0 = points[i - 1]["q"]
         else:
             lo, hi, x0 = robot.lower, robot.upper, pt["q"]
-        pt["oracle"] = min(pt["error"], least_squares_distance(robot, p, lo, hi, rng, starts, x0))
-        pt["status"] = "missed" if pt["oracle"] <= REACHED_M else "no solution"
+        _classify(pt, lambda p=p, lo=lo, hi=hi, x0=x0: least_squares_distance(robot, p, lo, hi, rng, starts, x0))
 
 
 def _smoothness(points: list[dict]) -> dict:
@@ -533,11 +541,8 @@ def _fig_targets(ctx, p_s2, p_s3):
     for k, (pts, title) in enumerate([(p_s2, "(a) Scenario 2: random points"), (p_s3, "(b) Scenario 3: spiral")]):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         ax.plot(*(pts / MM).T, "o" if k == 0 else "o-", ms=2.5, lw=0.8)
-        ax.set_xlabel("x (mm)")
-        ax.set_ylabel("y (mm)")
-        ax.set_zlabel("z (mm)")
+        ax.set(xlabel="x (mm)", ylabel="y (mm)", zlabel="z (mm)")
         ax.set_title(title, fontsize=9)
-    fig.tight_layout()
     return ctx.save_figure(fig, "fig3_targets", "Fig. 3 analogue: the target points of Scenarios 2 and 3")
 
 
@@ -548,13 +553,9 @@ def _fig_convergence(ctx, curves, time_axis: bool):
         if x is None or len(x) != hist.size:  # no per-generation stamps: spread the run's time evenly
             x = np.linspace(0, 1, hist.size)
         ax.semilogy(x, np.maximum(hist, 1e-17), label=name, color=_color(name))
-    ax.set_xlabel("time (s)" if time_axis else "generation")
-    ax.set_ylabel("best distance error (m)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
     what = "time" if time_axis else "generations"
-    ax.set_title(f"Scenario 1: error vs {what} (best of the Table 3 runs, 85 iterations)", fontsize=9)
-    fig.tight_layout()
+    dress(ax, "time (s)" if time_axis else "generation", "best distance error (m)",
+          f"Scenario 1: error vs {what} (best of the Table 3 runs, 85 iterations)", legend=10, grid="both")
     name, num = ("fig5_error_vs_time", 5) if time_axis else ("fig4_error_vs_generation", 4)
     return ctx.save_figure(fig, name, f"Fig. {num} analogue: Scenario 1 end-effector distance error vs {what}")
 
@@ -573,7 +574,6 @@ def _fig_points(ctx, points: dict, name: str, caption: str):
     axes[0].legend(fontsize=8)
     for ax in axes:
         ax.grid(True, alpha=0.3)
-    fig.tight_layout()
     return ctx.save_figure(fig, name, caption + " (errors of exactly 0 drawn at 1e-18 m)")
 
 
@@ -587,12 +587,8 @@ def _fig_joints(ctx, plain: list[dict], pro: list[dict]):
         for i, pt in enumerate(pts):  # points where no solution exists in the search box
             if pt.get("status") == "no solution":
                 ax.axvspan(i + 0.5, i + 1.5, color="tab:red", alpha=0.12, lw=0)
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel("spiral point")
-        ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("joint value (deg)")
+        dress(ax, "spiral point", "joint value (deg)" if ax is axes[0] else "", title)
     axes[1].legend(fontsize=7, ncol=2)
-    fig.tight_layout()
     return ctx.save_figure(fig, "fig8_joints_along_spiral",
                            "Fig. 8 analogue: joint values along the spiral without and with the Pro- search box "
                            "(shaded: no solution in the search box)")

@@ -12,7 +12,7 @@ import numpy as np
 from ..api import solve_trajectory
 from ..problem import Target
 from ..robot import load_robot
-from .reporting import Animation, PaperReport, RunContext, Table, derive_rng
+from .reporting import Animation, PaperReport, RunContext, Table, derive_rng, dress
 
 PAPER_ID = "003"
 TITLE = "Inverse kinematic multiobjective optimization for a vehicle-arm robot system using evolutionary algorithms"
@@ -247,12 +247,9 @@ def _fig_configurations(ctx, runs, P, q_start):
         ax.plot(P[:, 0], P[:, 1], "x", color="tab:red", ms=6, label="path points (tool along +x)")
         ax.plot(e["Q"][:, 0], e["Q"][:, 1], ".-", color="k", lw=0.8, ms=3, label="vehicle centre")
         ax.set_aspect("equal")
-        ax.set_title(f"K = {K:g} on the vehicle: vehicle path {e['vehicle_total'] / CM:.0f} cm", fontsize=9)
-        ax.set_xlabel("x (m)")
-        ax.grid(True, alpha=0.3)
-    axes[0].set_ylabel("y (m)")
+        dress(ax, "x (m)", "y (m)" if ax is axes[0] else "",
+              f"K = {K:g} on the vehicle: vehicle path {e['vehicle_total'] / CM:.0f} cm")
     axes[0].legend(fontsize=7, loc="lower right")
-    fig.tight_layout()
     return ctx.save_figure(fig, "fig2_configurations", "Fig. 2 analogue: vehicle-arm configurations along the path "
                                                        "for K = 10 (left) and K = 100 (right); grey: start, colour: "
                                                        "point order, boxes: vehicle")
@@ -267,14 +264,10 @@ def _fig_front(ctx, runs, mid, P):
         ax.plot(F[ok, 1], F[ok, 0], ".", color=color, ms=4, label=f"K = {K:g}")
         k = int(np.argmin(np.where(ok, F[:, 1], np.inf)))
         ax.plot(F[k, 1], F[k, 0], "*", color=color, ms=12, mec="k")
-    ax.set_xlabel("smoothness S = sqrt(sum K_i dq_i^2)")
-    ax.set_ylabel("g = 1 / (Y + 1)")
     ax.set_xscale("log")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    ax.set_title(f"Final front at point {mid + 1} ({P[mid, 0]:.1f}, {P[mid, 1]:.1f}) m; star = picked (least S)",
-                 fontsize=9)
-    fig.tight_layout()
+    dress(ax, "smoothness S = sqrt(sum K_i dq_i^2)", "g = 1 / (Y + 1)",
+          f"Final front at point {mid + 1} ({P[mid, 0]:.1f}, {P[mid, 1]:.1f}) m; star = picked (least S)", legend=8,
+          grid="both")
     return ctx.save_figure(fig, "fig_front_mid_point", "Final Pareto front (manipulability term g vs smoothness S) "
                                                        "at the middle path point, first run of each K")
 
@@ -285,11 +278,7 @@ def _fig_steps(ctx, runs, P):
     for K, color in zip(GAINS, ("tab:gray", "tab:blue", "tab:orange"), strict=True):
         steps = np.mean([e["vehicle_steps"] for e in runs[K]], axis=0)
         ax.plot(x, steps / CM, "o-", color=color, ms=3, label=f"K = {K:g}")
-    ax.set_xlabel("path point")
-    ax.set_ylabel("vehicle displacement into the point (cm)")
     ax.set_yscale("log")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    dress(ax, "path point", "vehicle displacement into the point (cm)", legend=8, grid="both")
     return ctx.save_figure(fig, "fig_vehicle_steps", "Vehicle displacement between consecutive points for each K "
                                                      "(mean over the runs; point 1 from the start configuration)")

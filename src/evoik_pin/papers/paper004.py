@@ -14,7 +14,7 @@ from ..api import solve
 from ..objectives import RPYPoseError
 from ..problem import Target
 from ..robot import load_robot
-from .reporting import PaperReport, RunContext, Table, least_squares_distance
+from .reporting import PaperReport, RunContext, Table, dress, least_squares_distance
 
 PAPER_ID = "004"
 TITLE = "Solving the kinematics of an aerial human-like manipulator using the differential evolution algorithm"
@@ -281,12 +281,8 @@ def _fig_objective(ctx: RunContext, robot, fk_goals):
         for label, goal in goals:
             r = _solve(robot, goal, pop, iters, rng)
             ax.semilogy(np.arange(r["history"].size), np.maximum(r["history"], 1e-17), label=label)
-        ax.set_xlabel("iteration")
-        ax.set_ylabel("best J (cm / rad units)")
-        ax.set_title(f"DE/rand/1, population {pop}, {iters} iterations", fontsize=9)
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
+        dress(ax, "iteration", "best J (cm / rad units)", f"DE/rand/1, population {pop}, {iters} iterations",
+              legend=7 if ax is axes[0] else None, grid="both")
     return ctx.save_figure(fig, "fig2_objective_vs_iteration",
                            "Fig. 2 analogue: best objective J per iteration for the paper's target (unreachable in our "
                            "model) and the three Table 5 targets made reachable (FK of the paper's joints)")
@@ -302,11 +298,7 @@ def _fig_sweep(ctx: RunContext, cells, sweep_paper, sweep_reach):
             idx.sort(key=lambda i: cells[i][1])
             ax.semilogy([cells[i][1] for i in idx], [max(sweep[i]["J_median"], 1e-17) for i in idx], "o-",
                         label=f"population {pop}")
-        ax.set_xlabel("iterations")
-        ax.set_ylabel("median J")
-        ax.set_title(f"Table 4 sweep - {title}", fontsize=9)
-        ax.grid(True, which="both", alpha=0.3)
-    axes[1].legend(fontsize=7)
-    fig.tight_layout()
+        dress(ax, "iterations", "median J", f"Table 4 sweep - {title}", legend=7 if ax is axes[1] else None,
+              grid="both")
     return ctx.save_figure(fig, "table4_sweep", "Table 4 sweep: median J against iterations, one line per population, "
                                                 "on the paper's target and on reachable targets")
