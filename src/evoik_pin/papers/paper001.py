@@ -153,15 +153,18 @@ def run(ctx: RunContext) -> PaperReport:
         if spec["history"]:
             histories[spec["arm"]] = hist
 
+    def against(arm: str, references: list) -> dict:
+        """Per target (cm): its closed-form solutions and, per method, what each run found and how near."""
+        out = {}
+        for k, (t_cm, ref) in enumerate(references):
+            out[t_cm] = {"reference": ref}
+            for m in ("ga", "hga"):
+                out[t_cm][m] = {"found": found[(arm, k, m)], "stats": _stats(ref, found[(arm, k, m)], m)}
+        return out
+
     # -- planar 2R: Tables 3 and 4 -----------------------------------------------------------------------
-    res2r: dict = {}
-    for k, t_cm in enumerate(TARGETS_2R_CM):
-        ref = planar2r_ik(targets["planar2r"][k][0], targets["planar2r"][k][1])
-        entry = {"reference": ref}
-        for method in ("ga", "hga"):
-            f = found[("planar2r", k, method)]
-            entry[method] = {"found": f, "stats": _stats(ref, f, method)}
-        res2r[t_cm] = entry
+    res2r = against("planar2r", [(t_cm, planar2r_ik(*targets["planar2r"][k][:2]))
+                                 for k, t_cm in enumerate(TARGETS_2R_CM)])
     for key, method, title in (("table3", "ga", "Table 3 - planar 2R: GA (12 generations) vs closed form"),
                                ("table4", "hga", "Table 4 - planar 2R: HGA (GA + Nelder-Mead) vs closed form")):
         rows, paper_rows = [], []
@@ -194,14 +197,8 @@ def run(ctx: RunContext) -> PaperReport:
                      "in the source text and restored from the closed form)." if method == "hga" else ""))))
 
     # -- PUMA: Tables 5 and 6 ----------------------------------------------------------------------------
-    resp: dict = {}
-    for k, t_cm in enumerate(TARGETS_PUMA_CM):
-        ref = _order_like(PAPER_TABLE5[t_cm], puma_ik(targets["puma3r"][k]), cols=(1, 2))  # t1 of target 4: notes
-        entry = {"reference": ref}
-        for method in ("ga", "hga"):
-            f = found[("puma3r", k, method)]
-            entry[method] = {"found": f, "stats": _stats(ref, f, method)}
-        resp[t_cm] = entry
+    resp = against("puma3r", [(t_cm, _order_like(PAPER_TABLE5[t_cm], puma_ik(targets["puma3r"][k]), cols=(1, 2)))
+                              for k, t_cm in enumerate(TARGETS_PUMA_CM)])  # t1 of target 4: see the notes
 
     rows5, paper5, misses = [], [], {}
     for t_cm in TARGETS_PUMA_CM:
@@ -258,16 +255,12 @@ def run(ctx: RunContext) -> PaperReport:
     # -- notes and data ----------------------------------------------------------------------------------
     report.notes += _notes(res2r, resp, misses, runs)
     report.data.update({
-        "planar2r": {str(t): {"closed_form_deg": np.degrees(np.array(e["reference"])),
-                              **{m: {"found_deg_per_run": [np.degrees(np.array(f)) if f else [] for f in e[m]["found"]],
-                                     "error_deg_per_solution_and_run": [st["errors"] for st in e[m]["stats"]]}
-                                 for m in ("ga", "hga")}} for t, e in res2r.items()},
-        "puma3r": {str(t): {"closed_form_deg": np.degrees(np.array(e["reference"])),
-                            **{m: {"found_deg_per_run": [np.degrees(np.array(f)) if f else [] for f in e[m]["found"]],
-                                   "error_deg_per_solution_and_run": [st["errors"] for st in e[m]["stats"]]}
-                               for m in ("ga", "hga")}} for t, e in resp.items()},
-        "paper_table5_fk_miss_cm": misses,
-    })
+        arm: {str(t): {"closed_form_deg": np.degrees(np.array(e["reference"])),
+                       **{m: {"found_deg_per_run": [np.degrees(np.array(f)) if f else [] for f in e[m]["found"]],
+                              "error_deg_per_solution_and_run": [st["errors"] for st in e[m]["stats"]]}
+                          for m in ("ga", "hga")}} for t, e in res.items()}
+        for arm, res in (("planar2r", res2r), ("puma3r", resp))})
+    report.data["paper_table5_fk_miss_cm"] = misses
     return report
 
 
@@ -298,16 +291,9 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
               for q, st in zip(e["reference"], e["hga"]["stats"], strict=True)
               if np.any(st["errors"] > FOUND_DEG["hga"])]
     if missed:
-        near_limit = all(np.any(np.abs(q) > 160.0) for _, q, _ in missed)
         notes.append(
             "HGA misses: " + "; ".join(f"target {_xyz(t)} solution ({', '.join(f'{v:.1f}' for v in q)}) deg in {n} of "
-                                       f"{runs} runs" for t, q, n in missed) + ". "
-            + ("Every missed solution has a joint within 20 deg of the +-180 deg limit. " if near_limit else "")
-            + "Diagnosed on PUMA target 2 (t1 = -170.7 deg): the GA's good points near that solution can lie "
-            "across the limit (t1 = +180 deg), and hga's Nelder-Mead polish is bounded to [-180, 180] deg and "
-            "cannot wrap round, so it stops on the bound (cost 0.05 m). A wrap-aware polish (unbounded on "
-            "full-circle revolute joints, the result wrapped) should remove these misses; hga.py is left unchanged "
-            "here (reported to its owner).")
+                                       f"{runs} runs" for t, q, n in missed) + ".")
     t3 = {str(t): [float(np.degrees(q[2])) for q in e["reference"]] for t, e in resp.items()}
     first = list(t3)[0]
     ours = {t: np.degrees(np.array(e["reference"])) for t, e in resp.items()}
@@ -322,32 +308,20 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
     t1_4m = sorted({round(float(np.degrees(q[0])), 1) for q in puma_ik(mirrored * CM)})
     sq = [float(np.sum(np.square(t))) for t in TARGETS_PUMA_CM]
     notes += [
-        "PUMA Table 5: with the stated lengths (a2 = 43.18, d = 14.90, a3 = 2.03, d4 = 43.30 cm) the closed form "
-        f"gives, for target 1, t3 = {', '.join(f'{v:.1f}' for v in t3[first])} deg where the paper prints 45, "
-        f"140.3, 140.3, 44.9; over all targets t3 differs by up to {max(d3):.1f} deg, while t1 and t2 of targets "
-        f"1-3 agree within {d12:.2f} deg. The paper's own angles put through its eq. 20 miss its targets 1-3 by "
-        f"{miss123.min():.2f}-{miss123.max():.2f} cm, so its Table 5 does not come from eq. 20 with these lengths "
-        "(its text also gives a3 = 2.302 cm beside Table 2's 2.03; a3 alone cannot move t3 by 5 deg). We keep the "
-        "stated lengths and report the difference; the HGA is judged against our closed form, which is exact for "
-        "the model it solves.",
+        "PUMA Table 5 is not eq. 20 with the stated lengths: our closed form gives, for target 1, t3 = "
+        f"{', '.join(f'{v:.1f}' for v in t3[first])} deg where the paper prints 45, 140.3, 140.3, 44.9 (t3 differs by "
+        f"up to {max(d3):.1f} deg, t1 and t2 of targets 1-3 agree within {d12:.2f} deg), and the paper's own angles "
+        f"miss its targets 1-3 by {miss123.min():.2f}-{miss123.max():.2f} cm. The HGA is judged against our closed "
+        "form.",
         f"PUMA target 4 as printed, (-56.4, 49.7, -28.4) cm, has t1 = {' / '.join(f'{v:g}' for v in t1_4)} deg; the "
         f"paper's t1 = -150 / 52.8 deg are those of (-56.4, -49.7, -28.4) (ours there: "
         f"{' / '.join(f'{v:g}' for v in t1_4m)} deg), and its t2, t3 match either sign. Against that mirrored target "
         f"the paper's angles miss by {miss4m.min():.2f}-{miss4m.max():.2f} cm, like targets 1-3: a sign of y is "
-        "lost in the paper (or its text). We solve the target as printed.",
-        f"The paper's targets 1, 3 and 4 lie at the same distance from the shoulder (|p|^2 = {sq[0]:.0f}, {sq[2]:.0f}, "
-        f"{sq[3]:.0f} cm^2), which is why their t3 values repeat (140.3 / 45 deg in the paper).",
-        "GA solutions: the GA's niche leaders (best member of each cluster of the final population, clusters of "
-        "radius 0.35 rad holding at least 0.5 % of it, at most 8); the GA alone is approximate after 12 "
-        "generations, as in the paper, but less accurate than its 0.4-3.6 deg: the paper's Fig. 9 shows the "
-        "final population gathered around the two optima, while ours (Figs. 7-9 analogue) still spreads along "
-        "wide bands, with members piled on the +-180 deg bounds by clipping. A likely cause: with sigma_share "
-        "(eq. 8) on range-normalized joints (0.5 for the 2R) the niche counts sit near n* = 200, and on target 1 "
-        "from a third to two thirds of the tournaments after generation 1 are decided by crowding, not by cost. "
-        "The HGA polishes the leaders of the clusters of every individual the GA "
-        "evaluated (not only the last generation), so it also polishes families the last generation lost.",
-        "Figs. 7-11: the populations of the first GA run (target 1) given to ga's callback(generation, population) "
-        "option, which we added for this reproduction.",
+        f"lost. We solve the target as printed. (Targets 1, 3 and 4 lie at the same distance from the shoulder, "
+        f"|p|^2 = {sq[0]:.0f}, {sq[2]:.0f}, {sq[3]:.0f} cm^2: their t3 values repeat.)",
+        "GA solutions: the leaders of the final population's niches (docs/REPRODUCTION.md discusses why they are "
+        "less accurate than the paper's 0.4-3.6 deg). Figs. 7-11: the first GA run's populations (target 1), from "
+        "ga's callback(generation, population).",
     ]
     return notes
 

@@ -454,20 +454,17 @@ def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int) -> list[str]:
             at_limit |= {f"q{j + 1}" for j in np.nonzero(lim)[0]}
         notes.append(
             f"{len(out)} of the {len(p_s3)} spiral points (n = {_runs_of(out)}, z = {z.min():.0f}-{z.max():.0f} mm) "
-            "have no solution within the joint ranges: bounded least squares from many starts and all our solvers "
-            f"stop millimetres away (table scenario3_unreachable). They lie {shoulder.min():.2f}-"
-            f"{shoulder.max():.2f} m from the shoulder (z = d1 = 500 mm); in the closest configurations found, "
-            f"{', '.join(sorted(at_limit)) or 'no joint'} sit at a limit, i.e. the limits stop the arm folding back "
-            "that far. The paper reports every spiral point solved, "
-            "so its spiral or its arm must differ from Table 1 and eq. 22 as printed; we keep them as printed.")
+            "have no solution within the joint ranges (table scenario3_unreachable): they lie "
+            f"{shoulder.min():.2f}-{shoulder.max():.2f} m from the shoulder, and in the closest configurations found "
+            f"{', '.join(sorted(at_limit)) or 'no joint'} sit at a limit. The paper reports every spiral point "
+            "solved, so its spiral or its arm must differ from Table 1 and eq. 22 as printed, which we keep.")
     missed = {k: [i for i, pt in enumerate(s3_points[k]) if i > 0 and pt["status"] == "missed"] for k in METHODS}
     if any(missed.values()):
         notes.append(
             "Scenario 3.1 misses (a solution exists, found by least squares, but not by the method after rho runs): "
             + "; ".join(f"{k} {len(v)} (n = {_runs_of(v)})" for k, v in missed.items())
-            + ". Every run's population contains the previous solution (q0, the paper's warm start); when that "
-              "configuration has joints at their limits, best/1-type mutations around it converge to the local "
-              "minimum next to it, restart after restart. " + _seed_check(s3_points, p_s3, seed))
+            + ". Every run's population holds the previous solution (q0); with joints at their limits there, "
+              "best/1-type mutations converge to the local minimum next to it. " + _seed_check(s3_points, p_s3, seed))
     lost = {k: [i for i, pt in enumerate(v) if pt["status"] == "no solution" and i not in out]
             for k, v in s3_points.items() if k.startswith("Pro-")}
     if any(lost.values()):
@@ -477,20 +474,13 @@ def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int) -> list[str]:
         dq1 = np.mean([d[:, 0].mean() for d in pro.values()])
         edge = np.mean([(d.max(axis=1) > np.degrees(DEFAULT_PRO_DELTA) - 0.01).mean() for d in pro.values()])
         notes.append(
-            f"Why the Pro- box loses the spiral: the spiral turns {azimuth:.1f} deg about the base axis per point, "
-            f"{azimuth / np.degrees(DEFAULT_PRO_DELTA):.1f} times the box half-width pi/100 = 1.8 deg, so q1 alone "
-            f"cannot follow it (it turns {dq1:.2f} deg per point on average in the Pro- runs) and the other joints "
-            "must make up the difference. With a = 0 nothing keeps the 4 redundant directions away from the joint "
-            f"limits: the solutions drift inside the box ({edge:.0%} of the steps have some joint at the edge of its "
-            "box) until a joint reaches its limit and the box no longer contains a solution. How long the track "
-            "lasts depends on that drift, i.e. on the variant.")
-        notes.append(
-            "Pro- variants lose the track where the box previous +- pi/100 contains no solution (checked by bounded "
-            "least squares inside the box): typically a joint sits at its limit or the step needs more than pi/100 "
-            "rad in some joint, and later points start from the approximation. Points with no solution in the box: "
-            + "; ".join(f"{k} {len(v)} (n = {_runs_of(v)})" for k, v in lost.items())
-            + ". These are counted in Table 5's 'no solution' column and left out of its averages; the paper reports "
-              "no such loss.")
+            "Pro- variants lose the track where the box previous +- pi/100 contains no solution (bounded least "
+            "squares inside it): " + "; ".join(f"{k} {len(v)} (n = {_runs_of(v)})" for k, v in lost.items())
+            + f" (Table 5's 'no solution' column; the paper reports no such loss). The spiral turns {azimuth:.1f} deg "
+            f"about the base axis per point, {azimuth / np.degrees(DEFAULT_PRO_DELTA):.1f} times the box half-width, "
+            f"so q1 alone cannot follow ({dq1:.2f} deg per point in the Pro- runs); with a = 0 the 4 redundant "
+            f"directions drift ({edge:.0%} of the steps have a joint at its box's edge) until a joint reaches its "
+            "limit.")
     return notes
 
 
@@ -500,26 +490,23 @@ def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
     notes = [
         f"Floating-point floor: NumPy and Pinocchio FK of the same joint vector differ by {np.median(floor):.1e} m "
         f"(median, max {floor.max():.1e} m), and doubles near these coordinates are spaced {ulp.min():.1e}-"
-        f"{ulp.max():.1e} m apart. A fitness value of 1e-17 m (ISADE) therefore means an exactly zero computed "
-        "distance; 1e-15 m (DE) is a few units in the last place. Runs that cannot meet it stop at their "
-        "generation budget with the error at the floor, and rho restarts them.",
+        f"{ulp.max():.1e} m apart: a fitness value of 1e-17 m (ISADE) means an exactly zero computed distance, and "
+        "runs that cannot meet it stop at their budget with the error at the floor.",
         f"Scenario 2 (Table 4): average errors ISADE {iso['avg_error']:.2e}, DE {de['avg_error']:.2e}, "
         f"PSO {pso['avg_error']:.2e} m (paper {p4['ISADE'][1]:.2e}, {p4['DE'][1]:.2e}, {p4['PSO'][1]:.2e}); "
         f"generations of the kept run {iso['avg_generations']:.1f} / {de['avg_generations']:.1f} / "
         f"{pso['avg_generations']:.1f} (paper 85.6 / 124.5 / 413.2).",
-        "Times: the paper's are MATLAB on an Intel i5-4258U; ours are NumPy on the machine above, so compare "
-        f"ratios, not absolute values. Scenario 2 time ratios DE/ISADE {_ratio(de['avg_time'], iso['avg_time'])} "
+        "Times (the paper's: MATLAB on an Intel i5-4258U): compare ratios. Scenario 2 time ratios DE/ISADE "
+        f"{_ratio(de['avg_time'], iso['avg_time'])} "
         f"(paper {_ratio(p4['DE'][4], p4['ISADE'][4])}), PSO/ISADE {_ratio(pso['avg_time'], iso['avg_time'])} "
         f"(paper {_ratio(p4['PSO'][4], p4['ISADE'][4])}).",
         "Joint continuity (Fig. 8): max joint jump between consecutive spiral points "
         + ", ".join(f"{k} {s3[k]['max_jump_deg']:.1f} deg" for k in ("PSO", "DE", "ISADE", "Pro-PSO", "Pro-DE",
                                                                      "Pro-ISADE"))
         + "; the Pro- box bounds every step by pi/100 = 1.8 deg per joint.",
-        "The paper's own numbers disagree in places: its text gives Scenario 3.1 PSO error 7.5404e-13 m, 391.1 "
-        "generations and 0.3478 s where Table 5 prints 7.4140e-13 m, 429.95 and 0.3604 s; Table 5 prints Pro-ISADE's "
-        "fitness value as 1e-12 m (Table 2: 1e-17 m). Its average errors (2e-14 m for ISADE) sit above the 1e-17 m "
-        "fitness value while its average generations (85.6) sit below the 130 budget, which no stopping rule stated "
-        "in the paper explains.",
+        "The paper's own numbers disagree in places (docs/REPRODUCTION.md): its text and Table 5 differ for Scenario "
+        "3.1 PSO; Table 5 prints Pro-ISADE's fitness value as 1e-12 m (Table 2: 1e-17 m); its ISADE errors (2e-14 m) "
+        "sit above the 1e-17 m fitness value while its generations (85.6) sit below the 130 budget.",
     ]
     return notes
 
