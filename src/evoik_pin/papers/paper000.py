@@ -204,39 +204,27 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
         f"Proposed DE (configuration (c), paper settings): {n_ok} of {runs * len(TARGETS_CM)} runs within 1 mm "
         f"(per target {rates}); median errors {medians} mm, worst run {worst:.3f} mm. The paper prints each DE "
         "result as the target itself to 1 decimal (within ~0.9 mm).",
-        "Trigonometric share Mt: the paper gives no value. With Fan & Lampinen's 0.05, 94 % of Table 2 runs (seeds "
-        "0-19, measured for issue 5) ended within 1 mm, the misses stalled with a still diverse population: the "
-        "adaptive rule gives the best individual P_m = P_c = 0, so it never moves and only other individuals' "
-        "trials can improve it. Mt = 0.125, measured on random reachable targets (not on Table 2), lets the "
-        "trigonometric donors contract the population fast enough; details in evoik_pin/solvers/paper/mode.py.",
+        "Trigonometric share Mt: the paper gives no value; ours, 0.125, was measured on random reachable targets "
+        "(with Fan & Lampinen's 0.05, 94 % of Table 2 runs ended within 1 mm; docs/BENCHMARKS.md).",
         f"GA: our binary GA's median errors per target are {min(g['median_error'] for g in ga) / MM:.2f}-"
         f"{max(g['median_error'] for g in ga) / MM:.2f} mm (worst run {max(g['max_error'] for g in ga) / MM:.2f} mm) "
         f"against the paper's {min(paper_ga):.1f}-{max(paper_ga):.1f} cm. Its 9-bit angles move in 0.7 deg steps "
-        "(2-4 mm of tip motion per step at the AX-18's 17-35 cm lever arms), so millimetres are its floor. Why "
-        "the paper's GA lands centimetres away we cannot tell: its crossover and mutation rates are not given (we "
-        "use 0.9 single-point crossover and 1/36 bit flips, and roulette on exp(-error in cm)).",
+        "(2-4 mm of tip motion per step), so millimetres are its floor; the paper gives no crossover or mutation "
+        "rates that could explain its centimetres.",
         f"AM: our algebraic method reaches every target to {max(a['max_error'] for a in am):.1e} m; the paper's misses "
-        f"by up to {max(paper_am):.2f} cm. Ours searches phi on a 0.5 deg grid with both shoulder branches (t1 and "
-        "t1 + 180 deg) and refines it; the paper's formulas as printed (t1 = atan(py/px), B = py / sin t1, a "
-        "dimensionally inconsistent t2) cannot be run as written, so we cannot say which of its steps loses the "
-        "accuracy.",
+        f"by up to {max(paper_am):.2f} cm (ours searches phi with both shoulder branches and refines it; the "
+        "paper's formulas cannot be run as printed).",
         "Configurations (Fig. 6b): " + "; ".join(f"{r[0]} {r[2]:.0%} within 1 mm, median {r[3]:.3f} mm"
                                                  for r in cfg_rows)
-        + ". As in the paper, (c) reaches the lowest position error. (a) and (b) lack the trigonometric donor, whose "
-        "pull towards the better of three members is what contracts the population; with only individuals drawn "
-        "with m < P_m <= 0.2 changed in a generation they stall at millimetres within 200 generations.",
+        + ". As in the paper, (c) reaches the lowest position error: (a) and (b) lack the trigonometric donor that "
+        "contracts the population, and stall at millimetres.",
         "Weights (Fig. 4): generation at which the median w1 exceeds 0.99: "
         + ", ".join(f"{k.split(' ')[0]} {v if v is not None else '> 200'}" for k, v in w_gen.items())
-        + f". The paper reports (c) settling in under 50 generations; ours settles at {w_gen[c_label]}. With b the "
-        "individual closest to the target, w2 = f1(b) / (f1(b) + f2(b)) tends to 0 as the error does, so w1 -> 1 "
-        "measures convergence of the position more than a balance between the objectives.",
-        "Diversity (Fig. 3) is the mean distance of the individuals to the population centroid with every joint "
-        "scaled by its range (0.29 sqrt(4) = 0.58 for a uniform population); the paper does not define its measure, "
-        "so compare shapes, not values.",
-        "Readings (evoik_pin.solvers.paper.mode): f1 = 1 - exp(-error in m), f2 = max displacement in rad, minimized; "
-        "the weights' best individual b is the one closest to the target (the pseudocode's maximized exp(-error), "
-        "exp(-displacement) and b = the best weighted individual both collapse the search, see docs/BENCHMARKS.md); "
-        "the answer is the last generation's best weighted individual (the pseudocode's argmax f).",
+        + f". The paper reports (c) settling in under 50 generations; ours settles at {w_gen[c_label]} (w2 tends to 0 "
+        "with the error of b, the individual closest to the target).",
+        "Diversity (Fig. 3): mean range-scaled distance to the centroid (0.58 for a uniform population); the paper "
+        "does not define its measure, so compare shapes, not values. Our readings of the pseudocode: "
+        "evoik_pin.solvers.paper.mode and docs/BENCHMARKS.md.",
     ]
     return notes
 
