@@ -373,8 +373,7 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
     disp = np.abs(Q - q0).max(axis=1)
     order = np.lexsort((disp, np.round(ev.cost / 1e-12), ~inside))
     best = order[0]
-    rot = None if ev.orientation_error is None else float(ev.orientation_error[best])
-    run.offer(np.clip(Q[best], lo, hi), float(ev.cost[best]), float(ev.position_error[best]), rot)
+    run.offer(np.clip(Q[best], lo, hi), ev, best)
     keep = Q[order][inside[order]]
     if len(keep):
         leaders, _ = leader_clusters(keep, np.arange(len(keep), dtype=float), 1e-6, robot.revolute)

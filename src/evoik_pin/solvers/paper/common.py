@@ -47,15 +47,9 @@ def initial_population(problem: IKProblem, rng: np.random.Generator, size: int) 
     return Q
 
 
-def enforce_bounds(
-    trial: np.ndarray, problem: IKProblem, rng: np.random.Generator, method: str = "clip",
-    parent: np.ndarray | None = None,
-) -> np.ndarray:
-    """Bring a population (N, n) back into the search box.
-
-    ``"clip"``: onto the violated bound; ``"reflect"``: mirrored back inside; ``"resample"``: violating entries
-    re-drawn uniformly in the box (``parent`` unused).
-    """
+def enforce_bounds(trial: np.ndarray, problem: IKProblem, rng: np.random.Generator, method: str = "clip") -> np.ndarray:
+    """A population (N, n) brought back into the search box: ``"clip"`` onto the violated bound, ``"reflect"``
+    mirrored back inside, ``"resample"`` violating entries re-drawn uniformly in the box."""
     lo, hi = problem.lower, problem.upper
     if method == "clip":
         return np.minimum(np.maximum(trial, lo), hi)  # = np.clip, with less call overhead
@@ -123,14 +117,8 @@ class SolverRun:
         """Log one generation's population ``Q`` (N, n) and its evaluation, extra keywords as history series;
         returns the best index."""
         i = int(ev.cost.argmin())
-        if ev.cost[i] < self.best_cost:
-            self.best_cost = float(ev.cost[i])
-            self.best_q = Q[i].copy()
-            self._best_pos = float(ev.position_error[i])
-            self._best_rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
-            self._stall = 0
-        else:
-            self._stall += 1
+        self._stall = 0 if ev.cost[i] < self.best_cost else self._stall + 1
+        self.offer(Q[i], ev, i)
         self.history["best_cost"].append(self.best_cost)
         self.history["mean_cost"].append(float(ev.cost.sum() / ev.cost.shape[0]))
         # diversity is computed in batches: one vectorized pass instead of a handful of calls per generation
@@ -149,11 +137,12 @@ class SolverRun:
             self.history["diversity"].extend(values.tolist())
             self._pending = []
 
-    def offer(self, q: np.ndarray, cost: float, position_error: float, orientation_error: float | None) -> None:
-        """Consider one configuration outside the generational log (e.g. after a local polish)."""
-        if cost < self.best_cost:
-            self.best_cost, self.best_q = float(cost), np.asarray(q, float).copy()
-            self._best_pos, self._best_rot = float(position_error), orientation_error
+    def offer(self, q: np.ndarray, ev: Evaluation, i: int) -> None:
+        """Consider configuration ``q`` (n,), whose cost and errors are row ``i`` of ``ev``, for the best."""
+        if ev.cost[i] < self.best_cost:
+            self.best_cost, self.best_q = float(ev.cost[i]), np.asarray(q, float).copy()
+            self._best_pos = float(ev.position_error[i])
+            self._best_rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
 
     @property
     def best_succeeded(self) -> bool:

@@ -110,20 +110,20 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
     is ignored. History adds ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
     """
     n, lo, hi = problem.n, problem.lower, problem.upper
-    width = np.where(hi > lo, hi - lo, 1.0)
-    scale = width if normalize else np.ones(n)
+    scale = np.where(hi > lo, hi - lo, 1.0) if normalize else np.ones(n)
     sigma = sharing_radius(n, niches)
     run = SolverRun(problem, max_generations)
-    Q = initial_population(problem, rng, population)
-    ev = problem.evaluate(Q)
-    nc = niche_counts(Q / scale, sigma)
-    run.record(Q, ev, mutation_probability=1.0 / n, mean_niche_count=float(nc.mean()))
-    if archive is not None:
-        archive.append((Q, ev.cost))
-    if callback is not None:
-        callback(0, Q.copy())
-    half = (population + 1) // 2
-    while run.generation < max_generations:
+    Q, p_m, half = initial_population(problem, rng, population), 1.0 / n, (population + 1) // 2
+    while True:
+        ev = problem.evaluate(Q)
+        nc = niche_counts(Q / scale, sigma)
+        run.record(Q, ev, mutation_probability=p_m, mean_niche_count=float(nc.mean()))
+        if archive is not None:
+            archive.append((Q, ev.cost))
+        if callback is not None:
+            callback(run.generation, Q.copy())
+        if run.generation >= max_generations:
+            break
         t = run.generation
         winners = niching_tournament(ev.cost, nc, niche_size, rng.integers(0, population, (2 * half, 2)), niching)
         P1, P2 = Q[winners[:half]], Q[winners[half:]]
@@ -133,16 +133,8 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
         # Eq. 11 (Deb 2000): p_m grows from 1/n to 1 while eta_m = 100 + t shrinks the perturbation.
         p_m = 1.0 / n + (t / max(max_generations, 1)) * (1.0 - 1.0 / n)
         mask = rng.random(children.shape) < p_m
-        children = basic_polynomial_mutation(children, lo, hi, 100.0 + t, mask, rng.random(children.shape))
-        Q = np.clip(children, lo, hi)
-        ev = problem.evaluate(Q)
-        nc = niche_counts(Q / scale, sigma)
+        Q = np.clip(basic_polynomial_mutation(children, lo, hi, 100.0 + t, mask, rng.random(children.shape)), lo, hi)
         run.generation += 1
-        run.record(Q, ev, mutation_probability=p_m, mean_niche_count=float(nc.mean()))
-        if archive is not None:
-            archive.append((Q, ev.cost))
-        if callback is not None:
-            callback(run.generation, Q.copy())
     return run, Q, ev.cost
 
 

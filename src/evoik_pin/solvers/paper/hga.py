@@ -86,8 +86,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     ev = problem.evaluate(polished)
     problem.evaluations = before  # bookkeeping, not search
     for i in range(len(polished)):
-        rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
-        run.offer(polished[i], float(ev.cost[i]), float(ev.position_error[i]), rot)
+        run.offer(polished[i], ev, i)
     ok = problem.rows_met(polished)  # a goal list: every goal within its own tolerances
     good, good_cost = polished[ok], ev.cost[ok]
     if len(good):

@@ -180,7 +180,7 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     # ever met under other weights: reset the run's best to it.
     final = int(np.argmin(cost))
     run.best_cost = np.inf
-    run.offer(X[final], cost[final], pos[final], None if rot is None else rot[final])
+    run.offer(X[final], Evaluation(cost, pos, rot), final)
     result = run.result("mode", reason)
     order = np.argsort(archive.F[:, 0], kind="stable")
     result.front = Front(q=archive.Q[order], objectives=archive.F[order], violation=np.zeros(len(order)))
