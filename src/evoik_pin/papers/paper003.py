@@ -129,9 +129,8 @@ def run(ctx: RunContext) -> PaperReport:
                      "smaller (Fig. 2, right)"],
                     ["vehicle path over the whole path (cm)", None, None]],
         formats=[None, ".2f", ".2f"],
-        note="The paper reports this only as a picture (and a text box we cannot read); 'smaller' for K = 100 is "
-             "its claim. Ours: mean over the runs; steps from point 1 on (the step from q_start to point 1 is "
-             "excluded from the mean, included in the path)."))
+        note="The paper reports this only as a picture; 'smaller' for K = 100 is its claim. Ours: mean over the "
+             "runs; steps from point 1 on (the step from q_start is in the path, not in the mean)."))
 
     bound = vehicle_path_lower_bound(P, q_start)
     rows = []
@@ -189,13 +188,12 @@ def run(ctx: RunContext) -> PaperReport:
         f"vehicle path over the whole line {tot[1.0] / CM:.0f} / {tot[10.0] / CM:.0f} / {tot[100.0] / CM:.0f} cm for "
         f"K = 1 / 10 / 100 against a lower bound of {bound / CM:.0f} cm, while the arm takes up the motion "
         f"({arm[1.0]:.0f} / {arm[10.0]:.0f} / {arm[100.0]:.0f} deg of summed joint motion). On this path the vehicle "
-        "has to move in the end, so the mean steps differ less than the early ones: with K = 100 the vehicle hardly "
-        "moves while the arm can still reach (first points of the step table) and moves only as much as it must.",
-        "The paper gives no link lengths, bounds, path, generation count or start; ours are in the settings. "
-        "Population 200 is the paper's. The equality constraint is met to 1e-6 m / rad at every point "
-        f"(largest position error {max(r[8] for r in rows):.1e} m) thanks to our damped-least-squares repair of "
-        "new individuals (weighted by 1/K, so it too spares the vehicle); the paper starts from a feasible "
-        "population but does not say how it keeps offspring feasible.",
+        "has to move in the end; with K = 100 it hardly moves while the arm can still reach (first points of the "
+        "step table).",
+        "The paper gives no link lengths, bounds, path, generation count or start; ours are in the settings. The "
+        f"equality constraint is met to 1e-6 m / rad at every point (largest position error "
+        f"{max(r[8] for r in rows):.1e} m) thanks to our damped-least-squares repair of new individuals (weighted "
+        "by 1/K); the paper does not say how it keeps offspring feasible.",
         f"Fronts: {min(front_sizes)}-{max(front_sizes)} members per point (population 200). At the middle point "
         "g = 1/(Y + 1) spans only " + ", ".join(f"{g_span[K]:.4f} (K = {K:g})" for K in GAINS)
         + " along the front while S spans " + ", ".join(f"{a:.2f}-{b:.2f}" for a, b in s_span.values())

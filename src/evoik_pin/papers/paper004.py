@@ -239,7 +239,7 @@ def run(ctx: RunContext) -> PaperReport:
         "The paper's tables are not mutually consistent with its own kinematics: FK of Table 5's joint values "
         f"misses Table 5's poses by {miss[:, 0].min():.1f}-{miss[:, 0].max():.1f} cm and "
         f"{miss[:, 1].min():.0f}-{miss[:, 1].max():.0f} deg (RPY norm) under our standard-DH reading of Table 1 "
-        "(PAPERS.md lists the other readings tried). The paper's own target cannot be reached by our model: its "
+        "(PAPERS.md lists the other readings tried). The paper's target is out of our model's reach: its "
         f"position alone is {pos_gap_cm:.1f} cm out of reach (bounded least squares, {starts} starts). The best J we "
         f"reach on it is {best_paper:.4g} (position {best_cell['pos_cm']:.2f} cm, RPY {best_cell['ori_deg']:.1f} deg "
         "off), whereas the paper reports J down to 4.5e-9. On its three Table 5 poses our best runs reach the "
@@ -250,12 +250,9 @@ def run(ctx: RunContext) -> PaperReport:
         f"budget (population 12, 100 iterations) reaches the target (<= {REACHED_POS_CM} cm, <= {REACHED_ORI_DEG} "
         f"deg) in {np.mean(reach_small):.0%} of runs; at population {s['table6_budgets'][1][0]} x "
         f"{s['table6_budgets'][1][1]} iterations in {np.mean(reach_big):.0%}.",
-        "J is computed in the paper's units (position in cm with sigma = 0.3, roll-pitch-yaw in rad with epsilon = "
-        "0.7); inside the library this is RPYPoseError(sigma = 30 per m, epsilon = 0.7). The paper's J column does "
-        "not follow from its own reached poses either (e.g. test 1: its pose is 0.07 cm and 15 deg off, which gives "
-        "J = 0.2, not 4.6).",
-        "Times: the paper does not state its machine or language; compare ratios between budgets, not absolute "
-        "values. Ours are single-threaded NumPy on the machine listed above.",
+        "J is in the paper's units (RPYPoseError(sigma = 30 per m, epsilon = 0.7)); the paper's J column does not "
+        "follow from its own reached poses either (test 1: 0.07 cm and 15 deg off give J = 0.2, not 4.6). Times: "
+        "the paper states no machine; compare ratios between budgets.",
     ]
     report.data = {
         "paper_target_position_out_of_reach_cm": pos_gap_cm,
