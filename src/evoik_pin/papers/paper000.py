@@ -57,10 +57,6 @@ def _settings(quick: bool) -> dict:
     }
 
 
-# --------------------------------------------------------------------------------------------------
-# runs
-
-
 def _part(spec: dict) -> list[dict]:
     """``spec["runs"]`` runs of one method on one target (a top-level job for ``ctx.map_parallel``)."""
     robot = load_robot(ROBOT)
@@ -103,10 +99,6 @@ def _median_series(runs: list[dict], key: str) -> np.ndarray:
 def _first_generation_below(curve: np.ndarray, level: float) -> int | None:
     hit = np.nonzero(curve <= level)[0]
     return int(hit[0]) if hit.size else None
-
-
-# --------------------------------------------------------------------------------------------------
-# the experiment
 
 
 def run(ctx: RunContext) -> PaperReport:
@@ -228,9 +220,6 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
     ]
     return notes
 
-
-# --------------------------------------------------------------------------------------------------
-# figures
 
 _COLORS = dict(zip(CONFIGS, ("tab:blue", "tab:orange", "tab:green"), strict=True))
 

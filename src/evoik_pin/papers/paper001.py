@@ -61,10 +61,6 @@ def _settings(quick: bool) -> dict:
     }
 
 
-# --------------------------------------------------------------------------------------------------
-# helpers
-
-
 def _wrap_deg(a):
     return (np.asarray(a, float) + 180.0) % 360.0 - 180.0
 
@@ -129,10 +125,6 @@ def _stats(reference, runs_found, method) -> list[dict]:
                       "median_error": float(np.median(errs)), "max_error": float(errs.max()),
                       "errors": errs})
     return stats
-
-
-# --------------------------------------------------------------------------------------------------
-# the experiment
 
 
 def run(ctx: RunContext) -> PaperReport:
@@ -324,10 +316,6 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
         "ga's callback(generation, population).",
     ]
     return notes
-
-
-# --------------------------------------------------------------------------------------------------
-# figures
 
 
 def _fig_population_2r(ctx, hist, ref, cfg):

@@ -95,10 +95,6 @@ def _settings(quick: bool) -> dict:
     }
 
 
-# --------------------------------------------------------------------------------------------------
-# solving
-
-
 def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0, bounds=None, a: float = 0.0,
                  max_generations: int | None = None, callback=None) -> dict:
     """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``)."""
@@ -205,10 +201,6 @@ def spiral_targets(count: int) -> np.ndarray:
     """The paper's spiral (eq. 22) in m: z = n pi mm, x = 200 cos(2z/100), y = 200 sin(2z/100) mm."""
     z = np.arange(1, count + 1) * np.pi
     return np.stack([200 * np.cos(2 * z / 100), 200 * np.sin(2 * z / 100), z], axis=1) * MM
-
-
-# --------------------------------------------------------------------------------------------------
-# the experiment
 
 
 @lru_cache(maxsize=1)
@@ -510,9 +502,6 @@ def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
     ]
     return notes
 
-
-# --------------------------------------------------------------------------------------------------
-# figures
 
 _COLORS = {"PSO": "tab:blue", "DE": "tab:orange", "ISADE": "tab:green"}
 

@@ -47,10 +47,6 @@ def _settings(quick: bool) -> dict:
     }
 
 
-# --------------------------------------------------------------------------------------------------
-# kinematics for drawing
-
-
 def planar_chain(q) -> np.ndarray:
     """Points (4, 2) in m: vehicle centre, elbow joints and tool tip of configuration ``q`` (5,)."""
     q = np.asarray(q, float)
@@ -84,10 +80,6 @@ def _part(spec: dict) -> list:
                             gains=[K, K, 1.0, 1.0, 1.0], population=cfg["population"],
                             max_generations=cfg["max_generations"], repair_steps=cfg["repair_steps"],
                             tolerance=cfg["tolerance_m"], rotation_tolerance=cfg["rotation_tolerance_rad"])
-
-
-# --------------------------------------------------------------------------------------------------
-# the experiment
 
 
 def run(ctx: RunContext) -> PaperReport:
@@ -213,10 +205,6 @@ def run(ctx: RunContext) -> PaperReport:
                                          "q": runs[K][0]["results"][mid].front.q} for K in GAINS},
     })
     return report
-
-
-# --------------------------------------------------------------------------------------------------
-# figures
 
 
 def _draw(ax, q, color, alpha=1.0):
