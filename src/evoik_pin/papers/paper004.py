@@ -138,18 +138,16 @@ def run(ctx: RunContext) -> PaperReport:
     cells = s["sweep_cells"]
 
     # -- Table 4 on the paper's target, and on reachable targets ---------------------------------------
-    rng = ctx.rng("004", "table4", "paper-target")
-    sweep_paper = []
-    for pop, iters in ctx.bar(cells, desc="004 Table 4 (paper target)"):
-        sweep_paper.append(_cells([_solve(robot, PAPER_TARGET, pop, iters, rng) for _ in range(runs)]))
+    def sweep(goals: list, label: str) -> list[dict]:
+        """Table 4's cells, one run per goal, from the stream ``label``."""
+        rng = ctx.rng("004", "table4", label)
+        return [_cells([_solve(robot, g, pop, iters, rng) for g in goals])
+                for pop, iters in ctx.bar(cells, desc=f"004 Table 4 ({label})")]
 
-    rng_t = ctx.rng("004", "reachable-targets")
-    q_reach = robot.random_configurations(s["reachable_targets"], rng_t)
+    sweep_paper = sweep([PAPER_TARGET] * runs, "paper-target")
+    q_reach = robot.random_configurations(s["reachable_targets"], ctx.rng("004", "reachable-targets"))
     goals_reach = [_pose(robot, q) for q in q_reach]
-    rng = ctx.rng("004", "table4", "reachable")
-    sweep_reach = []
-    for pop, iters in ctx.bar(cells, desc="004 Table 4 (reachable targets)"):
-        sweep_reach.append(_cells([_solve(robot, g, pop, iters, rng) for g in goals_reach]))
+    sweep_reach = sweep(goals_reach, "reachable")
 
     paper_rows, rows = [], []
     for (test, pop, iters, J, _total, t_ms, reached), (_, ours_iters), cell in zip(PAPER_TABLE4, cells, sweep_paper,
