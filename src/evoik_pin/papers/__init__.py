@@ -32,18 +32,8 @@ from .reporting import (
     machine_info,
 )
 
-__all__ = [
-    "PAPERS",
-    "Animation",
-    "Figure",
-    "PaperReport",
-    "RunContext",
-    "Table",
-    "derive_rng",
-    "paper_ids",
-    "run_paper",
-    "run_papers",
-]
+__all__ = ["PAPERS", "Animation", "Figure", "PaperReport", "RunContext", "Table", "derive_rng", "paper_ids",
+           "run_paper", "run_papers"]
 
 #: Default output directory of ``evoik reproduce`` (relative to the working directory).
 DEFAULT_OUT = "reproduction"

@@ -22,22 +22,8 @@ import numpy as np
 
 from ..errors import OutputError, ReproductionError
 
-__all__ = [
-    "Animation",
-    "Figure",
-    "PaperReport",
-    "RunContext",
-    "Table",
-    "check_output_dir",
-    "check_seed",
-    "derive_rng",
-    "dress",
-    "fmt",
-    "jsonable",
-    "least_squares_distance",
-    "machine_info",
-    "progress_bar",
-]
+__all__ = ["Animation", "Figure", "PaperReport", "RunContext", "Table", "check_output_dir", "check_seed", "derive_rng",
+           "dress", "fmt", "jsonable", "least_squares_distance", "machine_info", "progress_bar"]
 
 
 def check_seed(seed) -> int:

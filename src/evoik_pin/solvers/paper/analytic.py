@@ -20,21 +20,8 @@ from ..options import check_positive
 from .clustering import leader_clusters
 from .common import SolverRun
 
-__all__ = [
-    "AX18",
-    "PLANAR2R",
-    "PUMA3R",
-    "AX18Solution",
-    "ax18_algebraic",
-    "ax18_fk",
-    "ax18_ik",
-    "planar2r_fk",
-    "planar2r_ik",
-    "puma_fk",
-    "puma_ik",
-    "solution_results",
-    "tip_target_problem",
-]
+__all__ = ["AX18", "PLANAR2R", "PUMA3R", "AX18Solution", "ax18_algebraic", "ax18_fk", "ax18_ik", "planar2r_fk",
+           "planar2r_ik", "puma_fk", "puma_ik", "solution_results", "tip_target_problem"]
 
 _CM = 0.01
 #: Paper 000, Table 1 (m): d1, a1, a2, a3, d2, a4 of the Crustcrawler AX-18.

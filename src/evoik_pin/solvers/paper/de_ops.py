@@ -17,20 +17,9 @@ import numpy as np
 
 from ...errors import OptionError
 
-__all__ = [
-    "MUTATIONS",
-    "SCHEME_NUMBERS",
-    "binomial_crossover",
-    "distinct_indices",
-    "either_or",
-    "exponential_crossover",
-    "exponential_lengths",
-    "indices_from_uniform",
-    "mutate",
-    "permutation_indices",
-    "rand1",
-    "trigonometric",
-]
+__all__ = ["MUTATIONS", "SCHEME_NUMBERS", "binomial_crossover", "distinct_indices", "either_or",
+           "exponential_crossover", "exponential_lengths", "indices_from_uniform", "mutate", "permutation_indices",
+           "rand1", "trigonometric"]
 
 #: Paper 002's eq. 12 schemes in the paper's order, with the number of random indices each needs.
 MUTATIONS: dict[str, int] = {

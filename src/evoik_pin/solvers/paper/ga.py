@@ -18,19 +18,9 @@ from .analytic import solution_results
 from .clustering import leader_clusters
 from .common import SolverRun, initial_population
 
-__all__ = [
-    "ENCODINGS",
-    "basic_polynomial_mutation",
-    "check_niching_ga_options",
-    "decode_bits",
-    "decode_bounds",
-    "decode_sign_magnitude",
-    "niche_counts",
-    "niching_tournament",
-    "run_niching_ga",
-    "sbx_pairs",
-    "sharing_radius",
-]
+__all__ = ["ENCODINGS", "basic_polynomial_mutation", "check_niching_ga_options", "decode_bits", "decode_bounds",
+           "decode_sign_magnitude", "niche_counts", "niching_tournament", "run_niching_ga", "sbx_pairs",
+           "sharing_radius"]
 
 #: ``ga-binary`` encodings: the paper's sign + magnitude in degrees, or unsigned bits over the bounds.
 ENCODINGS = ("sign-magnitude", "bounds")

@@ -29,17 +29,8 @@ from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_populatio
 from .de import greedy_selection
 from .de_ops import binomial_crossover, permutation_indices
 
-__all__ = [
-    "ISADE_STRATEGIES",
-    "adapt_crossover_rates",
-    "isade",
-    "isade_donors",
-    "mean_scale_factor",
-    "rank_scale_factors",
-    "scale_factors",
-    "sigmoid_by_rank",
-    "strategy_probabilities",
-]
+__all__ = ["ISADE_STRATEGIES", "adapt_crossover_rates", "isade", "isade_donors", "mean_scale_factor",
+           "rank_scale_factors", "scale_factors", "sigmoid_by_rank", "strategy_probabilities"]
 
 #: ISADE's candidate strategies, in the order of paper 002's eqs. 14-16.
 ISADE_STRATEGIES = ("best1", "best2", "randtobest1")

@@ -26,19 +26,8 @@ from .nsga2_minimizer import NSGA2Result, bounded_polynomial_mutation, nsga2_min
 from .pareto_sorting import crowding_distance, dominance_matrix, nondominated_ranks, survival
 from .task_repair import _movable_rows, _task_rows, dls_repair
 
-__all__ = [
-    "GoalManipulability",
-    "NSGA2Result",
-    "bounded_polynomial_mutation",
-    "crowding_distance",
-    "dls_repair",
-    "dominance_matrix",
-    "goal_task",
-    "nondominated_ranks",
-    "nsga2_minimize",
-    "sbx",
-    "survival",
-]
+__all__ = ["GoalManipulability", "NSGA2Result", "bounded_polynomial_mutation", "crowding_distance", "dls_repair",
+           "dominance_matrix", "goal_task", "nondominated_ranks", "nsga2_minimize", "sbx", "survival"]
 
 
 #: Names of the rows of a base-frame Jacobian.

@@ -51,10 +51,11 @@ def _pareto_ranks(F: np.ndarray, stop: int | None = None) -> np.ndarray:
     return rank
 
 
-def _ranks(F: np.ndarray, violation: np.ndarray | None, stop: int | None = None) -> np.ndarray:
-    """Constraint-domination ranks without the (N, N) constraint matrix: the feasible rows are sorted by
-    Pareto dominance, the infeasible ones follow, one front per distinct violation value (a row with less
-    violation dominates one with more). ``stop`` as in :func:`_pareto_ranks`."""
+def nondominated_ranks(F: np.ndarray, violation: np.ndarray | None = None, stop: int | None = None) -> np.ndarray:
+    """Front index (N,) of every row under constraint domination, 0 first, as sorting by :func:`dominance_matrix`
+    would give without building its (N, N) constraint part: the feasible rows by Pareto dominance, then one front
+    per distinct violation value. ``stop`` as in :func:`_pareto_ranks`."""
+    F = np.asarray(F, float)
     if violation is None:
         return _pareto_ranks(F, stop)
     cv = np.asarray(violation, float).reshape(-1)
@@ -67,12 +68,6 @@ def _ranks(F: np.ndarray, violation: np.ndarray | None, stop: int | None = None)
     if not feas.all():
         rank[~feas] = offset + np.unique(cv[~feas], return_inverse=True)[1].reshape(-1)
     return rank
-
-
-def nondominated_ranks(F: np.ndarray, violation: np.ndarray | None = None) -> np.ndarray:
-    """Front index (N,) of every row under constraint domination, 0 first (as sorting by :func:`dominance_matrix`,
-    without building its constraint part)."""
-    return _ranks(np.asarray(F, float), violation)
 
 
 def crowding_distance(F: np.ndarray) -> np.ndarray:
@@ -93,7 +88,7 @@ def crowding_distance(F: np.ndarray) -> np.ndarray:
 def survival(F: np.ndarray, violation: np.ndarray | None, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """NSGA-II's elitist survival: indices of the ``size`` survivors (whole fronts in rank order, the overflowing one
     cut by crowding distance), with their ranks and crowding distances."""
-    rank = _ranks(F, violation, stop=size)
+    rank = nondominated_ranks(F, violation, stop=size)
     order = np.argsort(rank, kind="stable")
     last = rank[order[min(size, len(order)) - 1]]
     cd = np.zeros(F.shape[0])
