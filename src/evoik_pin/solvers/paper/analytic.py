@@ -17,7 +17,7 @@ from ...problem import IKProblem
 from ...result import Result
 from .. import register
 from ..options import check_positive
-from .clustering import leader_clusters
+from .clustering import leader_rows
 from .common import SolverRun
 
 __all__ = ["AX18", "PLANAR2R", "PUMA3R", "AX18Solution", "ax18_algebraic", "ax18_fk", "ax18_ik", "planar2r_fk",
@@ -362,11 +362,8 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
     best = order[0]
     run.offer(np.clip(Q[best], lo, hi), ev, best)
     keep = Q[order][inside[order]]
-    if len(keep):
-        leaders, _ = leader_clusters(keep, np.arange(len(keep), dtype=float), 1e-6, robot.revolute)
-        keep = keep[np.sort(leaders)]
-    solutions = solution_results(problem, keep, "algebraic", 0, problem.evaluations,
-                                 0.0) if exact else []
+    keep = leader_rows(keep, np.arange(len(keep), dtype=float), 1e-6, robot.revolute)  # order kept: cost = index
+    solutions = solution_results(problem, keep, "algebraic", 0, problem.evaluations, 0.0) if exact else []
     if exact and solutions:
         message = f"closed form: {len(solutions)} solution(s) inside the bounds"
     elif exact:

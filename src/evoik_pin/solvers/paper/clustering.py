@@ -9,7 +9,7 @@ import numpy as np
 from ... import lie
 from ..options import check_positive
 
-__all__ = ["joint_differences", "joint_distances", "leader_clusters"]
+__all__ = ["joint_differences", "joint_distances", "leader_clusters", "leader_rows"]
 
 
 def joint_differences(A: np.ndarray, b: np.ndarray, revolute: np.ndarray) -> np.ndarray:
@@ -43,3 +43,11 @@ def leader_clusters(Q: np.ndarray, cost: np.ndarray, radius: float, revolute: np
         leaders.append(lead)
         remaining = remaining[~near]
     return np.array(leaders, dtype=int), labels
+
+
+def leader_rows(Q: np.ndarray, cost: np.ndarray, radius: float, revolute: np.ndarray, max_clusters: int | None = None,
+                min_members: int = 1) -> np.ndarray:
+    """The leaders (M, n) of :func:`leader_clusters`, best first, of the clusters with at least ``min_members``."""
+    leaders, labels = leader_clusters(Q, cost, radius, revolute, max_clusters)
+    sizes = np.bincount(labels[labels >= 0], minlength=len(leaders))
+    return np.asarray(Q)[leaders[sizes >= min_members]]

@@ -15,7 +15,7 @@ from ...result import Result
 from .. import register
 from ..options import check_callback, check_choice, check_fraction, check_int, check_nonnegative, check_positive
 from .analytic import solution_results
-from .clustering import leader_clusters
+from .clustering import leader_rows
 from .common import SolverRun, initial_population
 
 __all__ = ["ENCODINGS", "basic_polynomial_mutation", "check_niching_ga_options", "decode_bits", "decode_bounds",
@@ -128,15 +128,6 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
     return run, Q, ev.cost
 
 
-def solution_leaders(problem: IKProblem, Q: np.ndarray, cost: np.ndarray, radius: float,
-                     max_clusters: int | None = None, min_members: int = 1) -> np.ndarray:
-    """Leaders (M, n), best first, of the :func:`~.clustering.leader_clusters` of radius ``radius`` (rad) of a
-    population that hold at least ``min_members`` members."""
-    leaders, labels = leader_clusters(Q, cost, radius, problem.robot.revolute, max_clusters)
-    sizes = np.bincount(labels[labels >= 0], minlength=len(leaders))
-    return Q[leaders[sizes >= min_members]]
-
-
 @register("ga", "paper 001: real-coded GA with SBX and niching binary tournament; the final population's "
           "niches give several IK solutions", multi_solution=True)
 def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, max_generations: int = 12,
@@ -168,8 +159,8 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
     check_callback(callback)
     run, Q, cost = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                   crossover_probability, bool(niching), callback=callback)
-    leaders = solution_leaders(problem, Q, cost, cluster_radius,
-                               min_members=max(1, int(np.ceil(min_niche_fraction * population))))[:max_solutions]
+    leaders = leader_rows(Q, cost, cluster_radius, problem.robot.revolute,
+                          min_members=max(1, int(np.ceil(min_niche_fraction * population))))[:max_solutions]
     result = run.result("ga", f"max_generations ({max_generations}) run; {len(leaders)} niche(s) found")
     result.solutions = solution_results(problem, leaders, "ga", result.generations, result.evaluations,
                                         result.time_s, only_successful=False)

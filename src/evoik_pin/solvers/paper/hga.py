@@ -14,8 +14,8 @@ from ...result import Result
 from .. import register
 from ..options import check_callback, check_int, check_positive
 from .analytic import solution_results
-from .clustering import leader_clusters
-from .ga import check_niching_ga_options, run_niching_ga, solution_leaders
+from .clustering import leader_rows
+from .ga import check_niching_ga_options, run_niching_ga
 
 __all__ = ["nelder_mead_polish"]
 
@@ -79,7 +79,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     # every individual the GA evaluated, not only the last generation, which may have drifted away from a family
     Q = np.concatenate([a[0] for a in archive])
     cost = np.concatenate([a[1] for a in archive])
-    starts = solution_leaders(problem, Q, cost, cluster_radius, max_clusters=max_starts)
+    starts = leader_rows(Q, cost, cluster_radius, problem.robot.revolute, max_clusters=max_starts)
     polished = np.array([nelder_mead_polish(problem, q, simplex_size, xatol, fatol, max_polish_evaluations)
                          for q in starts])
     before = problem.evaluations
@@ -88,10 +88,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     for i in range(len(polished)):
         run.offer(polished[i], ev, i)
     ok = problem.rows_met(polished)  # a goal list: every goal within its own tolerances
-    good, good_cost = polished[ok], ev.cost[ok]
-    if len(good):
-        leaders, _ = leader_clusters(good, good_cost, solution_radius, problem.robot.revolute)
-        good = good[leaders]
+    good = leader_rows(polished[ok], ev.cost[ok], solution_radius, problem.robot.revolute)
     message = (f"{len(good)} distinct solution(s) from {len(starts)} polished niche leader(s)" if len(good) else
                f"no polished niche leader (of {len(starts)}) reaches the target: it is out of reach, or "
                "the GA missed it")
