@@ -11,7 +11,7 @@ import numpy as np
 
 from ..api import solve
 from ..robot import load_robot
-from .reporting import PaperReport, RunContext, Table, derive_rng, dress
+from .reporting import PaperReport, RunContext, Table, derive_rng, dress, tuple_text
 
 PAPER_ID = "000"
 TITLE = "A multi-objective differential evolution algorithm for robot inverse kinematics"
@@ -128,11 +128,11 @@ def run(ctx: RunContext) -> PaperReport:
         for key, method in (("GA", "GA"), ("AM", "AM"), ("DE", "binomial-trigonometric")):
             sm = _summary(results[t_cm][method])
             summary[f"{t_cm} {key}"] = sm
-            rows.append([_xyz(t_cm), METHOD_LABELS[key], _xyz(sm["reached"] / CM, ".2f"), sm["reached_error"] / CM,
-                         sm["runs"], sm["success"], sm["median_error"] / MM, sm["max_error"] / MM,
-                         np.degrees(sm["median_displacement"])])
+            rows.append([tuple_text(t_cm, ".1f"), METHOD_LABELS[key], tuple_text(sm["reached"] / CM, ".2f"),
+                         sm["reached_error"] / CM, sm["runs"], sm["success"], sm["median_error"] / MM,
+                         sm["max_error"] / MM, np.degrees(sm["median_displacement"])])
             reached = PAPER_TABLE2[t_cm][key]
-            paper_rows.append([_xyz(t_cm), METHOD_LABELS[key], _xyz(reached),
+            paper_rows.append([tuple_text(t_cm, ".1f"), METHOD_LABELS[key], tuple_text(reached, ".1f"),
                                float(np.linalg.norm(np.subtract(reached, t_cm))), None, None, None, None, None])
     report.tables.append(Table(
         "table2", "Table 2 - target positions and the end-effector positions reached (GA, AM, proposed DE)",
@@ -174,10 +174,6 @@ def run(ctx: RunContext) -> PaperReport:
         "summary": summary,
     })
     return report
-
-
-def _xyz(p, spec: str = ".1f") -> str:
-    return "(" + ", ".join(format(float(v), spec) for v in p) + ")"
 
 
 def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:

@@ -11,7 +11,7 @@ import numpy as np
 from ..api import solve
 from ..robot import load_robot
 from ..solvers.paper.analytic import planar2r_ik, puma_fk, puma_ik
-from .reporting import PaperReport, RunContext, Table, derive_rng, dress
+from .reporting import PaperReport, RunContext, Table, derive_rng, dress, tuple_text
 
 PAPER_ID = "001"
 TITLE = "Inverse kinematics solution of robot arms using genetic and hybrid genetic algorithms (all solutions)"
@@ -168,12 +168,12 @@ def run(ctx: RunContext) -> PaperReport:
             for j, q in enumerate(ref):
                 st = stats[id(q)]
                 got = _angles(st["first_q"])[:2]
-                rows.append([_xy(t_cm), j + 1, *np.degrees(q), *got, st["first_error"], runs, st["found"],
+                rows.append([tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *got, st["first_error"], runs, st["found"],
                              st["median_error"], st["max_error"]])
             for j, (closed, ga_row) in enumerate(paper):
                 got = ga_row if method == "ga" else closed
                 err = float(np.abs(np.subtract(got, closed)).max())
-                paper_rows.append([_xy(t_cm), j + 1, *closed, *got, err, None, None, None, None])
+                paper_rows.append([tuple_text(t_cm, "g"), j + 1, *closed, *got, err, None, None, None, None])
         report.tables.append(Table(
             key, title,
             ["target (cm)", "solution", "closed form t1 (deg)", "closed form t2 (deg)", f"{method.upper()} t1 (deg)",
@@ -194,14 +194,14 @@ def run(ctx: RunContext) -> PaperReport:
 
     rows5, paper5, misses = [], [], {}
     for t_cm in TARGETS_PUMA_CM:
-        target = np.array(t_cm) * CM
+        target, t_text = np.array(t_cm) * CM, tuple_text(t_cm, "g")
         for j, q in enumerate(resp[t_cm]["reference"]):
-            rows5.append([_xyz(t_cm), j + 1, *np.degrees(q), float(np.linalg.norm(puma_fk(q) - target)) / CM])
+            rows5.append([t_text, j + 1, *np.degrees(q), float(np.linalg.norm(puma_fk(q) - target)) / CM])
         paper_q = np.radians(np.array(PAPER_TABLE5[t_cm]))
         miss = np.linalg.norm(puma_fk(paper_q) - target, axis=1) / CM
         misses[str(t_cm)] = miss
         for j, row in enumerate(PAPER_TABLE5[t_cm]):
-            paper5.append([_xyz(t_cm), j + 1, *row, float(miss[j])])
+            paper5.append([t_text, j + 1, *row, float(miss[j])])
     report.tables.append(Table(
         "table5", "Table 5 - PUMA wrist point: closed-form solutions (eq. 20, stated lengths)",
         ["target (cm)", "solution", "t1 (deg)", "t2 (deg)", "t3 (deg)", "FK miss of these angles (cm)"],
@@ -217,11 +217,11 @@ def run(ctx: RunContext) -> PaperReport:
         for t_cm in TARGETS_PUMA_CM:
             e = resp[t_cm]
             for j, (q, st) in enumerate(zip(e["reference"], e[method]["stats"], strict=True)):
-                rows.append([_xyz(t_cm), j + 1, *np.degrees(q), *_angles(st["first_q"]), st["first_error"], runs,
-                             st["found"], st["median_error"], st["max_error"]])
+                rows.append([tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"]), st["first_error"],
+                             runs, st["found"], st["median_error"], st["max_error"]])
             if method == "hga":
                 for j, row in enumerate(PAPER_TABLE6.get(t_cm, [])):
-                    paper_rows.append([_xyz(t_cm), j + 1, *PAPER_TABLE5[t_cm][j], *row,
+                    paper_rows.append([tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
                                        float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()),
                                        None, None, None, None])
         spec = ".4f" if method == "hga" else ".2f"
@@ -256,14 +256,6 @@ def run(ctx: RunContext) -> PaperReport:
     return report
 
 
-def _xy(t) -> str:
-    return f"({t[0]:g}, {t[1]:g})"
-
-
-def _xyz(t) -> str:
-    return "(" + ", ".join(f"{v:g}" for v in t) + ")"
-
-
 def _collect(res: dict, method: str) -> np.ndarray:
     return np.concatenate([st["errors"] for e in res.values() for st in e[method]["stats"]])
 
@@ -284,7 +276,7 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
               if np.any(st["errors"] > FOUND_DEG["hga"])]
     if missed:
         notes.append(
-            "HGA misses: " + "; ".join(f"target {_xyz(t)} solution ({', '.join(f'{v:.1f}' for v in q)}) deg in {n} of "
+            "HGA misses: " + "; ".join(f"target {tuple_text(t, 'g')} solution {tuple_text(q, '.1f')} deg in {n} of "
                                        f"{runs} runs" for t, q, n in missed) + ".")
     t3 = {str(t): [float(np.degrees(q[2])) for q in e["reference"]] for t, e in resp.items()}
     first = list(t3)[0]

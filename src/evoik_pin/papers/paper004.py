@@ -14,7 +14,7 @@ from ..api import solve
 from ..objectives import RPYPoseError
 from ..problem import Target
 from ..robot import load_robot
-from .reporting import PaperReport, RunContext, Table, dress, least_squares_distance
+from .reporting import PaperReport, RunContext, Table, dress, least_squares_distance, tuple_text
 
 PAPER_ID = "004"
 TITLE = "Solving the kinematics of an aerial human-like manipulator using the differential evolution algorithm"
@@ -117,10 +117,6 @@ def _solve(robot, goal, population: int, iterations: int, rng) -> dict:
             "reached": bool(pos_cm <= REACHED_POS_CM and ori_deg <= REACHED_ORI_DEG)}
 
 
-def _pose_str(pose) -> str:
-    return "(" + ", ".join(f"{v:.4g}" for v in pose) + ")"
-
-
 def _cells(runs: list[dict]) -> dict:
     J = np.array([r["J"] for r in runs])
     best = runs[int(np.argmin(J))]
@@ -153,14 +149,14 @@ def run(ctx: RunContext) -> PaperReport:
     for (test, pop, iters, J, _total, t_ms, reached), (_, ours_iters), cell in zip(PAPER_TABLE4, cells, sweep_paper,
                                                                                       strict=True):
         p_err, o_err = _pose_errors(reached, PAPER_TARGET)
-        paper_rows.append([test, pop, iters, J, None, p_err, o_err, t_ms, _pose_str(reached)])
+        paper_rows.append([test, pop, iters, J, None, p_err, o_err, t_ms, tuple_text(reached)])
         b = cell["best"]
         rows.append([test, pop, ours_iters, cell["J_median"], cell["J_best"], b["pos_cm"], b["ori_deg"],
-                     cell["time_ms_median"], _pose_str(b["pose"])])
+                     cell["time_ms_median"], tuple_text(b["pose"])])
     cols = ["test", "population", "iterations", "J (median)", "J (best)", "pos. error (cm)",
             "RPY error (deg)", "time (ms, median)", "reached pose (x, y, z cm; r, p, y deg)"]
     report.tables.append(Table(
-        "table4", f"Table 4 - DE sweep on the paper's target {_pose_str(PAPER_TARGET)} (cm, deg)", cols, rows,
+        "table4", f"Table 4 - DE sweep on the paper's target {tuple_text(PAPER_TARGET)} (cm, deg)", cols, rows,
         paper_rows=paper_rows,
         note=(f"Ours: {runs} run(s) per cell; 'J (median)' is the typical single run, errors and pose are of the "
               "best run. Paper: one run per cell; its errors are computed here from its reported reached pose; "
@@ -187,7 +183,7 @@ def run(ctx: RunContext) -> PaperReport:
         pose = _pose(robot, np.radians(q_deg))
         fk_goals.append(pose)
         p_err, o_err = _pose_errors(pose, goal)
-        check_rows.append([k, _pose_str(goal), _pose_str(q_deg), _pose_str(pose), p_err, o_err])
+        check_rows.append([k, tuple_text(goal), tuple_text(q_deg), tuple_text(pose), p_err, o_err])
     report.tables.append(Table(
         "table5_check", "Table 5 consistency check - FK (our standard-DH reading of Table 1) of the paper's joint "
         "values against the paper's target poses",
@@ -207,12 +203,12 @@ def run(ctx: RunContext) -> PaperReport:
     paper6 = []
     for k, (J, _total, t_ms, reached) in enumerate(PAPER_TABLE6):
         p_err, o_err = _pose_errors(reached, PAPER_TABLE5[k][0])
-        paper6.append([k + 1, "paper pose", 12, 100, J, None, p_err, o_err, t_ms, None, _pose_str(reached)])
+        paper6.append([k + 1, "paper pose", 12, 100, J, None, p_err, o_err, t_ms, None, tuple_text(reached)])
     rows6 = []
     for (kind, k, pop, iters), cell in t6.items():
         b = cell["best"]
         rows6.append([k + 1, kind, pop, iters, cell["J_median"], cell["J_best"], b["pos_cm"], b["ori_deg"],
-                      cell["time_ms_median"], cell["reached_fraction"], _pose_str(b["pose"])])
+                      cell["time_ms_median"], cell["reached_fraction"], tuple_text(b["pose"])])
     report.tables.append(Table(
         "table6", "Tables 5/6 - the paper's three targets: as printed ('paper pose') and as FK of the paper's own "
         "joint values ('FK of paper joints', reachable by construction)", cols6, rows6, paper_rows=paper6,

@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import OutputError, ReproductionError
 
 __all__ = ["Animation", "Figure", "PaperReport", "RunContext", "Table", "check_output_dir", "check_seed", "derive_rng",
-           "dress", "fmt", "jsonable", "least_squares_distance", "machine_info", "progress_bar"]
+           "dress", "fmt", "jsonable", "least_squares_distance", "machine_info", "progress_bar", "tuple_text"]
 
 
 def check_seed(seed) -> int:
@@ -70,6 +70,11 @@ def fmt(value, spec: str | None = None) -> str:
     if abs(v) < 1e-3 or abs(v) >= 1e5:
         return f"{v:.3e}"
     return f"{v:.4g}"
+
+
+def tuple_text(values, spec: str = ".4g") -> str:
+    """``values`` as ``"(v1, v2, ...)"``, each formatted with ``spec``, for table cells."""
+    return "(" + ", ".join(format(float(v), spec) for v in values) + ")"
 
 
 def jsonable(obj: Any) -> Any:
