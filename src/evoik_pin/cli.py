@@ -325,10 +325,11 @@ def _cmd_fk(args: argparse.Namespace) -> int:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    """IK for one target: xyz in metres, optional roll-pitch-yaw in degrees; exit 1 when not reached."""
+    """IK for one target (xyz in m, optional roll-pitch-yaw in degrees) or a goals file; exit 1 when not reached."""
     import pinocchio as pin
 
-    from .api import DEFAULT_ALL_METHOD, DEFAULT_METHOD, solve
+    from .api import DEFAULT_ALL_METHOD, DEFAULT_METHOD, GOAL_METHODS, solve
+    from .goals import Goal
     from .papers.reporting import check_output_file
     from .problem import Target
     from .solvers import get_solver, methods
@@ -340,35 +341,141 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     method = args.method or (DEFAULT_ALL_METHOD if args.all else DEFAULT_METHOD)
     get_solver(method)  # an unknown method is named before its options are checked
     if goals_file is not None:
-        return _solve_goals(args, robot, goals_file, method, html, scene, margin)
-    pool = [m for m in methods() if get_solver(m).multi_solution or not args.all]
+        goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
+    pool = [m for m in (methods() if goals_file is None else GOAL_METHODS)
+            if get_solver(m).multi_solution or not args.all]
     options = _call_options(args, robot, method, pool)
-    position = np.asarray(args.xyz, dtype=float)
-    target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
     if scene is not None:
         options.update(scene=scene, margin=margin)
+    if goals_file is not None:
+        for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
+            args.typed_flags.pop(phrase, None)
+        target = goals_file.problems[0]
+    else:
+        position = np.asarray(args.xyz, dtype=float)
+        target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
     if args.all:
-        return _solve_all(args, robot, target, options, html, method)
+        return _solve_all(args, robot, target, options, html, method, goals_file is not None)
     res = solve(robot, target, method=method, seed=args.seed, **options)
-    reached = robot.fk(res.q)
-    info = {
-        "robot": robot.name,
-        "method": res.method or method,
-        "success": bool(res.success),
-        "message": res.message,
-        "joint_names": list(robot.joint_names),
-        "q_rad": [float(v) for v in res.q],
-        "q_deg": [float(v) for v in _shown(robot, res.q, False)],
-        "target_position_m": [float(v) for v in position],
-        "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
-        "reached_position_m": [float(v) for v in reached.translation],
-        "reached_rpy_deg": [float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))],
-        **_answer_fields(args, res),
-    }
-    _report(args, robot, res, info, scene, margin)
+    info = {"robot": robot.name, "method": res.method or method, "success": bool(res.success),
+            "message": res.message, "joint_names": list(robot.joint_names), **_q_fields(robot, res.q)}
+    rows = None
+    if goals_file is None:
+        reached = robot.fk(res.q)
+        info.update(target_position_m=[float(v) for v in position],
+                    target_rpy_deg=None if args.rpy is None else [float(v) for v in args.rpy],
+                    reached_position_m=[float(v) for v in reached.translation],
+                    reached_rpy_deg=[float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))])
+        target = Target.coerce(target)
+    else:
+        target = [g for g in target if isinstance(g, Goal)]  # the preferences have no errors to show
+        rows = [_goal_row(res, i, goal, *errors) for i, (goal, errors) in enumerate(zip(target, res.goal_errors,
+                                                                                          strict=True))]
+        info.update(floating_base=robot.floating_base, goals_file=str(args.goals),
+                    q_pinocchio=[float(v) for v in robot.full_configuration(res.q)], goal_errors=rows)
+    info.update(position_error_m=res.position_error, orientation_error_rad=res.orientation_error, cost=res.cost,
+                generations=res.generations, evaluations=res.evaluations, time_s=res.time_s, seed=args.seed)
+    _report(args, robot, res, info, scene, margin, rows)
     if html is not None or args.view:
-        _view_solution(robot, res, Target.coerce(target), html, args.view, scene=scene, margin=margin)
+        _view_solution(robot, res, target, html, args.view, scene=scene, margin=margin)
     return 0 if res.success else 1
+
+
+def _goal_row(res, i: int, goal, pos, rot) -> dict:
+    """Goal ``i``'s line of a goal-list answer (``evoik solve --goals --json``'s ``goal_errors``)."""
+    from .io.goals_file import goal_kind_name
+
+    row = {"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos, "rotation_error_rad": rot,
+           "met": bool(goal.met(pos, rot)), "tolerance_m": goal.tolerance if goal.has_position else None,
+           "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None, "weight": goal.weight}
+    if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
+        row["label"] = goal.label
+        if getattr(goal, "frame_a", None):
+            row["frame_a"] = goal.frame_a
+    if goal.alternatives is not None:  # a goal set: the member met
+        row["chosen"] = res.chosen[i]
+    return row
+
+
+def _q_fields(robot, q) -> dict:
+    """An answer's joint values for JSON output: ``q_rad`` and ``q_deg`` (revolute in degrees, prismatic in m)."""
+    return {"q_rad": [float(v) for v in q], "q_deg": [float(v) for v in _shown(robot, q, False)]}
+
+
+def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, method: str, goal_list: bool) -> int:
+    """``evoik solve --all``: every solution of the target or goal list (``solve_all``), one line each or as JSON;
+    exit 1 when there is none. ``--html`` / ``--view``: the first solution (or the best approximation), the others
+    as ghosts."""
+    from .api import solve_all
+    from .problem import Target
+
+    sols = solve_all(robot, target, method=method, seed=args.seed, **options)
+    res = sols.result
+    scene = options.get("scene")
+    rows = [_q_fields(robot, s.q) for s in sols]
+    info = {"robot": robot.name, "method": res.method or method, "success": bool(sols), "count": len(sols),
+            "message": sols.message, "joint_names": list(robot.joint_names), "solutions": rows,
+            "time_s": res.time_s, "seed": args.seed}
+    if goal_list:
+        for row, s in zip(rows, sols, strict=True):
+            row.update(q_pinocchio=[float(v) for v in robot.full_configuration(s.q)], goal_errors=[
+                {"frame": g.frame, "position_error_m": p, "rotation_error_rad": o, "met": bool(g.met(p, o))}
+                for g, (p, o) in zip(target, s.goal_errors, strict=True)])
+        info.update(floating_base=robot.floating_base, goals_file=str(args.goals))
+        found = f"{len(sols)} solution(s) of {len(target)} goals"
+    else:
+        for row, s in zip(rows, sols, strict=True):
+            row.update(position_error_m=s.position_error, orientation_error_rad=s.orientation_error)
+            if scene is not None:  # solve_all keeps the collision-free solutions only
+                row.update(collision_free=bool(s.collision_free), min_distance_m=float(s.min_distance))
+        info.update(target_position_m=[float(v) for v in args.xyz],
+                    target_rpy_deg=None if args.rpy is None else [float(v) for v in args.rpy])
+        if scene is not None:
+            info.update(scene=str(args.scene), margin_m=options["margin"])
+        found = f"{len(sols)} solution(s)"
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        unit = "rad" if args.rad else "deg"
+        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {found} in {res.time_s * 1e3:.2f} ms "
+              f"({sols.message})")
+        if sols:
+            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+        for k, s in enumerate(sols):
+            if goal_list:
+                rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
+                errors = f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
+            else:
+                rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
+                free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
+                errors = f"position error {s.position_error:.1e} m{rot}{free}"
+            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors})")
+    if html is not None or args.view:
+        _view_solution(robot, sols[0] if sols else res, target if goal_list else Target.coerce(target), html,
+                       args.view, ghosts=sols, scene=scene, margin=options.get("margin", 0.0))
+    return 0 if sols else 1
+
+
+def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None, margin: float = 0.0) -> None:
+    """Show a solve's answer and its target (a :class:`Target`, or a goal list: its goals' markers) in meshcat, with
+    ``ghosts`` (e.g. every solution of ``--all``) as translucent robots and a ``scene``'s obstacles (the links in
+    collision red); write ``html`` and/or serve until Ctrl-C."""
+    from .viz import Viewer
+
+    with Viewer(robot) as viewer:
+        if isinstance(target, list):
+            viewer.show_solution(res, target, scene=scene, margin=margin)
+        else:
+            viewer.show(res, scene=scene, margin=margin)
+        if ghosts:
+            viewer.show_solutions(ghosts)
+        if not isinstance(target, list):
+            viewer.show_target(target.position, target.rotation)
+        if html is not None:
+            print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
+        if view:
+            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+
 
 
 def _goals_arg(args: argparse.Namespace):
@@ -396,113 +503,6 @@ def _goals_arg(args: argparse.Namespace):
                              "evoik solve solves one goal list (goals:): in Python, evoik_pin.io.goals_file."
                              "load_problems with solve_many or solve_trajectory")
     return goals_file
-
-
-def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html, scene, margin: float) -> int:
-    """``evoik solve ROBOT --goals FILE``: one answer meeting every goal of the file; each goal's errors printed
-    (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
-    from .api import GOAL_METHODS, solve
-    from .goals import Goal
-    from .io.goals_file import goal_kind_name
-    from .solvers import get_solver
-
-    goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
-    pool = [m for m in GOAL_METHODS if get_solver(m).multi_solution or not args.all]
-    options = _call_options(args, robot, method, pool)
-    for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
-        args.typed_flags.pop(phrase, None)
-    if scene is not None:
-        options.update(scene=scene, margin=margin)
-    goals = goals_file.problems[0]
-    if args.all:
-        return _solve_all_goals(args, robot, goals, method, options, html)
-    res = solve(robot, goals, method=method, seed=args.seed, **options)
-    goals = [g for g in goals if isinstance(g, Goal)]  # the preferences have no errors to show
-    rows = []
-    for i, (goal, (pos, rot)) in enumerate(zip(goals, res.goal_errors, strict=True)):
-        rows.append({"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos,
-                     "rotation_error_rad": rot, "met": bool(goal.met(pos, rot)),
-                     "tolerance_m": goal.tolerance if goal.has_position else None,
-                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None,
-                     "weight": goal.weight})
-        if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
-            rows[-1]["label"] = goal.label
-            if getattr(goal, "frame_a", None):
-                rows[-1]["frame_a"] = goal.frame_a
-        if goal.alternatives is not None:  # a goal set: the member met
-            rows[-1]["chosen"] = res.chosen[i]
-    info = {
-        "robot": robot.name,
-        "floating_base": robot.floating_base,
-        "method": res.method or method,
-        "success": bool(res.success),
-        "message": res.message,
-        "goals_file": str(args.goals),
-        "joint_names": list(robot.joint_names),
-        "q_rad": [float(v) for v in res.q],
-        "q_deg": [float(v) for v in _shown(robot, res.q, False)],
-        "q_pinocchio": [float(v) for v in robot.full_configuration(res.q)],
-        "goal_errors": rows,
-        **_answer_fields(args, res),
-    }
-    _report(args, robot, res, info, scene, margin, rows)
-    if html is not None:
-        from .viz import save_solution_html
-
-        print(f"wrote {save_solution_html(robot, res, goals, html, scene=scene, margin=margin)}", file=sys.stderr)
-    if args.view:
-        from .viz import Viewer
-
-        with Viewer(robot) as viewer:
-            viewer.show_solution(res, goals, scene=scene, margin=margin)
-            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-    return 0 if res.success else 1
-
-
-def _solve_all_goals(args: argparse.Namespace, robot, goals, method: str, options: dict, html) -> int:
-    """``evoik solve ROBOT --goals FILE --all``: every solution of the goal list (``solve_all``), one line each with
-    its largest errors (JSON: each solution's q and per-goal errors); exit 1 when there is none. ``--html`` /
-    ``--view`` show the first solution (or the best approximation) with the goals, the others as ghosts."""
-    from .api import solve_all
-
-    sols = solve_all(robot, goals, method=method, seed=args.seed, **options)
-    res = sols.result
-    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
-             "q_pinocchio": [float(v) for v in robot.full_configuration(s.q)],
-             "goal_errors": [{"frame": g.frame, "position_error_m": p, "rotation_error_rad": o,
-                              "met": bool(g.met(p, o))} for g, (p, o) in zip(goals, s.goal_errors, strict=True)]}
-            for s in sols]
-    info = {"robot": robot.name, "floating_base": robot.floating_base, "method": res.method or method,
-            "success": bool(sols), "count": len(sols), "message": sols.message, "goals_file": str(args.goals),
-            "joint_names": list(robot.joint_names), "solutions": rows, "time_s": res.time_s, "seed": args.seed}
-    if args.json:
-        print(json.dumps(info, indent=2))
-    else:
-        def errors(s):
-            rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
-            return f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
-
-        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) of {len(goals)} goals in "
-                         f"{res.time_s * 1e3:.2f} ms", errors)
-    if html is not None or args.view:
-        from .viz import Viewer
-
-        with Viewer(robot) as viewer:
-            viewer.show_solution(sols[0] if sols else res, goals, scene=options.get("scene"),
-                                 margin=options.get("margin", 0.0))
-            if sols:
-                viewer.show_solutions(sols)
-            if html is not None:
-                print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
-            if args.view:
-                viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-    return 0 if sols else 1
-
-
-def _answer_fields(args: argparse.Namespace, res) -> dict:
-    """The JSON fields every ``evoik solve`` answer ends with: its errors (m, rad), cost, effort and seed."""
-    return {"position_error_m": res.position_error, "orientation_error_rad": res.orientation_error, "cost": res.cost,
-            "generations": res.generations, "evaluations": res.evaluations, "time_s": res.time_s, "seed": args.seed}
 
 
 def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
@@ -568,70 +568,6 @@ def _print_collisions(info: dict) -> None:
           f"{info['min_distance_m'] * 1e3:.3f} mm; {where})")
     if info["colliding_pairs"]:
         print("in collision:   " + ", ".join(f"{a} - {b}" for a, b in info["colliding_pairs"]))
-
-
-def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None, margin: float = 0.0) -> None:
-    """Show a solve's answer and its target in meshcat (and ``ghosts``, e.g. every solution of ``--all``, as
-    translucent robots; with a ``scene``, its obstacles and the answer's links in collision in red); write ``html``
-    and/or serve until Ctrl-C."""
-    from .viz import Viewer
-
-    with Viewer(robot) as viewer:
-        viewer.show(res, scene=scene, margin=margin)
-        if ghosts:
-            viewer.show_solutions(ghosts)
-        viewer.show_target(target.position, target.rotation)
-        if html is not None:
-            print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
-        if view:
-            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-
-
-def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, method: str) -> int:
-    """``evoik solve --all``: every solution (``solve_all``), printed one per line or as JSON; exit 1 when none."""
-    from .api import solve_all
-    from .problem import Target
-
-    sols = solve_all(robot, target, method=method, seed=args.seed, **options)
-    res = sols.result
-    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
-             "position_error_m": s.position_error, "orientation_error_rad": s.orientation_error} for s in sols]
-    scene = options.get("scene")
-    if scene is not None:  # solve_all keeps the collision-free solutions only
-        for row, s in zip(rows, sols, strict=True):
-            row.update(collision_free=bool(s.collision_free), min_distance_m=float(s.min_distance))
-    info = {"robot": robot.name, "method": res.method or method, "success": bool(sols), "count": len(sols),
-            "message": sols.message, "joint_names": list(robot.joint_names), "solutions": rows,
-            "target_position_m": [float(v) for v in args.xyz],
-            "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
-            "time_s": res.time_s, "seed": args.seed}
-    if scene is not None:
-        info.update(scene=str(args.scene), margin_m=options["margin"])
-    if args.json:
-        print(json.dumps(info, indent=2))
-    else:
-        def errors(s):
-            rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
-            free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
-            return f"position error {s.position_error:.1e} m{rot}{free}"
-
-        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) in {res.time_s * 1e3:.2f} ms",
-                         errors)
-    if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
-        _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols,
-                       scene=scene, margin=options.get("margin", 0.0))
-    return 0 if sols else 1
-
-
-def _print_solutions(args: argparse.Namespace, robot, sols, method: str, what: str, errors) -> None:
-    """``evoik solve --all``'s text: a heading (the method, ``what`` was found, the search's message), then a line
-    per solution: its index, q (deg, or rad with ``--rad``) and ``errors(solution)`` in parentheses."""
-    unit = "rad" if args.rad else "deg"
-    print(f"{robot.name} ({robot.n} joints), method {method}: {what} ({sols.message})")
-    if sols:
-        print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
-    for k, s in enumerate(sols):
-        print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors(s)})")
 
 
 def _print_solution(robot, res, info: dict, rad: bool) -> None:

@@ -278,7 +278,7 @@ class IKSolver:
                 self._lanes[key] = lane
 
     def run(self, problem: IKProblem, rng) -> Result:
-        """The method on this solver.s problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
+        """The method on this solver's problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
         goals = problem.goals
         if self._plain and problem.scene is None and (goals is None or not problem.goal_sets):
             # memetic's plan alone: without goal sets, scene or polish its verdict is the goals' verdict

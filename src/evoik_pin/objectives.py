@@ -1,19 +1,6 @@
-"""Vectorized IK objectives: every cost maps a population ``Q`` (N, n) to costs (N,) in one call.
-
-Terms share one forward-kinematics pass through :class:`PopulationKinematics` (positions only when no
-term needs rotations) and compose as weighted sums: ``PositionError(t) + 0.5 * OrientationError(t)``.
-
-Terms and their units:
-
-* :class:`PositionError` (m), :class:`OrientationError` (rad, angle of ``log3(R_target^T R)``; planar:
-  wrapped yaw difference), :class:`PoseError` = position + weight x orientation, :class:`PoseDistance` =
-  sqrt(position^2 + (weight x orientation)^2), the Euclidean norm of the weighted 6-D error;
-* :class:`RPYPoseError`: paper 004's ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` with O the
-  roll-pitch-yaw angles (wrapped differences);
-* :class:`MaxJointDisplacement`: paper 000's ``max_k |q_k - q_init,k|`` (rad);
-* :class:`WeightedJointDisplacement`: ``sqrt(sum_k K_k (q_k - q_prev,k)^2)`` (papers 001, 002 eq. 21, 003);
-* :class:`ManipulabilityCost`: paper 003's ``1 / (Y + 1)`` with Y = sqrt(det(J J^T)) of chosen rows, or -Y;
-* :class:`JointLimitMargin`: 1 - (smallest normalized distance to a limit), 0 at mid-range, 1 at a limit.
+"""Vectorized IK objectives: every cost maps a population ``Q`` (N, n) to costs (N,) in one call, its terms sharing
+one forward-kinematics pass (:class:`PopulationKinematics`) and composing as weighted sums:
+``PositionError(t) + 0.5 * OrientationError(t)``. Each term's docstring gives its formula and unit.
 """
 
 from __future__ import annotations
@@ -113,12 +100,8 @@ class Objective:
         raise NotImplementedError
 
     def from_errors(self, target, position_error: float, orientation_error: float | None) -> float | None:
-        """The cost of a configuration whose errors towards ``target`` are known (position m, orientation rad
-        or None), when the objective is a function of those errors alone; None otherwise (then evaluate it).
-
-        Lets a local solver, which has the errors from its own kinematics, report the cost without a second
-        kinematics pass.
-        """
+        """The cost from known errors towards ``target`` (position m, orientation rad or None) when the objective is a
+        function of them alone (a local solver has them from its own kinematics); None otherwise."""
         return None
 
     def __call__(self, Q: np.ndarray, kin: PopulationKinematics | None = None, robot=None) -> np.ndarray:
@@ -216,12 +199,8 @@ def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 
 
 
 class PoseDistance(Objective):
-    """``sqrt(position_error^2 + (orientation_weight x rotation_angle)^2)`` (m): the Euclidean norm of the
-    6-D error (position in m, rotation vector of ``log3`` in rad scaled by ``orientation_weight`` m/rad).
-
-    Same zero set and units as :func:`PoseError`, but smooth away from the solution: the sum of two norms
-    has a crease wherever one error is exactly zero, which a swarm collapses onto; this norm has none.
-    """
+    """``sqrt(position_error^2 + (orientation_weight x rotation_angle)^2)`` (m): the Euclidean norm of the weighted
+    6-D error; the zero set of :func:`PoseError` without its crease where one error is zero."""
 
     def __init__(self, target, orientation_weight: float = 1.0) -> None:
         if not target.has_orientation:
@@ -342,11 +321,8 @@ POSE_METRICS = ("sum", "euclidean")
 
 
 def default_cost(position_error, orientation_error, orientation_weight: float = 1.0, pose_metric: str = "sum"):
-    """The value of :func:`default_objective` from the errors (scalars or arrays; ``orientation_error`` None for
-    position targets): position + weight x orientation (``"sum"``) or their Euclidean norm (``"euclidean"``).
-
-    For batch solvers, which have every target's errors and no per-target objective object.
-    """
+    """:func:`default_objective`'s value from the errors (scalars or arrays; ``orientation_error`` None for position
+    targets), for batch solvers, which have no per-target objective object."""
     if orientation_error is None:
         return position_error
     if pose_metric == "euclidean":

@@ -1,25 +1,9 @@
 """Reachability maps: which voxels of the workspace the tip reaches, in how many orientations, how dexterously.
 
-:func:`reachability_map` cuts the workspace into cubes of ``voxel`` m (the bounding box of the tip positions of
-random configurations, padded by one voxel) and asks IK, for each voxel centre, about ``orientations``
-orientations (a super-Fibonacci sample of SO(3): Alexa, CVPR 2022; the same set for every voxel):
-
-* ``index``: the fraction of them IK reaches, the *reachability index* of capability maps (Zacharias et al.
-  2007; reuleaux's "reachability"); for position-only arms (fewer than 6 joints) and planar arms the question is
-  the position alone, so the index is 1 (reached) or 0;
-* ``manipulability``: the best Yoshikawa manipulability ``sqrt(det(J J^T))`` among the answers (all six rows
-  for poses, the translational rows for positions, vx and vy for planar arms); 0 where nothing is reached.
-
-It runs the batch engine of :func:`evoik_pin.solve_many` (:class:`~evoik_pin.solvers.batch.threads.BatchSolver`, or
-Ray actors with ``backend="ray"``) in batches of ``batch_size`` targets: first the voxel centres as position
-targets (a voxel whose centre no configuration reaches reaches no orientation either: its poses are not asked),
-then every orientation of the voxels reached. Only the batched LM rounds judge a target (``table_seeds`` of them,
-no per-target fallback search, which would dominate the cost on unreachable poses): a pose those rounds miss
-counts as not reached, so the index is a lower bound.
-
-:meth:`ReachMap.save` writes ``<robot>_reach.npz`` (``centers`` (M, 3), ``index`` (M,) in [0, 1],
-``manipulability`` (M,), the settings and the seed), a PNG of slices and a meshcat HTML point cloud coloured by
-the index.
+:func:`reachability_map` asks the batch engine of :func:`evoik_pin.solve_many` (its LM rounds only, so the index is
+a lower bound), at every voxel centre, first for the position, then for ``orientations`` orientations (a
+super-Fibonacci sample of SO(3), the same for every voxel); ``index`` is the fraction reached, ``manipulability``
+the best ``sqrt(det(J J^T))`` among the answers. Definitions and options: docs/SCALE.md.
 """
 
 from __future__ import annotations

@@ -1,8 +1,5 @@
-"""IK targets: what a solver is asked to reach, as one checked value (:class:`Target`).
-
-A target is a position (3,) in m, a pose (position and rotation), or a planar (x, y[, yaw]) target, in the
-robot's base frame. Every entry point checks its targets here: finite numbers of the right shape, a rotation
-matrix, and a position within :data:`MAX_TARGET_NORM` of the base.
+"""IK targets: a position (3,) m, a pose, or a planar (x, y[, yaw]) target in the robot's base frame, checked once
+(:class:`Target`): finite numbers of the right shape, a rotation matrix, within :data:`MAX_TARGET_NORM` of the base.
 """
 
 from __future__ import annotations
@@ -90,10 +87,8 @@ def _pose_ok(position: np.ndarray, rotation: np.ndarray) -> bool:
 
 
 def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
-    """A ``cls`` (Target) of the float arrays ``position`` (3,) m and ``rotation`` (3, 3) when they pass
-    :class:`Target`'s checks, built without its ``__post_init__`` (the checks made here on Python floats, about 1 us
-    in place of 3); None when they do not: the caller then builds the Target the slow way, which raises the error
-    with its message."""
+    """A ``cls`` (Target) of ``position`` (3,) m and ``rotation`` (3, 3) without ``__post_init__`` when they pass
+    :func:`_pose_ok`; None when not (the caller then builds it the checked way, which raises the error)."""
     if not _pose_ok(position, rotation):
         return None
     t = object.__new__(cls)
@@ -102,12 +97,9 @@ def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
 
 
 def pose_arrays(target) -> tuple[np.ndarray, np.ndarray | None] | None:
-    """(position (3,) m, rotation (3, 3) or None for a position) of a target given as a ``pin.SE3``, a float64
-    (4, 4) homogeneous matrix with the exact bottom row [0 0 0 1], a float64 3-vector position or a 3-D
-    :class:`Target`, when it passes :class:`Target`'s checks; None for any other form, or when a check fails
-    (:meth:`Target.coerce` then gives the verdict: it accepts what this accepts, with the same numbers, and
-    raises the error of what this refuses). No Target is made: an IKSolver's per-call path copies the arrays
-    into its engine at once. The arrays may be views of ``target``'s own."""
+    """(position (3,) m, rotation (3, 3) or None) of a ``pin.SE3``, a float64 (4, 4) pose (bottom row exactly
+    [0 0 0 1]), a float64 3-vector or a 3-D :class:`Target` that passes :class:`Target`'s checks, without making a
+    Target; None otherwise (:meth:`Target.coerce` then gives the verdict). The arrays may be views of ``target``."""
     kind = type(target)
     if kind is pin.SE3:
         position, rotation = target.translation, target.rotation

@@ -1,16 +1,6 @@
-"""Solver registry: every method is a function ``solver(problem, rng, **options) -> Result`` registered
-by name with :func:`register`. ``evoik_pin.methods()`` lists them.
-
-Option names are checked here against each solver's signature; option values by the solver itself, with
-the shared validators of :mod:`.options`.
-
-The solvers are grouped by role: :mod:`.paper` (the papers' methods), :mod:`.lm` (the one LM engine and
-``polish``), :mod:`.search` (seed table, ``memetic``, ``memetic-all``), :mod:`.batch` (``solve_many``'s API above
-its engines). :mod:`.collision_verdict` is the exact collision check every method's answer passes through.
-
-A solver registered with ``check=`` also lets its value checks run without solving
-(:meth:`SolverInfo.check_options` with ``n``): the entry points that solve many targets (``solve_many``,
-``solve_trajectory``, ``reachability_map``) check every option that way before any work."""
+"""Solver registry: every method is a function ``solver(problem, rng, **options) -> Result`` registered by name
+with :func:`register`; ``evoik_pin.methods()`` lists them. Option names are checked here against each solver's
+signature, option values by the solver (and its ``check=``, before any work) with :mod:`.options`' validators."""
 
 from __future__ import annotations
 
