@@ -45,18 +45,9 @@ def _load(args: argparse.Namespace, goals_file=None):
     ``floating_base`` and ``tips`` fill in the flags not given, and a value given both ways that differs (the
     file's ``robot`` another than ROBOT, ``--floating-base`` on a file saying false, other ``--tips``) is an
     error naming the flag and the file."""
-    xacro_args = {}
-    for item in args.xacro_arg:
-        name, sep, value = item.partition(":=") if ":=" in item else item.partition("=")
-        if not sep or not name:
-            raise OptionError(f"--xacro-arg needs NAME=VALUE, got {item!r}")
-        xacro_args[name] = value
-    aliases = {}
-    for item in args.package_alias:
-        name, sep, value = item.partition("=")
-        if not sep or not name or not value:
-            raise OptionError(f"--package-alias needs NAME=SHIPPED_AS, got {item!r}")
-        aliases[name] = value
+    xacro_args = dict(_name_value(item, "--xacro-arg", "NAME=VALUE") for item in args.xacro_arg)
+    aliases = dict(_name_value(item, "--package-alias", "NAME=SHIPPED_AS", lambda _, value: bool(value))
+                   for item in args.package_alias)
     tips = args.tips[0] if args.tips == ["all"] else args.tips
     floating_base = args.floating_base
     if goals_file is not None:
@@ -79,6 +70,24 @@ def _load(args: argparse.Namespace, goals_file=None):
     return robot
 
 
+def _name_value(item: str, flag: str, form: str, ok=lambda name, value: True) -> tuple[str, str]:
+    """(NAME, VALUE) of a ``flag NAME=VALUE`` (``NAME:=VALUE`` too); OptionError '<flag> needs <form>, got ...' for
+    an item without a name, or whose name and value ``ok`` refuses."""
+    name, sep, value = item.partition(":=") if ":=" in item else item.partition("=")
+    name = name.strip()
+    if not sep or not name or not ok(name, value):
+        raise OptionError(f"{flag} needs {form}, got {item!r}")
+    return name, value
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
     """Joint values typed at the command line in SI: revolute joints in degrees (radians with ``--rad``),
     prismatic joints in m either way. A list of the wrong length is converted whole (the library names it)."""
@@ -95,16 +104,9 @@ def _locked_values(robot, items: list[str], rad: bool) -> dict[str, float]:
     checks the names and limits."""
     out = {}
     for item in items:
-        name, sep, text = item.partition("=")
-        name = name.strip()
-        try:
-            value = float(text)
-        except ValueError:
-            value = None
-        if not sep or not name or value is None:
-            raise OptionError(f"--locked needs NAME=VALUE (a joint and a number), got {item!r}")
+        name, text = _name_value(item, "--locked", "NAME=VALUE (a joint and a number)", lambda _, v: _is_number(v))
         revolute = name in robot.joint_names and bool(robot.revolute[robot.joint_names.index(name)])
-        out[name] = float(np.radians(value)) if revolute and not rad else value
+        out[name] = float(np.radians(float(text))) if revolute and not rad else float(text)
     return out
 
 
@@ -176,14 +178,10 @@ def _add_problem_args(p: argparse.ArgumentParser, q0: bool = True) -> None:
                    help="m per rad of orientation error in the pose cost (default 1)")
     p.add_argument("--pose-metric", help="how the pose cost combines the errors: sum (default) or euclidean")
     if q0:
-        p.add_argument("--q0", type=float, nargs="+", help="initial configuration (revolute joints in degrees, or "
-                       "radians with --rad; prismatic joints in m)")
-        p.add_argument("--lower", type=float, nargs="+", metavar="Q",
-                       help="lower joint bounds of the search (revolute joints in degrees, or radians with --rad; "
-                       "prismatic in m; default the robot's)")
-        p.add_argument("--upper", type=float, nargs="+", metavar="Q",
-                       help="upper joint bounds of the search (revolute joints in degrees, or radians with --rad; "
-                       "prismatic in m; default the robot's)")
+        p.add_argument("--q0", type=float, nargs="+", help=f"initial configuration ({_JOINT_UNITS})")
+        for bound in ("lower", "upper"):
+            p.add_argument(f"--{bound}", type=float, nargs="+", metavar="Q",
+                           help=f"{bound} joint bounds of the search ({_JOINT_UNITS}; default the robot's)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
                    "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
@@ -211,10 +209,8 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
     if getattr(args, "locked", None):
         given["locked"] = (_locked_values(robot, args.locked, args.rad), "--locked")
     for item in getattr(args, "option", []):
-        name, sep, text = item.partition("=")
-        name = name.strip()
-        if not sep or not name.isidentifier():
-            raise OptionError(f"--option needs NAME=VALUE with NAME a Python keyword (e.g. runs=5), got {item!r}")
+        name, text = _name_value(item, "--option", "NAME=VALUE with NAME a Python keyword (e.g. runs=5)",
+                                 lambda name, _: name.isidentifier())
         flag = f"--option {name}"
         if name in CALL_FLAGS and hasattr(args, _dest(CALL_FLAGS[name])):
             raise OptionError(f"{flag}: use {CALL_FLAGS[name]} (one way to set each option)")
@@ -506,18 +502,33 @@ def _goals_arg(args: argparse.Namespace):
 
 
 def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
-    """Print a solve's answer: ``info`` as JSON with ``--json`` (plus the scene's verdict), else as text, with one
-    line per goal of ``goal_rows`` and the scene's verdict."""
-    if scene is not None:
-        info.update(_collision_info(args, scene, margin, res))
+    """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of ``goal_rows``);
+    with a scene, the verdict of the exact mesh check on the answer too."""
+    if scene is not None:  # distinct pairs: a link with several collision shapes counts once
+        pairs = [list(p) for p in dict.fromkeys(scene.colliding_pairs(res.q, margin))]
+        info.update(scene=str(args.scene), margin_m=margin, collision_free=bool(res.collision_free),
+                    min_distance_m=float(res.min_distance), colliding_pairs=pairs)
     if args.json:
         print(json.dumps(info, indent=2))
         return
-    _print_solution(robot, res, info, args.rad)
+    unit = "rad" if args.rad else "deg"
+    print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
+          f"{'reached' if res.success else 'NOT reached'} ({res.message})")
+    print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in _shown(robot, res.q, args.rad)))
+    print(f"position error (m):   {res.position_error:.3e}")
+    if res.orientation_error is not None:
+        print(f"orientation error:    {res.orientation_error:.3e} rad ({np.degrees(res.orientation_error):.3e} deg)")
+    print(f"generations:          {res.generations}")
+    print(f"evaluations:          {res.evaluations}")
+    print(f"time:                 {res.time_s * 1e3:.2f} ms")
     if goal_rows is not None:
         _print_goal_errors(goal_rows)
     if scene is not None:
-        _print_collisions(info)
+        where = f"scene {info['scene']}" + (f", margin {margin:g} m" if margin > 0 else "")
+        print(f"collision-free: {'yes' if res.collision_free else 'no'} (min distance "
+              f"{info['min_distance_m'] * 1e3:.3f} mm; {where})")
+        if pairs:
+            print("in collision:   " + ", ".join(f"{a} - {b}" for a, b in pairs))
 
 
 def _print_goal_errors(rows: list[dict]) -> None:
@@ -548,40 +559,6 @@ def _load_scene(args: argparse.Namespace, robot):
     from .scene import Scene
 
     return Scene.from_file(robot, args.scene), 0.0 if margin is None else float(margin)
-
-
-def _collision_pairs(scene, q, margin: float) -> list[list[str]]:
-    """The distinct (name, name) pairs in collision at ``q`` (a link with several collision shapes counts once)."""
-    return [list(p) for p in dict.fromkeys(scene.colliding_pairs(q, margin))]
-
-
-def _collision_info(args: argparse.Namespace, scene, margin: float, res) -> dict:
-    """The JSON fields of a solve with ``--scene``: the verdict of the exact mesh check on the answer."""
-    return {"scene": str(args.scene), "margin_m": margin, "collision_free": bool(res.collision_free),
-            "min_distance_m": float(res.min_distance), "colliding_pairs": _collision_pairs(scene, res.q, margin)}
-
-
-def _print_collisions(info: dict) -> None:
-    """``collision-free: yes/no``, the smallest clearance (mm) and the pairs in collision."""
-    where = f"scene {info['scene']}" + (f", margin {info['margin_m']:g} m" if info["margin_m"] > 0 else "")
-    print(f"collision-free: {'yes' if info['collision_free'] else 'no'} (min distance "
-          f"{info['min_distance_m'] * 1e3:.3f} mm; {where})")
-    if info["colliding_pairs"]:
-        print("in collision:   " + ", ".join(f"{a} - {b}" for a, b in info["colliding_pairs"]))
-
-
-def _print_solution(robot, res, info: dict, rad: bool) -> None:
-    unit = "rad" if rad else "deg"
-    shown = _shown(robot, res.q, rad)
-    print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
-          f"{'reached' if res.success else 'NOT reached'} ({res.message})")
-    print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in shown))
-    print(f"position error (m):   {res.position_error:.3e}")
-    if res.orientation_error is not None:
-        print(f"orientation error:    {res.orientation_error:.3e} rad ({np.degrees(res.orientation_error):.3e} deg)")
-    print(f"generations:          {res.generations}")
-    print(f"evaluations:          {res.evaluations}")
-    print(f"time:                 {res.time_s * 1e3:.2f} ms")
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
@@ -691,95 +668,92 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="evoik", description="Inverse kinematics by evolutionary computation on Pinocchio."
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
+#: The flags several sub-commands share, as ``add_argument`` takes them (:func:`_add`).
+_JOINT_UNITS = "revolute joints in degrees, or radians with --rad; prismatic joints in m"
+_SHARED_FLAGS = {
+    "--q": dict(type=float, nargs="+", help=f"joint values ({_JOINT_UNITS}); default 0"),
+    "--rad": dict(action="store_true", help="joint values in radians (input and output)"),
+    "--json": dict(action="store_true", help="machine-readable output"),
+    "--html": dict(metavar="PATH", help="also write the result as a self-contained HTML page"),
+    "--view": dict(action="store_true", help="show the result in meshcat until Ctrl-C"),
+    "--seed": dict(type=int, default=0, help="seed of every random draw (default 0): same seed, same answer"),
+    "--scene": dict(metavar="FILE", help="collision scene (YAML or JSON obstacles, Scene.from_file): answers must be "
+                    "free of collisions with it and the robot itself; links in collision drawn red"),
+    "--margin": dict(type=float, metavar="M", help="with --scene: clearance in m kept from collisions (default 0)"),
+    "--no-progress": dict(action="store_true", help="no progress bar"),
+}
 
-    p = sub.add_parser("robots", help="list the robots that load by name")
-    p.set_defaults(func=_cmd_robots)
+
+def _add(p: argparse.ArgumentParser, *flags: str, **help_texts: str) -> None:
+    """Add the shared ``flags`` (:data:`_SHARED_FLAGS`) to ``p``; ``help_texts`` (by dest) replace their help."""
+    for flag in flags:
+        spec = _SHARED_FLAGS[flag]
+        p.add_argument(flag, **{**spec, "help": help_texts.get(_dest(flag), spec["help"])})
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="evoik", description="Inverse kinematics by evolutionary computation on "
+                                     "Pinocchio.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("robots", help="list the robots that load by name").set_defaults(func=_cmd_robots)
 
     p = sub.add_parser("fk", help="forward kinematics: tip pose at a joint vector")
     _add_robot_args(p)
-    p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
-                   "--rad; prismatic joints in m)")
-    p.add_argument("--rad", action="store_true", help="joint values in radians")
-    p.add_argument("--frame", metavar="NAME", help="the frame whose pose is printed: any frame of the robot (link, "
-                   "joint or fixed frame; default the tip)")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+    _add(p, "--q", "--rad", "--json")
+    p.add_argument("--frame", metavar="NAME", help="the frame whose pose is printed (default the tip)")
     p.set_defaults(func=_cmd_fk)
 
-    p = sub.add_parser("solve", help="inverse kinematics for one target or a goals file (exit status 1 when not "
-                       "reached)")
+    p = sub.add_parser("solve", help="inverse kinematics for one target or a goals file (exit 1 when not reached)")
     _add_robot_args(p)
-    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"),
-                   help="target tip position in metres, in the base frame")
-    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file): several "
-                   "goals on any frames (pose or position, weights, tolerances), instead of --xyz/--rpy; the output "
-                   "gives each goal's errors and whether it is met; exit 1 when one is not")
+    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="target tip position in m (base frame)")
     p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
                    help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")
+    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file) instead of "
+                   "--xyz/--rpy: each goal's errors are printed; exit 1 when one is not met")
     p.add_argument("--method", help="solver (evoik_pin.methods(); default: the memetic solver)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same answer")
+    _add(p, "--seed")
     _add_problem_args(p)
     p.add_argument("--polish", action="store_true", help="polish the method's answer with Levenberg-Marquardt")
     p.add_argument("--population", type=int, help="population size of population-based solvers")
     p.add_argument("--max-generations", type=int, help="generation budget of population-based solvers")
-    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock budget in seconds (memetic: default "
-                   "0.005; memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")
-    p.add_argument("--count", type=int, help="with --all (memetic-all): solutions wanted on a redundant arm "
-                   "(default 8)")
-    p.add_argument("--rad", action="store_true", help="joint values in radians (output and --q0)")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
-    p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
-    p.add_argument("--all", action="store_true", help="every distinct solution of the target or of the --goals "
-                   "list (solve_all; default method memetic-all), one per line; with --html/--view drawn as ghosts; "
-                   "exit 1 when there is none")
-    p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles, see Scene.from_file): "
-                   "answers must be free of collisions with it and with the robot itself; exit 1 when the answer "
-                   "collides; --html/--view draw the obstacles and the links in collision in red")
-    p.add_argument("--margin", type=float, metavar="M", help="with --scene: clearance in m the answer must keep "
-                   "(pairs closer than M count as colliding; default 0)")
-    p.add_argument("--prefer", help="which answer: first (default: the first found), nearest (nearest --q0) or "
-                   "manipulability (the most dexterous), among those found within --timeout (default 0.7 ms for "
-                   "the last two)")
+    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock budget in s (memetic: default 0.005; "
+                   "memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")
+    p.add_argument("--count", type=int, help="with --all: solutions wanted on a redundant arm (default 8)")
+    _add(p, "--rad", "--json", "--html", "--view")
+    p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
+                   "memetic-all), one per line, drawn as ghosts by --html/--view; exit 1 when there is none")
+    _add(p, "--scene", "--margin")
+    p.add_argument("--prefer", help="which answer: first (default), nearest (nearest --q0) or manipulability (the "
+                   "most dexterous), among those found within --timeout (default 0.7 ms for the last two)")
     p.add_argument("--locked", action="append", default=[], metavar="NAME=VALUE",
-                   help="hold joint NAME at VALUE for this solve (repeatable; revolute in degrees, or radians with "
-                   "--rad; prismatic in m); --q0 and the answer keep every joint")
+                   help=f"hold joint NAME at VALUE (repeatable; {_JOINT_UNITS}); --q0 and the answer keep every joint")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
     _add_robot_args(p)
-    p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
-                   "--rad; prismatic joints in m); default 0")
-    p.add_argument("--rad", action="store_true", help="joint values in radians")
-    p.add_argument("--html", metavar="PATH", help="also write the scene as a self-contained HTML file")
+    _add(p, "--q", "--rad", "--html", "--scene")
     p.add_argument("--no-block", action="store_true",
                    help="write --html PATH and return at once (the viewer's server stops with evoik)")
-    p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles) drawn in grey; links in "
-                   "collision at the configuration are red")
     p.set_defaults(func=_cmd_view)
+
     p = sub.add_parser("reach", help="reachability map: fraction of orientations IK reaches per voxel (npz, png, html)")
     _add_robot_args(p)
     p.add_argument("--voxel", type=float, default=0.05, help="voxel edge in m (default 0.05)")
     p.add_argument("--out", required=True, help="output directory: OUT/<robot>_reach.npz, .png and .html")
     p.add_argument("--orientations", type=int, default=32,
                    help="orientations asked per voxel (6-D arms; default 32); position-only and planar arms: 1")
-    p.add_argument("--scene", metavar="FILE", help="scene file (YAML/JSON obstacles): collision-free answers only")
-    p.add_argument("--margin", type=float, help="clearance in m kept from the scene (with --scene; default 0)")
+    _add(p, "--scene", "--margin", "--seed", seed="seed of the workspace sampling (default 0)")
     p.add_argument("--backend", choices=["local", "ray"], default="local",
                    help="local (threads, every core) or ray (actors; pip install 'evoik_pin[ray]')")
     p.add_argument("--workers", type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")
     p.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the workspace sampling (default 0)")
-    p.add_argument("--batch-size", type=int, default=50_000, help="targets per call of the batch engine "
-                   "(default 50000)")
+    p.add_argument("--batch-size", type=int, default=50_000, help="targets per call of the batch engine (default "
+                   "50000)")
     _add_problem_args(p, q0=False)
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add(p, "--no-progress")
     p.add_argument("--no-html", action="store_true", help="skip the meshcat HTML page")
     p.set_defaults(func=_cmd_reach)
+
     p = sub.add_parser("retarget", help="retarget a human motion (BVH file or bundled clip) onto a humanoid: "
                        "joint trajectory as npz, csv or pkl")
     p.add_argument("file", help="a BVH file, or a bundled clip's name (walk, run, jump, dance, getup)")
@@ -787,24 +761,24 @@ def build_parser() -> argparse.ArgumentParser:
                    "floating base")
     p.add_argument("--mapping", default="cmu", help="keypoint mapping preset: cmu (BVH skeletons, default) or smpl")
     p.add_argument("--out", required=True, help="output file: .npz, .csv or .pkl (GMR's layout)")
-    p.add_argument("--html", metavar="PATH", help="also write a self-contained HTML page playing the clip")
+    _add(p, "--html", html="also write a self-contained HTML page playing the clip")
     p.add_argument("--scale", type=float, help="source-to-robot length factor (default: leg lengths' ratio)")
     p.add_argument("--no-self-collision", action="store_true", help="do not keep the frames free of self-collision")
     p.add_argument("--no-velocity-limits", action="store_true", help="do not bound each step by the joint velocity "
                    "limits")
-    p.add_argument("--seed", type=int, default=0, help="seed of the solves' random draws (default 0)")
+    _add(p, "--seed")
     p.add_argument("--progress", action="store_true", help="print progress every 30 frames")
     p.set_defaults(func=_cmd_retarget)
+
     p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
     p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
     p.add_argument("--quick", action="store_true", help="reduced-size runs (well under a minute per paper)")
-    p.add_argument("--seed", type=int, default=0, help="master seed of every random choice (default 0)")
+    _add(p, "--seed")
     p.add_argument("--out", default="reproduction", help="output directory; each paper writes OUT/<id>/")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    _add(p, "--no-progress")
     p.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
                    help="worker processes for independent parts; same numbers for any value (default: 2 if available)")
-    p.add_argument("--html", metavar="PATH", help="save the paper's animation (002: Pro-ISADE spiral) as HTML")
-    p.add_argument("--view", action="store_true", help="play the paper's animation in meshcat until Ctrl-C")
+    _add(p, "--html", "--view", html="save the paper's animation (002: Pro-ISADE spiral) as HTML")
     p.set_defaults(func=_cmd_reproduce)
     return parser
 
