@@ -94,18 +94,27 @@ GOAL_METHODS = ("memetic", "memetic-all", "de", "isade", "pso", "mode", "ga", "g
 
 
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
+    """The registered ``method`` with ``options`` (``polish`` among them) on ``problem``, with its verdicts
+    (:func:`run_with_verdicts`)."""
     info = get_solver(method)
-    goal_problem = problem.goals is not None and problem
-    if goal_problem:
-        problem = _goal_method_problem(method, problem)
     polish = options.pop("polish", False)
     info.check_options(options)
-    result = info.func(problem, rng, **options)
+    return run_with_verdicts(problem, method, lambda p, r: info.func(p, r, **options), polish, rng)
+
+
+def run_with_verdicts(problem: IKProblem, method: str, solve, polish: bool, rng) -> Result:
+    """``solve(problem, rng)`` (a goal list: on ``method``'s own problem of it, :func:`_goal_method_problem`), then
+    the LM ``polish`` when asked, the goals' verdict (:func:`_with_goal_verdict`) and the scene's
+    (:func:`with_collision_verdict`)."""
+    goal_problem = problem if problem.goals is not None else None
+    if goal_problem is not None:
+        problem = _goal_method_problem(method, problem)
+    result = solve(problem, rng)
     if polish:
         from .solvers.lm.polish import polish_result
 
         result = polish_result(problem, result, rng)
-    if goal_problem:
+    if goal_problem is not None:
         result = _with_goal_verdict(goal_problem, result)
     return with_collision_verdict(problem, result)
 

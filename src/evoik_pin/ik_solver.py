@@ -10,17 +10,18 @@ from __future__ import annotations
 
 import math
 import threading
+from functools import partial
 
 import numpy as np
 
 from .call_setup import (
     _PROBLEM_OPTIONS,
     DEFAULT_METHOD,
-    _goal_method_problem,
     _rng,
     _robot,
     _with_goal_verdict,
     make_problem,
+    run_with_verdicts,
     split_options,
 )
 from .errors import ConfigurationError, EvoikError, OptionError
@@ -288,20 +289,8 @@ class IKSolver:
             if self._lanes_open and (goals is None or len(goals) == 1):
                 self._open_lane(problem)
             return result
-        goal_problem = problem if goals is not None else None
-        if goal_problem is not None:  # the method's own problem of a goal list (the closed forms: one tip goal)
-            problem = _goal_method_problem(self.method, problem)
-        if self._plan is not None:
-            result = self._plan.solve(problem, rng)
-        else:
-            result = self._info.func(problem, rng, **self._options)
-        if self._polish:
-            from .solvers.lm.polish import polish_result
-
-            result = polish_result(problem, result, rng)
-        if goal_problem is not None:
-            result = _with_goal_verdict(goal_problem, result)
-        return with_collision_verdict(problem, result)
+        solve = self._plan.solve if self._plan is not None else partial(self._info.func, **self._options)
+        return run_with_verdicts(problem, self.method, solve, self._polish, rng)
 
     def __repr__(self) -> str:
         return f"IKSolver({self.robot.name!r}, method={self.method!r})"

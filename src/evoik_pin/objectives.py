@@ -52,20 +52,15 @@ class PopulationKinematics:
         kin._full = (positions, rotations)
         return kin
 
-    def _fk(self):
-        if self._full is None:
-            self._full = self.robot.fk_batch(self.Q, validate=False)
-        return self._full
-
     @cached_property
     def positions(self) -> np.ndarray:
-        if self._full is not None:
-            return self._full[0]
-        return self.robot.positions_batch(self.Q)
+        return self.robot.positions_batch(self.Q) if self._full is None else self._full[0]
 
     @cached_property
     def rotations(self) -> np.ndarray:
-        return self._fk()[1]
+        if self._full is None:
+            self._full = self.robot.fk_batch(self.Q, validate=False)
+        return self._full[1]
 
     @cached_property
     def jacobians(self) -> np.ndarray:
@@ -126,6 +121,9 @@ class Objective:
     def _terms(self) -> list[tuple[float, Objective]]:
         return [(1.0, self)]
 
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
 
 class WeightedSum(Objective):
     """``sum_i w_i f_i(Q)``; build it with ``+`` and ``*`` on objectives."""
@@ -168,9 +166,6 @@ class PositionError(Objective):
     def from_errors(self, target, position_error, orientation_error):
         return position_error if target is self.target else None
 
-    def __repr__(self) -> str:
-        return "PositionError()"
-
 
 class OrientationError(Objective):
     """Rotation angle (rad) between the tip and the target orientation."""
@@ -185,9 +180,6 @@ class OrientationError(Objective):
 
     def from_errors(self, target, position_error, orientation_error):
         return orientation_error if target is self.target and orientation_error is not None else None
-
-    def __repr__(self) -> str:
-        return "OrientationError()"
 
 
 def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 1.0) -> Objective:  # noqa: N802
@@ -251,9 +243,6 @@ class MaxJointDisplacement(Objective):
     def value(self, Q, kin):
         return np.abs(Q - self.q_init).max(axis=1)
 
-    def __repr__(self) -> str:
-        return "MaxJointDisplacement()"
-
 
 class WeightedJointDisplacement(Objective):
     """``sqrt(sum_k K_k (q_k - q_prev,k)^2)``: paper 003's smoothness S, paper 002's ``||q - q0||``.
@@ -310,9 +299,6 @@ class JointLimitMargin(Objective):
     def value(self, Q, kin):
         margin = np.minimum(Q - self.lower, self.upper - Q) / self.half
         return 1.0 - margin.min(axis=1)
-
-    def __repr__(self) -> str:
-        return "JointLimitMargin()"
 
 
 #: How the default objective combines position and orientation errors of a pose target: ``sum`` (m + weight x

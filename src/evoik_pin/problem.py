@@ -322,13 +322,7 @@ class IKProblem:
     def chosen(self, q: np.ndarray) -> list[int | None] | None:
         """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
         to), None for a goal with one target; None for a problem without a goal list."""
-        if self.goals is None:
-            return None
-        if not self.goal_sets:
-            return [None] * len(self.goals)
-        fids = [self.robot.frame_id(g.frame) for g in self.goals]
-        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
-        return [self._member(g, T)[0] for g, T in zip(self.goals, poses, strict=True)]
+        return None if self.goals is None else self.goal_errors_and_chosen(q)[1]
 
     def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
         """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen
@@ -346,15 +340,8 @@ class IKProblem:
         R = np.repeat(Rt[None], len(combos), axis=0)
         for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
             P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
-        G = len(self.goals or ())
-        if len(sets) == G:  # every goal a set (a grasp set alone): the combinations are the choices
-            return combos, P, R
-        choices = []
-        for combo in combos:
-            choice = [None] * G
-            for g, m in zip(sets, combo, strict=True):
-                choice[g] = m
-            choices.append(tuple(choice))
+        G = len(self.goals or ())  # a choice per goal: its member, None for a goal with one target
+        choices = [tuple(dict(zip(sets, combo, strict=True)).get(g) for g in range(G)) for combo in combos]
         return choices, P, R
 
     def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:

@@ -203,28 +203,20 @@ def _grid(lo: np.ndarray, hi: np.ndarray, voxel: float, planar_z: float | None):
     return np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1), shape
 
 
-class _Engine:
-    """The batch engine the map runs on: local threads or Ray actors, without the per-target fallback."""
+def _engine(robot, backend: str, workers, address, entropy: int, options: dict):
+    """(solve(targets) -> BatchOutcome, workers) of the batch engine the map runs on: local threads or Ray actors,
+    without the per-target fallback; ``targets`` a list of :class:`Target` or an (N, 4, 4) array of poses."""
+    from .api import _run, make_problem
 
-    def __init__(self, robot, backend: str, workers, address, entropy: int, options: dict) -> None:
-        from .api import _run, make_problem
+    if backend == "ray":
+        from .solvers.batch.ray_actors import RayBatch
 
-        self.backend = backend
-        if backend == "ray":
-            from .solvers.batch.ray_actors import RayBatch
-
-            self._ray = RayBatch(robot, make_problem, _run, "memetic", entropy, options, fallback=False,
-                                 workers=workers, address=address)
-            self.workers = self._ray.workers
-        else:
-            self._local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
-            self.workers = check_workers(workers)
-
-    def solve(self, targets) -> BatchOutcome:
-        """Solve ``targets`` (a list of :class:`Target` or an (N, 4, 4) array of poses)."""
-        if self.backend == "ray":
-            return self._ray.solve(targets)
-        return self._local.solve(targets, workers=self.workers)
+        ray = RayBatch(robot, make_problem, _run, "memetic", entropy, options, fallback=False, workers=workers,
+                       address=address)
+        return ray.solve, ray.workers
+    local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
+    workers = check_workers(workers)
+    return (lambda targets: local.solve(targets, workers=workers)), workers
 
 
 def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=None, backend: str = "local",
@@ -267,13 +259,13 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     kind = "planar" if planar else ("position" if robot.n < 6 else "pose")
     centers, shape = _grid(lo - voxel, hi + voxel, voxel, float(lo[2]) if planar else None)
     M = centers.shape[0]
-    engine = _Engine(robot, backend, workers, address, seed, options)
+    solve, workers = _engine(robot, backend, workers, address, seed, options)
     bar = progress_bar(progress, f"reach {robot.name}", unit="target")
 
     def run(targets: list[Target]) -> BatchOutcome:
         parts = []
         for a in range(0, len(targets), batch_size):
-            parts.append(engine.solve(targets[a:a + batch_size]))
+            parts.append(solve(targets[a:a + batch_size]))
             if bar is not None:
                 bar.update(len(targets[a:a + batch_size]))
         return BatchOutcome.concatenate(parts)
@@ -305,7 +297,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 H[:, :, :3, 3] = centers[part, None, :]
                 H[:, :, 3, 3] = 1.0
                 poses = H.reshape(-1, 4, 4)  # solved as an array: no Target object per pose
-                res = engine.solve(poses)
+                res = solve(poses)
                 if bar is not None:
                     bar.update(poses.shape[0])
                 ok = res.success.reshape(part.size, orientations)
@@ -317,7 +309,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
         if bar is not None:
             bar.close()
     n_orient = orientations if kind == "pose" else 1
-    settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": engine.workers,
+    settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": workers,
                 "position_targets": M, "pose_targets": asked,
                 "batch_size": batch_size, "manipulability_rows": rows, "scene": None if scene is None else repr(scene),
                 "options": {k: v for k, v in options.items() if isinstance(v, (int, float, str, bool))}}
