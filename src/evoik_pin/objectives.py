@@ -12,24 +12,9 @@ import numpy as np
 from . import lie
 from .errors import OptionError
 
-__all__ = [
-    "JointLimitMargin",
-    "ManipulabilityCost",
-    "MaxJointDisplacement",
-    "Objective",
-    "OrientationError",
-    "PopulationKinematics",
-    "POSE_METRICS",
-    "PoseDistance",
-    "PoseError",
-    "PositionError",
-    "RPYPoseError",
-    "WeightedJointDisplacement",
-    "default_cost",
-    "default_objective",
-    "orientation_errors",
-    "position_errors",
-]
+__all__ = ["JointLimitMargin", "ManipulabilityCost", "MaxJointDisplacement", "Objective", "OrientationError",
+           "PopulationKinematics", "POSE_METRICS", "PoseDistance", "PoseError", "PositionError", "RPYPoseError",
+           "WeightedJointDisplacement", "default_cost", "default_objective", "orientation_errors", "position_errors"]
 
 
 class PopulationKinematics:

@@ -45,6 +45,7 @@ def _vector(value, name: str, sizes: tuple[int, ...], bound: float | None = None
     return arr
 
 
+_TARGET_FORMS = "target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target"
 _NOT_ROTATION = ("target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
                  "orthonormalize it or pass roll-pitch-yaw angles")
 
@@ -86,14 +87,17 @@ def _pose_ok(position: np.ndarray, rotation: np.ndarray) -> bool:
     return math.hypot(*position.tolist()) <= MAX_TARGET_NORM and _is_rotation(rotation.reshape(9).tolist())
 
 
-def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
-    """A ``cls`` (Target) of ``position`` (3,) m and ``rotation`` (3, 3) without ``__post_init__`` when they pass
-    :func:`_pose_ok`; None when not (the caller then builds it the checked way, which raises the error)."""
-    if not _pose_ok(position, rotation):
-        return None
+def _unchecked_pose(cls, position: np.ndarray, rotation: np.ndarray):
+    """A ``cls`` (Target) of ``position`` (3,) m and ``rotation`` (3, 3) checked already: no ``__post_init__``."""
     t = object.__new__(cls)
     t.__dict__.update(position=position, rotation=rotation, planar=False, yaw=None)  # frozen: no __setattr__
     return t
+
+
+def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
+    """:func:`_unchecked_pose` when they pass :func:`_pose_ok`; None when not (the caller then builds the Target
+    the checked way, which raises the error)."""
+    return _unchecked_pose(cls, position, rotation) if _pose_ok(position, rotation) else None
 
 
 def pose_arrays(target) -> tuple[np.ndarray, np.ndarray | None] | None:
@@ -167,10 +171,7 @@ class Target:
         try:
             arr = np.asarray(target, dtype=float)
         except (TypeError, ValueError) as exc:
-            raise TargetError(
-                f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target; "
-                f"got {target!r}"
-            ) from exc
+            raise TargetError(f"{_TARGET_FORMS}; got {target!r}") from exc
         if arr.shape == (4, 4):
             a, b, c, d = arr[3].tolist()
             # the bottom row on Python floats first (a NaN fails every comparison: numpy's test then decides)
@@ -182,25 +183,14 @@ class Target:
             return _checked_pose(cls, position, rotation) or cls(position=position, rotation=rotation)
         if arr.ndim == 1 and arr.shape[0] == 3:
             return cls(position=arr)
-        raise TargetError(
-            f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target "
-            f"(Target.planar_target(x, y, yaw) for planar arms); got an array of shape {arr.shape}"
-        )
+        raise TargetError(f"{_TARGET_FORMS} (Target.planar_target(x, y, yaw) for planar arms); got an array of shape "
+                          f"{arr.shape}")
 
     @classmethod
     def from_poses(cls, poses) -> list[Target]:
         """Pose targets from an array of N homogeneous matrices (N, 4, 4) (m), checked in one vectorized pass
         (:meth:`check_poses`)."""
-        H = cls.check_poses(poses)
-        out = []
-        for T in H:  # already checked: skip the per-instance validation of __post_init__
-            t = object.__new__(cls)
-            object.__setattr__(t, "position", T[:3, 3].copy())
-            object.__setattr__(t, "rotation", T[:3, :3].copy())
-            object.__setattr__(t, "planar", False)
-            object.__setattr__(t, "yaw", None)
-            out.append(t)
-        return out
+        return [_unchecked_pose(cls, T[:3, 3].copy(), T[:3, :3].copy()) for T in cls.check_poses(poses)]
 
     @staticmethod
     def check_poses(poses) -> np.ndarray:

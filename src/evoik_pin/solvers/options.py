@@ -12,16 +12,8 @@ import numpy as np
 
 from ..errors import OptionError
 
-__all__ = [
-    "check_callback",
-    "check_choice",
-    "check_fraction",
-    "check_int",
-    "check_nonnegative",
-    "check_nonnegative_vector",
-    "check_number",
-    "check_positive",
-]
+__all__ = ["check_callback", "check_choice", "check_fraction", "check_int", "check_nonnegative",
+           "check_nonnegative_vector", "check_number", "check_positive"]
 
 
 def _with_unit(text: str, unit: str) -> str:
