@@ -150,15 +150,21 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
         options["locked"] = locked
     if prefer is not None:
         options["prefer"] = prefer
-    if step is not None:
-        return _velocity_trajectory(robot, targets, method, previous, step, rng, options)
+    box_solver = None
+    if step is not None:  # one solver (and its box stage) for every point within the velocity box
+        for target in targets:
+            check_no_preferences(target)
+        box_solver = IKSolver(robot, method, **{k: v for k, v in options.items() if k != "prefer"})
     for i, target in enumerate(targets):
-        point = {**options, "q0": previous}
-        if pro and i > 0:  # the previous answer's box: that point's problem's search box +- delta, q0 clipped into it
-            box, _ = make_problem(robot, split_preferences(target)[0], q0=previous, **options)
-            box = box.with_pro_box(previous, delta)
-            point.update(q0=box.q0, bounds=(box.lower, box.upper))
-        results.append(solve(robot, target, method, rng, **point))  # one generator for the whole trajectory
+        if box_solver is not None and previous is not None:
+            results.append(box_solver.solve_within(target, previous, step, rng))
+        else:
+            point = {**options, "q0": previous}
+            if pro and i > 0:  # the previous answer's box: that point's search box +- delta, q0 clipped into it
+                box = make_problem(robot, split_preferences(target)[0], q0=previous, **options)[0]
+                box = box.with_pro_box(previous, delta)
+                point.update(q0=box.q0, bounds=(box.lower, box.upper))
+            results.append(solve(robot, target, method, rng, **point))  # one generator for the whole trajectory
         previous = results[-1].q
     return results
 
@@ -205,23 +211,6 @@ def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
     if pro:
         raise OptionError("solve_trajectory: pro=True and velocity limits are two search boxes; give one of them")
     return limits_of(robot, velocity_limits) * check_dt(dt)
-
-
-def _velocity_trajectory(robot, targets, method: str, q0, step: np.ndarray, rng, options: dict) -> list[Result]:
-    """solve_trajectory's points, each within the velocity box of the one before (the first freely without ``q0``)."""
-    for target in targets:
-        check_no_preferences(target)
-    box_options = {k: v for k, v in options.items() if k != "prefer"}  # the box holds one answer: nothing to prefer
-    solver = IKSolver(robot, method, **box_options)
-    results: list[Result] = []
-    previous = q0
-    for i, target in enumerate(targets):
-        if i == 0 and previous is None:
-            results.append(solve(robot, target, method, rng, **options))
-        else:
-            results.append(solver.solve_within(target, previous, step, rng))
-        previous = results[-1].q
-    return results
 
 
 # ------------------------------------------------ solve's choices beyond one answer: prefer=, preferences, locked=

@@ -285,27 +285,15 @@ def _cmd_robots(args: argparse.Namespace) -> int:
     return 0
 
 
-def _pose_dict(robot, q, frame: str | None = None) -> dict:
-    """The pose of ``frame`` (default: the tip) at ``q``, as ``evoik fk --json`` prints it."""
+def _cmd_fk(args: argparse.Namespace) -> int:
     import pinocchio as pin
 
-    T = robot.fk(q, frame=frame)
-    return {
-        "robot": robot.name,
-        "tip": robot.tip,
-        "frame": frame or robot.tip,
-        "base": robot.base,
-        "q_rad": [float(v) for v in q],
-        "position_m": [float(v) for v in T.translation],
-        "rpy_rad": [float(v) for v in pin.rpy.matrixToRpy(T.rotation)],
-        "rotation": np.asarray(T.rotation).tolist(),
-    }
-
-
-def _cmd_fk(args: argparse.Namespace) -> int:
     robot = _load(args)
     q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
-    info = _pose_dict(robot, q, args.frame)
+    T = robot.fk(q, frame=args.frame)
+    info = {"robot": robot.name, "tip": robot.tip, "frame": args.frame or robot.tip, "base": robot.base,
+            "q_rad": [float(v) for v in q], "position_m": [float(v) for v in T.translation],
+            "rpy_rad": [float(v) for v in pin.rpy.matrixToRpy(T.rotation)], "rotation": np.asarray(T.rotation).tolist()}
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
