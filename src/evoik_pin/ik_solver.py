@@ -33,6 +33,7 @@ from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
 from .robot import Robot
+from .robot.locking import expand_result, kept_columns, locked_robot, shrink_q
 from .scene import Scene
 from .solvers import get_solver
 from .solvers.collision_verdict import with_collision_verdict
@@ -307,8 +308,6 @@ class _Locked:
     """An :class:`IKSolver` of the robot without its ``locked`` joints (:meth:`Robot.locked`), in the full layout."""
 
     def __init__(self, robot, locked: dict, method: str, prefer: str, options: dict) -> None:
-        from .robot.locking import locked_robot, shrink_q
-
         self.robot = robot
         self.sub = sub = locked_robot(robot, locked)
         self.values = {k: float(v) for k, v in locked.items()}
@@ -320,15 +319,11 @@ class _Locked:
         self.solver = IKSolver(sub, method, prefer=prefer, **options)
 
     def solve(self, target, q0, seed) -> Result:
-        from .robot.locking import expand_result, shrink_q
-
         if q0 is not None:
             q0 = shrink_q(self.robot, self.sub, q0)
         return expand_result(self.robot, self.sub, self.values, self.solver.solve(target, q0, seed))
 
     def solve_within(self, target, q_prev, step, seed) -> Result:
-        from .robot.locking import expand_result, kept_columns, shrink_q
-
         step = np.asarray(step, dtype=float)[kept_columns(self.robot, self.sub)]
         return expand_result(self.robot, self.sub, self.values, self.solver.solve_within(
             target, shrink_q(self.robot, self.sub, q_prev), step, seed))
@@ -390,7 +385,6 @@ def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
     return solver
 
 
-
 def solver_for(robot, method: str, options: dict, target) -> IKSolver:
     """The IKSolver that solves ``target`` for :func:`evoik_pin.solve` (:func:`cached_solver`'s, else a new one);
     bad arguments raise solve's errors in its order: the target's own checks before the options'."""
@@ -403,7 +397,6 @@ def solver_for(robot, method: str, options: dict, target) -> IKSolver:
     except EvoikError:
         # solve's order: prefer=, locked=, the target's own checks (a goal list's bound to the robot), the options
         from .goals.preferences import split_preferences
-        from .robot.locking import locked_robot
         from .solvers.search.choose import check_prefer
 
         check_prefer("first" if options.get("prefer") is None else options["prefer"])

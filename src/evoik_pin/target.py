@@ -35,8 +35,7 @@ def _vector(value, name: str, sizes: tuple[int, ...], bound: float | None = None
         raise TargetError(f"{name} must be numbers, got {value!r}") from exc
     if arr.ndim != 1 or arr.shape[0] not in sizes:
         raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
-    # math.hypot scales, so huge finite entries give their norm rather than an overflow warning (a dot product
-    # would); NaN anywhere gives NaN, inf gives inf. One C call, as this runs once per solve.
+    # math.hypot: huge finite entries give their norm without an overflow warning; NaN and inf propagate
     norm = math.hypot(*arr.tolist())
     if not norm <= (math.inf if bound is None else bound):
         if not np.isfinite(arr).all():
@@ -68,12 +67,10 @@ def _rotation(value) -> np.ndarray:
 def _is_rotation(v: list) -> bool:
     """Whether the 9 Python floats ``v`` (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and
     det R >= 0 (False for NaN or inf)."""
-    # Frobenius norm sqrt(3) for a rotation; math.hypot gives it without an overflow warning for huge entries (a
-    # product would), so the products below only ever see entries of a near-rotation
+    # a rotation's Frobenius norm is sqrt(3): the products below (on Python floats, faster than NumPy at this size)
+    # only ever see entries of a near-rotation, so none overflows
     if not math.hypot(*v) <= 2.0:
         return False
-    # det R and R^T R - I written out on Python floats: numpy's per-element indexing and small products cost
-    # about 3 us, which is a tenth of a solve
     a, b, c, d, e, f, g, h, i = v
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     n0, n1, n2 = a * a + d * d + g * g - 1.0, b * b + e * e + h * h - 1.0, c * c + f * f + i * i - 1.0

@@ -31,11 +31,7 @@ class SolverInfo:
     @property
     def options(self) -> list[str]:
         """Names of the solver-specific keyword options."""
-        return list(self._option_names)
-
-    @cached_property
-    def _option_names(self) -> tuple[str, ...]:
-        return tuple(self._defaults)
+        return list(self._defaults)
 
     @cached_property
     def _defaults(self) -> dict:
@@ -55,7 +51,7 @@ class SolverInfo:
             self._check_names(options)
 
     def _check_names(self, options: dict) -> None:
-        unknown = sorted(set(options) - set(self._option_names))
+        unknown = sorted(set(options) - set(self._defaults))
         if unknown:
             raise OptionError(
                 f"unknown option(s) {', '.join(unknown)} for method {self.name!r}; it accepts "
