@@ -98,9 +98,8 @@ def solve_all(robot, target, method: str = DEFAULT_ALL_METHOD, seed=None, **opti
     info = get_solver(method)
     if not info.multi_solution:
         capable = [m for m in methods() if get_solver(m).multi_solution]
-        raise MethodError(
-            f"method {method!r} returns one solution; solve_all needs one of: {', '.join(capable) or '(none)'}"
-        )
+        raise MethodError(f"method {method!r} returns one solution; solve_all needs one of: "
+                          f"{', '.join(capable) or '(none)'}")
     if "prefer" in options:  # which one answer to return is solve's choice; solve_all returns them all
         info.check_options({k: v for k, v in options.items() if k not in (*_PROBLEM_OPTIONS, "locked", "polish")})
     result = solver_for(robot, method, options, target).solve(target, options.get("q0"), seed)  # solve's pipeline

@@ -1,8 +1,5 @@
-"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view, retarget.
-
-Degrees (and metres) at the command line by default: revolute joint values in degrees (``--rad`` switches them to
-radians), prismatic joint values and positions in metres; ``q_deg`` in JSON output follows the same rule.
-Each sub-command is one ``_cmd_*`` function registered in :func:`build_parser`.
+"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view, retarget (docs/CLI.md); one ``_cmd_*``
+function per sub-command. Revolute joint values in degrees unless ``--rad``, prismatic ones and positions in m.
 """
 
 from __future__ import annotations
@@ -226,32 +223,26 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
     return given
 
 
-def _check_method_options(given: dict, method: str, pool: list[str] | None, command: str) -> None:
-    """OptionError naming the flag of an option ``method`` does not take, and the methods of ``pool`` that do
-    (``pool`` None: ``evoik command`` has this one method)."""
+def _call_options(args: argparse.Namespace, robot, method: str, pool: list[str] | None = None) -> dict:
+    """The keyword options of the wrapped call from the flags, checked against ``method`` (an option it does not take
+    names the flag and the methods of ``pool`` that take it; ``pool`` None: the command's one method). Records on
+    ``args.typed_flags`` which flag set which option, so that :func:`main` names the flag in the library's errors."""
     from .api import _PROBLEM_OPTIONS
     from .solvers import get_solver
 
+    given = _given_options(args, robot)
     takes = get_solver(method).options
-    for name, (_, flag) in given.items():
+    for name, (_, flag) in given.items():  # an option method does not take: the flag and the methods that take it
         if name in _PROBLEM_OPTIONS or name in ("polish", "prefer", "locked") or name in takes:
             continue
         if pool is None:
-            raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {command}); "
+            raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {args.command}); "
                               f"it takes: {', '.join(takes)}")
         takers = [m for m in pool if name in get_solver(m).options]
         if takers:
             raise OptionError(f"{flag} is not an option of method {method!r}; methods that take it: "
                               f"{', '.join(takers)}")
         raise OptionError(f"{flag}: no method takes an option {name!r}; method {method!r} takes: {', '.join(takes)}")
-
-
-def _call_options(args: argparse.Namespace, robot, method: str, pool: list[str] | None = None) -> dict:
-    """The keyword options of the wrapped call from the flags, checked against ``method`` (an option it does
-    not take names the flag and the methods of ``pool`` that take it). Records on ``args.typed_flags`` which
-    flag set which option, so that :func:`main` names the flag in the library's errors."""
-    given = _given_options(args, robot)
-    _check_method_options(given, method, pool, args.command)
     args.typed_flags = {name: flag for name, (_, flag) in given.items()}
     args.typed_flags.update(_TARGET_FLAGS)
     if getattr(args, "seed", 0):  # the default 0 is always valid; a typed seed the library rejects is named

@@ -18,11 +18,8 @@ __all__ = ["JointLimitMargin", "ManipulabilityCost", "MaxJointDisplacement", "Ob
 
 
 class PopulationKinematics:
-    """Lazily computed kinematics of one population, shared by every term of an objective.
-
-    Attributes (computed on first use): ``positions`` (N, 3) m, ``rotations`` (N, 3, 3),
-    ``jacobians`` (N, 6, n) in the base frame.
-    """
+    """Kinematics of one population, computed on first use and shared by every term of an objective: ``positions``
+    (N, 3) m, ``rotations`` (N, 3, 3), ``jacobians`` (N, 6, n) in the base frame."""
 
     def __init__(self, robot, Q: np.ndarray) -> None:
         self.robot = robot
@@ -53,10 +50,8 @@ class PopulationKinematics:
 
 
 def position_errors(target, kin: PopulationKinematics) -> np.ndarray:
-    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane).
-
-    Cached on ``kin`` per target: ``IKProblem.evaluate`` asks for it twice (objective and errors).
-    """
+    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane), cached on ``kin`` per
+    target (``IKProblem.evaluate`` asks twice)."""
     cached = kin.__dict__.get("_position_errors")
     if cached is not None and cached[0] is target:
         return cached[1]
@@ -199,10 +194,8 @@ class PoseDistance(Objective):
 
 
 class RPYPoseError(Objective):
-    """Paper 004: ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||``, O = roll-pitch-yaw (rad), wrapped.
-
-    Defaults sigma = 0.3, epsilon = 0.7 as in the paper. Position in m.
-    """
+    """Paper 004: ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (position m, O roll-pitch-yaw rad, wrapped);
+    the paper's sigma = 0.3, epsilon = 0.7 by default."""
 
     def __init__(self, target, sigma: float = 0.3, epsilon: float = 0.7) -> None:
         if target.rotation is None:
@@ -230,10 +223,8 @@ class MaxJointDisplacement(Objective):
 
 
 class WeightedJointDisplacement(Objective):
-    """``sqrt(sum_k K_k (q_k - q_prev,k)^2)``: paper 003's smoothness S, paper 002's ``||q - q0||``.
-
-    ``gains`` K (n,) default to ones.
-    """
+    """``sqrt(sum_k K_k (q_k - q_prev,k)^2)`` (gains K (n,), default ones): paper 003's smoothness S, paper 002's
+    ``||q - q0||``."""
 
     def __init__(self, q_prev, gains=None) -> None:
         self.q_prev = np.asarray(q_prev, dtype=float)
@@ -249,12 +240,8 @@ class WeightedJointDisplacement(Objective):
 
 
 class ManipulabilityCost(Objective):
-    """Manipulability cost of paper 003.
-
-    ``form="inverse"``: ``1 / (Y + 1)`` (to minimize); ``form="negative"``: ``-Y``; ``form="value"``: Y.
-    Y = sqrt(det(J J^T)) of the chosen rows of the base-frame Jacobian (``rows`` as in
-    ``Robot.manipulability``: "translation", "rotation", "full", "planar" or a list of row indices).
-    """
+    """Paper 003's manipulability cost of Y = sqrt(det(J J^T)), J the ``rows`` of the base-frame Jacobian (as in
+    ``Robot.manipulability``): ``form="inverse"``: ``1 / (Y + 1)``; ``"negative"``: ``-Y``; ``"value"``: Y."""
 
     _FORMS = ("inverse", "negative", "value")
 

@@ -222,20 +222,13 @@ def _engine(robot, backend: str, workers, address, entropy: int, options: dict):
 def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=None, backend: str = "local",
                      workers: int | None = None, seed: int = 0, progress: bool = True, address: str | None = None,
                      batch_size: int = DEFAULT_BATCH, **options) -> ReachMap:
-    """The reachability map of ``robot`` (see the module docstring).
+    """The reachability map of ``robot`` (see the module docstring) as a :class:`ReachMap`.
 
     Args:
-        robot: a :class:`Robot` or anything :func:`load_robot` accepts.
-        voxel: voxel edge (m). orientations: orientations asked per voxel for 6-D arms (>= 1).
-        scene: a :class:`~evoik_pin.scene.Scene` or a scene file's path (str or Path): only collision-free answers
-            count.
-        backend, workers, address: as for :func:`evoik_pin.solve_many` (threads, or Ray actors).
-        seed: seeds the workspace sampling (the orientation set and the LM starts are deterministic).
-        progress: a tqdm bar over the targets. batch_size: targets per call of the batch engine.
-        **options: IK options for every target (``tolerance``, ``rotation_tolerance``, ``table_seeds``, ...).
-
-    Returns:
-        A :class:`ReachMap` (write it with :meth:`ReachMap.save`).
+        robot: a :class:`Robot` or anything :func:`load_robot` accepts. voxel: voxel edge (m). orientations:
+            orientations asked per voxel for 6-D arms (>= 1). scene: a Scene or a scene file's path: collision-free
+            answers only. backend, workers, address, progress: as for :func:`evoik_pin.solve_many`. seed: of the
+            workspace sampling. batch_size: targets per call of the batch engine. **options: IK options.
     """
     t0 = time.perf_counter()
     robot = robot if isinstance(robot, Robot) else load_robot(robot)
