@@ -19,10 +19,10 @@ from .call_setup import (
     DEFAULT_METHOD,
     _rng,
     _robot,
-    _with_goal_verdict,
     make_problem,
     run_with_verdicts,
     split_options,
+    with_verdicts,
 )
 from .errors import ConfigurationError, EvoikError, OptionError
 from .goals import is_goal_list
@@ -36,7 +36,6 @@ from .robot import Robot
 from .robot.locking import expand_result, kept_columns, locked_robot, shrink_q
 from .scene import Scene
 from .solvers import get_solver
-from .solvers.collision_verdict import with_collision_verdict
 from .solvers.search.memetic import KEPT_ENGINES
 from .target import pose_arrays
 
@@ -225,10 +224,7 @@ class IKSolver:
             problem = self.problem(goals, q0)
         rng = _rng(seed)
         if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
-            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options)
-            if problem.goals is not None:
-                result = _with_goal_verdict(problem, result)
-            return with_collision_verdict(problem, result)
+            return with_verdicts(problem, choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options))
         criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
         result = self.run(problem, rng)
         if not result.success:
@@ -244,9 +240,7 @@ class IKSolver:
         result.q, result.position_error, result.orientation_error, result.cost = q, *problem.assess(q)
         result.goal_errors = None
         result.collision_free = None  # the search's verdict was on its answer, not the refined one
-        if problem.goals is not None:
-            result = _with_goal_verdict(problem, result)
-        return with_collision_verdict(problem, result)
+        return with_verdicts(problem, result)
 
     def _lane_q0(self, q0, seed):
         """A lane call's q0 (checked; None: the solver's), then the seed's check, as the general path orders them."""
