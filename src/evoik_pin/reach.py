@@ -255,7 +255,8 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     solve, workers = _engine(robot, backend, workers, address, seed, options)
     bar = progress_bar(progress, f"reach {robot.name}", unit="target")
 
-    def run(targets: list[Target]) -> BatchOutcome:
+    def run(targets) -> BatchOutcome:
+        """The engine on ``targets`` (Targets, or an (N, 4, 4) array of poses), ``batch_size`` at a time."""
         parts = []
         for a in range(0, len(targets), batch_size):
             parts.append(solve(targets[a:a + batch_size]))
@@ -289,10 +290,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 H[:, :, :3, :3] = R
                 H[:, :, :3, 3] = centers[part, None, :]
                 H[:, :, 3, 3] = 1.0
-                poses = H.reshape(-1, 4, 4)  # solved as an array: no Target object per pose
-                res = solve(poses)
-                if bar is not None:
-                    bar.update(poses.shape[0])
+                res = run(H.reshape(-1, 4, 4))  # solved as an array: no Target object per pose
                 ok = res.success.reshape(part.size, orientations)
                 count[part] = ok.sum(axis=1)
                 m = np.zeros(ok.shape)
