@@ -15,28 +15,7 @@ from .robot import Robot, list_robots, load_robot
 from .scene import Scene
 from .solvers import methods
 
-__all__ = [
-    "BatchResults",
-    "Front",
-    "IKProblem",
-    "IKSolver",
-    "ReachMap",
-    "Result",
-    "RelativePosition",
-    "Robot",
-    "Scene",
-    "Target",
-    "Tracker",
-    "list_robots",
-    "load_robot",
-    "make_problem",
-    "methods",
-    "prepare",
-    "reachability_map",
-    "retarget",
-    "solve",
-    "solve_all",
-    "solve_many",
-    "solve_trajectory",
-]
+__all__ = ["BatchResults", "Front", "IKProblem", "IKSolver", "ReachMap", "Result", "RelativePosition", "Robot",
+           "Scene", "Target", "Tracker", "list_robots", "load_robot", "make_problem", "methods", "prepare",
+           "reachability_map", "retarget", "solve", "solve_all", "solve_many", "solve_trajectory"]
 __version__ = "0.1.0"

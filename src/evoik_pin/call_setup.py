@@ -8,7 +8,7 @@ import numpy as np
 
 from .errors import MethodError, OptionError
 from .goals import is_goal_list
-from .problem import IKProblem, Target
+from .problem import IKProblem
 from .result import Result
 from .robot import Robot, load_robot
 from .solvers import get_solver
@@ -28,13 +28,8 @@ _PROBLEM_OPTIONS = ("tolerance", "rotation_tolerance", "q0", "bounds", "objectiv
 
 
 class _DeferredGenerator:
-    """A ``numpy.random.Generator`` for ``seed``, created on first use.
-
-    Seeding a generator costs 10-50 us, a tenth of a typical memetic solve, whose deterministic stages (q0
-    and the seed table) usually meet the tolerance without drawing a number. Solvers use the object like
-    the Generator itself (every attribute is forwarded), and the draws are exactly those of
-    ``np.random.default_rng(seed)``.
-    """
+    """A ``numpy.random.Generator`` for ``seed`` (the same draws), created on first use: seeding costs 10-50 us, a
+    tenth of a memetic solve, whose deterministic stages usually need no random number."""
 
     __slots__ = ("_seed", "_generator")
 
@@ -80,33 +75,40 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
     problem_kw = split_options(options)
     if "q0" in problem_kw and problem_kw["q0"] is None:
         problem_kw.pop("q0")
-    if is_goal_list(target):  # a list of goals (evoik_pin.goals) on frames of the robot
-        return IKProblem(robot, list(target), **problem_kw), options
-    return IKProblem(robot, Target.coerce(target), **problem_kw), options
+    return IKProblem(robot, list(target) if is_goal_list(target) else target, **problem_kw), options
 
 
-#: Methods that solve goal lists (:mod:`evoik_pin.goals`): memetic and memetic-all (the LM engine over the goal
-#: stack), and the evolutionary methods, which read a problem through ``IKProblem.evaluate`` (the goals' weighted cost
-#: and largest errors over a population); nsga2 with every goal as its constraint, hga and memetic-all with every
-#: solution meeting every goal. The closed forms (``algebraic``) take one target for the tip, or a goal list that is
-#: that problem: one Pose or Position goal on the tip.
+#: Methods that solve goal lists (:mod:`evoik_pin.goals`); ``algebraic`` takes a goal list that is one Pose or
+#: Position goal on the tip.
 GOAL_METHODS = ("memetic", "memetic-all", "de", "isade", "pso", "mode", "ga", "ga-binary", "nsga2", "hga")
 
 
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
+    """The registered ``method`` with ``options`` (``polish`` among them) on ``problem``, with its verdicts
+    (:func:`run_with_verdicts`)."""
     info = get_solver(method)
-    goal_problem = problem.goals is not None and problem
-    if goal_problem:
-        problem = _goal_method_problem(method, problem)
     polish = options.pop("polish", False)
     info.check_options(options)
-    result = info.func(problem, rng, **options)
+    return run_with_verdicts(problem, method, lambda p, r: info.func(p, r, **options), polish, rng)
+
+
+def run_with_verdicts(problem: IKProblem, method: str, solve, polish: bool, rng) -> Result:
+    """``solve(problem, rng)`` (a goal list: on ``method``'s own problem of it, :func:`_goal_method_problem`), then
+    the LM ``polish`` when asked and the verdicts (:func:`with_verdicts`)."""
+    solved = problem if problem.goals is None else _goal_method_problem(method, problem)
+    result = solve(solved, rng)
     if polish:
         from .solvers.lm.polish import polish_result
 
-        result = polish_result(problem, result, rng)
-    if goal_problem:
-        result = _with_goal_verdict(goal_problem, result)
+        result = polish_result(solved, result, rng)
+    return with_verdicts(problem, result)
+
+
+def with_verdicts(problem: IKProblem, result: Result) -> Result:
+    """``result`` judged goal by goal (a goal list: :func:`_with_goal_verdict`), then against the scene
+    (:func:`~evoik_pin.solvers.collision_verdict.with_collision_verdict`)."""
+    if problem.goals is not None:
+        result = _with_goal_verdict(problem, result)
     return with_collision_verdict(problem, result)
 
 

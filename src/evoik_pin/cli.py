@@ -1,8 +1,5 @@
-"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view, retarget.
-
-Degrees (and metres) at the command line by default: revolute joint values in degrees (``--rad`` switches them to
-radians), prismatic joint values and positions in metres; ``q_deg`` in JSON output follows the same rule.
-Each sub-command is one ``_cmd_*`` function registered in :func:`build_parser`.
+"""The ``evoik`` command line: robots, fk, solve, reach, reproduce, view, retarget (docs/CLI.md); one ``_cmd_*``
+function per sub-command. Revolute joint values in degrees unless ``--rad``, prismatic ones and positions in m.
 """
 
 from __future__ import annotations
@@ -45,18 +42,9 @@ def _load(args: argparse.Namespace, goals_file=None):
     ``floating_base`` and ``tips`` fill in the flags not given, and a value given both ways that differs (the
     file's ``robot`` another than ROBOT, ``--floating-base`` on a file saying false, other ``--tips``) is an
     error naming the flag and the file."""
-    xacro_args = {}
-    for item in args.xacro_arg:
-        name, sep, value = item.partition(":=") if ":=" in item else item.partition("=")
-        if not sep or not name:
-            raise OptionError(f"--xacro-arg needs NAME=VALUE, got {item!r}")
-        xacro_args[name] = value
-    aliases = {}
-    for item in args.package_alias:
-        name, sep, value = item.partition("=")
-        if not sep or not name or not value:
-            raise OptionError(f"--package-alias needs NAME=SHIPPED_AS, got {item!r}")
-        aliases[name] = value
+    xacro_args = dict(_name_value(item, "--xacro-arg", "NAME=VALUE") for item in args.xacro_arg)
+    aliases = dict(_name_value(item, "--package-alias", "NAME=SHIPPED_AS", lambda _, value: bool(value))
+                   for item in args.package_alias)
     tips = args.tips[0] if args.tips == ["all"] else args.tips
     floating_base = args.floating_base
     if goals_file is not None:
@@ -79,6 +67,24 @@ def _load(args: argparse.Namespace, goals_file=None):
     return robot
 
 
+def _name_value(item: str, flag: str, form: str, ok=lambda name, value: True) -> tuple[str, str]:
+    """(NAME, VALUE) of a ``flag NAME=VALUE`` (``NAME:=VALUE`` too); OptionError '<flag> needs <form>, got ...' for
+    an item without a name, or whose name and value ``ok`` refuses."""
+    name, sep, value = item.partition(":=") if ":=" in item else item.partition("=")
+    name = name.strip()
+    if not sep or not name or not ok(name, value):
+        raise OptionError(f"{flag} needs {form}, got {item!r}")
+    return name, value
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
     """Joint values typed at the command line in SI: revolute joints in degrees (radians with ``--rad``),
     prismatic joints in m either way. A list of the wrong length is converted whole (the library names it)."""
@@ -95,16 +101,9 @@ def _locked_values(robot, items: list[str], rad: bool) -> dict[str, float]:
     checks the names and limits."""
     out = {}
     for item in items:
-        name, sep, text = item.partition("=")
-        name = name.strip()
-        try:
-            value = float(text)
-        except ValueError:
-            value = None
-        if not sep or not name or value is None:
-            raise OptionError(f"--locked needs NAME=VALUE (a joint and a number), got {item!r}")
+        name, text = _name_value(item, "--locked", "NAME=VALUE (a joint and a number)", lambda _, v: _is_number(v))
         revolute = name in robot.joint_names and bool(robot.revolute[robot.joint_names.index(name)])
-        out[name] = float(np.radians(value)) if revolute and not rad else value
+        out[name] = float(np.radians(float(text))) if revolute and not rad else float(text)
     return out
 
 
@@ -176,14 +175,10 @@ def _add_problem_args(p: argparse.ArgumentParser, q0: bool = True) -> None:
                    help="m per rad of orientation error in the pose cost (default 1)")
     p.add_argument("--pose-metric", help="how the pose cost combines the errors: sum (default) or euclidean")
     if q0:
-        p.add_argument("--q0", type=float, nargs="+", help="initial configuration (revolute joints in degrees, or "
-                       "radians with --rad; prismatic joints in m)")
-        p.add_argument("--lower", type=float, nargs="+", metavar="Q",
-                       help="lower joint bounds of the search (revolute joints in degrees, or radians with --rad; "
-                       "prismatic in m; default the robot's)")
-        p.add_argument("--upper", type=float, nargs="+", metavar="Q",
-                       help="upper joint bounds of the search (revolute joints in degrees, or radians with --rad; "
-                       "prismatic in m; default the robot's)")
+        p.add_argument("--q0", type=float, nargs="+", help=f"initial configuration ({_JOINT_UNITS})")
+        for bound in ("lower", "upper"):
+            p.add_argument(f"--{bound}", type=float, nargs="+", metavar="Q",
+                           help=f"{bound} joint bounds of the search ({_JOINT_UNITS}; default the robot's)")
     p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
                    "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
@@ -211,10 +206,8 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
     if getattr(args, "locked", None):
         given["locked"] = (_locked_values(robot, args.locked, args.rad), "--locked")
     for item in getattr(args, "option", []):
-        name, sep, text = item.partition("=")
-        name = name.strip()
-        if not sep or not name.isidentifier():
-            raise OptionError(f"--option needs NAME=VALUE with NAME a Python keyword (e.g. runs=5), got {item!r}")
+        name, text = _name_value(item, "--option", "NAME=VALUE with NAME a Python keyword (e.g. runs=5)",
+                                 lambda name, _: name.isidentifier())
         flag = f"--option {name}"
         if name in CALL_FLAGS and hasattr(args, _dest(CALL_FLAGS[name])):
             raise OptionError(f"{flag}: use {CALL_FLAGS[name]} (one way to set each option)")
@@ -230,32 +223,26 @@ def _given_options(args: argparse.Namespace, robot) -> dict[str, tuple[object, s
     return given
 
 
-def _check_method_options(given: dict, method: str, pool: list[str] | None, command: str) -> None:
-    """OptionError naming the flag of an option ``method`` does not take, and the methods of ``pool`` that do
-    (``pool`` None: ``evoik command`` has this one method)."""
+def _call_options(args: argparse.Namespace, robot, method: str, pool: list[str] | None = None) -> dict:
+    """The keyword options of the wrapped call from the flags, checked against ``method`` (an option it does not take
+    names the flag and the methods of ``pool`` that take it; ``pool`` None: the command's one method). Records on
+    ``args.typed_flags`` which flag set which option, so that :func:`main` names the flag in the library's errors."""
     from .api import _PROBLEM_OPTIONS
     from .solvers import get_solver
 
+    given = _given_options(args, robot)
     takes = get_solver(method).options
-    for name, (_, flag) in given.items():
+    for name, (_, flag) in given.items():  # an option method does not take: the flag and the methods that take it
         if name in _PROBLEM_OPTIONS or name in ("polish", "prefer", "locked") or name in takes:
             continue
         if pool is None:
-            raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {command}); "
+            raise OptionError(f"{flag} is not an option of method {method!r} (the solver of evoik {args.command}); "
                               f"it takes: {', '.join(takes)}")
         takers = [m for m in pool if name in get_solver(m).options]
         if takers:
             raise OptionError(f"{flag} is not an option of method {method!r}; methods that take it: "
                               f"{', '.join(takers)}")
         raise OptionError(f"{flag}: no method takes an option {name!r}; method {method!r} takes: {', '.join(takes)}")
-
-
-def _call_options(args: argparse.Namespace, robot, method: str, pool: list[str] | None = None) -> dict:
-    """The keyword options of the wrapped call from the flags, checked against ``method`` (an option it does
-    not take names the flag and the methods of ``pool`` that take it). Records on ``args.typed_flags`` which
-    flag set which option, so that :func:`main` names the flag in the library's errors."""
-    given = _given_options(args, robot)
-    _check_method_options(given, method, pool, args.command)
     args.typed_flags = {name: flag for name, (_, flag) in given.items()}
     args.typed_flags.update(_TARGET_FLAGS)
     if getattr(args, "seed", 0):  # the default 0 is always valid; a typed seed the library rejects is named
@@ -289,27 +276,15 @@ def _cmd_robots(args: argparse.Namespace) -> int:
     return 0
 
 
-def _pose_dict(robot, q, frame: str | None = None) -> dict:
-    """The pose of ``frame`` (default: the tip) at ``q``, as ``evoik fk --json`` prints it."""
+def _cmd_fk(args: argparse.Namespace) -> int:
     import pinocchio as pin
 
-    T = robot.fk(q, frame=frame)
-    return {
-        "robot": robot.name,
-        "tip": robot.tip,
-        "frame": frame or robot.tip,
-        "base": robot.base,
-        "q_rad": [float(v) for v in q],
-        "position_m": [float(v) for v in T.translation],
-        "rpy_rad": [float(v) for v in pin.rpy.matrixToRpy(T.rotation)],
-        "rotation": np.asarray(T.rotation).tolist(),
-    }
-
-
-def _cmd_fk(args: argparse.Namespace) -> int:
     robot = _load(args)
     q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
-    info = _pose_dict(robot, q, args.frame)
+    T = robot.fk(q, frame=args.frame)
+    info = {"robot": robot.name, "tip": robot.tip, "frame": args.frame or robot.tip, "base": robot.base,
+            "q_rad": [float(v) for v in q], "position_m": [float(v) for v in T.translation],
+            "rpy_rad": [float(v) for v in pin.rpy.matrixToRpy(T.rotation)], "rotation": np.asarray(T.rotation).tolist()}
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -325,10 +300,11 @@ def _cmd_fk(args: argparse.Namespace) -> int:
 
 
 def _cmd_solve(args: argparse.Namespace) -> int:
-    """IK for one target: xyz in metres, optional roll-pitch-yaw in degrees; exit 1 when not reached."""
+    """IK for one target (xyz in m, optional roll-pitch-yaw in degrees) or a goals file; exit 1 when not reached."""
     import pinocchio as pin
 
-    from .api import DEFAULT_ALL_METHOD, DEFAULT_METHOD, solve
+    from .api import DEFAULT_ALL_METHOD, DEFAULT_METHOD, GOAL_METHODS, solve
+    from .goals import Goal
     from .papers.reporting import check_output_file
     from .problem import Target
     from .solvers import get_solver, methods
@@ -340,35 +316,141 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     method = args.method or (DEFAULT_ALL_METHOD if args.all else DEFAULT_METHOD)
     get_solver(method)  # an unknown method is named before its options are checked
     if goals_file is not None:
-        return _solve_goals(args, robot, goals_file, method, html, scene, margin)
-    pool = [m for m in methods() if get_solver(m).multi_solution or not args.all]
+        goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
+    pool = [m for m in (methods() if goals_file is None else GOAL_METHODS)
+            if get_solver(m).multi_solution or not args.all]
     options = _call_options(args, robot, method, pool)
-    position = np.asarray(args.xyz, dtype=float)
-    target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
     if scene is not None:
         options.update(scene=scene, margin=margin)
+    if goals_file is not None:
+        for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
+            args.typed_flags.pop(phrase, None)
+        target = goals_file.problems[0]
+    else:
+        position = np.asarray(args.xyz, dtype=float)
+        target = position if args.rpy is None else Target.from_rpy(position, np.radians(args.rpy))
     if args.all:
-        return _solve_all(args, robot, target, options, html, method)
+        return _solve_all(args, robot, target, options, html, method, goals_file is not None)
     res = solve(robot, target, method=method, seed=args.seed, **options)
-    reached = robot.fk(res.q)
-    info = {
-        "robot": robot.name,
-        "method": res.method or method,
-        "success": bool(res.success),
-        "message": res.message,
-        "joint_names": list(robot.joint_names),
-        "q_rad": [float(v) for v in res.q],
-        "q_deg": [float(v) for v in _shown(robot, res.q, False)],
-        "target_position_m": [float(v) for v in position],
-        "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
-        "reached_position_m": [float(v) for v in reached.translation],
-        "reached_rpy_deg": [float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))],
-        **_answer_fields(args, res),
-    }
-    _report(args, robot, res, info, scene, margin)
+    info = {"robot": robot.name, "method": res.method or method, "success": bool(res.success),
+            "message": res.message, "joint_names": list(robot.joint_names), **_q_fields(robot, res.q)}
+    rows = None
+    if goals_file is None:
+        reached = robot.fk(res.q)
+        info.update(target_position_m=[float(v) for v in position],
+                    target_rpy_deg=None if args.rpy is None else [float(v) for v in args.rpy],
+                    reached_position_m=[float(v) for v in reached.translation],
+                    reached_rpy_deg=[float(v) for v in np.degrees(pin.rpy.matrixToRpy(reached.rotation))])
+        target = Target.coerce(target)
+    else:
+        target = [g for g in target if isinstance(g, Goal)]  # the preferences have no errors to show
+        rows = [_goal_row(res, i, goal, *errors) for i, (goal, errors) in enumerate(zip(target, res.goal_errors,
+                                                                                          strict=True))]
+        info.update(floating_base=robot.floating_base, goals_file=str(args.goals),
+                    q_pinocchio=[float(v) for v in robot.full_configuration(res.q)], goal_errors=rows)
+    info.update(position_error_m=res.position_error, orientation_error_rad=res.orientation_error, cost=res.cost,
+                generations=res.generations, evaluations=res.evaluations, time_s=res.time_s, seed=args.seed)
+    _report(args, robot, res, info, scene, margin, rows)
     if html is not None or args.view:
-        _view_solution(robot, res, Target.coerce(target), html, args.view, scene=scene, margin=margin)
+        _view_solution(robot, res, target, html, args.view, scene=scene, margin=margin)
     return 0 if res.success else 1
+
+
+def _goal_row(res, i: int, goal, pos, rot) -> dict:
+    """Goal ``i``'s line of a goal-list answer (``evoik solve --goals --json``'s ``goal_errors``)."""
+    from .io.goals_file import goal_kind_name
+
+    row = {"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos, "rotation_error_rad": rot,
+           "met": bool(goal.met(pos, rot)), "tolerance_m": goal.tolerance if goal.has_position else None,
+           "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None, "weight": goal.weight}
+    if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
+        row["label"] = goal.label
+        if getattr(goal, "frame_a", None):
+            row["frame_a"] = goal.frame_a
+    if goal.alternatives is not None:  # a goal set: the member met
+        row["chosen"] = res.chosen[i]
+    return row
+
+
+def _q_fields(robot, q) -> dict:
+    """An answer's joint values for JSON output: ``q_rad`` and ``q_deg`` (revolute in degrees, prismatic in m)."""
+    return {"q_rad": [float(v) for v in q], "q_deg": [float(v) for v in _shown(robot, q, False)]}
+
+
+def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, method: str, goal_list: bool) -> int:
+    """``evoik solve --all``: every solution of the target or goal list (``solve_all``), one line each or as JSON;
+    exit 1 when there is none. ``--html`` / ``--view``: the first solution (or the best approximation), the others
+    as ghosts."""
+    from .api import solve_all
+    from .problem import Target
+
+    sols = solve_all(robot, target, method=method, seed=args.seed, **options)
+    res = sols.result
+    scene = options.get("scene")
+    rows = [_q_fields(robot, s.q) for s in sols]
+    info = {"robot": robot.name, "method": res.method or method, "success": bool(sols), "count": len(sols),
+            "message": sols.message, "joint_names": list(robot.joint_names), "solutions": rows,
+            "time_s": res.time_s, "seed": args.seed}
+    if goal_list:
+        for row, s in zip(rows, sols, strict=True):
+            row.update(q_pinocchio=[float(v) for v in robot.full_configuration(s.q)], goal_errors=[
+                {"frame": g.frame, "position_error_m": p, "rotation_error_rad": o, "met": bool(g.met(p, o))}
+                for g, (p, o) in zip(target, s.goal_errors, strict=True)])
+        info.update(floating_base=robot.floating_base, goals_file=str(args.goals))
+        found = f"{len(sols)} solution(s) of {len(target)} goals"
+    else:
+        for row, s in zip(rows, sols, strict=True):
+            row.update(position_error_m=s.position_error, orientation_error_rad=s.orientation_error)
+            if scene is not None:  # solve_all keeps the collision-free solutions only
+                row.update(collision_free=bool(s.collision_free), min_distance_m=float(s.min_distance))
+        info.update(target_position_m=[float(v) for v in args.xyz],
+                    target_rpy_deg=None if args.rpy is None else [float(v) for v in args.rpy])
+        if scene is not None:
+            info.update(scene=str(args.scene), margin_m=options["margin"])
+        found = f"{len(sols)} solution(s)"
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        unit = "rad" if args.rad else "deg"
+        print(f"{robot.name} ({robot.n} joints), method {info['method']}: {found} in {res.time_s * 1e3:.2f} ms "
+              f"({sols.message})")
+        if sols:
+            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+        for k, s in enumerate(sols):
+            if goal_list:
+                rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
+                errors = f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
+            else:
+                rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
+                free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
+                errors = f"position error {s.position_error:.1e} m{rot}{free}"
+            print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors})")
+    if html is not None or args.view:
+        _view_solution(robot, sols[0] if sols else res, target if goal_list else Target.coerce(target), html,
+                       args.view, ghosts=sols, scene=scene, margin=options.get("margin", 0.0))
+    return 0 if sols else 1
+
+
+def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None, margin: float = 0.0) -> None:
+    """Show a solve's answer and its target (a :class:`Target`, or a goal list: its goals' markers) in meshcat, with
+    ``ghosts`` (e.g. every solution of ``--all``) as translucent robots and a ``scene``'s obstacles (the links in
+    collision red); write ``html`` and/or serve until Ctrl-C."""
+    from .viz import Viewer
+
+    with Viewer(robot) as viewer:
+        if isinstance(target, list):
+            viewer.show_solution(res, target, scene=scene, margin=margin)
+        else:
+            viewer.show(res, scene=scene, margin=margin)
+        if ghosts:
+            viewer.show_solutions(ghosts)
+        if not isinstance(target, list):
+            viewer.show_target(target.position, target.rotation)
+        if html is not None:
+            print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
+        if view:
+            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
+
 
 
 def _goals_arg(args: argparse.Namespace):
@@ -398,126 +480,34 @@ def _goals_arg(args: argparse.Namespace):
     return goals_file
 
 
-def _solve_goals(args: argparse.Namespace, robot, goals_file, method: str, html, scene, margin: float) -> int:
-    """``evoik solve ROBOT --goals FILE``: one answer meeting every goal of the file; each goal's errors printed
-    (or in JSON's ``goal_errors``); exit 1 when a goal is not met (or, with a scene, the answer collides)."""
-    from .api import GOAL_METHODS, solve
-    from .goals import Goal
-    from .io.goals_file import goal_kind_name
-    from .solvers import get_solver
-
-    goals_file.bind(robot)  # unknown frames and frames no active joint moves, named by file and goal
-    pool = [m for m in GOAL_METHODS if get_solver(m).multi_solution or not args.all]
-    options = _call_options(args, robot, method, pool)
-    for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
-        args.typed_flags.pop(phrase, None)
-    if scene is not None:
-        options.update(scene=scene, margin=margin)
-    goals = goals_file.problems[0]
-    if args.all:
-        return _solve_all_goals(args, robot, goals, method, options, html)
-    res = solve(robot, goals, method=method, seed=args.seed, **options)
-    goals = [g for g in goals if isinstance(g, Goal)]  # the preferences have no errors to show
-    rows = []
-    for i, (goal, (pos, rot)) in enumerate(zip(goals, res.goal_errors, strict=True)):
-        rows.append({"frame": goal.frame, "kind": goal_kind_name(goal), "position_error_m": pos,
-                     "rotation_error_rad": rot, "met": bool(goal.met(pos, rot)),
-                     "tolerance_m": goal.tolerance if goal.has_position else None,
-                     "rotation_tolerance_rad": goal.rotation_tolerance if goal.reports_angle else None,
-                     "weight": goal.weight})
-        if goal.label != goal.frame:  # a centre of mass (no frame), a relative pose (frame_a -> frame)
-            rows[-1]["label"] = goal.label
-            if getattr(goal, "frame_a", None):
-                rows[-1]["frame_a"] = goal.frame_a
-        if goal.alternatives is not None:  # a goal set: the member met
-            rows[-1]["chosen"] = res.chosen[i]
-    info = {
-        "robot": robot.name,
-        "floating_base": robot.floating_base,
-        "method": res.method or method,
-        "success": bool(res.success),
-        "message": res.message,
-        "goals_file": str(args.goals),
-        "joint_names": list(robot.joint_names),
-        "q_rad": [float(v) for v in res.q],
-        "q_deg": [float(v) for v in _shown(robot, res.q, False)],
-        "q_pinocchio": [float(v) for v in robot.full_configuration(res.q)],
-        "goal_errors": rows,
-        **_answer_fields(args, res),
-    }
-    _report(args, robot, res, info, scene, margin, rows)
-    if html is not None:
-        from .viz import save_solution_html
-
-        print(f"wrote {save_solution_html(robot, res, goals, html, scene=scene, margin=margin)}", file=sys.stderr)
-    if args.view:
-        from .viz import Viewer
-
-        with Viewer(robot) as viewer:
-            viewer.show_solution(res, goals, scene=scene, margin=margin)
-            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-    return 0 if res.success else 1
-
-
-def _solve_all_goals(args: argparse.Namespace, robot, goals, method: str, options: dict, html) -> int:
-    """``evoik solve ROBOT --goals FILE --all``: every solution of the goal list (``solve_all``), one line each with
-    its largest errors (JSON: each solution's q and per-goal errors); exit 1 when there is none. ``--html`` /
-    ``--view`` show the first solution (or the best approximation) with the goals, the others as ghosts."""
-    from .api import solve_all
-
-    sols = solve_all(robot, goals, method=method, seed=args.seed, **options)
-    res = sols.result
-    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
-             "q_pinocchio": [float(v) for v in robot.full_configuration(s.q)],
-             "goal_errors": [{"frame": g.frame, "position_error_m": p, "rotation_error_rad": o,
-                              "met": bool(g.met(p, o))} for g, (p, o) in zip(goals, s.goal_errors, strict=True)]}
-            for s in sols]
-    info = {"robot": robot.name, "floating_base": robot.floating_base, "method": res.method or method,
-            "success": bool(sols), "count": len(sols), "message": sols.message, "goals_file": str(args.goals),
-            "joint_names": list(robot.joint_names), "solutions": rows, "time_s": res.time_s, "seed": args.seed}
-    if args.json:
-        print(json.dumps(info, indent=2))
-    else:
-        def errors(s):
-            rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
-            return f"every goal met; largest errors: position {s.position_error:.1e} m{rot}"
-
-        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) of {len(goals)} goals in "
-                         f"{res.time_s * 1e3:.2f} ms", errors)
-    if html is not None or args.view:
-        from .viz import Viewer
-
-        with Viewer(robot) as viewer:
-            viewer.show_solution(sols[0] if sols else res, goals, scene=options.get("scene"),
-                                 margin=options.get("margin", 0.0))
-            if sols:
-                viewer.show_solutions(sols)
-            if html is not None:
-                print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
-            if args.view:
-                viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-    return 0 if sols else 1
-
-
-def _answer_fields(args: argparse.Namespace, res) -> dict:
-    """The JSON fields every ``evoik solve`` answer ends with: its errors (m, rad), cost, effort and seed."""
-    return {"position_error_m": res.position_error, "orientation_error_rad": res.orientation_error, "cost": res.cost,
-            "generations": res.generations, "evaluations": res.evaluations, "time_s": res.time_s, "seed": args.seed}
-
-
 def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
-    """Print a solve's answer: ``info`` as JSON with ``--json`` (plus the scene's verdict), else as text, with one
-    line per goal of ``goal_rows`` and the scene's verdict."""
-    if scene is not None:
-        info.update(_collision_info(args, scene, margin, res))
+    """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of ``goal_rows``);
+    with a scene, the verdict of the exact mesh check on the answer too."""
+    if scene is not None:  # distinct pairs: a link with several collision shapes counts once
+        pairs = [list(p) for p in dict.fromkeys(scene.colliding_pairs(res.q, margin))]
+        info.update(scene=str(args.scene), margin_m=margin, collision_free=bool(res.collision_free),
+                    min_distance_m=float(res.min_distance), colliding_pairs=pairs)
     if args.json:
         print(json.dumps(info, indent=2))
         return
-    _print_solution(robot, res, info, args.rad)
+    unit = "rad" if args.rad else "deg"
+    print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
+          f"{'reached' if res.success else 'NOT reached'} ({res.message})")
+    print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in _shown(robot, res.q, args.rad)))
+    print(f"position error (m):   {res.position_error:.3e}")
+    if res.orientation_error is not None:
+        print(f"orientation error:    {res.orientation_error:.3e} rad ({np.degrees(res.orientation_error):.3e} deg)")
+    print(f"generations:          {res.generations}")
+    print(f"evaluations:          {res.evaluations}")
+    print(f"time:                 {res.time_s * 1e3:.2f} ms")
     if goal_rows is not None:
         _print_goal_errors(goal_rows)
     if scene is not None:
-        _print_collisions(info)
+        where = f"scene {info['scene']}" + (f", margin {margin:g} m" if margin > 0 else "")
+        print(f"collision-free: {'yes' if res.collision_free else 'no'} (min distance "
+              f"{info['min_distance_m'] * 1e3:.3f} mm; {where})")
+        if pairs:
+            print("in collision:   " + ", ".join(f"{a} - {b}" for a, b in pairs))
 
 
 def _print_goal_errors(rows: list[dict]) -> None:
@@ -548,104 +538,6 @@ def _load_scene(args: argparse.Namespace, robot):
     from .scene import Scene
 
     return Scene.from_file(robot, args.scene), 0.0 if margin is None else float(margin)
-
-
-def _collision_pairs(scene, q, margin: float) -> list[list[str]]:
-    """The distinct (name, name) pairs in collision at ``q`` (a link with several collision shapes counts once)."""
-    return [list(p) for p in dict.fromkeys(scene.colliding_pairs(q, margin))]
-
-
-def _collision_info(args: argparse.Namespace, scene, margin: float, res) -> dict:
-    """The JSON fields of a solve with ``--scene``: the verdict of the exact mesh check on the answer."""
-    return {"scene": str(args.scene), "margin_m": margin, "collision_free": bool(res.collision_free),
-            "min_distance_m": float(res.min_distance), "colliding_pairs": _collision_pairs(scene, res.q, margin)}
-
-
-def _print_collisions(info: dict) -> None:
-    """``collision-free: yes/no``, the smallest clearance (mm) and the pairs in collision."""
-    where = f"scene {info['scene']}" + (f", margin {info['margin_m']:g} m" if info["margin_m"] > 0 else "")
-    print(f"collision-free: {'yes' if info['collision_free'] else 'no'} (min distance "
-          f"{info['min_distance_m'] * 1e3:.3f} mm; {where})")
-    if info["colliding_pairs"]:
-        print("in collision:   " + ", ".join(f"{a} - {b}" for a, b in info["colliding_pairs"]))
-
-
-def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None, margin: float = 0.0) -> None:
-    """Show a solve's answer and its target in meshcat (and ``ghosts``, e.g. every solution of ``--all``, as
-    translucent robots; with a ``scene``, its obstacles and the answer's links in collision in red); write ``html``
-    and/or serve until Ctrl-C."""
-    from .viz import Viewer
-
-    with Viewer(robot) as viewer:
-        viewer.show(res, scene=scene, margin=margin)
-        if ghosts:
-            viewer.show_solutions(ghosts)
-        viewer.show_target(target.position, target.rotation)
-        if html is not None:
-            print(f"wrote {viewer.save_html(html)}", file=sys.stderr)
-        if view:
-            viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
-
-
-def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, method: str) -> int:
-    """``evoik solve --all``: every solution (``solve_all``), printed one per line or as JSON; exit 1 when none."""
-    from .api import solve_all
-    from .problem import Target
-
-    sols = solve_all(robot, target, method=method, seed=args.seed, **options)
-    res = sols.result
-    rows = [{"q_rad": [float(v) for v in s.q], "q_deg": [float(v) for v in _shown(robot, s.q, False)],
-             "position_error_m": s.position_error, "orientation_error_rad": s.orientation_error} for s in sols]
-    scene = options.get("scene")
-    if scene is not None:  # solve_all keeps the collision-free solutions only
-        for row, s in zip(rows, sols, strict=True):
-            row.update(collision_free=bool(s.collision_free), min_distance_m=float(s.min_distance))
-    info = {"robot": robot.name, "method": res.method or method, "success": bool(sols), "count": len(sols),
-            "message": sols.message, "joint_names": list(robot.joint_names), "solutions": rows,
-            "target_position_m": [float(v) for v in args.xyz],
-            "target_rpy_deg": None if args.rpy is None else [float(v) for v in args.rpy],
-            "time_s": res.time_s, "seed": args.seed}
-    if scene is not None:
-        info.update(scene=str(args.scene), margin_m=options["margin"])
-    if args.json:
-        print(json.dumps(info, indent=2))
-    else:
-        def errors(s):
-            rot = "" if s.orientation_error is None else f", orientation error {s.orientation_error:.1e} rad"
-            free = "" if scene is None else f", collision-free, min distance {s.min_distance * 1e3:.1f} mm"
-            return f"position error {s.position_error:.1e} m{rot}{free}"
-
-        _print_solutions(args, robot, sols, info["method"], f"{len(sols)} solution(s) in {res.time_s * 1e3:.2f} ms",
-                         errors)
-    if html is not None or args.view:  # the first solution (or the best approximation), every solution as a ghost
-        _view_solution(robot, sols[0] if sols else res, Target.coerce(target), html, args.view, ghosts=sols,
-                       scene=scene, margin=options.get("margin", 0.0))
-    return 0 if sols else 1
-
-
-def _print_solutions(args: argparse.Namespace, robot, sols, method: str, what: str, errors) -> None:
-    """``evoik solve --all``'s text: a heading (the method, ``what`` was found, the search's message), then a line
-    per solution: its index, q (deg, or rad with ``--rad``) and ``errors(solution)`` in parentheses."""
-    unit = "rad" if args.rad else "deg"
-    print(f"{robot.name} ({robot.n} joints), method {method}: {what} ({sols.message})")
-    if sols:
-        print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
-    for k, s in enumerate(sols):
-        print(f"{k:3d}  " + " ".join(f"{v:.4f}" for v in _shown(robot, s.q, args.rad)) + f"  ({errors(s)})")
-
-
-def _print_solution(robot, res, info: dict, rad: bool) -> None:
-    unit = "rad" if rad else "deg"
-    shown = _shown(robot, res.q, rad)
-    print(f"{robot.name} ({robot.n} joints), method {info['method']}: "
-          f"{'reached' if res.success else 'NOT reached'} ({res.message})")
-    print(f"q ({unit}):            " + " ".join(f"{v:.6f}" for v in shown))
-    print(f"position error (m):   {res.position_error:.3e}")
-    if res.orientation_error is not None:
-        print(f"orientation error:    {res.orientation_error:.3e} rad ({np.degrees(res.orientation_error):.3e} deg)")
-    print(f"generations:          {res.generations}")
-    print(f"evaluations:          {res.evaluations}")
-    print(f"time:                 {res.time_s * 1e3:.2f} ms")
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
@@ -755,95 +647,92 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="evoik", description="Inverse kinematics by evolutionary computation on Pinocchio."
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
+#: The flags several sub-commands share, as ``add_argument`` takes them (:func:`_add`).
+_JOINT_UNITS = "revolute joints in degrees, or radians with --rad; prismatic joints in m"
+_SHARED_FLAGS = {
+    "--q": dict(type=float, nargs="+", help=f"joint values ({_JOINT_UNITS}); default 0"),
+    "--rad": dict(action="store_true", help="joint values in radians (input and output)"),
+    "--json": dict(action="store_true", help="machine-readable output"),
+    "--html": dict(metavar="PATH", help="also write the result as a self-contained HTML page"),
+    "--view": dict(action="store_true", help="show the result in meshcat until Ctrl-C"),
+    "--seed": dict(type=int, default=0, help="seed of every random draw (default 0): same seed, same answer"),
+    "--scene": dict(metavar="FILE", help="collision scene (YAML or JSON obstacles, Scene.from_file): answers must be "
+                    "free of collisions with it and the robot itself; links in collision drawn red"),
+    "--margin": dict(type=float, metavar="M", help="with --scene: clearance in m kept from collisions (default 0)"),
+    "--no-progress": dict(action="store_true", help="no progress bar"),
+}
 
-    p = sub.add_parser("robots", help="list the robots that load by name")
-    p.set_defaults(func=_cmd_robots)
+
+def _add(p: argparse.ArgumentParser, *flags: str, **help_texts: str) -> None:
+    """Add the shared ``flags`` (:data:`_SHARED_FLAGS`) to ``p``; ``help_texts`` (by dest) replace their help."""
+    for flag in flags:
+        spec = _SHARED_FLAGS[flag]
+        p.add_argument(flag, **{**spec, "help": help_texts.get(_dest(flag), spec["help"])})
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="evoik", description="Inverse kinematics by evolutionary computation on "
+                                     "Pinocchio.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    sub.add_parser("robots", help="list the robots that load by name").set_defaults(func=_cmd_robots)
 
     p = sub.add_parser("fk", help="forward kinematics: tip pose at a joint vector")
     _add_robot_args(p)
-    p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
-                   "--rad; prismatic joints in m)")
-    p.add_argument("--rad", action="store_true", help="joint values in radians")
-    p.add_argument("--frame", metavar="NAME", help="the frame whose pose is printed: any frame of the robot (link, "
-                   "joint or fixed frame; default the tip)")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+    _add(p, "--q", "--rad", "--json")
+    p.add_argument("--frame", metavar="NAME", help="the frame whose pose is printed (default the tip)")
     p.set_defaults(func=_cmd_fk)
 
-    p = sub.add_parser("solve", help="inverse kinematics for one target or a goals file (exit status 1 when not "
-                       "reached)")
+    p = sub.add_parser("solve", help="inverse kinematics for one target or a goals file (exit 1 when not reached)")
     _add_robot_args(p)
-    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"),
-                   help="target tip position in metres, in the base frame")
-    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file): several "
-                   "goals on any frames (pose or position, weights, tolerances), instead of --xyz/--rpy; the output "
-                   "gives each goal's errors and whether it is met; exit 1 when one is not")
+    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="target tip position in m (base frame)")
     p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
                    help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")
+    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file) instead of "
+                   "--xyz/--rpy: each goal's errors are printed; exit 1 when one is not met")
     p.add_argument("--method", help="solver (evoik_pin.methods(); default: the memetic solver)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same answer")
+    _add(p, "--seed")
     _add_problem_args(p)
     p.add_argument("--polish", action="store_true", help="polish the method's answer with Levenberg-Marquardt")
     p.add_argument("--population", type=int, help="population size of population-based solvers")
     p.add_argument("--max-generations", type=int, help="generation budget of population-based solvers")
-    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock budget in seconds (memetic: default "
-                   "0.005; memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")
-    p.add_argument("--count", type=int, help="with --all (memetic-all): solutions wanted on a redundant arm "
-                   "(default 8)")
-    p.add_argument("--rad", action="store_true", help="joint values in radians (output and --q0)")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--html", metavar="PATH", help="also write the solution and target as a self-contained meshcat page")
-    p.add_argument("--view", action="store_true", help="show the solution and target in meshcat until Ctrl-C")
-    p.add_argument("--all", action="store_true", help="every distinct solution of the target or of the --goals "
-                   "list (solve_all; default method memetic-all), one per line; with --html/--view drawn as ghosts; "
-                   "exit 1 when there is none")
-    p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles, see Scene.from_file): "
-                   "answers must be free of collisions with it and with the robot itself; exit 1 when the answer "
-                   "collides; --html/--view draw the obstacles and the links in collision in red")
-    p.add_argument("--margin", type=float, metavar="M", help="with --scene: clearance in m the answer must keep "
-                   "(pairs closer than M count as colliding; default 0)")
-    p.add_argument("--prefer", help="which answer: first (default: the first found), nearest (nearest --q0) or "
-                   "manipulability (the most dexterous), among those found within --timeout (default 0.7 ms for "
-                   "the last two)")
+    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock budget in s (memetic: default 0.005; "
+                   "memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")
+    p.add_argument("--count", type=int, help="with --all: solutions wanted on a redundant arm (default 8)")
+    _add(p, "--rad", "--json", "--html", "--view")
+    p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
+                   "memetic-all), one per line, drawn as ghosts by --html/--view; exit 1 when there is none")
+    _add(p, "--scene", "--margin")
+    p.add_argument("--prefer", help="which answer: first (default), nearest (nearest --q0) or manipulability (the "
+                   "most dexterous), among those found within --timeout (default 0.7 ms for the last two)")
     p.add_argument("--locked", action="append", default=[], metavar="NAME=VALUE",
-                   help="hold joint NAME at VALUE for this solve (repeatable; revolute in degrees, or radians with "
-                   "--rad; prismatic in m); --q0 and the answer keep every joint")
+                   help=f"hold joint NAME at VALUE (repeatable; {_JOINT_UNITS}); --q0 and the answer keep every joint")
     p.set_defaults(func=_cmd_solve)
 
     p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
     _add_robot_args(p)
-    p.add_argument("--q", type=float, nargs="+", help="joint values (revolute joints in degrees, or radians with "
-                   "--rad; prismatic joints in m); default 0")
-    p.add_argument("--rad", action="store_true", help="joint values in radians")
-    p.add_argument("--html", metavar="PATH", help="also write the scene as a self-contained HTML file")
+    _add(p, "--q", "--rad", "--html", "--scene")
     p.add_argument("--no-block", action="store_true",
                    help="write --html PATH and return at once (the viewer's server stops with evoik)")
-    p.add_argument("--scene", metavar="FILE", help="collision scene (YAML or JSON obstacles) drawn in grey; links in "
-                   "collision at the configuration are red")
     p.set_defaults(func=_cmd_view)
+
     p = sub.add_parser("reach", help="reachability map: fraction of orientations IK reaches per voxel (npz, png, html)")
     _add_robot_args(p)
     p.add_argument("--voxel", type=float, default=0.05, help="voxel edge in m (default 0.05)")
     p.add_argument("--out", required=True, help="output directory: OUT/<robot>_reach.npz, .png and .html")
     p.add_argument("--orientations", type=int, default=32,
                    help="orientations asked per voxel (6-D arms; default 32); position-only and planar arms: 1")
-    p.add_argument("--scene", metavar="FILE", help="scene file (YAML/JSON obstacles): collision-free answers only")
-    p.add_argument("--margin", type=float, help="clearance in m kept from the scene (with --scene; default 0)")
+    _add(p, "--scene", "--margin", "--seed", seed="seed of the workspace sampling (default 0)")
     p.add_argument("--backend", choices=["local", "ray"], default="local",
                    help="local (threads, every core) or ray (actors; pip install 'evoik_pin[ray]')")
     p.add_argument("--workers", type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")
     p.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the workspace sampling (default 0)")
-    p.add_argument("--batch-size", type=int, default=50_000, help="targets per call of the batch engine "
-                   "(default 50000)")
+    p.add_argument("--batch-size", type=int, default=50_000, help="targets per call of the batch engine (default "
+                   "50000)")
     _add_problem_args(p, q0=False)
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add(p, "--no-progress")
     p.add_argument("--no-html", action="store_true", help="skip the meshcat HTML page")
     p.set_defaults(func=_cmd_reach)
+
     p = sub.add_parser("retarget", help="retarget a human motion (BVH file or bundled clip) onto a humanoid: "
                        "joint trajectory as npz, csv or pkl")
     p.add_argument("file", help="a BVH file, or a bundled clip's name (walk, run, jump, dance, getup)")
@@ -851,24 +740,24 @@ def build_parser() -> argparse.ArgumentParser:
                    "floating base")
     p.add_argument("--mapping", default="cmu", help="keypoint mapping preset: cmu (BVH skeletons, default) or smpl")
     p.add_argument("--out", required=True, help="output file: .npz, .csv or .pkl (GMR's layout)")
-    p.add_argument("--html", metavar="PATH", help="also write a self-contained HTML page playing the clip")
+    _add(p, "--html", html="also write a self-contained HTML page playing the clip")
     p.add_argument("--scale", type=float, help="source-to-robot length factor (default: leg lengths' ratio)")
     p.add_argument("--no-self-collision", action="store_true", help="do not keep the frames free of self-collision")
     p.add_argument("--no-velocity-limits", action="store_true", help="do not bound each step by the joint velocity "
                    "limits")
-    p.add_argument("--seed", type=int, default=0, help="seed of the solves' random draws (default 0)")
+    _add(p, "--seed")
     p.add_argument("--progress", action="store_true", help="print progress every 30 frames")
     p.set_defaults(func=_cmd_retarget)
+
     p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
     p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
     p.add_argument("--quick", action="store_true", help="reduced-size runs (well under a minute per paper)")
-    p.add_argument("--seed", type=int, default=0, help="master seed of every random choice (default 0)")
+    _add(p, "--seed")
     p.add_argument("--out", default="reproduction", help="output directory; each paper writes OUT/<id>/")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    _add(p, "--no-progress")
     p.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
                    help="worker processes for independent parts; same numbers for any value (default: 2 if available)")
-    p.add_argument("--html", metavar="PATH", help="save the paper's animation (002: Pro-ISADE spiral) as HTML")
-    p.add_argument("--view", action="store_true", help="play the paper's animation in meshcat until Ctrl-C")
+    _add(p, "--html", "--view", html="save the paper's animation (002: Pro-ISADE spiral) as HTML")
     p.set_defaults(func=_cmd_reproduce)
     return parser
 

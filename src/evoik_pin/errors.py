@@ -1,10 +1,5 @@
-"""Exceptions raised at evoik_pin's boundary.
-
-Every error names what was wrong and what is accepted. Each class subclasses the built-in exception a
-Python user would expect (``ValueError``, ``KeyError``, ``FileNotFoundError``) so ``except ValueError``
-keeps working, and :class:`EvoikError` so ``except EvoikError`` catches all of ours. :class:`RobotLoadWarning`
-is the one warning: a URDF that loads with part of it ignored.
-"""
+"""Exceptions raised at evoik_pin's boundary: each subclasses :class:`EvoikError` and the built-in exception a Python
+user would expect (``ValueError``, ``KeyError``, ...); :class:`RobotLoadWarning` is the one warning."""
 
 from __future__ import annotations
 
@@ -25,8 +20,7 @@ class RobotLoadError(EvoikError, ValueError):
 
 
 class RobotLoadWarning(UserWarning):
-    """A URDF loaded, but part of it was ignored: the warning names the file, the element and why (for example a
-    ``<mimic>`` naming no joint of the file, whose joint is then loaded as an independent joint)."""
+    """A URDF loaded with part of it ignored (e.g. a ``<mimic>`` naming no joint): the file, the element and why."""
 
 
 class RobotNotFoundError(_PlainMessage, EvoikError, FileNotFoundError):
@@ -39,9 +33,8 @@ class FrameError(_PlainMessage, EvoikError, KeyError):
 
 
 class LockedJointsError(FrameError):
-    """A goal on a frame that only a floating base moves, while joints between the root and that frame are
-    locked (off the robot's active joints): the base alone would have to reach it. The message names the locked
-    joints and how to free them (``tips=[...]``, ``joints=[...]`` or ``tips="all"`` when loading)."""
+    """A goal on a frame only a floating base moves while joints between the root and it are locked (not active);
+    the message names them and how to free them."""
 
 
 class ConfigurationError(EvoikError, ValueError):
@@ -77,35 +70,27 @@ class OutputError(_PlainMessage, EvoikError, OSError):
 
 
 class SceneError(EvoikError, ValueError):
-    """A collision scene that cannot be built or used: a bad obstacle (size, pose, mesh file), an unknown
-    obstacle name, a scene file that does not parse, or a scene built for another robot."""
+    """A collision scene that cannot be built or used: a bad obstacle or scene file, one built for another robot."""
 
 
 class BackendError(EvoikError, RuntimeError):
-    """A compute backend that cannot be used: Ray not installed (``pip install 'evoik_pin[ray]'``), a cluster
-    address that cannot be reached, or a chunk of work that failed on every attempt."""
+    """A compute backend that cannot be used: Ray not installed, a cluster out of reach, a chunk failing every try."""
 
 
 class GoalsFileError(EvoikError, ValueError):
-    """A goals file (:mod:`evoik_pin.io.goals_file`) that cannot be read or used: it does not parse, a goal has an
-    unknown kind, a missing or bad field, or the file was written for another robot than the one it is used with.
-    The message names the file, the goal (its index from 0, and its frame) and the field."""
+    """A goals file (:mod:`evoik_pin.io.goals_file`) that cannot be read or used; the message names the file, the goal
+    (index and frame) and the field."""
 
 
 class MotionError(EvoikError, ValueError):
-    """A motion (:class:`evoik_pin.motion.Motion`) that cannot be made or used: keypoints of the wrong shape or
-    with NaN/inf entries, an empty motion (no frame or no keypoint), duplicate keypoint names, an fps that is not a
-    finite number > 0, a frame range or rate out of what the motion has. The message names the field and what is
-    accepted."""
+    """A motion (:class:`evoik_pin.motion.Motion`) that cannot be made or used (bad keypoints, fps, frame range); the
+    message names the field and what is accepted."""
 
 
 class BvhError(MotionError):
-    """A BVH file that cannot be read: no ``HIERARCHY`` or ``MOTION`` section, a bad ``CHANNELS`` line, a frame
-    whose value count differs from the hierarchy's channel count, a value that is not a number, a ``Frame Time``
-    <= 0, an unknown unit. The message names the file and the line (from 1)."""
+    """A BVH file that cannot be read; the message names the file and the line (from 1)."""
 
 
 class MappingError(_PlainMessage, MotionError, KeyError):
-    """A robot-to-motion keypoint mapping that cannot be used: an unknown preset, a robot frame absent from the
-    robot or a keypoint absent from the motion (the message lists the closest names), or a robot without a
-    floating base (load it with ``floating_base=True``)."""
+    """A robot-to-motion keypoint mapping that cannot be used: an unknown preset, frame or keypoint (the closest names
+    listed), or a robot without a floating base."""

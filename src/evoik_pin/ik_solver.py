@@ -1,50 +1,30 @@
 """The one solve pipeline: :class:`IKSolver`, a solver set up once for one robot, method and options.
 
-A control loop, a planner sampling goal configurations or a grasp scorer solves one target at a time, thousands of
-times, with the same robot and options. Checking the options, building the problem's constants and looking up the
-method's set-up on every call would cost more than the solve; an ``IKSolver`` does that once:
-
-* the method and every option are checked when the solver is made (the errors :func:`evoik_pin.solve` raises);
-* the problem's constants (tolerances, search box, scene, objective settings) are checked into a template problem,
-  and each call copies it with the new target (checked: a NaN pose, a 5-vector, a q0 of the wrong length get the
-  errors they get from :func:`evoik_pin.solve`);
-* for ``memetic`` (the default), its :class:`~evoik_pin.solvers.search.memetic.MemeticPlan`: the compiled kernel
-  loaded, the seed table of the search box built, and one LM engine whose target arrays each call overwrites.
-
-The pipeline of a call: the target (or goal list) checked and bound, its problem copied from the template, the
-method run (for memetic: q0, the seed table, LM, the evolutionary search; :mod:`evoik_pin.solvers.search.choose` for
-goal sets, ``prefer=`` and preferences), the goals' and the scene's verdicts. ``locked=`` makes it the pipeline of
-the robot without those joints, its answers put back in the full layout.
-
-Once memetic has solved a pose (a position, a one-goal list of some goal structure) this way, the next ones of that
-kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`): the target's and q0's checks, memetic's
-compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the pipeline's,
-bit for bit; a target the first runs do not solve goes on in memetic from their state.
-
-:func:`evoik_pin.solve` is an IKSolver's solve: the one kept per robot, method and options (per thread, the 8 made
-last, which keep their robots alive) when the options are plain values (numbers, strings, a
-:class:`~evoik_pin.Scene` or objective object, a ``locked`` dict), else one made for the call (a robot by name, a
-scene file's path, array bounds).
+The options are checked and the problem's constants built once into a template problem that each call copies with
+its target; memetic's plan (kernel, seed table, engine) is made once. After memetic has solved a pose, a position or a
+one-goal list, the next ones of that kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`) with the
+same answers, bit for bit. :func:`evoik_pin.solve` is the solve of an IKSolver kept per robot, method and options.
 """
 
 from __future__ import annotations
 
 import math
 import threading
+from functools import partial
 
 import numpy as np
 
 from .call_setup import (
     _PROBLEM_OPTIONS,
     DEFAULT_METHOD,
-    _goal_method_problem,
     _rng,
     _robot,
-    _with_goal_verdict,
     make_problem,
+    run_with_verdicts,
     split_options,
+    with_verdicts,
 )
-from .errors import ConfigurationError, EvoikError
+from .errors import ConfigurationError, EvoikError, OptionError
 from .goals import is_goal_list
 from .goals.goal import Goal
 from .goals.preferences import Preference
@@ -53,9 +33,9 @@ from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
 from .robot import Robot
+from .robot.locking import expand_result, kept_columns, locked_robot, shrink_q
 from .scene import Scene
 from .solvers import get_solver
-from .solvers.collision_verdict import with_collision_verdict
 from .solvers.search.memetic import KEPT_ENGINES
 from .target import pose_arrays
 
@@ -68,29 +48,15 @@ class IKSolver:
     Args:
         robot: a :class:`~evoik_pin.Robot` or anything :func:`~evoik_pin.load_robot` accepts.
         method: a name from :func:`~evoik_pin.methods` (default ``"memetic"``).
-        prefer: ``"first"`` (None: the same), ``"nearest"`` (q0 required) or ``"manipulability"``: which answer
-            memetic returns among those it finds (:mod:`evoik_pin.solvers.search.choose`).
-        locked: ``{joint: value}`` (rad or m): those joints held at their values; ``q0``, ``bounds`` and the answers
-            stay in ``robot``'s layout.
-        **options: what :func:`evoik_pin.solve` takes (``tolerance`` m, ``rotation_tolerance`` rad, ``bounds``,
-            ``scene``, ``margin`` m, ``orientation_weight``, ``pose_metric``, ``objective``, ``polish``, the method's
-            own: ``timeout`` s, ``max_restarts``, ...); a ``q0`` (n,) here is the start of every :meth:`solve` not
-            given one.
+        prefer: ``"first"`` (or None), ``"nearest"`` (q0 required) or ``"manipulability"`` (method memetic).
+        locked: ``{joint: value}`` (rad or m) held fixed; ``q0``, ``bounds`` and answers stay in ``robot``'s layout.
+        **options: what :func:`evoik_pin.solve` takes; a ``q0`` (n,) here starts every solve not given one.
 
     Raises:
-        MethodError: an unknown method, ``prefer`` other than "first" with a method other than memetic. OptionError,
-        BoundsError, ConfigurationError, SceneError, FrameError: an option :func:`evoik_pin.solve` would refuse (an
-        unknown ``prefer``, a ``locked`` joint that does not exist), with its message.
+        The errors :func:`evoik_pin.solve` raises for the same method and options (MethodError, OptionError,
+        BoundsError, ConfigurationError, SceneError, FrameError).
 
-    The robot's bounds (``bounds`` or the robot's own) are read when the solver is made. One solver is not to be
-    shared by threads that solve at the same time (each call writes the solver's target buffers): make one per
-    thread.
-
-    Example::
-
-        solver = IKSolver(panda, tolerance=1e-6)
-        for T in targets:
-            r = solver.solve(T, q0=q_now)     # a Result, as evoik_pin.solve returns
+    Not to be shared by threads solving at the same time (each call writes the solver's target buffers).
     """
 
     def __init__(self, robot, method: str = DEFAULT_METHOD, *, prefer: str | None = None, locked: dict | None = None,
@@ -100,8 +66,7 @@ class IKSolver:
         robot = _robot(robot)
         self.robot = robot
         self.method = method
-        # prefer= and locked= checked first (evoik_pin.solve's order): an unknown prefer, then an unknown joint or a
-        # value beyond its limits
+        # evoik_pin.solve's order of checks: prefer=, then locked=
         self._prefer = check_prefer("first" if prefer is None else prefer)
         self._locked = None
         options = dict(options)
@@ -120,9 +85,8 @@ class IKSolver:
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
         self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
             ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
-        # a goal list's box: the bounds given, else the robot's (IKProblem's for a goal list: no target box); the
-        # template's own arrays whenever they hold those values, so that single targets and goal lists share one box
-        # (the plan keeps one seed table per box arrays: a solver alternating them would look the table up anew)
+        # a goal list's box (no target box): the template's arrays when they hold its values, so that targets and goal
+        # lists share the plan's one seed table per box arrays
         template = self._template
         given = "lower" in problem_kw or "upper" in problem_kw
         self._goal_box = ((template.lower, template.upper) if given or (
@@ -138,19 +102,15 @@ class IKSolver:
             self._plan = MemeticPlan(robot, **options)
         # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
         self._plain = self._plan is not None and not self._polish and self._prefer == "first"
-        # the per-call lanes (memetic's compiled first runs and little else), one per kind (True: poses, False:
-        # positions) and per one-goal list's goal stack (by id; the last _GOAL_LANES), made after the general path
-        # has solved a target of that kind: for the default objective in a box that does not move with the target (a
-        # custom objective may need the Target; a target box is remade per target)
+        # the lanes: True (poses), False (positions), id(goal stack) (the last _GOAL_LANES); only for the default
+        # objective in a box that does not move with the target
         self._lanes: dict = {}
         self._lanes_open = self._plain and not self._target_box and self._objective is None
         self._box_stage = None  # solve_within's stage (velocity_box), made on its first call
 
     def _checked_q0(self, q0) -> np.ndarray:
         arr = np.asarray(q0, dtype=float)
-        # Robot.check_q's verdict for the usual q0 in a fraction of its microsecond: of shape (n,) and a finite sum
-        # (a NaN or inf makes the sum NaN or inf); anything else, huge finite entries whose sum overflows too, gets
-        # check_q itself, which accepts or raises its error
+        # Robot.check_q's verdict, faster: shape (n,) and a finite sum (NaN, inf and overflow make it non-finite)
         if arr.shape == self._q_shape and math.isfinite(sum(arr.tolist())):
             return arr
         try:
@@ -159,8 +119,7 @@ class IKSolver:
             raise ConfigurationError(f"q0: {exc}") from None
 
     def problem(self, target, q0=None) -> IKProblem:
-        """The :class:`~evoik_pin.IKProblem` of one target (or goal list) and start ``q0`` (None: the solver's),
-        as :func:`evoik_pin.make_problem` would make it with the solver's options, checked the same way."""
+        """The :class:`~evoik_pin.IKProblem` of one target (or goal list) and ``q0`` (None: the solver's)."""
         template = self._template
         objective = self._objective
         if is_goal_list(target):
@@ -181,9 +140,7 @@ class IKSolver:
 
     def _goal_problem(self, bound: tuple, q0) -> IKProblem:
         """:meth:`problem` of a goal list bound to the robot (``bound``: :func:`~evoik_pin.goals.stack.bind`'s
-        (goals, stack, pt, Rt): the goals' checks made, the stack cached for equal goals), q0 checked; the box is the
-        solver's own arrays, the same every call (the plan keeps its seed table and engine while the box arrays are
-        the same)."""
+        (goals, stack, pt, Rt)); the box is the solver's own arrays, so the plan keeps its seed table and engine."""
         goals, stack, pt, Rt = bound
         p = object.__new__(IKProblem)
         lower, upper = self._goal_box
@@ -193,16 +150,13 @@ class IKSolver:
         return p
 
     def solve(self, target, q0=None, seed=None) -> Result:
-        """Solve one target: a 3-vector position (m), a ``pin.SE3``, a (4, 4) matrix, a
-        :class:`~evoik_pin.Target`, or a goal list (:mod:`evoik_pin.goals`); from ``q0`` (n,) when given; ``seed``:
-        int, ``numpy.random.Generator`` or None. The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` with the
-        solver's robot, method and options, the same for the same seed."""
+        """The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` for ``target`` (any form it takes), ``q0`` (n,)
+        and ``seed`` (int, Generator or None) with the solver's robot, method and options."""
         if self._locked is not None:
             return self._locked.solve(target, q0, seed)
         problem = None
         if self._lanes:
-            # a pose or a position on the lane of its kind (single_target_lane), here rather than behind a call: the
-            # lane's whole Python is a few us, and a control loop's calls are nearly all of this kind
+            # a pose or a position on the lane of its kind, inline: the lane's whole Python is a few us
             arrays = pose_arrays(target)
             if arrays is not None:
                 lane = self._lanes.get(arrays[1] is not None)
@@ -223,27 +177,16 @@ class IKSolver:
         return self.run(problem, _rng(seed))
 
     def solve_within(self, target, q_prev, step, seed=None) -> Result:
-        """Solve one target (or goal list) inside the velocity box of the last configuration ``q_prev`` (n,):
-        ``[q_prev - step, q_prev + step]`` (``step`` (n,) rad or m: ``v_max dt``) within the solver's bounds,
-        full-turn joints in unwrapped values around ``q_prev`` (:mod:`evoik_pin.solvers.search.velocity_box`).
-
-        The answer is inside the box whatever the target: the one closest to meeting the goals, ``success=False`` and
-        its goal errors when they cannot be met within it. Levenberg-Marquardt from ``q_prev``, then a few starts
-        inside the box drawn from ``seed`` (int, Generator or None) when that run falls short; the solver's goals,
-        tolerances, bounds and scene, whatever its method (a box this small holds one branch: no global search).
-        The box is written into the stage's own engine per call: no seed table is built for it.
+        """Solve one target (or goal list) inside the velocity box ``[q_prev - step, q_prev + step]`` (``step`` (n,)
+        rad or m: ``v_max dt``) within the bounds (:mod:`evoik_pin.solvers.search.velocity_box`): the answer closest
+        to meeting the goals inside it, ``success=False`` when they cannot be met there.
 
         Raises:
-            OptionError: goal lists holding preferences (the box's stage meets goals only). The errors of
-            :meth:`solve` for a bad target or ``q_prev``.
+            OptionError: goal lists holding preferences. :meth:`solve`'s errors for a bad target or ``q_prev``.
         """
         if self._locked is not None:
             return self._locked.solve_within(target, q_prev, step, seed)
-        if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
-            from .errors import OptionError
-
-            raise OptionError("velocity limits meet goals only: a goal list with preferences (Posture, "
-                              "JointLimitMargin, ...) is not accepted with velocity_limits; drop the preferences")
+        check_no_preferences(target)
         q_prev = self._checked_q0(q_prev)
         problem = self.problem(target)  # its q0 is not read: the stage starts from q_prev
         stage = self._box_stage
@@ -254,9 +197,8 @@ class IKSolver:
         return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
     def _goal_on_lane(self, target, q0, seed) -> Result | IKProblem | None:
-        """A one-goal list on the lane of its goal stack (single_target_lane; :meth:`solve` puts poses and positions
-        on theirs): the Result (memetic going on from the lane's first runs when none met the tolerances); the
-        problem of a one-goal list without a lane (bound already); None for any other target."""
+        """A one-goal list on the lane of its goal stack: the Result; the problem (bound) when it has no lane; None
+        for any other target."""
         if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
                 and target[0].alternatives is None and self._objective is None):
             return None
@@ -269,10 +211,9 @@ class IKSolver:
         return out if type(out) is Result else self._go_on(self._goal_problem(bound, q0), seed, out)
 
     def _solve_choosing(self, target, q0, seed) -> Result:
-        """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goal
-        list or target, or its problem already made). Preferences with ``prefer="first"`` (or another method than
-        memetic) come after the method's own search: the same answers as without them, then refined in the goals'
-        null space (a step kept only when every goal is still met), so they never cost success."""
+        """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goals
+        or their problem). With ``prefer="first"`` the preferences refine the method's answer in the goals' null
+        space, a step kept only while every goal is still met."""
         from .goals.preferences import split_preferences
         from .solvers.search.choose import bind_preferences, choose, refine
 
@@ -283,10 +224,7 @@ class IKSolver:
             problem = self.problem(goals, q0)
         rng = _rng(seed)
         if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
-            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options)
-            if problem.goals is not None:
-                result = _with_goal_verdict(problem, result)
-            return with_collision_verdict(problem, result)
+            return with_verdicts(problem, choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options))
         criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
         result = self.run(problem, rng)
         if not result.success:
@@ -302,22 +240,18 @@ class IKSolver:
         result.q, result.position_error, result.orientation_error, result.cost = q, *problem.assess(q)
         result.goal_errors = None
         result.collision_free = None  # the search's verdict was on its answer, not the refined one
-        if problem.goals is not None:
-            result = _with_goal_verdict(problem, result)
-        return with_collision_verdict(problem, result)
+        return with_verdicts(problem, result)
 
     def _lane_q0(self, q0, seed):
-        """A lane call's q0 (checked; None: the solver's own) after the seed's check: the general path's errors for
-        a bad q0 or seed, in its order (the target's checks came first)."""
+        """A lane call's q0 (checked; None: the solver's), then the seed's check, as the general path orders them."""
         q0 = self._q0 if q0 is None else self._checked_q0(q0)
         if seed is not None and not (type(seed) is int and seed >= 0):
             _rng(seed)  # a Generator passes; anything else raises the general path's error
         return q0
 
     def _go_on(self, problem: IKProblem, seed, out) -> Result:
-        """The general path after a lane's first runs none of which met the tolerances: memetic goes on from their
-        state (``out``: the lane's), or solves ``problem`` from the start (``out`` None: a run converged by the
-        kernel's test but not by the problem's tolerances)."""
+        """Memetic after a lane's first runs met no tolerance: going on from their state ``out``, or from the start
+        (``out`` None)."""
         rng = _rng(seed)
         result = self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
         if problem.goals is not None:
@@ -325,9 +259,7 @@ class IKSolver:
         return result
 
     def _open_lane(self, problem: IKProblem) -> None:
-        """After the plan solved ``problem`` (a single target or a one-goal list), make the lane of its kind (or goal
-        stack) when there is none, or when the one kept no longer holds (its engine remade; another thread's). The
-        lanes of goal stacks are the last few kept."""
+        """Make the lane of ``problem``'s kind (or goal stack) after the plan solved it, unless a usable one is kept."""
         key = problem.target.rotation is not None if problem.goals is None else id(problem.goal_stack()[0])
         kept = self._lanes.get(key)
         if kept is None or not kept.usable():
@@ -342,45 +274,34 @@ class IKSolver:
                 self._lanes[key] = lane
 
     def run(self, problem: IKProblem, rng) -> Result:
-        """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does
-        after it: ``polish``, the goals' verdict, the scene's exact check."""
+        """The method on this solver's problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
         goals = problem.goals
         if self._plain and problem.scene is None and (goals is None or not problem.goal_sets):
-            # memetic's plan alone (no polish, no scene): memetic judged each goal by goals_met on the goal_errors it
-            # returns, every goal with one target (chosen: None each), so the goals' verdict is its own
+            # memetic's plan alone: without goal sets, scene or polish its verdict is the goals' verdict
             result = self._plan.solve(problem, rng)
             if goals is not None:
                 result.chosen = [None] * len(goals)
             if self._lanes_open and (goals is None or len(goals) == 1):
                 self._open_lane(problem)
             return result
-        goal_problem = problem if goals is not None else None
-        if goal_problem is not None:  # the method's own problem of a goal list (the closed forms: one tip goal)
-            problem = _goal_method_problem(self.method, problem)
-        if self._plan is not None:
-            result = self._plan.solve(problem, rng)
-        else:
-            result = self._info.func(problem, rng, **self._options)
-        if self._polish:
-            from .solvers.lm.polish import polish_result
-
-            result = polish_result(problem, result, rng)
-        if goal_problem is not None:
-            result = _with_goal_verdict(goal_problem, result)
-        return with_collision_verdict(problem, result)
+        solve = self._plan.solve if self._plan is not None else partial(self._info.func, **self._options)
+        return run_with_verdicts(problem, self.method, solve, self._polish, rng)
 
     def __repr__(self) -> str:
         return f"IKSolver({self.robot.name!r}, method={self.method!r})"
 
 
+def check_no_preferences(target) -> None:
+    """OptionError for a goal list holding preferences: a velocity box meets goals only."""
+    if type(target) in (list, tuple) and any(isinstance(x, Preference) for x in target):
+        raise OptionError("velocity limits meet goals only: a goal list with preferences (Posture, "
+                          "JointLimitMargin, ...) is not accepted with velocity_limits; drop the preferences")
+
+
 class _Locked:
-    """An :class:`IKSolver`'s joints held fixed (``locked``: {joint: value}, rad or m): the solver of the robot without
-    them (:meth:`Robot.locked`), ``q0``, ``bounds`` and the answers in the full robot's layout, the locked joints at
-    their values."""
+    """An :class:`IKSolver` of the robot without its ``locked`` joints (:meth:`Robot.locked`), in the full layout."""
 
     def __init__(self, robot, locked: dict, method: str, prefer: str, options: dict) -> None:
-        from .robot.locking import locked_robot, shrink_q
-
         self.robot = robot
         self.sub = sub = locked_robot(robot, locked)
         self.values = {k: float(v) for k, v in locked.items()}
@@ -392,35 +313,28 @@ class _Locked:
         self.solver = IKSolver(sub, method, prefer=prefer, **options)
 
     def solve(self, target, q0, seed) -> Result:
-        from .robot.locking import expand_result, shrink_q
-
         if q0 is not None:
             q0 = shrink_q(self.robot, self.sub, q0)
         return expand_result(self.robot, self.sub, self.values, self.solver.solve(target, q0, seed))
 
     def solve_within(self, target, q_prev, step, seed) -> Result:
-        from .robot.locking import expand_result, kept_columns, shrink_q
-
         step = np.asarray(step, dtype=float)[kept_columns(self.robot, self.sub)]
         return expand_result(self.robot, self.sub, self.values, self.solver.solve_within(
             target, shrink_q(self.robot, self.sub, q_prev), step, seed))
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
-#: One-goal lists' lanes an IKSolver keeps (one per goal stack: frame, kind, weight, tolerances; the last made): as
-#: many as the plan keeps engines (a lane opens at its engine's second problem).
+#: One-goal lists' lanes an IKSolver keeps (the last made): as many as the plan keeps engines.
 _GOAL_LANES = KEPT_ENGINES
 _LOCAL = threading.local()
-#: IKSolvers evoik_pin.solve keeps per thread (the last ones made; each keeps its robot, seed table and scene alive,
-#: so the number is small).
+#: IKSolvers evoik_pin.solve keeps per thread (the last made; each keeps its robot, seed table and scene alive).
 _CACHED = 8
 #: Option values keyed by value (by type too: population=32.0 must still be refused where 32 is accepted).
 _PLAIN = (bool, int, float, str, type(None), np.integer, np.floating)
 
 
 def _key(robot, method: str, options: dict):
-    """A hashable key of (robot, its bounds, method, options), or None when an option is not a plain value (a
-    scene file's path: the file may change between calls; arrays)."""
+    """A hashable key of (robot, its bounds, method, options), or None for options that are no plain values."""
     parts = []
     for name, value in options.items():
         if name == "q0":
@@ -433,8 +347,7 @@ def _key(robot, method: str, options: dict):
                 type(k) is str and isinstance(v, _PLAIN) for k, v in value.items()):
             parts.append((name, None, tuple(sorted((k, type(v), v) for k, v in value.items()))))
         elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
-            # an object, by identity: the cached solver keeps it alive, so its id is not reused while cached (a
-            # scene file's path is read into a Scene anew on every call, as before: the file may change)
+            # by identity: the cached solver keeps the object alive, so its id is not reused while cached
             parts.append((name, None, id(value)))
         else:
             return None
@@ -443,9 +356,8 @@ def _key(robot, method: str, options: dict):
 
 
 def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
-    """The IKSolver :func:`evoik_pin.solve` uses for these arguments (made on first use, then kept), or None when
-    they take the general path: a robot given by name, options that are no plain values, or options the solver
-    refuses (the general path then raises the error :func:`evoik_pin.solve` always raised, in its order)."""
+    """The IKSolver kept for these arguments (made on first use), or None: a robot by name, options that are no
+    plain values or that the solver refuses (the general path then raises solve's error)."""
     if type(robot) is not Robot and not isinstance(robot, Robot):
         return None
     key = _key(robot, method, options)
@@ -467,12 +379,9 @@ def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
     return solver
 
 
-
 def solver_for(robot, method: str, options: dict, target) -> IKSolver:
-    """The IKSolver that solves ``target`` for :func:`evoik_pin.solve` with these arguments: the one kept for them
-    (:func:`cached_solver`), else a new one (a robot by name, a scene file's path, array bounds: options that are no
-    plain values). Bad arguments raise solve's errors in its order: the target's own checks (a NaN, a 5-vector) come
-    before the options'."""
+    """The IKSolver that solves ``target`` for :func:`evoik_pin.solve` (:func:`cached_solver`'s, else a new one);
+    bad arguments raise solve's errors in its order: the target's own checks before the options'."""
     solver = cached_solver(robot, method, options)
     if solver is not None:
         return solver
@@ -482,7 +391,6 @@ def solver_for(robot, method: str, options: dict, target) -> IKSolver:
     except EvoikError:
         # solve's order: prefer=, locked=, the target's own checks (a goal list's bound to the robot), the options
         from .goals.preferences import split_preferences
-        from .robot.locking import locked_robot
         from .solvers.search.choose import check_prefer
 
         check_prefer("first" if options.get("prefer") is None else options["prefer"])

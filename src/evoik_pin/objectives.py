@@ -1,19 +1,6 @@
-"""Vectorized IK objectives: every cost maps a population ``Q`` (N, n) to costs (N,) in one call.
-
-Terms share one forward-kinematics pass through :class:`PopulationKinematics` (positions only when no
-term needs rotations) and compose as weighted sums: ``PositionError(t) + 0.5 * OrientationError(t)``.
-
-Terms and their units:
-
-* :class:`PositionError` (m), :class:`OrientationError` (rad, angle of ``log3(R_target^T R)``; planar:
-  wrapped yaw difference), :class:`PoseError` = position + weight x orientation, :class:`PoseDistance` =
-  sqrt(position^2 + (weight x orientation)^2), the Euclidean norm of the weighted 6-D error;
-* :class:`RPYPoseError`: paper 004's ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` with O the
-  roll-pitch-yaw angles (wrapped differences);
-* :class:`MaxJointDisplacement`: paper 000's ``max_k |q_k - q_init,k|`` (rad);
-* :class:`WeightedJointDisplacement`: ``sqrt(sum_k K_k (q_k - q_prev,k)^2)`` (papers 001, 002 eq. 21, 003);
-* :class:`ManipulabilityCost`: paper 003's ``1 / (Y + 1)`` with Y = sqrt(det(J J^T)) of chosen rows, or -Y;
-* :class:`JointLimitMargin`: 1 - (smallest normalized distance to a limit), 0 at mid-range, 1 at a limit.
+"""Vectorized IK objectives: every cost maps a population ``Q`` (N, n) to costs (N,) in one call, its terms sharing
+one forward-kinematics pass (:class:`PopulationKinematics`) and composing as weighted sums:
+``PositionError(t) + 0.5 * OrientationError(t)``. Each term's docstring gives its formula and unit.
 """
 
 from __future__ import annotations
@@ -25,32 +12,14 @@ import numpy as np
 from . import lie
 from .errors import OptionError
 
-__all__ = [
-    "JointLimitMargin",
-    "ManipulabilityCost",
-    "MaxJointDisplacement",
-    "Objective",
-    "OrientationError",
-    "PopulationKinematics",
-    "POSE_METRICS",
-    "PoseDistance",
-    "PoseError",
-    "PositionError",
-    "RPYPoseError",
-    "WeightedJointDisplacement",
-    "default_cost",
-    "default_objective",
-    "orientation_errors",
-    "position_errors",
-]
+__all__ = ["JointLimitMargin", "ManipulabilityCost", "MaxJointDisplacement", "Objective", "OrientationError",
+           "PopulationKinematics", "POSE_METRICS", "PoseDistance", "PoseError", "PositionError", "RPYPoseError",
+           "WeightedJointDisplacement", "default_cost", "default_objective", "orientation_errors", "position_errors"]
 
 
 class PopulationKinematics:
-    """Lazily computed kinematics of one population, shared by every term of an objective.
-
-    Attributes (computed on first use): ``positions`` (N, 3) m, ``rotations`` (N, 3, 3),
-    ``jacobians`` (N, 6, n) in the base frame.
-    """
+    """Kinematics of one population, computed on first use and shared by every term of an objective: ``positions``
+    (N, 3) m, ``rotations`` (N, 3, 3), ``jacobians`` (N, 6, n) in the base frame."""
 
     def __init__(self, robot, Q: np.ndarray) -> None:
         self.robot = robot
@@ -65,20 +34,15 @@ class PopulationKinematics:
         kin._full = (positions, rotations)
         return kin
 
-    def _fk(self):
-        if self._full is None:
-            self._full = self.robot.fk_batch(self.Q, validate=False)
-        return self._full
-
     @cached_property
     def positions(self) -> np.ndarray:
-        if self._full is not None:
-            return self._full[0]
-        return self.robot.positions_batch(self.Q)
+        return self.robot.positions_batch(self.Q) if self._full is None else self._full[0]
 
     @cached_property
     def rotations(self) -> np.ndarray:
-        return self._fk()[1]
+        if self._full is None:
+            self._full = self.robot.fk_batch(self.Q, validate=False)
+        return self._full[1]
 
     @cached_property
     def jacobians(self) -> np.ndarray:
@@ -86,10 +50,8 @@ class PopulationKinematics:
 
 
 def position_errors(target, kin: PopulationKinematics) -> np.ndarray:
-    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane).
-
-    Cached on ``kin`` per target: ``IKProblem.evaluate`` asks for it twice (objective and errors).
-    """
+    """Position error (N,) in m: Euclidean distance to the target (planar: in the xy-plane), cached on ``kin`` per
+    target (``IKProblem.evaluate`` asks twice)."""
     cached = kin.__dict__.get("_position_errors")
     if cached is not None and cached[0] is target:
         return cached[1]
@@ -113,12 +75,8 @@ class Objective:
         raise NotImplementedError
 
     def from_errors(self, target, position_error: float, orientation_error: float | None) -> float | None:
-        """The cost of a configuration whose errors towards ``target`` are known (position m, orientation rad
-        or None), when the objective is a function of those errors alone; None otherwise (then evaluate it).
-
-        Lets a local solver, which has the errors from its own kinematics, report the cost without a second
-        kinematics pass.
-        """
+        """The cost from known errors towards ``target`` (position m, orientation rad or None) when the objective is a
+        function of them alone (a local solver has them from its own kinematics); None otherwise."""
         return None
 
     def __call__(self, Q: np.ndarray, kin: PopulationKinematics | None = None, robot=None) -> np.ndarray:
@@ -142,6 +100,9 @@ class Objective:
 
     def _terms(self) -> list[tuple[float, Objective]]:
         return [(1.0, self)]
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
 
 
 class WeightedSum(Objective):
@@ -185,9 +146,6 @@ class PositionError(Objective):
     def from_errors(self, target, position_error, orientation_error):
         return position_error if target is self.target else None
 
-    def __repr__(self) -> str:
-        return "PositionError()"
-
 
 class OrientationError(Objective):
     """Rotation angle (rad) between the tip and the target orientation."""
@@ -203,9 +161,6 @@ class OrientationError(Objective):
     def from_errors(self, target, position_error, orientation_error):
         return orientation_error if target is self.target and orientation_error is not None else None
 
-    def __repr__(self) -> str:
-        return "OrientationError()"
-
 
 def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 1.0) -> Objective:  # noqa: N802
     """``position_weight`` x position error (m) + ``orientation_weight`` x rotation angle (rad)."""
@@ -216,12 +171,8 @@ def PoseError(target, position_weight: float = 1.0, orientation_weight: float = 
 
 
 class PoseDistance(Objective):
-    """``sqrt(position_error^2 + (orientation_weight x rotation_angle)^2)`` (m): the Euclidean norm of the
-    6-D error (position in m, rotation vector of ``log3`` in rad scaled by ``orientation_weight`` m/rad).
-
-    Same zero set and units as :func:`PoseError`, but smooth away from the solution: the sum of two norms
-    has a crease wherever one error is exactly zero, which a swarm collapses onto; this norm has none.
-    """
+    """``sqrt(position_error^2 + (orientation_weight x rotation_angle)^2)`` (m): the Euclidean norm of the weighted
+    6-D error; the zero set of :func:`PoseError` without its crease where one error is zero."""
 
     def __init__(self, target, orientation_weight: float = 1.0) -> None:
         if not target.has_orientation:
@@ -243,10 +194,8 @@ class PoseDistance(Objective):
 
 
 class RPYPoseError(Objective):
-    """Paper 004: ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||``, O = roll-pitch-yaw (rad), wrapped.
-
-    Defaults sigma = 0.3, epsilon = 0.7 as in the paper. Position in m.
-    """
+    """Paper 004: ``sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (position m, O roll-pitch-yaw rad, wrapped);
+    the paper's sigma = 0.3, epsilon = 0.7 by default."""
 
     def __init__(self, target, sigma: float = 0.3, epsilon: float = 0.7) -> None:
         if target.rotation is None:
@@ -272,15 +221,10 @@ class MaxJointDisplacement(Objective):
     def value(self, Q, kin):
         return np.abs(Q - self.q_init).max(axis=1)
 
-    def __repr__(self) -> str:
-        return "MaxJointDisplacement()"
-
 
 class WeightedJointDisplacement(Objective):
-    """``sqrt(sum_k K_k (q_k - q_prev,k)^2)``: paper 003's smoothness S, paper 002's ``||q - q0||``.
-
-    ``gains`` K (n,) default to ones.
-    """
+    """``sqrt(sum_k K_k (q_k - q_prev,k)^2)`` (gains K (n,), default ones): paper 003's smoothness S, paper 002's
+    ``||q - q0||``."""
 
     def __init__(self, q_prev, gains=None) -> None:
         self.q_prev = np.asarray(q_prev, dtype=float)
@@ -296,12 +240,8 @@ class WeightedJointDisplacement(Objective):
 
 
 class ManipulabilityCost(Objective):
-    """Manipulability cost of paper 003.
-
-    ``form="inverse"``: ``1 / (Y + 1)`` (to minimize); ``form="negative"``: ``-Y``; ``form="value"``: Y.
-    Y = sqrt(det(J J^T)) of the chosen rows of the base-frame Jacobian (``rows`` as in
-    ``Robot.manipulability``: "translation", "rotation", "full", "planar" or a list of row indices).
-    """
+    """Paper 003's manipulability cost of Y = sqrt(det(J J^T)), J the ``rows`` of the base-frame Jacobian (as in
+    ``Robot.manipulability``): ``form="inverse"``: ``1 / (Y + 1)``; ``"negative"``: ``-Y``; ``"value"``: Y."""
 
     _FORMS = ("inverse", "negative", "value")
 
@@ -332,9 +272,6 @@ class JointLimitMargin(Objective):
         margin = np.minimum(Q - self.lower, self.upper - Q) / self.half
         return 1.0 - margin.min(axis=1)
 
-    def __repr__(self) -> str:
-        return "JointLimitMargin()"
-
 
 #: How the default objective combines position and orientation errors of a pose target: ``sum`` (m + weight x
 #: rad, :func:`PoseError`) or ``euclidean`` (:class:`PoseDistance`).
@@ -342,11 +279,8 @@ POSE_METRICS = ("sum", "euclidean")
 
 
 def default_cost(position_error, orientation_error, orientation_weight: float = 1.0, pose_metric: str = "sum"):
-    """The value of :func:`default_objective` from the errors (scalars or arrays; ``orientation_error`` None for
-    position targets): position + weight x orientation (``"sum"``) or their Euclidean norm (``"euclidean"``).
-
-    For batch solvers, which have every target's errors and no per-target objective object.
-    """
+    """:func:`default_objective`'s value from the errors (scalars or arrays; ``orientation_error`` None for position
+    targets), for batch solvers, which have no per-target objective object."""
     if orientation_error is None:
         return position_error
     if pose_metric == "euclidean":

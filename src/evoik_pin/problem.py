@@ -1,9 +1,5 @@
-"""IK targets and problems: what a solver is asked to reach, within which bounds, to which tolerance.
-
-A solver sees only an :class:`IKProblem`: the robot, the :class:`Target`, the objective (a vectorized
-cost over a population), the search box and the tolerances. ``IKProblem.evaluate`` computes the cost and
-the position / orientation errors of a whole population from one forward-kinematics pass.
-"""
+"""IK problems: what a solver sees (:class:`IKProblem`: robot, target or goal list, objective, search box,
+tolerances, scene) and the cost and errors of a population from one forward-kinematics pass."""
 
 from __future__ import annotations
 
@@ -30,7 +26,7 @@ from .objectives import (
 )
 from .robot import Robot
 from .robot.robot import NEAR_UNBOUNDED
-from .solvers.options import check_positive
+from .solvers.options import check_nonnegative, check_positive
 from .target import MAX_TARGET_NORM, Target
 
 if TYPE_CHECKING:
@@ -55,12 +51,11 @@ def check_pro_delta(delta) -> float:
 
 
 def coerce_scene(robot: Robot, scene) -> Scene | None:
-    """The :class:`~evoik_pin.scene.Scene` a ``scene`` argument names: a Scene as it is, a scene file's path
-    (``str`` or ``os.PathLike``; ``.yaml``, ``.yml`` or ``.json``) read by :meth:`Scene.from_file` for ``robot``,
-    None as None. Every entry point's scene goes through here (the ones solving many targets once, up front).
+    """The :class:`~evoik_pin.scene.Scene` a ``scene`` argument names: a Scene, a scene file's path (str or
+    ``os.PathLike``, :meth:`Scene.from_file`) or None.
 
     Raises:
-        OptionError: another type. SceneError: a file that is missing or does not parse (naming the file).
+        OptionError: another type. SceneError: a file that is missing or does not parse.
     """
     from .scene import Scene
 
@@ -73,12 +68,10 @@ def coerce_scene(robot: Robot, scene) -> Scene | None:
 
 
 def goal_summary(goals, errors, orientation_weight: float) -> tuple[float, float | None, float]:
-    """(largest position error m, largest rotation angle rad or None, cost) of the errors ``errors`` (per goal:
-    position m or None, angle rad or None; :meth:`IKProblem.goal_errors`) of ``goals``: the cost is the sum over
-    the goals of ``weight x (position error + orientation_weight x angle)``. A goal's errors are those its success
-    test reads (for bands: the excess over them; for pointing goals: the angle as the rotation)."""
-    # _goal_cost's sum for one row, in plain floats: a goal list has a few goals, and NumPy's arrays for them
-    # cost more than the sums (5 us)
+    """(largest position error m, largest rotation angle rad or None, cost) of ``goals``' errors ``errors`` (per goal:
+    position m or None, angle rad or None; :meth:`IKProblem.goal_errors`): the cost is the sum over the goals of
+    ``weight x (position error + orientation_weight x angle)``."""
+    # _goal_cost's sum for one row, in plain floats: faster than NumPy for a few goals
     pos = cost = 0.0
     rot = None
     for g, (p, r) in zip(goals, errors, strict=True):
@@ -100,48 +93,29 @@ class Evaluation:
     orientation_error: np.ndarray | None
 
 
-def _check_nonnegative(name: str, value) -> None:
-    """OptionError unless ``value`` is a finite number >= 0 (math.isfinite: this runs on every solve)."""
-    try:
-        ok = math.isfinite(value) and value >= 0
-    except TypeError:
-        ok = False
-    if not ok:
-        raise OptionError(f"{name} must be a finite number >= 0, got {value!r}")
 
 
 @dataclass
 class IKProblem:
-    """Robot + target + objective + search box + tolerances: everything a solver sees.
+    """Robot + target (or goal list) + objective + search box + tolerances: everything a solver sees.
 
     Attributes:
         robot: the robot to solve for.
-        target: the :class:`Target` (coerced from the accepted target forms) of the robot's tip; None for a goal
-            list.
-        goals: a list of goals on frames of the robot (:mod:`evoik_pin.goals`: ``Pose``, ``Position``), each with
-            its weight and tolerances, instead of one target (pass the list as ``target`` or as ``goals``); checked
-            against the robot (:func:`evoik_pin.goals.bind`). Its cost is the weighted sum over the goals of
-            position error + ``orientation_weight`` x rotation angle; its errors the largest over the goals.
-        objective: vectorized cost; default: position error (m) plus, for pose targets,
-            ``orientation_weight`` x rotation angle (rad).
-        lower, upper: (n,) search box (rad or m); default the robot's bounds, except that near-unbounded joints
-            (:data:`NEAR_UNBOUNDED`) are searched within a box around the target (:func:`target_box`). Bounds
-            given are used as given.
-        tolerance: success threshold on the position error (m).
-        rotation_tolerance: success threshold on the orientation error (rad); defaults to ``tolerance``.
-        q0: optional (n,) initial / previous configuration (seeds the population; used by displacement
-            objectives).
-        orientation_weight: m per rad in the default pose objective.
-        pose_metric: how the default pose objective combines the two errors: ``"sum"`` (position +
-            weight x angle, the default) or ``"euclidean"`` (sqrt(position^2 + (weight x angle)^2),
-            :class:`~evoik_pin.objectives.PoseDistance`). Ignored for position targets and custom objectives.
-        scene: an optional :class:`~evoik_pin.scene.Scene` (the robot's body and obstacles), or a scene file's path
-            (:func:`coerce_scene`): answers must be
-            collision-free; :meth:`evaluate` and :meth:`cost` add ``COLLISION_PENALTY`` to the cost of
-            configurations whose convex-hull proxies collide (steering every evolutionary method); the exact
-            mesh check judges every answer (:mod:`evoik_pin.solvers.collision_verdict`).
-        margin: clearance (m) an answer must keep from collisions (pairs closer than it count as colliding).
-        evaluations: number of configurations evaluated so far (every call of :meth:`evaluate` adds N).
+        target: the tip's :class:`Target` (coerced from any accepted form); None for a goal list.
+        goals: a goal list (:mod:`evoik_pin.goals`, given as ``target`` or ``goals``), bound to the robot; its cost
+            is the weighted sum over the goals of position error + ``orientation_weight`` x angle.
+        objective: vectorized cost; default :func:`~evoik_pin.objectives.default_objective`. None for a goal list.
+        lower, upper: (n,) search box (rad or m); default the robot's bounds, near-unbounded joints narrowed around
+            the target (:func:`target_box`).
+        tolerance: success threshold on the position error (m); rotation_tolerance: on the angle (rad), default
+            ``tolerance``.
+        q0: optional (n,) initial / previous configuration.
+        orientation_weight: m per rad in the pose cost; pose_metric: ``"sum"`` or ``"euclidean"``
+            (:data:`~evoik_pin.objectives.POSE_METRICS`).
+        scene: a :class:`~evoik_pin.scene.Scene` or a scene file's path (:func:`coerce_scene`): answers must be
+            collision-free; the cost of a configuration whose convex-hull proxies collide gets ``COLLISION_PENALTY``.
+        margin: clearance (m) an answer must keep from collisions.
+        evaluations: configurations evaluated so far (every :meth:`evaluate` adds N).
     """
 
     robot: Robot
@@ -172,7 +146,7 @@ class IKProblem:
         if self.rotation_tolerance is None:
             self.rotation_tolerance = self.tolerance
         for name in ("tolerance", "orientation_weight", "rotation_tolerance"):
-            _check_nonnegative(name, getattr(self, name))
+            setattr(self, name, check_nonnegative(name, getattr(self, name)))
         if self.lower is None and self.upper is None:  # the robot's own bounds, checked when they were set
             if self.target is None:  # a goal list: the robot's bounds (near-unbounded joints: give bounds=)
                 self.lower, self.upper = self.robot.lower.copy(), self.robot.upper.copy()
@@ -187,17 +161,14 @@ class IKProblem:
                 self.q0 = self.robot.check_q(self.q0)
             except ConfigurationError as exc:
                 raise ConfigurationError(f"q0: {exc}") from None
-        _check_nonnegative("margin (m)", self.margin)
+        self.margin = check_nonnegative("margin (m)", self.margin)
         if self.scene is not None:
             self.scene = coerce_scene(self.robot, self.scene)
             self.scene.check_robot(self.robot)
-        if self.goals is not None:
-            if self.pose_metric not in POSE_METRICS:
-                raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
-        elif self.objective is None:
-            self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
-        elif self.pose_metric not in POSE_METRICS:
+        if self.pose_metric not in POSE_METRICS:
             raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
+        if self.goals is None and self.objective is None:
+            self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
 
     def _checked_bounds(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n = self.robot.n
@@ -240,10 +211,8 @@ class IKProblem:
 
     def goal_rows(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The LM kernel's task rows of a goal list at each row of ``Q`` (N, n): the stacked error e (N, rows) and its
-        Jacobian E (N, rows, n), ``e = f(q) - target`` and ``E = de/dq`` for every goal kind, each goal's rows scaled
-        by the square root of its weight (zero for a goal inside its dead-zone bands); a goal set's rows are those of
-        the member each configuration is nearest to (:meth:`nearest_members`). One compiled call for the population
-        (:func:`~evoik_pin.solvers.lm.population_rows.task_rows_batch`). Bookkeeping: no evaluation is counted."""
+        Jacobian E (N, rows, n), each goal's rows scaled by the square root of its weight, a goal set's those of the
+        member nearest (:meth:`nearest_members`). One compiled call; no evaluation is counted."""
         from .solvers.lm.population_rows import task_rows_batch
 
         self._need_goal_list("goal_rows")
@@ -353,13 +322,7 @@ class IKProblem:
     def chosen(self, q: np.ndarray) -> list[int | None] | None:
         """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
         to), None for a goal with one target; None for a problem without a goal list."""
-        if self.goals is None:
-            return None
-        if not self.goal_sets:
-            return [None] * len(self.goals)
-        fids = [self.robot.frame_id(g.frame) for g in self.goals]
-        poses = self.robot.frame_poses_unchecked(np.asarray(q, dtype=float), fids)
-        return [self._member(g, T)[0] for g, T in zip(self.goals, poses, strict=True)]
+        return None if self.goals is None else self.goal_errors_and_chosen(q)[1]
 
     def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
         """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen
@@ -377,15 +340,8 @@ class IKProblem:
         R = np.repeat(Rt[None], len(combos), axis=0)
         for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
             P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
-        G = len(self.goals or ())
-        if len(sets) == G:  # every goal a set (a grasp set alone): the combinations are the choices
-            return combos, P, R
-        choices = []
-        for combo in combos:
-            choice = [None] * G
-            for g, m in zip(sets, combo, strict=True):
-                choice[g] = m
-            choices.append(tuple(choice))
+        G = len(self.goals or ())  # a choice per goal: its member, None for a goal with one target
+        choices = [tuple(dict(zip(sets, combo, strict=True)).get(g) for g in range(G)) for combo in combos]
         return choices, P, R
 
     def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:
@@ -499,13 +455,9 @@ class IKProblem:
 
     def assess(self, q: np.ndarray, position_error: float | None = None, orientation_error: float | None = None
                ) -> tuple[float, float | None, float]:
-        """(position error m, orientation error rad or None, objective cost) of one configuration ``q`` (n,).
-
-        Pass the errors when a local solver already has them at this very ``q`` (from its own kinematics):
-        they are reused, and so is the cost when the objective is a function of the errors alone
-        (:meth:`Objective.from_errors`); otherwise one forward-kinematics call fills the kinematics the
-        objective reads (no batch pass).
-        """
+        """(position error m, orientation error rad or None, objective cost) of one configuration ``q`` (n,); errors a
+        local solver already has at this ``q`` are reused, and the cost too when the objective is a function of them
+        (:meth:`Objective.from_errors`)."""
         if self.goals is not None:
             return self.goal_summary(self.goal_errors(q))
         target = self.target
@@ -538,23 +490,16 @@ class IKProblem:
 
 
 def target_box(robot: Robot, target: Target, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The search box (lower, upper), each (n,) in rad or m, of ``robot`` for ``target``: [lower, upper] (copies),
-    with each near-unbounded joint (a bound beyond :data:`NEAR_UNBOUNDED`) narrowed to where answers lie.
+    """The search box (lower, upper), each (n,) in rad or m, of ``robot`` for ``target``: copies of [lower, upper]
+    with each near-unbounded joint (a bound beyond :data:`NEAR_UNBOUNDED`) narrowed to where answers lie, inside
+    [lower, upper] (joints driving mimic joints keep it):
 
-    * a revolute joint: one turn, [c - pi, c + pi] (c = 0 clipped into [lower + pi, upper - pi]): every angle
-      modulo 2 pi, so nothing is lost;
-    * a prismatic joint whose axis no revolute joint before it turns (a mobile base's virtual x, y, z): the
-      values that bring the tip to the target, ``pinv(A) (t - p_ref)`` (A: the axes of these joints (3, k) in the
-      base frame, p_ref: the tip position with them at 0 and the other joints at 0 clipped into their bounds),
-      +- the reach of the rest of the chain (twice the sum of its link offsets and prismatic travel, R, over A's
-      smallest singular value), plus a margin of max(0.1 m, 0.1 R);
-    * a prismatic joint a revolute joint turns: +- (|t| + R + margin), t the target position; when a
-      near-unbounded revolute joint turns it (a base's forward motion after its yaw), only the values pointing
-      it at the target, [|t| - R - margin, |t| + R + margin] (a far target is then not searched with the base
-      facing away from it; give ``bounds=`` to search there).
-
-    The result lies inside [lower, upper], so an answer inside it keeps the robot's nominal limits. Joints
-    driving mimic joints keep [lower, upper].
+    * a revolute joint: one turn, [c - pi, c + pi] (c = 0 clipped into [lower + pi, upper - pi]);
+    * a prismatic joint no revolute joint before it turns (a mobile base's x, y, z): ``pinv(A) (t - p_ref)`` (A its
+      axes (3, k), p_ref the tip with them at 0) +- the rest of the chain's reach R over A's smallest singular value,
+      plus a margin of max(0.1 m, 0.1 R);
+    * a prismatic joint a revolute joint turns: +- (|t| + R + margin); after a near-unbounded revolute joint (a base
+      moving forward after its yaw) [|t| - R - margin, |t| + R + margin] (give ``bounds=`` to search beyond).
     """
     lower, upper = np.array(lower, dtype=float), np.array(upper, dtype=float)
     far = (np.abs(lower) >= NEAR_UNBOUNDED) | (np.abs(upper) >= NEAR_UNBOUNDED)
@@ -621,11 +566,8 @@ def errors_text(pos: float, rot: float | None) -> str:
 
 
 def shortfall_text(problem: IKProblem, pos: float, rot: float | None, goal_errors=None) -> str:
-    """What a failed solve missed, for its message: 'best position error ... m[, orientation error ... rad] exceeds
-    the tolerance (position error <= ... m[, orientation error <= ... rad])', the orientation's only for a target
-    that constrains it (``rot`` not None); for a goal list (``goal_errors``: each goal's,
-    :meth:`IKProblem.goal_errors`; ``pos`` and ``rot`` the largest of them) 'best ... (largest over the goals);
-    goals not met: frame, ...'."""
+    """What a failed solve missed, for its message: the best errors against the tolerances, or for a goal list
+    (``goal_errors``: each goal's; ``pos`` and ``rot`` the largest) the goals not met."""
     if goal_errors is not None:
         unmet = [g.label for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
         return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"

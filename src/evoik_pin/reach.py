@@ -1,25 +1,9 @@
 """Reachability maps: which voxels of the workspace the tip reaches, in how many orientations, how dexterously.
 
-:func:`reachability_map` cuts the workspace into cubes of ``voxel`` m (the bounding box of the tip positions of
-random configurations, padded by one voxel) and asks IK, for each voxel centre, about ``orientations``
-orientations (a super-Fibonacci sample of SO(3): Alexa, CVPR 2022; the same set for every voxel):
-
-* ``index``: the fraction of them IK reaches, the *reachability index* of capability maps (Zacharias et al.
-  2007; reuleaux's "reachability"); for position-only arms (fewer than 6 joints) and planar arms the question is
-  the position alone, so the index is 1 (reached) or 0;
-* ``manipulability``: the best Yoshikawa manipulability ``sqrt(det(J J^T))`` among the answers (all six rows
-  for poses, the translational rows for positions, vx and vy for planar arms); 0 where nothing is reached.
-
-It runs the batch engine of :func:`evoik_pin.solve_many` (:class:`~evoik_pin.solvers.batch.threads.BatchSolver`, or
-Ray actors with ``backend="ray"``) in batches of ``batch_size`` targets: first the voxel centres as position
-targets (a voxel whose centre no configuration reaches reaches no orientation either: its poses are not asked),
-then every orientation of the voxels reached. Only the batched LM rounds judge a target (``table_seeds`` of them,
-no per-target fallback search, which would dominate the cost on unreachable poses): a pose those rounds miss
-counts as not reached, so the index is a lower bound.
-
-:meth:`ReachMap.save` writes ``<robot>_reach.npz`` (``centers`` (M, 3), ``index`` (M,) in [0, 1],
-``manipulability`` (M,), the settings and the seed), a PNG of slices and a meshcat HTML point cloud coloured by
-the index.
+:func:`reachability_map` asks the batch engine of :func:`evoik_pin.solve_many` (its LM rounds only, so the index is
+a lower bound), at every voxel centre, first for the position, then for ``orientations`` orientations (a
+super-Fibonacci sample of SO(3), the same for every voxel); ``index`` is the fraction reached, ``manipulability``
+the best ``sqrt(det(J J^T))`` among the answers. Definitions and options: docs/SCALE.md.
 """
 
 from __future__ import annotations
@@ -219,47 +203,32 @@ def _grid(lo: np.ndarray, hi: np.ndarray, voxel: float, planar_z: float | None):
     return np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1), shape
 
 
-class _Engine:
-    """The batch engine the map runs on: local threads or Ray actors, without the per-target fallback."""
+def _engine(robot, backend: str, workers, address, entropy: int, options: dict):
+    """(solve(targets) -> BatchOutcome, workers) of the batch engine the map runs on: local threads or Ray actors,
+    without the per-target fallback; ``targets`` a list of :class:`Target` or an (N, 4, 4) array of poses."""
+    from .api import _run, make_problem
 
-    def __init__(self, robot, backend: str, workers, address, entropy: int, options: dict) -> None:
-        from .api import _run, make_problem
+    if backend == "ray":
+        from .solvers.batch.ray_actors import RayBatch
 
-        self.backend = backend
-        if backend == "ray":
-            from .solvers.batch.ray_actors import RayBatch
-
-            self._ray = RayBatch(robot, make_problem, _run, "memetic", entropy, options, fallback=False,
-                                 workers=workers, address=address)
-            self.workers = self._ray.workers
-        else:
-            self._local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
-            self.workers = check_workers(workers)
-
-    def solve(self, targets) -> BatchOutcome:
-        """Solve ``targets`` (a list of :class:`Target` or an (N, 4, 4) array of poses)."""
-        if self.backend == "ray":
-            return self._ray.solve(targets)
-        return self._local.solve(targets, workers=self.workers)
+        ray = RayBatch(robot, make_problem, _run, "memetic", entropy, options, fallback=False, workers=workers,
+                       address=address)
+        return ray.solve, ray.workers
+    local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
+    workers = check_workers(workers)
+    return (lambda targets: local.solve(targets, workers=workers)), workers
 
 
 def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=None, backend: str = "local",
                      workers: int | None = None, seed: int = 0, progress: bool = True, address: str | None = None,
                      batch_size: int = DEFAULT_BATCH, **options) -> ReachMap:
-    """The reachability map of ``robot`` (see the module docstring).
+    """The reachability map of ``robot`` (see the module docstring) as a :class:`ReachMap`.
 
     Args:
-        robot: a :class:`Robot` or anything :func:`load_robot` accepts.
-        voxel: voxel edge (m). orientations: orientations asked per voxel for 6-D arms (>= 1).
-        scene: a :class:`~evoik_pin.scene.Scene` or a scene file's path (str or Path): only collision-free answers
-            count.
-        backend, workers, address: as for :func:`evoik_pin.solve_many` (threads, or Ray actors).
-        seed: seeds the workspace sampling (the orientation set and the LM starts are deterministic).
-        progress: a tqdm bar over the targets. batch_size: targets per call of the batch engine.
-        **options: IK options for every target (``tolerance``, ``rotation_tolerance``, ``table_seeds``, ...).
-
-    Returns:
-        A :class:`ReachMap` (write it with :meth:`ReachMap.save`).
+        robot: a :class:`Robot` or anything :func:`load_robot` accepts. voxel: voxel edge (m). orientations:
+            orientations asked per voxel for 6-D arms (>= 1). scene: a Scene or a scene file's path: collision-free
+            answers only. backend, workers, address, progress: as for :func:`evoik_pin.solve_many`. seed: of the
+            workspace sampling. batch_size: targets per call of the batch engine. **options: IK options.
     """
     t0 = time.perf_counter()
     robot = robot if isinstance(robot, Robot) else load_robot(robot)
@@ -283,13 +252,14 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     kind = "planar" if planar else ("position" if robot.n < 6 else "pose")
     centers, shape = _grid(lo - voxel, hi + voxel, voxel, float(lo[2]) if planar else None)
     M = centers.shape[0]
-    engine = _Engine(robot, backend, workers, address, seed, options)
+    solve, workers = _engine(robot, backend, workers, address, seed, options)
     bar = progress_bar(progress, f"reach {robot.name}", unit="target")
 
-    def run(targets: list[Target]) -> BatchOutcome:
+    def run(targets) -> BatchOutcome:
+        """The engine on ``targets`` (Targets, or an (N, 4, 4) array of poses), ``batch_size`` at a time."""
         parts = []
         for a in range(0, len(targets), batch_size):
-            parts.append(engine.solve(targets[a:a + batch_size]))
+            parts.append(solve(targets[a:a + batch_size]))
             if bar is not None:
                 bar.update(len(targets[a:a + batch_size]))
         return BatchOutcome.concatenate(parts)
@@ -320,10 +290,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 H[:, :, :3, :3] = R
                 H[:, :, :3, 3] = centers[part, None, :]
                 H[:, :, 3, 3] = 1.0
-                poses = H.reshape(-1, 4, 4)  # solved as an array: no Target object per pose
-                res = engine.solve(poses)
-                if bar is not None:
-                    bar.update(poses.shape[0])
+                res = run(H.reshape(-1, 4, 4))  # solved as an array: no Target object per pose
                 ok = res.success.reshape(part.size, orientations)
                 count[part] = ok.sum(axis=1)
                 m = np.zeros(ok.shape)
@@ -333,7 +300,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
         if bar is not None:
             bar.close()
     n_orient = orientations if kind == "pose" else 1
-    settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": engine.workers,
+    settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": workers,
                 "position_targets": M, "pose_targets": asked,
                 "batch_size": batch_size, "manipulability_rows": rows, "scene": None if scene is None else repr(scene),
                 "options": {k: v for k, v in options.items() if isinstance(v, (int, float, str, bool))}}

@@ -40,18 +40,14 @@ class Result:
         method: registered name of the solver.
         solutions: distinct IK solutions (each a Result), best first, for all-solutions methods.
         front: the final Pareto set, for multi-objective methods.
-        setup_s: one-time set-up this call paid outside its clock (s): loading (once per install: compiling) the
-            compiled code it uses (the LM kernel's variant for its goals, memetic's first runs, the goal lists'
-            rankings), building a seed table and its goal features. 0 once the process has done it (see
-            :func:`evoik_pin.prepare`).
-        goal_errors: for a goal list (:mod:`evoik_pin.goals`), each goal's (position error m, rotation angle rad or
-            None for a goal without orientation) at ``q``, in the goals' order; ``position_error`` and
-            ``orientation_error`` are then the largest of them. None for a single target.
-        collision_free: with a scene, whether ``q`` passes the exact mesh check at the problem's margin
-            (``success`` requires it); None when no scene was given.
-        min_distance: with a scene, the signed distance (m) of the closest checked pair at ``q``
-            (:meth:`Scene.distance`: exact on the meshes), computed on first access (a solve does not pay for it
-            unless it is read); None when no scene was given.
+        setup_s: one-time set-up this call paid outside its clock (s): loading the compiled code, building a seed
+            table; 0 once the process has done it (:func:`evoik_pin.prepare`).
+        goal_errors: for a goal list, each goal's (position error m, rotation angle rad or None) at ``q``;
+            ``position_error`` and ``orientation_error`` are then the largest of them. None for a single target.
+        collision_free: with a scene, whether ``q`` passes the exact mesh check at the problem's margin (``success``
+            requires it); None without a scene.
+        min_distance: with a scene, the signed distance (m) of the closest checked pair at ``q``, computed on first
+            access; None without a scene.
     """
 
     q: np.ndarray

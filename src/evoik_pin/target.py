@@ -1,8 +1,5 @@
-"""IK targets: what a solver is asked to reach, as one checked value (:class:`Target`).
-
-A target is a position (3,) in m, a pose (position and rotation), or a planar (x, y[, yaw]) target, in the
-robot's base frame. Every entry point checks its targets here: finite numbers of the right shape, a rotation
-matrix, and a position within :data:`MAX_TARGET_NORM` of the base.
+"""IK targets: a position (3,) m, a pose, or a planar (x, y[, yaw]) target in the robot's base frame, checked once
+(:class:`Target`): finite numbers of the right shape, a rotation matrix, within :data:`MAX_TARGET_NORM` of the base.
 """
 
 from __future__ import annotations
@@ -38,8 +35,7 @@ def _vector(value, name: str, sizes: tuple[int, ...], bound: float | None = None
         raise TargetError(f"{name} must be numbers, got {value!r}") from exc
     if arr.ndim != 1 or arr.shape[0] not in sizes:
         raise TargetError(f"{name} must have {' or '.join(map(str, sizes))} entries, got shape {arr.shape}")
-    # math.hypot scales, so huge finite entries give their norm rather than an overflow warning (a dot product
-    # would); NaN anywhere gives NaN, inf gives inf. One C call, as this runs once per solve.
+    # math.hypot: huge finite entries give their norm without an overflow warning; NaN and inf propagate
     norm = math.hypot(*arr.tolist())
     if not norm <= (math.inf if bound is None else bound):
         if not np.isfinite(arr).all():
@@ -48,6 +44,7 @@ def _vector(value, name: str, sizes: tuple[int, ...], bound: float | None = None
     return arr
 
 
+_TARGET_FORMS = "target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target"
 _NOT_ROTATION = ("target rotation is not a rotation matrix (R^T R must be I and det R = +1 to 1e-6); "
                  "orthonormalize it or pass roll-pitch-yaw angles")
 
@@ -70,12 +67,10 @@ def _rotation(value) -> np.ndarray:
 def _is_rotation(v: list) -> bool:
     """Whether the 9 Python floats ``v`` (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and
     det R >= 0 (False for NaN or inf)."""
-    # Frobenius norm sqrt(3) for a rotation; math.hypot gives it without an overflow warning for huge entries (a
-    # product would), so the products below only ever see entries of a near-rotation
+    # a rotation's Frobenius norm is sqrt(3): the products below (on Python floats, faster than NumPy at this size)
+    # only ever see entries of a near-rotation, so none overflows
     if not math.hypot(*v) <= 2.0:
         return False
-    # det R and R^T R - I written out on Python floats: numpy's per-element indexing and small products cost
-    # about 3 us, which is a tenth of a solve
     a, b, c, d, e, f, g, h, i = v
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     n0, n1, n2 = a * a + d * d + g * g - 1.0, b * b + e * e + h * h - 1.0, c * c + f * f + i * i - 1.0
@@ -89,25 +84,23 @@ def _pose_ok(position: np.ndarray, rotation: np.ndarray) -> bool:
     return math.hypot(*position.tolist()) <= MAX_TARGET_NORM and _is_rotation(rotation.reshape(9).tolist())
 
 
-def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
-    """A ``cls`` (Target) of the float arrays ``position`` (3,) m and ``rotation`` (3, 3) when they pass
-    :class:`Target`'s checks, built without its ``__post_init__`` (the checks made here on Python floats, about 1 us
-    in place of 3); None when they do not: the caller then builds the Target the slow way, which raises the error
-    with its message."""
-    if not _pose_ok(position, rotation):
-        return None
+def _unchecked_pose(cls, position: np.ndarray, rotation: np.ndarray):
+    """A ``cls`` (Target) of ``position`` (3,) m and ``rotation`` (3, 3) checked already: no ``__post_init__``."""
     t = object.__new__(cls)
     t.__dict__.update(position=position, rotation=rotation, planar=False, yaw=None)  # frozen: no __setattr__
     return t
 
 
+def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
+    """:func:`_unchecked_pose` when they pass :func:`_pose_ok`; None when not (the caller then builds the Target
+    the checked way, which raises the error)."""
+    return _unchecked_pose(cls, position, rotation) if _pose_ok(position, rotation) else None
+
+
 def pose_arrays(target) -> tuple[np.ndarray, np.ndarray | None] | None:
-    """(position (3,) m, rotation (3, 3) or None for a position) of a target given as a ``pin.SE3``, a float64
-    (4, 4) homogeneous matrix with the exact bottom row [0 0 0 1], a float64 3-vector position or a 3-D
-    :class:`Target`, when it passes :class:`Target`'s checks; None for any other form, or when a check fails
-    (:meth:`Target.coerce` then gives the verdict: it accepts what this accepts, with the same numbers, and
-    raises the error of what this refuses). No Target is made: an IKSolver's per-call path copies the arrays
-    into its engine at once. The arrays may be views of ``target``'s own."""
+    """(position (3,) m, rotation (3, 3) or None) of a ``pin.SE3``, a float64 (4, 4) pose (bottom row exactly
+    [0 0 0 1]), a float64 3-vector or a 3-D :class:`Target` that passes :class:`Target`'s checks, without making a
+    Target; None otherwise (:meth:`Target.coerce` then gives the verdict). The arrays may be views of ``target``."""
     kind = type(target)
     if kind is pin.SE3:
         position, rotation = target.translation, target.rotation
@@ -175,10 +168,7 @@ class Target:
         try:
             arr = np.asarray(target, dtype=float)
         except (TypeError, ValueError) as exc:
-            raise TargetError(
-                f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target; "
-                f"got {target!r}"
-            ) from exc
+            raise TargetError(f"{_TARGET_FORMS}; got {target!r}") from exc
         if arr.shape == (4, 4):
             a, b, c, d = arr[3].tolist()
             # the bottom row on Python floats first (a NaN fails every comparison: numpy's test then decides)
@@ -190,25 +180,14 @@ class Target:
             return _checked_pose(cls, position, rotation) or cls(position=position, rotation=rotation)
         if arr.ndim == 1 and arr.shape[0] == 3:
             return cls(position=arr)
-        raise TargetError(
-            f"target must be a 3-vector position (m), a pin.SE3, a 4 x 4 homogeneous matrix or a Target "
-            f"(Target.planar_target(x, y, yaw) for planar arms); got an array of shape {arr.shape}"
-        )
+        raise TargetError(f"{_TARGET_FORMS} (Target.planar_target(x, y, yaw) for planar arms); got an array of shape "
+                          f"{arr.shape}")
 
     @classmethod
     def from_poses(cls, poses) -> list[Target]:
         """Pose targets from an array of N homogeneous matrices (N, 4, 4) (m), checked in one vectorized pass
         (:meth:`check_poses`)."""
-        H = cls.check_poses(poses)
-        out = []
-        for T in H:  # already checked: skip the per-instance validation of __post_init__
-            t = object.__new__(cls)
-            object.__setattr__(t, "position", T[:3, 3].copy())
-            object.__setattr__(t, "rotation", T[:3, :3].copy())
-            object.__setattr__(t, "planar", False)
-            object.__setattr__(t, "yaw", None)
-            out.append(t)
-        return out
+        return [_unchecked_pose(cls, T[:3, 3].copy(), T[:3, :3].copy()) for T in cls.check_poses(poses)]
 
     @staticmethod
     def check_poses(poses) -> np.ndarray:

@@ -1,16 +1,6 @@
-"""Solver registry: every method is a function ``solver(problem, rng, **options) -> Result`` registered
-by name with :func:`register`. ``evoik_pin.methods()`` lists them.
-
-Option names are checked here against each solver's signature; option values by the solver itself, with
-the shared validators of :mod:`.options`.
-
-The solvers are grouped by role: :mod:`.paper` (the papers' methods), :mod:`.lm` (the one LM engine and
-``polish``), :mod:`.search` (seed table, ``memetic``, ``memetic-all``), :mod:`.batch` (``solve_many``'s API above
-its engines). :mod:`.collision_verdict` is the exact collision check every method's answer passes through.
-
-A solver registered with ``check=`` also lets its value checks run without solving
-(:meth:`SolverInfo.check_options` with ``n``): the entry points that solve many targets (``solve_many``,
-``solve_trajectory``, ``reachability_map``) check every option that way before any work."""
+"""Solver registry: every method is a function ``solver(problem, rng, **options) -> Result`` registered by name
+with :func:`register`; ``evoik_pin.methods()`` lists them. Option names are checked here against each solver's
+signature, option values by the solver (and its ``check=``, before any work) with :mod:`.options`' validators."""
 
 from __future__ import annotations
 
@@ -41,11 +31,7 @@ class SolverInfo:
     @property
     def options(self) -> list[str]:
         """Names of the solver-specific keyword options."""
-        return list(self._option_names)
-
-    @cached_property
-    def _option_names(self) -> tuple[str, ...]:
-        return tuple(self._defaults)
+        return list(self._defaults)
 
     @cached_property
     def _defaults(self) -> dict:
@@ -65,7 +51,7 @@ class SolverInfo:
             self._check_names(options)
 
     def _check_names(self, options: dict) -> None:
-        unknown = sorted(set(options) - set(self._option_names))
+        unknown = sorted(set(options) - set(self._defaults))
         if unknown:
             raise OptionError(
                 f"unknown option(s) {', '.join(unknown)} for method {self.name!r}; it accepts "

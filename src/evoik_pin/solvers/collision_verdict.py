@@ -1,11 +1,5 @@
-"""The exact collision verdict on a solver's answer: the one place where a scene's judgement enters a Result.
-
-Every method hands its result through :func:`with_collision_verdict` when the problem has a scene:
-``collision_free`` and ``min_distance`` are filled from the exact mesh check
-(:meth:`~evoik_pin.problem.IKProblem.collision_verdict`), ``success`` requires ``collision_free``, a colliding
-answer's message names the pairs in contact, and multi-solution results keep only their collision-free
-solutions.
-"""
+"""The exact collision verdict on a solver's answer (:func:`with_collision_verdict`): the one place where a scene's
+judgement enters a Result."""
 
 from __future__ import annotations
 
@@ -24,11 +18,9 @@ def pairs_text(pairs: list[tuple[str, str]], most: int = 3) -> str:
 
 
 def with_collision_verdict(problem: IKProblem, result: Result) -> Result:
-    """``result`` judged against ``problem.scene`` (unchanged when there is none); see the module docstring.
-
-    A result whose ``collision_free`` a solver already decided with the same exact check (memetic, the batch
-    rounds) is not checked twice.
-    """
+    """``result`` judged against ``problem.scene`` (unchanged without one): ``collision_free`` and ``min_distance`` from
+    the exact mesh check (unless the solver decided it already), ``success`` requiring it, the pairs in contact
+    named in the message, multi-solution results keeping their collision-free solutions only."""
     scene = problem.scene
     if scene is None:
         return result

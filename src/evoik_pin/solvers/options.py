@@ -1,13 +1,6 @@
-"""Option validators shared by every solver: one home for "is this option value acceptable?".
-
-Each check takes the option's ``name`` (as the user typed it, optionally with a hint such as
-``"niche_size (n*)"``) and its ``value``, returns the value in canonical form (``int``, ``float``, the
-callable, ...) and otherwise raises :class:`~evoik_pin.errors.OptionError` naming the option, the accepted
-values and what was given. Solver-specific rules that tie several options together (e.g. ``elite <
-population``) stay in the solver's module, built from these primitives.
-
-Booleans are rejected wherever a number is expected (``True`` is an ``int`` to Python, rarely what was
-meant).
+"""Option validators shared by every solver: each check takes the option's ``name`` (as the user typed it) and its
+``value``, returns the value in canonical form and otherwise raises :class:`~evoik_pin.errors.OptionError` naming the
+option, the accepted values and what was given. Booleans are refused wherever a number is expected.
 """
 
 from __future__ import annotations
@@ -19,16 +12,8 @@ import numpy as np
 
 from ..errors import OptionError
 
-__all__ = [
-    "check_callback",
-    "check_choice",
-    "check_fraction",
-    "check_int",
-    "check_nonnegative",
-    "check_nonnegative_vector",
-    "check_number",
-    "check_positive",
-]
+__all__ = ["check_callback", "check_choice", "check_fraction", "check_int", "check_nonnegative",
+           "check_nonnegative_vector", "check_number", "check_positive"]
 
 
 def _with_unit(text: str, unit: str) -> str:
@@ -36,14 +21,8 @@ def _with_unit(text: str, unit: str) -> str:
 
 
 def check_int(name: str, value, minimum: int = 1, maximum: int | None = None) -> int:
-    """``value`` as an ``int`` in [minimum, maximum] (no upper limit when ``maximum`` is None).
-
-    Accepted: Python and NumPy integers (not ``bool``, not floats such as ``2.0``).
-
-    Raises:
-        OptionError: ``"<name> must be an integer >= <minimum>, got <value>"`` (or ``"... in [minimum,
-            maximum]"``).
-    """
+    """``value`` as an ``int`` in [minimum, maximum] (no upper limit when ``maximum`` is None): Python and NumPy
+    integers, not ``bool`` or floats; OptionError otherwise."""
     # type(...) is int first: the common case, without isinstance's walk over numpy's abstract classes
     ok = type(value) is int or (not isinstance(value, bool) and isinstance(value, (int, np.integer)))
     if ok and value >= minimum and (maximum is None or value <= maximum):
@@ -65,20 +44,9 @@ def _range_text(low: float, high: float, open_low: bool, open_high: bool) -> str
 
 def check_number(name: str, value, low: float = -np.inf, high: float = np.inf, *, open_low: bool = False,
                  open_high: bool = False, unit: str = "") -> float:
-    """``value`` as a finite ``float`` in the interval from ``low`` to ``high``.
-
-    The interval is closed unless ``open_low`` / ``open_high``; infinite ends mean no limit on that side
-    (the value must be finite all the same). Accepted: anything ``float()`` takes except ``bool``
-    (Python and NumPy numbers, numeric strings).
-
-    Args:
-        name: option name shown in the error.
-        unit: unit shown after the accepted range (``"m"``, ``"rad"``), or ``""``.
-
-    Raises:
-        OptionError: ``"<name> must be a finite number in (low, high] <unit>, got <value>"`` (or ``"> low"``,
-            ``"<= high"`` for a one-sided range).
-    """
+    """``value`` as a finite ``float`` (anything ``float()`` takes but ``bool``) between ``low`` and ``high``, closed
+    unless ``open_low`` / ``open_high`` (infinite ends: no limit); ``unit`` (``"m"``, ``"rad"``) shown in the error.
+    OptionError: ``"<name> must be a finite number in (low, high] <unit>, got <value>"``."""
     if not isinstance(value, bool):
         try:
             v = float(value)
@@ -111,11 +79,7 @@ def check_fraction(name: str, value) -> float:
 
 
 def check_choice(name: str, value, choices: Sequence):
-    """``value`` if it equals one of ``choices`` (e.g. ``bound_handling`` in ``("clip", "reflect", "resample")``).
-
-    Raises:
-        OptionError: ``"<name> <value> is not one of <choices>"``.
-    """
+    """``value`` if it equals one of ``choices``; OptionError ``"<name> <value> is not one of <choices>"``."""
     try:
         ok = value in choices
     except (TypeError, ValueError):  # e.g. an array compared with strings
@@ -126,23 +90,14 @@ def check_choice(name: str, value, choices: Sequence):
 
 
 def check_callback(callback, signature: str = "callback(generation, population)") -> Callable | None:
-    """``callback`` if it is None or callable (called as ``signature``).
-
-    Raises:
-        OptionError: ``"callback must be None or callable as callback(generation, population), got ..."``.
-    """
+    """``callback`` if it is None or callable (called as ``signature``); OptionError otherwise."""
     if callback is not None and not callable(callback):
         raise OptionError(f"callback must be None or callable as {signature}, got {callback!r}")
     return callback
 
 
 def check_nonnegative_vector(name: str, value, size: int) -> np.ndarray:
-    """``value`` as a float array (size,) of finite values >= 0 (e.g. per-joint ``gains``, one per joint).
-
-    Raises:
-        OptionError: ``"<name> must have <size> values (one per joint), got <k>"`` or ``"<name> must be
-            finite values >= 0, got [...]"``.
-    """
+    """``value`` as a float array (size,) of finite values >= 0 (e.g. per-joint ``gains``); OptionError otherwise."""
     try:
         arr = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
