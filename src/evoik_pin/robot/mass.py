@@ -1,13 +1,6 @@
-"""The robot's masses as constants of compiled kernels: each physical joint's body (mass, centre of mass in the
-joint's folded frame), each joint's subtree mass, and the bodies no active joint moves (see :class:`MassConstants`).
-
-Masses and centres come from the Pinocchio model's inertias (``model.inertias``). The robot's reduced model
-already holds, on each physical joint, the bodies of the links on fixed or locked joints below it (Pinocchio's
-``buildReducedModel`` merges them into their parent joint's inertia), and a floating base's root body sits on its
-last (roll) joint. The bodies the reduction leaves on the universe (those above the base, or on locked branches
-hanging from it) are a constant first moment; the bodies welded to the world in :attr:`Robot.full_model` (a fixed
-base's root link) are left out, as ``pin.centerOfMass(full_model, ...)`` leaves them out: the centre of mass is
-that of every body the robot's joints (active or locked) carry.
+"""The robot's masses as constants of compiled kernels (:class:`MassConstants`), from the reduced model's inertias
+(which hold locked links' bodies). Bodies the reduction leaves on the universe are a constant first moment; bodies
+welded to the world in ``full_model`` are left out, as ``pin.centerOfMass(full_model, ...)`` does.
 """
 
 from __future__ import annotations
@@ -21,15 +14,9 @@ __all__ = ["MassConstants", "mass_constants"]
 
 @dataclass(frozen=True)
 class MassConstants:
-    """The masses of a robot's m physical joints (``Robot.tree_constants``).
-
-    Attributes:
-        masses: (m,) kg, the body each physical joint carries (0 for a massless one).
-        moments: (m, 3) kg m, each body's first moment ``m_k c_k`` in its joint's folded frame.
-        subtree: (m,) kg, the mass of each joint's body and of every body below it.
-        fixed_mass: kg, and fixed_moment: (3,) kg m in the base frame: the bodies no active joint moves.
-        total: kg, the whole robot's mass (of the bodies counted).
-    """
+    """The masses of a robot's m physical joints: ``masses`` (m,) kg, ``moments`` (m, 3) kg m (``m_k c_k`` in the
+    joint's folded frame), ``subtree`` (m,) kg (a joint's body and all below), ``fixed_mass`` kg and ``fixed_moment``
+    (3,) kg m (base frame) of the bodies no active joint moves, ``total`` kg."""
 
     masses: np.ndarray
     moments: np.ndarray

@@ -1,8 +1,5 @@
-"""Kinematics of whole populations (NumPy): the poses, positions and Jacobians of one frame for N configurations.
-
-Each function walks the serial chain from the base to the frame (:class:`~.tree.ChainView`: the frame's joint and
-its ancestors in a tree) for a population of physical joint values X (N, m) (rad or m) in one pass of NumPy
-calls per joint, whatever N is (:meth:`Robot.fk_batch <evoik_pin.robot.robot.Robot.fk_batch>` and its siblings).
+"""Kinematics of whole populations (NumPy): poses, positions and Jacobians of one frame for physical joint values
+X (N, m), walking its :class:`~.tree.ChainView` with a few NumPy calls per joint whatever N is.
 """
 
 from __future__ import annotations
@@ -15,8 +12,7 @@ __all__ = ["chain_forward", "chain_jacobians", "chain_positions"]
 
 
 def _on_chain(view: ChainView, X: np.ndarray) -> np.ndarray:
-    """The columns of X (N, m) of the chain's joints (X itself when the chain holds every joint: they are then
-    0..m-1 in order)."""
+    """The columns of X (N, m) of the chain's joints."""
     return X if view.joints.size == X.shape[1] else X[:, view.joints]
 
 
@@ -49,13 +45,8 @@ def chain_forward(view: ChainView, X: np.ndarray, want_joints: bool):
 
 
 def chain_positions(view: ChainView, X: np.ndarray) -> np.ndarray:
-    """The frame's positions (N, 3) m for physical joint values X (N, m); cheaper than :func:`chain_forward`.
-
-    Walks the chain from the frame back to the base carrying homogeneous points in a (12, N) buffer
-    ``Y = [a p; b p; p]``: per joint one in-place product with the joint's (cos, sin) rows and one BLAS product
-    with a constant (12, 12) matrix (:attr:`~.tree.ChainView.positions_operator`), so a joint costs two NumPy
-    calls whatever N is.
-    """
+    """The frame's positions (N, 3) m for X (N, m), walking back from the frame with two NumPy calls per joint
+    (:attr:`~.tree.ChainView.positions_operator`); cheaper than :func:`chain_forward`."""
     N = X.shape[0]
     XT = _on_chain(view, X).T
     c = XT.shape[0]

@@ -1,11 +1,5 @@
-"""What a URDF must be before Pinocchio reads it: one tree of links and joints with usable numbers.
-
-urdfdom (the C++ parser under Pinocchio) rejects some broken files with a generic "not a valid URDF model" and
-its reasons printed on stderr, and accepts others that then give NaN or silently wrong kinematics (a zero
-joint axis, inverted limits, a NaN origin). :func:`check_urdf` reads the parsed XML first and raises a
-:class:`~evoik_pin.errors.RobotLoadError` naming the file, the joint or link, and what is accepted. It also
-collects the ``<mimic>`` couplings (``q_j = multiplier q_k + offset``), resolved to the joint that drives
-each chain of them, which :class:`~evoik_pin.robot.robot.Robot` folds into its joint vector.
+"""What a URDF must be before Pinocchio reads it (urdfdom accepts files giving NaN or wrong kinematics, or rejects
+them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings.
 """
 
 from __future__ import annotations
@@ -43,16 +37,9 @@ class UrdfSummary:
 
 
 def check_urdf(root: ET.Element, where: str) -> UrdfSummary:
-    """Check the parsed URDF ``root`` (read from ``where``: a path or "URDF string"); return its summary.
-
-    Raises a RobotLoadError naming ``where`` for: a root element other than ``<robot>``, a missing or
-    duplicated link or joint name, an unknown joint type, a joint without parent or child or naming a link
-    the file lacks, an origin or axis that is not three finite numbers, a zero axis, a revolute or prismatic
-    joint without ``<limit>`` (or without its effort / velocity), limits that are not numbers or are inverted
-    (lower > upper), a link with two parents (a closed loop), several root links, a cycle, and a malformed or
-    circular ``<mimic>``. A ``<mimic>`` naming no 1-DOF joint of the file is ignored with a
-    :class:`~evoik_pin.errors.RobotLoadWarning` (its joint stays independent); one on a fixed joint is ignored.
-    """
+    """Check the parsed URDF ``root`` (read from ``where``) and return its summary; a RobotLoadError naming
+    ``where``, the joint or link and what is accepted for names, joint types, links, origins, axes, limits, a
+    tree shape and mimics. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
     if root.tag != "robot":
         raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
     name = root.get("name")

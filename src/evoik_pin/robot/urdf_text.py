@@ -34,12 +34,8 @@ _STDERR_LOCK = threading.RLock()
 
 
 def decode_xml(data: bytes, where: str) -> str:
-    """Text of the XML document ``data`` read from ``where`` (a path, or "URDF string").
-
-    The encoding is the one an XML parser would use: a byte-order mark, else the ``encoding`` attribute of the
-    ``<?xml ...?>`` declaration (e.g. ISO-8859-1), else UTF-8. Empty, binary (NUL bytes, control characters)
-    and undecodable input raise a :class:`RobotLoadError` naming ``where``.
-    """
+    """Text of the XML document ``data`` read from ``where``, decoded as an XML parser would (byte-order mark, else
+    the declared encoding, else UTF-8); RobotLoadError for empty, binary or undecodable input."""
     if not data.strip():
         raise RobotLoadError(f"{where} is empty: expected URDF XML (a <robot name=...> element)")
     encoding = next((enc for sig, enc in _SIGNATURES if data.startswith(sig)), None)
@@ -87,23 +83,16 @@ def is_xacro_path(path: Path) -> bool:
 
 
 def is_xacro_text(text: str) -> bool:
-    """True when ``text`` holds xacro constructs that need expanding, outside comments: ``<xacro:...>`` elements,
-    ``${...}`` expressions or ``$(...)`` substitutions. (The xacro namespace alone is not enough: URDFs generated
-    by xacro, panda's among them, keep it on their <robot> element.)"""
+    """True when ``text`` holds ``<xacro:...>``, ``${...}`` or ``$(...)`` outside comments (the xacro namespace
+    alone is not enough: generated URDFs keep it)."""
     return _XACRO.search(_COMMENT.sub("", text)) is not None  # comments often keep xacro source around
 
 
 def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
                  packages: PackageResolver | None = None) -> str:
-    """URDF text of the xacro document ``text`` (read from ``path``, or None for a string).
-
-    ``args`` sets ``<xacro:arg>`` values (``name: value``, values turned into strings). Relative
-    ``<xacro:include>`` files resolve against the file's folder (the working directory for a string);
-    ``$(find pkg)`` through ``packages`` (default: a :class:`PackageResolver` of ``path`` alone), then ROS's
-    own look-up. Any xacro failure (a missing package, arg, include, macro or property, bad syntax) is a
-    :class:`RobotLoadError` naming ``where`` and what failed; a missing package also names the file that
-    names it and the folders searched.
-    """
+    """URDF text of the xacro document ``text`` (read from ``path``, or None for a string), ``args`` setting its
+    ``<xacro:arg>`` values, ``$(find pkg)`` found through ``packages``. Any failure is a RobotLoadError naming
+    ``where`` and what failed."""
     try:
         import xacro
         from xacrodoc import XacroDoc
@@ -173,12 +162,8 @@ def _xacro_message(exc: Exception, where: str, err: str, resolver: PackageResolv
 
 @contextlib.contextmanager
 def captured_stderr() -> Iterator[list[str]]:
-    """Redirect file descriptor 2 (C/C++ ``stderr``) and ``sys.stderr`` while the block runs.
-
-    Yields a list that, when the block ends, holds the captured text (one string). urdfdom prints its parse
-    errors there; we put them in our error messages instead of on the user's terminal. Process-wide (a lock
-    serializes users); when fd 2 cannot be duplicated (closed), only ``sys.stderr`` is captured.
-    """
+    """Redirect file descriptor 2 and ``sys.stderr`` while the block runs (urdfdom prints its errors there); the
+    yielded list then holds the captured text. Process-wide, serialized by a lock."""
     out: list[str] = []
     with _STDERR_LOCK, tempfile.TemporaryFile() as tmp:
         py_err = io.StringIO()
