@@ -1,10 +1,5 @@
-"""Collision scenes in the viewer: a Scene's obstacles in translucent grey, the robot's links in contact in red.
-
-``show_scene(scene)`` turns the obstacles into a ``pin.GeometryModel`` on the universe (:func:`obstacle_model`:
-coal shapes rebuilt from each :class:`~evoik_pin.scene.Obstacle`'s kind, params and pose) drawn by one more
-MeshcatVisualizer under ``scene``; ``show(q, scene=)`` reloads the visual objects of the links in contact as
-plain red geometry (a skeleton: the parts on their joints), the others back in their own colours. Reloads are
-``set_object`` commands, so the static export keeps them.
+"""Collision scenes in the viewer: a Scene's obstacles in translucent grey, the robot's links in contact in red
+(reloaded as plain geometry: ``set_object`` commands, which the static export keeps).
 """
 
 from __future__ import annotations
@@ -87,17 +82,8 @@ class ObstacleDrawing:
     @_talks
     def show_scene(self, scene, name: str = "scene", color=OBSTACLE_RGBA[:3],
                    opacity: float = OBSTACLE_RGBA[3]) -> list[str]:
-        """Draw the obstacles of a collision :class:`~evoik_pin.scene.Scene` in the base frame: boxes, spheres,
-        cylinders and capsules (axis along their pose's z) and meshes, translucent grey by default.
-
-        Args:
-            scene: a Scene of this Viewer's robot (e.g. ``Scene.from_file(robot, "shelf.yaml")``).
-            name: group node; obstacle ``o`` is ``<name>/visuals/<o>``. Drawing the same name again replaces it.
-            color: RGB in [0, 1]. opacity: in (0, 1].
-
-        Returns:
-            The obstacles' node names (none for a scene without obstacles).
-        """
+        """Draw the obstacles of a :class:`~evoik_pin.scene.Scene` of this robot as ``<name>/visuals/<o>`` in
+        ``color`` (RGB in [0, 1]) and ``opacity``; return their node names."""
         self._check_scene(scene)
         name = name.strip("/")
         if not name or not 0.0 < opacity <= 1.0:
