@@ -1,8 +1,5 @@
-"""YAML and JSON data files, read and written the same way by every file format of evoik_pin (scene files,
-goals files): the format chosen by the extension, syntax errors with their line and column, files read as UTF-8.
-
-Each function takes the ``where`` text its errors start with (e.g. ``"scene file 'a.yaml'"``) and the
-:mod:`evoik_pin.errors` class to raise, so a format's errors keep their own class and wording.
+"""YAML and JSON data files, read and written alike by evoik_pin's file formats (format by extension, syntax errors
+with line and column, UTF-8). Each function takes the ``where`` its errors start with and the error class to raise.
 """
 
 from __future__ import annotations

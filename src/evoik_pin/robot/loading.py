@@ -19,7 +19,7 @@ from .frames import is_branched
 from .joints import couplings
 from .packages import PackageResolver, check_package_aliases, check_package_dirs, package_uris
 from .robot import Robot
-from .urdf_checks import UrdfSummary, check_urdf
+from .urdf_checks import Mimic, check_urdf
 from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
 
 __all__ = [
@@ -122,16 +122,16 @@ def load_robot(
                              "elements or ${...} / $(...) expressions)")
     if tip is None and named:
         tip = _default_tip(name)
-    model, summary = _parse_urdf(xml, path)
+    model, mimic = _parse_urdf(xml, path)
     if tip is None and tips is None and (named and name in WHOLE_ROBOTS
-                                         or not named and is_branched(model, couplings(model, summary.mimic))):
+                                         or not named and is_branched(model, couplings(model, mimic))):
         # a whole robot: never the chain to one arbitrary deepest link (with a floating base, goals on the other
         # branches would bind to locked joints)
         tips = "all"
     mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
     try:
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
-                      package_dirs=_package_dirs(path, resolver), mimic=summary.mimic,
+                      package_dirs=_package_dirs(path, resolver), mimic=mimic,
                       packages=mesh_packages, missing_packages=missing_packages, tips=tips,
                       floating_base=floating_base, base_box=base_box)
     except (RobotLoadError, FrameError, BoundsError) as exc:  # say which file the frames and joints were looked for in
@@ -253,7 +253,7 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
     return (text if named else stem), resolved, xml, named
 
 
-def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, UrdfSummary]:
+def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, dict[str, Mimic]]:
     """Pinocchio model of the whole URDF ``xml`` (read from ``path``, or None for a string) and what
     :func:`check_urdf` found in it, or a RobotLoadError saying what is wrong with it."""
     where = str(path) if path is not None else "URDF string"
@@ -261,7 +261,7 @@ def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, UrdfSummary]:
         root = ET.fromstring(xml)
     except (ET.ParseError, ValueError, RecursionError) as exc:  # ValueError: e.g. characters XML does not allow
         raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
-    summary = check_urdf(root, where)
+    mimic = check_urdf(root, where)
     failure: Exception | None = None
     with captured_stderr() as err:  # urdfdom prints its reasons on stderr
         try:
@@ -273,4 +273,4 @@ def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, UrdfSummary]:
         said = [line for line in said if line and not line.startswith("at line ")]
         detail = f" urdfdom said: {'; '.join(said)}" if said else ""
         raise RobotLoadError(f"Pinocchio could not build a model from {where}: {failure}{detail}") from None
-    return model, summary
+    return model, mimic

@@ -59,7 +59,6 @@ def locked_robot(robot, values):
     out.srdf = robot.srdf
     idx = [robot.joint_names.index(j) for j in keep]
     out.set_bounds(robot.lower[idx], robot.upper[idx])
-    out.parent_robot = robot  # the robot whose q ``expand_q`` gives back
     if len(_CACHE) > 32:
         _CACHE.clear()
     _CACHE[key] = (weakref.ref(robot), out)

@@ -10,7 +10,6 @@ Poses are those of frames in the base frame (the world frame when no base is cho
 
 from __future__ import annotations
 
-import re
 from functools import cached_property
 from pathlib import Path
 
@@ -19,13 +18,19 @@ import pinocchio as pin
 
 from ..errors import ConfigurationError, FrameError, RobotLoadError
 from .frames import body_frame_names, closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
+from .geometry_models import RobotGeometry
 from .joint_bounds import NEAR_UNBOUNDED, JointBounds
 from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
-from .population import chain_forward, chain_jacobians, chain_positions
-from .tree import ChainView, KinematicTree, free_flyer_model, rpy_to_quaternion, with_floating_base
-
-#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
-_MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
+from .tree import (
+    ChainView,
+    KinematicTree,
+    chain_forward,
+    chain_jacobians,
+    chain_positions,
+    free_flyer_model,
+    rpy_to_quaternion,
+    with_floating_base,
+)
 
 __all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
 
@@ -37,7 +42,7 @@ _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full":
                         "planar": [0, 1, 5]}
 
 
-class Robot(JointBounds):
+class Robot(JointBounds, RobotGeometry):
     """The active joints of a URDF (a serial chain or a tree): kinematics, Jacobians, manipulability of any frame.
 
     Attributes:
@@ -527,54 +532,6 @@ class Robot(JointBounds):
         from .mass import mass_constants
 
         return mass_constants(self)
-
-    # ------------------------------------------------------------------ geometry for display
-    @property
-    def base_placement(self) -> pin.SE3:
-        """Placement (m, a new ``pin.SE3``) of the base frame in :attr:`model`'s world frame (constant)."""
-        return self._oMbase.copy()
-
-    def geometry_placements(self, geometry_model: pin.GeometryModel, q) -> list[pin.SE3]:
-        """Placements (new ``pin.SE3``, m, :attr:`model`'s world frame) of every object of ``geometry_model`` (attached
-        to :attr:`model`'s joints) at ``q`` (n,)."""
-        q = self.check_q(q)
-        gdata = pin.GeometryData(geometry_model)
-        pin.forwardKinematics(self.model, self.data, self.to_pinocchio(q))
-        pin.updateGeometryPlacements(self.model, self.data, geometry_model, gdata)
-        return [M.copy() for M in gdata.oMg]
-
-    @cached_property
-    def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for the viewer."""
-        return self._geometry_model(pin.GeometryType.VISUAL)
-
-    @cached_property
-    def collision_model(self) -> pin.GeometryModel:
-        """Collision geometry (``<collision>``) on :attr:`model`'s joints, for :class:`~evoik_pin.scene.Scene`."""
-        return self._geometry_model(pin.GeometryType.COLLISION)
-
-    def _geometry_model(self, kind) -> pin.GeometryModel:
-        """The URDF's geometry of one kind, reduced onto :attr:`model` like the model itself."""
-        if self.urdf_xml is None:  # pragma: no cover
-            raise RobotLoadError("this robot has no URDF text to read geometry from")
-        xml = _MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml
-        try:
-            geom = pin.buildGeomFromUrdfString(self._kin_model, xml, kind, package_dirs=self.package_dirs)
-        except (ValueError, RuntimeError) as exc:  # a mesh Pinocchio could not find or read
-            said = str(exc).strip()
-            why = [m for pkg, m in self.missing_packages.items() if f"package://{pkg}/" in said]
-            raise RobotLoadError(f"{self.name}: {why[0] if why else said}") from None
-        if self._locked:
-            _, geoms = reduced_model(self._kin_model, self._locked, self._q_ref_full, (geom,))
-            geom = geoms[0]
-        return geom
-
-    def _mesh_file(self, m: re.Match) -> str:
-        """The file of a ``package://pkg/rel`` URI whose package was found, else the URI (for ``package_dirs``)."""
-        folder = self.packages.get(m.group(1))
-        if folder is not None and (Path(folder) / m.group(2)).is_file():
-            return (Path(folder) / m.group(2)).as_posix()
-        return m.group(0)
 
     def __repr__(self) -> str:
         tips = f"tip={self.tip!r}" if len(self.tips) == 1 else f"tips={list(self.tips)}"

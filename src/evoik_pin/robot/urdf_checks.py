@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from ..errors import RobotLoadError, RobotLoadWarning
 
-__all__ = ["JOINT_TYPES", "Mimic", "UrdfSummary", "check_urdf"]
+__all__ = ["JOINT_TYPES", "Mimic", "check_urdf"]
 
 #: The joint types of the URDF specification.
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -27,23 +27,14 @@ class Mimic:
     offset: float
 
 
-@dataclass(frozen=True)
-class UrdfSummary:
-    """What :func:`check_urdf` learnt: the robot's name, joint types and the mimic couplings."""
-
-    name: str
-    joint_types: dict[str, str]
-    mimic: dict[str, Mimic]
-
-
-def check_urdf(root: ET.Element, where: str) -> UrdfSummary:
-    """Check the parsed URDF ``root`` (read from ``where``) and return its summary; a RobotLoadError naming
+def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
+    """Check the parsed URDF ``root`` (read from ``where``) and return its mimic couplings ``{joint: Mimic}``, each
+    resolved to the joint driving its chain of mimics; a RobotLoadError naming
     ``where``, the joint or link and what is accepted for names, joint types, links, origins, axes, limits, a
     tree shape and mimics. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
     if root.tag != "robot":
         raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
-    name = root.get("name")
-    if not name:
+    if not root.get("name"):
         raise RobotLoadError(f"{where}: the <robot> element has no name attribute (<robot name=\"...\">)")
     links = _names(root.findall("link"), "link", where)
     if not links:
@@ -82,7 +73,7 @@ def check_urdf(root: ET.Element, where: str) -> UrdfSummary:
         parent_of[child] = (parent, jname)
         _check_joint(j, jname, jtype, where)
     _check_tree(links, parent_of, where)
-    return UrdfSummary(name, types, _mimic(joints, types, where))
+    return _mimic(joints, types, where)
 
 
 def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:

@@ -6,11 +6,9 @@ from __future__ import annotations
 
 import warnings
 
-import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError
-from .robot import _fcl
 from .server import _talks
 
 __all__ = ["COLLISION_RGBA", "OBSTACLE_RGBA", "obstacle_model"]
@@ -22,23 +20,12 @@ COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
 
 
 def obstacle_model(scene) -> pin.GeometryModel:
-    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` attached to the universe of
-    ``scene.robot.model`` (boxes, spheres, cylinders and capsules along their pose's z, meshes at their scale),
-    one object per obstacle, named as the obstacle."""
-    fcl = _fcl()
+    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` on the universe of
+    ``scene.robot.model``, one object per obstacle, named as the obstacle."""
     base = scene.robot.base_placement
     geom = pin.GeometryModel()
-    for ob in scene.obstacles.values():
-        p = ob.params
-        if ob.kind == "box":
-            shape = fcl.Box(*p["size"])
-        elif ob.kind == "sphere":
-            shape = fcl.Sphere(p["radius"])
-        elif ob.kind in ("cylinder", "capsule"):
-            shape = (fcl.Cylinder if ob.kind == "cylinder" else fcl.Capsule)(p["radius"], p["length"])
-        else:
-            shape = fcl.MeshLoader().load(p["path"], np.asarray(p["scale"], dtype=float))
-        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, shape))  # base frame -> world
+    for ob in scene.obstacles.values():  # base frame -> the model's world frame
+        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, ob.shape))
     return geom
 
 
