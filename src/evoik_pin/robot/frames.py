@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pinocchio as pin
 
-__all__ = ["body_frame_names", "closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
+__all__ = ["closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
            "reduced_model", "restore_frame_names", "root_link", "unique_frame_names"]
 
 
@@ -18,15 +18,6 @@ def find_frame(model: pin.Model, name: str) -> int:
         return -1
     bodies = [i for i in ids if model.frames[i].type == pin.FrameType.BODY]
     return (bodies or ids)[0]
-
-
-def body_frame_names(model: pin.Model) -> list[str]:
-    """Names of the BODY frames (the URDF's links) in model order, each once."""
-    seen: dict[str, None] = {}
-    for f in model.frames:
-        if f.type == pin.FrameType.BODY:
-            seen.setdefault(f.name, None)
-    return list(seen)
 
 
 def root_link(model: pin.Model) -> str:
@@ -106,12 +97,10 @@ def restore_frame_names(model: pin.Model, renamed: dict[str, str]) -> None:
     for i in range(len(model.frames)):
         model.frames[i].name = renamed.get(model.frames[i].name, model.frames[i].name)
 
-def frame_names(model: pin.Model) -> list[str]:
-    """Names of every frame of ``model`` but the universe, in model order, each once."""
-    seen: dict[str, None] = {}
-    for f in list(model.frames)[1:]:
-        seen.setdefault(f.name, None)
-    return list(seen)
+def frame_names(model: pin.Model, bodies: bool = False) -> list[str]:
+    """Names of every frame of ``model`` but the universe (with ``bodies``: its BODY frames, the URDF's links), in
+    model order, each once."""
+    return list(dict.fromkeys(f.name for f in list(model.frames)[1:] if not bodies or f.type == pin.FrameType.BODY))
 
 
 def closest_names(name: str, names: list[str], count: int = 5) -> list[str]:

@@ -40,11 +40,9 @@ class JointBounds:
                     continue
                 a, b = sorted(((jlo - off) / m, (jhi - off) / m))
                 if max(lo, a) > min(hi, b):
-                    raise RobotLoadError(
-                        f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} = {m:g} "
-                        f"{fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in [{lo:g}, {hi:g}] keeps it in "
-                        f"its limits [{jlo:g}, {jhi:g}]"
-                    )
+                    raise RobotLoadError(f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} "
+                                         f"= {m:g} {fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in "
+                                         f"[{lo:g}, {hi:g}] keeps it in its limits [{jlo:g}, {jhi:g}]")
                 lo, hi = max(lo, a), min(hi, b)
             lower[k], upper[k] = lo + 0.0, hi + 0.0  # + 0.0: no -0.0 bound (NumPy's uniform refuses [0, -0])
         self.lower, self.upper = lower, upper

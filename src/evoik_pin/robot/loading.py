@@ -37,10 +37,8 @@ def example_robot_data_dir() -> Path:
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
-        raise RobotNotFoundError(
-            "the 'example-robot-data' package is not installed; install it (pip install example-robot-data) "
-            "to load arms such as panda or ur5 by name"
-        ) from exc
+        raise RobotNotFoundError("the 'example-robot-data' package is not installed; install it (pip install "
+                                 "example-robot-data) to load arms such as panda or ur5 by name") from exc
     for f in dist.files or []:
         parts = Path(str(f)).parts
         if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):

@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, FrameError, RobotLoadError
-from .frames import body_frame_names, closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
+from .frames import closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
 from .geometry_models import RobotGeometry
 from .joint_bounds import NEAR_UNBOUNDED, JointBounds
 from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
@@ -82,10 +82,7 @@ class Robot(JointBounds, RobotGeometry):
         :func:`~evoik_pin.robot.urdf_checks.check_urdf`). ``packages``: ``{pkg: folder}`` of mesh URIs,
         ``missing_packages``: ``{pkg: error}``. ``rest``: ``{joint: value}`` where joints left out of ``q`` stay
         (:meth:`locked`). The other arguments: :func:`~evoik_pin.robot.load_robot`'s."""
-        self._init_args = dict(full_model=full_model, tip=tip, base=base, joints=joints, name=name,
-                               urdf_path=urdf_path, urdf_xml=urdf_xml, package_dirs=package_dirs, mimic=mimic,
-                               tips=tips, floating_base=floating_base, base_box=base_box, packages=packages,
-                               missing_packages=missing_packages)
+        self._init_args = {k: v for k, v in locals().items() if k not in ("self", "rest")}  # for Robot.locked
         self.locked_values: dict[str, float] = dict(rest or {})
         self.name, self.urdf_path, self.urdf_xml = name, urdf_path, urdf_xml
         self.package_dirs, self.packages = list(package_dirs or []), dict(packages or {})
@@ -116,12 +113,12 @@ class Robot(JointBounds, RobotGeometry):
         base_id = 0 if base is None else find_frame(kin, base)
         if base_id < 0:
             raise FrameError(f"unknown base frame {base!r}{_suggest(base, kin)}; frames of {name}: "
-                             f"{_listed(body_frame_names(full_model))}")
+                             f"{_listed(frame_names(full_model, bodies=True))}")
         base_joint = kin.frames[base_id].parentJoint
         for t in [tip, *(tip_names or [])]:
             if find_frame(kin, t) < 0:
                 raise FrameError(f"unknown tip frame {t!r}{_suggest(t, kin)}; frames of {name}: "
-                                 f"{_listed(body_frame_names(full_model))}")
+                                 f"{_listed(frame_names(full_model, bodies=True))}")
 
         if whole:
             active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
@@ -253,17 +250,15 @@ class Robot(JointBounds, RobotGeometry):
         when there is no such frame."""
         if frame is None:
             return self._tip_id
-        fid = self._frame_ids.get(frame, -1) if isinstance(frame, str) else -1
-        if fid >= 0:
-            return fid
-        fid = find_frame(self.model, frame) if isinstance(frame, str) else -1  # a scan of every frame
-        if fid >= 0:
-            self._frame_ids[frame] = fid
-        else:
+        fid = self._frame_ids.get(frame) if isinstance(frame, str) else None
+        if fid is None:
             if not isinstance(frame, str):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
-            raise FrameError(f"{self.name} has no frame {frame!r}{_suggest(frame, self.model)} (robot.frames lists "
-                             f"its {len(self.frames)} frames)")
+            fid = self._frame_ids[frame] = find_frame(self.model, frame)  # a scan of every frame
+            if fid < 0:
+                del self._frame_ids[frame]
+                raise FrameError(f"{self.name} has no frame {frame!r}{_suggest(frame, self.model)} (robot.frames "
+                                 f"lists its {len(self.frames)} frames)")
         return fid
 
     def _frame_view(self, fid: int) -> tuple[int, np.ndarray, np.ndarray, ChainView]:
@@ -470,10 +465,9 @@ class Robot(JointBounds, RobotGeometry):
         """Jacobian row indices of a row selection: "translation", "rotation", "full", "planar" or a list."""
         if isinstance(rows, str):
             if rows not in _MANIPULABILITY_ROWS:
-                raise ConfigurationError(
-                    f"manipulability rows {rows!r} unknown; use one of {list(_MANIPULABILITY_ROWS)} or a list of "
-                    "row indices 0-5 (vx, vy, vz, wx, wy, wz)"
-                )
+                raise ConfigurationError(f"manipulability rows {rows!r} unknown; use one of "
+                                         f"{list(_MANIPULABILITY_ROWS)} or a list of row indices 0-5 (vx, vy, vz, wx, "
+                                         "wy, wz)")
             return _MANIPULABILITY_ROWS[rows]
         out = [int(r) for r in rows]
         if not out or any(r < 0 or r > 5 for r in out) or len(set(out)) != len(out):

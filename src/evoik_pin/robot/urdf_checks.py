@@ -65,11 +65,9 @@ def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
             raise RobotLoadError(f"{where}: joint {jname!r} joins link {parent!r} to itself")
         if child in parent_of:
             other = parent_of[child][1]
-            raise RobotLoadError(
-                f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r} (a closed loop); a "
-                "URDF must be a tree: every link has at most one parent joint. Model a closed chain by cutting it "
-                "open (drop one joint)"
-            )
+            raise RobotLoadError(f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r} (a "
+                                 "closed loop); a URDF must be a tree: every link has at most one parent joint. Model "
+                                 "a closed chain by cutting it open (drop one joint)")
         parent_of[child] = (parent, jname)
         _check_joint(j, jname, jtype, where)
     _check_tree(links, parent_of, where)
@@ -144,10 +142,8 @@ def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
         values[attr] = _floats(limit.get(attr), 1, f"the {attr} limit of joint {jname!r}", where, (0.0,),
                                finite=False)[0]
     if jtype in ("revolute", "prismatic") and values["lower"] > values["upper"]:
-        raise RobotLoadError(
-            f"{where}: joint {jname!r} has inverted limits: lower {values['lower']:g} > upper {values['upper']:g} "
-            "(lower must not exceed upper)"
-        )
+        raise RobotLoadError(f"{where}: joint {jname!r} has inverted limits: lower {values['lower']:g} > upper "
+                             f"{values['upper']:g} (lower must not exceed upper)")
 
 
 def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: str) -> None:
@@ -158,10 +154,8 @@ def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: 
                              "tree with one root link")
     if len(roots) > 1:
         shown = ", ".join(repr(r) for r in roots[:5]) + (", ..." if len(roots) > 5 else "")
-        raise RobotLoadError(
-            f"{where} has {len(roots)} root links (links no joint has as child): {shown}; a URDF must be one tree: "
-            "join them with joints"
-        )
+        raise RobotLoadError(f"{where} has {len(roots)} root links (links no joint has as child): {shown}; a URDF must "
+                             "be one tree: join them with joints")
     children: dict[str, list[str]] = {}
     for child, (parent, _) in parent_of.items():
         children.setdefault(parent, []).append(child)

@@ -46,10 +46,8 @@ def decode_xml(data: bytes, where: str) -> str:
     try:
         codecs.lookup(encoding)
     except LookupError:
-        raise RobotLoadError(
-            f"{where} declares an unknown encoding {encoding!r} in its <?xml ...?> declaration; use UTF-8 or a "
-            "standard name such as ISO-8859-1"
-        ) from None
+        raise RobotLoadError(f"{where} declares an unknown encoding {encoding!r} in its <?xml ...?> declaration; use "
+                             "UTF-8 or a standard name such as ISO-8859-1") from None
     source = f"{encoding} (declared in its <?xml ...?> line)" if declared else encoding
     try:
         text = data.decode(encoding)
@@ -63,10 +61,8 @@ def decode_xml(data: bytes, where: str) -> str:
     text = text.lstrip("\ufeff")
     bad = _CONTROL.search(text)  # XML allows no control characters but tab, newline and carriage return
     if bad is not None:
-        raise RobotLoadError(
-            f"{where} is a binary file, not URDF XML: control character {ord(bad.group()):#04x} at character "
-            f"{bad.start()}"
-        )
+        raise RobotLoadError(f"{where} is a binary file, not URDF XML: control character {ord(bad.group()):#04x} at "
+                             f"character {bad.start()}")
     return text
 
 
@@ -98,9 +94,8 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
         from xacrodoc import XacroDoc
         from xacrodoc import packages as xacro_packages
     except ImportError as exc:  # pragma: no cover - a dependency
-        raise RobotLoadError(
-            f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc ({exc})"
-        ) from exc
+        raise RobotLoadError(f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc "
+                             f"({exc})") from exc
     mappings = {str(k): str(v) for k, v in (args or {}).items()}
     resolver = packages if packages is not None else PackageResolver(path)
     missing: list[tuple[str, str]] = []  # (package, file naming it) of failed look-ups

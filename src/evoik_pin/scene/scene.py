@@ -37,13 +37,15 @@ class Obstacle:
     shape: object = field(default=None, compare=False, repr=False)
 
 
-def _positive(value, what: str) -> float:
+def _length(value, what: str, zero: bool = False) -> float:
+    """``value`` (m) as a finite float > 0 (>= 0 with ``zero``), or a SceneError naming ``what``."""
+    bound = ">= 0" if zero else "> 0"
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise SceneError(f"{what} must be a number > 0 (m), got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise SceneError(f"{what} must be a finite number > 0 (m), got {value!r}")
+        raise SceneError(f"{what} must be a number {bound} (m), got {value!r}") from None
+    if not (math.isfinite(v) and (v >= 0 if zero else v > 0)):
+        raise SceneError(f"{what} must be a finite number {bound} (m), got {value!r}")
     return v
 
 
@@ -99,7 +101,7 @@ class Scene:
             raise SceneError(f"box {name!r}: size must be three lengths (m), got {size!r}") from None
         if s.shape != (3,):
             raise SceneError(f"box {name!r}: size must be three lengths (x, y, z) in m, got {size!r}")
-        s = np.array([_positive(v, f"box {name!r}: size") for v in s])
+        s = np.array([_length(v, f"box {name!r}: size") for v in s])
         return self._add(name, "box", {"size": s.tolist()}, coal.Box(*s), pose)
 
     def add_sphere(self, name: str, radius, pose) -> Scene:
@@ -119,7 +121,7 @@ class Scene:
         """A sphere, cylinder or capsule of ``sizes`` (radius, and length), in m."""
         import coal
 
-        params = {key: _positive(value, f"{kind} {name!r}: {key}") for key, value in sizes.items()}
+        params = {key: _length(value, f"{kind} {name!r}: {key}") for key, value in sizes.items()}
         return self._add(name, kind, params, getattr(coal, kind.capitalize())(*params.values()), pose)
 
     def add_mesh(self, name: str, path, pose, scale=1.0) -> Scene:
@@ -132,7 +134,7 @@ class Scene:
             raise SceneError(f"mesh {name!r}: file not found: {str(path)!r}")
         sc = np.broadcast_to(np.asarray(scale, dtype=float), (3,)).copy()
         for v in sc:
-            _positive(v, f"mesh {name!r}: scale")
+            _length(v, f"mesh {name!r}: scale")
         try:
             shape = coal.MeshLoader().load(str(p), sc)
         except Exception as exc:  # assimp / coal report unreadable files with various exception types
@@ -212,16 +214,6 @@ class Scene:
             raise ConfigurationError(f"scene query: {exc}") from None
         return self.robot.to_pinocchio(q)
 
-    @staticmethod
-    def _margin_value(margin) -> float:
-        try:
-            m = float(margin)
-        except (TypeError, ValueError):
-            raise SceneError(f"margin must be a number >= 0 (m), got {margin!r}") from None
-        if not (math.isfinite(m) and m >= 0):
-            raise SceneError(f"margin must be a finite number >= 0 (m), got {margin!r}")
-        return m
-
     def _check(self, q_pin: np.ndarray, margin: float, hulls: bool, stop_at_first: bool) -> bool:
         geom, gdata = (self._hulls, self._hdata) if hulls else (self._geom, self._gdata)
         self._set_margin(gdata, margin)
@@ -236,12 +228,12 @@ class Scene:
 
     def in_collision(self, q, margin: float = 0.0) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (or closer than ``margin`` m)."""
-        return self._check(self._q(q), self._margin_value(margin), hulls=False, stop_at_first=True)
+        return self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=True)
 
     def colliding_pairs(self, q, margin: float = 0.0) -> list[tuple[str, str]]:
         """The (name, name) pairs in contact at ``q`` (closer than ``margin`` m), each once: robot links by link
         name, obstacles by their name."""
-        self._check(self._q(q), self._margin_value(margin), hulls=False, stop_at_first=False)
+        self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=False)
         pairs = [(self._object_name(a), self._object_name(b))
                  for (a, b), res in zip(self._pairs, self._gdata.collisionResults, strict=True) if res.isCollision()]
         return list(dict.fromkeys(pairs))  # once per pair of names (a link may have several shapes)
@@ -251,7 +243,7 @@ class Scene:
         (conservative, cheaper)."""
         robot = self.robot
         Q = robot.check_population(Q)
-        margin = self._margin_value(margin)
+        margin = _length(margin, "margin", zero=True)
         return np.fromiter((self._check(robot.to_pinocchio(q), margin, proxy, True) for q in Q), dtype=bool,
                            count=Q.shape[0])
 

@@ -115,10 +115,8 @@ def _probe(zmq_url: str, timeout: float) -> str:
         sock.send(b"url")
         return sock.recv().decode()
     except zmq.error.Again:
-        raise ViewerError(
-            f"no meshcat server answers at {zmq_url} within {timeout:g} s; start one with `meshcat-server`, "
-            "or pass zmq_url=None to let the Viewer start its own"
-        ) from None
+        raise ViewerError(f"no meshcat server answers at {zmq_url} within {timeout:g} s; start one with "
+                          "`meshcat-server`, or pass zmq_url=None to let the Viewer start its own") from None
     except zmq.error.ZMQError as exc:
         raise ViewerError(f"cannot reach a meshcat server at {zmq_url!r}: {exc}") from None
     finally:
