@@ -113,22 +113,21 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
     finder = xacro_packages._finder
     saved_finders, saved_cache = list(finder.finder_funcs), dict(finder.package_cache)
     failure: Exception | None = None
-    with _STDERR_LOCK:
-        with captured_stderr() as err:
-            try:
-                xacro.init_stacks(str(path) if path is not None else None)
-                finder.package_cache.clear()  # this file's packages, not those of an earlier expansion
-                finder.finder_funcs.insert(0, (find, xacro_packages.PackageNotFoundError))
-                doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
-                                           rootdir=path.parent if path is not None else None)
-                urdf = doc.dom.toxml()
-            except Exception as exc:  # xacro raises XacroException, NameError, ValueError, ExpatError, ...
-                failure = exc
-            finally:
-                xacro.init_stacks(None)
-                finder.finder_funcs[:] = saved_finders
-                finder.package_cache.clear()
-                finder.package_cache.update(saved_cache)
+    with captured_stderr() as err:  # which holds _STDERR_LOCK: xacro's state is this expansion's alone
+        try:
+            xacro.init_stacks(str(path) if path is not None else None)
+            finder.package_cache.clear()  # this file's packages, not those of an earlier expansion
+            finder.finder_funcs.insert(0, (find, xacro_packages.PackageNotFoundError))
+            doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
+                                       rootdir=path.parent if path is not None else None)
+            urdf = doc.dom.toxml()
+        except Exception as exc:  # xacro raises XacroException, NameError, ValueError, ExpatError, ...
+            failure = exc
+        finally:
+            xacro.init_stacks(None)
+            finder.finder_funcs[:] = saved_finders
+            finder.package_cache.clear()
+            finder.package_cache.update(saved_cache)
     if failure is not None:
         raise RobotLoadError(_xacro_message(failure, where, err[0], resolver, missing)) from None
     return urdf
@@ -162,10 +161,8 @@ def captured_stderr() -> Iterator[list[str]]:
     out: list[str] = []
     with _STDERR_LOCK, tempfile.TemporaryFile() as tmp:
         py_err = io.StringIO()
-        try:
+        with contextlib.suppress(AttributeError, OSError, ValueError):  # a closed or odd sys.stderr
             sys.stderr.flush()
-        except (AttributeError, OSError, ValueError):  # pragma: no cover - a closed or odd sys.stderr
-            pass
         try:
             saved = os.dup(2)
         except OSError:  # pragma: no cover - no fd 2 to redirect
