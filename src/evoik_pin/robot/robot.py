@@ -17,7 +17,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, FrameError, RobotLoadError
-from .frames import closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
+from .active_joints import MAX_CHAIN_JOINTS, choose_joints, suggest_frames
+from .frames import find_frame, frame_names, reduced_model
 from .geometry_models import RobotGeometry
 from .joint_bounds import NEAR_UNBOUNDED, JointBounds
 from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
@@ -28,15 +29,12 @@ from .tree import (
     chain_jacobians,
     chain_positions,
     free_flyer_model,
+    mass_constants,
     rpy_to_quaternion,
     with_floating_base,
 )
 
 __all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
-
-#: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
-#: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
-MAX_CHAIN_JOINTS = 200
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
@@ -102,76 +100,8 @@ class Robot(JointBounds, RobotGeometry):
         self._kin_model = kin  # the model the reduced one is cut from: full_model, or six joints + full_model
         self._full_couplings = coupling = couplings(kin, mimic)
 
-        whole = isinstance(tips, str) and tips == "all"
-        if tips is None or whole:
-            tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
-        else:
-            tip_names = _frame_list(tips)
-        if tip is None:
-            tip = tip_names[0] if tip_names else deepest_body(full_model)
-        root_name = root_link(full_model) if base is None else base
-        base_id = 0 if base is None else find_frame(kin, base)
-        if base_id < 0:
-            raise FrameError(f"unknown base frame {base!r}{_suggest(base, kin)}; frames of {name}: "
-                             f"{_listed(frame_names(full_model, bodies=True))}")
-        base_joint = kin.frames[base_id].parentJoint
-        for t in [tip, *(tip_names or [])]:
-            if find_frame(kin, t) < 0:
-                raise FrameError(f"unknown tip frame {t!r}{_suggest(t, kin)}; frames of {name}: "
-                                 f"{_listed(frame_names(full_model, bodies=True))}")
-
-        if whole:
-            active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
-        else:
-            chosen: set[int] = set()
-            for t in tip_names:
-                support = list(kin.supports[kin.frames[find_frame(kin, t)].parentJoint])
-                if base_joint not in support:
-                    raise FrameError(f"tip frame {t!r} is not downstream of base frame {root_name!r}: no kinematic "
-                                     "chain joins them from base to tip")
-                chosen.update(support[support.index(base_joint) + 1:])
-            active = sorted(chosen)
-        where = (f"the chain {root_name!r} -> {tip_names[0]!r}" if tip_names and len(tip_names) == 1
-                 else f"the joints below {root_name!r}" if whole else f"the chains {root_name!r} -> {tip_names}")
-        bad = [kin.names[j] for j in active if kin.joints[j].nv != 1]
-        if bad:
-            raise RobotLoadError(f"joints {bad} of {where} are not 1-DOF revolute or prismatic joints; only those are "
-                                 "supported (lock them with joints=[...])")
-        above_base = set(kin.supports[base_joint])
-
-        def follows(j: int) -> tuple[int | None, float, float]:
-            """(joint whose q moves physical joint j, multiplier, offset); None when j is constant."""
-            c = coupling.get(j)
-            if c is None:
-                return j, 1.0, 0.0
-            driver, m, off = c
-            return (None if driver in above_base or m == 0.0 else driver), m, off
-
-        dofs: list[int] = []
-        for j in active:
-            d = follows(j)[0]
-            if d is not None and d not in dofs:
-                dofs.append(d)
-        dof_names = [kin.names[d] for d in dofs]
-        if joints is not None:
-            unknown = [j for j in joints if j not in dof_names]
-            if unknown:
-                coupled = [f"{u!r} mimics {kin.names[coupling[kin.getJointId(u)][0]]!r}"
-                           for u in unknown if kin.existJointName(u) and kin.getJointId(u) in coupling]
-                hint = f" ({'; '.join(coupled)}: name the joint it follows)" if coupled else ""
-                raise FrameError(f"joints {unknown} are not on {where}; its joints are "
-                                 f"{', '.join(dof_names) or '(none)'}{hint}")
-            dofs = [d for d in dofs if kin.names[d] in joints]
-        # the physical joints: every joint q moves (below the base): the active ones, the joints their mimics follow
-        # and every other mimic of those, so that each link is where full_configuration(q) puts it
-        physical = [j for j in range(1, kin.njoints) if j not in above_base and follows(j)[0] in dofs]
-        if not physical:
-            raise RobotLoadError(f"{where} of {name} has no movable joint; pick another tip or base")
-        if len(physical) > MAX_CHAIN_JOINTS:
-            raise RobotLoadError(f"{where} of {name} has {len(physical)} joints; at most {MAX_CHAIN_JOINTS} are "
-                                 "supported (Pinocchio's data for an n-joint chain takes O(n^3) memory): pick nearer "
-                                 "tips, a farther base, or keep fewer joints free with joints=[...]")
-
+        chosen = choose_joints(kin, full_model, name, tip, tips, base, joints, coupling)
+        physical, dofs = chosen.physical, chosen.dofs
         q_ref = pin.neutral(kin)
         for j in range(1, kin.njoints):
             jm = kin.joints[j]
@@ -184,12 +114,12 @@ class Robot(JointBounds, RobotGeometry):
         for j, (d, m, off) in coupling.items():  # locked mimic joints sit where their driver's rest puts them
             set_joint_value(kin, q_ref, j, m * joint_value(kin, q_ref, d) + off)
         self._q_ref_full, self._locked = q_ref, [j for j in range(1, kin.njoints) if j not in physical]
-        self._above_base = above_base  # kinematic-model joints that stay put whatever q is (the base's chain)
+        self._above_base = chosen.above_base  # kinematic-model joints that stay put whatever q is
         self.model = reduced_model(kin, self._locked, q_ref) if self._locked else pin.Model(kin)
         self.data = self.model.createData()
         self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
-        self.tip, self.tips, self.base = tip, tuple(tip_names) if tip_names else (tip,), root_name
-        self._tip_id = find_frame(self.model, tip)
+        self.tip, self.tips, self.base = chosen.tip, chosen.tips, chosen.base
+        self._tip_id = find_frame(self.model, self.tip)
         self._base_id = 0 if base is None else find_frame(self.model, base)
         self.n = len(dofs)
         self.joint_names = [kin.names[d] for d in dofs]
@@ -206,7 +136,7 @@ class Robot(JointBounds, RobotGeometry):
         self._phys_idx_q = np.array([self.model.joints[k].idx_q for k in range(1, m_phys + 1)], dtype=np.intp)
         self._phys_continuous = np.array([self.model.joints[k].nq == 2 for k in range(1, m_phys + 1)])
         self.tree = KinematicTree.of(self.model, self._baseMo)
-        follow = [follows(j) for j in physical]
+        follow = chosen.follow
         self.mimic_joints = {kin.names[j]: (kin.names[d], m, off) for j, (d, m, off) in zip(physical, follow,
                                                                                           strict=True) if d != j}
         self._phys_index = np.array([dofs.index(d) for d, _, _ in follow], dtype=np.int64)
@@ -257,7 +187,7 @@ class Robot(JointBounds, RobotGeometry):
             fid = self._frame_ids[frame] = find_frame(self.model, frame)  # a scan of every frame
             if fid < 0:
                 del self._frame_ids[frame]
-                raise FrameError(f"{self.name} has no frame {frame!r}{_suggest(frame, self.model)} (robot.frames "
+                raise FrameError(f"{self.name} has no frame {frame!r}{suggest_frames(frame, self.model)} (robot.frames "
                                  f"lists its {len(self.frames)} frames)")
         return fid
 
@@ -522,37 +452,13 @@ class Robot(JointBounds, RobotGeometry):
 
     @cached_property
     def mass_constants(self):
-        """:class:`~evoik_pin.robot.mass.MassConstants` for compiled kernels (centre-of-mass goals). Read-only."""
-        from .mass import mass_constants
-
+        """:class:`~evoik_pin.robot.tree.MassConstants` for compiled kernels (centre-of-mass goals). Read-only."""
         return mass_constants(self)
 
     def __repr__(self) -> str:
         tips = f"tip={self.tip!r}" if len(self.tips) == 1 else f"tips={list(self.tips)}"
         floating = ", floating_base=True" if self.floating_base else ""
         return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, {tips}{floating})"
-
-
-def _frame_list(tips) -> list[str]:
-    """``tips`` as a non-empty list of frame names, or a FrameError."""
-    if isinstance(tips, str) or not hasattr(tips, "__iter__"):
-        raise FrameError(f"tips must be a list of frame names or 'all', got {tips!r}")
-    out = list(tips)
-    if not out or not all(isinstance(t, str) for t in out):
-        raise FrameError(f"tips must be a non-empty list of frame names (strings), got {tips!r}")
-    return out
-
-
-def _listed(names: list[str], most: int = 40) -> str:
-    """The first ``most`` names, comma-separated, and how many more there are."""
-    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
-    return ", ".join(names[:most]) + more
-
-
-def _suggest(name, model: pin.Model) -> str:
-    """' (closest: a, b)' for a frame name not found in ``model``, or ''."""
-    close = closest_names(str(name), frame_names(model))
-    return f" (closest: {', '.join(close)})" if close else ""
 
 
 def _check_fixed_root(model: pin.Model, name: str) -> None:

@@ -1,4 +1,5 @@
-"""The kinematic tree of a robot's active joints: topology, folded constants, frames on joints, a floating base.
+"""The kinematic tree of a robot's active joints: topology, folded constants (and masses), frames on joints, a
+floating base, the kinematics of populations.
 
 The m physical joints of a (reduced) Pinocchio model are its joints 1..m in topological order. For joint k,
 ``parent[k]`` (-1 at the root) and its placement ``(FR[k], Fp[k])`` in its parent's *folded* frame: every joint
@@ -23,8 +24,9 @@ from ..lie import rotation_to_z
 from .frames import restore_frame_names, unique_frame_names
 from .joints import joint_motions
 
-__all__ = ["FLOATING_BASE_BOUNDS", "FLOATING_BASE_JOINTS", "ChainView", "KinematicTree", "chain_forward",
-           "chain_jacobians", "chain_positions", "free_flyer_model", "rpy_to_quaternion", "with_floating_base"]
+__all__ = ["FLOATING_BASE_BOUNDS", "FLOATING_BASE_JOINTS", "ChainView", "KinematicTree", "MassConstants",
+           "chain_forward", "chain_jacobians", "chain_positions", "free_flyer_model", "mass_constants",
+           "rpy_to_quaternion", "with_floating_base"]
 
 #: Names of the six joints a floating base adds at the front of q (rotation Rz(yaw) Ry(pitch) Rx(roll)).
 FLOATING_BASE_JOINTS = ("floating_base_x", "floating_base_y", "floating_base_z", "floating_base_yaw",
@@ -185,6 +187,44 @@ class KinematicTree:
         for g, j in enumerate(joints_of_frames):
             mask[g, self.ancestors(int(j))] = True
         return mask
+
+
+@dataclass(frozen=True)
+class MassConstants:
+    """The masses of a robot's m physical joints: ``masses`` (m,) kg, ``moments`` (m, 3) kg m (``m_k c_k`` in the
+    joint's folded frame), ``subtree`` (m,) kg (a joint's body and all below), ``fixed_mass`` kg and ``fixed_moment``
+    (3,) kg m (base frame) of the bodies no active joint moves, ``total`` kg."""
+
+    masses: np.ndarray
+    moments: np.ndarray
+    subtree: np.ndarray
+    fixed_mass: float
+    fixed_moment: np.ndarray
+    total: float
+
+
+def mass_constants(robot) -> MassConstants:
+    """The :class:`MassConstants` of ``robot``, from its reduced model's inertias (which hold locked links' bodies).
+    Bodies the reduction leaves on the universe are a constant first moment; bodies welded to the world in
+    ``full_model`` are left out, as ``pin.centerOfMass(full_model, ...)`` does."""
+    model, tree = robot.model, robot.tree
+    m = tree.m
+    masses = np.array([model.inertias[k + 1].mass for k in range(m)], dtype=float)
+    moments = np.empty((m, 3))
+    for k in range(m):
+        inertia = model.inertias[k + 1]
+        moments[k] = tree.B[k].T @ (inertia.mass * np.asarray(inertia.lever))
+    subtree = masses.copy()
+    for k in range(m - 1, -1, -1):  # a joint comes after its parent
+        if tree.parent[k] >= 0:
+            subtree[tree.parent[k]] += subtree[k]
+    held, welded = model.inertias[0], robot.full_model.inertias[0]
+    fixed_mass = float(held.mass - welded.mass)
+    first = held.mass * np.asarray(held.lever) - welded.mass * np.asarray(welded.lever)  # world frame
+    fixed_moment = tree.base_R @ first + fixed_mass * tree.base_p
+    if abs(fixed_mass) < 1e-12:  # the same bodies on both sides: no round-off left over
+        fixed_mass, fixed_moment = 0.0, np.zeros(3)
+    return MassConstants(masses, moments, subtree, fixed_mass, fixed_moment, float(masses.sum() + fixed_mass))
 
 
 def _on_chain(view: ChainView, X: np.ndarray) -> np.ndarray:
