@@ -57,10 +57,6 @@ class SceneFile:
     obstacles: list[tuple[str, str, dict, pin.SE3]]
 
 
-def _format(path: Path) -> str:
-    return data_format(path, f"scene file {str(path)!r}", SceneError)
-
-
 def _number(value, what: str, positive: bool = False) -> float:
     """A finite number (int or float, not a bool nor a string), > 0 when ``positive``."""
     if (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
@@ -176,7 +172,7 @@ def _clean(values) -> list[float]:
 def write_scene(scene, path: str | os.PathLike) -> Path:
     """Write ``scene`` to ``path`` (YAML or JSON; mesh paths relative to its folder when below it); return the path."""
     path = Path(os.fspath(path)).expanduser()
-    fmt = _format(path)
+    fmt = data_format(path, f"scene file {str(path)!r}", SceneError)
     data: dict = {"units": "m", "self_collision": scene.self_collision}
     if scene.srdf is not None and scene.srdf != getattr(scene.robot, "srdf", None):
         data["srdf"] = _relative(Path(scene.srdf), path.parent)

@@ -20,11 +20,6 @@ from .geometry import as_placement, convex_hulls, robot_collision_model, self_co
 
 __all__ = ["Obstacle", "Scene"]
 
-#: Obstacle kinds and the size parameters each takes (m).
-OBSTACLE_KINDS = {"box": ("size",), "sphere": ("radius",), "cylinder": ("radius", "length"),
-                  "capsule": ("radius", "length"), "mesh": ("path", "scale")}
-
-
 @dataclass(frozen=True)
 class Obstacle:
     """One obstacle: ``kind`` (box, sphere, cylinder, capsule, mesh), its parameters (``size`` (3,) m for a box,
