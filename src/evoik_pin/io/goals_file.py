@@ -30,7 +30,7 @@ from ..goals import Goal, bind, is_goal_list
 from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, number, unknown_keys
 from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from ..goals.registry import kind_classes
-from .datafile import data_format, dump_data, read_data, write_text
+from .datafile import data_format, read_data, write_data
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
 
@@ -283,7 +283,7 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
     the path; :func:`load_goals` reads it back bit for bit. ``robot``: a name or a Robot (its name, and its
     ``floating_base`` unless given); ``floating_base``, ``tips``: written as given."""
     path = Path(os.fspath(path)).expanduser()
-    fmt = data_format(path, f"goals file {str(path)!r}", GoalsFileError)
+    data_format(path, f"goals file {str(path)!r}", GoalsFileError)  # before any other check
     goals = list(goals) if isinstance(goals, (list, tuple)) else goals
     several = isinstance(goals, list) and bool(goals) and all(isinstance(g, (list, tuple)) for g in goals)
     problems = [list(g) for g in goals] if several else [goals]
@@ -305,7 +305,7 @@ def save_goals(goals, path: str | os.PathLike, robot=None, floating_base: bool |
     lists = [[_entry(g) for g in problem] for problem in problems]
     data["problems" if several else "goals"] = lists if several else lists[0]
     header = "# evoik_pin goals (m and rad, in the robot's base frame; format: evoik_pin/io/goals_file.py)\n"
-    return write_text(path, dump_data(data, fmt, header), "goals file", GoalsFileError)
+    return write_data(path, data, header, "goals file", GoalsFileError)
 
 
 def goal_kind_name(goal: Goal) -> str:

@@ -35,7 +35,7 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import Flow, data_format, dump_data, read_data, write_text
+from .datafile import Flow, read_data, write_data
 
 __all__ = ["SceneFile", "read_scene", "write_scene"]
 
@@ -172,7 +172,6 @@ def _clean(values) -> list[float]:
 def write_scene(scene, path: str | os.PathLike) -> Path:
     """Write ``scene`` to ``path`` (YAML or JSON; mesh paths relative to its folder when below it); return the path."""
     path = Path(os.fspath(path)).expanduser()
-    fmt = data_format(path, f"scene file {str(path)!r}", SceneError)
     data: dict = {"units": "m", "self_collision": scene.self_collision}
     if scene.srdf is not None and scene.srdf != getattr(scene.robot, "srdf", None):
         data["srdf"] = _relative(Path(scene.srdf), path.parent)
@@ -191,8 +190,7 @@ def write_scene(scene, path: str | os.PathLike) -> Path:
         obstacles.append(entry)
     data["obstacles"] = obstacles
     header = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
-    write_text(path, dump_data(data, fmt, header), "scene file", SceneError)
-    return path
+    return write_data(path, data, header, "scene file", SceneError)
 
 
 def _relative(file: Path, folder: Path) -> str:
