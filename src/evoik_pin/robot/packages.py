@@ -145,13 +145,8 @@ class PackageResolver:
 
     def _search(self, pkg: str) -> Path | None:
         """Rules (a) to (d) for ``pkg``, then for its sibling names (none for an aliased package)."""
-        found = self._search_name(pkg)
-        if found is None and pkg not in self.aliases.values():
-            for sibling in sibling_names(pkg):
-                found = self._search_name(sibling)
-                if found is not None:
-                    break
-        return found
+        names = [pkg] if pkg in self.aliases.values() else [pkg, *sibling_names(pkg)]
+        return next((found for found in map(self._search_name, names) if found is not None), None)
 
     def _search_name(self, pkg: str) -> Path | None:
         if not pkg or "/" in pkg or pkg in (".", ".."):

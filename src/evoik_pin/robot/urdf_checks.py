@@ -76,17 +76,15 @@ def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
 
 def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:
     """The ``name`` of each element; a RobotLoadError for a missing or repeated one."""
-    names: list[str] = []
-    seen: set[str] = set()
+    names: dict[str, None] = {}  # in order, each once
     for i, el in enumerate(elements):
         n = el.get("name")
         if not n:
             raise RobotLoadError(f"{where}: <{kind}> number {i + 1} has no name attribute")
-        if n in seen:
+        if n in names:
             raise RobotLoadError(f"{where}: two {kind}s are named {n!r}; {kind} names must be unique")
-        seen.add(n)
-        names.append(n)
-    return names
+        names[n] = None
+    return list(names)
 
 
 def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...] | None = None,
@@ -137,10 +135,8 @@ def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
                                      "requires effort and velocity (lower and upper default to 0)")
     if limit is None:
         return
-    values = {}
-    for attr in ("lower", "upper", "effort", "velocity"):
-        values[attr] = _floats(limit.get(attr), 1, f"the {attr} limit of joint {jname!r}", where, (0.0,),
-                               finite=False)[0]
+    values = {attr: _floats(limit.get(attr), 1, f"the {attr} limit of joint {jname!r}", where, (0.0,), finite=False)[0]
+              for attr in ("lower", "upper", "effort", "velocity")}
     if jtype in ("revolute", "prismatic") and values["lower"] > values["upper"]:
         raise RobotLoadError(f"{where}: joint {jname!r} has inverted limits: lower {values['lower']:g} > upper "
                              f"{values['upper']:g} (lower must not exceed upper)")
@@ -159,8 +155,7 @@ def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: 
     children: dict[str, list[str]] = {}
     for child, (parent, _) in parent_of.items():
         children.setdefault(parent, []).append(child)
-    seen = {roots[0]}
-    stack = [roots[0]]
+    seen, stack = {roots[0]}, [roots[0]]
     while stack:
         for c in children.get(stack.pop(), ()):
             if c not in seen:

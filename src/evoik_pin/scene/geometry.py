@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from ..errors import SceneError
 
-__all__ = ["adjacent_joints", "convex_hulls", "robot_collision_model", "self_collision_pairs"]
+__all__ = ["convex_hulls", "robot_collision_model", "self_collision_pairs"]
 
 
 def robot_collision_model(robot) -> pin.GeometryModel:
@@ -22,15 +22,11 @@ def robot_collision_model(robot) -> pin.GeometryModel:
     return geom.copy()
 
 
-def adjacent_joints(model: pin.Model) -> set[tuple[int, int]]:
-    """Pairs (i, j), i < j, of joints of ``model`` that are parent and child."""
-    return {(min(j, int(model.parents[j])), max(j, int(model.parents[j]))) for j in range(1, model.njoints)}
-
-
 def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> list[tuple[int, int]]:
     """Index pairs (a, b), a < b, of the robot's collision objects worth checking: not on the same or adjacent joints
     (rigidly attached, or touching by construction), nor disabled by the SRDF."""
-    adjacent = adjacent_joints(robot.model)
+    parents = robot.model.parents
+    adjacent = {(min(j, int(parents[j])), max(j, int(parents[j]))) for j in range(1, robot.model.njoints)}
     objects = geom.geometryObjects
     pairs = []
     for a in range(geom.ngeoms):
