@@ -14,7 +14,7 @@ DATA_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
 
 
 class Flow(dict):
-    """A mapping :func:`dump_data` writes on one line in YAML (e.g. a pose)."""
+    """A mapping :func:`write_data` writes on one line in YAML (e.g. a pose)."""
 
 
 def data_format(path: Path, where: str, error: type[Exception]) -> str:
