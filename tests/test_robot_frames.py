@@ -7,7 +7,7 @@ import pytest
 from urdf_helpers import yourdfpy_pose
 
 from evoik_pin.robot import example_robot_data_dir, load_robot
-from evoik_pin.robot.frames import body_frame_names, deepest_body, find_frame, reduced_model, root_link
+from evoik_pin.robot.frames import deepest_body, find_frame, frame_names, reduced_model, root_link
 
 
 def _joint(name: str, kind: str, parent: str, child: str, xyz: str, axis: str = "0 0 1") -> str:
@@ -35,7 +35,7 @@ def test_find_frame_prefers_the_body_frame():
 
 def test_body_frames_root_and_deepest():
     model = pin.buildModelFromXML(URDF)
-    assert body_frame_names(model) == ["a", "b", "c", "tool"]
+    assert frame_names(model, bodies=True) == ["a", "b", "c", "tool"]
     assert root_link(model) == "a"
     assert deepest_body(model) == "tool"  # the last deepest: the tool fixed after link c
 

@@ -69,9 +69,9 @@ def _reference_check(robot, scene, q, margin=0.0):
         if ja == 0:
             continue
         for ob in scene.obstacles.values():
-            shape = scene._shapes[ob.name]
             res = coal.CollisionResult()
-            if coal.collide(objs[a].geometry, tf(gdata.oMg[a]), shape, tf(robot.base_placement * ob.pose), req, res):
+            if coal.collide(objs[a].geometry, tf(gdata.oMg[a]), ob.shape, tf(robot.base_placement * ob.pose), req,
+                            res):
                 return True
     return False
 

@@ -111,12 +111,14 @@ def test_the_shipped_panda_shelf_equals_the_example_scene(panda):
 
 
 def test_the_file_format_knows_every_obstacle_kind_of_the_scene():
-    """The file module does not import the Scene (it parses into plain data): its kinds are held equal here."""
-    from evoik_pin.scene.scene import OBSTACLE_KINDS
+    """The file module does not import the Scene (it parses into plain data): each kind it reads is a Scene.add_<kind>
+    taking the kind's keys, and every add_<kind> is a kind it reads."""
+    import inspect
 
-    assert list(file.KIND_KEYS) == list(OBSTACLE_KINDS)
+    assert {m.removeprefix("add_") for m in dir(Scene) if m.startswith("add_")} == set(file.KIND_KEYS)
     for kind, (required, optional) in file.KIND_KEYS.items():
-        assert set(required + optional) == set(OBSTACLE_KINDS[kind])
+        taken = set(inspect.signature(getattr(Scene, f"add_{kind}")).parameters) - {"self", "name", "pose"}
+        assert set(required + optional) == taken
 
 
 def test_reading_a_file_gives_plain_checked_data():

@@ -1,8 +1,5 @@
-"""YAML and JSON data files, read and written the same way by every file format of evoik_pin (scene files,
-goals files): the format chosen by the extension, syntax errors with their line and column, files read as UTF-8.
-
-Each function takes the ``where`` text its errors start with (e.g. ``"scene file 'a.yaml'"``) and the
-:mod:`evoik_pin.errors` class to raise, so a format's errors keep their own class and wording.
+"""YAML and JSON data files, read and written alike by evoik_pin's file formats (format by extension, syntax errors
+with line and column, UTF-8). Each function takes the ``where`` its errors start with and the error class to raise.
 """
 
 from __future__ import annotations
@@ -10,14 +7,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "dump_data", "parse_data", "read_data", "write_text"]
+__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "read_data", "write_data"]
 
 #: File extensions and the format each selects.
 DATA_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
 
 
 class Flow(dict):
-    """A mapping :func:`dump_data` writes on one line in YAML (e.g. a pose)."""
+    """A mapping :func:`write_data` writes on one line in YAML (e.g. a pose)."""
 
 
 def data_format(path: Path, where: str, error: type[Exception]) -> str:
@@ -28,10 +25,18 @@ def data_format(path: Path, where: str, error: type[Exception]) -> str:
     return fmt
 
 
-def parse_data(path: Path, text: str, where: str, error: type[Exception]):
-    """The data of ``text`` (dicts, lists, numbers, strings), parsed as ``path``'s extension says (YAML with
-    PyYAML's safe loader); ``error`` with the line and column of a syntax error."""
-    if data_format(path, where, error) == "json":
+def read_data(path: Path, where: str, error: type[Exception]):
+    """The data of the file ``path`` (dicts, lists, numbers, strings), parsed as its extension says (YAML with
+    PyYAML's safe loader); ``error`` for a missing or unreadable file, and with the line and column of a syntax
+    error."""
+    fmt = data_format(path, where, error)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error(f"{where}: not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(f"{where}: cannot read it: {exc}") from None
+    if fmt == "json":
         try:
             return json.loads(text)
         except json.JSONDecodeError as exc:
@@ -52,34 +57,20 @@ def parse_data(path: Path, text: str, where: str, error: type[Exception]):
         raise error(f"{where}: YAML error: {exc}") from None
 
 
-def read_data(path: Path, where: str, error: type[Exception]):
-    """The parsed data of the file ``path`` (:func:`parse_data`); ``error`` for a missing or unreadable file."""
-    data_format(path, where, error)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise error(f"{where}: not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise error(f"{where}: cannot read it: {exc}") from None
-    return parse_data(path, text, where, error)
+def write_data(path: Path, data, header: str, what: str, error: type[Exception]) -> Path:
+    """Write ``data`` to ``path`` (UTF-8) as its extension says and return the path: YAML keeps the mappings' order,
+    writes lists of numbers and :class:`Flow` mappings on one line and starts with ``header`` (comment lines).
+    ``error`` ("cannot write the {what} ...") when it cannot be written."""
+    if data_format(path, f"{what} {str(path)!r}", error) == "json":
+        text = json.dumps(data, indent=2) + "\n"
+    else:
+        import yaml
 
+        class Dumper(yaml.SafeDumper):
+            pass
 
-def dump_data(data, fmt: str, header: str = "") -> str:
-    """``data`` as the text of a ``fmt`` file (``"yaml"`` or ``"json"``): YAML keeps the mappings' order, writes
-    lists of numbers and :class:`Flow` mappings on one line and starts with ``header`` (comment lines)."""
-    if fmt == "json":
-        return json.dumps(data, indent=2) + "\n"
-    import yaml
-
-    class Dumper(yaml.SafeDumper):
-        pass
-
-    Dumper.add_representer(Flow, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True))
-    return header + yaml.dump(data, Dumper=Dumper, sort_keys=False, default_flow_style=None)
-
-
-def write_text(path: Path, text: str, what: str, error: type[Exception]) -> Path:
-    """Write ``text`` to ``path`` (UTF-8) and return it; ``error`` ("cannot write the {what} ...") otherwise."""
+        Dumper.add_representer(Flow, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True))
+        text = header + yaml.dump(data, Dumper=Dumper, sort_keys=False, default_flow_style=None)
     try:
         path.write_text(text, encoding="utf-8")
     except OSError as exc:

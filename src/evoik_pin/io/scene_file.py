@@ -1,11 +1,6 @@
-"""Scene files: a :class:`~evoik_pin.scene.Scene`'s obstacles as YAML or JSON (``Scene.from_file``, ``Scene.to_file``).
-
-This module is the file format only: :func:`read_scene` parses and checks a file into plain data
-(:class:`SceneFile`), which ``Scene.from_file`` builds a scene from; :func:`write_scene` writes any object with a
-scene's attributes. It does not import :mod:`evoik_pin.scene.scene` (the Scene reads files, not the other way round).
-
-The format is chosen by the extension: ``.yaml`` / ``.yml`` (read with PyYAML's safe loader) or ``.json``. Lengths
-are in metres and angles in radians, every pose in the robot's base frame (the frame of ``Robot.fk``)::
+"""Scene files: a :class:`~evoik_pin.scene.Scene`'s obstacles as YAML or JSON by the extension: :func:`read_scene`
+checks a file into plain data (:class:`SceneFile`), :func:`write_scene` writes a scene. Lengths in m, angles in rad,
+poses in the robot's base frame::
 
     units: m                 # optional; m is the only unit accepted
     self_collision: true     # optional (default true): also check the robot against itself
@@ -24,11 +19,8 @@ are in metres and angles in radians, every pose in the robot's base frame (the f
         scale: 0.001           # optional (default 1): one factor or three (a mesh in mm -> m)
         pose: [[1, 0, 0, 0.5], [0, 1, 0, -0.3], [0, 0, 1, 0.0], [0, 0, 0, 1]]   # or a 4 x 4 homogeneous matrix
 
-``obstacles`` may be missing or empty (self-collision only). Unknown keys are errors (a misspelt ``raduis`` is not
-silently ignored). Every error is a :class:`~evoik_pin.errors.SceneError` naming the file, the obstacle (index
-from 0 and name) and what is wrong; the scene is built only once the whole file has been read, so a bad file
-leaves nothing half-built. :func:`write_scene` writes the same format (poses as ``xyz`` + ``rpy``, mesh paths
-relative to the file's folder when the mesh lies below it); reading it back gives the same obstacles.
+Unknown keys are errors; every error is a :class:`~evoik_pin.errors.SceneError` naming the file, the obstacle
+(index from 0 and name) and what is wrong.
 """
 
 from __future__ import annotations
@@ -43,12 +35,11 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import Flow, data_format, dump_data, read_data, write_text
+from .datafile import Flow, read_data, write_data
 
 __all__ = ["SceneFile", "read_scene", "write_scene"]
 
-#: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional); the
-#: kinds are the Scene's (``scene.OBSTACLE_KINDS``; a test holds them equal).
+#: Keys an obstacle entry takes besides ``name``, ``kind`` and ``pose``, per kind (required, optional).
 KIND_KEYS = {"box": (("size",), ()), "sphere": (("radius",), ()), "cylinder": (("radius", "length"), ()),
              "capsule": (("radius", "length"), ()), "mesh": (("path",), ("scale",))}
 _TOP_KEYS = ("units", "self_collision", "srdf", "obstacles")
@@ -57,18 +48,13 @@ _POSE_HELP = "pose: {xyz: [x, y, z] (m), rpy: [roll, pitch, yaw] (rad, optional)
 
 @dataclass(frozen=True)
 class SceneFile:
-    """What a scene file holds, checked: ``path`` (the file), ``self_collision``, ``srdf`` (a path, relative ones
-    resolved against the file's folder, or None) and ``obstacles``, each ``(name, kind, keyword arguments of
-    Scene.add_<kind>, pose (pin.SE3, base frame))`` in file order."""
+    """A scene file, checked: ``self_collision``, ``srdf`` (resolved against the file's folder, or None) and
+    ``obstacles``, each ``(name, kind, Scene.add_<kind> keyword arguments, pose (pin.SE3))`` in file order."""
 
     path: Path
     self_collision: bool
     srdf: Path | None
     obstacles: list[tuple[str, str, dict, pin.SE3]]
-
-
-def _format(path: Path) -> str:
-    return data_format(path, f"scene file {str(path)!r}", SceneError)
 
 
 def _number(value, what: str, positive: bool = False) -> float:
@@ -145,8 +131,7 @@ def _obstacle(entry, k: int, folder: Path, seen: dict[str, int]) -> tuple[str, s
 
 
 def read_scene(path: str | os.PathLike) -> SceneFile:
-    """The self-collision setting, SRDF and obstacles of the scene file ``path`` (format: the module docstring),
-    checked. SceneError naming the file, the obstacle and the problem."""
+    """The scene file ``path`` (format: the module docstring), checked; SceneError."""
     path = Path(os.fspath(path)).expanduser()
     where = f"scene file {str(path)!r}"
     data = read_data(path, where, SceneError)
@@ -185,11 +170,8 @@ def _clean(values) -> list[float]:
 
 
 def write_scene(scene, path: str | os.PathLike) -> Path:
-    """Write ``scene`` (a :class:`~evoik_pin.scene.Scene`: its ``robot``, ``self_collision``, ``srdf`` and
-    ``obstacles`` are read) to ``path`` (YAML or JSON by the extension) and return the path; see the module
-    docstring."""
+    """Write ``scene`` to ``path`` (YAML or JSON; mesh paths relative to its folder when below it); return the path."""
     path = Path(os.fspath(path)).expanduser()
-    fmt = _format(path)
     data: dict = {"units": "m", "self_collision": scene.self_collision}
     if scene.srdf is not None and scene.srdf != getattr(scene.robot, "srdf", None):
         data["srdf"] = _relative(Path(scene.srdf), path.parent)
@@ -208,8 +190,7 @@ def write_scene(scene, path: str | os.PathLike) -> Path:
         obstacles.append(entry)
     data["obstacles"] = obstacles
     header = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
-    write_text(path, dump_data(data, fmt, header), "scene file", SceneError)
-    return path
+    return write_data(path, data, header, "scene file", SceneError)
 
 
 def _relative(file: Path, folder: Path) -> str:

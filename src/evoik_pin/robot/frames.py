@@ -1,16 +1,12 @@
-"""Frame look-up in a Pinocchio model: names to ids, the URDF's root link, its deepest link, whether its movable
-joints branch (a tree, not a serial chain); and locking joints.
-
-URDF links become BODY frames; a joint and a link may share a name, and then the BODY frame is the one
-meant (a tip or a base is a link). The look-up helpers only read the model's frame list (no ``Data``, no
-kinematics). :func:`reduced_model` is ``pin.buildReducedModel`` made safe for such shared names.
+"""Frame look-up in a Pinocchio model (names to ids, root and deepest links, whether the joints branch) and
+:func:`reduced_model`. A joint and a link may share a name; the BODY frame (the link) is then the one meant.
 """
 
 from __future__ import annotations
 
 import pinocchio as pin
 
-__all__ = ["body_frame_names", "closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
+__all__ = ["closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
            "reduced_model", "restore_frame_names", "root_link", "unique_frame_names"]
 
 
@@ -24,15 +20,6 @@ def find_frame(model: pin.Model, name: str) -> int:
     return (bodies or ids)[0]
 
 
-def body_frame_names(model: pin.Model) -> list[str]:
-    """Names of the BODY frames (the URDF's links) in model order, each once."""
-    seen: dict[str, None] = {}
-    for f in model.frames:
-        if f.type == pin.FrameType.BODY:
-            seen.setdefault(f.name, None)
-    return list(seen)
-
-
 def root_link(model: pin.Model) -> str:
     """Name of the URDF's root link (the first body frame fixed to the universe)."""
     for f in model.frames:
@@ -42,8 +29,7 @@ def root_link(model: pin.Model) -> str:
 
 
 def deepest_body(model: pin.Model) -> str:
-    """Name of the body frame with the most joints above it (the last such one: a tool link fixed after the
-    last joint's link wins over that link)."""
+    """Name of the body frame with the most joints above it (the last such one)."""
     best, depth = model.frames[0].name, -1
     for f in model.frames:
         if f.type == pin.FrameType.BODY:
@@ -54,14 +40,9 @@ def deepest_body(model: pin.Model) -> str:
 
 
 def is_branched(model: pin.Model, coupling: dict[int, tuple[int, float, float]]) -> bool:
-    """True when the movable joints of ``model`` form a real tree: two of its links are each moved by a joint
-    that does not move the other (legs and arms, or fingers moving on their own), so that no single chain holds
-    every joint. False for a serial chain, also one ending in a gripper whose fingers follow one joint.
-
-    ``coupling``: ``{mimic joint id: (followed joint id, multiplier, offset)}``
-    (:func:`~evoik_pin.robot.joints.couplings`); a mimic joint counts as the joint it follows, so a second
-    finger that mimics the first is no branch of its own.
-    """
+    """True when no single chain holds every movable joint of ``model`` (legs and arms, independent fingers);
+    False for a serial chain, also one ending in fingers that mimic one joint (``coupling``:
+    :func:`~evoik_pin.robot.joints.couplings`; a mimic joint counts as the joint it follows)."""
     def moved_by(j: int) -> frozenset[int]:  # the independent joints that move joint j's link
         return frozenset(coupling.get(k, (k,))[0] for k in list(model.supports[j])[1:])
 
@@ -71,15 +52,9 @@ def is_branched(model: pin.Model, coupling: dict[int, tuple[int, float, float]])
 
 
 def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: tuple = ()):
-    """``pin.buildReducedModel(model, [geometry_models,] locked, q_ref)`` for models whose frames share names.
-
-    Pinocchio's reduction looks frames up by name alone, and fails with "Several frames match the filter" when
-    a joint and a link share one (anymal_c's ``LF_HAA`` joint and link, b1-z1's fixed joint and link
-    ``gripperStator``), whichever frame the user asked for. So the reduction runs on a copy in which every
-    non-BODY frame (and its joint) with a repeated name is renamed uniquely (:func:`unique_frame_names`), and the
-    names are put back in the result. Returns the reduced model, or (model, list of geometry models) when
-    ``geometry_models`` are given.
-    """
+    """``pin.buildReducedModel(model, [geometry_models,] locked, q_ref)`` safe for frames sharing a name (Pinocchio
+    fails with "Several frames match the filter", e.g. anymal_c's ``LF_HAA``): it runs on
+    :func:`unique_frame_names`' copy. Returns the model, or (model, list of geometry models) when given some."""
     work, renamed = unique_frame_names(model)
     if geometry_models:
         out, geoms = pin.buildReducedModel(work, list(geometry_models), locked, q_ref)
@@ -91,8 +66,7 @@ def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: t
 
 def unique_frame_names(model: pin.Model) -> tuple[pin.Model, dict[str, str]]:
     """(model, {}) when no two frames share a name; else (a copy in which every non-BODY frame with a repeated name,
-    and its joint for a JOINT frame, has a unique alias, {alias: name}): what Pinocchio's algorithms that look
-    frames up by name alone (``buildReducedModel``, ``appendModel``) need. :func:`restore_frame_names` undoes it."""
+    and a JOINT frame's joint, has a unique alias, {alias: name}). :func:`restore_frame_names` undoes it."""
     counts: dict[str, int] = {}
     for f in model.frames:
         counts[f.name] = counts.get(f.name, 0) + 1
@@ -123,18 +97,14 @@ def restore_frame_names(model: pin.Model, renamed: dict[str, str]) -> None:
     for i in range(len(model.frames)):
         model.frames[i].name = renamed.get(model.frames[i].name, model.frames[i].name)
 
-def frame_names(model: pin.Model) -> list[str]:
-    """Names of every frame of ``model`` but the universe (links, joint frames, fixed and operational frames), in
+def frame_names(model: pin.Model, bodies: bool = False) -> list[str]:
+    """Names of every frame of ``model`` but the universe (with ``bodies``: its BODY frames, the URDF's links), in
     model order, each once."""
-    seen: dict[str, None] = {}
-    for f in list(model.frames)[1:]:
-        seen.setdefault(f.name, None)
-    return list(seen)
+    return list(dict.fromkeys(f.name for f in list(model.frames)[1:] if not bodies or f.type == pin.FrameType.BODY))
 
 
 def closest_names(name: str, names: list[str], count: int = 5) -> list[str]:
-    """Up to ``count`` of ``names`` closest to ``name`` (difflib's ratio; a name containing ``name`` or contained in
-    it counts as close too), closest first."""
+    """Up to ``count`` of ``names`` closest to ``name`` (difflib; containing or contained names too), closest first."""
     import difflib
 
     close = difflib.get_close_matches(name, names, n=count, cutoff=0.6)

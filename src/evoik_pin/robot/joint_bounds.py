@@ -1,12 +1,5 @@
-"""A robot's joint bounds: the search box of ``q`` (rad or m; a floating base's first three entries in m) and the
-checks of joint vectors and populations against the robot's shape, as :class:`JointBounds`, a base class of
-:class:`~evoik_pin.robot.Robot`.
-
-The box starts at the URDF's limits (narrowed so every mimic joint stays inside its own), a floating base's position
-box comes from ``base_box``, and :meth:`JointBounds.sampling_box` narrows near-unbounded joints
-(:data:`NEAR_UNBOUNDED`) to where searches find answers. The methods read the attributes the Robot sets up: ``name``,
-``n``, ``joint_names``, ``revolute``, ``floating_base``, ``tree`` and the kinematic model's joints (``_kin_model``,
-``_dof_ids``).
+"""A robot's joint bounds: the search box of ``q`` (rad or m) and the checks of joint vectors and populations, as
+:class:`JointBounds`, a base class of :class:`~evoik_pin.robot.Robot` (whose attributes its methods read).
 """
 
 from __future__ import annotations
@@ -18,23 +11,21 @@ from .joints import DEFAULT_PRISMATIC_RANGE, joint_limits
 
 __all__ = ["NEAR_UNBOUNDED", "JointBounds"]
 
-#: A joint whose bound reaches this far (``|lower|`` or ``|upper|`` >= 1000 m or rad) is near-unbounded: URDFs give
-#: the virtual joints of mobile bases limits like +-999999 to mean "none" (limits beyond 1e10, and absent ones,
-#: are already read as none by :class:`~evoik_pin.robot.Robot`). No real arm joint travels 1 km or 160 turns.
+#: A joint whose bound reaches this far (m or rad) is near-unbounded: URDFs give mobile bases' virtual joints limits
+#: like +-999999 to mean "none"; no real arm joint travels 1 km or 160 turns.
 NEAR_UNBOUNDED = 1e3
 
 
 class JointBounds:
-    """The search bounds ``lower``, ``upper`` (n,) of a robot's joint vector (rad or m) and the checks of joint
-    vectors against them and against the robot's shape; :class:`~evoik_pin.robot.Robot` inherits them."""
+    """The search bounds ``lower``, ``upper`` (n,) (rad or m) and the checks of joint vectors."""
 
     lower: np.ndarray
     upper: np.ndarray
 
     # ------------------------------------------------------------------ the bounds a robot starts with
     def _set_default_bounds(self, coupling: dict[int, tuple[int, float, float]]) -> None:
-        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE when it has none), narrowed
-        so that every mimic joint following it stays inside its own limits."""
+        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE without), narrowed so that every
+        mimic joint following it stays inside its own."""
         fm = self._kin_model
         lower = np.empty(self.n)
         upper = np.empty(self.n)
@@ -49,18 +40,15 @@ class JointBounds:
                     continue
                 a, b = sorted(((jlo - off) / m, (jhi - off) / m))
                 if max(lo, a) > min(hi, b):
-                    raise RobotLoadError(
-                        f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} = {m:g} "
-                        f"{fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in [{lo:g}, {hi:g}] keeps it in "
-                        f"its limits [{jlo:g}, {jhi:g}]"
-                    )
+                    raise RobotLoadError(f"joint {fm.names[j]!r} of {self.name} mimics {fm.names[d]!r} ({fm.names[j]} "
+                                         f"= {m:g} {fm.names[d]} + {off:g}) but no value of {fm.names[d]!r} in "
+                                         f"[{lo:g}, {hi:g}] keeps it in its limits [{jlo:g}, {jhi:g}]")
                 lo, hi = max(lo, a), min(hi, b)
             lower[k], upper[k] = lo + 0.0, hi + 0.0  # + 0.0: no -0.0 bound (NumPy's uniform refuses [0, -0])
         self.lower, self.upper = lower, upper
 
     def _set_base_box(self, base_box) -> None:
-        """The floating base's translation bounds: ``base_box`` a half-width h (m; the box [-h, h]^3 around the
-        origin) or a pair (lower (3,), upper (3,)) in m."""
+        """The floating base's position bounds: a half-width h (m) or (lower (3,), upper (3,)) in m."""
         if not self.floating_base:
             raise BoundsError("base_box bounds the floating base's position: give it with floating_base=True")
         try:
@@ -77,23 +65,19 @@ class JointBounds:
         self.set_bounds(lower, upper)
 
     def set_bounds(self, lower, upper) -> None:
-        """Replace the search bounds (rad or m), each of length ``n``; finite, lower <= upper. (A floating base's
-        first three entries are its position box, m.)"""
+        """Replace the search bounds (rad or m), each (n,), finite, lower <= upper."""
         lower = np.asarray(lower, dtype=float).reshape(-1)
         upper = np.asarray(upper, dtype=float).reshape(-1)
         if lower.shape != (self.n,) or upper.shape != (self.n,):
-            raise BoundsError(
-                f"bounds of {self.name} need {self.n} values each (one per joint), got {lower.size} and "
-                f"{upper.size}"
-            )
+            raise BoundsError(f"bounds of {self.name} need {self.n} values each (one per joint), got {lower.size} "
+                              f"and {upper.size}")
         if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
             raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
         bad = np.nonzero(lower > upper)[0]
         if bad.size:
             k = int(bad[0])
-            raise BoundsError(
-                f"inverted bounds for joint {self.joint_names[k]!r}: lower {lower[k]:.6g} > upper {upper[k]:.6g}"
-            )
+            raise BoundsError(f"inverted bounds for joint {self.joint_names[k]!r}: lower {lower[k]:.6g} > upper "
+                              f"{upper[k]:.6g}")
         self.lower, self.upper = lower, upper
 
     def check_q(self, q) -> np.ndarray:
@@ -101,10 +85,8 @@ class JointBounds:
         arr = np.asarray(q, dtype=float)
         if arr.ndim != 1 or arr.shape[0] != self.n:
             names = ", ".join(self.joint_names) if self.n <= 12 else ", ".join(self.joint_names[:12]) + ", ..."
-            raise ConfigurationError(
-                f"{self.name} has {self.n} joints ({names}); got a joint vector of shape {arr.shape}, expected "
-                f"({self.n},)"
-            )
+            raise ConfigurationError(f"{self.name} has {self.n} joints ({names}); got a joint vector of shape "
+                                     f"{arr.shape}, expected ({self.n},)")
         if not np.isfinite(arr).all():  # the method: np.all's dispatch costs about a microsecond per solve
             raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
         return arr
@@ -115,9 +97,7 @@ class JointBounds:
         if arr.ndim == 1 and arr.shape[0] == self.n:
             arr = arr[None, :]
         if arr.ndim != 2 or arr.shape[1] != self.n:
-            raise ConfigurationError(
-                f"{self.name} needs configurations of shape (N, {self.n}); got shape {arr.shape}"
-            )
+            raise ConfigurationError(f"{self.name} needs configurations of shape (N, {self.n}); got shape {arr.shape}")
         if not np.all(np.isfinite(arr)):
             raise ConfigurationError("configurations contain NaN or inf")
         return arr
@@ -132,18 +112,14 @@ class JointBounds:
         return np.clip(Q, self.lower, self.upper)
 
     def random_configurations(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        """``count`` configurations drawn uniformly inside :meth:`sampling_box`, shape (count, n): inside the search
-        bounds, and ones the library solves for (a mobile base's +-999999 m joints are not drawn 1e5 m away)."""
+        """``count`` configurations (count, n) drawn uniformly inside :meth:`sampling_box`."""
         lower, upper = self.sampling_box()
         return rng.uniform(lower, upper, size=(count, self.n))
 
     def sampling_box(self) -> tuple[np.ndarray, np.ndarray]:
-        """(lower, upper), each (n,) in rad or m: the search bounds with every near-unbounded entry (a bound beyond
-        :data:`NEAR_UNBOUNDED`) narrowed to where a search finds answers for targets near the base: a revolute one to
-        one turn [c - pi, c + pi] (c = 0 clipped into [lower + pi, upper - pi]), a prismatic one to +-(2 R + max(0.1,
-        0.1 R)) m around 0 (clipped into its bounds), R the robot's reach: the lengths of its joint offsets and the
-        travel of its bounded prismatic joints, summed. :func:`evoik_pin.problem.target_box` narrows such joints around
-        each target the same way."""
+        """(lower, upper), each (n,): the search bounds with every near-unbounded entry (:data:`NEAR_UNBOUNDED`)
+        narrowed to where answers lie near the base: a revolute one to one turn around 0, a prismatic one to
+        +-(2 R + max(0.1, 0.1 R)) m, R the robot's reach (joint offsets and bounded prismatic travel, summed)."""
         lower, upper = self.lower.copy(), self.upper.copy()
         far = (np.abs(lower) >= NEAR_UNBOUNDED) | (np.abs(upper) >= NEAR_UNBOUNDED)
         if not far.any():

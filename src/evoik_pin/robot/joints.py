@@ -1,8 +1,5 @@
-"""1-DOF joint helpers on a Pinocchio model: values in a configuration, motions (axes), limits, mimic couplings.
-
-A joint's *value* is one number (rad for revolute joints, m for prismatic ones) whatever Pinocchio stores: a
-continuous (unbounded revolute) joint is two numbers (cos, sin) in a configuration. These helpers read one joint
-at a time from the model (no model-wide ``Data``, which is large for big models).
+"""1-DOF joint helpers on a Pinocchio model: values (rad or m; a continuous joint stores (cos, sin)), motions,
+limits, mimic couplings; one joint at a time (no model-wide ``Data``, which is large for big models).
 """
 
 from __future__ import annotations
@@ -20,9 +17,8 @@ UNBOUNDED = 1e10
 
 
 def couplings(model: pin.Model, mimic: dict | None) -> dict[int, tuple[int, float, float]]:
-    """``{mimic joint id: (followed joint id, multiplier, offset)}`` of ``mimic`` entries whose two joints are
-    1-DOF joints of ``model`` (``mimic``: ``{joint: (followed joint, multiplier, offset)}``, or values with
-    ``joint``, ``multiplier``, ``offset`` attributes)."""
+    """``{mimic joint id: (followed joint id, multiplier, offset)}`` of the ``mimic`` entries (``{joint: (followed,
+    multiplier, offset)}`` or objects with those attributes) whose two joints are 1-DOF joints of ``model``."""
     out: dict[int, tuple[int, float, float]] = {}
     for name, spec in (mimic or {}).items():
         driver, m, off = (spec.joint, spec.multiplier, spec.offset) if hasattr(spec, "joint") else spec
@@ -51,7 +47,7 @@ def set_joint_value(model: pin.Model, q: np.ndarray, j: int, value: float) -> No
 
 def joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
     """(revolute (k,) bool, unit axes (k, 3) in each joint's own frame) of 1-DOF joints, from their motion
-    subspace at the neutral configuration (joint by joint: no model-wide ``Data``, which is large)."""
+    subspace at the neutral configuration."""
     ids = list(joint_ids)
     q = pin.neutral(model)
     revolute = np.zeros(len(ids), dtype=bool)
@@ -68,8 +64,8 @@ def joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
 
 
 def joint_limits(model: pin.Model, j: int) -> tuple[float, float, bool]:
-    """(lower, upper, limited) of 1-DOF joint j: limited is False for continuous joints and for limits that
-    are absent (lower == upper, as urdfdom reads a <limit> without them), inverted or beyond 1e10."""
+    """(lower, upper, limited) of 1-DOF joint j: not limited when continuous, or limits absent (lower == upper),
+    inverted or beyond :data:`UNBOUNDED`."""
     jm = model.joints[j]
     if jm.nq != 1:
         return -np.pi, np.pi, False

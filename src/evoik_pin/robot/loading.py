@@ -1,8 +1,6 @@
 """Finding and reading a robot (:func:`load_robot`, :func:`list_robots`): a source resolved to URDF text
-(:mod:`.urdf_text`), checked (:mod:`.urdf_checks`), built into the Pinocchio model of the whole URDF and handed,
-with its default tip and mesh package folders, to :class:`~evoik_pin.robot.robot.Robot`. Bad input raises
-:class:`~evoik_pin.errors.RobotLoadError` (or :class:`~evoik_pin.errors.RobotNotFoundError`) naming the file (or
-"URDF string") and what is accepted."""
+(:mod:`.urdf_text`), checked (:mod:`.urdf_checks`), built into a Pinocchio model and handed to
+:class:`~evoik_pin.robot.robot.Robot`. Bad input raises RobotLoadError or RobotNotFoundError naming the file."""
 
 from __future__ import annotations
 
@@ -10,19 +8,18 @@ import importlib.metadata
 import os
 import re
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import BoundsError, FrameError, RobotLoadError, RobotNotFoundError
-from .catalog import WHOLE_ROBOTS
+from .catalog import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS
 from .frames import is_branched
 from .joints import couplings
 from .packages import PackageResolver, check_package_aliases, check_package_dirs, package_uris
 from .robot import Robot
-from .urdf_checks import UrdfSummary, check_urdf
+from .urdf_checks import Mimic, check_urdf
 from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
 
 __all__ = [
@@ -35,52 +32,13 @@ __all__ = [
     "load_robot",
 ]
 
-#: The papers' arms shipped with evoik_pin (``robots/<name>.urdf``), with the paper each comes from.
-BUNDLED_ROBOTS: dict[str, str] = {
-    "ax18": "000: Crustcrawler AX-18, 4R + tool (standard DH, Table 1)",
-    "planar2r": "001: planar 2R elbow arm, a1 = 0.25 m, a2 = 0.16 m",
-    "puma3r": "001: PUMA 560 positioning chain (wrist point, eq. 20)",
-    "redundant7r": "002: redundant 7R arm (standard DH, eqs. 3-9)",
-    "vehicle_arm": "003: planar vehicle (prismatic x, y) carrying a 3R arm",
-    "aerial6r": "004: 6R human-like arm of an aerial manipulator (Table 1, standard DH)",
-}
-
-
-@dataclass(frozen=True)
-class _ExampleArm:
-    urdf: str  # path below example-robot-data's robots/ directory
-    tip: str
-    base: str | None = None
-    srdf: str | None = None  # the SRDF (disabled collision pairs), below robots/ too
-
-
-#: Arms of the ``example-robot-data`` wheel reachable by name, with their default tip frames.
-EXAMPLE_ARMS: dict[str, _ExampleArm] = {
-    "panda": _ExampleArm("panda_description/urdf/panda.urdf", "panda_hand_tcp",
-                         srdf="panda_description/srdf/panda.srdf"),
-    "ur3": _ExampleArm("ur_description/urdf/ur3_robot.urdf", "tool0"),
-    "ur5": _ExampleArm("ur_description/urdf/ur5_robot.urdf", "tool0", srdf="ur_description/srdf/ur5.srdf"),
-    "ur10": _ExampleArm("ur_description/urdf/ur10_robot.urdf", "tool0"),
-    "kinova": _ExampleArm("kinova_description/robots/kinova.urdf", "j2s6s200_end_effector",
-                          srdf="kinova_description/srdf/kinova.srdf"),
-    "z1": _ExampleArm("z1_description/urdf/z1.urdf", "gripperStator", srdf="z1_description/srdf/z1.srdf"),
-    "xarm": _ExampleArm("xarm_description/urdf/xarm7.urdf", "link_eef", srdf="xarm_description/srdf/xarm7.srdf"),
-    "so_arm": _ExampleArm("so_arm_description/urdf/so101.urdf", "gripper_frame_link"),
-}
-
-
 def example_robot_data_dir() -> Path:
-    """The ``robots/`` directory of the installed ``example-robot-data`` wheel.
-
-    Found from the installed distribution's file list, so it works in any virtual environment.
-    """
+    """The ``robots/`` directory of the installed ``example-robot-data`` wheel (from its file list)."""
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
-        raise RobotNotFoundError(
-            "the 'example-robot-data' package is not installed; install it (pip install example-robot-data) "
-            "to load arms such as panda or ur5 by name"
-        ) from exc
+        raise RobotNotFoundError("the 'example-robot-data' package is not installed; install it (pip install "
+                                 "example-robot-data) to load arms such as panda or ur5 by name") from exc
     for f in dist.files or []:
         parts = Path(str(f)).parts
         if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):
@@ -100,10 +58,8 @@ def bundled_robots_dir() -> Path:
 
 
 def list_robots(whole: bool = False, describe: bool = False) -> list[str] | dict[str, str]:
-    """Names accepted by :func:`load_robot`: the bundled paper arms, then the example-robot-data arms (serial
-    chains to a tool frame), then with ``whole=True`` the example-robot-data whole robots (humanoids, quadrupeds,
-    dual-arm robots, hands: :data:`~evoik_pin.robot.catalog.WHOLE_ROBOTS`). ``describe=True``: a dict of those
-    names to what each is."""
+    """Names :func:`load_robot` takes (:mod:`.catalog`): the bundled paper arms, the example-robot-data arms, and with
+    ``whole=True`` its whole robots. ``describe=True``: a dict of those names to what each is."""
     what = {**BUNDLED_ROBOTS, **{k: f"example-robot-data arm, tip {a.tip}" for k, a in EXAMPLE_ARMS.items()}}
     if whole:
         what.update({k: f"example-robot-data whole robot: {w.what}" for k, w in WHOLE_ROBOTS.items()})
@@ -127,54 +83,29 @@ def load_robot(
     """Load a robot: one serial chain of a URDF, the chains to several frames, or the whole tree.
 
     Args:
-        source: a URDF path, a xacro path (``*.xacro``, ``*.urdf.xacro``), a URDF XML string (or bytes;
-            xacro text is expanded too), the name of a bundled paper arm (``ax18``, ``planar2r``,
-            ``puma3r``, ``redundant7r``, ``vehicle_arm``, ``aerial6r``), of an example-robot-data arm
-            (``panda``, ``ur3``, ``ur5``, ``ur10``, ``kinova``, ``z1``, ``xarm``, ``so_arm``) or of an
-            example-robot-data whole robot (``talos``, ``g1``, ``go2``, ``baxter``, ``pr2``, ``tiago_dual``,
-            ``allegro_right``, ...: ``list_robots(whole=True)``). Files are read as bytes and decoded as their XML
-            declaration says (UTF-8 by default).
-        tip: end-effector frame (a link or frame name). Default: the arm's usual tool frame for the named
-            arms, otherwise the deepest link of the URDF (a file called ``panda.urdf`` is not the named arm).
-            Given, the active joints are those of the chain from the base to the tip. Not given (nor ``tips``),
-            a whole robot by name and a URDF whose movable joints branch (a tree: legs, arms, a head; a file or a
-            string) activate the whole tree, as ``tips="all"``, and ``tip`` is only the default goal frame; a
-            serial chain (a gripper whose fingers mimic one joint included) activates the chain to its tip.
-        base: frame the chain starts from and poses are expressed in. Default: the URDF's root (world).
-        joints: optional subset of the active joints' names (the chain's, or the whole tree's) to keep free; the
-            rest is locked.
-        bounds: optional ``(lower, upper)`` search bounds, each of length ``n`` (rad or m).
-        xacro_args: values of a xacro file's ``<xacro:arg>`` (``{"name": value}``), as ``name:=value`` on
-            xacro's command line; only for xacro sources.
-        srdf: an SRDF file whose ``<disable_collisions>`` pairs collision scenes skip
-            (:class:`~evoik_pin.scene.Scene`); the named example-robot-data robots find their own.
-        package_dirs: folders (one, or a list) holding the ROS packages the file names (``$(find pkg)`` in
-            xacro, ``package://pkg/...`` mesh URIs): ``pkg`` is ``DIR/pkg``, ``DIR`` itself, or a package.xml
-            naming it below ``DIR``. Searched first, then ``ROS_PACKAGE_PATH``, then the file's own tree (a
-            folder named ``pkg`` above the file or inside one of the folders above it), then a package.xml
-            naming ``pkg`` above the file (:mod:`evoik_pin.robot.packages`). A ``$(find pkg)`` nothing finds is a
-            RobotLoadError naming the package, the file naming it and the folders searched; a mesh package
-            nothing finds only matters to meshes (viewer, collision scenes), which then raise that error.
-        package_aliases: ``{package named in the file: the name it is shipped under}``, e.g.
-            ``{"abb_irb140": "abb_irb140_description"}``: the package is looked for under that name by the rules
-            above (a robot file copied out of its ROS workspace whose packages were renamed).
-        tips: frames (names) whose chains from the base make the active joints (their union), e.g. both grippers
-            of a dual-arm robot; ``tip`` defaults to the first. ``"all"``: every joint below the base (what a
-            whole robot by name, or a URDF whose joints branch, gets when neither ``tip`` nor ``tips`` is given).
-        floating_base: put a free-flying root in front of the URDF's root link: six more entries at the front of
-            q, the root link's position x, y, z (m) and yaw, pitch, roll (rad; its rotation is Rz(yaw) Ry(pitch)
-            Rx(roll)) in the world frame, where poses are then expressed. Bounds: ``base_box`` for the position,
-            yaw and roll a full turn (they wrap), pitch [-pi/2, pi/2]; ``Robot.full_configuration`` gives the
-            configuration of ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())``. The base moves every
-            frame, so a goal on a frame that only the base moves while joints between the root and that frame
-            are locked (off the active joints) is an error naming them (:class:`~evoik_pin.errors.LockedJointsError`).
-        base_box: the floating base's position box: a half-width h (m; the box [-h, h]^3, default 1 m) or a pair
-            (lower (3,), upper (3,)) in m. (``robot.set_bounds`` changes it later: entries 0-2.)
+        source: a URDF or xacro path, URDF (or xacro) XML text or bytes, or a name of :func:`list_robots`
+            (``list_robots(whole=True)``). Files are decoded as their XML declaration says (UTF-8 by default).
+        tip: end-effector frame; default a named arm's tool frame, else the deepest link. Given, the active joints
+            are the chain from the base to it. Given neither ``tip`` nor ``tips``, a whole robot by name and a URDF
+            whose movable joints branch activate the whole tree (``tips="all"``); a serial chain its chain.
+        base: frame the chain starts from and poses are expressed in (default: the URDF's root).
+        joints: names of the active joints to keep free; the rest is locked.
+        bounds: ``(lower, upper)`` search bounds, each (n,) (rad or m).
+        xacro_args: ``{name: value}`` of a xacro file's ``<xacro:arg>`` (xacro sources only).
+        srdf: an SRDF file whose ``<disable_collisions>`` pairs collision scenes skip (named robots find theirs).
+        package_dirs: folders holding the ROS packages the file names (``$(find pkg)``, ``package://pkg/...``),
+            searched first (the other rules: :mod:`.packages`). A ``$(find pkg)`` nothing finds is a
+            RobotLoadError; a missing mesh package only matters to meshes (viewer, collision scenes).
+        package_aliases: ``{package named in the file: the name it is shipped under}``.
+        tips: frames whose chains from the base make the active joints (their union; ``tip`` defaults to the
+            first), or ``"all"``: every joint below the base.
+        floating_base: a free-flying root in front of the URDF's root: six more entries at the front of q, x, y, z
+            (m) and yaw, pitch, roll (rad; Rz Ry Rx) in the world frame, where poses are then expressed.
+        base_box: the floating base's position box: a half-width h (m; default 1) or (lower (3,), upper (3,)).
 
     Returns:
-        A :class:`Robot`. Joints outside the active ones (the base->tip chain, the tips' chains) are locked at their
-        neutral value (clipped into their limits); mimic joints follow their joint (``q`` has one entry per
-        independent degree of freedom).
+        A :class:`Robot`; joints off the active ones locked at their neutral value (clipped into their limits),
+        mimic joints following their joint.
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
@@ -189,17 +120,16 @@ def load_robot(
                              "elements or ${...} / $(...) expressions)")
     if tip is None and named:
         tip = _default_tip(name)
-    model, summary = _parse_urdf(xml, path)
+    model, mimic = _parse_urdf(xml, path)
     if tip is None and tips is None and (named and name in WHOLE_ROBOTS
-                                         or not named and is_branched(model, couplings(model, summary.mimic))):
-        # a whole robot, by name or from a file or string whose joints branch: every joint, unless joints= says
-        # less. Never the chain to one arbitrary deepest link: with a floating base, goals on the other branches
-        # would bind to locked joints (the base moves every frame, so nothing else refuses them).
+                                         or not named and is_branched(model, couplings(model, mimic))):
+        # a whole robot: never the chain to one arbitrary deepest link (with a floating base, goals on the other
+        # branches would bind to locked joints)
         tips = "all"
     mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
     try:
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
-                      package_dirs=_package_dirs(path, resolver), mimic=summary.mimic,
+                      package_dirs=_package_dirs(path, resolver), mimic=mimic,
                       packages=mesh_packages, missing_packages=missing_packages, tips=tips,
                       floating_base=floating_base, base_box=base_box)
     except (RobotLoadError, FrameError, BoundsError) as exc:  # say which file the frames and joints were looked for in
@@ -226,17 +156,11 @@ def _srdf_path(srdf, name: str | None) -> str | None:
 
 def _default_tip(name: str) -> str | None:
     """The usual tool frame of a named arm (``tool`` for the bundled paper arms); None for other names."""
-    if name in EXAMPLE_ARMS:
-        return EXAMPLE_ARMS[name].tip
-    if name in BUNDLED_ROBOTS:
-        return "tool"
-    return None
+    return EXAMPLE_ARMS[name].tip if name in EXAMPLE_ARMS else "tool" if name in BUNDLED_ROBOTS else None
 
 
 def _package_dirs(path: Path | None, resolver: PackageResolver) -> list[str]:
-    """Directories Pinocchio tries ``package://pkg/...`` mesh URIs in (as ``DIR/pkg/...``) when
-    :func:`_mesh_packages` did not find ``pkg``: the given folders, ``ROS_PACKAGE_PATH``'s, the URDF's folder
-    and its parent (when loaded from a file), then example-robot-data's."""
+    """Directories Pinocchio tries ``package://pkg/...`` URIs in when :func:`_mesh_packages` did not find ``pkg``."""
     erd = example_robot_data_dir()
     # example-robot-data URDFs name meshes both package://<pkg>/... and package://example-robot-data/robots/...
     package_dirs = [str(erd), str(erd.parents[1])]
@@ -285,9 +209,8 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
         stripped = source.lstrip("\ufeff \t\r\n")  # an XML declaration must come first
         return "urdf", None, stripped if stripped.startswith("<") else source, False
     if not isinstance(source, (str, os.PathLike)):
-        raise RobotLoadError(
-            f"robot source must be a URDF path, a URDF XML string or a robot name, got {type(source).__name__}"
-        )
+        raise RobotLoadError(f"robot source must be a URDF path, a URDF XML string or a robot name, got "
+                             f"{type(source).__name__}")
     text = os.fspath(source)
     if not isinstance(text, str) or not text.strip():
         raise RobotLoadError(f"robot source {text!r} is empty: give a URDF path, a URDF XML string or one of "
@@ -314,10 +237,8 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
         if not is_file:
             if path.suffix or os.sep in text or exists or not isinstance(source, str):
                 raise RobotNotFoundError(f"URDF file not found: {shown} (no such file)")
-            raise RobotNotFoundError(
-                f"unknown robot {shown}: give a URDF path, a URDF XML string or one of "
-                f"{', '.join(list_robots(whole=True))}"
-            )
+            raise RobotNotFoundError(f"unknown robot {shown}: give a URDF path, a URDF XML string or one of "
+                                     f"{', '.join(list_robots(whole=True))}")
     try:
         data = path.read_bytes()
     except OSError as exc:
@@ -330,17 +251,15 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
     return (text if named else stem), resolved, xml, named
 
 
-def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, UrdfSummary]:
+def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, dict[str, Mimic]]:
     """Pinocchio model of the whole URDF ``xml`` (read from ``path``, or None for a string) and what
     :func:`check_urdf` found in it, or a RobotLoadError saying what is wrong with it."""
     where = str(path) if path is not None else "URDF string"
     try:
         root = ET.fromstring(xml)
-    except ET.ParseError as exc:
+    except (ET.ParseError, ValueError, RecursionError) as exc:  # ValueError: e.g. characters XML does not allow
         raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
-    except (ValueError, RecursionError) as exc:  # e.g. characters XML does not allow
-        raise RobotLoadError(f"malformed URDF XML in {where}: {exc}") from exc
-    summary = check_urdf(root, where)
+    mimic = check_urdf(root, where)
     failure: Exception | None = None
     with captured_stderr() as err:  # urdfdom prints its reasons on stderr
         try:
@@ -352,4 +271,4 @@ def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, UrdfSummary]:
         said = [line for line in said if line and not line.startswith("at line ")]
         detail = f" urdfdom said: {'; '.join(said)}" if said else ""
         raise RobotLoadError(f"Pinocchio could not build a model from {where}: {failure}{detail}") from None
-    return model, summary
+    return model, mimic

@@ -1,9 +1,5 @@
-"""Locking joints: :meth:`Robot.locked` makes a robot whose ``q`` omits some joints, fixed at given values; the
-solvers' ``locked=`` option (:func:`evoik_pin.solve`) does it for one call and maps ``q`` back.
-
-The locked robot is built like the original (the same URDF model, tips, base, mimic couplings), with the locked
-joints left out of ``q`` and Pinocchio's reduced model built at their values, so every kinematic quantity
-(frames, Jacobians, the compiled kernel's tree) is that of the arm with those joints fixed.
+"""Locking joints: :meth:`Robot.locked` builds a robot like the original whose ``q`` omits some joints, fixed at given
+values; the solvers' ``locked=`` option does it for one call and maps ``q`` back with these helpers.
 """
 
 from __future__ import annotations
@@ -63,7 +59,6 @@ def locked_robot(robot, values):
     out.srdf = robot.srdf
     idx = [robot.joint_names.index(j) for j in keep]
     out.set_bounds(robot.lower[idx], robot.upper[idx])
-    out.parent_robot = robot  # the robot whose q ``expand_q`` gives back
     if len(_CACHE) > 32:
         _CACHE.clear()
     _CACHE[key] = (weakref.ref(robot), out)
@@ -76,8 +71,7 @@ def kept_columns(robot, sub) -> np.ndarray:
 
 
 def expand_rows(robot, sub, values: dict[str, float], Q) -> np.ndarray:
-    """``robot``'s q of each row of ``sub``'s ``Q`` (N, sub.n) -> (N, robot.n): the locked joints at their
-    ``values`` (rad or m)."""
+    """``robot``'s q (N, robot.n) of ``sub``'s ``Q`` (N, sub.n), the locked joints at their ``values``."""
     Q = np.asarray(Q, dtype=float)
     out = np.empty((Q.shape[0], robot.n))
     for name, value in values.items():
@@ -97,9 +91,8 @@ def locked_note(values: dict[str, float]) -> str:
 
 
 def expand_result(robot, sub, values: dict[str, float], result):
-    """A :class:`~evoik_pin.result.Result` of ``sub`` (``robot.locked(values)``) in ``robot``'s layout, in place:
-    its ``q`` and its solutions' ``q`` expanded (the locked joints at their values), :func:`locked_note` added to
-    its message. Returns it."""
+    """A Result of ``sub`` (``robot.locked(values)``) put in ``robot``'s layout in place (its and its solutions' ``q``,
+    :func:`locked_note` on its message); returns it."""
     result.q = expand_q(robot, sub, values, result.q)
     for s in result.solutions or ():
         s.q = expand_q(robot, sub, values, s.q)

@@ -1,8 +1,5 @@
-"""Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS.
-
-Robot files copied out of a ROS workspace (the rtb-data wheel, a vendor's download) name packages that have no
-``package.xml`` on disk, or whose folder is named differently. :class:`PackageResolver` finds a package ``pkg``
-for one robot file the way Pinocchio's ``package_dirs`` and ROS do, first match wins:
+"""Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS, also for files
+copied out of their workspace. :class:`PackageResolver` finds ``pkg`` for one robot file, first match wins:
 
 a. the folders the user gives (``load_robot(path, package_dirs=[...])``, ``--package-dir DIR``),
 b. the folders of ``ROS_PACKAGE_PATH`` (read at each load, not once per process),
@@ -13,12 +10,8 @@ d. a ``package.xml`` whose ``<name>`` is ``pkg`` in the file's folder or above i
 In a folder ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself when it is named ``pkg``, or a folder up to
 :data:`CRAWL_DEPTH` levels below ``D`` whose ``package.xml`` names ``pkg`` (a ROS workspace's ``src/``).
 
-Aliases (``load_robot(path, package_aliases={"abb_irb140": "abb_irb140_description"})``, ``--package-alias
-abb_irb140=abb_irb140_description``) say that a package the file names is shipped under another name: the rules
-above then look for that other name. Without an alias, a package none of the rules finds is looked for, by the same
-rules, under its sibling names (:func:`sibling_names`): ROS-Industrial's ``<robot>_support`` packages and the
-``<robot>_description`` packages are often shipped one as the other (rtb-data ships ``kuka_kr10_support`` as
-``kuka_kr10`` and ``abb_irb140`` as ``abb_irb140_description``, with no package.xml naming them).
+An alias (``package_aliases={"abb_irb140": "abb_irb140_description"}``) makes the rules look for another name;
+without one, a package none finds is looked for under its :func:`sibling_names`.
 """
 
 from __future__ import annotations
@@ -40,8 +33,7 @@ _URI = re.compile(r"package://([^/\"'<>\s]+)/")
 
 
 def check_package_dirs(package_dirs) -> list[Path]:
-    """``package_dirs`` (one folder, or a list of folders: str or path-like) as resolved paths; each must be an
-    existing folder. None gives []."""
+    """``package_dirs`` (a folder or a list of them, or None) as resolved paths of existing folders."""
     if package_dirs is None:
         return []
     if isinstance(package_dirs, (str, os.PathLike)):
@@ -63,8 +55,7 @@ def check_package_dirs(package_dirs) -> list[Path]:
 
 
 def check_package_aliases(aliases) -> dict[str, str]:
-    """``aliases`` ({package named in the file: package name to look for instead}) checked: both names non-empty
-    strings without "/"; None gives {}."""
+    """``aliases`` ({package named in the file: name to look for instead}, or None) checked."""
     if aliases is None:
         return {}
     if not isinstance(aliases, dict):
@@ -126,22 +117,15 @@ SIBLING_SUFFIXES = ("_support", "_description")
 
 
 def sibling_names(pkg: str) -> list[str]:
-    """Other names package ``pkg`` may be shipped under: without its ``_support`` / ``_description`` suffix, then
-    with ``_description`` in its place (``kuka_kr10_support`` -> ``kuka_kr10``, ``kuka_kr10_description``;
-    ``abb_irb140`` -> ``abb_irb140_description``)."""
+    """Other names package ``pkg`` may be shipped under (``kuka_kr10_support`` -> ``kuka_kr10``,
+    ``kuka_kr10_description``; ``abb_irb140`` -> ``abb_irb140_description``)."""
     stem = next((pkg[: -len(x)] for x in SIBLING_SUFFIXES if pkg.endswith(x) and len(pkg) > len(x)), pkg)
     return [name for name in dict.fromkeys((stem, stem + "_description")) if name != pkg]
 
 
 class PackageResolver:
-    """Finds the packages one robot file names (see the module docstring for the rules and their order).
-
-    Args:
-        path: the robot file (None for a URDF string: rules (c) and (d) then do not apply).
-        package_dirs: folders the user gives (already checked by :func:`check_package_dirs`).
-        aliases: {package named in the file: the name it is shipped under} (checked by
-            :func:`check_package_aliases`).
-    """
+    """Finds the packages one robot file ``path`` (None for a string: no rules (c), (d)) names, with the checked
+    ``package_dirs`` and ``aliases`` (the module docstring)."""
 
     def __init__(self, path: Path | None, package_dirs: Iterable[Path] = (), aliases: dict | None = None) -> None:
         self.path = path
@@ -161,13 +145,8 @@ class PackageResolver:
 
     def _search(self, pkg: str) -> Path | None:
         """Rules (a) to (d) for ``pkg``, then for its sibling names (none for an aliased package)."""
-        found = self._search_name(pkg)
-        if found is None and pkg not in self.aliases.values():
-            for sibling in sibling_names(pkg):
-                found = self._search_name(sibling)
-                if found is not None:
-                    break
-        return found
+        names = [pkg] if pkg in self.aliases.values() else [pkg, *sibling_names(pkg)]
+        return next((found for found in map(self._search_name, names) if found is not None), None)
 
     def _search_name(self, pkg: str) -> Path | None:
         if not pkg or "/" in pkg or pkg in (".", ".."):
@@ -203,8 +182,7 @@ class PackageResolver:
         return "; ".join(parts)
 
     def not_found(self, pkg: str, named_in: str, how: str) -> str:
-        """Message of a package that cannot be found: the package, the file naming it (``how``: as what) and
-        the folders searched, with what to do."""
+        """Message of a package not found: the file naming it (``how``: as what), the folders searched, what to do."""
         looked_for = f" (looked for as {self.aliases[pkg]!r}: package_aliases)" if pkg in self.aliases else ""
         return (f"package {pkg!r} not found{looked_for} (used as {how}), named in {named_in}; searched: "
                 f"{self.searched()}. Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on "

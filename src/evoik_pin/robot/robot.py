@@ -1,33 +1,15 @@
-"""The robot: :class:`Robot`, the active joints of a URDF as Pinocchio sees them, a serial chain or a whole tree.
+"""The robot: :class:`Robot`, the active joints of a URDF (a serial chain, the chains to several tips, or the whole
+tree) as Pinocchio sees them, every other joint locked; kinematics of any frame, one ``q`` (Pinocchio) or a
+population (NumPy), and the folded constants compiled kernels evaluate. Loading: :mod:`.loading`.
 
-A :class:`Robot` picks its active joints (the chain from a base frame to one tip, the union of the chains to several
-tips, or the whole tree), locks every other joint (``pin.buildReducedModel``) and offers forward kinematics and
-Jacobians of any frame, one configuration at a time (Pinocchio) or a whole population at once (NumPy), the folded
-tree constants compiled kernels evaluate, and the placements the viewer draws. Loading is :mod:`.loading`'s job.
-
-The joint vector ``q`` users and solvers see has one entry per independent degree of freedom (rad for revolute
-joints, m for prismatic ones), in Pinocchio's joint order (a serial chain: base to tip). Pinocchio stores a
-continuous (unbounded revolute) joint as two numbers (cos, sin); :meth:`Robot.to_pinocchio` and
-:meth:`Robot.from_pinocchio` map between the two.
-
-A floating base (``floating_base=True``) puts six entries at the front of ``q``: the root link's position x, y,
-z (m) in the world and its yaw, pitch, roll (rad), rotation ``Rz(yaw) Ry(pitch) Rx(roll)`` (:mod:`.tree`).
-:meth:`Robot.full_configuration` turns them into the seven numbers of Pinocchio's free-flyer joint (position,
-then the unit quaternion (x, y, z, w)).
-
-Mimic joints (URDF ``<mimic joint="k" multiplier="m" offset="c"/>``: ``q_j = m q_k + c``) are not entries of
-``q``: the reduced Pinocchio model holds the active *physical* joints (mimic joints included), and every
-physical joint's value is ``scale * q[index] + offset`` (1, its own entry, 0 for the others; see
-:meth:`Robot.tree_constants`). The joint a mimic follows is an entry of ``q`` even when it lies off the active
-joints (a gripper finger driven by the other finger), and Jacobians get the chain rule: column k gathers ``m``
-times the column of each physical joint that follows q_k.
-
-Poses are those of frames expressed in the base frame (the world frame when no base is chosen).
+``q`` has one entry per independent degree of freedom (rad or m) in Pinocchio's joint order; a floating base puts
+x, y, z (m) and yaw, pitch, roll (rad) in front (:mod:`.tree`). Mimic joints are not entries: physical joint k's
+value is ``scale[k] * q[index[k]] + offset[k]`` (:meth:`Robot.tree_constants`) and Jacobians get the chain rule.
+Poses are those of frames in the base frame (the world frame when no base is chosen).
 """
 
 from __future__ import annotations
 
-import re
 from functools import cached_property
 from pathlib import Path
 
@@ -35,54 +17,44 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, FrameError, RobotLoadError
-from .frames import body_frame_names, closest_names, deepest_body, find_frame, frame_names, reduced_model, root_link
+from .active_joints import MAX_CHAIN_JOINTS, choose_joints, suggest_frames
+from .frames import find_frame, frame_names, reduced_model
+from .geometry_models import RobotGeometry
 from .joint_bounds import NEAR_UNBOUNDED, JointBounds
 from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
-from .population import chain_forward, chain_jacobians, chain_positions
-from .tree import ChainView, KinematicTree, free_flyer_model, rpy_to_quaternion, with_floating_base
-
-#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
-_MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
+from .tree import (
+    ChainView,
+    KinematicTree,
+    chain_forward,
+    chain_jacobians,
+    chain_positions,
+    free_flyer_model,
+    mass_constants,
+    rpy_to_quaternion,
+    with_floating_base,
+)
 
 __all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
-
-#: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
-#: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
-MAX_CHAIN_JOINTS = 200
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
 
 
-class Robot(JointBounds):
-    """The active joints of a URDF (a serial chain or a tree): forward kinematics, Jacobians and manipulability of
-    any of its frames.
+class Robot(JointBounds, RobotGeometry):
+    """The active joints of a URDF (a serial chain or a tree): kinematics, Jacobians, manipulability of any frame.
 
     Attributes:
-        name: robot name (bundled or example name, or the URDF file's stem).
-        n: number of independent degrees of freedom (mimic joints are folded in; a floating base counts 6).
-        joint_names: the joints of ``q`` (length n), in Pinocchio's joint order (a chain: base to tip); a joint
-            that mimic joints follow is listed where the first of them sits when it is not active itself. With a
-            floating base the first six are :data:`~evoik_pin.robot.tree.FLOATING_BASE_JOINTS`.
-        lower, upper: search bounds (n,) in rad or m; finite; see :meth:`set_bounds`. A joint that mimic joints
-            follow is also bounded so that every such joint stays inside its own URDF limits.
-        tip: the default goal frame (single-target solves, :meth:`fk` without a frame); ``tips``: the frames the
-            active joints were chosen for (``(tip,)`` for a chain; every frame for a whole tree is allowed).
-        base: frame name poses are expressed in; the URDF root when none was chosen (with a floating base: the
-            world frame the root link moves in).
-        floating_base: whether the first six entries of q move the root link.
-        model: the reduced Pinocchio model holding the active physical joints (``model.nv == n`` unless mimic
-            joints are active); map ``q`` to its configuration with :meth:`to_pinocchio`.
-        full_model: the Pinocchio model of the whole URDF (every joint independent; with a floating base, behind
-            Pinocchio's free-flyer ``root_joint``): :meth:`full_configuration` gives its configurations.
-        urdf_path: the URDF file (None when loaded from an XML string); ``urdf_xml`` holds its text (the expanded
-            URDF for a xacro file).
-        revolute: (n,) bool, True for revolute joints (rad), False for prismatic ones (m).
-        continuous: (n,) bool, True for joints Pinocchio stores as (cos, sin).
-        joint_axes: (n, 3) unit axis of each joint in its own frame: the rotation axis of a revolute joint,
-            the sliding direction of a prismatic one.
-        mimic_joints: ``{physical joint: (joint it follows, multiplier, offset)}`` for the active mimic joints:
-            ``q_joint = multiplier * q_followed + offset``.
+        name: robot name. n: entries of ``q`` (mimic joints folded in; a floating base counts 6).
+        joint_names: the joints of ``q`` (n,), in Pinocchio's order (a floating base's first six:
+            :data:`~evoik_pin.robot.tree.FLOATING_BASE_JOINTS`).
+        lower, upper: search bounds (n,) in rad or m, finite (:meth:`set_bounds`).
+        tip: default goal frame; tips: the frames the active joints were chosen for. base: frame poses are
+            expressed in (the URDF root, or the world with a floating base). floating_base: bool.
+        model: reduced Pinocchio model of the active physical joints (:meth:`to_pinocchio` maps ``q`` to it);
+            full_model: the whole URDF's (:meth:`full_configuration`). urdf_path, urdf_xml: the file and its text.
+        revolute, continuous: (n,) bool (revolute: rad, else m; continuous: stored as (cos, sin)).
+        joint_axes: (n, 3) unit axis of each joint in its own frame.
+        mimic_joints: ``{physical joint: (joint it follows, multiplier, offset)}`` of the active mimic joints.
     """
 
     def __init__(
@@ -103,25 +75,15 @@ class Robot(JointBounds):
         missing_packages: dict[str, str] | None = None,
         rest: dict[str, float] | None = None,
     ) -> None:
-        """``full_model``: the URDF's fixed-base Pinocchio model. ``tips``: frames whose chains make the active
-        joints (``tip`` defaults to the first), or ``"all"`` for every joint downstream of the base. ``mimic``:
-        ``{joint: (followed joint, multiplier, offset)}`` (objects with ``joint``, ``multiplier``, ``offset``
-        attributes also do), the URDF's mimic couplings resolved to joints no mimic drives
-        (:func:`~evoik_pin.robot.urdf_checks.check_urdf` returns them); entries naming no 1-DOF joint of
-        ``full_model`` are ignored. ``floating_base``, ``base_box``: see :func:`~evoik_pin.robot.load_robot`.
-        ``packages``: ``{pkg: folder}`` that ``package://pkg/...`` mesh URIs resolve to (before ``package_dirs``);
-        ``missing_packages``: ``{pkg: error message}`` of those nothing found. ``rest``: ``{joint: value}`` (rad or
-        m) where joints left out of ``q`` stay instead of their neutral value (:meth:`locked`)."""
-        self._init_args = dict(full_model=full_model, tip=tip, base=base, joints=joints, name=name,
-                               urdf_path=urdf_path, urdf_xml=urdf_xml, package_dirs=package_dirs, mimic=mimic,
-                               tips=tips, floating_base=floating_base, base_box=base_box, packages=packages,
-                               missing_packages=missing_packages)
+        """``full_model``: the URDF's fixed-base model. ``tips``: frames whose chains make the active joints, or
+        ``"all"``. ``mimic``: ``{joint: (followed joint, multiplier, offset)}`` (or objects with those attributes;
+        :func:`~evoik_pin.robot.urdf_checks.check_urdf`). ``packages``: ``{pkg: folder}`` of mesh URIs,
+        ``missing_packages``: ``{pkg: error}``. ``rest``: ``{joint: value}`` where joints left out of ``q`` stay
+        (:meth:`locked`). The other arguments: :func:`~evoik_pin.robot.load_robot`'s."""
+        self._init_args = {k: v for k, v in locals().items() if k not in ("self", "rest")}  # for Robot.locked
         self.locked_values: dict[str, float] = dict(rest or {})
-        self.name = name
-        self.urdf_path = urdf_path
-        self.urdf_xml = urdf_xml
-        self.package_dirs = list(package_dirs or [])
-        self.packages = dict(packages or {})
+        self.name, self.urdf_path, self.urdf_xml = name, urdf_path, urdf_xml
+        self.package_dirs, self.packages = list(package_dirs or []), dict(packages or {})
         self.missing_packages = dict(missing_packages or {})
         self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
         self.floating_base = bool(floating_base)
@@ -136,87 +98,10 @@ class Robot(JointBounds):
             kin = full_model
             self.full_model = full_model
         self._kin_model = kin  # the model the reduced one is cut from: full_model, or six joints + full_model
-        coupling = couplings(kin, mimic)
-        self._full_couplings = coupling
+        self._full_couplings = coupling = couplings(kin, mimic)
 
-        whole = isinstance(tips, str) and tips == "all"
-        if tips is None or whole:
-            tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
-        else:
-            tip_names = _frame_list(tips)
-        if tip is None:
-            tip = tip_names[0] if tip_names else deepest_body(full_model)
-        root_name = root_link(full_model) if base is None else base
-        base_id = 0 if base is None else find_frame(kin, base)
-        if base_id < 0:
-            raise FrameError(f"unknown base frame {base!r}{_suggest(base, kin)}; frames of {name}: "
-                             f"{_listed(body_frame_names(full_model))}")
-        base_joint = kin.frames[base_id].parentJoint
-        for t in [tip, *(tip_names or [])]:
-            if find_frame(kin, t) < 0:
-                raise FrameError(f"unknown tip frame {t!r}{_suggest(t, kin)}; frames of {name}: "
-                                 f"{_listed(body_frame_names(full_model))}")
-
-        if whole:
-            active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
-        else:
-            chosen: set[int] = set()
-            for t in tip_names:
-                support = list(kin.supports[kin.frames[find_frame(kin, t)].parentJoint])
-                if base_joint not in support:
-                    raise FrameError(
-                        f"tip frame {t!r} is not downstream of base frame {root_name!r}: no kinematic chain joins "
-                        "them from base to tip"
-                    )
-                chosen.update(support[support.index(base_joint) + 1:])
-            active = sorted(chosen)
-        where = (f"the chain {root_name!r} -> {tip_names[0]!r}" if tip_names and len(tip_names) == 1
-                 else f"the joints below {root_name!r}" if whole else f"the chains {root_name!r} -> {tip_names}")
-        bad = [kin.names[j] for j in active if kin.joints[j].nv != 1]
-        if bad:
-            raise RobotLoadError(
-                f"joints {bad} of {where} are not 1-DOF revolute or prismatic joints; only those are "
-                "supported (lock them with joints=[...])"
-            )
-        above_base = set(kin.supports[base_joint])
-
-        def follows(j: int) -> tuple[int | None, float, float]:
-            """(joint whose q moves physical joint j, multiplier, offset); None when j is constant (it follows a
-            joint above the base, which stays locked, or has multiplier 0)."""
-            c = coupling.get(j)
-            if c is None:
-                return j, 1.0, 0.0
-            driver, m, off = c
-            return (None if driver in above_base or m == 0.0 else driver), m, off
-
-        dofs: list[int] = []
-        for j in active:
-            d = follows(j)[0]
-            if d is not None and d not in dofs:
-                dofs.append(d)
-        dof_names = [kin.names[d] for d in dofs]
-        if joints is not None:
-            unknown = [j for j in joints if j not in dof_names]
-            if unknown:
-                coupled = [f"{u!r} mimics {kin.names[coupling[kin.getJointId(u)][0]]!r}"
-                           for u in unknown if kin.existJointName(u) and kin.getJointId(u) in coupling]
-                hint = f" ({'; '.join(coupled)}: name the joint it follows)" if coupled else ""
-                raise FrameError(
-                    f"joints {unknown} are not on {where}; its joints are {', '.join(dof_names) or '(none)'}{hint}"
-                )
-            dofs = [d for d in dofs if kin.names[d] in joints]
-        # the physical joints: every joint q moves (below the base): the active ones, the joints their mimics follow
-        # and every other mimic of those, so that each link is where full_configuration(q) puts it
-        physical = [j for j in range(1, kin.njoints) if j not in above_base and follows(j)[0] in dofs]
-        if not physical:
-            raise RobotLoadError(f"{where} of {name} has no movable joint; pick another tip or base")
-        if len(physical) > MAX_CHAIN_JOINTS:
-            raise RobotLoadError(
-                f"{where} of {name} has {len(physical)} joints; at most {MAX_CHAIN_JOINTS} are supported "
-                "(Pinocchio's data for an n-joint chain takes O(n^3) memory): pick nearer tips, a farther base, or "
-                "keep fewer joints free with joints=[...]"
-            )
-
+        chosen = choose_joints(kin, full_model, name, tip, tips, base, joints, coupling)
+        physical, dofs = chosen.physical, chosen.dofs
         q_ref = pin.neutral(kin)
         for j in range(1, kin.njoints):
             jm = kin.joints[j]
@@ -228,25 +113,20 @@ class Robot(JointBounds):
             set_joint_value(kin, q_ref, kin.getJointId(jname), value)
         for j, (d, m, off) in coupling.items():  # locked mimic joints sit where their driver's rest puts them
             set_joint_value(kin, q_ref, j, m * joint_value(kin, q_ref, d) + off)
-        to_lock = [j for j in range(1, kin.njoints) if j not in physical]
-        self._q_ref_full = q_ref
-        self._locked = to_lock
-        self._above_base = above_base  # kinematic-model joints that stay put whatever q is (the base's chain)
-        self.model = reduced_model(kin, to_lock, q_ref) if to_lock else pin.Model(kin)
+        self._q_ref_full, self._locked = q_ref, [j for j in range(1, kin.njoints) if j not in physical]
+        self._above_base = chosen.above_base  # kinematic-model joints that stay put whatever q is
+        self.model = reduced_model(kin, self._locked, q_ref) if self._locked else pin.Model(kin)
         self.data = self.model.createData()
         self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
-        self.tip = tip
-        self.tips = tuple(tip_names) if tip_names else (tip,)
-        self.base = root_name
-        self._tip_id = find_frame(self.model, tip)
+        self.tip, self.tips, self.base = chosen.tip, chosen.tips, chosen.base
+        self._tip_id = find_frame(self.model, self.tip)
         self._base_id = 0 if base is None else find_frame(self.model, base)
         self.n = len(dofs)
         self.joint_names = [kin.names[d] for d in dofs]
         self._dof_ids = dofs  # kinematic-model joint ids of the entries of q
 
         # Base placement is constant: every free joint is downstream of the base frame.
-        q0 = pin.neutral(self.model)
-        pin.framesForwardKinematics(self.model, self.data, q0)
+        pin.framesForwardKinematics(self.model, self.data, pin.neutral(self.model))
         self._oMbase = self.data.oMf[self._base_id].copy() if base is not None else pin.SE3.Identity()
         self._baseMo = self._oMbase.inverse()
         self._identity = pin.SE3.Identity()
@@ -256,18 +136,12 @@ class Robot(JointBounds):
         self._phys_idx_q = np.array([self.model.joints[k].idx_q for k in range(1, m_phys + 1)], dtype=np.intp)
         self._phys_continuous = np.array([self.model.joints[k].nq == 2 for k in range(1, m_phys + 1)])
         self.tree = KinematicTree.of(self.model, self._baseMo)
-        index, scale, offset = [], [], []
-        self.mimic_joints: dict[str, tuple[str, float, float]] = {}
-        for j in physical:
-            d, m, off = follows(j)
-            index.append(dofs.index(d))
-            scale.append(m)
-            offset.append(off)
-            if d != j:
-                self.mimic_joints[kin.names[j]] = (kin.names[d], m, off)
-        self._phys_index = np.ascontiguousarray(index, dtype=np.int64)
-        self._phys_scale = np.ascontiguousarray(scale, dtype=float)
-        self._phys_offset = np.ascontiguousarray(offset, dtype=float)
+        follow = chosen.follow
+        self.mimic_joints = {kin.names[j]: (kin.names[d], m, off) for j, (d, m, off) in zip(physical, follow,
+                                                                                          strict=True) if d != j}
+        self._phys_index = np.array([dofs.index(d) for d, _, _ in follow], dtype=np.int64)
+        self._phys_scale = np.array([m for _, m, _ in follow], dtype=float)
+        self._phys_offset = np.array([off for _, _, off in follow], dtype=float)
         self._coupled = bool(self.mimic_joints)
         self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
         self._G[np.arange(m_phys), self._phys_index] = self._phys_scale
@@ -277,9 +151,7 @@ class Robot(JointBounds):
         self._tip_view = self._frame_view(self._tip_id)[3]
 
         # The entries of q: their own joint's motion (active, or the inactive joint mimics follow).
-        revolute, axes = joint_motions(kin, dofs)
-        self.revolute = revolute
-        self.joint_axes = axes
+        self.revolute, self.joint_axes = joint_motions(kin, dofs)
         self.continuous = np.array([kin.joints[d].nq == 2 for d in dofs])
         self._set_default_bounds(coupling)
         if base_box is not None:
@@ -287,12 +159,11 @@ class Robot(JointBounds):
 
     # ------------------------------------------------------------------ locked copies
     def locked(self, values: dict[str, float]) -> Robot:
-        """A new Robot with the joints ``values`` names fixed at those values (rad or m): its ``q`` omits them (the
-        other joints in the same order), its :meth:`fk` and :meth:`full_configuration` put them there, its bounds are
-        this robot's on the joints left. Locking a locked robot locks more. See :mod:`.locking`.
+        """A new Robot whose ``q`` omits the joints ``values`` names, fixed at those values (rad or m); bounds are
+        this robot's on the joints left (:mod:`.locking`).
 
-        Raises: FrameError for a name that is no joint of ``q`` (with this robot's joints); BoundsError for a value
-        outside the joint's bounds (naming them); ConfigurationError when every joint would be locked.
+        Raises: FrameError for a name that is no joint of ``q``; BoundsError for a value outside the joint's bounds;
+        ConfigurationError when every joint would be locked.
         """
         from .locking import locked_robot
 
@@ -301,8 +172,7 @@ class Robot(JointBounds):
     # ------------------------------------------------------------------ frames
     @cached_property
     def frames(self) -> list[str]:
-        """Names of every frame a goal or :meth:`fk` can name: the URDF's links, joint frames and fixed frames
-        (Pinocchio's names), each once, in model order."""
+        """Names of every frame a goal or :meth:`fk` can name (links, joint and fixed frames), in model order."""
         return frame_names(self.model)
 
     def frame_id(self, frame: str | None) -> int:
@@ -310,17 +180,15 @@ class Robot(JointBounds):
         when there is no such frame."""
         if frame is None:
             return self._tip_id
-        fid = self._frame_ids.get(frame, -1) if isinstance(frame, str) else -1
-        if fid >= 0:
-            return fid
-        fid = find_frame(self.model, frame) if isinstance(frame, str) else -1  # a scan of every frame
-        if fid >= 0:
-            self._frame_ids[frame] = fid
-        else:
+        fid = self._frame_ids.get(frame) if isinstance(frame, str) else None
+        if fid is None:
             if not isinstance(frame, str):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
-            raise FrameError(f"{self.name} has no frame {frame!r}{_suggest(frame, self.model)} (robot.frames lists "
-                             f"its {len(self.frames)} frames)")
+            fid = self._frame_ids[frame] = find_frame(self.model, frame)  # a scan of every frame
+            if fid < 0:
+                del self._frame_ids[frame]
+                raise FrameError(f"{self.name} has no frame {frame!r}{suggest_frames(frame, self.model)} (robot.frames "
+                                 f"lists its {len(self.frames)} frames)")
         return fid
 
     def _frame_view(self, fid: int) -> tuple[int, np.ndarray, np.ndarray, ChainView]:
@@ -333,8 +201,7 @@ class Robot(JointBounds):
 
     def frame_constants(self, frame: str | None = None) -> tuple[int, np.ndarray, np.ndarray]:
         """(physical joint j_f, R_f (3, 3), p_f (3,) m) of a frame (None: the tip) for compiled kernels: its folded
-        placement on physical joint j_f of :meth:`tree_constants`, or its constant pose in the base frame when no
-        active joint moves it (j_f = -1). Owned by the robot: do not modify them."""
+        placement on joint j_f of :meth:`tree_constants`, or its base-frame pose when j_f = -1. Read-only."""
         j, R, p, _ = self._frame_view(self.frame_id(frame))
         return j, R, p
 
@@ -349,14 +216,9 @@ class Robot(JointBounds):
         return list(names)
 
     def locked_joints(self, frame: str | None = None) -> list[str]:
-        """Names of the URDF's joints between the base and a frame (None: the tip) that ``q`` does not move: locked
-        because they are off the active joints (another branch than the tips'), left out by ``joints=[...]`` or
-        fixed by :meth:`locked`. A mimic joint is named by the joint it follows (the one to free); joints above the
-        base frame are not counted (the base frame holds them). Empty when ``q`` moves every joint to the frame.
-
-        What tells a goal on a frame only a floating base moves (its six entries) apart from one the joints should
-        move: :func:`~evoik_pin.goals.stack.bind` refuses the latter with the names this returns.
-        """
+        """Names of the joints between the base and a frame (None: the tip) that ``q`` does not move (off the active
+        joints, left out by ``joints=[...]`` or :meth:`locked`); a mimic joint is named by the joint it follows.
+        :func:`~evoik_pin.goals.stack.bind` refuses goals on such frames with these names."""
         name = self.model.frames[self.frame_id(frame)].name
         kin = self._kin_model
         path = kin.supports[kin.frames[find_frame(kin, name)].parentJoint]
@@ -372,38 +234,29 @@ class Robot(JointBounds):
 
     # ------------------------------------------------------------------ constants of compiled kernels
     def tree_constants(self) -> tuple[np.ndarray, ...]:
-        """The folded tree of the m active physical joints and how they follow q, for compiled kernels that
-        evaluate it without Pinocchio (:mod:`.tree`): parent (m,) int64, FR (m, 3, 3), Fp (m, 3) (m), revolute
-        (m,) bool, then index (m,) int64, scale (m,), offset (m,): physical joint k's value is
-        ``scale[k] * q[index[k]] + offset[k]``. C-contiguous, owned by the robot: do not modify them."""
+        """The folded tree of the m physical joints for compiled kernels (:mod:`.tree`): parent (m,) int64, FR (m, 3,
+        3), Fp (m, 3) m, revolute (m,) bool, index (m,) int64, scale (m,), offset (m,): joint k's value is
+        ``scale[k] * q[index[k]] + offset[k]``. C-contiguous, read-only."""
         t = self.tree
         return (t.parent, t.FR, t.Fp, t.revolute, self._phys_index, self._phys_scale, self._phys_offset)
 
     def chain_constants(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The folded serial chain ``T = F_0 Z(x_1) F_1 ... Z(x_c) F_c`` (tip pose in the base frame) over the c
-        physical joints from the base to the tip: rotations F_R (c+1, 3, 3), translations F_p (c+1, 3) (m) and the
-        (c,) bool mask of revolute joints. Z(x) is a rotation by x about z (revolute) or a translation by x along z
-        (prismatic); the joint values x come from q by :meth:`chain_coupling`. (A whole tree's constants:
-        :meth:`tree_constants` and :meth:`frame_constants`.) Owned by the robot: do not modify them.
-        """
+        """The folded chain ``T = F_0 Z(x_1) F_1 ... Z(x_c) F_c`` from the base to the tip (:class:`.tree.ChainView`):
+        F_R (c+1, 3, 3), F_p (c+1, 3) m, revolute (c,) bool; x from q by :meth:`chain_coupling`. Read-only."""
         view = self._tip_view
         return view.FR, view.Fp, view.revolute
 
     def chain_coupling(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """How the c joints of :meth:`chain_constants` follow q (n,): ``x_k = scale[k] * q[index[k]] + offset[k]``.
-        Returns index (c,) int64, scale (c,) and offset (c,) float64 (identity, ones and zeros without mimic joints
-        on the chain). The Jacobian with respect to q adds ``scale[k]`` times physical column k into column
-        ``index[k]``.
-        """
+        """index (c,) int64, scale (c,), offset (c,) of the joints of :meth:`chain_constants`:
+        ``x_k = scale[k] * q[index[k]] + offset[k]``."""
         joints = self._tip_view.joints
         if joints.size == self.tree.m:  # the chain holds every physical joint (then 0..m-1 in order)
             return self._phys_index, self._phys_scale, self._phys_offset
         return self._phys_index[joints], self._phys_scale[joints], self._phys_offset[joints]
 
     def chain_joints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The m physical joints (``model``'s joints: q's joints and the active mimic joints): revolute mask (m,),
-        unit axes (m, 3) in each joint's frame, and the lower and upper values (m,) (rad or m) they take when q
-        spans its bounds. Equal to (revolute, joint_axes, lower, upper) without mimic joints."""
+        """Revolute mask (m,), unit axes (m, 3) and the lower and upper values (m,) (rad or m) of the m physical
+        joints when q spans its bounds."""
         a = self._phys_scale * self.lower[self._phys_index] + self._phys_offset
         b = self._phys_scale * self.upper[self._phys_index] + self._phys_offset
         return self.tree.revolute, self.tree.axes, np.minimum(a, b), np.maximum(a, b)
@@ -416,17 +269,14 @@ class Robot(JointBounds):
 
     # ------------------------------------------------------------------ Pinocchio mapping
     def to_pinocchio(self, q) -> np.ndarray:
-        """Configuration (model.nq,) of :attr:`model` at joint vector ``q`` (n,): mimic joints at their coupled
-        values, continuous joints as (cos, sin); a floating base as its six joints (x, y, z, yaw, pitch, roll)."""
+        """Configuration (model.nq,) of :attr:`model` at ``q`` (n,): mimic joints coupled, continuous as (cos, sin)."""
         x = self._physical(np.asarray(q, dtype=float))
         if not self._has_continuous:
             return np.array(x)  # a copy: the caller owns it
         return np.concatenate((x, np.cos(x), np.sin(x)))[self._pin_gather]
 
     def from_pinocchio(self, q_pin) -> np.ndarray:
-        """Joint vector (n,) of a configuration (model.nq,) of :attr:`model`; continuous joints via
-        atan2(sin, cos), an entry that only mimic joints show through the first of them (``(x - offset) /
-        scale``)."""
+        """Joint vector (n,) of a configuration (model.nq,) of :attr:`model` (the inverse of :meth:`to_pinocchio`)."""
         q_pin = np.asarray(q_pin, dtype=float)
         out = np.full(self.n, np.nan)
         for k, i in enumerate(self._phys_idx_q):
@@ -437,14 +287,9 @@ class Robot(JointBounds):
         return out
 
     def full_configuration(self, q) -> np.ndarray:
-        """Configuration (full_model.nq,) of the whole URDF: the entries of ``q`` on their joints, every mimic
-        joint of them at its coupled value, the other joints at rest (where the model locked them), in
-        :attr:`full_model`'s joint order (that of ``pin.buildModelFromUrdf(path)``).
-
-        With a floating base, :attr:`full_model` is ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())``'s:
-        the configuration starts with the root link's position ``q[0:3]`` (m) and the unit quaternion (x, y, z, w),
-        w >= 0, of ``Rz(q[3]) Ry(q[4]) Rx(q[5])``, then the URDF's joints.
-        """
+        """Configuration (full_model.nq,) of the whole URDF (``pin.buildModelFromUrdf(path)``'s order): ``q`` on its
+        joints, mimic joints coupled, the others at rest. With a floating base it starts with the position (m) and
+        unit quaternion (x, y, z, w), w >= 0, of Pinocchio's free-flyer joint."""
         q = self.check_q(q)
         out = self._q_ref_full.copy()
         fm = self._kin_model
@@ -459,34 +304,20 @@ class Robot(JointBounds):
 
     # ------------------------------------------------------------------ kinematics, one configuration
     def fk(self, q, frame: str | None = None) -> pin.SE3:
-        """Pose of a frame (a link, joint or fixed frame of the URDF, Pinocchio's name; None: the tip) in the base
-        frame at joint vector ``q`` (n,), as a ``pin.SE3`` (m)."""
+        """Pose (``pin.SE3``, m) in the base frame of a frame (None: the tip) at ``q`` (n,)."""
         q = self.check_q(q)
-        fid = self.frame_id(frame)
-        pin.framesForwardKinematics(self.model, self.data, self.to_pinocchio(q))
-        return self._baseMo * self.data.oMf[fid]
+        return self.frame_poses_unchecked(q, [self.frame_id(frame)])[0]
 
     def jacobian(self, q, frame: str = "world", of: str | None = None) -> np.ndarray:
-        """Frame Jacobian (6, n) of a frame (``of``: a frame name; None: the tip): rows (vx, vy, vz, wx, wy, wz),
-        columns the entries of q.
-
-        ``frame="world"``: linear velocity of the frame's origin and angular velocity, both in the base
-        frame's axes (the derivative of :meth:`fk`'s translation is ``J[:3]``).
-        ``frame="local"``: both expressed in the frame itself.
-        """
+        """Jacobian (6, n) of a frame (``of``; None: the tip), rows (vx, vy, vz, wx, wy, wz), columns the entries of q.
+        ``frame="world"``: in the base frame's axes (``J[:3]`` is the derivative of :meth:`fk`'s translation);
+        ``"local"``: in the frame itself."""
         q = self.check_q(q)
         if frame not in ("world", "local"):
             raise ConfigurationError(f"jacobian frame must be 'world' or 'local', got {frame!r} (name the frame "
                                      "whose Jacobian you want with of=...)")
         fid = self.frame_id(of)
-        ref = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED if frame == "world" else pin.ReferenceFrame.LOCAL
-        # reshape: eigenpy returns a (6,) array for a one-joint model
-        J = pin.computeFrameJacobian(self.model, self.data, self.to_pinocchio(q), fid, ref).reshape(6, -1)
-        if self._coupled:
-            J = J @ self._G  # chain rule: dx/dq
-        if frame == "world" and self._base_id != 0:
-            Rt = self._oMbase.rotation.T
-            J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
+        J = self.jacobian_world_unchecked(q, fid) if frame == "world" else self.jacobian_local_unchecked(q, fid)
         return np.array(J)
 
     # ------------------------------------------------------------------ hot path of local solvers
@@ -508,12 +339,8 @@ class Robot(JointBounds):
         return bool(self._phys_continuous.any())
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`to_pinocchio` for the hot path: ``q`` itself when nothing is continuous and no mimic joint is
-        active, else the conversion.
-
-        The last conversion is memoized by the bytes of ``q``: local solvers ask for the pose and then the
-        Jacobian of one configuration, and the (cos, sin) conversion costs more than the kinematics.
-        """
+        """:meth:`to_pinocchio` for the hot path: ``q`` itself when no conversion is needed, else the last one
+        memoized (local solvers ask for the pose, then the Jacobian, of one ``q``)."""
         if not (self._has_continuous or self._coupled):
             return q
         key = q.tobytes()
@@ -524,25 +351,19 @@ class Robot(JointBounds):
         return out
 
     def fk_unchecked(self, q: np.ndarray) -> pin.SE3:
-        """:meth:`fk` of the tip without validation, for local solvers' inner loops.
-
-        ``q`` must already be a finite float array of shape (n,). Returns the tip pose in the base frame
-        (a ``pin.SE3`` owned by the caller).
-        """
+        """:meth:`fk` of the tip without validation (``q`` a finite float array (n,)), for inner loops."""
         return self.tip_pose_seen_from_unchecked(q, self._identity)
 
     def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
-        """``M * fk(q)``: the tip pose expressed in a frame whose inverse placement in the base frame is
-        ``M`` (e.g. ``M = T_target^-1`` gives the tip seen from the target), without validation and
-        without the copy :meth:`fk_unchecked` makes. ``q`` as in :meth:`fk_unchecked`; a new ``pin.SE3``."""
+        """``M * fk(q)`` (e.g. ``M = T_target^-1``: the tip seen from the target), unchecked, a new ``pin.SE3``."""
         pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
         if self._base_id == 0:
             return M * self.data.oMf[self._tip_id]
         return M * (self._baseMo * self.data.oMf[self._tip_id])
 
     def frame_poses_unchecked(self, q: np.ndarray, frame_ids) -> list[pin.SE3]:
-        """Poses in the base frame (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, from
-        one kinematics pass, without validation (``q`` as in :meth:`fk_unchecked`)."""
+        """Base-frame poses (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, one
+        kinematics pass, unchecked."""
         pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
         oMf = self.data.oMf
         if self._base_id == 0:
@@ -550,20 +371,15 @@ class Robot(JointBounds):
         return [self._baseMo * oMf[f] for f in frame_ids]
 
     def jacobian_local_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
-        """``jacobian(q, "local")`` of the tip (or of Pinocchio frame ``frame_id``) without validation (6, n), in
-        that frame.
-
-        Rows (vx, vy, vz, wx, wy, wz): ``T(q + dq) ~ T(q) exp(J dq)`` for small dq. ``q`` as in
-        :meth:`fk_unchecked`.
-        """
+        """``jacobian(q, "local")`` (6, n) of the tip (or frame id ``frame_id``), unchecked:
+        ``T(q + dq) ~ T(q) exp(J dq)``."""
         fid = self._tip_id if frame_id is None else frame_id
         J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, pin.ReferenceFrame.LOCAL)
         J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
         return J @ self._G if self._coupled else J
 
     def jacobian_world_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
-        """``jacobian(q, "world")`` of the tip (or of Pinocchio frame ``frame_id``) without validation (6, n), for
-        inner loops (``q`` as in :meth:`fk_unchecked`)."""
+        """``jacobian(q, "world")`` (6, n) of the tip (or frame id ``frame_id``), unchecked."""
         fid = self._tip_id if frame_id is None else frame_id
         J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid,
                                      pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, -1)
@@ -579,10 +395,9 @@ class Robot(JointBounds):
         """Jacobian row indices of a row selection: "translation", "rotation", "full", "planar" or a list."""
         if isinstance(rows, str):
             if rows not in _MANIPULABILITY_ROWS:
-                raise ConfigurationError(
-                    f"manipulability rows {rows!r} unknown; use one of {list(_MANIPULABILITY_ROWS)} or a list of "
-                    "row indices 0-5 (vx, vy, vz, wx, wy, wz)"
-                )
+                raise ConfigurationError(f"manipulability rows {rows!r} unknown; use one of "
+                                         f"{list(_MANIPULABILITY_ROWS)} or a list of row indices 0-5 (vx, vy, vz, wx, "
+                                         "wy, wz)")
             return _MANIPULABILITY_ROWS[rows]
         out = [int(r) for r in rows]
         if not out or any(r < 0 or r > 5 for r in out) or len(set(out)) != len(out):
@@ -590,11 +405,8 @@ class Robot(JointBounds):
         return out
 
     def manipulability(self, q, rows="translation") -> float:
-        """Yoshikawa manipulability sqrt(det(J J^T)) of the chosen rows of the tip's world-frame Jacobian.
-
-        ``rows``: ``"translation"`` (vx, vy, vz), ``"rotation"``, ``"full"`` (all six), ``"planar"``
-        (vx, vy, wz: paper 003's x, y, yaw) or an explicit list of row indices.
-        """
+        """Yoshikawa manipulability sqrt(det(J J^T)) of the rows :meth:`task_rows` picks of the tip's world
+        Jacobian."""
         J = self.jacobian(q, "world")[self.task_rows(rows)]
         return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
 
@@ -603,13 +415,8 @@ class Robot(JointBounds):
         return self._tip_view if frame is None else self._frame_view(self.frame_id(frame))[3]
 
     def fk_batch(self, Q, validate: bool = True, frames=None):
-        """Frame poses of a population ``Q`` (N, n): positions (N, 3) in m and rotations (N, 3, 3) of the tip
-        (``frames=None``) or of one frame (a name); for a list of G frames, positions (N, G, 3) and rotations
-        (N, G, 3, 3).
-
-        ``validate=False`` skips the shape/finiteness check, for solvers' inner loops on populations
-        they built themselves.
-        """
+        """Positions (N, 3) m and rotations (N, 3, 3) of the tip (or of one frame name) for a population ``Q``
+        (N, n); for a list of G frames (N, G, 3) and (N, G, 3, 3). ``validate=False`` skips the checks."""
         if validate:
             Q = self.check_population(Q)
         X = self._physical(Q)
@@ -623,24 +430,15 @@ class Robot(JointBounds):
         return P, R
 
     def positions_batch(self, Q, frame: str | None = None) -> np.ndarray:
-        """Positions (N, 3) in m of the tip (or of ``frame``) for a population ``Q`` (N, n); cheaper than
-        :meth:`fk_batch` (:func:`~evoik_pin.robot.population.chain_positions`). Not validated: solvers call it in
-        their inner loop with populations they built themselves.
-        """
+        """Positions (N, 3) m of the tip (or ``frame``) for ``Q`` (N, n), unchecked; cheaper than :meth:`fk_batch`."""
         return chain_positions(self._view(frame), self._physical(Q))
 
     def jacobian_batch(self, Q, validate: bool = True, frame: str | None = None) -> np.ndarray:
-        """World-frame Jacobians (N, 6, n) of the tip (or of ``frame``) for a population, equal to
-        :meth:`jacobian` row by row."""
+        """World-frame Jacobians (N, 6, n) of the tip (or ``frame``): :meth:`jacobian` row by row."""
         return self.fk_jacobian_batch(Q, validate, frame)[2]
 
     def fk_jacobian_batch(self, Q, validate: bool = True, frame: str | None = None):
-        """Positions (N, 3), rotations (N, 3, 3) and world-frame Jacobians (N, 6, n) of the tip (or of ``frame``)
-        from one pass.
-
-        What :meth:`fk_batch` and :meth:`jacobian_batch` return, for batched Newton-type solvers that need
-        both at every iteration.
-        """
+        """Positions (N, 3), rotations (N, 3, 3) and world Jacobians (N, 6, n) of the tip (or ``frame``), one pass."""
         if validate:
             Q = self.check_population(Q)
         p, R, J = chain_jacobians(self._view(frame), self._physical(Q), self.tree.m)
@@ -654,68 +452,8 @@ class Robot(JointBounds):
 
     @cached_property
     def mass_constants(self):
-        """The masses of the physical joints' bodies for compiled kernels (centre-of-mass goals):
-        :class:`~evoik_pin.robot.mass.MassConstants`. Owned by the robot: do not modify them."""
-        from .mass import mass_constants
-
+        """:class:`~evoik_pin.robot.tree.MassConstants` for compiled kernels (centre-of-mass goals). Read-only."""
         return mass_constants(self)
-
-    # ------------------------------------------------------------------ geometry for display
-    @property
-    def base_placement(self) -> pin.SE3:
-        """Placement (m) of the base frame in the world frame of :attr:`model` (the URDF's root), a new
-        ``pin.SE3``; the identity when no base was chosen. Constant: every free joint lies downstream of the
-        base, so it is taken at the neutral configuration."""
-        return self._oMbase.copy()
-
-    def geometry_placements(self, geometry_model: pin.GeometryModel, q) -> list[pin.SE3]:
-        """Placements (m) of every object of ``geometry_model`` at joint vector ``q`` (n,) in rad/m.
-
-        ``geometry_model`` must be attached to :attr:`model`'s joints (e.g. :attr:`visual_model`, or a
-        skeleton built on :attr:`model`). Returns one new ``pin.SE3`` per geometry object, in its order,
-        expressed in :attr:`model`'s world frame (compose with ``base_placement.inverse()`` for the base
-        frame).
-        """
-        q = self.check_q(q)
-        gdata = pin.GeometryData(geometry_model)
-        pin.forwardKinematics(self.model, self.data, self.to_pinocchio(q))
-        pin.updateGeometryPlacements(self.model, self.data, geometry_model, gdata)
-        return [M.copy() for M in gdata.oMg]
-
-    @cached_property
-    def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for the viewer."""
-        return self._geometry_model(pin.GeometryType.VISUAL)
-
-    @cached_property
-    def collision_model(self) -> pin.GeometryModel:
-        """Collision geometry (the URDF's ``<collision>`` elements), attached to :attr:`model`'s joints (locked
-        parts fixed where they rest), for :class:`~evoik_pin.scene.Scene`."""
-        return self._geometry_model(pin.GeometryType.COLLISION)
-
-    def _geometry_model(self, kind) -> pin.GeometryModel:
-        """The URDF's geometry of one kind, reduced onto :attr:`model` like the model itself."""
-        if self.urdf_xml is None:  # pragma: no cover
-            raise RobotLoadError("this robot has no URDF text to read geometry from")
-        xml = _MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml
-        try:
-            geom = pin.buildGeomFromUrdfString(self._kin_model, xml, kind, package_dirs=self.package_dirs)
-        except (ValueError, RuntimeError) as exc:  # a mesh Pinocchio could not find or read
-            said = str(exc).strip()
-            why = [m for pkg, m in self.missing_packages.items() if f"package://{pkg}/" in said]
-            raise RobotLoadError(f"{self.name}: {why[0] if why else said}") from None
-        if self._locked:
-            _, geoms = reduced_model(self._kin_model, self._locked, self._q_ref_full, (geom,))
-            geom = geoms[0]
-        return geom
-
-    def _mesh_file(self, m: re.Match) -> str:
-        """The absolute file of one ``package://pkg/rel`` URI whose package was found and holds ``rel``; the URI
-        unchanged otherwise (Pinocchio then tries ``package_dirs``)."""
-        folder = self.packages.get(m.group(1))
-        if folder is not None and (Path(folder) / m.group(2)).is_file():
-            return (Path(folder) / m.group(2)).as_posix()
-        return m.group(0)
 
     def __repr__(self) -> str:
         tips = f"tip={self.tip!r}" if len(self.tips) == 1 else f"tips={list(self.tips)}"
@@ -723,31 +461,8 @@ class Robot(JointBounds):
         return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, {tips}{floating})"
 
 
-def _frame_list(tips) -> list[str]:
-    """``tips`` as a non-empty list of frame names, or a FrameError."""
-    if isinstance(tips, str) or not hasattr(tips, "__iter__"):
-        raise FrameError(f"tips must be a list of frame names or 'all', got {tips!r}")
-    out = list(tips)
-    if not out or not all(isinstance(t, str) for t in out):
-        raise FrameError(f"tips must be a non-empty list of frame names (strings), got {tips!r}")
-    return out
-
-
-def _listed(names: list[str], most: int = 40) -> str:
-    """The first ``most`` names, comma-separated, and how many more there are."""
-    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
-    return ", ".join(names[:most]) + more
-
-
-def _suggest(name, model: pin.Model) -> str:
-    """' (closest: a, b)' for a frame name not found in ``model``, or ''."""
-    close = closest_names(str(name), frame_names(model))
-    return f" (closest: {', '.join(close)})" if close else ""
-
-
 def _check_fixed_root(model: pin.Model, name: str) -> None:
-    """A RobotLoadError when the URDF's root already moves (a floating or planar joint from its root link):
-    a floating base would then move it twice."""
+    """A RobotLoadError when the URDF's root already moves (a floating base would move it twice)."""
     moving = [j for j in range(1, model.njoints) if model.parents[j] == 0 and model.joints[j].nv > 1]
     if moving:
         j = moving[0]

@@ -1,25 +1,15 @@
-"""The kinematic tree of a robot's active joints: topology, folded constants, frames on joints, a floating base.
+"""The kinematic tree of a robot's active joints: topology, folded constants (and masses), frames on joints, a
+floating base, the kinematics of populations.
 
-The m physical joints of a (reduced) Pinocchio model are its joints 1..m, in Pinocchio's topological order (a
-joint comes after its parent). :class:`KinematicTree` holds, for physical joint k:
-
-* ``parent[k]``: the index of its parent physical joint, -1 for a joint at the root (below the base frame);
-* ``FR[k]`` (3, 3), ``Fp[k]`` (3,) (m): the joint's placement in its parent's *folded* frame (in the base frame
-  for a root joint). Folded: every joint axis a_k is turned onto z by a constant rotation ``B_k``
-  (:func:`~evoik_pin.lie.rotation_to_z`) folded into the placements, ``F_k = B_parent^T M_k B_k``, so that a
-  joint's motion ``Z(x)`` is a rotation by x about z (revolute) or a translation by x along z (prismatic);
-* the joint poses follow in one pass: ``(R_k, p_k) = (R_parent, p_parent) F_k Z(x_k)``.
-
-A frame f (a link, a joint frame or a fixed frame of the URDF) sits on one physical joint j_f (or on the base,
-j_f = -1) at a constant placement, folded as ``B_j^T M_f``: its pose is ``(R_j R_f, p_j + R_j p_f)``; the
-joints that move it are j_f and its ancestors. A serial chain is the tree with ``parent[k] = k - 1``; the chain
-from the base to one frame (:meth:`KinematicTree.chain_to`) is what the population kinematics
-(:mod:`.population`) evaluate.
-
-A floating base (:func:`with_floating_base`) is six 1-DOF joints in front of the URDF's root link, so nothing
-downstream needs a special case: prismatic along the world x, y, z axes (m), then revolute about z (yaw), the
-new y (pitch) and the new x (roll) (rad), so that the root link's pose is ``(Rz(yaw) Ry(pitch) Rx(roll),
-(x, y, z))``.
+The m physical joints of a (reduced) Pinocchio model are its joints 1..m in topological order. For joint k,
+``parent[k]`` (-1 at the root) and its placement ``(FR[k], Fp[k])`` in its parent's *folded* frame: every joint
+axis is turned onto z by a constant rotation ``B_k`` (:func:`~evoik_pin.lie.rotation_to_z`) folded into the
+placements, ``F_k = B_parent^T M_k B_k``, so that ``Z(x)`` is a rotation about z (revolute) or a translation along
+z (prismatic) and ``(R_k, p_k) = (R_parent, p_parent) F_k Z(x_k)``. A frame sits on one joint j_f (-1: the base) at
+the folded placement ``B_j^T M_f``. A floating base (:func:`with_floating_base`) is six 1-DOF joints in front of
+the root link: prismatic x, y, z (m), then revolute yaw (z), pitch (new y), roll (new x) (rad). The population
+kinematics (:func:`chain_forward`, :func:`chain_positions`, :func:`chain_jacobians`) walk a frame's
+:class:`ChainView` for physical joint values X (N, m) with a few NumPy calls per joint whatever N is.
 """
 
 from __future__ import annotations
@@ -34,23 +24,21 @@ from ..lie import rotation_to_z
 from .frames import restore_frame_names, unique_frame_names
 from .joints import joint_motions
 
-__all__ = ["FLOATING_BASE_BOUNDS", "FLOATING_BASE_JOINTS", "ChainView", "KinematicTree",
-           "free_flyer_model", "rpy_to_quaternion", "with_floating_base"]
+__all__ = ["FLOATING_BASE_BOUNDS", "FLOATING_BASE_JOINTS", "ChainView", "KinematicTree", "MassConstants",
+           "chain_forward", "chain_jacobians", "chain_positions", "free_flyer_model", "mass_constants",
+           "rpy_to_quaternion", "with_floating_base"]
 
-#: Names of the six joints a floating base adds at the front of q: x, y, z (m, along the world axes), then yaw,
-#: pitch, roll (rad; the root link's rotation is Rz(yaw) Ry(pitch) Rx(roll)).
+#: Names of the six joints a floating base adds at the front of q (rotation Rz(yaw) Ry(pitch) Rx(roll)).
 FLOATING_BASE_JOINTS = ("floating_base_x", "floating_base_y", "floating_base_z", "floating_base_yaw",
                         "floating_base_pitch", "floating_base_roll")
-#: Default bounds of the floating base's six entries: a 1 m box around the origin, yaw and roll a full turn
-#: (they wrap), pitch [-pi/2, pi/2] (every rotation has such roll-pitch-yaw angles).
+#: Default bounds of the floating base's six entries: a 1 m box, yaw and roll a full turn, pitch [-pi/2, pi/2].
 FLOATING_BASE_BOUNDS = (np.array([-1.0, -1.0, -1.0, -np.pi, -np.pi / 2, -np.pi]),
                         np.array([1.0, 1.0, 1.0, np.pi, np.pi / 2, np.pi]))
 
 
 def with_floating_base(model: pin.Model) -> pin.Model:
-    """``model`` (a fixed-base model of a URDF) behind six 1-DOF joints (:data:`FLOATING_BASE_JOINTS`) whose
-    limits are :data:`FLOATING_BASE_BOUNDS`, each with its JOINT frame as a URDF joint has: the model's joints keep
-    their order after them, and its frames their names; the root link hangs from the roll joint's frame."""
+    """``model`` (fixed-base) behind the six joints :data:`FLOATING_BASE_JOINTS` (limits
+    :data:`FLOATING_BASE_BOUNDS`, each with its JOINT frame); the root link hangs from the roll joint's frame."""
     base = pin.Model()
     parent = 0
     kinds = (pin.JointModelPX(), pin.JointModelPY(), pin.JointModelPZ(), pin.JointModelRZ(), pin.JointModelRY(),
@@ -65,8 +53,8 @@ def with_floating_base(model: pin.Model) -> pin.Model:
 
 
 def _appended(base: pin.Model, model: pin.Model, frame: int) -> pin.Model:
-    """``pin.appendModel(base, model, frame, identity)`` for models whose frames share names (appendModel looks
-    frames up by name: see :func:`.frames.unique_frame_names`)."""
+    """``pin.appendModel(base, model, frame, identity)`` safe for shared frame names
+    (:func:`.frames.unique_frame_names`)."""
     work, renamed = unique_frame_names(model)
     out = pin.appendModel(base, work, frame, pin.SE3.Identity())
     restore_frame_names(out, renamed)
@@ -74,9 +62,8 @@ def _appended(base: pin.Model, model: pin.Model, frame: int) -> pin.Model:
 
 
 def free_flyer_model(model: pin.Model) -> pin.Model:
-    """``model`` behind a free-flyer root joint (Pinocchio's ``root_joint``): the model
-    ``pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())`` builds, whose configuration starts with the root
-    link's position (3) and unit quaternion (x, y, z, w) (4)."""
+    """``model`` behind Pinocchio's free-flyer ``root_joint``, as ``pin.buildModelFromUrdf(path,
+    pin.JointModelFreeFlyer())`` builds it."""
     base = pin.Model()
     joint = base.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root_joint")
     frame = base.addFrame(pin.Frame("root_joint", joint, pin.SE3.Identity(), pin.FrameType.JOINT))
@@ -91,15 +78,9 @@ def rpy_to_quaternion(yaw: float, pitch: float, roll: float) -> np.ndarray:
 
 
 class ChainView:
-    """The serial chain from the base to one frame, in the folded form ``T = F_0 Z(x_a0) F_1 ... Z(x_ac) F_c+1``.
-
-    Attributes:
-        joints: (c,) indices of the physical joints on the chain, base to frame (the frame's joint's ancestors
-            and itself).
-        FR: (c+1, 3, 3), Fp: (c+1, 3) (m): the placements; the last one is the frame's (its only one when c = 0:
-            a frame no joint moves).
-        revolute: (c,) bool.
-    """
+    """The serial chain from the base to one frame, folded: ``T = F_0 Z(x_a0) F_1 ... Z(x_ac) F_c+1``.
+    ``joints`` (c,): its physical joints, base to frame; ``FR`` (c+1, 3, 3), ``Fp`` (c+1, 3) m: the placements,
+    the last the frame's; ``revolute`` (c,) bool."""
 
     def __init__(self, joints: np.ndarray, FR: np.ndarray, Fp: np.ndarray, revolute: np.ndarray) -> None:
         self.joints = joints
@@ -110,14 +91,9 @@ class ChainView:
 
     @cached_property
     def positions_operator(self) -> tuple[list[np.ndarray], np.ndarray]:
-        """(S3, y_tip) for the positions-only recursion of :func:`.population.chain_positions`.
-
-        The homogeneous map of joint k is ``H_k(x) = a(x) A_k + b(x) B_k + C_k`` (4 x 4) with a = cos x, b = sin x
-        (revolute) or a = x, b = 0 (prismatic). With ``Y = [a p; b p; p]`` (12, N) for the homogeneous points p
-        (4, N), ``H_k p = [A_k B_k C_k] Y``; stacking that (4, 12) block three times makes one BLAS product
-        return p' already copied into all three slots of the next Y. S3: one (12, 12) matrix per joint; y_tip
-        (12, 1): the frame's origin, three times.
-        """
+        """(S3, y_tip) of :func:`chain_positions`: joint k's homogeneous map is ``H_k(x) = a A_k + b B_k
+        + C_k`` (a, b = cos x, sin x; or x, 0 for a prismatic joint), so ``H_k p = [A_k B_k C_k] [a p; b p; p]``.
+        S3: that (4, 12) block stacked three times per joint (12, 12); y_tip (12, 1): the frame's origin, thrice."""
         c = self.joints.size
         S = np.zeros((c, 4, 12))
         for k in range(c):
@@ -136,15 +112,9 @@ class ChainView:
 
 @dataclass(frozen=True)
 class KinematicTree:
-    """The folded constants of a model's m physical joints (see the module docstring).
-
-    Attributes:
-        parent: (m,) int64, the parent physical joint of each (-1 at the root).
-        FR: (m, 3, 3), Fp: (m, 3) (m): each joint's placement in its parent's folded frame (base frame at the
-            root). revolute: (m,) bool. axes: (m, 3) unit joint axes in each joint's own (unfolded) frame.
-        B: (m, 3, 3) the rotations folding each axis onto z. base_R, base_p: the base frame's inverse
-            placement in the model's world frame (``baseMo``), for frames no joint moves.
-    """
+    """The folded constants of a model's m physical joints (the module docstring): parent (m,) int64, FR (m, 3, 3),
+    Fp (m, 3) m, revolute (m,) bool, axes (m, 3) unfolded unit axes, B (m, 3, 3) folding rotations, and base_R,
+    base_p: ``baseMo``, for frames no joint moves."""
 
     parent: np.ndarray
     FR: np.ndarray
@@ -157,8 +127,7 @@ class KinematicTree:
 
     @classmethod
     def of(cls, model: pin.Model, baseMo: pin.SE3) -> KinematicTree:
-        """The tree of every joint of ``model`` (all 1-DOF), with poses expressed in the frame whose inverse
-        placement in the model's world frame is ``baseMo``."""
+        """The tree of every joint of ``model`` (all 1-DOF), poses in the frame ``baseMo`` maps the world to."""
         m = model.njoints - 1
         revolute, axes = joint_motions(model, range(1, m + 1))
         B = np.array([rotation_to_z(a) for a in axes]).reshape(m, 3, 3)
@@ -186,15 +155,13 @@ class KinematicTree:
         return bool(np.array_equal(self.parent, np.arange(-1, self.m - 1)))
 
     def frame(self, model: pin.Model, frame_id: int) -> tuple[int, np.ndarray, np.ndarray]:
-        """(physical joint j_f or -1, R_f (3, 3), p_f (3,) m) of frame ``frame_id`` of ``model`` (the model the tree
-        was made of): its folded placement on its joint, or its constant pose in the base frame when j_f = -1."""
+        """(j_f or -1, R_f (3, 3), p_f (3,) m) of frame ``frame_id`` of the tree's ``model``: its folded placement
+        on its joint, or its base-frame pose when j_f = -1."""
         f = model.frames[frame_id]
         j = int(f.parentJoint) - 1
         M = f.placement
         if j < 0:
-            R = self.base_R @ M.rotation
-            p = self.base_R @ M.translation + self.base_p
-            return -1, R, p
+            return -1, self.base_R @ M.rotation, self.base_R @ M.translation + self.base_p
         Bt = self.B[j].T
         return j, Bt @ M.rotation, Bt @ M.translation
 
@@ -220,3 +187,111 @@ class KinematicTree:
         for g, j in enumerate(joints_of_frames):
             mask[g, self.ancestors(int(j))] = True
         return mask
+
+
+@dataclass(frozen=True)
+class MassConstants:
+    """The masses of a robot's m physical joints: ``masses`` (m,) kg, ``moments`` (m, 3) kg m (``m_k c_k`` in the
+    joint's folded frame), ``subtree`` (m,) kg (a joint's body and all below), ``fixed_mass`` kg and ``fixed_moment``
+    (3,) kg m (base frame) of the bodies no active joint moves, ``total`` kg."""
+
+    masses: np.ndarray
+    moments: np.ndarray
+    subtree: np.ndarray
+    fixed_mass: float
+    fixed_moment: np.ndarray
+    total: float
+
+
+def mass_constants(robot) -> MassConstants:
+    """The :class:`MassConstants` of ``robot``, from its reduced model's inertias (which hold locked links' bodies).
+    Bodies the reduction leaves on the universe are a constant first moment; bodies welded to the world in
+    ``full_model`` are left out, as ``pin.centerOfMass(full_model, ...)`` does."""
+    model, tree = robot.model, robot.tree
+    m = tree.m
+    masses = np.array([model.inertias[k + 1].mass for k in range(m)], dtype=float)
+    moments = np.empty((m, 3))
+    for k in range(m):
+        inertia = model.inertias[k + 1]
+        moments[k] = tree.B[k].T @ (inertia.mass * np.asarray(inertia.lever))
+    subtree = masses.copy()
+    for k in range(m - 1, -1, -1):  # a joint comes after its parent
+        if tree.parent[k] >= 0:
+            subtree[tree.parent[k]] += subtree[k]
+    held, welded = model.inertias[0], robot.full_model.inertias[0]
+    fixed_mass = float(held.mass - welded.mass)
+    first = held.mass * np.asarray(held.lever) - welded.mass * np.asarray(welded.lever)  # world frame
+    fixed_moment = tree.base_R @ first + fixed_mass * tree.base_p
+    if abs(fixed_mass) < 1e-12:  # the same bodies on both sides: no round-off left over
+        fixed_mass, fixed_moment = 0.0, np.zeros(3)
+    return MassConstants(masses, moments, subtree, fixed_mass, fixed_moment, float(masses.sum() + fixed_mass))
+
+
+def _on_chain(view: ChainView, X: np.ndarray) -> np.ndarray:
+    """The columns of X (N, m) of the chain's joints."""
+    return X if view.joints.size == X.shape[1] else X[:, view.joints]
+
+
+def chain_forward(view: ChainView, X: np.ndarray, want_joints: bool):
+    """Base-to-frame recursion over physical joint values X (N, m): the frame's rotations (N, 3, 3) and positions
+    (N, 3) m, and with ``want_joints`` the chain joints' z axes and origins (N, c, 3) (else None)."""
+    N = X.shape[0]
+    X = _on_chain(view, X)
+    c = X.shape[1]
+    FR, Fp = view.FR, view.Fp
+    R = np.broadcast_to(FR[0], (N, 3, 3)).copy()
+    p = np.broadcast_to(Fp[0], (N, 3)).copy()
+    cos, sin = np.cos(X), np.sin(X)
+    z_axes = np.empty((N, c, 3)) if want_joints else None
+    origins = np.empty((N, c, 3)) if want_joints else None
+    for k in range(c):
+        if want_joints:
+            z_axes[:, k] = R[:, :, 2]
+            origins[:, k] = p
+        if view.revolute[k]:
+            cs, sn = cos[:, k, None], sin[:, k, None]
+            c0, c1 = R[:, :, 0].copy(), R[:, :, 1]
+            R[:, :, 0] = cs * c0 + sn * c1
+            R[:, :, 1] = cs * c1 - sn * c0
+        else:
+            p = p + X[:, k, None] * R[:, :, 2]
+        p = p + (R.reshape(N * 3, 3) @ Fp[k + 1]).reshape(N, 3)
+        R = (R.reshape(N * 3, 3) @ FR[k + 1]).reshape(N, 3, 3)
+    return R, p, z_axes, origins
+
+
+def chain_positions(view: ChainView, X: np.ndarray) -> np.ndarray:
+    """The frame's positions (N, 3) m for X (N, m), walking back from the frame with two NumPy calls per joint
+    (:attr:`ChainView.positions_operator`); cheaper than :func:`chain_forward`."""
+    N = X.shape[0]
+    XT = _on_chain(view, X).T
+    c = XT.shape[0]
+    S3, y_tip = view.positions_operator
+    AB = np.empty((c, 8, N))  # rows 0-3: a = cos x (or x), rows 4-7: b = sin x (or 0)
+    AB[:, 0:4] = np.cos(XT)[:, None, :]
+    AB[:, 4:8] = np.sin(XT)[:, None, :]
+    if not view.all_revolute:
+        prismatic = ~view.revolute
+        AB[prismatic, 0:4] = XT[prismatic][:, None, :]
+    Y = np.empty((12, N))
+    Z = np.empty((12, N))
+    Y[:] = y_tip
+    for k in range(c - 1, -1, -1):
+        Y[0:8] *= AB[k]
+        np.matmul(S3[k], Y, out=Z)
+        Y, Z = Z, Y
+    return Y[8:11].T.copy()
+
+
+def chain_jacobians(view: ChainView, X: np.ndarray, m: int):
+    """The frame's positions (N, 3), rotations (N, 3, 3) and base-frame Jacobians (N, 6, m) with respect to the
+    m physical joint values (rows vx, vy, vz, wx, wy, wz; zero columns for joints that do not move the frame)."""
+    R, p, z_axes, origins = chain_forward(view, X, want_joints=True)
+    J = np.zeros((X.shape[0], 6, m))
+    cols = view.joints
+    rev = view.revolute
+    lever = p[:, None, :] - origins  # (N, c, 3)
+    J[:, :3, cols[rev]] = np.cross(z_axes[:, rev], lever[:, rev]).transpose(0, 2, 1)
+    J[:, 3:, cols[rev]] = z_axes[:, rev].transpose(0, 2, 1)
+    J[:, :3, cols[~rev]] = z_axes[:, ~rev].transpose(0, 2, 1)
+    return p, R, J

@@ -1,11 +1,5 @@
-"""What a URDF must be before Pinocchio reads it: one tree of links and joints with usable numbers.
-
-urdfdom (the C++ parser under Pinocchio) rejects some broken files with a generic "not a valid URDF model" and
-its reasons printed on stderr, and accepts others that then give NaN or silently wrong kinematics (a zero
-joint axis, inverted limits, a NaN origin). :func:`check_urdf` reads the parsed XML first and raises a
-:class:`~evoik_pin.errors.RobotLoadError` naming the file, the joint or link, and what is accepted. It also
-collects the ``<mimic>`` couplings (``q_j = multiplier q_k + offset``), resolved to the joint that drives
-each chain of them, which :class:`~evoik_pin.robot.robot.Robot` folds into its joint vector.
+"""What a URDF must be before Pinocchio reads it (urdfdom accepts files giving NaN or wrong kinematics, or rejects
+them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings.
 """
 
 from __future__ import annotations
@@ -17,7 +11,7 @@ from dataclasses import dataclass
 
 from ..errors import RobotLoadError, RobotLoadWarning
 
-__all__ = ["JOINT_TYPES", "Mimic", "UrdfSummary", "check_urdf"]
+__all__ = ["JOINT_TYPES", "Mimic", "check_urdf"]
 
 #: The joint types of the URDF specification.
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -33,30 +27,14 @@ class Mimic:
     offset: float
 
 
-@dataclass(frozen=True)
-class UrdfSummary:
-    """What :func:`check_urdf` learnt: the robot's name, joint types and the mimic couplings."""
-
-    name: str
-    joint_types: dict[str, str]
-    mimic: dict[str, Mimic]
-
-
-def check_urdf(root: ET.Element, where: str) -> UrdfSummary:
-    """Check the parsed URDF ``root`` (read from ``where``: a path or "URDF string"); return its summary.
-
-    Raises a RobotLoadError naming ``where`` for: a root element other than ``<robot>``, a missing or
-    duplicated link or joint name, an unknown joint type, a joint without parent or child or naming a link
-    the file lacks, an origin or axis that is not three finite numbers, a zero axis, a revolute or prismatic
-    joint without ``<limit>`` (or without its effort / velocity), limits that are not numbers or are inverted
-    (lower > upper), a link with two parents (a closed loop), several root links, a cycle, and a malformed or
-    circular ``<mimic>``. A ``<mimic>`` naming no 1-DOF joint of the file is ignored with a
-    :class:`~evoik_pin.errors.RobotLoadWarning` (its joint stays independent); one on a fixed joint is ignored.
-    """
+def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
+    """Check the parsed URDF ``root`` (read from ``where``) and return its mimic couplings ``{joint: Mimic}``, each
+    resolved to the joint driving its chain of mimics; a RobotLoadError naming
+    ``where``, the joint or link and what is accepted for names, joint types, links, origins, axes, limits, a
+    tree shape and mimics. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
     if root.tag != "robot":
         raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
-    name = root.get("name")
-    if not name:
+    if not root.get("name"):
         raise RobotLoadError(f"{where}: the <robot> element has no name attribute (<robot name=\"...\">)")
     links = _names(root.findall("link"), "link", where)
     if not links:
@@ -87,30 +65,26 @@ def check_urdf(root: ET.Element, where: str) -> UrdfSummary:
             raise RobotLoadError(f"{where}: joint {jname!r} joins link {parent!r} to itself")
         if child in parent_of:
             other = parent_of[child][1]
-            raise RobotLoadError(
-                f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r} (a closed loop); a "
-                "URDF must be a tree: every link has at most one parent joint. Model a closed chain by cutting it "
-                "open (drop one joint)"
-            )
+            raise RobotLoadError(f"{where}: link {child!r} is the child of two joints, {other!r} and {jname!r} (a "
+                                 "closed loop); a URDF must be a tree: every link has at most one parent joint. Model "
+                                 "a closed chain by cutting it open (drop one joint)")
         parent_of[child] = (parent, jname)
         _check_joint(j, jname, jtype, where)
     _check_tree(links, parent_of, where)
-    return UrdfSummary(name, types, _mimic(joints, types, where))
+    return _mimic(joints, types, where)
 
 
 def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:
     """The ``name`` of each element; a RobotLoadError for a missing or repeated one."""
-    names: list[str] = []
-    seen: set[str] = set()
+    names: dict[str, None] = {}  # in order, each once
     for i, el in enumerate(elements):
         n = el.get("name")
         if not n:
             raise RobotLoadError(f"{where}: <{kind}> number {i + 1} has no name attribute")
-        if n in seen:
+        if n in names:
             raise RobotLoadError(f"{where}: two {kind}s are named {n!r}; {kind} names must be unique")
-        seen.add(n)
-        names.append(n)
-    return names
+        names[n] = None
+    return list(names)
 
 
 def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...] | None = None,
@@ -161,15 +135,11 @@ def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
                                      "requires effort and velocity (lower and upper default to 0)")
     if limit is None:
         return
-    values = {}
-    for attr in ("lower", "upper", "effort", "velocity"):
-        values[attr] = _floats(limit.get(attr), 1, f"the {attr} limit of joint {jname!r}", where, (0.0,),
-                               finite=False)[0]
+    values = {attr: _floats(limit.get(attr), 1, f"the {attr} limit of joint {jname!r}", where, (0.0,), finite=False)[0]
+              for attr in ("lower", "upper", "effort", "velocity")}
     if jtype in ("revolute", "prismatic") and values["lower"] > values["upper"]:
-        raise RobotLoadError(
-            f"{where}: joint {jname!r} has inverted limits: lower {values['lower']:g} > upper {values['upper']:g} "
-            "(lower must not exceed upper)"
-        )
+        raise RobotLoadError(f"{where}: joint {jname!r} has inverted limits: lower {values['lower']:g} > upper "
+                             f"{values['upper']:g} (lower must not exceed upper)")
 
 
 def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: str) -> None:
@@ -180,15 +150,12 @@ def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: 
                              "tree with one root link")
     if len(roots) > 1:
         shown = ", ".join(repr(r) for r in roots[:5]) + (", ..." if len(roots) > 5 else "")
-        raise RobotLoadError(
-            f"{where} has {len(roots)} root links (links no joint has as child): {shown}; a URDF must be one tree: "
-            "join them with joints"
-        )
+        raise RobotLoadError(f"{where} has {len(roots)} root links (links no joint has as child): {shown}; a URDF must "
+                             "be one tree: join them with joints")
     children: dict[str, list[str]] = {}
     for child, (parent, _) in parent_of.items():
         children.setdefault(parent, []).append(child)
-    seen = {roots[0]}
-    stack = [roots[0]]
+    seen, stack = {roots[0]}, [roots[0]]
     while stack:
         for c in children.get(stack.pop(), ()):
             if c not in seen:

@@ -34,12 +34,8 @@ _STDERR_LOCK = threading.RLock()
 
 
 def decode_xml(data: bytes, where: str) -> str:
-    """Text of the XML document ``data`` read from ``where`` (a path, or "URDF string").
-
-    The encoding is the one an XML parser would use: a byte-order mark, else the ``encoding`` attribute of the
-    ``<?xml ...?>`` declaration (e.g. ISO-8859-1), else UTF-8. Empty, binary (NUL bytes, control characters)
-    and undecodable input raise a :class:`RobotLoadError` naming ``where``.
-    """
+    """Text of the XML document ``data`` read from ``where``, decoded as an XML parser would (byte-order mark, else
+    the declared encoding, else UTF-8); RobotLoadError for empty, binary or undecodable input."""
     if not data.strip():
         raise RobotLoadError(f"{where} is empty: expected URDF XML (a <robot name=...> element)")
     encoding = next((enc for sig, enc in _SIGNATURES if data.startswith(sig)), None)
@@ -50,10 +46,8 @@ def decode_xml(data: bytes, where: str) -> str:
     try:
         codecs.lookup(encoding)
     except LookupError:
-        raise RobotLoadError(
-            f"{where} declares an unknown encoding {encoding!r} in its <?xml ...?> declaration; use UTF-8 or a "
-            "standard name such as ISO-8859-1"
-        ) from None
+        raise RobotLoadError(f"{where} declares an unknown encoding {encoding!r} in its <?xml ...?> declaration; use "
+                             "UTF-8 or a standard name such as ISO-8859-1") from None
     source = f"{encoding} (declared in its <?xml ...?> line)" if declared else encoding
     try:
         text = data.decode(encoding)
@@ -67,10 +61,8 @@ def decode_xml(data: bytes, where: str) -> str:
     text = text.lstrip("\ufeff")
     bad = _CONTROL.search(text)  # XML allows no control characters but tab, newline and carriage return
     if bad is not None:
-        raise RobotLoadError(
-            f"{where} is a binary file, not URDF XML: control character {ord(bad.group()):#04x} at character "
-            f"{bad.start()}"
-        )
+        raise RobotLoadError(f"{where} is a binary file, not URDF XML: control character {ord(bad.group()):#04x} at "
+                             f"character {bad.start()}")
     return text
 
 
@@ -87,31 +79,23 @@ def is_xacro_path(path: Path) -> bool:
 
 
 def is_xacro_text(text: str) -> bool:
-    """True when ``text`` holds xacro constructs that need expanding, outside comments: ``<xacro:...>`` elements,
-    ``${...}`` expressions or ``$(...)`` substitutions. (The xacro namespace alone is not enough: URDFs generated
-    by xacro, panda's among them, keep it on their <robot> element.)"""
+    """True when ``text`` holds ``<xacro:...>``, ``${...}`` or ``$(...)`` outside comments (the xacro namespace
+    alone is not enough: generated URDFs keep it)."""
     return _XACRO.search(_COMMENT.sub("", text)) is not None  # comments often keep xacro source around
 
 
 def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
                  packages: PackageResolver | None = None) -> str:
-    """URDF text of the xacro document ``text`` (read from ``path``, or None for a string).
-
-    ``args`` sets ``<xacro:arg>`` values (``name: value``, values turned into strings). Relative
-    ``<xacro:include>`` files resolve against the file's folder (the working directory for a string);
-    ``$(find pkg)`` through ``packages`` (default: a :class:`PackageResolver` of ``path`` alone), then ROS's
-    own look-up. Any xacro failure (a missing package, arg, include, macro or property, bad syntax) is a
-    :class:`RobotLoadError` naming ``where`` and what failed; a missing package also names the file that
-    names it and the folders searched.
-    """
+    """URDF text of the xacro document ``text`` (read from ``path``, or None for a string), ``args`` setting its
+    ``<xacro:arg>`` values, ``$(find pkg)`` found through ``packages``. Any failure is a RobotLoadError naming
+    ``where`` and what failed."""
     try:
         import xacro
         from xacrodoc import XacroDoc
         from xacrodoc import packages as xacro_packages
     except ImportError as exc:  # pragma: no cover - a dependency
-        raise RobotLoadError(
-            f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc ({exc})"
-        ) from exc
+        raise RobotLoadError(f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc "
+                             f"({exc})") from exc
     mappings = {str(k): str(v) for k, v in (args or {}).items()}
     resolver = packages if packages is not None else PackageResolver(path)
     missing: list[tuple[str, str]] = []  # (package, file naming it) of failed look-ups
@@ -129,22 +113,21 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
     finder = xacro_packages._finder
     saved_finders, saved_cache = list(finder.finder_funcs), dict(finder.package_cache)
     failure: Exception | None = None
-    with _STDERR_LOCK:
-        with captured_stderr() as err:
-            try:
-                xacro.init_stacks(str(path) if path is not None else None)
-                finder.package_cache.clear()  # this file's packages, not those of an earlier expansion
-                finder.finder_funcs.insert(0, (find, xacro_packages.PackageNotFoundError))
-                doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
-                                           rootdir=path.parent if path is not None else None)
-                urdf = doc.dom.toxml()
-            except Exception as exc:  # xacro raises XacroException, NameError, ValueError, ExpatError, ...
-                failure = exc
-            finally:
-                xacro.init_stacks(None)
-                finder.finder_funcs[:] = saved_finders
-                finder.package_cache.clear()
-                finder.package_cache.update(saved_cache)
+    with captured_stderr() as err:  # which holds _STDERR_LOCK: xacro's state is this expansion's alone
+        try:
+            xacro.init_stacks(str(path) if path is not None else None)
+            finder.package_cache.clear()  # this file's packages, not those of an earlier expansion
+            finder.finder_funcs.insert(0, (find, xacro_packages.PackageNotFoundError))
+            doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
+                                       rootdir=path.parent if path is not None else None)
+            urdf = doc.dom.toxml()
+        except Exception as exc:  # xacro raises XacroException, NameError, ValueError, ExpatError, ...
+            failure = exc
+        finally:
+            xacro.init_stacks(None)
+            finder.finder_funcs[:] = saved_finders
+            finder.package_cache.clear()
+            finder.package_cache.update(saved_cache)
     if failure is not None:
         raise RobotLoadError(_xacro_message(failure, where, err[0], resolver, missing)) from None
     return urdf
@@ -173,19 +156,13 @@ def _xacro_message(exc: Exception, where: str, err: str, resolver: PackageResolv
 
 @contextlib.contextmanager
 def captured_stderr() -> Iterator[list[str]]:
-    """Redirect file descriptor 2 (C/C++ ``stderr``) and ``sys.stderr`` while the block runs.
-
-    Yields a list that, when the block ends, holds the captured text (one string). urdfdom prints its parse
-    errors there; we put them in our error messages instead of on the user's terminal. Process-wide (a lock
-    serializes users); when fd 2 cannot be duplicated (closed), only ``sys.stderr`` is captured.
-    """
+    """Redirect file descriptor 2 and ``sys.stderr`` while the block runs (urdfdom prints its errors there); the
+    yielded list then holds the captured text. Process-wide, serialized by a lock."""
     out: list[str] = []
     with _STDERR_LOCK, tempfile.TemporaryFile() as tmp:
         py_err = io.StringIO()
-        try:
+        with contextlib.suppress(AttributeError, OSError, ValueError):  # a closed or odd sys.stderr
             sys.stderr.flush()
-        except (AttributeError, OSError, ValueError):  # pragma: no cover - a closed or odd sys.stderr
-            pass
         try:
             saved = os.dup(2)
         except OSError:  # pragma: no cover - no fd 2 to redirect

@@ -1,15 +1,7 @@
-"""A robot's speed limits per entry of ``q``, and the ``velocity_limits=`` / ``dt=`` options that read them.
+"""A robot's speed limits per entry of ``q`` (rad/s or m/s), and the ``velocity_limits=`` / ``dt=`` options.
 
-``velocity_limits`` is ``True`` (the URDF's ``<limit velocity=...>``), a positive factor of those, or an array (n,)
-of speeds (rad/s for revolute joints, m/s for prismatic ones and a floating base's x, y, z). Where the URDF gives
-none (0 or inf: a joint without ``velocity``, a floating base), a default stands in:
-:data:`DEFAULT_JOINT_SPEED` for joints, :data:`DEFAULT_BASE_LINEAR_SPEED` and :data:`DEFAULT_BASE_ANGULAR_SPEED`
-for a floating base.
-
-A floating base's rotation entries are Euler angles (yaw, pitch, roll: :mod:`.robot`), so its angular limit bounds
-each Euler rate, not the body's angular velocity: an approximation (exact for a rotation about one axis; near
-pitch = +-pi/2 the body may turn slower than the bound allows). Its linear limit bounds each of x, y, z, so the
-speed itself is within sqrt(3) times it.
+Where the URDF gives none (0 or inf; a floating base), the defaults below stand in. A floating base's angular
+limit bounds each Euler rate (yaw, pitch, roll), not the body's angular velocity; its linear one each of x, y, z.
 """
 
 from __future__ import annotations
@@ -25,18 +17,15 @@ __all__ = ["DEFAULT_BASE_ANGULAR_SPEED", "DEFAULT_BASE_LINEAR_SPEED", "DEFAULT_J
 
 #: Speed (rad/s, m/s for prismatic joints) of a joint whose URDF gives no velocity limit.
 DEFAULT_JOINT_SPEED = 3.0
-#: A floating base's x, y, z speed (m/s) by default: faster than a running human (about 5 m/s), so that a
-#: retargeted motion is not held back by it.
+#: A floating base's x, y, z speed (m/s) by default: a running human's, so a retargeted motion is not held back.
 DEFAULT_BASE_LINEAR_SPEED = 5.0
 #: A floating base's yaw, pitch, roll rates (rad/s) by default (a turn per second).
 DEFAULT_BASE_ANGULAR_SPEED = 2.0 * math.pi
 
 
 def urdf_velocity_limits(robot) -> np.ndarray:
-    """(n,) speed limits of ``robot``'s entries of ``q`` (rad/s or m/s): the URDF's, the defaults where it has none.
-
-    A mimic joint's limit bounds the entry it follows through its multiplier (``|m| q_k' <= v_j``): an entry gets
-    the smallest of the bounds of the physical joints that follow it."""
+    """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's (an entry gets the smallest ``v_j / |m|``
+    of the physical joints following it), the defaults where it has none."""
     n = robot.n
     limits = np.full(n, np.inf)
     v = np.asarray(robot.model.velocityLimit, dtype=float)
@@ -59,12 +48,7 @@ def urdf_velocity_limits(robot) -> np.ndarray:
 
 def velocity_limits(robot, spec) -> np.ndarray:
     """(n,) speed limits (rad/s, m/s) of ``velocity_limits=spec``: ``True`` the URDF's (:func:`urdf_velocity_limits`),
-    a factor (float > 0) times those, or an array (n,) of positive finite speeds.
-
-    Raises:
-        OptionError: anything else (False, a factor <= 0 or not finite, an array of the wrong length or with an entry
-            <= 0, NaN or inf), naming what is accepted.
-    """
+    a factor > 0 times those, or an array (n,) of positive finite speeds; OptionError otherwise."""
     accepted = (f"velocity_limits must be True (the URDF's limits), a factor > 0 of them, or an array of {robot.n} "
                 "speeds > 0 (rad/s for revolute joints, m/s for prismatic ones and a floating base's x, y, z)")
     if spec is True:
@@ -88,10 +72,7 @@ def velocity_limits(robot, spec) -> np.ndarray:
 
 
 def check_dt(dt) -> float:
-    """``dt`` (s) between two points of a trajectory or two steps of a control loop: a finite number > 0.
-
-    Raises:
-        OptionError: anything else."""
+    """``dt`` (s) between two points of a trajectory or control steps: a finite number > 0, else OptionError."""
     if isinstance(dt, bool) or not isinstance(dt, (int, float, np.integer, np.floating)) or not (
             math.isfinite(float(dt)) and float(dt) > 0.0):
         raise OptionError(f"dt must be the time step in s, a finite number > 0; got {dt!r}")

@@ -1,6 +1,4 @@
-"""Example scenes: a table and an open shelf in front of an arm (the collision benchmark's and the tests' scene),
-and random collision-free configurations to make targets from.
-"""
+"""Example scenes (a table and an open shelf in front of an arm) and random collision-free configurations."""
 
 from __future__ import annotations
 
@@ -20,9 +18,8 @@ def _at(x: float, y: float, z: float) -> pin.SE3:
 
 
 def add_table_and_shelf(scene: Scene) -> Scene:
-    """Add a 1.6 x 1.6 m table whose top is 1 cm below the base frame and, on it, an open shelf 0.45-0.77 m in
-    front of the base (x), 0.64 m wide (y), its interior from 0.2 to 0.6 m high (z), open towards the arm.
-    Sized for a Panda-class arm (reach 0.85 m). Returns the scene."""
+    """Add a 1.6 x 1.6 m table 1 cm below the base frame and on it an open shelf 0.45-0.77 m in front (x), 0.64 m
+    wide, its interior 0.2-0.6 m high, open towards the arm (a Panda-class arm's reach); returns the scene."""
     scene.add_box("table", (1.6, 1.6, 0.04), _at(0.3, 0.0, -0.03))
     scene.add_box("shelf_bottom", (0.32, 0.64, 0.02), _at(0.6, 0.0, 0.19))
     scene.add_box("shelf_top", (0.32, 0.64, 0.02), _at(0.6, 0.0, 0.61))
@@ -34,10 +31,8 @@ def add_table_and_shelf(scene: Scene) -> Scene:
 
 def free_configurations(scene: Scene, count: int, rng: np.random.Generator, tip_box=None,
                         batch: int = 20000, max_draws: int = 2_000_000) -> np.ndarray:
-    """``count`` configurations (count, n) drawn uniformly in the robot's bounds that are collision-free in
-    ``scene`` (exact check) and, when ``tip_box`` = (lower (3,), upper (3,)) is given, put the tip inside it
-    (base frame, m). Their tip poses are reachable, collision-free targets. Fewer rows when ``max_draws``
-    draws did not find ``count``."""
+    """Up to ``count`` configurations (count, n) drawn in the robot's bounds, collision-free in ``scene`` and, with
+    ``tip_box`` = (lower (3,), upper (3,)) m, putting the tip inside it; fewer when ``max_draws`` did not suffice."""
     robot = scene.robot
     out, drawn = [], 0
     while sum(len(x) for x in out) < count and drawn < max_draws:

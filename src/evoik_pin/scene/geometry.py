@@ -1,9 +1,5 @@
-"""A robot's collision geometry as Pinocchio and coal see it: the URDF's ``<collision>`` elements on the robot's
-reduced model (a chain or a whole tree), the pairs worth checking, and convex-hull proxies.
-
-Pairs: every pair of collision objects of the robot, less those on the same joint (rigidly attached: they
-never move relative to each other), those on adjacent joints (parent and child: touching by construction)
-and those an SRDF disables (``<disable_collisions link1= link2= />``, read by ``pin.removeCollisionPairs``).
+"""A robot's collision geometry (the URDF's ``<collision>`` on its reduced model), the pairs worth checking, and
+convex-hull proxies.
 """
 
 from __future__ import annotations
@@ -13,7 +9,7 @@ import pinocchio as pin
 
 from ..errors import SceneError
 
-__all__ = ["adjacent_joints", "convex_hulls", "robot_collision_model", "self_collision_pairs"]
+__all__ = ["convex_hulls", "robot_collision_model", "self_collision_pairs"]
 
 
 def robot_collision_model(robot) -> pin.GeometryModel:
@@ -26,14 +22,11 @@ def robot_collision_model(robot) -> pin.GeometryModel:
     return geom.copy()
 
 
-def adjacent_joints(model: pin.Model) -> set[tuple[int, int]]:
-    """Pairs (i, j), i < j, of joints of ``model`` that are parent and child."""
-    return {(min(j, int(model.parents[j])), max(j, int(model.parents[j]))) for j in range(1, model.njoints)}
-
-
 def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> list[tuple[int, int]]:
-    """Index pairs (a, b), a < b, of the robot's collision objects worth checking (see the module docstring)."""
-    adjacent = adjacent_joints(robot.model)
+    """Index pairs (a, b), a < b, of the robot's collision objects worth checking: not on the same or adjacent joints
+    (rigidly attached, or touching by construction), nor disabled by the SRDF."""
+    parents = robot.model.parents
+    adjacent = {(min(j, int(parents[j])), max(j, int(parents[j]))) for j in range(1, robot.model.njoints)}
     objects = geom.geometryObjects
     pairs = []
     for a in range(geom.ngeoms):
@@ -55,12 +48,8 @@ def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> li
 
 
 def convex_hulls(geom: pin.GeometryModel) -> pin.GeometryModel:
-    """A copy of ``geom`` whose meshes are replaced by their convex hulls (primitives are kept).
-
-    A hull contains its mesh, so a hull check is conservative (no hull contact means no mesh contact) and
-    its distances are lower bounds of the meshes'; hull queries are much cheaper (GJK on convex sets instead of
-    BVH traversals).
-    """
+    """A copy of ``geom`` whose meshes are replaced by their convex hulls: conservative checks and lower-bound
+    distances, much cheaper (GJK instead of BVH traversals)."""
     hulls = geom.copy()
     for obj in hulls.geometryObjects:
         shape = obj.geometry
@@ -71,8 +60,8 @@ def convex_hulls(geom: pin.GeometryModel) -> pin.GeometryModel:
 
 
 def as_placement(pose, what: str) -> pin.SE3:
-    """A ``pin.SE3`` from a ``pin.SE3`` or a (4, 4) homogeneous matrix (m); SceneError naming ``what`` when the
-    matrix is not a rigid transform (rotation block orthonormal with det +1, bottom row [0 0 0 1])."""
+    """A ``pin.SE3`` from a ``pin.SE3`` or a (4, 4) homogeneous matrix (m); SceneError naming ``what`` unless it is
+    a rigid transform."""
     if isinstance(pose, pin.SE3):
         return pin.SE3(pose)
     try:

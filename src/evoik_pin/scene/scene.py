@@ -1,27 +1,14 @@
-"""A collision scene: the robot's own body and obstacles around it, checked with Pinocchio and coal.
-
-``Scene(robot)`` holds the robot's collision geometry (the URDF's ``<collision>`` elements) and the
-obstacles added to it (boxes, spheres, cylinders, capsules, meshes), each at a pose in the robot's base
-frame (m). Checked pairs: the robot's self-collision pairs (:func:`.geometry.self_collision_pairs`: all link
-pairs less adjacent and SRDF-disabled ones) and every (moving robot object, obstacle) pair; obstacles never
-collide with each other, nor with robot objects fixed to the base (neither can move with ``q``).
-
-Queries (``q`` (n,) a joint vector, rad or m):
-
-* :meth:`Scene.in_collision`: the exact check on the collision meshes (``pin.computeCollisions``), the judge
-  of every answer evoik_pin calls collision-free; ``margin`` (m) counts pairs closer than it as colliding;
-* :meth:`Scene.colliding_pairs`: the names of the pairs in collision;
-* :meth:`Scene.distance`: the signed distance (m) of the closest pair: exact on the meshes when it is
-  positive, bounded through the convex hulls when they overlap (see the method);
-* :meth:`Scene.collides`: a population (N, n) at once, exactly or on the convex-hull proxies (conservative,
-  cheaper), for solvers steering a search.
+"""A collision scene: the robot's collision geometry and obstacles at poses in its base frame (m), checked with
+Pinocchio and coal. Checked pairs: the robot's self-collision pairs (:func:`.geometry.self_collision_pairs`) and
+every (moving robot object, obstacle) pair. :meth:`Scene.in_collision` (exact, on the meshes) judges every answer
+evoik_pin calls collision-free; :meth:`Scene.collides` checks populations, also on convex-hull proxies.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -33,41 +20,33 @@ from .geometry import as_placement, convex_hulls, robot_collision_model, self_co
 
 __all__ = ["Obstacle", "Scene"]
 
-#: Obstacle kinds and the size parameters each takes (m).
-OBSTACLE_KINDS = {"box": ("size",), "sphere": ("radius",), "cylinder": ("radius", "length"),
-                  "capsule": ("radius", "length"), "mesh": ("path", "scale")}
-
-
 @dataclass(frozen=True)
 class Obstacle:
     """One obstacle: ``kind`` (box, sphere, cylinder, capsule, mesh), its parameters (``size`` (3,) m for a box,
-    ``radius`` / ``length`` m, ``path`` and ``scale`` for a mesh) and its ``pose`` in the robot's base frame."""
+    ``radius`` / ``length`` m, ``path`` and ``scale`` for a mesh), its ``pose`` in the base frame, its coal shape."""
 
     name: str
     kind: str
     params: dict
     pose: pin.SE3
+    shape: object = field(default=None, compare=False, repr=False)
 
 
-def _positive(value, what: str) -> float:
+def _length(value, what: str, zero: bool = False) -> float:
+    """``value`` (m) as a finite float > 0 (>= 0 with ``zero``), or a SceneError naming ``what``."""
+    bound = ">= 0" if zero else "> 0"
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise SceneError(f"{what} must be a number > 0 (m), got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise SceneError(f"{what} must be a finite number > 0 (m), got {value!r}")
+        raise SceneError(f"{what} must be a number {bound} (m), got {value!r}") from None
+    if not (math.isfinite(v) and (v >= 0 if zero else v > 0)):
+        raise SceneError(f"{what} must be a finite number {bound} (m), got {value!r}")
     return v
 
 
 class Scene:
-    """The robot's body and the obstacles around it (see the module docstring).
-
-    Args:
-        robot: the :class:`~evoik_pin.robot.Robot` the scene is for (its collision geometry is used).
-        self_collision: check the robot against itself (default True); False checks obstacles only.
-        srdf: an SRDF whose ``disable_collisions`` pairs are not checked; default the robot's own
-            (``load_robot(..., srdf=...)``, found automatically for example-robot-data arms).
-    """
+    """The body of ``robot`` and the obstacles around it; ``self_collision``: check the robot against itself too;
+    ``srdf``: an SRDF whose ``disable_collisions`` pairs are not checked (default the robot's own)."""
 
     def __init__(self, robot, self_collision: bool = True, srdf: str | os.PathLike | None = None) -> None:
         from ..robot import Robot
@@ -76,16 +55,13 @@ class Scene:
             raise SceneError(f"Scene needs a loaded Robot (evoik_pin.load_robot(...)), got {type(robot).__name__}")
         self.robot = robot
         self.self_collision = bool(self_collision)
-        self.srdf = None if srdf is None else str(srdf)
-        if self.srdf is None:
-            self.srdf = getattr(robot, "srdf", None)
+        self.srdf = getattr(robot, "srdf", None) if srdf is None else str(srdf)
         if self.srdf is not None and not Path(self.srdf).is_file():
             raise SceneError(f"SRDF file not found: {self.srdf!r}")
         self._robot_geom = robot_collision_model(robot)
         self._self_pairs = self_collision_pairs(robot, self._robot_geom, self.srdf) if self.self_collision else []
         self._moving = [i for i, o in enumerate(self._robot_geom.geometryObjects) if int(o.parentJoint) != 0]
         self._obstacles: dict[str, Obstacle] = {}
-        self._shapes: dict[str, object] = {}
         self._data = robot.model.createData()
         self.version = 0
         self._build()
@@ -106,8 +82,7 @@ class Scene:
         if name in robot_names:
             raise SceneError(f"obstacle name {name!r} is the name of one of the robot's links")
         placement = as_placement(pose, f"obstacle {name!r}")
-        self._obstacles[name] = Obstacle(name, kind, params, placement)
-        self._shapes[name] = shape
+        self._obstacles[name] = Obstacle(name, kind, params, placement, shape)
         self._build()
         return self
 
@@ -121,30 +96,28 @@ class Scene:
             raise SceneError(f"box {name!r}: size must be three lengths (m), got {size!r}") from None
         if s.shape != (3,):
             raise SceneError(f"box {name!r}: size must be three lengths (x, y, z) in m, got {size!r}")
-        s = np.array([_positive(v, f"box {name!r}: size") for v in s])
+        s = np.array([_length(v, f"box {name!r}: size") for v in s])
         return self._add(name, "box", {"size": s.tolist()}, coal.Box(*s), pose)
 
     def add_sphere(self, name: str, radius, pose) -> Scene:
         """A sphere of ``radius`` m centred at ``pose``."""
-        import coal
-
-        r = _positive(radius, f"sphere {name!r}: radius")
-        return self._add(name, "sphere", {"radius": r}, coal.Sphere(r), pose)
+        return self._add_round(name, "sphere", pose, radius=radius)
 
     def add_cylinder(self, name: str, radius, length, pose) -> Scene:
         """A cylinder of ``radius`` and ``length`` (m) centred at ``pose``, its axis along the pose's z."""
-        import coal
-
-        r, h = _positive(radius, f"cylinder {name!r}: radius"), _positive(length, f"cylinder {name!r}: length")
-        return self._add(name, "cylinder", {"radius": r, "length": h}, coal.Cylinder(r, h), pose)
+        return self._add_round(name, "cylinder", pose, radius=radius, length=length)
 
     def add_capsule(self, name: str, radius, length, pose) -> Scene:
         """A capsule (a cylinder of ``length`` with hemispherical caps of ``radius``, m) centred at ``pose``,
         its axis along the pose's z."""
+        return self._add_round(name, "capsule", pose, radius=radius, length=length)
+
+    def _add_round(self, name: str, kind: str, pose, **sizes) -> Scene:
+        """A sphere, cylinder or capsule of ``sizes`` (radius, and length), in m."""
         import coal
 
-        r, h = _positive(radius, f"capsule {name!r}: radius"), _positive(length, f"capsule {name!r}: length")
-        return self._add(name, "capsule", {"radius": r, "length": h}, coal.Capsule(r, h), pose)
+        params = {key: _length(value, f"{kind} {name!r}: {key}") for key, value in sizes.items()}
+        return self._add(name, kind, params, getattr(coal, kind.capitalize())(*params.values()), pose)
 
     def add_mesh(self, name: str, path, pose, scale=1.0) -> Scene:
         """A mesh file (STL, OBJ, DAE, ... anything assimp reads) at ``pose``, its vertices in m times ``scale``
@@ -156,7 +129,7 @@ class Scene:
             raise SceneError(f"mesh {name!r}: file not found: {str(path)!r}")
         sc = np.broadcast_to(np.asarray(scale, dtype=float), (3,)).copy()
         for v in sc:
-            _positive(v, f"mesh {name!r}: scale")
+            _length(v, f"mesh {name!r}: scale")
         try:
             shape = coal.MeshLoader().load(str(p), sc)
         except Exception as exc:  # assimp / coal report unreadable files with various exception types
@@ -169,17 +142,14 @@ class Scene:
             known = ", ".join(self._obstacles) or "(none)"
             raise SceneError(f"no obstacle named {name!r} in the scene; obstacles: {known}")
         del self._obstacles[name]
-        del self._shapes[name]
         self._build()
         return self
 
     # ------------------------------------------------------------------ scene files
     @classmethod
     def from_file(cls, robot, path: str | os.PathLike) -> Scene:
-        """A scene of ``robot`` read from a YAML (``.yaml``, ``.yml``) or JSON (``.json``) scene file: obstacles
-        (kind, size, pose in the base frame, m / rad), optional ``self_collision`` and ``srdf``. The format is
-        :mod:`evoik_pin.io.scene_file`'s docstring; a bad file is a SceneError naming the file, the obstacle and
-        the problem. The whole file is read and checked before the scene is built."""
+        """A scene of ``robot`` read from a YAML or JSON scene file (format: :mod:`evoik_pin.io.scene_file`), checked
+        whole before the scene is built; SceneError naming the file, the obstacle and the problem."""
         spec = read_scene(path)
         try:
             scene = cls(robot, self_collision=spec.self_collision, srdf=spec.srdf)
@@ -193,8 +163,7 @@ class Scene:
         return scene
 
     def to_file(self, path: str | os.PathLike) -> Path:
-        """Write this scene as a scene file (YAML or JSON by the extension; :meth:`from_file` reads it back to the
-        same obstacles) and return its path."""
+        """Write this scene as a scene file (YAML or JSON; :meth:`from_file` reads it back) and return its path."""
         return write_scene(self, path)
 
     # ------------------------------------------------------------------ geometry models
@@ -212,7 +181,7 @@ class Scene:
         self._names = list(self._obstacles)
         for name in self._names:
             placement = base * self._obstacles[name].pose  # base frame -> the model's world frame
-            geom.addGeometryObject(pin.GeometryObject(name, 0, 0, placement, self._shapes[name]))
+            geom.addGeometryObject(pin.GeometryObject(name, 0, 0, placement, self._obstacles[name].shape))
         pairs = list(self._self_pairs)
         n_robot = self._robot_geom.ngeoms
         pairs += [(i, n_robot + k) for i in self._moving for k in range(len(self._names))]
@@ -240,16 +209,6 @@ class Scene:
             raise ConfigurationError(f"scene query: {exc}") from None
         return self.robot.to_pinocchio(q)
 
-    @staticmethod
-    def _margin_value(margin) -> float:
-        try:
-            m = float(margin)
-        except (TypeError, ValueError):
-            raise SceneError(f"margin must be a number >= 0 (m), got {margin!r}") from None
-        if not (math.isfinite(m) and m >= 0):
-            raise SceneError(f"margin must be a finite number >= 0 (m), got {margin!r}")
-        return m
-
     def _check(self, q_pin: np.ndarray, margin: float, hulls: bool, stop_at_first: bool) -> bool:
         geom, gdata = (self._hulls, self._hdata) if hulls else (self._geom, self._gdata)
         self._set_margin(gdata, margin)
@@ -264,33 +223,29 @@ class Scene:
 
     def in_collision(self, q, margin: float = 0.0) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (or closer than ``margin`` m)."""
-        return self._check(self._q(q), self._margin_value(margin), hulls=False, stop_at_first=True)
+        return self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=True)
 
     def colliding_pairs(self, q, margin: float = 0.0) -> list[tuple[str, str]]:
         """The (name, name) pairs in contact at ``q`` (closer than ``margin`` m), each once: robot links by link
         name, obstacles by their name."""
-        self._check(self._q(q), self._margin_value(margin), hulls=False, stop_at_first=False)
+        self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=False)
         pairs = [(self._object_name(a), self._object_name(b))
                  for (a, b), res in zip(self._pairs, self._gdata.collisionResults, strict=True) if res.isCollision()]
         return list(dict.fromkeys(pairs))  # once per pair of names (a link may have several shapes)
 
     def collides(self, Q, margin: float = 0.0, proxy: bool = False) -> np.ndarray:
-        """(N,) bool: :meth:`in_collision` of each row of ``Q`` (N, n). ``proxy=True`` checks the convex hulls
-        instead of the meshes: conservative (a hull-free row is mesh-free) and about five times cheaper."""
+        """(N,) bool: :meth:`in_collision` of each row of ``Q`` (N, n); ``proxy=True`` on the convex hulls
+        (conservative, cheaper)."""
         robot = self.robot
         Q = robot.check_population(Q)
-        margin = self._margin_value(margin)
+        margin = _length(margin, "margin", zero=True)
         return np.fromiter((self._check(robot.to_pinocchio(q), margin, proxy, True) for q in Q), dtype=bool,
                            count=Q.shape[0])
 
     def distance(self, q) -> float:
-        """Signed distance (m) between the closest checked pair at ``q``: positive, the exact clearance between
-        the collision meshes; negative when a pair is in contact: the convex hulls' penetration depth (coal
-        gives meshes in contact distance 0), an estimate bounded by the hulls. ``inf`` when no pair is checked.
-
-        The hull distances, lower bounds of the mesh distances, order the pairs; exact mesh distances are
-        computed only until the next lower bound exceeds the best one found (a few pairs, not all).
-        """
+        """Signed distance (m) of the closest checked pair at ``q``: the exact mesh clearance when positive, the
+        convex hulls' penetration depth in contact, ``inf`` without pairs. The hull distances (lower bounds) order
+        the pairs; exact distances are computed until the next bound exceeds the best one."""
         if not self._pairs:
             return math.inf
         q_pin = self._q(q)

@@ -1,51 +1,18 @@
-"""Meshcat web preview: a robot (a chain or a whole tree), IK targets and goals, several solutions, a trajectory,
-and a static HTML export.
+"""Meshcat web preview of a robot (chain or whole tree), targets and goals, solutions, trajectories, obstacles, and
+a static HTML export: :class:`Viewer`, its life cycle and inputs. Everything is drawn in the robot's base frame (m).
 
-Built on :class:`pinocchio.visualize.MeshcatVisualizer` (:mod:`.robot`; a URDF without visual geometry is drawn
-as a skeleton). Everything is drawn in the robot's base frame, the frame :meth:`Robot.fk` and the solvers use (m;
-with a floating base: the world frame the root link moves in).
-
-Scene tree (paths below meshcat's ``/meshcat`` root, each a checkbox in the browser's "Open Controls"):
-
-- ``robot``: the robot at the configuration of :meth:`Viewer.show` (animated by :meth:`Viewer.animate`), every
-  link of its model;
-- ``<name>/<k>`` (default ``solutions/0``, ``solutions/1``, ...): ghost robots of :meth:`Viewer.show_solutions`;
-- ``target``: a coordinate triad (x red, y green, z blue) or a point for a position-only target;
-- ``goals/<frame>``: one marker per goal of a goal list (:meth:`Viewer.show_goals`), a triad for a pose, a sphere
-  for a position, with its frame name as a label (``goals/<frame>/label``);
-- ``path``: a polyline, e.g. the end-effector path of an animated trajectory;
-- ``scene/visuals/<obstacle>``: the obstacles of a collision :class:`~evoik_pin.scene.Scene`, translucent grey
-  (:meth:`Viewer.show_scene`, or ``show(q, scene=scene)``, which also draws the robot's links in collision red).
-
-The meshcat server is a subprocess started per :class:`Viewer` (its web server and its ZeroMQ socket
-listen on 127.0.0.1 only; busy ports are skipped: ZeroMQ from 6000, HTTP from 7000). It stops with
-:meth:`Viewer.close`, at the end of a ``with`` block, when the Viewer is garbage collected, at interpreter
-exit, or when the process that started it dies.
-
-Modules: :mod:`.server`, :mod:`.robot`, :mod:`.ghosts`, :mod:`.markers`, :mod:`.obstacles`, :mod:`.paths`,
-:mod:`.camera`, :mod:`.html`; this one holds the :class:`Viewer` they make up, its life cycle, inputs and time
-limits.
+Nodes below meshcat's root: ``robot``, ghost ``solutions/<k>``, ``target``, ``goals/<frame>`` (and ``/label``),
+``path``, ``scene/visuals/<obstacle>``. The drawing is the mixins' of :mod:`.robot`, :mod:`.ghosts`,
+:mod:`.markers`, :mod:`.obstacles`, :mod:`.paths`, :mod:`.camera`, :mod:`.html`; the meshcat server is
+:mod:`.server`'s (127.0.0.1 only; it stops with :meth:`Viewer.close`, a ``with`` block, or its parent's exit).
 
 Example::
 
-    from evoik_pin import load_robot
-    from evoik_pin.viz import Viewer
-
-    robot = load_robot("panda")
-    with Viewer(robot) as v:
-        print(v.url)                        # open it in a browser
-        v.show(q)                           # (n,) joint vector (rad, m), or a result with a .q attribute
-        v.show_target(T.translation, T.rotation)
-        v.show_solutions([q1, q2, q3])      # ghosts, one colour each
-        v.animate(trajectory, dt=0.05)      # (N, n); draws the tip path too
-        v.show(q, scene=scene)              # obstacles in grey, links in collision at q in red
-        v.save_html("scene.html")           # self-contained file, opens without a server or network
-
-    talos = load_robot("talos", floating_base=True)
-    result = evoik_pin.solve(talos, goals)  # goals: [Pose("left_sole_link", T), Position("arm_right_7_link", p)]
-    with Viewer(talos) as v:
-        v.show_solution(result, goals)      # the whole robot, a marker per goal, the camera on both
-        v.save_html("talos.html")           # or, in one call: save_solution_html(talos, result, goals, "talos.html")
+    with Viewer(load_robot("panda")) as v:
+        v.show(q)                           # (n,) joint vector, or a result with .q
+        v.show_solutions([q1, q2])          # ghosts
+        v.animate(trajectory, dt=0.05)      # (N, n)
+        v.save_html("scene.html")           # self-contained file
 """
 
 from __future__ import annotations
@@ -78,9 +45,8 @@ __all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGE
 
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer one request.
 SERVER_TIMEOUT = 20.0
-#: Seconds after which a Viewer's own server that neither answers (or prints its URLs) nor exits counts as
-#: wedged. While it runs, it is waited for: a loaded machine (or a cold disk cache) slows it, it is no error;
-#: its exit is noticed within a quarter of a second.
+#: Seconds after which a Viewer's own server that neither answers nor exits counts as wedged (a loaded machine
+#: slows it: while it runs, it is waited for).
 OWN_SERVER_HANG_S = 600.0
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer its first request.
 PROBE_TIMEOUT = 5.0
@@ -90,28 +56,18 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
     """A meshcat scene of one robot: configurations, ghosts, targets and goals, paths, animation, HTML export.
 
     Args:
-        robot: a :class:`~evoik_pin.robot.Robot` (from :func:`~evoik_pin.load_robot`): a chain or a whole robot.
-        zmq_url: ZeroMQ URL of a running meshcat server (e.g. ``"tcp://127.0.0.1:6000"`` from
-            ``meshcat-server``) to draw into; default ``None`` starts a private server on 127.0.0.1 that
-            stops with the Viewer.
+        robot: a :class:`~evoik_pin.robot.Robot`.
+        zmq_url: ZeroMQ URL of a running meshcat server to draw into; None starts a private one on 127.0.0.1.
         open: open the scene in the default web browser.
-        skeleton: ``True`` draws spheres and cylinders instead of the URDF's visuals; default ``None``
-            uses the visuals when the URDF has some (with a warning when it falls back).
+        skeleton: True draws spheres and cylinders; None uses the URDF's visuals when it has some.
 
     Attributes:
-        url: the web address of the live scene (``http://127.0.0.1:7000/static/`` or the next free port).
-        zmq_url: the ZeroMQ address of the server.
-        scene: what this Viewer drew, ``{path below /meshcat: description}``, e.g. ``{"robot": "robot",
-            "solutions/0": "ghost", "target": "target triad", "path": "line of 50 points"}``.
-        skeleton: True when the robot is drawn as a skeleton.
-        vis: the underlying ``meshcat.Visualizer`` (to draw anything else).
+        url, zmq_url: the web and ZeroMQ addresses. scene: ``{node path: description}`` of what was drawn.
+        skeleton: whether the robot is drawn as a skeleton. vis: the underlying ``meshcat.Visualizer``.
 
-    Joint vectors are ``(n,)`` arrays in rad (m for prismatic joints; a floating base's first six entries are
-    its position, m, and yaw, pitch, roll, rad); positions are in m in the base frame. Every method that takes a
-    configuration also takes an object with a ``.q`` attribute (a :class:`~evoik_pin.Result`). A list of
-    configurations may be a list of joint vectors or of results (``solve_all``, ``solve_trajectory``), an
-    ``(N, n)`` array, a :class:`~evoik_pin.Front` (its ``q`` rows), or a result carrying ``solutions`` or a
-    ``front``.
+    Configurations are ``(n,)`` joint vectors (rad, m) or objects with ``.q`` (a :class:`~evoik_pin.Result`);
+    a list of them may also be an ``(N, n)`` array, a :class:`~evoik_pin.Front`, or a result with ``solutions``
+    or a ``front``.
     """
 
     def __init__(self, robot: Robot, zmq_url: str | None = None, open: bool = False, skeleton: bool | None = None):
@@ -172,12 +128,8 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
         return self._server.proc if self._server is not None else None
 
     def block(self, message: str | None = None, file=None) -> None:
-        """Keep the server running until Ctrl-C (or until the server exits), then close the Viewer.
-
-        Args:
-            message: a line to print (and flush) to ``file`` (default ``sys.stdout``) inside the wait, so a
-                Ctrl-C right after it still stops the Viewer cleanly, e.g. "Press Ctrl-C to stop the viewer."
-        """
+        """Keep the server running until Ctrl-C (or its exit), then close the Viewer. ``message``: a line printed
+        to ``file`` (default stdout) inside the wait, so a Ctrl-C right after it still stops the Viewer cleanly."""
         if message is not None and not isinstance(message, str):
             raise OptionError(f"Viewer.block: message must be a str (a line to print) or None, not "
                               f"{type(message).__name__}")
@@ -239,17 +191,9 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
 
 def save_solution_html(robot: Robot, result, goals, path: str | os.PathLike, scene=None,
                        margin: float = 0.0) -> Path:
-    """Write the answer of a goal-list solve as one self-contained HTML scene and return its path: the whole robot
-    at ``result.q``, a marker per goal, the camera on both (:meth:`Viewer.show_solution`, :meth:`Viewer.save_html`).
-    A Viewer's meshcat server is started for it and stopped. (What ``evoik solve ... --html`` writes for a goal
-    list.)
-
-    Args:
-        robot: the :class:`~evoik_pin.robot.Robot` solved for. result: its :class:`~evoik_pin.Result` (or a joint
-            vector (n,)). goals: the goal list. path: the HTML file to write.
-        scene, margin: a collision :class:`~evoik_pin.scene.Scene` of ``robot`` (its obstacles drawn, the links in
-            collision red) and its margin (m), as for :meth:`Viewer.show`.
-    """
+    """Write :meth:`Viewer.show_solution` of ``result`` (or a joint vector (n,)) for ``goals`` (and a collision
+    ``scene`` with its ``margin``, m) as one self-contained HTML file ``path`` (:meth:`Viewer.save_html`); return
+    its path. What ``evoik solve ... --html`` writes for a goal list."""
     with Viewer(robot) as viewer:
         viewer.show_solution(result, goals, scene=scene, margin=margin)
         return viewer.save_html(path)

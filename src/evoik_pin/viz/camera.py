@@ -7,7 +7,7 @@ import numpy as np
 from ..errors import ConfigurationError, TargetError
 from .server import _talks
 
-__all__ = ["CAMERA_FOV_DEG"]
+__all__ = ["CAMERA_FOV_DEG", "checked_points"]
 
 #: Vertical field of view (degrees) of meshcat's default camera.
 CAMERA_FOV_DEG = 75.0
@@ -15,19 +15,22 @@ CAMERA_FOV_DEG = 75.0
 _VIEW_DIRECTION = np.array([0.9, 0.7, 0.55])
 
 
+def checked_points(points, what: str, least: int) -> np.ndarray:
+    """``points`` as a finite (N, 3) array (m) with N >= ``least``, or a TargetError naming ``what``."""
+    P = np.asarray(points, dtype=float)
+    if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < least or not np.all(np.isfinite(P)):
+        raise TargetError(f"{what} must be a finite (N, 3) array with N >= {least} (m), got shape {P.shape}")
+    return P
+
+
 class Camera:
     """The Viewer's camera methods."""
 
     @_talks
     def set_camera(self, position=None, target=None) -> None:
-        """Place the camera at ``position`` (3,) in m (base frame), looking at ``target`` (3,) in m (default: the
-        origin, the robot's base).
-
-        Default position: ``target`` plus, in front of, beside and above it, 1.25 times the robot's reach
-        (a chain's stretched length). Meshcat's orbit controls always look at (and turn about) the world origin, so
-        a ``target`` other than the origin moves the drawing instead: the ``/meshcat`` tree, the grid and the axes
-        are translated by ``-target`` (every object keeps its place relative to the others and to the grid).
-        """
+        """Place the camera at ``position`` (3,) m (default: in front of, beside and above ``target`` at the robot's
+        reach), looking at ``target`` (3,) m (default: the base). Meshcat's camera always looks at the world origin,
+        so the drawing (``/meshcat``, grid, axes) is translated by ``-target`` instead."""
         vis = self._check_open()
         t = np.zeros(3) if target is None else np.asarray(target, dtype=float)
         if t.shape != (3,) or not np.all(np.isfinite(t)):
@@ -46,15 +49,9 @@ class Camera:
         vis["/Cameras/default/rotated/<object>"].set_property("position", [float(d[0]), float(d[2]), float(-d[1])])
 
     def frame(self, points, fill: float = 0.8) -> tuple[np.ndarray, np.ndarray]:
-        """Point the camera at the bounding box of ``points`` (N, 3) in m (base frame) and back it off until the
-        box fills about ``fill`` of the view's height, from the default direction (front, side, above).
-
-        Returns:
-            (position, target), each (3,) in m: the camera and the box centre it looks at.
-        """
-        P = np.asarray(points, dtype=float)
-        if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 1 or not np.all(np.isfinite(P)):
-            raise TargetError(f"points to frame must be a finite (N, 3) array with N >= 1 (m), got shape {P.shape}")
+        """Point the camera at the bounding box of ``points`` (N, 3) m, backed off until the box fills about ``fill``
+        of the view's height; returns (position, target), each (3,) m."""
+        P = checked_points(points, "points to frame", 1)
         if not 0 < fill <= 1:
             raise ConfigurationError(f"fill must be in (0, 1], got {fill}")
         lo, hi = P.min(axis=0), P.max(axis=0)

@@ -20,7 +20,6 @@ def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True)
     """Write ``clip`` (a :class:`~evoik_pin.motion.Clip` of ``robot``) as a self-contained HTML page playing it at
     its fps, and return the path. ``keypoints``: also the source keypoints the robot followed (``clip.keypoints``,
     scaled into the robot's world), as orange spheres under ``keypoints/<name>``."""
-    import meshcat.animation
     import meshcat.geometry as mg
 
     from . import Viewer
@@ -28,25 +27,16 @@ def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True)
     with Viewer(robot) as viewer:
         Q = viewer._qs(clip.q)
         vis = viewer._check_open()
-        drawing = viewer._load("robot")
-        geom = drawing.visual_model
-        nodes = [drawing.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]
         points = clip.keypoints if keypoints and clip.keypoints is not None else None
         if points is not None:
             material = mg.MeshLambertMaterial(color=KEYPOINT_COLOR)
             for name in clip.keypoint_names:
                 vis["keypoints"][name].set_object(mg.Sphere(KEYPOINT_RADIUS), material)
-        animation = meshcat.animation.Animation(default_framerate=float(clip.fps))
-        for k, q in enumerate(Q):
-            with animation.at_frame(vis, k) as frame:
-                for node, M in zip(nodes, robot.geometry_placements(geom, q), strict=True):
-                    frame[node].set_transform(M.homogeneous)
-                if points is not None:
-                    for name, p in zip(clip.keypoint_names, points[k], strict=True):
-                        T = np.eye(4)
-                        T[:3, 3] = p
-                        frame["keypoints"][name].set_transform(T)
-        viewer.show(Q[0])
-        vis.set_animation(animation, play=True, repetitions=1)
+
+        def move_keypoints(frame, k: int) -> None:
+            for name, p in zip(clip.keypoint_names, points[k], strict=True):
+                frame["keypoints"][name].set_transform(pin.SE3(np.eye(3), p).homogeneous)
+
+        viewer._animate_robot(Q, clip.fps, each_frame=move_keypoints if points is not None else None)
         viewer.scene["animation"] = f"{Q.shape[0]} frames at {clip.fps:g} fps"
         return viewer.save_html(path)

@@ -1,9 +1,4 @@
-"""Ghosts: several configurations drawn at once as translucent robots, one colour each (``<name>/<k>``).
-
-Ghosts reuse the robot drawing (:mod:`.robot`) with one colour and an opacity per node, Collada meshes loaded as
-plain geometry so the colour applies; past :data:`GHOST_MESH_BUDGET` bytes of embedded mesh files they are drawn
-as skeletons.
-"""
+"""Ghosts: several configurations drawn at once as translucent robots, one colour each (``<name>/<k>``)."""
 
 from __future__ import annotations
 
@@ -32,26 +27,12 @@ class GhostDrawing:
     @_talks
     def show_solutions(self, solutions, name: str = "solutions", opacity: float = 0.4, limit: int = 64,
                        style: str = "auto") -> list[str]:
-        """Draw several configurations at once as translucent ghost robots, one colour each.
+        """Draw configurations (any form :class:`~evoik_pin.viz.Viewer` takes) as translucent ghosts ``<name>/<k>``,
+        one colour each, at most ``limit`` (evenly spaced, with a warning); return their node names.
 
-        Args:
-            solutions: a list of joint vectors (n,) or of results with a ``.q``, an (N, n) array, or an
-                object whose ``.q`` is (N, n) (e.g. a Pareto front) or that has ``.solutions``.
-            name: group node; ghost k is ``<name>/<k>`` (a checkbox each in the browser). Drawing the same
-                name again replaces the group.
-            opacity: ghost opacity in (0, 1].
-            limit: at most this many ghosts (evenly spaced, with a warning, when there are more).
-            style: ``"mesh"`` (the robot's own visuals), ``"skeleton"`` (spheres and cylinders), or
-                ``"auto"``: meshes unless the ghosts' mesh files would exceed :data:`GHOST_MESH_BUDGET`
-                bytes in all (every ghost embeds a copy: 11 MB of mesh files per Panda).
-
-        Returns:
-            The ghosts' node names.
-
-        Raises:
-            ConfigurationError: no configuration to draw, e.g. the empty list :func:`evoik_pin.solve_all` returns
-                for an unreachable target (the error quotes that list's ``message``: why it is empty).
-        """
+        ``style``: ``"mesh"``, ``"skeleton"``, or ``"auto"``: meshes unless the ghosts' mesh files exceed
+        :data:`GHOST_MESH_BUDGET` bytes in all (each ghost embeds a copy). ConfigurationError for nothing to draw
+        (quoting an empty :func:`evoik_pin.solve_all` list's ``message``)."""
         empty = getattr(solutions, "solutions", solutions)
         if isinstance(empty, list) and not empty:
             why = getattr(solutions, "message", "")
@@ -60,10 +41,9 @@ class GhostDrawing:
         Q = self._qs(solutions)
         name = name.strip("/")
         if not name or not 0.0 < opacity <= 1.0 or limit < 1 or style not in ("auto", "mesh", "skeleton"):
-            raise ConfigurationError(
-                f"show_solutions needs a non-empty name, 0 < opacity <= 1, limit >= 1 and style 'auto', 'mesh' or "
-                f"'skeleton'; got name={name!r}, opacity={opacity}, limit={limit}, style={style!r}"
-            )
+            raise ConfigurationError(f"show_solutions needs a non-empty name, 0 < opacity <= 1, limit >= 1 and style "
+                                     f"'auto', 'mesh' or 'skeleton'; got name={name!r}, opacity={opacity}, "
+                                     f"limit={limit}, style={style!r}")
         if Q.shape[0] > limit:
             keep = np.unique(np.linspace(0, Q.shape[0] - 1, limit).round().astype(int))
             warnings.warn(f"{Q.shape[0]} solutions: drawing {keep.size} of them (limit={limit})", UserWarning,

@@ -1,8 +1,4 @@
-"""The static export: the scene (with its animation) as one self-contained HTML file, and reading one back.
-
-meshcat's ``static_html()`` inlines three.js and every mesh and replays the recorded commands as base64 msgpack
-blobs; :func:`html_commands` decodes them (the tests read the scene there).
-"""
+"""The static export: the scene (with its animation) as one self-contained HTML file, and reading one back."""
 
 from __future__ import annotations
 
@@ -20,16 +16,8 @@ _COMMAND_RE = re.compile(r'fetch\("data:application/octet-binary;base64,([A-Za-z
 
 
 def html_commands(html: str) -> list[dict]:
-    """The meshcat commands a static HTML export replays, in order.
-
-    Args:
-        html: the text of a file written by :meth:`Viewer.save_html` (or ``meshcat``'s ``static_html()``).
-
-    Returns:
-        One dict per command, decoded from its base64 msgpack blob: ``type`` (``set_object``,
-        ``set_transform``, ``set_property``, ``set_animation``) and ``path`` (e.g. ``/meshcat/robot``),
-        plus the command's payload.
-    """
+    """The meshcat commands (dicts with ``type``, ``path`` and the payload) the static HTML ``html``
+    (:meth:`Viewer.save_html`) replays, in order, decoded from its base64 msgpack blobs."""
     import umsgpack
 
     return [umsgpack.unpackb(base64.b64decode(m)) for m in _COMMAND_RE.findall(html)]
@@ -40,10 +28,7 @@ class HtmlExport:
 
     @_talks
     def save_html(self, path: str | os.PathLike) -> Path:
-        """Write the current scene (with its animation) as one self-contained HTML file and return its path.
-
-        The file embeds three.js and every mesh: it opens offline in any WebGL browser, without a server.
-        """
+        """Write the scene (with its animation) as one self-contained HTML file (no server needed); return its path."""
         html = self._check_open().static_html()
         html = html.replace("<title>MeshCat</title>", f"<title>evoik_pin: {self.robot.name}</title>", 1)
         out = Path(path).expanduser()

@@ -1,10 +1,5 @@
-"""Markers of targets and goals: a coordinate triad (x red, y green, z blue) for a pose, a sphere for a position.
-
-``show_target`` draws one IK target (node ``target``); ``show_goals`` one marker per goal of a goal list
-(:mod:`evoik_pin.goals`; node ``goals/<frame>``), each labelled by its frame name (a text sprite facing the camera,
-node ``goals/<frame>/label``); ``show_solution`` draws a goal-list answer: the whole robot at ``result.q`` with its
-goals, the camera framing both. Every marker is in the base frame (for a floating base: the world frame), where
-the goals' targets are given.
+"""Markers of targets and goals in the base frame: a coordinate triad (x red, y green, z blue) for a pose, a sphere
+for a position, a goal's frame name as a label; and a goal-list answer with its goals (``show_solution``).
 """
 
 from __future__ import annotations
@@ -59,8 +54,7 @@ def _draw_marker(node, p: np.ndarray, R: np.ndarray | None, size: float) -> str:
 
 
 def _label(text: str):
-    """A meshcat object showing ``text`` on a sprite that always faces the camera (meshcat's viewer renders the
-    ``_text`` texture onto a 256 x 256 canvas; the python package has no class for it in this version)."""
+    """A meshcat sprite showing ``text``, facing the camera (the viewer's ``_text`` texture, 256 x 256 px)."""
     import meshcat.geometry as mg
 
     class _TextTexture(mg.Texture):
@@ -95,15 +89,8 @@ class MarkerDrawing:
 
     @_talks
     def show_target(self, position, rotation=None, name: str = "target", size: float | None = None) -> None:
-        """Draw an IK target: a coordinate triad (x red, y green, z blue), or a point without ``rotation``.
-
-        Args:
-            position: (3,) in m in the base frame, or a ``pin.SE3`` (then its rotation is used too).
-            rotation: (3, 3) rotation matrix, or None for a position-only target (drawn as a point).
-            name: node name (draw several targets under different names).
-            size: axis length (m) of the triad; the point's radius is a quarter of it. Default: 15 % of
-                the robot's reach, within [2 cm, 20 cm].
-        """
+        """Draw an IK target at ``position`` (3,) m (or a ``pin.SE3``) under node ``name``: a triad of axis length
+        ``size`` m (default 15 % of the reach, within [2, 20] cm) with a ``rotation`` (3, 3), else a point."""
         if isinstance(position, pin.SE3):
             position, rotation = position.translation, position.rotation if rotation is None else rotation
         p = np.asarray(position, dtype=float)
@@ -118,23 +105,9 @@ class MarkerDrawing:
 
     @_talks
     def show_goals(self, goals, name: str = "goals", size: float | None = None, labels: bool = True) -> list[str]:
-        """Draw one marker per goal of a goal list: a triad for a :class:`~evoik_pin.goals.Pose`, a sphere for a
-        :class:`~evoik_pin.goals.Position`, at its target in the base frame, labelled by its frame name.
-
-        Args:
-            goals: a goal list of this Viewer's robot (``[Pose(frame, T), Position(frame, p), ...]``), checked as a
-                solve checks it (:func:`evoik_pin.goals.bind`: frames that exist and move, no clashing targets).
-            name: group node; the marker of the goal on frame ``f`` is ``<name>/<f>``, its label
-                ``<name>/<f>/label``. Drawing the same name again replaces the group.
-            size: axis length (m) of the triads (the spheres' radius is a quarter of it). Default: 15 % of the
-                robot's reach, within [2 cm, 20 cm].
-            labels: draw each goal's frame name beside its marker (a text sprite facing the camera).
-
-        Returns:
-            The markers' node names, in the goals' order. A centre-of-mass point is a sphere named
-            ``<name>/center_of_mass``; a support polygon and a relative pose have no target in the base frame and
-            get no marker.
-        """
+        """Draw a marker ``<name>/<frame>`` per goal of a goal list (checked by :func:`evoik_pin.goals.bind`) that
+        has a place (``goal.marker()``), ``size`` as for :meth:`show_target`, with ``labels`` its frame name
+        (``<name>/<frame>/label``); return the markers' node names in the goals' order."""
         from ..goals import bind
 
         goals = bind(self.robot, goals)[0]
@@ -167,20 +140,9 @@ class MarkerDrawing:
     @_talks
     def show_solution(self, result, goals, scene=None, margin: float = 0.0, name: str = "goals",
                       frame: bool = True) -> list[tuple[str, str]] | None:
-        """Draw the answer of a goal-list solve: the robot at ``result.q`` (:meth:`show`, with a ``scene``: its
-        obstacles and the links in collision red), a marker per goal (:meth:`show_goals`), and, with ``frame``,
-        the camera framing the robot's links and the goals (:meth:`frame`).
-
-        Args:
-            result: a :class:`~evoik_pin.Result` of ``evoik_pin.solve(robot, goals, ...)`` (or a joint vector (n,)).
-            goals: the goal list it was solved for.
-            scene, margin: as for :meth:`show`.
-            name: the goals' group node.
-            frame: point the camera at the robot and the goals.
-
-        Returns:
-            What :meth:`show` returns: with a scene, the pairs in collision at ``result.q``; None without.
-        """
+        """Draw a goal-list answer: the robot at ``result.q`` (:meth:`show` with ``scene`` and ``margin``, whose
+        return this returns), the ``goals`` under ``name`` (:meth:`show_goals`), and with ``frame`` the camera on
+        the links and goals (:meth:`frame`)."""
         pairs = self.show(result, scene=scene, margin=margin)
         self.show_goals(goals, name=name)
         if frame:

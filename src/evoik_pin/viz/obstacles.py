@@ -1,21 +1,14 @@
-"""Collision scenes in the viewer: a Scene's obstacles in translucent grey, the robot's links in contact in red.
-
-``show_scene(scene)`` turns the obstacles into a ``pin.GeometryModel`` on the universe (:func:`obstacle_model`:
-coal shapes rebuilt from each :class:`~evoik_pin.scene.Obstacle`'s kind, params and pose) drawn by one more
-MeshcatVisualizer under ``scene``; ``show(q, scene=)`` reloads the visual objects of the links in contact as
-plain red geometry (a skeleton: the parts on their joints), the others back in their own colours. Reloads are
-``set_object`` commands, so the static export keeps them.
+"""Collision scenes in the viewer: a Scene's obstacles in translucent grey, the robot's links in contact in red
+(reloaded as plain geometry: ``set_object`` commands, which the static export keeps).
 """
 
 from __future__ import annotations
 
 import warnings
 
-import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError
-from .robot import _fcl
 from .server import _talks
 
 __all__ = ["COLLISION_RGBA", "OBSTACLE_RGBA", "obstacle_model"]
@@ -27,23 +20,12 @@ COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
 
 
 def obstacle_model(scene) -> pin.GeometryModel:
-    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` attached to the universe of
-    ``scene.robot.model`` (boxes, spheres, cylinders and capsules along their pose's z, meshes at their scale),
-    one object per obstacle, named as the obstacle."""
-    fcl = _fcl()
+    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` on the universe of
+    ``scene.robot.model``, one object per obstacle, named as the obstacle."""
     base = scene.robot.base_placement
     geom = pin.GeometryModel()
-    for ob in scene.obstacles.values():
-        p = ob.params
-        if ob.kind == "box":
-            shape = fcl.Box(*p["size"])
-        elif ob.kind == "sphere":
-            shape = fcl.Sphere(p["radius"])
-        elif ob.kind in ("cylinder", "capsule"):
-            shape = (fcl.Cylinder if ob.kind == "cylinder" else fcl.Capsule)(p["radius"], p["length"])
-        else:
-            shape = fcl.MeshLoader().load(p["path"], np.asarray(p["scale"], dtype=float))
-        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, shape))  # base frame -> world
+    for ob in scene.obstacles.values():  # base frame -> the model's world frame
+        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, ob.shape))
     return geom
 
 
@@ -87,17 +69,8 @@ class ObstacleDrawing:
     @_talks
     def show_scene(self, scene, name: str = "scene", color=OBSTACLE_RGBA[:3],
                    opacity: float = OBSTACLE_RGBA[3]) -> list[str]:
-        """Draw the obstacles of a collision :class:`~evoik_pin.scene.Scene` in the base frame: boxes, spheres,
-        cylinders and capsules (axis along their pose's z) and meshes, translucent grey by default.
-
-        Args:
-            scene: a Scene of this Viewer's robot (e.g. ``Scene.from_file(robot, "shelf.yaml")``).
-            name: group node; obstacle ``o`` is ``<name>/visuals/<o>``. Drawing the same name again replaces it.
-            color: RGB in [0, 1]. opacity: in (0, 1].
-
-        Returns:
-            The obstacles' node names (none for a scene without obstacles).
-        """
+        """Draw the obstacles of a :class:`~evoik_pin.scene.Scene` of this robot as ``<name>/visuals/<o>`` in
+        ``color`` (RGB in [0, 1]) and ``opacity``; return their node names."""
         self._check_scene(scene)
         name = name.strip("/")
         if not name or not 0.0 < opacity <= 1.0:

@@ -1,9 +1,5 @@
-"""Point clouds, polylines and trajectories: reachability maps (``show_points``), tip paths (``draw_path``) and
-the robot animated along a trajectory (``animate``).
-
-``animate`` keys the geometry nodes' poses into one meshcat ``Animation``; meshcat puts an object under
-``<path>/<object>``, so the animated group nodes survive in the static export, where the animation command is
-replayed before the objects.
+"""Point clouds (``show_points``), polylines (``draw_path``) and the robot animated along a trajectory (``animate``:
+one meshcat ``Animation`` of the geometry nodes' poses, which the static export keeps).
 """
 
 from __future__ import annotations
@@ -11,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ConfigurationError, TargetError
+from ..errors import ConfigurationError
+from .camera import checked_points
 from .ghosts import GHOST_COLORS
 from .server import _talks
 
@@ -28,19 +25,12 @@ class PathDrawing:
     @_talks
     def show_points(self, points, values=None, name: str = "points", size: float | None = None,
                     cmap: str = "viridis", vmin: float = 0.0, vmax: float = 1.0) -> None:
-        """Draw a point cloud (e.g. the voxels of a reachability map), coloured by ``values``.
-
-        Args:
-            points: (N, 3) positions in m in the base frame.
-            values: (N,) numbers mapped through the matplotlib colormap ``cmap`` over [vmin, vmax]; None: one colour.
-            name: node name. size: point size in m (default 2 % of the robot's reach, within [5 mm, 5 cm]).
-        """
+        """Draw a point cloud ``points`` (N, 3) m under node ``name``, coloured by ``values`` (N,) through the
+        matplotlib colormap ``cmap`` over [vmin, vmax] (None: one colour); ``size`` m (default from the reach)."""
         import matplotlib
         import meshcat.geometry as mg
 
-        P = np.asarray(points, dtype=float)
-        if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 1 or not np.all(np.isfinite(P)):
-            raise TargetError(f"points must be a finite (N, 3) array with N >= 1 (m), got shape {P.shape}")
+        P = checked_points(points, "points", 1)
         if values is None:
             colors = np.tile(GHOST_COLORS[0], (P.shape[0], 1))
         else:
@@ -61,9 +51,7 @@ class PathDrawing:
         """Draw a polyline through ``points`` (N, 3) in m in the base frame (N >= 2), e.g. a tip path."""
         import meshcat.geometry as mg
 
-        P = np.asarray(points, dtype=float)
-        if P.ndim != 2 or P.shape[1] != 3 or P.shape[0] < 2 or not np.all(np.isfinite(P)):
-            raise TargetError(f"path points must be a finite (N, 3) array with N >= 2 (m), got shape {P.shape}")
+        P = checked_points(points, "path points", 2)
         vis = self._check_open()
         name = name.strip("/")
         self.delete(name)
@@ -73,36 +61,34 @@ class PathDrawing:
 
     @_talks
     def animate(self, trajectory, dt: float = 0.05, path: bool = True, repetitions: int = 1) -> None:
-        """Animate the robot along a trajectory (a meshcat animation, so the HTML export keeps it).
-
-        Args:
-            trajectory: joint vectors (N, n) in rad/m (a list, an array, or results with ``.q``).
-            dt: time between two configurations (s).
-            path: also draw the tip's path through the trajectory (node ``path``).
-            repetitions: how many times the animation plays (the browser's Animations panel replays it).
-
-        The robot is left displayed at the first configuration; one animation exists at a time (a new one
-        replaces it).
-        """
-        import meshcat.animation
-
+        """Animate the robot along ``trajectory`` (N, n) (joint vectors or results) at ``dt`` s per configuration,
+        ``repetitions`` times, and with ``path`` draw the tip's path (node ``path``). The robot is left at the
+        first configuration; a new animation replaces the last."""
         Q = self._qs(trajectory)
         if not (np.isfinite(dt) and dt > 0):
             raise ConfigurationError(f"dt must be a positive number of seconds, got {dt}")
-        vis = self._check_open()
-        viz = self._load("robot")
-        anim = meshcat.animation.Animation(default_framerate=1.0 / dt)
-        geom = viz.visual_model
-        nodes = [viz.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]
-        for k, q in enumerate(Q):
-            placements = self.robot.geometry_placements(geom, q)
-            with anim.at_frame(vis, k) as frame:
-                for node, M in zip(nodes, placements, strict=True):  # rigid poses: the mesh scale stays as loaded
-                    frame[node].set_transform(M.homogeneous)
-        self.show(Q[0])
-        vis.set_animation(anim, play=True, repetitions=int(repetitions))
+        self._animate_robot(Q, 1.0 / dt, repetitions)
         self.scene["animation"] = f"{Q.shape[0]} frames, dt {dt:g} s"
         if path:
             P, _ = self.robot.fk_batch(Q)
             if P.shape[0] >= 2:
                 self.draw_path(P)
+
+    def _animate_robot(self, Q: np.ndarray, fps: float, repetitions: int = 1, each_frame=None) -> None:
+        """Key the robot's geometry poses at each row of ``Q`` (N, n) into one meshcat animation at ``fps``
+        (``each_frame(frame, k)`` keys more nodes), show ``Q[0]`` and play it."""
+        import meshcat.animation
+
+        vis = self._check_open()
+        viz = self._load("robot")
+        anim = meshcat.animation.Animation(default_framerate=float(fps))
+        geom = viz.visual_model
+        nodes = [viz.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]
+        for k, q in enumerate(Q):
+            with anim.at_frame(vis, k) as frame:
+                for node, M in zip(nodes, self.robot.geometry_placements(geom, q), strict=True):
+                    frame[node].set_transform(M.homogeneous)  # rigid poses: the mesh scale stays as loaded
+                if each_frame is not None:
+                    each_frame(frame, k)
+        self.show(Q[0])
+        vis.set_animation(anim, play=True, repetitions=int(repetitions))

@@ -1,11 +1,5 @@
-"""Drawing a robot at a configuration: its URDF visuals or a skeleton, every link of the model.
-
-The geometry goes through ``pinocchio.visualize.MeshcatVisualizer`` with ``robot.model`` (the active joints;
-locked parts where they rest) and ``robot.visual_model``, one visualizer per node (``robot``, ``solutions/<k>``,
-...). A floating base is the model's first six joints, so ``to_pinocchio(q)`` places the whole robot in the world
-from q's six base entries. A URDF without usable visuals is drawn as :func:`skeleton_model`: coal spheres at the
-joint origins and the goal frames, cylinders from joint to joint and rails along prismatic ranges, attached to the
-model's joints. The viewer runs no kinematics of its own: placements come from the robot layer.
+"""Drawing a robot at a configuration: ``robot.visual_model`` (or :func:`skeleton_model`) on ``robot.model``, one
+``pinocchio.visualize.MeshcatVisualizer`` per node; placements come from the robot layer.
 """
 
 from __future__ import annotations
@@ -38,14 +32,12 @@ def _fcl():
 
 
 def _tip_frames(robot: Robot) -> list[str]:
-    """The frames a skeleton marks beyond the joint origins: the tip and the other frames the robot was loaded
-    for (``tips=``), each once."""
+    """The frames a skeleton marks beyond the joint origins: the tip and ``tips``, each once."""
     return list(dict.fromkeys([robot.tip, *robot.tips]))
 
 
 def _segments(robot: Robot) -> list[tuple[int, pin.SE3]]:
-    """The skeleton's points: (parent joint, placement in that joint) of each joint origin, then of each tip frame
-    (:func:`_tip_frames`)."""
+    """(parent joint, placement in it) of each joint origin, then of each of :func:`_tip_frames`."""
     model = robot.model
     points = [(model.parents[j], model.jointPlacements[j]) for j in range(1, model.njoints)]
     for name in _tip_frames(robot):
@@ -55,23 +47,13 @@ def _segments(robot: Robot) -> list[tuple[int, pin.SE3]]:
 
 
 def _base_joints(robot: Robot) -> int:
-    """How many of the model's first joints are a floating base's six (drawn as nothing: they only place the root
-    link)."""
+    """How many of the model's first joints are a floating base's (drawn as nothing)."""
     return 6 if robot.floating_base else 0
 
 
 def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryModel:
-    """Simple visual geometry of ``robot``: spheres at the joint origins and the tip frames, cylinders between.
-
-    Args:
-        robot: the robot to draw (a chain, or a tree: every joint of ``robot.model``; a floating base's six joints
-            get nothing of their own, the root link's joints hang from where they place it).
-        radius: sphere radius (m); links get 0.6 of it, the rails prismatic joints slide on 0.3. Default:
-            2 % of the robot's reach (:func:`_reach`: with prismatic travel), within [3 mm, 30 mm].
-
-    Returns:
-        A ``pin.GeometryModel`` attached to ``robot.model``'s joints (usable as a visual model).
-    """
+    """A visual ``pin.GeometryModel`` on ``robot.model``'s joints: spheres of ``radius`` m (default 2 % of the
+    reach, within [3, 30] mm) at the joint origins and tip frames, cylinders between, rails along prismatic ranges."""
     fcl = _fcl()
     model = robot.model
     reach = _reach(robot)
@@ -114,12 +96,8 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
 
 
 def _reach(robot: Robot) -> float:
-    """The robot's size (m), >= 0.1 m, that sets default marker sizes and the camera distance.
-
-    A chain (every entry of q moves the tip, no floating base): the length of its polyline base -> joints -> tip
-    at rest plus prismatic travel. Any other tree: the longest such path from the root to a joint origin or a
-    tip frame (a floating base's six joints count for nothing).
-    """
+    """The robot's size (m, >= 0.1) for default marker sizes and the camera distance: the longest polyline from the
+    root through the joint origins to a tip frame, at rest, plus prismatic travel."""
     model = robot.model
     revolute, _, lower, upper = robot.chain_joints()
     travel = np.where(revolute, 0.0, np.maximum(np.abs(lower), np.abs(upper)))
@@ -190,18 +168,9 @@ class RobotDrawing:
 
     @_talks
     def show(self, q, scene=None, margin: float = 0.0) -> list[tuple[str, str]] | None:
-        """Draw the robot (node ``robot``) at joint vector ``q`` (n,) in rad/m, or a result's ``.q``: every link
-        of the model (a whole robot: the whole tree, a floating base placed by q's six base entries).
-
-        With a collision ``scene`` (:class:`~evoik_pin.scene.Scene` of this robot): its obstacles are drawn too
-        (node ``scene``, as :meth:`show_scene`; again only when the scene changed), and the robot's links in
-        collision at ``q`` (closer than ``margin`` m) are drawn red (:data:`COLLISION_RGBA`); a later ``show``
-        gives links no longer in collision their own colours back.
-
-        Returns:
-            With a scene, the pairs in collision (``scene.colliding_pairs(q, margin)``: link or obstacle names,
-            empty when ``q`` is collision-free); None without.
-        """
+        """Draw the robot (node ``robot``) at ``q`` (n,) or a result's ``.q``. With a collision ``scene``: its
+        obstacles too (:meth:`show_scene`, when it changed) and the links in collision at ``q`` (closer than
+        ``margin`` m) in red; returns then ``scene.colliding_pairs(q, margin)`` (None without a scene)."""
         q = self._q(q)
         pairs = None
         if scene is not None:

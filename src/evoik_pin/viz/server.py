@@ -1,11 +1,5 @@
-"""The meshcat server a Viewer draws into: its own subprocess (start, readiness, ports, stop) or an external one.
-
-A Viewer's own server is meshcat's ``zmqserver.main()`` run through a ``python -c`` wrapper that binds the
-HTTP/websocket socket to 127.0.0.1 (meshcat binds every interface) and exits when its parent process disappears.
-meshcat's own search picks the ports (ZeroMQ from 6000, HTTP from 7000, skipping busy ones); the server is ready
-when it has printed both URLs. An external server (``Viewer(zmq_url=...)``) is probed first, so a silent one is a
-:class:`~evoik_pin.errors.ViewerError` instead of a hang. The time limits are the :mod:`evoik_pin.viz` package's
-constants, passed in by the Viewer.
+"""The meshcat server a Viewer draws into: its own subprocess (bound to 127.0.0.1, ready once it printed both
+URLs, exiting with its parent) or an external one (probed first: a silent one is a ViewerError, not a hang).
 """
 
 from __future__ import annotations
@@ -47,9 +41,8 @@ zmqserver.main()
 
 
 def _printed(f) -> str:
-    """What a subprocess has written so far to ``f`` (the temporary file given it as stdout or stderr), read without
-    moving the file's offset: the subprocess writes at that shared offset, so a ``seek(0)`` would let its next line
-    overwrite its first."""
+    """What a subprocess has written so far to ``f`` (its stdout or stderr file), read without moving the shared
+    offset (a ``seek(0)`` would let its next line overwrite its first)."""
     chunks, offset = [], 0
     while True:
         chunk = os.pread(f.fileno(), 1 << 16, offset)
@@ -70,11 +63,7 @@ def _stop_process(proc: subprocess.Popen) -> None:
 
 
 class _Server:
-    """A meshcat server subprocess listening on 127.0.0.1; ``stop()`` ends it (idempotent).
-
-    ``timeout`` (s): how long a server that neither prints its URLs nor exits is waited for before it counts as
-    wedged (:data:`evoik_pin.viz.OWN_SERVER_HANG_S`).
-    """
+    """A meshcat server subprocess on 127.0.0.1, waited for ``timeout`` s to print its URLs; ``stop()`` ends it."""
 
     def __init__(self, timeout: float):
         import meshcat
@@ -126,10 +115,8 @@ def _probe(zmq_url: str, timeout: float) -> str:
         sock.send(b"url")
         return sock.recv().decode()
     except zmq.error.Again:
-        raise ViewerError(
-            f"no meshcat server answers at {zmq_url} within {timeout:g} s; start one with `meshcat-server`, "
-            "or pass zmq_url=None to let the Viewer start its own"
-        ) from None
+        raise ViewerError(f"no meshcat server answers at {zmq_url} within {timeout:g} s; start one with "
+                          "`meshcat-server`, or pass zmq_url=None to let the Viewer start its own") from None
     except zmq.error.ZMQError as exc:
         raise ViewerError(f"cannot reach a meshcat server at {zmq_url!r}: {exc}") from None
     finally:
@@ -137,9 +124,8 @@ def _probe(zmq_url: str, timeout: float) -> str:
 
 
 class _OwnServerSocket:
-    """The REQ socket to a Viewer's own server: ``recv`` waits as long as the server process runs (a busy machine
-    delays its answer) and raises ``zmq.ZMQError`` once it has exited (or ``zmq.Again`` after ``hang_s`` s without
-    an answer). Everything else is the wrapped socket's."""
+    """The REQ socket to a Viewer's own server: ``recv`` waits while the server runs, raising ``zmq.ZMQError`` once
+    it exited (``zmq.Again`` after ``hang_s`` s); the rest is the wrapped socket's."""
 
     def __init__(self, sock, proc: subprocess.Popen, hang_s: float):
         self._sock, self._proc, self._hang_s = sock, proc, hang_s
@@ -160,11 +146,8 @@ class _OwnServerSocket:
 
 
 def _connect(zmq_url: str, web_url: str, proc: subprocess.Popen | None, answer_timeout: float, hang_s: float):
-    """A ``meshcat.Visualizer`` talking to the server at ``zmq_url``; a silent server raises instead of hanging.
-
-    ``proc``: the server process when it is the Viewer's own (answers are waited for while it runs, up to ``hang_s``
-    s); None for an external server (``answer_timeout`` s per answer).
-    """
+    """A ``meshcat.Visualizer`` talking to the server at ``zmq_url``: its own ``proc`` (waited for up to ``hang_s``
+    s), or None for an external one (``answer_timeout`` s per answer)."""
     import zmq
     from meshcat.visualizer import ViewerWindow, Visualizer
 

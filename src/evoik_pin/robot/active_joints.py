@@ -1,0 +1,135 @@
+"""Which joints of a URDF a :class:`~evoik_pin.robot.Robot` moves (:func:`choose_joints`): the chains from the base
+frame to its tips, or the whole tree below it, the joints ``joints=[...]`` keeps, and the mimic joints following them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pinocchio as pin
+
+from ..errors import FrameError, RobotLoadError
+from .frames import closest_names, deepest_body, find_frame, frame_names, root_link
+
+__all__ = ["MAX_CHAIN_JOINTS", "ActiveJoints", "choose_joints", "suggest_frames"]
+
+#: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
+#: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
+MAX_CHAIN_JOINTS = 200
+
+
+@dataclass(frozen=True)
+class ActiveJoints:
+    """What :func:`choose_joints` chose (joint ids of the kinematic model): ``tip`` and ``tips`` (frame names),
+    ``base`` (the base frame's name), ``above_base`` (the joints holding the base: they never move), ``dofs`` (the
+    joints of q, in order), ``physical`` (every joint q moves) and ``follow``, for each physical joint, (the joint
+    of q it follows, multiplier, offset)."""
+
+    tip: str
+    tips: tuple[str, ...]
+    base: str
+    above_base: set[int]
+    dofs: list[int]
+    physical: list[int]
+    follow: list[tuple[int, float, float]]
+
+
+def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | None, tips, base: str | None,
+                  joints: list[str] | None, coupling: dict[int, tuple[int, float, float]]) -> ActiveJoints:
+    """The active joints of ``kin`` (``full_model``, behind a floating base's six joints if any) for the Robot
+    arguments ``tip``, ``tips``, ``base`` and ``joints`` (:func:`~evoik_pin.robot.load_robot`), ``coupling`` its
+    mimic couplings (:func:`~evoik_pin.robot.joints.couplings`). FrameError for unknown or unconnected frames and
+    joints; RobotLoadError for joints that are not 1-DOF, none to move, or more than :data:`MAX_CHAIN_JOINTS`."""
+    whole = isinstance(tips, str) and tips == "all"
+    if tips is None or whole:
+        tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
+    else:
+        tip_names = _frame_list(tips)
+    if tip is None:
+        tip = tip_names[0] if tip_names else deepest_body(full_model)
+    root_name = root_link(full_model) if base is None else base
+    base_id = 0 if base is None else find_frame(kin, base)
+    if base_id < 0:
+        raise FrameError(f"unknown base frame {base!r}{suggest_frames(base, kin)}; frames of {name}: "
+                         f"{_listed(frame_names(full_model, bodies=True))}")
+    base_joint = kin.frames[base_id].parentJoint
+    for t in [tip, *(tip_names or [])]:
+        if find_frame(kin, t) < 0:
+            raise FrameError(f"unknown tip frame {t!r}{suggest_frames(t, kin)}; frames of {name}: "
+                             f"{_listed(frame_names(full_model, bodies=True))}")
+
+    if whole:
+        active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
+    else:
+        chosen: set[int] = set()
+        for t in tip_names:
+            support = list(kin.supports[kin.frames[find_frame(kin, t)].parentJoint])
+            if base_joint not in support:
+                raise FrameError(f"tip frame {t!r} is not downstream of base frame {root_name!r}: no kinematic "
+                                 "chain joins them from base to tip")
+            chosen.update(support[support.index(base_joint) + 1:])
+        active = sorted(chosen)
+    where = (f"the chain {root_name!r} -> {tip_names[0]!r}" if tip_names and len(tip_names) == 1
+             else f"the joints below {root_name!r}" if whole else f"the chains {root_name!r} -> {tip_names}")
+    bad = [kin.names[j] for j in active if kin.joints[j].nv != 1]
+    if bad:
+        raise RobotLoadError(f"joints {bad} of {where} are not 1-DOF revolute or prismatic joints; only those are "
+                             "supported (lock them with joints=[...])")
+    above_base = set(kin.supports[base_joint])
+
+    def follows(j: int) -> tuple[int | None, float, float]:
+        """(joint whose q moves physical joint j, multiplier, offset); None when j is constant."""
+        c = coupling.get(j)
+        if c is None:
+            return j, 1.0, 0.0
+        driver, m, off = c
+        return (None if driver in above_base or m == 0.0 else driver), m, off
+
+    dofs: list[int] = []
+    for j in active:
+        d = follows(j)[0]
+        if d is not None and d not in dofs:
+            dofs.append(d)
+    dof_names = [kin.names[d] for d in dofs]
+    if joints is not None:
+        unknown = [j for j in joints if j not in dof_names]
+        if unknown:
+            coupled = [f"{u!r} mimics {kin.names[coupling[kin.getJointId(u)][0]]!r}"
+                       for u in unknown if kin.existJointName(u) and kin.getJointId(u) in coupling]
+            hint = f" ({'; '.join(coupled)}: name the joint it follows)" if coupled else ""
+            raise FrameError(f"joints {unknown} are not on {where}; its joints are "
+                             f"{', '.join(dof_names) or '(none)'}{hint}")
+        dofs = [d for d in dofs if kin.names[d] in joints]
+    # the physical joints: every joint q moves (below the base): the active ones, the joints their mimics follow
+    # and every other mimic of those, so that each link is where full_configuration(q) puts it
+    physical = [j for j in range(1, kin.njoints) if j not in above_base and follows(j)[0] in dofs]
+    if not physical:
+        raise RobotLoadError(f"{where} of {name} has no movable joint; pick another tip or base")
+    if len(physical) > MAX_CHAIN_JOINTS:
+        raise RobotLoadError(f"{where} of {name} has {len(physical)} joints; at most {MAX_CHAIN_JOINTS} are "
+                             "supported (Pinocchio's data for an n-joint chain takes O(n^3) memory): pick nearer "
+                             "tips, a farther base, or keep fewer joints free with joints=[...]")
+    return ActiveJoints(tip, tuple(tip_names) if tip_names else (tip,), root_name, above_base, dofs, physical,
+                        [follows(j) for j in physical])
+
+
+def _frame_list(tips) -> list[str]:
+    """``tips`` as a non-empty list of frame names, or a FrameError."""
+    if isinstance(tips, str) or not hasattr(tips, "__iter__"):
+        raise FrameError(f"tips must be a list of frame names or 'all', got {tips!r}")
+    out = list(tips)
+    if not out or not all(isinstance(t, str) for t in out):
+        raise FrameError(f"tips must be a non-empty list of frame names (strings), got {tips!r}")
+    return out
+
+
+def _listed(names: list[str], most: int = 40) -> str:
+    """The first ``most`` names, comma-separated, and how many more there are."""
+    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
+    return ", ".join(names[:most]) + more
+
+
+def suggest_frames(name, model: pin.Model) -> str:
+    """' (closest: a, b)' for a frame name not found in ``model``, or ''."""
+    close = closest_names(str(name), frame_names(model))
+    return f" (closest: {', '.join(close)})" if close else ""
