@@ -104,9 +104,8 @@ def later_kinds(stack: GoalStack) -> bool:
 def compiled_kernel(extra: bool = False) -> dict:
     """The kernel's entry points for one variant of the run, ready to run: ``extra`` False for stacks of one-frame goals
     (pose, position, planar: ``lm_run_basic``), True for any stack (``lm_run_all``; :func:`later_kinds` says which a
-    stack needs). The dict holds ``lm_run_buffers``, ``lm_run_starts_buffers`` and ``lm_run_pairs_buffers`` (the
-    variant's :data:`.kernel.Entries`), ``lm_run``, ``lm_run_starts`` and ``lm_run_pairs`` (Python wrappers that make a
-    workspace) and ``workspace_size``.
+    stack needs). The dict holds ``lm_run_buffers`` and ``lm_runs_buffers`` (the variant's :data:`.kernel.Entries`),
+    ``lm_runs`` (their Python wrapper that makes a workspace) and ``workspace_size``.
 
     The first call per variant runs each entry once on a one-joint robot, so that numba loads (or, once per install,
     compiles, with a notice: :mod:`.compiling`) its machine code here rather than inside a solve's time budget; every
@@ -133,12 +132,10 @@ def _load_kernel(extra: bool) -> dict:
     # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
     buffers = (np.empty(int(K.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
     stats = np.empty((1, STATS_SIZE))
-    calls = [(entries.run, (*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
+    calls = [(entries.run, (*buffers, np.zeros(1), tree, box, False, goals, pt, Rt, params, np.empty(1),
                             np.empty((1, 2)))),
-             (entries.starts, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
-                               np.empty((1, 1)), stats, np.empty((1, 1, 2)))),
-             (entries.pairs, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(),
-                              Rt[None].copy(), params, np.empty((1, 1)), stats, np.empty((1, 1, 2))))]
+             (entries.runs, (*buffers, np.zeros((1, 1)), tree, box, False, goals, pt[None], Rt[None], params,
+                             np.empty((1, 1)), stats, np.empty((1, 1, 2)), True))]
     if extra:
         # Goal.errors' compiled errors (.axes, read-only aux row) are first called mid-search: load them here too,
         # outside any time budget
@@ -150,8 +147,7 @@ def _load_kernel(extra: bool) -> dict:
                                    np.empty((3, 3)), np.empty(3), np.empty(6))))
     load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
          KERNEL_COMPILE_SECONDS[extra])
-    return dict(lm_run=K.lm_run, lm_run_starts=K.lm_run_starts, lm_run_pairs=K.lm_run_pairs,
-                lm_run_buffers=entries.run, lm_run_starts_buffers=entries.starts, lm_run_pairs_buffers=entries.pairs,
+    return dict(lm_runs=K.lm_runs, lm_run_buffers=entries.run, lm_runs_buffers=entries.runs,
                 workspace_size=K.workspace_size)
 
 
@@ -214,8 +210,7 @@ class LevenbergMarquardt:
         self._buffers: tuple = ()  # the kernel's workspace (_workspace)
         self._buffers_for = -1  # the most steps those buffers hold
         self._buffers_thread = -1  # the thread whose buffers they are (threading.get_ident)
-        # the kernel's constant arguments, unpacked from one tuple at each call
-        self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+        self._set_args()
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
         self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
         self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
@@ -252,7 +247,7 @@ class LevenbergMarquardt:
             self._Rt[...] = Rt
         else:  # the first problem's arrays may be its target's own: copies from now on, never written through
             self._pt, self._Rt = np.array(pt), np.array(Rt)
-            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._set_args()
             self._owned = True
             self._direct = self._overload()
         self._same = None if problem.goals is not None or target.planar else (
@@ -271,7 +266,7 @@ class LevenbergMarquardt:
         box = self._box
         if not self._own_box:  # the first call: an array of our own (the cached one serves other engines)
             box = self._box = np.zeros_like(box)
-            self._args = (*self._tree, box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._set_args()
             self._own_box = True
         box[B_LO] = box[B_CLO] = lower
         box[B_HI] = box[B_CHI] = upper  # the wrap row stays 0: the box is in unwrapped values
@@ -283,7 +278,7 @@ class LevenbergMarquardt:
             raise OptionError("set_targets runs on the compiled LM engine only (engine='compiled')")
         if not self._owned:  # the first problem's arrays may be its target's own: copies, never written through
             self._pt, self._Rt = np.array(pt, dtype=float), np.array(Rt, dtype=float)
-            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._set_args()
             self._owned = True
             self._direct = self._overload()
             self._same = None
@@ -291,9 +286,14 @@ class LevenbergMarquardt:
             self._pt[...] = pt
             self._Rt[...] = Rt
 
+    def _set_args(self) -> None:
+        """The kernel's constant arguments, (kin, box, any_wrap, goals, pt, Rt) (:mod:`.kernel`'s groups), remade as one
+        tuple whenever one of them is replaced: callers keep it, and test by identity that it still holds."""
+        self._args = (self._tree, self._box, self._any_wrap, self._goal_arrays, self._pt, self._Rt)
+
     def _overload(self):
         """The machine code numba runs for :meth:`run`'s arguments, as a function called without numba's dispatch
-        (which types each of the kernel's 22 arguments on every call, a noticeable share of a short run), or None
+        (which types each of the kernel's arguments on every call, a noticeable share of a short run), or None
         where this numba does not expose it. Only for an engine that runs many problems: finding it costs more than
         a call. The argument types are fixed: the engine's own arrays, and ``q`` copied as
         :meth:`run` does."""
@@ -387,8 +387,8 @@ class LevenbergMarquardt:
         Q_out = np.empty_like(Q)
         stats = np.empty((K, STATS_SIZE))
         g_stats = np.empty((K, len(self.goals), 2))
-        k = self._kernel["lm_run_starts_buffers"](*self._workspace(max_iterations), Q, *self._args, params, Q_out,
-                                                  stats, g_stats)
+        k = self._kernel["lm_runs_buffers"](*self._workspace(max_iterations), Q, *self._args[:4], self._pt[None],
+                                            self._Rt[None], params, Q_out, stats, g_stats, True)
         runs = k + 1 if k >= 0 else -(k + 1)
         s = stats[:runs]
         if k < 0:
@@ -458,15 +458,15 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
                             np.array([o.orientation_error for o in outs]) if oriented else None,
                             np.array([o.converged for o in outs]), np.array([o.evaluations for o in outs]))
     arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
-    lm_run_pairs = compiled_kernel(False)["lm_run_pairs"]  # a single target: pose, position or planar
+    lm_runs = compiled_kernel(False)["lm_runs"]  # a single target: pose, position or planar
     _, any_wrap, _, _, box = box_constants(robot, lower, upper)
     params = kernel_params(max_iterations, damping, max_step)
     stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
-                 *(owned(a) for a in stack.arrays), owned(arrays.P[:, None], float), owned(arrays.Rts[:, None], float),
-                 params, Q_out, stats, np.empty((N, 1, 2)))
+    lm_runs(owned(Q, float), tuple(owned(a) for a in robot.tree_constants()), box, any_wrap,
+            tuple(owned(a) for a in stack.arrays), owned(arrays.P[:, None], float), owned(arrays.Rts[:, None], float),
+            params, Q_out, stats, np.empty((N, 1, 2)))
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
 
@@ -480,9 +480,9 @@ def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upp
     Q_out = np.empty((N, robot.n))
     stats = np.empty((N, STATS_SIZE))
     g_stats = np.empty((N, G, 2))
-    compiled_kernel(later_kinds(stack))["lm_run_pairs"](
-        owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
-        *(owned(a) for a in stack.arrays), owned(arrays.P, float), owned(arrays.Rts, float), params, Q_out, stats,
+    compiled_kernel(later_kinds(stack))["lm_runs"](
+        owned(Q, float), tuple(owned(a) for a in robot.tree_constants()), box, any_wrap,
+        tuple(owned(a) for a in stack.arrays), owned(arrays.P, float), owned(arrays.Rts, float), params, Q_out, stats,
         g_stats)
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64), g_stats)

@@ -62,8 +62,8 @@ _DOC = """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kern
             sqrt(weight) for a goal). oriented: whether the engine counts the orientation error (``lm.oriented``:
             a run's error is position + orientation error, else position error).
             table_runs: the entries run at most (>= 1).
-        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on one frame (the
-            tip's for a single target).
+        kin, box, any_wrap, goals, pt, Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run_buffers`),
+            one goal on one frame (the tip's for a single target).
         q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's
             position error + orientation error (m + rad), in order. best_q (n,), best (6,): when none converges,
             the run memetic keeps as its best (the first of the lowest errors): its configuration, and its position
@@ -81,9 +81,10 @@ def _first_runs(extra, name):
     for stacks of the first four kinds, True for any), a constant of the closure whose branch numba prunes before
     typing: each variant calls (and links) the one entry of its run, as the kernel's entries do."""
 
-    def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, parent, FR, Fp,
-             rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out,
-             errors, best_q, best):  # pragma: no cover - compiled
+    def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap,
+             goals, pt, Rt, params, q_out, g_out, errors, best_q, best):  # pragma: no cover - compiled
+        parent, FR, Fp, rev, index, scale, offset = kin
+        spec, gR, gp = goals[0], goals[1], goals[2]
         n = q0.shape[0]
         D = F.shape[1]
         has_position = D != 9
@@ -157,13 +158,11 @@ def _first_runs(extra, name):
             row = order[s]
             start = q0 if row < 0 else Q[row]
             if extra is not None:
-                pos, rot, converged, it, ev, cost = lm_run_buffers(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, kin, box, any_wrap, goals, pt, Rt,
+                                                                   params, q_out, g_out)
             else:
-                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(buf, held, start, kin, box, any_wrap, goals,
+                                                                         pt, Rt, params, q_out, g_out)
             error = pos + (rot if oriented else 0.0)
             errors[s] = error
             evaluations += ev
@@ -208,7 +207,7 @@ _GOAL_DOC = """memetic's guaranteed LM runs for a goal list of several goals (or
             floating base every start takes) or BASE_EACH_ENTRY. allowed: (N,) bool or (0,) for every entry.
             oriented: whether the engine counts orientation errors (``lm.oriented``: a run's error is position +
             orientation error, else position error). table_runs: the starts run at most after q0's.
-        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`) for the goal list.
+        kin ... params: the kernel's arguments (:func:`~..lm.kernel.lm_run_buffers`) for the goal list.
         q_out (n,), g_out (G, 2): the converged (or last) run's configuration and each goal's errors. errors
             (>= runs,): each run's position + orientation error (m + rad, the largest over the goals). best_q (n,),
             best (6,), best_g (G, 2): when none converges, the run memetic keeps as its best (the first of the
@@ -225,9 +224,8 @@ def _goal_first_runs(extra, name):
     """:func:`goal_first_runs` compiled for one variant of the kernel's run (as :func:`_first_runs`)."""
 
     def runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, gpos, gori, weight, wpt, wRt, idx,
-             idx_start, base, base_mode, allowed, oriented, table_runs, parent, FR, Fp, rev, index, scale, offset, box,
-             any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out, errors, best_q, best,
-             best_g):  # pragma: no cover - compiled
+             idx_start, base, base_mode, allowed, oriented, table_runs, kin, box, any_wrap, goals, pt, Rt, params,
+             q_out, g_out, errors, best_q, best, best_g):  # pragma: no cover - compiled
         N, n = Q.shape
         G = wpt.shape[0]
         composed = (table_runs + 1) // 2  # starts 2j (composed j) and 2j + 1 (entry j) read the j-th ranked entry
@@ -267,13 +265,11 @@ def _goal_first_runs(extra, name):
                             i = idx[a]
                             start[i] = Q[e, i]
             if extra is not None:
-                pos, rot, converged, it, ev, cost = lm_run_buffers(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, kin, box, any_wrap, goals, pt, Rt,
+                                                                   params, q_out, g_out)
             else:
-                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(buf, held, start, kin, box, any_wrap, goals,
+                                                                         pt, Rt, params, q_out, g_out)
             errors[s] = pos + (rot if oriented else 0.0)
             evaluations += ev
             if converged:
