@@ -256,8 +256,8 @@ class IKProblem:
             for g in self.goal_sets:
                 P[:, g], Rts[:, g] = (t[members[:, g]] for t in self.goals[g].member_targets)
         e, E = np.empty((N, stack.rows)), np.empty((N, stack.rows, self.n))
-        task_rows_batch(Q, tuple(owned(a) for a in self.robot.tree_constants()), tuple(owned(a) for a in stack.arrays),
-                        P, Rts, e, E, np.empty((N, len(self.goals), 2)))
+        task_rows_batch(Q, *(owned(a) for a in self.robot.tree_constants()), *(owned(a) for a in stack.arrays), P, Rts,
+                        e, E, np.empty((N, len(self.goals), 2)))
         return e, E
 
     def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

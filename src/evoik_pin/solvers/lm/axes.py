@@ -1,23 +1,14 @@
-"""The compiled residuals and Jacobians of the goal kinds on one frame beyond pose, position and planar: per-axis
-tolerance bands and free axes, orientation alone, a frame axis along a direction or at a point.
+"""The compiled residuals and Jacobians of the one-frame goal kinds beyond pose, position and planar (the
+``FAMILY_AXES`` kinds of :mod:`evoik_pin.goals.registry`), inlined into :mod:`.kernel`. For the goal frame's pose
+(R (3, 3), p (3,) m), its target (pt (3,), Rt (3, 3)) and the goal's ``aux`` row (:mod:`evoik_pin.goals.bands`):
 
-Inlined into :mod:`.kernel` (``forceinline=True``: numba's disk cache does not see edits here; delete the kernel's
-cached ``*.nbi`` / ``*.nbc`` after one). :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call these only
-for the goals whose kind declares this family (``FAMILY_AXES`` of :mod:`evoik_pin.goals.registry`, the
-``G_FAMILY`` column of their spec), so pose, position and planar goals never run a line of them. For the goal
-frame's pose (R (3, 3), p (3,) m, base frame), its target (pt (3,), Rt (3, 3)) and the goal's ``aux`` row
-(``AUX_INNER`` ... of :mod:`evoik_pin.goals.bands`):
-
-* bands (pose with axes: 6 rows; position with bands: 3 rows; orientation: 3 rows): per component v_i of the error
-  (position ``R_t^T (p - p_t)`` m for a pose, ``p - p_t`` for a position; rotation ``log3(R_t^T R)`` rad), the
-  dead zone ``sign(v) max(|v| - h_i, 0)`` with h_i the inner half-width (inf: a free axis, whose row is zero), its
-  Jacobian row zero inside the zone. With one free rotation axis a and a norm tolerance, the rotation rows are
-  instead the swing ``R a - R_t a`` (base frame; zero exactly when the frame's a axis is the target's, smooth
-  through a twist of pi about it, where the rotation vector's components jump sign). Errors: the norm of the
-  components' excess over their accepted half-widths (m; rad), or the swing angle;
-* pointing (direction: pt the unit direction; look-at: pt the point, m): rows ``R a - d`` with d the unit
-  direction (to the point ``(pt - p) / |pt - p|``), zero only when aligned (2 when opposite); error the angle
-  between R a and d (rad).
+* bands (pose with axes: 6 rows; position: 3; orientation: 3): per component v_i of the error (position
+  ``R_t^T (p - p_t)`` for a pose, ``p - p_t`` for a position; rotation ``log3(R_t^T R)``) the dead zone
+  ``sign(v) max(|v| - h_i, 0)`` (h_i = inf: a free axis), its Jacobian row zero inside. With one free rotation axis a
+  and a norm tolerance, the rotation rows are the swing ``R a - R_t a`` instead (smooth through a twist of pi about
+  a). Errors: the norm of the components' excess over their accepted half-widths (m; rad), or the swing angle;
+* pointing (direction: pt the unit direction; look-at: pt the point, m): rows ``R a - d`` with d the unit direction
+  (to the point), error the angle between R a and d (rad).
 """
 
 from __future__ import annotations

@@ -1,28 +1,18 @@
-"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``COM_POINT``, ``COM_SUPPORT``,
-``RELATIVE_LOG6``, ``RELATIVE_BANDED_LOG6``, ``RELATIVE_POINT_WORLD``, ``RELATIVE_POINT_IN_A`` of
-:mod:`evoik_pin.goals.registry`), which :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call in a
-branch the one-frame kinds never enter (their declared family, the spec's ``G_FAMILY``).
+"""The compiled residuals and Jacobians of the goal kinds beyond one frame (the ``FAMILY_BEYOND_FRAME`` kinds of
+:mod:`evoik_pin.goals.registry`), called by :func:`.kernel.task_error` and :func:`.kernel.task_jacobian`.
 
-* Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
-  c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree_kinematics.tree_forward`), s_0 the first
-  moment of the bodies no joint moves and M the total mass. Its Jacobian in one backward pass over the tree: with S_k
-  the first moment of joint k's whole subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
-  ``M_k z_k / M`` (prismatic). Rows of axes a goal leaves free are zero.
-* Support polygon: the ground (x, y) projection of c inside the convex hull of the contact points (gift wrapping,
-  counter-clockwise), shrunk by s = margin + tolerance (m); the 2 rows are ``c_xy - proj(c_xy)``, zero inside.
-  The goal is met when that distance is within its tolerance, which then puts c at least ``margin`` inside
-  every edge (the s-shrunk polygon grown by the tolerance lies inside the margin-shrunk one).
-* Relative pose: frame b seen from frame a against the target T, ``e = log6(T^-1 T_a^-1 T_b)``; its Jacobian is
-  ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``, the second term the velocity of the point p_b carried by frame a's joints
-  (the body twist of ``T_a^-1 T_b``), through the pose kind's :func:`.kernel.goal_jacobian`.
-* Relative pose with bands or free axes (``RELATIVE_BANDED_LOG6``): the rows of a pose with axes
-  (:mod:`.axes`: dead zones in the target frame, the swing of one free rotation axis) for frame b's pose seen from
-  frame a, ``(R_a^T R_b, R_a^T (p_b - p_a))``, against T; its Jacobian those rows' from the same
-  ``J_b(p_b) - J_a(p_b)`` turned into frame a's coordinates (the twist of b relative to a, as frame a sees it).
-* Relative position: frame b's origin relative to frame a's against the target point p (m), in frame a's axes
-  ``e = R_a^T (p_b - p_a) - p`` with Jacobian ``R_a^T (J_b(p_b) - J_a(p_b))_v`` (the translational rows of the
-  relative pose's), or in the world's ``e = (p_b - p_a) - p`` with Jacobian ``J_b,v - J_a,v`` (each at its own
-  frame's origin; a joint moving both frames turns the vector: ``z x (p_b - p_a)``).
+* Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (s_0 the first moment
+  of the bodies no joint moves, M the total mass). Its Jacobian in one backward pass over the tree: with S_k the
+  first moment of joint k's subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
+  ``M_k z_k / M`` (prismatic). Rows of free axes are zero.
+* Support polygon: the ground projection of c against the convex hull of the contact points (gift wrapping,
+  counter-clockwise) shrunk by s = margin + tolerance (m); rows ``c_xy - proj(c_xy)``, zero inside, so a met goal
+  puts c at least ``margin`` inside every edge.
+* Relative pose: ``e = log6(T^-1 T_a^-1 T_b)``, Jacobian ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``; with bands or free
+  axes, the rows of :mod:`.axes`' pose with axes for frame b seen from frame a, from the same Jacobian difference
+  in frame a's coordinates.
+* Relative position: ``e = R_a^T (p_b - p_a) - p`` (frame a's axes; Jacobian ``R_a^T (J_b(p_b) - J_a(p_b))_v``) or
+  ``(p_b - p_a) - p`` (the world's; ``J_b,v - J_a,v``, a joint moving both frames turning the vector).
 """
 
 from __future__ import annotations
@@ -230,24 +220,28 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def frame_a_pose(Rj, pj, aux, M):
-    """Frame a's rotation (base frame) into M (3, 3) and its origin (m) returned, from its physical joint and
-    folded placement in a relative pose goal's aux row and the joint poses Rj (m, 3, 3), pj (m, 3)."""
+def frame_a_origin(Rj, pj, aux):
+    """Frame a's origin (m, base frame) from its physical joint and folded placement in a two-frame goal's aux row
+    and the joint poses Rj (m, 3, 3), pj (m, 3)."""
     ja = int(aux[A_REL_JOINT])
-    if ja < 0:
-        for i in range(3):
-            for c in range(3):
-                M[i, c] = aux[A_REL_R + 3 * i + c]
-        return aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
     f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
-    pa0 = pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2
-    pa1 = pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2
-    pa2 = pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2
+    if ja < 0:
+        return f0, f1, f2
+    return (pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2,
+            pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2,
+            pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2)
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def frame_a_pose(Rj, pj, aux, M):
+    """Frame a's rotation (base frame) into M (3, 3) and its origin (m, :func:`frame_a_origin`) returned."""
+    ja = int(aux[A_REL_JOINT])
     for i in range(3):
         for c in range(3):
-            M[i, c] = (Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
-                       + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
-    return pa0, pa1, pa2
+            M[i, c] = aux[A_REL_R + 3 * i + c] if ja < 0 else (
+                Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
+                + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
+    return frame_a_origin(Rj, pj, aux)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
@@ -319,18 +313,6 @@ def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
             J[i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
             J[3 + i, k] = A[0, i] * w0 + A[1, i] * w1 + A[2, i] * w2
     axes_jacobian(BANDED_LOG6, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
-
-
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def frame_a_origin(Rj, pj, aux):
-    """Frame a's origin (m, base frame) of a two-frame goal's aux row at the joint poses Rj, pj."""
-    ja = int(aux[A_REL_JOINT])
-    f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
-    if ja < 0:
-        return f0, f1, f2
-    return (pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2,
-            pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2,
-            pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)

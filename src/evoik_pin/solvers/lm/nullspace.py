@@ -1,23 +1,19 @@
 """Compiled descent along the goals' self-motion manifold (numba): ``prefer="nearest"`` and ``"manipulability"``.
 
-A redundant arm's answers to a goal stack (Panda on a pose: 7 joints, 6 rows) form curves (one per IK branch, cut by
-the joint limits); the answer nearest q0 or the most dexterous one is a continuous optimum along such a curve,
-which picking among a few discrete LM answers only approximates. :func:`descend_batch` takes each given answer
-(every goal met) to a local optimum of the criterion on its curve:
+A redundant arm's answers to a goal stack form curves (one per IK branch, cut by the joint limits); the answer
+nearest q0 or the most dexterous one is a continuous optimum along such a curve. :func:`descend_batch` takes each
+given answer (every goal met) to a local optimum of the criterion on its curve:
 
-1. the criterion's descent direction projected on the null space of the task Jacobian E (n,): for nearness
-   ``v = q0 - q`` (the negative gradient of ``|q - q0|^2 / 2``), for manipulability the gradient of Yoshikawa's
-   ``sqrt(det(J J^T))`` (the first goal frame's 6 x n LOCAL_WORLD_ALIGNED Jacobian) by forward differences;
-   ``p = v - E^T (E E^T)^-1 E v`` with joints on a bound that p pushes outward held (their column of E zeroed);
-2. a step ``t p`` (t = 1 first for nearness: the minimum of |q - q0|^2 on the tangent plane; a step of
-   ``MANIP_STEP`` rad first for manipulability), shortened to stay inside the box and within ``max_step``;
+1. the criterion's descent direction v (nearness: ``q0 - q``; manipulability: the gradient of Yoshikawa's
+   ``sqrt(det(J J^T))`` of the first goal frame's Jacobian, by forward differences) projected on the null space of
+   the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p pushes outward held;
+2. a step ``t p``, shortened to stay inside the box and within ``max_step``;
 3. Gauss-Newton steps from there until every goal is within its tolerances again (at most ``restore``);
-4. the step is kept only when step 3 met every goal and the criterion improved (then the next t is the secant
-   (Barzilai-Borwein) step of the last two directions); otherwise t halves. The descent ends when t is below 1e-3
-   of its start or a kept step was shorter than :data:`MIN_STEP`.
+4. the step kept only when step 3 met every goal and the criterion improved (then the next t is the
+   Barzilai-Borwein secant step), else t halves; the descent ends when t is below 1e-3 of its start or a kept
+   step was shorter than :data:`MIN_STEP`.
 
-So the criterion never gets worse and every kept configuration meets every goal (the kernel's own test,
-:func:`.kernel.within`). A step costs 1-5 kinematics evaluations (n more for manipulability's gradient).
+So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`).
 """
 
 from __future__ import annotations
@@ -41,9 +37,8 @@ MODE_NEAREST, MODE_MANIPULABILITY = 0, 1
 MANIP_STEP = 0.2
 #: Forward-difference step (rad or m) of the manipulability gradient.
 MANIP_H = 1e-6
-#: The secant (Barzilai-Borwein) step's range, times the first step's multiple t0: after a kept step, the next
-#: step's multiple is |s|^2 / s.(p_prev - p) (s the kept step, p the projected direction), which converges in a few
-#: steps where the fixed step t = 1 converges linearly (measured: 20 steps left 1e-5 rad to go).
+#: The secant step's range, times the first step's multiple t0: after a kept step s, the next multiple is
+#: |s|^2 / s.(p_prev - p) (p the projected direction).
 BB_RANGE = (0.01, 100.0)
 #: A kept step shorter than this (rad or m) ends the descent.
 MIN_STEP = 1e-9
@@ -54,9 +49,8 @@ _KERNEL: dict = {}
 
 @njit(cache=True, nogil=True, forceinline=False)
 def _manipulability(rev, support, pg, Z, O, J, JJ):
-    """sqrt(det(J J^T)) of the first goal frame's base-frame (LOCAL_WORLD_ALIGNED) Jacobian J (6, n), from the
-    kinematics buffers :func:`.kernel.task_error` filled (pg its frame's position, Z, O the joint axes and origins);
-    0 at a singularity. JJ (6, 6) scratch. The Cholesky factor's diagonal gives the determinant."""
+    """sqrt(det(J J^T)) of the first goal frame's base-frame Jacobian J (6, n) from a :data:`.kernel.State`'s pg, Z,
+    O (0 at a singularity), by the Cholesky factor's diagonal. JJ (6, 6) scratch."""
     frame_jacobian(rev, support[0], pg[0], Z, O, J)
     n = J.shape[1]
     for i in range(6):
@@ -243,15 +237,13 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
     return evaluations
 
 
-#: About how long (s, one core) compiling the null-space descent takes from an empty cache (its first use after an
-#: install, announced by :func:`.compiling.load`).
+#: About how long (s, one core) compiling the null-space descent takes from an empty cache (:func:`.compiling.load`).
 NULLSPACE_COMPILE_SECONDS = 25.0
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian whose null space
-    :func:`evoik_pin.solvers.search.choose.refine` steps in), compiled (or loaded from numba's disk cache) on a
-    one-joint robot, outside any time budget."""
+    """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian of
+    :func:`evoik_pin.solvers.search.choose.refine`), loaded (or compiled) outside any time budget."""
     if not _KERNEL:
         from .compiling import load
         from .engine import warmup_problem

@@ -19,11 +19,13 @@ __all__ = ["task_rows", "task_rows_batch"]
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def task_rows_batch(Q, kin, goals, P, Rts, e_out, E_out, g_out):
+def task_rows_batch(Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, P, Rts, e_out, E_out,
+                    g_out):
     """The task rows at each row of Q (N, n), row i with its own targets P[i] (G, 3), Rts[i] (G, 3, 3) (a goal set's
     member per configuration; the stack's ``pt``, ``Rt`` repeated otherwise): the stacked task error e_out[i]
     (rows,), its Jacobian E_out[i] (rows, n) and each goal's errors g_out[i] (G, 2) (position m, orientation rad or
-    0). kin, goals: the kernel's groups (:mod:`.kernel`). One workspace serves every row."""
+    0). The tree's and the stack's arrays are those of the kernel's groups kin and goals (:mod:`.kernel`)."""
+    kin, goals = (parent, FR, Fp, rev, index, scale, offset), (spec, gR, gp, support, gaux)
     _rows_in(make_workspace(kin, goals, Q.shape[1], 0), Q, kin, goals, P, Rts, e_out, E_out, g_out)
 
 
@@ -47,9 +49,8 @@ def _rows_in(ws, Q, kin, goals, P, Rts, e_out, E_out, g_out):
 
 
 def task_rows(q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, pt, Rt, e_out, E_out, g_out):
-    """The kernel's task rows at one configuration q (n,) (:func:`task_rows_batch` on a population of one, with the
-    groups' arrays given one by one): writes e_out (rows,), E_out (rows, n) and g_out (G, 2) in place; returns the
-    weighted |e|^2."""
-    task_rows_batch(np.ascontiguousarray(q, dtype=float)[None], (parent, FR, Fp, rev, index, scale, offset),
-                    (spec, gR, gp, support, gaux), pt[None], Rt[None], e_out[None], E_out[None], g_out[None])
+    """The kernel's task rows at one configuration q (n,) (:func:`task_rows_batch` on a population of one): writes
+    e_out (rows,), E_out (rows, n) and g_out (G, 2) in place; returns the weighted |e|^2."""
+    task_rows_batch(np.ascontiguousarray(q, dtype=float)[None], parent, FR, Fp, rev, index, scale, offset, spec, gR,
+                    gp, support, gaux, pt[None], Rt[None], e_out[None], E_out[None], g_out[None])
     return float(e_out @ e_out)
