@@ -290,10 +290,9 @@ class LevenbergMarquardt:
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
         """One LM run from ``q`` (n,) (clipped / wrapped into the box first), at most ``max_iterations`` steps.
 
-        Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at
-        ``deadline`` (a ``time.perf_counter()`` value). The compiled engine checks ``deadline`` only before
-        the run starts (a run is at most ``max_iterations`` short steps); when it has passed, the
-        start is evaluated and no step is taken. Returns the last accepted configuration (the best met).
+        Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at ``deadline``
+        (a ``time.perf_counter()`` value; the compiled engine checks it before the run only: when it has passed, the
+        start is evaluated and no step taken). Returns the last accepted configuration (the best met).
         """
         if self._reference is not None:
             return self._reference.run(q, max_iterations, deadline)
@@ -322,10 +321,8 @@ class LevenbergMarquardt:
 
     def run_many(self, Q: np.ndarray, max_iterations: int, deadline: float | None = None
                  ) -> tuple[LMOutcome, int]:
-        """LM runs from the starts ``Q`` (K, n), in order, until one meets the tolerances: one kernel call
-        for all K (compiled engine), so a group of starts that mostly fail costs little more than its steps.
-
-        ``deadline`` is checked before the group starts (compiled) or before every step (python).
+        """LM runs from the starts ``Q`` (K, n), in order, until one meets the tolerances (one kernel call for all K;
+        ``deadline`` checked before the group starts, or before every step with the python engine).
 
         Returns:
             (outcome of the converged run, or of the run with the lowest error (one goal: position + orientation
@@ -346,14 +343,11 @@ class LevenbergMarquardt:
                              o.cost), best
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
-        params = self._params
-        params[P_ITERATIONS] = max_iterations
+        buffers, args, params = self.kernel_arguments(max_iterations)
         K = Q.shape[0]
-        Q_out = np.empty_like(Q)
-        stats = np.empty((K, STATS_SIZE))
-        g_stats = np.empty((K, len(self.goals), 2))
-        k = self._kernel["lm_runs_buffers"](*self._workspace(max_iterations), Q, *self._args[:4], self._pt[None],
-                                            self._Rt[None], params, Q_out, stats, g_stats, True)
+        Q_out, stats, g_stats = np.empty_like(Q), np.empty((K, STATS_SIZE)), np.empty((K, len(self.goals), 2))
+        k = self._kernel["lm_runs_buffers"](*buffers, Q, *args[:4], self._pt[None], self._Rt[None], params, Q_out,
+                                            stats, g_stats, True)
         runs = k + 1 if k >= 0 else -(k + 1)
         s = stats[:runs]
         if k < 0:
@@ -372,9 +366,8 @@ _BUFFERS_KEPT = 8
 
 def _thread_buffers(kernel: dict, stack: GoalStack, n: int, m: int, max_iterations: int):
     """(float buffer, held (n,) bool) of the kernel's workspace for ``stack`` on this thread, for runs of up to
-    ``max_iterations`` steps (at least 30, the default, so that one pair serves every usual call): kept per thread
-    (two threads never share a workspace) for the last few goal stacks; the entry keeps its stack alive, so an id is
-    never reused while it is cached."""
+    ``max_iterations`` steps (at least the default): kept per thread for the last few goal stacks (the entry keeps
+    its stack alive, so an id is never reused while it is cached)."""
     cache = getattr(_LOCAL, "buffers", None)
     if cache is None:
         cache = _LOCAL.buffers = {}
