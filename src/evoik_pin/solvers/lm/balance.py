@@ -36,8 +36,7 @@ from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
 from .tree_kinematics import BORROWING, frame_pose, joint_column
 
-#: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
-#: counts as parallel to another.
+#: Squared distance (m^2) under which two contact points are one; slopes below which two offset edges are parallel.
 _SAME2, _PARALLEL = 1e-24, 1e-12
 #: Added (m) to the error of a support goal whose shrunk polygon is empty or degenerate: never met.
 EMPTY_POLYGON = 1.0
@@ -246,9 +245,8 @@ def frame_a_pose(Rj, pj, aux, M):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
-    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``: frame b (on physical joint jb at folded
-    placement Rbf, pbf) into Rb, pb; ``T_t^-1 T_a^-1 T_b`` into M (3, 3), t (3,); returns (position error m,
-    rotation angle rad)."""
+    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``, frame b (joint jb, folded placement Rbf, pbf)
+    into Rb, pb and ``T_t^-1 T_a^-1 T_b`` into M, t; returns (position error m, rotation angle rad)."""
     pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
     frame_pose(Rj, pj, jb, Rbf, pbf, Rb, pb)  # frame b's pose, as a one-frame goal's
     # W = R_a R_t row by row (in place in M); then M = W^T R_b and t = W^T (p_b - p_a) - R_t^T p_t
@@ -276,12 +274,10 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
-    """The 6 rows e of a relative pose with bands or free axes: those of a pose with axes (:func:`.axes.axes_error`,
-    ``BANDED_LOG6``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
-    (into R (3, 3)) and ``t = R_a^T (p_b - p_a)`` (into t (3,)), against the target (pt, Rt): the error of
-    ``T_t^-1 T_a^-1 T_b`` in the target frame. p (3,) ends as frame b's origin (base frame, m) for
-    :func:`balance_columns` (scratch before); M (3, 3) scratch. Returns (|e|^2, position error m, rotation error
-    rad) as axes_error's."""
+    """The 6 rows e of a relative pose with bands or free axes: :func:`.axes.axes_error`'s ``BANDED_LOG6`` rows (bands
+    at ``A_REL_BAND``) for frame b seen from frame a, ``R = R_a^T R_b`` and ``t = R_a^T (p_b - p_a)`` (written to R,
+    t), against (pt, Rt). p ends as frame b's origin (m) for :func:`balance_columns`; M scratch. Returns
+    axes_error's."""
     pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
     frame_pose(Rj, pj, jb, Rbf, pbf, R, p)
     d0, d1, d2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
@@ -301,10 +297,8 @@ def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
     """Rows r.. of the task Jacobian E (unweighted) of a relative pose with bands or free axes, from
-    ``J = J_b(p_b) - J_a(p_b)`` (6, n) (:func:`balance_columns`, base frame), for the buffers
-    :func:`relative_axes_error` filled (R = R_a^T R_b, t = R_a^T (p_b - p_a)): J turned into frame a's coordinates
-    (in place; the twist of frame b relative to frame a), then the pose-with-axes rows of
-    :func:`.axes.axes_jacobian`. rv (3,), A, B (3, 3) scratch."""
+    ``J = J_b(p_b) - J_a(p_b)`` (6, n) (:func:`balance_columns`) turned in place into frame a's coordinates, then
+    :func:`.axes.axes_jacobian`'s rows for :func:`relative_axes_error`'s R, t. rv, A, B scratch."""
     frame_a_pose(Rj, pj, aux, A)
     for k in range(J.shape[1]):  # J <- diag(R_a^T, R_a^T) J
         v0, v1, v2 = J[0, k], J[1, k], J[2, k]
@@ -388,9 +382,8 @@ def relative_point_rows(kind, Rj, pj, aux, J, A, E, r):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """Rows e of a goal of a kind beyond one frame (see the module docstring); returns (|e|^2, position error m,
-    orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
-    p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t; the relative
-    pose with axes frame b's pose seen from frame a in R, t and frame b's origin in p)."""
+    orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers, as each kind's function fills
+    them (the CoM in p and the support goal's active piece in t; frame b's pose, ...)."""
     if kind == COM_POINT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2

@@ -83,9 +83,8 @@ TWO_PI = 2.0 * math.pi
 
 @njit(cache=True, nogil=True, forceinline=True)
 def frame_rows(kind):
-    """Rows of :func:`goal_error`'s residuals (the frame family's codes): 6 (the SE(3) logarithm), 2 (planar), 3 (a
-    point, planar with yaw), as the kinds declare them (tests hold the two equal). :func:`lm_run_basic` reads a goal's
-    row count from here rather than from ``G_ROWS`` so that LLVM, knowing it, unrolls the rows' loops."""
+    """Rows of :func:`goal_error`'s residuals (6 pose, 2 planar, 3 point or planar with yaw, as the kinds declare
+    them): :func:`lm_run_basic` reads them here rather than from ``G_ROWS`` so that LLVM unrolls the rows' loops."""
     return 6 if kind == LOG6 else (2 if kind == PLANAR else 3)
 
 
@@ -467,11 +466,8 @@ def _carve_state(buf, o, n, m, G, rows):
 @njit(cache=True, nogil=True, inline="always")
 def carve(buf, held, n, m, G, rows, max_it):
     """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
-    ``rows`` task rows, as views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,).
-
-    Inlined: in a borrowing caller the views count no references, so a borrowing entry point receives two buffers,
-    not some fifty arrays (a reference-counting caller brackets every array it passes with atomic operations).
-    """
+    ``rows`` task rows: views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,). Inlined, so
+    a borrowing entry receives two buffers rather than some fifty reference-counted arrays."""
     s = min(rows, n)
     cur, o = _carve_state(buf, 0, n, m, G, rows)
     cand, o = _carve_state(buf, o, n, m, G, rows)
@@ -537,10 +533,9 @@ def weighted_stack(spec):
 
 
 def _run(extra, name, doc):
-    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: the run with ``extra`` a constant of its
-    closure (True: goals of any family; None: one-frame goals only, whose other branches numba prunes before typing,
-    so :func:`lm_run_basic` neither compiles :mod:`.axes` and :mod:`.balance` nor pays for their branches). numba's
-    disk cache keys closures by their cells' contents, so the two are cached apart."""
+    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: ``extra`` a constant of the closure (True: any
+    goal family; None: one-frame goals only, the other branches pruned by numba before typing, so neither compiled
+    nor paid for). numba's disk cache keys closures by their cells' contents, so the two are cached apart."""
 
     def run(ws, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
         spec = goals[0]
@@ -656,8 +651,8 @@ Entries = namedtuple("Entries", ["run", "runs"])
 
 def _entries(extra, suffix):
     """The :data:`Entries` of one variant of the run (``extra``: :func:`_run`'s), named apart by ``suffix`` for
-    numba's disk cache. One variant per entry, picked in Python (:func:`entries_for`), because numba re-optimizes
-    every run an entry links: an entry linking both would compile both. Both borrow their arrays (:data:`BORROWING`)."""
+    numba's disk cache: one variant per entry, picked in Python (:func:`entries_for`), since numba re-optimizes every
+    run an entry links."""
 
     def run(buf, held, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
         spec = goals[0]
