@@ -53,9 +53,8 @@ def _angle(a0, a1, a2, d0, d1, d2):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _direction(kind, R, p, pt, aux, u):
-    """u (3,) = the wanted unit direction of a pointing goal (pt itself, or from p towards the point pt; with the
-    frame on the point, the opposite of its axis, so the goal is unmet there); returns the distance (m) to the
-    point (1 for a direction)."""
+    """u (3,) = a pointing goal's wanted unit direction (pt, or from p towards the point pt; on the point, the
+    opposite of its axis, so the goal is unmet there); returns the distance (m) to the point (1 for a direction)."""
     if kind == AXIS_ALONG:
         u[0], u[1], u[2] = pt[0], pt[1], pt[2]
         return 1.0
@@ -71,9 +70,8 @@ def _direction(kind, R, p, pt, aux, u):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
-    """One goal's error rows e (its ``G_ROWS``) of the kinds of this module (see the module docstring); returns
-    (|e|^2 unweighted, position error m, orientation error rad), the errors those the success test compares with
-    the goal's tolerances. M (3, 3) and rv (3,) are scratch."""
+    """One goal's error rows e (its ``G_ROWS``) of this module's kinds; returns (|e|^2 unweighted, position error m,
+    orientation error rad), the errors its tolerances judge. M (3, 3), rv (3,) scratch."""
     if kind == AXIS_ALONG or kind == AXIS_AT:
         _direction(kind, R, p, pt, aux, rv)
         c = 0.0

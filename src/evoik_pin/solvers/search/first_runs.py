@@ -25,9 +25,8 @@ __all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "STAGE_Q0", "STAGE
 
 #: Which start solved the problem (first_runs's first return value; -1: none did).
 STAGE_Q0, STAGE_TABLE = 0, 1
-#: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``, SeedTable.goal_starts's cases):
-#: a fixed base (the targets as they are), a floating base set by a goal (the targets seen from that base), a
-#: floating base each composed start takes from its table entry (the targets seen from that entry's base).
+#: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``): as they are (a fixed base), from
+#: a floating base a goal sets, or from each composed start's table entry's base.
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
 
 
