@@ -35,6 +35,7 @@ from evoik_pin.solvers.batch import threads
 from evoik_pin.solvers.batch.batch_results import SOURCE_SINGLE, BatchOutcome, BatchResults
 from evoik_pin.solvers.batch.targets import TargetSource
 from evoik_pin.solvers.lm import engine as lm_engine
+from evoik_pin.solvers.lm import kernel as lm_kernel
 from evoik_pin.solvers.lm.layout import STATS_SIZE, box_constants, kernel_params
 from evoik_pin.solvers.search.seed_table import SeedTable, default_table_size, seed_table
 
@@ -181,7 +182,8 @@ def kernel_options(robot, H, reps: int) -> dict:
     tree = robot.tree_constants()
     goals = stack.arrays
     P, Rts = P[:, None].copy(), Rts[:, None].copy()  # one goal per pair
-    serial = lm_engine.compiled_kernel()["lm_run_pairs"]
+    lm_engine.compiled_kernel()
+    serial = lm_kernel.lm_run_pairs
     parallel = prange_kernel()
     N = len(targets)
     g_stats = np.empty((N, 1, 2))

@@ -1,23 +1,16 @@
-"""SO(3) / SE(3) maths compiled with numba, one rotation at a time, written into caller-owned buffers.
-
-The same closed forms as :mod:`.so3` and :mod:`.se3` (Pinocchio's), for compiled kernels that cannot call
-NumPy per step (:mod:`evoik_pin.solvers.lm.kernel`). ``1 - cos(theta)`` is computed as ``2 sin^2(theta/2)``
-to avoid cancellation at small angles. numba compiles each function on first use and caches it on disk.
-"""
+"""SO(3) / SE(3) maths compiled with numba, one rotation at a time into caller-owned buffers: :mod:`.so3`'s and
+:mod:`.se3`'s closed forms (Pinocchio's), for compiled kernels (:mod:`evoik_pin.solvers.lm.kernel`)."""
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
-from .so3 import NEAR_PI
+from .so3 import NEAR_PI, PREC2, PREC3
 
 __all__ = ["jlog3", "jlog6", "log3", "log6", "wrap_angle", "yaw"]
 
-#: Pinocchio's series thresholds (TaylorSeriesExpansion precision<3> and <2>: eps^(1/3), eps^(1/2)).
-_PREC3, _PREC2 = np.finfo(np.float64).eps ** (1.0 / 3.0), np.finfo(np.float64).eps ** 0.5
 _TWO_PI = 2.0 * math.pi
 
 
@@ -84,7 +77,7 @@ def _add_half_skew(v, A):
 def jlog3(theta, w, A):
     """``pin.Jlog3``: A (3, 3), the derivative of ``log3(R exp(dw))`` at dw = 0, from ``w = log3(R)`` (angle
     theta): ``alpha w w^T + d I + [w]x / 2``."""
-    if theta < _PREC3:
+    if theta < PREC3:
         alpha = 1.0 / 12.0 + theta * theta / 720.0
         d = 0.5 * (2.0 - theta * theta / 6.0)
     else:
@@ -103,7 +96,7 @@ def log6(M, t, e):
     """``pin.log6`` of the pose (M (3, 3), t (3,)): e (6,) = (v, w) with ``w = log3(M)``; returns the angle."""
     theta = log3(M, e[3:])
     w0, w1, w2 = e[3], e[4], e[5]
-    if M[0, 0] + M[1, 1] + M[2, 2] >= 3.0 - _PREC2:
+    if M[0, 0] + M[1, 1] + M[2, 2] >= 3.0 - PREC2:
         # Pinocchio's switch and series variable: the squared norm of the antisymmetric part (sin^2 theta)
         a0, a1, a2 = 0.5 * (M[2, 1] - M[1, 2]), 0.5 * (M[0, 2] - M[2, 0]), 0.5 * (M[1, 0] - M[0, 1])
         t2 = a0 * a0 + a1 * a1 + a2 * a2
@@ -127,7 +120,7 @@ def jlog6(theta, w, t, A, B):
     ``[[A, B], [0, A]]`` as its blocks A = ``Jlog3`` and B (3, 3) (Pinocchio's formula)."""
     jlog3(theta, w, A)
     t2 = theta * theta
-    if theta < _PREC3:
+    if theta < PREC3:
         beta = 1.0 / 12.0 + t2 / 720.0
         beta_dot_over_theta = 1.0 / 360.0
     else:

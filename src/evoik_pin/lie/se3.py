@@ -1,9 +1,5 @@
-"""SE(3) maths in NumPy, vectorized over a batch of poses: a pose is a rotation R (N, 3, 3) and a translation
-t (N, 3) m; a twist is (N, 6) = (v m, w rad).
-
-Closed forms as Pinocchio's (``pin.log6``, ``pin.exp6``, ``pin.Jlog6``), with ``1 - cos(theta)`` computed as
-``2 sin^2(theta / 2)``. The numba twins are in :mod:`.compiled`.
-"""
+"""SE(3) maths in NumPy, vectorized over a batch of poses (R (N, 3, 3), t (N, 3) m; twists (N, 6) = (v m, w rad)):
+Pinocchio's closed forms (``pin.log6``, ``pin.exp6``, ``pin.Jlog6``); the numba twins are in :mod:`.compiled`."""
 
 from __future__ import annotations
 

@@ -1,8 +1,6 @@
-"""SO(3) maths in NumPy, vectorized over a batch of rotations (leading axis N).
-
-Closed forms as Pinocchio's (``pin.log3``, ``pin.exp3``, ``pin.Jlog3``), with ``1 - cos(theta)`` computed as
-``2 sin^2(theta / 2)`` so that small angles lose no digits. The numba twins are in :mod:`.compiled`.
-"""
+"""SO(3) maths in NumPy, vectorized over a batch of rotations (leading axis N): Pinocchio's closed forms
+(``pin.log3``, ``pin.exp3``, ``pin.Jlog3``), ``1 - cos`` as ``2 sin^2(theta / 2)`` (no digits lost at small angles);
+the numba twins are in :mod:`.compiled`."""
 
 from __future__ import annotations
 

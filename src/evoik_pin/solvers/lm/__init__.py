@@ -1,14 +1,7 @@
-"""The one Levenberg-Marquardt engine of evoik_pin.
-
-* :mod:`.engine`: :class:`LevenbergMarquardt` (one target; one start, or several in one call) and
-  :func:`solve_pairs` (many (start, target) pairs), the task errors and the iteration's description;
-* :mod:`.kernel`: the iteration compiled with numba (every goal kind), with :mod:`.tree_kinematics`, :mod:`.chain`,
-  :mod:`.axes`, :mod:`.balance` and the closed forms of :mod:`evoik_pin.lie.compiled`;
-* :mod:`.reference`: the same iteration as a Python loop over Pinocchio, the reference the kernel is tested
-  against (``engine="python"``);
-* :mod:`.layout`: the constants and the kernel's memory layouts; :mod:`.run_outcome`: what runs return;
-* :mod:`.population_rows`: the kernel's task rows of a whole population in one compiled call (NSGA-II's repair);
-* :mod:`.polish`: ``polish=True``, any solver's answer taken to machine precision by one LM run.
+"""The one Levenberg-Marquardt engine of evoik_pin: :mod:`.engine` (:class:`LevenbergMarquardt`,
+:func:`solve_pairs`), its numba kernel :mod:`.kernel` (with :mod:`.tree_kinematics`, :mod:`.chain`, :mod:`.axes`,
+:mod:`.balance`) and the Python reference :mod:`.reference`; :mod:`.layout` (constants), :mod:`.run_outcome`,
+:mod:`.population_rows` (NSGA-II's task rows), :mod:`.nullspace` (prefer=), :mod:`.polish` (``polish=True``).
 """
 
 from .engine import ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs

@@ -1,23 +1,14 @@
-"""The compiled residuals and Jacobians of the goal kinds on one frame beyond pose, position and planar: per-axis
-tolerance bands and free axes, orientation alone, a frame axis along a direction or at a point.
+"""The compiled residuals and Jacobians of the one-frame goal kinds beyond pose, position and planar (the
+``FAMILY_AXES`` kinds of :mod:`evoik_pin.goals.registry`), inlined into :mod:`.kernel`. For the goal frame's pose
+(R (3, 3), p (3,) m), its target (pt (3,), Rt (3, 3)) and the goal's ``aux`` row (:mod:`evoik_pin.goals.bands`):
 
-Inlined into :mod:`.kernel` (``forceinline=True``: numba's disk cache does not see edits here; delete the kernel's
-cached ``*.nbi`` / ``*.nbc`` after one). :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call these only
-for the goals whose kind declares this family (``FAMILY_AXES`` of :mod:`evoik_pin.goals.registry`, the
-``G_FAMILY`` column of their spec), so pose, position and planar goals never run a line of them. For the goal
-frame's pose (R (3, 3), p (3,) m, base frame), its target (pt (3,), Rt (3, 3)) and the goal's ``aux`` row
-(``AUX_INNER`` ... of :mod:`evoik_pin.goals.bands`):
-
-* bands (pose with axes: 6 rows; position with bands: 3 rows; orientation: 3 rows): per component v_i of the error
-  (position ``R_t^T (p - p_t)`` m for a pose, ``p - p_t`` for a position; rotation ``log3(R_t^T R)`` rad), the
-  dead zone ``sign(v) max(|v| - h_i, 0)`` with h_i the inner half-width (inf: a free axis, whose row is zero), its
-  Jacobian row zero inside the zone. With one free rotation axis a and a norm tolerance, the rotation rows are
-  instead the swing ``R a - R_t a`` (base frame; zero exactly when the frame's a axis is the target's, smooth
-  through a twist of pi about it, where the rotation vector's components jump sign). Errors: the norm of the
-  components' excess over their accepted half-widths (m; rad), or the swing angle;
-* pointing (direction: pt the unit direction; look-at: pt the point, m): rows ``R a - d`` with d the unit
-  direction (to the point ``(pt - p) / |pt - p|``), zero only when aligned (2 when opposite); error the angle
-  between R a and d (rad).
+* bands (pose with axes: 6 rows; position: 3; orientation: 3): per component v_i of the error (position
+  ``R_t^T (p - p_t)`` for a pose, ``p - p_t`` for a position; rotation ``log3(R_t^T R)``) the dead zone
+  ``sign(v) max(|v| - h_i, 0)`` (h_i = inf: a free axis), its Jacobian row zero inside. With one free rotation axis a
+  and a norm tolerance, the rotation rows are the swing ``R a - R_t a`` instead (smooth through a twist of pi about
+  a). Errors: the norm of the components' excess over their accepted half-widths (m; rad), or the swing angle;
+* pointing (direction: pt the unit direction; look-at: pt the point, m): rows ``R a - d`` with d the unit direction
+  (to the point), error the angle between R a and d (rad).
 """
 
 from __future__ import annotations
@@ -62,9 +53,8 @@ def _angle(a0, a1, a2, d0, d1, d2):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _direction(kind, R, p, pt, aux, u):
-    """u (3,) = the wanted unit direction of a pointing goal (pt itself, or from p towards the point pt; with the
-    frame on the point, the opposite of its axis, so the goal is unmet there); returns the distance (m) to the
-    point (1 for a direction)."""
+    """u (3,) = a pointing goal's wanted unit direction (pt, or from p towards the point pt; on the point, the
+    opposite of its axis, so the goal is unmet there); returns the distance (m) to the point (1 for a direction)."""
     if kind == AXIS_ALONG:
         u[0], u[1], u[2] = pt[0], pt[1], pt[2]
         return 1.0
@@ -80,9 +70,8 @@ def _direction(kind, R, p, pt, aux, u):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
-    """One goal's error rows e (its ``G_ROWS``) of the kinds of this module (see the module docstring); returns
-    (|e|^2 unweighted, position error m, orientation error rad), the errors those the success test compares with
-    the goal's tolerances. M (3, 3) and rv (3,) are scratch."""
+    """One goal's error rows e (its ``G_ROWS``) of this module's kinds; returns (|e|^2 unweighted, position error m,
+    orientation error rad), the errors its tolerances judge. M (3, 3), rv (3,) scratch."""
     if kind == AXIS_ALONG or kind == AXIS_AT:
         _direction(kind, R, p, pt, aux, rv)
         c = 0.0

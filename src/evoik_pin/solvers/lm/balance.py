@@ -1,28 +1,18 @@
-"""The compiled residuals and Jacobians of the goal kinds beyond one frame (``COM_POINT``, ``COM_SUPPORT``,
-``RELATIVE_LOG6``, ``RELATIVE_BANDED_LOG6``, ``RELATIVE_POINT_WORLD``, ``RELATIVE_POINT_IN_A`` of
-:mod:`evoik_pin.goals.registry`), which :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` call in a
-branch the one-frame kinds never enter (their declared family, the spec's ``G_FAMILY``).
+"""The compiled residuals and Jacobians of the goal kinds beyond one frame (the ``FAMILY_BEYOND_FRAME`` kinds of
+:mod:`evoik_pin.goals.registry`), called by :func:`.kernel.task_error` and :func:`.kernel.task_jacobian`.
 
-* Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (mass m_k, centre
-  c_k in the joint's folded frame, the pose (R_k, p_k) of :func:`.tree_kinematics.tree_forward`), s_0 the first
-  moment of the bodies no joint moves and M the total mass. Its Jacobian in one backward pass over the tree: with S_k
-  the first moment of joint k's whole subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
-  ``M_k z_k / M`` (prismatic). Rows of axes a goal leaves free are zero.
-* Support polygon: the ground (x, y) projection of c inside the convex hull of the contact points (gift wrapping,
-  counter-clockwise), shrunk by s = margin + tolerance (m); the 2 rows are ``c_xy - proj(c_xy)``, zero inside.
-  The goal is met when that distance is within its tolerance, which then puts c at least ``margin`` inside
-  every edge (the s-shrunk polygon grown by the tolerance lies inside the margin-shrunk one).
-* Relative pose: frame b seen from frame a against the target T, ``e = log6(T^-1 T_a^-1 T_b)``; its Jacobian is
-  ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``, the second term the velocity of the point p_b carried by frame a's joints
-  (the body twist of ``T_a^-1 T_b``), through the pose kind's :func:`.kernel.goal_jacobian`.
-* Relative pose with bands or free axes (``RELATIVE_BANDED_LOG6``): the rows of a pose with axes
-  (:mod:`.axes`: dead zones in the target frame, the swing of one free rotation axis) for frame b's pose seen from
-  frame a, ``(R_a^T R_b, R_a^T (p_b - p_a))``, against T; its Jacobian those rows' from the same
-  ``J_b(p_b) - J_a(p_b)`` turned into frame a's coordinates (the twist of b relative to a, as frame a sees it).
-* Relative position: frame b's origin relative to frame a's against the target point p (m), in frame a's axes
-  ``e = R_a^T (p_b - p_a) - p`` with Jacobian ``R_a^T (J_b(p_b) - J_a(p_b))_v`` (the translational rows of the
-  relative pose's), or in the world's ``e = (p_b - p_a) - p`` with Jacobian ``J_b,v - J_a,v`` (each at its own
-  frame's origin; a joint moving both frames turns the vector: ``z x (p_b - p_a)``).
+* Centre of mass: ``c(q) = (sum_k m_k (p_k + R_k c_k) + s_0) / M`` over the physical joints k (s_0 the first moment
+  of the bodies no joint moves, M the total mass). Its Jacobian in one backward pass over the tree: with S_k the
+  first moment of joint k's subtree and M_k its mass, column k is ``z_k x (S_k - M_k o_k) / M`` (revolute) or
+  ``M_k z_k / M`` (prismatic). Rows of free axes are zero.
+* Support polygon: the ground projection of c against the convex hull of the contact points (gift wrapping,
+  counter-clockwise) shrunk by s = margin + tolerance (m); rows ``c_xy - proj(c_xy)``, zero inside, so a met goal
+  puts c at least ``margin`` inside every edge.
+* Relative pose: ``e = log6(T^-1 T_a^-1 T_b)``, Jacobian ``Jlog6 R_b^T (J_b(p_b) - J_a(p_b))``; with bands or free
+  axes, the rows of :mod:`.axes`' pose with axes for frame b seen from frame a, from the same Jacobian difference
+  in frame a's coordinates.
+* Relative position: ``e = R_a^T (p_b - p_a) - p`` (frame a's axes; Jacobian ``R_a^T (J_b(p_b) - J_a(p_b))_v``) or
+  ``(p_b - p_a) - p`` (the world's; ``J_b,v - J_a,v``, a joint moving both frames turning the vector).
 """
 
 from __future__ import annotations
@@ -46,8 +36,7 @@ from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
 from .tree_kinematics import BORROWING, frame_pose, joint_column
 
-#: Squared distance (m^2) under which two contact points count as one; slopes below which a polygon's offset edge
-#: counts as parallel to another.
+#: Squared distance (m^2) under which two contact points are one; slopes below which two offset edges are parallel.
 _SAME2, _PARALLEL = 1e-24, 1e-12
 #: Added (m) to the error of a support goal whose shrunk polygon is empty or degenerate: never met.
 EMPTY_POLYGON = 1.0
@@ -230,31 +219,34 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def frame_a_pose(Rj, pj, aux, M):
-    """Frame a's rotation (base frame) into M (3, 3) and its origin (m) returned, from its physical joint and
-    folded placement in a relative pose goal's aux row and the joint poses Rj (m, 3, 3), pj (m, 3)."""
+def frame_a_origin(Rj, pj, aux):
+    """Frame a's origin (m, base frame) from its physical joint and folded placement in a two-frame goal's aux row
+    and the joint poses Rj (m, 3, 3), pj (m, 3)."""
     ja = int(aux[A_REL_JOINT])
-    if ja < 0:
-        for i in range(3):
-            for c in range(3):
-                M[i, c] = aux[A_REL_R + 3 * i + c]
-        return aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
     f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
-    pa0 = pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2
-    pa1 = pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2
-    pa2 = pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2
+    if ja < 0:
+        return f0, f1, f2
+    return (pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2,
+            pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2,
+            pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2)
+
+
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def frame_a_pose(Rj, pj, aux, M):
+    """Frame a's rotation (base frame) into M (3, 3) and its origin (m, :func:`frame_a_origin`) returned."""
+    ja = int(aux[A_REL_JOINT])
     for i in range(3):
         for c in range(3):
-            M[i, c] = (Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
-                       + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
-    return pa0, pa1, pa2
+            M[i, c] = aux[A_REL_R + 3 * i + c] if ja < 0 else (
+                Rj[ja, i, 0] * aux[A_REL_R + c] + Rj[ja, i, 1] * aux[A_REL_R + 3 + c]
+                + Rj[ja, i, 2] * aux[A_REL_R + 6 + c])
+    return frame_a_origin(Rj, pj, aux)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
-    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``: frame b (on physical joint jb at folded
-    placement Rbf, pbf) into Rb, pb; ``T_t^-1 T_a^-1 T_b`` into M (3, 3), t (3,); returns (position error m,
-    rotation angle rad)."""
+    """The relative pose goal's 6 rows ``e = log6(T_t^-1 T_a^-1 T_b)``, frame b (joint jb, folded placement Rbf, pbf)
+    into Rb, pb and ``T_t^-1 T_a^-1 T_b`` into M, t; returns (position error m, rotation angle rad)."""
     pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
     frame_pose(Rj, pj, jb, Rbf, pbf, Rb, pb)  # frame b's pose, as a one-frame goal's
     # W = R_a R_t row by row (in place in M); then M = W^T R_b and t = W^T (p_b - p_a) - R_t^T p_t
@@ -282,12 +274,10 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
-    """The 6 rows e of a relative pose with bands or free axes: those of a pose with axes (:func:`.axes.axes_error`,
-    ``BANDED_LOG6``, the band columns at ``A_REL_BAND``) for frame b's pose seen from frame a, ``R = R_a^T R_b``
-    (into R (3, 3)) and ``t = R_a^T (p_b - p_a)`` (into t (3,)), against the target (pt, Rt): the error of
-    ``T_t^-1 T_a^-1 T_b`` in the target frame. p (3,) ends as frame b's origin (base frame, m) for
-    :func:`balance_columns` (scratch before); M (3, 3) scratch. Returns (|e|^2, position error m, rotation error
-    rad) as axes_error's."""
+    """The 6 rows e of a relative pose with bands or free axes: :func:`.axes.axes_error`'s ``BANDED_LOG6`` rows (bands
+    at ``A_REL_BAND``) for frame b seen from frame a, ``R = R_a^T R_b`` and ``t = R_a^T (p_b - p_a)`` (written to R,
+    t), against (pt, Rt). p ends as frame b's origin (m) for :func:`balance_columns`; M scratch. Returns
+    axes_error's."""
     pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
     frame_pose(Rj, pj, jb, Rbf, pbf, R, p)
     d0, d1, d2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
@@ -307,10 +297,8 @@ def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
     """Rows r.. of the task Jacobian E (unweighted) of a relative pose with bands or free axes, from
-    ``J = J_b(p_b) - J_a(p_b)`` (6, n) (:func:`balance_columns`, base frame), for the buffers
-    :func:`relative_axes_error` filled (R = R_a^T R_b, t = R_a^T (p_b - p_a)): J turned into frame a's coordinates
-    (in place; the twist of frame b relative to frame a), then the pose-with-axes rows of
-    :func:`.axes.axes_jacobian`. rv (3,), A, B (3, 3) scratch."""
+    ``J = J_b(p_b) - J_a(p_b)`` (6, n) (:func:`balance_columns`) turned in place into frame a's coordinates, then
+    :func:`.axes.axes_jacobian`'s rows for :func:`relative_axes_error`'s R, t. rv, A, B scratch."""
     frame_a_pose(Rj, pj, aux, A)
     for k in range(J.shape[1]):  # J <- diag(R_a^T, R_a^T) J
         v0, v1, v2 = J[0, k], J[1, k], J[2, k]
@@ -319,18 +307,6 @@ def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
             J[i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
             J[3 + i, k] = A[0, i] * w0 + A[1, i] * w1 + A[2, i] * w2
     axes_jacobian(BANDED_LOG6, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
-
-
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def frame_a_origin(Rj, pj, aux):
-    """Frame a's origin (m, base frame) of a two-frame goal's aux row at the joint poses Rj, pj."""
-    ja = int(aux[A_REL_JOINT])
-    f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
-    if ja < 0:
-        return f0, f1, f2
-    return (pj[ja, 0] + Rj[ja, 0, 0] * f0 + Rj[ja, 0, 1] * f1 + Rj[ja, 0, 2] * f2,
-            pj[ja, 1] + Rj[ja, 1, 0] * f0 + Rj[ja, 1, 1] * f1 + Rj[ja, 1, 2] * f2,
-            pj[ja, 2] + Rj[ja, 2, 0] * f0 + Rj[ja, 2, 1] * f1 + Rj[ja, 2, 2] * f2)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
@@ -406,9 +382,8 @@ def relative_point_rows(kind, Rj, pj, aux, J, A, E, r):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
     """Rows e of a goal of a kind beyond one frame (see the module docstring); returns (|e|^2, position error m,
-    orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers (the CoM kinds keep the CoM in
-    p and the active piece in t; the relative pose frame b's pose in R, p and its translation in t; the relative
-    pose with axes frame b's pose seen from frame a in R, t and frame b's origin in p)."""
+    orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers, as each kind's function fills
+    them (the CoM in p and the support goal's active piece in t; frame b's pose, ...)."""
     if kind == COM_POINT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2

@@ -1,14 +1,7 @@
-"""The folded serial chain evaluated in numba (tip pose, joint axes and origins, base-frame Jacobian), and the
-coupling of physical joint values to the joint vector.
-
-A serial chain's constants (``Robot.chain_constants``): every joint axis turned onto z and folded into the fixed
-placements, ``T = F_0 Z(x_1) F_1 ... Z(x_m) F_m`` with ``Z(x)`` a rotation by x about z (revolute) or a
-translation by x along z (prismatic), over the chain's m physical joints. :func:`forward` and :func:`jacobian`
-evaluate it; the kernel evaluates the general tree of :mod:`.tree_kinematics` instead, whose operations on a chain
-are these, bit for bit (tests/test_robot_tree.py holds the two to it). The physical values x follow the joint
-vector q (n,) through ``Robot.chain_coupling`` / ``Robot.tree_constants``: ``x_k = scale_k q[index_k] +
-offset_k`` (mimic joints; x = q, m = n without them): :func:`expand` maps q to x and :func:`fold` the Jacobian
-columns of x to those of q (the chain rule); the kernel uses these.
+"""The folded serial chain in numba (``Robot.chain_constants``: ``T = F_0 Z(x_1) F_1 ... Z(x_m) F_m``, ``Z(x)`` a
+rotation by x about z or a translation along z), and the coupling ``x_k = scale_k q[index_k] + offset_k`` of the
+physical joint values to q (mimic joints): :func:`expand` maps q to x, :func:`fold` the Jacobian columns of x to
+those of q. The kernel evaluates the tree of :mod:`.tree_kinematics`, whose operations on a chain are these.
 """
 
 from __future__ import annotations

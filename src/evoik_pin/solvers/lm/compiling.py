@@ -1,16 +1,9 @@
-"""First use of evoik_pin's compiled code: whether numba is about to compile an entry (rather than load it from its
-disk cache), and the one line that says so.
+"""First use of evoik_pin's compiled code: whether numba is about to compile an entry rather than load it from its
+disk cache, and the one line that says so (tens of seconds, once per install, would otherwise look like a hang).
 
-numba compiles the LM kernel's entries the first time they are called after an install (or after their source
-changed) and caches the machine code on disk (``__pycache__/*.nbi``, ``*.nbc``, or ``NUMBA_CACHE_DIR``); later
-processes load it in well under a second. A first use that compiles takes tens of seconds, which, unannounced,
-looks like a hang. :func:`load` runs a group of entries once on small arguments (outside any time budget: its
-callers are the set-up steps) and, when at least one of them is not in numba's cache for those argument types,
-first says what is compiled and that it happens once.
-
-The line goes to the ``evoik_pin`` logger at INFO. Without any logging configuration (no handler anywhere: a
-script, the ``evoik`` command), it is written to stderr instead, as one line. To silence it, set that logger above
-INFO (``logging.getLogger("evoik_pin").setLevel(logging.WARNING)``) or give it a handler of your own.
+:func:`load` runs a group of entries once on small arguments (its callers are set-up steps, outside any time
+budget). The line goes to the ``evoik_pin`` logger at INFO, or to stderr when no logging is configured; set that
+logger above INFO to silence it.
 """
 
 from __future__ import annotations
@@ -27,9 +20,8 @@ LOGGER = logging.getLogger("evoik_pin")
 
 def will_compile(dispatcher, args: tuple) -> bool:
     """Whether calling the numba ``dispatcher`` on ``args`` compiles it: no machine code for the arguments' types in
-    this process, nor in numba's disk cache for this source (its cache index holds no entry for that signature and
-    this build of numba; a stale index, from an older source, holds none). False when that cannot be told (a
-    dispatcher without a disk cache, a numba whose internals differ): the notice is then left out, never wrong."""
+    this process nor in numba's disk cache for this source. False when that cannot be told (the notice is then left
+    out, never wrong)."""
     try:
         sig = tuple(dispatcher.typeof_pyval(a) for a in args)
         if sig in dispatcher.overloads:
@@ -58,10 +50,9 @@ def notice(what: str, seconds: float) -> str:
 
 
 def load(what: str, calls: list[tuple], seconds: float) -> float:
-    """Call each (dispatcher, args) of ``calls`` once, so that numba compiles or loads its machine code now; when
-    one of them will compile (:func:`will_compile`), first :func:`announce` that ``what`` is being compiled, about
-    ``seconds`` s (a measured figure for one core). Returns the seconds spent. The calls must only write into
-    their own arguments (small scratch arrays)."""
+    """Call each (dispatcher, args) of ``calls`` once, so that numba compiles or loads its machine code now, first
+    announcing that ``what`` is compiled (about ``seconds`` s of one core) when one will compile. Returns the seconds
+    spent. The calls must only write into their own arguments."""
     t = time.perf_counter()
     if any(will_compile(dispatcher, args) for dispatcher, args in calls):
         announce(notice(what, seconds))

@@ -1,26 +1,18 @@
-"""The Levenberg-Marquardt engine: every LM run in evoik_pin goes through :class:`LevenbergMarquardt`
-(one problem, one or several starts) or :func:`solve_pairs` (many (start, target) pairs).
+"""The Levenberg-Marquardt engine: every LM run in evoik_pin goes through :class:`LevenbergMarquardt` (one problem,
+one or several starts) or :func:`solve_pairs` (many (start, target) pairs).
 
-A problem is a stack of goals on frames of the robot: the task error ``e(q)`` stacks each goal's rows, scaled by
-the square root of its weight, and ``E(q) = de/dq``. For a pose goal (6 rows), ``e = log6(T_t^-1 T_f(q))`` (m, rad)
-and ``E = Jlog6(T_t^-1 T_f(q)) J_local(q)``; its rotational part's norm is the rotation angle and it vanishes
-exactly at the target. A position goal is ``p_f(q) - p_t`` in the base frame; the other kinds' rows are in
-:mod:`.axes` and :mod:`.balance`.
-
-One step solves the damped normal equations in the smaller of task space and joint space::
-
-    (E E^T + lambda I) y = e,  dq = -E^T y     (rows <= joints)
-    (E^T E + lambda I) dq = -E^T e               (rows > joints: the same step)
-
-with the step length capped at ``max_step`` (a trust region), accepted only when it lowers ``|e|^2``
-(``lambda`` shrinks after a success, grows after a failure). Joint limits are held exactly by an active set
-(joints a step carries past a bound are fixed there and the step re-solved for the others); revolute joints
-spanning a full turn wrap instead. A run gives up on a stall (``|e|`` not halved in a few steps) so the caller
-can restart elsewhere; once every goal meets its tolerances it takes one undamped finishing step. Near-singular
+The task error ``e(q)`` stacks each goal's rows scaled by the square root of its weight; ``E = de/dq``. A pose goal's
+rows are ``log6(T_t^-1 T_f(q))`` (m, rad), with ``E = Jlog6(T_t^-1 T_f) J_local``; a position goal's ``p_f(q) - p_t``
+(base frame); the other kinds' are in :mod:`.axes` and :mod:`.balance`. One step solves the damped normal equations
+in the smaller space, ``(E E^T + lambda I) y = e, dq = -E^T y`` (rows <= joints) or ``(E^T E + lambda I) dq = -E^T e``,
+its length capped at ``max_step`` (trust region), accepted only when it lowers ``|e|^2`` (lambda shrinks after a
+success, grows after a failure). Joint limits are an active set (joints a step carries past a bound are fixed there,
+the step re-solved for the others); full-turn revolute joints wrap instead. A run gives up on a stall so the caller
+can restart elsewhere, takes one undamped finishing step once every goal meets its tolerances, and near-singular
 targets get a geodesic acceleration (Transtrum & Sethna 2012).
 
-``engine="compiled"`` (the default) runs the numba kernel (:mod:`.kernel`); ``engine="python"`` runs the
-reference loop (:mod:`.reference`) the tests hold the kernel to.
+``engine="compiled"`` (the default) runs the numba kernel (:mod:`.kernel`); ``engine="python"`` the reference loop
+(:mod:`.reference`) the tests hold the kernel to.
 """
 
 from __future__ import annotations
@@ -72,8 +64,7 @@ if TYPE_CHECKING:  # the problem module imports goals, which import this package
 
 __all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "later_kinds", "problem_goals", "solve_pairs"]
 
-#: LM engines: "compiled" runs the numba kernel of :mod:`.kernel`; "python" the reference loop of
-#: :mod:`.reference` over Pinocchio's kinematics.
+#: LM engines: the numba kernel of :mod:`.kernel`, the reference loop of :mod:`.reference`.
 ENGINES = ("compiled", "python")
 
 #: About how long (s, one core) compiling a variant's entries takes from an empty cache (scripts/compile_time.py).
@@ -84,9 +75,8 @@ _LOADING = threading.Lock()
 
 
 def warmup_problem() -> tuple:
-    """A one-joint tree (``Robot.tree_constants()``), its box and one pose goal on it (``GoalStack``'s arrays) with
-    its targets pt, Rt: (tree, box, goals, pt, Rt), the kernels' arguments of the types the engine passes
-    (C-contiguous float64 / int64 / bool arrays), for compiling or loading them outside any time budget."""
+    """(kin, box, goals, pt, Rt) of a one-joint tree with one pose goal: the kernels' arguments of the types the
+    engine passes, for compiling or loading them outside any time budget."""
     tree = (np.full(1, -1, dtype=np.int64), np.eye(3)[None].copy(), np.zeros((1, 3)), np.ones(1, dtype=bool),
             np.zeros(1, dtype=np.int64), np.ones(1), np.zeros(1))
     spec = spec_row(LOG6, 0, 1.0, 1e-6, 1e-6, 0)[None]
@@ -96,22 +86,18 @@ def warmup_problem() -> tuple:
 
 
 def later_kinds(stack: GoalStack) -> bool:
-    """Whether ``stack`` holds a goal its kind declares of a compiled family beyond the frame family's (pose,
-    position, planar): :mod:`.axes`'s or :mod:`.balance`'s, which only the kernel's ``lm_run_all`` variant runs."""
+    """Whether ``stack`` holds a goal of a compiled family beyond the frame family's (pose, position, planar), which
+    only the kernel's ``lm_run_all`` variant runs."""
     return any(KINDS[k].family != FAMILY_FRAME for k in stack.kinds)
 
 
 def compiled_kernel(extra: bool = False) -> dict:
-    """The kernel's entry points for one variant of the run, ready to run: ``extra`` False for stacks of one-frame goals
-    (pose, position, planar: ``lm_run_basic``), True for any stack (``lm_run_all``; :func:`later_kinds` says which a
-    stack needs). The dict holds ``lm_run_buffers``, ``lm_run_starts_buffers`` and ``lm_run_pairs_buffers`` (the
-    variant's :data:`.kernel.Entries`), ``lm_run``, ``lm_run_starts`` and ``lm_run_pairs`` (Python wrappers that make a
-    workspace) and ``workspace_size``.
+    """The kernel's entries for one variant of the run, loaded: ``extra`` False for stacks of one-frame goals
+    (``lm_run_basic``), True for any (``lm_run_all``; :func:`later_kinds`). The dict holds ``lm_run_buffers``,
+    ``lm_runs_buffers`` (:data:`.kernel.Entries`), ``lm_runs`` and ``workspace_size``.
 
     The first call per variant runs each entry once on a one-joint robot, so that numba loads (or, once per install,
-    compiles, with a notice: :mod:`.compiling`) its machine code here rather than inside a solve's time budget; every
-    :class:`LevenbergMarquardt` calls it when made, before any solver starts its clock. Thread-safe; later calls
-    return at once.
+    compiles, with a notice: :mod:`.compiling`) its machine code before any solver starts its clock. Thread-safe.
     """
     kernel = _KERNELS.get(extra)
     if kernel is None:
@@ -123,22 +109,19 @@ def compiled_kernel(extra: bool = False) -> dict:
 
 
 def _load_kernel(extra: bool) -> dict:
-    """:func:`compiled_kernel`'s work for one variant: each entry run once (compiled with a notice, or loaded)."""
+    """:func:`compiled_kernel`'s work for one variant."""
     from . import kernel as K
     from .compiling import load
 
     tree, box, goals, pt, Rt = warmup_problem()
     params = kernel_params(iterations=1)
     entries = K.ALL if extra else K.BASIC
-    # the argument types the engine passes: C-contiguous float64 / int64 / bool arrays and a Python bool
     buffers = (np.empty(int(K.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
     stats = np.empty((1, STATS_SIZE))
-    calls = [(entries.run, (*buffers, np.zeros(1), *tree, box, False, *goals, pt, Rt, params, np.empty(1),
+    calls = [(entries.run, (*buffers, np.zeros(1), tree, box, False, goals, pt, Rt, params, np.empty(1),
                             np.empty((1, 2)))),
-             (entries.starts, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt, Rt, params,
-                               np.empty((1, 1)), stats, np.empty((1, 1, 2)))),
-             (entries.pairs, (*buffers, np.zeros((1, 1)), *tree, box, False, *goals, pt[None].copy(),
-                              Rt[None].copy(), params, np.empty((1, 1)), stats, np.empty((1, 1, 2))))]
+             (entries.runs, (*buffers, np.zeros((1, 1)), tree, box, False, goals, pt[None], Rt[None], params,
+                             np.empty((1, 1)), stats, np.empty((1, 1, 2)), True))]
     if extra:
         # Goal.errors' compiled errors (.axes, read-only aux row) are first called mid-search: load them here too,
         # outside any time budget
@@ -150,8 +133,7 @@ def _load_kernel(extra: bool) -> dict:
                                    np.empty((3, 3)), np.empty(3), np.empty(6))))
     load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
          KERNEL_COMPILE_SECONDS[extra])
-    return dict(lm_run=K.lm_run, lm_run_starts=K.lm_run_starts, lm_run_pairs=K.lm_run_pairs,
-                lm_run_buffers=entries.run, lm_run_starts_buffers=entries.starts, lm_run_pairs_buffers=entries.pairs,
+    return dict(lm_runs=K.lm_runs, lm_run_buffers=entries.run, lm_runs_buffers=entries.runs,
                 workspace_size=K.workspace_size)
 
 
@@ -161,20 +143,17 @@ def _check_engine(engine: str) -> None:
 
 
 class LevenbergMarquardt:
-    """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem`: its goals, or its single
-    target on the tip (see the module docstring for the error and the iteration).
+    """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem` (its goals, or its single
+    target on the tip; the module docstring states the iteration).
 
     Args:
-        problem: robot, goals (or target), search box and tolerances (``tolerance`` m, ``rotation_tolerance`` rad,
-            or each goal's own).
+        problem: robot, goals (or target), search box and tolerances (m, rad; or each goal's own).
         damping: initial lambda (m^2 / rad^2 scale), adapted per step.
         max_step: largest length ``|dq|`` of one step (rad or m, Euclidean norm over the joints).
         stall_window, stall_ratio: give up when ``|e|`` has not dropped below ``stall_ratio`` times its value
-            ``stall_window`` accepted steps earlier (a limit or a local minimum holds the arm), so the
-            caller can restart elsewhere instead of spending iterations on a lost cause.
-        finish: once the tolerances are met, take one more step (kept if it lowers the error): near the
-            solution LM converges quadratically, so one step takes an answer just inside a 1e-6 tolerance to
-            about 1e-12, for the price of one iteration.
+            ``stall_window`` accepted steps earlier.
+        finish: once the tolerances are met, take one more step (kept if it lowers the error; quadratic
+            convergence takes ~1e-6 to ~1e-12).
         engine: ``"compiled"`` (numba kernel) or ``"python"`` (the reference loop).
     """
 
@@ -203,8 +182,7 @@ class LevenbergMarquardt:
             return
         self._reference = None
         self._kernel = compiled_kernel(later_kinds(stack))  # this stack's variant, loaded before any clock
-        # the folded tree, how it follows q (read-only in a Ray worker: owned's docstring says why they are copied)
-        self._tree = tuple(owned(a) for a in robot.tree_constants())
+        self._tree = tuple(owned(a) for a in robot.tree_constants())  # the kernel's kin
         self._goal_arrays = tuple(owned(a) for a in stack.arrays)
         _, self._any_wrap, _, _, self._box = box_constants(robot, problem.lower, problem.upper)
         self._params = kernel_params(0, damping, max_step, stall_window, stall_ratio, finish)
@@ -214,8 +192,7 @@ class LevenbergMarquardt:
         self._buffers: tuple = ()  # the kernel's workspace (_workspace)
         self._buffers_for = -1  # the most steps those buffers hold
         self._buffers_thread = -1  # the thread whose buffers they are (threading.get_ident)
-        # the kernel's constant arguments, unpacked from one tuple at each call
-        self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+        self._set_args()
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
         self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
         self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
@@ -223,9 +200,8 @@ class LevenbergMarquardt:
         self._own_box = False  # whether _box is this engine's own array (confine), no longer box_constants'
 
     def retarget(self, problem: IKProblem) -> bool:
-        """Point this engine at ``problem`` when it differs from the current one only in its targets (the same
-        robot, goal stack and search box, as the problems of an :class:`~evoik_pin.IKSolver` do): the targets are
-        written into the kernel's argument arrays in place, so no constant is rebuilt. Returns False (the engine
+        """Point this engine at ``problem`` when it differs from the current one only in its targets (an
+        :class:`~evoik_pin.IKSolver`'s problems), written in place (:meth:`set_targets`). Returns False (the engine
         unchanged) when ``problem`` needs an engine of its own, and for the python engine."""
         if self._reference is not None or problem.robot is not self.robot or self._own_box:
             return False
@@ -247,56 +223,51 @@ class LevenbergMarquardt:
                 self.robot, problem.lower, problem.upper)[4] is not self._box):
             return False
         self._same_box = (problem.lower, problem.upper)  # the box arrays checked last (an IKSolver's, every call)
-        if self._owned:
-            self._pt[...] = pt
-            self._Rt[...] = Rt
-        else:  # the first problem's arrays may be its target's own: copies from now on, never written through
-            self._pt, self._Rt = np.array(pt), np.array(Rt)
-            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
-            self._owned = True
-            self._direct = self._overload()
+        self.set_targets(pt, Rt)
         self._same = None if problem.goals is not None or target.planar else (
             problem.lower, problem.upper, target.rotation is None, problem.tolerance, problem.rotation_tolerance)
         self.problem = problem
         return True
 
     def confine(self, lower: np.ndarray, upper: np.ndarray) -> None:
-        """Run inside ``[lower, upper]`` (n,) (rad or m) from now on, no joint wrapping: a per-call box (a velocity
-        box around the last configuration, :mod:`..search.velocity_box`) written in place into this engine's own box
-        array, so a new box every call rebuilds nothing (the cached :func:`box_constants` arrays stay untouched).
-        After it, :meth:`retarget` refuses other boxes (the engine's box is no longer theirs). Compiled engine only."""
+        """Run inside ``[lower, upper]`` (n,) (rad or m) from now on, no joint wrapping: a per-call box
+        (:mod:`..search.velocity_box`) written in place into this engine's own box array; :meth:`retarget` then
+        refuses other boxes. Compiled engine only."""
         if self._reference is not None:
             raise OptionError("a per-call box (velocity limits) runs on the compiled LM engine only "
                               "(engine='compiled')")
         box = self._box
         if not self._own_box:  # the first call: an array of our own (the cached one serves other engines)
             box = self._box = np.zeros_like(box)
-            self._args = (*self._tree, box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
+            self._set_args()
             self._own_box = True
         box[B_LO] = box[B_CLO] = lower
         box[B_HI] = box[B_CHI] = upper  # the wrap row stays 0: the box is in unwrapped values
 
     def set_targets(self, pt: np.ndarray, Rt: np.ndarray) -> None:
         """Write the goals' targets ``pt`` (G, 3) m and ``Rt`` (G, 3, 3) into the kernel's argument arrays (the goal
-        stack unchanged): the per-step update of a tracking loop, nothing rebuilt."""
+        stack unchanged; a tracking loop's per-step update). Compiled engine only."""
         if self._reference is not None:
             raise OptionError("set_targets runs on the compiled LM engine only (engine='compiled')")
-        if not self._owned:  # the first problem's arrays may be its target's own: copies, never written through
-            self._pt, self._Rt = np.array(pt, dtype=float), np.array(Rt, dtype=float)
-            self._args = (*self._tree, self._box, self._any_wrap, *self._goal_arrays, self._pt, self._Rt)
-            self._owned = True
-            self._direct = self._overload()
-            self._same = None
-        else:
+        if self._owned:
             self._pt[...] = pt
             self._Rt[...] = Rt
+        else:  # the first problem's arrays may be its target's own: copies from now on, never written through
+            self._pt, self._Rt = np.array(pt, dtype=float), np.array(Rt, dtype=float)
+            self._set_args()
+            self._owned = True
+            self._direct = self._overload()  # an engine that serves many problems
+            self._same = None
+
+    def _set_args(self) -> None:
+        """The kernel's constant arguments, (kin, box, any_wrap, goals, pt, Rt) (:mod:`.kernel`'s groups), remade as one
+        tuple whenever one of them is replaced: callers keep it, and test by identity that it still holds."""
+        self._args = (self._tree, self._box, self._any_wrap, self._goal_arrays, self._pt, self._Rt)
 
     def _overload(self):
-        """The machine code numba runs for :meth:`run`'s arguments, as a function called without numba's dispatch
-        (which types each of the kernel's 22 arguments on every call, a noticeable share of a short run), or None
-        where this numba does not expose it. Only for an engine that runs many problems: finding it costs more than
-        a call. The argument types are fixed: the engine's own arrays, and ``q`` copied as
-        :meth:`run` does."""
+        """The compiled entry of :meth:`run`'s argument types, called without numba's dispatch (which types every
+        argument on every call), or None where this numba does not expose it; for an engine that runs many problems
+        (finding it costs more than a call)."""
         buffers = self._buffers or self._workspace(DEFAULT_ITERATIONS)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
         args = (*buffers, np.zeros(self.n), *self._args, self._params, np.empty(self.n), g_err)
@@ -308,21 +279,20 @@ class LevenbergMarquardt:
             return None
 
     def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
-        """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's buffers for this goal
-        stack, kept from solve to solve (:func:`_thread_buffers`), so a run neither allocates nor finds its memory
-        cold in the cache."""
-        self._buffers = _thread_buffers(self._kernel, self.goals, self.n, self._tree[0].shape[0], max_iterations)
-        self._buffers_for = max_iterations
-        self._buffers_thread = threading.get_ident()
+        """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's for this goal stack
+        (:func:`_thread_buffers`; an engine kept from solve to solve may be handed to another thread)."""
+        if max_iterations > self._buffers_for or self._buffers_thread != threading.get_ident():
+            self._buffers = _thread_buffers(self._kernel, self.goals, self.n, self._tree[0].shape[0], max_iterations)
+            self._buffers_for = max_iterations
+            self._buffers_thread = threading.get_ident()
         return self._buffers
 
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
         """One LM run from ``q`` (n,) (clipped / wrapped into the box first), at most ``max_iterations`` steps.
 
-        Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at
-        ``deadline`` (a ``time.perf_counter()`` value). The compiled engine checks ``deadline`` only before
-        the run starts (a run is at most ``max_iterations`` short steps); when it has passed, the
-        start is evaluated and no step is taken. Returns the last accepted configuration (the best met).
+        Stops as soon as the problem's tolerances are met, when the damping saturates, on a stall or at ``deadline``
+        (a ``time.perf_counter()`` value; the compiled engine checks it before the run only: when it has passed, the
+        start is evaluated and no step taken). Returns the last accepted configuration (the best met).
         """
         if self._reference is not None:
             return self._reference.run(q, max_iterations, deadline)
@@ -332,10 +302,7 @@ class LevenbergMarquardt:
         params[P_ITERATIONS] = max_iterations
         out = np.empty(self.n)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
-        # an engine kept from solve to solve (an IKSolver's) may be handed to another thread: the buffers are the
-        # running thread's
-        mine = self._buffers_thread == threading.get_ident()
-        buffers = self._buffers if max_iterations <= self._buffers_for and mine else self._workspace(max_iterations)
+        buffers = self._workspace(max_iterations)
         run = self._direct
         if run is None:
             run, q = self._kernel["lm_run_buffers"], owned(q, float)
@@ -346,21 +313,16 @@ class LevenbergMarquardt:
                          None if self._one else g_err, cost)
 
     def kernel_arguments(self, max_iterations: int) -> tuple[tuple, tuple, np.ndarray]:
-        """(workspace buffers, the kernel's constant arguments from ``parent`` to ``Rt``, params) for compiled code
-        that makes :meth:`run`'s runs itself (memetic's first runs, :mod:`..search.first_runs`), ``max_iterations``
-        steps per run set in params. Compiled engine only."""
-        params = self._params
-        params[P_ITERATIONS] = max_iterations
-        mine = self._buffers_thread == threading.get_ident()
-        buffers = self._buffers if max_iterations <= self._buffers_for and mine else self._workspace(max_iterations)
-        return buffers, self._args, params
+        """(workspace buffers, the kernel's constant arguments (kin, box, any_wrap, goals, pt, Rt), params with
+        ``max_iterations`` steps) for compiled code that makes :meth:`run`'s runs itself (:mod:`..search.first_runs`).
+        Compiled engine only."""
+        self._params[P_ITERATIONS] = max_iterations
+        return self._workspace(max_iterations), self._args, self._params
 
     def run_many(self, Q: np.ndarray, max_iterations: int, deadline: float | None = None
                  ) -> tuple[LMOutcome, int]:
-        """LM runs from the starts ``Q`` (K, n), in order, until one meets the tolerances: one kernel call
-        for all K (compiled engine), so a group of starts that mostly fail costs little more than its steps.
-
-        ``deadline`` is checked before the group starts (compiled) or before every step (python).
+        """LM runs from the starts ``Q`` (K, n), in order, until one meets the tolerances (one kernel call for all K;
+        ``deadline`` checked before the group starts, or before every step with the python engine).
 
         Returns:
             (outcome of the converged run, or of the run with the lowest error (one goal: position + orientation
@@ -381,14 +343,11 @@ class LevenbergMarquardt:
                              o.cost), best
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
-        params = self._params
-        params[P_ITERATIONS] = max_iterations
+        buffers, args, params = self.kernel_arguments(max_iterations)
         K = Q.shape[0]
-        Q_out = np.empty_like(Q)
-        stats = np.empty((K, STATS_SIZE))
-        g_stats = np.empty((K, len(self.goals), 2))
-        k = self._kernel["lm_run_starts_buffers"](*self._workspace(max_iterations), Q, *self._args, params, Q_out,
-                                                  stats, g_stats)
+        Q_out, stats, g_stats = np.empty_like(Q), np.empty((K, STATS_SIZE)), np.empty((K, len(self.goals), 2))
+        k = self._kernel["lm_runs_buffers"](*buffers, Q, *args[:4], self._pt[None], self._Rt[None], params, Q_out,
+                                            stats, g_stats, True)
         runs = k + 1 if k >= 0 else -(k + 1)
         s = stats[:runs]
         if k < 0:
@@ -407,9 +366,8 @@ _BUFFERS_KEPT = 8
 
 def _thread_buffers(kernel: dict, stack: GoalStack, n: int, m: int, max_iterations: int):
     """(float buffer, held (n,) bool) of the kernel's workspace for ``stack`` on this thread, for runs of up to
-    ``max_iterations`` steps (at least 30, the default, so that one pair serves every usual call): kept per thread
-    (two threads never share a workspace) for the last few goal stacks; the entry keeps its stack alive, so an id is
-    never reused while it is cached."""
+    ``max_iterations`` steps (at least the default): kept per thread for the last few goal stacks (the entry keeps
+    its stack alive, so an id is never reused while it is cached)."""
     cache = getattr(_LOCAL, "buffers", None)
     if cache is None:
         cache = _LOCAL.buffers = {}
@@ -441,10 +399,8 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
     """
     _check_engine(engine)
     N = Q.shape[0]
-    if isinstance(targets, GoalArrays):
-        if engine == "python":
-            raise OptionError("solve_pairs runs goal stacks on the compiled engine only (engine='compiled')")
-        return _goal_pairs(robot, Q, targets, lower, upper, kernel_params(max_iterations, damping, max_step))
+    if isinstance(targets, GoalArrays) and engine == "python":
+        raise OptionError("solve_pairs runs goal stacks on the compiled engine only (engine='compiled')")
     if engine == "python":
         from ...problem import IKProblem
         from .reference import ReferenceLM
@@ -457,33 +413,20 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
         return PairsOutcome(np.array([o.q for o in outs]), np.array([o.position_error for o in outs]),
                             np.array([o.orientation_error for o in outs]) if oriented else None,
                             np.array([o.converged for o in outs]), np.array([o.evaluations for o in outs]))
-    arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
-    lm_run_pairs = compiled_kernel(False)["lm_run_pairs"]  # a single target: pose, position or planar
+    if isinstance(targets, GoalArrays):  # N goal lists of one stack, each goal's errors kept
+        arrays, stack, P, Rts = targets, targets.stack, targets.P, targets.Rts
+        g_stats = np.empty((N, len(stack), 2))
+    else:  # single targets: the tip's one-goal stack
+        arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
+        stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
+        P, Rts, g_stats = arrays.P[:, None], arrays.Rts[:, None], None
     _, any_wrap, _, _, box = box_constants(robot, lower, upper)
-    params = kernel_params(max_iterations, damping, max_step)
-    stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
-    Q_out = np.empty((N, robot.n))
-    stats = np.empty((N, STATS_SIZE))
-    lm_run_pairs(owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
-                 *(owned(a) for a in stack.arrays), owned(arrays.P[:, None], float), owned(arrays.Rts[:, None], float),
-                 params, Q_out, stats, np.empty((N, 1, 2)))
-    return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
-                        stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64))
-
-
-def _goal_pairs(robot, Q: np.ndarray, arrays: GoalArrays, lower: np.ndarray, upper: np.ndarray,
-                params: np.ndarray) -> PairsOutcome:
-    """:func:`solve_pairs` on N goal lists of one stack: one kernel call, each goal's errors kept."""
-    stack = arrays.stack
-    N, G = len(arrays), len(stack)
-    _, any_wrap, _, _, box = box_constants(robot, lower, upper)
-    Q_out = np.empty((N, robot.n))
-    stats = np.empty((N, STATS_SIZE))
-    g_stats = np.empty((N, G, 2))
-    compiled_kernel(later_kinds(stack))["lm_run_pairs"](
-        owned(Q, float), *(owned(a) for a in robot.tree_constants()), box, any_wrap,
-        *(owned(a) for a in stack.arrays), owned(arrays.P, float), owned(arrays.Rts, float), params, Q_out, stats,
-        g_stats)
+    Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
+    compiled_kernel(later_kinds(stack))["lm_runs"](
+        owned(Q, float), tuple(owned(a) for a in robot.tree_constants()), box, any_wrap,
+        tuple(owned(a) for a in stack.arrays), owned(P, float), owned(Rts, float),
+        kernel_params(max_iterations, damping, max_step), Q_out, stats,
+        np.empty((N, 1, 2)) if g_stats is None else g_stats)
     return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
                         stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64), g_stats)
 

@@ -1,25 +1,17 @@
 """The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
 
-:func:`lm_run` runs one LM iteration from one start for a stack of goals on frames of a kinematic tree (any goal
-kind: each kind's kernel codes and compiled family are declared in :mod:`evoik_pin.goals.registry` and the kind's
-own file; :mod:`evoik_pin.goals.stack` packs them into the ``spec`` rows read here). :func:`lm_run_starts` runs
-several starts for one problem, in order, until one converges; :func:`lm_run_pairs` runs one start per
-(start, targets) pair. The iteration is :class:`.reference.ReferenceLM`'s line for line (errors, damping rule, trust
-region, active-set joint limits, wrapping, stall test, geodesic acceleration, finishing step); tests hold the two to
-the same steps from the same starts.
+A run (:func:`lm_run`) is :class:`.reference.ReferenceLM`'s iteration line for line (errors, damping rule, trust
+region, active-set joint limits, wrapping, stall test, geodesic acceleration, finishing step; :mod:`.engine` states
+it); tests hold the two to the same steps. The task error ``e`` stacks the goals' rows (goal g's from
+``spec[g, G_ROW]``), each scaled by the square root of its weight; ``E = de/dq``. The frame family's rows are here
+(:func:`goal_error`), the other families' in :mod:`.axes` and :mod:`.balance`.
 
-Task error ``e``: the goals' rows stacked (goal g's rows from ``spec[g, G_ROW]``), each scaled by the square root of
-its weight, ``e = f(q) - target`` in m and rad; ``E = de/dq``. The one-frame family (:func:`goal_error`) is here
-(pose: ``log6(T_t^-1 T_f(q))``; position: ``p_f(q) - p_t``; planar: x, y and optionally the wrapped yaw); bands,
-free axes, orientation and pointing are in :mod:`.axes`, goals beyond one frame in :mod:`.balance`. A run has
-converged when every goal is within its own tolerances (m, rad). The damped step is solved in the smaller space:
-``(E E^T + lambda I) y = e, dq = -E^T y`` when there are no more rows than joints, else
-``(E^T E + lambda I) dq = -E^T e``.
-
-Constants and the ``params`` / ``box`` / goal layouts: :mod:`.layout`. The run is compiled in two variants
-(:func:`_run`): :func:`lm_run_basic` for one-frame goals only, :func:`lm_run_all` for any; :func:`entries_for` picks
-a variant's entries (:data:`BASIC`, :data:`ALL`) for a stack, and :func:`.engine.compiled_kernel` loads them outside
-any time budget (:mod:`.compiling`). A run allocates nothing: the callers make one :data:`Workspace` per call.
+The arrays travel in groups: ``kin`` (``Robot.tree_constants()``: parent, FR, Fp, rev, index, scale, offset),
+``goals`` (``GoalStack.arrays``: spec, gR, gp, support, gaux), the targets (pt (G, 3), Rt (G, 3, 3)) and the
+:data:`Workspace` carved from two buffers. The run is compiled in two variants (:func:`_run`): :func:`lm_run_basic`
+for one-frame goals only, :func:`lm_run_all` for any; each has two entries (:data:`Entries`: one run, and runs
+from many starts or (start, targets) pairs), :func:`entries_for` picks a stack's, :func:`.engine.compiled_kernel`
+loads them outside any time budget.
 
 Rules for editing the compiled code:
 
@@ -91,9 +83,8 @@ TWO_PI = 2.0 * math.pi
 
 @njit(cache=True, nogil=True, forceinline=True)
 def frame_rows(kind):
-    """Rows of :func:`goal_error`'s residuals (the frame family's codes): 6 (the SE(3) logarithm), 2 (planar), 3 (a
-    point, planar with yaw), as the kinds declare them (tests hold the two equal). :func:`lm_run_basic` reads a goal's
-    row count from here rather than from ``G_ROWS`` so that LLVM, knowing it, unrolls the rows' loops."""
+    """Rows of :func:`goal_error`'s residuals (6 pose, 2 planar, 3 point or planar with yaw, as the kinds declare
+    them): :func:`lm_run_basic` reads them here rather than from ``G_ROWS`` so that LLVM unrolls the rows' loops."""
     return 6 if kind == LOG6 else (2 if kind == PLANAR else 3)
 
 
@@ -128,29 +119,30 @@ def goal_error(kind, R, p, pt, Rt, M, t, e):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
-               pj, Z, O, Rg, pg, tg, M, e, ge):
-    """Stacked task error e (rows,) at q; returns the weighted |e|^2 and writes each goal's (position error m,
-    orientation error rad or 0) to ge (G, 2).
+def task_error(extra, kin, mimic, goals, weighted, pt, Rt, q, s, ws):
+    """Stacked task error ``s.e`` (rows,) at q (n,) for the targets pt (G, 3), Rt (G, 3, 3); returns the weighted
+    |e|^2 and writes each goal's (position error m, orientation error rad or 0) to ``s.ge``.
 
-    Fills the kinematics buffers Rj, pj, Z, O (:func:`.tree_kinematics.tree_forward`; with ``mimic``, the physical
-    joint values x of :func:`.chain.expand` first), each goal frame's pose Rg (G, 3, 3), pg (G, 3) and, for pose goals,
-    its position seen from the target tg (G, 3), which :func:`task_jacobian` needs. M (3, 3) is scratch.
-    ``weighted``: some goal's weight is not 1 (its rows are then scaled in a second pass, which keeps the goal loop
-    free of it). ``extra``: :func:`_run`'s (None: one-frame goals only, the other families' branches pruned).
+    Fills the rest of the :data:`State` s: the joint kinematics (:func:`.tree_kinematics.tree_forward`; with
+    ``mimic``, the joint values of :func:`.chain.expand` in ``ws.x`` first), each goal frame's pose and, for pose
+    goals, its position seen from the target (``s.tg``), which :func:`task_jacobian` needs. ``weighted``: some goal's
+    weight is not 1 (its rows are scaled in a second pass, which keeps the goal loop free of it). ``extra``:
+    :func:`_run`'s (None: one-frame goals only, the other families' branches pruned).
     """
+    parent, FR, Fp, rev, index, scale, offset = kin
+    spec, gR, gp, _, gaux = goals
+    Rj, pj, Rg, pg, tg, e, ge, M = s.Rj, s.pj, s.Rg, s.pg, s.tg, s.e, s.ge, ws.M
     if mimic:
-        expand(index, scale, offset, q, x)
-        tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O)
+        expand(index, scale, offset, q, ws.x)
+        tree_forward(parent, FR, Fp, rev, ws.x, Rj, pj, s.Z, s.O)
     else:
-        tree_forward(parent, FR, Fp, rev, q, Rj, pj, Z, O)
+        tree_forward(parent, FR, Fp, rev, q, Rj, pj, s.Z, s.O)
     c = 0.0
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
         rows = int(spec[g, G_ROWS]) if extra is not None else frame_rows(kind)  # frame_rows says why
         R, p = Rg[g], pg[g]
-        # centre of mass, support polygon, two frames (.balance)
         if extra is not None and int(spec[g, G_FAMILY]) == FAMILY_BEYOND_FRAME:
             cg, pos, rot = beyond_frame_error(kind, Rj, pj, gaux[g], int(spec[g, G_JOINT]), gR[g], gp[g], pt[g], Rt[g],
                                               R, p, M, tg[g], e[r:r + rows])
@@ -217,26 +209,24 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                  rv, A, B, E, parent, Rj, pj):
-    """Stacked task Jacobian E (rows, n) from the buffers :func:`task_error` filled for the same configuration:
-    per goal, its frame's base-frame Jacobian (:func:`.tree_kinematics.frame_jacobian` over the joints
-    ``support[g]`` marks; with ``mimic`` its physical columns Jx (6, m) folded into those of q, :func:`.chain.fold`)
-    turned into the goal's rows (:func:`goal_jacobian`; :func:`.axes.axes_jacobian`, with the targets pt (G, 3), Rt (G,
-    3, 3), for its kinds), scaled by the square root of its weight (when ``weighted``, in a second pass, as
-    :func:`task_error` does; e holds the weighted rows then). J (6, n), rv (3,), A, B (3, 3) scratch.
-    parent (m,) and the joint poses Rj (m, 3, 3), pj (m, 3): for the kinds beyond one frame (:mod:`.balance`), which
-    start from their own physical Jacobian. ``extra``: as :func:`task_error`'s.
-    """
+def task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, s, ws, E):
+    """Stacked task Jacobian E (rows, n) from the :data:`State` s :func:`task_error` filled for the same
+    configuration and targets: per goal, its frame's base-frame Jacobian (:func:`.tree_kinematics.frame_jacobian`
+    over the joints ``support[g]`` marks, folded with ``mimic``: :func:`.chain.fold`) turned into the goal's rows
+    (:func:`goal_jacobian`, :func:`.axes.axes_jacobian`, :mod:`.balance`), scaled as :func:`task_error` scales them.
+    Scratch: ws's Jx, J, rv, A, Bm. ``extra``: as :func:`task_error`'s."""
+    parent, _, _, rev, index, scale, _ = kin
+    spec, _, _, support, gaux = goals
+    Rg, pg, Z, O, tg, e = s.Rg, s.pg, s.Z, s.O, s.tg, s.e
+    Jx, J, rv, A, B = ws.Jx, ws.J, ws.rv, ws.A, ws.Bm
     n = J.shape[1]
     for g in range(spec.shape[0]):
         kind = int(spec[g, G_KIND])
         r = int(spec[g, G_ROW])
         rows = int(spec[g, G_ROWS]) if extra is not None else frame_rows(kind)  # frame_rows says why
-        # centre of mass, support polygon, two frames (.balance)
         if extra is not None and int(spec[g, G_FAMILY]) == FAMILY_BEYOND_FRAME:
-            beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, gaux[g], Rg[g], pg[g], tg[g],
-                                  e[r:r + rows], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
+            beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, s.Rj, s.pj, Z, O, gaux[g], Rg[g], pg[g],
+                                  tg[g], e[r:r + rows], spec[g, G_WEIGHT], pt[g], Rt[g], Jx, J, rv, A, B, E, r)
             continue
         if mimic:
             frame_jacobian(rev, support[g], pg[g], Z, O, Jx)
@@ -268,9 +258,8 @@ def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, 
                           A, B, E, r):
     """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): its
     physical Jacobian (:func:`.balance.balance_columns`, folded with ``mimic``) turned into its rows, a relative
-    pose's by the pose kind's :func:`goal_jacobian` (R, p, t: frame b's rotation and origin, the translation of
-    ``T^-1 T_a^-1 T_b``), the others' (a banded relative pose, a relative position, a centre of mass) by
-    :func:`.balance.balance_rows`."""
+    pose's by :func:`goal_jacobian` (R, p, t: frame b's rotation and origin, the translation of
+    ``T^-1 T_a^-1 T_b``), the others' by :func:`.balance.balance_rows`."""
     balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx)
     src = Jx
     if mimic:
@@ -278,7 +267,7 @@ def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, 
         src = J
     if kind == RELATIVE_LOG6:
         goal_jacobian(LOG6, R, src, t, e, w, rv, A, B, E, r)
-    else:  # a banded relative pose, a relative position, a centre of mass (.balance)
+    else:
         balance_rows(kind, Rj, pj, aux, R, p, t, src, pt, Rt, rv, A, B, E, r)
 
 
@@ -384,10 +373,11 @@ def _copy(a, b):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn):
-    """The next configuration qn (n,) (written in place) and whether a joint hit a bound: the damped step,
-    trust region, active-set limits and wrapping of ``reference._step`` (its docstring says why).
-    W (m, n), L (m, m), y, rhs (m,), dq, dfix (n,) and held (n,) bool are scratch."""
+def lm_step(q, on_bound, e, lam, box, any_wrap, max_step, ws, qn):
+    """The next configuration qn (n,) (written in place) from q and its error e, with ws.E its Jacobian, and whether
+    a joint hit a bound: the damped step, trust region, active-set limits and wrapping of ``reference._step`` (its
+    docstring says why). Scratch: ws's W, L, y, dq, dfix, rhs, held."""
+    E, W, L, y, dq, dfix, rhs, held = ws.E, ws.W, ws.L, ws.y, ws.dq, ws.dfix, ws.rhs, ws.held
     m, n = E.shape
     for i in range(m):
         for k in range(n):
@@ -437,19 +427,16 @@ def lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, 
     return clipped
 
 
-#: The buffers of LM runs (:func:`make_workspace`) for n joints, m physical joints, G goals and `rows` task rows,
-#: reused from run to run. The kinematics come in three sets: the current configuration (q, Rj, pj, Z, O, Rg, pg,
-#: tg, e, ge), a step's candidate (qn, ..., en, ge2) and the geodesic-acceleration probe (qh, ..., eh, ge3): Rj (m,
-#: 3, 3), pj (m, 3) the joint poses, Z, O (m, 3) the joint axes and origins (:func:`.tree_kinematics.tree_forward`),
-#: Rg (G, 3, 3), pg (G, 3) the goal frames' poses, tg (G, 3) their positions seen from their targets
-#: (:func:`goal_error`'s t), e (rows,) the task error, ge (G, 2) each goal's errors. Scratch: x (m,), Jx (6, m), J (6,
-#: n), rv (3,), E, W (rows, n), A, Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq,
-#: dfix (n,), held (n,) bool, and history (max_it + 1,), the |e|^2 after each accepted step.
-Workspace = namedtuple("Workspace", ["q", "Rj", "pj", "Z", "O", "Rg", "pg", "tg", "e", "ge",
-                                     "qn", "Rj2", "pj2", "Z2", "O2", "Rg2", "pg2", "tg2", "en", "ge2",
-                                     "qh", "Rj3", "pj3", "Z3", "O3", "Rg3", "pg3", "tg3", "eh", "ge3",
-                                     "x", "Jx", "J", "rv", "E", "W", "A", "Bm", "M", "L", "y", "rhs", "v", "dq",
-                                     "dfix", "held", "history"])
+#: One configuration's kinematics and errors: q (n,), the joint poses Rj (m, 3, 3), pj (m, 3), axes and origins Z, O
+#: (m, 3) (:func:`.tree_kinematics.tree_forward`), the goal frames' poses Rg (G, 3, 3), pg (G, 3) and positions seen
+#: from their targets tg (G, 3) (:func:`goal_error`'s t), the task error e (rows,), each goal's errors ge (G, 2).
+State = namedtuple("State", ["q", "Rj", "pj", "Z", "O", "Rg", "pg", "tg", "e", "ge"])
+#: The buffers of LM runs, reused from run to run: three :data:`State` (the current configuration, a step's
+#: candidate, the geodesic-acceleration probe) and scratch: x (m,), Jx (6, m), J (6, n), rv (3,), E, W (rows, n), A,
+#: Bm, M (3, 3), L (s, s) with s = min(rows, n), y (max(rows, n),), rhs (rows,), v, dq, dfix (n,), held (n,) bool and
+#: history (max_it + 1,), the |e|^2 after each accepted step.
+Workspace = namedtuple("Workspace", ["cur", "cand", "probe", "x", "Jx", "J", "rv", "E", "W", "A", "Bm", "M", "L", "y",
+                                     "rhs", "v", "dq", "dfix", "held", "history"])
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -461,9 +448,8 @@ def workspace_size(n, m, G, rows, max_it):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _carve_set(buf, o, n, m, G, rows):
-    """One configuration's kinematics buffers (q, Rj, pj, Z, O, Rg, pg, tg, e, ge) from buf at offset o, and the
-    offset after them."""
+def _carve_state(buf, o, n, m, G, rows):
+    """A :data:`State` from buf at offset o, and the offset after it."""
     q, o = buf[o:o + n], o + n
     Rj, o = buf[o:o + 9 * m].reshape((m, 3, 3)), o + 9 * m
     pj, o = buf[o:o + 3 * m].reshape((m, 3)), o + 3 * m
@@ -474,22 +460,18 @@ def _carve_set(buf, o, n, m, G, rows):
     tg, o = buf[o:o + 3 * G].reshape((G, 3)), o + 3 * G
     e, o = buf[o:o + rows], o + rows
     ge, o = buf[o:o + 2 * G].reshape((G, 2)), o + 2 * G
-    return q, Rj, pj, Z, O, Rg, pg, tg, e, ge, o
+    return State(q, Rj, pj, Z, O, Rg, pg, tg, e, ge), o
 
 
 @njit(cache=True, nogil=True, inline="always")
 def carve(buf, held, n, m, G, rows, max_it):
     """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
-    ``rows`` task rows, as views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,).
-
-    Inlined: in a reference-counting caller the views count references as usual; in a borrowing one they do not,
-    so a borrowing entry point that receives the two buffers passes two arrays, not some fifty (a reference-counting
-    caller brackets every array it passes with an atomic increment and decrement).
-    """
+    ``rows`` task rows: views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,). Inlined, so
+    a borrowing entry receives two buffers rather than some fifty reference-counted arrays."""
     s = min(rows, n)
-    q, Rj, pj, Z, O, Rg, pg, tg, e, ge, o = _carve_set(buf, 0, n, m, G, rows)
-    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2, o = _carve_set(buf, o, n, m, G, rows)
-    qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3, o = _carve_set(buf, o, n, m, G, rows)
+    cur, o = _carve_state(buf, 0, n, m, G, rows)
+    cand, o = _carve_state(buf, o, n, m, G, rows)
+    probe, o = _carve_state(buf, o, n, m, G, rows)
     x, o = buf[o:o + m], o + m
     Jx, o = buf[o:o + 6 * m].reshape((6, m)), o + 6 * m
     J, o = buf[o:o + 6 * n].reshape((6, n)), o + 6 * n
@@ -506,21 +488,15 @@ def carve(buf, held, n, m, G, rows, max_it):
     dq, o = buf[o:o + n], o + n
     dfix, o = buf[o:o + n], o + n
     history = buf[o:o + max(max_it, 0) + 1]
-    return Workspace(q, Rj, pj, Z, O, Rg, pg, tg, e, ge, qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2,
-                     qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3, x, Jx, J, rv, E, W, A, Bm, M, L, y, rhs, v, dq,
-                     dfix, held, history)
+    return Workspace(cur, cand, probe, x, Jx, J, rv, E, W, A, Bm, M, L, y, rhs, v, dq, dfix, held, history)
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def make_workspace(n, m, G, rows, max_it):
-    """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
-    ``rows`` task rows: views into one float buffer and the bool ``held`` (two allocations instead of some fifty).
-
-    One workspace serves any number of runs one after the other (a run writes each buffer before it reads it),
-    never two at a time: the entry points make one per call, so concurrent calls share nothing.
-    """
-    return carve(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), n, m, G, rows,
-                 max_it)
+def make_workspace(kin, goals, n, max_it):
+    """A fresh :data:`Workspace` for runs of at most max_it steps on the tree ``kin`` for n joints and the stack
+    ``goals``: views into two allocations. It serves any number of runs one after the other, never two at once."""
+    m, G, rows = kin[0].shape[0], goals[0].shape[0], stack_rows(goals[0])
+    return carve(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), n, m, G, rows, max_it)
 
 
 @njit(cache=True, nogil=True, forceinline=False)
@@ -547,7 +523,7 @@ def _outcome(spec, ge, g_out):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def _weighted(spec):
+def weighted_stack(spec):
     """Whether some goal of the stack spec (G, GOAL_SIZE) has a weight other than 1. A function rather than a flag
     set in a loop, which numba would type as the literal False and compile each callee once more for."""
     for g in range(spec.shape[0]):
@@ -557,43 +533,34 @@ def _weighted(spec):
 
 
 def _run(extra, name, doc):
-    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`, named ``name`` with docstring ``doc``: the run
-    with ``extra`` a constant of its closure (True: the stack may hold goals of any family; None: one-frame goals
-    only). With None numba prunes the other families' branches before typing them, so :func:`lm_run_basic` neither
-    compiles :mod:`.axes` and :mod:`.balance` nor pays for their branches in its loops. numba's disk cache keys
-    closures by their cells' contents, so the two are cached apart."""
+    """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: ``extra`` a constant of the closure (True: any
+    goal family; None: one-frame goals only, the other branches pruned by numba before typing, so neither compiled
+    nor paid for). numba's disk cache keys closures by their cells' contents, so the two are cached apart."""
 
-    def run(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-            params, q_out, g_out):
+    def run(ws, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
+        spec = goals[0]
         n = q_start.shape[0]
-        mimic = coupled(index, scale, offset, n)
-        weighted = _weighted(spec)
+        mimic = coupled(kin[4], kin[5], kin[6], n)
+        weighted = weighted_stack(spec)
         m = ws.E.shape[0]
         max_step = params[P_MAX_STEP]
         window = int(params[P_STALL_WINDOW])
         stall = params[P_STALL_RATIO] * params[P_STALL_RATIO]
         finish = params[P_FINISH] != 0.0
         max_it = int(params[P_ITERATIONS])
-        # the current configuration's buffers and the candidate's trade places when a step is accepted
-        q, Rj, pj, Z, O, Rg, pg, tg, e, ge = ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge
-        qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2,
-                                                        ws.en, ws.ge2)
-        qh, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, eh, ge3 = (ws.qh, ws.Rj3, ws.pj3, ws.Z3, ws.O3, ws.Rg3, ws.pg3, ws.tg3,
-                                                        ws.eh, ws.ge3)
-        x, Jx, J, rv, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.rv, ws.E, ws.W, ws.A, ws.Bm, ws.M
-        L, y, rhs, v, dq, dfix, held, history = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.dfix, ws.held, ws.history
+        cur, cand, probe = ws.cur, ws.cand, ws.probe  # cur and cand trade places when a step is accepted
+        E, v, dq, history = ws.E, ws.v, ws.dq, ws.history
 
-        into_box(q_start, box, any_wrap, q)
+        into_box(q_start, box, any_wrap, cur.q)
         on_bound = False
         for k in range(n):
-            if q[k] <= box[B_CLO, k] or q[k] >= box[B_CHI, k]:
+            if cur.q[k] <= box[B_CLO, k] or cur.q[k] >= box[B_CHI, k]:
                 on_bound = True
-        c = task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt,
-                       Rt, Rj, pj, Z, O, Rg, pg, tg, M, e, ge)
+        c = task_error(extra, kin, mimic, goals, weighted, pt, Rt, cur.q, cur, ws)
         evaluations = 1
-        if within(spec, ge):
-            _copy(q, q_out)
-            pos, rot = _outcome(spec, ge, g_out)
+        if within(spec, cur.ge):
+            _copy(cur.q, q_out)
+            pos, rot = _outcome(spec, cur.ge, g_out)
             return pos, rot, True, 0, evaluations, c
         lam = params[P_DAMPING]
         have_E = False
@@ -604,11 +571,11 @@ def _run(extra, name, doc):
         converged = False
         while it < max_it:
             it += 1
+            q, e, qn, qh = cur.q, cur.e, cand.q, probe.q
             if not have_E:
-                task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg,
-                              e, Jx, J, rv, A, Bm, E, parent, Rj, pj)
+                task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, cur, ws, E)
                 have_E = True
-            on_bound_n = lm_step(q, on_bound, E, e, lam, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
+            on_bound_n = lm_step(q, on_bound, e, lam, box, any_wrap, max_step, ws, qn)
             if creeping and not (on_bound or on_bound_n):
                 # geodesic acceleration (ReferenceLM._geodesic): r'' from one extra FK at q + h v
                 for k in range(n):
@@ -617,15 +584,15 @@ def _run(extra, name, doc):
                         d = (d + math.pi) % TWO_PI - math.pi
                     v[k] = d
                     qh[k] = q[k] + GEO_H * d
-                task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, qh, x, spec, weighted, gR, gp, gaux,
-                           pt, Rt, Rj3, pj3, Z3, O3, Rg3, pg3, tg3, M, eh, ge3)
+                task_error(extra, kin, mimic, goals, weighted, pt, Rt, qh, probe, ws)
                 evaluations += 1
+                rhs = ws.rhs
                 for i in range(m):
                     s = 0.0
                     for k in range(n):
                         s += E[i, k] * v[k]
-                    rhs[i] = (2.0 / GEO_H) * ((eh[i] - e[i]) / GEO_H - s)
-                if damped_solve(E, lam, rhs, L, y, dq):  # dq = -a
+                    rhs[i] = (2.0 / GEO_H) * ((probe.e[i] - e[i]) / GEO_H - s)
+                if damped_solve(E, lam, rhs, ws.L, ws.y, dq):  # dq = -a
                     a2 = 0.0
                     v2 = 0.0
                     for k in range(n):
@@ -635,23 +602,13 @@ def _run(extra, name, doc):
                         for k in range(n):
                             qh[k] = q[k] + v[k] - 0.5 * dq[k]
                         into_box(qh, box, any_wrap, qn)
-            cn = task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp,
-                            gaux, pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+            cn = task_error(extra, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
             evaluations += 1
             if cn < c:
                 creeping = GEO_SLOW * c < cn < GEO_NEAR
-                q, qn = qn, q
-                Rj, Rj2 = Rj2, Rj
-                pj, pj2 = pj2, pj
-                Z, Z2 = Z2, Z
-                O, O2 = O2, O
-                Rg, Rg2 = Rg2, Rg
-                pg, pg2 = pg2, pg
-                tg, tg2 = tg2, tg
-                e, en = en, e
-                ge, ge2 = ge2, ge
+                cur, cand = cand, cur
                 on_bound, c = on_bound_n, cn
-                if within(spec, ge):
+                if within(spec, cur.ge):
                     converged = True
                     break
                 have_E = False
@@ -666,19 +623,15 @@ def _run(extra, name, doc):
                     break
         if converged and finish and c > FINISHED:
             # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
-            task_jacobian(extra, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e,
-                          Jx, J, rv, A, Bm, E, parent, Rj, pj)
-            lm_step(q, False, E, e, LAMBDA_MIN, box, any_wrap, max_step, W, L, y, dq, dfix, rhs, held, qn)
-            cn = task_error(extra, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp,
-                            gaux, pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+            task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, cur, ws, E)
+            lm_step(cur.q, False, cur.e, LAMBDA_MIN, box, any_wrap, max_step, ws, cand.q)
+            cn = task_error(extra, kin, mimic, goals, weighted, pt, Rt, cand.q, cand, ws)
             it += 1
             evaluations += 1
             if cn < c:
-                q = qn
-                ge = ge2
-                c = cn
-        _copy(q, q_out)
-        pos, rot = _outcome(spec, ge, g_out)
+                cur, c = cand, cn
+        _copy(cur.q, q_out)
+        pos, rot = _outcome(spec, cur.ge, g_out)
         return pos, rot, converged, it, evaluations, c
 
     run.__name__ = run.__qualname__ = name
@@ -691,161 +644,117 @@ one-frame goals only (``G_FAMILY`` = ``FAMILY_FRAME``); the other arguments and 
 lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_basic` for any stack.""")
 
 
-@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def _record(stats, i, pos, rot, converged, it, evaluations, c):
-    """Row i of stats (the ``S_*`` columns) from one run's outcome."""
-    stats[i, S_POS], stats[i, S_ROT] = pos, rot
-    stats[i, S_CONVERGED] = 1.0 if converged else 0.0
-    stats[i, S_ITERATIONS], stats[i, S_EVALUATIONS] = it, evaluations
-    stats[i, S_COST] = c
-
-
-
-#: A variant's compiled entries: ``run`` (one run: :func:`lm_run` in the caller's buffers), ``starts``
-#: (:func:`lm_run_starts`'s) and ``pairs`` (:func:`lm_run_pairs`'s).
-Entries = namedtuple("Entries", ["run", "starts", "pairs"])
+#: A variant's compiled entries: ``run`` (one run, :func:`lm_run`'s, in the caller's buffers) and ``runs`` (runs
+#: from many starts, or of (start, targets) pairs: :func:`lm_runs`' in the caller's buffers).
+Entries = namedtuple("Entries", ["run", "runs"])
 
 
 def _entries(extra, suffix):
-    """The three compiled entries (:data:`Entries`) of one variant of the run (``extra``: :func:`_run`'s), each a
-    function of its own for numba's disk cache (``suffix`` names them apart). One variant per entry, picked in Python
-    (:func:`entries_for`), because numba re-optimizes every run an entry links: an entry linking both would compile
-    both. Every entry borrows its arrays (:data:`BORROWING`)."""
+    """The :data:`Entries` of one variant of the run (``extra``: :func:`_run`'s), named apart by ``suffix`` for
+    numba's disk cache: one variant per entry, picked in Python (:func:`entries_for`), since numba re-optimizes every
+    run an entry links."""
 
-    def run(buf, held, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-            gaux, pt, Rt, params, q_out, g_out):
-        ws = carve(buf, held, q_start.shape[0], parent.shape[0], spec.shape[0], stack_rows(spec),
+    def run(buf, held, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
+        spec = goals[0]
+        ws = carve(buf, held, q_start.shape[0], kin[0].shape[0], spec.shape[0], stack_rows(spec),
                    int(params[P_ITERATIONS]))
         if extra is not None:
-            return lm_run_all(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
-                              support, gaux, pt, Rt, params, q_out, g_out)
-        return lm_run_basic(ws, q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp,
-                            support, gaux, pt, Rt, params, q_out, g_out)
+            return lm_run_all(ws, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out)
+        return lm_run_basic(ws, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out)
 
-    def starts(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-               pt, Rt, params, Q_out, stats, g_stats):
-        ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+    def runs(buf, held, Q, kin, box, any_wrap, goals, P, Rts, params, Q_out, stats, g_stats, first):
+        spec = goals[0]
+        ws = carve(buf, held, Q.shape[1], kin[0].shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
+        last = P.shape[0] - 1
         for k in range(Q.shape[0]):
+            t = min(k, last)
             if extra is not None:
-                pos, rot, converged, it, evaluations, c = lm_run_all(
-                    ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                    pt, Rt, params, Q_out[k], g_stats[k])
+                pos, rot, converged, it, evaluations, c = lm_run_all(ws, Q[k], kin, box, any_wrap, goals, P[t],
+                                                                     Rts[t], params, Q_out[k], g_stats[k])
             else:
-                pos, rot, converged, it, evaluations, c = lm_run_basic(
-                    ws, Q[k], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                    pt, Rt, params, Q_out[k], g_stats[k])
-            _record(stats, k, pos, rot, converged, it, evaluations, c)
-            if converged:
+                pos, rot, converged, it, evaluations, c = lm_run_basic(ws, Q[k], kin, box, any_wrap, goals, P[t],
+                                                                       Rts[t], params, Q_out[k], g_stats[k])
+            stats[k, S_POS], stats[k, S_ROT], stats[k, S_COST] = pos, rot, c
+            stats[k, S_CONVERGED] = 1.0 if converged else 0.0
+            stats[k, S_ITERATIONS], stats[k, S_EVALUATIONS] = it, evaluations
+            if converged and first:
                 return k
         return -(1 + Q.shape[0])
 
-    def pairs(buf, held, Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-              P, Rts, params, Q_out, stats, g_stats):
-        ws = carve(buf, held, Q.shape[1], parent.shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
-        for i in range(Q.shape[0]):
-            if extra is not None:
-                pos, rot, converged, it, evaluations, c = lm_run_all(
-                    ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                    P[i], Rts[i], params, Q_out[i], g_stats[i])
-            else:
-                pos, rot, converged, it, evaluations, c = lm_run_basic(
-                    ws, Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                    P[i], Rts[i], params, Q_out[i], g_stats[i])
-            _record(stats, i, pos, rot, converged, it, evaluations, c)
-
-    named = ((run, "lm_run_buffers", """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`)
-        and held (n,) bool (see :func:`carve`); a caller making many runs one after the other keeps them (no
-        allocation per run)."""),
-             (starts, "lm_run_starts_buffers", """:func:`lm_run_starts` in the caller's buffers (as the ``run``
-        entry)."""),
-             (pairs, "lm_run_pairs_buffers", """:func:`lm_run_pairs` in the caller's buffers (as the ``run``
-        entry)."""))
-    compiled = []
-    for func, name, doc in named:
-        func.__name__ = func.__qualname__ = name + suffix
-        func.__doc__ = doc
-        compiled.append(njit(cache=True, nogil=True, forceinline=False, **BORROWING)(func))
-    return Entries(*compiled)
+    run.__name__ = run.__qualname__ = "lm_run_buffers" + suffix
+    runs.__name__ = runs.__qualname__ = "lm_runs_buffers" + suffix
+    run.__doc__ = """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`) and held (n,) bool
+        (:func:`carve`), which a caller making many runs keeps (no allocation per run)."""
+    runs.__doc__ = """:func:`lm_runs` in the caller's buffers (as the ``run`` entry)."""
+    return Entries(*(njit(cache=True, nogil=True, forceinline=False, **BORROWING)(f) for f in (run, runs)))
 
 
-#: The entries of the run for stacks of one-frame goals (:func:`lm_run_basic`) and for any stack
-#: (:func:`lm_run_all`); :func:`entries_for` picks one for a stack.
+#: The entries of the run for stacks of one-frame goals (:func:`lm_run_basic`) and for any stack (:func:`lm_run_all`).
 BASIC = _entries(None, "_basic")
 ALL = _entries(True, "")
-# each entry under a name of its own
-lm_run_buffers, lm_run_starts_buffers, lm_run_pairs_buffers = ALL
-lm_run_buffers_basic, lm_run_starts_buffers_basic, lm_run_pairs_buffers_basic = BASIC
-
-
-def has_later_kinds(spec: np.ndarray) -> bool:
-    """Whether the goal stack spec (G, GOAL_SIZE) holds a goal its kind declares of a compiled family beyond
-    :func:`goal_error`'s (pose, position, planar): :mod:`.axes`'s or :mod:`.balance`'s (its ``G_FAMILY`` column),
-    which only :func:`lm_run_all` runs."""
-    return bool((spec[:, G_FAMILY] != FAMILY_FRAME).any())
+lm_run_buffers_basic, lm_runs_buffers_basic = BASIC  # each entry under a name of its own
+lm_run_buffers, lm_runs_buffers = ALL
 
 
 def entries_for(spec: np.ndarray) -> Entries:
-    """The compiled entries that run the goal stack spec (G, GOAL_SIZE): :data:`BASIC` when it holds one-frame goals
-    only (the faster run), else :data:`ALL`."""
-    return ALL if has_later_kinds(spec) else BASIC
+    """The entries that run the goal stack spec (G, GOAL_SIZE): :data:`BASIC` when every goal's compiled family is
+    the frame family (pose, position, planar: the faster run), else :data:`ALL`."""
+    return ALL if bool((spec[:, G_FAMILY] != FAMILY_FRAME).any()) else BASIC
 
 
-def lm_run(q_start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-           params, q_out, g_out):
+def _buffers(n: int, kin: tuple, spec: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two buffers of a :data:`Workspace` for n joints and the tree, goal stack and step budget of a call."""
+    size = workspace_size(n, kin[0].shape[0], spec.shape[0], int(stack_rows(spec)), int(params[P_ITERATIONS]))
+    return np.empty(int(size)), np.empty(n, dtype=np.bool_)
+
+
+def lm_runs(Q, kin, box, any_wrap, goals, P, Rts, params, Q_out, stats, g_stats, first=False):
+    """LM runs from the starts Q (K, n), in one workspace made here: run k towards the targets P[k] (T, G, 3), Rts[k]
+    (T, G, 3, 3) (pairs: T = K, each row :func:`~evoik_pin.goals.stack.encode_targets` for one goal), or all towards
+    P[0], Rts[0] (T = 1); with ``first``, only until one converges. Each run's end configuration goes to Q_out[k],
+    its ``S_*`` columns (errors, converged, iterations, evaluations, cost) to stats[k] (K, STATS_SIZE), its goals'
+    errors to g_stats[k] (G, 2); rows of runs not made are left untouched. Returns the index of the run that stopped
+    them (``first``), else -(1 + K). The other arguments are :func:`lm_run`'s."""
+    return entries_for(goals[0]).runs(*_buffers(Q.shape[1], kin, goals[0], params), Q, kin, box, any_wrap, goals, P,
+                                      Rts, params, Q_out, stats, g_stats, first)
+
+
+def _grouped(args: tuple) -> tuple:
+    """The flat arguments of :func:`lm_run`'s signature from ``parent`` to ``gaux`` grouped (kin, box, any_wrap,
+    goals)."""
+    return tuple(args[:7]), args[7], args[8], tuple(args[9:14])
+
+
+def lm_run(q_start, *args):
     """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
     g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
 
-    Args:
+    Args (after q_start, flat):
         parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
-            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
+            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``; the entries' ``kin``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
-        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool: the goal stack
-            (:class:`~evoik_pin.goals.stack.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets
-            (:func:`~evoik_pin.goals.stack.encode_target`).
-        params (PARAMS_SIZE,): initial damping, max step, stall window, stall ratio, finish (0/1), max iterations
-            (:mod:`.layout`).
+        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool, gaux (G, A): the goal stack
+            (:class:`~evoik_pin.goals.stack.GoalStack`; the entries' ``goals``); pt (G, 3), Rt (G, 3, 3): its
+            targets (:func:`~evoik_pin.goals.stack.encode_target`).
+        params (PARAMS_SIZE,): the run's settings (:mod:`.layout`). q_out, g_out.
 
     Returns:
         (position error m, orientation error rad (nan when no goal has an orientation), converged, iterations,
-        forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals, as
-        :class:`.reference.ReferenceLM` counts them. A Python wrapper: the workspace made here, the entry of the
-        stack's variant called (:func:`entries_for`).
+        forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals.
     """
-    n = q_start.shape[0]
-    return entries_for(spec).run(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), q_start,
-                                 parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                                 pt, Rt, params, q_out, g_out)
+    kin, box, any_wrap, goals = _grouped(args)
+    return entries_for(goals[0]).run(*_buffers(q_start.shape[0], kin, goals[0], args[16]), q_start, kin, box,
+                                     any_wrap, goals, *args[14:])
 
 
-def _workspace_buffer(n: int, parent: np.ndarray, spec: np.ndarray, params: np.ndarray) -> np.ndarray:
-    """The float buffer of a :data:`Workspace` for n joints and the tree, goal stack and step budget of a call."""
-    return np.empty(int(workspace_size(n, parent.shape[0], spec.shape[0], int(stack_rows(spec)),
-                                       int(params[P_ITERATIONS]))))
+def lm_run_pairs(Q, *args):
+    """:func:`lm_runs` on N (start, targets) pairs, with :func:`lm_run`'s flat arguments: (Q, parent, ..., gaux, P,
+    Rts, params, Q_out, stats, g_stats)."""
+    lm_runs(Q, *_grouped(args), *args[14:])
 
 
-def lm_run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
-                 params, Q_out, stats, g_stats):
-    """:func:`lm_run` on N (start, targets) pairs: starts Q (N, n), targets P (N, G, 3) and Rts (N, G, 3, 3) (each
-    row the stack's targets, :func:`~evoik_pin.goals.stack.encode_targets` for one goal); end configurations to
-    Q_out (N, n), per pair the ``S_*`` columns (errors, converged, iterations, evaluations, cost) to the rows of stats
-    (N, STATS_SIZE) and each goal's errors to g_stats (N, G, 2). The runs share one workspace, made here (a Python
-    wrapper of the ``pairs`` entry of the stack's variant)."""
-    n = Q.shape[1]
-    entries_for(spec).pairs(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q, parent, FR,
-                            Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts, params,
-                            Q_out, stats, g_stats)
-
-
-def lm_run_starts(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt,
-                  params, Q_out, stats, g_stats):
-    """:func:`lm_run` from the starts Q (K, n) for one problem (targets pt (G, 3), Rt (G, 3, 3)), in order, until
-    one converges.
-
-    Each run's end configuration goes to Q_out[k], its ``S_*`` statistics to stats[k] and its goals' errors to
-    g_stats[k] (G, 2) (rows of starts not run are left untouched). Returns the index of the converged run, or
-    -(1 + the number of runs) when none converged (every start was run then). The runs share one workspace, made
-    here (a Python wrapper of the ``starts`` entry of the stack's variant)."""
-    n = Q.shape[1]
-    return entries_for(spec).starts(_workspace_buffer(n, parent, spec, params), np.empty(n, dtype=np.bool_), Q,
-                                    parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                                    gaux, pt, Rt, params, Q_out, stats, g_stats)
+def lm_run_starts(Q, *args):
+    """:func:`lm_runs` from the starts Q (K, n) for one problem until one converges, with :func:`lm_run`'s flat
+    arguments: (Q, parent, ..., gaux, pt, Rt, params, Q_out, stats, g_stats). Returns :func:`lm_runs`'."""
+    pt, Rt, *rest = args[14:]
+    return lm_runs(Q, *_grouped(args), pt[None], Rt[None], *rest, first=True)

@@ -1,15 +1,7 @@
-"""The LM iteration's constants and the memory layouts of its run settings, defined once.
-
-:mod:`.kernel` (numba) and :mod:`.reference` (the Python loop) both import from here; nothing here imports
-them, so there is no import circle. The goal model the kernel reads (kind codes, the goal stack and its ``G_*``
-columns, the targets' encoding, each kind's ``aux`` layout) is :mod:`evoik_pin.goals`' (:mod:`evoik_pin.goals.stack`).
-
-Kernel arguments built here:
-
-* ``params`` (PARAMS_SIZE,): the run's settings at the ``P_*`` indices (:func:`kernel_params`);
-* ``box`` (5, n): rows ``B_LO``, ``B_HI`` (the search box, rad or m), ``B_CLO``, ``B_CHI`` (the clip box:
-  +-inf on wrapping joints, which are never clipped) and ``B_WRAP`` (1.0 on wrapping joints)
-  (:func:`box_constants`).
+"""The LM iteration's constants and the layouts of the kernel's ``params`` (PARAMS_SIZE,) at the ``P_*`` indices
+(:func:`kernel_params`) and ``box`` (5, n) (:func:`box_constants`): rows ``B_LO``, ``B_HI`` (the search box, rad or
+m), ``B_CLO``, ``B_CHI`` (the clip box: +-inf on wrapping joints) and ``B_WRAP`` (1.0 on wrapping joints). Shared by
+:mod:`.kernel` and :mod:`.reference`; the goal layouts are :mod:`evoik_pin.goals.stack`'s.
 """
 
 from __future__ import annotations

@@ -1,23 +1,19 @@
 """Compiled descent along the goals' self-motion manifold (numba): ``prefer="nearest"`` and ``"manipulability"``.
 
-A redundant arm's answers to a goal stack (Panda on a pose: 7 joints, 6 rows) form curves (one per IK branch, cut by
-the joint limits); the answer nearest q0 or the most dexterous one is a continuous optimum along such a curve,
-which picking among a few discrete LM answers only approximates. :func:`descend_batch` takes each given answer
-(every goal met) to a local optimum of the criterion on its curve:
+A redundant arm's answers to a goal stack form curves (one per IK branch, cut by the joint limits); the answer
+nearest q0 or the most dexterous one is a continuous optimum along such a curve. :func:`descend_batch` takes each
+given answer (every goal met) to a local optimum of the criterion on its curve:
 
-1. the criterion's descent direction projected on the null space of the task Jacobian E (n,): for nearness
-   ``v = q0 - q`` (the negative gradient of ``|q - q0|^2 / 2``), for manipulability the gradient of Yoshikawa's
-   ``sqrt(det(J J^T))`` (the first goal frame's 6 x n LOCAL_WORLD_ALIGNED Jacobian) by forward differences;
-   ``p = v - E^T (E E^T)^-1 E v`` with joints on a bound that p pushes outward held (their column of E zeroed);
-2. a step ``t p`` (t = 1 first for nearness: the minimum of |q - q0|^2 on the tangent plane; a step of
-   ``MANIP_STEP`` rad first for manipulability), shortened to stay inside the box and within ``max_step``;
+1. the criterion's descent direction v (nearness: ``q0 - q``; manipulability: the gradient of Yoshikawa's
+   ``sqrt(det(J J^T))`` of the first goal frame's Jacobian, by forward differences) projected on the null space of
+   the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p pushes outward held;
+2. a step ``t p``, shortened to stay inside the box and within ``max_step``;
 3. Gauss-Newton steps from there until every goal is within its tolerances again (at most ``restore``);
-4. the step is kept only when step 3 met every goal and the criterion improved (then the next t is the secant
-   (Barzilai-Borwein) step of the last two directions); otherwise t halves. The descent ends when t is below 1e-3
-   of its start or a kept step was shorter than :data:`MIN_STEP`.
+4. the step kept only when step 3 met every goal and the criterion improved (then the next t is the
+   Barzilai-Borwein secant step), else t halves; the descent ends when t is below 1e-3 of its start or a kept
+   step was shorter than :data:`MIN_STEP`.
 
-So the criterion never gets worse and every kept configuration meets every goal (the kernel's own test,
-:func:`.kernel.within`). A step costs 1-5 kinematics evaluations (n more for manipulability's gradient).
+So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`).
 """
 
 from __future__ import annotations
@@ -27,9 +23,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ...goals.stack import G_WEIGHT
 from .chain import coupled
-from .kernel import _copy, damped_solve, make_workspace, stack_rows, task_error, task_jacobian, within
+from .kernel import _copy, damped_solve, make_workspace, task_error, task_jacobian, weighted_stack, within
 from .layout import B_CHI, B_CLO, LAMBDA_MIN
 from .tree_kinematics import frame_jacobian
 
@@ -42,9 +37,8 @@ MODE_NEAREST, MODE_MANIPULABILITY = 0, 1
 MANIP_STEP = 0.2
 #: Forward-difference step (rad or m) of the manipulability gradient.
 MANIP_H = 1e-6
-#: The secant (Barzilai-Borwein) step's range, times the first step's multiple t0: after a kept step, the next
-#: step's multiple is |s|^2 / s.(p_prev - p) (s the kept step, p the projected direction), which converges in a few
-#: steps where the fixed step t = 1 converges linearly (measured: 20 steps left 1e-5 rad to go).
+#: The secant step's range, times the first step's multiple t0: after a kept step s, the next multiple is
+#: |s|^2 / s.(p_prev - p) (p the projected direction).
 BB_RANGE = (0.01, 100.0)
 #: A kept step shorter than this (rad or m) ends the descent.
 MIN_STEP = 1e-9
@@ -53,20 +47,10 @@ ON_BOUND = 1e-12
 
 _KERNEL: dict = {}
 
-@njit(cache=True, nogil=True, forceinline=True)
-def _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv, A,
-              B, E, parent, Rj, pj):
-    """:func:`.kernel.task_jacobian` at the configuration whose buffers these are, compiled for every goal kind
-    (``extra``: the descent serves any goal list)."""
-    task_jacobian(True, rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J,
-                  rv, A, B, E, parent, Rj, pj)
-
-
 @njit(cache=True, nogil=True, forceinline=False)
 def _manipulability(rev, support, pg, Z, O, J, JJ):
-    """sqrt(det(J J^T)) of the first goal frame's base-frame (LOCAL_WORLD_ALIGNED) Jacobian J (6, n), from the
-    kinematics buffers :func:`.kernel.task_error` filled (pg its frame's position, Z, O the joint axes and origins);
-    0 at a singularity. JJ (6, 6) scratch. The Cholesky factor's diagonal gives the determinant."""
+    """sqrt(det(J J^T)) of the first goal frame's base-frame Jacobian J (6, n) from a :data:`.kernel.State`'s pg, Z,
+    O (0 at a singularity), by the Cholesky factor's diagonal. JJ (6, 6) scratch."""
     frame_jacobian(rev, support[0], pg[0], Z, O, J)
     n = J.shape[1]
     for i in range(6):
@@ -104,65 +88,54 @@ def _criterion(mode, q, q0, rev, support, pg, Z, O, J, JJ):
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def descend_batch(Q, q0, mode, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux,
-                  pt, Rt, iterations, restore, max_step, Q_out, f_out):
+def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, restore, max_step, Q_out, f_out):
     """Each answer Q[i] (N, n) taken along its self-motion manifold to a local optimum of the criterion (``mode``,
     see the module docstring) in at most ``iterations`` kept-or-rejected steps, each restored to the goals by at
     most ``restore`` Gauss-Newton steps; the result to Q_out[i] (Q[i] itself when no step was kept or Q[i] does not
     meet the goals) and its criterion to f_out[i] (|q - q0|^2 or -manipulability). ``max_step`` (rad or m): the
-    longest step. The other arguments are :func:`.kernel.lm_run`'s (one goal stack and its targets pt, Rt).
+    longest step. The other arguments are the kernel's (:func:`.kernel.lm_run_buffers`; no joint wraps here).
     Returns the kinematics evaluations made."""
     N, n = Q.shape
-    m, G = parent.shape[0], spec.shape[0]
-    ws = make_workspace(n, m, G, stack_rows(spec), 1)
+    ws = make_workspace(kin, goals, n, 1)
     JJ = np.empty((6, 6))
     p, q_prev, p_prev = np.empty(n), np.empty(n), np.empty(n)
     evaluations = 0
     for i in range(N):
-        evaluations += _descend(ws, JJ, p, q_prev, p_prev, Q[i], q0, mode, parent, FR, Fp, rev, index, scale, offset,
-                                box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, iterations, restore, max_step,
-                                Q_out[i], f_out, i)
+        evaluations += _descend(ws, JJ, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
+                                restore, max_step, Q_out[i], f_out, i)
     return evaluations
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, index, scale, offset, box, any_wrap,
-             spec, gR, gp, support, gaux, pt, Rt, iterations, restore, max_step, q_out, f_out, i):
+def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, Rt, iterations, restore, max_step,
+             q_out, f_out, i):
     """:func:`descend_batch` for one answer; returns its kinematics evaluations."""
     n = q_start.shape[0]
+    rev, spec, support = kin[3], goals[0], goals[3]
     mimic = False  # the manipulability's Jacobian is over the physical joints: mimic trees are not descended
-    weighted = False
-    for g in range(spec.shape[0]):
-        if spec[g, G_WEIGHT] != 1.0:
-            weighted = True
+    weighted = weighted_stack(spec)
     m = ws.E.shape[0]
-    # the kept configuration's kinematics buffers and the candidate's, traded when a step is kept
-    cur = (ws.q, ws.Rj, ws.pj, ws.Z, ws.O, ws.Rg, ws.pg, ws.tg, ws.e, ws.ge)
-    cand = (ws.qn, ws.Rj2, ws.pj2, ws.Z2, ws.O2, ws.Rg2, ws.pg2, ws.tg2, ws.en, ws.ge2)
-    q, Rj, pj, Z, O, Rg, pg, tg, e, ge = cur
-    qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = cand
-    x, Jx, J, rv, E, W, A, Bm, M = ws.x, ws.Jx, ws.J, ws.rv, ws.E, ws.W, ws.A, ws.Bm, ws.M
-    L, y, rhs, v, dq, held = ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.held
-    if coupled(index, scale, offset, n):  # left as it is (see above): a criterion of inf says so
+    cur, cand = ws.cur, ws.cand  # the kept configuration's State and the candidate's, traded when a step is kept
+    J, E, W, L, y, rhs, v, dq, held = ws.J, ws.E, ws.W, ws.L, ws.y, ws.rhs, ws.v, ws.dq, ws.held
+    if coupled(kin[4], kin[5], kin[6], n):  # left as it is (see above): a criterion of inf says so
         _copy(q_start, q_out)
         f_out[i] = np.inf
         return 0
+    q = cur.q
     _copy(q_start, q)
-    task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, q, x, spec, weighted, gR, gp, gaux, pt, Rt, Rj,
-               pj, Z, O, Rg, pg, tg, M, e, ge)
+    task_error(True, kin, mimic, goals, weighted, pt, Rt, q, cur, ws)
     evaluations = 1
-    f = _criterion(mode, q, q0, rev, support, pg, Z, O, J, JJ)
+    f = _criterion(mode, q, q0, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
     _copy(q, q_out)
     f_out[i] = f
-    if not within(spec, ge):
+    if not within(spec, cur.ge):
         return evaluations
     t0 = 1.0 if mode == MODE_NEAREST else -1.0  # -1: set from the first direction's length
     t = t0
     have_v = False
     have_prev = False  # q_prev, p_prev: the last kept step's start and its direction (the secant step's data)
     for _ in range(iterations):
-        q, Rj, pj, Z, O, Rg, pg, tg, e, ge = cur
-        qn, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, en, ge2 = cand
+        q, qn = cur.q, cand.q
         if not have_v:
             # the descent direction v at q, then the task Jacobian at q (the gradient's probes overwrite the
             # candidate's buffers only)
@@ -173,12 +146,10 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
                 for k in range(n):
                     _copy(q, qn)
                     qn[k] += MANIP_H
-                    task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp,
-                               gaux, pt, Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
-                    v[k] = (-_criterion(mode, qn, q0, rev, support, pg2, Z2, O2, J, JJ) + f) / MANIP_H
+                    task_error(True, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
+                    v[k] = (-_criterion(mode, qn, q0, rev, support, cand.pg, cand.Z, cand.O, J, JJ) + f) / MANIP_H
                 evaluations += n
-            _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg, pg, Z, O, tg, e, Jx, J, rv,
-                      A, Bm, E, parent, Rj, pj)
+            task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, cur, ws, E)
             # p: v projected on the null space of E, joints on a bound that p pushes outward held (twice: holding
             # one joint changes the others' motion)
             for k in range(n):
@@ -234,21 +205,19 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
         # Gauss-Newton back onto the goals
         met = False
         for _r in range(restore + 1):
-            task_error(True, parent, FR, Fp, rev, index, scale, offset, mimic, qn, x, spec, weighted, gR, gp, gaux, pt,
-                       Rt, Rj2, pj2, Z2, O2, Rg2, pg2, tg2, M, en, ge2)
+            task_error(True, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
             evaluations += 1
-            if within(spec, ge2):
+            if within(spec, cand.ge):
                 met = True
                 break
             if _r == restore:
                 break
-            _jacobian(rev, index, scale, mimic, spec, weighted, support, gaux, pt, Rt, Rg2, pg2, Z2, O2, tg2, en, Jx,
-                      J, rv, A, Bm, W, parent, Rj2, pj2)
-            if not damped_solve(W, LAMBDA_MIN, en, L, y, dq):
+            task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, cand, ws, W)
+            if not damped_solve(W, LAMBDA_MIN, cand.e, L, y, dq):
                 break
             for k in range(n):
                 qn[k] = min(max(qn[k] - dq[k], box[B_CLO, k]), box[B_CHI, k])
-        f_new = _criterion(mode, qn, q0, rev, support, pg2, Z2, O2, J, JJ) if met else np.inf
+        f_new = _criterion(mode, qn, q0, rev, support, cand.pg, cand.Z, cand.O, J, JJ) if met else np.inf
         if f_new < f - 1e-15 * max(1.0, abs(f)):
             _copy(q, q_prev)
             _copy(p, p_prev)
@@ -263,20 +232,18 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, parent, FR, Fp, rev, 
             t *= 0.5
             if t < 1e-3 * t0:
                 break
-    _copy(cur[0], q_out)
+    _copy(cur.q, q_out)
     f_out[i] = f
     return evaluations
 
 
-#: About how long (s, one core) compiling the null-space descent takes from an empty cache (its first use after an
-#: install, announced by :func:`.compiling.load`).
+#: About how long (s, one core) compiling the null-space descent takes from an empty cache (:func:`.compiling.load`).
 NULLSPACE_COMPILE_SECONDS = 25.0
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian whose null space
-    :func:`evoik_pin.solvers.search.choose.refine` steps in), compiled (or loaded from numba's disk cache) on a
-    one-joint robot, outside any time budget."""
+    """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian of
+    :func:`evoik_pin.solvers.search.choose.refine`), loaded (or compiled) outside any time budget."""
     if not _KERNEL:
         from .compiling import load
         from .engine import warmup_problem
@@ -284,8 +251,8 @@ def nullspace_kernel() -> dict:
 
         tree, box, goals, pt, Rt = warmup_problem()
         load("the null-space descent of prefer= and preferences", [
-            (descend_batch, (np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, *tree, box, False, *goals, pt, Rt, 1, 1,
-                             0.5, np.empty((1, 1)), np.empty(1))),
+            (descend_batch, (np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, tree, box, False, goals, pt, Rt, 1, 1, 0.5,
+                             np.empty((1, 1)), np.empty(1))),
             (task_rows, (np.zeros(1), *tree, *goals, pt, Rt, np.empty(6), np.empty((6, 1)), np.empty((1, 2))))],
              NULLSPACE_COMPILE_SECONDS)
         _KERNEL.update(descend_batch=descend_batch, task_rows=task_rows)

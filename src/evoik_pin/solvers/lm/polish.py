@@ -1,10 +1,5 @@
-"""``polish=True``: any solver's answer taken to machine precision by the LM engine.
-
-:func:`polish_result` runs one Levenberg-Marquardt run (:class:`~evoik_pin.solvers.lm.LevenbergMarquardt`) from
-a result's configuration and keeps it when it lowers the error. :func:`evoik_pin.solve` calls it for every
-method given ``polish=True`` (the paper solvers' DE, ISADE, PSO, GA ... answers, typically 1e-3 to 1e-5 m,
-become 1e-12).
-"""
+"""``polish=True`` of every method (:func:`evoik_pin.solve`): any solver's answer taken to machine precision by one
+LM run, kept when it lowers the error."""
 
 from __future__ import annotations
 
@@ -25,13 +20,9 @@ POLISH_ITERATIONS = 100
 
 def polish_result(problem: IKProblem, result: Result, rng: np.random.Generator | None = None,
                   iterations: int = POLISH_ITERATIONS, engine: str = "compiled") -> Result:
-    """``result`` with its configuration polished by Levenberg-Marquardt (the ``polish=True`` of every method).
-
-    LM runs from ``result.q`` for at most ``iterations`` steps on the problem's task error; the polished
-    configuration replaces ``result.q`` only when its error (position + orientation, m + rad) is lower.
-    The history is kept; ``evaluations`` and ``time_s`` grow by the polish's; the message says what the
-    polish did. ``engine``: ``"compiled"`` or ``"python"`` (:mod:`evoik_pin.solvers.lm`). ``rng`` is accepted for
-    the uniform hook signature; the polish draws no random numbers.
+    """``result`` with its configuration replaced by one LM run's from ``result.q`` (at most ``iterations`` steps)
+    when that lowers its error (m + rad); ``evaluations``, ``time_s`` and the message grow by the polish's.
+    ``engine``: ``"compiled"`` or ``"python"``. ``rng``: the hooks' uniform signature (no random numbers drawn).
     """
     t0 = time.perf_counter()
     iterations = check_int("iterations", iterations, 1)

@@ -1,7 +1,5 @@
-"""The reference Levenberg-Marquardt loop: :mod:`.engine`'s iteration in Python over Pinocchio, step for step what
-:mod:`.kernel` compiles (tests/test_lm.py holds the two to the same steps from the same starts); ``engine="python"``.
-Kinematics come from the robot layer, the error's logarithm and its Jacobian from Pinocchio (``pin.log6``,
-``pin.Jlog6``)."""
+"""The reference Levenberg-Marquardt loop (``engine="python"``): :mod:`.engine`'s iteration in Python over Pinocchio
+(``pin.log6``, ``pin.Jlog6``), step for step what :mod:`.kernel` compiles (tests/test_lm.py holds the two equal)."""
 
 from __future__ import annotations
 
@@ -151,8 +149,7 @@ class ReferenceLM:
         return self.goals[0].residual(T)
 
     def task_jacobian(self, q: np.ndarray, extras) -> np.ndarray:
-        """``E = de/dq`` (rows, n) at ``q``; ``extras`` is what :meth:`error_at` returned for the same q (for a
-        single goal on the tip, also its one extra, as :meth:`residual` returns it)."""
+        """``E = de/dq`` (rows, n) at ``q``; ``extras``: :meth:`error_at`'s (or :meth:`residual`'s one) for that q."""
         if self._tip:
             extra = extras[0] if isinstance(extras, (tuple, list)) else extras
             return self.goals[0].jacobian(self.robot.jacobian_local_unchecked(q), extra)
@@ -191,12 +188,10 @@ class ReferenceLM:
               lam: float) -> tuple[np.ndarray, bool]:
         """The next configuration and whether it rests on a bound: damped step, trust region, joint limits.
 
-        ``N`` is :meth:`_normal` of ``E``. Limits are an active set: joints resting on a bound (``on_bound`` says
-        whether any does) that the descent direction ``-E^T e`` pushes further out are held there, their columns
-        of E zeroed, so the free joints take the whole task error; if the step still carries joints past a bound,
-        those are fixed at the bound they hit and the step is re-solved once for the others (with the task error
-        the fixed joints' moves leave), so it keeps its effect instead of being cut by the clip. Wrapping joints
-        are never clipped: they are shifted by 2 pi back into their range.
+        ``N`` is :meth:`_normal` of ``E``. Limits are an active set: joints on a bound (``on_bound``: any is) that
+        ``-E^T e`` pushes further out are held there (their columns of E zeroed); joints the step still carries past
+        a bound are fixed at it and the step re-solved once for the others, with the error those moves leave, so it
+        keeps its effect instead of being cut by the clip. Wrapping joints are shifted by 2 pi instead.
         """
         lo, hi = self.clip_lo, self.clip_hi
         held = None
@@ -231,12 +226,7 @@ class ReferenceLM:
         return qc, bool(clipped)
 
     def run(self, q: np.ndarray, max_iterations: int, deadline: float | None = None) -> LMOutcome:
-        """Iterate from ``q`` (n,) (clipped / wrapped into the box first) for at most ``max_iterations`` steps.
-
-        Stops as soon as every goal meets its tolerances, when the damping saturates, on a stall or at
-        ``deadline`` (a ``time.perf_counter()`` value, checked before every step). Returns the last accepted
-        configuration (the best met).
-        """
+        """:meth:`.engine.LevenbergMarquardt.run`, ``deadline`` checked before every step."""
         q = self._into_box(np.asarray(q, dtype=float))
         on_bound = np.count_nonzero((q <= self.clip_lo) | (q >= self.clip_hi)) > 0
         error_at = self.error_at
@@ -300,15 +290,10 @@ class ReferenceLM:
         return d
 
     def _geodesic(self, e, E, N, lam, v, eh):
-        """Geodesic acceleration (Transtrum & Sethna 2012) ``a`` (n,) of the step ``v`` (n,) taken from a
-        configuration with task error ``e`` (rows,), Jacobian ``E`` (rows, n), its normal matrix ``N``
-        (:meth:`_normal`) and damping ``lam``, given the error ``eh`` (rows,) at ``q + h v``; None when
-        ``|a| > GEO_ALPHA |v| / 2`` (the second-order model is not trusted).
-
-        The second directional derivative ``r'' = 2/h ((e(q + h v) - e) / h - E v)`` costs one FK; the
-        acceleration ``a = -(E^T E + lam I)^-1 E^T r''`` bends the step ``v + a / 2`` along the valley's
-        curvature, so a run creeping along a narrow curved valley (a near-singular target, where the linear
-        model holds only for short steps) takes steps several times longer.
+        """Geodesic acceleration (Transtrum & Sethna 2012) ``a = -(E^T E + lam I)^-1 E^T r''`` (n,) of the step v
+        (n,) from a configuration with error e, Jacobian E, its normal matrix N and damping lam, given the error eh
+        at ``q + h v``: ``r'' = 2/h ((eh - e) / h - E v)``; the step ``v + a / 2`` bends along a narrow curved valley
+        (a near-singular target). None when ``|a| > GEO_ALPHA |v| / 2``.
         """
         h = GEO_H
         rpp = (2.0 / h) * ((eh - e) / h - E.dot(v))
@@ -325,10 +310,8 @@ class ReferenceLM:
         return q
 
     def _finish(self, q, e, extras, errors, c, it, evaluations) -> LMOutcome:
-        """One more step once the tolerances are met: at quadratic convergence it takes the error from
-        about the tolerance to about 1e-12 or below for the price of one iteration (kept only if better)."""
+        """One more, (almost) undamped step once the tolerances are met (kept only if better)."""
         E = self.task_jacobian(q, extras)
-        # (almost) undamped: any damping left would cap the gain at lambda / (sigma^2 + lambda) per step
         qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
         en, _, errors_n = self.error_at(qn)
         cn = en.dot(en)

@@ -47,9 +47,8 @@ class LMOutcome:
 
 @dataclass
 class PairsOutcome:
-    """End state of LM runs on N (start, target) pairs: configurations (N, n), position errors (N,) m,
-    orientation errors (N,) rad or None (targets without orientation), converged (N,) bool and
-    forward-kinematics evaluations (N,) per pair; for goal stacks (several goals per pair) the errors are the
+    """End state of LM runs on N (start, target) pairs: configurations (N, n), position errors (N,) m, orientation
+    errors (N,) rad or None, converged (N,) bool and kinematics evaluations (N,); for goal stacks the errors are the
     largest over the goals and ``goal_errors`` (N, G, 2) gives each goal's (position m, orientation rad or NaN)."""
 
     q: np.ndarray

@@ -1,14 +1,9 @@
 """The folded kinematic tree evaluated in numba: joint poses, axes and origins, frame poses and frame Jacobians.
 
-The robot layer exports the tree as constants (``Robot.tree_constants``, :mod:`evoik_pin.robot.tree`): the m
-physical joints in topological order with their parents, each joint's placement in its parent's folded frame
-(every joint axis turned onto z), and frames as (joint, folded placement) pairs (``Robot.frame_constants``).
-Joint values x follow the joint vector q (n,) through the coupling of :mod:`.chain` (:func:`.chain.expand`,
-:func:`.chain.fold`). For a serial chain (``parent[k] = k - 1``) these functions do the floating-point operations
-of :func:`.chain.forward` and :func:`.chain.jacobian`, in the same order, so their results are identical bit for
-bit (tests/test_robot_tree.py compares them on every bundled arm); tests check them against Pinocchio on the
-example-robot-data trees, on random URDF trees, with mimic joints and with a floating base. All three are inlined
-into the kernel (``forceinline=True``; :mod:`.kernel` says why).
+The tree comes from ``Robot.tree_constants`` (:mod:`evoik_pin.robot.tree`): the m physical joints in topological
+order with their parents, each joint's placement in its parent's folded frame (every joint axis turned onto z).
+On a serial chain these do :mod:`.chain`'s operations in the same order (tests/test_robot_tree.py holds them equal
+bit for bit, and to Pinocchio). Inlined into the kernel (``forceinline=True``; :mod:`.kernel` says why).
 """
 
 from __future__ import annotations
@@ -21,9 +16,8 @@ __all__ = ["BORROWING", "frame_jacobian", "frame_pose", "joint_column", "tree_fo
 
 
 def _borrowing_options() -> dict:
-    """``{"_nrt": False}`` where this numba has that option (every release since 0.60 does; it is numba's own, not
-    a documented one), else ``{}``: the kernel then counts references as usual, with the same results, about a
-    fifth slower."""
+    """``{"_nrt": False}`` where this numba has that (undocumented) option, else ``{}``: the kernel then counts
+    references as usual, with the same results, about a fifth slower."""
     try:
         from numba.core.cpu import CPUTargetOptions
     except ImportError:
@@ -40,12 +34,8 @@ def tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O):
     """Joint poses at the physical joint values x (m,): Rj (m, 3, 3), pj (m, 3) (m) the pose of each joint's folded
     frame after its motion, Z (m, 3) and O (m, 3) each joint's axis and origin, all in the base frame (written in
     place). ``(R_k, p_k) = (R_parent, p_parent) (FR[k], Fp[k]) Z(x_k)``; a root joint (parent -1) starts from
-    (FR[k], Fp[k]).
-
-    The pose being composed lives in local variables (registers) from one joint to the next and is read back from
-    Rj, pj only where the tree branches (a joint whose parent is not the joint before it): a chain's recursion
-    costs what the serial chain's does.
-    """
+    (FR[k], Fp[k]). The pose being composed stays in local variables, read back from Rj, pj only where the tree
+    branches."""
     m = x.shape[0]
     r00 = r01 = r02 = r10 = r11 = r12 = r20 = r21 = r22 = p0 = p1 = p2 = 0.0
     for k in range(m):

@@ -650,9 +650,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         pt, Rt = lm._pt, lm._Rt
         P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)  # writable: layout.owned says why
         Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
-        lm._kernel["lm_run_pairs"](owned(Q, float), *lm._args[:-2], P, Rts,
-                                   kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats,
-                                   np.empty((N, pt.shape[0], 2)))
+        lm._kernel["lm_runs"](owned(Q, float), *lm._args[:-2], P, Rts, kernel_params(COLLECT_ITERATIONS or iterations),
+                              Q_out, stats, np.empty((N, pt.shape[0], 2)))
         runs += N
         evaluations += int(stats[:, S_EVALUATIONS].sum())
         ok = stats[:, S_CONVERGED] != 0.0

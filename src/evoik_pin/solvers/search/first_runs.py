@@ -1,28 +1,12 @@
-"""memetic's guaranteed LM runs for one target (or a goal list of one goal on one frame), or for a goal list of
-several goals, in one compiled call (numba): q0's nearness, the seed table's ranking (and a goal list's composed
-starts) and the runs, in the order :func:`~evoik_pin.solvers.search.memetic._solve` makes them.
-
-A single-target solve that one of its first runs solves (nearly every one: the run from the table's nearest entry
-or a near q0 converges) spent most of its time in Python around those runs: q0's tip pose from Pinocchio and its
-nearness, the ranking's dispatches, an engine call and an outcome object per run (about 10-20 us). Here they are
-one call. The runs are those memetic makes whatever the clock says (``guaranteed``: q0's and the
-``GUARANTEED_TABLE_RUNS`` nearest entries'), so the clock plays no part; when none of them converges, memetic
-solves the problem its own way from the start (the same runs again, then the clock-checked rest), and the answer
-is its own.
-
-The decisions are memetic's: q0 first when its tip pose is within the table's typical gap of the target, or nearer
-than the nearest entry; then the nearest entry, q0 (when it went second), the next entries. q0's tip pose comes from
-the kernel's kinematics and its distances are summed in the features' order, where memetic used Pinocchio and BLAS:
-the numbers can differ in their last bits, so a decision can only differ when q0 is within a few ulps of the gap or
-of the entry's distance (and the ranking only where two entries' distances are, :mod:`.nearest`):
-tests/test_first_runs.py holds the answers equal over thousands of targets.
-
-:func:`goal_first_runs` does the same for a goal list of several goals (a whole robot: both soles and both wrists
-of a humanoid), whose starts (:meth:`~.seed_table.SeedTable.goal_starts`: a start composed goal by goal, the next
-entry by the goals' summed nearness, alternately) took more Python than their runs: the ranking, each goal's
-nearest entries, the floating base's view of the goals and the composition are here compiled helpers that
-goal_starts calls too (:mod:`.nearest`), so both make the same starts from the same numbers and memetic's answers
-are those of its runs made one by one (tests/test_goal_first_runs.py).
+"""memetic's guaranteed LM runs in one compiled call (numba): for one target (or one goal on one frame),
+:func:`first_runs`: q0's nearness, the seed table's ranking and the runs; for a goal list of several goals,
+:func:`goal_first_runs`: the ranking, the starts composed goal by goal (:meth:`~.seed_table.SeedTable.goal_starts`,
+through the same compiled helpers of :mod:`.nearest`) and the runs. Both make the runs
+:func:`~evoik_pin.solvers.search.memetic._solve` makes whatever the clock says, in its order and with its decisions
+(q0 first when its tip pose is within the table's typical gap of the target, or nearer than the nearest entry);
+when none converges memetic goes on its own way. q0's tip pose comes from the kernel's kinematics and the distances
+are summed in the features' order, so a decision can differ from memetic's only within a few ulps:
+tests/test_first_runs.py and tests/test_goal_first_runs.py hold the answers equal.
 """
 
 from __future__ import annotations
@@ -41,55 +25,48 @@ __all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "STAGE_Q0", "STAGE
 
 #: Which start solved the problem (first_runs's first return value; -1: none did).
 STAGE_Q0, STAGE_TABLE = 0, 1
-#: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``, SeedTable.goal_starts's cases):
-#: a fixed base (the targets as they are), a floating base set by a goal (the targets seen from that base), a
-#: floating base each composed start takes from its table entry (the targets seen from that entry's base).
+#: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``): as they are (a fixed base), from
+#: a floating base a goal sets, or from each composed start's table entry's base.
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
 
 
 #: first_runs' docstring (both variants').
-_DOC = """Up to ``has_q0 + table_runs`` LM runs (the kernel's, :func:`~..lm.kernel.lm_run_buffers`) from q0 and the
-    nearest table entries, stopping at the first that converges.
+_DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table entries, stopping at the first that
+    converges.
 
     Args:
         buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``). lower, upper (n,): the
-            search box (q0's tip pose is taken at q0 clipped into it). gap: the table's typical squared gap
-            (``SeedTable.typical_gap_sq``). Q (size, n): the table's configurations; F (size, D) their features
-            (the goal frame's position, then its rotation's 9 entries: D = 12; position alone: D = 3; rotation
-            alone: D = 9), FT (D, size) the same transposed, sq (size,) their squared norms (the ranking:
-            :func:`~.nearest.table_distances`). sp, sr: the features' scales of a position (1 for a single target,
-            sqrt(weight) for a goal) and of a rotation's entries (the table's rotation weight (m), times
-            sqrt(weight) for a goal). oriented: whether the engine counts the orientation error (``lm.oriented``:
-            a run's error is position + orientation error, else position error).
-            table_runs: the entries run at most (>= 1).
-        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`), one goal on one frame (the
-            tip's for a single target).
-        q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's
-            position error + orientation error (m + rad), in order. best_q (n,), best (6,): when none converges,
-            the run memetic keeps as its best (the first of the lowest errors): its configuration, and its position
-            error, orientation error, weighted |e|^2, iterations, evaluations and index among the runs (best: (6,)).
+            search box (q0's tip pose is taken at q0 clipped into it). gap: the table's typical squared gap. Q
+            (size, n): the table's configurations; F (size, D) their features (position, then the rotation's 9
+            entries: D = 12, 3 or 9), FT (D, size) transposed, sq (size,) their squared norms
+            (:func:`~.nearest.table_distances`). sp, sr: the features' scales of a position and of a rotation's
+            entries (:meth:`~.seed_table.SeedTable.one_goal_features`). oriented: a run's error is position +
+            orientation error (else position error). table_runs: the entries run at most (>= 1).
+        kin ... params: the kernel's arguments (:func:`~..lm.kernel.lm_run_buffers`), one goal on one frame.
+        q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's error
+            (m + rad). best_q (n,), best (6,): when none converges, memetic's best run (the first of the lowest
+            errors): its configuration; its position error, orientation error, weighted |e|^2, iterations,
+            evaluations and index.
 
     Returns:
-        (STAGE_Q0 or STAGE_TABLE: the start that converged, or -1; runs made; their forward-kinematics evaluations
-        summed; the converged (or last) run's position error m, orientation error rad (nan for a position),
-        weighted |e|^2).
+        (STAGE_Q0, STAGE_TABLE or -1: the start that converged; runs made; their evaluations; the converged (or last)
+        run's position error m, orientation error rad (nan for a position), weighted |e|^2).
     """
 
 
 def _first_runs(extra, name):
-    """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s: None
-    for stacks of the first four kinds, True for any), a constant of the closure whose branch numba prunes before
-    typing: each variant calls (and links) the one entry of its run, as the kernel's entries do."""
+    """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s), a
+    constant of the closure: each variant links the one entry of its run."""
 
-    def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, parent, FR, Fp,
-             rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out,
-             errors, best_q, best):  # pragma: no cover - compiled
+    def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap,
+             goals, pt, Rt, params, q_out, g_out, errors, best_q, best):  # pragma: no cover - compiled
+        parent, FR, Fp, rev, index, scale, offset = kin
+        spec, gR, gp = goals[0], goals[1], goals[2]
         n = q0.shape[0]
         D = F.shape[1]
         has_position = D != 9
         ro = 3 if has_position else 0  # where the rotation's entries start (D > 3: they are features)
-        # the target's features (SeedTable.one_target_features, .one_goal_features: sp x its position, then sr x its
-        # rotation's entries; the products NumPy makes, so the same numbers)
+        # the target's features, the products SeedTable.one_goal_features makes
         f = np.empty(D)
         if has_position:
             for j in range(3):
@@ -99,8 +76,7 @@ def _first_runs(extra, name):
                 f[ro + j] = sr * Rt[0, j // 3, j % 3]
         d = np.empty(F.shape[0])
         table_distances(FT, sq, f, d)
-        # the nearest entries, nearest first, in one pass over the distances (the nearest alone, which q0's decision
-        # reads, is the first of them: select_k's order, argmin's); select_few directly, the few runs' insertions
+        # the nearest entries, nearest first (select_k's order), in one pass over the distances
         out = np.empty(max(table_runs, 1), dtype=np.int64)
         ranked = select_few(d, np.zeros(0, dtype=np.bool_), table_runs, out)
         q0_first = has_q0
@@ -157,13 +133,11 @@ def _first_runs(extra, name):
             row = order[s]
             start = q0 if row < 0 else Q[row]
             if extra is not None:
-                pos, rot, converged, it, ev, cost = lm_run_buffers(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, kin, box, any_wrap, goals, pt, Rt,
+                                                                   params, q_out, g_out)
             else:
-                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(buf, held, start, kin, box, any_wrap, goals,
+                                                                         pt, Rt, params, q_out, g_out)
             error = pos + (rot if oriented else 0.0)
             errors[s] = error
             evaluations += ev
@@ -180,44 +154,28 @@ def _first_runs(extra, name):
     return njit(cache=True, nogil=True, forceinline=False)(runs)
 
 
-#: memetic's first runs for stacks of the first four kinds (the kernel's ``lm_run_basic``) and for any stack
-#: (``lm_run_all``): :meth:`.memetic.MemeticPlan.first_runs` picks the one of its engine's kernel.
+#: memetic's first runs per variant of the kernel's run (``lm_run_basic``, ``lm_run_all``).
 first_runs_basic = _first_runs(None, "first_runs_basic")
 first_runs = _first_runs(True, "first_runs")
 
 
-_GOAL_DOC = """memetic's guaranteed LM runs for a goal list of several goals (or goals beyond one frame) in one call:
-    q0's
-    run, then up to ``table_runs`` of :meth:`~.seed_table.SeedTable.goal_starts`' starts in its order (a start
-    composed goal by goal, the next table entry by the goals' summed nearness, alternately), stopping at the first
-    run that converges. The ranking, the composition and the runs are those of memetic's runs one by one, on the
-    same numbers (goal_starts uses the same compiled helpers: :func:`~.nearest.rank_goal_entries`,
-    :func:`~.nearest.seen_from`, :func:`~.nearest.nearest_per_goal`), so the answers are the same.
+_GOAL_DOC = """q0's LM run, then up to ``table_runs`` of :meth:`~.seed_table.SeedTable.goal_starts`' starts in its
+    order (a start composed goal by goal, the next table entry by the goals' summed nearness, alternately), stopping
+    at the first run that converges.
 
     Args:
         buf, held: the kernel's workspace. q0 (n,): the start given (run first when ``has_q0``). Q (N, n): the
-            table's configurations. FT (D, N), sq (N,) float32: the goal list's table features transposed and their
-            squared norms (:meth:`~.seed_table.SeedTable.ranked_goals`' metric). PT (E, N), psq (G, N) float32, pstart
-            (G + 1,): each goal's features of its frame's pose relative to the root link, stacked
-            (:meth:`~.seed_table.SeedTable.goal_layout`).
-            gscale, gpos, gori (G,): sqrt of each goal's weight, whether it has a position, an orientation
-            (SeedTable.goal_spec). weight: the table's rotation weight (m). wpt (G, 3), wRt (G, 3, 3): the goals'
-            targets as the table ranks them (:func:`~.seed_table.seed_targets`), in the world.
-            idx, idx_start (G + 1,): the entries of q each goal's chain sets in a composed start, goal g's
-            ``idx[idx_start[g]:idx_start[g + 1]]``. base (6,), base_mode: BASE_FIXED, BASE_FROM_GOAL (``base``: the
-            floating base every start takes) or BASE_EACH_ENTRY. allowed: (N,) bool or (0,) for every entry.
-            oriented: whether the engine counts orientation errors (``lm.oriented``: a run's error is position +
-            orientation error, else position error). table_runs: the starts run at most after q0's.
-        parent ... Rt, params: the kernel's arguments (:func:`~..lm.kernel.lm_run`) for the goal list.
-        q_out (n,), g_out (G, 2): the converged (or last) run's configuration and each goal's errors. errors
-            (>= runs,): each run's position + orientation error (m + rad, the largest over the goals). best_q (n,),
-            best (6,), best_g (G, 2): when none converges, the run memetic keeps as its best (the first of the
-            lowest weighted |e|^2, LMOutcome.rank for several goals): its configuration; its position error,
-            orientation error, weighted |e|^2, iterations, evaluations and index among the runs; its goals' errors.
+            table's configurations. FT, sq, PT, psq, pstart, gscale, gpos, gori, idx, idx_start: the goal list's
+            table layout (:meth:`~.seed_table.SeedTable.goal_layout`). weight: the table's rotation weight (m). wpt
+            (G, 3), wRt (G, 3, 3): the goals' targets as the table ranks them (:func:`~.seed_table.seed_targets`).
+            base (6,), base_mode: BASE_FIXED, BASE_FROM_GOAL (``base``: every start's floating base) or
+            BASE_EACH_ENTRY. allowed: (N,) bool or (0,) for every entry. oriented, table_runs: as first_runs'.
+        kin ... params: the kernel's arguments (:func:`~..lm.kernel.lm_run_buffers`) for the goal list.
+        q_out (n,), g_out (G, 2), errors, best_q, best: as first_runs', the best by the lowest weighted |e|^2
+            (LMOutcome.rank for several goals); best_g (G, 2): its goals' errors.
 
     Returns:
-        (STAGE_Q0 or STAGE_TABLE: the start that converged, or -1; runs made; their forward-kinematics evaluations
-        summed; the converged (or last) run's position error m, orientation error rad, weighted |e|^2).
+        first_runs'.
     """
 
 
@@ -225,9 +183,8 @@ def _goal_first_runs(extra, name):
     """:func:`goal_first_runs` compiled for one variant of the kernel's run (as :func:`_first_runs`)."""
 
     def runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, gpos, gori, weight, wpt, wRt, idx,
-             idx_start, base, base_mode, allowed, oriented, table_runs, parent, FR, Fp, rev, index, scale, offset, box,
-             any_wrap, spec, gR, gp, support, gaux, pt, Rt, params, q_out, g_out, errors, best_q, best,
-             best_g):  # pragma: no cover - compiled
+             idx_start, base, base_mode, allowed, oriented, table_runs, kin, box, any_wrap, goals, pt, Rt, params,
+             q_out, g_out, errors, best_q, best, best_g):  # pragma: no cover - compiled
         N, n = Q.shape
         G = wpt.shape[0]
         composed = (table_runs + 1) // 2  # starts 2j (composed j) and 2j + 1 (entry j) read the j-th ranked entry
@@ -267,13 +224,11 @@ def _goal_first_runs(extra, name):
                             i = idx[a]
                             start[i] = Q[e, i]
             if extra is not None:
-                pos, rot, converged, it, ev, cost = lm_run_buffers(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, kin, box, any_wrap, goals, pt, Rt,
+                                                                   params, q_out, g_out)
             else:
-                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(
-                    buf, held, start, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support,
-                    gaux, pt, Rt, params, q_out, g_out)
+                pos, rot, converged, it, ev, cost = lm_run_buffers_basic(buf, held, start, kin, box, any_wrap, goals,
+                                                                         pt, Rt, params, q_out, g_out)
             errors[s] = pos + (rot if oriented else 0.0)
             evaluations += ev
             if converged:
@@ -289,7 +244,6 @@ def _goal_first_runs(extra, name):
     return njit(cache=True, nogil=True, forceinline=False)(runs)
 
 
-#: memetic's first runs for goal lists of several goals, per variant of the kernel's run (as first_runs_basic and
-#: first_runs).
+#: memetic's first runs for goal lists of several goals, per variant of the kernel's run.
 goal_first_runs_basic = _goal_first_runs(None, "goal_first_runs_basic")
 goal_first_runs = _goal_first_runs(True, "goal_first_runs")
