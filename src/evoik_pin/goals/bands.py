@@ -21,13 +21,14 @@ has no frame of its own); an orientation's three are the rotation vector's. The 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import OptionError
 from ..lie import log3
 from .registry import BANDED_LOG6, BANDED_POINT
 
-__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_band",
-           "parse_free", "parse_pose_axes", "tolerance_text"]
+__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_axes",
+           "parse_band", "parse_free", "pose_text"]
 
 #: The ``aux`` row of a goal with bands or free axes (read by the compiled ``solvers/lm/axes.py``): AUX_INNER (6,)
 #: the residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
@@ -81,28 +82,33 @@ def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | Non
     return band
 
 
-def parse_pose_axes(tolerance, rotation_tolerance, free, where: str) -> tuple[np.ndarray | None, tuple[str, ...]]:
-    """(band (6,) or None, free axes) of a pose-like goal (:class:`Pose`, :class:`RelativePose`): ``tolerance`` one
-    number (None: a norm tolerance, checked by the goal) or 6 half-widths (:func:`parse_band`; the free axes' set to
-    inf), ``free`` the names of :data:`AXES` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or
-    free axis, a ``rotation_tolerance`` beside 6 half-widths, or all six axes free."""
-    band = parse_band(tolerance, AXES, where)
-    free = parse_free(free, AXES, where)
+def parse_axes(tolerance, rotation_tolerance, free, axes: tuple[str, ...], where: str
+               ) -> tuple[np.ndarray | None, tuple[str, ...]]:
+    """(band or None, free axes) of a goal whose error components are ``axes``: ``tolerance`` one number (None: a
+    norm tolerance, checked by the goal) or one half-width per axis (:func:`parse_band`; the free axes' set to inf),
+    ``free`` names among ``axes`` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or free axis,
+    a ``rotation_tolerance`` beside half-widths, or every axis free."""
+    band = parse_band(tolerance, axes, where)
+    free = parse_free(free, axes, where)
     if band is not None and rotation_tolerance is not None:
         raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
                           "already holds the rotation's half-widths (rx ry rz, rad)")
-    if len(free) == len(AXES):
-        raise OptionError(f"{where}: free names all six axes, which leaves nothing to meet; drop the goal")
+    if len(free) == len(axes):
+        raise OptionError(f"{where}: free names all {({3: 'three'}).get(len(axes), 'six')} axes, which leaves "
+                          "nothing to meet; drop the goal")
     if band is not None:
-        band = np.where(np.isin(AXES, free), np.inf, band)
+        band = np.where(np.isin(axes, free), np.inf, band)
     return band, free
 
 
-def tolerance_text(goal) -> str:
-    """How a pose-like goal's repr shows its tolerances and free axes (its ``band``, ``free``, tolerances)."""
-    tol = (f"tolerance={goal.tolerance:g}, rotation_tolerance={goal.rotation_tolerance:g}" if goal.band is None
-           else f"tolerance={goal.band.tolist()}")
-    return tol + (f", free={' '.join(goal.free)!r}" if goal.free else "")
+def pose_text(goal) -> str:
+    """How a pose-like goal's repr shows its target, weight, tolerances and free axes."""
+    T = goal.target
+    rpy = np.round(pin.rpy.matrixToRpy(T.rotation), 6).tolist()
+    text = f"position={np.round(T.translation, 6).tolist()}, rpy={rpy}, weight={goal.weight:g}, "
+    text += (f"tolerance={goal.tolerance:g}, rotation_tolerance={goal.rotation_tolerance:g}" if goal.band is None
+             else f"tolerance={goal.band.tolist()}")
+    return text + (f", free={' '.join(goal.free)!r}" if goal.free else "")
 
 
 def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:

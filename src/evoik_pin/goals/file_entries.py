@@ -19,7 +19,7 @@ from ..target import Target
 from .goal import DEFAULT_GOAL_TOLERANCE
 
 __all__ = ["FIELD_READERS", "FileKind", "axis_entry", "field_entries", "matrix_text", "name_entry", "number", "numbers",
-           "orientation_target", "pair_goal", "pointing", "pose_target", "position_target", "position_text",
+           "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",
            "unknown_keys", "vector_target"]
 
 #: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
@@ -191,24 +191,36 @@ def field_entries(goal, fields: tuple[str, ...]) -> dict:
                 entry[key] = " ".join(goal.free)
         elif key == "axis":
             entry[key] = [float(v) + 0.0 for v in goal.axis]
+        elif key == "expressed_in":
+            if goal.expressed_in != "a":
+                entry[key] = goal.expressed_in
         elif getattr(goal, key) != defaults[key]:
             entry[key] = float(getattr(goal, key))
     return entry
 
 
-def pair_goal(cls, entry: dict, what: str, name: str, fields: tuple[str, ...], read_target: Callable) -> object:
-    """A two-frame ``kind: <name>`` entry (:class:`RelativePose`, :class:`RelativePosition`): ``frame_a``, ``frame``
-    (frame b) and a ``target`` (read by ``read_target``), with the optional ``fields``; ``cls(frame_a, frame,
-    target, **fields)``."""
-    unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
-    for key in ("frame_a", "frame", "target"):
-        if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
-                                 "frame's placement relative to frame_a)")
-    if not isinstance(entry["target"], dict):
-        raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
-    options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
-    try:
-        return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
-    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+def pair_kind(cls, name: str, read_target: Callable, write_target: Callable) -> FileKind:
+    """The ``kind: <name>`` of a two-frame goal class (:class:`RelativePose`, :class:`RelativePosition`):
+    ``frame_a``, ``frame`` (frame b) and a ``target`` (read by ``read_target``, written by ``write_target``), with
+    the optional ``cls.FILE_FIELDS``; read as ``cls(frame_a, frame, target, **fields)``."""
+    fields = cls.FILE_FIELDS
+
+    def read(entry: dict, what: str):
+        unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
+        for key in ("frame_a", "frame", "target"):
+            if key not in entry:
+                raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
+                                     "frame's placement relative to frame_a)")
+        if not isinstance(entry["target"], dict):
+            raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
+        options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
+        try:
+            return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
+        except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
+            raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+
+    def write(goal) -> dict:
+        return ({"frame_a": goal.frame_a, "frame": goal.frame, "kind": name, "target": write_target(goal)}
+                | field_entries(goal, fields))
+
+    return FileKind(name, cls, (), read_target, write_target, read=read, write=write)
