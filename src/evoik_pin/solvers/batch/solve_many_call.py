@@ -1,15 +1,6 @@
-"""Batch solving: many independent IK targets in one call (:func:`solve_many`), on every core or a Ray cluster.
-
-The top of the batch package: it checks the call's arguments (backend, workers, ``q0``), reads the targets
-(:class:`~.targets.TargetSource`), hands them to an engine below it, and wraps the engine's arrays
-(:class:`~.batch_results.BatchOutcome`) as what :func:`evoik_pin.solve_many` returns
-(:class:`~.batch_results.BatchResults`):
-
-* ``backend="local"``: :class:`~.threads.BatchSolver` on ``workers`` threads of this process (:mod:`.threads`
-  explains the batched rounds, the chunks and the per-target generators);
-* ``backend="ray"``: :class:`~.ray_actors.RayBatch`, chunks handed to Ray actors that each run a
-  :class:`~.threads.BatchSolver` (:mod:`.ray_actors`).
-"""
+""":func:`solve_many`, the top of the batch package: the call's checks, the engine (``backend="local"``:
+:class:`~.threads.BatchSolver` on threads; ``"ray"``: :class:`~.ray_actors.RayBatch`) and its answers as
+:class:`~.batch_results.BatchResults`."""
 
 from __future__ import annotations
 
@@ -45,35 +36,15 @@ def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
     return Q0
 
 
-def _check_backend(backend) -> str:
-    return check_choice("backend", backend, BACKENDS)
-
-
 def solve_many(robot, targets, make_problem: Callable, run: Callable, method: str, seed=None, q0=None,
                workers=None, backend: str = "local", address: str | None = None, progress: bool = False,
                choose: Callable | None = None, prefer: str | None = None, locked: dict | None = None,
                **options) -> BatchResults:
-    """Solve many independent IK targets (see the module docstring); called by :func:`evoik_pin.solve_many`.
-
-    Args:
-        robot: a loaded :class:`~evoik_pin.robot.Robot`.
-        targets: anything :meth:`Target.coerce_many` accepts (a sequence of targets, or (N, 4, 4) poses), or a
-            sequence of goal lists (:mod:`.goal_lists`).
-        make_problem, run: the API's problem builder and solver runner (``api.make_problem``, ``api._run``).
-        method: solver name. seed: int, None or Generator (:func:`root_entropy`).
-        q0: None, one (n,) start for every target, or (N, n) starts.
-        workers: threads (local) or actors (ray); None: every core (local) or every CPU of the cluster (ray).
-        backend: "local" or "ray". address: a Ray cluster's address (ray only; default ``RAY_ADDRESS``).
-        progress: a tqdm bar over chunks.
-        choose, prefer: see :class:`~.threads.BatchSolver` (``prefer`` checked by the caller; None: the first
-            answer).
-        locked: ``{joint: value}`` (rad or m): the call solved on ``robot.locked(locked)``
-            (:func:`~evoik_pin.robot.locking.locked_robot`), ``q0`` and ``bounds`` given and the answers' ``q``
-            returned in ``robot``'s layout, the locked joints at their values.
-        **options: as for :func:`evoik_pin.solve`.
-    """
+    """Solve many independent IK problems; the engine of :func:`evoik_pin.solve_many`, whose docstring gives the
+    arguments. ``make_problem``, ``run``, ``choose``: see :class:`~.threads.BatchSolver`. ``locked``: solved on
+    :func:`~evoik_pin.robot.locking.locked_robot`, ``q0``, ``bounds`` and answers in ``robot``'s layout."""
     t_start = time.perf_counter()
-    backend = _check_backend(backend)
+    backend = check_choice("backend", backend, BACKENDS)
     if backend == "local" and address is not None:
         raise OptionError("address names a Ray cluster: give it with backend='ray'")
     workers = None if workers is None and backend == "ray" else check_workers(workers)
