@@ -11,7 +11,7 @@ import pinocchio as pin
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
 from ..io.datafile import Flow
-from .file_entries import FileKind, number, position_target, unknown_keys
+from .file_entries import FileKind, field_entries, number, position_target, unknown_keys
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
 from .goal import number as goal_number
 from .registry import COM_POINT, COM_SUPPORT, FAMILY_BEYOND_FRAME, KindCode
@@ -68,10 +68,7 @@ class CenterOfMass(Goal):
             raise TargetError("CenterOfMass takes a point (point=p, a 3-vector in m) or a support polygon "
                               "(support={frame: points} or support=[frames]), exactly one of the two")
         kind = KIND_COM if support is None else KIND_COM_SUPPORT
-        for name, value in (("frame", None), ("weight", weight), ("tolerance", tolerance),
-                            ("rotation_tolerance", None), ("kind", kind), ("has_orientation", False)):
-            object.__setattr__(self, name, value)
-        self._check_numbers("the centre-of-mass goal")
+        self._init_common(None, weight, tolerance, None, kind, False, "the centre-of-mass goal")
         if support is None:
             object.__setattr__(self, "point", point3(point, "CenterOfMass's point"))
             object.__setattr__(self, "axes", _axes(axes))
@@ -100,9 +97,8 @@ class CenterOfMass(Goal):
         return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout
-        above). Raises TargetError for a robot without mass, FrameError for an
-        unknown support frame or one without collision geometry."""
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout above). Raises
+        TargetError for a robot without mass, FrameError for an unknown support frame or one without geometry."""
         mc = robot.mass_constants
         if not mc.total > 0.0:
             raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "
@@ -212,12 +208,9 @@ def _support(support) -> dict:
 
 
 def contact_points(robot, frame: str) -> np.ndarray:
-    """(4, 3) contact points (m, in ``frame``) from the collision geometry of the rigid body ``frame`` is on: the
-    four corners of the lowest face (least z in the frame) of the box, aligned with the frame's axes, that bounds
-    every collision geometry on the frame's joint (each geometry's own bounding box, ``coal``'s ``aabb_local``,
-    through its placement). A sole frame (z up, on the foot) gets the corners of the foot's bottom.
-
-    Raises FrameError when the frame's joint carries no collision geometry."""
+    """(4, 3) contact points (m, in ``frame``): the four corners of the lowest face (least z in the frame) of the box,
+    aligned with the frame's axes, that bounds every collision geometry on the frame's joint (a sole frame, z up:
+    the foot's bottom). Raises FrameError when the frame's joint carries no collision geometry."""
     known = _CONTACTS.setdefault(robot, {})
     if frame not in known:  # every solve binds its goals and reports their errors: read the geometry once
         known[frame] = _geometry_contacts(robot, frame)
@@ -229,7 +222,6 @@ _CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _geometry_contacts(robot, frame: str) -> np.ndarray:
-    """:func:`contact_points`, uncached."""
     model = robot.model
     f = model.frames[robot.frame_id(frame)]
     geom = robot.collision_model
@@ -414,7 +406,4 @@ def _file_entry(goal: CenterOfMass) -> dict:
                             if given else list(goal.support))
         if goal.margin:
             entry["margin"] = float(goal.margin)
-    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE)):
-        if getattr(goal, key) != default:
-            entry[key] = float(getattr(goal, key))
-    return entry
+    return entry | field_entries(goal, ("weight", "tolerance"))

@@ -74,14 +74,29 @@ class Goal:
     #: leaves their target position out). A class attribute, not a field.
     has_position = True
 
-    def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool) -> None:
-        """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__)."""
-        for name, value in (("frame", frame), ("weight", weight), ("tolerance", tolerance),
-                            ("rotation_tolerance", rotation_tolerance), ("kind", kind), ("has_orientation", oriented)):
+    def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool,
+                     what: str | None = None) -> None:
+        """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__): weight
+        > 0, tolerances >= 0 (None: the default; ``rotation_tolerance`` None: ``tolerance``), a frame name unless
+        ``what`` names a goal without one in the messages."""
+        for name, value in (("frame", frame), ("kind", kind), ("has_orientation", oriented)):
             object.__setattr__(self, name, value)
-        if not isinstance(self.frame, str) or not self.frame:
-            raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {self.frame!r}")
-        self._check_numbers(f"the goal on {self.frame!r}")
+        if what is None:
+            if not isinstance(frame, str) or not frame:
+                raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {frame!r}")
+            what = f"the goal on {frame!r}"
+        weight_ = number(weight, f"weight of {what}", "a finite number > 0")
+        if weight_ <= 0:
+            raise OptionError(f"weight of {what} must be > 0, got {weight!r}")
+        tol = DEFAULT_GOAL_TOLERANCE if tolerance is None else number(
+            tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
+        rtol = tol if rotation_tolerance is None else number(
+            rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
+        if tol < 0 or rtol < 0:
+            raise OptionError(f"tolerances of {what} must be >= 0, got {tolerance!r} m and {rotation_tolerance!r} rad")
+        object.__setattr__(self, "weight", weight_)
+        object.__setattr__(self, "tolerance", tol)
+        object.__setattr__(self, "rotation_tolerance", rtol)
 
     def _init_axes(self, frame, weight, tolerance, rotation_tolerance, free, axes: tuple[str, ...],
                    kinds: tuple[int | None, int], where: str) -> None:
@@ -98,22 +113,6 @@ class Goal:
         object.__setattr__(self, "band", band)
         object.__setattr__(self, "free", free)
         self._set_aux(None if plain else band_aux(band, free, axes, DEFAULT_GOAL_TOLERANCE))
-
-    def _check_numbers(self, what: str) -> None:
-        """Check and set weight and tolerances (None: the default); ``what`` names the goal in the messages."""
-        weight = number(self.weight, f"weight of {what}", "a finite number > 0")
-        if weight <= 0:
-            raise OptionError(f"weight of {what} must be > 0, got {self.weight!r}")
-        tol = DEFAULT_GOAL_TOLERANCE if self.tolerance is None else number(
-            self.tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
-        rtol = tol if self.rotation_tolerance is None else number(
-            self.rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
-        if tol < 0 or rtol < 0:
-            raise OptionError(f"tolerances of {what} must be >= 0, got {self.tolerance!r} m and "
-                              f"{self.rotation_tolerance!r} rad")
-        object.__setattr__(self, "weight", weight)
-        object.__setattr__(self, "tolerance", tol)
-        object.__setattr__(self, "rotation_tolerance", rtol)
 
     @property
     def label(self) -> str:
