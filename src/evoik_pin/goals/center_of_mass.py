@@ -350,27 +350,15 @@ def polygon_distance(point, points, margin: float = 0.0) -> float:
 
 
 def _half_planes(P: np.ndarray):
-    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2) (Andrew's monotone chain,
-    counter-clockwise): n.x <= o inside, n unit; (None, None) for points that span no area."""
-    pts = sorted({(float(x), float(y)) for x, y in P})
-    if len(pts) < 3:
-        return None, None
+    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2): n.x <= o inside, n unit outward;
+    (None, None) for points that span no area."""
+    from scipy.spatial import ConvexHull, QhullError
 
-    def chain(points):
-        out: list = []
-        for p in points:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
-                out.pop()
-            out.append(p)
-        return out[:-1]
-
-    hull = np.array(chain(pts) + chain(pts[::-1]))
-    if len(hull) < 3:
+    try:
+        eq = ConvexHull(P).equations
+    except (QhullError, ValueError):
         return None, None
-    d = np.roll(hull, -1, axis=0) - hull
-    n = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]  # outward: right of each edge
-    return n, (n * hull).sum(axis=1)
+    return eq[:, :2], -eq[:, 2]
 
 
 def _file_goal(entry: dict, what: str) -> CenterOfMass:

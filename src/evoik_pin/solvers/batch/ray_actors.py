@@ -330,9 +330,3 @@ class RayBatch:
             for r in out.singles.values():
                 r.distance_source = functools.partial(self._scene.distance, r.q.copy())
         return out
-
-    def __enter__(self) -> RayBatch:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        pass  # the pool's actors stay for the next call
