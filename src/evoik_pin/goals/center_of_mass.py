@@ -35,18 +35,15 @@ _AXES = "xyz"
 
 @dataclass(frozen=True, eq=False, repr=False)
 class CenterOfMass(Goal):
-    """The robot's centre of mass (every body its joints carry; masses from the URDF's inertias) at a point, or
-    its ground projection inside a support polygon. Exactly one of:
+    """The robot's centre of mass (masses from the URDF's inertias) at a point, or its ground projection inside a
+    support polygon. Exactly one of:
 
-    * ``point``: a 3-vector (m, the robot's base frame; the world with a floating base); the CoM meets it on
-      ``axes`` (any of "x", "y", "z", default "xyz": ``axes="xy"`` puts the CoM above the point). Met when the
-      distance over those axes is within ``tolerance`` (m).
-    * ``support``: ``{frame: points}`` with points a (k, 3) array (m) in that frame (the corners of a sole, the
-      tips of a quadruped's feet), or a list of frames whose contact points come from their collision geometry
-      (:func:`contact_points`). The CoM's ground (x, y) projection lies inside the convex hull of every contact
-      point's ground projection, at least ``margin`` (m, >= 0) inside each edge. The contact points move with their
-      frames. Met when the projection is inside (the solver aims ``tolerance`` further in, so an answer is inside
-      the margin, not merely within ``tolerance`` of it); its error is the distance (m) outside, 0 inside.
+    * ``point``: a 3-vector (m, base frame), met on ``axes`` (any of "x", "y", "z", default "xyz": ``axes="xy"``
+      puts the CoM above the point) when the distance over them is within ``tolerance`` (m).
+    * ``support``: ``{frame: points}`` (a (k, 3) array, m, in that frame: the corners of a sole), or a list of
+      frames whose contact points come from their collision geometry (:func:`contact_points`). The CoM's ground
+      (x, y) projection lies inside the convex hull of the contact points', at least ``margin`` (m, >= 0) inside each
+      edge (the solver aims ``tolerance`` further in); its error is the distance (m) outside, 0 inside.
 
     Args (all by keyword): point, axes, support, margin, then ``weight`` (> 0, default 1) and ``tolerance`` (m,
     default 1e-6).
@@ -135,8 +132,7 @@ class CenterOfMass(Goal):
         return (self.margin, *((f, None if p is None else p.tobytes()) for f, p in self.support.items()))
 
     def robot_errors(self, robot, q) -> tuple[float, None]:
-        """(error m, None) at ``q`` (n,), from Pinocchio's ``centerOfMass``: the distance over ``axes`` to the
-        point, or the distance outside the support polygon shrunk by ``margin`` (0 inside)."""
+        """(error m, None) at ``q`` (n,), from Pinocchio's ``centerOfMass``."""
         c = com_of(robot, q)
         if self.support is None:
             mask = np.array([a in self.axes for a in _AXES])
@@ -144,9 +140,8 @@ class CenterOfMass(Goal):
         return polygon_distance(c[:2], _world_points(robot, q, self.support), self.margin), None
 
     def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
-        """(errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation): the distance
-        over ``axes`` to the point; for a support polygon the largest violation of the margin-shrunk hull's edge
-        half-planes (0 exactly inside; at most the distance outside)."""
+        """(errors (N,) m, zeros (N,)) of a population Q (N, n); for a support polygon the largest violation of the
+        margin-shrunk hull's edge half-planes (0 exactly inside; at most the distance outside)."""
         c = com_batch(robot, Q)
         if self.support is None:
             mask = np.array([a in self.axes for a in _AXES])
@@ -177,32 +172,27 @@ def _axes(axes) -> str:
 
 def _support(support) -> dict:
     """{frame: (k, 3) points or None (from the collision geometry)} of a support argument, checked."""
-    if isinstance(support, dict):
-        items = list(support.items())
-    elif isinstance(support, (list, tuple)):
-        items = [(f, None) for f in support]
-    else:
+    if isinstance(support, (list, tuple)):
+        support = dict.fromkeys(support)
+    if not isinstance(support, dict):
         raise TargetError(f"CenterOfMass's support is {{frame: points (k x 3, m)}} or a list of frames, got "
                           f"{type(support).__name__}")
-    if not items:
+    if not support:
         raise TargetError("CenterOfMass's support names no frame: give {frame: points (k x 3, m)} or [frames]")
     out = {}
-    for frame, pts in items:
+    for frame, pts in support.items():
         if not isinstance(frame, str) or not frame:
             raise FrameError(f"CenterOfMass's support frames are frame names (strings), got {frame!r}")
         if pts is not None:
             try:
-                a = np.asarray(pts, dtype=float)
+                a = np.array(pts, dtype=float)
             except (TypeError, ValueError):
-                raise TargetError(f"support points of {frame!r} are a k x 3 array (m), got {pts!r}") from None
-            if a.ndim == 1 and a.size == 3:
-                a = a[None]
-            if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0:
-                raise TargetError(f"support points of {frame!r} are a k x 3 array (m) with k >= 1, got shape "
-                                  f"{a.shape}")
-            if not np.isfinite(a).all():
-                raise TargetError(f"support points of {frame!r} contain NaN or inf")
-            pts = a.copy()
+                a = np.zeros((0, 0))
+            a = a[None] if a.shape == (3,) else a
+            if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0 or not np.isfinite(a).all():
+                raise TargetError(f"support points of {frame!r} are a k x 3 array (m) of finite numbers with k >= 1, "
+                                  f"got {pts!r}")
+            pts = a
         out[frame] = pts
     return out
 
@@ -326,8 +316,8 @@ def _hull_violation(c: np.ndarray, ground: np.ndarray, margin: float) -> np.ndar
 
 def polygon_distance(point, points, margin: float = 0.0) -> float:
     """Distance (m) from ``point`` (2,) to the convex hull of ``points`` (K, >= 2) (their x, y) shrunk by
-    ``margin`` (m): 0 inside; inf when the shrunk hull is empty (a polygon narrower than 2 x margin) or the points
-    span no area. Exact: the nearest of the feet on the shrunk edges' lines and of their crossings that lie in it."""
+    ``margin`` (m): 0 inside; inf when the shrunk hull is empty or the points span no area."""
+    # exact: the nearest of the feet on the shrunk edges' lines and of their crossings that lie in it
     P = np.asarray(points, dtype=float)[:, :2]
     normals, offsets = _half_planes(P)
     if normals is None:
