@@ -31,7 +31,6 @@ from ...goals.preferences import holds_preferences, split_preferences
 from ...goals.stack import G_WEIGHT, GoalArrays, TargetArrays
 from ...objectives import default_cost
 from ...problem import Target, coerce_scene
-from ...result import Result
 from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
@@ -247,32 +246,27 @@ class BatchSolver:
         while left:
             self._singles(*left.popleft(), offset, singles)
 
-    def _singles(self, a: int, targets: dict[int, Target], q0, out: BatchOutcome, offset: int,
+    def _singles(self, a: int, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int,
                  singles: Callable | None) -> None:
-        """The one-by-one solves of the chunk starting at ``a`` (see :meth:`pipeline`)."""
-        self._one_by_one(targets, q0, out, offset + a)
-        if singles is not None:
-            singles(a, out)
-
-    def _one_by_one(self, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int) -> None:
-        """The problems ``{row: target}`` of a chunk the batched rounds left (all of them for other methods), one by
-        one with each target's own generator."""
+        """The problems ``{row: target}`` of the chunk starting at ``a`` that the batched rounds left (all of them for
+        other methods), one by one with each target's own generator; then ``singles(a, out)``."""
         # memetic skips the table entries the rounds tried; a goal list's starts alternate composed and ranked
         # entries (SeedTable.goal_starts), so its fallback starts from the first composed one (offset 0)
-        offset_of = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
+        skip = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
         for i, target in targets.items():
-            extra = {"table_offset": 0} if self.batched and is_goal_list(target) else offset_of
-            out.set_single(i, self._one(target, None if Q0 is None else Q0[i], offset + i, extra))
-
-    def _one(self, target: Target, q0, index: int, extra: dict) -> Result:
-        if self.choose is not None:  # evoik_pin.solve's pipeline (an IKSolver kept per thread)
-            if self.prefer is not None or holds_preferences(target):  # answers collected anew: no table offset
-                extra = {}
-            return self.choose(self.robot, target, self.method, target_generator(self.entropy, index),
-                               prefer=self.prefer, **{**self.options, **extra, "q0": q0})
-        problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
-        solver_options.update(extra)
-        return self.run(problem, self.method, target_generator(self.entropy, index), solver_options)
+            extra = {"table_offset": 0} if self.batched and is_goal_list(target) else skip
+            q0, rng = None if Q0 is None else Q0[i], target_generator(self.entropy, offset + a + i)
+            if self.choose is not None:  # evoik_pin.solve's pipeline (an IKSolver kept per thread)
+                if self.prefer is not None or holds_preferences(target):  # answers collected anew: no table offset
+                    extra = {}
+                r = self.choose(self.robot, target, self.method, rng, prefer=self.prefer,
+                                **{**self.options, **extra, "q0": q0})
+            else:
+                problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
+                r = self.run(problem, self.method, rng, {**solver_options, **extra})
+            out.set_single(i, r)
+        if singles is not None:
+            singles(a, out)
 
     def _chunk_rounds(self, block: GoalBlock, Q0) -> BatchOutcome:
         """The batched rounds of one chunk (each goal stack apart): an outcome whose unsolved rows are
@@ -282,7 +276,8 @@ class BatchSolver:
             return out
         t = self.template
         for rows, arrays in block.groups:
-            key = (block.tip, self._tree_key(arrays))
+            stack = arrays.stack  # a k-d tree serves a stack's frames, kinds and weights
+            key = (block.tip, stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes())
             if self.table is not None and key not in self._trees:
                 with self._lock:  # the k-d tree of this stack is built once, not by every thread
                     if key not in self._trees:
@@ -302,12 +297,6 @@ class BatchSolver:
         out.success[solved] = True
         out.collision_checked = t.scene is not None
         return out
-
-    @staticmethod
-    def _tree_key(arrays: GoalArrays):
-        """What a k-d tree of the table serves: a goal stack's frames, kinds and weights."""
-        stack = arrays.stack
-        return stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes()
 
     def _rounds(self, arrays: GoalArrays, rows: np.ndarray, Q0, out: BatchOutcome, tree: GoalTree | None) -> None:
         """The batched rounds of the problems ``arrays`` (of one goal stack), written into ``out``'s rows ``rows``;
