@@ -100,11 +100,9 @@ class Goal:
 
     def _init_axes(self, frame, weight, tolerance, rotation_tolerance, free, axes: tuple[str, ...],
                    kinds: tuple[int | None, int], where: str) -> None:
-        """Set and check the fields of a goal with bands and free axes on the error components ``axes`` (a slice
-        of :data:`.bands.AXES`): those of :meth:`_init_common`, ``band`` and ``free`` (:func:`.bands.parse_axes`;
-        ``where`` names the goal) and its aux row. ``kinds``: its code under a norm tolerance with no free axis (None:
-        the kind always reads its aux row), and its code with bands or free axes, whose errors under bands are their
-        excess over them (tolerances 0)."""
+        """:meth:`_init_common` for a goal with bands and free axes on the error components ``axes``, with its
+        ``band``, ``free`` (:func:`.bands.parse_axes`; ``where`` names the goal) and aux row. ``kinds``: its code under
+        a norm tolerance with no free axis (None: it always reads its aux row), and with bands or free axes."""
         band, free = parse_axes(tolerance, rotation_tolerance, free, axes, where)
         plain = band is None and not free and kinds[0] is not None
         if band is not None:  # met at 0
@@ -131,8 +129,7 @@ class Goal:
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray] | None:
         """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for target
-        (pt, Rt), as the kernel's success test sees them, for the kinds with an ``aux`` row (None for the others,
-        whose errors are the distance and the rotation angle)."""
+        (pt, Rt) as the kernel's success test sees them; None for the kinds without an ``aux`` row."""
         aux = self.aux()
         return None if aux is None else band_errors(self.kind, P, R, pt, Rt, aux)
 
@@ -152,8 +149,7 @@ class Goal:
         raise NotImplementedError
 
     def errors(self, T: pin.SE3) -> tuple[float, float | None]:
-        """(position error m or None, rotation angle rad or None) of the goal frame at pose ``T`` (base frame); for
-        the kinds with an ``aux`` row, the errors their success test compares with the tolerances."""
+        """(position error m or None, rotation error rad or None) of the goal frame at pose ``T`` (base frame)."""
         pt, Rt = self.encode()
         if self.aux() is not None:
             pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], pt, Rt)
@@ -212,10 +208,9 @@ def init_set(goal, targets, single, what: str) -> None:
 
 
 # ------------------------------------------------------------------ goals on two frames
-#: The ``aux`` row of the goals on two frames (read by the compiled ``solvers/lm/balance.py``): frame a's physical
-#: joint (-1: the base) at A_REL_JOINT, its folded placement R (9, row-major) at A_REL_R and p (3,) at A_REL_P; the
-#: AUX_SIZE band columns of a pose with axes from A_REL_BAND (:mod:`.bands`); then A_REL_SIGNS + k (k < m), per
-#: physical joint k: +1 when it moves frame b only, -1 frame a only, :data:`BOTH` (or 0, as the kind asks) both.
+#: The ``aux`` row of the goals on two frames (read by ``solvers/lm/balance.py``): frame a's physical joint (-1: the
+#: base), its folded placement R (9, row-major) and p (3,); the band columns (:mod:`.bands`); then per physical joint
+#: k: +1 when it moves frame b only, -1 frame a only, :data:`BOTH` (or 0, as the kind asks) both.
 A_REL_JOINT, A_REL_R, A_REL_P, A_REL_BAND = 0, 1, 10, 13
 A_REL_SIGNS = A_REL_BAND + AUX_SIZE
 #: The sign of a joint that moves both frames, for a kind whose error sees them (a vector in the world's axes turns

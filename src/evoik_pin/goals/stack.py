@@ -178,15 +178,6 @@ class GoalStack:
         hit = _STACK_CACHE.get(key)
         if hit is not None and hit[0]() is robot:
             return hit[1]
-        stack = cls._made(robot, frames, kinds, weights, tolerances, rotation_tolerances, aux)
-        if len(_STACK_CACHE) >= 64:
-            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
-        _STACK_CACHE[key] = (weakref.ref(robot), stack)
-        return stack
-
-    @classmethod
-    def _made(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux) -> GoalStack:
-        """:meth:`of`'s stack, built."""
         G = len(frames)
         spec = np.empty((G, GOAL_SIZE))
         R, p = np.empty((G, 3, 3)), np.empty((G, 3))
@@ -204,8 +195,12 @@ class GoalStack:
             for g, a in enumerate(aux):
                 if a is not None:
                     packed[g, :len(a)] = a
-        return cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
-                   tuple(robot.tip if f is None else f for f in frames), packed)
+        stack = cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
+                    tuple(robot.tip if f is None else f for f in frames), packed)
+        if len(_STACK_CACHE) >= 64:
+            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
+        _STACK_CACHE[key] = (weakref.ref(robot), stack)
+        return stack
 
     @classmethod
     def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
@@ -295,10 +290,16 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
             _check_frames(robot, goals)  # the clash test reads the targets
     else:
         _check_frames(robot, goals)
+        # the goals beyond one frame pack their aux and support rows against the robot (checking their frames)
+        packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
         stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
                              [g.tolerance for g in goals], [g.rotation_tolerance for g in goals],
-                             [g.aux() for g in goals])
-        stack = _beyond_frame(robot, goals, stack)
+                             [packed[g][0] if g in packed else goal.aux() for g, goal in enumerate(goals)])
+        if packed:
+            support = stack.support.copy()
+            for g, (_, moved) in packed.items():
+                support[g] = moved
+            stack = dataclasses.replace(stack, support=support)
         if key is not None:
             if len(_BOUND) >= 64:
                 _BOUND.pop(next(iter(_BOUND)))
@@ -316,7 +317,7 @@ _BOUND: dict = {}
 
 def _signature(robot, goals) -> tuple | None:
     """What :func:`bind`'s checks and stack read of ``goals`` besides their targets, with the robot's id; None when
-    a goal packs itself against the robot (:func:`_beyond_frame`)."""
+    a goal packs itself against the robot."""
     parts = [id(robot)]
     for g in goals:
         if _packs_itself(g):
@@ -337,7 +338,7 @@ def _check_frames(robot, goals) -> None:
     """:func:`bind`'s checks of the goals on one frame."""
     seen: dict[int, Goal] = {}
     for g in goals:
-        if _packs_itself(g):  # centre of mass, relative pose: checked as they pack (_beyond_frame)
+        if _packs_itself(g):  # centre of mass, two frames: checked as they pack
             continue
         fid = robot.frame_id(g.frame)  # FrameError with the closest names
         if not robot.moving_joints(g.frame):
@@ -376,18 +377,3 @@ def _check_not_base_only(robot, frame: str) -> None:
         f"locked ({shown}), so the base alone would have to reach it. Free them when loading the robot: "
         f"tips=[{tips}, {frame!r}] (the chains to each), joints=[...] naming them with the others to keep free, "
         f"or tips='all' (the whole tree; what a branching URDF gets without tip=/tips=)")
-
-
-def _beyond_frame(robot, goals, stack: GoalStack) -> GoalStack:
-    """``stack`` with the ``aux`` and ``support`` rows of the goals beyond one frame (their ``pack(robot)``)."""
-    packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
-    if not packed:
-        return stack
-    width = max(max(a.size for a, _ in packed.values()), stack.aux.shape[1])
-    aux = np.zeros((len(goals), width))
-    aux[:, :stack.aux.shape[1]] = stack.aux
-    support = stack.support.copy()
-    for g, (row, moved) in packed.items():
-        aux[g, :row.size] = row
-        support[g] = moved
-    return dataclasses.replace(stack, aux=aux, support=support)

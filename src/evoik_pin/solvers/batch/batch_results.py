@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -185,9 +185,6 @@ class BatchResults(Sequence):
         if r is None:
             r = self._made[i] = self.outcome.result(i, self.template)
         return r
-
-    def __iter__(self) -> Iterator[Result]:
-        return (self[i] for i in range(len(self)))
 
     def __repr__(self) -> str:
         s = self.stats
