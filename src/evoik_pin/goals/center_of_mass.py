@@ -53,9 +53,6 @@ class CenterOfMass(Goal):
     axes: str = _AXES
     support: dict | None = None
     margin: float = 0.0
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     KIND_CODES = (KindCode(KIND_COM, (0, 1, 2), FAMILY_BEYOND_FRAME),
                   KindCode(KIND_COM_SUPPORT, (0, 1), FAMILY_BEYOND_FRAME))
 

@@ -101,9 +101,6 @@ class Direction(_Pointing):
     """
 
     direction: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     has_point = False
     TARGET = FILE_KIND = "direction"
     KIND_CODES = (KindCode(KIND_DIRECTION, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)

@@ -25,9 +25,6 @@ class LookAt(_Pointing):
     """
 
     point: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     has_point = True
     TARGET, FILE_KIND = "point", "look_at"
     KIND_CODES = (KindCode(KIND_LOOK_AT, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)

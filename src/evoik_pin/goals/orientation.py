@@ -33,9 +33,6 @@ class Orientation(Goal):
     """
 
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     band: object = None
     free: tuple = ()
     has_position = False

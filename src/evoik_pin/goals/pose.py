@@ -54,9 +54,6 @@ class Pose(Goal):
     """
 
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     #: The per-axis half-widths (6,) (m, rad; inf on free axes) of a banded pose, else None; the free axes' names.
     band: object = None
     free: tuple = ()

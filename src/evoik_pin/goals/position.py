@@ -33,9 +33,6 @@ class Position(Goal):
     """
 
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     #: The per-axis half-widths (3,) (m, base frame; inf: free) of a banded position, else None.
     band: object = None
     KIND_CODES = (KindCode(KIND_POSITION, (0, 1, 2), FAMILY_FRAME),

@@ -37,9 +37,6 @@ class RelativePose(FramePair, Goal):
 
     frame_a: str = ""
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     #: The per-axis half-widths (6,) (m, rad; inf on free axes) of a banded goal, else None; the free axes' names.
     band: object = None
     free: tuple = ()

@@ -37,9 +37,6 @@ class RelativePosition(FramePair, Goal):
     frame_a: str = ""
     target: object = None
     expressed_in: str = "a"
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     KIND_CODES = (KindCode(KIND_RELATIVE_POSITION, (0, 1, 2), FAMILY_BEYOND_FRAME),
                   KindCode(KIND_RELATIVE_POSITION_IN_A, (0, 1, 2), FAMILY_BEYOND_FRAME))
     #: The optional fields of its goals-file entry.

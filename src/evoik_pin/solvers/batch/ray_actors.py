@@ -26,7 +26,7 @@ from .batch_results import BatchOutcome
 from .targets import source_of
 from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
 
-__all__ = ["RayBatch", "RayPool", "connect", "import_ray", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
+__all__ = ["RayBatch", "RayPool", "connect", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
            "unpack_targets"]
 
 #: Attempts per chunk before its failure is reported (an actor dying each time).
@@ -37,15 +37,6 @@ RAY_MIN_CHUNK, RAY_MAX_CHUNK = 1000, 20_000
 #: Seconds to reach a cluster address before calling it unreachable.
 CONNECT_TIMEOUT = 5.0
 INSTALL_HINT = "pip install 'evoik_pin[ray]'"
-
-
-def import_ray():
-    """The ``ray`` module, or a BackendError naming the extra that installs it."""
-    try:
-        import ray
-    except ImportError:
-        raise BackendError(f"backend='ray' needs Ray, which is not installed: {INSTALL_HINT}") from None
-    return ray
 
 
 def _probe(address: str) -> None:
@@ -67,8 +58,11 @@ def _probe(address: str) -> None:
 def connect(address: str | None = None, workers: int | None = None):
     """The ``ray`` module, initialized: connected to the cluster at ``address`` (else ``RAY_ADDRESS``; ``"auto"``:
     the one on this machine; BackendError at once when nothing answers there), else an initialized Ray as it is, else
-    a local instance of ``workers`` CPUs (default every core)."""
-    ray = import_ray()
+    a local instance of ``workers`` CPUs (default every core). BackendError when Ray is not installed."""
+    try:
+        import ray
+    except ImportError:
+        raise BackendError(f"backend='ray' needs Ray, which is not installed: {INSTALL_HINT}") from None
     address = address or os.environ.get("RAY_ADDRESS") or None
     if address is not None and address != "auto":
         _probe(address)
@@ -271,18 +265,15 @@ class RayBatch:
             self._local._prepare(target)
         return self._local.template
 
-    def _chunks(self, N: int) -> list[tuple[int, int]]:
-        if self.chunk_size:
-            return [(a, min(a + self.chunk_size, N)) for a in range(0, N, self.chunk_size)]
-        return chunk_bounds(N, self.workers, RAY_MIN_CHUNK, RAY_MAX_CHUNK)
-
     def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
         """:meth:`.threads.BatchSolver.solve` on the actors."""
         ray, pool = self.ray, self.pool
         source = source_of(self._local.robot, targets)
         self.template(source.chunk(0, 1)[0])  # every option checked here, before the actors see them
         poses = source.poses
-        chunks = self._chunks(len(source))
+        N, size = len(source), self.chunk_size
+        chunks = ([(a, min(a + size, N)) for a in range(0, N, size)] if size
+                  else chunk_bounds(N, self.workers, RAY_MIN_CHUNK, RAY_MAX_CHUNK))
         todo = deque((k, 0) for k in range(len(chunks)))  # (chunk, attempt)
         idle = deque(pool.actors)
         running: dict = {}  # future -> (chunk, attempt, actor)
