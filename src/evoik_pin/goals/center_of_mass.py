@@ -128,26 +128,31 @@ class CenterOfMass(Goal):
             return (self.axes,)
         return (self.margin, *((f, None if p is None else p.tobytes()) for f, p in self.support.items()))
 
+    def _axes_distance(self, c: np.ndarray) -> np.ndarray:
+        """The distances (m) over ``axes`` from centres of mass c (..., 3) to the point."""
+        return np.linalg.norm((c - self.point)[..., np.array([a in self.axes for a in _AXES])], axis=-1)
+
+    def _ground(self, robot, Q: np.ndarray) -> np.ndarray:
+        """(N, K, 2) the contact points' ground (x, y) positions (m, base frame) over a population Q (N, n)."""
+        frames = _frame_points(robot, self.support)
+        P, R = robot.fk_batch(Q, validate=False, frames=[f for f, _ in frames])
+        return np.concatenate([np.einsum("nij,kj->nki", R[:, g], pts) + P[:, g, None] for g, (_, pts)
+                               in enumerate(frames)], axis=1)[:, :, :2]
+
     def robot_errors(self, robot, q) -> tuple[float, None]:
-        """(error m, None) at ``q`` (n,), from Pinocchio's ``centerOfMass``."""
+        """(error m, None) at ``q`` (n,), the centre of mass from Pinocchio's ``centerOfMass``."""
         c = com_of(robot, q)
         if self.support is None:
-            mask = np.array([a in self.axes for a in _AXES])
-            return float(np.linalg.norm((c - self.point)[mask])), None
-        return polygon_distance(c[:2], _world_points(robot, q, self.support), self.margin), None
+            return float(self._axes_distance(c)), None
+        return polygon_distance(c[:2], self._ground(robot, np.asarray(q, dtype=float)[None])[0], self.margin), None
 
     def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
         """(errors (N,) m, zeros (N,)) of a population Q (N, n); for a support polygon the largest violation of the
         margin-shrunk hull's edge half-planes (0 exactly inside; at most the distance outside)."""
         c = com_batch(robot, Q)
         if self.support is None:
-            mask = np.array([a in self.axes for a in _AXES])
-            return np.linalg.norm((c - self.point)[:, mask], axis=1), np.zeros(len(Q))
-        frames = _frame_points(robot, self.support)
-        P, R = robot.fk_batch(Q, validate=False, frames=[f for f, _ in frames])
-        ground = np.concatenate([np.einsum("nij,kj->nki", R[:, g], pts) + P[:, g, None] for g, (_, pts)
-                                 in enumerate(frames)], axis=1)[:, :, :2]  # (N, K, 2)
-        return _hull_violation(c[:, :2], ground, self.margin), np.zeros(len(Q))
+            return self._axes_distance(c), np.zeros(len(Q))
+        return _hull_violation(c[:, :2], self._ground(robot, Q), self.margin), np.zeros(len(Q))
 
     def __repr__(self) -> str:
         if self.support is None:
@@ -245,15 +250,6 @@ def _bound_points(robot, support: dict) -> np.ndarray:
         for x in pts:
             rows.append([j, *(R @ x + p)])
     return np.array(rows, dtype=float)
-
-
-def _world_points(robot, q, support: dict) -> np.ndarray:
-    """(K, 3) the contact points (m, base frame) at ``q`` (Pinocchio's kinematics)."""
-    out = []
-    for frame, pts in _frame_points(robot, support):
-        T = robot.fk(q, frame)
-        out.append(pts @ np.asarray(T.rotation).T + np.asarray(T.translation))
-    return np.concatenate(out)
 
 
 def com_of(robot, q) -> np.ndarray:

@@ -105,8 +105,7 @@ class Posture(Preference):
         return out
 
     def cost(self, q):
-        d = np.where(self._mask, turn_difference(q, self._ref, self._wrap), 0.0)
-        return 0.5 * self.weight * float(d @ d)
+        return float(self.costs(q))
 
     def gradient(self, q):
         return self.weight * np.where(self._mask, turn_difference(q, self._ref, self._wrap), 0.0)

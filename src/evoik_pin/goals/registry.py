@@ -78,8 +78,4 @@ def register(owner: type | None, *codes: KindCode) -> None:
 
 def kind_classes() -> list[type]:
     """The registered goal classes, in the order they were registered (declared)."""
-    seen: list[type] = []
-    for cls in _CLASSES.values():
-        if cls is not None and cls not in seen:
-            seen.append(cls)
-    return seen
+    return list(dict.fromkeys(cls for cls in _CLASSES.values() if cls is not None))

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import OptionError
-from .file_entries import FileKind, pair_kind, position_text, vector_target
+from .file_entries import FileKind, pair_kind, position_target, position_text
 from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, FramePair, Goal, pack_frame_pair, point3
 from .registry import FAMILY_BEYOND_FRAME, RELATIVE_POINT_IN_A, RELATIVE_POINT_WORLD, KindCode
 
@@ -79,7 +79,7 @@ class RelativePosition(FramePair, Goal):
     def file_kind(cls) -> FileKind:
         """``kind: relative_position``: ``frame_a``, ``frame`` (frame b) and ``target: {position: [x, y, z]}`` (m),
         with optional ``expressed_in`` (a | world), ``weight`` and ``tolerance``."""
-        return pair_kind(cls, "relative_position", vector_target("position"), position_text)
+        return pair_kind(cls, "relative_position", position_target, position_text)
 
     def __repr__(self) -> str:
         return (f"RelativePosition({self.frame_a!r}, {self.frame!r}, {np.round(self.target, 6).tolist()}, "

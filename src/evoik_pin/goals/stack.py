@@ -32,7 +32,7 @@ from .registry import (
 
 __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_ROWS", "G_RTOL", "G_TOL", "G_WEIGHT",
            "KIND_PLANAR", "KIND_PLANAR_YAW", "GoalArrays", "GoalStack", "TargetArrays", "bind", "encode_target",
-           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "target_kind"]
+           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "structure", "target_kind"]
 
 #: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
 #: first row in the stacked error; then its kind's declaration: its row count, its compiled family (``FAMILY_*``)
@@ -93,8 +93,19 @@ def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
     return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
 
 
+class _Rows:
+    """What :class:`TargetArrays` and :class:`GoalArrays` share: N problems' targets ``P``, ``Rts``, by row."""
+
+    def __len__(self) -> int:
+        return int(self.P.shape[0])
+
+    def take(self, rows: np.ndarray):
+        """The problems at ``rows`` (an index array), as new arrays."""
+        return dataclasses.replace(self, P=self.P[rows], Rts=self.Rts[rows])
+
+
 @dataclass(frozen=True)
-class TargetArrays:
+class TargetArrays(_Rows):
     """N targets of one kind as the kernel reads them (:func:`encode_targets`), without Target objects.
 
     Attributes:
@@ -117,17 +128,10 @@ class TargetArrays:
         return cls(KIND_POSE, np.ascontiguousarray(H[:, :3, 3], dtype=float),
                    np.ascontiguousarray(H[:, :3, :3], dtype=float))
 
-    def __len__(self) -> int:
-        return int(self.P.shape[0])
-
     @property
     def oriented(self) -> bool:
         """True when the targets constrain orientation (pose, planar with yaw)."""
         return self.kind in ORIENTED_KINDS
-
-    def take(self, rows: np.ndarray) -> TargetArrays:
-        """The targets at ``rows`` (an index array), as new arrays."""
-        return TargetArrays(self.kind, self.P[rows], self.Rts[rows])
 
 
 @dataclass(frozen=True)
@@ -220,7 +224,7 @@ _STACK_CACHE: dict = {}  # GoalStack.of's: key -> (weak reference to the robot, 
 
 
 @dataclass(frozen=True)
-class GoalArrays:
+class GoalArrays(_Rows):
     """N problems over one goal stack (other targets) as the kernel's pair entry point reads them.
 
     Attributes:
@@ -232,17 +236,10 @@ class GoalArrays:
     P: np.ndarray
     Rts: np.ndarray
 
-    def __len__(self) -> int:
-        return int(self.P.shape[0])
-
     @property
     def oriented(self) -> bool:
         """True when some goal constrains orientation."""
         return self.stack.any_oriented
-
-    def take(self, rows: np.ndarray) -> GoalArrays:
-        """The problems at ``rows`` (an index array), as new arrays."""
-        return GoalArrays(self.stack, self.P[rows], self.Rts[rows])
 
 
 def problem_goals(problem) -> tuple[GoalStack, np.ndarray, np.ndarray]:
@@ -282,8 +279,9 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
         if not isinstance(g, Goal):
             raise TargetError(f"goal {i} is a {type(g).__name__}, not a goal: use Pose(frame, T) or "
                               "Position(frame, p) from evoik_pin.goals")
-    key = _signature(robot, goals)
-    hit = _BOUND.get(key) if key is not None else None
+    # goals beyond one frame pack their rows against the robot on every bind: only lists without them are kept
+    key = None if any(_packs_itself(g) for g in goals) else (id(robot), structure(goals))
+    hit = _BOUND.get(key)
     if hit is not None and hit[0]() is robot:
         stack = hit[1]
         if len(stack.frames) > len(set(stack.frames)):
@@ -311,21 +309,17 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     return goals, stack, pt, Rt
 
 
-#: Stacks of goal lists bound before, by the goals' :func:`_signature` (the last 64): a hit skips the frames' checks.
+#: Stacks of goal lists bound before, by robot and :func:`structure` (the last 64): a hit skips the frames' checks.
 _BOUND: dict = {}
 
 
-def _signature(robot, goals) -> tuple | None:
-    """What :func:`bind`'s checks and stack read of ``goals`` besides their targets, with the robot's id; None when
-    a goal packs itself against the robot."""
-    parts = [id(robot)]
-    for g in goals:
-        if _packs_itself(g):
-            return None
-        aux = g.aux()
-        parts.append((type(g), g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
-                      None if aux is None else aux.tobytes()))
-    return tuple(parts)
+def structure(goals) -> tuple:
+    """What a goal list's stack depends on besides its targets: each goal's frame, kind, weight, tolerances and aux
+    row, in order, and for a goal beyond one frame its ``batch_key()`` (what its robot-bound ``aux`` row holds).
+    Lists of one structure share a stack (:func:`bind`'s cache, solve_many's groups)."""
+    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                  None if g.aux() is None else g.aux().tobytes())
+                 + (g.batch_key() if _packs_itself(g) else ()) for g in goals)
 
 
 def _packs_itself(goal: Goal) -> bool:

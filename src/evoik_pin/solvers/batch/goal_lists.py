@@ -8,6 +8,7 @@ Lists of one *structure* (the same frames, kinds, weights and tolerances in orde
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from ...errors import ConfigurationError, FrameError, OptionError, TargetError
 from ...goals import Goal, bind, is_goal_list
 from ...goals.preferences import check_preferences, holds_preferences, split_preferences
 from ...goals.registry import KIND_BEYOND_FRAME, POSITIONLESS_KINDS
-from ...goals.stack import G_WEIGHT, GoalArrays
+from ...goals.stack import G_WEIGHT, GoalArrays, structure
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
@@ -33,37 +34,25 @@ def is_goal_batch(targets) -> bool:
     return any(isinstance(t, (list, tuple)) and t and is_problem_list(t) for t in targets)
 
 
-def structure(goals) -> tuple:
-    """What problems sharing a goal stack have in common: each goal's frame, kind, weight, tolerances and aux row, in
-    order, and for a goal beyond one frame its ``batch_key()`` (what its robot-bound ``aux`` row holds)."""
-    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
-                  None if g.aux() is None else g.aux().tobytes())
-                 + (g.batch_key() if g.kind >= KIND_BEYOND_FRAME else ()) for g in goals)
-
-
+@dataclass
 class GoalBlock:
     """Consecutive problems of a call, grouped by goal stack: the one form the batch engine solves.
 
     Attributes:
         groups: ``[(rows, arrays)]``: the block's row indices (k,) of one stack and their
             :class:`~evoik_pin.goals.stack.GoalArrays`, in the order the stacks first appear.
-        tip: True for tip targets (answers reported as single-target results: no goal errors, the target's cost),
-            False for goal lists.
+        size: the block's rows. target: row ``i``'s problem for the one-by-one solver (its
+            :class:`~evoik_pin.problem.Target` or goal list).
+        tip: True for tip targets (answers reported as single-target results), False for goal lists.
     """
 
-    def __init__(self, groups: list[tuple[np.ndarray, GoalArrays]], size: int, problem: Callable[[int], object],
-                 tip: bool = False) -> None:
-        self.groups = groups
-        self._size = size
-        self._problem = problem
-        self.tip = tip
+    groups: list[tuple[np.ndarray, GoalArrays]]
+    size: int
+    target: Callable[[int], object]
+    tip: bool = False
 
     def __len__(self) -> int:
-        return self._size
-
-    def target(self, i: int):
-        """Row ``i``'s problem for the one-by-one solver: its :class:`~evoik_pin.problem.Target` or goal list."""
-        return self._problem(i)
+        return self.size
 
 
 class GoalSource:
