@@ -45,7 +45,6 @@ class _Pointing(Goal):
     direction; the kernel's residual ``R a - d`` (3 rows, base frame) is zero only when they are aligned."""
 
     axis: object = None
-    has_position = False
     #: The field holding the target (a unit direction, or a point), and its ``kind:`` in goals files.
     TARGET = FILE_KIND = ""
 
@@ -59,10 +58,6 @@ class _Pointing(Goal):
         aux = np.zeros(AUX_SIZE)
         aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
         self._set_aux(aux)
-
-    @property
-    def reports_angle(self) -> bool:
-        return True
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return getattr(self, self.TARGET).copy(), np.eye(3)

@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
 from .bands import AUX_SIZE, band_aux, band_errors, parse_axes
-from .registry import register
+from .registry import KINDS, register
 
 __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
            "FramePair", "init_set", "is_set", "number", "pack_frame_pair", "point3"]
@@ -70,9 +70,6 @@ class Goal:
     has_orientation: bool = field(default=False, init=False, repr=False)
     #: A goal set's members (:func:`init_set`): one single-target goal each; None for one target.
     alternatives: tuple | None = field(default=None, init=False, repr=False)
-    #: Whether the goal puts the frame's origin somewhere (False for orientation and pointing goals: seed ranking
-    #: leaves their target position out). A class attribute, not a field.
-    has_position = True
 
     def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool,
                      what: str | None = None) -> None:
@@ -166,9 +163,15 @@ class Goal:
                 (float(rotation_error) if self.reports_angle else None))
 
     @property
+    def has_position(self) -> bool:
+        """Whether the goal puts the frame's origin somewhere (its kind's declaration; False for orientation and
+        pointing goals, whose target position seed ranking leaves out)."""
+        return KINDS[self.kind].has_position
+
+    @property
     def reports_angle(self) -> bool:
-        """Whether the goal's errors include an angle (rad): it constrains orientation, or it points an axis."""
-        return self.has_orientation
+        """Whether the goal's errors include an angle (rad) (its kind's declaration)."""
+        return KINDS[self.kind].angle
 
     def met(self, position_error: float | None, orientation_error: float | None) -> bool:
         """Whether errors (m or None, rad or None) are within this goal's tolerances."""

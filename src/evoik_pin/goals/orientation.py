@@ -35,7 +35,6 @@ class Orientation(Goal):
     target: object = None
     band: object = None
     free: tuple = ()
-    has_position = False
     KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,

@@ -22,7 +22,6 @@ __all__ = ["BACKENDS", "solve_many"]
 BACKENDS = ("local", "ray")
 
 
-
 def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
     """q0 as (N, n) starts: None, one (n,) joint vector for every target, or one per target (N, n)."""
     if q0 is None:
