@@ -178,19 +178,15 @@ class RayPool:
         self.ray, self.key, self.workers = ray, key, workers
         self._robot = ray.put(robot)  # pickled once into the object store
         self._actor_class = ray.remote(num_cpus=1)(ChunkWorker)
-        self.actors = [self.new_actor() for _ in range(workers)]
+        self.actors = [self._actor_class.remote(self._robot) for _ in range(workers)]
         self.replaced = 0  # actors replaced after dying
-
-    def new_actor(self):
-        return self._actor_class.remote(self._robot)
 
     def replace(self, actor):
         """A new actor in place of ``actor`` (dead, or to be killed)."""
         self.retire(actor)
         self.replaced += 1
-        fresh = self.new_actor()
-        self.actors.append(fresh)
-        return fresh
+        self.actors.append(self._actor_class.remote(self._robot))
+        return self.actors[-1]
 
     def retire(self, actor) -> None:
         if actor in self.actors:

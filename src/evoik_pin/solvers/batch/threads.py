@@ -1,16 +1,10 @@
 """The local engine of :func:`~evoik_pin.solve_many` (``backend="local"``): :class:`BatchSolver` and its threads.
 
-With the memetic method (the default) the problems are solved in batched rounds first: each unsolved one starts from
-its next-nearest seed-table entry (from ``q0`` in the first round when given) and one call of
-:func:`~evoik_pin.solvers.lm.solve_pairs` runs memetic's LM iteration on all of them. Those left after
-``table_seeds`` rounds go to the per-target solver, told which entries were tried. Other methods, a custom
-``objective`` or ``polish=True`` solve every target one by one, as :func:`evoik_pin.solve` does.
-
-The problems are cut into chunks (:func:`chunk_bounds`) whose batched rounds run on ``workers`` threads (the kernel
-and the k-d tree release the GIL); the calling thread also encodes the chunks and runs the one-by-one solves
-(:meth:`BatchSolver.pipeline`). A target solved one by one draws from its own generator (:func:`target_generator`,
-keyed by its index in the call), so the answers do not depend on the workers, the chunks or the backend (up to a
-wall-clock ``timeout``).
+With the memetic method the problems are solved in batched rounds first, each from its next-nearest seed-table entry
+(from ``q0`` first when given) by one :func:`~evoik_pin.solvers.lm.solve_pairs` call; those left after ``table_seeds``
+rounds, and every problem of other methods, are solved one by one as :func:`evoik_pin.solve` does, each with its own
+generator (:func:`target_generator`), so the answers do not depend on the workers, chunks or backend. The chunks'
+rounds run on ``workers`` threads (:meth:`BatchSolver.pipeline`).
 """
 
 from __future__ import annotations
