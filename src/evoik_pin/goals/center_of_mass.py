@@ -204,22 +204,12 @@ def contact_points(robot, frame: str) -> np.ndarray:
     aligned with the frame's axes, that bounds every collision geometry on the frame's joint (a sole frame, z up:
     the foot's bottom). Raises FrameError when the frame's joint carries no collision geometry."""
     known = _CONTACTS.setdefault(robot, {})
-    if frame not in known:  # every solve binds its goals and reports their errors: read the geometry once
-        known[frame] = _geometry_contacts(robot, frame)
-    return known[frame].copy()
-
-
-#: Contact points from collision geometry, per robot (weakly: the cache keeps no robot alive) and frame.
-_CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _geometry_contacts(robot, frame: str) -> np.ndarray:
-    model = robot.model
-    f = model.frames[robot.frame_id(frame)]
-    geom = robot.collision_model
+    if frame in known:  # every solve binds its goals and reports their errors: read the geometry once
+        return known[frame].copy()
+    f = robot.model.frames[robot.frame_id(frame)]
     fMj = f.placement.inverse()
     corners = []
-    for g in geom.geometryObjects:
+    for g in robot.collision_model.geometryObjects:
         if g.parentJoint != f.parentJoint:
             continue
         shape = g.geometry
@@ -233,7 +223,13 @@ def _geometry_contacts(robot, frame: str) -> np.ndarray:
                          f"from: give its points, support={{{frame!r}: points (k x 3, m)}}")
     c = np.concatenate(corners)
     lo, hi = c.min(axis=0), c.max(axis=0)
-    return np.array([[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]], [lo[0], hi[1], lo[2]]])
+    known[frame] = np.array([[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]],
+                             [lo[0], hi[1], lo[2]]])
+    return known[frame].copy()
+
+
+#: Contact points from collision geometry, per robot (weakly: the cache keeps no robot alive) and frame.
+_CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _frame_points(robot, support: dict) -> list[tuple[str, np.ndarray]]:
@@ -311,11 +307,13 @@ def polygon_distance(point, points, margin: float = 0.0) -> float:
     """Distance (m) from ``point`` (2,) to the convex hull of ``points`` (K, >= 2) (their x, y) shrunk by
     ``margin`` (m): 0 inside; inf when the shrunk hull is empty or the points span no area."""
     # exact: the nearest of the feet on the shrunk edges' lines and of their crossings that lie in it
-    P = np.asarray(points, dtype=float)[:, :2]
-    normals, offsets = _half_planes(P)
-    if normals is None:
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:  # the hull's edges: n.x <= o inside, n unit outward
+        hull = ConvexHull(np.asarray(points, dtype=float)[:, :2]).equations
+    except (QhullError, ValueError):  # points spanning no area
         return float("inf")
-    b = offsets - margin
+    normals, b = hull[:, :2], -hull[:, 2] - margin
     c = np.asarray(point, dtype=float)
     if (normals @ c <= b).all():
         return 0.0
@@ -330,18 +328,6 @@ def polygon_distance(point, points, margin: float = 0.0) -> float:
     if not inside:
         return float("inf")
     return float(min(np.linalg.norm(x - c) for x in inside))
-
-
-def _half_planes(P: np.ndarray):
-    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2): n.x <= o inside, n unit outward;
-    (None, None) for points that span no area."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        eq = ConvexHull(P).equations
-    except (QhullError, ValueError):
-        return None, None
-    return eq[:, :2], -eq[:, 2]
 
 
 def _file_goal(entry: dict, what: str) -> CenterOfMass:

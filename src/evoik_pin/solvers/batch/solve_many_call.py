@@ -22,19 +22,6 @@ __all__ = ["BACKENDS", "solve_many"]
 BACKENDS = ("local", "ray")
 
 
-def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
-    """q0 as (N, n) starts: None, one (n,) joint vector for every target, or one per target (N, n)."""
-    if q0 is None:
-        return None
-    Q0 = np.asarray(q0, dtype=float)
-    if Q0.ndim == 1:
-        return np.broadcast_to(robot.check_q(Q0), (N, robot.n))
-    if Q0.shape != (N, robot.n) or not np.isfinite(Q0).all():
-        raise ConfigurationError(f"q0 must be one joint vector ({robot.n},) or one per target ({N}, {robot.n}) of "
-                                 f"finite numbers, got shape {Q0.shape}")
-    return Q0
-
-
 def solve_many(robot, targets, make_problem: Callable, run: Callable, method: str, seed=None, q0=None,
                workers=None, backend: str = "local", address: str | None = None, progress: bool = False,
                choose: Callable | None = None, prefer: str | None = None, locked: dict | None = None,
@@ -58,7 +45,12 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
     N = len(source)
     if N == 0:
         raise ConfigurationError("solve_many needs at least one target")
-    Q0 = _start_configurations(full, q0, N)
+    Q0 = None if q0 is None else np.asarray(q0, dtype=float)  # one (n,) start for every target, or one per target
+    if Q0 is not None and Q0.ndim == 1:
+        Q0 = np.broadcast_to(full.check_q(Q0), (N, full.n))
+    elif Q0 is not None and (Q0.shape != (N, full.n) or not np.isfinite(Q0).all()):
+        raise ConfigurationError(f"q0 must be one joint vector ({full.n},) or one per target ({N}, {full.n}) of "
+                                 f"finite numbers, got shape {Q0.shape}")
     if Q0 is None and source.goals:
         source.require_q0(range(N))  # MinimalDisplacement is measured from q0
     if locked and Q0 is not None:

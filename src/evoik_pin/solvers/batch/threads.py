@@ -314,7 +314,9 @@ class BatchSolver:
                 if ranked is None:
                     ranked = tree.nearest(group, self.rounds, NEAREST_EPS)
                 Qs = table.Q[ranked[:, rank]]
-            pairs = group if self.engine == "compiled" else tip_arrays(group)
+            # the Python reference engine runs one-goal tip problems as the single targets they are
+            pairs = group if self.engine == "compiled" else TargetArrays(group.stack.kinds[0], group.P[:, 0],
+                                                                         group.Rts[:, 0])
             res = solve_pairs(self.robot, Qs, pairs, t.lower, t.upper, t.tolerance, t.rotation_tolerance,
                               engine=self.engine)
             converged = res.converged
@@ -333,11 +335,6 @@ class BatchSolver:
                 group = arrays.take(pending)
         if res is not None and pending.size and not self.fallback:  # no per-target search: the last round's answers
             out.put(rows[pending], res, ~converged)
-
-
-def tip_arrays(group: GoalArrays) -> TargetArrays:
-    """One-goal tip problems as the single targets they are, for the Python reference engine."""
-    return TargetArrays(group.stack.kinds[0], group.P[:, 0], group.Rts[:, 0])
 
 
 @contextlib.contextmanager
