@@ -72,10 +72,8 @@ class CenterOfMass(Goal):
             object.__setattr__(self, "point", None)
             object.__setattr__(self, "axes", "xy")
             object.__setattr__(self, "support", _support(support))
-            margin = goal_number(margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0")
-            if margin < 0:
-                raise OptionError(f"margin (m) of the centre-of-mass support goal must be >= 0, got {margin!r}")
-            object.__setattr__(self, "margin", margin)
+            object.__setattr__(self, "margin", goal_number(margin, "margin (m) of the centre-of-mass support goal",
+                                                           "a finite number >= 0", 0.0))
 
     @property
     def frames(self) -> list[str]:

@@ -25,13 +25,14 @@ __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BO
 DEFAULT_GOAL_TOLERANCE = 1e-6
 
 
-def number(value, what: str, accepted: str) -> float:
-    """``value`` as a finite float, or an OptionError naming ``what`` and what is ``accepted``."""
+def number(value, what: str, accepted: str, low: float | None = None, strict: bool = False) -> float:
+    """``value`` as a finite float (>= ``low`` when given, > ``low`` when ``strict``), or an OptionError naming
+    ``what`` and what is ``accepted``."""
     try:
         x = float(value)
     except (TypeError, ValueError):
         x = math.nan
-    if not math.isfinite(x):
+    if not math.isfinite(x) or low is not None and (x < low or strict and x == low):
         raise OptionError(f"{what} must be {accepted}, got {value!r}")
     return x
 
@@ -82,9 +83,7 @@ class Goal:
             if not isinstance(frame, str) or not frame:
                 raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {frame!r}")
             what = f"the goal on {frame!r}"
-        weight_ = number(weight, f"weight of {what}", "a finite number > 0")
-        if weight_ <= 0:
-            raise OptionError(f"weight of {what} must be > 0, got {weight!r}")
+        weight_ = number(weight, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
         tol = DEFAULT_GOAL_TOLERANCE if tolerance is None else number(
             tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
         rtol = tol if rotation_tolerance is None else number(

@@ -23,10 +23,7 @@ TWO_PI = 2.0 * np.pi
 
 
 def _weight(value, what: str) -> float:
-    w = number(value, f"weight of {what}", "a finite number > 0")
-    if w <= 0:
-        raise OptionError(f"weight of {what} must be a finite number > 0, got {value!r}")
-    return w
+    return number(value, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
 
 
 def turn_difference(q: np.ndarray, ref: np.ndarray, wrap: np.ndarray) -> np.ndarray:
@@ -141,9 +138,7 @@ class JointLimitMargin(Preference):
     full turn wrap and have no limit to keep off."""
 
     def __init__(self, margin: float, weight: float = 1.0) -> None:
-        self.margin = number(margin, "JointLimitMargin's margin (rad or m)", "a finite number >= 0")
-        if self.margin < 0:
-            raise OptionError(f"JointLimitMargin's margin (rad or m) must be >= 0, got {margin!r}")
+        self.margin = number(margin, "JointLimitMargin's margin (rad or m)", "a finite number >= 0", 0.0)
         self.weight = self.curvature = _weight(weight, "JointLimitMargin")
 
     def bind(self, robot, q0, lower, upper, wrap) -> JointLimitMargin:
