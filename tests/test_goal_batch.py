@@ -118,7 +118,7 @@ def test_solve_many_solves_goal_lists_as_solve_does(talos, lists):
     batched = next(r for r in res if "batched LM" in r.message)
     assert batched.cost == pytest.approx(sum(p + o for p, o in batched.goal_errors))
     # the unreachable list went to memetic with its own generator, from its first start: the rounds tried ranked
-    # table entries, memetic's goal-list starts begin with composed ones (threads.BatchSolver._one_by_one)
+    # table entries, memetic's goal-list starts begin with composed ones (threads.BatchSolver._singles)
     gens = [np.random.default_rng(s) for s in np.random.SeedSequence(4).spawn(len(lists))]
     alone = ek.solve(talos, lists[17], seed=gens[17], table_offset=0, **BUDGET)
     same([res[17]], [alone])

@@ -1,19 +1,11 @@
-"""Goals of an IK problem on a whole robot: which frame goes where, with which weight and tolerances.
+"""Goals of an IK problem on a whole robot: a list of goals, each on one frame, its target in the robot's base frame::
 
-A problem is a list of goals, each on one frame of the robot (a link, a joint frame or a fixed frame), its target
-in the robot's base frame (for a floating base: the world frame)::
-
-    from evoik_pin.goals import Pose, Position
     goals = [Pose("left_sole_link", T_lf), Pose("right_sole_link", T_rf), Position("arm_right_7_link", p_rh)]
     result = evoik_pin.solve(talos, goals)
 
-The kinds, each in its own module: :class:`Pose`, :class:`Position`, :class:`Orientation`, :class:`Direction`,
-:class:`LookAt`, :class:`CenterOfMass`, :class:`RelativePose`, :class:`RelativePosition` (per-axis bands and free
-axes: :mod:`.bands`); goal sets, any one member of which will do (:mod:`.goal`); preferences, met as well as the
-goals allow (:mod:`.preferences`). Each kind declares itself in :mod:`.registry`; :func:`bind` checks a goal list
-against a robot and packs it into the LM kernel's goal stack (:mod:`.stack`). A goal's ``weight`` (> 0) scales its
-rows by ``sqrt(weight)``, so goals that cannot all be met settle on the compromise the weights make. User guide:
-docs/GOALS.md.
+One module per kind; bands and free axes: :mod:`.bands`; goal sets: :mod:`.goal`; preferences: :mod:`.preferences`;
+:func:`bind` packs a goal list into the LM kernel's goal stack (:mod:`.stack`). A goal's ``weight`` (> 0) scales
+its rows by ``sqrt(weight)``. User guide: docs/GOALS.md.
 """
 
 # The kinds in the order they are declared (registered: evoik_pin.goals.registry), which goals files list them in.

@@ -1,33 +1,25 @@
-"""Per-axis tolerance bands and free axes of the goals on one frame (:class:`Pose`, :class:`Position`,
-:class:`Orientation`), their packing into the kernel's ``aux`` row, and the NumPy twin of the kernel's errors of
-the banded kinds (``solvers/lm/axes.py``; populations for the evolutionary solvers, ``Result.goal_errors``).
+"""Per-axis tolerance bands and free axes (:class:`Pose`, :class:`Position`, :class:`Orientation`,
+:class:`RelativePose`), their kernel ``aux`` row, and the NumPy twin of the kernel's errors of the banded kinds
+(``solvers/lm/axes.py``).
 
-A pose's error has six components: the position error seen in the target frame, ``R_t^T (p - p_t)`` (m), then the
-rotation vector ``log3(R_t^T R)`` (rad); a position's three are ``p - p_t`` in the base frame (a position target
-has no frame of its own); an orientation's three are the rotation vector's. The axis names are
-``x y z rx ry rz``.
-
-* A scalar ``tolerance`` keeps the norm test: the position error's norm (over the axes not free) within it, and
-  the rotation's (the angle; over the axes not free) within ``rotation_tolerance``. With exactly one free rotation
-  axis a the rotation's error is the swing angle between the frame's a axis and the target's (the same zero set
-  as the rotation vector's other two components, and smooth through a twist of pi about a).
-* A vector ``tolerance`` gives each component a band ``|v_i| <= b_i`` (half-widths, m or rad; ``inf``: free); a
-  band narrower than :data:`~evoik_pin.goals.goal.DEFAULT_GOAL_TOLERANCE` counts as that wide (the accuracy of an
-  exact goal). The goal's errors are then how far the components lie beyond their bands (the norm of the excess,
-  m and rad): 0 when met. The kernel's residual is a dead zone at half a tolerance inside each band, so LM ends
-  inside the band, not on its edge.
+Error components (axes ``x y z rx ry rz``): a pose's ``R_t^T (p - p_t)`` (m) then ``log3(R_t^T R)`` (rad); a
+position's ``p - p_t`` in the base frame; an orientation's the rotation vector's. A scalar ``tolerance`` bounds the
+norms over the axes not free (with one free rotation axis a: the swing angle between the frame's and the target's
+a axes); a vector gives each component a half-width (``inf``: free; at least the default tolerance), the errors then
+being the norm of the excess over the bands (0 when met). LM aims half a tolerance inside each band.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import OptionError
 from ..lie import log3
 from .registry import BANDED_LOG6, BANDED_POINT
 
-__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_band",
-           "parse_free", "parse_pose_axes", "tolerance_text"]
+__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_axes",
+           "parse_band", "parse_free", "pose_text"]
 
 #: The ``aux`` row of a goal with bands or free axes (read by the compiled ``solvers/lm/axes.py``): AUX_INNER (6,)
 #: the residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
@@ -41,8 +33,8 @@ AXES = ("x", "y", "z", "rx", "ry", "rz")
 
 
 def parse_free(free, allowed: tuple[str, ...], where: str) -> tuple[str, ...]:
-    """The free axes named by ``free`` (None, a string of names separated by spaces or commas, or a list of
-    names), each one of ``allowed``, in :data:`AXES` order; OptionError for an unknown or repeated name."""
+    """The free axes named by ``free`` (None, a string of names, or a list), each one of ``allowed``, in
+    :data:`AXES` order; OptionError for an unknown or repeated name."""
     if free is None:
         return ()
     if isinstance(free, str):
@@ -62,9 +54,8 @@ def parse_free(free, allowed: tuple[str, ...], where: str) -> tuple[str, ...]:
 
 
 def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | None:
-    """None for a scalar ``tolerance`` (the norm test, checked by the goal), else its half-widths, one per axis of
-    ``axes``, as a float array (m or rad, >= 0; inf: free); OptionError for a wrong length, NaN or a negative
-    half-width."""
+    """None for a scalar ``tolerance``, else its half-widths, one per axis of ``axes`` (m or rad, >= 0; inf: free);
+    OptionError for a wrong length, NaN or a negative half-width."""
     count = len(axes)
     if np.ndim(tolerance) == 0:
         return None
@@ -81,34 +72,38 @@ def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | Non
     return band
 
 
-def parse_pose_axes(tolerance, rotation_tolerance, free, where: str) -> tuple[np.ndarray | None, tuple[str, ...]]:
-    """(band (6,) or None, free axes) of a pose-like goal (:class:`Pose`, :class:`RelativePose`): ``tolerance`` one
-    number (None: a norm tolerance, checked by the goal) or 6 half-widths (:func:`parse_band`; the free axes' set to
-    inf), ``free`` the names of :data:`AXES` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or
-    free axis, a ``rotation_tolerance`` beside 6 half-widths, or all six axes free."""
-    band = parse_band(tolerance, AXES, where)
-    free = parse_free(free, AXES, where)
+def parse_axes(tolerance, rotation_tolerance, free, axes: tuple[str, ...], where: str
+               ) -> tuple[np.ndarray | None, tuple[str, ...]]:
+    """(band or None, free axes) of a goal whose error components are ``axes``: ``tolerance`` one number (None: a
+    norm tolerance, checked by the goal) or one half-width per axis (:func:`parse_band`; the free axes' set to inf),
+    ``free`` names among ``axes`` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or free axis,
+    a ``rotation_tolerance`` beside half-widths, or every axis free."""
+    band = parse_band(tolerance, axes, where)
+    free = parse_free(free, axes, where)
     if band is not None and rotation_tolerance is not None:
         raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
                           "already holds the rotation's half-widths (rx ry rz, rad)")
-    if len(free) == len(AXES):
-        raise OptionError(f"{where}: free names all six axes, which leaves nothing to meet; drop the goal")
+    if len(free) == len(axes):
+        raise OptionError(f"{where}: free names all {({3: 'three'}).get(len(axes), 'six')} axes, which leaves "
+                          "nothing to meet; drop the goal")
     if band is not None:
-        band = np.where(np.isin(AXES, free), np.inf, band)
+        band = np.where(np.isin(axes, free), np.inf, band)
     return band, free
 
 
-def tolerance_text(goal) -> str:
-    """How a pose-like goal's repr shows its tolerances and free axes (its ``band``, ``free``, tolerances)."""
-    tol = (f"tolerance={goal.tolerance:g}, rotation_tolerance={goal.rotation_tolerance:g}" if goal.band is None
-           else f"tolerance={goal.band.tolist()}")
-    return tol + (f", free={' '.join(goal.free)!r}" if goal.free else "")
+def pose_text(goal) -> str:
+    """How a pose-like goal's repr shows its target, weight, tolerances and free axes."""
+    T = goal.target
+    rpy = np.round(pin.rpy.matrixToRpy(T.rotation), 6).tolist()
+    text = f"position={np.round(T.translation, 6).tolist()}, rpy={rpy}, weight={goal.weight:g}, "
+    text += (f"tolerance={goal.tolerance:g}, rotation_tolerance={goal.rotation_tolerance:g}" if goal.band is None
+             else f"tolerance={goal.band.tolist()}")
+    return text + (f", free={' '.join(goal.free)!r}" if goal.free else "")
 
 
 def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:
-    """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes`` (a slice of :data:`AXES`):
-    ``band`` (len(axes),) half-widths or None (a norm tolerance), ``free`` the free axes' names; ``accuracy`` (m,
-    rad) the narrowest band (the goals' default tolerance)."""
+    """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes``: ``band`` (len(axes),) or None
+    (a norm tolerance), ``free`` the free axes; ``accuracy`` (m, rad) the narrowest band."""
     aux = np.full(AUX_SIZE, np.inf)
     aux[AUX_SWING] = -1.0
     for i, name in enumerate(AXES):
@@ -140,10 +135,9 @@ def angles(A: np.ndarray, D: np.ndarray) -> np.ndarray:
 
 def band_errors(kind: int, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray,
                 aux: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for a goal with
-    bands or free axes (kind ``BANDED_LOG6``, ``BANDED_POINT`` or ``BANDED_ROTATION``) with target (pt (3,), Rt
-    (3, 3)) and aux row ``aux``: the numbers its success test compares with the goal's tolerances, as the compiled
-    ``solvers/lm/axes.py`` computes them (0 where a kind has none)."""
+    """(position errors (N,) m, orientation errors (N,) rad; 0 where a kind has none) of frame poses P (N, 3),
+    R (N, 3, 3) for a banded goal of ``kind`` with target (pt (3,), Rt (3, 3)) and aux row ``aux``, as the kernel's
+    success test computes them."""
     N = P.shape[0]
     zeros = np.zeros(N)
     pos = zeros

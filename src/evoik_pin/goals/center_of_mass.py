@@ -11,7 +11,7 @@ import pinocchio as pin
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
 from ..io.datafile import Flow
-from .file_entries import FileKind, number, position_target, unknown_keys
+from .file_entries import FileKind, field_entries, number, position_target, unknown_keys
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
 from .goal import number as goal_number
 from .registry import COM_POINT, COM_SUPPORT, FAMILY_BEYOND_FRAME, KindCode
@@ -35,18 +35,15 @@ _AXES = "xyz"
 
 @dataclass(frozen=True, eq=False, repr=False)
 class CenterOfMass(Goal):
-    """The robot's centre of mass (every body its joints carry; masses from the URDF's inertias) at a point, or
-    its ground projection inside a support polygon. Exactly one of:
+    """The robot's centre of mass (masses from the URDF's inertias) at a point, or its ground projection inside a
+    support polygon. Exactly one of:
 
-    * ``point``: a 3-vector (m, the robot's base frame; the world with a floating base); the CoM meets it on
-      ``axes`` (any of "x", "y", "z", default "xyz": ``axes="xy"`` puts the CoM above the point). Met when the
-      distance over those axes is within ``tolerance`` (m).
-    * ``support``: ``{frame: points}`` with points a (k, 3) array (m) in that frame (the corners of a sole, the
-      tips of a quadruped's feet), or a list of frames whose contact points come from their collision geometry
-      (:func:`contact_points`). The CoM's ground (x, y) projection lies inside the convex hull of every contact
-      point's ground projection, at least ``margin`` (m, >= 0) inside each edge. The contact points move with their
-      frames. Met when the projection is inside (the solver aims ``tolerance`` further in, so an answer is inside
-      the margin, not merely within ``tolerance`` of it); its error is the distance (m) outside, 0 inside.
+    * ``point``: a 3-vector (m, base frame), met on ``axes`` (any of "x", "y", "z", default "xyz": ``axes="xy"``
+      puts the CoM above the point) when the distance over them is within ``tolerance`` (m).
+    * ``support``: ``{frame: points}`` (a (k, 3) array, m, in that frame: the corners of a sole), or a list of
+      frames whose contact points come from their collision geometry (:func:`contact_points`). The CoM's ground
+      (x, y) projection lies inside the convex hull of the contact points', at least ``margin`` (m, >= 0) inside each
+      edge (the solver aims ``tolerance`` further in); its error is the distance (m) outside, 0 inside.
 
     Args (all by keyword): point, axes, support, margin, then ``weight`` (> 0, default 1) and ``tolerance`` (m,
     default 1e-6).
@@ -56,9 +53,6 @@ class CenterOfMass(Goal):
     axes: str = _AXES
     support: dict | None = None
     margin: float = 0.0
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     KIND_CODES = (KindCode(KIND_COM, (0, 1, 2), FAMILY_BEYOND_FRAME),
                   KindCode(KIND_COM_SUPPORT, (0, 1), FAMILY_BEYOND_FRAME))
 
@@ -68,10 +62,7 @@ class CenterOfMass(Goal):
             raise TargetError("CenterOfMass takes a point (point=p, a 3-vector in m) or a support polygon "
                               "(support={frame: points} or support=[frames]), exactly one of the two")
         kind = KIND_COM if support is None else KIND_COM_SUPPORT
-        for name, value in (("frame", None), ("weight", weight), ("tolerance", tolerance),
-                            ("rotation_tolerance", None), ("kind", kind), ("has_orientation", False)):
-            object.__setattr__(self, name, value)
-        self._check_numbers("the centre-of-mass goal")
+        self._init_common(None, weight, tolerance, None, kind, False, "the centre-of-mass goal")
         if support is None:
             object.__setattr__(self, "point", point3(point, "CenterOfMass's point"))
             object.__setattr__(self, "axes", _axes(axes))
@@ -81,10 +72,8 @@ class CenterOfMass(Goal):
             object.__setattr__(self, "point", None)
             object.__setattr__(self, "axes", "xy")
             object.__setattr__(self, "support", _support(support))
-            margin = goal_number(margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0")
-            if margin < 0:
-                raise OptionError(f"margin (m) of the centre-of-mass support goal must be >= 0, got {margin!r}")
-            object.__setattr__(self, "margin", margin)
+            object.__setattr__(self, "margin", goal_number(margin, "margin (m) of the centre-of-mass support goal",
+                                                           "a finite number >= 0", 0.0))
 
     @property
     def frames(self) -> list[str]:
@@ -100,9 +89,8 @@ class CenterOfMass(Goal):
         return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout
-        above). Raises TargetError for a robot without mass, FrameError for an
-        unknown support frame or one without collision geometry."""
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout above). Raises
+        TargetError for a robot without mass, FrameError for an unknown support frame or one without geometry."""
         mc = robot.mass_constants
         if not mc.total > 0.0:
             raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "
@@ -138,28 +126,31 @@ class CenterOfMass(Goal):
             return (self.axes,)
         return (self.margin, *((f, None if p is None else p.tobytes()) for f, p in self.support.items()))
 
-    def robot_errors(self, robot, q) -> tuple[float, None]:
-        """(error m, None) at ``q`` (n,), from Pinocchio's ``centerOfMass``: the distance over ``axes`` to the
-        point, or the distance outside the support polygon shrunk by ``margin`` (0 inside)."""
-        c = com_of(robot, q)
-        if self.support is None:
-            mask = np.array([a in self.axes for a in _AXES])
-            return float(np.linalg.norm((c - self.point)[mask])), None
-        return polygon_distance(c[:2], _world_points(robot, q, self.support), self.margin), None
+    def _axes_distance(self, c: np.ndarray) -> np.ndarray:
+        """The distances (m) over ``axes`` from centres of mass c (..., 3) to the point."""
+        return np.linalg.norm((c - self.point)[..., np.array([a in self.axes for a in _AXES])], axis=-1)
 
-    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
-        """(errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation): the distance
-        over ``axes`` to the point; for a support polygon the largest violation of the margin-shrunk hull's edge
-        half-planes (0 exactly inside; at most the distance outside)."""
-        c = com_batch(robot, Q)
-        if self.support is None:
-            mask = np.array([a in self.axes for a in _AXES])
-            return np.linalg.norm((c - self.point)[:, mask], axis=1), np.zeros(len(Q))
+    def _ground(self, robot, Q: np.ndarray) -> np.ndarray:
+        """(N, K, 2) the contact points' ground (x, y) positions (m, base frame) over a population Q (N, n)."""
         frames = _frame_points(robot, self.support)
         P, R = robot.fk_batch(Q, validate=False, frames=[f for f, _ in frames])
-        ground = np.concatenate([np.einsum("nij,kj->nki", R[:, g], pts) + P[:, g, None] for g, (_, pts)
-                                 in enumerate(frames)], axis=1)[:, :, :2]  # (N, K, 2)
-        return _hull_violation(c[:, :2], ground, self.margin), np.zeros(len(Q))
+        return np.concatenate([np.einsum("nij,kj->nki", R[:, g], pts) + P[:, g, None] for g, (_, pts)
+                               in enumerate(frames)], axis=1)[:, :, :2]
+
+    def robot_errors(self, robot, q) -> tuple[float, None]:
+        """(error m, None) at ``q`` (n,), the centre of mass from Pinocchio's ``centerOfMass``."""
+        c = com_of(robot, q)
+        if self.support is None:
+            return float(self._axes_distance(c)), None
+        return polygon_distance(c[:2], self._ground(robot, np.asarray(q, dtype=float)[None])[0], self.margin), None
+
+    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
+        """(errors (N,) m, zeros (N,)) of a population Q (N, n); for a support polygon the largest violation of the
+        margin-shrunk hull's edge half-planes (0 exactly inside; at most the distance outside)."""
+        c = com_batch(robot, Q)
+        if self.support is None:
+            return self._axes_distance(c), np.zeros(len(Q))
+        return _hull_violation(c[:, :2], self._ground(robot, Q), self.margin), np.zeros(len(Q))
 
     def __repr__(self) -> str:
         if self.support is None:
@@ -181,61 +172,42 @@ def _axes(axes) -> str:
 
 def _support(support) -> dict:
     """{frame: (k, 3) points or None (from the collision geometry)} of a support argument, checked."""
-    if isinstance(support, dict):
-        items = list(support.items())
-    elif isinstance(support, (list, tuple)):
-        items = [(f, None) for f in support]
-    else:
+    if isinstance(support, (list, tuple)):
+        support = dict.fromkeys(support)
+    if not isinstance(support, dict):
         raise TargetError(f"CenterOfMass's support is {{frame: points (k x 3, m)}} or a list of frames, got "
                           f"{type(support).__name__}")
-    if not items:
+    if not support:
         raise TargetError("CenterOfMass's support names no frame: give {frame: points (k x 3, m)} or [frames]")
     out = {}
-    for frame, pts in items:
+    for frame, pts in support.items():
         if not isinstance(frame, str) or not frame:
             raise FrameError(f"CenterOfMass's support frames are frame names (strings), got {frame!r}")
         if pts is not None:
             try:
-                a = np.asarray(pts, dtype=float)
+                a = np.array(pts, dtype=float)
             except (TypeError, ValueError):
-                raise TargetError(f"support points of {frame!r} are a k x 3 array (m), got {pts!r}") from None
-            if a.ndim == 1 and a.size == 3:
-                a = a[None]
-            if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0:
-                raise TargetError(f"support points of {frame!r} are a k x 3 array (m) with k >= 1, got shape "
-                                  f"{a.shape}")
-            if not np.isfinite(a).all():
-                raise TargetError(f"support points of {frame!r} contain NaN or inf")
-            pts = a.copy()
+                a = np.zeros((0, 0))
+            a = a[None] if a.shape == (3,) else a
+            if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] == 0 or not np.isfinite(a).all():
+                raise TargetError(f"support points of {frame!r} are a k x 3 array (m) of finite numbers with k >= 1, "
+                                  f"got {pts!r}")
+            pts = a
         out[frame] = pts
     return out
 
 
 def contact_points(robot, frame: str) -> np.ndarray:
-    """(4, 3) contact points (m, in ``frame``) from the collision geometry of the rigid body ``frame`` is on: the
-    four corners of the lowest face (least z in the frame) of the box, aligned with the frame's axes, that bounds
-    every collision geometry on the frame's joint (each geometry's own bounding box, ``coal``'s ``aabb_local``,
-    through its placement). A sole frame (z up, on the foot) gets the corners of the foot's bottom.
-
-    Raises FrameError when the frame's joint carries no collision geometry."""
+    """(4, 3) contact points (m, in ``frame``): the four corners of the lowest face (least z in the frame) of the box,
+    aligned with the frame's axes, that bounds every collision geometry on the frame's joint (a sole frame, z up:
+    the foot's bottom). Raises FrameError when the frame's joint carries no collision geometry."""
     known = _CONTACTS.setdefault(robot, {})
-    if frame not in known:  # every solve binds its goals and reports their errors: read the geometry once
-        known[frame] = _geometry_contacts(robot, frame)
-    return known[frame].copy()
-
-
-#: Contact points from collision geometry, per robot (weakly: the cache keeps no robot alive) and frame.
-_CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _geometry_contacts(robot, frame: str) -> np.ndarray:
-    """:func:`contact_points`, uncached."""
-    model = robot.model
-    f = model.frames[robot.frame_id(frame)]
-    geom = robot.collision_model
+    if frame in known:  # every solve binds its goals and reports their errors: read the geometry once
+        return known[frame].copy()
+    f = robot.model.frames[robot.frame_id(frame)]
     fMj = f.placement.inverse()
     corners = []
-    for g in geom.geometryObjects:
+    for g in robot.collision_model.geometryObjects:
         if g.parentJoint != f.parentJoint:
             continue
         shape = g.geometry
@@ -249,7 +221,13 @@ def _geometry_contacts(robot, frame: str) -> np.ndarray:
                          f"from: give its points, support={{{frame!r}: points (k x 3, m)}}")
     c = np.concatenate(corners)
     lo, hi = c.min(axis=0), c.max(axis=0)
-    return np.array([[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]], [lo[0], hi[1], lo[2]]])
+    known[frame] = np.array([[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]],
+                             [lo[0], hi[1], lo[2]]])
+    return known[frame].copy()
+
+
+#: Contact points from collision geometry, per robot (weakly: the cache keeps no robot alive) and frame.
+_CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _frame_points(robot, support: dict) -> list[tuple[str, np.ndarray]]:
@@ -266,15 +244,6 @@ def _bound_points(robot, support: dict) -> np.ndarray:
         for x in pts:
             rows.append([j, *(R @ x + p)])
     return np.array(rows, dtype=float)
-
-
-def _world_points(robot, q, support: dict) -> np.ndarray:
-    """(K, 3) the contact points (m, base frame) at ``q`` (Pinocchio's kinematics)."""
-    out = []
-    for frame, pts in _frame_points(robot, support):
-        T = robot.fk(q, frame)
-        out.append(pts @ np.asarray(T.rotation).T + np.asarray(T.translation))
-    return np.concatenate(out)
 
 
 def com_of(robot, q) -> np.ndarray:
@@ -334,13 +303,15 @@ def _hull_violation(c: np.ndarray, ground: np.ndarray, margin: float) -> np.ndar
 
 def polygon_distance(point, points, margin: float = 0.0) -> float:
     """Distance (m) from ``point`` (2,) to the convex hull of ``points`` (K, >= 2) (their x, y) shrunk by
-    ``margin`` (m): 0 inside; inf when the shrunk hull is empty (a polygon narrower than 2 x margin) or the points
-    span no area. Exact: the nearest of the feet on the shrunk edges' lines and of their crossings that lie in it."""
-    P = np.asarray(points, dtype=float)[:, :2]
-    normals, offsets = _half_planes(P)
-    if normals is None:
+    ``margin`` (m): 0 inside; inf when the shrunk hull is empty or the points span no area."""
+    # exact: the nearest of the feet on the shrunk edges' lines and of their crossings that lie in it
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:  # the hull's edges: n.x <= o inside, n unit outward
+        hull = ConvexHull(np.asarray(points, dtype=float)[:, :2]).equations
+    except (QhullError, ValueError):  # points spanning no area
         return float("inf")
-    b = offsets - margin
+    normals, b = hull[:, :2], -hull[:, 2] - margin
     c = np.asarray(point, dtype=float)
     if (normals @ c <= b).all():
         return 0.0
@@ -355,30 +326,6 @@ def polygon_distance(point, points, margin: float = 0.0) -> float:
     if not inside:
         return float("inf")
     return float(min(np.linalg.norm(x - c) for x in inside))
-
-
-def _half_planes(P: np.ndarray):
-    """(normals (h, 2), offsets (h,)) of the convex hull of points P (K, 2) (Andrew's monotone chain,
-    counter-clockwise): n.x <= o inside, n unit; (None, None) for points that span no area."""
-    pts = sorted({(float(x), float(y)) for x, y in P})
-    if len(pts) < 3:
-        return None, None
-
-    def chain(points):
-        out: list = []
-        for p in points:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
-                out.pop()
-            out.append(p)
-        return out[:-1]
-
-    hull = np.array(chain(pts) + chain(pts[::-1]))
-    if len(hull) < 3:
-        return None, None
-    d = np.roll(hull, -1, axis=0) - hull
-    n = np.stack([d[:, 1], -d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]  # outward: right of each edge
-    return n, (n * hull).sum(axis=1)
 
 
 def _file_goal(entry: dict, what: str) -> CenterOfMass:
@@ -414,7 +361,4 @@ def _file_entry(goal: CenterOfMass) -> dict:
                             if given else list(goal.support))
         if goal.margin:
             entry["margin"] = float(goal.margin)
-    for key, default in (("weight", 1.0), ("tolerance", DEFAULT_GOAL_TOLERANCE)):
-        if getattr(goal, key) != default:
-            entry[key] = float(getattr(goal, key))
-    return entry
+    return entry | field_entries(goal, ("weight", "tolerance"))

@@ -10,7 +10,7 @@ from ..errors import TargetError
 from ..io.datafile import Flow
 from .bands import AUX_SIZE, angles
 from .file_entries import FileKind, pointing, vector_target
-from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
 from .registry import AXIS_ALONG, FAMILY_AXES, KindCode
 
 __all__ = ["AUX_AXIS", "KIND_DIRECTION", "Direction", "unit_vector"]
@@ -38,25 +38,29 @@ def unit_vector(value, what: str) -> np.ndarray:
     return v / norm
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class _Pointing(Goal):
-    """A frame's axis aimed along a direction (:class:`Direction`) or at a point (:class:`LookAt`): the error is the
-    angle (rad) between the axis (turned with the frame) and the wanted direction; the kernel's residual
-    ``R a - d`` (3 rows, base frame) is zero only when they are aligned."""
+    """A frame's ``axis`` aimed along a direction (:class:`Direction`) or at a point (:class:`LookAt`), its target
+    the field ``TARGET`` names: the error is the angle (rad) between the axis (turned with the frame) and the wanted
+    direction; the kernel's residual ``R a - d`` (3 rows, base frame) is zero only when they are aligned."""
 
     axis: object = None
-    has_position = False
+    #: The field holding the target (a unit direction, or a point), and its ``kind:`` in goals files.
+    TARGET = FILE_KIND = ""
 
-    def _init_pointing(self, frame, axis, weight, tolerance, kind: int) -> None:
-        self._init_common(frame, weight, tolerance, tolerance, kind, False)  # rad; the position error (None) is unused
-        object.__setattr__(self, "axis", unit_vector(axis, f"{type(self).__name__} on {frame!r}: axis"))
+    def _init_pointing(self, frame: str, axis, target, weight, tolerance) -> None:
+        name = type(self).__name__
+        # rad; the position error (None) is unused
+        self._init_common(frame, weight, tolerance, tolerance, self.KIND_CODES[0].code, False)
+        object.__setattr__(self, "axis", unit_vector(axis, f"{name} on {frame!r}: axis"))
+        where = f"{name} on {frame!r}: {self.TARGET}"
+        object.__setattr__(self, self.TARGET, point3(target, where) if self.has_point else unit_vector(target, where))
         aux = np.zeros(AUX_SIZE)
         aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
         self._set_aux(aux)
 
-    @property
-    def reports_angle(self) -> bool:
-        return True
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        return getattr(self, self.TARGET).copy(), np.eye(3)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
@@ -67,9 +71,18 @@ class _Pointing(Goal):
         if not self.has_point:
             return zeros, angles(A, np.broadcast_to(pt, A.shape))
         D = pt - P
-        rho = np.linalg.norm(D, axis=1)
-        return zeros, np.where(rho < 1e-12, np.pi, angles(A, D))
+        return zeros, np.where(np.linalg.norm(D, axis=1) < 1e-12, np.pi, angles(A, D))
 
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: direction | look_at``: ``axis`` and ``target: {direction | point}``; weight, tolerance (rad)."""
+        return FileKind(cls.FILE_KIND, cls, ("weight", "tolerance", "axis"), vector_target(cls.TARGET),
+                        lambda g: Flow(**{cls.TARGET: [float(v) + 0.0 for v in g.encode()[0]]}), pointing(cls))
+
+    def __repr__(self) -> str:
+        return (f"{type(self).__name__}({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "
+                f"{self.TARGET}={np.round(self.encode()[0], 6).tolist()}, weight={self.weight:g}, "
+                f"tolerance={self.rotation_tolerance:g})")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -83,31 +96,14 @@ class Direction(_Pointing):
     """
 
     direction: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     has_point = False
+    TARGET = FILE_KIND = "direction"
     KIND_CODES = (KindCode(KIND_DIRECTION, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
 
     def __init__(self, frame: str, axis, direction, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
-        self._init_pointing(frame, axis, weight, tolerance, KIND_DIRECTION)
-        object.__setattr__(self, "direction", unit_vector(direction, f"Direction on {frame!r}: direction"))
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.direction.copy(), np.eye(3)
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: direction``: ``axis`` and ``target: {direction}``; weight, tolerance (rad)."""
-        return FileKind("direction", cls, ("weight", "tolerance", "axis"), vector_target("direction"),
-                        lambda g: Flow(direction=[float(v) + 0.0 for v in g.direction]), pointing(cls))
+        self._init_pointing(frame, axis, direction, weight, tolerance)
 
     def marker(self) -> None:
         """None: a direction has no place to mark."""
         return None
-
-    def __repr__(self) -> str:
-        return (f"Direction({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "
-                f"direction={np.round(self.direction, 6).tolist()}, weight={self.weight:g}, "
-                f"tolerance={self.rotation_tolerance:g})")

@@ -18,8 +18,8 @@ from ..io.datafile import Flow
 from ..target import Target
 from .goal import DEFAULT_GOAL_TOLERANCE
 
-__all__ = ["FIELD_READERS", "FileKind", "axis_entry", "field_entries", "matrix_text", "name_entry", "number", "numbers",
-           "orientation_target", "pair_goal", "pointing", "pose_target", "position_target", "position_text",
+__all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_entry", "number", "numbers",
+           "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",
            "unknown_keys", "vector_target"]
 
 #: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
@@ -73,13 +73,11 @@ def pose_target(target: dict) -> Target:
 
 
 def position_target(target: dict) -> np.ndarray:
+    """A position's target: ``position`` (m), no orientation."""
     if any(k in target for k in ("rpy", "rpy_rad", "matrix")):
         raise GoalsFileError("target: a position goal has no orientation (rpy, rpy_rad, matrix); use kind: pose "
                              "for one")
-    unknown_keys(target, ("position",), "target")
-    if "position" not in target:
-        raise GoalsFileError("target of a position goal needs position: [x, y, z] (m)")
-    return numbers(target["position"], 3, "target.position (m)")
+    return vector_target("position", " (m)")(target)
 
 
 def orientation_target(target: dict) -> np.ndarray:
@@ -98,13 +96,13 @@ def orientation_target(target: dict) -> np.ndarray:
     return Target.from_rpy(np.zeros(3), np.radians(rpy) if key == "rpy" else rpy).rotation
 
 
-def vector_target(name: str) -> Callable[[dict], np.ndarray]:
-    """The reader of a target that is one 3-vector under the key ``name`` (direction, point)."""
+def vector_target(name: str, unit: str = "") -> Callable[[dict], np.ndarray]:
+    """The reader of a target that is one 3-vector under the key ``name`` (direction, point, position)."""
     def read(target: dict) -> np.ndarray:
         unknown_keys(target, (name,), "target")
         if name not in target:
-            raise GoalsFileError(f"target needs {name}: [x, y, z]")
-        return numbers(target[name], 3, f"target.{name}")
+            raise GoalsFileError(f"target needs {name}: [x, y, z]{unit}")
+        return numbers(target[name], 3, f"target.{name}{unit}")
     return read
 
 
@@ -122,11 +120,6 @@ def free_entry(value, what: str):
     raise GoalsFileError(f"{what} must name axes (a string such as 'rz' or a list of names), got {value!r}")
 
 
-def axis_entry(value, what: str) -> np.ndarray:
-    return numbers(value, 3, what)
-
-
-#: How the optional fields other than numbers are read (the others: :func:`_number`).
 def name_entry(value, what: str) -> str:
     """A name (a non-empty string), such as ``expressed_in: world``; the goal checks which names it accepts."""
     if not isinstance(value, str) or not value:
@@ -134,7 +127,9 @@ def name_entry(value, what: str) -> str:
     return value
 
 
-FIELD_READERS = {"tolerance": tolerance_entry, "free": free_entry, "axis": axis_entry, "expressed_in": name_entry}
+#: How the optional fields other than numbers are read (the others: :func:`number`).
+FIELD_READERS = {"tolerance": tolerance_entry, "free": free_entry, "axis": lambda value, what: numbers(value, 3, what),
+                 "expressed_in": name_entry}
 
 
 def matrix_text(goal) -> dict:
@@ -191,24 +186,36 @@ def field_entries(goal, fields: tuple[str, ...]) -> dict:
                 entry[key] = " ".join(goal.free)
         elif key == "axis":
             entry[key] = [float(v) + 0.0 for v in goal.axis]
+        elif key == "expressed_in":
+            if goal.expressed_in != "a":
+                entry[key] = goal.expressed_in
         elif getattr(goal, key) != defaults[key]:
             entry[key] = float(getattr(goal, key))
     return entry
 
 
-def pair_goal(cls, entry: dict, what: str, name: str, fields: tuple[str, ...], read_target: Callable) -> object:
-    """A two-frame ``kind: <name>`` entry (:class:`RelativePose`, :class:`RelativePosition`): ``frame_a``, ``frame``
-    (frame b) and a ``target`` (read by ``read_target``), with the optional ``fields``; ``cls(frame_a, frame,
-    target, **fields)``."""
-    unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
-    for key in ("frame_a", "frame", "target"):
-        if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
-                                 "frame's placement relative to frame_a)")
-    if not isinstance(entry["target"], dict):
-        raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
-    options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
-    try:
-        return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
-    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+def pair_kind(cls, name: str, read_target: Callable, write_target: Callable) -> FileKind:
+    """The ``kind: <name>`` of a two-frame goal class (:class:`RelativePose`, :class:`RelativePosition`):
+    ``frame_a``, ``frame`` (frame b) and a ``target`` (read by ``read_target``, written by ``write_target``), with
+    the optional ``cls.FILE_FIELDS``; read as ``cls(frame_a, frame, target, **fields)``."""
+    fields = cls.FILE_FIELDS
+
+    def read(entry: dict, what: str):
+        unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
+        for key in ("frame_a", "frame", "target"):
+            if key not in entry:
+                raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
+                                     "frame's placement relative to frame_a)")
+        if not isinstance(entry["target"], dict):
+            raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
+        options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
+        try:
+            return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
+        except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
+            raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
+
+    def write(goal) -> dict:
+        return ({"frame_a": goal.frame_a, "frame": goal.frame, "kind": name, "target": write_target(goal)}
+                | field_entries(goal, fields))
+
+    return FileKind(name, cls, (), read_target, write_target, read=read, write=write)

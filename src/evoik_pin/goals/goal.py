@@ -1,14 +1,9 @@
-"""The base of every goal kind: the frame it is on, its weight and tolerances, checked when the goal is made
-(see :mod:`evoik_pin.goals`); goal sets; and what the kinds on two frames share (their checks, ``aux`` row and
-placements over a population: :func:`check_frame_pair`, :func:`pack_frame_pair`, :func:`pair_placements`).
+"""The base of every goal kind (:class:`Goal`: its frame, weight and tolerances, checked when made), goal sets, and
+what the kinds on two frames share (:class:`FramePair`, :func:`pack_frame_pair`).
 
-Goal sets: one goal whose target is any one of several (``Pose(frame, [T1, ..., Tk])``,
-``Position(frame, [p1, ..., pk])``), the grasps a planner offers of which any will do.
-
-A goal set is a goal like the others (its frame, weight and tolerances), packed for the kernel with its first
-member's target; its ``alternatives`` hold one single-target goal per member, in the order given. Solvers try the
-members (:meth:`evoik_pin.problem.IKProblem.variants`); ``Result.chosen[i]`` is the index of the member goal ``i``
-meets.
+A goal set is one goal whose target is any one of several (``Pose(frame, [T1, ..., Tk])``): packed for the kernel
+with its first member's target, its ``alternatives`` one single-target goal per member, in order. Solvers try the
+members (:meth:`evoik_pin.problem.IKProblem.variants`); ``Result.chosen[i]`` is the member goal ``i`` meets.
 """
 
 from __future__ import annotations
@@ -20,27 +15,26 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
-from .bands import AUX_SIZE, AXES, band_aux, band_errors, parse_pose_axes
-from .registry import register
+from .bands import AUX_SIZE, band_aux, band_errors, parse_axes
+from .registry import KINDS, register
 
 __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
-           "FramePair", "check_frame_pair", "init_set", "is_set", "number", "pack_frame_pair", "pair_placements",
-           "point3"]
+           "FramePair", "init_set", "is_set", "number", "pack_frame_pair", "point3"]
 
 #: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation).
 DEFAULT_GOAL_TOLERANCE = 1e-6
 
 
-def number(value, what: str, accepted: str) -> float:
-    """``value`` as a finite float, or an OptionError naming ``what`` and what is ``accepted``."""
+def number(value, what: str, accepted: str, low: float | None = None, strict: bool = False) -> float:
+    """``value`` as a finite float (>= ``low`` when given, > ``low`` when ``strict``), or an OptionError naming
+    ``what`` and what is ``accepted``."""
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise OptionError(f"{what} must be {accepted}, got {value!r}") from None
-    if not math.isfinite(x):
+        x = math.nan
+    if not math.isfinite(x) or low is not None and (x < low or strict and x == low):
         raise OptionError(f"{what} must be {accepted}, got {value!r}")
     return x
-
 
 
 def point3(value, what: str) -> np.ndarray:
@@ -48,21 +42,19 @@ def point3(value, what: str) -> np.ndarray:
     try:
         p = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise TargetError(f"{what} must be 3 finite numbers (m) (a 3-vector), got {value!r}") from None
-    if p.shape != (3,) or not np.isfinite(p).all():
+        p = None
+    if p is None or p.shape != (3,) or not np.isfinite(p).all():
         raise TargetError(f"{what} must be 3 finite numbers (m) (a 3-vector), got {value!r}")
     return p
 
+
 @dataclass(frozen=True, eq=False)
 class Goal:
-    """A goal on one frame (abstract: :class:`Pose`, :class:`Position`). See the module docstring.
+    """A goal on one frame (abstract: :class:`Pose`, :class:`Position`, ...; see :mod:`evoik_pin.goals`).
 
-    A kind (a subclass) declares what the solvers need of it: ``KIND_CODES``, its kernel codes
-    (:class:`.registry.KindCode`: rows, compiled family, orientation, position, angle; registered when the class is
-    made), :meth:`population_errors` (its violation over a population, NumPy), :meth:`file_kind` (its entry in
-    goals files) and :meth:`marker` (its viewer marker)."""
+    A kind (a subclass) declares ``KIND_CODES``, its kernel codes (:class:`.registry.KindCode`, registered when the
+    class is made), :meth:`encode`, :meth:`file_kind` (its goals-file entry) and :meth:`marker` (its viewer marker)."""
 
-    #: The kind's kernel codes (:class:`.registry.KindCode`); a class attribute, registered by __init_subclass__.
     KIND_CODES = ()
 
     def __init_subclass__(cls, **kwargs) -> None:
@@ -80,61 +72,49 @@ class Goal:
     #: A goal set's members (:func:`init_set`): one single-target goal each; None for one target.
     alternatives: tuple | None = field(default=None, init=False, repr=False)
 
-    def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool) -> None:
-        """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__)."""
-        for name, value in (("frame", frame), ("weight", weight), ("tolerance", tolerance),
-                            ("rotation_tolerance", rotation_tolerance), ("kind", kind), ("has_orientation", oriented)):
+    def _init_common(self, frame, weight, tolerance, rotation_tolerance, kind: int, oriented: bool,
+                     what: str | None = None) -> None:
+        """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__): weight
+        > 0, tolerances >= 0 (None: the default; ``rotation_tolerance`` None: ``tolerance``), a frame name unless
+        ``what`` names a goal without one in the messages."""
+        for name, value in (("frame", frame), ("kind", kind), ("has_orientation", oriented)):
             object.__setattr__(self, name, value)
-        self._check_common()
-
-    def _init_pose_axes(self, frame, weight, tolerance, rotation_tolerance, free, kinds: tuple[int, int],
-                        where: str) -> None:
-        """Set and check the fields of a pose-like goal (:class:`Pose`, :class:`RelativePose`): those of
-        :meth:`_init_common`, its ``band`` and ``free`` (:func:`.bands.parse_pose_axes`; ``where`` names the goal in
-        the messages) and its aux row; kind ``kinds[0]`` under a norm tolerance with no free axis, else
-        ``kinds[1]``, whose errors under bands are their excess over them (tolerances 0)."""
-        band, free = parse_pose_axes(tolerance, rotation_tolerance, free, where)
-        plain = band is None and not free
-        if band is None:
-            self._init_common(frame, weight, tolerance, rotation_tolerance, kinds[0] if plain else kinds[1], True)
-        else:  # the errors of a banded goal are its excess over the bands: met at 0
-            self._init_common(frame, weight, 0.0, 0.0, kinds[1], True)
-        object.__setattr__(self, "band", band)
-        object.__setattr__(self, "free", free)
-        self._set_aux(None if plain else band_aux(band, free, AXES, DEFAULT_GOAL_TOLERANCE))
-
-    def _check_common(self) -> None:
-        if not isinstance(self.frame, str) or not self.frame:
-            raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {self.frame!r}")
-        self._check_numbers(f"the goal on {self.frame!r}")
-
-    def _check_numbers(self, what: str) -> None:
-        """Check and set weight and tolerances; ``what`` names the goal in the messages."""
-        weight = number(self.weight, f"weight of {what}", "a finite number > 0")
-        if weight <= 0:
-            raise OptionError(f"weight of {what} must be > 0, got {self.weight!r}")
-        tol = DEFAULT_GOAL_TOLERANCE if self.tolerance is None else number(  # None: the default
-            self.tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
-        rtol = tol if self.rotation_tolerance is None else number(
-            self.rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
+        if what is None:
+            if not isinstance(frame, str) or not frame:
+                raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {frame!r}")
+            what = f"the goal on {frame!r}"
+        weight_ = number(weight, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
+        tol = DEFAULT_GOAL_TOLERANCE if tolerance is None else number(
+            tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
+        rtol = tol if rotation_tolerance is None else number(
+            rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
         if tol < 0 or rtol < 0:
-            raise OptionError(f"tolerances of {what} must be >= 0, got {self.tolerance!r} m and "
-                              f"{self.rotation_tolerance!r} rad")
-        object.__setattr__(self, "weight", weight)
+            raise OptionError(f"tolerances of {what} must be >= 0, got {tolerance!r} m and {rotation_tolerance!r} rad")
+        object.__setattr__(self, "weight", weight_)
         object.__setattr__(self, "tolerance", tol)
         object.__setattr__(self, "rotation_tolerance", rtol)
+
+    def _init_axes(self, frame, weight, tolerance, rotation_tolerance, free, axes: tuple[str, ...],
+                   kinds: tuple[int | None, int], where: str) -> None:
+        """:meth:`_init_common` for a goal with bands and free axes on the error components ``axes``, with its
+        ``band``, ``free`` (:func:`.bands.parse_axes`; ``where`` names the goal) and aux row. ``kinds``: its code under
+        a norm tolerance with no free axis (None: it always reads its aux row), and with bands or free axes."""
+        band, free = parse_axes(tolerance, rotation_tolerance, free, axes, where)
+        plain = band is None and not free and kinds[0] is not None
+        if band is not None:  # met at 0
+            tolerance = rotation_tolerance = 0.0
+        self._init_common(frame, weight, tolerance, rotation_tolerance, kinds[0] if plain else kinds[1], "rx" in axes)
+        object.__setattr__(self, "band", band)
+        object.__setattr__(self, "free", free)
+        self._set_aux(None if plain else band_aux(band, free, axes, DEFAULT_GOAL_TOLERANCE))
 
     @property
     def label(self) -> str:
         """How messages name this goal: its frame (goals beyond one frame say more)."""
         return self.frame
-    #: Whether the goal puts the frame's origin somewhere (False for orientation and pointing goals: their target
-    #: position pt is no place for the frame, and seed ranking leaves it out). A class attribute, not a field.
-    has_position = True
 
     def aux(self) -> np.ndarray | None:
-        """The kernel's ``aux`` row of this goal (its kind's layout, e.g. :mod:`.bands`' ``AUX_*``, read-only; None:
-        its kind reads none), made once with the goal (:meth:`_set_aux`)."""
+        """The kernel's ``aux`` row of this goal (read-only; None: its kind reads none)."""
         return self.__dict__.get("_aux")
 
     def _set_aux(self, aux: np.ndarray | None) -> None:
@@ -145,17 +125,13 @@ class Goal:
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray] | None:
         """(position errors (N,) m, orientation errors (N,) rad) of frame poses P (N, 3), R (N, 3, 3) for target
-        (pt, Rt), as the kernel's success test sees them, for the kinds with an ``aux`` row (None for the others,
-        whose errors are the distance and the rotation angle)."""
+        (pt, Rt) as the kernel's success test sees them; None for the kinds without an ``aux`` row."""
         aux = self.aux()
-        if aux is None:
-            return None
-        return band_errors(self.kind, P, R, pt, Rt, aux)
+        return None if aux is None else band_errors(self.kind, P, R, pt, Rt, aux)
 
     @classmethod
     def file_kind(cls):
-        """This kind's entry in goals files (a :class:`.file_entries.FileKind`: its ``kind:`` name, fields, how its
-        target is read and written), or None for a kind goals files do not take."""
+        """This kind's :class:`.file_entries.FileKind` in goals files, or None for a kind they do not take."""
         return None
 
     def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:
@@ -169,12 +145,9 @@ class Goal:
         raise NotImplementedError
 
     def errors(self, T: pin.SE3) -> tuple[float, float | None]:
-        """(position error m or None, rotation angle rad or None) of the goal frame at pose ``T`` (base frame); for
-        the kinds with bands, free axes or an axis to point, the errors their success test compares with the
-        tolerances (:mod:`.bands`)."""
+        """(position error m or None, rotation error rad or None) of the goal frame at pose ``T`` (base frame)."""
         pt, Rt = self.encode()
-        aux = self.aux()
-        if aux is not None:  # the kernel's own errors (its success test's), by their NumPy twin for one pose
+        if self.aux() is not None:
             pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], pt, Rt)
             return self.reported(pos[0], rot[0])
         pos = float(np.linalg.norm(T.translation - pt))
@@ -183,16 +156,21 @@ class Goal:
         return pos, float(np.linalg.norm(pin.log3(Rt.T @ T.rotation)))
 
     def reported(self, position_error: float, rotation_error: float | None) -> tuple[float | None, float | None]:
-        """The errors :meth:`errors` reports from the LM kernel's errors of this goal (position m, rotation rad or
-        None/NaN: the kernel's success test's numbers, :func:`~evoik_pin.solvers.lm.kernel.task_error`): the
-        position error None for a goal without a position, the rotation None for one that reports no angle."""
+        """The errors :meth:`errors` reports from the LM kernel's (m, rad): the position None for a goal without
+        a position, the rotation None for one that reports no angle."""
         return ((float(position_error) if self.has_position else None),
                 (float(rotation_error) if self.reports_angle else None))
 
     @property
+    def has_position(self) -> bool:
+        """Whether the goal puts the frame's origin somewhere (its kind's declaration; False for orientation and
+        pointing goals, whose target position seed ranking leaves out)."""
+        return KINDS[self.kind].has_position
+
+    @property
     def reports_angle(self) -> bool:
-        """Whether the goal's errors include an angle (rad): it constrains orientation, or it points an axis."""
-        return self.has_orientation
+        """Whether the goal's errors include an angle (rad) (its kind's declaration)."""
+        return KINDS[self.kind].angle
 
     def met(self, position_error: float | None, orientation_error: float | None) -> bool:
         """Whether errors (m or None, rad or None) are within this goal's tolerances."""
@@ -209,15 +187,12 @@ def is_set(target, single_shape: tuple[int, ...]) -> bool:
         return target.ndim == len(single_shape) + 1 and target.shape[1:] == single_shape
     if not isinstance(target, (list, tuple)):
         return False
-    if not target:
-        return True
     return all(isinstance(t, pin.SE3) or np.shape(t) == single_shape for t in target)
 
 
 def init_set(goal, targets, single, what: str) -> None:
-    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``: its target
-    is the first member's, its ``alternatives`` the members' goals. ``what`` names the kind and its members in
-    errors ("Pose" and "poses"). TargetError for an empty set, naming the member index of a bad one."""
+    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``. ``what``
+    names the kind and its members ("Pose poses"). TargetError for an empty set, naming the index of a bad member."""
     kind, members = what.split()
     if len(targets) == 0:
         raise TargetError(f"{kind} on {goal.frame!r}: a goal set with no {members}; give at least one "
@@ -235,12 +210,9 @@ def init_set(goal, targets, single, what: str) -> None:
 
 
 # ------------------------------------------------------------------ goals on two frames
-#: What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
-#: :class:`~.relative_position.RelativePosition`): frame b placed relative to frame a. Their ``aux`` row (read by the
-#: compiled ``solvers/lm/balance.py``): frame a's physical joint (-1: the base) at A_REL_JOINT, its folded placement
-#: R (9, row-major) at A_REL_R and p (3,) at A_REL_P; the AUX_SIZE band columns of a pose with axes from A_REL_BAND
-#: (:mod:`.bands`; unused by the kinds without bands); then A_REL_SIGNS + k (k < m), per physical joint k: +1 when it
-#: moves frame b only, -1 frame a only, :data:`BOTH` (or 0, as the kind asks) both, 0 neither.
+#: The ``aux`` row of the goals on two frames (read by ``solvers/lm/balance.py``): frame a's physical joint (-1: the
+#: base), its folded placement R (9, row-major) and p (3,); the band columns (:mod:`.bands`); then per physical joint
+#: k: +1 when it moves frame b only, -1 frame a only, :data:`BOTH` (or 0, as the kind asks) both.
 A_REL_JOINT, A_REL_R, A_REL_P, A_REL_BAND = 0, 1, 10, 13
 A_REL_SIGNS = A_REL_BAND + AUX_SIZE
 #: The sign of a joint that moves both frames, for a kind whose error sees them (a vector in the world's axes turns
@@ -250,7 +222,17 @@ BOTH = 2.0
 
 class FramePair:
     """What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
-    :class:`~.relative_position.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``."""
+    :class:`~.relative_position.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``. A kind
+    defines :meth:`placement_errors`; the errors of poses and of populations follow from it."""
+
+    def _init_pair(self, frame_a, frame_b, kind: str) -> None:
+        """Set ``frame_a``; FrameError unless the frames are two different frame names (``kind`` names the goal)."""
+        for name, value in (("frame_a", frame_a), ("frame_b", frame_b)):
+            if not isinstance(value, str) or not value:
+                raise FrameError(f"{kind}'s {name} is a frame name (a non-empty string), got {value!r}")
+        if frame_a == frame_b:
+            raise FrameError(f"{kind} needs two frames, got {frame_a!r} twice")
+        object.__setattr__(self, "frame_a", frame_a)
 
     @property
     def frame_b(self) -> str:
@@ -267,20 +249,33 @@ class FramePair:
         """How messages name this goal: ``frame_a -> frame_b``."""
         return f"{self.frame_a} -> {self.frame}"
 
-    def pair_errors(self, Ta, Tb) -> tuple[float, float | None]:
+    def batch_key(self) -> tuple:
+        """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
+        return (self.frame_a,)
+
+    def marker(self) -> None:
+        """None: the target is placed relative to frame a, no place in the base frame."""
+        return None
+
+    def placement_errors(self, Ra: np.ndarray, d: np.ndarray, Rb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(position errors (N,) m, rotation errors (N,) rad) for frame a's rotations Ra (N, 3, 3), the vectors
+        p_b - p_a (N, 3) (m) and frame b's rotations Rb (N, 3, 3), all in the base frame."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def pair_errors(self, Ta: pin.SE3, Tb: pin.SE3) -> tuple[float, float | None]:
         """The goal's errors (position m, rotation rad or None) for frame a's and frame b's poses ``Ta``, ``Tb``
-        (``pin.SE3``, base frame): what ``robot_errors`` reports, from poses a caller already has."""
-        raise NotImplementedError
+        (base frame): what :meth:`robot_errors` reports, from poses a caller already has."""
+        pos, rot = self.placement_errors(Ta.rotation[None], (Tb.translation - Ta.translation)[None], Tb.rotation[None])
+        return float(pos[0]), (float(rot[0]) if self.has_orientation else None)
 
+    def robot_errors(self, robot, q) -> tuple[float, float | None]:
+        """:meth:`pair_errors` at ``q`` (n,), from Pinocchio's kinematics."""
+        return self.pair_errors(robot.fk(q, self.frame_a), robot.fk(q, self.frame))
 
-def check_frame_pair(frame_a, frame_b, kind: str) -> None:
-    """FrameError unless ``frame_a`` and ``frame_b`` are two different frame names (non-empty strings); ``kind``
-    names the goal in the message."""
-    for name, value in (("frame_a", frame_a), ("frame_b", frame_b)):
-        if not isinstance(value, str) or not value:
-            raise FrameError(f"{kind}'s {name} is a frame name (a non-empty string), got {value!r}")
-    if frame_a == frame_b:
-        raise FrameError(f"{kind} needs two frames, got {frame_a!r} twice")
+    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`placement_errors` of a population Q (N, n), from the robot's batch kinematics."""
+        P, R = robot.fk_batch(Q, validate=False, frames=[self.frame_a, self.frame])
+        return self.placement_errors(R[:, 0], P[:, 1] - P[:, 0], R[:, 1])
 
 
 def pack_frame_pair(robot, frame_a: str, frame_b: str, band: np.ndarray | None = None,
@@ -310,11 +305,3 @@ def pack_frame_pair(robot, frame_a: str, frame_b: str, band: np.ndarray | None =
         aux[A_REL_BAND:A_REL_BAND + AUX_SIZE] = band
     aux[A_REL_SIGNS:] = signs
     return aux, on_a | on_b
-
-
-def pair_placements(robot, Q: np.ndarray, frame_a: str, frame_b: str
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Over a population Q (N, n): frame a's rotations R_a (N, 3, 3) (base frame), the vectors p_b - p_a (N, 3)
-    (m, base frame) and frame b's rotations R_b (N, 3, 3), from the robot's batch kinematics."""
-    P, R = robot.fk_batch(Q, validate=False, frames=[frame_a, frame_b])
-    return R[:, 0], P[:, 1] - P[:, 0], R[:, 1]

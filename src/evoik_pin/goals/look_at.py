@@ -4,12 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
-from ..io.datafile import Flow
 from .direction import _Pointing
-from .file_entries import FileKind, pointing, vector_target
-from .goal import DEFAULT_GOAL_TOLERANCE, point3
+from .goal import DEFAULT_GOAL_TOLERANCE
 from .registry import AXIS_AT, FAMILY_AXES, KindCode
 
 __all__ = ["KIND_LOOK_AT", "LookAt"]
@@ -29,27 +25,9 @@ class LookAt(_Pointing):
     """
 
     point: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     has_point = True
+    TARGET, FILE_KIND = "point", "look_at"
     KIND_CODES = (KindCode(KIND_LOOK_AT, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
 
-    def __init__(self, frame: str, axis, point, weight: float = 1.0,
-                 tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
-        self._init_pointing(frame, axis, weight, tolerance, KIND_LOOK_AT)
-        object.__setattr__(self, "point", point3(point, f"LookAt on {frame!r}: point"))
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.point.copy(), np.eye(3)
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: look_at``: ``axis`` and ``target: {point}`` (m); weight, tolerance (rad)."""
-        return FileKind("look_at", cls, ("weight", "tolerance", "axis"), vector_target("point"),
-                        lambda g: Flow(point=[float(v) + 0.0 for v in g.point]), pointing(cls))
-
-    def __repr__(self) -> str:
-        return (f"LookAt({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "
-                f"point={np.round(self.point, 6).tolist()}, weight={self.weight:g}, "
-                f"tolerance={self.rotation_tolerance:g})")
+    def __init__(self, frame: str, axis, point, weight: float = 1.0, tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+        self._init_pointing(frame, axis, point, weight, tolerance)

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import OptionError, TargetError
+from ..errors import TargetError
 from ..target import _rotation
-from .bands import AXES, band_aux, parse_band, parse_free
+from .bands import AXES
 from .file_entries import FileKind, orientation_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .registry import BANDED_ROTATION, FAMILY_AXES, KindCode
@@ -18,9 +18,6 @@ __all__ = ["KIND_ORIENTATION", "Orientation"]
 
 #: An orientation's kernel code: the rotation vector's components with bands (a norm tolerance: bands of 0).
 KIND_ORIENTATION = BANDED_ROTATION
-
-#: The error components of an orientation: the rotation vector's.
-_ROTATION_AXES = AXES[3:]
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -36,27 +33,14 @@ class Orientation(Goal):
     """
 
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     band: object = None
     free: tuple = ()
-    has_position = False
     KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  free=None) -> None:
         where = f"Orientation on {frame!r}"
-        band = parse_band(tolerance, _ROTATION_AXES, where)
-        free = parse_free(free, _ROTATION_AXES, where)
-        if len(free) == 3:
-            raise OptionError(f"{where}: free names all three rotation axes, which leaves nothing to meet; drop the "
-                              "goal")
-        if band is None:  # rad; the position error (None) is unused
-            self._init_common(frame, weight, tolerance, tolerance, KIND_ORIENTATION, True)
-        else:  # the errors of a banded goal are its excess over the bands: met at 0
-            self._init_common(frame, weight, 0.0, 0.0, KIND_ORIENTATION, True)
-            band = np.where(np.isin(_ROTATION_AXES, free), np.inf, band)
+        self._init_axes(frame, weight, tolerance, None, free, AXES[3:], (None, KIND_ORIENTATION), where)
         if isinstance(target, pin.SE3):
             target = target.rotation
         elif np.shape(target) == (4, 4):
@@ -66,9 +50,6 @@ class Orientation(Goal):
         except TargetError as exc:
             raise TargetError(f"{where} takes a 3 x 3 rotation, a pin.SE3 or a 4 x 4 pose: {exc}") from None
         object.__setattr__(self, "target", np.array(R))
-        object.__setattr__(self, "band", band)
-        object.__setattr__(self, "free", free)
-        self._set_aux(band_aux(band, free, _ROTATION_AXES, DEFAULT_GOAL_TOLERANCE))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(3), self.target.copy()

@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from ..errors import TargetError
 from ..target import Target
-from .bands import tolerance_text
+from .bands import AXES, pose_text
 from .file_entries import FileKind, matrix_text, pose_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
 from .registry import BANDED_LOG6, FAMILY_AXES, FAMILY_FRAME, LOG6, KindCode
@@ -24,7 +24,8 @@ def se3_target(target, where: str) -> pin.SE3:
     """``target`` (a (4, 4) homogeneous matrix, a ``pin.SE3`` or a Target with a rotation; m) as a ``pin.SE3``, or
     a TargetError naming ``where`` (a 3-vector is a position, not a pose)."""
     if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
-        raise TargetError(f"{where}: a 3-vector is a position; give a 4 x 4 pose or a pin.SE3")
+        raise TargetError(f"{where}: a 3-vector is a position (Position goals take one); give a 4 x 4 pose or a "
+                          "pin.SE3")
     try:
         t = Target.coerce(target)
     except TargetError as exc:
@@ -45,19 +46,14 @@ class Pose(Goal):
     ``tolerance`` is either one number, the bound of the position error's norm (and ``rotation_tolerance`` of the
     rotation angle), or 6 numbers, per-axis half-widths of the error seen in the target frame: the position error
     ``R_t^T (p - p_t)`` along x, y, z (m), then the components of the rotation vector ``log3(R_t^T R)`` (rad)
-    (``inf``: free; ``rotation_tolerance`` then has no use). ``free`` names axes left free, any of
-    ``"x y z rx ry rz"`` (a string with spaces or a list): ``free="rz"``, any rotation about the target's z axis
-    (a drill, a suction cup). With one number and one free rotation axis, the rotation error is the angle between
-    the frame's and the target's axis of that name. See :mod:`evoik_pin.goals.bands`.
+    (``inf``: free). ``free`` names axes left free, any of ``"x y z rx ry rz"`` (a string or a list):
+    ``free="rz"``, any rotation about the target's z axis (a drill). See :mod:`evoik_pin.goals.bands`.
 
     ``target`` may be a goal set: a list of poses or a (k, 4, 4) array, any one of which will do
     (:func:`.goal.init_set`).
     """
 
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     #: The per-axis half-widths (6,) (m, rad; inf on free axes) of a banded pose, else None; the free axes' names.
     band: object = None
     free: tuple = ()
@@ -66,23 +62,13 @@ class Pose(Goal):
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  rotation_tolerance: float | None = None, free=None) -> None:
-        self._init_pose_axes(frame, weight, tolerance, rotation_tolerance, free, (KIND_POSE, KIND_POSE_AXES),
-                             f"Pose on {frame!r}")
-        free = self.free
+        self._init_axes(frame, weight, tolerance, rotation_tolerance, free, AXES, (KIND_POSE, KIND_POSE_AXES),
+                        f"Pose on {frame!r}")
         if is_set(target, (4, 4)):  # any one of several poses
-            return init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance,
-                                                                  free or None), "Pose poses")
-        if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
-            raise TargetError(f"Pose on {frame!r}: a 3-vector is a position; use Position({frame!r}, p) or give a "
-                              "4 x 4 pose or a pin.SE3")
-        try:
-            t = Target.coerce(target)
-        except TargetError as exc:
-            raise TargetError(f"Pose on {frame!r}: {exc}") from None
-        if t.rotation is None or t.planar:
-            raise TargetError(f"Pose on {frame!r} needs a target with a rotation (4 x 4 pose or pin.SE3); use "
-                              f"Position({frame!r}, p) for a position alone")
-        object.__setattr__(self, "target", pin.SE3(np.array(t.rotation), np.array(t.position)))
+            free = self.free or None
+            return init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance, free),
+                            "Pose poses")
+        object.__setattr__(self, "target", se3_target(target, f"Pose on {frame!r}"))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)
@@ -95,6 +81,4 @@ class Pose(Goal):
                         set_member=lambda t: t.se3())
 
     def __repr__(self) -> str:
-        p = np.round(self.target.translation, 6).tolist()
-        rpy = np.round(pin.rpy.matrixToRpy(self.target.rotation), 6).tolist()
-        return f"Pose({self.frame!r}, position={p}, rpy={rpy}, weight={self.weight:g}, {tolerance_text(self)})"
+        return f"Pose({self.frame!r}, {pose_text(self)})"

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from .bands import AXES, band_aux, parse_band
+from .bands import AXES
 from .file_entries import FileKind, position_target, position_text
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
 from .registry import BANDED_POINT, FAMILY_AXES, FAMILY_FRAME, POINT, KindCode
@@ -33,9 +33,6 @@ class Position(Goal):
     """
 
     target: object = None
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     #: The per-axis half-widths (3,) (m, base frame; inf: free) of a banded position, else None.
     band: object = None
     KIND_CODES = (KindCode(KIND_POSITION, (0, 1, 2), FAMILY_FRAME),
@@ -43,25 +40,17 @@ class Position(Goal):
 
     def __init__(self, frame: str, target, weight: float = 1.0,
                  tolerance: float | object = DEFAULT_GOAL_TOLERANCE) -> None:
-        band = parse_band(tolerance, AXES[:3], f"Position on {frame!r}")
-        if band is None:
-            self._init_common(frame, weight, tolerance, None, KIND_POSITION, False)
-        else:  # the errors of a banded goal are its excess over the bands: met at 0
-            self._init_common(frame, weight, 0.0, None, KIND_POSITION_BAND, False)
-        object.__setattr__(self, "band", band)
-        self._set_aux(None if band is None else band_aux(band, (), AXES[:3], DEFAULT_GOAL_TOLERANCE))
+        self._init_axes(frame, weight, tolerance, None, None, AXES[:3], (KIND_POSITION, KIND_POSITION_BAND),
+                        f"Position on {frame!r}")
         if is_set(target, (3,)):  # any one of several points
             return init_set(self, target, lambda p: Position(frame, p, weight, tolerance), "Position points")
-        if isinstance(target, pin.SE3) or np.shape(target) == (4, 4):
-            raise TargetError(f"Position on {frame!r} takes a 3-vector (m); use Pose({frame!r}, T) for a pose")
         try:
-            p = np.asarray(target, dtype=float)
+            p = np.array(target.homogeneous if isinstance(target, pin.SE3) else target, dtype=float)
         except (TypeError, ValueError):
-            raise TargetError(f"Position on {frame!r} takes a 3-vector (m), got {target!r}") from None
-        if p.shape != (3,):
-            raise TargetError(f"Position on {frame!r} takes a 3-vector (m), got shape {p.shape}")
-        if not np.isfinite(p).all():
-            raise TargetError(f"Position on {frame!r}: target contains NaN or inf: {p}")
+            p = np.array(None)
+        if p.shape != (3,) or not np.isfinite(p).all():
+            raise TargetError(f"Position on {frame!r} takes a 3-vector (m) of finite numbers (not NaN or inf; "
+                              f"Pose({frame!r}, T) for a pose), got {target!r} (shape {p.shape})")
         object.__setattr__(self, "target", p.copy())
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:

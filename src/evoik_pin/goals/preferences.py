@@ -1,12 +1,7 @@
 """Preferences: members of a goal list that are not goals, met as well as the goals allow and never at their
-expense (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``).
-
-Each preference is a cost over configurations (lower is better); a solve first meets the goals, then lowers the
-preferences' summed cost by steps in the null space of the goals' Jacobian, each step followed by an LM run that
-brings every goal back within its tolerance and kept only when it does and lowers the cost
-(:func:`evoik_pin.solvers.search.choose.refine`). A solve also ranks the answers it found by that cost
-(``prefer=`` adds its own term first). Differences on joints whose range spans a full turn (continuous joints,
-UR's +-2 pi) are taken to the nearest turn.
+expense (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``): costs over configurations (lower is better) that a
+solve lowers once the goals are met and ranks its answers by (:func:`evoik_pin.solvers.search.choose.refine`).
+Differences on joints whose range spans a full turn are taken to the nearest turn.
 
 * :class:`Posture`: ``weight / 2 * |q - q_ref|^2`` over the joints ``q_ref`` names (rad^2, m^2);
 * :class:`JointLimitMargin`: ``weight / 2 * sum max(0, margin - distance to a limit)^2``;
@@ -28,10 +23,7 @@ TWO_PI = 2.0 * np.pi
 
 
 def _weight(value, what: str) -> float:
-    w = number(value, f"weight of {what}", "a finite number > 0")
-    if w <= 0:
-        raise OptionError(f"weight of {what} must be a finite number > 0, got {value!r}")
-    return w
+    return number(value, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
 
 
 def turn_difference(q: np.ndarray, ref: np.ndarray, wrap: np.ndarray) -> np.ndarray:
@@ -49,7 +41,7 @@ class Preference:
 
     def bind(self, robot, q0, lower, upper, wrap) -> Preference:
         """This preference checked against ``robot`` for one solve (q0 (n,) or None, the box, its wrapping
-        joints); returns the bound copy :meth:`cost` and :meth:`gradient` read."""
+        joints): the bound copy :meth:`cost` and :meth:`gradient` read."""
         raise NotImplementedError  # pragma: no cover
 
     def cost(self, q: np.ndarray) -> float:  # pragma: no cover - abstract
@@ -110,8 +102,7 @@ class Posture(Preference):
         return out
 
     def cost(self, q):
-        d = np.where(self._mask, turn_difference(q, self._ref, self._wrap), 0.0)
-        return 0.5 * self.weight * float(d @ d)
+        return float(self.costs(q))
 
     def gradient(self, q):
         return self.weight * np.where(self._mask, turn_difference(q, self._ref, self._wrap), 0.0)
@@ -147,9 +138,7 @@ class JointLimitMargin(Preference):
     full turn wrap and have no limit to keep off."""
 
     def __init__(self, margin: float, weight: float = 1.0) -> None:
-        self.margin = number(margin, "JointLimitMargin's margin (rad or m)", "a finite number >= 0")
-        if self.margin < 0:
-            raise OptionError(f"JointLimitMargin's margin (rad or m) must be >= 0, got {margin!r}")
+        self.margin = number(margin, "JointLimitMargin's margin (rad or m)", "a finite number >= 0", 0.0)
         self.weight = self.curvature = _weight(weight, "JointLimitMargin")
 
     def bind(self, robot, q0, lower, upper, wrap) -> JointLimitMargin:
@@ -174,8 +163,7 @@ class JointLimitMargin(Preference):
         return f"JointLimitMargin({self.margin:g}, weight={self.weight:g})"
 
 
-#: Manipulability.costs computes up to this many rows one by one (measured on Panda: 8 rows 39 us one by one, 112
-#: batched; 32 rows 154 and 134).
+#: Manipulability.costs computes up to this many rows one by one (faster than its batched Jacobians).
 SMALL_BATCH = 24
 
 
@@ -195,16 +183,12 @@ class Manipulability(Preference):
         out._robot = robot
         return out
 
-    def measure(self, q) -> float:
-        """Yoshikawa's ``sqrt(det(J J^T))`` of the frame's 6 x n Jacobian at ``q`` (finite, shape (n,))."""
-        J = self._robot.jacobian_world_unchecked(np.asarray(q, dtype=float), self._fid)
-        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
-
     def cost(self, q):
-        return -self.weight * float(np.log(max(self.measure(q), 1e-300)))
+        J = self._robot.jacobian_world_unchecked(np.asarray(q, dtype=float), self._fid)
+        return -self.weight * float(np.log(max(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)), 1e-300)))
 
     def costs(self, Q):
-        if Q.shape[0] <= SMALL_BATCH:  # row by row: the batched Jacobians cost some 100 us whatever the rows
+        if Q.shape[0] <= SMALL_BATCH:
             return np.array([self.cost(q) for q in Q], dtype=float).reshape(Q.shape[0])
         J = self._robot.jacobian_batch(Q, validate=False, frame=self.frame)
         w = np.sqrt(np.maximum(np.linalg.det(J @ J.transpose(0, 2, 1)), 1e-600))
@@ -215,16 +199,14 @@ class Manipulability(Preference):
 
 
 def holds_preferences(value) -> bool:
-    """True for a goal list holding preferences: a list or tuple of goals and preferences, at least one of them a
-    preference (a list of preferences alone too: :func:`split_preferences` refuses it by name)."""
+    """True for a list or tuple of goals and preferences holding at least one preference."""
     return (isinstance(value, (list, tuple)) and any(isinstance(x, Preference) for x in value)
             and all(isinstance(x, (Goal, Preference)) for x in value))
 
 
 def check_preferences(robot, preferences, frame: str | None, with_q0: bool) -> None:
-    """Each preference bound to ``robot`` once, for its errors before any work (a joint or frame it names that
-    ``robot`` lacks, a Posture of the wrong length; without ``with_q0``, a MinimalDisplacement, which is measured
-    from q0); ``frame``: the goal frame a Manipulability without one measures."""
+    """Each preference bound to ``robot`` once, for its errors before any work (without ``with_q0``: a
+    MinimalDisplacement's); ``frame``: the goal frame a Manipulability without one measures."""
     wrap = np.zeros(robot.n, dtype=bool)
     q0 = np.clip(np.zeros(robot.n), robot.lower, robot.upper) if with_q0 else None
     for p in preferences:
@@ -235,8 +217,8 @@ def check_preferences(robot, preferences, frame: str | None, with_q0: bool) -> N
 
 
 def split_preferences(target):
-    """(the goals, the preferences) of a goal list holding preferences; ``(target, [])`` for anything else. A list
-    of preferences alone is refused (TargetError): they rank answers to goals."""
+    """(the goals, the preferences) of a goal list holding preferences; ``(target, [])`` for anything else.
+    TargetError for preferences alone."""
     from ..errors import TargetError
 
     if not isinstance(target, (list, tuple)) or not any(isinstance(x, Preference) for x in target):

@@ -1,16 +1,9 @@
-"""The goal kinds' declarations and every table derived from them, in one place.
+"""The goal kinds' declarations and the tables derived from them.
 
-A goal kind (a :class:`~evoik_pin.goals.goal.Goal` subclass, one file of :mod:`evoik_pin.goals`) declares each of
-its kernel codes with a :class:`KindCode` in its class attribute ``KIND_CODES``: which rows of its frame's
-base-frame Jacobian its residual uses (their number is its row count), which compiled family of the LM kernel
-evaluates it, and whether it constrains orientation, puts a frame's origin somewhere and reports an angle.
-Declaring the class registers its codes here (``Goal.__init_subclass__``); :data:`TASK_ROWS`,
-:data:`ORIENTED_KINDS`, :data:`POSITIONLESS_KINDS` and :data:`ANGLE_KINDS` are filled from the declarations,
-never listed by hand, and the goal stack (:mod:`.stack`) writes each goal's row count, family and angle flag into
-its spec, where the compiled kernel reads them (it branches on those columns, not on ranges of codes).
-
-The compiled residuals are named here by their maths (``LOG6``, ``POINT``, ...), so the kernel's code names no goal
-kind: a kind's code is the code of the compiled residual that evaluates it.
+A goal kind (a :class:`~evoik_pin.goals.goal.Goal` subclass) declares its kernel codes with :class:`KindCode` in
+its ``KIND_CODES``, registered here when the class is made; :data:`TASK_ROWS`, :data:`ORIENTED_KINDS`,
+:data:`POSITIONLESS_KINDS` and :data:`ANGLE_KINDS` are filled from them. The compiled residuals are named by their
+maths (``LOG6``, ``POINT``, ...): a kind's code is the code of the residual that evaluates it.
 """
 
 from __future__ import annotations
@@ -43,17 +36,10 @@ KIND_BEYOND_FRAME = 10
 
 @dataclass(frozen=True)
 class KindCode:
-    """One kernel code of a goal kind, as the kind declares it.
-
-    Attributes:
-        code: the kind code (one of the compiled residuals above).
-        rows: the rows (0-5: vx vy vz wx wy wz) of the goal frame's base-frame Jacobian its residual stands on; its
-            residual has ``len(rows)`` rows.
-        family: the compiled family that evaluates it (``FAMILY_*``).
-        oriented: it constrains orientation. has_position: it puts a point somewhere (False: an orientation or a
-            pointing goal, whose target position is no place for the frame). angle: its errors include an angle
-            (rad).
-    """
+    """One kernel code of a goal kind: ``code`` (a compiled residual above), ``rows`` (0-5: vx vy vz wx wy wz) of
+    the frame's base-frame Jacobian its residual stands on, the compiled ``family`` (``FAMILY_*``) that evaluates it;
+    whether it constrains orientation (``oriented``), puts a point somewhere (``has_position``) and reports an
+    ``angle`` (rad)."""
 
     code: int
     rows: tuple
@@ -75,9 +61,8 @@ ANGLE_KINDS: set[int] = set()
 
 
 def register(owner: type | None, *codes: KindCode) -> None:
-    """Record the declared ``codes`` of the goal class ``owner`` (None: a target kind of a single-target problem)
-    and derive the tables from them. ValueError for a code declared twice by two owners or a family that
-    contradicts :data:`KIND_BEYOND_FRAME` (a bug in a kind's declaration)."""
+    """Record the declared ``codes`` of the goal class ``owner`` (None: a single-target problem's target kind) and
+    derive the tables. ValueError for a code declared twice or a family contradicting :data:`KIND_BEYOND_FRAME`."""
     for c in codes:
         if c.code in KINDS and _CLASSES[c.code] is not owner and KINDS[c.code] != c:
             raise ValueError(f"kind code {c.code} declared twice: by {_CLASSES[c.code]} and {owner}")
@@ -93,8 +78,4 @@ def register(owner: type | None, *codes: KindCode) -> None:
 
 def kind_classes() -> list[type]:
     """The registered goal classes, in the order they were registered (declared)."""
-    seen: list[type] = []
-    for cls in _CLASSES.values():
-        if cls is not None and cls not in seen:
-            seen.append(cls)
-    return seen
+    return list(dict.fromkeys(cls for cls in _CLASSES.values() if cls is not None))

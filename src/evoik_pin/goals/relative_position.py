@@ -8,18 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import OptionError
-from ..io.datafile import Flow
-from .file_entries import FileKind, field_entries, pair_goal, vector_target
-from .goal import (
-    BOTH,
-    DEFAULT_GOAL_TOLERANCE,
-    FramePair,
-    Goal,
-    check_frame_pair,
-    pack_frame_pair,
-    pair_placements,
-    point3,
-)
+from .file_entries import FileKind, pair_kind, position_target, position_text
+from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, FramePair, Goal, pack_frame_pair, point3
 from .registry import FAMILY_BEYOND_FRAME, RELATIVE_POINT_IN_A, RELATIVE_POINT_WORLD, KindCode
 
 __all__ = ["EXPRESSED_IN", "KIND_RELATIVE_POSITION", "KIND_RELATIVE_POSITION_IN_A", "RelativePosition"]
@@ -47,9 +37,6 @@ class RelativePosition(FramePair, Goal):
     frame_a: str = ""
     target: object = None
     expressed_in: str = "a"
-    weight: float = 1.0
-    tolerance: float = DEFAULT_GOAL_TOLERANCE
-    rotation_tolerance: float | None = None
     KIND_CODES = (KindCode(KIND_RELATIVE_POSITION, (0, 1, 2), FAMILY_BEYOND_FRAME),
                   KindCode(KIND_RELATIVE_POSITION_IN_A, (0, 1, 2), FAMILY_BEYOND_FRAME))
     #: The optional fields of its goals-file entry.
@@ -62,11 +49,10 @@ class RelativePosition(FramePair, Goal):
                               f"(frame a's axes or the world's), got {expressed_in!r}")
         kind = KIND_RELATIVE_POSITION_IN_A if expressed_in == "a" else KIND_RELATIVE_POSITION
         self._init_common(frame_b, weight, tolerance, None, kind, False)
-        check_frame_pair(frame_a, frame_b, "RelativePosition")
+        self._init_pair(frame_a, frame_b, "RelativePosition")
         if not self.tolerance > 0:
             raise OptionError(f"tolerance (m) of the RelativePosition of {frame_b!r} from {frame_a!r} must be > 0, "
                               f"got {tolerance!r}")
-        object.__setattr__(self, "frame_a", frame_a)
         object.__setattr__(self, "expressed_in", expressed_in)
         object.__setattr__(self, "target", point3(p, f"RelativePosition of {frame_b!r} from {frame_a!r}: p"))
 
@@ -84,48 +70,16 @@ class RelativePosition(FramePair, Goal):
         together (0). Raises FrameError for an unknown frame or two frames no joint moves apart."""
         return pack_frame_pair(robot, self.frame_a, self.frame, both=BOTH if self.expressed_in == "world" else 0.0)
 
-    def batch_key(self) -> tuple:
-        """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
-        return (self.frame_a,)
-
-    def marker(self) -> None:
-        """None, as for a relative pose: the target is a vector from frame a, no place in the base frame."""
-        return None
-
-    def vectors(self, Ra: np.ndarray, d: np.ndarray) -> np.ndarray:
-        """The vectors (N, 3) (m) compared with ``p``, in the axes ``expressed_in`` names, from frame a's rotations
-        Ra (N, 3, 3) and the vectors p_b - p_a (N, 3) (base frame)."""
-        return np.einsum("nji,nj->ni", Ra, d) if self.expressed_in == "a" else d
-
-    def robot_errors(self, robot, q) -> tuple[float, None]:
-        """(position error m, None) at ``q`` (n,), from Pinocchio's kinematics."""
-        return float(self.robot_population_errors(robot, np.asarray(q, dtype=float)[None])[0][0]), None
-
-    def pair_errors(self, Ta, Tb) -> tuple[float, None]:
-        """(position error m, None) for frame a's and frame b's poses ``Ta``, ``Tb`` (``pin.SE3``, base frame)."""
-        d = (Tb.translation - Ta.translation)[None]
-        return float(np.linalg.norm(self.vectors(Ta.rotation[None], d)[0] - self.target)), None
-
-    def robot_population_errors(self, robot, Q) -> tuple[np.ndarray, np.ndarray]:
-        """(position errors (N,) m, zeros (N,)) of a population Q (N, n) (the evolutionary solvers' violation)."""
-        Ra, d, _ = pair_placements(robot, Q, self.frame_a, self.frame)
-        return np.linalg.norm(self.vectors(Ra, d) - self.target, axis=1), np.zeros(len(Q))
+    def placement_errors(self, Ra, d, Rb) -> tuple[np.ndarray, np.ndarray]:
+        """(|e| (N,) m, zeros (N,)): e the vector p_b - p_a, in the axes ``expressed_in`` names, minus ``p``."""
+        v = np.einsum("nji,nj->ni", Ra, d) if self.expressed_in == "a" else d
+        return np.linalg.norm(v - self.target, axis=1), np.zeros(len(d))
 
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: relative_position``: ``frame_a``, ``frame`` (frame b) and ``target: {position: [x, y, z]}`` (m),
         with optional ``expressed_in`` (a | world), ``weight`` and ``tolerance``."""
-        def read(entry: dict, what: str) -> RelativePosition:
-            return pair_goal(cls, entry, what, "relative_position", cls.FILE_FIELDS, vector_target("position"))
-
-        def write(goal: RelativePosition) -> dict:
-            entry = {"frame_a": goal.frame_a, "frame": goal.frame, "kind": "relative_position",
-                     "target": Flow(position=[float(v) + 0.0 for v in goal.target])}
-            if goal.expressed_in != "a":
-                entry["expressed_in"] = goal.expressed_in
-            return entry | field_entries(goal, ("weight", "tolerance"))
-
-        return FileKind("relative_position", cls, (), vector_target("position"), write, read=read, write=write)
+        return pair_kind(cls, "relative_position", position_target, position_text)
 
     def __repr__(self) -> str:
         return (f"RelativePosition({self.frame_a!r}, {self.frame!r}, {np.round(self.target, 6).tolist()}, "

@@ -1,19 +1,9 @@
-"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:func:`bind` checks a goal list
-against a robot and packs it), and the targets' encoding.
+"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:class:`GoalStack`; :func:`bind`
+checks a goal list against a robot and packs it), and the targets' encoding as ``pt`` (3,), ``Rt`` (3, 3)
+(:func:`encode_target`; many at once: :class:`GoalArrays`, :class:`TargetArrays`).
 
-* a goal stack (:class:`GoalStack`): per goal g, ``spec[g]`` (GOAL_SIZE,) at the ``G_*`` columns (kind, the
-  physical joint its frame sits on, the square root of its weight, its tolerances in m and rad, the first of its
-  rows in the stacked error, and from its kind's declaration (:mod:`.registry`) its row count, the compiled family
-  that evaluates it and whether it reports an angle), the frame's folded placement on that joint ``R[g]`` (3, 3),
-  ``p[g]`` (3,), ``support[g]`` (m,) bool, the joints that move it, and ``aux[g]``, its kind's further numbers;
-* a goal's target as ``pt`` (3,) and ``Rt`` (3, 3) (:func:`encode_target`): pose (position m, rotation),
-  position (position, identity), planar (x, y, yaw rad or 0; identity); a stack's targets as (G, 3) and
-  (G, 3, 3) arrays (:class:`GoalArrays`), N single targets of one kind as :class:`TargetArrays`.
-
-The kernel reads the row count, family and angle flag from the spec (filled here from the declarations when a
-stack is built), never from the tables of :mod:`.registry`: numba compiles a module's globals into its code and
-its disk cache does not see another module's tables change. (Its runs of frame-family goals alone take the row
-count from the code of the residual they compute, ``kernel.frame_rows``, for speed; tests hold the two equal.)
+The kernel reads a goal's row count, family and angle flag from its spec, filled here from its kind's declaration
+(:mod:`.registry`), never from the registry's tables: numba's disk cache would not see another module's tables change.
 """
 
 from __future__ import annotations
@@ -42,7 +32,7 @@ from .registry import (
 
 __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_ROWS", "G_RTOL", "G_TOL", "G_WEIGHT",
            "KIND_PLANAR", "KIND_PLANAR_YAW", "GoalArrays", "GoalStack", "TargetArrays", "bind", "encode_target",
-           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "target_kind"]
+           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "structure", "target_kind"]
 
 #: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
 #: first row in the stacked error; then its kind's declaration: its row count, its compiled family (``FAMILY_*``)
@@ -58,8 +48,7 @@ register(None, KindCode(KIND_PLANAR, (0, 1), FAMILY_FRAME),
 
 def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_tolerance: float,
              row: int) -> np.ndarray:
-    """One goal's spec (GOAL_SIZE,): the given columns (``weight`` > 0, tolerances m and rad) and those its kind
-    declares (row count, compiled family, angle flag)."""
+    """One goal's spec (GOAL_SIZE,): the given columns and those its kind declares."""
     code = KINDS[int(kind)]
     return np.array([kind, joint, np.sqrt(weight), tolerance, rotation_tolerance, row, len(code.rows), code.family,
                      1.0 if code.angle else 0.0])
@@ -67,9 +56,8 @@ def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_to
 
 def owned(a: np.ndarray, dtype=None) -> np.ndarray:
     """``a`` as the kernel's entry points are compiled for it: a C-contiguous, writable array (of ``dtype`` when
-    given): ``a`` itself when it is one, else a copy. numba compiles a function once per argument type and a read-only
-    array (a broadcast, Ray's object store, a memory map) is a type of its own: one reaching an entry point would
-    recompile the whole kernel inside the caller's time budget. The engine passes every array through here once."""
+    given), ``a`` itself when it is one, else a copy (a read-only array is another numba type: it would recompile
+    the kernel)."""
     if a.flags.writeable and a.flags.c_contiguous and (dtype is None or a.dtype == dtype):
         return a
     return np.array(a, dtype=dtype, order="C")
@@ -83,7 +71,8 @@ def target_kind(target) -> int:
 
 
 def encode_target(target) -> tuple[np.ndarray, np.ndarray]:
-    """The kernel's ``(pt (3,), Rt (3, 3))`` of one target (see the module docstring)."""
+    """The kernel's ``(pt (3,), Rt (3, 3))`` of one target: pose (position m, rotation), position (position,
+    identity), planar (x, y, yaw rad or 0; identity)."""
     if target.planar:
         pt = np.array([target.position[0], target.position[1], target.yaw or 0.0])
         return pt, np.eye(3)
@@ -104,10 +93,20 @@ def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
     return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
 
 
+class _Rows:
+    """What :class:`TargetArrays` and :class:`GoalArrays` share: N problems' targets ``P``, ``Rts``, by row."""
+
+    def __len__(self) -> int:
+        return int(self.P.shape[0])
+
+    def take(self, rows: np.ndarray):
+        """The problems at ``rows`` (an index array), as new arrays."""
+        return dataclasses.replace(self, P=self.P[rows], Rts=self.Rts[rows])
+
+
 @dataclass(frozen=True)
-class TargetArrays:
-    """N targets of one kind as the kernel reads them (:func:`encode_targets`), without Target objects: how the
-    batch solver carries millions of targets (an (N, 4, 4) array of poses becomes one without a Python loop).
+class TargetArrays(_Rows):
+    """N targets of one kind as the kernel reads them (:func:`encode_targets`), without Target objects.
 
     Attributes:
         kind: their ``KIND_*``. P: (N, 3) positions (m; planar: x, y, yaw rad). Rts: (N, 3, 3) rotations
@@ -129,31 +128,22 @@ class TargetArrays:
         return cls(KIND_POSE, np.ascontiguousarray(H[:, :3, 3], dtype=float),
                    np.ascontiguousarray(H[:, :3, :3], dtype=float))
 
-    def __len__(self) -> int:
-        return int(self.P.shape[0])
-
     @property
     def oriented(self) -> bool:
         """True when the targets constrain orientation (pose, planar with yaw)."""
         return self.kind in ORIENTED_KINDS
 
-    def take(self, rows: np.ndarray) -> TargetArrays:
-        """The targets at ``rows`` (an index array), as new arrays."""
-        return TargetArrays(self.kind, self.P[rows], self.Rts[rows])
-
 
 @dataclass(frozen=True)
 class GoalStack:
-    """G goals on frames of one robot as the kernel reads them (see the module docstring): which frame, which
-    kind, how much weight, which tolerances; the targets come apart (:func:`encode_target`), so one stack serves
-    any number of problems.
+    """G goals on frames of one robot as the kernel reads them, without their targets (one stack serves any
+    number of problems).
 
     Attributes:
         spec: (G, GOAL_SIZE) the ``G_*`` columns. R: (G, 3, 3), p: (G, 3) (m) each frame's folded placement on
             its joint (``Robot.frame_constants``). support: (G, m) bool, the physical joints that move each frame.
         rows: total rows of the stacked error. kinds: (G,) the ``KIND_*``. frames: the frame names.
-        aux: (G, A) float, A >= 1: each goal's further numbers, read by its kind's code in the kernel (a band of
-            tolerances, an axis, a second frame, ...; zeros for kinds that need none).
+        aux: (G, A) float, A >= 1: each goal's further numbers, read by its kind's code (zeros where none).
         any_oriented: some goal constrains orientation.
     """
 
@@ -181,12 +171,10 @@ class GoalStack:
     def of(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux=None) -> GoalStack:
         """The stack of goals on ``frames`` (names; None: the robot's tip) of ``kinds`` (``KIND_*``) with
         ``weights`` (> 0), ``tolerances`` (m) and ``rotation_tolerances`` (rad), one each per goal; ``aux``: per
-        goal its further numbers (a 1-d array or None), packed into the (G, A) ``aux`` array (zero-padded).
+        goal its further numbers (a 1-d array or None), zero-padded into the (G, A) ``aux`` array.
 
-        Cached per robot and these values (the last 64 stacks): a goal list solved again with new targets (an
-        :class:`~evoik_pin.IKSolver`'s calls, a trajectory) gets the same stack object, so an LM engine kept from
-        solve to solve is retargeted in place instead of rebuilt. A stack is never written (a tightened copy is
-        made with ``dataclasses.replace``)."""
+        Cached per robot and these values (the last 64): a goal list solved again with new targets gets the same
+        stack, so an LM engine kept from solve to solve is retargeted, not rebuilt. A stack is never written."""
         key = (id(robot), tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
                tuple(float(t) for t in tolerances), tuple(float(t) for t in rotation_tolerances),
                None if aux is None else tuple(None if a is None else np.asarray(a, dtype=float).tobytes()
@@ -194,15 +182,6 @@ class GoalStack:
         hit = _STACK_CACHE.get(key)
         if hit is not None and hit[0]() is robot:
             return hit[1]
-        stack = cls._made(robot, frames, kinds, weights, tolerances, rotation_tolerances, aux)
-        if len(_STACK_CACHE) >= 64:
-            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
-        _STACK_CACHE[key] = (weakref.ref(robot), stack)
-        return stack
-
-    @classmethod
-    def _made(cls, robot, frames, kinds, weights, tolerances, rotation_tolerances, aux) -> GoalStack:
-        """:meth:`of`'s stack, built."""
         G = len(frames)
         spec = np.empty((G, GOAL_SIZE))
         R, p = np.empty((G, 3, 3)), np.empty((G, 3))
@@ -220,21 +199,17 @@ class GoalStack:
             for g, a in enumerate(aux):
                 if a is not None:
                     packed[g, :len(a)] = a
-        return cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
-                   tuple(robot.tip if f is None else f for f in frames), packed)
+        stack = cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
+                    tuple(robot.tip if f is None else f for f in frames), packed)
+        if len(_STACK_CACHE) >= 64:
+            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
+        _STACK_CACHE[key] = (weakref.ref(robot), stack)
+        return stack
 
     @classmethod
     def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
-        """The one goal of a single-target problem: the tip, weight 1 (cached per robot, kind and tolerances:
-        every single-target solve builds one)."""
-        key = (id(robot), kind, float(tolerance), float(rotation_tolerance))
-        hit = _SINGLE_CACHE.get(key)
-        if hit is None or hit[0]() is not robot:
-            stack = cls.of(robot, [None], [kind], [1.0], [tolerance], [rotation_tolerance])
-            if len(_SINGLE_CACHE) > 64:
-                _SINGLE_CACHE.clear()
-            hit = _SINGLE_CACHE[key] = (weakref.ref(robot), stack)
-        return hit[1]
+        """The one goal of a single-target problem: the tip, weight 1."""
+        return cls.of(robot, [None], [kind], [1.0], [tolerance], [rotation_tolerance])
 
     def __len__(self) -> int:
         return int(self.spec.shape[0])
@@ -245,14 +220,12 @@ class GoalStack:
         return np.array([k in ORIENTED_KINDS for k in self.kinds], dtype=bool)
 
 
-_SINGLE_CACHE: dict = {}
 _STACK_CACHE: dict = {}  # GoalStack.of's: key -> (weak reference to the robot, stack)
 
 
 @dataclass(frozen=True)
-class GoalArrays:
-    """N problems over one goal stack (the same frames, kinds, weights and tolerances; different targets) as the
-    kernel's pair entry point reads them: how :func:`~evoik_pin.solve_many` carries goal lists.
+class GoalArrays(_Rows):
+    """N problems over one goal stack (other targets) as the kernel's pair entry point reads them.
 
     Attributes:
         stack: the :class:`GoalStack` every problem shares. P: (N, G, 3) target positions (m). Rts: (N, G, 3, 3)
@@ -263,17 +236,10 @@ class GoalArrays:
     P: np.ndarray
     Rts: np.ndarray
 
-    def __len__(self) -> int:
-        return int(self.P.shape[0])
-
     @property
     def oriented(self) -> bool:
         """True when some goal constrains orientation."""
         return self.stack.any_oriented
-
-    def take(self, rows: np.ndarray) -> GoalArrays:
-        """The problems at ``rows`` (an index array), as new arrays."""
-        return GoalArrays(self.stack, self.P[rows], self.Rts[rows])
 
 
 def problem_goals(problem) -> tuple[GoalStack, np.ndarray, np.ndarray]:
@@ -299,16 +265,12 @@ def is_goal_list(value) -> bool:
 
 def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     """Check ``goals`` against ``robot`` and pack them for the LM kernel: (the goals as a list, their
-    :class:`~evoik_pin.goals.stack.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)).
-
-    A list of goals on frames (no goal beyond one frame) with the frames, kinds, weights, tolerances and ``aux``
-    rows of a list bound before on this robot (an :class:`~evoik_pin.IKSolver`'s calls: new targets, the same
-    goals) takes its checked stack from :data:`_BOUND`: only the targets are packed (and, for a frame given two
-    goals, their clash checked: it reads the targets).
+    :class:`GoalStack`, targets pt (G, 3), Rt (G, 3, 3)). A list like one bound before on this robot (new targets)
+    takes its checked stack from :data:`_BOUND`.
 
     Raises: TargetError for an empty list, a member that is no goal, or one frame given clashing targets;
     FrameError for an unknown frame (with the closest names) or a frame no active joint moves; LockedJointsError
-    (a FrameError) for a frame only a floating base moves while joints between the root and it are locked.
+    for a frame only a floating base moves while joints between the root and it are locked.
     """
     goals = list(goals)
     if not goals:
@@ -317,18 +279,25 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
         if not isinstance(g, Goal):
             raise TargetError(f"goal {i} is a {type(g).__name__}, not a goal: use Pose(frame, T) or "
                               "Position(frame, p) from evoik_pin.goals")
-    key = _signature(robot, goals)
-    hit = _BOUND.get(key) if key is not None else None
+    # goals beyond one frame pack their rows against the robot on every bind: only lists without them are kept
+    key = None if any(_packs_itself(g) for g in goals) else (id(robot), structure(goals))
+    hit = _BOUND.get(key)
     if hit is not None and hit[0]() is robot:
         stack = hit[1]
         if len(stack.frames) > len(set(stack.frames)):
             _check_frames(robot, goals)  # the clash test reads the targets
     else:
         _check_frames(robot, goals)
+        # the goals beyond one frame pack their aux and support rows against the robot (checking their frames)
+        packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
         stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
                              [g.tolerance for g in goals], [g.rotation_tolerance for g in goals],
-                             [g.aux() for g in goals])
-        stack = _beyond_frame(robot, goals, stack)
+                             [packed[g][0] if g in packed else goal.aux() for g, goal in enumerate(goals)])
+        if packed:
+            support = stack.support.copy()
+            for g, (_, moved) in packed.items():
+                support[g] = moved
+            stack = dataclasses.replace(stack, support=support)
         if key is not None:
             if len(_BOUND) >= 64:
                 _BOUND.pop(next(iter(_BOUND)))
@@ -340,38 +309,30 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     return goals, stack, pt, Rt
 
 
-#: Stacks of goal lists bound before, by robot and the goals' :func:`_signature` (the last 64): a hit skips the
-#: frames' checks (their verdict depends on the robot and the frame names alone) and GoalStack.of's key.
+#: Stacks of goal lists bound before, by robot and :func:`structure` (the last 64): a hit skips the frames' checks.
 _BOUND: dict = {}
 
 
-def _signature(robot, goals) -> tuple | None:
-    """What :func:`bind`'s checks and stack read of ``goals`` besides their targets, with the robot's id: per goal
-    its class, frame, kind, weight, tolerances and ``aux`` row; None when a goal packs itself against the robot
-    (a goal beyond one frame: :func:`_beyond_frame`)."""
-    parts = [id(robot)]
-    for g in goals:
-        if _packs_itself(g):
-            return None
-        aux = g.aux()
-        parts.append((type(g), g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
-                      None if aux is None else aux.tobytes()))
-    return tuple(parts)
+def structure(goals) -> tuple:
+    """What a goal list's stack depends on besides its targets: each goal's frame, kind, weight, tolerances and aux
+    row, in order, and for a goal beyond one frame its ``batch_key()`` (what its robot-bound ``aux`` row holds).
+    Lists of one structure share a stack (:func:`bind`'s cache, solve_many's groups)."""
+    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                  None if g.aux() is None else g.aux().tobytes())
+                 + (g.batch_key() if _packs_itself(g) else ()) for g in goals)
 
 
 def _packs_itself(goal: Goal) -> bool:
-    """Whether ``goal`` is of a kind beyond one frame (its declaration's family), which packs its own ``aux`` and
-    ``support`` rows against the robot (``goal.pack(robot)``) and checks its frames as it does."""
+    """Whether ``goal`` is of a kind beyond one frame, which packs its own ``aux`` and ``support`` rows against the
+    robot (``goal.pack(robot)``), checking its frames."""
     return KINDS[goal.kind].family == FAMILY_BEYOND_FRAME
 
 
 def _check_frames(robot, goals) -> None:
-    """FrameError for a goal's unknown frame (with the closest names) or one no active joint moves;
-    :func:`_check_not_base_only` for one only a floating base moves; TargetError for one frame given two goals
-    with clashing targets."""
+    """:func:`bind`'s checks of the goals on one frame."""
     seen: dict[int, Goal] = {}
     for g in goals:
-        if _packs_itself(g):  # centre of mass, relative pose: checked as they pack (_beyond_frame)
+        if _packs_itself(g):  # centre of mass, two frames: checked as they pack
             continue
         fid = robot.frame_id(g.frame)  # FrameError with the closest names
         if not robot.moving_joints(g.frame):
@@ -392,17 +353,14 @@ def _check_frames(robot, goals) -> None:
 
 
 def _check_not_base_only(robot, frame: str) -> None:
-    """LockedJointsError for a goal frame that only the floating base's six entries move while joints between the
-    root and it are locked (another branch than the robot's tips, or left out by ``joints=[...]``): the base moves
-    every frame, so the frame passes the "some active joint moves it" test, yet no joint below the base can reach
-    for it and the goal binds."""
+    """LockedJointsError for a goal frame that only the floating base moves while joints between the root and it
+    are locked (another branch than the robot's tips): no joint below the base can reach for it."""
     if not robot.floating_base:
         return
     base = set(robot.joint_names[:6])  # a floating base's entries come first in q
     if not set(robot.moving_joints(frame)) <= base:
         return
-    # joints fixed at values the caller chose (Robot.locked, solve's locked=) are placed on purpose: a leg held in a
-    # posture may be carried by the base. Only fixed joints between the root and the frame: the base's job too.
+    # joints locked at values the caller chose are placed on purpose (a leg held in a posture, carried by the base)
     locked = [j for j in robot.locked_joints(frame) if j not in robot.locked_values]
     if not locked:
         return
@@ -413,19 +371,3 @@ def _check_not_base_only(robot, frame: str) -> None:
         f"locked ({shown}), so the base alone would have to reach it. Free them when loading the robot: "
         f"tips=[{tips}, {frame!r}] (the chains to each), joints=[...] naming them with the others to keep free, "
         f"or tips='all' (the whole tree; what a branching URDF gets without tip=/tips=)")
-
-
-def _beyond_frame(robot, goals, stack: GoalStack) -> GoalStack:
-    """``stack`` with the ``aux`` and ``support`` rows of the goals beyond one frame (:class:`CenterOfMass`,
-    :class:`RelativePose`: their ``pack(robot)``, which checks their frames and the robot's masses)."""
-    packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
-    if not packed:
-        return stack
-    width = max(max(a.size for a, _ in packed.values()), stack.aux.shape[1])
-    aux = np.zeros((len(goals), width))
-    aux[:, :stack.aux.shape[1]] = stack.aux
-    support = stack.support.copy()
-    for g, (row, moved) in packed.items():
-        aux[g, :row.size] = row
-        support[g] = moved
-    return dataclasses.replace(stack, aux=aux, support=support)

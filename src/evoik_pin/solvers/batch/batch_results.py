@@ -1,16 +1,12 @@
 """What a batch of targets came to: arrays (:class:`BatchOutcome`), and what :func:`~evoik_pin.solve_many`
-returns: :class:`BatchResults`, a sequence of :class:`~evoik_pin.Result` made on first access, with the same
-answers as arrays.
-
-Making a :class:`Result` costs about 2 us, a tenth of a whole batched solve: a dataset of millions of poses reads
-``results.q`` and ``results.success``; a script that reads ``results[i]`` pays for the targets it reads.
-"""
+returns (:class:`BatchResults`: the arrays, and a :class:`~evoik_pin.Result` per target made on first access, as
+making one costs a tenth of a batched solve)."""
 
 from __future__ import annotations
 
 import math
 import operator
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,8 +23,7 @@ _LABELS = {SOURCE_Q0: "q0", SOURCE_TABLE: "seed table"}
 
 @dataclass
 class BatchOutcome:
-    """What a batch of N targets came to, as arrays (cheap to send between processes; :meth:`result` makes
-    a :class:`Result`).
+    """What a batch of N targets came to, as arrays (cheap to send between processes).
 
     Attributes:
         q: (N, n) answers. position_error (m), orientation_error (rad; NaN for targets without orientation),
@@ -76,6 +71,18 @@ class BatchOutcome:
             self.goal_errors[i] = np.array([(np.nan if p is None else p, np.nan if o is None else o)
                                             for p, o in r.goal_errors], dtype=float)
 
+    def put(self, rows: np.ndarray, res, mask: np.ndarray) -> None:
+        """Rows ``rows`` set from the batched LM answers ``res`` (:func:`~evoik_pin.solvers.lm.solve_pairs`') where
+        ``mask``; their cost, success, time and source are the caller's."""
+        self.q[rows] = res.q[mask]
+        self.position_error[rows] = res.position_error[mask]
+        if res.orientation_error is not None:
+            self.orientation_error[rows] = res.orientation_error[mask]
+        self.evaluations[rows] = res.evaluations[mask]
+        if self.goal_errors is not None:  # one by one: a slice assignment would broadcast the (G, 2) arrays
+            for r, v in zip(rows.tolist(), res.goal_errors[mask], strict=True):
+                self.goal_errors[r] = v
+
     @classmethod
     def concatenate(cls, parts: list[BatchOutcome]) -> BatchOutcome:
         """One outcome of consecutive parts (their ``singles`` re-indexed)."""
@@ -100,9 +107,8 @@ class BatchOutcome:
             return single
         made = self.__dict__.get("_made")
         if made is None:
-            # One real Result gives the field set; the others copy its __dict__ and change what differs (about
-            # three times cheaper than the dataclass __init__). The columns become Python lists once (a float of a
-            # NumPy scalar costs more than an item of a list) and the histories one array of views.
+            # the Results copy one real Result's __dict__ (cheaper than the dataclass __init__), from the columns
+            # as Python lists (cheaper to read item by item than NumPy scalars)
             base = Result(q=self.q[0], position_error=0.0, orientation_error=None, cost=0.0, success=True,
                           generations=0, evaluations=0, time_s=0.0, method="memetic",
                           collision_free=True if self.collision_checked else None).__dict__
@@ -146,8 +152,7 @@ def _column(name: str, doc: str) -> property:
 
 class BatchResults(Sequence):
     """What :func:`evoik_pin.solve_many` returns: one :class:`Result` per target, in order, made on first access
-    (``results[i]``, iteration, slices; ``list(results)`` makes them all), the same answers as arrays, and
-    ``stats``.
+    (``results[i]``, iteration, slices), the same answers as arrays, and ``stats``.
 
     Arrays (read-only views, one row per target): ``q`` (N, n), ``success`` (N,) bool, ``position_error`` (N,) m,
     ``orientation_error`` (N,) rad (NaN for targets without orientation), ``cost``, ``evaluations`` (N,).
@@ -180,9 +185,6 @@ class BatchResults(Sequence):
         if r is None:
             r = self._made[i] = self.outcome.result(i, self.template)
         return r
-
-    def __iter__(self) -> Iterator[Result]:
-        return (self[i] for i in range(len(self)))
 
     def __repr__(self) -> str:
         s = self.stats

@@ -1,22 +1,14 @@
-"""Goal lists in :func:`~evoik_pin.solve_many` and :func:`~evoik_pin.solve_trajectory`: many whole-robot problems
-(:mod:`evoik_pin.goals`), each a list of goals on frames of the robot.
+"""Goal lists in :func:`~evoik_pin.solve_many`: many whole-robot problems, each a list of goals, in the one form the
+batch engine reads (:class:`GoalBlock`, :class:`GoalTree`; a call's tip targets take it too, :mod:`.targets`).
 
-Lists of one *structure* (the same frames, kinds, weights and tolerances in the same order; different targets) share
-one :class:`~evoik_pin.solvers.lm.layout.GoalStack`, so their problems go to the LM kernel's pair entry point
-together (:class:`~evoik_pin.solvers.lm.layout.GoalArrays`); lists of different structures form groups of their own,
-as targets of different kinds do. Every list is checked against the robot (:func:`evoik_pin.goals.bind`) when the
-:class:`GoalSource` is made, before any work: a bad one is named by its index in the call.
-
-The batched rounds start each problem from the seed-table entries nearest to it in memetic's goal metric
-(:meth:`~evoik_pin.solvers.search.seed_table.SeedTable.ranked_goals`: the sum over the goals of their weight times
-``|p - p_t|^2 (+ w^2 |R - R_t|_F^2`` for a pose)), found by a k-d tree over the concatenated goal-frame features
-(:class:`GoalTree`). A call's tip targets take the same form (:mod:`.targets`: one-goal stacks), so
-:class:`GoalBlock` and :class:`GoalTree` are what the batch engine reads for every call.
+Lists of one *structure* (the same frames, kinds, weights and tolerances in order; other targets) share one
+:class:`~evoik_pin.goals.stack.GoalStack` and go to the LM kernel's pair entry point together.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -24,73 +16,49 @@ from ...errors import ConfigurationError, FrameError, OptionError, TargetError
 from ...goals import Goal, bind, is_goal_list
 from ...goals.preferences import check_preferences, holds_preferences, split_preferences
 from ...goals.registry import KIND_BEYOND_FRAME, POSITIONLESS_KINDS
-from ...goals.stack import G_WEIGHT, GoalArrays
+from ...goals.stack import G_WEIGHT, GoalArrays, structure
 
 __all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
 
 
 def is_problem_list(value) -> bool:
-    """True for one whole-robot problem: a list or tuple of goals (:func:`is_goal_list`), preferences among them
-    or not (:func:`~evoik_pin.goals.preferences.holds_preferences`)."""
+    """True for one whole-robot problem: a list or tuple of goals, preferences among them or not."""
     return is_goal_list(value) or holds_preferences(value)
 
 
 def is_goal_batch(targets) -> bool:
-    """True when ``targets`` is a sequence of goal lists (some member a non-empty list or tuple of goals, preferences
-    among them or not), not of single targets; one goal list alone is one problem (:func:`is_problem_list`)."""
+    """True when ``targets`` is a sequence of goal lists (some member a non-empty :func:`is_problem_list`), not of
+    single targets nor one goal list alone."""
     if not isinstance(targets, (list, tuple)) or not targets or is_problem_list(targets):
         return False
     return any(isinstance(t, (list, tuple)) and t and is_problem_list(t) for t in targets)
 
 
-def structure(goals) -> tuple:
-    """What problems sharing a goal stack have in common: each goal's (frame, kind, weight, tolerance m,
-    rotation tolerance rad, and its aux row's bytes: bands, free axes, a pointing axis), in order; for a goal beyond
-    one frame also what its robot-bound ``aux`` row holds (``batch_key()``: a centre of mass's axes, margin and contact
-    points, a relative pose's first frame)."""
-    return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
-                  None if g.aux() is None else g.aux().tobytes())
-                 + (g.batch_key() if g.kind >= KIND_BEYOND_FRAME else ()) for g in goals)
-
-
+@dataclass
 class GoalBlock:
-    """Consecutive problems of a call, grouped by goal stack: the one form the batch engine solves. A call's tip
-    targets come as one-goal stacks (:meth:`~.targets.TargetSource.block`), its goal lists one stack per structure.
+    """Consecutive problems of a call, grouped by goal stack: the one form the batch engine solves.
 
     Attributes:
         groups: ``[(rows, arrays)]``: the block's row indices (k,) of one stack and their
             :class:`~evoik_pin.goals.stack.GoalArrays`, in the order the stacks first appear.
-        tip: True for tip targets (answers reported as single-target results: no goal errors, the target's cost),
-            False for goal lists.
+        size: the block's rows. target: row ``i``'s problem for the one-by-one solver (its
+            :class:`~evoik_pin.problem.Target` or goal list).
+        tip: True for tip targets (answers reported as single-target results), False for goal lists.
     """
 
-    def __init__(self, groups: list[tuple[np.ndarray, GoalArrays]], size: int, problem: Callable[[int], object],
-                 tip: bool = False) -> None:
-        self.groups = groups
-        self._size = size
-        self._problem = problem
-        self.tip = tip
+    groups: list[tuple[np.ndarray, GoalArrays]]
+    size: int
+    target: Callable[[int], object]
+    tip: bool = False
 
     def __len__(self) -> int:
-        return self._size
-
-    def target(self, i: int):
-        """Row ``i``'s problem, for the one-by-one solver: its :class:`~evoik_pin.problem.Target` (made on demand for
-        an array of poses) or its goal list."""
-        return self._problem(i)
+        return self.size
 
 
 class GoalSource:
-    """The goal lists of a call, every one checked against ``robot`` when made (a TargetError or FrameError naming
-    the list's index: an entry that is no goal list, an empty list, an unknown frame, a frame no active joint
-    moves, one frame given clashing targets; its preferences' errors, :func:`check_preferences`), then handed out
-    chunk by chunk (:meth:`block`).
-
-    A list holding preferences (:mod:`evoik_pin.goals.preferences`) is solved one by one, through the choosing path
-    of :func:`evoik_pin.solve` (:class:`~.threads.BatchSolver`): its rows are left out of the batched groups.
-
-    Args:
-        robot: the :class:`~evoik_pin.robot.Robot`. lists: a sequence of goal lists.
+    """The goal lists of a call, every one checked against ``robot`` when made (:func:`evoik_pin.goals.bind`,
+    :func:`check_preferences`; the error names the list's index), then handed out chunk by chunk (:meth:`block`).
+    Lists holding preferences or goal sets are left to the one-by-one solver.
 
     Attributes:
         preferences: ``{index: [preference, ...]}`` of the lists holding preferences.
@@ -151,7 +119,7 @@ class GoalSource:
         return self.raw[a:b]
 
     def block(self, a: int, b: int, tolerances: tuple[float, float] | None = None) -> GoalBlock:
-        """Lists a to b - 1 as a :class:`GoalBlock` (``tolerances``: unused, each goal carries its own)."""
+        """Lists a to b - 1 as a :class:`GoalBlock` (``tolerances`` unused: each goal has its own)."""
         by_key: dict[tuple, list[int]] = {}
         for i in range(a, b):
             if i in self.preferences or any(g.alternatives is not None for g in self.raw[i]):
@@ -169,8 +137,7 @@ class GoalSource:
         """Nothing to do: every list was checked when the source was made."""
 
     def require_q0(self, rows) -> None:
-        """The OptionError of the first list among ``rows`` (indices) whose preferences need the q0 it is solved
-        without (MinimalDisplacement), named by its index."""
+        """The OptionError of the first list among ``rows`` whose preferences need a q0 (MinimalDisplacement)."""
         for i in rows:
             prefs = self.preferences.get(i)
             if prefs:
@@ -181,18 +148,10 @@ class GoalSource:
 
 
 class GoalTree:
-    """The seed table's entries searchable by nearness to problems of one goal stack: a k-d tree over the
-    concatenated features of the goal frames at each entry (goal g: ``sqrt(weight_g) p_g``, and for a pose
-    ``sqrt(weight_g) w R_g`` flattened, ``w`` the table's m per unit of Frobenius distance), so that its Euclidean
-    distance is memetic's goal metric (:meth:`SeedTable.ranked_goals`). A tip target's one-goal stack (``tip``) is
-    ranked by the table's own tip features of its kind (:meth:`SeedTable.nearest`: the same metric for a
-    pose or a position, and the planar kinds' x, y and heading).
-
-    Args:
-        robot: the robot. table: the :class:`~evoik_pin.solvers.search.seed_table.SeedTable`. stack: the goal stack.
-        allowed: (size,) bool, the entries to search (a scene's collision-free ones), or None for all.
-        tip: the stack is a tip target's (:meth:`GoalStack.single`).
-    """
+    """The seed table's entries searchable by nearness to problems of one goal stack in memetic's goal metric: a
+    k-d tree over the table's goal features (:meth:`SeedTable.goal_table_features`), or for a tip target's stack
+    (``tip``) the table's own tree of its kind (:meth:`SeedTable.nearest`). ``allowed``: (size,) bool, the entries to
+    search (a scene's collision-free ones), or None for all."""
 
     def __init__(self, robot, table, stack, allowed: np.ndarray | None = None, tip: bool = False) -> None:
         self.table, self.allowed = table, allowed
@@ -202,8 +161,7 @@ class GoalTree:
             return
         from scipy.spatial import cKDTree
 
-        # the seed table's own goal features (one home for memetic's goal metric), per goal (sqrt(weight), oriented)
-        # (a goal beyond one frame has no target pose of its frame to rank by: weight 0)
+        # per goal (sqrt(weight), oriented); a goal beyond one frame has no frame target to rank by: weight 0
         weights = np.where(np.array(stack.kinds) >= KIND_BEYOND_FRAME, 0.0, stack.spec[:, G_WEIGHT]).tolist()
         self.spec = tuple((w, bool(o)) + ((False,) if k in POSITIONLESS_KINDS else ())  # SeedTable.goal_spec's
                           for w, o, k in zip(weights, stack.oriented, stack.kinds, strict=True))
@@ -212,8 +170,8 @@ class GoalTree:
         self.tree = cKDTree(F[self.index])
 
     def nearest(self, arrays: GoalArrays, k: int, eps: float = 0.0) -> np.ndarray:
-        """Indices (N, k) of the table entries nearest to each problem, nearest first (k capped at the entries
-        searched); ``eps``: ``cKDTree.query``'s approximation factor."""
+        """Indices (N, k) of the entries nearest to each problem, nearest first (k capped at the entries searched);
+        ``eps``: ``cKDTree.query``'s approximation factor."""
         if self.tip_kind is not None:
             return self.table.nearest(self.tip_kind, arrays.P[:, 0], arrays.Rts[:, 0], k, self.allowed, eps)
         k = min(k, self.tree.n)

@@ -1,20 +1,9 @@
 """The Ray backend of :func:`evoik_pin.solve_many` (``backend="ray"``; ``pip install 'evoik_pin[ray]'``).
 
-:class:`RayBatch` starts ``workers`` actors (one CPU each). Each actor receives the robot once (a pickled
-:class:`~evoik_pin.robot.Robot` through Ray's object store), rebuilds the scene from its obstacles when there is
-one, and runs :class:`~.threads.BatchSolver` (the local backend, one thread) on the chunks it is handed: the
-targets as arrays (:func:`pack_targets`), the answers back as a :class:`~.batch_results.BatchOutcome` (arrays, plus the
-full :class:`~evoik_pin.Result` of the targets solved one by one). A target's answer depends only on the
-target, the options and ``(entropy, its index)``, so the answers are those of the local backend whatever the
-chunks and the actors.
-
-Cluster: an ``address`` (or ``RAY_ADDRESS``) connects to a running cluster (``ray start --head`` on one machine,
-``ray start --address=HEAD:6379`` on the others; see docs/SCALE.md); without one, an already initialized Ray is
-used, else a local instance of ``workers`` CPUs is started (and left running for later calls: ``ray.shutdown()``
-stops it). Every node needs the same evoik_pin installed, and the scene's mesh and SRDF files at the same paths.
-
-Failures: a chunk whose actor dies (the process is killed, the node lost) is re-run on a new actor, up to
-``attempts`` times; nothing is lost. An error raised by the solver itself (a bad option) is raised as is.
+:class:`RayBatch` hands chunks to ``workers`` actors (one CPU each, :class:`RayPool`), each holding the robot (sent
+once), the scene rebuilt from its obstacles, and a :class:`~.threads.BatchSolver` (one thread); the answers come
+back as :class:`~.batch_results.BatchOutcome` objects, the same as the local backend's. Clusters: docs/SCALE.md.
+A chunk whose actor dies is re-run on a new actor, up to ``attempts`` times; a solver's own error is raised as is.
 """
 
 from __future__ import annotations
@@ -37,26 +26,17 @@ from .batch_results import BatchOutcome
 from .targets import source_of
 from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
 
-__all__ = ["RayBatch", "RayPool", "connect", "import_ray", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
+__all__ = ["RayBatch", "RayPool", "connect", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
            "unpack_targets"]
 
 #: Attempts per chunk before its failure is reported (an actor dying each time).
 DEFAULT_ATTEMPTS = 3
-#: Guided chunks for the actors (:func:`~.threads.chunk_bounds`), between these sizes (targets): a remote call costs
-#: about a millisecond, so the smallest chunks are larger than the local backend's.
+#: Guided chunks for the actors (:func:`~.threads.chunk_bounds`), between these sizes (targets; a remote call costs
+#: about a millisecond).
 RAY_MIN_CHUNK, RAY_MAX_CHUNK = 1000, 20_000
 #: Seconds to reach a cluster address before calling it unreachable.
 CONNECT_TIMEOUT = 5.0
 INSTALL_HINT = "pip install 'evoik_pin[ray]'"
-
-
-def import_ray():
-    """The ``ray`` module, or a BackendError naming the extra that installs it."""
-    try:
-        import ray
-    except ImportError:
-        raise BackendError(f"backend='ray' needs Ray, which is not installed: {INSTALL_HINT}") from None
-    return ray
 
 
 def _probe(address: str) -> None:
@@ -76,14 +56,13 @@ def _probe(address: str) -> None:
 
 
 def connect(address: str | None = None, workers: int | None = None):
-    """Make sure Ray is initialized; return the ``ray`` module.
-
-    ``address`` (else ``RAY_ADDRESS``): connect to that cluster (``"auto"``: the one running on this machine); an
-    address nothing answers at is a BackendError at once, even when Ray is already initialized. Without one: an
-    already initialized Ray is kept, else a local instance with ``workers`` CPUs (default every core) is started,
-    its workers at normal priority (``RAY_worker_niceness`` 0 unless set).
-    """
-    ray = import_ray()
+    """The ``ray`` module, initialized: connected to the cluster at ``address`` (else ``RAY_ADDRESS``; ``"auto"``:
+    the one on this machine; BackendError at once when nothing answers there), else an initialized Ray as it is, else
+    a local instance of ``workers`` CPUs (default every core). BackendError when Ray is not installed."""
+    try:
+        import ray
+    except ImportError:
+        raise BackendError(f"backend='ray' needs Ray, which is not installed: {INSTALL_HINT}") from None
     address = address or os.environ.get("RAY_ADDRESS") or None
     if address is not None and address != "auto":
         _probe(address)
@@ -92,9 +71,8 @@ def connect(address: str | None = None, workers: int | None = None):
     kwargs = {"log_to_driver": False, "configure_logging": False}
     try:
         if address is None:
-            # Ray starts its workers at nice 15; the workers of a local instance started for this call do the call's
-            # work, so they run at the caller's priority (beside any other busy process they starved: minutes for a
-            # few thousand poses). RAY_worker_niceness set by the user wins.
+            # Ray starts its workers at nice 15, starved beside any busy process: the call's work runs at the
+            # caller's priority unless the user set RAY_worker_niceness
             os.environ.setdefault("RAY_worker_niceness", "0")
             ray.init(num_cpus=check_workers(workers), include_dashboard=False, **kwargs)
         else:
@@ -106,7 +84,7 @@ def connect(address: str | None = None, workers: int | None = None):
 
 # ---------------------------------------------------------------------- what travels to the actors
 def pack_targets(targets: list[Target]) -> dict:
-    """Targets as arrays (pickling Target objects costs about 20 us each): ``planar``, ``yaw`` (NaN: none),
+    """Targets as arrays (cheaper to pickle than Target objects): ``planar``, ``yaw`` (NaN: none),
     ``has_rotation`` (N,) and ``position`` (N, 3) (planar: (x, y, 0)), ``rotation`` (N, 3, 3)."""
     N = len(targets)
     position = np.zeros((N, 3))
@@ -122,8 +100,8 @@ def pack_targets(targets: list[Target]) -> dict:
 
 
 def unpack_targets(packed) -> list[Target]:
-    """The targets :func:`pack_targets` packed (poses through :meth:`Target.from_poses`, in one pass), or those of an
-    (N, 4, 4) array of poses (checked: a TargetError names a bad one)."""
+    """The targets :func:`pack_targets` packed, or those of an (N, 4, 4) array of poses (a TargetError names a bad
+    one)."""
     if isinstance(packed, np.ndarray):
         return Target.from_poses(packed)
     P, R, planar, has_rotation, yaw = (packed[k] for k in ("position", "rotation", "planar", "has_rotation", "yaw"))
@@ -137,8 +115,7 @@ def unpack_targets(packed) -> list[Target]:
 
 
 def scene_spec(scene) -> dict | None:
-    """What rebuilds ``scene`` on another process (a Scene holds Pinocchio data that does not pickle): its
-    settings and its obstacles (kind, parameters, pose)."""
+    """What rebuilds ``scene`` on another process (its Pinocchio data does not pickle): settings and obstacles."""
     if scene is None:
         return None
     return {"self_collision": scene.self_collision, "srdf": scene.srdf,
@@ -159,8 +136,8 @@ def build_scene(robot, spec: dict):
 
 
 class ChunkWorker:
-    """A Ray actor's state: the robot (received once) and the solver of the call in progress (built on the first
-    chunk of each call: options checked, scene rebuilt, seed table cached in the actor's process)."""
+    """A Ray actor's state: the robot (received once) and the solver of the call in progress (built on its first
+    chunk)."""
 
     def __init__(self, robot) -> None:
         self.robot = robot
@@ -194,26 +171,22 @@ class ChunkWorker:
 
 
 class RayPool:
-    """Actors holding one robot, kept between calls (starting an actor costs seconds: a process importing
-    evoik_pin and loading the compiled kernel). One pool is alive at a time (:func:`pool_for`)."""
+    """Actors holding one robot, kept between calls (an actor takes seconds to start). One pool is alive at a time
+    (:func:`pool_for`)."""
 
     def __init__(self, ray, robot, workers: int, key: tuple) -> None:
         self.ray, self.key, self.workers = ray, key, workers
         self._robot = ray.put(robot)  # pickled once into the object store
         self._actor_class = ray.remote(num_cpus=1)(ChunkWorker)
-        self.actors = [self.new_actor() for _ in range(workers)]
+        self.actors = [self._actor_class.remote(self._robot) for _ in range(workers)]
         self.replaced = 0  # actors replaced after dying
-
-    def new_actor(self):
-        return self._actor_class.remote(self._robot)
 
     def replace(self, actor):
         """A new actor in place of ``actor`` (dead, or to be killed)."""
         self.retire(actor)
         self.replaced += 1
-        fresh = self.new_actor()
-        self.actors.append(fresh)
-        return fresh
+        self.actors.append(self._actor_class.remote(self._robot))
+        return self.actors[-1]
 
     def retire(self, actor) -> None:
         if actor in self.actors:
@@ -232,9 +205,8 @@ _POOL: list[RayPool] = []  # the live pool, if any
 
 
 def pool_for(robot, workers: int | None = None, address: str | None = None) -> RayPool:
-    """The actor pool for ``robot`` (its pickled content, so a robot whose bounds changed gets new actors) and
-    ``workers`` (default every CPU of the cluster); a pool kept from an earlier call when it matches, else a new
-    one (the previous pool is closed: its actors would hold CPUs the new ones need)."""
+    """The actor pool for ``robot`` (by its pickled content) and ``workers`` (default every CPU of the cluster): the
+    kept one when it matches, else a new one (the previous one closed: its actors hold CPUs)."""
     ray = connect(address, workers)
     workers = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
     key = (ray.get_runtime_context().get_job_id(), hashlib.sha1(pickle.dumps(robot)).hexdigest(), workers)
@@ -289,20 +261,15 @@ class RayBatch:
             self._local._prepare(target)
         return self._local.template
 
-    def _chunks(self, N: int) -> list[tuple[int, int]]:
-        if self.chunk_size:
-            return [(a, min(a + self.chunk_size, N)) for a in range(0, N, self.chunk_size)]
-        return chunk_bounds(N, self.workers, RAY_MIN_CHUNK, RAY_MAX_CHUNK)
-
     def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
-        """Solve ``targets`` (a list of :class:`Target` or a :class:`~.targets.TargetSource`) from ``Q0`` (N, n) when
-        given, on the actors; the outcome in target order. ``offset``: the index of the first target in the whole
-        work (it keys the per-target generators)."""
+        """:meth:`.threads.BatchSolver.solve` on the actors."""
         ray, pool = self.ray, self.pool
         source = source_of(self._local.robot, targets)
         self.template(source.chunk(0, 1)[0])  # every option checked here, before the actors see them
         poses = source.poses
-        chunks = self._chunks(len(source))
+        N, size = len(source), self.chunk_size
+        chunks = ([(a, min(a + size, N)) for a in range(0, N, size)] if size
+                  else chunk_bounds(N, self.workers, RAY_MIN_CHUNK, RAY_MAX_CHUNK))
         todo = deque((k, 0) for k in range(len(chunks)))  # (chunk, attempt)
         idle = deque(pool.actors)
         running: dict = {}  # future -> (chunk, attempt, actor)
@@ -350,9 +317,3 @@ class RayBatch:
             for r in out.singles.values():
                 r.distance_source = functools.partial(self._scene.distance, r.q.copy())
         return out
-
-    def __enter__(self) -> RayBatch:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        pass  # the pool's actors stay for the next call

@@ -1,15 +1,6 @@
-"""Batch solving: many independent IK targets in one call (:func:`solve_many`), on every core or a Ray cluster.
-
-The top of the batch package: it checks the call's arguments (backend, workers, ``q0``), reads the targets
-(:class:`~.targets.TargetSource`), hands them to an engine below it, and wraps the engine's arrays
-(:class:`~.batch_results.BatchOutcome`) as what :func:`evoik_pin.solve_many` returns
-(:class:`~.batch_results.BatchResults`):
-
-* ``backend="local"``: :class:`~.threads.BatchSolver` on ``workers`` threads of this process (:mod:`.threads`
-  explains the batched rounds, the chunks and the per-target generators);
-* ``backend="ray"``: :class:`~.ray_actors.RayBatch`, chunks handed to Ray actors that each run a
-  :class:`~.threads.BatchSolver` (:mod:`.ray_actors`).
-"""
+""":func:`solve_many`, the top of the batch package: the call's checks, the engine (``backend="local"``:
+:class:`~.threads.BatchSolver` on threads; ``"ray"``: :class:`~.ray_actors.RayBatch`) and its answers as
+:class:`~.batch_results.BatchResults`."""
 
 from __future__ import annotations
 
@@ -31,49 +22,15 @@ __all__ = ["BACKENDS", "solve_many"]
 BACKENDS = ("local", "ray")
 
 
-
-def _start_configurations(robot, q0, N: int) -> np.ndarray | None:
-    """q0 as (N, n) starts: None, one (n,) joint vector for every target, or one per target (N, n)."""
-    if q0 is None:
-        return None
-    Q0 = np.asarray(q0, dtype=float)
-    if Q0.ndim == 1:
-        return np.broadcast_to(robot.check_q(Q0), (N, robot.n))
-    if Q0.shape != (N, robot.n) or not np.isfinite(Q0).all():
-        raise ConfigurationError(f"q0 must be one joint vector ({robot.n},) or one per target ({N}, {robot.n}) of "
-                                 f"finite numbers, got shape {Q0.shape}")
-    return Q0
-
-
-def _check_backend(backend) -> str:
-    return check_choice("backend", backend, BACKENDS)
-
-
 def solve_many(robot, targets, make_problem: Callable, run: Callable, method: str, seed=None, q0=None,
                workers=None, backend: str = "local", address: str | None = None, progress: bool = False,
                choose: Callable | None = None, prefer: str | None = None, locked: dict | None = None,
                **options) -> BatchResults:
-    """Solve many independent IK targets (see the module docstring); called by :func:`evoik_pin.solve_many`.
-
-    Args:
-        robot: a loaded :class:`~evoik_pin.robot.Robot`.
-        targets: anything :meth:`Target.coerce_many` accepts (a sequence of targets, or (N, 4, 4) poses), or a
-            sequence of goal lists (:mod:`.goal_lists`).
-        make_problem, run: the API's problem builder and solver runner (``api.make_problem``, ``api._run``).
-        method: solver name. seed: int, None or Generator (:func:`root_entropy`).
-        q0: None, one (n,) start for every target, or (N, n) starts.
-        workers: threads (local) or actors (ray); None: every core (local) or every CPU of the cluster (ray).
-        backend: "local" or "ray". address: a Ray cluster's address (ray only; default ``RAY_ADDRESS``).
-        progress: a tqdm bar over chunks.
-        choose, prefer: see :class:`~.threads.BatchSolver` (``prefer`` checked by the caller; None: the first
-            answer).
-        locked: ``{joint: value}`` (rad or m): the call solved on ``robot.locked(locked)``
-            (:func:`~evoik_pin.robot.locking.locked_robot`), ``q0`` and ``bounds`` given and the answers' ``q``
-            returned in ``robot``'s layout, the locked joints at their values.
-        **options: as for :func:`evoik_pin.solve`.
-    """
+    """Solve many independent IK problems; the engine of :func:`evoik_pin.solve_many`, whose docstring gives the
+    arguments. ``make_problem``, ``run``, ``choose``: see :class:`~.threads.BatchSolver`. ``locked``: solved on
+    :func:`~evoik_pin.robot.locking.locked_robot`, ``q0``, ``bounds`` and answers in ``robot``'s layout."""
     t_start = time.perf_counter()
-    backend = _check_backend(backend)
+    backend = check_choice("backend", backend, BACKENDS)
     if backend == "local" and address is not None:
         raise OptionError("address names a Ray cluster: give it with backend='ray'")
     workers = None if workers is None and backend == "ray" else check_workers(workers)
@@ -88,7 +45,12 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
     N = len(source)
     if N == 0:
         raise ConfigurationError("solve_many needs at least one target")
-    Q0 = _start_configurations(full, q0, N)
+    Q0 = None if q0 is None else np.asarray(q0, dtype=float)  # one (n,) start for every target, or one per target
+    if Q0 is not None and Q0.ndim == 1:
+        Q0 = np.broadcast_to(full.check_q(Q0), (N, full.n))
+    elif Q0 is not None and (Q0.shape != (N, full.n) or not np.isfinite(Q0).all()):
+        raise ConfigurationError(f"q0 must be one joint vector ({full.n},) or one per target ({N}, {full.n}) of "
+                                 f"finite numbers, got shape {Q0.shape}")
     if Q0 is None and source.goals:
         source.require_q0(range(N))  # MinimalDisplacement is measured from q0
     if locked and Q0 is not None:

@@ -1,12 +1,7 @@
-"""The tip targets of a :func:`~evoik_pin.solve_many` call, chunk by chunk, as the batch solver reads them.
-
-A user's targets (an (N, 4, 4) array of poses, a sequence of anything :meth:`Target.coerce` accepts, or an
-iterable) become :class:`~.goal_lists.GoalBlock` objects of consecutive targets, the form goal lists take too: each
-target a one-goal problem on the tip (``[Pose(tip, T)]``, ``[Position(tip, p)]``, the planar kinds), one
-:class:`~evoik_pin.goals.stack.GoalArrays` per target kind over :meth:`GoalStack.single`'s stack. An array of poses
-is checked and encoded in a few vectorized passes with no :class:`~evoik_pin.problem.Target` object made (they cost
-about 2 us each, the tenth of a whole batched solve); a Target is made only for a target that needs one: the few
-the batched rounds leave to the per-target solver.
+"""The tip targets of a :func:`~evoik_pin.solve_many` call as the batch solver reads them: chunks of one-goal
+problems on the tip (:class:`~.goal_lists.GoalBlock`, the form goal lists take), one group per target kind over
+:meth:`GoalStack.single`'s stack. An (N, 4, 4) array of poses is encoded with no Target object made (a Target costs
+a tenth of a batched solve): only the targets left to the per-target solver get one.
 """
 
 from __future__ import annotations
@@ -24,16 +19,14 @@ __all__ = ["TargetSource", "source_of"]
 
 def tip_group(robot, rows: np.ndarray, arrays: TargetArrays, tolerances: tuple[float, float]
               ) -> tuple[np.ndarray, GoalArrays]:
-    """Rows (k,) of tip targets of one kind as one-goal problems: ``arrays`` (P (k, 3), Rts (k, 3, 3)) seen as
-    (k, 1, 3) and (k, 1, 3, 3) over the tip's one-goal stack with ``tolerances`` (m, rad)."""
+    """Rows (k,) of tip targets of one kind as one-goal problems over the tip's stack with ``tolerances`` (m, rad)."""
     stack = GoalStack.single(robot, arrays.kind, *tolerances)
     return rows, GoalArrays(stack, arrays.P[:, None], arrays.Rts[:, None])
 
 
 def _one_target(targets) -> bool:
-    """True when ``targets`` is a single target rather than a sequence of them: a ``pin.SE3``, a Target, or an
-    array of shape (4, 4) (a homogeneous pose: its rows, 4-vectors, are no targets) or (3,) (a position: its
-    numbers are no targets), also as nested lists."""
+    """True when ``targets`` is one target rather than a sequence of them: a ``pin.SE3``, a Target, or an array (or
+    nested lists) of shape (4, 4) or (3,)."""
     if isinstance(targets, (pin.SE3, Target)):
         return True
     if isinstance(targets, np.ndarray):
@@ -47,12 +40,8 @@ def _one_target(targets) -> bool:
 
 
 class TargetSource:
-    """The user's tip targets, made into :class:`~.goal_lists.GoalBlock` objects of one-goal problems chunk by chunk
-    (the pipeline makes a chunk's while worker threads solve the earlier ones).
-
-    ``targets``: an (N, 4, 4) array of poses, any sequence :meth:`Target.coerce_many` accepts, or an iterable
-    (listed first); one target alone (a ``pin.SE3``, a :class:`Target`, one (4, 4) pose or one 3-vector
-    position) is one target, never its rows."""
+    """The user's tip targets (an (N, 4, 4) array of poses, any sequence :meth:`Target.coerce_many` accepts, an
+    iterable, or one target alone), made into :class:`~.goal_lists.GoalBlock` objects chunk by chunk."""
 
     goals = False  # tip targets (goal lists: :class:`~.goal_lists.GoalSource`)
 
@@ -72,8 +61,7 @@ class TargetSource:
         return raw if isinstance(raw, np.ndarray) and raw.ndim == 3 and raw.shape[1:] == (4, 4) else None
 
     def chunk(self, a: int, b: int) -> list[Target]:
-        """Targets a to b - 1 as :class:`Target` objects; a bad one is a TargetError naming its index in the whole
-        call."""
+        """Targets a to b - 1 as :class:`Target` objects (a TargetError names a bad one by its index in the call)."""
         try:
             return Target.coerce_many(self.raw[a:b])
         except TargetError:
@@ -81,8 +69,7 @@ class TargetSource:
             raise
 
     def block(self, a: int, b: int, tolerances: tuple[float, float]) -> GoalBlock:
-        """Targets a to b - 1 as one-goal problems with the call's ``tolerances`` (m, rad), grouped by kind; a bad
-        target is a TargetError naming its index in the whole call."""
+        """Targets a to b - 1 as one-goal problems with the call's ``tolerances`` (m, rad), grouped by kind."""
         poses = self.poses
         if poses is None:
             targets = self.chunk(a, b)
@@ -106,9 +93,8 @@ class TargetSource:
 
 
 def source_of(robot, targets) -> TargetSource | GoalSource:
-    """The source of a call's problems: a :class:`~.goal_lists.GoalSource` for a sequence of goal lists (every list
-    checked against ``robot`` here; one goal list alone is one problem), else a :class:`TargetSource`; an existing
-    source as it is."""
+    """The source of a call's problems: a :class:`~.goal_lists.GoalSource` for goal lists (one alone: one problem),
+    else a :class:`TargetSource`; an existing source as it is."""
     if isinstance(targets, (TargetSource, GoalSource)):
         return targets
     if is_problem_list(targets) and len(targets) > 0:

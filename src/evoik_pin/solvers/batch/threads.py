@@ -1,33 +1,10 @@
-"""The local engine of :func:`~evoik_pin.solve_many` (``backend="local"``): :class:`BatchSolver` and its worker threads.
+"""The local engine of :func:`~evoik_pin.solve_many` (``backend="local"``): :class:`BatchSolver` and its threads.
 
-With the memetic method (the default) the targets are solved in batched rounds first: every unsolved target
-starts from its nearest seed-table entry (:mod:`evoik_pin.solvers.search.seed_table`; from ``q0`` in the first
-round when given), and one call of the LM engine (:func:`~evoik_pin.solvers.lm.solve_pairs`, one compiled kernel
-call over all (start, target) pairs) runs memetic's LM iteration on all of them; each further round tries the
-next-nearest table entry for the targets still unsolved. The targets left after ``table_seeds`` rounds go to the
-per-target ``memetic`` solver (with the same options, e.g. ``timeout``), told which table entries were already
-tried. Other methods, a custom ``objective`` or ``polish=True`` solve the targets one by one through the same route
-as :func:`evoik_pin.solve`.
-
-Workers: the targets are cut into chunks (:func:`chunk_bounds`), and ``workers`` threads
-(the calling thread and ``workers - 1`` others) run the batched rounds of one chunk each: the compiled kernel and the
-k-d tree queries release the GIL. The calling thread also encodes the chunks' targets as arrays
-(:mod:`.targets`; no :class:`Target` object is made for an (N, 4, 4) array of poses) and solves one by one the
-targets a finished chunk left, as soon as it is done (with a scene: after every chunk's rounds, since the scene's
-collision data is shared) (:meth:`BatchSolver.pipeline`). The answers come back as arrays
-(:class:`~.batch_results.BatchOutcome`); :class:`~.batch_results.BatchResults` makes a :class:`Result` when one is
-read. Threads were measured against numba ``prange`` and worker processes (docs/BENCHMARKS.md,
-``scripts/bench_scale.py``). A target's rounds do not depend on the other targets of its chunk, so the answers do
-not depend on the chunking.
-
-Randomness: a target solved one by one (the fallback, or another method) draws from its own generator,
-``numpy.random.default_rng(SeedSequence(entropy, spawn_key=(i,)))`` with ``i`` its index in the call
-(``SeedSequence(seed).spawn(N)[i]`` for an integer ``seed``), so every answer is the same whatever the number of
-workers, the chunks or the backend (up to a wall-clock ``timeout``, as for :func:`evoik_pin.solve`; give
-``timeout=None, max_restarts=k`` for a budget independent of the machine).
-
-The Ray actors (:mod:`.ray_actors`) run this module's :class:`BatchSolver` on their chunks (one thread each);
-:mod:`.solve_many_call` (``solve_many``) chooses between the two. Nothing here imports either.
+With the memetic method the problems are solved in batched rounds first, each from its next-nearest seed-table entry
+(from ``q0`` first when given) by one :func:`~evoik_pin.solvers.lm.solve_pairs` call; those left after ``table_seeds``
+rounds, and every problem of other methods, are solved one by one as :func:`evoik_pin.solve` does, each with its own
+generator (:func:`target_generator`), so the answers do not depend on the workers, chunks or backend. The chunks'
+rounds run on ``workers`` threads (:meth:`BatchSolver.pipeline`).
 """
 
 from __future__ import annotations
@@ -48,7 +25,6 @@ from ...goals.preferences import holds_preferences, split_preferences
 from ...goals.stack import G_WEIGHT, GoalArrays, TargetArrays
 from ...objectives import default_cost
 from ...problem import Target, coerce_scene
-from ...result import Result
 from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
@@ -61,13 +37,11 @@ __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_b
 
 
 #: Guided chunks (:func:`chunk_bounds`): each a 1 / (GUIDED_SHARE * workers) share of the targets left, at least
-#: MIN_CHUNK targets (the smallest chunk worth a kernel call of its own).
+#: MIN_CHUNK targets.
 GUIDED_SHARE = 2
 MIN_CHUNK = 256
-#: The seed-table search of the batched rounds is approximate: ``cKDTree.query(eps=NEAREST_EPS)`` returns entries
-#: within (1 + eps) times the distance of the true nearest ones. Measured on 20,000 Panda poses
-#: (docs/BENCHMARKS.md): the true nearest entry for 94 % of them, the same first-round convergence (76.7 % against
-#: 76.8 %) and steps, for 2.4 instead of 6.4 us per query (12-D features defeat exact k-d tree search).
+#: The seed-table search of the batched rounds is approximate (``cKDTree.query(eps=NEAREST_EPS)``: within (1 + eps)
+#: times the nearest distance; docs/BENCHMARKS.md): 12-D features defeat exact k-d tree search.
 NEAREST_EPS = 1.0
 
 
@@ -105,8 +79,7 @@ def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int 
                  ) -> list[tuple[int, int]]:
     """[start, stop) ranges cutting n items into chunks: one for one worker; for several, guided chunks, each a
     ``1 / (GUIDED_SHARE * workers)`` share of the items not yet cut, between ``minimum`` (default ``MIN_CHUNK``)
-    and ``maximum`` items (none: no cap), so that chunks shrink toward the end and the workers finish together (a
-    worker idle while another ends a large last chunk had cost about 12 % of the wall time on 2 workers)."""
+    and ``maximum`` items (none: no cap), so that the workers finish together."""
     minimum = MIN_CHUNK if minimum is None else minimum
     if workers <= 1 or n <= minimum:
         return [(0, n)] if n > 0 else []
@@ -122,13 +95,8 @@ def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int 
 # ---------------------------------------------------------------------- the solver
 def check_call(robot, make_problem: Callable, method: str, options: dict) -> dict:
     """Every option of a call solving many targets checked before any work, as :func:`evoik_pin.solve` checks
-    them: the problem's (a problem built for a probe target at the base origin), the method's names and, for a
-    method registered with its checks (memetic, memetic-all), their values; the scene, given as a file path, read
-    once. Returns the options to solve with (the scene a :class:`~evoik_pin.scene.Scene`).
-
-    Raises:
-        OptionError (and the problem's errors: BoundsError, ConfigurationError, SceneError) naming the option.
-    """
+    them (on a probe target at the base origin); returns the options to solve with (a scene file read once into a
+    :class:`~evoik_pin.scene.Scene`). Raises OptionError (and the problem's errors) naming the option."""
     from .. import get_solver
 
     info = get_solver(method)
@@ -142,21 +110,17 @@ def check_call(robot, make_problem: Callable, method: str, options: dict) -> dic
 
 
 class BatchSolver:
-    """Solves batches of targets for one robot, method and set of options (the set-up done once: option
-    checks, seed table, collision-free entries); :meth:`solve` takes a batch.
+    """Solves batches of problems for one robot, method and set of options (option checks, seed table and
+    collision-free entries made once); :meth:`solve` takes a batch.
 
     Args:
         robot: a loaded :class:`~evoik_pin.robot.Robot`.
-        make_problem, run: the API's problem builder and solver runner (``api.make_problem``, ``api._run``),
-            so a target solved one by one is solved exactly as :func:`evoik_pin.solve` would.
-        method: solver name. entropy: see :func:`root_entropy`.
-        options: as for :func:`evoik_pin.solve` (``scene`` included).
-        fallback: hand the targets the batched rounds leave to the per-target solver (False: they stay
-            unsolved, with the best batched answer; reachability maps want a verdict, not a 5 ms search).
-        choose: the API's solve (``api.solve``: ``choose(robot, target, method, seed, prefer=, **options)``), which
-            solves every target left to the one-by-one solves (all of them when ``prefer`` is given, every goal list
-            holding preferences); None: ``make_problem`` and ``run`` solve them (reachability maps).
-        prefer: ``"nearest"`` or ``"manipulability"`` (checked by the caller), or None (the first answer).
+        make_problem, run: the API's problem builder and solver runner (``api.make_problem``, ``api._run``).
+        method: solver name. entropy: see :func:`root_entropy`. options: as for :func:`evoik_pin.solve`.
+        fallback: hand what the batched rounds leave to the per-target solver (False: it stays unsolved, with the
+            last batched answer: reachability maps want a verdict).
+        choose: the API's solve (``choose(robot, target, method, seed, prefer=, **options)``) for the one-by-one
+            solves; None: ``make_problem`` and ``run``. prefer: ``"nearest"``, ``"manipulability"`` or None.
     """
 
     def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int,
@@ -203,9 +167,9 @@ class BatchSolver:
 
     def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, workers: int = 1,
               progress=None) -> BatchOutcome:
-        """Solve ``targets`` (a list of :class:`Target`, an (N, 4, 4) array of poses, or a :class:`TargetSource`)
-        from ``Q0`` (N, n) starts when given; ``offset``: the index of the first target in the user's call (it keys
-        the per-target generators); ``progress``: a tqdm bar advanced chunk by chunk, or None."""
+        """Solve ``targets`` (anything :func:`~.targets.source_of` takes) from ``Q0`` (N, n) starts when given;
+        ``offset``: the index of the first target in the user's call (it keys the per-target generators);
+        ``progress``: a bar advanced chunk by chunk, or None."""
         parts: list[BatchOutcome] = []
         self.pipeline(source_of(self.robot, targets), Q0, offset, workers, progress,
                       lambda a, b, out: parts.append(out))
@@ -214,19 +178,12 @@ class BatchSolver:
     def pipeline(self, source: TargetSource | GoalSource, Q0, offset: int, workers: int, progress, batched: Callable,
                  singles: Callable | None = None) -> None:
         """Solve ``source`` chunk by chunk: ``batched(start, stop, outcome)`` on each chunk in order once its
-        batched rounds are done, and ``singles(start, outcome)`` on each chunk that had targets left for the
-        one-by-one solver, once they are solved (its ``outcome.singles`` filled).
+        batched rounds are done, ``singles(start, outcome)`` on each chunk with one-by-one solves once they are done.
 
-        ``workers`` threads share the work, this one and ``workers - 1`` others, so that no more threads run than
-        there are workers: the others run the batched rounds of one chunk each (the kernel and the k-d tree
-        release the GIL), a chunk queued ahead for each; this thread encodes the chunks' problems
-        (:meth:`TargetSource.block`: one-goal problems; :meth:`GoalSource.block`), solves one by one the targets a
-        finished chunk left as soon as it is done, and otherwise runs the batched rounds of the next chunk itself.
-        So a one-by-one solve (its wall-clock ``timeout``) has a core to itself, and the few such targets do not
-        wait for the end. Every one-by-one solve runs in this thread: they share the robot's Pinocchio data. With a
-        scene they come after every chunk's rounds (they use its collision data, which the rounds' exact checks
-        share under a lock).
-        """
+        This thread and ``workers - 1`` others share the work: the others run one chunk's batched rounds each; this
+        one encodes the chunks, runs the one-by-one solves of a finished chunk at once (they share the robot's
+        Pinocchio data; with a scene, after every chunk's rounds: its collision data is shared under a lock) and
+        otherwise the next chunk's rounds itself."""
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
         tolerances = (self.template.tolerance, self.template.rotation_tolerance)  # a tip target's one goal's
@@ -283,33 +240,27 @@ class BatchSolver:
         while left:
             self._singles(*left.popleft(), offset, singles)
 
-    def _singles(self, a: int, targets: dict[int, Target], q0, out: BatchOutcome, offset: int,
+    def _singles(self, a: int, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int,
                  singles: Callable | None) -> None:
-        """The one-by-one solves of the chunk starting at ``a`` (see :meth:`pipeline`)."""
-        self._one_by_one(targets, q0, out, offset + a)
+        """The problems ``{row: target}`` of the chunk starting at ``a`` that the batched rounds left (all of them for
+        other methods), one by one with each target's own generator; then ``singles(a, out)``."""
+        # memetic skips the table entries the rounds tried; a goal list's starts alternate composed and ranked
+        # entries (SeedTable.goal_starts), so its fallback starts from the first composed one (offset 0)
+        skip = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
+        for i, target in targets.items():
+            extra = {"table_offset": 0} if self.batched and is_goal_list(target) else skip
+            q0, rng = None if Q0 is None else Q0[i], target_generator(self.entropy, offset + a + i)
+            if self.choose is not None:  # evoik_pin.solve's pipeline (an IKSolver kept per thread)
+                if self.prefer is not None or holds_preferences(target):  # answers collected anew: no table offset
+                    extra = {}
+                r = self.choose(self.robot, target, self.method, rng, prefer=self.prefer,
+                                **{**self.options, **extra, "q0": q0})
+            else:
+                problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
+                r = self.run(problem, self.method, rng, {**solver_options, **extra})
+            out.set_single(i, r)
         if singles is not None:
             singles(a, out)
-
-    def _one_by_one(self, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int) -> None:
-        """The targets of a chunk the batched rounds left (all of them for other methods), ``{row: target}``, one
-        by one: the per-target solver with the call's options and each target's own generator."""
-        # A target's rounds tried its `rounds` nearest table entries: memetic skips them. A goal list's starts are
-        # composed ones and ranked entries alternately (SeedTable.goal_starts), and the rounds tried ranked entries
-        # only, so its fallback starts from the first composed start (offset 0).
-        offset_of = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
-        for i, target in targets.items():
-            extra = {"table_offset": 0} if self.batched and is_goal_list(target) else offset_of
-            out.set_single(i, self._one(target, None if Q0 is None else Q0[i], offset + i, extra))
-
-    def _one(self, target: Target, q0, index: int, extra: dict) -> Result:
-        if self.choose is not None:  # evoik_pin.solve's pipeline (an IKSolver kept per thread)
-            if self.prefer is not None or holds_preferences(target):  # answers collected anew: no table offset
-                extra = {}
-            return self.choose(self.robot, target, self.method, target_generator(self.entropy, index),
-                               prefer=self.prefer, **{**self.options, **extra, "q0": q0})
-        problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
-        solver_options.update(extra)
-        return self.run(problem, self.method, target_generator(self.entropy, index), solver_options)
 
     def _chunk_rounds(self, block: GoalBlock, Q0) -> BatchOutcome:
         """The batched rounds of one chunk (each goal stack apart): an outcome whose unsolved rows are
@@ -319,7 +270,8 @@ class BatchSolver:
             return out
         t = self.template
         for rows, arrays in block.groups:
-            key = (block.tip, self._tree_key(arrays))
+            stack = arrays.stack  # a k-d tree serves a stack's frames, kinds and weights
+            key = (block.tip, stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes())
             if self.table is not None and key not in self._trees:
                 with self._lock:  # the k-d tree of this stack is built once, not by every thread
                     if key not in self._trees:
@@ -339,12 +291,6 @@ class BatchSolver:
         out.success[solved] = True
         out.collision_checked = t.scene is not None
         return out
-
-    @staticmethod
-    def _tree_key(arrays: GoalArrays):
-        """What a k-d tree of the table serves: a goal stack's frames, kinds and weights."""
-        stack = arrays.stack
-        return stack.frames, stack.kinds, stack.spec[:, G_WEIGHT].tobytes()
 
     def _rounds(self, arrays: GoalArrays, rows: np.ndarray, Q0, out: BatchOutcome, tree: GoalTree | None) -> None:
         """The batched rounds of the problems ``arrays`` (of one goal stack), written into ``out``'s rows ``rows``;
@@ -368,7 +314,9 @@ class BatchSolver:
                 if ranked is None:
                     ranked = tree.nearest(group, self.rounds, NEAREST_EPS)
                 Qs = table.Q[ranked[:, rank]]
-            pairs = group if self.engine == "compiled" else tip_arrays(group)
+            # the Python reference engine runs one-goal tip problems as the single targets they are
+            pairs = group if self.engine == "compiled" else TargetArrays(group.stack.kinds[0], group.P[:, 0],
+                                                                         group.Rts[:, 0])
             res = solve_pairs(self.robot, Qs, pairs, t.lower, t.upper, t.tolerance, t.rotation_tolerance,
                               engine=self.engine)
             converged = res.converged
@@ -377,13 +325,7 @@ class BatchSolver:
                     for j in np.nonzero(converged)[0]:
                         converged[j] = not scene.in_collision(res.q[j], t.margin)
             done = rows[pending[converged]]
-            out.q[done] = res.q[converged]
-            out.position_error[done] = res.position_error[converged]
-            if res.orientation_error is not None:
-                out.orientation_error[done] = res.orientation_error[converged]
-            out.evaluations[done] = res.evaluations[converged]
-            if out.goal_errors is not None:
-                _put_rows(out.goal_errors, done, res.goal_errors[converged])
+            out.put(done, res, converged)
             out.time_s[done] = (time.perf_counter() - t0) / pending.size
             out.source[done] = source
             pending = pending[~converged]
@@ -392,33 +334,13 @@ class BatchSolver:
             if pending.size:
                 group = arrays.take(pending)
         if res is not None and pending.size and not self.fallback:  # no per-target search: the last round's answers
-            left = rows[pending]
-            out.q[left] = res.q[~converged]
-            out.position_error[left] = res.position_error[~converged]
-            if res.orientation_error is not None:
-                out.orientation_error[left] = res.orientation_error[~converged]
-            out.evaluations[left] = res.evaluations[~converged]
-            if out.goal_errors is not None:
-                _put_rows(out.goal_errors, left, res.goal_errors[~converged])
-
-
-def tip_arrays(group: GoalArrays) -> TargetArrays:
-    """One-goal tip problems as the single targets they are, for the Python reference engine (which runs goal lists
-    one at a time: :meth:`BatchSolver._prepare` leaves those to the one-by-one solver)."""
-    return TargetArrays(group.stack.kinds[0], group.P[:, 0], group.Rts[:, 0])
-
-
-def _put_rows(column: np.ndarray, rows: np.ndarray, values: np.ndarray) -> None:
-    """``column[rows[i]] = values[i]`` for an object column of arrays (a slice assignment would broadcast them)."""
-    for r, v in zip(rows.tolist(), values, strict=True):
-        column[r] = v
+            out.put(rows[pending], res, ~converged)
 
 
 @contextlib.contextmanager
 def gc_paused():
-    """The cyclic garbage collector paused while millions of small acyclic objects (targets, results) are made:
-    its passes over the growing heap cost more than making them (measured: 0.11 s -> 0.04 s for 20,000
-    results)."""
+    """The cyclic garbage collector paused while many small acyclic objects (targets, results) are made: its passes
+    over the growing heap cost more than making them."""
     enabled = gc.isenabled()
     gc.disable()
     try:
