@@ -367,7 +367,7 @@ def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
     """``prefer`` checked as :func:`solve` checks it, before any work: None for the first answer (None or
     ``"first"``), else ``"nearest"`` or ``"manipulability"``. OptionError: an unknown value, or "nearest" without
     q0; MethodError: a method other than memetic (it gives one answer, nothing to choose among)."""
-    from .solvers.search.choose import check_prefer, check_prefer_method
+    from .solvers.search.prefer import check_prefer, check_prefer_method
 
     prefer = check_prefer("first" if prefer is None else prefer)
     if prefer == "first":

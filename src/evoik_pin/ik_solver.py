@@ -8,7 +8,7 @@ method's set-up on every call would cost more than the solve; an ``IKSolver`` do
 * the problem's constants (tolerances, search box, scene, objective settings) are checked into a template problem,
   and each call copies it with the new target (checked: a NaN pose, a 5-vector, a q0 of the wrong length get the
   errors they get from :func:`evoik_pin.solve`);
-* for ``memetic`` (the default), its :class:`~evoik_pin.solvers.search.memetic.MemeticPlan`: the compiled kernel
+* for ``memetic`` (the default), its :class:`~evoik_pin.solvers.search.memetic.MemeticSetup`: the compiled kernel
   loaded, the seed table of the search box built, and one LM engine whose target arrays each call overwrites.
 
 The pipeline of a call: the target (or goal list) checked and bound, its problem copied from the template, the
@@ -17,7 +17,7 @@ goal sets, ``prefer=`` and preferences), the goals' and the scene's verdicts. ``
 the robot without those joints, its answers put back in the full layout.
 
 Once memetic has solved a pose (a position, a one-goal list of some goal structure) this way, the next ones of that
-kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`): the target's and q0's checks, memetic's
+kind take a lane (:mod:`evoik_pin.solvers.search.repeat_call`): the target's and q0's checks, memetic's
 compiled first runs called directly, the Result; no problem copied, no look-up. The answers stay the pipeline's,
 bit for bit; a target the first runs do not solve goes on in memetic from their state.
 
@@ -95,7 +95,7 @@ class IKSolver:
 
     def __init__(self, robot, method: str = DEFAULT_METHOD, *, prefer: str | None = None, locked: dict | None = None,
                  **options) -> None:
-        from .solvers.search.choose import check_prefer, check_prefer_method
+        from .solvers.search.prefer import check_prefer, check_prefer_method
 
         robot = _robot(robot)
         self.robot = robot
@@ -133,17 +133,17 @@ class IKSolver:
         info.check_options(options, n=robot.n)
         self._plan = None
         if method == "memetic":
-            from .solvers.search.memetic import MemeticPlan
+            from .solvers.search.memetic import MemeticSetup
 
-            self._plan = MemeticPlan(robot, **options)
+            self._plan = MemeticSetup(robot, **options)
         # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
         self._plain = self._plan is not None and not self._polish and self._prefer == "first"
-        # the per-call lanes (memetic's compiled first runs and little else), one per kind (True: poses, False:
-        # positions) and per one-goal list's goal stack (by id; the last _GOAL_LANES), made after the general path
-        # has solved a target of that kind: for the default objective in a box that does not move with the target (a
-        # custom objective may need the Target; a target box is remade per target)
-        self._lanes: dict = {}
-        self._lanes_open = self._plain and not self._target_box and self._objective is None
+        # the per-call paths (memetic's compiled first runs and little else), one per kind (True: poses, False:
+        # positions) and per one-goal list's goal stack (by id; the last _GOAL_REPEAT_CALLS), made after the general
+        # path has solved a target of that kind: for the default objective in a box that does not move with the target
+        # (a custom objective may need the Target; a target box is remade per target)
+        self._repeat_calls: dict = {}
+        self._repeat_calls_open = self._plain and not self._target_box and self._objective is None
         self._box_stage = None  # solve_within's stage (velocity_box), made on its first call
 
     def _checked_q0(self, q0) -> np.ndarray:
@@ -200,18 +200,18 @@ class IKSolver:
         if self._locked is not None:
             return self._locked.solve(target, q0, seed)
         problem = None
-        if self._lanes:
-            # a pose or a position on the lane of its kind (single_target_lane), here rather than behind a call: the
+        if self._repeat_calls:
+            # a pose or a position on the lane of its kind (repeat_call), here rather than behind a call: the
             # lane's whole Python is a few us, and a control loop's calls are nearly all of this kind
             arrays = pose_arrays(target)
             if arrays is not None:
-                lane = self._lanes.get(arrays[1] is not None)
+                lane = self._repeat_calls.get(arrays[1] is not None)
                 if lane is not None and lane.usable():
-                    q0 = self._lane_q0(q0, seed)
+                    q0 = self._repeat_call_q0(q0, seed)
                     out = lane.solve(arrays[0], arrays[1], q0)
-                    return out if type(out) is Result else self._go_on(self.problem(target, q0), seed, out)
+                    return out if type(out) is Result else self._resume_general(self.problem(target, q0), seed, out)
             else:
-                problem = self._goal_on_lane(target, q0, seed)
+                problem = self._goal_repeat_call(target, q0, seed)
                 if type(problem) is Result:
                     return problem
         if problem is None:
@@ -253,20 +253,20 @@ class IKSolver:
             stage = self._box_stage = VelocityBoxStage(self.robot)
         return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
-    def _goal_on_lane(self, target, q0, seed) -> Result | IKProblem | None:
-        """A one-goal list on the lane of its goal stack (single_target_lane; :meth:`solve` puts poses and positions
+    def _goal_repeat_call(self, target, q0, seed) -> Result | IKProblem | None:
+        """A one-goal list on the lane of its goal stack (repeat_call; :meth:`solve` puts poses and positions
         on theirs): the Result (memetic going on from the lane's first runs when none met the tolerances); the
         problem of a one-goal list without a lane (bound already); None for any other target."""
         if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
                 and target[0].alternatives is None and self._objective is None):
             return None
         bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
-        lane = self._lanes.get(id(bound[1]))
+        lane = self._repeat_calls.get(id(bound[1]))
         if lane is None or lane.key is not bound[1] or not lane.usable():
             return self._goal_problem(bound, q0)
-        q0 = self._lane_q0(q0, seed)
+        q0 = self._repeat_call_q0(q0, seed)
         out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])
-        return out if type(out) is Result else self._go_on(self._goal_problem(bound, q0), seed, out)
+        return out if type(out) is Result else self._resume_general(self._goal_problem(bound, q0), seed, out)
 
     def _solve_choosing(self, target, q0, seed) -> Result:
         """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goal
@@ -274,7 +274,8 @@ class IKSolver:
         memetic) come after the method's own search: the same answers as without them, then refined in the goals'
         null space (a step kept only when every goal is still met), so they never cost success."""
         from .goals.preferences import split_preferences
-        from .solvers.search.choose import bind_preferences, choose, refine
+        from .solvers.search.choose import choose
+        from .solvers.search.prefer import bind_preferences, refine
 
         if isinstance(target, IKProblem):
             problem, prefs = target, []
@@ -306,7 +307,7 @@ class IKSolver:
             result = _with_goal_verdict(problem, result)
         return with_collision_verdict(problem, result)
 
-    def _lane_q0(self, q0, seed):
+    def _repeat_call_q0(self, q0, seed):
         """A lane call's q0 (checked; None: the solver's own) after the seed's check: the general path's errors for
         a bad q0 or seed, in its order (the target's checks came first)."""
         q0 = self._q0 if q0 is None else self._checked_q0(q0)
@@ -314,7 +315,7 @@ class IKSolver:
             _rng(seed)  # a Generator passes; anything else raises the general path's error
         return q0
 
-    def _go_on(self, problem: IKProblem, seed, out) -> Result:
+    def _resume_general(self, problem: IKProblem, seed, out) -> Result:
         """The general path after a lane's first runs none of which met the tolerances: memetic goes on from their
         state (``out``: the lane's), or solves ``problem`` from the start (``out`` None: a run converged by the
         kernel's test but not by the problem's tolerances)."""
@@ -324,22 +325,22 @@ class IKSolver:
             result.chosen = [None] * len(problem.goals)
         return result
 
-    def _open_lane(self, problem: IKProblem) -> None:
+    def _open_repeat_call(self, problem: IKProblem) -> None:
         """After the plan solved ``problem`` (a single target or a one-goal list), make the lane of its kind (or goal
         stack) when there is none, or when the one kept no longer holds (its engine remade; another thread's). The
         lanes of goal stacks are the last few kept."""
         key = problem.target.rotation is not None if problem.goals is None else id(problem.goal_stack()[0])
-        kept = self._lanes.get(key)
+        kept = self._repeat_calls.get(key)
         if kept is None or not kept.usable():
-            from .solvers.search.single_target_lane import SingleTargetLane
+            from .solvers.search.repeat_call import RepeatCall
 
-            lane = SingleTargetLane.of_plan(self._plan, problem)
+            lane = RepeatCall.of_setup(self._plan, problem)
             if lane is not None:
                 if problem.goals is not None:
-                    stacks = [k for k in self._lanes if k is not True and k is not False]
-                    if len(stacks) >= _GOAL_LANES:
-                        del self._lanes[stacks[0]]
-                self._lanes[key] = lane
+                    stacks = [k for k in self._repeat_calls if k is not True and k is not False]
+                    if len(stacks) >= _GOAL_REPEAT_CALLS:
+                        del self._repeat_calls[stacks[0]]
+                self._repeat_calls[key] = lane
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on a problem of this solver (:meth:`problem`), then what :func:`evoik_pin.solve` does
@@ -351,8 +352,8 @@ class IKSolver:
             result = self._plan.solve(problem, rng)
             if goals is not None:
                 result.chosen = [None] * len(goals)
-            if self._lanes_open and (goals is None or len(goals) == 1):
-                self._open_lane(problem)
+            if self._repeat_calls_open and (goals is None or len(goals) == 1):
+                self._open_repeat_call(problem)
             return result
         goal_problem = problem if goals is not None else None
         if goal_problem is not None:  # the method's own problem of a goal list (the closed forms: one tip goal)
@@ -409,7 +410,7 @@ class _Locked:
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
 #: One-goal lists' lanes an IKSolver keeps (one per goal stack: frame, kind, weight, tolerances; the last made): as
 #: many as the plan keeps engines (a lane opens at its engine's second problem).
-_GOAL_LANES = KEPT_ENGINES
+_GOAL_REPEAT_CALLS = KEPT_ENGINES
 _LOCAL = threading.local()
 #: IKSolvers evoik_pin.solve keeps per thread (the last ones made; each keeps its robot, seed table and scene alive,
 #: so the number is small).
@@ -483,7 +484,7 @@ def solver_for(robot, method: str, options: dict, target) -> IKSolver:
         # solve's order: prefer=, locked=, the target's own checks (a goal list's bound to the robot), the options
         from .goals.preferences import split_preferences
         from .robot.locking import locked_robot
-        from .solvers.search.choose import check_prefer
+        from .solvers.search.prefer import check_prefer
 
         check_prefer("first" if options.get("prefer") is None else options["prefer"])
         goals = split_preferences(target)[0]

@@ -4,7 +4,7 @@ expense (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``).
 Each preference is a cost over configurations (lower is better); a solve first meets the goals, then lowers the
 preferences' summed cost by steps in the null space of the goals' Jacobian, each step followed by an LM run that
 brings every goal back within its tolerance and kept only when it does and lowers the cost
-(:func:`evoik_pin.solvers.search.choose.refine`). A solve also ranks the answers it found by that cost
+(:func:`evoik_pin.solvers.search.prefer.refine`). A solve also ranks the answers it found by that cost
 (``prefer=`` adds its own term first). Differences on joints whose range spans a full turn (continuous joints,
 UR's +-2 pi) are taken to the nearest turn.
 

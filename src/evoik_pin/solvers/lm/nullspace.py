@@ -275,7 +275,7 @@ NULLSPACE_COMPILE_SECONDS = 25.0
 
 def nullspace_kernel() -> dict:
     """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian whose null space
-    :func:`evoik_pin.solvers.search.choose.refine` steps in), compiled (or loaded from numba's disk cache) on a
+    :func:`evoik_pin.solvers.search.prefer.refine` steps in), compiled (or loaded from numba's disk cache) on a
     one-joint robot, outside any time budget."""
     if not _KERNEL:
         from .compiling import load
