@@ -11,6 +11,7 @@ restarts look for one; an unreachable target gives ``success=False`` and the bes
 
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
@@ -88,33 +89,17 @@ def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, cla
             check_choice("engine", engine, ENGINES))
 
 
-class _Starts:
-    """The stream of LM starts: q0, the seed table's nearest first (a goal list: :meth:`SeedTable.goal_starts`), then
-    uniform draws."""
-
-    def __init__(self, problem: IKProblem, table, rng) -> None:
-        self.problem = problem
-        self.table = table
-        self.rng = rng
-        if table is None:
-            self.order = iter(())
-        elif problem.goals is not None:
-            self.order = table.goal_starts(problem, table.Q.shape[0])  # configurations (n,)
-        else:
-            self.order = (table.Q[i] for i in table.ranked(problem.target, table.Q.shape[0]))
-        self.pending: list[np.ndarray] = [] if problem.q0 is None else [problem.q0]
-
-    def take(self, k: int) -> np.ndarray:
-        starts = self.pending[:k]
-        del self.pending[:k]
-        for q in self.order:
-            starts.append(q)
-            if len(starts) >= k:
-                break
-        if len(starts) < k:
-            p = self.problem
-            starts.extend(self.rng.uniform(p.lower, p.upper, size=(k - len(starts), p.n)))
-        return np.array(starts)
+def _starts(problem: IKProblem, table, rng):
+    """The endless stream of LM starts (n,): q0, the seed table's nearest first (a goal list:
+    :meth:`SeedTable.goal_starts`), then uniform draws from ``rng``."""
+    if problem.q0 is not None:
+        yield problem.q0
+    if table is not None:
+        size = table.Q.shape[0]
+        yield from (table.goal_starts(problem, size) if problem.goals is not None
+                    else (table.Q[i] for i in table.ranked(problem.target, size)))
+    while True:
+        yield rng.uniform(problem.lower, problem.upper)
 
 
 @register("memetic-all", "Every distinct IK solution: batched Levenberg-Marquardt from q0 and the seed table "
@@ -187,7 +172,7 @@ def memetic_all(
     deadline = None if timeout is None else t0 + timeout
     # A finite set: isolate each solution by refinement (redundant arms have no isolated solutions).
     classes = SolutionClasses(problem, wrap, class_radius, None if redundant else patient)
-    starts = _Starts(problem, table, rng)
+    starts = _starts(problem, table, rng)
     history: dict[str, list[float]] = {"starts": [], "solutions": [], "best_cost": []}
     evaluations = started = batches = quiet = 0
     best = (np.inf, None, np.inf, None)  # error, q, position error, orientation error
@@ -199,8 +184,8 @@ def memetic_all(
             break
         pairs = GoalArrays(stack, np.repeat(pt[None], k, axis=0), np.repeat(Rt[None], k, axis=0)) if goals else (
             [target] * k)
-        out = solve_pairs(robot, starts.take(k), pairs, lo, hi, problem.tolerance, problem.rotation_tolerance,
-                          iterations, engine=engine)
+        out = solve_pairs(robot, np.array(list(itertools.islice(starts, k))), pairs, lo, hi, problem.tolerance,
+                          problem.rotation_tolerance, iterations, engine=engine)
         if goals and still.size:
             out.q[:, still] = rest_at
         started += k

@@ -181,13 +181,10 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     if table is None:
         return [0.0] * len(variants)
     if parent.goals is None:  # one target on the tip (prefer= alone)
-        if joint is None:
-            variants[0].starts = (table.Q[i] for i in table.ranked(parent.target, k, free))
-        else:
-            d = table.distances(*table.one_target_features(parent.target)) + joint
-            if free is not None:
-                d[~free] = np.inf
-            variants[0].starts = _TableStarts(table.Q, d, int(d.argmin()), k)
+        d = table.distances(*table.one_target_features(parent.target)) + (0.0 if joint is None else joint)
+        if free is not None:
+            d[~free] = np.inf
+        variants[0].starts = _TableStarts(table.Q, d, int(d.argmin()), k)
         return [0.0]
     if len(parent.goals) > 1:  # a whole robot: composed starts too (SeedTable.goal_starts), the sets' order
         for v in variants:
@@ -199,8 +196,7 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     f = table.goal_features(spec, P, R)  # (V, d)
     g = parent.goals[0]  # the table's features of the goal's frame:
     FT, sq = table.features32(table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1])))
-    # |F - f|^2 = sq - 2 F.f + |f|^2: its first two terms compiled, in single precision (nearest.table_distances_many
-    # says why), |f|^2 only where variants are compared
+    # |F - f|^2 = sq - 2 F.f + |f|^2: the first two terms compiled, in single precision; |f|^2 to compare variants
     D = np.empty((f.shape[0], FT.shape[1]), dtype=np.float32)
     table_distances_many(FT, sq, f.astype(np.float32), D)
     if joint is not None:
@@ -262,8 +258,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
     joint = None
     if prefer == "nearest" and table is not None and (not goals or len(problem.goals) == 1):
-        # entries near q0 too: LM from them lands on answers near q0 (measured on Panda: 42 % of such starts
-        # descend to an answer no farther than TRAC-IK's Distance's, 26 % by pose alone)
+        # entries near q0 too: LM from them lands on answers near q0
         joint = table.joint_distances(problem.q0, wrap)
         joint *= NEAR_JOINT_WEIGHT * table.weight**2
     near = _variant_starts(table, problem, variants, per_variant, free, joint, *((P, R) if goals else ()))
@@ -331,6 +326,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             v.best_rank = -1.0
             answers.extend(zip(criterion.costs(A).tolist(), A, [i] * A.shape[0], strict=True))
 
+    def random_starts() -> str:
+        for i in order:
+            variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+        return "random starts"
+
     def out_of(limit) -> bool:
         return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
 
@@ -338,8 +338,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     limit = deadline if prefer == "first" else collect_until
     lead = {}  # q0 at the head of a variant's first batch
     if q0 is not None and prefer != "first" and len(variants) == 1:
-        # prefer on one variant: q0's run in the first batch's kernel call (its own LM run cost 30-70 us more in
-        # Python, measured on Panda: a tenth of prefer's budget)
+        # prefer on one variant: q0's run in the first batch's kernel call (its own LM run costs more in Python)
         lead = {order[0]: q0[None]}
     elif q0 is not None:  # round 0: q0 towards every variant (prefer="nearest": the nearest answers start there)
         for i in order:
@@ -378,14 +377,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             if not progressed:
                 if deadline is None:  # no clock: the table's starts are the budget
                     break
-                stage = "random starts"
-                for i in order:
-                    variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+                stage = random_starts()
             else:
                 stage = "seed table" if stage != "random starts" else stage
             order = sorted(order, key=lambda i: variants[i].best_rank)
         done = True
-    rnd = 0
     while not done and not out_of(limit):
         stage = "seed table"
         progressed = False
@@ -399,13 +395,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 break
             if out_of(limit):
                 break
-        rnd += 1
         if not progressed:
             if prefer == "first" or deadline is None:  # no clock: the table's starts are the budget
                 break
-            stage = "random starts"  # prefer: keep collecting from uniform random starts until the budget
-            for i in order:
-                variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
+            stage = random_starts()  # prefer: keep collecting until the budget
         order = sorted(order, key=lambda i: variants[i].best_rank)  # the variants that came nearest first
     if winner is None and answers:
         answers.sort(key=lambda a: a[0])
@@ -463,10 +456,9 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         choice = variants[winner[1]].choice
         members = [g if m is None else g.alternatives[m] for g, m in zip(problem.goals, choice, strict=True)]
         if not all(g.kind < KIND_BEYOND_FRAME and (g.has_position or g.has_orientation) for g in members):
-            members = None  # kinds whose errors the general verdict computes on its own (memetic.one_frame_goal)
+            members = None  # kinds whose errors the general verdict computes on its own (seed_table.one_frame)
     if members is not None:
-        # the first answer, met by one LM run: each goal's errors are the kernel's of that run (its success test's
-        # numbers, as a single target's and a one-goal list's are, memetic), each goal set's member the variant's
+        # the first answer, met by one LM run: each goal's errors are the kernel's of that run, as memetic's are
         out = winner[2]
         errors = ([(out.position_error, out.orientation_error)] if out.goal_errors is None
                   else out.goal_errors.tolist())
@@ -480,8 +472,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         within = problem.goals_met(goal_errors)
     else:
         goal_errors = None
-        # the errors from one LM evaluation at q (no step; the kernel's errors, as memetic's answers are assessed):
-        # 3 us, where assess's own kinematics and angle cost 35 (measured, warm; 80-130 after other work)
+        # the errors from one LM evaluation at q (no step: the kernel's errors, as memetic's answers are assessed)
         at_q = variants[winner[1]].lm.run(q, 0)
         evaluations += at_q.evaluations
         pos, rot, cost = problem.assess(q, at_q.position_error, at_q.orientation_error)

@@ -28,8 +28,7 @@ from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, com
 from ..lm.compiling import load
 from ..lm.engine import later_kinds
 from ..options import check_choice, check_int, check_positive
-from ..paper.common import diversity
-from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
+from .memetic_runs import LMRuns, de_restart
 from .seed_table import (
     DEFAULT_GOAL_TABLE_SEEDS,
     DEFAULT_TABLE_SEEDS,
@@ -46,17 +45,13 @@ __all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticSetup", "memetic"
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
 #: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
-#: descheduled past the budget still gets this minimum of useful work (5 runs of at most 30 steps, about
-#: 0.3 ms of compiled LM at worst).
+#: descheduled past the budget still gets this minimum of useful work.
 GUARANTEED_TABLE_RUNS = 4
-#: LM engines (and their compiled first-runs entries) a MemeticSetup keeps, one per goal stack: a solver alternating
-#: single targets and several goal structures retargets them instead of rebuilding (an engine's target arrays become
-#: its own at its second problem, which an IKSolver's lane needs: ik_solver keeps as many goal lanes).
+#: LM engines (and their compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted instead of
+#: rebuilt by a solver alternating goal structures.
 KEPT_ENGINES = 8
 #: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
 FIRST_RUNS_COMPILE_SECONDS = 5.0
-#: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
-BOUND_SHARE = 0.4
 
 
 def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
@@ -71,7 +66,6 @@ def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine
     return table, free
 
 
-# ---------------------------------------------------------------------- option checks
 def check_options(*, timeout, max_restarts, population, generations, polish_count, table_size, table_seeds,
                   table_offset, batch, iterations, engine, n: int) -> tuple:
     """memetic's options (:func:`memetic`'s keywords; ``n`` the robot's joints) as a tuple in the signature's order,
@@ -91,87 +85,6 @@ def check_options(*, timeout, max_restarts, population, generations, polish_coun
             check_int("table_offset", table_offset, 0),
             check_int("batch", batch, 1), check_int("iterations", iterations, 1),
             check_choice("engine", engine, ENGINES))
-
-
-# ---------------------------------------------------------------------- the solver
-class _Search:
-    """State of one memetic solve: the LM engine, the best outcome met, counters and the clock."""
-
-    def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int,
-                 batch: int = 1, engine: str = "compiled", guaranteed: int = 0,
-                 lm: LevenbergMarquardt | None = None) -> None:
-        self.problem = problem
-        self.guaranteed = guaranteed  # LM runs made whatever the clock says
-        self.batch = batch
-        self.lm = LevenbergMarquardt(problem, engine=engine) if lm is None else lm
-        self.t0 = t0
-        self.deadline = deadline
-        self.iterations = iterations
-        self.best: LMOutcome | None = None
-        self.evaluations = 0
-        self.attempts = 0
-        self.attempt_errors: list[float] = []
-        self.scene = problem.scene
-        self.rejected = 0  # converged LM answers rejected by the scene's exact check
-        self.rejected_pairs: list[tuple[str, str]] = []  # the pairs in contact at the last one
-
-    def out_of_time(self) -> bool:
-        return (self.deadline is not None and self.attempts >= self.guaranteed
-                and time.perf_counter() >= self.deadline)
-
-    def _deadline(self) -> float | None:
-        """The next LM run's deadline: none while the guaranteed runs are made."""
-        return None if self.attempts < self.guaranteed else self.deadline
-
-    def _keep(self, out: LMOutcome, runs: int) -> bool:
-        self.evaluations += out.evaluations
-        self.attempts += runs
-        self.attempt_errors.append(out.error)
-        if out.converged and self.scene is not None:
-            margin = self.problem.margin
-            if self.scene.in_collision(out.q, margin):  # the exact check, ~90 us
-                # it reaches the target in collision: rejected; the search goes on from other starts
-                self.rejected += 1
-                self.rejected_pairs = self.scene.colliding_pairs(out.q, margin)
-                out.converged = False
-                if self.best is None:
-                    self.best = out
-                return False
-        if self.best is None or out.converged or out.rank < self.best.rank:
-            self.best = out
-        return out.converged
-
-    def polish(self, q: np.ndarray, iterations: int | None = None) -> bool:
-        """One LM run from ``q`` (n,); keeps the best outcome; True when it meets the tolerances."""
-        return self._keep(self.lm.run(q, iterations or self.iterations, self._deadline()), 1)
-
-    def polish_iter(self, starts) -> bool:
-        """:meth:`polish_many` over an iterable of starts (n,) drawn lazily, ``batch`` at a time, the clock checked
-        between groups."""
-        it = iter(starts)
-        for g in itertools.count():
-            chunk = list(itertools.islice(it, self.batch))
-            if not chunk or (g and self.out_of_time()):
-                return False
-            if self.polish_many(np.array(chunk)):
-                return True
-        return False  # pragma: no cover - the loop returns
-
-    def polish_many(self, Q: np.ndarray) -> bool:
-        """LM runs from the rows of ``Q`` (K, n) in order (``batch`` per engine call) until one meets the tolerances or
-        the time is up."""
-        for s in range(0, Q.shape[0], self.batch):
-            if s and self.out_of_time():
-                return False
-            chunk = Q[s:s + self.batch]
-            if chunk.shape[0] == 1:
-                solved = self.polish(chunk[0])
-            else:
-                out, k = self.lm.run_many(chunk, self.iterations, self._deadline())
-                solved = self._keep(out, k + 1 if out.converged else chunk.shape[0])
-            if solved:
-                return True
-        return False
 
 
 #: The search over goal sets (:func:`.choose.choose`), which puts itself here when imported (the solver registry
@@ -244,10 +157,7 @@ class MemeticSetup:
         self.given = dict(timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
                           polish_count=polish_count, table_size=table_size, table_seeds=table_seeds,
                           table_offset=table_offset, batch=batch, iterations=iterations, engine=engine)
-        self.options = check_options(
-            timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
-            polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
-            batch=batch, iterations=iterations, engine=engine, n=robot.n)
+        self.options = check_options(**self.given, n=robot.n)
         self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
         self._table = None
         self._lm: LevenbergMarquardt | None = None
@@ -256,8 +166,7 @@ class MemeticSetup:
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
         self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
         self._goal_entries: list[tuple] = []  # the same for goal_first_runs (goal lists of several goals), newest first
-        # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
-        # never read (no q0 given), the best failed run's configuration and numbers
+        # first_runs' scratch: each run's error, the goal's errors, a q0 never read, the best failed run's q and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
                          np.empty(6))
 
@@ -383,8 +292,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
      iterations, engine) = setup.options
 
-    # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
-    # table of this box with its nearness features (cached per robot and box).
+    # one-time set-up before the clock starts: the seed table and its features, the compiled rankings, the engine
     goals = problem.goals is not None
     single = one_frame(problem)
     if table_seeds is None:
@@ -392,9 +300,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     use_table = table_size > 0 and table_seeds > 0
     table, free = setup._prepare(problem, table_size if use_table else 0, engine)
     if table is not None and goals:
-        load_goal_helpers()  # the compiled rankings goal lists' starts call from Python (once per process)
-    # a problem searched as one frame's pose (a tip target, one goal on one frame): its features over the table (a
-    # goal frame's kinematics: ~20 ms on 4,096 entries, before the clock); other goal lists: their goal starts'
+        load_goal_helpers()
     frame = table.frame_search(problem) if table is not None else None
     if table is not None and frame is None:
         table.prepare_goals(problem.goals)
@@ -413,33 +319,27 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
         setup_s += loading
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
-    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
-                     lm)
+    search = LMRuns(problem, lm, None if timeout is None else t0 + timeout, iterations, batch, guaranteed)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
     stage = ""
     n_gen = 0
     restarts = 0
     solved = False
-    # Stages 1-2: LM from q0 and the table's starts, each run with the full step budget.
-    ranked = first = None
-    if table is not None:  # lazy; with a scene, among the collision-free entries only
+    # Stages 1-2: LM from q0 and the table's starts (lazy; with a scene, the collision-free entries only)
+    ranked = starts = first = None
+    if table is not None:
         ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if frame is None
                   else table.ranked(frame, table_offset + table_seeds, free))
-        if table_offset:
-            ranked = itertools.islice(ranked, table_offset, None)
+        ranked = itertools.islice(ranked, table_offset, None)
+        starts = ranked if frame is None else (table.Q[i] for i in ranked)
     q0 = problem.q0
     q0_first = q0 is not None
     if resumed is not None:
         # the compiled first runs made the guaranteed runs in this order: on from there, the clock checked between runs
         search.attempts, search.evaluations, search.attempt_errors, search.best, made = resumed
         stage = "seed table"
-        if frame is None:  # goal_starts' starts (configurations), lazily, after the ones made
-            if not search.out_of_time():
-                solved = search.polish_iter(itertools.islice(ranked, made, None))
-        else:
-            rest = list(itertools.islice(ranked, made, None))
-            if rest and not search.out_of_time():
-                solved = search.polish_many(table.Q[rest])
+        if not search.out_of_time():
+            solved = search.polish_many(itertools.islice(starts, made, None))
     elif q0 is not None and frame is not None:
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
@@ -454,23 +354,17 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     if q0_first and resumed is None:
         stage = "q0"
         solved = search.polish(q0)
-    if resumed is not None:
-        pass
-    elif not solved and frame is None and table is not None and not search.out_of_time():
+    if resumed is None and not solved and table is not None and not search.out_of_time():
         stage = "seed table"
-        solved = search.polish_iter(ranked)
-    elif not solved and table is not None and not search.out_of_time():
-        if first is None:
-            first = next(ranked, None)
-        stage = "seed table"
-        solved = first is not None and search.polish(table.Q[first])
-        if not solved and q0 is not None and not q0_first and not search.out_of_time():
-            stage = "q0"
-            solved = search.polish(q0)
+        if frame is not None:  # the nearest entry, then a farther q0, then the others
+            first = next(ranked, None) if first is None else first
+            solved = first is not None and search.polish(table.Q[first])
+            if not solved and q0 is not None and not q0_first and not search.out_of_time():
+                stage = "q0"
+                solved = search.polish(q0)
         if not solved and not search.out_of_time():
-            rest = list(ranked)
             stage = "seed table"
-            solved = bool(rest) and search.polish_many(table.Q[rest])
+            solved = search.polish_many(starts)
     # Stage 3: DE populations, their best members polished by LM, best first.
     if not solved and not search.out_of_time() and max_restarts != 0:
         if search.best is None:  # no q0 and no table: start from the box centre
@@ -483,7 +377,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         while not solved and not search.out_of_time() and (max_restarts is None or restarts < max_restarts):
             stage = "memetic restarts"
             restarts += 1
-            solved, n_gen, cost = _memetic_restart(problem, rng, search, population, generations, polish_count,
+            solved, n_gen, cost = de_restart(problem, rng, search, population, generations, polish_count,
                                                    wrap, history, n_gen, cost)
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
@@ -498,10 +392,8 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    if goals:
-        within = problem.goals_met(goal_errors)
-    else:
-        within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    within = (problem.goals_met(goal_errors) if goals
+              else pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance))
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
@@ -637,42 +529,3 @@ def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float,
         message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
                 "restart(s))",
         method="memetic", setup_s=setup_s, goal_errors=goal_errors)
-
-
-def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,
-                     wrap: np.ndarray, history: dict, n_gen: int, best_cost: float) -> tuple[bool, int, float]:
-    """One stage-3 restart: a DE population (uniform in the box, a share on its bounds, the best met and ``q0``),
-    ``generations`` generations, then its ``polish_count`` best members (the elite excepted) polished by LM. Returns
-    (solved, generations so far, best cost)."""
-    lo, hi = problem.lower, problem.upper
-    X = rng.uniform(lo, hi, size=(population, problem.n))
-    # a share of the coordinates sits on a bound: targets whose solutions rest on joint limits (several at once
-    # near a corner of the box) are rare under uniform draws, and LM from the interior is held off by the limits
-    on_bound = rng.random(X.shape) < BOUND_SHARE
-    X = np.where(on_bound, np.where(rng.random(X.shape) < 0.5, lo, hi), X)
-    X[0] = search.best.q
-    if problem.q0 is not None:
-        X[1] = np.minimum(np.maximum(problem.q0, lo), hi)
-    costs = problem.cost(X)
-    for _ in range(generations):
-        best = int(costs.argmin())
-        F = rng.uniform(0.5, 1.0, size=population)
-        V = mutate(X, "currenttobest1", F, distinct_indices(rng, population, 2), best)
-        U = binomial_crossover(X, V, 0.9, rng.random(X.shape), rng.integers(0, problem.n, population))
-        U = np.where(wrap, lo + np.mod(U - lo, 2 * np.pi), np.minimum(np.maximum(U, lo), hi))
-        cu = problem.cost(U)
-        better = cu <= costs
-        X[better], costs[better] = U[better], cu[better]
-        n_gen += 1
-        best_cost = min(best_cost, float(costs.min()))
-        history["best_cost"].append(best_cost)
-        history["mean_cost"].append(float(costs.mean()))
-        history["diversity"].append(diversity(X, lo, hi))
-        if search.out_of_time():
-            break
-    order = np.argsort(costs)
-    elite = search.best.q
-    order = [i for i in order if not np.array_equal(X[i], elite)][:polish_count]
-    if not order:
-        return False, n_gen, best_cost
-    return search.polish_many(X[order]), n_gen, best_cost

@@ -121,23 +121,22 @@ class Criterion:
         return c
 
 
+def _frame_rows(problem) -> list[tuple]:
+    """(frame (None: the tip), its task rows) of each goal (a tip target: one)."""
+    if problem.goals is None:
+        return [(None, TASK_ROWS[target_kind(problem.target)])]
+    return [(g.frame, TASK_ROWS.get(g.kind, range(6))) for g in problem.goals]
+
+
 def has_null_space(problem) -> bool:
     """Whether the goals leave a null space to refine in: fewer task rows than joints."""
-    if problem.goals is None:
-        rows = len(TASK_ROWS[target_kind(problem.target)])
-    else:
-        rows = sum(len(TASK_ROWS.get(g.kind, range(6))) for g in problem.goals)
-    return rows < problem.robot.n
+    return sum(len(rows) for _, rows in _frame_rows(problem)) < problem.robot.n
 
 
 def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
-    """The goals' stacked task Jacobian (rows, n) at ``q``: its null space is the joint motion that leaves every goal
-    met to first order. On the compiled engine, the rows LM's own step reads
-    (:func:`..lm.population_rows.task_rows`), right
-    for every kind: a free axis's swing rows (the turn about it is free), a band's and a support polygon's rows zero
-    where inactive (inside), a relative pose's and a centre of mass's from their own Jacobians, LookAt's with the
-    frame's motion across the line of sight. The Python engine (pose, position and planar goals only): the frames'
-    base-frame rows (LOCAL_WORLD_ALIGNED; a pose goal's log6 error has the same null space)."""
+    """The goals' stacked task Jacobian (rows, n) at ``q``, whose null space leaves every goal met to first order: on
+    the compiled engine the rows LM's own step reads (right for every kind: free axes, bands, relative poses, centres
+    of mass, LookAt); on the Python engine (pose, position, planar goals) the frames' base-frame rows."""
     if lm.engine == "compiled":
         stack = lm.goals
         e, E, ge = np.empty(stack.rows), np.empty((stack.rows, lm.n)), np.empty((len(stack.kinds), 2))
@@ -145,11 +144,8 @@ def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray
                                         lm._Rt, e, E, ge)
         return E
     robot = problem.robot
-    if problem.goals is None:
-        return robot.jacobian_world_unchecked(q)[list(TASK_ROWS[target_kind(problem.target)])]
-    blocks = [robot.jacobian_world_unchecked(q, robot.frame_id(g.frame))[list(TASK_ROWS.get(g.kind, range(6)))]
-              for g in problem.goals]
-    return np.vstack(blocks)
+    return np.vstack([robot.jacobian_world_unchecked(q, None if f is None else robot.frame_id(f))[list(rows)]
+                      for f, rows in _frame_rows(problem)])
 
 
 def _null_basis(E: np.ndarray) -> np.ndarray:
@@ -165,11 +161,8 @@ GRAM_PIVOT = 1e-4
 
 
 def _null_projection(E: np.ndarray, g: np.ndarray) -> np.ndarray:
-    """``g`` (n,) projected on the null space of ``E`` (rows, n). Zero rows (an inactive band's, a support polygon's
-    with the CoM inside) bind nothing and are dropped; then ``g - E^T (E E^T)^-1 E g`` when the rows left are well
-    independent (E E^T's Cholesky pivots within :data:`GRAM_PIVOT` of each other: a few microseconds), else by the
-    SVD's null basis (tens to hundreds of microseconds): some kinds' rows are dependent by design (a free axis's
-    three swing rows have rank two, LookAt's too near its answer)."""
+    """``g`` (n,) projected on the null space of ``E`` (rows, n), zero rows dropped: ``g - E^T (E E^T)^-1 E g`` when
+    the rows are well independent (Cholesky pivots within :data:`GRAM_PIVOT`), else by the SVD's null basis."""
     E = E[np.any(E != 0.0, axis=1)]
     if E.shape[0] == 0:
         return g
@@ -187,12 +180,10 @@ def _null_projection(E: np.ndarray, g: np.ndarray) -> np.ndarray:
 
 def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion, deadline: float | None,
            steps: int = REFINE_STEPS) -> tuple[np.ndarray, float, int]:
-    """Lower ``criterion`` from an answer ``q`` (every goal met) by steps in the null space of the goals'
-    Jacobian: the projected gradient step (scaled by the criterion's curvature, so a quadratic term's step is
-    its minimum on the tangent plane; at most :data:`MAX_REFINE_STEP`), then an LM run from there restoring
-    every goal within its tolerance. A step is kept only when that run converges, the cost drops and, with a
-    scene, the configuration is collision-free (``problem.margin``); otherwise the step is halved. Returns (q, its
-    cost, LM evaluations)."""
+    """Lower ``criterion`` from an answer ``q`` (every goal met) by projected gradient steps in the goals' null space
+    (scaled by the criterion's curvature, at most :data:`MAX_REFINE_STEP`), each restored by an LM run and kept only
+    when it converges, the cost drops and, with a scene, it is collision-free; else halved. Returns (q, cost, LM
+    evaluations)."""
     f = criterion.cost(q)
     scale, evaluations = 1.0, 0
     scene = problem.scene
@@ -245,20 +236,17 @@ def _mimic(lm: LevenbergMarquardt) -> bool:
 
 def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
              finish: float | None) -> tuple[list, int]:
-    """prefer's answers (cost, q, variant), best first, taken along their self-motion manifolds by the compiled
-    descent (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct
-    ones :data:`DESCEND_TRIAL` steps each, then the best :data:`DESCEND_FINAL` of those :data:`DESCEND_STEPS` steps
-    more a round, in rounds while the clock allows (until ``finish``; nearest's first round for the best
-    :data:`SURE_FINAL` whatever it says) and they move. A descended
-    answer in collision keeps its start. Returns the refined answers, best first, and the kinematics evaluations."""
+    """prefer's answers (cost, q, variant), best first, taken along their self-motion by the compiled descent
+    (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct ones
+    :data:`DESCEND_TRIAL` steps, then the best :data:`DESCEND_FINAL` on in rounds while the clock allows (until
+    ``finish``). A descended answer in collision keeps its start. Returns (the answers best first, evaluations)."""
     kernel = nullspace_kernel()["descend_batch"]
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
     picked = distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
     evaluations = 0
 
     def run(batch, steps):
-        """Each answer of ``batch`` descended ``steps`` steps at most: one kernel call per variant, the answers'
-        turns and costs for all of them at once (a Python call per answer cost as much as the descent)."""
+        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant."""
         nonlocal evaluations
         out = []
         for i in sorted({a[2] for a in batch}):
@@ -291,9 +279,7 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
 
 
 def distinct(answers, count: int) -> list:
-    """The first ``count`` of ``answers`` (cost, q, variant; best first) no two of which are within 1e-3 (rad or
-    m, Euclidean) of each other. One matrix of the pairs' distances, then plain Python: an array operation per
-    answer cost some 100 us on 20 answers (measured)."""
+    """The first ``count`` of ``answers`` (cost, q, variant; best first) no two within 1e-3 (rad or m) of each other."""
     if len(answers) <= 1:
         return list(answers[:count])
     Q = np.array([a[1] for a in answers])
@@ -323,10 +309,8 @@ def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Crite
     elif prefer == "manipulability":
         terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
     for p in preferences:
-        if isinstance(p, Manipulability):
-            terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap, first_frame))
-        else:
-            terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+        frame = (first_frame,) if isinstance(p, Manipulability) else ()
+        terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap, *frame))
     return Criterion(terms)
 
 

@@ -62,7 +62,8 @@ def _pose_rows(sp: float, sr: float, positioned: bool, oriented: bool, planar: b
     """Features (N, d) of N poses (P (N, 3) m, R (N, 3, 3)) in :class:`FrameFeatures`' metric."""
     if planar:  # x, y, and the heading scaled like rotations
         return np.concatenate([P[:, :2]] + ([sr * R[:, :2, 0]] if oriented else []), axis=1)
-    return np.concatenate(([sp * P] if positioned else []) + ([sr * R.reshape(-1, 9)] if oriented else []), axis=1)
+    parts = ([sp * P] if positioned else []) + ([sr * R.reshape(-1, 9)] if oriented else [])
+    return np.concatenate(parts, axis=1) if parts else np.zeros((P.shape[0], 0))
 
 
 class SeedTable:
@@ -200,8 +201,6 @@ class SeedTable:
         """:meth:`ranked` for a goal list (``problem.goals``): nearest in the goals' weighted summed nearness, each
         goal's frame posed by the entry (ties: the lower index first), by one compiled pass
         (:func:`~.nearest.rank_goal_entries`)."""
-        if k <= 0:
-            return
         from .nearest import rank_goal_entries  # numba, loaded on first use (as the kernel is)
 
         layout = self.goal_layout(problem.goals)
@@ -217,7 +216,7 @@ class SeedTable:
 
     def prepare_goals(self, goals) -> None:
         """One-time set-up for a goal list: its features over the table and the compiled rankings its search calls."""
-        self._goal_table_features(goals)
+        self.goal_table_features(tuple(g.frame for g in goals), self.goal_spec(goals))
         self._goal_parts(goals)
         if len(goals) > 1:
             load_goal_helpers()
@@ -262,19 +261,17 @@ class SeedTable:
                 if fixed is None or (j > 0 and fixed.shape[1] == 1):
                     fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, 1 if j == 0 else k, allowed)
                 picks = fixed[:, j] if j < fixed.shape[1] else None
-            if picks is not None:
-                for (_, _, idx), e in zip(parts, picks, strict=True):
-                    q[idx] = self.Q[e, idx]
-                yield q
-                made += 1
-                if made >= k:
-                    return
             entry = self.Q[row]
             if base is not None:
                 entry = entry.copy()
                 entry[:6] = base
-            yield entry
-            made += 1
+            out = [entry]
+            if picks is not None:
+                for (_, _, idx), e in zip(parts, picks, strict=True):
+                    q[idx] = self.Q[e, idx]
+                out.insert(0, q)
+            yield from out[:k - made]
+            made += len(out)
             if made >= k:
                 return
 
@@ -325,18 +322,12 @@ class SeedTable:
         from .nearest import nearest_per_goal  # numba, loaded on first use (as the kernel is)
 
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
-        FT, sq, start, scale, positioned, oriented = self._stacked_parts(goals, parts)
+        FT, sq, start, scale, positioned, oriented = self.goal_layout(goals, parts)[2:8]
         out = np.empty((len(parts), k), dtype=np.int64)
         if k > 0:
             nearest_per_goal(FT, sq, start, scale, positioned, oriented, self.weight, np.ascontiguousarray(pt),
                              np.ascontiguousarray(Rt), _EVERY if allowed is None else allowed, k, out)
         return out.astype(np.intp, copy=False)
-
-    def _stacked_parts(self, goals, parts) -> tuple:
-        """:meth:`_goal_parts`' features of every goal stacked for :func:`~.nearest.nearest_per_goal`: (FT (D, size)
-        the goals' features transposed, goal g's rows from start[g]; sq (G, size); start (G + 1,); scale (G,)
-        sqrt(weight); positioned, oriented (G,) bool), as :meth:`goal_spec` gives them (:meth:`goal_layout`'s)."""
-        return self.goal_layout(goals, parts)[2:8]
 
     def goal_layout(self, goals, parts=None) -> tuple:
         """What the compiled rankings and compositions of a goal list read (:func:`~.nearest.rank_goal_entries`,
@@ -367,10 +358,6 @@ class SeedTable:
                                                 oriented, idx, idx_start))
         return hit[1]
 
-    def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`goal_table_features` of a goal list."""
-        return self.goal_table_features(tuple(g.frame for g in goals), self.goal_spec(goals))
-
     def goal_table_features(self, frames, spec) -> tuple[np.ndarray, np.ndarray]:
         """(features (size, d), squared norms (size,)) of the frames ``frames`` over the table, cached per frames and
         ``spec`` (:meth:`goal_spec`)."""
@@ -394,16 +381,10 @@ class SeedTable:
     def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
         """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3) (``spec``:
         :meth:`goal_spec`): sqrt(weight) x the position, then x ``self.weight`` the rotation's entries."""
-        out = []
-        for g, entry in enumerate(spec):
-            s, oriented = entry[0], entry[1]
-            if len(entry) < 3 or entry[2]:  # a goal with a position
-                out.append(s * P[g])
-            if oriented:
-                out.append((s * self.weight) * R[g].reshape(-1, 9))
-        if not out:  # pointing goals alone: no feature ranks the entries (all equally near)
-            out.append(np.zeros((len(P[0]), 1)))
-        return out
+        out = [_pose_rows(e[0], e[0] * self.weight, len(e) < 3 or e[2], e[1], False, P[g], R[g])
+               for g, e in enumerate(spec)]
+        # pointing goals alone: no feature ranks the entries (all equally near)
+        return [b for b in out if b.shape[1]] or [np.zeros((len(P[0]), 1))]
 
     def goal_features(self, spec, P: np.ndarray, R: np.ndarray) -> np.ndarray:
         """Features (N, d) of N poses of G goal frames, P (N, G, 3) m, R (N, G, 3, 3) (``spec``: :meth:`goal_spec`)."""
