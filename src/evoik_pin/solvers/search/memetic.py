@@ -392,8 +392,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    within = (problem.goals_met(goal_errors) if goals
-              else pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance))
+    within = bool(problem.goals_met(goal_errors) if goals else problem.succeeded(pos, rot))
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
@@ -462,7 +461,7 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
         met = goal.met(*goal_errors[0])
     else:
         pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
-        met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+        met = problem.succeeded(pos, rot)
     if not met:
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
     return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,

@@ -87,7 +87,7 @@ class SeedTable:
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
         self._frames32: dict = {}  # id(a FrameFeatures' FT) -> (that FT, its float32 copy, sq's)
-        self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, its features stacked: _stacked_parts)
+        self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, goal_layout)
         if size:
             for key in _KIND_KEYS.values():  # one-time work here, not inside a solve's time budget
                 self.frame_features(key)

@@ -147,30 +147,21 @@ class SolutionClasses:
         rest, rest_errors = Q[labels < 0], E[labels < 0]
         leaders, group = leader_clusters(rest, rest_errors, self.radius, self.wrap)
         sizes = np.bincount(group, minlength=leaders.size)
-        if self.refine is None:  # no refinement: every leader is a new class (leaders are radius apart)
-            first = len(self.reps)
-            new = list(range(first, first + leaders.size))
-            self.reps.extend(rest[leaders])
-            self.errors.extend(rest_errors[leaders].tolist())
-            self.exact.extend([True] * leaders.size)
-            self.hits.extend(sizes.tolist())
-            self._known = np.vstack([self._known, rest[leaders]])
-            self._label = np.concatenate([self._label, np.array(new, dtype=int)])
-            return new
         for j, (q, error) in enumerate(zip(rest[leaders], rest_errors[leaders], strict=True)):
             members = int(sizes[j])
-            label = int(self.labels(q[None])[0])
+            # no refinement: every leader is a new class (leaders are radius apart)
+            label = -1 if self.refine is None else int(self.labels(q[None])[0])
             if label >= 0:
                 self.hits[label] += members
                 continue
-            raw, exact = q, error <= EXACT_ERROR
+            raw, exact = q, self.refine is None or error <= EXACT_ERROR
             if not exact:  # most runs end near 1e-12 (LM's finishing step): nothing to refine
                 out = self.refine.run(q, REFINE_ITERATIONS)
                 self.evaluations += out.evaluations
                 q, error = out.q, out.error
                 exact = error <= EXACT_ERROR
                 label = int(self.labels(q[None])[0])
-            if label < 0:
+            if label < 0 and self.refine is not None:
                 label = self._valley_class(q, exact)
             if label < 0:
                 label = len(self.reps)

@@ -147,7 +147,7 @@ class VelocityBoxStage:
             goal_errors = None
             pos, rot, cost = (problem.assess(q, out.position_error, out.orientation_error) if kernel_errors
                               else problem.assess(q))
-            met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+            met = bool(problem.succeeded(pos, rot))
         success = bool(met and collision_free is not False)
         if not met:
             message += "; the goals are not met within the velocity box (the answer closest to them inside it)"
