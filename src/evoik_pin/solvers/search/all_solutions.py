@@ -35,7 +35,7 @@ from .solution_classes import (
 )
 
 __all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
-           "goal_moving_joints", "memetic_all", "task_dimension"]
+           "goal_moving_joints", "memetic_all"]
 
 #: Default time budget (s) of one search: a safety net; the stopping rule ends most UR5 / UR10 pose searches in
 #: 1-4 ms.
@@ -68,11 +68,6 @@ class SolutionList(list):
     @property
     def message(self) -> str:
         return "" if self.result is None else self.result.message
-
-
-def task_dimension(target) -> int:
-    """Rows of a target's task error: 6 (pose), 3 (position; planar with yaw), 2 (planar x, y)."""
-    return len(TASK_ROWS[target_kind(target)])
 
 
 def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size,
@@ -154,7 +149,7 @@ def memetic_all(
         moving = goal_moving_joints(robot, stack)
         redundant = int(moving.sum()) > stack.rows
     else:
-        redundant = robot.n > task_dimension(target)
+        redundant = robot.n > len(TASK_ROWS[target_kind(target)])  # more joints than task rows
     wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
     if engine == "compiled":
         compiled_kernel()  # loaded (or compiled, once per install) outside the clock, as memetic does

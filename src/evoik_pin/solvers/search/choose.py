@@ -54,9 +54,8 @@ NEAR_SCALES = (0.1, 0.25, 0.5)
 #: times the table's weight squared (the term scales with the arm).
 NEAR_JOINT_WEIGHT = 0.1
 NEAR_EVERY = 4
-#: LM runs per kernel call while prefer collects answers, and their steps at most (None: memetic's iterations).
+#: LM runs per kernel call while prefer collects answers.
 COLLECT_BATCH = 16
-COLLECT_ITERATIONS = None
 #: The batch on goals without a null space (UR10 on a pose), whose whole budget collects: more runs find more of
 #: the branches, of which the nearest is the answer.
 COLLECT_BATCH_BRANCHES = 32
@@ -305,7 +304,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         P, Rts = np.repeat(pt[None], N, axis=0), np.repeat(Rt[None], N, axis=0)  # writable: layout.owned says why
         Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
         lm._kernel["lm_run_pairs"](owned(Q, float), *lm._args[:-2], P, Rts,
-                                   kernel_params(COLLECT_ITERATIONS or iterations), Q_out, stats,
+                                   kernel_params(iterations), Q_out, stats,
                                    np.empty((N, pt.shape[0], 2)))
         runs += N
         evaluations += int(stats[:, S_EVALUATIONS].sum())

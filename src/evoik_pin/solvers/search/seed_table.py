@@ -27,10 +27,8 @@ __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
 DEFAULT_TABLE_SEEDS = 17
-#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`: composed starts and
-#: table entries alternately). On whole robots a start costs an LM run (~0.1 ms on Talos) and a DE generation a
-#: population's tree kinematics in numpy (~1 ms on Talos): with 48 starts every one of 200 Talos, Go2 and Baxter
-#: problems (scripts/bench_goals.py) was solved without a restart, against 199, 197 and 198 with 17.
+#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`): on whole robots a start
+#: (an LM run) costs far less than a DE generation.
 DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
@@ -78,7 +76,7 @@ class SeedTable:
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
-        self._goal_features: dict = {}  # (frame, oriented, weight) per goal -> (features (size, d), squared norms)
+        self._goal_features: dict = {}  # (frames, goal_spec) -> goal_table_features; ("parts", ...) -> _goal_parts
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
         self._frames: dict = {}  # frame_features' key -> FrameFeatures
