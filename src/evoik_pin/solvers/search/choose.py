@@ -24,6 +24,7 @@ from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
 from ..lm.nullspace import nullspace_kernel
 from . import memetic as memetic_module
+from .memetic_runs import kernel_goal_errors
 from .nearest import table_distances_many
 from .prefer import (
     DEFAULT_PREFER_TIMEOUT,
@@ -325,11 +326,6 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             v.best_rank = -1.0
             answers.extend(zip(criterion.costs(A).tolist(), A, [i] * A.shape[0], strict=True))
 
-    def random_starts() -> str:
-        for i in order:
-            variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
-        return "random starts"
-
     def out_of(limit) -> bool:
         return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
 
@@ -376,7 +372,9 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             if not progressed:
                 if deadline is None:  # no clock: the table's starts are the budget
                     break
-                stage = random_starts()
+                stage = "random starts"
+                for i in order:
+                    variants[i].starts = iter(rng.uniform(problem.lower, problem.upper, size=(64, robot.n)))
             else:
                 stage = "seed table" if stage != "random starts" else stage
             order = sorted(order, key=lambda i: variants[i].best_rank)
@@ -394,10 +392,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 break
             if out_of(limit):
                 break
-        if not progressed:
-            if prefer == "first" or deadline is None:  # no clock: the table's starts are the budget
-                break
-            stage = random_starts()  # prefer: keep collecting until the budget
+        if not progressed:  # prefer="first" (the others collected above): the table's starts are spent
+            break
         order = sorted(order, key=lambda i: variants[i].best_rank)  # the variants that came nearest first
     if winner is None and answers:
         answers.sort(key=lambda a: a[0])
@@ -458,10 +454,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             members = None  # kinds whose errors the general verdict computes on its own (seed_table.one_frame)
     if members is not None:
         # the first answer, met by one LM run: each goal's errors are the kernel's of that run, as memetic's are
-        out = winner[2]
-        errors = ([(out.position_error, out.orientation_error)] if out.goal_errors is None
-                  else out.goal_errors.tolist())
-        goal_errors = [g.reported(p, np.nan if r is None else r) for g, (p, r) in zip(members, errors, strict=True)]
+        goal_errors = kernel_goal_errors(members, winner[2])
         chosen = list(choice)
         pos, rot, cost = problem.goal_summary(goal_errors)
         within = all(g.met(*e) for g, e in zip(members, goal_errors, strict=True))

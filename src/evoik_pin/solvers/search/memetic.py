@@ -28,10 +28,11 @@ from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, com
 from ..lm.compiling import load
 from ..lm.engine import later_kinds
 from ..options import check_choice, check_int, check_positive
-from .memetic_runs import LMRuns, de_restart
+from .memetic_runs import LMRuns, de_restart, kernel_goal_errors
 from .seed_table import (
     DEFAULT_GOAL_TABLE_SEEDS,
     DEFAULT_TABLE_SEEDS,
+    FrameFeatures,
     SeedTable,
     default_table_size,
     load_goal_helpers,
@@ -279,8 +280,8 @@ class MemeticSetup:
         return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
     def resume(self, problem: IKProblem, rng: np.random.Generator, resumed: tuple) -> Result:
-        """:meth:`solve` going on from the compiled first runs a lane made for ``problem`` (``resumed``: (clock start,
-        :func:`resumed_state`)), none of which converged."""
+        """:meth:`solve` going on from the compiled first runs a :class:`~.repeat_call.RepeatCall` made for
+        ``problem``, none of which converged (``resumed``: (clock start, :func:`resumed_state`))."""
         return _solve(self, problem, rng, resumed[0], resumed)
 
 
@@ -310,7 +311,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     if resumed is not None:  # the guaranteed runs' state: the compiled first runs made them and none converged
         t0, resumed = resumed
         setup_s = 0.0
-    elif (FIRST_RUNS and table is not None and (frame is None or not frame[0].planar) and problem.scene is None
+    elif (FIRST_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is None
             and engine == "compiled" and batch == 1 and table_offset == 0):
         args = (setup, problem, table, lm, t0, setup_s, iterations, table_seeds)
         result, loading, resumed = _goal_first_runs(*args) if frame is None else _first_runs(*args, frame)
@@ -329,7 +330,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     ranked = starts = first = None
     if table is not None:
         ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if frame is None
-                  else table.ranked(frame, table_offset + table_seeds, free))
+                  else table.ranked((frame, table.target_point(problem, frame)), table_offset + table_seeds, free))
         ranked = itertools.islice(ranked, table_offset, None)
         starts = ranked if frame is None else (table.Q[i] for i in ranked)
     q0 = problem.q0
@@ -343,14 +344,14 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     elif q0 is not None and frame is not None:
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
-        ff, f = frame
+        f = table.target_point(problem, frame)
         qc = np.minimum(np.maximum(q0, problem.lower), problem.upper)
         T = robot.frame_poses_unchecked(qc, [robot.frame_id(problem.goals[0].frame if goals else None)])[0]
-        d = f - ff.point(T.translation, T.rotation)
+        d = f - frame.point(T.translation, T.rotation)
         d0 = float(d.dot(d))
-        if d0 > ff.gap:
+        if d0 > frame.gap:
             first = next(ranked, None)
-            q0_first = first is None or d0 <= float((f - ff.F[first]).dot(f - ff.F[first]))
+            q0_first = first is None or d0 <= float((f - frame.F[first]).dot(f - frame.F[first]))
     if q0_first and resumed is None:
         stage = "q0"
         solved = search.polish(q0)
@@ -383,7 +384,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
     if goals and single:  # the kernel's errors of the best run, at q, trusted (_first_runs)
-        goal_errors = [problem.goals[0].reported(search.best.position_error, search.best.orientation_error)]
+        goal_errors = kernel_goal_errors(problem.goals, search.best)
     else:
         goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
     pos, rot, cost = (problem.goal_summary(goal_errors) if goals
@@ -433,12 +434,11 @@ FIRST_RUNS = True
 
 def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
                 setup_s: float, iterations: int, table_seeds: int,
-                frame: tuple) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_solve`'s guaranteed runs for a problem searched as one frame's pose (``frame``:
+                ff: FrameFeatures) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_solve`'s guaranteed runs for a problem searched as one frame's pose (``ff``:
     :meth:`SeedTable.frame_search`'s; not planar) in one compiled call (:mod:`.first_runs`), with _solve's order and
     decisions. Returns (the Result when one met the tolerances else None; the seconds spent loading the compiled
     function; when none converged, the state _solve goes on from (:func:`resumed_state`), else None)."""
-    ff = frame[0]
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
     n = problem.n

@@ -13,10 +13,17 @@ from ..lm import LevenbergMarquardt, LMOutcome
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
 
-__all__ = ["BOUND_SHARE", "LMRuns", "de_restart"]
+__all__ = ["BOUND_SHARE", "LMRuns", "de_restart", "kernel_goal_errors"]
 
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
+
+
+def kernel_goal_errors(goals, out: LMOutcome) -> list:
+    """Each goal's errors (:meth:`~evoik_pin.goals.Goal.reported`) from the kernel's at an LM outcome's q (its
+    success test's numbers, trusted as the answer's: no kinematics pass in Python)."""
+    errors = [(out.position_error, out.orientation_error)] if out.goal_errors is None else out.goal_errors.tolist()
+    return [g.reported(p, r) for g, (p, r) in zip(goals, errors, strict=True)]
 
 
 class LMRuns:

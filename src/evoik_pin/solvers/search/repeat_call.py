@@ -57,7 +57,7 @@ class RepeatCall:
 
     def __init__(self, setup, problem, lm, table, entry) -> None:
         self.setup = setup
-        ff = table.frame_search(problem)[0]
+        ff = table.frame_search(problem)
         if problem.goals is None:
             self.key = ff.oriented
             # the objective the solver's options make for a target of this kind, as IKProblem.assess asks it

@@ -111,19 +111,25 @@ class SeedTable:
             hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
         return hit
 
-    def frame_search(self, problem) -> tuple[FrameFeatures, np.ndarray] | None:
+    def frame_search(self, problem) -> FrameFeatures | None:
         """For a problem searched as one frame's pose (:func:`one_frame`: a tip target, or a goal list of one goal on
-        one frame), (its :class:`FrameFeatures`, the target's features (d,)); None for any other problem."""
+        one frame), its :class:`FrameFeatures`; None for any other problem."""
         goals = problem.goals
         if goals is None:
-            key, f = self.one_target_features(problem.target)
-            return self.frame_features(key), f
+            t = problem.target
+            return self.frame_features(_KIND_KEYS[target_kind(t)] if t.planar else
+                                       "position" if t.rotation is None else "pose")
         if not one_frame(problem):
             return None
         g = goals[0]
-        ff = self.frame_features((g.frame, float(np.sqrt(g.weight)), g.has_position, g.has_orientation))
+        return self.frame_features((g.frame, float(np.sqrt(g.weight)), g.has_position, g.has_orientation))
+
+    def target_point(self, problem, ff: FrameFeatures) -> np.ndarray:
+        """The features (d,) of ``problem``'s target in ``ff``'s metric (:meth:`frame_search`'s)."""
+        if problem.goals is None:
+            return self.one_target_features(problem.target)[1]
         _, pt, Rt = problem.goal_stack()
-        return ff, ff.point(pt[0], Rt[0])
+        return ff.point(pt[0], Rt[0])
 
     def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
         """(kind key, features (N, d)) of N tip targets of one ``KIND_*`` in the kernel's encoding
@@ -150,9 +156,9 @@ class SeedTable:
         return out
 
     def ranked(self, target, k: int, allowed: np.ndarray | None = None):
-        """Indices of the (up to) k entries nearest a tip target (a :class:`Target`, or the (features, f) pair of
-        :meth:`frame_search`), nearest first, lazily (the nearest costs one product and an argmin); ``allowed``
-        (size,) bool: only those entries."""
+        """Indices of the (up to) k entries nearest a tip target (a :class:`Target`, or a pair (:meth:`frame_search`'s
+        features, :meth:`target_point`)), nearest first, lazily (the nearest costs one product and an argmin);
+        ``allowed`` (size,) bool: only those entries."""
         if k <= 0:
             return
         d = self.distances(*(self.one_target_features(target) if isinstance(target, Target) else target))

@@ -16,6 +16,7 @@ from ...result import Result
 from ..lm.engine import LevenbergMarquardt, problem_goals
 from ..lm.layout import wrapping_joints
 from ..lm.run_outcome import LMOutcome
+from .memetic_runs import kernel_goal_errors
 
 __all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
 
@@ -132,13 +133,7 @@ class VelocityBoxStage:
         goals = problem.goals
         if goals is not None:
             if kernel_errors and not problem.goal_sets:
-                # the kernel's errors of each goal at q, its success test's numbers (memetic's first runs trust them
-                # the same way): no kinematics pass in Python
-                if len(goals) == 1:
-                    goal_errors = [goals[0].reported(out.position_error, out.orientation_error)]
-                else:
-                    goal_errors = [g.reported(p, r) for g, (p, r) in zip(goals, out.goal_errors.tolist(), strict=True)]
-                chosen = [None] * len(goals)
+                goal_errors, chosen = kernel_goal_errors(goals, out), [None] * len(goals)
             else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)
                 goal_errors, chosen = problem.goal_errors_and_chosen(q)
             pos, rot, cost = problem.goal_summary(goal_errors)
