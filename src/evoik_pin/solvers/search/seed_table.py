@@ -141,19 +141,11 @@ class SeedTable:
         return key, _pose_rows(*self.frame_features(key)[4:], P, Rts)
 
     def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
-        """(kind key, features (d,)) of one tip target: :meth:`encoded_features`' row."""
-        last = self._last
-        if last[0] is target:  # a solve asks more than once
-            return last[1]
-        if target.planar:
+        """(kind key, features (d,)) of one tip target: :meth:`encoded_features`' row (cached for the last target)."""
+        if self._last[0] is not target:
             key, f = self.encoded_features(target_kind(target), *encode_targets([target]))
-            out = key, f[0]
-        elif target.rotation is None:
-            out = "position", np.array(target.position, dtype=float)  # our own (compiled callers fix its type)
-        else:
-            out = "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
-        self._last = (target, out)
-        return out
+            self._last = (target, (key, f[0]))
+        return self._last[1]
 
     def ranked(self, target, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k entries nearest a tip target (a :class:`Target`, or a pair (:meth:`frame_search`'s
