@@ -135,9 +135,9 @@ def memetic(
         the best approximation with ``success=False`` and a message saying why."""
     t_setup = time.perf_counter()
     setup = MemeticSetup(problem.robot, timeout=timeout, max_restarts=max_restarts, population=population,
-                       generations=generations, polish_count=polish_count, table_size=table_size,
-                       table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
-                       engine=engine)
+                         generations=generations, polish_count=polish_count, table_size=table_size,
+                         table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
+                         engine=engine)
     return setup.solve(problem, rng, t_setup)
 
 
@@ -378,8 +378,8 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         while not solved and not search.out_of_time() and (max_restarts is None or restarts < max_restarts):
             stage = "memetic restarts"
             restarts += 1
-            solved, n_gen, cost = de_restart(problem, rng, search, population, generations, polish_count,
-                                                   wrap, history, n_gen, cost)
+            solved, n_gen, cost = de_restart(problem, rng, search, population, generations, polish_count, wrap,
+                                             history, n_gen, cost)
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q

@@ -95,7 +95,7 @@ class LMRuns:
 
 
 def de_restart(problem, rng, search: LMRuns, population: int, generations: int, polish_count: int,
-                     wrap: np.ndarray, history: dict, n_gen: int, best_cost: float) -> tuple[bool, int, float]:
+               wrap: np.ndarray, history: dict, n_gen: int, best_cost: float) -> tuple[bool, int, float]:
     """One stage-3 restart: a DE population (uniform in the box, a share on its bounds, the best met and ``q0``),
     ``generations`` generations, then its ``polish_count`` best members (the elite excepted) polished by LM. Returns
     (solved, generations so far, best cost)."""

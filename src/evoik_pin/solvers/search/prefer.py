@@ -235,7 +235,7 @@ def _mimic(lm: LevenbergMarquardt) -> bool:
 
 
 def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
-             finish: float | None) -> tuple[list, int]:
+            finish: float | None) -> tuple[list, int]:
     """prefer's answers (cost, q, variant), best first, taken along their self-motion by the compiled descent
     (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct ones
     :data:`DESCEND_TRIAL` steps, then the best :data:`DESCEND_FINAL` on in rounds while the clock allows (until
