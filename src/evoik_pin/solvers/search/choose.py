@@ -13,6 +13,7 @@ from __future__ import annotations
 import copy
 import itertools
 import time
+from functools import cached_property
 
 import numpy as np
 
@@ -71,30 +72,24 @@ class _Variant:
     def __init__(self, parent, choice, pt, Rt, base_lm: LevenbergMarquardt | None, engine: str) -> None:
         self.parent, self.choice, self.pt, self.Rt = parent, choice, pt, Rt
         self._base_lm, self._engine = base_lm, engine
-        self._problem = self._lm = None
         self.starts = iter(())
         self.best_rank = np.inf
 
-    @property
+    @cached_property
     def problem(self):
-        if self._problem is None:
-            self._problem = self.parent.variant(self.choice, self.pt, self.Rt)
-        return self._problem
+        return self.parent.variant(self.choice, self.pt, self.Rt)
 
-    @property
+    @cached_property
     def lm(self) -> LevenbergMarquardt:
-        if self._lm is None:
-            base = self._base_lm
-            if base is not None and base.engine == "compiled" and base._pt.shape == self.pt.shape:
-                # the same goal stack and box, other targets: the kernel's arguments with those swapped
-                lm = copy.copy(base)
-                lm._pt, lm._Rt = np.ascontiguousarray(self.pt), np.ascontiguousarray(self.Rt)
-                lm._args = (*base._args[:-2], lm._pt, lm._Rt)
-                lm.problem = self.problem if self.parent.goal_sets else self.parent
-                self._lm = lm
-            else:
-                self._lm = LevenbergMarquardt(self.problem, engine=self._engine)
-        return self._lm
+        base = self._base_lm
+        if base is None or base.engine != "compiled" or base._pt.shape != self.pt.shape:
+            return LevenbergMarquardt(self.problem, engine=self._engine)
+        # the same goal stack and box, other targets: the kernel's arguments with those swapped
+        lm = copy.copy(base)
+        lm._pt, lm._Rt = np.ascontiguousarray(self.pt), np.ascontiguousarray(self.Rt)
+        lm._args = (*base._args[:-2], lm._pt, lm._Rt)
+        lm.problem = self.problem if self.parent.goal_sets else self.parent
+        return lm
 
 
 class _Around:
@@ -240,7 +235,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     base_lm = LevenbergMarquardt(problem, engine=engine) if setup is None else setup._engine(problem, engine)
     variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
     if len(variants) == 1:
-        variants[0]._problem, variants[0]._lm = problem, base_lm
+        variants[0].problem, variants[0].lm = problem, base_lm
     if table_seeds is None:
         table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals else DEFAULT_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0

@@ -427,8 +427,8 @@ BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # first_runs' base modes 
 _NO_BASE = np.zeros(6)  # goal_first_runs' base where no goal sets one (never read)
 _EVERY = np.zeros(0, dtype=bool)  # every table entry (goal_first_runs' allowed: no scene on that path)
 
-#: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
-#: turn it off to compare with the runs made one by one.
+#: Whether memetic makes its guaranteed runs in one compiled call where it serves (:func:`_first_runs`,
+#: :func:`_goal_first_runs`); the tests turn it off to compare with the runs made one by one.
 FIRST_RUNS = True
 
 
@@ -441,13 +441,11 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
     function; when none converged, the state _solve goes on from (:func:`resumed_state`), else None)."""
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
-    n = problem.n
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
-    lower, upper = setup._bounds
-    q_out = np.empty(n)
+    q_out = np.empty(problem.n)
     errors, g_out, zeros, best_q, best = setup._scratch
     (stage, runs, evaluations, pos, rot, _), loading = setup.first_runs(
-        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, *setup._bounds,
          ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out,
          errors, best_q, best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
