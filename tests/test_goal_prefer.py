@@ -654,7 +654,7 @@ def test_table_starts_hand_out_the_k_nearest_in_order(seed, size, k, chunks):
     d[rng.integers(size)] = -1.0  # at least one finite entry, the argmin
     first = int(d.argmin())
     expected = [first] + [int(i) for i in np.argsort(d)[:min(k, size)] if i != first and np.isfinite(d[i])]
-    starts = _TableStarts(Q, d, first, k)
+    starts = _TableStarts(Q, d, k)
     got = [next(starts)]  # q0's neighbour alone first, as prefer="first" takes it
     for c in chunks:
         rows = starts.take(c)

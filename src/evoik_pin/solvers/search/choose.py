@@ -41,7 +41,7 @@ from .prefer import (
     nearest_turn,
     refine,
 )
-from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first
 
 __all__ = ["COLLECT_SHARE", "choose"]
 
@@ -130,43 +130,21 @@ def _take(starts, size: int, n: int) -> np.ndarray:
 
 
 class _TableStarts:
-    """Table entries by ``d`` (T,): ``first`` (its argmin), then the next ``k - 1`` nearest, ranked on first demand;
-    an iterator of rows, and :meth:`take` for a batch in one indexing."""
+    """The table's rows ``Q`` by ``d`` (T,), the nearest first, at most ``k`` and only finite ones, ranked lazily
+    (:func:`~.seed_table.nearest_first`): an iterator of rows, and :meth:`take` for a batch in one indexing."""
 
-    def __init__(self, Q: np.ndarray, d: np.ndarray, first: int, k: int) -> None:
-        self.Q, self.d, self.first, self.k = Q, d, first, min(k, d.shape[0])
-        self.order: np.ndarray | None = None  # the entries' indices, nearest first (once ranked)
-        self.next = 0  # entries handed out so far
-
-    def _ranked(self) -> np.ndarray:
-        if self.order is None:
-            d, k, first = self.d, self.k, self.first
-            rest = np.empty(0, dtype=np.intp)
-            if k > 1:
-                part = np.argpartition(d, k - 1)[:k] if k < d.shape[0] else np.arange(d.shape[0])
-                rest = part[np.argsort(d[part])]
-                rest = rest[(rest != first) & np.isfinite(d[rest])]
-            self.order = np.concatenate([np.array([first], dtype=np.intp), rest])
-        return self.order
+    def __init__(self, Q: np.ndarray, d: np.ndarray, k: int) -> None:
+        self.Q, self.order = Q, nearest_first(d, min(k, int(np.count_nonzero(np.isfinite(d)))))
 
     def take(self, size: int) -> np.ndarray:
         """Up to ``size`` entries (rows), the nearest not yet taken."""
-        if self.next == 0 and size == 1 and self.order is None:  # q0's neighbour alone: no ranking yet
-            self.next = 1
-            return self.Q[self.first][None]
-        order = self._ranked()
-        picked = order[self.next:self.next + max(size, 0)]
-        self.next += picked.shape[0]
-        return self.Q[picked]
+        return self.Q[list(itertools.islice(self.order, max(size, 0)))]
 
     def __iter__(self):
         return self
 
     def __next__(self) -> np.ndarray:
-        rows = self.take(1)
-        if rows.shape[0] == 0:
-            raise StopIteration
-        return rows[0]
+        return self.Q[next(self.order)]
 
 
 def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R=None) -> list[float]:
@@ -179,7 +157,7 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
         d = table.distances(*table.one_target_features(parent.target)) + (0.0 if joint is None else joint)
         if free is not None:
             d[~free] = np.inf
-        variants[0].starts = _TableStarts(table.Q, d, int(d.argmin()), k)
+        variants[0].starts = _TableStarts(table.Q, d, k)
         return [0.0]
     if len(parent.goals) > 1:  # a whole robot: composed starts too (SeedTable.goal_starts), the sets' order
         for v in variants:
@@ -199,8 +177,8 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     if free is not None:
         D[:, ~free] = np.inf
     first = D.argmin(axis=1)
-    for v, d, i in zip(variants, D, first, strict=True):
-        v.starts = _TableStarts(table.Q, d, int(i), k)
+    for v, d in zip(variants, D, strict=True):
+        v.starts = _TableStarts(table.Q, d, k)
     return (D[np.arange(len(variants)), first] + (f * f).sum(axis=1)).tolist()
 
 

@@ -22,7 +22,7 @@ from ...problem import Target
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
-           "load_goal_helpers", "one_frame", "seed_table"]
+           "load_goal_helpers", "nearest_first", "one_frame", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
@@ -157,16 +157,7 @@ class SeedTable:
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
-            if k <= 0:
-                return
-        first = int(d.argmin())
-        yield first
-        k = min(k, d.shape[0])
-        if k > 1:
-            part = np.argpartition(d, k - 1)[:k]
-            for i in part[d[part].argsort()]:
-                if i != first:
-                    yield int(i)
+        yield from nearest_first(d, k)
 
     def joint_distances(self, q0: np.ndarray, wrap: np.ndarray) -> np.ndarray:
         """Each entry's squared joint distance (size,) to ``q0`` (n,), a ``wrap`` joint (bool (n,)) by its chord on the
@@ -496,6 +487,21 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
             per_robot.pop(next(iter(per_robot)))
         per_robot[key] = table
     return table
+
+
+def nearest_first(d: np.ndarray, k: int):
+    """Indices of the (up to) ``k`` smallest of ``d`` (N,), smallest first, lazily: the first (the argmin) costs one
+    pass, the others are ranked only if asked for."""
+    k = min(k, d.shape[0])
+    if k <= 0:
+        return
+    first = int(d.argmin())
+    yield first
+    if k > 1:
+        part = np.argpartition(d, k - 1)[:k]
+        for i in part[d[part].argsort()]:
+            if i != first:
+                yield int(i)
 
 
 def one_frame(problem) -> bool:
