@@ -22,10 +22,10 @@ from ...goals.stack import GoalArrays, target_kind
 from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import register
-from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
+from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, solve_pairs, wrapping_joints
 from ..options import check_choice, check_int, check_positive
-from .memetic import memetic
-from .seed_table import default_table_size, seed_table
+from .memetic import memetic, prepare
+from .seed_table import default_table_size
 from .solution_classes import (
     REFINE_ITERATIONS,
     SolutionClasses,
@@ -151,9 +151,7 @@ def memetic_all(
     else:
         redundant = robot.n > len(TASK_ROWS[target_kind(target)])  # more joints than task rows
     wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
-    if engine == "compiled":
-        compiled_kernel()  # loaded (or compiled, once per install) outside the clock, as memetic does
-    table = seed_table(robot, lo, hi, table_size) if table_size > 0 else None
+    table, _ = prepare(robot, lo, hi, table_size, engine)  # the kernel and the seed table, outside the clock
     if table is not None and goals:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     wrap = wrapping_joints(robot, lo, hi)

@@ -176,15 +176,11 @@ class MemeticSetup:
         mask looked up every time (it follows the scene's version)."""
         box = self._box
         if box is None or box[0] is not problem.lower or box[1] is not problem.upper or box[2] != size:
-            self._table, free = prepare(self.robot, problem.lower, problem.upper, size, engine, problem.scene,
-                                        problem.margin, kernel=False)
+            self._table = prepare(self.robot, problem.lower, problem.upper, size, engine, kernel=False)[0]
             self._box = (problem.lower, problem.upper, size)
             self._bounds = (np.array(problem.lower, dtype=float), np.array(problem.upper, dtype=float))
-            return self._table, free
-        table = self._table
-        free = table.free_mask(problem.scene, problem.margin) if table is not None and problem.scene is not None \
-            else None
-        return table, free
+        table, scene = self._table, problem.scene
+        return table, None if table is None or scene is None else table.free_mask(scene, problem.margin)
 
     def _engine(self, problem: IKProblem, engine: str) -> LevenbergMarquardt:
         """The LM engine of ``problem``: the last one retargeted, else one of the last ``KEPT_ENGINES`` (one per goal
