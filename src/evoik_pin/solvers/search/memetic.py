@@ -296,11 +296,11 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         table_seeds = DEFAULT_TABLE_SEEDS if single else DEFAULT_GOAL_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = setup._prepare(problem, table_size if use_table else 0, engine)
-    if table is not None and goals:
-        load_goal_helpers()
     frame = table.frame_search(problem) if table is not None else None
-    if table is not None and frame is None:
-        table.prepare_goals(problem.goals)
+    if table is not None and goals:  # the compiled rankings of goal lists (and their starts' features)
+        load_goal_helpers()
+        if frame is None:
+            table.prepare_goals(problem.goals)
     lm = setup._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
@@ -318,15 +318,13 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
     search = LMRuns(problem, lm, None if timeout is None else t0 + timeout, iterations, batch, guaranteed)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
-    stage = ""
-    n_gen = 0
-    restarts = 0
-    solved = False
+    stage, n_gen, restarts, solved = "", 0, 0, False
     # Stages 1-2: LM from q0 and the table's starts (lazy; with a scene, the collision-free entries only)
     ranked = starts = first = None
     if table is not None:
-        ranked = (table.goal_starts(problem, table_offset + table_seeds, free) if frame is None
-                  else table.ranked((frame, table.target_point(problem, frame)), table_offset + table_seeds, free))
+        k = table_offset + table_seeds  # a goal list's ranking compiled (single-threaded), a tip target's NumPy's
+        ranked = (table.goal_starts(problem, k, free) if frame is None else table.ranked_goals(problem, k, free)
+                  if goals else table.ranked((frame, table.target_point(problem, frame)), k, free))
         ranked = itertools.islice(ranked, table_offset, None)
         starts = ranked if frame is None else (table.Q[i] for i in ranked)
     q0 = problem.q0
