@@ -44,7 +44,7 @@ import pinocchio as pin
 import evoik_pin as ev
 from evoik_pin.goals import JointLimitMargin, Pose, Posture
 from evoik_pin.solvers.lm import LevenbergMarquardt, wrapping_joints
-from evoik_pin.solvers.search.choose import DEFAULT_PREFER_TIMEOUT, nearest_turn
+from evoik_pin.solvers.search.prefer import DEFAULT_PREFER_TIMEOUT, nearest_turn
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_ik import cpu_model, quiet_output  # noqa: E402

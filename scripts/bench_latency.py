@@ -154,7 +154,7 @@ STAGES = [
     ("problem", "the general path only: the template problem copied with the target and q0 (IKProblem)"),
     ("set-up look-ups", "the general path only: the memetic plan's cached seed table and LM engine (retargeted)"),
     ("first runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, q0's tip "
-     "pose and nearness, the guaranteed LM runs (the lane's compiled entry, or MemeticPlan.first_runs)"),
+     "pose and nearness, the guaranteed LM runs (the lane's compiled entry, or MemeticSetup.first_runs)"),
     ("memetic's later stages", "when no first run converged: the search going on (LM runs one by one, DE restarts), "
      "rare but long"),
     ("cost and Result", "the cost from the errors (the objective's from_errors; problem.assess) and the Result"),
@@ -166,11 +166,11 @@ STAGES = [
 def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
     """Mean microseconds per IKSolver.solve call spent in each stage of :data:`STAGES` (each stage's functions
     wrapped with an exclusive clock; the wrappers' own cost, about 0.15 us each, lands in their stages). Single
-    targets take the solver's lane (solvers/search/single_target_lane.py) from the second of their kind; ``targets``
+    targets take the solver's lane (solvers/search/repeat_call.py) from the second of their kind; ``targets``
     may be goal lists (scripts/bench_one_goal_latency.py), which take the general path: their checks and packing
     (bind) are the target's checks, their summary (IKProblem.goal_summary) part of the cost and Result."""
     from evoik_pin import ik_solver
-    from evoik_pin.solvers.search import memetic, single_target_lane
+    from evoik_pin.solvers.search import memetic, repeat_call
 
     solver = ek.IKSolver(robot)
     n = len(targets)
@@ -187,16 +187,16 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         (ik_solver, "bind", clock.wrap(ik_solver, "bind", "target")),
         (ik_solver.IKSolver, "_checked_q0", clock.wrap(ik_solver.IKSolver, "_checked_q0", "q0")),
         (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
-        (memetic.MemeticPlan, "_prepare", clock.wrap(memetic.MemeticPlan, "_prepare", "setup")),
-        (memetic.MemeticPlan, "_engine", clock.wrap(memetic.MemeticPlan, "_engine", "setup")),
-        (memetic.MemeticPlan, "first_runs", clock.wrap(memetic.MemeticPlan, "first_runs", "first")),
-        (memetic.MemeticPlan, "resume", clock.wrap(memetic.MemeticPlan, "resume", "later")),
+        (memetic.MemeticSetup, "_prepare", clock.wrap(memetic.MemeticSetup, "_prepare", "setup")),
+        (memetic.MemeticSetup, "_engine", clock.wrap(memetic.MemeticSetup, "_engine", "setup")),
+        (memetic.MemeticSetup, "first_runs", clock.wrap(memetic.MemeticSetup, "first_runs", "first")),
+        (memetic.MemeticSetup, "resume", clock.wrap(memetic.MemeticSetup, "resume", "later")),
         (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
         (ek.IKProblem, "goal_summary", clock.wrap(ek.IKProblem, "goal_summary", "result")),  # a goal list's
         (memetic, "Result", clock.wrap(memetic, "Result", "result")),
-        (single_target_lane, "first_runs_result", clock.wrap(single_target_lane, "first_runs_result", "result")),
+        (repeat_call, "first_runs_result", clock.wrap(repeat_call, "first_runs_result", "result")),
     ]
-    lanes = list(solver._lanes.values())
+    lanes = list(solver._repeat_calls.values())
     entries = [lane._entry for lane in lanes]
     for lane in lanes:  # the lane's own compiled entry and objective
         lane._entry = clock.timed(lane._entry, "first")

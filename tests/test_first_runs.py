@@ -8,8 +8,8 @@ import pytest
 import evoik_pin as ek
 from evoik_pin.solvers.search import memetic
 from evoik_pin.solvers.search.nearest import select_k, table_distances
+from evoik_pin.solvers.search.repeat_call import RepeatCall
 from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
-from evoik_pin.solvers.search.single_target_lane import SingleTargetLane
 
 
 def targets(robot, count, seed):
@@ -32,7 +32,7 @@ def test_compiled_ranking_is_the_tables_over_many_targets(name):
     for i, T in enumerate(poses):
         for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
             key, f = table.one_target_features(target)
-            _, FT, sq = table.compiled_features(key)
+            _, FT, sq = table.frame_features(key)[:3]
             table_distances(FT, sq, f, d)
             reference = list(table.ranked(target, 17))
             m = select_k(d, every, 17, out)
@@ -87,9 +87,9 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
             target = 3.0 * T.translation
         calls.append((target, q0, i))
     made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
-    one_call, lane_call = memetic._first_runs, SingleTargetLane.solve
+    one_call, lane_call = memetic._first_runs, RepeatCall.solve
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
-    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: made.append(2) or lane_call(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args: made.append(2) or lane_call(*args))
     fast = [solver.solve(t, q0=q0, seed=i) for t, q0, i in calls]
     general = [ek.solve(robot, t, q0=q0, seed=i, **budget) for t, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general)
@@ -151,9 +151,9 @@ def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name,
         calls.append((one_goal(kinds[i % len(kinds)], frame, T), q0, i))
     made = []  # each call's compiled first runs: memetic's own (one_goal True), or a goal lane's (a solver alternating
     # five goal structures keeps a lane for each)
-    one_call, lane_call = memetic._first_runs, SingleTargetLane.solve
-    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(args[-1]) or one_call(*args))
-    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: made.append("lane") or lane_call(*args))
+    one_call, lane_call = memetic._first_runs, RepeatCall.solve
+    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(args[-1] is not None) or one_call(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args: made.append("lane") or lane_call(*args))
     fast = [solver.solve(g, q0=q0, seed=i) for g, q0, i in calls]
     general = [ek.solve(robot, g, q0=q0, seed=i, **budget) for g, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general) and set(made) == {True, "lane"}
@@ -176,9 +176,9 @@ def test_several_goals_take_the_goal_lists_first_runs(monkeypatch):
     robot = ek.load_robot("panda")
     T = robot.fk(robot.random_configurations(1, np.random.default_rng(0))[0])
     made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
-    one_call, lane_call, goal_call = memetic._first_runs, SingleTargetLane.solve, memetic._goal_first_runs
+    one_call, lane_call, goal_call = memetic._first_runs, RepeatCall.solve, memetic._goal_first_runs
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
-    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: made.append(2) or lane_call(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args: made.append(2) or lane_call(*args))
     monkeypatch.setattr(memetic, "_goal_first_runs", lambda *args: made.append(3) or goal_call(*args))
     for goals in ([Pose(robot.tip, T), Position("panda_link4", robot.fk(np.zeros(robot.n)).translation)],
                   [Direction(robot.tip, [0, 0, 1], T.rotation[:, 2])], [Pose(robot.tip, [T, T])]):
@@ -229,7 +229,7 @@ def test_a_goal_frames_table_features_are_set_up_before_the_clock(monkeypatch):
 
     def checked(plan, problem, table, *rest):
         goal = problem.goals[0]
-        seen.append((goal.frame, goal.weight, goal.has_orientation, goal.has_position) in table._one_goal)
+        seen.append((goal.frame, np.sqrt(goal.weight), goal.has_position, goal.has_orientation) in table._frames)
         return one_call(plan, problem, table, *rest)
 
     monkeypatch.setattr(memetic, "_first_runs", checked)

@@ -57,7 +57,7 @@ FIRST_SOLVES = textwrap.dedent("""
 
     Dispatcher.compile = compile
     ek.methods()  # the solver modules loaded, so that their clocks can be patched below
-    import evoik_pin.solvers.search.first_runs, evoik_pin.solvers.search.single_target_lane
+    import evoik_pin.solvers.search.first_runs, evoik_pin.solvers.search.repeat_call
     clock = types.SimpleNamespace(**{k: v for k, v in vars(time).items() if not k.startswith("__")})
     clock.perf_counter = time.thread_time
     for name, module in list(sys.modules.items()):

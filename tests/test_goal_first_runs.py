@@ -133,7 +133,7 @@ def test_goal_ranking_is_the_summed_nearness(name):
     exact = rankings = 0
     for goal_list in lists:
         problem = IKProblem(robot, goal_list)
-        F, sq = table._goal_table_features(goal_list)
+        F, sq = table.goal_table_features(tuple(g.frame for g in goal_list), table.goal_spec(goal_list))
         _, pt, Rt = problem.goal_stack()
         spec = table.goal_spec(goal_list)
         f = np.concatenate(table._goal_feature_blocks(spec, pt[:, None], Rt[:, None]), axis=1)[0]

@@ -24,7 +24,7 @@ from evoik_pin.goals import (
 )
 from evoik_pin.goals.preferences import turn_difference
 from evoik_pin.solvers.lm import wrapping_joints
-from evoik_pin.solvers.search.choose import nearest_turn
+from evoik_pin.solvers.search.prefer import nearest_turn
 
 
 @pytest.fixture(scope="module")
@@ -231,7 +231,7 @@ def test_refine_steps_where_every_goal_kind_stays_met(panda, make, free):
     (7 joints less the rows that bind: a free axis 5, a position 3 and a gaze 2, a direction 2, a relative pose of
     the six joints after link1 6, a CoM over a point 2)."""
     from evoik_pin.solvers.lm import LevenbergMarquardt
-    from evoik_pin.solvers.search.choose import _null_basis, _task_jacobian
+    from evoik_pin.solvers.search.prefer import _null_basis, _task_jacobian
 
     q_true = np.array([0.3, -0.4, 0.2, -1.9, 0.1, 1.6, 0.4])
     T = panda.fk(q_true)
@@ -525,19 +525,19 @@ def test_descent_mode_skips_mimic_trees(panda):
     from evoik_pin.robot import load_robot
     from evoik_pin.solvers.lm import LevenbergMarquardt
     from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
-    from evoik_pin.solvers.search.choose import _criterion, _descent_mode
+    from evoik_pin.solvers.search.prefer import descent_mode, make_criterion
 
     for robot, expected in ((load_robot(mimic_3r(), tip="tool"), None), (panda, MODE_NEAREST)):
         q = robot.random_configurations(1, np.random.default_rng(0))[0]
         problem = ev.make_problem(robot, robot.fk(q), q0=q)[0]
-        criterion = _criterion(problem, "nearest", (), wrapping_joints(robot, robot.lower, robot.upper))
-        assert _descent_mode("nearest", criterion, [SimpleNamespace(lm=LevenbergMarquardt(problem))]) == expected
+        criterion = make_criterion(problem, "nearest", (), wrapping_joints(robot, robot.lower, robot.upper))
+        assert descent_mode("nearest", criterion, [SimpleNamespace(lm=LevenbergMarquardt(problem))]) == expected
 
 
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(1, 12), st.integers(1, 20))
 def test_distinct_keeps_the_order_and_drops_near_duplicates(seed, count, size):
-    from evoik_pin.solvers.search.choose import _distinct
+    from evoik_pin.solvers.search.prefer import distinct
 
     rng = np.random.default_rng(seed)
     Q = rng.normal(size=(size, 3))
@@ -545,7 +545,7 @@ def test_distinct_keeps_the_order_and_drops_near_duplicates(seed, count, size):
         if rng.random() < 0.4:
             Q[k] = Q[rng.integers(k)] + rng.normal(size=3) * 1e-5
     answers = [(float(k), q, 0) for k, q in enumerate(Q)]
-    picked = _distinct(answers, count)
+    picked = distinct(answers, count)
     keys = [a[0] for a in picked]
     assert keys == sorted(keys) and len(picked) <= count
     P = np.array([a[1] for a in picked])
@@ -654,7 +654,7 @@ def test_table_starts_hand_out_the_k_nearest_in_order(seed, size, k, chunks):
     d[rng.integers(size)] = -1.0  # at least one finite entry, the argmin
     first = int(d.argmin())
     expected = [first] + [int(i) for i in np.argsort(d)[:min(k, size)] if i != first and np.isfinite(d[i])]
-    starts = _TableStarts(Q, d, first, k)
+    starts = _TableStarts(Q, d, k)
     got = [next(starts)]  # q0's neighbour alone first, as prefer="first" takes it
     for c in chunks:
         rows = starts.take(c)

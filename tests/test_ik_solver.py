@@ -206,27 +206,23 @@ def test_property_rotation_check_gives_the_numpy_verdict(seed, log_eps, mirror):
 
 
 def test_seed_table_ranking_and_nearness_are_the_batch_formulas(panda, cases):
-    """The single-target shortcuts of the seed table (features without the batch encoding, the distances computed in
-    place) rank and measure exactly as the batch formulas do."""
+    """The single-target features of the seed table (without the batch encoding, the distances computed in place)
+    rank as the batch formulas do, and a pose's features are its table row's."""
     from evoik_pin.goals.stack import encode_targets, target_kind
     from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
 
     table = seed_table(panda, panda.lower, panda.upper, default_table_size(panda.n))
-    targets, Qs = cases
-    for T, q in zip(targets[:10], Qs[:10], strict=True):
+    for T in cases[0][:10]:
         for target in (ek.Target(T.translation, T.rotation), ek.Target(T.translation.copy())):
             key, f = table.encoded_features(target_kind(target), *encode_targets([target]))
-            F, sq = table._table_features(key)
-            d = sq - 2.0 * (F @ f[0])
+            ff = table.frame_features(key)
+            d = ff.sq - 2.0 * (ff.F @ f[0])
             part = np.argpartition(d, 16)[:17]
             first = int(d.argmin())
             reference = [first] + [int(i) for i in part[d[part].argsort()] if i != first]
             assert list(table.ranked(target, 17)) == reference
-            Tq = panda.fk(q)
-            g = table._pose_features(key, Tq.translation[None], Tq.rotation[None])[0]
-            assert table.distance_sq(target, Tq) == float((f[0] - g).dot(f[0] - g))
-            assert table.entry_distance_sq(target, first) == table.distance_sq(
-                target, pin.SE3(table.rotations[first], table.positions[first]))
+            assert np.array_equal(table.one_target_features(target)[1], f[0])
+            assert np.array_equal(ff.point(table.positions[first], table.rotations[first]), ff.F[first])
 
 
 def test_which_calls_of_solve_keep_a_solver(panda, tmp_path):

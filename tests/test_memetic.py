@@ -392,7 +392,9 @@ def test_a_near_q0_goes_first_and_a_far_one_after_the_nearest_table_entry(robots
     assert near.success and near.message.startswith("tolerance reached by LM from q0 (1 LM run(s)")
     assert np.abs(near.q - q_goal).max() < 0.05  # the solution next to q0, not another IK branch
     table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
-    assert table.distance_sq(Target.coerce(T), robot.fk(q_far)) > table.typical_gap_sq(Target.coerce(T))
+    ff, T_far = table.frame_features("pose"), robot.fk(q_far)
+    d = ff.point(T.translation, T.rotation) - ff.point(T_far.translation, T_far.rotation)
+    assert d.dot(d) > ff.gap
     far = ev.solve(robot, T, seed=0, q0=q_far, **BUDGET)
     plain = ev.solve(robot, T, seed=0, **BUDGET)
     runs = [int(r.message.split("(")[1].split(" LM")[0]) for r in (far, plain)]

@@ -216,7 +216,7 @@ def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
 def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
     """``prefer`` checked as :func:`solve` checks it: None for ``"first"``, else ``"nearest"`` or ``"manipulability"``.
     OptionError: an unknown value, "nearest" without q0; MethodError: a method other than memetic."""
-    from .solvers.search.choose import check_prefer, check_prefer_method
+    from .solvers.search.prefer import check_prefer, check_prefer_method
 
     prefer = check_prefer("first" if prefer is None else prefer)
     if prefer == "first":

@@ -1,8 +1,8 @@
 """The one solve pipeline: :class:`IKSolver`, a solver set up once for one robot, method and options.
 
 The options are checked and the problem's constants built once into a template problem that each call copies with
-its target; memetic's plan (kernel, seed table, engine) is made once. After memetic has solved a pose, a position or a
-one-goal list, the next ones of that kind take a lane (:mod:`evoik_pin.solvers.search.single_target_lane`) with the
+its target; memetic's set-up (kernel, seed table, engine) is made once. After memetic has solved a pose, a position or a
+one-goal list, the next ones of that kind take a repeat call (:mod:`evoik_pin.solvers.search.repeat_call`) with the
 same answers, bit for bit. :func:`evoik_pin.solve` is the solve of an IKSolver kept per robot, method and options.
 """
 
@@ -61,7 +61,7 @@ class IKSolver:
 
     def __init__(self, robot, method: str = DEFAULT_METHOD, *, prefer: str | None = None, locked: dict | None = None,
                  **options) -> None:
-        from .solvers.search.choose import check_prefer, check_prefer_method
+        from .solvers.search.prefer import check_prefer, check_prefer_method
 
         robot = _robot(robot)
         self.robot = robot
@@ -97,15 +97,15 @@ class IKSolver:
         info.check_options(options, n=robot.n)
         self._plan = None
         if method == "memetic":
-            from .solvers.search.memetic import MemeticPlan
+            from .solvers.search.memetic import MemeticSetup
 
-            self._plan = MemeticPlan(robot, **options)
+            self._plan = MemeticSetup(robot, **options)
         # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
         self._plain = self._plan is not None and not self._polish and self._prefer == "first"
-        # the lanes: True (poses), False (positions), id(goal stack) (the last _GOAL_LANES); only for the default
-        # objective in a box that does not move with the target
-        self._lanes: dict = {}
-        self._lanes_open = self._plain and not self._target_box and self._objective is None
+        # the repeat calls: True (poses), False (positions), id(goal stack) (the last _GOAL_REPEAT_CALLS); only for
+        # the default objective in a box that does not move with the target
+        self._repeat_calls: dict = {}
+        self._repeat_calls_open = self._plain and not self._target_box and self._objective is None
         self._box_stage = None  # solve_within's stage (velocity_box), made on its first call
 
     def _checked_q0(self, q0) -> np.ndarray:
@@ -155,17 +155,17 @@ class IKSolver:
         if self._locked is not None:
             return self._locked.solve(target, q0, seed)
         problem = None
-        if self._lanes:
-            # a pose or a position on the lane of its kind, inline: the lane's whole Python is a few us
+        if self._repeat_calls:
+            # a pose or a position on the repeat call of its kind, inline: its whole Python is a few us
             arrays = pose_arrays(target)
             if arrays is not None:
-                lane = self._lanes.get(arrays[1] is not None)
+                lane = self._repeat_calls.get(arrays[1] is not None)
                 if lane is not None and lane.usable():
-                    q0 = self._lane_q0(q0, seed)
+                    q0 = self._repeat_call_q0(q0, seed)
                     out = lane.solve(arrays[0], arrays[1], q0)
-                    return out if type(out) is Result else self._go_on(self.problem(target, q0), seed, out)
+                    return out if type(out) is Result else self._resume_general(self.problem(target, q0), seed, out)
             else:
-                problem = self._goal_on_lane(target, q0, seed)
+                problem = self._goal_repeat_call(target, q0, seed)
                 if type(problem) is Result:
                     return problem
         if problem is None:
@@ -196,26 +196,27 @@ class IKSolver:
             stage = self._box_stage = VelocityBoxStage(self.robot)
         return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
-    def _goal_on_lane(self, target, q0, seed) -> Result | IKProblem | None:
-        """A one-goal list on the lane of its goal stack: the Result; the problem (bound) when it has no lane; None
-        for any other target."""
+    def _goal_repeat_call(self, target, q0, seed) -> Result | IKProblem | None:
+        """A one-goal list on the repeat call of its goal stack: the Result; the problem (bound) when it has none;
+        None for any other target."""
         if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
                 and target[0].alternatives is None and self._objective is None):
             return None
         bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
-        lane = self._lanes.get(id(bound[1]))
+        lane = self._repeat_calls.get(id(bound[1]))
         if lane is None or lane.key is not bound[1] or not lane.usable():
             return self._goal_problem(bound, q0)
-        q0 = self._lane_q0(q0, seed)
+        q0 = self._repeat_call_q0(q0, seed)
         out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])
-        return out if type(out) is Result else self._go_on(self._goal_problem(bound, q0), seed, out)
+        return out if type(out) is Result else self._resume_general(self._goal_problem(bound, q0), seed, out)
 
     def _solve_choosing(self, target, q0, seed) -> Result:
         """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goals
         or their problem). With ``prefer="first"`` the preferences refine the method's answer in the goals' null
         space, a step kept only while every goal is still met."""
         from .goals.preferences import split_preferences
-        from .solvers.search.choose import bind_preferences, choose, refine
+        from .solvers.search.choose import choose
+        from .solvers.search.prefer import bind_preferences, refine
 
         if isinstance(target, IKProblem):
             problem, prefs = target, []
@@ -242,36 +243,37 @@ class IKSolver:
         result.collision_free = None  # the search's verdict was on its answer, not the refined one
         return with_verdicts(problem, result)
 
-    def _lane_q0(self, q0, seed):
-        """A lane call's q0 (checked; None: the solver's), then the seed's check, as the general path orders them."""
+    def _repeat_call_q0(self, q0, seed):
+        """A repeat call's q0 (checked; None: the solver's), then the seed's check, as the general path orders them."""
         q0 = self._q0 if q0 is None else self._checked_q0(q0)
         if seed is not None and not (type(seed) is int and seed >= 0):
             _rng(seed)  # a Generator passes; anything else raises the general path's error
         return q0
 
-    def _go_on(self, problem: IKProblem, seed, out) -> Result:
-        """Memetic after a lane's first runs met no tolerance: going on from their state ``out``, or from the start
-        (``out`` None)."""
+    def _resume_general(self, problem: IKProblem, seed, out) -> Result:
+        """Memetic after a repeat call's first runs met no tolerance: going on from their state ``out``, or from the
+        start (``out`` None)."""
         rng = _rng(seed)
         result = self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
         if problem.goals is not None:
             result.chosen = [None] * len(problem.goals)
         return result
 
-    def _open_lane(self, problem: IKProblem) -> None:
-        """Make the lane of ``problem``'s kind (or goal stack) after the plan solved it, unless a usable one is kept."""
+    def _open_repeat_call(self, problem: IKProblem) -> None:
+        """Make the repeat call of ``problem``'s kind (or goal stack) after memetic solved it, unless a usable one is
+        kept."""
         key = problem.target.rotation is not None if problem.goals is None else id(problem.goal_stack()[0])
-        kept = self._lanes.get(key)
+        kept = self._repeat_calls.get(key)
         if kept is None or not kept.usable():
-            from .solvers.search.single_target_lane import SingleTargetLane
+            from .solvers.search.repeat_call import RepeatCall
 
-            lane = SingleTargetLane.of_plan(self._plan, problem)
+            lane = RepeatCall.of_setup(self._plan, problem)
             if lane is not None:
                 if problem.goals is not None:
-                    stacks = [k for k in self._lanes if k is not True and k is not False]
-                    if len(stacks) >= _GOAL_LANES:
-                        del self._lanes[stacks[0]]
-                self._lanes[key] = lane
+                    stacks = [k for k in self._repeat_calls if k is not True and k is not False]
+                    if len(stacks) >= _GOAL_REPEAT_CALLS:
+                        del self._repeat_calls[stacks[0]]
+                self._repeat_calls[key] = lane
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on this solver's problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
@@ -281,8 +283,8 @@ class IKSolver:
             result = self._plan.solve(problem, rng)
             if goals is not None:
                 result.chosen = [None] * len(goals)
-            if self._lanes_open and (goals is None or len(goals) == 1):
-                self._open_lane(problem)
+            if self._repeat_calls_open and (goals is None or len(goals) == 1):
+                self._open_repeat_call(problem)
             return result
         solve = self._plan.solve if self._plan is not None else partial(self._info.func, **self._options)
         return run_with_verdicts(problem, self.method, solve, self._polish, rng)
@@ -324,8 +326,8 @@ class _Locked:
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
-#: One-goal lists' lanes an IKSolver keeps (the last made): as many as the plan keeps engines.
-_GOAL_LANES = KEPT_ENGINES
+#: One-goal lists' repeat calls an IKSolver keeps (the last made): as many as memetic's set-up keeps engines.
+_GOAL_REPEAT_CALLS = KEPT_ENGINES
 _LOCAL = threading.local()
 #: IKSolvers evoik_pin.solve keeps per thread (the last made; each keeps its robot, seed table and scene alive).
 _CACHED = 8
@@ -391,7 +393,7 @@ def solver_for(robot, method: str, options: dict, target) -> IKSolver:
     except EvoikError:
         # solve's order: prefer=, locked=, the target's own checks (a goal list's bound to the robot), the options
         from .goals.preferences import split_preferences
-        from .solvers.search.choose import check_prefer
+        from .solvers.search.prefer import check_prefer
 
         check_prefer("first" if options.get("prefer") is None else options["prefer"])
         goals = split_preferences(target)[0]

@@ -1,6 +1,6 @@
 """Preferences: members of a goal list that are not goals, met as well as the goals allow and never at their
 expense (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``): costs over configurations (lower is better) that a
-solve lowers once the goals are met and ranks its answers by (:func:`evoik_pin.solvers.search.choose.refine`).
+solve lowers once the goals are met and ranks its answers by (:func:`evoik_pin.solvers.search.prefer.refine`).
 Differences on joints whose range spans a full turn are taken to the nearest turn.
 
 * :class:`Posture`: ``weight / 2 * |q - q_ref|^2`` over the joints ``q_ref`` names (rad^2, m^2);

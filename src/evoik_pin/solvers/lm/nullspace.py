@@ -243,7 +243,7 @@ NULLSPACE_COMPILE_SECONDS = 25.0
 
 def nullspace_kernel() -> dict:
     """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian of
-    :func:`evoik_pin.solvers.search.choose.refine`), loaded (or compiled) outside any time budget."""
+    :func:`evoik_pin.solvers.search.prefer.refine`), loaded (or compiled) outside any time budget."""
     if not _KERNEL:
         from .compiling import load
         from .engine import warmup_problem

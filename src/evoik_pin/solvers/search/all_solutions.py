@@ -1,53 +1,17 @@
-"""Every IK solution of one target: many Levenberg-Marquardt starts, clustered into distinct solutions.
+"""Every IK solution of one target (``memetic-all``, the default method of :func:`evoik_pin.solve_all`).
 
-Registered as ``memetic-all``, the default method of :func:`evoik_pin.solve_all`. The starts are ``q0``, then
-the entries of memetic's cached seed table (a deterministic Halton set of configurations spread over the
-search box, with their tip poses: :func:`~evoik_pin.solvers.search.seed_table.seed_table`) nearest to the target first
-(entries whose tip is near the target lie near the solution set, on every branch of it), then uniform draws
-from ``rng`` if the table runs out. ``batch`` starts at a time go through the compiled LM engine in one kernel
-call (:func:`~evoik_pin.solvers.lm.solve_pairs`, the same target repeated), and the converged runs are sorted
-into classes of distinct solutions (:class:`~evoik_pin.solvers.search.solution_classes.SolutionClasses`).
-
-**Distinct solutions.** Two configurations are one solution when their wrapped joint distance is at most
-``class_radius`` (1e-3 rad by default): joints whose range spans a full turn (continuous joints, UR's +-2 pi
-joints: :func:`~evoik_pin.solvers.lm.wrapping_joints`) are compared modulo 2 pi, the others (rad, or m on
-prismatic joints) as they are. A run that would open a class is first refined by a patient LM run to about
-1e-12, so that runs stopped anywhere along the flat valley of a near-singular solution (all within a 1e-6
-tolerance) count as that one solution; at a degenerate pose, where refinement cannot isolate the solution, a
-run joined to a class by a low-error joint-space segment joins that class (module :mod:`.solution_classes`).
-
-**What is returned** depends on the task:
-
-* a finite solution set (as many joints as task rows: a 6-D pose on a 6-joint arm, a position on a 3-joint
-  arm, (x, y) on a planar 2-joint arm): every class found. The search stops when ``patience`` consecutive
-  batches brought no new class and every class has been reached by at least ``min_hits`` runs (a class met
-  once hints at small basins that may hide more; that wait ends after ``4 x patience`` quiet batches), or at
-  the budget (``timeout``, ``max_starts``);
-* a redundant arm (more joints than task rows: a 7-DOF arm on poses, a 6-DOF arm on positions): its solutions
-  form self-motion manifolds, so ``count`` (default 8) solutions spread over them are returned. The search
-  collects ``pool`` x ``count`` distinct converged solutions (or stops after ``4 x patience`` batches without a
-  new one, or at the budget), then farthest-point
-  selection picks ``count`` of them: the one nearest the reference first, then each time the one farthest from
-  those picked. ``history["min_pairwise_distance"]`` and the message give the smallest wrapped joint distance
-  (rad) between two returned solutions.
-
-Each returned solution is the representative of its class nearest to the reference, ``q0`` (zero when no
-``q0`` is given): on every wrapping joint the multiple of 2 pi inside the box nearest to the reference's value.
-Every one is re-checked before it is returned: inside the box, and within the tolerances by the robot's
-forward kinematics. They are ordered nearest to the reference first: every one meets the tolerances, and most
-sit near 1e-12 after LM's finishing step, so the error does not rank them; the motion from ``q0`` does.
-
-At a degenerate pose, where a whole curve of configurations meets the tolerance and refinement cannot isolate
-one solution (e.g. a wrist centre a fraction of a millimetre from a singular line), the classes are valid
-samples of that curve and their number means little.
-
-When no run has converged after ``4 x patience`` batches, memetic's differential-evolution restarts
-(:func:`~evoik_pin.solvers.search.memetic.memetic` without its table stage, with the remaining budget) look for a
-solution. An unreachable pose gives no solution, ``success=False``, and a message with the best approximation.
-"""
+Starts: ``q0``, the seed table nearest the target first (:mod:`.seed_table`), then uniform draws from ``rng``;
+``batch`` of them per kernel call (:func:`~evoik_pin.solvers.lm.solve_pairs`). Converged runs are sorted into
+distinct solutions (:mod:`.solution_classes`: wrapped joint distance at most ``class_radius``). A finite solution
+set returns every class found (the search stops after ``patience`` quiet batches once every class has ``min_hits``
+runs); a redundant arm returns ``count`` solutions spread over its self-motion manifolds by farthest-point
+selection among ``pool`` x ``count``. Each solution is its class's representative nearest ``q0`` (zero without
+one), re-checked (in the box, within the tolerances), nearest first. When no run converges, memetic's DE
+restarts look for one; an unreachable target gives ``success=False`` and the best approximation."""
 
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
@@ -58,10 +22,10 @@ from ...goals.stack import GoalArrays, target_kind
 from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import register
-from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, compiled_kernel, solve_pairs, wrapping_joints
+from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, solve_pairs, wrapping_joints
 from ..options import check_choice, check_int, check_positive
-from .memetic import memetic
-from .seed_table import default_table_size, seed_table
+from .memetic import memetic, prepare
+from .seed_table import default_table_size
 from .solution_classes import (
     REFINE_ITERATIONS,
     SolutionClasses,
@@ -71,7 +35,7 @@ from .solution_classes import (
 )
 
 __all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
-           "goal_moving_joints", "memetic_all", "task_dimension"]
+           "goal_moving_joints", "memetic_all"]
 
 #: Default time budget (s) of one search: a safety net; the stopping rule ends most UR5 / UR10 pose searches in
 #: 1-4 ms.
@@ -93,17 +57,9 @@ EMPTY_PATIENCE_FACTOR = 4
 
 
 class SolutionList(list):
-    """What :func:`evoik_pin.solve_all` returns: a plain ``list`` of :class:`Result` (one per solution, best
-    first) that also carries the search behind it.
-
-    Attributes:
-        result: the search's own :class:`Result` (or None): its ``message`` says why the list is empty (how close
-            the best approximation came, after how many starts) or how the solutions were found; its
-            ``history`` holds per-batch series.
-        message: ``result.message`` ("" without a result).
-
-    Slicing or copying gives a plain list.
-    """
+    """What :func:`evoik_pin.solve_all` returns: a ``list`` of :class:`Result` (one per solution, best first)
+    carrying the search's own Result as ``result`` (or None) and its ``message`` ("" without one). Slicing or copying
+    gives a plain list."""
 
     def __init__(self, solutions=(), result: Result | None = None) -> None:
         super().__init__(solutions)
@@ -114,15 +70,10 @@ class SolutionList(list):
         return "" if self.result is None else self.result.message
 
 
-def task_dimension(target) -> int:
-    """Rows of a target's task error: 6 (pose), 3 (position; planar with yaw), 2 (planar x, y)."""
-    return len(TASK_ROWS[target_kind(target)])
-
-
 def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size,
                    iterations, engine, n: int) -> tuple:
-    """memetic-all's options (every keyword of :func:`memetic_all`, ``n`` the robot's joints) in canonical form, in
-    the signature's order, ``table_size`` resolved; OptionError naming the option and its accepted range."""
+    """memetic-all's options (:func:`memetic_all`'s keywords; ``n`` the robot's joints) in the signature's order,
+    ``table_size`` resolved; OptionError naming an option out of range."""
     count = None if count is None else check_int("count", count, 1)
     timeout = None if timeout is None else check_positive("timeout (s; or None)", timeout)
     max_starts = None if max_starts is None else check_int("max_starts", max_starts, 1)
@@ -133,33 +84,17 @@ def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, cla
             check_choice("engine", engine, ENGINES))
 
 
-class _Starts:
-    """The stream of LM starts: q0, the seed table nearest to the target first (a goal list: memetic's goal starts,
-    composed goal by goal and table entries alternately, :meth:`SeedTable.goal_starts`), then uniform draws."""
-
-    def __init__(self, problem: IKProblem, table, rng) -> None:
-        self.problem = problem
-        self.table = table
-        self.rng = rng
-        if table is None:
-            self.order = iter(())
-        elif problem.goals is not None:
-            self.order = table.goal_starts(problem, table.Q.shape[0])  # configurations (n,)
-        else:
-            self.order = (table.Q[i] for i in table.ranked(problem.target, table.Q.shape[0]))
-        self.pending: list[np.ndarray] = [] if problem.q0 is None else [problem.q0]
-
-    def take(self, k: int) -> np.ndarray:
-        starts = self.pending[:k]
-        del self.pending[:k]
-        for q in self.order:
-            starts.append(q)
-            if len(starts) >= k:
-                break
-        if len(starts) < k:
-            p = self.problem
-            starts.extend(self.rng.uniform(p.lower, p.upper, size=(k - len(starts), p.n)))
-        return np.array(starts)
+def _starts(problem: IKProblem, table, rng):
+    """The endless stream of LM starts (n,): q0, the seed table's nearest first (a goal list:
+    :meth:`SeedTable.goal_starts`), then uniform draws from ``rng``."""
+    if problem.q0 is not None:
+        yield problem.q0
+    if table is not None:
+        size = table.Q.shape[0]
+        yield from (table.goal_starts(problem, size) if problem.goals is not None
+                    else (table.Q[i] for i in table.ranked(problem.target, size)))
+    while True:
+        yield rng.uniform(problem.lower, problem.upper)
 
 
 @register("memetic-all", "Every distinct IK solution: batched Levenberg-Marquardt from q0 and the seed table "
@@ -184,33 +119,21 @@ def memetic_all(
     """Every distinct IK solution of ``problem`` (see the module docstring), in ``Result.solutions``.
 
     Args:
-        problem: the IK problem; its tolerances (``tolerance`` m, ``rotation_tolerance`` rad; default 1e-6)
-            decide which runs converged, and every returned solution meets them.
-        rng: used only when the seed table runs out of entries (uniform starts in the box) and by the
-            differential-evolution fallback; the search is otherwise deterministic.
-        count: redundant arms: the number of spread solutions returned (>= 1; default 8). Finite solution sets:
-            at most this many, nearest the reference first (default: all).
-        timeout: wall-clock budget in s (default 0.02), checked between batches; None for none. The clock starts
-            after the one-time set-up (compiled kernel, seed table: ``Result.setup_s``).
-        max_starts: LM starts at most (>= 1; default 4096, about 60 ms of LM: a bound for ``timeout=None``);
-            None for no limit.
-        batch: LM starts per kernel call (default 32).
-        patience: finite sets: stop after this many consecutive batches without a new class (default 2)...
-        min_hits: ... once every class has been reached by at least this many runs (default 3).
-        class_radius: wrapped joint distance (rad; m on prismatic joints) within which two converged
-            configurations are one solution (default 1e-3).
-        pool: redundant arms: distinct converged solutions collected per returned one (default 4).
-        table_size: seed-table size (default memetic's: 2^(n+5) clamped to [256, 4096]); 0: uniform starts.
-        iterations: LM steps per start (default 30). engine: ``"compiled"`` or ``"python"``
-            (:mod:`evoik_pin.solvers.lm`).
+        problem: the IK problem; its tolerances decide which runs converged.
+        rng: uniform starts once the table runs out, and the DE fallback.
+        count: redundant arms: spread solutions returned (>= 1; default 8); finite sets: at most this many.
+        timeout: budget (s; default 0.02; None: none), checked between batches, after the one-time set-up.
+        max_starts: LM starts at most (>= 1; None: no limit).
+        batch: LM starts per kernel call. patience: quiet batches before a finite set's search stops.
+        min_hits: runs each class needs before that stop. class_radius: wrapped joint distance (rad; m on prismatic
+            joints) within which two answers are one solution. pool: redundant arms: solutions collected per one
+            returned. table_size: seed-table size (default memetic's; 0: uniform starts).
+        iterations: LM steps per start. engine: ``"compiled"`` or ``"python"``.
 
     Returns:
-        A :class:`Result`: ``q`` the first solution (or the best approximation met when there is none),
-        ``success`` True when there is at least one solution, ``solutions`` the distinct solutions (each a
-        Result with ``success=True``), ``generations`` the batches run, ``evaluations`` the forward kinematics
-        of every LM step; ``history`` per batch: ``starts`` (cumulative LM starts), ``solutions`` (classes so
-        far) and ``best_cost`` (lowest error met, m + rad); ``min_pairwise_distance`` (rad) on redundant arms.
-    """
+        A :class:`Result`: ``q`` the first solution (or the best approximation), ``success`` when there is one,
+        ``solutions`` (each a Result), ``generations`` the batches; ``history`` per batch: ``starts``, ``solutions``,
+        ``best_cost`` (m + rad), and ``min_pairwise_distance`` (rad) on redundant arms."""
     t_setup = time.perf_counter()
     robot = problem.robot
     count, timeout, max_starts, batch, patience, min_hits, class_radius, pool, table_size, iterations, engine = \
@@ -226,11 +149,9 @@ def memetic_all(
         moving = goal_moving_joints(robot, stack)
         redundant = int(moving.sum()) > stack.rows
     else:
-        redundant = robot.n > task_dimension(target)
+        redundant = robot.n > len(TASK_ROWS[target_kind(target)])  # more joints than task rows
     wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
-    if engine == "compiled":
-        compiled_kernel()  # loaded (or compiled, once per install) outside the clock, as memetic does
-    table = seed_table(robot, lo, hi, table_size) if table_size > 0 else None
+    table, _ = prepare(robot, lo, hi, table_size, engine)  # the kernel and the seed table, outside the clock
     if table is not None and goals:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     wrap = wrapping_joints(robot, lo, hi)
@@ -244,7 +165,7 @@ def memetic_all(
     deadline = None if timeout is None else t0 + timeout
     # A finite set: isolate each solution by refinement (redundant arms have no isolated solutions).
     classes = SolutionClasses(problem, wrap, class_radius, None if redundant else patient)
-    starts = _Starts(problem, table, rng)
+    starts = _starts(problem, table, rng)
     history: dict[str, list[float]] = {"starts": [], "solutions": [], "best_cost": []}
     evaluations = started = batches = quiet = 0
     best = (np.inf, None, np.inf, None)  # error, q, position error, orientation error
@@ -256,8 +177,8 @@ def memetic_all(
             break
         pairs = GoalArrays(stack, np.repeat(pt[None], k, axis=0), np.repeat(Rt[None], k, axis=0)) if goals else (
             [target] * k)
-        out = solve_pairs(robot, starts.take(k), pairs, lo, hi, problem.tolerance, problem.rotation_tolerance,
-                          iterations, engine=engine)
+        out = solve_pairs(robot, np.array(list(itertools.islice(starts, k))), pairs, lo, hi, problem.tolerance,
+                          problem.rotation_tolerance, iterations, engine=engine)
         if goals and still.size:
             out.q[:, still] = rest_at
         started += k
@@ -338,12 +259,9 @@ def memetic_all(
 
 def _rescued(problem: IKProblem, patient: LevenbergMarquardt, Q: np.ndarray, E: np.ndarray, converged: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, int]:
-    """The converged runs of a batch (configurations, errors m + rad), plus the near misses (stalled with an
-    error below RESCUE_ERROR) that a patient LM run takes within the tolerances, and the FK evaluations spent.
-
-    LM's stall test gives up on a run whose error does not halve every few steps, so that a start in a poor
-    region costs little; near a singular solution every run creeps, and solutions with tiny basins would be
-    missed: those near misses are continued (rare elsewhere: about 1 run in 2000 on UR5 poses, 1 in 50 on Panda)."""
+    """The converged runs of a batch (configurations, errors m + rad), plus the near misses (stalled below
+    ``RESCUE_ERROR``) a patient LM run takes within the tolerances (near-singular solutions with tiny basins), and the
+    kinematics evaluations spent."""
     near = np.flatnonzero(~converged & (E < RESCUE_ERROR))
     if not near.size:
         return Q[converged], E[converged], 0
@@ -360,9 +278,8 @@ def _rescued(problem: IKProblem, patient: LevenbergMarquardt, Q: np.ndarray, E: 
 
 def _fallback(problem: IKProblem, rng, classes: SolutionClasses, deadline: float | None, iterations: int,
               engine: str) -> str:
-    """No start converged: memetic's differential-evolution restarts (no table stage: the table was tried) look
-    for one solution with the remaining budget (20 restarts without a timeout); a solution opens the first
-    class. Returns what happened, for the message."""
+    """No start converged: memetic's DE restarts (no table stage) look for one solution with the budget left (20
+    restarts without a timeout); a solution opens the first class. Returns what happened, for the message."""
     remaining = None if deadline is None else max(deadline - time.perf_counter(), 1e-4)
     res = memetic(problem, rng, timeout=remaining, max_restarts=None if remaining else 20, table_seeds=0,
                   iterations=iterations, engine=engine)
@@ -376,8 +293,8 @@ def _fallback(problem: IKProblem, rng, classes: SolutionClasses, deadline: float
 
 def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray, evaluations: int, time_s: float,
                        batches: int) -> list[Result]:
-    """One Result per row of ``Q`` (M, n) that lies in the box and meets the tolerances by the robot's forward
-    kinematics (evaluated afresh: bookkeeping, not counted as evaluations), nearest to ``reference`` first."""
+    """One Result per row of ``Q`` (M, n) in the box and within the tolerances by fresh forward kinematics (not
+    counted as evaluations), nearest ``reference`` first."""
     if not Q.shape[0]:
         return []
     Q = Q[np.argsort(np.linalg.norm(Q - reference, axis=1), kind="stable")]
@@ -395,8 +312,7 @@ def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray,
 
 
 def goal_moving_joints(robot, stack) -> np.ndarray:
-    """(n,) bool: the entries of q that move some goal frame of a goal ``stack`` (the union of the goals' supports,
-    through the robot's coupling of q to its physical joints)."""
+    """(n,) bool: the entries of q that move some goal frame of goal ``stack``."""
     index, scale = robot.tree_constants()[4:6]
     moving = np.zeros(robot.n, dtype=bool)
     moving[index[stack.support.any(axis=0) & (scale != 0.0)]] = True

@@ -1,46 +1,16 @@
-"""Memetic IK: Levenberg-Marquardt from good starting points, differential evolution when they fail.
+"""Memetic IK (``memetic``, the default method): Levenberg-Marquardt from good starts, differential evolution when
+they fail. Stages, each only while the tolerances are unmet:
 
-Registered as ``memetic``, the default method of :func:`evoik_pin.solve`. It pairs a global search that
-proposes starting configurations with a local Newton-type search that takes them to machine precision
-(the LM engine :class:`~evoik_pin.solvers.lm.LevenbergMarquardt`, on the SE(3) error ``log6(T_t^-1 T(q))``
-for pose targets, the position for position targets, (x, y[, yaw]) for planar ones, within the joint limits;
-each run is one call of a numba-compiled function, :mod:`evoik_pin.solvers.lm.kernel`, about 1 us per step).
-Stages, each tried only when the previous ones have not met the tolerances:
+1. **Warm start**: LM from ``q0``, first when its pose is within the table's typical spacing of the target or
+   nearer than the table's nearest entry, else right after that entry.
+2. **Seed table** (:mod:`.seed_table`): LM from the entries nearest to the target (``batch`` at a time); a goal list
+   of several goals alternates starts composed goal by goal and entries (``SeedTable.goal_starts``).
+3. **Memetic restarts** until the tolerances, ``timeout`` or ``max_restarts``: DE populations
+   (DE/current-to-best/1/bin, :mod:`evoik_pin.solvers.paper.de_ops`) whose ``polish_count`` best are polished by LM.
 
-1. **Warm start**: LM from ``q0`` when it is given (a previous solution usually converges in a few steps),
-   first when its tip pose is within the table's typical spacing of the target or nearer than the table's
-   nearest entry; a farther ``q0`` (a random guess) goes right after that entry.
-2. **Seed table**: LM from the configurations whose tip poses are nearest to the target in a table of
-   ``table_size`` configurations spread over the search box (a deterministic Halton sequence, so no random
-   numbers are drawn; its forward kinematics is computed once per robot and box and cached). Nearness is
-   ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` with ``w`` a quarter of the arm's reach (m per unit of the
-   Frobenius distance, which is ``2 sqrt(2) sin(angle / 2)``). The nearest entry is polished alone (it
-   converges for most targets); then the next ones, one LM run after the other, the clock checked between
-   runs (``batch=k`` hands them to the engine k at a time,
-   :meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.run_many`, the clock checked between groups). One-time
-   costs do not count against the budget: the table's construction, and loading (or, once after an install,
-   compiling) the compiled LM kernel. A goal list (a whole robot: several frames) gets 48 starts, a start composed
-   goal by goal (each goal's chain from the table entry nearest for that goal alone, relative to the root link)
-   and the next table entry by the goals' summed nearness, alternately (``SeedTable.goal_starts``).
-3. **Memetic restarts** until the tolerances, the time budget ``timeout`` or ``max_restarts`` are reached:
-   a population of ``population`` configurations (uniform in the box, drawn from ``rng``, plus ``q0`` and
-   the best configuration met so far) evolves for ``generations`` generations of differential evolution
-   (DE/current-to-best/1/bin from :mod:`evoik_pin.solvers.paper.de_ops`, dithered F in [0.5, 1], CR = 0.9,
-   greedy selection on the problem's objective), and its ``polish_count`` best members are polished by LM, best first.
-
-For one pose or position target, or a goal list of one goal on one frame (:func:`one_frame_goal`, searched as a
-single target is, in its frame's features) (no scene, ``batch=1``) the runs of stages 1-2 made whatever the clock
-says (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries') are one compiled call (:mod:`.first_runs`: the
-table's ranking, q0's nearness, the LM runs), with the same decisions and answers; the search goes on from its
-state when none of them converges. A goal list of several goals (a whole robot) gets the same: q0's run and the
-first ``GUARANTEED_TABLE_RUNS`` of its starts (the ranking, the composed starts, the LM runs) in one compiled call
-(:func:`~.first_runs.goal_first_runs`), on the numbers ``SeedTable.goal_starts`` gives the runs made one by one.
-
-Determinism: every random draw comes from ``rng``, and stages 1-2 draw none. The time budget is checked
-between LM runs and generations, so two runs with the same seed give identical results whenever the
-budget is not what stops them (every reachable target in practice); ``timeout=None`` with
-``max_restarts=k`` gives a fully deterministic budget.
-"""
+The runs of stages 1-2 made whatever the clock says (q0's and ``GUARANTEED_TABLE_RUNS`` entries') are one compiled
+call where it serves (:mod:`.first_runs`; no scene, ``batch=1``). Every random draw comes from ``rng`` (stage 3
+only); ``timeout=None`` with ``max_restarts=k`` is fully deterministic."""
 
 from __future__ import annotations
 
@@ -50,7 +20,6 @@ import time
 import numpy as np
 
 from ...errors import OptionError
-from ...goals.registry import KIND_BEYOND_FRAME
 from ...problem import IKProblem, errors_text, shortfall_text
 from ...result import Result
 from .. import get_solver, register
@@ -59,46 +28,38 @@ from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, com
 from ..lm.compiling import load
 from ..lm.engine import later_kinds
 from ..options import check_choice, check_int, check_positive
-from ..paper.common import diversity
-from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
+from .memetic_runs import LMRuns, de_restart, kernel_goal_errors
 from .seed_table import (
     DEFAULT_GOAL_TABLE_SEEDS,
     DEFAULT_TABLE_SEEDS,
+    FrameFeatures,
     SeedTable,
     default_table_size,
     load_goal_helpers,
+    one_frame,
     seed_table,
     seed_targets,
 )
 
-__all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticPlan", "memetic", "prepare"]
+__all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticSetup", "memetic", "prepare"]
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
 #: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
-#: descheduled past the budget still gets this minimum of useful work (5 runs of at most 30 steps, about
-#: 0.3 ms of compiled LM at worst).
+#: descheduled past the budget still gets this minimum of useful work.
 GUARANTEED_TABLE_RUNS = 4
-#: LM engines (and their compiled first-runs entries) a MemeticPlan keeps, one per goal stack: a solver alternating
-#: single targets and several goal structures retargets them instead of rebuilding (an engine's target arrays become
-#: its own at its second problem, which an IKSolver's lane needs: ik_solver keeps as many goal lanes).
+#: LM engines (and their compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted instead of
+#: rebuilt by a solver alternating goal structures.
 KEPT_ENGINES = 8
 #: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
 FIRST_RUNS_COMPILE_SECONDS = 5.0
-#: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
-BOUND_SHARE = 0.4
 
 
 def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
             margin: float = 0.0, kernel: bool = True) -> tuple[SeedTable | None, np.ndarray | None]:
-    """Do memetic's one-time work for a robot and a search box: load (once per install: compile) the compiled
-    LM kernel for pose, position and planar goals (``kernel``; an LM engine loads its own variant when made), build
-    the cached seed table of ``table_size`` entries (0: none) and, with a scene, find its collision-free entries.
-    Returns (the table, its free mask or None).
-
-    :func:`memetic` calls it before starting its clock (without the kernel: the engine it makes before the clock
-    loads the variant its goals need, and only that one); :func:`evoik_pin.prepare` calls it ahead of time.
-    """
+    """memetic's one-time work for a robot and a search box: load the compiled LM kernel (``kernel``), build the
+    cached seed table of ``table_size`` entries (0: none) and, with a scene, its collision-free mask. Returns (the
+    table or None, the mask or None)."""
     if engine == "compiled" and kernel:
         compiled_kernel()
     table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
@@ -106,13 +67,10 @@ def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine
     return table, free
 
 
-# ---------------------------------------------------------------------- option checks
 def check_options(*, timeout, max_restarts, population, generations, polish_count, table_size, table_seeds,
                   table_offset, batch, iterations, engine, n: int) -> tuple:
-    """memetic's options (every keyword of :func:`memetic`, ``n`` the robot's joints) in canonical form, in the
-    signature's order, ``table_size`` resolved (None: :func:`default_table_size`); OptionError naming the option
-    and its accepted range otherwise. :func:`memetic` calls it first, and the entry points solving many targets
-    call it (through the registry) before any work."""
+    """memetic's options (:func:`memetic`'s keywords; ``n`` the robot's joints) as a tuple in the signature's order,
+    ``table_size`` resolved; OptionError naming an option out of range."""
     timeout = None if timeout is None else check_positive("timeout (s; or None)", timeout)
     max_restarts = None if max_restarts is None else check_int("max_restarts", max_restarts, 0)
     if timeout is None and max_restarts is None:
@@ -128,88 +86,6 @@ def check_options(*, timeout, max_restarts, population, generations, polish_coun
             check_int("table_offset", table_offset, 0),
             check_int("batch", batch, 1), check_int("iterations", iterations, 1),
             check_choice("engine", engine, ENGINES))
-
-
-# ---------------------------------------------------------------------- the solver
-class _Search:
-    """State of one memetic solve: the LM engine, the best configuration met, counters and the clock."""
-
-    def __init__(self, problem: IKProblem, t0: float, deadline: float | None, iterations: int,
-                 batch: int = 1, engine: str = "compiled", guaranteed: int = 0,
-                 lm: LevenbergMarquardt | None = None) -> None:
-        self.problem = problem
-        self.guaranteed = guaranteed  # LM runs made whatever the clock says
-        self.batch = batch
-        self.lm = LevenbergMarquardt(problem, engine=engine) if lm is None else lm
-        self.t0 = t0
-        self.deadline = deadline
-        self.iterations = iterations
-        self.best: LMOutcome | None = None
-        self.evaluations = 0
-        self.attempts = 0
-        self.attempt_errors: list[float] = []
-        self.scene = problem.scene
-        self.rejected = 0  # converged LM answers rejected by the scene's exact check
-        self.rejected_pairs: list[tuple[str, str]] = []  # the pairs in contact at the last one
-
-    def out_of_time(self) -> bool:
-        return (self.deadline is not None and self.attempts >= self.guaranteed
-                and time.perf_counter() >= self.deadline)
-
-    def _deadline(self) -> float | None:
-        """The deadline for the next LM run: none while the guaranteed runs are being made."""
-        return None if self.attempts < self.guaranteed else self.deadline
-
-    def _keep(self, out: LMOutcome, runs: int) -> bool:
-        self.evaluations += out.evaluations
-        self.attempts += runs
-        self.attempt_errors.append(out.error)
-        if out.converged and self.scene is not None:
-            margin = self.problem.margin
-            if self.scene.in_collision(out.q, margin):  # the exact check, ~90 us
-                # it reaches the target in collision: rejected; the search goes on from other starts
-                self.rejected += 1
-                self.rejected_pairs = self.scene.colliding_pairs(out.q, margin)
-                out.converged = False
-                if self.best is None:
-                    self.best = out
-                return False
-        if self.best is None or out.converged or out.rank < self.best.rank:
-            self.best = out
-        return out.converged
-
-    def polish(self, q: np.ndarray, iterations: int | None = None) -> bool:
-        """One LM run from ``q`` (n,); keeps the best outcome; True when it meets the tolerances."""
-        return self._keep(self.lm.run(q, iterations or self.iterations, self._deadline()), 1)
-
-    def polish_iter(self, starts) -> bool:
-        """:meth:`polish_many` over an iterable of starts (n,), drawn lazily, ``batch`` at a time: a start is
-        made only when the ones before it have failed; the clock is checked between groups."""
-        it = iter(starts)
-        for g in itertools.count():
-            chunk = list(itertools.islice(it, self.batch))
-            if not chunk or (g and self.out_of_time()):
-                return False
-            if self.polish_many(np.array(chunk)):
-                return True
-        return False  # pragma: no cover - the loop returns
-
-    def polish_many(self, Q: np.ndarray) -> bool:
-        """LM runs from the rows of ``Q`` (K, n), in order, until one meets the tolerances or the time is up;
-        ``batch`` > 1 hands them to the engine ``batch`` at a time (``LevenbergMarquardt.run_many``: one kernel
-        call per group, the clock checked between groups)."""
-        for s in range(0, Q.shape[0], self.batch):
-            if s and self.out_of_time():
-                return False
-            chunk = Q[s:s + self.batch]
-            if chunk.shape[0] == 1:
-                solved = self.polish(chunk[0])
-            else:
-                out, k = self.lm.run_many(chunk, self.iterations, self._deadline())
-                solved = self._keep(out, k + 1 if out.converged else chunk.shape[0])
-            if solved:
-                return True
-        return False
 
 
 #: The search over goal sets (:func:`.choose.choose`), which puts itself here when imported (the solver registry
@@ -238,64 +114,41 @@ def memetic(
     """Solve ``problem`` with LM from q0 and the seed table, then DE populations polished by LM.
 
     Args:
-        problem: the IK problem; its tolerances (``tolerance`` m, ``rotation_tolerance`` rad; default 1e-6,
-            reachable down to about 1e-12) decide success.
+        problem: the IK problem; its tolerances decide success.
         rng: source of every random draw (stage 3 only).
-        timeout: wall-clock budget in s (default 0.005, TRAC-IK's default), checked between LM runs and
-            generations; None for no time limit (then ``max_restarts`` bounds the work). The clock starts
-            after the one-time set-up (the compiled kernel, the seed table: see ``Result.setup_s``), and a
-            minimum of work is always done, whatever the clock says (a process descheduled past the budget
-            still solves what that work solves): the LM runs from ``q0`` and from the
-            ``GUARANTEED_TABLE_RUNS`` (4) nearest seed-table entries, at most 30 steps each (about 0.3 ms).
-        max_restarts: number of DE populations (stage 3) at most; None for no limit (then ``timeout``
-            bounds the work); 0 runs stages 1-2 only.
+        timeout: wall-clock budget (s; None: none, then ``max_restarts`` bounds the work), checked between LM runs and
+            generations; the clock starts after the one-time set-up, and the guaranteed runs (q0's and
+            ``GUARANTEED_TABLE_RUNS`` entries') are made whatever it says.
+        max_restarts: DE populations at most (None: no limit; 0: stages 1-2 only).
         population: DE population size (>= 4). generations: DE generations per population (>= 0).
         polish_count: members of each population polished by LM, best first (1..population).
         table_size: seed-table size (0 disables stage 2); default 2^(n+5) clamped to [256, 4096].
-        table_seeds: table entries tried in stage 2, nearest first: the nearest alone (it usually converges),
-            the next ones one by one (``batch`` at a time); default (None) 17 for one target. A goal list's
-            stage 2 alternates starts composed goal by goal and table entries
-            (:meth:`~evoik_pin.solvers.search.seed_table.SeedTable.goal_starts`), 48 by default.
-        table_offset: skip the nearest ``table_offset`` entries (already tried, e.g. by ``solve_many``); for a goal
-            list the first ``table_offset`` starts.
-        batch: LM runs handed to the engine together (stages 2 and 3; >= 1): one kernel call per group of
-            ``batch`` starts, in order, stopping at the first that meets the tolerances; the clock is checked
-            between groups. 1 (default): between every two runs.
+        table_seeds: table entries (a goal list: starts) tried in stage 2; default 17 (a goal list: 48).
+        table_offset: skip the first ``table_offset`` entries (starts).
+        batch: LM runs handed to the engine together (>= 1), the clock checked between groups.
         iterations: LM steps allowed per run (>= 1).
-        engine: ``"compiled"`` (default): each LM run is one call of the numba kernel
-            (:mod:`evoik_pin.solvers.lm.kernel`, about 1 us per step); ``"python"``: the same iteration as the reference
-            Python loop over Pinocchio's kinematics (:mod:`evoik_pin.solvers.lm.reference`, about 30 us per step).
+        engine: ``"compiled"`` (the numba kernel) or ``"python"`` (the reference loop over Pinocchio).
 
     Returns:
-        A :class:`Result`. ``generations`` counts DE generations; ``evaluations`` counts forward-kinematics
-        evaluations (LM steps and DE individuals; the cached seed table is not counted); ``history`` holds
-        ``best_cost`` / ``mean_cost`` / ``diversity`` with one entry for stages 1-2 and one per DE
-        generation, and ``attempt_error`` (m + rad) after each LM run (or group of ``batch`` runs). An unreachable
-        target gives the best approximation met, ``success=False`` and a message.
-    """
+        A :class:`Result`: ``generations`` DE generations, ``evaluations`` kinematics evaluations, ``history``
+        (``best_cost``, ``mean_cost``, ``diversity``; ``attempt_error`` (m + rad) per LM run); an unmet problem gives
+        the best approximation with ``success=False`` and a message saying why."""
     t_setup = time.perf_counter()
-    plan = MemeticPlan(problem.robot, timeout=timeout, max_restarts=max_restarts, population=population,
-                       generations=generations, polish_count=polish_count, table_size=table_size,
-                       table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
-                       engine=engine)
-    return plan.solve(problem, rng, t_setup)
+    setup = MemeticSetup(problem.robot, timeout=timeout, max_restarts=max_restarts, population=population,
+                         generations=generations, polish_count=polish_count, table_size=table_size,
+                         table_seeds=table_seeds, table_offset=table_offset, batch=batch, iterations=iterations,
+                         engine=engine)
+    return setup.solve(problem, rng, t_setup)
 
 
-class MemeticPlan:
-    """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve.
-
-    :func:`memetic` makes one per call; an :class:`~evoik_pin.IKSolver` makes one and solves every target with it:
-    the options are not checked again, the seed table of the search box (and its collision-free mask, re-read per
-    scene version) is looked up once, and the LM engine is pointed at each new target in place
-    (:meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.retarget`) instead of being rebuilt. The answers are those of
-    :func:`memetic` with the same options and generator: :meth:`solve` is its body.
-
-    Not thread-safe: one plan per thread (its engine's target arrays are written by every solve).
+class MemeticSetup:
+    """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve: the seed table
+    of the box, the LM engines retargeted in place, the compiled first-runs entries. :meth:`solve` is :func:`memetic`'s
+    body (the same answers). Not thread-safe: one per thread.
 
     Args:
-        robot: the robot every problem is posed on. options: :func:`memetic`'s keywords (OptionError here when
-            one is out of range).
-    """
+        robot: the robot every problem is posed on.
+        options: :func:`memetic`'s keywords (OptionError when out of range)."""
 
     def __init__(self, robot, *, timeout=DEFAULT_TIMEOUT, max_restarts=None, population=32, generations=3,
                  polish_count=8, table_size=None, table_seeds=None, table_offset=0, batch=1,
@@ -305,10 +158,7 @@ class MemeticPlan:
         self.given = dict(timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
                           polish_count=polish_count, table_size=table_size, table_seeds=table_seeds,
                           table_offset=table_offset, batch=batch, iterations=iterations, engine=engine)
-        self.options = check_options(
-            timeout=timeout, max_restarts=max_restarts, population=population, generations=generations,
-            polish_count=polish_count, table_size=table_size, table_seeds=table_seeds, table_offset=table_offset,
-            batch=batch, iterations=iterations, engine=engine, n=robot.n)
+        self.options = check_options(**self.given, n=robot.n)
         self._box = None  # (lower, upper, table size): the box the cached table is for (the arrays themselves)
         self._table = None
         self._lm: LevenbergMarquardt | None = None
@@ -317,30 +167,24 @@ class MemeticPlan:
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
         self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
         self._goal_entries: list[tuple] = []  # the same for goal_first_runs (goal lists of several goals), newest first
-        # first_runs's scratch: each run's error (q0's and GUARANTEED_TABLE_RUNS entries'), the goal's errors, a q0
-        # never read (no q0 given), the best failed run's configuration and numbers
+        # first_runs' scratch: each run's error, the goal's errors, a q0 never read, the best failed run's q and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
                          np.empty(6))
 
     def _prepare(self, problem: IKProblem, size: int, engine: str) -> tuple[SeedTable | None, np.ndarray | None]:
-        """:func:`prepare` for ``problem``, the table kept while the problems share their box arrays (an
-        IKSolver's problems do); the scene's free mask is looked up every time (it follows the scene's version)."""
+        """:func:`prepare` for ``problem``, the table kept while the problems share their box arrays; the scene's free
+        mask looked up every time (it follows the scene's version)."""
         box = self._box
         if box is None or box[0] is not problem.lower or box[1] is not problem.upper or box[2] != size:
-            self._table, free = prepare(self.robot, problem.lower, problem.upper, size, engine, problem.scene,
-                                        problem.margin, kernel=False)
+            self._table = prepare(self.robot, problem.lower, problem.upper, size, engine, kernel=False)[0]
             self._box = (problem.lower, problem.upper, size)
             self._bounds = (np.array(problem.lower, dtype=float), np.array(problem.upper, dtype=float))
-            return self._table, free
-        table = self._table
-        free = table.free_mask(problem.scene, problem.margin) if table is not None and problem.scene is not None \
-            else None
-        return table, free
+        table, scene = self._table, problem.scene
+        return table, None if table is None or scene is None else table.free_mask(scene, problem.margin)
 
     def _engine(self, problem: IKProblem, engine: str) -> LevenbergMarquardt:
-        """The LM engine of ``problem``: the last one, retargeted, when only the targets differ; else one of the
-        last few engines (a solver alternating single targets and goal lists: one engine per goal stack), else a
-        new one."""
+        """The LM engine of ``problem``: the last one retargeted, else one of the last ``KEPT_ENGINES`` (one per goal
+        stack), else a new one."""
         lm = self._lm
         if lm is not None and lm.engine == engine and lm.retarget(problem):
             return lm
@@ -353,11 +197,9 @@ class MemeticPlan:
         return lm
 
     def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
-        """(:func:`~.first_runs.first_runs` on ``args``, the seconds spent loading it). The process's first call
-        loads (once after an install: compiles) the function, timed as set-up, and then makes the runs. A plan that
-        solves again (an IKSolver's) calls its compiled entry directly from its second solve on: numba's dispatch
-        types each of the 37 arguments on every call (about 3 us); the entry is found once per engine arguments
-        and table (the other arguments are arrays of fixed types and Python scalars)."""
+        """(:func:`~.first_runs.first_runs` on ``args``, the seconds spent loading it: set-up). From the setup's second
+        solve on, the compiled entry is called directly (found once per engine arguments and table), without numba's
+        typing of every argument."""
         kept_args, kept_table, entry = self._entry
         if entry is not None and kept_args is lm._args and kept_table is table:
             return entry(*args), 0.0
@@ -378,7 +220,7 @@ class MemeticPlan:
                  [(first_runs, args)], FIRST_RUNS_COMPILE_SECONDS)
             loading = time.perf_counter() - t
             _LOADED.append(first_runs)
-        if kept_table is not None:  # not this plan's first solve: it is kept
+        if kept_table is not None:  # not this setup's first solve: it is kept
             from numba import typeof
 
             try:
@@ -386,15 +228,12 @@ class MemeticPlan:
             except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
                 entry = first_runs
         self._entry = (lm._args, table, entry)
-        if entry is not None and entry is not first_runs:  # a compiled entry found (not on the plan's first solve)
+        if entry is not None and entry is not first_runs:  # a compiled entry found (not on the setup's first solve)
             self._entries = [self._entry, *self._entries[:KEPT_ENGINES - 1]]
         return first_runs(*args), loading
 
     def goal_first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
-        """:meth:`first_runs` for :func:`~.first_runs.goal_first_runs` (a goal list of several goals): (its
-        return on ``args``, the seconds spent loading it: the process's first call, set-up). From a plan's second
-        solve of a goal stack on, its compiled entry is called directly (found once per engine arguments and
-        table; the last ``KEPT_ENGINES`` kept), without numba's typing of the 50 arguments on every call."""
+        """:meth:`first_runs` for :func:`~.first_runs.goal_first_runs` (a goal list of several goals)."""
         entries = self._goal_entries
         for kept in entries:
             if kept[0] is lm._args and kept[1] is table:
@@ -428,145 +267,99 @@ class MemeticPlan:
         return out, loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
-        """:func:`memetic` on ``problem`` (posed on this plan's robot) with the plan's options; ``t_setup``: when
-        the call began (``perf_counter``; default now), for ``Result.setup_s``."""
+        """:func:`memetic` on ``problem`` with the setup's options; ``t_setup``: when the call began (``perf_counter``;
+        default now), for ``Result.setup_s``. Goal sets go to :func:`.choose.choose`."""
         if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
             if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
                 get_solver("memetic")
-            return GOAL_SET_SEARCH["choose"](problem, rng, plan=self, **self.given)
+            return GOAL_SET_SEARCH["choose"](problem, rng, setup=self, **self.given)
         return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
     def resume(self, problem: IKProblem, rng: np.random.Generator, resumed: tuple) -> Result:
-        """:meth:`solve` on ``problem`` going on from the compiled first runs a
-        :class:`~.single_target_lane.SingleTargetLane` made for it, none of which converged (``resumed``: the lane's
-        (clock start, runs' state))."""
+        """:meth:`solve` going on from the compiled first runs a :class:`~.repeat_call.RepeatCall` made for
+        ``problem``, none of which converged (``resumed``: (clock start, :func:`resumed_state`))."""
         return _solve(self, problem, rng, resumed[0], resumed)
 
 
-def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_setup: float,
+def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_setup: float,
            resumed: tuple | None = None) -> Result:
-    """memetic's search (see :func:`memetic`) with the options and set-up of ``plan``; ``t_setup``: when the call
-    began (``perf_counter``). ``resumed``: (when the clock started, :func:`resumed_state`) when the compiled first
-    runs were made for this very problem before (an IKSolver's single-target lane) and none converged: the search
-    goes on from there, on that clock."""
+    """memetic's search (:func:`memetic`) with ``setup``'s options and set-up; ``t_setup``: when the call began
+    (``perf_counter``); ``resumed``: (clock start, :func:`resumed_state`) when the first runs were already made."""
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
-     iterations, engine) = plan.options
+     iterations, engine) = setup.options
 
-    # One-time set-up before the clock starts: numba's import and the kernel's load (or compilation), the seed
-    # table of this box with its nearness features (cached per robot and box).
+    # one-time set-up before the clock starts: the seed table and its features, the compiled rankings, the engine
     goals = problem.goals is not None
-    one_goal = goals and one_frame_goal(problem)  # searched as a single target is, in its goal frame's features
+    single = one_frame(problem)
     if table_seeds is None:
-        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals and not one_goal else DEFAULT_TABLE_SEEDS
+        table_seeds = DEFAULT_TABLE_SEEDS if single else DEFAULT_GOAL_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
-    table, free = plan._prepare(problem, table_size if use_table else 0, engine)
-    if table is not None and goals:
-        load_goal_helpers()  # the compiled rankings goal lists' starts call from Python (once per process)
-    if table is not None and goals and not one_goal:
-        table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
-    elif table is not None and one_goal:
-        # the goal frame's features over the table (its kinematics: ~20 ms on a 4,096-entry table), once per frame
-        # and weight, before the clock: a first solve paid it from the budget and could run out of time
-        table.one_goal_features(problem.goals[0])
-    lm = plan._engine(problem, engine)
+    table, free = setup._prepare(problem, table_size if use_table else 0, engine)
+    frame = table.frame_search(problem) if table is not None else None
+    if table is not None and goals:  # the compiled rankings of goal lists (and their starts' features)
+        load_goal_helpers()
+        if frame is None:
+            table.prepare_goals(problem.goals)
+    lm = setup._engine(problem, engine)
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     if resumed is not None:  # the guaranteed runs' state: the compiled first runs made them and none converged
         t0, resumed = resumed
         setup_s = 0.0
-    elif (FIRST_RUNS and table is not None and (one_goal or not (goals or problem.target.planar))
-            and problem.scene is None and engine == "compiled" and batch == 1 and table_offset == 0):
-        result, loading, resumed = _first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds,
-                                               one_goal)
+    elif (FIRST_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is None
+            and engine == "compiled" and batch == 1 and table_offset == 0):
+        args = (setup, problem, table, lm, t0, setup_s, iterations, table_seeds)
+        result, loading, resumed = _goal_first_runs(*args) if frame is None else _first_runs(*args, frame)
         if result is not None:
             return result
         t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
         setup_s += loading
-    elif (FIRST_RUNS and table is not None and goals and problem.scene is None and engine == "compiled"
-            and batch == 1 and table_offset == 0):
-        result, loading, resumed = _goal_first_runs(plan, problem, table, lm, t0, setup_s, iterations, table_seeds)
-        if result is not None:
-            return result
-        t0 += loading
-        setup_s += loading
     guaranteed = (problem.q0 is not None) + (min(GUARANTEED_TABLE_RUNS, table_seeds) if use_table else 0)
-    search = _Search(problem, t0, None if timeout is None else t0 + timeout, iterations, batch, engine, guaranteed,
-                     lm)
+    search = LMRuns(problem, lm, None if timeout is None else t0 + timeout, iterations, batch, guaranteed)
     history: dict[str, list[float]] = {"best_cost": [], "mean_cost": [], "diversity": []}
-    stage = ""
-    n_gen = 0
-    restarts = 0
-    solved = False
-    # Stages 1-2: LM from q0 and from the seed table's entries nearest to the target. Every single run gets
-    # the full step budget: a start in the basin of a solution converges in about 5-10 steps, one held by a
-    # limit or a local minimum is dropped by LM's stall test within a few, and one still gaining after 15 is
-    # mostly creeping towards a near-singular solution (LM's geodesic acceleration), cheaper to finish than
-    # to replace.
-    ranked = first = None
+    stage, n_gen, restarts, solved = "", 0, 0, False
+    # Stages 1-2: LM from q0 and the table's starts (lazy; with a scene, the collision-free entries only)
+    ranked = starts = first = None
     if table is not None:
-        # lazy: ranks on the first next(); with a scene, among the collision-free entries only
-        # a goal list: starting configurations, composed goal by goal and table entries alternately; one goal on
-        # one frame: the entries nearest in its frame's features
-        ranked = (table.ranked_goals(problem, table_offset + table_seeds, free) if one_goal
-                  else table.goal_starts(problem, table_offset + table_seeds, free) if goals
-                  else table.ranked(problem.target, table_offset + table_seeds, free))
-        if table_offset:
-            ranked = itertools.islice(ranked, table_offset, None)
+        k = table_offset + table_seeds  # a goal list's ranking compiled (single-threaded), a tip target's NumPy's
+        ranked = (table.goal_starts(problem, k, free) if frame is None else table.ranked_goals(problem, k, free)
+                  if goals else table.ranked((frame, table.target_point(problem, frame)), k, free))
+        ranked = itertools.islice(ranked, table_offset, None)
+        starts = ranked if frame is None else (table.Q[i] for i in ranked)
     q0 = problem.q0
     q0_first = q0 is not None
     if resumed is not None:
-        # the compiled first runs made the guaranteed runs (q0's and the nearest entries') in this order: on from
-        # there, the next entries one by one, the clock checked between runs
+        # the compiled first runs made the guaranteed runs in this order: on from there, the clock checked between runs
         search.attempts, search.evaluations, search.attempt_errors, search.best, made = resumed
         stage = "seed table"
-        if goals and not one_goal:  # goal_starts' starts (configurations), lazily, after the ones made
-            if not search.out_of_time():
-                solved = search.polish_iter(itertools.islice(ranked, made, None))
-        else:
-            rest = list(itertools.islice(ranked, made, None))
-            if rest and not search.out_of_time():
-                solved = search.polish_many(table.Q[rest])
-    elif q0 is not None and table is not None and (one_goal or not goals):
+        if not search.out_of_time():
+            solved = search.polish_many(itertools.islice(starts, made, None))
+    elif q0 is not None and frame is not None:
         # A q0 farther from the target than the table's nearest entry (a random guess rather than a previous
         # solution) goes second: a failed LM run from it costs as much as a converging one.
+        f = table.target_point(problem, frame)
         qc = np.minimum(np.maximum(q0, problem.lower), problem.upper)
-        if one_goal:  # the same in the goal frame's features
-            goal = problem.goals[0]
-            F, _, _, gap, _, _ = table.one_goal_features(goal)
-            _, pt, Rt = problem.goal_stack()
-            f = table.one_goal_point(goal, pt[0], Rt[0])
-            T = robot.frame_poses_unchecked(qc, [robot.frame_id(goal.frame)])[0]
-            d = f - table.one_goal_point(goal, T.translation, T.rotation)
-            d0 = float(d.dot(d))
-            if d0 > gap:
-                first = next(ranked, None)
-                q0_first = first is None or d0 <= float((f - F[first]).dot(f - F[first]))
-        else:
-            d0 = table.distance_sq(problem.target, robot.fk_unchecked(qc))
-            if d0 > table.typical_gap_sq(problem.target):
-                first = next(ranked, None)
-                q0_first = first is None or d0 <= table.entry_distance_sq(problem.target, first)
+        T = robot.frame_poses_unchecked(qc, [robot.frame_id(problem.goals[0].frame if goals else None)])[0]
+        d = f - frame.point(T.translation, T.rotation)
+        d0 = float(d.dot(d))
+        if d0 > frame.gap:
+            first = next(ranked, None)
+            q0_first = first is None or d0 <= float((f - frame.F[first]).dot(f - frame.F[first]))
     if q0_first and resumed is None:
         stage = "q0"
         solved = search.polish(q0)
-    if resumed is not None:
-        pass
-    elif not solved and goals and not one_goal and table is not None and not search.out_of_time():
+    if resumed is None and not solved and table is not None and not search.out_of_time():
         stage = "seed table"
-        solved = search.polish_iter(ranked)
-    elif not solved and table is not None and not search.out_of_time():
-        if first is None:
-            first = next(ranked, None)
-        stage = "seed table"
-        solved = first is not None and search.polish(table.Q[first])
-        if not solved and q0 is not None and not q0_first and not search.out_of_time():
-            stage = "q0"
-            solved = search.polish(q0)
+        if frame is not None:  # the nearest entry, then a farther q0, then the others
+            first = next(ranked, None) if first is None else first
+            solved = first is not None and search.polish(table.Q[first])
+            if not solved and q0 is not None and not q0_first and not search.out_of_time():
+                stage = "q0"
+                solved = search.polish(q0)
         if not solved and not search.out_of_time():
-            rest = list(ranked)
             stage = "seed table"
-            solved = bool(rest) and search.polish_many(table.Q[rest])
+            solved = search.polish_many(starts)
     # Stage 3: DE populations, their best members polished by LM, best first.
     if not solved and not search.out_of_time() and max_restarts != 0:
         if search.best is None:  # no q0 and no table: start from the box centre
@@ -579,13 +372,13 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         while not solved and not search.out_of_time() and (max_restarts is None or restarts < max_restarts):
             stage = "memetic restarts"
             restarts += 1
-            solved, n_gen, cost = _memetic_restart(problem, rng, search, population, generations, polish_count,
-                                                   wrap, history, n_gen, cost)
+            solved, n_gen, cost = de_restart(problem, rng, search, population, generations, polish_count, wrap,
+                                             history, n_gen, cost)
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    if one_goal:  # the kernel's errors of the best run, at q: trusted as a single target's are (_first_runs)
-        goal_errors = [problem.goals[0].reported(search.best.position_error, search.best.orientation_error)]
+    if goals and single:  # the kernel's errors of the best run, at q, trusted (_first_runs)
+        goal_errors = kernel_goal_errors(problem.goals, search.best)
     else:
         goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
     pos, rot, cost = (problem.goal_summary(goal_errors) if goals
@@ -594,10 +387,7 @@ def _solve(plan: MemeticPlan, problem: IKProblem, rng: np.random.Generator, t_se
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    if goals:
-        within = problem.goals_met(goal_errors)
-    else:
-        within = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+    within = bool(problem.goals_met(goal_errors) if goals else problem.succeeded(pos, rot))
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
@@ -631,80 +421,49 @@ BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # first_runs' base modes 
 _NO_BASE = np.zeros(6)  # goal_first_runs' base where no goal sets one (never read)
 _EVERY = np.zeros(0, dtype=bool)  # every table entry (goal_first_runs' allowed: no scene on that path)
 
-#: Whether single-target solves make their guaranteed runs in one compiled call (:func:`_first_runs`); the tests
-#: turn it off to compare with the runs made one by one.
+#: Whether memetic makes its guaranteed runs in one compiled call where it serves (:func:`_first_runs`,
+#: :func:`_goal_first_runs`); the tests turn it off to compare with the runs made one by one.
 FIRST_RUNS = True
 
 
-def one_frame_goal(problem: IKProblem) -> bool:
-    """Whether a goal list is one goal on one frame with a position or an orientation to match (a Pose with or
-    without free axes or bands, a Position with or without a band, an Orientation; not a goal set, a pointing goal
-    or a goal beyond one frame): memetic searches it as it does a single target (:func:`_solve`): q0 first or after
-    the nearest entry, the entries nearest in the goal frame's features (:meth:`SeedTable.one_goal_features`),
-    ``DEFAULT_TABLE_SEEDS`` of them, the guaranteed runs in one compiled call. A start composed goal by goal
-    (:meth:`SeedTable.goal_starts`) is then the table entry itself, and a random q0 tried first a lost run."""
-    goals = problem.goals
-    if goals is None or len(goals) != 1:
-        return False
-    goal = goals[0]
-    return goal.kind < KIND_BEYOND_FRAME and goal.alternatives is None and (goal.has_position or
-                                                                            goal.has_orientation)
-
-
-def _first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
+def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
                 setup_s: float, iterations: int, table_seeds: int,
-                one_goal: bool = False) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_solve`'s stages 1-2 for one pose or position target, or a goal list of one goal on one frame
-    (``one_goal``: :func:`one_frame_goal`) (no scene, ``batch=1``, no ``table_offset``) up to its guaranteed runs
-    (q0's and the ``GUARANTEED_TABLE_RUNS`` nearest entries'), made in one compiled call (:mod:`.first_runs`) in
-    _solve's order and with its decisions: the Result _solve returns when one of them meets
-    the tolerances, None when none does; the seconds spent loading the compiled function (on a plan's first solve),
-    set-up rather than budget; and when none converged, the state _solve goes on from (:func:`resumed_state`), else
-    None. :class:`~.single_target_lane.SingleTargetLane` makes the same call for an IKSolver's single targets."""
-    if one_goal:
-        F, FT, sq, gap, sp, sr = table.one_goal_features(problem.goals[0])
-    else:
-        key = "position" if problem.target.rotation is None else "pose"
-        F, FT, sq = table.compiled_features(key)
-        gap, sp, sr = table._gap(key), 1.0, table.weight
+                ff: FrameFeatures) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_solve`'s guaranteed runs for a problem searched as one frame's pose (``ff``:
+    :meth:`SeedTable.frame_search`'s; not planar) in one compiled call (:mod:`.first_runs`), with _solve's order and
+    decisions. Returns (the Result when one met the tolerances else None; the seconds spent loading the compiled
+    function; when none converged, the state _solve goes on from (:func:`resumed_state`), else None)."""
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
-    n = problem.n
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
-    lower, upper = plan._bounds
-    q_out = np.empty(n)
-    errors, g_out, zeros, best_q, best = plan._scratch
-    (stage, runs, evaluations, pos, rot, _), loading = plan.first_runs(
-        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, lower, upper,
-         gap, table.Q, F, FT, sq, sp, sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q,
-         best), lm, table)
+    q_out = np.empty(problem.n)
+    errors, g_out, zeros, best_q, best = setup._scratch
+    (stage, runs, evaluations, pos, rot, _), loading = setup.first_runs(
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, *setup._bounds,
+         ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out,
+         errors, best_q, best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
-        return None, loading, resumed_state(plan, lm.oriented, runs, evaluations, table_runs)
+        return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
     goal_errors = None
-    if one_goal:
-        # the goal's errors are the kernel's at q_out (its success test's numbers), as a single target's are: the
-        # kernel computes them exactly as Goal.errors does (the same maths, its own kinematics, equal to Pinocchio's
-        # within rounding), and the goal's tolerances are tested on them again here, as a single target's are below
+    if problem.goals is not None:
+        # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
         goal = problem.goals[0]
         goal_errors = [goal.reported(pos, rot)]
         pos, rot, cost = problem.goal_summary(goal_errors)
         met = goal.met(*goal_errors[0])
     else:
         pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
-        met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+        met = problem.succeeded(pos, rot)
     if not met:
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
     return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
                              time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None
 
 
-def _goal_first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
+def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
                      setup_s: float, iterations: int, table_seeds: int) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_first_runs` for a goal list of several goals (no scene, ``batch=1``, no ``table_offset``): _solve's
-    guaranteed runs (q0's, then the first ``GUARANTEED_TABLE_RUNS`` of :meth:`SeedTable.goal_starts`) in one compiled
-    call (:func:`~.first_runs.goal_first_runs`: the ranking, the composed starts and the LM runs, in _solve's order
-    on the same numbers). Returns (the Result _solve returns when one of them meets the tolerances, else None; the
-    seconds spent loading the compiled function, set-up; when none converged, the state _solve goes on from)."""
+    """:func:`_first_runs` for a goal list of several goals (:func:`~.first_runs.goal_first_runs`: the ranking, the
+    composed starts and the LM runs of :meth:`SeedTable.goal_starts`'s first starts)."""
     goals = problem.goals
     robot = problem.robot
     layout = table.goal_layout(goals)
@@ -719,16 +478,16 @@ def _goal_first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm
     G = len(goals)
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
     q_out = np.empty(n)
-    errors, _, zeros, best_q, best = plan._scratch
+    errors, _, zeros, best_q, best = setup._scratch
     g_out, best_g = np.empty((G, 2)), np.empty((G, 2))
-    (stage, runs, evaluations, pos, rot, cost), loading = plan.goal_first_runs(
+    (stage, runs, evaluations, pos, rot, cost), loading = setup.goal_first_runs(
         (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, table.Q, *layout[:8],
          table.weight, np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float), *layout[8:],
          base, base_mode, _EVERY, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best,
          best_g), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them (ranked by
         # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank)
-        runs_, evaluations_, errs, kept, _ = resumed_state(plan, lm.oriented, runs, evaluations, table_runs)
+        runs_, evaluations_, errs, kept, _ = resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
         kept.goal_errors = best_g
         return None, loading, (runs_, evaluations_, errs, kept, runs - (q0 is not None))
     goal_errors = problem.goal_errors(q_out)  # Pinocchio's, as _solve's: the answer's verdict is the same
@@ -739,11 +498,10 @@ def _goal_first_runs(plan: MemeticPlan, problem: IKProblem, table: SeedTable, lm
                              time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None
 
 
-def resumed_state(plan: MemeticPlan, oriented: bool, runs: int, evaluations: int, table_runs: int) -> tuple:
-    """The state :func:`_solve` goes on from after compiled first runs none of which converged (read from the
-    plan's scratch arrays, which the runs wrote): (runs made, their evaluations, each run's error, the best run as
-    an LMOutcome, the table entries run)."""
-    errors, _, _, best_q, best = plan._scratch
+def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, table_runs: int) -> tuple:
+    """The state :func:`_solve` goes on from after compiled first runs none of which converged, read from the setup's
+    scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome, the table entries run)."""
+    errors, _, _, best_q, best = setup._scratch
     b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
     kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), None, b_cost)
     return runs, evaluations, errors[:runs].tolist(), kept, table_runs
@@ -752,9 +510,8 @@ def resumed_state(plan: MemeticPlan, oriented: bool, runs: int, evaluations: int
 def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float, stage: int, runs: int,
                       evaluations: int, errors: np.ndarray, time_s: float, setup_s: float,
                       goal_errors: list | None = None) -> Result:
-    """memetic's Result when the compiled first runs met the tolerances: ``q`` (n,) the converged run's answer, its
-    errors (m, rad or None) and cost, ``stage`` the start that converged (:mod:`.first_runs`' STAGE_Q0 or
-    STAGE_TABLE), ``runs`` made, ``errors`` (>= runs,) each run's error (m + rad)."""
+    """memetic's Result when a compiled first run met the tolerances: ``q`` (n,), its errors (m, rad or None) and cost,
+    ``stage`` (STAGE_Q0 or STAGE_TABLE), ``runs`` made, ``errors`` (>= runs,) each run's error (m + rad)."""
     history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
                "attempt_error": errors[:runs].copy()}
     return Result(
@@ -763,47 +520,3 @@ def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float,
         message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
                 "restart(s))",
         method="memetic", setup_s=setup_s, goal_errors=goal_errors)
-
-
-def _memetic_restart(problem, rng, search: _Search, population: int, generations: int, polish_count: int,
-                     wrap: np.ndarray, history: dict, n_gen: int, best_cost: float) -> tuple[bool, int, float]:
-    """One stage-3 restart: a DE population, ``generations`` generations, its best members polished by LM.
-
-    The population is uniform in the box plus the best configuration met so far (elitism) and ``q0``.
-    DE/current-to-best/1/bin (:mod:`evoik_pin.solvers.paper.de_ops`) with a dithered scale factor F ~ U[0.5, 1] per
-    individual and CR = 0.9; wrapping joints stay on their circle, the others are clipped; greedy selection on the
-    problem's objective. Then the ``polish_count`` best members, except the elite (already polished), are
-    polished by LM, best first (``batch`` at a time).
-    """
-    lo, hi = problem.lower, problem.upper
-    X = rng.uniform(lo, hi, size=(population, problem.n))
-    # a share of the coordinates sits on a bound: targets whose solutions rest on joint limits (several at once
-    # near a corner of the box) are rare under uniform draws, and LM from the interior is held off by the limits
-    on_bound = rng.random(X.shape) < BOUND_SHARE
-    X = np.where(on_bound, np.where(rng.random(X.shape) < 0.5, lo, hi), X)
-    X[0] = search.best.q
-    if problem.q0 is not None:
-        X[1] = np.minimum(np.maximum(problem.q0, lo), hi)
-    costs = problem.cost(X)
-    for _ in range(generations):
-        best = int(costs.argmin())
-        F = rng.uniform(0.5, 1.0, size=population)
-        V = mutate(X, "currenttobest1", F, distinct_indices(rng, population, 2), best)
-        U = binomial_crossover(X, V, 0.9, rng.random(X.shape), rng.integers(0, problem.n, population))
-        U = np.where(wrap, lo + np.mod(U - lo, 2 * np.pi), np.minimum(np.maximum(U, lo), hi))
-        cu = problem.cost(U)
-        better = cu <= costs
-        X[better], costs[better] = U[better], cu[better]
-        n_gen += 1
-        best_cost = min(best_cost, float(costs.min()))
-        history["best_cost"].append(best_cost)
-        history["mean_cost"].append(float(costs.mean()))
-        history["diversity"].append(diversity(X, lo, hi))
-        if search.out_of_time():
-            break
-    order = np.argsort(costs)
-    elite = search.best.q
-    order = [i for i in order if not np.array_equal(X[i], elite)][:polish_count]
-    if not order:
-        return False, n_gen, best_cost
-    return search.polish_many(X[order]), n_gen, best_cost

@@ -1,19 +1,16 @@
-"""The seed table: configurations spread over a search box with their tip poses, searchable by nearness to a target.
+"""The seed table: configurations spread over a search box (a deterministic Halton sequence) with their frames'
+poses, ranked by nearness to a target or a goal list; one per robot and box (:func:`seed_table`, cached).
 
-One table per robot and box (:func:`seed_table`, cached), built from a deterministic Halton sequence (no random
-numbers drawn) with its forward kinematics computed once. Read by the memetic solver (:mod:`.memetic`, its stage 2),
-by ``memetic-all`` (:mod:`.all_solutions`, its starts) and by :func:`~evoik_pin.solve_many`'s batched rounds
-(:mod:`evoik_pin.solvers.batch.threads`). Nearness is ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` with ``w`` a quarter of
-the arm's reach (m per unit of the Frobenius distance, which is ``2 sqrt(2) sin(angle / 2)``); position and planar
-targets use their own features.
-"""
+Nearness is ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` (``w``: a quarter of the arm's reach, m per unit of Frobenius
+distance), summed over a goal list's goals with each goal's weight; position and planar targets use their own
+features."""
 
 from __future__ import annotations
 
 import weakref
+from typing import NamedTuple
 
 import numpy as np
-import pinocchio as pin
 
 from ...goals.pose import KIND_POSE
 from ...goals.position import KIND_POSITION
@@ -24,72 +21,115 @@ from ...lie import rpy
 from ...problem import Target
 from ..paper.common import halton
 
-__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "SeedTable", "default_table_size", "load_goal_helpers",
-           "seed_table"]
+__all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
+           "load_goal_helpers", "nearest_first", "one_frame", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
 DEFAULT_TABLE_SEEDS = 17
-#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`: composed starts and
-#: table entries alternately). On whole robots a start costs an LM run (~0.1 ms on Talos) and a DE generation a
-#: population's tree kinematics in numpy (~1 ms on Talos): with 48 starts every one of 200 Talos, Go2 and Baxter
-#: problems (scripts/bench_goals.py) was solved without a restart, against 199, 197 and 198 with 17.
+#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`): on whole robots a start
+#: (an LM run) costs far less than a DE generation.
 DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
-_KINDS = tuple(_KIND_KEYS.values())
+
+
+class FrameFeatures(NamedTuple):
+    """The table's features of one frame's pose (the tip's for a target kind, or a goal frame's): F (size, d), FT
+    (d, size), sq (size,) their squared norms, gap (the median squared distance from an entry to its nearest other:
+    a start nearer the target than this is as good as the table's nearest entry), sp and sr (the scales of the
+    position and of the rotation's entries), positioned, oriented, planar (x, y and the heading only)."""
+
+    F: np.ndarray
+    FT: np.ndarray
+    sq: np.ndarray
+    gap: float
+    sp: float
+    sr: float
+    positioned: bool
+    oriented: bool
+    planar: bool
+
+    def point(self, p: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """The features (d,) of one pose of the frame (p (3,) m, R (3, 3))."""
+        return _pose_rows(*self[4:], p[None], R[None])[0]
+
+
+def _pose_rows(sp: float, sr: float, positioned: bool, oriented: bool, planar: bool, P: np.ndarray,
+               R: np.ndarray) -> np.ndarray:
+    """Features (N, d) of N poses (P (N, 3) m, R (N, 3, 3)) in :class:`FrameFeatures`' metric."""
+    if planar:  # x, y, and the heading scaled like rotations
+        return np.concatenate([P[:, :2]] + ([sr * R[:, :2, 0]] if oriented else []), axis=1)
+    parts = ([sp * P] if positioned else []) + ([sr * R.reshape(-1, 9)] if oriented else [])
+    return np.concatenate(parts, axis=1) if parts else np.zeros((P.shape[0], 0))
 
 
 class SeedTable:
     """Configurations spread over a search box and their tip poses, searchable by nearness to a target.
 
     Attributes:
-        Q: (size, n) configurations (a Halton sequence mapped onto the box; deterministic).
-        positions: (size, 3) tip positions (m); rotations: (size, 3, 3).
-        weight: m per unit of rotation-matrix (Frobenius) distance in the pose metric.
-    """
+        Q: (size, n) configurations. positions: (size, 3) tip positions (m); rotations: (size, 3, 3).
+        weight: m per unit of rotation-matrix (Frobenius) distance in the pose metric."""
 
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
-        self._goal_features: dict = {}  # (frame, oriented, weight) per goal -> (features (size, d), squared norms)
+        self._goal_features: dict = {}  # (frames, goal_spec) -> goal_table_features; ("parts", ...) -> _goal_parts
         reach = float(np.sqrt((self.positions**2).sum(axis=1)).max()) if size else 1.0
         self.weight = 0.25 * max(reach, 1e-3)
-        self._features: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._frames: dict = {}  # frame_features' key -> FrameFeatures
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
-        self._gaps: dict[str, float] = {}  # feature key -> typical_gap_sq
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
-        self._transposed: dict = {}  # feature key -> compiled_features
-        self._one_goal: dict = {}  # (frame, weight, has_orientation, has_position) -> one_goal_features
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
-        self._one_goal32: dict = {}  # id(one_goal_features' FT) -> (that FT, its float32 copy, sq's)
-        self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, its features stacked: _stacked_parts)
+        self._frames32: dict = {}  # id(a FrameFeatures' FT) -> (that FT, its float32 copy, sq's)
+        self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, goal_layout)
         if size:
-            for key in _KINDS:  # one-time work here, not inside a solve's time budget
-                self._table_features(key)
-                self._gap(key)
-            for key in ("pose", "position"):
-                self.compiled_features(key)
+            for key in _KIND_KEYS.values():  # one-time work here, not inside a solve's time budget
+                self.frame_features(key)
 
-    def _pose_features(self, key: str, P: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Features (N, d) of tip poses (positions P (N, 3) m, rotations R (N, 3, 3)) for one target kind."""
-        if key == "pose":
-            return np.concatenate([P, self.weight * R.reshape(-1, 9)], axis=1)
-        if key == "position":
-            return P
-        if key == "planar":
-            return P[:, :2]
-        return np.concatenate([P[:, :2], self.weight * R[:, :2, 0]], axis=1)  # heading, scaled like rotations
+    def frame_features(self, key) -> FrameFeatures:
+        """The table's :class:`FrameFeatures` (cached): of the tip for a target kind (``key`` "pose", "position",
+        "planar" or "planar_yaw"), or of a goal frame (``key`` (frame, sp, has_position, has_orientation): sp (a
+        goal's sqrt(weight): :meth:`goal_spec`) x its position, then sp x ``self.weight`` x its rotation's entries)."""
+        hit = self._frames.get(key)
+        if hit is None:
+            if isinstance(key, str):
+                shape = (1.0, self.weight, key in ("pose", "position"), key in ("pose", "planar_yaw"),
+                         key.startswith("planar"))
+                F = np.array(_pose_rows(*shape, self.positions, self.rotations), order="C")  # a copy
+                sq = (F * F).sum(axis=1)
+            else:
+                frame, sp, positioned, oriented = key
+                spec = ((sp, bool(oriented)) + (() if positioned else (False,)),)
+                F, sq = self.goal_table_features((frame,), spec)
+                shape = (spec[0][0], spec[0][0] * self.weight, bool(positioned), bool(oriented), False)
+                if len(self._frames) > 12:
+                    self._frames = {k: v for k, v in self._frames.items() if isinstance(k, str)}
+            hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
+        return hit
 
-    def _table_features(self, key: str) -> tuple[np.ndarray, np.ndarray]:
-        """(features (size, d), squared norms (size,)) of the table for one target kind, built once."""
-        if key not in self._features:
-            F = np.array(self._pose_features(key, self.positions, self.rotations), order="C")  # a copy
-            self._features[key] = (F, (F * F).sum(axis=1))
-        return self._features[key]
+    def frame_search(self, problem) -> FrameFeatures | None:
+        """For a problem searched as one frame's pose (:func:`one_frame`: a tip target, or a goal list of one goal on
+        one frame), its :class:`FrameFeatures`; None for any other problem."""
+        goals = problem.goals
+        if goals is None:
+            t = problem.target
+            return self.frame_features(_KIND_KEYS[target_kind(t)] if t.planar else
+                                       "position" if t.rotation is None else "pose")
+        if not one_frame(problem):
+            return None
+        g = goals[0]
+        return self.frame_features((g.frame, float(np.sqrt(g.weight)), g.has_position, g.has_orientation))
+
+    def target_point(self, problem, ff: FrameFeatures) -> np.ndarray:
+        """The features (d,) of ``problem``'s target in ``ff``'s metric (:meth:`frame_search`'s)."""
+        if problem.goals is None:
+            return self.one_target_features(problem.target)[1]
+        _, pt, Rt = problem.goal_stack()
+        return ff.point(pt[0], Rt[0])
 
     def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
         """(kind key, features (N, d)) of N tip targets of one ``KIND_*`` in the kernel's encoding
@@ -98,60 +138,30 @@ class SeedTable:
         if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
             yaw = P[:, 2]
             return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
-        return key, self._pose_features(key, P, Rts)
+        return key, _pose_rows(*self.frame_features(key)[4:], P, Rts)
 
     def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
-        """(kind key, features (d,)) of one target: :meth:`encoded_features`' row, the same numbers, without the
-        batch encoding (this runs on every single-target solve)."""
-        last = self._last
-        if last[0] is target:  # a solve asks up to four times (ranking, q0's nearness, the gap)
-            return last[1]
-        if target.planar:
+        """(kind key, features (d,)) of one tip target: :meth:`encoded_features`' row (cached for the last target)."""
+        if self._last[0] is not target:
             key, f = self.encoded_features(target_kind(target), *encode_targets([target]))
-            out = key, f[0]
-        elif target.rotation is None:
-            out = "position", np.array(target.position, dtype=float)  # our own (compiled callers fix its type)
-        else:
-            out = "pose", np.concatenate((target.position, self.weight * target.rotation.reshape(9)))
-        self._last = (target, out)
-        return out
+            self._last = (target, (key, f[0]))
+        return self._last[1]
 
-    def ranked(self, target: Target, k: int, allowed: np.ndarray | None = None):
-        """Indices of the (up to) k table entries nearest to one target, nearest first, lazily: the nearest
-        costs one matrix-vector product and an argmin; the others are ranked only if asked for. ``allowed``
-        (size,) bool: only those entries (e.g. :meth:`free_mask`)."""
+    def ranked(self, target, k: int, allowed: np.ndarray | None = None):
+        """Indices of the (up to) k entries nearest a tip target (a :class:`Target`, or a pair (:meth:`frame_search`'s
+        features, :meth:`target_point`)), nearest first, lazily (the nearest costs one product and an argmin);
+        ``allowed`` (size,) bool: only those entries."""
         if k <= 0:
             return
-        d = self.distances(*self.one_target_features(target))
+        d = self.distances(*(self.one_target_features(target) if isinstance(target, Target) else target))
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
-            if k <= 0:
-                return
-        first = int(d.argmin())
-        yield first
-        k = min(k, d.shape[0])
-        if k > 1:
-            part = np.argpartition(d, k - 1)[:k]
-            for i in part[d[part].argsort()]:
-                if i != first:
-                    yield int(i)
-
-    def compiled_features(self, key: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(features (size, d), the same transposed (d, size), squared norms (size,)) of one target kind, for the
-        compiled ranking (:mod:`.nearest`); built once."""
-        hit = self._transposed.get(key)
-        if hit is None:
-            F, sq = self._table_features(key)
-            hit = self._transposed[key] = (F, np.ascontiguousarray(F.T), sq)
-        return hit
+        yield from nearest_first(d, k)
 
     def joint_distances(self, q0: np.ndarray, wrap: np.ndarray) -> np.ndarray:
-        """Each entry's squared joint-space distance (size,) to ``q0`` (n,) (rad^2 or m^2), a ``wrap`` joint (bool
-        (n,): its range spans a full turn) by its chord on the unit circle, ``2 - 2 cos d`` (d^2 near 0, at most 4
-        at half a turn: the difference taken to its nearest turn, without a modulo). One matrix-vector product over
-        features kept per ``wrap`` (the joints, the wrapping ones as cos and sin; their squared norms): the modulo
-        over the table took 100 us on UR10, the product 5."""
+        """Each entry's squared joint distance (size,) to ``q0`` (n,), a ``wrap`` joint (bool (n,)) by its chord on the
+        unit circle, ``2 - 2 cos d``: one product over features kept per ``wrap``."""
         key = wrap.tobytes()
         kept = self._joint_features.get(key)
         if kept is None:
@@ -165,24 +175,19 @@ class SeedTable:
         d += f @ f
         return d
 
-    def distances(self, key: str, f: np.ndarray) -> np.ndarray:
-        """The table's squared distances (size,) to features ``f`` (d,) of kind ``key`` (:meth:`one_target_features`)
-        less ``|f|^2`` (the same for every entry): what :meth:`ranked` sorts (memetic's first runs too)."""
-        F, sq = self._table_features(key)
-        d = F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
+    def distances(self, key, f: np.ndarray) -> np.ndarray:
+        """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of
+        :meth:`frame_features` ``key`` (or of those features)."""
+        ff = key if isinstance(key, FrameFeatures) else self.frame_features(key)
+        d = ff.F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
         d *= -2.0
-        d += sq
+        d += ff.sq
         return d
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
-        """:meth:`ranked` for a goal list (``problem.goals``): the entries nearest in the sum over the goals of their
-        weight times ``|p - p_t|^2 (+ w^2 |R - R_t|_F^2 for a pose)``, each goal's frame posed by the entry, nearest
-        first (ties: the lower index first). The goals' features over the table (the frames' poses, scaled by the
-        square roots of the weights) are computed once per frame list, kinds and weights and cached, so a ranking
-        is one compiled pass over them (:func:`~.nearest.rank_goal_entries`, which memetic's compiled first runs of
-        a goal list make too: the same order)."""
-        if k <= 0:
-            return
+        """:meth:`ranked` for a goal list (``problem.goals``): nearest in the goals' weighted summed nearness, each
+        goal's frame posed by the entry (ties: the lower index first), by one compiled pass
+        (:func:`~.nearest.rank_goal_entries`)."""
         from .nearest import rank_goal_entries  # numba, loaded on first use (as the kernel is)
 
         layout = self.goal_layout(problem.goals)
@@ -197,12 +202,8 @@ class SeedTable:
         yield from out[:m].tolist()
 
     def prepare_goals(self, goals) -> None:
-        """Compute (once per frame list, kinds and weights; then cached) the goal features that
-        :meth:`ranked_goals` and :meth:`goal_starts` read: forward kinematics of every entry, one-time set-up; and
-        load (once per process; once per install: compile) the compiled rankings a search of these goals calls
-        (:func:`load_goal_helpers` for several goals; a goal set's members' ranking,
-        :func:`~.nearest.table_distances_many`, for choose), so that no solve's clock pays for that."""
-        self._goal_table_features(goals)
+        """One-time set-up for a goal list: its features over the table and the compiled rankings its search calls."""
+        self.goal_table_features(tuple(g.frame for g in goals), self.goal_spec(goals))
         self._goal_parts(goals)
         if len(goals) > 1:
             load_goal_helpers()
@@ -217,20 +218,14 @@ class SeedTable:
             _RANKING_LOADED.append("sets")
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
-        """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed ones and table entries
+        """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed starts and table entries
         alternately, a composed one first.
 
-        The j-th table entry is the j-th of :meth:`ranked_goals`. The j-th composed start is assembled goal by goal:
-        for each goal, the joints that move its frame (the floating base excepted) are taken from the table entry
-        whose pose of that frame *relative to the root link* is the nearest to the goal's target (its j-th nearest
-        on a fixed base; with a floating base, the nearest to the target seen from the j-th ranked entry's base,
-        which the composed start keeps); the other joints are that entry's. A pose goal on a frame only the floating
-        base moves (a quadruped's trunk) sets the base of every start, composed or not, and the composed starts
-        then rank each goal's entries once, as on a fixed base. Each goal's chain thus gets its own
-        good table entry where one entry rarely suits every goal of a whole robot (on Talos's four poses the LM
-        run from the first composed start converges about 1.3 times as often as from the nearest entry). A joint
-        shared by several goals' chains (a torso) takes the value of the last of them.
-        """
+        The j-th entry is :meth:`ranked_goals`' j-th. The j-th composed start takes, for each goal, the joints that move
+        its frame (the floating base excepted) from the entry whose frame pose relative to the root link is the j-th
+        nearest the goal's target (with a floating base: seen from the j-th entry's base, or from the base a pose goal
+        on the trunk sets); the other joints are that entry's. A joint shared by several chains takes the last one's
+        value."""
         if k <= 0:
             return
         ranked = self.ranked_goals(problem, k, allowed)
@@ -253,26 +248,23 @@ class SeedTable:
                 if fixed is None or (j > 0 and fixed.shape[1] == 1):
                     fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, 1 if j == 0 else k, allowed)
                 picks = fixed[:, j] if j < fixed.shape[1] else None
-            if picks is not None:
-                for (_, _, idx), e in zip(parts, picks, strict=True):
-                    q[idx] = self.Q[e, idx]
-                yield q
-                made += 1
-                if made >= k:
-                    return
             entry = self.Q[row]
             if base is not None:
                 entry = entry.copy()
                 entry[:6] = base
-            yield entry
-            made += 1
+            out = [entry]
+            if picks is not None:
+                for (_, _, idx), e in zip(parts, picks, strict=True):
+                    q[idx] = self.Q[e, idx]
+                out.insert(0, q)
+            yield from out[:k - made]
+            made += len(out)
             if made >= k:
                 return
 
     def _base_from_goals(self, problem, parts) -> np.ndarray | None:
-        """The floating base's six entries (clipped into the search box) that put the first pose goal on a frame
-        only the floating base moves (the root link or a frame fixed to it: a quadruped's trunk) exactly on its
-        target; None when no goal is such."""
+        """The floating base's six entries (clipped into the box) putting the first pose goal on a frame only the base
+        moves exactly on its target; None when no goal is such."""
         pt, Rt = seed_targets(problem)
         for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
             if goal.has_orientation and goal.has_position and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
@@ -284,9 +276,8 @@ class SeedTable:
         return None
 
     def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Per goal (cached per frame list, kinds and weights): the table's features of its frame's pose relative to
-        the root link (a floating base's six entries set to zero), their squared norms, and the indices of the
-        entries of q (the floating base's excepted) that move the frame."""
+        """Per goal (cached): the table's features of its frame's pose relative to the root link, their squared norms,
+        and the entries of q (the floating base's excepted) that move the frame."""
         key = ("parts",) + tuple((g.frame, g.has_orientation, g.has_position, g.weight) for g in goals)
         hit = self._goal_features.get(key)
         if hit is None:
@@ -313,36 +304,23 @@ class SeedTable:
 
     def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
                           allowed: np.ndarray | None) -> np.ndarray:
-        """(G, <= k) indices of the table entries nearest, goal by goal, to targets pt (G, 3), Rt (G, 3, 3) of the
-        frames' poses relative to the root link, nearest first (ties: the lower index first): one compiled call
-        for every goal (:func:`~.nearest.nearest_per_goal`; NumPy's products and rankings goal by goal took 15 us a
-        goal, the composed starts a third of a Talos solve)."""
+        """(G, <= k) indices of the entries nearest, goal by goal, targets pt (G, 3), Rt (G, 3, 3) relative to the root
+        link, nearest first: one compiled call (:func:`~.nearest.nearest_per_goal`)."""
         from .nearest import nearest_per_goal  # numba, loaded on first use (as the kernel is)
 
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
-        FT, sq, start, scale, positioned, oriented = self._stacked_parts(goals, parts)
+        FT, sq, start, scale, positioned, oriented = self.goal_layout(goals, parts)[2:8]
         out = np.empty((len(parts), k), dtype=np.int64)
         if k > 0:
             nearest_per_goal(FT, sq, start, scale, positioned, oriented, self.weight, np.ascontiguousarray(pt),
                              np.ascontiguousarray(Rt), _EVERY if allowed is None else allowed, k, out)
         return out.astype(np.intp, copy=False)
 
-    def _stacked_parts(self, goals, parts) -> tuple:
-        """:meth:`_goal_parts`' features of every goal stacked for :func:`~.nearest.nearest_per_goal`: (FT (D, size)
-        the goals' features transposed, goal g's rows from start[g]; sq (G, size); start (G + 1,); scale (G,)
-        sqrt(weight); positioned, oriented (G,) bool), as :meth:`goal_spec` gives them (:meth:`goal_layout`'s)."""
-        return self.goal_layout(goals, parts)[2:8]
-
     def goal_layout(self, goals, parts=None) -> tuple:
-        """Everything the compiled ranking and composition of a goal list's starts read (:func:`~.nearest.
-        rank_goal_entries`, :func:`~.nearest.nearest_per_goal`, :func:`~.first_runs.goal_first_runs`), cached with
-        :meth:`_goal_parts` (per frame list, kinds and weights): (FT (D, size), sq (size,) float32: the goal list's
-        table features transposed (:meth:`goal_table_features`) and their squared norms; PT (E, size), psq (G, size)
-        float32, pstart (G + 1,): each goal's features relative to the root link, stacked, goal g's rows from
-        pstart[g] (single precision: a start's order is all they decide, :func:`~.nearest.table_distances32`);
-        scale (G,) sqrt(weight); positioned, oriented (G,) bool (:meth:`goal_spec`); idx (I,) int64, idx_start
-        (G + 1,): the entries of q each goal's chain sets in a composed start, goal g's
-        ``idx[idx_start[g]:idx_start[g + 1]]``)."""
+        """What the compiled rankings and compositions of a goal list read (:func:`~.nearest.rank_goal_entries`,
+        :func:`~.nearest.nearest_per_goal`, :func:`~.first_runs.goal_first_runs`), cached: (FT (D, size), sq (size,)
+        float32; PT (E, size), psq (G, size) float32, pstart (G + 1,): each goal's root-relative features stacked; scale
+        (G,); positioned, oriented (G,) bool; idx (I,), idx_start (G + 1,): the entries of q each goal's chain sets)."""
         if parts is None:
             parts = self._goal_parts(goals)
         key = id(parts)
@@ -367,13 +345,9 @@ class SeedTable:
                                                 oriented, idx, idx_start))
         return hit[1]
 
-    def _goal_table_features(self, goals) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`goal_table_features` of a goal list."""
-        return self.goal_table_features(tuple(g.frame for g in goals), self.goal_spec(goals))
-
     def goal_table_features(self, frames, spec) -> tuple[np.ndarray, np.ndarray]:
-        """(features (size, d), squared norms (size,)) of the goal frames ``frames`` over the table
-        (:meth:`ranked_goals`, the batch engine's k-d tree), cached per frames and ``spec`` (:meth:`goal_spec`)."""
+        """(features (size, d), squared norms (size,)) of the frames ``frames`` over the table, cached per frames and
+        ``spec`` (:meth:`goal_spec`)."""
         key = (tuple(frames), tuple(spec))
         hit = self._goal_features.get(key)
         if hit is None:
@@ -386,37 +360,26 @@ class SeedTable:
 
     @staticmethod
     def goal_spec(goals) -> tuple[tuple, ...]:
-        """Per goal, (sqrt(weight), has orientation), and False third for a goal without a position (orientation,
-        pointing: its target's pt is no place for the frame): what the goal features depend on besides the
-        frames. A goal beyond one frame without a target pose of its frame (a centre of mass, a relative pose whose
-        first frame has no pose goal: :func:`seed_targets`) weighs 0: it ranks nothing."""
+        """Per goal, (sqrt(weight), has orientation), with a third False for a goal without a position: what its
+        features depend on besides the frame. A goal beyond one frame without a target pose of its frame weighs 0."""
         return tuple((float(np.sqrt(g.weight)) if g.kind < KIND_BEYOND_FRAME or _anchor(g, goals) is not None
                       else 0.0, bool(g.has_orientation)) + (() if g.has_position else (False,)) for g in goals)
 
     def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
-        """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3): ``sqrt(weight_g)``
-        times the position and, for a goal with orientation, ``self.weight`` times the rotation's entries
-        (``spec``: :meth:`goal_spec`). Their Euclidean distance is memetic's goal metric."""
-        out = []
-        for g, entry in enumerate(spec):
-            s, oriented = entry[0], entry[1]
-            if len(entry) < 3 or entry[2]:  # a goal with a position
-                out.append(s * P[g])
-            if oriented:
-                out.append((s * self.weight) * R[g].reshape(-1, 9))
-        if not out:  # pointing goals alone: no feature ranks the entries (all equally near)
-            out.append(np.zeros((len(P[0]), 1)))
-        return out
+        """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3) (``spec``:
+        :meth:`goal_spec`): sqrt(weight) x the position, then x ``self.weight`` the rotation's entries."""
+        out = [_pose_rows(e[0], e[0] * self.weight, len(e) < 3 or e[2], e[1], False, P[g], R[g])
+               for g, e in enumerate(spec)]
+        # pointing goals alone: no feature ranks the entries (all equally near)
+        return [b for b in out if b.shape[1]] or [np.zeros((len(P[0]), 1))]
 
     def goal_features(self, spec, P: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Features (N, d) of N poses of G goal frames, positions P (N, G, 3) m and rotations R (N, G, 3, 3)
-        (``spec``: :meth:`goal_spec`): what :meth:`goal_table_features` holds for the table's entries."""
+        """Features (N, d) of N poses of G goal frames, P (N, G, 3) m, R (N, G, 3, 3) (``spec``: :meth:`goal_spec`)."""
         return np.concatenate(self._goal_feature_blocks(spec, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)), axis=1)
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
-        """(size,) bool: the entries whose convex-hull proxies are collision-free in ``scene`` at ``margin`` m
-        (conservative: every such entry is mesh-free), computed once per scene version and margin (about
-        20-60 us an entry: one-time set-up)."""
+        """(size,) bool: the entries collision-free in ``scene`` at ``margin`` m by their convex-hull proxies
+        (conservative), cached per scene version and margin."""
         key = (id(scene), scene.version, float(margin))
         hit = self._free.get(key)
         if hit is None or hit[0]() is not scene:
@@ -425,88 +388,20 @@ class SeedTable:
             hit = self._free[key] = (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True))
         return hit[1]
 
-    def distance_sq(self, target: Target, T: pin.SE3) -> float:
-        """Squared nearness metric between a target and a tip pose ``T`` (the one :meth:`ranked` sorts by)."""
-        key, f = self.one_target_features(target)
-        if key == "pose":  # _pose_features's row, without its batch reshapes (once per solve with a q0)
-            d = f - np.concatenate((T.translation, self.weight * T.rotation.reshape(9)))
-        elif key == "position":
-            d = f - T.translation
-        else:
-            d = f - self._pose_features(key, T.translation[None], T.rotation[None])[0]
-        return float(d.dot(d))
-
-    def entry_distance_sq(self, target: Target, i: int) -> float:
-        """:meth:`distance_sq` between a target and table entry ``i``'s tip pose, from the table's own features
-        (the same numbers: the features of ``i``'s pose are row ``i`` of the table's)."""
-        key, f = self.one_target_features(target)
-        d = f - self._table_features(key)[0][i]
-        return float(d.dot(d))
-
-    def typical_gap_sq(self, target: Target) -> float:
-        """Median squared distance (in the metric of ``target``'s kind) from a table entry to its nearest
-        other entry, over 64 sampled entries, cached: a start nearer the target than this is as good a guess
-        as the table's nearest entry usually is."""
-        return self._gap(self.one_target_features(target)[0])
-
-    def _gap(self, key: str) -> float:
-        gap = self._gaps.get(key)
-        if gap is None:
-            gap = self._gaps[key] = _typical_gap(*self._table_features(key))
-        return gap
-
-    def one_goal_features(self, goal) -> tuple:
-        """For a goal list of one goal on one frame (memetic searches it as a single target: :mod:`.memetic`,
-        :mod:`.first_runs`), the table's features of the goal's frame (:meth:`goal_table_features`: ``sp`` x the
-        frame's position when the goal has one, then ``sr`` x its rotation's entries when it has an orientation):
-        (F (size, D), FT (D, size), sq (size,), the typical squared gap between entries (:meth:`typical_gap_sq`'s,
-        in these features), sp, sr), cached per frame, weight and kind. ``sp = sqrt(weight)``,
-        ``sr = sqrt(weight) x self.weight``: :meth:`ranked_goals`'s metric."""
-        # keyed by what goal_spec reads of a goal on one frame (its spec made on a miss only: 0.7 us a call)
-        key = (goal.frame, goal.weight, goal.has_orientation, goal.has_position)
-        hit = self._one_goal.get(key)
-        if hit is None:
-            spec = self.goal_spec([goal])
-            F, sq = self.goal_table_features((goal.frame,), spec)
-            s = spec[0][0]
-            if len(self._one_goal) > 8:
-                self._one_goal.clear()
-            hit = self._one_goal[key] = (F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), s, s * self.weight)
-        return hit
-
-    def one_goal_features32(self, goal) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`one_goal_features`'s FT (D, size) and sq (size,) in single precision (cached): a goal set's members
-        ranked against the table (:func:`~.nearest.table_distances_many`)."""
-        F, FT, sq = self.one_goal_features(goal)[:3]
-        hit = self._one_goal32.get(id(FT))
-        if hit is None or hit[0] is not FT:
-            if len(self._one_goal32) > 8:
-                self._one_goal32.clear()
-            hit = self._one_goal32[id(FT)] = (FT, FT.astype(np.float32), sq.astype(np.float32))
+    def features32(self, ff: FrameFeatures) -> tuple[np.ndarray, np.ndarray]:
+        """``ff``'s FT and sq in single precision (cached), for a goal set's ranking."""
+        hit = self._frames32.get(id(ff.FT))
+        if hit is None or hit[0] is not ff.FT:
+            if len(self._frames32) > 8:
+                self._frames32.clear()
+            hit = self._frames32[id(ff.FT)] = (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32))
         return hit[1], hit[2]
-
-    def one_goal_point(self, goal, p: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """The features (D,) of the pose (p (3,) m, R (3, 3)) of ``goal``'s frame (or of its target) in
-        :meth:`one_goal_features`'s metric: the products :meth:`_goal_feature_blocks` makes, so the same numbers."""
-        spec = self.goal_spec([goal])[0]
-        s, oriented = spec[0], spec[1]
-        parts = [s * p] if len(spec) < 3 or spec[2] else []
-        if oriented:
-            parts.append((s * self.weight) * R.reshape(9))
-        return np.concatenate(parts)
 
     def nearest(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
                 eps: float = 0.0) -> np.ndarray:
-        """Indices (N, k) of the k table entries nearest to each of N tip targets of one ``KIND_*`` in the kernel's
-        encoding (P (N, 3), Rts (N, 3, 3): :class:`~evoik_pin.goals.stack.TargetArrays`), nearest first (only
-        ``allowed`` entries when a (size,) bool mask is given; k is capped at their number).
-
-        Many targets at once go through a k-d tree of the table's features (built once per target kind and
-        mask): O(N log size), against O(N size) for the distance matrix that :meth:`ranked` uses for one target.
-        ``eps`` > 0: approximate neighbours (``scipy.spatial.cKDTree.query``'s ``eps``: the i-th entry returned
-        is within (1 + eps) times the distance of the true i-th nearest), several times cheaper in these 12-D
-        features.
-        """
+        """Indices (N, k) of the k entries nearest each of N tip targets of one ``KIND_*`` (P (N, 3), Rts (N, 3, 3)),
+        nearest first, by a k-d tree of the table's features (only ``allowed`` entries when a (size,) mask is given; k
+        capped at their number); ``eps`` > 0: approximate neighbours (``cKDTree.query``'s)."""
         key, f = self.encoded_features(kind, P, Rts)
         tree_key = (key, None if allowed is None else allowed.tobytes())
         hit = self._trees.get(tree_key)
@@ -516,7 +411,7 @@ class SeedTable:
             index = np.arange(self.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
             if len(self._trees) > 16:
                 self._trees.clear()
-            hit = self._trees[tree_key] = (cKDTree(self._table_features(key)[0][index]), index)
+            hit = self._trees[tree_key] = (cKDTree(self.frame_features(key).F[index]), index)
         tree, index = hit
         k = min(k, tree.n)
         N = f.shape[0]
@@ -530,11 +425,8 @@ _GOAL_HELPERS_LOADED: list = []  # [True] once load_goal_helpers has run in this
 
 
 def load_goal_helpers() -> None:
-    """Load (once per process; once after an install: compile) the compiled helpers a goal list's starts call from
-    Python (:meth:`SeedTable.ranked_goals`, :meth:`SeedTable.goal_starts`: :func:`~.nearest.rank_goal_entries`,
-    :func:`~.nearest.nearest_per_goal`, :func:`~.nearest.seen_from`), each on tiny arrays of the types those calls
-    pass: one-time set-up that memetic makes before its clock starts, where the first ranking of a process's first
-    goal list otherwise loaded them from its budget (a few ms each)."""
+    """Load (once per process; after an install: compile) the compiled helpers a goal list's starts call, before a
+    solve's clock."""
     if _GOAL_HELPERS_LOADED:
         return
     from ..lm.compiling import load
@@ -552,8 +444,8 @@ def load_goal_helpers() -> None:
 
 
 def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
-    """Median squared distance from an entry to its nearest other entry, over 64 entries sampled evenly, in
-    features F (size, d) with squared norms sq (size,)."""
+    """Median squared distance from an entry to its nearest other, over 64 entries, in features F (size, d) with
+    squared norms sq (size,)."""
     sample = np.linspace(0, F.shape[0] - 1, min(64, F.shape[0])).astype(int)
     D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
     D[np.arange(sample.size), sample] = np.inf
@@ -561,9 +453,7 @@ def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
 
 
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Targets pt (G, 3), Rt (G, 3, 3) in the world seen from a floating base's pose (its six entries: x, y, z m,
-    yaw, pitch, roll rad; rotation ``Rz(yaw) Ry(pitch) Rx(roll)``): ``B^-1 T`` per target, by the compiled
-    :func:`~.nearest.seen_from` that memetic's compiled first runs use (the same numbers)."""
+    """Targets pt (G, 3), Rt (G, 3, 3) seen from a floating base's pose (:func:`~.nearest.seen_from`)."""
     from .nearest import seen_from  # numba, loaded on first use (as the kernel is)
 
     P_out, R_out = np.empty((pt.shape[0], 3)), np.empty((pt.shape[0], 3, 3))
@@ -581,16 +471,13 @@ _TABLES_PER_ROBOT = 4
 
 
 def default_table_size(n: int) -> int:
-    """Seed-table size for an n-joint chain: 2^(n+5), clamped to [256, 4096] (about 1-5 ms to build)."""
+    """Seed-table size for an n-joint robot: 2^(n+5), clamped to [256, 4096]."""
     return int(min(4096, max(256, 2 ** (n + 5))))
 
 
 def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTable:
-    """The cached :class:`SeedTable` of ``robot`` over the box [lower, upper] (built on first use).
-
-    A few boxes are kept per robot (the most recent ones), so a trajectory solved in narrow moving boxes
-    does not grow the cache.
-    """
+    """The cached :class:`SeedTable` of ``robot`` over [lower, upper] (built on first use; the last few boxes kept
+    per robot)."""
     per_robot = _TABLES.setdefault(robot, {})
     key = (lower.tobytes(), upper.tobytes(), int(size))
     table = per_robot.get(key)
@@ -602,18 +489,44 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
     return table
 
 
+def nearest_first(d: np.ndarray, k: int):
+    """Indices of the (up to) ``k`` smallest of ``d`` (N,), smallest first, lazily: the first (the argmin) costs one
+    pass, the others are ranked only if asked for."""
+    k = min(k, d.shape[0])
+    if k <= 0:
+        return
+    first = int(d.argmin())
+    yield first
+    if k > 1:
+        part = np.argpartition(d, k - 1)[:k]
+        for i in part[d[part].argsort()]:
+            if i != first:
+                yield int(i)
+
+
+def one_frame(problem) -> bool:
+    """Whether a problem is searched as one frame's pose (:meth:`SeedTable.frame_search`): a tip target, or a goal
+    list of one goal on one frame with a position or an orientation to match (not a goal set, a pointing goal or a
+    goal beyond one frame)."""
+    goals = problem.goals
+    if goals is None:
+        return True
+    g = goals[0]
+    return (len(goals) == 1 and g.kind < KIND_BEYOND_FRAME and g.alternatives is None
+            and (g.has_position or g.has_orientation))
+
+
 def _anchor(goal, goals):
-    """For a relative pose goal, the index of a pose goal on its first frame (None when there is none, or for any
-    other goal)."""
+    """For a relative pose goal, the index of a pose goal on its first frame (None when there is none, or for
+    another goal)."""
     if goal.kind not in (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES):  # with bands or free axes: T_1 T seeds too
         return None
     return next((i for i, g in enumerate(goals) if g.kind == KIND_POSE and g.frame == goal.frame_a), None)
 
 
 def seed_targets(problem) -> tuple[np.ndarray, np.ndarray]:
-    """The goals' targets pt (G, 3), Rt (G, 3, 3) as the seed table ranks them: a relative pose ``T_a^-1 T_b = T``
-    whose frame a has a pose goal ``T_a = T_1`` (two hands holding a box, one of them placed) is frame b's pose
-    ``T_1 T``, which the table can match like any pose goal."""
+    """The goals' targets pt (G, 3), Rt (G, 3, 3) as the table ranks them: a relative pose whose frame a has a pose
+    goal ``T_1`` is frame b's pose ``T_1 T``."""
     _, pt, Rt = problem.goal_stack()
     goals = problem.goals
     out = None

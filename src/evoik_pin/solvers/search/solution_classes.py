@@ -1,23 +1,11 @@
-"""Distinct IK solutions among converged LM runs: classes modulo 2 pi, their representatives, their spread.
+"""Distinct IK solutions among converged LM runs (for :mod:`.all_solutions`): classes modulo 2 pi, their
+representatives, their spread. Distances are wrapped joint distances (rad, m on prismatic joints), joints whose
+range spans a full turn compared modulo 2 pi.
 
-Used by :mod:`.all_solutions` (``memetic-all``). Distances are wrapped joint distances
-(:func:`~evoik_pin.solvers.paper.clustering.joint_differences`) with a mask of the joints compared modulo 2 pi:
-those whose range spans a full turn (:func:`~evoik_pin.solvers.lm.wrapping_joints`); rad on revolute joints, m
-on prismatic ones.
-
-:class:`SolutionClasses` sorts converged configurations into classes:
-
-* a configuration within ``radius`` of one already met joins its class;
-* otherwise, unless LM's finishing step already took it below :data:`EXACT_ERROR` (most runs), it is refined by
-  a patient LM run (to about 1e-12: near a singularity LM stops anywhere along a flat valley of configurations
-  that all meet a 1e-6 tolerance, and the refinement takes them to the one exact solution at its floor) and
-  matched again;
-* a configuration whose refinement does not get below :data:`EXACT_ERROR` lies on a near-degenerate valley (a
-  pose at a singularity, where the solutions are not isolated at the tolerance's scale): it joins a class whose
-  representative it is joined to by a straight joint-space segment along which every sampled point stays within
-  :data:`VALLEY_ERROR` of the target, instead of opening a class of its own. Two exact solutions (isolated
-  roots) are never merged this way.
-"""
+A configuration within ``radius`` of one met joins its class; otherwise, unless already below
+:data:`EXACT_ERROR`, a patient LM run refines it (near a singularity LM stops anywhere along a flat valley) and it
+is matched again; one whose refinement stays above :data:`EXACT_ERROR` joins a class joined to it by a joint-space
+segment within :data:`VALLEY_ERROR` of the target instead of opening its own. Exact solutions are never merged."""
 
 from __future__ import annotations
 
@@ -83,11 +71,9 @@ class SolutionClasses:
     """Classes of distinct solutions met so far (see the module docstring).
 
     Attributes:
-        reps: one configuration (n,) per class: the lowest-error one met (refined when ``refine`` is given).
-        errors: its error (m + rad). exact: whether it is an isolated solution (refined to EXACT_ERROR).
-        hits: converged runs that reached each class.
-        evaluations: forward kinematics spent on refinements.
-    """
+        reps: one configuration (n,) per class, the lowest-error met. errors: its error (m + rad).
+        exact: whether it is an isolated solution. hits: runs that reached each class.
+        evaluations: forward kinematics spent on refinements."""
 
     def __init__(self, problem: IKProblem, wrap: np.ndarray, radius: float, refine: LevenbergMarquardt | None
                  ) -> None:
@@ -161,30 +147,21 @@ class SolutionClasses:
         rest, rest_errors = Q[labels < 0], E[labels < 0]
         leaders, group = leader_clusters(rest, rest_errors, self.radius, self.wrap)
         sizes = np.bincount(group, minlength=leaders.size)
-        if self.refine is None:  # no refinement: every leader is a new class (leaders are radius apart)
-            first = len(self.reps)
-            new = list(range(first, first + leaders.size))
-            self.reps.extend(rest[leaders])
-            self.errors.extend(rest_errors[leaders].tolist())
-            self.exact.extend([True] * leaders.size)
-            self.hits.extend(sizes.tolist())
-            self._known = np.vstack([self._known, rest[leaders]])
-            self._label = np.concatenate([self._label, np.array(new, dtype=int)])
-            return new
         for j, (q, error) in enumerate(zip(rest[leaders], rest_errors[leaders], strict=True)):
             members = int(sizes[j])
-            label = int(self.labels(q[None])[0])
+            # no refinement: every leader is a new class (leaders are radius apart)
+            label = -1 if self.refine is None else int(self.labels(q[None])[0])
             if label >= 0:
                 self.hits[label] += members
                 continue
-            raw, exact = q, error <= EXACT_ERROR
+            raw, exact = q, self.refine is None or error <= EXACT_ERROR
             if not exact:  # most runs end near 1e-12 (LM's finishing step): nothing to refine
                 out = self.refine.run(q, REFINE_ITERATIONS)
                 self.evaluations += out.evaluations
                 q, error = out.q, out.error
                 exact = error <= EXACT_ERROR
                 label = int(self.labels(q[None])[0])
-            if label < 0:
+            if label < 0 and self.refine is not None:
                 label = self._valley_class(q, exact)
             if label < 0:
                 label = len(self.reps)

@@ -1,27 +1,10 @@
-"""One solve inside a velocity box: the step of a trajectory a robot can follow, or of a tracking loop.
-
-Given the last configuration ``q_prev`` (n,) and the largest step per entry ``step = v_max dt`` (n,) (rad or m), the
-box is ``[q_prev - step, q_prev + step]`` clipped to the search bounds; joints whose range spans a full turn
-(continuous joints, a floating base's yaw and roll) are not clipped: their box is in unwrapped values around
-``q_prev``, so crossing +-pi is a small step, not a 2 pi jump. The answer lies inside the box by construction: the
-LM kernel holds every joint inside its box exactly (an active set), and the box's wrap row is 0.
-
-The stage is Levenberg-Marquardt from ``q_prev`` (the previous answer is the natural warm start, and the box is too
-small for another branch). When that run does not meet the goals (LM's active set pinned a joint at the box early,
-or the goals are out of the box's reach), LM from ``q_prev`` in the full bounds finds the exact answer nearest
-``q_prev``: taken when it lies inside the box; else its share inside the box along the straight line, it clipped,
-and a few starts drawn inside the box from the call's generator start runs in the box: the best run wins.
-A target that cannot be met within the box gets the answer closest to meeting it (the lowest task error LM
-reaches), its goal errors and ``success=False``: never a jump.
-
-With a scene, an answer in collision is pulled back along the segment from ``q_prev`` (collision-free when the
-previous answer was) to the farthest point the exact check passes (bisection): the robot stops short of the
-obstacle or of its own body instead of passing through, and ``success`` is False.
-
-The engine is the solver's own per goal stack (:class:`~evoik_pin.solvers.lm.LevenbergMarquardt`), its box and
-targets written in place every call (:meth:`~evoik_pin.solvers.lm.LevenbergMarquardt.confine`, ``set_targets``): a
-new box per call rebuilds no seed table and no constant.
-"""
+"""One solve inside a velocity box ``[q_prev - step, q_prev + step]`` (``step = v_max dt``, rad or m) clipped to the
+bounds: a trajectory's step a robot can follow, or a tracking loop's. Wrapping joints are not clipped (crossing
++-pi is a small step). LM from ``q_prev`` inside the box (the kernel holds the box exactly); when it misses, LM in
+the full bounds finds the answer nearest ``q_prev``, and its share inside the box, it clipped and a few random
+starts in the box run there: the best wins. An unmet target gets the closest answer and ``success=False``, never a
+jump. With a scene, an answer in collision is pulled back towards ``q_prev`` (bisection) and is not a success. The
+engines are kept per goal stack, their box and targets written in place every call."""
 
 from __future__ import annotations
 
@@ -33,6 +16,7 @@ from ...result import Result
 from ..lm.engine import LevenbergMarquardt, problem_goals
 from ..lm.layout import wrapping_joints
 from ..lm.run_outcome import LMOutcome
+from .memetic_runs import kernel_goal_errors
 
 __all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
 
@@ -40,9 +24,8 @@ __all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
 EXTRA_STARTS = 4
 #: LM steps per run: the box is small, the warm start close.
 BOX_ITERATIONS = 30
-#: LM's initial damping in the box (the engine's default: 1e-2): the warm start is about one control step from the
-#: answer, where Gauss-Newton's full steps converge (Talos's four poses in 3 steps instead of 5-8); the damping still
-#: grows after a rejected step (near a singularity).
+#: LM's initial damping in the box (the engine's default: 1e-2): the warm start is one control step from the answer,
+#: where Gauss-Newton's full steps converge.
 BOX_DAMPING = 1e-6
 #: Bisection steps pulling a colliding answer back towards q_prev (2^-8 of the segment).
 COLLISION_BISECTIONS = 8
@@ -55,8 +38,7 @@ class VelocityBoxStage:
 
     Args:
         robot: the :class:`~evoik_pin.Robot` the problems are of.
-        extra_starts: starts drawn inside the box when the run from ``q_prev`` does not meet the goals.
-    """
+        extra_starts: starts drawn inside the box when the run from ``q_prev`` does not meet the goals."""
 
     def __init__(self, robot, extra_starts: int = EXTRA_STARTS) -> None:
         self.robot = robot
@@ -139,7 +121,7 @@ class VelocityBoxStage:
         message = f"velocity box: {runs} LM run(s)"
         collision_free = None
         scene = problem.scene
-        kernel_errors = True  # the kernel's errors are q's (the memetic plan trusts them the same way)
+        kernel_errors = True  # the kernel's errors are q's (memetic trusts them the same way)
         if scene is not None:
             collision_free = not scene.in_collision(q, problem.margin)
             if not collision_free:
@@ -151,13 +133,7 @@ class VelocityBoxStage:
         goals = problem.goals
         if goals is not None:
             if kernel_errors and not problem.goal_sets:
-                # the kernel's errors of each goal at q, its success test's numbers (memetic's first runs trust them
-                # the same way): no kinematics pass in Python
-                if len(goals) == 1:
-                    goal_errors = [goals[0].reported(out.position_error, out.orientation_error)]
-                else:
-                    goal_errors = [g.reported(p, r) for g, (p, r) in zip(goals, out.goal_errors.tolist(), strict=True)]
-                chosen = [None] * len(goals)
+                goal_errors, chosen = kernel_goal_errors(goals, out), [None] * len(goals)
             else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)
                 goal_errors, chosen = problem.goal_errors_and_chosen(q)
             pos, rot, cost = problem.goal_summary(goal_errors)
@@ -166,7 +142,7 @@ class VelocityBoxStage:
             goal_errors = None
             pos, rot, cost = (problem.assess(q, out.position_error, out.orientation_error) if kernel_errors
                               else problem.assess(q))
-            met = pos <= problem.tolerance and (rot is None or rot <= problem.rotation_tolerance)
+            met = bool(problem.succeeded(pos, rot))
         success = bool(met and collision_free is not False)
         if not met:
             message += "; the goals are not met within the velocity box (the answer closest to them inside it)"

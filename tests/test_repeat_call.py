@@ -1,4 +1,4 @@
-"""IKSolver's per-call lane for single targets (issue 24, solvers/search/single_target_lane.py): once a solver has
+"""IKSolver's per-call lane for single targets (issue 24, solvers/search/repeat_call.py): once a solver has
 solved a pose (or a position) through memetic's compiled first runs, the next ones of that kind take the lane. Its
 answers are the general path's, bit for bit; it refuses exactly what the general path refuses, with the same
 errors; it hands a target none of its first runs solves to memetic, which goes on from their state."""
@@ -16,7 +16,7 @@ import evoik_pin as ek
 from evoik_pin import api
 from evoik_pin.errors import ConfigurationError, OptionError, TargetError
 from evoik_pin.goals import Pose
-from evoik_pin.solvers.search.single_target_lane import SingleTargetLane
+from evoik_pin.solvers.search.repeat_call import RepeatCall
 from evoik_pin.target import pose_arrays
 
 BUDGET = {"timeout": None, "max_restarts": 2}  # deterministic: the clock cannot change an answer
@@ -41,7 +41,7 @@ def laned(robot, **options):
         T = robot.fk(q)
         solver.solve(T, seed=0)
         solver.solve(T.translation.copy(), seed=0)
-    assert set(solver._lanes) == {True, False}
+    assert set(solver._repeat_calls) == {True, False}
     return solver
 
 
@@ -49,8 +49,8 @@ def laned(robot, **options):
 def counted(monkeypatch):
     """The number of lane solves made (a list, one entry per call)."""
     calls = []
-    lane_solve = SingleTargetLane.solve
-    monkeypatch.setattr(SingleTargetLane, "solve", lambda *args: calls.append(1) or lane_solve(*args))
+    lane_solve = RepeatCall.solve
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args: calls.append(1) or lane_solve(*args))
     return calls
 
 
@@ -190,14 +190,14 @@ def test_no_lane_where_the_first_runs_do_not_serve(panda):
     plain = ek.IKSolver(panda)
     for i in range(2):  # a plain solver's lane opens after its second solve (the compiled entry found)
         plain.solve(T, seed=i)
-    assert set(plain._lanes) == {True}
+    assert set(plain._repeat_calls) == {True}
     for options in ({"scene": Scene(panda)}, {"objective": objective}, {"polish": True},
                     {"method": "de", "max_generations": 5}, {"batch": 2}, {"table_offset": 1}, {"engine": "python"},
                     {"table_size": 0}):
         solver = ek.IKSolver(panda, **options)
         for i in range(2):
             solver.solve(T, seed=i)
-        assert not solver._lanes, options
+        assert not solver._repeat_calls, options
 
 
 @settings(max_examples=300, deadline=None)

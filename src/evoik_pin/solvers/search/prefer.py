@@ -1,0 +1,319 @@
+"""Taking answers along the goals' self-motion: ``prefer="nearest" | "manipulability"`` (TRAC-IK's Distance and
+Manip1) and preferences (:mod:`evoik_pin.goals.preferences`) summed into one :class:`Criterion`, lowered in the
+null space of the goals' Jacobian by :func:`refine` (Python: projected steps, each restored onto the goals by LM and
+kept only when every goal is met and the criterion improved) or by the compiled descent (:func:`descend`, prefer
+alone on the compiled engine). Nearness is ``|q - q0|`` with full-turn joints taken to their turn nearest ``q0``
+inside the box (:func:`nearest_turn`).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ...errors import MethodError, OptionError
+from ...goals.preferences import Manipulability, Posture
+from ...goals.registry import TASK_ROWS
+from ...goals.stack import owned, target_kind
+from ..lm import LevenbergMarquardt, wrapping_joints
+from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
+from ..options import check_choice
+
+__all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bind_preferences", "check_prefer",
+           "check_prefer_method", "nearest_turn", "refine"]
+
+#: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
+PREFER = ("first", "nearest", "manipulability")
+#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead, a fifth of
+#: TRAC-IK's 5 ms Distance / Manip1 modes.
+DEFAULT_PREFER_TIMEOUT = 0.0007
+#: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
+REFINE_COUNT = 4
+#: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
+#: steps restoring the goals after each.
+REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
+#: Largest null-space step (rad or m, Euclidean).
+MAX_REFINE_STEP = 0.5
+#: The compiled descent (:func:`descend`): the best DESCEND_COUNT distinct answers (MANIP_COUNT for manipulability,
+#: whose gradient costs n evaluations a step) descended DESCEND_TRIAL steps each, the best DESCEND_FINAL of them on
+#: in rounds of DESCEND_STEPS while the clock allows (DESCEND_ROUNDS at most); steps of DESCEND_MAX_STEP (rad or m)
+#: at most.
+DESCEND_COUNT, MANIP_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 4, 2, 10, 4
+DESCEND_MAX_STEP = 1.0
+#: prefer="nearest": the best answers (this many) get the first round of DESCEND_STEPS whatever the clock says.
+SURE_FINAL = 1
+
+
+def check_prefer(prefer, q0_given: bool = True) -> str:
+    """``prefer`` checked: one of :data:`PREFER`; OptionError naming them otherwise, or for "nearest" without a q0
+    (``q0_given`` False)."""
+    prefer = check_choice("prefer", prefer, PREFER)
+    if prefer == "nearest" and not q0_given:
+        raise OptionError("prefer='nearest' picks the answer nearest q0: give q0 (the current joints)")
+    return prefer
+
+
+def check_prefer_method(prefer: str, method: str) -> None:
+    """MethodError for ``prefer`` other than ``"first"`` with a method other than memetic: it gives one answer,
+    nothing to choose among."""
+    if prefer != "first" and method != "memetic":
+        raise MethodError(f"prefer={prefer!r} collects answers with method 'memetic'; {method!r} gives one "
+                          "(use prefer='first', the default)")
+
+
+def nearest_turn(q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    """``q`` (n,) with each ``wrap`` joint (its range spans a full turn) moved by a multiple of 2 pi to the value
+    nearest ``q0`` that stays inside [lower, upper] (the same pose: a full turn)."""
+    if not wrap.any():
+        return q
+    two_pi = 2.0 * np.pi
+    shifted = q + two_pi * np.round((q0 - q) / two_pi)
+    shifted = np.where(shifted > upper, shifted - two_pi, shifted)
+    shifted = np.where(shifted < lower, shifted + two_pi, shifted)
+    ok = wrap & (shifted >= lower) & (shifted <= upper)
+    return np.where(ok, shifted, q)
+
+
+class Criterion:
+    """The sum of bound preferences (``prefer``'s term first), what answers are ranked and refined by."""
+
+    def __init__(self, terms: list) -> None:
+        self.terms = terms
+        self.curvature = sum(t.curvature for t in terms)
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    def cost(self, q: np.ndarray) -> float:
+        return float(sum(t.cost(q) for t in self.terms))
+
+    def costs(self, Q: np.ndarray) -> np.ndarray:
+        """:meth:`cost` of each row of ``Q`` (N, n)."""
+        return sum((t.costs(Q) for t in self.terms), np.zeros(Q.shape[0]))
+
+    def analytic_gradient(self, q: np.ndarray) -> np.ndarray | None:
+        """d cost / dq (n,) when every term has it in closed form, else None."""
+        total = np.zeros(q.shape[0])
+        for t in self.terms:
+            g = t.gradient(q)
+            if g is None:
+                return None
+            total += g
+        return total
+
+    def null_gradient(self, q: np.ndarray, N: np.ndarray, f: float) -> np.ndarray:
+        """The cost's gradient in the null-space basis ``N`` (r, n) (orthonormal rows): analytic terms exactly,
+        the others (manipulability) by forward differences along each basis vector (``f``: the cost at q)."""
+        c = np.zeros(N.shape[0])
+        numeric = []
+        for t in self.terms:
+            g = t.gradient(q)
+            if g is None:
+                numeric.append(t)
+            else:
+                c += N @ g
+        if numeric:
+            h = 1e-6
+            f0 = sum(t.cost(q) for t in numeric)
+            for i in range(N.shape[0]):
+                c[i] += (sum(t.cost(q + h * N[i]) for t in numeric) - f0) / h
+        return c
+
+
+def _frame_rows(problem) -> list[tuple]:
+    """(frame (None: the tip), its task rows) of each goal (a tip target: one)."""
+    if problem.goals is None:
+        return [(None, TASK_ROWS[target_kind(problem.target)])]
+    return [(g.frame, TASK_ROWS.get(g.kind, range(6))) for g in problem.goals]
+
+
+def has_null_space(problem) -> bool:
+    """Whether the goals leave a null space to refine in: fewer task rows than joints."""
+    return sum(len(rows) for _, rows in _frame_rows(problem)) < problem.robot.n
+
+
+def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
+    """The goals' stacked task Jacobian (rows, n) at ``q``, whose null space leaves every goal met to first order: on
+    the compiled engine the rows LM's own step reads (right for every kind: free axes, bands, relative poses, centres
+    of mass, LookAt); on the Python engine (pose, position, planar goals) the frames' base-frame rows."""
+    if lm.engine == "compiled":
+        stack = lm.goals
+        e, E, ge = np.empty(stack.rows), np.empty((stack.rows, lm.n)), np.empty((len(stack.kinds), 2))
+        nullspace_kernel()["task_rows"](np.ascontiguousarray(q, dtype=float), *lm._tree, *lm._goal_arrays, lm._pt,
+                                        lm._Rt, e, E, ge)
+        return E
+    robot = problem.robot
+    return np.vstack([robot.jacobian_world_unchecked(q, None if f is None else robot.frame_id(f))[list(rows)]
+                      for f, rows in _frame_rows(problem)])
+
+
+def _null_basis(E: np.ndarray) -> np.ndarray:
+    """Orthonormal basis (r, n) of the null space of ``E`` (rows, n)."""
+    _, s, Vt = np.linalg.svd(E)
+    rank = int(np.count_nonzero(s > 1e-9 * max(s[0], 1e-300))) if s.size else 0
+    return Vt[rank:]
+
+
+#: Smallest pivot of the Cholesky factor of E E^T, relative to its largest, for which :func:`_null_projection` trusts
+#: it (a condition number of E E^T up to 1e8); below it, the SVD.
+GRAM_PIVOT = 1e-4
+
+
+def _null_projection(E: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``g`` (n,) projected on the null space of ``E`` (rows, n), zero rows dropped: ``g - E^T (E E^T)^-1 E g`` when
+    the rows are well independent (Cholesky pivots within :data:`GRAM_PIVOT`), else by the SVD's null basis."""
+    E = E[np.any(E != 0.0, axis=1)]
+    if E.shape[0] == 0:
+        return g
+    if E.shape[0] < E.shape[1]:
+        A = E @ E.T
+        try:
+            pivots = np.diagonal(np.linalg.cholesky(A))
+            if pivots.min() > GRAM_PIVOT * pivots.max():
+                return g - E.T @ np.linalg.solve(A, E @ g)
+        except np.linalg.LinAlgError:  # not positive definite: dependent rows
+            pass
+    N = _null_basis(E)
+    return N.T @ (N @ g)
+
+
+def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion, deadline: float | None,
+           steps: int = REFINE_STEPS) -> tuple[np.ndarray, float, int]:
+    """Lower ``criterion`` from an answer ``q`` (every goal met) by projected gradient steps in the goals' null space
+    (scaled by the criterion's curvature, at most :data:`MAX_REFINE_STEP`), each restored by an LM run and kept only
+    when it converges, the cost drops and, with a scene, it is collision-free; else halved. Returns (q, cost, LM
+    evaluations)."""
+    f = criterion.cost(q)
+    scale, evaluations = 1.0, 0
+    scene = problem.scene
+    for _ in range(steps):
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
+        E = _task_jacobian(problem, q, lm)
+        g = criterion.analytic_gradient(q)
+        if g is not None:
+            proj = _null_projection(E, g)
+        else:
+            N = _null_basis(E)
+            if N.shape[0] == 0:
+                break
+            proj = N.T @ criterion.null_gradient(q, N, f)
+        norm = float(np.linalg.norm(proj))
+        if norm < 1e-12:
+            break
+        step = -proj / criterion.curvature if criterion.curvature > 0 else -proj * (0.2 / norm)
+        length = float(np.linalg.norm(step)) * scale
+        step *= scale * min(1.0, MAX_REFINE_STEP / max(length, 1e-300))
+        out = lm.run(q + step, RESTORE_ITERATIONS)
+        evaluations += out.evaluations
+        f_new = criterion.cost(out.q) if out.converged else np.inf
+        if f_new < f - 1e-15 * max(1.0, abs(f)) and (scene is None or not scene.in_collision(out.q, problem.margin)):
+            q, f, scale = out.q, f_new, min(1.0, 2.0 * scale)
+        else:
+            scale *= 0.5
+            if scale < 1e-3:
+                break
+    return q, f, evaluations
+
+
+def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
+    """The compiled descent's mode (:mod:`..lm.nullspace`) for prefer="nearest" | "manipulability" alone (no
+    further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
+    if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
+        return None
+    lm = variants[0].lm
+    if lm._tree[4].shape[0] != lm.n or _mimic(lm):  # mimic joints: the descent leaves answers as they are
+        return None
+    return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+
+
+def _mimic(lm: LevenbergMarquardt) -> bool:
+    """Whether the engine's tree couples physical joints to q (mimic joints; ``Robot.tree_constants``)."""
+    index, scale, offset = lm._tree[4:7]
+    return bool(np.any(index != np.arange(index.shape[0])) or np.any(scale != 1.0) or np.any(offset != 0.0))
+
+
+def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
+            finish: float | None) -> tuple[list, int]:
+    """prefer's answers (cost, q, variant), best first, taken along their self-motion by the compiled descent
+    (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct ones
+    :data:`DESCEND_TRIAL` steps, then the best :data:`DESCEND_FINAL` on in rounds while the clock allows (until
+    ``finish``). A descended answer in collision keeps its start. Returns (the answers best first, evaluations)."""
+    kernel = nullspace_kernel()["descend_batch"]
+    target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
+    picked = distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
+    evaluations = 0
+
+    def run(batch, steps):
+        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant."""
+        nonlocal evaluations
+        out = []
+        for i in sorted({a[2] for a in batch}):
+            mine = [a for a in batch if a[2] == i]
+            Q = np.array([a[1] for a in mine])
+            Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
+            evaluations += int(kernel(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
+                                       DESCEND_MAX_STEP, Q_out, f))
+            if scene is not None:
+                for k in range(Q.shape[0]):
+                    if scene.in_collision(Q_out[k], problem.margin):
+                        Q_out[k] = Q[k]
+            if q0 is not None:
+                Q_out = nearest_turn(Q_out, q0, problem.lower, problem.upper, wrap)
+            out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q.shape[0], strict=True))
+        return sorted(out, key=lambda a: a[0])
+
+    picked = run(picked, DESCEND_TRIAL)
+    for k in range(DESCEND_ROUNDS):  # rounds of the best on towards their optimum while the clock allows
+        final = DESCEND_FINAL
+        if finish is not None and time.perf_counter() >= finish:
+            if k or mode != MODE_NEAREST or not SURE_FINAL:
+                break
+            final = SURE_FINAL  # nearest's first round, for the best, whatever the clock says
+        before = [a[0] for a in picked[:final]]
+        picked = sorted(run(picked[:final], DESCEND_STEPS) + picked[final:], key=lambda a: a[0])
+        if [a[0] for a in picked[:final]] == before:  # converged
+            break
+    return picked, evaluations
+
+
+def distinct(answers, count: int) -> list:
+    """The first ``count`` of ``answers`` (cost, q, variant; best first) no two within 1e-3 (rad or m) of each other."""
+    if len(answers) <= 1:
+        return list(answers[:count])
+    Q = np.array([a[1] for a in answers])
+    G = Q @ Q.T
+    sq = np.diag(G)
+    close = ((sq[:, None] + sq[None, :] - 2.0 * G) < 1e-6).tolist()
+    picked, taken = [], []
+    for k, row in enumerate(close):
+        if len(picked) >= count:
+            break
+        if not any(row[j] for j in taken):
+            picked.append(answers[k])
+            taken.append(k)
+    return picked
+
+
+def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
+    """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
+    robot = problem.robot
+    first_frame = problem.goals[0].frame if problem.goals is not None else None
+    terms = []
+    if prefer == "nearest":
+        check_prefer(prefer, problem.q0 is not None)
+        # plain differences: answers are taken to their turn nearest q0 inside the box first (nearest_turn), and
+        # a difference modulo 2 pi would count turns the limits forbid
+        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
+    elif prefer == "manipulability":
+        terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
+    for p in preferences:
+        frame = (first_frame,) if isinstance(p, Manipulability) else ()
+        terms.append(p.bind(robot, problem.q0, problem.lower, problem.upper, wrap, *frame))
+    return Criterion(terms)
+
+
+def bind_preferences(problem, preferences) -> Criterion:
+    """The preferences checked against the problem's robot (errors naming the joint or frame), as a criterion."""
+    return make_criterion(problem, "first", preferences, wrapping_joints(problem.robot, problem.lower, problem.upper))

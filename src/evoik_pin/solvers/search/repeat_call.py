@@ -1,0 +1,131 @@
+"""An :class:`~evoik_pin.IKSolver`'s per-call path for problems its memetic set-up solved before: memetic's compiled
+first runs (:mod:`.first_runs`) with nothing around them but the target's and q0's checks and the Result.
+
+It serves a tip pose or position target, or a goal list of one goal on one frame bound to one goal stack
+(:func:`~.seed_table.one_frame`), in the search box, tolerances and objective of the problem it was made from:
+the target is written into its engine's own arrays and the compiled entry called with the arguments it keeps. The
+answer is the general path's (the same call on the same numbers; ``setup_s`` 0); when no first run converges, its
+state goes to :meth:`~.memetic.MemeticSetup.resume`. It serves the thread that made it.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+
+from ...objectives import default_objective
+from ...problem import goal_summary
+from ...target import Target
+from ..lm.layout import P_ITERATIONS
+from . import memetic
+from .memetic import GUARANTEED_TABLE_RUNS, first_runs_result, resumed_state
+from .seed_table import DEFAULT_TABLE_SEEDS, one_frame
+
+__all__ = ["RepeatCall"]
+
+
+class RepeatCall:
+    """The per-call path of one :class:`~.memetic.MemeticSetup` for problems like the one it was made from.
+
+    Args:
+        setup: the memetic setup. problem: a problem the setup has just solved through the compiled first runs (no
+            scene). lm: the setup's engine for it. table: the setup's seed table. entry: the compiled entry of
+            :func:`~.first_runs.first_runs` for ``lm``'s arguments.
+
+    Attributes:
+        key: what it serves: True (poses), False (positions), or the goal stack a one-goal list is bound to.
+    """
+
+    @classmethod
+    def of_setup(cls, setup, problem) -> RepeatCall | None:
+        """A path for problems like ``problem``, which the setup has just solved; None when such problems do not take
+        the compiled first runs (a scene, a planar target, several goals, a goal set, options that change the first
+        runs), when the compiled entry is not known yet, or while the engine's target arrays are not its own."""
+        (_, _, _, _, _, table_size, table_seeds, table_offset, batch, _, engine) = setup.options
+        lm, table = setup._lm, setup._table
+        args, kept_table, entry = setup._entry
+        if not (memetic.FIRST_RUNS and problem.scene is None and engine == "compiled" and batch == 1
+                and table_offset == 0 and table_size > 0 and table_seeds != 0 and table is not None
+                and lm is not None and lm.problem is problem and lm._owned
+                and args is lm._args and kept_table is table and entry is not None
+                and not hasattr(entry, "overloads")  # a compiled entry, not numba's dispatcher
+                and one_frame(problem) and (problem.goals is not None or not problem.target.planar)):
+            return None
+        return cls(setup, problem, lm, table, entry)
+
+    def __init__(self, setup, problem, lm, table, entry) -> None:
+        self.setup = setup
+        ff = table.frame_search(problem)
+        if problem.goals is None:
+            self.key = ff.oriented
+            # the objective the solver's options make for a target of this kind, as IKProblem.assess asks it
+            self._dummy = Target(np.zeros(3), np.eye(3) if ff.oriented else None)
+            self._objective = default_objective(self._dummy, problem.orientation_weight, problem.pose_metric)
+        else:
+            self.key = problem.goal_stack()[0]
+        options = setup.options
+        self._iterations = options[9]
+        self._tolerance = problem.tolerance
+        self._rotation_tolerance = problem.rotation_tolerance
+        self._orientation_weight = problem.orientation_weight
+        self._lm = lm
+        self._args = lm._args
+        self._pt, self._Rt = lm._pt[0], lm._Rt[0]  # (3,) and (3, 3) views of the engine's own target arrays
+        buffers, args, params = lm.kernel_arguments(self._iterations)
+        self._params = params
+        lower, upper = setup._bounds
+        self._errors, self._g_out, self._zeros, self._best_q, self._best = setup._scratch
+        self._head = tuple(buffers)
+        table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if options[6] is None else options[6])
+        self._box = (lower, upper, ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args,
+                     params)
+        self._entry = entry
+        self._thread = threading.get_ident()
+        self._n = problem.n
+
+    def usable(self) -> bool:
+        """Whether the engine's arguments still hold, in the thread that made the path."""
+        return self._lm._args is self._args and threading.get_ident() == self._thread
+
+    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None, goals=None):
+        """Solve one checked tip target (``position`` (3,) m, ``rotation`` (3, 3) or None), or the one-goal list
+        ``goals`` bound to the path's stack (its target ``position`` and ``rotation``), from ``q0`` (n,) float
+        (checked; None: none); a goal is judged on the kernel's errors, as memetic judges them.
+
+        Returns:
+            The Result when a first run met the tolerances; else (clock start, the runs' state) for
+            :meth:`~.memetic.MemeticSetup.resume`, or None when a run converged by the kernel's test but not by the
+            tolerances (the general path then solves the problem from the start).
+        """
+        t0 = time.perf_counter()
+        self._pt[:] = position
+        if rotation is not None:
+            self._Rt[:] = rotation
+        self._params[P_ITERATIONS] = self._iterations  # another path may have run the engine with another budget
+        q = np.empty(self._n)
+        stage, runs, evaluations, pos, rot, _ = self._entry(
+            *self._head, self._zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, *self._box, q,
+            self._g_out, self._errors, self._best_q, self._best)
+        if stage < 0:
+            return t0, resumed_state(self.setup, self._box[9], runs, evaluations, self._box[10])
+        goal_errors = None
+        if goals is not None:
+            goal_errors = [goals[0].reported(pos, rot)]
+            pos, rot, cost = goal_summary(goals, goal_errors, self._orientation_weight)
+            if not goals[0].met(*goal_errors[0]):
+                return None
+        else:
+            if not self.key:
+                rot = None
+            elif not rot <= self._rotation_tolerance:
+                return None
+            if not pos <= self._tolerance:
+                return None
+            cost = float(self._objective.from_errors(self._dummy, pos, rot))
+        result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
+                                   time.perf_counter() - t0, 0.0, goal_errors)
+        if goals is not None:
+            result.chosen = [None]
+        return result
