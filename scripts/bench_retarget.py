@@ -23,6 +23,8 @@ For each clip (``evoik_pin.motion.load_clip``) and robot:
 4. evoik_pin: :func:`retarget_evoik` (the hook the lead fills in when ``evoik_pin.retarget`` lands).
 5. each answer judged by ``judge_retarget.judge_clip`` with the source contacts (``detect_contacts``) on the
    robot's ankle frames, the limbs of ``limb_pairs("cmu")`` and the SRDF where the robot has one (Talos).
+   evoik_pin retargets the unscaled clip in the source's world, whose floor is ``ground_height(motion)``: its
+   clips are judged against that floor (its tracking mm are against keypoints of another world: not compared).
 
 Frames per second are the steady rate: frames 2..N over their wall time (pink: its own per-frame clock in its
 subprocess; process start and model loading excluded). The first frame, which starts from the neutral
@@ -194,10 +196,12 @@ def retarget_evoik(robot_name: str, motion, scale: float):
     return np.asarray(clip.configurations), seconds
 
 
-def judge(robot_name: str, case: dict, configurations: np.ndarray) -> dict:
+def judge(robot_name: str, case: dict, configurations: np.ndarray, ground: float = 0.0) -> dict:
+    """The judge's verdict on a clip whose floor is z = ``ground`` (m): 0 for the targets of :func:`prepare`;
+    evoik_pin retargets in the source's world, whose floor is ``ground_height(motion)``."""
     urdf, srdf = robot_files(robot_name)
     return jr.judge_clip(urdf, srdf, configurations, case["motion"].fps, case["keypoints"], case["mapping"],
-                         case["contacts"], 0.0, case["limbs"], keypoint_names=case["names"])
+                         case["contacts"], ground, case["limbs"], keypoint_names=case["names"])
 
 
 HEADER = ("| clip | robot | method | frames | fps | first ms | limit | vel | coll | skate mm | pen mm "
@@ -274,7 +278,7 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"| {clip} | {robot} | evoik_pin | not built yet | | | | | | | | | | | |", flush=True)
                 else:
                     configurations, seconds = ours
-                    v = judge(robot, case, configurations)
+                    v = judge(robot, case, configurations, ground_height(case["motion"]))
                     fps = len(configurations) / seconds  # over the whole clip: the hook returns one time
                     print(row(clip, robot, "evoik_pin", v, fps, float("nan")), flush=True)
                     out.append({"clip": clip, "robot": robot, "method": "evoik_pin", "fps": len(configurations)

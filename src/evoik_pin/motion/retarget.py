@@ -25,9 +25,14 @@ The method (:func:`retarget`):
      its parent (G1's head on its torso) gets a Direction on the parent's axis towards it instead;
    * feet (the frames mapped to the ankle keypoints): while the source foot is in contact, a Position at the point
      where it landed, held for the whole stance: x, y where the robot's foot was at touchdown (then where that
-     frame's answer put it), z the floor plus the robot's sole height at neutral (ankle frame over the lowest corner
-     of its collision boxes); otherwise a one-sided band (a Position with per-axis tolerance, x, y free) keeping
-     the sole above the floor;
+     frame's answer put it), z the floor plus the robot's sole height at neutral (ankle frame over the lowest
+     corner of its collision boxes), the foot level within ``LEVEL_BAND["stance"]`` (an Orientation band on roll
+     and pitch, yaw free); otherwise a one-sided band (a Position with per-axis tolerance, x, y free) keeping the
+     frame at least its clearance above the floor, the foot level within ``LEVEL_BAND["swing"]``. The clearance
+     is the height of the ankle frame over the lowest corner of the foot's collision boxes at the previous frame's
+     tilt (at least the sole's height), so a toe-off tilt lifts the frame instead of pushing the toe into the
+     floor; an answer that still puts a corner under the floor is solved again from itself with the clearance of
+     its own tilt (:data:`FLOOR_RETRIES`);
    * any other mapped frame: a Position at its scaled keypoint.
 
    Each goal has a tolerance: what "met" means for that goal (:data:`TOLERANCES`); weights rank them when they
@@ -70,7 +75,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import MappingError, OptionError
-from ..goals import Direction, Position, RelativePosition
+from ..goals import Direction, Orientation, Position, RelativePosition
 from .clip import Clip
 from .collision_step import free_nearby, step_back_free
 from .contacts import DEFAULT_FEET, detect_contacts, ground_height
@@ -101,7 +106,7 @@ FIRM_CONTACT_WEIGHT = 3e4
 #: Length (m) at which a limb's weight is WEIGHTS["limb"]: a thigh's.
 LIMB_REFERENCE_LENGTH = 0.3
 #: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
-WEIGHTS = {"contact": 300.0, "floor": 300.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
+WEIGHTS = {"contact": 300.0, "floor": 300.0, "level": 30.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
 #: Budget (s) of each frame's solve (its LM run from q0 is made whatever the clock says: see FRAME_OPTIONS).
 FRAME_TIMEOUT = 0.005
 #: memetic's options per frame: the previous answer is the start (LM from q0); no seed table (a global search
@@ -120,6 +125,12 @@ COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": 0}
 FIRST_COLLISION_RETRY_OPTIONS = {"table_size": 0, "max_restarts": 8}
 #: Half-height (m) of the above-floor band of a swing foot: its sole anywhere from the floor to twice this above.
 FLOOR_BAND = 2.0
+#: Roll and pitch (rad) a foot may take from level: a held foot stays flat (its toe or heel less than a centimetre
+#: from the floor); a swing foot tilted further would have to be lifted far to keep its toe or heel out of it.
+LEVEL_BAND = {"stance": 0.05, "swing": 0.3}
+#: Solves more of a frame whose swing foot's lowest corner ends more than FLOOR_SLACK (m) under the floor.
+FLOOR_RETRIES = 4
+FLOOR_SLACK = 5e-4
 #: Slack (m) around the clip's extent for the floating base's translation bounds.
 BASE_BOX_SLACK = 2.0
 
@@ -444,9 +455,13 @@ class _Plan:
 
 
 def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: dict = TOLERANCES,
-                 contact_weight: float = WEIGHTS["contact"]) -> list:
+                 contact_weight: float = WEIGHTS["contact"], clearance: dict | None = None,
+                 level: dict | None = None) -> list:
     """Frame i's goal list (see the module docstring), each goal met within its family's ``tolerances``; a held
-    foot weighs ``contact_weight``."""
+    foot weighs ``contact_weight``; a swing foot's frame stays ``clearance[frame]`` (m; default its sole height at
+    neutral) above the floor; ``level`` ``{foot: (3, 3) rotation}``: the level orientations the feet keep within
+    :data:`LEVEL_BAND`."""
+    clearance = plan.sole if clearance is None else clearance
     goals = [Position(plan.roles["pelvis"], plan.root_target(i), WEIGHTS["root"], tolerances["root"])]
     axes = plan.pelvis_axes(i)
     if axes is not None and plan.left_axis is not None:
@@ -470,8 +485,11 @@ def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: 
             goals.append(Position(frame, holds[frame], contact_weight, tolerances["contact"]))
         elif plan.ground is not None:  # sole between the floor and 2 FLOOR_BAND above it; x, y free
             xy = plan.src(frame, i)[:2] if frame in plan.src_index else np.zeros(2)
-            z = plan.ground + plan.sole[frame] + FLOOR_BAND
+            z = plan.ground + clearance[frame] + FLOOR_BAND
             goals.append(Position(frame, [xy[0], xy[1], z], WEIGHTS["floor"], (np.inf, np.inf, FLOOR_BAND)))
+    for frame, rotation in (level or {}).items():  # a foot near level (roll, pitch); yaw free
+        band = LEVEL_BAND["stance" if plan.contacts[frame][i] and frame in holds else "swing"]
+        goals.append(Orientation(frame, rotation, WEIGHTS["level"], (band, band, np.inf)))
     for frame, _ in plan.pairs:
         if frame not in in_limbs and frame not in plan.contacts:
             goals.append(Position(frame, plan.src(frame, i), WEIGHTS["point"], tolerances["point"]))
@@ -514,6 +532,15 @@ def _anchor_holds(plan: _Plan, touched: list[str], holds: dict[str, np.ndarray],
         if plan.ground is not None:
             p[2] = plan.ground + plan.sole[frame]
         holds[frame] = p
+
+
+def _level(robot, plan: _Plan, foot: str, q: np.ndarray) -> np.ndarray:
+    """(3, 3) the foot's orientation at neutral turned about the world's z to its heading at ``q``."""
+    neutral = plan.neutral[foot].rotation
+    x = robot.fk(q, foot).rotation @ neutral.T[:, 0]
+    yaw = np.arctan2(x[1], x[0])
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ neutral
 
 
 def _initial_q(robot, plan: _Plan) -> np.ndarray:
@@ -619,7 +646,13 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     setup_s, first_frame_end = start - setup_start, start
     for i in range(n_frames):
         touched = _update_holds(plan, i, holds, robot, q_prev)
-        goals = _frame_goals(plan, i, holds)
+        # a swing foot tilts (toe-off, heel strike): its frame keeps the height over the floor that its lowest
+        # corner needs at the previous frame's tilt, which changes little in one frame
+        clearance = {f: max(plan.sole[f], _sole_height(robot, f, q_prev)) if i > 0 else plan.sole[f]
+                     for f in plan.contacts}
+        level = {f: _level(robot, plan, f, q_prev) for f in plan.contacts}
+        goals_of = functools.partial(_frame_goals, plan, i, holds, clearance=clearance, level=level)
+        goals = goals_of()
         if i == 0:  # FIRST_FRAME_RESTARTS bound the work; the yaw within half a turn of the source's heading
             lower, upper, budget = first_lower.copy(), first_upper.copy(), None
             lower[3], upper[3] = q_prev[3] - np.pi, q_prev[3] + np.pi
@@ -631,17 +664,29 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         result = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
                            timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
         q_new = np.clip(result.q, lower, upper)
+        for _ in range(FLOOR_RETRIES):
+            # the tilt the answer gave a swing foot may put its lowest corner under the floor: once more from
+            # the answer with that foot's frame kept as high as this tilt needs
+            need = {f: _sole_height(robot, f, q_new) for f in plan.contacts if f not in holds}
+            low = {f: h for f, h in need.items() if plan.ground is not None
+                   and float(robot.fk(q_new, f).translation[2]) - plan.ground < h - FLOOR_SLACK}
+            if not low:
+                break
+            clearance.update({f: max(clearance[f], h) for f, h in low.items()})
+            lifted = api.solve(robot, goals_of(), seed=int(rng.integers(2**31)), q0=q_new, bounds=(lower, upper),
+                               timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
+            result, q_new = lifted, np.clip(lifted.q, lower, upper)
         if _hold_slip(robot, plan, i, holds, q_new) > HOLD_SLIP:
             # the other goals pulled a held foot off its point (a touchdown while the source foot still moves):
             # once more from that answer with the feet weighing far more, kept if the feet end nearer their holds
-            firm = api.solve(robot, _frame_goals(plan, i, holds, contact_weight=FIRM_CONTACT_WEIGHT),
+            firm = api.solve(robot, goals_of(contact_weight=FIRM_CONTACT_WEIGHT),
                              seed=int(rng.integers(2**31)), q0=q_new, bounds=(lower, upper), timeout=budget,
                              **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
             q_firm = np.clip(firm.q, lower, upper)
             if _hold_slip(robot, plan, i, holds, q_firm) < _hold_slip(robot, plan, i, holds, q_new):
                 result, q_new, firmed = firm, q_firm, firmed + 1
         if self_collision and check.in_collision(q_new):
-            again = api.solve(robot, _frame_goals(plan, i, holds, RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
+            again = api.solve(robot, goals_of(RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
                               q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
                               **(FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS))
             free = again.q if again.success and not check.in_collision(again.q) else None
