@@ -33,6 +33,7 @@ import argparse
 import collections
 import datetime
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -132,10 +133,12 @@ def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, 
         trac = TracIKRetry(robot, scene)
     ev.solve(robot, targets[0], scene=scene, seed=0)  # one-time set-up (kernel, seed table, its free entries)
     ev.solve(robot, targets[0], seed=0)
-    results = {}
+    results, cpu = {}, {}
 
     def evoik_scene(T, i, r):
+        c = time.process_time()
         results[i] = ev.solve(robot, T, scene=scene, seed=i)
+        cpu[i] = time.process_time() - c
         return results[i].q
 
     solvers = {
@@ -163,7 +166,7 @@ def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, 
     rows["evoik (scene)"]["false_success"] = sum(r.success and scene.in_collision(r.q) for r in results.values())
     out = {"n": len(targets), "rows": rows, "throughput": {}, "misses": None}
     if misses:
-        out["misses"] = miss_analysis(robot, scene, Q, targets, results, rows["evoik (scene)"]["missed"])
+        out["misses"] = miss_analysis(robot, scene, Q, targets, results, cpu, rows["evoik (scene)"]["missed"])
     if not throughput:
         return out
     H = np.array([T.homogeneous for T in targets])
@@ -181,7 +184,13 @@ def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, 
     return out
 
 
-def miss_analysis(robot, scene, Q, targets, results, missed) -> dict:
+def _stage(message: str) -> str:
+    """What memetic's message says it did: "<LM runs> runs, <restarts> restarts"."""
+    found = re.search(r"(\d+) LM run\(s\),? (?:and )?(\d+) restart", message)
+    return f"{found.group(1)} runs, {found.group(2)} restarts" if found else "-"
+
+
+def miss_analysis(robot, scene, Q, targets, results, cpu, missed) -> dict:
     """Why ``evoik (scene)`` missed: per miss the timed answer's errors, collision and nearest bound, the generating
     configuration's nearest limit, and a re-solve at LONG_BUDGET; and how near a limit all the targets are."""
     gaps = np.array([limit_gap(robot, q)[0] for q in Q])
@@ -193,7 +202,8 @@ def miss_analysis(robot, scene, Q, targets, results, missed) -> dict:
         long = ev.solve(robot, targets[i], scene=scene, seed=i, timeout=LONG_BUDGET)
         ok, free = judge(robot, scene, targets[i], long.q)
         rows.append({"i": i, "pos": r.position_error, "rot": r.orientation_error, "collision_free": r.collision_free,
-                     "time_ms": 1e3 * r.time_s, "message": r.message, "target_gap": g_target,
+                     "time_ms": 1e3 * r.time_s, "cpu_ms": 1e3 * cpu[i], "message": r.message,
+                     "stage": _stage(r.message), "long_stage": _stage(long.message), "target_gap": g_target,
                      "target_joint": robot.joint_names[j_target], "answer_gap": g_answer,
                      "answer_joint": robot.joint_names[j_answer], "long_ok": bool(long.success and ok and free),
                      "long_ms": 1e3 * long.time_s})
@@ -246,14 +256,15 @@ def _scene_table(name: str, run: dict) -> list[str]:
                   f"{dict(m['near_joint_all'].most_common())}); found with a {1e3 * LONG_BUDGET:g} ms budget: "
                   f"{sum(r['long_ok'] for r in rows)} of {len(rows)}."]
         if rows:
-            lines += ["", "| target | pos err m | rot err rad | answer collision-free | solve ms | target's nearest "
-                      "limit (joint, rad) | answer's nearest bound (joint, rad) | 50 ms budget |",
-                      "| ---: | ---: | ---: | --- | ---: | --- | --- | --- |"]
+            lines += ["", "| target | pos err m | rot err rad | answer collision-free | solve ms (CPU ms) | "
+                      "memetic did | "
+                      "target's nearest limit (joint, rad) | answer's nearest bound (joint, rad) | 50 ms budget |",
+                      "| ---: | ---: | ---: | --- | ---: | --- | --- | --- | --- |"]
             for r in rows:
                 rot = "-" if r["rot"] is None else f"{r['rot']:.1e}"
                 lines.append(f"| {r['i']} | {r['pos']:.1e} | {rot} | {r['collision_free']} | {r['time_ms']:.1f} | "
                              f"{r['target_joint']} {r['target_gap']:.3f} | {r['answer_joint']} {r['answer_gap']:.3f} | "
-                             f"{'found' if r['long_ok'] else 'missed'} ({r['long_ms']:.0f} ms) |")
+                             f"{'found' if r['long_ok'] else 'missed'} ({r['long_ms']:.0f} ms, {r['long_stage']}) |")
     if run["throughput"]:
         lines += ["", "| throughput | targets | targets/s | success | collision-free (1,000 sampled) |",
                   "| --- | ---: | ---: | ---: | ---: |"]
