@@ -106,7 +106,7 @@ def missed(goals, r) -> list[tuple[str, float, float | None]]:
     return [(g.label, e[0], e[1]) for g, e in zip(goals, r.goal_errors, strict=True) if not g.met(*e)]
 
 
-def run_robot(name: str, n: int, seed: int, log) -> dict:
+def run_robot(name: str, n: int, seed: int, log, runs_n: int = 0) -> dict:
     soles, hands, z = HUMANOIDS[name]
     robot = ek.load_robot(name, floating_base=True)
     ek.prepare(robot)
@@ -145,14 +145,29 @@ def run_robot(name: str, n: int, seed: int, log) -> dict:
             r.message)
         found = re.search(r"LM from (.*?) \(", r.message)
         m["long_stage"] = found.group(1) if found else "-"
+    need = runs_needed(robot, stance, problems[:runs_n]) if runs_n else None
     return {"rows": rows, "misses": misses, "made": made, "tries": tries, "n_dof": robot.n,
-            "frames": (soles, hands), "z": q0[2]}
+            "frames": (soles, hands), "z": q0[2], "need": need}
 
 
 def lm_runs(message: str) -> int:
     """The LM runs memetic's message says it made (-1: not said)."""
     found = re.search(r"(\d+) LM run", message)
     return int(found.group(1)) if found else -1
+
+
+def runs_needed(robot, stance, problems) -> dict:
+    """Load-independent diagnosis: each problem solved with no clock (``timeout=None, max_restarts=3``): the LM runs
+    it needed, and the CPU time (``time.process_time``) per LM run over the solved ones."""
+    ek.solve(robot, stance + problems[0], seed=0, timeout=None, max_restarts=3)
+    runs, cpu = [], 0.0
+    for i, hp in enumerate(problems):
+        c = time.process_time()
+        r = ek.solve(robot, stance + hp, seed=i, timeout=None, max_restarts=3)
+        cpu += time.process_time() - c
+        runs.append(lm_runs(r.message) if r.success else None)
+    made = [k for k in runs if k is not None]
+    return {"n": len(runs), "solved": len(made), "runs": np.array(made), "per_run": cpu / max(1, sum(made))}
 
 
 def _pct(rows) -> str:
@@ -216,6 +231,19 @@ def report(res: dict, args, load0, load1, command: str) -> str:
                      f"({_med(r['misses'], 'long_runs', 0)}, "
                      f"{max([v['long_runs'] for v in r['misses']], default='-')}; by "
                      f"{dict(collections.Counter(v['long_stage'] for v in r['misses']))}) |")
+    need = {k: v["need"] for k, v in res.items() if v["need"] is not None}
+    if need:
+        lines += ["", "Diagnosis, independent of the load: the first problems of each robot solved again with no clock "
+                  "(`timeout=None, max_restarts=3`): the LM runs each needed, and the CPU time per LM run (solves' "
+                  "`time.process_time` summed over the runs made), hence how many runs 5 ms of a whole core affords.",
+                  "", "| robot | solved (no clock) | LM runs needed: median, p95, max | CPU ms per LM run | "
+                  "runs in 5 ms CPU | problems needing no more | needing <= 4 (memetic's guaranteed table runs) |",
+                  "|---|---:|---|---:|---:|---:|---:|"]
+        for k, v in need.items():
+            r, fit = v["runs"], int(0.005 / v["per_run"])
+            lines.append(f"| {k} | {v['solved']} / {v['n']} | {np.median(r):.0f}, {np.percentile(r, 95):.0f}, "
+                         f"{r.max()} | {1e3 * v['per_run']:.3f} | {fit} | {100 * (r <= fit).sum() / v['n']:.1f} % | "
+                         f"{100 * (r <= 4).sum() / v['n']:.1f} % |")
     lines += ["", "Problem making (not timed above): " + ", ".join(
         f"{k} {v['tries']} attempts for {len(v['rows']['com'])} ({v['made']:.0f} s)" for k, v in res.items()) + "."]
     return "\n".join(lines) + "\n"
@@ -227,6 +255,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--robots", nargs="+", default=list(HUMANOIDS), choices=list(HUMANOIDS))
     parser.add_argument("--out", help="also write the report to this file")
+    parser.add_argument("--runs-needed", type=int, default=0, help="diagnosis: re-solve this many problems per "
+                        "robot with no clock and report the LM runs they need (default 0: skip)")
     args = parser.parse_args(argv)
     command = "python scripts/bench_balance_humanoids.py " + " ".join(argv if argv is not None else sys.argv[1:])
 
@@ -236,7 +266,7 @@ def main(argv: list[str] | None = None) -> int:
     load0 = os.getloadavg()
     res = {}
     for name in args.robots:
-        res[name] = run_robot(name, args.n, args.seed, log)
+        res[name] = run_robot(name, args.n, args.seed, log, args.runs_needed)
         for m in res[name]["misses"]:
             log(f"  {name} miss {m}")
         log(report(res, args, load0, os.getloadavg(), command.strip()))

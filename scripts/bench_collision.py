@@ -121,12 +121,13 @@ def limit_gap(robot, q) -> tuple[float, int]:
     return float(gap.min()), int(gap.argmin())
 
 
-def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, misses: bool = True) -> dict:
+def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, misses: bool = True,
+              runs: bool = False) -> dict:
     build, interior, _ = SCENES[scene_name]
     robot = ev.load_robot("panda")
     scene = build(Scene(robot))
     rng = np.random.default_rng(seed)
-    Q = free_configurations(scene, n, rng, interior)
+    Q = free_configurations(scene, n, rng, interior, max_draws=max(2_000_000, 5_000 * n))
     targets = [robot.fk(q) for q in Q]
     log(f"{len(targets)} {scene_name} targets")
     with quiet_output():
@@ -164,7 +165,9 @@ def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, 
                 rows[name]["missed"].append(i)
     # success=True answers that collide (must be none), from the timed runs themselves
     rows["evoik (scene)"]["false_success"] = sum(r.success and scene.in_collision(r.q) for r in results.values())
-    out = {"n": len(targets), "rows": rows, "throughput": {}, "misses": None}
+    out = {"n": len(targets), "rows": rows, "throughput": {}, "misses": None, "need": None}
+    if runs:
+        out["need"] = runs_needed(robot, scene, targets)
     if misses:
         out["misses"] = miss_analysis(robot, scene, Q, targets, results, cpu, rows["evoik (scene)"]["missed"])
     if not throughput:
@@ -188,6 +191,20 @@ def _stage(message: str) -> str:
     """What memetic's message says it did: "<LM runs> runs, <restarts> restarts"."""
     found = re.search(r"(\d+) LM run\(s\),? (?:and )?(\d+) restart", message)
     return f"{found.group(1)} runs, {found.group(2)} restarts" if found else "-"
+
+
+def runs_needed(robot, scene, targets) -> dict:
+    """Load-independent diagnosis: every target solved with the scene and no clock (``timeout=None,
+    max_restarts=3``): the LM runs each needed and the CPU time (``time.process_time``) per LM run."""
+    runs, cpu = [], 0.0
+    for i, T in enumerate(targets):
+        c = time.process_time()
+        r = ev.solve(robot, T, scene=scene, seed=i, timeout=None, max_restarts=3)
+        cpu += time.process_time() - c
+        found = re.search(r"(\d+) LM run", r.message)
+        runs.append(int(found.group(1)) if r.success and found else None)
+    made = [k for k in runs if k is not None]
+    return {"n": len(runs), "solved": len(made), "runs": np.array(made), "per_run": cpu / max(1, sum(made))}
 
 
 def miss_analysis(robot, scene, Q, targets, results, cpu, missed) -> dict:
@@ -262,9 +279,19 @@ def _scene_table(name: str, run: dict) -> list[str]:
                       "| ---: | ---: | ---: | --- | ---: | --- | --- | --- | --- |"]
             for r in rows:
                 rot = "-" if r["rot"] is None else f"{r['rot']:.1e}"
-                lines.append(f"| {r['i']} | {r['pos']:.1e} | {rot} | {r['collision_free']} | {r['time_ms']:.1f} | "
+                lines.append(f"| {r['i']} | {r['pos']:.1e} | {rot} | {r['collision_free']} | {r['time_ms']:.1f} "
+                             f"({r['cpu_ms']:.1f}) | {r['stage']} | "
                              f"{r['target_joint']} {r['target_gap']:.3f} | {r['answer_joint']} {r['answer_gap']:.3f} | "
                              f"{'found' if r['long_ok'] else 'missed'} ({r['long_ms']:.0f} ms, {r['long_stage']}) |")
+    need = run["need"]
+    if need is not None:
+        r, fit = need["runs"], int(BUDGET / need["per_run"])
+        lines += ["", f"Diagnosis, independent of the load: every target solved again with the scene and no clock "
+                  f"(`timeout=None, max_restarts=3`): {need['solved']} of {need['n']} solved; LM runs needed: median "
+                  f"{np.median(r):.0f}, p99 {np.percentile(r, 99):.0f}, max {r.max()}; CPU per LM run (collision "
+                  f"checks included) {1e3 * need['per_run']:.3f} ms, so {fit} runs fit in 5 ms of a whole core; "
+                  f"targets needing no more: {100 * (r <= fit).sum() / need['n']:.2f} % (targets needing more: "
+                  f"{int((r > fit).sum()) + need['n'] - need['solved']})."]
     if run["throughput"]:
         lines += ["", "| throughput | targets | targets/s | success | collision-free (1,000 sampled) |",
                   "| --- | ---: | ---: | ---: | ---: |"]
@@ -313,6 +340,8 @@ def main(argv=None) -> int:
                     "skip)")
     ap.add_argument("--no-throughput", action="store_true", help="skip the solve_many throughput rows")
     ap.add_argument("--no-misses", action="store_true", help="skip the analysis of evoik's misses")
+    ap.add_argument("--runs-needed", action="store_true", help="diagnosis: every target again with no clock, the LM "
+                    "runs it needs")
     ap.add_argument("--no-docs", action="store_true", help="do not write docs/BENCHMARKS.md")
     ap.add_argument("--out", help="also write the markdown to this file")
     ap.add_argument("--seed", type=int, default=2026)
@@ -323,7 +352,8 @@ def main(argv=None) -> int:
         print(msg, file=sys.stderr, flush=True)
 
     load0 = os.getloadavg()[0]
-    runs = {name: scene_run(name, args.targets, args.seed, log, not args.no_throughput, not args.no_misses)
+    runs = {name: scene_run(name, args.targets, args.seed, log, not args.no_throughput, not args.no_misses,
+                             args.runs_needed)
             for name in args.scenes}
     selfc = self_collision_run(["panda", "ur5", "kinova"], args.self_poses, args.seed) if args.self_poses else {}
     text = markdown(runs, selfc, command.strip(), (load0, os.getloadavg()[0]))
