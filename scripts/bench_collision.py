@@ -55,6 +55,7 @@ TOL = 1e-6
 BUDGET = 0.005
 LONG_BUDGET = 0.05
 NEAR_LIMIT = 0.1  # rad: a configuration "near a limit" has a joint within this of one of its bounds
+HARD_RUNS = 5  # LM runs (no clock): a target needing this many is a hard one
 
 #: The bin's free interior (m, base frame), 1 cm inside its walls and above its floor.
 BIN_INTERIOR = (np.array([0.43, -0.19, 0.01]), np.array([0.67, 0.19, 0.20]))
@@ -165,7 +166,7 @@ def scene_run(scene_name: str, n: int, seed: int, log, throughput: bool = True, 
                 rows[name]["missed"].append(i)
     # success=True answers that collide (must be none), from the timed runs themselves
     rows["evoik (scene)"]["false_success"] = sum(r.success and scene.in_collision(r.q) for r in results.values())
-    out = {"n": len(targets), "rows": rows, "throughput": {}, "misses": None, "need": None}
+    out = {"n": len(targets), "rows": rows, "throughput": {}, "misses": None, "need": None, "Q": Q}
     if runs:
         out["need"] = runs_needed(robot, scene, targets)
     if misses:
@@ -204,7 +205,8 @@ def runs_needed(robot, scene, targets) -> dict:
         found = re.search(r"(\d+) LM run", r.message)
         runs.append(int(found.group(1)) if r.success and found else None)
     made = [k for k in runs if k is not None]
-    return {"n": len(runs), "solved": len(made), "runs": np.array(made), "per_run": cpu / max(1, sum(made))}
+    return {"n": len(runs), "solved": len(made), "runs": np.array(made), "per_run": cpu / max(1, sum(made)),
+            "each": np.array([10**6 if k is None else k for k in runs])}
 
 
 def miss_analysis(robot, scene, Q, targets, results, cpu, missed) -> dict:
@@ -248,7 +250,7 @@ def self_collision_run(names, n: int, seed: int) -> dict:
     return out
 
 
-def _scene_table(name: str, run: dict) -> list[str]:
+def _scene_table(name: str, run: dict, robot) -> list[str]:
     n = run["n"]
     lines = [f"### {name.capitalize()}: {SCENES[name][2]} ({n} targets)", "",
              "| solver | success | pose ok | collision-free | colliding answers | median ms | p95 ms | "
@@ -292,6 +294,13 @@ def _scene_table(name: str, run: dict) -> list[str]:
                   f"checks included) {1e3 * need['per_run']:.3f} ms, so {fit} runs fit in 5 ms of a whole core; "
                   f"targets needing no more: {100 * (r <= fit).sum() / need['n']:.2f} % (targets needing more: "
                   f"{int((r > fit).sum()) + need['n'] - need['solved']})."]
+        gaps = np.array([limit_gap(robot, q)[0] for q in run["Q"]])
+        hard = need["each"] >= HARD_RUNS
+        near, hard_gap = int((gaps[hard] < NEAR_LIMIT).sum()), np.median(gaps[hard]) if hard.any() else float("nan")
+        lines += ["", f"Targets needing >= {HARD_RUNS} LM runs (no clock): {int(hard.sum())}; of them with a joint "
+                  f"within {NEAR_LIMIT:g} rad of a limit in the target's configuration: {near} (against "
+                  f"{100 * (gaps < NEAR_LIMIT).mean():.0f} % of all targets); their median nearest-limit gap "
+                  f"{hard_gap:.3f} rad (all targets: {np.median(gaps):.3f})."]
     if run["throughput"]:
         lines += ["", "| throughput | targets | targets/s | success | collision-free (1,000 sampled) |",
                   "| --- | ---: | ---: | ---: | ---: |"]
@@ -310,8 +319,9 @@ def markdown(runs: dict, selfc: dict, command: str, loads: tuple) -> str:
              "(m, rad), joints within limits, collision-free by the exact mesh check. Times are wall-clock per "
              "call, solvers interleaved per target in random order; evoik at its default 5 ms budget, TRAC-IK "
              "retried from random seeds until collision-free or 5 ms.", ""]
+    robot = ev.load_robot("panda")
     for name, run in runs.items():
-        lines += _scene_table(name, run)
+        lines += _scene_table(name, run, robot)
     if selfc:
         lines += ["Self-collision only (random reachable poses of collision-free configurations, default 5 ms "
                   "budget):", "", "| robot | poses | checked pairs | success | median ms |",
