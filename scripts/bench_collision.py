@@ -259,7 +259,7 @@ def _scene_table(name: str, run: dict, robot) -> list[str]:
     for solver, r in run["rows"].items():
         t = 1e3 * np.array(r["t"])
         ratio = "-" if t_trac is None else f"{np.median(t) / (1e3 * t_trac):.2f}x"
-        lines.append(f"| {solver} | {100 * r['ok_free'] / n:.1f}% ({r['ok_free']}/{n}) | {100 * r['ok'] / n:.1f}% | "
+        lines.append(f"| {solver} | {100 * r['ok_free'] / n:.2f}% ({r['ok_free']}/{n}) | {100 * r['ok'] / n:.1f}% | "
                      f"{100 * r['free'] / n:.1f}% | {r['colliding']} | {np.median(t):.3f} | "
                      f"{np.percentile(t, 95):.3f} | {ratio} |")
     lines += ["", f"`success=True` answers of `evoik (scene)` that collide: "
