@@ -19,20 +19,22 @@ independently the same way; seeds fixed):
    targets both solve on which our answer is no farther from q0 than its answer (Euclidean norm of q - q0, joints
    whose range spans a full turn at their turn nearest q0 inside the limits for both, a 1e-6 rad slack; TRAC-IK's
    answer first taken by our LM from where it is to the exact solution (1e-12) of its branch, a move of about its
-   epsilon, so that two answers of one branch compare equal), median wall time per target (all targets) and the
-   ratio. ``prefer="manipulability"`` against ``"Manip1"`` likewise: the share of the targets both solve on which
-   our answer's sqrt(det(J J^T)) (6 x n, LOCAL_WORLD_ALIGNED; computed as the product of J's singular values,
-   TRAC-IK's Manip1 measure, which is sqrt(det(J^T J)) on SO-ARM's 5 joints) is at least its own (1e-9 relative
-   slack). ``--q0 random`` (the default): q0 drawn uniformly in the limits, independently of the target; ``--q0
-   near``: q0 near a known answer, the configuration the target was made from plus Gaussian noise (``--near-sigma``,
-   0.1 rad by default, per joint) clipped into the limits; ``--q0 both``: both, one row each.
+   epsilon, so that two answers of one branch compare equal; the misses counted where LM does not get there, near a
+   singularity, its answer then a point of its 1e-5 band up to 1e-2 rad from any exact solution), median wall time
+   per target (all targets) and the ratio. ``prefer="manipulability"`` against ``"Manip1"`` likewise: the share of
+   the targets both solve on which our answer's sqrt(det(J J^T)) (6 x n, LOCAL_WORLD_ALIGNED; computed as the
+   product of J's singular values, TRAC-IK's Manip1 measure, which is sqrt(det(J^T J)) on SO-ARM's 5 joints) is at
+   least its own (1e-9 relative slack). ``--q0 random`` (the default): q0 drawn uniformly in the limits,
+   independently of the target; ``--q0 near``: q0 near a known answer, the configuration the target was made from
+   plus Gaussian noise (``--near-sigma``, 0.1 rad by default, per joint) clipped into the limits; ``--q0 both``:
+   both, one row each.
 2. Goal sets on each arm of ``--robots``: 10 grasps of which 3 are reachable (forward kinematics of random
    configurations) and 7 are not (positions 1.2 to 1.6 m from the base for Panda, the original protocol; for the
    other arms 1.1 to 1.5 times the arm's reach, the largest tip distance from the base over 4000 random
    configurations, so beyond it; random orientations), shuffled: the share that finds a reachable one, and its
    median wall time against single-pose solves (``[Pose(tip, T)]``, the reachable grasp) of the same targets.
-3. Preferences never cost success: the single-pose problems of each arm of ``--robots`` with ``Posture(mid-range)`` or
-   ``JointLimitMargin(0.1 rad)`` added: success with and without.
+3. Preferences never cost success: the single-pose problems of each arm of ``--robots`` with ``Posture(mid-range)``
+   or ``JointLimitMargin(0.1 rad)`` added: success with and without.
 
 Prints one markdown section (``run(args)`` returns it) with the command, the date, the machine and its load.
 """
@@ -153,11 +155,14 @@ def lm_for(robot, T):
     return LevenbergMarquardt(ev.make_problem(robot, T, tolerance=1e-12)[0])
 
 
-def exact(lm, q):
+def exact(lm, q, flag: bool = False):
     """TRAC-IK's answer (within its epsilon, 1e-5) taken by our LM to the exact solution of its branch nearest it
-    (a few steps, ~1e-5 rad), so that the two answers of one branch compare equal; the original when LM fails."""
+    (a few steps, ~1e-5 rad), so that the two answers of one branch compare equal; the original when LM fails
+    (``flag``: with whether LM got there; near a singularity it may not, and a 1e-5 pose error can then lie 1e-2 rad
+    from the exact solution)."""
     out = lm.run(np.clip(q, lm.problem.lower, lm.problem.upper), 30)
-    return out.q if out.converged else q
+    q = out.q if out.converged else q
+    return (q, bool(out.converged)) if flag else q
 
 
 def manip(robot, q) -> float:
@@ -193,7 +198,7 @@ def bench_prefer(name: str, n: int, seed: int, log, timeout: float | None = None
     for prefer, stype in (("nearest", "Distance"), ("manipulability", "Manip1")):
         trac = Trac(robot, stype)
         ev.solve(robot, targets[0], q0=Q0[0], prefer=prefer, seed=0, **extra)  # warm
-        ours, theirs, t_ours, t_theirs, by_norm = [], [], [], [], 0
+        ours, theirs, t_ours, t_theirs, by_norm, inexact = [], [], [], [], 0, set()
         for i, (T, q0) in enumerate(zip(targets, Q0, strict=True)):
             t = time.perf_counter()
             r = ev.solve(robot, T, q0=q0, prefer=prefer, seed=i, **extra)
@@ -202,7 +207,13 @@ def bench_prefer(name: str, n: int, seed: int, log, timeout: float | None = None
             t = time.perf_counter()
             q = trac(T, q0)
             t_theirs.append(time.perf_counter() - t)
-            theirs.append(exact(lm_for(robot, T), q) if met_own(robot, T, q) else None)
+            if met_own(robot, T, q):
+                q, converged = exact(lm_for(robot, T), q, flag=True)
+                if not converged:
+                    inexact.add(i)
+            else:
+                q = None
+            theirs.append(q)
             by_norm += met(robot, T, q, TRAC_EPS)
         both = [i for i in range(n) if ours[i] is not None and theirs[i] is not None]
         if prefer == "nearest":
@@ -215,6 +226,7 @@ def bench_prefer(name: str, n: int, seed: int, log, timeout: float | None = None
             better = [manip(robot, ours[i]) >= manip(robot, theirs[i]) * (1 - 1e-9) for i in both]
             med = (np.median([manip(robot, ours[i]) for i in both]), np.median([manip(robot, theirs[i]) for i in both]))
             what = "at least as dexterous"
+        missed = [i for i, ok in zip(both, better, strict=True) if not ok]
         s_ours = sum(q is not None for q in ours) / n
         s_theirs = sum(q is not None for q in theirs) / n
         mo, mt = np.median(t_ours) * 1e3, np.median(t_theirs) * 1e3
@@ -223,8 +235,10 @@ def bench_prefer(name: str, n: int, seed: int, log, timeout: float | None = None
                                    ("time", mo / mt > 0.2)) if bad]
         row = (f"| {name} | {q0_kind} | {prefer} vs {stype} | {100 * s_ours:.1f} % | {100 * s_theirs:.1f} % "
                f"({100 * by_norm / n:.1f} %) | "
-               f"{100 * share:.1f} % {what} ({len(both)} both solve) | {med[0]:.4g} / {med[1]:.4g} | "
-               f"{mo:.3f} / {mt:.3f} ms | {mo / mt:.2f}x | {'yes' if not misses else 'no: ' + ', '.join(misses)} |")
+               f"{100 * share:.1f} % {what} ({len(both)} both solve; {len(missed)} missed, "
+               f"{len(inexact.intersection(missed))} of them against an inexact TRAC-IK answer) | "
+               f"{med[0]:.4g} / {med[1]:.4g} | {mo:.3f} / {mt:.3f} ms | {mo / mt:.2f}x ({mo / 5:.2f}x of 5 ms) | "
+               f"{'yes' if not misses else 'no: ' + ', '.join(misses)} |")
         log(row)
         rows.append(row)
     return rows
