@@ -682,3 +682,23 @@ def test_prefer_result_errors_are_the_answers_own(name, prefer):
         assert r.success, r.message
         assert abs(r.position_error - pos) <= 1e-12 and abs(r.orientation_error - rot) <= 1e-12
         assert abs(r.cost - cost) <= 1e-12
+
+
+def test_prefer_manipulability_on_a_five_joint_arm():
+    """SO-ARM has 5 joints: its 6 x 5 Jacobian's J J^T is singular everywhere, so Yoshikawa's measure is the
+    product of the singular values (sqrt(det(J^T J))); with a position goal (2 redundant joints) prefer= finds
+    answers more dexterous than the first."""
+    arm = ev.load_robot("so_arm")
+    rng = np.random.default_rng(3)
+    gains = []
+    for i in range(6):
+        p = arm.fk(arm.random_configurations(1, rng)[0]).translation
+        goals = [Position(arm.tip, p)]
+        first = ev.solve(arm, goals, seed=i)
+        best = ev.solve(arm, goals, prefer="manipulability", seed=i, timeout=0.005)
+        assert first.success and best.success, best.message
+        m_first, m_best = arm.manipulability(first.q, "full"), arm.manipulability(best.q, "full")
+        assert m_first > 0
+        assert m_best >= m_first * (1 - 1e-9)
+        gains.append(m_best > 1.01 * m_first)
+    assert any(gains)

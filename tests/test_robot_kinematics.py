@@ -78,16 +78,17 @@ def test_jacobian_equals_finite_differences(robot, rng):
 
 def test_manipulability(robot, rng):
     Q = robot.random_configurations(5, rng)
-    # with fewer than 6 joints the full 6 x 6 product is singular and its root is only rounding noise
-    rows_batch = "full" if robot.n >= 6 else "translation"
-    batch = robot.manipulability_batch(Q, rows_batch)
+    batch = robot.manipulability_batch(Q, "full")
     for i, q in enumerate(Q):
         J = robot.jacobian(q)
         for rows, sel in [("translation", [0, 1, 2]), ("full", list(range(6))), ([0, 1, 5], [0, 1, 5])]:
+            # Yoshikawa's measure: sqrt(det(J J^T)) with no fewer joints than rows; with fewer joints (a 4- or
+            # 5-joint arm's full rows) the product of the singular values, not J J^T's zero
             Js = J[sel]
-            ref = np.sqrt(max(np.linalg.det(Js @ Js.T), 0.0))
-            assert robot.manipulability(q, rows=rows) == pytest.approx(ref, rel=1e-9, abs=1e-15)
-        assert batch[i] == pytest.approx(robot.manipulability(q, rows_batch), rel=1e-7, abs=1e-12)
+            ref = (np.sqrt(max(np.linalg.det(Js @ Js.T), 0.0)) if len(sel) <= robot.n
+                   else float(np.prod(np.linalg.svd(Js, compute_uv=False))))
+            assert robot.manipulability(q, rows=rows) == pytest.approx(ref, rel=1e-7, abs=1e-15)
+        assert batch[i] == pytest.approx(robot.manipulability(q, "full"), rel=1e-7, abs=1e-12)
 
 
 def test_planar_manipulability_of_vehicle_arm():

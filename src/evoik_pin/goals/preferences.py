@@ -5,7 +5,8 @@ Differences on joints whose range spans a full turn are taken to the nearest tur
 
 * :class:`Posture`: ``weight / 2 * |q - q_ref|^2`` over the joints ``q_ref`` names (rad^2, m^2);
 * :class:`JointLimitMargin`: ``weight / 2 * sum max(0, margin - distance to a limit)^2``;
-* :class:`Manipulability`: ``-weight * log(sqrt(det(J J^T)))`` of a frame's 6 x n Jacobian (LOCAL_WORLD_ALIGNED);
+* :class:`Manipulability`: ``-weight * log(w)``, w the product of the singular values of a frame's 6 x n
+  Jacobian (LOCAL_WORLD_ALIGNED);
 * :class:`MinimalDisplacement`: ``weight / 2 * |q - q0|^2`` from the solve's ``q0``.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ConfigurationError, FrameError, OptionError
+from ..robot.robot import yoshikawa
 from .goal import Goal, number
 
 __all__ = ["JointLimitMargin", "Manipulability", "MinimalDisplacement", "Posture", "Preference", "check_preferences",
@@ -168,8 +170,9 @@ SMALL_BATCH = 24
 
 
 class Manipulability(Preference):
-    """Stay dexterous: cost ``-weight * log(w)``, ``w = sqrt(det(J J^T))`` (Yoshikawa) of ``frame``'s 6 x n
-    Jacobian in LOCAL_WORLD_ALIGNED (None: the first goal's frame, the tip for a single target)."""
+    """Stay dexterous: cost ``-weight * log(w)``, ``w`` Yoshikawa's manipulability (the product of the singular
+    values: :func:`~evoik_pin.robot.robot.yoshikawa`) of ``frame``'s 6 x n Jacobian in LOCAL_WORLD_ALIGNED (None:
+    the first goal's frame, the tip for a single target)."""
 
     def __init__(self, frame: str | None = None, weight: float = 1.0) -> None:
         if frame is not None and (not isinstance(frame, str) or not frame):
@@ -185,13 +188,12 @@ class Manipulability(Preference):
 
     def cost(self, q):
         J = self._robot.jacobian_world_unchecked(np.asarray(q, dtype=float), self._fid)
-        return -self.weight * float(np.log(max(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)), 1e-300)))
+        return -self.weight * float(np.log(max(float(yoshikawa(J)), 1e-300)))
 
     def costs(self, Q):
         if Q.shape[0] <= SMALL_BATCH:
             return np.array([self.cost(q) for q in Q], dtype=float).reshape(Q.shape[0])
-        J = self._robot.jacobian_batch(Q, validate=False, frame=self.frame)
-        w = np.sqrt(np.maximum(np.linalg.det(J @ J.transpose(0, 2, 1)), 1e-600))
+        w = yoshikawa(self._robot.jacobian_batch(Q, validate=False, frame=self.frame))
         return -self.weight * np.log(np.maximum(w, 1e-300))
 
     def __repr__(self) -> str:

@@ -40,6 +40,15 @@ _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full":
                         "planar": [0, 1, 5]}
 
 
+
+def yoshikawa(J: np.ndarray):
+    """Yoshikawa's manipulability of Jacobians J (..., r, n): the product of J's singular values, i.e.
+    sqrt(det(J J^T)) when r <= n and sqrt(det(J^T J)) when the arm has fewer joints than rows (a 5-joint arm's
+    6 x 5 Jacobian, whose J J^T is singular at every configuration). Shape (...,); 0 at a singularity."""
+    if J.shape[-2] > J.shape[-1]:  # the singular values themselves: det(J^T J) of a rank-deficient J is noise
+        return np.prod(np.linalg.svd(J, compute_uv=False), axis=-1)
+    return np.sqrt(np.maximum(np.linalg.det(J @ np.swapaxes(J, -1, -2)), 0.0))
+
 class Robot(JointBounds, RobotGeometry):
     """The active joints of a URDF (a serial chain or a tree): kinematics, Jacobians, manipulability of any frame.
 
@@ -405,10 +414,9 @@ class Robot(JointBounds, RobotGeometry):
         return out
 
     def manipulability(self, q, rows="translation") -> float:
-        """Yoshikawa manipulability sqrt(det(J J^T)) of the rows :meth:`task_rows` picks of the tip's world
+        """Yoshikawa manipulability (:func:`yoshikawa`) of the rows :meth:`task_rows` picks of the tip's world
         Jacobian."""
-        J = self.jacobian(q, "world")[self.task_rows(rows)]
-        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+        return float(yoshikawa(self.jacobian(q, "world")[self.task_rows(rows)]))
 
     # ------------------------------------------------------------------ kinematics, whole populations
     def _view(self, frame: str | None) -> ChainView:
@@ -446,9 +454,7 @@ class Robot(JointBounds, RobotGeometry):
 
     def manipulability_batch(self, Q, rows="translation") -> np.ndarray:
         """:meth:`manipulability` of every row of ``Q`` (N, n), shape (N,)."""
-        J = self.jacobian_batch(Q)[:, self.task_rows(rows)]
-        det = np.linalg.det(J @ J.transpose(0, 2, 1))
-        return np.sqrt(np.maximum(det, 0.0))
+        return yoshikawa(self.jacobian_batch(Q)[:, self.task_rows(rows)])
 
     @cached_property
     def mass_constants(self):

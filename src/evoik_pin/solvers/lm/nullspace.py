@@ -49,18 +49,24 @@ _KERNEL: dict = {}
 
 @njit(cache=True, nogil=True, forceinline=False)
 def _manipulability(rev, support, pg, Z, O, J, JJ):
-    """sqrt(det(J J^T)) of the first goal frame's base-frame Jacobian J (6, n) from a :data:`.kernel.State`'s pg, Z,
-    O (0 at a singularity), by the Cholesky factor's diagonal. JJ (6, 6) scratch."""
+    """Yoshikawa's manipulability (:func:`~evoik_pin.robot.robot.yoshikawa`: sqrt(det(J J^T)), sqrt(det(J^T J))
+    for fewer than 6 joints) of the first goal frame's base-frame Jacobian J (6, n) from a :data:`.kernel.State`'s
+    pg, Z, O (0 at a singularity), by the Cholesky factor's diagonal. JJ (6, 6) scratch."""
     frame_jacobian(rev, support[0], pg[0], Z, O, J)
     n = J.shape[1]
-    for i in range(6):
+    r = min(n, 6)
+    for i in range(r):
         for j in range(i + 1):
             s = 0.0
-            for k in range(n):
-                s += J[i, k] * J[j, k]
+            if n >= 6:
+                for k in range(n):
+                    s += J[i, k] * J[j, k]
+            else:
+                for k in range(6):
+                    s += J[k, i] * J[k, j]
             JJ[i, j] = s
     logdet = 0.0
-    for i in range(6):  # in-place Cholesky of the lower triangle
+    for i in range(r):  # in-place Cholesky of the lower triangle
         for j in range(i + 1):
             s = JJ[i, j]
             for k in range(j):
