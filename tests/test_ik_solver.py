@@ -479,3 +479,25 @@ def test_solve_all_takes_solves_locked_and_refuses_prefer(panda, cases):
         assert np.linalg.norm(reached.translation - T.translation) <= 1e-6 and panda.within_bounds(s.q)
     with pytest.raises(OptionError, match=r"unknown option\(s\) prefer for method 'memetic-all'"):
         ek.solve_all(panda, T, prefer="nearest", q0=np.zeros(panda.n))
+
+
+def test_alternating_goal_lists_of_several_goals():
+    """A solver alternating goal lists of different structures (two hands; with the head's position or direction;
+    with the centre of mass) solves each of them on every round."""
+    from evoik_pin.goals import CenterOfMass, Direction
+
+    talos = ek.load_robot("talos", floating_base=True)
+    rng = np.random.default_rng(5)
+    solver = ek.IKSolver(talos, **BUDGET)
+    q = talos.random_configurations(1, rng)[0]
+    hands = [Pose("arm_left_7_link", talos.fk(q, "arm_left_7_link")),
+             Pose("arm_right_7_link", talos.fk(q, "arm_right_7_link"))]
+    model = talos.full_model
+    com = pin.centerOfMass(model, model.createData(), talos.full_configuration(q))
+    lists = [hands, hands + [Position("head_2_link", talos.fk(q, "head_2_link").translation)],
+             hands + [Direction("head_2_link", (1.0, 0.0, 0.0), talos.fk(q, "head_2_link").rotation[:, 0])],
+             hands + [CenterOfMass(com, tolerance=1e-3)]]
+    for round_ in range(2):
+        for i, goals in enumerate(lists):
+            result = solver.solve(goals, q0=q, seed=10 * round_ + i)
+            assert result.success, (round_, i, result.message)

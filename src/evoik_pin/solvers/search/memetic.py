@@ -235,11 +235,10 @@ class MemeticSetup:
     def goal_first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
         """:meth:`first_runs` for :func:`~.first_runs.goal_first_runs` (a goal list of several goals)."""
         entries = self._goal_entries
-        for kept in entries:
+        for i, kept in enumerate(entries):
             if kept[0] is lm._args and kept[1] is table:
-                if kept is not entries[0]:
-                    entries.remove(kept)
-                    entries.insert(0, kept)
+                if i:  # by index: list.remove compares the entries' arrays (ValueError)
+                    entries.insert(0, entries.pop(i))
                 return kept[2](*args), 0.0
         t = time.perf_counter()
         from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too
