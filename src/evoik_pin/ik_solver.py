@@ -199,7 +199,7 @@ class IKSolver:
         return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
     def _goal_repeat_call(self, target, q0, seed) -> Result | IKProblem | None:
-        """A one-goal list (a goal set too: its member nearest the seed table) on the repeat call of its goal stack:
+        """A one-goal list (a goal set too: its members nearest the seed table) on the repeat call of its goal stack:
         the Result; the problem (bound) when it has none; None for any other target."""
         if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal) and self._objective is None):
             return None
@@ -208,7 +208,7 @@ class IKSolver:
         if lane is None or lane.key is not bound[1] or not lane.usable():
             return self._goal_problem(bound, q0)
         q0 = self._repeat_call_q0(q0, seed)
-        if target[0].alternatives is not None:  # a goal set: the goal-set search when its first member is not met
+        if target[0].alternatives is not None:  # a goal set: the goal-set search when none of those members is met
             out = lane.solve_set(target[0], q0)
             return self._goal_problem(bound, q0) if out is None else out
         out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])

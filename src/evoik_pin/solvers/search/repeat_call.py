@@ -148,13 +148,19 @@ class RepeatCall:
         solves it alone.
 
         Returns:
-            The Result, ``chosen`` the member met, when a first run met one; else None (the goal-set search then
-            solves the set from the start)."""
+            The Result, ``chosen`` the member met, when a first run met one (its time and evaluations those of the
+            members tried before too); else None (the goal-set search then solves the set from the start)."""
+        t0 = time.perf_counter()
         P, R = goal.member_targets
         near = member_distances(*self._ranking, P[:, None], R[:, None])[1]
+        spent = 0  # the evaluations of the members tried before
         for m in np.argsort(near, kind="stable")[:SET_MEMBERS].tolist():  # equals: the first member first
             out = self.solve(P[m], R[m], q0, [goal.alternatives[m]])
             if type(out) is Result:
                 out.chosen = [m]
+                out.evaluations += spent
+                out.time_s = time.perf_counter() - t0
                 return out
+            if out is not None:  # (clock start, resumed_state): the runs made and their evaluations
+                spent += out[1][1]
         return None
