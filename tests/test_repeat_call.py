@@ -313,6 +313,22 @@ def test_goal_sets_alone_open_a_lane_and_meet_the_member_they_report(panda, coun
     assert len(counted) >= 25  # the lane opens after the first set or two
 
 
+def test_a_one_member_goal_set_is_its_member_on_the_lane(panda, counted):
+    """A goal set of one member takes the lane as that member's one-goal list: its answer, bit for bit, member 0."""
+    rng = np.random.default_rng(35)
+    solver = ek.IKSolver(panda, **BUDGET)
+    Q, Qs = panda.random_configurations(8, rng), panda.random_configurations(8, rng)
+    for i, q in enumerate(Q):
+        T = panda.fk(q)
+        q0 = None if i % 2 else Qs[i]
+        r = solver.solve([Pose(panda.tip, [T])], q0, seed=i)
+        if i >= 2:  # the lane is open
+            reference = general(panda, [Pose(panda.tip, T)], seed=i, q0=q0, **BUDGET)
+            assert np.array_equal(r.q, reference.q) and r.goal_errors == reference.goal_errors
+        assert r.success and r.chosen == [0]
+    assert len(counted) >= 6
+
+
 def test_a_goal_set_no_lane_member_meets_is_the_goal_set_searchs(panda, monkeypatch):
     """When the lane tries no member (or meets none), the set is the goal-set search's from the start: the general
     path's Result, bit for bit."""

@@ -152,9 +152,10 @@ class RepeatCall:
             members tried before too); else None (the goal-set search then solves the set from the start)."""
         t0 = time.perf_counter()
         P, R = goal.member_targets
-        near = member_distances(*self._ranking, P[:, None], R[:, None])[1]
+        order = [0] if len(P) == 1 else np.argsort(  # equals: the first member first
+            member_distances(*self._ranking, P[:, None], R[:, None])[1], kind="stable")[:SET_MEMBERS].tolist()
         spent = 0  # the evaluations of the members tried before
-        for m in np.argsort(near, kind="stable")[:SET_MEMBERS].tolist():  # equals: the first member first
+        for m in order:
             out = self.solve(P[m], R[m], q0, [goal.alternatives[m]])
             if type(out) is Result:
                 out.chosen = [m]
