@@ -260,9 +260,9 @@ def test_one_goal_lists_take_a_lane_with_the_general_answers(panda, counted):
     assert sum(r.success for r in results) >= len(Q) - 6
 
 
-def test_a_goal_set_never_takes_a_one_goal_lane(panda, counted):
-    """A goal set binds to the stack of a one-goal Pose (the members are targets): it still goes to the goal-set
-    search, and the member it meets is reported."""
+def test_a_goal_set_takes_its_stacks_lane_member_by_member(panda, counted):
+    """A goal set binds to the stack of a one-goal Pose (the members are targets): it takes that lane for its
+    members (the nearest the seed table first), never as its first member, and the member it meets is reported."""
     rng = np.random.default_rng(32)
     solver = ek.IKSolver(panda, **BUDGET)
     Q = panda.random_configurations(6, rng)
@@ -270,8 +270,82 @@ def test_a_goal_set_never_takes_a_one_goal_lane(panda, counted):
         solver.solve([Pose(panda.tip, panda.fk(q))], seed=i)  # the one-goal Pose's lane opens
     counted.clear()
     far = pin.SE3(np.eye(3), np.array([2.0, 0.0, 0.5]))
-    r = solver.solve([Pose(panda.tip, [far, panda.fk(Q[0])])], seed=0)
-    assert not counted and r.success and r.chosen == [1]
+    T = panda.fk(Q[0])
+    r = solver.solve([Pose(panda.tip, [far, T])], seed=0)
+    assert counted and r.success and r.chosen == [1]
+    M = panda.fk(r.q)
+    assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+    assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+
+
+def set_of(robot, rng, reachable: int, far: int):
+    """A goal set on the tip: ``reachable`` poses (forward kinematics) and ``far`` beyond the Panda's reach (1.3 to
+    1.6 m from the base), shuffled; and the reachable ones' indices."""
+    members = [robot.fk(q) for q in robot.random_configurations(reachable, rng)]
+    for _ in range(far):
+        d = rng.normal(size=3)
+        d[2] = abs(d[2])
+        members.append(pin.SE3(pin.exp3(rng.normal(size=3)), d / np.linalg.norm(d) * rng.uniform(1.3, 1.6)))
+    order = rng.permutation(len(members))
+    return [Pose(robot.tip, [members[k] for k in order])], [int(np.nonzero(order == k)[0][0]) for k in range(reachable)]
+
+
+def test_goal_sets_alone_open_a_lane_and_meet_the_member_they_report(panda, counted):
+    """A solver fed goal sets only opens the lane of their stack (after its first sets) and serves the sets there:
+    each answer meets the member reported, whose errors are those the general verdict computes at the answer; the
+    sets whose nearest members none of the first runs meet go to the goal-set search, which finds a reachable one."""
+    from evoik_pin.problem import IKProblem
+
+    rng = np.random.default_rng(33)
+    solver = ek.IKSolver(panda, **BUDGET)
+    for i in range(30):
+        goals, reachable = set_of(panda, rng, 3, 7)
+        q0 = None if i % 2 else panda.random_configurations(1, rng)[0]
+        r = solver.solve(goals, q0, seed=i)
+        assert r.success, r.message
+        errors, chosen = IKProblem(panda, goals).goal_errors_and_chosen(r.q)
+        assert r.chosen == chosen and r.chosen[0] in reachable
+        assert np.allclose(np.array(r.goal_errors, dtype=float), np.array(errors, dtype=float), rtol=0, atol=1e-12)
+        T = goals[0].alternatives[r.chosen[0]].target
+        M = panda.fk(r.q)
+        assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+        assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+    assert len(counted) >= 25  # the lane opens after the first set or two
+
+
+def test_a_one_member_goal_set_is_its_member_on_the_lane(panda, counted):
+    """A goal set of one member takes the lane as that member's one-goal list: its answer, bit for bit, member 0."""
+    rng = np.random.default_rng(35)
+    solver = ek.IKSolver(panda, **BUDGET)
+    Q, Qs = panda.random_configurations(8, rng), panda.random_configurations(8, rng)
+    for i, q in enumerate(Q):
+        T = panda.fk(q)
+        q0 = None if i % 2 else Qs[i]
+        r = solver.solve([Pose(panda.tip, [T])], q0, seed=i)
+        if i >= 2:  # the lane is open
+            reference = general(panda, [Pose(panda.tip, T)], seed=i, q0=q0, **BUDGET)
+            assert np.array_equal(r.q, reference.q) and r.goal_errors == reference.goal_errors
+        assert r.success and r.chosen == [0]
+    assert len(counted) >= 6
+
+
+def test_a_goal_set_no_lane_member_meets_is_the_goal_set_searchs(panda, monkeypatch):
+    """When the lane tries no member (or meets none), the set is the goal-set search's from the start: the general
+    path's Result, bit for bit."""
+    from evoik_pin.solvers.search import repeat_call
+
+    rng = np.random.default_rng(34)
+    solver = ek.IKSolver(panda, **BUDGET)
+    for i in range(3):
+        solver.solve(set_of(panda, rng, 1, 1)[0], seed=i)  # the lane opens
+    monkeypatch.setattr(repeat_call, "SET_MEMBERS", 0)
+    for i in range(4):
+        goals, _ = set_of(panda, rng, 2, 3)
+        q0 = None if i % 2 else panda.random_configurations(1, rng)[0]
+        r = solver.solve(goals, q0, seed=i)
+        reference = general(panda, goals, seed=i, q0=q0, **BUDGET)
+        same(r, reference)
+        assert r.success and r.chosen == reference.chosen and r.goal_errors == reference.goal_errors
 
 
 def test_a_trajectory_gives_the_answers_of_its_points_solved_one_by_one(panda):

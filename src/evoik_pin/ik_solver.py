@@ -3,7 +3,9 @@
 The options are checked and the problem's constants built once into a template problem that each call copies with
 its target; memetic's set-up (kernel, seed table, engine) is made once. After memetic has solved a pose, a position or a
 one-goal list, the next ones of that kind take a repeat call (:mod:`evoik_pin.solvers.search.repeat_call`) with the
-same answers, bit for bit. :func:`evoik_pin.solve` is the solve of an IKSolver kept per robot, method and options.
+same answers, bit for bit; a one-goal set takes the repeat call of its goal stack on its members nearest the seed table
+(the goal-set search when none of them is met). :func:`evoik_pin.solve` is the solve of an IKSolver kept per robot,
+method and options.
 """
 
 from __future__ import annotations
@@ -197,16 +199,18 @@ class IKSolver:
         return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
 
     def _goal_repeat_call(self, target, q0, seed) -> Result | IKProblem | None:
-        """A one-goal list on the repeat call of its goal stack: the Result; the problem (bound) when it has none;
-        None for any other target."""
-        if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal)
-                and target[0].alternatives is None and self._objective is None):
+        """A one-goal list (a goal set too: its members nearest the seed table) on the repeat call of its goal stack:
+        the Result; the problem (bound) when it has none; None for any other target."""
+        if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal) and self._objective is None):
             return None
-        bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's may be too)
+        bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's members' too)
         lane = self._repeat_calls.get(id(bound[1]))
         if lane is None or lane.key is not bound[1] or not lane.usable():
             return self._goal_problem(bound, q0)
         q0 = self._repeat_call_q0(q0, seed)
+        if target[0].alternatives is not None:  # a goal set: the goal-set search when none of those members is met
+            out = lane.solve_set(target[0], q0)
+            return self._goal_problem(bound, q0) if out is None else out
         out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])
         return out if type(out) is Result else self._resume_general(self._goal_problem(bound, q0), seed, out)
 
@@ -287,7 +291,22 @@ class IKSolver:
                 self._open_repeat_call(problem)
             return result
         solve = self._plan.solve if self._plan is not None else partial(self._info.func, **self._options)
-        return run_with_verdicts(problem, self.method, solve, self._polish, rng)
+        result = run_with_verdicts(problem, self.method, solve, self._polish, rng)
+        if (self._repeat_calls_open and goals is not None and len(goals) == 1 and problem.scene is None
+                and result.success and result.chosen[0] is not None):
+            self._open_set_repeat_call(problem, result)
+        return result
+
+    def _open_set_repeat_call(self, problem: IKProblem, result: Result) -> None:
+        """After the goal-set search met a one-goal set: the repeat call of its goal stack (its members' too), opened
+        by memetic solving the member met from the answer (one LM evaluation), unless a usable one is kept."""
+        goal = problem.goals[0]
+        kept = self._repeat_calls.get(id(problem.goal_stack()[0]))
+        if kept is not None and kept.usable():
+            return
+        member = self._goal_problem(bind(self.robot, [goal.alternatives[result.chosen[0]]]), result.q)
+        if member.goal_stack()[0] is problem.goal_stack()[0]:
+            self.run(member, _rng(0))  # a plain one-goal list: run opens its repeat call (no draw: q0 meets it)
 
     def __repr__(self) -> str:
         return f"IKSolver({self.robot.name!r}, method={self.method!r})"

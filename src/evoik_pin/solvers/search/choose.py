@@ -43,7 +43,7 @@ from .prefer import (
 )
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first
 
-__all__ = ["COLLECT_SHARE", "choose"]
+__all__ = ["COLLECT_SHARE", "choose", "member_distances"]
 
 #: Share of the budget spent collecting answers before the best ones are refined.
 COLLECT_SHARE = 0.6
@@ -166,9 +166,23 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     spec = table.goal_spec(parent.goals)
     if P is None:
         P, R = np.stack([v.pt for v in variants]), np.stack([v.Rt for v in variants])
-    f = table.goal_features(spec, P, R)  # (V, d)
     g = parent.goals[0]  # the table's features of the goal's frame:
-    FT, sq = table.features32(table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1])))
+    ff = table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1]))
+    D, near = member_distances(table, ff, spec, P, R, joint, free)
+    for v, d in zip(variants, D, strict=True):
+        v.starts = _TableStarts(table.Q, d, k)
+    return near.tolist()
+
+
+def member_distances(table, ff, spec, P: np.ndarray, R: np.ndarray, joint=None,
+                     free=None) -> tuple[np.ndarray, np.ndarray]:
+    """The nearness of V targets of one goal on one frame (a goal set's members) to the seed table: (D (V, size)
+    float32, each entry's squared feature distance less the target's own |f|^2, inf where not ``free``; near (V,)
+    float64, each target's squared distance to its nearest entry), the members ranked by ``near``. ``ff``: the
+    table's features of the goal's frame (:meth:`~.seed_table.SeedTable.frame_features`), ``spec``: the goal's
+    :meth:`~.seed_table.SeedTable.goal_spec`; P (V, 1, 3) m, R (V, 1, 3, 3); ``joint`` (size,): added to every row."""
+    f = table.goal_features(spec, P, R)  # (V, d)
+    FT, sq = table.features32(ff)
     # |F - f|^2 = sq - 2 F.f + |f|^2: the first two terms compiled, in single precision; |f|^2 to compare variants
     D = np.empty((f.shape[0], FT.shape[1]), dtype=np.float32)
     table_distances_many(FT, sq, f.astype(np.float32), D)
@@ -176,10 +190,7 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
         D += joint
     if free is not None:
         D[:, ~free] = np.inf
-    first = D.argmin(axis=1)
-    for v, d in zip(variants, D, strict=True):
-        v.starts = _TableStarts(table.Q, d, k)
-    return (D[np.arange(len(variants)), first] + (f * f).sum(axis=1)).tolist()
+    return D, D.min(axis=1) + (f * f).sum(axis=1)
 
 
 def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: float | None = None,
