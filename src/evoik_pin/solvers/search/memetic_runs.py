@@ -1,5 +1,5 @@
-"""The LM runs of one memetic solve (:class:`LMRuns`: their bookkeeping, the clock, a scene's exact check and the repair
-of a colliding answer) and its stage 3, differential-evolution restarts polished by LM (:func:`de_restart`)."""
+"""The LM runs of one memetic solve (:class:`LMRuns`: their bookkeeping, the clock, a scene's exact check) and its
+stage 3, differential-evolution restarts polished by LM (:func:`de_restart`)."""
 
 from __future__ import annotations
 
@@ -17,12 +17,6 @@ __all__ = ["BOUND_SHARE", "LMRuns", "de_restart", "kernel_goal_errors"]
 
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
-#: The walk repairing an answer that reaches the target in collision (:meth:`LMRuns.repair`): its step along the
-#: Jacobian's null space (rad, joint-space norm), the steps each way at most, and the LM steps bringing each back
-#: onto the target.
-REPAIR_STEP = 0.2
-REPAIR_STEPS = 10
-REPAIR_ITERATIONS = 20
 
 
 def kernel_goal_errors(goals, out: LMOutcome) -> list:
@@ -51,11 +45,6 @@ class LMRuns:
         self.scene = problem.scene
         self.rejected = 0  # converged LM answers rejected by the scene's exact check
         self.rejected_pairs: list[tuple[str, str]] = []  # the pairs in contact at the last one
-        target = problem.target
-        # the task's rows of the tip Jacobian where its null space has room to move (a redundant arm, one tip target)
-        rows = None if target is None or target.planar else 6 if target.rotation is not None else 3
-        self._task_rows = rows if self.scene is not None and rows is not None and problem.n > rows else None
-        self._walked = np.zeros((0, problem.n))  # the configurations the repair walks went through
 
     def out_of_time(self) -> bool:
         return (self.deadline is not None and self.attempts >= self.guaranteed
@@ -78,52 +67,10 @@ class LMRuns:
                 out.converged = False
                 if self.best is None:
                     self.best = out
-                repaired = self.repair(out.q)
-                if repaired is not None:
-                    self.best = repaired
-                    return True
                 return False
         if self.best is None or out.converged or out.rank < self.best.rank:
             self.best = out
         return out.converged
-
-    def repair(self, q: np.ndarray) -> LMOutcome | None:
-        """Walk the self-motion manifold from ``q`` (n,), a converged answer that collides: steps of ``REPAIR_STEP``
-        along the tip Jacobian's null direction (its task rows' smallest singular vector, its sign kept from step to
-        step), each brought back onto the target by a short LM run, one way then the other, ``REPAIR_STEPS`` each at
-        most, until an answer passes the exact check (returned, converged) or the walk leaves the target or stalls at a
-        joint limit, the clock runs out or it starts on a walk made before (None). Only for a redundant arm and one tip
-        target (else None).
-
-        Why: the next starts (the table's nearest entries by tip pose) often lead LM back to a colliding branch
-        (a wrist through a bin's wall), while a collision-free answer of the same branch lies along its self-motion
-        (the elbow swung the other way), a few short LM runs away."""
-        rows = self._task_rows
-        if rows is None or (self._walked.size and np.min(np.abs(self._walked - q).max(axis=1)) < REPAIR_STEP):
-            return None  # no null space, or this branch was walked already
-        robot, margin = self.problem.robot, self.problem.margin
-        walked = [q]
-        for sign in (1.0, -1.0):
-            p, prev = q, None
-            for _ in range(REPAIR_STEPS):
-                if self.out_of_time():
-                    break
-                d = np.linalg.svd(robot.jacobian_local_unchecked(p)[:rows])[2][-1]
-                d = sign * d if prev is None else d if d @ prev >= 0.0 else -d  # on along the same way
-                prev = d
-                out = self.lm.run(p + REPAIR_STEP * d, REPAIR_ITERATIONS, self._deadline())
-                self.evaluations += out.evaluations
-                self.attempts += 1
-                self.attempt_errors.append(out.error)
-                if not out.converged or np.abs(out.q - p).max() < 0.5 * REPAIR_STEP:
-                    break  # off the target, or held at a joint limit (LM undid the step): the other way
-                p = out.q
-                walked.append(p)
-                if not self.scene.in_collision(p, margin):
-                    self._walked = np.vstack([self._walked, walked])
-                    return out
-        self._walked = np.vstack([self._walked, walked])
-        return None
 
     def polish(self, q: np.ndarray, iterations: int | None = None) -> bool:
         """One LM run from ``q`` (n,); keeps the best outcome; True when it meets the tolerances."""
