@@ -2,8 +2,8 @@
 """Benchmark collision-aware IK: a Panda reaching into a shelf or a bin on a table, against TRAC-IK + reject/retry.
 
 Scenes (``--scenes``, default both): ``shelf`` (``evoik_pin.scene.examples.add_table_and_shelf``) and ``bin`` (an
-open-top bin on the same table, :func:`add_table_and_bin` here: the second scene of issue 32; it belongs beside the
-shelf in ``evoik_pin.scene.examples`` once src is open again). Targets: the tip poses of random collision-free
+open-top bin on the same table, ``evoik_pin.scene.examples.add_table_and_bin``: the second scene of issue 32).
+Targets: the tip poses of random collision-free
 configurations with the tip inside the shelf's or the bin's interior. Per target, in a fresh random order (so
 machine load hits all alike):
 
@@ -43,7 +43,13 @@ import pinocchio as pin
 
 import evoik_pin as ev
 from evoik_pin.scene import Scene
-from evoik_pin.scene.examples import SHELF_INTERIOR, add_table_and_shelf, free_configurations
+from evoik_pin.scene.examples import (
+    BIN_INTERIOR,
+    SHELF_INTERIOR,
+    add_table_and_bin,
+    add_table_and_shelf,
+    free_configurations,
+)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_ik import TracIK, cpu_model, quiet_output  # noqa: E402
@@ -57,30 +63,11 @@ LONG_BUDGET = 0.05
 NEAR_LIMIT = 0.1  # rad: a configuration "near a limit" has a joint within this of one of its bounds
 HARD_RUNS = 5  # LM runs (no clock): a target needing this many is a hard one
 
-#: The bin's free interior (m, base frame), 1 cm inside its walls and above its floor.
-BIN_INTERIOR = (np.array([0.43, -0.19, 0.01]), np.array([0.67, 0.19, 0.20]))
-
-
-def _at(x: float, y: float, z: float) -> pin.SE3:
-    return pin.SE3(np.eye(3), np.array([x, y, z]))
-
-
-def add_table_and_bin(scene: Scene) -> Scene:
-    """The shelf's 1.6 x 1.6 m table (top 1 cm below the base frame) and on it an open-top bin 0.42-0.68 m in front
-    (x), 0.40 m wide (y), 0.22 m high, 1 cm walls, its floor on the table: the arm reaches down into it over a wall."""
-    scene.add_box("table", (1.6, 1.6, 0.04), _at(0.3, 0.0, -0.03))
-    scene.add_box("bin_front", (0.01, 0.40, 0.22), _at(0.42 + 0.005, 0.0, 0.10))
-    scene.add_box("bin_back", (0.01, 0.40, 0.22), _at(0.68 - 0.005, 0.0, 0.10))
-    scene.add_box("bin_left", (0.26, 0.01, 0.22), _at(0.55, 0.20 - 0.005, 0.10))
-    scene.add_box("bin_right", (0.26, 0.01, 0.22), _at(0.55, -0.20 + 0.005, 0.10))
-    return scene
-
-
 SCENES = {
     "shelf": (add_table_and_shelf, SHELF_INTERIOR, "a table and an open shelf (`evoik_pin.scene.examples."
               "add_table_and_shelf`); targets with the tip inside the shelf"),
     "bin": (add_table_and_bin, BIN_INTERIOR, "the same table and an open-top bin 0.42-0.68 m in front, 0.40 m wide, "
-            "0.22 m high (`add_table_and_bin` in this script); targets with the tip inside the bin"),
+            "0.22 m high (`evoik_pin.scene.examples.add_table_and_bin`); targets with the tip inside the bin"),
 }
 
 

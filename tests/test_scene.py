@@ -8,7 +8,13 @@ import pytest
 import evoik_pin as ev
 from evoik_pin.errors import ConfigurationError, SceneError
 from evoik_pin.scene import Scene
-from evoik_pin.scene.examples import SHELF_INTERIOR, add_table_and_shelf, free_configurations
+from evoik_pin.scene.examples import (
+    BIN_INTERIOR,
+    SHELF_INTERIOR,
+    add_table_and_bin,
+    add_table_and_shelf,
+    free_configurations,
+)
 
 
 def at(x, y, z, R=None):
@@ -264,3 +270,28 @@ def test_solve_trajectory_with_a_scene(panda, shelf_scene, shelf_targets):
         if r.success:
             assert not _reference_check(panda, shelf_scene, r.q)
     assert sum(r.success for r in results) >= 4
+
+
+#: Configurations reaching into the bin (issue 32; bench_collision's bin targets 472, 965 and 1854) whose tip poses the
+#: seed table's 17 nearest entries miss: LM from each of them reaches the pose with the wrist through a wall.
+BIN_WALL_REACHES = [
+    [-2.207152834059749, -1.147827336174307, 2.035814742611652, -1.5457947164704695, -2.5953456490881215,
+     3.6700417571026045, 0.29201046022411603],
+    [0.6416671516243806, 0.9353238855189656, -0.5359257601677574, -1.5314788161433361, 2.82386890668834,
+     3.6454514291764086, 1.3744665510255278],
+    [-0.048355996851426664, 0.3985537870978484, 0.2314640918907469, -2.1949047876684245, -2.0701429859203504,
+     2.4967302130318614, -1.781913756028532],
+]
+
+
+def test_with_a_scene_the_seed_table_goes_on_past_answers_in_collision(panda):
+    scene = add_table_and_bin(Scene(panda))
+    for q in BIN_WALL_REACHES:
+        q = np.array(q)
+        assert not scene.in_collision(q)
+        tip = panda.fk(q).translation
+        assert np.all(tip >= BIN_INTERIOR[0]) and np.all(tip <= BIN_INTERIOR[1])
+        # the table only (no random draws): a collision-free answer from its farther entries
+        res = ev.solve(panda, panda.fk(q), scene=scene, seed=0, timeout=None, max_restarts=0)
+        assert res.success and res.collision_free and not _reference_check(panda, scene, res.q), res.message
+        assert "from seed table" in res.message

@@ -48,6 +48,11 @@ DEFAULT_TIMEOUT = 0.005
 #: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
 #: descheduled past the budget still gets this minimum of useful work.
 GUARANTEED_TABLE_RUNS = 4
+#: Seed-table entries tried for one frame's target with a scene: its converged answers may be rejected in collision
+#: (a bin's or a shelf's targets: most of the pose's solutions put the wrist through a wall), and the table's
+#: collision-free entries, ranked by pose, farther ones included, stay better starts than stage 3's DE draws over the
+#: box (a start is one LM run; a DE restart 3 generations of 32 and 8 LM runs from random, bound-heavy members).
+DEFAULT_SCENE_TABLE_SEEDS = 48
 #: LM engines (and their compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted instead of
 #: rebuilt by a solver alternating goal structures.
 KEPT_ENGINES = 8
@@ -123,7 +128,7 @@ def memetic(
         population: DE population size (>= 4). generations: DE generations per population (>= 0).
         polish_count: members of each population polished by LM, best first (1..population).
         table_size: seed-table size (0 disables stage 2); default 2^(n+5) clamped to [256, 4096].
-        table_seeds: table entries (a goal list: starts) tried in stage 2; default 17 (a goal list: 48).
+        table_seeds: table entries (a goal list: starts) tried in stage 2; default 17 (a goal list, or a scene: 48).
         table_offset: skip the first ``table_offset`` entries (starts).
         batch: LM runs handed to the engine together (>= 1), the clock checked between groups.
         iterations: LM steps allowed per run (>= 1).
@@ -292,7 +297,8 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     goals = problem.goals is not None
     single = one_frame(problem)
     if table_seeds is None:
-        table_seeds = DEFAULT_TABLE_SEEDS if single else DEFAULT_GOAL_TABLE_SEEDS
+        table_seeds = (DEFAULT_GOAL_TABLE_SEEDS if not single else DEFAULT_TABLE_SEEDS if problem.scene is None
+                       else DEFAULT_SCENE_TABLE_SEEDS)
     use_table = table_size > 0 and table_seeds > 0
     table, free = setup._prepare(problem, table_size if use_table else 0, engine)
     frame = table.frame_search(problem) if table is not None else None
