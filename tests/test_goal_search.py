@@ -6,7 +6,7 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.errors import FrameError
-from evoik_pin.goals import Pose, Position
+from evoik_pin.goals import CenterOfMass, Pose, Position
 from evoik_pin.problem import IKProblem
 from evoik_pin.robot.frames import find_frame
 from evoik_pin.solvers.search.seed_table import DEFAULT_GOAL_TABLE_SEEDS, default_table_size, seed_table
@@ -113,6 +113,32 @@ def test_composed_starts_take_each_goals_chain_from_its_own_nearest_entry(which,
     assert np.allclose(got, best, rtol=1e-9, atol=1e-12)  # every goal as near as its own nearest entry
     P0, R0 = _relative_poses(robot, table.Q[ranked[0]], frames)
     assert got.sum() <= _distances(table, goals, P0, R0, pt, Rt)[0].sum() + 1e-12
+
+
+@pytest.mark.parametrize("name, soles, hand", [
+    ("g1", ("left_ankle_roll_link", "right_ankle_roll_link"), "left_rubber_hand"),
+    ("talos", ("left_sole_link", "right_sole_link"), "arm_left_7_link")])
+def test_a_stances_starts_stand_upright_on_its_first_sole(name, soles, hand):
+    """Soles posed and the centre of mass over them (a stance): every start's floating base puts the first sole on its
+    target with every joint at 0 clipped into the box (the URDF's upright stance), not a random entry's base; the
+    table holds that stance, so the first composed start stands on both soles of a stance made from it."""
+    robot = ek.load_robot(name, tips=[*soles, hand], floating_base=True)
+    q = robot.clip(np.zeros(robot.n))
+    q[:6] = 0.3, -0.2, 0.8, 0.5, 0.0, 0.0  # standing somewhere, turned 0.5 rad
+    hand_q = robot.random_configurations(1, np.random.default_rng(2))[0]
+    hand_q[:6] = q[:6]
+    goals = ([Pose(f, robot.fk(q, f)) for f in soles] + [CenterOfMass(support=list(soles), margin=0.02)]
+             + [Pose(hand, robot.fk(hand_q, hand))])
+    problem = IKProblem(robot, goals)
+    table = _table(problem)
+    starts = list(table.goal_starts(problem, 6))
+    assert len(starts) == 6
+    for start in starts:
+        assert np.allclose(start[:6], q[:6], atol=1e-9)
+    upright = robot.fk(np.concatenate([starts[0][:6], q[6:]]), soles[0])
+    assert np.allclose(upright.homogeneous, goals[0].target.homogeneous, atol=1e-9)
+    for g in goals[:2]:  # the first composed start: each sole's chain from the table's upright entry, the nearest
+        assert np.allclose(robot.fk(starts[0], g.frame).homogeneous, g.target.homogeneous, atol=1e-9)
 
 
 @pytest.mark.parametrize("which, index", [("baxter", 12)])
