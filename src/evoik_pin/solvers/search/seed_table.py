@@ -14,7 +14,7 @@ import numpy as np
 
 from ...goals.pose import KIND_POSE
 from ...goals.position import KIND_POSITION
-from ...goals.registry import COM_SUPPORT, KIND_BEYOND_FRAME
+from ...goals.registry import KIND_BEYOND_FRAME
 from ...goals.relative_pose import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
 from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW, encode_targets, target_kind
 from ...lie import rpy
@@ -65,7 +65,8 @@ def _pose_rows(sp: float, sr: float, positioned: bool, oriented: bool, planar: b
 
 
 class SeedTable:
-    """Configurations spread over a search box and their tip poses, searchable by nearness to a target.
+    """Configurations spread over a search box (the last: every joint at 0 clipped into it) and their tip poses,
+    searchable by nearness to a target.
 
     Attributes:
         Q: (size, n) configurations. positions: (size, 3) tip positions (m); rotations: (size, 3, 3).
@@ -74,8 +75,8 @@ class SeedTable:
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
-        if size:  # the last entry: every joint at 0 clipped into the box (a humanoid URDF's upright stance, whose
-            # legs a stance's soles compose: _base_from_goals)
+        if size:  # the last entry: every joint at 0 clipped into the box, a humanoid URDF's upright stance (random
+            # entries rarely stand: a stance's starts composed from them alone needed dozens of LM runs on G1)
             self.Q[-1] = np.minimum(np.maximum(0.0, lower), upper)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
@@ -267,28 +268,16 @@ class SeedTable:
 
     def _base_from_goals(self, problem, parts) -> np.ndarray | None:
         """The floating base's six entries (clipped into the box) putting the first pose goal on a frame only the base
-        moves exactly on its target; else (a stance: :func:`_stance_goal`) putting the first sole with a pose goal on
-        its target with every joint at 0 clipped into the box (a humanoid URDF's upright stance); None when no goal is
-        such."""
+        moves exactly on its target; None when no goal is such."""
         pt, Rt = seed_targets(problem)
-        goals = problem.goals
-        for g, (goal, (F, _, idx)) in enumerate(zip(goals, parts, strict=True)):
+        for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
             if goal.has_orientation and goal.has_position and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
                 s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
-                return _base_putting(F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight), pt[g], Rt[g], problem)
-        g = _stance_goal(goals)
-        if g is None:
-            return None
-        # Starts with random base poses (each entry's) rarely stand: the soles' chains composed from there put the
-        # trunk anywhere, the centre of mass off the support polygon, and LM needs dozens of runs to stand up
-        key = ("upright", goals[g].frame, problem.lower[6:].tobytes(), problem.upper[6:].tobytes())
-        hit = self._goal_features.get(key)
-        if hit is None:
-            q = np.minimum(np.maximum(0.0, problem.lower), problem.upper)
-            q[:6] = 0.0
-            T = self._robot.fk(q, goals[g].frame)
-            hit = self._goal_features[key] = (T.translation.copy(), T.rotation.copy())
-        return _base_putting(*hit, pt[g], Rt[g], problem)
+                p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
+                R = Rt[g] @ R_f.T
+                base = np.concatenate([pt[g] - R @ p_f, rpy(R)[0, ::-1]])  # x, y, z, yaw, pitch, roll
+                return np.minimum(np.maximum(base, problem.lower[:6]), problem.upper[:6])
+        return None
 
     def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Per goal (cached): the table's features of its frame's pose relative to the root link, their squared norms,
@@ -465,22 +454,6 @@ def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
     D = sq[sample, None] + sq[None, :] - 2.0 * F[sample] @ F.T
     D[np.arange(sample.size), sample] = np.inf
     return float(np.median(D.min(axis=1)))
-
-
-def _base_putting(p_f: np.ndarray, R_f: np.ndarray, p_t: np.ndarray, R_t: np.ndarray, problem) -> np.ndarray:
-    """The floating base's six entries (x, y, z, yaw, pitch, roll; clipped into ``problem``'s box) putting a frame
-    whose pose relative to the root link is p_f (3,) m, R_f (3, 3) on the target p_t, R_t."""
-    R = R_t @ R_f.T
-    base = np.concatenate([p_t - R @ p_f, rpy(R)[0, ::-1]])
-    return np.minimum(np.maximum(base, problem.lower[:6]), problem.upper[:6])
-
-
-def _stance_goal(goals) -> int | None:
-    """The index of the first pose goal (position and orientation) on a support frame of a centre-of-mass goal (a
-    sole the robot stands on); None when there is none."""
-    soles = {f for g in goals if g.kind == COM_SUPPORT for f in g.frames}
-    return next((i for i, g in enumerate(goals) if g.kind == KIND_POSE and g.frame in soles and g.has_position
-                 and g.has_orientation), None)
 
 
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
