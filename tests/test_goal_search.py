@@ -6,7 +6,7 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.errors import FrameError
-from evoik_pin.goals import Pose, Position
+from evoik_pin.goals import CenterOfMass, Pose, Position
 from evoik_pin.problem import IKProblem
 from evoik_pin.robot.frames import find_frame
 from evoik_pin.solvers.search.seed_table import DEFAULT_GOAL_TABLE_SEEDS, default_table_size, seed_table
@@ -113,6 +113,24 @@ def test_composed_starts_take_each_goals_chain_from_its_own_nearest_entry(which,
     assert np.allclose(got, best, rtol=1e-9, atol=1e-12)  # every goal as near as its own nearest entry
     P0, R0 = _relative_poses(robot, table.Q[ranked[0]], frames)
     assert got.sum() <= _distances(table, goals, P0, R0, pt, Rt)[0].sum() + 1e-12
+
+
+@pytest.mark.parametrize("name, soles", [("g1", ("left_ankle_roll_link", "right_ankle_roll_link")),
+                                         ("talos", ("left_sole_link", "right_sole_link"))])
+def test_the_table_holds_the_upright_stance_and_a_stance_composes_its_legs(name, soles):
+    """The table's last entry is every joint at 0 clipped into the box (a humanoid URDF's upright stance): a stance
+    made from it (soles posed, the centre of mass over them) seen from the upright base gets a composed start whose
+    legs are that entry's, both soles exactly on their targets."""
+    robot = ek.load_robot(name, tips=list(soles), floating_base=True)
+    q = robot.clip(np.zeros(robot.n))
+    goals = [Pose(f, robot.fk(q, f)) for f in soles] + [CenterOfMass(support=list(soles), margin=0.02)]
+    problem = IKProblem(robot, goals)
+    table = _table(problem)
+    assert np.array_equal(table.Q[-1], q)
+    composed = next(iter(table.goal_starts(problem, 1)))
+    for g in goals[:2]:
+        assert np.allclose(robot.fk(np.concatenate([q[:6], composed[6:]]), g.frame).homogeneous,
+                           g.target.homogeneous, atol=1e-9)
 
 
 @pytest.mark.parametrize("which, index", [("baxter", 12)])

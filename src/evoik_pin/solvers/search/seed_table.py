@@ -65,7 +65,8 @@ def _pose_rows(sp: float, sr: float, positioned: bool, oriented: bool, planar: b
 
 
 class SeedTable:
-    """Configurations spread over a search box and their tip poses, searchable by nearness to a target.
+    """Configurations spread over a search box (the last: every joint at 0 clipped into it) and their tip poses,
+    searchable by nearness to a target.
 
     Attributes:
         Q: (size, n) configurations. positions: (size, 3) tip positions (m); rotations: (size, 3, 3).
@@ -74,6 +75,9 @@ class SeedTable:
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
+        if size:  # the last entry: every joint at 0 clipped into the box, a humanoid URDF's upright stance (random
+            # entries rarely stand: a stance's starts composed from them alone needed dozens of LM runs on G1)
+            self.Q[-1] = np.minimum(np.maximum(0.0, lower), upper)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
         self._goal_features: dict = {}  # (frames, goal_spec) -> goal_table_features; ("parts", ...) -> _goal_parts
