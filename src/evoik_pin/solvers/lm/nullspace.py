@@ -7,13 +7,16 @@ given answer (every goal met) to a local optimum of the criterion on its curve:
 1. the criterion's descent direction v (nearness: ``q0 - q``; manipulability: the gradient of Yoshikawa's
    ``sqrt(det(J J^T))`` of the first goal frame's Jacobian, by forward differences) projected on the null space of
    the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p pushes outward held;
-2. a step ``t p``, shortened to stay inside the box and within ``max_step``;
+2. a step ``t p``, shortened to stay inside the box and within ``max_step``; the box is the joint limits, full-turn
+   joints' too (LM leaves those open and wraps them): an answer beyond a limit, taken back into it, would land a turn
+   away from q0;
 3. Gauss-Newton steps from there until every goal is within its tolerances again (at most ``restore``);
 4. the step kept only when step 3 met every goal and the criterion improved (then the next t is the
    Barzilai-Borwein secant step), else t halves; the descent ends when t is below 1e-3 of its start or a kept
    step was shorter than :data:`MIN_STEP`.
 
-So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`).
+So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`) inside the
+limits.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ from numba import njit
 
 from .chain import coupled
 from .kernel import _copy, damped_solve, make_workspace, task_error, task_jacobian, weighted_stack, within
-from .layout import B_CHI, B_CLO, LAMBDA_MIN
+from .layout import B_HI, B_LO, LAMBDA_MIN
 from .tree_kinematics import frame_jacobian
 
 __all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "nullspace_kernel"]
@@ -172,8 +175,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
                 again = False
                 for k in range(n):
                     p[k] = 0.0 if held[k] else v[k] - dq[k]
-                    if not held[k] and ((q[k] <= box[B_CLO, k] + ON_BOUND and p[k] < 0.0)
-                                        or (q[k] >= box[B_CHI, k] - ON_BOUND and p[k] > 0.0)):
+                    if not held[k] and ((q[k] <= box[B_LO, k] + ON_BOUND and p[k] < 0.0)
+                                        or (q[k] >= box[B_HI, k] - ON_BOUND and p[k] > 0.0)):
                         held[k] = True
                         again = True
                 if not again:
@@ -201,13 +204,13 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
         s = min(t, max_step / norm)
         for k in range(n):
             if p[k] > 0.0:
-                s = min(s, (box[B_CHI, k] - q[k]) / p[k])
+                s = min(s, (box[B_HI, k] - q[k]) / p[k])
             elif p[k] < 0.0:
-                s = min(s, (box[B_CLO, k] - q[k]) / p[k])
+                s = min(s, (box[B_LO, k] - q[k]) / p[k])
         if s <= 0.0:
             break
         for k in range(n):
-            qn[k] = min(max(q[k] + s * p[k], box[B_CLO, k]), box[B_CHI, k])
+            qn[k] = min(max(q[k] + s * p[k], box[B_LO, k]), box[B_HI, k])
         # Gauss-Newton back onto the goals
         met = False
         for _r in range(restore + 1):
@@ -222,7 +225,7 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
             if not damped_solve(W, LAMBDA_MIN, cand.e, L, y, dq):
                 break
             for k in range(n):
-                qn[k] = min(max(qn[k] - dq[k], box[B_CLO, k]), box[B_CHI, k])
+                qn[k] = min(max(qn[k] - dq[k], box[B_LO, k]), box[B_HI, k])
         f_new = _criterion(mode, qn, q0, rev, support, cand.pg, cand.Z, cand.O, J, JJ) if met else np.inf
         if f_new < f - 1e-15 * max(1.0, abs(f)):
             _copy(q, q_prev)
