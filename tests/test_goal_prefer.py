@@ -486,6 +486,36 @@ def test_descent_never_worsens_the_criterion_and_keeps_the_goals(panda, seed, pr
         assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
 
 
+@pytest.mark.parametrize("prefer", ["nearest", "manipulability"])
+def test_descent_stays_within_the_limits_of_full_turn_joints(ur5, prefer):
+    """UR5's joints span two full turns (+-2 pi), limits LM's clip box leaves open (it wraps them): the descent
+    keeps every answer inside [lower, upper] all the same, q0 near the limits pulling it outward. Outside, an answer
+    taken back into the box lands a full turn from q0 (xArm's misses against TRAC-IK's Distance)."""
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
+
+    mode = MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        q_target = ur5.random_configurations(1, rng)[0]
+        q0 = np.where(rng.random(ur5.n) < 0.5, ur5.lower + 0.05, ur5.upper - 0.05)
+        T = ur5.fk(q_target)
+        lm = LevenbergMarquardt(ev.make_problem(ur5, T.translation, q0=q0)[0])
+        Q = []
+        while len(Q) < 3:  # answers near q0, inside the limits
+            run = lm.run(np.clip(q0 + rng.normal(size=ur5.n), ur5.lower, ur5.upper), 100)
+            if run.converged and ur5.within_bounds(run.q):
+                Q.append(run.q)
+        Q = np.array(Q)
+        Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
+        nullspace_kernel()["descend_batch"](Q, q0, mode, *lm._args, 30, 4, 0.5, Q_out, f)
+        for q_in, q_out in zip(Q, Q_out, strict=True):
+            assert ur5.within_bounds(q_out), (seed, q_out)
+            assert np.linalg.norm(ur5.fk(q_out).translation - T.translation) <= 1e-6
+            if prefer == "nearest":
+                assert np.linalg.norm(q_out - q0) <= np.linalg.norm(q_in - q0) + 1e-12
+
+
 def test_nearest_no_farther_than_lm_from_q0(panda):
     from evoik_pin.solvers.lm import LevenbergMarquardt
 
@@ -702,3 +732,35 @@ def test_prefer_manipulability_on_a_five_joint_arm():
         assert m_best >= m_first * (1 - 1e-9)
         gains.append(m_best > 1.01 * m_first)
     assert any(gains)
+
+
+def test_nearest_descent_measures_full_turn_joints_at_their_nearest_turn(ur5):
+    """The descent's criterion is |nearest_turn(q) - q0|^2, the distance prefer="nearest" ranks by (UR5's +-2 pi
+    joints): f_out equals it, it never grows, and a long descent ends where its gradient (the turned q - q0) has
+    no component along the self-motion wherever no joint is on a bound; a descent in plain differences stops short
+    of that when a joint ends more than pi from q0."""
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.lm.nullspace import MODE_NEAREST, nullspace_kernel
+
+    wrap = wrapping_joints(ur5, ur5.lower, ur5.upper)
+    stationary = 0
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        q_target, q0 = ur5.random_configurations(2, rng)
+        T = ur5.fk(q_target)
+        lm = LevenbergMarquardt(ev.make_problem(ur5, T.translation, q0=q0)[0])
+        _, Q = _answers(ur5, lm.problem, rng, 4)
+        Q = nearest_turn(Q, q0, ur5.lower, ur5.upper, wrap)
+        Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
+        nullspace_kernel()["descend_batch"](Q, q0, MODE_NEAREST, *lm._args, 300, 10, 0.5, Q_out, f)
+        for q_in, q_out, f_out in zip(Q, Q_out, f, strict=True):
+            g = nearest_turn(q_out, q0, ur5.lower, ur5.upper, wrap) - q0
+            assert f_out == pytest.approx(float(g @ g), rel=1e-9, abs=1e-12)
+            assert f_out <= float(np.sum((q_in - q0) ** 2)) + 1e-12
+            assert np.linalg.norm(ur5.fk(q_out).translation - T.translation) <= 1e-6
+            if np.min(np.minimum(q_out - ur5.lower, ur5.upper - q_out)) > 1e-6:
+                J = ur5.jacobian(q_out, "world")[:3]
+                along = g - np.linalg.pinv(J) @ (J @ g)
+                assert np.linalg.norm(along) <= 1e-5 * max(1.0, np.linalg.norm(g)), (seed, np.linalg.norm(along))
+                stationary += 1
+    assert stationary >= 20

@@ -4,16 +4,21 @@ A redundant arm's answers to a goal stack form curves (one per IK branch, cut by
 nearest q0 or the most dexterous one is a continuous optimum along such a curve. :func:`descend_batch` takes each
 given answer (every goal met) to a local optimum of the criterion on its curve:
 
-1. the criterion's descent direction v (nearness: ``q0 - q``; manipulability: the gradient of Yoshikawa's
-   ``sqrt(det(J J^T))`` of the first goal frame's Jacobian, by forward differences) projected on the null space of
-   the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p pushes outward held;
-2. a step ``t p``, shortened to stay inside the box and within ``max_step``;
+1. the criterion's descent direction v (nearness: ``q0 - q``, full-turn joints from their turn nearest q0 inside the
+   limits, as the answers are measured (:func:`~evoik_pin.solvers.search.prefer.nearest_turn`); manipulability: the
+   gradient of Yoshikawa's ``sqrt(det(J J^T))`` of the first goal frame's Jacobian, by forward differences)
+   projected on the null space of the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p
+   pushes outward held;
+2. a step ``t p``, shortened to stay inside the box and within ``max_step``; the box is the joint limits, full-turn
+   joints' too (LM leaves those open and wraps them): an answer beyond a limit, taken back into it, would land a turn
+   away from q0;
 3. Gauss-Newton steps from there until every goal is within its tolerances again (at most ``restore``);
 4. the step kept only when step 3 met every goal and the criterion improved (then the next t is the
    Barzilai-Borwein secant step), else t halves; the descent ends when t is below 1e-3 of its start or a kept
    step was shorter than :data:`MIN_STEP`.
 
-So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`).
+So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`) inside the
+limits.
 """
 
 from __future__ import annotations
@@ -25,12 +30,13 @@ from numba import njit
 
 from .chain import coupled
 from .kernel import _copy, damped_solve, make_workspace, task_error, task_jacobian, weighted_stack, within
-from .layout import B_CHI, B_CLO, LAMBDA_MIN
+from .layout import B_HI, B_LO, B_WRAP, LAMBDA_MIN, TWO_PI
 from .tree_kinematics import frame_jacobian
 
 __all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "nullspace_kernel"]
 
-#: What :func:`descend_batch` optimises: nearness to q0 (``|q - q0|^2``, lower is better) or manipulability
+#: What :func:`descend_batch` optimises: nearness to q0 (``|q - q0|^2``, full-turn joints at their turn nearest q0
+#: inside the limits; lower is better) or manipulability
 #: (``-sqrt(det(J J^T))`` of the first goal's frame, lower is better).
 MODE_NEAREST, MODE_MANIPULABILITY = 0, 1
 #: First step length (rad or m) of a manipulability ascent: its scale is unknown (no curvature to divide by).
@@ -82,12 +88,27 @@ def _manipulability(rev, support, pg, Z, O, J, JJ):
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def _criterion(mode, q, q0, rev, support, pg, Z, O, J, JJ):
+def _turned(q, q0, box, k):
+    """q[k] - q0[k], for a full-turn joint (``box``'s wrap row) from the turn of q[k] nearest q0[k] inside the
+    limits (the same pose; :func:`~evoik_pin.solvers.search.prefer.nearest_turn`'s rule)."""
+    d = q[k] - q0[k]
+    if box[B_WRAP, k] == 0.0:
+        return d
+    s = d - TWO_PI * np.round(d / TWO_PI)
+    if q0[k] + s > box[B_HI, k]:
+        s -= TWO_PI
+    if q0[k] + s < box[B_LO, k]:
+        s += TWO_PI
+    return s if box[B_LO, k] <= q0[k] + s <= box[B_HI, k] else d
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def _criterion(mode, q, q0, box, rev, support, pg, Z, O, J, JJ):
     """The criterion at q (lower is better), from q's kinematics buffers."""
     if mode == MODE_NEAREST:
         s = 0.0
         for k in range(q.shape[0]):
-            d = q[k] - q0[k]
+            d = _turned(q, q0, box, k)
             s += d * d
         return s
     return -_manipulability(rev, support, pg, Z, O, J, JJ)
@@ -98,8 +119,9 @@ def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, re
     """Each answer Q[i] (N, n) taken along its self-motion manifold to a local optimum of the criterion (``mode``,
     see the module docstring) in at most ``iterations`` kept-or-rejected steps, each restored to the goals by at
     most ``restore`` Gauss-Newton steps; the result to Q_out[i] (Q[i] itself when no step was kept or Q[i] does not
-    meet the goals) and its criterion to f_out[i] (|q - q0|^2 or -manipulability). ``max_step`` (rad or m): the
-    longest step. The other arguments are the kernel's (:func:`.kernel.lm_run_buffers`; no joint wraps here).
+    meet the goals; inside the box's limits, B_LO and B_HI) and its criterion to f_out[i] (|q - q0|^2 with full-turn
+    joints at their turn nearest q0, or -manipulability). ``max_step`` (rad or m): the longest step. The other
+    arguments are the kernel's (:func:`.kernel.lm_run_buffers`; joints are not wrapped here).
     Returns the kinematics evaluations made."""
     N, n = Q.shape
     ws = make_workspace(kin, goals, n, 1)
@@ -131,7 +153,7 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
     _copy(q_start, q)
     task_error(True, kin, mimic, goals, weighted, pt, Rt, q, cur, ws)
     evaluations = 1
-    f = _criterion(mode, q, q0, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
+    f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
     _copy(q, q_out)
     f_out[i] = f
     if not within(spec, cur.ge):
@@ -147,13 +169,13 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
             # candidate's buffers only)
             if mode == MODE_NEAREST:
                 for k in range(n):
-                    v[k] = q0[k] - q[k]
+                    v[k] = -_turned(q, q0, box, k)
             else:
                 for k in range(n):
                     _copy(q, qn)
                     qn[k] += MANIP_H
                     task_error(True, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
-                    v[k] = (-_criterion(mode, qn, q0, rev, support, cand.pg, cand.Z, cand.O, J, JJ) + f) / MANIP_H
+                    v[k] = (-_criterion(mode, qn, q0, box, rev, support, cand.pg, cand.Z, cand.O, J, JJ) + f) / MANIP_H
                 evaluations += n
             task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, cur, ws, E)
             # p: v projected on the null space of E, joints on a bound that p pushes outward held (twice: holding
@@ -172,8 +194,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
                 again = False
                 for k in range(n):
                     p[k] = 0.0 if held[k] else v[k] - dq[k]
-                    if not held[k] and ((q[k] <= box[B_CLO, k] + ON_BOUND and p[k] < 0.0)
-                                        or (q[k] >= box[B_CHI, k] - ON_BOUND and p[k] > 0.0)):
+                    if not held[k] and ((q[k] <= box[B_LO, k] + ON_BOUND and p[k] < 0.0)
+                                        or (q[k] >= box[B_HI, k] - ON_BOUND and p[k] > 0.0)):
                         held[k] = True
                         again = True
                 if not again:
@@ -201,13 +223,13 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
         s = min(t, max_step / norm)
         for k in range(n):
             if p[k] > 0.0:
-                s = min(s, (box[B_CHI, k] - q[k]) / p[k])
+                s = min(s, (box[B_HI, k] - q[k]) / p[k])
             elif p[k] < 0.0:
-                s = min(s, (box[B_CLO, k] - q[k]) / p[k])
+                s = min(s, (box[B_LO, k] - q[k]) / p[k])
         if s <= 0.0:
             break
         for k in range(n):
-            qn[k] = min(max(q[k] + s * p[k], box[B_CLO, k]), box[B_CHI, k])
+            qn[k] = min(max(q[k] + s * p[k], box[B_LO, k]), box[B_HI, k])
         # Gauss-Newton back onto the goals
         met = False
         for _r in range(restore + 1):
@@ -222,8 +244,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
             if not damped_solve(W, LAMBDA_MIN, cand.e, L, y, dq):
                 break
             for k in range(n):
-                qn[k] = min(max(qn[k] - dq[k], box[B_CLO, k]), box[B_CHI, k])
-        f_new = _criterion(mode, qn, q0, rev, support, cand.pg, cand.Z, cand.O, J, JJ) if met else np.inf
+                qn[k] = min(max(qn[k] - dq[k], box[B_LO, k]), box[B_HI, k])
+        f_new = _criterion(mode, qn, q0, box, rev, support, cand.pg, cand.Z, cand.O, J, JJ) if met else np.inf
         if f_new < f - 1e-15 * max(1.0, abs(f)):
             _copy(q, q_prev)
             _copy(p, p_prev)
