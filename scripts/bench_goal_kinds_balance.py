@@ -47,6 +47,7 @@ from evoik_pin.goals.center_of_mass import com_of, contact_points, polygon_dista
 
 SCRIPTS = Path(__file__).resolve().parent
 sys.path.insert(0, str(SCRIPTS))
+from bench_balance_humanoids import make_problems  # noqa: E402
 from bench_ik import cpu_model  # noqa: E402
 
 DOCS = SCRIPTS.parent / "docs" / "BENCHMARKS.md"
@@ -66,15 +67,7 @@ def stance_goals(talos) -> list:
 
 def talos_problems(talos, n: int, seed: int) -> list[list]:
     """``n`` wrist pose pairs reached by standing configurations (see the module docstring)."""
-    stance, rng, out, tries = stance_goals(talos), np.random.default_rng(seed), [], 0
-    while len(out) < n:
-        tries += 1
-        start = talos.random_configurations(1, rng)[0]
-        start[:6] = STANCE_BASE
-        r = ek.solve(talos, stance, q0=start, seed=tries, timeout=None, max_restarts=2)
-        if r.success:
-            out.append([Pose(f, talos.fk(r.q, f)) for f in WRISTS])
-    return out
+    return make_problems(talos, stance_goals(talos), WRISTS, np.array(STANCE_BASE), n, seed)[0]
 
 
 def baxter_problems(baxter, n: int, seed: int) -> list[pin.SE3]:
