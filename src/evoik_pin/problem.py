@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import BoundsError, ConfigurationError, OptionError
+from .errors import ConfigurationError, OptionError
 from .goals import bind, is_goal_list
 from .goals.goal import FramePair
 from .goals.registry import KIND_BEYOND_FRAME
@@ -155,7 +155,7 @@ class IKProblem:
         else:
             lower = self.robot.lower if self.lower is None else np.asarray(self.lower, dtype=float)
             upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
-            self.lower, self.upper = self._checked_bounds(lower, upper)
+            self.lower, self.upper = self.robot.checked_bounds(lower, upper)
         if self.q0 is not None:
             try:
                 self.q0 = self.robot.check_q(self.q0)
@@ -169,18 +169,6 @@ class IKProblem:
             raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
         if self.goals is None and self.objective is None:
             self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
-
-    def _checked_bounds(self, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        n = self.robot.n
-        lower, upper = lower.reshape(-1), upper.reshape(-1)
-        if lower.shape != (n,) or upper.shape != (n,):
-            raise BoundsError(f"bounds need {n} values each (one per joint), got {lower.size} and {upper.size}")
-        if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
-            raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
-        if (lower > upper).any():
-            k = int(np.nonzero(lower > upper)[0][0])
-            raise BoundsError(f"inverted bounds for joint {self.robot.joint_names[k]!r}: {lower[k]} > {upper[k]}")
-        return lower.copy(), upper.copy()
 
     @property
     def n(self) -> int:

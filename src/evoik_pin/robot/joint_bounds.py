@@ -66,10 +66,15 @@ class JointBounds:
 
     def set_bounds(self, lower, upper) -> None:
         """Replace the search bounds (rad or m), each (n,), finite, lower <= upper."""
-        lower = np.asarray(lower, dtype=float).reshape(-1)
-        upper = np.asarray(upper, dtype=float).reshape(-1)
+        self.lower, self.upper = self.checked_bounds(lower, upper)
+
+    def checked_bounds(self, lower, upper) -> tuple[np.ndarray, np.ndarray]:
+        """``lower`` and ``upper`` as float arrays (n,) of their own (rad or m), or a BoundsError naming what is wrong:
+        a count other than n, NaN or inf, lower > upper."""
+        lower = np.array(lower, dtype=float).reshape(-1)
+        upper = np.array(upper, dtype=float).reshape(-1)
         if lower.shape != (self.n,) or upper.shape != (self.n,):
-            raise BoundsError(f"bounds of {self.name} need {self.n} values each (one per joint), got {lower.size} "
+            raise BoundsError(f"bounds need {self.n} values each (one per joint of {self.name}), got {lower.size} "
                               f"and {upper.size}")
         if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
             raise BoundsError("bounds must be finite numbers (rad or m); got NaN or inf")
@@ -78,7 +83,7 @@ class JointBounds:
             k = int(bad[0])
             raise BoundsError(f"inverted bounds for joint {self.joint_names[k]!r}: lower {lower[k]:.6g} > upper "
                               f"{upper[k]:.6g}")
-        self.lower, self.upper = lower, upper
+        return lower, upper
 
     def check_q(self, q) -> np.ndarray:
         """``q`` as a float array of shape (n,), or a ConfigurationError naming the problem."""
