@@ -7,13 +7,14 @@ fields, how its target is read and written) built from the readers and writers h
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
+from ..io import datafile
 from ..io.datafile import Flow
 from ..target import Target
 from .goal import DEFAULT_GOAL_TOLERANCE
@@ -22,30 +23,10 @@ __all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_en
            "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",
            "unknown_keys", "vector_target"]
 
-#: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
-_NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
-
-
-def number(value, what: str) -> float:
-    """A finite number (int, float, or YAML 1.1's text of one such as ``1e-6``; not a bool)."""
-    if isinstance(value, str) and _NUMBER_TEXT.fullmatch(value.strip()):
-        value = float(value)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise GoalsFileError(f"{what} must be a finite number, got {value!r}")
-    return float(value)
-
-
-def numbers(value, count: int, what: str) -> np.ndarray:
-    if not isinstance(value, list) or len(value) != count:
-        raise GoalsFileError(f"{what} must be a list of {count} numbers, got {value!r}")
-    return np.array([number(v, f"{what}[{k}]") for k, v in enumerate(value)])
-
-
-def unknown_keys(entry: dict, accepted, what: str) -> None:
-    unknown = [k for k in entry if k not in accepted]
-    if unknown:
-        raise GoalsFileError(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: "
-                             f"{', '.join(accepted)}")
+#: The data files' field readers (:mod:`evoik_pin.io.datafile`) raising GoalsFileError.
+number = partial(datafile.number, error=GoalsFileError)
+numbers = partial(datafile.numbers, error=GoalsFileError)
+unknown_keys = partial(datafile.unknown_keys, error=GoalsFileError)
 
 
 def pose_target(target: dict) -> Target:

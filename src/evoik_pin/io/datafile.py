@@ -5,9 +5,16 @@ with line and column, UTF-8). Each function takes the ``where`` its errors start
 from __future__ import annotations
 
 import json
+import math
+import re
 from pathlib import Path
 
-__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "read_data", "write_data"]
+import numpy as np
+
+__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "number", "numbers", "read_data", "unknown_keys", "write_data"]
+
+#: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
+_NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 
 #: File extensions and the format each selects.
 DATA_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
@@ -76,3 +83,27 @@ def write_data(path: Path, data, header: str, what: str, error: type[Exception])
     except OSError as exc:
         raise error(f"cannot write the {what} {str(path)!r}: {exc.strerror or exc}") from None
     return path
+
+
+def number(value, what: str, positive: bool = False, *, error: type[Exception]) -> float:
+    """A finite number (int, float, or YAML 1.1's text of one such as ``1e-6``; not a bool), > 0 when ``positive``."""
+    if isinstance(value, str) and _NUMBER_TEXT.fullmatch(value.strip()):
+        value = float(value)
+    if (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
+            or (positive and value <= 0)):
+        raise error(f"{what} must be a finite number{' > 0' if positive else ''}, got {value!r}")
+    return float(value)
+
+
+def numbers(value, count: int, what: str, positive: bool = False, *, error: type[Exception]) -> np.ndarray:
+    """A list of ``count`` :func:`number` s as a float array (count,)."""
+    if not isinstance(value, list) or len(value) != count:
+        raise error(f"{what} must be a list of {count} numbers{' > 0' if positive else ''}, got {value!r}")
+    return np.array([number(v, f"{what}[{k}]", positive, error=error) for k, v in enumerate(value)])
+
+
+def unknown_keys(entry: dict, accepted, what: str, *, error: type[Exception]) -> None:
+    """An ``error`` naming the keys of ``entry`` not among ``accepted``, and the accepted ones."""
+    unknown = [k for k in entry if k not in accepted]
+    if unknown:
+        raise error(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: {', '.join(accepted)}")

@@ -25,9 +25,9 @@ Unknown keys are errors; every error is a :class:`~evoik_pin.errors.SceneError` 
 
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -35,7 +35,7 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import Flow, read_data, write_data
+from .datafile import Flow, number, numbers, read_data, unknown_keys, write_data
 
 __all__ = ["SceneFile", "read_scene", "write_scene"]
 
@@ -57,24 +57,10 @@ class SceneFile:
     obstacles: list[tuple[str, str, dict, pin.SE3]]
 
 
-def _number(value, what: str, positive: bool = False) -> float:
-    """A finite number (int or float, not a bool nor a string), > 0 when ``positive``."""
-    if (isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
-            or (positive and value <= 0)):
-        raise SceneError(f"{what} must be a finite number{' > 0' if positive else ''}, got {value!r}")
-    return float(value)
-
-
-def _numbers(value, count: int, what: str, positive: bool = False) -> list[float]:
-    if not isinstance(value, list) or len(value) != count:
-        raise SceneError(f"{what} must be a list of {count} numbers{' > 0' if positive else ''}, got {value!r}")
-    return [_number(v, f"{what}[{k}]", positive) for k, v in enumerate(value)]
-
-
-def _unknown_keys(entry: dict, accepted, what: str) -> None:
-    unknown = [k for k in entry if k not in accepted]
-    if unknown:
-        raise SceneError(f"{what}: unknown key(s) {', '.join(map(repr, unknown))}; accepted: {', '.join(accepted)}")
+#: The data files' field readers raising SceneError.
+_number = partial(number, error=SceneError)
+_numbers = partial(numbers, error=SceneError)
+_unknown_keys = partial(unknown_keys, error=SceneError)
 
 
 def _pose(value, what: str) -> pin.SE3:
