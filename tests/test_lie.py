@@ -167,3 +167,18 @@ def test_compiled_log3_log6_and_their_jacobians_equal_pinocchio_and_the_batch_fo
             Jl = pin.Jlog6(M)
             assert np.abs(A - pin.Jlog3(Rm)).max() < 1e-9
             assert np.abs(A - Jl[:3, :3]).max() < 1e-9 and np.abs(B - Jl[:3, 3:]).max() < 1e-9
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=3, max_size=3), st.floats(1e-4, 0.5))
+def test_is_rotation_accepts_rotations_and_refuses_the_rest(phi, scale):
+    from evoik_pin.lie import is_rotation
+
+    R = lie.exp3(np.array(phi))[0]
+    assert is_rotation(R) and is_rotation(np.stack([R, R])).all()
+    assert not is_rotation(R * (1.0 + scale))  # scaled
+    assert not is_rotation(-R)  # a reflection: det -1
+    bad = R.copy()
+    bad[0, 0] = np.nan
+    assert not is_rotation(bad)
+    assert is_rotation(np.stack([R, bad])).tolist() == [True, False]

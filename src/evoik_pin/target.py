@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import TargetError
+from .lie import is_rotation
 
 __all__ = ["MAX_TARGET_NORM", "Target", "pose_arrays"]
 
@@ -208,9 +209,7 @@ class Target:
         if far.size:
             k = int(far[0])
             raise TargetError(f"target {k}: {_beyond_text(H[k, :3, 3])}")
-        R = np.clip(H[:, :3, :3], -2.0, 2.0)
-        ortho = np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)).max(axis=(1, 2))
-        bad = np.nonzero((ortho > 1e-6) | (np.linalg.det(R) < 0))[0]
+        bad = np.nonzero(~is_rotation(H[:, :3, :3]))[0]
         if bad.size:
             raise TargetError(f"target {int(bad[0])}: rotation is not a rotation matrix (R^T R must be I and "
                               "det R = +1 to 1e-6)")

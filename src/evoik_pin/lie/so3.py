@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["angle", "exp3", "jlog3", "log3", "relative_angle", "rotation_to_z", "rpy", "skew", "wrap_angle", "yaw"]
+__all__ = ["angle", "exp3", "is_rotation", "jlog3", "log3", "relative_angle", "rotation_to_z", "rpy", "skew",
+           "wrap_angle", "yaw"]
 
 #: Pinocchio's series thresholds (TaylorSeriesExpansion precision<3> and <2>: eps^(1/3), eps^(1/2)).
 PREC3, PREC2 = np.finfo(np.float64).eps ** (1.0 / 3.0), np.finfo(np.float64).eps ** 0.5
@@ -17,6 +18,15 @@ NEAR_PI = 1e-3
 def wrap_angle(a):
     """Angles (any shape, rad) wrapped into [-pi, pi)."""
     return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def is_rotation(R: np.ndarray, tol: float = 1e-6):
+    """Whether each (3, 3) matrix of R (..., 3, 3) is a rotation: every entry of R^T R - I within ``tol`` and
+    det R >= 0 (False for NaN or inf). Shape (...,) bool."""
+    R = np.asarray(R, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        ortho = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1))
+        return (ortho <= tol) & (np.linalg.det(np.nan_to_num(R, nan=0.0, posinf=0.0, neginf=0.0)) >= 0)
 
 
 def skew(v: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SceneError
+from ..lie import is_rotation
 
 __all__ = ["convex_hulls", "robot_collision_model", "self_collision_pairs"]
 
@@ -71,8 +72,7 @@ def as_placement(pose, what: str) -> pin.SE3:
     if H.shape != (4, 4) or not np.isfinite(H).all():
         raise SceneError(f"{what}: pose must be a finite 4 x 4 homogeneous matrix (or a pin.SE3), got shape {H.shape}")
     R = H[:3, :3]
-    if (np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0
-            or np.abs(H[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9):
+    if not is_rotation(R) or np.abs(H[3] - [0.0, 0.0, 0.0, 1.0]).max() > 1e-9:
         raise SceneError(f"{what}: pose is not a rigid transform (the rotation block must be orthonormal with "
                          "det +1 and the bottom row [0 0 0 1]); scaling and shear are not accepted")
     return pin.SE3(R, H[:3, 3])

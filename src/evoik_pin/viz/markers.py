@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
+from ..lie import is_rotation
 from .server import _talks
 
 __all__ = ["GOAL_LABEL_HEIGHT"]
@@ -24,7 +25,7 @@ def _check_rotation(rotation, what: str) -> np.ndarray:
     R = np.asarray(rotation, dtype=float)
     if R.shape != (3, 3) or not np.all(np.isfinite(R)):
         raise TargetError(f"{what} rotation must be a finite (3, 3) matrix, got shape {R.shape}")
-    if not (np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0):
+    if not is_rotation(R):
         raise TargetError(f"{what} rotation is not a rotation matrix (R^T R != I or det R != 1)")
     return R
 
