@@ -26,7 +26,9 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -40,6 +42,9 @@ from evoik_pin.objectives import (
     position_errors,
 )
 from evoik_pin.solvers.paper.nsga2 import nsga2_minimize
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_ik import cpu_model  # noqa: E402
 
 GAINS = np.array([10.0, 10.0, 1.0, 1.0, 1.0])
 VEHICLE_TARGET = Target.planar_target(1.5, 0.5, 0.0)
@@ -218,8 +223,7 @@ def main():
     zdt_seeds = list(range(2 if args.quick else args.zdt_seeds))
     veh_seeds = list(range(2 if args.quick else args.vehicle_seeds))
     zdt_gens, veh_gens, mode_gens = (40, 10, 40) if args.quick else (250, 100, 200)
-    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo") if "model name" in line),
-               platform.processor()) if os.path.exists("/proc/cpuinfo") else platform.processor()
+    cpu = cpu_model()
     import pymoo
 
     print(f"machine: {cpu}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy {np.__version__}, "

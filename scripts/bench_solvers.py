@@ -40,6 +40,9 @@ import evoik_pin as ek
 from evoik_pin.api import make_problem
 from evoik_pin.solvers import get_solver
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_ik import cpu_model  # noqa: E402
+
 #: Points' seed (Scenario 2); ISADE's defaults were tuned on points of another seed (7).
 POINTS_SEED = 2026
 METHODS = ("isade", "de", "pso", "scipy", "scipy-002")
@@ -48,16 +51,6 @@ SCIPY_SETTINGS = {
     "scipy": dict(strategy="best1bin", popsize=15, mutation=(0.5, 1.0), recombination=0.7),
     "scipy-002": dict(strategy="best1bin", popsize=5, mutation=0.5, recombination=0.9),
 }
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
 
 
 def scenario2_points(robot, count: int, seed: int = POINTS_SEED) -> np.ndarray:
