@@ -197,20 +197,27 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return np.divide(v, n, out=np.zeros_like(v), where=n > 1e-12)
 
 
-def _sole_height(robot, frame: str, q: np.ndarray) -> float:
-    """Height (m) of ``frame``'s origin over the lowest corner of the collision boxes moved by its joint, at q:
-    the sole's height under an ankle frame (0 when that joint carries no collision geometry)."""
+def _foot_corners(robot, frame: str) -> np.ndarray:
+    """(K, 3) corners (m, in ``frame``'s axes, from its origin) of the collision boxes its joint carries, or (0, 3)
+    without collision geometry."""
+    q = np.zeros(robot.n)
     joint = robot.model.frames[robot.frame_id(frame)].parentJoint
     model = robot.collision_model
-    placements = robot.geometry_placements(model, q)
-    lowest = np.inf
-    for obj, placement in zip(model.geometryObjects, placements, strict=True):
-        if obj.parentJoint != joint:
-            continue
-        corners = _box_corners(obj.geometry)
-        lowest = min(lowest, float((corners @ placement.rotation.T + placement.translation)[:, 2].min()))
-    z = float(robot.fk(q, frame).translation[2])
-    return z - lowest if np.isfinite(lowest) else 0.0
+    corners = [_box_corners(obj.geometry) @ placement.rotation.T + placement.translation
+               for obj, placement in zip(model.geometryObjects, robot.geometry_placements(model, q), strict=True)
+               if obj.parentJoint == joint]
+    if not corners:
+        return np.zeros((0, 3))
+    pose = robot.fk(q, frame)
+    return (np.concatenate(corners) - pose.translation) @ pose.rotation
+
+
+def _sole_height(robot, frame: str, corners: np.ndarray, q: np.ndarray) -> float:
+    """Height (m) of ``frame``'s origin over the lowest of its foot's ``corners`` (:func:`_foot_corners`) at q: the
+    sole's height under an ankle frame at that tilt (0 without collision geometry)."""
+    if not len(corners):
+        return 0.0
+    return -float((corners @ robot.fk(q, frame).rotation[2]).min())
 
 
 def _half_width(robot, frame: str, axis: np.ndarray) -> float:
@@ -266,7 +273,9 @@ class _Plan:
         self.origin = origin
         self.points = origin + self.scale * (src - origin)  # (N, K, 3) the source in the robot's world, m
         self.contacts = self._contacts(robot, motion, contacts, feet_keys)
-        self.sole = {f: _sole_height(robot, f, q_neutral) for f in self.contacts}
+        #: each foot's collision-box corners in its frame, and the sole's height under it at neutral
+        self.corners = {f: _foot_corners(robot, f) for f in self.contacts}
+        self.sole = {f: _sole_height(robot, f, self.corners[f], q_neutral) for f in self.contacts}
         #: bool (n,): the joints placing a foot frame (the floating base included), kept when a collision steps back
         self.foot_joints = np.array([any(name in robot.moving_joints(f) for f in self.contacts)
                                      for name in robot.joint_names])
@@ -648,7 +657,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         touched = _update_holds(plan, i, holds, robot, q_prev)
         # a swing foot tilts (toe-off, heel strike): its frame keeps the height over the floor that its lowest
         # corner needs at the previous frame's tilt, which changes little in one frame
-        clearance = {f: max(plan.sole[f], _sole_height(robot, f, q_prev)) if i > 0 else plan.sole[f]
+        clearance = {f: max(plan.sole[f], _sole_height(robot, f, plan.corners[f], q_prev)) if i > 0 else plan.sole[f]
                      for f in plan.contacts}
         level = {f: _level(robot, plan, f, q_prev) for f in plan.contacts}
         goals_of = functools.partial(_frame_goals, plan, i, holds, clearance=clearance, level=level)
@@ -667,7 +676,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         for _ in range(FLOOR_RETRIES):
             # the tilt the answer gave a swing foot may put its lowest corner under the floor: once more from
             # the answer with that foot's frame kept as high as this tilt needs
-            need = {f: _sole_height(robot, f, q_new) for f in plan.contacts if f not in holds}
+            need = {f: _sole_height(robot, f, plan.corners[f], q_new) for f in plan.contacts if f not in holds}
             low = {f: h for f, h in need.items() if plan.ground is not None
                    and float(robot.fk(q_new, f).translation[2]) - plan.ground < h - FLOOR_SLACK}
             if not low:
