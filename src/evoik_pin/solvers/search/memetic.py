@@ -146,6 +146,35 @@ def memetic(
     return setup.solve(problem, rng, t_setup)
 
 
+
+def _load_variant(lm: LevenbergMarquardt, which: str, what: str, args: tuple) -> tuple[object, float]:
+    """The compiled first runs ``which`` (``"first_runs"`` or ``"goal_first_runs"``, :mod:`.first_runs`) in the
+    variant of ``lm``'s kernel, and the seconds spent loading it: the first time in the process it is compiled (once
+    per install, with a notice naming ``what``) or loaded from numba's cache, on ``args`` (the caller makes the runs
+    again: they only write args' buffers)."""
+    t = time.perf_counter()
+    from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
+
+    extra = later_kinds(lm.goals)  # the variant of the engine's kernel
+    function = getattr(compiled, which if extra else which + "_basic")
+    if function in _LOADED:
+        return function, 0.0
+    load(f"memetic's {what} for " + ("every goal kind" if extra else "pose, position and planar goals"),
+         [(function, args)], FIRST_RUNS_COMPILE_SECONDS)
+    _LOADED.append(function)
+    return function, time.perf_counter() - t
+
+
+def _entry_point(function, args: tuple):
+    """numba's compiled entry of ``function`` for ``args``' types, called directly from then on (without numba's
+    typing of every argument); ``function`` itself on a numba without overloads' entry points."""
+    from numba import typeof
+
+    try:
+        return function.overloads[tuple(typeof(a) for a in args)].entry_point
+    except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
+        return function
+
 class MemeticSetup:
     """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve: the seed table
     of the box, the LM engines retargeted in place, the compiled first-runs entries. :meth:`solve` is :func:`memetic`'s
@@ -212,26 +241,9 @@ class MemeticSetup:
             if kept[0] is lm._args and kept[1] is table:
                 self._entry = kept
                 return kept[2](*args), 0.0
-        t = time.perf_counter()
-        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
-
-        extra = later_kinds(lm.goals)  # the variant of the engine's kernel
-        first_runs = compiled.first_runs if extra else compiled.first_runs_basic
-        loading = 0.0
-        if first_runs not in _LOADED:
-            # compiled (once per install, with a notice) or loaded from numba's cache; the runs are made again below
-            # (they only write args' buffers)
-            load("memetic's first runs for " + ("every goal kind" if extra else "pose, position and planar goals"),
-                 [(first_runs, args)], FIRST_RUNS_COMPILE_SECONDS)
-            loading = time.perf_counter() - t
-            _LOADED.append(first_runs)
+        first_runs, loading = _load_variant(lm, "first_runs", "first runs", args)
         if kept_table is not None:  # not this setup's first solve: it is kept
-            from numba import typeof
-
-            try:
-                entry = first_runs.overloads[tuple(typeof(a) for a in args)].entry_point
-            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
-                entry = first_runs
+            entry = _entry_point(first_runs, args)
         self._entry = (lm._args, table, entry)
         if entry is not None and entry is not first_runs:  # a compiled entry found (not on the setup's first solve)
             self._entries = [self._entry, *self._entries[:KEPT_ENGINES - 1]]
@@ -245,29 +257,10 @@ class MemeticSetup:
                 if i:  # by index: list.remove compares the entries' arrays (ValueError)
                     entries.insert(0, entries.pop(i))
                 return kept[2](*args), 0.0
-        t = time.perf_counter()
-        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too
-
-        extra = later_kinds(lm.goals)  # the variant of the engine's kernel
-        goal_first_runs = compiled.goal_first_runs if extra else compiled.goal_first_runs_basic
-        loading = 0.0
-        if goal_first_runs not in _LOADED:
-            # compiled (once per install, with a notice) or loaded from numba's cache; the runs are made again below
-            # (they only write args' buffers)
-            load("memetic's first runs of goal lists for " + ("every goal kind" if extra else
-                                                              "pose, position and planar goals"),
-                 [(goal_first_runs, args)], FIRST_RUNS_COMPILE_SECONDS)
-            loading = time.perf_counter() - t
-            _LOADED.append(goal_first_runs)
+        goal_first_runs, loading = _load_variant(lm, "goal_first_runs", "first runs of goal lists", args)
         out = goal_first_runs(*args)
         if lm._owned:  # the engine's arrays are its own (its second problem on): its arguments stay, keep the entry
-            from numba import typeof
-
-            try:
-                entry = goal_first_runs.overloads[tuple(typeof(a) for a in args)].entry_point
-            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
-                entry = goal_first_runs
-            self._goal_entries = [(lm._args, table, entry), *entries[:KEPT_ENGINES - 1]]
+            self._goal_entries = [(lm._args, table, _entry_point(goal_first_runs, args)), *entries[:KEPT_ENGINES - 1]]
         return out, loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
