@@ -24,7 +24,7 @@ def is_rotation(R: np.ndarray, tol: float = 1e-6):
     """Whether each (3, 3) matrix of R (..., 3, 3) is a rotation: every entry of R^T R - I within ``tol`` and
     det R >= 0 (False for NaN or inf). Shape (...,) bool."""
     R = np.asarray(R, dtype=float)
-    with np.errstate(invalid="ignore", over="ignore"):
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         ortho = np.abs(np.swapaxes(R, -1, -2) @ R - np.eye(3)).max(axis=(-2, -1))
         return (ortho <= tol) & (np.linalg.det(np.nan_to_num(R, nan=0.0, posinf=0.0, neginf=0.0)) >= 0)
 
