@@ -14,7 +14,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import MotionError
-from .motion import Motion
+from .motion import Motion, positive_number
 
 __all__ = ["CONTACT_HEIGHT_M", "CONTACT_SPEED_MPS", "DEFAULT_FEET", "detect_contacts", "ground_height"]
 
@@ -48,13 +48,7 @@ def _feet(motion: Motion, feet: Sequence[str] | None) -> tuple[str, ...]:
 def _threshold(value, default: float, what: str, unit: str) -> float:
     if value is None:
         return default
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise MotionError(f"contact {what} threshold must be a finite number > 0 ({unit}); got {value!r}") from None
-    if not np.isfinite(v) or v <= 0.0:
-        raise MotionError(f"contact {what} threshold must be a finite number > 0 ({unit}); got {value!r}")
-    return v
+    return positive_number(value, f"contact {what} threshold must be a finite number > 0 ({unit}); got {value!r}")
 
 
 def ground_height(motion: Motion, feet: Sequence[str] | None = None) -> float:

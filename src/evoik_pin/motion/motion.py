@@ -17,6 +17,17 @@ from ..robot.frames import closest_names
 __all__ = ["Motion"]
 
 
+
+def positive_number(value, message: str, error: type[Exception] = MotionError) -> float:
+    """``value`` as a float when it is a finite number > 0 (a numeric string too), else ``error(message)``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise error(message) from None
+    if not np.isfinite(v) or v <= 0.0:
+        raise error(message)
+    return v
+
 class Motion:
     """Keypoint trajectories: ``positions`` (N, K, 3) in m in a z-up world frame, ``names`` (K,) and ``fps`` (Hz).
 
@@ -52,12 +63,7 @@ class Motion:
         if len(index) != len(names):
             twice = sorted({n for n in names if names.count(n) > 1})
             raise MotionError(f"Motion names must be unique; repeated: {twice}")
-        try:
-            rate = float(fps)
-        except (TypeError, ValueError):
-            raise MotionError(f"Motion fps must be a finite number > 0 (frames per second); got {fps!r}") from None
-        if not np.isfinite(rate) or rate <= 0.0:
-            raise MotionError(f"Motion fps must be a finite number > 0 (frames per second); got {fps!r}")
+        rate = positive_number(fps, f"Motion fps must be a finite number > 0 (frames per second); got {fps!r}")
         p.setflags(write=False)
         self.positions = p
         self.names = names

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 from ..errors import BvhError
+from .motion import positive_number
 
 __all__ = ["HUMAN_HEIGHT_M", "UNITS", "infer_unit", "unit_scale"]
 
@@ -28,13 +29,8 @@ def unit_scale(unit) -> float:
         if unit in UNITS:
             return UNITS[unit]
         raise BvhError(f"unknown unit {unit!r}; accepted: one of {list(UNITS)} or a number of m per file unit")
-    try:
-        scale = float(unit)
-    except (TypeError, ValueError):
-        raise BvhError(f"unit must be one of {list(UNITS)} or a number of m per file unit; got {unit!r}") from None
-    if not math.isfinite(scale) or scale <= 0.0:
-        raise BvhError(f"unit as a number must be finite and > 0 (m per file unit); got {unit!r}")
-    return scale
+    return positive_number(unit, f"unit must be one of {list(UNITS)} or a finite number > 0 of m per file unit; "
+                           f"got {unit!r}", BvhError)
 
 
 def infer_unit(size: float) -> str:
