@@ -95,7 +95,7 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
 def run_with_verdicts(problem: IKProblem, method: str, solve, polish: bool, rng) -> Result:
     """``solve(problem, rng)`` (a goal list: on ``method``'s own problem of it, :func:`_goal_method_problem`), then
     the LM ``polish`` when asked and the verdicts (:func:`with_verdicts`)."""
-    solved = problem if problem.goals is None else _goal_method_problem(method, problem)
+    solved = problem if problem.target is not None else _goal_method_problem(method, problem)
     result = solve(solved, rng)
     if polish:
         from .solvers.lm.polish import polish_result
@@ -107,7 +107,7 @@ def run_with_verdicts(problem: IKProblem, method: str, solve, polish: bool, rng)
 def with_verdicts(problem: IKProblem, result: Result) -> Result:
     """``result`` judged goal by goal (a goal list: :func:`_with_goal_verdict`), then against the scene
     (:func:`~evoik_pin.solvers.collision_verdict.with_collision_verdict`)."""
-    if problem.goals is not None:
+    if problem.target is None:
         result = _with_goal_verdict(problem, result)
     return with_collision_verdict(problem, result)
 

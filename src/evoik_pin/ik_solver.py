@@ -30,7 +30,7 @@ from .errors import ConfigurationError, EvoikError, OptionError
 from .goals import is_goal_list
 from .goals.goal import Goal
 from .goals.preferences import Preference
-from .goals.stack import bind
+from .goals.stack import bind, tip_goals
 from .objectives import default_objective
 from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
 from .result import Result
@@ -132,10 +132,12 @@ class IKSolver:
             return self._goal_problem(bind(self.robot, target), q0)
         target = Target.coerce(target)
         p = object.__new__(IKProblem)
+        goals, *stack = tip_goals(self.robot, target, template.tolerance, template.rotation_tolerance)
         # the template's fields with this call's: one dict built, no attribute set one by one
         p.__dict__ = {**template.__dict__, "target": target, "objective": default_objective(
             target, template.orientation_weight, template.pose_metric) if objective is None else objective,
-            "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0}
+            "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0, "goals": goals,
+            "_goal_stack": stack}
         if self._target_box:
             p.lower, p.upper = target_box(self.robot, target, self.robot.lower, self.robot.upper)
         return p
@@ -237,7 +239,7 @@ class IKSolver:
         from .solvers.lm import LevenbergMarquardt
 
         refined = problem
-        if problem.goals is not None and problem.goal_sets:  # refined on the members the answer meets
+        if problem.target is None and problem.goal_sets:  # refined on the members the answer meets
             choices, P, R = problem.variant_targets()
             k = choices.index(tuple(problem.chosen(result.q)))
             refined = problem.variant(choices[k], P[k], R[k])
@@ -259,21 +261,21 @@ class IKSolver:
         start (``out`` None)."""
         rng = _rng(seed)
         result = self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
-        if problem.goals is not None:
+        if problem.target is None:
             result.chosen = [None] * len(problem.goals)
         return result
 
     def _open_repeat_call(self, problem: IKProblem) -> None:
         """Make the repeat call of ``problem``'s kind (or goal stack) after memetic solved it, unless a usable one is
         kept."""
-        key = problem.target.rotation is not None if problem.goals is None else id(problem.goal_stack()[0])
+        key = problem.target.rotation is not None if problem.target is not None else id(problem.goal_stack()[0])
         kept = self._repeat_calls.get(key)
         if kept is None or not kept.usable():
             from .solvers.search.repeat_call import RepeatCall
 
             lane = RepeatCall.of_setup(self._plan, problem)
             if lane is not None:
-                if problem.goals is not None:
+                if problem.target is None:
                     stacks = [k for k in self._repeat_calls if k is not True and k is not False]
                     if len(stacks) >= _GOAL_REPEAT_CALLS:
                         del self._repeat_calls[stacks[0]]
@@ -281,7 +283,7 @@ class IKSolver:
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on this solver's problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
-        goals = problem.goals
+        goals = None if problem.target is not None else problem.goals
         if self._plain and problem.scene is None and (goals is None or not problem.goal_sets):
             # memetic's plan alone: without goal sets, scene or polish its verdict is the goals' verdict
             result = self._plan.solve(problem, rng)

@@ -14,7 +14,7 @@ from .errors import ConfigurationError, OptionError
 from .goals import bind, is_goal_list
 from .goals.goal import FramePair
 from .goals.registry import KIND_BEYOND_FRAME
-from .goals.stack import owned
+from .goals.stack import owned, tip_goals
 from .objectives import (
     POSE_METRICS,
     Objective,
@@ -134,12 +134,11 @@ class IKProblem:
     evaluations: int = field(default=0, compare=False)
 
     def __post_init__(self) -> None:
-        if self.goals is None and is_goal_list(self.target):
-            self.goals = self.target
-        if self.goals is not None:
+        if is_goal_list(self.target):
+            self.target, self.goals = None, self.target
+        if self.target is None:
             if self.objective is not None:
                 raise OptionError("a goal list has its own cost (the goals' weighted errors); give no objective")
-            self.target = None
             self.goals, *self._goal_stack = bind(self.robot, self.goals)
         else:
             self.target = Target.coerce(self.target)
@@ -147,6 +146,8 @@ class IKProblem:
             self.rotation_tolerance = self.tolerance
         for name in ("tolerance", "orientation_weight", "rotation_tolerance"):
             setattr(self, name, check_nonnegative(name, getattr(self, name)))
+        if self.target is not None:  # the tip target's one goal: what every solver below reads
+            self.goals, *self._goal_stack = tip_goals(self.robot, self.target, self.tolerance, self.rotation_tolerance)
         if self.lower is None and self.upper is None:  # the robot's own bounds, checked when they were set
             if self.target is None:  # a goal list: the robot's bounds (near-unbounded joints: give bounds=)
                 self.lower, self.upper = self.robot.lower.copy(), self.robot.upper.copy()
@@ -167,7 +168,7 @@ class IKProblem:
             self.scene.check_robot(self.robot)
         if self.pose_metric not in POSE_METRICS:
             raise OptionError(f"pose_metric {self.pose_metric!r} is not one of {POSE_METRICS}")
-        if self.goals is None and self.objective is None:
+        if self.target is not None and self.objective is None:
             self.objective = default_objective(self.target, self.orientation_weight, self.pose_metric)
 
     @property
@@ -193,7 +194,7 @@ class IKProblem:
         return self._goal_population_members(Q)[2]
 
     def _need_goal_list(self, what: str) -> None:
-        if self.goals is None:
+        if self.target is not None:
             raise OptionError(f"IKProblem.{what} reads the goals of a goal list; this problem has one target: make it "
                               "with a list of goals (evoik_pin.goals: Pose(frame, T), Position(frame, p), ...)")
 
@@ -285,7 +286,7 @@ class IKProblem:
     @property
     def goal_sets(self) -> list[int]:
         """Indices of the goals that are goal sets (any one of several targets)."""
-        if self.goals is None:
+        if self.target is not None:
             return []
         found = self.__dict__.get("_goal_set_indices")
         if found is None or found[0] is not self.goals:
@@ -310,14 +311,14 @@ class IKProblem:
     def chosen(self, q: np.ndarray) -> list[int | None] | None:
         """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
         to), None for a goal with one target; None for a problem without a goal list."""
-        return None if self.goals is None else self.goal_errors_and_chosen(q)[1]
+        return None if self.target is not None else self.goal_errors_and_chosen(q)[1]
 
     def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
         """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen
         per goal, None for a single target; targets pt (V, G, 3), Rt (V, G, 3, 3)). OptionError beyond ``most``."""
         import itertools
 
-        _, pt, Rt = self.goal_stack() if self.goals is not None else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
+        _, pt, Rt = self.goal_stack() if self.target is None else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
         sets = self.goal_sets
         sizes = [len(self.goals[g].alternatives) for g in sets]
         if math.prod(sizes) > most:
@@ -328,7 +329,8 @@ class IKProblem:
         R = np.repeat(Rt[None], len(combos), axis=0)
         for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
             P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
-        G = len(self.goals or ())  # a choice per goal: its member, None for a goal with one target
+        # a choice per goal of a goal list: its member, None for a goal with one target
+        G = len(self.goals) if self.target is None else 0
         choices = [tuple(dict(zip(sets, combo, strict=True)).get(g) for g in range(G)) for combo in combos]
         return choices, P, R
 
@@ -351,7 +353,7 @@ class IKProblem:
         with those members as goals, sharing this one's box, q0 and scene). A list of one (None choices, self)
         without goal sets. OptionError beyond ``most`` combinations."""
         if not self.goal_sets:
-            return [(tuple([None] * len(self.goals or ())), self)]
+            return [(tuple([None] * (len(self.goals) if self.target is None else 0)), self)]
         choices, P, R = self.variant_targets(most)
         return [(c, self.variant(c, P[v], R[v])) for v, c in enumerate(choices)]
 
@@ -379,7 +381,7 @@ class IKProblem:
         verdict: every goal within its own tolerances (a goal list), or the errors within ``tolerance`` and
         ``rotation_tolerance`` (one target). Bookkeeping: no evaluation is counted."""
         before = self.evaluations
-        if self.goals is not None:
+        if self.target is None:
             ok = self.goal_violation(Q) <= 0.0
         else:
             ev = self.evaluate(Q)
@@ -391,7 +393,7 @@ class IKProblem:
         """This problem (robot, box, target or goals) with every tolerance at most ``tolerance`` (m and rad): for
         refinement runs of the LM engine, which stop once the tolerances are met. A goal list keeps its goals (their
         own tolerances still judge answers); only the kernel's goal stack gets the smaller tolerances."""
-        if self.goals is None:
+        if self.target is not None:
             return IKProblem(self.robot, self.target, lower=self.lower, upper=self.upper,
                              tolerance=min(tolerance, self.tolerance),
                              rotation_tolerance=min(tolerance, self.rotation_tolerance))
@@ -407,7 +409,7 @@ class IKProblem:
     def evaluate(self, Q: np.ndarray) -> Evaluation:
         """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors
         over the goals)."""
-        if self.goals is not None:
+        if self.target is None:
             pos, rot = self._goal_population_errors(Q)
             self.evaluations += Q.shape[0]
             oriented = any(g.reports_angle for g in self.goals)
@@ -429,7 +431,7 @@ class IKProblem:
 
     def cost(self, Q: np.ndarray) -> np.ndarray:
         """Objective values (N,) of a population ``Q`` (N, n)."""
-        if self.goals is not None:
+        if self.target is None:
             return self.evaluate(Q).cost
         kin = PopulationKinematics(self.robot, Q)
         self.evaluations += Q.shape[0]
@@ -446,7 +448,7 @@ class IKProblem:
         """(position error m, orientation error rad or None, objective cost) of one configuration ``q`` (n,); errors a
         local solver already has at this ``q`` are reused, and the cost too when the objective is a function of them
         (:meth:`Objective.from_errors`)."""
-        if self.goals is not None:
+        if self.target is None:
             return self.goal_summary(self.goal_errors(q))
         target = self.target
         if position_error is not None:

@@ -11,6 +11,7 @@ its rows by ``sqrt(weight)``. User guide: docs/GOALS.md.
 # The kinds in the order they are declared (registered: evoik_pin.goals.registry), which goals files list them in.
 from .pose import Pose  # noqa: I001
 from .position import Position
+from .planar import Planar
 from .orientation import Orientation
 from .direction import Direction
 from .look_at import LookAt
@@ -23,4 +24,4 @@ from .stack import bind, is_goal_list
 
 __all__ = ["DEFAULT_GOAL_TOLERANCE", "Direction", "Goal", "JointLimitMargin", "LookAt", "Manipulability",
            "MinimalDisplacement", "Orientation", "Pose", "Position", "Posture", "Preference", "bind", "is_goal_list"]
-__all__ += ["CenterOfMass", "RelativePose", "RelativePosition"]
+__all__ += ["CenterOfMass", "Planar", "RelativePose", "RelativePosition"]

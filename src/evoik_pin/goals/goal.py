@@ -99,7 +99,9 @@ class Goal:
         """:meth:`_init_common` for a goal with bands and free axes on the error components ``axes``, with its
         ``band``, ``free`` (:func:`.bands.parse_axes`; ``where`` names the goal) and aux row. ``kinds``: its code under
         a norm tolerance with no free axis (None: it always reads its aux row), and with bands or free axes."""
-        band, free = parse_axes(tolerance, rotation_tolerance, free, axes, where)
+        # one number and no free axis (the common goal, made per call in a control loop): nothing to parse
+        band, free = ((None, ()) if free is None and type(tolerance) in (float, int, type(None))
+                      else parse_axes(tolerance, rotation_tolerance, free, axes, where))
         plain = band is None and not free and kinds[0] is not None
         if band is not None:  # met at 0
             tolerance = rotation_tolerance = 0.0

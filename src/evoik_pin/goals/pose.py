@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TargetError
-from ..target import Target
+from ..target import Target, pose_arrays
 from .bands import AXES, pose_text
 from .file_entries import FileKind, matrix_text, pose_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
@@ -23,6 +23,9 @@ KIND_POSE, KIND_POSE_AXES = LOG6, BANDED_LOG6
 def se3_target(target, where: str) -> pin.SE3:
     """``target`` (a (4, 4) homogeneous matrix, a ``pin.SE3`` or a Target with a rotation; m) as a ``pin.SE3``, or
     a TargetError naming ``where`` (a 3-vector is a position, not a pose)."""
+    arrays = pose_arrays(target)  # a checked pin.SE3 or float (4, 4) pose: no Target made
+    if arrays is not None and arrays[1] is not None:
+        return target.copy() if type(target) is pin.SE3 else pin.SE3(np.array(arrays[1]), np.array(arrays[0]))
     if isinstance(target, (list, tuple)) and len(target) == 3 or np.ndim(target) == 1:
         raise TargetError(f"{where}: a 3-vector is a position (Position goals take one); give a 4 x 4 pose or a "
                           "pin.SE3")

@@ -13,26 +13,24 @@ import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import FrameError, LockedJointsError, TargetError
 from .goal import Goal
-from .pose import KIND_POSE
-from .position import KIND_POSITION
+from .planar import KIND_PLANAR, KIND_PLANAR_YAW, Planar
+from .pose import KIND_POSE, Pose
+from .position import KIND_POSITION, Position
 from .registry import (
     FAMILY_BEYOND_FRAME,
-    FAMILY_FRAME,
     KINDS,
     ORIENTED_KINDS,
-    PLANAR,
-    PLANAR_YAW,
     TASK_ROWS,
-    KindCode,
-    register,
 )
 
 __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_ROWS", "G_RTOL", "G_TOL", "G_WEIGHT",
            "KIND_PLANAR", "KIND_PLANAR_YAW", "GoalArrays", "GoalStack", "TargetArrays", "bind", "encode_target",
-           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "structure", "target_kind"]
+           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "structure", "target_kind",
+           "tip_goals"]
 
 #: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
 #: first row in the stacked error; then its kind's declaration: its row count, its compiled family (``FAMILY_*``)
@@ -40,10 +38,6 @@ __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_
 G_KIND, G_JOINT, G_WEIGHT, G_TOL, G_RTOL, G_ROW, G_ROWS, G_FAMILY, G_ANGLE = range(9)
 GOAL_SIZE = 9
 
-#: The planar target kinds of a single-target problem (no goal class): x, y (2 rows) and x, y, yaw (3 rows).
-KIND_PLANAR, KIND_PLANAR_YAW = PLANAR, PLANAR_YAW
-register(None, KindCode(KIND_PLANAR, (0, 1), FAMILY_FRAME),
-         KindCode(KIND_PLANAR_YAW, (0, 1, 5), FAMILY_FRAME, oriented=True, angle=True))
 
 
 def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_tolerance: float,
@@ -177,8 +171,8 @@ class GoalStack:
         stack, so an LM engine kept from solve to solve is retargeted, not rebuilt. A stack is never written."""
         key = (id(robot), tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
                tuple(float(t) for t in tolerances), tuple(float(t) for t in rotation_tolerances),
-               None if aux is None else tuple(None if a is None else np.asarray(a, dtype=float).tobytes()
-                                              for a in aux))
+               None if aux is None or all(a is None for a in aux)
+               else tuple(None if a is None else np.asarray(a, dtype=float).tobytes() for a in aux))
         hit = _STACK_CACHE.get(key)
         if hit is not None and hit[0]() is robot:
             return hit[1]
@@ -209,7 +203,7 @@ class GoalStack:
     @classmethod
     def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
         """The one goal of a single-target problem: the tip, weight 1."""
-        return cls.of(robot, [None], [kind], [1.0], [tolerance], [rotation_tolerance])
+        return cls.of(robot, [robot.tip], [kind], [1.0], [tolerance], [rotation_tolerance])
 
     def __len__(self) -> int:
         return int(self.spec.shape[0])
@@ -221,6 +215,8 @@ class GoalStack:
 
 
 _STACK_CACHE: dict = {}  # GoalStack.of's: key -> (weak reference to the robot, stack)
+#: The goal class of each tip-target kind (:func:`tip_goals`).
+_TIP_CLASSES = {KIND_POSE: Pose, KIND_POSITION: Position, KIND_PLANAR: Planar, KIND_PLANAR_YAW: Planar}
 
 
 @dataclass(frozen=True)
@@ -261,6 +257,38 @@ _CLASH = 1e-9
 def is_goal_list(value) -> bool:
     """True for a list or tuple of goals (an empty one too: :func:`bind` refuses it by name)."""
     return isinstance(value, (list, tuple)) and all(isinstance(g, Goal) for g in value)
+
+
+def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
+              ) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
+    """:func:`bind`'s answer for a tip :class:`~evoik_pin.Target` (checked already): its one goal on the robot's tip
+    (a :class:`~.pose.Pose`, :class:`~.position.Position` or :class:`~.planar.Planar`, weight 1, the problem's
+    ``tolerance`` m and ``rotation_tolerance`` rad), the tip's stack, pt (1, 3) and Rt (1, 3, 3). Nothing is checked
+    again (a control loop makes one per step)."""
+    kind = target_kind(target)
+    pt, Rt = encode_target(target)
+    goal = object.__new__(_TIP_CLASSES[kind])
+    fields = {"frame": robot.tip, "weight": 1.0, "tolerance": tolerance, "rotation_tolerance": rotation_tolerance,
+              "kind": kind, "has_orientation": target.has_orientation, "alternatives": None, "band": None,
+              "_aux": None}
+    if kind == KIND_POSE:
+        fields.update(target=pin.SE3(Rt, pt), free=())
+    elif kind == KIND_POSITION:
+        fields.update(target=pt)
+    else:
+        fields.update(target=pt, yaw=target.yaw)
+    goal.__dict__.update(fields)  # frozen dataclasses: their fields set as their __init__ sets them
+    key = (id(robot), kind, tolerance, rotation_tolerance)
+    hit = _TIP_STACKS.get(key)
+    if hit is None or hit[0]() is not robot:
+        if len(_TIP_STACKS) >= 64:
+            _TIP_STACKS.pop(next(iter(_TIP_STACKS)))
+        hit = _TIP_STACKS[key] = (weakref.ref(robot), GoalStack.single(robot, kind, tolerance, rotation_tolerance))
+    return [goal], hit[1], pt[None], Rt[None]
+
+
+#: :func:`tip_goals`' stacks by (robot id, kind, tolerances): GoalStack.of's key costs more than a tip goal.
+_TIP_STACKS: dict = {}
 
 
 def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:

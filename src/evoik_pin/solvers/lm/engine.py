@@ -207,7 +207,7 @@ class LevenbergMarquardt:
             return False
         target = problem.target
         same = self._same
-        if (same is not None and problem.goals is None and problem.lower is same[0] and problem.upper is same[1]
+        if (same is not None and problem.target is not None and problem.lower is same[0] and problem.upper is same[1]
                 and not target.planar and (target.rotation is None) is same[2] and problem.tolerance == same[3]
                 and problem.rotation_tolerance == same[4]):
             # the last problem's box arrays, kind and tolerances: the same goal stack and box (a single target's
@@ -224,7 +224,7 @@ class LevenbergMarquardt:
             return False
         self._same_box = (problem.lower, problem.upper)  # the box arrays checked last (an IKSolver's, every call)
         self.set_targets(pt, Rt)
-        self._same = None if problem.goals is not None or target.planar else (
+        self._same = None if problem.target is None or target.planar else (
             problem.lower, problem.upper, target.rotation is None, problem.tolerance, problem.rotation_tolerance)
         self.problem = problem
         return True

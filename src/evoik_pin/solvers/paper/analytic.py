@@ -291,7 +291,7 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
         out.append(Result(q=Q[i].copy(), position_error=float(ev.position_error[i]), orientation_error=rot,
                           cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations,
                           evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method,
-                          goal_errors=None if problem.goals is None else problem.goal_errors(Q[i])))
+                          goal_errors=None if problem.target is not None else problem.goal_errors(Q[i])))
     return out
 
 

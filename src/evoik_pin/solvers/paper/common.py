@@ -148,7 +148,7 @@ class SolverRun:
     def best_succeeded(self) -> bool:
         if self.best_q is None:
             return False
-        if self.problem.goals is not None:  # every goal within its own tolerances (not the problem's)
+        if self.problem.target is None:  # every goal within its own tolerances (not the problem's)
             return bool(self.problem.rows_met(self.best_q[None])[0])
         return bool(self.problem.succeeded(self._best_pos, self._best_rot))
 
@@ -178,7 +178,7 @@ class SolverRun:
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
         success = bool(problem.succeeded(pos, rot))
         goal_errors = None
-        if problem.goals is not None:  # every goal within its own tolerances
+        if problem.target is None:  # every goal within its own tolerances
             goal_errors = problem.goal_errors(q)
             success = problem.goals_met(goal_errors)
         if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"

@@ -92,7 +92,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     message = (f"{len(good)} distinct solution(s) from {len(starts)} polished niche leader(s)" if len(good) else
                f"no polished niche leader (of {len(starts)}) reaches the target: it is out of reach, or "
                "the GA missed it")
-    if not len(good) and problem.goals is not None and problem.n > 6:
+    if not len(good) and problem.target is None and problem.n > 6:
         message += (f" (Nelder-Mead over {problem.n} joints rarely meets a goal list's tolerances; memetic-all finds "
                     "the solutions of whole robots)")
     result = run.result("hga", message)

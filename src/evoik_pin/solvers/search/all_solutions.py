@@ -91,7 +91,7 @@ def _starts(problem: IKProblem, table, rng):
         yield problem.q0
     if table is not None:
         size = table.Q.shape[0]
-        yield from (table.goal_starts(problem, size) if problem.goals is not None
+        yield from (table.goal_starts(problem, size) if problem.target is None
                     else (table.Q[i] for i in table.ranked(problem.target, size)))
     while True:
         yield rng.uniform(problem.lower, problem.upper)
@@ -141,7 +141,7 @@ def memetic_all(
                        min_hits=min_hits, class_radius=class_radius, pool=pool, table_size=table_size,
                        iterations=iterations, engine=engine, n=robot.n)
     lo, hi, target = problem.lower, problem.upper, problem.target
-    goals = problem.goals is not None
+    goals = problem.target is None
     if goals:
         if engine != "compiled":
             raise OptionError("memetic-all solves goal lists on the compiled LM engine only (engine='compiled')")
@@ -271,7 +271,7 @@ def _rescued(problem: IKProblem, patient: LevenbergMarquardt, Q: np.ndarray, E: 
         out = patient.run(Q[i], REFINE_ITERATIONS)
         work += out.evaluations
         Q[i], E[i] = out.q, out.error
-        ok[i] = bool(problem.rows_met(out.q[None])[0] if problem.goals is not None
+        ok[i] = bool(problem.rows_met(out.q[None])[0] if problem.target is None
                      else problem.succeeded(out.position_error, out.orientation_error))
     return Q[ok], E[ok], work
 
@@ -301,7 +301,7 @@ def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray,
     before = problem.evaluations
     ev = problem.evaluate(Q)
     problem.evaluations = before
-    goals = problem.goals is not None
+    goals = problem.target is None
     ok = problem.rows_met(Q) if goals else problem.succeeded(ev.position_error, ev.orientation_error)
     ok &= np.all((Q >= problem.lower) & (Q <= problem.upper), axis=1)
     return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),

@@ -153,7 +153,7 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     nearness (prefer="nearest", one target or goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets."""
     if table is None:
         return [0.0] * len(variants)
-    if parent.goals is None:  # one target on the tip (prefer= alone)
+    if parent.target is not None:  # one target on the tip (prefer= alone)
         d = table.distances(*table.one_target_features(parent.target)) + (0.0 if joint is None else joint)
         if free is not None:
             d[~free] = np.inf
@@ -219,7 +219,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                              engine=engine, n=robot.n)
     wrap = wrapping_joints(robot, problem.lower, problem.upper)
     criterion = make_criterion(problem, prefer, preferences, wrap)
-    goals = problem.goals is not None
+    goals = problem.target is None
     choices, P, R = (problem.variant_targets() if goals else ([()], [None], [None]))
     base_lm = LevenbergMarquardt(problem, engine=engine) if setup is None else setup._engine(problem, engine)
     variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]

@@ -266,7 +266,7 @@ class MemeticSetup:
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` with the setup's options; ``t_setup``: when the call began (``perf_counter``;
         default now), for ``Result.setup_s``. Goal sets go to :func:`.choose.choose`."""
-        if problem.goals is not None and problem.goal_sets:  # any one of several targets: tried in choose.py
+        if problem.target is None and problem.goal_sets:  # any one of several targets: tried in choose.py
             if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
                 get_solver("memetic")
             return GOAL_SET_SEARCH["choose"](problem, rng, setup=self, **self.given)
@@ -287,7 +287,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
      iterations, engine) = setup.options
 
     # one-time set-up before the clock starts: the seed table and its features, the compiled rankings, the engine
-    goals = problem.goals is not None
+    goals = problem.target is None
     single = one_frame(problem)
     if table_seeds is None:
         table_seeds = (DEFAULT_GOAL_TABLE_SEEDS if not single else DEFAULT_TABLE_SEEDS if problem.scene is None
@@ -443,7 +443,7 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
     goal_errors = None
-    if problem.goals is not None:
+    if problem.target is None:
         # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
         goal = problem.goals[0]
         goal_errors = [goal.reported(pos, rot)]

@@ -123,7 +123,7 @@ class Criterion:
 
 def _frame_rows(problem) -> list[tuple]:
     """(frame (None: the tip), its task rows) of each goal (a tip target: one)."""
-    if problem.goals is None:
+    if problem.target is not None:
         return [(None, TASK_ROWS[target_kind(problem.target)])]
     return [(g.frame, TASK_ROWS.get(g.kind, range(6))) for g in problem.goals]
 
@@ -299,7 +299,7 @@ def distinct(answers, count: int) -> list:
 def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
     """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
     robot = problem.robot
-    first_frame = problem.goals[0].frame if problem.goals is not None else None
+    first_frame = problem.goals[0].frame if problem.target is None else None
     terms = []
     if prefer == "nearest":
         check_prefer(prefer, problem.q0 is not None)

@@ -60,14 +60,14 @@ class RepeatCall:
                 and lm is not None and lm.problem is problem and lm._owned
                 and args is lm._args and kept_table is table and entry is not None
                 and not hasattr(entry, "overloads")  # a compiled entry, not numba's dispatcher
-                and one_frame(problem) and (problem.goals is not None or not problem.target.planar)):
+                and one_frame(problem) and (problem.target is None or not problem.target.planar)):
             return None
         return cls(setup, problem, lm, table, entry)
 
     def __init__(self, setup, problem, lm, table, entry) -> None:
         self.setup = setup
         ff = table.frame_search(problem)
-        if problem.goals is None:
+        if problem.target is not None:
             self.key = ff.oriented
             # the objective the solver's options make for a target of this kind, as IKProblem.assess asks it
             self._dummy = Target(np.zeros(3), np.eye(3) if ff.oriented else None)

@@ -119,7 +119,7 @@ class SeedTable:
         """For a problem searched as one frame's pose (:func:`one_frame`: a tip target, or a goal list of one goal on
         one frame), its :class:`FrameFeatures`; None for any other problem."""
         goals = problem.goals
-        if goals is None:
+        if problem.target is not None:
             t = problem.target
             return self.frame_features(_KIND_KEYS[target_kind(t)] if t.planar else
                                        "position" if t.rotation is None else "pose")
@@ -130,7 +130,7 @@ class SeedTable:
 
     def target_point(self, problem, ff: FrameFeatures) -> np.ndarray:
         """The features (d,) of ``problem``'s target in ``ff``'s metric (:meth:`frame_search`'s)."""
-        if problem.goals is None:
+        if problem.target is not None:
             return self.one_target_features(problem.target)[1]
         _, pt, Rt = problem.goal_stack()
         return ff.point(pt[0], Rt[0])
@@ -513,7 +513,7 @@ def one_frame(problem) -> bool:
     list of one goal on one frame with a position or an orientation to match (not a goal set, a pointing goal or a
     goal beyond one frame)."""
     goals = problem.goals
-    if goals is None:
+    if problem.target is not None:
         return True
     g = goals[0]
     return (len(goals) == 1 and g.kind < KIND_BEYOND_FRAME and g.alternatives is None

@@ -131,7 +131,7 @@ class VelocityBoxStage:
                 message += "; the answer collided: pulled back towards the previous configuration"
         chosen = None
         goals = problem.goals
-        if goals is not None:
+        if problem.target is None:
             if kernel_errors and not problem.goal_sets:
                 goal_errors, chosen = kernel_goal_errors(goals, out), [None] * len(goals)
             else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)

@@ -1,0 +1,102 @@
+"""Planar: a frame's (x, y) in the base xy-plane and optionally its heading, for arms that move in that plane (see
+:mod:`evoik_pin.goals`); what a planar :class:`~evoik_pin.Target` of the tip is once it enters a solve."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .. import lie
+from ..errors import TargetError
+from .file_entries import FileKind, number, unknown_keys
+from .goal import DEFAULT_GOAL_TOLERANCE, Goal
+from .registry import FAMILY_FRAME, PLANAR, PLANAR_YAW, KindCode
+
+__all__ = ["KIND_PLANAR", "KIND_PLANAR_YAW", "Planar"]
+
+#: A planar goal's kernel codes: x, y (2 rows), and x, y with the heading (3 rows).
+KIND_PLANAR, KIND_PLANAR_YAW = PLANAR, PLANAR_YAW
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Planar(Goal):
+    """The frame's origin at (x, y) (m) in the robot's base xy-plane (its height free) and, with ``yaw`` (rad), its
+    heading ``atan2(R[1, 0], R[0, 0])`` at ``yaw``.
+
+    Args: frame, x, y, yaw (None: heading free), then ``weight`` (> 0, default 1), ``tolerance`` (m, default 1e-6,
+    on the distance in the plane) and ``rotation_tolerance`` (rad, default ``tolerance``, on the wrapped heading
+    difference).
+    """
+
+    #: (x, y, yaw or 0): the kernel's target row.
+    target: object = None
+    yaw: float | None = None
+    KIND_CODES = (KindCode(KIND_PLANAR, (0, 1), FAMILY_FRAME),
+                  KindCode(KIND_PLANAR_YAW, (0, 1, 5), FAMILY_FRAME, oriented=True, angle=True))
+
+    def __init__(self, frame: str, x: float, y: float, yaw: float | None = None, weight: float = 1.0,
+                 tolerance: float | None = DEFAULT_GOAL_TOLERANCE, rotation_tolerance: float | None = None) -> None:
+        where = f"Planar on {frame!r}"
+        self._init_common(frame, weight, tolerance, rotation_tolerance,
+                          KIND_PLANAR if yaw is None else KIND_PLANAR_YAW, yaw is not None)
+        values = [x, y] + ([] if yaw is None else [yaw])
+        try:
+            values = [float(v) for v in values]
+        except (TypeError, ValueError):
+            values = [math.nan]
+        if not all(math.isfinite(v) for v in values):
+            raise TargetError(f"{where} takes finite numbers x, y (m) and yaw (rad) or None, got "
+                              f"{x!r}, {y!r}, {yaw!r}")
+        object.__setattr__(self, "target", np.array([values[0], values[1], values[2] if yaw is not None else 0.0]))
+        object.__setattr__(self, "yaw", None if yaw is None else values[2])
+        self._set_aux(None)
+
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.target.copy(), np.eye(3)
+
+    def errors(self, T: pin.SE3) -> tuple[float, float | None]:
+        pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], None, None)
+        return float(pos[0]), (float(rot[0]) if self.yaw is not None else None)
+
+    def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:
+        """(distances (N,) m in the base xy-plane, |wrapped heading differences| (N,) rad, 0 without a yaw) of frame
+        poses P (N, 3), R (N, 3, 3): the kernel's planar errors."""
+        d = P[:, :2] - self.target[:2]
+        pos = np.sqrt((d * d).sum(axis=1))
+        rot = (np.abs(lie.wrap_angle(lie.yaw(R) - self.yaw)) if self.yaw is not None else np.zeros_like(pos))
+        return pos, rot
+
+    def marker(self) -> tuple[str, np.ndarray, np.ndarray | None]:
+        """A sphere at (x, y, 0), a triad turned by the yaw when it has one."""
+        x, y, yaw = self.target
+        R = pin.rpy.rpyToMatrix(0.0, 0.0, yaw) if self.yaw is not None else None
+        return self.frame, np.array([x, y, 0.0]), R
+
+    @classmethod
+    def file_kind(cls) -> FileKind:
+        """``kind: planar``: ``target: {x, y[, yaw_rad]}`` (m, rad); weight, tolerance, rotation_tolerance."""
+        return FileKind("planar", cls, ("weight", "tolerance", "rotation_tolerance"), _planar_target, _planar_text,
+                        make=lambda frame, target, **fields: cls(frame, *target, **fields))
+
+    def __repr__(self) -> str:
+        yaw = "" if self.yaw is None else f", yaw={self.yaw:g}"
+        return (f"Planar({self.frame!r}, x={self.target[0]:g}, y={self.target[1]:g}{yaw}, weight={self.weight:g}, "
+                f"tolerance={self.tolerance:g}, rotation_tolerance={self.rotation_tolerance:g})")
+
+
+def _planar_target(target: dict) -> tuple[float, float, float | None]:
+    """A planar goal's target: ``x``, ``y`` (m) and optionally ``yaw_rad`` (rad)."""
+    unknown_keys(target, ("x", "y", "yaw_rad"), "target")
+    return (number(target.get("x"), "target x (m)"), number(target.get("y"), "target y (m)"),
+            None if "yaw_rad" not in target else number(target["yaw_rad"], "target yaw_rad (rad)"))
+
+
+def _planar_text(goal: Planar) -> dict:
+    """A planar target as its ``x``, ``y`` and ``yaw_rad``."""
+    out = {"x": float(goal.target[0]), "y": float(goal.target[1])}
+    if goal.yaw is not None:
+        out["yaw_rad"] = goal.yaw
+    return out
