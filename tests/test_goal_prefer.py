@@ -654,7 +654,8 @@ def test_nearest_ranks_table_entries_near_q0_first(panda):
         pose_first, both_first = np.array(list(by_pose.starts)), np.array(list(by_both.starts))
         assert len(pose_first) == len(both_first) == 8
         assert np.linalg.norm(both_first - q0, axis=1).mean() < np.linalg.norm(pose_first - q0, axis=1).mean()
-        order = np.argsort(table.distances(*table.one_target_features(problem.target)))
+        ff = table.frame_search(problem)
+        order = np.argsort(table.distances(ff, table.target_point(problem, ff)))
         rank = {tuple(table.Q[k]): r for r, k in enumerate(order)}
         assert max(rank[tuple(s)] for s in both_first) < 200  # of 4096 (measured: 20-50)
 

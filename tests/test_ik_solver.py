@@ -220,8 +220,10 @@ def test_seed_table_ranking_and_nearness_are_the_batch_formulas(panda, cases):
             part = np.argpartition(d, 16)[:17]
             first = int(d.argmin())
             reference = [first] + [int(i) for i in part[d[part].argsort()] if i != first]
-            assert list(table.ranked(target, 17)) == reference
-            assert np.array_equal(table.one_target_features(target)[1], f[0])
+            problem = ek.IKProblem(panda, target)
+            assert table.frame_search(problem) is ff
+            assert list(table.ranked(ff, table.target_point(problem, ff), 17)) == reference
+            assert np.array_equal(table.target_point(problem, ff), f[0])
             assert np.array_equal(ff.point(table.positions[first], table.rotations[first]), ff.F[first])
 
 

@@ -439,8 +439,11 @@ def test_seed_table_is_deterministic_and_nearest_is_nearest(robots):
     assert np.all(a.Q >= robot.lower) and np.all(a.Q <= robot.upper)
     t = Target.coerce(robot.fk(a.Q[100]))
     nearest = a.nearest(KIND_POSE, *encode_targets([t]), 3)[0]
-    assert nearest[0] == 100 and next(a.ranked(t, 3)) == 100
-    assert list(a.ranked(t, 3)) == list(nearest)
+    problem = IKProblem(robot, t)
+    ff = a.frame_search(problem)
+    ranked = list(a.ranked(ff, a.target_point(problem, ff), 3))
+    assert nearest[0] == 100 and ranked[0] == 100
+    assert ranked == list(nearest)
 
 
 # ---------------------------------------------------------------------- robot hot path

@@ -318,7 +318,7 @@ class IKProblem:
         per goal, None for a single target; targets pt (V, G, 3), Rt (V, G, 3, 3)). OptionError beyond ``most``."""
         import itertools
 
-        _, pt, Rt = self.goal_stack() if self.target is None else (None, np.zeros((0, 3)), np.zeros((0, 3, 3)))
+        _, pt, Rt = self.goal_stack()
         sets = self.goal_sets
         sizes = [len(self.goals[g].alternatives) for g in sets]
         if math.prod(sizes) > most:
@@ -329,8 +329,7 @@ class IKProblem:
         R = np.repeat(Rt[None], len(combos), axis=0)
         for g, members in zip(sets, np.array(combos, dtype=np.intp).reshape(len(combos), -1).T, strict=True):
             P[:, g], R[:, g] = self.goals[g].member_targets[0][members], self.goals[g].member_targets[1][members]
-        # a choice per goal of a goal list: its member, None for a goal with one target
-        G = len(self.goals) if self.target is None else 0
+        G = len(self.goals)  # a choice per goal: its member, None for a goal with one target
         choices = [tuple(dict(zip(sets, combo, strict=True)).get(g) for g in range(G)) for combo in combos]
         return choices, P, R
 
@@ -353,7 +352,7 @@ class IKProblem:
         with those members as goals, sharing this one's box, q0 and scene). A list of one (None choices, self)
         without goal sets. OptionError beyond ``most`` combinations."""
         if not self.goal_sets:
-            return [(tuple([None] * (len(self.goals) if self.target is None else 0)), self)]
+            return [(tuple([None] * len(self.goals)), self)]
         choices, P, R = self.variant_targets(most)
         return [(c, self.variant(c, P[v], R[v])) for v, c in enumerate(choices)]
 
@@ -361,6 +360,18 @@ class IKProblem:
         """(largest position error m, largest rotation angle rad or None, cost) of a goal list's errors
         (:meth:`goal_errors`): what :meth:`assess` returns for a goal list (:func:`goal_summary`)."""
         return goal_summary(self.goals, errors, self.orientation_weight)
+
+    def summary(self, q: np.ndarray, errors) -> tuple[float, float | None, float]:
+        """(largest position error m, largest angle rad or None, cost) of ``q`` (n,) whose goals' errors are
+        ``errors`` (:meth:`goal_errors`, or the kernel's): a goal list's :meth:`goal_summary`; a tip target's
+        errors with its objective's cost (:meth:`assess`)."""
+        if self.target is None:
+            return goal_summary(self.goals, errors, self.orientation_weight)
+        return self.assess(q, *errors[0])
+
+    def reported(self, errors):
+        """What a Result reports as ``goal_errors``: ``errors`` for a goal list, None for a tip target."""
+        return errors if self.target is None else None
 
     def goals_met(self, errors) -> bool:
         """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""
@@ -381,11 +392,7 @@ class IKProblem:
         verdict: every goal within its own tolerances (a goal list), or the errors within ``tolerance`` and
         ``rotation_tolerance`` (one target). Bookkeeping: no evaluation is counted."""
         before = self.evaluations
-        if self.target is None:
-            ok = self.goal_violation(Q) <= 0.0
-        else:
-            ev = self.evaluate(Q)
-            ok = np.asarray(self.succeeded(ev.position_error, ev.orientation_error), dtype=bool)
+        ok = self.goal_violation(Q) <= 0.0
         self.evaluations = before
         return ok
 
@@ -558,7 +565,7 @@ def errors_text(pos: float, rot: float | None) -> str:
 def shortfall_text(problem: IKProblem, pos: float, rot: float | None, goal_errors=None) -> str:
     """What a failed solve missed, for its message: the best errors against the tolerances, or for a goal list
     (``goal_errors``: each goal's; ``pos`` and ``rot`` the largest) the goals not met."""
-    if goal_errors is not None:
+    if problem.target is None:
         unmet = [g.label for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
         return f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
     accepted = f"position error <= {problem.tolerance:g} m" + (

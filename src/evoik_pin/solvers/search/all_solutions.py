@@ -17,8 +17,7 @@ import time
 import numpy as np
 
 from ...errors import OptionError
-from ...goals.registry import TASK_ROWS
-from ...goals.stack import GoalArrays, target_kind
+from ...goals.stack import GoalArrays
 from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import register
@@ -85,14 +84,15 @@ def _check_options(*, count, timeout, max_starts, batch, patience, min_hits, cla
 
 
 def _starts(problem: IKProblem, table, rng):
-    """The endless stream of LM starts (n,): q0, the seed table's nearest first (a goal list:
+    """The endless stream of LM starts (n,): q0, the seed table's nearest first (several goals:
     :meth:`SeedTable.goal_starts`), then uniform draws from ``rng``."""
     if problem.q0 is not None:
         yield problem.q0
     if table is not None:
         size = table.Q.shape[0]
-        yield from (table.goal_starts(problem, size) if problem.target is None
-                    else (table.Q[i] for i in table.ranked(problem.target, size)))
+        ff = table.frame_search(problem)
+        yield from (table.goal_starts(problem, size) if ff is None
+                    else (table.Q[i] for i in table.ranked(ff, table.target_point(problem, ff), size)))
     while True:
         yield rng.uniform(problem.lower, problem.upper)
 
@@ -140,25 +140,21 @@ def memetic_all(
         _check_options(count=count, timeout=timeout, max_starts=max_starts, batch=batch, patience=patience,
                        min_hits=min_hits, class_radius=class_radius, pool=pool, table_size=table_size,
                        iterations=iterations, engine=engine, n=robot.n)
-    lo, hi, target = problem.lower, problem.upper, problem.target
-    goals = problem.target is None
-    if goals:
-        if engine != "compiled":
-            raise OptionError("memetic-all solves goal lists on the compiled LM engine only (engine='compiled')")
-        stack, pt, Rt = problem.goal_stack()
-        moving = goal_moving_joints(robot, stack)
-        redundant = int(moving.sum()) > stack.rows
-    else:
-        redundant = robot.n > len(TASK_ROWS[target_kind(target)])  # more joints than task rows
+    lo, hi = problem.lower, problem.upper
+    if engine != "compiled" and problem.target is None:  # the Python engine's pairs are tip targets
+        raise OptionError("memetic-all solves goal lists on the compiled LM engine only (engine='compiled')")
+    stack, pt, Rt = problem.goal_stack()
+    moving = goal_moving_joints(robot, stack)
+    redundant = int(moving.sum()) > stack.rows  # more joints moving the goals than task rows
     wanted = (DEFAULT_COUNT if count is None else count) if redundant else count
     table, _ = prepare(robot, lo, hi, table_size, engine)  # the kernel and the seed table, outside the clock
-    if table is not None and goals:
+    if table is not None and table.frame_search(problem) is None:
         table.prepare_goals(problem.goals)  # the goal frames' poses over the table, once per frame list
     wrap = wrapping_joints(robot, lo, hi)
     reference = np.zeros(robot.n) if problem.q0 is None else problem.q0
-    if goals:  # joints that move no goal frame stay where LM leaves them: put them at the reference instead
-        still = np.flatnonzero(~moving)
-        rest_at = np.minimum(np.maximum(reference, lo), hi)[still]
+    # joints that move no goal frame stay where LM leaves them: put them at the reference instead
+    still = np.flatnonzero(~moving)
+    rest_at = np.minimum(np.maximum(reference, lo), hi)[still]
     patient = LevenbergMarquardt(problem.tightened(REFINE_TOLERANCE), stall_window=REFINE_STALL[0],
                                  stall_ratio=REFINE_STALL[1], engine=engine)
     t0 = time.perf_counter()
@@ -175,11 +171,11 @@ def memetic_all(
         if k <= 0:
             stop = f"max_starts ({max_starts}) reached"
             break
-        pairs = GoalArrays(stack, np.repeat(pt[None], k, axis=0), np.repeat(Rt[None], k, axis=0)) if goals else (
-            [target] * k)
+        pairs = (GoalArrays(stack, np.repeat(pt[None], k, axis=0), np.repeat(Rt[None], k, axis=0))
+                 if engine == "compiled" else [problem.target] * k)
         out = solve_pairs(robot, np.array(list(itertools.islice(starts, k))), pairs, lo, hi, problem.tolerance,
                           problem.rotation_tolerance, iterations, engine=engine)
-        if goals and still.size:
+        if still.size:
             out.q[:, still] = rest_at
         started += k
         batches += 1
@@ -218,7 +214,7 @@ def memetic_all(
     evaluations += classes.evaluations
     pooled = len(classes)
     Q = class_representatives(np.array(classes.reps).reshape(-1, robot.n), reference, lo, hi, wrap)
-    if goals and still.size:  # the fallback's answers too
+    if still.size:  # the fallback's answers too
         Q[:, still] = rest_at
     collided = 0
     if problem.scene is not None and Q.shape[0]:  # with a scene, only collision-free solutions are candidates
@@ -243,9 +239,10 @@ def memetic_all(
     else:
         q = best[1] if best[1] is not None else np.minimum(np.maximum(reference, lo), hi)
         pos, rot, cost = problem.assess(q)
-        shortfall = shortfall_text(problem, pos, rot, problem.goal_errors(q) if goals else None)
+        shortfall = shortfall_text(problem, pos, rot, problem.goal_errors(q))
         message = (f"no solution after {started} LM start(s) ({stop}); {shortfall}: the "
-                   f"{'goals are' if goals else 'target is'} out of reach (or reachable only where no start led)")
+                   f"{'target is' if problem.target is not None else 'goals are'} out of reach (or reachable only "
+                   "where no start led)")
         if collided:
             message = (f"all {collided} solution(s) found after {started} LM start(s) are in collision; "
                        f"the nearest to q0 is returned")
@@ -271,8 +268,7 @@ def _rescued(problem: IKProblem, patient: LevenbergMarquardt, Q: np.ndarray, E: 
         out = patient.run(Q[i], REFINE_ITERATIONS)
         work += out.evaluations
         Q[i], E[i] = out.q, out.error
-        ok[i] = bool(problem.rows_met(out.q[None])[0] if problem.target is None
-                     else problem.succeeded(out.position_error, out.orientation_error))
+        ok[i] = bool(problem.rows_met(out.q[None])[0])
     return Q[ok], E[ok], work
 
 
@@ -301,14 +297,14 @@ def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray,
     before = problem.evaluations
     ev = problem.evaluate(Q)
     problem.evaluations = before
-    goals = problem.target is None
-    ok = problem.rows_met(Q) if goals else problem.succeeded(ev.position_error, ev.orientation_error)
+    ok = problem.rows_met(Q)
     ok &= np.all((Q >= problem.lower) & (Q <= problem.upper), axis=1)
     return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),
                    orientation_error=None if ev.orientation_error is None else float(ev.orientation_error[i]),
                    cost=float(ev.cost[i]), success=True, generations=batches, evaluations=evaluations, time_s=time_s,
                    message="distinct IK solution", method="memetic-all",
-                   goal_errors=problem.goal_errors(Q[i]) if goals else None) for i in np.flatnonzero(ok)]
+                   goal_errors=None if problem.target is not None else problem.goal_errors(Q[i]))
+            for i in np.flatnonzero(ok)]
 
 
 def goal_moving_joints(robot, stack) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 
 from ...goals.registry import KIND_BEYOND_FRAME
 from ...goals.stack import owned
-from ...problem import errors_text, shortfall_text
+from ...problem import shortfall_text
 from ...result import Result
 from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
@@ -41,7 +41,7 @@ from .prefer import (
     nearest_turn,
     refine,
 )
-from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first, one_frame
 
 __all__ = ["COLLECT_SHARE", "choose", "member_distances"]
 
@@ -153,8 +153,9 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
     nearness (prefer="nearest", one target or goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets."""
     if table is None:
         return [0.0] * len(variants)
-    if parent.target is not None:  # one target on the tip (prefer= alone)
-        d = table.distances(*table.one_target_features(parent.target)) + (0.0 if joint is None else joint)
+    if len(variants) == 1 and one_frame(parent):  # one goal on one frame
+        ff = table.frame_search(parent)
+        d = table.distances(ff, table.target_point(parent, ff)) + (0.0 if joint is None else joint)
         if free is not None:
             d[~free] = np.inf
         variants[0].starts = _TableStarts(table.Q, d, k)
@@ -219,18 +220,18 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                              engine=engine, n=robot.n)
     wrap = wrapping_joints(robot, problem.lower, problem.upper)
     criterion = make_criterion(problem, prefer, preferences, wrap)
-    goals = problem.target is None
-    choices, P, R = (problem.variant_targets() if goals else ([()], [None], [None]))
+    single = one_frame(problem)
+    choices, P, R = problem.variant_targets()
     base_lm = LevenbergMarquardt(problem, engine=engine) if setup is None else setup._engine(problem, engine)
     variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
     if len(variants) == 1:
         variants[0].problem, variants[0].lm = problem, base_lm
     if table_seeds is None:
-        table_seeds = DEFAULT_GOAL_TABLE_SEEDS if goals else DEFAULT_TABLE_SEEDS
+        table_seeds = DEFAULT_TABLE_SEEDS if single else DEFAULT_GOAL_TABLE_SEEDS
     use_table = table_size > 0 and table_seeds > 0
     table, free = prepare(robot, problem.lower, problem.upper, table_size if use_table else 0, engine,
                           problem.scene, problem.margin)
-    if table is not None and goals:
+    if table is not None and not single:
         table.prepare_goals(problem.goals)
     if prefer != "first" and engine == "compiled":
         nullspace_kernel()  # compiled or loaded before the clock starts
@@ -241,11 +242,11 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     redundant = has_null_space(problem)
     per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
     joint = None
-    if prefer == "nearest" and table is not None and (not goals or len(problem.goals) == 1):
+    if prefer == "nearest" and table is not None and len(problem.goals) == 1:
         # entries near q0 too: LM from them lands on answers near q0
         joint = table.joint_distances(problem.q0, wrap)
         joint *= NEAR_JOINT_WEIGHT * table.weight**2
-    near = _variant_starts(table, problem, variants, per_variant, free, joint, *((P, R) if goals else ()))
+    near = _variant_starts(table, problem, variants, per_variant, free, joint, P, R)
     order = sorted(range(len(variants)), key=lambda i: near[i])
     q0 = problem.q0
     scene = problem.scene
@@ -430,7 +431,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     q = np.array(winner[0])
     chosen = None
     members = None
-    if goals and len(winner) > 2:
+    if len(winner) > 2:
         choice = variants[winner[1]].choice
         members = [g if m is None else g.alternatives[m] for g, m in zip(problem.goals, choice, strict=True)]
         if not all(g.kind < KIND_BEYOND_FRAME and (g.has_position or g.has_orientation) for g in members):
@@ -439,19 +440,16 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         # the first answer, met by one LM run: each goal's errors are the kernel's of that run, as memetic's are
         goal_errors = kernel_goal_errors(members, winner[2])
         chosen = list(choice)
-        pos, rot, cost = problem.goal_summary(goal_errors)
         within = all(g.met(*e) for g, e in zip(members, goal_errors, strict=True))
-    elif goals:
-        goal_errors, chosen = problem.goal_errors_and_chosen(q)
-        pos, rot, cost = problem.goal_summary(goal_errors)
-        within = problem.goals_met(goal_errors)
     else:
-        goal_errors = None
-        # the errors from one LM evaluation at q (no step: the kernel's errors, as memetic's answers are assessed)
-        at_q = variants[winner[1]].lm.run(q, 0)
-        evaluations += at_q.evaluations
-        pos, rot, cost = problem.assess(q, at_q.position_error, at_q.orientation_error)
-        within = bool(problem.succeeded(pos, rot))
+        if single:  # the errors from one LM evaluation at q (no step: the kernel's, as memetic's answers are assessed)
+            at_q = variants[winner[1]].lm.run(q, 0)
+            evaluations += at_q.evaluations
+            goal_errors, chosen = kernel_goal_errors(problem.goals, at_q), [None]
+        else:
+            goal_errors, chosen = problem.goal_errors_and_chosen(q)
+        within = problem.goals_met(goal_errors)
+    pos, rot, cost = problem.summary(q, goal_errors)
     free_q = None if scene is None else not scene.in_collision(q, problem.margin)
     success = within and free_q is not False
     what = {"first": "the first answer", "nearest": "the answer nearest q0",
@@ -460,8 +458,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         message = (f"{what} of {max(len(answers), 1)} found by LM from {stage} ({runs} LM run(s), "
                    f"{len(variants)} variant(s))")
     else:
-        best = (f"best {errors_text(pos, rot)} (largest over the goals)" if goals
-                else shortfall_text(problem, pos, rot))
+        best = shortfall_text(problem, pos, rot, goal_errors)
         message = f"no answer within the budget after {runs} LM run(s) over {len(variants)} variant(s); {best}"
     if rejected:
         message += f"; {rejected} LM answer(s) reached the goals in collision"
@@ -471,7 +468,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=0,
                   evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0, history=history,
                   message=message, method="memetic", setup_s=t0 - t_setup, collision_free=free_q,
-                  goal_errors=goal_errors, chosen=chosen)
+                  goal_errors=problem.reported(goal_errors), chosen=problem.reported(chosen))
 
 
 memetic_module.GOAL_SET_SEARCH["choose"] = choose  # memetic hands goal sets over to choose (see there)

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from ...errors import OptionError
-from ...problem import IKProblem, errors_text, shortfall_text
+from ...problem import IKProblem, shortfall_text
 from ...result import Result
 from .. import get_solver, register
 from ..collision_verdict import pairs_text
@@ -321,8 +321,8 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     ranked = starts = first = None
     if table is not None:
         k = table_offset + table_seeds  # a goal list's ranking compiled (single-threaded), a tip target's NumPy's
-        ranked = (table.goal_starts(problem, k, free) if frame is None else table.ranked_goals(problem, k, free)
-                  if goals else table.ranked((frame, table.target_point(problem, frame)), k, free))
+        ranked = (table.goal_starts(problem, k, free) if frame is None
+                  else table.ranked(frame, table.target_point(problem, frame), k, free))
         ranked = itertools.islice(ranked, table_offset, None)
         starts = ranked if frame is None else (table.Q[i] for i in ranked)
     q0 = problem.q0
@@ -338,7 +338,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         # solution) goes second: a failed LM run from it costs as much as a converging one.
         f = table.target_point(problem, frame)
         qc = np.minimum(np.maximum(q0, problem.lower), problem.upper)
-        T = robot.frame_poses_unchecked(qc, [robot.frame_id(problem.goals[0].frame if goals else None)])[0]
+        T = robot.frame_poses_unchecked(qc, [robot.frame_id(problem.goals[0].frame)])[0]
         d = f - frame.point(T.translation, T.rotation)
         d0 = float(d.dot(d))
         if d0 > frame.gap:
@@ -375,28 +375,21 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    if goals and single:  # the kernel's errors of the best run, at q, trusted (_first_runs)
-        goal_errors = kernel_goal_errors(problem.goals, search.best)
-    else:
-        goal_errors = problem.goal_errors(q) if goals else None  # one kinematics pass gives the summary too
-    pos, rot, cost = (problem.goal_summary(goal_errors) if goals
-                      else problem.assess(q, search.best.position_error, search.best.orientation_error))
+    # one frame: the kernel's errors of the best run, at q, trusted (_first_runs); else one kinematics pass
+    goal_errors = kernel_goal_errors(problem.goals, search.best) if single else problem.goal_errors(q)
+    pos, rot, cost = problem.summary(q, goal_errors)
     if not history["best_cost"]:
         history["best_cost"].append(cost)
         history["mean_cost"].append(cost)
         history["diversity"].append(0.0)
-    within = bool(problem.goals_met(goal_errors) if goals else problem.succeeded(pos, rot))
+    within = problem.goals_met(goal_errors)
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
         message = f"tolerance reached by LM from {stage} ({search.attempts} LM run(s), {restarts} restart(s))"
     else:
         why = (f"time budget ({timeout:g} s) exhausted" if search.out_of_time()
                else f"max_restarts ({max_restarts}) reached")
-        if goals and not within:
-            unmet = [g.label for g, e in zip(problem.goals, goal_errors, strict=True) if not g.met(*e)]
-            best = f"best {errors_text(pos, rot)} (largest over the goals); goals not met: {', '.join(unmet)}"
-        else:
-            best = shortfall_text(problem, pos, rot) if not within else "no collision-free answer met"
+        best = shortfall_text(problem, pos, rot, goal_errors) if not within else "no collision-free answer met"
         message = f"{why} after {search.attempts} LM run(s) and {restarts} restart(s); {best}"
     if search.rejected and not success:
         message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
@@ -409,7 +402,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         setup_s=setup_s,
         # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
         collision_free=True if problem.scene is not None and search.best.converged else None,
-        goal_errors=goal_errors,
+        goal_errors=problem.reported(goal_errors),
     )
 
 
@@ -442,20 +435,14 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
          errors, best_q, best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
-    goal_errors = None
-    if problem.target is None:
-        # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
-        goal = problem.goals[0]
-        goal_errors = [goal.reported(pos, rot)]
-        pos, rot, cost = problem.goal_summary(goal_errors)
-        met = goal.met(*goal_errors[0])
-    else:
-        pos, rot, cost = problem.assess(q_out, pos, rot if lm.oriented else None)
-        met = problem.succeeded(pos, rot)
-    if not met:
+    # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
+    goal_errors = [problem.goals[0].reported(pos, rot)]
+    pos, rot, cost = problem.summary(q_out, goal_errors)
+    if not problem.goals_met(goal_errors):
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
     return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
-                             time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None
+                             time.perf_counter() - t0 - loading, setup_s + loading, problem.reported(goal_errors)
+                             ), loading, None
 
 
 def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,

@@ -16,9 +16,8 @@ from ...goals.pose import KIND_POSE
 from ...goals.position import KIND_POSITION
 from ...goals.registry import KIND_BEYOND_FRAME
 from ...goals.relative_pose import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
-from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW, encode_targets, target_kind
+from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW
 from ...lie import rpy
-from ...problem import Target
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
@@ -86,7 +85,6 @@ class SeedTable:
         self._frames: dict = {}  # frame_features' key -> FrameFeatures
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
-        self._last: tuple = (None, None)  # (the last target, its one_target_features): Targets are immutable
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
         self._frames32: dict = {}  # id(a FrameFeatures' FT) -> (that FT, its float32 copy, sq's)
         self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, goal_layout)
@@ -116,23 +114,21 @@ class SeedTable:
         return hit
 
     def frame_search(self, problem) -> FrameFeatures | None:
-        """For a problem searched as one frame's pose (:func:`one_frame`: a tip target, or a goal list of one goal on
-        one frame), its :class:`FrameFeatures`; None for any other problem."""
-        goals = problem.goals
-        if problem.target is not None:
-            t = problem.target
-            return self.frame_features(_KIND_KEYS[target_kind(t)] if t.planar else
-                                       "position" if t.rotation is None else "pose")
+        """For a problem searched as one frame's pose (:func:`one_frame`: one goal on one frame), its
+        :class:`FrameFeatures` (a plain pose, position or planar goal of weight 1 on the tip: the tip's of its kind);
+        None for any other problem."""
         if not one_frame(problem):
             return None
-        g = goals[0]
+        g = problem.goals[0]
+        if g.kind in _KIND_KEYS and g.weight == 1.0 and g.frame == self._robot.tip:
+            return self.frame_features(_KIND_KEYS[g.kind])
         return self.frame_features((g.frame, float(np.sqrt(g.weight)), g.has_position, g.has_orientation))
 
     def target_point(self, problem, ff: FrameFeatures) -> np.ndarray:
-        """The features (d,) of ``problem``'s target in ``ff``'s metric (:meth:`frame_search`'s)."""
-        if problem.target is not None:
-            return self.one_target_features(problem.target)[1]
+        """The features (d,) of ``problem``'s one goal's target in ``ff``'s metric (:meth:`frame_search`'s)."""
         _, pt, Rt = problem.goal_stack()
+        if ff.planar:  # (x, y, yaw): the heading's features from the yaw
+            return self.encoded_features(problem.goals[0].kind, pt[:1], Rt[:1])[1][0]
         return ff.point(pt[0], Rt[0])
 
     def encoded_features(self, kind: int, P: np.ndarray, Rts: np.ndarray) -> tuple[str, np.ndarray]:
@@ -144,20 +140,13 @@ class SeedTable:
             return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
         return key, _pose_rows(*self.frame_features(key)[4:], P, Rts)
 
-    def one_target_features(self, target: Target) -> tuple[str, np.ndarray]:
-        """(kind key, features (d,)) of one tip target: :meth:`encoded_features`' row (cached for the last target)."""
-        if self._last[0] is not target:
-            key, f = self.encoded_features(target_kind(target), *encode_targets([target]))
-            self._last = (target, (key, f[0]))
-        return self._last[1]
-
-    def ranked(self, target, k: int, allowed: np.ndarray | None = None):
-        """Indices of the (up to) k entries nearest a tip target (a :class:`Target`, or a pair (:meth:`frame_search`'s
-        features, :meth:`target_point`)), nearest first, lazily (the nearest costs one product and an argmin);
-        ``allowed`` (size,) bool: only those entries."""
+    def ranked(self, ff: FrameFeatures, point: np.ndarray, k: int, allowed: np.ndarray | None = None):
+        """Indices of the (up to) k entries nearest a one-frame problem's target (:meth:`frame_search`'s features
+        ``ff``, :meth:`target_point`'s ``point``), nearest first, lazily (the nearest costs one product and an
+        argmin); ``allowed`` (size,) bool: only those entries."""
         if k <= 0:
             return
-        d = self.distances(*(self.one_target_features(target) if isinstance(target, Target) else target))
+        d = self.distances(ff, point)
         if allowed is not None:
             d = np.where(allowed, d, np.inf)
             k = min(k, int(np.count_nonzero(allowed)))
@@ -513,11 +502,10 @@ def one_frame(problem) -> bool:
     list of one goal on one frame with a position or an orientation to match (not a goal set, a pointing goal or a
     goal beyond one frame)."""
     goals = problem.goals
-    if problem.target is not None:
-        return True
     g = goals[0]
     return (len(goals) == 1 and g.kind < KIND_BEYOND_FRAME and g.alternatives is None
-            and (g.has_position or g.has_orientation))
+            and (g.has_position or g.has_orientation)
+            and (g.kind not in (KIND_PLANAR, KIND_PLANAR_YAW) or g.frame == problem.robot.tip))
 
 
 def _anchor(goal, goals):
