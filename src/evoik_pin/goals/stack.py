@@ -29,7 +29,7 @@ from .registry import (
 
 __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_ROWS", "G_RTOL", "G_TOL", "G_WEIGHT",
            "KIND_PLANAR", "KIND_PLANAR_YAW", "GoalArrays", "GoalStack", "TargetArrays", "bind", "encode_target",
-           "encode_targets", "is_goal_list", "owned", "problem_goals", "spec_row", "structure", "target_kind",
+           "encode_targets", "is_goal_list", "owned", "spec_row", "structure", "target_kind",
            "tip_goals"]
 
 #: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
@@ -236,17 +236,6 @@ class GoalArrays(_Rows):
     def oriented(self) -> bool:
         """True when some goal constrains orientation."""
         return self.stack.any_oriented
-
-
-def problem_goals(problem) -> tuple[GoalStack, np.ndarray, np.ndarray]:
-    """(goal stack, targets pt (G, 3), Rt (G, 3, 3)) of an :class:`~evoik_pin.problem.IKProblem`: its goal list
-    (``problem.goal_stack()``) when it has one, else its single target on the robot's tip."""
-    if getattr(problem, "goals", None) is not None:
-        return problem.goal_stack()
-    stack = GoalStack.single(problem.robot, target_kind(problem.target), float(problem.tolerance),
-                             float(problem.rotation_tolerance))
-    pt, Rt = encode_target(problem.target)
-    return stack, pt[None], Rt[None]
 
 
 # ------------------------------------------------------------------ binding a goal list

@@ -33,7 +33,6 @@ from ...goals.stack import (
     GoalStack,
     TargetArrays,
     owned,
-    problem_goals,
     spec_row,
 )
 from .layout import (
@@ -62,7 +61,7 @@ from .run_outcome import LMOutcome, PairsOutcome
 if TYPE_CHECKING:  # the problem module imports goals, which import this package's layout
     from ...problem import IKProblem, Target
 
-__all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "later_kinds", "problem_goals", "solve_pairs"]
+__all__ = ["ENGINES", "LevenbergMarquardt", "compiled_kernel", "later_kinds", "solve_pairs"]
 
 #: LM engines: the numba kernel of :mod:`.kernel`, the reference loop of :mod:`.reference`.
 ENGINES = ("compiled", "python")
@@ -166,7 +165,7 @@ class LevenbergMarquardt:
         robot = problem.robot
         self.robot = robot
         self.n = robot.n
-        stack, pt, Rt = problem_goals(problem)
+        stack, pt, Rt = problem.goal_stack()
         self._pt, self._Rt = owned(pt, float), owned(Rt, float)
         self.goals = stack
         self.oriented = stack.any_oriented
@@ -217,7 +216,7 @@ class LevenbergMarquardt:
                 self._Rt[0] = target.rotation
             self.problem = problem
             return True
-        stack, pt, Rt = problem_goals(problem)
+        stack, pt, Rt = problem.goal_stack()
         box = self._same_box
         if stack is not self.goals or ((problem.lower is not box[0] or problem.upper is not box[1]) and box_constants(
                 self.robot, problem.lower, problem.upper)[4] is not self._box):

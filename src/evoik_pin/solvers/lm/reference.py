@@ -12,7 +12,7 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv
 
 from ...goals.registry import LOG6, POINT
-from ...goals.stack import G_RTOL, G_TOL, G_WEIGHT, KIND_PLANAR_YAW, problem_goals
+from ...goals.stack import G_RTOL, G_TOL, G_WEIGHT, KIND_PLANAR_YAW
 from ...lie import wrap_angle, yaw
 from .layout import (
     DEFAULT_DAMPING,
@@ -113,7 +113,7 @@ class ReferenceLM:
         self.finish = bool(finish)
         self.lower, self.upper = problem.lower, problem.upper
         self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(robot, self.lower, self.upper)
-        stack, pt, Rt = problem_goals(problem)
+        stack, pt, Rt = problem.goal_stack()
         spec = stack.spec
         self.goals = [_Goal(robot, stack.kinds[g], stack.frames[g], spec[g, G_WEIGHT], spec[g, G_TOL],
                             spec[g, G_RTOL], pt[g], Rt[g]) for g in range(len(stack))]

@@ -15,7 +15,7 @@ import numpy as np
 from ...errors import MethodError, OptionError
 from ...goals.preferences import Manipulability, Posture
 from ...goals.registry import TASK_ROWS
-from ...goals.stack import owned, target_kind
+from ...goals.stack import owned
 from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
@@ -122,9 +122,7 @@ class Criterion:
 
 
 def _frame_rows(problem) -> list[tuple]:
-    """(frame (None: the tip), its task rows) of each goal (a tip target: one)."""
-    if problem.target is not None:
-        return [(None, TASK_ROWS[target_kind(problem.target)])]
+    """(frame, its task rows) of each goal."""
     return [(g.frame, TASK_ROWS.get(g.kind, range(6))) for g in problem.goals]
 
 
@@ -299,7 +297,7 @@ def distinct(answers, count: int) -> list:
 def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
     """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
     robot = problem.robot
-    first_frame = problem.goals[0].frame if problem.target is None else None
+    first_frame = problem.goals[0].frame
     terms = []
     if prefer == "nearest":
         check_prefer(prefer, problem.q0 is not None)

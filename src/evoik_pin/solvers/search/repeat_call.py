@@ -17,10 +17,7 @@ import time
 
 import numpy as np
 
-from ...objectives import default_objective
-from ...problem import goal_summary
 from ...result import Result
-from ...target import Target
 from ..lm.layout import P_ITERATIONS
 from . import memetic
 from .choose import member_distances
@@ -60,27 +57,20 @@ class RepeatCall:
                 and lm is not None and lm.problem is problem and lm._owned
                 and args is lm._args and kept_table is table and entry is not None
                 and not hasattr(entry, "overloads")  # a compiled entry, not numba's dispatcher
-                and one_frame(problem) and (problem.target is None or not problem.target.planar)):
+                and one_frame(problem) and not table.frame_search(problem).planar):
             return None
         return cls(setup, problem, lm, table, entry)
 
     def __init__(self, setup, problem, lm, table, entry) -> None:
         self.setup = setup
         ff = table.frame_search(problem)
-        if problem.target is not None:
-            self.key = ff.oriented
-            # the objective the solver's options make for a target of this kind, as IKProblem.assess asks it
-            self._dummy = Target(np.zeros(3), np.eye(3) if ff.oriented else None)
-            self._objective = default_objective(self._dummy, problem.orientation_weight, problem.pose_metric)
-        else:
-            self.key = problem.goal_stack()[0]
-            # a goal set bound to the same stack ranks its members by the table's features of the goal's frame
-            self._ranking = (table, ff, table.goal_spec(problem.goals))
+        self.key = ff.oriented if problem.target is not None else problem.goal_stack()[0]
+        # its problems' verdict and cost are the first one's (IKProblem.summary reads the goals' weights and the
+        # objective, not the targets); a goal set bound to the same stack ranks its members by the frame's features
+        self._problem, self._goal = problem, problem.goals[0]
+        self._ranking = (table, ff, table.goal_spec(problem.goals))
         options = setup.options
         self._iterations = options[9]
-        self._tolerance = problem.tolerance
-        self._rotation_tolerance = problem.rotation_tolerance
-        self._orientation_weight = problem.orientation_weight
         self._lm = lm
         self._args = lm._args
         self._pt, self._Rt = lm._pt[0], lm._Rt[0]  # (3,) and (3, 3) views of the engine's own target arrays
@@ -121,24 +111,15 @@ class RepeatCall:
             self._g_out, self._errors, self._best_q, self._best)
         if stage < 0:
             return t0, resumed_state(self.setup, self._box[9], runs, evaluations, self._box[10])
-        goal_errors = None
-        if goals is not None:
-            goal_errors = [goals[0].reported(pos, rot)]
-            pos, rot, cost = goal_summary(goals, goal_errors, self._orientation_weight)
-            if not goals[0].met(*goal_errors[0]):
-                return None
-        else:
-            if not self.key:
-                rot = None
-            elif not rot <= self._rotation_tolerance:
-                return None
-            if not pos <= self._tolerance:
-                return None
-            cost = float(self._objective.from_errors(self._dummy, pos, rot))
+        goal = self._goal if goals is None else goals[0]
+        goal_errors = [goal.reported(pos, rot)]
+        if not goal.met(*goal_errors[0]):
+            return None
+        problem = self._problem
+        pos, rot, cost = problem.summary(q, goal_errors)
         result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
-                                   time.perf_counter() - t0, 0.0, goal_errors)
-        if goals is not None:
-            result.chosen = [None]
+                                   time.perf_counter() - t0, 0.0, problem.reported(goal_errors))
+        result.chosen = problem.reported([None])
         return result
 
     def solve_set(self, goal, q0: np.ndarray | None):

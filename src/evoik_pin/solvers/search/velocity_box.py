@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from ...result import Result
-from ..lm.engine import LevenbergMarquardt, problem_goals
+from ..lm.engine import LevenbergMarquardt
 from ..lm.layout import wrapping_joints
 from ..lm.run_outcome import LMOutcome
 from .memetic_runs import kernel_goal_errors
@@ -69,7 +69,7 @@ class VelocityBoxStage:
     def _engine(self, problem, free: bool = False) -> LevenbergMarquardt:
         """The engine of ``problem``'s goal stack, its targets written in: the boxed one (``confine`` per call), or
         with ``free`` the one searching the problem's bounds (its box fixed: the solver's arrays)."""
-        stack, pt, Rt = problem_goals(problem)
+        stack, pt, Rt = problem.goal_stack()
         key = (id(stack), free)
         kept = self._engines.get(key)
         if kept is None or kept[0] is not stack or (free and (kept[2] is not problem.lower
@@ -129,27 +129,20 @@ class VelocityBoxStage:
                 collision_free = not scene.in_collision(q, problem.margin)
                 kernel_errors = False
                 message += "; the answer collided: pulled back towards the previous configuration"
-        chosen = None
         goals = problem.goals
-        if problem.target is None:
-            if kernel_errors and not problem.goal_sets:
-                goal_errors, chosen = kernel_goal_errors(goals, out), [None] * len(goals)
-            else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)
-                goal_errors, chosen = problem.goal_errors_and_chosen(q)
-            pos, rot, cost = problem.goal_summary(goal_errors)
-            met = problem.goals_met(goal_errors)
-        else:
-            goal_errors = None
-            pos, rot, cost = (problem.assess(q, out.position_error, out.orientation_error) if kernel_errors
-                              else problem.assess(q))
-            met = bool(problem.succeeded(pos, rot))
+        if kernel_errors and not problem.goal_sets:
+            goal_errors, chosen = kernel_goal_errors(goals, out), [None] * len(goals)
+        else:  # a pulled-back answer, goal sets: the errors from one kinematics pass (and the members met)
+            goal_errors, chosen = problem.goal_errors_and_chosen(q)
+        pos, rot, cost = problem.summary(q, goal_errors)
+        met = problem.goals_met(goal_errors)
         success = bool(met and collision_free is not False)
         if not met:
             message += "; the goals are not met within the velocity box (the answer closest to them inside it)"
         return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
                       cost=float(cost), success=success, generations=0, evaluations=int(evaluations),
                       time_s=time.perf_counter() - t0, message=message, method=method, collision_free=collision_free,
-                      goal_errors=goal_errors, chosen=chosen)
+                      goal_errors=problem.reported(goal_errors), chosen=problem.reported(chosen))
 
 
 def _pulled_back(scene, margin: float, q_prev: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray
