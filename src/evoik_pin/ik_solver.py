@@ -239,7 +239,7 @@ class IKSolver:
         from .solvers.lm import LevenbergMarquardt
 
         refined = problem
-        if problem.target is None and problem.goal_sets:  # refined on the members the answer meets
+        if problem.goal_sets:  # refined on the members the answer meets
             choices, P, R = problem.variant_targets()
             k = choices.index(tuple(problem.chosen(result.q)))
             refined = problem.variant(choices[k], P[k], R[k])
@@ -261,8 +261,7 @@ class IKSolver:
         start (``out`` None)."""
         rng = _rng(seed)
         result = self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
-        if problem.target is None:
-            result.chosen = [None] * len(problem.goals)
+        result.chosen = problem.reported([None] * len(problem.goals))
         return result
 
     def _open_repeat_call(self, problem: IKProblem) -> None:
@@ -283,18 +282,17 @@ class IKSolver:
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on this solver's problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
-        goals = None if problem.target is not None else problem.goals
-        if self._plain and problem.scene is None and (goals is None or not problem.goal_sets):
+        goals = problem.goals
+        if self._plain and problem.scene is None and not problem.goal_sets:
             # memetic's plan alone: without goal sets, scene or polish its verdict is the goals' verdict
             result = self._plan.solve(problem, rng)
-            if goals is not None:
-                result.chosen = [None] * len(goals)
-            if self._repeat_calls_open and (goals is None or len(goals) == 1):
+            result.chosen = problem.reported([None] * len(goals))
+            if self._repeat_calls_open and len(goals) == 1:
                 self._open_repeat_call(problem)
             return result
         solve = self._plan.solve if self._plan is not None else partial(self._info.func, **self._options)
         result = run_with_verdicts(problem, self.method, solve, self._polish, rng)
-        if (self._repeat_calls_open and goals is not None and len(goals) == 1 and problem.scene is None
+        if (self._repeat_calls_open and problem.target is None and len(goals) == 1 and problem.scene is None
                 and result.success and result.chosen[0] is not None):
             self._open_set_repeat_call(problem, result)
         return result

@@ -398,12 +398,8 @@ class IKProblem:
 
     def tightened(self, tolerance: float) -> IKProblem:
         """This problem (robot, box, target or goals) with every tolerance at most ``tolerance`` (m and rad): for
-        refinement runs of the LM engine, which stop once the tolerances are met. A goal list keeps its goals (their
+        refinement runs of the LM engine, which stop once the tolerances are met. It keeps its goals (their
         own tolerances still judge answers); only the kernel's goal stack gets the smaller tolerances."""
-        if self.target is not None:
-            return IKProblem(self.robot, self.target, lower=self.lower, upper=self.upper,
-                             tolerance=min(tolerance, self.tolerance),
-                             rotation_tolerance=min(tolerance, self.rotation_tolerance))
         from .goals.stack import G_RTOL, G_TOL
 
         tight = replace(self, goals=list(self.goals), evaluations=0)
