@@ -15,7 +15,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import evoik_pin as ek
-from evoik_pin.errors import OptionError
 from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Pose, Position, RelativePose, bind
 from evoik_pin.goals.center_of_mass import com_of
 from evoik_pin.problem import IKProblem
@@ -91,13 +90,17 @@ def test_batch_rows_equal_the_kernel_rows_one_configuration_at_a_time(talos, see
     assert np.abs(E).max() > 0 and np.abs(e).max() > 0  # rows of every configuration were written
 
 
-def test_goal_rows_and_nearest_members_need_a_goal_list(baxter):
-    problem = IKProblem(baxter, [0.5, 0.2, 0.3])
+def test_a_tip_targets_rows_and_members_are_its_tip_goals(baxter):
+    """A tip target's problem is its one goal on the tip: the same task rows and (no) goal-set members."""
+    p = np.array([0.5, 0.2, 0.3])
     Q = np.zeros((2, baxter.n))
-    with pytest.raises(OptionError, match="IKProblem.goal_rows reads the goals of a goal list"):
-        problem.goal_rows(Q)
-    with pytest.raises(OptionError, match="IKProblem.nearest_members reads the goals of a goal list"):
-        problem.nearest_members(Q)
+    Q[1] += 0.1
+    target, goal = IKProblem(baxter, p), IKProblem(baxter, [Position(baxter.tip, p)])
+    e, E = target.goal_rows(Q)
+    e_goal, E_goal = goal.goal_rows(Q)
+    assert e.shape == (2, 3) and np.array_equal(e, e_goal) and np.array_equal(E, E_goal)
+    assert np.allclose(e, baxter.fk_batch(Q, validate=False)[0] - p)
+    assert target.nearest_members(Q).tolist() == [[0], [0]]
 
 
 def test_goal_task_is_the_kernel_rows_with_the_repair_sign(talos, rng):

@@ -190,13 +190,7 @@ class IKProblem:
         """(N, G) int: per row of ``Q`` (N, n) and goal, the index of the goal set's member whose errors the
         violation (:meth:`goal_violation`) reads, the one nearest by position + orientation_weight x angle (0 for a
         goal with one target). Bookkeeping: no evaluation is counted."""
-        self._need_goal_list("nearest_members")
         return self._goal_population_members(Q)[2]
-
-    def _need_goal_list(self, what: str) -> None:
-        if self.target is not None:
-            raise OptionError(f"IKProblem.{what} reads the goals of a goal list; this problem has one target: make it "
-                              "with a list of goals (evoik_pin.goals: Pose(frame, T), Position(frame, p), ...)")
 
     def goal_rows(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The LM kernel's task rows of a goal list at each row of ``Q`` (N, n): the stacked error e (N, rows) and its
@@ -204,7 +198,6 @@ class IKProblem:
         member nearest (:meth:`nearest_members`). One compiled call; no evaluation is counted."""
         from .solvers.lm.population_rows import task_rows_batch
 
-        self._need_goal_list("goal_rows")
         stack, pt, Rt = self._goal_stack
         Q = owned(np.asarray(Q), float)  # writable C arrays throughout: the entry's one compiled signature
         N = Q.shape[0]
@@ -286,8 +279,6 @@ class IKProblem:
     @property
     def goal_sets(self) -> list[int]:
         """Indices of the goals that are goal sets (any one of several targets)."""
-        if self.target is not None:
-            return []
         found = self.__dict__.get("_goal_set_indices")
         if found is None or found[0] is not self.goals:
             found = self.__dict__["_goal_set_indices"] = (self.goals, [i for i, g in enumerate(self.goals)
@@ -311,7 +302,7 @@ class IKProblem:
     def chosen(self, q: np.ndarray) -> list[int | None] | None:
         """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
         to), None for a goal with one target; None for a problem without a goal list."""
-        return None if self.target is not None else self.goal_errors_and_chosen(q)[1]
+        return self.reported(self.goal_errors_and_chosen(q)[1])
 
     def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
         """The combinations of goal-set members (:meth:`variants`) without making their problems: (members chosen

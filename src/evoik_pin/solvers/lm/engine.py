@@ -194,7 +194,6 @@ class LevenbergMarquardt:
         self._set_args()
         self._owned = False  # whether _pt and _Rt are this engine's own arrays (retarget)
         self._direct = None  # lm_run_buffers's compiled overload, once the engine serves many problems (retarget)
-        self._same = None  # (lower, upper, position-only, tolerances) of the last single target retargeted to
         self._same_box = (problem.lower, problem.upper)  # box arrays known to give this engine's box constants
         self._own_box = False  # whether _box is this engine's own array (confine), no longer box_constants'
 
@@ -204,18 +203,6 @@ class LevenbergMarquardt:
         unchanged) when ``problem`` needs an engine of its own, and for the python engine."""
         if self._reference is not None or problem.robot is not self.robot or self._own_box:
             return False
-        target = problem.target
-        same = self._same
-        if (same is not None and problem.target is not None and problem.lower is same[0] and problem.upper is same[1]
-                and not target.planar and (target.rotation is None) is same[2] and problem.tolerance == same[3]
-                and problem.rotation_tolerance == same[4]):
-            # the last problem's box arrays, kind and tolerances: the same goal stack and box (a single target's
-            # stack is GoalStack.single's, cached by kind and tolerances); a position target's Rt stays identity
-            self._pt[0] = target.position
-            if target.rotation is not None:
-                self._Rt[0] = target.rotation
-            self.problem = problem
-            return True
         stack, pt, Rt = problem.goal_stack()
         box = self._same_box
         if stack is not self.goals or ((problem.lower is not box[0] or problem.upper is not box[1]) and box_constants(
@@ -223,8 +210,6 @@ class LevenbergMarquardt:
             return False
         self._same_box = (problem.lower, problem.upper)  # the box arrays checked last (an IKSolver's, every call)
         self.set_targets(pt, Rt)
-        self._same = None if problem.target is None or target.planar else (
-            problem.lower, problem.upper, target.rotation is None, problem.tolerance, problem.rotation_tolerance)
         self.problem = problem
         return True
 
@@ -256,7 +241,6 @@ class LevenbergMarquardt:
             self._set_args()
             self._owned = True
             self._direct = self._overload()  # an engine that serves many problems
-            self._same = None
 
     def _set_args(self) -> None:
         """The kernel's constant arguments, (kin, box, any_wrap, goals, pt, Rt) (:mod:`.kernel`'s groups), remade as one

@@ -266,7 +266,7 @@ class MemeticSetup:
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` with the setup's options; ``t_setup``: when the call began (``perf_counter``;
         default now), for ``Result.setup_s``. Goal sets go to :func:`.choose.choose`."""
-        if problem.target is None and problem.goal_sets:  # any one of several targets: tried in choose.py
+        if problem.goal_sets:  # any one of several targets: tried in choose.py
             if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
                 get_solver("memetic")
             return GOAL_SET_SEARCH["choose"](problem, rng, setup=self, **self.given)
@@ -287,7 +287,6 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
      iterations, engine) = setup.options
 
     # one-time set-up before the clock starts: the seed table and its features, the compiled rankings, the engine
-    goals = problem.target is None
     single = one_frame(problem)
     if table_seeds is None:
         table_seeds = (DEFAULT_GOAL_TABLE_SEEDS if not single else DEFAULT_TABLE_SEEDS if problem.scene is None
@@ -295,7 +294,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     use_table = table_size > 0 and table_seeds > 0
     table, free = setup._prepare(problem, table_size if use_table else 0, engine)
     frame = table.frame_search(problem) if table is not None else None
-    if table is not None and goals:  # the compiled rankings of goal lists (and their starts' features)
+    if table is not None and problem.target is None:  # the compiled rankings of goal lists (their starts' features)
         load_goal_helpers()
         if frame is None:
             table.prepare_goals(problem.goals)
