@@ -67,7 +67,9 @@ class RepeatCall:
         self.key = ff.oriented if problem.target is not None else problem.goal_stack()[0]
         # its problems' verdict and cost are the first one's (IKProblem.summary reads the goals' weights and the
         # objective, not the targets); a goal set bound to the same stack ranks its members by the frame's features
-        self._problem, self._goal = problem, problem.goals[0]
+        goal = problem.goals[0]  # what the kernel's errors report and their tolerances (the stack's, every call's)
+        self._summary, self._goal_list = problem.summary, problem.target is None
+        self._reports = (goal.has_position, goal.reports_angle, goal.tolerance, goal.rotation_tolerance)
         self._ranking = (table, ff, table.goal_spec(problem.goals))
         options = setup.options
         self._iterations = options[9]
@@ -111,15 +113,15 @@ class RepeatCall:
             self._g_out, self._errors, self._best_q, self._best)
         if stage < 0:
             return t0, resumed_state(self.setup, self._box[9], runs, evaluations, self._box[10])
-        goal = self._goal if goals is None else goals[0]
-        goal_errors = [goal.reported(pos, rot)]
-        if not goal.met(*goal_errors[0]):
+        positioned, angled, tol, rtol = self._reports  # Goal.reported and Goal.met, inline
+        errors = [(float(pos) if positioned else None, float(rot) if angled else None)]
+        if not ((not positioned or errors[0][0] <= tol) and (not angled or errors[0][1] <= rtol)):
             return None
-        problem = self._problem
-        pos, rot, cost = problem.summary(q, goal_errors)
+        pos, rot, cost = self._summary(q, errors)
         result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
-                                   time.perf_counter() - t0, 0.0, problem.reported(goal_errors))
-        result.chosen = problem.reported([None])
+                                   time.perf_counter() - t0, 0.0, errors if self._goal_list else None)
+        if self._goal_list:
+            result.chosen = [None]
         return result
 
     def solve_set(self, goal, q0: np.ndarray | None):
