@@ -90,8 +90,9 @@ def test_goal_kinds_are_the_goal_classes():
     from evoik_pin.goals import CenterOfMass, Direction, LookAt, Orientation, Planar, RelativePose, RelativePosition
 
     assert {name: kind.cls for name, kind in GOAL_KINDS.items()} == {
-        "pose": Pose, "position": Position, "planar": Planar, "orientation": Orientation, "direction": Direction, "look_at": LookAt,
-        "center_of_mass": CenterOfMass, "relative_pose": RelativePose, "relative_position": RelativePosition}
+        "pose": Pose, "position": Position, "planar": Planar, "orientation": Orientation, "direction": Direction,
+        "look_at": LookAt, "center_of_mass": CenterOfMass, "relative_pose": RelativePose,
+        "relative_position": RelativePosition}
     assert all(kind.name == name for name, kind in GOAL_KINDS.items())  # each kind class declares its entry
 
 

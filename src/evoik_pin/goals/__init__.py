@@ -13,8 +13,7 @@ from .pose import Pose  # noqa: I001
 from .position import Position
 from .planar import Planar
 from .orientation import Orientation
-from .direction import Direction
-from .look_at import LookAt
+from .pointing import Direction, LookAt
 from .center_of_mass import CenterOfMass
 from .relative_pose import RelativePose
 from .relative_position import RelativePosition

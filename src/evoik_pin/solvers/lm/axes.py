@@ -18,7 +18,7 @@ import math
 from numba import njit
 
 from ...goals.bands import AUX_BAND, AUX_INNER, AUX_SWING
-from ...goals.direction import AUX_AXIS
+from ...goals.pointing import AUX_AXIS
 from ...goals.registry import AXIS_ALONG, AXIS_AT, BANDED_LOG6, BANDED_POINT
 from ...lie.compiled import jlog3, log3
 from .tree_kinematics import BORROWING

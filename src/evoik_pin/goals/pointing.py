@@ -1,4 +1,5 @@
-"""Direction: a frame's axis along a direction (see :mod:`evoik_pin.goals`); what it shares with :class:`LookAt`."""
+"""The pointing kinds: Direction (a frame's axis along a direction) and LookAt (a frame's axis pointing at a point)
+(see :mod:`evoik_pin.goals`), and what they share."""
 
 from __future__ import annotations
 
@@ -11,9 +12,9 @@ from ..io.datafile import Flow
 from .bands import AUX_SIZE, angles
 from .file_entries import FileKind, pointing, vector_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
-from .registry import AXIS_ALONG, FAMILY_AXES, KindCode
+from .registry import AXIS_ALONG, AXIS_AT, FAMILY_AXES, KindCode
 
-__all__ = ["AUX_AXIS", "KIND_DIRECTION", "Direction", "unit_vector"]
+__all__ = ["AUX_AXIS", "KIND_DIRECTION", "KIND_LOOK_AT", "Direction", "LookAt", "unit_vector"]
 
 #: A direction's kernel code: the frame's axis minus the wanted unit direction (3 rows, base frame).
 KIND_DIRECTION = AXIS_ALONG
@@ -107,3 +108,26 @@ class Direction(_Pointing):
     def marker(self) -> None:
         """None: a direction has no place to mark."""
         return None
+
+
+#: A look-at's kernel code: the frame's axis minus the unit direction to the point (3 rows, base frame).
+KIND_LOOK_AT = AXIS_AT
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class LookAt(_Pointing):
+    """The frame's ``axis`` (3 numbers in the frame, normalised) pointing at ``point`` (3 numbers, m, base frame):
+    a head camera on an object is ``LookAt(camera, [0, 0, 1], p_object)`` (the optical axis of a ROS ``*_optical``
+    frame is its z). The frame's position is free but enters the direction; a frame on the point is never met.
+
+    Args: frame, axis, point, then ``weight`` (> 0, default 1) and ``tolerance`` (rad, default 1e-6), the bound of
+    the angle between the axis and the line from the frame's origin to the point.
+    """
+
+    point: object = None
+    has_point = True
+    TARGET, FILE_KIND = "point", "look_at"
+    KIND_CODES = (KindCode(KIND_LOOK_AT, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
+
+    def __init__(self, frame: str, axis, point, weight: float = 1.0, tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
+        self._init_pointing(frame, axis, point, weight, tolerance)
