@@ -88,14 +88,8 @@ class JointSpec:
     upper: float = np.pi
 
 
-def dh_to_urdf(
-    name: str,
-    rows: list[DHRow],
-    convention: str = "standard",
-    base: np.ndarray | None = None,
-    link_radius: float = 0.01,
-    comment: str = "",
-) -> str:
+def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", base: np.ndarray | None = None,
+               link_radius: float = 0.01, comment: str = "") -> str:
     """URDF text of the arm ``name`` described by DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
     ``"modified"``): ``base`` (4, 4) from ``base_link`` to the first DH frame, ``link_radius`` (m) of the visuals,
     ``comment`` placed in an XML comment at the top."""
@@ -117,15 +111,8 @@ def dh_to_urdf(
         else:
             before = _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", row.theta) @ _trans("z", row.d)
             after = np.eye(4)
-        joints.append(
-            JointSpec(
-                name=row.name or f"joint{len(joints) + 1}",
-                kind=row.kind,
-                origin=pending @ before,
-                lower=row.lower,
-                upper=row.upper,
-            )
-        )
+        joints.append(JointSpec(row.name or f"joint{len(joints) + 1}", row.kind, pending @ before, lower=row.lower,
+                                upper=row.upper))
         pending = after
     joints.append(JointSpec(name="tool_joint", kind="fixed", origin=pending))
     return chain_to_urdf(name, joints, link_radius=link_radius, comment=comment)
@@ -166,10 +153,8 @@ def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
         return ""
     T = _frame_along(p / length, p / 2)
     w = 1.4 * radius
-    return (
-        f"    <visual>{_origin_xml(T)}<geometry><box size=\"{_short(w)} {_short(w)} {_short(length)}\"/>"
-        f"</geometry><material name=\"{material}\"/></visual>\n"
-    )
+    return (f"    <visual>{_origin_xml(T)}<geometry><box size=\"{_short(w)} {_short(w)} {_short(length)}\"/>"
+            f"</geometry><material name=\"{material}\"/></visual>\n")
 
 
 def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
@@ -189,12 +174,10 @@ def chain_to_urdf(name: str, joints: list[JointSpec], link_radius: float = 0.01,
     lines = ['<?xml version="1.0"?>']
     if comment:
         lines.append("<!--\n" + escape(comment).replace("--", "- -") + "\n-->")
-    lines.append(f'<robot name="{escape(name)}">')
-    lines.append('  <material name="link"><color rgba="0.55 0.6 0.7 1"/></material>')
-    lines.append('  <material name="joint"><color rgba="0.9 0.5 0.1 1"/></material>')
-    link_names = ["base_link"] + [
-        "tool" if (j.kind == "fixed" and k == len(joints) - 1) else f"link{k + 1}" for k, j in enumerate(joints)
-    ]
+    lines += [f'<robot name="{escape(name)}">', '  <material name="link"><color rgba="0.55 0.6 0.7 1"/></material>',
+              '  <material name="joint"><color rgba="0.9 0.5 0.1 1"/></material>']
+    link_names = ["base_link"] + ["tool" if (j.kind == "fixed" and k == len(joints) - 1) else f"link{k + 1}"
+                                  for k, j in enumerate(joints)]
     for k, link in enumerate(link_names):
         body = ""
         if k > 0 and joints[k - 1].kind != "fixed":
@@ -202,23 +185,15 @@ def chain_to_urdf(name: str, joints: list[JointSpec], link_radius: float = 0.01,
         if k < len(joints):
             body += _segment_visual(np.asarray(joints[k].origin)[:3, 3], link_radius, "link")
         if link == "tool":
-            body += (
-                f'    <visual><origin xyz="0 0 0" rpy="0 0 0"/><geometry><sphere radius="{_short(link_radius)}"/>'
-                '</geometry><material name="joint"/></visual>\n'
-            )
+            body += (f'    <visual><origin xyz="0 0 0" rpy="0 0 0"/><geometry><sphere radius="{_short(link_radius)}"/>'
+                     '</geometry><material name="joint"/></visual>\n')
         lines.append(f'  <link name="{link}">\n{body}  </link>' if body else f'  <link name="{link}"/>')
     for k, j in enumerate(joints):
-        parts = [
-            f'  <joint name="{escape(j.name)}" type="{j.kind}">',
-            f'    <parent link="{link_names[k]}"/>',
-            f'    <child link="{link_names[k + 1]}"/>',
-            f"    {_origin_xml(np.asarray(j.origin, float))}",
-        ]
+        parts = [f'  <joint name="{escape(j.name)}" type="{j.kind}">', f'    <parent link="{link_names[k]}"/>',
+                 f'    <child link="{link_names[k + 1]}"/>', f"    {_origin_xml(np.asarray(j.origin, float))}"]
         if j.kind != "fixed":
-            parts.append(f'    <axis xyz="{" ".join(_fmt(v) for v in j.axis)}"/>')
-            parts.append(
-                f'    <limit lower="{_fmt(j.lower)}" upper="{_fmt(j.upper)}" effort="10.0" velocity="2.0"/>'
-            )
+            parts += [f'    <axis xyz="{" ".join(_fmt(v) for v in j.axis)}"/>',
+                      f'    <limit lower="{_fmt(j.lower)}" upper="{_fmt(j.upper)}" effort="10.0" velocity="2.0"/>']
         parts.append("  </joint>")
         lines.append("\n".join(parts))
     lines.append("</robot>")

@@ -99,26 +99,11 @@ def isade_donors(X: np.ndarray, F: np.ndarray, E: np.ndarray, strategy: np.ndarr
 
 @register("isade", "ISADE (paper 002): DE with adaptive strategy choice among best/1, best/2, rand-to-best/1, "
                    "rank-sigmoid F blended with a decaying mean F, self-adapted CR")
-def isade(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    population: int = 60,
-    max_generations: int = 130,
-    stall_generations: int | None = None,
-    cost_tolerance: float | None = None,
-    F_min: float = 0.02,
-    F_max: float = 0.3,
-    n_iter: float = 6.0,
-    alpha: float = 4.0,
-    tau: float = 0.1,
-    CR_init: float = 1.0,
-    CR_low: float = 0.95,
-    learning_period: int = 10,
-    bound_handling: str = "clip",
-    runs: int = 10,
-    callback: Callable | None = None,
-) -> Result:
+def isade(problem: IKProblem, rng: np.random.Generator, *, population: int = 60, max_generations: int = 130,
+          stall_generations: int | None = None, cost_tolerance: float | None = None, F_min: float = 0.02,
+          F_max: float = 0.3, n_iter: float = 6.0, alpha: float = 4.0, tau: float = 0.1, CR_init: float = 1.0,
+          CR_low: float = 0.95, learning_period: int = 10, bound_handling: str = "clip", runs: int = 10,
+          callback: Callable | None = None) -> Result:
     """ISADE over the joint vector, vectorized over the population (paper 002, eqs. 14-20). Defaults beyond the
     paper's 130 generations and rho = 10 are tuned for speed on reachable points; multimodal 6-D pose targets
     want a wider F (``F_max=0.9, F_min=0.3, n_iter=2``) and more generations.

@@ -50,26 +50,11 @@ def ring_best(p_cost: np.ndarray) -> np.ndarray:
 
 @register("pso", "particle swarm (paper 002): inertia weight linear from w_start to w_end, c1 = c2 = 1.5, "
                  "velocity clamping")
-def pso(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    population: int = 30,
-    max_generations: int = 600,
-    stall_generations: int | None = None,
-    cost_tolerance: float | None = None,
-    w_start: float = 0.9,
-    w_end: float = 0.4,
-    c1: float = 1.5,
-    c2: float = 1.5,
-    velocity_clamp: float = 0.2,
-    topology: str = "global",
-    random_factors: str = "per-coordinate",
-    reinit_stagnant: int | None = None,
-    bound_handling: str = "clip",
-    runs: int = 10,
-    callback: Callable | None = None,
-) -> Result:
+def pso(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, max_generations: int = 600,
+        stall_generations: int | None = None, cost_tolerance: float | None = None, w_start: float = 0.9,
+        w_end: float = 0.4, c1: float = 1.5, c2: float = 1.5, velocity_clamp: float = 0.2, topology: str = "global",
+        random_factors: str = "per-coordinate", reinit_stagnant: int | None = None, bound_handling: str = "clip",
+        runs: int = 10, callback: Callable | None = None) -> Result:
     """Particle swarm optimization over the joint vector, vectorized over the swarm (paper 002, eq. 11).
 
     Args:
