@@ -88,16 +88,16 @@ class JointSpec:
     upper: float = np.pi
 
 
-def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", base: np.ndarray | None = None,
-               link_radius: float = 0.01, comment: str = "") -> str:
+def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_radius: float = 0.01,
+               comment: str = "") -> str:
     """URDF text of the arm ``name`` described by DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
-    ``"modified"``): ``base`` (4, 4) from ``base_link`` to the first DH frame, ``link_radius`` (m) of the visuals,
-    ``comment`` placed in an XML comment at the top."""
+    ``"modified"``), the first DH frame at ``base_link``: ``link_radius`` (m) of the visuals, ``comment`` placed in
+    an XML comment at the top."""
     if convention not in ("standard", "modified"):
         raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
     if not rows:
         raise RobotLoadError("a DH table needs at least one row")
-    pending = np.eye(4) if base is None else np.asarray(base, dtype=float)
+    pending = np.eye(4)
     joints: list[JointSpec] = []
     for row in rows:
         const_q = DHRow(row.a, row.alpha, row.d, row.theta, "fixed")

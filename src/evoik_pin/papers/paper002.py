@@ -65,10 +65,8 @@ PAPER_TABLE5 = {"PSO": (1e-14, 7.4140e-13, 1.9574e-13, 429.95, 0.3604),
 
 
 def _settings(quick: bool) -> dict:
-    defaults = {}
-    for name, cfg in METHODS.items():
-        params = inspect.signature(get_solver(cfg["method"]).func).parameters
-        defaults[name] = {k: params[k].default for k in ("population",) if k in params}
+    defaults = {name: {"population": inspect.signature(get_solver(c["method"]).func).parameters["population"].default}
+                for name, c in METHODS.items()}
     return {
         "robot": ROBOT,
         "methods": {name: {"method": c["method"], "max_generations": c["max_generations"],
@@ -152,12 +150,9 @@ def _by_construction(points: list[dict]) -> list[dict]:
 def _classify(pt: dict, distance) -> None:
     """A point's ``status``: ``reached``; ``missed`` when ``distance()`` (the least distance a reachability check
     finds, m) is within REACHED_M; else ``no solution``."""
-    pt["oracle"] = None
-    if pt["error"] <= REACHED_M:
-        pt["status"] = "reached"
-        return
-    pt["oracle"] = min(pt["error"], distance())
-    pt["status"] = "missed" if pt["oracle"] <= REACHED_M else "no solution"
+    reached = pt["error"] <= REACHED_M
+    pt["oracle"] = None if reached else min(pt["error"], distance())
+    pt["status"] = "reached" if reached else "missed" if pt["oracle"] <= REACHED_M else "no solution"
 
 
 def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
@@ -180,11 +175,8 @@ def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, 
 def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: int) -> None:
     """:func:`_classify` Pro-variant points, the check confined to each point's Pro box (the first: full range)."""
     for i, (pt, p) in enumerate(zip(points, targets, strict=True)):
-        if i > 0:
-            lo, hi = _pro_bounds(robot, points[i - 1]["q"], DEFAULT_PRO_DELTA)
-            x0 = points[i - 1]["q"]
-        else:
-            lo, hi, x0 = robot.lower, robot.upper, pt["q"]
+        x0 = points[i - 1]["q"] if i > 0 else pt["q"]
+        lo, hi = _pro_bounds(robot, x0, DEFAULT_PRO_DELTA) if i > 0 else (robot.lower, robot.upper)
         _classify(pt, lambda p=p, lo=lo, hi=hi, x0=x0: least_squares_distance(robot, p, lo, hi, rng, starts, x0))
 
 
@@ -387,10 +379,9 @@ def run(ctx: RunContext) -> PaperReport:
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,
         "scenario2_targets_m": p_s2_pin, "scenario3_targets_m": p_s3,
-        "scenario2": {n: [{k: p[k] for k in ("error", "generations", "time", "runs", "total_time", "success")}
-                          for p in pts] for n, pts in s2_points.items()},
-        "scenario3": {n: [{k: p[k] for k in ("error", "generations", "time", "runs", "total_time", "success")}
-                          for p in pts] for n, pts in s3_points.items()},
+        **{key: {n: [{k: p[k] for k in ("error", "generations", "time", "runs", "total_time", "success")}
+                     for p in pts] for n, pts in points.items()}
+           for key, points in (("scenario2", s2_points), ("scenario3", s3_points))},
         "scenario3_q": {n: np.array([p["q"] for p in pts]) for n, pts in s3_points.items()},
         "summary": {"table3": t3, "scenario1": s1, "scenario2": s2, "scenario3": s3},
     })
@@ -543,13 +534,11 @@ def _fig_points(ctx, points: dict, name: str, caption: str):
         axes[0].semilogy(x, [max(p["error"], 1e-18) for p in pts], ".-", lw=0.7, label=label, color=_color(label))
         axes[1].plot(x, [p["time"] for p in pts], ".-", lw=0.7, color=_color(label))
         axes[2].plot(x, [p["generations"] for p in pts], ".-", lw=0.7, color=_color(label))
-    axes[0].set_ylabel("(a) distance error (m)")
-    axes[1].set_ylabel("(b) execution time (s)")
-    axes[2].set_ylabel("(c) generations")
+    for ax, ylabel in zip(axes, ("(a) distance error (m)", "(b) execution time (s)", "(c) generations"), strict=True):
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
     axes[2].set_xlabel("point")
     axes[0].legend(fontsize=8)
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
     return ctx.save_figure(fig, name, caption + " (errors of exactly 0 drawn at 1e-18 m)")
 
 

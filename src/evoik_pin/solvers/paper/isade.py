@@ -1,11 +1,7 @@
-"""ISADE: DE with self-adapted strategies, scale factors and crossover rates (paper 002, section 3.3): ``isade``.
-
-Every generation, for every individual at once: the strategy is drawn among DE/best/1, DE/best/2 and
-DE/rand-to-best/1 (eqs. 14-16) with SaDE's success-rate probabilities, renewed every ``learning_period``
-generations; the scale factor blends a sigmoid of the fitness rank (eq. 17, rank 1 = best) with a decaying
-mean (eq. 18) by eq. 19 as in the original ISADE, ``(F_i + F_mean) / 2`` (paper 002 misprints a minus); each
-individual's crossover rate is re-drawn jDE-style (eq. 20), kept only when its trial survives.
-Paper 002's stop at 1e-17 m is below what double-precision kinematics resolves: use 1e-15 m or more.
+"""ISADE (paper 002, section 3.3; ``isade``): DE whose strategy (eqs. 14-16, :func:`isade_donors`, SaDE's
+:func:`strategy_probabilities`), scale factors (eqs. 17-19) and crossover rates (eq. 20, jDE-style, kept with a
+surviving trial) adapt per individual. Paper 002's stop at 1e-17 m is below what double-precision kinematics
+resolves: use 1e-15 m or more.
 """
 
 from __future__ import annotations
