@@ -108,9 +108,7 @@ def run(ctx: RunContext) -> PaperReport:
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs, q_init = s["runs_per_target_and_method"], np.zeros(robot.n)
     s["jobs"] = ctx.jobs
-    mode_kw = {k: v for k, v in s["mode"].items() if k in ("population", "max_generations", "mutation_probability",
-                                                            "crossover_rate", "scale_factor",
-                                                            "trigonometric_probability", "adaptive")}
+    mode_kw = {k: v for k, v in s["mode"].items() if k not in ("variants", "tolerance_m", "note")}
     ga_kw = {k: s["ga_binary"][k] for k in ("population", "elite", "max_generations", "bits", "encoding")}
 
     results: dict[tuple, dict[str, list[dict]]] = {}
@@ -188,7 +186,7 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
     rates = ", ".join(f"{d['success']:.0%}" for d in de)
     medians = ", ".join(f"{d['median_error'] / MM:.3f}" for d in de)
     worst = max(d["max_error"] for d in de) / MM
-    notes = [
+    return [
         f"Proposed DE (configuration (c), paper settings): {n_ok} of {runs * len(TARGETS_CM)} runs within 1 mm "
         f"(per target {rates}); median errors {medians} mm, worst run {worst:.3f} mm. The paper prints each DE "
         "result as the target itself to 1 decimal (within ~0.9 mm).",
@@ -214,7 +212,6 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
         "does not define its measure, so compare shapes, not values. Our readings of the pseudocode: "
         "evoik_pin.solvers.paper.mode and docs/BENCHMARKS.md.",
     ]
-    return notes
 
 
 _COLORS = dict(zip(CONFIGS, ("tab:blue", "tab:orange", "tab:green"), strict=True))

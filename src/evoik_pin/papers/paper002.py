@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import inspect
 import time
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -95,14 +95,15 @@ def _settings(quick: bool) -> dict:
 
 def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0, bounds=None, a: float = 0.0,
                  max_generations: int | None = None, callback=None) -> dict:
-    """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``)."""
+    """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``); ``callback`` goes to
+    every run."""
     target = Target.coerce(target)
     objective = PositionError(target)
     if a > 0:
         objective = a * WeightedJointDisplacement(q0) + objective
     best, runs, total_time, total_gens = None, 0, 0.0, 0
     for _ in range(rho):
-        extra = {} if callback is None else {"callback": callback()}
+        extra = {} if callback is None else {"callback": callback}
         res = solve(robot, target, method=cfg["method"], seed=rng, q0=q0, bounds=bounds, objective=objective,
                     tolerance=fitness, max_generations=max_generations or cfg["max_generations"], runs=1,
                     **cfg["options"], **extra)
@@ -158,14 +159,12 @@ def _classify(pt: dict, distance) -> None:
 def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
     """:func:`_classify` full-range spiral points, the check run once per point for all variants, starting from
     the closest configuration any variant found."""
-    cache: dict[int, float] = {}
 
+    @cache
     def distance(i: int) -> float:
-        if i not in cache:
-            closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
-            cache[i] = min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper,
-                                                                    rng, starts, closest["q"]))
-        return cache[i]
+        closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
+        return min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper, rng, starts,
+                                                            closest["q"]))
 
     for pts in variants.values():
         for i, pt in enumerate(pts):
@@ -195,7 +194,7 @@ def spiral_targets(count: int) -> np.ndarray:
     return np.stack([200 * np.cos(2 * z / 100), 200 * np.sin(2 * z / 100), z], axis=1) * MM
 
 
-@lru_cache(maxsize=1)
+@cache
 def _robot():
     return load_robot(ROBOT)
 
@@ -216,13 +215,8 @@ def _job(spec: dict):
         runs = []
         for _ in range(s["table3"]["runs"]):
             stamps: list[float] = []
-
-            def make_cb(stamps=stamps):
-                stamps.clear()
-                return lambda g, X: stamps.append(time.perf_counter()) and False
-
             r = _solve_point(robot, spec["target"], cfg, rng, rho=1, fitness=0.0, q0=q_zero, max_generations=85,
-                             callback=make_cb)
+                             callback=lambda g, X, stamps=stamps: stamps.append(time.perf_counter()) and False)
             runs.append((r, np.asarray(stamps) - stamps[0] if stamps else None))
         best_r, best_t = min(runs, key=lambda rt: rt[0]["error"])
         out = {"error": best_r["error"], "time": best_r["time"],
