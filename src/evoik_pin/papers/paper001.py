@@ -116,14 +116,10 @@ def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
 def _stats(reference, runs_found, method) -> list[dict]:
     """Per reference solution: first run's match, share found, median / max error over the runs."""
     per = [_match(reference, found) for found in runs_found]
-    stats = []
-    for j in range(len(reference)):
-        errs = np.array([p[j][1] for p in per])
-        stats.append({"first_q": per[0][j][0], "first_error": float(errs[0]),
-                      "found": float(np.mean(errs <= FOUND_DEG[method])),
-                      "median_error": float(np.median(errs)), "max_error": float(errs.max()),
-                      "errors": errs})
-    return stats
+    errors = [np.array([p[j][1] for p in per]) for j in range(len(reference))]
+    return [{"first_q": per[0][j][0], "first_error": float(errs[0]), "found": float(np.mean(errs <= FOUND_DEG[method])),
+             "median_error": float(np.median(errs)), "max_error": float(errs.max()), "errors": errs}
+            for j, errs in enumerate(errors)]
 
 
 def run(ctx: RunContext) -> PaperReport:

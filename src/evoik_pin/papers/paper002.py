@@ -286,11 +286,9 @@ def run(ctx: RunContext) -> PaperReport:
     s3_points = {label: outputs[("scenario3", label)] for label, _, _ in variants}
     _classify_full(robot, {k: s3_points[k] for k in METHODS}, p_s3, ctx.rng("002", "oracle", "full range"),
                    s["oracle_starts"])
-    s3 = {}
-    for label, _, fitness in variants:
-        pts = s3_points[label]
-        # averages over points 2..N: the first point carries eq. 21's a-term and cannot stop on the fitness value
-        s3[label] = {**_stats(pts[1:] or pts, fitness), **_smoothness(pts)}
+    # averages over points 2..N: the first point carries eq. 21's a-term and cannot stop on the fitness value
+    s3 = {label: {**_stats(s3_points[label][1:] or s3_points[label], fitness), **_smoothness(s3_points[label])}
+          for label, _, fitness in variants}
 
     # -- tables ------------------------------------------------------------------------------------------
     report.tables.append(Table(
@@ -408,11 +406,9 @@ def _seed_check(s3_points: dict, p_s3: np.ndarray, seed: int, runs: int = 3) -> 
         return ""
     i, robot, cfg = miss[0], _robot(), METHODS[name]
     rng = derive_rng(seed, "002", "seed-check", name)
-    out = {}
-    for label, q0 in (("seeded", s3_points[name][i - 1]["q"]), ("unseeded", None)):
-        errs = [_solve_point(robot, p_s3[i], cfg, rng, rho=1, fitness=cfg["fitness"], q0=q0)["error"]
-                for _ in range(runs)]
-        out[label] = sum(e <= REACHED_M for e in errs)
+    out = {label: sum(_solve_point(robot, p_s3[i], cfg, rng, rho=1, fitness=cfg["fitness"], q0=q0)["error"] <= REACHED_M
+                      for _ in range(runs))
+           for label, q0 in (("seeded", s3_points[name][i - 1]["q"]), ("unseeded", None))}
     return (f"Check at n = {i + 1} with {name}: {out['seeded']}/{runs} runs seeded with the previous solution reach "
             f"it, {out['unseeded']}/{runs} unseeded runs do.")
 
