@@ -100,9 +100,8 @@ def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_
     pending = np.eye(4)
     joints: list[JointSpec] = []
     for row in rows:
-        const_q = DHRow(row.a, row.alpha, row.d, row.theta, "fixed")
         if row.kind == "fixed":
-            pending = pending @ dh_transform(const_q, 0.0, convention)
+            pending = pending @ dh_transform(row, 0.0, convention)
             continue
         # Split the row into (fixed part before the joint motion) * (motion along/about z) * (fixed after).
         if convention == "standard":

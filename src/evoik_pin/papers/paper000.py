@@ -96,11 +96,6 @@ def _median_series(runs: list[dict], key: str) -> np.ndarray:
     return np.median(np.stack([c[:length] for c in curves]), axis=0)
 
 
-def _first_generation_below(curve: np.ndarray, level: float) -> int | None:
-    hit = np.nonzero(curve <= level)[0]
-    return int(hit[0]) if hit.size else None
-
-
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 000's Table 2 and Figs. 3-6 (see the module docstring)."""
     s = _settings(ctx.quick)
@@ -182,7 +177,8 @@ def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
     paper_am = [np.linalg.norm(np.subtract(PAPER_TABLE2[t]["AM"], t)) for t in TARGETS_CM]
     n_ok = sum(round(d["success"] * d["runs"]) for d in de)
     c_label = list(CONFIGS)[2]
-    w_gen = {label: _first_generation_below(1.0 - c["w1"], 0.01) for label, c in curves.items()}
+    hits = {label: np.nonzero(1.0 - c["w1"] <= 0.01)[0] for label, c in curves.items()}  # median w1 >= 0.99
+    w_gen = {label: int(h[0]) if h.size else None for label, h in hits.items()}
     rates = ", ".join(f"{d['success']:.0%}" for d in de)
     medians = ", ".join(f"{d['median_error'] / MM:.3f}" for d in de)
     worst = max(d["max_error"] for d in de) / MM

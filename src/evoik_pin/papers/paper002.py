@@ -141,19 +141,15 @@ def _stats(points: list[dict], fitness: float | None) -> dict:
 REACHED_M = 1e-9
 
 
-def _by_construction(points: list[dict]) -> list[dict]:
-    """Status of points whose targets are FK of joint vectors inside the bounds (a solution exists)."""
-    for pt in points:
-        pt["status"] = "reached" if pt["error"] <= REACHED_M else "missed"
+def _classify(points: list[dict], distance=lambda i: 0.0) -> list[dict]:
+    """Each point's ``status``: ``reached``; ``missed`` when ``distance(i)`` (the least distance a reachability
+    check finds for point i, m; default 0: a target that is FK of joints inside the bounds) is within REACHED_M;
+    else ``no solution``."""
+    for i, pt in enumerate(points):
+        reached = pt["error"] <= REACHED_M
+        pt["oracle"] = None if reached else min(pt["error"], distance(i))
+        pt["status"] = "reached" if reached else "missed" if pt["oracle"] <= REACHED_M else "no solution"
     return points
-
-
-def _classify(pt: dict, distance) -> None:
-    """A point's ``status``: ``reached``; ``missed`` when ``distance()`` (the least distance a reachability check
-    finds, m) is within REACHED_M; else ``no solution``."""
-    reached = pt["error"] <= REACHED_M
-    pt["oracle"] = None if reached else min(pt["error"], distance())
-    pt["status"] = "reached" if reached else "missed" if pt["oracle"] <= REACHED_M else "no solution"
 
 
 def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
@@ -167,16 +163,18 @@ def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, 
                                                             closest["q"]))
 
     for pts in variants.values():
-        for i, pt in enumerate(pts):
-            _classify(pt, lambda i=i: distance(i))
+        _classify(pts, distance)
 
 
 def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: int) -> None:
     """:func:`_classify` Pro-variant points, the check confined to each point's Pro box (the first: full range)."""
-    for i, (pt, p) in enumerate(zip(points, targets, strict=True)):
-        x0 = points[i - 1]["q"] if i > 0 else pt["q"]
+
+    def distance(i: int) -> float:
+        x0 = points[i - 1]["q"] if i > 0 else points[0]["q"]
         lo, hi = _pro_bounds(robot, x0, DEFAULT_PRO_DELTA) if i > 0 else (robot.lower, robot.upper)
-        _classify(pt, lambda p=p, lo=lo, hi=hi, x0=x0: least_squares_distance(robot, p, lo, hi, rng, starts, x0))
+        return least_squares_distance(robot, targets[i], lo, hi, rng, starts, x0)
+
+    _classify(points, distance)
 
 
 def _smoothness(points: list[dict]) -> dict:
@@ -200,11 +198,8 @@ def _robot():
 
 
 def _job(spec: dict):
-    """One independent part of the experiment; top level so a process pool can run it.
-
-    Returns ``(key, output, wall time s)``. Every random stream derives from ``spec["seed"]`` and the
-    part's labels only, so serial and parallel runs give the same numbers.
-    """
+    """One independent part of the experiment (a top-level job for ``ctx.map_parallel``): ``(key, output, wall
+    time s)``."""
     t0 = time.perf_counter()
     robot, s, kind, label = _robot(), spec["settings"], spec["kind"], spec["label"]
     cfg = METHODS[label.removeprefix("Pro-").split(" ")[0]]
@@ -280,9 +275,9 @@ def run(ctx: RunContext) -> PaperReport:
 
     t3 = {n: outputs[("table3", n)] for n in METHODS}
     curves = {n: t3[n].pop("curve") for n in METHODS}
-    s1 = {n: _stats(_by_construction(outputs[("scenario1", n)]), METHODS[n]["fitness_s1"]) for n in METHODS}
+    s1 = {n: _stats(_classify(outputs[("scenario1", n)]), METHODS[n]["fitness_s1"]) for n in METHODS}
     s2_points = {n: outputs[("scenario2", n)] for n in METHODS}
-    s2 = {n: _stats(_by_construction(pts), METHODS[n]["fitness"]) for n, pts in s2_points.items()}
+    s2 = {n: _stats(_classify(pts), METHODS[n]["fitness"]) for n, pts in s2_points.items()}
     s3_points = {label: outputs[("scenario3", label)] for label, _, _ in variants}
     _classify_full(robot, {k: s3_points[k] for k in METHODS}, p_s3, ctx.rng("002", "oracle", "full range"),
                    s["oracle_starts"])

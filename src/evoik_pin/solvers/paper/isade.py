@@ -128,9 +128,7 @@ def isade(problem: IKProblem, rng: np.random.Generator, *, population: int = 60,
     F_max = check_number("F_max", F_max, F_min, 2.0)
     n_iter = check_positive("n_iter", n_iter, 100.0)
     alpha = check_nonnegative("alpha", alpha, 1e3)
-    tau = check_fraction("tau", tau)
-    CR_init = check_fraction("CR_init", CR_init)
-    CR_low = check_fraction("CR_low", CR_low)
+    tau, CR_init, CR_low = (check_fraction(k, v) for k, v in (("tau", tau), ("CR_init", CR_init), ("CR_low", CR_low)))
     learning_period = check_int("learning_period", learning_period)
     check_choice("bound_handling", bound_handling, BOUND_HANDLING)
 

@@ -79,10 +79,8 @@ def pso(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, m
         A :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
     """
     N = check_int("population", population, 2)
-    w_start = check_nonnegative("w_start", w_start, 2.0)
-    w_end = check_nonnegative("w_end", w_end, 2.0)
-    c1 = check_nonnegative("c1", c1, 10.0)
-    c2 = check_nonnegative("c2", c2, 10.0)
+    w_start, w_end = (check_nonnegative(k, v, 2.0) for k, v in (("w_start", w_start), ("w_end", w_end)))
+    c1, c2 = (check_nonnegative(k, v, 10.0) for k, v in (("c1", c1), ("c2", c2)))
     velocity_clamp = check_positive("velocity_clamp", velocity_clamp, 1.0)
     check_choice("bound_handling", bound_handling, BOUND_HANDLING)
     check_choice("topology", topology, TOPOLOGIES)
