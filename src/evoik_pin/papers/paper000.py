@@ -39,9 +39,7 @@ SERIES = ("diversity", "w1", "w2", "best_fitness", "best_position_error")
 
 def _settings(quick: bool) -> dict:
     return {
-        "robot": ROBOT,
-        "targets_cm": TARGETS_CM,
-        "runs_per_target_and_method": 2 if quick else 10,
+        "robot": ROBOT, "targets_cm": TARGETS_CM, "runs_per_target_and_method": 2 if quick else 10,
         "q_init_deg": [0.0, 0.0, 0.0, 0.0],
         "mode": {"population": 150, "max_generations": 200, "mutation_probability": 0.2, "crossover_rate": 0.8,
                  "scale_factor": 0.2, "trigonometric_probability": 0.125, "adaptive": True,

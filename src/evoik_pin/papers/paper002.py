@@ -76,18 +76,15 @@ def _settings(quick: bool) -> dict:
         "rho_rule": "re-solve until the distance meets the fitness value, at most rho runs; keep the lowest cost "
                     "(our loop over solver calls with runs=1, so the kept run's generations and time are known)",
         "table3": {"iterations": 85, "runs": 3 if quick else 10, "stop": "iterations only (fitness 0)"},
-        "scenario1_runs": 3 if quick else 30,
-        "scenario2_points": 5 if quick else 100,
+        "scenario1_runs": 3 if quick else 30, "scenario2_points": 5 if quick else 100,
         "scenario3_points": 5 if quick else 100,
         "spiral_mm": "x = 200 cos(2 z / 100), y = 200 sin(2 z / 100), z = n pi, n = 1..N",
         "pro_delta_rad": DEFAULT_PRO_DELTA,
         "cost": "a ||q - q0|| + b * distance (eq. 21, position only)",
-        "a_first": 1e-3, "b": 1.0,
-        "reached_m": REACHED_M,
+        "a_first": 1e-3, "b": 1.0, "reached_m": REACHED_M,
         "oracle": "points with error > reached_m are re-checked by multi-start bounded least squares in the same "
                   "search box; 'no solution' points (none within reached_m) are counted and left out of averages",
-        "oracle_starts": 3 if quick else 10,
-        "oracle_starts_pro": 2 if quick else 3,
+        "oracle_starts": 3 if quick else 10, "oracle_starts_pro": 2 if quick else 3,
         "q_start": "zeros (Scenarios 1, 2 and the first spiral point)",
         "extra_row": "Pro-ISADE at Table 5's printed fitness value 1e-12 m (Table 2 says 1e-17 m)",
     }

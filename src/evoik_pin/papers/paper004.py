@@ -78,8 +78,7 @@ def _settings(quick: bool) -> dict:
         "sweep_cells": [(p, it if not quick else it // 5) for _, p, it, *_ in PAPER_TABLE4],
         "sweep_iterations": "the paper's" if not quick else "the paper's divided by 5 (quick mode)",
         "reachable_targets": 2 if quick else 10,
-        "table6_budgets": [(12, 100), (30, 300 if quick else 1000)],
-        "table6_runs": 2 if quick else 10,
+        "table6_budgets": [(12, 100), (30, 300 if quick else 1000)], "table6_runs": 2 if quick else 10,
         "reached_threshold": {"position_cm": REACHED_POS_CM, "orientation_deg": REACHED_ORI_DEG},
     }
 

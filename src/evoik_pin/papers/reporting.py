@@ -132,18 +132,9 @@ def machine_info() -> dict[str, Any]:
         load = [round(x, 2) for x in os.getloadavg()]
     except (OSError, AttributeError):  # pragma: no cover - not on Linux/macOS
         load = None
-    return {
-        "git_commit": _git_commit(),
-        "cpu": _cpu_model(),
-        "cores": os.cpu_count(),
-        "load_average_at_start": load,
-        "platform": platform.platform(),
-        "python": sys.version.split()[0],
-        "numpy": np.__version__,
-        "pinocchio": pinocchio.__version__,
-        "matplotlib": matplotlib.__version__,
-        "evoik_pin": __version__,
-    }
+    return {"git_commit": _git_commit(), "cpu": _cpu_model(), "cores": os.cpu_count(), "load_average_at_start": load,
+            "platform": platform.platform(), "python": sys.version.split()[0], "numpy": np.__version__,
+            "pinocchio": pinocchio.__version__, "matplotlib": matplotlib.__version__, "evoik_pin": __version__}
 
 
 @dataclass
