@@ -314,13 +314,10 @@ def _fig_population_2r(ctx, hist, ref, cfg):
 
 
 def _fig_population_puma(ctx, hist, ref, cfg):
-    import matplotlib.pyplot as plt
-
     gens = [0, cfg["max_generations"]]
-    fig = plt.figure(figsize=(10, 4.2))
+    fig, axes = ctx.new_figure(1, 2, figsize=(10, 4.2), subplot_kw={"projection": "3d"})
     R = np.degrees(np.array(ref))
-    for k, (g, num) in enumerate(zip(gens, (10, 11), strict=True)):
-        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+    for k, (ax, g, num) in enumerate(zip(axes, gens, (10, 11), strict=True)):
         Q = np.degrees(hist.get(g, np.empty((0, 3))))
         ax.scatter(Q[:, 0], Q[:, 1], Q[:, 2], s=2, c="tab:blue", linewidths=0, label="population members")
         ax.scatter(R[:, 0], R[:, 1], R[:, 2], s=60, c="tab:red", marker="o", label="closed-form solutions")

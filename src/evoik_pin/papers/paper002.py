@@ -484,11 +484,9 @@ def _color(name: str) -> str:
 
 
 def _fig_targets(ctx, p_s2, p_s3):
-    import matplotlib.pyplot as plt
-
-    fig = plt.figure(figsize=(9, 4))
-    for k, (pts, title) in enumerate([(p_s2, "(a) Scenario 2: random points"), (p_s3, "(b) Scenario 3: spiral")]):
-        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+    fig, axes = ctx.new_figure(1, 2, figsize=(9, 4), subplot_kw={"projection": "3d"})
+    titles = ("(a) Scenario 2: random points", "(b) Scenario 3: spiral")
+    for k, (ax, pts, title) in enumerate(zip(axes, (p_s2, p_s3), titles, strict=True)):
         ax.plot(*(pts / MM).T, "o" if k == 0 else "o-", ms=2.5, lw=0.8)
         ax.set(xlabel="x (mm)", ylabel="y (mm)", zlabel="z (mm)")
         ax.set_title(title, fontsize=9)
