@@ -68,9 +68,7 @@ def _resolve_ids(papers) -> list[str]:
             continue
         pid = p.zfill(3) if p.isdigit() else p
         if pid not in PAPERS:
-            raise ReproductionError(
-                f"unknown paper id {p!r}; valid ids: {', '.join(PAPERS) or '(none)'} or all"
-            )
+            raise ReproductionError(f"unknown paper id {p!r}; valid ids: {', '.join(PAPERS) or '(none)'} or all")
         if pid not in ids:
             ids.append(pid)
     return ids

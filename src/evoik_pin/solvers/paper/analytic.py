@@ -246,10 +246,8 @@ def _closed_form_for(robot):
     forms = {"planar2r": (2, lambda Q: np.concatenate([planar2r_fk(Q), np.zeros(Q.shape[:-1] + (1,))], -1)),
              "puma3r": (3, puma_fk), "ax18": (4, ax18_fk)}
     if robot.name not in forms:
-        raise MethodError(
-            f"method 'algebraic' has closed forms for the bundled robots {', '.join(forms)} only, not for "
-            f"{robot.name!r}; use an evolutionary method (see evoik_pin.methods())"
-        )
+        raise MethodError(f"method 'algebraic' has closed forms for the bundled robots {', '.join(forms)} only, not "
+                          f"for {robot.name!r}; use an evolutionary method (see evoik_pin.methods())")
     n, fk = forms[robot.name]
     if robot.n != n:
         raise MethodError(f"method 'algebraic': robot {robot.name!r} has {robot.n} joints, its closed form {n}")
