@@ -19,7 +19,7 @@ import numpy as np
 from .. import lie
 from ..errors import RobotLoadError
 
-__all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform"]
+__all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform", "translation"]
 
 _KINDS = ("revolute", "prismatic", "fixed")
 
@@ -34,7 +34,8 @@ def _rot(axis: str, angle: float) -> np.ndarray:
     return T
 
 
-def _trans(axis: str, dist: float) -> np.ndarray:
+def translation(axis: str, dist: float) -> np.ndarray:
+    """The (4, 4) transform moving ``dist`` (m) along ``axis`` (``"x"``, ``"y"`` or ``"z"``)."""
     T = np.eye(4)
     T["xyz".index(axis), 3] = dist
     return T
@@ -69,9 +70,9 @@ def dh_transform(row: DHRow, q: float = 0.0, convention: str = "standard") -> np
     theta = row.theta + (q if row.kind == "revolute" else 0.0)
     d = row.d + (q if row.kind == "prismatic" else 0.0)
     if convention == "standard":
-        return _rot("z", theta) @ _trans("z", d) @ _trans("x", row.a) @ _rot("x", row.alpha)
+        return _rot("z", theta) @ translation("z", d) @ translation("x", row.a) @ _rot("x", row.alpha)
     if convention == "modified":
-        return _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", theta) @ _trans("z", d)
+        return _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", theta) @ translation("z", d)
     raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
 
 
@@ -105,10 +106,10 @@ def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_
             continue
         # Split the row into (fixed part before the joint motion) * (motion along/about z) * (fixed after).
         if convention == "standard":
-            before = _rot("z", row.theta) @ _trans("z", row.d)
-            after = _trans("x", row.a) @ _rot("x", row.alpha)
+            before = _rot("z", row.theta) @ translation("z", row.d)
+            after = translation("x", row.a) @ _rot("x", row.alpha)
         else:
-            before = _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", row.theta) @ _trans("z", row.d)
+            before = _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", row.theta) @ translation("z", row.d)
             after = np.eye(4)
         joints.append(JointSpec(row.name or f"joint{len(joints) + 1}", row.kind, pending @ before, lower=row.lower,
                                 upper=row.upper))
