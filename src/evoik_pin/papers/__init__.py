@@ -55,9 +55,7 @@ def paper_ids() -> list[str]:
 
 
 def _resolve_ids(papers) -> list[str]:
-    if isinstance(papers, str):
-        papers = [papers]
-    papers = list(papers)
+    papers = [papers] if isinstance(papers, str) else list(papers)
     if not papers:
         raise ReproductionError(f"name at least one paper: {', '.join(PAPERS)} or all")
     ids: list[str] = []
@@ -68,18 +66,15 @@ def _resolve_ids(papers) -> list[str]:
             continue
         pid = p.zfill(3) if p.isdigit() else p
         if pid not in PAPERS:
-            raise ReproductionError(
-                f"unknown paper id {p!r}; valid ids: {', '.join(PAPERS) or '(none)'} or all"
-            )
+            raise ReproductionError(f"unknown paper id {p!r}; valid ids: {', '.join(PAPERS) or '(none)'} or all")
         if pid not in ids:
             ids.append(pid)
     return ids
 
 
 def _default_command(pid: str, quick: bool, seed: int, out: Path, jobs: int) -> str:
-    parts = ["evoik", "reproduce", pid, *(["--quick"] if quick else []), "--seed", str(seed), "--out", str(out),
-             *(["--jobs", str(jobs)] if jobs > 1 else [])]
-    return shlex.join(parts)
+    return shlex.join(["evoik", "reproduce", pid, *(["--quick"] if quick else []), "--seed", str(seed), "--out",
+                       str(out), *(["--jobs", str(jobs)] if jobs > 1 else [])])
 
 
 def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0, progress: bool = True,

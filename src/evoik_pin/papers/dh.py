@@ -19,7 +19,7 @@ import numpy as np
 from .. import lie
 from ..errors import RobotLoadError
 
-__all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform"]
+__all__ = ["DHRow", "JointSpec", "chain_to_urdf", "dh_to_urdf", "dh_transform", "translation"]
 
 _KINDS = ("revolute", "prismatic", "fixed")
 
@@ -34,7 +34,8 @@ def _rot(axis: str, angle: float) -> np.ndarray:
     return T
 
 
-def _trans(axis: str, dist: float) -> np.ndarray:
+def translation(axis: str, dist: float) -> np.ndarray:
+    """The (4, 4) transform moving ``dist`` (m) along ``axis`` (``"x"``, ``"y"`` or ``"z"``)."""
     T = np.eye(4)
     T["xyz".index(axis), 3] = dist
     return T
@@ -69,9 +70,9 @@ def dh_transform(row: DHRow, q: float = 0.0, convention: str = "standard") -> np
     theta = row.theta + (q if row.kind == "revolute" else 0.0)
     d = row.d + (q if row.kind == "prismatic" else 0.0)
     if convention == "standard":
-        return _rot("z", theta) @ _trans("z", d) @ _trans("x", row.a) @ _rot("x", row.alpha)
+        return _rot("z", theta) @ translation("z", d) @ translation("x", row.a) @ _rot("x", row.alpha)
     if convention == "modified":
-        return _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", theta) @ _trans("z", d)
+        return _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", theta) @ translation("z", d)
     raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
 
 
@@ -88,44 +89,30 @@ class JointSpec:
     upper: float = np.pi
 
 
-def dh_to_urdf(
-    name: str,
-    rows: list[DHRow],
-    convention: str = "standard",
-    base: np.ndarray | None = None,
-    link_radius: float = 0.01,
-    comment: str = "",
-) -> str:
+def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_radius: float = 0.01,
+               comment: str = "") -> str:
     """URDF text of the arm ``name`` described by DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
-    ``"modified"``): ``base`` (4, 4) from ``base_link`` to the first DH frame, ``link_radius`` (m) of the visuals,
-    ``comment`` placed in an XML comment at the top."""
+    ``"modified"``), the first DH frame at ``base_link``: ``link_radius`` (m) of the visuals, ``comment`` placed in
+    an XML comment at the top."""
     if convention not in ("standard", "modified"):
         raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
     if not rows:
         raise RobotLoadError("a DH table needs at least one row")
-    pending = np.eye(4) if base is None else np.asarray(base, dtype=float)
+    pending = np.eye(4)
     joints: list[JointSpec] = []
     for row in rows:
-        const_q = DHRow(row.a, row.alpha, row.d, row.theta, "fixed")
         if row.kind == "fixed":
-            pending = pending @ dh_transform(const_q, 0.0, convention)
+            pending = pending @ dh_transform(row, 0.0, convention)
             continue
         # Split the row into (fixed part before the joint motion) * (motion along/about z) * (fixed after).
         if convention == "standard":
-            before = _rot("z", row.theta) @ _trans("z", row.d)
-            after = _trans("x", row.a) @ _rot("x", row.alpha)
+            before = _rot("z", row.theta) @ translation("z", row.d)
+            after = translation("x", row.a) @ _rot("x", row.alpha)
         else:
-            before = _rot("x", row.alpha) @ _trans("x", row.a) @ _rot("z", row.theta) @ _trans("z", row.d)
+            before = _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", row.theta) @ translation("z", row.d)
             after = np.eye(4)
-        joints.append(
-            JointSpec(
-                name=row.name or f"joint{len(joints) + 1}",
-                kind=row.kind,
-                origin=pending @ before,
-                lower=row.lower,
-                upper=row.upper,
-            )
-        )
+        joints.append(JointSpec(row.name or f"joint{len(joints) + 1}", row.kind, pending @ before, lower=row.lower,
+                                upper=row.upper))
         pending = after
     joints.append(JointSpec(name="tool_joint", kind="fixed", origin=pending))
     return chain_to_urdf(name, joints, link_radius=link_radius, comment=comment)
@@ -166,10 +153,8 @@ def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
         return ""
     T = _frame_along(p / length, p / 2)
     w = 1.4 * radius
-    return (
-        f"    <visual>{_origin_xml(T)}<geometry><box size=\"{_short(w)} {_short(w)} {_short(length)}\"/>"
-        f"</geometry><material name=\"{material}\"/></visual>\n"
-    )
+    return (f"    <visual>{_origin_xml(T)}<geometry><box size=\"{_short(w)} {_short(w)} {_short(length)}\"/>"
+            f"</geometry><material name=\"{material}\"/></visual>\n")
 
 
 def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
@@ -189,12 +174,10 @@ def chain_to_urdf(name: str, joints: list[JointSpec], link_radius: float = 0.01,
     lines = ['<?xml version="1.0"?>']
     if comment:
         lines.append("<!--\n" + escape(comment).replace("--", "- -") + "\n-->")
-    lines.append(f'<robot name="{escape(name)}">')
-    lines.append('  <material name="link"><color rgba="0.55 0.6 0.7 1"/></material>')
-    lines.append('  <material name="joint"><color rgba="0.9 0.5 0.1 1"/></material>')
-    link_names = ["base_link"] + [
-        "tool" if (j.kind == "fixed" and k == len(joints) - 1) else f"link{k + 1}" for k, j in enumerate(joints)
-    ]
+    lines += [f'<robot name="{escape(name)}">', '  <material name="link"><color rgba="0.55 0.6 0.7 1"/></material>',
+              '  <material name="joint"><color rgba="0.9 0.5 0.1 1"/></material>']
+    link_names = ["base_link"] + ["tool" if (j.kind == "fixed" and k == len(joints) - 1) else f"link{k + 1}"
+                                  for k, j in enumerate(joints)]
     for k, link in enumerate(link_names):
         body = ""
         if k > 0 and joints[k - 1].kind != "fixed":
@@ -202,23 +185,15 @@ def chain_to_urdf(name: str, joints: list[JointSpec], link_radius: float = 0.01,
         if k < len(joints):
             body += _segment_visual(np.asarray(joints[k].origin)[:3, 3], link_radius, "link")
         if link == "tool":
-            body += (
-                f'    <visual><origin xyz="0 0 0" rpy="0 0 0"/><geometry><sphere radius="{_short(link_radius)}"/>'
-                '</geometry><material name="joint"/></visual>\n'
-            )
+            body += (f'    <visual><origin xyz="0 0 0" rpy="0 0 0"/><geometry><sphere radius="{_short(link_radius)}"/>'
+                     '</geometry><material name="joint"/></visual>\n')
         lines.append(f'  <link name="{link}">\n{body}  </link>' if body else f'  <link name="{link}"/>')
     for k, j in enumerate(joints):
-        parts = [
-            f'  <joint name="{escape(j.name)}" type="{j.kind}">',
-            f'    <parent link="{link_names[k]}"/>',
-            f'    <child link="{link_names[k + 1]}"/>',
-            f"    {_origin_xml(np.asarray(j.origin, float))}",
-        ]
+        parts = [f'  <joint name="{escape(j.name)}" type="{j.kind}">', f'    <parent link="{link_names[k]}"/>',
+                 f'    <child link="{link_names[k + 1]}"/>', f"    {_origin_xml(np.asarray(j.origin, float))}"]
         if j.kind != "fixed":
-            parts.append(f'    <axis xyz="{" ".join(_fmt(v) for v in j.axis)}"/>')
-            parts.append(
-                f'    <limit lower="{_fmt(j.lower)}" upper="{_fmt(j.upper)}" effort="10.0" velocity="2.0"/>'
-            )
+            parts += [f'    <axis xyz="{" ".join(_fmt(v) for v in j.axis)}"/>',
+                      f'    <limit lower="{_fmt(j.lower)}" upper="{_fmt(j.upper)}" effort="10.0" velocity="2.0"/>']
         parts.append("  </joint>")
         lines.append("\n".join(parts))
     lines.append("</robot>")

@@ -67,11 +67,10 @@ def _wrap_deg(a):
 
 def _match(reference: list[np.ndarray], found: list[np.ndarray]) -> list[tuple[np.ndarray | None, float]]:
     """For each reference solution (rad): the nearest found one (rad) and its error (deg, max over joints)."""
+    if not found:
+        return [(None, float("inf")) for _ in reference]
     out = []
     for q in reference:
-        if not found:
-            out.append((None, float("inf")))
-            continue
         errs = [float(np.abs(_wrap_deg(np.degrees(f - q))).max()) for f in found]
         k = int(np.argmin(errs))
         out.append((found[k], errs[k]))
@@ -117,14 +116,10 @@ def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
 def _stats(reference, runs_found, method) -> list[dict]:
     """Per reference solution: first run's match, share found, median / max error over the runs."""
     per = [_match(reference, found) for found in runs_found]
-    stats = []
-    for j in range(len(reference)):
-        errs = np.array([p[j][1] for p in per])
-        stats.append({"first_q": per[0][j][0], "first_error": float(errs[0]),
-                      "found": float(np.mean(errs <= FOUND_DEG[method])),
-                      "median_error": float(np.median(errs)), "max_error": float(errs.max()),
-                      "errors": errs})
-    return stats
+    errors = [np.array([p[j][1] for p in per]) for j in range(len(reference))]
+    return [{"first_q": per[0][j][0], "first_error": float(errs[0]), "found": float(np.mean(errs <= FOUND_DEG[method])),
+             "median_error": float(np.median(errs)), "max_error": float(errs.max()), "errors": errs}
+            for j, errs in enumerate(errors)]
 
 
 def run(ctx: RunContext) -> PaperReport:
@@ -147,12 +142,9 @@ def run(ctx: RunContext) -> PaperReport:
 
     def against(arm: str, references: list) -> dict:
         """Per target (cm): its closed-form solutions and, per method, what each run found and how near."""
-        out = {}
-        for k, (t_cm, ref) in enumerate(references):
-            out[t_cm] = {"reference": ref}
-            for m in ("ga", "hga"):
-                out[t_cm][m] = {"found": found[(arm, k, m)], "stats": _stats(ref, found[(arm, k, m)], m)}
-        return out
+        return {t_cm: {"reference": ref, **{m: {"found": found[arm, k, m], "stats": _stats(ref, found[arm, k, m], m)}
+                                            for m in ("ga", "hga")}}
+                for k, (t_cm, ref) in enumerate(references)}
 
     # -- planar 2R: Tables 3 and 4 -----------------------------------------------------------------------
     res2r = against("planar2r", [(t_cm, planar2r_ik(*targets["planar2r"][k][:2]))
@@ -195,13 +187,11 @@ def run(ctx: RunContext) -> PaperReport:
     rows5, paper5, misses = [], [], {}
     for t_cm in TARGETS_PUMA_CM:
         target, t_text = np.array(t_cm) * CM, tuple_text(t_cm, "g")
-        for j, q in enumerate(resp[t_cm]["reference"]):
-            rows5.append([t_text, j + 1, *np.degrees(q), float(np.linalg.norm(puma_fk(q) - target)) / CM])
+        rows5 += [[t_text, j + 1, *np.degrees(q), float(np.linalg.norm(puma_fk(q) - target)) / CM]
+                  for j, q in enumerate(resp[t_cm]["reference"])]
         paper_q = np.radians(np.array(PAPER_TABLE5[t_cm]))
-        miss = np.linalg.norm(puma_fk(paper_q) - target, axis=1) / CM
-        misses[str(t_cm)] = miss
-        for j, row in enumerate(PAPER_TABLE5[t_cm]):
-            paper5.append([t_text, j + 1, *row, float(miss[j])])
+        miss = misses[str(t_cm)] = np.linalg.norm(puma_fk(paper_q) - target, axis=1) / CM
+        paper5 += [[t_text, j + 1, *row, float(miss[j])] for j, row in enumerate(PAPER_TABLE5[t_cm])]
     report.tables.append(Table(
         "table5", "Table 5 - PUMA wrist point: closed-form solutions (eq. 20, stated lengths)",
         ["target (cm)", "solution", "t1 (deg)", "t2 (deg)", "t3 (deg)", "FK miss of these angles (cm)"],
@@ -216,14 +206,12 @@ def run(ctx: RunContext) -> PaperReport:
         rows, paper_rows = [], []
         for t_cm in TARGETS_PUMA_CM:
             e = resp[t_cm]
-            for j, (q, st) in enumerate(zip(e["reference"], e[method]["stats"], strict=True)):
-                rows.append([tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"]), st["first_error"],
-                             runs, st["found"], st["median_error"], st["max_error"]])
-            if method == "hga":
-                for j, row in enumerate(PAPER_TABLE6.get(t_cm, [])):
-                    paper_rows.append([tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
-                                       float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()),
-                                       None, None, None, None])
+            rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"]), st["first_error"], runs,
+                      st["found"], st["median_error"], st["max_error"]]
+                     for j, (q, st) in enumerate(zip(e["reference"], e[method]["stats"], strict=True))]
+            paper_rows += [[tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
+                            float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()), None, None, None, None]
+                           for j, row in enumerate(PAPER_TABLE6.get(t_cm, []))]
         spec = ".4f" if method == "hga" else ".2f"
         report.tables.append(Table(
             key, title,
@@ -326,13 +314,10 @@ def _fig_population_2r(ctx, hist, ref, cfg):
 
 
 def _fig_population_puma(ctx, hist, ref, cfg):
-    import matplotlib.pyplot as plt
-
     gens = [0, cfg["max_generations"]]
-    fig = plt.figure(figsize=(10, 4.2))
+    fig, axes = ctx.new_figure(1, 2, figsize=(10, 4.2), subplot_kw={"projection": "3d"})
     R = np.degrees(np.array(ref))
-    for k, (g, num) in enumerate(zip(gens, (10, 11), strict=True)):
-        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+    for k, (ax, g, num) in enumerate(zip(axes, gens, (10, 11), strict=True)):
         Q = np.degrees(hist.get(g, np.empty((0, 3))))
         ax.scatter(Q[:, 0], Q[:, 1], Q[:, 2], s=2, c="tab:blue", linewidths=0, label="population members")
         ax.scatter(R[:, 0], R[:, 1], R[:, 2], s=60, c="tab:red", marker="o", label="closed-form solutions")

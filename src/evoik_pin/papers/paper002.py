@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import inspect
 import time
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -65,10 +65,8 @@ PAPER_TABLE5 = {"PSO": (1e-14, 7.4140e-13, 1.9574e-13, 429.95, 0.3604),
 
 
 def _settings(quick: bool) -> dict:
-    defaults = {}
-    for name, cfg in METHODS.items():
-        params = inspect.signature(get_solver(cfg["method"]).func).parameters
-        defaults[name] = {k: params[k].default for k in ("population",) if k in params}
+    defaults = {name: {"population": inspect.signature(get_solver(c["method"]).func).parameters["population"].default}
+                for name, c in METHODS.items()}
     return {
         "robot": ROBOT,
         "methods": {name: {"method": c["method"], "max_generations": c["max_generations"],
@@ -78,18 +76,15 @@ def _settings(quick: bool) -> dict:
         "rho_rule": "re-solve until the distance meets the fitness value, at most rho runs; keep the lowest cost "
                     "(our loop over solver calls with runs=1, so the kept run's generations and time are known)",
         "table3": {"iterations": 85, "runs": 3 if quick else 10, "stop": "iterations only (fitness 0)"},
-        "scenario1_runs": 3 if quick else 30,
-        "scenario2_points": 5 if quick else 100,
+        "scenario1_runs": 3 if quick else 30, "scenario2_points": 5 if quick else 100,
         "scenario3_points": 5 if quick else 100,
         "spiral_mm": "x = 200 cos(2 z / 100), y = 200 sin(2 z / 100), z = n pi, n = 1..N",
         "pro_delta_rad": DEFAULT_PRO_DELTA,
         "cost": "a ||q - q0|| + b * distance (eq. 21, position only)",
-        "a_first": 1e-3, "b": 1.0,
-        "reached_m": REACHED_M,
+        "a_first": 1e-3, "b": 1.0, "reached_m": REACHED_M,
         "oracle": "points with error > reached_m are re-checked by multi-start bounded least squares in the same "
                   "search box; 'no solution' points (none within reached_m) are counted and left out of averages",
-        "oracle_starts": 3 if quick else 10,
-        "oracle_starts_pro": 2 if quick else 3,
+        "oracle_starts": 3 if quick else 10, "oracle_starts_pro": 2 if quick else 3,
         "q_start": "zeros (Scenarios 1, 2 and the first spiral point)",
         "extra_row": "Pro-ISADE at Table 5's printed fitness value 1e-12 m (Table 2 says 1e-17 m)",
     }
@@ -97,14 +92,15 @@ def _settings(quick: bool) -> dict:
 
 def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0, bounds=None, a: float = 0.0,
                  max_generations: int | None = None, callback=None) -> dict:
-    """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``)."""
+    """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``); ``callback`` goes to
+    every run."""
     target = Target.coerce(target)
     objective = PositionError(target)
     if a > 0:
         objective = a * WeightedJointDisplacement(q0) + objective
     best, runs, total_time, total_gens = None, 0, 0.0, 0
     for _ in range(rho):
-        extra = {} if callback is None else {"callback": callback()}
+        extra = {} if callback is None else {"callback": callback}
         res = solve(robot, target, method=cfg["method"], seed=rng, q0=q0, bounds=bounds, objective=objective,
                     tolerance=fitness, max_generations=max_generations or cfg["max_generations"], runs=1,
                     **cfg["options"], **extra)
@@ -142,50 +138,40 @@ def _stats(points: list[dict], fitness: float | None) -> dict:
 REACHED_M = 1e-9
 
 
-def _by_construction(points: list[dict]) -> list[dict]:
-    """Status of points whose targets are FK of joint vectors inside the bounds (a solution exists)."""
-    for pt in points:
-        pt["status"] = "reached" if pt["error"] <= REACHED_M else "missed"
+def _classify(points: list[dict], distance=lambda i: 0.0) -> list[dict]:
+    """Each point's ``status``: ``reached``; ``missed`` when ``distance(i)`` (the least distance a reachability
+    check finds for point i, m; default 0: a target that is FK of joints inside the bounds) is within REACHED_M;
+    else ``no solution``."""
+    for i, pt in enumerate(points):
+        reached = pt["error"] <= REACHED_M
+        pt["oracle"] = None if reached else min(pt["error"], distance(i))
+        pt["status"] = "reached" if reached else "missed" if pt["oracle"] <= REACHED_M else "no solution"
     return points
-
-
-def _classify(pt: dict, distance) -> None:
-    """A point's ``status``: ``reached``; ``missed`` when ``distance()`` (the least distance a reachability check
-    finds, m) is within REACHED_M; else ``no solution``."""
-    pt["oracle"] = None
-    if pt["error"] <= REACHED_M:
-        pt["status"] = "reached"
-        return
-    pt["oracle"] = min(pt["error"], distance())
-    pt["status"] = "missed" if pt["oracle"] <= REACHED_M else "no solution"
 
 
 def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
     """:func:`_classify` full-range spiral points, the check run once per point for all variants, starting from
     the closest configuration any variant found."""
-    cache: dict[int, float] = {}
 
+    @cache
     def distance(i: int) -> float:
-        if i not in cache:
-            closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
-            cache[i] = min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper,
-                                                                    rng, starts, closest["q"]))
-        return cache[i]
+        closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
+        return min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper, rng, starts,
+                                                            closest["q"]))
 
     for pts in variants.values():
-        for i, pt in enumerate(pts):
-            _classify(pt, lambda i=i: distance(i))
+        _classify(pts, distance)
 
 
 def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: int) -> None:
     """:func:`_classify` Pro-variant points, the check confined to each point's Pro box (the first: full range)."""
-    for i, (pt, p) in enumerate(zip(points, targets, strict=True)):
-        if i > 0:
-            lo, hi = _pro_bounds(robot, points[i - 1]["q"], DEFAULT_PRO_DELTA)
-            x0 = points[i - 1]["q"]
-        else:
-            lo, hi, x0 = robot.lower, robot.upper, pt["q"]
-        _classify(pt, lambda p=p, lo=lo, hi=hi, x0=x0: least_squares_distance(robot, p, lo, hi, rng, starts, x0))
+
+    def distance(i: int) -> float:
+        x0 = points[i - 1]["q"] if i > 0 else points[0]["q"]
+        lo, hi = _pro_bounds(robot, x0, DEFAULT_PRO_DELTA) if i > 0 else (robot.lower, robot.upper)
+        return least_squares_distance(robot, targets[i], lo, hi, rng, starts, x0)
+
+    _classify(points, distance)
 
 
 def _smoothness(points: list[dict]) -> dict:
@@ -203,17 +189,14 @@ def spiral_targets(count: int) -> np.ndarray:
     return np.stack([200 * np.cos(2 * z / 100), 200 * np.sin(2 * z / 100), z], axis=1) * MM
 
 
-@lru_cache(maxsize=1)
+@cache
 def _robot():
     return load_robot(ROBOT)
 
 
 def _job(spec: dict):
-    """One independent part of the experiment; top level so a process pool can run it.
-
-    Returns ``(key, output, wall time s)``. Every random stream derives from ``spec["seed"]`` and the
-    part's labels only, so serial and parallel runs give the same numbers.
-    """
+    """One independent part of the experiment (a top-level job for ``ctx.map_parallel``): ``(key, output, wall
+    time s)``."""
     t0 = time.perf_counter()
     robot, s, kind, label = _robot(), spec["settings"], spec["kind"], spec["label"]
     cfg = METHODS[label.removeprefix("Pro-").split(" ")[0]]
@@ -224,13 +207,8 @@ def _job(spec: dict):
         runs = []
         for _ in range(s["table3"]["runs"]):
             stamps: list[float] = []
-
-            def make_cb(stamps=stamps):
-                stamps.clear()
-                return lambda g, X: stamps.append(time.perf_counter()) and False
-
             r = _solve_point(robot, spec["target"], cfg, rng, rho=1, fitness=0.0, q0=q_zero, max_generations=85,
-                             callback=make_cb)
+                             callback=lambda g, X, stamps=stamps: stamps.append(time.perf_counter()) and False)
             runs.append((r, np.asarray(stamps) - stamps[0] if stamps else None))
         best_r, best_t = min(runs, key=lambda rt: rt[0]["error"])
         out = {"error": best_r["error"], "time": best_r["time"],
@@ -294,17 +272,15 @@ def run(ctx: RunContext) -> PaperReport:
 
     t3 = {n: outputs[("table3", n)] for n in METHODS}
     curves = {n: t3[n].pop("curve") for n in METHODS}
-    s1 = {n: _stats(_by_construction(outputs[("scenario1", n)]), METHODS[n]["fitness_s1"]) for n in METHODS}
+    s1 = {n: _stats(_classify(outputs[("scenario1", n)]), METHODS[n]["fitness_s1"]) for n in METHODS}
     s2_points = {n: outputs[("scenario2", n)] for n in METHODS}
-    s2 = {n: _stats(_by_construction(pts), METHODS[n]["fitness"]) for n, pts in s2_points.items()}
+    s2 = {n: _stats(_classify(pts), METHODS[n]["fitness"]) for n, pts in s2_points.items()}
     s3_points = {label: outputs[("scenario3", label)] for label, _, _ in variants}
     _classify_full(robot, {k: s3_points[k] for k in METHODS}, p_s3, ctx.rng("002", "oracle", "full range"),
                    s["oracle_starts"])
-    s3 = {}
-    for label, _, fitness in variants:
-        pts = s3_points[label]
-        # averages over points 2..N: the first point carries eq. 21's a-term and cannot stop on the fitness value
-        s3[label] = {**_stats(pts[1:] or pts, fitness), **_smoothness(pts)}
+    # averages over points 2..N: the first point carries eq. 21's a-term and cannot stop on the fitness value
+    s3 = {label: {**_stats(s3_points[label][1:] or s3_points[label], fitness), **_smoothness(s3_points[label])}
+          for label, _, fitness in variants}
 
     # -- tables ------------------------------------------------------------------------------------------
     report.tables.append(Table(
@@ -387,10 +363,9 @@ def run(ctx: RunContext) -> PaperReport:
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,
         "scenario2_targets_m": p_s2_pin, "scenario3_targets_m": p_s3,
-        "scenario2": {n: [{k: p[k] for k in ("error", "generations", "time", "runs", "total_time", "success")}
-                          for p in pts] for n, pts in s2_points.items()},
-        "scenario3": {n: [{k: p[k] for k in ("error", "generations", "time", "runs", "total_time", "success")}
-                          for p in pts] for n, pts in s3_points.items()},
+        **{key: {n: [{k: p[k] for k in ("error", "generations", "time", "runs", "total_time", "success")}
+                     for p in pts] for n, pts in points.items()}
+           for key, points in (("scenario2", s2_points), ("scenario3", s3_points))},
         "scenario3_q": {n: np.array([p["q"] for p in pts]) for n, pts in s3_points.items()},
         "summary": {"table3": t3, "scenario1": s1, "scenario2": s2, "scenario3": s3},
     })
@@ -423,11 +398,9 @@ def _seed_check(s3_points: dict, p_s3: np.ndarray, seed: int, runs: int = 3) -> 
         return ""
     i, robot, cfg = miss[0], _robot(), METHODS[name]
     rng = derive_rng(seed, "002", "seed-check", name)
-    out = {}
-    for label, q0 in (("seeded", s3_points[name][i - 1]["q"]), ("unseeded", None)):
-        errs = [_solve_point(robot, p_s3[i], cfg, rng, rho=1, fitness=cfg["fitness"], q0=q0)["error"]
-                for _ in range(runs)]
-        out[label] = sum(e <= REACHED_M for e in errs)
+    out = {label: sum(_solve_point(robot, p_s3[i], cfg, rng, rho=1, fitness=cfg["fitness"], q0=q0)["error"] <= REACHED_M
+                      for _ in range(runs))
+           for label, q0 in (("seeded", s3_points[name][i - 1]["q"]), ("unseeded", None))}
     return (f"Check at n = {i + 1} with {name}: {out['seeded']}/{runs} runs seeded with the previous solution reach "
             f"it, {out['unseeded']}/{runs} unseeded runs do.")
 
@@ -511,11 +484,9 @@ def _color(name: str) -> str:
 
 
 def _fig_targets(ctx, p_s2, p_s3):
-    import matplotlib.pyplot as plt
-
-    fig = plt.figure(figsize=(9, 4))
-    for k, (pts, title) in enumerate([(p_s2, "(a) Scenario 2: random points"), (p_s3, "(b) Scenario 3: spiral")]):
-        ax = fig.add_subplot(1, 2, k + 1, projection="3d")
+    fig, axes = ctx.new_figure(1, 2, figsize=(9, 4), subplot_kw={"projection": "3d"})
+    titles = ("(a) Scenario 2: random points", "(b) Scenario 3: spiral")
+    for k, (ax, pts, title) in enumerate(zip(axes, (p_s2, p_s3), titles, strict=True)):
         ax.plot(*(pts / MM).T, "o" if k == 0 else "o-", ms=2.5, lw=0.8)
         ax.set(xlabel="x (mm)", ylabel="y (mm)", zlabel="z (mm)")
         ax.set_title(title, fontsize=9)
@@ -543,13 +514,11 @@ def _fig_points(ctx, points: dict, name: str, caption: str):
         axes[0].semilogy(x, [max(p["error"], 1e-18) for p in pts], ".-", lw=0.7, label=label, color=_color(label))
         axes[1].plot(x, [p["time"] for p in pts], ".-", lw=0.7, color=_color(label))
         axes[2].plot(x, [p["generations"] for p in pts], ".-", lw=0.7, color=_color(label))
-    axes[0].set_ylabel("(a) distance error (m)")
-    axes[1].set_ylabel("(b) execution time (s)")
-    axes[2].set_ylabel("(c) generations")
+    for ax, ylabel in zip(axes, ("(a) distance error (m)", "(b) execution time (s)", "(c) generations"), strict=True):
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
     axes[2].set_xlabel("point")
     axes[0].legend(fontsize=8)
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
     return ctx.save_figure(fig, name, caption + " (errors of exactly 0 drawn at 1e-18 m)")
 
 

@@ -146,14 +146,10 @@ def run(ctx: RunContext) -> PaperReport:
              f"configurations. Lower bound of the vehicle path: {bound / CM:.1f} cm (the distance from the start to "
              "the disc of radius l1 + l2 around the last point's wrist point)."))
 
-    step_rows = []
-    for k in range(len(P)):
-        row = [k + 1, f"({P[k, 0] / CM:.0f}, {P[k, 1] / CM:.0f})"]
-        for K in GAINS:
-            row.append(float(np.mean([e["vehicle_steps"][k] for e in runs[K]])) / CM)
-        for K in GAINS:
-            row.append(float(np.degrees(np.mean([e["arm_steps"][k] for e in runs[K]]))))
-        step_rows.append(row)
+    step_rows = [[k + 1, f"({P[k, 0] / CM:.0f}, {P[k, 1] / CM:.0f})",
+                  *(float(np.mean([e["vehicle_steps"][k] for e in runs[K]])) / CM for K in GAINS),
+                  *(float(np.degrees(np.mean([e["arm_steps"][k] for e in runs[K]]))) for K in GAINS)]
+                 for k in range(len(P))]
     report.tables.append(Table(
         "vehicle_steps", "Vehicle displacement into each path point (mean over the runs)",
         ["point", "target (cm)", *(f"vehicle step K={K:g} (cm)" for K in GAINS),

@@ -78,8 +78,7 @@ def _settings(quick: bool) -> dict:
         "sweep_cells": [(p, it if not quick else it // 5) for _, p, it, *_ in PAPER_TABLE4],
         "sweep_iterations": "the paper's" if not quick else "the paper's divided by 5 (quick mode)",
         "reachable_targets": 2 if quick else 10,
-        "table6_budgets": [(12, 100), (30, 300 if quick else 1000)],
-        "table6_runs": 2 if quick else 10,
+        "table6_budgets": [(12, 100), (30, 300 if quick else 1000)], "table6_runs": 2 if quick else 10,
         "reached_threshold": {"position_cm": REACHED_POS_CM, "orientation_deg": REACHED_ORI_DEG},
     }
 
@@ -145,14 +144,11 @@ def run(ctx: RunContext) -> PaperReport:
     goals_reach = [_pose(robot, q) for q in q_reach]
     sweep_reach = sweep(goals_reach, "reachable")
 
-    paper_rows, rows = [], []
-    for (test, pop, iters, J, _total, t_ms, reached), (_, ours_iters), cell in zip(PAPER_TABLE4, cells, sweep_paper,
-                                                                                      strict=True):
-        p_err, o_err = _pose_errors(reached, PAPER_TARGET)
-        paper_rows.append([test, pop, iters, J, None, p_err, o_err, t_ms, tuple_text(reached)])
-        b = cell["best"]
-        rows.append([test, pop, ours_iters, cell["J_median"], cell["J_best"], b["pos_cm"], b["ori_deg"],
-                     cell["time_ms_median"], tuple_text(b["pose"])])
+    paper_rows = [[test, pop, iters, J, None, *_pose_errors(reached, PAPER_TARGET), t_ms, tuple_text(reached)]
+                  for test, pop, iters, J, _total, t_ms, reached in PAPER_TABLE4]
+    rows = [[test, pop, iters, c["J_median"], c["J_best"], c["best"]["pos_cm"], c["best"]["ori_deg"],
+             c["time_ms_median"], tuple_text(c["best"]["pose"])]
+            for (test, *_), (pop, iters), c in zip(PAPER_TABLE4, cells, sweep_paper, strict=True)]
     cols = ["test", "population", "iterations", "J (median)", "J (best)", "pos. error (cm)",
             "RPY error (deg)", "time (ms, median)", "reached pose (x, y, z cm; r, p, y deg)"]
     report.tables.append(Table(
@@ -163,11 +159,9 @@ def run(ctx: RunContext) -> PaperReport:
               "its 'total error' column (a signed sum over iterations) is not reproduced. J in the paper's units "
               "(position in cm, angles in rad).")))
 
-    rows = []
-    for (test, *_), (pop, iters), cell in zip(PAPER_TABLE4, cells, sweep_reach, strict=True):
-        b = cell["best"]
-        rows.append([test, pop, iters, cell["J_median"], cell["J_best"], cell["reached_fraction"],
-                     cell["time_ms_median"], b["pos_cm"], b["ori_deg"]])
+    rows = [[test, pop, iters, c["J_median"], c["J_best"], c["reached_fraction"], c["time_ms_median"],
+             c["best"]["pos_cm"], c["best"]["ori_deg"]]
+            for (test, *_), (pop, iters), c in zip(PAPER_TABLE4, cells, sweep_reach, strict=True)]
     report.tables.append(Table(
         "table4_reachable",
         f"Table 4 analogue - the same sweep on {len(goals_reach)} targets reachable by construction (FK of joint "
@@ -177,13 +171,9 @@ def run(ctx: RunContext) -> PaperReport:
         note=f"'Reached' = position error <= {REACHED_POS_CM} cm and RPY error <= {REACHED_ORI_DEG} deg."))
 
     # -- Tables 5/6: the paper's three targets, as printed and as FK of the paper's joints ---------------
-    check_rows = []
-    fk_goals = []
-    for k, (goal, q_deg) in enumerate(PAPER_TABLE5, start=1):
-        pose = _pose(robot, np.radians(q_deg))
-        fk_goals.append(pose)
-        p_err, o_err = _pose_errors(pose, goal)
-        check_rows.append([k, tuple_text(goal), tuple_text(q_deg), tuple_text(pose), p_err, o_err])
+    fk_goals = [_pose(robot, np.radians(q_deg)) for _, q_deg in PAPER_TABLE5]
+    check_rows = [[k, tuple_text(goal), tuple_text(q_deg), tuple_text(pose), *_pose_errors(pose, goal)]
+                  for k, ((goal, q_deg), pose) in enumerate(zip(PAPER_TABLE5, fk_goals, strict=True), start=1)]
     report.tables.append(Table(
         "table5_check", "Table 5 consistency check - FK (our standard-DH reading of Table 1) of the paper's joint "
         "values against the paper's target poses",
@@ -200,15 +190,11 @@ def run(ctx: RunContext) -> PaperReport:
         t6[(kind, k, pop, iters)] = _cells([_solve(robot, goal, pop, iters, rng) for _ in range(table6_runs)])
     cols6 = ["target", "goal", "population", "iterations", "J (median)", "J (best)", "pos. error (cm)",
              "RPY error (deg)", "time (ms, median)", "reached (fraction)", "reached pose (x, y, z cm; r, p, y deg)"]
-    paper6 = []
-    for k, (J, _total, t_ms, reached) in enumerate(PAPER_TABLE6):
-        p_err, o_err = _pose_errors(reached, PAPER_TABLE5[k][0])
-        paper6.append([k + 1, "paper pose", 12, 100, J, None, p_err, o_err, t_ms, None, tuple_text(reached)])
-    rows6 = []
-    for (kind, k, pop, iters), cell in t6.items():
-        b = cell["best"]
-        rows6.append([k + 1, kind, pop, iters, cell["J_median"], cell["J_best"], b["pos_cm"], b["ori_deg"],
-                      cell["time_ms_median"], cell["reached_fraction"], tuple_text(b["pose"])])
+    paper6 = [[k + 1, "paper pose", 12, 100, J, None, *_pose_errors(reached, PAPER_TABLE5[k][0]), t_ms, None,
+               tuple_text(reached)] for k, (J, _total, t_ms, reached) in enumerate(PAPER_TABLE6)]
+    rows6 = [[k + 1, kind, pop, iters, c["J_median"], c["J_best"], c["best"]["pos_cm"], c["best"]["ori_deg"],
+              c["time_ms_median"], c["reached_fraction"], tuple_text(c["best"]["pose"])]
+             for (kind, k, pop, iters), c in t6.items()]
     report.tables.append(Table(
         "table6", "Tables 5/6 - the paper's three targets: as printed ('paper pose') and as FK of the paper's own "
         "joint values ('FK of paper joints', reachable by construction)", cols6, rows6, paper_rows=paper6,

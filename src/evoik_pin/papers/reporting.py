@@ -44,9 +44,8 @@ def check_output_dir(path) -> Path:
         with tempfile.NamedTemporaryFile(dir=out, prefix=".evoik-write-test-", delete=True) as fh:
             fh.write(b"ok")
     except OSError as exc:
-        raise OutputError(
-            f"output directory {str(out)!r} is not writable ({exc.strerror or exc}); choose another with --out"
-        ) from None
+        raise OutputError(f"output directory {str(out)!r} is not writable ({exc.strerror or exc}); choose another "
+                          "with --out") from None
     return out.resolve()
 
 
@@ -133,18 +132,9 @@ def machine_info() -> dict[str, Any]:
         load = [round(x, 2) for x in os.getloadavg()]
     except (OSError, AttributeError):  # pragma: no cover - not on Linux/macOS
         load = None
-    return {
-        "git_commit": _git_commit(),
-        "cpu": _cpu_model(),
-        "cores": os.cpu_count(),
-        "load_average_at_start": load,
-        "platform": platform.platform(),
-        "python": sys.version.split()[0],
-        "numpy": np.__version__,
-        "pinocchio": pinocchio.__version__,
-        "matplotlib": matplotlib.__version__,
-        "evoik_pin": __version__,
-    }
+    return {"git_commit": _git_commit(), "cpu": _cpu_model(), "cores": os.cpu_count(), "load_average_at_start": load,
+            "platform": platform.platform(), "python": sys.version.split()[0], "numpy": np.__version__,
+            "pinocchio": pinocchio.__version__, "matplotlib": matplotlib.__version__, "evoik_pin": __version__}
 
 
 @dataclass
@@ -240,8 +230,8 @@ class PaperReport:
     command: str = ""
     animation: Animation | None = None
 
-    def markdown(self, out_dir: Path | None = None) -> str:
-        """The report as markdown (figure links relative to ``out_dir`` when given)."""
+    def markdown(self, out_dir: Path) -> str:
+        """The report as markdown, figure links relative to ``out_dir``."""
         mode = "quick (reduced size)" if self.quick else "full (paper settings)"
         lines = [f"# Paper {self.paper_id}: {self.title}", "",
                  f"- mode: {mode}", f"- seed: {self.seed}", f"- command: `{self.command}`",
@@ -254,8 +244,7 @@ class PaperReport:
         if self.figures:
             lines += ["## Figures", ""]
             for f in self.figures:
-                rel = f.path.name if out_dir is None else os.path.relpath(f.path, out_dir)
-                lines += [f"![{f.caption}]({rel})", "", f"*{f.caption}*", ""]
+                lines += [f"![{f.caption}]({os.path.relpath(f.path, out_dir)})", "", f"*{f.caption}*", ""]
         if self.notes:
             lines += ["## Notes", ""] + [f"- {n}" for n in self.notes] + [""]
         return "\n".join(lines)
@@ -269,17 +258,13 @@ class PaperReport:
             "notes": self.notes, "data": self.data,
         })
 
-    def write(self, out_dir: Path) -> dict[str, Path]:
+    def write(self, out_dir: Path) -> None:
         """Write ``report.md``, ``results.json`` and ``<table key>.csv`` files into ``out_dir``."""
         out_dir = Path(out_dir)
-        written: dict[str, Path] = {}
         for t in self.tables:
-            written[t.key] = t.write_csv(out_dir / f"{t.key}.csv")
-        written["results.json"] = out_dir / "results.json"
-        written["results.json"].write_text(json.dumps(self.as_dict(), indent=1, allow_nan=False))
-        written["report.md"] = out_dir / "report.md"
-        written["report.md"].write_text(self.markdown(out_dir))
-        return written
+            t.write_csv(out_dir / f"{t.key}.csv")
+        (out_dir / "results.json").write_text(json.dumps(self.as_dict(), indent=1, allow_nan=False))
+        (out_dir / "report.md").write_text(self.markdown(out_dir))
 
 
 def progress_bar(iterable: Iterable | None = None, total: int | None = None, desc: str = "", enabled: bool = True):

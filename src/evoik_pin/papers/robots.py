@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .dh import DHRow, JointSpec, chain_to_urdf, dh_to_urdf
+from .dh import DHRow, JointSpec, chain_to_urdf, dh_to_urdf, translation
 
 __all__ = ["PAPER_ROBOTS", "VEHICLE_ARM_LENGTHS", "paper_robot_urdf"]
 
@@ -86,18 +86,13 @@ VEHICLE_TRAVEL = 3.0
 def _vehicle_arm() -> str:
     l1, l2, l3 = VEHICLE_ARM_LENGTHS
 
-    def tx(x: float) -> np.ndarray:
-        T = np.eye(4)
-        T[0, 3] = x
-        return T
-
     joints = [
         JointSpec("vehicle_x", "prismatic", np.eye(4), (1.0, 0.0, 0.0), -VEHICLE_TRAVEL, VEHICLE_TRAVEL),
         JointSpec("vehicle_y", "prismatic", np.eye(4), (0.0, 1.0, 0.0), -VEHICLE_TRAVEL, VEHICLE_TRAVEL),
         JointSpec("arm_q2", "revolute", np.eye(4), (0.0, 0.0, 1.0), -np.pi, np.pi),
-        JointSpec("arm_q3", "revolute", tx(l1), (0.0, 0.0, 1.0), -np.pi, np.pi),
-        JointSpec("arm_q4", "revolute", tx(l2), (0.0, 0.0, 1.0), -np.pi, np.pi),
-        JointSpec("tool_joint", "fixed", tx(l3)),
+        JointSpec("arm_q3", "revolute", translation("x", l1), (0.0, 0.0, 1.0), -np.pi, np.pi),
+        JointSpec("arm_q4", "revolute", translation("x", l2), (0.0, 0.0, 1.0), -np.pi, np.pi),
+        JointSpec("tool_joint", "fixed", translation("x", l3)),
     ]
     return chain_to_urdf("vehicle_arm", joints, link_radius=0.02, comment=(
         "Paper 003: planar vehicle-arm. q0, q1: vehicle translation along x and y (prismatic, +-3 m); "

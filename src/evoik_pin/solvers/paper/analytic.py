@@ -209,35 +209,26 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
     q0 = np.zeros(4) if q0 is None else np.asarray(q0, float)
     fk = ax18_fk if fk is None else fk
 
-    def score(Q):
-        err = np.linalg.norm(fk(Q) - p, axis=-1)
-        disp = np.abs(Q - q0).max(axis=-1)
-        return err, disp
+    def branch_q(phi: float, b: int) -> np.ndarray:
+        return _into_limits(_ax18_branches(p, np.array([phi]))[0][b, 0], lower, upper)
 
     phis = np.arange(-np.pi, np.pi, phi_step)
-    Q, _ = _ax18_branches(p, phis)
-    Q = _into_limits(Q, lower, upper)
-    err, disp = score(Q.reshape(-1, 4))
-    err, disp = err.reshape(4, -1), disp.reshape(4, -1)
+    Q = _into_limits(_ax18_branches(p, phis)[0], lower, upper).reshape(-1, 4)
+    err = np.linalg.norm(fk(Q) - p, axis=-1).reshape(4, -1)
+    disp = np.abs(Q - q0).max(axis=-1).reshape(4, -1)
     out = []
     for b in range(4):
         # Least error first; among errors equal to 1e-12 m, least displacement.
-        key = np.round(err[b] / 1e-12) * 1e3 + disp[b] / (2 * np.pi)
-        g = int(np.argmin(key))
-
-        def err_at(phi, b=b):
-            Qb = _into_limits(_ax18_branches(p, np.array([phi]))[0][b, 0], lower, upper)
-            return float(np.linalg.norm(fk(Qb[None])[0] - p))
-
+        g = int(np.argmin(np.round(err[b] / 1e-12) * 1e3 + disp[b] / (2 * np.pi)))
         phi = float(phis[g])
         if err[b, g] > 1e-12:
-            from scipy.optimize import minimize_scalar  # lazy: scipy.optimize costs ~0.4 s to import
+            from scipy.optimize import minimize_scalar  # lazy: scipy.optimize is slow to import
 
-            ref = minimize_scalar(err_at, bounds=(phi - phi_step, phi + phi_step), method="bounded",
-                                  options={"xatol": 1e-10})
+            ref = minimize_scalar(lambda x, b=b: float(np.linalg.norm(fk(branch_q(x, b)[None])[0] - p)),
+                                  bounds=(phi - phi_step, phi + phi_step), method="bounded", options={"xatol": 1e-10})
             if ref.fun < err[b, g]:
                 phi = float(ref.x)
-        q = _into_limits(_ax18_branches(p, np.array([phi]))[0][b, 0], lower, upper)
+        q = branch_q(phi, b)
         out.append(AX18Solution(q=q, phi=phi, position_error=float(np.linalg.norm(fk(q[None])[0] - p)), branch=b))
     out.sort(key=lambda s: (round(s.position_error / 1e-12), float(np.abs(s.q - q0).max())))
     return out
@@ -255,10 +246,8 @@ def _closed_form_for(robot):
     forms = {"planar2r": (2, lambda Q: np.concatenate([planar2r_fk(Q), np.zeros(Q.shape[:-1] + (1,))], -1)),
              "puma3r": (3, puma_fk), "ax18": (4, ax18_fk)}
     if robot.name not in forms:
-        raise MethodError(
-            f"method 'algebraic' has closed forms for the bundled robots {', '.join(forms)} only, not for "
-            f"{robot.name!r}; use an evolutionary method (see evoik_pin.methods())"
-        )
+        raise MethodError(f"method 'algebraic' has closed forms for the bundled robots {', '.join(forms)} only, not "
+                          f"for {robot.name!r}; use an evolutionary method (see evoik_pin.methods())")
     n, fk = forms[robot.name]
     if robot.n != n:
         raise MethodError(f"method 'algebraic': robot {robot.name!r} has {robot.n} joints, its closed form {n}")
@@ -336,12 +325,11 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
     run = SolverRun(problem, 0)
     p = _target_point(problem, name)
     if name == "planar2r":
-        cands, exact = _planar2r_candidates(p[0], p[1], PLANAR2R["a1"], PLANAR2R["a2"], clamp=True)
-        if abs(p[2]) > 0:
-            exact = False
+        cands, exact = _planar2r_candidates(p[0], p[1], **PLANAR2R, clamp=True)
+        exact = exact and not abs(p[2]) > 0
         Q = np.array(cands)
     elif name == "puma3r":
-        cands, exact = _puma_candidates(p, PUMA3R["a2"], PUMA3R["d"], PUMA3R["a3"], PUMA3R["d4"], clamp=True)
+        cands, exact = _puma_candidates(p, **PUMA3R, clamp=True)
         Q = np.array(cands)
     else:
         def counted_fk(Q):

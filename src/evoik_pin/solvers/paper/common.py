@@ -20,7 +20,7 @@ BOUND_HANDLING = ("clip", "reflect", "resample")
 
 def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
     """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence,
-    as ``scipy.stats.qmc.Halton(d, scramble=False)`` gives them, without importing scipy.stats (0.4-2 s)."""
+    as ``scipy.stats.qmc.Halton(d, scramble=False)`` gives them, without importing the slow scipy.stats."""
     primes: list[int] = []
     k = 2
     while len(primes) < dimensions:

@@ -66,26 +66,11 @@ def _mutation_name(mutation) -> str:
 
 @register("de", "differential evolution: paper 002's eight schemes (default best/1, F 0.5, CR 0.9), paper 004's "
                 "either-or, trigonometric mutation; binomial or exponential crossover")
-def de(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    population: int = 30,
-    max_generations: int = 600,
-    stall_generations: int | None = None,
-    cost_tolerance: float | None = None,
-    strategy: str | None = None,
-    mutation: str | int = "best1",
-    crossover: str = "bin",
-    F: float = 0.5,
-    CR: float = 0.9,
-    p_F: float = 0.5,
-    K: float | None = None,
-    trig_probability: float = 0.05,
-    bound_handling: str = "clip",
-    runs: int = 10,
-    callback: Callable | None = None,
-) -> Result:
+def de(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, max_generations: int = 600,
+       stall_generations: int | None = None, cost_tolerance: float | None = None, strategy: str | None = None,
+       mutation: str | int = "best1", crossover: str = "bin", F: float = 0.5, CR: float = 0.9, p_F: float = 0.5,
+       K: float | None = None, trig_probability: float = 0.05, bound_handling: str = "clip", runs: int = 10,
+       callback: Callable | None = None) -> Result:
     """Differential evolution over the joint vector, vectorized over the population.
 
     Defaults follow paper 002 (Table 2): DE/best/1, F = 0.5, CR = 0.9, binomial crossover, 600 generations;

@@ -1,14 +1,9 @@
-"""Differential-evolution operators on whole populations, as plain vectorized functions.
+"""Differential-evolution operators on whole populations, as plain vectorized functions: paper 002's eq. 12
+mutation schemes (:data:`MUTATIONS`), paper 004's :func:`either_or`, paper 000's :func:`trigonometric`, the
+binomial and exponential crossovers, and index sampling.
 
 Every operator takes its random draws as arguments, so tests can inject fixed draws. Shapes: a population
 ``X`` is (N, D); index matrices are (N, k) integers into it; ``F`` is a scalar or (N,).
-
-Paper 002's eq. 12 schemes, numbered as there: 1 ``rand1`` X_r1 + F (X_r2 - X_r3); 2 ``best1`` X_best +
-F (X_r1 - X_r2); 3 ``rand2`` X_r1 + F (X_r2 - X_r3) + F (X_r4 - X_r5); 4 ``best2`` X_best + F (X_r1 - X_r2) +
-F (X_r3 - X_r4); 5 ``currenttobest1`` X + F (X_r1 - X_r2) + F (X_best - X); 6 ``currenttobest2`` X +
-F (X_r1 - X_r2) + F (X_r3 - X_r4) + F (X_best - X); 7 ``randtobest1`` X_r1 + F (X_r2 - X_r3) + F (X_best - X_r1);
-8 ``currenttorand1`` X + F (X_r2 - X_r3) + F (X_r1 - X). Besides: paper 004's :func:`either_or`, paper 000's
-:func:`trigonometric`, the binomial and exponential crossovers, and index sampling.
 """
 
 from __future__ import annotations
@@ -21,17 +16,21 @@ __all__ = ["MUTATIONS", "SCHEME_NUMBERS", "binomial_crossover", "distinct_indice
            "exponential_crossover", "exponential_lengths", "indices_from_uniform", "mutate", "permutation_indices",
            "rand1", "trigonometric"]
 
-#: Paper 002's eq. 12 schemes in the paper's order, with the number of random indices each needs.
-MUTATIONS: dict[str, int] = {
-    "rand1": 3,
-    "best1": 2,
-    "rand2": 5,
-    "best2": 4,
-    "currenttobest1": 2,
-    "currenttobest2": 4,
-    "randtobest1": 3,
-    "currenttorand1": 3,
+#: Paper 002's eq. 12 schemes, numbered 1-8 in this order: ``(base, (a, b), ...)`` for the donor
+#: ``base + F (a - b) + ...``, where an int j is X_r(j+1), ``"best"`` X_best and ``"self"`` X.
+_SCHEMES: dict[str, tuple] = {
+    "rand1": (0, (1, 2)),
+    "best1": ("best", (0, 1)),
+    "rand2": (0, (1, 2), (3, 4)),
+    "best2": ("best", (0, 1), (2, 3)),
+    "currenttobest1": ("self", (0, 1), ("best", "self")),
+    "currenttobest2": ("self", (0, 1), (2, 3), ("best", "self")),
+    "randtobest1": (0, (1, 2), ("best", 0)),
+    "currenttorand1": ("self", (1, 2), (0, "self")),
 }
+#: The schemes with the number of random indices each needs.
+MUTATIONS: dict[str, int] = {name: 1 + max(v for t in terms for v in (t if isinstance(t, tuple) else (t,))
+                                           if isinstance(v, int)) for name, terms in _SCHEMES.items()}
 #: Paper 002's scheme numbers (1-8) -> names.
 SCHEME_NUMBERS: dict[int, str] = {i + 1: name for i, name in enumerate(MUTATIONS)}
 
@@ -80,24 +79,15 @@ def mutate(X: np.ndarray, scheme: str, F, idx: np.ndarray, best: int) -> np.ndar
         raise OptionError(f"mutation {scheme!r} needs an index matrix of shape ({X.shape[0]}, >={n_needed}), "
                           f"got {idx.shape}")
     f = _as_column(F)
-    r = [X[idx[:, j]] for j in range(n_needed)]
-    Xb = X[best]
-    if scheme == "rand1":
-        return r[0] + f * (r[1] - r[2])
-    if scheme == "best1":
-        return Xb + f * (r[0] - r[1])
-    if scheme == "rand2":
-        return r[0] + f * (r[1] - r[2]) + f * (r[3] - r[4])
-    if scheme == "best2":
-        return Xb + f * (r[0] - r[1]) + f * (r[2] - r[3])
-    if scheme == "currenttobest1":
-        return X + f * (r[0] - r[1]) + f * (Xb - X)
-    if scheme == "currenttobest2":
-        return X + f * (r[0] - r[1]) + f * (r[2] - r[3]) + f * (Xb - X)
-    if scheme == "randtobest1":
-        return r[0] + f * (r[1] - r[2]) + f * (Xb - r[0])
-    # currenttorand1
-    return X + f * (r[1] - r[2]) + f * (r[0] - X)
+
+    def term(t):
+        return X if t == "self" else X[best] if t == "best" else X[idx[:, t]]
+
+    base, *pairs = _SCHEMES[scheme]
+    V = term(base)
+    for a, b in pairs:
+        V = V + f * (term(a) - term(b))
+    return V
 
 
 def rand1(X: np.ndarray, F, idx: np.ndarray) -> np.ndarray:

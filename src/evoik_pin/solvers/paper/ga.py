@@ -89,18 +89,18 @@ def check_niching_ga_options(population, max_generations, niches, niche_size, et
 
 
 def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int, max_generations: int,
-                   niches: int, niche_size: float, eta: float, crossover_probability: float,
-                   niching: bool = True, normalize: bool = True, archive: list | None = None,
-                   callback: Callable | None = None) -> tuple[SolverRun, np.ndarray, np.ndarray]:
+                   niches: int, niche_size: float, eta: float, crossover_probability: float, niching: bool = True,
+                   archive: list | None = None, callback: Callable | None = None
+                   ) -> tuple[SolverRun, np.ndarray, np.ndarray]:
     """Paper 001's real-coded GA for exactly ``max_generations`` generations (stopping at the first solution
     would cut the other families short); returns the run and the final population (N, n) with its costs (N,).
 
-    Options as in :func:`ga`; ``normalize`` measures niche distances in the unit hypercube of the bounds;
-    ``archive`` (a list) receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value
-    is ignored. History adds ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
+    Options as in :func:`ga`, niche distances measured in the unit hypercube of the bounds; ``archive`` (a list)
+    receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value is ignored. History adds
+    ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
     """
     n, lo, hi = problem.n, problem.lower, problem.upper
-    scale = np.where(hi > lo, hi - lo, 1.0) if normalize else np.ones(n)
+    scale = np.where(hi > lo, hi - lo, 1.0)
     sigma = sharing_radius(n, niches)
     run = SolverRun(problem, max_generations)
     Q, p_m, half = initial_population(problem, rng, population), 1.0 / n, (population + 1) // 2
@@ -168,25 +168,26 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
 
 
 # ------------------------------------------------------------------------------------------ binary GA
+def _unsigned(bits) -> np.ndarray:
+    """The unsigned integers (...) of bit strings ``bits`` (..., B), most significant bit first."""
+    bits = np.asarray(bits).astype(np.int64)
+    return bits @ (1 << np.arange(bits.shape[-1] - 1, -1, -1, dtype=np.int64))
+
+
 def decode_sign_magnitude(bits: np.ndarray) -> np.ndarray:
     """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B): ``bits[..., 0]`` the
     sign (1 = positive), the rest the magnitude, most significant first, ``theta = +-m * 180 / (2^(B-1) - 1)``
     deg."""
     bits = np.asarray(bits)
-    mag_bits = bits[..., 1:].astype(np.int64)
-    m = mag_bits.shape[-1]
-    value = mag_bits @ (1 << np.arange(m - 1, -1, -1, dtype=np.int64))
+    m = bits.shape[-1] - 1
     sign = np.where(bits[..., 0] == 1, 1.0, -1.0)
-    return np.radians(sign * value * 180.0 / (2 ** m - 1))
+    return np.radians(sign * _unsigned(bits[..., 1:]) * 180.0 / (2 ** m - 1))
 
 
 def decode_bounds(bits: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Unsigned bit strings ``bits`` (N, n, B), most significant first, mapped linearly onto the bounds:
     ``q = lower + k / (2^B - 1) (upper - lower)`` (rad or m)."""
-    bits = np.asarray(bits).astype(np.int64)
-    B = bits.shape[-1]
-    k = bits @ (1 << np.arange(B - 1, -1, -1, dtype=np.int64))
-    return lower + k / (2 ** B - 1) * (upper - lower)
+    return lower + _unsigned(bits) / (2 ** np.shape(bits)[-1] - 1) * (upper - lower)
 
 
 def decode_bits(chromosomes: np.ndarray, n: int, encoding: str, lower: np.ndarray,

@@ -1,11 +1,7 @@
-"""ISADE: DE with self-adapted strategies, scale factors and crossover rates (paper 002, section 3.3): ``isade``.
-
-Every generation, for every individual at once: the strategy is drawn among DE/best/1, DE/best/2 and
-DE/rand-to-best/1 (eqs. 14-16) with SaDE's success-rate probabilities, renewed every ``learning_period``
-generations; the scale factor blends a sigmoid of the fitness rank (eq. 17, rank 1 = best) with a decaying
-mean (eq. 18) by eq. 19 as in the original ISADE, ``(F_i + F_mean) / 2`` (paper 002 misprints a minus); each
-individual's crossover rate is re-drawn jDE-style (eq. 20), kept only when its trial survives.
-Paper 002's stop at 1e-17 m is below what double-precision kinematics resolves: use 1e-15 m or more.
+"""ISADE (paper 002, section 3.3; ``isade``): DE whose strategy (eqs. 14-16, :func:`isade_donors`, SaDE's
+:func:`strategy_probabilities`), scale factors (eqs. 17-19) and crossover rates (eq. 20, jDE-style, kept with a
+surviving trial) adapt per individual. Paper 002's stop at 1e-17 m is below what double-precision kinematics
+resolves: use 1e-15 m or more.
 """
 
 from __future__ import annotations
@@ -99,26 +95,11 @@ def isade_donors(X: np.ndarray, F: np.ndarray, E: np.ndarray, strategy: np.ndarr
 
 @register("isade", "ISADE (paper 002): DE with adaptive strategy choice among best/1, best/2, rand-to-best/1, "
                    "rank-sigmoid F blended with a decaying mean F, self-adapted CR")
-def isade(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    population: int = 60,
-    max_generations: int = 130,
-    stall_generations: int | None = None,
-    cost_tolerance: float | None = None,
-    F_min: float = 0.02,
-    F_max: float = 0.3,
-    n_iter: float = 6.0,
-    alpha: float = 4.0,
-    tau: float = 0.1,
-    CR_init: float = 1.0,
-    CR_low: float = 0.95,
-    learning_period: int = 10,
-    bound_handling: str = "clip",
-    runs: int = 10,
-    callback: Callable | None = None,
-) -> Result:
+def isade(problem: IKProblem, rng: np.random.Generator, *, population: int = 60, max_generations: int = 130,
+          stall_generations: int | None = None, cost_tolerance: float | None = None, F_min: float = 0.02,
+          F_max: float = 0.3, n_iter: float = 6.0, alpha: float = 4.0, tau: float = 0.1, CR_init: float = 1.0,
+          CR_low: float = 0.95, learning_period: int = 10, bound_handling: str = "clip", runs: int = 10,
+          callback: Callable | None = None) -> Result:
     """ISADE over the joint vector, vectorized over the population (paper 002, eqs. 14-20). Defaults beyond the
     paper's 130 generations and rho = 10 are tuned for speed on reachable points; multimodal 6-D pose targets
     want a wider F (``F_max=0.9, F_min=0.3, n_iter=2``) and more generations.
@@ -147,9 +128,7 @@ def isade(
     F_max = check_number("F_max", F_max, F_min, 2.0)
     n_iter = check_positive("n_iter", n_iter, 100.0)
     alpha = check_nonnegative("alpha", alpha, 1e3)
-    tau = check_fraction("tau", tau)
-    CR_init = check_fraction("CR_init", CR_init)
-    CR_low = check_fraction("CR_low", CR_low)
+    tau, CR_init, CR_low = (check_fraction(k, v) for k, v in (("tau", tau), ("CR_init", CR_init), ("CR_low", CR_low)))
     learning_period = check_int("learning_period", learning_period)
     check_choice("bound_handling", bound_handling, BOUND_HANDLING)
 

@@ -225,6 +225,5 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         message += f"; manipulability on Jacobian rows {rows}: the chain never moves its tip along {names}"
     if fixed_goal_rows:
         message += f"; manipulability without the rows no joint moves ({', '.join(fixed_goal_rows)})"
-    result = run.result("nsga2", message,
-                        front=Front(q=out.X[order], objectives=out.F[order], violation=out.violation[order]))
-    return result
+    return run.result("nsga2", message,
+                      front=Front(q=out.X[order], objectives=out.F[order], violation=out.violation[order]))

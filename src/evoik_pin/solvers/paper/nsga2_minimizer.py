@@ -155,14 +155,14 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
     X, F, cv = X[keep], F[keep], cv[keep]
     history: dict[str, list[float]] = {"front_size": [], "feasible_fraction": [], "min_violation": []}
 
-    def log():
+    def log(generation: int) -> None:
         history["front_size"].append(float(np.sum(rank == 0)))
         history["feasible_fraction"].append(float(np.mean(cv <= 0)))
         history["min_violation"].append(float(cv.min()))
+        if callback is not None:
+            callback(generation, X, F, cv)
 
-    log()
-    if callback is not None:
-        callback(0, X, F, cv)
+    log(0)
 
     def breed(m):
         half = (m + 1) // 2
@@ -184,8 +184,6 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
         XA, FA, cvA = np.concatenate([X, Y]), np.concatenate([F, FY]), np.concatenate([cv, cvY])
         keep, rank, cd = survival(FA, cvA, population)
         X, F, cv = XA[keep], FA[keep], cvA[keep]
-        log()
-        if callback is not None:
-            callback(g + 1, X, F, cv)
+        log(g + 1)
     return NSGA2Result(X=X, F=F, violation=cv, rank=rank, generations=generations, evaluations=evaluations,
                        time_s=time.perf_counter() - t0, history={k: np.asarray(v) for k, v in history.items()})

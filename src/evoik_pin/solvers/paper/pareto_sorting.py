@@ -116,13 +116,10 @@ def _tournament_pairs(size: int, count: int, rng: np.random.Generator) -> np.nda
     return perms[: 2 * count].reshape(count, 2)
 
 
-def _tournament(rank: np.ndarray, cd: np.ndarray, pairs: np.ndarray, rng: np.random.Generator | None = None
-                ) -> np.ndarray:
+def _tournament(rank: np.ndarray, cd: np.ndarray, pairs: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Binary tournaments with Deb's crowded comparison: lower rank wins, then larger crowding distance;
-    a full tie (same rank and distance, e.g. two boundary points) is a fair coin toss from ``rng`` (the
-    first contestant without one)."""
+    a full tie (same rank and distance, e.g. two boundary points) is a fair coin toss from ``rng``."""
     a, b = pairs[:, 0], pairs[:, 1]
     b_wins = (rank[b] < rank[a]) | ((rank[b] == rank[a]) & (cd[b] > cd[a]))
-    if rng is not None:
-        b_wins |= (rank[b] == rank[a]) & (cd[b] == cd[a]) & (rng.random(a.size) < 0.5)
+    b_wins |= (rank[b] == rank[a]) & (cd[b] == cd[a]) & (rng.random(a.size) < 0.5)
     return np.where(b_wins, b, a)

@@ -50,26 +50,11 @@ def ring_best(p_cost: np.ndarray) -> np.ndarray:
 
 @register("pso", "particle swarm (paper 002): inertia weight linear from w_start to w_end, c1 = c2 = 1.5, "
                  "velocity clamping")
-def pso(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    population: int = 30,
-    max_generations: int = 600,
-    stall_generations: int | None = None,
-    cost_tolerance: float | None = None,
-    w_start: float = 0.9,
-    w_end: float = 0.4,
-    c1: float = 1.5,
-    c2: float = 1.5,
-    velocity_clamp: float = 0.2,
-    topology: str = "global",
-    random_factors: str = "per-coordinate",
-    reinit_stagnant: int | None = None,
-    bound_handling: str = "clip",
-    runs: int = 10,
-    callback: Callable | None = None,
-) -> Result:
+def pso(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, max_generations: int = 600,
+        stall_generations: int | None = None, cost_tolerance: float | None = None, w_start: float = 0.9,
+        w_end: float = 0.4, c1: float = 1.5, c2: float = 1.5, velocity_clamp: float = 0.2, topology: str = "global",
+        random_factors: str = "per-coordinate", reinit_stagnant: int | None = None, bound_handling: str = "clip",
+        runs: int = 10, callback: Callable | None = None) -> Result:
     """Particle swarm optimization over the joint vector, vectorized over the swarm (paper 002, eq. 11).
 
     Args:
@@ -94,10 +79,8 @@ def pso(
         A :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
     """
     N = check_int("population", population, 2)
-    w_start = check_nonnegative("w_start", w_start, 2.0)
-    w_end = check_nonnegative("w_end", w_end, 2.0)
-    c1 = check_nonnegative("c1", c1, 10.0)
-    c2 = check_nonnegative("c2", c2, 10.0)
+    w_start, w_end = (check_nonnegative(k, v, 2.0) for k, v in (("w_start", w_start), ("w_end", w_end)))
+    c1, c2 = (check_nonnegative(k, v, 10.0) for k, v in (("c1", c1), ("c2", c2)))
     velocity_clamp = check_positive("velocity_clamp", velocity_clamp, 1.0)
     check_choice("bound_handling", bound_handling, BOUND_HANDLING)
     check_choice("topology", topology, TOPOLOGIES)
