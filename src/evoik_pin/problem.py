@@ -368,24 +368,20 @@ class IKProblem:
         """Whether every goal's errors (:meth:`goal_errors`) are within its tolerances."""
         return all(g.met(p, r) for g, (p, r) in zip(self.goals, errors, strict=True))
 
-    def goal_violation(self, Q: np.ndarray) -> np.ndarray:
+    def goal_violation(self, Q: np.ndarray, count: bool = True) -> np.ndarray:
         """(N,) how far each row of ``Q`` (N, n) is from meeting every goal: the sum over the goals of the position
         error beyond the goal's ``tolerance`` (m) plus the rotation angle beyond its ``rotation_tolerance`` (rad);
-        0 exactly where every goal is met. Counts N evaluations (NSGA-II's constraint over a goal list)."""
+        0 exactly where every goal is met. Counts N evaluations unless ``count`` is False (bookkeeping)."""
         pos, rot = self._goal_population_errors(Q)
-        self.evaluations += Q.shape[0]
+        self.evaluations += Q.shape[0] if count else 0
         tol = np.array([g.tolerance for g in self.goals])
         rtol = np.array([g.rotation_tolerance if g.reports_angle else np.inf for g in self.goals])
         return (np.maximum(pos - tol, 0.0) + np.maximum(rot - rtol, 0.0)).sum(axis=1)
 
     def rows_met(self, Q: np.ndarray) -> np.ndarray:
         """(N,) bool: whether each row of ``Q`` (N, n) solves the problem, by the criterion of :func:`evoik_pin.solve`'s
-        verdict: every goal within its own tolerances (a goal list), or the errors within ``tolerance`` and
-        ``rotation_tolerance`` (one target). Bookkeeping: no evaluation is counted."""
-        before = self.evaluations
-        ok = self.goal_violation(Q) <= 0.0
-        self.evaluations = before
-        return ok
+        verdict: every goal within its own tolerances. Bookkeeping: no evaluation is counted."""
+        return self.goal_violation(Q, count=False) <= 0.0
 
     def tightened(self, tolerance: float) -> IKProblem:
         """This problem (robot, box, target or goals) with every tolerance at most ``tolerance`` (m and rad): for
@@ -400,12 +396,13 @@ class IKProblem:
         tight._goal_stack = [replace(stack, spec=spec), pt, Rt]
         return tight
 
-    def evaluate(self, Q: np.ndarray) -> Evaluation:
+    def evaluate(self, Q: np.ndarray, count: bool = True) -> Evaluation:
         """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors
-        over the goals)."""
+        over the goals); N evaluations counted unless ``count`` is False (bookkeeping, not search)."""
+        counted = Q.shape[0] if count else 0
         if self.target is None:
             pos, rot = self._goal_population_errors(Q)
-            self.evaluations += Q.shape[0]
+            self.evaluations += counted
             oriented = any(g.reports_angle for g in self.goals)
             return Evaluation(self._penalized(Q, self._goal_cost(pos, rot)), pos.max(axis=1),
                               rot.max(axis=1) if oriented else None)
@@ -414,10 +411,10 @@ class IKProblem:
             # the default position-only objective, in the solvers' inner loop: skip the generic machinery
             d = self.robot.positions_batch(Q) - target.position
             err = np.sqrt((d * d).sum(axis=1))
-            self.evaluations += Q.shape[0]
+            self.evaluations += counted
             return Evaluation(self._penalized(Q, err), err, None)
         kin = PopulationKinematics(self.robot, Q)
-        self.evaluations += Q.shape[0]
+        self.evaluations += counted
         cost = self._penalized(Q, self.objective(Q, kin))
         pos = position_errors(self.target, kin)
         rot = orientation_errors(self.target, kin) if self.target.has_orientation else None

@@ -268,9 +268,7 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     if len(Q) == 0:
         return []
     Q = np.atleast_2d(np.asarray(Q, float))
-    before = problem.evaluations
-    ev = problem.evaluate(Q)
-    problem.evaluations = before
+    ev = problem.evaluate(Q, count=False)
     ok = problem.rows_met(Q)
     out = []
     for i in np.argsort(ev.cost, kind="stable"):

@@ -294,9 +294,7 @@ def _checked_solutions(problem: IKProblem, Q: np.ndarray, reference: np.ndarray,
     if not Q.shape[0]:
         return []
     Q = Q[np.argsort(np.linalg.norm(Q - reference, axis=1), kind="stable")]
-    before = problem.evaluations
-    ev = problem.evaluate(Q)
-    problem.evaluations = before
+    ev = problem.evaluate(Q, count=False)
     ok = problem.rows_met(Q)
     ok &= np.all((Q >= problem.lower) & (Q <= problem.upper), axis=1)
     return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),

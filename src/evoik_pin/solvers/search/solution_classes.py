@@ -109,9 +109,7 @@ class SolutionClasses:
         """Largest error (m + rad) at VALLEY_SAMPLES interior points of the wrapped segment from a to b."""
         t = np.linspace(0.0, 1.0, VALLEY_SAMPLES + 2)[1:-1, None]
         P = a + t * joint_differences(b, a, self.wrap)
-        before = self.problem.evaluations
-        ev = self.problem.evaluate(P)
-        self.problem.evaluations = before  # bookkeeping, not search
+        ev = self.problem.evaluate(P, count=False)
         err = ev.position_error + (0.0 if ev.orientation_error is None else ev.orientation_error)
         return float(err.max())
 
