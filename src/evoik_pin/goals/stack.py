@@ -255,29 +255,31 @@ def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
     ``tolerance`` m and ``rotation_tolerance`` rad), the tip's stack, pt (1, 3) and Rt (1, 3, 3). Nothing is checked
     again (a control loop makes one per step)."""
     kind = target_kind(target)
-    pt, Rt = encode_target(target)
-    goal = object.__new__(_TIP_CLASSES[kind])
-    fields = {"frame": robot.tip, "weight": 1.0, "tolerance": tolerance, "rotation_tolerance": rotation_tolerance,
-              "kind": kind, "has_orientation": target.has_orientation, "alternatives": None, "band": None,
-              "_aux": None}
-    if kind == KIND_POSE:
-        fields.update(target=pin.SE3(Rt, pt), free=())
-    elif kind == KIND_POSITION:
-        fields.update(target=pt)
-    else:
-        fields.update(target=pt, yaw=target.yaw)
-    goal.__dict__.update(fields)  # frozen dataclasses: their fields set as their __init__ sets them
     key = (id(robot), kind, tolerance, rotation_tolerance)
-    hit = _TIP_STACKS.get(key)
+    hit = _TIP_GOALS.get(key)
     if hit is None or hit[0]() is not robot:
-        if len(_TIP_STACKS) >= 64:
-            _TIP_STACKS.pop(next(iter(_TIP_STACKS)))
-        hit = _TIP_STACKS[key] = (weakref.ref(robot), GoalStack.single(robot, kind, tolerance, rotation_tolerance))
+        if len(_TIP_GOALS) >= 64:
+            _TIP_GOALS.pop(next(iter(_TIP_GOALS)))
+        fields = {"frame": robot.tip, "weight": 1.0, "tolerance": tolerance, "rotation_tolerance": rotation_tolerance,
+                  "kind": kind, "has_orientation": target.has_orientation, "alternatives": None, "band": None,
+                  "_aux": None, **({"free": ()} if kind == KIND_POSE else {})}
+        hit = _TIP_GOALS[key] = (weakref.ref(robot), GoalStack.single(robot, kind, tolerance, rotation_tolerance),
+                                 _TIP_CLASSES[kind], fields)
+    pt, Rt = encode_target(target)
+    goal = object.__new__(hit[2])
+    goal.__dict__.update(hit[3])  # frozen dataclasses: their fields set as their __init__ sets them
+    if kind == KIND_POSE:
+        goal.__dict__["target"] = pin.SE3(Rt, pt)
+    else:
+        goal.__dict__["target"] = pt
+        if kind != KIND_POSITION:
+            goal.__dict__["yaw"] = target.yaw
     return [goal], hit[1], pt[None], Rt[None]
 
 
-#: :func:`tip_goals`' stacks by (robot id, kind, tolerances): GoalStack.of's key costs more than a tip goal.
-_TIP_STACKS: dict = {}
+#: :func:`tip_goals`' per (robot id, kind, tolerances): (weak reference to the robot, the tip's stack, the goal class,
+#: its fields but the target).
+_TIP_GOALS: dict = {}
 
 
 def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
