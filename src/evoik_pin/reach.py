@@ -20,7 +20,7 @@ from .problem import Target, coerce_scene
 from .robot import Robot, load_robot
 from .solvers.batch.batch_results import BatchOutcome
 from .solvers.batch.solve_many_call import BACKENDS
-from .solvers.batch.threads import BatchSolver, check_call, check_workers, gc_paused, grow_bar, progress_bar
+from .solvers.batch.threads import BatchSolver, ProgressBar, check_call, check_workers, gc_paused
 from .solvers.options import check_choice, check_int, check_positive
 
 __all__ = ["ReachMap", "output_dir", "reachability_map", "so3_samples"]
@@ -253,21 +253,20 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     centers, shape = _grid(lo - voxel, hi + voxel, voxel, float(lo[2]) if planar else None)
     M = centers.shape[0]
     solve, workers = _engine(robot, backend, workers, address, seed, options)
-    bar = progress_bar(progress, f"reach {robot.name}", unit="target")
+    bar = ProgressBar(f"reach {robot.name}", "target", enabled=progress)
 
     def run(targets) -> BatchOutcome:
         """The engine on ``targets`` (Targets, or an (N, 4, 4) array of poses), ``batch_size`` at a time."""
         parts = []
         for a in range(0, len(targets), batch_size):
             parts.append(solve(targets[a:a + batch_size]))
-            if bar is not None:
-                bar.update(len(targets[a:a + batch_size]))
+            bar.update(len(parts[-1]))
         return BatchOutcome.concatenate(parts)
 
     rows = [0, 1] if planar else ("translation" if kind == "position" else "full")
     asked = 0  # pose targets (after the position pass)
-    try:
-        grow_bar(bar, M)
+    with bar:
+        bar.grow(M)
         with gc_paused():
             first = ([Target.planar_target(x, y) for x, y in centers[:, :2]] if planar
                      else [Target(c) for c in centers])
@@ -282,7 +281,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
             R = so3_samples(orientations)
             cells = np.nonzero(reached)[0]
             asked = cells.size * orientations
-            grow_bar(bar, asked)
+            bar.grow(asked)
             step = max(1, batch_size // orientations)
             for a in range(0, cells.size, step):  # voxel after voxel, every orientation of each
                 part = cells[a:a + step]
@@ -296,9 +295,6 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 m = np.zeros(ok.shape)
                 m[ok] = robot.manipulability_batch(res.q.reshape(part.size, orientations, -1)[ok], rows)
                 best[part] = m.max(axis=1)
-    finally:
-        if bar is not None:
-            bar.close()
     n_orient = orientations if kind == "pose" else 1
     settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": workers,
                 "position_targets": M, "pose_targets": asked,

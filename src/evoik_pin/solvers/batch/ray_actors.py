@@ -24,7 +24,7 @@ from ...errors import BackendError, TargetError
 from ...problem import Target
 from .batch_results import BatchOutcome
 from .targets import source_of
-from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
+from .threads import BatchSolver, ProgressBar, check_workers, chunk_bounds, gc_paused
 
 __all__ = ["RayBatch", "RayPool", "connect", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
            "unpack_targets"]
@@ -274,19 +274,16 @@ class RayBatch:
         idle = deque(pool.actors)
         running: dict = {}  # future -> (chunk, attempt, actor)
         parts: dict[int, BatchOutcome] = {}
-        bar = progress_bar(progress, "solve_many (ray)")
-        grow_bar(bar, len(chunks))
-        try:
+        with ProgressBar("solve_many (ray)", enabled=progress) as bar:
+            bar.grow(len(chunks))
             while todo or running:
                 while todo and idle:
                     k, attempt = todo.popleft()
                     actor = idle.popleft()
                     a, b = chunks[k]
-                    # an array of poses goes as it is (the actor makes and checks the Target objects)
-                    if poses is not None or source.goals:  # goal lists pickle as they are
-                        packed = poses[a:b] if poses is not None else source.chunk(a, b)
-                    else:
-                        packed = pack_targets(source.chunk(a, b))
+                    # poses and goal lists go as they are (the actor makes and checks the Target objects)
+                    packed = (poses[a:b] if poses is not None else source.chunk(a, b) if source.goals
+                              else pack_targets(source.chunk(a, b)))
                     future = actor.solve.remote(self._key, self._job, packed, None if Q0 is None else Q0[a:b],
                                                 offset + a, crash=k in self.crash_hook and attempt == 0)
                     running[future] = (k, attempt, actor)
@@ -295,6 +292,7 @@ class RayBatch:
                     k, attempt, actor = running.pop(future)
                     try:
                         parts[k] = ray.get(future)
+                        bar.update(1)
                     except ray.exceptions.RayActorError as exc:  # the actor died: a new one re-runs the chunk
                         if attempt + 1 >= self.attempts:
                             pool.retire(actor)
@@ -305,13 +303,7 @@ class RayBatch:
                     except TargetError:  # a bad pose in a chunk sent as it was: name it by its index in the call
                         source.check()
                         raise
-                    else:
-                        if bar is not None:
-                            bar.update(1)
                     idle.append(actor)
-        finally:
-            if bar is not None:
-                bar.close()
         out = BatchOutcome.concatenate([parts[k] for k in range(len(chunks))])
         if self._scene is not None:
             for r in out.singles.values():

@@ -33,7 +33,7 @@ from .goal_lists import GoalBlock, GoalSource, GoalTree
 from .targets import TargetSource, source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
-           "grow_bar", "progress_bar", "root_entropy", "target_generator"]
+           "root_entropy", "target_generator"]
 
 
 #: Guided chunks (:func:`chunk_bounds`): each a 1 / (GUIDED_SHARE * workers) share of the targets left, at least
@@ -191,7 +191,8 @@ class BatchSolver:
         # one-by-one solvers hold the GIL, and use the robot's one Pinocchio Data)
         threads = workers if self.batched and self.engine == "compiled" else 1
         bounds = chunk_bounds(len(source), threads)
-        grow_bar(progress, len(bounds))
+        progress = progress or ProgressBar("", enabled=False)
+        progress.grow(len(bounds))
         helpers = min(threads, len(bounds)) - 1
         pool = ThreadPoolExecutor(helpers, thread_name_prefix="evoik-batch") if helpers > 0 else None
         overlap = self.template.scene is None  # one-by-one solves between chunks, not after all of them
@@ -220,8 +221,7 @@ class BatchSolver:
                     rest = np.nonzero(out.source == SOURCE_SINGLE)[0] if self.fallback or not self.batched else ()
                     if len(rest):
                         left.append((a, {int(i): block.target(int(i)) for i in rest}, q0, out))
-                    if progress is not None:
-                        progress.update(1)
+                    progress.update(1)
                     delivered += 1
                 if overlap and left:
                     self._singles(*left.popleft(), offset, singles)
@@ -351,13 +351,22 @@ def gc_paused():
 
 
 class ProgressBar:
-    """A tqdm bar drawn when its total is first known (:func:`grow_bar`), and grown as more work is planned."""
+    """A tqdm bar drawn when its total is first known (:meth:`grow`) and grown as more work is planned; inert when
+    not ``enabled``. As a context manager, closed on exit."""
 
-    def __init__(self, what: str, unit: str) -> None:
-        self.what, self.unit = what, unit
+    def __init__(self, what: str, unit: str = "chunk", enabled: bool = True) -> None:
+        self.what, self.unit, self.enabled = what, unit, enabled
         self.tqdm = None
 
+    def __enter__(self) -> ProgressBar:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     def grow(self, units: int) -> None:
+        if not (self.enabled and units):
+            return
         if self.tqdm is None:
             from tqdm.auto import tqdm
 
@@ -373,14 +382,3 @@ class ProgressBar:
     def close(self) -> None:
         if self.tqdm is not None:
             self.tqdm.close()
-
-
-def progress_bar(progress: bool, what: str, unit: str = "chunk") -> ProgressBar | None:
-    """A :class:`ProgressBar` when ``progress``, else None."""
-    return ProgressBar(what, unit) if progress else None
-
-
-def grow_bar(bar: ProgressBar | None, units: int) -> None:
-    """Add ``units`` to a bar's total (None: nothing)."""
-    if bar is not None and units:
-        bar.grow(units)
