@@ -123,7 +123,7 @@ def breakdown(robot, H, reps: int) -> dict:
             out = solver._chunk_rounds(block, None)
             t3 = time.perf_counter()
             rest = np.nonzero(out.source == SOURCE_SINGLE)[0]
-            solver._singles(0, {int(i): block.target(int(i)) for i in rest}, None, out, 0, None)
+            solver._singles(0, {int(i): block.target(int(i)) for i in rest}, None, out, 0)
             t4 = time.perf_counter()
             with threads.gc_paused():
                 out.results(solver.template)

@@ -515,8 +515,7 @@ def _print_goal_errors(rows: list[dict]) -> None:
     for k, (r, name) in enumerate(zip(rows, names, strict=True)):
         rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
         pos = "free" if r["position_error_m"] is None else f"{r['position_error_m']:.3e}"  # orientation, pointing
-        print(f"{k:3d}  {name:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  "
-              f"{'yes' if r['met'] else 'NO'}")
+        print(f"{k:3d}  {name:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  {'yes' if r['met'] else 'NO'}")
 
 
 def _load_scene(args: argparse.Namespace, robot):

@@ -101,29 +101,28 @@ class ReachMap:
         nx, ny, nz = self.shape
         grid = self.index.reshape(nx, ny, nz)
         xs, ys, zs = (np.unique(self.centers[:, k]) for k in range(3))
-        ext_xy = [xs[0] - self.voxel / 2, xs[-1] + self.voxel / 2, ys[0] - self.voxel / 2, ys[-1] + self.voxel / 2]
+        h = self.voxel / 2
+        ext_xy, ext_xz = [xs[0] - h, xs[-1] + h, ys[0] - h, ys[-1] + h], [xs[0] - h, xs[-1] + h, zs[0] - h, zs[-1] + h]
         layers = np.nonzero(grid.max(axis=(0, 1)) > 0)[0]
         if layers.size == 0:
             layers = np.array([nz // 2])
         layers = layers[np.unique(np.linspace(0, layers.size - 1, min(8, layers.size)).round().astype(int))]
-        panels = [("xy", k) for k in layers] + ([("xz", int(np.abs(ys).argmin()))] if nz > 1 else [])
+        # (cut, extent, title, vertical axis): horizontal layers, then the vertical x-z slice nearest y = 0
+        panels = [(grid[:, :, k], ext_xy, f"z = {zs[k]:.3f} m" if nz > 1 else "plane of the arm", "y (m)")
+                  for k in layers]
+        if nz > 1:
+            k = int(np.abs(ys).argmin())
+            panels.append((grid[:, k, :], ext_xz, f"y = {ys[k]:.3f} m", "z (m)"))
         cols = min(3, len(panels))
         rows = -(-len(panels) // cols)
         fig, axes = plt.subplots(rows, cols, figsize=(max(6.0, 4.2 * cols), 3.8 * rows + 0.6), squeeze=False,
                                  layout="constrained")  # no label overlaps its neighbour panel
         image = None
-        for ax, (plane, k) in zip(axes.ravel(), panels, strict=False):
-            if plane == "xy":
-                image = ax.imshow(grid[:, :, k].T, origin="lower", extent=ext_xy, vmin=0, vmax=1, cmap="viridis")
-                ax.set_title(f"z = {zs[k]:.3f} m" if nz > 1 else "plane of the arm")
-                ax.set_xlabel("x (m)")
-                ax.set_ylabel("y (m)")
-            else:
-                ext = [ext_xy[0], ext_xy[1], zs[0] - self.voxel / 2, zs[-1] + self.voxel / 2]
-                image = ax.imshow(grid[:, k, :].T, origin="lower", extent=ext, vmin=0, vmax=1, cmap="viridis")
-                ax.set_title(f"y = {ys[k]:.3f} m")
-                ax.set_xlabel("x (m)")
-                ax.set_ylabel("z (m)")
+        for ax, (cut, extent, title, vertical) in zip(axes.ravel(), panels, strict=False):
+            image = ax.imshow(cut.T, origin="lower", extent=extent, vmin=0, vmax=1, cmap="viridis")
+            ax.set_title(title)
+            ax.set_xlabel("x (m)")
+            ax.set_ylabel(vertical)
             ax.set_aspect("equal")
         for ax in axes.ravel()[len(panels):]:
             ax.axis("off")
@@ -156,8 +155,7 @@ class ReachMap:
         with Viewer(robot, skeleton=None) as viewer:
             viewer.show(np.clip(np.zeros(robot.n), robot.lower, robot.upper))
             if reached.any():
-                viewer.show_points(self.centers[reached], self.index[reached], name="reach",
-                                   size=0.4 * self.voxel)
+                viewer.show_points(self.centers[reached], self.index[reached], name="reach", size=0.4 * self.voxel)
             viewer.frame(np.array(self.box()))
             return viewer.save_html(path)
 
@@ -215,7 +213,6 @@ def _engine(robot, backend: str, workers, address, entropy: int, options: dict):
                        address=address)
         return ray.solve, ray.workers
     local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
-    workers = check_workers(workers)
     return (lambda targets: local.solve(targets, workers=workers)), workers
 
 

@@ -100,10 +100,7 @@ def pack_targets(targets: list[Target]) -> dict:
 
 
 def unpack_targets(packed) -> list[Target]:
-    """The targets :func:`pack_targets` packed, or those of an (N, 4, 4) array of poses (a TargetError names a bad
-    one)."""
-    if isinstance(packed, np.ndarray):
-        return Target.from_poses(packed)
+    """The targets :func:`pack_targets` packed."""
     P, R, planar, has_rotation, yaw = (packed[k] for k in ("position", "rotation", "planar", "has_rotation", "yaw"))
     N = P.shape[0]
     if has_rotation.all():

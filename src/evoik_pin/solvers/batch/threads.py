@@ -2,9 +2,8 @@
 
 With the memetic method the problems are solved in batched rounds first, each from its next-nearest seed-table entry
 (from ``q0`` first when given) by one :func:`~evoik_pin.solvers.lm.solve_pairs` call; those left after ``table_seeds``
-rounds, and every problem of other methods, are solved one by one as :func:`evoik_pin.solve` does, each with its own
-generator (:func:`target_generator`), so the answers do not depend on the workers, chunks or backend. The chunks'
-rounds run on ``workers`` threads (:meth:`BatchSolver.pipeline`).
+rounds, and every problem of other methods, one by one as :func:`evoik_pin.solve` does, each with its own generator
+(:func:`target_generator`): the answers do not depend on the workers, chunks or backend.
 """
 
 from __future__ import annotations
@@ -75,8 +74,7 @@ def target_generator(entropy: int, i: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(int(i),)))
 
 
-def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int | None = None
-                 ) -> list[tuple[int, int]]:
+def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int | None = None) -> list[tuple[int, int]]:
     """[start, stop) ranges cutting n items into chunks: one for one worker; for several, guided chunks, each a
     ``1 / (GUIDED_SHARE * workers)`` share of the items not yet cut, between ``minimum`` (default ``MIN_CHUNK``)
     and ``maximum`` items (none: no cap), so that the workers finish together."""
@@ -110,8 +108,7 @@ def check_call(robot, make_problem: Callable, method: str, options: dict) -> dic
 
 
 class BatchSolver:
-    """Solves batches of problems for one robot, method and set of options (option checks, seed table and
-    collision-free entries made once); :meth:`solve` takes a batch.
+    """Solves batches of problems (:meth:`solve`) for one robot, method and set of options, checked once.
 
     Args:
         robot: a loaded :class:`~evoik_pin.robot.Robot`.
@@ -166,24 +163,18 @@ class BatchSolver:
         self.rounds = rounds
 
     def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, workers: int = 1,
-              progress=None) -> BatchOutcome:
+              progress: ProgressBar | None = None) -> BatchOutcome:
         """Solve ``targets`` (anything :func:`~.targets.source_of` takes) from ``Q0`` (N, n) starts when given;
         ``offset``: the index of the first target in the user's call (it keys the per-target generators);
         ``progress``: a bar advanced chunk by chunk, or None."""
-        parts: list[BatchOutcome] = []
-        self.pipeline(source_of(self.robot, targets), Q0, offset, workers, progress,
-                      lambda a, b, out: parts.append(out))
-        return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now
+        return self.pipeline(source_of(self.robot, targets), Q0, offset, workers,
+                             progress or ProgressBar("", enabled=False))
 
-    def pipeline(self, source: TargetSource | GoalSource, Q0, offset: int, workers: int, progress, batched: Callable,
-                 singles: Callable | None = None) -> None:
-        """Solve ``source`` chunk by chunk: ``batched(start, stop, outcome)`` on each chunk in order once its
-        batched rounds are done, ``singles(start, outcome)`` on each chunk with one-by-one solves once they are done.
-
-        This thread and ``workers - 1`` others share the work: the others run one chunk's batched rounds each; this
-        one encodes the chunks, runs the one-by-one solves of a finished chunk at once (they share the robot's
-        Pinocchio data; with a scene, after every chunk's rounds: its collision data is shared under a lock) and
-        otherwise the next chunk's rounds itself."""
+    def pipeline(self, source: TargetSource | GoalSource, Q0, offset: int, workers: int,
+                 progress: ProgressBar) -> BatchOutcome:
+        """:meth:`solve` chunk by chunk: ``workers - 1`` threads run one chunk's batched rounds each; this one encodes
+        the chunks and runs the one-by-one solves (the robot's one Pinocchio data; with a scene, after every chunk's
+        rounds), else rounds itself."""
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
         tolerances = (self.template.tolerance, self.template.rotation_tolerance)  # a tip target's one goal's
@@ -191,7 +182,6 @@ class BatchSolver:
         # one-by-one solvers hold the GIL, and use the robot's one Pinocchio Data)
         threads = workers if self.batched and self.engine == "compiled" else 1
         bounds = chunk_bounds(len(source), threads)
-        progress = progress or ProgressBar("", enabled=False)
         progress.grow(len(bounds))
         helpers = min(threads, len(bounds)) - 1
         pool = ThreadPoolExecutor(helpers, thread_name_prefix="evoik-batch") if helpers > 0 else None
@@ -199,6 +189,7 @@ class BatchSolver:
         jobs: dict[int, list] = {}  # chunk -> [block, q0, future or None, outcome or None]
         left: deque = deque()  # (start, {row: target}, q0, outcome): chunks with targets for the one-by-one solver
         handed = delivered = 0  # chunks handed out (to a thread or to this one), chunks delivered in order
+        parts: list[BatchOutcome] = []
 
         def take(k: int) -> list:
             a, b = bounds[k]
@@ -216,15 +207,15 @@ class BatchSolver:
                 while delivered in jobs and (jobs[delivered][3] is not None or jobs[delivered][2].done()):
                     block, q0, future, out = jobs.pop(delivered)
                     out = out if future is None else future.result()
-                    a, b = bounds[delivered]
-                    batched(a, b, out)
+                    a = bounds[delivered][0]
+                    parts.append(out)
                     rest = np.nonzero(out.source == SOURCE_SINGLE)[0] if self.fallback or not self.batched else ()
                     if len(rest):
                         left.append((a, {int(i): block.target(int(i)) for i in rest}, q0, out))
                     progress.update(1)
                     delivered += 1
                 if overlap and left:
-                    self._singles(*left.popleft(), offset, singles)
+                    self._singles(*left.popleft(), offset)
                 elif handed < len(bounds):
                     job = jobs[handed] = take(handed)
                     job[3] = self._chunk_rounds(job[0], job[1])
@@ -238,12 +229,12 @@ class BatchSolver:
                         job[2].cancel()
                 pool.shutdown(wait=True)
         while left:
-            self._singles(*left.popleft(), offset, singles)
+            self._singles(*left.popleft(), offset)
+        return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now
 
-    def _singles(self, a: int, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int,
-                 singles: Callable | None) -> None:
+    def _singles(self, a: int, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int) -> None:
         """The problems ``{row: target}`` of the chunk starting at ``a`` that the batched rounds left (all of them for
-        other methods), one by one with each target's own generator; then ``singles(a, out)``."""
+        other methods), one by one with each target's own generator, written into ``out``."""
         # memetic skips the table entries the rounds tried; a goal list's starts alternate composed and ranked
         # entries (SeedTable.goal_starts), so its fallback starts from the first composed one (offset 0)
         skip = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
@@ -259,8 +250,6 @@ class BatchSolver:
                 problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
                 r = self.run(problem, self.method, rng, {**solver_options, **extra})
             out.set_single(i, r)
-        if singles is not None:
-            singles(a, out)
 
     def _chunk_rounds(self, block: GoalBlock, Q0) -> BatchOutcome:
         """The batched rounds of one chunk (each goal stack apart): an outcome whose unsolved rows are

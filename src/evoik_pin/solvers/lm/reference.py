@@ -105,12 +105,9 @@ class ReferenceLM:
                  finish: bool = True) -> None:
         self.problem = problem
         robot = self.robot = problem.robot
-        self.damping = float(damping)
-        self.max_step = float(max_step)
+        self.damping, self.max_step, self.finish = float(damping), float(max_step), bool(finish)
         self.max_step2 = self.max_step**2
-        self.stall_window = int(stall_window)
-        self.stall_ratio = float(stall_ratio)
-        self.finish = bool(finish)
+        self.stall_window, self.stall_ratio = int(stall_window), float(stall_ratio)
         self.lower, self.upper = problem.lower, problem.upper
         self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(robot, self.lower, self.upper)
         stack, pt, Rt = problem_goals(problem)
@@ -143,13 +140,8 @@ class ReferenceLM:
             errors.append((pos, rot))
         return np.concatenate(parts), extras, errors
 
-    def residual(self, T: pin.SE3):
-        """(e, extra, position error m, orientation error rad or None) of a single-goal problem for its frame's pose
-        ``T`` in the base frame (unweighted)."""
-        return self.goals[0].residual(T)
-
     def task_jacobian(self, q: np.ndarray, extras) -> np.ndarray:
-        """``E = de/dq`` (rows, n) at ``q``; ``extras``: :meth:`error_at`'s (or :meth:`residual`'s one) for that q."""
+        """``E = de/dq`` (rows, n) at ``q``; ``extras``: :meth:`error_at`'s (or one goal's residual's) for that q."""
         if self._tip:
             extra = extras[0] if isinstance(extras, (tuple, list)) else extras
             return self.goals[0].jacobian(self.robot.jacobian_local_unchecked(q), extra)
@@ -186,13 +178,9 @@ class ReferenceLM:
     # ------------------------------------------------------------------ the iteration
     def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, N: np.ndarray, e: np.ndarray,
               lam: float) -> tuple[np.ndarray, bool]:
-        """The next configuration and whether it rests on a bound: damped step, trust region, joint limits.
-
-        ``N`` is :meth:`_normal` of ``E``. Limits are an active set: joints on a bound (``on_bound``: any is) that
-        ``-E^T e`` pushes further out are held there (their columns of E zeroed); joints the step still carries past
-        a bound are fixed at it and the step re-solved once for the others, with the error those moves leave, so it
-        keeps its effect instead of being cut by the clip. Wrapping joints are shifted by 2 pi instead.
-        """
+        """The next configuration and whether it rests on a bound (``N``: :meth:`_normal` of ``E``): the damped step
+        in the trust region; joints on a bound (``on_bound``: any is) that ``-E^T e`` pushes out are held, joints the
+        step carries past one fixed at it and the step re-solved for the others; wrapping joints wrapped instead."""
         lo, hi = self.clip_lo, self.clip_hi
         held = None
         if on_bound:

@@ -1,10 +1,6 @@
-"""The folded kinematic tree evaluated in numba: joint poses, axes and origins, frame poses and frame Jacobians.
-
-The tree comes from ``Robot.tree_constants`` (:mod:`evoik_pin.robot.tree`): the m physical joints in topological
-order with their parents, each joint's placement in its parent's folded frame (every joint axis turned onto z).
-On a serial chain these do :mod:`.chain`'s operations in the same order (tests/test_robot_tree.py holds them equal
-bit for bit, and to Pinocchio). Inlined into the kernel (``forceinline=True``; :mod:`.kernel` says why).
-"""
+"""The folded kinematic tree (``Robot.tree_constants``: the m physical joints in topological order, each joint's
+placement in its parent's folded frame, every axis turned onto z) evaluated in numba: joint poses, axes and origins,
+frame poses and Jacobians. On a chain, :mod:`.chain`'s operations in the same order (the same bits)."""
 
 from __future__ import annotations
 
