@@ -161,8 +161,7 @@ class ReachMap:
 
 
 def output_dir(path) -> Path:
-    """The directory ``path``, created if needed; an OutputError when it cannot be (checked before a map is
-    computed, so a long run does not end on an unwritable path)."""
+    """The directory ``path``, created if needed; an OutputError when it cannot be."""
     out = Path(path).expanduser()
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -253,7 +252,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     bar = ProgressBar(f"reach {robot.name}", "target", enabled=progress)
 
     def run(targets) -> BatchOutcome:
-        """The engine on ``targets`` (Targets, or an (N, 4, 4) array of poses), ``batch_size`` at a time."""
+        """The engine on ``targets`` (Targets, or (N, 4, 4) poses), ``batch_size`` at a time."""
         parts = []
         for a in range(0, len(targets), batch_size):
             parts.append(solve(targets[a:a + batch_size]))

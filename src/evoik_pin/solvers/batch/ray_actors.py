@@ -1,9 +1,7 @@
-"""The Ray backend of :func:`evoik_pin.solve_many` (``backend="ray"``; ``pip install 'evoik_pin[ray]'``).
-
-:class:`RayBatch` hands chunks to ``workers`` actors (one CPU each, :class:`RayPool`), each holding the robot (sent
-once), the scene rebuilt from its obstacles, and a :class:`~.threads.BatchSolver` (one thread); the answers come
-back as :class:`~.batch_results.BatchOutcome` objects, the same as the local backend's. Clusters: docs/SCALE.md.
-A chunk whose actor dies is re-run on a new actor, up to ``attempts`` times; a solver's own error is raised as is.
+"""The Ray backend of :func:`evoik_pin.solve_many` (``backend="ray"``; ``pip install 'evoik_pin[ray]'``):
+:class:`RayBatch` hands chunks to actors (:class:`RayPool`), each running a :class:`~.threads.BatchSolver` on one
+thread; a chunk whose actor dies is re-run on a new actor, up to ``attempts`` times (a solver's own error is raised
+as is). Clusters: docs/SCALE.md.
 """
 
 from __future__ import annotations
@@ -133,8 +131,7 @@ def build_scene(robot, spec: dict):
 
 
 class ChunkWorker:
-    """A Ray actor's state: the robot (received once) and the solver of the call in progress (built on its first
-    chunk)."""
+    """A Ray actor's state: the robot (received once) and the solver of the call in progress."""
 
     def __init__(self, robot) -> None:
         self.robot = robot
@@ -168,8 +165,7 @@ class ChunkWorker:
 
 
 class RayPool:
-    """Actors holding one robot, kept between calls (an actor takes seconds to start). One pool is alive at a time
-    (:func:`pool_for`)."""
+    """Actors holding one robot, kept between calls (an actor takes seconds to start); one alive at a time."""
 
     def __init__(self, ray, robot, workers: int, key: tuple) -> None:
         self.ray, self.key, self.workers = ray, key, workers

@@ -103,7 +103,6 @@ class ReferenceLM:
     def __init__(self, problem: IKProblem, damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
                  stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
                  finish: bool = True) -> None:
-        self.problem = problem
         robot = self.robot = problem.robot
         self.damping, self.max_step, self.finish = float(damping), float(max_step), bool(finish)
         self.max_step2 = self.max_step**2
@@ -115,12 +114,10 @@ class ReferenceLM:
         self.goals = [_Goal(robot, stack.kinds[g], stack.frames[g], spec[g, G_WEIGHT], spec[g, G_TOL],
                             spec[g, G_RTOL], pt[g], Rt[g]) for g in range(len(stack))]
         self.frame_ids = [g.frame_id for g in self.goals]
-        self.oriented = stack.any_oriented
-        self.rows = stack.rows
         # one goal on the tip: the robot's tip fast paths (for a pose goal, the tip seen from the target directly)
         self._tip = len(self.goals) == 1 and self.frame_ids[0] == robot.frame_id(None) and self.goals[0].sw == 1.0
-        self.task_space = self.rows <= robot.n  # solve the smaller normal equations
-        self.eye = np.eye(min(self.rows, robot.n))
+        self.task_space = stack.rows <= robot.n  # solve the smaller normal equations
+        self.eye = np.eye(min(stack.rows, robot.n))
 
     # ------------------------------------------------------------------ task error
     def error_at(self, q: np.ndarray):
@@ -160,9 +157,7 @@ class ReferenceLM:
         pos = max(p for p, _ in errors)
         rots = [r for _, r in errors if r is not None]
         rot = max(rots) if rots else None
-        g_err = None
-        if len(errors) > 1:
-            g_err = np.array([(p, np.nan if r is None else r) for p, r in errors])
+        g_err = np.array([(p, np.nan if r is None else r) for p, r in errors]) if len(errors) > 1 else None
         return LMOutcome(q, pos, rot, converged, it, evaluations, g_err, float(c))
 
     def _normal(self, E: np.ndarray) -> np.ndarray:
