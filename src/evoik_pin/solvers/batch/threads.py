@@ -224,10 +224,7 @@ class BatchSolver:
                     wait([jobs[delivered][2]], return_when=FIRST_COMPLETED)
         finally:
             if pool is not None:
-                for job in jobs.values():
-                    if job[2] is not None:
-                        job[2].cancel()
-                pool.shutdown(wait=True)
+                pool.shutdown(wait=True, cancel_futures=True)
         while left:
             self._singles(*left.popleft(), offset)
         return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now

@@ -330,31 +330,24 @@ def relative_point_columns(rev, Rj, pj, Z, O, aux, p, Jx):
     pa0, pa1, pa2 = frame_a_origin(Rj, pj, aux)
     for k in range(Jx.shape[1]):
         sign = aux[A_REL_SIGNS + k]
-        if sign == 0.0:
-            for i in range(6):
-                Jx[i, k] = 0.0
-        elif sign == BOTH:
-            z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
-            for i in range(6):
-                Jx[i, k] = 0.0
-            if rev[k]:
-                l0, l1, l2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
-                Jx[0, k] = z1 * l2 - z2 * l1
-                Jx[1, k] = z2 * l0 - z0 * l2
-                Jx[2, k] = z0 * l1 - z1 * l0
-        elif sign > 0.0:
+        if sign > 0.0 and sign != BOTH:
             joint_column(rev[k], p, Z, O, k, Jx)
-        else:
-            z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
-            for i in range(6):
-                Jx[i, k] = 0.0
-            if rev[k]:
-                l0, l1, l2 = pa0 - O[k, 0], pa1 - O[k, 1], pa2 - O[k, 2]
-                Jx[0, k] = -(z1 * l2 - z2 * l1)
-                Jx[1, k] = -(z2 * l0 - z0 * l2)
-                Jx[2, k] = -(z0 * l1 - z1 * l0)
-            else:
-                Jx[0, k], Jx[1, k], Jx[2, k] = -z0, -z1, -z2
+            continue
+        for i in range(6):
+            Jx[i, k] = 0.0
+        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+        if sign == BOTH and rev[k]:
+            l0, l1, l2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
+            Jx[0, k] = z1 * l2 - z2 * l1
+            Jx[1, k] = z2 * l0 - z0 * l2
+            Jx[2, k] = z0 * l1 - z1 * l0
+        elif sign < 0.0 and rev[k]:
+            l0, l1, l2 = pa0 - O[k, 0], pa1 - O[k, 1], pa2 - O[k, 2]
+            Jx[0, k] = -(z1 * l2 - z2 * l1)
+            Jx[1, k] = -(z2 * l0 - z0 * l2)
+            Jx[2, k] = -(z0 * l1 - z1 * l0)
+        elif sign < 0.0:
+            Jx[0, k], Jx[1, k], Jx[2, k] = -z0, -z1, -z2
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
