@@ -686,40 +686,22 @@ def lm_runs(Q, kin, box, any_wrap, goals, P, Rts, params, Q_out, stats, g_stats,
                                       Rts, params, Q_out, stats, g_stats, first)
 
 
-def _grouped(args: tuple) -> tuple:
-    """:func:`lm_run`'s flat arguments ``parent`` ... ``gaux`` as (kin, box, any_wrap, goals)."""
-    return tuple(args[:7]), args[7], args[8], tuple(args[9:14])
-
-
-def lm_run(q_start, *args):
+def lm_run(q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
     """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
     g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
 
-    Args (after q_start, flat):
-        parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
-            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``; the entries' ``kin``).
+    Args (after q_start):
+        kin: parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
+            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
-        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool, gaux (G, A): the goal stack
-            (:class:`~evoik_pin.goals.stack.GoalStack`; the entries' ``goals``); pt (G, 3), Rt (G, 3, 3): its
-            targets (:func:`~evoik_pin.goals.stack.encode_target`).
+        goals: spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool, gaux (G, A): the goal stack
+            (:class:`~evoik_pin.goals.stack.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets
+            (:func:`~evoik_pin.goals.stack.encode_target`).
         params (PARAMS_SIZE,): the run's settings (:mod:`.layout`). q_out, g_out.
 
     Returns:
         (position error m, orientation error rad (nan when no goal has an orientation), converged, iterations,
         forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals.
     """
-    kin, box, any_wrap, goals = _grouped(args)
-    return entries_for(goals[0]).run(*_buffers(q_start.shape[0], kin, goals[0], args[16]), q_start, kin, box,
-                                     any_wrap, goals, *args[14:])
-
-
-def lm_run_pairs(Q, *args):
-    """:func:`lm_runs` on N (start, targets) pairs with :func:`lm_run`'s flat arguments (Q, ..., gaux, P, Rts, ...)."""
-    lm_runs(Q, *_grouped(args), *args[14:])
-
-
-def lm_run_starts(Q, *args):
-    """:func:`lm_runs` from the starts Q (K, n) towards pt, Rt until one converges, with :func:`lm_run`'s flat
-    arguments; returns :func:`lm_runs`'."""
-    pt, Rt, *rest = args[14:]
-    return lm_runs(Q, *_grouped(args), pt[None], Rt[None], *rest, first=True)
+    return entries_for(goals[0]).run(*_buffers(q_start.shape[0], kin, goals[0], params), q_start, kin, box, any_wrap,
+                                     goals, pt, Rt, params, q_out, g_out)
