@@ -28,8 +28,8 @@ from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
 from .batch_results import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
-from .goal_lists import GoalBlock, GoalSource, GoalTree
-from .targets import TargetSource, source_of
+from .goal_lists import GoalBlock, GoalTree
+from .targets import source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
            "root_entropy", "target_generator"]
@@ -166,15 +166,11 @@ class BatchSolver:
               progress: ProgressBar | None = None) -> BatchOutcome:
         """Solve ``targets`` (anything :func:`~.targets.source_of` takes) from ``Q0`` (N, n) starts when given;
         ``offset``: the index of the first target in the user's call (it keys the per-target generators);
-        ``progress``: a bar advanced chunk by chunk, or None."""
-        return self.pipeline(source_of(self.robot, targets), Q0, offset, workers,
-                             progress or ProgressBar("", enabled=False))
-
-    def pipeline(self, source: TargetSource | GoalSource, Q0, offset: int, workers: int,
-                 progress: ProgressBar) -> BatchOutcome:
-        """:meth:`solve` chunk by chunk: ``workers - 1`` threads run one chunk's batched rounds each; this one encodes
-        the chunks and runs the one-by-one solves (the robot's one Pinocchio data; with a scene, after every chunk's
-        rounds), else rounds itself."""
+        ``progress``: a bar advanced chunk by chunk, or None. Chunk by chunk: ``workers - 1`` threads run one chunk's
+        batched rounds each; this one encodes the chunks and runs the one-by-one solves (the robot's one Pinocchio
+        data; with a scene, after every chunk's rounds), else rounds itself."""
+        source = source_of(self.robot, targets)
+        progress = progress or ProgressBar("", enabled=False)
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
         tolerances = (self.template.tolerance, self.template.rotation_tolerance)  # a tip target's one goal's
