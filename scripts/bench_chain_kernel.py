@@ -4,7 +4,7 @@ compare two checkouts (a branch that adds goal kinds must leave this case bit fo
 
     PYTHONPATH=/path/to/checkout/src python scripts/bench_chain_kernel.py      # run it under each checkout, alternating
 
-Runs ``lm_run_pairs`` (one kernel call) on ``--n`` Panda pose targets (forward kinematics of random configurations,
+Runs ``lm_runs`` (one kernel call) on ``--n`` Panda pose targets (forward kinematics of random configurations,
 fixed seed) from random starts (another fixed seed), 30 iterations, ``--reps`` times; prints the md5 of the end
 configurations, statistics and per-goal errors (equal digests: the same floating-point results), the best and the
 median time per run (us), the convergence rate and the mean number of kinematics evaluations.
@@ -41,12 +41,13 @@ def main(argv: list[str] | None = None) -> int:
     stack = GoalStack.single(robot, KIND_POSE, 1e-6, 1e-6)
     _, any_wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
     Q_out, stats, g_stats = np.empty_like(Q0), np.empty((args.n, STATS_SIZE)), np.empty((args.n, 1, 2))
-    call = (Q0, *robot.tree_constants(), box, any_wrap, *stack.arrays, P, R, kernel_params(30), Q_out, stats, g_stats)
-    K.lm_run_pairs(*call)  # compiled (or loaded from numba's cache) outside the timing
+    kin, goals = tuple(robot.tree_constants()), tuple(stack.arrays)
+    call = (Q0, kin, box, any_wrap, goals, P, R, kernel_params(30), Q_out, stats, g_stats)
+    K.lm_runs(*call)  # compiled (or loaded from numba's cache) outside the timing
     times = []
     for _ in range(args.reps):
         t0 = time.perf_counter()
-        K.lm_run_pairs(*call)
+        K.lm_runs(*call)
         times.append((time.perf_counter() - t0) / args.n * 1e6)
     digest = hashlib.md5(Q_out.tobytes() + stats.tobytes() + g_stats.tobytes()).hexdigest()
     print(f"{ek.__file__}: md5 {digest}; us per run best {min(times):.2f}, median {np.median(times):.2f}; converged "

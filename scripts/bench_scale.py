@@ -123,7 +123,7 @@ def breakdown(robot, H, reps: int) -> dict:
             out = solver._chunk_rounds(block, None)
             t3 = time.perf_counter()
             rest = np.nonzero(out.source == SOURCE_SINGLE)[0]
-            solver._singles(0, {int(i): block.target(int(i)) for i in rest}, None, out, 0, None)
+            solver._singles(0, {int(i): block.target(int(i)) for i in rest}, None, out, 0)
             t4 = time.perf_counter()
             with threads.gc_paused():
                 out.results(solver.template)
@@ -155,8 +155,8 @@ def prange_kernel():
         def run_pairs(Q, parent, FR, Fp, rev, index, scale, offset, box, any_wrap, spec, gR, gp, support, gaux, P, Rts,
                       params, Q_out, stats, g_stats):
             for i in prange(Q.shape[0]):
-                pos, rot, conv, it, ev_, c = lm_run(Q[i], parent, FR, Fp, rev, index, scale, offset, box, any_wrap,
-                                                    spec, gR, gp, support, gaux, P[i], Rts[i], params, Q_out[i],
+                pos, rot, conv, it, ev_, c = lm_run(Q[i], (parent, FR, Fp, rev, index, scale, offset), box, any_wrap,
+                                                    (spec, gR, gp, support, gaux), P[i], Rts[i], params, Q_out[i],
                                                     g_stats[i])
                 stats[i, 0], stats[i, 1], stats[i, 2], stats[i, 3], stats[i, 4] = pos, rot, conv, it, ev_
                 stats[i, 5] = c
@@ -183,7 +183,10 @@ def kernel_options(robot, H, reps: int) -> dict:
     goals = stack.arrays
     P, Rts = P[:, None].copy(), Rts[:, None].copy()  # one goal per pair
     lm_engine.compiled_kernel()
-    serial = lm_kernel.lm_run_pairs
+
+    def serial(Q, *flat):  # lm_runs with call()'s flat arguments
+        lm_kernel.lm_runs(Q, flat[:7], flat[7], flat[8], flat[9:14], *flat[14:])
+
     parallel = prange_kernel()
     N = len(targets)
     g_stats = np.empty((N, 1, 2))

@@ -178,7 +178,7 @@ def test_lists_of_different_structures_are_grouped(talos, baxter):
 ])
 def test_a_bad_list_is_named_by_its_index_before_any_work(talos, lists, bad, error, match, monkeypatch):
     called = []
-    monkeypatch.setattr(threads.BatchSolver, "pipeline", lambda *a, **k: called.append(1))
+    monkeypatch.setattr(threads.BatchSolver, "solve", lambda *a, **k: called.append(1))
     given = list(lists[:10])
     given[5] = bad
     with pytest.raises(error, match=match):

@@ -220,7 +220,7 @@ def _kernel_pairs(robot, kind, count, seed):
     _, any_wrap, _, _, box = box_constants(robot, robot.lower, robot.upper)
     stack = GoalStack.single(robot, target_kind(targets[0]), 1e-6, 1e-6)
     params = kernel_params(30)
-    return (np.ascontiguousarray(Q0), *robot.tree_constants(), box, any_wrap, *stack.arrays,
+    return (np.ascontiguousarray(Q0), tuple(robot.tree_constants()), box, any_wrap, tuple(stack.arrays),
             P[:, None].copy(), Rts[:, None].copy(), params)
 
 
@@ -229,15 +229,15 @@ def _kernel_pairs(robot, kind, count, seed):
 def test_kernel_runs_do_not_depend_on_earlier_runs(robots, name, kind):
     # the batch entry points reuse one workspace for all their runs: each run must write every buffer before
     # reading it, so a pair's result (bit for bit) does not depend on which runs came before it
-    from evoik_pin.solvers.lm.kernel import lm_run, lm_run_pairs, lm_run_starts
+    from evoik_pin.solvers.lm.kernel import lm_run, lm_runs
 
     robot = robots[name]
     Q0, *args, P, Rts, params = _kernel_pairs(robot, kind, 60, 41)
     N, n = Q0.shape
     out, stats, g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
-    lm_run_pairs(Q0, *args, P, Rts, params, out, stats, g)
+    lm_runs(Q0, *args, P, Rts, params, out, stats, g)
     back, back_stats, back_g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
-    lm_run_pairs(Q0[::-1].copy(), *args, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats, back_g)
+    lm_runs(Q0[::-1].copy(), *args, P[::-1].copy(), Rts[::-1].copy(), params, back, back_stats, back_g)
     assert np.array_equal(out, back[::-1]) and np.array_equal(stats, back_stats[::-1], equal_nan=True)
     assert np.array_equal(g, back_g[::-1], equal_nan=True)
     assert stats[:, 2].any() and (stats[:, 4] > 2).any()  # converged runs, runs of several steps
@@ -247,7 +247,7 @@ def test_kernel_runs_do_not_depend_on_earlier_runs(robots, name, kind):
         assert np.array_equal(one, out[i])
     # several starts for one target, after runs for other targets: the same runs again
     starts, starts_stats = np.empty((N, n)), np.full((N, STATS_SIZE), -1.0)
-    k = lm_run_starts(Q0, *args, P[0], Rts[0], params, starts, starts_stats, np.empty((N, 1, 2)))
+    k = lm_runs(Q0, *args, P[:1], Rts[:1], params, starts, starts_stats, np.empty((N, 1, 2)), first=True)
     runs = k + 1 if k >= 0 else -(k + 1)
     for i in range(runs):
         one = np.empty(n)
@@ -261,17 +261,17 @@ def test_kernel_batches_from_threads_equal_one_call(robots):
     # own workspace, so chunks solved concurrently give what one call gives
     from concurrent.futures import ThreadPoolExecutor
 
-    from evoik_pin.solvers.lm.kernel import lm_run_pairs
+    from evoik_pin.solvers.lm.kernel import lm_runs
 
     robot = robots["panda"]
     Q0, *args, P, Rts, params = _kernel_pairs(robot, "pose", 400, 43)
     N, n = Q0.shape
     out, stats, g = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
-    lm_run_pairs(Q0, *args, P, Rts, params, out, stats, g)
+    lm_runs(Q0, *args, P, Rts, params, out, stats, g)
     out_t, stats_t, g_t = np.empty((N, n)), np.empty((N, STATS_SIZE)), np.empty((N, 1, 2))
 
     def chunk(s):
-        lm_run_pairs(Q0[s], *args, P[s], Rts[s], params, out_t[s], stats_t[s], g_t[s])
+        lm_runs(Q0[s], *args, P[s], Rts[s], params, out_t[s], stats_t[s], g_t[s])
 
     with ThreadPoolExecutor(4) as pool:
         list(pool.map(chunk, [slice(i, i + 50) for i in range(0, N, 50)]))

@@ -490,19 +490,19 @@ def test_geodesic_acceleration_vanishes_on_a_linear_error_and_is_refused_when_to
     rng = np.random.default_rng(41)
     q, qt = robot.random_configurations(2, rng)
     lm = ReferenceLM(IKProblem(robot, robot.fk(qt)))
-    e, extra, _, _ = lm.residual(robot.fk_unchecked(q))
+    e, extra, _, _ = lm.goals[0].residual(robot.fk_unchecked(q))
     E = lm.task_jacobian(q, extra)
     v = 0.01 * rng.standard_normal(robot.n)
     # e(q + h v) exactly on the tangent line: no curvature, no acceleration
     a = lm._geodesic(e, E, E @ E.T, 1e-6, v, e + 0.1 * E @ v)
     assert a is not None and np.abs(a).max() < 1e-9
     # the real error bends: a small correction, accepted and finite
-    a = lm._geodesic(e, E, E @ E.T, 1e-6, v, lm.residual(robot.fk_unchecked(q + 0.1 * v))[0])
+    a = lm._geodesic(e, E, E @ E.T, 1e-6, v, lm.goals[0].residual(robot.fk_unchecked(q + 0.1 * v))[0])
     assert a is None or (np.isfinite(a).all() and np.linalg.norm(a) <= 0.375 * np.linalg.norm(v) + 1e-15)
     # a curvature far beyond the step's length is not trusted
     assert lm._geodesic(e, E, E @ E.T, 1e-6, v, e + 0.1 * E @ v + 1.0) is None
     # the formula: a = -(E^T E + lam I)^-1 E^T r'' with r'' = 2/h ((e(q + h v) - e)/h - E v), h = 0.1
-    eh = lm.residual(robot.fk_unchecked(q + 0.1 * v))[0]
+    eh = lm.goals[0].residual(robot.fk_unchecked(q + 0.1 * v))[0]
     for lam in (1e-6, 1e-3):
         a = lm._geodesic(e, E, E @ E.T, lam, v, eh)
         rpp = (2.0 / 0.1) * ((eh - e) / 0.1 - E @ v)

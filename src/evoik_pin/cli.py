@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from .errors import EvoikError, GoalsFileError, OptionError, RobotLoadWarning
+from .errors import ConfigurationError, EvoikError, GoalsFileError, OptionError, RobotLoadWarning
 from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS, load_robot
 
 
@@ -115,8 +115,6 @@ def _shown(robot, q: np.ndarray, rad: bool) -> np.ndarray:
 
 def _joint_flag(robot, values: list[float], rad: bool, flag: str) -> np.ndarray:
     """The joint vector of ``flag`` (e.g. ``--q``) in rad; a ConfigurationError that names the flag."""
-    from .errors import ConfigurationError
-
     try:
         return robot.check_q(_joint_values(robot, values, rad))
     except ConfigurationError as exc:
@@ -244,7 +242,8 @@ def _call_options(args: argparse.Namespace, robot, method: str, pool: list[str] 
                               f"{', '.join(takers)}")
         raise OptionError(f"{flag}: no method takes an option {name!r}; method {method!r} takes: {', '.join(takes)}")
     args.typed_flags = {name: flag for name, (_, flag) in given.items()}
-    args.typed_flags.update(_TARGET_FLAGS)
+    if getattr(args, "goals", None) is None:  # a goals file's targets are not typed as flags
+        args.typed_flags.update(_TARGET_FLAGS)
     if getattr(args, "seed", 0):  # the default 0 is always valid; a typed seed the library rejects is named
         args.typed_flags["seed"] = "--seed"
     return {name: value for name, (value, _) in given.items()}
@@ -323,8 +322,6 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if scene is not None:
         options.update(scene=scene, margin=margin)
     if goals_file is not None:
-        for phrase in _TARGET_FLAGS:  # the targets come from the file, not from --xyz / --rpy
-            args.typed_flags.pop(phrase, None)
         target = goals_file.problems[0]
     else:
         position = np.asarray(args.xyz, dtype=float)
@@ -452,7 +449,6 @@ def _view_solution(robot, res, target, html, view: bool, ghosts=None, scene=None
             viewer.block(f"meshcat viewer of {robot.name}: {viewer.url} (Ctrl-C to stop)", file=sys.stderr)
 
 
-
 def _goals_arg(args: argparse.Namespace):
     """The :class:`~evoik_pin.io.goals_file.GoalsFile` of ``--goals FILE`` (None without it), after checking that
     the target is given one way: ``--goals`` or ``--xyz`` (with ``--rpy``), and that no flag of a one-target
@@ -517,11 +513,9 @@ def _print_goal_errors(rows: list[dict]) -> None:
     kw = max(len("kind"), *(len(r["kind"]) for r in rows))  # orientation, look_at, ...
     print(f"  #  {'frame':{width}s}  {'kind':{kw}s}  position error (m)  rotation error (rad)  met")
     for k, (r, name) in enumerate(zip(rows, names, strict=True)):
-        r = {**r, "frame": name}
         rot = "free" if r["rotation_error_rad"] is None else f"{r['rotation_error_rad']:.3e}"
         pos = "free" if r["position_error_m"] is None else f"{r['position_error_m']:.3e}"  # orientation, pointing
-        print(f"{k:3d}  {r['frame']:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  "
-              f"{'yes' if r['met'] else 'NO'}")
+        print(f"{k:3d}  {name:{width}s}  {r['kind']:{kw}s}  {pos:<18s}  {rot:<20s}  {'yes' if r['met'] else 'NO'}")
 
 
 def _load_scene(args: argparse.Namespace, robot):

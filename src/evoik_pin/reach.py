@@ -20,7 +20,7 @@ from .problem import Target, coerce_scene
 from .robot import Robot, load_robot
 from .solvers.batch.batch_results import BatchOutcome
 from .solvers.batch.solve_many_call import BACKENDS
-from .solvers.batch.threads import BatchSolver, check_call, check_workers, gc_paused, grow_bar, progress_bar
+from .solvers.batch.threads import BatchSolver, ProgressBar, check_call, check_workers, gc_paused
 from .solvers.options import check_choice, check_int, check_positive
 
 __all__ = ["ReachMap", "output_dir", "reachability_map", "so3_samples"]
@@ -101,29 +101,28 @@ class ReachMap:
         nx, ny, nz = self.shape
         grid = self.index.reshape(nx, ny, nz)
         xs, ys, zs = (np.unique(self.centers[:, k]) for k in range(3))
-        ext_xy = [xs[0] - self.voxel / 2, xs[-1] + self.voxel / 2, ys[0] - self.voxel / 2, ys[-1] + self.voxel / 2]
+        h = self.voxel / 2
+        ext_xy, ext_xz = [xs[0] - h, xs[-1] + h, ys[0] - h, ys[-1] + h], [xs[0] - h, xs[-1] + h, zs[0] - h, zs[-1] + h]
         layers = np.nonzero(grid.max(axis=(0, 1)) > 0)[0]
         if layers.size == 0:
             layers = np.array([nz // 2])
         layers = layers[np.unique(np.linspace(0, layers.size - 1, min(8, layers.size)).round().astype(int))]
-        panels = [("xy", k) for k in layers] + ([("xz", int(np.abs(ys).argmin()))] if nz > 1 else [])
+        # (cut, extent, title, vertical axis): horizontal layers, then the vertical x-z slice nearest y = 0
+        panels = [(grid[:, :, k], ext_xy, f"z = {zs[k]:.3f} m" if nz > 1 else "plane of the arm", "y (m)")
+                  for k in layers]
+        if nz > 1:
+            k = int(np.abs(ys).argmin())
+            panels.append((grid[:, k, :], ext_xz, f"y = {ys[k]:.3f} m", "z (m)"))
         cols = min(3, len(panels))
         rows = -(-len(panels) // cols)
         fig, axes = plt.subplots(rows, cols, figsize=(max(6.0, 4.2 * cols), 3.8 * rows + 0.6), squeeze=False,
                                  layout="constrained")  # no label overlaps its neighbour panel
         image = None
-        for ax, (plane, k) in zip(axes.ravel(), panels, strict=False):
-            if plane == "xy":
-                image = ax.imshow(grid[:, :, k].T, origin="lower", extent=ext_xy, vmin=0, vmax=1, cmap="viridis")
-                ax.set_title(f"z = {zs[k]:.3f} m" if nz > 1 else "plane of the arm")
-                ax.set_xlabel("x (m)")
-                ax.set_ylabel("y (m)")
-            else:
-                ext = [ext_xy[0], ext_xy[1], zs[0] - self.voxel / 2, zs[-1] + self.voxel / 2]
-                image = ax.imshow(grid[:, k, :].T, origin="lower", extent=ext, vmin=0, vmax=1, cmap="viridis")
-                ax.set_title(f"y = {ys[k]:.3f} m")
-                ax.set_xlabel("x (m)")
-                ax.set_ylabel("z (m)")
+        for ax, (cut, extent, title, vertical) in zip(axes.ravel(), panels, strict=False):
+            image = ax.imshow(cut.T, origin="lower", extent=extent, vmin=0, vmax=1, cmap="viridis")
+            ax.set_title(title)
+            ax.set_xlabel("x (m)")
+            ax.set_ylabel(vertical)
             ax.set_aspect("equal")
         for ax in axes.ravel()[len(panels):]:
             ax.axis("off")
@@ -156,15 +155,13 @@ class ReachMap:
         with Viewer(robot, skeleton=None) as viewer:
             viewer.show(np.clip(np.zeros(robot.n), robot.lower, robot.upper))
             if reached.any():
-                viewer.show_points(self.centers[reached], self.index[reached], name="reach",
-                                   size=0.4 * self.voxel)
+                viewer.show_points(self.centers[reached], self.index[reached], name="reach", size=0.4 * self.voxel)
             viewer.frame(np.array(self.box()))
             return viewer.save_html(path)
 
 
 def output_dir(path) -> Path:
-    """The directory ``path``, created if needed; an OutputError when it cannot be (checked before a map is
-    computed, so a long run does not end on an unwritable path)."""
+    """The directory ``path``, created if needed; an OutputError when it cannot be."""
     out = Path(path).expanduser()
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -215,7 +212,6 @@ def _engine(robot, backend: str, workers, address, entropy: int, options: dict):
                        address=address)
         return ray.solve, ray.workers
     local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
-    workers = check_workers(workers)
     return (lambda targets: local.solve(targets, workers=workers)), workers
 
 
@@ -253,21 +249,20 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     centers, shape = _grid(lo - voxel, hi + voxel, voxel, float(lo[2]) if planar else None)
     M = centers.shape[0]
     solve, workers = _engine(robot, backend, workers, address, seed, options)
-    bar = progress_bar(progress, f"reach {robot.name}", unit="target")
+    bar = ProgressBar(f"reach {robot.name}", "target", enabled=progress)
 
     def run(targets) -> BatchOutcome:
-        """The engine on ``targets`` (Targets, or an (N, 4, 4) array of poses), ``batch_size`` at a time."""
+        """The engine on ``targets`` (Targets, or (N, 4, 4) poses), ``batch_size`` at a time."""
         parts = []
         for a in range(0, len(targets), batch_size):
             parts.append(solve(targets[a:a + batch_size]))
-            if bar is not None:
-                bar.update(len(targets[a:a + batch_size]))
+            bar.update(len(parts[-1]))
         return BatchOutcome.concatenate(parts)
 
     rows = [0, 1] if planar else ("translation" if kind == "position" else "full")
     asked = 0  # pose targets (after the position pass)
-    try:
-        grow_bar(bar, M)
+    with bar:
+        bar.grow(M)
         with gc_paused():
             first = ([Target.planar_target(x, y) for x, y in centers[:, :2]] if planar
                      else [Target(c) for c in centers])
@@ -282,7 +277,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
             R = so3_samples(orientations)
             cells = np.nonzero(reached)[0]
             asked = cells.size * orientations
-            grow_bar(bar, asked)
+            bar.grow(asked)
             step = max(1, batch_size // orientations)
             for a in range(0, cells.size, step):  # voxel after voxel, every orientation of each
                 part = cells[a:a + step]
@@ -296,9 +291,6 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 m = np.zeros(ok.shape)
                 m[ok] = robot.manipulability_batch(res.q.reshape(part.size, orientations, -1)[ok], rows)
                 best[part] = m.max(axis=1)
-    finally:
-        if bar is not None:
-            bar.close()
     n_orient = orientations if kind == "pose" else 1
     settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": workers,
                 "position_targets": M, "pose_targets": asked,

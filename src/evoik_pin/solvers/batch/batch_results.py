@@ -1,6 +1,5 @@
-"""What a batch of targets came to: arrays (:class:`BatchOutcome`), and what :func:`~evoik_pin.solve_many`
-returns (:class:`BatchResults`: the arrays, and a :class:`~evoik_pin.Result` per target made on first access, as
-making one costs a tenth of a batched solve)."""
+"""What a batch of targets came to: arrays (:class:`BatchOutcome`), and what :func:`~evoik_pin.solve_many` returns
+(:class:`BatchResults`: the arrays, and a :class:`~evoik_pin.Result` per target made on first access)."""
 
 from __future__ import annotations
 

@@ -1,9 +1,7 @@
-"""The Ray backend of :func:`evoik_pin.solve_many` (``backend="ray"``; ``pip install 'evoik_pin[ray]'``).
-
-:class:`RayBatch` hands chunks to ``workers`` actors (one CPU each, :class:`RayPool`), each holding the robot (sent
-once), the scene rebuilt from its obstacles, and a :class:`~.threads.BatchSolver` (one thread); the answers come
-back as :class:`~.batch_results.BatchOutcome` objects, the same as the local backend's. Clusters: docs/SCALE.md.
-A chunk whose actor dies is re-run on a new actor, up to ``attempts`` times; a solver's own error is raised as is.
+"""The Ray backend of :func:`evoik_pin.solve_many` (``backend="ray"``; ``pip install 'evoik_pin[ray]'``):
+:class:`RayBatch` hands chunks to actors (:class:`RayPool`), each running a :class:`~.threads.BatchSolver` on one
+thread; a chunk whose actor dies is re-run on a new actor, up to ``attempts`` times (a solver's own error is raised
+as is). Clusters: docs/SCALE.md.
 """
 
 from __future__ import annotations
@@ -24,7 +22,7 @@ from ...errors import BackendError, TargetError
 from ...problem import Target
 from .batch_results import BatchOutcome
 from .targets import source_of
-from .threads import BatchSolver, check_workers, chunk_bounds, gc_paused, grow_bar, progress_bar
+from .threads import BatchSolver, ProgressBar, check_workers, chunk_bounds, gc_paused
 
 __all__ = ["RayBatch", "RayPool", "connect", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
            "unpack_targets"]
@@ -100,10 +98,7 @@ def pack_targets(targets: list[Target]) -> dict:
 
 
 def unpack_targets(packed) -> list[Target]:
-    """The targets :func:`pack_targets` packed, or those of an (N, 4, 4) array of poses (a TargetError names a bad
-    one)."""
-    if isinstance(packed, np.ndarray):
-        return Target.from_poses(packed)
+    """The targets :func:`pack_targets` packed."""
     P, R, planar, has_rotation, yaw = (packed[k] for k in ("position", "rotation", "planar", "has_rotation", "yaw"))
     N = P.shape[0]
     if has_rotation.all():
@@ -136,8 +131,7 @@ def build_scene(robot, spec: dict):
 
 
 class ChunkWorker:
-    """A Ray actor's state: the robot (received once) and the solver of the call in progress (built on its first
-    chunk)."""
+    """A Ray actor's state: the robot (received once) and the solver of the call in progress."""
 
     def __init__(self, robot) -> None:
         self.robot = robot
@@ -171,8 +165,7 @@ class ChunkWorker:
 
 
 class RayPool:
-    """Actors holding one robot, kept between calls (an actor takes seconds to start). One pool is alive at a time
-    (:func:`pool_for`)."""
+    """Actors holding one robot, kept between calls (an actor takes seconds to start); one alive at a time."""
 
     def __init__(self, ray, robot, workers: int, key: tuple) -> None:
         self.ray, self.key, self.workers = ray, key, workers
@@ -274,19 +267,16 @@ class RayBatch:
         idle = deque(pool.actors)
         running: dict = {}  # future -> (chunk, attempt, actor)
         parts: dict[int, BatchOutcome] = {}
-        bar = progress_bar(progress, "solve_many (ray)")
-        grow_bar(bar, len(chunks))
-        try:
+        with ProgressBar("solve_many (ray)", enabled=progress) as bar:
+            bar.grow(len(chunks))
             while todo or running:
                 while todo and idle:
                     k, attempt = todo.popleft()
                     actor = idle.popleft()
                     a, b = chunks[k]
-                    # an array of poses goes as it is (the actor makes and checks the Target objects)
-                    if poses is not None or source.goals:  # goal lists pickle as they are
-                        packed = poses[a:b] if poses is not None else source.chunk(a, b)
-                    else:
-                        packed = pack_targets(source.chunk(a, b))
+                    # poses and goal lists go as they are (the actor makes and checks the Target objects)
+                    packed = (poses[a:b] if poses is not None else source.chunk(a, b) if source.goals
+                              else pack_targets(source.chunk(a, b)))
                     future = actor.solve.remote(self._key, self._job, packed, None if Q0 is None else Q0[a:b],
                                                 offset + a, crash=k in self.crash_hook and attempt == 0)
                     running[future] = (k, attempt, actor)
@@ -295,6 +285,7 @@ class RayBatch:
                     k, attempt, actor = running.pop(future)
                     try:
                         parts[k] = ray.get(future)
+                        bar.update(1)
                     except ray.exceptions.RayActorError as exc:  # the actor died: a new one re-runs the chunk
                         if attempt + 1 >= self.attempts:
                             pool.retire(actor)
@@ -305,13 +296,7 @@ class RayBatch:
                     except TargetError:  # a bad pose in a chunk sent as it was: name it by its index in the call
                         source.check()
                         raise
-                    else:
-                        if bar is not None:
-                            bar.update(1)
                     idle.append(actor)
-        finally:
-            if bar is not None:
-                bar.close()
         out = BatchOutcome.concatenate([parts[k] for k in range(len(chunks))])
         if self._scene is not None:
             for r in out.singles.values():

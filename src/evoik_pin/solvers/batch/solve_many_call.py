@@ -14,7 +14,7 @@ from ...robot.locking import expand_result, expand_rows, kept_columns, locked_no
 from ..options import check_choice
 from .batch_results import SOURCE_SINGLE, BatchOutcome, BatchResults
 from .targets import source_of
-from .threads import BatchSolver, check_workers, progress_bar, root_entropy
+from .threads import BatchSolver, ProgressBar, check_workers, root_entropy
 
 __all__ = ["BACKENDS", "solve_many"]
 
@@ -66,12 +66,8 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
         workers = job.workers
     else:
         solver = BatchSolver(robot, make_problem, run, method, entropy, options, choose=choose, prefer=prefer)
-        bar = progress_bar(progress, "solve_many")
-        try:
+        with ProgressBar("solve_many", enabled=progress) as bar:
             outcome = solver.solve(source, Q0, workers=workers, progress=bar)
-        finally:
-            if bar is not None:
-                bar.close()
         template = solver.template
     if locked:
         outcome.q = expand_rows(full, robot, values, outcome.q)

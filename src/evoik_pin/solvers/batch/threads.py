@@ -2,9 +2,8 @@
 
 With the memetic method the problems are solved in batched rounds first, each from its next-nearest seed-table entry
 (from ``q0`` first when given) by one :func:`~evoik_pin.solvers.lm.solve_pairs` call; those left after ``table_seeds``
-rounds, and every problem of other methods, are solved one by one as :func:`evoik_pin.solve` does, each with its own
-generator (:func:`target_generator`), so the answers do not depend on the workers, chunks or backend. The chunks'
-rounds run on ``workers`` threads (:meth:`BatchSolver.pipeline`).
+rounds, and every problem of other methods, one by one as :func:`evoik_pin.solve` does, each with its own generator
+(:func:`target_generator`): the answers do not depend on the workers, chunks or backend.
 """
 
 from __future__ import annotations
@@ -29,11 +28,11 @@ from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
 from .batch_results import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
-from .goal_lists import GoalBlock, GoalSource, GoalTree
-from .targets import TargetSource, source_of
+from .goal_lists import GoalBlock, GoalTree
+from .targets import source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
-           "grow_bar", "progress_bar", "root_entropy", "target_generator"]
+           "root_entropy", "target_generator"]
 
 
 #: Guided chunks (:func:`chunk_bounds`): each a 1 / (GUIDED_SHARE * workers) share of the targets left, at least
@@ -75,8 +74,7 @@ def target_generator(entropy: int, i: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(int(i),)))
 
 
-def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int | None = None
-                 ) -> list[tuple[int, int]]:
+def chunk_bounds(n: int, workers: int, minimum: int | None = None, maximum: int | None = None) -> list[tuple[int, int]]:
     """[start, stop) ranges cutting n items into chunks: one for one worker; for several, guided chunks, each a
     ``1 / (GUIDED_SHARE * workers)`` share of the items not yet cut, between ``minimum`` (default ``MIN_CHUNK``)
     and ``maximum`` items (none: no cap), so that the workers finish together."""
@@ -110,8 +108,7 @@ def check_call(robot, make_problem: Callable, method: str, options: dict) -> dic
 
 
 class BatchSolver:
-    """Solves batches of problems for one robot, method and set of options (option checks, seed table and
-    collision-free entries made once); :meth:`solve` takes a batch.
+    """Solves batches of problems (:meth:`solve`) for one robot, method and set of options, checked once.
 
     Args:
         robot: a loaded :class:`~evoik_pin.robot.Robot`.
@@ -166,24 +163,14 @@ class BatchSolver:
         self.rounds = rounds
 
     def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, workers: int = 1,
-              progress=None) -> BatchOutcome:
+              progress: ProgressBar | None = None) -> BatchOutcome:
         """Solve ``targets`` (anything :func:`~.targets.source_of` takes) from ``Q0`` (N, n) starts when given;
         ``offset``: the index of the first target in the user's call (it keys the per-target generators);
-        ``progress``: a bar advanced chunk by chunk, or None."""
-        parts: list[BatchOutcome] = []
-        self.pipeline(source_of(self.robot, targets), Q0, offset, workers, progress,
-                      lambda a, b, out: parts.append(out))
-        return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now
-
-    def pipeline(self, source: TargetSource | GoalSource, Q0, offset: int, workers: int, progress, batched: Callable,
-                 singles: Callable | None = None) -> None:
-        """Solve ``source`` chunk by chunk: ``batched(start, stop, outcome)`` on each chunk in order once its
-        batched rounds are done, ``singles(start, outcome)`` on each chunk with one-by-one solves once they are done.
-
-        This thread and ``workers - 1`` others share the work: the others run one chunk's batched rounds each; this
-        one encodes the chunks, runs the one-by-one solves of a finished chunk at once (they share the robot's
-        Pinocchio data; with a scene, after every chunk's rounds: its collision data is shared under a lock) and
-        otherwise the next chunk's rounds itself."""
+        ``progress``: a bar advanced chunk by chunk, or None. Chunk by chunk: ``workers - 1`` threads run one chunk's
+        batched rounds each; this one encodes the chunks and runs the one-by-one solves (the robot's one Pinocchio
+        data; with a scene, after every chunk's rounds), else rounds itself."""
+        source = source_of(self.robot, targets)
+        progress = progress or ProgressBar("", enabled=False)
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
         tolerances = (self.template.tolerance, self.template.rotation_tolerance)  # a tip target's one goal's
@@ -191,13 +178,14 @@ class BatchSolver:
         # one-by-one solvers hold the GIL, and use the robot's one Pinocchio Data)
         threads = workers if self.batched and self.engine == "compiled" else 1
         bounds = chunk_bounds(len(source), threads)
-        grow_bar(progress, len(bounds))
+        progress.grow(len(bounds))
         helpers = min(threads, len(bounds)) - 1
         pool = ThreadPoolExecutor(helpers, thread_name_prefix="evoik-batch") if helpers > 0 else None
         overlap = self.template.scene is None  # one-by-one solves between chunks, not after all of them
         jobs: dict[int, list] = {}  # chunk -> [block, q0, future or None, outcome or None]
         left: deque = deque()  # (start, {row: target}, q0, outcome): chunks with targets for the one-by-one solver
         handed = delivered = 0  # chunks handed out (to a thread or to this one), chunks delivered in order
+        parts: list[BatchOutcome] = []
 
         def take(k: int) -> list:
             a, b = bounds[k]
@@ -215,16 +203,15 @@ class BatchSolver:
                 while delivered in jobs and (jobs[delivered][3] is not None or jobs[delivered][2].done()):
                     block, q0, future, out = jobs.pop(delivered)
                     out = out if future is None else future.result()
-                    a, b = bounds[delivered]
-                    batched(a, b, out)
+                    a = bounds[delivered][0]
+                    parts.append(out)
                     rest = np.nonzero(out.source == SOURCE_SINGLE)[0] if self.fallback or not self.batched else ()
                     if len(rest):
                         left.append((a, {int(i): block.target(int(i)) for i in rest}, q0, out))
-                    if progress is not None:
-                        progress.update(1)
+                    progress.update(1)
                     delivered += 1
                 if overlap and left:
-                    self._singles(*left.popleft(), offset, singles)
+                    self._singles(*left.popleft(), offset)
                 elif handed < len(bounds):
                     job = jobs[handed] = take(handed)
                     job[3] = self._chunk_rounds(job[0], job[1])
@@ -233,17 +220,14 @@ class BatchSolver:
                     wait([jobs[delivered][2]], return_when=FIRST_COMPLETED)
         finally:
             if pool is not None:
-                for job in jobs.values():
-                    if job[2] is not None:
-                        job[2].cancel()
-                pool.shutdown(wait=True)
+                pool.shutdown(wait=True, cancel_futures=True)
         while left:
-            self._singles(*left.popleft(), offset, singles)
+            self._singles(*left.popleft(), offset)
+        return BatchOutcome.concatenate(parts)  # the one-by-one answers are in the parts by now
 
-    def _singles(self, a: int, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int,
-                 singles: Callable | None) -> None:
+    def _singles(self, a: int, targets: dict[int, Target], Q0, out: BatchOutcome, offset: int) -> None:
         """The problems ``{row: target}`` of the chunk starting at ``a`` that the batched rounds left (all of them for
-        other methods), one by one with each target's own generator; then ``singles(a, out)``."""
+        other methods), one by one with each target's own generator, written into ``out``."""
         # memetic skips the table entries the rounds tried; a goal list's starts alternate composed and ranked
         # entries (SeedTable.goal_starts), so its fallback starts from the first composed one (offset 0)
         skip = {"table_offset": self.options.get("table_offset", self.rounds)} if self.batched else {}
@@ -259,8 +243,6 @@ class BatchSolver:
                 problem, solver_options = self.make_problem(self.robot, target, q0=q0, **dict(self.options))
                 r = self.run(problem, self.method, rng, {**solver_options, **extra})
             out.set_single(i, r)
-        if singles is not None:
-            singles(a, out)
 
     def _chunk_rounds(self, block: GoalBlock, Q0) -> BatchOutcome:
         """The batched rounds of one chunk (each goal stack apart): an outcome whose unsolved rows are
@@ -351,13 +333,22 @@ def gc_paused():
 
 
 class ProgressBar:
-    """A tqdm bar drawn when its total is first known (:func:`grow_bar`), and grown as more work is planned."""
+    """A tqdm bar drawn when its total is first known (:meth:`grow`) and grown as more work is planned; inert when
+    not ``enabled``. As a context manager, closed on exit."""
 
-    def __init__(self, what: str, unit: str) -> None:
-        self.what, self.unit = what, unit
+    def __init__(self, what: str, unit: str = "chunk", enabled: bool = True) -> None:
+        self.what, self.unit, self.enabled = what, unit, enabled
         self.tqdm = None
 
+    def __enter__(self) -> ProgressBar:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
     def grow(self, units: int) -> None:
+        if not (self.enabled and units):
+            return
         if self.tqdm is None:
             from tqdm.auto import tqdm
 
@@ -373,14 +364,3 @@ class ProgressBar:
     def close(self) -> None:
         if self.tqdm is not None:
             self.tqdm.close()
-
-
-def progress_bar(progress: bool, what: str, unit: str = "chunk") -> ProgressBar | None:
-    """A :class:`ProgressBar` when ``progress``, else None."""
-    return ProgressBar(what, unit) if progress else None
-
-
-def grow_bar(bar: ProgressBar | None, units: int) -> None:
-    """Add ``units`` to a bar's total (None: nothing)."""
-    if bar is not None and units:
-        bar.grow(units)

@@ -114,8 +114,8 @@ def axes_error(kind, R, p, pt, Rt, aux, M, rv, e):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def axes_jacobian(kind, R, p, J, pt, Rt, aux, rv, A, B, E, r):
-    """One goal's rows r.. of the task Jacobian E (unweighted) of the kinds of this module, from its frame's
-    base-frame Jacobian J (6, n) at the pose (R, p) :func:`axes_error` saw. rv (3,), A, B (3, 3) are scratch."""
+    """One goal's rows r.. of the task Jacobian E (unweighted) from its frame's base-frame Jacobian J (6, n) at the
+    pose (R, p) :func:`axes_error` saw. rv (3,), A, B (3, 3) scratch."""
     n = J.shape[1]
     if kind == AXIS_ALONG or kind == AXIS_AT:
         rho = _direction(kind, R, p, pt, aux, rv)

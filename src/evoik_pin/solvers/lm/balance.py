@@ -137,9 +137,8 @@ def _hull_next(aux, base, K, i, xi, yi, Rj, pj):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def support_error(Rj, pj, aux, cx, cy, e, tg):
-    """The support goal's 2 rows e = c_xy - (nearest point of the shrunk hull) for the CoM's ground point (cx, cy)
-    (zero inside), and its distance (m); tg (3,) keeps the active piece (code, outward normal) for
-    :func:`balance_jacobian`."""
+    """The support goal's 2 rows e = c_xy - (nearest point of the shrunk hull) for the CoM's ground point (cx, cy);
+    returns the distance (m). tg (3,) keeps the active piece (code, outward normal) for :func:`com_rows`."""
     m = Rj.shape[0]
     K = int(aux[A_COM_POINTS])
     base = A_COM_BODIES + 5 * m
@@ -220,8 +219,7 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def frame_a_origin(Rj, pj, aux):
-    """Frame a's origin (m, base frame) from its physical joint and folded placement in a two-frame goal's aux row
-    and the joint poses Rj (m, 3, 3), pj (m, 3)."""
+    """Frame a's origin (m, base frame) of a two-frame goal's aux row at the joint poses Rj (m, 3, 3), pj (m, 3)."""
     ja = int(aux[A_REL_JOINT])
     f0, f1, f2 = aux[A_REL_P], aux[A_REL_P + 1], aux[A_REL_P + 2]
     if ja < 0:
@@ -257,8 +255,7 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
         M[i, 0], M[i, 1], M[i, 2] = w0, w1, w2
     d0, d1, d2 = pb[0] - pa0, pb[1] - pa1, pb[2] - pa2
     for i in range(3):
-        t[i] = (M[0, i] * d0 + M[1, i] * d1 + M[2, i] * d2) - (Rt[0, i] * pt[0] + Rt[1, i] * pt[1]
-                                                               + Rt[2, i] * pt[2])
+        t[i] = (M[0, i] * d0 + M[1, i] * d1 + M[2, i] * d2) - (Rt[0, i] * pt[0] + Rt[1, i] * pt[1] + Rt[2, i] * pt[2])
     w00, w01, w02 = M[0, 0], M[0, 1], M[0, 2]
     w10, w11, w12 = M[1, 0], M[1, 1], M[1, 2]
     w20, w21, w22 = M[2, 0], M[2, 1], M[2, 2]
@@ -274,10 +271,8 @@ def relative_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, Rb, pb, M, t, e):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
-    """The 6 rows e of a relative pose with bands or free axes: :func:`.axes.axes_error`'s ``BANDED_LOG6`` rows (bands
-    at ``A_REL_BAND``) for frame b seen from frame a, ``R = R_a^T R_b`` and ``t = R_a^T (p_b - p_a)`` (written to R,
-    t), against (pt, Rt). p ends as frame b's origin (m) for :func:`balance_columns`; M scratch. Returns
-    axes_error's."""
+    """The 6 rows e of a relative pose with bands or free axes: :func:`.axes.axes_error`'s ``BANDED_LOG6`` rows for
+    ``R = R_a^T R_b``, ``t = R_a^T (p_b - p_a)`` (written to R, t); p ends as frame b's origin (m); M scratch."""
     pa0, pa1, pa2 = frame_a_pose(Rj, pj, aux, M)
     frame_pose(Rj, pj, jb, Rbf, pbf, R, p)
     d0, d1, d2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
@@ -296,9 +291,9 @@ def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
-    """Rows r.. of the task Jacobian E (unweighted) of a relative pose with bands or free axes, from
-    ``J = J_b(p_b) - J_a(p_b)`` (6, n) (:func:`balance_columns`) turned in place into frame a's coordinates, then
-    :func:`.axes.axes_jacobian`'s rows for :func:`relative_axes_error`'s R, t. rv, A, B scratch."""
+    """Rows r.. of the task Jacobian E (unweighted) of a relative pose with bands or free axes: those of
+    :func:`.axes.axes_jacobian` for :func:`relative_axes_error`'s R, t from ``J_b(p_b) - J_a(p_b)`` (6, n) turned
+    in place into frame a's axes. rv, A, B scratch."""
     frame_a_pose(Rj, pj, aux, A)
     for k in range(J.shape[1]):  # J <- diag(R_a^T, R_a^T) J
         v0, v1, v2 = J[0, k], J[1, k], J[2, k]
@@ -335,31 +330,24 @@ def relative_point_columns(rev, Rj, pj, Z, O, aux, p, Jx):
     pa0, pa1, pa2 = frame_a_origin(Rj, pj, aux)
     for k in range(Jx.shape[1]):
         sign = aux[A_REL_SIGNS + k]
-        if sign == 0.0:
-            for i in range(6):
-                Jx[i, k] = 0.0
-        elif sign == BOTH:
-            z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
-            for i in range(6):
-                Jx[i, k] = 0.0
-            if rev[k]:
-                l0, l1, l2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
-                Jx[0, k] = z1 * l2 - z2 * l1
-                Jx[1, k] = z2 * l0 - z0 * l2
-                Jx[2, k] = z0 * l1 - z1 * l0
-        elif sign > 0.0:
+        if sign > 0.0 and sign != BOTH:
             joint_column(rev[k], p, Z, O, k, Jx)
-        else:
-            z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
-            for i in range(6):
-                Jx[i, k] = 0.0
-            if rev[k]:
-                l0, l1, l2 = pa0 - O[k, 0], pa1 - O[k, 1], pa2 - O[k, 2]
-                Jx[0, k] = -(z1 * l2 - z2 * l1)
-                Jx[1, k] = -(z2 * l0 - z0 * l2)
-                Jx[2, k] = -(z0 * l1 - z1 * l0)
-            else:
-                Jx[0, k], Jx[1, k], Jx[2, k] = -z0, -z1, -z2
+            continue
+        for i in range(6):
+            Jx[i, k] = 0.0
+        z0, z1, z2 = Z[k, 0], Z[k, 1], Z[k, 2]
+        if sign == BOTH and rev[k]:
+            l0, l1, l2 = p[0] - pa0, p[1] - pa1, p[2] - pa2
+            Jx[0, k] = z1 * l2 - z2 * l1
+            Jx[1, k] = z2 * l0 - z0 * l2
+            Jx[2, k] = z0 * l1 - z1 * l0
+        elif sign < 0.0 and rev[k]:
+            l0, l1, l2 = pa0 - O[k, 0], pa1 - O[k, 1], pa2 - O[k, 2]
+            Jx[0, k] = -(z1 * l2 - z2 * l1)
+            Jx[1, k] = -(z2 * l0 - z0 * l2)
+            Jx[2, k] = -(z0 * l1 - z1 * l0)
+        elif sign < 0.0:
+            Jx[0, k], Jx[1, k], Jx[2, k] = -z0, -z1, -z2
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
@@ -381,9 +369,8 @@ def relative_point_rows(kind, Rj, pj, aux, J, A, E, r):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
-    """Rows e of a goal of a kind beyond one frame (see the module docstring); returns (|e|^2, position error m,
-    orientation error rad or 0). R (3, 3), p (3,), t (3,): the goal's pose buffers, as each kind's function fills
-    them (the CoM in p and the support goal's active piece in t; frame b's pose, ...)."""
+    """Rows e of a goal of a kind beyond one frame; returns (|e|^2, position error m, orientation error rad or 0).
+    R (3, 3), p (3,), t (3,): the goal's pose buffers, as each kind's function fills them."""
     if kind == COM_POINT:
         c0, c1, c2 = com_position(Rj, pj, aux)
         p[0], p[1], p[2] = c0, c1, c2
@@ -456,10 +443,7 @@ def com_rows(kind, aux, t, J, E, r):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def balance_rows(kind, Rj, pj, aux, R, p, t, J, pt, Rt, rv, A, B, E, r):
     """Rows r.. of the task Jacobian E (unweighted) of a goal beyond one frame other than a plain relative pose, from
-    the physical Jacobian J :func:`balance_columns` made (folded with mimic joints): a banded relative pose's
-    (:func:`relative_axes_jacobian`), a relative position's (:func:`relative_point_rows`), a centre of mass's
-    (:func:`com_rows`). R, p, t: the goal's pose buffers :func:`balance_error` filled; rv (3,), A, B (3, 3)
-    scratch."""
+    :func:`balance_columns`' J (folded); R, p, t: :func:`balance_error`'s buffers; rv (3,), A, B (3, 3) scratch."""
     if kind == RELATIVE_BANDED_LOG6:
         relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r)
     elif kind == RELATIVE_POINT_WORLD or kind == RELATIVE_POINT_IN_A:

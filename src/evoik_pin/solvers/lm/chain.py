@@ -1,8 +1,6 @@
 """The folded serial chain in numba (``Robot.chain_constants``: ``T = F_0 Z(x_1) F_1 ... Z(x_m) F_m``, ``Z(x)`` a
-rotation by x about z or a translation along z), and the coupling ``x_k = scale_k q[index_k] + offset_k`` of the
-physical joint values to q (mimic joints): :func:`expand` maps q to x, :func:`fold` the Jacobian columns of x to
-those of q. The kernel evaluates the tree of :mod:`.tree_kinematics`, whose operations on a chain are these.
-"""
+rotation about or translation along z), and the coupling ``x_k = scale_k q[index_k] + offset_k`` of the physical
+joint values to q (mimic joints): :func:`expand` maps q to x, :func:`fold` the Jacobian columns of x to q's."""
 
 from __future__ import annotations
 

@@ -1,10 +1,6 @@
-"""First use of evoik_pin's compiled code: whether numba is about to compile an entry rather than load it from its
-disk cache, and the one line that says so (tens of seconds, once per install, would otherwise look like a hang).
-
-:func:`load` runs a group of entries once on small arguments (its callers are set-up steps, outside any time
-budget). The line goes to the ``evoik_pin`` logger at INFO, or to stderr when no logging is configured; set that
-logger above INFO to silence it.
-"""
+"""First use of evoik_pin's compiled code: :func:`load` runs a group of numba entries once on small arguments, first
+saying so in one line when one is about to compile rather than load from numba's disk cache (tens of seconds, once
+per install, would otherwise look like a hang)."""
 
 from __future__ import annotations
 
@@ -44,18 +40,13 @@ def announce(message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
 
-def notice(what: str, seconds: float) -> str:
-    """The line said before compiling ``what`` (about ``seconds`` s of one core)."""
-    return f"evoik_pin: compiling {what} (once; cached for later runs, about {seconds:.0f} s)"
-
-
 def load(what: str, calls: list[tuple], seconds: float) -> float:
     """Call each (dispatcher, args) of ``calls`` once, so that numba compiles or loads its machine code now, first
     announcing that ``what`` is compiled (about ``seconds`` s of one core) when one will compile. Returns the seconds
     spent. The calls must only write into their own arguments."""
     t = time.perf_counter()
     if any(will_compile(dispatcher, args) for dispatcher, args in calls):
-        announce(notice(what, seconds))
+        announce(f"evoik_pin: compiling {what} (once; cached for later runs, about {seconds:.0f} s)")
     for dispatcher, args in calls:
         dispatcher(*args)
     return time.perf_counter() - t

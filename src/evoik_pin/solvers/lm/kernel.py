@@ -1,28 +1,17 @@
 """The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
 
-A run (:func:`lm_run`) is :class:`.reference.ReferenceLM`'s iteration line for line (errors, damping rule, trust
-region, active-set joint limits, wrapping, stall test, geodesic acceleration, finishing step; :mod:`.engine` states
-it); tests hold the two to the same steps. The task error ``e`` stacks the goals' rows (goal g's from
-``spec[g, G_ROW]``), each scaled by the square root of its weight; ``E = de/dq``. The frame family's rows are here
-(:func:`goal_error`), the other families' in :mod:`.axes` and :mod:`.balance`.
+A run (:func:`lm_run`) is :class:`.reference.ReferenceLM`'s iteration line for line (tests hold the two to the same
+steps). The task error ``e`` stacks the goals' rows (goal g's from ``spec[g, G_ROW]``), each scaled by the square root
+of its weight; ``E = de/dq``. The frame family's rows are here (:func:`goal_error`), the others' in :mod:`.axes` and
+:mod:`.balance`. Arguments travel in groups: ``kin`` (``Robot.tree_constants()``), ``goals`` (``GoalStack.arrays``),
+the targets (pt (G, 3), Rt (G, 3, 3)) and the :data:`Workspace`. Two variants (:func:`_run`), two entries each
+(:data:`Entries`; :func:`entries_for`).
 
-The arrays travel in groups: ``kin`` (``Robot.tree_constants()``: parent, FR, Fp, rev, index, scale, offset),
-``goals`` (``GoalStack.arrays``: spec, gR, gp, support, gaux), the targets (pt (G, 3), Rt (G, 3, 3)) and the
-:data:`Workspace` carved from two buffers. The run is compiled in two variants (:func:`_run`): :func:`lm_run_basic`
-for one-frame goals only, :func:`lm_run_all` for any; each has two entries (:data:`Entries`: one run, and runs
-from many starts or (start, targets) pairs), :func:`entries_for` picks a stack's, :func:`.engine.compiled_kernel`
-loads them outside any time budget.
-
-Rules for editing the compiled code:
-
-* The runs and helpers are compiled with :data:`BORROWING` (``_nrt=False``): they borrow their caller's arrays
-  without reference counting (otherwise a fifth of the run time), so a helper that allocates fails to compile.
-* :func:`task_error`, :func:`task_jacobian`, :func:`lm_step` and the kinematics of :mod:`.tree_kinematics`,
-  :mod:`.axes` and :mod:`.balance` are inlined by LLVM (``forceinline=True``; numba's ``inline="always"`` compiles
-  far slower). Every other compiled function says ``forceinline=False`` explicitly, since numba's flags are
-  inherited by a callee that does not set them.
-* numba's disk cache keys an entry point on its own file only: after editing an inlined helper in another file,
-  delete the kernel's cached ``*.nbi`` / ``*.nbc``.
+Editing rules: compiled functions take :data:`BORROWING` (``_nrt=False``: no reference counting, a fifth of the run
+time, so a helper that allocates fails to compile); the per-step helpers are inlined by LLVM (``forceinline=True``;
+numba's ``inline="always"`` compiles far slower) and every other function says ``forceinline=False``, as callees
+inherit the flag; numba's disk cache keys an entry on its own file: after editing an inlined helper in another file,
+delete the kernel's cached ``*.nbi`` / ``*.nbc``.
 """
 
 from __future__ import annotations
@@ -121,14 +110,10 @@ def goal_error(kind, R, p, pt, Rt, M, t, e):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def task_error(extra, kin, mimic, goals, weighted, pt, Rt, q, s, ws):
     """Stacked task error ``s.e`` (rows,) at q (n,) for the targets pt (G, 3), Rt (G, 3, 3); returns the weighted
-    |e|^2 and writes each goal's (position error m, orientation error rad or 0) to ``s.ge``.
-
-    Fills the rest of the :data:`State` s: the joint kinematics (:func:`.tree_kinematics.tree_forward`; with
-    ``mimic``, the joint values of :func:`.chain.expand` in ``ws.x`` first), each goal frame's pose and, for pose
-    goals, its position seen from the target (``s.tg``), which :func:`task_jacobian` needs. ``weighted``: some goal's
-    weight is not 1 (its rows are scaled in a second pass, which keeps the goal loop free of it). ``extra``:
-    :func:`_run`'s (None: one-frame goals only, the other families' branches pruned).
-    """
+    |e|^2, writes each goal's (position error m, orientation error rad or 0) to ``s.ge`` and fills the rest of the
+    :data:`State` s for :func:`task_jacobian` (with ``mimic``, :func:`.chain.expand`'s values in ``ws.x`` first).
+    ``weighted``: some goal's weight is not 1 (scaled in a second pass, keeping the goal loop free of it). ``extra``:
+    :func:`_run`'s."""
     parent, FR, Fp, rev, index, scale, offset = kin
     spec, gR, gp, _, gaux = goals
     Rj, pj, Rg, pg, tg, e, ge, M = s.Rj, s.pj, s.Rg, s.pg, s.tg, s.e, s.ge, ws.M
@@ -177,14 +162,9 @@ def within(spec, ge):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
-    """One goal's rows r.. of the task Jacobian E (unweighted) from its frame's base-frame Jacobian J (6, n), for the
-    buffers :func:`goal_error` filled (R the frame's rotation; e, t its error rows, scaled by w, and its
-    seen-from-target position).
-
-    Position: the base-frame translational rows; planar: rows vx, vy[, wz]. Pose: ``Jlog6(T_t^-1 T_f) J_local``
-    with ``J_local = (R^T J_v, R^T J_w)``, Jlog6 at the unscaled rotation vector rv (3,) = e[3:] / w. A, B (3, 3)
-    are scratch.
-    """
+    """One goal's rows r.. of the task Jacobian E (unweighted) from its frame's base-frame Jacobian J (6, n) and the
+    buffers :func:`goal_error` filled (R; e scaled by w; t). Position: J's translational rows; planar: vx, vy[, wz];
+    pose: ``Jlog6(T_t^-1 T_f) (R^T J_v, R^T J_w)``, Jlog6 at rv (3,) = e[3:] / w. A, B (3, 3) scratch."""
     n = J.shape[1]
     if kind != LOG6:
         for i in range(frame_rows(kind)):
@@ -211,10 +191,7 @@ def goal_jacobian(kind, R, J, t, e, w, rv, A, B, E, r):
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, s, ws, E):
     """Stacked task Jacobian E (rows, n) from the :data:`State` s :func:`task_error` filled for the same
-    configuration and targets: per goal, its frame's base-frame Jacobian (:func:`.tree_kinematics.frame_jacobian`
-    over the joints ``support[g]`` marks, folded with ``mimic``: :func:`.chain.fold`) turned into the goal's rows
-    (:func:`goal_jacobian`, :func:`.axes.axes_jacobian`, :mod:`.balance`), scaled as :func:`task_error` scales them.
-    Scratch: ws's Jx, J, rv, A, Bm. ``extra``: as :func:`task_error`'s."""
+    configuration and targets, scaled as it scales the rows. Scratch: ws's Jx, J, rv, A, Bm."""
     parent, _, _, rev, index, scale, _ = kin
     spec, _, _, support, gaux = goals
     Rg, pg, Z, O, tg, e = s.Rg, s.pg, s.Z, s.O, s.tg, s.e
@@ -248,18 +225,15 @@ def task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, s, ws, E):
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def beyond_frame_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e):
-    """:func:`.balance.balance_error` behind a call, not inlined, so that :func:`task_error` (inlined four times
-    into the run) keeps the size the one-frame kinds compile to."""
+    """:func:`.balance.balance_error` behind a call, so that :func:`task_error` (inlined four times) stays small."""
     return balance_error(kind, Rj, pj, aux, jf, Rf, pf, pt, Rt, R, p, M, t, e)
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def beyond_frame_jacobian(kind, parent, rev, index, scale, mimic, Rj, pj, Z, O, aux, R, p, t, e, w, pt, Rt, Jx, J, rv,
                           A, B, E, r):
-    """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): its
-    physical Jacobian (:func:`.balance.balance_columns`, folded with ``mimic``) turned into its rows, a relative
-    pose's by :func:`goal_jacobian` (R, p, t: frame b's rotation and origin, the translation of
-    ``T^-1 T_a^-1 T_b``), the others' by :func:`.balance.balance_rows`."""
+    """Rows r.. of the task Jacobian E of a goal beyond one frame (behind a call, as :func:`beyond_frame_error`): a
+    relative pose's by :func:`goal_jacobian`, the others' by :func:`.balance.balance_rows`."""
     balance_columns(kind, parent, rev, Rj, pj, Z, O, aux, p, Jx)
     src = Jx
     if mimic:
@@ -357,8 +331,7 @@ def _scaled_to(dq, max_step):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _trust_step(W, lam, rhs, L, y, dq, max_step):
-    """dq = the damped step of :func:`damped_solve` scaled into the trust region (:func:`_scaled_to`); False when
-    the damped system is not positive (dq is then meaningless)."""
+    """dq = :func:`damped_solve`'s step scaled into the trust region; False when the system is not positive."""
     if not damped_solve(W, lam, rhs, L, y, dq):
         return False
     _scaled_to(dq, max_step)
@@ -374,9 +347,8 @@ def _copy(a, b):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def lm_step(q, on_bound, e, lam, box, any_wrap, max_step, ws, qn):
-    """The next configuration qn (n,) (written in place) from q and its error e, with ws.E its Jacobian, and whether
-    a joint hit a bound: the damped step, trust region, active-set limits and wrapping of ``reference._step`` (its
-    docstring says why). Scratch: ws's W, L, y, dq, dfix, rhs, held."""
+    """The next configuration qn (n,) from q, its error e and Jacobian ws.E, and whether a joint hit a bound:
+    ``reference._step``'s rule. Scratch: ws's W, L, y, dq, dfix, rhs, held."""
     E, W, L, y, dq, dfix, rhs, held = ws.E, ws.W, ws.L, ws.y, ws.dq, ws.dfix, ws.rhs, ws.held
     m, n = E.shape
     for i in range(m):
@@ -466,8 +438,8 @@ def _carve_state(buf, o, n, m, G, rows):
 @njit(cache=True, nogil=True, inline="always")
 def carve(buf, held, n, m, G, rows, max_it):
     """The :data:`Workspace` of LM runs of at most max_it steps for n joints, m physical joints, G goals and
-    ``rows`` task rows: views into one float buffer of :func:`workspace_size` and the bool ``held`` (n,). Inlined, so
-    a borrowing entry receives two buffers rather than some fifty reference-counted arrays."""
+    ``rows`` task rows: views into buf (:func:`workspace_size`) and ``held`` (n,) bool (inlined: an entry receives
+    two buffers, not some fifty arrays)."""
     s = min(rows, n)
     cur, o = _carve_state(buf, 0, n, m, G, rows)
     cand, o = _carve_state(buf, o, n, m, G, rows)
@@ -493,8 +465,8 @@ def carve(buf, held, n, m, G, rows, max_it):
 
 @njit(cache=True, nogil=True, forceinline=False)
 def make_workspace(kin, goals, n, max_it):
-    """A fresh :data:`Workspace` for runs of at most max_it steps on the tree ``kin`` for n joints and the stack
-    ``goals``: views into two allocations. It serves any number of runs one after the other, never two at once."""
+    """A fresh :data:`Workspace` for runs of at most max_it steps on the tree ``kin``, n joints and stack ``goals``
+    (runs one after the other, never two at once)."""
     m, G, rows = kin[0].shape[0], goals[0].shape[0], stack_rows(goals[0])
     return carve(np.empty(workspace_size(n, m, G, rows, max_it)), np.empty(n, dtype=np.bool_), n, m, G, rows, max_it)
 
@@ -524,8 +496,8 @@ def _outcome(spec, ge, g_out):
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def weighted_stack(spec):
-    """Whether some goal of the stack spec (G, GOAL_SIZE) has a weight other than 1. A function rather than a flag
-    set in a loop, which numba would type as the literal False and compile each callee once more for."""
+    """Whether some goal of spec (G, GOAL_SIZE) has a weight other than 1 (a flag set in a loop would be typed as
+    the literal False, compiling each callee once more)."""
     for g in range(spec.shape[0]):
         if spec[g, G_WEIGHT] != 1.0:
             return True
@@ -534,8 +506,7 @@ def weighted_stack(spec):
 
 def _run(extra, name, doc):
     """The one source of :func:`lm_run_basic` and :func:`lm_run_all`: ``extra`` a constant of the closure (True: any
-    goal family; None: one-frame goals only, the other branches pruned by numba before typing, so neither compiled
-    nor paid for). numba's disk cache keys closures by their cells' contents, so the two are cached apart."""
+    goal family; None: one-frame goals only, the other branches pruned before typing; cached apart by cell)."""
 
     def run(ws, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
         spec = goals[0]
@@ -644,17 +615,16 @@ one-frame goals only (``G_FAMILY`` = ``FAMILY_FRAME``); the other arguments and 
 lm_run_all = _run(True, "lm_run_all", """:func:`lm_run_basic` for any stack.""")
 
 
-#: A variant's compiled entries: ``run`` (one run, :func:`lm_run`'s, in the caller's buffers) and ``runs`` (runs
-#: from many starts, or of (start, targets) pairs: :func:`lm_runs`' in the caller's buffers).
+#: A variant's compiled entries, in the caller's buffers: ``run`` (:func:`lm_run`) and ``runs`` (:func:`lm_runs`).
 Entries = namedtuple("Entries", ["run", "runs"])
 
 
 def _entries(extra, suffix):
-    """The :data:`Entries` of one variant of the run (``extra``: :func:`_run`'s), named apart by ``suffix`` for
-    numba's disk cache: one variant per entry, picked in Python (:func:`entries_for`), since numba re-optimizes every
-    run an entry links."""
+    """The :data:`Entries` of one variant (``extra``: :func:`_run`'s), named apart by ``suffix`` for numba's disk
+    cache; one variant per entry since numba re-optimizes every run an entry links."""
 
     def run(buf, held, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
+        """:func:`lm_run` in buf (:func:`workspace_size`) and held (n,) bool, kept by a caller making many runs."""
         spec = goals[0]
         ws = carve(buf, held, q_start.shape[0], kin[0].shape[0], spec.shape[0], stack_rows(spec),
                    int(params[P_ITERATIONS]))
@@ -663,6 +633,7 @@ def _entries(extra, suffix):
         return lm_run_basic(ws, q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out)
 
     def runs(buf, held, Q, kin, box, any_wrap, goals, P, Rts, params, Q_out, stats, g_stats, first):
+        """:func:`lm_runs` in the caller's buffers (as ``run``)."""
         spec = goals[0]
         ws = carve(buf, held, Q.shape[1], kin[0].shape[0], spec.shape[0], stack_rows(spec), int(params[P_ITERATIONS]))
         last = P.shape[0] - 1
@@ -683,9 +654,6 @@ def _entries(extra, suffix):
 
     run.__name__ = run.__qualname__ = "lm_run_buffers" + suffix
     runs.__name__ = runs.__qualname__ = "lm_runs_buffers" + suffix
-    run.__doc__ = """:func:`lm_run` in the caller's buffers: buf (at least :func:`workspace_size`) and held (n,) bool
-        (:func:`carve`), which a caller making many runs keeps (no allocation per run)."""
-    runs.__doc__ = """:func:`lm_runs` in the caller's buffers (as the ``run`` entry)."""
     return Entries(*(njit(cache=True, nogil=True, forceinline=False, **BORROWING)(f) for f in (run, runs)))
 
 
@@ -697,8 +665,8 @@ lm_run_buffers, lm_runs_buffers = ALL
 
 
 def entries_for(spec: np.ndarray) -> Entries:
-    """The entries that run the goal stack spec (G, GOAL_SIZE): :data:`BASIC` when every goal's compiled family is
-    the frame family (pose, position, planar: the faster run), else :data:`ALL`."""
+    """The entries for the goal stack spec (G, GOAL_SIZE): :data:`BASIC` (faster) when every goal is of the frame
+    family, else :data:`ALL`."""
     return ALL if bool((spec[:, G_FAMILY] != FAMILY_FRAME).any()) else BASIC
 
 
@@ -709,52 +677,31 @@ def _buffers(n: int, kin: tuple, spec: np.ndarray, params: np.ndarray) -> tuple[
 
 
 def lm_runs(Q, kin, box, any_wrap, goals, P, Rts, params, Q_out, stats, g_stats, first=False):
-    """LM runs from the starts Q (K, n), in one workspace made here: run k towards the targets P[k] (T, G, 3), Rts[k]
-    (T, G, 3, 3) (pairs: T = K, each row :func:`~evoik_pin.goals.stack.encode_targets` for one goal), or all towards
-    P[0], Rts[0] (T = 1); with ``first``, only until one converges. Each run's end configuration goes to Q_out[k],
-    its ``S_*`` columns (errors, converged, iterations, evaluations, cost) to stats[k] (K, STATS_SIZE), its goals'
-    errors to g_stats[k] (G, 2); rows of runs not made are left untouched. Returns the index of the run that stopped
-    them (``first``), else -(1 + K). The other arguments are :func:`lm_run`'s."""
+    """LM runs from the starts Q (K, n) in one workspace: run k towards the targets P[k] (T, G, 3), Rts[k]
+    (T, G, 3, 3) (pairs: T = K), or all towards P[0], Rts[0] (T = 1); with ``first``, until one converges. Run k's
+    end configuration goes to Q_out[k], its ``S_*`` columns to stats[k] (K, STATS_SIZE), its goals' errors to
+    g_stats[k] (G, 2); rows of runs not made are untouched. Returns the index of the run that stopped them
+    (``first``), else -(1 + K). The other arguments are :func:`lm_run`'s."""
     return entries_for(goals[0]).runs(*_buffers(Q.shape[1], kin, goals[0], params), Q, kin, box, any_wrap, goals, P,
                                       Rts, params, Q_out, stats, g_stats, first)
 
 
-def _grouped(args: tuple) -> tuple:
-    """The flat arguments of :func:`lm_run`'s signature from ``parent`` to ``gaux`` grouped (kin, box, any_wrap,
-    goals)."""
-    return tuple(args[:7]), args[7], args[8], tuple(args[9:14])
-
-
-def lm_run(q_start, *args):
+def lm_run(q_start, kin, box, any_wrap, goals, pt, Rt, params, q_out, g_out):
     """One LM run from ``q_start`` (n,); the end configuration goes to ``q_out`` (n,), each goal's errors to
     g_out (G, 2) (position m, orientation rad; nan for a goal without orientation).
 
-    Args (after q_start, flat):
-        parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
-            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``; the entries' ``kin``).
+    Args (after q_start):
+        kin: parent (m,) int64, FR (m, 3, 3), Fp (m, 3), rev (m,) bool: the folded tree of the m physical joints, and
+            index (m,) int64, scale, offset (m,): how they follow q (``Robot.tree_constants``).
         box (5, n): rows B_LO, B_HI, B_CLO, B_CHI, B_WRAP. any_wrap: some joint wraps.
-        spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool, gaux (G, A): the goal stack
-            (:class:`~evoik_pin.goals.stack.GoalStack`; the entries' ``goals``); pt (G, 3), Rt (G, 3, 3): its
-            targets (:func:`~evoik_pin.goals.stack.encode_target`).
+        goals: spec (G, GOAL_SIZE), gR (G, 3, 3), gp (G, 3), support (G, m) bool, gaux (G, A): the goal stack
+            (:class:`~evoik_pin.goals.stack.GoalStack`); pt (G, 3), Rt (G, 3, 3): its targets
+            (:func:`~evoik_pin.goals.stack.encode_target`).
         params (PARAMS_SIZE,): the run's settings (:mod:`.layout`). q_out, g_out.
 
     Returns:
         (position error m, orientation error rad (nan when no goal has an orientation), converged, iterations,
         forward-kinematics evaluations, weighted |e|^2), the errors the largest over the goals.
     """
-    kin, box, any_wrap, goals = _grouped(args)
-    return entries_for(goals[0]).run(*_buffers(q_start.shape[0], kin, goals[0], args[16]), q_start, kin, box,
-                                     any_wrap, goals, *args[14:])
-
-
-def lm_run_pairs(Q, *args):
-    """:func:`lm_runs` on N (start, targets) pairs, with :func:`lm_run`'s flat arguments: (Q, parent, ..., gaux, P,
-    Rts, params, Q_out, stats, g_stats)."""
-    lm_runs(Q, *_grouped(args), *args[14:])
-
-
-def lm_run_starts(Q, *args):
-    """:func:`lm_runs` from the starts Q (K, n) for one problem until one converges, with :func:`lm_run`'s flat
-    arguments: (Q, parent, ..., gaux, pt, Rt, params, Q_out, stats, g_stats). Returns :func:`lm_runs`'."""
-    pt, Rt, *rest = args[14:]
-    return lm_runs(Q, *_grouped(args), pt[None], Rt[None], *rest, first=True)
+    return entries_for(goals[0]).run(*_buffers(q_start.shape[0], kin, goals[0], params), q_start, kin, box, any_wrap,
+                                     goals, pt, Rt, params, q_out, g_out)

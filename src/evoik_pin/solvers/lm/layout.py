@@ -46,10 +46,8 @@ STATS_SIZE = 6
 
 
 def wrapping_joints(robot, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """(n,) bool: revolute joints whose search range spans a full turn, so wrapping by 2 pi keeps them inside.
-
-    Every continuous joint qualifies (its range is [-pi, pi]), and so does a UR-style [-2 pi, 2 pi] joint.
-    """
+    """(n,) bool: revolute joints whose search range spans a full turn (continuous ones, UR-style [-2 pi, 2 pi]
+    ones), so wrapping by 2 pi keeps them inside."""
     return robot.revolute & ((upper - lower) >= TWO_PI - 1e-9)
 
 
@@ -57,11 +55,8 @@ _BOX_CACHE: dict = {}
 
 
 def box_constants(robot, lower: np.ndarray, upper: np.ndarray):
-    """(wrap mask (n,), any wrap, clip lower, clip upper, kernel box (5, n)) of a search box, cached: the same
-    box recurs every solve.
-
-    The clip bounds are the box with +-inf for wrapping joints, which are never clipped.
-    """
+    """(wrap mask (n,), any wrap, clip lower, clip upper, kernel box (5, n)) of a search box, cached (the same box
+    recurs every solve); the clip bounds are +-inf for wrapping joints, which are never clipped."""
     key = (id(robot), lower.tobytes(), upper.tobytes())
     hit = _BOX_CACHE.get(key)
     if hit is None or hit[0]() is not robot:  # a weak reference: the cache must not keep robots alive

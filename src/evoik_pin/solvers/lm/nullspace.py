@@ -1,24 +1,16 @@
 """Compiled descent along the goals' self-motion manifold (numba): ``prefer="nearest"`` and ``"manipulability"``.
 
-A redundant arm's answers to a goal stack form curves (one per IK branch, cut by the joint limits); the answer
-nearest q0 or the most dexterous one is a continuous optimum along such a curve. :func:`descend_batch` takes each
-given answer (every goal met) to a local optimum of the criterion on its curve:
+A redundant arm's answers to a goal stack form curves (one per IK branch); :func:`descend_batch` takes each answer
+to a local optimum of the criterion (:data:`MODE_NEAREST`, :data:`MODE_MANIPULABILITY`) on its curve:
 
-1. the criterion's descent direction v (nearness: ``q0 - q``, full-turn joints from their turn nearest q0 inside the
-   limits, as the answers are measured (:func:`~evoik_pin.solvers.search.prefer.nearest_turn`); manipulability: the
-   gradient of Yoshikawa's ``sqrt(det(J J^T))`` of the first goal frame's Jacobian, by forward differences)
-   projected on the null space of the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p
-   pushes outward held;
-2. a step ``t p``, shortened to stay inside the box and within ``max_step``; the box is the joint limits, full-turn
-   joints' too (LM leaves those open and wraps them): an answer beyond a limit, taken back into it, would land a turn
-   away from q0;
-3. Gauss-Newton steps from there until every goal is within its tolerances again (at most ``restore``);
-4. the step kept only when step 3 met every goal and the criterion improved (then the next t is the
-   Barzilai-Borwein secant step), else t halves; the descent ends when t is below 1e-3 of its start or a kept
-   step was shorter than :data:`MIN_STEP`.
-
-So the criterion never gets worse and every kept configuration meets every goal (:func:`.kernel.within`) inside the
-limits.
+1. the criterion's descent direction v (for manipulability by forward differences) projected on the null space of
+   the task Jacobian E, ``p = v - E^T (E E^T)^-1 E v``, joints on a bound that p pushes outward held;
+2. a step ``t p`` kept inside the box (the joint limits, full-turn joints' too: an answer taken back into them
+   would land a turn away from q0) and within ``max_step``;
+3. Gauss-Newton steps until every goal is within its tolerances again (at most ``restore``);
+4. the step kept only when step 3 met every goal and the criterion improved (the next t: the Barzilai-Borwein
+   secant step), else t halves; the descent ends when t is below 1e-3 of its start or a kept step was shorter
+   than :data:`MIN_STEP`. So the criterion never gets worse and every kept configuration meets every goal.
 """
 
 from __future__ import annotations
@@ -35,9 +27,8 @@ from .tree_kinematics import frame_jacobian
 
 __all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "nullspace_kernel"]
 
-#: What :func:`descend_batch` optimises: nearness to q0 (``|q - q0|^2``, full-turn joints at their turn nearest q0
-#: inside the limits; lower is better) or manipulability
-#: (``-sqrt(det(J J^T))`` of the first goal's frame, lower is better).
+#: What :func:`descend_batch` minimises: ``|q - q0|^2`` (full-turn joints at their turn nearest q0 inside the limits,
+#: :func:`~evoik_pin.solvers.search.prefer.nearest_turn`'s rule) or ``-sqrt(det(J J^T))`` of the first goal's frame.
 MODE_NEAREST, MODE_MANIPULABILITY = 0, 1
 #: First step length (rad or m) of a manipulability ascent: its scale is unknown (no curvature to divide by).
 MANIP_STEP = 0.2
@@ -116,13 +107,10 @@ def _criterion(mode, q, q0, box, rev, support, pg, Z, O, J, JJ):
 
 @njit(cache=True, nogil=True, forceinline=False)
 def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, restore, max_step, Q_out, f_out):
-    """Each answer Q[i] (N, n) taken along its self-motion manifold to a local optimum of the criterion (``mode``,
-    see the module docstring) in at most ``iterations`` kept-or-rejected steps, each restored to the goals by at
-    most ``restore`` Gauss-Newton steps; the result to Q_out[i] (Q[i] itself when no step was kept or Q[i] does not
-    meet the goals; inside the box's limits, B_LO and B_HI) and its criterion to f_out[i] (|q - q0|^2 with full-turn
-    joints at their turn nearest q0, or -manipulability). ``max_step`` (rad or m): the longest step. The other
-    arguments are the kernel's (:func:`.kernel.lm_run_buffers`; joints are not wrapped here).
-    Returns the kinematics evaluations made."""
+    """Each answer Q[i] (N, n) taken to a local optimum of the criterion ``mode`` in at most ``iterations`` steps,
+    each restored to the goals by at most ``restore`` Gauss-Newton steps; the result to Q_out[i] (Q[i] itself when
+    no step was kept or Q[i] does not meet the goals) and its criterion to f_out[i]. ``max_step`` (rad or m): the
+    longest step. The other arguments are :func:`.kernel.lm_run_buffers`'. Returns the kinematics evaluations."""
     N, n = Q.shape
     ws = make_workspace(kin, goals, n, 1)
     JJ = np.empty((6, 6))
@@ -270,8 +258,8 @@ NULLSPACE_COMPILE_SECONDS = 25.0
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch` and :func:`.population_rows.task_rows` (the task Jacobian of
-    :func:`evoik_pin.solvers.search.prefer.refine`), loaded (or compiled) outside any time budget."""
+    """:func:`descend_batch` and :func:`.population_rows.task_rows` (for :func:`~..search.prefer.refine`), loaded
+    (or compiled) outside any time budget."""
     if not _KERNEL:
         from .compiling import load
         from .engine import warmup_problem

@@ -28,19 +28,16 @@ def polish_result(problem: IKProblem, result: Result, rng: np.random.Generator |
     iterations = check_int("iterations", iterations, 1)
     lm = LevenbergMarquardt(problem, engine=engine)
     out = lm.run(np.asarray(result.q, dtype=float), iterations)
-    before = result.position_error + (result.orientation_error or 0.0)
-    improved = out.error < before
-    if improved:
+    if out.error < result.position_error + (result.orientation_error or 0.0):
         q = out.q
         pos, rot, cost = problem.assess(q, out.position_error, out.orientation_error)
+        note = errors_text(pos, rot)
     else:
         q = np.asarray(result.q, dtype=float)
         pos, rot, cost = result.position_error, result.orientation_error, result.cost
+        note = "no improvement"
     success = bool(problem.succeeded(pos, rot))
-    if improved:
-        note = f"polished by Levenberg-Marquardt ({out.iterations} steps): {errors_text(pos, rot)}"
-    else:
-        note = f"polished by Levenberg-Marquardt ({out.iterations} steps): no improvement"
+    note = f"polished by Levenberg-Marquardt ({out.iterations} steps): {note}"
     message = (result.message + "; " if result.message else "") + note
     if success and not result.success:
         message += "; tolerance reached"

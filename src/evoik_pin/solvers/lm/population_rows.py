@@ -1,10 +1,6 @@
-"""The LM kernel's task rows of a whole population in one compiled call (NSGA-II's repair reads them through
-:meth:`evoik_pin.problem.IKProblem.goal_rows`): :func:`.kernel.task_error` and :func:`.kernel.task_jacobian` at each
-row, so every goal kind gets the kernel's own rows, and one call instead of numba's dispatch per configuration.
-
-The kernel's helpers are inlined: after editing them, delete this module's cached ``*.nbi`` / ``*.nbc`` too (numba
-keys an entry point on its own file only).
-"""
+"""The LM kernel's task rows (:func:`.kernel.task_error`, :func:`.kernel.task_jacobian`) of a whole population in one
+compiled call, for NSGA-II's repair (:meth:`evoik_pin.problem.IKProblem.goal_rows`). The kernel's helpers are inlined:
+after editing them, delete this module's cached ``*.nbi`` / ``*.nbc`` too."""
 
 from __future__ import annotations
 
@@ -21,10 +17,9 @@ __all__ = ["task_rows", "task_rows_batch"]
 @njit(cache=True, nogil=True, forceinline=False)
 def task_rows_batch(Q, parent, FR, Fp, rev, index, scale, offset, spec, gR, gp, support, gaux, P, Rts, e_out, E_out,
                     g_out):
-    """The task rows at each row of Q (N, n), row i with its own targets P[i] (G, 3), Rts[i] (G, 3, 3) (a goal set's
-    member per configuration; the stack's ``pt``, ``Rt`` repeated otherwise): the stacked task error e_out[i]
-    (rows,), its Jacobian E_out[i] (rows, n) and each goal's errors g_out[i] (G, 2) (position m, orientation rad or
-    0). The tree's and the stack's arrays are those of the kernel's groups kin and goals (:mod:`.kernel`)."""
+    """The task rows at each row of Q (N, n) towards its own targets P[i] (G, 3), Rts[i] (G, 3, 3): the stacked task
+    error e_out[i] (rows,), its Jacobian E_out[i] (rows, n) and each goal's errors g_out[i] (G, 2) (position m,
+    orientation rad or 0). The other arrays: the kernel's groups kin and goals, flat."""
     kin, goals = (parent, FR, Fp, rev, index, scale, offset), (spec, gR, gp, support, gaux)
     _rows_in(make_workspace(kin, goals, Q.shape[1], 0), Q, kin, goals, P, Rts, e_out, E_out, g_out)
 

@@ -103,14 +103,10 @@ class ReferenceLM:
     def __init__(self, problem: IKProblem, damping: float = DEFAULT_DAMPING, max_step: float = DEFAULT_MAX_STEP,
                  stall_window: int = DEFAULT_STALL_WINDOW, stall_ratio: float = DEFAULT_STALL_RATIO,
                  finish: bool = True) -> None:
-        self.problem = problem
         robot = self.robot = problem.robot
-        self.damping = float(damping)
-        self.max_step = float(max_step)
+        self.damping, self.max_step, self.finish = float(damping), float(max_step), bool(finish)
         self.max_step2 = self.max_step**2
-        self.stall_window = int(stall_window)
-        self.stall_ratio = float(stall_ratio)
-        self.finish = bool(finish)
+        self.stall_window, self.stall_ratio = int(stall_window), float(stall_ratio)
         self.lower, self.upper = problem.lower, problem.upper
         self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(robot, self.lower, self.upper)
         stack, pt, Rt = problem.goal_stack()
@@ -118,12 +114,10 @@ class ReferenceLM:
         self.goals = [_Goal(robot, stack.kinds[g], stack.frames[g], spec[g, G_WEIGHT], spec[g, G_TOL],
                             spec[g, G_RTOL], pt[g], Rt[g]) for g in range(len(stack))]
         self.frame_ids = [g.frame_id for g in self.goals]
-        self.oriented = stack.any_oriented
-        self.rows = stack.rows
         # one goal on the tip: the robot's tip fast paths (for a pose goal, the tip seen from the target directly)
         self._tip = len(self.goals) == 1 and self.frame_ids[0] == robot.frame_id(None) and self.goals[0].sw == 1.0
-        self.task_space = self.rows <= robot.n  # solve the smaller normal equations
-        self.eye = np.eye(min(self.rows, robot.n))
+        self.task_space = stack.rows <= robot.n  # solve the smaller normal equations
+        self.eye = np.eye(min(stack.rows, robot.n))
 
     # ------------------------------------------------------------------ task error
     def error_at(self, q: np.ndarray):
@@ -143,13 +137,8 @@ class ReferenceLM:
             errors.append((pos, rot))
         return np.concatenate(parts), extras, errors
 
-    def residual(self, T: pin.SE3):
-        """(e, extra, position error m, orientation error rad or None) of a single-goal problem for its frame's pose
-        ``T`` in the base frame (unweighted)."""
-        return self.goals[0].residual(T)
-
     def task_jacobian(self, q: np.ndarray, extras) -> np.ndarray:
-        """``E = de/dq`` (rows, n) at ``q``; ``extras``: :meth:`error_at`'s (or :meth:`residual`'s one) for that q."""
+        """``E = de/dq`` (rows, n) at ``q``; ``extras``: :meth:`error_at`'s (or one goal's residual's) for that q."""
         if self._tip:
             extra = extras[0] if isinstance(extras, (tuple, list)) else extras
             return self.goals[0].jacobian(self.robot.jacobian_local_unchecked(q), extra)
@@ -168,9 +157,7 @@ class ReferenceLM:
         pos = max(p for p, _ in errors)
         rots = [r for _, r in errors if r is not None]
         rot = max(rots) if rots else None
-        g_err = None
-        if len(errors) > 1:
-            g_err = np.array([(p, np.nan if r is None else r) for p, r in errors])
+        g_err = np.array([(p, np.nan if r is None else r) for p, r in errors]) if len(errors) > 1 else None
         return LMOutcome(q, pos, rot, converged, it, evaluations, g_err, float(c))
 
     def _normal(self, E: np.ndarray) -> np.ndarray:
@@ -186,13 +173,9 @@ class ReferenceLM:
     # ------------------------------------------------------------------ the iteration
     def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, N: np.ndarray, e: np.ndarray,
               lam: float) -> tuple[np.ndarray, bool]:
-        """The next configuration and whether it rests on a bound: damped step, trust region, joint limits.
-
-        ``N`` is :meth:`_normal` of ``E``. Limits are an active set: joints on a bound (``on_bound``: any is) that
-        ``-E^T e`` pushes further out are held there (their columns of E zeroed); joints the step still carries past
-        a bound are fixed at it and the step re-solved once for the others, with the error those moves leave, so it
-        keeps its effect instead of being cut by the clip. Wrapping joints are shifted by 2 pi instead.
-        """
+        """The next configuration and whether it rests on a bound (``N``: :meth:`_normal` of ``E``): the damped step
+        in the trust region; joints on a bound (``on_bound``: any is) that ``-E^T e`` pushes out are held, joints the
+        step carries past one fixed at it and the step re-solved for the others; wrapping joints wrapped instead."""
         lo, hi = self.clip_lo, self.clip_hi
         held = None
         if on_bound:

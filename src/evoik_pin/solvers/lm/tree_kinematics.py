@@ -1,10 +1,6 @@
-"""The folded kinematic tree evaluated in numba: joint poses, axes and origins, frame poses and frame Jacobians.
-
-The tree comes from ``Robot.tree_constants`` (:mod:`evoik_pin.robot.tree`): the m physical joints in topological
-order with their parents, each joint's placement in its parent's folded frame (every joint axis turned onto z).
-On a serial chain these do :mod:`.chain`'s operations in the same order (tests/test_robot_tree.py holds them equal
-bit for bit, and to Pinocchio). Inlined into the kernel (``forceinline=True``; :mod:`.kernel` says why).
-"""
+"""The folded kinematic tree (``Robot.tree_constants``: the m physical joints in topological order, each joint's
+placement in its parent's folded frame, every axis turned onto z) evaluated in numba: joint poses, axes and origins,
+frame poses and Jacobians. On a chain, :mod:`.chain`'s operations in the same order (the same bits)."""
 
 from __future__ import annotations
 
@@ -31,11 +27,9 @@ BORROWING = _borrowing_options()
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def tree_forward(parent, FR, Fp, rev, x, Rj, pj, Z, O):
-    """Joint poses at the physical joint values x (m,): Rj (m, 3, 3), pj (m, 3) (m) the pose of each joint's folded
-    frame after its motion, Z (m, 3) and O (m, 3) each joint's axis and origin, all in the base frame (written in
-    place). ``(R_k, p_k) = (R_parent, p_parent) (FR[k], Fp[k]) Z(x_k)``; a root joint (parent -1) starts from
-    (FR[k], Fp[k]). The pose being composed stays in local variables, read back from Rj, pj only where the tree
-    branches."""
+    """Joint poses at the physical joint values x (m,), in the base frame: Rj (m, 3, 3), pj (m, 3) (m) each joint's
+    folded frame after its motion, ``(R_parent, p_parent) (FR[k], Fp[k]) Z(x_k)`` (a root from (FR[k], Fp[k])), and
+    Z, O (m, 3) its axis and origin. The pose being composed stays in locals, read back only where the tree branches."""
     m = x.shape[0]
     r00 = r01 = r02 = r10 = r11 = r12 = r20 = r21 = r22 = p0 = p1 = p2 = 0.0
     for k in range(m):
