@@ -1,11 +1,7 @@
-"""The robot: :class:`Robot`, the active joints of a URDF (a serial chain, the chains to several tips, or the whole
-tree) as Pinocchio sees them, every other joint locked; kinematics of any frame, one ``q`` (Pinocchio) or a
-population (NumPy), and the folded constants compiled kernels evaluate. Loading: :mod:`.loading`.
-
-``q`` has one entry per independent degree of freedom (rad or m) in Pinocchio's joint order; a floating base puts
-x, y, z (m) and yaw, pitch, roll (rad) in front (:mod:`.tree`). Mimic joints are not entries: physical joint k's
-value is ``scale[k] * q[index[k]] + offset[k]`` (:meth:`Robot.tree_constants`) and Jacobians get the chain rule.
-Poses are those of frames in the base frame (the world frame when no base is chosen).
+"""The robot: :class:`Robot`, the active joints of a URDF (a chain, several tips' chains, or the whole tree), the
+others locked: kinematics of any frame for one ``q`` (Pinocchio) or a population (NumPy), and the folded constants
+of compiled kernels. ``q``: one entry per independent degree of freedom (rad or m) in Pinocchio's order; mimic
+joints follow (:meth:`Robot.tree_constants`). Poses are in the base frame (the world frame when none is chosen).
 """
 
 from __future__ import annotations
@@ -40,14 +36,13 @@ _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full":
                         "planar": [0, 1, 5]}
 
 
-
 def yoshikawa(J: np.ndarray):
-    """Yoshikawa's manipulability of Jacobians J (..., r, n): the product of J's singular values, i.e.
-    sqrt(det(J J^T)) when r <= n and sqrt(det(J^T J)) when the arm has fewer joints than rows (a 5-joint arm's
-    6 x 5 Jacobian, whose J J^T is singular at every configuration). Shape (...,); 0 at a singularity."""
+    """Yoshikawa's manipulability (...,) of Jacobians J (..., r, n): the product of J's singular values
+    (sqrt(det(J J^T)) when r <= n); 0 at a singularity."""
     if J.shape[-2] > J.shape[-1]:  # the singular values themselves: det(J^T J) of a rank-deficient J is noise
         return np.prod(np.linalg.svd(J, compute_uv=False), axis=-1)
     return np.sqrt(np.maximum(np.linalg.det(J @ np.swapaxes(J, -1, -2)), 0.0))
+
 
 class Robot(JointBounds, RobotGeometry):
     """The active joints of a URDF (a serial chain or a tree): kinematics, Jacobians, manipulability of any frame.
@@ -96,28 +91,22 @@ class Robot(JointBounds, RobotGeometry):
         self.missing_packages = dict(missing_packages or {})
         self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
         self.floating_base = bool(floating_base)
+        kin = self.full_model = full_model  # kin: the model the reduced one is cut from (six joints + full_model)
         if self.floating_base:
             _check_fixed_root(full_model, name)
             if base is not None:
                 raise FrameError(f"a floating base moves the root link of {name}: poses are in the world frame, so "
                                  f"no base frame can be chosen (got base={base!r})")
-            kin = with_floating_base(full_model)
-            self.full_model = free_flyer_model(full_model)
-        else:
-            kin = full_model
-            self.full_model = full_model
-        self._kin_model = kin  # the model the reduced one is cut from: full_model, or six joints + full_model
+            kin, self.full_model = with_floating_base(full_model), free_flyer_model(full_model)
+        self._kin_model = kin
         self._full_couplings = coupling = couplings(kin, mimic)
 
         chosen = choose_joints(kin, full_model, name, tip, tips, base, joints, coupling)
         physical, dofs = chosen.physical, chosen.dofs
-        q_ref = pin.neutral(kin)
-        for j in range(1, kin.njoints):
-            jm = kin.joints[j]
-            if jm.nq == 1:  # keep locked joints inside their limits
-                lo, hi = kin.lowerPositionLimit[jm.idx_q], kin.upperPositionLimit[jm.idx_q]
-                if lo <= hi:
-                    q_ref[jm.idx_q] = np.clip(q_ref[jm.idx_q], lo, hi)
+        q_ref = pin.neutral(kin)  # locked joints at rest, inside their limits
+        idx = np.array([kin.joints[j].idx_q for j in range(1, kin.njoints) if kin.joints[j].nq == 1], dtype=np.intp)
+        lo, hi = kin.lowerPositionLimit[idx], kin.upperPositionLimit[idx]
+        q_ref[idx] = np.where(lo <= hi, np.clip(q_ref[idx], lo, hi), q_ref[idx])
         for jname, value in (rest or {}).items():  # joints locked elsewhere than at rest (Robot.locked)
             set_joint_value(kin, q_ref, kin.getJointId(jname), value)
         for j, (d, m, off) in coupling.items():  # locked mimic joints sit where their driver's rest puts them
@@ -144,6 +133,7 @@ class Robot(JointBounds, RobotGeometry):
         m_phys = self.model.njoints - 1
         self._phys_idx_q = np.array([self.model.joints[k].idx_q for k in range(1, m_phys + 1)], dtype=np.intp)
         self._phys_continuous = np.array([self.model.joints[k].nq == 2 for k in range(1, m_phys + 1)])
+        self._has_continuous = bool(self._phys_continuous.any())
         self.tree = KinematicTree.of(self.model, self._baseMo)
         follow = chosen.follow
         self.mimic_joints = {kin.names[j]: (kin.names[d], m, off) for j, (d, m, off) in zip(physical, follow,
@@ -168,12 +158,9 @@ class Robot(JointBounds, RobotGeometry):
 
     # ------------------------------------------------------------------ locked copies
     def locked(self, values: dict[str, float]) -> Robot:
-        """A new Robot whose ``q`` omits the joints ``values`` names, fixed at those values (rad or m); bounds are
-        this robot's on the joints left (:mod:`.locking`).
-
-        Raises: FrameError for a name that is no joint of ``q``; BoundsError for a value outside the joint's bounds;
-        ConfigurationError when every joint would be locked.
-        """
+        """A new Robot whose ``q`` omits the joints ``values`` names, fixed at those values (rad or m), this robot's
+        bounds on the others. FrameError for no joint of ``q``, BoundsError outside its bounds, ConfigurationError
+        when none is left free."""
         from .locking import locked_robot
 
         return locked_robot(self, values)
@@ -342,10 +329,6 @@ class Robot(JointBounds, RobotGeometry):
             else:
                 gather[i] = k
         return gather
-
-    @cached_property
-    def _has_continuous(self) -> bool:
-        return bool(self._phys_continuous.any())
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
         """:meth:`to_pinocchio` for the hot path: ``q`` itself when no conversion is needed, else the last one

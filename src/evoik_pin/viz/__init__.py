@@ -1,18 +1,7 @@
-"""Meshcat web preview of a robot (chain or whole tree), targets and goals, solutions, trajectories, obstacles, and
-a static HTML export: :class:`Viewer`, its life cycle and inputs. Everything is drawn in the robot's base frame (m).
-
-Nodes below meshcat's root: ``robot``, ghost ``solutions/<k>``, ``target``, ``goals/<frame>`` (and ``/label``),
-``path``, ``scene/visuals/<obstacle>``. The drawing is the mixins' of :mod:`.robot`, :mod:`.ghosts`,
-:mod:`.markers`, :mod:`.obstacles`, :mod:`.paths`, :mod:`.camera`, :mod:`.html`; the meshcat server is
-:mod:`.server`'s (127.0.0.1 only; it stops with :meth:`Viewer.close`, a ``with`` block, or its parent's exit).
-
-Example::
-
-    with Viewer(load_robot("panda")) as v:
-        v.show(q)                           # (n,) joint vector, or a result with .q
-        v.show_solutions([q1, q2])          # ghosts
-        v.animate(trajectory, dt=0.05)      # (N, n)
-        v.save_html("scene.html")           # self-contained file
+"""Meshcat web preview of a robot, targets and goals, solutions, trajectories, obstacles, and a static HTML export
+(docs/API.md): :class:`Viewer`, its life cycle and inputs, drawing in the robot's base frame (m). Nodes: ``robot``,
+``solutions/<k>``, ``target``, ``goals/<frame>``, ``path``, ``scene/visuals/<obstacle>``; the drawing is the mixins'
+of the modules beside this one, the meshcat server :mod:`.server`'s (127.0.0.1 only, stopped by :meth:`Viewer.close`).
 """
 
 from __future__ import annotations
@@ -26,7 +15,6 @@ import webbrowser
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 
 from ..errors import ConfigurationError, OptionError, ViewerError
 from ..robot import Robot
@@ -55,26 +43,19 @@ PROBE_TIMEOUT = 5.0
 class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera, HtmlExport):
     """A meshcat scene of one robot: configurations, ghosts, targets and goals, paths, animation, HTML export.
 
-    Args:
-        robot: a :class:`~evoik_pin.robot.Robot`.
-        zmq_url: ZeroMQ URL of a running meshcat server to draw into; None starts a private one on 127.0.0.1.
-        open: open the scene in the default web browser.
-        skeleton: True draws spheres and cylinders; None uses the URDF's visuals when it has some.
+    ``robot``: a :class:`~evoik_pin.robot.Robot`; ``zmq_url``: a running meshcat server to draw into (None: a
+    private one on 127.0.0.1); ``open``: open the scene in the browser; ``skeleton``: True draws spheres and
+    cylinders, None the URDF's visuals when it has some. Attributes: ``url``, ``zmq_url``, ``scene`` (``{node path:
+    description}`` of what was drawn), ``skeleton``, ``vis`` (the ``meshcat.Visualizer``).
 
-    Attributes:
-        url, zmq_url: the web and ZeroMQ addresses. scene: ``{node path: description}`` of what was drawn.
-        skeleton: whether the robot is drawn as a skeleton. vis: the underlying ``meshcat.Visualizer``.
-
-    Configurations are ``(n,)`` joint vectors (rad, m) or objects with ``.q`` (a :class:`~evoik_pin.Result`);
-    a list of them may also be an ``(N, n)`` array, a :class:`~evoik_pin.Front`, or a result with ``solutions``
-    or a ``front``.
+    Configurations are ``(n,)`` joint vectors (rad, m) or objects with ``.q`` (a :class:`~evoik_pin.Result`); a list
+    of them may also be an ``(N, n)`` array, a :class:`~evoik_pin.Front`, or a result with ``solutions`` or ``front``.
     """
 
     def __init__(self, robot: Robot, zmq_url: str | None = None, open: bool = False, skeleton: bool | None = None):
         _import_meshcat()
         self.robot = robot
-        self.vis = None
-        self._server: _Server | None = None
+        self.vis, self._server = None, None
         self.scene: dict[str, str] = {}
         self._viz = {}  # node name -> pinocchio MeshcatVisualizer drawing the robot there
         self._red: tuple[object, frozenset[str]] = (None, frozenset())  # (robot visualizer, its red geometry names)
@@ -86,8 +67,7 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
                 warnings.warn(f"{robot.name}: {why}; drawing a skeleton (spheres at the joints, cylinders "
                               "between them) instead", UserWarning, stacklevel=2)
             geom = skeleton_model(robot)
-        self._geom = geom
-        self._skeleton_geom: pin.GeometryModel | None = None
+        self._geom, self._skeleton_geom = geom, None
         self._reach = _reach(robot)
         self._baseMo = robot.base_placement.inverse()  # the model's world frame seen from the base frame
         self._camera_target = np.zeros(3)  # the point the camera looks at (m, base frame)
@@ -180,10 +160,9 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
         if not name:
             raise ConfigurationError("delete needs a node name; an empty name would clear the whole scene")
         vis[name].delete()
-        for key in [k for k in self.scene if k == name or k.startswith(name + "/")]:
-            del self.scene[key]
-        for key in [k for k in self._viz if k == name or k.startswith(name + "/")]:
-            del self._viz[key]
+        for drawn in (self.scene, self._viz):
+            for key in [k for k in drawn if k == name or k.startswith(name + "/")]:
+                del drawn[key]
 
     def __repr__(self) -> str:
         return f"Viewer({self.robot.name!r}, url={getattr(self, 'url', None)!r}, scene={list(self.scene)})"

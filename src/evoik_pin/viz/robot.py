@@ -19,18 +19,6 @@ from .server import _talks
 __all__ = ["skeleton_model"]
 
 
-def _fcl():
-    """Pinocchio's collision library module (``coal``; ``hppfcl`` before Pinocchio 3.4)."""
-    try:
-        import coal
-
-        return coal
-    except ImportError:  # pragma: no cover - older Pinocchio
-        import hppfcl
-
-        return hppfcl
-
-
 def _tip_frames(robot: Robot) -> list[str]:
     """The frames a skeleton marks beyond the joint origins: the tip and ``tips``, each once."""
     return list(dict.fromkeys([robot.tip, *robot.tips]))
@@ -54,14 +42,11 @@ def _base_joints(robot: Robot) -> int:
 def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryModel:
     """A visual ``pin.GeometryModel`` on ``robot.model``'s joints: spheres of ``radius`` m (default 2 % of the
     reach, within [3, 30] mm) at the joint origins and tip frames, cylinders between, rails along prismatic ranges."""
-    fcl = _fcl()
-    model = robot.model
-    reach = _reach(robot)
-    r = float(np.clip(0.02 * reach, 0.003, 0.03)) if radius is None else float(radius)
-    geom = pin.GeometryModel()
-    joint_rgba = np.array([0.9, 0.5, 0.1, 1.0])
-    link_rgba = np.array([0.55, 0.6, 0.7, 1.0])
-    rail_rgba = np.array([0.3, 0.3, 0.35, 1.0])
+    import coal
+
+    model, geom = robot.model, pin.GeometryModel()
+    r = float(np.clip(0.02 * _reach(robot), 0.003, 0.03)) if radius is None else float(radius)
+    joint_rgba, link_rgba, rail_rgba = np.array([[0.9, 0.5, 0.1, 1.0], [0.55, 0.6, 0.7, 1.0], [0.3, 0.3, 0.35, 1.0]])
 
     def add(name: str, joint: int, placement: pin.SE3, shape, rgba: np.ndarray) -> None:
         frame = next(i for i, f in enumerate(model.frames) if f.parentJoint == joint)
@@ -70,23 +55,21 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
         geom.addGeometryObject(obj)
 
     def cylinder(name: str, joint: int, p0: np.ndarray, p1: np.ndarray, radius: float, rgba: np.ndarray) -> None:
-        d = p1 - p0
-        if np.linalg.norm(d) > 1e-9:
-            length = float(np.linalg.norm(d))
-            add(name, joint, pin.SE3(rotation_to_z(d), (p0 + p1) / 2), fcl.Cylinder(radius, length), rgba)
+        length = float(np.linalg.norm(p1 - p0))
+        if length > 1e-9:
+            add(name, joint, pin.SE3(rotation_to_z(p1 - p0), (p0 + p1) / 2), coal.Cylinder(radius, length), rgba)
 
     revolute, axes, lower, upper = robot.chain_joints()  # model's joints: mimic joints on the chain included
-    skip = _base_joints(robot)
     tips = _tip_frames(robot)
     for k, (parent, M) in enumerate(_segments(robot)):
         is_tip = k >= model.njoints - 1
-        if k < skip:
+        if k < _base_joints(robot):
             continue
         child = k + 1 if not is_tip else parent
         name = tips[k - (model.njoints - 1)] if is_tip else model.names[k + 1]
         # sphere at this point, attached to the joint it moves with (the joint itself, or the tip's parent)
         add(f"skeleton_{name}", child, pin.SE3.Identity() if not is_tip else M,
-            fcl.Sphere(r * (0.8 if is_tip else 1.0)), joint_rgba)
+            coal.Sphere(r * (0.8 if is_tip else 1.0)), joint_rgba)
         cylinder(f"skeleton_to_{name}", parent, np.zeros(3), M.translation, 0.6 * r, link_rgba)
         if not is_tip and not revolute[k]:  # a prismatic joint slides along a rail spanning its bounds
             a = M.rotation @ axes[k]
