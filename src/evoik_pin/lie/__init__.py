@@ -6,19 +6,7 @@ buffers (:mod:`.compiled`). Conventions (Pinocchio's): ``log3(R)`` is the rotati
 """
 
 from .se3 import exp6, jlog6, log6
-from .so3 import (
-    angle,
-    exp3,
-    is_rotation,
-    jlog3,
-    log3,
-    relative_angle,
-    rotation_to_z,
-    rpy,
-    skew,
-    wrap_angle,
-    yaw,
-)
+from .so3 import angle, exp3, is_rotation, jlog3, log3, relative_angle, rotation_to_z, rpy, skew, wrap_angle, yaw
 
 __all__ = ["angle", "exp3", "exp6", "is_rotation", "jlog3", "jlog6", "log3", "log6", "relative_angle",
            "rotation_to_z", "rpy", "skew", "wrap_angle", "yaw"]

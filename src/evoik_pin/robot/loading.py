@@ -57,20 +57,11 @@ def list_robots(whole: bool = False, describe: bool = False) -> list[str] | dict
     return what if describe else list(what)
 
 
-def load_robot(
-    source: str | bytes | os.PathLike,
-    tip: str | None = None,
-    base: str | None = None,
-    joints: list[str] | None = None,
-    bounds: tuple[np.ndarray, np.ndarray] | None = None,
-    xacro_args: dict | None = None,
-    srdf: str | os.PathLike | None = None,
-    package_dirs: str | os.PathLike | list | None = None,
-    tips: list[str] | str | None = None,
-    floating_base: bool = False,
-    base_box=None,
-    package_aliases: dict[str, str] | None = None,
-) -> Robot:
+def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: str | None = None,
+               joints: list[str] | None = None, bounds: tuple[np.ndarray, np.ndarray] | None = None,
+               xacro_args: dict | None = None, srdf: str | os.PathLike | None = None,
+               package_dirs: str | os.PathLike | list | None = None, tips: list[str] | str | None = None,
+               floating_base: bool = False, base_box=None, package_aliases: dict[str, str] | None = None) -> Robot:
     """Load a robot: one serial chain of a URDF, the chains to several frames, or the whole tree.
 
     Args:

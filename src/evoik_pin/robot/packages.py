@@ -132,9 +132,7 @@ class PackageResolver:
         self.user_dirs = list(package_dirs)
         self.aliases = dict(aliases or {})
         self.ros_dirs = ros_package_path()
-        self.ancestors = list(path.parent.resolve().parents) if path is not None else []
-        if path is not None:
-            self.ancestors.insert(0, path.parent.resolve())
+        self.ancestors = [path.parent.resolve(), *path.parent.resolve().parents] if path is not None else []
         self._found: dict[str, Path | None] = {}
 
     def find(self, pkg: str) -> Path | None:

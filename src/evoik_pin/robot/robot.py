@@ -61,24 +61,12 @@ class Robot(JointBounds, RobotGeometry):
         mimic_joints: ``{physical joint: (joint it follows, multiplier, offset)}`` of the active mimic joints.
     """
 
-    def __init__(
-        self,
-        full_model: pin.Model,
-        tip: str | None = None,
-        base: str | None = None,
-        joints: list[str] | None = None,
-        name: str = "robot",
-        urdf_path: Path | None = None,
-        urdf_xml: str | None = None,
-        package_dirs: list[str] | None = None,
-        mimic: dict | None = None,
-        tips: list[str] | str | None = None,
-        floating_base: bool = False,
-        base_box=None,
-        packages: dict[str, str] | None = None,
-        missing_packages: dict[str, str] | None = None,
-        rest: dict[str, float] | None = None,
-    ) -> None:
+    def __init__(self, full_model: pin.Model, tip: str | None = None, base: str | None = None,
+                 joints: list[str] | None = None, name: str = "robot", urdf_path: Path | None = None,
+                 urdf_xml: str | None = None, package_dirs: list[str] | None = None, mimic: dict | None = None,
+                 tips: list[str] | str | None = None, floating_base: bool = False, base_box=None,
+                 packages: dict[str, str] | None = None, missing_packages: dict[str, str] | None = None,
+                 rest: dict[str, float] | None = None) -> None:
         """``full_model``: the URDF's fixed-base model. ``tips``: frames whose chains make the active joints, or
         ``"all"``. ``mimic``: ``{joint: (followed joint, multiplier, offset)}`` (or objects with those attributes;
         :func:`~evoik_pin.robot.urdf_checks.check_urdf`). ``packages``: ``{pkg: folder}`` of mesh URIs,

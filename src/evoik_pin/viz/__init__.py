@@ -164,6 +164,12 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
             for key in [k for k in drawn if k == name or k.startswith(name + "/")]:
                 del drawn[key]
 
+    def _fresh(self, name: str):
+        """(meshcat node, name) of the node ``name`` (slashes stripped), deleted for a new drawing."""
+        name = name.strip("/")
+        self.delete(name)
+        return self._check_open()[name], name
+
     def __repr__(self) -> str:
         return f"Viewer({self.robot.name!r}, url={getattr(self, 'url', None)!r}, scene={list(self.scene)})"
 

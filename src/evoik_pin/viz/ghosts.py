@@ -57,11 +57,8 @@ class GhostDrawing:
                 self._skeleton_geom = skeleton_model(self.robot)
             geom = self._skeleton_geom
         self.delete(name)
-        nodes = []
         for k, q in enumerate(Q):
-            node = f"{name}/{k}"
             rgba = (*GHOST_COLORS[k % len(GHOST_COLORS)], opacity)
-            self._load(node, rgba, geom).display(self.robot.to_pinocchio(q))
-            self.scene[node] = "ghost skeleton" if style == "skeleton" else "ghost"
-            nodes.append(node)
-        return nodes
+            self._load(f"{name}/{k}", rgba, geom).display(self.robot.to_pinocchio(q))
+            self.scene[f"{name}/{k}"] = "ghost skeleton" if style == "skeleton" else "ghost"
+        return [f"{name}/{k}" for k in range(Q.shape[0])]

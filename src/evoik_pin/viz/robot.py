@@ -1,6 +1,5 @@
 """Drawing a robot at a configuration: ``robot.visual_model`` (or :func:`skeleton_model`) on ``robot.model``, one
-``pinocchio.visualize.MeshcatVisualizer`` per node; placements come from the robot layer.
-"""
+``pinocchio.visualize.MeshcatVisualizer`` per node; placements come from the robot layer."""
 
 from __future__ import annotations
 
@@ -133,8 +132,7 @@ class RobotDrawing:
         vis = self._check_open()
         if node in self._viz:
             return self._viz[node]
-        cls = _meshcat_visualizer_class()
-        viz = cls(self.robot.model, visual_model=self._geom if geom is None else geom)
+        viz = _meshcat_visualizer_class()(self.robot.model, visual_model=self._geom if geom is None else geom)
         viz.plain_meshes = rgba is not None
         viz.initViewer(viewer=vis)
         with warnings.catch_warnings():
@@ -154,15 +152,13 @@ class RobotDrawing:
         """Draw the robot (node ``robot``) at ``q`` (n,) or a result's ``.q``. With a collision ``scene``: its
         obstacles too (:meth:`show_scene`, when it changed) and the links in collision at ``q`` (closer than
         ``margin`` m) in red; returns then ``scene.colliding_pairs(q, margin)`` (None without a scene)."""
-        q = self._q(q)
-        pairs = None
+        q, pairs, links = self._q(q), None, set()
         if scene is not None:
             self._check_scene(scene)
             pairs = scene.colliding_pairs(q, margin)
         viz = self._load("robot")
         viz.display(self.robot.to_pinocchio(q))
         self.scene["robot"] = "robot"
-        links: set[str] = set()
         if scene is not None:
             if "scene" not in self.scene or self._drawn_scenes.get("scene") != (id(scene), scene.version):
                 self.show_scene(scene)

@@ -1,6 +1,5 @@
 """The meshcat server a Viewer draws into: its own subprocess (bound to 127.0.0.1, ready once it printed both
-URLs, exiting with its parent) or an external one (probed first: a silent one is a ViewerError, not a hang).
-"""
+URLs, exiting with its parent) or an external one (probed first: a silent one is a ViewerError, not a hang)."""
 
 from __future__ import annotations
 
