@@ -107,8 +107,7 @@ class Robot(JointBounds, RobotGeometry):
         self.tip, self.tips, self.base = chosen.tip, chosen.tips, chosen.base
         self._tip_id = find_frame(self.model, self.tip)
         self._base_id = 0 if base is None else find_frame(self.model, base)
-        self.n = len(dofs)
-        self.joint_names = [kin.names[d] for d in dofs]
+        self.n, self.joint_names = len(dofs), [kin.names[d] for d in dofs]
         self._dof_ids = dofs  # kinematic-model joint ids of the entries of q
 
         # Base placement is constant: every free joint is downstream of the base frame.
@@ -127,8 +126,8 @@ class Robot(JointBounds, RobotGeometry):
         self.mimic_joints = {kin.names[j]: (kin.names[d], m, off) for j, (d, m, off) in zip(physical, follow,
                                                                                           strict=True) if d != j}
         self._phys_index = np.array([dofs.index(d) for d, _, _ in follow], dtype=np.int64)
-        self._phys_scale = np.array([m for _, m, _ in follow], dtype=float)
-        self._phys_offset = np.array([off for _, _, off in follow], dtype=float)
+        _, scale, offset = zip(*follow, strict=True)
+        self._phys_scale, self._phys_offset = np.array(scale, dtype=float), np.array(offset, dtype=float)
         self._coupled = bool(self.mimic_joints)
         self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
         self._G[np.arange(m_phys), self._phys_index] = self._phys_scale
@@ -168,11 +167,11 @@ class Robot(JointBounds, RobotGeometry):
         if fid is None:
             if not isinstance(frame, str):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
-            fid = self._frame_ids[frame] = find_frame(self.model, frame)  # a scan of every frame
+            fid = find_frame(self.model, frame)  # a scan of every frame
             if fid < 0:
-                del self._frame_ids[frame]
                 raise FrameError(f"{self.name} has no frame {frame!r}{suggest_frames(frame, self.model)} (robot.frames "
                                  f"lists its {len(self.frames)} frames)")
+            self._frame_ids[frame] = fid
         return fid
 
     def _frame_view(self, fid: int) -> tuple[int, np.ndarray, np.ndarray, ChainView]:
@@ -203,18 +202,10 @@ class Robot(JointBounds, RobotGeometry):
         """Names of the joints between the base and a frame (None: the tip) that ``q`` does not move (off the active
         joints, left out by ``joints=[...]`` or :meth:`locked`); a mimic joint is named by the joint it follows.
         :func:`~evoik_pin.goals.stack.bind` refuses goals on such frames with these names."""
-        name = self.model.frames[self.frame_id(frame)].name
-        kin = self._kin_model
-        path = kin.supports[kin.frames[find_frame(kin, name)].parentJoint]
-        locked = set(self._locked)
-        names: list[str] = []
-        for j in path:
-            if j not in locked or j in self._above_base:
-                continue
-            driver = self._full_couplings.get(j, (j,))[0]
-            if driver not in self._above_base and kin.names[driver] not in names:
-                names.append(kin.names[driver])
-        return names
+        kin, locked = self._kin_model, set(self._locked) - self._above_base
+        path = kin.supports[kin.frames[find_frame(kin, self.model.frames[self.frame_id(frame)].name)].parentJoint]
+        drivers = [self._full_couplings.get(j, (j,))[0] for j in path if j in locked]
+        return list(dict.fromkeys(kin.names[d] for d in drivers if d not in self._above_base))
 
     # ------------------------------------------------------------------ constants of compiled kernels
     def tree_constants(self) -> tuple[np.ndarray, ...]:
@@ -274,9 +265,7 @@ class Robot(JointBounds, RobotGeometry):
         """Configuration (full_model.nq,) of the whole URDF (``pin.buildModelFromUrdf(path)``'s order): ``q`` on its
         joints, mimic joints coupled, the others at rest. With a floating base it starts with the position (m) and
         unit quaternion (x, y, z, w), w >= 0, of Pinocchio's free-flyer joint."""
-        q = self.check_q(q)
-        out = self._q_ref_full.copy()
-        fm = self._kin_model
+        q, out, fm = self.check_q(q), self._q_ref_full.copy(), self._kin_model
         for k, d in enumerate(self._dof_ids):
             set_joint_value(fm, out, d, q[k])
         for j, (d, m, off) in self._full_couplings.items():

@@ -1,6 +1,5 @@
 """What a URDF must be before Pinocchio reads it (urdfdom accepts files giving NaN or wrong kinematics, or rejects
-them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings.
-"""
+them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings."""
 
 from __future__ import annotations
 
@@ -29,9 +28,8 @@ class Mimic:
 
 def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
     """Check the parsed URDF ``root`` (read from ``where``) and return its mimic couplings ``{joint: Mimic}``, each
-    resolved to the joint driving its chain of mimics; a RobotLoadError naming
-    ``where``, the joint or link and what is accepted for names, joint types, links, origins, axes, limits, a
-    tree shape and mimics. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
+    resolved to the joint driving its chain of mimics; a RobotLoadError naming ``where``, the joint or link and what
+    is accepted. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
     if root.tag != "robot":
         raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
     if not root.get("name"):
@@ -44,8 +42,7 @@ def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
     types: dict[str, str] = {}
     parent_of: dict[str, tuple[str, str]] = {}  # child link -> (parent link, joint)
     for j in joints:
-        jname = j.get("name")
-        jtype = j.get("type")
+        jname, jtype = j.get("name"), j.get("type")
         types[jname] = jtype
         if jtype not in JOINT_TYPES:
             raise RobotLoadError(f"{where}: joint {jname!r} has type {jtype!r}; URDF joint types are "
