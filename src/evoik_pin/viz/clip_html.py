@@ -25,13 +25,10 @@ def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True)
     from . import Viewer
 
     with Viewer(robot) as viewer:
-        Q = viewer._qs(clip.q)
-        vis = viewer._check_open()
+        Q, vis = viewer._qs(clip.q), viewer._check_open()
         points = clip.keypoints if keypoints and clip.keypoints is not None else None
-        if points is not None:
-            material = mg.MeshLambertMaterial(color=KEYPOINT_COLOR)
-            for name in clip.keypoint_names:
-                vis["keypoints"][name].set_object(mg.Sphere(KEYPOINT_RADIUS), material)
+        for name in clip.keypoint_names if points is not None else ():
+            vis["keypoints"][name].set_object(mg.Sphere(KEYPOINT_RADIUS), mg.MeshLambertMaterial(color=KEYPOINT_COLOR))
 
         def move_keypoints(frame, k: int) -> None:
             for name, p in zip(clip.keypoint_names, points[k], strict=True):
