@@ -97,8 +97,8 @@ def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: 
     elif xacro_args:
         raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
                              "elements or ${...} / $(...) expressions)")
-    if tip is None and named:
-        tip = _default_tip(name)
+    if tip is None and named:  # a named arm's tool frame (the bundled paper arms': tool)
+        tip = EXAMPLE_ARMS[name].tip if name in EXAMPLE_ARMS else "tool" if name in BUNDLED_ROBOTS else None
     model, mimic = _parse_urdf(xml, path)
     if tip is None and tips is None and (named and name in WHOLE_ROBOTS
                                          or not named and is_branched(model, couplings(model, mimic))):
@@ -129,11 +129,6 @@ def _srdf_path(srdf, name: str | None) -> str | None:
         p = example_robot_data_dir() / arm.srdf
         return str(p) if p.is_file() else None
     return None
-
-
-def _default_tip(name: str) -> str | None:
-    """The usual tool frame of a named arm (``tool`` for the bundled paper arms); None for other names."""
-    return EXAMPLE_ARMS[name].tip if name in EXAMPLE_ARMS else "tool" if name in BUNDLED_ROBOTS else None
 
 
 def _package_dirs(path: Path | None, resolver: PackageResolver) -> list[str]:

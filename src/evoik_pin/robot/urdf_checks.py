@@ -84,12 +84,10 @@ def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:
     return list(names)
 
 
-def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...] | None = None,
+def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...],
             finite: bool = True) -> tuple[float, ...]:
     """``count`` numbers of a space-separated attribute; ``default`` when it is absent."""
     if text is None:
-        if default is None:  # pragma: no cover - callers pass defaults for optional attributes
-            raise RobotLoadError(f"{where}: {what} is missing")
         return default
     parts = text.split()
     try:
