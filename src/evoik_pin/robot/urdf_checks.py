@@ -112,18 +112,14 @@ def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
     if axis_el is not None:
         axis = _floats(axis_el.get("xyz"), 3, f"the axis of joint {jname!r}", where, (1.0, 0.0, 0.0))
         if math.sqrt(sum(a * a for a in axis)) < 1e-12:
-            raise RobotLoadError(
-                f"{where}: joint {jname!r} has a zero-length axis {axis_el.get('xyz')!r}; give its direction, e.g. "
-                "<axis xyz=\"0 0 1\"/> (omitting <axis> means 1 0 0)"
-            )
+            raise RobotLoadError(f"{where}: joint {jname!r} has a zero-length axis {axis_el.get('xyz')!r}; give its "
+                                 "direction, e.g. <axis xyz=\"0 0 1\"/> (omitting <axis> means 1 0 0)")
     limit = j.find("limit")
     if jtype in ("revolute", "prismatic"):
         if limit is None:
             hint = " (an unlimited revolute joint is type=\"continuous\")" if jtype == "revolute" else ""
-            raise RobotLoadError(
-                f"{where}: {jtype} joint {jname!r} has no <limit> element; URDF requires "
-                f"<limit lower=\"...\" upper=\"...\" effort=\"...\" velocity=\"...\"/> for {jtype} joints{hint}"
-            )
+            raise RobotLoadError(f"{where}: {jtype} joint {jname!r} has no <limit> element; URDF requires <limit lower="
+                                 f"\"...\" upper=\"...\" effort=\"...\" velocity=\"...\"/> for {jtype} joints{hint}")
         for attr in ("effort", "velocity"):
             if limit.get(attr) is None:
                 raise RobotLoadError(f"{where}: the <limit> of joint {jname!r} has no {attr} attribute; URDF "

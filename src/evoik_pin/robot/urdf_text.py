@@ -50,11 +50,9 @@ def decode_xml(data: bytes, where: str) -> str:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
         kind = "a binary file, not URDF XML: " if _looks_binary(data) else ""
-        raise RobotLoadError(
-            f"{where} is {kind}not decodable as {source}: byte {data[exc.start]:#04x} at offset {exc.start}. A URDF "
-            "is XML text; declare a non-UTF-8 encoding in its first line, e.g. "
-            "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>"
-        ) from None
+        raise RobotLoadError(f"{where} is {kind}not decodable as {source}: byte {data[exc.start]:#04x} at offset "
+                             f"{exc.start}. A URDF is XML text; declare a non-UTF-8 encoding in its first line, e.g. "
+                             "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>") from None
     text = text.lstrip("\ufeff")
     bad = _CONTROL.search(text)  # XML allows no control characters but tab, newline and carriage return
     if bad is not None:
