@@ -15,21 +15,21 @@ import webbrowser
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 
 from ..errors import ConfigurationError, OptionError, ViewerError
 from ..robot import Robot
 from .camera import CAMERA_FOV_DEG, Camera
-from .ghosts import GHOST_COLORS, GHOST_MESH_BUDGET, GhostDrawing
 from .html import HtmlExport, html_commands
 from .markers import MarkerDrawing
 from .obstacles import COLLISION_RGBA, OBSTACLE_RGBA, ObstacleDrawing, obstacle_model
 from .paths import PathDrawing
-from .robot import RobotDrawing, _reach, _visual_model, skeleton_model
+from .robot import GHOST_COLORS, GHOST_MESH_BUDGET, RobotDrawing, _reach, _visual_model, skeleton_model
 from .server import _connect, _import_meshcat, _probe, _Server, _talks
 
-__all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGET", "OBSTACLE_RGBA",
-           "OWN_SERVER_HANG_S", "PROBE_TIMEOUT", "SERVER_TIMEOUT", "Viewer", "html_commands", "obstacle_model",
-           "save_solution_html", "skeleton_model"]
+__all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGET", "KEYPOINT_COLOR", "KEYPOINT_RADIUS",
+           "OBSTACLE_RGBA", "OWN_SERVER_HANG_S", "PROBE_TIMEOUT", "SERVER_TIMEOUT", "Viewer", "html_commands",
+           "obstacle_model", "save_clip_html", "save_solution_html", "skeleton_model"]
 
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer one request.
 SERVER_TIMEOUT = 20.0
@@ -38,9 +38,12 @@ SERVER_TIMEOUT = 20.0
 OWN_SERVER_HANG_S = 600.0
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer its first request.
 PROBE_TIMEOUT = 5.0
+#: Radius (m) and colour (0xRRGGBB) of a source keypoint's sphere in :func:`save_clip_html`.
+KEYPOINT_RADIUS = 0.015
+KEYPOINT_COLOR = 0xFF8C00
 
 
-class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera, HtmlExport):
+class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera, HtmlExport):
     """A meshcat scene of one robot: configurations, ghosts, targets and goals, paths, animation, HTML export.
 
     ``robot``: a :class:`~evoik_pin.robot.Robot`; ``zmq_url``: a running meshcat server to draw into (None: a
@@ -181,4 +184,25 @@ def save_solution_html(robot: Robot, result, goals, path: str | os.PathLike, sce
     its path. What ``evoik solve ... --html`` writes for a goal list."""
     with Viewer(robot) as viewer:
         viewer.show_solution(result, goals, scene=scene, margin=margin)
+        return viewer.save_html(path)
+
+
+def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True) -> Path:
+    """Write ``clip`` (a :class:`~evoik_pin.motion.Clip` of ``robot``) as a self-contained HTML page playing it at
+    its fps, and return the path. ``keypoints``: also the source keypoints the robot followed (``clip.keypoints``,
+    scaled into the robot's world), as orange spheres under ``keypoints/<name>``."""
+    import meshcat.geometry as mg
+
+    with Viewer(robot) as viewer:
+        Q, vis = viewer._qs(clip.q), viewer._check_open()
+        points = clip.keypoints if keypoints and clip.keypoints is not None else None
+        for name in clip.keypoint_names if points is not None else ():
+            vis["keypoints"][name].set_object(mg.Sphere(KEYPOINT_RADIUS), mg.MeshLambertMaterial(color=KEYPOINT_COLOR))
+
+        def move_keypoints(frame, k: int) -> None:
+            for name, p in zip(clip.keypoint_names, points[k], strict=True):
+                frame["keypoints"][name].set_transform(pin.SE3(np.eye(3), p).homogeneous)
+
+        viewer._animate_robot(Q, clip.fps, each_frame=move_keypoints if points is not None else None)
+        viewer.scene["animation"] = f"{Q.shape[0]} frames at {clip.fps:g} fps"
         return viewer.save_html(path)

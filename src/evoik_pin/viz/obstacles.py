@@ -7,7 +7,7 @@ import warnings
 
 import pinocchio as pin
 
-from ..errors import ConfigurationError
+from ..errors import ConfigurationError, SceneError
 from .server import _talks
 
 __all__ = ["COLLISION_RGBA", "OBSTACLE_RGBA", "obstacle_model"]
@@ -32,7 +32,6 @@ class ObstacleDrawing:
 
     def _check_scene(self, scene) -> None:
         """SceneError unless ``scene`` is a Scene of this Viewer's robot (the same object, or the same chain)."""
-        from ..errors import SceneError
         from ..scene import Scene
 
         if not isinstance(scene, Scene):
