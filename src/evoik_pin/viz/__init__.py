@@ -1,12 +1,14 @@
 """Meshcat web preview of a robot, targets and goals, solutions, trajectories, obstacles, and a static HTML export
-(docs/API.md): :class:`Viewer`, its life cycle and inputs, drawing in the robot's base frame (m). Nodes: ``robot``,
+(docs/API.md): :class:`Viewer`, its life cycle, inputs and export, in the robot's base frame (m). Nodes: ``robot``,
 ``solutions/<k>``, ``target``, ``goals/<frame>``, ``path``, ``scene/visuals/<obstacle>``; the drawing is the mixins'
 of the modules beside this one, the meshcat server :mod:`.server`'s (127.0.0.1 only, stopped by :meth:`Viewer.close`).
 """
 
 from __future__ import annotations
 
+import base64
 import os
+import re
 import subprocess
 import sys
 import time
@@ -20,7 +22,6 @@ import pinocchio as pin
 from ..errors import ConfigurationError, OptionError, ViewerError
 from ..robot import Robot
 from .camera import CAMERA_FOV_DEG, Camera
-from .html import HtmlExport, html_commands
 from .markers import MarkerDrawing
 from .obstacles import COLLISION_RGBA, OBSTACLE_RGBA, ObstacleDrawing, obstacle_model
 from .paths import PathDrawing
@@ -43,7 +44,18 @@ KEYPOINT_RADIUS = 0.015
 KEYPOINT_COLOR = 0xFF8C00
 
 
-class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera, HtmlExport):
+_COMMAND_RE = re.compile(r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"\)')
+
+
+def html_commands(html: str) -> list[dict]:
+    """The meshcat commands (dicts with ``type``, ``path`` and the payload) the static HTML ``html``
+    (:meth:`Viewer.save_html`) replays, in order, decoded from its base64 msgpack blobs."""
+    import umsgpack
+
+    return [umsgpack.unpackb(base64.b64decode(m)) for m in _COMMAND_RE.findall(html)]
+
+
+class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera):
     """A meshcat scene of one robot: configurations, ghosts, targets and goals, paths, animation, HTML export.
 
     ``robot``: a :class:`~evoik_pin.robot.Robot`; ``zmq_url``: a running meshcat server to draw into (None: a
@@ -172,6 +184,18 @@ class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera, 
         name = name.strip("/")
         self.delete(name)
         return self._check_open()[name], name
+
+    @_talks
+    def save_html(self, path: str | os.PathLike) -> Path:
+        """Write the scene (with its animation) as one self-contained HTML file (no server needed); return its path."""
+        html = self._check_open().static_html()
+        html = html.replace("<title>MeshCat</title>", f"<title>evoik_pin: {self.robot.name}</title>", 1)
+        out = Path(path).expanduser()
+        try:
+            out.write_text(html, encoding="utf-8")
+        except OSError as exc:
+            raise ViewerError(f"cannot write the HTML scene to {str(out)!r}: {exc.strerror or exc}") from exc
+        return out
 
     def __repr__(self) -> str:
         return f"Viewer({self.robot.name!r}, url={getattr(self, 'url', None)!r}, scene={list(self.scene)})"
