@@ -235,8 +235,7 @@ def test_given_contacts_hold_a_foot_without_a_floor(walk):
 
 
 def test_html_plays_the_robot_and_the_source_keypoints(walk, tmp_path):
-    from evoik_pin.viz import html_commands
-    from evoik_pin.viz.clip_html import save_clip_html
+    from evoik_pin.viz import html_commands, save_clip_html
 
     robot = ek.load_robot("g1", floating_base=True)
     clip = ek.retarget(robot, walk.slice(0, 3), self_collision=False)

@@ -635,7 +635,7 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
           f", ground penetration {report['ground_penetration_mm']:.1f} mm; mean limb angle (deg): {angles}")
     print(f"wrote {clip.save(out)}")
     if args.html:
-        from .viz.clip_html import save_clip_html
+        from .viz import save_clip_html
 
         print(f"wrote {save_clip_html(robot, clip, args.html)}")
     return 0

@@ -1,6 +1,5 @@
 """YAML and JSON data files, read and written alike by evoik_pin's file formats (format by extension, syntax errors
-with line and column, UTF-8). Each function takes the ``where`` its errors start with and the error class to raise.
-"""
+with line and column, UTF-8). Each function takes the ``where`` its errors start with and the error class to raise."""
 
 from __future__ import annotations
 
@@ -53,9 +52,8 @@ def read_data(path: Path, where: str, error: type[Exception]):
     try:
         return yaml.safe_load(text)
     except yaml.MarkedYAMLError as exc:
-        mark, begun = exc.problem_mark or exc.context_mark, exc.context_mark
+        mark, begun, context = exc.problem_mark or exc.context_mark, exc.context_mark, exc.context
         at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-        context = exc.context
         if context and begun is not None and begun is not mark:
             context += f" (begun at line {begun.line + 1}, column {begun.column + 1})"
         what = ": ".join(filter(None, [context, exc.problem]))

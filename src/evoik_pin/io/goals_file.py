@@ -1,17 +1,11 @@
 """Goals files: goal lists (:mod:`evoik_pin.goals`) as YAML or JSON by the extension (:func:`load_goals`,
-:func:`save_goals`, :func:`load_problems`); the format's guide is docs/GOALS.md ("Goals files"). In short::
+:func:`save_goals`, :func:`load_problems`); the guide and an example are in docs/GOALS.md ("Goals files"). Beyond::
 
-    robot: talos                  # optional, with floating_base and tips: what the file was written for
-    floating_base: true
     goals:                        # or problems: [[goal, ...], ...] (load_problems; load_goals refuses them)
-      - frame: left_sole_link     # any frame of the robot
-        kind: pose                # a kind of GOAL_KINDS, or a preference of PREFERENCE_KINDS
-        target: {position: [0.0, 0.085, 0.0], rpy: [0, 0, 0]}   # m; rpy in degrees, or rpy_rad, or a 4 x 4 matrix
-        weight: 0.5               # optional fields: those of the kind's class (tolerance, free, axis, ...)
-      - frame: arm_right_7_link
+      - frame: arm_right_7_link   # a kind of GOAL_KINDS with the optional fields of its class (weight, free, ...)
         kind: position
         targets: [{position: [0.26, -0.41, 0.94]}, {position: [0.3, -0.4, 0.9]}]   # a goal set: any one will do
-      - {kind: posture, joints: {arm_left_4_joint: -0.5}}
+      - {kind: posture, joints: {arm_left_4_joint: -0.5}}                          # a preference of PREFERENCE_KINDS
 
 Positions in m in the robot's base frame; numbers written ``1e-6`` are numbers; unknown keys are errors. Every
 error is a :class:`~evoik_pin.errors.GoalsFileError` naming the file, the goal (index from 0, and frame) and the

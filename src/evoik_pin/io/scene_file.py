@@ -111,9 +111,8 @@ def _obstacle(entry, k: int, folder: Path, seen: dict[str, int]) -> tuple[str, s
         kw["scale"] = _numbers(scale, 3, label, True) if isinstance(scale, list) else _number(scale, label, True)
     else:
         kw.update({key: _number(entry[key], f"{what}: {key} (m)", positive=True) for key in required})
-    pose = _pose(entry["pose"], what)
     seen[name] = k
-    return name, kind, kw, pose
+    return name, kind, kw, _pose(entry["pose"], what)
 
 
 def read_scene(path: str | os.PathLike) -> SceneFile:
@@ -161,20 +160,17 @@ def write_scene(scene, path: str | os.PathLike) -> Path:
     data: dict = {"units": "m", "self_collision": scene.self_collision}
     if scene.srdf is not None and scene.srdf != getattr(scene.robot, "srdf", None):
         data["srdf"] = _relative(Path(scene.srdf), path.parent)
-    obstacles = []
+    data["obstacles"] = []
     for ob in scene.obstacles.values():
-        entry: dict = {"name": ob.name, "kind": ob.kind}
+        entry = {"name": ob.name, "kind": ob.kind, **ob.params}  # a sphere's, cylinder's, capsule's lengths (m)
         if ob.kind == "box":
             entry["size"] = _clean(ob.params["size"])
         elif ob.kind == "mesh":
-            entry["path"] = _relative(Path(ob.params["path"]), path.parent)
             scale = _clean(ob.params["scale"])
+            entry["path"] = _relative(Path(ob.params["path"]), path.parent)
             entry["scale"] = scale[0] if len(set(scale)) == 1 else scale
-        else:
-            entry.update({key: float(ob.params[key]) for key in KIND_KEYS[ob.kind][0]})
         entry["pose"] = Flow(xyz=_clean(ob.pose.translation), rpy=_clean(pin.rpy.matrixToRpy(ob.pose.rotation)))
-        obstacles.append(entry)
-    data["obstacles"] = obstacles
+        data["obstacles"].append(entry)
     header = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
     return write_data(path, data, header, "scene file", SceneError)
 

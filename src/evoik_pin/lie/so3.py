@@ -48,11 +48,8 @@ def _axis_and_cos(R: np.ndarray):
 
 
 def angle(R: np.ndarray) -> np.ndarray:
-    """Rotation angles (N,) in [0, pi] rad of rotations R (N, 3, 3): ``|log3(R)|``.
-
-    ``atan2(|sin|, cos)`` keeps full precision near 0 (where ``acos`` of the trace loses half the digits)
-    and near pi.
-    """
+    """Rotation angles (N,) in [0, pi] rad of rotations R (N, 3, 3): ``|log3(R)|``, as ``atan2(|sin|, cos)`` (full
+    precision near 0, where ``acos`` of the trace loses half the digits, and near pi)."""
     _, s, c = _axis_and_cos(np.asarray(R, dtype=float).reshape(-1, 3, 3))
     return np.arctan2(s, c)
 
@@ -75,8 +72,7 @@ def rpy(R: np.ndarray) -> np.ndarray:
     ``pin.rpy.matrixToRpy``'s convention). At gimbal lock (pitch = +-pi/2) the whole heading goes to roll."""
     R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
     cp = np.hypot(R[:, 0, 0], R[:, 1, 0])
-    pitch = np.arctan2(-R[:, 2, 0], cp)
-    roll = np.arctan2(R[:, 2, 1], R[:, 2, 2])
+    pitch, roll = np.arctan2(-R[:, 2, 0], cp), np.arctan2(R[:, 2, 1], R[:, 2, 2])
     yw = np.arctan2(R[:, 1, 0], R[:, 0, 0])
     lock = cp < 1e-12
     if lock.any():
@@ -86,12 +82,8 @@ def rpy(R: np.ndarray) -> np.ndarray:
 
 
 def log3(R: np.ndarray) -> np.ndarray:
-    """Rotation vectors (N, 3) rad of rotations R (N, 3, 3), ``pin.log3`` row by row, stable near 0 and pi.
-
-    Away from pi: ``theta / (2 sin theta)`` times the antisymmetric part's vector (series near 0). Near pi,
-    where that part vanishes, the axis comes from the symmetric part, ``a a^T = ((R + R^T)/2 - cos I) /
-    (1 - cos)``, its sign from the antisymmetric part.
-    """
+    """Rotation vectors (N, 3) rad of rotations R (N, 3, 3), ``pin.log3`` row by row, stable near 0 and pi (there
+    the axis comes from the symmetric part, ``a a^T = ((R + R^T)/2 - cos I) / (1 - cos)``, as in :mod:`.compiled`)."""
     R = np.asarray(R, dtype=float).reshape(-1, 3, 3)
     ax, s, c = _axis_and_cos(R)
     theta = np.arctan2(s, c)
@@ -146,8 +138,7 @@ def jlog3(phi: np.ndarray) -> np.ndarray:
 def rotation_to_z(axis) -> np.ndarray:
     """A rotation B (3, 3) whose third column is the unit vector of ``axis`` (3,) (identity when it is +z):
     turns a joint axis, or a cylinder's axis, onto z."""
-    axis = np.asarray(axis, dtype=float)
-    z = axis / np.linalg.norm(axis)
+    z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
     if np.allclose(z, [0.0, 0.0, 1.0], atol=1e-15):
         return np.eye(3)
     helper = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])

@@ -2,25 +2,10 @@
 code in evoik_pin that runs Pinocchio's kinematics: :func:`load_robot` (:mod:`.loading`) makes a :class:`Robot`
 (:mod:`.robot`)."""
 
-from .catalog import WHOLE_ROBOTS
+from .catalog import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS
 from .joints import DEFAULT_PRISMATIC_RANGE as DEFAULT_PRISMATIC_RANGE
-from .loading import (
-    BUNDLED_ROBOTS,
-    EXAMPLE_ARMS,
-    bundled_robots_dir,
-    example_robot_data_dir,
-    list_robots,
-    load_robot,
-)
+from .loading import bundled_robots_dir, example_robot_data_dir, list_robots, load_robot
 from .robot import Robot
 
-__all__ = [
-    "BUNDLED_ROBOTS",
-    "EXAMPLE_ARMS",
-    "WHOLE_ROBOTS",
-    "Robot",
-    "bundled_robots_dir",
-    "example_robot_data_dir",
-    "list_robots",
-    "load_robot",
-]
+__all__ = ["BUNDLED_ROBOTS", "EXAMPLE_ARMS", "WHOLE_ROBOTS", "Robot", "bundled_robots_dir", "example_robot_data_dir",
+           "list_robots", "load_robot"]

@@ -1,6 +1,5 @@
 """Which joints of a URDF a :class:`~evoik_pin.robot.Robot` moves (:func:`choose_joints`): the chains from the base
-frame to its tips, or the whole tree below it, the joints ``joints=[...]`` keeps, and the mimic joints following them.
-"""
+frame to its tips, or the whole tree below it, the joints ``joints=[...]`` keeps and the mimic joints following them."""
 
 from __future__ import annotations
 
@@ -48,15 +47,12 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
     if tip is None:
         tip = tip_names[0] if tip_names else deepest_body(full_model)
     root_name = root_link(full_model) if base is None else base
-    base_id = 0 if base is None else find_frame(kin, base)
-    if base_id < 0:
-        raise FrameError(f"unknown base frame {base!r}{suggest_frames(base, kin)}; frames of {name}: "
-                         f"{_listed(frame_names(full_model, bodies=True))}")
-    base_joint = kin.frames[base_id].parentJoint
-    for t in [tip, *(tip_names or [])]:
-        if find_frame(kin, t) < 0:
-            raise FrameError(f"unknown tip frame {t!r}{suggest_frames(t, kin)}; frames of {name}: "
+    named = ([("base", base)] if base is not None else []) + [("tip", t) for t in [tip, *(tip_names or [])]]
+    for what, frame in named:
+        if find_frame(kin, frame) < 0:
+            raise FrameError(f"unknown {what} frame {frame!r}{suggest_frames(frame, kin)}; frames of {name}: "
                              f"{_listed(frame_names(full_model, bodies=True))}")
+    base_joint = kin.frames[0 if base is None else find_frame(kin, base)].parentJoint
 
     if whole:
         active = [j for j in range(1, kin.njoints) if j != base_joint and base_joint in kin.supports[j]]
@@ -85,11 +81,7 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
         driver, m, off = c
         return (None if driver in above_base or m == 0.0 else driver), m, off
 
-    dofs: list[int] = []
-    for j in active:
-        d = follows(j)[0]
-        if d is not None and d not in dofs:
-            dofs.append(d)
+    dofs = [d for d in dict.fromkeys(follows(j)[0] for j in active) if d is not None]
     dof_names = [kin.names[d] for d in dofs]
     if joints is not None:
         unknown = [j for j in joints if j not in dof_names]

@@ -1,9 +1,6 @@
-"""The robots :func:`~evoik_pin.robot.load_robot` takes by name: the papers' arms shipped with evoik_pin, and the arms
-and whole robots (humanoids, legged robots, dual-arm and mobile manipulators, hands) of ``example-robot-data``.
-
-A named arm loads as the serial chain to its tool frame; a whole robot as its whole tree unless ``tip``, ``tips`` or
-``joints`` say less. Names follow ``example_robot_data.load(name)``.
-"""
+"""The robots :func:`~evoik_pin.robot.load_robot` takes by name (those of ``example_robot_data.load(name)``): the
+papers' arms shipped with evoik_pin, and the arms (loaded as the chain to their tool frame) and whole robots (loaded
+whole unless ``tip``, ``tips`` or ``joints`` say less) of ``example-robot-data``."""
 
 from __future__ import annotations
 

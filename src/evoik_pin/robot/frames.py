@@ -4,6 +4,9 @@
 
 from __future__ import annotations
 
+import difflib
+from collections import Counter
+
 import pinocchio as pin
 
 __all__ = ["closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
@@ -67,9 +70,7 @@ def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: t
 def unique_frame_names(model: pin.Model) -> tuple[pin.Model, dict[str, str]]:
     """(model, {}) when no two frames share a name; else (a copy in which every non-BODY frame with a repeated name,
     and a JOINT frame's joint, has a unique alias, {alias: name}). :func:`restore_frame_names` undoes it."""
-    counts: dict[str, int] = {}
-    for f in model.frames:
-        counts[f.name] = counts.get(f.name, 0) + 1
+    counts = Counter(f.name for f in model.frames)
     renamed: dict[str, str] = {}
     if not any(c > 1 for c in counts.values()):
         return model, renamed
@@ -97,6 +98,7 @@ def restore_frame_names(model: pin.Model, renamed: dict[str, str]) -> None:
     for i in range(len(model.frames)):
         model.frames[i].name = renamed.get(model.frames[i].name, model.frames[i].name)
 
+
 def frame_names(model: pin.Model, bodies: bool = False) -> list[str]:
     """Names of every frame of ``model`` but the universe (with ``bodies``: its BODY frames, the URDF's links), in
     model order, each once."""
@@ -105,8 +107,6 @@ def frame_names(model: pin.Model, bodies: bool = False) -> list[str]:
 
 def closest_names(name: str, names: list[str], count: int = 5) -> list[str]:
     """Up to ``count`` of ``names`` closest to ``name`` (difflib; containing or contained names too), closest first."""
-    import difflib
-
     close = difflib.get_close_matches(name, names, n=count, cutoff=0.6)
     low = name.lower()
     close += [x for x in names if x not in close and low and (low in x.lower() or x.lower() in low)]

@@ -1,7 +1,6 @@
 """The geometry of a robot's links for the viewer and collision scenes, as :class:`RobotGeometry`, a base class of
-:class:`~evoik_pin.robot.Robot`: the URDF's visual and collision models reduced like the robot's model, with
-``package://`` mesh URIs resolved, and their placements at a joint vector.
-"""
+:class:`~evoik_pin.robot.Robot`: the URDF's visual and collision models reduced like its model (``package://`` mesh
+URIs resolved), and their placements at a joint vector."""
 
 from __future__ import annotations
 
@@ -58,10 +57,7 @@ class RobotGeometry:
             said = str(exc).strip()
             why = [m for pkg, m in self.missing_packages.items() if f"package://{pkg}/" in said]
             raise RobotLoadError(f"{self.name}: {why[0] if why else said}") from None
-        if self._locked:
-            _, geoms = reduced_model(self._kin_model, self._locked, self._q_ref_full, (geom,))
-            geom = geoms[0]
-        return geom
+        return reduced_model(self._kin_model, self._locked, self._q_ref_full, (geom,))[1][0] if self._locked else geom
 
     def _mesh_file(self, m: re.Match) -> str:
         """The file of a ``package://pkg/rel`` URI whose package was found, else the URI (for ``package_dirs``)."""

@@ -1,6 +1,5 @@
 """A robot's joint bounds: the search box of ``q`` (rad or m) and the checks of joint vectors and populations, as
-:class:`JointBounds`, a base class of :class:`~evoik_pin.robot.Robot` (whose attributes its methods read).
-"""
+:class:`JointBounds`, a base class of :class:`~evoik_pin.robot.Robot` (whose attributes its methods read)."""
 
 from __future__ import annotations
 
@@ -26,9 +25,7 @@ class JointBounds:
     def _set_default_bounds(self, coupling: dict[int, tuple[int, float, float]]) -> None:
         """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE without), narrowed so that every
         mimic joint following it stays inside its own."""
-        fm = self._kin_model
-        lower = np.empty(self.n)
-        upper = np.empty(self.n)
+        fm, lower, upper = self._kin_model, np.empty(self.n), np.empty(self.n)
         for k, d in enumerate(self._dof_ids):
             lo, hi, limited = joint_limits(fm, d)
             if not limited:
@@ -53,8 +50,7 @@ class JointBounds:
             raise BoundsError("base_box bounds the floating base's position: give it with floating_base=True")
         try:
             if np.ndim(base_box) == 0:
-                h = float(base_box)
-                lo, hi = np.full(3, -h), np.full(3, h)
+                lo, hi = np.full(3, -float(base_box)), np.full(3, float(base_box))
             else:
                 lo, hi = (np.asarray(b, dtype=float).reshape(3) for b in base_box)
         except (TypeError, ValueError) as exc:
@@ -71,8 +67,7 @@ class JointBounds:
     def checked_bounds(self, lower, upper) -> tuple[np.ndarray, np.ndarray]:
         """``lower`` and ``upper`` as float arrays (n,) of their own (rad or m), or a BoundsError naming what is wrong:
         a count other than n, NaN or inf, lower > upper."""
-        lower = np.array(lower, dtype=float).reshape(-1)
-        upper = np.array(upper, dtype=float).reshape(-1)
+        lower, upper = np.array(lower, dtype=float).reshape(-1), np.array(upper, dtype=float).reshape(-1)
         if lower.shape != (self.n,) or upper.shape != (self.n,):
             raise BoundsError(f"bounds need {self.n} values each (one per joint of {self.name}), got {lower.size} "
                               f"and {upper.size}")

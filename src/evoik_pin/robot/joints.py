@@ -1,6 +1,5 @@
 """1-DOF joint helpers on a Pinocchio model: values (rad or m; a continuous joint stores (cos, sin)), motions,
-limits, mimic couplings; one joint at a time (no model-wide ``Data``, which is large for big models).
-"""
+limits, mimic couplings; one joint at a time (a model-wide ``Data`` is large for big models)."""
 
 from __future__ import annotations
 
@@ -48,19 +47,14 @@ def set_joint_value(model: pin.Model, q: np.ndarray, j: int, value: float) -> No
 def joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
     """(revolute (k,) bool, unit axes (k, 3) in each joint's own frame) of 1-DOF joints, from their motion
     subspace at the neutral configuration."""
-    ids = list(joint_ids)
-    q = pin.neutral(model)
-    revolute = np.zeros(len(ids), dtype=bool)
-    axes = np.zeros((len(ids), 3))
-    for k, j in enumerate(ids):
-        jm = model.joints[j]
-        jd = jm.createData()
-        jm.calc(jd, q)
-        S = np.asarray(jd.S).reshape(6)
-        lin, ang = S[:3], S[3:]
-        revolute[k] = np.linalg.norm(ang) > 0.5
-        axes[k] = ang if revolute[k] else lin
-    return revolute, axes
+    q, S = pin.neutral(model), []
+    for j in joint_ids:
+        jd = model.joints[j].createData()
+        model.joints[j].calc(jd, q)
+        S.append(np.asarray(jd.S).reshape(6))
+    S = np.array(S, dtype=float).reshape(-1, 6)  # rows (linear, angular)
+    revolute = np.linalg.norm(S[:, 3:], axis=1) > 0.5
+    return revolute, np.where(revolute[:, None], S[:, 3:], S[:, :3])
 
 
 def joint_limits(model: pin.Model, j: int) -> tuple[float, float, bool]:
@@ -69,7 +63,6 @@ def joint_limits(model: pin.Model, j: int) -> tuple[float, float, bool]:
     jm = model.joints[j]
     if jm.nq != 1:
         return -np.pi, np.pi, False
-    lo = float(model.lowerPositionLimit[jm.idx_q])
-    hi = float(model.upperPositionLimit[jm.idx_q])
+    lo, hi = float(model.lowerPositionLimit[jm.idx_q]), float(model.upperPositionLimit[jm.idx_q])
     limited = abs(lo) < UNBOUNDED and abs(hi) < UNBOUNDED and lo < hi
     return lo, hi, limited

@@ -22,23 +22,15 @@ from .robot import Robot
 from .urdf_checks import Mimic, check_urdf
 from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
 
-__all__ = [
-    "BUNDLED_ROBOTS",
-    "EXAMPLE_ARMS",
-    "WHOLE_ROBOTS",
-    "bundled_robots_dir",
-    "example_robot_data_dir",
-    "list_robots",
-    "load_robot",
-]
+__all__ = ["bundled_robots_dir", "example_robot_data_dir", "list_robots", "load_robot"]
+
 
 def example_robot_data_dir() -> Path:
-    """The ``robots/`` directory of the installed ``example-robot-data`` wheel (from its file list)."""
+    """The ``robots/`` directory of the installed ``example-robot-data`` wheel (a dependency; from its file list)."""
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
-        raise RobotNotFoundError("the 'example-robot-data' package is not installed; install it (pip install "
-                                 "example-robot-data) to load arms such as panda or ur5 by name") from exc
+        raise RobotNotFoundError("the 'example-robot-data' package is not installed (pip install it)") from exc
     for f in dist.files or []:
         parts = Path(str(f)).parts
         if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):
@@ -48,8 +40,7 @@ def example_robot_data_dir() -> Path:
 
 
 def bundled_robots_dir() -> Path:
-    """Directory holding the bundled paper arms: ``evoik_pin/robots`` in an installed wheel (pyproject's
-    ``force-include``), ``robots/`` at the top of a source checkout (``src/evoik_pin`` two levels below)."""
+    """Directory of the bundled paper arms: ``evoik_pin/robots`` in a wheel, ``robots/`` atop a source checkout."""
     package = Path(__file__).resolve().parents[1]  # evoik_pin/ (this file is evoik_pin/robot/loading.py)
     for candidate in (package / "robots", package.parents[1] / "robots"):
         if (candidate / "ax18.urdf").is_file():
@@ -66,36 +57,26 @@ def list_robots(whole: bool = False, describe: bool = False) -> list[str] | dict
     return what if describe else list(what)
 
 
-def load_robot(
-    source: str | bytes | os.PathLike,
-    tip: str | None = None,
-    base: str | None = None,
-    joints: list[str] | None = None,
-    bounds: tuple[np.ndarray, np.ndarray] | None = None,
-    xacro_args: dict | None = None,
-    srdf: str | os.PathLike | None = None,
-    package_dirs: str | os.PathLike | list | None = None,
-    tips: list[str] | str | None = None,
-    floating_base: bool = False,
-    base_box=None,
-    package_aliases: dict[str, str] | None = None,
-) -> Robot:
+def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: str | None = None,
+               joints: list[str] | None = None, bounds: tuple[np.ndarray, np.ndarray] | None = None,
+               xacro_args: dict | None = None, srdf: str | os.PathLike | None = None,
+               package_dirs: str | os.PathLike | list | None = None, tips: list[str] | str | None = None,
+               floating_base: bool = False, base_box=None, package_aliases: dict[str, str] | None = None) -> Robot:
     """Load a robot: one serial chain of a URDF, the chains to several frames, or the whole tree.
 
     Args:
-        source: a URDF or xacro path, URDF (or xacro) XML text or bytes, or a name of :func:`list_robots`
-            (``list_robots(whole=True)``). Files are decoded as their XML declaration says (UTF-8 by default).
-        tip: end-effector frame; default a named arm's tool frame, else the deepest link. Given, the active joints
-            are the chain from the base to it. Given neither ``tip`` nor ``tips``, a whole robot by name and a URDF
-            whose movable joints branch activate the whole tree (``tips="all"``); a serial chain its chain.
+        source: a URDF or xacro path, URDF (or xacro) XML text or bytes, or a name of ``list_robots(whole=True)``.
+            Files are decoded as their XML declaration says (UTF-8 by default).
+        tip: end-effector frame (default a named arm's tool frame, else the deepest link): the active joints are
+            the chain from the base to it. Without ``tip`` and ``tips``, a whole robot by name and a branching URDF
+            activate the whole tree (``tips="all"``).
         base: frame the chain starts from and poses are expressed in (default: the URDF's root).
         joints: names of the active joints to keep free; the rest is locked.
         bounds: ``(lower, upper)`` search bounds, each (n,) (rad or m).
         xacro_args: ``{name: value}`` of a xacro file's ``<xacro:arg>`` (xacro sources only).
         srdf: an SRDF file whose ``<disable_collisions>`` pairs collision scenes skip (named robots find theirs).
-        package_dirs: folders holding the ROS packages the file names (``$(find pkg)``, ``package://pkg/...``),
-            searched first (the other rules: :mod:`.packages`). A ``$(find pkg)`` nothing finds is a
-            RobotLoadError; a missing mesh package only matters to meshes (viewer, collision scenes).
+        package_dirs: folders holding the ROS packages the file names, searched first (:mod:`.packages`). A
+            ``$(find pkg)`` nothing finds is a RobotLoadError; a missing mesh package only matters to meshes.
         package_aliases: ``{package named in the file: the name it is shipped under}``.
         tips: frames whose chains from the base make the active joints (their union; ``tip`` defaults to the
             first), or ``"all"``: every joint below the base.
@@ -103,9 +84,7 @@ def load_robot(
             (m) and yaw, pitch, roll (rad; Rz Ry Rx) in the world frame, where poses are then expressed.
         base_box: the floating base's position box: a half-width h (m; default 1) or (lower (3,), upper (3,)).
 
-    Returns:
-        A :class:`Robot`; joints off the active ones locked at their neutral value (clipped into their limits),
-        mimic joints following their joint.
+    Returns a :class:`Robot`, the other joints locked at their neutral value (clipped into their limits).
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
@@ -118,14 +97,12 @@ def load_robot(
     elif xacro_args:
         raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
                              "elements or ${...} / $(...) expressions)")
-    if tip is None and named:
-        tip = _default_tip(name)
+    if tip is None and named:  # a named arm's tool frame (the bundled paper arms': tool)
+        tip = EXAMPLE_ARMS[name].tip if name in EXAMPLE_ARMS else "tool" if name in BUNDLED_ROBOTS else None
     model, mimic = _parse_urdf(xml, path)
     if tip is None and tips is None and (named and name in WHOLE_ROBOTS
                                          or not named and is_branched(model, couplings(model, mimic))):
-        # a whole robot: never the chain to one arbitrary deepest link (with a floating base, goals on the other
-        # branches would bind to locked joints)
-        tips = "all"
+        tips = "all"  # a whole robot: never the chain to one arbitrary deepest link
     mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
     try:
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
@@ -154,26 +131,17 @@ def _srdf_path(srdf, name: str | None) -> str | None:
     return None
 
 
-def _default_tip(name: str) -> str | None:
-    """The usual tool frame of a named arm (``tool`` for the bundled paper arms); None for other names."""
-    return EXAMPLE_ARMS[name].tip if name in EXAMPLE_ARMS else "tool" if name in BUNDLED_ROBOTS else None
-
-
 def _package_dirs(path: Path | None, resolver: PackageResolver) -> list[str]:
     """Directories Pinocchio tries ``package://pkg/...`` URIs in when :func:`_mesh_packages` did not find ``pkg``."""
-    erd = example_robot_data_dir()
-    # example-robot-data URDFs name meshes both package://<pkg>/... and package://example-robot-data/robots/...
-    package_dirs = [str(erd), str(erd.parents[1])]
-    if path is not None:
-        package_dirs = [str(path.parent), str(path.parent.parent), *package_dirs]
-    return [*(str(d) for d in (*resolver.user_dirs, *resolver.ros_dirs)), *package_dirs]
+    erd = example_robot_data_dir()  # its URDFs name package://<pkg>/... and package://example-robot-data/robots/...
+    own = [path.parent, path.parent.parent] if path is not None else []
+    return [str(d) for d in (*resolver.user_dirs, *resolver.ros_dirs, *own, erd, erd.parents[1])]
 
 
 def _mesh_packages(xml: str, resolver: PackageResolver, where: str) -> tuple[dict[str, str], dict[str, str]]:
     """(``{pkg: folder}`` of the ``package://pkg/...`` URIs of the URDF that were found, ``{pkg: error
     message}`` of those that were not: raised only when meshes are loaded, as IK needs none)."""
-    found: dict[str, str] = {}
-    missing: dict[str, str] = {}
+    found, missing = {}, {}
     for pkg in package_uris(xml):
         folder = resolver.find(pkg)
         if folder is not None:
@@ -184,8 +152,7 @@ def _mesh_packages(xml: str, resolver: PackageResolver, where: str) -> tuple[dic
 
 
 def _check_instantiated(source_text: str, urdf: str, where: str) -> None:
-    """A RobotLoadError for a xacro file that only defines macros (it has a robot name, but no link comes
-    out): name the macros, so that the user loads the file calling them."""
+    """A RobotLoadError naming the macros of a xacro file that defines some but yields no link."""
     if re.search(r"<link\b", urdf):
         return
     macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)", source_text)
@@ -196,8 +163,7 @@ def _check_instantiated(source_text: str, urdf: str, where: str) -> None:
 
 
 def _looks_like_xml(text: str) -> bool:
-    """True for URDF (or xacro) text given as a string: it starts with "<" or holds an XML declaration or a
-    <robot> element (a path or a name does neither)."""
+    """True for URDF (or xacro) text: it starts with "<" or holds "<?xml" or "<robot" (no path or name does)."""
     return text.lstrip("\ufeff \t\r\n").startswith("<") or "<?xml" in text or "<robot" in text
 
 
@@ -243,17 +209,15 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
         data = path.read_bytes()
     except OSError as exc:
         raise RobotNotFoundError(f"cannot read URDF file {str(path)!r}: {exc.strerror}") from exc
-    resolved = path.resolve()
-    xml = decode_xml(data, str(resolved))
     stem = path.name
     for suffix in (".xacro", ".urdf"):
         stem = stem[: -len(suffix)] if stem.lower().endswith(suffix) and len(stem) > len(suffix) else stem
-    return (text if named else stem), resolved, xml, named
+    return (text if named else stem), path.resolve(), decode_xml(data, str(path.resolve())), named
 
 
 def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, dict[str, Mimic]]:
-    """Pinocchio model of the whole URDF ``xml`` (read from ``path``, or None for a string) and what
-    :func:`check_urdf` found in it, or a RobotLoadError saying what is wrong with it."""
+    """(Pinocchio model of the whole URDF ``xml`` read from ``path`` (None: a string), its :func:`check_urdf`
+    mimics), or a RobotLoadError saying what is wrong with it."""
     where = str(path) if path is not None else "URDF string"
     try:
         root = ET.fromstring(xml)

@@ -1,8 +1,9 @@
 """Locking joints: :meth:`Robot.locked` builds a robot like the original whose ``q`` omits some joints, fixed at given
-values; the solvers' ``locked=`` option does it for one call and maps ``q`` back with these helpers.
-"""
+values; the solvers' ``locked=`` option does it for one call and maps ``q`` back with these helpers."""
 
 from __future__ import annotations
+
+import weakref
 
 import numpy as np
 
@@ -42,8 +43,6 @@ def _checked(robot, values) -> dict[str, float]:
 
 def locked_robot(robot, values):
     """:meth:`Robot.locked` (see there); the robots made are cached per robot and values (weakly)."""
-    import weakref
-
     values = _checked(robot, values)
     if not values:
         return robot
@@ -51,10 +50,8 @@ def locked_robot(robot, values):
     hit = _CACHE.get(key)
     if hit is not None and hit[0]() is robot:
         return hit[1]
-    args = dict(robot._init_args)
     keep = [j for j in robot.joint_names if j not in values]
-    args["joints"] = keep
-    args["base_box"] = None  # the bounds are copied below
+    args = {**robot._init_args, "joints": keep, "base_box": None}  # the bounds are copied below
     out = type(robot)(**args, rest={**robot.locked_values, **values})  # a Robot, without importing robot.py
     out.srdf = robot.srdf
     idx = [robot.joint_names.index(j) for j in keep]

@@ -69,12 +69,6 @@ def check_package_aliases(aliases) -> dict[str, str]:
     return dict(aliases)
 
 
-def ros_package_path() -> list[Path]:
-    """The existing folders of ``ROS_PACKAGE_PATH`` (``os.pathsep``-separated), in order."""
-    entries = os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep)
-    return [Path(e).expanduser().resolve() for e in entries if e.strip() and Path(e).expanduser().is_dir()]
-
-
 def package_uris(xml: str) -> list[str]:
     """The package names of the ``package://pkg/...`` URIs in URDF text, in order of first appearance."""
     return list(dict.fromkeys(_URI.findall(xml)))
@@ -82,12 +76,9 @@ def package_uris(xml: str) -> list[str]:
 
 def _package_name(folder: Path) -> str | None:
     """The ``<name>`` of ``folder/package.xml``, or None (no file, unreadable, no name)."""
-    f = folder / "package.xml"
-    if not f.is_file():
-        return None
     try:
-        name = ET.parse(f).getroot().findtext("name")
-    except (ET.ParseError, OSError):
+        name = ET.parse(folder / "package.xml").getroot().findtext("name")
+    except (ET.ParseError, OSError):  # no file (FileNotFoundError), unreadable
         return None
     return name.strip() if name else None
 
@@ -131,10 +122,9 @@ class PackageResolver:
         self.path = path
         self.user_dirs = list(package_dirs)
         self.aliases = dict(aliases or {})
-        self.ros_dirs = ros_package_path()
-        self.ancestors = list(path.parent.resolve().parents) if path is not None else []
-        if path is not None:
-            self.ancestors.insert(0, path.parent.resolve())
+        entries = os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep)  # read at each load
+        self.ros_dirs = [Path(e).expanduser().resolve() for e in entries if e.strip() and Path(e).expanduser().is_dir()]
+        self.ancestors = [path.parent.resolve(), *path.parent.resolve().parents] if path is not None else []
         self._found: dict[str, Path | None] = {}
 
     def find(self, pkg: str) -> Path | None:
@@ -160,10 +150,8 @@ class PackageResolver:
             if crawled is not None:
                 return crawled
         for a in self.ancestors:  # (c): the file's own tree, nearest first
-            if a.name == pkg:
-                return a
-            if (a / pkg).is_dir():
-                return a / pkg
+            if a.name == pkg or (a / pkg).is_dir():
+                return a if a.name == pkg else a / pkg
         for a in self.ancestors:  # (d): a package.xml naming it
             if _package_name(a) == pkg:
                 return a
@@ -171,9 +159,7 @@ class PackageResolver:
 
     def searched(self) -> str:
         """Where a package was looked for, for error messages."""
-        parts = []
-        if self.user_dirs:
-            parts.append(f"package_dirs {[str(d) for d in self.user_dirs]}")
+        parts = [f"package_dirs {[str(d) for d in self.user_dirs]}"] if self.user_dirs else []
         parts.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs
                      else "ROS_PACKAGE_PATH (not set)")
         if self.ancestors:

@@ -1,11 +1,7 @@
-"""The robot: :class:`Robot`, the active joints of a URDF (a serial chain, the chains to several tips, or the whole
-tree) as Pinocchio sees them, every other joint locked; kinematics of any frame, one ``q`` (Pinocchio) or a
-population (NumPy), and the folded constants compiled kernels evaluate. Loading: :mod:`.loading`.
-
-``q`` has one entry per independent degree of freedom (rad or m) in Pinocchio's joint order; a floating base puts
-x, y, z (m) and yaw, pitch, roll (rad) in front (:mod:`.tree`). Mimic joints are not entries: physical joint k's
-value is ``scale[k] * q[index[k]] + offset[k]`` (:meth:`Robot.tree_constants`) and Jacobians get the chain rule.
-Poses are those of frames in the base frame (the world frame when no base is chosen).
+"""The robot: :class:`Robot`, the active joints of a URDF (a chain, several tips' chains, or the whole tree), the
+others locked: kinematics of any frame for one ``q`` (Pinocchio) or a population (NumPy), and the folded constants
+of compiled kernels. ``q``: one entry per independent degree of freedom (rad or m) in Pinocchio's order; mimic
+joints follow (:meth:`Robot.tree_constants`). Poses are in the base frame (the world frame when none is chosen).
 """
 
 from __future__ import annotations
@@ -40,14 +36,13 @@ _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full":
                         "planar": [0, 1, 5]}
 
 
-
 def yoshikawa(J: np.ndarray):
-    """Yoshikawa's manipulability of Jacobians J (..., r, n): the product of J's singular values, i.e.
-    sqrt(det(J J^T)) when r <= n and sqrt(det(J^T J)) when the arm has fewer joints than rows (a 5-joint arm's
-    6 x 5 Jacobian, whose J J^T is singular at every configuration). Shape (...,); 0 at a singularity."""
+    """Yoshikawa's manipulability (...,) of Jacobians J (..., r, n): the product of J's singular values
+    (sqrt(det(J J^T)) when r <= n); 0 at a singularity."""
     if J.shape[-2] > J.shape[-1]:  # the singular values themselves: det(J^T J) of a rank-deficient J is noise
         return np.prod(np.linalg.svd(J, compute_uv=False), axis=-1)
     return np.sqrt(np.maximum(np.linalg.det(J @ np.swapaxes(J, -1, -2)), 0.0))
+
 
 class Robot(JointBounds, RobotGeometry):
     """The active joints of a URDF (a serial chain or a tree): kinematics, Jacobians, manipulability of any frame.
@@ -66,24 +61,12 @@ class Robot(JointBounds, RobotGeometry):
         mimic_joints: ``{physical joint: (joint it follows, multiplier, offset)}`` of the active mimic joints.
     """
 
-    def __init__(
-        self,
-        full_model: pin.Model,
-        tip: str | None = None,
-        base: str | None = None,
-        joints: list[str] | None = None,
-        name: str = "robot",
-        urdf_path: Path | None = None,
-        urdf_xml: str | None = None,
-        package_dirs: list[str] | None = None,
-        mimic: dict | None = None,
-        tips: list[str] | str | None = None,
-        floating_base: bool = False,
-        base_box=None,
-        packages: dict[str, str] | None = None,
-        missing_packages: dict[str, str] | None = None,
-        rest: dict[str, float] | None = None,
-    ) -> None:
+    def __init__(self, full_model: pin.Model, tip: str | None = None, base: str | None = None,
+                 joints: list[str] | None = None, name: str = "robot", urdf_path: Path | None = None,
+                 urdf_xml: str | None = None, package_dirs: list[str] | None = None, mimic: dict | None = None,
+                 tips: list[str] | str | None = None, floating_base: bool = False, base_box=None,
+                 packages: dict[str, str] | None = None, missing_packages: dict[str, str] | None = None,
+                 rest: dict[str, float] | None = None) -> None:
         """``full_model``: the URDF's fixed-base model. ``tips``: frames whose chains make the active joints, or
         ``"all"``. ``mimic``: ``{joint: (followed joint, multiplier, offset)}`` (or objects with those attributes;
         :func:`~evoik_pin.robot.urdf_checks.check_urdf`). ``packages``: ``{pkg: folder}`` of mesh URIs,
@@ -96,28 +79,22 @@ class Robot(JointBounds, RobotGeometry):
         self.missing_packages = dict(missing_packages or {})
         self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
         self.floating_base = bool(floating_base)
+        kin = self.full_model = full_model  # kin: the model the reduced one is cut from (six joints + full_model)
         if self.floating_base:
             _check_fixed_root(full_model, name)
             if base is not None:
                 raise FrameError(f"a floating base moves the root link of {name}: poses are in the world frame, so "
                                  f"no base frame can be chosen (got base={base!r})")
-            kin = with_floating_base(full_model)
-            self.full_model = free_flyer_model(full_model)
-        else:
-            kin = full_model
-            self.full_model = full_model
-        self._kin_model = kin  # the model the reduced one is cut from: full_model, or six joints + full_model
+            kin, self.full_model = with_floating_base(full_model), free_flyer_model(full_model)
+        self._kin_model = kin
         self._full_couplings = coupling = couplings(kin, mimic)
 
         chosen = choose_joints(kin, full_model, name, tip, tips, base, joints, coupling)
         physical, dofs = chosen.physical, chosen.dofs
-        q_ref = pin.neutral(kin)
-        for j in range(1, kin.njoints):
-            jm = kin.joints[j]
-            if jm.nq == 1:  # keep locked joints inside their limits
-                lo, hi = kin.lowerPositionLimit[jm.idx_q], kin.upperPositionLimit[jm.idx_q]
-                if lo <= hi:
-                    q_ref[jm.idx_q] = np.clip(q_ref[jm.idx_q], lo, hi)
+        q_ref = pin.neutral(kin)  # locked joints at rest, inside their limits
+        idx = np.array([kin.joints[j].idx_q for j in range(1, kin.njoints) if kin.joints[j].nq == 1], dtype=np.intp)
+        lo, hi = kin.lowerPositionLimit[idx], kin.upperPositionLimit[idx]
+        q_ref[idx] = np.where(lo <= hi, np.clip(q_ref[idx], lo, hi), q_ref[idx])
         for jname, value in (rest or {}).items():  # joints locked elsewhere than at rest (Robot.locked)
             set_joint_value(kin, q_ref, kin.getJointId(jname), value)
         for j, (d, m, off) in coupling.items():  # locked mimic joints sit where their driver's rest puts them
@@ -130,8 +107,7 @@ class Robot(JointBounds, RobotGeometry):
         self.tip, self.tips, self.base = chosen.tip, chosen.tips, chosen.base
         self._tip_id = find_frame(self.model, self.tip)
         self._base_id = 0 if base is None else find_frame(self.model, base)
-        self.n = len(dofs)
-        self.joint_names = [kin.names[d] for d in dofs]
+        self.n, self.joint_names = len(dofs), [kin.names[d] for d in dofs]
         self._dof_ids = dofs  # kinematic-model joint ids of the entries of q
 
         # Base placement is constant: every free joint is downstream of the base frame.
@@ -144,13 +120,14 @@ class Robot(JointBounds, RobotGeometry):
         m_phys = self.model.njoints - 1
         self._phys_idx_q = np.array([self.model.joints[k].idx_q for k in range(1, m_phys + 1)], dtype=np.intp)
         self._phys_continuous = np.array([self.model.joints[k].nq == 2 for k in range(1, m_phys + 1)])
+        self._has_continuous = bool(self._phys_continuous.any())
         self.tree = KinematicTree.of(self.model, self._baseMo)
         follow = chosen.follow
         self.mimic_joints = {kin.names[j]: (kin.names[d], m, off) for j, (d, m, off) in zip(physical, follow,
                                                                                           strict=True) if d != j}
         self._phys_index = np.array([dofs.index(d) for d, _, _ in follow], dtype=np.int64)
-        self._phys_scale = np.array([m for _, m, _ in follow], dtype=float)
-        self._phys_offset = np.array([off for _, _, off in follow], dtype=float)
+        _, scale, offset = zip(*follow, strict=True)
+        self._phys_scale, self._phys_offset = np.array(scale, dtype=float), np.array(offset, dtype=float)
         self._coupled = bool(self.mimic_joints)
         self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
         self._G[np.arange(m_phys), self._phys_index] = self._phys_scale
@@ -168,12 +145,9 @@ class Robot(JointBounds, RobotGeometry):
 
     # ------------------------------------------------------------------ locked copies
     def locked(self, values: dict[str, float]) -> Robot:
-        """A new Robot whose ``q`` omits the joints ``values`` names, fixed at those values (rad or m); bounds are
-        this robot's on the joints left (:mod:`.locking`).
-
-        Raises: FrameError for a name that is no joint of ``q``; BoundsError for a value outside the joint's bounds;
-        ConfigurationError when every joint would be locked.
-        """
+        """A new Robot whose ``q`` omits the joints ``values`` names, fixed at those values (rad or m), this robot's
+        bounds on the others. FrameError for no joint of ``q``, BoundsError outside its bounds, ConfigurationError
+        when none is left free."""
         from .locking import locked_robot
 
         return locked_robot(self, values)
@@ -193,11 +167,11 @@ class Robot(JointBounds, RobotGeometry):
         if fid is None:
             if not isinstance(frame, str):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
-            fid = self._frame_ids[frame] = find_frame(self.model, frame)  # a scan of every frame
+            fid = find_frame(self.model, frame)  # a scan of every frame
             if fid < 0:
-                del self._frame_ids[frame]
                 raise FrameError(f"{self.name} has no frame {frame!r}{suggest_frames(frame, self.model)} (robot.frames "
                                  f"lists its {len(self.frames)} frames)")
+            self._frame_ids[frame] = fid
         return fid
 
     def _frame_view(self, fid: int) -> tuple[int, np.ndarray, np.ndarray, ChainView]:
@@ -228,18 +202,10 @@ class Robot(JointBounds, RobotGeometry):
         """Names of the joints between the base and a frame (None: the tip) that ``q`` does not move (off the active
         joints, left out by ``joints=[...]`` or :meth:`locked`); a mimic joint is named by the joint it follows.
         :func:`~evoik_pin.goals.stack.bind` refuses goals on such frames with these names."""
-        name = self.model.frames[self.frame_id(frame)].name
-        kin = self._kin_model
-        path = kin.supports[kin.frames[find_frame(kin, name)].parentJoint]
-        locked = set(self._locked)
-        names: list[str] = []
-        for j in path:
-            if j not in locked or j in self._above_base:
-                continue
-            driver = self._full_couplings.get(j, (j,))[0]
-            if driver not in self._above_base and kin.names[driver] not in names:
-                names.append(kin.names[driver])
-        return names
+        kin, locked = self._kin_model, set(self._locked) - self._above_base
+        path = kin.supports[kin.frames[find_frame(kin, self.model.frames[self.frame_id(frame)].name)].parentJoint]
+        drivers = [self._full_couplings.get(j, (j,))[0] for j in path if j in locked]
+        return list(dict.fromkeys(kin.names[d] for d in drivers if d not in self._above_base))
 
     # ------------------------------------------------------------------ constants of compiled kernels
     def tree_constants(self) -> tuple[np.ndarray, ...]:
@@ -299,9 +265,7 @@ class Robot(JointBounds, RobotGeometry):
         """Configuration (full_model.nq,) of the whole URDF (``pin.buildModelFromUrdf(path)``'s order): ``q`` on its
         joints, mimic joints coupled, the others at rest. With a floating base it starts with the position (m) and
         unit quaternion (x, y, z, w), w >= 0, of Pinocchio's free-flyer joint."""
-        q = self.check_q(q)
-        out = self._q_ref_full.copy()
-        fm = self._kin_model
+        q, out, fm = self.check_q(q), self._q_ref_full.copy(), self._kin_model
         for k, d in enumerate(self._dof_ids):
             set_joint_value(fm, out, d, q[k])
         for j, (d, m, off) in self._full_couplings.items():
@@ -342,10 +306,6 @@ class Robot(JointBounds, RobotGeometry):
             else:
                 gather[i] = k
         return gather
-
-    @cached_property
-    def _has_continuous(self) -> bool:
-        return bool(self._phys_continuous.any())
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
         """:meth:`to_pinocchio` for the hot path: ``q`` itself when no conversion is needed, else the last one

@@ -1,15 +1,11 @@
-"""The kinematic tree of a robot's active joints: topology, folded constants (and masses), frames on joints, a
-floating base, the kinematics of populations.
+"""The kinematic tree of a robot's active joints: folded constants, masses, frames, a floating base, and the
+kinematics of populations (physical joint values X (N, m), a few NumPy calls per joint whatever N is).
 
-The m physical joints of a (reduced) Pinocchio model are its joints 1..m in topological order. For joint k,
-``parent[k]`` (-1 at the root) and its placement ``(FR[k], Fp[k])`` in its parent's *folded* frame: every joint
-axis is turned onto z by a constant rotation ``B_k`` (:func:`~evoik_pin.lie.rotation_to_z`) folded into the
-placements, ``F_k = B_parent^T M_k B_k``, so that ``Z(x)`` is a rotation about z (revolute) or a translation along
-z (prismatic) and ``(R_k, p_k) = (R_parent, p_parent) F_k Z(x_k)``. A frame sits on one joint j_f (-1: the base) at
-the folded placement ``B_j^T M_f``. A floating base (:func:`with_floating_base`) is six 1-DOF joints in front of
-the root link: prismatic x, y, z (m), then revolute yaw (z), pitch (new y), roll (new x) (rad). The population
-kinematics (:func:`chain_forward`, :func:`chain_positions`, :func:`chain_jacobians`) walk a frame's
-:class:`ChainView` for physical joint values X (N, m) with a few NumPy calls per joint whatever N is.
+The m physical joints of a reduced model are its joints 1..m in topological order; joint k has ``parent[k]`` (-1 at
+the root) and placement ``(FR[k], Fp[k])`` in its parent's *folded* frame: a constant rotation ``B_k``
+(:func:`~evoik_pin.lie.rotation_to_z`) turns each axis onto z, ``F_k = B_parent^T M_k B_k``, so ``(R_k, p_k) =
+(R_parent, p_parent) F_k Z(x_k)`` with ``Z(x)`` about or along z. A frame on joint j_f (-1: the base) sits at
+``B_j^T M_f``. A floating base is six 1-DOF joints before the root: x, y, z (m), yaw, pitch, roll (rad).
 """
 
 from __future__ import annotations
@@ -39,14 +35,11 @@ FLOATING_BASE_BOUNDS = (np.array([-1.0, -1.0, -1.0, -np.pi, -np.pi / 2, -np.pi])
 def with_floating_base(model: pin.Model) -> pin.Model:
     """``model`` (fixed-base) behind the six joints :data:`FLOATING_BASE_JOINTS` (limits
     :data:`FLOATING_BASE_BOUNDS`, each with its JOINT frame); the root link hangs from the roll joint's frame."""
-    base = pin.Model()
-    parent = 0
-    kinds = (pin.JointModelPX(), pin.JointModelPY(), pin.JointModelPZ(), pin.JointModelRZ(), pin.JointModelRY(),
-             pin.JointModelRX())
-    lo, hi = FLOATING_BASE_BOUNDS
-    for k, (name, joint) in enumerate(zip(FLOATING_BASE_JOINTS, kinds, strict=True)):
-        parent = base.addJoint(parent, joint, pin.SE3.Identity(), name, np.array([np.inf]), np.array([np.inf]),
-                               np.array([lo[k]]), np.array([hi[k]]))
+    base, parent = pin.Model(), 0
+    kinds = (pin.JointModelPX, pin.JointModelPY, pin.JointModelPZ, pin.JointModelRZ, pin.JointModelRY, pin.JointModelRX)
+    for name, joint, lo, hi in zip(FLOATING_BASE_JOINTS, kinds, *FLOATING_BASE_BOUNDS, strict=True):
+        parent = base.addJoint(parent, joint(), pin.SE3.Identity(), name, np.array([np.inf]), np.array([np.inf]),
+                               np.array([lo]), np.array([hi]))
         base.appendBodyToJoint(parent, pin.Inertia.Zero(), pin.SE3.Identity())
         frame = base.addFrame(pin.Frame(name, parent, pin.SE3.Identity(), pin.FrameType.JOINT))
     return _appended(base, model, frame)
@@ -72,22 +65,23 @@ def free_flyer_model(model: pin.Model) -> pin.Model:
 
 def rpy_to_quaternion(yaw: float, pitch: float, roll: float) -> np.ndarray:
     """Unit quaternion (x, y, z, w) of ``Rz(yaw) Ry(pitch) Rx(roll)`` (rad), with w >= 0."""
-    R = pin.rpy.rpyToMatrix(roll, pitch, yaw)
-    quat = pin.Quaternion(R).coeffs()  # (x, y, z, w)
-    return np.array(quat) * (1.0 if quat[3] >= 0 else -1.0)
+    quat = np.array(pin.Quaternion(pin.rpy.rpyToMatrix(roll, pitch, yaw)).coeffs())  # (x, y, z, w)
+    return quat if quat[3] >= 0 else -quat
 
 
+@dataclass(eq=False)
 class ChainView:
     """The serial chain from the base to one frame, folded: ``T = F_0 Z(x_a0) F_1 ... Z(x_ac) F_c+1``.
     ``joints`` (c,): its physical joints, base to frame; ``FR`` (c+1, 3, 3), ``Fp`` (c+1, 3) m: the placements,
     the last the frame's; ``revolute`` (c,) bool."""
 
-    def __init__(self, joints: np.ndarray, FR: np.ndarray, Fp: np.ndarray, revolute: np.ndarray) -> None:
-        self.joints = joints
-        self.FR = FR
-        self.Fp = Fp
-        self.revolute = revolute
-        self.all_revolute = bool(revolute.all())
+    joints: np.ndarray
+    FR: np.ndarray
+    Fp: np.ndarray
+    revolute: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.all_revolute = bool(self.revolute.all())
 
     @cached_property
     def positions_operator(self) -> tuple[list[np.ndarray], np.ndarray]:
@@ -145,8 +139,7 @@ class KinematicTree:
                    np.array(baseMo.rotation), np.array(baseMo.translation))
 
     @property
-    def m(self) -> int:
-        """Number of physical joints."""
+    def m(self) -> int:  # the number of physical joints
         return int(self.parent.size)
 
     @cached_property
@@ -158,8 +151,7 @@ class KinematicTree:
         """(j_f or -1, R_f (3, 3), p_f (3,) m) of frame ``frame_id`` of the tree's ``model``: its folded placement
         on its joint, or its base-frame pose when j_f = -1."""
         f = model.frames[frame_id]
-        j = int(f.parentJoint) - 1
-        M = f.placement
+        j, M = int(f.parentJoint) - 1, f.placement
         if j < 0:
             return -1, self.base_R @ M.rotation, self.base_R @ M.translation + self.base_p
         Bt = self.B[j].T
@@ -167,8 +159,7 @@ class KinematicTree:
 
     def ancestors(self, j: int) -> np.ndarray:
         """(c,) int64: the physical joints that move a frame on joint j (its ancestors and j), root first."""
-        parent = self.parent.tolist()  # Python ints: cheaper than indexing the array joint by joint
-        out = []
+        parent, out = self.parent.tolist(), []  # Python ints: cheaper than indexing the array joint by joint
         while j >= 0:
             out.append(j)
             j = parent[j]
@@ -208,14 +199,11 @@ def mass_constants(robot) -> MassConstants:
     Bodies the reduction leaves on the universe are a constant first moment; bodies welded to the world in
     ``full_model`` are left out, as ``pin.centerOfMass(full_model, ...)`` does."""
     model, tree = robot.model, robot.tree
-    m = tree.m
-    masses = np.array([model.inertias[k + 1].mass for k in range(m)], dtype=float)
-    moments = np.empty((m, 3))
-    for k in range(m):
-        inertia = model.inertias[k + 1]
-        moments[k] = tree.B[k].T @ (inertia.mass * np.asarray(inertia.lever))
+    inertias = [model.inertias[k + 1] for k in range(tree.m)]
+    masses = np.array([i.mass for i in inertias], dtype=float)
+    moments = np.array([B.T @ (i.mass * np.asarray(i.lever)) for B, i in zip(tree.B, inertias, strict=True)])
     subtree = masses.copy()
-    for k in range(m - 1, -1, -1):  # a joint comes after its parent
+    for k in range(tree.m - 1, -1, -1):  # a joint comes after its parent
         if tree.parent[k] >= 0:
             subtree[tree.parent[k]] += subtree[k]
     held, welded = model.inertias[0], robot.full_model.inertias[0]
@@ -242,12 +230,10 @@ def chain_forward(view: ChainView, X: np.ndarray, want_joints: bool):
     R = np.broadcast_to(FR[0], (N, 3, 3)).copy()
     p = np.broadcast_to(Fp[0], (N, 3)).copy()
     cos, sin = np.cos(X), np.sin(X)
-    z_axes = np.empty((N, c, 3)) if want_joints else None
-    origins = np.empty((N, c, 3)) if want_joints else None
+    z_axes, origins = (np.empty((N, c, 3)), np.empty((N, c, 3))) if want_joints else (None, None)
     for k in range(c):
         if want_joints:
-            z_axes[:, k] = R[:, :, 2]
-            origins[:, k] = p
+            z_axes[:, k], origins[:, k] = R[:, :, 2], p
         if view.revolute[k]:
             cs, sn = cos[:, k, None], sin[:, k, None]
             c0, c1 = R[:, :, 0].copy(), R[:, :, 1]
@@ -273,8 +259,7 @@ def chain_positions(view: ChainView, X: np.ndarray) -> np.ndarray:
     if not view.all_revolute:
         prismatic = ~view.revolute
         AB[prismatic, 0:4] = XT[prismatic][:, None, :]
-    Y = np.empty((12, N))
-    Z = np.empty((12, N))
+    Y, Z = np.empty((12, N)), np.empty((12, N))
     Y[:] = y_tip
     for k in range(c - 1, -1, -1):
         Y[0:8] *= AB[k]
@@ -287,9 +272,7 @@ def chain_jacobians(view: ChainView, X: np.ndarray, m: int):
     """The frame's positions (N, 3), rotations (N, 3, 3) and base-frame Jacobians (N, 6, m) with respect to the
     m physical joint values (rows vx, vy, vz, wx, wy, wz; zero columns for joints that do not move the frame)."""
     R, p, z_axes, origins = chain_forward(view, X, want_joints=True)
-    J = np.zeros((X.shape[0], 6, m))
-    cols = view.joints
-    rev = view.revolute
+    J, cols, rev = np.zeros((X.shape[0], 6, m)), view.joints, view.revolute
     lever = p[:, None, :] - origins  # (N, c, 3)
     J[:, :3, cols[rev]] = np.cross(z_axes[:, rev], lever[:, rev]).transpose(0, 2, 1)
     J[:, 3:, cols[rev]] = z_axes[:, rev].transpose(0, 2, 1)

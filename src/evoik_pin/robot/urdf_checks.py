@@ -1,6 +1,5 @@
 """What a URDF must be before Pinocchio reads it (urdfdom accepts files giving NaN or wrong kinematics, or rejects
-them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings.
-"""
+them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings."""
 
 from __future__ import annotations
 
@@ -29,9 +28,8 @@ class Mimic:
 
 def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
     """Check the parsed URDF ``root`` (read from ``where``) and return its mimic couplings ``{joint: Mimic}``, each
-    resolved to the joint driving its chain of mimics; a RobotLoadError naming
-    ``where``, the joint or link and what is accepted for names, joint types, links, origins, axes, limits, a
-    tree shape and mimics. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
+    resolved to the joint driving its chain of mimics; a RobotLoadError naming ``where``, the joint or link and what
+    is accepted. A ``<mimic>`` naming no 1-DOF joint is ignored with a RobotLoadWarning."""
     if root.tag != "robot":
         raise RobotLoadError(f"{where} is not a URDF: its root element is <{root.tag}>, expected <robot>")
     if not root.get("name"):
@@ -44,8 +42,7 @@ def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
     types: dict[str, str] = {}
     parent_of: dict[str, tuple[str, str]] = {}  # child link -> (parent link, joint)
     for j in joints:
-        jname = j.get("name")
-        jtype = j.get("type")
+        jname, jtype = j.get("name"), j.get("type")
         types[jname] = jtype
         if jtype not in JOINT_TYPES:
             raise RobotLoadError(f"{where}: joint {jname!r} has type {jtype!r}; URDF joint types are "
@@ -87,12 +84,10 @@ def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:
     return list(names)
 
 
-def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...] | None = None,
+def _floats(text: str | None, count: int, what: str, where: str, default: tuple[float, ...],
             finite: bool = True) -> tuple[float, ...]:
     """``count`` numbers of a space-separated attribute; ``default`` when it is absent."""
     if text is None:
-        if default is None:  # pragma: no cover - callers pass defaults for optional attributes
-            raise RobotLoadError(f"{where}: {what} is missing")
         return default
     parts = text.split()
     try:
@@ -117,18 +112,14 @@ def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
     if axis_el is not None:
         axis = _floats(axis_el.get("xyz"), 3, f"the axis of joint {jname!r}", where, (1.0, 0.0, 0.0))
         if math.sqrt(sum(a * a for a in axis)) < 1e-12:
-            raise RobotLoadError(
-                f"{where}: joint {jname!r} has a zero-length axis {axis_el.get('xyz')!r}; give its direction, e.g. "
-                "<axis xyz=\"0 0 1\"/> (omitting <axis> means 1 0 0)"
-            )
+            raise RobotLoadError(f"{where}: joint {jname!r} has a zero-length axis {axis_el.get('xyz')!r}; give its "
+                                 "direction, e.g. <axis xyz=\"0 0 1\"/> (omitting <axis> means 1 0 0)")
     limit = j.find("limit")
     if jtype in ("revolute", "prismatic"):
         if limit is None:
             hint = " (an unlimited revolute joint is type=\"continuous\")" if jtype == "revolute" else ""
-            raise RobotLoadError(
-                f"{where}: {jtype} joint {jname!r} has no <limit> element; URDF requires "
-                f"<limit lower=\"...\" upper=\"...\" effort=\"...\" velocity=\"...\"/> for {jtype} joints{hint}"
-            )
+            raise RobotLoadError(f"{where}: {jtype} joint {jname!r} has no <limit> element; URDF requires <limit lower="
+                                 f"\"...\" upper=\"...\" effort=\"...\" velocity=\"...\"/> for {jtype} joints{hint}")
         for attr in ("effort", "velocity"):
             if limit.get(attr) is None:
                 raise RobotLoadError(f"{where}: the <limit> of joint {jname!r} has no {attr} attribute; URDF "

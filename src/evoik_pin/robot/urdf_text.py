@@ -20,12 +20,9 @@ from .packages import PackageResolver
 __all__ = ["captured_stderr", "decode_xml", "expand_xacro", "is_xacro_path", "is_xacro_text"]
 
 # Byte-order marks and the XML spec's (appendix F) signatures of "<?" in UTF-16 / UTF-32 without a mark.
-_SIGNATURES = (
-    (codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
-    (codecs.BOM_UTF16_BE, "utf-16"), (codecs.BOM_UTF16_LE, "utf-16"),
-    (b"\x00\x00\x00<", "utf-32-be"), (b"<\x00\x00\x00", "utf-32-le"),
-    (b"\x00<\x00?", "utf-16-be"), (b"<\x00?\x00", "utf-16-le"),
-)
+_SIGNATURES = ((codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
+               (codecs.BOM_UTF16_BE, "utf-16"), (codecs.BOM_UTF16_LE, "utf-16"), (b"\x00\x00\x00<", "utf-32-be"),
+               (b"<\x00\x00\x00", "utf-32-le"), (b"\x00<\x00?", "utf-16-be"), (b"<\x00?\x00", "utf-16-le"))
 _DECLARED = re.compile(rb"""^\s*<\?xml\s[^>]*?encoding\s*=\s*["']([A-Za-z][A-Za-z0-9._-]*)["']""")
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
 _XACRO = re.compile(r"<xacro:[A-Za-z]|\$\{|\$\(")
@@ -53,11 +50,9 @@ def decode_xml(data: bytes, where: str) -> str:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
         kind = "a binary file, not URDF XML: " if _looks_binary(data) else ""
-        raise RobotLoadError(
-            f"{where} is {kind}not decodable as {source}: byte {data[exc.start]:#04x} at offset {exc.start}. A URDF "
-            "is XML text; declare a non-UTF-8 encoding in its first line, e.g. "
-            "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>"
-        ) from None
+        raise RobotLoadError(f"{where} is {kind}not decodable as {source}: byte {data[exc.start]:#04x} at offset "
+                             f"{exc.start}. A URDF is XML text; declare a non-UTF-8 encoding in its first line, e.g. "
+                             "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>") from None
     text = text.lstrip("\ufeff")
     bad = _CONTROL.search(text)  # XML allows no control characters but tab, newline and carriage return
     if bad is not None:

@@ -26,21 +26,16 @@ DEFAULT_BASE_ANGULAR_SPEED = 2.0 * math.pi
 def urdf_velocity_limits(robot) -> np.ndarray:
     """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's (an entry gets the smallest ``v_j / |m|``
     of the physical joints following it), the defaults where it has none."""
-    n = robot.n
-    limits = np.full(n, np.inf)
-    v = np.asarray(robot.model.velocityLimit, dtype=float)
-    index, scale = robot.tree_constants()[4], robot.tree_constants()[5]
-    if v.shape[0] == n:
-        limits = v.copy()
-    elif v.shape[0] == index.shape[0]:  # one entry per physical joint of the folded tree
-        for j in range(index.shape[0]):
-            k = int(index[j])
+    n, v = robot.n, np.asarray(robot.model.velocityLimit, dtype=float)
+    index, scale = robot.tree_constants()[4:6]
+    limits = v.copy() if v.shape[0] == n else np.full(n, np.inf)
+    if v.shape[0] != n and v.shape[0] == index.shape[0]:  # one entry per physical joint of the folded tree
+        for j, k in enumerate(index):
             if 0 <= k < n and scale[j] != 0.0:
                 limits[k] = min(limits[k], v[j] / abs(scale[j]))
-    missing = ~np.isfinite(limits) | (limits <= 0.0)
-    limits[missing] = DEFAULT_JOINT_SPEED
+    base = limits[:6].copy() if v.shape[0] == n else np.full(6, np.inf)
+    limits[~np.isfinite(limits) | (limits <= 0.0)] = DEFAULT_JOINT_SPEED
     if robot.floating_base:  # x, y, z (m/s), yaw, pitch, roll (rad/s): a free flyer has no URDF limit
-        base = np.asarray(robot.model.velocityLimit[:6], dtype=float) if v.shape[0] == n else np.full(6, np.inf)
         defaults = np.array([DEFAULT_BASE_LINEAR_SPEED] * 3 + [DEFAULT_BASE_ANGULAR_SPEED] * 3)
         limits[:6] = np.where(np.isfinite(base) & (base > 0.0), base, defaults)
     return limits
@@ -56,10 +51,9 @@ def velocity_limits(robot, spec) -> np.ndarray:
     if isinstance(spec, bool) or spec is None:
         raise OptionError(f"{accepted}; got {spec!r}")
     if isinstance(spec, (int, float, np.integer, np.floating)):
-        factor = float(spec)
-        if not (math.isfinite(factor) and factor > 0.0):
+        if not (math.isfinite(spec) and spec > 0.0):
             raise OptionError(f"{accepted}; got the factor {spec!r}")
-        return factor * urdf_velocity_limits(robot)
+        return float(spec) * urdf_velocity_limits(robot)
     try:
         arr = np.asarray(spec, dtype=float)
     except (TypeError, ValueError):

@@ -47,8 +47,7 @@ def free_configurations(scene: Scene, count: int, rng: np.random.Generator, tip_
                         batch: int = 20000, max_draws: int = 2_000_000) -> np.ndarray:
     """Up to ``count`` configurations (count, n) drawn in the robot's bounds, collision-free in ``scene`` and, with
     ``tip_box`` = (lower (3,), upper (3,)) m, putting the tip inside it; fewer when ``max_draws`` did not suffice."""
-    robot = scene.robot
-    out, drawn = [], 0
+    robot, out, drawn = scene.robot, [], 0
     while sum(len(x) for x in out) < count and drawn < max_draws:
         Q = robot.random_configurations(batch, rng)
         drawn += batch

@@ -1,8 +1,9 @@
 """A robot's collision geometry (the URDF's ``<collision>`` on its reduced model), the pairs worth checking, and
-convex-hull proxies.
-"""
+convex-hull proxies."""
 
 from __future__ import annotations
+
+from itertools import combinations
 
 import numpy as np
 import pinocchio as pin
@@ -28,13 +29,9 @@ def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> li
     (rigidly attached, or touching by construction), nor disabled by the SRDF."""
     parents = robot.model.parents
     adjacent = {(min(j, int(parents[j])), max(j, int(parents[j]))) for j in range(1, robot.model.njoints)}
-    objects = geom.geometryObjects
-    pairs = []
-    for a in range(geom.ngeoms):
-        for b in range(a + 1, geom.ngeoms):
-            ja, jb = int(objects[a].parentJoint), int(objects[b].parentJoint)
-            if ja != jb and (min(ja, jb), max(ja, jb)) not in adjacent:
-                pairs.append((a, b))
+    joint = [int(o.parentJoint) for o in geom.geometryObjects]
+    pairs = [(a, b) for a, b in combinations(range(geom.ngeoms), 2)
+             if joint[a] != joint[b] and (min(joint[a], joint[b]), max(joint[a], joint[b])) not in adjacent]
     if srdf is None or not pairs:
         return pairs
     probe = geom.copy()

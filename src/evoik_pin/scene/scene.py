@@ -1,7 +1,6 @@
 """A collision scene: the robot's collision geometry and obstacles at poses in its base frame (m), checked with
-Pinocchio and coal. Checked pairs: the robot's self-collision pairs (:func:`.geometry.self_collision_pairs`) and
-every (moving robot object, obstacle) pair. :meth:`Scene.in_collision` (exact, on the meshes) judges every answer
-evoik_pin calls collision-free; :meth:`Scene.collides` checks populations, also on convex-hull proxies.
+Pinocchio and coal on the robot's self-collision pairs (:func:`.geometry.self_collision_pairs`) and every (moving
+robot object, obstacle) pair: exactly on the meshes, or on convex-hull proxies.
 """
 
 from __future__ import annotations
@@ -20,6 +19,7 @@ from .geometry import as_placement, convex_hulls, robot_collision_model, self_co
 
 __all__ = ["Obstacle", "Scene"]
 
+
 @dataclass(frozen=True)
 class Obstacle:
     """One obstacle: ``kind`` (box, sphere, cylinder, capsule, mesh), its parameters (``size`` (3,) m for a box,
@@ -34,13 +34,12 @@ class Obstacle:
 
 def _length(value, what: str, zero: bool = False) -> float:
     """``value`` (m) as a finite float > 0 (>= 0 with ``zero``), or a SceneError naming ``what``."""
-    bound = ">= 0" if zero else "> 0"
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise SceneError(f"{what} must be a number {bound} (m), got {value!r}") from None
+        v = math.nan
     if not (math.isfinite(v) and (v >= 0 if zero else v > 0)):
-        raise SceneError(f"{what} must be a finite number {bound} (m), got {value!r}")
+        raise SceneError(f"{what} must be a finite number {'>= 0' if zero else '> 0'} (m), got {value!r}")
     return v
 
 
@@ -78,11 +77,9 @@ class Scene:
         if name in self._obstacles:
             raise SceneError(f"an obstacle named {name!r} is already in the scene; remove it first or pick "
                              "another name")
-        robot_names = {self._object_name(i) for i in range(self._robot_geom.ngeoms)}
-        if name in robot_names:
+        if name in {self._object_name(i) for i in range(self._robot_geom.ngeoms)}:
             raise SceneError(f"obstacle name {name!r} is the name of one of the robot's links")
-        placement = as_placement(pose, f"obstacle {name!r}")
-        self._obstacles[name] = Obstacle(name, kind, params, placement, shape)
+        self._obstacles[name] = Obstacle(name, kind, params, as_placement(pose, f"obstacle {name!r}"), shape)
         self._build()
         return self
 
@@ -91,13 +88,11 @@ class Scene:
         import coal
 
         try:
-            s = np.asarray(size, dtype=float).reshape(-1)
+            s = np.asarray(size, dtype=float).reshape(3)
         except (TypeError, ValueError):
-            raise SceneError(f"box {name!r}: size must be three lengths (m), got {size!r}") from None
-        if s.shape != (3,):
-            raise SceneError(f"box {name!r}: size must be three lengths (x, y, z) in m, got {size!r}")
-        s = np.array([_length(v, f"box {name!r}: size") for v in s])
-        return self._add(name, "box", {"size": s.tolist()}, coal.Box(*s), pose)
+            raise SceneError(f"box {name!r}: size must be three lengths (x, y, z) in m, got {size!r}") from None
+        s = [_length(v, f"box {name!r}: size") for v in s]
+        return self._add(name, "box", {"size": s}, coal.Box(*s), pose)
 
     def add_sphere(self, name: str, radius, pose) -> Scene:
         """A sphere of ``radius`` m centred at ``pose``."""
@@ -127,9 +122,7 @@ class Scene:
         p = Path(os.fspath(path)).expanduser()
         if not p.is_file():
             raise SceneError(f"mesh {name!r}: file not found: {str(path)!r}")
-        sc = np.broadcast_to(np.asarray(scale, dtype=float), (3,)).copy()
-        for v in sc:
-            _length(v, f"mesh {name!r}: scale")
+        sc = np.array([_length(v, f"mesh {name!r}: scale") for v in np.broadcast_to(np.asarray(scale, float), (3,))])
         try:
             shape = coal.MeshLoader().load(str(p), sc)
         except Exception as exc:  # assimp / coal report unreadable files with various exception types
@@ -139,8 +132,8 @@ class Scene:
     def remove(self, name: str) -> Scene:
         """Remove the obstacle ``name``."""
         if name not in self._obstacles:
-            known = ", ".join(self._obstacles) or "(none)"
-            raise SceneError(f"no obstacle named {name!r} in the scene; obstacles: {known}")
+            raise SceneError(f"no obstacle named {name!r} in the scene; obstacles: "
+                             f"{', '.join(self._obstacles) or '(none)'}")
         del self._obstacles[name]
         self._build()
         return self
@@ -176,21 +169,17 @@ class Scene:
 
     def _build(self) -> None:
         """(Re)build the exact and the hull geometry models with every pair to check."""
-        geom = self._robot_geom.copy()
-        base = self.robot.base_placement
+        geom, base = self._robot_geom.copy(), self.robot.base_placement
         self._names = list(self._obstacles)
-        for name in self._names:
-            placement = base * self._obstacles[name].pose  # base frame -> the model's world frame
-            geom.addGeometryObject(pin.GeometryObject(name, 0, 0, placement, self._obstacles[name].shape))
-        pairs = list(self._self_pairs)
+        for name in self._names:  # base frame -> the model's world frame
+            geom.addGeometryObject(pin.GeometryObject(name, 0, 0, base * self._obstacles[name].pose,
+                                                      self._obstacles[name].shape))
         n_robot = self._robot_geom.ngeoms
-        pairs += [(i, n_robot + k) for i in self._moving for k in range(len(self._names))]
+        self._pairs = [*self._self_pairs, *((i, n_robot + k) for i in self._moving for k in range(len(self._names)))]
         geom.removeAllCollisionPairs()
-        for a, b in pairs:
+        for a, b in self._pairs:
             geom.addCollisionPair(pin.CollisionPair(a, b))
-        self._pairs = pairs
-        self._geom = geom
-        self._gdata = pin.GeometryData(geom)
+        self._geom, self._gdata = geom, pin.GeometryData(geom)
         self._hulls = convex_hulls(geom)
         self._hdata = pin.GeometryData(self._hulls)
         self._margin = {id(self._gdata): 0.0, id(self._hdata): 0.0}
@@ -236,10 +225,8 @@ class Scene:
     def collides(self, Q, margin: float = 0.0, proxy: bool = False) -> np.ndarray:
         """(N,) bool: :meth:`in_collision` of each row of ``Q`` (N, n); ``proxy=True`` on the convex hulls
         (conservative, cheaper)."""
-        robot = self.robot
-        Q = robot.check_population(Q)
-        margin = _length(margin, "margin", zero=True)
-        return np.fromiter((self._check(robot.to_pinocchio(q), margin, proxy, True) for q in Q), dtype=bool,
+        Q, margin = self.robot.check_population(Q), _length(margin, "margin", zero=True)
+        return np.fromiter((self._check(self.robot.to_pinocchio(q), margin, proxy, True) for q in Q), dtype=bool,
                            count=Q.shape[0])
 
     def distance(self, q) -> float:
@@ -248,8 +235,7 @@ class Scene:
         the pairs; exact distances are computed until the next bound exceeds the best one."""
         if not self._pairs:
             return math.inf
-        q_pin = self._q(q)
-        model = self.robot.model
+        q_pin, model = self._q(q), self.robot.model
         pin.updateGeometryPlacements(model, self._data, self._hulls, self._hdata, q_pin)
         pin.computeDistances(self._hulls, self._hdata)
         lower = np.array([r.min_distance for r in self._hdata.distanceResults])

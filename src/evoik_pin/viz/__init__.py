@@ -1,23 +1,14 @@
-"""Meshcat web preview of a robot (chain or whole tree), targets and goals, solutions, trajectories, obstacles, and
-a static HTML export: :class:`Viewer`, its life cycle and inputs. Everything is drawn in the robot's base frame (m).
-
-Nodes below meshcat's root: ``robot``, ghost ``solutions/<k>``, ``target``, ``goals/<frame>`` (and ``/label``),
-``path``, ``scene/visuals/<obstacle>``. The drawing is the mixins' of :mod:`.robot`, :mod:`.ghosts`,
-:mod:`.markers`, :mod:`.obstacles`, :mod:`.paths`, :mod:`.camera`, :mod:`.html`; the meshcat server is
-:mod:`.server`'s (127.0.0.1 only; it stops with :meth:`Viewer.close`, a ``with`` block, or its parent's exit).
-
-Example::
-
-    with Viewer(load_robot("panda")) as v:
-        v.show(q)                           # (n,) joint vector, or a result with .q
-        v.show_solutions([q1, q2])          # ghosts
-        v.animate(trajectory, dt=0.05)      # (N, n)
-        v.save_html("scene.html")           # self-contained file
+"""Meshcat web preview of a robot, targets and goals, solutions, trajectories, obstacles, and a static HTML export
+(docs/API.md): :class:`Viewer`, its life cycle, inputs and export, in the robot's base frame (m). Nodes: ``robot``,
+``solutions/<k>``, ``target``, ``goals/<frame>``, ``path``, ``scene/visuals/<obstacle>``; the drawing is the mixins'
+of the modules beside this one, the meshcat server :mod:`.server`'s (127.0.0.1 only, stopped by :meth:`Viewer.close`).
 """
 
 from __future__ import annotations
 
+import base64
 import os
+import re
 import subprocess
 import sys
 import time
@@ -31,17 +22,15 @@ import pinocchio as pin
 from ..errors import ConfigurationError, OptionError, ViewerError
 from ..robot import Robot
 from .camera import CAMERA_FOV_DEG, Camera
-from .ghosts import GHOST_COLORS, GHOST_MESH_BUDGET, GhostDrawing
-from .html import HtmlExport, html_commands
 from .markers import MarkerDrawing
 from .obstacles import COLLISION_RGBA, OBSTACLE_RGBA, ObstacleDrawing, obstacle_model
 from .paths import PathDrawing
-from .robot import RobotDrawing, _reach, _visual_model, skeleton_model
+from .robot import GHOST_COLORS, GHOST_MESH_BUDGET, RobotDrawing, _reach, _visual_model, skeleton_model
 from .server import _connect, _import_meshcat, _probe, _Server, _talks
 
-__all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGET", "OBSTACLE_RGBA",
-           "OWN_SERVER_HANG_S", "PROBE_TIMEOUT", "SERVER_TIMEOUT", "Viewer", "html_commands", "obstacle_model",
-           "save_solution_html", "skeleton_model"]
+__all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGET", "KEYPOINT_COLOR", "KEYPOINT_RADIUS",
+           "OBSTACLE_RGBA", "OWN_SERVER_HANG_S", "PROBE_TIMEOUT", "SERVER_TIMEOUT", "Viewer", "html_commands",
+           "obstacle_model", "save_clip_html", "save_solution_html", "skeleton_model"]
 
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer one request.
 SERVER_TIMEOUT = 20.0
@@ -50,31 +39,38 @@ SERVER_TIMEOUT = 20.0
 OWN_SERVER_HANG_S = 600.0
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer its first request.
 PROBE_TIMEOUT = 5.0
+#: Radius (m) and colour (0xRRGGBB) of a source keypoint's sphere in :func:`save_clip_html`.
+KEYPOINT_RADIUS = 0.015
+KEYPOINT_COLOR = 0xFF8C00
 
 
-class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera, HtmlExport):
+_COMMAND_RE = re.compile(r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"\)')
+
+
+def html_commands(html: str) -> list[dict]:
+    """The meshcat commands (dicts with ``type``, ``path`` and the payload) the static HTML ``html``
+    (:meth:`Viewer.save_html`) replays, in order, decoded from its base64 msgpack blobs."""
+    import umsgpack
+
+    return [umsgpack.unpackb(base64.b64decode(m)) for m in _COMMAND_RE.findall(html)]
+
+
+class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera):
     """A meshcat scene of one robot: configurations, ghosts, targets and goals, paths, animation, HTML export.
 
-    Args:
-        robot: a :class:`~evoik_pin.robot.Robot`.
-        zmq_url: ZeroMQ URL of a running meshcat server to draw into; None starts a private one on 127.0.0.1.
-        open: open the scene in the default web browser.
-        skeleton: True draws spheres and cylinders; None uses the URDF's visuals when it has some.
+    ``robot``: a :class:`~evoik_pin.robot.Robot`; ``zmq_url``: a running meshcat server to draw into (None: a
+    private one on 127.0.0.1); ``open``: open the scene in the browser; ``skeleton``: True draws spheres and
+    cylinders, None the URDF's visuals when it has some. Attributes: ``url``, ``zmq_url``, ``scene`` (``{node path:
+    description}`` of what was drawn), ``skeleton``, ``vis`` (the ``meshcat.Visualizer``).
 
-    Attributes:
-        url, zmq_url: the web and ZeroMQ addresses. scene: ``{node path: description}`` of what was drawn.
-        skeleton: whether the robot is drawn as a skeleton. vis: the underlying ``meshcat.Visualizer``.
-
-    Configurations are ``(n,)`` joint vectors (rad, m) or objects with ``.q`` (a :class:`~evoik_pin.Result`);
-    a list of them may also be an ``(N, n)`` array, a :class:`~evoik_pin.Front`, or a result with ``solutions``
-    or a ``front``.
+    Configurations are ``(n,)`` joint vectors (rad, m) or objects with ``.q`` (a :class:`~evoik_pin.Result`); a list
+    of them may also be an ``(N, n)`` array, a :class:`~evoik_pin.Front`, or a result with ``solutions`` or ``front``.
     """
 
     def __init__(self, robot: Robot, zmq_url: str | None = None, open: bool = False, skeleton: bool | None = None):
         _import_meshcat()
         self.robot = robot
-        self.vis = None
-        self._server: _Server | None = None
+        self.vis, self._server = None, None
         self.scene: dict[str, str] = {}
         self._viz = {}  # node name -> pinocchio MeshcatVisualizer drawing the robot there
         self._red: tuple[object, frozenset[str]] = (None, frozenset())  # (robot visualizer, its red geometry names)
@@ -86,8 +82,7 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
                 warnings.warn(f"{robot.name}: {why}; drawing a skeleton (spheres at the joints, cylinders "
                               "between them) instead", UserWarning, stacklevel=2)
             geom = skeleton_model(robot)
-        self._geom = geom
-        self._skeleton_geom: pin.GeometryModel | None = None
+        self._geom, self._skeleton_geom = geom, None
         self._reach = _reach(robot)
         self._baseMo = robot.base_placement.inverse()  # the model's world frame seen from the base frame
         self._camera_target = np.zeros(3)  # the point the camera looks at (m, base frame)
@@ -180,10 +175,27 @@ class Viewer(RobotDrawing, GhostDrawing, MarkerDrawing, ObstacleDrawing, PathDra
         if not name:
             raise ConfigurationError("delete needs a node name; an empty name would clear the whole scene")
         vis[name].delete()
-        for key in [k for k in self.scene if k == name or k.startswith(name + "/")]:
-            del self.scene[key]
-        for key in [k for k in self._viz if k == name or k.startswith(name + "/")]:
-            del self._viz[key]
+        for drawn in (self.scene, self._viz):
+            for key in [k for k in drawn if k == name or k.startswith(name + "/")]:
+                del drawn[key]
+
+    def _fresh(self, name: str):
+        """(meshcat node, name) of the node ``name`` (slashes stripped), deleted for a new drawing."""
+        name = name.strip("/")
+        self.delete(name)
+        return self._check_open()[name], name
+
+    @_talks
+    def save_html(self, path: str | os.PathLike) -> Path:
+        """Write the scene (with its animation) as one self-contained HTML file (no server needed); return its path."""
+        html = self._check_open().static_html()
+        html = html.replace("<title>MeshCat</title>", f"<title>evoik_pin: {self.robot.name}</title>", 1)
+        out = Path(path).expanduser()
+        try:
+            out.write_text(html, encoding="utf-8")
+        except OSError as exc:
+            raise ViewerError(f"cannot write the HTML scene to {str(out)!r}: {exc.strerror or exc}") from exc
+        return out
 
     def __repr__(self) -> str:
         return f"Viewer({self.robot.name!r}, url={getattr(self, 'url', None)!r}, scene={list(self.scene)})"
@@ -196,4 +208,25 @@ def save_solution_html(robot: Robot, result, goals, path: str | os.PathLike, sce
     its path. What ``evoik solve ... --html`` writes for a goal list."""
     with Viewer(robot) as viewer:
         viewer.show_solution(result, goals, scene=scene, margin=margin)
+        return viewer.save_html(path)
+
+
+def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True) -> Path:
+    """Write ``clip`` (a :class:`~evoik_pin.motion.Clip` of ``robot``) as a self-contained HTML page playing it at
+    its fps, and return the path. ``keypoints``: also the source keypoints the robot followed (``clip.keypoints``,
+    scaled into the robot's world), as orange spheres under ``keypoints/<name>``."""
+    import meshcat.geometry as mg
+
+    with Viewer(robot) as viewer:
+        Q, vis = viewer._qs(clip.q), viewer._check_open()
+        points = clip.keypoints if keypoints and clip.keypoints is not None else None
+        for name in clip.keypoint_names if points is not None else ():
+            vis["keypoints"][name].set_object(mg.Sphere(KEYPOINT_RADIUS), mg.MeshLambertMaterial(color=KEYPOINT_COLOR))
+
+        def move_keypoints(frame, k: int) -> None:
+            for name, p in zip(clip.keypoint_names, points[k], strict=True):
+                frame["keypoints"][name].set_transform(pin.SE3(np.eye(3), p).homogeneous)
+
+        viewer._animate_robot(Q, clip.fps, each_frame=move_keypoints if points is not None else None)
+        viewer.scene["animation"] = f"{Q.shape[0]} frames at {clip.fps:g} fps"
         return viewer.save_html(path)

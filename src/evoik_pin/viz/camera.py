@@ -59,7 +59,6 @@ class Camera:
         radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.01)  # the box's bounding sphere; a point: 1 cm
         # the sphere's silhouette spans 2 asin(radius / distance) of the vertical field of view
         distance = radius / np.sin(fill * np.radians(CAMERA_FOV_DEG) / 2)
-        direction = _VIEW_DIRECTION / np.linalg.norm(_VIEW_DIRECTION)
-        position = target + distance * direction
+        position = target + distance * _VIEW_DIRECTION / np.linalg.norm(_VIEW_DIRECTION)
         self.set_camera(position, target)
         return position, target

@@ -1,6 +1,5 @@
 """Markers of targets and goals in the base frame: a coordinate triad (x red, y green, z blue) for a pose, a sphere
-for a position, a goal's frame name as a label; and a goal-list answer with its goals (``show_solution``).
-"""
+for a position, a goal's frame name as a label; and a goal-list answer with its goals (``show_solution``)."""
 
 from __future__ import annotations
 
@@ -46,11 +45,7 @@ def _draw_marker(node, p: np.ndarray, R: np.ndarray | None, size: float) -> str:
             T[:3, :3] = turn[axis]  # meshcat's cylinder runs along y
             T[:3, 3] = turn[axis] @ np.array([0.0, size / 2, 0.0])
             node[axis].set_transform(T)
-    T = np.eye(4)
-    T[:3, 3] = p
-    if R is not None:
-        T[:3, :3] = R
-    node.set_transform(T)
+    node.set_transform(pin.SE3(np.eye(3) if R is None else R, p).homogeneous)
     return "point" if R is None else "triad"
 
 
@@ -98,11 +93,8 @@ class MarkerDrawing:
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise TargetError(f"target position must be 3 finite numbers (m), got shape {p.shape}: {p}")
         R = None if rotation is None else _check_rotation(rotation, "target")
-        s = self._marker_size(size)
-        vis = self._check_open()
-        name = name.strip("/")
-        self.delete(name)
-        self.scene[name] = "target " + _draw_marker(vis[name], p, R, s)
+        node, name = self._fresh(name)
+        self.scene[name] = "target " + _draw_marker(node, p, R, self._marker_size(size))
 
     @_talks
     def show_goals(self, goals, name: str = "goals", size: float | None = None, labels: bool = True) -> list[str]:
@@ -111,11 +103,8 @@ class MarkerDrawing:
         (``<name>/<frame>/label``); return the markers' node names in the goals' order."""
         from ..goals import bind
 
-        goals = bind(self.robot, goals)[0]
-        s = self._marker_size(size)
-        vis = self._check_open()
-        name = name.strip("/")
-        self.delete(name)
+        goals, s = bind(self.robot, goals)[0], self._marker_size(size)
+        root, name = self._fresh(name)
         nodes = []
         for goal in goals:
             marker = goal.marker()  # what the goal's kind declares: (node name, point, rotation or None) or None
@@ -125,9 +114,9 @@ class MarkerDrawing:
             node = f"{name}/{frame}"
             if node in nodes:  # the same frame twice with the same target (bind refuses clashing ones)
                 continue
-            kind = _draw_marker(vis[node], p, R, s)
+            kind = _draw_marker(root[frame], p, R, s)
             if labels:
-                label = vis[node]["label"]
+                label = root[frame]["label"]
                 label.set_object(_label(frame))
                 # above the marker, in its own frame turned back to the base frame's axes (a sprite has no rotation
                 # of its own to keep, but its offset would turn with a pose's rotation)
@@ -147,10 +136,8 @@ class MarkerDrawing:
         pairs = self.show(result, scene=scene, margin=margin)
         self.show_goals(goals, name=name)
         if frame:
-            q = self._q(result)
-            model = self.robot.model
-            links = [i for i, f in enumerate(model.frames) if f.type == pin.FrameType.BODY]
-            poses = self.robot.frame_poses_unchecked(q, links)  # q checked by show
+            links = [i for i, f in enumerate(self.robot.model.frames) if f.type == pin.FrameType.BODY]
+            poses = self.robot.frame_poses_unchecked(self._q(result), links)
             self.frame(np.array([M.translation for M in poses]
                                 + [m[1] for m in (g.marker() for g in goals) if m is not None]))
         return pairs

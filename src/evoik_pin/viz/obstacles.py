@@ -1,6 +1,5 @@
 """Collision scenes in the viewer: a Scene's obstacles in translucent grey, the robot's links in contact in red
-(reloaded as plain geometry: ``set_object`` commands, which the static export keeps).
-"""
+(reloaded as plain geometry: ``set_object`` commands, which the static export keeps)."""
 
 from __future__ import annotations
 
@@ -8,7 +7,7 @@ import warnings
 
 import pinocchio as pin
 
-from ..errors import ConfigurationError
+from ..errors import ConfigurationError, SceneError
 from .server import _talks
 
 __all__ = ["COLLISION_RGBA", "OBSTACLE_RGBA", "obstacle_model"]
@@ -22,8 +21,7 @@ COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
 def obstacle_model(scene) -> pin.GeometryModel:
     """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` on the universe of
     ``scene.robot.model``, one object per obstacle, named as the obstacle."""
-    base = scene.robot.base_placement
-    geom = pin.GeometryModel()
+    base, geom = scene.robot.base_placement, pin.GeometryModel()
     for ob in scene.obstacles.values():  # base frame -> the model's world frame
         geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, ob.shape))
     return geom
@@ -34,7 +32,6 @@ class ObstacleDrawing:
 
     def _check_scene(self, scene) -> None:
         """SceneError unless ``scene`` is a Scene of this Viewer's robot (the same object, or the same chain)."""
-        from ..errors import SceneError
         from ..scene import Scene
 
         if not isinstance(scene, Scene):
@@ -52,8 +49,7 @@ class ObstacleDrawing:
             red = {g.name for g in viz.visual_model.geometryObjects if g.parentJoint in joints}
         else:
             red = {g.name for g in viz.visual_model.geometryObjects if model.frames[g.parentFrame].name in links}
-        before = self._red[1] if self._red[0] is viz else frozenset()
-        plain = viz.plain_meshes
+        before, plain = self._red[1] if self._red[0] is viz else frozenset(), viz.plain_meshes
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)

@@ -1,6 +1,5 @@
 """Point clouds (``show_points``), polylines (``draw_path``) and the robot animated along a trajectory (``animate``:
-one meshcat ``Animation`` of the geometry nodes' poses, which the static export keeps).
-"""
+one meshcat ``Animation`` of the geometry nodes' poses, which the static export keeps)."""
 
 from __future__ import annotations
 
@@ -9,7 +8,7 @@ import pinocchio as pin
 
 from ..errors import ConfigurationError
 from .camera import checked_points
-from .ghosts import GHOST_COLORS
+from .robot import GHOST_COLORS
 from .server import _talks
 
 
@@ -40,10 +39,8 @@ class PathDrawing:
                                          f"{v.shape}, vmin {vmin}, vmax {vmax}")
             colors = matplotlib.colormaps[cmap](np.clip((v - vmin) / (vmax - vmin), 0.0, 1.0))[:, :3]
         s = float(np.clip(0.02 * self._reach, 0.005, 0.05)) if size is None else float(size)
-        vis = self._check_open()
-        name = name.strip("/")
-        self.delete(name)
-        vis[name].set_object(mg.PointCloud(P.T.astype(np.float32), colors.T.astype(np.float32), size=s))
+        node, name = self._fresh(name)
+        node.set_object(mg.PointCloud(P.T.astype(np.float32), colors.T.astype(np.float32), size=s))
         self.scene[name] = f"cloud of {P.shape[0]} points"
 
     @_talks
@@ -52,11 +49,9 @@ class PathDrawing:
         import meshcat.geometry as mg
 
         P = checked_points(points, "path points", 2)
-        vis = self._check_open()
-        name = name.strip("/")
-        self.delete(name)
-        vis[name].set_object(mg.Line(mg.PointsGeometry(P.T.astype(np.float32)),
-                                     mg.LineBasicMaterial(color=_hex(color), linewidth=2)))
+        node, name = self._fresh(name)
+        node.set_object(mg.Line(mg.PointsGeometry(P.T.astype(np.float32)),
+                                mg.LineBasicMaterial(color=_hex(color), linewidth=2)))
         self.scene[name] = f"line of {P.shape[0]} points"
 
     @_talks
@@ -79,8 +74,7 @@ class PathDrawing:
         (``each_frame(frame, k)`` keys more nodes), show ``Q[0]`` and play it."""
         import meshcat.animation
 
-        vis = self._check_open()
-        viz = self._load("robot")
+        vis, viz = self._check_open(), self._load("robot")
         anim = meshcat.animation.Animation(default_framerate=float(fps))
         geom = viz.visual_model
         nodes = [viz.getViewerNodeName(g, pin.GeometryType.VISUAL) for g in geom.geometryObjects]

@@ -1,6 +1,5 @@
 """The meshcat server a Viewer draws into: its own subprocess (bound to 127.0.0.1, ready once it printed both
-URLs, exiting with its parent) or an external one (probed first: a silent one is a ViewerError, not a hang).
-"""
+URLs, exiting with its parent) or an external one (probed first: a silent one is a ViewerError, not a hang)."""
 
 from __future__ import annotations
 
@@ -68,17 +67,15 @@ class _Server:
     def __init__(self, timeout: float):
         import meshcat
 
-        self._out = tempfile.TemporaryFile()  # files, not pipes: a full pipe would block the server
-        self._err = tempfile.TemporaryFile()
+        self._out, self._err = tempfile.TemporaryFile(), tempfile.TemporaryFile()  # a full pipe would block it
         env = dict(os.environ)
         site = str(Path(meshcat.__file__).resolve().parents[1])
         env["PYTHONPATH"] = os.pathsep.join([site, *filter(None, [env.get("PYTHONPATH")])])
         self.proc = subprocess.Popen([sys.executable, "-u", "-c", _SERVER_SCRIPT, str(os.getpid())],
                                      stdin=subprocess.DEVNULL, stdout=self._out, stderr=self._err, env=env)
         self._finalizer = weakref.finalize(self, _stop_process, self.proc)
-        deadline = time.monotonic() + timeout
-        urls: dict[str, str] = {}
-        while len(urls) < 2:
+        deadline, urls = time.monotonic() + timeout, {}
+        while True:
             for line in _printed(self._out).splitlines():
                 key, _, value = line.strip().partition("=")
                 if key in ("zmq_url", "web_url") and value:
@@ -108,9 +105,9 @@ def _probe(zmq_url: str, timeout: float) -> str:
     import zmq
 
     sock = zmq.Context.instance().socket(zmq.REQ)
-    sock.setsockopt(zmq.LINGER, 0)
-    sock.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
     try:
+        sock.setsockopt(zmq.LINGER, 0)
+        sock.setsockopt(zmq.RCVTIMEO, int(timeout * 1000))
         sock.connect(zmq_url)
         sock.send(b"url")
         return sock.recv().decode()
