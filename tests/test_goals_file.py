@@ -130,6 +130,7 @@ BAD_FILES = [
     ("goals: [{frame: hand, kind: pose, target: {position: [0, 0, 1], rpy: [0, 0, 0]}, tolerence: 0.1}]",
      ["goal 0 (hand)", "unknown key(s) 'tolerence'"]),
     ("goals: []", ["goals is empty"]),
+    (f"goals: [{GOOD}, {{frame: hand, kind: planar, target: {{x: 0, y: .nan}}}}]", ["goal 1 (hand)", "target y (m)"]),
     (f"goals: [{GOOD}]\nproblems: [[{GOOD}]]", ["give one of goals:", "got both"]),
     ("robot: talos", ["give one of goals:", "got neither"]),
     (f"goal: [{GOOD}]", ["top level: unknown key(s) 'goal'"]),
@@ -142,6 +143,15 @@ BAD_FILES = [
     ("", ["the file is empty"]),
     ("3", ["the top level must be a mapping"]),
 ]
+
+
+def test_an_empty_posture_vector_is_read_as_given(tmp_path):
+    """q_ref: [] is a Posture of no entries (its length is checked against a robot when bound), not a KeyError."""
+    from evoik_pin.goals import Posture
+
+    path = _write(tmp_path, f"goals: [{GOOD}, {{kind: posture, q_ref: []}}]")
+    posture = read_goals_file(path).problems[0][1]
+    assert isinstance(posture, Posture) and len(posture.q_ref) == 0
 
 
 @pytest.mark.parametrize(("text", "expected"), BAD_FILES, ids=[e[0][:40] for e in BAD_FILES])

@@ -157,7 +157,7 @@ def _preference(entry: dict, what: str, kind_name: str):
     if kind_name == "posture":
         if ("q_ref" in args) == ("joints" in args):
             raise GoalsFileError(f"{what}: a posture needs one of q_ref (a joint vector) and joints ({{name: value}})")
-        args["q_ref"] = args.pop("q_ref", None) or args.pop("joints")
+        args["q_ref"] = args.pop("q_ref") if "q_ref" in args else args.pop("joints")
     if kind_name == "joint_limit_margin" and "margin" not in args:
         raise GoalsFileError(f"{what}: a joint_limit_margin needs margin (rad or m)")
     try:
