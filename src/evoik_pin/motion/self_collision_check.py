@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from numba import njit
 
 from ..errors import SceneError
 
@@ -27,6 +28,47 @@ BOX_SLACK = 1e-9
 HULL_MARGIN = 1e-3
 #: Verdicts kept by configuration (the last ones: a bisection's and a frame's few).
 REMEMBERED = 64
+#: Pairs found touching that later checks try first.
+RECENT_PAIRS = 8
+
+
+@njit(cache=True, nogil=True)
+def _overlapping_pairs(J, parent, P, centre, half, a, b, slack, out):  # pragma: no cover - compiled
+    """The checked pairs (``a``, ``b``: (K,) object indices) whose world boxes overlap, written into ``out`` (K,)
+    in order; returns their count. ``J`` (nj, 4, 4): the joints' placements; ``parent`` (G,): each object's joint;
+    ``P`` (G, 4, 4): its placement on that joint; ``centre``, ``half`` (G, 3): its local box (m, own frame). The
+    object is at ``J[parent] P``; a box turned by R and moved by t has centre ``R c + t`` and half-extents ``|R| h``;
+    two boxes overlap where no axis separates them by more than ``slack`` (m)."""
+    G = P.shape[0]
+    wc = np.empty((G, 3))
+    wh = np.empty((G, 3))
+    R = np.empty((3, 3))
+    for g in range(G):
+        M = J[parent[g]]
+        for i in range(3):
+            t = M[i, 3]
+            for j in range(3):
+                R[i, j] = M[i, 0] * P[g, 0, j] + M[i, 1] * P[g, 1, j] + M[i, 2] * P[g, 2, j]
+                t += M[i, j] * P[g, j, 3]
+            c = t
+            h = 0.0
+            for j in range(3):
+                c += R[i, j] * centre[g, j]
+                h += abs(R[i, j]) * half[g, j]
+            wc[g, i] = c
+            wh[g, i] = h
+    count = 0
+    for k in range(a.shape[0]):
+        p, q = a[k], b[k]
+        apart = False
+        for i in range(3):
+            if abs(wc[p, i] - wc[q, i]) > wh[p, i] + wh[q, i] + slack:
+                apart = True
+                break
+        if not apart:
+            out[count] = k
+            count += 1
+    return count
 
 
 class SelfCollisionCheck:
@@ -55,6 +97,9 @@ class SelfCollisionCheck:
         # each object by its robot link's name (the scene's names: no obstacles here)
         self._names = [robot.model.frames[int(obj.parentFrame)].name for obj in geom.geometryObjects]
         self._verdicts: dict[bytes, bool] = {}
+        self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its objects' placements, verdict)
+        self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
+        self._placements = np.zeros((0, 4, 4))  # (nj, 4, 4) the joints' placements at the last candidate_pairs
         centres, halves = [], []
         for obj in geom.geometryObjects:
             shape = obj.geometry
@@ -62,8 +107,12 @@ class SelfCollisionCheck:
             lo, hi = np.asarray(shape.aabb_local.min_), np.asarray(shape.aabb_local.max_)
             centres.append((lo + hi) / 2)
             halves.append((hi - lo) / 2)
-        self._centre = np.array(centres).reshape(-1, 3)  # (G, 3) m, each object's own frame
-        self._half = np.array(halves).reshape(-1, 3)
+        self._centre = np.array(centres, dtype=float).reshape(-1, 3)  # (G, 3) m, each object's own frame
+        self._half = np.array(halves, dtype=float).reshape(-1, 3)
+        self._out = np.empty(len(self._a), dtype=np.intp)  # candidate_pairs' scratch
+        self._parent = np.array([int(obj.parentJoint) for obj in geom.geometryObjects], dtype=np.intp)  # (G,)
+        self._local = np.array([obj.placement.homogeneous for obj in geom.geometryObjects],
+                               dtype=float).reshape(-1, 4, 4)  # (G, 4, 4) each object on its joint
 
     def candidate_pairs(self, q) -> np.ndarray:
         """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated)."""
@@ -71,26 +120,49 @@ class SelfCollisionCheck:
         q_pin = robot.to_pinocchio(robot.check_q(q))
         pin.updateGeometryPlacements(robot.model, self._data, self._geom, self._gdata, q_pin)
         pin.updateGeometryPlacements(robot.model, self._data, self._hulls, self._hdata)  # same joint placements
-        H = np.array([m.homogeneous for m in self._gdata.oMg])  # (G, 4, 4)
-        R, t = H[:, :3, :3], H[:, :3, 3]
-        centre = np.einsum("gij,gj->gi", R, self._centre) + t
-        half = np.einsum("gij,gj->gi", np.abs(R), self._half)
-        apart = np.abs(centre[self._a] - centre[self._b]) > half[self._a] + half[self._b] + BOX_SLACK
-        return np.flatnonzero(~apart.any(axis=1))
+        # the joints' placements (fewer than the objects, and the objects' true inputs: a pair's verdict is a
+        # function of its two joints' placements, _touching)
+        J = self._placements = np.array([m.homogeneous for m in self._data.oMi])  # (nj, 4, 4)
+        out = self._out
+        count = _overlapping_pairs(J, self._parent, self._local, self._centre, self._half, self._a, self._b,
+                                   BOX_SLACK, out)
+        return out[:count].copy()
 
     def _touching(self, k: int) -> bool:
         """Whether checked pair k touches at the placements last updated: hulls (within HULL_MARGIN) first, then
-        meshes."""
-        return pin.computeCollision(self._hulls, self._hdata, k) and pin.computeCollision(self._geom, self._gdata, k)
+        meshes. The pair's last verdict is kept with its two objects' joints' placements: a check where both are the
+        same numbers (a bisection moving other links) reuses it."""
+        J, parent = self._placements, self._parent
+        key = J[parent[self._a[k]]].tobytes() + J[parent[self._b[k]]].tobytes()
+        kept = self._pair_verdicts.get(k)
+        if kept is not None and kept[0] == key:
+            return kept[1]
+        verdict = pin.computeCollision(self._hulls, self._hdata, k) and pin.computeCollision(self._geom, self._gdata, k)
+        self._pair_verdicts[k] = (key, verdict)
+        return verdict
 
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
         The last :data:`REMEMBERED` verdicts are kept by ``q``'s bytes: a frame's answer is checked again as the next
-        frame's previous one."""
+        frame's previous one. The pairs found touching last are tried first (a retargeted clip's contacts recur: an
+        arm against the hips), so a colliding configuration is told after a few narrow-phase calls."""
         key = np.asarray(q, dtype=float).tobytes()
         verdict = self._verdicts.get(key)
         if verdict is None:
-            verdict = any(self._touching(k) for k in self.candidate_pairs(q).tolist())
+            candidates = self.candidate_pairs(q)
+            verdict = False
+            recent = [k for k in self._recent if k in candidates]  # np.ndarray membership: a few pairs
+            for k in recent:
+                if self._touching(k):
+                    verdict = True
+                    break
+            else:
+                tried = set(recent)
+                for k in candidates.tolist():
+                    if k not in tried and self._touching(k):
+                        verdict = True
+                        self._recent = [k, *self._recent[:RECENT_PAIRS - 1]]
+                        break
             if len(self._verdicts) >= REMEMBERED:
                 self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
             self._verdicts[key] = verdict
