@@ -341,7 +341,7 @@ def test_frame_stack_targets_are_those_of_the_goal_list(walk_stacks):
         mine, mine_R = np.full_like(pt, np.nan), np.broadcast_to(np.eye(3), Rt.shape).copy()
         stacks.targets(i, holds, clearance, level, mine, mine_R)
         assert np.allclose(mine, pt, rtol=0, atol=1e-12) and np.allclose(mine_R, Rt, rtol=0, atol=1e-12), i
-        structures.add(tuple(stack.kinds.tolist()) + (len(holds),))
+        structures.add(tuple(stack.kinds) + (len(holds),))
     assert len(structures) >= 2  # frames with one and with two feet held were compared
 
 

@@ -13,6 +13,8 @@ the retargeter's :class:`~evoik_pin.motion.self_collision_check.SelfCollisionChe
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["BISECTION_STEPS", "free_nearby", "step_back_free"]
@@ -42,13 +44,18 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
     return lo, at(lo)
 
 
+@functools.lru_cache(maxsize=512)
 def _joints_moving(robot, link: str, others: str) -> np.ndarray:
-    """bool (n,): the entries of q that move ``link`` but not ``others`` (a floating base moves both: never)."""
+    """bool (n,): the entries of q that move ``link`` but not ``others`` (a floating base moves both: never); kept
+    per robot and pair of links (a clip asks for the same few pairs every colliding frame), read-only."""
     try:
         mine, theirs = set(robot.moving_joints(link)), set(robot.moving_joints(others))
     except Exception:  # a geometry name that is no frame: no joint known to move it alone
-        return np.zeros(robot.n, dtype=bool)
-    return np.array([name in mine and name not in theirs for name in robot.joint_names])
+        out = np.zeros(robot.n, dtype=bool)
+    else:
+        out = np.array([name in mine and name not in theirs for name in robot.joint_names])
+    out.setflags(write=False)
+    return out
 
 
 def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.ndarray | None = None
@@ -109,7 +116,8 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
     if not movable.any():
         return None
     for spread in NEARBY_SPREADS:
-        draws = np.clip(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q), lower, upper)
+        draws = np.minimum(np.maximum(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q),
+                                      lower), upper)
         free = [d for d in draws if not scene.in_collision(d)]
         if free:
             return min(free, key=lambda d: float(np.linalg.norm(d - q)))

@@ -122,6 +122,26 @@ class FrameStacks:
             k += 1
         pt[k:] = back
 
+    def prepare(self, tolerances: dict, contact_weight: float, lower: np.ndarray, upper: np.ndarray) -> None:
+        """Bind now (clip set-up) the structures the warm-started frames will use with these ``tolerances`` and
+        ``contact_weight``: one per combination of the feet's contact flags over frames 1.. (a foot in contact is
+        held there), on a box ``[lower, upper]`` (n,) like a frame's (nothing when a joint spans a full turn in
+        it: those frames take the general solve)."""
+        plan = self.plan
+        if not self.usable(lower, upper):
+            return
+        first: dict[tuple, int] = {}  # each combination of flags -> the first frame (from 1) that has it
+        for i in range(1, plan.points.shape[0]):
+            first.setdefault(tuple(bool(flags[i]) for flags in plan.contacts.values()), i)
+        clearance = dict(plan.sole)
+        level = {f: plan.neutral[f].rotation for f in plan.contacts}
+        for row, i in first.items():
+            holds = {f: np.array(plan.neutral[f].translation) for f, held in zip(plan.contacts, row, strict=True)
+                     if held}
+            key = self._key(i, holds, tolerances, contact_weight)
+            if key not in self._stacks:
+                self._stacks[key] = self._bind(i, holds, clearance, level, tolerances, contact_weight, lower, upper)
+
     def usable(self, lower: np.ndarray, upper: np.ndarray) -> bool:
         """Whether a frame's box ``[lower, upper]`` (n,) runs on a confined engine: no joint spans a full turn in it
         (a confined engine does not wrap; such a box goes to the general solve)."""

@@ -631,13 +631,13 @@ class _Frame:
             out = self.stacks.solve(self.i, holds, clearance, level, tolerances, contact_weight, start, lower, upper)
             # the scene's verdict as the solvers give it: a converged answer in collision is rejected
             ok = out.success and (scene is None or not self.check.in_collision(out.q))
-            return np.clip(out.q, lower, upper), ok, _named(out.goals, out.goal_errors)
+            return np.minimum(np.maximum(out.q, lower), upper), ok, _named(out.goals, out.goal_errors)
         if options is None:
             options = FIRST_FRAME_OPTIONS if self.i == 0 else FRAME_OPTIONS
         goals = self.goals_of(tolerances, contact_weight)
         result = api.solve(self.robot, goals, seed=seed, q0=start, bounds=(lower, upper),
                            timeout=self.budget if timeout is None else timeout, scene=scene, **options)
-        return np.clip(result.q, lower, upper), result.success, _named(goals, result.goal_errors)
+        return np.minimum(np.maximum(result.q, lower), upper), result.success, _named(goals, result.goal_errors)
 
 
 def _named(goals: list, goal_errors: list | None) -> list[tuple[str, float]]:
@@ -720,6 +720,9 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     # the frames' goal lists bound once per structure, their targets written per frame (the ones that do not depend
     # on the previous frame computed for every frame here)
     stacks = FrameStacks(robot, plan, functools.partial(_frame_goals, plan), FLOOR_BAND)
+    q_init = _initial_q(robot, plan)
+    stacks.prepare(TOLERANCES, WEIGHTS["contact"], np.maximum(q_init - v_max * dt, first_lower),
+                   np.minimum(q_init + v_max * dt, first_upper))
     feet = _FootPoses(robot, plan.contacts)
     n_frames = motion.frames
     Q = np.zeros((n_frames, robot.n))
@@ -727,7 +730,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     errors: list[list] = []
     stepped_back = relaxed = firmed = drawn = 0
     holds: dict[str, np.ndarray] = {}
-    q_prev = _initial_q(robot, plan)
+    q_prev = q_init
     start = time.perf_counter()
     setup_s, first_frame_end = start - setup_start, start
     for i in range(n_frames):
@@ -751,7 +754,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         frame = _Frame(robot, i, stacks if i > 0 and stacks.usable(lower, upper) else None, check, rng, goals_of,
                        (holds, clearance, level), (lower, upper), budget)
         solve = frame.solve
-        q0 = np.clip(q_prev, lower, upper)
+        q0 = np.minimum(np.maximum(q_prev, lower), upper)
         q_new, ok, goal_errors = solve(start=q0)
         for _ in range(FLOOR_RETRIES):
             # the tilt the answer gave a swing foot may put its lowest corner under the floor: once more from
