@@ -721,8 +721,10 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     # on the previous frame computed for every frame here)
     stacks = FrameStacks(robot, plan, functools.partial(_frame_goals, plan), FLOOR_BAND)
     q_init = _initial_q(robot, plan)
-    stacks.prepare(TOLERANCES, WEIGHTS["contact"], np.maximum(q_init - v_max * dt, first_lower),
-                   np.minimum(q_init + v_max * dt, first_upper))
+    box = np.maximum(q_init - v_max * dt, first_lower), np.minimum(q_init + v_max * dt, first_upper)
+    stacks.prepare(TOLERANCES, WEIGHTS["contact"], *box)
+    if self_collision:  # a colliding frame's retry
+        stacks.prepare(RELAXED_TOLERANCES, WEIGHTS["contact"], *box)
     feet = _FootPoses(robot, plan.contacts)
     n_frames = motion.frames
     Q = np.zeros((n_frames, robot.n))
