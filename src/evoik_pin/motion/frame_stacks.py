@@ -36,14 +36,44 @@ KEPT_STRUCTURES = 16
 
 
 class FrameSolve:
-    """One frame's answer: ``q`` (n,), ``success`` (every goal within its tolerance), ``goal_errors`` (per goal:
-    position m or None, angle rad or None; the kernel's at q) and the frame's ``goals`` (the structure's goal
-    objects: their kinds and tolerances; their targets are those of the frame the structure was first bound on)."""
+    """One frame's answer: ``q`` (n,), ``success`` (every goal within its tolerance, on the kernel's errors at q, as
+    memetic and the velocity-box stage judge them) and the frame's ``goals`` (the structure's goal objects: their
+    kinds and tolerances; their targets are those of the frame the structure was first bound on);
+    :attr:`goal_errors` read on demand from the run's outcome."""
 
-    __slots__ = ("goal_errors", "goals", "q", "success")
+    __slots__ = ("_outcome", "goals", "q", "success")
 
-    def __init__(self, q: np.ndarray, success: bool, goal_errors: list, goals: list) -> None:
-        self.q, self.success, self.goal_errors, self.goals = q, success, goal_errors, goals
+    def __init__(self, q: np.ndarray, success: bool, outcome, goals: list) -> None:
+        self.q, self.success, self._outcome, self.goals = q, success, outcome, goals
+
+    @property
+    def goal_errors(self) -> list:
+        """Per goal (position m or None, angle rad or None): the kernel's at q (:meth:`Goal.reported`)."""
+        return kernel_goal_errors(self.goals, self._outcome)
+
+
+class _MetTest:
+    """Whether an LM outcome meets every goal of a list (each goal's :meth:`~evoik_pin.goals.Goal.met` on the
+    kernel's errors, :func:`kernel_goal_errors`), on arrays: the goals' tolerances and which errors they report,
+    read once per goal stack."""
+
+    def __init__(self, goals: list) -> None:
+        self._goals = goals
+        self._position = np.array([g.has_position for g in goals], dtype=bool)
+        self._angle = np.array([g.reports_angle for g in goals], dtype=bool)
+        try:
+            self._tolerance = np.array([g.tolerance for g in goals], dtype=float)
+            self._rotation_tolerance = np.array([g.rotation_tolerance for g in goals], dtype=float)
+        except (TypeError, ValueError):  # a tolerance that is no number: each goal's own test
+            self._tolerance = None
+
+    def __call__(self, out) -> bool:
+        if self._tolerance is None or out.goal_errors is None:
+            return all(g.met(p, r) for g, (p, r) in zip(self._goals, kernel_goal_errors(self._goals, out),
+                                                           strict=True))
+        e = out.goal_errors
+        return bool(((~self._position | (e[:, 0] <= self._tolerance))
+                     & (~self._angle | (e[:, 1] <= self._rotation_tolerance))).all())
 
 
 class FrameStacks:
@@ -159,14 +189,12 @@ class FrameStacks:
                                                   lower, upper)
             if len(self._stacks) > KEPT_STRUCTURES:
                 self._stacks.pop(next(iter(self._stacks)))
-        goals, engine, pt, Rt = kept
+        goals, engine, pt, Rt, met = kept
         self.targets(i, holds, clearance, level, pt, Rt)
         engine.set_targets(pt, Rt)
         engine.confine(lower, upper)
         out = engine.run(q0, DEFAULT_ITERATIONS)
-        errors = kernel_goal_errors(goals, out)
-        success = all(g.met(p, r) for g, (p, r) in zip(goals, errors, strict=True))
-        return FrameSolve(out.q, success, errors, goals)
+        return FrameSolve(out.q, met(out), out, goals)
 
     def _bind(self, i, holds, clearance, level, tolerances, contact_weight, lower, upper) -> tuple:
         """(goals, engine, pt (G, 3), Rt (G, 3, 3)) of a new structure: its goal list made by ``goals_of`` for frame
@@ -179,7 +207,12 @@ class FrameStacks:
         engine = LevenbergMarquardt(problem)
         _, pt, Rt = problem.goal_stack()
         pt, Rt = owned(np.array(pt, dtype=float)), owned(np.array(Rt, dtype=float))
-        return problem.goals, engine, pt, Rt
+        # one run now, discarded: the engine's first targets and box (its compiled entry looked up), its workspace,
+        # are set-up, not a frame's work
+        engine.set_targets(pt, Rt)
+        engine.confine(lower, upper)
+        engine.run((lower + upper) / 2, DEFAULT_ITERATIONS)
+        return problem.goals, engine, pt, Rt, _MetTest(problem.goals)
 
 
 def _unit(v: np.ndarray) -> np.ndarray:

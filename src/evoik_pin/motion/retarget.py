@@ -46,7 +46,9 @@ The method (:func:`retarget`):
    base :data:`BASE_LINEAR_SPEED` m/s on x, y, z and :data:`BASE_ANGULAR_SPEED` rad/s on yaw, pitch, roll. A frame
    that cannot meet every goal gets the solver's best inside that box (``success=False`` recorded), never a jump.
    The per-frame solve is one LM run from q0 (no seed table, no DE restarts: :data:`FRAME_OPTIONS`), so the clip
-   does not depend on the machine's speed.
+   does not depend on the machine's speed. It runs on goal stacks bound once per clip (:mod:`.frame_stacks`: one per
+   structure of the goal list, its targets written per frame; those that do not depend on the previous frame
+   computed for every frame at the clip's set-up), not through a solver set up per frame.
 4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
    SRDF-disabled pairs ignored; its verdict through a broad phase, :mod:`.self_collision_check`: boxes, hulls, then
    meshes, ~0.3-0.6 ms a check). A colliding answer is solved again with relaxed tolerances
@@ -78,7 +80,7 @@ from ..goals import Direction, Orientation, Position, RelativePosition
 from .clip import Clip
 from .collision_step import free_nearby, step_back_free
 from .contacts import DEFAULT_FEET, detect_contacts, ground_height
-from .frame_stacks import FrameStacks
+from .frame_stacks import FrameSolve, FrameStacks
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
 
@@ -616,9 +618,9 @@ class _Frame:
         self.feet, self.box, self.budget = feet, box, budget
 
     def solve(self, tolerances: dict = TOLERANCES, contact_weight: float = WEIGHTS["contact"], start=None,
-              scene=None, options: dict | None = None, timeout=None) -> tuple[np.ndarray, bool, list]:
-        """(q (n,) in the box, success, goal errors: per goal (its kind's name, its error: m, or rad for a goal
-        without a position)) of the frame's goals from ``start`` (n,) with these
+              scene=None, options: dict | None = None, timeout=None) -> tuple[np.ndarray, bool, object]:
+        """(q (n,) in the box, success, the goal errors as :func:`_named` reads them, once the clip is solved) of
+        the frame's goals from ``start`` (n,) with these
         ``tolerances`` and ``contact_weight``; with a ``scene`` an answer in collision is no success. ``options``
         (default: the first frame's or a warm-started frame's) and ``timeout`` (default the frame's budget) go to
         :func:`evoik_pin.solve`."""
@@ -631,18 +633,22 @@ class _Frame:
             out = self.stacks.solve(self.i, holds, clearance, level, tolerances, contact_weight, start, lower, upper)
             # the scene's verdict as the solvers give it: a converged answer in collision is rejected
             ok = out.success and (scene is None or not self.check.in_collision(out.q))
-            return np.minimum(np.maximum(out.q, lower), upper), ok, _named(out.goals, out.goal_errors)
+            return np.minimum(np.maximum(out.q, lower), upper), ok, out
         if options is None:
             options = FIRST_FRAME_OPTIONS if self.i == 0 else FRAME_OPTIONS
         goals = self.goals_of(tolerances, contact_weight)
         result = api.solve(self.robot, goals, seed=seed, q0=start, bounds=(lower, upper),
                            timeout=self.budget if timeout is None else timeout, scene=scene, **options)
-        return np.minimum(np.maximum(result.q, lower), upper), result.success, _named(goals, result.goal_errors)
+        return np.minimum(np.maximum(result.q, lower), upper), result.success, (goals, result.goal_errors)
 
 
-def _named(goals: list, goal_errors: list | None) -> list[tuple[str, float]]:
-    """Per goal (its kind's name, its error: m, or rad for a goal without a position) of a solve's goal errors
-    (per goal (m or None, rad or None); None: none)."""
+def _named(errors) -> list[tuple[str, float]]:
+    """Per goal (its kind's name, its error: m, or rad for a goal without a position) of a frame's ``errors``: a
+    :class:`.frame_stacks.FrameSolve`, (goals, their errors: per goal (m or None, rad or None), or None), or None
+    (no errors reported)."""
+    if errors is None:
+        return []
+    goals, goal_errors = (errors.goals, errors.goal_errors) if isinstance(errors, FrameSolve) else errors
     return [(type(g).__name__, e[0] if e[0] is not None else e[1]) for g, e in zip(goals, goal_errors or [],
                                                                                      strict=False)]
 
@@ -729,7 +735,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     n_frames = motion.frames
     Q = np.zeros((n_frames, robot.n))
     success = np.zeros(n_frames, dtype=bool)
-    errors: list[list] = []
+    errors: list = []  # per frame: what _named reads
     stepped_back = relaxed = firmed = drawn = 0
     holds: dict[str, np.ndarray] = {}
     q_prev = q_init
@@ -795,11 +801,11 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
                 relaxed += 1
             if free is not None:  # the solver's goal errors were those of the colliding answer: not reported
                 q_new = np.clip(free, lower, upper)
-                ok, goal_errors = False, []
+                ok, goal_errors = False, None
         _anchor_holds(plan, touched, holds, feet(q_new))
         q_prev = q_new
         Q[i], success[i] = q_prev, ok
-        errors.append(goal_errors)
+        errors.append(goal_errors)  # named after the clip: not a frame's work
         if i == 0:
             first_frame_end = time.perf_counter()
         if progress and (i % 30 == 0 or i == n_frames - 1):
@@ -807,7 +813,8 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     elapsed = time.perf_counter() - start
     from .retarget_report import clip_report  # the quality figures: one concept per file
 
-    report = clip_report(robot, plan, Q, success, errors, v_max, dt, check, first_lower, first_upper)
+    report = clip_report(robot, plan, Q, success, [_named(e) for e in errors], v_max, dt, check, first_lower,
+                         first_upper)
     report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back, "drawn": drawn}
     report["firm_contact_frames"] = firmed
     report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
