@@ -25,9 +25,12 @@ BISECTION_STEPS = 8
 MAX_PAIRS = 4
 
 
-def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray) -> tuple[float, np.ndarray]:
+def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray, beat: float = -1.0
+                   ) -> tuple[float, np.ndarray]:
     """The largest t in [0, 1] (bisection) with ``q_to`` but ``joints`` (bool (n,)) at ``q_from + t (q_to - q_from)``
-    collision-free, and that configuration; (-1, q_to) when even t = 0 collides."""
+    collision-free, and that configuration; (-1, q_to) when even t = 0 collides. ``beat``: the t another side already
+    found; once the bisection's upper end is at or below it this side cannot find more, and it stops there (its t,
+    then at most ``beat``, loses the comparison it was made for; a side that can beat it is bisected in full)."""
 
     def at(t: float) -> np.ndarray:
         return np.where(joints, q_from + t * (q_to - q_from), q_to)
@@ -36,6 +39,8 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
         return -1.0, q_to
     lo, hi = 0.0, 1.0
     for _ in range(BISECTION_STEPS):
+        if hi <= beat:
+            break
         mid = 0.5 * (lo + hi)
         if scene.in_collision(at(mid)):
             hi = mid
@@ -78,7 +83,7 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     for link, other in ((a, b), (b, a)):
         joints = _joints_moving(robot, link, other) & movable
         if joints.any():
-            t, candidate = _farthest_free(scene, q_prev, q, joints)
+            t, candidate = _farthest_free(scene, q_prev, q, joints, best_t)
             if t > best_t:
                 best_t, best_q = t, candidate
     if best_q is not None and best_t >= 0:
@@ -118,7 +123,9 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
     for spread in NEARBY_SPREADS:
         draws = np.minimum(np.maximum(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q),
                                       lower), upper)
-        free = [d for d in draws if not scene.in_collision(d)]
-        if free:
-            return min(free, key=lambda d: float(np.linalg.norm(d - q)))
+        # the nearest free draw: the draws checked nearest first (a stable sort: equally near ones in draw order)
+        distance = [float(np.linalg.norm(d - q)) for d in draws]
+        for k in sorted(range(len(draws)), key=distance.__getitem__):
+            if not scene.in_collision(draws[k]):
+                return draws[k]
     return None
