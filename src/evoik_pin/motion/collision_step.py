@@ -75,10 +75,12 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     if scene.in_collision(q_prev):
         return None
     q = np.asarray(q, dtype=float)
-    pairs = scene.colliding_pairs(q)
-    if not pairs:
+    # the first colliding pair alone (the narrow phase of the others only if its links' joints do not free it)
+    first = (scene.first_colliding_pair(q) if hasattr(scene, "first_colliding_pair")
+             else next(iter(scene.colliding_pairs(q)), None))
+    if first is None:
         return q.copy()
-    a, b = pairs[0]
+    a, b = first
     best_t, best_q = -1.0, None
     for link, other in ((a, b), (b, a)):
         joints = _joints_moving(robot, link, other) & movable
@@ -89,7 +91,7 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     if best_q is not None and best_t >= 0:
         return best_q
     either = np.zeros(robot.n, dtype=bool)
-    for a, b in pairs[:MAX_PAIRS]:
+    for a, b in scene.colliding_pairs(q)[:MAX_PAIRS]:
         either |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
     either &= movable
     if either.any():

@@ -173,6 +173,15 @@ class SelfCollisionCheck:
             self._verdicts[key] = verdict
         return verdict
 
+    def first_colliding_pair(self, q) -> tuple[str, str] | None:
+        """``colliding_pairs(q)[0]`` (the first (link, link) pair in contact at ``q`` (n,) in the scene's pair order),
+        or None when none is, without the narrow phase of the pairs after it."""
+        names = self._names
+        for k in self.candidate_pairs(q).tolist():
+            if self._touching(k):
+                return names[self._a[k]], names[self._b[k]]
+        return None
+
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
         """``scene.colliding_pairs(q)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the scene's
         pair order."""
