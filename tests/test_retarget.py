@@ -369,3 +369,31 @@ def test_frame_stack_solve_is_the_solvers_run(walk_stacks):
             assert (p is None) == (p_ref is None) and (r is None) == (r_ref is None)
             assert abs((p or 0.0) - (p_ref or 0.0)) < 1e-9 and abs((r or 0.0) - (r_ref or 0.0)) < 1e-9
         q_prev = out.q
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_first_colliding_pair_is_the_scene_first(g1_checks, seed):
+    """first_colliding_pair is the scene's first colliding pair (None when free) without the others' narrow phase."""
+    robot, scene, check = g1_checks
+    q = np.clip(np.random.default_rng(seed).normal(0.0, 1.0, robot.n), robot.lower, robot.upper)
+    pairs = scene.colliding_pairs(q)
+    assert check.first_colliding_pair(q) == (pairs[0] if pairs else None)
+
+
+def test_kept_pair_verdicts_follow_a_bisection(g1_checks):
+    """Along segments where only one arm's joints move (a collision step's bisection: the other links' pair verdicts
+    are reused by placement, the last contacts tried first) every verdict is still the scene's."""
+    robot, scene, check = g1_checks
+    rng = np.random.default_rng(5)
+    arm = np.array(["right_shoulder" in n or "right_elbow" in n or "right_wrist" in n for n in robot.joint_names])
+    assert arm.any()
+    verdicts = []
+    for _ in range(6):
+        q_to = np.clip(rng.normal(0.0, 0.8, robot.n), robot.lower, robot.upper)
+        q_from = np.clip(q_to + np.where(arm, rng.normal(0.0, 1.0, robot.n), 0.0), robot.lower, robot.upper)
+        for t in np.linspace(0.0, 1.0, 9):
+            q = np.where(arm, q_from + t * (q_to - q_from), q_to)
+            verdicts.append(check.in_collision(q))
+            assert verdicts[-1] == scene.in_collision(q)
+    assert any(verdicts) and not all(verdicts)
