@@ -10,10 +10,13 @@ neighbouring links). A box contains its mesh, and a hull its mesh up to Qhull's 
 pairs within :data:`HULL_MARGIN` as touching): a pair dropped at either step cannot touch, so the verdict is the exact
 one.
 
-The boxes come from the joints' placements in one compiled pass (:func:`_overlapping_pairs`). A pair's last verdict
-is kept with the placements of its two joints, so a check in which neither moved (a bisection stepping an arm back
-leaves the legs where they were) reuses it; the pairs found touching last are tried first, so a colliding
-configuration (most of a bisection's) is told after a few narrow-phase calls. Neither changes a verdict.
+The boxes come from the joints' placements in one compiled pass (:func:`_overlapping_pairs`), which also tests the
+pairs whose world boxes overlap on their turned boxes (the oriented boxes' separating axes: a box turned with its
+link is far tighter than its world-aligned box; about 2.5 times fewer pairs reach the hulls on G1 and Talos). A
+pair's last verdict is kept with the placements of its two joints, so a check in which neither moved (a bisection
+stepping an arm back leaves the legs where they were) reuses it; the pairs found touching last are tried first, so a
+colliding configuration (most of a bisection's) is told after a few narrow-phase calls. None of these changes a
+verdict.
 """
 
 from __future__ import annotations
@@ -39,29 +42,35 @@ RECENT_PAIRS = 8
 
 @njit(cache=True, nogil=True)
 def _overlapping_pairs(J, parent, P, centre, half, a, b, slack, out):  # pragma: no cover - compiled
-    """The checked pairs (``a``, ``b``: (K,) object indices) whose world boxes overlap, written into ``out`` (K,)
-    in order; returns their count. ``J`` (nj, 4, 4): the joints' placements; ``parent`` (G,): each object's joint;
-    ``P`` (G, 4, 4): its placement on that joint; ``centre``, ``half`` (G, 3): its local box (m, own frame). The
-    object is at ``J[parent] P``; a box turned by R and moved by t has centre ``R c + t`` and half-extents ``|R| h``;
-    two boxes overlap where no axis separates them by more than ``slack`` (m)."""
+    """The checked pairs (``a``, ``b``: (K,) object indices) whose boxes overlap, written into ``out`` (K,) in order;
+    returns their count. ``J`` (nj, 4, 4): the joints' placements; ``parent`` (G,): each object's joint; ``P``
+    (G, 4, 4): its placement on that joint; ``centre``, ``half`` (G, 3): its local box (m, own frame). The object is
+    at ``J[parent] P``: its box is turned by R and moved by t (centre ``R c + t``). Two tests, each dropping only
+    pairs some axis separates by more than ``slack`` (m): the world axis-aligned boxes (half-extents ``|R| h``), then
+    the turned boxes themselves (the separating-axis test of two oriented boxes: their 3 + 3 face normals and 9 edge
+    cross products; 1e-9 added to |cos| keeps near-parallel edges from separating anything)."""
     G = P.shape[0]
     wc = np.empty((G, 3))
     wh = np.empty((G, 3))
-    R = np.empty((3, 3))
+    WR = np.empty((G, 3, 3))
     for g in range(G):
         M = J[parent[g]]
         for i in range(3):
             t = M[i, 3]
             for j in range(3):
-                R[i, j] = M[i, 0] * P[g, 0, j] + M[i, 1] * P[g, 1, j] + M[i, 2] * P[g, 2, j]
+                WR[g, i, j] = M[i, 0] * P[g, 0, j] + M[i, 1] * P[g, 1, j] + M[i, 2] * P[g, 2, j]
                 t += M[i, j] * P[g, j, 3]
             c = t
             h = 0.0
             for j in range(3):
-                c += R[i, j] * centre[g, j]
-                h += abs(R[i, j]) * half[g, j]
+                c += WR[g, i, j] * centre[g, j]
+                h += abs(WR[g, i, j]) * half[g, j]
             wc[g, i] = c
             wh[g, i] = h
+    R = np.empty((3, 3))
+    AbsR = np.empty((3, 3))
+    d = np.empty(3)
+    tA = np.empty(3)
     count = 0
     for k in range(a.shape[0]):
         p, q = a[k], b[k]
@@ -70,6 +79,38 @@ def _overlapping_pairs(J, parent, P, centre, half, a, b, slack, out):  # pragma:
             if abs(wc[p, i] - wc[q, i]) > wh[p, i] + wh[q, i] + slack:
                 apart = True
                 break
+        if not apart:
+            # q's box in p's axes: R = Rp^T Rq, the centres' offset tA = Rp^T (cq - cp)
+            for i in range(3):
+                d[i] = wc[q, i] - wc[p, i]
+            for i in range(3):
+                tA[i] = WR[p, 0, i] * d[0] + WR[p, 1, i] * d[1] + WR[p, 2, i] * d[2]
+                for j in range(3):
+                    R[i, j] = WR[p, 0, i] * WR[q, 0, j] + WR[p, 1, i] * WR[q, 1, j] + WR[p, 2, i] * WR[q, 2, j]
+                    AbsR[i, j] = abs(R[i, j]) + 1e-9
+            hp, hq = half[p], half[q]
+            for i in range(3):  # p's face normals
+                if abs(tA[i]) > hp[i] + hq[0] * AbsR[i, 0] + hq[1] * AbsR[i, 1] + hq[2] * AbsR[i, 2] + slack:
+                    apart = True
+                    break
+            if not apart:
+                for j in range(3):  # q's face normals
+                    dist = abs(tA[0] * R[0, j] + tA[1] * R[1, j] + tA[2] * R[2, j])
+                    if dist > hp[0] * AbsR[0, j] + hp[1] * AbsR[1, j] + hp[2] * AbsR[2, j] + hq[j] + slack:
+                        apart = True
+                        break
+            if not apart:
+                for i in range(3):  # the edges' cross products
+                    i1, i2 = (i + 1) % 3, (i + 2) % 3
+                    for j in range(3):
+                        j1, j2 = (j + 1) % 3, (j + 2) % 3
+                        ra = hp[i1] * AbsR[i2, j] + hp[i2] * AbsR[i1, j]
+                        rb = hq[j1] * AbsR[i, j2] + hq[j2] * AbsR[i, j1]
+                        if abs(tA[i2] * R[i1, j] - tA[i1] * R[i2, j]) > ra + rb + slack:
+                            apart = True
+                            break
+                    if apart:
+                        break
         if not apart:
             out[count] = k
             count += 1
