@@ -304,3 +304,95 @@ def test_broad_phase_finds_a_contact_the_hulls_alone_miss(g1_checks):
     pairs = check.colliding_pairs(q)
     assert ("left_knee_link", "left_shoulder_roll_link") in pairs
     assert pairs == scene.colliding_pairs(q)
+
+
+@pytest.fixture(scope="module")
+def walk_stacks(walk):
+    """G1, the walk's plan and its FrameStacks (the per-frame targets written into goal stacks bound once)."""
+    from evoik_pin.motion.frame_stacks import FrameStacks
+    from evoik_pin.motion.retarget import FLOOR_BAND, _frame_goals, _Plan
+
+    robot = ek.load_robot("g1", floating_base=True)
+    plan = _Plan(robot, walk, "cmu", "auto", "auto", "auto")
+    return robot, plan, FrameStacks(robot, plan, lambda *a, **k: _frame_goals(plan, *a, **k), FLOOR_BAND)
+
+
+def _feet_cases(robot, plan, i, rng):
+    """(holds, clearance, level) of frame i: each foot held at a random point where the source is in contact."""
+    holds = {f: rng.normal(0.0, 0.5, 3) for f, flags in plan.contacts.items() if flags[i]}
+    clearance = {f: plan.sole[f] + rng.uniform(0.0, 0.02) for f in plan.contacts}
+    rotations = [robot.fk(rng.uniform(robot.lower, robot.upper) * 0.3, f).rotation for f in plan.contacts]
+    return holds, clearance, dict(zip(plan.contacts, rotations, strict=True))
+
+
+def test_frame_stack_targets_are_those_of_the_goal_list(walk_stacks):
+    """The targets FrameStacks writes per frame (computed for every frame at once, the feet's per frame) are the
+    goal list's own (_frame_goals, bound), in its order, for every frame and contact state."""
+    from evoik_pin.goals.stack import bind
+    from evoik_pin.motion.retarget import _frame_goals
+
+    robot, plan, stacks = walk_stacks
+    rng = np.random.default_rng(0)
+    structures = set()
+    for i in range(plan.points.shape[0]):
+        holds, clearance, level = _feet_cases(robot, plan, i, rng)
+        _, stack, pt, Rt = bind(robot, _frame_goals(plan, i, holds, clearance=clearance, level=level))
+        mine, mine_R = np.full_like(pt, np.nan), np.broadcast_to(np.eye(3), Rt.shape).copy()
+        stacks.targets(i, holds, clearance, level, mine, mine_R)
+        assert np.allclose(mine, pt, rtol=0, atol=1e-12) and np.allclose(mine_R, Rt, rtol=0, atol=1e-12), i
+        structures.add(tuple(stack.kinds) + (len(holds),))
+    assert len(structures) >= 2  # frames with one and with two feet held were compared
+
+
+def test_frame_stack_solve_is_the_solvers_run(walk_stacks):
+    """A frame's run on its bound stack gives the answer evoik_pin.solve gives for the same goal list, start and box
+    with the retargeter's per-frame options (one LM run from q0), and the same verdict."""
+    from evoik_pin.motion.retarget import FRAME_OPTIONS, TOLERANCES, WEIGHTS, _frame_goals, _initial_q
+
+    robot, plan, stacks = walk_stacks
+    rng = np.random.default_rng(1)
+    q_prev = _initial_q(robot, plan)
+    for i in (3, 12, 21):
+        holds, clearance, level = _feet_cases(robot, plan, i, rng)
+        for f in holds:  # reachable holds: where the foot is at a nearby configuration
+            holds[f] = np.array(robot.fk(q_prev, f).translation)
+        lower, upper = np.maximum(q_prev - 0.1, robot.lower), np.minimum(q_prev + 0.1, robot.upper)
+        lower[:6], upper[:6] = q_prev[:6] - 0.05, q_prev[:6] + 0.05
+        assert stacks.usable(lower, upper)
+        out = stacks.solve(i, holds, clearance, level, TOLERANCES, WEIGHTS["contact"], q_prev, lower, upper)
+        goals = _frame_goals(plan, i, holds, clearance=clearance, level=level)
+        ref = ek.solve(robot, goals, seed=0, q0=q_prev, bounds=(lower, upper), timeout=None, **FRAME_OPTIONS)
+        assert np.allclose(out.q, ref.q, rtol=0, atol=1e-9), i
+        assert out.success == ref.success
+        for (p, r), (p_ref, r_ref) in zip(out.goal_errors, ref.goal_errors, strict=True):
+            assert (p is None) == (p_ref is None) and (r is None) == (r_ref is None)
+            assert abs((p or 0.0) - (p_ref or 0.0)) < 1e-9 and abs((r or 0.0) - (r_ref or 0.0)) < 1e-9
+        q_prev = out.q
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_first_colliding_pair_is_the_scene_first(g1_checks, seed):
+    """first_colliding_pair is the scene's first colliding pair (None when free) without the others' narrow phase."""
+    robot, scene, check = g1_checks
+    q = np.clip(np.random.default_rng(seed).normal(0.0, 1.0, robot.n), robot.lower, robot.upper)
+    pairs = scene.colliding_pairs(q)
+    assert check.first_colliding_pair(q) == (pairs[0] if pairs else None)
+
+
+def test_kept_pair_verdicts_follow_a_bisection(g1_checks):
+    """Along segments where only one arm's joints move (a collision step's bisection: the other links' pair verdicts
+    are reused by placement, the last contacts tried first) every verdict is still the scene's."""
+    robot, scene, check = g1_checks
+    rng = np.random.default_rng(5)
+    arm = np.array(["right_shoulder" in n or "right_elbow" in n or "right_wrist" in n for n in robot.joint_names])
+    assert arm.any()
+    verdicts = []
+    for _ in range(6):
+        q_to = np.clip(rng.normal(0.0, 0.8, robot.n), robot.lower, robot.upper)
+        q_from = np.clip(q_to + np.where(arm, rng.normal(0.0, 1.0, robot.n), 0.0), robot.lower, robot.upper)
+        for t in np.linspace(0.0, 1.0, 9):
+            q = np.where(arm, q_from + t * (q_to - q_from), q_to)
+            verdicts.append(check.in_collision(q))
+            assert verdicts[-1] == scene.in_collision(q)
+    assert any(verdicts) and not all(verdicts)

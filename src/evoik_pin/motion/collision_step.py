@@ -13,6 +13,8 @@ the retargeter's :class:`~evoik_pin.motion.self_collision_check.SelfCollisionChe
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 __all__ = ["BISECTION_STEPS", "free_nearby", "step_back_free"]
@@ -23,9 +25,12 @@ BISECTION_STEPS = 8
 MAX_PAIRS = 4
 
 
-def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray) -> tuple[float, np.ndarray]:
+def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray, beat: float = -1.0
+                   ) -> tuple[float, np.ndarray]:
     """The largest t in [0, 1] (bisection) with ``q_to`` but ``joints`` (bool (n,)) at ``q_from + t (q_to - q_from)``
-    collision-free, and that configuration; (-1, q_to) when even t = 0 collides."""
+    collision-free, and that configuration; (-1, q_to) when even t = 0 collides. ``beat``: the t another side already
+    found; once the bisection's upper end is at or below it this side cannot find more, and it stops there (its t,
+    then at most ``beat``, loses the comparison it was made for; a side that can beat it is bisected in full)."""
 
     def at(t: float) -> np.ndarray:
         return np.where(joints, q_from + t * (q_to - q_from), q_to)
@@ -34,6 +39,8 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
         return -1.0, q_to
     lo, hi = 0.0, 1.0
     for _ in range(BISECTION_STEPS):
+        if hi <= beat:
+            break
         mid = 0.5 * (lo + hi)
         if scene.in_collision(at(mid)):
             hi = mid
@@ -42,13 +49,18 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
     return lo, at(lo)
 
 
+@functools.lru_cache(maxsize=512)
 def _joints_moving(robot, link: str, others: str) -> np.ndarray:
-    """bool (n,): the entries of q that move ``link`` but not ``others`` (a floating base moves both: never)."""
+    """bool (n,): the entries of q that move ``link`` but not ``others`` (a floating base moves both: never); kept
+    per robot and pair of links (a clip asks for the same few pairs every colliding frame), read-only."""
     try:
         mine, theirs = set(robot.moving_joints(link)), set(robot.moving_joints(others))
     except Exception:  # a geometry name that is no frame: no joint known to move it alone
-        return np.zeros(robot.n, dtype=bool)
-    return np.array([name in mine and name not in theirs for name in robot.joint_names])
+        out = np.zeros(robot.n, dtype=bool)
+    else:
+        out = np.array([name in mine and name not in theirs for name in robot.joint_names])
+    out.setflags(write=False)
+    return out
 
 
 def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.ndarray | None = None
@@ -63,21 +75,23 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     if scene.in_collision(q_prev):
         return None
     q = np.asarray(q, dtype=float)
-    pairs = scene.colliding_pairs(q)
-    if not pairs:
+    # the first colliding pair alone (the narrow phase of the others only if its links' joints do not free it)
+    first = (scene.first_colliding_pair(q) if hasattr(scene, "first_colliding_pair")
+             else next(iter(scene.colliding_pairs(q)), None))
+    if first is None:
         return q.copy()
-    a, b = pairs[0]
+    a, b = first
     best_t, best_q = -1.0, None
     for link, other in ((a, b), (b, a)):
         joints = _joints_moving(robot, link, other) & movable
         if joints.any():
-            t, candidate = _farthest_free(scene, q_prev, q, joints)
+            t, candidate = _farthest_free(scene, q_prev, q, joints, best_t)
             if t > best_t:
                 best_t, best_q = t, candidate
     if best_q is not None and best_t >= 0:
         return best_q
     either = np.zeros(robot.n, dtype=bool)
-    for a, b in pairs[:MAX_PAIRS]:
+    for a, b in scene.colliding_pairs(q)[:MAX_PAIRS]:
         either |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
     either &= movable
     if either.any():
@@ -109,8 +123,11 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
     if not movable.any():
         return None
     for spread in NEARBY_SPREADS:
-        draws = np.clip(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q), lower, upper)
-        free = [d for d in draws if not scene.in_collision(d)]
-        if free:
-            return min(free, key=lambda d: float(np.linalg.norm(d - q)))
+        draws = np.minimum(np.maximum(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q),
+                                      lower), upper)
+        # the nearest free draw: the draws checked nearest first (a stable sort: equally near ones in draw order)
+        distance = [float(np.linalg.norm(d - q)) for d in draws]
+        for k in sorted(range(len(draws)), key=distance.__getitem__):
+            if not scene.in_collision(draws[k]):
+                return draws[k]
     return None

@@ -46,7 +46,9 @@ The method (:func:`retarget`):
    base :data:`BASE_LINEAR_SPEED` m/s on x, y, z and :data:`BASE_ANGULAR_SPEED` rad/s on yaw, pitch, roll. A frame
    that cannot meet every goal gets the solver's best inside that box (``success=False`` recorded), never a jump.
    The per-frame solve is one LM run from q0 (no seed table, no DE restarts: :data:`FRAME_OPTIONS`), so the clip
-   does not depend on the machine's speed.
+   does not depend on the machine's speed. It runs on goal stacks bound once per clip (:mod:`.frame_stacks`: one per
+   structure of the goal list, its targets written per frame; those that do not depend on the previous frame
+   computed for every frame at the clip's set-up), not through a solver set up per frame.
 4. **Self-collision**: each answer is checked on the collision meshes (:class:`~evoik_pin.Scene`, adjacent and
    SRDF-disabled pairs ignored; its verdict through a broad phase, :mod:`.self_collision_check`: boxes, hulls, then
    meshes, ~0.3-0.6 ms a check). A colliding answer is solved again with relaxed tolerances
@@ -70,7 +72,6 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Mapping
-from dataclasses import replace
 
 import numpy as np
 
@@ -79,6 +80,7 @@ from ..goals import Direction, Orientation, Position, RelativePosition
 from .clip import Clip
 from .collision_step import free_nearby, step_back_free
 from .contacts import DEFAULT_FEET, detect_contacts, ground_height
+from .frame_stacks import FrameSolve, FrameStacks
 from .mapping import LIMBS, SKELETON_JOINTS, resolve_mapping
 from .motion import Motion
 
@@ -215,9 +217,14 @@ def _foot_corners(robot, frame: str) -> np.ndarray:
 def _sole_height(robot, frame: str, corners: np.ndarray, q: np.ndarray) -> float:
     """Height (m) of ``frame``'s origin over the lowest of its foot's ``corners`` (:func:`_foot_corners`) at q: the
     sole's height under an ankle frame at that tilt (0 without collision geometry)."""
+    return _sole_height_at(corners, robot.fk(q, frame).rotation) if len(corners) else 0.0
+
+
+def _sole_height_at(corners: np.ndarray, rotation: np.ndarray) -> float:
+    """:func:`_sole_height` of a foot frame whose rotation (3, 3) is ``rotation``."""
     if not len(corners):
         return 0.0
-    return -float((corners @ robot.fk(q, frame).rotation[2]).min())
+    return -float((corners @ rotation[2]).min())
 
 
 def _half_width(robot, frame: str, axis: np.ndarray) -> float:
@@ -505,17 +512,18 @@ def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: 
     return goals
 
 
-def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray], robot, q_prev) -> list[str]:
-    """Touchdown at frame i sets a foot's hold point: x, y where the robot's foot is at the previous frame (the
-    scaled source ankle's at frame 0), z the floor plus the sole (without a floor: that z as well); lift-off drops
-    it. Returns the feet that touched down (their holds are re-anchored on the answer, :func:`_anchor_holds`)."""
+def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray], poses_prev) -> list[str]:
+    """Touchdown at frame i sets a foot's hold point: x, y where the robot's foot is at the previous frame
+    (``poses_prev``: the feet's poses there, :class:`_FootPoses`; the scaled source ankle's at frame 0), z the floor
+    plus the sole (without a floor: that z as well); lift-off drops it. Returns the feet that touched down (their
+    holds are re-anchored on the answer, :func:`_anchor_holds`)."""
     touched = []
     for frame, flags in plan.contacts.items():
         if not flags[i]:
             holds.pop(frame, None)
         elif frame not in holds:
             if i > 0:
-                p = np.array(robot.fk(q_prev, frame).translation)
+                p = np.array(poses_prev[frame].translation)
             elif frame in plan.src_index:
                 p = plan.src(frame, i).copy()
             else:
@@ -527,29 +535,56 @@ def _update_holds(plan: _Plan, i: int, holds: dict[str, np.ndarray], robot, q_pr
     return touched
 
 
-def _hold_slip(robot, plan: _Plan, i: int, holds: dict[str, np.ndarray], q) -> float:
-    """Largest distance (m) of a held foot (in contact at frame i) from its hold point at ``q``; 0 without one."""
-    return max((float(np.linalg.norm(robot.fk(q, frame).translation - holds[frame]))
+def _hold_slip(plan: _Plan, i: int, holds: dict[str, np.ndarray], poses) -> float:
+    """Largest distance (m) of a held foot (in contact at frame i) from its hold point at the feet's ``poses``
+    (:class:`_FootPoses` of an answer); 0 without one."""
+    return max((float(np.linalg.norm(poses[frame].translation - holds[frame]))
                 for frame, flags in plan.contacts.items() if flags[i] and frame in holds), default=0.0)
 
 
-def _anchor_holds(plan: _Plan, touched: list[str], holds: dict[str, np.ndarray], robot, q) -> None:
-    """The feet that touched down at this frame are held where the answer ``q`` put them (x, y; z on the floor):
-    a touchdown the velocity box did not let the foot finish would otherwise slide it over the next frames."""
+def _anchor_holds(plan: _Plan, touched: list[str], holds: dict[str, np.ndarray], poses) -> None:
+    """The feet that touched down at this frame are held where the answer put them (``poses``: the feet's there;
+    x, y; z on the floor): a touchdown the velocity box did not let the foot finish would otherwise slide it over the
+    next frames."""
     for frame in touched:
-        p = np.array(robot.fk(q, frame).translation)
+        p = np.array(poses[frame].translation)
         if plan.ground is not None:
             p[2] = plan.ground + plan.sole[frame]
         holds[frame] = p
 
 
-def _level(robot, plan: _Plan, foot: str, q: np.ndarray) -> np.ndarray:
-    """(3, 3) the foot's orientation at neutral turned about the world's z to its heading at ``q``."""
+def _level(plan: _Plan, foot: str, rotation: np.ndarray) -> np.ndarray:
+    """(3, 3) the foot's orientation at neutral turned about the world's z to its heading when its frame has
+    ``rotation`` (3, 3)."""
     neutral = plan.neutral[foot].rotation
-    x = robot.fk(q, foot).rotation @ neutral.T[:, 0]
+    x = rotation @ neutral.T[:, 0]
     yaw = np.arctan2(x[1], x[0])
     c, s = np.cos(yaw), np.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ neutral
+
+
+class _FootPoses:
+    """The feet's poses (``pin.SE3``, base frame) at a configuration: one kinematics pass per configuration, the last
+    few kept (a frame asks for them at the previous answer and several times at each new one)."""
+
+    KEPT = 8
+
+    def __init__(self, robot, frames) -> None:
+        self._robot, self._frames = robot, list(frames)
+        self._ids = [robot.frame_id(f) for f in self._frames]
+        self._kept: dict[bytes, dict] = {}
+
+    def __call__(self, q: np.ndarray) -> dict:
+        """``{foot frame: pose}`` at ``q`` (n,) (a finite float array: an answer of the solve)."""
+        q = np.ascontiguousarray(q, dtype=float)
+        key = q.tobytes()
+        poses = self._kept.get(key)
+        if poses is None:
+            poses = dict(zip(self._frames, self._robot.frame_poses_unchecked(q, self._ids), strict=True))
+            if len(self._kept) >= self.KEPT:
+                self._kept.pop(next(iter(self._kept)))
+            self._kept[key] = poses
+        return poses
 
 
 def _initial_q(robot, plan: _Plan) -> np.ndarray:
@@ -570,6 +605,52 @@ def _first_bounds(robot, plan: _Plan) -> tuple[np.ndarray, np.ndarray]:
     # velocity box keeps it near the previous one
     lower[3], upper[3] = yaw - 4 * np.pi, yaw + 4 * np.pi
     return lower, upper
+
+
+class _Frame:
+    """One frame's solves: on the clip's bound goal stacks (``stacks``, :class:`.frame_stacks.FrameStacks`) or, with
+    ``stacks`` None, through :func:`evoik_pin.solve` on ``goals_of``'s goal list; ``feet`` (holds, clearance, level)
+    as :func:`_frame_goals` takes them (read at each solve: a floor retry raises a clearance); ``box`` (lower,
+    upper) (n,); ``budget``: the solve's timeout (s, None: none)."""
+
+    def __init__(self, robot, i: int, stacks, check, rng, goals_of, feet: tuple, box: tuple, budget) -> None:
+        self.robot, self.i, self.stacks, self.check, self.rng, self.goals_of = robot, i, stacks, check, rng, goals_of
+        self.feet, self.box, self.budget = feet, box, budget
+
+    def solve(self, tolerances: dict = TOLERANCES, contact_weight: float = WEIGHTS["contact"], start=None,
+              scene=None, options: dict | None = None, timeout=None) -> tuple[np.ndarray, bool, object]:
+        """(q (n,) in the box, success, the goal errors as :func:`_named` reads them, once the clip is solved) of
+        the frame's goals from ``start`` (n,) with these
+        ``tolerances`` and ``contact_weight``; with a ``scene`` an answer in collision is no success. ``options``
+        (default: the first frame's or a warm-started frame's) and ``timeout`` (default the frame's budget) go to
+        :func:`evoik_pin.solve`."""
+        from .. import api  # the public solve; imported here: evoik_pin's top level imports this module
+
+        lower, upper = self.box
+        seed = int(self.rng.integers(2**31))  # drawn on either path: the clip's random stream does not depend on it
+        if self.stacks is not None:
+            holds, clearance, level = self.feet
+            out = self.stacks.solve(self.i, holds, clearance, level, tolerances, contact_weight, start, lower, upper)
+            # the scene's verdict as the solvers give it: a converged answer in collision is rejected
+            ok = out.success and (scene is None or not self.check.in_collision(out.q))
+            return np.minimum(np.maximum(out.q, lower), upper), ok, out
+        if options is None:
+            options = FIRST_FRAME_OPTIONS if self.i == 0 else FRAME_OPTIONS
+        goals = self.goals_of(tolerances, contact_weight)
+        result = api.solve(self.robot, goals, seed=seed, q0=start, bounds=(lower, upper),
+                           timeout=self.budget if timeout is None else timeout, scene=scene, **options)
+        return np.minimum(np.maximum(result.q, lower), upper), result.success, (goals, result.goal_errors)
+
+
+def _named(errors) -> list[tuple[str, float]]:
+    """Per goal (its kind's name, its error: m, or rad for a goal without a position) of a frame's ``errors``: a
+    :class:`.frame_stacks.FrameSolve`, (goals, their errors: per goal (m or None, rad or None), or None), or None
+    (no errors reported)."""
+    if errors is None:
+        return []
+    goals, goal_errors = (errors.goals, errors.goal_errors) if isinstance(errors, FrameSolve) else errors
+    return [(type(g).__name__, e[0] if e[0] is not None else e[1]) for g, e in zip(goals, goal_errors or [],
+                                                                                     strict=False)]
 
 
 @functools.lru_cache(maxsize=4)
@@ -626,8 +707,6 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
         hulls), ``first_frame_s`` (s: the first frame's search), ``steady_fps`` (frames per second after the first:
         the warm-started rate; NaN for a one-frame clip), ``scale``.
     """
-    from .. import api  # the public solve; imported here: evoik_pin's top level imports this module
-
     if not isinstance(motion, Motion):
         raise OptionError(f"retarget takes a evoik_pin.motion.Motion (load_bvh, load_clip, Motion(...)); got "
                           f"{type(motion).__name__}")
@@ -644,24 +723,33 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     check = self_collision_check(robot)  # every other check, the report's too: collisions are counted either way
     rng = np.random.default_rng(seed)
     first_lower, first_upper = _first_bounds(robot, plan)
+    # the frames' goal lists bound once per structure, their targets written per frame (the ones that do not depend
+    # on the previous frame computed for every frame here)
+    stacks = FrameStacks(robot, plan, functools.partial(_frame_goals, plan), FLOOR_BAND)
+    q_init = _initial_q(robot, plan)
+    box = np.maximum(q_init - v_max * dt, first_lower), np.minimum(q_init + v_max * dt, first_upper)
+    stacks.prepare(TOLERANCES, WEIGHTS["contact"], *box)
+    if self_collision:  # a colliding frame's retry
+        stacks.prepare(RELAXED_TOLERANCES, WEIGHTS["contact"], *box)
+    feet = _FootPoses(robot, plan.contacts)
     n_frames = motion.frames
     Q = np.zeros((n_frames, robot.n))
     success = np.zeros(n_frames, dtype=bool)
-    errors: list[list] = []
+    errors: list = []  # per frame: what _named reads
     stepped_back = relaxed = firmed = drawn = 0
     holds: dict[str, np.ndarray] = {}
-    q_prev = _initial_q(robot, plan)
+    q_prev = q_init
     start = time.perf_counter()
     setup_s, first_frame_end = start - setup_start, start
     for i in range(n_frames):
-        touched = _update_holds(plan, i, holds, robot, q_prev)
+        poses_prev = feet(q_prev)
+        touched = _update_holds(plan, i, holds, poses_prev)
         # a swing foot tilts (toe-off, heel strike): its frame keeps the height over the floor that its lowest
         # corner needs at the previous frame's tilt, which changes little in one frame
-        clearance = {f: max(plan.sole[f], _sole_height(robot, f, plan.corners[f], q_prev)) if i > 0 else plan.sole[f]
-                     for f in plan.contacts}
-        level = {f: _level(robot, plan, f, q_prev) for f in plan.contacts}
+        clearance = {f: max(plan.sole[f], _sole_height_at(plan.corners[f], poses_prev[f].rotation)) if i > 0
+                     else plan.sole[f] for f in plan.contacts}
+        level = {f: _level(plan, f, poses_prev[f].rotation) for f in plan.contacts}
         goals_of = functools.partial(_frame_goals, plan, i, holds, clearance=clearance, level=level)
-        goals = goals_of()
         if i == 0:  # FIRST_FRAME_RESTARTS bound the work; the yaw within half a turn of the source's heading
             lower, upper, budget = first_lower.copy(), first_upper.copy(), None
             lower[3], upper[3] = q_prev[3] - np.pi, q_prev[3] + np.pi
@@ -669,36 +757,34 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
             lower = np.maximum(q_prev - v_max * dt, first_lower)
             upper = np.minimum(q_prev + v_max * dt, first_upper)
             budget = frame_timeout
-        q0 = np.clip(q_prev, lower, upper)
-        result = api.solve(robot, goals, seed=int(rng.integers(2**31)), q0=q0, bounds=(lower, upper),
-                           timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
-        q_new = np.clip(result.q, lower, upper)
+        # a warm-started frame is one LM run from its start (FRAME_OPTIONS): on the clip's bound goal stacks; the
+        # first frame (a search) and a box in which a joint spans a full turn take the general solve
+        frame = _Frame(robot, i, stacks if i > 0 and stacks.usable(lower, upper) else None, check, rng, goals_of,
+                       (holds, clearance, level), (lower, upper), budget)
+        solve = frame.solve
+        q0 = np.minimum(np.maximum(q_prev, lower), upper)
+        q_new, ok, goal_errors = solve(start=q0)
         for _ in range(FLOOR_RETRIES):
             # the tilt the answer gave a swing foot may put its lowest corner under the floor: once more from
             # the answer with that foot's frame kept as high as this tilt needs
-            need = {f: _sole_height(robot, f, plan.corners[f], q_new) for f in plan.contacts if f not in holds}
+            poses = feet(q_new)
+            need = {f: _sole_height_at(plan.corners[f], poses[f].rotation) for f in plan.contacts if f not in holds}
             low = {f: h for f, h in need.items() if plan.ground is not None
-                   and float(robot.fk(q_new, f).translation[2]) - plan.ground < h - FLOOR_SLACK}
+                   and float(poses[f].translation[2]) - plan.ground < h - FLOOR_SLACK}
             if not low:
                 break
             clearance.update({f: max(clearance[f], h) for f, h in low.items()})
-            lifted = api.solve(robot, goals_of(), seed=int(rng.integers(2**31)), q0=q_new, bounds=(lower, upper),
-                               timeout=budget, **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
-            result, q_new = lifted, np.clip(lifted.q, lower, upper)
-        if _hold_slip(robot, plan, i, holds, q_new) > HOLD_SLIP:
+            q_new, ok, goal_errors = solve(start=q_new)
+        if _hold_slip(plan, i, holds, feet(q_new)) > HOLD_SLIP:
             # the other goals pulled a held foot off its point (a touchdown while the source foot still moves):
             # once more from that answer with the feet weighing far more, kept if the feet end nearer their holds
-            firm = api.solve(robot, goals_of(contact_weight=FIRM_CONTACT_WEIGHT),
-                             seed=int(rng.integers(2**31)), q0=q_new, bounds=(lower, upper), timeout=budget,
-                             **(FIRST_FRAME_OPTIONS if i == 0 else FRAME_OPTIONS))
-            q_firm = np.clip(firm.q, lower, upper)
-            if _hold_slip(robot, plan, i, holds, q_firm) < _hold_slip(robot, plan, i, holds, q_new):
-                result, q_new, firmed = firm, q_firm, firmed + 1
+            firm = solve(contact_weight=FIRM_CONTACT_WEIGHT, start=q_new)
+            if _hold_slip(plan, i, holds, feet(firm[0])) < _hold_slip(plan, i, holds, feet(q_new)):
+                (q_new, ok, goal_errors), firmed = firm, firmed + 1
         if self_collision and check.in_collision(q_new):
-            again = api.solve(robot, goals_of(RELAXED_TOLERANCES), seed=int(rng.integers(2**31)),
-                              q0=q0, bounds=(lower, upper), timeout=frame_timeout, scene=scene,
-                              **(FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS))
-            free = again.q if again.success and not check.in_collision(again.q) else None
+            again_q, again_ok, _ = solve(RELAXED_TOLERANCES, start=q0, scene=scene, timeout=frame_timeout,
+                                         options=FIRST_COLLISION_RETRY_OPTIONS if i == 0 else COLLISION_RETRY_OPTIONS)
+            free = again_q if again_ok and not check.in_collision(again_q) else None
             if free is None:
                 if i > 0:
                     free = step_back_free(robot, check, q_prev, q_new, plan.foot_joints)
@@ -715,12 +801,11 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
                 relaxed += 1
             if free is not None:  # the solver's goal errors were those of the colliding answer: not reported
                 q_new = np.clip(free, lower, upper)
-                result = replace(result, success=False, goal_errors=None)
-        _anchor_holds(plan, touched, holds, robot, q_new)
+                ok, goal_errors = False, None
+        _anchor_holds(plan, touched, holds, feet(q_new))
         q_prev = q_new
-        Q[i], success[i] = q_prev, result.success
-        errors.append([(type(g).__name__, e[0] if e[0] is not None else e[1])  # m, or rad for a Direction
-                       for g, e in zip(goals, result.goal_errors or [], strict=False)])
+        Q[i], success[i] = q_prev, ok
+        errors.append(goal_errors)  # named after the clip: not a frame's work
         if i == 0:
             first_frame_end = time.perf_counter()
         if progress and (i % 30 == 0 or i == n_frames - 1):
@@ -728,7 +813,8 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     elapsed = time.perf_counter() - start
     from .retarget_report import clip_report  # the quality figures: one concept per file
 
-    report = clip_report(robot, plan, Q, success, errors, v_max, dt, check, first_lower, first_upper)
+    report = clip_report(robot, plan, Q, success, [_named(e) for e in errors], v_max, dt, check, first_lower,
+                         first_upper)
     report["collision_resolves"] = {"relaxed": relaxed, "step_back": stepped_back, "drawn": drawn}
     report["firm_contact_frames"] = firmed
     report["fps"] = n_frames / elapsed if elapsed > 0 else float("inf")
