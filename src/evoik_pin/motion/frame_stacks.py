@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..goals.direction import unit_vector
+from ..goals.pointing import unit_vector
 from ..goals.stack import owned
 from ..solvers.lm.engine import LevenbergMarquardt
 from ..solvers.lm.layout import DEFAULT_ITERATIONS, wrapping_joints
