@@ -101,10 +101,13 @@ class IKProblem:
 
     Attributes:
         robot: the robot to solve for.
-        target: the tip's :class:`Target` (coerced from any accepted form); None for a goal list.
-        goals: a goal list (:mod:`evoik_pin.goals`, given as ``target`` or ``goals``), bound to the robot; its cost
-            is the weighted sum over the goals of position error + ``orientation_weight`` x angle.
-        objective: vectorized cost; default :func:`~evoik_pin.objectives.default_objective`. None for a goal list.
+        target: the tip's :class:`Target` (coerced from any accepted form) when the problem came as one; None for a
+            goal list.
+        goals: the goal list every solver reads (:mod:`evoik_pin.goals`, given as ``target`` or ``goals``), bound to
+            the robot; a tip target's is its one goal on the tip (:func:`~evoik_pin.goals.stack.tip_goals`). A goal
+            list's cost is the weighted sum over the goals of position error + ``orientation_weight`` x angle.
+        objective: a tip target's vectorized cost; default :func:`~evoik_pin.objectives.default_objective`. None
+            for a goal list.
         lower, upper: (n,) search box (rad or m); default the robot's bounds, near-unbounded joints narrowed around
             the target (:func:`target_box`).
         tolerance: success threshold on the position error (m); rotation_tolerance: on the angle (rad), default
@@ -301,7 +304,7 @@ class IKProblem:
 
     def chosen(self, q: np.ndarray) -> list[int | None] | None:
         """Per goal, the index of the member of a goal set the configuration ``q`` (n,) meets (or comes nearest
-        to), None for a goal with one target; None for a problem without a goal list."""
+        to), None for a goal with one target; None for a tip target (:meth:`reported`)."""
         return self.reported(self.goal_errors_and_chosen(q)[1])
 
     def variant_targets(self, most: int = MAX_VARIANTS) -> tuple[list[tuple], np.ndarray, np.ndarray]:
