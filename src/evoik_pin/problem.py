@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "shortfall_text",
+           "Target", "check_pro_delta", "coerce_scene", "errors_text", "pro_box", "shortfall_text",
            "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
@@ -467,10 +467,14 @@ class IKProblem:
     def with_pro_box(self, q_prev, delta: float = DEFAULT_PRO_DELTA) -> IKProblem:
         """Paper 002's "Pro" problem: the search box is ``q_prev +- delta`` intersected with the bounds."""
         q_prev = self.robot.check_q(q_prev)
-        delta = check_pro_delta(delta)
-        lower = np.clip(np.maximum(self.lower, q_prev - delta), self.lower, self.upper)
-        upper = np.clip(np.minimum(self.upper, q_prev + delta), self.lower, self.upper)
+        lower, upper = pro_box(self.lower, self.upper, q_prev, check_pro_delta(delta))
         return replace(self, lower=lower, upper=upper, q0=np.clip(q_prev, lower, upper), evaluations=0)
+
+
+def pro_box(lower: np.ndarray, upper: np.ndarray, q_prev: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    """Paper 002's "Pro" search box: ``q_prev +- delta`` (rad or m) intersected with [lower, upper], each (n,)."""
+    return (np.clip(np.maximum(lower, q_prev - delta), lower, upper),
+            np.clip(np.minimum(upper, q_prev + delta), lower, upper))
 
 
 def target_box(robot: Robot, target: Target, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

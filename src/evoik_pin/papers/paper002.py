@@ -16,7 +16,7 @@ import numpy as np
 
 from ..api import solve
 from ..objectives import PositionError, WeightedJointDisplacement
-from ..problem import DEFAULT_PRO_DELTA, Target
+from ..problem import DEFAULT_PRO_DELTA, Target, pro_box
 from ..robot import load_robot
 from ..solvers import get_solver
 from .reporting import (
@@ -114,12 +114,6 @@ def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0,
             "q": best.q, "result": best}
 
 
-def _pro_bounds(robot, q_prev, delta):
-    lo = np.clip(np.maximum(robot.lower, q_prev - delta), robot.lower, robot.upper)
-    hi = np.clip(np.minimum(robot.upper, q_prev + delta), robot.lower, robot.upper)
-    return lo, hi
-
-
 def _stats(points: list[dict], fitness: float | None) -> dict:
     counts = {k: sum(p.get("status") == k for p in points) for k in ("reached", "missed", "no solution")}
     points = [p for p in points if p.get("status") != "no solution"] or points
@@ -168,7 +162,7 @@ def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: i
 
     def distance(i: int) -> float:
         x0 = points[i - 1]["q"] if i > 0 else points[0]["q"]
-        lo, hi = _pro_bounds(robot, x0, DEFAULT_PRO_DELTA) if i > 0 else (robot.lower, robot.upper)
+        lo, hi = pro_box(robot.lower, robot.upper, x0, DEFAULT_PRO_DELTA) if i > 0 else (robot.lower, robot.upper)
         return least_squares_distance(robot, targets[i], lo, hi, rng, starts, x0)
 
     _classify(points, distance)
@@ -225,7 +219,7 @@ def _job(spec: dict):
         pro, fitness = spec["pro"], spec["fitness"]
         out, q_prev = [], q_zero
         for i, p in enumerate(progress_bar(spec["targets"], desc=f"002 Scenario 3 {label}", enabled=show)):
-            bounds = _pro_bounds(robot, q_prev, DEFAULT_PRO_DELTA) if (pro and i > 0) else None
+            bounds = pro_box(robot.lower, robot.upper, q_prev, DEFAULT_PRO_DELTA) if (pro and i > 0) else None
             out.append(_solve_point(robot, p, cfg, rng, rho=s["rho_runs_per_point"], fitness=fitness, q0=q_prev,
                                     bounds=bounds, a=s["a_first"] if i == 0 else 0.0))
             q_prev = out[-1]["q"]
