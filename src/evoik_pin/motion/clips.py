@@ -1,7 +1,8 @@
 """The CMU motion-capture clips shipped with evoik_pin (``motions/cmu/*.bvh``; credits in ``motions/README.md``).
 
-Each clip is a few seconds of one CMU trial at 30 fps, kept as a BVH file with CMU's hierarchy, so that examples
-and tests can retarget a real human motion without a download. Found next to the installed package
+Each clip is one CMU trial at 30 fps (walk, run and jump whole, 1.4-4.0 s; dance and getup 0.5 s cut from
+theirs), kept as a BVH file with CMU's hierarchy, so that examples and tests can retarget a real human motion without
+a download. Found next to the installed package
 (``evoik_pin/motions``, pyproject's ``force-include``) or at the top of a source checkout.
 """
 
@@ -18,9 +19,12 @@ __all__ = ["CLIPS", "clip_path", "list_clips", "load_clip", "motions_dir"]
 
 #: Bundled clips: name -> (file below motions/, what it shows and its CMU subject_trial).
 CLIPS: dict[str, tuple[str, str]] = {
-    "walk": ("cmu/walk.bvh", "walk forward, 1.0 s: right stance, then left stance (CMU 07_01)"),
-    "run": ("cmu/run.bvh", "run, 0.63 s: right stance, flight, left stance (CMU 02_03)"),
-    "jump": ("cmu/jump.bvh", "jump on the spot, 0.87 s: push-off, flight, landing in a crouch (CMU 02_04)"),
+    "walk": ("cmu/walk.bvh", "walk forward, 2.6 s (the whole trial): two gait cycles, five stances from the right "
+                             "foot's (CMU 07_01)"),
+    "run": ("cmu/run.bvh", "run, 1.43 s (the whole trial): four stances from the right foot's, a flight between "
+                           "each (CMU 02_03)"),
+    "jump": ("cmu/jump.bvh", "jump on the spot, 4.0 s (the whole trial): crouch, push-off, flight, landing in a "
+                             "crouch, standing up, balancing (CMU 02_04)"),
     "dance": ("cmu/dance.bvh", "modern dance, 0.5 s: rising from a bend, arms sweeping (CMU 05_04)"),
     "getup": ("cmu/getup.bvh", "getting up from the ground, 0.5 s: squat to standing (CMU 140_03)"),
 }
