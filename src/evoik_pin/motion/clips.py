@@ -1,9 +1,9 @@
 """The CMU motion-capture clips shipped with evoik_pin (``motions/cmu/*.bvh``; credits in ``motions/README.md``).
 
-Each clip is one CMU trial at 30 fps (walk, run and jump whole, 1.4-4.0 s; dance and getup 0.5 s cut from
-theirs), kept as a BVH file with CMU's hierarchy, so that examples and tests can retarget a real human motion without
-a download. Found next to the installed package
-(``evoik_pin/motions``, pyproject's ``force-include``) or at the top of a source checkout.
+Each clip is one CMU trial at 30 fps (run and jump whole, 1.4-4.0 s; walk its first second; dance and getup 0.5 s
+cut from theirs), kept as a BVH file with CMU's hierarchy, so that examples and tests can retarget a real human
+motion without a download. Found next to the installed package (``evoik_pin/motions``, pyproject's
+``force-include``) or at the top of a source checkout.
 """
 
 from __future__ import annotations
@@ -19,8 +19,7 @@ __all__ = ["CLIPS", "clip_path", "list_clips", "load_clip", "motions_dir"]
 
 #: Bundled clips: name -> (file below motions/, what it shows and its CMU subject_trial).
 CLIPS: dict[str, tuple[str, str]] = {
-    "walk": ("cmu/walk.bvh", "walk forward, 2.6 s (the whole trial): two gait cycles, five stances from the right "
-                             "foot's (CMU 07_01)"),
+    "walk": ("cmu/walk.bvh", "walk forward, 1.0 s: right stance, then left stance (CMU 07_01)"),
     "run": ("cmu/run.bvh", "run, 1.43 s (the whole trial): four stances from the right foot's, a flight between "
                            "each (CMU 02_03)"),
     "jump": ("cmu/jump.bvh", "jump on the spot, 4.0 s (the whole trial): crouch, push-off, flight, landing in a "
