@@ -33,12 +33,12 @@ README_MAX_LINES = 300
 # Command lines not run here, each with the reason (the text up to the first "#" comment of the line).
 NOT_RUN = {
     "evoik reproduce 002 004 --seed 0 --out runs": "the papers' full settings: minutes per paper",
-    "evoik reproduce 002 --quick": "tests/test_reproduce.py's quick_runs runs every paper's --quick run",
-    "evoik reproduce all --quick --out runs": "tests/test_reproduce.py runs it (quick_runs), once for the suite",
+    "evoik reproduce 002 --quick": "tests/conftest.py's quick_runs runs every paper's --quick run",
+    "evoik reproduce all --quick --out runs": "tests/conftest.py runs it (quick_runs), once for the suite",
     "evoik reproduce 002 --html spiral.html": "paper 002's full settings: minutes",
     "evoik reach panda --voxel 0.05 --out maps": "874,000 pose targets: minutes on a loaded 2-core machine; the "
                                                  "planar2r line above it runs the same command",
-    "python scripts/reproduce_004.py --quick": "the same run_paper call as tests/test_reproduce.py's quick run of "
+    "python scripts/reproduce_004.py --quick": "the same run_paper call as the tests' quick run of "
                                                "004 (quick_runs), seconds more for no new code",
 }
 
