@@ -1,9 +1,10 @@
 """The documentation's code runs as written.
 
 - Every ```python block of README.md and docs/*.md: the blocks of one ``##`` section run top to bottom in ONE fresh
-  interpreter (a block may build on the blocks above it in its section, never on another section's), from the
-  repository root (a mirror of it, see docs_helpers.repo_mirror), and the section must exit 0. A failure names the
-  file, the section and the block's line, with the interpreter's stderr.
+  interpreter (a fork of one with evoik_pin loaded, see docs_helpers; a block may build on the blocks above it in its
+  section, never on another section's), from the repository root (a mirror of it, see docs_helpers.repo_mirror),
+  and the section must exit 0. A failure names the file, the section and the block's line, with the interpreter's
+  stderr.
 - Every command line of the ```bash blocks of README.md and of the reference pages docs/API.md, docs/CLI.md,
   docs/GOALS.md and docs/ROBOTS.md (``evoik ...``, ``python ...``) exits 0, except the set-up lines at the top of
   README.md (a venv and ``pip install``) and the ones listed in NOT_RUN with the reason; a command that serves a
