@@ -42,3 +42,18 @@ def root_mirror(tmp_path_factory):
     from docs_helpers import repo_mirror
 
     return repo_mirror(tmp_path_factory.mktemp("repo"))
+
+
+@pytest.fixture(scope="session")
+def quick_runs(tmp_path_factory):
+    """Every implemented paper reproduced in quick mode at seed 3, once for the whole suite, through the command line
+    (``evoik reproduce all --quick``, two worker processes); returns the output folder (one ``<paper id>/`` each).
+
+    test_reproduce.py checks every paper's files and the numbers of 002 and 004, test_reproduce_000_001_003.py the
+    numbers of 000, 001 and 003: one run of each paper for both (the reproductions are the suite's slowest set-up).
+    """
+    from evoik_pin.cli import main
+
+    out = tmp_path_factory.mktemp("reproduction")
+    assert main(["reproduce", "all", "--quick", "--seed", "3", "--out", str(out), "--no-progress", "--jobs", "2"]) == 0
+    return out

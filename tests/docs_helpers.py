@@ -1,9 +1,12 @@
 """Helpers of tests/test_docs.py and tests/test_docs_examples.py: the documentation's code blocks and commands.
 
 - :func:`python_sections`: the ```python blocks of a Markdown file, grouped by their ``##`` section;
-- :func:`run_python_blocks`: a section's blocks, in order, in one fresh interpreter (a subprocess);
-- :func:`run_command`: one shell-style command line (``evoik ...``, ``python ...``) in a subprocess, exit status 0
-  expected; a command that serves a meshcat viewer is interrupted with SIGINT (Ctrl-C) once it says so;
+- :func:`run_python_blocks`: a section's blocks, in order, in one fresh interpreter (a process of its own);
+- :func:`run_command`: one shell-style command line (``evoik ...``, ``python ...``) in a process of its own, exit
+  status 0 expected; a command that serves a meshcat viewer is interrupted with SIGINT (Ctrl-C) once it says so;
+- the processes: forks of one interpreter that has evoik_pin and its common kernels loaded (tests/docs_zygote.py: about
+  1.3 s of CPU less per section and command), or, with the environment variable EVOIK_DOCS_FRESH_INTERPRETERS=1, each
+  a new interpreter (``python -c``, ``python -m evoik_pin.cli``, ``python script.py``) as a user's shell starts it;
 - :func:`repo_mirror`: a temporary folder that looks like the repository root (a symbolic link to each of its
   top-level entries), so the docs' relative paths (``examples/...``, ``robots/...``) resolve as from the root while
   the files they write (``maps/``, ``scene.html``, ...) land in the temporary folder, not in the checkout.
@@ -18,12 +21,15 @@ import shlex
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
+#: Set to 1: every section and command in a new interpreter of its own, not a fork of docs_zygote's server.
+FRESH_INTERPRETERS = "EVOIK_DOCS_FRESH_INTERPRETERS"
 #: Seconds one section or one command may take before it counts as hung (a safety net, not a speed check).
 HANG_TIMEOUT = 600.0
 #: A serving command prints a line containing this when it starts serving (``evoik view``, ``--view``,
@@ -89,11 +95,44 @@ for name, line, code in json.load(sys.stdin):
 """
 
 
+def _forks() -> bool:
+    """Whether sections and commands run in forks of docs_zygote's server (the default) or in new interpreters."""
+    return os.environ.get(FRESH_INTERPRETERS, "") != "1"
+
+
+_FRESH_PATH: list = []
+
+
+def _fresh_path() -> list[str]:
+    """docs_zygote.fresh_sys_path(), found once."""
+    import docs_zygote
+
+    if not _FRESH_PATH:
+        _FRESH_PATH.append(docs_zygote.fresh_sys_path())
+    return _FRESH_PATH[0]
+
+
 def run_python_blocks(blocks: list[Block], cwd: Path) -> subprocess.CompletedProcess:
     """Run ``blocks`` top to bottom in one fresh ``python`` process in ``cwd`` (output captured as text)."""
-    payload = json.dumps([[os.path.relpath(b.file, ROOT), b.line, b.code] for b in blocks])
-    return subprocess.run([sys.executable, "-c", _RUNNER], input=payload, cwd=cwd, capture_output=True, text=True,
-                          timeout=HANG_TIMEOUT)
+    runs = [[os.path.relpath(b.file, ROOT), b.line, b.code] for b in blocks]
+    if not _forks():
+        return subprocess.run([sys.executable, "-c", _RUNNER], input=json.dumps(runs), cwd=cwd, capture_output=True,
+                              text=True, timeout=HANG_TIMEOUT)
+    import docs_zygote
+
+    with tempfile.TemporaryDirectory() as folder:
+        out, err = Path(folder, "stdout"), Path(folder, "stderr")
+        proc = docs_zygote.context().Process(target=docs_zygote.run,
+                                             args=("blocks", runs, str(cwd), str(out), str(err), dict(os.environ),
+                                                   _fresh_path()))
+        proc.start()
+        proc.join(HANG_TIMEOUT)
+        if proc.exitcode is None:
+            proc.kill()
+            proc.join()
+            raise subprocess.TimeoutExpired(["python", "-c", "<section>"], HANG_TIMEOUT)
+        return subprocess.CompletedProcess(["python", "-c", "<section>"], proc.exitcode, out.read_text(),
+                                           err.read_text())
 
 
 def command_argv(line: str) -> list[str]:
@@ -124,8 +163,12 @@ class CommandRun:
 def run_command(line: str, cwd: Path) -> CommandRun:
     """Run one documented command line in ``cwd``; a command that prints :data:`SERVING_MARK` while it runs is
     sent SIGINT (Ctrl-C) at that moment and is expected to stop by itself (exit status 0)."""
-    proc = subprocess.Popen(command_argv(line), cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            stdin=subprocess.DEVNULL, text=True, preexec_fn=_default_sigint)
+    argv = command_argv(line)
+    if _forks() and argv[0] == sys.executable and len(argv) > 1 and (argv[1] == "-m" or not argv[1].startswith("-")):
+        proc = _ForkedCommand(argv[1:], cwd)
+    else:
+        proc = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                stdin=subprocess.DEVNULL, text=True, preexec_fn=_default_sigint)
     out: list[str] = []
     event = threading.Event()  # set when the command says it serves, or when its output ends (it exited)
     served = threading.Event()
@@ -153,6 +196,40 @@ def run_command(line: str, cwd: Path) -> CommandRun:
             proc.wait()
     reader.join(timeout=10)
     return CommandRun(returncode, "".join(out), served.is_set())
+
+
+class _ForkedCommand:
+    """``python -m MODULE ARGS`` or ``python SCRIPT ARGS`` (``args``: what follows ``python``) run in a fork of
+    docs_zygote's server, with the part of :class:`subprocess.Popen`'s interface :func:`run_command` uses: ``stdout``
+    (text lines of standard output and error, interleaved), ``poll``, ``wait``, ``send_signal``, ``kill``."""
+
+    def __init__(self, args: list[str], cwd: Path):
+        import docs_zygote
+
+        context = docs_zygote.context()
+        read, write = context.Pipe(duplex=False)
+        kind, what = ("module", args[1:]) if args[0] == "-m" else ("script", args)
+        self._proc = context.Process(target=docs_zygote.run, args=(kind, what, str(cwd), write, write, dict(os.environ),
+                                                                   _fresh_path()))
+        self._proc.start()
+        write.close()  # the fork holds the only writing end: the lines end when it (and what it started) ends
+        self.stdout = open(os.dup(read.fileno()))  # noqa: SIM115 - read to its end by run_command's reader
+        read.close()
+
+    def poll(self) -> int | None:
+        return self._proc.exitcode
+
+    def wait(self, timeout: float | None = None) -> int:
+        self._proc.join(timeout)
+        if self._proc.exitcode is None:
+            raise subprocess.TimeoutExpired("forked command", timeout)
+        return self._proc.exitcode
+
+    def send_signal(self, sig: int) -> None:
+        os.kill(self._proc.pid, sig)
+
+    def kill(self) -> None:
+        self._proc.kill()
 
 
 def repo_mirror(path: Path) -> Path:

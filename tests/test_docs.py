@@ -1,9 +1,10 @@
 """The documentation's code runs as written.
 
 - Every ```python block of README.md and docs/*.md: the blocks of one ``##`` section run top to bottom in ONE fresh
-  interpreter (a block may build on the blocks above it in its section, never on another section's), from the
-  repository root (a mirror of it, see docs_helpers.repo_mirror), and the section must exit 0. A failure names the
-  file, the section and the block's line, with the interpreter's stderr.
+  interpreter (a fork of one with evoik_pin loaded, see docs_helpers; a block may build on the blocks above it in its
+  section, never on another section's), from the repository root (a mirror of it, see docs_helpers.repo_mirror),
+  and the section must exit 0. A failure names the file, the section and the block's line, with the interpreter's
+  stderr.
 - Every command line of the ```bash blocks of README.md and of the reference pages docs/API.md, docs/CLI.md,
   docs/GOALS.md and docs/ROBOTS.md (``evoik ...``, ``python ...``) exits 0, except the set-up lines at the top of
   README.md (a venv and ``pip install``) and the ones listed in NOT_RUN with the reason; a command that serves a
@@ -33,12 +34,12 @@ README_MAX_LINES = 300
 # Command lines not run here, each with the reason (the text up to the first "#" comment of the line).
 NOT_RUN = {
     "evoik reproduce 002 004 --seed 0 --out runs": "the papers' full settings: minutes per paper",
-    "evoik reproduce 002 --quick": "tests/test_reproduce.py's quick_runs runs every paper's --quick run",
-    "evoik reproduce all --quick --out runs": "tests/test_reproduce.py runs it (quick_runs), once for the suite",
+    "evoik reproduce 002 --quick": "tests/conftest.py's quick_runs runs every paper's --quick run",
+    "evoik reproduce all --quick --out runs": "tests/conftest.py runs it (quick_runs), once for the suite",
     "evoik reproduce 002 --html spiral.html": "paper 002's full settings: minutes",
     "evoik reach panda --voxel 0.05 --out maps": "874,000 pose targets: minutes on a loaded 2-core machine; the "
                                                  "planar2r line above it runs the same command",
-    "python scripts/reproduce_004.py --quick": "the same run_paper call as tests/test_reproduce.py's quick run of "
+    "python scripts/reproduce_004.py --quick": "the same run_paper call as the tests' quick run of "
                                                "004 (quick_runs), seconds more for no new code",
 }
 

@@ -1,5 +1,6 @@
 """Goal lists (evoik_pin.goals) in every entry point: solve_many (batched rounds through the kernel's pair entry
-point, the k-d tree over the goal frames, the one-by-one fallback, workers, Ray, bad lists named by their index),
+point, the k-d tree over the goal frames, the one-by-one fallback, workers, bad lists named by their index; Ray in
+test_ray_backend.py, beside the other Ray tests, so that the suite starts Ray once),
 solve_trajectory (warm-started frame to frame), and every method that takes them (the evolutionary ones through
 IKProblem.evaluate, polish=True), the others refusing by name.
 
@@ -11,7 +12,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from test_batch import same
-from test_ray_backend import ray  # noqa: F401 - the module's Ray fixture (a local Ray of 2 CPUs)
 
 import evoik_pin as ek
 from evoik_pin.errors import FrameError, MethodError, TargetError
@@ -203,13 +203,6 @@ def test_methods_without_goal_lists_are_refused_by_name(talos, lists):
         ek.solve_many(talos, lists[:3], method="algebraic", seed=0)
     with pytest.raises(MethodError, match="'de' returns one solution; solve_all needs one of"):
         ek.solve_all(talos, lists[0], method="de", seed=0)
-
-
-def test_ray_gives_the_local_answers(ray, talos, lists):  # noqa: F811 - the Ray fixture
-    local = ek.solve_many(talos, lists[:12], seed=2, workers=2, **BUDGET)
-    remote = ek.solve_many(talos, lists[:12], seed=2, backend="ray", workers=2, **BUDGET)
-    same(local, remote)
-    assert [r.goal_errors for r in local] == [r.goal_errors for r in remote]
 
 
 # ---------------------------------------------------------------------------------------------- solve_trajectory

@@ -1,10 +1,11 @@
 """solve_many(backend="ray") and reachability maps on Ray: one local 2-CPU Ray instance for the module (starting
-Ray costs seconds), the same answers as the local backend, a dying actor's chunk re-run, scenes rebuilt in the
-actors, clear errors for unreachable clusters."""
+Ray costs seconds: every Ray test of the suite is here), the same answers as the local backend (targets, goal lists),
+a dying actor's chunk re-run, scenes rebuilt in the actors, clear errors for unreachable clusters."""
 
 import numpy as np
 import pytest
 from test_batch import mixed, same
+from test_goal_batch import talos_lists
 
 import evoik_pin as ev
 from evoik_pin.errors import BackendError, TargetError
@@ -97,6 +98,16 @@ def test_reachability_map_on_ray(ray):
     remote = reachability_map("planar2r", voxel=0.05, backend="ray", workers=2, progress=False)
     assert np.array_equal(local.index, remote.index) and np.array_equal(local.manipulability, remote.manipulability)
     assert remote.settings["backend"] == "ray"
+
+
+def test_goal_lists_on_ray_give_the_local_answers(ray):
+    """Goal lists (four poses on the floating Talos) reach the actors: the local backend's answers and goal errors."""
+    talos = ev.load_robot("talos", floating_base=True)
+    lists = talos_lists(talos, 40, 3)[:12]
+    local = ev.solve_many(talos, lists, seed=2, workers=2, **BUDGET)
+    remote = ev.solve_many(talos, lists, seed=2, backend="ray", workers=2, **BUDGET)
+    same(local, remote)
+    assert [r.goal_errors for r in local] == [r.goal_errors for r in remote]
 
 
 def test_unreachable_cluster_address_is_a_clear_error(panda, monkeypatch):

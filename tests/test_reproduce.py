@@ -1,4 +1,9 @@
-"""Paper reproductions (evoik_pin.papers, ``evoik reproduce``): quick runs produce sane tables and figures."""
+"""Paper reproductions (evoik_pin.papers, ``evoik reproduce``): quick runs produce sane tables and figures.
+
+The quick runs are conftest.py's ``quick_runs`` (``evoik reproduce all --quick --seed 3``, once for the suite): the
+generic checks below cover every paper; paper-specific numbers of 002 and 004 are checked here, those of 000, 001
+and 003 in test_reproduce_000_001_003.py.
+"""
 
 import csv
 import importlib
@@ -16,18 +21,6 @@ from evoik_pin.papers.reporting import check_output_file, fmt
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-
-
-@pytest.fixture(scope="module")
-def quick_runs(tmp_path_factory):
-    """Every implemented paper in quick mode, once, through the command line (two worker processes).
-
-    The generic checks below cover every paper; paper-specific numbers of 002 and 004 are checked here,
-    those of 000, 001 and 003 in test_reproduce_000_001_003.py.
-    """
-    out = tmp_path_factory.mktemp("reproduction")
-    assert main(["reproduce", "all", "--quick", "--seed", "3", "--out", str(out), "--no-progress", "--jobs", "2"]) == 0
-    return out
 
 
 def _csv(path: Path) -> list[dict]:

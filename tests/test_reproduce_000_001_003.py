@@ -1,8 +1,8 @@
 """Papers 000, 001 and 003: quick reproductions give the papers' qualitative results, and the helpers they use.
 
-The generic checks (files, tables, figures) are in test_reproduce.py, which runs every paper at seed 3; these
-run the three papers once more at another seed (5) and check paper-specific numbers against thresholds with
-margin over the measured behaviour (see each test), so they do not rest on one seed.
+The generic checks (files, tables, figures) are in test_reproduce.py; these check paper-specific numbers of the same
+quick runs (conftest.py's ``quick_runs``: every paper at seed 3, once for the suite) against thresholds with margin
+over the behaviour measured on many seeds (see each test), so they do not rest on the one seed run here.
 """
 
 import csv
@@ -13,17 +13,9 @@ import pytest
 
 import evoik_pin
 from evoik_pin.errors import OptionError
-from evoik_pin.papers import run_papers
 from evoik_pin.papers.paper001 import PAPER_TABLE5, TARGETS_PUMA_CM, _match, _order_like
 from evoik_pin.papers.paper003 import LINKS, path_points, planar_chain, vehicle_path_lower_bound
 from evoik_pin.solvers.paper.analytic import puma_fk, puma_ik
-
-
-@pytest.fixture(scope="module")
-def quick(tmp_path_factory):
-    out = tmp_path_factory.mktemp("repro_000_001_003")
-    run_papers(["000", "001", "003"], out=out, quick=True, seed=5, progress=False)
-    return out
 
 
 def _ours(path: Path) -> list[dict]:
@@ -34,9 +26,9 @@ def _ours(path: Path) -> list[dict]:
 # ------------------------------------------------------------------------------------------------ 000
 
 
-def test_000_de_reaches_table2_targets_and_beats_the_other_configurations(quick):
+def test_000_de_reaches_table2_targets_and_beats_the_other_configurations(quick_runs):
     """Measured for mode (c) at the paper's settings: 199 of 200 Table 2 runs within 1 mm (seeds 0-39)."""
-    rows = _ours(quick / "000" / "table2.csv")
+    rows = _ours(quick_runs / "000" / "table2.csv")
     de = [r for r in rows if r["method"].startswith("DE")]
     am = [r for r in rows if r["method"].startswith("AM")]
     ga = [r for r in rows if r["method"].startswith("GA")]
@@ -46,22 +38,23 @@ def test_000_de_reaches_table2_targets_and_beats_the_other_configurations(quick)
     assert within >= runs - 1, [r["max error (mm)"] for r in de]  # at most one miss in the quick runs
     assert all(float(r["error (cm)"]) < 1e-9 for r in am)  # the closed form with a phi search is exact
     assert all(float(r["max error (mm)"]) < 50 for r in ga)  # the 9-bit GA lands within centimetres
-    cfg = {r["configuration"][:3]: float(r["median error (mm)"]) for r in _ours(quick / "000" / "configurations.csv")}
+    configurations = _ours(quick_runs / "000" / "configurations.csv")
+    cfg = {r["configuration"][:3]: float(r["median error (mm)"]) for r in configurations}
     assert cfg["(c)"] < cfg["(a)"] and cfg["(c)"] < cfg["(b)"]  # the paper's Fig. 6(b)
 
 
 # ------------------------------------------------------------------------------------------------ 001
 
 
-def test_001_hga_finds_the_closed_form_solutions(quick):
-    t4 = _ours(quick / "001" / "table4.csv")
+def test_001_hga_finds_the_closed_form_solutions(quick_runs):
+    t4 = _ours(quick_runs / "001" / "table4.csv")
     assert len(t4) == 8 and all(float(r["found within 0.001 deg (fraction)"]) == 1.0 for r in t4)
-    t6 = _ours(quick / "001" / "table6.csv")
+    t6 = _ours(quick_runs / "001" / "table6.csv")
     assert len(t6) == 16
     # hga's bounded polish cannot wrap round +-180 deg and misses PUMA target 2's t1 = -170.7 deg solution in
     # about 10 % of runs (measured: 4 of 40); everything else is found every time.
     assert sum(float(r["found within 0.001 deg (fraction)"]) for r in t6) >= 15
-    t5 = _ours(quick / "001" / "table5.csv")
+    t5 = _ours(quick_runs / "001" / "table5.csv")
     assert all(float(r["FK miss of these angles (cm)"]) < 1e-9 for r in t5)
 
 
@@ -102,8 +95,8 @@ def test_ga_and_hga_callback_sees_every_generation():
 # ------------------------------------------------------------------------------------------------ 003
 
 
-def test_003_larger_gain_moves_the_vehicle_less(quick):
-    rows = {float(r["K (vehicle)"]): r for r in _ours(quick / "003" / "gains.csv")}
+def test_003_larger_gain_moves_the_vehicle_less(quick_runs):
+    rows = {float(r["K (vehicle)"]): r for r in _ours(quick_runs / "003" / "gains.csv")}
     assert set(rows) == {1.0, 10.0, 100.0}
     path = {k: float(r["vehicle path (cm)"]) for k, r in rows.items()}
     assert path[100.0] < path[10.0] < path[1.0]  # the paper's Fig. 2 claim
