@@ -82,17 +82,9 @@ def python_sections(path: Path) -> dict[str, list[Block]]:
 # Runs in the fresh interpreter: each block compiled under the Markdown file's name with its own line numbers
 # (a traceback then points at the line of README.md that failed), all of a section's blocks in one namespace,
 # as when they are pasted one after the other into one interpreter.
-_RUNNER = r"""
-import json, sys, traceback
-namespace = {"__name__": "__main__"}
-for name, line, code in json.load(sys.stdin):
-    try:
-        exec(compile("\n" * (line - 1) + code, name, "exec"), namespace)
-    except BaseException:
-        traceback.print_exc()
-        print(f"FAILED: the block at {name}:{line}", file=sys.stderr)
-        sys.exit(1)
-"""
+# (the runner is docs_zygote's, imported from this folder, which leaves sys.path as a new interpreter's)
+_RUNNER = (f"import json, sys; sys.path.insert(0, {str(Path(__file__).resolve().parent)!r}); "
+           "from docs_zygote import run_blocks; sys.path.pop(0); run_blocks(json.load(sys.stdin))")
 
 
 def _forks() -> bool:

@@ -74,7 +74,9 @@ def _stop_server() -> None:
         stop()
 
 
-def _run_blocks(blocks: list) -> None:
+def run_blocks(blocks: list) -> None:
+    """Run ``[file name, first line, code]`` blocks top to bottom in one ``__main__`` namespace; exit 1 with the
+    traceback and the failing block's place at the first that raises."""
     namespace = {"__name__": "__main__"}
     for name, line, code in blocks:
         try:
@@ -114,7 +116,7 @@ def run(kind: str, what, cwd: str, stdout, stderr, environ: dict, path: list[str
         elif kind == "blocks":
             sys.argv = ["-c"]
             sys.path[:] = ["", *path]
-            _run_blocks(what)
+            run_blocks(what)
         else:
             raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     except SystemExit as exc:
