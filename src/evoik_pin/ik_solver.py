@@ -213,7 +213,7 @@ class IKSolver:
         if target[0].alternatives is not None:  # a goal set: the goal-set search when none of those members is met
             out = lane.solve_set(target[0], q0)
             return self._goal_problem(bound, q0) if out is None else out
-        out = lane.solve(bound[2][0], bound[3][0], q0, bound[0])
+        out = lane.solve(bound[2][0], bound[3][0], q0)
         return out if type(out) is Result else self._resume_general(self._goal_problem(bound, q0), seed, out)
 
     def _solve_choosing(self, target, q0, seed) -> Result:

@@ -92,10 +92,10 @@ class RepeatCall:
         """Whether the engine's arguments still hold, in the thread that made the path."""
         return self._lm._args is self._args and threading.get_ident() == self._thread
 
-    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None, goals=None):
-        """Solve one checked tip target (``position`` (3,) m, ``rotation`` (3, 3) or None), or the one-goal list
-        ``goals`` bound to the path's stack (its target ``position`` and ``rotation``), from ``q0`` (n,) float
-        (checked; None: none); a goal is judged on the kernel's errors, as memetic judges them.
+    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None):
+        """Solve a problem like the path's (a tip target, or a one-goal list bound to its stack) whose one target is
+        ``position`` (3,) m and ``rotation`` (3, 3) or None (checked), from ``q0`` (n,) float (checked; None: none);
+        the goal is judged on the kernel's errors, as memetic judges them.
 
         Returns:
             The Result when a first run met the tolerances; else (clock start, the runs' state) for
@@ -139,7 +139,7 @@ class RepeatCall:
             member_distances(*self._ranking, P[:, None], R[:, None])[1], kind="stable")[:SET_MEMBERS].tolist()
         spent = 0  # the evaluations of the members tried before
         for m in order:
-            out = self.solve(P[m], R[m], q0, [goal.alternatives[m]])
+            out = self.solve(P[m], R[m], q0)
             if type(out) is Result:
                 out.chosen = [m]
                 out.evaluations += spent
