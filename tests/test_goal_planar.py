@@ -76,3 +76,19 @@ def test_planar_goals_file_round_trip(tmp_path, vehicle_arm):
         (back,) = load_goals(path)
         assert type(back) is Planar and back.target.tolist() == g.target.tolist() and back.yaw == g.yaw
         assert back.tolerance == g.tolerance
+
+
+def test_planar_goals_on_any_frame_and_beside_a_position(vehicle_arm):
+    """A Planar goal on a frame other than the tip, and one beside a Position on the same frame (its (x, y, yaw) is
+    no point to clash with the position's): solved, and met by the robot's own kinematics."""
+    rng = np.random.default_rng(3)
+    for i, q in enumerate(vehicle_arm.random_configurations(5, rng)):
+        for frame in ("link4", vehicle_arm.tip):
+            T = vehicle_arm.fk(q, frame)
+            planar = Planar(frame, *T.translation[:2], yaw=float(np.arctan2(T.rotation[1, 0], T.rotation[0, 0])))
+            goals = [planar, Position(vehicle_arm.tip, vehicle_arm.fk(q).translation)]
+            r = ek.solve(vehicle_arm, goals, seed=i, timeout=None, max_restarts=3)
+            assert r.success
+            pos, rot = planar.errors(vehicle_arm.fk(r.q, frame))
+            assert pos <= 1e-6 and rot <= 1e-6
+            assert np.linalg.norm(vehicle_arm.fk(r.q).translation - goals[1].target) <= 1e-6

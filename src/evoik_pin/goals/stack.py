@@ -239,6 +239,7 @@ class GoalArrays(_Rows):
 
 
 # ------------------------------------------------------------------ binding a goal list
+_PLANAR = {KIND_PLANAR, KIND_PLANAR_YAW}
 #: Two goals on one frame clash when their target positions (m) or rotations (Frobenius norm) differ by more.
 _CLASH = 1e-9
 
@@ -359,7 +360,8 @@ def _check_frames(robot, goals) -> None:
                              f"among its tips (tips=[...]) or with tips='all', or aim at another frame")
         _check_not_base_only(robot, g.frame)
         other = seen.get(fid)
-        if other is not None and other.aux() is None and g.aux() is None:  # bands, free axes, pointing: no clash
+        # bands, free axes, pointing and planar targets (x, y, yaw: no point) are no clash
+        if other is not None and other.aux() is None and g.aux() is None and not {other.kind, g.kind} & _PLANAR:
             pa, Ra = other.encode()
             pb, Rb = g.encode()
             clash = np.linalg.norm(pa - pb) > _CLASH
