@@ -238,9 +238,17 @@ def test_which_calls_of_solve_keep_a_solver(panda, tmp_path):
     assert a is not cached_solver(panda, "memetic", {"tolerance": 1e-7})
     scene = Scene(panda)
     assert cached_solver(panda, "memetic", {"scene": scene}) is cached_solver(panda, "memetic", {"scene": scene})
-    # the general path: a scene file (read on every call: it may change), array bounds, a robot by name, bad options
+    # bounds by value (the solver keeps copies): equal arrays share a solver, other values make another
+    lower, upper = panda.lower / 2, panda.upper / 2
+    kept = cached_solver(panda, "memetic", {"bounds": (lower, upper)})
+    assert kept is cached_solver(panda, "memetic", {"bounds": (lower.copy(), list(upper))})
+    assert kept is not cached_solver(panda, "memetic", {"bounds": (lower, upper * 0.9)})
+    lower[:] = 0.0  # the caller's arrays changed after the call: the kept solver's box is its own copy
+    assert np.array_equal(kept._template.lower, panda.lower / 2)
+    # the general path: a scene file (read on every call: it may change), a robot by name, bad options or bounds
     for options in ({"scene": str(tmp_path / "s.yaml")}, {"scene": Path(tmp_path / "s.yaml")},
-                    {"bounds": (panda.lower, panda.upper)}, {"population": 2}, {"tolerance": float("nan")}):
+                    {"population": 2}, {"tolerance": float("nan")}, {"bounds": (panda.lower, panda.lower - 1.0)},
+                    {"bounds": "wide"}):
         assert cached_solver(panda, "memetic", options) is None
     assert cached_solver("panda", "memetic", {}) is None
 

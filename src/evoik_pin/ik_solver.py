@@ -367,6 +367,8 @@ def _key(robot, method: str, options: dict):
         elif name == "locked" and isinstance(value, dict) and all(
                 type(k) is str and isinstance(v, _PLAIN) for k, v in value.items()):
             parts.append((name, None, tuple(sorted((k, type(v), v) for k, v in value.items()))))
+        elif name == "bounds" and _bounds_key(value) is not None:  # by value: a solver copies its bounds
+            parts.append((name, None, _bounds_key(value)))
         elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
             # by identity: the cached solver keeps the object alive, so its id is not reused while cached
             parts.append((name, None, id(value)))
@@ -374,6 +376,17 @@ def _key(robot, method: str, options: dict):
             return None
     parts.sort(key=lambda part: part[0])
     return (id(robot), robot.lower.tobytes(), robot.upper.tobytes(), method, tuple(parts))
+
+
+def _bounds_key(bounds) -> tuple | None:
+    """(shape, lower's bytes, upper's bytes) of ``bounds`` given as two arrays or sequences of numbers (rad or m);
+    None for anything else (the general path then raises solve's error)."""
+    try:
+        lower, upper = bounds
+        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return lower.shape, upper.shape, lower.tobytes(), upper.tobytes()
 
 
 def cached_solver(robot, method: str, options: dict) -> IKSolver | None:
