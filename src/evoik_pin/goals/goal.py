@@ -16,7 +16,7 @@ import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
 from .bands import AUX_SIZE, band_aux, band_errors, parse_axes
-from .registry import KINDS, register
+from .registry import KIND_BEYOND_FRAME, KINDS, register
 
 __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
            "FramePair", "init_set", "is_set", "number", "pack_frame_pair", "point3"]
@@ -173,6 +173,13 @@ class Goal:
     def reports_angle(self) -> bool:
         """Whether the goal's errors include an angle (rad) (its kind's declaration)."""
         return KINDS[self.kind].angle
+
+    @property
+    def on_one_frame(self) -> bool:
+        """Whether the goal matches a position or an orientation of its one frame (no pointing goal, no kind beyond
+        one frame): the seed table ranks it as one frame's pose, and the kernel's errors of it are its ``errors(T)``
+        (:meth:`reported`; a support polygon's distance, exactly 0 inside, is no kernel residual's)."""
+        return self.kind < KIND_BEYOND_FRAME and (self.has_position or self.has_orientation)
 
     def met(self, position_error: float | None, orientation_error: float | None) -> bool:
         """Whether errors (m or None, rad or None) are within this goal's tolerances."""

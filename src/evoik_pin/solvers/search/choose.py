@@ -24,7 +24,7 @@ from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
 from ..lm.nullspace import nullspace_kernel
 from . import memetic as memetic_module
-from .memetic_runs import kernel_errors_are_goal_errors, kernel_goal_errors
+from .memetic_runs import kernel_goal_errors
 from .nearest import table_distances_many
 from .prefer import (
     DEFAULT_PREFER_TIMEOUT,
@@ -433,7 +433,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     if len(winner) > 2:
         choice = variants[winner[1]].choice
         members = [g if m is None else g.alternatives[m] for g, m in zip(problem.goals, choice, strict=True)]
-        if not kernel_errors_are_goal_errors(members):
+        if not all(g.on_one_frame for g in members):
             members = None  # kinds whose errors the general verdict computes on its own
     if members is not None:
         # the first answer, met by one LM run: each goal's errors are the kernel's of that run, as memetic's are

@@ -28,7 +28,7 @@ from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, com
 from ..lm.compiling import load
 from ..lm.engine import later_kinds
 from ..options import check_choice, check_int, check_positive
-from .memetic_runs import LMRuns, de_restart, kernel_errors_are_goal_errors, kernel_goal_errors
+from .memetic_runs import LMRuns, de_restart, kernel_goal_errors
 from .seed_table import (
     DEFAULT_GOAL_TABLE_SEEDS,
     DEFAULT_TABLE_SEEDS,
@@ -377,7 +377,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     # the kernel's errors of the best run, at q, trusted where they are Goal.errors' (its success test's numbers);
     # a kinematics pass otherwise
     goal_errors = (kernel_goal_errors(problem.goals, search.best) if single or (
-        search.best.goal_errors is not None and kernel_errors_are_goal_errors(problem.goals))
+        search.best.goal_errors is not None and all(g.on_one_frame for g in problem.goals))
         else problem.goal_errors(q))
     pos, rot, cost = problem.summary(q, goal_errors)
     if not history["best_cost"]:
@@ -479,7 +479,7 @@ def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, 
         return None, loading, (runs_, evaluations_, errs, kept, runs - (q0 is not None))
     # the goals' errors: the kernel's at q_out where they are Goal.errors' (as _solve's), tested again
     goal_errors = ([g.reported(p, r) for g, (p, r) in zip(goals, g_out.tolist(), strict=True)]
-                   if kernel_errors_are_goal_errors(goals) else problem.goal_errors(q_out))
+                   if all(g.on_one_frame for g in goals) else problem.goal_errors(q_out))
     pos, rot, cost = problem.goal_summary(goal_errors)
     if not problem.goals_met(goal_errors):
         return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why

@@ -8,23 +8,15 @@ import time
 
 import numpy as np
 
-from ...goals.registry import KIND_BEYOND_FRAME
 from ...problem import IKProblem
 from ..lm import LevenbergMarquardt, LMOutcome
 from ..paper.common import diversity
 from ..paper.de_ops import binomial_crossover, distinct_indices, mutate
 
-__all__ = ["BOUND_SHARE", "LMRuns", "de_restart", "kernel_errors_are_goal_errors", "kernel_goal_errors"]
+__all__ = ["BOUND_SHARE", "LMRuns", "de_restart", "kernel_goal_errors"]
 
 #: Share of the coordinates of memetic's DE populations drawn on a bound instead of inside the box.
 BOUND_SHARE = 0.4
-
-
-def kernel_errors_are_goal_errors(goals) -> bool:
-    """Whether the kernel's errors of ``goals`` are what their ``errors(T)`` report (:meth:`Goal.reported`): goals on
-    one frame with a position or an orientation to match; the centre of mass and two-frame kinds compute their own
-    (a support polygon's distance, exactly 0 inside, where the kernel's residual may leave 1e-13)."""
-    return all(g.kind < KIND_BEYOND_FRAME and (g.has_position or g.has_orientation) for g in goals)
 
 
 def kernel_goal_errors(goals, out: LMOutcome) -> list:

@@ -503,8 +503,7 @@ def one_frame(problem) -> bool:
     goal beyond one frame)."""
     goals = problem.goals
     g = goals[0]
-    return (len(goals) == 1 and g.kind < KIND_BEYOND_FRAME and g.alternatives is None
-            and (g.has_position or g.has_orientation)
+    return (len(goals) == 1 and g.on_one_frame and g.alternatives is None
             and (g.kind not in (KIND_PLANAR, KIND_PLANAR_YAW) or g.frame == problem.robot.tip))
 
 
