@@ -21,7 +21,8 @@ The method (:func:`retarget`):
    * limb **directions**: a :class:`~evoik_pin.goals.RelativePosition` per limb (parent mapped frame -> child mapped
      frame, :data:`~evoik_pin.motion.mapping.LIMBS`), target the source limb's unit vector times the robot's own
      limb length at neutral, in the world's axes, weighted by 1 / length^2 so that each limb's residual reads as an
-     angle: limbs follow the source's directions whatever the proportions. A child frame no joint moves relative to
+     angle (the trunk's limbs ten times an arm's or a leg's: :data:`WEIGHTS`): limbs follow the source's directions
+     whatever the proportions. A child frame no joint moves relative to
      its parent (G1's head on its torso) gets a Direction on the parent's axis towards it instead;
    * feet (the frames mapped to the ankle keypoints): while the source foot is in contact, a Position at the point
      where it landed, held for the whole stance: x, y where the robot's foot was at touchdown (then where that
@@ -107,8 +108,12 @@ HOLD_SLIP = 1.5e-3
 FIRM_CONTACT_WEIGHT = 3e4
 #: Length (m) at which a limb's weight is WEIGHTS["limb"]: a thigh's.
 LIMB_REFERENCE_LENGTH = 0.3
-#: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)).
-WEIGHTS = {"contact": 300.0, "floor": 300.0, "level": 30.0, "root": 10.0, "heading": 3.0, "limb": 1.0, "point": 1.0}
+#: Weights ranking the goals when they cannot all be met (the rows of a goal scale by sqrt(weight)). The trunk's
+#: limbs (pelvis -> torso -> head) weigh "trunk" instead of "limb": they place the head and both shoulders, and a
+#: robot trunk with fewer joints than a spine (Talos: yaw and pitch, no roll) otherwise gives their direction up
+#: to the arms' (measured over five clips on G1 and Talos: docs/BENCHMARKS.md, "The trunk's weight").
+WEIGHTS = {"contact": 300.0, "floor": 300.0, "level": 30.0, "root": 10.0, "heading": 3.0, "trunk": 10.0, "limb": 1.0,
+           "point": 1.0}
 #: Budget (s) of each frame's solve (its LM run from q0 is made whatever the clock says: see FRAME_OPTIONS).
 FRAME_TIMEOUT = 0.005
 #: memetic's options per frame: the previous answer is the start (LM from q0); no seed table (a global search
@@ -484,14 +489,14 @@ def _frame_goals(plan: _Plan, i: int, holds: dict[str, np.ndarray], tolerances: 
         goals.append(Direction(plan.roles["pelvis"], plan.left_axis, axes[:, 1], WEIGHTS["heading"],
                                tolerances["heading"]))
     in_limbs = {plan.roles["pelvis"]}
-    for limbs in plan.limbs.values():
+    for group, limbs in plan.limbs.items():
         for a, b in limbs:
             in_limbs.update((a, b))
             vector = plan.limb_vector(a, b, i)
             length = float(np.linalg.norm(vector))
             # rows in m scale with the limb's length: weight 1 / length^2 makes every limb's residual an angle
             # (rad, times LIMB_REFERENCE_LENGTH), so a short limb is steered as firmly as a long one
-            weight = WEIGHTS["limb"] * (LIMB_REFERENCE_LENGTH / max(length, 1e-3)) ** 2
+            weight = WEIGHTS["trunk" if group == "trunk" else "limb"] * (LIMB_REFERENCE_LENGTH / max(length, 1e-3)) ** 2
             if (a, b) in plan.rigid:  # b fixed on a (G1's head on its torso): frame a's axis towards b
                 goals.append(Direction(a, plan.rigid[(a, b)], vector, weight, tolerances["limb"]))
             else:
