@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "pro_box", "shortfall_text",
+           "Target", "check_pro_delta", "check_q0", "coerce_scene", "errors_text", "pro_box", "shortfall_text",
            "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
@@ -48,6 +48,14 @@ MAX_VARIANTS = 256
 def check_pro_delta(delta) -> float:
     """The half-width (rad) of paper 002's "Pro" search box as a float > 0; OptionError otherwise."""
     return check_positive("delta (the Pro box half-width)", delta, unit="rad")
+
+
+def check_q0(robot: Robot, q0) -> np.ndarray:
+    """``q0`` as ``robot``'s (n,) joint vector (rad or m); ConfigurationError naming q0 otherwise."""
+    try:
+        return robot.check_q(q0)
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"q0: {exc}") from None
 
 
 def coerce_scene(robot: Robot, scene) -> Scene | None:
@@ -161,10 +169,7 @@ class IKProblem:
             upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
             self.lower, self.upper = self.robot.checked_bounds(lower, upper)
         if self.q0 is not None:
-            try:
-                self.q0 = self.robot.check_q(self.q0)
-            except ConfigurationError as exc:
-                raise ConfigurationError(f"q0: {exc}") from None
+            self.q0 = check_q0(self.robot, self.q0)
         self.margin = check_nonnegative("margin (m)", self.margin)
         if self.scene is not None:
             self.scene = coerce_scene(self.robot, self.scene)

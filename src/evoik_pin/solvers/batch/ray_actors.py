@@ -21,7 +21,7 @@ import numpy as np
 from ...errors import BackendError, TargetError
 from ...problem import Target
 from .batch_results import BatchOutcome
-from .targets import source_of
+from .goal_lists import source_of
 from .threads import BatchSolver, ProgressBar, check_workers, chunk_bounds, gc_paused
 
 __all__ = ["RayBatch", "RayPool", "connect", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
@@ -231,8 +231,6 @@ class RayBatch:
                  fallback: bool = True, workers: int | None = None, address: str | None = None,
                  chunk_size: int | None = None, attempts: int = DEFAULT_ATTEMPTS, choose: Callable | None = None,
                  prefer: str | None = None) -> None:
-        if workers is not None:
-            workers = check_workers(workers)
         # the driver's own solver checks every option before any actor sees them, and judges scenes at the end
         self._local = BatchSolver(robot, make_problem, run, method, entropy, options, fallback, choose, prefer)
         self.pool = pool_for(robot, workers, address)
@@ -247,18 +245,17 @@ class RayBatch:
                                  fallback, choose, prefer))
         self.crash_hook: set[int] = set()  # tests: chunks whose first attempt kills its actor
 
-    def template(self, target: Target | None = None):
-        """The call's problem (the driver's; its scene judges the batched answers), made for ``target`` the first
-        time."""
-        if self._local.template is None:
-            self._local._prepare(target)
+    @property
+    def template(self):
+        """The call's problem (the driver's; its scene judges the batched answers); None before :meth:`solve`."""
         return self._local.template
 
-    def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
+    def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, progress: bool = False) -> BatchOutcome:
         """:meth:`.threads.BatchSolver.solve` on the actors."""
         ray, pool = self.ray, self.pool
         source = source_of(self._local.robot, targets)
-        self.template(source.chunk(0, 1)[0])  # every option checked here, before the actors see them
+        if self._local.template is None:  # every option checked here, before the actors see them
+            self._local._prepare(source.chunk(0, 1)[0])
         poses = source.poses
         N, size = len(source), self.chunk_size
         chunks = ([(a, min(a + size, N)) for a in range(0, N, size)] if size
