@@ -120,9 +120,7 @@ class IKSolver:
         objective = self._objective
         if is_goal_list(target):
             if objective is not None:  # refused for a goal list: IKProblem raises its error
-                kw = self._problem_kw
-                q0 = self._q0 if q0 is None else q0
-                return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
+                return IKProblem(self.robot, list(target), **self._problem_kw)
             return self._goal_problem(bind(self.robot, target), q0)
         target = Target.coerce(target)
         p = object.__new__(IKProblem)

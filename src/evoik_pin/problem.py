@@ -81,15 +81,11 @@ def goal_summary(goals, errors, orientation_weight: float) -> tuple[float, float
     ``weight x (position error + orientation_weight x angle)``."""
     # _goal_cost's sum for one row, in plain floats: faster than NumPy for a few goals
     pos = cost = 0.0
-    rot = None
     for g, (p, r) in zip(goals, errors, strict=True):
         p, r = p or 0.0, r or 0.0  # None: a goal without a position (Orientation, ...) or an angle
         pos = pos if pos != pos else (p if p != p else max(pos, p))  # NumPy's max: a NaN error stays NaN
         cost += (p + orientation_weight * r) * g.weight
-    rots = [r for _, r in errors if r is not None]
-    if rots:
-        rot = max(rots)
-    return float(pos), rot, float(cost)
+    return float(pos), max((r for _, r in errors if r is not None), default=None), float(cost)
 
 
 @dataclass(frozen=True)
@@ -99,8 +95,6 @@ class Evaluation:
     cost: np.ndarray
     position_error: np.ndarray
     orientation_error: np.ndarray | None
-
-
 
 
 @dataclass
@@ -190,10 +184,6 @@ class IKProblem:
         list."""
         return tuple(self._goal_stack)
 
-    def _goal_population_errors(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q``."""
-        return self._goal_population_members(Q)[:2]
-
     def nearest_members(self, Q: np.ndarray) -> np.ndarray:
         """(N, G) int: per row of ``Q`` (N, n) and goal, the index of the goal set's member whose errors the
         violation (:meth:`goal_violation`) reads, the one nearest by position + orientation_weight x angle (0 for a
@@ -220,7 +210,8 @@ class IKProblem:
         return e, E
 
     def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`_goal_population_errors` of ``Q`` and the goal-set members they are of (:meth:`nearest_members`)."""
+        """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q`` (N, n), and
+        the goal-set members they are of (:meth:`nearest_members`)."""
         from .lie import relative_angle
 
         P, R = self.robot.fk_batch(Q, validate=False, frames=[g.frame for g in self.goals])
@@ -380,7 +371,7 @@ class IKProblem:
         """(N,) how far each row of ``Q`` (N, n) is from meeting every goal: the sum over the goals of the position
         error beyond the goal's ``tolerance`` (m) plus the rotation angle beyond its ``rotation_tolerance`` (rad);
         0 exactly where every goal is met. Counts N evaluations unless ``count`` is False (bookkeeping)."""
-        pos, rot = self._goal_population_errors(Q)
+        pos, rot, _ = self._goal_population_members(Q)
         self.evaluations += Q.shape[0] if count else 0
         tol = np.array([g.tolerance for g in self.goals])
         rtol = np.array([g.rotation_tolerance if g.reports_angle else np.inf for g in self.goals])
@@ -409,7 +400,7 @@ class IKProblem:
         over the goals); N evaluations counted unless ``count`` is False (bookkeeping, not search)."""
         counted = Q.shape[0] if count else 0
         if self.target is None:
-            pos, rot = self._goal_population_errors(Q)
+            pos, rot, _ = self._goal_population_members(Q)
             self.evaluations += counted
             oriented = any(g.reports_angle for g in self.goals)
             return Evaluation(self._penalized(Q, self._goal_cost(pos, rot)), pos.max(axis=1),
