@@ -79,29 +79,24 @@ class GoalSource:
             if not isinstance(goals, list) or not is_problem_list(goals):
                 raise TargetError(f"goal list {i} is a {type(goals).__name__}, not a list of goals: give each problem "
                                   "as a list of Pose(frame, T) / Position(frame, p) (evoik_pin.goals)")
-            if holds_preferences(goals):
-                try:
+            try:
+                if holds_preferences(goals):
                     goals, prefs = split_preferences(goals)
                     seen = (goals[0].frame, *map(id, prefs))  # lists sharing their preference objects: checked once
                     if seen not in checked:
                         check_preferences(robot, prefs, goals[0].frame, with_q0=True)
                         checked.add(seen)
-                except (TargetError, FrameError, ConfigurationError, OptionError) as exc:
-                    raise type(exc)(f"goal list {i}: {exc}") from None
-                self.preferences[i] = prefs
-                self._frames[i] = goals[0].frame
-            key = structure(goals)
-            first = key not in self._stacks
-            # a list repeating a frame is checked whole (its targets may clash); the others' frames, once per structure
-            if first or len({g.frame for g in goals}) < len(goals):
-                try:
+                    self.preferences[i], self._frames[i] = prefs, goals[0].frame
+                key = structure(goals)
+                # a list repeating a frame is checked whole (its targets may clash); others' frames once per structure
+                if key not in self._stacks or len({g.frame for g in goals}) < len(goals):
                     _, stack, pt, Rt = bind(robot, goals)
-                except (TargetError, FrameError) as exc:
-                    raise type(exc)(f"goal list {i}: {exc}") from None
-                self._stacks.setdefault(key, stack)
-            else:
-                encoded = [g.encode() for g in goals]
-                pt, Rt = np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])
+                    self._stacks.setdefault(key, stack)
+                else:
+                    encoded = [g.encode() for g in goals]
+                    pt, Rt = np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])
+            except (TargetError, FrameError, ConfigurationError, OptionError) as exc:
+                raise type(exc)(f"goal list {i}: {exc}") from None
             self._keys.append(key)
             self._targets.append((pt, Rt))
 
@@ -191,8 +186,12 @@ class TargetSource:
 
     def chunk(self, a: int, b: int) -> list[Target]:
         """Targets a to b - 1 as :class:`Target` objects (a TargetError names a bad one by its index in the call)."""
+        return self._named(Target.coerce_many, self.raw[a:b])
+
+    def _named(self, check, part):
+        """``check(part)``; its TargetError re-raised naming the bad target by its index in the call (:meth:`check`)."""
         try:
-            return Target.coerce_many(self.raw[a:b])
+            return check(part)
         except TargetError:
             self.check()
             raise
@@ -208,11 +207,7 @@ class TargetSource:
             groups = [tip_group(self.robot, np.array(rows), TargetArrays.of([targets[i] for i in rows]), tolerances)
                       for rows in by_kind.values()]
             return GoalBlock(groups, len(targets), targets.__getitem__, tip=True)
-        try:
-            H = Target.check_poses(poses[a:b])
-        except TargetError:
-            self.check()
-            raise
+        H = self._named(Target.check_poses, poses[a:b])
         return GoalBlock([tip_group(self.robot, np.arange(H.shape[0]), TargetArrays.from_poses(H), tolerances)],
                          H.shape[0], lambda i: Target.from_poses(H[i:i + 1])[0], tip=True)
 
