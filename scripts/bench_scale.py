@@ -33,7 +33,7 @@ from evoik_pin.goals.stack import GoalStack, encode_targets
 from evoik_pin.problem import Target
 from evoik_pin.solvers.batch import threads
 from evoik_pin.solvers.batch.batch_results import SOURCE_SINGLE, BatchOutcome, BatchResults
-from evoik_pin.solvers.batch.targets import TargetSource
+from evoik_pin.solvers.batch.goal_lists import TargetSource
 from evoik_pin.solvers.lm import engine as lm_engine
 from evoik_pin.solvers.lm import kernel as lm_kernel
 from evoik_pin.solvers.lm.layout import STATS_SIZE, box_constants, kernel_params

@@ -72,7 +72,7 @@ def test_a_dying_actor_has_its_chunk_re_run(ray, panda, targets):
     job.crash_hook = {1, 3}  # the first attempts of chunks 1 and 3 kill their actor (os._exit) mid-run
     out = job.solve(work)
     assert job.pool.replaced == replaced + 2 and len(job.pool.actors) == 2
-    same(local, out.results(job.template(work[0])))
+    same(local, out.results(job.template))
 
 
 def test_a_scene_is_rebuilt_in_the_actors(ray, panda):

@@ -1,7 +1,5 @@
-"""The public calls: :func:`solve`, :func:`solve_all`, :func:`solve_trajectory`, :func:`solve_many`, :func:`prepare`.
-
-They route; the solvers live in :mod:`evoik_pin.solvers`. The reference with examples: docs/API.md.
-"""
+"""The public calls: :func:`solve`, :func:`solve_all`, :func:`solve_trajectory`, :func:`solve_many`, :func:`prepare`;
+they route to :mod:`evoik_pin.solvers`. The reference with examples: docs/API.md."""
 
 from __future__ import annotations
 
@@ -9,20 +7,16 @@ import time
 
 import numpy as np
 
-from .call_setup import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, ... are read by reach.py, cli.py, tests)
+from .call_setup import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, api._rng are read by cli.py, tests)
     _PROBLEM_OPTIONS,
     DEFAULT_ALL_METHOD,
     DEFAULT_METHOD,
     GOAL_METHODS,
     _check_goal_method,
-    _DeferredGenerator,
-    _goal_method_problem,
     _rng,
     _robot,
     _run,
-    _with_goal_verdict,
     make_problem,
-    split_options,
 )
 from .errors import ConfigurationError, MethodError, OptionError
 from .goals.preferences import split_preferences
@@ -35,7 +29,7 @@ from .solvers.batch.batch_results import BatchResults
 from .solvers.batch.goal_lists import GoalSource, is_goal_batch, is_problem_list
 from .solvers.batch.threads import check_call
 from .solvers.lm import ENGINES
-from .solvers.options import check_int
+from .solvers.options import check_choice, check_int
 from .solvers.search.all_solutions import SolutionList  # also registers "memetic-all"
 
 __all__ = ["DEFAULT_ALL_METHOD", "DEFAULT_METHOD", "GOAL_METHODS", "BatchResults", "IKSolver", "SolutionList",
@@ -57,9 +51,7 @@ def prepare(robot, bounds=None, table_size: int | None = None, engine: str = "co
     robot = _robot(robot)
     problem, _ = make_problem(robot, np.zeros(3), bounds=bounds)
     size = default_table_size(robot.n) if table_size is None else check_int("table_size", table_size, 0)
-    if engine not in ENGINES:
-        raise OptionError(f"LM engine {engine!r} unknown; use one of {list(ENGINES)}")
-    prepare_memetic(robot, problem.lower, problem.upper, size, engine)
+    prepare_memetic(robot, problem.lower, problem.upper, size, check_choice("engine", engine, ENGINES))
     return time.perf_counter() - t0
 
 

@@ -72,10 +72,7 @@ def split_options(options: dict) -> dict:
 def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
     """Split ``options`` into an :class:`IKProblem` and the remaining solver options."""
     robot = _robot(robot)
-    problem_kw = split_options(options)
-    if "q0" in problem_kw and problem_kw["q0"] is None:
-        problem_kw.pop("q0")
-    return IKProblem(robot, list(target) if is_goal_list(target) else target, **problem_kw), options
+    return IKProblem(robot, list(target) if is_goal_list(target) else target, **split_options(options)), options
 
 
 #: Methods that solve goal lists (:mod:`evoik_pin.goals`); ``algebraic`` takes a goal list that is one Pose or

@@ -1,12 +1,5 @@
-"""The one solve pipeline: :class:`IKSolver`, a solver set up once for one robot, method and options.
-
-The options are checked and the problem's constants built once into a template problem that each call copies with
-its target; memetic's set-up (kernel, seed table, engine) is made once. After memetic has solved a pose, a position or a
-one-goal list, the next ones of that kind take a repeat call (:mod:`evoik_pin.solvers.search.repeat_call`) with the
-same answers, bit for bit; a one-goal set takes the repeat call of its goal stack on its members nearest the seed table
-(the goal-set search when none of them is met). :func:`evoik_pin.solve` is the solve of an IKSolver kept per robot,
-method and options.
-"""
+"""The one solve pipeline: :class:`IKSolver`, a solver set up once for one robot, method and options;
+:func:`evoik_pin.solve` is the solve of an IKSolver kept per robot, method and options (:func:`cached_solver`)."""
 
 from __future__ import annotations
 
@@ -26,13 +19,13 @@ from .call_setup import (
     split_options,
     with_verdicts,
 )
-from .errors import ConfigurationError, EvoikError, OptionError
+from .errors import EvoikError, OptionError
 from .goals import is_goal_list
 from .goals.goal import Goal
 from .goals.preferences import Preference
 from .goals.stack import bind, tip_goals
 from .objectives import default_objective
-from .problem import NEAR_UNBOUNDED, IKProblem, Target, target_box
+from .problem import NEAR_UNBOUNDED, IKProblem, Target, check_q0, target_box
 from .result import Result
 from .robot import Robot
 from .robot.locking import expand_result, kept_columns, locked_robot, shrink_q
@@ -46,6 +39,12 @@ __all__ = ["IKSolver"]
 
 class IKSolver:
     """One robot, method and set of options, checked and prepared once; :meth:`solve` per target.
+
+    The options are checked and the problem's constants built once into a template problem that each call copies with
+    its target; memetic's set-up (kernel, seed table, engine) is made once. After memetic has solved a pose, a position
+    or a one-goal list, the next ones of that kind take a repeat call (:mod:`evoik_pin.solvers.search.repeat_call`)
+    with the same answers, bit for bit; a one-goal set takes the repeat call of its goal stack on its members nearest
+    the seed table (the goal-set search when none of them is met).
 
     Args:
         robot: a :class:`~evoik_pin.Robot` or anything :func:`~evoik_pin.load_robot` accepts.
@@ -84,13 +83,13 @@ class IKSolver:
         self._q_shape = (robot.n,)
         self._q0 = None if q0 is None else self._checked_q0(q0)
         self._objective = problem_kw.get("objective")  # a custom objective serves every target; None: the default
+        given = "lower" in problem_kw or "upper" in problem_kw
         # near-unbounded joints searched in a box around each target (target_box) unless bounds were given
-        self._target_box = "lower" not in problem_kw and "upper" not in problem_kw and bool(
+        self._target_box = not given and bool(
             ((np.abs(robot.lower) >= NEAR_UNBOUNDED) | (np.abs(robot.upper) >= NEAR_UNBOUNDED)).any())
         # a goal list's box (no target box): the template's arrays when they hold its values, so that targets and goal
         # lists share the plan's one seed table per box arrays
         template = self._template
-        given = "lower" in problem_kw or "upper" in problem_kw
         self._goal_box = ((template.lower, template.upper) if given or (
             np.array_equal(template.lower, robot.lower) and np.array_equal(template.upper, robot.upper))
                           else (robot.lower.copy(), robot.upper.copy()))
@@ -113,12 +112,7 @@ class IKSolver:
     def _checked_q0(self, q0) -> np.ndarray:
         arr = np.asarray(q0, dtype=float)
         # Robot.check_q's verdict, faster: shape (n,) and a finite sum (NaN, inf and overflow make it non-finite)
-        if arr.shape == self._q_shape and math.isfinite(sum(arr.tolist())):
-            return arr
-        try:
-            return self.robot.check_q(q0)
-        except ConfigurationError as exc:
-            raise ConfigurationError(f"q0: {exc}") from None
+        return arr if arr.shape == self._q_shape and math.isfinite(sum(arr.tolist())) else check_q0(self.robot, q0)
 
     def problem(self, target, q0=None) -> IKProblem:
         """The :class:`~evoik_pin.IKProblem` of one target (or goal list) and ``q0`` (None: the solver's)."""
@@ -126,9 +120,7 @@ class IKSolver:
         objective = self._objective
         if is_goal_list(target):
             if objective is not None:  # refused for a goal list: IKProblem raises its error
-                kw = self._problem_kw
-                q0 = self._q0 if q0 is None else q0
-                return IKProblem(self.robot, list(target), **kw, **({} if q0 is None else {"q0": q0}))
+                return IKProblem(self.robot, list(target), **self._problem_kw)
             return self._goal_problem(bind(self.robot, target), q0)
         target = Target.coerce(target)
         p = object.__new__(IKProblem)

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from .scene import Scene
 
 __all__ = ["COLLISION_PENALTY", "DEFAULT_PRO_DELTA", "MAX_TARGET_NORM", "NEAR_UNBOUNDED", "Evaluation", "IKProblem",
-           "Target", "check_pro_delta", "coerce_scene", "errors_text", "pro_box", "shortfall_text",
+           "Target", "check_pro_delta", "check_q0", "coerce_scene", "errors_text", "pro_box", "shortfall_text",
            "target_box"]
 
 #: Added to the cost (m + rad) of a configuration in collision when a scene is given: more than any pose error
@@ -48,6 +48,14 @@ MAX_VARIANTS = 256
 def check_pro_delta(delta) -> float:
     """The half-width (rad) of paper 002's "Pro" search box as a float > 0; OptionError otherwise."""
     return check_positive("delta (the Pro box half-width)", delta, unit="rad")
+
+
+def check_q0(robot: Robot, q0) -> np.ndarray:
+    """``q0`` as ``robot``'s (n,) joint vector (rad or m); ConfigurationError naming q0 otherwise."""
+    try:
+        return robot.check_q(q0)
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"q0: {exc}") from None
 
 
 def coerce_scene(robot: Robot, scene) -> Scene | None:
@@ -73,15 +81,11 @@ def goal_summary(goals, errors, orientation_weight: float) -> tuple[float, float
     ``weight x (position error + orientation_weight x angle)``."""
     # _goal_cost's sum for one row, in plain floats: faster than NumPy for a few goals
     pos = cost = 0.0
-    rot = None
     for g, (p, r) in zip(goals, errors, strict=True):
         p, r = p or 0.0, r or 0.0  # None: a goal without a position (Orientation, ...) or an angle
         pos = pos if pos != pos else (p if p != p else max(pos, p))  # NumPy's max: a NaN error stays NaN
         cost += (p + orientation_weight * r) * g.weight
-    rots = [r for _, r in errors if r is not None]
-    if rots:
-        rot = max(rots)
-    return float(pos), rot, float(cost)
+    return float(pos), max((r for _, r in errors if r is not None), default=None), float(cost)
 
 
 @dataclass(frozen=True)
@@ -91,8 +95,6 @@ class Evaluation:
     cost: np.ndarray
     position_error: np.ndarray
     orientation_error: np.ndarray | None
-
-
 
 
 @dataclass
@@ -161,10 +163,7 @@ class IKProblem:
             upper = self.robot.upper if self.upper is None else np.asarray(self.upper, dtype=float)
             self.lower, self.upper = self.robot.checked_bounds(lower, upper)
         if self.q0 is not None:
-            try:
-                self.q0 = self.robot.check_q(self.q0)
-            except ConfigurationError as exc:
-                raise ConfigurationError(f"q0: {exc}") from None
+            self.q0 = check_q0(self.robot, self.q0)
         self.margin = check_nonnegative("margin (m)", self.margin)
         if self.scene is not None:
             self.scene = coerce_scene(self.robot, self.scene)
@@ -184,10 +183,6 @@ class IKProblem:
         """(the LM kernel's :class:`~evoik_pin.solvers.lm.layout.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)) of a goal
         list."""
         return tuple(self._goal_stack)
-
-    def _goal_population_errors(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q``."""
-        return self._goal_population_members(Q)[:2]
 
     def nearest_members(self, Q: np.ndarray) -> np.ndarray:
         """(N, G) int: per row of ``Q`` (N, n) and goal, the index of the goal set's member whose errors the
@@ -215,7 +210,8 @@ class IKProblem:
         return e, E
 
     def _goal_population_members(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`_goal_population_errors` of ``Q`` and the goal-set members they are of (:meth:`nearest_members`)."""
+        """(position errors (N, G) m, rotation angles (N, G) rad, 0 for goals without orientation) of ``Q`` (N, n), and
+        the goal-set members they are of (:meth:`nearest_members`)."""
         from .lie import relative_angle
 
         P, R = self.robot.fk_batch(Q, validate=False, frames=[g.frame for g in self.goals])
@@ -375,7 +371,7 @@ class IKProblem:
         """(N,) how far each row of ``Q`` (N, n) is from meeting every goal: the sum over the goals of the position
         error beyond the goal's ``tolerance`` (m) plus the rotation angle beyond its ``rotation_tolerance`` (rad);
         0 exactly where every goal is met. Counts N evaluations unless ``count`` is False (bookkeeping)."""
-        pos, rot = self._goal_population_errors(Q)
+        pos, rot, _ = self._goal_population_members(Q)
         self.evaluations += Q.shape[0] if count else 0
         tol = np.array([g.tolerance for g in self.goals])
         rtol = np.array([g.rotation_tolerance if g.reports_angle else np.inf for g in self.goals])
@@ -404,7 +400,7 @@ class IKProblem:
         over the goals); N evaluations counted unless ``count`` is False (bookkeeping, not search)."""
         counted = Q.shape[0] if count else 0
         if self.target is None:
-            pos, rot = self._goal_population_errors(Q)
+            pos, rot, _ = self._goal_population_members(Q)
             self.evaluations += counted
             oriented = any(g.reports_angle for g in self.goals)
             return Evaluation(self._penalized(Q, self._goal_cost(pos, rot)), pos.max(axis=1),

@@ -1,10 +1,5 @@
-"""Reachability maps: which voxels of the workspace the tip reaches, in how many orientations, how dexterously.
-
-:func:`reachability_map` asks the batch engine of :func:`evoik_pin.solve_many` (its LM rounds only, so the index is
-a lower bound), at every voxel centre, first for the position, then for ``orientations`` orientations (a
-super-Fibonacci sample of SO(3), the same for every voxel); ``index`` is the fraction reached, ``manipulability``
-the best ``sqrt(det(J J^T))`` among the answers. Definitions and options: docs/SCALE.md.
-"""
+"""Reachability maps: which voxels of the workspace the tip reaches, in how many orientations, how dexterously
+(:func:`reachability_map`; definitions and options: docs/SCALE.md)."""
 
 from __future__ import annotations
 
@@ -15,13 +10,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .call_setup import _run, make_problem
 from .errors import OptionError, OutputError
 from .problem import Target, coerce_scene
 from .robot import Robot, load_robot
 from .solvers.batch.batch_results import BatchOutcome
-from .solvers.batch.solve_many_call import BACKENDS
-from .solvers.batch.threads import BatchSolver, ProgressBar, check_call, check_workers, gc_paused
-from .solvers.options import check_choice, check_int, check_positive
+from .solvers.batch.solve_many_call import batch_engine, check_backend
+from .solvers.batch.threads import ProgressBar, check_call, gc_paused
+from .solvers.options import check_int, check_positive
 
 __all__ = ["ReachMap", "output_dir", "reachability_map", "so3_samples"]
 
@@ -35,7 +31,7 @@ DEFAULT_BATCH = 50_000
 
 @dataclass
 class ReachMap:
-    """A reachability map (see the module docstring).
+    """A reachability map (:func:`reachability_map`).
 
     Attributes:
         centers: (M, 3) voxel centres (m, base frame); every voxel of the padded workspace box (planar arms: one
@@ -200,31 +196,22 @@ def _grid(lo: np.ndarray, hi: np.ndarray, voxel: float, planar_z: float | None):
     return np.stack([X.ravel(), Y.ravel(), Z.ravel()], axis=1), shape
 
 
-def _engine(robot, backend: str, workers, address, entropy: int, options: dict):
-    """(solve(targets) -> BatchOutcome, workers) of the batch engine the map runs on: local threads or Ray actors,
-    without the per-target fallback; ``targets`` a list of :class:`Target` or an (N, 4, 4) array of poses."""
-    from .api import _run, make_problem
-
-    if backend == "ray":
-        from .solvers.batch.ray_actors import RayBatch
-
-        ray = RayBatch(robot, make_problem, _run, "memetic", entropy, options, fallback=False, workers=workers,
-                       address=address)
-        return ray.solve, ray.workers
-    local = BatchSolver(robot, make_problem, _run, "memetic", entropy, options, fallback=False)
-    return (lambda targets: local.solve(targets, workers=workers)), workers
-
-
 def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=None, backend: str = "local",
                      workers: int | None = None, seed: int = 0, progress: bool = True, address: str | None = None,
                      batch_size: int = DEFAULT_BATCH, **options) -> ReachMap:
-    """The reachability map of ``robot`` (see the module docstring) as a :class:`ReachMap`.
+    """The reachability map of ``robot`` as a :class:`ReachMap`: the batch engine of :func:`evoik_pin.solve_many` (its
+    LM rounds only, so the index is a lower bound) asked at every voxel centre, first for the position, then for
+    ``orientations`` orientations (a super-Fibonacci sample of SO(3), the same for every voxel); ``index`` is the
+    fraction reached, ``manipulability`` the best ``sqrt(det(J J^T))`` among the answers.
 
     Args:
         robot: a :class:`Robot` or anything :func:`load_robot` accepts. voxel: voxel edge (m). orientations:
             orientations asked per voxel for 6-D arms (>= 1). scene: a Scene or a scene file's path: collision-free
             answers only. backend, workers, address, progress: as for :func:`evoik_pin.solve_many`. seed: of the
             workspace sampling. batch_size: targets per call of the batch engine. **options: IK options.
+
+    Raises:
+        OptionError: a bad option (``backend``, ``workers``, ``voxel`` too small for :data:`MAX_VOXELS`, ...).
     """
     t0 = time.perf_counter()
     robot = robot if isinstance(robot, Robot) else load_robot(robot)
@@ -232,11 +219,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     orientations = check_int("orientations", orientations, 1)
     seed = check_int("seed", seed, 0)
     batch_size = check_int("batch_size", batch_size, 1)
-    backend = check_choice("backend", backend, BACKENDS)
-    if backend == "local":
-        workers = check_workers(workers)
-    from .api import make_problem
-
+    workers = check_backend(backend, workers, address)
     scene = coerce_scene(robot, scene)
     if scene is not None:
         options["scene"] = scene
@@ -248,14 +231,15 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
     kind = "planar" if planar else ("position" if robot.n < 6 else "pose")
     centers, shape = _grid(lo - voxel, hi + voxel, voxel, float(lo[2]) if planar else None)
     M = centers.shape[0]
-    solve, workers = _engine(robot, backend, workers, address, seed, options)
+    engine = batch_engine(robot, make_problem, _run, "memetic", seed, options, backend, workers, address,
+                          fallback=False)
     bar = ProgressBar(f"reach {robot.name}", "target", enabled=progress)
 
     def run(targets) -> BatchOutcome:
         """The engine on ``targets`` (Targets, or (N, 4, 4) poses), ``batch_size`` at a time."""
         parts = []
         for a in range(0, len(targets), batch_size):
-            parts.append(solve(targets[a:a + batch_size]))
+            parts.append(engine.solve(targets[a:a + batch_size]))
             bar.update(len(parts[-1]))
         return BatchOutcome.concatenate(parts)
 
@@ -292,7 +276,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
                 m[ok] = robot.manipulability_batch(res.q.reshape(part.size, orientations, -1)[ok], rows)
                 best[part] = m.max(axis=1)
     n_orient = orientations if kind == "pose" else 1
-    settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": workers,
+    settings = {"workspace_samples": WORKSPACE_SAMPLES, "backend": backend, "workers": engine.workers,
                 "position_targets": M, "pose_targets": asked,
                 "batch_size": batch_size, "manipulability_rows": rows, "scene": None if scene is None else repr(scene),
                 "options": {k: v for k, v in options.items() if isinstance(v, (int, float, str, bool))}}

@@ -92,12 +92,6 @@ def _unchecked_pose(cls, position: np.ndarray, rotation: np.ndarray):
     return t
 
 
-def _checked_pose(cls, position: np.ndarray, rotation: np.ndarray):
-    """:func:`_unchecked_pose` when they pass :func:`_pose_ok`; None when not (the caller then builds the Target
-    the checked way, which raises the error)."""
-    return _unchecked_pose(cls, position, rotation) if _pose_ok(position, rotation) else None
-
-
 def pose_arrays(target) -> tuple[np.ndarray, np.ndarray | None] | None:
     """(position (3,) m, rotation (3, 3) or None) of a ``pin.SE3``, a float64 (4, 4) pose (bottom row exactly
     [0 0 0 1]), a float64 3-vector or a 3-D :class:`Target` that passes :class:`Target`'s checks, without making a
@@ -165,12 +159,16 @@ class Target:
             return target
         if isinstance(target, pin.SE3):
             position, rotation = np.array(target.translation), np.array(target.rotation)
-            return _checked_pose(cls, position, rotation) or cls(position=position, rotation=rotation)
-        try:
-            arr = np.asarray(target, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise TargetError(f"{_TARGET_FORMS}; got {target!r}") from exc
-        if arr.shape == (4, 4):
+        else:
+            try:
+                arr = np.asarray(target, dtype=float)
+            except (TypeError, ValueError) as exc:
+                raise TargetError(f"{_TARGET_FORMS}; got {target!r}") from exc
+            if arr.ndim == 1 and arr.shape[0] == 3:
+                return cls(position=arr)
+            if arr.shape != (4, 4):
+                raise TargetError(f"{_TARGET_FORMS} (Target.planar_target(x, y, yaw) for planar arms); got an array "
+                                  f"of shape {arr.shape}")
             a, b, c, d = arr[3].tolist()
             # the bottom row on Python floats first (a NaN fails every comparison: numpy's test then decides)
             if not (abs(a) <= 1e-9 and abs(b) <= 1e-9 and abs(c) <= 1e-9 and abs(d - 1.0) <= 1e-9):
@@ -178,11 +176,10 @@ class Target:
                     raise TargetError(f"the bottom row of a 4 x 4 homogeneous pose must be [0 0 0 1], got "
                                       f"{arr[3].tolist()}")
             position, rotation = arr[:3, 3], arr[:3, :3]
-            return _checked_pose(cls, position, rotation) or cls(position=position, rotation=rotation)
-        if arr.ndim == 1 and arr.shape[0] == 3:
-            return cls(position=arr)
-        raise TargetError(f"{_TARGET_FORMS} (Target.planar_target(x, y, yaw) for planar arms); got an array of shape "
-                          f"{arr.shape}")
+        # checked on Python floats (about 1 us); a bad pose is built the checked way, which raises its error
+        if _pose_ok(position, rotation):
+            return _unchecked_pose(cls, position, rotation)
+        return cls(position=position, rotation=rotation)
 
     @classmethod
     def from_poses(cls, poses) -> list[Target]:

@@ -151,10 +151,8 @@ def _column(name: str, doc: str) -> property:
 
 class BatchResults(Sequence):
     """What :func:`evoik_pin.solve_many` returns: one :class:`Result` per target, in order, made on first access
-    (``results[i]``, iteration, slices), the same answers as arrays, and ``stats``.
-
-    Arrays (read-only views, one row per target): ``q`` (N, n), ``success`` (N,) bool, ``position_error`` (N,) m,
-    ``orientation_error`` (N,) rad (NaN for targets without orientation), ``cost``, ``evaluations`` (N,).
+    (``results[i]``, iteration, slices), the same answers as read-only arrays (``q``, ``success``, ``position_error``,
+    ``orientation_error``, ``cost``, ``evaluations``: one row per target), and ``stats``.
 
     ``stats`` (a dict): ``n`` targets, ``solved``, ``success_rate``, ``time_s`` (wall clock of the whole call),
     ``throughput`` (targets per second, ``n / time_s``), ``batched`` (targets solved by the batched LM rounds),

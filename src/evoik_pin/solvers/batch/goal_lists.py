@@ -1,9 +1,6 @@
-"""Goal lists in :func:`~evoik_pin.solve_many`: many whole-robot problems, each a list of goals, in the one form the
-batch engine reads (:class:`GoalBlock`, :class:`GoalTree`; a call's tip targets take it too, :mod:`.targets`).
-
-Lists of one *structure* (the same frames, kinds, weights and tolerances in order; other targets) share one
-:class:`~evoik_pin.goals.stack.GoalStack` and go to the LM kernel's pair entry point together.
-"""
+"""The problems of a :func:`~evoik_pin.solve_many` call in the one form the batch engine reads (:class:`GoalBlock`,
+chunk by chunk): goal lists (:class:`GoalSource`) and tip targets as one-goal problems on the tip
+(:class:`TargetSource`); and :class:`GoalTree`, the seed table searched by nearness to them."""
 
 from __future__ import annotations
 
@@ -11,14 +8,16 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from ...errors import ConfigurationError, FrameError, OptionError, TargetError
 from ...goals import Goal, bind, is_goal_list
 from ...goals.preferences import check_preferences, holds_preferences, split_preferences
 from ...goals.registry import KIND_BEYOND_FRAME, POSITIONLESS_KINDS
-from ...goals.stack import G_WEIGHT, GoalArrays, structure
+from ...goals.stack import G_WEIGHT, GoalArrays, GoalStack, TargetArrays, structure, target_kind
+from ...problem import Target
 
-__all__ = ["GoalBlock", "GoalSource", "GoalTree", "is_goal_batch", "structure"]
+__all__ = ["GoalBlock", "GoalSource", "GoalTree", "TargetSource", "is_goal_batch", "source_of", "structure"]
 
 
 def is_problem_list(value) -> bool:
@@ -80,29 +79,24 @@ class GoalSource:
             if not isinstance(goals, list) or not is_problem_list(goals):
                 raise TargetError(f"goal list {i} is a {type(goals).__name__}, not a list of goals: give each problem "
                                   "as a list of Pose(frame, T) / Position(frame, p) (evoik_pin.goals)")
-            if holds_preferences(goals):
-                try:
+            try:
+                if holds_preferences(goals):
                     goals, prefs = split_preferences(goals)
                     seen = (goals[0].frame, *map(id, prefs))  # lists sharing their preference objects: checked once
                     if seen not in checked:
                         check_preferences(robot, prefs, goals[0].frame, with_q0=True)
                         checked.add(seen)
-                except (TargetError, FrameError, ConfigurationError, OptionError) as exc:
-                    raise type(exc)(f"goal list {i}: {exc}") from None
-                self.preferences[i] = prefs
-                self._frames[i] = goals[0].frame
-            key = structure(goals)
-            first = key not in self._stacks
-            # a list repeating a frame is checked whole (its targets may clash); the others' frames, once per structure
-            if first or len({g.frame for g in goals}) < len(goals):
-                try:
+                    self.preferences[i], self._frames[i] = prefs, goals[0].frame
+                key = structure(goals)
+                # a list repeating a frame is checked whole (its targets may clash); others' frames once per structure
+                if key not in self._stacks or len({g.frame for g in goals}) < len(goals):
                     _, stack, pt, Rt = bind(robot, goals)
-                except (TargetError, FrameError) as exc:
-                    raise type(exc)(f"goal list {i}: {exc}") from None
-                self._stacks.setdefault(key, stack)
-            else:
-                encoded = [g.encode() for g in goals]
-                pt, Rt = np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])
+                    self._stacks.setdefault(key, stack)
+                else:
+                    encoded = [g.encode() for g in goals]
+                    pt, Rt = np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])
+            except (TargetError, FrameError, ConfigurationError, OptionError) as exc:
+                raise type(exc)(f"goal list {i}: {exc}") from None
             self._keys.append(key)
             self._targets.append((pt, Rt))
 
@@ -145,6 +139,91 @@ class GoalSource:
                     check_preferences(self._robot, prefs, self._frames[i], with_q0=False)
                 except OptionError as exc:
                     raise OptionError(f"goal list {i}: {exc}") from None
+
+
+def tip_group(robot, rows: np.ndarray, arrays: TargetArrays, tolerances: tuple[float, float]
+              ) -> tuple[np.ndarray, GoalArrays]:
+    """Rows (k,) of tip targets of one kind as one-goal problems over the tip's stack with ``tolerances`` (m, rad)."""
+    stack = GoalStack.single(robot, arrays.kind, *tolerances)
+    return rows, GoalArrays(stack, arrays.P[:, None], arrays.Rts[:, None])
+
+
+def _one_target(targets) -> bool:
+    """True when ``targets`` is one target rather than a sequence of them: a ``pin.SE3``, a Target, or an array (or
+    nested lists) of shape (4, 4) or (3,)."""
+    if isinstance(targets, (pin.SE3, Target)):
+        return True
+    if isinstance(targets, np.ndarray):
+        return targets.shape in ((4, 4), (3,))
+    if isinstance(targets, (list, tuple)) and len(targets) in (3, 4):  # short: the array costs nothing
+        try:
+            return np.asarray(targets, dtype=float).shape in ((4, 4), (3,))
+        except (TypeError, ValueError):  # targets of other kinds (SE3, Target) in a list
+            return False
+    return False
+
+
+class TargetSource:
+    """The user's tip targets (an (N, 4, 4) array of poses, any sequence :meth:`Target.coerce_many` accepts, an
+    iterable, or one target alone), made into :class:`~.goal_lists.GoalBlock` objects chunk by chunk."""
+
+    goals = False  # tip targets (goal lists: :class:`~.goal_lists.GoalSource`)
+
+    def __init__(self, robot, targets) -> None:
+        self.robot = robot
+        if _one_target(targets):
+            targets = targets[None] if isinstance(targets, np.ndarray) and targets.ndim == 2 else [targets]
+        self.raw = targets if isinstance(targets, (np.ndarray, list, tuple)) else list(targets)
+
+    def __len__(self) -> int:
+        return len(self.raw)
+
+    @property
+    def poses(self) -> np.ndarray | None:
+        """The (N, 4, 4) array when the targets are one (Ray sends its slices as they are), else None."""
+        raw = self.raw
+        return raw if isinstance(raw, np.ndarray) and raw.ndim == 3 and raw.shape[1:] == (4, 4) else None
+
+    def chunk(self, a: int, b: int) -> list[Target]:
+        """Targets a to b - 1 as :class:`Target` objects (a TargetError names a bad one by its index in the call)."""
+        return self._named(Target.coerce_many, self.raw[a:b])
+
+    def _named(self, check, part):
+        """``check(part)``; its TargetError re-raised naming the bad target by its index in the call (:meth:`check`)."""
+        try:
+            return check(part)
+        except TargetError:
+            self.check()
+            raise
+
+    def block(self, a: int, b: int, tolerances: tuple[float, float]) -> GoalBlock:
+        """Targets a to b - 1 as one-goal problems with the call's ``tolerances`` (m, rad), grouped by kind."""
+        poses = self.poses
+        if poses is None:
+            targets = self.chunk(a, b)
+            by_kind: dict[int, list[int]] = {}
+            for i, t in enumerate(targets):
+                by_kind.setdefault(target_kind(t), []).append(i)
+            groups = [tip_group(self.robot, np.array(rows), TargetArrays.of([targets[i] for i in rows]), tolerances)
+                      for rows in by_kind.values()]
+            return GoalBlock(groups, len(targets), targets.__getitem__, tip=True)
+        H = self._named(Target.check_poses, poses[a:b])
+        return GoalBlock([tip_group(self.robot, np.arange(H.shape[0]), TargetArrays.from_poses(H), tolerances)],
+                         H.shape[0], lambda i: Target.from_poses(H[i:i + 1])[0], tip=True)
+
+    def check(self) -> None:
+        """Coerce every target: the TargetError (naming the first bad target's index) if there is one."""
+        Target.coerce_many(self.raw)
+
+
+def source_of(robot, targets) -> TargetSource | GoalSource:
+    """The source of a call's problems: a :class:`~.goal_lists.GoalSource` for goal lists (one alone: one problem),
+    else a :class:`TargetSource`; an existing source as it is."""
+    if isinstance(targets, (TargetSource, GoalSource)):
+        return targets
+    if is_problem_list(targets) and len(targets) > 0:
+        return GoalSource(robot, [targets])
+    return GoalSource(robot, targets) if is_goal_batch(targets) else TargetSource(robot, targets)
 
 
 class GoalTree:

@@ -21,7 +21,7 @@ import numpy as np
 from ...errors import BackendError, TargetError
 from ...problem import Target
 from .batch_results import BatchOutcome
-from .targets import source_of
+from .goal_lists import source_of
 from .threads import BatchSolver, ProgressBar, check_workers, chunk_bounds, gc_paused
 
 __all__ = ["RayBatch", "RayPool", "connect", "pack_targets", "pool_for", "scene_spec", "shutdown_pool",
@@ -140,18 +140,16 @@ class ChunkWorker:
 
     def solve(self, key: str, job: tuple, packed: dict, Q0: np.ndarray | None, offset: int,
               crash: bool = False) -> BatchOutcome:
-        """Solve one chunk (targets ``offset``, ``offset + 1``, ... of call ``key``; ``job``: (make_problem, run,
-        method, entropy, options, scene spec, fallback, choose, prefer)). ``crash``: exit the process at once instead
-        (tests: an actor dying mid-run)."""
+        """Solve one chunk (targets ``offset``, ``offset + 1``, ... of call ``key``; ``job``: the
+        :class:`~.threads.BatchSolver`'s keywords but its options, its options but the scene, the scene's
+        :func:`scene_spec`). ``crash``: exit the process at once instead (tests: an actor dying mid-run)."""
         if crash:
             os._exit(1)
         if key != self._key:
-            make_problem, run, method, entropy, options, scene, fallback, choose, prefer = job
-            options = dict(options)
+            solver_args, options, scene = job
             if scene is not None:
-                options["scene"] = build_scene(self.robot, scene)
-            self._solver = BatchSolver(self.robot, make_problem, run, method, entropy, options, fallback, choose,
-                                       prefer)
+                options = {**options, "scene": build_scene(self.robot, scene)}
+            self._solver = BatchSolver(self.robot, options=options, **solver_args)
             self._key = key
         if isinstance(packed, (np.ndarray, list)):  # poses (no Target object per pose) or goal lists, as they are
             targets = packed
@@ -224,41 +222,37 @@ class RayBatch:
             :class:`~.threads.BatchSolver`'s.
         workers: actors (one CPU each); default every CPU of the cluster.
         address: see :func:`connect`. chunk_size: targets per chunk (default: guided chunks, ``RAY_MIN_CHUNK`` to
-            ``RAY_MAX_CHUNK`` targets, shrinking toward the end). attempts: tries per chunk when actors die.
+            ``RAY_MAX_CHUNK`` targets, shrinking toward the end).
     """
 
     def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int, options: dict,
                  fallback: bool = True, workers: int | None = None, address: str | None = None,
-                 chunk_size: int | None = None, attempts: int = DEFAULT_ATTEMPTS, choose: Callable | None = None,
-                 prefer: str | None = None) -> None:
-        if workers is not None:
-            workers = check_workers(workers)
+                 chunk_size: int | None = None, choose: Callable | None = None, prefer: str | None = None) -> None:
+        solver_args = dict(make_problem=make_problem, run=run, method=method, entropy=entropy, fallback=fallback,
+                           choose=choose, prefer=prefer)
         # the driver's own solver checks every option before any actor sees them, and judges scenes at the end
-        self._local = BatchSolver(robot, make_problem, run, method, entropy, options, fallback, choose, prefer)
+        self._local = BatchSolver(robot, options=options, **solver_args)
         self.pool = pool_for(robot, workers, address)
         self.ray, self.workers = self.pool.ray, self.pool.workers
         self.chunk_size = chunk_size
-        self.attempts = attempts
         options = self._local.options  # checked, the scene read from its file if one was named
         self._scene = options.get("scene")
         remote_options = {k: v for k, v in options.items() if k != "scene"}
         self._key = uuid.uuid4().hex
-        self._job = self.ray.put((make_problem, run, method, entropy, remote_options, scene_spec(self._scene),
-                                 fallback, choose, prefer))
+        self._job = self.ray.put((solver_args, remote_options, scene_spec(self._scene)))
         self.crash_hook: set[int] = set()  # tests: chunks whose first attempt kills its actor
 
-    def template(self, target: Target | None = None):
-        """The call's problem (the driver's; its scene judges the batched answers), made for ``target`` the first
-        time."""
-        if self._local.template is None:
-            self._local._prepare(target)
+    @property
+    def template(self):
+        """The call's problem (the driver's; its scene judges the batched answers); None before :meth:`solve`."""
         return self._local.template
 
-    def solve(self, targets, Q0: np.ndarray | None = None, progress: bool = False, offset: int = 0) -> BatchOutcome:
+    def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, progress: bool = False) -> BatchOutcome:
         """:meth:`.threads.BatchSolver.solve` on the actors."""
         ray, pool = self.ray, self.pool
         source = source_of(self._local.robot, targets)
-        self.template(source.chunk(0, 1)[0])  # every option checked here, before the actors see them
+        if self._local.template is None:  # every option checked here, before the actors see them
+            self._local._prepare(source.chunk(0, 1)[0])
         poses = source.poses
         N, size = len(source), self.chunk_size
         chunks = ([(a, min(a + size, N)) for a in range(0, N, size)] if size
@@ -287,10 +281,10 @@ class RayBatch:
                         parts[k] = ray.get(future)
                         bar.update(1)
                     except ray.exceptions.RayActorError as exc:  # the actor died: a new one re-runs the chunk
-                        if attempt + 1 >= self.attempts:
+                        if attempt + 1 >= DEFAULT_ATTEMPTS:
                             pool.retire(actor)
                             raise BackendError(f"chunk {k} (targets {chunks[k][0]}-{chunks[k][1] - 1}) failed "
-                                               f"{self.attempts} times: its Ray actor died ({exc})") from None
+                                               f"{DEFAULT_ATTEMPTS} times: its Ray actor died ({exc})") from None
                         actor = pool.replace(actor)
                         todo.appendleft((k, attempt + 1))
                     except TargetError:  # a bad pose in a chunk sent as it was: name it by its index in the call

@@ -1,6 +1,5 @@
-""":func:`solve_many`, the top of the batch package: the call's checks, the engine (``backend="local"``:
-:class:`~.threads.BatchSolver` on threads; ``"ray"``: :class:`~.ray_actors.RayBatch`) and its answers as
-:class:`~.batch_results.BatchResults`."""
+""":func:`solve_many`, the top of the batch package: the call's checks, its engine (:func:`batch_engine`) and its
+answers as :class:`~.batch_results.BatchResults`."""
 
 from __future__ import annotations
 
@@ -13,13 +12,35 @@ from ...errors import ConfigurationError, OptionError
 from ...robot.locking import expand_result, expand_rows, kept_columns, locked_note, locked_robot, shrink_q
 from ..options import check_choice
 from .batch_results import SOURCE_SINGLE, BatchOutcome, BatchResults
-from .targets import source_of
-from .threads import BatchSolver, ProgressBar, check_workers, root_entropy
+from .goal_lists import source_of
+from .threads import BatchSolver, check_workers, root_entropy
 
-__all__ = ["BACKENDS", "solve_many"]
+__all__ = ["BACKENDS", "batch_engine", "check_backend", "solve_many"]
 
 #: Where :func:`solve_many` runs: threads of this process, or actors of a Ray cluster.
 BACKENDS = ("local", "ray")
+
+
+def check_backend(backend: str, workers, address: str | None) -> int | None:
+    """``workers`` checked for ``backend`` (one of :data:`BACKENDS`): an int >= 1, or None for Ray's default (every
+    CPU of the cluster). OptionError: an unknown backend, a bad ``workers``, an ``address`` without Ray."""
+    backend = check_choice("backend", backend, BACKENDS)
+    if backend == "local" and address is not None:
+        raise OptionError("address names a Ray cluster: give it with backend='ray'")
+    return None if workers is None and backend == "ray" else check_workers(workers)
+
+
+def batch_engine(robot, make_problem: Callable, run: Callable, method: str, entropy: int, options: dict,
+                 backend: str = "local", workers: int | None = None, address: str | None = None, **kwargs):
+    """The engine of one call on ``backend`` (``workers`` checked by :func:`check_backend`): a
+    :class:`~.threads.BatchSolver` on ``workers`` threads, or a :class:`~.ray_actors.RayBatch` on Ray actors. Either
+    has ``solve(targets, Q0=None, progress=False) -> BatchOutcome``, ``template`` and ``workers``; the other
+    arguments are :class:`~.threads.BatchSolver`'s."""
+    if backend == "ray":
+        from .ray_actors import RayBatch
+
+        return RayBatch(robot, make_problem, run, method, entropy, options, workers=workers, address=address, **kwargs)
+    return BatchSolver(robot, make_problem, run, method, entropy, options, workers=workers, **kwargs)
 
 
 def solve_many(robot, targets, make_problem: Callable, run: Callable, method: str, seed=None, q0=None,
@@ -30,10 +51,7 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
     arguments. ``make_problem``, ``run``, ``choose``: see :class:`~.threads.BatchSolver`. ``locked``: solved on
     :func:`~evoik_pin.robot.locking.locked_robot`, ``q0``, ``bounds`` and answers in ``robot``'s layout."""
     t_start = time.perf_counter()
-    backend = check_choice("backend", backend, BACKENDS)
-    if backend == "local" and address is not None:
-        raise OptionError("address names a Ray cluster: give it with backend='ray'")
-    workers = None if workers is None and backend == "ray" else check_workers(workers)
+    workers = check_backend(backend, workers, address)
     full = robot
     if locked:  # checked here (an unknown joint, a value beyond its limits); the batch solved on the locked robot
         robot = locked_robot(full, locked)
@@ -55,26 +73,15 @@ def solve_many(robot, targets, make_problem: Callable, run: Callable, method: st
         source.require_q0(range(N))  # MinimalDisplacement is measured from q0
     if locked and Q0 is not None:
         Q0 = np.ascontiguousarray(Q0[:, kept_columns(full, robot)])
-    entropy = root_entropy(seed)
-    if backend == "ray":
-        from .ray_actors import RayBatch
-
-        job = RayBatch(robot, make_problem, run, method, entropy, options, workers=workers, address=address,
-                       choose=choose, prefer=prefer)
-        outcome = job.solve(source, Q0, progress=progress)
-        template = job.template()
-        workers = job.workers
-    else:
-        solver = BatchSolver(robot, make_problem, run, method, entropy, options, choose=choose, prefer=prefer)
-        with ProgressBar("solve_many", enabled=progress) as bar:
-            outcome = solver.solve(source, Q0, workers=workers, progress=bar)
-        template = solver.template
+    engine = batch_engine(robot, make_problem, run, method, root_entropy(seed), options, backend, workers, address,
+                          choose=choose, prefer=prefer)
+    outcome = engine.solve(source, Q0, progress=progress)
     if locked:
         outcome.q = expand_rows(full, robot, values, outcome.q)
         outcome.note = locked_note(values)
         for r in outcome.singles.values():
             expand_result(full, robot, values, r)
-    return BatchResults(outcome, template, _stats(outcome, t_start, workers, backend))
+    return BatchResults(outcome, engine.template, _stats(outcome, t_start, engine.workers, backend))
 
 
 def _stats(outcome: BatchOutcome, t_start: float, workers: int | None, backend: str) -> dict:

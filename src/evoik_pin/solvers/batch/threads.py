@@ -1,10 +1,5 @@
-"""The local engine of :func:`~evoik_pin.solve_many` (``backend="local"``): :class:`BatchSolver` and its threads.
-
-With the memetic method the problems are solved in batched rounds first, each from its next-nearest seed-table entry
-(from ``q0`` first when given) by one :func:`~evoik_pin.solvers.lm.solve_pairs` call; those left after ``table_seeds``
-rounds, and every problem of other methods, one by one as :func:`evoik_pin.solve` does, each with its own generator
-(:func:`target_generator`): the answers do not depend on the workers, chunks or backend.
-"""
+"""The local engine of :func:`~evoik_pin.solve_many` (``backend="local"``): :class:`BatchSolver` and its threads,
+and what the Ray backend shares with it (chunks, per-problem generators, the progress bar)."""
 
 from __future__ import annotations
 
@@ -28,8 +23,7 @@ from ..lm import solve_pairs
 from ..options import check_int
 from ..search.seed_table import DEFAULT_TABLE_SEEDS, default_table_size, seed_table
 from .batch_results import SOURCE_Q0, SOURCE_SINGLE, SOURCE_TABLE, BatchOutcome
-from .goal_lists import GoalBlock, GoalTree
-from .targets import source_of
+from .goal_lists import GoalBlock, GoalTree, source_of
 
 __all__ = ["BatchSolver", "ProgressBar", "check_call", "check_workers", "chunk_bounds", "default_workers", "gc_paused",
            "root_entropy", "target_generator"]
@@ -118,12 +112,18 @@ class BatchSolver:
             last batched answer: reachability maps want a verdict).
         choose: the API's solve (``choose(robot, target, method, seed, prefer=, **options)``) for the one-by-one
             solves; None: ``make_problem`` and ``run``. prefer: ``"nearest"``, ``"manipulability"`` or None.
+        workers: threads :meth:`solve` runs on (checked by the caller).
+
+    With memetic, the problems are solved in batched rounds first, each from its next-nearest seed-table entry (from
+    ``q0`` first when given) by one :func:`~evoik_pin.solvers.lm.solve_pairs` call; those left after ``table_seeds``
+    rounds, and every problem of other methods, one by one as :func:`evoik_pin.solve` does, each with its own
+    generator (:func:`target_generator`): the answers do not depend on the workers, chunks or backend.
     """
 
     def __init__(self, robot, make_problem: Callable, run: Callable, method: str, entropy: int,
                  options: dict, fallback: bool = True, choose: Callable | None = None,
-                 prefer: str | None = None) -> None:
-        self.robot = robot
+                 prefer: str | None = None, workers: int = 1) -> None:
+        self.robot, self.workers = robot, workers
         self.make_problem, self.run, self.method = make_problem, run, method
         self.entropy = entropy
         self.options = check_call(robot, make_problem, method, options)
@@ -162,21 +162,20 @@ class BatchSolver:
             rounds = min(rounds, int(np.count_nonzero(self.free)))
         self.rounds = rounds
 
-    def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, workers: int = 1,
-              progress: ProgressBar | None = None) -> BatchOutcome:
-        """Solve ``targets`` (anything :func:`~.targets.source_of` takes) from ``Q0`` (N, n) starts when given;
+    def solve(self, targets, Q0: np.ndarray | None = None, offset: int = 0, progress: bool = False) -> BatchOutcome:
+        """Solve ``targets`` (anything :func:`~.goal_lists.source_of` takes) from ``Q0`` (N, n) starts when given;
         ``offset``: the index of the first target in the user's call (it keys the per-target generators);
-        ``progress``: a bar advanced chunk by chunk, or None. Chunk by chunk: ``workers - 1`` threads run one chunk's
-        batched rounds each; this one encodes the chunks and runs the one-by-one solves (the robot's one Pinocchio
-        data; with a scene, after every chunk's rounds), else rounds itself."""
+        ``progress``: a bar advanced chunk by chunk. Chunk by chunk: ``workers - 1`` threads run one chunk's batched
+        rounds each; this one encodes the chunks and runs the one-by-one solves (the robot's one Pinocchio data; with
+        a scene, after every chunk's rounds), else rounds itself."""
         source = source_of(self.robot, targets)
-        progress = progress or ProgressBar("", enabled=False)
+        progress = ProgressBar("solve_many", enabled=progress)
         if self.template is None:
             self._prepare(source.chunk(0, 1)[0])
         tolerances = (self.template.tolerance, self.template.rotation_tolerance)  # a tip target's one goal's
         # threads only where they gain: batched rounds on the compiled kernel (the Python reference engine and the
         # one-by-one solvers hold the GIL, and use the robot's one Pinocchio Data)
-        threads = workers if self.batched and self.engine == "compiled" else 1
+        threads = self.workers if self.batched and self.engine == "compiled" else 1
         bounds = chunk_bounds(len(source), threads)
         progress.grow(len(bounds))
         helpers = min(threads, len(bounds)) - 1
@@ -219,6 +218,7 @@ class BatchSolver:
                 elif delivered in jobs:
                     wait([jobs[delivered][2]], return_when=FIRST_COMPLETED)
         finally:
+            progress.close()
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)
         while left:
