@@ -1,13 +1,6 @@
-"""Every IK solution of one target (``memetic-all``, the default method of :func:`evoik_pin.solve_all`).
-
-Starts: ``q0``, the seed table nearest the target first (:mod:`.seed_table`), then uniform draws from ``rng``;
-``batch`` of them per kernel call (:func:`~evoik_pin.solvers.lm.solve_pairs`). Converged runs are sorted into
-distinct solutions (:mod:`.solution_classes`: wrapped joint distance at most ``class_radius``). A finite solution
-set returns every class found (the search stops after ``patience`` quiet batches once every class has ``min_hits``
-runs); a redundant arm returns ``count`` solutions spread over its self-motion manifolds by farthest-point
-selection among ``pool`` x ``count``. Each solution is its class's representative nearest ``q0`` (zero without
-one), re-checked (in the box, within the tolerances), nearest first. When no run converges, memetic's DE
-restarts look for one; an unreachable target gives ``success=False`` and the best approximation."""
+"""Every IK solution of one target (``memetic-all``, the default method of :func:`evoik_pin.solve_all`): batched LM
+from q0, the seed table and uniform draws, the converged runs sorted into distinct solutions
+(:mod:`.solution_classes`); every class of a finite set, ``count`` spread solutions on a redundant arm."""
 
 from __future__ import annotations
 
@@ -36,8 +29,7 @@ from .solution_classes import (
 __all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
            "goal_moving_joints", "memetic_all"]
 
-#: Default time budget (s) of one search: a safety net; the stopping rule ends most UR5 / UR10 pose searches in
-#: 1-4 ms.
+#: Default time budget (s) of one search: a safety net (the stopping rule ends most UR5 pose searches in 1-4 ms).
 DEFAULT_TIMEOUT = 0.02
 #: Default class radius (rad, wrapped joint distance): converged configurations closer than this are one solution.
 DEFAULT_CLASS_RADIUS = 1e-3
@@ -100,23 +92,17 @@ def _starts(problem: IKProblem, table, rng):
 @register("memetic-all", "Every distinct IK solution: batched Levenberg-Marquardt from q0 and the seed table "
           "(nearest first), clustered modulo 2 pi; count spread solutions on redundant arms", multi_solution=True,
           check=_check_options)
-def memetic_all(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    count: int | None = None,
-    timeout: float | None = DEFAULT_TIMEOUT,
-    max_starts: int | None = DEFAULT_MAX_STARTS,
-    batch: int = 32,
-    patience: int = 2,
-    min_hits: int = 3,
-    class_radius: float = DEFAULT_CLASS_RADIUS,
-    pool: int = 4,
-    table_size: int | None = None,
-    iterations: int = DEFAULT_ITERATIONS,
-    engine: str = "compiled",
-) -> Result:
-    """Every distinct IK solution of ``problem`` (see the module docstring), in ``Result.solutions``.
+def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | None = None,
+                timeout: float | None = DEFAULT_TIMEOUT, max_starts: int | None = DEFAULT_MAX_STARTS, batch: int = 32,
+                patience: int = 2, min_hits: int = 3, class_radius: float = DEFAULT_CLASS_RADIUS, pool: int = 4,
+                table_size: int | None = None, iterations: int = DEFAULT_ITERATIONS,
+                engine: str = "compiled") -> Result:
+    """Every distinct IK solution of ``problem``, in ``Result.solutions``: LM starts (q0, the seed table nearest first,
+    uniform draws; ``batch`` per kernel call) whose converged runs are sorted into classes (wrapped joint distance at
+    most ``class_radius``). A finite set returns every class found (the search stops after ``patience`` quiet batches
+    once every class has ``min_hits`` runs); a redundant arm ``count`` solutions spread by farthest-point selection
+    among ``pool`` x ``count``. Each is its class's representative nearest ``q0``, re-checked, nearest first; when no
+    run converges, memetic's DE restarts look for one.
 
     Args:
         problem: the IK problem; its tolerances decide which runs converged.

@@ -1,10 +1,7 @@
-"""Taking answers along the goals' self-motion: ``prefer="nearest" | "manipulability"`` (TRAC-IK's Distance and
-Manip1) and preferences (:mod:`evoik_pin.goals.preferences`) summed into one :class:`Criterion`, lowered in the
-null space of the goals' Jacobian by :func:`refine` (Python: projected steps, each restored onto the goals by LM and
-kept only when every goal is met and the criterion improved) or by the compiled descent (:func:`descend`, prefer
-alone on the compiled engine). Nearness is ``|q - q0|`` with full-turn joints taken to their turn nearest ``q0``
-inside the box (:func:`nearest_turn`).
-"""
+"""Taking answers along the goals' self-motion: ``prefer="nearest" | "manipulability"`` (TRAC-IK's Distance and Manip1)
+and preferences summed into one :class:`Criterion`, lowered in the goals' null space by :func:`refine` (projected steps
+restored by LM) or the compiled :func:`descend`. Nearness is ``|q - q0|``, full-turn joints taken to their turn nearest
+``q0`` inside the box (:func:`nearest_turn`)."""
 
 from __future__ import annotations
 
@@ -25,8 +22,7 @@ __all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bin
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
-#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead, a fifth of
-#: TRAC-IK's 5 ms Distance / Manip1 modes.
+#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead.
 DEFAULT_PREFER_TIMEOUT = 0.0007
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4

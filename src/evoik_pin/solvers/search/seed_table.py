@@ -1,9 +1,6 @@
-"""The seed table: configurations spread over a search box (a deterministic Halton sequence) with their frames'
-poses, ranked by nearness to a target or a goal list; one per robot and box (:func:`seed_table`, cached).
-
-Nearness is ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` (``w``: a quarter of the arm's reach, m per unit of Frobenius
-distance), summed over a goal list's goals with each goal's weight; position and planar targets use their own
-features."""
+"""The seed table (:func:`seed_table`, cached per robot and box): Halton configurations over a search box with their
+frames' poses, ranked by nearness ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` (``w``: a quarter of the arm's reach, m) to a
+target, or summed with the goals' weights over a goal list; position and planar targets use their own features."""
 
 from __future__ import annotations
 
@@ -108,7 +105,7 @@ class SeedTable:
                 spec = ((sp, bool(oriented)) + (() if positioned else (False,)),)
                 F, sq = self.goal_table_features((frame,), spec)
                 shape = (spec[0][0], spec[0][0] * self.weight, bool(positioned), bool(oriented), False)
-                if len(self._frames) > 12:
+                if len(self._frames) > 12:  # the goal frames' go, the kinds' stay
                     self._frames = {k: v for k, v in self._frames.items() if isinstance(k, str)}
             hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
         return hit
@@ -160,11 +157,8 @@ class SeedTable:
         if kept is None:
             F = np.concatenate([self.Q[:, ~wrap], np.cos(self.Q[:, wrap]), np.sin(self.Q[:, wrap])], axis=1)
             kept = self._joint_features[key] = (F, np.einsum("ij,ij->i", F, F))
-        F, sq = kept
         f = np.concatenate([q0[~wrap], np.cos(q0[wrap]), np.sin(q0[wrap])])
-        d = F @ f
-        d *= -2.0
-        d += sq
+        d = _less_norm(*kept, f)
         d += f @ f
         return d
 
@@ -172,10 +166,7 @@ class SeedTable:
         """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of
         :meth:`frame_features` ``key`` (or of those features)."""
         ff = key if isinstance(key, FrameFeatures) else self.frame_features(key)
-        d = ff.F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
-        d *= -2.0
-        d += ff.sq
-        return d
+        return _less_norm(ff.F, ff.sq, f)
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): nearest in the goals' weighted summed nearness, each
@@ -290,10 +281,7 @@ class SeedTable:
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
                 hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
-            if len(self._goal_features) > 8:
-                self._goal_features.clear()
-            self._goal_features[key] = hit
-        return hit
+        return _kept(self._goal_features, key, hit)
 
     def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
                           allowed: np.ndarray | None) -> np.ndarray:
@@ -330,12 +318,10 @@ class SeedTable:
             oriented = np.array([bool(e[1]) for e in spec])
             idx = np.concatenate([np.zeros(0, dtype=np.int64)] + [i.astype(np.int64) for _, _, i in parts])
             idx_start = np.cumsum([0] + [i.size for _, _, i in parts]).astype(np.int64)
-            if len(self._stacked) > 8:
-                self._stacked.clear()
             # single precision for the rankings (nearest.table_distances32): a start's order only
-            hit = self._stacked[key] = (parts, (FT.astype(np.float32), sq_rank.astype(np.float32),
-                                                PT.astype(np.float32), sq.astype(np.float32), start, scale, positioned,
-                                                oriented, idx, idx_start))
+            hit = _kept(self._stacked, key, (parts, (FT.astype(np.float32), sq_rank.astype(np.float32),
+                                                     PT.astype(np.float32), sq.astype(np.float32), start, scale,
+                                                     positioned, oriented, idx, idx_start)))
         return hit[1]
 
     def goal_table_features(self, frames, spec) -> tuple[np.ndarray, np.ndarray]:
@@ -346,9 +332,7 @@ class SeedTable:
         if hit is None:
             P, R = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
             F = self.goal_features(spec, P, R)
-            if len(self._goal_features) > 8:
-                self._goal_features.clear()
-            hit = self._goal_features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
+            hit = _kept(self._goal_features, key, (np.ascontiguousarray(F), (F * F).sum(axis=1)))
         return hit
 
     @staticmethod
@@ -376,18 +360,14 @@ class SeedTable:
         key = (id(scene), scene.version, float(margin))
         hit = self._free.get(key)
         if hit is None or hit[0]() is not scene:
-            if len(self._free) > 8:
-                self._free.clear()
-            hit = self._free[key] = (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True))
+            hit = _kept(self._free, key, (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True)))
         return hit[1]
 
     def features32(self, ff: FrameFeatures) -> tuple[np.ndarray, np.ndarray]:
         """``ff``'s FT and sq in single precision (cached), for a goal set's ranking."""
         hit = self._frames32.get(id(ff.FT))
         if hit is None or hit[0] is not ff.FT:
-            if len(self._frames32) > 8:
-                self._frames32.clear()
-            hit = self._frames32[id(ff.FT)] = (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32))
+            hit = _kept(self._frames32, id(ff.FT), (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32)))
         return hit[1], hit[2]
 
     def nearest(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
@@ -402,9 +382,7 @@ class SeedTable:
             from scipy.spatial import cKDTree
 
             index = np.arange(self.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
-            if len(self._trees) > 16:
-                self._trees.clear()
-            hit = self._trees[tree_key] = (cKDTree(self.frame_features(key).F[index]), index)
+            hit = _kept(self._trees, tree_key, (cKDTree(self.frame_features(key).F[index]), index), 16)
         tree, index = hit
         k = min(k, tree.n)
         N = f.shape[0]
@@ -434,6 +412,23 @@ def load_goal_helpers() -> None:
                             np.empty((1, 1), dtype=np.int64))),
         (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))], RANKING_COMPILE_SECONDS)
     _GOAL_HELPERS_LOADED.append(True)
+
+
+def _kept(cache: dict, key, value, most: int = 8):
+    """``value``, stored in ``cache`` under ``key`` (the cache emptied first when it holds more than ``most``)."""
+    if len(cache) > most:
+        cache.clear()
+    cache[key] = value
+    return value
+
+
+def _less_norm(F: np.ndarray, sq: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """``sq - 2 F f`` (N,): the squared distances of rows F (N, d), squared norms sq (N,), to f (d,) less ``|f|^2``;
+    in place (negation is exact: the same numbers as the formula, two fewer (N,) arrays)."""
+    d = F @ f
+    d *= -2.0
+    d += sq
+    return d
 
 
 def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
