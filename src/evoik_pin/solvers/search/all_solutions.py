@@ -150,7 +150,7 @@ def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | No
     starts = _starts(problem, table, rng)
     history: dict[str, list[float]] = {"starts": [], "solutions": [], "best_cost": []}
     evaluations = started = batches = quiet = 0
-    best = (np.inf, None, np.inf, None)  # error, q, position error, orientation error
+    best = (np.inf, None)  # the lowest error (m + rad) met and its q
     fallback = ""
     while True:
         k = batch if max_starts is None else min(batch, max_starts - started)
@@ -170,8 +170,7 @@ def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | No
         err = out.position_error + rot
         i = int(err.argmin())
         if err[i] < best[0]:
-            best = (float(err[i]), out.q[i].copy(), float(out.position_error[i]),
-                    None if out.orientation_error is None else float(rot[i]))
+            best = (float(err[i]), out.q[i].copy())
         Q, E, work = _rescued(problem, patient, out.q, err, out.converged)
         evaluations += work
         quiet = 0 if classes.add(Q, E) else quiet + 1
@@ -181,12 +180,9 @@ def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | No
         if redundant and len(classes) >= pool * wanted:
             stop = f"{len(classes)} distinct solutions pooled"
             break
-        if not redundant and len(classes) and quiet >= patience and (
-                min(classes.hits) >= min_hits or quiet >= EMPTY_PATIENCE_FACTOR * patience):
-            stop = f"no new solution in the last {quiet} batch(es) of {batch} starts"
-            break
-        if redundant and len(classes) and quiet >= EMPTY_PATIENCE_FACTOR * patience:
-            stop = f"no new distinct solution in the last {quiet} batch(es) of {batch} starts"
+        if len(classes) and quiet >= patience and (
+                (not redundant and min(classes.hits) >= min_hits) or quiet >= EMPTY_PATIENCE_FACTOR * patience):
+            stop = f"no new {'distinct ' if redundant else ''}solution in the last {quiet} batch(es) of {batch} starts"
             break
         if not len(classes) and quiet >= EMPTY_PATIENCE_FACTOR * patience and not fallback:
             fallback = _fallback(problem, rng, classes, deadline, iterations, engine)
@@ -219,7 +215,10 @@ def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | No
     if solutions:
         first = solutions[0]
         q, pos, rot, cost = first.q, first.position_error, first.orientation_error, first.cost
-        message = _message(solutions, redundant, pooled, started, stop, spread)
+        message = (f"{len(solutions)} solution(s) spread over the self-motion manifold, smallest pairwise joint "
+                   f"distance {spread:.3g} rad, chosen among {pooled} distinct converged solutions from {started} "
+                   f"LM start(s) ({stop})" if redundant
+                   else f"{len(solutions)} distinct solution(s) from {started} LM start(s) ({stop})")
         if collided:
             message += f"; {collided} solution(s) in collision left out"
     else:
@@ -297,12 +296,3 @@ def goal_moving_joints(robot, stack) -> np.ndarray:
     moving = np.zeros(robot.n, dtype=bool)
     moving[index[stack.support.any(axis=0) & (scale != 0.0)]] = True
     return moving
-
-
-def _message(solutions: list[Result], redundant: bool, pooled: int, started: int, stop: str,
-             spread: float | None) -> str:
-    if redundant:
-        return (f"{len(solutions)} solution(s) spread over the self-motion manifold, smallest pairwise joint "
-                f"distance {spread:.3g} rad, chosen among {pooled} distinct converged solutions from {started} LM "
-                f"start(s) ({stop})")
-    return f"{len(solutions)} distinct solution(s) from {started} LM start(s) ({stop})"

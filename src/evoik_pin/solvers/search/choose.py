@@ -142,7 +142,8 @@ class _TableStarts:
 def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R=None) -> list[float]:
     """Give each variant its lazy table starts and return each one's squared distance to its nearest entry (zeros
     without a table). ``joint``: the entries' weighted squared joint distances to q0 (size,), added to their pose
-    nearness (prefer="nearest", one target or goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets."""
+    nearness (prefer="nearest", one target or goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets
+    (read for a goal set of one goal)."""
     if table is None:
         return [0.0] * len(variants)
     if len(variants) == 1 and one_frame(parent):  # one goal on one frame
@@ -157,8 +158,6 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
             v.starts = table.goal_starts(v.problem, k, free)
         return [float(i) for i in range(len(variants))]
     spec = table.goal_spec(parent.goals)
-    if P is None:
-        P, R = np.stack([v.pt for v in variants]), np.stack([v.Rt for v in variants])
     g = parent.goals[0]  # the table's features of the goal's frame:
     ff = table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1]))
     D, near = member_distances(table, ff, spec, P, R, joint, free)

@@ -12,15 +12,13 @@ __all__ = ["goal_target_features", "nearest_per_goal", "rank_goal_entries", "see
            "table_distances", "table_distances32", "table_distances_many"]
 
 
-#: select_k keeps the k smallest by insertion up to this k, above by a stable sort (faster for a whole table).
-_SORT_FROM = 64
+_SORT_FROM = 64  # select_k: by insertion up to this k, above by a stable sort (faster for a whole table)
 
 
 @njit(cache=True, nogil=True, forceinline=False)
 def select_k(d, allowed, k, out):  # pragma: no cover - compiled
     """Write into ``out[:m]`` the indices of the ``m = min(k, allowed entries)`` smallest of ``d`` (N,), smallest first
-    (ties: the lower index first); returns m. ``allowed``: (N,) bool, or (0,) for every entry; ``out``: (>= k,) int64.
-    By insertion up to ``_SORT_FROM`` kept, else by one stable sort: the same order."""
+    (ties: the lower index first); returns m. ``allowed``: (N,) bool, or (0,) for every entry; ``out`` (>= k,) int64."""
     if k > _SORT_FROM:
         return _select_sorted(d, allowed, k, out)
     return select_few(d, allowed, k, out)
@@ -40,8 +38,7 @@ def _select_sorted(d, allowed, k, out):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True, forceinline=False)
 def select_few(d, allowed, k, out):  # pragma: no cover - compiled
-    """:func:`select_k` by insertion in one pass over d (a function of its own: the sort's arrays beside it slowed this
-    loop by a third)."""
+    """:func:`select_k` by insertion in one pass over d (apart: the sort's arrays beside it slowed this loop)."""
     N = d.shape[0]
     if k <= 0:
         return 0
@@ -102,8 +99,8 @@ def table_distances32(FT, sq, f, d):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True, forceinline=False, fastmath={"contract"})
 def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
-    """:func:`table_distances32` of V targets: D (V, N) float32 for features f (V, D) (compiled: OpenBLAS's threads
-    on a busy machine took 15 ms for this product)."""
+    """:func:`table_distances32` of V targets: D (V, N) float32 for features f (V, D) (OpenBLAS's threads on a busy
+    machine took 15 ms for this product)."""
     for v in range(f.shape[0]):
         table_distances32(FT, sq, f[v], D[v])
 

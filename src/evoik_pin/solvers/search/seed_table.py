@@ -232,11 +232,7 @@ class SeedTable:
                 if fixed is None or (j > 0 and fixed.shape[1] == 1):
                     fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, 1 if j == 0 else k, allowed)
                 picks = fixed[:, j] if j < fixed.shape[1] else None
-            entry = self.Q[row]
-            if base is not None:
-                entry = entry.copy()
-                entry[:6] = base
-            out = [entry]
+            out = [q.copy()]  # the entry (its base set), before the picks compose q
             if picks is not None:
                 for (_, _, idx), e in zip(parts, picks, strict=True):
                     q[idx] = self.Q[e, idx]
