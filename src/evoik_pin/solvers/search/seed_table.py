@@ -277,7 +277,8 @@ class SeedTable:
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
                 hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
-        return _kept(self._goal_features, key, hit)
+            _kept(self._goal_features, key, hit)
+        return hit
 
     def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
                           allowed: np.ndarray | None) -> np.ndarray:
