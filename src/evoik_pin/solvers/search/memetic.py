@@ -419,22 +419,17 @@ def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, 
         base_mode, base = (BASE_EACH_ENTRY, _NO_BASE) if found is None else (BASE_FROM_GOAL, found)
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
-    n = problem.n
-    G = len(goals)
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
-    q_out = np.empty(n)
+    q_out, g_out, best_g = np.empty(problem.n), np.empty((len(goals), 2)), np.empty((len(goals), 2))
     errors, _, zeros, best_q, best = setup._scratch
-    g_out, best_g = np.empty((G, 2)), np.empty((G, 2))
     (stage, runs, evaluations, pos, rot, cost), loading = setup.first_runs(
         (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, table.Q, *layout[:8],
          table.weight, np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float), *layout[8:],
          base, base_mode, _EVERY, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best,
          best_g), lm, table, goal_list=True)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them (ranked by
-        # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank)
-        runs_, evaluations_, errs, kept, _ = resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
-        kept.goal_errors = best_g
-        return None, loading, (runs_, evaluations_, errs, kept, runs - (q0 is not None))
+        # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank), the starts after q0's made
+        return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, runs - (q0 is not None), best_g)
     # the goals' errors: the kernel's at q_out where they are Goal.errors' (as _solve's), tested again
     goal_errors = ([g.reported(p, r) for g, (p, r) in zip(goals, g_out.tolist(), strict=True)]
                    if all(g.on_one_frame for g in goals) else problem.goal_errors(q_out))
@@ -453,13 +448,16 @@ def _first_runs_answer(problem: IKProblem, q: np.ndarray, goal_errors: list, sta
                              ), loading, None
 
 
-def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, table_runs: int) -> tuple:
+def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, made: int,
+                  goal_errors: np.ndarray | None = None) -> tuple:
     """The state :func:`_solve` goes on from after compiled first runs none of which converged, read from the setup's
-    scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome, the table entries run)."""
+    scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome (its ``goal_errors`` (G, 2)
+    for several goals), the table's starts ``made``)."""
     errors, _, _, best_q, best = setup._scratch
     b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
-    kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), None, b_cost)
-    return runs, evaluations, errors[:runs].tolist(), kept, table_runs
+    kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), goal_errors,
+                     b_cost)
+    return runs, evaluations, errors[:runs].tolist(), kept, made
 
 
 def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float, stage: int, runs: int,
