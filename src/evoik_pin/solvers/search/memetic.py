@@ -122,35 +122,6 @@ def memetic(problem: IKProblem, rng: np.random.Generator, *, timeout: float | No
     return setup.solve(problem, rng, t_setup)
 
 
-def _load_variant(lm: LevenbergMarquardt, which: str, what: str, args: tuple) -> tuple[object, float]:
-    """The compiled first runs ``which`` (``"first_runs"`` or ``"goal_first_runs"``, :mod:`.first_runs`) in the
-    variant of ``lm``'s kernel, and the seconds spent loading it: the first time in the process it is compiled (once
-    per install, with a notice naming ``what``) or loaded from numba's cache, on ``args`` (the caller makes the runs
-    again: they only write args' buffers)."""
-    t = time.perf_counter()
-    from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
-
-    extra = later_kinds(lm.goals)  # the variant of the engine's kernel
-    function = getattr(compiled, which if extra else which + "_basic")
-    if function in _LOADED:
-        return function, 0.0
-    load(f"memetic's {what} for " + ("every goal kind" if extra else "pose, position and planar goals"),
-         [(function, args)], FIRST_RUNS_COMPILE_SECONDS)
-    _LOADED.append(function)
-    return function, time.perf_counter() - t
-
-
-def _entry_point(function, args: tuple):
-    """numba's compiled entry of ``function`` for ``args``' types, called directly from then on (without numba's
-    typing of every argument); ``function`` itself on a numba without overloads' entry points."""
-    from numba import typeof
-
-    try:
-        return function.overloads[tuple(typeof(a) for a in args)].entry_point
-    except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
-        return function
-
-
 class MemeticSetup:
     """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve: the seed table
     of the box, the LM engines retargeted in place, the compiled first-runs entries. :meth:`solve` is :func:`memetic`'s
@@ -208,10 +179,11 @@ class MemeticSetup:
 
     def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable,
                    goal_list: bool = False) -> tuple[tuple, float]:
-        """(:func:`~.first_runs.first_runs`, or with ``goal_list`` :func:`~.first_runs.goal_first_runs`, on ``args``;
-        the seconds spent loading it: set-up). Once the engine's arguments stay (from the setup's second solve on; a
-        goal list's engine owning its arrays), the compiled entry is kept per engine arguments and table (the last
-        ``KEPT_ENGINES``) and called directly, without numba's typing of every argument."""
+        """(:func:`~.first_runs.first_runs`, or with ``goal_list`` :func:`~.first_runs.goal_first_runs`, in the
+        variant of ``lm``'s kernel, on ``args``; the seconds spent loading it: set-up). The first time in the process
+        it is compiled (once per install, with a notice) or loaded from numba's cache. Once the engine's arguments stay
+        (from the setup's second solve on; a goal list's engine owning its arrays), numba's compiled entry is kept per
+        engine arguments and table (the last ``KEPT_ENGINES``) and called directly, without typing every argument."""
         kept = self._goal_entries if goal_list else self._entries
         current = self._entry
         if not goal_list and current[2] is not None and current[0] is lm._args and current[1] is table:
@@ -222,10 +194,26 @@ class MemeticSetup:
                 if not goal_list:
                     self._entry = entry
                 return entry[2](*args), 0.0
-        function, loading = _load_variant(lm, "goal_first_runs" if goal_list else "first_runs",
-                                          "first runs of goal lists" if goal_list else "first runs", args)
-        keep = lm._owned if goal_list else current[1] is not None
-        entry = _entry_point(function, args) if keep else None
+        t = time.perf_counter()
+        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
+
+        extra = later_kinds(lm.goals)  # the variant of the engine's kernel
+        which = "goal_first_runs" if goal_list else "first_runs"
+        function, loading = getattr(compiled, which if extra else which + "_basic"), 0.0
+        if function not in _LOADED:
+            load(f"memetic's first runs{' of goal lists' if goal_list else ''} for "
+                 + ("every goal kind" if extra else "pose, position and planar goals"),
+                 [(function, args)], FIRST_RUNS_COMPILE_SECONDS)  # the runs made again below: args' buffers only
+            _LOADED.append(function)
+            loading = time.perf_counter() - t
+        entry = None
+        if lm._owned if goal_list else current[1] is not None:
+            from numba import typeof
+
+            try:
+                entry = function.overloads[tuple(typeof(a) for a in args)].entry_point
+            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
+                entry = function
         if not goal_list:
             self._entry = (lm._args, table, entry)
         if entry is not None and entry is not function:  # a compiled entry found
