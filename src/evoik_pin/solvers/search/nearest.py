@@ -106,24 +106,6 @@ def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def nearest_per_goal(FT, sq, start, scale, positioned, oriented, weight, pt, Rt, allowed, k, out):  # pragma: no cover
-    """Per goal g, the ``k`` table entries nearest its target by the goal's own features, nearest first (ties: the
-    lower index first), into ``out[g]`` (G, >= k) int64: :meth:`~.seed_table.SeedTable.goal_starts`' composed starts.
-    FT (D, N) float32: the goals' features transposed, goal g's rows from ``start[g]``; sq (G, N) float32; the other
-    arguments as :func:`goal_target_features` reads them; allowed (N,) bool or (0,); k <= the allowed entries."""
-    d = np.empty(FT.shape[1], dtype=np.float32)
-    f = np.empty(12, dtype=np.float32)
-    for g in range(pt.shape[0]):
-        D = goal_target_features(scale[g:g + 1], positioned[g:g + 1], oriented[g:g + 1], weight, pt[g:g + 1],
-                                 Rt[g:g + 1], f)
-        if D == 0:  # a goal without a position or an orientation to match: every entry as near
-            d[:] = 0.0
-        else:
-            table_distances32(FT[start[g]:start[g] + D], sq[g], f[:D], d)
-        select_k(d, allowed, k, out[g])
-
-
-@njit(cache=True, nogil=True, forceinline=False)
 def goal_target_features(scale, positioned, oriented, weight, pt, Rt, f):  # pragma: no cover - compiled
     """The goals' targets' features into ``f`` (>= D,) float32, goal after goal: ``scale[g]`` x its position when
     ``positioned[g]``, then ``scale[g] x weight`` x its rotation's entries when ``oriented[g]`` (the products
@@ -159,6 +141,17 @@ def rank_goal_entries(FT, sq, scale, positioned, oriented, weight, pt, Rt, allow
     else:
         table_distances32(FT, sq, f[:D], d)
     return select_k(d, allowed, k, out)
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def nearest_per_goal(FT, sq, start, scale, positioned, oriented, weight, pt, Rt, allowed, k, out):  # pragma: no cover
+    """Per goal g, the ``k`` table entries nearest its target by the goal's own features, nearest first (ties: the
+    lower index first), into ``out[g]`` (G, >= k) int64: :meth:`~.seed_table.SeedTable.goal_starts`' composed starts.
+    FT (D, N) float32: the goals' features transposed, goal g's rows from ``start[g]``; sq (G, N) float32; the other
+    arguments as :func:`goal_target_features` reads them; allowed (N,) bool or (0,); k <= the allowed entries."""
+    for g in range(pt.shape[0]):  # each goal ranked alone (a goal without features: every entry as near)
+        rank_goal_entries(FT[start[g]:start[g + 1]], sq[g], scale[g:g + 1], positioned[g:g + 1], oriented[g:g + 1],
+                          weight, pt[g:g + 1], Rt[g:g + 1], allowed, k, out[g])
 
 
 @njit(cache=True, nogil=True, forceinline=False)
