@@ -272,7 +272,7 @@ class SeedTable:
             hit = []
             for g, goal in enumerate(goals):
                 spec = self.goal_spec(goals)[g:g + 1]
-                F = np.concatenate(self._goal_feature_blocks(spec, P[:, g][None], R[:, g][None]), axis=1)
+                F = self.goal_features(spec, P[:, g:g + 1], R[:, g:g + 1])
                 seeded = goal.kind < KIND_BEYOND_FRAME or _anchor(goal, goals) is not None
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
@@ -339,17 +339,13 @@ class SeedTable:
         return tuple((float(np.sqrt(g.weight)) if g.kind < KIND_BEYOND_FRAME or _anchor(g, goals) is not None
                       else 0.0, bool(g.has_orientation)) + (() if g.has_position else (False,)) for g in goals)
 
-    def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
-        """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3) (``spec``:
-        :meth:`goal_spec`): sqrt(weight) x the position, then x ``self.weight`` the rotation's entries."""
-        out = [_pose_rows(e[0], e[0] * self.weight, len(e) < 3 or e[2], e[1], False, P[g], R[g])
-               for g, e in enumerate(spec)]
-        # pointing goals alone: no feature ranks the entries (all equally near)
-        return [b for b in out if b.shape[1]] or [np.zeros((len(P[0]), 1))]
-
     def goal_features(self, spec, P: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Features (N, d) of N poses of G goal frames, P (N, G, 3) m, R (N, G, 3, 3) (``spec``: :meth:`goal_spec`)."""
-        return np.concatenate(self._goal_feature_blocks(spec, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)), axis=1)
+        """Features (N, d) of N poses of G goal frames, P (N, G, 3) m, R (N, G, 3, 3) (``spec``: :meth:`goal_spec`):
+        per goal sqrt(weight) x its frame's position, then x ``self.weight`` its rotation's entries; one zero column
+        when no goal has any (pointing goals alone: every entry as near)."""
+        blocks = [_pose_rows(e[0], e[0] * self.weight, len(e) < 3 or e[2], e[1], False, P[:, g], R[:, g])
+                  for g, e in enumerate(spec)]
+        return np.concatenate([b for b in blocks if b.shape[1]] or [np.zeros((P.shape[0], 1))], axis=1)
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries collision-free in ``scene`` at ``margin`` m by their convex-hull proxies
