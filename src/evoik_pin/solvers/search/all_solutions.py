@@ -97,12 +97,10 @@ def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | No
                 patience: int = 2, min_hits: int = 3, class_radius: float = DEFAULT_CLASS_RADIUS, pool: int = 4,
                 table_size: int | None = None, iterations: int = DEFAULT_ITERATIONS,
                 engine: str = "compiled") -> Result:
-    """Every distinct IK solution of ``problem``, in ``Result.solutions``: LM starts (q0, the seed table nearest first,
-    uniform draws; ``batch`` per kernel call) whose converged runs are sorted into classes (wrapped joint distance at
-    most ``class_radius``). A finite set returns every class found (the search stops after ``patience`` quiet batches
-    once every class has ``min_hits`` runs); a redundant arm ``count`` solutions spread by farthest-point selection
-    among ``pool`` x ``count``. Each is its class's representative nearest ``q0``, re-checked, nearest first; when no
-    run converges, memetic's DE restarts look for one.
+    """Every distinct IK solution of ``problem`` (``Result.solutions``): batched LM from q0, the seed table (nearest
+    first) and uniform draws, the converged runs sorted into classes; every class of a finite set, ``count`` spread
+    by farthest-point selection on a redundant arm; each its class's representative nearest ``q0`` (re-checked,
+    nearest first). When no run converges, memetic's DE restarts look for one.
 
     Args:
         problem: the IK problem; its tolerances decide which runs converged.

@@ -98,16 +98,13 @@ def _first_runs(extra, name):
                 for j in range(9):
                     c = f[ro + j] - sr * R[j // 3, j % 3]
                     d0 += c * c
-            if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
-                if ranked > 0:
-                    first = out[0]
-                    de = 0.0
-                    for j in range(D):
-                        c = f[j] - F[first, j]
-                        de += c * c
-                    q0_first = d0 <= de
-                else:
-                    q0_first = True
+            if d0 > gap and ranked > 0:  # a random guess, not a previous solution: second unless nearer than the
+                first = out[0]  # nearest entry
+                de = 0.0
+                for j in range(D):
+                    c = f[j] - F[first, j]
+                    de += c * c
+                q0_first = d0 <= de
         # the starts in memetic's order: q0 first or after the nearest entry, then the next entries (-1: q0)
         order = np.empty(table_runs + 1, dtype=np.int64)
         count = 0
