@@ -36,14 +36,12 @@ __all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticSetup", "memetic"
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
-#: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
-#: descheduled past the budget still gets this minimum of useful work.
+#: LM runs from the nearest seed-table entries (and q0's) made whatever the clock says: a minimum of useful work.
 GUARANTEED_TABLE_RUNS = 4
 #: Seed-table entries tried for one frame's target with a scene: converged answers may be rejected in collision, and
 #: the collision-free entries, farther ones included, stay better (cheaper) starts than stage 3's DE draws.
 DEFAULT_SCENE_TABLE_SEEDS = 48
-#: LM engines (and their compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted instead of
-#: rebuilt by a solver alternating goal structures.
+#: LM engines (and compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted, not rebuilt.
 KEPT_ENGINES = 8
 #: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
 FIRST_RUNS_COMPILE_SECONDS = 5.0

@@ -23,8 +23,7 @@ __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
 DEFAULT_TABLE_SEEDS = 17
-#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`): on whole robots a start
-#: (an LM run) costs far less than a DE generation.
+#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`; far cheaper than DE).
 DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
@@ -71,8 +70,7 @@ class SeedTable:
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
-        if size:  # the last entry: every joint at 0 clipped into the box, a humanoid URDF's upright stance (random
-            # entries rarely stand: a stance's starts composed from them alone needed dozens of LM runs on G1)
+        if size:  # the last entry: every joint at 0 clipped into the box, a humanoid URDF's upright stance
             self.Q[-1] = np.minimum(np.maximum(0.0, lower), upper)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
