@@ -278,8 +278,7 @@ def test_compiled_per_goal_ranking_is_numpys_over_many_targets(name):
         for k, mask in ((1, None), (17, None), (1, allowed), (17, allowed)):
             got = table._nearest_per_goal(goals, parts, pt, Rt, k, mask)
             for g, (F, sq, _) in enumerate(parts):
-                f = np.concatenate(table._goal_feature_blocks(spec[g:g + 1], pt[g][None, None], Rt[g][None, None]),
-                                   axis=1)[0]
+                f = table.goal_features(spec[g:g + 1], pt[g][None, None], Rt[g][None, None])[0]
                 d = sq - 2.0 * (F @ f)
                 if mask is not None:
                     d = np.where(mask, d, np.inf)

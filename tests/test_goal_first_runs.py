@@ -136,7 +136,7 @@ def test_goal_ranking_is_the_summed_nearness(name):
         F, sq = table.goal_table_features(tuple(g.frame for g in goal_list), table.goal_spec(goal_list))
         _, pt, Rt = problem.goal_stack()
         spec = table.goal_spec(goal_list)
-        f = np.concatenate(table._goal_feature_blocks(spec, pt[:, None], Rt[:, None]), axis=1)[0]
+        f = table.goal_features(spec, pt[None], Rt[None])[0]
         for k, mask in ((1, None), (17, None), (17, allowed)):
             d = sq - 2.0 * (F @ f)
             if mask is not None:

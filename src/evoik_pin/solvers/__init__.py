@@ -4,11 +4,11 @@ signature, option values by the solver (and its ``check=``, before any work) wit
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property
 
 from ..errors import MethodError, OptionError
 
@@ -33,7 +33,7 @@ class SolverInfo:
         """Names of the solver-specific keyword options."""
         return list(self._defaults)
 
-    @cached_property
+    @functools.cached_property
     def _defaults(self) -> dict:
         """The keyword options and their defaults (inspect.signature costs tens of microseconds: once per solver,
         not once per solve)."""
@@ -44,13 +44,6 @@ class SolverInfo:
         """OptionError for an option the solver does not take; with ``n`` (the robot's joints), also for a value
         the solver would refuse (its ``check``, when registered), so that a call solving many targets fails
         before any work, with the message :func:`evoik_pin.solve` gives."""
-        if n is not None and self.check is not None:
-            self._check_names(options)
-            self.check(n=n, **{**self._defaults, **options})
-        elif options:
-            self._check_names(options)
-
-    def _check_names(self, options: dict) -> None:
         unknown = sorted(set(options) - set(self._defaults))
         if unknown:
             raise OptionError(
@@ -58,6 +51,8 @@ class SolverInfo:
                 f"{', '.join(self.options)} (and tolerance, rotation_tolerance, q0, bounds, objective, "
                 "orientation_weight, seed)"
             )
+        if n is not None and self.check is not None:
+            self.check(n=n, **{**self._defaults, **options})
 
 
 _REGISTRY: dict[str, SolverInfo] = {}
@@ -65,7 +60,6 @@ _REGISTRY: dict[str, SolverInfo] = {}
 # One module per solver family; each registers its methods on import (this order is methods()' order).
 _MODULES = ["paper.de", "paper.isade", "paper.pso", "paper.mode", "paper.ga", "paper.hga", "paper.nsga2",
             "paper.analytic", "search.memetic", "search.choose", "search.all_solutions"]
-_loaded = False
 
 
 def register(name: str, description: str, multi_solution: bool = False, multi_objective: bool = False,
@@ -80,13 +74,10 @@ def register(name: str, description: str, multi_solution: bool = False, multi_ob
     return wrap
 
 
+@functools.cache
 def _load_all() -> None:
-    global _loaded
-    if _loaded:
-        return
     for mod in _MODULES:
         importlib.import_module(f"{__name__}.{mod}")
-    _loaded = True
 
 
 def methods() -> list[str]:

@@ -16,10 +16,6 @@ __all__ = ["check_callback", "check_choice", "check_fraction", "check_int", "che
            "check_nonnegative_vector", "check_number", "check_positive"]
 
 
-def _with_unit(text: str, unit: str) -> str:
-    return f"{text} {unit}" if unit else text
-
-
 def check_int(name: str, value, minimum: int = 1, maximum: int | None = None) -> int:
     """``value`` as an ``int`` in [minimum, maximum] (no upper limit when ``maximum`` is None): Python and NumPy
     integers, not ``bool`` or floats; OptionError otherwise."""
@@ -58,8 +54,7 @@ def check_number(name: str, value, low: float = -np.inf, high: float = np.inf, *
             if above and below and math.isfinite(v):
                 return v
     # the message only on failure: formatting it costs more than the check (this runs on every solve)
-    accepted = _with_unit(" ".join(filter(None, ["a finite number", _range_text(low, high, open_low, open_high)])),
-                          unit)
+    accepted = " ".join(filter(None, ["a finite number", _range_text(low, high, open_low, open_high), unit]))
     raise OptionError(f"{name} must be {accepted}, got {value!r}")
 
 

@@ -1,13 +1,6 @@
-"""Every IK solution of one target (``memetic-all``, the default method of :func:`evoik_pin.solve_all`).
-
-Starts: ``q0``, the seed table nearest the target first (:mod:`.seed_table`), then uniform draws from ``rng``;
-``batch`` of them per kernel call (:func:`~evoik_pin.solvers.lm.solve_pairs`). Converged runs are sorted into
-distinct solutions (:mod:`.solution_classes`: wrapped joint distance at most ``class_radius``). A finite solution
-set returns every class found (the search stops after ``patience`` quiet batches once every class has ``min_hits``
-runs); a redundant arm returns ``count`` solutions spread over its self-motion manifolds by farthest-point
-selection among ``pool`` x ``count``. Each solution is its class's representative nearest ``q0`` (zero without
-one), re-checked (in the box, within the tolerances), nearest first. When no run converges, memetic's DE
-restarts look for one; an unreachable target gives ``success=False`` and the best approximation."""
+"""Every IK solution of one target (``memetic-all``, the default method of :func:`evoik_pin.solve_all`): batched LM
+from q0, the seed table and uniform draws, the converged runs sorted into distinct solutions
+(:mod:`.solution_classes`); every class of a finite set, ``count`` spread solutions on a redundant arm."""
 
 from __future__ import annotations
 
@@ -36,8 +29,7 @@ from .solution_classes import (
 __all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
            "goal_moving_joints", "memetic_all"]
 
-#: Default time budget (s) of one search: a safety net; the stopping rule ends most UR5 / UR10 pose searches in
-#: 1-4 ms.
+#: Default time budget (s) of one search: a safety net (the stopping rule ends most UR5 pose searches in 1-4 ms).
 DEFAULT_TIMEOUT = 0.02
 #: Default class radius (rad, wrapped joint distance): converged configurations closer than this are one solution.
 DEFAULT_CLASS_RADIUS = 1e-3
@@ -100,23 +92,15 @@ def _starts(problem: IKProblem, table, rng):
 @register("memetic-all", "Every distinct IK solution: batched Levenberg-Marquardt from q0 and the seed table "
           "(nearest first), clustered modulo 2 pi; count spread solutions on redundant arms", multi_solution=True,
           check=_check_options)
-def memetic_all(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    count: int | None = None,
-    timeout: float | None = DEFAULT_TIMEOUT,
-    max_starts: int | None = DEFAULT_MAX_STARTS,
-    batch: int = 32,
-    patience: int = 2,
-    min_hits: int = 3,
-    class_radius: float = DEFAULT_CLASS_RADIUS,
-    pool: int = 4,
-    table_size: int | None = None,
-    iterations: int = DEFAULT_ITERATIONS,
-    engine: str = "compiled",
-) -> Result:
-    """Every distinct IK solution of ``problem`` (see the module docstring), in ``Result.solutions``.
+def memetic_all(problem: IKProblem, rng: np.random.Generator, *, count: int | None = None,
+                timeout: float | None = DEFAULT_TIMEOUT, max_starts: int | None = DEFAULT_MAX_STARTS, batch: int = 32,
+                patience: int = 2, min_hits: int = 3, class_radius: float = DEFAULT_CLASS_RADIUS, pool: int = 4,
+                table_size: int | None = None, iterations: int = DEFAULT_ITERATIONS,
+                engine: str = "compiled") -> Result:
+    """Every distinct IK solution of ``problem`` (``Result.solutions``): batched LM from q0, the seed table (nearest
+    first) and uniform draws, the converged runs sorted into classes; every class of a finite set, ``count`` spread
+    by farthest-point selection on a redundant arm; each its class's representative nearest ``q0`` (re-checked,
+    nearest first). When no run converges, memetic's DE restarts look for one.
 
     Args:
         problem: the IK problem; its tolerances decide which runs converged.
@@ -164,7 +148,7 @@ def memetic_all(
     starts = _starts(problem, table, rng)
     history: dict[str, list[float]] = {"starts": [], "solutions": [], "best_cost": []}
     evaluations = started = batches = quiet = 0
-    best = (np.inf, None, np.inf, None)  # error, q, position error, orientation error
+    best = (np.inf, None)  # the lowest error (m + rad) met and its q
     fallback = ""
     while True:
         k = batch if max_starts is None else min(batch, max_starts - started)
@@ -184,8 +168,7 @@ def memetic_all(
         err = out.position_error + rot
         i = int(err.argmin())
         if err[i] < best[0]:
-            best = (float(err[i]), out.q[i].copy(), float(out.position_error[i]),
-                    None if out.orientation_error is None else float(rot[i]))
+            best = (float(err[i]), out.q[i].copy())
         Q, E, work = _rescued(problem, patient, out.q, err, out.converged)
         evaluations += work
         quiet = 0 if classes.add(Q, E) else quiet + 1
@@ -195,12 +178,9 @@ def memetic_all(
         if redundant and len(classes) >= pool * wanted:
             stop = f"{len(classes)} distinct solutions pooled"
             break
-        if not redundant and len(classes) and quiet >= patience and (
-                min(classes.hits) >= min_hits or quiet >= EMPTY_PATIENCE_FACTOR * patience):
-            stop = f"no new solution in the last {quiet} batch(es) of {batch} starts"
-            break
-        if redundant and len(classes) and quiet >= EMPTY_PATIENCE_FACTOR * patience:
-            stop = f"no new distinct solution in the last {quiet} batch(es) of {batch} starts"
+        if len(classes) and quiet >= patience and (
+                (not redundant and min(classes.hits) >= min_hits) or quiet >= EMPTY_PATIENCE_FACTOR * patience):
+            stop = f"no new {'distinct ' if redundant else ''}solution in the last {quiet} batch(es) of {batch} starts"
             break
         if not len(classes) and quiet >= EMPTY_PATIENCE_FACTOR * patience and not fallback:
             fallback = _fallback(problem, rng, classes, deadline, iterations, engine)
@@ -233,7 +213,10 @@ def memetic_all(
     if solutions:
         first = solutions[0]
         q, pos, rot, cost = first.q, first.position_error, first.orientation_error, first.cost
-        message = _message(solutions, redundant, pooled, started, stop, spread)
+        message = (f"{len(solutions)} solution(s) spread over the self-motion manifold, smallest pairwise joint "
+                   f"distance {spread:.3g} rad, chosen among {pooled} distinct converged solutions from {started} "
+                   f"LM start(s) ({stop})" if redundant
+                   else f"{len(solutions)} distinct solution(s) from {started} LM start(s) ({stop})")
         if collided:
             message += f"; {collided} solution(s) in collision left out"
     else:
@@ -311,12 +294,3 @@ def goal_moving_joints(robot, stack) -> np.ndarray:
     moving = np.zeros(robot.n, dtype=bool)
     moving[index[stack.support.any(axis=0) & (scale != 0.0)]] = True
     return moving
-
-
-def _message(solutions: list[Result], redundant: bool, pooled: int, started: int, stop: str,
-             spread: float | None) -> str:
-    if redundant:
-        return (f"{len(solutions)} solution(s) spread over the self-motion manifold, smallest pairwise joint "
-                f"distance {spread:.3g} rad, chosen among {pooled} distinct converged solutions from {started} LM "
-                f"start(s) ({stop})")
-    return f"{len(solutions)} distinct solution(s) from {started} LM start(s) ({stop})"

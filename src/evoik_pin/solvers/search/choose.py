@@ -1,12 +1,7 @@
-"""memetic over goal sets (any one of several targets) and with ``prefer="nearest" | "manipulability"`` or
-preferences: :func:`choose`.
-
-A goal set's combinations of members (:meth:`~evoik_pin.problem.IKProblem.variants`) are ranked by the table's
-nearness, then tried round by round: LM from ``q0`` and each variant's nearest entries, the variants whose last run
-came nearest first; when the table's starts are spent, memetic's search runs on the nearest variants. With
-``prefer`` other than "first", answers are collected for :data:`COLLECT_SHARE` of the budget (batches of the
-table's entries nearest each variant, for "nearest" also near q0 in joint space and drawn around it; then uniform
-starts), then the best are taken along the goals' self-motion (:mod:`.prefer`) and the best returned."""
+"""memetic over goal sets (any one of several targets) and with ``prefer`` or preferences (:func:`choose`): the
+variants (combinations of members) tried nearest the seed table first, LM from q0 and their table starts, then
+memetic's search; with ``prefer`` other than "first", answers collected for :data:`COLLECT_SHARE` of the budget, the
+best taken along the goals' self-motion (:mod:`.prefer`)."""
 
 from __future__ import annotations
 
@@ -20,7 +15,7 @@ import numpy as np
 from ...goals.stack import owned
 from ...problem import shortfall_text
 from ...result import Result
-from ..lm import LevenbergMarquardt, wrapping_joints
+from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, wrapping_joints
 from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
 from ..lm.nullspace import nullspace_kernel
 from . import memetic as memetic_module
@@ -50,15 +45,13 @@ COLLECT_SHARE = 0.6
 FINISH_SHARE = 0.1
 #: prefer="nearest" draws one start in NEAR_EVERY around q0, with these standard deviations (times each joint's
 #: half-range, at most pi) in turn.
-NEAR_SCALES = (0.1, 0.25, 0.5)
-#: prefer="nearest" ranks the seed table by pose nearness plus this times the squared joint distance to q0 (rad^2)
-#: times the table's weight squared (the term scales with the arm).
+NEAR_SCALES, NEAR_EVERY = (0.1, 0.25, 0.5), 4
+#: prefer="nearest" ranks the seed table by pose nearness plus this x the squared joint distance to q0 (rad^2) x the
+#: table's weight squared (the term scales with the arm).
 NEAR_JOINT_WEIGHT = 0.1
-NEAR_EVERY = 4
 #: LM runs per kernel call while prefer collects answers.
 COLLECT_BATCH = 16
-#: The batch on goals without a null space (UR10 on a pose), whose whole budget collects: more runs find more of
-#: the branches, of which the nearest is the answer.
+#: The batch on goals without a null space (UR10 on a pose), whose whole budget collects the branches.
 COLLECT_BATCH_BRANCHES = 32
 #: Table entries tried per variant of a goal set in the first rounds (at least).
 MIN_SEEDS_PER_VARIANT = 4
@@ -66,7 +59,7 @@ MIN_SEEDS_PER_VARIANT = 4
 
 class _Variant:
     """One combination of goal-set members (or the problem itself): its targets, its problem and LM engine (made on
-    first use), its starts, its best run."""
+    first use), its starts, its best run's rank (-1 once it met the goals)."""
 
     def __init__(self, parent, choice, pt, Rt, base_lm: LevenbergMarquardt | None, engine: str) -> None:
         self.parent, self.choice, self.pt, self.Rt = parent, choice, pt, Rt
@@ -149,7 +142,8 @@ class _TableStarts:
 def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R=None) -> list[float]:
     """Give each variant its lazy table starts and return each one's squared distance to its nearest entry (zeros
     without a table). ``joint``: the entries' weighted squared joint distances to q0 (size,), added to their pose
-    nearness (prefer="nearest", one target or goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets."""
+    nearness (prefer="nearest", one target or goal). P (V, G, 3), R (V, G, 3, 3): the variants' targets
+    (read for a goal set of one goal)."""
     if table is None:
         return [0.0] * len(variants)
     if len(variants) == 1 and one_frame(parent):  # one goal on one frame
@@ -164,8 +158,6 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
             v.starts = table.goal_starts(v.problem, k, free)
         return [float(i) for i in range(len(variants))]
     spec = table.goal_spec(parent.goals)
-    if P is None:
-        P, R = np.stack([v.pt for v in variants]), np.stack([v.Rt for v in variants])
     g = parent.goals[0]  # the table's features of the goal's frame:
     ff = table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1]))
     D, near = member_distances(table, ff, spec, P, R, joint, free)
@@ -196,7 +188,7 @@ def member_distances(table, ff, spec, P: np.ndarray, R: np.ndarray, joint=None,
 def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: float | None = None,
            max_restarts: int | None = None, population: int = 32, generations: int = 3, polish_count: int = 8,
            table_size: int | None = None, table_seeds: int | None = None, table_offset: int = 0, batch: int = 1,
-           iterations: int | None = None, engine: str = "compiled", setup=None) -> Result:
+           iterations: int = DEFAULT_ITERATIONS, engine: str = "compiled", setup=None) -> Result:
     """memetic over goal sets and with ``prefer`` / preferences (see the module docstring); memetic's options.
 
     ``timeout`` (s): default memetic's for ``prefer="first"``, :data:`~.prefer.DEFAULT_PREFER_TIMEOUT` otherwise;
@@ -209,9 +201,6 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         timeout = DEFAULT_TIMEOUT if prefer == "first" else DEFAULT_PREFER_TIMEOUT
     t_setup = time.perf_counter()
     robot = problem.robot
-    from ..lm import DEFAULT_ITERATIONS
-
-    iterations = DEFAULT_ITERATIONS if iterations is None else iterations
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, _, batch, iterations,
      engine) = check_options(timeout=timeout, max_restarts=max_restarts, population=population,
                              generations=generations, polish_count=polish_count, table_size=table_size,
@@ -235,9 +224,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     if prefer != "first" and engine == "compiled":
         nullspace_kernel()  # compiled or loaded before the clock starts
     t0 = time.perf_counter()
-    deadline = None if timeout is None else t0 + timeout
-    collect_until = None if timeout is None else t0 + COLLECT_SHARE * timeout
-    finish = None if timeout is None else t0 + (1.0 - FINISH_SHARE) * timeout  # then the answer is made
+    deadline, collect_until, finish = (None, None, None) if timeout is None else (
+        t0 + timeout, t0 + COLLECT_SHARE * timeout, t0 + (1.0 - FINISH_SHARE) * timeout)  # finish: the answer made
     redundant = has_null_space(problem)
     per_variant = table_seeds if prefer != "first" else max(MIN_SEEDS_PER_VARIANT, table_seeds // len(variants))
     joint = None
@@ -264,11 +252,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         if converged and scene is not None and scene.in_collision(out.q, problem.margin):
             converged, rejected = False, rejected + 1
         if not converged:
-            if out.rank < v.best_rank:
-                v.best_rank, v.best = out.rank, out.q
+            v.best_rank = min(v.best_rank, out.rank)
             return False
         q = nearest_turn(out.q, q0, problem.lower, problem.upper, wrap) if q0 is not None else out.q
-        v.best_rank, v.best = -1.0, q
+        v.best_rank = -1.0
         if prefer == "first" and not criterion:
             winner = (q, i, out)
             return True
@@ -299,9 +286,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                     ok[k], rejected = False, rejected + 1
         if not ok.all():
             rank = stats[~ok, S_COST] if pt.shape[0] > 1 else stats[~ok, S_POS] + stats[~ok, S_ROT]
-            j = int(np.argmin(rank))
-            if rank[j] < v.best_rank:
-                v.best_rank, v.best = float(rank[j]), Q_out[~ok][j]
+            v.best_rank = min(v.best_rank, float(rank.min()))
         if ok.any():
             A = Q_out[ok]
             if q0 is not None:
@@ -428,17 +413,12 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             winner = (q_r, best[1])
         extra = f"; {best[0].message}"
     q = np.array(winner[0])
-    chosen = None
-    members = None
-    if len(winner) > 2:
-        choice = variants[winner[1]].choice
-        members = [g if m is None else g.alternatives[m] for g, m in zip(problem.goals, choice, strict=True)]
-        if not all(g.on_one_frame for g in members):
-            members = None  # kinds whose errors the general verdict computes on its own
-    if members is not None:
-        # the first answer, met by one LM run: each goal's errors are the kernel's of that run, as memetic's are
-        goal_errors = kernel_goal_errors(members, winner[2])
-        chosen = list(choice)
+    choice = variants[winner[1]].choice
+    members = [g if m is None else g.alternatives[m] for g, m in zip(problem.goals, choice, strict=True)]
+    if len(winner) > 2 and all(g.on_one_frame for g in members):
+        # the first answer, met by one LM run: each goal's errors are the kernel's of that run, as memetic's are (other
+        # kinds' errors the general verdict computes on its own)
+        goal_errors, chosen = kernel_goal_errors(members, winner[2]), list(choice)
         within = all(g.met(*e) for g, e in zip(members, goal_errors, strict=True))
     else:
         if single:  # the errors from one LM evaluation at q (no step: the kernel's, as memetic's answers are assessed)
@@ -462,8 +442,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     if rejected:
         message += f"; {rejected} LM answer(s) reached the goals in collision"
     message += extra
-    history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1)}
-    history["answers"] = np.array([a[0] for a in answers], dtype=float)
+    history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
+               "answers": np.array([a[0] for a in answers], dtype=float)}
     return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=0,
                   evaluations=evaluations + problem.evaluations, time_s=time.perf_counter() - t0, history=history,
                   message=message, method="memetic", setup_s=t0 - t_setup, collision_free=free_q,

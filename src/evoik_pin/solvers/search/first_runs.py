@@ -1,13 +1,7 @@
-"""memetic's guaranteed LM runs in one compiled call (numba): for one target (or one goal on one frame),
-:func:`first_runs`: q0's nearness, the seed table's ranking and the runs; for a goal list of several goals,
-:func:`goal_first_runs`: the ranking, the starts composed goal by goal (:meth:`~.seed_table.SeedTable.goal_starts`,
-through the same compiled helpers of :mod:`.nearest`) and the runs. Both make the runs
-:func:`~evoik_pin.solvers.search.memetic._solve` makes whatever the clock says, in its order and with its decisions
-(q0 first when its tip pose is within the table's typical gap of the target, or nearer than the nearest entry);
-when none converges memetic goes on its own way. q0's tip pose comes from the kernel's kinematics and the distances
-are summed in the features' order, so a decision can differ from memetic's only within a few ulps:
-tests/test_first_runs.py and tests/test_goal_first_runs.py hold the answers equal.
-"""
+"""memetic's guaranteed LM runs in one compiled call (numba), in memetic's order and with its decisions: for one goal
+on one frame :func:`first_runs` (q0's nearness, the table's ranking, the runs), for a goal list :func:`goal_first_runs`
+(the ranking, :meth:`~.seed_table.SeedTable.goal_starts`' composed starts, the runs). A decision may differ from
+memetic's within a few ulps only (tests/test_first_runs.py, tests/test_goal_first_runs.py hold the answers equal)."""
 
 from __future__ import annotations
 
@@ -30,7 +24,6 @@ STAGE_Q0, STAGE_TABLE = 0, 1
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
 
 
-#: first_runs' docstring (both variants').
 _DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table entries, stopping at the first that
     converges.
 
@@ -55,8 +48,8 @@ _DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table en
 
 
 def _first_runs(extra, name):
-    """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s), a
-    constant of the closure: each variant links the one entry of its run."""
+    """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s, a
+    constant of the closure)."""
 
     def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap,
              goals, pt, Rt, params, q_out, g_out, errors, best_q, best):  # pragma: no cover - compiled
@@ -105,16 +98,13 @@ def _first_runs(extra, name):
                 for j in range(9):
                     c = f[ro + j] - sr * R[j // 3, j % 3]
                     d0 += c * c
-            if d0 > gap:  # a random guess rather than a previous solution: second unless nearer than the nearest entry
-                if ranked > 0:
-                    first = out[0]
-                    de = 0.0
-                    for j in range(D):
-                        c = f[j] - F[first, j]
-                        de += c * c
-                    q0_first = d0 <= de
-                else:
-                    q0_first = True
+            if d0 > gap and ranked > 0:  # a random guess, not a previous solution: second unless nearer than the
+                first = out[0]  # nearest entry
+                de = 0.0
+                for j in range(D):
+                    c = f[j] - F[first, j]
+                    de += c * c
+                q0_first = d0 <= de
         # the starts in memetic's order: q0 first or after the nearest entry, then the next entries (-1: q0)
         order = np.empty(table_runs + 1, dtype=np.int64)
         count = 0
@@ -149,8 +139,13 @@ def _first_runs(extra, name):
                 best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
         return -1, count, evaluations, pos, rot, cost
 
+    return _compiled(runs, name, _DOC)
+
+
+def _compiled(runs, name: str, doc: str):
+    """``runs`` compiled (numba, cached) under ``name`` with docstring ``doc``."""
     runs.__name__ = runs.__qualname__ = name
-    runs.__doc__ = _DOC
+    runs.__doc__ = doc
     return njit(cache=True, nogil=True, forceinline=False)(runs)
 
 
@@ -239,9 +234,7 @@ def _goal_first_runs(extra, name):
                 best[0], best[1], best[2], best[3], best[4], best[5] = pos, rot, cost, it, ev, s
         return -1, total, evaluations, pos, rot, cost
 
-    runs.__name__ = runs.__qualname__ = name
-    runs.__doc__ = _GOAL_DOC
-    return njit(cache=True, nogil=True, forceinline=False)(runs)
+    return _compiled(runs, name, _GOAL_DOC)
 
 
 #: memetic's first runs for goal lists of several goals, per variant of the kernel's run.

@@ -1,16 +1,7 @@
-"""Memetic IK (``memetic``, the default method): Levenberg-Marquardt from good starts, differential evolution when
-they fail. Stages, each only while the tolerances are unmet:
-
-1. **Warm start**: LM from ``q0``, first when its pose is within the table's typical spacing of the target or
-   nearer than the table's nearest entry, else right after that entry.
-2. **Seed table** (:mod:`.seed_table`): LM from the entries nearest to the target (``batch`` at a time); a goal list
-   of several goals alternates starts composed goal by goal and entries (``SeedTable.goal_starts``).
-3. **Memetic restarts** until the tolerances, ``timeout`` or ``max_restarts``: DE populations
-   (DE/current-to-best/1/bin, :mod:`evoik_pin.solvers.paper.de_ops`) whose ``polish_count`` best are polished by LM.
-
-The runs of stages 1-2 made whatever the clock says (q0's and ``GUARANTEED_TABLE_RUNS`` entries') are one compiled
-call where it serves (:mod:`.first_runs`; no scene, ``batch=1``). Every random draw comes from ``rng`` (stage 3
-only); ``timeout=None`` with ``max_restarts=k`` is fully deterministic."""
+"""Memetic IK (``memetic``, the default method): each stage only while the tolerances are unmet, (1) LM from ``q0``,
+(2) LM from the seed table's nearest entries (:mod:`.seed_table`; q0 after the nearest when farther than it), (3) DE
+populations polished by LM (:mod:`.memetic_runs`). Stages 1-2's guaranteed runs are one compiled call where it serves
+(:mod:`.first_runs`); every random draw is stage 3's, from ``rng``."""
 
 from __future__ import annotations
 
@@ -45,16 +36,12 @@ __all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticSetup", "memetic"
 
 #: Default time budget (s): TRAC-IK's default.
 DEFAULT_TIMEOUT = 0.005
-#: LM runs from the nearest seed-table entries made whatever the clock says (with the run from q0): a process
-#: descheduled past the budget still gets this minimum of useful work.
+#: LM runs from the nearest seed-table entries (and q0's) made whatever the clock says: a minimum of useful work.
 GUARANTEED_TABLE_RUNS = 4
-#: Seed-table entries tried for one frame's target with a scene: its converged answers may be rejected in collision
-#: (a bin's or a shelf's targets: most of the pose's solutions put the wrist through a wall), and the table's
-#: collision-free entries, ranked by pose, farther ones included, stay better starts than stage 3's DE draws over the
-#: box (a start is one LM run; a DE restart 3 generations of 32 and 8 LM runs from random, bound-heavy members).
+#: Seed-table entries tried for one frame's target with a scene: converged answers may be rejected in collision, and
+#: the collision-free entries, farther ones included, stay better (cheaper) starts than stage 3's DE draws.
 DEFAULT_SCENE_TABLE_SEEDS = 48
-#: LM engines (and their compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted instead of
-#: rebuilt by a solver alternating goal structures.
+#: LM engines (and compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted, not rebuilt.
 KEPT_ENGINES = 8
 #: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
 FIRST_RUNS_COMPILE_SECONDS = 5.0
@@ -62,9 +49,8 @@ FIRST_RUNS_COMPILE_SECONDS = 5.0
 
 def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
             margin: float = 0.0, kernel: bool = True) -> tuple[SeedTable | None, np.ndarray | None]:
-    """memetic's one-time work for a robot and a search box: load the compiled LM kernel (``kernel``), build the
-    cached seed table of ``table_size`` entries (0: none) and, with a scene, its collision-free mask. Returns (the
-    table or None, the mask or None)."""
+    """memetic's one-time work for a robot and a search box: the compiled LM kernel loaded (``kernel``), the cached
+    seed table of ``table_size`` entries (0: none) and, with a scene, its collision-free mask: (table, mask or None)."""
     if engine == "compiled" and kernel:
         compiled_kernel()
     table = seed_table(robot, lower, upper, table_size) if table_size > 0 else None
@@ -100,22 +86,10 @@ GOAL_SET_SEARCH: dict = {}
 
 @register("memetic", "Memetic IK: Levenberg-Marquardt on the SE(3) error from q0 and a seed table, then DE "
           "populations polished by LM until the tolerance or the time budget (default 5 ms)", check=check_options)
-def memetic(
-    problem: IKProblem,
-    rng: np.random.Generator,
-    *,
-    timeout: float | None = DEFAULT_TIMEOUT,
-    max_restarts: int | None = None,
-    population: int = 32,
-    generations: int = 3,
-    polish_count: int = 8,
-    table_size: int | None = None,
-    table_seeds: int | None = None,
-    table_offset: int = 0,
-    batch: int = 1,
-    iterations: int = DEFAULT_ITERATIONS,
-    engine: str = "compiled",
-) -> Result:
+def memetic(problem: IKProblem, rng: np.random.Generator, *, timeout: float | None = DEFAULT_TIMEOUT,
+            max_restarts: int | None = None, population: int = 32, generations: int = 3, polish_count: int = 8,
+            table_size: int | None = None, table_seeds: int | None = None, table_offset: int = 0, batch: int = 1,
+            iterations: int = DEFAULT_ITERATIONS, engine: str = "compiled") -> Result:
     """Solve ``problem`` with LM from q0 and the seed table, then DE populations polished by LM.
 
     Args:
@@ -145,35 +119,6 @@ def memetic(
                          engine=engine)
     return setup.solve(problem, rng, t_setup)
 
-
-
-def _load_variant(lm: LevenbergMarquardt, which: str, what: str, args: tuple) -> tuple[object, float]:
-    """The compiled first runs ``which`` (``"first_runs"`` or ``"goal_first_runs"``, :mod:`.first_runs`) in the
-    variant of ``lm``'s kernel, and the seconds spent loading it: the first time in the process it is compiled (once
-    per install, with a notice naming ``what``) or loaded from numba's cache, on ``args`` (the caller makes the runs
-    again: they only write args' buffers)."""
-    t = time.perf_counter()
-    from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
-
-    extra = later_kinds(lm.goals)  # the variant of the engine's kernel
-    function = getattr(compiled, which if extra else which + "_basic")
-    if function in _LOADED:
-        return function, 0.0
-    load(f"memetic's {what} for " + ("every goal kind" if extra else "pose, position and planar goals"),
-         [(function, args)], FIRST_RUNS_COMPILE_SECONDS)
-    _LOADED.append(function)
-    return function, time.perf_counter() - t
-
-
-def _entry_point(function, args: tuple):
-    """numba's compiled entry of ``function`` for ``args``' types, called directly from then on (without numba's
-    typing of every argument); ``function`` itself on a numba without overloads' entry points."""
-    from numba import typeof
-
-    try:
-        return function.overloads[tuple(typeof(a) for a in args)].entry_point
-    except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
-        return function
 
 class MemeticSetup:
     """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve: the seed table
@@ -230,38 +175,48 @@ class MemeticSetup:
         self._engines = [lm, *self._engines[:KEPT_ENGINES - 1]]
         return lm
 
-    def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
-        """(:func:`~.first_runs.first_runs` on ``args``, the seconds spent loading it: set-up). From the setup's second
-        solve on, the compiled entry is called directly (found once per engine arguments and table), without numba's
-        typing of every argument."""
-        kept_args, kept_table, entry = self._entry
-        if entry is not None and kept_args is lm._args and kept_table is table:
-            return entry(*args), 0.0
-        for kept in self._entries:  # an engine used before (a solver alternating goal stacks)
-            if kept[0] is lm._args and kept[1] is table:
-                self._entry = kept
-                return kept[2](*args), 0.0
-        first_runs, loading = _load_variant(lm, "first_runs", "first runs", args)
-        if kept_table is not None:  # not this setup's first solve: it is kept
-            entry = _entry_point(first_runs, args)
-        self._entry = (lm._args, table, entry)
-        if entry is not None and entry is not first_runs:  # a compiled entry found (not on the setup's first solve)
-            self._entries = [self._entry, *self._entries[:KEPT_ENGINES - 1]]
-        return first_runs(*args), loading
+    def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable,
+                   goal_list: bool = False) -> tuple[tuple, float]:
+        """(:func:`~.first_runs.first_runs`, or with ``goal_list`` :func:`~.first_runs.goal_first_runs`, in the
+        variant of ``lm``'s kernel, on ``args``; the seconds spent loading it: set-up). The first time in the process
+        it is compiled (once per install, with a notice) or loaded from numba's cache. Once the engine's arguments stay
+        (from the setup's second solve on; a goal list's engine owning its arrays), numba's compiled entry is kept per
+        engine arguments and table (the last ``KEPT_ENGINES``) and called directly, without typing every argument."""
+        kept = self._goal_entries if goal_list else self._entries
+        current = self._entry
+        if not goal_list and current[2] is not None and current[0] is lm._args and current[1] is table:
+            return current[2](*args), 0.0
+        for i, entry in enumerate(kept):
+            if entry[0] is lm._args and entry[1] is table:
+                kept.insert(0, kept.pop(i))  # by index: list.remove compares the entries' arrays (ValueError)
+                if not goal_list:
+                    self._entry = entry
+                return entry[2](*args), 0.0
+        t = time.perf_counter()
+        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
 
-    def goal_first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable) -> tuple[tuple, float]:
-        """:meth:`first_runs` for :func:`~.first_runs.goal_first_runs` (a goal list of several goals)."""
-        entries = self._goal_entries
-        for i, kept in enumerate(entries):
-            if kept[0] is lm._args and kept[1] is table:
-                if i:  # by index: list.remove compares the entries' arrays (ValueError)
-                    entries.insert(0, entries.pop(i))
-                return kept[2](*args), 0.0
-        goal_first_runs, loading = _load_variant(lm, "goal_first_runs", "first runs of goal lists", args)
-        out = goal_first_runs(*args)
-        if lm._owned:  # the engine's arrays are its own (its second problem on): its arguments stay, keep the entry
-            self._goal_entries = [(lm._args, table, _entry_point(goal_first_runs, args)), *entries[:KEPT_ENGINES - 1]]
-        return out, loading
+        extra = later_kinds(lm.goals)  # the variant of the engine's kernel
+        which = "goal_first_runs" if goal_list else "first_runs"
+        function, loading = getattr(compiled, which if extra else which + "_basic"), 0.0
+        if function not in _LOADED:
+            load(f"memetic's first runs{' of goal lists' if goal_list else ''} for "
+                 + ("every goal kind" if extra else "pose, position and planar goals"),
+                 [(function, args)], FIRST_RUNS_COMPILE_SECONDS)  # the runs made again below: args' buffers only
+            _LOADED.append(function)
+            loading = time.perf_counter() - t
+        entry = None
+        if lm._owned if goal_list else current[1] is not None:
+            from numba import typeof
+
+            try:
+                entry = function.overloads[tuple(typeof(a) for a in args)].entry_point
+            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
+                entry = function
+        if not goal_list:
+            self._entry = (lm._args, table, entry)
+        if entry is not None and entry is not function:  # a compiled entry found
+            kept[:] = [(lm._args, table, entry), *kept[:KEPT_ENGINES - 1]]
+        return function(*args), loading
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` with the setup's options; ``t_setup``: when the call began (``perf_counter``;
@@ -362,9 +317,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         if search.best is None:  # no q0 and no table: start from the box centre
             solved = search.polish(0.5 * (problem.lower + problem.upper))
         cost = problem.assess(search.best.q, search.best.position_error, search.best.orientation_error)[2]
-        history["best_cost"].append(cost)
-        history["mean_cost"].append(cost)
-        history["diversity"].append(0.0)
+        history.update(best_cost=[cost], mean_cost=[cost], diversity=[0.0])
         wrap = wrapping_joints(robot, problem.lower, problem.upper)
         while not solved and not search.out_of_time() and (max_restarts is None or restarts < max_restarts):
             stage = "memetic restarts"
@@ -381,9 +334,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         else problem.goal_errors(q))
     pos, rot, cost = problem.summary(q, goal_errors)
     if not history["best_cost"]:
-        history["best_cost"].append(cost)
-        history["mean_cost"].append(cost)
-        history["diversity"].append(0.0)
+        history.update(best_cost=[cost], mean_cost=[cost], diversity=[0.0])
     within = problem.goals_met(goal_errors)
     success = within and (problem.scene is None or search.best.converged)  # a rejected answer collides
     if success:
@@ -397,15 +348,13 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         message += (f"; {search.rejected} LM answer(s) reached the target in collision, the last at "
                     f"{pairs_text(search.rejected_pairs)}")
     history["attempt_error"] = search.attempt_errors
-    return Result(
-        q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(success), generations=n_gen,
-        evaluations=search.evaluations + problem.evaluations, time_s=time.perf_counter() - t0,
-        history={k: np.asarray(v, dtype=float) for k, v in history.items()}, message=message, method="memetic",
-        setup_s=setup_s,
-        # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
-        collision_free=True if problem.scene is not None and search.best.converged else None,
-        goal_errors=problem.reported(goal_errors),
-    )
+    # with a scene, a converged best passed the exact check in _keep (a rejected one is no longer converged)
+    return Result(q=q.copy(), position_error=pos, orientation_error=rot, cost=cost, success=bool(success),
+                  generations=n_gen, evaluations=search.evaluations + problem.evaluations,
+                  time_s=time.perf_counter() - t0, history={k: np.asarray(v, dtype=float) for k, v in history.items()},
+                  message=message, method="memetic", setup_s=setup_s,
+                  collision_free=True if problem.scene is not None and search.best.converged else None,
+                  goal_errors=problem.reported(goal_errors))
 
 
 _LOADED: list = []  # the compiled variants of first_runs and goal_first_runs loaded in this process
@@ -438,13 +387,8 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
     # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
-    goal_errors = [problem.goals[0].reported(pos, rot)]
-    pos, rot, cost = problem.summary(q_out, goal_errors)
-    if not problem.goals_met(goal_errors):
-        return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
-    return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
-                             time.perf_counter() - t0 - loading, setup_s + loading, problem.reported(goal_errors)
-                             ), loading, None
+    return _first_runs_answer(problem, q_out, [problem.goals[0].reported(pos, rot)], stage, runs, evaluations, errors,
+                              t0, setup_s, loading)
 
 
 def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
@@ -461,39 +405,45 @@ def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, 
         base_mode, base = (BASE_EACH_ENTRY, _NO_BASE) if found is None else (BASE_FROM_GOAL, found)
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
-    n = problem.n
-    G = len(goals)
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
-    q_out = np.empty(n)
+    q_out, g_out, best_g = np.empty(problem.n), np.empty((len(goals), 2)), np.empty((len(goals), 2))
     errors, _, zeros, best_q, best = setup._scratch
-    g_out, best_g = np.empty((G, 2)), np.empty((G, 2))
-    (stage, runs, evaluations, pos, rot, cost), loading = setup.goal_first_runs(
+    (stage, runs, evaluations, pos, rot, cost), loading = setup.first_runs(
         (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, table.Q, *layout[:8],
          table.weight, np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float), *layout[8:],
          base, base_mode, _EVERY, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best,
-         best_g), lm, table)
+         best_g), lm, table, goal_list=True)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them (ranked by
-        # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank)
-        runs_, evaluations_, errs, kept, _ = resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
-        kept.goal_errors = best_g
-        return None, loading, (runs_, evaluations_, errs, kept, runs - (q0 is not None))
+        # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank), the starts after q0's made
+        return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, runs - (q0 is not None), best_g)
     # the goals' errors: the kernel's at q_out where they are Goal.errors' (as _solve's), tested again
     goal_errors = ([g.reported(p, r) for g, (p, r) in zip(goals, g_out.tolist(), strict=True)]
                    if all(g.on_one_frame for g in goals) else problem.goal_errors(q_out))
-    pos, rot, cost = problem.goal_summary(goal_errors)
+    return _first_runs_answer(problem, q_out, goal_errors, stage, runs, evaluations, errors, t0, setup_s, loading)
+
+
+def _first_runs_answer(problem: IKProblem, q: np.ndarray, goal_errors: list, stage: int, runs: int, evaluations: int,
+                       errors: np.ndarray, t0: float, setup_s: float, loading: float) -> tuple:
+    """(:func:`first_runs_result` when the converged run's ``goal_errors`` meet the problem's tolerances, else None
+    (converged by the kernel's test but not by the problem's: _solve says why); ``loading``; None)."""
+    pos, rot, cost = problem.summary(q, goal_errors)
     if not problem.goals_met(goal_errors):
-        return None, loading, None  # converged by the kernel's test but not by the problem's: _solve says why
-    return first_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
-                             time.perf_counter() - t0 - loading, setup_s + loading, goal_errors), loading, None
+        return None, loading, None
+    return first_runs_result(q, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
+                             time.perf_counter() - t0 - loading, setup_s + loading, problem.reported(goal_errors)
+                             ), loading, None
 
 
-def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, table_runs: int) -> tuple:
+def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, made: int,
+                  goal_errors: np.ndarray | None = None) -> tuple:
     """The state :func:`_solve` goes on from after compiled first runs none of which converged, read from the setup's
-    scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome, the table entries run)."""
+    scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome (its ``goal_errors`` (G, 2)
+    for several goals), the table's starts ``made``)."""
     errors, _, _, best_q, best = setup._scratch
     b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
-    kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), None, b_cost)
-    return runs, evaluations, errors[:runs].tolist(), kept, table_runs
+    kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), goal_errors,
+                     b_cost)
+    return runs, evaluations, errors[:runs].tolist(), kept, made
 
 
 def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float, stage: int, runs: int,
@@ -503,9 +453,7 @@ def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float,
     ``stage`` (STAGE_Q0 or STAGE_TABLE), ``runs`` made, ``errors`` (>= runs,) each run's error (m + rad)."""
     history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
                "attempt_error": errors[:runs].copy()}
-    return Result(
-        q=q, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
-        evaluations=evaluations, time_s=time_s, history=history,
-        message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM run(s), 0 "
-                "restart(s))",
-        method="memetic", setup_s=setup_s, goal_errors=goal_errors)
+    return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,
+                  evaluations=evaluations, time_s=time_s, history=history, method="memetic", setup_s=setup_s,
+                  message=f"tolerance reached by LM from {'q0' if stage == _FROM_Q0 else 'seed table'} ({runs} LM "
+                          "run(s), 0 restart(s))", goal_errors=goal_errors)

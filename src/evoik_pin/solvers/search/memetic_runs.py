@@ -31,18 +31,12 @@ class LMRuns:
     ``perf_counter``; the first ``guaranteed`` runs are made whatever it says)."""
 
     def __init__(self, problem: IKProblem, lm: LevenbergMarquardt, deadline: float | None, iterations: int,
-                 batch: int = 1, guaranteed: int = 0) -> None:
-        self.problem = problem
-        self.guaranteed = guaranteed  # LM runs made whatever the clock says
-        self.batch = batch
-        self.lm = lm
-        self.deadline = deadline
-        self.iterations = iterations
+                 batch: int, guaranteed: int) -> None:
+        self.problem, self.scene, self.lm, self.deadline = problem, problem.scene, lm, deadline
+        self.iterations, self.batch, self.guaranteed = iterations, batch, guaranteed
         self.best: LMOutcome | None = None
-        self.evaluations = 0
-        self.attempts = 0
+        self.evaluations = self.attempts = 0
         self.attempt_errors: list[float] = []
-        self.scene = problem.scene
         self.rejected = 0  # converged LM answers rejected by the scene's exact check
         self.rejected_pairs: list[tuple[str, str]] = []  # the pairs in contact at the last one
 
@@ -72,9 +66,9 @@ class LMRuns:
             self.best = out
         return out.converged
 
-    def polish(self, q: np.ndarray, iterations: int | None = None) -> bool:
+    def polish(self, q: np.ndarray) -> bool:
         """One LM run from ``q`` (n,); keeps the best outcome; True when it meets the tolerances."""
-        return self._keep(self.lm.run(q, iterations or self.iterations, self._deadline()), 1)
+        return self._keep(self.lm.run(q, self.iterations, self._deadline()), 1)
 
     def polish_many(self, starts) -> bool:
         """LM runs from ``starts`` (an iterable of (n,) configurations, drawn lazily) in order, ``batch`` per engine
@@ -91,7 +85,6 @@ class LMRuns:
                 solved = self._keep(out, k + 1 if out.converged else len(chunk))
             if solved:
                 return True
-        return False  # pragma: no cover - the loop returns
 
 
 def de_restart(problem, rng, search: LMRuns, population: int, generations: int, polish_count: int,

@@ -12,15 +12,13 @@ __all__ = ["goal_target_features", "nearest_per_goal", "rank_goal_entries", "see
            "table_distances", "table_distances32", "table_distances_many"]
 
 
-#: select_k keeps the k smallest by insertion up to this k, above by a stable sort (faster for a whole table).
-_SORT_FROM = 64
+_SORT_FROM = 64  # select_k: by insertion up to this k, above by a stable sort (faster for a whole table)
 
 
 @njit(cache=True, nogil=True, forceinline=False)
 def select_k(d, allowed, k, out):  # pragma: no cover - compiled
     """Write into ``out[:m]`` the indices of the ``m = min(k, allowed entries)`` smallest of ``d`` (N,), smallest first
-    (ties: the lower index first); returns m. ``allowed``: (N,) bool, or (0,) for every entry; ``out``: (>= k,) int64.
-    By insertion up to ``_SORT_FROM`` kept, else by one stable sort: the same order."""
+    (ties: the lower index first); returns m. ``allowed``: (N,) bool, or (0,) for every entry; ``out`` (>= k,) int64."""
     if k > _SORT_FROM:
         return _select_sorted(d, allowed, k, out)
     return select_few(d, allowed, k, out)
@@ -40,8 +38,7 @@ def _select_sorted(d, allowed, k, out):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True, forceinline=False)
 def select_few(d, allowed, k, out):  # pragma: no cover - compiled
-    """:func:`select_k` by insertion in one pass over d (a function of its own: the sort's arrays beside it slowed this
-    loop by a third)."""
+    """:func:`select_k` by insertion in one pass over d (apart: the sort's arrays beside it slowed this loop)."""
     N = d.shape[0]
     if k <= 0:
         return 0
@@ -102,28 +99,10 @@ def table_distances32(FT, sq, f, d):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True, forceinline=False, fastmath={"contract"})
 def table_distances_many(FT, sq, f, D):  # pragma: no cover - compiled
-    """:func:`table_distances32` of V targets: D (V, N) float32 for features f (V, D) (compiled: OpenBLAS's threads
-    on a busy machine took 15 ms for this product)."""
+    """:func:`table_distances32` of V targets: D (V, N) float32 for features f (V, D) (OpenBLAS's threads on a busy
+    machine took 15 ms for this product)."""
     for v in range(f.shape[0]):
         table_distances32(FT, sq, f[v], D[v])
-
-
-@njit(cache=True, nogil=True, forceinline=False)
-def nearest_per_goal(FT, sq, start, scale, positioned, oriented, weight, pt, Rt, allowed, k, out):  # pragma: no cover
-    """Per goal g, the ``k`` table entries nearest its target by the goal's own features, nearest first (ties: the
-    lower index first), into ``out[g]`` (G, >= k) int64: :meth:`~.seed_table.SeedTable.goal_starts`' composed starts.
-    FT (D, N) float32: the goals' features transposed, goal g's rows from ``start[g]``; sq (G, N) float32; the other
-    arguments as :func:`goal_target_features` reads them; allowed (N,) bool or (0,); k <= the allowed entries."""
-    d = np.empty(FT.shape[1], dtype=np.float32)
-    f = np.empty(12, dtype=np.float32)
-    for g in range(pt.shape[0]):
-        D = goal_target_features(scale[g:g + 1], positioned[g:g + 1], oriented[g:g + 1], weight, pt[g:g + 1],
-                                 Rt[g:g + 1], f)
-        if D == 0:  # a goal without a position or an orientation to match: every entry as near
-            d[:] = 0.0
-        else:
-            table_distances32(FT[start[g]:start[g] + D], sq[g], f[:D], d)
-        select_k(d, allowed, k, out[g])
 
 
 @njit(cache=True, nogil=True, forceinline=False)
@@ -162,6 +141,17 @@ def rank_goal_entries(FT, sq, scale, positioned, oriented, weight, pt, Rt, allow
     else:
         table_distances32(FT, sq, f[:D], d)
     return select_k(d, allowed, k, out)
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def nearest_per_goal(FT, sq, start, scale, positioned, oriented, weight, pt, Rt, allowed, k, out):  # pragma: no cover
+    """Per goal g, the ``k`` table entries nearest its target by the goal's own features, nearest first (ties: the
+    lower index first), into ``out[g]`` (G, >= k) int64: :meth:`~.seed_table.SeedTable.goal_starts`' composed starts.
+    FT (D, N) float32: the goals' features transposed, goal g's rows from ``start[g]``; sq (G, N) float32; the other
+    arguments as :func:`goal_target_features` reads them; allowed (N,) bool or (0,); k <= the allowed entries."""
+    for g in range(pt.shape[0]):  # each goal ranked alone (a goal without features: every entry as near)
+        rank_goal_entries(FT[start[g]:start[g + 1]], sq[g], scale[g:g + 1], positioned[g:g + 1], oriented[g:g + 1],
+                          weight, pt[g:g + 1], Rt[g:g + 1], allowed, k, out[g])
 
 
 @njit(cache=True, nogil=True, forceinline=False)

@@ -1,10 +1,7 @@
-"""Taking answers along the goals' self-motion: ``prefer="nearest" | "manipulability"`` (TRAC-IK's Distance and
-Manip1) and preferences (:mod:`evoik_pin.goals.preferences`) summed into one :class:`Criterion`, lowered in the
-null space of the goals' Jacobian by :func:`refine` (Python: projected steps, each restored onto the goals by LM and
-kept only when every goal is met and the criterion improved) or by the compiled descent (:func:`descend`, prefer
-alone on the compiled engine). Nearness is ``|q - q0|`` with full-turn joints taken to their turn nearest ``q0``
-inside the box (:func:`nearest_turn`).
-"""
+"""Taking answers along the goals' self-motion: ``prefer="nearest" | "manipulability"`` (TRAC-IK's Distance and Manip1)
+and preferences summed into one :class:`Criterion`, lowered in the goals' null space by :func:`refine` (projected steps
+restored by LM) or the compiled :func:`descend`. Nearness is ``|q - q0|``, full-turn joints taken to their turn nearest
+``q0`` inside the box (:func:`nearest_turn`)."""
 
 from __future__ import annotations
 
@@ -25,8 +22,7 @@ __all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bin
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
-#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead, a fifth of
-#: TRAC-IK's 5 ms Distance / Manip1 modes.
+#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead.
 DEFAULT_PREFER_TIMEOUT = 0.0007
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4
@@ -102,9 +98,9 @@ class Criterion:
             total += g
         return total
 
-    def null_gradient(self, q: np.ndarray, N: np.ndarray, f: float) -> np.ndarray:
+    def null_gradient(self, q: np.ndarray, N: np.ndarray) -> np.ndarray:
         """The cost's gradient in the null-space basis ``N`` (r, n) (orthonormal rows): analytic terms exactly,
-        the others (manipulability) by forward differences along each basis vector (``f``: the cost at q)."""
+        the others (manipulability) by forward differences along each basis vector."""
         c = np.zeros(N.shape[0])
         numeric = []
         for t in self.terms:
@@ -196,7 +192,7 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
             N = _null_basis(E)
             if N.shape[0] == 0:
                 break
-            proj = N.T @ criterion.null_gradient(q, N, f)
+            proj = N.T @ criterion.null_gradient(q, N)
         norm = float(np.linalg.norm(proj))
         if norm < 1e-12:
             break
@@ -221,15 +217,10 @@ def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
     if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
         return None
     lm = variants[0].lm
-    if lm._tree[4].shape[0] != lm.n or _mimic(lm):  # mimic joints: the descent leaves answers as they are
+    index, scale, offset = lm._tree[4:7]  # mimic joints (the tree's joints coupled to q): the descent leaves answers
+    if index.shape[0] != lm.n or np.any(index != np.arange(lm.n)) or np.any(scale != 1.0) or np.any(offset != 0.0):
         return None
     return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
-
-
-def _mimic(lm: LevenbergMarquardt) -> bool:
-    """Whether the engine's tree couples physical joints to q (mimic joints; ``Robot.tree_constants``)."""
-    index, scale, offset = lm._tree[4:7]
-    return bool(np.any(index != np.arange(index.shape[0])) or np.any(scale != 1.0) or np.any(offset != 0.0))
 
 
 def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,

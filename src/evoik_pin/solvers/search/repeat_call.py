@@ -1,14 +1,7 @@
-"""An :class:`~evoik_pin.IKSolver`'s per-call path for problems its memetic set-up solved before: memetic's compiled
-first runs (:mod:`.first_runs`) with nothing around them but the target's and q0's checks and the Result.
-
-It serves a tip pose or position target, or a goal list of one goal on one frame bound to one goal stack
-(:func:`~.seed_table.one_frame`), in the search box, tolerances and objective of the problem it was made from:
-the target is written into its engine's own arrays and the compiled entry called with the arguments it keeps. The
-answer is the general path's (the same call on the same numbers; ``setup_s`` 0); when no first run converges, its
-state goes to :meth:`~.memetic.MemeticSetup.resume`. A goal set of one goal bound to the same stack
-(:meth:`RepeatCall.solve_set`) is served member by member, the nearest the seed table first, as the goal-set search
-would choose them. It serves the thread that made it.
-"""
+"""An :class:`~evoik_pin.IKSolver`'s per-call path (:class:`RepeatCall`) for problems its memetic set-up solved
+before: memetic's compiled first runs (:mod:`.first_runs`) on the engine's own target arrays, with nothing around them
+but the checks and the Result; the general path's answer, and when no first run converges its state goes on in
+:meth:`~.memetic.MemeticSetup.resume`."""
 
 from __future__ import annotations
 
@@ -27,13 +20,14 @@ from .seed_table import DEFAULT_TABLE_SEEDS, one_frame
 __all__ = ["SET_MEMBERS", "RepeatCall"]
 
 #: A goal set's members tried on the compiled first runs (the nearest the seed table first) before the goal-set search
-#: takes the set over: as many as that search's last stage takes (its nearest variants). Panda's sets of 3 reachable
-#: grasps of 10: 11 % of them went on to the search with 1 member tried, 1 % with 3.
+#: takes the set over: as many as that search's last stage takes (its nearest variants).
 SET_MEMBERS = 3
 
 
 class RepeatCall:
-    """The per-call path of one :class:`~.memetic.MemeticSetup` for problems like the one it was made from.
+    """The per-call path of one :class:`~.memetic.MemeticSetup` for problems like the one it was made from: a tip
+    pose or position target, or a one-goal list on one frame bound to its goal stack, in that problem's box, tolerances
+    and objective; in the thread that made it.
 
     Args:
         setup: the memetic setup. problem: a problem the setup has just solved through the compiled first runs (no
@@ -49,7 +43,7 @@ class RepeatCall:
         """A path for problems like ``problem``, which the setup has just solved; None when such problems do not take
         the compiled first runs (a scene, a planar target, several goals, a goal set, options that change the first
         runs), when the compiled entry is not known yet, or while the engine's target arrays are not its own."""
-        (_, _, _, _, _, table_size, table_seeds, table_offset, batch, _, engine) = setup.options
+        table_size, table_seeds, table_offset, batch, _, engine = setup.options[5:]
         lm, table = setup._lm, setup._table
         args, kept_table, entry = setup._entry
         if not (memetic.FIRST_RUNS and problem.scene is None and engine == "compiled" and batch == 1
@@ -71,22 +65,16 @@ class RepeatCall:
         self._summary, self._goal_list = problem.summary, problem.target is None
         self._reports = (goal.has_position, goal.reports_angle, goal.tolerance, goal.rotation_tolerance)
         self._ranking = (table, ff, table.goal_spec(problem.goals))
-        options = setup.options
-        self._iterations = options[9]
-        self._lm = lm
-        self._args = lm._args
+        self._iterations, table_seeds = setup.options[9], setup.options[6]
+        self._lm, self._args, self._entry, self._n = lm, lm._args, entry, problem.n
         self._pt, self._Rt = lm._pt[0], lm._Rt[0]  # (3,) and (3, 3) views of the engine's own target arrays
-        buffers, args, params = lm.kernel_arguments(self._iterations)
-        self._params = params
-        lower, upper = setup._bounds
+        buffers, args, self._params = lm.kernel_arguments(self._iterations)
         self._errors, self._g_out, self._zeros, self._best_q, self._best = setup._scratch
         self._head = tuple(buffers)
-        table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if options[6] is None else options[6])
-        self._box = (lower, upper, ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args,
-                     params)
-        self._entry = entry
+        table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if table_seeds is None else table_seeds)
+        self._box = (*setup._bounds, ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args,
+                     self._params)
         self._thread = threading.get_ident()
-        self._n = problem.n
 
     def usable(self) -> bool:
         """Whether the engine's arguments still hold, in the thread that made the path."""

@@ -1,9 +1,6 @@
-"""The seed table: configurations spread over a search box (a deterministic Halton sequence) with their frames'
-poses, ranked by nearness to a target or a goal list; one per robot and box (:func:`seed_table`, cached).
-
-Nearness is ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` (``w``: a quarter of the arm's reach, m per unit of Frobenius
-distance), summed over a goal list's goals with each goal's weight; position and planar targets use their own
-features."""
+"""The seed table (:func:`seed_table`, cached per robot and box): Halton configurations over a search box with their
+frames' poses, ranked by nearness ``|p - p_t|^2 + w^2 |R - R_t|_F^2`` (``w``: a quarter of the arm's reach, m) to a
+target, or summed with the goals' weights over a goal list; position and planar targets use their own features."""
 
 from __future__ import annotations
 
@@ -26,8 +23,7 @@ __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
 DEFAULT_TABLE_SEEDS = 17
-#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`): on whole robots a start
-#: (an LM run) costs far less than a DE generation.
+#: Starts tried for a goal list before memetic's DE restarts (:meth:`SeedTable.goal_starts`; far cheaper than DE).
 DEFAULT_GOAL_TABLE_SEEDS = 48
 #: Target kinds a seed table serves, each with its own nearness features.
 _KIND_KEYS = {KIND_POSE: "pose", KIND_POSITION: "position", KIND_PLANAR: "planar", KIND_PLANAR_YAW: "planar_yaw"}
@@ -74,8 +70,7 @@ class SeedTable:
     def __init__(self, robot, lower: np.ndarray, upper: np.ndarray, size: int) -> None:
         # Halton point 0 is the box's lower corner (often a singular, limit-bound pose): skip it.
         self.Q = lower + halton(robot.n, size, skip=1) * (upper - lower)
-        if size:  # the last entry: every joint at 0 clipped into the box, a humanoid URDF's upright stance (random
-            # entries rarely stand: a stance's starts composed from them alone needed dozens of LM runs on G1)
+        if size:  # the last entry: every joint at 0 clipped into the box, a humanoid URDF's upright stance
             self.Q[-1] = np.minimum(np.maximum(0.0, lower), upper)
         self.positions, self.rotations = robot.fk_batch(self.Q, validate=False)
         self._robot = weakref.proxy(robot)  # for the goal frames' poses (a table never outlives its robot's cache)
@@ -108,7 +103,7 @@ class SeedTable:
                 spec = ((sp, bool(oriented)) + (() if positioned else (False,)),)
                 F, sq = self.goal_table_features((frame,), spec)
                 shape = (spec[0][0], spec[0][0] * self.weight, bool(positioned), bool(oriented), False)
-                if len(self._frames) > 12:
+                if len(self._frames) > 12:  # the goal frames' go, the kinds' stay
                     self._frames = {k: v for k, v in self._frames.items() if isinstance(k, str)}
             hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
         return hit
@@ -160,11 +155,8 @@ class SeedTable:
         if kept is None:
             F = np.concatenate([self.Q[:, ~wrap], np.cos(self.Q[:, wrap]), np.sin(self.Q[:, wrap])], axis=1)
             kept = self._joint_features[key] = (F, np.einsum("ij,ij->i", F, F))
-        F, sq = kept
         f = np.concatenate([q0[~wrap], np.cos(q0[wrap]), np.sin(q0[wrap])])
-        d = F @ f
-        d *= -2.0
-        d += sq
+        d = _less_norm(*kept, f)
         d += f @ f
         return d
 
@@ -172,10 +164,7 @@ class SeedTable:
         """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of
         :meth:`frame_features` ``key`` (or of those features)."""
         ff = key if isinstance(key, FrameFeatures) else self.frame_features(key)
-        d = ff.F @ f  # sq - 2 F f, in place: the same numbers (negation is exact), two fewer (size,) arrays
-        d *= -2.0
-        d += ff.sq
-        return d
+        return _less_norm(ff.F, ff.sq, f)
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): nearest in the goals' weighted summed nearness, each
@@ -241,11 +230,7 @@ class SeedTable:
                 if fixed is None or (j > 0 and fixed.shape[1] == 1):
                     fixed = self._nearest_per_goal(problem.goals, parts, pt, Rt, 1 if j == 0 else k, allowed)
                 picks = fixed[:, j] if j < fixed.shape[1] else None
-            entry = self.Q[row]
-            if base is not None:
-                entry = entry.copy()
-                entry[:6] = base
-            out = [entry]
+            out = [q.copy()]  # the entry (its base set), before the picks compose q
             if picks is not None:
                 for (_, _, idx), e in zip(parts, picks, strict=True):
                     q[idx] = self.Q[e, idx]
@@ -285,14 +270,12 @@ class SeedTable:
             hit = []
             for g, goal in enumerate(goals):
                 spec = self.goal_spec(goals)[g:g + 1]
-                F = np.concatenate(self._goal_feature_blocks(spec, P[:, g][None], R[:, g][None]), axis=1)
+                F = self.goal_features(spec, P[:, g:g + 1], R[:, g:g + 1])
                 seeded = goal.kind < KIND_BEYOND_FRAME or _anchor(goal, goals) is not None
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
                 hit.append((np.ascontiguousarray(F), (F * F).sum(axis=1), idx))
-            if len(self._goal_features) > 8:
-                self._goal_features.clear()
-            self._goal_features[key] = hit
+            _kept(self._goal_features, key, hit)
         return hit
 
     def _nearest_per_goal(self, goals, parts, pt: np.ndarray, Rt: np.ndarray, k: int,
@@ -330,12 +313,10 @@ class SeedTable:
             oriented = np.array([bool(e[1]) for e in spec])
             idx = np.concatenate([np.zeros(0, dtype=np.int64)] + [i.astype(np.int64) for _, _, i in parts])
             idx_start = np.cumsum([0] + [i.size for _, _, i in parts]).astype(np.int64)
-            if len(self._stacked) > 8:
-                self._stacked.clear()
             # single precision for the rankings (nearest.table_distances32): a start's order only
-            hit = self._stacked[key] = (parts, (FT.astype(np.float32), sq_rank.astype(np.float32),
-                                                PT.astype(np.float32), sq.astype(np.float32), start, scale, positioned,
-                                                oriented, idx, idx_start))
+            hit = _kept(self._stacked, key, (parts, (FT.astype(np.float32), sq_rank.astype(np.float32),
+                                                     PT.astype(np.float32), sq.astype(np.float32), start, scale,
+                                                     positioned, oriented, idx, idx_start)))
         return hit[1]
 
     def goal_table_features(self, frames, spec) -> tuple[np.ndarray, np.ndarray]:
@@ -346,9 +327,7 @@ class SeedTable:
         if hit is None:
             P, R = self._robot.fk_batch(self.Q, validate=False, frames=list(frames))
             F = self.goal_features(spec, P, R)
-            if len(self._goal_features) > 8:
-                self._goal_features.clear()
-            hit = self._goal_features[key] = (np.ascontiguousarray(F), (F * F).sum(axis=1))
+            hit = _kept(self._goal_features, key, (np.ascontiguousarray(F), (F * F).sum(axis=1)))
         return hit
 
     @staticmethod
@@ -358,17 +337,13 @@ class SeedTable:
         return tuple((float(np.sqrt(g.weight)) if g.kind < KIND_BEYOND_FRAME or _anchor(g, goals) is not None
                       else 0.0, bool(g.has_orientation)) + (() if g.has_position else (False,)) for g in goals)
 
-    def _goal_feature_blocks(self, spec, P: np.ndarray, R: np.ndarray) -> list[np.ndarray]:
-        """Per goal g, the features (N, 3 or 12) of frame poses P[g] (N, 3) m, R[g] (N, 3, 3) (``spec``:
-        :meth:`goal_spec`): sqrt(weight) x the position, then x ``self.weight`` the rotation's entries."""
-        out = [_pose_rows(e[0], e[0] * self.weight, len(e) < 3 or e[2], e[1], False, P[g], R[g])
-               for g, e in enumerate(spec)]
-        # pointing goals alone: no feature ranks the entries (all equally near)
-        return [b for b in out if b.shape[1]] or [np.zeros((len(P[0]), 1))]
-
     def goal_features(self, spec, P: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Features (N, d) of N poses of G goal frames, P (N, G, 3) m, R (N, G, 3, 3) (``spec``: :meth:`goal_spec`)."""
-        return np.concatenate(self._goal_feature_blocks(spec, P.transpose(1, 0, 2), R.transpose(1, 0, 2, 3)), axis=1)
+        """Features (N, d) of N poses of G goal frames, P (N, G, 3) m, R (N, G, 3, 3) (``spec``: :meth:`goal_spec`):
+        per goal sqrt(weight) x its frame's position, then x ``self.weight`` its rotation's entries; one zero column
+        when no goal has any (pointing goals alone: every entry as near)."""
+        blocks = [_pose_rows(e[0], e[0] * self.weight, len(e) < 3 or e[2], e[1], False, P[:, g], R[:, g])
+                  for g, e in enumerate(spec)]
+        return np.concatenate([b for b in blocks if b.shape[1]] or [np.zeros((P.shape[0], 1))], axis=1)
 
     def free_mask(self, scene, margin: float) -> np.ndarray:
         """(size,) bool: the entries collision-free in ``scene`` at ``margin`` m by their convex-hull proxies
@@ -376,18 +351,14 @@ class SeedTable:
         key = (id(scene), scene.version, float(margin))
         hit = self._free.get(key)
         if hit is None or hit[0]() is not scene:
-            if len(self._free) > 8:
-                self._free.clear()
-            hit = self._free[key] = (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True))
+            hit = _kept(self._free, key, (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True)))
         return hit[1]
 
     def features32(self, ff: FrameFeatures) -> tuple[np.ndarray, np.ndarray]:
         """``ff``'s FT and sq in single precision (cached), for a goal set's ranking."""
         hit = self._frames32.get(id(ff.FT))
         if hit is None or hit[0] is not ff.FT:
-            if len(self._frames32) > 8:
-                self._frames32.clear()
-            hit = self._frames32[id(ff.FT)] = (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32))
+            hit = _kept(self._frames32, id(ff.FT), (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32)))
         return hit[1], hit[2]
 
     def nearest(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
@@ -402,9 +373,7 @@ class SeedTable:
             from scipy.spatial import cKDTree
 
             index = np.arange(self.Q.shape[0]) if allowed is None else np.nonzero(allowed)[0]
-            if len(self._trees) > 16:
-                self._trees.clear()
-            hit = self._trees[tree_key] = (cKDTree(self.frame_features(key).F[index]), index)
+            hit = _kept(self._trees, tree_key, (cKDTree(self.frame_features(key).F[index]), index), 16)
         tree, index = hit
         k = min(k, tree.n)
         N = f.shape[0]
@@ -434,6 +403,23 @@ def load_goal_helpers() -> None:
                             np.empty((1, 1), dtype=np.int64))),
         (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))], RANKING_COMPILE_SECONDS)
     _GOAL_HELPERS_LOADED.append(True)
+
+
+def _kept(cache: dict, key, value, most: int = 8):
+    """``value``, stored in ``cache`` under ``key`` (the cache emptied first when it holds more than ``most``)."""
+    if len(cache) > most:
+        cache.clear()
+    cache[key] = value
+    return value
+
+
+def _less_norm(F: np.ndarray, sq: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """``sq - 2 F f`` (N,): the squared distances of rows F (N, d), squared norms sq (N,), to f (d,) less ``|f|^2``;
+    in place (negation is exact: the same numbers as the formula, two fewer (N,) arrays)."""
+    d = F @ f
+    d *= -2.0
+    d += sq
+    return d
 
 
 def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:

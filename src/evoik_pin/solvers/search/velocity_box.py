@@ -1,10 +1,6 @@
 """One solve inside a velocity box ``[q_prev - step, q_prev + step]`` (``step = v_max dt``, rad or m) clipped to the
-bounds: a trajectory's step a robot can follow, or a tracking loop's. Wrapping joints are not clipped (crossing
-+-pi is a small step). LM from ``q_prev`` inside the box (the kernel holds the box exactly); when it misses, LM in
-the full bounds finds the answer nearest ``q_prev``, and its share inside the box, it clipped and a few random
-starts in the box run there: the best wins. An unmet target gets the closest answer and ``success=False``, never a
-jump. With a scene, an answer in collision is pulled back towards ``q_prev`` (bisection) and is not a success. The
-engines are kept per goal stack, their box and targets written in place every call."""
+bounds, wrapping joints unclipped (:class:`VelocityBoxStage`): a step a robot can follow, never a jump; the closest
+answer inside the box when the goals are unmet there."""
 
 from __future__ import annotations
 
@@ -24,8 +20,7 @@ __all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
 EXTRA_STARTS = 4
 #: LM steps per run: the box is small, the warm start close.
 BOX_ITERATIONS = 30
-#: LM's initial damping in the box (the engine's default: 1e-2): the warm start is one control step from the answer,
-#: where Gauss-Newton's full steps converge.
+#: LM's initial damping in the box (the engine's default: 1e-2): the warm start is a control step from the answer.
 BOX_DAMPING = 1e-6
 #: Bisection steps pulling a colliding answer back towards q_prev (2^-8 of the segment).
 COLLISION_BISECTIONS = 8
@@ -34,15 +29,14 @@ _KEPT = 8
 
 
 class VelocityBoxStage:
-    """Levenberg-Marquardt inside a per-call box, one engine per goal stack kept from call to call.
+    """Levenberg-Marquardt inside a per-call box, one engine per goal stack kept from call to call, its box and targets
+    written in place every call.
 
     Args:
-        robot: the :class:`~evoik_pin.Robot` the problems are of.
-        extra_starts: starts drawn inside the box when the run from ``q_prev`` does not meet the goals."""
+        robot: the :class:`~evoik_pin.Robot` the problems are of."""
 
-    def __init__(self, robot, extra_starts: int = EXTRA_STARTS) -> None:
+    def __init__(self, robot) -> None:
         self.robot = robot
-        self.extra_starts = int(extra_starts)
         self._engines: dict = {}  # id(goal stack) -> (stack, engine)
         self._wrap_for = None  # (lower, upper) arrays the wrap mask is of
         self._wrap = np.zeros(robot.n, dtype=bool)
@@ -82,12 +76,14 @@ class VelocityBoxStage:
         engine.set_targets(pt, Rt)
         return engine
 
-    def solve(self, problem, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None,
-              method: str = "velocity-box") -> Result:
+    def solve(self, problem, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None) -> Result:
         """The answer to ``problem`` (an :class:`~evoik_pin.IKProblem`: its goals or target, tolerances, bounds and
-        scene) inside the velocity box of ``q_prev`` (n,) and ``step`` (n,) (rad or m); ``rng`` draws the extra
-        starts (None: none drawn). A :class:`Result` whose ``q`` is inside the box, ``success`` when every goal
-        is met (and the answer collision-free, with a scene)."""
+        scene) inside the velocity box of ``q_prev`` (n,) and ``step`` (n,) (rad or m): LM from ``q_prev``; when it
+        misses, LM in the full bounds, its share inside the box, it clipped and :data:`EXTRA_STARTS` drawn by ``rng``
+        (None: none) run in the box, the best winning. With a scene an answer in collision is pulled back towards
+        ``q_prev``.
+        A :class:`Result` whose ``q`` is inside the box, ``success`` when every goal is met (and, with a scene, the
+        answer collision-free)."""
         t0 = time.perf_counter()
         lo, hi = self.box(q_prev, step, problem.lower, problem.upper)
         engine = self._engine(problem)
@@ -110,8 +106,8 @@ class VelocityBoxStage:
             else:
                 share = float(np.min(np.where(np.abs(move) > 0.0, step / np.maximum(np.abs(move), 1e-300), np.inf)))
                 starts = [q_prev + min(1.0, share) * move, np.minimum(np.maximum(reach, lo), hi)]
-                if self.extra_starts > 0 and rng is not None:
-                    starts.extend(lo + (hi - lo) * rng.random((self.extra_starts, self.robot.n)))
+                if rng is not None:
+                    starts.extend(lo + (hi - lo) * rng.random((EXTRA_STARTS, self.robot.n)))
                 more, _ = engine.run_many(np.array(starts), BOX_ITERATIONS)
                 evaluations += more.evaluations
                 runs += len(starts)
@@ -141,7 +137,8 @@ class VelocityBoxStage:
             message += "; the goals are not met within the velocity box (the answer closest to them inside it)"
         return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
                       cost=float(cost), success=success, generations=0, evaluations=int(evaluations),
-                      time_s=time.perf_counter() - t0, message=message, method=method, collision_free=collision_free,
+                      time_s=time.perf_counter() - t0, message=message, method="velocity-box",
+                      collision_free=collision_free,
                       goal_errors=problem.reported(goal_errors), chosen=problem.reported(chosen))
 
 
