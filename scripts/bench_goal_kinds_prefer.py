@@ -29,7 +29,9 @@ independently the same way; seeds fixed):
    plus Gaussian noise (``--near-sigma``, 0.1 rad by default, per joint) clipped into the limits; ``--q0 both``:
    both, one row each. ``--trac-eps 1e-6`` holds TRAC-IK to the accuracy our answers are held to: with its own 1e-5,
    near a singularity its answer can be nearer q0 than every exact solution of the pose (on UR arms, whose closed
-   form lists them all), a distance no answer exact to 1e-6 can match.
+   form lists them all), a distance no answer exact to 1e-6 can match. Beside each share, the share counting only
+   the misses against TRAC-IK answers LM takes to an exact solution (where one nearer than ours, or more dexterous,
+   exists).
 2. Goal sets on each arm of ``--robots``: 10 grasps of which 3 are reachable (forward kinematics of random
    configurations) and 7 are not (positions 1.2 to 1.6 m from the base for Panda, the original protocol; for the
    other arms 1.1 to 1.5 times the arm's reach, the largest tip distance from the base over 4000 random
