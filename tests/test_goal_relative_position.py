@@ -70,7 +70,7 @@ def test_reported_errors_are_pinocchios(baxter, seed, expressed_in, p):
     Q = baxter.random_configurations(4, np.random.default_rng(seed))
     expected = [float(np.linalg.norm(direct(baxter, goal, q))) for q in Q]
     problem = IKProblem(baxter, [goal])
-    pos, rot = problem._goal_population_errors(Q)
+    pos, rot, _ = problem._goal_population_members(Q)
     assert np.allclose(pos[:, 0], expected, atol=1e-12, rtol=0) and not rot.any()
     for q, want in zip(Q, expected, strict=True):
         assert goal.robot_errors(baxter, q) == (pytest.approx(want, abs=1e-12), None)

@@ -225,7 +225,7 @@ def test_population_violations_follow_the_goals_errors(talos, rng):
     problem = IKProblem(talos, goals)
     q0 = np.zeros(talos.n)
     Q = np.clip(q0 + 0.3 * rng.standard_normal((12, talos.n)), talos.lower, talos.upper)
-    pos, rot = problem._goal_population_errors(Q)
+    pos, rot, _ = problem._goal_population_members(Q)
     ev = problem.evaluate(Q)
     assert np.allclose(ev.position_error, pos.max(axis=1)) and ev.orientation_error is not None
     for q, p, r in zip(Q, pos, rot, strict=True):
