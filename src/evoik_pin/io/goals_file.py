@@ -24,7 +24,7 @@ from ..goals import Goal, bind, is_goal_list
 from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, number, unknown_keys
 from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from ..goals.registry import kind_classes
-from .datafile import data_format, read_data, write_data
+from .datafile import data_format, naming, read_mapping, write_data
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
 
@@ -124,10 +124,8 @@ def _goal(entry, what: str) -> Goal:
                if key in entry}
     if several and kind.set_member is not None:
         read = [kind.set_member(t) for t in read]
-    try:
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError)):
         return (kind.cls if several else kind.make or kind.cls)(frame, read if several else read[0], **options)
-    except (OptionError, TargetError, GoalsFileError) as exc:
-        raise GoalsFileError(f"{what}: {exc}") from None
 
 
 def _preference(entry: dict, what: str, kind_name: str):
@@ -160,10 +158,8 @@ def _preference(entry: dict, what: str, kind_name: str):
         args["q_ref"] = args.pop("q_ref") if "q_ref" in args else args.pop("joints")
     if kind_name == "joint_limit_margin" and "margin" not in args:
         raise GoalsFileError(f"{what}: a joint_limit_margin needs margin (rad or m)")
-    try:
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError, ValueError)):
         return cls(**args)
-    except (OptionError, TargetError, ValueError) as exc:
-        raise GoalsFileError(f"{what}: {exc}") from None
 
 
 def _goal_list(entries, what: str, several: bool) -> list[Goal]:
@@ -180,16 +176,8 @@ def read_goals_file(path: str | os.PathLike) -> GoalsFile:
     """Everything a goals file holds, checked (frames only by :meth:`GoalsFile.bind`); GoalsFileError."""
     path = Path(os.fspath(path)).expanduser()
     where = f"goals file {str(path)!r}"
-    data = read_data(path, where, GoalsFileError)
-    if data is None:
-        raise GoalsFileError(f"{where}: the file is empty; expected a goals: list (or problems:)")
-    if isinstance(data, list):
-        data = {"goals": data}
-    if not isinstance(data, dict):
-        raise GoalsFileError(f"{where}: the top level must be a mapping ({', '.join(_TOP_KEYS)}) or a list of "
-                             f"goals, got a {type(data).__name__}")
-    try:
-        unknown_keys(data, _TOP_KEYS, "top level")
+    data = read_mapping(path, where, GoalsFileError, _TOP_KEYS, "a goals: list (or problems:)", list_key="goals")
+    with naming(where, GoalsFileError):
         robot = data.get("robot")
         if robot is not None and (not isinstance(robot, str) or not robot):
             raise GoalsFileError(f"robot must be a robot name or URDF path, got {robot!r}")
@@ -211,8 +199,6 @@ def read_goals_file(path: str | os.PathLike) -> GoalsFile:
             problems = [_goal_list(goals, f"problem {p}", True) for p, goals in enumerate(problems)]
         else:
             problems = [_goal_list(data["goals"], "goals", False)]
-    except GoalsFileError as exc:
-        raise GoalsFileError(f"{where}: {exc}") from None
     return GoalsFile(path, robot, floating_base, tips, problems, several)
 
 

@@ -14,6 +14,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, SceneError
+from ..io.datafile import naming
 from ..io.scene_file import read_scene, write_scene
 from .geometry import as_placement, convex_hulls, robot_collision_model, self_collision_pairs
 
@@ -144,15 +145,11 @@ class Scene:
         """A scene of ``robot`` read from a YAML or JSON scene file (format: :mod:`evoik_pin.io.scene_file`), checked
         whole before the scene is built; SceneError naming the file, the obstacle and the problem."""
         spec = read_scene(path)
-        try:
+        with naming(f"scene file {str(spec.path)!r}", SceneError):
             scene = cls(robot, self_collision=spec.self_collision, srdf=spec.srdf)
             for k, (name, kind, kw, pose) in enumerate(spec.obstacles):
-                try:
+                with naming(f"obstacle {k} ({name!r})", SceneError):
                     getattr(scene, f"add_{kind}")(name, pose=pose, **kw)
-                except SceneError as exc:
-                    raise SceneError(f"obstacle {k} ({name!r}): {exc}") from None
-        except SceneError as exc:
-            raise SceneError(f"scene file {str(spec.path)!r}: {exc}") from None
         return scene
 
     def to_file(self, path: str | os.PathLike) -> Path:
