@@ -439,8 +439,8 @@ def _goals_arg(args: argparse.Namespace):
 def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
     """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of ``goal_rows``);
     with a scene, the verdict of the exact mesh check on the answer too."""
-    if scene is not None:  # distinct pairs: a link with several collision shapes counts once
-        pairs = [list(p) for p in dict.fromkeys(scene.colliding_pairs(res.q, margin))]
+    if scene is not None:
+        pairs = [list(p) for p in scene.colliding_pairs(res.q, margin)]  # each pair of names once
         info.update(scene=str(args.scene), margin_m=margin, collision_free=bool(res.collision_free),
                     min_distance_m=float(res.min_distance), colliding_pairs=pairs)
     if args.json:
@@ -507,7 +507,6 @@ def _cmd_view(args: argparse.Namespace) -> int:
         pairs = viewer.show(q, scene=scene)
         viewer.show_target(robot.fk(q))
         if scene is not None:
-            pairs = list(dict.fromkeys(pairs))
             print(f"collision-free: {'no' if pairs else 'yes'} (scene {args.scene}"
                   + (f"; in collision: {', '.join(f'{a} - {b}' for a, b in pairs)})" if pairs else ")"), flush=True)
         if args.no_block:  # the server stops when we return: the file is what stays

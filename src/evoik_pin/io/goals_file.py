@@ -50,22 +50,14 @@ class GoalsFile:
             try:
                 bind(robot, goals)
             except (FrameError, TargetError) as exc:
-                where = self._where(p)
+                where = f"goals file {str(self.path)!r}" + (f": problem {p}" if self.several else "")
                 for i, g in enumerate(goals):  # the goal that fails alone, when one does (a clash needs two)
                     try:
                         bind(robot, [g])
                     except (FrameError, TargetError):
-                        where = self._where(p, i, g.frame)
+                        where += f"{',' if self.several else ':'} goal {i}" + (f" ({g.frame})" if g.frame else "")
                         break
                 raise GoalsFileError(f"{where}: {exc}") from None
-
-    def _where(self, problem: int | None = None, index: int | None = None, frame: str | None = None) -> str:
-        text = f"goals file {str(self.path)!r}"
-        if self.several and problem is not None:
-            text += f": problem {problem}"
-        if index is not None:
-            text += f"{',' if self.several else ':'} goal {index}" + (f" ({frame})" if frame else "")
-        return text
 
 
 # ------------------------------------------------------------------ reading
