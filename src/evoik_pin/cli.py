@@ -72,9 +72,7 @@ def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
     q = np.asarray(values, dtype=float)
     if rad:
         return q
-    if q.shape == (robot.n,):
-        return np.where(robot.revolute, np.radians(q), q)
-    return np.radians(q)
+    return np.where(robot.revolute, np.radians(q), q) if q.shape == (robot.n,) else np.radians(q)
 
 
 def _locked_values(robot, items: list[str], rad: bool) -> dict[str, float]:
@@ -104,16 +102,12 @@ def _q_flag(args: argparse.Namespace, robot) -> np.ndarray:
 
 # ------------------------------------------------------------------ the options of the wrapped Python calls
 #: Option of the Python call (``solve``, ``solve_all``, ``reachability_map``; the shared problem options; the
-#: methods' common options) -> the named flag that sets it. Every other method option: ``--option NAME=VALUE``.
-CALL_FLAGS = {
-    "method": "--method", "seed": "--seed", "tolerance": "--tolerance", "rotation_tolerance": "--rotation-tolerance",
-    "q0": "--q0", "bounds": "--lower/--upper", "orientation_weight": "--orientation-weight",
-    "pose_metric": "--pose-metric", "scene": "--scene", "margin": "--margin", "polish": "--polish",
-    "population": "--population", "max_generations": "--max-generations", "timeout": "--timeout", "count": "--count",
-    "voxel": "--voxel", "orientations": "--orientations", "backend": "--backend", "workers": "--workers",
-    "address": "--address", "progress": "--no-progress", "batch_size": "--batch-size",
-    "prefer": "--prefer", "locked": "--locked",
-}
+#: methods' common options) -> the named flag that sets it: its name in kebab case, but for two. Every other method
+#: option: ``--option NAME=VALUE``.
+CALL_FLAGS = {**{name: "--" + name.replace("_", "-") for name in (
+    "method", "seed", "tolerance", "rotation_tolerance", "q0", "orientation_weight", "pose_metric", "scene", "margin",
+    "polish", "population", "max_generations", "timeout", "count", "voxel", "orientations", "backend", "workers",
+    "address", "batch_size", "prefer", "locked")}, "bounds": "--lower/--upper", "progress": "--no-progress"}
 #: Options of ``solve``'s methods that no command-line value expresses, and why.
 NOT_ON_CLI = {"objective": "a Python callable objective(Q, kin) -> (N,) costs",
               "callback": "a Python callable called every generation",
@@ -249,9 +243,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         return 0
     what = f"tip {robot.tip!r}" if args.frame is None else f"frame {args.frame!r}"
     print(f"{robot.name}: {robot.n} joints, base {robot.base!r} -> {what}")
-    unit = "rad" if args.rad else "deg"
-    shown = _shown(robot, q, args.rad)
-    print(f"q ({unit}):        " + " ".join(f"{v:.4f}" for v in shown))
+    print(f"q ({'rad' if args.rad else 'deg'}):        " + " ".join(f"{v:.4f}" for v in _shown(robot, q, args.rad)))
     print("position (m):   " + " ".join(f"{v:.6f}" for v in info["position_m"]))
     print("rpy (deg):      " + " ".join(f"{np.degrees(v):.4f}" for v in info["rpy_rad"]))
     print("rotation:\n" + "\n".join("  " + " ".join(f"{v:+.6f}" for v in row) for row in info["rotation"]))
@@ -368,11 +360,10 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        unit = "rad" if args.rad else "deg"
         print(f"{robot.name} ({robot.n} joints), method {info['method']}: {found} in {res.time_s * 1e3:.2f} ms "
               f"({sols.message})")
         if sols:
-            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+            print(f"  #  q ({'rad' if args.rad else 'deg'}): {' '.join(robot.joint_names)}")
         for k, s in enumerate(sols):
             if goal_list:
                 rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
