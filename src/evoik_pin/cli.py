@@ -15,6 +15,7 @@ import warnings
 import numpy as np
 
 from .errors import ConfigurationError, EvoikError, GoalsFileError, OptionError, RobotLoadWarning
+from .io.datafile import naming
 from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS, load_robot
 
 
@@ -94,10 +95,8 @@ def _shown(robot, q: np.ndarray, rad: bool) -> np.ndarray:
 
 def _q_flag(args: argparse.Namespace, robot) -> np.ndarray:
     """The joint vector (n,) of ``--q`` in rad and m (zeros without it); a ConfigurationError naming ``--q``."""
-    try:
+    with naming("--q", ConfigurationError):
         return robot.check_q(_joint_values(robot, args.q, args.rad)) if args.q else np.zeros(robot.n)
-    except ConfigurationError as exc:
-        raise ConfigurationError(f"--q: {exc}") from None
 
 
 # ------------------------------------------------------------------ the options of the wrapped Python calls
@@ -283,7 +282,6 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     res = solve(robot, target, method=method, seed=args.seed, **options)
     info = {"robot": robot.name, "method": res.method or method, "success": bool(res.success),
             "message": res.message, "joint_names": list(robot.joint_names), **_q_fields(robot, res.q)}
-    rows = None
     if goals_file is None:
         reached = robot.fk(res.q)
         info.update(target_position_m=[float(v) for v in position],
@@ -293,13 +291,13 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         target = Target.coerce(target)
     else:
         target = [g for g in target if isinstance(g, Goal)]  # the preferences have no errors to show
-        rows = [_goal_row(res, i, goal, *errors) for i, (goal, errors) in enumerate(zip(target, res.goal_errors,
-                                                                                          strict=True))]
         info.update(floating_base=robot.floating_base, goals_file=str(args.goals),
-                    q_pinocchio=[float(v) for v in robot.full_configuration(res.q)], goal_errors=rows)
+                    q_pinocchio=[float(v) for v in robot.full_configuration(res.q)],
+                    goal_errors=[_goal_row(res, i, g, *e) for i, (g, e) in enumerate(zip(target, res.goal_errors,
+                                                                                         strict=True))])
     info.update(position_error_m=res.position_error, orientation_error_rad=res.orientation_error, cost=res.cost,
                 generations=res.generations, evaluations=res.evaluations, time_s=res.time_s, seed=args.seed)
-    _report(args, robot, res, info, scene, margin, rows)
+    _report(args, robot, res, info, scene, margin)
     if html is not None or args.view:
         _view_solution(robot, res, target, html, args.view, scene=scene, margin=margin)
     return 0 if res.success else 1
@@ -427,9 +425,9 @@ def _goals_arg(args: argparse.Namespace):
     return goals_file
 
 
-def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
-    """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of ``goal_rows``);
-    with a scene, the verdict of the exact mesh check on the answer too."""
+def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float) -> None:
+    """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of its
+    ``goal_errors``); with a scene, the verdict of the exact mesh check on the answer too."""
     if scene is not None:
         pairs = [list(p) for p in scene.colliding_pairs(res.q, margin)]  # each pair of names once
         info.update(scene=str(args.scene), margin_m=margin, collision_free=bool(res.collision_free),
@@ -447,8 +445,8 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
     print(f"generations:          {res.generations}")
     print(f"evaluations:          {res.evaluations}")
     print(f"time:                 {res.time_s * 1e3:.2f} ms")
-    if goal_rows is not None:
-        _print_goal_errors(goal_rows)
+    if "goal_errors" in info:
+        _print_goal_errors(info["goal_errors"])
     if scene is not None:
         where = f"scene {info['scene']}" + (f", margin {margin:g} m" if margin > 0 else "")
         print(f"collision-free: {'yes' if res.collision_free else 'no'} (min distance "

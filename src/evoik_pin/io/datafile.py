@@ -97,9 +97,7 @@ def write_data(path: Path, data, header: str, what: str, error: type[Exception])
     else:
         import yaml
 
-        class Dumper(yaml.SafeDumper):
-            pass
-
+        Dumper = type("Dumper", (yaml.SafeDumper,), {})  # a representer of its own, not SafeDumper's
         Dumper.add_representer(Flow, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True))
         text = header + yaml.dump(data, Dumper=Dumper, sort_keys=False, default_flow_style=None)
     try:

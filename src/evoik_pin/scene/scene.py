@@ -189,10 +189,8 @@ class Scene:
             self._margin[id(gdata)] = margin
 
     def _q(self, q) -> np.ndarray:
-        try:
+        with naming("scene query", ConfigurationError):
             q = self.robot.check_q(q)
-        except ConfigurationError as exc:
-            raise ConfigurationError(f"scene query: {exc}") from None
         return self.robot.to_pinocchio(q)
 
     def _check(self, q_pin: np.ndarray, margin: float, hulls: bool, stop_at_first: bool) -> bool:
