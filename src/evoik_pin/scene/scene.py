@@ -16,7 +16,7 @@ import pinocchio as pin
 from ..errors import ConfigurationError, SceneError
 from ..io.datafile import naming
 from ..io.scene_file import read_scene, write_scene
-from .geometry import as_placement, convex_hulls, robot_collision_model, self_collision_pairs
+from .geometry import as_placement, convex_hulls, obstacle_model, robot_collision_model, self_collision_pairs
 
 __all__ = ["Obstacle", "Scene"]
 
@@ -166,11 +166,9 @@ class Scene:
 
     def _build(self) -> None:
         """(Re)build the exact and the hull geometry models with every pair to check."""
-        geom, base = self._robot_geom.copy(), self.robot.base_placement
-        self._names = list(self._obstacles)
-        for name in self._names:  # base frame -> the model's world frame
-            geom.addGeometryObject(pin.GeometryObject(name, 0, 0, base * self._obstacles[name].pose,
-                                                      self._obstacles[name].shape))
+        geom, self._names = self._robot_geom.copy(), list(self._obstacles)
+        for obj in obstacle_model(self).geometryObjects:
+            geom.addGeometryObject(obj)
         n_robot = self._robot_geom.ngeoms
         self._pairs = [*self._self_pairs, *((i, n_robot + k) for i in self._moving for k in range(len(self._names)))]
         geom.removeAllCollisionPairs()
