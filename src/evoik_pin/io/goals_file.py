@@ -125,9 +125,7 @@ def _preference(entry: dict, what: str, kind_name: str):
     cls, fields = PREFERENCE_KINDS[kind_name]
     unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
     args = {}
-    for key in fields:
-        if key not in entry:
-            continue
+    for key in (k for k in fields if k in entry):
         value = entry[key]
         if key == "q_ref":
             if not isinstance(value, list):
