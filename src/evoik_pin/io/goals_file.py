@@ -158,8 +158,7 @@ def _goal_list(entries, what: str, several: bool) -> list[Goal]:
         raise GoalsFileError(f"{what}: {key} must be a list of goals (frame, kind, target), got {entries!r}")
     if not entries:
         raise GoalsFileError(f"{what}: {key} is empty; give at least one goal (frame, kind, target)")
-    sep = ", " if several else ": "
-    return [_goal(entry, f"{what}{sep}goal {i}" if several else f"goal {i}") for i, entry in enumerate(entries)]
+    return [_goal(entry, f"{what}, goal {i}" if several else f"goal {i}") for i, entry in enumerate(entries)]
 
 
 def read_goals_file(path: str | os.PathLike) -> GoalsFile:
