@@ -15,26 +15,8 @@ import warnings
 import numpy as np
 
 from .errors import ConfigurationError, EvoikError, GoalsFileError, OptionError, RobotLoadWarning
+from .io.datafile import naming
 from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS, load_robot
-
-
-def _add_robot_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("robot", help="bundled or example-robot-data name, or a URDF or xacro path")
-    p.add_argument("--tip", help="tip frame (default: the arm's tool frame)")
-    p.add_argument("--base", help="base frame (default: the URDF root)")
-    p.add_argument("--tips", nargs="+", metavar="FRAME", help="frames whose chains from the base are the active "
-                   "joints (their union), e.g. both grippers of a dual-arm robot; 'all' for every joint (what whole "
-                   "robots loaded by name get by default)")
-    p.add_argument("--floating-base", action="store_true", help="put a free-flying root in front of the URDF's "
-                   "root link: six more joints at the front of q (x, y, z in m; yaw, pitch, roll), poses in the world")
-    p.add_argument("--xacro-arg", action="append", default=[], metavar="NAME=VALUE",
-                   help="a <xacro:arg> value of a xacro file (repeatable); NAME:=VALUE also works")
-    p.add_argument("--package-dir", action="append", default=[], metavar="DIR",
-                   help="a folder holding the ROS packages a robot file names ($(find pkg), package://pkg/...), "
-                        "searched before ROS_PACKAGE_PATH and the file's own tree (repeatable)")
-    p.add_argument("--package-alias", action="append", default=[], metavar="NAME=SHIPPED_AS",
-                   help="a package the robot file names that is shipped under another name, e.g. "
-                        "abb_irb140=abb_irb140_description (repeatable)")
 
 
 def _load(args: argparse.Namespace, goals_file=None):
@@ -91,9 +73,7 @@ def _joint_values(robot, values: list[float], rad: bool) -> np.ndarray:
     q = np.asarray(values, dtype=float)
     if rad:
         return q
-    if q.shape == (robot.n,):
-        return np.where(robot.revolute, np.radians(q), q)
-    return np.radians(q)
+    return np.where(robot.revolute, np.radians(q), q) if q.shape == (robot.n,) else np.radians(q)
 
 
 def _locked_values(robot, items: list[str], rad: bool) -> dict[str, float]:
@@ -113,26 +93,20 @@ def _shown(robot, q: np.ndarray, rad: bool) -> np.ndarray:
     return q if rad else np.where(robot.revolute, np.degrees(q), q)
 
 
-def _joint_flag(robot, values: list[float], rad: bool, flag: str) -> np.ndarray:
-    """The joint vector of ``flag`` (e.g. ``--q``) in rad; a ConfigurationError that names the flag."""
-    try:
-        return robot.check_q(_joint_values(robot, values, rad))
-    except ConfigurationError as exc:
-        raise ConfigurationError(f"{flag}: {exc}") from None
+def _q_flag(args: argparse.Namespace, robot) -> np.ndarray:
+    """The joint vector (n,) of ``--q`` in rad and m (zeros without it); a ConfigurationError naming ``--q``."""
+    with naming("--q", ConfigurationError):
+        return robot.check_q(_joint_values(robot, args.q, args.rad)) if args.q else np.zeros(robot.n)
 
 
 # ------------------------------------------------------------------ the options of the wrapped Python calls
 #: Option of the Python call (``solve``, ``solve_all``, ``reachability_map``; the shared problem options; the
-#: methods' common options) -> the named flag that sets it. Every other method option: ``--option NAME=VALUE``.
-CALL_FLAGS = {
-    "method": "--method", "seed": "--seed", "tolerance": "--tolerance", "rotation_tolerance": "--rotation-tolerance",
-    "q0": "--q0", "bounds": "--lower/--upper", "orientation_weight": "--orientation-weight",
-    "pose_metric": "--pose-metric", "scene": "--scene", "margin": "--margin", "polish": "--polish",
-    "population": "--population", "max_generations": "--max-generations", "timeout": "--timeout", "count": "--count",
-    "voxel": "--voxel", "orientations": "--orientations", "backend": "--backend", "workers": "--workers",
-    "address": "--address", "progress": "--no-progress", "batch_size": "--batch-size",
-    "prefer": "--prefer", "locked": "--locked",
-}
+#: methods' common options) -> the named flag that sets it: its name in kebab case, but for two. Every other method
+#: option: ``--option NAME=VALUE``.
+CALL_FLAGS = {**{name: "--" + name.replace("_", "-") for name in (
+    "method", "seed", "tolerance", "rotation_tolerance", "q0", "orientation_weight", "pose_metric", "scene", "margin",
+    "polish", "population", "max_generations", "timeout", "count", "voxel", "orientations", "backend", "workers",
+    "address", "batch_size", "prefer", "locked")}, "bounds": "--lower/--upper", "progress": "--no-progress"}
 #: Options of ``solve``'s methods that no command-line value expresses, and why.
 NOT_ON_CLI = {"objective": "a Python callable objective(Q, kin) -> (N,) costs",
               "callback": "a Python callable called every generation",
@@ -160,27 +134,6 @@ def _seconds(text: str) -> float | str:
         return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected seconds or 'none', got {text!r}") from None
-
-
-def _add_problem_args(p: argparse.ArgumentParser, q0: bool = True) -> None:
-    """The flags of the problem options every method takes (``tolerance``, ... ``pose_metric``; ``q0`` and the
-    bounds when ``q0``) and ``--option NAME=VALUE`` for any method option."""
-    p.add_argument("--tolerance", type=float, help="success threshold: position error in m (and orientation "
-                   "error in rad for pose targets); default 1e-6")
-    p.add_argument("--rotation-tolerance", type=float, metavar="RAD",
-                   help="success threshold on the orientation error in rad (default: --tolerance)")
-    p.add_argument("--orientation-weight", type=float, metavar="M_PER_RAD",
-                   help="m per rad of orientation error in the pose cost (default 1)")
-    p.add_argument("--pose-metric", help="how the pose cost combines the errors: sum (default) or euclidean")
-    if q0:
-        p.add_argument("--q0", type=float, nargs="+", help=f"initial configuration ({_JOINT_UNITS})")
-        for bound in ("lower", "upper"):
-            p.add_argument(f"--{bound}", type=float, nargs="+", metavar="Q",
-                           help=f"{bound} joint bounds of the search ({_JOINT_UNITS}; default the robot's)")
-    p.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
-                   help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
-                   "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
-                   "--option strategy=rand1bin --option max_restarts=4")
 
 
 def _dest(flag: str) -> str:
@@ -279,7 +232,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
     import pinocchio as pin
 
     robot = _load(args)
-    q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
+    q = _q_flag(args, robot)
     T = robot.fk(q, frame=args.frame)
     info = {"robot": robot.name, "tip": robot.tip, "frame": args.frame or robot.tip, "base": robot.base,
             "q_rad": [float(v) for v in q], "position_m": [float(v) for v in T.translation],
@@ -289,9 +242,7 @@ def _cmd_fk(args: argparse.Namespace) -> int:
         return 0
     what = f"tip {robot.tip!r}" if args.frame is None else f"frame {args.frame!r}"
     print(f"{robot.name}: {robot.n} joints, base {robot.base!r} -> {what}")
-    unit = "rad" if args.rad else "deg"
-    shown = _shown(robot, q, args.rad)
-    print(f"q ({unit}):        " + " ".join(f"{v:.4f}" for v in shown))
+    print(f"q ({'rad' if args.rad else 'deg'}):        " + " ".join(f"{v:.4f}" for v in _shown(robot, q, args.rad)))
     print("position (m):   " + " ".join(f"{v:.6f}" for v in info["position_m"]))
     print("rpy (deg):      " + " ".join(f"{np.degrees(v):.4f}" for v in info["rpy_rad"]))
     print("rotation:\n" + "\n".join("  " + " ".join(f"{v:+.6f}" for v in row) for row in info["rotation"]))
@@ -331,7 +282,6 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     res = solve(robot, target, method=method, seed=args.seed, **options)
     info = {"robot": robot.name, "method": res.method or method, "success": bool(res.success),
             "message": res.message, "joint_names": list(robot.joint_names), **_q_fields(robot, res.q)}
-    rows = None
     if goals_file is None:
         reached = robot.fk(res.q)
         info.update(target_position_m=[float(v) for v in position],
@@ -341,13 +291,13 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         target = Target.coerce(target)
     else:
         target = [g for g in target if isinstance(g, Goal)]  # the preferences have no errors to show
-        rows = [_goal_row(res, i, goal, *errors) for i, (goal, errors) in enumerate(zip(target, res.goal_errors,
-                                                                                          strict=True))]
         info.update(floating_base=robot.floating_base, goals_file=str(args.goals),
-                    q_pinocchio=[float(v) for v in robot.full_configuration(res.q)], goal_errors=rows)
+                    q_pinocchio=[float(v) for v in robot.full_configuration(res.q)],
+                    goal_errors=[_goal_row(res, i, g, *e) for i, (g, e) in enumerate(zip(target, res.goal_errors,
+                                                                                         strict=True))])
     info.update(position_error_m=res.position_error, orientation_error_rad=res.orientation_error, cost=res.cost,
                 generations=res.generations, evaluations=res.evaluations, time_s=res.time_s, seed=args.seed)
-    _report(args, robot, res, info, scene, margin, rows)
+    _report(args, robot, res, info, scene, margin)
     if html is not None or args.view:
         _view_solution(robot, res, target, html, args.view, scene=scene, margin=margin)
     return 0 if res.success else 1
@@ -408,11 +358,10 @@ def _solve_all(args: argparse.Namespace, robot, target, options: dict, html, met
     if args.json:
         print(json.dumps(info, indent=2))
     else:
-        unit = "rad" if args.rad else "deg"
         print(f"{robot.name} ({robot.n} joints), method {info['method']}: {found} in {res.time_s * 1e3:.2f} ms "
               f"({sols.message})")
         if sols:
-            print(f"  #  q ({unit}): {' '.join(robot.joint_names)}")
+            print(f"  #  q ({'rad' if args.rad else 'deg'}): {' '.join(robot.joint_names)}")
         for k, s in enumerate(sols):
             if goal_list:
                 rot = "" if s.orientation_error is None else f", rotation {s.orientation_error:.1e} rad"
@@ -476,11 +425,11 @@ def _goals_arg(args: argparse.Namespace):
     return goals_file
 
 
-def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float, goal_rows=None) -> None:
-    """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of ``goal_rows``);
-    with a scene, the verdict of the exact mesh check on the answer too."""
-    if scene is not None:  # distinct pairs: a link with several collision shapes counts once
-        pairs = [list(p) for p in dict.fromkeys(scene.colliding_pairs(res.q, margin))]
+def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: float) -> None:
+    """Print a solve's answer: ``info`` as JSON with ``--json``, else as text (one line per goal of its
+    ``goal_errors``); with a scene, the verdict of the exact mesh check on the answer too."""
+    if scene is not None:
+        pairs = [list(p) for p in scene.colliding_pairs(res.q, margin)]  # each pair of names once
         info.update(scene=str(args.scene), margin_m=margin, collision_free=bool(res.collision_free),
                     min_distance_m=float(res.min_distance), colliding_pairs=pairs)
     if args.json:
@@ -496,8 +445,8 @@ def _report(args: argparse.Namespace, robot, res, info: dict, scene, margin: flo
     print(f"generations:          {res.generations}")
     print(f"evaluations:          {res.evaluations}")
     print(f"time:                 {res.time_s * 1e3:.2f} ms")
-    if goal_rows is not None:
-        _print_goal_errors(goal_rows)
+    if "goal_errors" in info:
+        _print_goal_errors(info["goal_errors"])
     if scene is not None:
         where = f"scene {info['scene']}" + (f", margin {margin:g} m" if margin > 0 else "")
         print(f"collision-free: {'yes' if res.collision_free else 'no'} (min distance "
@@ -538,7 +487,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from .viz import Viewer
 
     robot = _load(args)
-    q = _joint_flag(robot, args.q, args.rad, "--q") if args.q else np.zeros(robot.n)
+    q = _q_flag(args, robot)
     if args.no_block and not args.html:
         raise OptionError("--no-block without --html shows nothing: the viewer stops when evoik exits; add "
                           "--html PATH to keep the scene as a file")
@@ -547,7 +496,6 @@ def _cmd_view(args: argparse.Namespace) -> int:
         pairs = viewer.show(q, scene=scene)
         viewer.show_target(robot.fk(q))
         if scene is not None:
-            pairs = list(dict.fromkeys(pairs))
             print(f"collision-free: {'no' if pairs else 'yes'} (scene {args.scene}"
                   + (f"; in collision: {', '.join(f'{a} - {b}' for a, b in pairs)})" if pairs else ")"), flush=True)
         if args.no_block:  # the server stops when we return: the file is what stays
@@ -641,9 +589,25 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     return 0
 
 
-#: The flags several sub-commands share, as ``add_argument`` takes them (:func:`_add`).
 _JOINT_UNITS = "revolute joints in degrees, or radians with --rad; prismatic joints in m"
-_SHARED_FLAGS = {
+#: The flags several sub-commands share, as ``add_argument`` takes them (a sub-command may replace their help).
+_FLAGS = {
+    "robot": dict(help="bundled or example-robot-data name, or a URDF or xacro path"),
+    "--tip": dict(help="tip frame (default: the arm's tool frame)"),
+    "--base": dict(help="base frame (default: the URDF root)"),
+    "--tips": dict(nargs="+", metavar="FRAME", help="frames whose chains from the base are the active joints (their "
+                   "union), e.g. both grippers of a dual-arm robot; 'all' for every joint (what whole robots loaded by "
+                   "name get by default)"),
+    "--floating-base": dict(action="store_true", help="put a free-flying root in front of the URDF's root link: six "
+                            "more joints at the front of q (x, y, z in m; yaw, pitch, roll), poses in the world"),
+    "--xacro-arg": dict(action="append", default=[], metavar="NAME=VALUE",
+                        help="a <xacro:arg> value of a xacro file (repeatable); NAME:=VALUE also works"),
+    "--package-dir": dict(action="append", default=[], metavar="DIR",
+                          help="a folder holding the ROS packages a robot file names ($(find pkg), package://pkg/...), "
+                               "searched before ROS_PACKAGE_PATH and the file's own tree (repeatable)"),
+    "--package-alias": dict(action="append", default=[], metavar="NAME=SHIPPED_AS",
+                            help="a package the robot file names that is shipped under another name, e.g. "
+                                 "abb_irb140=abb_irb140_description (repeatable)"),
     "--q": dict(type=float, nargs="+", help=f"joint values ({_JOINT_UNITS}); default 0"),
     "--rad": dict(action="store_true", help="joint values in radians (input and output)"),
     "--json": dict(action="store_true", help="machine-readable output"),
@@ -654,105 +618,110 @@ _SHARED_FLAGS = {
                     "free of collisions with it and the robot itself; links in collision drawn red"),
     "--margin": dict(type=float, metavar="M", help="with --scene: clearance in m kept from collisions (default 0)"),
     "--no-progress": dict(action="store_true", help="no progress bar"),
+    # the problem options every method takes
+    "--tolerance": dict(type=float, help="success threshold: position error in m (and orientation error in rad for "
+                        "pose targets); default 1e-6"),
+    "--rotation-tolerance": dict(type=float, metavar="RAD",
+                                 help="success threshold on the orientation error in rad (default: --tolerance)"),
+    "--orientation-weight": dict(type=float, metavar="M_PER_RAD",
+                                 help="m per rad of orientation error in the pose cost (default 1)"),
+    "--pose-metric": dict(help="how the pose cost combines the errors: sum (default) or euclidean"),
+    "--q0": dict(type=float, nargs="+", help=f"initial configuration ({_JOINT_UNITS})"),
+    "--lower": dict(type=float, nargs="+", metavar="Q",
+                    help=f"lower joint bounds of the search ({_JOINT_UNITS}; default the robot's)"),
+    "--upper": dict(type=float, nargs="+", metavar="Q",
+                    help=f"upper joint bounds of the search ({_JOINT_UNITS}; default the robot's)"),
+    "--option": dict(action="append", default=[], metavar="NAME=VALUE",
+                     help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
+                     "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
+                     "--option strategy=rand1bin --option max_restarts=4"),
+}
+_ROBOT = ["robot", "--tip", "--base", "--tips", "--floating-base", "--xacro-arg", "--package-dir", "--package-alias"]
+_PROBLEM = ["--tolerance", "--rotation-tolerance", "--orientation-weight", "--pose-metric"]
+#: Sub-command -> (its function, its help, its flags in order: a name of :data:`_FLAGS`, or (flag, what
+#: ``add_argument`` takes beyond or instead of its :data:`_FLAGS` entry)).
+_COMMANDS = {
+    "robots": (_cmd_robots, "list the robots that load by name", []),
+    "fk": (_cmd_fk, "forward kinematics: tip pose at a joint vector", [
+        *_ROBOT, "--q", "--rad", "--json",
+        ("--frame", dict(metavar="NAME", help="the frame whose pose is printed (default the tip)"))]),
+    "solve": (_cmd_solve, "inverse kinematics for one target or a goals file (exit 1 when not reached)", [
+        *_ROBOT,
+        ("--xyz", dict(type=float, nargs=3, metavar=("X", "Y", "Z"), help="target tip position in m (base frame)")),
+        ("--rpy", dict(type=float, nargs=3, metavar=("R", "P", "Y"),
+                       help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")),
+        ("--goals", dict(metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file) instead of "
+                         "--xyz/--rpy: each goal's errors are printed; exit 1 when one is not met")),
+        ("--method", dict(help="solver (evoik_pin.methods(); default: the memetic solver)")),
+        "--seed", *_PROBLEM, "--q0", "--lower", "--upper", "--option",
+        ("--polish", dict(action="store_true", help="polish the method's answer with Levenberg-Marquardt")),
+        ("--population", dict(type=int, help="population size of population-based solvers")),
+        ("--max-generations", dict(type=int, help="generation budget of population-based solvers")),
+        ("--timeout", dict(type=_seconds, metavar="S", help="wall-clock budget in s (memetic: default 0.005; "
+                           "memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")),
+        ("--count", dict(type=int, help="with --all: solutions wanted on a redundant arm (default 8)")),
+        "--rad", "--json", "--html", "--view",
+        ("--all", dict(action="store_true", help="every distinct solution (solve_all; default method memetic-all), "
+                       "one per line, drawn as ghosts by --html/--view; exit 1 when there is none")),
+        "--scene", "--margin",
+        ("--prefer", dict(help="which answer: first (default), nearest (nearest --q0) or manipulability (the most "
+                          "dexterous), among those found within --timeout (default 0.7 ms for the last two)")),
+        ("--locked", dict(action="append", default=[], metavar="NAME=VALUE", help=f"hold joint NAME at VALUE "
+                          f"(repeatable; {_JOINT_UNITS}); --q0 and the answer keep every joint"))]),
+    "view": (_cmd_view, "meshcat web preview of a robot at a joint vector (tip pose as a triad)", [
+        *_ROBOT, "--q", "--rad", "--html", "--scene",
+        ("--no-block", dict(action="store_true",
+                            help="write --html PATH and return at once (the viewer's server stops with evoik)"))]),
+    "reach": (_cmd_reach, "reachability map: fraction of orientations IK reaches per voxel (npz, png, html)", [
+        *_ROBOT,
+        ("--voxel", dict(type=float, default=0.05, help="voxel edge in m (default 0.05)")),
+        ("--out", dict(required=True, help="output directory: OUT/<robot>_reach.npz, .png and .html")),
+        ("--orientations", dict(type=int, default=32, help="orientations asked per voxel (6-D arms; default 32); "
+                                "position-only and planar arms: 1")),
+        "--scene", "--margin", ("--seed", dict(help="seed of the workspace sampling (default 0)")),
+        ("--backend", dict(choices=["local", "ray"], default="local",
+                           help="local (threads, every core) or ray (actors; pip install 'evoik_pin[ray]')")),
+        ("--workers", dict(type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")),
+        ("--address", dict(help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")),
+        ("--batch-size", dict(type=int, default=50_000, help="targets per call of the batch engine (default 50000)")),
+        *_PROBLEM, "--option", "--no-progress",
+        ("--no-html", dict(action="store_true", help="skip the meshcat HTML page"))]),
+    "retarget": (_cmd_retarget, "retarget a human motion (BVH file or bundled clip) onto a humanoid: joint trajectory "
+                 "as npz, csv or pkl", [
+        ("file", dict(help="a BVH file, or a bundled clip's name (walk, run, jump, dance, getup)")),
+        ("--robot", dict(required=True, help="humanoid name (g1, talos, romeo, icub) or URDF path; loaded with a "
+                         "floating base")),
+        ("--mapping", dict(default="cmu", help="keypoint mapping preset: cmu (BVH skeletons, default) or smpl")),
+        ("--out", dict(required=True, help="output file: .npz, .csv or .pkl (GMR's layout)")),
+        ("--html", dict(help="also write a self-contained HTML page playing the clip")),
+        ("--scale", dict(type=float, help="source-to-robot length factor (default: leg lengths' ratio)")),
+        ("--no-self-collision", dict(action="store_true", help="do not keep the frames free of self-collision")),
+        ("--no-velocity-limits", dict(action="store_true",
+                                      help="do not bound each step by the joint velocity limits")),
+        "--seed", ("--progress", dict(action="store_true", help="print progress every 30 frames"))]),
+    "reproduce": (_cmd_reproduce, "re-run a paper's experiments: tables (md, csv, json) and figures (png)", [
+        ("paper", dict(nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")),
+        ("--quick", dict(action="store_true", help="reduced-size runs (well under a minute per paper)")),
+        "--seed", ("--out", dict(default="reproduction", help="output directory; each paper writes OUT/<id>/")),
+        "--no-progress",
+        ("--jobs", dict(type=int, default=min(2, os.cpu_count() or 1),
+                        help="worker processes for independent parts; same numbers for any value (default: 2 if "
+                        "available)")),
+        ("--html", dict(help="save the paper's animation (002: Pro-ISADE spiral) as HTML")), "--view"]),
 }
 
 
-def _add(p: argparse.ArgumentParser, *flags: str, **help_texts: str) -> None:
-    """Add the shared ``flags`` (:data:`_SHARED_FLAGS`) to ``p``; ``help_texts`` (by dest) replace their help."""
-    for flag in flags:
-        spec = _SHARED_FLAGS[flag]
-        p.add_argument(flag, **{**spec, "help": help_texts.get(_dest(flag), spec["help"])})
-
-
 def build_parser() -> argparse.ArgumentParser:
+    """The ``evoik`` argument parser: one sub-parser per entry of :data:`_COMMANDS`."""
     parser = argparse.ArgumentParser(prog="evoik", description="Inverse kinematics by evolutionary computation on "
                                      "Pinocchio.")
     sub = parser.add_subparsers(dest="command", required=True)
-    sub.add_parser("robots", help="list the robots that load by name").set_defaults(func=_cmd_robots)
-
-    p = sub.add_parser("fk", help="forward kinematics: tip pose at a joint vector")
-    _add_robot_args(p)
-    _add(p, "--q", "--rad", "--json")
-    p.add_argument("--frame", metavar="NAME", help="the frame whose pose is printed (default the tip)")
-    p.set_defaults(func=_cmd_fk)
-
-    p = sub.add_parser("solve", help="inverse kinematics for one target or a goals file (exit 1 when not reached)")
-    _add_robot_args(p)
-    p.add_argument("--xyz", type=float, nargs=3, metavar=("X", "Y", "Z"), help="target tip position in m (base frame)")
-    p.add_argument("--rpy", type=float, nargs=3, metavar=("R", "P", "Y"),
-                   help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")
-    p.add_argument("--goals", metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file) instead of "
-                   "--xyz/--rpy: each goal's errors are printed; exit 1 when one is not met")
-    p.add_argument("--method", help="solver (evoik_pin.methods(); default: the memetic solver)")
-    _add(p, "--seed")
-    _add_problem_args(p)
-    p.add_argument("--polish", action="store_true", help="polish the method's answer with Levenberg-Marquardt")
-    p.add_argument("--population", type=int, help="population size of population-based solvers")
-    p.add_argument("--max-generations", type=int, help="generation budget of population-based solvers")
-    p.add_argument("--timeout", type=_seconds, metavar="S", help="wall-clock budget in s (memetic: default 0.005; "
-                   "memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")
-    p.add_argument("--count", type=int, help="with --all: solutions wanted on a redundant arm (default 8)")
-    _add(p, "--rad", "--json", "--html", "--view")
-    p.add_argument("--all", action="store_true", help="every distinct solution (solve_all; default method "
-                   "memetic-all), one per line, drawn as ghosts by --html/--view; exit 1 when there is none")
-    _add(p, "--scene", "--margin")
-    p.add_argument("--prefer", help="which answer: first (default), nearest (nearest --q0) or manipulability (the "
-                   "most dexterous), among those found within --timeout (default 0.7 ms for the last two)")
-    p.add_argument("--locked", action="append", default=[], metavar="NAME=VALUE",
-                   help=f"hold joint NAME at VALUE (repeatable; {_JOINT_UNITS}); --q0 and the answer keep every joint")
-    p.set_defaults(func=_cmd_solve)
-
-    p = sub.add_parser("view", help="meshcat web preview of a robot at a joint vector (tip pose as a triad)")
-    _add_robot_args(p)
-    _add(p, "--q", "--rad", "--html", "--scene")
-    p.add_argument("--no-block", action="store_true",
-                   help="write --html PATH and return at once (the viewer's server stops with evoik)")
-    p.set_defaults(func=_cmd_view)
-
-    p = sub.add_parser("reach", help="reachability map: fraction of orientations IK reaches per voxel (npz, png, html)")
-    _add_robot_args(p)
-    p.add_argument("--voxel", type=float, default=0.05, help="voxel edge in m (default 0.05)")
-    p.add_argument("--out", required=True, help="output directory: OUT/<robot>_reach.npz, .png and .html")
-    p.add_argument("--orientations", type=int, default=32,
-                   help="orientations asked per voxel (6-D arms; default 32); position-only and planar arms: 1")
-    _add(p, "--scene", "--margin", "--seed", seed="seed of the workspace sampling (default 0)")
-    p.add_argument("--backend", choices=["local", "ray"], default="local",
-                   help="local (threads, every core) or ray (actors; pip install 'evoik_pin[ray]')")
-    p.add_argument("--workers", type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")
-    p.add_argument("--address", help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")
-    p.add_argument("--batch-size", type=int, default=50_000, help="targets per call of the batch engine (default "
-                   "50000)")
-    _add_problem_args(p, q0=False)
-    _add(p, "--no-progress")
-    p.add_argument("--no-html", action="store_true", help="skip the meshcat HTML page")
-    p.set_defaults(func=_cmd_reach)
-
-    p = sub.add_parser("retarget", help="retarget a human motion (BVH file or bundled clip) onto a humanoid: "
-                       "joint trajectory as npz, csv or pkl")
-    p.add_argument("file", help="a BVH file, or a bundled clip's name (walk, run, jump, dance, getup)")
-    p.add_argument("--robot", required=True, help="humanoid name (g1, talos, romeo, icub) or URDF path; loaded with a "
-                   "floating base")
-    p.add_argument("--mapping", default="cmu", help="keypoint mapping preset: cmu (BVH skeletons, default) or smpl")
-    p.add_argument("--out", required=True, help="output file: .npz, .csv or .pkl (GMR's layout)")
-    _add(p, "--html", html="also write a self-contained HTML page playing the clip")
-    p.add_argument("--scale", type=float, help="source-to-robot length factor (default: leg lengths' ratio)")
-    p.add_argument("--no-self-collision", action="store_true", help="do not keep the frames free of self-collision")
-    p.add_argument("--no-velocity-limits", action="store_true", help="do not bound each step by the joint velocity "
-                   "limits")
-    _add(p, "--seed")
-    p.add_argument("--progress", action="store_true", help="print progress every 30 frames")
-    p.set_defaults(func=_cmd_retarget)
-
-    p = sub.add_parser("reproduce", help="re-run a paper's experiments: tables (md, csv, json) and figures (png)")
-    p.add_argument("paper", nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")
-    p.add_argument("--quick", action="store_true", help="reduced-size runs (well under a minute per paper)")
-    _add(p, "--seed")
-    p.add_argument("--out", default="reproduction", help="output directory; each paper writes OUT/<id>/")
-    _add(p, "--no-progress")
-    p.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1),
-                   help="worker processes for independent parts; same numbers for any value (default: 2 if available)")
-    _add(p, "--html", "--view", html="save the paper's animation (002: Pro-ISADE spiral) as HTML")
-    p.set_defaults(func=_cmd_reproduce)
+    for command, (func, what, flags) in _COMMANDS.items():
+        p = sub.add_parser(command, help=what)
+        for item in flags:
+            flag, spec = (item, {}) if isinstance(item, str) else item
+            p.add_argument(flag, **{**_FLAGS.get(flag, {}), **spec})
+        p.set_defaults(func=func)
     return parser
 
 

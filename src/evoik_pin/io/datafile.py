@@ -6,11 +6,13 @@ from __future__ import annotations
 import json
 import math
 import re
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "number", "numbers", "read_data", "unknown_keys", "write_data"]
+__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "naming", "number", "numbers", "read_mapping", "unknown_keys",
+           "write_data"]
 
 #: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
 _NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -31,10 +33,25 @@ def data_format(path: Path, where: str, error: type[Exception]) -> str:
     return fmt
 
 
-def read_data(path: Path, where: str, error: type[Exception]):
-    """The data of the file ``path`` (dicts, lists, numbers, strings), parsed as its extension says (YAML with
-    PyYAML's safe loader); ``error`` for a missing or unreadable file, and with the line and column of a syntax
-    error."""
+def read_mapping(path: Path, where: str, error: type[Exception], keys: tuple[str, ...], empty: str,
+                 list_key: str | None = None) -> dict:
+    """The top-level mapping of the data file ``path``, parsed as its extension says (YAML with PyYAML's safe
+    loader), its keys among ``keys``; with ``list_key``, a top-level list stands for ``{list_key: the list}``.
+    ``error`` starting with ``where`` for a missing or unreadable file, a syntax error (with its line and column),
+    an empty file (``empty``: what it should hold), another top level, or an unknown key."""
+    data = _parse(path, where, error)
+    if data is None:
+        raise error(f"{where}: the file is empty; expected {empty}")
+    if list_key is not None and isinstance(data, list):
+        data = {list_key: data}
+    if not isinstance(data, dict):
+        raise error(f"{where}: the top level must be a mapping ({', '.join(keys)})"
+                    + (f" or a list of {list_key}" if list_key else "") + f", got a {type(data).__name__}")
+    unknown_keys(data, keys, f"{where}: top level", error=error)
+    return data
+
+
+def _parse(path: Path, where: str, error: type[Exception]):
     fmt = data_format(path, where, error)
     try:
         text = path.read_text(encoding="utf-8")
@@ -62,6 +79,15 @@ def read_data(path: Path, where: str, error: type[Exception]):
         raise error(f"{where}: YAML error: {exc}") from None
 
 
+@contextmanager
+def naming(where: str, error: type[Exception], catch: tuple[type[Exception], ...] = ()):
+    """Re-raise an ``error`` (or one of ``catch``) raised in the block as an ``error`` starting with ``where``."""
+    try:
+        yield
+    except (error, *catch) as exc:
+        raise error(f"{where}: {exc}") from None
+
+
 def write_data(path: Path, data, header: str, what: str, error: type[Exception]) -> Path:
     """Write ``data`` to ``path`` (UTF-8) as its extension says and return the path: YAML keeps the mappings' order,
     writes lists of numbers and :class:`Flow` mappings on one line and starts with ``header`` (comment lines).
@@ -71,9 +97,7 @@ def write_data(path: Path, data, header: str, what: str, error: type[Exception])
     else:
         import yaml
 
-        class Dumper(yaml.SafeDumper):
-            pass
-
+        Dumper = type("Dumper", (yaml.SafeDumper,), {})  # a representer of its own, not SafeDumper's
         Dumper.add_representer(Flow, lambda d, v: d.represent_mapping("tag:yaml.org,2002:map", v, flow_style=True))
         text = header + yaml.dump(data, Dumper=Dumper, sort_keys=False, default_flow_style=None)
     try:

@@ -24,7 +24,7 @@ from ..goals import Goal, bind, is_goal_list
 from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, number, unknown_keys
 from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from ..goals.registry import kind_classes
-from .datafile import data_format, read_data, write_data
+from .datafile import data_format, naming, read_mapping, write_data
 
 __all__ = ["GOAL_KINDS", "GoalsFile", "goal_kind_name", "load_goals", "load_problems", "read_goals_file", "save_goals"]
 
@@ -50,22 +50,14 @@ class GoalsFile:
             try:
                 bind(robot, goals)
             except (FrameError, TargetError) as exc:
-                where = self._where(p)
+                where = f"goals file {str(self.path)!r}" + (f": problem {p}" if self.several else "")
                 for i, g in enumerate(goals):  # the goal that fails alone, when one does (a clash needs two)
                     try:
                         bind(robot, [g])
                     except (FrameError, TargetError):
-                        where = self._where(p, i, g.frame)
+                        where += f"{',' if self.several else ':'} goal {i}" + (f" ({g.frame})" if g.frame else "")
                         break
                 raise GoalsFileError(f"{where}: {exc}") from None
-
-    def _where(self, problem: int | None = None, index: int | None = None, frame: str | None = None) -> str:
-        text = f"goals file {str(self.path)!r}"
-        if self.several and problem is not None:
-            text += f": problem {problem}"
-        if index is not None:
-            text += f"{',' if self.several else ':'} goal {index}" + (f" ({frame})" if frame else "")
-        return text
 
 
 # ------------------------------------------------------------------ reading
@@ -124,10 +116,8 @@ def _goal(entry, what: str) -> Goal:
                if key in entry}
     if several and kind.set_member is not None:
         read = [kind.set_member(t) for t in read]
-    try:
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError)):
         return (kind.cls if several else kind.make or kind.cls)(frame, read if several else read[0], **options)
-    except (OptionError, TargetError, GoalsFileError) as exc:
-        raise GoalsFileError(f"{what}: {exc}") from None
 
 
 def _preference(entry: dict, what: str, kind_name: str):
@@ -135,9 +125,7 @@ def _preference(entry: dict, what: str, kind_name: str):
     cls, fields = PREFERENCE_KINDS[kind_name]
     unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
     args = {}
-    for key in fields:
-        if key not in entry:
-            continue
+    for key in (k for k in fields if k in entry):
         value = entry[key]
         if key == "q_ref":
             if not isinstance(value, list):
@@ -160,10 +148,8 @@ def _preference(entry: dict, what: str, kind_name: str):
         args["q_ref"] = args.pop("q_ref") if "q_ref" in args else args.pop("joints")
     if kind_name == "joint_limit_margin" and "margin" not in args:
         raise GoalsFileError(f"{what}: a joint_limit_margin needs margin (rad or m)")
-    try:
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError, ValueError)):
         return cls(**args)
-    except (OptionError, TargetError, ValueError) as exc:
-        raise GoalsFileError(f"{what}: {exc}") from None
 
 
 def _goal_list(entries, what: str, several: bool) -> list[Goal]:
@@ -172,24 +158,15 @@ def _goal_list(entries, what: str, several: bool) -> list[Goal]:
         raise GoalsFileError(f"{what}: {key} must be a list of goals (frame, kind, target), got {entries!r}")
     if not entries:
         raise GoalsFileError(f"{what}: {key} is empty; give at least one goal (frame, kind, target)")
-    sep = ", " if several else ": "
-    return [_goal(entry, f"{what}{sep}goal {i}" if several else f"goal {i}") for i, entry in enumerate(entries)]
+    return [_goal(entry, f"{what}, goal {i}" if several else f"goal {i}") for i, entry in enumerate(entries)]
 
 
 def read_goals_file(path: str | os.PathLike) -> GoalsFile:
     """Everything a goals file holds, checked (frames only by :meth:`GoalsFile.bind`); GoalsFileError."""
     path = Path(os.fspath(path)).expanduser()
     where = f"goals file {str(path)!r}"
-    data = read_data(path, where, GoalsFileError)
-    if data is None:
-        raise GoalsFileError(f"{where}: the file is empty; expected a goals: list (or problems:)")
-    if isinstance(data, list):
-        data = {"goals": data}
-    if not isinstance(data, dict):
-        raise GoalsFileError(f"{where}: the top level must be a mapping ({', '.join(_TOP_KEYS)}) or a list of "
-                             f"goals, got a {type(data).__name__}")
-    try:
-        unknown_keys(data, _TOP_KEYS, "top level")
+    data = read_mapping(path, where, GoalsFileError, _TOP_KEYS, "a goals: list (or problems:)", list_key="goals")
+    with naming(where, GoalsFileError):
         robot = data.get("robot")
         if robot is not None and (not isinstance(robot, str) or not robot):
             raise GoalsFileError(f"robot must be a robot name or URDF path, got {robot!r}")
@@ -211,8 +188,6 @@ def read_goals_file(path: str | os.PathLike) -> GoalsFile:
             problems = [_goal_list(goals, f"problem {p}", True) for p, goals in enumerate(problems)]
         else:
             problems = [_goal_list(data["goals"], "goals", False)]
-    except GoalsFileError as exc:
-        raise GoalsFileError(f"{where}: {exc}") from None
     return GoalsFile(path, robot, floating_base, tips, problems, several)
 
 

@@ -35,7 +35,7 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import Flow, number, numbers, read_data, unknown_keys, write_data
+from .datafile import Flow, naming, number, numbers, read_mapping, unknown_keys, write_data
 
 __all__ = ["SceneFile", "read_scene", "write_scene"]
 
@@ -102,11 +102,7 @@ def _obstacle(entry, k: int, folder: Path, seen: dict[str, int]) -> tuple[str, s
     if kind == "box":
         kw["size"] = _numbers(entry["size"], 3, f"{what}: size (m)", positive=True)
     elif kind == "mesh":
-        path = entry["path"]
-        if not isinstance(path, str) or not path:
-            raise SceneError(f"{what}: path must be a mesh file name, got {path!r}")
-        p = Path(path).expanduser()
-        kw["path"] = p if p.is_absolute() else folder / p
+        kw["path"] = _file_in(folder, entry["path"], f"{what}: path must be a mesh file name")
         scale, label = entry.get("scale", 1.0), f"{what}: scale (one factor or three)"
         kw["scale"] = _numbers(scale, 3, label, True) if isinstance(scale, list) else _number(scale, label, True)
     else:
@@ -119,14 +115,8 @@ def read_scene(path: str | os.PathLike) -> SceneFile:
     """The scene file ``path`` (format: the module docstring), checked; SceneError."""
     path = Path(os.fspath(path)).expanduser()
     where = f"scene file {str(path)!r}"
-    data = read_data(path, where, SceneError)
-    if data is None:
-        raise SceneError(f"{where}: the file is empty; expected a mapping with an 'obstacles:' list")
-    if not isinstance(data, dict):
-        raise SceneError(f"{where}: the top level must be a mapping (units, self_collision, srdf, obstacles), got "
-                         f"a {type(data).__name__}")
-    try:
-        _unknown_keys(data, _TOP_KEYS, "top level")
+    data = read_mapping(path, where, SceneError, _TOP_KEYS, "a mapping with an 'obstacles:' list")
+    with naming(where, SceneError):
         units = data.get("units", "m")
         if units != "m":
             raise SceneError(f"units: only 'm' is accepted (lengths in metres, angles in radians), got {units!r}")
@@ -134,19 +124,21 @@ def read_scene(path: str | os.PathLike) -> SceneFile:
         if not isinstance(self_collision, bool):
             raise SceneError(f"self_collision must be true or false, got {self_collision!r}")
         srdf = data.get("srdf")
-        if srdf is not None:
-            if not isinstance(srdf, str) or not srdf:
-                raise SceneError(f"srdf must be a file name, got {srdf!r}")
-            srdf = Path(srdf).expanduser()
-            srdf = srdf if srdf.is_absolute() else path.parent / srdf
+        srdf = None if srdf is None else _file_in(path.parent, srdf, "srdf must be a file name")
         entries = data.get("obstacles") or []
         if not isinstance(entries, list):
             raise SceneError(f"obstacles must be a list of obstacles, got {entries!r}")
         seen: dict[str, int] = {}
         obstacles = [_obstacle(entry, k, path.parent, seen) for k, entry in enumerate(entries)]
-    except SceneError as exc:
-        raise SceneError(f"{where}: {exc}") from None
     return SceneFile(path, self_collision, srdf, obstacles)
+
+
+def _file_in(folder: Path, name, what: str) -> Path:
+    """The file ``name`` (a non-empty string; relative to ``folder`` unless absolute); SceneError "``what``, got
+    ..." otherwise."""
+    if not isinstance(name, str) or not name:
+        raise SceneError(f"{what}, got {name!r}")
+    return folder / Path(name).expanduser()  # an absolute path replaces the folder
 
 
 def _clean(values) -> list[float]:

@@ -1,5 +1,5 @@
-"""A robot's collision geometry (the URDF's ``<collision>`` on its reduced model), the pairs worth checking, and
-convex-hull proxies."""
+"""A robot's collision geometry (the URDF's ``<collision>`` on its reduced model), the pairs worth checking, a
+scene's obstacles as a geometry model, and convex-hull proxies."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pinocchio as pin
 from ..errors import SceneError
 from ..lie import is_rotation
 
-__all__ = ["convex_hulls", "robot_collision_model", "self_collision_pairs"]
+__all__ = ["convex_hulls", "obstacle_model", "robot_collision_model", "self_collision_pairs"]
 
 
 def robot_collision_model(robot) -> pin.GeometryModel:
@@ -43,6 +43,15 @@ def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> li
     except (RuntimeError, ValueError) as exc:
         raise SceneError(f"cannot read the SRDF {srdf!r}: {exc}") from None
     return [(int(p.first), int(p.second)) for p in probe.collisionPairs]
+
+
+def obstacle_model(scene) -> pin.GeometryModel:
+    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` on the universe of
+    ``scene.robot.model``, one object per obstacle, named as the obstacle, placed in the model's world frame."""
+    base, geom = scene.robot.base_placement, pin.GeometryModel()
+    for ob in scene.obstacles.values():  # base frame -> the model's world frame
+        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, ob.shape))
+    return geom
 
 
 def convex_hulls(geom: pin.GeometryModel) -> pin.GeometryModel:

@@ -14,8 +14,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, SceneError
+from ..io.datafile import naming
 from ..io.scene_file import read_scene, write_scene
-from .geometry import as_placement, convex_hulls, robot_collision_model, self_collision_pairs
+from .geometry import as_placement, convex_hulls, obstacle_model, robot_collision_model, self_collision_pairs
 
 __all__ = ["Obstacle", "Scene"]
 
@@ -144,15 +145,11 @@ class Scene:
         """A scene of ``robot`` read from a YAML or JSON scene file (format: :mod:`evoik_pin.io.scene_file`), checked
         whole before the scene is built; SceneError naming the file, the obstacle and the problem."""
         spec = read_scene(path)
-        try:
+        with naming(f"scene file {str(spec.path)!r}", SceneError):
             scene = cls(robot, self_collision=spec.self_collision, srdf=spec.srdf)
             for k, (name, kind, kw, pose) in enumerate(spec.obstacles):
-                try:
+                with naming(f"obstacle {k} ({name!r})", SceneError):
                     getattr(scene, f"add_{kind}")(name, pose=pose, **kw)
-                except SceneError as exc:
-                    raise SceneError(f"obstacle {k} ({name!r}): {exc}") from None
-        except SceneError as exc:
-            raise SceneError(f"scene file {str(spec.path)!r}: {exc}") from None
         return scene
 
     def to_file(self, path: str | os.PathLike) -> Path:
@@ -169,11 +166,9 @@ class Scene:
 
     def _build(self) -> None:
         """(Re)build the exact and the hull geometry models with every pair to check."""
-        geom, base = self._robot_geom.copy(), self.robot.base_placement
-        self._names = list(self._obstacles)
-        for name in self._names:  # base frame -> the model's world frame
-            geom.addGeometryObject(pin.GeometryObject(name, 0, 0, base * self._obstacles[name].pose,
-                                                      self._obstacles[name].shape))
+        geom, self._names = self._robot_geom.copy(), list(self._obstacles)
+        for obj in obstacle_model(self).geometryObjects:
+            geom.addGeometryObject(obj)
         n_robot = self._robot_geom.ngeoms
         self._pairs = [*self._self_pairs, *((i, n_robot + k) for i in self._moving for k in range(len(self._names)))]
         geom.removeAllCollisionPairs()
@@ -192,10 +187,8 @@ class Scene:
             self._margin[id(gdata)] = margin
 
     def _q(self, q) -> np.ndarray:
-        try:
+        with naming("scene query", ConfigurationError):
             q = self.robot.check_q(q)
-        except ConfigurationError as exc:
-            raise ConfigurationError(f"scene query: {exc}") from None
         return self.robot.to_pinocchio(q)
 
     def _check(self, q_pin: np.ndarray, margin: float, hulls: bool, stop_at_first: bool) -> bool:

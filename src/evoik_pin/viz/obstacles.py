@@ -8,6 +8,7 @@ import warnings
 import pinocchio as pin
 
 from ..errors import ConfigurationError, SceneError
+from ..scene.geometry import obstacle_model
 from .server import _talks
 
 __all__ = ["COLLISION_RGBA", "OBSTACLE_RGBA", "obstacle_model"]
@@ -16,15 +17,6 @@ __all__ = ["COLLISION_RGBA", "OBSTACLE_RGBA", "obstacle_model"]
 OBSTACLE_RGBA = (0.55, 0.55, 0.55, 0.6)
 #: Robot links in collision: opaque red.
 COLLISION_RGBA = (0.9, 0.05, 0.05, 1.0)
-
-
-def obstacle_model(scene) -> pin.GeometryModel:
-    """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` on the universe of
-    ``scene.robot.model``, one object per obstacle, named as the obstacle."""
-    base, geom = scene.robot.base_placement, pin.GeometryModel()
-    for ob in scene.obstacles.values():  # base frame -> the model's world frame
-        geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, ob.shape))
-    return geom
 
 
 class ObstacleDrawing:

@@ -12,12 +12,6 @@ from .robot import GHOST_COLORS
 from .server import _talks
 
 
-def _hex(rgb) -> int:
-    """0xRRGGBB of an RGB triple in [0, 1] (clipped)."""
-    r, g, b = (int(round(255 * float(np.clip(c, 0.0, 1.0)))) for c in rgb[:3])
-    return (r << 16) | (g << 8) | b
-
-
 class PathDrawing:
     """The Viewer's point clouds, polylines and animation."""
 
@@ -49,9 +43,10 @@ class PathDrawing:
         import meshcat.geometry as mg
 
         P = checked_points(points, "path points", 2)
+        r, g, b = (int(round(255 * float(np.clip(c, 0.0, 1.0)))) for c in color[:3])  # 0xRRGGBB of RGB in [0, 1]
         node, name = self._fresh(name)
         node.set_object(mg.Line(mg.PointsGeometry(P.T.astype(np.float32)),
-                                mg.LineBasicMaterial(color=_hex(color), linewidth=2)))
+                                mg.LineBasicMaterial(color=(r << 16) | (g << 8) | b, linewidth=2)))
         self.scene[name] = f"line of {P.shape[0]} points"
 
     @_talks

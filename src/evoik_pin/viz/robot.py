@@ -152,11 +152,6 @@ class RobotDrawing:
         self._viz[node] = viz
         return viz
 
-    def _mesh_bytes(self) -> int:
-        """Bytes of mesh files one copy of the robot's visual geometry embeds in the scene."""
-        paths = [g.meshPath for g in self._geom.geometryObjects]
-        return sum(os.path.getsize(f) for f in paths if f and os.path.isfile(f))
-
     @_talks
     def show(self, q, scene=None, margin: float = 0.0) -> list[tuple[str, str]] | None:
         """Draw the robot (node ``robot``) at ``q`` (n,) or a result's ``.q``. With a collision ``scene``: its
@@ -203,8 +198,10 @@ class RobotDrawing:
             warnings.warn(f"{Q.shape[0]} solutions: drawing {keep.size} of them (limit={limit})", UserWarning,
                           stacklevel=3)
             Q = Q[keep]
-        if style == "auto":
-            style = "skeleton" if Q.shape[0] * self._mesh_bytes() > GHOST_MESH_BUDGET else "mesh"
+        if style == "auto":  # each ghost embeds a copy of the mesh files
+            paths = [g.meshPath for g in self._geom.geometryObjects]
+            mesh_bytes = sum(os.path.getsize(f) for f in paths if f and os.path.isfile(f))
+            style = "skeleton" if Q.shape[0] * mesh_bytes > GHOST_MESH_BUDGET else "mesh"
         geom = None
         if style == "skeleton" and not self.skeleton:
             if self._skeleton_geom is None:

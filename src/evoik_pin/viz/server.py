@@ -42,13 +42,8 @@ zmqserver.main()
 def _printed(f) -> str:
     """What a subprocess has written so far to ``f`` (its stdout or stderr file), read without moving the shared
     offset (a ``seek(0)`` would let its next line overwrite its first)."""
-    chunks, offset = [], 0
-    while True:
-        chunk = os.pread(f.fileno(), 1 << 16, offset)
-        if not chunk:
-            return b"".join(chunks).decode(errors="replace")
-        chunks.append(chunk)
-        offset += len(chunk)
+    fd = f.fileno()
+    return os.pread(fd, os.fstat(fd).st_size, 0).decode(errors="replace")
 
 
 def _stop_process(proc: subprocess.Popen) -> None:
