@@ -14,23 +14,8 @@ from scipy.linalg.lapack import dposv
 from ...goals.registry import LOG6, POINT
 from ...goals.stack import G_RTOL, G_TOL, G_WEIGHT, KIND_PLANAR_YAW
 from ...lie import wrap_angle, yaw
-from .layout import (
-    DEFAULT_DAMPING,
-    DEFAULT_MAX_STEP,
-    DEFAULT_STALL_RATIO,
-    DEFAULT_STALL_WINDOW,
-    FINISHED,
-    GEO_ALPHA,
-    GEO_H,
-    GEO_NEAR,
-    GEO_SLOW,
-    GROW,
-    LAMBDA_MAX,
-    LAMBDA_MIN,
-    SHRINK,
-    TWO_PI,
-    box_constants,
-)
+from . import layout
+from .layout import DEFAULT_DAMPING, DEFAULT_MAX_STEP, DEFAULT_STALL_RATIO, DEFAULT_STALL_WINDOW, LAMBDA_MIN
 from .run_outcome import LMOutcome
 
 if TYPE_CHECKING:
@@ -89,9 +74,6 @@ class _Goal:
             return Jv
         return np.vstack([Jv, R[2].dot(J[3:])])
 
-    def within(self, pos: float, rot: float | None) -> bool:
-        return pos <= self.tol and (rot is None or rot <= self.rtol)
-
 
 class ReferenceLM:
     """Levenberg-Marquardt on the task error of one :class:`~evoik_pin.problem.IKProblem` (its goals, or its
@@ -108,7 +90,7 @@ class ReferenceLM:
         self.max_step2 = self.max_step**2
         self.stall_window, self.stall_ratio = int(stall_window), float(stall_ratio)
         self.lower, self.upper = problem.lower, problem.upper
-        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(robot, self.lower, self.upper)
+        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = layout.box_constants(robot, self.lower, self.upper)
         stack, pt, Rt = problem.goal_stack()
         spec = stack.spec
         self.goals = [_Goal(robot, stack.kinds[g], stack.frames[g], spec[g, G_WEIGHT], spec[g, G_TOL],
@@ -150,7 +132,8 @@ class ReferenceLM:
 
     def within(self, errors) -> bool:
         """Every goal's errors within its tolerances."""
-        return all(goal.within(pos, rot) for goal, (pos, rot) in zip(self.goals, errors, strict=True))
+        return all(pos <= g.tol and (rot is None or rot <= g.rtol) for g, (pos, rot) in zip(self.goals, errors,
+                                                                                            strict=True))
 
     def outcome(self, q, errors, converged: bool, it: int, evaluations: int, c: float) -> LMOutcome:
         """The :class:`LMOutcome` of a run ending at ``q`` with per-goal ``errors`` and cost ``c``."""
@@ -212,14 +195,10 @@ class ReferenceLM:
         """:meth:`.engine.LevenbergMarquardt.run`, ``deadline`` checked before every step."""
         q = self._into_box(np.asarray(q, dtype=float))
         on_bound = np.count_nonzero((q <= self.clip_lo) | (q >= self.clip_hi)) > 0
-        error_at = self.error_at
-        jacobian = self.task_jacobian
-        step = self._step
-        within = self.within
-        e, extras, errors = error_at(q)
+        e, extras, errors = self.error_at(q)
         evaluations = 1
         c = e.dot(e)
-        if within(errors):
+        if self.within(errors):
             return self.outcome(q, errors, True, 0, evaluations, c)
         lam = self.damping
         E = N = None
@@ -233,55 +212,48 @@ class ReferenceLM:
                 break
             it += 1
             if E is None:
-                E = jacobian(q, extras)
+                E = self.task_jacobian(q, extras)
                 N = self._normal(E)
-            qn, on_bound_n = step(q, on_bound, E, N, e, lam)
+            qn, on_bound_n = self._step(q, on_bound, E, N, e, lam)
             if creeping and not (on_bound or on_bound_n):
-                v = self._delta(qn, q)
-                a = self._geodesic(e, E, N, lam, v, error_at(q + GEO_H * v)[0])
+                v = qn - q
+                if self.any_wrap:  # wrapping joints' differences on the circle (a wrapped step is no 2 pi jump)
+                    v = np.where(self.wrap, wrap_angle(v), v)
+                a = self._geodesic(e, E, N, lam, v, self.error_at(q + layout.GEO_H * v)[0])
                 evaluations += 1
                 if a is not None:
                     qn = self._into_box(q + v + 0.5 * a)
-            en, extras_n, errors_n = error_at(qn)
+            en, extras_n, errors_n = self.error_at(qn)
             evaluations += 1
             cn = en.dot(en)
             if cn < c:
-                creeping = GEO_SLOW * c < cn < GEO_NEAR
+                creeping = layout.GEO_SLOW * c < cn < layout.GEO_NEAR
                 q, on_bound, e, extras, errors, c = qn, on_bound_n, en, extras_n, errors_n, cn
-                if within(errors):
-                    if self.finish and c > FINISHED:
+                if self.within(errors):
+                    if self.finish and c > layout.FINISHED:
                         return self._finish(q, e, extras, errors, c, it, evaluations)
                     return self.outcome(q, errors, True, it, evaluations, c)
                 E = None
-                lam *= SHRINK
-                if lam < LAMBDA_MIN:
-                    lam = LAMBDA_MIN
+                lam = max(lam * layout.SHRINK, LAMBDA_MIN)
                 history.append(c)
                 if len(history) > window and c > stall * history[-1 - window]:
                     break
             else:
-                lam *= GROW
-                if lam > LAMBDA_MAX:
+                lam *= layout.GROW
+                if lam > layout.LAMBDA_MAX:
                     break
         return self.outcome(q, errors, False, it, evaluations, c)
-
-    def _delta(self, qn: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """``qn - q`` with wrapping joints' differences taken on the circle (a wrapped step is no 2 pi jump)."""
-        d = qn - q
-        if self.any_wrap:
-            d = np.where(self.wrap, wrap_angle(d), d)
-        return d
 
     def _geodesic(self, e, E, N, lam, v, eh):
         """Geodesic acceleration (Transtrum & Sethna 2012) ``a = -(E^T E + lam I)^-1 E^T r''`` (n,) of the step v
         (n,) from a configuration with error e, Jacobian E, its normal matrix N and damping lam, given the error eh
         at ``q + h v``: ``r'' = 2/h ((eh - e) / h - E v)``; the step ``v + a / 2`` bends along a narrow curved valley
-        (a near-singular target). None when ``|a| > GEO_ALPHA |v| / 2``.
+        (a near-singular target). None when ``|a| > layout.GEO_ALPHA |v| / 2``.
         """
-        h = GEO_H
+        h = layout.GEO_H
         rpp = (2.0 / h) * ((eh - e) / h - E.dot(v))
         a = -self._solve(E, N, rpp, lam)
-        return a if 2.0 * math.sqrt(a.dot(a)) <= GEO_ALPHA * math.sqrt(v.dot(v)) else None
+        return a if 2.0 * math.sqrt(a.dot(a)) <= layout.GEO_ALPHA * math.sqrt(v.dot(v)) else None
 
     def _into_box(self, q: np.ndarray) -> np.ndarray:
         """``q`` (n,) clipped into the box, wrapping joints wrapped into [lower, lower + 2 pi)."""
@@ -289,7 +261,7 @@ class ReferenceLM:
         if self.any_wrap:
             out = self.wrap & ((q < self.lower) | (q > self.upper))
             if np.count_nonzero(out):
-                q = np.where(out, self.lower + np.mod(q - self.lower, TWO_PI), q)
+                q = np.where(out, self.lower + np.mod(q - self.lower, layout.TWO_PI), q)
         return q
 
     def _finish(self, q, e, extras, errors, c, it, evaluations) -> LMOutcome:
