@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -248,17 +249,15 @@ class LevenbergMarquardt:
             return self._reference.run(q, max_iterations, deadline)
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
-        params = self._params
-        params[layout.P_ITERATIONS] = max_iterations
+        buffers, args, params = self.kernel_arguments(max_iterations)
         out = np.empty(self.n)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
-        buffers = self._workspace(max_iterations)
         run = self._direct
         if run is None:
             run, q = self._kernel["lm_run_buffers"], owned(q, float)
         else:  # the overload's argument type exactly: a C-contiguous, writable float64 vector of our own
             q = np.array(q, dtype=float)
-        pos, rot, converged, it, evaluations, cost = run(*buffers, q, *self._args, params, out, g_err)
+        pos, rot, converged, it, evaluations, cost = run(*buffers, q, *args, params, out, g_err)
         return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations,
                          None if self._one else g_err, cost)
 
@@ -287,10 +286,8 @@ class LevenbergMarquardt:
                 if outs[-1].converged:
                     break
             best = len(outs) - 1 if outs[-1].converged else int(np.argmin([o.rank for o in outs]))
-            o = outs[best]
-            return LMOutcome(o.q, o.position_error, o.orientation_error, o.converged,
-                             sum(x.iterations for x in outs), sum(x.evaluations for x in outs), o.goal_errors,
-                             o.cost), best
+            return replace(outs[best], iterations=sum(o.iterations for o in outs),
+                           evaluations=sum(o.evaluations for o in outs)), best
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
         buffers, args, params = self.kernel_arguments(max_iterations)

@@ -1,11 +1,8 @@
-"""The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
-
-A run (:func:`lm_run`) is :class:`.reference.ReferenceLM`'s iteration line for line (tests hold the two to the same
-steps). The task error ``e`` stacks the goals' rows (goal g's from ``spec[g, G_ROW]``), each scaled by the square root
-of its weight; ``E = de/dq``. The frame family's rows are here (:func:`goal_error`), the others' in :mod:`.axes` and
-:mod:`.balance`. Arguments travel in groups: ``kin`` (``Robot.tree_constants()``), ``goals`` (``GoalStack.arrays``),
-the targets (pt (G, 3), Rt (G, 3, 3)) and the :data:`Workspace`. Two variants (:func:`_run`), two entries each
-(:data:`Entries`; :func:`entries_for`).
+"""The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs (the iteration: :mod:`.engine`), one call
+each, :class:`.reference.ReferenceLM`'s loop line for line. The frame family's rows are here (:func:`goal_error`), the
+others' in :mod:`.axes` and :mod:`.balance`. Arguments travel in groups: ``kin`` (``Robot.tree_constants()``),
+``goals`` (``GoalStack.arrays``), the targets (pt (G, 3), Rt (G, 3, 3)) and the :data:`Workspace`; two variants
+(:func:`_run`), two entries each (:data:`Entries`; :func:`entries_for`).
 
 Editing rules: compiled functions take :data:`BORROWING` (``_nrt=False``: no reference counting, a fifth of the run
 time, so a helper that allocates fails to compile); the per-step helpers are inlined by LLVM (``forceinline=True``;

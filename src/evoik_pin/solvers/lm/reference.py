@@ -101,7 +101,6 @@ class ReferenceLM:
         self.task_space = stack.rows <= robot.n  # solve the smaller normal equations
         self.eye = np.eye(min(stack.rows, robot.n))
 
-    # ------------------------------------------------------------------ task error
     def error_at(self, q: np.ndarray):
         """(e (rows,), extras (per goal), errors (per goal: (position m, orientation rad or None))) at ``q`` (n,)."""
         if self._tip:
@@ -153,7 +152,6 @@ class ReferenceLM:
             return E.T.dot(dposv(N + lam * self.eye, rhs, overwrite_a=1)[1])
         return dposv(N + lam * self.eye, E.T.dot(rhs), overwrite_a=1)[1]
 
-    # ------------------------------------------------------------------ the iteration
     def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, N: np.ndarray, e: np.ndarray,
               lam: float) -> tuple[np.ndarray, bool]:
         """The next configuration and whether it rests on a bound (``N``: :meth:`_normal` of ``E``): the damped step
