@@ -97,17 +97,6 @@ def _contact(aux, base, i, Rj, pj):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def _hull_start(aux, base, K, Rj, pj):
-    """(index, x, y) of the contact point with the least x (then y): a vertex of their convex hull."""
-    best, bx, by = 0, 0.0, 0.0
-    for i in range(K):
-        x, y = _contact(aux, base, i, Rj, pj)
-        if i == 0 or x < bx or (x == bx and y < by):
-            best, bx, by = i, x, y
-    return best, bx, by
-
-
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _hull_next(aux, base, K, i, xi, yi, Rj, pj):
     """(index, x, y) of the hull vertex after vertex i (at xi, yi) counter-clockwise: the point with every other
     point on the left of the edge (of collinear ones the farthest); index -1 when every point coincides with i."""
@@ -137,7 +126,11 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
     K = int(aux[A_COM_POINTS])
     base = A_COM_BODIES + 5 * m
     s = aux[A_COM_SHRINK]
-    i0, x0, y0 = _hull_start(aux, base, K, Rj, pj)
+    i0, x0, y0 = 0, 0.0, 0.0  # the contact point with the least x (then y): a vertex of the hull
+    for i in range(K):
+        x, y = _contact(aux, base, i, Rj, pj)
+        if i == 0 or x < x0 or (x == x0 and y < y0):
+            i0, x0, y0 = i, x, y
     # pass 1: the largest violation of the shrunk edges' half-planes n.x <= n.P - s, and the hull's size
     worst = -1e300
     edges = 0

@@ -216,7 +216,13 @@ def damped_solve(E, lam, rhs, L, y, dq):
     size = n if joints else m
     for i in range(size):  # L L^T = Gram + lam I, the Gram matrix's entries made as they are needed
         for j in range(i + 1):
-            s = _gram(E, i, j, joints)
+            s = 0.0
+            if joints:  # entry (i, j) of E^T E (columns i, j) or of E E^T (rows i, j)
+                for k in range(m):
+                    s += E[k, i] * E[k, j]
+            else:
+                for k in range(n):
+                    s += E[i, k] * E[j, k]
             if i == j:
                 s += lam
             for k in range(j):
@@ -252,19 +258,6 @@ def damped_solve(E, lam, rhs, L, y, dq):
             s += E[i, k] * y[i]
         dq[k] = s
     return True
-
-
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def _gram(E, i, j, joints):
-    """Entry (i, j) of E E^T (rows i, j of E) or, with ``joints``, of E^T E (columns i, j)."""
-    s = 0.0
-    if joints:
-        for k in range(E.shape[0]):
-            s += E[k, i] * E[k, j]
-    else:
-        for k in range(E.shape[1]):
-            s += E[i, k] * E[j, k]
-    return s
 
 
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
