@@ -130,8 +130,7 @@ class LevenbergMarquardt:
         _check_engine(engine)
         self.engine = engine
         self.problem = problem
-        robot = problem.robot
-        self.robot = robot
+        robot = self.robot = problem.robot
         self.n = robot.n
         stack, pt, Rt = problem.goal_stack()
         self._pt, self._Rt = owned(pt, float), owned(Rt, float)

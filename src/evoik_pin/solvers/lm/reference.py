@@ -40,7 +40,6 @@ class _Goal:
         self.frame_id = robot.frame_id(frame)
         self.sw = float(weight)  # the square root of the goal's weight
         self.tol, self.rtol = float(tol), float(rtol)
-        self.m = {LOG6: 6, POINT: 3, KIND_PLANAR_YAW: 3}.get(kind, 2)
         self.position = np.array(pt, dtype=float)
         if kind == LOG6:
             self.target_inv = pin.SE3(np.array(Rt, dtype=float), self.position).inverse()
@@ -70,7 +69,7 @@ class _Goal:
         if self.kind == POINT:
             return R.dot(J[:3])
         Jv = R[:2].dot(J[:3])
-        if self.m == 2:
+        if self.kind != KIND_PLANAR_YAW:
             return Jv
         return np.vstack([Jv, R[2].dot(J[3:])])
 
@@ -137,8 +136,7 @@ class ReferenceLM:
     def outcome(self, q, errors, converged: bool, it: int, evaluations: int, c: float) -> LMOutcome:
         """The :class:`LMOutcome` of a run ending at ``q`` with per-goal ``errors`` and cost ``c``."""
         pos = max(p for p, _ in errors)
-        rots = [r for _, r in errors if r is not None]
-        rot = max(rots) if rots else None
+        rot = max((r for _, r in errors if r is not None), default=None)
         g_err = np.array([(p, np.nan if r is None else r) for p, r in errors]) if len(errors) > 1 else None
         return LMOutcome(q, pos, rot, converged, it, evaluations, g_err, float(c))
 
