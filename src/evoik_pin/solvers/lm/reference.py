@@ -226,8 +226,13 @@ class ReferenceLM:
                 creeping = layout.GEO_SLOW * c < cn < layout.GEO_NEAR
                 q, on_bound, e, extras, errors, c = qn, on_bound_n, en, extras_n, errors_n, cn
                 if self.within(errors):
-                    if self.finish and c > layout.FINISHED:
-                        return self._finish(q, e, extras, errors, c, it, evaluations)
+                    if self.finish and c > layout.FINISHED:  # one more, (almost) undamped step, kept if better
+                        E = self.task_jacobian(q, extras)
+                        qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
+                        en, _, errors_n = self.error_at(qn)
+                        it, evaluations, cn = it + 1, evaluations + 1, en.dot(en)
+                        if cn < c:
+                            q, errors, c = qn, errors_n, cn
                     return self.outcome(q, errors, True, it, evaluations, c)
                 E = None
                 lam = max(lam * layout.SHRINK, LAMBDA_MIN)
@@ -244,7 +249,7 @@ class ReferenceLM:
         """Geodesic acceleration (Transtrum & Sethna 2012) ``a = -(E^T E + lam I)^-1 E^T r''`` (n,) of the step v
         (n,) from a configuration with error e, Jacobian E, its normal matrix N and damping lam, given the error eh
         at ``q + h v``: ``r'' = 2/h ((eh - e) / h - E v)``; the step ``v + a / 2`` bends along a narrow curved valley
-        (a near-singular target). None when ``|a| > layout.GEO_ALPHA |v| / 2``.
+        (a near-singular target). None when ``|a| > GEO_ALPHA |v| / 2``.
         """
         h = layout.GEO_H
         rpp = (2.0 / h) * ((eh - e) / h - E.dot(v))
@@ -259,13 +264,3 @@ class ReferenceLM:
             if np.count_nonzero(out):
                 q = np.where(out, self.lower + np.mod(q - self.lower, layout.TWO_PI), q)
         return q
-
-    def _finish(self, q, e, extras, errors, c, it, evaluations) -> LMOutcome:
-        """One more, (almost) undamped step once the tolerances are met (kept only if better)."""
-        E = self.task_jacobian(q, extras)
-        qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
-        en, _, errors_n = self.error_at(qn)
-        cn = en.dot(en)
-        if cn < c:
-            return self.outcome(qn, errors_n, True, it + 1, evaluations + 1, cn)
-        return self.outcome(q, errors, True, it + 1, evaluations + 1, c)
