@@ -63,17 +63,6 @@ def log3(M, phi):
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def _add_half_skew(v, A):
-    """A (3, 3) += [v / 2]x, the skew matrix of v / 2 (Pinocchio's ``addSkew(0.5 * v, A)``)."""
-    A[0, 1] -= 0.5 * v[2]
-    A[1, 0] += 0.5 * v[2]
-    A[0, 2] += 0.5 * v[1]
-    A[2, 0] -= 0.5 * v[1]
-    A[1, 2] -= 0.5 * v[0]
-    A[2, 1] += 0.5 * v[0]
-
-
-@njit(cache=True, nogil=True, forceinline=False)
 def jlog3(theta, w, A):
     """``pin.Jlog3``: A (3, 3), the derivative of ``log3(R exp(dw))`` at dw = 0, from ``w = log3(R)`` (angle
     theta): ``alpha w w^T + d I + [w]x / 2``."""
@@ -88,7 +77,12 @@ def jlog3(theta, w, A):
         for j in range(3):
             A[i, j] = alpha * w[i] * w[j]
         A[i, i] += d
-    _add_half_skew(w, A)
+    A[0, 1] -= 0.5 * w[2]  # + [w / 2]x (Pinocchio's addSkew(0.5 * w, A))
+    A[1, 0] += 0.5 * w[2]
+    A[0, 2] += 0.5 * w[1]
+    A[2, 0] -= 0.5 * w[1]
+    A[1, 2] -= 0.5 * w[0]
+    A[2, 1] += 0.5 * w[0]
 
 
 @njit(cache=True, nogil=True, forceinline=False)

@@ -21,17 +21,11 @@ import math
 
 from numba import njit
 
+from ...goals import registry
 from ...goals.bands import AUX_SIZE
 from ...goals.center_of_mass import A_COM_AXES, A_COM_BODIES, A_COM_MASS, A_COM_MOMENT, A_COM_POINTS, A_COM_SHRINK
 from ...goals.goal import A_REL_BAND, A_REL_JOINT, A_REL_P, A_REL_R, A_REL_SIGNS, BOTH
-from ...goals.registry import (
-    BANDED_LOG6,
-    COM_POINT,
-    COM_SUPPORT,
-    RELATIVE_BANDED_LOG6,
-    RELATIVE_POINT_IN_A,
-    RELATIVE_POINT_WORLD,
-)
+from ...goals.registry import COM_POINT, COM_SUPPORT, RELATIVE_BANDED_LOG6, RELATIVE_POINT_IN_A, RELATIVE_POINT_WORLD
 from ...lie.compiled import log6
 from .axes import axes_error, axes_jacobian
 from .tree_kinematics import BORROWING, frame_pose, joint_column
@@ -103,17 +97,6 @@ def _contact(aux, base, i, Rj, pj):
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def _hull_start(aux, base, K, Rj, pj):
-    """(index, x, y) of the contact point with the least x (then y): a vertex of their convex hull."""
-    best, bx, by = 0, 0.0, 0.0
-    for i in range(K):
-        x, y = _contact(aux, base, i, Rj, pj)
-        if i == 0 or x < bx or (x == bx and y < by):
-            best, bx, by = i, x, y
-    return best, bx, by
-
-
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
 def _hull_next(aux, base, K, i, xi, yi, Rj, pj):
     """(index, x, y) of the hull vertex after vertex i (at xi, yi) counter-clockwise: the point with every other
     point on the left of the edge (of collinear ones the farthest); index -1 when every point coincides with i."""
@@ -143,7 +126,11 @@ def support_error(Rj, pj, aux, cx, cy, e, tg):
     K = int(aux[A_COM_POINTS])
     base = A_COM_BODIES + 5 * m
     s = aux[A_COM_SHRINK]
-    i0, x0, y0 = _hull_start(aux, base, K, Rj, pj)
+    i0, x0, y0 = 0, 0.0, 0.0  # the contact point with the least x (then y): a vertex of the hull
+    for i in range(K):
+        x, y = _contact(aux, base, i, Rj, pj)
+        if i == 0 or x < x0 or (x == x0 and y < y0):
+            i0, x0, y0 = i, x, y
     # pass 1: the largest violation of the shrunk edges' half-planes n.x <= n.P - s, and the hull's size
     worst = -1e300
     edges = 0
@@ -284,7 +271,7 @@ def relative_axes_error(Rj, pj, aux, jb, Rbf, pbf, pt, Rt, R, p, M, t, e):
             p[i] = M[0, i] * b0 + M[1, i] * b1 + M[2, i] * b2
         R[0, c], R[1, c], R[2, c] = p[0], p[1], p[2]
     band = aux[A_REL_BAND:A_REL_BAND + AUX_SIZE]
-    c, pos, rot = axes_error(BANDED_LOG6, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
+    c, pos, rot = axes_error(registry.BANDED_LOG6, R, t, pt, Rt, band, M, p, e)  # p as axes_error's scratch
     frame_pose(Rj, pj, jb, Rbf, pbf, M, p)  # frame b's origin again (M: scratch)
     return c, pos, rot
 
@@ -301,7 +288,7 @@ def relative_axes_jacobian(Rj, pj, aux, R, t, J, pt, Rt, rv, A, B, E, r):
         for i in range(3):
             J[i, k] = A[0, i] * v0 + A[1, i] * v1 + A[2, i] * v2
             J[3 + i, k] = A[0, i] * w0 + A[1, i] * w1 + A[2, i] * w2
-    axes_jacobian(BANDED_LOG6, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
+    axes_jacobian(registry.BANDED_LOG6, R, t, J, pt, Rt, aux[A_REL_BAND:A_REL_BAND + AUX_SIZE], rv, A, B, E, r)
 
 
 @njit(cache=True, nogil=True, forceinline=True, **BORROWING)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import threading
 import time
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -26,36 +27,9 @@ import numpy as np
 from ...errors import OptionError
 from ...goals.bands import AUX_SIZE
 from ...goals.registry import BANDED_LOG6, FAMILY_FRAME, KINDS, LOG6, POINT
-from ...goals.stack import (
-    KIND_PLANAR,
-    KIND_PLANAR_YAW,
-    GoalArrays,
-    GoalStack,
-    TargetArrays,
-    owned,
-    spec_row,
-)
-from .layout import (
-    B_CHI,
-    B_CLO,
-    B_HI,
-    B_LO,
-    DEFAULT_DAMPING,
-    DEFAULT_ITERATIONS,
-    DEFAULT_MAX_STEP,
-    DEFAULT_STALL_RATIO,
-    DEFAULT_STALL_WINDOW,
-    P_ITERATIONS,
-    S_CONVERGED,
-    S_COST,
-    S_EVALUATIONS,
-    S_ITERATIONS,
-    S_POS,
-    S_ROT,
-    STATS_SIZE,
-    box_constants,
-    kernel_params,
-)
+from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW, GoalArrays, GoalStack, TargetArrays, owned, spec_row
+from . import layout
+from .layout import DEFAULT_DAMPING, DEFAULT_ITERATIONS, DEFAULT_MAX_STEP, DEFAULT_STALL_RATIO, DEFAULT_STALL_WINDOW
 from .run_outcome import LMOutcome, PairsOutcome
 
 if TYPE_CHECKING:  # the problem module imports goals, which import this package's layout
@@ -98,42 +72,36 @@ def compiled_kernel(extra: bool = False) -> dict:
     The first call per variant runs each entry once on a one-joint robot, so that numba loads (or, once per install,
     compiles, with a notice: :mod:`.compiling`) its machine code before any solver starts its clock. Thread-safe.
     """
-    kernel = _KERNELS.get(extra)
-    if kernel is None:
-        with _LOADING:  # threads wanting it at once (solve_many's workers): one loads it, one notice
-            kernel = _KERNELS.get(extra)
-            if kernel is None:
-                kernel = _KERNELS[extra] = _load_kernel(extra)
-    return kernel
-
-
-def _load_kernel(extra: bool) -> dict:
-    """:func:`compiled_kernel`'s work for one variant."""
+    if extra in _KERNELS:
+        return _KERNELS[extra]
     from . import kernel as K
     from .compiling import load
 
-    tree, box, goals, pt, Rt = warmup_problem()
-    params = kernel_params(iterations=1)
-    entries = K.ALL if extra else K.BASIC
-    buffers = (np.empty(int(K.workspace_size(1, 1, 1, 6, 1))), np.empty(1, dtype=bool))
-    stats = np.empty((1, STATS_SIZE))
-    calls = [(entries.run, (*buffers, np.zeros(1), tree, box, False, goals, pt, Rt, params, np.empty(1),
-                            np.empty((1, 2)))),
-             (entries.runs, (*buffers, np.zeros((1, 1)), tree, box, False, goals, pt[None], Rt[None], params,
-                             np.empty((1, 1)), stats, np.empty((1, 1, 2)), True))]
-    if extra:
-        # Goal.errors' compiled errors (.axes, read-only aux row) are first called mid-search: load them here too,
-        # outside any time budget
-        from .axes import axes_error
+    with _LOADING:  # threads wanting it at once (solve_many's workers): one loads it, one notice
+        if extra in _KERNELS:
+            return _KERNELS[extra]
+        tree, box, goals, pt, Rt = warmup_problem()
+        params = layout.kernel_params(iterations=1)
+        entries = K.ALL if extra else K.BASIC
+        buffers = K._buffers(1, tree, goals[0], params)
+        calls = [(entries.run, (*buffers, np.zeros(1), tree, box, False, goals, pt, Rt, params, np.empty(1),
+                                np.empty((1, 2)))),
+                 (entries.runs, (*buffers, np.zeros((1, 1)), tree, box, False, goals, pt[None], Rt[None], params,
+                                 np.empty((1, 1)), np.empty((1, layout.STATS_SIZE)), np.empty((1, 1, 2)), True))]
+        if extra:
+            # Goal.errors' compiled errors (.axes, read-only aux row) are first called mid-search: load them here
+            # too, outside any time budget
+            from .axes import axes_error
 
-        aux = np.zeros(AUX_SIZE)
-        aux.setflags(write=False)
-        calls.append((axes_error, (BANDED_LOG6, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux,
-                                   np.empty((3, 3)), np.empty(3), np.empty(6))))
-    load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
-         KERNEL_COMPILE_SECONDS[extra])
-    return dict(lm_runs=K.lm_runs, lm_run_buffers=entries.run, lm_runs_buffers=entries.runs,
-                workspace_size=K.workspace_size)
+            aux = np.zeros(AUX_SIZE)
+            aux.setflags(write=False)
+            calls.append((axes_error, (BANDED_LOG6, np.eye(3), np.zeros(3), np.zeros(3), np.eye(3), aux,
+                                       np.empty((3, 3)), np.empty(3), np.empty(6))))
+        load("the LM kernel for " + ("every goal kind" if extra else "pose, position and planar goals"), calls,
+             KERNEL_COMPILE_SECONDS[extra])
+        _KERNELS[extra] = dict(lm_runs=K.lm_runs, lm_run_buffers=entries.run, lm_runs_buffers=entries.runs,
+                               workspace_size=K.workspace_size)
+    return _KERNELS[extra]
 
 
 def _check_engine(engine: str) -> None:
@@ -162,8 +130,7 @@ class LevenbergMarquardt:
         _check_engine(engine)
         self.engine = engine
         self.problem = problem
-        robot = problem.robot
-        self.robot = robot
+        robot = self.robot = problem.robot
         self.n = robot.n
         stack, pt, Rt = problem.goal_stack()
         self._pt, self._Rt = owned(pt, float), owned(Rt, float)
@@ -183,8 +150,8 @@ class LevenbergMarquardt:
         self._kernel = compiled_kernel(later_kinds(stack))  # this stack's variant, loaded before any clock
         self._tree = tuple(owned(a) for a in robot.tree_constants())  # the kernel's kin
         self._goal_arrays = tuple(owned(a) for a in stack.arrays)
-        _, self._any_wrap, _, _, self._box = box_constants(robot, problem.lower, problem.upper)
-        self._params = kernel_params(0, damping, max_step, stall_window, stall_ratio, finish)
+        _, self._any_wrap, _, _, self._box = layout.box_constants(robot, problem.lower, problem.upper)
+        self._params = layout.kernel_params(0, damping, max_step, stall_window, stall_ratio, finish)
         G = len(stack.kinds)
         self._one = G == 1
         self._g_scratch = np.empty((G, 2))  # one goal: its errors are the outcome's own
@@ -204,9 +171,9 @@ class LevenbergMarquardt:
         if self._reference is not None or problem.robot is not self.robot or self._own_box:
             return False
         stack, pt, Rt = problem.goal_stack()
-        box = self._same_box
-        if stack is not self.goals or ((problem.lower is not box[0] or problem.upper is not box[1]) and box_constants(
-                self.robot, problem.lower, problem.upper)[4] is not self._box):
+        same = problem.lower is self._same_box[0] and problem.upper is self._same_box[1]
+        if stack is not self.goals or not (same or layout.box_constants(self.robot, problem.lower, problem.upper)[4]
+                                           is self._box):
             return False
         self._same_box = (problem.lower, problem.upper)  # the box arrays checked last (an IKSolver's, every call)
         self.set_targets(pt, Rt)
@@ -225,8 +192,8 @@ class LevenbergMarquardt:
             box = self._box = np.zeros_like(box)
             self._set_args()
             self._own_box = True
-        box[B_LO] = box[B_CLO] = lower
-        box[B_HI] = box[B_CHI] = upper  # the wrap row stays 0: the box is in unwrapped values
+        box[layout.B_LO] = box[layout.B_CLO] = lower
+        box[layout.B_HI] = box[layout.B_CHI] = upper  # the wrap row stays 0: the box is in unwrapped values
 
     def set_targets(self, pt: np.ndarray, Rt: np.ndarray) -> None:
         """Write the goals' targets ``pt`` (G, 3) m and ``Rt`` (G, 3, 3) into the kernel's argument arrays (the goal
@@ -281,17 +248,15 @@ class LevenbergMarquardt:
             return self._reference.run(q, max_iterations, deadline)
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
-        params = self._params
-        params[P_ITERATIONS] = max_iterations
+        buffers, args, params = self.kernel_arguments(max_iterations)
         out = np.empty(self.n)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
-        buffers = self._workspace(max_iterations)
         run = self._direct
         if run is None:
             run, q = self._kernel["lm_run_buffers"], owned(q, float)
         else:  # the overload's argument type exactly: a C-contiguous, writable float64 vector of our own
             q = np.array(q, dtype=float)
-        pos, rot, converged, it, evaluations, cost = run(*buffers, q, *self._args, params, out, g_err)
+        pos, rot, converged, it, evaluations, cost = run(*buffers, q, *args, params, out, g_err)
         return LMOutcome(out, pos, rot if self.oriented else None, converged, it, evaluations,
                          None if self._one else g_err, cost)
 
@@ -299,7 +264,7 @@ class LevenbergMarquardt:
         """(workspace buffers, the kernel's constant arguments (kin, box, any_wrap, goals, pt, Rt), params with
         ``max_iterations`` steps) for compiled code that makes :meth:`run`'s runs itself (:mod:`..search.first_runs`).
         Compiled engine only."""
-        self._params[P_ITERATIONS] = max_iterations
+        self._params[layout.P_ITERATIONS] = max_iterations
         return self._workspace(max_iterations), self._args, self._params
 
     def run_many(self, Q: np.ndarray, max_iterations: int, deadline: float | None = None
@@ -320,26 +285,24 @@ class LevenbergMarquardt:
                 if outs[-1].converged:
                     break
             best = len(outs) - 1 if outs[-1].converged else int(np.argmin([o.rank for o in outs]))
-            o = outs[best]
-            return LMOutcome(o.q, o.position_error, o.orientation_error, o.converged,
-                             sum(x.iterations for x in outs), sum(x.evaluations for x in outs), o.goal_errors,
-                             o.cost), best
+            return replace(outs[best], iterations=sum(o.iterations for o in outs),
+                           evaluations=sum(o.evaluations for o in outs)), best
         if deadline is not None and time.perf_counter() >= deadline:
             max_iterations = 0
         buffers, args, params = self.kernel_arguments(max_iterations)
         K = Q.shape[0]
-        Q_out, stats, g_stats = np.empty_like(Q), np.empty((K, STATS_SIZE)), np.empty((K, len(self.goals), 2))
+        Q_out, stats, g_stats = np.empty_like(Q), np.empty((K, layout.STATS_SIZE)), np.empty((K, len(self.goals), 2))
         k = self._kernel["lm_runs_buffers"](*buffers, Q, *args[:4], self._pt[None], self._Rt[None], params, Q_out,
                                             stats, g_stats, True)
         runs = k + 1 if k >= 0 else -(k + 1)
         s = stats[:runs]
         if k < 0:
-            rank = (s[:, S_POS] + (s[:, S_ROT] if self.oriented else 0.0)) if self._one else s[:, S_COST]
-            k = int(np.argmin(rank))
-        rot = float(s[k, S_ROT]) if self.oriented else None
-        return LMOutcome(Q_out[k], float(s[k, S_POS]), rot, bool(s[k, S_CONVERGED]),
-                         int(s[:, S_ITERATIONS].sum()), int(s[:, S_EVALUATIONS].sum()),
-                         None if self._one else g_stats[k], float(s[k, S_COST])), k
+            pos_rot = s[:, layout.S_POS] + (s[:, layout.S_ROT] if self.oriented else 0.0)
+            k = int(np.argmin(pos_rot if self._one else s[:, layout.S_COST]))  # LMOutcome.rank
+        rot = float(s[k, layout.S_ROT]) if self.oriented else None
+        return LMOutcome(Q_out[k], float(s[k, layout.S_POS]), rot, bool(s[k, layout.S_CONVERGED]),
+                         int(s[:, layout.S_ITERATIONS].sum()), int(s[:, layout.S_EVALUATIONS].sum()),
+                         None if self._one else g_stats[k], float(s[k, layout.S_COST])), k
 
 
 _LOCAL = threading.local()
@@ -403,15 +366,16 @@ def solve_pairs(robot, Q: np.ndarray, targets: list[Target] | TargetArrays | Goa
         arrays = targets if isinstance(targets, TargetArrays) else TargetArrays.of(targets)
         stack = GoalStack.single(robot, arrays.kind, tolerance, rotation_tolerance)
         P, Rts, g_stats = arrays.P[:, None], arrays.Rts[:, None], None
-    _, any_wrap, _, _, box = box_constants(robot, lower, upper)
-    Q_out, stats = np.empty((N, robot.n)), np.empty((N, STATS_SIZE))
+    _, any_wrap, _, _, box = layout.box_constants(robot, lower, upper)
+    Q_out, stats = np.empty((N, robot.n)), np.empty((N, layout.STATS_SIZE))
     compiled_kernel(later_kinds(stack))["lm_runs"](
         owned(Q, float), tuple(owned(a) for a in robot.tree_constants()), box, any_wrap,
         tuple(owned(a) for a in stack.arrays), owned(P, float), owned(Rts, float),
-        kernel_params(max_iterations, damping, max_step), Q_out, stats,
+        layout.kernel_params(max_iterations, damping, max_step), Q_out, stats,
         np.empty((N, 1, 2)) if g_stats is None else g_stats)
-    return PairsOutcome(Q_out, stats[:, S_POS].copy(), stats[:, S_ROT].copy() if arrays.oriented else None,
-                        stats[:, S_CONVERGED] != 0.0, stats[:, S_EVALUATIONS].astype(np.int64), g_stats)
+    rot = stats[:, layout.S_ROT].copy() if arrays.oriented else None
+    return PairsOutcome(Q_out, stats[:, layout.S_POS].copy(), rot, stats[:, layout.S_CONVERGED] != 0.0,
+                        stats[:, layout.S_EVALUATIONS].astype(np.int64), g_stats)
 
 
 def targets_of(arrays: TargetArrays) -> list[Target]:

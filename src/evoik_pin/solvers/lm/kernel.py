@@ -1,11 +1,8 @@
-"""The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs, one call each.
-
-A run (:func:`lm_run`) is :class:`.reference.ReferenceLM`'s iteration line for line (tests hold the two to the same
-steps). The task error ``e`` stacks the goals' rows (goal g's from ``spec[g, G_ROW]``), each scaled by the square root
-of its weight; ``E = de/dq``. The frame family's rows are here (:func:`goal_error`), the others' in :mod:`.axes` and
-:mod:`.balance`. Arguments travel in groups: ``kin`` (``Robot.tree_constants()``), ``goals`` (``GoalStack.arrays``),
-the targets (pt (G, 3), Rt (G, 3, 3)) and the :data:`Workspace`. Two variants (:func:`_run`), two entries each
-(:data:`Entries`; :func:`entries_for`).
+"""The Levenberg-Marquardt engine's compiled kernel (numba): whole LM runs (the iteration: :mod:`.engine`), one call
+each, :class:`.reference.ReferenceLM`'s loop line for line. The frame family's rows are here (:func:`goal_error`), the
+others' in :mod:`.axes` and :mod:`.balance`. Arguments travel in groups: ``kin`` (``Robot.tree_constants()``),
+``goals`` (``GoalStack.arrays``), the targets (pt (G, 3), Rt (G, 3, 3)) and the :data:`Workspace`; two variants
+(:func:`_run`), two entries each (:data:`Entries`; :func:`entries_for`).
 
 Editing rules: compiled functions take :data:`BORROWING` (``_nrt=False``: no reference counting, a fifth of the run
 time, so a helper that allocates fails to compile); the per-step helpers are inlined by LLVM (``forceinline=True``;
@@ -22,52 +19,16 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ...goals.registry import (
-    FAMILY_AXES,
-    FAMILY_BEYOND_FRAME,
-    FAMILY_FRAME,
-    LOG6,
-    PLANAR,
-    PLANAR_YAW,
-    POINT,
-    RELATIVE_LOG6,
-)
+from ...goals import registry
+from ...goals.registry import FAMILY_AXES, FAMILY_BEYOND_FRAME, LOG6, PLANAR, PLANAR_YAW, POINT, RELATIVE_LOG6
 from ...goals.stack import G_ANGLE, G_FAMILY, G_JOINT, G_KIND, G_ROW, G_ROWS, G_RTOL, G_TOL, G_WEIGHT
 from ...lie.compiled import jlog6, log6, wrap_angle, yaw
+from . import layout
 from .axes import axes_error, axes_jacobian
 from .balance import balance_columns, balance_error, balance_rows
 from .chain import coupled, expand, fold
-from .layout import (
-    B_CHI,
-    B_CLO,
-    B_HI,
-    B_LO,
-    B_WRAP,
-    FINISHED,
-    GEO_ALPHA,
-    GEO_H,
-    GEO_NEAR,
-    GEO_SLOW,
-    GROW,
-    LAMBDA_MAX,
-    LAMBDA_MIN,
-    P_DAMPING,
-    P_FINISH,
-    P_ITERATIONS,
-    P_MAX_STEP,
-    P_STALL_RATIO,
-    P_STALL_WINDOW,
-    S_CONVERGED,
-    S_COST,
-    S_EVALUATIONS,
-    S_ITERATIONS,
-    S_POS,
-    S_ROT,
-    SHRINK,
-)
+from .layout import B_CHI, B_CLO, B_HI, B_LO, B_WRAP, LAMBDA_MIN, P_ITERATIONS, TWO_PI
 from .tree_kinematics import BORROWING, frame_jacobian, frame_pose, tree_forward
-
-TWO_PI = 2.0 * math.pi
 
 
 @njit(cache=True, nogil=True, forceinline=True)
@@ -255,7 +216,13 @@ def damped_solve(E, lam, rhs, L, y, dq):
     size = n if joints else m
     for i in range(size):  # L L^T = Gram + lam I, the Gram matrix's entries made as they are needed
         for j in range(i + 1):
-            s = _gram(E, i, j, joints)
+            s = 0.0
+            if joints:  # entry (i, j) of E^T E (columns i, j) or of E E^T (rows i, j)
+                for k in range(m):
+                    s += E[k, i] * E[k, j]
+            else:
+                for k in range(n):
+                    s += E[i, k] * E[j, k]
             if i == j:
                 s += lam
             for k in range(j):
@@ -293,19 +260,6 @@ def damped_solve(E, lam, rhs, L, y, dq):
     return True
 
 
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def _gram(E, i, j, joints):
-    """Entry (i, j) of E E^T (rows i, j of E) or, with ``joints``, of E^T E (columns i, j)."""
-    s = 0.0
-    if joints:
-        for k in range(E.shape[0]):
-            s += E[k, i] * E[k, j]
-    else:
-        for k in range(E.shape[1]):
-            s += E[i, k] * E[j, k]
-    return s
-
-
 @njit(cache=True, nogil=True, forceinline=False, **BORROWING)
 def into_box(q, box, any_wrap, out):
     """out (n,) = q clipped into the box, wrapping joints shifted by 2 pi into [lower, lower + 2 pi)."""
@@ -317,9 +271,12 @@ def into_box(q, box, any_wrap, out):
         out[k] = x
 
 
-@njit(cache=True, nogil=True, forceinline=False, **BORROWING)
-def _scaled_to(dq, max_step):
-    """Scale dq (n,) down to length max_step when longer (the trust region)."""
+@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
+def _trust_step(W, lam, rhs, L, y, dq, max_step):
+    """dq = :func:`damped_solve`'s step, scaled down to length max_step when longer (the trust region); False when the
+    system is not positive."""
+    if not damped_solve(W, lam, rhs, L, y, dq):
+        return False
     s2 = 0.0
     for k in range(dq.shape[0]):
         s2 += dq[k] * dq[k]
@@ -327,14 +284,6 @@ def _scaled_to(dq, max_step):
         f = max_step / math.sqrt(s2)
         for k in range(dq.shape[0]):
             dq[k] *= f
-
-
-@njit(cache=True, nogil=True, forceinline=True, **BORROWING)
-def _trust_step(W, lam, rhs, L, y, dq, max_step):
-    """dq = :func:`damped_solve`'s step scaled into the trust region; False when the system is not positive."""
-    if not damped_solve(W, lam, rhs, L, y, dq):
-        return False
-    _scaled_to(dq, max_step)
     return True
 
 
@@ -514,10 +463,10 @@ def _run(extra, name, doc):
         mimic = coupled(kin[4], kin[5], kin[6], n)
         weighted = weighted_stack(spec)
         m = ws.E.shape[0]
-        max_step = params[P_MAX_STEP]
-        window = int(params[P_STALL_WINDOW])
-        stall = params[P_STALL_RATIO] * params[P_STALL_RATIO]
-        finish = params[P_FINISH] != 0.0
+        max_step = params[layout.P_MAX_STEP]
+        window = int(params[layout.P_STALL_WINDOW])
+        stall = params[layout.P_STALL_RATIO] * params[layout.P_STALL_RATIO]
+        finish = params[layout.P_FINISH] != 0.0
         max_it = int(params[P_ITERATIONS])
         cur, cand, probe = ws.cur, ws.cand, ws.probe  # cur and cand trade places when a step is accepted
         E, v, dq, history = ws.E, ws.v, ws.dq, ws.history
@@ -533,7 +482,7 @@ def _run(extra, name, doc):
             _copy(cur.q, q_out)
             pos, rot = _outcome(spec, cur.ge, g_out)
             return pos, rot, True, 0, evaluations, c
-        lam = params[P_DAMPING]
+        lam = params[layout.P_DAMPING]
         have_E = False
         history[0] = c
         hlen = 1
@@ -554,7 +503,7 @@ def _run(extra, name, doc):
                     if any_wrap and box[B_WRAP, k] != 0.0:
                         d = (d + math.pi) % TWO_PI - math.pi
                     v[k] = d
-                    qh[k] = q[k] + GEO_H * d
+                    qh[k] = q[k] + layout.GEO_H * d
                 task_error(extra, kin, mimic, goals, weighted, pt, Rt, qh, probe, ws)
                 evaluations += 1
                 rhs = ws.rhs
@@ -562,37 +511,37 @@ def _run(extra, name, doc):
                     s = 0.0
                     for k in range(n):
                         s += E[i, k] * v[k]
-                    rhs[i] = (2.0 / GEO_H) * ((probe.e[i] - e[i]) / GEO_H - s)
+                    rhs[i] = (2.0 / layout.GEO_H) * ((probe.e[i] - e[i]) / layout.GEO_H - s)
                 if damped_solve(E, lam, rhs, ws.L, ws.y, dq):  # dq = -a
                     a2 = 0.0
                     v2 = 0.0
                     for k in range(n):
                         a2 += dq[k] * dq[k]
                         v2 += v[k] * v[k]
-                    if 2.0 * math.sqrt(a2) <= GEO_ALPHA * math.sqrt(v2):
+                    if 2.0 * math.sqrt(a2) <= layout.GEO_ALPHA * math.sqrt(v2):
                         for k in range(n):
                             qh[k] = q[k] + v[k] - 0.5 * dq[k]
                         into_box(qh, box, any_wrap, qn)
             cn = task_error(extra, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
             evaluations += 1
             if cn < c:
-                creeping = GEO_SLOW * c < cn < GEO_NEAR
+                creeping = layout.GEO_SLOW * c < cn < layout.GEO_NEAR
                 cur, cand = cand, cur
                 on_bound, c = on_bound_n, cn
                 if within(spec, cur.ge):
                     converged = True
                     break
                 have_E = False
-                lam = max(lam * SHRINK, LAMBDA_MIN)
+                lam = max(lam * layout.SHRINK, LAMBDA_MIN)
                 history[hlen] = c
                 hlen += 1
                 if hlen > window and c > stall * history[hlen - 1 - window]:
                     break
             else:
-                lam *= GROW
-                if lam > LAMBDA_MAX:
+                lam *= layout.GROW
+                if lam > layout.LAMBDA_MAX:
                     break
-        if converged and finish and c > FINISHED:
+        if converged and finish and c > layout.FINISHED:
             # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
             task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, cur, ws, E)
             lm_step(cur.q, False, cur.e, LAMBDA_MIN, box, any_wrap, max_step, ws, cand.q)
@@ -645,9 +594,9 @@ def _entries(extra, suffix):
             else:
                 pos, rot, converged, it, evaluations, c = lm_run_basic(ws, Q[k], kin, box, any_wrap, goals, P[t],
                                                                        Rts[t], params, Q_out[k], g_stats[k])
-            stats[k, S_POS], stats[k, S_ROT], stats[k, S_COST] = pos, rot, c
-            stats[k, S_CONVERGED] = 1.0 if converged else 0.0
-            stats[k, S_ITERATIONS], stats[k, S_EVALUATIONS] = it, evaluations
+            stats[k, layout.S_POS], stats[k, layout.S_ROT], stats[k, layout.S_COST] = pos, rot, c
+            stats[k, layout.S_CONVERGED] = 1.0 if converged else 0.0
+            stats[k, layout.S_ITERATIONS], stats[k, layout.S_EVALUATIONS] = it, evaluations
             if converged and first:
                 return k
         return -(1 + Q.shape[0])
@@ -667,7 +616,7 @@ lm_run_buffers, lm_runs_buffers = ALL
 def entries_for(spec: np.ndarray) -> Entries:
     """The entries for the goal stack spec (G, GOAL_SIZE): :data:`BASIC` (faster) when every goal is of the frame
     family, else :data:`ALL`."""
-    return ALL if bool((spec[:, G_FAMILY] != FAMILY_FRAME).any()) else BASIC
+    return ALL if bool((spec[:, G_FAMILY] != registry.FAMILY_FRAME).any()) else BASIC
 
 
 def _buffers(n: int, kin: tuple, spec: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

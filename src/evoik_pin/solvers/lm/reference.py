@@ -14,23 +14,8 @@ from scipy.linalg.lapack import dposv
 from ...goals.registry import LOG6, POINT
 from ...goals.stack import G_RTOL, G_TOL, G_WEIGHT, KIND_PLANAR_YAW
 from ...lie import wrap_angle, yaw
-from .layout import (
-    DEFAULT_DAMPING,
-    DEFAULT_MAX_STEP,
-    DEFAULT_STALL_RATIO,
-    DEFAULT_STALL_WINDOW,
-    FINISHED,
-    GEO_ALPHA,
-    GEO_H,
-    GEO_NEAR,
-    GEO_SLOW,
-    GROW,
-    LAMBDA_MAX,
-    LAMBDA_MIN,
-    SHRINK,
-    TWO_PI,
-    box_constants,
-)
+from . import layout
+from .layout import DEFAULT_DAMPING, DEFAULT_MAX_STEP, DEFAULT_STALL_RATIO, DEFAULT_STALL_WINDOW, LAMBDA_MIN
 from .run_outcome import LMOutcome
 
 if TYPE_CHECKING:
@@ -55,7 +40,6 @@ class _Goal:
         self.frame_id = robot.frame_id(frame)
         self.sw = float(weight)  # the square root of the goal's weight
         self.tol, self.rtol = float(tol), float(rtol)
-        self.m = {LOG6: 6, POINT: 3, KIND_PLANAR_YAW: 3}.get(kind, 2)
         self.position = np.array(pt, dtype=float)
         if kind == LOG6:
             self.target_inv = pin.SE3(np.array(Rt, dtype=float), self.position).inverse()
@@ -85,12 +69,9 @@ class _Goal:
         if self.kind == POINT:
             return R.dot(J[:3])
         Jv = R[:2].dot(J[:3])
-        if self.m == 2:
+        if self.kind != KIND_PLANAR_YAW:
             return Jv
         return np.vstack([Jv, R[2].dot(J[3:])])
-
-    def within(self, pos: float, rot: float | None) -> bool:
-        return pos <= self.tol and (rot is None or rot <= self.rtol)
 
 
 class ReferenceLM:
@@ -108,7 +89,7 @@ class ReferenceLM:
         self.max_step2 = self.max_step**2
         self.stall_window, self.stall_ratio = int(stall_window), float(stall_ratio)
         self.lower, self.upper = problem.lower, problem.upper
-        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = box_constants(robot, self.lower, self.upper)
+        self.wrap, self.any_wrap, self.clip_lo, self.clip_hi, _ = layout.box_constants(robot, self.lower, self.upper)
         stack, pt, Rt = problem.goal_stack()
         spec = stack.spec
         self.goals = [_Goal(robot, stack.kinds[g], stack.frames[g], spec[g, G_WEIGHT], spec[g, G_TOL],
@@ -119,7 +100,6 @@ class ReferenceLM:
         self.task_space = stack.rows <= robot.n  # solve the smaller normal equations
         self.eye = np.eye(min(stack.rows, robot.n))
 
-    # ------------------------------------------------------------------ task error
     def error_at(self, q: np.ndarray):
         """(e (rows,), extras (per goal), errors (per goal: (position m, orientation rad or None))) at ``q`` (n,)."""
         if self._tip:
@@ -150,13 +130,13 @@ class ReferenceLM:
 
     def within(self, errors) -> bool:
         """Every goal's errors within its tolerances."""
-        return all(goal.within(pos, rot) for goal, (pos, rot) in zip(self.goals, errors, strict=True))
+        return all(pos <= g.tol and (rot is None or rot <= g.rtol) for g, (pos, rot) in zip(self.goals, errors,
+                                                                                            strict=True))
 
     def outcome(self, q, errors, converged: bool, it: int, evaluations: int, c: float) -> LMOutcome:
         """The :class:`LMOutcome` of a run ending at ``q`` with per-goal ``errors`` and cost ``c``."""
         pos = max(p for p, _ in errors)
-        rots = [r for _, r in errors if r is not None]
-        rot = max(rots) if rots else None
+        rot = max((r for _, r in errors if r is not None), default=None)
         g_err = np.array([(p, np.nan if r is None else r) for p, r in errors]) if len(errors) > 1 else None
         return LMOutcome(q, pos, rot, converged, it, evaluations, g_err, float(c))
 
@@ -170,7 +150,6 @@ class ReferenceLM:
             return E.T.dot(dposv(N + lam * self.eye, rhs, overwrite_a=1)[1])
         return dposv(N + lam * self.eye, E.T.dot(rhs), overwrite_a=1)[1]
 
-    # ------------------------------------------------------------------ the iteration
     def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, N: np.ndarray, e: np.ndarray,
               lam: float) -> tuple[np.ndarray, bool]:
         """The next configuration and whether it rests on a bound (``N``: :meth:`_normal` of ``E``): the damped step
@@ -212,14 +191,10 @@ class ReferenceLM:
         """:meth:`.engine.LevenbergMarquardt.run`, ``deadline`` checked before every step."""
         q = self._into_box(np.asarray(q, dtype=float))
         on_bound = np.count_nonzero((q <= self.clip_lo) | (q >= self.clip_hi)) > 0
-        error_at = self.error_at
-        jacobian = self.task_jacobian
-        step = self._step
-        within = self.within
-        e, extras, errors = error_at(q)
+        e, extras, errors = self.error_at(q)
         evaluations = 1
         c = e.dot(e)
-        if within(errors):
+        if self.within(errors):
             return self.outcome(q, errors, True, 0, evaluations, c)
         lam = self.damping
         E = N = None
@@ -233,44 +208,42 @@ class ReferenceLM:
                 break
             it += 1
             if E is None:
-                E = jacobian(q, extras)
+                E = self.task_jacobian(q, extras)
                 N = self._normal(E)
-            qn, on_bound_n = step(q, on_bound, E, N, e, lam)
+            qn, on_bound_n = self._step(q, on_bound, E, N, e, lam)
             if creeping and not (on_bound or on_bound_n):
-                v = self._delta(qn, q)
-                a = self._geodesic(e, E, N, lam, v, error_at(q + GEO_H * v)[0])
+                v = qn - q
+                if self.any_wrap:  # wrapping joints' differences on the circle (a wrapped step is no 2 pi jump)
+                    v = np.where(self.wrap, wrap_angle(v), v)
+                a = self._geodesic(e, E, N, lam, v, self.error_at(q + layout.GEO_H * v)[0])
                 evaluations += 1
                 if a is not None:
                     qn = self._into_box(q + v + 0.5 * a)
-            en, extras_n, errors_n = error_at(qn)
+            en, extras_n, errors_n = self.error_at(qn)
             evaluations += 1
             cn = en.dot(en)
             if cn < c:
-                creeping = GEO_SLOW * c < cn < GEO_NEAR
+                creeping = layout.GEO_SLOW * c < cn < layout.GEO_NEAR
                 q, on_bound, e, extras, errors, c = qn, on_bound_n, en, extras_n, errors_n, cn
-                if within(errors):
-                    if self.finish and c > FINISHED:
-                        return self._finish(q, e, extras, errors, c, it, evaluations)
+                if self.within(errors):
+                    if self.finish and c > layout.FINISHED:  # one more, (almost) undamped step, kept if better
+                        E = self.task_jacobian(q, extras)
+                        qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
+                        en, _, errors_n = self.error_at(qn)
+                        it, evaluations, cn = it + 1, evaluations + 1, en.dot(en)
+                        if cn < c:
+                            q, errors, c = qn, errors_n, cn
                     return self.outcome(q, errors, True, it, evaluations, c)
                 E = None
-                lam *= SHRINK
-                if lam < LAMBDA_MIN:
-                    lam = LAMBDA_MIN
+                lam = max(lam * layout.SHRINK, LAMBDA_MIN)
                 history.append(c)
                 if len(history) > window and c > stall * history[-1 - window]:
                     break
             else:
-                lam *= GROW
-                if lam > LAMBDA_MAX:
+                lam *= layout.GROW
+                if lam > layout.LAMBDA_MAX:
                     break
         return self.outcome(q, errors, False, it, evaluations, c)
-
-    def _delta(self, qn: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """``qn - q`` with wrapping joints' differences taken on the circle (a wrapped step is no 2 pi jump)."""
-        d = qn - q
-        if self.any_wrap:
-            d = np.where(self.wrap, wrap_angle(d), d)
-        return d
 
     def _geodesic(self, e, E, N, lam, v, eh):
         """Geodesic acceleration (Transtrum & Sethna 2012) ``a = -(E^T E + lam I)^-1 E^T r''`` (n,) of the step v
@@ -278,10 +251,10 @@ class ReferenceLM:
         at ``q + h v``: ``r'' = 2/h ((eh - e) / h - E v)``; the step ``v + a / 2`` bends along a narrow curved valley
         (a near-singular target). None when ``|a| > GEO_ALPHA |v| / 2``.
         """
-        h = GEO_H
+        h = layout.GEO_H
         rpp = (2.0 / h) * ((eh - e) / h - E.dot(v))
         a = -self._solve(E, N, rpp, lam)
-        return a if 2.0 * math.sqrt(a.dot(a)) <= GEO_ALPHA * math.sqrt(v.dot(v)) else None
+        return a if 2.0 * math.sqrt(a.dot(a)) <= layout.GEO_ALPHA * math.sqrt(v.dot(v)) else None
 
     def _into_box(self, q: np.ndarray) -> np.ndarray:
         """``q`` (n,) clipped into the box, wrapping joints wrapped into [lower, lower + 2 pi)."""
@@ -289,15 +262,5 @@ class ReferenceLM:
         if self.any_wrap:
             out = self.wrap & ((q < self.lower) | (q > self.upper))
             if np.count_nonzero(out):
-                q = np.where(out, self.lower + np.mod(q - self.lower, TWO_PI), q)
+                q = np.where(out, self.lower + np.mod(q - self.lower, layout.TWO_PI), q)
         return q
-
-    def _finish(self, q, e, extras, errors, c, it, evaluations) -> LMOutcome:
-        """One more, (almost) undamped step once the tolerances are met (kept only if better)."""
-        E = self.task_jacobian(q, extras)
-        qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
-        en, _, errors_n = self.error_at(qn)
-        cn = en.dot(en)
-        if cn < c:
-            return self.outcome(qn, errors_n, True, it + 1, evaluations + 1, cn)
-        return self.outcome(q, errors, True, it + 1, evaluations + 1, c)
