@@ -113,7 +113,6 @@ def run(ctx: RunContext) -> PaperReport:
         res = solve(robot, np.array(t_cm) * CM, method="algebraic", q0=q_init)
         results[t_cm]["AM"] = [_record(robot, res, np.array(t_cm) * CM)]
 
-    # -- Table 2 -----------------------------------------------------------------------------------------
     rows, paper_rows, summary = [], [], {}
     for t_cm in TARGETS_CM:
         for key, method in (("GA", "GA"), ("AM", "AM"), ("DE", "binomial-trigonometric")):
@@ -135,7 +134,6 @@ def run(ctx: RunContext) -> PaperReport:
               "about 0.09 cm). AM is deterministic (one run); 'max displacement' is paper 000's second objective, "
               "max |q_k - q_init,k| with q_init = 0.")))
 
-    # -- the three configurations ----------------------------------------------------------------------
     cfg_rows = []
     for label, variant in CONFIGS.items():
         all_runs = [r for t in TARGETS_CM for r in results[t][variant]]
@@ -148,13 +146,11 @@ def run(ctx: RunContext) -> PaperReport:
         cfg_rows, formats=[None, None, ".2f", ".4f", ".3f", ".3f"],
         note="The paper shows these as curves only (Fig. 6b: (c) reaches the lowest position error)."))
 
-    # -- figures -----------------------------------------------------------------------------------------
     curves = {label: {k: _median_series([r for t in TARGETS_CM for r in results[t][v]], k) for k in SERIES}
               for label, v in CONFIGS.items()}
     report.figures += [_fig_diversity(ctx, curves), _fig_weights(ctx, curves), _fig_fitness(ctx, curves),
                        _fig_front(ctx, results[TARGETS_CM[0]]["binomial-trigonometric"][0]["result"], curves)]
 
-    # -- notes and raw data ------------------------------------------------------------------------------
     report.notes += _notes(summary, cfg_rows, curves, runs)
     report.data.update({
         "runs": {f"{t}": {m: [{"error_m": r["error"], "reached_m": r["reached"], "q_rad": r["q"],

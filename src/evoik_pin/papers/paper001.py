@@ -146,7 +146,6 @@ def run(ctx: RunContext) -> PaperReport:
                                             for m in ("ga", "hga")}}
                 for k, (t_cm, ref) in enumerate(references)}
 
-    # -- planar 2R: Tables 3 and 4 -----------------------------------------------------------------------
     res2r = against("planar2r", [(t_cm, planar2r_ik(*targets["planar2r"][k][:2]))
                                  for k, t_cm in enumerate(TARGETS_2R_CM)])
     for key, method, title in (("table3", "ga", "Table 3 - planar 2R: GA (12 generations) vs closed form"),
@@ -180,7 +179,6 @@ def run(ctx: RunContext) -> PaperReport:
                   + (" The HGA rows print the closed form (Table 4's signs of t2 for the second solutions are lost "
                      "in the source text and restored from the closed form)." if method == "hga" else ""))))
 
-    # -- PUMA: Tables 5 and 6 ----------------------------------------------------------------------------
     resp = against("puma3r", [(t_cm, _order_like(PAPER_TABLE5[t_cm], puma_ik(targets["puma3r"][k]), cols=(1, 2)))
                               for k, t_cm in enumerate(TARGETS_PUMA_CM)])  # t1 of target 4: see the notes
 
@@ -226,13 +224,11 @@ def run(ctx: RunContext) -> PaperReport:
                   "The paper gives no GA table for the PUMA (its GA errors, 0.44-3.6 deg, are quoted for both "
                   "arms); an empty cell means the GA returned no solution at all.")))
 
-    # -- figures -----------------------------------------------------------------------------------------
     report.figures += [
         _fig_population_2r(ctx, histories["planar2r"], res2r[TARGETS_2R_CM[0]]["reference"], s["planar2r"]),
         _fig_population_puma(ctx, histories["puma3r"], resp[TARGETS_PUMA_CM[0]]["reference"], s["puma3r"]),
     ]
 
-    # -- notes and data ----------------------------------------------------------------------------------
     report.notes += _notes(res2r, resp, misses, runs)
     report.data.update({
         arm: {str(t): {"closed_form_deg": np.degrees(np.array(e["reference"])),

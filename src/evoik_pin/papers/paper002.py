@@ -98,34 +98,27 @@ def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0,
     objective = PositionError(target)
     if a > 0:
         objective = a * WeightedJointDisplacement(q0) + objective
-    best, runs, total_time, total_gens = None, 0, 0.0, 0
-    for _ in range(rho):
-        extra = {} if callback is None else {"callback": callback}
-        res = solve(robot, target, method=cfg["method"], seed=rng, q0=q0, bounds=bounds, objective=objective,
-                    tolerance=fitness, max_generations=max_generations or cfg["max_generations"], runs=1,
-                    **cfg["options"], **extra)
-        runs, total_time, total_gens = runs + 1, total_time + res.time_s, total_gens + res.generations
-        if best is None or res.cost < best.cost:
-            best = res
-        if res.success:
-            break
-    return {"error": best.position_error, "generations": best.generations, "time": best.time_s, "runs": runs,
-            "total_time": total_time, "total_generations": total_gens, "success": bool(best.success),
-            "q": best.q, "result": best}
+    extra = {} if callback is None else {"callback": callback}
+    results = []
+    while len(results) < rho and not (results and results[-1].success):
+        results.append(solve(robot, target, method=cfg["method"], seed=rng, q0=q0, bounds=bounds, objective=objective,
+                             tolerance=fitness, max_generations=max_generations or cfg["max_generations"], runs=1,
+                             **cfg["options"], **extra))
+    best = min(results, key=lambda r: r.cost)
+    return {"error": best.position_error, "generations": best.generations, "time": best.time_s, "runs": len(results),
+            "total_time": sum(r.time_s for r in results), "total_generations": sum(r.generations for r in results),
+            "success": bool(best.success), "q": best.q, "result": best}
 
 
 def _stats(points: list[dict], fitness: float | None) -> dict:
     counts = {k: sum(p.get("status") == k for p in points) for k in ("reached", "missed", "no solution")}
     points = [p for p in points if p.get("status") != "no solution"] or points
     e = np.array([p["error"] for p in points])
+    mean = {k: float(np.mean([p[k] for p in points])) for k in ("generations", "time", "success", "runs", "total_time")}
     return {"fitness": fitness, "avg_error": float(e.mean()), "std": float(e.std(ddof=1)) if e.size > 1 else 0.0,
-            "points": len(points), **counts,
-            "avg_generations": float(np.mean([p["generations"] for p in points])),
-            "avg_time": float(np.mean([p["time"] for p in points])),
-            "median_error": float(np.median(e)), "max_error": float(e.max()),
-            "success": float(np.mean([p["success"] for p in points])),
-            "avg_runs": float(np.mean([p["runs"] for p in points])),
-            "avg_total_time": float(np.mean([p["total_time"] for p in points]))}
+            "points": len(points), **counts, "avg_generations": mean["generations"], "avg_time": mean["time"],
+            "median_error": float(np.median(e)), "max_error": float(e.max()), "success": mean["success"],
+            "avg_runs": mean["runs"], "avg_total_time": mean["total_time"]}
 
 
 #: A point counts as reached when the distance error is at most this (m); far above every fitness value.
@@ -276,7 +269,6 @@ def run(ctx: RunContext) -> PaperReport:
     s3 = {label: {**_stats(s3_points[label][1:] or s3_points[label], fitness), **_smoothness(s3_points[label])}
           for label, _, fitness in variants}
 
-    # -- tables ------------------------------------------------------------------------------------------
     report.tables.append(Table(
         "table3", "Table 3 - Scenario 1: one random point, 85 iterations, best of the runs",
         ["method", "max. iteration", "position error (m)", "calculation time (s)", "median error (m)",
@@ -334,12 +326,10 @@ def run(ctx: RunContext) -> PaperReport:
          for n, v in s3.items()],
         note="A Pro- step can move each joint by at most pi/100 = 1.8 deg."))
 
-    # -- floating-point floor ----------------------------------------------------------------------------
     floor = np.linalg.norm(p_s2 - p_s2_pin, axis=1)
     ulp = np.spacing(np.abs(np.concatenate([p_s2_pin, p_s3])).max(axis=1))
     report.data["fk_floor"] = {"numpy_vs_pinocchio_fk_m": floor, "coordinate_spacing_m": ulp}
 
-    # -- figures -----------------------------------------------------------------------------------------
     report.figures += [
         _fig_targets(ctx, p_s2_pin, p_s3),
         _fig_convergence(ctx, curves, time_axis=False),
@@ -352,7 +342,6 @@ def run(ctx: RunContext) -> PaperReport:
                     "Fig. 9 analogue: Scenario 3.2 (Pro-, previous +- pi/100) per spiral point"),
     ]
 
-    # -- notes -------------------------------------------------------------------------------------------
     report.notes += _notes(s, t3, s1, s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed)
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,

@@ -109,7 +109,6 @@ def run(ctx: RunContext) -> PaperReport:
                  "time": float(sum(r.time_s for r in res))}
         runs.setdefault(spec["K"], []).append(entry)
 
-    # -- tables ------------------------------------------------------------------------------------------
     mean_step = {K: float(np.mean([e["vehicle_steps"][1:].mean() for e in runs[K]])) for K in GAINS}
     report.tables.append(Table(
         "fig2_claim", "Fig. 2 in numbers - vehicle displacement between consecutive path points",
@@ -157,12 +156,10 @@ def run(ctx: RunContext) -> PaperReport:
         step_rows, formats=[None, None, ".2f", ".2f", ".2f", ".1f", ".1f", ".1f"],
         note="Point 1's step starts from q_start."))
 
-    # -- figures -----------------------------------------------------------------------------------------
     mid = len(P) // 2
     report.figures += [_fig_configurations(ctx, runs, P, q_start), _fig_front(ctx, runs, mid, P),
                        _fig_steps(ctx, runs, P)]
 
-    # -- notes and data ----------------------------------------------------------------------------------
     ratio = mean_step[100.0] / mean_step[10.0] if mean_step[10.0] > 0 else float("nan")
     tot = {K: float(np.mean([e["vehicle_total"] for e in runs[K]])) for K in GAINS}
     arm = {K: float(np.degrees(np.mean([e["arm_total"] for e in runs[K]]))) for K in GAINS}

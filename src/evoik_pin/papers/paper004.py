@@ -132,7 +132,6 @@ def run(ctx: RunContext) -> PaperReport:
     runs = s["runs_per_cell"]
     cells = s["sweep_cells"]
 
-    # -- Table 4 on the paper's target, and on reachable targets ---------------------------------------
     def sweep(goals: list, label: str) -> list[dict]:
         """Table 4's cells, one run per goal, from the stream ``label``."""
         rng = ctx.rng("004", "table4", label)
@@ -170,7 +169,6 @@ def run(ctx: RunContext) -> PaperReport:
          "best pos. error (cm)", "best RPY error (deg)"], rows,
         note=f"'Reached' = position error <= {REACHED_POS_CM} cm and RPY error <= {REACHED_ORI_DEG} deg."))
 
-    # -- Tables 5/6: the paper's three targets, as printed and as FK of the paper's joints ---------------
     fk_goals = [_pose(robot, np.radians(q_deg)) for _, q_deg in PAPER_TABLE5]
     check_rows = [[k, tuple_text(goal), tuple_text(q_deg), tuple_text(pose), *_pose_errors(pose, goal)]
                   for k, ((goal, q_deg), pose) in enumerate(zip(PAPER_TABLE5, fk_goals, strict=True), start=1)]
@@ -201,11 +199,9 @@ def run(ctx: RunContext) -> PaperReport:
         note=f"Ours: {table6_runs} runs per row, errors and pose of the best run. Paper: one run at population 12, "
              "100 iterations; errors computed here from its reported reached pose."))
 
-    # -- figures -----------------------------------------------------------------------------------------
     report.figures.append(_fig_objective(ctx, robot, fk_goals))
     report.figures.append(_fig_sweep(ctx, cells, sweep_paper, sweep_reach))
 
-    # -- notes and raw data -------------------------------------------------------------------------------
     starts = 10 if ctx.quick else 50
     pos_gap_cm = least_squares_distance(robot, np.asarray(PAPER_TARGET[:3]) * CM, robot.lower, robot.upper,
                                         ctx.rng("004", "position-reachability"), starts) / CM

@@ -57,7 +57,6 @@ def _point(p, size: int, name: str) -> np.ndarray:
     return arr
 
 
-# ---------------------------------------------------------------------------------------------- planar 2R
 def planar2r_fk(Q, a1: float = PLANAR2R["a1"], a2: float = PLANAR2R["a2"]) -> np.ndarray:
     """Paper 001 eqs. 16-17: tip (x, y) in m of joint vectors ``Q`` (..., 2) in rad, shape (..., 2)."""
     Q = np.asarray(Q, float)
@@ -87,7 +86,6 @@ def planar2r_ik(x: float, y: float, a1: float = PLANAR2R["a1"], a2: float = PLAN
     return _planar2r_candidates(x, y, a1, a2, clamp=False)[0]
 
 
-# ---------------------------------------------------------------------------------------------- PUMA 3R
 def puma_fk(Q, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUMA3R["a3"],
             d4: float = PUMA3R["d4"]) -> np.ndarray:
     """Paper 001 eq. 20: PUMA wrist point (..., 3) in m of joint vectors ``Q`` (..., 3) in rad."""
@@ -134,7 +132,6 @@ def puma_ik(p, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUM
     return _puma_candidates(_point(p, 3, "puma_ik"), a2, d, a3, d4, clamp=False)[0]
 
 
-# ---------------------------------------------------------------------------------------------- AX-18
 def ax18_fk(Q, d1: float = AX18["d1"], a1: float = AX18["a1"], a2: float = AX18["a2"], a3: float = AX18["a3"],
             d2: float = AX18["d2"], a4: float = AX18["a4"]) -> np.ndarray:
     """Paper 000, section III-A: AX-18 tool position (..., 3) in m of joint vectors ``Q`` (..., 4) in rad."""
@@ -234,7 +231,6 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
     return out
 
 
-# ---------------------------------------------------------------------------------------------- registry
 #: Fixed joint vectors (rad) at which a loaded chain must match the closed form to be recognized.
 _PROBES = np.array([[0.3, -0.7, 1.1, -0.4], [-1.2, 0.5, -0.2, 2.0], [2.5, 1.9, -2.2, 0.6]])
 #: Largest FK mismatch (m) tolerated between the loaded chain and the closed form.

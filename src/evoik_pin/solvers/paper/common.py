@@ -60,7 +60,6 @@ def enforce_bounds(trial: np.ndarray, problem: IKProblem, rng: np.random.Generat
         y = np.mod(trial - lo, 2 * safe)
         y = np.where(y > safe, 2 * safe - y, y)
         return np.where(width > 0, lo + y, lo)
-    # resample
     bad = (trial < lo) | (trial > hi)
     if bad.any():
         trial = trial.copy()
@@ -121,7 +120,6 @@ class SolverRun:
         self.offer(Q[i], ev, i)
         self.history["best_cost"].append(self.best_cost)
         self.history["mean_cost"].append(float(ev.cost.sum() / ev.cost.shape[0]))
-        # diversity is computed in batches: one vectorized pass instead of a handful of calls per generation
         if self._pending and (len(self._pending) >= self._DIVERSITY_BATCH or Q.shape != self._pending[0].shape):
             self._flush_diversity()
         self._pending.append(np.array(Q, dtype=float))
@@ -171,9 +169,7 @@ class SolverRun:
         problem = self.problem
         self._flush_diversity()
         q = np.clip(self.best_q, problem.lower, problem.upper)
-        evaluations = problem.evaluations
-        ev = problem.evaluate(q[None])
-        problem.evaluations = evaluations  # the final check is bookkeeping, not search
+        ev = problem.evaluate(q[None], count=False)
         pos = float(ev.position_error[0])
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
         success = bool(problem.succeeded(pos, rot))
@@ -187,7 +183,7 @@ class SolverRun:
             message += f"; {shortfall_text(problem, pos, rot, goal_errors)}"
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
-            generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,
+            generations=self.generation, evaluations=problem.evaluations, time_s=time.perf_counter() - self.t0,
             history={k: np.asarray(v) for k, v in self.history.items()}, message=message, method=method,
             goal_errors=goal_errors, **fields,
         )

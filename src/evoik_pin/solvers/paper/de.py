@@ -98,10 +98,9 @@ def de(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, ma
     k = MUTATIONS.get(scheme, 3)
     N = check_int("population", population, k + 1)
     F = check_positive("F", F, 2.0)
-    CR = check_fraction("CR", CR)
-    p_F = check_fraction("p_F", p_F)
+    CR, p_F, trig_probability = (check_fraction(k, v) for k, v in (("CR", CR), ("p_F", p_F),
+                                                                     ("trig_probability", trig_probability)))
     K = 0.5 * (F + 1.0) if K is None else check_positive("K", K, 2.0)
-    trig_probability = check_fraction("trig_probability", trig_probability)
     D = problem.n
 
     def once(run: SolverRun) -> Result:

@@ -130,11 +130,8 @@ def exponential_lengths(CR, u: np.ndarray) -> np.ndarray:
     """Lengths L (N,) of paper 004's Algorithm 2: ``L = 1``, then ``L += 1`` while ``u < CR`` and ``L < D``, from
     uniform draws ``u`` (N, D) (its first D - 1 columns)."""
     D = u.shape[1]
-    go_on = u[:, : D - 1] < _as_column(CR)
-    # L - 1 = number of leading True values of each row
-    stopped = ~go_on
-    first_stop = np.where(stopped.any(axis=1), stopped.argmax(axis=1), D - 1)
-    return first_stop + 1
+    stopped = ~(u[:, : D - 1] < _as_column(CR))  # L - 1 = the number of leading draws below CR
+    return np.where(stopped.any(axis=1), stopped.argmax(axis=1), D - 1) + 1
 
 
 def exponential_crossover(X: np.ndarray, V: np.ndarray, start: np.ndarray, length: np.ndarray) -> np.ndarray:

@@ -18,15 +18,13 @@ from .analytic import solution_results
 from .clustering import leader_rows
 from .common import SolverRun, initial_population
 
-__all__ = ["ENCODINGS", "basic_polynomial_mutation", "check_niching_ga_options", "decode_bits", "decode_bounds",
-           "decode_sign_magnitude", "niche_counts", "niching_tournament", "run_niching_ga", "sbx_pairs",
-           "sharing_radius"]
+__all__ = ["ENCODINGS", "basic_polynomial_mutation", "decode_bits", "decode_bounds", "decode_sign_magnitude",
+           "niche_counts", "niching_tournament", "run_niching_ga", "sbx_pairs", "sharing_radius"]
 
 #: ``ga-binary`` encodings: the paper's sign + magnitude in degrees, or unsigned bits over the bounds.
 ENCODINGS = ("sign-magnitude", "bounds")
 
 
-# ------------------------------------------------------------------------------------------ real-coded GA
 def sharing_radius(n: int, niches: int) -> float:
     """Paper 001 eq. 8: ``sigma_share = sqrt(n) / (2 r^(1/n))`` in the unit hypercube of n variables."""
     return float(np.sqrt(n) / (2.0 * niches ** (1.0 / n)))
@@ -73,32 +71,25 @@ def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarra
     return np.where(mask, X + delta * (upper - lower), X)
 
 
-def check_niching_ga_options(population, max_generations, niches, niche_size, eta, crossover_probability
-                             ) -> tuple[int, int, int, float, float, float]:
-    """The niching GA's options (shared by ``ga`` and ``hga``) checked; ``niche_size`` None becomes paper 001's
-    proportion, n* = 200 per 750 individuals."""
-    population = check_int("population", population, 4)
-    max_generations = check_int("max_generations", max_generations, 0)
-    niches = check_int("niches", niches, 1)
-    if niche_size is None:
-        niche_size = 200.0 * population / 750.0
-    niche_size = check_positive("niche_size (n*)", niche_size)
-    eta = check_nonnegative("eta (SBX distribution index)", eta)
-    crossover_probability = check_fraction("crossover_probability", crossover_probability)
-    return population, max_generations, niches, niche_size, eta, crossover_probability
-
-
 def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int, max_generations: int,
-                   niches: int, niche_size: float, eta: float, crossover_probability: float, niching: bool = True,
-                   archive: list | None = None, callback: Callable | None = None
+                   niches: int, niche_size: float | None, eta: float, crossover_probability: float,
+                   niching: bool = True, archive: list | None = None, callback: Callable | None = None
                    ) -> tuple[SolverRun, np.ndarray, np.ndarray]:
     """Paper 001's real-coded GA for exactly ``max_generations`` generations (stopping at the first solution
     would cut the other families short); returns the run and the final population (N, n) with its costs (N,).
 
-    Options as in :func:`ga`, niche distances measured in the unit hypercube of the bounds; ``archive`` (a list)
-    receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value is ignored. History adds
-    ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
+    Options as in :func:`ga` (checked here, for ``ga`` and ``hga``; ``niche_size`` None: paper 001's proportion,
+    n* = 200 per 750 individuals), niche distances measured in the unit hypercube of the bounds; ``archive`` (a
+    list) receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value is ignored.
+    History adds ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
     """
+    population = check_int("population", population, 4)
+    max_generations = check_int("max_generations", max_generations, 0)
+    niches = check_int("niches", niches, 1)
+    niche_size = check_positive("niche_size (n*)", 200.0 * population / 750.0 if niche_size is None else niche_size)
+    eta = check_nonnegative("eta (SBX distribution index)", eta)
+    crossover_probability = check_fraction("crossover_probability", crossover_probability)
+    callback = check_callback(callback)
     n, lo, hi = problem.n, problem.lower, problem.upper
     scale = np.where(hi > lo, hi - lo, 1.0)
     sigma = sharing_radius(n, niches)
@@ -152,11 +143,8 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
         :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche, best
         first (``success=False`` unless within tolerance: the GA alone is approximate; ``hga`` polishes).
     """
-    population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
-        population, max_generations, niches, niche_size, eta, crossover_probability)
     min_niche_fraction = check_fraction("min_niche_fraction", min_niche_fraction)
     max_solutions = check_int("max_solutions", max_solutions)
-    check_callback(callback)
     run, Q, cost = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                   crossover_probability, bool(niching), callback=callback)
     leaders = leader_rows(Q, cost, cluster_radius, problem.robot.revolute,
@@ -167,7 +155,6 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
     return result
 
 
-# ------------------------------------------------------------------------------------------ binary GA
 def _unsigned(bits) -> np.ndarray:
     """The unsigned integers (...) of bit strings ``bits`` (..., B), most significant bit first."""
     bits = np.asarray(bits).astype(np.int64)

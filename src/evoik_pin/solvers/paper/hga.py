@@ -12,10 +12,10 @@ import numpy as np
 from ...problem import IKProblem
 from ...result import Result
 from .. import register
-from ..options import check_callback, check_int, check_positive
+from ..options import check_int, check_positive
 from .analytic import solution_results
 from .clustering import leader_rows
-from .ga import check_niching_ga_options, run_niching_ga
+from .ga import run_niching_ga
 
 __all__ = ["nelder_mead_polish"]
 
@@ -66,13 +66,10 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution that
         meets the tolerances (a goal list: every goal's), best first; empty, with a message, when none does.
     """
-    population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
-        population, max_generations, niches, niche_size, eta, crossover_probability)
     max_starts = check_int("max_starts", max_starts)
     max_polish_evaluations = check_int("max_polish_evaluations", max_polish_evaluations)
     simplex_size, xatol, fatol, solution_radius = (check_positive(k, v) for k, v in (
         ("simplex_size", simplex_size), ("xatol", xatol), ("fatol", fatol), ("solution_radius", solution_radius)))
-    check_callback(callback)
     archive: list = []
     run, _, _ = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                crossover_probability, archive=archive, callback=callback)

@@ -13,14 +13,7 @@ import numpy as np
 from ...problem import IKProblem
 from ...result import Result
 from .. import register
-from ..options import (
-    check_choice,
-    check_fraction,
-    check_int,
-    check_nonnegative,
-    check_number,
-    check_positive,
-)
+from ..options import check_choice, check_fraction, check_int, check_nonnegative, check_number, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
 from .de import greedy_selection
 from .de_ops import binomial_crossover, permutation_indices

@@ -61,23 +61,14 @@ def nondominated_2d(F: np.ndarray) -> np.ndarray:
     return order[f2 < prev_min]
 
 
-class _Archive:
-    """The non-dominated (position error, max displacement) set met during a run, at most ``size`` points."""
-
-    def __init__(self, size: int) -> None:
-        self.size = size
-        self.Q = np.empty((0, 0))
-        self.F = np.empty((0, 2))
-
-    def add(self, Q: np.ndarray, F: np.ndarray) -> None:
-        Q = np.concatenate([self.Q, Q]) if self.Q.size else Q
-        F = np.concatenate([self.F, F])
-        keep = nondominated_2d(F)
-        if keep.size > self.size:
-            # Thin a crowded front by crowding distance (Deb 2002), keeping its extremes.
-            cd = crowding_distance(F[keep])
-            keep = keep[np.sort(np.argsort(-cd, kind="stable")[: self.size])]
-        self.Q, self.F = Q[keep], F[keep]
+def _merge_front(front: tuple[np.ndarray, np.ndarray], Q: np.ndarray, F: np.ndarray, size: int):
+    """The non-dominated rows of ``front`` (configurations (M, n), objectives (M, 2)) and the new ``Q``, ``F``, as
+    such a pair of at most ``size`` rows (a crowded front thinned by crowding distance, Deb 2002, extremes kept)."""
+    Q, F = np.concatenate([front[0], Q]), np.concatenate([front[1], F])
+    keep = nondominated_2d(F)
+    if keep.size > size:
+        keep = keep[np.sort(np.argsort(-crowding_distance(F[keep]), kind="stable")[:size])]
+    return Q[keep], F[keep]
 
 
 @register("mode", "paper 000: multi-objective DE (position error and max joint displacement, equitable "
@@ -126,11 +117,10 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         return ev, np.column_stack([1.0 - np.exp(-raw[:, 0] / length_scale), raw[:, 1]]), raw
 
     run = SolverRun(problem, max_generations)
-    archive = _Archive(front_size)
     X = initial_population(problem, rng, population)
     ev, Fx, raw = objectives(X)
     pos, rot, disp = ev.position_error, ev.orientation_error, raw[:, 1]
-    archive.add(X, raw)
+    archive = _merge_front((X[:0], raw[:0]), X, raw, front_size)  # the non-dominated points met in the run
     w = np.array([0.5, 0.5])  # Pseudocode 1, step 2
     cost = Fx @ w
     best = int(np.argmin(pos))
@@ -143,10 +133,7 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     while (reason := run.stop_reason()) is None:
         w = equitable_weights(Fx[best], w)
         cost = Fx @ w
-        if adaptive:
-            P_m, P_c = adaptive_probability(cost, M), adaptive_probability(cost, Cr)
-        else:
-            P_m, P_c = np.full(population, M), np.full(population, Cr)
+        P_m, P_c = (adaptive_probability(cost, c) if adaptive else np.full(population, c) for c in (M, Cr))
         m = rng.random(population)
         mutated = m < P_m
         idx = distinct_indices(rng, population, 3)
@@ -164,7 +151,7 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         if changed.any():
             trial = enforce_bounds(U[changed], problem, rng, bound_handling)
             ev_t, F_t, raw_t = objectives(trial)
-            archive.add(trial, raw_t)
+            archive = _merge_front(archive, trial, raw_t, front_size)
             better = F_t @ w <= cost[changed]
             rows = np.nonzero(changed)[0][better]
             X[rows], Fx[rows], pos, disp = trial[better], F_t[better], pos.copy(), disp.copy()
@@ -181,7 +168,6 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     final = int(np.argmin(cost))
     run.best_cost = np.inf
     run.offer(X[final], Evaluation(cost, pos, rot), final)
-    result = run.result("mode", reason)
-    order = np.argsort(archive.F[:, 0], kind="stable")
-    result.front = Front(q=archive.Q[order], objectives=archive.F[order], violation=np.zeros(len(order)))
-    return result
+    order = np.argsort(archive[1][:, 0], kind="stable")
+    return run.result("mode", reason,
+                      front=Front(q=archive[0][order], objectives=archive[1][order], violation=np.zeros(len(order))))

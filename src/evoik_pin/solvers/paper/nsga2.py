@@ -65,10 +65,7 @@ def _chosen_goals(problem: IKProblem, which) -> list[int]:
         return list(range(len(goals)))
     frames = [g.frame for g in goals]
     picked: list[int] = []
-    try:
-        listed = [which] if isinstance(which, (str, int, np.integer)) else list(which)
-    except TypeError:
-        listed = [which]  # refused below, by name
+    listed = list(which) if np.iterable(which) and not isinstance(which, str) else [which]
     for w in listed:
         if isinstance(w, str) and w in frames:
             picked.append(frames.index(w))

@@ -16,7 +16,6 @@ from .pareto_sorting import _tournament, _tournament_pairs, survival
 __all__ = ["NSGA2Result", "bounded_polynomial_mutation", "nsga2_minimize", "sbx"]
 
 
-# ---------------------------------------------------------------------------------------------- operators
 def sbx(P1: np.ndarray, P2: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, rng: np.random.Generator,
         crossover_probability: float = 0.9, variable_probability: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
     """Bounded simulated binary crossover (Deb's NSGA-II code) of parents (M, n): each pair crosses with
@@ -67,7 +66,6 @@ def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return ~unique[X.shape[0]:]
 
 
-# ---------------------------------------------------------------------------------------------- generic loop
 @dataclass
 class NSGA2Result:
     """Outcome of :func:`nsga2_minimize`: final population ``X`` (N, n), objectives ``F`` (N, k), ``violation``
