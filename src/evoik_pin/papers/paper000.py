@@ -1,8 +1,6 @@
-"""Paper 000: multi-objective DE for the 4-DOF Crustcrawler AX-18 (Rodriguez, Saha, Romero-Hdz & Ortega, 2016).
-
+"""Paper 000: multi-objective DE for the 4-DOF Crustcrawler AX-18 (Rodriguez, Saha, Romero-Hdz & Ortega, 2016):
 Table 2 (five targets: binary GA, algebraic method, the paper's ``mode``) and Figs. 3-6 (diversity, weights,
-fitness, front and error of three configurations). Our runs, readings and results: docs/REPRODUCTION.md,
-section "Paper 000".
+fitness, front and error of three configurations); our readings and results: docs/REPRODUCTION.md, "Paper 000".
 """
 
 from __future__ import annotations
@@ -134,20 +132,16 @@ def run(ctx: RunContext) -> PaperReport:
               "about 0.09 cm). AM is deterministic (one run); 'max displacement' is paper 000's second objective, "
               "max |q_k - q_init,k| with q_init = 0.")))
 
-    cfg_rows = []
-    for label, variant in CONFIGS.items():
-        all_runs = [r for t in TARGETS_CM for r in results[t][variant]]
-        e = np.array([r["error"] for r in all_runs])
-        cfg_rows.append([label, len(e), float(np.mean(e < MM)), float(np.median(e)) / MM, float(e.max()) / MM,
-                         float(np.mean([r["time"] for r in all_runs]))])
+    pooled = {label: [r for t in TARGETS_CM for r in results[t][v]] for label, v in CONFIGS.items()}
+    cfg_rows = [[label, c["runs"], c["success"], c["median_error"] / MM, c["max_error"] / MM, c["mean_time"]]
+                for label, c in zip(pooled, map(_summary, pooled.values()), strict=True)]
     report.tables.append(Table(
         "configurations", "Fig. 6(b) in numbers - the three DE configurations over all five targets",
         ["configuration", "runs", "within 1 mm (fraction)", "median error (mm)", "max error (mm)", "time per run (s)"],
         cfg_rows, formats=[None, None, ".2f", ".4f", ".3f", ".3f"],
         note="The paper shows these as curves only (Fig. 6b: (c) reaches the lowest position error)."))
 
-    curves = {label: {k: _median_series([r for t in TARGETS_CM for r in results[t][v]], k) for k in SERIES}
-              for label, v in CONFIGS.items()}
+    curves = {label: {k: _median_series(rs, k) for k in SERIES} for label, rs in pooled.items()}
     report.figures += [_fig_diversity(ctx, curves), _fig_weights(ctx, curves), _fig_fitness(ctx, curves),
                        _fig_front(ctx, results[TARGETS_CM[0]]["binomial-trigonometric"][0]["result"], curves)]
 

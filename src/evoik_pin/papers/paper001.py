@@ -1,7 +1,6 @@
-"""Paper 001: GA and hybrid GA (GA + Nelder-Mead) for all IK solutions (planar 2R and PUMA wrist point).
-
-Tables 3-4 (planar 2R, GA and HGA against the closed form), 5-6 (PUMA: closed form, HGA) and Figs. 7-11 (the
-GA's populations). Our runs, readings and results: docs/REPRODUCTION.md, section "Paper 001".
+"""Paper 001: GA and hybrid GA (GA + Nelder-Mead) for all IK solutions (planar 2R and PUMA wrist point): Tables
+3-4 (planar 2R, GA and HGA against the closed form), 5-6 (PUMA: closed form, HGA) and Figs. 7-11 (the GA's
+populations); our readings and results: docs/REPRODUCTION.md, section "Paper 001".
 """
 
 from __future__ import annotations

@@ -1,9 +1,7 @@
-"""Paper 002: ISADE, DE and PSO (and their "Pro-" variants) on a redundant 7R arm (Nguyen & Bui, 2021).
-
-Position-only IK of ``redundant7r``, each run stopped at a "fitness value" or its generation budget, best of
-rho = 10 runs: Scenario 1 (one random point, Tables 3 and 5), 2 (100 random points from q = 0, Table 4) and 3 (a
-spiral in sequence, full range or inside the "Pro" box previous solution +- pi/100, Table 5, Figs. 7-9). Our
-runs, readings and results: docs/REPRODUCTION.md, section "Paper 002".
+"""Paper 002: ISADE, DE and PSO (and their "Pro-" variants) on a redundant 7R arm (Nguyen & Bui, 2021), position
+only, best of rho = 10 runs each stopped at a "fitness value": Scenarios 1 (one point, Tables 3 and 5), 2 (100
+points, Table 4) and 3 (a spiral, full range or in the "Pro" box previous +- pi/100, Table 5, Figs. 7-9); our
+readings and results: docs/REPRODUCTION.md, section "Paper 002".
 """
 
 from __future__ import annotations
@@ -254,8 +252,7 @@ def run(ctx: RunContext) -> PaperReport:
                                not sp.get("pro", False)))
     done = ctx.map_parallel(_job, specs, "002 parts")
     outputs = {key: out for key, out, _ in done}
-    job_times = {key: dt for key, _, dt in done}
-    report.data["job_wall_time_s"] = {f"{k[0]} {k[1]}": v for k, v in job_times.items()}
+    report.data["job_wall_time_s"] = {f"{k[0]} {k[1]}": dt for k, _, dt in done}
 
     t3 = {n: outputs[("table3", n)] for n in METHODS}
     curves = {n: t3[n].pop("curve") for n in METHODS}
@@ -365,12 +362,8 @@ def _runs_of(indices: list[int]) -> str:
     """'3-41, 76-99' from sorted 0-based indices, printed 1-based."""
     if not indices:
         return "none"
-    spans, start = [], indices[0]
-    for a, b in zip(indices, [*indices[1:], None], strict=True):
-        if b != a + 1:
-            spans.append(f"{start + 1}" if start == a else f"{start + 1}-{a + 1}")
-            start = b
-    return ", ".join(spans)
+    spans = np.split(np.asarray(indices), np.nonzero(np.diff(indices) != 1)[0] + 1)
+    return ", ".join(f"{s[0] + 1}" if s.size == 1 else f"{s[0] + 1}-{s[-1] + 1}" for s in spans)
 
 
 def _seed_check(s3_points: dict, p_s3: np.ndarray, seed: int, runs: int = 3) -> str:

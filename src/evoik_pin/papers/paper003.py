@@ -1,8 +1,6 @@
-"""Paper 003: NSGA-II for a planar vehicle-arm robot (5 DOF) (Rodriguez & Banfield).
-
-A path of poses solved point by point by ``nsga2`` (manipulability and smoothness ``S`` with a gain K on the
-vehicle coordinates); Fig. 2: with K = 100 the vehicle moves less than with K = 10. Our path, lengths and
-results: docs/REPRODUCTION.md, section "Paper 003".
+"""Paper 003: NSGA-II for a planar vehicle-arm robot (5 DOF) (Rodriguez & Banfield): a path of poses solved point
+by point by ``nsga2`` (manipulability and smoothness ``S`` with a gain K on the vehicle coordinates); Fig. 2: with
+K = 100 the vehicle moves less than with K = 10. Our path, lengths and results: docs/REPRODUCTION.md, "Paper 003".
 """
 
 from __future__ import annotations

@@ -1,8 +1,6 @@
-"""Paper 004: DE for the 6-DOF human-like arm of an aerial manipulator (Ibrahim & Al Akkad, 2019).
-
-DE/rand/1/bin minimizing ``J = sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (roll-pitch-yaw; J in the paper's
-units, cm and rad): Table 4 (population x iterations sweep), Tables 5/6 (three more targets) and Fig. 2. Our runs,
-readings and results: docs/REPRODUCTION.md, section "Paper 004".
+"""Paper 004: DE for the 6-DOF human-like arm of an aerial manipulator (Ibrahim & Al Akkad, 2019): DE/rand/1/bin
+minimizing ``J = sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (roll-pitch-yaw; J in cm and rad): Table 4 (population
+x iterations sweep), Tables 5/6 (three more targets), Fig. 2; our readings and results: docs/REPRODUCTION.md.
 """
 
 from __future__ import annotations

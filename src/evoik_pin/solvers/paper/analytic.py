@@ -1,9 +1,7 @@
-"""Closed-form IK of the papers' small arms (m, rad), as references and as the ``algebraic`` method: paper 001's
-planar 2R (:func:`planar2r_ik`) and PUMA wrist point (:func:`puma_ik`), paper 000's AX-18 for a tool pitch
-(:func:`ax18_ik`) and its "algebraic method" searching the pitch (:func:`ax18_algebraic`). ``algebraic`` takes the
-bundled robots only, after checking their kinematics against the closed form, and of goal lists only one tip
-``Pose`` or ``Position`` (:func:`tip_target_problem`).
-"""
+"""Closed-form IK of the papers' small arms (m, rad), as references and as the ``algebraic`` method (the bundled
+robots only, their kinematics checked; of goal lists one tip ``Pose`` or ``Position``, :func:`tip_target_problem`):
+paper 001's planar 2R (:func:`planar2r_ik`) and PUMA wrist point (:func:`puma_ik`), paper 000's AX-18 for a tool
+pitch (:func:`ax18_ik`) and its "algebraic method" searching the pitch (:func:`ax18_algebraic`)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,7 @@
-"""Differential-evolution operators on whole populations, as plain vectorized functions: paper 002's eq. 12
-mutation schemes (:data:`MUTATIONS`), paper 004's :func:`either_or`, paper 000's :func:`trigonometric`, the
-binomial and exponential crossovers, and index sampling.
-
-Every operator takes its random draws as arguments, so tests can inject fixed draws. Shapes: a population
-``X`` is (N, D); index matrices are (N, k) integers into it; ``F`` is a scalar or (N,).
-"""
+"""Differential-evolution operators on whole populations, vectorized, their random draws taken as arguments:
+paper 002's eq. 12 mutations (:data:`MUTATIONS`), paper 004's :func:`either_or`, paper 000's :func:`trigonometric`,
+binomial and exponential crossovers, index sampling. Shapes: a population ``X`` is (N, D); index matrices are
+(N, k) integers into it; ``F`` is a scalar or (N,)."""
 
 from __future__ import annotations
 

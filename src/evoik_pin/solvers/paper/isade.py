@@ -1,7 +1,6 @@
 """ISADE (paper 002, section 3.3; ``isade``): DE whose strategy (eqs. 14-16, :func:`isade_donors`, SaDE's
 :func:`strategy_probabilities`), scale factors (eqs. 17-19) and crossover rates (eq. 20, jDE-style, kept with a
-surviving trial) adapt per individual. Paper 002's stop at 1e-17 m is below what double-precision kinematics
-resolves: use 1e-15 m or more.
+surviving trial) adapt per individual. Paper 002's stop at 1e-17 m is below double precision: use 1e-15 m or more.
 """
 
 from __future__ import annotations

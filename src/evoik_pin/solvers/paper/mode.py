@@ -1,12 +1,10 @@
-"""Paper 000's multi-objective differential evolution (``mode``), Pseudocode 1.
-
-Two minimized objectives of a configuration q (section IV): ``f1 = 1 - exp(-||P - P_e(q)|| / l)`` (position
-error, l = ``length_scale``) and ``f2 = max_k |q_k - q_init,k|`` (rad; q_init = ``problem.q0`` or zeros),
-combined as ``w1 f1 + w2 f2`` with Gabli et al.'s equitable weights (:func:`equitable_weights`) of the previous
-generation's individual closest to the target. Per individual: a draw m; if ``m < P_m`` a trigonometric donor
-(``m <= Mt``) or DE/rand/1, crossed binomially (or whole, the "fixed" variant) with probability ``P_c``; greedy
-selection under the current weights. ``P_c``, ``P_m`` adapt as in Zhao & Qiao (:func:`adaptive_probability`).
-The paper gives no Mt; the default 0.125 and the readings not adopted are measured in docs/BENCHMARKS.md.
+"""Paper 000's multi-objective differential evolution (``mode``, Pseudocode 1): minimized objectives (section IV)
+``f1 = 1 - exp(-||P - P_e(q)|| / l)`` (l = ``length_scale``) and ``f2 = max_k |q_k - q_init,k|`` (rad; q_init =
+``problem.q0`` or zeros), combined as ``w1 f1 + w2 f2`` with Gabli et al.'s equitable weights
+(:func:`equitable_weights`) of the previous generation's individual closest to the target. Per individual: a draw
+m; if ``m < P_m`` a trigonometric donor (``m <= Mt``) or DE/rand/1, crossed binomially (or whole, the "fixed"
+variant) with probability ``P_c``; greedy selection under the current weights. ``P_c``, ``P_m`` adapt as in Zhao &
+Qiao (:func:`adaptive_probability`). The paper gives no Mt: the default 0.125 is measured in docs/BENCHMARKS.md.
 """
 
 from __future__ import annotations

@@ -1,8 +1,7 @@
-"""Paper 003's NSGA-II IK method (``nsga2``) on the generic :func:`~.nsga2_minimizer.nsga2_minimize`: objectives
-``g = 1 / (Y + 1)`` (Yoshikawa manipulability of the task rows) and the smoothness ``S``, the pose equality as a
-constraint, every new individual repaired by :func:`~.task_repair.dls_repair`; also for goal lists
-(:class:`GoalManipulability`, :func:`goal_task`). The minimizer's and the sorting's names are re-exported here.
-"""
+"""Paper 003's NSGA-II IK method (``nsga2``) on :func:`~.nsga2_minimizer.nsga2_minimize` (whose names and the
+sorting's are re-exported here): objectives ``g = 1 / (Y + 1)`` (Yoshikawa manipulability of the task rows) and the
+smoothness ``S``, the pose equality a constraint, new individuals repaired by :func:`~.task_repair.dls_repair`;
+also for goal lists (:class:`GoalManipulability`, :func:`goal_task`)."""
 
 from __future__ import annotations
 
