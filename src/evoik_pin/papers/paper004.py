@@ -81,12 +81,6 @@ def _settings(quick: bool) -> dict:
     }
 
 
-def _target(pose) -> Target:
-    """A Target from a (x, y, z cm, roll, pitch, yaw deg) tuple."""
-    pose = np.asarray(pose, dtype=float)
-    return Target.from_rpy(pose[:3] * CM, pose[3:] * DEG)
-
-
 def _pose(robot, q) -> np.ndarray:
     """(x, y, z cm, roll, pitch, yaw deg) of the tip at ``q``."""
     T = robot.fk(q)
@@ -101,8 +95,9 @@ def _pose_errors(pose, goal) -> tuple[float, float]:
 
 
 def _solve(robot, goal, population: int, iterations: int, rng) -> dict:
-    """One DE run at the paper's settings; errors in the paper's units."""
-    target = _target(goal)
+    """One DE run at the paper's settings on ``goal`` (x, y, z cm; roll, pitch, yaw deg); errors in its units."""
+    xyz_rpy = np.asarray(goal, dtype=float)
+    target = Target.from_rpy(xyz_rpy[:3] * CM, xyz_rpy[3:] * DEG)
     res = solve(robot, target, method="de", seed=rng, objective=RPYPoseError(target, SIGMA / CM, EPSILON),
                 population=population, max_generations=iterations, strategy="rand1bin", F=F, CR=CR,
                 bound_handling="clip", tolerance=0.0, rotation_tolerance=0.0, runs=1)

@@ -180,10 +180,8 @@ class Table:
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["source", *self.columns])
-            for row in self.paper_rows or []:
-                w.writerow(["paper", *("" if v is None else v for v in row)])
-            for row in self.rows:
-                w.writerow(["ours", *("" if v is None else v for v in row)])
+            for source, rows in (("paper", self.paper_rows or []), ("ours", self.rows)):
+                w.writerows([source, *("" if v is None else v for v in row)] for row in rows)
         return path
 
     def as_dict(self) -> dict[str, Any]:
