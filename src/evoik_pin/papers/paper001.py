@@ -121,6 +121,27 @@ def _stats(reference, runs_found, method) -> list[dict]:
             for j, errs in enumerate(errors)]
 
 
+def _solutions_table(key: str, title: str, res: dict, method: str, runs: int, closed_spec: str,
+                     paper_rows: list | None, note: str, order=lambda t_cm, refs: refs) -> Table:
+    """Tables 3, 4 and 6: per target of ``res`` and closed-form solution (in ``order``), its angles (formatted
+    ``closed_spec``), the first run's nearest solution and its error, and over the ``runs`` the share found, the
+    median and the max error (deg)."""
+    rows = []
+    for t_cm, e in res.items():
+        stats = {id(q): st for q, st in zip(e["reference"], e[method]["stats"], strict=True)}
+        rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"])[:len(q)], st["first_error"],
+                  runs, st["found"], st["median_error"], st["max_error"]]
+                 for j, q in enumerate(order(t_cm, e["reference"])) for st in [stats[id(q)]]]
+    joints = [f"t{i} (deg)" for i in range(1, len(next(iter(res.values()))["reference"][0]) + 1)]
+    spec = ".4f" if method == "hga" else ".2f"
+    return Table(key, title, ["target (cm)", "solution", *(f"closed form {t}" for t in joints),
+                              *(f"{method.upper()} {t}" for t in joints), "error (deg)", "runs",
+                              f"found within {FOUND_DEG[method]:g} deg (fraction)", "median error (deg)",
+                              "max error (deg)"], rows, paper_rows=paper_rows,
+                 formats=[None, None, *[closed_spec] * len(joints), *[spec] * len(joints), ".3g", None, ".2f", ".3g",
+                          ".3g"], note=note)
+
+
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 001's Tables 3-6 and Figs. 7-11 (see the module docstring)."""
     s = _settings(ctx.quick)
@@ -149,34 +170,18 @@ def run(ctx: RunContext) -> PaperReport:
                                  for k, t_cm in enumerate(TARGETS_2R_CM)])
     for key, method, title in (("table3", "ga", "Table 3 - planar 2R: GA (12 generations) vs closed form"),
                                ("table4", "hga", "Table 4 - planar 2R: HGA (GA + Nelder-Mead) vs closed form")):
-        rows, paper_rows = [], []
-        for t_cm in TARGETS_2R_CM:
-            e = res2r[t_cm]
-            paper = PAPER_TABLE3[t_cm]
-            ref = _order_like([p[0] for p in paper], e["reference"])
-            stats = {id(q): st for q, st in zip(e["reference"], e[method]["stats"], strict=True)}
-            for j, q in enumerate(ref):
-                st = stats[id(q)]
-                got = _angles(st["first_q"])[:2]
-                rows.append([tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *got, st["first_error"], runs, st["found"],
-                             st["median_error"], st["max_error"]])
-            for j, (closed, ga_row) in enumerate(paper):
-                got = ga_row if method == "ga" else closed
-                err = float(np.abs(np.subtract(got, closed)).max())
-                paper_rows.append([tuple_text(t_cm, "g"), j + 1, *closed, *got, err, None, None, None, None])
-        report.tables.append(Table(
-            key, title,
-            ["target (cm)", "solution", "closed form t1 (deg)", "closed form t2 (deg)", f"{method.upper()} t1 (deg)",
-             f"{method.upper()} t2 (deg)", "error (deg)", "runs", f"found within {FOUND_DEG[method]:g} deg (fraction)",
-             "median error (deg)", "max error (deg)"],
-            rows, paper_rows=paper_rows,
-            formats=[None, None, ".1f", ".1f", ".2f" if method == "ga" else ".4f",
-                     ".2f" if method == "ga" else ".4f", ".3g", None, ".2f", ".3g", ".3g"],
-            note=("Our angles and error: the first run (the solution it returned nearest to each closed-form one); "
-                  "found / median / max: over all runs. Paper rows: its printed angles; its error column is the "
-                  "largest difference of the printed values."
-                  + (" The HGA rows print the closed form (Table 4's signs of t2 for the second solutions are lost "
-                     "in the source text and restored from the closed form)." if method == "hga" else ""))))
+        paper_rows = [[tuple_text(t_cm, "g"), j + 1, *closed, *got, float(np.abs(np.subtract(got, closed)).max()),
+                       None, None, None, None]
+                      for t_cm in TARGETS_2R_CM for j, (closed, ga_row) in enumerate(PAPER_TABLE3[t_cm])
+                      for got in [ga_row if method == "ga" else closed]]
+        report.tables.append(_solutions_table(
+            key, title, res2r, method, runs, ".1f", paper_rows,
+            ("Our angles and error: the first run (the solution it returned nearest to each closed-form one); "
+             "found / median / max: over all runs. Paper rows: its printed angles; its error column is the "
+             "largest difference of the printed values."
+             + (" The HGA rows print the closed form (Table 4's signs of t2 for the second solutions are lost "
+                "in the source text and restored from the closed form)." if method == "hga" else "")),
+            order=lambda t_cm, refs: _order_like([p[0] for p in PAPER_TABLE3[t_cm]], refs)))
 
     resp = against("puma3r", [(t_cm, _order_like(PAPER_TABLE5[t_cm], puma_ik(targets["puma3r"][k]), cols=(1, 2)))
                               for k, t_cm in enumerate(TARGETS_PUMA_CM)])  # t1 of target 4: see the notes
@@ -200,28 +205,16 @@ def run(ctx: RunContext) -> PaperReport:
 
     for key, method, title in (("table6", "hga", "Table 6 - PUMA wrist point: HGA vs closed form"),
                                ("table6_ga", "ga", "PUMA wrist point: GA alone (12 generations) vs closed form")):
-        rows, paper_rows = [], []
-        for t_cm in TARGETS_PUMA_CM:
-            e = resp[t_cm]
-            rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"]), st["first_error"], runs,
-                      st["found"], st["median_error"], st["max_error"]]
-                     for j, (q, st) in enumerate(zip(e["reference"], e[method]["stats"], strict=True))]
-            paper_rows += [[tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
-                            float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()), None, None, None, None]
-                           for j, row in enumerate(PAPER_TABLE6.get(t_cm, []))]
-        spec = ".4f" if method == "hga" else ".2f"
-        report.tables.append(Table(
-            key, title,
-            ["target (cm)", "solution", "closed form t1 (deg)", "closed form t2 (deg)", "closed form t3 (deg)",
-             f"{method.upper()} t1 (deg)", f"{method.upper()} t2 (deg)", f"{method.upper()} t3 (deg)", "error (deg)",
-             "runs", f"found within {FOUND_DEG[method]:g} deg (fraction)", "median error (deg)", "max error (deg)"],
-            rows, paper_rows=paper_rows if method == "hga" else None,
-            formats=[None, None, ".2f", ".2f", ".2f", spec, spec, spec, ".3g", None, ".2f", ".3g", ".3g"],
-            note=("Closed form: ours (Table 5 above). Paper rows: its Table 5 as the closed form and its Table 6 as "
-                  "the HGA, for the rows that survive in the source text (targets 1 and 2; target 2's third "
-                  "angle 9.8 is printed without the sign of Table 5's -9.8)." if method == "hga" else
-                  "The paper gives no GA table for the PUMA (its GA errors, 0.44-3.6 deg, are quoted for both "
-                  "arms); an empty cell means the GA returned no solution at all.")))
+        paper_rows = [[tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
+                       float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()), None, None, None, None]
+                      for t_cm in TARGETS_PUMA_CM for j, row in enumerate(PAPER_TABLE6.get(t_cm, []))]
+        report.tables.append(_solutions_table(
+            key, title, resp, method, runs, ".2f", paper_rows if method == "hga" else None,
+            "Closed form: ours (Table 5 above). Paper rows: its Table 5 as the closed form and its Table 6 as the HGA, "
+            "for the rows that survive in the source text (targets 1 and 2; target 2's third angle 9.8 is printed "
+            "without the sign of Table 5's -9.8)." if method == "hga" else
+            "The paper gives no GA table for the PUMA (its GA errors, 0.44-3.6 deg, are quoted for both arms); an "
+            "empty cell means the GA returned no solution at all."))
 
     report.figures += [
         _fig_population_2r(ctx, histories["planar2r"], res2r[TARGETS_2R_CM[0]]["reference"], s["planar2r"]),

@@ -74,8 +74,7 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
     run, _, _ = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                crossover_probability, archive=archive, callback=callback)
     # every individual the GA evaluated, not only the last generation, which may have drifted away from a family
-    Q = np.concatenate([a[0] for a in archive])
-    cost = np.concatenate([a[1] for a in archive])
+    Q, cost = (np.concatenate(part) for part in zip(*archive, strict=True))
     starts = leader_rows(Q, cost, cluster_radius, problem.robot.revolute, max_clusters=max_starts)
     polished = np.array([nelder_mead_polish(problem, q, simplex_size, xatol, fatol, max_polish_evaluations)
                          for q in starts])

@@ -195,27 +195,22 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         run.history["mean_cost"].append(float(np.mean(F[:, pick])))
         run.history["diversity"].append(diversity(X, problem.lower, problem.upper))
 
-    first_repair = None if repair_steps == 0 else 4 * repair_steps
     out = nsga2_minimize(
         f, problem.lower, problem.upper, k, rng, population=population, generations=max_generations, eta_c=eta_c,
         eta_m=eta_m, crossover_probability=crossover_probability, mutation_probability=mutation_probability,
-        initial=init if first_repair is None else repair(init, first_repair),
-        repair=None if repair_steps == 0 else (lambda Y: repair(Y, repair_steps)),
-        callback=callback)
+        initial=init if repair_steps == 0 else repair(init, 4 * repair_steps),
+        repair=None if repair_steps == 0 else (lambda Y: repair(Y, repair_steps)), callback=callback)
     run.generation = out.generations
-    front = out.front
-    order = front[np.argsort(out.F[front, 0], kind="stable")]
+    order = out.front[np.argsort(out.F[out.front, 0], kind="stable")]
     feasible = order[out.violation[order] <= 0]
     chosen = (feasible[np.argmin(out.F[feasible, pick])] if feasible.size
               else order[np.argmin(out.violation[order])])
     run.best_q = out.X[chosen].copy()
     run.history["best_cost"] = best_pick
     run.history.update({key: list(v) for key, v in out.history.items()})
-    if feasible.size:
-        message = f"{max_generations} generations; {len(order)} point(s) on the front, all feasible"
-    else:
-        message = (f"{max_generations} generations; no individual meets "
-                   + ("every goal" if goals else "the pose constraint"))
+    message = f"{max_generations} generations; " + (
+        f"{len(order)} point(s) on the front, all feasible" if feasible.size
+        else "no individual meets " + ("every goal" if goals else "the pose constraint"))
     if fixed_rows:
         names = ", ".join(ROW_NAMES[r] for r in fixed_rows)
         message += f"; manipulability on Jacobian rows {rows}: the chain never moves its tip along {names}"
