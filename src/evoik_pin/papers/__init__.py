@@ -1,6 +1,5 @@
 """Reproductions of the five papers' experiments: ``evoik reproduce`` and ``scripts/reproduce_NNN.py`` wrap
-:func:`run_papers`, which writes ``DIR/NNN/report.md``, ``results.json``, one CSV per table (``source``: ``paper`` or
-``ours``) and the figures.
+:func:`run_papers`, which writes ``DIR/NNN/report.md``, ``results.json``, the figures and one CSV per table.
 
 How to add paper NNN: ``evoik_pin/papers/paperNNN.py`` (found by its file name) defines ``PAPER_ID = "NNN"``,
 ``TITLE`` and ``run(ctx: RunContext) -> PaperReport``, which draws every random number from ``ctx.rng(labels...)``

@@ -1,12 +1,8 @@
-"""Denavit-Hartenberg tables and serial chains written out as URDF (joint ``i`` moves like row ``i``; a box per
-link and a cylinder per joint axis, so the arm renders in meshcat). Lengths in m, angles in rad:
-
-* standard DH, row i = (a_i, alpha_i, d_i, theta_i):  ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
-* modified DH (Craig), row i = (a_{i-1}, alpha_{i-1}, d_i, theta_i):
-  ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
-
-The joint variable adds to ``theta`` (revolute) or ``d`` (prismatic); the frame after the last row is the
-``tool`` link.
+"""Denavit-Hartenberg tables and serial chains written out as URDF (joint ``i`` moves like row ``i``, the frame
+after the last row is the ``tool`` link; a box per link, a cylinder per joint axis, for meshcat). Lengths in m,
+angles in rad. Standard DH, row (a_i, alpha_i, d_i, theta_i): ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
+modified (Craig), row (a_{i-1}, alpha_{i-1}, d_i, theta_i): ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
+The joint variable adds to ``theta`` (revolute) or ``d`` (prismatic).
 """
 
 from __future__ import annotations
@@ -91,9 +87,8 @@ class JointSpec:
 
 def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_radius: float = 0.01,
                comment: str = "") -> str:
-    """URDF text of the arm ``name`` described by DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
-    ``"modified"``), the first DH frame at ``base_link``: ``link_radius`` (m) of the visuals, ``comment`` placed in
-    an XML comment at the top."""
+    """URDF text of the arm ``name`` of DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
+    ``"modified"``), first DH frame at ``base_link``; ``link_radius`` (m) of the visuals, ``comment`` on top."""
     if convention not in ("standard", "modified"):
         raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
     if not rows:

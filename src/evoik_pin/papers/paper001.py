@@ -123,9 +123,8 @@ def _stats(reference, runs_found, method) -> list[dict]:
 
 def _solutions_table(key: str, title: str, res: dict, method: str, runs: int, closed_spec: str,
                      paper_rows: list | None, note: str, order=lambda t_cm, refs: refs) -> Table:
-    """Tables 3, 4 and 6: per target of ``res`` and closed-form solution (in ``order``), its angles (formatted
-    ``closed_spec``), the first run's nearest solution and its error, and over the ``runs`` the share found, the
-    median and the max error (deg)."""
+    """Tables 3, 4 and 6: per target of ``res`` and closed-form solution (in ``order``), its angles (``closed_spec``),
+    the first run's nearest solution and its error, and over the ``runs`` the share found, median and max error."""
     rows = []
     for t_cm, e in res.items():
         stats = {id(q): st for q, st in zip(e["reference"], e[method]["stats"], strict=True)}

@@ -90,8 +90,7 @@ def _settings(quick: bool) -> dict:
 
 def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0, bounds=None, a: float = 0.0,
                  max_generations: int | None = None, callback=None) -> dict:
-    """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``); ``callback`` goes to
-    every run."""
+    """Best of up to ``rho`` runs on one target (stop once a run meets ``fitness``), each given ``callback``."""
     target = Target.coerce(target)
     objective = PositionError(target)
     if a > 0:
@@ -124,9 +123,8 @@ REACHED_M = 1e-9
 
 
 def _classify(points: list[dict], distance=lambda i: 0.0) -> list[dict]:
-    """Each point's ``status``: ``reached``; ``missed`` when ``distance(i)`` (the least distance a reachability
-    check finds for point i, m; default 0: a target that is FK of joints inside the bounds) is within REACHED_M;
-    else ``no solution``."""
+    """Each point's ``status``: ``reached``; ``missed`` when ``distance(i)`` (the least distance a reachability check
+    finds for point i, m; default 0: FK of joints inside the bounds) is within REACHED_M; else ``no solution``."""
     for i, pt in enumerate(points):
         reached = pt["error"] <= REACHED_M
         pt["oracle"] = None if reached else min(pt["error"], distance(i))
@@ -180,8 +178,7 @@ def _robot():
 
 
 def _job(spec: dict):
-    """One independent part of the experiment (a top-level job for ``ctx.map_parallel``): ``(key, output, wall
-    time s)``."""
+    """One part of the experiment (a top-level job for ``ctx.map_parallel``): ``(key, output, wall time s)``."""
     t0 = time.perf_counter()
     robot, s, kind, label = _robot(), spec["settings"], spec["kind"], spec["label"]
     cfg = METHODS[label.removeprefix("Pro-").split(" ")[0]]

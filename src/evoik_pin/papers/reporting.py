@@ -34,8 +34,7 @@ def check_seed(seed) -> int:
 
 
 def check_output_dir(path) -> Path:
-    """``path`` resolved, created (with parents) if needed; OutputError when it is a file, cannot be created or
-    is not writable."""
+    """``path`` resolved, created (with parents) if needed; OutputError when it is a file, uncreatable or unwritable."""
     out = Path(path).expanduser()
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {str(out)!r} exists and is not a directory; choose a directory for --out")
@@ -332,8 +331,7 @@ class RunContext:
         return plt.subplots(*args, **kwargs)
 
     def save_figure(self, fig, name: str, caption: str) -> Figure:
-        """Lay ``fig`` out tightly, save it as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it, return a
-        :class:`Figure`."""
+        """Lay ``fig`` out tightly, save it as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it; a :class:`Figure`."""
         import matplotlib.pyplot as plt
 
         path = self.out_dir / f"{name}.png"

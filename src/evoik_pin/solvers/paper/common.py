@@ -88,9 +88,8 @@ class SolverRun:
     Stopping rules, checked by :meth:`stop_reason` after every generation: ``callback(generation, population)``
     (given the (N, n) population after every :meth:`record`) returned a truthy value; the best individual meets
     the problem's tolerances; its cost is at most ``cost_tolerance``; ``max_generations`` reached; no improvement
-    of the best cost for ``stall_generations`` generations. ``history["diversity"]`` is computed in batches: it
-    is complete in :meth:`result`.
-    """
+    of the best cost for ``stall_generations`` generations. ``history["diversity"]`` (computed in batches) is
+    complete in :meth:`result`."""
 
     #: Populations kept before their diversities are computed in one vectorized pass.
     _DIVERSITY_BATCH = 64
@@ -113,8 +112,7 @@ class SolverRun:
         self._pending: list[np.ndarray] = []  # populations whose diversity is not computed yet
 
     def record(self, Q: np.ndarray, ev: Evaluation, **extra: float) -> int:
-        """Log one generation's population ``Q`` (N, n) and its evaluation, extra keywords as history series;
-        returns the best index."""
+        """Log one generation's population ``Q`` (N, n), its evaluation and ``extra`` history series; the best index."""
         i = int(ev.cost.argmin())
         self._stall = 0 if ev.cost[i] < self.best_cost else self._stall + 1
         self.offer(Q[i], ev, i)

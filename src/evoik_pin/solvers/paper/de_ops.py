@@ -66,9 +66,8 @@ def _as_column(F) -> np.ndarray | float:
 
 
 def mutate(X: np.ndarray, scheme: str, F, idx: np.ndarray, best: int) -> np.ndarray:
-    """Donors (N, D) of paper 002's eq. 12 ``scheme`` (one of :data:`MUTATIONS`) for population ``X`` (N, D),
-    scale factor ``F``, distinct random indices ``idx`` (N, >= the scheme's count; column j is r_(j+1)) and the
-    row ``best`` of the best individual."""
+    """Donors (N, D) of paper 002's eq. 12 ``scheme`` (one of :data:`MUTATIONS`) for population ``X`` (N, D), scale
+    factor ``F``, distinct random indices ``idx`` (N, >= the scheme's count; column j is r_(j+1)), best row ``best``."""
     if scheme not in MUTATIONS:
         raise OptionError(f"unknown mutation scheme {scheme!r}; known: {', '.join(MUTATIONS)}")
     n_needed = MUTATIONS[scheme]

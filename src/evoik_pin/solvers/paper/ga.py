@@ -162,9 +162,8 @@ def _unsigned(bits) -> np.ndarray:
 
 
 def decode_sign_magnitude(bits: np.ndarray) -> np.ndarray:
-    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B): ``bits[..., 0]`` the
-    sign (1 = positive), the rest the magnitude, most significant first, ``theta = +-m * 180 / (2^(B-1) - 1)``
-    deg."""
+    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B): ``bits[..., 0]`` the sign
+    (1 = positive), the rest the magnitude, most significant first, ``theta = +-m * 180 / (2^(B-1) - 1)`` deg."""
     bits = np.asarray(bits)
     m = bits.shape[-1] - 1
     sign = np.where(bits[..., 0] == 1, 1.0, -1.0)

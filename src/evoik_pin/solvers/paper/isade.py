@@ -41,8 +41,8 @@ def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None
 
 
 def mean_scale_factor(generation: int, max_generations: int, F_min: float, F_max: float, n_iter: float) -> float:
-    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter`` for the generation
-    being produced (1..max_generations)."""
+    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter`` for the generation being
+    produced (1..max_generations)."""
     frac = max(max_generations - generation, 0) / max(max_generations, 1)
     return F_min + (F_max - F_min) * frac**n_iter
 

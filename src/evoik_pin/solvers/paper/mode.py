@@ -51,8 +51,7 @@ def adaptive_probability(cost: np.ndarray, C: float) -> np.ndarray:
 
 
 def nondominated_2d(F: np.ndarray) -> np.ndarray:
-    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized), sorted by the first objective; exact
-    duplicates keep one."""
+    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized) by the first objective, one per duplicate."""
     order = np.lexsort((F[:, 1], F[:, 0]))
     f2 = F[order, 1]
     prev_min = np.concatenate([[np.inf], np.minimum.accumulate(f2)[:-1]])
@@ -84,14 +83,12 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         mutation_probability: M. crossover_rate: Cr. scale_factor: F. trigonometric_probability: Mt.
         adaptive: Zhao & Qiao's adaptive P_c and P_m; False keeps P_c = Cr and P_m = M.
         bound_handling: ``"clip"``, ``"reflect"`` or ``"resample"`` for donors outside the bounds.
-        front_size: at most this many points kept in the non-dominated archive.
-        length_scale: l (m) of ``f1``.
+        front_size: at most this many points kept in the non-dominated archive. length_scale: l (m) of ``f1``.
 
     Returns:
         :class:`Result` with ``q`` the final generation's best weighted individual (the paper's ``argmax f``),
-        ``front`` the non-dominated (position error m, max displacement rad) met during the run, and history
-        series ``w1``, ``w2``, ``best_fitness`` (least weighted cost), ``best_position_error`` (m),
-        ``best_displacement`` (rad).
+        ``front`` the non-dominated (position error m, max displacement rad) met in the run, and history series
+        ``w1``, ``w2``, ``best_fitness`` (least weighted cost), ``best_position_error`` m, ``best_displacement`` rad.
     """
     population = check_int("population", population, 5)
     max_generations = check_int("max_generations", max_generations, 0)

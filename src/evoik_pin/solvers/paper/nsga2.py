@@ -57,8 +57,7 @@ class GoalManipulability(Objective):
 
 
 def _chosen_goals(problem: IKProblem, which) -> list[int]:
-    """Indices of the goals ``which`` names (indices or frames of the goal list; None: every goal), or
-    OptionError."""
+    """Indices of the goals ``which`` names (indices or frames of the goal list; None: all), or OptionError."""
     goals = problem.goals
     if which is None:
         return list(range(len(goals)))
@@ -127,8 +126,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     Returns:
         :class:`Result` whose ``front`` holds the first front sorted by the first objective (violation = errors
         above the tolerances, m + rad) and whose ``q`` is its feasible member with the least objective ``pick``
-        (the least violation when none is feasible). History adds ``front_size``, ``feasible_fraction``,
-        ``min_violation``.
+        (else the least violation). History adds ``front_size``, ``feasible_fraction``, ``min_violation``.
     """
     robot = problem.robot
     repair_steps = check_int("repair_steps", repair_steps, 0)

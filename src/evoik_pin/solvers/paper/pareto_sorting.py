@@ -1,6 +1,5 @@
-"""NSGA-II's sorting and selection (Deb et al. 2002), vectorized over the population: constraint domination,
-non-dominated sorting, crowding distance, survival and crowded tournaments. ``F`` (N, k) minimized, ``violation``
-(N,) >= 0 (0 = feasible).
+"""NSGA-II's sorting and selection (Deb et al. 2002), vectorized: constraint domination, non-dominated sorting,
+crowding distance, survival, crowded tournaments. ``F`` (N, k) minimized, ``violation`` (N,) >= 0 (0 = feasible).
 """
 
 from __future__ import annotations
