@@ -65,9 +65,7 @@ def fmt(value, spec: str | None = None) -> str:
         return format(v, spec)
     if v == 0.0:
         return "0"
-    if abs(v) < 1e-3 or abs(v) >= 1e5:
-        return f"{v:.3e}"
-    return f"{v:.4g}"
+    return f"{v:.3e}" if abs(v) < 1e-3 or abs(v) >= 1e5 else f"{v:.4g}"
 
 
 def tuple_text(values, spec: str = ".4g") -> str:
@@ -90,9 +88,7 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, (float, np.floating)):
         v = float(obj)
         return None if not math.isfinite(v) else v
-    if isinstance(obj, Path):
-        return str(obj)
-    return obj
+    return str(obj) if isinstance(obj, Path) else obj
 
 
 def _cpu_model() -> str:
@@ -159,10 +155,8 @@ class Table:
 
     def _markdown_block(self, rows: list[list]) -> list[str]:
         specs = self.formats or [None] * len(self.columns)
-        lines = ["| " + " | ".join(self.columns) + " |", "|" + " --- |" * len(self.columns)]
-        for row in rows:
-            lines.append("| " + " | ".join(fmt(v, s) for v, s in zip(row, specs, strict=True)) + " |")
-        return lines
+        return ["| " + " | ".join(self.columns) + " |", "|" + " --- |" * len(self.columns),
+                *("| " + " | ".join(fmt(v, s) for v, s in zip(row, specs, strict=True)) + " |" for row in rows)]
 
     def markdown(self) -> str:
         """The table as markdown: the paper's block (when given) above ours, same rows and columns."""

@@ -204,8 +204,7 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
     population = check_int("population", population, 2)
     elite = check_int("elite", elite, 0)
     if elite >= population:
-        raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, "
-                          f"got {elite}")
+        raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, got {elite}")
     max_generations = check_int("max_generations", max_generations, 0)
     bits = check_int("bits (per joint)", bits, 2, 62)
     check_choice("encoding", encoding, ENCODINGS)
@@ -226,13 +225,12 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
         G[0] = ((k.astype(np.int64)[:, None] >> np.arange(bits - 1, -1, -1)) & 1).reshape(-1)
     Q = decode_bits(G, n, encoding, lo, hi)
     ev = problem.evaluate(Q)
-    cost = ev.cost
     run.record(Q, ev)
     n_child = population - elite
     half = (n_child + 1) // 2
     while (reason := run.stop_reason()) is None:
         # Roulette wheel (paper: p_i = f_i / sum f): fitness relative to the best keeps exp() finite.
-        fit = np.exp(-(cost - cost.min()) / fitness_scale)
+        fit = np.exp(-(ev.cost - ev.cost.min()) / fitness_scale)
         parents = rng.choice(population, size=2 * half, p=fit / fit.sum())
         A, B = G[parents[:half]], G[parents[half:]]
         cut = rng.integers(1, length, size=half)
@@ -241,13 +239,12 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
         kids ^= (rng.random(kids.shape) < p_bit).astype(np.uint8)
         Qk = decode_bits(kids, n, encoding, lo, hi)
         evk = problem.evaluate(Qk)
-        keep = np.argsort(cost, kind="stable")[:elite]
+        keep = np.argsort(ev.cost, kind="stable")[:elite]
         G = np.concatenate([G[keep], kids])
         Q = np.concatenate([Q[keep], Qk])
-        cost = np.concatenate([cost[keep], evk.cost])
-        rot = None if ev.orientation_error is None else np.concatenate([ev.orientation_error[keep],
-                                                                        evk.orientation_error])
-        ev = type(ev)(cost, np.concatenate([ev.position_error[keep], evk.position_error]), rot)
+        ev = type(ev)(*(None if a is None else np.concatenate([a[keep], b])
+                        for a, b in zip((ev.cost, ev.position_error, ev.orientation_error),
+                                        (evk.cost, evk.position_error, evk.orientation_error), strict=True)))
         run.generation += 1
         run.record(Q, ev)
     return run.result("ga-binary", reason)

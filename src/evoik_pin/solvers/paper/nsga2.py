@@ -48,9 +48,7 @@ class GoalManipulability(Objective):
                             for f, r in zip(self.frames, self.rows, strict=True)], axis=1)
         M = J @ J.transpose(0, 2, 1) if J.shape[1] <= J.shape[2] else J.transpose(0, 2, 1) @ J
         Y = np.sqrt(np.maximum(np.linalg.det(M), 0.0))
-        if self._form == "inverse":
-            return 1.0 / (Y + 1.0)
-        return -Y if self._form == "negative" else Y
+        return 1.0 / (Y + 1.0) if self._form == "inverse" else -Y if self._form == "negative" else Y
 
     def __repr__(self) -> str:
         return f"GoalManipulability(frames={self.frames!r}, rows={self.rows!r}, form={self._form!r})"
