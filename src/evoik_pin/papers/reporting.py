@@ -262,8 +262,7 @@ def progress_bar(iterable: Iterable | None = None, total: int | None = None, des
     """A tqdm progress bar on stderr that disappears when done (usable in worker processes)."""
     from tqdm.auto import tqdm
 
-    return tqdm(iterable, total=total, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True,
-                file=sys.stderr)
+    return tqdm(iterable, total=total, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True, file=sys.stderr)
 
 
 def derive_rng(seed: int, *labels: str) -> np.random.Generator:

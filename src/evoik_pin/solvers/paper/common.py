@@ -206,8 +206,7 @@ def run_with_restarts(solve_once, problem: IKProblem, runs: int, max_generations
         return results[0]
     k = min(range(len(results)), key=lambda i: (not results[i].success, results[i].cost))
     best = results[k]
-    history = {key: np.concatenate([r.history[key] for r in results if key in r.history])
-               for key in best.history}
+    history = {key: np.concatenate([r.history[key] for r in results if key in r.history]) for key in best.history}
     history["run"] = np.concatenate([np.full(len(r.history["best_cost"]), float(i)) for i, r in enumerate(results)])
     best.history = history
     best.generations = sum(r.generations for r in results)

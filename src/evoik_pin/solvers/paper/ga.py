@@ -66,8 +66,7 @@ def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarra
     """Paper 001 eq. 11: the basic polynomial mutation (Deb 2000) of the entries of ``X`` (N, n) where ``mask``
     is True, with uniform draws ``u`` (N, n): ``x += delta (upper - lower)``. Its spread ignores the bounds,
     unlike :func:`~.nsga2_minimizer.bounded_polynomial_mutation`."""
-    delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
-                     1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
+    delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0, 1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
     return np.where(mask, X + delta * (upper - lower), X)
 
 

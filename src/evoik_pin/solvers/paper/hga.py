@@ -90,6 +90,5 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         message += (f" (Nelder-Mead over {problem.n} joints rarely meets a goal list's tolerances; memetic-all finds "
                     "the solutions of whole robots)")
     result = run.result("hga", message)
-    result.solutions = solution_results(problem, good, "hga", result.generations, result.evaluations,
-                                        result.time_s)
+    result.solutions = solution_results(problem, good, "hga", result.generations, result.evaluations, result.time_s)
     return result

@@ -199,8 +199,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     run.generation = out.generations
     order = out.front[np.argsort(out.F[out.front, 0], kind="stable")]
     feasible = order[out.violation[order] <= 0]
-    chosen = (feasible[np.argmin(out.F[feasible, pick])] if feasible.size
-              else order[np.argmin(out.violation[order])])
+    chosen = feasible[np.argmin(out.F[feasible, pick])] if feasible.size else order[np.argmin(out.violation[order])]
     run.best_q = out.X[chosen].copy()
     run.history["best_cost"] = best_pick
     run.history.update({key: list(v) for key, v in out.history.items()})
