@@ -435,9 +435,8 @@ def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
         f"generations of the kept run {iso['avg_generations']:.1f} / {de['avg_generations']:.1f} / "
         f"{pso['avg_generations']:.1f} (paper 85.6 / 124.5 / 413.2).",
         "Times (the paper's: MATLAB on an Intel i5-4258U): compare ratios. Scenario 2 time ratios DE/ISADE "
-        f"{_ratio(de['avg_time'], iso['avg_time'])} "
-        f"(paper {_ratio(p4['DE'][4], p4['ISADE'][4])}), PSO/ISADE {_ratio(pso['avg_time'], iso['avg_time'])} "
-        f"(paper {_ratio(p4['PSO'][4], p4['ISADE'][4])}).",
+        f"{_ratio(de['avg_time'], iso['avg_time'])} (paper {_ratio(p4['DE'][4], p4['ISADE'][4])}), PSO/ISADE "
+        f"{_ratio(pso['avg_time'], iso['avg_time'])} (paper {_ratio(p4['PSO'][4], p4['ISADE'][4])}).",
         "Joint continuity (Fig. 8): max joint jump between consecutive spiral points "
         + ", ".join(f"{k} {s3[k]['max_jump_deg']:.1f} deg" for k in ("PSO", "DE", "ISADE", "Pro-PSO", "Pro-DE",
                                                                      "Pro-ISADE"))
