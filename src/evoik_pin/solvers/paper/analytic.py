@@ -295,15 +295,6 @@ def tip_target_problem(problem: IKProblem) -> IKProblem | None:
                    tolerance=goal.tolerance, rotation_tolerance=goal.rotation_tolerance, evaluations=0)
 
 
-def _target_point(problem: IKProblem, robot_name: str) -> np.ndarray:
-    t = problem.target
-    if t.planar:
-        if robot_name != "planar2r":
-            raise TargetError(f"a planar target applies to planar arms; {robot_name} needs a 3-D position (m)")
-        return np.array([t.position[0], t.position[1], 0.0])
-    return t.position
-
-
 @register("algebraic", "closed-form IK: paper 000's algebraic method (ax18, phi search), planar2r (both "
           "elbows) and the puma3r wrist point (four solutions)", multi_solution=True)
 def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float = np.radians(0.5)) -> Result:
@@ -315,7 +306,10 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
     robot = problem.robot
     name = _closed_form_for(robot)
     run = SolverRun(problem, 0)
-    p = _target_point(problem, name)
+    t = problem.target
+    if t.planar and name != "planar2r":
+        raise TargetError(f"a planar target applies to planar arms; {name} needs a 3-D position (m)")
+    p = np.array([t.position[0], t.position[1], 0.0]) if t.planar else t.position
     if name == "planar2r":
         cands, exact = _planar2r_candidates(p[0], p[1], **PLANAR2R, clamp=True)
         exact = exact and not abs(p[2]) > 0

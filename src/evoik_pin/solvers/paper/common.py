@@ -21,12 +21,7 @@ BOUND_HANDLING = ("clip", "reflect", "resample")
 def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
     """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence,
     as ``scipy.stats.qmc.Halton(d, scramble=False)`` gives them, without importing the slow scipy.stats."""
-    primes: list[int] = []
-    k = 2
-    while len(primes) < dimensions:
-        if all(k % p for p in primes):
-            primes.append(k)
-        k += 1
+    primes = [p for p in range(2, 20 * dimensions + 20) if all(p % d for d in range(2, int(p**0.5) + 1))][:dimensions]
     index = np.arange(skip, skip + count, dtype=np.int64)
     out = np.zeros((count, dimensions))
     for d, base in enumerate(primes):
