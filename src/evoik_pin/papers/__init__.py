@@ -58,16 +58,11 @@ def _resolve_ids(papers) -> list[str]:
     if not papers:
         raise ReproductionError(f"name at least one paper: {', '.join(PAPERS)} or all")
     ids: list[str] = []
-    for p in papers:
-        p = str(p).strip()
-        if p == "all":
-            ids += [pid for pid in PAPERS if pid not in ids]
-            continue
+    for p in (str(p).strip() for p in papers):
         pid = p.zfill(3) if p.isdigit() else p
-        if pid not in PAPERS:
+        if p != "all" and pid not in PAPERS:
             raise ReproductionError(f"unknown paper id {p!r}; valid ids: {', '.join(PAPERS) or '(none)'} or all")
-        if pid not in ids:
-            ids.append(pid)
+        ids += [i for i in (PAPERS if p == "all" else [pid]) if i not in ids]
     return ids
 
 

@@ -22,11 +22,8 @@ _KINDS = ("revolute", "prismatic", "fixed")
 
 def _rot(axis: str, angle: float) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
-    T = np.eye(4)
-    if axis == "x":
-        T[1:3, 1:3] = [[c, -s], [s, c]]
-    else:  # z
-        T[0:2, 0:2] = [[c, -s], [s, c]]
+    T, i = np.eye(4), 1 if axis == "x" else 0  # the rotated plane: (y, z) about x, (x, y) about z
+    T[i:i + 2, i:i + 2] = [[c, -s], [s, c]]
     return T
 
 
@@ -115,8 +112,7 @@ def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_
 
 def _fmt(x: float) -> str:
     """Full precision for kinematics (FK must match the DH product to 1e-12 m)."""
-    x = 0.0 if abs(x) < 1e-15 else float(x)
-    return repr(x)
+    return repr(0.0 if abs(x) < 1e-15 else float(x))
 
 
 def _short(x: float) -> str:
