@@ -151,10 +151,8 @@ def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
 def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
     """A cylinder along a revolute axis (or a small box on a prismatic one) at the joint origin."""
     T = _frame_along(np.asarray(axis, float))
-    if kind == "revolute":
-        geom = f'<cylinder radius="{_short(1.6 * radius)}" length="{_short(5 * radius)}"/>'
-    else:
-        geom = f'<box size="{_short(3 * radius)} {_short(3 * radius)} {_short(3 * radius)}"/>'
+    geom = (f'<cylinder radius="{_short(1.6 * radius)}" length="{_short(5 * radius)}"/>' if kind == "revolute"
+            else f'<box size="{_short(3 * radius)} {_short(3 * radius)} {_short(3 * radius)}"/>')
     return f'    <visual>{_origin_xml(T)}<geometry>{geom}</geometry><material name="joint"/></visual>\n'
 
 

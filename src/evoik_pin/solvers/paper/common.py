@@ -170,10 +170,9 @@ class SolverRun:
         if problem.target is None:  # every goal within its own tolerances
             goal_errors = problem.goal_errors(q)
             success = problem.goals_met(goal_errors)
-        if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
-            message = "stopped"
-        if not success:
-            message += f"; {shortfall_text(problem, pos, rot, goal_errors)}"
+        if not success:  # "tolerance reached" by the best's errors, not by "cost <= cost_tolerance (...)"
+            message = ("stopped" if message == "tolerance reached" else message) + "; " + shortfall_text(
+                problem, pos, rot, goal_errors)
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
             generations=self.generation, evaluations=problem.evaluations, time_s=time.perf_counter() - self.t0,

@@ -120,10 +120,8 @@ def de(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, ma
                 use_trig = u[:, N + D + 1] < trig_probability
                 V = np.where(use_trig[:, None], trigonometric(X, ev.cost, idx), rand1(X, F, idx))
             j = (u[:, N + D] * D).astype(np.intp)
-            if crossover == "bin":
-                U = binomial_crossover(X, V, CR, u[:, N:N + D], j)
-            else:
-                U = exponential_crossover(X, V, j, exponential_lengths(CR, u[:, N:N + D]))
+            U = (binomial_crossover(X, V, CR, u[:, N:N + D], j) if crossover == "bin"
+                 else exponential_crossover(X, V, j, exponential_lengths(CR, u[:, N:N + D])))
             U = enforce_bounds(U, problem, rng, bound_handling)
             X, ev = greedy_selection(X, ev, U, problem.evaluate(U))
             run.generation += 1

@@ -138,10 +138,8 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
             if trig.any():
                 V[trig] = trigonometric(X, cost, idx[trig])
         u, jrand = rng.random(X.shape), rng.integers(0, problem.n, population)
-        if crossover == "binomial":
-            U = binomial_crossover(X, V, P_c, u, jrand)
-        else:
-            U = np.where((u[:, 0] < P_c)[:, None], V, X)
+        U = (binomial_crossover(X, V, P_c, u, jrand) if crossover == "binomial"
+             else np.where((u[:, 0] < P_c)[:, None], V, X))  # "fixed": the whole donor
         changed = mutated & np.any(U != X, axis=1)
         if changed.any():
             trial = enforce_bounds(U[changed], problem, rng, bound_handling)
