@@ -39,8 +39,7 @@ DEFAULT_OUT = "reproduction"
 
 
 def _discover() -> dict[str, str]:
-    here = Path(__file__).resolve().parent
-    found = sorted(p.stem[len("paper"):] for p in here.glob("paper[0-9][0-9][0-9].py"))
+    found = sorted(p.stem[len("paper"):] for p in Path(__file__).resolve().parent.glob("paper[0-9][0-9][0-9].py"))
     return {pid: f"{__name__}.paper{pid}" for pid in found}
 
 

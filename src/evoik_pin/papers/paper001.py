@@ -107,8 +107,7 @@ def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
     out = []
     for i in range(spec["runs"]):
         extra = {"callback": history.__setitem__} if (spec["history"] and i == 0) else {}
-        res = solve(robot, target, method=method, seed=rng, **kw, **extra)
-        out.append([sol.q for sol in (res.solutions or [])])
+        out.append([sol.q for sol in (solve(robot, target, method=method, seed=rng, **kw, **extra).solutions or [])])
     return out, history
 
 

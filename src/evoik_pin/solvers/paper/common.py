@@ -58,8 +58,7 @@ def enforce_bounds(trial: np.ndarray, problem: IKProblem, rng: np.random.Generat
     bad = (trial < lo) | (trial > hi)
     if bad.any():
         trial = trial.copy()
-        fresh = rng.uniform(lo, hi, size=trial.shape)
-        trial[bad] = fresh[bad]
+        trial[bad] = rng.uniform(lo, hi, size=trial.shape)[bad]
     return trial
 
 
@@ -71,8 +70,7 @@ def diversity(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
 
 def _diversities(Qs: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """:func:`diversity` of a stack of equally sized populations (G, N, n), shape (G,), in one pass."""
-    width = np.where(upper > lower, upper - lower, 1.0)
-    Z = Qs / width
+    Z = Qs / np.where(upper > lower, upper - lower, 1.0)
     Z -= Z.mean(axis=1, keepdims=True)
     return np.sqrt((Z * Z).sum(axis=2)).mean(axis=1)
 

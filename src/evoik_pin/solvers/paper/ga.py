@@ -35,8 +35,7 @@ def niche_counts(Z: np.ndarray, sigma: float) -> np.ndarray:
     of normalized individuals ``Z`` (N, n)."""
     sq = np.einsum("ij,ij->i", Z, Z)
     d2 = np.maximum(sq[:, None] + sq[None, :] - 2.0 * (Z @ Z.T), 0.0)
-    sh = np.maximum(1.0 - np.sqrt(d2) / sigma, 0.0)
-    return sh.sum(axis=1)
+    return np.maximum(1.0 - np.sqrt(d2) / sigma, 0.0).sum(axis=1)
 
 
 def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pairs: np.ndarray,
@@ -48,8 +47,7 @@ def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pair
     by_cost = np.where(cost[b] < cost[a], b, a)
     if not niching:
         return by_cost
-    by_crowd = np.where(nc[b] < nc[a], b, a)
-    return np.where((nc[a] < niche_size) & (nc[b] < niche_size), by_cost, by_crowd)
+    return np.where((nc[a] < niche_size) & (nc[b] < niche_size), by_cost, np.where(nc[b] < nc[a], b, a))
 
 
 def sbx_pairs(P1: np.ndarray, P2: np.ndarray, eta: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -33,8 +33,7 @@ def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 
     # unbounded for the simplex (a solution at -170 deg reached from +179 deg must not stop on +180) and
     # wrap the result back into the box.
     full_turn = problem.robot.revolute & (hi - lo >= 2 * np.pi - 1e-9)
-    step = np.where(full_turn | (q + simplex_size <= hi), simplex_size, -simplex_size)
-    simplex = np.vstack([q, q + np.diag(step)])
+    simplex = np.vstack([q, q + np.diag(np.where(full_turn | (q + simplex_size <= hi), simplex_size, -simplex_size))])
     simplex = np.where(full_turn, simplex, np.clip(simplex, lo, hi))
     bounds = [(None, None) if f else (a, b) for f, a, b in zip(full_turn, lo, hi, strict=True)]
     from scipy.optimize import minimize  # lazy: importing scipy.optimize costs ~0.4 s

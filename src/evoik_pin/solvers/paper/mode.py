@@ -102,8 +102,7 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     length_scale = check_positive("length_scale", length_scale, unit="m")
     crossover, use_trig = VARIANTS[variant]
 
-    q_init = np.zeros(problem.n) if problem.q0 is None else problem.q0
-    displacement = MaxJointDisplacement(q_init)
+    displacement = MaxJointDisplacement(np.zeros(problem.n) if problem.q0 is None else problem.q0)
 
     def objectives(Q):
         """Evaluation, objectives (N, 2) f1, f2, and the front's (position error m, f2 rad)."""

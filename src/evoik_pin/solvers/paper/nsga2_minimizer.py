@@ -52,8 +52,7 @@ def bounded_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndar
     power = 1.0 / (eta + 1.0)
     left = (2.0 * u + (1.0 - 2.0 * u) * (1.0 - d1) ** (eta + 1.0)) ** power - 1.0
     right = 1.0 - (2.0 * (1.0 - u) + 2.0 * (u - 0.5) * (1.0 - d2) ** (eta + 1.0)) ** power
-    delta = np.where(u < 0.5, left, right)
-    return np.clip(np.where(mask, X + delta * width, X), lower, upper)
+    return np.clip(np.where(mask, X + np.where(u < 0.5, left, right) * width, X), lower, upper)
 
 
 def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:

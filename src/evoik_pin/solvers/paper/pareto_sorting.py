@@ -110,8 +110,7 @@ def _tournament_pairs(size: int, count: int, rng: np.random.Generator) -> np.nda
     """``count`` tournament pairs (count, 2) over ``size`` individuals, read off consecutive random
     permutations as in Deb's reference code: for ``count = size`` (even) every individual enters exactly
     two tournaments and never meets itself."""
-    k = -(-2 * count // size)
-    perms = np.argsort(rng.random((k, size)), axis=1).reshape(-1)
+    perms = np.argsort(rng.random((-(-2 * count // size), size)), axis=1).reshape(-1)
     return perms[: 2 * count].reshape(count, 2)
 
 
