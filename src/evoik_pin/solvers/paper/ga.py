@@ -173,8 +173,7 @@ def decode_bounds(bits: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
     return lower + _unsigned(bits) / (2 ** np.shape(bits)[-1] - 1) * (upper - lower)
 
 
-def decode_bits(chromosomes: np.ndarray, n: int, encoding: str, lower: np.ndarray,
-                upper: np.ndarray) -> np.ndarray:
+def decode_bits(chromosomes: np.ndarray, n: int, encoding: str, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Joint vectors (N, n) of chromosomes (N, n * B) under ``encoding``, clipped into the bounds."""
     bits = chromosomes.reshape(chromosomes.shape[0], n, -1)
     Q = decode_sign_magnitude(bits) if encoding == "sign-magnitude" else decode_bounds(bits, lower, upper)
