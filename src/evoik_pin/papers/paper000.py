@@ -94,11 +94,10 @@ def _median_series(runs: list[dict], key: str) -> np.ndarray:
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 000's Table 2 and Figs. 3-6 (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     robot = load_robot(ROBOT)
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs, q_init = s["runs_per_target_and_method"], np.zeros(robot.n)
-    s["jobs"] = ctx.jobs
     mode_kw = {k: v for k, v in s["mode"].items() if k not in ("variants", "tolerance_m", "note")}
     ga_kw = {k: s["ga_binary"][k] for k in ("population", "elite", "max_generations", "bits", "encoding")}
 

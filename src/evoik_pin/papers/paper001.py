@@ -142,10 +142,9 @@ def _solutions_table(key: str, title: str, res: dict, method: str, runs: int, cl
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 001's Tables 3-6 and Figs. 7-11 (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs = s["runs_per_target_and_method"]
-    s["jobs"] = ctx.jobs
     histories: dict[str, dict[int, np.ndarray]] = {}
     targets = {"planar2r": [np.array([t[0], t[1], 0.0]) * CM for t in TARGETS_2R_CM],
                "puma3r": [np.array(t) * CM for t in TARGETS_PUMA_CM]}

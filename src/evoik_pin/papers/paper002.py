@@ -222,11 +222,10 @@ def _job(spec: dict):
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 002's Tables 3-5 and Figs. 3-9 (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     robot = _robot()
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     rho = s["rho_runs_per_point"]
-    s["jobs"] = ctx.jobs
 
     q_s1 = robot.random_configurations(1, ctx.rng("002", "s1-target"))[0]
     p_s1 = np.asarray(robot.fk(q_s1).translation)

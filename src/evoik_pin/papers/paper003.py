@@ -83,7 +83,7 @@ def _part(spec: dict) -> list:
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 003's Fig. 2 and its front (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     robot = load_robot(ROBOT)
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     q_start = np.array(Q_START)
@@ -91,7 +91,6 @@ def run(ctx: RunContext) -> PaperReport:
     cfg = s["nsga2"]
 
     runs: dict[float, list[dict]] = {}
-    s["jobs"] = ctx.jobs
     specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": cfg}
              for K in GAINS for i in range(s["runs_per_gain"])]
     for spec, res in zip(specs, ctx.map_parallel(_part, specs, "003 trajectories (K x runs)"), strict=True):
