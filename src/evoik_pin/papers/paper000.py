@@ -59,15 +59,9 @@ def _part(spec: dict) -> list[dict]:
     t_cm, method = spec["t_cm"], spec["method"]
     target = np.array(t_cm) * CM
     rng = derive_rng(spec["seed"], "000", method, *map(str, t_cm))
-    out = []
-    for _ in range(spec["runs"]):
-        if method == "GA":
-            res = solve(robot, target, method="ga-binary", seed=rng, tolerance=0.0, **spec["ga_kw"])
-        else:
-            res = solve(robot, target, method="mode", seed=rng, q0=np.zeros(robot.n), tolerance=0.0, variant=method,
-                        **spec["mode_kw"])
-        out.append(_record(robot, res, target))
-    return out
+    kw = ({"method": "ga-binary", **spec["ga_kw"]} if method == "GA"
+          else {"method": "mode", "q0": np.zeros(robot.n), "variant": method, **spec["mode_kw"]})
+    return [_record(robot, solve(robot, target, seed=rng, tolerance=0.0, **kw), target) for _ in range(spec["runs"])]
 
 
 def _record(robot, res, target) -> dict:
