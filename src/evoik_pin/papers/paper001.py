@@ -68,12 +68,8 @@ def _match(reference: list[np.ndarray], found: list[np.ndarray]) -> list[tuple[n
     """For each reference solution (rad): the nearest found one (rad) and its error (deg, max over joints)."""
     if not found:
         return [(None, float("inf")) for _ in reference]
-    out = []
-    for q in reference:
-        errs = [float(np.abs(_wrap_deg(np.degrees(f - q))).max()) for f in found]
-        k = int(np.argmin(errs))
-        out.append((found[k], errs[k]))
-    return out
+    errors = [[float(np.abs(_wrap_deg(np.degrees(f - q))).max()) for f in found] for q in reference]
+    return [(found[k], errs[k]) for errs in errors for k in [int(np.argmin(errs))]]
 
 
 def _order_like(reference_deg: list[tuple], ours: list[np.ndarray], cols=(0, 1)) -> list[np.ndarray]:

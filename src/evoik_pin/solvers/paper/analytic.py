@@ -264,16 +264,12 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     Q = np.atleast_2d(np.asarray(Q, float))
     ev = problem.evaluate(Q, count=False)
     ok = problem.rows_met(Q)
-    out = []
-    for i in np.argsort(ev.cost, kind="stable"):
-        if only_successful and not ok[i]:
-            continue
-        rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
-        out.append(Result(q=Q[i].copy(), position_error=float(ev.position_error[i]), orientation_error=rot,
-                          cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations,
-                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method,
-                          goal_errors=None if problem.target is not None else problem.goal_errors(Q[i])))
-    return out
+    return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),
+                   orientation_error=None if ev.orientation_error is None else float(ev.orientation_error[i]),
+                   cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations, evaluations=evaluations,
+                   time_s=time_s, message="distinct IK solution", method=method,
+                   goal_errors=None if problem.target is not None else problem.goal_errors(Q[i]))
+            for i in np.argsort(ev.cost, kind="stable") if ok[i] or not only_successful]
 
 
 def tip_target_problem(problem: IKProblem) -> IKProblem | None:
