@@ -233,14 +233,12 @@ def run(ctx: RunContext) -> PaperReport:
     p_s2 = robot.positions_batch(q_s2)
     p_s2_pin = np.array([robot.fk(q).translation for q in q_s2])
     p_s3 = spiral_targets(s["scenario3_points"])
-    variants = [(name, False, cfg["fitness"]) for name, cfg in METHODS.items()]
-    variants += [(f"Pro-{name}", True, cfg["fitness"]) for name, cfg in METHODS.items()]
+    variants = [(pro + name, pro == "Pro-", cfg["fitness"]) for pro in ("", "Pro-") for name, cfg in METHODS.items()]
     variants += [("Pro-ISADE (1e-12)", True, 1e-12)]
 
     base = {"settings": s, "seed": ctx.seed, "progress": ctx.progress and ctx.jobs <= 1}
-    specs = [{**base, "kind": "table3", "label": n, "target": p_s1} for n in METHODS]
-    specs += [{**base, "kind": "scenario1", "label": n, "target": p_s1} for n in METHODS]
-    specs += [{**base, "kind": "scenario2", "label": n, "targets": p_s2_pin} for n in METHODS]
+    specs = [{**base, "kind": kind, "label": n, key: points} for kind, key, points in (
+        ("table3", "target", p_s1), ("scenario1", "target", p_s1), ("scenario2", "targets", p_s2_pin)) for n in METHODS]
     specs += [{**base, "kind": "scenario3", "label": label, "targets": p_s3, "pro": pro, "fitness": fitness}
               for label, pro, fitness in variants]
     # longest first (Pro- spiral runs restart most), so the processes of a pool finish together
