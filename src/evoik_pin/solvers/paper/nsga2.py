@@ -146,13 +146,12 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         if goals:
             manipulability, fixed_goal_rows = _goal_manipulability(problem, manipulability_goals)
         else:
-            if manipulability_rows is None:
+            rows = manipulability_rows
+            if rows is None:
                 rows, fixed_rows = _movable_rows(problem, _task_rows(problem))
                 if not rows:
                     raise OptionError("the chain cannot move its tip along any row of the task; give "
                                       "manipulability_rows=[...] or objectives=[...]")
-            else:
-                rows = manipulability_rows
             robot.task_rows(rows)  # validates names and indices with a clear error
             manipulability = ManipulabilityCost(rows, "inverse")
         objectives = [manipulability, WeightedJointDisplacement(q_prev, gains)]
