@@ -184,8 +184,7 @@ class AX18Solution:
 
 def _into_limits(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Each angle moved by a multiple of 2 pi into [lower, lower + 2 pi), then clamped onto the limits."""
-    Q = lower + np.mod(Q - lower, 2 * np.pi)
-    return np.clip(Q, lower, upper)
+    return np.clip(lower + np.mod(Q - lower, 2 * np.pi), lower, upper)
 
 
 def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, upper=None,
