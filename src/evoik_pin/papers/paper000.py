@@ -151,11 +151,9 @@ def run(ctx: RunContext) -> PaperReport:
 
 
 def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
-    de = [summary[f"{t} DE"] for t in TARGETS_CM]
-    ga = [summary[f"{t} GA"] for t in TARGETS_CM]
-    am = [summary[f"{t} AM"] for t in TARGETS_CM]
-    paper_ga = [np.linalg.norm(np.subtract(PAPER_TABLE2[t]["GA"], t)) for t in TARGETS_CM]
-    paper_am = [np.linalg.norm(np.subtract(PAPER_TABLE2[t]["AM"], t)) for t in TARGETS_CM]
+    de, ga, am = ([summary[f"{t} {m}"] for t in TARGETS_CM] for m in ("DE", "GA", "AM"))
+    paper_ga, paper_am = ([np.linalg.norm(np.subtract(PAPER_TABLE2[t][m], t)) for t in TARGETS_CM]
+                          for m in ("GA", "AM"))
     n_ok = sum(round(d["success"] * d["runs"]) for d in de)
     c_label = list(CONFIGS)[2]
     hits = {label: np.nonzero(1.0 - c["w1"] <= 0.01)[0] for label, c in curves.items()}  # median w1 >= 0.99

@@ -259,8 +259,7 @@ def _fig_sweep(ctx: RunContext, cells, sweep_paper, sweep_reach):
     pops = sorted({p for p, _ in cells})
     for ax, sweep, title in [(axes[0], sweep_paper, "paper's target"), (axes[1], sweep_reach, "reachable targets")]:
         for pop in pops:
-            idx = [i for i, (p, _) in enumerate(cells) if p == pop]
-            idx.sort(key=lambda i: cells[i][1])
+            idx = sorted((i for i, (p, _) in enumerate(cells) if p == pop), key=lambda i: cells[i][1])
             ax.semilogy([cells[i][1] for i in idx], [max(sweep[i]["J_median"], 1e-17) for i in idx], "o-",
                         label=f"population {pop}")
         dress(ax, "iterations", "median J", f"Table 4 sweep - {title}", legend=7 if ax is axes[1] else None,
