@@ -247,8 +247,6 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
         notes.append(
             "HGA misses: " + "; ".join(f"target {tuple_text(t, 'g')} solution {tuple_text(q, '.1f')} deg in {n} of "
                                        f"{runs} runs" for t, q, n in missed) + ".")
-    t3 = {str(t): [float(np.degrees(q[2])) for q in e["reference"]] for t, e in resp.items()}
-    first = list(t3)[0]
     ours = {t: np.degrees(np.array(e["reference"])) for t, e in resp.items()}
     d12 = max(float(np.abs(_wrap_deg(ours[t][:, :2] - np.array(PAPER_TABLE5[t])[:, :2])).max())
               for t in TARGETS_PUMA_CM[:3])
@@ -262,10 +260,10 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
     sq = [float(np.sum(np.square(t))) for t in TARGETS_PUMA_CM]
     notes += [
         "PUMA Table 5 is not eq. 20 with the stated lengths: our closed form gives, for target 1, t3 = "
-        f"{', '.join(f'{v:.1f}' for v in t3[first])} deg where the paper prints 45, 140.3, 140.3, 44.9 (t3 differs by "
-        f"up to {max(d3):.1f} deg, t1 and t2 of targets 1-3 agree within {d12:.2f} deg), and the paper's own angles "
-        f"miss its targets 1-3 by {miss123.min():.2f}-{miss123.max():.2f} cm. The HGA is judged against our closed "
-        "form.",
+        f"{', '.join(f'{v:.1f}' for v in ours[TARGETS_PUMA_CM[0]][:, 2])} deg where the paper prints 45, 140.3, "
+        f"140.3, 44.9 (t3 differs by up to {max(d3):.1f} deg, t1 and t2 of targets 1-3 agree within {d12:.2f} deg), "
+        f"and the paper's own angles miss its targets 1-3 by {miss123.min():.2f}-{miss123.max():.2f} cm. The HGA is "
+        "judged against our closed form.",
         f"PUMA target 4 as printed, (-56.4, 49.7, -28.4) cm, has t1 = {' / '.join(f'{v:g}' for v in t1_4)} deg; the "
         f"paper's t1 = -150 / 52.8 deg are those of (-56.4, -49.7, -28.4) (ours there: "
         f"{' / '.join(f'{v:g}' for v in t1_4m)} deg), and its t2, t3 match either sign. Against that mirrored target "
