@@ -88,20 +88,18 @@ def run(ctx: RunContext) -> PaperReport:
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     q_start = np.array(Q_START)
     P = path_points(s["path"]["points"])
-    cfg = s["nsga2"]
 
     runs: dict[float, list[dict]] = {}
-    specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": cfg}
+    specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": s["nsga2"]}
              for K in GAINS for i in range(s["runs_per_gain"])]
     for spec, res in zip(specs, ctx.map_parallel(_part, specs, "003 trajectories (K x runs)"), strict=True):
         Q = np.array([r.q for r in res])
-        entry = {"results": res, "Q": Q, **_trajectory_stats(Q, q_start),
-                 "position_error": np.array([r.position_error for r in res]),
-                 "orientation_error": np.array([r.orientation_error for r in res]),
-                 "feasible": all(r.success for r in res),
-                 "manipulability": np.array([robot.manipulability(q, rows="planar") for q in Q]),
-                 "time": float(sum(r.time_s for r in res))}
-        runs.setdefault(spec["K"], []).append(entry)
+        runs.setdefault(spec["K"], []).append({
+            "results": res, "Q": Q, **_trajectory_stats(Q, q_start),
+            "position_error": np.array([r.position_error for r in res]),
+            "orientation_error": np.array([r.orientation_error for r in res]), "feasible": all(r.success for r in res),
+            "manipulability": np.array([robot.manipulability(q, rows="planar") for q in Q]),
+            "time": float(sum(r.time_s for r in res))})
 
     mean_step = {K: float(np.mean([e["vehicle_steps"][1:].mean() for e in runs[K]])) for K in GAINS}
     tot = {K: float(np.mean([e["vehicle_total"] for e in runs[K]])) for K in GAINS}

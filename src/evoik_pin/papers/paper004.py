@@ -192,8 +192,7 @@ def run(ctx: RunContext) -> PaperReport:
         note=f"Ours: {table6_runs} runs per row, errors and pose of the best run. Paper: one run at population 12, "
              "100 iterations; errors computed here from its reported reached pose."))
 
-    report.figures.append(_fig_objective(ctx, robot, fk_goals))
-    report.figures.append(_fig_sweep(ctx, cells, sweep_paper, sweep_reach))
+    report.figures += [_fig_objective(ctx, robot, fk_goals), _fig_sweep(ctx, cells, sweep_paper, sweep_reach)]
 
     starts = 10 if ctx.quick else 50
     pos_gap_cm = least_squares_distance(robot, np.asarray(PAPER_TARGET[:3]) * CM, robot.lower, robot.upper,
