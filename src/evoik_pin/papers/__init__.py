@@ -1,6 +1,5 @@
 """Reproductions of the five papers' experiments: ``evoik reproduce`` and ``scripts/reproduce_NNN.py`` wrap
-:func:`run_papers`, which writes ``DIR/NNN/report.md``, ``results.json``, one CSV per table (``source``: ``paper`` or
-``ours``) and the figures.
+:func:`run_papers`, which writes ``DIR/NNN/report.md``, ``results.json``, the figures and one CSV per table.
 
 How to add paper NNN: ``evoik_pin/papers/paperNNN.py`` (found by its file name) defines ``PAPER_ID = "NNN"``,
 ``TITLE`` and ``run(ctx: RunContext) -> PaperReport``, which draws every random number from ``ctx.rng(labels...)``
@@ -40,8 +39,7 @@ DEFAULT_OUT = "reproduction"
 
 
 def _discover() -> dict[str, str]:
-    here = Path(__file__).resolve().parent
-    found = sorted(p.stem[len("paper"):] for p in here.glob("paper[0-9][0-9][0-9].py"))
+    found = sorted(p.stem[len("paper"):] for p in Path(__file__).resolve().parent.glob("paper[0-9][0-9][0-9].py"))
     return {pid: f"{__name__}.paper{pid}" for pid in found}
 
 
@@ -59,16 +57,11 @@ def _resolve_ids(papers) -> list[str]:
     if not papers:
         raise ReproductionError(f"name at least one paper: {', '.join(PAPERS)} or all")
     ids: list[str] = []
-    for p in papers:
-        p = str(p).strip()
-        if p == "all":
-            ids += [pid for pid in PAPERS if pid not in ids]
-            continue
+    for p in (str(p).strip() for p in papers):
         pid = p.zfill(3) if p.isdigit() else p
-        if pid not in PAPERS:
+        if p != "all" and pid not in PAPERS:
             raise ReproductionError(f"unknown paper id {p!r}; valid ids: {', '.join(PAPERS) or '(none)'} or all")
-        if pid not in ids:
-            ids.append(pid)
+        ids += [i for i in (PAPERS if p == "all" else [pid]) if i not in ids]
     return ids
 
 

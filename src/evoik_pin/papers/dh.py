@@ -1,12 +1,8 @@
-"""Denavit-Hartenberg tables and serial chains written out as URDF (joint ``i`` moves like row ``i``; a box per
-link and a cylinder per joint axis, so the arm renders in meshcat). Lengths in m, angles in rad:
-
-* standard DH, row i = (a_i, alpha_i, d_i, theta_i):  ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
-* modified DH (Craig), row i = (a_{i-1}, alpha_{i-1}, d_i, theta_i):
-  ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
-
-The joint variable adds to ``theta`` (revolute) or ``d`` (prismatic); the frame after the last row is the
-``tool`` link.
+"""Denavit-Hartenberg tables and serial chains written out as URDF (joint ``i`` moves like row ``i``, the frame
+after the last row is the ``tool`` link; a box per link, a cylinder per joint axis, for meshcat). Lengths in m,
+angles in rad. Standard DH, row (a_i, alpha_i, d_i, theta_i): ``A_i = Rz(theta_i) Tz(d_i) Tx(a_i) Rx(alpha_i)``;
+modified (Craig), row (a_{i-1}, alpha_{i-1}, d_i, theta_i): ``A_i = Rx(alpha_{i-1}) Tx(a_{i-1}) Rz(theta_i) Tz(d_i)``.
+The joint variable adds to ``theta`` (revolute) or ``d`` (prismatic).
 """
 
 from __future__ import annotations
@@ -26,11 +22,8 @@ _KINDS = ("revolute", "prismatic", "fixed")
 
 def _rot(axis: str, angle: float) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
-    T = np.eye(4)
-    if axis == "x":
-        T[1:3, 1:3] = [[c, -s], [s, c]]
-    else:  # z
-        T[0:2, 0:2] = [[c, -s], [s, c]]
+    T, i = np.eye(4), 1 if axis == "x" else 0  # the rotated plane: (y, z) about x, (x, y) about z
+    T[i:i + 2, i:i + 2] = [[c, -s], [s, c]]
     return T
 
 
@@ -91,9 +84,8 @@ class JointSpec:
 
 def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_radius: float = 0.01,
                comment: str = "") -> str:
-    """URDF text of the arm ``name`` described by DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
-    ``"modified"``), the first DH frame at ``base_link``: ``link_radius`` (m) of the visuals, ``comment`` placed in
-    an XML comment at the top."""
+    """URDF text of the arm ``name`` of DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
+    ``"modified"``), first DH frame at ``base_link``; ``link_radius`` (m) of the visuals, ``comment`` on top."""
     if convention not in ("standard", "modified"):
         raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
     if not rows:
@@ -120,8 +112,7 @@ def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_
 
 def _fmt(x: float) -> str:
     """Full precision for kinematics (FK must match the DH product to 1e-12 m)."""
-    x = 0.0 if abs(x) < 1e-15 else float(x)
-    return repr(x)
+    return repr(0.0 if abs(x) < 1e-15 else float(x))
 
 
 def _short(x: float) -> str:
@@ -160,10 +151,8 @@ def _segment_visual(p: np.ndarray, radius: float, material: str) -> str:
 def _axis_visual(axis: np.ndarray, kind: str, radius: float) -> str:
     """A cylinder along a revolute axis (or a small box on a prismatic one) at the joint origin."""
     T = _frame_along(np.asarray(axis, float))
-    if kind == "revolute":
-        geom = f'<cylinder radius="{_short(1.6 * radius)}" length="{_short(5 * radius)}"/>'
-    else:
-        geom = f'<box size="{_short(3 * radius)} {_short(3 * radius)} {_short(3 * radius)}"/>'
+    geom = (f'<cylinder radius="{_short(1.6 * radius)}" length="{_short(5 * radius)}"/>' if kind == "revolute"
+            else f'<box size="{_short(3 * radius)} {_short(3 * radius)} {_short(3 * radius)}"/>')
     return f'    <visual>{_origin_xml(T)}<geometry>{geom}</geometry><material name="joint"/></visual>\n'
 
 

@@ -1,8 +1,6 @@
-"""Paper 000: multi-objective DE for the 4-DOF Crustcrawler AX-18 (Rodriguez, Saha, Romero-Hdz & Ortega, 2016).
-
+"""Paper 000: multi-objective DE for the 4-DOF Crustcrawler AX-18 (Rodriguez, Saha, Romero-Hdz & Ortega, 2016):
 Table 2 (five targets: binary GA, algebraic method, the paper's ``mode``) and Figs. 3-6 (diversity, weights,
-fitness, front and error of three configurations). Our runs, readings and results: docs/REPRODUCTION.md,
-section "Paper 000".
+fitness, front and error of three configurations); our readings and results: docs/REPRODUCTION.md, "Paper 000".
 """
 
 from __future__ import annotations
@@ -61,15 +59,9 @@ def _part(spec: dict) -> list[dict]:
     t_cm, method = spec["t_cm"], spec["method"]
     target = np.array(t_cm) * CM
     rng = derive_rng(spec["seed"], "000", method, *map(str, t_cm))
-    out = []
-    for _ in range(spec["runs"]):
-        if method == "GA":
-            res = solve(robot, target, method="ga-binary", seed=rng, tolerance=0.0, **spec["ga_kw"])
-        else:
-            res = solve(robot, target, method="mode", seed=rng, q0=np.zeros(robot.n), tolerance=0.0, variant=method,
-                        **spec["mode_kw"])
-        out.append(_record(robot, res, target))
-    return out
+    kw = ({"method": "ga-binary", **spec["ga_kw"]} if method == "GA"
+          else {"method": "mode", "q0": np.zeros(robot.n), "variant": method, **spec["mode_kw"]})
+    return [_record(robot, solve(robot, target, seed=rng, tolerance=0.0, **kw), target) for _ in range(spec["runs"])]
 
 
 def _record(robot, res, target) -> dict:
@@ -96,11 +88,10 @@ def _median_series(runs: list[dict], key: str) -> np.ndarray:
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 000's Table 2 and Figs. 3-6 (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     robot = load_robot(ROBOT)
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs, q_init = s["runs_per_target_and_method"], np.zeros(robot.n)
-    s["jobs"] = ctx.jobs
     mode_kw = {k: v for k, v in s["mode"].items() if k not in ("variants", "tolerance_m", "note")}
     ga_kw = {k: s["ga_binary"][k] for k in ("population", "elite", "max_generations", "bits", "encoding")}
 
@@ -113,7 +104,6 @@ def run(ctx: RunContext) -> PaperReport:
         res = solve(robot, np.array(t_cm) * CM, method="algebraic", q0=q_init)
         results[t_cm]["AM"] = [_record(robot, res, np.array(t_cm) * CM)]
 
-    # -- Table 2 -----------------------------------------------------------------------------------------
     rows, paper_rows, summary = [], [], {}
     for t_cm in TARGETS_CM:
         for key, method in (("GA", "GA"), ("AM", "AM"), ("DE", "binomial-trigonometric")):
@@ -135,26 +125,19 @@ def run(ctx: RunContext) -> PaperReport:
               "about 0.09 cm). AM is deterministic (one run); 'max displacement' is paper 000's second objective, "
               "max |q_k - q_init,k| with q_init = 0.")))
 
-    # -- the three configurations ----------------------------------------------------------------------
-    cfg_rows = []
-    for label, variant in CONFIGS.items():
-        all_runs = [r for t in TARGETS_CM for r in results[t][variant]]
-        e = np.array([r["error"] for r in all_runs])
-        cfg_rows.append([label, len(e), float(np.mean(e < MM)), float(np.median(e)) / MM, float(e.max()) / MM,
-                         float(np.mean([r["time"] for r in all_runs]))])
+    pooled = {label: [r for t in TARGETS_CM for r in results[t][v]] for label, v in CONFIGS.items()}
+    cfg_rows = [[label, c["runs"], c["success"], c["median_error"] / MM, c["max_error"] / MM, c["mean_time"]]
+                for label, c in zip(pooled, map(_summary, pooled.values()), strict=True)]
     report.tables.append(Table(
         "configurations", "Fig. 6(b) in numbers - the three DE configurations over all five targets",
         ["configuration", "runs", "within 1 mm (fraction)", "median error (mm)", "max error (mm)", "time per run (s)"],
         cfg_rows, formats=[None, None, ".2f", ".4f", ".3f", ".3f"],
         note="The paper shows these as curves only (Fig. 6b: (c) reaches the lowest position error)."))
 
-    # -- figures -----------------------------------------------------------------------------------------
-    curves = {label: {k: _median_series([r for t in TARGETS_CM for r in results[t][v]], k) for k in SERIES}
-              for label, v in CONFIGS.items()}
+    curves = {label: {k: _median_series(rs, k) for k in SERIES} for label, rs in pooled.items()}
     report.figures += [_fig_diversity(ctx, curves), _fig_weights(ctx, curves), _fig_fitness(ctx, curves),
                        _fig_front(ctx, results[TARGETS_CM[0]]["binomial-trigonometric"][0]["result"], curves)]
 
-    # -- notes and raw data ------------------------------------------------------------------------------
     report.notes += _notes(summary, cfg_rows, curves, runs)
     report.data.update({
         "runs": {f"{t}": {m: [{"error_m": r["error"], "reached_m": r["reached"], "q_rad": r["q"],
@@ -168,11 +151,9 @@ def run(ctx: RunContext) -> PaperReport:
 
 
 def _notes(summary: dict, cfg_rows: list, curves: dict, runs: int) -> list[str]:
-    de = [summary[f"{t} DE"] for t in TARGETS_CM]
-    ga = [summary[f"{t} GA"] for t in TARGETS_CM]
-    am = [summary[f"{t} AM"] for t in TARGETS_CM]
-    paper_ga = [np.linalg.norm(np.subtract(PAPER_TABLE2[t]["GA"], t)) for t in TARGETS_CM]
-    paper_am = [np.linalg.norm(np.subtract(PAPER_TABLE2[t]["AM"], t)) for t in TARGETS_CM]
+    de, ga, am = ([summary[f"{t} {m}"] for t in TARGETS_CM] for m in ("DE", "GA", "AM"))
+    paper_ga, paper_am = ([np.linalg.norm(np.subtract(PAPER_TABLE2[t][m], t)) for t in TARGETS_CM]
+                          for m in ("GA", "AM"))
     n_ok = sum(round(d["success"] * d["runs"]) for d in de)
     c_label = list(CONFIGS)[2]
     hits = {label: np.nonzero(1.0 - c["w1"] <= 0.01)[0] for label, c in curves.items()}  # median w1 >= 0.99

@@ -1,7 +1,6 @@
-"""Paper 001: GA and hybrid GA (GA + Nelder-Mead) for all IK solutions (planar 2R and PUMA wrist point).
-
-Tables 3-4 (planar 2R, GA and HGA against the closed form), 5-6 (PUMA: closed form, HGA) and Figs. 7-11 (the
-GA's populations). Our runs, readings and results: docs/REPRODUCTION.md, section "Paper 001".
+"""Paper 001: GA and hybrid GA (GA + Nelder-Mead) for all IK solutions (planar 2R and PUMA wrist point): Tables
+3-4 (planar 2R, GA and HGA against the closed form), 5-6 (PUMA: closed form, HGA) and Figs. 7-11 (the GA's
+populations); our readings and results: docs/REPRODUCTION.md, section "Paper 001".
 """
 
 from __future__ import annotations
@@ -69,12 +68,8 @@ def _match(reference: list[np.ndarray], found: list[np.ndarray]) -> list[tuple[n
     """For each reference solution (rad): the nearest found one (rad) and its error (deg, max over joints)."""
     if not found:
         return [(None, float("inf")) for _ in reference]
-    out = []
-    for q in reference:
-        errs = [float(np.abs(_wrap_deg(np.degrees(f - q))).max()) for f in found]
-        k = int(np.argmin(errs))
-        out.append((found[k], errs[k]))
-    return out
+    errors = [[float(np.abs(_wrap_deg(np.degrees(f - q))).max()) for f in found] for q in reference]
+    return [(found[k], errs[k]) for errs in errors for k in [int(np.argmin(errs))]]
 
 
 def _order_like(reference_deg: list[tuple], ours: list[np.ndarray], cols=(0, 1)) -> list[np.ndarray]:
@@ -108,8 +103,7 @@ def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
     out = []
     for i in range(spec["runs"]):
         extra = {"callback": history.__setitem__} if (spec["history"] and i == 0) else {}
-        res = solve(robot, target, method=method, seed=rng, **kw, **extra)
-        out.append([sol.q for sol in (res.solutions or [])])
+        out.append([sol.q for sol in (solve(robot, target, method=method, seed=rng, **kw, **extra).solutions or [])])
     return out, history
 
 
@@ -122,12 +116,31 @@ def _stats(reference, runs_found, method) -> list[dict]:
             for j, errs in enumerate(errors)]
 
 
+def _solutions_table(key: str, title: str, res: dict, method: str, runs: int, closed_spec: str,
+                     paper_rows: list | None, note: str, order=lambda t_cm, refs: refs) -> Table:
+    """Tables 3, 4 and 6: per target of ``res`` and closed-form solution (in ``order``), its angles (``closed_spec``),
+    the first run's nearest solution and its error, and over the ``runs`` the share found, median and max error."""
+    rows = []
+    for t_cm, e in res.items():
+        stats = {id(q): st for q, st in zip(e["reference"], e[method]["stats"], strict=True)}
+        rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"])[:len(q)], st["first_error"],
+                  runs, st["found"], st["median_error"], st["max_error"]]
+                 for j, q in enumerate(order(t_cm, e["reference"])) for st in [stats[id(q)]]]
+    joints = [f"t{i} (deg)" for i in range(1, len(next(iter(res.values()))["reference"][0]) + 1)]
+    spec = ".4f" if method == "hga" else ".2f"
+    return Table(key, title, ["target (cm)", "solution", *(f"closed form {t}" for t in joints),
+                              *(f"{method.upper()} {t}" for t in joints), "error (deg)", "runs",
+                              f"found within {FOUND_DEG[method]:g} deg (fraction)", "median error (deg)",
+                              "max error (deg)"], rows, paper_rows=paper_rows,
+                 formats=[None, None, *[closed_spec] * len(joints), *[spec] * len(joints), ".3g", None, ".2f", ".3g",
+                          ".3g"], note=note)
+
+
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 001's Tables 3-6 and Figs. 7-11 (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     runs = s["runs_per_target_and_method"]
-    s["jobs"] = ctx.jobs
     histories: dict[str, dict[int, np.ndarray]] = {}
     targets = {"planar2r": [np.array([t[0], t[1], 0.0]) * CM for t in TARGETS_2R_CM],
                "puma3r": [np.array(t) * CM for t in TARGETS_PUMA_CM]}
@@ -146,41 +159,23 @@ def run(ctx: RunContext) -> PaperReport:
                                             for m in ("ga", "hga")}}
                 for k, (t_cm, ref) in enumerate(references)}
 
-    # -- planar 2R: Tables 3 and 4 -----------------------------------------------------------------------
     res2r = against("planar2r", [(t_cm, planar2r_ik(*targets["planar2r"][k][:2]))
                                  for k, t_cm in enumerate(TARGETS_2R_CM)])
     for key, method, title in (("table3", "ga", "Table 3 - planar 2R: GA (12 generations) vs closed form"),
                                ("table4", "hga", "Table 4 - planar 2R: HGA (GA + Nelder-Mead) vs closed form")):
-        rows, paper_rows = [], []
-        for t_cm in TARGETS_2R_CM:
-            e = res2r[t_cm]
-            paper = PAPER_TABLE3[t_cm]
-            ref = _order_like([p[0] for p in paper], e["reference"])
-            stats = {id(q): st for q, st in zip(e["reference"], e[method]["stats"], strict=True)}
-            for j, q in enumerate(ref):
-                st = stats[id(q)]
-                got = _angles(st["first_q"])[:2]
-                rows.append([tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *got, st["first_error"], runs, st["found"],
-                             st["median_error"], st["max_error"]])
-            for j, (closed, ga_row) in enumerate(paper):
-                got = ga_row if method == "ga" else closed
-                err = float(np.abs(np.subtract(got, closed)).max())
-                paper_rows.append([tuple_text(t_cm, "g"), j + 1, *closed, *got, err, None, None, None, None])
-        report.tables.append(Table(
-            key, title,
-            ["target (cm)", "solution", "closed form t1 (deg)", "closed form t2 (deg)", f"{method.upper()} t1 (deg)",
-             f"{method.upper()} t2 (deg)", "error (deg)", "runs", f"found within {FOUND_DEG[method]:g} deg (fraction)",
-             "median error (deg)", "max error (deg)"],
-            rows, paper_rows=paper_rows,
-            formats=[None, None, ".1f", ".1f", ".2f" if method == "ga" else ".4f",
-                     ".2f" if method == "ga" else ".4f", ".3g", None, ".2f", ".3g", ".3g"],
-            note=("Our angles and error: the first run (the solution it returned nearest to each closed-form one); "
-                  "found / median / max: over all runs. Paper rows: its printed angles; its error column is the "
-                  "largest difference of the printed values."
-                  + (" The HGA rows print the closed form (Table 4's signs of t2 for the second solutions are lost "
-                     "in the source text and restored from the closed form)." if method == "hga" else ""))))
+        paper_rows = [[tuple_text(t_cm, "g"), j + 1, *closed, *got, float(np.abs(np.subtract(got, closed)).max()),
+                       None, None, None, None]
+                      for t_cm in TARGETS_2R_CM for j, (closed, ga_row) in enumerate(PAPER_TABLE3[t_cm])
+                      for got in [ga_row if method == "ga" else closed]]
+        report.tables.append(_solutions_table(
+            key, title, res2r, method, runs, ".1f", paper_rows,
+            ("Our angles and error: the first run (the solution it returned nearest to each closed-form one); "
+             "found / median / max: over all runs. Paper rows: its printed angles; its error column is the "
+             "largest difference of the printed values."
+             + (" The HGA rows print the closed form (Table 4's signs of t2 for the second solutions are lost "
+                "in the source text and restored from the closed form)." if method == "hga" else "")),
+            order=lambda t_cm, refs: _order_like([p[0] for p in PAPER_TABLE3[t_cm]], refs)))
 
-    # -- PUMA: Tables 5 and 6 ----------------------------------------------------------------------------
     resp = against("puma3r", [(t_cm, _order_like(PAPER_TABLE5[t_cm], puma_ik(targets["puma3r"][k]), cols=(1, 2)))
                               for k, t_cm in enumerate(TARGETS_PUMA_CM)])  # t1 of target 4: see the notes
 
@@ -203,36 +198,22 @@ def run(ctx: RunContext) -> PaperReport:
 
     for key, method, title in (("table6", "hga", "Table 6 - PUMA wrist point: HGA vs closed form"),
                                ("table6_ga", "ga", "PUMA wrist point: GA alone (12 generations) vs closed form")):
-        rows, paper_rows = [], []
-        for t_cm in TARGETS_PUMA_CM:
-            e = resp[t_cm]
-            rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"]), st["first_error"], runs,
-                      st["found"], st["median_error"], st["max_error"]]
-                     for j, (q, st) in enumerate(zip(e["reference"], e[method]["stats"], strict=True))]
-            paper_rows += [[tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
-                            float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()), None, None, None, None]
-                           for j, row in enumerate(PAPER_TABLE6.get(t_cm, []))]
-        spec = ".4f" if method == "hga" else ".2f"
-        report.tables.append(Table(
-            key, title,
-            ["target (cm)", "solution", "closed form t1 (deg)", "closed form t2 (deg)", "closed form t3 (deg)",
-             f"{method.upper()} t1 (deg)", f"{method.upper()} t2 (deg)", f"{method.upper()} t3 (deg)", "error (deg)",
-             "runs", f"found within {FOUND_DEG[method]:g} deg (fraction)", "median error (deg)", "max error (deg)"],
-            rows, paper_rows=paper_rows if method == "hga" else None,
-            formats=[None, None, ".2f", ".2f", ".2f", spec, spec, spec, ".3g", None, ".2f", ".3g", ".3g"],
-            note=("Closed form: ours (Table 5 above). Paper rows: its Table 5 as the closed form and its Table 6 as "
-                  "the HGA, for the rows that survive in the source text (targets 1 and 2; target 2's third "
-                  "angle 9.8 is printed without the sign of Table 5's -9.8)." if method == "hga" else
-                  "The paper gives no GA table for the PUMA (its GA errors, 0.44-3.6 deg, are quoted for both "
-                  "arms); an empty cell means the GA returned no solution at all.")))
+        paper_rows = [[tuple_text(t_cm, "g"), j + 1, *PAPER_TABLE5[t_cm][j], *row,
+                       float(np.abs(np.subtract(row, PAPER_TABLE5[t_cm][j])).max()), None, None, None, None]
+                      for t_cm in TARGETS_PUMA_CM for j, row in enumerate(PAPER_TABLE6.get(t_cm, []))]
+        report.tables.append(_solutions_table(
+            key, title, resp, method, runs, ".2f", paper_rows if method == "hga" else None,
+            "Closed form: ours (Table 5 above). Paper rows: its Table 5 as the closed form and its Table 6 as the HGA, "
+            "for the rows that survive in the source text (targets 1 and 2; target 2's third angle 9.8 is printed "
+            "without the sign of Table 5's -9.8)." if method == "hga" else
+            "The paper gives no GA table for the PUMA (its GA errors, 0.44-3.6 deg, are quoted for both arms); an "
+            "empty cell means the GA returned no solution at all."))
 
-    # -- figures -----------------------------------------------------------------------------------------
     report.figures += [
         _fig_population_2r(ctx, histories["planar2r"], res2r[TARGETS_2R_CM[0]]["reference"], s["planar2r"]),
         _fig_population_puma(ctx, histories["puma3r"], resp[TARGETS_PUMA_CM[0]]["reference"], s["puma3r"]),
     ]
 
-    # -- notes and data ----------------------------------------------------------------------------------
     report.notes += _notes(res2r, resp, misses, runs)
     report.data.update({
         arm: {str(t): {"closed_form_deg": np.degrees(np.array(e["reference"])),
@@ -266,8 +247,6 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
         notes.append(
             "HGA misses: " + "; ".join(f"target {tuple_text(t, 'g')} solution {tuple_text(q, '.1f')} deg in {n} of "
                                        f"{runs} runs" for t, q, n in missed) + ".")
-    t3 = {str(t): [float(np.degrees(q[2])) for q in e["reference"]] for t, e in resp.items()}
-    first = list(t3)[0]
     ours = {t: np.degrees(np.array(e["reference"])) for t, e in resp.items()}
     d12 = max(float(np.abs(_wrap_deg(ours[t][:, :2] - np.array(PAPER_TABLE5[t])[:, :2])).max())
               for t in TARGETS_PUMA_CM[:3])
@@ -281,10 +260,10 @@ def _notes(res2r, resp, misses, runs) -> list[str]:
     sq = [float(np.sum(np.square(t))) for t in TARGETS_PUMA_CM]
     notes += [
         "PUMA Table 5 is not eq. 20 with the stated lengths: our closed form gives, for target 1, t3 = "
-        f"{', '.join(f'{v:.1f}' for v in t3[first])} deg where the paper prints 45, 140.3, 140.3, 44.9 (t3 differs by "
-        f"up to {max(d3):.1f} deg, t1 and t2 of targets 1-3 agree within {d12:.2f} deg), and the paper's own angles "
-        f"miss its targets 1-3 by {miss123.min():.2f}-{miss123.max():.2f} cm. The HGA is judged against our closed "
-        "form.",
+        f"{', '.join(f'{v:.1f}' for v in ours[TARGETS_PUMA_CM[0]][:, 2])} deg where the paper prints 45, 140.3, "
+        f"140.3, 44.9 (t3 differs by up to {max(d3):.1f} deg, t1 and t2 of targets 1-3 agree within {d12:.2f} deg), "
+        f"and the paper's own angles miss its targets 1-3 by {miss123.min():.2f}-{miss123.max():.2f} cm. The HGA is "
+        "judged against our closed form.",
         f"PUMA target 4 as printed, (-56.4, 49.7, -28.4) cm, has t1 = {' / '.join(f'{v:g}' for v in t1_4)} deg; the "
         f"paper's t1 = -150 / 52.8 deg are those of (-56.4, -49.7, -28.4) (ours there: "
         f"{' / '.join(f'{v:g}' for v in t1_4m)} deg), and its t2, t3 match either sign. Against that mirrored target "

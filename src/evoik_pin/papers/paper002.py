@@ -1,9 +1,7 @@
-"""Paper 002: ISADE, DE and PSO (and their "Pro-" variants) on a redundant 7R arm (Nguyen & Bui, 2021).
-
-Position-only IK of ``redundant7r``, each run stopped at a "fitness value" or its generation budget, best of
-rho = 10 runs: Scenario 1 (one random point, Tables 3 and 5), 2 (100 random points from q = 0, Table 4) and 3 (a
-spiral in sequence, full range or inside the "Pro" box previous solution +- pi/100, Table 5, Figs. 7-9). Our
-runs, readings and results: docs/REPRODUCTION.md, section "Paper 002".
+"""Paper 002: ISADE, DE and PSO (and their "Pro-" variants) on a redundant 7R arm (Nguyen & Bui, 2021), position
+only, best of rho = 10 runs each stopped at a "fitness value": Scenarios 1 (one point, Tables 3 and 5), 2 (100
+points, Table 4) and 3 (a spiral, full range or in the "Pro" box previous +- pi/100, Table 5, Figs. 7-9); our
+readings and results: docs/REPRODUCTION.md, section "Paper 002".
 """
 
 from __future__ import annotations
@@ -92,40 +90,32 @@ def _settings(quick: bool) -> dict:
 
 def _solve_point(robot, target, cfg: dict, rng, *, rho: int, fitness: float, q0, bounds=None, a: float = 0.0,
                  max_generations: int | None = None, callback=None) -> dict:
-    """Best of up to ``rho`` runs on one target (stop early once a run meets ``fitness``); ``callback`` goes to
-    every run."""
+    """Best of up to ``rho`` runs on one target (stop once a run meets ``fitness``), each given ``callback``."""
     target = Target.coerce(target)
     objective = PositionError(target)
     if a > 0:
         objective = a * WeightedJointDisplacement(q0) + objective
-    best, runs, total_time, total_gens = None, 0, 0.0, 0
-    for _ in range(rho):
-        extra = {} if callback is None else {"callback": callback}
-        res = solve(robot, target, method=cfg["method"], seed=rng, q0=q0, bounds=bounds, objective=objective,
-                    tolerance=fitness, max_generations=max_generations or cfg["max_generations"], runs=1,
-                    **cfg["options"], **extra)
-        runs, total_time, total_gens = runs + 1, total_time + res.time_s, total_gens + res.generations
-        if best is None or res.cost < best.cost:
-            best = res
-        if res.success:
-            break
-    return {"error": best.position_error, "generations": best.generations, "time": best.time_s, "runs": runs,
-            "total_time": total_time, "total_generations": total_gens, "success": bool(best.success),
-            "q": best.q, "result": best}
+    extra = {} if callback is None else {"callback": callback}
+    results = []
+    while len(results) < rho and not (results and results[-1].success):
+        results.append(solve(robot, target, method=cfg["method"], seed=rng, q0=q0, bounds=bounds, objective=objective,
+                             tolerance=fitness, max_generations=max_generations or cfg["max_generations"], runs=1,
+                             **cfg["options"], **extra))
+    best = min(results, key=lambda r: r.cost)
+    return {"error": best.position_error, "generations": best.generations, "time": best.time_s, "runs": len(results),
+            "total_time": sum(r.time_s for r in results), "total_generations": sum(r.generations for r in results),
+            "success": bool(best.success), "q": best.q, "result": best}
 
 
 def _stats(points: list[dict], fitness: float | None) -> dict:
     counts = {k: sum(p.get("status") == k for p in points) for k in ("reached", "missed", "no solution")}
     points = [p for p in points if p.get("status") != "no solution"] or points
     e = np.array([p["error"] for p in points])
+    mean = {k: float(np.mean([p[k] for p in points])) for k in ("generations", "time", "success", "runs", "total_time")}
     return {"fitness": fitness, "avg_error": float(e.mean()), "std": float(e.std(ddof=1)) if e.size > 1 else 0.0,
-            "points": len(points), **counts,
-            "avg_generations": float(np.mean([p["generations"] for p in points])),
-            "avg_time": float(np.mean([p["time"] for p in points])),
-            "median_error": float(np.median(e)), "max_error": float(e.max()),
-            "success": float(np.mean([p["success"] for p in points])),
-            "avg_runs": float(np.mean([p["runs"] for p in points])),
-            "avg_total_time": float(np.mean([p["total_time"] for p in points]))}
+            "points": len(points), **counts, "avg_generations": mean["generations"], "avg_time": mean["time"],
+            "median_error": float(np.median(e)), "max_error": float(e.max()), "success": mean["success"],
+            "avg_runs": mean["runs"], "avg_total_time": mean["total_time"]}
 
 
 #: A point counts as reached when the distance error is at most this (m); far above every fitness value.
@@ -133,9 +123,8 @@ REACHED_M = 1e-9
 
 
 def _classify(points: list[dict], distance=lambda i: 0.0) -> list[dict]:
-    """Each point's ``status``: ``reached``; ``missed`` when ``distance(i)`` (the least distance a reachability
-    check finds for point i, m; default 0: a target that is FK of joints inside the bounds) is within REACHED_M;
-    else ``no solution``."""
+    """Each point's ``status``: ``reached``; ``missed`` when ``distance(i)`` (the least distance a reachability check
+    finds for point i, m; default 0: FK of joints inside the bounds) is within REACHED_M; else ``no solution``."""
     for i, pt in enumerate(points):
         reached = pt["error"] <= REACHED_M
         pt["oracle"] = None if reached else min(pt["error"], distance(i))
@@ -189,8 +178,7 @@ def _robot():
 
 
 def _job(spec: dict):
-    """One independent part of the experiment (a top-level job for ``ctx.map_parallel``): ``(key, output, wall
-    time s)``."""
+    """One part of the experiment (a top-level job for ``ctx.map_parallel``): ``(key, output, wall time s)``."""
     t0 = time.perf_counter()
     robot, s, kind, label = _robot(), spec["settings"], spec["kind"], spec["label"]
     cfg = METHODS[label.removeprefix("Pro-").split(" ")[0]]
@@ -234,11 +222,10 @@ def _job(spec: dict):
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 002's Tables 3-5 and Figs. 3-9 (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     robot = _robot()
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     rho = s["rho_runs_per_point"]
-    s["jobs"] = ctx.jobs
 
     q_s1 = robot.random_configurations(1, ctx.rng("002", "s1-target"))[0]
     p_s1 = np.asarray(robot.fk(q_s1).translation)
@@ -246,14 +233,12 @@ def run(ctx: RunContext) -> PaperReport:
     p_s2 = robot.positions_batch(q_s2)
     p_s2_pin = np.array([robot.fk(q).translation for q in q_s2])
     p_s3 = spiral_targets(s["scenario3_points"])
-    variants = [(name, False, cfg["fitness"]) for name, cfg in METHODS.items()]
-    variants += [(f"Pro-{name}", True, cfg["fitness"]) for name, cfg in METHODS.items()]
+    variants = [(pro + name, pro == "Pro-", cfg["fitness"]) for pro in ("", "Pro-") for name, cfg in METHODS.items()]
     variants += [("Pro-ISADE (1e-12)", True, 1e-12)]
 
     base = {"settings": s, "seed": ctx.seed, "progress": ctx.progress and ctx.jobs <= 1}
-    specs = [{**base, "kind": "table3", "label": n, "target": p_s1} for n in METHODS]
-    specs += [{**base, "kind": "scenario1", "label": n, "target": p_s1} for n in METHODS]
-    specs += [{**base, "kind": "scenario2", "label": n, "targets": p_s2_pin} for n in METHODS]
+    specs = [{**base, "kind": kind, "label": n, key: points} for kind, key, points in (
+        ("table3", "target", p_s1), ("scenario1", "target", p_s1), ("scenario2", "targets", p_s2_pin)) for n in METHODS]
     specs += [{**base, "kind": "scenario3", "label": label, "targets": p_s3, "pro": pro, "fitness": fitness}
               for label, pro, fitness in variants]
     # longest first (Pro- spiral runs restart most), so the processes of a pool finish together
@@ -261,8 +246,7 @@ def run(ctx: RunContext) -> PaperReport:
                                not sp.get("pro", False)))
     done = ctx.map_parallel(_job, specs, "002 parts")
     outputs = {key: out for key, out, _ in done}
-    job_times = {key: dt for key, _, dt in done}
-    report.data["job_wall_time_s"] = {f"{k[0]} {k[1]}": v for k, v in job_times.items()}
+    report.data["job_wall_time_s"] = {f"{k[0]} {k[1]}": dt for k, _, dt in done}
 
     t3 = {n: outputs[("table3", n)] for n in METHODS}
     curves = {n: t3[n].pop("curve") for n in METHODS}
@@ -276,7 +260,6 @@ def run(ctx: RunContext) -> PaperReport:
     s3 = {label: {**_stats(s3_points[label][1:] or s3_points[label], fitness), **_smoothness(s3_points[label])}
           for label, _, fitness in variants}
 
-    # -- tables ------------------------------------------------------------------------------------------
     report.tables.append(Table(
         "table3", "Table 3 - Scenario 1: one random point, 85 iterations, best of the runs",
         ["method", "max. iteration", "position error (m)", "calculation time (s)", "median error (m)",
@@ -334,12 +317,10 @@ def run(ctx: RunContext) -> PaperReport:
          for n, v in s3.items()],
         note="A Pro- step can move each joint by at most pi/100 = 1.8 deg."))
 
-    # -- floating-point floor ----------------------------------------------------------------------------
     floor = np.linalg.norm(p_s2 - p_s2_pin, axis=1)
     ulp = np.spacing(np.abs(np.concatenate([p_s2_pin, p_s3])).max(axis=1))
     report.data["fk_floor"] = {"numpy_vs_pinocchio_fk_m": floor, "coordinate_spacing_m": ulp}
 
-    # -- figures -----------------------------------------------------------------------------------------
     report.figures += [
         _fig_targets(ctx, p_s2_pin, p_s3),
         _fig_convergence(ctx, curves, time_axis=False),
@@ -352,7 +333,6 @@ def run(ctx: RunContext) -> PaperReport:
                     "Fig. 9 analogue: Scenario 3.2 (Pro-, previous +- pi/100) per spiral point"),
     ]
 
-    # -- notes -------------------------------------------------------------------------------------------
     report.notes += _notes(s, t3, s1, s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed)
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,
@@ -376,12 +356,8 @@ def _runs_of(indices: list[int]) -> str:
     """'3-41, 76-99' from sorted 0-based indices, printed 1-based."""
     if not indices:
         return "none"
-    spans, start = [], indices[0]
-    for a, b in zip(indices, [*indices[1:], None], strict=True):
-        if b != a + 1:
-            spans.append(f"{start + 1}" if start == a else f"{start + 1}-{a + 1}")
-            start = b
-    return ", ".join(spans)
+    spans = np.split(np.asarray(indices), np.nonzero(np.diff(indices) != 1)[0] + 1)
+    return ", ".join(f"{s[0] + 1}" if s.size == 1 else f"{s[0] + 1}-{s[-1] + 1}" for s in spans)
 
 
 def _seed_check(s3_points: dict, p_s3: np.ndarray, seed: int, runs: int = 3) -> str:
@@ -456,9 +432,8 @@ def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
         f"generations of the kept run {iso['avg_generations']:.1f} / {de['avg_generations']:.1f} / "
         f"{pso['avg_generations']:.1f} (paper 85.6 / 124.5 / 413.2).",
         "Times (the paper's: MATLAB on an Intel i5-4258U): compare ratios. Scenario 2 time ratios DE/ISADE "
-        f"{_ratio(de['avg_time'], iso['avg_time'])} "
-        f"(paper {_ratio(p4['DE'][4], p4['ISADE'][4])}), PSO/ISADE {_ratio(pso['avg_time'], iso['avg_time'])} "
-        f"(paper {_ratio(p4['PSO'][4], p4['ISADE'][4])}).",
+        f"{_ratio(de['avg_time'], iso['avg_time'])} (paper {_ratio(p4['DE'][4], p4['ISADE'][4])}), PSO/ISADE "
+        f"{_ratio(pso['avg_time'], iso['avg_time'])} (paper {_ratio(p4['PSO'][4], p4['ISADE'][4])}).",
         "Joint continuity (Fig. 8): max joint jump between consecutive spiral points "
         + ", ".join(f"{k} {s3[k]['max_jump_deg']:.1f} deg" for k in ("PSO", "DE", "ISADE", "Pro-PSO", "Pro-DE",
                                                                      "Pro-ISADE"))

@@ -1,8 +1,6 @@
-"""Paper 003: NSGA-II for a planar vehicle-arm robot (5 DOF) (Rodriguez & Banfield).
-
-A path of poses solved point by point by ``nsga2`` (manipulability and smoothness ``S`` with a gain K on the
-vehicle coordinates); Fig. 2: with K = 100 the vehicle moves less than with K = 10. Our path, lengths and
-results: docs/REPRODUCTION.md, section "Paper 003".
+"""Paper 003: NSGA-II for a planar vehicle-arm robot (5 DOF) (Rodriguez & Banfield): a path of poses solved point
+by point by ``nsga2`` (manipulability and smoothness ``S`` with a gain K on the vehicle coordinates); Fig. 2: with
+K = 100 the vehicle moves less than with K = 10. Our path, lengths and results: docs/REPRODUCTION.md, "Paper 003".
 """
 
 from __future__ import annotations
@@ -13,14 +11,15 @@ from ..api import solve_trajectory
 from ..problem import Target
 from ..robot import load_robot
 from .reporting import Animation, PaperReport, RunContext, Table, derive_rng, dress
+from .robots import VEHICLE_ARM_LENGTHS
 
 PAPER_ID = "003"
 TITLE = "Inverse kinematic multiobjective optimization for a vehicle-arm robot system using evolutionary algorithms"
 
 ROBOT = "vehicle_arm"
 CM = 0.01
-#: Our link lengths (m), as in robots/vehicle_arm.urdf (checked against the URDF's FK at run time).
-LINKS = (0.5, 0.4, 0.25)
+#: Our link lengths (m): those of robots/vehicle_arm.urdf (:data:`~.robots.VEHICLE_ARM_LENGTHS`).
+LINKS = VEHICLE_ARM_LENGTHS
 #: Start configuration (m, m, rad, rad, rad): vehicle at the origin, arm bent, tool along +x.
 Q_START = (0.0, 0.0, 0.6, -1.2, 0.6)
 #: Gains on the vehicle coordinates: the paper's 10 and 100, and 1 (equal weights) as a reference.
@@ -84,39 +83,32 @@ def _part(spec: dict) -> list:
 
 def run(ctx: RunContext) -> PaperReport:
     """Reproduce paper 003's Fig. 2 and its front (see the module docstring)."""
-    s = _settings(ctx.quick)
+    s = _settings(ctx.quick) | {"jobs": ctx.jobs}
     robot = load_robot(ROBOT)
     report = PaperReport(PAPER_ID, TITLE, ctx.quick, ctx.seed, settings=s)
     q_start = np.array(Q_START)
-    check = max(np.abs(planar_chain(q)[-1] - np.asarray(robot.fk(q).translation)[:2]).max()
-                for q in (q_start, np.array([0.3, -0.2, 1.0, 0.5, -2.0])))
-    if check > 1e-9:
-        raise RuntimeError(f"LINKS {LINKS} do not match the {ROBOT} URDF (tip differs by {check:.3g} m)")
     P = path_points(s["path"]["points"])
-    cfg = s["nsga2"]
 
     runs: dict[float, list[dict]] = {}
-    s["jobs"] = ctx.jobs
-    specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": cfg}
+    specs = [{"seed": ctx.seed, "K": K, "i": i, "path": P, "q_start": q_start, "cfg": s["nsga2"]}
              for K in GAINS for i in range(s["runs_per_gain"])]
     for spec, res in zip(specs, ctx.map_parallel(_part, specs, "003 trajectories (K x runs)"), strict=True):
         Q = np.array([r.q for r in res])
-        entry = {"results": res, "Q": Q, **_trajectory_stats(Q, q_start),
-                 "position_error": np.array([r.position_error for r in res]),
-                 "orientation_error": np.array([r.orientation_error for r in res]),
-                 "feasible": all(r.success for r in res),
-                 "manipulability": np.array([robot.manipulability(q, rows="planar") for q in Q]),
-                 "time": float(sum(r.time_s for r in res))}
-        runs.setdefault(spec["K"], []).append(entry)
+        runs.setdefault(spec["K"], []).append({
+            "results": res, "Q": Q, **_trajectory_stats(Q, q_start),
+            "position_error": np.array([r.position_error for r in res]),
+            "orientation_error": np.array([r.orientation_error for r in res]), "feasible": all(r.success for r in res),
+            "manipulability": np.array([robot.manipulability(q, rows="planar") for q in Q]),
+            "time": float(sum(r.time_s for r in res))})
 
-    # -- tables ------------------------------------------------------------------------------------------
     mean_step = {K: float(np.mean([e["vehicle_steps"][1:].mean() for e in runs[K]])) for K in GAINS}
+    tot = {K: float(np.mean([e["vehicle_total"] for e in runs[K]])) for K in GAINS}
+    arm = {K: float(np.degrees(np.mean([e["arm_total"] for e in runs[K]]))) for K in GAINS}
     report.tables.append(Table(
         "fig2_claim", "Fig. 2 in numbers - vehicle displacement between consecutive path points",
         ["quantity", "K = 10", "K = 100"],
         [["mean vehicle step between consecutive points (cm)", mean_step[10.0] / CM, mean_step[100.0] / CM],
-         ["vehicle path over the whole path (cm)", *(float(np.mean([e["vehicle_total"] for e in runs[K]])) / CM
-                                                     for K in (10.0, 100.0))]],
+         ["vehicle path over the whole path (cm)", tot[10.0] / CM, tot[100.0] / CM]],
         paper_rows=[["mean vehicle step between consecutive points (cm)", "larger (Fig. 2, left)",
                      "smaller (Fig. 2, right)"],
                     ["vehicle path over the whole path (cm)", None, None]],
@@ -128,10 +120,9 @@ def run(ctx: RunContext) -> PaperReport:
     rows = []
     for K in GAINS:
         es = runs[K]
-        tot = np.array([e["vehicle_total"] for e in es])
-        rows.append([K, len(es), float(tot.mean()) / CM, float(tot.std(ddof=1)) / CM if len(tot) > 1 else 0.0,
-                     mean_step[K] / CM, float(max(e["vehicle_steps"][1:].max() for e in es)) / CM,
-                     float(np.degrees(np.mean([e["arm_total"] for e in es]))),
+        totals = np.array([e["vehicle_total"] for e in es])
+        rows.append([K, len(es), float(totals.mean()) / CM, float(totals.std(ddof=1)) / CM if len(es) > 1 else 0.0,
+                     mean_step[K] / CM, float(max(e["vehicle_steps"][1:].max() for e in es)) / CM, arm[K],
                      float(np.mean([e["manipulability"].mean() for e in es])),
                      float(max(e["position_error"].max() for e in es)), all(e["feasible"] for e in es),
                      float(np.mean([e["time"] for e in es]))])
@@ -157,15 +148,11 @@ def run(ctx: RunContext) -> PaperReport:
         step_rows, formats=[None, None, ".2f", ".2f", ".2f", ".1f", ".1f", ".1f"],
         note="Point 1's step starts from q_start."))
 
-    # -- figures -----------------------------------------------------------------------------------------
     mid = len(P) // 2
     report.figures += [_fig_configurations(ctx, runs, P, q_start), _fig_front(ctx, runs, mid, P),
                        _fig_steps(ctx, runs, P)]
 
-    # -- notes and data ----------------------------------------------------------------------------------
     ratio = mean_step[100.0] / mean_step[10.0] if mean_step[10.0] > 0 else float("nan")
-    tot = {K: float(np.mean([e["vehicle_total"] for e in runs[K]])) for K in GAINS}
-    arm = {K: float(np.degrees(np.mean([e["arm_total"] for e in runs[K]]))) for K in GAINS}
     front_sizes = [len(r.front) for K in GAINS for e in runs[K] for r in e["results"]]
     g_span = {K: float(np.ptp(runs[K][0]["results"][mid].front.objectives[:, 0])) for K in GAINS}
     s_span = {K: tuple(float(v) for v in np.quantile(runs[K][0]["results"][mid].front.objectives[:, 1], [0, 1]))

@@ -1,8 +1,6 @@
-"""Paper 004: DE for the 6-DOF human-like arm of an aerial manipulator (Ibrahim & Al Akkad, 2019).
-
-DE/rand/1/bin minimizing ``J = sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (roll-pitch-yaw; J in the paper's
-units, cm and rad): Table 4 (population x iterations sweep), Tables 5/6 (three more targets) and Fig. 2. Our runs,
-readings and results: docs/REPRODUCTION.md, section "Paper 004".
+"""Paper 004: DE for the 6-DOF human-like arm of an aerial manipulator (Ibrahim & Al Akkad, 2019): DE/rand/1/bin
+minimizing ``J = sigma ||P_G - P_E|| + epsilon ||O_G - O_E||`` (roll-pitch-yaw; J in cm and rad): Table 4 (population
+x iterations sweep), Tables 5/6 (three more targets), Fig. 2; our readings and results: docs/REPRODUCTION.md.
 """
 
 from __future__ import annotations
@@ -83,12 +81,6 @@ def _settings(quick: bool) -> dict:
     }
 
 
-def _target(pose) -> Target:
-    """A Target from a (x, y, z cm, roll, pitch, yaw deg) tuple."""
-    pose = np.asarray(pose, dtype=float)
-    return Target.from_rpy(pose[:3] * CM, pose[3:] * DEG)
-
-
 def _pose(robot, q) -> np.ndarray:
     """(x, y, z cm, roll, pitch, yaw deg) of the tip at ``q``."""
     T = robot.fk(q)
@@ -103,8 +95,9 @@ def _pose_errors(pose, goal) -> tuple[float, float]:
 
 
 def _solve(robot, goal, population: int, iterations: int, rng) -> dict:
-    """One DE run at the paper's settings; errors in the paper's units."""
-    target = _target(goal)
+    """One DE run at the paper's settings on ``goal`` (x, y, z cm; roll, pitch, yaw deg); errors in its units."""
+    xyz_rpy = np.asarray(goal, dtype=float)
+    target = Target.from_rpy(xyz_rpy[:3] * CM, xyz_rpy[3:] * DEG)
     res = solve(robot, target, method="de", seed=rng, objective=RPYPoseError(target, SIGMA / CM, EPSILON),
                 population=population, max_generations=iterations, strategy="rand1bin", F=F, CR=CR,
                 bound_handling="clip", tolerance=0.0, rotation_tolerance=0.0, runs=1)
@@ -132,7 +125,6 @@ def run(ctx: RunContext) -> PaperReport:
     runs = s["runs_per_cell"]
     cells = s["sweep_cells"]
 
-    # -- Table 4 on the paper's target, and on reachable targets ---------------------------------------
     def sweep(goals: list, label: str) -> list[dict]:
         """Table 4's cells, one run per goal, from the stream ``label``."""
         rng = ctx.rng("004", "table4", label)
@@ -170,7 +162,6 @@ def run(ctx: RunContext) -> PaperReport:
          "best pos. error (cm)", "best RPY error (deg)"], rows,
         note=f"'Reached' = position error <= {REACHED_POS_CM} cm and RPY error <= {REACHED_ORI_DEG} deg."))
 
-    # -- Tables 5/6: the paper's three targets, as printed and as FK of the paper's joints ---------------
     fk_goals = [_pose(robot, np.radians(q_deg)) for _, q_deg in PAPER_TABLE5]
     check_rows = [[k, tuple_text(goal), tuple_text(q_deg), tuple_text(pose), *_pose_errors(pose, goal)]
                   for k, ((goal, q_deg), pose) in enumerate(zip(PAPER_TABLE5, fk_goals, strict=True), start=1)]
@@ -201,28 +192,24 @@ def run(ctx: RunContext) -> PaperReport:
         note=f"Ours: {table6_runs} runs per row, errors and pose of the best run. Paper: one run at population 12, "
              "100 iterations; errors computed here from its reported reached pose."))
 
-    # -- figures -----------------------------------------------------------------------------------------
-    report.figures.append(_fig_objective(ctx, robot, fk_goals))
-    report.figures.append(_fig_sweep(ctx, cells, sweep_paper, sweep_reach))
+    report.figures += [_fig_objective(ctx, robot, fk_goals), _fig_sweep(ctx, cells, sweep_paper, sweep_reach)]
 
-    # -- notes and raw data -------------------------------------------------------------------------------
     starts = 10 if ctx.quick else 50
     pos_gap_cm = least_squares_distance(robot, np.asarray(PAPER_TARGET[:3]) * CM, robot.lower, robot.upper,
                                         ctx.rng("004", "position-reachability"), starts) / CM
-    best_paper = min(c["J_best"] for c in sweep_paper)
     pose_best = [t6[("paper pose", k, *s["table6_budgets"][1])]["best"] for k in range(3)]
     best_cell = sweep_paper[int(np.argmin([c["J_best"] for c in sweep_paper]))]["best"]
     miss = np.array([[r[4], r[5]] for r in check_rows])
-    reach_big = [t6[("FK of paper joints", k, *s["table6_budgets"][1])]["reached_fraction"] for k in range(3)]
-    reach_small = [t6[("FK of paper joints", k, *s["table6_budgets"][0])]["reached_fraction"] for k in range(3)]
+    reach_small, reach_big = ([t6[("FK of paper joints", k, *b)]["reached_fraction"] for k in range(3)]
+                              for b in s["table6_budgets"])
     report.notes += [
         "The paper's tables are not mutually consistent with its own kinematics: FK of Table 5's joint values "
         f"misses Table 5's poses by {miss[:, 0].min():.1f}-{miss[:, 0].max():.1f} cm and "
         f"{miss[:, 1].min():.0f}-{miss[:, 1].max():.0f} deg (RPY norm) under our standard-DH reading of Table 1 "
         "(PAPERS.md lists the other readings tried). The paper's target is out of our model's reach: its "
         f"position alone is {pos_gap_cm:.1f} cm out of reach (bounded least squares, {starts} starts). The best J we "
-        f"reach on it is {best_paper:.4g} (position {best_cell['pos_cm']:.2f} cm, RPY {best_cell['ori_deg']:.1f} deg "
-        "off), whereas the paper reports J down to 4.5e-9. On its three Table 5 poses our best runs reach the "
+        f"reach on it is {best_cell['J']:.4g} (position {best_cell['pos_cm']:.2f} cm, RPY {best_cell['ori_deg']:.1f} "
+        "deg off), whereas the paper reports J down to 4.5e-9. On its three Table 5 poses our best runs reach the "
         f"position to within {max(b['pos_cm'] for b in pose_best):.1g} cm but stay "
         f"{min(b['ori_deg'] for b in pose_best):.0f}-{max(b['ori_deg'] for b in pose_best):.0f} deg (RPY norm) "
         "from the orientation.",
@@ -271,8 +258,7 @@ def _fig_sweep(ctx: RunContext, cells, sweep_paper, sweep_reach):
     pops = sorted({p for p, _ in cells})
     for ax, sweep, title in [(axes[0], sweep_paper, "paper's target"), (axes[1], sweep_reach, "reachable targets")]:
         for pop in pops:
-            idx = [i for i, (p, _) in enumerate(cells) if p == pop]
-            idx.sort(key=lambda i: cells[i][1])
+            idx = sorted((i for i, (p, _) in enumerate(cells) if p == pop), key=lambda i: cells[i][1])
             ax.semilogy([cells[i][1] for i in idx], [max(sweep[i]["J_median"], 1e-17) for i in idx], "o-",
                         label=f"population {pop}")
         dress(ax, "iterations", "median J", f"Table 4 sweep - {title}", legend=7 if ax is axes[1] else None,

@@ -34,8 +34,7 @@ def check_seed(seed) -> int:
 
 
 def check_output_dir(path) -> Path:
-    """``path`` resolved, created (with parents) if needed; OutputError when it is a file, cannot be created or
-    is not writable."""
+    """``path`` resolved, created (with parents) if needed; OutputError when it is a file, uncreatable or unwritable."""
     out = Path(path).expanduser()
     if out.exists() and not out.is_dir():
         raise OutputError(f"output path {str(out)!r} exists and is not a directory; choose a directory for --out")
@@ -66,9 +65,7 @@ def fmt(value, spec: str | None = None) -> str:
         return format(v, spec)
     if v == 0.0:
         return "0"
-    if abs(v) < 1e-3 or abs(v) >= 1e5:
-        return f"{v:.3e}"
-    return f"{v:.4g}"
+    return f"{v:.3e}" if abs(v) < 1e-3 or abs(v) >= 1e5 else f"{v:.4g}"
 
 
 def tuple_text(values, spec: str = ".4g") -> str:
@@ -91,9 +88,7 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, (float, np.floating)):
         v = float(obj)
         return None if not math.isfinite(v) else v
-    if isinstance(obj, Path):
-        return str(obj)
-    return obj
+    return str(obj) if isinstance(obj, Path) else obj
 
 
 def _cpu_model() -> str:
@@ -160,10 +155,8 @@ class Table:
 
     def _markdown_block(self, rows: list[list]) -> list[str]:
         specs = self.formats or [None] * len(self.columns)
-        lines = ["| " + " | ".join(self.columns) + " |", "|" + " --- |" * len(self.columns)]
-        for row in rows:
-            lines.append("| " + " | ".join(fmt(v, s) for v, s in zip(row, specs, strict=True)) + " |")
-        return lines
+        return ["| " + " | ".join(self.columns) + " |", "|" + " --- |" * len(self.columns),
+                *("| " + " | ".join(fmt(v, s) for v, s in zip(row, specs, strict=True)) + " |" for row in rows)]
 
     def markdown(self) -> str:
         """The table as markdown: the paper's block (when given) above ours, same rows and columns."""
@@ -180,10 +173,8 @@ class Table:
         with open(path, "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["source", *self.columns])
-            for row in self.paper_rows or []:
-                w.writerow(["paper", *("" if v is None else v for v in row)])
-            for row in self.rows:
-                w.writerow(["ours", *("" if v is None else v for v in row)])
+            for source, rows in (("paper", self.paper_rows or []), ("ours", self.rows)):
+                w.writerows([source, *("" if v is None else v for v in row)] for row in rows)
         return path
 
     def as_dict(self) -> dict[str, Any]:
@@ -271,8 +262,7 @@ def progress_bar(iterable: Iterable | None = None, total: int | None = None, des
     """A tqdm progress bar on stderr that disappears when done (usable in worker processes)."""
     from tqdm.auto import tqdm
 
-    return tqdm(iterable, total=total, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True,
-                file=sys.stderr)
+    return tqdm(iterable, total=total, desc=desc, disable=not enabled, leave=False, dynamic_ncols=True, file=sys.stderr)
 
 
 def derive_rng(seed: int, *labels: str) -> np.random.Generator:
@@ -334,8 +324,7 @@ class RunContext:
         return plt.subplots(*args, **kwargs)
 
     def save_figure(self, fig, name: str, caption: str) -> Figure:
-        """Lay ``fig`` out tightly, save it as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it, return a
-        :class:`Figure`."""
+        """Lay ``fig`` out tightly, save it as ``<out_dir>/<name>.png`` at :attr:`dpi`, close it; a :class:`Figure`."""
         import matplotlib.pyplot as plt
 
         path = self.out_dir / f"{name}.png"

@@ -1,8 +1,6 @@
-"""The five papers' arms as DH tables (or joint lists), turned into the URDFs bundled in ``robots/``.
-
-``scripts/make_paper_robots.py`` writes :data:`PAPER_ROBOTS` to ``robots/<name>.urdf``; a test fails when a
-committed file differs from what these builders produce. Every length is in metres, every angle in
-radians; the papers' centimetre and degree values are converted here, once.
+"""The five papers' arms as DH tables (or joint lists), turned into the URDFs bundled in ``robots/``
+(``scripts/make_paper_robots.py`` writes :data:`PAPER_ROBOTS` there; a test compares). Lengths in m, angles in rad:
+the papers' centimetre and degree values are converted here, once.
 """
 
 from __future__ import annotations

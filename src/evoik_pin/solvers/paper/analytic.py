@@ -1,9 +1,7 @@
-"""Closed-form IK of the papers' small arms (m, rad), as references and as the ``algebraic`` method: paper 001's
-planar 2R (:func:`planar2r_ik`) and PUMA wrist point (:func:`puma_ik`), paper 000's AX-18 for a tool pitch
-(:func:`ax18_ik`) and its "algebraic method" searching the pitch (:func:`ax18_algebraic`). ``algebraic`` takes the
-bundled robots only, after checking their kinematics against the closed form, and of goal lists only one tip
-``Pose`` or ``Position`` (:func:`tip_target_problem`).
-"""
+"""Closed-form IK of the papers' small arms (m, rad), as references and as the ``algebraic`` method (the bundled
+robots only, their kinematics checked; of goal lists one tip ``Pose`` or ``Position``, :func:`tip_target_problem`):
+paper 001's planar 2R (:func:`planar2r_ik`) and PUMA wrist point (:func:`puma_ik`), paper 000's AX-18 for a tool
+pitch (:func:`ax18_ik`) and its "algebraic method" searching the pitch (:func:`ax18_algebraic`)."""
 
 from __future__ import annotations
 
@@ -57,7 +55,6 @@ def _point(p, size: int, name: str) -> np.ndarray:
     return arr
 
 
-# ---------------------------------------------------------------------------------------------- planar 2R
 def planar2r_fk(Q, a1: float = PLANAR2R["a1"], a2: float = PLANAR2R["a2"]) -> np.ndarray:
     """Paper 001 eqs. 16-17: tip (x, y) in m of joint vectors ``Q`` (..., 2) in rad, shape (..., 2)."""
     Q = np.asarray(Q, float)
@@ -87,7 +84,6 @@ def planar2r_ik(x: float, y: float, a1: float = PLANAR2R["a1"], a2: float = PLAN
     return _planar2r_candidates(x, y, a1, a2, clamp=False)[0]
 
 
-# ---------------------------------------------------------------------------------------------- PUMA 3R
 def puma_fk(Q, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUMA3R["a3"],
             d4: float = PUMA3R["d4"]) -> np.ndarray:
     """Paper 001 eq. 20: PUMA wrist point (..., 3) in m of joint vectors ``Q`` (..., 3) in rad."""
@@ -134,7 +130,6 @@ def puma_ik(p, a2: float = PUMA3R["a2"], d: float = PUMA3R["d"], a3: float = PUM
     return _puma_candidates(_point(p, 3, "puma_ik"), a2, d, a3, d4, clamp=False)[0]
 
 
-# ---------------------------------------------------------------------------------------------- AX-18
 def ax18_fk(Q, d1: float = AX18["d1"], a1: float = AX18["a1"], a2: float = AX18["a2"], a3: float = AX18["a3"],
             d2: float = AX18["d2"], a4: float = AX18["a4"]) -> np.ndarray:
     """Paper 000, section III-A: AX-18 tool position (..., 3) in m of joint vectors ``Q`` (..., 4) in rad."""
@@ -189,8 +184,7 @@ class AX18Solution:
 
 def _into_limits(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Each angle moved by a multiple of 2 pi into [lower, lower + 2 pi), then clamped onto the limits."""
-    Q = lower + np.mod(Q - lower, 2 * np.pi)
-    return np.clip(Q, lower, upper)
+    return np.clip(lower + np.mod(Q - lower, 2 * np.pi), lower, upper)
 
 
 def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, upper=None,
@@ -234,7 +228,6 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
     return out
 
 
-# ---------------------------------------------------------------------------------------------- registry
 #: Fixed joint vectors (rad) at which a loaded chain must match the closed form to be recognized.
 _PROBES = np.array([[0.3, -0.7, 1.1, -0.4], [-1.2, 0.5, -0.2, 2.0], [2.5, 1.9, -2.2, 0.6]])
 #: Largest FK mismatch (m) tolerated between the loaded chain and the closed form.
@@ -270,16 +263,12 @@ def solution_results(problem: IKProblem, Q: np.ndarray, method: str, generations
     Q = np.atleast_2d(np.asarray(Q, float))
     ev = problem.evaluate(Q, count=False)
     ok = problem.rows_met(Q)
-    out = []
-    for i in np.argsort(ev.cost, kind="stable"):
-        if only_successful and not ok[i]:
-            continue
-        rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
-        out.append(Result(q=Q[i].copy(), position_error=float(ev.position_error[i]), orientation_error=rot,
-                          cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations,
-                          evaluations=evaluations, time_s=time_s, message="distinct IK solution", method=method,
-                          goal_errors=None if problem.target is not None else problem.goal_errors(Q[i])))
-    return out
+    return [Result(q=Q[i].copy(), position_error=float(ev.position_error[i]),
+                   orientation_error=None if ev.orientation_error is None else float(ev.orientation_error[i]),
+                   cost=float(ev.cost[i]), success=bool(ok[i]), generations=generations, evaluations=evaluations,
+                   time_s=time_s, message="distinct IK solution", method=method,
+                   goal_errors=None if problem.target is not None else problem.goal_errors(Q[i]))
+            for i in np.argsort(ev.cost, kind="stable") if ok[i] or not only_successful]
 
 
 def tip_target_problem(problem: IKProblem) -> IKProblem | None:
@@ -301,15 +290,6 @@ def tip_target_problem(problem: IKProblem) -> IKProblem | None:
                    tolerance=goal.tolerance, rotation_tolerance=goal.rotation_tolerance, evaluations=0)
 
 
-def _target_point(problem: IKProblem, robot_name: str) -> np.ndarray:
-    t = problem.target
-    if t.planar:
-        if robot_name != "planar2r":
-            raise TargetError(f"a planar target applies to planar arms; {robot_name} needs a 3-D position (m)")
-        return np.array([t.position[0], t.position[1], 0.0])
-    return t.position
-
-
 @register("algebraic", "closed-form IK: paper 000's algebraic method (ax18, phi search), planar2r (both "
           "elbows) and the puma3r wrist point (four solutions)", multi_solution=True)
 def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float = np.radians(0.5)) -> Result:
@@ -321,7 +301,10 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
     robot = problem.robot
     name = _closed_form_for(robot)
     run = SolverRun(problem, 0)
-    p = _target_point(problem, name)
+    t = problem.target
+    if t.planar and name != "planar2r":
+        raise TargetError(f"a planar target applies to planar arms; {name} needs a 3-D position (m)")
+    p = np.array([t.position[0], t.position[1], 0.0]) if t.planar else t.position
     if name == "planar2r":
         cands, exact = _planar2r_candidates(p[0], p[1], **PLANAR2R, clamp=True)
         exact = exact and not abs(p[2]) > 0

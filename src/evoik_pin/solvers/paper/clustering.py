@@ -49,5 +49,4 @@ def leader_rows(Q: np.ndarray, cost: np.ndarray, radius: float, revolute: np.nda
                 min_members: int = 1) -> np.ndarray:
     """The leaders (M, n) of :func:`leader_clusters`, best first, of the clusters with at least ``min_members``."""
     leaders, labels = leader_clusters(Q, cost, radius, revolute, max_clusters)
-    sizes = np.bincount(labels[labels >= 0], minlength=len(leaders))
-    return np.asarray(Q)[leaders[sizes >= min_members]]
+    return np.asarray(Q)[leaders[np.bincount(labels[labels >= 0], minlength=len(leaders)) >= min_members]]

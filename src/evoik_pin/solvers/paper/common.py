@@ -21,12 +21,7 @@ BOUND_HANDLING = ("clip", "reflect", "resample")
 def halton(dimensions: int, count: int, skip: int = 0) -> np.ndarray:
     """Points ``skip .. skip + count - 1`` (count, dimensions) in [0, 1) of the unscrambled Halton sequence,
     as ``scipy.stats.qmc.Halton(d, scramble=False)`` gives them, without importing the slow scipy.stats."""
-    primes: list[int] = []
-    k = 2
-    while len(primes) < dimensions:
-        if all(k % p for p in primes):
-            primes.append(k)
-        k += 1
+    primes = [p for p in range(2, 20 * dimensions + 20) if all(p % d for d in range(2, int(p**0.5) + 1))][:dimensions]
     index = np.arange(skip, skip + count, dtype=np.int64)
     out = np.zeros((count, dimensions))
     for d, base in enumerate(primes):
@@ -60,12 +55,10 @@ def enforce_bounds(trial: np.ndarray, problem: IKProblem, rng: np.random.Generat
         y = np.mod(trial - lo, 2 * safe)
         y = np.where(y > safe, 2 * safe - y, y)
         return np.where(width > 0, lo + y, lo)
-    # resample
     bad = (trial < lo) | (trial > hi)
     if bad.any():
         trial = trial.copy()
-        fresh = rng.uniform(lo, hi, size=trial.shape)
-        trial[bad] = fresh[bad]
+        trial[bad] = rng.uniform(lo, hi, size=trial.shape)[bad]
     return trial
 
 
@@ -77,8 +70,7 @@ def diversity(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
 
 def _diversities(Qs: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """:func:`diversity` of a stack of equally sized populations (G, N, n), shape (G,), in one pass."""
-    width = np.where(upper > lower, upper - lower, 1.0)
-    Z = Qs / width
+    Z = Qs / np.where(upper > lower, upper - lower, 1.0)
     Z -= Z.mean(axis=1, keepdims=True)
     return np.sqrt((Z * Z).sum(axis=2)).mean(axis=1)
 
@@ -89,9 +81,8 @@ class SolverRun:
     Stopping rules, checked by :meth:`stop_reason` after every generation: ``callback(generation, population)``
     (given the (N, n) population after every :meth:`record`) returned a truthy value; the best individual meets
     the problem's tolerances; its cost is at most ``cost_tolerance``; ``max_generations`` reached; no improvement
-    of the best cost for ``stall_generations`` generations. ``history["diversity"]`` is computed in batches: it
-    is complete in :meth:`result`.
-    """
+    of the best cost for ``stall_generations`` generations. ``history["diversity"]`` (computed in batches) is
+    complete in :meth:`result`."""
 
     #: Populations kept before their diversities are computed in one vectorized pass.
     _DIVERSITY_BATCH = 64
@@ -114,14 +105,12 @@ class SolverRun:
         self._pending: list[np.ndarray] = []  # populations whose diversity is not computed yet
 
     def record(self, Q: np.ndarray, ev: Evaluation, **extra: float) -> int:
-        """Log one generation's population ``Q`` (N, n) and its evaluation, extra keywords as history series;
-        returns the best index."""
+        """Log one generation's population ``Q`` (N, n), its evaluation and ``extra`` history series; the best index."""
         i = int(ev.cost.argmin())
         self._stall = 0 if ev.cost[i] < self.best_cost else self._stall + 1
         self.offer(Q[i], ev, i)
         self.history["best_cost"].append(self.best_cost)
         self.history["mean_cost"].append(float(ev.cost.sum() / ev.cost.shape[0]))
-        # diversity is computed in batches: one vectorized pass instead of a handful of calls per generation
         if self._pending and (len(self._pending) >= self._DIVERSITY_BATCH or Q.shape != self._pending[0].shape):
             self._flush_diversity()
         self._pending.append(np.array(Q, dtype=float))
@@ -171,9 +160,7 @@ class SolverRun:
         problem = self.problem
         self._flush_diversity()
         q = np.clip(self.best_q, problem.lower, problem.upper)
-        evaluations = problem.evaluations
-        ev = problem.evaluate(q[None])
-        problem.evaluations = evaluations  # the final check is bookkeeping, not search
+        ev = problem.evaluate(q[None], count=False)
         pos = float(ev.position_error[0])
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
         success = bool(problem.succeeded(pos, rot))
@@ -181,13 +168,12 @@ class SolverRun:
         if problem.target is None:  # every goal within its own tolerances
             goal_errors = problem.goal_errors(q)
             success = problem.goals_met(goal_errors)
-        if not success and message == "tolerance reached":  # not "cost <= cost_tolerance (...)"
-            message = "stopped"
-        if not success:
-            message += f"; {shortfall_text(problem, pos, rot, goal_errors)}"
+        if not success:  # "tolerance reached" by the best's errors, not by "cost <= cost_tolerance (...)"
+            message = ("stopped" if message == "tolerance reached" else message) + "; " + shortfall_text(
+                problem, pos, rot, goal_errors)
         return Result(
             q=q, position_error=pos, orientation_error=rot, cost=float(ev.cost[0]), success=success,
-            generations=self.generation, evaluations=evaluations, time_s=time.perf_counter() - self.t0,
+            generations=self.generation, evaluations=problem.evaluations, time_s=time.perf_counter() - self.t0,
             history={k: np.asarray(v) for k, v in self.history.items()}, message=message, method=method,
             goal_errors=goal_errors, **fields,
         )
@@ -212,8 +198,7 @@ def run_with_restarts(solve_once, problem: IKProblem, runs: int, max_generations
         return results[0]
     k = min(range(len(results)), key=lambda i: (not results[i].success, results[i].cost))
     best = results[k]
-    history = {key: np.concatenate([r.history[key] for r in results if key in r.history])
-               for key in best.history}
+    history = {key: np.concatenate([r.history[key] for r in results if key in r.history]) for key in best.history}
     history["run"] = np.concatenate([np.full(len(r.history["best_cost"]), float(i)) for i, r in enumerate(results)])
     best.history = history
     best.generations = sum(r.generations for r in results)

@@ -98,10 +98,9 @@ def de(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, ma
     k = MUTATIONS.get(scheme, 3)
     N = check_int("population", population, k + 1)
     F = check_positive("F", F, 2.0)
-    CR = check_fraction("CR", CR)
-    p_F = check_fraction("p_F", p_F)
+    CR, p_F, trig_probability = (check_fraction(k, v) for k, v in (("CR", CR), ("p_F", p_F),
+                                                                     ("trig_probability", trig_probability)))
     K = 0.5 * (F + 1.0) if K is None else check_positive("K", K, 2.0)
-    trig_probability = check_fraction("trig_probability", trig_probability)
     D = problem.n
 
     def once(run: SolverRun) -> Result:
@@ -121,10 +120,8 @@ def de(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, ma
                 use_trig = u[:, N + D + 1] < trig_probability
                 V = np.where(use_trig[:, None], trigonometric(X, ev.cost, idx), rand1(X, F, idx))
             j = (u[:, N + D] * D).astype(np.intp)
-            if crossover == "bin":
-                U = binomial_crossover(X, V, CR, u[:, N:N + D], j)
-            else:
-                U = exponential_crossover(X, V, j, exponential_lengths(CR, u[:, N:N + D]))
+            U = (binomial_crossover(X, V, CR, u[:, N:N + D], j) if crossover == "bin"
+                 else exponential_crossover(X, V, j, exponential_lengths(CR, u[:, N:N + D])))
             U = enforce_bounds(U, problem, rng, bound_handling)
             X, ev = greedy_selection(X, ev, U, problem.evaluate(U))
             run.generation += 1

@@ -1,10 +1,7 @@
-"""Differential-evolution operators on whole populations, as plain vectorized functions: paper 002's eq. 12
-mutation schemes (:data:`MUTATIONS`), paper 004's :func:`either_or`, paper 000's :func:`trigonometric`, the
-binomial and exponential crossovers, and index sampling.
-
-Every operator takes its random draws as arguments, so tests can inject fixed draws. Shapes: a population
-``X`` is (N, D); index matrices are (N, k) integers into it; ``F`` is a scalar or (N,).
-"""
+"""Differential-evolution operators on whole populations, vectorized, their random draws taken as arguments:
+paper 002's eq. 12 mutations (:data:`MUTATIONS`), paper 004's :func:`either_or`, paper 000's :func:`trigonometric`,
+binomial and exponential crossovers, index sampling. Shapes: a population ``X`` is (N, D); index matrices are
+(N, k) integers into it; ``F`` is a scalar or (N,)."""
 
 from __future__ import annotations
 
@@ -69,9 +66,8 @@ def _as_column(F) -> np.ndarray | float:
 
 
 def mutate(X: np.ndarray, scheme: str, F, idx: np.ndarray, best: int) -> np.ndarray:
-    """Donors (N, D) of paper 002's eq. 12 ``scheme`` (one of :data:`MUTATIONS`) for population ``X`` (N, D),
-    scale factor ``F``, distinct random indices ``idx`` (N, >= the scheme's count; column j is r_(j+1)) and the
-    row ``best`` of the best individual."""
+    """Donors (N, D) of paper 002's eq. 12 ``scheme`` (one of :data:`MUTATIONS`) for population ``X`` (N, D), scale
+    factor ``F``, distinct random indices ``idx`` (N, >= the scheme's count; column j is r_(j+1)), best row ``best``."""
     if scheme not in MUTATIONS:
         raise OptionError(f"unknown mutation scheme {scheme!r}; known: {', '.join(MUTATIONS)}")
     n_needed = MUTATIONS[scheme]
@@ -130,11 +126,8 @@ def exponential_lengths(CR, u: np.ndarray) -> np.ndarray:
     """Lengths L (N,) of paper 004's Algorithm 2: ``L = 1``, then ``L += 1`` while ``u < CR`` and ``L < D``, from
     uniform draws ``u`` (N, D) (its first D - 1 columns)."""
     D = u.shape[1]
-    go_on = u[:, : D - 1] < _as_column(CR)
-    # L - 1 = number of leading True values of each row
-    stopped = ~go_on
-    first_stop = np.where(stopped.any(axis=1), stopped.argmax(axis=1), D - 1)
-    return first_stop + 1
+    stopped = ~(u[:, : D - 1] < _as_column(CR))  # L - 1 = the number of leading draws below CR
+    return np.where(stopped.any(axis=1), stopped.argmax(axis=1), D - 1) + 1
 
 
 def exponential_crossover(X: np.ndarray, V: np.ndarray, start: np.ndarray, length: np.ndarray) -> np.ndarray:

@@ -18,15 +18,13 @@ from .analytic import solution_results
 from .clustering import leader_rows
 from .common import SolverRun, initial_population
 
-__all__ = ["ENCODINGS", "basic_polynomial_mutation", "check_niching_ga_options", "decode_bits", "decode_bounds",
-           "decode_sign_magnitude", "niche_counts", "niching_tournament", "run_niching_ga", "sbx_pairs",
-           "sharing_radius"]
+__all__ = ["ENCODINGS", "basic_polynomial_mutation", "decode_bits", "decode_bounds", "decode_sign_magnitude",
+           "niche_counts", "niching_tournament", "run_niching_ga", "sbx_pairs", "sharing_radius"]
 
 #: ``ga-binary`` encodings: the paper's sign + magnitude in degrees, or unsigned bits over the bounds.
 ENCODINGS = ("sign-magnitude", "bounds")
 
 
-# ------------------------------------------------------------------------------------------ real-coded GA
 def sharing_radius(n: int, niches: int) -> float:
     """Paper 001 eq. 8: ``sigma_share = sqrt(n) / (2 r^(1/n))`` in the unit hypercube of n variables."""
     return float(np.sqrt(n) / (2.0 * niches ** (1.0 / n)))
@@ -37,8 +35,7 @@ def niche_counts(Z: np.ndarray, sigma: float) -> np.ndarray:
     of normalized individuals ``Z`` (N, n)."""
     sq = np.einsum("ij,ij->i", Z, Z)
     d2 = np.maximum(sq[:, None] + sq[None, :] - 2.0 * (Z @ Z.T), 0.0)
-    sh = np.maximum(1.0 - np.sqrt(d2) / sigma, 0.0)
-    return sh.sum(axis=1)
+    return np.maximum(1.0 - np.sqrt(d2) / sigma, 0.0).sum(axis=1)
 
 
 def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pairs: np.ndarray,
@@ -50,8 +47,7 @@ def niching_tournament(cost: np.ndarray, nc: np.ndarray, niche_size: float, pair
     by_cost = np.where(cost[b] < cost[a], b, a)
     if not niching:
         return by_cost
-    by_crowd = np.where(nc[b] < nc[a], b, a)
-    return np.where((nc[a] < niche_size) & (nc[b] < niche_size), by_cost, by_crowd)
+    return np.where((nc[a] < niche_size) & (nc[b] < niche_size), by_cost, np.where(nc[b] < nc[a], b, a))
 
 
 def sbx_pairs(P1: np.ndarray, P2: np.ndarray, eta: float, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -68,37 +64,29 @@ def basic_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndarra
     """Paper 001 eq. 11: the basic polynomial mutation (Deb 2000) of the entries of ``X`` (N, n) where ``mask``
     is True, with uniform draws ``u`` (N, n): ``x += delta (upper - lower)``. Its spread ignores the bounds,
     unlike :func:`~.nsga2_minimizer.bounded_polynomial_mutation`."""
-    delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0,
-                     1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
+    delta = np.where(u < 0.5, (2.0 * u) ** (1.0 / (eta + 1.0)) - 1.0, 1.0 - (2.0 * (1.0 - u)) ** (1.0 / (eta + 1.0)))
     return np.where(mask, X + delta * (upper - lower), X)
 
 
-def check_niching_ga_options(population, max_generations, niches, niche_size, eta, crossover_probability
-                             ) -> tuple[int, int, int, float, float, float]:
-    """The niching GA's options (shared by ``ga`` and ``hga``) checked; ``niche_size`` None becomes paper 001's
-    proportion, n* = 200 per 750 individuals."""
-    population = check_int("population", population, 4)
-    max_generations = check_int("max_generations", max_generations, 0)
-    niches = check_int("niches", niches, 1)
-    if niche_size is None:
-        niche_size = 200.0 * population / 750.0
-    niche_size = check_positive("niche_size (n*)", niche_size)
-    eta = check_nonnegative("eta (SBX distribution index)", eta)
-    crossover_probability = check_fraction("crossover_probability", crossover_probability)
-    return population, max_generations, niches, niche_size, eta, crossover_probability
-
-
 def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int, max_generations: int,
-                   niches: int, niche_size: float, eta: float, crossover_probability: float, niching: bool = True,
-                   archive: list | None = None, callback: Callable | None = None
+                   niches: int, niche_size: float | None, eta: float, crossover_probability: float,
+                   niching: bool = True, archive: list | None = None, callback: Callable | None = None
                    ) -> tuple[SolverRun, np.ndarray, np.ndarray]:
     """Paper 001's real-coded GA for exactly ``max_generations`` generations (stopping at the first solution
     would cut the other families short); returns the run and the final population (N, n) with its costs (N,).
 
-    Options as in :func:`ga`, niche distances measured in the unit hypercube of the bounds; ``archive`` (a list)
-    receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value is ignored. History adds
-    ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
+    Options as in :func:`ga` (checked here, for ``ga`` and ``hga``; ``niche_size`` None: paper 001's proportion,
+    n* = 200 per 750 individuals), niche distances measured in the unit hypercube of the bounds; ``archive`` (a
+    list) receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value is ignored.
+    History adds ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
     """
+    population = check_int("population", population, 4)
+    max_generations = check_int("max_generations", max_generations, 0)
+    niches = check_int("niches", niches, 1)
+    niche_size = check_positive("niche_size (n*)", 200.0 * population / 750.0 if niche_size is None else niche_size)
+    eta = check_nonnegative("eta (SBX distribution index)", eta)
+    crossover_probability = check_fraction("crossover_probability", crossover_probability)
+    callback = check_callback(callback)
     n, lo, hi = problem.n, problem.lower, problem.upper
     scale = np.where(hi > lo, hi - lo, 1.0)
     sigma = sharing_radius(n, niches)
@@ -152,11 +140,8 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
         :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche, best
         first (``success=False`` unless within tolerance: the GA alone is approximate; ``hga`` polishes).
     """
-    population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
-        population, max_generations, niches, niche_size, eta, crossover_probability)
     min_niche_fraction = check_fraction("min_niche_fraction", min_niche_fraction)
     max_solutions = check_int("max_solutions", max_solutions)
-    check_callback(callback)
     run, Q, cost = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                   crossover_probability, bool(niching), callback=callback)
     leaders = leader_rows(Q, cost, cluster_radius, problem.robot.revolute,
@@ -167,7 +152,6 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
     return result
 
 
-# ------------------------------------------------------------------------------------------ binary GA
 def _unsigned(bits) -> np.ndarray:
     """The unsigned integers (...) of bit strings ``bits`` (..., B), most significant bit first."""
     bits = np.asarray(bits).astype(np.int64)
@@ -175,9 +159,8 @@ def _unsigned(bits) -> np.ndarray:
 
 
 def decode_sign_magnitude(bits: np.ndarray) -> np.ndarray:
-    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B): ``bits[..., 0]`` the
-    sign (1 = positive), the rest the magnitude, most significant first, ``theta = +-m * 180 / (2^(B-1) - 1)``
-    deg."""
+    """Paper 000's decoding: angles (rad) of sign + magnitude bit strings ``bits`` (..., B): ``bits[..., 0]`` the sign
+    (1 = positive), the rest the magnitude, most significant first, ``theta = +-m * 180 / (2^(B-1) - 1)`` deg."""
     bits = np.asarray(bits)
     m = bits.shape[-1] - 1
     sign = np.where(bits[..., 0] == 1, 1.0, -1.0)
@@ -190,8 +173,7 @@ def decode_bounds(bits: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.
     return lower + _unsigned(bits) / (2 ** np.shape(bits)[-1] - 1) * (upper - lower)
 
 
-def decode_bits(chromosomes: np.ndarray, n: int, encoding: str, lower: np.ndarray,
-                upper: np.ndarray) -> np.ndarray:
+def decode_bits(chromosomes: np.ndarray, n: int, encoding: str, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """Joint vectors (N, n) of chromosomes (N, n * B) under ``encoding``, clipped into the bounds."""
     bits = chromosomes.reshape(chromosomes.shape[0], n, -1)
     Q = decode_sign_magnitude(bits) if encoding == "sign-magnitude" else decode_bounds(bits, lower, upper)
@@ -218,8 +200,7 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
     population = check_int("population", population, 2)
     elite = check_int("elite", elite, 0)
     if elite >= population:
-        raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, "
-                          f"got {elite}")
+        raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, got {elite}")
     max_generations = check_int("max_generations", max_generations, 0)
     bits = check_int("bits (per joint)", bits, 2, 62)
     check_choice("encoding", encoding, ENCODINGS)
@@ -240,13 +221,12 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
         G[0] = ((k.astype(np.int64)[:, None] >> np.arange(bits - 1, -1, -1)) & 1).reshape(-1)
     Q = decode_bits(G, n, encoding, lo, hi)
     ev = problem.evaluate(Q)
-    cost = ev.cost
     run.record(Q, ev)
     n_child = population - elite
     half = (n_child + 1) // 2
     while (reason := run.stop_reason()) is None:
         # Roulette wheel (paper: p_i = f_i / sum f): fitness relative to the best keeps exp() finite.
-        fit = np.exp(-(cost - cost.min()) / fitness_scale)
+        fit = np.exp(-(ev.cost - ev.cost.min()) / fitness_scale)
         parents = rng.choice(population, size=2 * half, p=fit / fit.sum())
         A, B = G[parents[:half]], G[parents[half:]]
         cut = rng.integers(1, length, size=half)
@@ -255,13 +235,12 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
         kids ^= (rng.random(kids.shape) < p_bit).astype(np.uint8)
         Qk = decode_bits(kids, n, encoding, lo, hi)
         evk = problem.evaluate(Qk)
-        keep = np.argsort(cost, kind="stable")[:elite]
+        keep = np.argsort(ev.cost, kind="stable")[:elite]
         G = np.concatenate([G[keep], kids])
         Q = np.concatenate([Q[keep], Qk])
-        cost = np.concatenate([cost[keep], evk.cost])
-        rot = None if ev.orientation_error is None else np.concatenate([ev.orientation_error[keep],
-                                                                        evk.orientation_error])
-        ev = type(ev)(cost, np.concatenate([ev.position_error[keep], evk.position_error]), rot)
+        ev = type(ev)(*(None if a is None else np.concatenate([a[keep], b])
+                        for a, b in zip((ev.cost, ev.position_error, ev.orientation_error),
+                                        (evk.cost, evk.position_error, evk.orientation_error), strict=True)))
         run.generation += 1
         run.record(Q, ev)
     return run.result("ga-binary", reason)

@@ -12,10 +12,10 @@ import numpy as np
 from ...problem import IKProblem
 from ...result import Result
 from .. import register
-from ..options import check_callback, check_int, check_positive
+from ..options import check_int, check_positive
 from .analytic import solution_results
 from .clustering import leader_rows
-from .ga import check_niching_ga_options, run_niching_ga
+from .ga import run_niching_ga
 
 __all__ = ["nelder_mead_polish"]
 
@@ -33,8 +33,7 @@ def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 
     # unbounded for the simplex (a solution at -170 deg reached from +179 deg must not stop on +180) and
     # wrap the result back into the box.
     full_turn = problem.robot.revolute & (hi - lo >= 2 * np.pi - 1e-9)
-    step = np.where(full_turn | (q + simplex_size <= hi), simplex_size, -simplex_size)
-    simplex = np.vstack([q, q + np.diag(step)])
+    simplex = np.vstack([q, q + np.diag(np.where(full_turn | (q + simplex_size <= hi), simplex_size, -simplex_size))])
     simplex = np.where(full_turn, simplex, np.clip(simplex, lo, hi))
     bounds = [(None, None) if f else (a, b) for f, a, b in zip(full_turn, lo, hi, strict=True)]
     from scipy.optimize import minimize  # lazy: importing scipy.optimize costs ~0.4 s
@@ -66,19 +65,15 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         :class:`Result` with ``q`` the best solution and ``solutions`` every distinct polished solution that
         meets the tolerances (a goal list: every goal's), best first; empty, with a message, when none does.
     """
-    population, max_generations, niches, niche_size, eta, crossover_probability = check_niching_ga_options(
-        population, max_generations, niches, niche_size, eta, crossover_probability)
     max_starts = check_int("max_starts", max_starts)
     max_polish_evaluations = check_int("max_polish_evaluations", max_polish_evaluations)
     simplex_size, xatol, fatol, solution_radius = (check_positive(k, v) for k, v in (
         ("simplex_size", simplex_size), ("xatol", xatol), ("fatol", fatol), ("solution_radius", solution_radius)))
-    check_callback(callback)
     archive: list = []
     run, _, _ = run_niching_ga(problem, rng, population, max_generations, niches, niche_size, eta,
                                crossover_probability, archive=archive, callback=callback)
     # every individual the GA evaluated, not only the last generation, which may have drifted away from a family
-    Q = np.concatenate([a[0] for a in archive])
-    cost = np.concatenate([a[1] for a in archive])
+    Q, cost = (np.concatenate(part) for part in zip(*archive, strict=True))
     starts = leader_rows(Q, cost, cluster_radius, problem.robot.revolute, max_clusters=max_starts)
     polished = np.array([nelder_mead_polish(problem, q, simplex_size, xatol, fatol, max_polish_evaluations)
                          for q in starts])
@@ -94,6 +89,5 @@ def hga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, 
         message += (f" (Nelder-Mead over {problem.n} joints rarely meets a goal list's tolerances; memetic-all finds "
                     "the solutions of whole robots)")
     result = run.result("hga", message)
-    result.solutions = solution_results(problem, good, "hga", result.generations, result.evaluations,
-                                        result.time_s)
+    result.solutions = solution_results(problem, good, "hga", result.generations, result.evaluations, result.time_s)
     return result

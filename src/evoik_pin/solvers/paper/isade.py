@@ -1,7 +1,6 @@
 """ISADE (paper 002, section 3.3; ``isade``): DE whose strategy (eqs. 14-16, :func:`isade_donors`, SaDE's
 :func:`strategy_probabilities`), scale factors (eqs. 17-19) and crossover rates (eq. 20, jDE-style, kept with a
-surviving trial) adapt per individual. Paper 002's stop at 1e-17 m is below what double-precision kinematics
-resolves: use 1e-15 m or more.
+surviving trial) adapt per individual. Paper 002's stop at 1e-17 m is below double precision: use 1e-15 m or more.
 """
 
 from __future__ import annotations
@@ -13,14 +12,7 @@ import numpy as np
 from ...problem import IKProblem
 from ...result import Result
 from .. import register
-from ..options import (
-    check_choice,
-    check_fraction,
-    check_int,
-    check_nonnegative,
-    check_number,
-    check_positive,
-)
+from ..options import check_choice, check_fraction, check_int, check_nonnegative, check_number, check_positive
 from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_population, run_with_restarts
 from .de import greedy_selection
 from .de_ops import binomial_crossover, permutation_indices
@@ -34,8 +26,7 @@ ISADE_STRATEGIES = ("best1", "best2", "randtobest1")
 
 def sigmoid_by_rank(N: int, alpha: float) -> np.ndarray:
     """Eq. 17 for ranks i = 1..N: ``F_i = 1 / (1 + exp(alpha (i - N/2) / N))``, shape (N,), decreasing in i."""
-    i = np.arange(1, N + 1)
-    return 1.0 / (1.0 + np.exp(alpha * (i - N / 2) / N))
+    return 1.0 / (1.0 + np.exp(alpha * (np.arange(1, N + 1) - N / 2) / N))
 
 
 def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None = None) -> np.ndarray:
@@ -49,10 +40,9 @@ def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None
 
 
 def mean_scale_factor(generation: int, max_generations: int, F_min: float, F_max: float, n_iter: float) -> float:
-    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter`` for the generation
-    being produced (1..max_generations)."""
-    frac = max(max_generations - generation, 0) / max(max_generations, 1)
-    return F_min + (F_max - F_min) * frac**n_iter
+    """Eq. 18: ``F_mean = F_min + (F_max - F_min) ((iter_max - iter) / iter_max) ** n_iter`` for the generation being
+    produced (1..max_generations)."""
+    return F_min + (F_max - F_min) * (max(max_generations - generation, 0) / max(max_generations, 1)) ** n_iter
 
 
 def scale_factors(F_rank: np.ndarray, F_mean: float) -> np.ndarray:
@@ -70,8 +60,7 @@ def adapt_crossover_rates(CR: np.ndarray, u1: np.ndarray, u2: np.ndarray, tau: f
 def strategy_probabilities(successes: np.ndarray, trials: np.ndarray, floor: float = 0.01) -> np.ndarray:
     """SaDE's strategy probabilities (K,): ``p_k`` proportional to ``successes_k / trials_k + floor`` over one
     learning period's counts (K,); a strategy not tried counts as fully successful, so it gets tried."""
-    rate = (np.asarray(successes, float) + 1e-12) / (np.asarray(trials, float) + 1e-12)
-    w = rate + floor
+    w = (np.asarray(successes, float) + 1e-12) / (np.asarray(trials, float) + 1e-12) + floor
     return w / w.sum()
 
 
@@ -88,8 +77,7 @@ def isade_donors(X: np.ndarray, F: np.ndarray, E: np.ndarray, strategy: np.ndarr
     """Donors (N, D) of population ``X`` (N, D) with scale factors ``F`` (N,) and a per-individual ``strategy``
     (N,): 0 = DE/best/1 (eq. 14), 1 = DE/best/2 (eq. 15), 2 = DE/rand-to-best/1 (eq. 16). ``E`` (N, 5): distinct
     random others r1..r4 in columns 0-3, the best individual in column 4. All from one gather."""
-    N = X.shape[0]
-    G = X[E[np.arange(N)[:, None], _DONOR_TEMPLATE[strategy]]]  # (N, 5, D)
+    G = X[E[np.arange(X.shape[0])[:, None], _DONOR_TEMPLATE[strategy]]]  # (N, 5, D)
     return G[:, 0] + F[:, None] * ((G[:, 1] - G[:, 2]) + (G[:, 3] - G[:, 4]))
 
 

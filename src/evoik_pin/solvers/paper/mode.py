@@ -1,12 +1,10 @@
-"""Paper 000's multi-objective differential evolution (``mode``), Pseudocode 1.
-
-Two minimized objectives of a configuration q (section IV): ``f1 = 1 - exp(-||P - P_e(q)|| / l)`` (position
-error, l = ``length_scale``) and ``f2 = max_k |q_k - q_init,k|`` (rad; q_init = ``problem.q0`` or zeros),
-combined as ``w1 f1 + w2 f2`` with Gabli et al.'s equitable weights (:func:`equitable_weights`) of the previous
-generation's individual closest to the target. Per individual: a draw m; if ``m < P_m`` a trigonometric donor
-(``m <= Mt``) or DE/rand/1, crossed binomially (or whole, the "fixed" variant) with probability ``P_c``; greedy
-selection under the current weights. ``P_c``, ``P_m`` adapt as in Zhao & Qiao (:func:`adaptive_probability`).
-The paper gives no Mt; the default 0.125 and the readings not adopted are measured in docs/BENCHMARKS.md.
+"""Paper 000's multi-objective differential evolution (``mode``, Pseudocode 1): minimized objectives (section IV)
+``f1 = 1 - exp(-||P - P_e(q)|| / l)`` (l = ``length_scale``) and ``f2 = max_k |q_k - q_init,k|`` (rad; q_init =
+``problem.q0`` or zeros), combined as ``w1 f1 + w2 f2`` with Gabli et al.'s equitable weights
+(:func:`equitable_weights`) of the previous generation's individual closest to the target. Per individual: a draw
+m; if ``m < P_m`` a trigonometric donor (``m <= Mt``) or DE/rand/1, crossed binomially (or whole, the "fixed"
+variant) with probability ``P_c``; greedy selection under the current weights. ``P_c``, ``P_m`` adapt as in Zhao &
+Qiao (:func:`adaptive_probability`). The paper gives no Mt: the default 0.125 is measured in docs/BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -53,31 +51,21 @@ def adaptive_probability(cost: np.ndarray, C: float) -> np.ndarray:
 
 
 def nondominated_2d(F: np.ndarray) -> np.ndarray:
-    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized), sorted by the first objective; exact
-    duplicates keep one."""
+    """Indices of the non-dominated rows of ``F`` (M, 2) (both minimized) by the first objective, one per duplicate."""
     order = np.lexsort((F[:, 1], F[:, 0]))
     f2 = F[order, 1]
     prev_min = np.concatenate([[np.inf], np.minimum.accumulate(f2)[:-1]])
     return order[f2 < prev_min]
 
 
-class _Archive:
-    """The non-dominated (position error, max displacement) set met during a run, at most ``size`` points."""
-
-    def __init__(self, size: int) -> None:
-        self.size = size
-        self.Q = np.empty((0, 0))
-        self.F = np.empty((0, 2))
-
-    def add(self, Q: np.ndarray, F: np.ndarray) -> None:
-        Q = np.concatenate([self.Q, Q]) if self.Q.size else Q
-        F = np.concatenate([self.F, F])
-        keep = nondominated_2d(F)
-        if keep.size > self.size:
-            # Thin a crowded front by crowding distance (Deb 2002), keeping its extremes.
-            cd = crowding_distance(F[keep])
-            keep = keep[np.sort(np.argsort(-cd, kind="stable")[: self.size])]
-        self.Q, self.F = Q[keep], F[keep]
+def _merge_front(front: tuple[np.ndarray, np.ndarray], Q: np.ndarray, F: np.ndarray, size: int):
+    """The non-dominated rows of ``front`` (configurations (M, n), objectives (M, 2)) and the new ``Q``, ``F``, as
+    such a pair of at most ``size`` rows (a crowded front thinned by crowding distance, Deb 2002, extremes kept)."""
+    Q, F = np.concatenate([front[0], Q]), np.concatenate([front[1], F])
+    keep = nondominated_2d(F)
+    if keep.size > size:
+        keep = keep[np.sort(np.argsort(-crowding_distance(F[keep]), kind="stable")[:size])]
+    return Q[keep], F[keep]
 
 
 @register("mode", "paper 000: multi-objective DE (position error and max joint displacement, equitable "
@@ -95,14 +83,12 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         mutation_probability: M. crossover_rate: Cr. scale_factor: F. trigonometric_probability: Mt.
         adaptive: Zhao & Qiao's adaptive P_c and P_m; False keeps P_c = Cr and P_m = M.
         bound_handling: ``"clip"``, ``"reflect"`` or ``"resample"`` for donors outside the bounds.
-        front_size: at most this many points kept in the non-dominated archive.
-        length_scale: l (m) of ``f1``.
+        front_size: at most this many points kept in the non-dominated archive. length_scale: l (m) of ``f1``.
 
     Returns:
         :class:`Result` with ``q`` the final generation's best weighted individual (the paper's ``argmax f``),
-        ``front`` the non-dominated (position error m, max displacement rad) met during the run, and history
-        series ``w1``, ``w2``, ``best_fitness`` (least weighted cost), ``best_position_error`` (m),
-        ``best_displacement`` (rad).
+        ``front`` the non-dominated (position error m, max displacement rad) met in the run, and history series
+        ``w1``, ``w2``, ``best_fitness`` (least weighted cost), ``best_position_error`` m, ``best_displacement`` rad.
     """
     population = check_int("population", population, 5)
     max_generations = check_int("max_generations", max_generations, 0)
@@ -116,8 +102,7 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     length_scale = check_positive("length_scale", length_scale, unit="m")
     crossover, use_trig = VARIANTS[variant]
 
-    q_init = np.zeros(problem.n) if problem.q0 is None else problem.q0
-    displacement = MaxJointDisplacement(q_init)
+    displacement = MaxJointDisplacement(np.zeros(problem.n) if problem.q0 is None else problem.q0)
 
     def objectives(Q):
         """Evaluation, objectives (N, 2) f1, f2, and the front's (position error m, f2 rad)."""
@@ -126,11 +111,10 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         return ev, np.column_stack([1.0 - np.exp(-raw[:, 0] / length_scale), raw[:, 1]]), raw
 
     run = SolverRun(problem, max_generations)
-    archive = _Archive(front_size)
     X = initial_population(problem, rng, population)
     ev, Fx, raw = objectives(X)
     pos, rot, disp = ev.position_error, ev.orientation_error, raw[:, 1]
-    archive.add(X, raw)
+    archive = _merge_front((X[:0], raw[:0]), X, raw, front_size)  # the non-dominated points met in the run
     w = np.array([0.5, 0.5])  # Pseudocode 1, step 2
     cost = Fx @ w
     best = int(np.argmin(pos))
@@ -143,10 +127,7 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     while (reason := run.stop_reason()) is None:
         w = equitable_weights(Fx[best], w)
         cost = Fx @ w
-        if adaptive:
-            P_m, P_c = adaptive_probability(cost, M), adaptive_probability(cost, Cr)
-        else:
-            P_m, P_c = np.full(population, M), np.full(population, Cr)
+        P_m, P_c = (adaptive_probability(cost, c) if adaptive else np.full(population, c) for c in (M, Cr))
         m = rng.random(population)
         mutated = m < P_m
         idx = distinct_indices(rng, population, 3)
@@ -156,15 +137,13 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
             if trig.any():
                 V[trig] = trigonometric(X, cost, idx[trig])
         u, jrand = rng.random(X.shape), rng.integers(0, problem.n, population)
-        if crossover == "binomial":
-            U = binomial_crossover(X, V, P_c, u, jrand)
-        else:
-            U = np.where((u[:, 0] < P_c)[:, None], V, X)
+        U = (binomial_crossover(X, V, P_c, u, jrand) if crossover == "binomial"
+             else np.where((u[:, 0] < P_c)[:, None], V, X))  # "fixed": the whole donor
         changed = mutated & np.any(U != X, axis=1)
         if changed.any():
             trial = enforce_bounds(U[changed], problem, rng, bound_handling)
             ev_t, F_t, raw_t = objectives(trial)
-            archive.add(trial, raw_t)
+            archive = _merge_front(archive, trial, raw_t, front_size)
             better = F_t @ w <= cost[changed]
             rows = np.nonzero(changed)[0][better]
             X[rows], Fx[rows], pos, disp = trial[better], F_t[better], pos.copy(), disp.copy()
@@ -181,7 +160,6 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
     final = int(np.argmin(cost))
     run.best_cost = np.inf
     run.offer(X[final], Evaluation(cost, pos, rot), final)
-    result = run.result("mode", reason)
-    order = np.argsort(archive.F[:, 0], kind="stable")
-    result.front = Front(q=archive.Q[order], objectives=archive.F[order], violation=np.zeros(len(order)))
-    return result
+    order = np.argsort(archive[1][:, 0], kind="stable")
+    return run.result("mode", reason,
+                      front=Front(q=archive[0][order], objectives=archive[1][order], violation=np.zeros(len(order))))

@@ -1,8 +1,7 @@
-"""Paper 003's NSGA-II IK method (``nsga2``) on the generic :func:`~.nsga2_minimizer.nsga2_minimize`: objectives
-``g = 1 / (Y + 1)`` (Yoshikawa manipulability of the task rows) and the smoothness ``S``, the pose equality as a
-constraint, every new individual repaired by :func:`~.task_repair.dls_repair`; also for goal lists
-(:class:`GoalManipulability`, :func:`goal_task`). The minimizer's and the sorting's names are re-exported here.
-"""
+"""Paper 003's NSGA-II IK method (``nsga2``) on :func:`~.nsga2_minimizer.nsga2_minimize` (whose names and the
+sorting's are re-exported here): objectives ``g = 1 / (Y + 1)`` (Yoshikawa manipulability of the task rows) and the
+smoothness ``S``, the pose equality a constraint, new individuals repaired by :func:`~.task_repair.dls_repair`;
+also for goal lists (:class:`GoalManipulability`, :func:`goal_task`)."""
 
 from __future__ import annotations
 
@@ -49,26 +48,20 @@ class GoalManipulability(Objective):
                             for f, r in zip(self.frames, self.rows, strict=True)], axis=1)
         M = J @ J.transpose(0, 2, 1) if J.shape[1] <= J.shape[2] else J.transpose(0, 2, 1) @ J
         Y = np.sqrt(np.maximum(np.linalg.det(M), 0.0))
-        if self._form == "inverse":
-            return 1.0 / (Y + 1.0)
-        return -Y if self._form == "negative" else Y
+        return 1.0 / (Y + 1.0) if self._form == "inverse" else -Y if self._form == "negative" else Y
 
     def __repr__(self) -> str:
         return f"GoalManipulability(frames={self.frames!r}, rows={self.rows!r}, form={self._form!r})"
 
 
 def _chosen_goals(problem: IKProblem, which) -> list[int]:
-    """Indices of the goals ``which`` names (indices or frames of the goal list; None: every goal), or
-    OptionError."""
+    """Indices of the goals ``which`` names (indices or frames of the goal list; None: all), or OptionError."""
     goals = problem.goals
     if which is None:
         return list(range(len(goals)))
     frames = [g.frame for g in goals]
     picked: list[int] = []
-    try:
-        listed = [which] if isinstance(which, (str, int, np.integer)) else list(which)
-    except TypeError:
-        listed = [which]  # refused below, by name
+    listed = list(which) if np.iterable(which) and not isinstance(which, str) else [which]
     for w in listed:
         if isinstance(w, str) and w in frames:
             picked.append(frames.index(w))
@@ -131,8 +124,7 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     Returns:
         :class:`Result` whose ``front`` holds the first front sorted by the first objective (violation = errors
         above the tolerances, m + rad) and whose ``q`` is its feasible member with the least objective ``pick``
-        (the least violation when none is feasible). History adds ``front_size``, ``feasible_fraction``,
-        ``min_violation``.
+        (else the least violation). History adds ``front_size``, ``feasible_fraction``, ``min_violation``.
     """
     robot = problem.robot
     repair_steps = check_int("repair_steps", repair_steps, 0)
@@ -154,13 +146,12 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         if goals:
             manipulability, fixed_goal_rows = _goal_manipulability(problem, manipulability_goals)
         else:
-            if manipulability_rows is None:
+            rows = manipulability_rows
+            if rows is None:
                 rows, fixed_rows = _movable_rows(problem, _task_rows(problem))
                 if not rows:
                     raise OptionError("the chain cannot move its tip along any row of the task; give "
                                       "manipulability_rows=[...] or objectives=[...]")
-            else:
-                rows = manipulability_rows
             robot.task_rows(rows)  # validates names and indices with a clear error
             manipulability = ManipulabilityCost(rows, "inverse")
         objectives = [manipulability, WeightedJointDisplacement(q_prev, gains)]
@@ -199,27 +190,21 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
         run.history["mean_cost"].append(float(np.mean(F[:, pick])))
         run.history["diversity"].append(diversity(X, problem.lower, problem.upper))
 
-    first_repair = None if repair_steps == 0 else 4 * repair_steps
     out = nsga2_minimize(
         f, problem.lower, problem.upper, k, rng, population=population, generations=max_generations, eta_c=eta_c,
         eta_m=eta_m, crossover_probability=crossover_probability, mutation_probability=mutation_probability,
-        initial=init if first_repair is None else repair(init, first_repair),
-        repair=None if repair_steps == 0 else (lambda Y: repair(Y, repair_steps)),
-        callback=callback)
+        initial=init if repair_steps == 0 else repair(init, 4 * repair_steps),
+        repair=None if repair_steps == 0 else (lambda Y: repair(Y, repair_steps)), callback=callback)
     run.generation = out.generations
-    front = out.front
-    order = front[np.argsort(out.F[front, 0], kind="stable")]
+    order = out.front[np.argsort(out.F[out.front, 0], kind="stable")]
     feasible = order[out.violation[order] <= 0]
-    chosen = (feasible[np.argmin(out.F[feasible, pick])] if feasible.size
-              else order[np.argmin(out.violation[order])])
+    chosen = feasible[np.argmin(out.F[feasible, pick])] if feasible.size else order[np.argmin(out.violation[order])]
     run.best_q = out.X[chosen].copy()
     run.history["best_cost"] = best_pick
     run.history.update({key: list(v) for key, v in out.history.items()})
-    if feasible.size:
-        message = f"{max_generations} generations; {len(order)} point(s) on the front, all feasible"
-    else:
-        message = (f"{max_generations} generations; no individual meets "
-                   + ("every goal" if goals else "the pose constraint"))
+    message = f"{max_generations} generations; " + (
+        f"{len(order)} point(s) on the front, all feasible" if feasible.size
+        else "no individual meets " + ("every goal" if goals else "the pose constraint"))
     if fixed_rows:
         names = ", ".join(ROW_NAMES[r] for r in fixed_rows)
         message += f"; manipulability on Jacobian rows {rows}: the chain never moves its tip along {names}"

@@ -16,7 +16,6 @@ from .pareto_sorting import _tournament, _tournament_pairs, survival
 __all__ = ["NSGA2Result", "bounded_polynomial_mutation", "nsga2_minimize", "sbx"]
 
 
-# ---------------------------------------------------------------------------------------------- operators
 def sbx(P1: np.ndarray, P2: np.ndarray, lower: np.ndarray, upper: np.ndarray, eta: float, rng: np.random.Generator,
         crossover_probability: float = 0.9, variable_probability: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
     """Bounded simulated binary crossover (Deb's NSGA-II code) of parents (M, n): each pair crosses with
@@ -53,8 +52,7 @@ def bounded_polynomial_mutation(X: np.ndarray, lower: np.ndarray, upper: np.ndar
     power = 1.0 / (eta + 1.0)
     left = (2.0 * u + (1.0 - 2.0 * u) * (1.0 - d1) ** (eta + 1.0)) ** power - 1.0
     right = 1.0 - (2.0 * (1.0 - u) + 2.0 * (u - 0.5) * (1.0 - d2) ** (eta + 1.0)) ** power
-    delta = np.where(u < 0.5, left, right)
-    return np.clip(np.where(mask, X + delta * width, X), lower, upper)
+    return np.clip(np.where(mask, X + np.where(u < 0.5, left, right) * width, X), lower, upper)
 
 
 def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
@@ -67,7 +65,6 @@ def _duplicate_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     return ~unique[X.shape[0]:]
 
 
-# ---------------------------------------------------------------------------------------------- generic loop
 @dataclass
 class NSGA2Result:
     """Outcome of :func:`nsga2_minimize`: final population ``X`` (N, n), objectives ``F`` (N, k), ``violation``

@@ -1,6 +1,5 @@
-"""NSGA-II's sorting and selection (Deb et al. 2002), vectorized over the population: constraint domination,
-non-dominated sorting, crowding distance, survival and crowded tournaments. ``F`` (N, k) minimized, ``violation``
-(N,) >= 0 (0 = feasible).
+"""NSGA-II's sorting and selection (Deb et al. 2002), vectorized: constraint domination, non-dominated sorting,
+crowding distance, survival, crowded tournaments. ``F`` (N, k) minimized, ``violation`` (N,) >= 0 (0 = feasible).
 """
 
 from __future__ import annotations
@@ -111,8 +110,7 @@ def _tournament_pairs(size: int, count: int, rng: np.random.Generator) -> np.nda
     """``count`` tournament pairs (count, 2) over ``size`` individuals, read off consecutive random
     permutations as in Deb's reference code: for ``count = size`` (even) every individual enters exactly
     two tournaments and never meets itself."""
-    k = -(-2 * count // size)
-    perms = np.argsort(rng.random((k, size)), axis=1).reshape(-1)
+    perms = np.argsort(rng.random((-(-2 * count // size), size)), axis=1).reshape(-1)
     return perms[: 2 * count].reshape(count, 2)
 
 

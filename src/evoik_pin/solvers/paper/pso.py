@@ -86,8 +86,7 @@ def pso(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, m
     check_choice("topology", topology, TOPOLOGIES)
     check_choice("random_factors", random_factors, RANDOM_FACTORS)
     r_shape = (2, N, problem.n) if random_factors == "per-coordinate" else (2, N, 1)
-    if reinit_stagnant is not None:
-        reinit_stagnant = check_int("reinit_stagnant", reinit_stagnant)
+    reinit_stagnant = None if reinit_stagnant is None else check_int("reinit_stagnant", reinit_stagnant)
 
     def once(run: SolverRun) -> Result:
         D = problem.n

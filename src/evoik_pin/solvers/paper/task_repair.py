@@ -1,5 +1,4 @@
-"""Paper 003's repair: damped-least-squares Newton steps towards the target, all individuals at once
-(:func:`dls_repair`)."""
+"""Paper 003's repair: damped-least-squares steps towards the target, all individuals at once (:func:`dls_repair`)."""
 
 from __future__ import annotations
 
@@ -22,11 +21,9 @@ def _task_rows(problem: IKProblem) -> list[int]:
 
 def _movable_rows(problem: IKProblem, rows: list[int], frame: str | None = None) -> tuple[list[int], list[int]]:
     """Split Jacobian ``rows`` of ``frame`` (default the tip) into those the chain moves it along and those it never
-    does (zero at 64 configurations spread over the box, e.g. vz of a planar chain: they would make the
-    manipulability 0 everywhere)."""
+    does (zero at 64 configurations spread over the box, e.g. vz of a planar chain: manipulability 0 everywhere)."""
     Q = problem.lower + halton(problem.n, 64, skip=1) * (problem.upper - problem.lower)
-    J = problem.robot.jacobian_batch(Q, validate=False, frame=frame)[:, rows]
-    moving = np.abs(J).max(axis=(0, 2)) > 1e-12
+    moving = np.abs(problem.robot.jacobian_batch(Q, validate=False, frame=frame)[:, rows]).max(axis=(0, 2)) > 1e-12
     return [r for r, m in zip(rows, moving, strict=True) if m], [r for r, m in zip(rows, moving, strict=True) if not m]
 
 
