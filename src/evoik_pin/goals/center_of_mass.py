@@ -64,16 +64,10 @@ class CenterOfMass(Goal):
         kind = KIND_COM if support is None else KIND_COM_SUPPORT
         self._init_common(None, weight, tolerance, None, kind, False, "the centre-of-mass goal")
         if support is None:
-            object.__setattr__(self, "point", point3(point, "CenterOfMass's point"))
-            object.__setattr__(self, "axes", _axes(axes))
-            object.__setattr__(self, "support", None)
-            object.__setattr__(self, "margin", 0.0)
+            self._set(point=point3(point, "CenterOfMass's point"), axes=_axes(axes), support=None, margin=0.0)
         else:
-            object.__setattr__(self, "point", None)
-            object.__setattr__(self, "axes", "xy")
-            object.__setattr__(self, "support", _support(support))
-            object.__setattr__(self, "margin", goal_number(margin, "margin (m) of the centre-of-mass support goal",
-                                                           "a finite number >= 0", 0.0))
+            self._set(point=None, axes="xy", support=_support(support), margin=goal_number(
+                margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0", 0.0))
 
     @property
     def frames(self) -> list[str]:

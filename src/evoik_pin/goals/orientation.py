@@ -49,7 +49,7 @@ class Orientation(Goal):
             R = _rotation(target)
         except TargetError as exc:
             raise TargetError(f"{where} takes a 3 x 3 rotation, a pin.SE3 or a 4 x 4 pose: {exc}") from None
-        object.__setattr__(self, "target", np.array(R))
+        self._set(target=np.array(R))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(3), self.target.copy()

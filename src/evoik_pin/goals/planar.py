@@ -50,16 +50,12 @@ class Planar(Goal):
         if not all(math.isfinite(v) for v in values):
             raise TargetError(f"{where} takes finite numbers x, y (m) and yaw (rad) or None, got "
                               f"{x!r}, {y!r}, {yaw!r}")
-        object.__setattr__(self, "target", np.array([values[0], values[1], values[2] if yaw is not None else 0.0]))
-        object.__setattr__(self, "yaw", None if yaw is None else values[2])
+        self._set(target=np.array([values[0], values[1], values[2] if yaw is not None else 0.0]),
+                  yaw=None if yaw is None else values[2])
         self._set_aux(None)
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)
-
-    def errors(self, T: pin.SE3) -> tuple[float, float | None]:
-        pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], None, None)
-        return float(pos[0]), (float(rot[0]) if self.yaw is not None else None)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:
         """(distances (N,) m in the base xy-plane, |wrapped heading differences| (N,) rad, 0 without a yaw) of frame

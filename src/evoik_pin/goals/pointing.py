@@ -53,9 +53,9 @@ class _Pointing(Goal):
         name = type(self).__name__
         # rad; the position error (None) is unused
         self._init_common(frame, weight, tolerance, tolerance, self.KIND_CODES[0].code, False)
-        object.__setattr__(self, "axis", unit_vector(axis, f"{name} on {frame!r}: axis"))
         where = f"{name} on {frame!r}: {self.TARGET}"
-        object.__setattr__(self, self.TARGET, point3(target, where) if self.has_point else unit_vector(target, where))
+        self._set(axis=unit_vector(axis, f"{name} on {frame!r}: axis"),
+                  **{self.TARGET: point3(target, where) if self.has_point else unit_vector(target, where)})
         aux = np.zeros(AUX_SIZE)
         aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
         self._set_aux(aux)

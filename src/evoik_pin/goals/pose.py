@@ -71,7 +71,7 @@ class Pose(Goal):
             free = self.free or None
             return init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance, free),
                             "Pose poses")
-        object.__setattr__(self, "target", se3_target(target, f"Pose on {frame!r}"))
+        self._set(target=se3_target(target, f"Pose on {frame!r}"))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)

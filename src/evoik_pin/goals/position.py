@@ -51,7 +51,7 @@ class Position(Goal):
         if p.shape != (3,) or not np.isfinite(p).all():
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m) of finite numbers (not NaN or inf; "
                               f"Pose({frame!r}, T) for a pose), got {target!r} (shape {p.shape})")
-        object.__setattr__(self, "target", p.copy())
+        self._set(target=p.copy())
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)

@@ -1,28 +1,19 @@
-"""Preferences: members of a goal list that are not goals, met as well as the goals allow and never at their
-expense (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``): costs over configurations (lower is better) that a
-solve lowers once the goals are met and ranks its answers by (:func:`evoik_pin.solvers.search.prefer.refine`).
-Differences on joints whose range spans a full turn are taken to the nearest turn.
-
-* :class:`Posture`: ``weight / 2 * |q - q_ref|^2`` over the joints ``q_ref`` names (rad^2, m^2);
-* :class:`JointLimitMargin`: ``weight / 2 * sum max(0, margin - distance to a limit)^2``;
-* :class:`Manipulability`: ``-weight * log(w)``, w the product of the singular values of a frame's 6 x n
-  Jacobian (LOCAL_WORLD_ALIGNED);
-* :class:`MinimalDisplacement`: ``weight / 2 * |q - q0|^2`` from the solve's ``q0``.
-"""
+"""Preferences: members of a goal list that are not goals (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``):
+costs over configurations (lower is better) a solve lowers once the goals are met, never at their expense, and ranks
+its answers by (:func:`evoik_pin.solvers.search.prefer.refine`). Differences on joints whose range spans a full turn
+are taken to the nearest turn."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import ConfigurationError, FrameError, OptionError
+from ..lie import wrap_angle
 from ..robot.robot import yoshikawa
 from .goal import Goal, number
 
 __all__ = ["JointLimitMargin", "Manipulability", "MinimalDisplacement", "Posture", "Preference", "check_preferences",
            "holds_preferences", "split_preferences"]
-
-TWO_PI = 2.0 * np.pi
-
 
 def _weight(value, what: str) -> float:
     return number(value, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
@@ -31,7 +22,7 @@ def _weight(value, what: str) -> float:
 def turn_difference(q: np.ndarray, ref: np.ndarray, wrap: np.ndarray) -> np.ndarray:
     """``q - ref`` (n,), on the ``wrap`` joints (bool (n,)) taken to the nearest turn, in [-pi, pi)."""
     d = q - ref
-    return np.where(wrap, (d + np.pi) % TWO_PI - np.pi, d)
+    return np.where(wrap, wrap_angle(d), d)
 
 
 class Preference:

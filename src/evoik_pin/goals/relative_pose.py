@@ -9,7 +9,7 @@ import numpy as np
 from ..lie import relative_angle
 from .bands import AXES, band_errors, pose_text
 from .file_entries import FileKind, matrix_text, pair_kind, pose_target
-from .goal import DEFAULT_GOAL_TOLERANCE, FramePair, Goal, pack_frame_pair
+from .goal import DEFAULT_GOAL_TOLERANCE, FramePair, Goal
 from .pose import se3_target
 from .registry import BANDED_LOG6, FAMILY_BEYOND_FRAME, RELATIVE_BANDED_LOG6, RELATIVE_LOG6, KindCode
 
@@ -53,15 +53,10 @@ class RelativePose(FramePair, Goal):
         self._init_axes(frame_b, weight, tolerance, rotation_tolerance, free, AXES,
                         (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES), where)
         self._init_pair(frame_a, frame_b, "RelativePose")
-        object.__setattr__(self, "target", se3_target(target, where))
+        self._set(target=se3_target(target, where))
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return np.array(self.target.translation), np.array(self.target.rotation)
-
-    def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) on ``robot`` (:func:`.goal.pack_frame_pair`, with the bands). Raises
-        FrameError for an unknown frame or two frames no joint moves apart."""
-        return pack_frame_pair(robot, self.frame_a, self.frame, self.aux())
 
     @classmethod
     def file_kind(cls) -> FileKind:

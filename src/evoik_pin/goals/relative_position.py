@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import OptionError
 from .file_entries import FileKind, pair_kind, position_target, position_text
-from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, FramePair, Goal, pack_frame_pair, point3
+from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, FramePair, Goal, point3
 from .registry import FAMILY_BEYOND_FRAME, RELATIVE_POINT_IN_A, RELATIVE_POINT_WORLD, KindCode
 
 __all__ = ["EXPRESSED_IN", "KIND_RELATIVE_POSITION", "KIND_RELATIVE_POSITION_IN_A", "RelativePosition"]
@@ -53,8 +53,7 @@ class RelativePosition(FramePair, Goal):
         if not self.tolerance > 0:
             raise OptionError(f"tolerance (m) of the RelativePosition of {frame_b!r} from {frame_a!r} must be > 0, "
                               f"got {tolerance!r}")
-        object.__setattr__(self, "expressed_in", expressed_in)
-        object.__setattr__(self, "target", point3(p, f"RelativePosition of {frame_b!r} from {frame_a!r}: p"))
+        self._set(expressed_in=expressed_in, target=point3(p, f"RelativePosition of {frame_b!r} from {frame_a!r}: p"))
 
     @property
     def p(self) -> np.ndarray:
@@ -64,11 +63,11 @@ class RelativePosition(FramePair, Goal):
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return self.target.copy(), np.eye(3)
 
-    def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) on ``robot`` (:func:`.goal.pack_frame_pair`). In the world's axes
-        a joint moving both frames turns the vector (its sign :data:`.goal.BOTH`); in frame a's it moves them
-        together (0). Raises FrameError for an unknown frame or two frames no joint moves apart."""
-        return pack_frame_pair(robot, self.frame_a, self.frame, both=BOTH if self.expressed_in == "world" else 0.0)
+    @property
+    def both(self) -> float:
+        """In the world's axes a joint moving both frames turns the vector (:data:`.goal.BOTH`); in frame a's it
+        moves them together (0)."""
+        return BOTH if self.expressed_in == "world" else 0.0
 
     def placement_errors(self, Ra, d, Rb) -> tuple[np.ndarray, np.ndarray]:
         """(|e| (N,) m, zeros (N,)): e the vector p_b - p_a, in the axes ``expressed_in`` names, minus ``p``."""

@@ -1,10 +1,6 @@
-"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:class:`GoalStack`; :func:`bind`
-checks a goal list against a robot and packs it), and the targets' encoding as ``pt`` (3,), ``Rt`` (3, 3)
-(:func:`encode_target`; many at once: :class:`GoalArrays`, :class:`TargetArrays`).
-
-The kernel reads a goal's row count, family and angle flag from its spec, filled here from its kind's declaration
-(:mod:`.registry`), never from the registry's tables: numba's disk cache would not see another module's tables change.
-"""
+"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:class:`GoalStack`, :func:`bind`),
+and the targets' encoding as ``pt`` (3,), ``Rt`` (3, 3) (:func:`encode_target`, :class:`TargetArrays`). A goal's spec
+holds its kind's declaration (:mod:`.registry`): numba's disk cache would not see the registry's tables change."""
 
 from __future__ import annotations
 
@@ -16,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, LockedJointsError, TargetError
+from ..robot.frames import listed
 from .goal import Goal
 from .planar import KIND_PLANAR, KIND_PLANAR_YAW, Planar
 from .pose import KIND_POSE, Pose
@@ -37,7 +34,6 @@ __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_
 #: and 1.0 when its errors include an angle.
 G_KIND, G_JOINT, G_WEIGHT, G_TOL, G_RTOL, G_ROW, G_ROWS, G_FAMILY, G_ANGLE = range(9)
 GOAL_SIZE = 9
-
 
 
 def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_tolerance: float,
@@ -75,16 +71,10 @@ def encode_target(target) -> tuple[np.ndarray, np.ndarray]:
 
 
 def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
-    """``(P (N, 3), Rts (N, 3, 3))`` of N targets of one kind, for the kernel's batch entry points."""
-    N = len(targets)
-    t0 = targets[0]
-    if t0.planar:
-        P = np.array([[t.position[0], t.position[1], t.yaw or 0.0] for t in targets], dtype=float)
-        return P, np.repeat(np.eye(3)[None], N, axis=0)
-    P = np.ascontiguousarray([t.position for t in targets], dtype=float)
-    if t0.rotation is None:
-        return P, np.repeat(np.eye(3)[None], N, axis=0)
-    return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
+    """``(P (N, 3), Rts (N, 3, 3))`` of N targets of one kind (:func:`encode_target` each), for the kernel's batch
+    entry points."""
+    P, Rts = zip(*map(encode_target, targets), strict=True)
+    return np.array(P, dtype=float), np.array(Rts, dtype=float)
 
 
 class _Rows:
@@ -153,8 +143,7 @@ class GoalStack:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
-        if self.aux is None:
-            object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)))
+        object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)) if self.aux is None else self.aux)
 
     @property
     def arrays(self) -> tuple:
@@ -386,9 +375,8 @@ def _check_not_base_only(robot, frame: str) -> None:
     if not locked:
         return
     tips = ", ".join(map(repr, robot.tips))
-    shown = ", ".join(locked[:12]) + (f", ... ({len(locked) - 12} more)" if len(locked) > 12 else "")
     raise LockedJointsError(
         f"only the floating base moves frame {frame!r} of {robot.name}: the joints between the root and it are "
-        f"locked ({shown}), so the base alone would have to reach it. Free them when loading the robot: "
+        f"locked ({listed(locked, 12)}), so the base alone would have to reach it. Free them when loading the robot: "
         f"tips=[{tips}, {frame!r}] (the chains to each), joints=[...] naming them with the others to keep free, "
         f"or tips='all' (the whole tree; what a branching URDF gets without tip=/tips=)")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import BoundsError, ConfigurationError, RobotLoadError
+from .frames import listed
 from .joints import DEFAULT_PRISMATIC_RANGE, joint_limits
 
 __all__ = ["NEAR_UNBOUNDED", "JointBounds"]
@@ -84,9 +85,8 @@ class JointBounds:
         """``q`` as a float array of shape (n,), or a ConfigurationError naming the problem."""
         arr = np.asarray(q, dtype=float)
         if arr.ndim != 1 or arr.shape[0] != self.n:
-            names = ", ".join(self.joint_names) if self.n <= 12 else ", ".join(self.joint_names[:12]) + ", ..."
-            raise ConfigurationError(f"{self.name} has {self.n} joints ({names}); got a joint vector of shape "
-                                     f"{arr.shape}, expected ({self.n},)")
+            raise ConfigurationError(f"{self.name} has {self.n} joints ({listed(self.joint_names, 12)}); got a joint "
+                                     f"vector of shape {arr.shape}, expected ({self.n},)")
         if not np.isfinite(arr).all():  # the method: np.all's dispatch costs about a microsecond per solve
             raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
         return arr

@@ -1,18 +1,6 @@
 """Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS, also for files
-copied out of their workspace. :class:`PackageResolver` finds ``pkg`` for one robot file, first match wins:
-
-a. the folders the user gives (``load_robot(path, package_dirs=[...])``, ``--package-dir DIR``),
-b. the folders of ``ROS_PACKAGE_PATH`` (read at each load, not once per process),
-c. the file's own tree: a folder named ``pkg`` among the file's ancestor folders, or inside one of them (beside
-   the file or beside one of its ancestors), nearest first; no ``package.xml`` needed,
-d. a ``package.xml`` whose ``<name>`` is ``pkg`` in the file's folder or above it (ROS's rule, and xacrodoc's).
-
-In a folder ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself when it is named ``pkg``, or a folder up to
-:data:`CRAWL_DEPTH` levels below ``D`` whose ``package.xml`` names ``pkg`` (a ROS workspace's ``src/``).
-
-An alias (``package_aliases={"abb_irb140": "abb_irb140_description"}``) makes the rules look for another name;
-without one, a package none finds is looked for under its :func:`sibling_names`.
-"""
+copied out of their workspace: :class:`PackageResolver`, whose rules (a) to (d) docs/ROBOTS.md ("Packages without
+ROS") lists."""
 
 from __future__ import annotations
 
@@ -116,7 +104,12 @@ def sibling_names(pkg: str) -> list[str]:
 
 class PackageResolver:
     """Finds the packages one robot file ``path`` (None for a string: no rules (c), (d)) names, with the checked
-    ``package_dirs`` and ``aliases`` (the module docstring)."""
+    ``package_dirs`` and ``aliases``, first match wins: (a) the ``package_dirs``, (b) the folders of
+    ``ROS_PACKAGE_PATH`` (read at each load), (c) a folder named ``pkg`` among the file's ancestor folders or inside
+    one of them, nearest first, (d) a ``package.xml`` naming ``pkg`` in the file's folder or above it. In a folder
+    ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself, or a folder up to :data:`CRAWL_DEPTH` levels below
+    ``D`` whose ``package.xml`` names it. An alias makes the rules look for another name; without one, a package
+    none finds is looked for under its :func:`sibling_names`."""
 
     def __init__(self, path: Path | None, package_dirs: Iterable[Path] = (), aliases: dict | None = None) -> None:
         self.path = path

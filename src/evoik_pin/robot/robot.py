@@ -13,8 +13,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, FrameError, RobotLoadError
-from .active_joints import MAX_CHAIN_JOINTS, choose_joints, suggest_frames
-from .frames import find_frame, frame_names, reduced_model
+from .active_joints import MAX_CHAIN_JOINTS, choose_joints
+from .frames import closest_hint, find_frame, frame_names, reduced_model
 from .geometry_models import RobotGeometry
 from .joint_bounds import NEAR_UNBOUNDED, JointBounds
 from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
@@ -169,7 +169,7 @@ class Robot(JointBounds, RobotGeometry):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
             fid = find_frame(self.model, frame)  # a scan of every frame
             if fid < 0:
-                raise FrameError(f"{self.name} has no frame {frame!r}{suggest_frames(frame, self.model)} (robot.frames "
+                raise FrameError(f"{self.name} has no frame {frame!r}{closest_hint(frame, self.frames)} (robot.frames "
                                  f"lists its {len(self.frames)} frames)")
             self._frame_ids[frame] = fid
         return fid
@@ -342,18 +342,17 @@ class Robot(JointBounds, RobotGeometry):
     def jacobian_local_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
         """``jacobian(q, "local")`` (6, n) of the tip (or frame id ``frame_id``), unchecked:
         ``T(q + dq) ~ T(q) exp(J dq)``."""
+        return self._frame_jacobian(q, frame_id, pin.ReferenceFrame.LOCAL)
+
+    def _frame_jacobian(self, q: np.ndarray, frame_id: int | None, reference) -> np.ndarray:
         fid = self._tip_id if frame_id is None else frame_id
-        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, pin.ReferenceFrame.LOCAL)
+        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, reference)
         J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
         return J @ self._G if self._coupled else J
 
     def jacobian_world_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
         """``jacobian(q, "world")`` (6, n) of the tip (or frame id ``frame_id``), unchecked."""
-        fid = self._tip_id if frame_id is None else frame_id
-        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid,
-                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, -1)
-        if self._coupled:
-            J = J @ self._G
+        J = self._frame_jacobian(q, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         if self._base_id != 0:
             Rt = self._oMbase.rotation.T
             J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
