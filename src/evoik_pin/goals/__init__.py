@@ -15,8 +15,7 @@ from .planar import Planar
 from .orientation import Orientation
 from .pointing import Direction, LookAt
 from .center_of_mass import CenterOfMass
-from .relative_pose import RelativePose
-from .relative_position import RelativePosition
+from .relative_pose import RelativePose, RelativePosition
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from .stack import bind, is_goal_list

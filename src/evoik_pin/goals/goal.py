@@ -229,7 +229,7 @@ BOTH = 2.0
 
 class FramePair:
     """What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
-    :class:`~.relative_position.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``. A kind
+    :class:`~.relative_pose.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``. A kind
     defines :meth:`placement_errors`; the errors of poses and of populations follow from it."""
 
     #: The aux row's sign of the joints moving both frames: :data:`BOTH` for a kind whose error sees them, else 0.
