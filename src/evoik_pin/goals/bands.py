@@ -1,13 +1,7 @@
 """Per-axis tolerance bands and free axes (:class:`Pose`, :class:`Position`, :class:`Orientation`,
-:class:`RelativePose`), their kernel ``aux`` row, and the NumPy twin of the kernel's errors of the banded kinds
-(``solvers/lm/axes.py``).
-
-Error components (axes ``x y z rx ry rz``): a pose's ``R_t^T (p - p_t)`` (m) then ``log3(R_t^T R)`` (rad); a
-position's ``p - p_t`` in the base frame; an orientation's the rotation vector's. A scalar ``tolerance`` bounds the
-norms over the axes not free (with one free rotation axis a: the swing angle between the frame's and the target's
-a axes); a vector gives each component a half-width (``inf``: free; at least the default tolerance), the errors then
-being the norm of the excess over the bands (0 when met). LM aims half a tolerance inside each band.
-"""
+:class:`RelativePose`; their docstrings and docs/GOALS.md say what the error components are), their kernel ``aux``
+row, and the NumPy twin of the kernel's errors of the banded kinds (``solvers/lm/axes.py``): the norm of the excess
+over the bands (0 when met), with one free rotation axis the swing angle. LM aims half a tolerance inside each band."""
 
 from __future__ import annotations
 

@@ -203,10 +203,7 @@ def check_preferences(robot, preferences, frame: str | None, with_q0: bool) -> N
     wrap = np.zeros(robot.n, dtype=bool)
     q0 = np.clip(np.zeros(robot.n), robot.lower, robot.upper) if with_q0 else None
     for p in preferences:
-        if isinstance(p, Manipulability):
-            p.bind(robot, q0, robot.lower, robot.upper, wrap, frame)
-        else:
-            p.bind(robot, q0, robot.lower, robot.upper, wrap)
+        p.bind(robot, q0, robot.lower, robot.upper, wrap, *([frame] if isinstance(p, Manipulability) else []))
 
 
 def split_preferences(target):

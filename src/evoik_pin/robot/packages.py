@@ -12,12 +12,13 @@ from pathlib import Path
 
 from ..errors import RobotLoadError, RobotNotFoundError
 
-__all__ = ["CRAWL_DEPTH", "SIBLING_SUFFIXES", "PackageResolver", "check_package_aliases", "check_package_dirs",
-           "package_uris", "sibling_names"]
+__all__ = ["CRAWL_DEPTH", "MESH_URI", "SIBLING_SUFFIXES", "PackageResolver", "check_package_aliases",
+           "check_package_dirs", "package_uris", "sibling_names"]
 
 #: How deep below a given folder (a) or a ROS_PACKAGE_PATH entry (b) package.xml files are looked for.
 CRAWL_DEPTH = 3
-_URI = re.compile(r"package://([^/\"'<>\s]+)/")
+#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
+MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
 
 
 def check_package_dirs(package_dirs) -> list[Path]:
@@ -59,7 +60,7 @@ def check_package_aliases(aliases) -> dict[str, str]:
 
 def package_uris(xml: str) -> list[str]:
     """The package names of the ``package://pkg/...`` URIs in URDF text, in order of first appearance."""
-    return list(dict.fromkeys(_URI.findall(xml)))
+    return list(dict.fromkeys(pkg for pkg, _ in MESH_URI.findall(xml)))
 
 
 def _package_name(folder: Path) -> str | None:

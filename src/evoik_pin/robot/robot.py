@@ -16,8 +16,7 @@ from ..errors import ConfigurationError, FrameError, RobotLoadError
 from .active_joints import MAX_CHAIN_JOINTS, choose_joints
 from .frames import closest_hint, find_frame, frame_names, reduced_model
 from .geometry_models import RobotGeometry
-from .joint_bounds import NEAR_UNBOUNDED, JointBounds
-from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
+from .joints import NEAR_UNBOUNDED, JointBounds, couplings, joint_motions, joint_value, set_joint_value
 from .tree import (
     ChainView,
     KinematicTree,
@@ -30,7 +29,7 @@ from .tree import (
     with_floating_base,
 )
 
-__all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
+__all__ = ["MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
@@ -325,10 +324,7 @@ class Robot(JointBounds, RobotGeometry):
 
     def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
         """``M * fk(q)`` (e.g. ``M = T_target^-1``: the tip seen from the target), unchecked, a new ``pin.SE3``."""
-        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
-        if self._base_id == 0:
-            return M * self.data.oMf[self._tip_id]
-        return M * (self._baseMo * self.data.oMf[self._tip_id])
+        return M * self.frame_poses_unchecked(q, [self._tip_id])[0]
 
     def frame_poses_unchecked(self, q: np.ndarray, frame_ids) -> list[pin.SE3]:
         """Base-frame poses (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, one
