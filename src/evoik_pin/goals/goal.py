@@ -138,9 +138,12 @@ class Goal:
         p, R = self.encode()
         return self.frame, p, (R if self.has_orientation else None)
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
-        """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal."""
-        raise NotImplementedError
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal, new arrays: of a ``target`` pose its translation
+        (m) and rotation, of a rotation (3, 3) zeros and itself, of 3 numbers (a point, m) those and the identity."""
+        if isinstance(self.target, pin.SE3):
+            return np.array(self.target.translation), np.array(self.target.rotation)
+        return (np.zeros(3), self.target.copy()) if self.target.shape == (3, 3) else (self.target.copy(), np.eye(3))
 
     def errors(self, T: pin.SE3) -> tuple[float, float | None]:
         """(position error m or None, rotation error rad or None) of the goal frame at pose ``T`` (base frame)."""

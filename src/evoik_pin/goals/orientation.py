@@ -51,9 +51,6 @@ class Orientation(Goal):
             raise TargetError(f"{where} takes a 3 x 3 rotation, a pin.SE3 or a 4 x 4 pose: {exc}") from None
         self._set(target=np.array(R))
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.zeros(3), self.target.copy()
-
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free."""

@@ -54,9 +54,6 @@ class Planar(Goal):
                   yaw=None if yaw is None else values[2])
         self._set_aux(None)
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.target.copy(), np.eye(3)
-
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:
         """(distances (N,) m in the base xy-plane, |wrapped heading differences| (N,) rad, 0 without a yaw) of frame
         poses P (N, 3), R (N, 3, 3): the kernel's planar errors."""

@@ -73,9 +73,6 @@ class Pose(Goal):
                             "Pose poses")
         self._set(target=se3_target(target, f"Pose on {frame!r}"))
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array(self.target.translation), np.array(self.target.rotation)
-
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; weight, tolerance (one number or 6

@@ -53,9 +53,6 @@ class Position(Goal):
                               f"Pose({frame!r}, T) for a pose), got {target!r} (shape {p.shape})")
         self._set(target=p.copy())
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.target.copy(), np.eye(3)
-
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: position``: ``target: {position}`` (m); weight, tolerance (one number or 3 half-widths)."""

@@ -66,9 +66,6 @@ class RelativePose(FramePair, Goal):
         self._init_pair(frame_a, frame_b, "RelativePose")
         self._set(target=se3_target(target, where))
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array(self.target.translation), np.array(self.target.rotation)
-
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: relative_pose``: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a), with
@@ -134,9 +131,6 @@ class RelativePosition(FramePair, Goal):
     def p(self) -> np.ndarray:
         """The wanted position (3,) (m) of frame b's origin from frame a's, in the axes ``expressed_in`` names."""
         return self.target
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.target.copy(), np.eye(3)
 
     @property
     def both(self) -> float:
