@@ -64,7 +64,11 @@ class CenterOfMass(Goal):
         kind = KIND_COM if support is None else KIND_COM_SUPPORT
         self._init_common(None, weight, tolerance, None, kind, False, "the centre-of-mass goal")
         if support is None:
-            self._set(point=point3(point, "CenterOfMass's point"), axes=_axes(axes), support=None, margin=0.0)
+            if not isinstance(axes, str) or not axes or not set(axes) <= set(_AXES) or len(set(axes)) != len(axes):
+                raise OptionError(f"CenterOfMass's axes name each of x, y, z at most once (e.g. 'xyz', 'xy', 'z'), "
+                                  f"got {axes!r}")
+            self._set(point=point3(point, "CenterOfMass's point"), axes="".join(a for a in _AXES if a in axes),
+                      support=None, margin=0.0)
         else:
             self._set(point=None, axes="xy", support=_support(support), margin=goal_number(
                 margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0", 0.0))
@@ -153,15 +157,6 @@ class CenterOfMass(Goal):
         frames = list(self.support)
         return (f"CenterOfMass(support={frames}, margin={self.margin:g}, weight={self.weight:g}, "
                 f"tolerance={self.tolerance:g})")
-
-
-
-
-def _axes(axes) -> str:
-    if not isinstance(axes, str) or not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
-        raise OptionError(f"CenterOfMass's axes name each of x, y, z at most once (e.g. 'xyz', 'xy', 'z'), "
-                          f"got {axes!r}")
-    return "".join(a for a in _AXES if a in axes)
 
 
 def _support(support) -> dict:

@@ -71,7 +71,9 @@ class Planar(Goal):
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: planar``: ``target: {x, y[, yaw_rad]}`` (m, rad); weight, tolerance, rotation_tolerance."""
-        return FileKind("planar", cls, ("weight", "tolerance", "rotation_tolerance"), _planar_target, _planar_text,
+        return FileKind("planar", cls, ("weight", "tolerance", "rotation_tolerance"), _planar_target,
+                        lambda g: {"x": float(g.target[0]), "y": float(g.target[1])}
+                        | ({} if g.yaw is None else {"yaw_rad": g.yaw}),
                         make=lambda frame, target, **fields: cls(frame, *target, **fields))
 
     def __repr__(self) -> str:
@@ -85,11 +87,3 @@ def _planar_target(target: dict) -> tuple[float, float, float | None]:
     unknown_keys(target, ("x", "y", "yaw_rad"), "target")
     return (number(target.get("x"), "target x (m)"), number(target.get("y"), "target y (m)"),
             None if "yaw_rad" not in target else number(target["yaw_rad"], "target yaw_rad (rad)"))
-
-
-def _planar_text(goal: Planar) -> dict:
-    """A planar target as its ``x``, ``y`` and ``yaw_rad``."""
-    out = {"x": float(goal.target[0]), "y": float(goal.target[1])}
-    if goal.yaw is not None:
-        out["yaw_rad"] = goal.yaw
-    return out

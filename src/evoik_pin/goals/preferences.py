@@ -5,6 +5,8 @@ are taken to the nearest turn."""
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ..errors import ConfigurationError, FrameError, OptionError
@@ -73,9 +75,8 @@ class Posture(Preference):
         self._ref = self._mask = self._wrap = None
 
     def bind(self, robot, q0, lower, upper, wrap) -> Posture:
-        out = Posture.__new__(Posture)
-        out.weight = out.curvature = self.weight
-        out.q_ref, out._wrap = self.q_ref, wrap
+        out = copy.copy(self)
+        out._wrap = wrap
         if isinstance(self.q_ref, dict):
             unknown = [k for k in self.q_ref if k not in robot.joint_names]
             if unknown:

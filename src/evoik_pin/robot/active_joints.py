@@ -43,7 +43,9 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
     if tips is None or whole:
         tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
     else:
-        tip_names = _frame_list(tips)
+        tip_names = list(tips) if hasattr(tips, "__iter__") and not isinstance(tips, str) else []
+        if not tip_names or not all(isinstance(t, str) for t in tip_names):
+            raise FrameError(f"tips must be a list of frame names (a non-empty list of strings) or 'all', got {tips!r}")
     if tip is None:
         tip = tip_names[0] if tip_names else deepest_body(full_model)
     root_name = root_link(full_model) if base is None else base
@@ -103,14 +105,4 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
                              "tips, a farther base, or keep fewer joints free with joints=[...]")
     return ActiveJoints(tip, tuple(tip_names) if tip_names else (tip,), root_name, above_base, dofs, physical,
                         [follows(j) for j in physical])
-
-
-def _frame_list(tips) -> list[str]:
-    """``tips`` as a non-empty list of frame names, or a FrameError."""
-    if isinstance(tips, str) or not hasattr(tips, "__iter__"):
-        raise FrameError(f"tips must be a list of frame names or 'all', got {tips!r}")
-    out = list(tips)
-    if not out or not all(isinstance(t, str) for t in out):
-        raise FrameError(f"tips must be a non-empty list of frame names (strings), got {tips!r}")
-    return out
 

@@ -80,7 +80,11 @@ class Robot(JointBounds, RobotGeometry):
         self.floating_base = bool(floating_base)
         kin = self.full_model = full_model  # kin: the model the reduced one is cut from (six joints + full_model)
         if self.floating_base:
-            _check_fixed_root(full_model, name)
+            moving = [j for j in range(1, kin.njoints) if kin.parents[j] == 0 and kin.joints[j].nv > 1]
+            if moving:  # the URDF's root already moves: a floating base would move it twice
+                raise RobotLoadError(f"{name}'s root already moves (joint {kin.names[moving[0]]!r} is a "
+                                     f"{kin.joints[moving[0]].shortname()} of {kin.joints[moving[0]].nv} DOF): load "
+                                     "it without floating_base=True")
             if base is not None:
                 raise FrameError(f"a floating base moves the root link of {name}: poses are in the world frame, so "
                                  f"no base frame can be chosen (got base={base!r})")
@@ -420,13 +424,3 @@ class Robot(JointBounds, RobotGeometry):
         tips = f"tip={self.tip!r}" if len(self.tips) == 1 else f"tips={list(self.tips)}"
         floating = ", floating_base=True" if self.floating_base else ""
         return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, {tips}{floating})"
-
-
-def _check_fixed_root(model: pin.Model, name: str) -> None:
-    """A RobotLoadError when the URDF's root already moves (a floating base would move it twice)."""
-    moving = [j for j in range(1, model.njoints) if model.parents[j] == 0 and model.joints[j].nv > 1]
-    if moving:
-        j = moving[0]
-        raise RobotLoadError(f"{name}'s root already moves (joint {model.names[j]!r} is a "
-                             f"{model.joints[j].shortname()} of {model.joints[j].nv} DOF): load it without "
-                             "floating_base=True")
