@@ -9,7 +9,7 @@ import copy
 
 import numpy as np
 
-from ..errors import ConfigurationError, FrameError, OptionError
+from ..errors import ConfigurationError, FrameError, OptionError, TargetError
 from ..lie import wrap_angle
 from ..robot.robot import yoshikawa
 from .goal import Goal, number
@@ -210,7 +210,6 @@ def check_preferences(robot, preferences, frame: str | None, with_q0: bool) -> N
 def split_preferences(target):
     """(the goals, the preferences) of a goal list holding preferences; ``(target, [])`` for anything else.
     TargetError for preferences alone."""
-    from ..errors import TargetError
 
     if not isinstance(target, (list, tuple)) or not any(isinstance(x, Preference) for x in target):
         return target, []

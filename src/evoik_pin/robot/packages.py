@@ -122,15 +122,13 @@ class PackageResolver:
         self._found: dict[str, Path | None] = {}
 
     def find(self, pkg: str) -> Path | None:
-        """The folder of package ``pkg``, or None."""
+        """The folder of package ``pkg`` (its alias's), by rules (a) to (d), then for its sibling names (none for an
+        aliased package), or None."""
         if pkg not in self._found:
-            self._found[pkg] = self._search(self.aliases.get(pkg, pkg))
+            name = self.aliases.get(pkg, pkg)
+            names = [name] if name in self.aliases.values() else [name, *sibling_names(name)]
+            self._found[pkg] = next((found for found in map(self._search_name, names) if found is not None), None)
         return self._found[pkg]
-
-    def _search(self, pkg: str) -> Path | None:
-        """Rules (a) to (d) for ``pkg``, then for its sibling names (none for an aliased package)."""
-        names = [pkg] if pkg in self.aliases.values() else [pkg, *sibling_names(pkg)]
-        return next((found for found in map(self._search_name, names) if found is not None), None)
 
     def _search_name(self, pkg: str) -> Path | None:
         if not pkg or "/" in pkg or pkg in (".", ".."):
@@ -151,20 +149,16 @@ class PackageResolver:
                 return a
         return None
 
-    def searched(self) -> str:
-        """Where a package was looked for, for error messages."""
-        parts = [f"package_dirs {[str(d) for d in self.user_dirs]}"] if self.user_dirs else []
-        parts.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs
-                     else "ROS_PACKAGE_PATH (not set)")
-        if self.ancestors:
-            parts.append(f"the folders above the file ({self.ancestors[0]} up to {self.ancestors[-1]}) and the "
-                         "folders inside them, by name or by a package.xml naming it")
-        return "; ".join(parts)
-
     def not_found(self, pkg: str, named_in: str, how: str) -> str:
         """Message of a package not found: the file naming it (``how``: as what), the folders searched, what to do."""
         looked_for = f" (looked for as {self.aliases[pkg]!r}: package_aliases)" if pkg in self.aliases else ""
+        searched = [f"package_dirs {[str(d) for d in self.user_dirs]}"] if self.user_dirs else []
+        searched.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs
+                        else "ROS_PACKAGE_PATH (not set)")
+        if self.ancestors:
+            searched.append(f"the folders above the file ({self.ancestors[0]} up to {self.ancestors[-1]}) and the "
+                            "folders inside them, by name or by a package.xml naming it")
         return (f"package {pkg!r} not found{looked_for} (used as {how}), named in {named_in}; searched: "
-                f"{self.searched()}. Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on "
-                f"the command line) or ROS_PACKAGE_PATH, or, when it is shipped under another name, "
+                f"{'; '.join(searched)}. Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR "
+                f"on the command line) or ROS_PACKAGE_PATH, or, when it is shipped under another name, "
                 f"package_aliases={{{pkg!r}: 'that_name'}} (--package-alias {pkg}=that_name)")

@@ -25,7 +25,6 @@ from .tree import (
     chain_positions,
     free_flyer_model,
     mass_constants,
-    rpy_to_quaternion,
     with_floating_base,
 )
 
@@ -275,7 +274,8 @@ class Robot(JointBounds, RobotGeometry):
             if d in self._dof_ids:
                 set_joint_value(fm, out, j, m * q[self._dof_ids.index(d)] + off)
         if self.floating_base:  # the six base joints are the kinematic model's first six numbers
-            out = np.concatenate([out[:3], rpy_to_quaternion(*out[3:6]), out[6:]])
+            quat = np.array(pin.Quaternion(pin.rpy.rpyToMatrix(out[5], out[4], out[3])).coeffs())  # (x, y, z, w)
+            out = np.concatenate([out[:3], quat if quat[3] >= 0 else -quat, out[6:]])
         return out
 
     # ------------------------------------------------------------------ kinematics, one configuration
