@@ -13,7 +13,7 @@ from ..lie import log3
 from .registry import BANDED_LOG6, BANDED_POINT
 
 __all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_axes",
-           "parse_band", "parse_free", "pose_text"]
+           "pose_text"]
 
 #: The ``aux`` row of a goal with bands or free axes (read by the compiled ``solvers/lm/axes.py``): AUX_INNER (6,)
 #: the residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
@@ -26,63 +26,43 @@ AUX_SIZE = 13
 AXES = ("x", "y", "z", "rx", "ry", "rz")
 
 
-def parse_free(free, allowed: tuple[str, ...], where: str) -> tuple[str, ...]:
-    """The free axes named by ``free`` (None, a string of names, or a list), each one of ``allowed``, in
-    :data:`AXES` order; OptionError for an unknown or repeated name."""
-    if free is None:
-        return ()
-    if isinstance(free, str):
-        names = free.replace(",", " ").split()
-    else:
-        try:
-            names = list(free)
-        except TypeError:
-            raise OptionError(f"{where}: free must name axes among {' '.join(allowed)} (a string or a list), "
-                              f"got {free!r}") from None
-    for name in names:
-        if name not in allowed:
-            raise OptionError(f"{where}: unknown free axis {name!r}; accepted: {' '.join(allowed)}")
-    if len(set(names)) != len(names):
-        raise OptionError(f"{where}: free names an axis twice: {names}")
-    return tuple(a for a in AXES if a in names)
-
-
-def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | None:
-    """None for a scalar ``tolerance``, else its half-widths, one per axis of ``axes`` (m or rad, >= 0; inf: free);
-    OptionError for a wrong length, NaN or a negative half-width."""
-    count = len(axes)
-    if np.ndim(tolerance) == 0:
-        return None
-    try:
-        band = np.array(tolerance, dtype=float)
-    except (TypeError, ValueError):
-        raise OptionError(f"{where}: tolerance must be a number or {count} numbers (half-widths), "
-                          f"got {tolerance!r}") from None
-    if band.shape != (count,):
-        raise OptionError(f"{where}: a tolerance band takes {count} half-widths ({' '.join(axes)}), "
-                          f"got shape {band.shape}")
-    if np.isnan(band).any() or (band < 0).any():
-        raise OptionError(f"{where}: tolerance half-widths must be >= 0 (inf: free), got {band.tolist()}")
-    return band
-
-
 def parse_axes(tolerance, rotation_tolerance, free, axes: tuple[str, ...], where: str
                ) -> tuple[np.ndarray | None, tuple[str, ...]]:
-    """(band or None, free axes) of a goal whose error components are ``axes``: ``tolerance`` one number (None: a
-    norm tolerance, checked by the goal) or one half-width per axis (:func:`parse_band`; the free axes' set to inf),
-    ``free`` names among ``axes`` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or free axis,
-    a ``rotation_tolerance`` beside half-widths, or every axis free."""
-    band = parse_band(tolerance, axes, where)
-    free = parse_free(free, axes, where)
-    if band is not None and rotation_tolerance is not None:
-        raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
-                          "already holds the rotation's half-widths (rx ry rz, rad)")
-    if len(free) == len(axes):
+    """(band or None, free axes in :data:`AXES` order) of a goal whose error components are ``axes``: ``tolerance``
+    one number (a norm tolerance, checked by the goal) or one half-width per axis (m or rad, >= 0; inf: free; the free
+    axes' set to inf), ``free`` None, a string of names or a list of them, among ``axes``. OptionError, naming
+    ``where``, for a wrong length, NaN or a negative half-width, a ``rotation_tolerance`` beside half-widths, an
+    unknown or repeated free axis, or every axis free."""
+    band = None
+    if np.ndim(tolerance) != 0:
+        try:
+            band = np.array(tolerance, dtype=float)
+        except (TypeError, ValueError):
+            raise OptionError(f"{where}: tolerance must be a number or {len(axes)} numbers (half-widths), "
+                              f"got {tolerance!r}") from None
+        if band.shape != (len(axes),):
+            raise OptionError(f"{where}: a tolerance band takes {len(axes)} half-widths ({' '.join(axes)}), "
+                              f"got shape {band.shape}")
+        if np.isnan(band).any() or (band < 0).any():
+            raise OptionError(f"{where}: tolerance half-widths must be >= 0 (inf: free), got {band.tolist()}")
+        if rotation_tolerance is not None:
+            raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
+                              "already holds the rotation's half-widths (rx ry rz, rad)")
+    try:
+        names = [] if free is None else free.replace(",", " ").split() if isinstance(free, str) else list(free)
+    except TypeError:
+        raise OptionError(f"{where}: free must name axes among {' '.join(axes)} (a string or a list), "
+                          f"got {free!r}") from None
+    for name in names:
+        if name not in axes:
+            raise OptionError(f"{where}: unknown free axis {name!r}; accepted: {' '.join(axes)}")
+    if len(set(names)) != len(names):
+        raise OptionError(f"{where}: free names an axis twice: {names}")
+    if len(names) == len(axes):
         raise OptionError(f"{where}: free names all {({3: 'three'}).get(len(axes), 'six')} axes, which leaves "
                           "nothing to meet; drop the goal")
-    if band is not None:
-        band = np.where(np.isin(axes, free), np.inf, band)
-    return band, free
+    free = tuple(a for a in AXES if a in names)
+    return (None if band is None else np.where(np.isin(axes, free), np.inf, band)), free
 
 
 def pose_text(goal) -> str:

@@ -94,7 +94,10 @@ class CenterOfMass(Goal):
             raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "
                               "CenterOfMass goal needs the links' masses")
         m = robot.tree.m
-        points = [] if self.support is None else _bound_points(robot, self.support)
+        points = []  # per contact point its physical joint (-1: none), its position (m) in that joint's folded frame
+        for frame, pts in [] if self.support is None else _frame_points(robot, self.support):
+            j, R, p = robot.frame_constants(frame)  # FrameError with the closest names
+            points += [[j, *(R @ x + p)] for x in pts]
         aux = np.zeros(A_COM_BODIES + 5 * m + 4 * len(points))
         aux[A_COM_MASS] = mc.total
         aux[A_COM_MOMENT:A_COM_MOMENT + 3] = mc.fixed_moment
@@ -222,17 +225,6 @@ _CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def _frame_points(robot, support: dict) -> list[tuple[str, np.ndarray]]:
     """(frame, its (k, 3) points in it) of each support frame (collision geometry where none were given)."""
     return [(f, contact_points(robot, f) if pts is None else pts) for f, pts in support.items()]
-
-
-def _bound_points(robot, support: dict) -> np.ndarray:
-    """(K, 4): per contact point, its physical joint (-1: none) and position (m) in that joint's folded frame (the
-    base frame for -1)."""
-    rows = []
-    for frame, pts in _frame_points(robot, support):
-        j, R, p = robot.frame_constants(frame)  # FrameError with the closest names
-        for x in pts:
-            rows.append([j, *(R @ x + p)])
-    return np.array(rows, dtype=float)
 
 
 def com_of(robot, q) -> np.ndarray:
