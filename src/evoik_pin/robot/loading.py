@@ -88,12 +88,14 @@ def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: 
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
-    user_dirs = check_package_dirs(package_dirs)
-    resolver = PackageResolver(path, user_dirs, check_package_aliases(package_aliases))
+    resolver = PackageResolver(path, check_package_dirs(package_dirs), check_package_aliases(package_aliases))
     if is_xacro(path, xml):
-        source_text = xml
-        xml = expand_xacro(xml, where, path, xacro_args, resolver)
-        _check_instantiated(source_text, xml, where)
+        source_text, xml = xml, expand_xacro(xml, where, path, xacro_args, resolver)
+        macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)", source_text)
+        if macros and not re.search(r"<link\b", xml):  # a file of macros that calls none
+            raise RobotLoadError(
+                f"{where} defines the xacro macro(s) {', '.join(macros)} but calls none, so it has no <link>: load the "
+                f"xacro file that includes it and calls them (e.g. <xacro:{macros[0]} .../>)")
     elif xacro_args:
         raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
                              "elements or ${...} / $(...) expressions)")
@@ -134,17 +136,6 @@ def _srdf_path(srdf, name: str | None) -> str | None:
         p = example_robot_data_dir() / arm.srdf
         return str(p) if p.is_file() else None
     return None
-
-
-def _check_instantiated(source_text: str, urdf: str, where: str) -> None:
-    """A RobotLoadError naming the macros of a xacro file that defines some but yields no link."""
-    if re.search(r"<link\b", urdf):
-        return
-    macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)", source_text)
-    if macros:
-        raise RobotLoadError(
-            f"{where} defines the xacro macro(s) {', '.join(macros)} but calls none, so it has no <link>: load the "
-            f"xacro file that includes it and calls them (e.g. <xacro:{macros[0]} .../>)")
 
 
 def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None, str, bool]:
