@@ -27,10 +27,7 @@ __all__ = ["bundled_robots_dir", "example_robot_data_dir", "list_robots", "load_
 
 def example_robot_data_dir() -> Path:
     """The ``robots/`` directory of the installed ``example-robot-data`` wheel (a dependency; from its file list)."""
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
-        raise RobotNotFoundError("the 'example-robot-data' package is not installed (pip install it)") from exc
+    dist = importlib.metadata.distribution("example-robot-data")
     for f in dist.files or []:
         parts = Path(str(f)).parts
         if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):

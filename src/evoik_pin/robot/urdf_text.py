@@ -76,13 +76,10 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
     """URDF text of the xacro document ``text`` (read from ``path``, or None for a string), ``args`` setting its
     ``<xacro:arg>`` values, ``$(find pkg)`` found through ``packages``. Any failure is a RobotLoadError naming
     ``where`` and what failed."""
-    try:
-        import xacro
-        from xacrodoc import XacroDoc
-        from xacrodoc import packages as xacro_packages
-    except ImportError as exc:  # pragma: no cover - a dependency
-        raise RobotLoadError(f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc "
-                             f"({exc})") from exc
+    import xacro  # xacrodoc's (a dependency), imported when a xacro file is first read
+    from xacrodoc import XacroDoc
+    from xacrodoc import packages as xacro_packages
+
     mappings = {str(k): str(v) for k, v in (args or {}).items()}
     resolver = packages if packages is not None else PackageResolver(path)
     missing: list[tuple[str, str]] = []  # (package, file naming it) of failed look-ups
