@@ -259,14 +259,10 @@ def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
         hit = _remember(_TIP_GOALS, robot, key, (GoalStack.single(robot, kind, tolerance, rotation_tolerance),
                                                  _TIP_CLASSES[kind], fields))
     pt, Rt = encode_target(target)
-    goal = object.__new__(hit[1])
-    goal.__dict__.update(hit[2])  # frozen dataclasses: their fields set as their __init__ sets them
-    if kind == KIND_POSE:
-        goal.__dict__["target"] = pin.SE3(Rt, pt)
-    else:
-        goal.__dict__["target"] = pt
-        if kind != KIND_POSITION:
-            goal.__dict__["yaw"] = target.yaw
+    goal = object.__new__(hit[1])  # frozen dataclasses: their fields set as their __init__ sets them
+    goal.__dict__.update(hit[2], target=pin.SE3(Rt, pt) if kind == KIND_POSE else pt)
+    if hit[1] is Planar:
+        goal.__dict__["yaw"] = target.yaw
     return [goal], hit[0], pt[None], Rt[None]
 
 
@@ -311,11 +307,8 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
             stack = dataclasses.replace(stack, support=support)
         if key is not None:
             _remember(_BOUND, robot, key, stack)
-    G = len(goals)
-    pt, Rt = np.empty((G, 3)), np.empty((G, 3, 3))
-    for g, goal in enumerate(goals):
-        pt[g], Rt[g] = goal.encode()
-    return goals, stack, pt, Rt
+    pt, Rt = zip(*(goal.encode() for goal in goals), strict=True)
+    return goals, stack, np.array(pt, dtype=float), np.array(Rt, dtype=float)
 
 
 #: Stacks of goal lists bound before, by robot and :func:`structure` (the last 64): a hit skips the frames' checks.
