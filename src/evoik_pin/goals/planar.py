@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,19 +38,16 @@ class Planar(Goal):
 
     def __init__(self, frame: str, x: float, y: float, yaw: float | None = None, weight: float = 1.0,
                  tolerance: float | None = DEFAULT_GOAL_TOLERANCE, rotation_tolerance: float | None = None) -> None:
-        where = f"Planar on {frame!r}"
         self._init_common(frame, weight, tolerance, rotation_tolerance,
                           KIND_PLANAR if yaw is None else KIND_PLANAR_YAW, yaw is not None)
-        values = [x, y] + ([] if yaw is None else [yaw])
         try:
-            values = [float(v) for v in values]
+            target = np.array([x, y, 0.0 if yaw is None else yaw], dtype=float)
         except (TypeError, ValueError):
-            values = [math.nan]
-        if not all(math.isfinite(v) for v in values):
-            raise TargetError(f"{where} takes finite numbers x, y (m) and yaw (rad) or None, got "
+            target = np.full(3, np.nan)
+        if not np.isfinite(target).all():
+            raise TargetError(f"Planar on {frame!r} takes finite numbers x, y (m) and yaw (rad) or None, got "
                               f"{x!r}, {y!r}, {yaw!r}")
-        self._set(target=np.array([values[0], values[1], values[2] if yaw is not None else 0.0]),
-                  yaw=None if yaw is None else values[2])
+        self._set(target=target, yaw=None if yaw is None else float(target[2]))
         self._set_aux(None)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:

@@ -28,9 +28,9 @@ def unit_vector(value, what: str) -> np.ndarray:
     try:
         v = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise TargetError(f"{what} must be 3 numbers (a direction), got {value!r}") from None
+        v = np.zeros(0)
     if v.shape != (3,):
-        raise TargetError(f"{what} must be 3 numbers (a direction), got shape {v.shape}")
+        raise TargetError(f"{what} must be 3 numbers (a direction), got {value!r}")
     if not np.isfinite(v).all():
         raise TargetError(f"{what} must be 3 finite numbers, got {v.tolist()}")
     norm = float(np.linalg.norm(v))
