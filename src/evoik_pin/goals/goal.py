@@ -127,10 +127,17 @@ class Goal:
         aux = self.aux()
         return None if aux is None else band_errors(self.kind, P, R, pt, Rt, aux)
 
+    #: This kind's goals-file entry (:meth:`file_kind`): its ``kind:`` name, optional fields, target reader and writer
+    #: (:mod:`.file_entries`), then FileKind's further options as a dict; None: goals files do not take the kind.
+    FILE_ENTRY = None
+
     @classmethod
     def file_kind(cls):
-        """This kind's :class:`.file_entries.FileKind` in goals files, or None for a kind they do not take."""
-        return None
+        """This kind's :class:`.file_entries.FileKind` in goals files (:attr:`FILE_ENTRY`), or None."""
+        from .file_entries import FileKind  # which reads this module's default tolerance
+
+        name, fields, read, write, *options = cls.FILE_ENTRY or (None,) * 4
+        return None if name is None else FileKind(name, cls, fields, read, write, **(options[0] if options else {}))
 
     def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:
         """This goal's viewer marker: (node name, position (3,) m in the base frame, rotation (3, 3) for a triad or
