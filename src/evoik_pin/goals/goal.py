@@ -134,9 +134,11 @@ class Goal:
     @classmethod
     def file_kind(cls):
         """This kind's :class:`.file_entries.FileKind` in goals files (:attr:`FILE_ENTRY`), or None."""
-        from .file_entries import FileKind  # which reads this module's default tolerance
+        from .file_entries import FileKind, pair_kind  # which read this module's default tolerance
 
         name, fields, read, write, *options = cls.FILE_ENTRY or (None,) * 4
+        if name is not None and issubclass(cls, FramePair):  # frame_a, frame and target
+            return pair_kind(cls, name, fields, read, write)
         return None if name is None else FileKind(name, cls, fields, read, write, **(options[0] if options else {}))
 
     def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:

@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import OptionError
 from ..lie import relative_angle
 from .bands import AXES, band_errors, pose_text
-from .file_entries import FileKind, matrix_text, pair_kind, pose_target, position_target, position_text
+from .file_entries import matrix_text, pose_target, position_target, position_text
 from .goal import BOTH, DEFAULT_GOAL_TOLERANCE, FramePair, Goal, point3
 from .pose import se3_target
 from .registry import (
@@ -54,8 +54,9 @@ class RelativePose(FramePair, Goal):
     KIND_CODES = (KindCode(KIND_RELATIVE_POSE, (0, 1, 2, 3, 4, 5), FAMILY_BEYOND_FRAME, oriented=True, angle=True),
                   KindCode(KIND_RELATIVE_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_BEYOND_FRAME, oriented=True,
                            angle=True))
-    #: The optional fields of its goals-file entry: Pose's.
-    FILE_FIELDS = ("weight", "tolerance", "rotation_tolerance", "free")
+    #: ``kind: relative_pose``: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a), with Pose's
+    #: optional fields.
+    FILE_ENTRY = ("relative_pose", ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text)
 
     def __init__(self, frame_a: str, frame_b: str, target, weight: float = 1.0,
                  tolerance: float | object = DEFAULT_GOAL_TOLERANCE, rotation_tolerance: float | None = None,
@@ -65,12 +66,6 @@ class RelativePose(FramePair, Goal):
                         (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES), where)
         self._init_pair(frame_a, frame_b, "RelativePose")
         self._set(target=se3_target(target, where))
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: relative_pose``: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a), with
-        Pose's optional fields."""
-        return pair_kind(cls, "relative_pose", pose_target, matrix_text)
 
     def placement_errors(self, Ra, d, Rb) -> tuple[np.ndarray, np.ndarray]:
         """The distance and rotation angle of b's pose seen from a to the target, or with bands or free axes
@@ -111,8 +106,9 @@ class RelativePosition(FramePair, Goal):
     expressed_in: str = "a"
     KIND_CODES = (KindCode(KIND_RELATIVE_POSITION, (0, 1, 2), FAMILY_BEYOND_FRAME),
                   KindCode(KIND_RELATIVE_POSITION_IN_A, (0, 1, 2), FAMILY_BEYOND_FRAME))
-    #: The optional fields of its goals-file entry.
-    FILE_FIELDS = ("expressed_in", "weight", "tolerance")
+    #: ``kind: relative_position``: ``frame_a``, ``frame`` (frame b) and ``target: {position: [x, y, z]}`` (m), with
+    #: optional ``expressed_in`` (a | world), ``weight`` and ``tolerance``.
+    FILE_ENTRY = ("relative_position", ("expressed_in", "weight", "tolerance"), position_target, position_text)
 
     def __init__(self, frame_a: str, frame_b: str, p, expressed_in: str = "a", weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
@@ -142,12 +138,6 @@ class RelativePosition(FramePair, Goal):
         """(|e| (N,) m, zeros (N,)): e the vector p_b - p_a, in the axes ``expressed_in`` names, minus ``p``."""
         v = np.einsum("nji,nj->ni", Ra, d) if self.expressed_in == "a" else d
         return np.linalg.norm(v - self.target, axis=1), np.zeros(len(d))
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: relative_position``: ``frame_a``, ``frame`` (frame b) and ``target: {position: [x, y, z]}`` (m),
-        with optional ``expressed_in`` (a | world), ``weight`` and ``tolerance``."""
-        return pair_kind(cls, "relative_position", position_target, position_text)
 
     def __repr__(self) -> str:
         return (f"RelativePosition({self.frame_a!r}, {self.frame!r}, {np.round(self.target, 6).tolist()}, "
