@@ -141,9 +141,15 @@ class Goal:
             return pair_kind(cls, name, fields, read, write)
         return None if name is None else FileKind(name, cls, fields, read, write, **(options[0] if options else {}))
 
+    #: False for the kinds whose target is no place in the base frame (an orientation, a direction, two frames'
+    #: placement): no viewer marker.
+    MARKED = True
+
     def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:
         """This goal's viewer marker: (node name, position (3,) m in the base frame, rotation (3, 3) for a triad or
-        None for a sphere), or None when its target is no place in the base frame. Default: its frame's target."""
+        None for a sphere), or None (:attr:`MARKED`). Default: its frame's target."""
+        if not self.MARKED:
+            return None
         p, R = self.encode()
         return self.frame, p, (R if self.has_orientation else None)
 
@@ -246,6 +252,7 @@ class FramePair:
 
     #: The aux row's sign of the joints moving both frames: :data:`BOTH` for a kind whose error sees them, else 0.
     both = 0.0
+    MARKED = False
 
     def _init_pair(self, frame_a, frame_b, kind: str) -> None:
         """Set ``frame_a``; FrameError unless the frames are two different frame names (``kind`` names the goal)."""
@@ -274,10 +281,6 @@ class FramePair:
     def batch_key(self) -> tuple:
         """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
         return (self.frame_a,)
-
-    def marker(self) -> None:
-        """None: the target is placed relative to frame a, no place in the base frame."""
-        return None
 
     def placement_errors(self, Ra: np.ndarray, d: np.ndarray, Rb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position errors (N,) m, rotation errors (N,) rad) for frame a's rotations Ra (N, 3, 3), the vectors

@@ -37,6 +37,7 @@ class Orientation(Goal):
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
     #: ``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free.
+    MARKED = False
     FILE_ENTRY = ("orientation", ("weight", "tolerance", "free"), orientation_target,
                   lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]})
 
@@ -53,10 +54,6 @@ class Orientation(Goal):
         except TargetError as exc:
             raise TargetError(f"{where} takes a 3 x 3 rotation, a pin.SE3 or a 4 x 4 pose: {exc}") from None
         self._set(target=np.array(R))
-
-    def marker(self) -> None:
-        """None: an orientation alone has no place to mark."""
-        return None
 
     def __repr__(self) -> str:
         rpy = np.round(pin.rpy.matrixToRpy(self.target), 6).tolist()

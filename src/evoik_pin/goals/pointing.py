@@ -99,15 +99,12 @@ class Direction(_Pointing):
     direction: object = None
     has_point = False
     TARGET = FILE_KIND = "direction"
+    MARKED = False
     KIND_CODES = (KindCode(KIND_DIRECTION, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
 
     def __init__(self, frame: str, axis, direction, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
         self._init_pointing(frame, axis, direction, weight, tolerance)
-
-    def marker(self) -> None:
-        """None: a direction has no place to mark."""
-        return None
 
 
 #: A look-at's kernel code: the frame's axis minus the unit direction to the point (3 rows, base frame).
