@@ -12,8 +12,8 @@ from ..errors import OptionError
 from ..lie import log3
 from .registry import BANDED_LOG6, BANDED_POINT
 
-__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_axes",
-           "pose_text"]
+__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "DEFAULT_GOAL_TOLERANCE", "angles", "band_aux",
+           "band_errors", "parse_axes", "pose_text"]
 
 #: The ``aux`` row of a goal with bands or free axes (read by the compiled ``solvers/lm/axes.py``): AUX_INNER (6,)
 #: the residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
@@ -21,6 +21,8 @@ __all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "
 #: axis (0, 1, 2: x, y, z of the target frame) whose swing residual replaces the rotation vector, or -1.
 AUX_INNER, AUX_BAND, AUX_SWING = 0, 6, 12
 AUX_SIZE = 13
+#: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation); no band is narrower.
+DEFAULT_GOAL_TOLERANCE = 1e-6
 
 #: The axis names of a pose's six error components, in their order.
 AXES = ("x", "y", "z", "rx", "ry", "rz")
@@ -75,9 +77,9 @@ def pose_text(goal) -> str:
     return text + (f", free={' '.join(goal.free)!r}" if goal.free else "")
 
 
-def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:
+def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...]) -> np.ndarray:
     """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes``: ``band`` (len(axes),) or None
-    (a norm tolerance), ``free`` the free axes; ``accuracy`` (m, rad) the narrowest band."""
+    (a norm tolerance), ``free`` the free axes; no band narrower than :data:`DEFAULT_GOAL_TOLERANCE` (m, rad)."""
     aux = np.full(AUX_SIZE, np.inf)
     aux[AUX_SWING] = -1.0
     for i, name in enumerate(AXES):
@@ -88,8 +90,8 @@ def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ..
         else:
             b = band[axes.index(name)]
             if np.isfinite(b):
-                b = max(b, accuracy)
-                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * accuracy, b
+                b = max(b, DEFAULT_GOAL_TOLERANCE)
+                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * DEFAULT_GOAL_TOLERANCE, b
     free_rot = [i for i in (3, 4, 5) if AXES[i] in free]
     if band is None and len(free_rot) == 1:
         aux[AUX_SWING] = free_rot[0] - 3

@@ -17,7 +17,7 @@ from ..errors import FrameError, GoalsFileError, OptionError, TargetError
 from ..io import datafile
 from ..io.datafile import Flow
 from ..target import Target
-from .goal import DEFAULT_GOAL_TOLERANCE
+from .bands import DEFAULT_GOAL_TOLERANCE
 
 __all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_entry", "number", "numbers",
            "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",

@@ -10,14 +10,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
-from .bands import AUX_SIZE, band_aux, band_errors, parse_axes
+from .bands import AUX_SIZE, DEFAULT_GOAL_TOLERANCE, band_aux, band_errors, parse_axes
 from .registry import KIND_BEYOND_FRAME, KINDS, register
 
 __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
            "FramePair", "init_set", "is_set", "number", "point3"]
-
-#: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation).
-DEFAULT_GOAL_TOLERANCE = 1e-6
 
 
 def number(value, what: str, accepted: str, low: float | None = None, strict: bool = False) -> float:
@@ -104,7 +101,7 @@ class Goal:
             tolerance = rotation_tolerance = 0.0
         self._init_common(frame, weight, tolerance, rotation_tolerance, kinds[0] if plain else kinds[1], "rx" in axes)
         self._set(band=band, free=free)
-        self._set_aux(None if plain else band_aux(band, free, axes, DEFAULT_GOAL_TOLERANCE))
+        self._set_aux(None if plain else band_aux(band, free, axes))
 
     @property
     def label(self) -> str:
@@ -134,7 +131,7 @@ class Goal:
     @classmethod
     def file_kind(cls):
         """This kind's :class:`.file_entries.FileKind` in goals files (:attr:`FILE_ENTRY`), or None."""
-        from .file_entries import FileKind, pair_kind  # which read this module's default tolerance
+        from .file_entries import FileKind, pair_kind
 
         name, fields, read, write, *options = cls.FILE_ENTRY or (None,) * 4
         if name is not None and issubclass(cls, FramePair):  # frame_a, frame and target
