@@ -103,9 +103,8 @@ def _floats(text: str | None, count: int, what: str, where: str, default: tuple[
 def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
     """Origin, axis and limits of one joint."""
     origin = j.find("origin")
-    if origin is not None:
-        _floats(origin.get("xyz"), 3, f"the origin xyz of joint {jname!r}", where, (0.0, 0.0, 0.0))
-        _floats(origin.get("rpy"), 3, f"the origin rpy of joint {jname!r}", where, (0.0, 0.0, 0.0))
+    for attr in ("xyz", "rpy") if origin is not None else ():
+        _floats(origin.get(attr), 3, f"the origin {attr} of joint {jname!r}", where, (0.0, 0.0, 0.0))
     if jtype in ("fixed", "floating"):
         return
     axis_el = j.find("axis")
