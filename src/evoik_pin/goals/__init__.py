@@ -1,12 +1,7 @@
-"""Goals of an IK problem on a whole robot: a list of goals, each on one frame, its target in the robot's base frame::
-
-    goals = [Pose("left_sole_link", T_lf), Pose("right_sole_link", T_rf), Position("arm_right_7_link", p_rh)]
-    result = evoik_pin.solve(talos, goals)
-
-One module per kind; bands and free axes: :mod:`.bands`; goal sets: :mod:`.goal`; preferences: :mod:`.preferences`;
-:func:`bind` packs a goal list into the LM kernel's goal stack (:mod:`.stack`). A goal's ``weight`` (> 0) scales
-its rows by ``sqrt(weight)``. User guide: docs/GOALS.md.
-"""
+"""Goals of an IK problem on a whole robot, each on one frame, its target in the robot's base frame
+(``evoik_pin.solve(talos, [Pose("left_sole_link", T_lf), Position("arm_right_7_link", p_rh)])``): one module per kind
+(bands and free axes: :mod:`.bands`; goal sets: :mod:`.goal`), :func:`bind` packs a goal list for the LM kernel
+(:mod:`.stack`). A goal's ``weight`` (> 0) scales its rows by ``sqrt(weight)``. User guide: docs/GOALS.md."""
 
 # The kinds in the order they are declared (registered: evoik_pin.goals.registry), which goals files list them in.
 from .pose import Pose  # noqa: I001
@@ -15,8 +10,7 @@ from .planar import Planar
 from .orientation import Orientation
 from .pointing import Direction, LookAt
 from .center_of_mass import CenterOfMass
-from .relative_pose import RelativePose
-from .relative_position import RelativePosition
+from .relative_pose import RelativePose, RelativePosition
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from .stack import bind, is_goal_list

@@ -1,13 +1,7 @@
 """Per-axis tolerance bands and free axes (:class:`Pose`, :class:`Position`, :class:`Orientation`,
-:class:`RelativePose`), their kernel ``aux`` row, and the NumPy twin of the kernel's errors of the banded kinds
-(``solvers/lm/axes.py``).
-
-Error components (axes ``x y z rx ry rz``): a pose's ``R_t^T (p - p_t)`` (m) then ``log3(R_t^T R)`` (rad); a
-position's ``p - p_t`` in the base frame; an orientation's the rotation vector's. A scalar ``tolerance`` bounds the
-norms over the axes not free (with one free rotation axis a: the swing angle between the frame's and the target's
-a axes); a vector gives each component a half-width (``inf``: free; at least the default tolerance), the errors then
-being the norm of the excess over the bands (0 when met). LM aims half a tolerance inside each band.
-"""
+:class:`RelativePose`; their docstrings and docs/GOALS.md say what the error components are), their kernel ``aux``
+row, and the NumPy twin of the kernel's errors of the banded kinds (``solvers/lm/axes.py``): the norm of the excess
+over the bands (0 when met), with one free rotation axis the swing angle. LM aims half a tolerance inside each band."""
 
 from __future__ import annotations
 
@@ -18,8 +12,8 @@ from ..errors import OptionError
 from ..lie import log3
 from .registry import BANDED_LOG6, BANDED_POINT
 
-__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "band_aux", "band_errors", "parse_axes",
-           "parse_band", "parse_free", "pose_text"]
+__all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "DEFAULT_GOAL_TOLERANCE", "angles", "band_aux",
+           "band_errors", "parse_axes", "pose_text"]
 
 #: The ``aux`` row of a goal with bands or free axes (read by the compiled ``solvers/lm/axes.py``): AUX_INNER (6,)
 #: the residual's dead-zone half-widths (m x3, rad x3; inf on a free axis, 0 under a norm tolerance), AUX_BAND (6,)
@@ -27,68 +21,50 @@ __all__ = ["AUX_BAND", "AUX_INNER", "AUX_SIZE", "AUX_SWING", "AXES", "angles", "
 #: axis (0, 1, 2: x, y, z of the target frame) whose swing residual replaces the rotation vector, or -1.
 AUX_INNER, AUX_BAND, AUX_SWING = 0, 6, 12
 AUX_SIZE = 13
+#: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation); no band is narrower.
+DEFAULT_GOAL_TOLERANCE = 1e-6
 
 #: The axis names of a pose's six error components, in their order.
 AXES = ("x", "y", "z", "rx", "ry", "rz")
 
 
-def parse_free(free, allowed: tuple[str, ...], where: str) -> tuple[str, ...]:
-    """The free axes named by ``free`` (None, a string of names, or a list), each one of ``allowed``, in
-    :data:`AXES` order; OptionError for an unknown or repeated name."""
-    if free is None:
-        return ()
-    if isinstance(free, str):
-        names = free.replace(",", " ").split()
-    else:
-        try:
-            names = list(free)
-        except TypeError:
-            raise OptionError(f"{where}: free must name axes among {' '.join(allowed)} (a string or a list), "
-                              f"got {free!r}") from None
-    for name in names:
-        if name not in allowed:
-            raise OptionError(f"{where}: unknown free axis {name!r}; accepted: {' '.join(allowed)}")
-    if len(set(names)) != len(names):
-        raise OptionError(f"{where}: free names an axis twice: {names}")
-    return tuple(a for a in AXES if a in names)
-
-
-def parse_band(tolerance, axes: tuple[str, ...], where: str) -> np.ndarray | None:
-    """None for a scalar ``tolerance``, else its half-widths, one per axis of ``axes`` (m or rad, >= 0; inf: free);
-    OptionError for a wrong length, NaN or a negative half-width."""
-    count = len(axes)
-    if np.ndim(tolerance) == 0:
-        return None
-    try:
-        band = np.array(tolerance, dtype=float)
-    except (TypeError, ValueError):
-        raise OptionError(f"{where}: tolerance must be a number or {count} numbers (half-widths), "
-                          f"got {tolerance!r}") from None
-    if band.shape != (count,):
-        raise OptionError(f"{where}: a tolerance band takes {count} half-widths ({' '.join(axes)}), "
-                          f"got shape {band.shape}")
-    if np.isnan(band).any() or (band < 0).any():
-        raise OptionError(f"{where}: tolerance half-widths must be >= 0 (inf: free), got {band.tolist()}")
-    return band
-
-
 def parse_axes(tolerance, rotation_tolerance, free, axes: tuple[str, ...], where: str
                ) -> tuple[np.ndarray | None, tuple[str, ...]]:
-    """(band or None, free axes) of a goal whose error components are ``axes``: ``tolerance`` one number (None: a
-    norm tolerance, checked by the goal) or one half-width per axis (:func:`parse_band`; the free axes' set to inf),
-    ``free`` names among ``axes`` (:func:`parse_free`). OptionError, naming ``where``, for a bad band or free axis,
-    a ``rotation_tolerance`` beside half-widths, or every axis free."""
-    band = parse_band(tolerance, axes, where)
-    free = parse_free(free, axes, where)
-    if band is not None and rotation_tolerance is not None:
-        raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
-                          "already holds the rotation's half-widths (rx ry rz, rad)")
-    if len(free) == len(axes):
+    """(band or None, free axes in :data:`AXES` order) of a goal whose error components are ``axes``: ``tolerance``
+    one number (a norm tolerance, checked by the goal) or one half-width per axis (m or rad, >= 0; inf: free; the free
+    axes' set to inf), ``free`` None, a string of names or a list of them, among ``axes``. OptionError, naming
+    ``where``, for a wrong length, NaN or a negative half-width, a ``rotation_tolerance`` beside half-widths, an
+    unknown or repeated free axis, or every axis free."""
+    band = None
+    if np.ndim(tolerance) != 0:
+        try:
+            band = np.array(tolerance, dtype=float)
+        except (TypeError, ValueError):
+            raise OptionError(f"{where}: tolerance must be a number or {len(axes)} numbers (half-widths), "
+                              f"got {tolerance!r}") from None
+        if band.shape != (len(axes),):
+            raise OptionError(f"{where}: a tolerance band takes {len(axes)} half-widths ({' '.join(axes)}), "
+                              f"got shape {band.shape}")
+        if np.isnan(band).any() or (band < 0).any():
+            raise OptionError(f"{where}: tolerance half-widths must be >= 0 (inf: free), got {band.tolist()}")
+        if rotation_tolerance is not None:
+            raise OptionError(f"{where}: rotation_tolerance goes with one number as tolerance; a 6-number tolerance "
+                              "already holds the rotation's half-widths (rx ry rz, rad)")
+    try:
+        names = [] if free is None else free.replace(",", " ").split() if isinstance(free, str) else list(free)
+    except TypeError:
+        raise OptionError(f"{where}: free must name axes among {' '.join(axes)} (a string or a list), "
+                          f"got {free!r}") from None
+    for name in names:
+        if name not in axes:
+            raise OptionError(f"{where}: unknown free axis {name!r}; accepted: {' '.join(axes)}")
+    if len(set(names)) != len(names):
+        raise OptionError(f"{where}: free names an axis twice: {names}")
+    if len(names) == len(axes):
         raise OptionError(f"{where}: free names all {({3: 'three'}).get(len(axes), 'six')} axes, which leaves "
                           "nothing to meet; drop the goal")
-    if band is not None:
-        band = np.where(np.isin(axes, free), np.inf, band)
-    return band, free
+    free = tuple(a for a in AXES if a in names)
+    return (None if band is None else np.where(np.isin(axes, free), np.inf, band)), free
 
 
 def pose_text(goal) -> str:
@@ -101,9 +77,9 @@ def pose_text(goal) -> str:
     return text + (f", free={' '.join(goal.free)!r}" if goal.free else "")
 
 
-def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...], accuracy: float) -> np.ndarray:
+def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...]) -> np.ndarray:
     """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes``: ``band`` (len(axes),) or None
-    (a norm tolerance), ``free`` the free axes; ``accuracy`` (m, rad) the narrowest band."""
+    (a norm tolerance), ``free`` the free axes; no band narrower than :data:`DEFAULT_GOAL_TOLERANCE` (m, rad)."""
     aux = np.full(AUX_SIZE, np.inf)
     aux[AUX_SWING] = -1.0
     for i, name in enumerate(AXES):
@@ -114,8 +90,8 @@ def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ..
         else:
             b = band[axes.index(name)]
             if np.isfinite(b):
-                b = max(b, accuracy)
-                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * accuracy, b
+                b = max(b, DEFAULT_GOAL_TOLERANCE)
+                aux[AUX_INNER + i], aux[AUX_BAND + i] = b - 0.5 * DEFAULT_GOAL_TOLERANCE, b
     free_rot = [i for i in (3, 4, 5) if AXES[i] in free]
     if band is None and len(free_rot) == 1:
         aux[AUX_SWING] = free_rot[0] - 3

@@ -64,16 +64,14 @@ class CenterOfMass(Goal):
         kind = KIND_COM if support is None else KIND_COM_SUPPORT
         self._init_common(None, weight, tolerance, None, kind, False, "the centre-of-mass goal")
         if support is None:
-            object.__setattr__(self, "point", point3(point, "CenterOfMass's point"))
-            object.__setattr__(self, "axes", _axes(axes))
-            object.__setattr__(self, "support", None)
-            object.__setattr__(self, "margin", 0.0)
+            if not isinstance(axes, str) or not axes or not set(axes) <= set(_AXES) or len(set(axes)) != len(axes):
+                raise OptionError(f"CenterOfMass's axes name each of x, y, z at most once (e.g. 'xyz', 'xy', 'z'), "
+                                  f"got {axes!r}")
+            self._set(point=point3(point, "CenterOfMass's point"), axes="".join(a for a in _AXES if a in axes),
+                      support=None, margin=0.0)
         else:
-            object.__setattr__(self, "point", None)
-            object.__setattr__(self, "axes", "xy")
-            object.__setattr__(self, "support", _support(support))
-            object.__setattr__(self, "margin", goal_number(margin, "margin (m) of the centre-of-mass support goal",
-                                                           "a finite number >= 0", 0.0))
+            self._set(point=None, axes="xy", support=_support(support), margin=goal_number(
+                margin, "margin (m) of the centre-of-mass support goal", "a finite number >= 0", 0.0))
 
     @property
     def frames(self) -> list[str]:
@@ -96,7 +94,10 @@ class CenterOfMass(Goal):
             raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "
                               "CenterOfMass goal needs the links' masses")
         m = robot.tree.m
-        points = [] if self.support is None else _bound_points(robot, self.support)
+        points = []  # per contact point its physical joint (-1: none), its position (m) in that joint's folded frame
+        for frame, pts in [] if self.support is None else _frame_points(robot, self.support):
+            j, R, p = robot.frame_constants(frame)  # FrameError with the closest names
+            points += [[j, *(R @ x + p)] for x in pts]
         aux = np.zeros(A_COM_BODIES + 5 * m + 4 * len(points))
         aux[A_COM_MASS] = mc.total
         aux[A_COM_MOMENT:A_COM_MOMENT + 3] = mc.fixed_moment
@@ -159,15 +160,6 @@ class CenterOfMass(Goal):
         frames = list(self.support)
         return (f"CenterOfMass(support={frames}, margin={self.margin:g}, weight={self.weight:g}, "
                 f"tolerance={self.tolerance:g})")
-
-
-
-
-def _axes(axes) -> str:
-    if not isinstance(axes, str) or not axes or any(a not in _AXES for a in axes) or len(set(axes)) != len(axes):
-        raise OptionError(f"CenterOfMass's axes name each of x, y, z at most once (e.g. 'xyz', 'xy', 'z'), "
-                          f"got {axes!r}")
-    return "".join(a for a in _AXES if a in axes)
 
 
 def _support(support) -> dict:
@@ -233,17 +225,6 @@ _CONTACTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def _frame_points(robot, support: dict) -> list[tuple[str, np.ndarray]]:
     """(frame, its (k, 3) points in it) of each support frame (collision geometry where none were given)."""
     return [(f, contact_points(robot, f) if pts is None else pts) for f, pts in support.items()]
-
-
-def _bound_points(robot, support: dict) -> np.ndarray:
-    """(K, 4): per contact point, its physical joint (-1: none) and position (m) in that joint's folded frame (the
-    base frame for -1)."""
-    rows = []
-    for frame, pts in _frame_points(robot, support):
-        j, R, p = robot.frame_constants(frame)  # FrameError with the closest names
-        for x in pts:
-            rows.append([j, *(R @ x + p)])
-    return np.array(rows, dtype=float)
 
 
 def com_of(robot, q) -> np.ndarray:

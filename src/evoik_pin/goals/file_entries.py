@@ -17,7 +17,7 @@ from ..errors import FrameError, GoalsFileError, OptionError, TargetError
 from ..io import datafile
 from ..io.datafile import Flow
 from ..target import Target
-from .goal import DEFAULT_GOAL_TOLERANCE
+from .bands import DEFAULT_GOAL_TOLERANCE
 
 __all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_entry", "number", "numbers",
            "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",
@@ -175,11 +175,10 @@ def field_entries(goal, fields: tuple[str, ...]) -> dict:
     return entry
 
 
-def pair_kind(cls, name: str, read_target: Callable, write_target: Callable) -> FileKind:
+def pair_kind(cls, name: str, fields: tuple[str, ...], read_target: Callable, write_target: Callable) -> FileKind:
     """The ``kind: <name>`` of a two-frame goal class (:class:`RelativePose`, :class:`RelativePosition`):
     ``frame_a``, ``frame`` (frame b) and a ``target`` (read by ``read_target``, written by ``write_target``), with
-    the optional ``cls.FILE_FIELDS``; read as ``cls(frame_a, frame, target, **fields)``."""
-    fields = cls.FILE_FIELDS
+    the optional ``fields``; read as ``cls(frame_a, frame, target, **fields)``."""
 
     def read(entry: dict, what: str):
         unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")

@@ -1,10 +1,5 @@
-"""The base of every goal kind (:class:`Goal`: its frame, weight and tolerances, checked when made), goal sets, and
-what the kinds on two frames share (:class:`FramePair`, :func:`pack_frame_pair`).
-
-A goal set is one goal whose target is any one of several (``Pose(frame, [T1, ..., Tk])``): packed for the kernel
-with its first member's target, its ``alternatives`` one single-target goal per member, in order. Solvers try the
-members (:meth:`evoik_pin.problem.IKProblem.variants`); ``Result.chosen[i]`` is the member goal ``i`` meets.
-"""
+"""The base of every goal kind (:class:`Goal`: its frame, weight and tolerances, checked when made), goal sets
+(:func:`init_set`), and what the kinds on two frames share (:class:`FramePair`)."""
 
 from __future__ import annotations
 
@@ -15,14 +10,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, OptionError, TargetError
-from .bands import AUX_SIZE, band_aux, band_errors, parse_axes
+from .bands import AUX_SIZE, DEFAULT_GOAL_TOLERANCE, band_aux, band_errors, parse_axes
 from .registry import KIND_BEYOND_FRAME, KINDS, register
 
 __all__ = ["A_REL_BAND", "A_REL_JOINT", "A_REL_P", "A_REL_R", "A_REL_SIGNS", "BOTH", "DEFAULT_GOAL_TOLERANCE", "Goal",
-           "FramePair", "init_set", "is_set", "number", "pack_frame_pair", "point3"]
-
-#: Default tolerance of a goal: 1e-6 m (and rad for a pose's rotation).
-DEFAULT_GOAL_TOLERANCE = 1e-6
+           "FramePair", "init_set", "is_set", "number", "point3"]
 
 
 def number(value, what: str, accepted: str, low: float | None = None, strict: bool = False) -> float:
@@ -77,22 +69,24 @@ class Goal:
         """Set and check the fields every goal has (a frozen dataclass's fields, hence object.__setattr__): weight
         > 0, tolerances >= 0 (None: the default; ``rotation_tolerance`` None: ``tolerance``), a frame name unless
         ``what`` names a goal without one in the messages."""
-        for name, value in (("frame", frame), ("kind", kind), ("has_orientation", oriented)):
-            object.__setattr__(self, name, value)
         if what is None:
             if not isinstance(frame, str) or not frame:
                 raise FrameError(f"a goal's frame is a frame name (a non-empty string), got {frame!r}")
             what = f"the goal on {frame!r}"
-        weight_ = number(weight, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
+        weight = number(weight, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
         tol = DEFAULT_GOAL_TOLERANCE if tolerance is None else number(
             tolerance, f"tolerance (m) of {what}", "a finite number >= 0")
         rtol = tol if rotation_tolerance is None else number(
             rotation_tolerance, f"rotation_tolerance (rad) of {what}", "a finite number >= 0")
         if tol < 0 or rtol < 0:
             raise OptionError(f"tolerances of {what} must be >= 0, got {tolerance!r} m and {rotation_tolerance!r} rad")
-        object.__setattr__(self, "weight", weight_)
-        object.__setattr__(self, "tolerance", tol)
-        object.__setattr__(self, "rotation_tolerance", rtol)
+        self._set(frame=frame, kind=kind, has_orientation=oriented, weight=weight, tolerance=tol,
+                  rotation_tolerance=rtol)
+
+    def _set(self, **fields) -> None:
+        """Set fields of this frozen dataclass, as its ``__init__`` does (object.__setattr__)."""
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
 
     def _init_axes(self, frame, weight, tolerance, rotation_tolerance, free, axes: tuple[str, ...],
                    kinds: tuple[int | None, int], where: str) -> None:
@@ -106,9 +100,8 @@ class Goal:
         if band is not None:  # met at 0
             tolerance = rotation_tolerance = 0.0
         self._init_common(frame, weight, tolerance, rotation_tolerance, kinds[0] if plain else kinds[1], "rx" in axes)
-        object.__setattr__(self, "band", band)
-        object.__setattr__(self, "free", free)
-        self._set_aux(None if plain else band_aux(band, free, axes, DEFAULT_GOAL_TOLERANCE))
+        self._set(band=band, free=free)
+        self._set_aux(None if plain else band_aux(band, free, axes))
 
     @property
     def label(self) -> str:
@@ -122,7 +115,7 @@ class Goal:
     def _set_aux(self, aux: np.ndarray | None) -> None:
         if aux is not None:
             aux.setflags(write=False)
-        object.__setattr__(self, "_aux", aux)
+        self._set(_aux=aux)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -131,27 +124,45 @@ class Goal:
         aux = self.aux()
         return None if aux is None else band_errors(self.kind, P, R, pt, Rt, aux)
 
+    #: This kind's goals-file entry (:meth:`file_kind`): its ``kind:`` name, optional fields, target reader and writer
+    #: (:mod:`.file_entries`), then FileKind's further options as a dict; None: goals files do not take the kind.
+    FILE_ENTRY = None
+
     @classmethod
     def file_kind(cls):
-        """This kind's :class:`.file_entries.FileKind` in goals files, or None for a kind they do not take."""
-        return None
+        """This kind's :class:`.file_entries.FileKind` in goals files (:attr:`FILE_ENTRY`), or None."""
+        from .file_entries import FileKind, pair_kind
+
+        name, fields, read, write, *options = cls.FILE_ENTRY or (None,) * 4
+        if name is not None and issubclass(cls, FramePair):  # frame_a, frame and target
+            return pair_kind(cls, name, fields, read, write)
+        return None if name is None else FileKind(name, cls, fields, read, write, **(options[0] if options else {}))
+
+    #: False for the kinds whose target is no place in the base frame (an orientation, a direction, two frames'
+    #: placement): no viewer marker.
+    MARKED = True
 
     def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:
         """This goal's viewer marker: (node name, position (3,) m in the base frame, rotation (3, 3) for a triad or
-        None for a sphere), or None when its target is no place in the base frame. Default: its frame's target."""
+        None for a sphere), or None (:attr:`MARKED`). Default: its frame's target."""
+        if not self.MARKED:
+            return None
         p, R = self.encode()
         return self.frame, p, (R if self.has_orientation else None)
 
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - abstract
-        """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal."""
-        raise NotImplementedError
+    def encode(self) -> tuple[np.ndarray, np.ndarray]:
+        """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal, new arrays: of a ``target`` pose its translation
+        (m) and rotation, of a rotation (3, 3) zeros and itself, of 3 numbers (a point, m) those and the identity."""
+        if isinstance(self.target, pin.SE3):
+            return np.array(self.target.translation), np.array(self.target.rotation)
+        return (np.zeros(3), self.target.copy()) if self.target.shape == (3, 3) else (self.target.copy(), np.eye(3))
 
     def errors(self, T: pin.SE3) -> tuple[float, float | None]:
         """(position error m or None, rotation error rad or None) of the goal frame at pose ``T`` (base frame)."""
         pt, Rt = self.encode()
-        if self.aux() is not None:
-            pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], pt, Rt)
-            return self.reported(pos[0], rot[0])
+        errors = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], pt, Rt)
+        if errors is not None:
+            return self.reported(errors[0][0], errors[1][0])
         pos = float(np.linalg.norm(T.translation - pt))
         if not self.has_orientation:
             return pos, None
@@ -200,8 +211,11 @@ def is_set(target, single_shape: tuple[int, ...]) -> bool:
 
 
 def init_set(goal, targets, single, what: str) -> None:
-    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``. ``what``
-    names the kind and its members ("Pose poses"). TargetError for an empty set, naming the index of a bad member."""
+    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``: any one will
+    do (``Pose(frame, [T1, ..., Tk])``). Packed for the kernel with its first member's target, its ``alternatives``
+    one single-target goal per member, in order; solvers try the members (:meth:`evoik_pin.problem.IKProblem.variants`)
+    and ``Result.chosen[i]`` is the member goal ``i`` meets. ``what`` names the kind and its members ("Pose poses").
+    TargetError for an empty set, naming the index of a bad member."""
     kind, members = what.split()
     if len(targets) == 0:
         raise TargetError(f"{kind} on {goal.frame!r}: a goal set with no {members}; give at least one "
@@ -212,10 +226,9 @@ def init_set(goal, targets, single, what: str) -> None:
             made.append(single(t))
         except TargetError as exc:
             raise TargetError(f"{kind} on {goal.frame!r}, member {i} of the goal set: {exc}") from None
-    object.__setattr__(goal, "target", made[0].target)
-    object.__setattr__(goal, "alternatives", tuple(made))
     encoded = [m.encode() for m in made]  # the members' kernel targets, (k, 3) and (k, 3, 3), for vectorized use
-    object.__setattr__(goal, "member_targets", (np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])))
+    goal._set(target=made[0].target, alternatives=tuple(made),
+              member_targets=(np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])))
 
 
 # ------------------------------------------------------------------ goals on two frames
@@ -231,8 +244,12 @@ BOTH = 2.0
 
 class FramePair:
     """What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
-    :class:`~.relative_position.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``. A kind
+    :class:`~.relative_pose.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``. A kind
     defines :meth:`placement_errors`; the errors of poses and of populations follow from it."""
+
+    #: The aux row's sign of the joints moving both frames: :data:`BOTH` for a kind whose error sees them, else 0.
+    both = 0.0
+    MARKED = False
 
     def _init_pair(self, frame_a, frame_b, kind: str) -> None:
         """Set ``frame_a``; FrameError unless the frames are two different frame names (``kind`` names the goal)."""
@@ -241,7 +258,7 @@ class FramePair:
                 raise FrameError(f"{kind}'s {name} is a frame name (a non-empty string), got {value!r}")
         if frame_a == frame_b:
             raise FrameError(f"{kind} needs two frames, got {frame_a!r} twice")
-        object.__setattr__(self, "frame_a", frame_a)
+        self._set(frame_a=frame_a)
 
     @property
     def frame_b(self) -> str:
@@ -261,10 +278,6 @@ class FramePair:
     def batch_key(self) -> tuple:
         """What this goal's kernel numbers depend on besides its target (solve_many batches lists alike)."""
         return (self.frame_a,)
-
-    def marker(self) -> None:
-        """None: the target is placed relative to frame a, no place in the base frame."""
-        return None
 
     def placement_errors(self, Ra: np.ndarray, d: np.ndarray, Rb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(position errors (N,) m, rotation errors (N,) rad) for frame a's rotations Ra (N, 3, 3), the vectors
@@ -286,31 +299,29 @@ class FramePair:
         P, R = robot.fk_batch(Q, validate=False, frames=[self.frame_a, self.frame])
         return self.placement_errors(R[:, 0], P[:, 1] - P[:, 0], R[:, 1])
 
-
-def pack_frame_pair(robot, frame_a: str, frame_b: str, band: np.ndarray | None = None,
-                    both: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """(aux row, support row (m,) bool) of a goal on frames a and b of ``robot`` (the ``A_REL_*`` layout above):
-    frame a's joint and folded placement, the band columns ``band`` (AUX_SIZE,) when given, and each joint's sign
-    (``both`` for the joints moving both frames). Raises FrameError for an unknown frame, or two frames no joint
-    moves apart (nor, with ``both``, turns together)."""
-    ja, Ra, pa = robot.frame_constants(frame_a)
-    jb = robot.frame_constants(frame_b)[0]
-    tree = robot.tree
-    on_a, on_b = np.zeros(tree.m, dtype=bool), np.zeros(tree.m, dtype=bool)
-    on_a[tree.ancestors(ja)], on_b[tree.ancestors(jb)] = True, True
-    signs = on_b.astype(float) - on_a.astype(float)  # joints moving both move the two frames together
-    shared = on_a & on_b
-    # with ``both`` set (a vector in the world's axes) a revolute joint moving both frames turns the vector: two
-    # frames on one link still make a goal then (a head's direction from the neck)
-    if not signs.any() and not (both and (shared & tree.revolute).any()):
-        raise FrameError(f"no active joint of {robot.name} moves frame {frame_b!r} relative to "
-                         f"{frame_a!r}: load the robot with both among its tips (tips=[...]) or tips='all'")
-    signs[shared] = both
-    aux = np.zeros(A_REL_SIGNS + tree.m)
-    aux[A_REL_JOINT] = ja
-    aux[A_REL_R:A_REL_R + 9] = Ra.ravel()
-    aux[A_REL_P:A_REL_P + 3] = pa
-    if band is not None:  # bands, free axes
-        aux[A_REL_BAND:A_REL_BAND + AUX_SIZE] = band
-    aux[A_REL_SIGNS:] = signs
-    return aux, on_a | on_b
+    def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_REL_*`` layout above): frame a's joint
+        and folded placement, the band columns of a goal with bands, and each joint's sign (:attr:`both` for the
+        joints moving both frames). Raises FrameError for an unknown frame, or two frames no joint moves apart (nor,
+        with :attr:`both`, turns together)."""
+        ja, Ra, pa = robot.frame_constants(self.frame_a)
+        jb = robot.frame_constants(self.frame)[0]
+        tree = robot.tree
+        on_a, on_b = np.zeros(tree.m, dtype=bool), np.zeros(tree.m, dtype=bool)
+        on_a[tree.ancestors(ja)], on_b[tree.ancestors(jb)] = True, True
+        signs = on_b.astype(float) - on_a.astype(float)  # joints moving both move the two frames together
+        shared = on_a & on_b
+        # with ``both`` set (a vector in the world's axes) a revolute joint moving both frames turns the vector: two
+        # frames on one link still make a goal then (a head's direction from the neck)
+        if not signs.any() and not (self.both and (shared & tree.revolute).any()):
+            raise FrameError(f"no active joint of {robot.name} moves frame {self.frame!r} relative to "
+                             f"{self.frame_a!r}: load the robot with both among its tips (tips=[...]) or tips='all'")
+        signs[shared] = self.both
+        aux = np.zeros(A_REL_SIGNS + tree.m)
+        aux[A_REL_JOINT] = ja
+        aux[A_REL_R:A_REL_R + 9] = Ra.ravel()
+        aux[A_REL_P:A_REL_P + 3] = pa
+        if self.aux() is not None:  # bands, free axes
+            aux[A_REL_BAND:A_REL_BAND + AUX_SIZE] = self.aux()
+        aux[A_REL_SIGNS:] = signs
+        return aux, on_a | on_b

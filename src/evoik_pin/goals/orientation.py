@@ -10,7 +10,7 @@ import pinocchio as pin
 from ..errors import TargetError
 from ..target import _rotation
 from .bands import AXES
-from .file_entries import FileKind, orientation_target
+from .file_entries import orientation_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .registry import BANDED_ROTATION, FAMILY_AXES, KindCode
 
@@ -36,6 +36,10 @@ class Orientation(Goal):
     band: object = None
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
+    #: ``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free.
+    MARKED = False
+    FILE_ENTRY = ("orientation", ("weight", "tolerance", "free"), orientation_target,
+                  lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]})
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  free=None) -> None:
@@ -49,20 +53,7 @@ class Orientation(Goal):
             R = _rotation(target)
         except TargetError as exc:
             raise TargetError(f"{where} takes a 3 x 3 rotation, a pin.SE3 or a 4 x 4 pose: {exc}") from None
-        object.__setattr__(self, "target", np.array(R))
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.zeros(3), self.target.copy()
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free."""
-        return FileKind("orientation", cls, ("weight", "tolerance", "free"), orientation_target,
-                        lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]})
-
-    def marker(self) -> None:
-        """None: an orientation alone has no place to mark."""
-        return None
+        self._set(target=np.array(R))
 
     def __repr__(self) -> str:
         rpy = np.round(pin.rpy.matrixToRpy(self.target), 6).tolist()

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,7 +10,7 @@ import pinocchio as pin
 
 from .. import lie
 from ..errors import TargetError
-from .file_entries import FileKind, number, unknown_keys
+from .file_entries import number, unknown_keys
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .registry import FAMILY_FRAME, PLANAR, PLANAR_YAW, KindCode
 
@@ -19,6 +18,13 @@ __all__ = ["KIND_PLANAR", "KIND_PLANAR_YAW", "Planar"]
 
 #: A planar goal's kernel codes: x, y (2 rows), and x, y with the heading (3 rows).
 KIND_PLANAR, KIND_PLANAR_YAW = PLANAR, PLANAR_YAW
+
+
+def _planar_target(target: dict) -> tuple[float, float, float | None]:
+    """A planar goal's target: ``x``, ``y`` (m) and optionally ``yaw_rad`` (rad)."""
+    unknown_keys(target, ("x", "y", "yaw_rad"), "target")
+    return (number(target.get("x"), "target x (m)"), number(target.get("y"), "target y (m)"),
+            None if "yaw_rad" not in target else number(target["yaw_rad"], "target yaw_rad (rad)"))
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -36,30 +42,25 @@ class Planar(Goal):
     yaw: float | None = None
     KIND_CODES = (KindCode(KIND_PLANAR, (0, 1), FAMILY_FRAME),
                   KindCode(KIND_PLANAR_YAW, (0, 1, 5), FAMILY_FRAME, oriented=True, angle=True))
+    #: ``kind: planar``: ``target: {x, y[, yaw_rad]}`` (m, rad); weight, tolerance, rotation_tolerance.
+    FILE_ENTRY = ("planar", ("weight", "tolerance", "rotation_tolerance"), _planar_target,
+                  lambda g: {"x": float(g.target[0]), "y": float(g.target[1])}
+                  | ({} if g.yaw is None else {"yaw_rad": g.yaw}),
+                  {"make": lambda frame, target, **fields: Planar(frame, *target, **fields)})
 
     def __init__(self, frame: str, x: float, y: float, yaw: float | None = None, weight: float = 1.0,
                  tolerance: float | None = DEFAULT_GOAL_TOLERANCE, rotation_tolerance: float | None = None) -> None:
-        where = f"Planar on {frame!r}"
         self._init_common(frame, weight, tolerance, rotation_tolerance,
                           KIND_PLANAR if yaw is None else KIND_PLANAR_YAW, yaw is not None)
-        values = [x, y] + ([] if yaw is None else [yaw])
         try:
-            values = [float(v) for v in values]
+            target = np.array([x, y, 0.0 if yaw is None else yaw], dtype=float)
         except (TypeError, ValueError):
-            values = [math.nan]
-        if not all(math.isfinite(v) for v in values):
-            raise TargetError(f"{where} takes finite numbers x, y (m) and yaw (rad) or None, got "
+            target = np.full(3, np.nan)
+        if not np.isfinite(target).all():
+            raise TargetError(f"Planar on {frame!r} takes finite numbers x, y (m) and yaw (rad) or None, got "
                               f"{x!r}, {y!r}, {yaw!r}")
-        object.__setattr__(self, "target", np.array([values[0], values[1], values[2] if yaw is not None else 0.0]))
-        object.__setattr__(self, "yaw", None if yaw is None else values[2])
+        self._set(target=target, yaw=None if yaw is None else float(target[2]))
         self._set_aux(None)
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.target.copy(), np.eye(3)
-
-    def errors(self, T: pin.SE3) -> tuple[float, float | None]:
-        pos, rot = self.population_errors(np.asarray(T.translation)[None], np.asarray(T.rotation)[None], None, None)
-        return float(pos[0]), (float(rot[0]) if self.yaw is not None else None)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:
         """(distances (N,) m in the base xy-plane, |wrapped heading differences| (N,) rad, 0 without a yaw) of frame
@@ -75,28 +76,7 @@ class Planar(Goal):
         R = pin.rpy.rpyToMatrix(0.0, 0.0, yaw) if self.yaw is not None else None
         return self.frame, np.array([x, y, 0.0]), R
 
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: planar``: ``target: {x, y[, yaw_rad]}`` (m, rad); weight, tolerance, rotation_tolerance."""
-        return FileKind("planar", cls, ("weight", "tolerance", "rotation_tolerance"), _planar_target, _planar_text,
-                        make=lambda frame, target, **fields: cls(frame, *target, **fields))
-
     def __repr__(self) -> str:
         yaw = "" if self.yaw is None else f", yaw={self.yaw:g}"
         return (f"Planar({self.frame!r}, x={self.target[0]:g}, y={self.target[1]:g}{yaw}, weight={self.weight:g}, "
                 f"tolerance={self.tolerance:g}, rotation_tolerance={self.rotation_tolerance:g})")
-
-
-def _planar_target(target: dict) -> tuple[float, float, float | None]:
-    """A planar goal's target: ``x``, ``y`` (m) and optionally ``yaw_rad`` (rad)."""
-    unknown_keys(target, ("x", "y", "yaw_rad"), "target")
-    return (number(target.get("x"), "target x (m)"), number(target.get("y"), "target y (m)"),
-            None if "yaw_rad" not in target else number(target["yaw_rad"], "target yaw_rad (rad)"))
-
-
-def _planar_text(goal: Planar) -> dict:
-    """A planar target as its ``x``, ``y`` and ``yaw_rad``."""
-    out = {"x": float(goal.target[0]), "y": float(goal.target[1])}
-    if goal.yaw is not None:
-        out["yaw_rad"] = goal.yaw
-    return out

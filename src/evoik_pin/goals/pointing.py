@@ -28,9 +28,9 @@ def unit_vector(value, what: str) -> np.ndarray:
     try:
         v = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise TargetError(f"{what} must be 3 numbers (a direction), got {value!r}") from None
+        v = np.zeros(0)
     if v.shape != (3,):
-        raise TargetError(f"{what} must be 3 numbers (a direction), got shape {v.shape}")
+        raise TargetError(f"{what} must be 3 numbers (a direction), got {value!r}")
     if not np.isfinite(v).all():
         raise TargetError(f"{what} must be 3 finite numbers, got {v.tolist()}")
     norm = float(np.linalg.norm(v))
@@ -53,9 +53,9 @@ class _Pointing(Goal):
         name = type(self).__name__
         # rad; the position error (None) is unused
         self._init_common(frame, weight, tolerance, tolerance, self.KIND_CODES[0].code, False)
-        object.__setattr__(self, "axis", unit_vector(axis, f"{name} on {frame!r}: axis"))
         where = f"{name} on {frame!r}: {self.TARGET}"
-        object.__setattr__(self, self.TARGET, point3(target, where) if self.has_point else unit_vector(target, where))
+        self._set(axis=unit_vector(axis, f"{name} on {frame!r}: axis"),
+                  **{self.TARGET: point3(target, where) if self.has_point else unit_vector(target, where)})
         aux = np.zeros(AUX_SIZE)
         aux[AUX_AXIS:AUX_AXIS + 3] = self.axis
         self._set_aux(aux)
@@ -99,15 +99,12 @@ class Direction(_Pointing):
     direction: object = None
     has_point = False
     TARGET = FILE_KIND = "direction"
+    MARKED = False
     KIND_CODES = (KindCode(KIND_DIRECTION, (3, 4, 5), FAMILY_AXES, has_position=False, angle=True),)
 
     def __init__(self, frame: str, axis, direction, weight: float = 1.0,
                  tolerance: float = DEFAULT_GOAL_TOLERANCE) -> None:
         self._init_pointing(frame, axis, direction, weight, tolerance)
-
-    def marker(self) -> None:
-        """None: a direction has no place to mark."""
-        return None
 
 
 #: A look-at's kernel code: the frame's axis minus the unit direction to the point (3 rows, base frame).

@@ -10,7 +10,7 @@ import pinocchio as pin
 from ..errors import TargetError
 from ..target import Target, pose_arrays
 from .bands import AXES, pose_text
-from .file_entries import FileKind, matrix_text, pose_target
+from .file_entries import matrix_text, pose_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
 from .registry import BANDED_LOG6, FAMILY_AXES, FAMILY_FRAME, LOG6, KindCode
 
@@ -62,6 +62,10 @@ class Pose(Goal):
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_POSE, (0, 1, 2, 3, 4, 5), FAMILY_FRAME, oriented=True, angle=True),
                   KindCode(KIND_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_AXES, oriented=True, angle=True))
+    #: ``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; weight, tolerance (one number or 6
+    #: half-widths), rotation_tolerance, free; a goal set's members as poses.
+    FILE_ENTRY = ("pose", ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text,
+                  {"set_member": lambda t: t.se3()})
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  rotation_tolerance: float | None = None, free=None) -> None:
@@ -71,17 +75,7 @@ class Pose(Goal):
             free = self.free or None
             return init_set(self, target, lambda T: Pose(frame, T, weight, tolerance, rotation_tolerance, free),
                             "Pose poses")
-        object.__setattr__(self, "target", se3_target(target, f"Pose on {frame!r}"))
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return np.array(self.target.translation), np.array(self.target.rotation)
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; weight, tolerance (one number or 6
-        half-widths), rotation_tolerance, free."""
-        return FileKind("pose", cls, ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text,
-                        set_member=lambda t: t.se3())
+        self._set(target=se3_target(target, f"Pose on {frame!r}"))
 
     def __repr__(self) -> str:
         return f"Pose({self.frame!r}, {pose_text(self)})"

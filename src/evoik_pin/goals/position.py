@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from ..errors import TargetError
 from .bands import AXES
-from .file_entries import FileKind, position_target, position_text
+from .file_entries import position_target, position_text
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, init_set, is_set
 from .registry import BANDED_POINT, FAMILY_AXES, FAMILY_FRAME, POINT, KindCode
 
@@ -37,6 +37,8 @@ class Position(Goal):
     band: object = None
     KIND_CODES = (KindCode(KIND_POSITION, (0, 1, 2), FAMILY_FRAME),
                   KindCode(KIND_POSITION_BAND, (0, 1, 2), FAMILY_AXES))
+    #: ``kind: position``: ``target: {position}`` (m); weight, tolerance (one number or 3 half-widths).
+    FILE_ENTRY = ("position", ("weight", "tolerance"), position_target, position_text)
 
     def __init__(self, frame: str, target, weight: float = 1.0,
                  tolerance: float | object = DEFAULT_GOAL_TOLERANCE) -> None:
@@ -51,15 +53,7 @@ class Position(Goal):
         if p.shape != (3,) or not np.isfinite(p).all():
             raise TargetError(f"Position on {frame!r} takes a 3-vector (m) of finite numbers (not NaN or inf; "
                               f"Pose({frame!r}, T) for a pose), got {target!r} (shape {p.shape})")
-        object.__setattr__(self, "target", p.copy())
-
-    def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.target.copy(), np.eye(3)
-
-    @classmethod
-    def file_kind(cls) -> FileKind:
-        """``kind: position``: ``target: {position}`` (m); weight, tolerance (one number or 3 half-widths)."""
-        return FileKind("position", cls, ("weight", "tolerance"), position_target, position_text)
+        self._set(target=p.copy())
 
     def __repr__(self) -> str:
         tol = f"{self.tolerance:g}" if self.band is None else f"{self.band.tolist()}"

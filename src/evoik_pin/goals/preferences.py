@@ -1,28 +1,21 @@
-"""Preferences: members of a goal list that are not goals, met as well as the goals allow and never at their
-expense (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``): costs over configurations (lower is better) that a
-solve lowers once the goals are met and ranks its answers by (:func:`evoik_pin.solvers.search.prefer.refine`).
-Differences on joints whose range spans a full turn are taken to the nearest turn.
-
-* :class:`Posture`: ``weight / 2 * |q - q_ref|^2`` over the joints ``q_ref`` names (rad^2, m^2);
-* :class:`JointLimitMargin`: ``weight / 2 * sum max(0, margin - distance to a limit)^2``;
-* :class:`Manipulability`: ``-weight * log(w)``, w the product of the singular values of a frame's 6 x n
-  Jacobian (LOCAL_WORLD_ALIGNED);
-* :class:`MinimalDisplacement`: ``weight / 2 * |q - q0|^2`` from the solve's ``q0``.
-"""
+"""Preferences: members of a goal list that are not goals (``solve(robot, [Pose(...), Posture(q_rest, 0.1)])``):
+costs over configurations (lower is better) a solve lowers once the goals are met, never at their expense, and ranks
+its answers by (:func:`evoik_pin.solvers.search.prefer.refine`). Differences on joints whose range spans a full turn
+are taken to the nearest turn."""
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
-from ..errors import ConfigurationError, FrameError, OptionError
+from ..errors import ConfigurationError, FrameError, OptionError, TargetError
+from ..lie import wrap_angle
 from ..robot.robot import yoshikawa
 from .goal import Goal, number
 
 __all__ = ["JointLimitMargin", "Manipulability", "MinimalDisplacement", "Posture", "Preference", "check_preferences",
            "holds_preferences", "split_preferences"]
-
-TWO_PI = 2.0 * np.pi
-
 
 def _weight(value, what: str) -> float:
     return number(value, f"weight of {what}", "a finite number > 0", 0.0, strict=True)
@@ -31,7 +24,7 @@ def _weight(value, what: str) -> float:
 def turn_difference(q: np.ndarray, ref: np.ndarray, wrap: np.ndarray) -> np.ndarray:
     """``q - ref`` (n,), on the ``wrap`` joints (bool (n,)) taken to the nearest turn, in [-pi, pi)."""
     d = q - ref
-    return np.where(wrap, (d + np.pi) % TWO_PI - np.pi, d)
+    return np.where(wrap, wrap_angle(d), d)
 
 
 class Preference:
@@ -82,9 +75,8 @@ class Posture(Preference):
         self._ref = self._mask = self._wrap = None
 
     def bind(self, robot, q0, lower, upper, wrap) -> Posture:
-        out = Posture.__new__(Posture)
-        out.weight = out.curvature = self.weight
-        out.q_ref, out._wrap = self.q_ref, wrap
+        out = copy.copy(self)
+        out._wrap = wrap
         if isinstance(self.q_ref, dict):
             unknown = [k for k in self.q_ref if k not in robot.joint_names]
             if unknown:
@@ -212,16 +204,12 @@ def check_preferences(robot, preferences, frame: str | None, with_q0: bool) -> N
     wrap = np.zeros(robot.n, dtype=bool)
     q0 = np.clip(np.zeros(robot.n), robot.lower, robot.upper) if with_q0 else None
     for p in preferences:
-        if isinstance(p, Manipulability):
-            p.bind(robot, q0, robot.lower, robot.upper, wrap, frame)
-        else:
-            p.bind(robot, q0, robot.lower, robot.upper, wrap)
+        p.bind(robot, q0, robot.lower, robot.upper, wrap, *([frame] if isinstance(p, Manipulability) else []))
 
 
 def split_preferences(target):
     """(the goals, the preferences) of a goal list holding preferences; ``(target, [])`` for anything else.
     TargetError for preferences alone."""
-    from ..errors import TargetError
 
     if not isinstance(target, (list, tuple)) or not any(isinstance(x, Preference) for x in target):
         return target, []

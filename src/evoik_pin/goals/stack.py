@@ -1,10 +1,6 @@
-"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:class:`GoalStack`; :func:`bind`
-checks a goal list against a robot and packs it), and the targets' encoding as ``pt`` (3,), ``Rt`` (3, 3)
-(:func:`encode_target`; many at once: :class:`GoalArrays`, :class:`TargetArrays`).
-
-The kernel reads a goal's row count, family and angle flag from its spec, filled here from its kind's declaration
-(:mod:`.registry`), never from the registry's tables: numba's disk cache would not see another module's tables change.
-"""
+"""The goal stack: G goals on frames of one robot packed as the LM kernel reads them (:class:`GoalStack`, :func:`bind`),
+and the targets' encoding as ``pt`` (3,), ``Rt`` (3, 3) (:func:`encode_target`, :class:`TargetArrays`). A goal's spec
+holds its kind's declaration (:mod:`.registry`): numba's disk cache would not see the registry's tables change."""
 
 from __future__ import annotations
 
@@ -16,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, LockedJointsError, TargetError
+from ..robot.frames import listed
 from .goal import Goal
 from .planar import KIND_PLANAR, KIND_PLANAR_YAW, Planar
 from .pose import KIND_POSE, Pose
@@ -37,7 +34,6 @@ __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_
 #: and 1.0 when its errors include an angle.
 G_KIND, G_JOINT, G_WEIGHT, G_TOL, G_RTOL, G_ROW, G_ROWS, G_FAMILY, G_ANGLE = range(9)
 GOAL_SIZE = 9
-
 
 
 def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_tolerance: float,
@@ -75,16 +71,10 @@ def encode_target(target) -> tuple[np.ndarray, np.ndarray]:
 
 
 def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
-    """``(P (N, 3), Rts (N, 3, 3))`` of N targets of one kind, for the kernel's batch entry points."""
-    N = len(targets)
-    t0 = targets[0]
-    if t0.planar:
-        P = np.array([[t.position[0], t.position[1], t.yaw or 0.0] for t in targets], dtype=float)
-        return P, np.repeat(np.eye(3)[None], N, axis=0)
-    P = np.ascontiguousarray([t.position for t in targets], dtype=float)
-    if t0.rotation is None:
-        return P, np.repeat(np.eye(3)[None], N, axis=0)
-    return P, np.ascontiguousarray([t.rotation for t in targets], dtype=float)
+    """``(P (N, 3), Rts (N, 3, 3))`` of N targets of one kind (:func:`encode_target` each), for the kernel's batch
+    entry points."""
+    P, Rts = zip(*map(encode_target, targets), strict=True)
+    return np.array(P, dtype=float), np.array(Rts, dtype=float)
 
 
 class _Rows:
@@ -153,8 +143,7 @@ class GoalStack:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
-        if self.aux is None:
-            object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)))
+        object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)) if self.aux is None else self.aux)
 
     @property
     def arrays(self) -> tuple:
@@ -169,36 +158,26 @@ class GoalStack:
 
         Cached per robot and these values (the last 64): a goal list solved again with new targets gets the same
         stack, so an LM engine kept from solve to solve is retargeted, not rebuilt. A stack is never written."""
-        key = (id(robot), tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
+        key = (tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
                tuple(float(t) for t in tolerances), tuple(float(t) for t in rotation_tolerances),
                None if aux is None or all(a is None for a in aux)
                else tuple(None if a is None else np.asarray(a, dtype=float).tobytes() for a in aux))
-        hit = _STACK_CACHE.get(key)
-        if hit is not None and hit[0]() is robot:
-            return hit[1]
-        G = len(frames)
-        spec = np.empty((G, GOAL_SIZE))
-        R, p = np.empty((G, 3, 3)), np.empty((G, 3))
-        joints = []
-        row = 0
-        for g in range(G):
-            j, R[g], p[g] = robot.frame_constants(frames[g])
-            joints.append(j)
-            spec[g] = spec_row(kinds[g], j, weights[g], tolerances[g], rotation_tolerances[g], row)
-            row += len(TASK_ROWS[kinds[g]])
+        hit = _recall(_STACK_CACHE, robot, key)
+        if hit is not None:
+            return hit
+        joints, R, p = zip(*map(robot.frame_constants, frames), strict=True)
+        rows = np.cumsum([0] + [len(TASK_ROWS[k]) for k in kinds])
+        spec = np.array([spec_row(*args) for args in zip(kinds, joints, weights, tolerances, rotation_tolerances,
+                                                          rows[:-1], strict=True)])
         packed = None
         if aux is not None and any(a is not None for a in aux):
-            width = max(len(a) for a in aux if a is not None)
-            packed = np.zeros((G, width))
+            packed = np.zeros((len(frames), max(len(a) for a in aux if a is not None)))
             for g, a in enumerate(aux):
                 if a is not None:
                     packed[g, :len(a)] = a
-        stack = cls(spec, R, p, robot.tree.support_mask(joints), row, tuple(int(k) for k in kinds),
-                    tuple(robot.tip if f is None else f for f in frames), packed)
-        if len(_STACK_CACHE) >= 64:
-            _STACK_CACHE.pop(next(iter(_STACK_CACHE)))
-        _STACK_CACHE[key] = (weakref.ref(robot), stack)
-        return stack
+        return _remember(_STACK_CACHE, robot, key, cls(
+            spec, np.array(R), np.array(p), robot.tree.support_mask(joints), int(rows[-1]),
+            tuple(int(k) for k in kinds), tuple(robot.tip if f is None else f for f in frames), packed))
 
     @classmethod
     def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
@@ -214,7 +193,22 @@ class GoalStack:
         return np.array([k in ORIENTED_KINDS for k in self.kinds], dtype=bool)
 
 
-_STACK_CACHE: dict = {}  # GoalStack.of's: key -> (weak reference to the robot, stack)
+_STACK_CACHE: dict = {}  # GoalStack.of's (:func:`_remember`)
+
+
+def _recall(cache: dict, robot, key):
+    """What ``cache`` holds for ``robot`` and ``key`` (:func:`_remember`), or None."""
+    hit = cache.get((id(robot), key))
+    return hit[1] if hit is not None and hit[0]() is robot else None  # a dead robot's id may be reused
+
+
+def _remember(cache: dict, robot, key, value):
+    """Keep ``value`` in ``cache`` for ``robot`` (weakly) and ``key``, the last 64 kept; return it."""
+    if len(cache) >= 64:
+        cache.pop(next(iter(cache)))
+    cache[(id(robot), key)] = (weakref.ref(robot), value)
+    return value
+
 #: The goal class of each tip-target kind (:func:`tip_goals`).
 _TIP_CLASSES = {KIND_POSE: Pose, KIND_POSITION: Position, KIND_PLANAR: Planar, KIND_PLANAR_YAW: Planar}
 
@@ -256,30 +250,24 @@ def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
     ``tolerance`` m and ``rotation_tolerance`` rad), the tip's stack, pt (1, 3) and Rt (1, 3, 3). Nothing is checked
     again (a control loop makes one per step)."""
     kind = target_kind(target)
-    key = (id(robot), kind, tolerance, rotation_tolerance)
-    hit = _TIP_GOALS.get(key)
-    if hit is None or hit[0]() is not robot:
-        if len(_TIP_GOALS) >= 64:
-            _TIP_GOALS.pop(next(iter(_TIP_GOALS)))
+    key = (kind, tolerance, rotation_tolerance)
+    hit = _recall(_TIP_GOALS, robot, key)
+    if hit is None:
         fields = {"frame": robot.tip, "weight": 1.0, "tolerance": tolerance, "rotation_tolerance": rotation_tolerance,
                   "kind": kind, "has_orientation": target.has_orientation, "alternatives": None, "band": None,
                   "_aux": None, **({"free": ()} if kind == KIND_POSE else {})}
-        hit = _TIP_GOALS[key] = (weakref.ref(robot), GoalStack.single(robot, kind, tolerance, rotation_tolerance),
-                                 _TIP_CLASSES[kind], fields)
+        hit = _remember(_TIP_GOALS, robot, key, (GoalStack.single(robot, kind, tolerance, rotation_tolerance),
+                                                 _TIP_CLASSES[kind], fields))
     pt, Rt = encode_target(target)
-    goal = object.__new__(hit[2])
-    goal.__dict__.update(hit[3])  # frozen dataclasses: their fields set as their __init__ sets them
-    if kind == KIND_POSE:
-        goal.__dict__["target"] = pin.SE3(Rt, pt)
-    else:
-        goal.__dict__["target"] = pt
-        if kind != KIND_POSITION:
-            goal.__dict__["yaw"] = target.yaw
-    return [goal], hit[1], pt[None], Rt[None]
+    goal = object.__new__(hit[1])  # frozen dataclasses: their fields set as their __init__ sets them
+    goal.__dict__.update(hit[2], target=pin.SE3(Rt, pt) if kind == KIND_POSE else pt)
+    if hit[1] is Planar:
+        goal.__dict__["yaw"] = target.yaw
+    return [goal], hit[0], pt[None], Rt[None]
 
 
-#: :func:`tip_goals`' per (robot id, kind, tolerances): (weak reference to the robot, the tip's stack, the goal class,
-#: its fields but the target).
+#: :func:`tip_goals`' per robot, kind and tolerances (:func:`_remember`): the tip's stack, the goal class, its fields
+#: but the target.
 _TIP_GOALS: dict = {}
 
 
@@ -300,10 +288,9 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
             raise TargetError(f"goal {i} is a {type(g).__name__}, not a goal: use Pose(frame, T) or "
                               "Position(frame, p) from evoik_pin.goals")
     # goals beyond one frame pack their rows against the robot on every bind: only lists without them are kept
-    key = None if any(_packs_itself(g) for g in goals) else (id(robot), structure(goals))
-    hit = _BOUND.get(key)
-    if hit is not None and hit[0]() is robot:
-        stack = hit[1]
+    key = None if any(_packs_itself(g) for g in goals) else structure(goals)
+    stack = None if key is None else _recall(_BOUND, robot, key)
+    if stack is not None:
         if len(stack.frames) > len(set(stack.frames)):
             _check_frames(robot, goals)  # the clash test reads the targets
     else:
@@ -319,14 +306,9 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
                 support[g] = moved
             stack = dataclasses.replace(stack, support=support)
         if key is not None:
-            if len(_BOUND) >= 64:
-                _BOUND.pop(next(iter(_BOUND)))
-            _BOUND[key] = (weakref.ref(robot), stack)
-    G = len(goals)
-    pt, Rt = np.empty((G, 3)), np.empty((G, 3, 3))
-    for g, goal in enumerate(goals):
-        pt[g], Rt[g] = goal.encode()
-    return goals, stack, pt, Rt
+            _remember(_BOUND, robot, key, stack)
+    pt, Rt = zip(*(goal.encode() for goal in goals), strict=True)
+    return goals, stack, np.array(pt, dtype=float), np.array(Rt, dtype=float)
 
 
 #: Stacks of goal lists bound before, by robot and :func:`structure` (the last 64): a hit skips the frames' checks.
@@ -386,9 +368,8 @@ def _check_not_base_only(robot, frame: str) -> None:
     if not locked:
         return
     tips = ", ".join(map(repr, robot.tips))
-    shown = ", ".join(locked[:12]) + (f", ... ({len(locked) - 12} more)" if len(locked) > 12 else "")
     raise LockedJointsError(
         f"only the floating base moves frame {frame!r} of {robot.name}: the joints between the root and it are "
-        f"locked ({shown}), so the base alone would have to reach it. Free them when loading the robot: "
+        f"locked ({listed(locked, 12)}), so the base alone would have to reach it. Free them when loading the robot: "
         f"tips=[{tips}, {frame!r}] (the chains to each), joints=[...] naming them with the others to keep free, "
         f"or tips='all' (the whole tree; what a branching URDF gets without tip=/tips=)")

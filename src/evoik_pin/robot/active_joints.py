@@ -8,9 +8,9 @@ from dataclasses import dataclass
 import pinocchio as pin
 
 from ..errors import FrameError, RobotLoadError
-from .frames import closest_names, deepest_body, find_frame, frame_names, root_link
+from .frames import closest_hint, deepest_body, find_frame, frame_names, listed, root_link
 
-__all__ = ["MAX_CHAIN_JOINTS", "ActiveJoints", "choose_joints", "suggest_frames"]
+__all__ = ["MAX_CHAIN_JOINTS", "ActiveJoints", "choose_joints"]
 
 #: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
 #: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
@@ -43,15 +43,17 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
     if tips is None or whole:
         tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
     else:
-        tip_names = _frame_list(tips)
+        tip_names = list(tips) if hasattr(tips, "__iter__") and not isinstance(tips, str) else []
+        if not tip_names or not all(isinstance(t, str) for t in tip_names):
+            raise FrameError(f"tips must be a list of frame names (a non-empty list of strings) or 'all', got {tips!r}")
     if tip is None:
         tip = tip_names[0] if tip_names else deepest_body(full_model)
     root_name = root_link(full_model) if base is None else base
     named = ([("base", base)] if base is not None else []) + [("tip", t) for t in [tip, *(tip_names or [])]]
     for what, frame in named:
         if find_frame(kin, frame) < 0:
-            raise FrameError(f"unknown {what} frame {frame!r}{suggest_frames(frame, kin)}; frames of {name}: "
-                             f"{_listed(frame_names(full_model, bodies=True))}")
+            raise FrameError(f"unknown {what} frame {frame!r}{closest_hint(frame, frame_names(kin))}; frames of "
+                             f"{name}: {listed(frame_names(full_model, bodies=True))}")
     base_joint = kin.frames[0 if base is None else find_frame(kin, base)].parentJoint
 
     if whole:
@@ -104,24 +106,3 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
     return ActiveJoints(tip, tuple(tip_names) if tip_names else (tip,), root_name, above_base, dofs, physical,
                         [follows(j) for j in physical])
 
-
-def _frame_list(tips) -> list[str]:
-    """``tips`` as a non-empty list of frame names, or a FrameError."""
-    if isinstance(tips, str) or not hasattr(tips, "__iter__"):
-        raise FrameError(f"tips must be a list of frame names or 'all', got {tips!r}")
-    out = list(tips)
-    if not out or not all(isinstance(t, str) for t in out):
-        raise FrameError(f"tips must be a non-empty list of frame names (strings), got {tips!r}")
-    return out
-
-
-def _listed(names: list[str], most: int = 40) -> str:
-    """The first ``most`` names, comma-separated, and how many more there are."""
-    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
-    return ", ".join(names[:most]) + more
-
-
-def suggest_frames(name, model: pin.Model) -> str:
-    """' (closest: a, b)' for a frame name not found in ``model``, or ''."""
-    close = closest_names(str(name), frame_names(model))
-    return f" (closest: {', '.join(close)})" if close else ""

@@ -9,7 +9,7 @@ from collections import Counter
 
 import pinocchio as pin
 
-__all__ = ["closest_names", "deepest_body", "find_frame", "frame_names", "is_branched",
+__all__ = ["closest_hint", "closest_names", "deepest_body", "find_frame", "frame_names", "is_branched", "listed",
            "reduced_model", "restore_frame_names", "root_link", "unique_frame_names"]
 
 
@@ -111,3 +111,15 @@ def closest_names(name: str, names: list[str], count: int = 5) -> list[str]:
     low = name.lower()
     close += [x for x in names if x not in close and low and (low in x.lower() or x.lower() in low)]
     return close[:count]
+
+
+def closest_hint(name, names: list[str]) -> str:
+    """' (closest: a, b)' for a ``name`` not among ``names`` (:func:`closest_names`), or '' when none is close."""
+    close = closest_names(str(name), names)
+    return f" (closest: {', '.join(close)})" if close else ""
+
+
+def listed(names: list[str], most: int = 40) -> str:
+    """The first ``most`` names, comma-separated, and how many more there are."""
+    more = f", ... ({len(names) - most} more)" if len(names) > most else ""
+    return ", ".join(names[:most]) + more

@@ -12,11 +12,9 @@ import pinocchio as pin
 
 from ..errors import RobotLoadError
 from .frames import reduced_model
+from .packages import MESH_URI
 
 __all__ = ["RobotGeometry"]
-
-#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
-_MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
 
 
 class RobotGeometry:
@@ -50,7 +48,7 @@ class RobotGeometry:
         """The URDF's geometry of one kind, reduced onto :attr:`model` like the model itself."""
         if self.urdf_xml is None:  # pragma: no cover
             raise RobotLoadError("this robot has no URDF text to read geometry from")
-        xml = _MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml
+        xml = MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml
         try:
             geom = pin.buildGeomFromUrdfString(self._kin_model, xml, kind, package_dirs=self.package_dirs)
         except (ValueError, RuntimeError) as exc:  # a mesh Pinocchio could not find or read

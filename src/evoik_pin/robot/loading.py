@@ -20,17 +20,14 @@ from .joints import couplings
 from .packages import PackageResolver, check_package_aliases, check_package_dirs, package_uris
 from .robot import Robot
 from .urdf_checks import Mimic, check_urdf
-from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro_path, is_xacro_text
+from .urdf_text import captured_stderr, decode_xml, expand_xacro, is_xacro
 
 __all__ = ["bundled_robots_dir", "example_robot_data_dir", "list_robots", "load_robot"]
 
 
 def example_robot_data_dir() -> Path:
     """The ``robots/`` directory of the installed ``example-robot-data`` wheel (a dependency; from its file list)."""
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError as exc:  # pragma: no cover - it is a dependency
-        raise RobotNotFoundError("the 'example-robot-data' package is not installed (pip install it)") from exc
+    dist = importlib.metadata.distribution("example-robot-data")
     for f in dist.files or []:
         parts = Path(str(f)).parts
         if "example-robot-data" in parts and "robots" in parts and str(f).endswith(".urdf"):
@@ -88,12 +85,14 @@ def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: 
     """
     name, path, xml, named = _resolve_source(source)
     where = str(path) if path is not None else "URDF string"
-    user_dirs = check_package_dirs(package_dirs)
-    resolver = PackageResolver(path, user_dirs, check_package_aliases(package_aliases))
-    if (path is not None and is_xacro_path(path)) or is_xacro_text(xml):
-        source_text = xml
-        xml = expand_xacro(xml, where, path, xacro_args, resolver)
-        _check_instantiated(source_text, xml, where)
+    resolver = PackageResolver(path, check_package_dirs(package_dirs), check_package_aliases(package_aliases))
+    if is_xacro(path, xml):
+        source_text, xml = xml, expand_xacro(xml, where, path, xacro_args, resolver)
+        macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)", source_text)
+        if macros and not re.search(r"<link\b", xml):  # a file of macros that calls none
+            raise RobotLoadError(
+                f"{where} defines the xacro macro(s) {', '.join(macros)} but calls none, so it has no <link>: load the "
+                f"xacro file that includes it and calls them (e.g. <xacro:{macros[0]} .../>)")
     elif xacro_args:
         raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
                              "elements or ${...} / $(...) expressions)")
@@ -103,12 +102,17 @@ def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: 
     if tip is None and tips is None and (named and name in WHOLE_ROBOTS
                                          or not named and is_branched(model, couplings(model, mimic))):
         tips = "all"  # a whole robot: never the chain to one arbitrary deepest link
-    mesh_packages, missing_packages = _mesh_packages(xml, resolver, where)
+    # the mesh URIs' packages, found or not (an error raised only when meshes are loaded: IK needs none), and the
+    # folders Pinocchio tries the others in (example-robot-data's URDFs name package://example-robot-data/robots/...)
+    folders = {pkg: resolver.find(pkg) for pkg in package_uris(xml)}
+    missing = {p: resolver.not_found(p, where, f"package://{p}/... in a mesh URI") for p, f in folders.items()
+               if f is None}
+    erd, own = example_robot_data_dir(), ([path.parent, path.parent.parent] if path is not None else [])
+    dirs = [str(d) for d in (*resolver.user_dirs, *resolver.ros_dirs, *own, erd, erd.parents[1])]
     try:
-        robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml,
-                      package_dirs=_package_dirs(path, resolver), mimic=mimic,
-                      packages=mesh_packages, missing_packages=missing_packages, tips=tips,
-                      floating_base=floating_base, base_box=base_box)
+        robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml, mimic=mimic,
+                      package_dirs=dirs, packages={p: str(f) for p, f in folders.items() if f is not None},
+                      missing_packages=missing, tips=tips, floating_base=floating_base, base_box=base_box)
     except (RobotLoadError, FrameError, BoundsError) as exc:  # say which file the frames and joints were looked for in
         raise type(exc)(f"{where}: {exc}") from None
     if bounds is not None:
@@ -131,48 +135,12 @@ def _srdf_path(srdf, name: str | None) -> str | None:
     return None
 
 
-def _package_dirs(path: Path | None, resolver: PackageResolver) -> list[str]:
-    """Directories Pinocchio tries ``package://pkg/...`` URIs in when :func:`_mesh_packages` did not find ``pkg``."""
-    erd = example_robot_data_dir()  # its URDFs name package://<pkg>/... and package://example-robot-data/robots/...
-    own = [path.parent, path.parent.parent] if path is not None else []
-    return [str(d) for d in (*resolver.user_dirs, *resolver.ros_dirs, *own, erd, erd.parents[1])]
-
-
-def _mesh_packages(xml: str, resolver: PackageResolver, where: str) -> tuple[dict[str, str], dict[str, str]]:
-    """(``{pkg: folder}`` of the ``package://pkg/...`` URIs of the URDF that were found, ``{pkg: error
-    message}`` of those that were not: raised only when meshes are loaded, as IK needs none)."""
-    found, missing = {}, {}
-    for pkg in package_uris(xml):
-        folder = resolver.find(pkg)
-        if folder is not None:
-            found[pkg] = str(folder)
-        else:
-            missing[pkg] = resolver.not_found(pkg, where, f"package://{pkg}/... in a mesh URI")
-    return found, missing
-
-
-def _check_instantiated(source_text: str, urdf: str, where: str) -> None:
-    """A RobotLoadError naming the macros of a xacro file that defines some but yields no link."""
-    if re.search(r"<link\b", urdf):
-        return
-    macros = re.findall(r"<xacro:macro\s+name\s*=\s*[\"']([^\"']+)", source_text)
-    if macros:
-        raise RobotLoadError(
-            f"{where} defines the xacro macro(s) {', '.join(macros)} but calls none, so it has no <link>: load the "
-            f"xacro file that includes it and calls them (e.g. <xacro:{macros[0]} .../>)")
-
-
-def _looks_like_xml(text: str) -> bool:
-    """True for URDF (or xacro) text: it starts with "<" or holds "<?xml" or "<robot" (no path or name does)."""
-    return text.lstrip("\ufeff \t\r\n").startswith("<") or "<?xml" in text or "<robot" in text
-
-
 def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None, str, bool]:
     """(name, path or None, URDF or xacro text, whether the source was a robot name) of a load_robot source."""
     if isinstance(source, (bytes, bytearray)):
         return "urdf", None, decode_xml(bytes(source), "URDF string"), False
-    if isinstance(source, str) and _looks_like_xml(source):
-        stripped = source.lstrip("\ufeff \t\r\n")  # an XML declaration must come first
+    stripped = source.lstrip("\ufeff \t\r\n") if isinstance(source, str) else ""  # an XML declaration comes first
+    if stripped.startswith("<") or "<?xml" in stripped or "<robot" in stripped:  # URDF text: no path or name has these
         return "urdf", None, stripped if stripped.startswith("<") else source, False
     if not isinstance(source, (str, os.PathLike)):
         raise RobotLoadError(f"robot source must be a URDF path, a URDF XML string or a robot name, got "

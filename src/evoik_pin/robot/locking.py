@@ -8,7 +8,7 @@ import weakref
 import numpy as np
 
 from ..errors import BoundsError, ConfigurationError, FrameError, OptionError
-from .frames import closest_names
+from .frames import closest_hint
 
 __all__ = ["expand_q", "expand_result", "expand_rows", "kept_columns", "locked_note", "locked_robot", "shrink_q"]
 
@@ -21,10 +21,8 @@ def _checked(robot, values) -> dict[str, float]:
     out = {}
     for name, value in values.items():
         if name not in robot.joint_names:
-            near = closest_names(str(name), robot.joint_names)
-            hint = f" (did you mean {', '.join(map(repr, near))}?)" if near else ""
-            raise FrameError(f"cannot lock {name!r}: no joint of {robot.name}'s q has that name{hint}; its joints: "
-                             f"{', '.join(robot.joint_names)}")
+            raise FrameError(f"cannot lock {name!r}: no joint of {robot.name}'s q has that name"
+                             f"{closest_hint(name, robot.joint_names)}; its joints: {', '.join(robot.joint_names)}")
         k = robot.joint_names.index(name)
         try:
             x = float(value)

@@ -1,18 +1,6 @@
 """Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS, also for files
-copied out of their workspace. :class:`PackageResolver` finds ``pkg`` for one robot file, first match wins:
-
-a. the folders the user gives (``load_robot(path, package_dirs=[...])``, ``--package-dir DIR``),
-b. the folders of ``ROS_PACKAGE_PATH`` (read at each load, not once per process),
-c. the file's own tree: a folder named ``pkg`` among the file's ancestor folders, or inside one of them (beside
-   the file or beside one of its ancestors), nearest first; no ``package.xml`` needed,
-d. a ``package.xml`` whose ``<name>`` is ``pkg`` in the file's folder or above it (ROS's rule, and xacrodoc's).
-
-In a folder ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself when it is named ``pkg``, or a folder up to
-:data:`CRAWL_DEPTH` levels below ``D`` whose ``package.xml`` names ``pkg`` (a ROS workspace's ``src/``).
-
-An alias (``package_aliases={"abb_irb140": "abb_irb140_description"}``) makes the rules look for another name;
-without one, a package none finds is looked for under its :func:`sibling_names`.
-"""
+copied out of their workspace: :class:`PackageResolver`, whose rules (a) to (d) docs/ROBOTS.md ("Packages without
+ROS") lists."""
 
 from __future__ import annotations
 
@@ -24,12 +12,13 @@ from pathlib import Path
 
 from ..errors import RobotLoadError, RobotNotFoundError
 
-__all__ = ["CRAWL_DEPTH", "SIBLING_SUFFIXES", "PackageResolver", "check_package_aliases", "check_package_dirs",
-           "package_uris", "sibling_names"]
+__all__ = ["CRAWL_DEPTH", "MESH_URI", "SIBLING_SUFFIXES", "PackageResolver", "check_package_aliases",
+           "check_package_dirs", "package_uris", "sibling_names"]
 
 #: How deep below a given folder (a) or a ROS_PACKAGE_PATH entry (b) package.xml files are looked for.
 CRAWL_DEPTH = 3
-_URI = re.compile(r"package://([^/\"'<>\s]+)/")
+#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
+MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
 
 
 def check_package_dirs(package_dirs) -> list[Path]:
@@ -71,7 +60,7 @@ def check_package_aliases(aliases) -> dict[str, str]:
 
 def package_uris(xml: str) -> list[str]:
     """The package names of the ``package://pkg/...`` URIs in URDF text, in order of first appearance."""
-    return list(dict.fromkeys(_URI.findall(xml)))
+    return list(dict.fromkeys(pkg for pkg, _ in MESH_URI.findall(xml)))
 
 
 def _package_name(folder: Path) -> str | None:
@@ -116,7 +105,12 @@ def sibling_names(pkg: str) -> list[str]:
 
 class PackageResolver:
     """Finds the packages one robot file ``path`` (None for a string: no rules (c), (d)) names, with the checked
-    ``package_dirs`` and ``aliases`` (the module docstring)."""
+    ``package_dirs`` and ``aliases``, first match wins: (a) the ``package_dirs``, (b) the folders of
+    ``ROS_PACKAGE_PATH`` (read at each load), (c) a folder named ``pkg`` among the file's ancestor folders or inside
+    one of them, nearest first, (d) a ``package.xml`` naming ``pkg`` in the file's folder or above it. In a folder
+    ``D`` of (a) and (b), ``pkg`` is ``D/pkg``, ``D`` itself, or a folder up to :data:`CRAWL_DEPTH` levels below
+    ``D`` whose ``package.xml`` names it. An alias makes the rules look for another name; without one, a package
+    none finds is looked for under its :func:`sibling_names`."""
 
     def __init__(self, path: Path | None, package_dirs: Iterable[Path] = (), aliases: dict | None = None) -> None:
         self.path = path
@@ -128,15 +122,13 @@ class PackageResolver:
         self._found: dict[str, Path | None] = {}
 
     def find(self, pkg: str) -> Path | None:
-        """The folder of package ``pkg``, or None."""
+        """The folder of package ``pkg`` (its alias's), by rules (a) to (d), then for its sibling names (none for an
+        aliased package), or None."""
         if pkg not in self._found:
-            self._found[pkg] = self._search(self.aliases.get(pkg, pkg))
+            name = self.aliases.get(pkg, pkg)
+            names = [name] if name in self.aliases.values() else [name, *sibling_names(name)]
+            self._found[pkg] = next((found for found in map(self._search_name, names) if found is not None), None)
         return self._found[pkg]
-
-    def _search(self, pkg: str) -> Path | None:
-        """Rules (a) to (d) for ``pkg``, then for its sibling names (none for an aliased package)."""
-        names = [pkg] if pkg in self.aliases.values() else [pkg, *sibling_names(pkg)]
-        return next((found for found in map(self._search_name, names) if found is not None), None)
 
     def _search_name(self, pkg: str) -> Path | None:
         if not pkg or "/" in pkg or pkg in (".", ".."):
@@ -157,20 +149,16 @@ class PackageResolver:
                 return a
         return None
 
-    def searched(self) -> str:
-        """Where a package was looked for, for error messages."""
-        parts = [f"package_dirs {[str(d) for d in self.user_dirs]}"] if self.user_dirs else []
-        parts.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs
-                     else "ROS_PACKAGE_PATH (not set)")
-        if self.ancestors:
-            parts.append(f"the folders above the file ({self.ancestors[0]} up to {self.ancestors[-1]}) and the "
-                         "folders inside them, by name or by a package.xml naming it")
-        return "; ".join(parts)
-
     def not_found(self, pkg: str, named_in: str, how: str) -> str:
         """Message of a package not found: the file naming it (``how``: as what), the folders searched, what to do."""
         looked_for = f" (looked for as {self.aliases[pkg]!r}: package_aliases)" if pkg in self.aliases else ""
+        searched = [f"package_dirs {[str(d) for d in self.user_dirs]}"] if self.user_dirs else []
+        searched.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs
+                        else "ROS_PACKAGE_PATH (not set)")
+        if self.ancestors:
+            searched.append(f"the folders above the file ({self.ancestors[0]} up to {self.ancestors[-1]}) and the "
+                            "folders inside them, by name or by a package.xml naming it")
         return (f"package {pkg!r} not found{looked_for} (used as {how}), named in {named_in}; searched: "
-                f"{self.searched()}. Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR on "
-                f"the command line) or ROS_PACKAGE_PATH, or, when it is shipped under another name, "
+                f"{'; '.join(searched)}. Give the folder that holds {pkg}/ with package_dirs=[...] (--package-dir DIR "
+                f"on the command line) or ROS_PACKAGE_PATH, or, when it is shipped under another name, "
                 f"package_aliases={{{pkg!r}: 'that_name'}} (--package-alias {pkg}=that_name)")

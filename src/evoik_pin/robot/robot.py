@@ -13,11 +13,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, FrameError, RobotLoadError
-from .active_joints import MAX_CHAIN_JOINTS, choose_joints, suggest_frames
-from .frames import find_frame, frame_names, reduced_model
+from .active_joints import MAX_CHAIN_JOINTS, choose_joints
+from .frames import closest_hint, find_frame, frame_names, reduced_model
 from .geometry_models import RobotGeometry
-from .joint_bounds import NEAR_UNBOUNDED, JointBounds
-from .joints import DEFAULT_PRISMATIC_RANGE, couplings, joint_motions, joint_value, set_joint_value
+from .joints import NEAR_UNBOUNDED, JointBounds, couplings, joint_motions, joint_value, set_joint_value
 from .tree import (
     ChainView,
     KinematicTree,
@@ -26,11 +25,10 @@ from .tree import (
     chain_positions,
     free_flyer_model,
     mass_constants,
-    rpy_to_quaternion,
     with_floating_base,
 )
 
-__all__ = ["DEFAULT_PRISMATIC_RANGE", "MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
+__all__ = ["MAX_CHAIN_JOINTS", "NEAR_UNBOUNDED", "Robot"]
 
 _MANIPULABILITY_ROWS = {"translation": [0, 1, 2], "rotation": [3, 4, 5], "full": [0, 1, 2, 3, 4, 5],
                         "planar": [0, 1, 5]}
@@ -81,7 +79,11 @@ class Robot(JointBounds, RobotGeometry):
         self.floating_base = bool(floating_base)
         kin = self.full_model = full_model  # kin: the model the reduced one is cut from (six joints + full_model)
         if self.floating_base:
-            _check_fixed_root(full_model, name)
+            moving = [j for j in range(1, kin.njoints) if kin.parents[j] == 0 and kin.joints[j].nv > 1]
+            if moving:  # the URDF's root already moves: a floating base would move it twice
+                raise RobotLoadError(f"{name}'s root already moves (joint {kin.names[moving[0]]!r} is a "
+                                     f"{kin.joints[moving[0]].shortname()} of {kin.joints[moving[0]].nv} DOF): load "
+                                     "it without floating_base=True")
             if base is not None:
                 raise FrameError(f"a floating base moves the root link of {name}: poses are in the world frame, so "
                                  f"no base frame can be chosen (got base={base!r})")
@@ -169,7 +171,7 @@ class Robot(JointBounds, RobotGeometry):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
             fid = find_frame(self.model, frame)  # a scan of every frame
             if fid < 0:
-                raise FrameError(f"{self.name} has no frame {frame!r}{suggest_frames(frame, self.model)} (robot.frames "
+                raise FrameError(f"{self.name} has no frame {frame!r}{closest_hint(frame, self.frames)} (robot.frames "
                                  f"lists its {len(self.frames)} frames)")
             self._frame_ids[frame] = fid
         return fid
@@ -272,7 +274,8 @@ class Robot(JointBounds, RobotGeometry):
             if d in self._dof_ids:
                 set_joint_value(fm, out, j, m * q[self._dof_ids.index(d)] + off)
         if self.floating_base:  # the six base joints are the kinematic model's first six numbers
-            out = np.concatenate([out[:3], rpy_to_quaternion(*out[3:6]), out[6:]])
+            quat = np.array(pin.Quaternion(pin.rpy.rpyToMatrix(out[5], out[4], out[3])).coeffs())  # (x, y, z, w)
+            out = np.concatenate([out[:3], quat if quat[3] >= 0 else -quat, out[6:]])
         return out
 
     # ------------------------------------------------------------------ kinematics, one configuration
@@ -325,10 +328,7 @@ class Robot(JointBounds, RobotGeometry):
 
     def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
         """``M * fk(q)`` (e.g. ``M = T_target^-1``: the tip seen from the target), unchecked, a new ``pin.SE3``."""
-        pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
-        if self._base_id == 0:
-            return M * self.data.oMf[self._tip_id]
-        return M * (self._baseMo * self.data.oMf[self._tip_id])
+        return M * self.frame_poses_unchecked(q, [self._tip_id])[0]
 
     def frame_poses_unchecked(self, q: np.ndarray, frame_ids) -> list[pin.SE3]:
         """Base-frame poses (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, one
@@ -342,18 +342,17 @@ class Robot(JointBounds, RobotGeometry):
     def jacobian_local_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
         """``jacobian(q, "local")`` (6, n) of the tip (or frame id ``frame_id``), unchecked:
         ``T(q + dq) ~ T(q) exp(J dq)``."""
+        return self._frame_jacobian(q, frame_id, pin.ReferenceFrame.LOCAL)
+
+    def _frame_jacobian(self, q: np.ndarray, frame_id: int | None, reference) -> np.ndarray:
         fid = self._tip_id if frame_id is None else frame_id
-        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, pin.ReferenceFrame.LOCAL)
+        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, reference)
         J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
         return J @ self._G if self._coupled else J
 
     def jacobian_world_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
         """``jacobian(q, "world")`` (6, n) of the tip (or frame id ``frame_id``), unchecked."""
-        fid = self._tip_id if frame_id is None else frame_id
-        J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid,
-                                     pin.ReferenceFrame.LOCAL_WORLD_ALIGNED).reshape(6, -1)
-        if self._coupled:
-            J = J @ self._G
+        J = self._frame_jacobian(q, frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         if self._base_id != 0:
             Rt = self._oMbase.rotation.T
             J = np.vstack([Rt @ J[:3], Rt @ J[3:]])
@@ -425,13 +424,3 @@ class Robot(JointBounds, RobotGeometry):
         tips = f"tip={self.tip!r}" if len(self.tips) == 1 else f"tips={list(self.tips)}"
         floating = ", floating_base=True" if self.floating_base else ""
         return f"Robot({self.name!r}, n={self.n}, base={self.base!r}, {tips}{floating})"
-
-
-def _check_fixed_root(model: pin.Model, name: str) -> None:
-    """A RobotLoadError when the URDF's root already moves (a floating base would move it twice)."""
-    moving = [j for j in range(1, model.njoints) if model.parents[j] == 0 and model.joints[j].nv > 1]
-    if moving:
-        j = moving[0]
-        raise RobotLoadError(f"{name}'s root already moves (joint {model.names[j]!r} is a "
-                             f"{model.joints[j].shortname()} of {model.joints[j].nv} DOF): load it without "
-                             "floating_base=True")

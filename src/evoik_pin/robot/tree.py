@@ -22,7 +22,7 @@ from .joints import joint_motions
 
 __all__ = ["FLOATING_BASE_BOUNDS", "FLOATING_BASE_JOINTS", "ChainView", "KinematicTree", "MassConstants",
            "chain_forward", "chain_jacobians", "chain_positions", "free_flyer_model", "mass_constants",
-           "rpy_to_quaternion", "with_floating_base"]
+           "with_floating_base"]
 
 #: Names of the six joints a floating base adds at the front of q (rotation Rz(yaw) Ry(pitch) Rx(roll)).
 FLOATING_BASE_JOINTS = ("floating_base_x", "floating_base_y", "floating_base_z", "floating_base_yaw",
@@ -61,12 +61,6 @@ def free_flyer_model(model: pin.Model) -> pin.Model:
     joint = base.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root_joint")
     frame = base.addFrame(pin.Frame("root_joint", joint, pin.SE3.Identity(), pin.FrameType.JOINT))
     return _appended(base, model, frame)
-
-
-def rpy_to_quaternion(yaw: float, pitch: float, roll: float) -> np.ndarray:
-    """Unit quaternion (x, y, z, w) of ``Rz(yaw) Ry(pitch) Rx(roll)`` (rad), with w >= 0."""
-    quat = np.array(pin.Quaternion(pin.rpy.rpyToMatrix(roll, pitch, yaw)).coeffs())  # (x, y, z, w)
-    return quat if quat[3] >= 0 else -quat
 
 
 @dataclass(eq=False)

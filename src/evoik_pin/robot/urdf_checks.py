@@ -103,9 +103,8 @@ def _floats(text: str | None, count: int, what: str, where: str, default: tuple[
 def _check_joint(j: ET.Element, jname: str, jtype: str, where: str) -> None:
     """Origin, axis and limits of one joint."""
     origin = j.find("origin")
-    if origin is not None:
-        _floats(origin.get("xyz"), 3, f"the origin xyz of joint {jname!r}", where, (0.0, 0.0, 0.0))
-        _floats(origin.get("rpy"), 3, f"the origin rpy of joint {jname!r}", where, (0.0, 0.0, 0.0))
+    for attr in ("xyz", "rpy") if origin is not None else ():
+        _floats(origin.get(attr), 3, f"the origin {attr} of joint {jname!r}", where, (0.0, 0.0, 0.0))
     if jtype in ("fixed", "floating"):
         return
     axis_el = j.find("axis")
@@ -143,17 +142,14 @@ def _check_tree(links: list[str], parent_of: dict[str, tuple[str, str]], where: 
         shown = ", ".join(repr(r) for r in roots[:5]) + (", ..." if len(roots) > 5 else "")
         raise RobotLoadError(f"{where} has {len(roots)} root links (links no joint has as child): {shown}; a URDF must "
                              "be one tree: join them with joints")
-    children: dict[str, list[str]] = {}
-    for child, (parent, _) in parent_of.items():
-        children.setdefault(parent, []).append(child)
-    seen, stack = {roots[0]}, [roots[0]]
-    while stack:
-        for c in children.get(stack.pop(), ()):
-            if c not in seen:
-                seen.add(c)
-                stack.append(c)
-    if len(seen) != len(links):
-        loop = [link for link in links if link not in seen]
+    loop = []
+    for link in links:  # a link whose parents never reach the root sits on a cycle (or hangs from one)
+        up, steps = link, 0
+        while up in parent_of and steps <= len(links):
+            up, steps = parent_of[up][0], steps + 1
+        if up != roots[0]:
+            loop.append(link)
+    if loop:
         shown = ", ".join(repr(x) for x in loop[:5]) + (", ..." if len(loop) > 5 else "")
         raise RobotLoadError(f"{where}: links {shown} are not connected to the root link {roots[0]!r}: their joints "
                              "form a cycle; a URDF must be a tree")

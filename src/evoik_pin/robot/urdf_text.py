@@ -17,7 +17,7 @@ from pathlib import Path
 from ..errors import RobotLoadError
 from .packages import PackageResolver
 
-__all__ = ["captured_stderr", "decode_xml", "expand_xacro", "is_xacro_path", "is_xacro_text"]
+__all__ = ["captured_stderr", "decode_xml", "expand_xacro", "is_xacro"]
 
 # Byte-order marks and the XML spec's (appendix F) signatures of "<?" in UTF-16 / UTF-32 without a mark.
 _SIGNATURES = ((codecs.BOM_UTF32_BE, "utf-32"), (codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF8, "utf-8-sig"),
@@ -49,7 +49,9 @@ def decode_xml(data: bytes, where: str) -> str:
     try:
         text = data.decode(encoding)
     except UnicodeDecodeError as exc:
-        kind = "a binary file, not URDF XML: " if _looks_binary(data) else ""
+        head = data[:1024]  # binary: NUL bytes or many control bytes in the first KiB (no UTF-16/32 signature matched)
+        binary = b"\x00" in head or sum(b < 32 and b not in (9, 10, 13) for b in head) > len(head) // 20
+        kind = "a binary file, not URDF XML: " if binary else ""
         raise RobotLoadError(f"{where} is {kind}not decodable as {source}: byte {data[exc.start]:#04x} at offset "
                              f"{exc.start}. A URDF is XML text; declare a non-UTF-8 encoding in its first line, e.g. "
                              "<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>") from None
@@ -61,21 +63,11 @@ def decode_xml(data: bytes, where: str) -> str:
     return text
 
 
-def _looks_binary(data: bytes) -> bool:
-    """True when the first KiB holds NUL bytes or many control bytes (and no UTF-16/32 signature matched)."""
-    head = data[:1024]
-    control = sum(b < 32 and b not in (9, 10, 13) for b in head)
-    return b"\x00" in head or control > len(head) // 20
-
-
-def is_xacro_path(path: Path) -> bool:
-    """True for ``*.xacro`` files (``arm.xacro``, ``arm.urdf.xacro``)."""
-    return path.suffix.lower() == ".xacro"
-
-
-def is_xacro_text(text: str) -> bool:
-    """True when ``text`` holds ``<xacro:...>``, ``${...}`` or ``$(...)`` outside comments (the xacro namespace
-    alone is not enough: generated URDFs keep it)."""
+def is_xacro(path: Path | None, text: str) -> bool:
+    """True for ``*.xacro`` files (``arm.urdf.xacro``) and for ``text`` holding ``<xacro:...>``, ``${...}`` or
+    ``$(...)`` outside comments (the xacro namespace alone is not enough: generated URDFs keep it)."""
+    if path is not None and path.suffix.lower() == ".xacro":
+        return True
     return _XACRO.search(_COMMENT.sub("", text)) is not None  # comments often keep xacro source around
 
 
@@ -84,13 +76,10 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
     """URDF text of the xacro document ``text`` (read from ``path``, or None for a string), ``args`` setting its
     ``<xacro:arg>`` values, ``$(find pkg)`` found through ``packages``. Any failure is a RobotLoadError naming
     ``where`` and what failed."""
-    try:
-        import xacro
-        from xacrodoc import XacroDoc
-        from xacrodoc import packages as xacro_packages
-    except ImportError as exc:  # pragma: no cover - a dependency
-        raise RobotLoadError(f"{where} is a xacro file and the 'xacrodoc' package is missing: pip install xacrodoc "
-                             f"({exc})") from exc
+    import xacro  # xacrodoc's (a dependency), imported when a xacro file is first read
+    from xacrodoc import XacroDoc
+    from xacrodoc import packages as xacro_packages
+
     mappings = {str(k): str(v) for k, v in (args or {}).items()}
     resolver = packages if packages is not None else PackageResolver(path)
     missing: list[tuple[str, str]] = []  # (package, file naming it) of failed look-ups
