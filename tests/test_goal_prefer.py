@@ -820,3 +820,37 @@ def test_descent_takes_a_start_off_the_goals_onto_them_first(panda):
         assert f_far[0] == np.inf
         assert np.array_equal(far_out, far)
     assert restored >= 4
+
+
+def test_descent_in_collision_keeps_answers_and_drops_flips(panda):
+    """With every descended configuration in collision, the answers keep their starts and no flip (off the goals
+    until descended) is kept."""
+    from types import SimpleNamespace
+
+    from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
+    from evoik_pin.solvers.search.prefer import descend, euler_flips, flipped, make_criterion
+
+    class Everywhere:  # a scene every configuration collides with
+        def in_collision(self, q, margin):
+            return True
+
+    wrap = wrapping_joints(panda, panda.lower, panda.upper)
+    checked = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        q_target, q0 = panda.random_configurations(2, rng)
+        T = panda.fk(q_target)
+        problem = ev.make_problem(panda, T, q0=q0)[0]
+        lm, Q = _answers(panda, problem, rng, 4)
+        F = flipped(Q, euler_flips(panda, None))
+        if not np.all((F >= panda.lower) & (F <= panda.upper), axis=1).any():
+            continue
+        criterion = make_criterion(problem, "nearest", (), wrap)
+        answers = sorted(zip(criterion.costs(Q).tolist(), Q, [0] * len(Q), strict=True), key=lambda a: a[0])
+        picked, _ = descend(answers, [SimpleNamespace(lm=lm)], q0, MODE_NEAREST, criterion, Everywhere(), problem,
+                            wrap, None, euler_flips(panda, None))
+        assert picked
+        for _, q, _ in picked:
+            assert min(np.abs(q - a).max() for a in Q) == 0.0
+        checked += 1
+    assert checked >= 3

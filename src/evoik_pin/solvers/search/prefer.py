@@ -284,8 +284,8 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
     (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct ones
     :data:`DESCEND_TRIAL` steps, then the best :data:`DESCEND_FINAL` on in rounds while the clock allows (until
     ``finish``). With ``flips`` (:func:`euler_flips`, q0 given), the answers' flips inside the box are candidates
-    too (the descent takes them onto the goals first). A descended answer in collision keeps its start. Returns (the
-    answers best first, evaluations)."""
+    too (the descent takes them onto the goals first). A descended answer in collision keeps its start (a flip is
+    dropped). Returns (the answers best first, evaluations)."""
     kernel = nullspace_kernel()["descend_batch"]
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
     if flips and q0 is not None and answers:
@@ -293,7 +293,9 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
         keep = np.all((F >= problem.lower) & (F <= problem.upper), axis=1)
         index = np.tile([a[2] for a in answers], len(flips))[keep]
         F = F[keep]
-        answers = sorted(answers + list(zip(criterion.costs(F).tolist(), F, index.tolist(), strict=True)),
+        # (cost, q, variant, True): a flip, off the goals until the descent takes it onto them
+        answers = sorted(answers + [(c, q, i, True) for c, q, i in zip(criterion.costs(F).tolist(), F,
+                                                                        index.tolist(), strict=True)],
                          key=lambda a: a[0])
     picked = distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
     evaluations = 0
@@ -308,11 +310,12 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
             Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
             evaluations += int(kernel(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
                                        DESCEND_MAX_STEP, Q_out, f))
+            met = np.isfinite(f)  # a flip the descent could not take onto the goals is dropped
             if scene is not None:
                 for k in range(Q.shape[0]):
                     if scene.in_collision(Q_out[k], problem.margin):
                         Q_out[k] = Q[k]
-            met = np.isfinite(f)  # a flip the descent could not take onto the goals is dropped
+                        met[k] &= len(mine[k]) == 3  # a flip's start is off the goals: no answer to keep
             Q_out = Q_out[met]
             if q0 is not None:
                 Q_out = nearest_turn(Q_out, q0, problem.lower, problem.upper, wrap)
