@@ -765,3 +765,92 @@ def test_nearest_descent_measures_full_turn_joints_at_their_nearest_turn(ur5):
                 assert np.linalg.norm(along) <= 1e-5 * max(1.0, np.linalg.norm(g)), (seed, np.linalg.norm(along))
                 stationary += 1
     assert stationary >= 20
+
+
+def test_euler_flips_keep_the_pose(panda, ur5):
+    """Panda's shoulder (joints 1-3 meet in a point) flips to another configuration of the same tip pose; UR5's
+    joints have no such triple."""
+    from evoik_pin.solvers.search.prefer import FLIP_TOLERANCE, euler_flips, flipped
+
+    flips = euler_flips(panda, None)
+    assert (0, 0.0) in flips
+    assert euler_flips(panda, None) is flips  # cached
+    assert euler_flips(ur5, None) == ()
+    Q = panda.random_configurations(20, np.random.default_rng(3))
+    F = flipped(Q, flips)
+    assert F.shape == (20 * len(flips), panda.n)
+    for q, qf in zip(np.tile(Q, (len(flips), 1)), F, strict=True):
+        assert np.linalg.norm(qf - q) > 1.0
+        T, Tf = _pin_pose(panda, q), _pin_pose(panda, qf)
+        assert np.linalg.norm(Tf.translation - T.translation) <= FLIP_TOLERANCE
+        assert np.linalg.norm(pin.log3(T.rotation.T @ Tf.rotation)) <= FLIP_TOLERANCE
+
+
+def test_descent_takes_a_start_off_the_goals_onto_them_first(panda):
+    """A flipped answer (off the goals by the URDF's rounding at most) is restored, then descended: it meets the
+    goals and f_out is its distance; a start far off the goals that the restoring steps cannot bring back keeps its
+    place with f_out inf."""
+    from evoik_pin.solvers.lm.nullspace import MODE_NEAREST, nullspace_kernel
+    from evoik_pin.solvers.search.prefer import euler_flips, flipped
+
+    kernel = nullspace_kernel()["descend_batch"]
+    restored = 0
+    for seed in range(8):
+        rng = np.random.default_rng(seed)
+        q_target, q0 = panda.random_configurations(2, rng)
+        T = panda.fk(q_target)
+        lm, Q = _answers(panda, ev.make_problem(panda, T, q0=q0)[0], rng, 4)
+        F = flipped(Q, euler_flips(panda, None))
+        F = F[np.all((F >= panda.lower) & (F <= panda.upper), axis=1)]
+        if F.shape[0] == 0:
+            continue
+        F_out, f = np.empty_like(F), np.empty(F.shape[0])
+        kernel(F, q0, MODE_NEAREST, *lm._args, 30, 4, 0.5, F_out, f)
+        for q_out, f_out in zip(F_out, f, strict=True):
+            assert np.isfinite(f_out)
+            assert f_out == pytest.approx(float(np.sum((q_out - q0) ** 2)), rel=1e-9, abs=1e-12)
+            assert panda.within_bounds(q_out)
+            M = _pin_pose(panda, q_out)
+            assert np.linalg.norm(M.translation - T.translation) <= 1e-6
+            assert np.linalg.norm(pin.log3(T.rotation.T @ M.rotation)) <= 1e-6
+            restored += 1
+        far = panda.random_configurations(1, rng)
+        far_out, f_far = np.empty_like(far), np.empty(1)
+        kernel(far, q0, MODE_NEAREST, *lm._args, 30, 1, 0.5, far_out, f_far)
+        assert f_far[0] == np.inf
+        assert np.array_equal(far_out, far)
+    assert restored >= 4
+
+
+def test_descent_in_collision_keeps_answers_and_drops_flips(panda):
+    """With every descended configuration in collision, the answers keep their starts and no flip (off the goals
+    until descended) is kept."""
+    from types import SimpleNamespace
+
+    from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
+    from evoik_pin.solvers.search.prefer import descend, euler_flips, flipped, make_criterion
+
+    class Everywhere:  # a scene every configuration collides with
+        def in_collision(self, q, margin):
+            return True
+
+    wrap = wrapping_joints(panda, panda.lower, panda.upper)
+    checked = 0
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        q_target, q0 = panda.random_configurations(2, rng)
+        T = panda.fk(q_target)
+        problem = ev.make_problem(panda, T, q0=q0)[0]
+        lm, Q = _answers(panda, problem, rng, 4)
+        F = flipped(Q, euler_flips(panda, None))
+        if not np.all((F >= panda.lower) & (F <= panda.upper), axis=1).any():
+            continue
+        criterion = make_criterion(problem, "nearest", (), wrap)
+        answers = sorted(zip(criterion.costs(Q).tolist(), Q, [0] * len(Q), strict=True), key=lambda a: a[0])
+        picked, _ = descend(answers, [SimpleNamespace(lm=lm)], q0, MODE_NEAREST, criterion, Everywhere(), problem,
+                            wrap, None, euler_flips(panda, None))
+        assert picked
+        for _, q, _ in picked:
+            assert min(np.abs(q - a).max() for a in Q) == 0.0
+        checked += 1
+    assert checked >= 3

@@ -109,8 +109,9 @@ def _criterion(mode, q, q0, box, rev, support, pg, Z, O, J, JJ):
 def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, restore, max_step, Q_out, f_out):
     """Each answer Q[i] (N, n) taken to a local optimum of the criterion ``mode`` in at most ``iterations`` steps,
     each restored to the goals by at most ``restore`` Gauss-Newton steps; the result to Q_out[i] (Q[i] itself when
-    no step was kept or Q[i] does not meet the goals) and its criterion to f_out[i]. ``max_step`` (rad or m): the
-    longest step. The other arguments are :func:`.kernel.lm_run_buffers`'. Returns the kinematics evaluations."""
+    no step was kept) and its criterion to f_out[i]. A Q[i] off the goals is first taken onto them by at most
+    ``restore`` Gauss-Newton steps; where they fail, Q_out[i] is Q[i] and f_out[i] inf. ``max_step`` (rad or m):
+    the longest step. The other arguments are :func:`.kernel.lm_run_buffers`'. Returns the kinematics evaluations."""
     N, n = Q.shape
     ws = make_workspace(kin, goals, n, 1)
     JJ = np.empty((6, 6))
@@ -144,8 +145,23 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
     f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
     _copy(q, q_out)
     f_out[i] = f
-    if not within(spec, cur.ge):
-        return evaluations
+    if not within(spec, cur.ge):  # a start off the goals (a flipped answer): Gauss-Newton onto them first
+        for _r in range(restore):
+            task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, cur, ws, W)
+            if not damped_solve(W, LAMBDA_MIN, cur.e, L, y, dq):
+                break
+            for k in range(n):
+                q[k] = min(max(q[k] - dq[k], box[B_LO, k]), box[B_HI, k])
+            task_error(True, kin, mimic, goals, weighted, pt, Rt, q, cur, ws)
+            evaluations += 1
+            if within(spec, cur.ge):
+                break
+        if not within(spec, cur.ge):
+            f_out[i] = np.inf  # left where it is: not an answer
+            return evaluations
+        f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
+        _copy(q, q_out)
+        f_out[i] = f
     t0 = 1.0 if mode == MODE_NEAREST else -1.0  # -1: set from the first direction's length
     t = t0
     have_v = False

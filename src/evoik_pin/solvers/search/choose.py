@@ -30,6 +30,7 @@ from .prefer import (
     descend,
     descent_mode,
     distinct,
+    euler_flips,
     has_null_space,
     make_criterion,
     nearest_turn,
@@ -223,6 +224,8 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         table.prepare_goals(problem.goals)
     if prefer != "first" and engine == "compiled":
         nullspace_kernel()  # compiled or loaded before the clock starts
+    # prefer="nearest": the answers' flips (other branches of the same pose) descended too
+    flips = euler_flips(robot, problem.goals[0].frame) if prefer == "nearest" and single else ()
     t0 = time.perf_counter()
     deadline, collect_until, finish = (None, None, None) if timeout is None else (
         t0 + timeout, t0 + COLLECT_SHARE * timeout, t0 + (1.0 - FINISH_SHARE) * timeout)  # finish: the answer made
@@ -379,7 +382,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
 
         mode = descent_mode(prefer, criterion, variants)
         if redundant and mode is not None:  # compiled: a first pass over more answers, then the best further
-            refined, ev = descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish)
+            refined, ev = descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish, flips)
             evaluations += ev
         elif criterion and redundant:  # a few steps for each of the best, then the rest of the time for the winner
             refined = [improve(*a, TRIAL_STEPS) for a in distinct(answers, REFINE_COUNT)]

@@ -6,8 +6,10 @@ restored by LM) or the compiled :func:`descend`. Nearness is ``|q - q0|``, full-
 from __future__ import annotations
 
 import time
+import weakref
 
 import numpy as np
+import pinocchio as pin
 
 from ...errors import MethodError, OptionError
 from ...goals.preferences import Manipulability, Posture
@@ -18,7 +20,7 @@ from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 
 __all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bind_preferences", "check_prefer",
-           "check_prefer_method", "nearest_turn", "refine"]
+           "check_prefer_method", "euler_flips", "flipped", "nearest_turn", "refine"]
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
@@ -69,6 +71,59 @@ def nearest_turn(q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.nda
     shifted = np.where(shifted < lower, shifted + two_pi, shifted)
     ok = wrap & (shifted >= lower) & (shifted <= upper)
     return np.where(ok, shifted, q)
+
+
+#: How close (m, rad) a frame's pose must stay under a joint-triple flip for :func:`euler_flips` to take it as exact
+#: (URDFs round their angles: xArm's shoulder flip moves the tip by ~1e-5); LM meets the goals again from there.
+FLIP_TOLERANCE = 1e-4
+#: Configurations :func:`euler_flips` tests a flip at (fixed draws in the limits).
+FLIP_TRIALS = 3
+_FLIPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def euler_flips(robot, frame: str | None) -> tuple[tuple[int, float], ...]:
+    """The joint triples (i, i+1, i+2) whose flip ``(q_i + pi, m - q_{i+1}, q_{i+2} + pi)`` leaves the pose of
+    ``frame`` unchanged, as (i, m) with m 0 or pi: the two Euler-angle solutions of a spherical joint group (a
+    7-joint arm's shoulder), other IK branches of the same pose whose self-motion prefer="nearest" also searches
+    (:func:`flipped`). Tested at :data:`FLIP_TRIALS` configurations within :data:`FLIP_TOLERANCE`, each of the three
+    joints moving the frame; cached per robot and frame."""
+    cache = _FLIPS.setdefault(robot, {})
+    if frame in cache:
+        return cache[frame]
+    fid = robot.frame_id(frame)
+    Q = robot.random_configurations(FLIP_TRIALS, np.random.default_rng(0))
+    poses = [robot.frame_poses_unchecked(q, [fid])[0] for q in Q]
+    moving = np.any(np.abs(robot.jacobian_world_unchecked(Q[0], fid)) > 1e-9, axis=0)
+    flips = []
+    for i in range(robot.n - 2):
+        if not moving[i:i + 3].all():
+            continue
+        for m in (0.0, np.pi):
+            ok = True
+            for q, T in zip(Q, poses, strict=True):
+                F = robot.frame_poses_unchecked(flipped(q[None], ((i, m),))[0], [fid])[0]
+                if (np.linalg.norm(F.translation - T.translation) > FLIP_TOLERANCE
+                        or np.linalg.norm(pin.log3(T.rotation.T @ F.rotation)) > FLIP_TOLERANCE):
+                    ok = False
+                    break
+            if ok:
+                flips.append((i, m))
+                break
+    cache[frame] = tuple(flips)
+    return cache[frame]
+
+
+def flipped(Q: np.ndarray, flips) -> np.ndarray:
+    """Each row of ``Q`` (N, n) under each flip of ``flips`` (:func:`euler_flips`) in turn: (N x len(flips), n),
+    not taken into any box."""
+    out = []
+    for i, m in flips:
+        F = Q.copy()
+        F[:, i] += np.pi
+        F[:, i + 1] = m - Q[:, i + 1]
+        F[:, i + 2] += np.pi
+        out.append(F)
+    return np.concatenate(out) if out else Q[:0]
 
 
 class Criterion:
@@ -224,13 +279,24 @@ def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
 
 
 def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
-            finish: float | None) -> tuple[list, int]:
+            finish: float | None, flips=()) -> tuple[list, int]:
     """prefer's answers (cost, q, variant), best first, taken along their self-motion by the compiled descent
     (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` (:data:`MANIP_COUNT`) distinct ones
     :data:`DESCEND_TRIAL` steps, then the best :data:`DESCEND_FINAL` on in rounds while the clock allows (until
-    ``finish``). A descended answer in collision keeps its start. Returns (the answers best first, evaluations)."""
+    ``finish``). With ``flips`` (:func:`euler_flips`, q0 given), the answers' flips inside the box are candidates
+    too (the descent takes them onto the goals first). A descended answer in collision keeps its start (a flip is
+    dropped). Returns (the answers best first, evaluations)."""
     kernel = nullspace_kernel()["descend_batch"]
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
+    if flips and q0 is not None and answers:
+        F = nearest_turn(flipped(np.array([a[1] for a in answers]), flips), q0, problem.lower, problem.upper, wrap)
+        keep = np.all((F >= problem.lower) & (F <= problem.upper), axis=1)
+        index = np.tile([a[2] for a in answers], len(flips))[keep]
+        F = F[keep]
+        # (cost, q, variant, True): a flip, off the goals until the descent takes it onto them
+        answers = sorted(answers + [(c, q, i, True) for c, q, i in zip(criterion.costs(F).tolist(), F,
+                                                                        index.tolist(), strict=True)],
+                         key=lambda a: a[0])
     picked = distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
     evaluations = 0
 
@@ -244,13 +310,16 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
             Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
             evaluations += int(kernel(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
                                        DESCEND_MAX_STEP, Q_out, f))
+            met = np.isfinite(f)  # a flip the descent could not take onto the goals is dropped
             if scene is not None:
                 for k in range(Q.shape[0]):
                     if scene.in_collision(Q_out[k], problem.margin):
                         Q_out[k] = Q[k]
+                        met[k] &= len(mine[k]) == 3  # a flip's start is off the goals: no answer to keep
+            Q_out = Q_out[met]
             if q0 is not None:
                 Q_out = nearest_turn(Q_out, q0, problem.lower, problem.upper, wrap)
-            out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q.shape[0], strict=True))
+            out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q_out.shape[0], strict=True))
         return sorted(out, key=lambda a: a[0])
 
     picked = run(picked, DESCEND_TRIAL)
