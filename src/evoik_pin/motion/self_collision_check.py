@@ -34,8 +34,9 @@ BOX_SLACK = 1e-9
 #: Margin (m) of the hull filter: Qhull's hulls may leave a mesh vertex a few 1e-5 m outside (measured: a G1 knee 70
 #: um into a shoulder, its hulls apart), so a pair goes on to the meshes when its hulls are within this of touching.
 HULL_MARGIN = 1e-3
-#: Verdicts kept by configuration (the last ones: a bisection's and a frame's few).
-REMEMBERED = 64
+#: Verdicts kept by configuration (the last ones: a bisection's, a frame's, and a clip's answers, which its report
+#: checks again).
+REMEMBERED = 4096
 #: Pairs found touching that later checks try first.
 RECENT_PAIRS = 8
 
@@ -168,7 +169,7 @@ class SelfCollisionCheck:
         pin.updateGeometryPlacements(robot.model, self._data, self._hulls, self._hdata)  # same joint placements
         # the joints' placements (fewer than the objects, and the objects' true inputs: a pair's verdict is a
         # function of its two joints' placements, _touching)
-        J = self._placements = np.array([m.homogeneous for m in self._data.oMi])  # (nj, 4, 4)
+        J = self._placements = np.array([m.homogeneous for m in self._data.oMi.tolist()])  # (nj, 4, 4)
         out = self._out
         count = _overlapping_pairs(J, self._parent, self._local, self._centre, self._half, self._a, self._b,
                                    BOX_SLACK, out)
