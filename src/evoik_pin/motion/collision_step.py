@@ -17,29 +17,36 @@ import functools
 
 import numpy as np
 
-__all__ = ["BISECTION_STEPS", "free_nearby", "step_back_free"]
+__all__ = ["BISECTION_RESOLUTION", "BISECTION_STEPS", "free_nearby", "step_back_free"]
 
-#: Bisection steps on the segment (the last free point is within 2^-8 of the segment's length of the contact).
+#: Bisection steps on the segment at most (the last free point within 2^-8 of the segment's length of the contact).
 BISECTION_STEPS = 8
+#: The bisection stops once the interval left moves no entry of q more than this (rad or m): a step back then gives
+#: up at most 0.01 rad (1 cm) of the colliding joints' motion in that frame (the next frame takes it up again), and
+#: skips the last checks, the dearest ones (meshes a hair apart: ~1 ms each on G1). Measured on the ten clips: the
+#: limb angles within 0.2 degrees but Talos jump's arms (docs/BENCHMARKS.md, "The step back's resolution").
+BISECTION_RESOLUTION = 1e-2
 #: Colliding pairs whose links' joints step back together at most (the second attempt).
 MAX_PAIRS = 4
 
 
 def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray, beat: float = -1.0
                    ) -> tuple[float, np.ndarray]:
-    """The largest t in [0, 1] (bisection) with ``q_to`` but ``joints`` (bool (n,)) at ``q_from + t (q_to - q_from)``
-    collision-free, and that configuration; (-1, q_to) when even t = 0 collides. ``beat``: the t another side already
-    found; once the bisection's upper end is at or below it this side cannot find more, and it stops there (its t,
-    then at most ``beat``, loses the comparison it was made for; a side that can beat it is bisected in full)."""
+    """The largest t in [0, 1] (bisection, to :data:`BISECTION_RESOLUTION`) with ``q_to`` but ``joints`` (bool (n,))
+    at ``q_from + t (q_to - q_from)`` collision-free, and that configuration; (-1, q_to) when even t = 0 collides.
+    ``beat``: the t another side already found; once the bisection's upper end is at or below it this side cannot
+    find more, and it stops there (its t, then at most ``beat``, loses the comparison it was made for; a side that can
+    beat it is bisected in full)."""
 
     def at(t: float) -> np.ndarray:
         return np.where(joints, q_from + t * (q_to - q_from), q_to)
 
     if scene.in_collision(at(0.0)):
         return -1.0, q_to
+    span = float(np.max(np.abs(q_to - q_from), where=joints, initial=0.0))  # the most a moving entry travels
     lo, hi = 0.0, 1.0
     for _ in range(BISECTION_STEPS):
-        if hi <= beat:
+        if hi <= beat or (hi - lo) * span <= BISECTION_RESOLUTION:
             break
         mid = 0.5 * (lo + hi)
         if scene.in_collision(at(mid)):
