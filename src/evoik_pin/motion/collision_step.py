@@ -24,7 +24,7 @@ BISECTION_STEPS = 8
 #: The bisection stops once the interval left moves no entry of q more than this (rad or m): a step back then gives
 #: up at most 0.01 rad (1 cm) of the colliding joints' motion in that frame (the next frame takes it up again), and
 #: skips the last checks, the dearest ones (meshes a hair apart: ~1 ms each on G1). Measured on the ten clips: the
-#: limb angles within 0.2 degrees but Talos jump's arms (docs/BENCHMARKS.md, "The step back's resolution").
+#: limb angles within 0.25 degrees but Talos jump's arms (docs/BENCHMARKS.md, "The step back's resolution").
 BISECTION_RESOLUTION = 1e-2
 #: Colliding pairs whose links' joints step back together at most (the second attempt).
 MAX_PAIRS = 4
