@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import functools
 import os
 import platform
 import sys
@@ -175,8 +176,9 @@ def exact(lm, q, flag: bool = False):
 UR_ARMS = ("ur3", "ur5", "ur10")
 
 
+@functools.cache
 def ur_closed_form_module():
-    """tests/test_all_solutions.py, where the UR closed form lives with the tests that verify it."""
+    """tests/test_all_solutions.py, where the UR closed form lives with the tests that verify it (loaded once)."""
     import importlib.util
 
     path = Path(__file__).resolve().parents[1] / "tests" / "test_all_solutions.py"
