@@ -123,6 +123,25 @@ def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, re
     return evaluations
 
 
+@njit(cache=True, nogil=True)
+def _onto_goals(kin, mimic, goals, weighted, pt, Rt, q, state, ws, W, L, y, dq, box, spec, restore):
+    """At most ``restore`` Gauss-Newton steps inside the box taking ``q`` (n,) (``state``: its task errors, evaluated)
+    onto the goals; returns (whether they are met, the kinematics evaluations made). ``W``, ``L``, ``y``, ``dq``:
+    scratch."""
+    evaluations = 0
+    for _r in range(restore):
+        if within(spec, state.ge):
+            break
+        task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, state, ws, W)
+        if not damped_solve(W, LAMBDA_MIN, state.e, L, y, dq):
+            break
+        for k in range(q.shape[0]):
+            q[k] = min(max(q[k] - dq[k], box[B_LO, k]), box[B_HI, k])
+        task_error(True, kin, mimic, goals, weighted, pt, Rt, q, state, ws)
+        evaluations += 1
+    return within(spec, state.ge), evaluations
+
+
 @njit(cache=True, nogil=True, forceinline=False)
 def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, Rt, iterations, restore, max_step,
              q_out, f_out, i):
@@ -146,17 +165,9 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
     _copy(q, q_out)
     f_out[i] = f
     if not within(spec, cur.ge):  # a start off the goals (a flipped answer): Gauss-Newton onto them first
-        for _r in range(restore):
-            task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, cur, ws, W)
-            if not damped_solve(W, LAMBDA_MIN, cur.e, L, y, dq):
-                break
-            for k in range(n):
-                q[k] = min(max(q[k] - dq[k], box[B_LO, k]), box[B_HI, k])
-            task_error(True, kin, mimic, goals, weighted, pt, Rt, q, cur, ws)
-            evaluations += 1
-            if within(spec, cur.ge):
-                break
-        if not within(spec, cur.ge):
+        met, count = _onto_goals(kin, mimic, goals, weighted, pt, Rt, q, cur, ws, W, L, y, dq, box, spec, restore)
+        evaluations += count
+        if not met:
             f_out[i] = np.inf  # left where it is: not an answer
             return evaluations
         f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
@@ -235,20 +246,9 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
         for k in range(n):
             qn[k] = min(max(q[k] + s * p[k], box[B_LO, k]), box[B_HI, k])
         # Gauss-Newton back onto the goals
-        met = False
-        for _r in range(restore + 1):
-            task_error(True, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
-            evaluations += 1
-            if within(spec, cand.ge):
-                met = True
-                break
-            if _r == restore:
-                break
-            task_jacobian(True, kin, mimic, goals, weighted, pt, Rt, cand, ws, W)
-            if not damped_solve(W, LAMBDA_MIN, cand.e, L, y, dq):
-                break
-            for k in range(n):
-                qn[k] = min(max(qn[k] - dq[k], box[B_LO, k]), box[B_HI, k])
+        task_error(True, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
+        met, count = _onto_goals(kin, mimic, goals, weighted, pt, Rt, qn, cand, ws, W, L, y, dq, box, spec, restore)
+        evaluations += 1 + count
         f_new = _criterion(mode, qn, q0, box, rev, support, cand.pg, cand.Z, cand.O, J, JJ) if met else np.inf
         if f_new < f - 1e-15 * max(1.0, abs(f)):
             _copy(q, q_prev)
