@@ -3,8 +3,11 @@
 Teleoperation, servoing and whole-body control call IK at control rate (1 kHz for an arm, several hundred Hz for a
 humanoid) with goals that move a little every step. A :class:`Tracker` keeps the robot's last configuration and an
 :class:`~evoik_pin.IKSolver` made once (options checked, goal stacks and LM engines cached); each :meth:`Tracker.step`
-binds the new goals into those caches and runs Levenberg-Marquardt from the last configuration inside its velocity
-box ``[q - v_max dt, q + v_max dt]`` (:mod:`evoik_pin.solvers.search.velocity_box`): the answer never leaves it, so
+runs Levenberg-Marquardt from the last configuration inside its velocity box ``[q - v_max dt, q + v_max dt]``
+(:mod:`evoik_pin.solvers.search.velocity_box`); after the first step of a goal structure (its frames, kinds, weights
+and tolerances; or a tip pose or position) the next ones of that structure take its prepared path
+(:mod:`evoik_pin.solvers.search.box_step`: the new targets and box written into the engine's own arrays, one
+compiled run, the same answers), the general one again whenever that run misses. The answer never leaves the box, so
 the commanded motion respects the robot's speed limits whatever the goals do; goals out of reach for one step give
 the answer closest to them inside the box and ``success=False``, and the loop catches up on the next steps.
 
@@ -24,8 +27,12 @@ from ..call_setup import _rng
 from ..ik_solver import IKSolver
 from ..robot.velocity_limits import check_dt
 from ..robot.velocity_limits import velocity_limits as limits_of
+from ..solvers.search.box_step import BoxStep, step_key
 
 __all__ = ["Tracker"]
+
+#: Goal structures whose prepared path a Tracker keeps (as many as its velocity-box stage keeps engines).
+_KEPT_STEPS = 8
 
 
 class Tracker:
@@ -55,7 +62,8 @@ class Tracker:
         self.velocity_limits = limits_of(robot, velocity_limits)
         self._step = self.velocity_limits * self.dt
         self._rng = _rng(seed)
-        self._q = robot.check_q(q0).copy()
+        self._q = np.array(robot.check_q(q0), dtype=float)  # a float64 vector of our own: the compiled run's type
+        self._prepared: dict = {}  # step_key -> BoxStep
 
     @property
     def q(self) -> np.ndarray:
@@ -69,16 +77,35 @@ class Tracker:
 
     def reset(self, q) -> None:
         """Restart from the configuration ``q`` (n,) (rad or m), e.g. after the robot was moved by hand."""
-        self._q = self.robot.check_q(q).copy()
+        self._q = np.array(self.robot.check_q(q), dtype=float)
 
     def step(self, goals):
         """One control step towards ``goals``: a target of the tip (position (3,) m, ``pin.SE3``, (4, 4)) or a goal
         list (:mod:`evoik_pin.goals`). Returns the :class:`~evoik_pin.Result`; its ``q`` (n,) lies within
         ``v_max dt`` of the last configuration, which it becomes (also when ``success`` is False: the closest the
         robot can get this step)."""
-        result = self._solver.solve_within(goals, self._q, self._step, self._rng)
+        key = step_key(goals)
+        prepared = None if key is None else self._prepared.get(key)
+        if prepared is not None and prepared.usable():
+            result = prepared.solve(goals, self._q)
+            if result is not None:
+                self._q = result.q.copy()
+                return result
+        result = self._solver.solve_within(goals, self._q, self._step, self._rng)  # its checks; the stage's search
         self._q = result.q.copy()
+        if key is not None and (prepared is None or not prepared.usable()):
+            self._prepare(key, goals)
         return result
+
+    def _prepare(self, key, goals) -> None:
+        """Keep the prepared path of ``goals``' structure ``key`` (the general path has just solved ``goals``), when
+        there is one (:meth:`BoxStep.prepare`)."""
+        prepared = BoxStep.prepare(self._solver, goals, self._step)
+        if prepared is None:
+            return
+        if len(self._prepared) >= _KEPT_STEPS and key not in self._prepared:
+            self._prepared.pop(next(iter(self._prepared)))
+        self._prepared[key] = prepared
 
     def __repr__(self) -> str:
         return f"Tracker({self.robot.name!r}, dt={self.dt:g})"

@@ -1,0 +1,184 @@
+"""A control loop's per-step path through the velocity box (:class:`BoxStep`): the goal structure a
+:class:`~.velocity_box.VelocityBoxStage` solved once, bound to its engine, so that each later step only writes the new
+targets and the new box into the engine's own arrays and calls the compiled LM entry; the same answers as the stage's,
+bit for bit, and the stage itself whenever this path cannot give them (another structure, a run that misses).
+
+A step of a warm-started tracker costs a few microseconds of compiled LM; the general path around it (binding the goal
+list, building the problem, the box in NumPy, the outcome objects) cost several times that. What stays per step here:
+the structure's test (:func:`~evoik_pin.goals.stack.structure`, the key the goal binder itself trusts), the targets'
+copy, one compiled box write, one compiled run and the Result."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+
+from ...goals.stack import structure
+from ...result import Result
+from ...target import pose_arrays
+from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
+from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
+
+__all__ = ["MISSED", "BoxStep", "step_key", "write_box"]
+
+#: What :meth:`BoxStep.solve` returns when its run did not meet the goals: the stage's search must take the step.
+MISSED = None
+#: The one message of a step met by the run from the last configuration (the stage's, for one run).
+_MESSAGE = "velocity box: 1 LM run(s)"
+
+
+@njit(cache=True, nogil=True)
+def write_box(box, q_prev, step, lower, upper, wrap):  # pragma: no cover - compiled
+    """Write the velocity box of ``q_prev`` (n,) with half-widths ``step`` (n,) (rad or m) into the LM kernel's
+    ``box`` (5, n) rows B_LO, B_CLO and B_HI, B_CHI: :meth:`~.velocity_box.VelocityBoxStage.box`'s values (clipped
+    into ``lower``, ``upper`` (n,); joints where ``wrap`` (n,) bool is set unclipped), its operations in its order, so
+    the same floats."""
+    for k in range(q_prev.shape[0]):
+        lo = q_prev[k] - step[k]
+        hi = q_prev[k] + step[k]
+        if not wrap[k]:
+            lo, hi = min(max(lo, lower[k]), hi), max(min(hi, upper[k]), lo)
+        box[B_LO, k] = lo
+        box[B_CLO, k] = lo
+        box[B_HI, k] = hi
+        box[B_CHI, k] = hi
+
+
+def _entry_point(dispatcher, args: tuple):
+    """The compiled entry of ``dispatcher`` for ``args``' types (compiled or loaded now), called without numba's
+    per-call typing of every argument; the dispatcher itself where this numba does not expose it."""
+    dispatcher(*args)
+    try:
+        from numba import typeof
+
+        return dispatcher.overloads[tuple(typeof(a) for a in args)].entry_point
+    except (AttributeError, KeyError, ImportError):
+        return dispatcher
+
+
+def step_key(target):
+    """What a :class:`BoxStep` is prepared for, of a Tracker's ``target``: a goal list's
+    :func:`~evoik_pin.goals.stack.structure` with its goals' classes, ``True`` / ``False`` for a tip pose / position
+    given as a ``pin.SE3``, float (4, 4) or float (3,) array (:func:`~evoik_pin.target.pose_arrays`); None for anything
+    else (the general path then takes it, and refuses it if it is bad). Never raises."""
+    kind = type(target)
+    if kind is list or kind is tuple:
+        try:
+            # a goal set's class is None here: BoxStep.prepare refuses sets, so such a key is never prepared
+            return tuple(type(g) if g.alternatives is None else None for g in target), structure(target)
+        except (AttributeError, TypeError):  # not goals: the general path's verdict
+            return None
+    if kind is pin.SE3:
+        return True
+    if kind is np.ndarray:
+        arrays = pose_arrays(target)
+        return None if arrays is None else arrays[1] is not None
+    return None
+
+
+class BoxStep:
+    """A velocity-box solve prepared for one goal structure (or one tip-target kind): the stage's boxed engine for it,
+    its box, targets and scratch arrays bound once; :meth:`solve` per step.
+
+    Made by :meth:`prepare`; used in the thread that made it (the engine's workspace is that thread's)."""
+
+    @classmethod
+    def prepare(cls, solver, target, step: np.ndarray) -> BoxStep | None:
+        """The per-step path of ``solver`` (an :class:`~evoik_pin.IKSolver`, after its ``solve_within`` took
+        ``target``) for targets like ``target`` and the half-widths ``step`` (n,) (rad or m); None where it would not
+        give the stage's answers: locked joints, a scene, goal sets, goals beyond one frame or two on one frame, a
+        target-dependent box or an objective other than the errors' (tip targets), or no :func:`step_key`."""
+        key = step_key(target)
+        stage = solver._box_stage
+        if key is None or solver._locked is not None or not isinstance(stage, VelocityBoxStage):
+            return None
+        problem = solver.problem(target)
+        if problem.scene is not None:
+            return None
+        goals = problem.goals
+        if problem.target is None:  # a goal list
+            frames = [g.frame for g in goals]
+            # one frame per goal: bind's clash test of two goals on one frame reads the targets
+            if problem.goal_sets or len(set(frames)) < len(frames) or not all(g.on_one_frame for g in goals):
+                return None
+        elif solver._target_box or solver._objective is not None or problem.objective.from_errors(
+                problem.target, 0.0, 0.0 if problem.target.has_orientation else None) is None:
+            return None  # the box or the cost would depend on the target itself
+        engine = stage._engine(problem)
+        if not (engine._owned and engine._own_box):  # the stage's run made both: else a path not taken yet
+            return None
+        return cls(key, problem, engine, step)
+
+    def __init__(self, key, problem, engine, step: np.ndarray) -> None:
+        self.key = key
+        self._thread = threading.get_ident()
+        self._problem, self._goals, self._list = problem, problem.goals, problem.target is None
+        # what each goal reports and meets (Goal.reported, Goal.met), fixed by its kind and tolerances: the structure's
+        self._checks = [(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance) for g in problem.goals]
+        self._engine, self._args = engine, engine._args
+        self._pt, self._Rt, self._box = engine._pt, engine._Rt, engine._box
+        self._lo, self._hi = self._box[B_LO], self._box[B_HI]
+        self._params = engine._params
+        self._head = tuple(engine.kernel_arguments(BOX_ITERATIONS)[0])
+        self._run = engine._direct or engine._kernel["lm_run_buffers"]
+        self._g_err = np.empty((len(problem.goals), 2))
+        self._n = problem.n
+        self._step = np.array(step, dtype=float)
+        self._bounds = (problem.lower, problem.upper, wrapping_joints(problem.robot, problem.lower, problem.upper))
+        self._write_box = _entry_point(write_box, (np.zeros_like(self._box), self._lo.copy(), self._step,
+                                                   *self._bounds))
+
+    def usable(self) -> bool:
+        """Whether the engine's arguments are still the ones bound, in the thread that prepared the path."""
+        return self._engine._args is self._args and threading.get_ident() == self._thread
+
+    def _write_targets(self, target) -> None:
+        """The step's targets into the engine's arrays: each goal's :meth:`~evoik_pin.goals.Goal.encode`, a tip
+        target's position and rotation (its kind's, by :func:`step_key`)."""
+        pt, Rt = self._pt, self._Rt
+        if not self._list:
+            position, rotation = (target.translation, target.rotation) if type(target) is pin.SE3 else pose_arrays(
+                target)
+            pt[0] = position
+            if rotation is not None:
+                Rt[0] = rotation
+            return
+        for i, g in enumerate(target):
+            T = g.target
+            if type(T) is pin.SE3:
+                pt[i] = T.translation
+                Rt[i] = T.rotation
+            else:
+                pt[i], Rt[i] = g.encode()
+
+    def solve(self, target, q_prev: np.ndarray) -> Result | None:
+        """The stage's answer to ``target`` (of this path's :attr:`key`, checked by the caller) inside the velocity box
+        of ``q_prev`` (n,) float (rad or m) when the LM run from ``q_prev`` meets the goals: a :class:`Result` with the
+        stage's fields; else :data:`MISSED` (the stage's search must take the step: its first run is this one)."""
+        t0 = time.perf_counter()
+        self._write_targets(target)
+        self._write_box(self._box, q_prev, self._step, *self._bounds)
+        self._params[P_ITERATIONS] = BOX_ITERATIONS  # another run of the engine may have set another budget
+        q = np.empty(self._n)
+        g_err = self._g_err
+        pos, rot, converged, _, evaluations, _ = self._run(*self._head, q_prev, *self._args, self._params, q, g_err)
+        if not converged:
+            return MISSED
+        np.minimum(np.maximum(q, self._lo, out=q), self._hi, out=q)  # the stage's clip: the kernel keeps q inside
+        rows = ((pos, rot),) if len(self._checks) == 1 else g_err.tolist()
+        errors = [(float(p) if has_p else None, float(r) if has_r else None)
+                  for (has_p, has_r, _, _), (p, r) in zip(self._checks, rows, strict=True)]
+        met = all((p is None or p <= tol) and (r is None or r <= rtol)
+                  for (_, _, tol, rtol), (p, r) in zip(self._checks, errors, strict=True))
+        pos, rot, cost = self._problem.summary(q, errors)  # the weights' and objective's, not the targets'
+        message = _MESSAGE if met else (_MESSAGE + "; the goals are not met within the velocity box (the answer "
+                                        "closest to them inside it)")
+        return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
+                      cost=float(cost), success=met, generations=0, evaluations=int(evaluations),
+                      time_s=time.perf_counter() - t0, message=message, method="velocity-box",
+                      goal_errors=errors if self._list else None,
+                      chosen=[None] * len(errors) if self._list else None)
