@@ -84,10 +84,10 @@ class Tracker:
         list (:mod:`evoik_pin.goals`). Returns the :class:`~evoik_pin.Result`; its ``q`` (n,) lies within
         ``v_max dt`` of the last configuration, which it becomes (also when ``success`` is False: the closest the
         robot can get this step)."""
-        key = step_key(goals)
+        key, targets = step_key(goals) or (None, None)
         prepared = None if key is None else self._prepared.get(key)
         if prepared is not None and prepared.usable():
-            result = prepared.solve(goals, self._q)
+            result = prepared.solve(targets, self._q)
             if result is not None:
                 self._q = result.q.copy()
                 return result

@@ -48,35 +48,43 @@ def write_box(box, q_prev, step, lower, upper, wrap):  # pragma: no cover - comp
         box[B_CHI, k] = hi
 
 
-def _entry_point(dispatcher, args: tuple):
-    """The compiled entry of ``dispatcher`` for ``args``' types (compiled or loaded now), called without numba's
-    per-call typing of every argument; the dispatcher itself where this numba does not expose it."""
-    dispatcher(*args)
-    try:
-        from numba import typeof
-
-        return dispatcher.overloads[tuple(typeof(a) for a in args)].entry_point
-    except (AttributeError, KeyError, ImportError):
-        return dispatcher
+_WRITE_BOX: list = []  # write_box's compiled entry, once found
 
 
-def step_key(target):
-    """What a :class:`BoxStep` is prepared for, of a Tracker's ``target``: a goal list's
-    :func:`~evoik_pin.goals.stack.structure` with its goals' classes, ``True`` / ``False`` for a tip pose / position
-    given as a ``pin.SE3``, float (4, 4) or float (3,) array (:func:`~evoik_pin.target.pose_arrays`); None for anything
-    else (the general path then takes it, and refuses it if it is bad). Never raises."""
+def _write_box_entry():
+    """The compiled entry of :func:`write_box` for its one argument signature (float64 C arrays, a bool mask),
+    compiled or loaded on first use and called without numba's per-call typing of every argument; the dispatcher
+    itself where this numba does not expose the entry."""
+    if not _WRITE_BOX:
+        args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1, dtype=bool))
+        write_box(*args)
+        try:
+            from numba import typeof
+
+            entry = write_box.overloads[tuple(typeof(a) for a in args)].entry_point
+        except (AttributeError, KeyError, ImportError):
+            entry = write_box
+        _WRITE_BOX.append(entry)
+    return _WRITE_BOX[0]
+
+
+def step_key(target) -> tuple | None:
+    """(key, targets) of a Tracker's ``target`` for a :class:`BoxStep`: a goal list's key is its
+    :func:`~evoik_pin.goals.stack.structure` with its goals' classes, its targets the list; a tip pose or position
+    given as a ``pin.SE3``, float (4, 4) or float (3,) array that passes :class:`~evoik_pin.Target`'s checks
+    (:func:`~evoik_pin.target.pose_arrays`) has the key ``True`` / ``False`` and the targets (position (3,) m,
+    rotation (3, 3) or None). None for anything else (the general path then takes it, and refuses it if it is bad).
+    Never raises."""
     kind = type(target)
     if kind is list or kind is tuple:
         try:
             # a goal set's class is None here: BoxStep.prepare refuses sets, so such a key is never prepared
-            return tuple(type(g) if g.alternatives is None else None for g in target), structure(target)
+            return (tuple(type(g) if g.alternatives is None else None for g in target), structure(target)), target
         except (AttributeError, TypeError):  # not goals: the general path's verdict
             return None
-    if kind is pin.SE3:
-        return True
-    if kind is np.ndarray:
+    if kind is pin.SE3 or kind is np.ndarray:
         arrays = pose_arrays(target)
-        return None if arrays is None else arrays[1] is not None
+        return None if arrays is None else (arrays[1] is not None, arrays)
     return None
 
 
@@ -84,7 +92,10 @@ class BoxStep:
     """A velocity-box solve prepared for one goal structure (or one tip-target kind): the stage's boxed engine for it,
     its box, targets and scratch arrays bound once; :meth:`solve` per step.
 
-    Made by :meth:`prepare`; used in the thread that made it (the engine's workspace is that thread's)."""
+    Made by :meth:`prepare`; used in the thread that made it (the engine's workspace is that thread's).
+
+    Attributes:
+        key: the :func:`step_key` of the targets it takes."""
 
     @classmethod
     def prepare(cls, solver, target, step: np.ndarray) -> BoxStep | None:
@@ -92,9 +103,9 @@ class BoxStep:
         ``target``) for targets like ``target`` and the half-widths ``step`` (n,) (rad or m); None where it would not
         give the stage's answers: locked joints, a scene, goal sets, goals beyond one frame or two on one frame, a
         target-dependent box or an objective other than the errors' (tip targets), or no :func:`step_key`."""
-        key = step_key(target)
+        keyed = step_key(target)
         stage = solver._box_stage
-        if key is None or solver._locked is not None or not isinstance(stage, VelocityBoxStage):
+        if keyed is None or solver._locked is not None or not isinstance(stage, VelocityBoxStage):
             return None
         problem = solver.problem(target)
         if problem.scene is not None:
@@ -111,12 +122,12 @@ class BoxStep:
         engine = stage._engine(problem)
         if not (engine._owned and engine._own_box):  # the stage's run made both: else a path not taken yet
             return None
-        return cls(key, problem, engine, step)
+        return cls(keyed[0], problem, engine, step)
 
     def __init__(self, key, problem, engine, step: np.ndarray) -> None:
         self.key = key
         self._thread = threading.get_ident()
-        self._problem, self._goals, self._list = problem, problem.goals, problem.target is None
+        self._problem, self._list = problem, problem.target is None
         # what each goal reports and meets (Goal.reported, Goal.met), fixed by its kind and tolerances: the structure's
         self._checks = [(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance) for g in problem.goals]
         self._engine, self._args = engine, engine._args
@@ -128,26 +139,26 @@ class BoxStep:
         self._g_err = np.empty((len(problem.goals), 2))
         self._n = problem.n
         self._step = np.array(step, dtype=float)
-        self._bounds = (problem.lower, problem.upper, wrapping_joints(problem.robot, problem.lower, problem.upper))
-        self._write_box = _entry_point(write_box, (np.zeros_like(self._box), self._lo.copy(), self._step,
-                                                   *self._bounds))
+        # C float64 copies (the entry's one signature) of the bounds the stage clips to, and its wrap mask of them
+        lower, upper = problem.lower, problem.upper
+        self._bounds = (np.array(lower, dtype=float), np.array(upper, dtype=float),
+                        np.array(wrapping_joints(problem.robot, lower, upper), dtype=bool))
+        self._write_box = _write_box_entry()
 
     def usable(self) -> bool:
         """Whether the engine's arguments are still the ones bound, in the thread that prepared the path."""
         return self._engine._args is self._args and threading.get_ident() == self._thread
 
-    def _write_targets(self, target) -> None:
-        """The step's targets into the engine's arrays: each goal's :meth:`~evoik_pin.goals.Goal.encode`, a tip
-        target's position and rotation (its kind's, by :func:`step_key`)."""
+    def _write_targets(self, targets) -> None:
+        """The step's targets (:func:`step_key`'s) into the engine's arrays: each goal's
+        :meth:`~evoik_pin.goals.Goal.encode`, or a tip target's position and rotation (None for a position)."""
         pt, Rt = self._pt, self._Rt
         if not self._list:
-            position, rotation = (target.translation, target.rotation) if type(target) is pin.SE3 else pose_arrays(
-                target)
-            pt[0] = position
-            if rotation is not None:
-                Rt[0] = rotation
+            pt[0] = targets[0]
+            if targets[1] is not None:
+                Rt[0] = targets[1]
             return
-        for i, g in enumerate(target):
+        for i, g in enumerate(targets):
             T = g.target
             if type(T) is pin.SE3:
                 pt[i] = T.translation
@@ -155,12 +166,12 @@ class BoxStep:
             else:
                 pt[i], Rt[i] = g.encode()
 
-    def solve(self, target, q_prev: np.ndarray) -> Result | None:
-        """The stage's answer to ``target`` (of this path's :attr:`key`, checked by the caller) inside the velocity box
+    def solve(self, targets, q_prev: np.ndarray) -> Result | None:
+        """The stage's answer to ``targets`` (:func:`step_key`'s, of this path's key) inside the velocity box
         of ``q_prev`` (n,) float (rad or m) when the LM run from ``q_prev`` meets the goals: a :class:`Result` with the
         stage's fields; else :data:`MISSED` (the stage's search must take the step: its first run is this one)."""
         t0 = time.perf_counter()
-        self._write_targets(target)
+        self._write_targets(targets)
         self._write_box(self._box, q_prev, self._step, *self._bounds)
         self._params[P_ITERATIONS] = BOX_ITERATIONS  # another run of the engine may have set another budget
         q = np.empty(self._n)
