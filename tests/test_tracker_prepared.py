@@ -1,0 +1,119 @@
+"""Tracker's prepared per-step path (solvers/search/box_step.py): every step's Result equal, field by field, to the
+general path's (IKSolver.solve_within with the same seed) for tip poses, 4 x 4 poses, positions and goal lists, with
+misses, structure changes and goal sets in between; bad input still refused after a structure was prepared."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from velocity_paths import pose_goals, smooth_path
+
+import evoik_pin as ek
+from evoik_pin.errors import FrameError, OptionError, TargetError
+from evoik_pin.goals import Pose, Position, Posture
+from evoik_pin.robot.velocity_limits import velocity_limits
+
+#: Result fields a prepared step must reproduce (all but time_s).
+FIELDS = ("position_error", "orientation_error", "cost", "success", "generations", "evaluations", "message",
+          "method", "collision_free", "goal_errors", "chosen", "setup_s", "solutions", "front")
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return ek.load_robot("panda")
+
+
+def _reference(robot, targets, q0, dt, seed, factor=True):
+    """The general path's Results: IKSolver.solve_within per step from the last answer, one generator throughout."""
+    solver = ek.IKSolver(robot)
+    rng = np.random.default_rng(seed)
+    step = velocity_limits(robot, factor) * dt
+    q, out = np.array(q0, dtype=float), []
+    for t in targets:
+        r = solver.solve_within(t, q, step, rng)
+        q = r.q.copy()
+        out.append(r)
+    return out
+
+
+def _assert_same(results, reference):
+    assert len(results) == len(reference)
+    for k, (a, b) in enumerate(zip(results, reference, strict=True)):
+        assert np.array_equal(a.q, b.q), k
+        for name in FIELDS:
+            assert repr(getattr(a, name)) == repr(getattr(b, name)), (k, name)
+        assert a.history == b.history == {}
+
+
+def _tracked(robot, targets, q0, dt, seed, factor=True):
+    tracker = ek.Tracker(robot, dt=dt, q0=q0, seed=np.random.default_rng(seed), velocity_limits=factor)
+    return tracker, [tracker.step(t) for t in targets]
+
+
+@pytest.mark.parametrize("form", ["se3", "matrix", "position", "goal list"])
+def test_panda_steps_equal_the_general_path_with_a_jump(panda, form):
+    dt = 0.001
+    Q = smooth_path(panda, 200, dt, seed=2)
+    T = [panda.fk(q) for q in Q]
+    for i in range(80, 110):  # out of reach for a while: misses take the stage's search, then the path resumes
+        T[i] = pin.SE3(T[i].rotation, T[i].translation + np.array([0.0, 0.3, 0.0]))
+    targets = {"se3": T, "matrix": [t.homogeneous for t in T], "position": [t.translation.copy() for t in T],
+               "goal list": [[Pose(panda.tip, t)] for t in T]}[form]
+    tracker, results = _tracked(panda, targets, Q[0], dt, seed=1, factor=2.0)
+    _assert_same(results, _reference(panda, targets, Q[0], dt, seed=1, factor=2.0))
+    assert len(tracker._prepared) == 1  # one structure: prepared once, taken by the other steps
+    assert all(r.success for r in results[:80]) and not any(r.success for r in results[80:110])
+    assert all(r.success for r in results[-20:])  # back on the path
+
+
+def test_talos_four_goals_equal_the_general_path():
+    talos = ek.load_robot("talos", floating_base=True)
+    dt = 0.002
+    Q = smooth_path(talos, 60, dt, seed=1, fraction=2.0)
+    lists = pose_goals(talos, Q)
+    tracker, results = _tracked(talos, lists, Q[0], dt, seed=4)
+    _assert_same(results, _reference(talos, lists, Q[0], dt, seed=4))
+    assert all(r.success and len(r.goal_errors) == 4 for r in results)
+
+
+def test_structures_alternating_and_goal_sets_equal_the_general_path(panda):
+    dt = 0.001
+    Q = smooth_path(panda, 90, dt, seed=5)
+    T = [panda.fk(q) for q in Q]
+    targets = []
+    for k, t in enumerate(T):
+        elbow = panda.fk(Q[k], frame="panda_link4").translation
+        targets.append([t, [Position(panda.tip, t.translation)],
+                        [Pose(panda.tip, t, tolerance=1e-5), Position("panda_link4", elbow, weight=0.5)],
+                        [Pose(panda.tip, [t.homogeneous, (t * pin.SE3(np.eye(3), np.array([0, 0, 0.1]))).homogeneous])],
+                        [Pose(panda.tip, t, weight=2.0)]][k % 5])
+    tracker, results = _tracked(panda, targets, Q[0], dt, seed=6)
+    _assert_same(results, _reference(panda, targets, Q[0], dt, seed=6))
+    assert len(tracker._prepared) == 4  # the goal set's steps are never prepared
+    assert all(r.success for r in results)
+
+
+def test_bad_input_refused_after_a_structure_was_prepared(panda):
+    dt = 0.001
+    Q = smooth_path(panda, 3, dt, seed=7)
+    tracker = ek.Tracker(panda, dt=dt, q0=Q[0])
+    T = panda.fk(Q[1])
+    tracker.step([Pose(panda.tip, T)])
+    tracker.step(T)
+    assert len(tracker._prepared) == 2
+    q = tracker.q
+    with pytest.raises(OptionError, match="preferences"):
+        tracker.step([Pose(panda.tip, T), Posture(Q[1])])
+    with pytest.raises(FrameError):
+        tracker.step([Pose("no_such_frame", T)])
+    with pytest.raises(TargetError):
+        tracker.step([])
+    bad = T.homogeneous.copy()
+    bad[:3, :3] *= 2.0  # no rotation
+    with pytest.raises(TargetError):
+        tracker.step(bad)
+    with pytest.raises(TargetError):
+        tracker.step(pin.SE3(2.0 * T.rotation, T.translation))
+    with pytest.raises(TargetError):
+        tracker.step(np.full(3, np.nan))
+    assert np.array_equal(tracker.q, q)  # a refused step leaves the tracker where it was
+    assert tracker.step(panda.fk(Q[2])).success
