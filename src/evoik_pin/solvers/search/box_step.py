@@ -17,13 +17,12 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from ...goals.stack import structure
 from ...result import Result
 from ...target import pose_arrays
 from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
 from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
 
-__all__ = ["MISSED", "BoxStep", "step_key", "write_box"]
+__all__ = ["MISSED", "BoxStep", "step_key", "write_step"]
 
 #: What :meth:`BoxStep.solve` returns when its run did not meet the goals: the stage's search must take the step.
 MISSED = None
@@ -32,11 +31,13 @@ _MESSAGE = "velocity box: 1 LM run(s)"
 
 
 @njit(cache=True, nogil=True)
-def write_box(box, q_prev, step, lower, upper, wrap):  # pragma: no cover - compiled
-    """Write the velocity box of ``q_prev`` (n,) with half-widths ``step`` (n,) (rad or m) into the LM kernel's
-    ``box`` (5, n) rows B_LO, B_CLO and B_HI, B_CHI: :meth:`~.velocity_box.VelocityBoxStage.box`'s values (clipped
-    into ``lower``, ``upper`` (n,); joints where ``wrap`` (n,) bool is set unclipped), its operations in its order, so
-    the same floats."""
+def write_step(box, q_prev, step, lower, upper, wrap, poses, posed, pt, Rt):  # pragma: no cover - compiled
+    """Write one step's box and targets into the LM kernel's arrays. The velocity box of ``q_prev`` (n,) with
+    half-widths ``step`` (n,) (rad or m) into ``box`` (5, n) rows B_LO, B_CLO and B_HI, B_CHI:
+    :meth:`~.velocity_box.VelocityBoxStage.box`'s values (clipped into ``lower``, ``upper`` (n,); joints where ``wrap``
+    (n,) bool is set unclipped), its operations in its order, so the same floats. The targets of the goals where
+    ``posed`` (G,) bool is set from their homogeneous poses ``poses`` (G, 4, 4) (m) into ``pt`` (G, 3) and ``Rt``
+    (G, 3, 3) (the others' rows untouched)."""
     for k in range(q_prev.shape[0]):
         lo = q_prev[k] - step[k]
         hi = q_prev[k] + step[k]
@@ -46,40 +47,50 @@ def write_box(box, q_prev, step, lower, upper, wrap):  # pragma: no cover - comp
         box[B_CLO, k] = lo
         box[B_HI, k] = hi
         box[B_CHI, k] = hi
+    for i in range(posed.shape[0]):
+        if posed[i]:
+            for r in range(3):
+                pt[i, r] = poses[i, r, 3]
+                for c in range(3):
+                    Rt[i, r, c] = poses[i, r, c]
 
 
-_WRITE_BOX: list = []  # write_box's compiled entry, once found
+_WRITE_STEP: list = []  # write_step's compiled entry, once found
 
 
-def _write_box_entry():
-    """The compiled entry of :func:`write_box` for its one argument signature (float64 C arrays, a bool mask),
+def _write_step_entry():
+    """The compiled entry of :func:`write_step` for its one argument signature (float64 C arrays, bool masks),
     compiled or loaded on first use and called without numba's per-call typing of every argument; the dispatcher
     itself where this numba does not expose the entry."""
-    if not _WRITE_BOX:
-        args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1, dtype=bool))
-        write_box(*args)
+    if not _WRITE_STEP:
+        mask = np.zeros(1, dtype=bool)
+        args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), mask, np.zeros((1, 4, 4)), mask,
+                np.zeros((1, 3)), np.zeros((1, 3, 3)))
+        write_step(*args)
         try:
             from numba import typeof
 
-            entry = write_box.overloads[tuple(typeof(a) for a in args)].entry_point
+            entry = write_step.overloads[tuple(typeof(a) for a in args)].entry_point
         except (AttributeError, KeyError, ImportError):
-            entry = write_box
-        _WRITE_BOX.append(entry)
-    return _WRITE_BOX[0]
+            entry = write_step
+        _WRITE_STEP.append(entry)
+    return _WRITE_STEP[0]
 
 
 def step_key(target) -> tuple | None:
-    """(key, targets) of a Tracker's ``target`` for a :class:`BoxStep`: a goal list's key is its
-    :func:`~evoik_pin.goals.stack.structure` with its goals' classes, its targets the list; a tip pose or position
-    given as a ``pin.SE3``, float (4, 4) or float (3,) array that passes :class:`~evoik_pin.Target`'s checks
-    (:func:`~evoik_pin.target.pose_arrays`) has the key ``True`` / ``False`` and the targets (position (3,) m,
-    rotation (3, 3) or None). None for anything else (the general path then takes it, and refuses it if it is bad).
-    Never raises."""
+    """(key, targets) of a Tracker's ``target`` for a :class:`BoxStep`. A goal list's key: per goal its class, frame,
+    kind, weight, tolerances, aux row and whether it is a single target (not a goal set), what its goal stack depends
+    on (:func:`~evoik_pin.goals.stack.structure`'s, which adds what goals beyond one frame pack: those are never
+    prepared); its targets: the list. A tip pose or position given as a ``pin.SE3``, float (4, 4) or float (3,) array
+    that passes :class:`~evoik_pin.Target`'s checks (:func:`~evoik_pin.target.pose_arrays`): the key ``True`` /
+    ``False``, the targets (position (3,) m, rotation (3, 3) or None). None for anything else (the general path then
+    takes it, and refuses it if it is bad). Never raises."""
     kind = type(target)
     if kind is list or kind is tuple:
         try:
-            # a goal set's class is None here: BoxStep.prepare refuses sets, so such a key is never prepared
-            return (tuple(type(g) if g.alternatives is None else None for g in target), structure(target)), target
+            return tuple([(type(g), g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
+                           g.alternatives is None, None if (aux := g.aux()) is None else aux.tobytes())
+                          for g in target]), target
         except (AttributeError, TypeError):  # not goals: the general path's verdict
             return None
     if kind is pin.SE3 or kind is np.ndarray:
@@ -129,7 +140,9 @@ class BoxStep:
         self._thread = threading.get_ident()
         self._problem, self._list = problem, problem.target is None
         # what each goal reports and meets (Goal.reported, Goal.met), fixed by its kind and tolerances: the structure's
-        self._checks = [(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance) for g in problem.goals]
+        self._checks = [(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance, g.weight)
+                        for g in problem.goals]
+        self._orientation_weight = problem.orientation_weight
         self._engine, self._args = engine, engine._args
         self._pt, self._Rt, self._box = engine._pt, engine._Rt, engine._box
         self._lo, self._hi = self._box[B_LO], self._box[B_HI]
@@ -143,7 +156,12 @@ class BoxStep:
         lower, upper = problem.lower, problem.upper
         self._bounds = (np.array(lower, dtype=float), np.array(upper, dtype=float),
                         np.array(wrapping_joints(problem.robot, lower, upper), dtype=bool))
-        self._write_box = _write_box_entry()
+        self._write_step = _write_step_entry()
+        # the goals whose target is a pin.SE3 (a Pose's always is): their poses go through one (G, 4, 4) array
+        G = len(problem.goals)
+        self._posed = np.array([self._list and type(g.target) is pin.SE3 for g in problem.goals], dtype=bool)
+        self._posed_list = self._posed.tolist()
+        self._poses = np.zeros((G, 4, 4))
 
     def usable(self) -> bool:
         """Whether the engine's arguments are still the ones bound, in the thread that prepared the path."""
@@ -158,11 +176,10 @@ class BoxStep:
             if targets[1] is not None:
                 Rt[0] = targets[1]
             return
-        for i, g in enumerate(targets):
-            T = g.target
-            if type(T) is pin.SE3:
-                pt[i] = T.translation
-                Rt[i] = T.rotation
+        poses = self._poses
+        for i, (g, posed) in enumerate(zip(targets, self._posed_list, strict=True)):
+            if posed:  # copied into pt, Rt by the compiled write (one array write here, not two)
+                poses[i] = g.target.homogeneous
             else:
                 pt[i], Rt[i] = g.encode()
 
@@ -172,7 +189,7 @@ class BoxStep:
         stage's fields; else :data:`MISSED` (the stage's search must take the step: its first run is this one)."""
         t0 = time.perf_counter()
         self._write_targets(targets)
-        self._write_box(self._box, q_prev, self._step, *self._bounds)
+        self._write_step(self._box, q_prev, self._step, *self._bounds, self._poses, self._posed, self._pt, self._Rt)
         self._params[P_ITERATIONS] = BOX_ITERATIONS  # another run of the engine may have set another budget
         q = np.empty(self._n)
         g_err = self._g_err
@@ -180,12 +197,24 @@ class BoxStep:
         if not converged:
             return MISSED
         np.minimum(np.maximum(q, self._lo, out=q), self._hi, out=q)  # the stage's clip: the kernel keeps q inside
-        rows = ((pos, rot),) if len(self._checks) == 1 else g_err.tolist()
-        errors = [(float(p) if has_p else None, float(r) if has_r else None)
-                  for (has_p, has_r, _, _), (p, r) in zip(self._checks, rows, strict=True)]
-        met = all((p is None or p <= tol) and (r is None or r <= rtol)
-                  for (_, _, tol, rtol), (p, r) in zip(self._checks, errors, strict=True))
-        pos, rot, cost = self._problem.summary(q, errors)  # the weights' and objective's, not the targets'
+        # per goal Goal.reported and Goal.met, and a goal list's problem.goal_summary (its largest errors and cost),
+        # inline, in their operations and order (tests/test_tracker_prepared.py holds the Results equal)
+        errors, met, ow = [], True, self._orientation_weight
+        largest, angle, cost = 0.0, None, 0.0
+        for (has_p, has_r, tol, rtol, weight), (p, r) in zip(self._checks, ((pos, rot),) if len(self._checks) == 1
+                                                             else g_err.tolist(), strict=True):
+            p, r = float(p) if has_p else None, float(r) if has_r else None
+            errors.append((p, r))
+            met = met and (p is None or p <= tol) and (r is None or r <= rtol)
+            p0, r0 = p or 0.0, r or 0.0
+            largest = largest if largest != largest else (p0 if p0 != p0 else max(largest, p0))  # NaN stays NaN
+            cost += (p0 + ow * r0) * weight
+            if r is not None:
+                angle = r if angle is None else max(angle, r)
+        if self._list:
+            pos, rot = largest, angle
+        else:  # a tip target's cost is its objective's (of the errors: BoxStep.prepare)
+            pos, rot, cost = self._problem.summary(q, errors)
         message = _MESSAGE if met else (_MESSAGE + "; the goals are not met within the velocity box (the answer "
                                         "closest to them inside it)")
         return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
