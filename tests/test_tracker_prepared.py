@@ -22,9 +22,9 @@ def panda():
     return ek.load_robot("panda")
 
 
-def _reference(robot, targets, q0, dt, seed, factor=True):
+def _reference(robot, targets, q0, dt, seed, factor=True, **options):
     """The general path's Results: IKSolver.solve_within per step from the last answer, one generator throughout."""
-    solver = ek.IKSolver(robot)
+    solver = ek.IKSolver(robot, **options)
     rng = np.random.default_rng(seed)
     step = velocity_limits(robot, factor) * dt
     q, out = np.array(q0, dtype=float), []
@@ -44,8 +44,8 @@ def _assert_same(results, reference):
         assert a.history == b.history == {}
 
 
-def _tracked(robot, targets, q0, dt, seed, factor=True):
-    tracker = ek.Tracker(robot, dt=dt, q0=q0, seed=np.random.default_rng(seed), velocity_limits=factor)
+def _tracked(robot, targets, q0, dt, seed, factor=True, **options):
+    tracker = ek.Tracker(robot, dt=dt, q0=q0, seed=np.random.default_rng(seed), velocity_limits=factor, **options)
     return tracker, [tracker.step(t) for t in targets]
 
 
@@ -60,7 +60,7 @@ def test_panda_steps_equal_the_general_path_with_a_jump(panda, form):
                "goal list": [[Pose(panda.tip, t)] for t in T]}[form]
     tracker, results = _tracked(panda, targets, Q[0], dt, seed=1, factor=2.0)
     _assert_same(results, _reference(panda, targets, Q[0], dt, seed=1, factor=2.0))
-    assert len(tracker._prepared) == 1  # one structure: prepared once, taken by the other steps
+    assert len(tracker._prepared) == 1 and None not in tracker._prepared.values()  # one structure, prepared once
     assert all(r.success for r in results[:80]) and not any(r.success for r in results[80:110])
     assert all(r.success for r in results[-20:])  # back on the path
 
@@ -88,8 +88,19 @@ def test_structures_alternating_and_goal_sets_equal_the_general_path(panda):
                         [Pose(panda.tip, t, weight=2.0)]][k % 5])
     tracker, results = _tracked(panda, targets, Q[0], dt, seed=6)
     _assert_same(results, _reference(panda, targets, Q[0], dt, seed=6))
-    assert len(tracker._prepared) == 4  # the goal set's steps are never prepared
+    kept = list(tracker._prepared.values())
+    assert len(kept) == 5 and kept.count(None) == 1  # the goal set's structure: no prepared path, not sought again
     assert all(r.success for r in results)
+
+
+def test_locked_joints_take_the_general_path(panda):
+    dt = 0.001
+    Q = smooth_path(panda, 40, dt, seed=8)
+    Q[:, 6] = 0.0
+    targets = [[Pose(panda.tip, panda.fk(q))] for q in Q]
+    tracker, results = _tracked(panda, targets, Q[0], dt, seed=2, locked={"panda_joint7": 0.0})
+    _assert_same(results, _reference(panda, targets, Q[0], dt, seed=2, locked={"panda_joint7": 0.0}))
+    assert list(tracker._prepared.values()) == [None]
 
 
 def test_bad_input_refused_after_a_structure_was_prepared(panda):
@@ -99,7 +110,7 @@ def test_bad_input_refused_after_a_structure_was_prepared(panda):
     T = panda.fk(Q[1])
     tracker.step([Pose(panda.tip, T)])
     tracker.step(T)
-    assert len(tracker._prepared) == 2
+    assert len(tracker._prepared) == 2 and None not in tracker._prepared.values()
     q = tracker.q
     with pytest.raises(OptionError, match="preferences"):
         tracker.step([Pose(panda.tip, T), Posture(Q[1])])

@@ -63,7 +63,7 @@ class Tracker:
         self._step = self.velocity_limits * self.dt
         self._rng = _rng(seed)
         self._q = np.array(robot.check_q(q0), dtype=float)  # a float64 vector of our own: the compiled run's type
-        self._prepared: dict = {}  # step_key -> BoxStep
+        self._prepared: dict = {}  # step_key's key -> BoxStep, or None where there is none
 
     @property
     def q(self) -> np.ndarray:
@@ -87,25 +87,21 @@ class Tracker:
         key, targets = step_key(goals) or (None, None)
         prepared = None if key is None else self._prepared.get(key)
         if prepared is not None and prepared.usable():
-            result = prepared.solve(targets, self._q)
-            if result is not None:
-                self._q = result.q.copy()
-                return result
-        result = self._solver.solve_within(goals, self._q, self._step, self._rng)  # its checks; the stage's search
+            result = prepared.solve(goals, targets, self._q, self._rng)
+        else:
+            result = self._solver.solve_within(goals, self._q, self._step, self._rng)  # its checks; the stage
+            if key is not None and (prepared is not None or key not in self._prepared):  # new, or another thread
+                self._prepare(key, goals)
         self._q = result.q.copy()
-        if key is not None and (prepared is None or not prepared.usable()):
-            self._prepare(key, goals)
         return result
 
     def _prepare(self, key, goals) -> None:
-        """Keep the prepared path of ``goals``' structure ``key`` (the general path has just solved ``goals``), when
-        there is one (:meth:`BoxStep.prepare`)."""
-        prepared = BoxStep.prepare(self._solver, goals, self._step)
-        if prepared is None:
-            return
+        """Keep the prepared path of ``goals``' structure ``key`` (the general path has just solved ``goals``), or
+        None when it has none (:meth:`BoxStep.prepare`: a scene, locked joints, goal sets, ...), so that it is not
+        sought again."""
         if len(self._prepared) >= _KEPT_STEPS and key not in self._prepared:
             self._prepared.pop(next(iter(self._prepared)))
-        self._prepared[key] = prepared
+        self._prepared[key] = BoxStep.prepare(self._solver, goals, self._step)
 
     def __repr__(self) -> str:
         return f"Tracker({self.robot.name!r}, dt={self.dt:g})"

@@ -20,12 +20,11 @@ from numba import njit
 from ...result import Result
 from ...target import pose_arrays
 from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
+from ..lm.run_outcome import LMOutcome
 from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
 
-__all__ = ["MISSED", "BoxStep", "step_key", "write_step"]
+__all__ = ["BoxStep", "step_key", "write_step"]
 
-#: What :meth:`BoxStep.solve` returns when its run did not meet the goals: the stage's search must take the step.
-MISSED = None
 #: The one message of a step met by the run from the last configuration (the stage's, for one run).
 _MESSAGE = "velocity box: 1 LM run(s)"
 
@@ -115,8 +114,10 @@ class BoxStep:
         give the stage's answers: locked joints, a scene, goal sets, goals beyond one frame or two on one frame, a
         target-dependent box or an objective other than the errors' (tip targets), or no :func:`step_key`."""
         keyed = step_key(target)
+        if keyed is None or solver._locked is not None:  # a locked solver's stage is its inner solver's
+            return None
         stage = solver._box_stage
-        if keyed is None or solver._locked is not None or not isinstance(stage, VelocityBoxStage):
+        if not isinstance(stage, VelocityBoxStage):
             return None
         problem = solver.problem(target)
         if problem.scene is not None:
@@ -133,10 +134,11 @@ class BoxStep:
         engine = stage._engine(problem)
         if not (engine._owned and engine._own_box):  # the stage's run made both: else a path not taken yet
             return None
-        return cls(keyed[0], problem, engine, step)
+        return cls(keyed[0], solver, stage, problem, engine, step)
 
-    def __init__(self, key, problem, engine, step: np.ndarray) -> None:
+    def __init__(self, key, solver, stage: VelocityBoxStage, problem, engine, step: np.ndarray) -> None:
         self.key = key
+        self._solver, self._stage = solver, stage
         self._thread = threading.get_ident()
         self._problem, self._list = problem, problem.target is None
         # what each goal reports and meets (Goal.reported, Goal.met), fixed by its kind and tolerances: the structure's
@@ -183,19 +185,22 @@ class BoxStep:
             else:
                 pt[i], Rt[i] = g.encode()
 
-    def solve(self, targets, q_prev: np.ndarray) -> Result | None:
-        """The stage's answer to ``targets`` (:func:`step_key`'s, of this path's key) inside the velocity box
-        of ``q_prev`` (n,) float (rad or m) when the LM run from ``q_prev`` meets the goals: a :class:`Result` with the
-        stage's fields; else :data:`MISSED` (the stage's search must take the step: its first run is this one)."""
+    def solve(self, target, targets, q_prev: np.ndarray, rng: np.random.Generator | None) -> Result:
+        """The stage's :class:`Result` for ``target`` (a Tracker's step; ``targets``: its :func:`step_key`'s, of this
+        path's key) inside the velocity box of ``q_prev`` (n,) float (rad or m): the LM run from ``q_prev``, and when
+        it misses the stage's search (:meth:`~.velocity_box.VelocityBoxStage.solve`, its extra starts drawn by
+        ``rng``) on ``target``'s problem, that run not made again."""
         t0 = time.perf_counter()
         self._write_targets(targets)
         self._write_step(self._box, q_prev, self._step, *self._bounds, self._poses, self._posed, self._pt, self._Rt)
         self._params[P_ITERATIONS] = BOX_ITERATIONS  # another run of the engine may have set another budget
         q = np.empty(self._n)
         g_err = self._g_err
-        pos, rot, converged, _, evaluations, _ = self._run(*self._head, q_prev, *self._args, self._params, q, g_err)
-        if not converged:
-            return MISSED
+        pos, rot, converged, it, evaluations, c = self._run(*self._head, q_prev, *self._args, self._params, q, g_err)
+        if not converged:  # the stage's search from here: its problem, this run as its first
+            first = LMOutcome(q, pos, rot if self._engine.oriented else None, False, it, evaluations,
+                              None if len(self._checks) == 1 else g_err.copy(), c)
+            return self._stage.solve(self._solver.problem(target), q_prev, self._step, rng, first, t0)
         np.minimum(np.maximum(q, self._lo, out=q), self._hi, out=q)  # the stage's clip: the kernel keeps q inside
         # per goal Goal.reported and Goal.met, and a goal list's problem.goal_summary (its largest errors and cost),
         # inline, in their operations and order (tests/test_tracker_prepared.py holds the Results equal)

@@ -76,19 +76,22 @@ class VelocityBoxStage:
         engine.set_targets(pt, Rt)
         return engine
 
-    def solve(self, problem, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None) -> Result:
+    def solve(self, problem, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None,
+              first: LMOutcome | None = None, t0: float | None = None) -> Result:
         """The answer to ``problem`` (an :class:`~evoik_pin.IKProblem`: its goals or target, tolerances, bounds and
         scene) inside the velocity box of ``q_prev`` (n,) and ``step`` (n,) (rad or m): LM from ``q_prev``; when it
         misses, LM in the full bounds, its share inside the box, it clipped and :data:`EXTRA_STARTS` drawn by ``rng``
         (None: none) run in the box, the best winning. With a scene an answer in collision is pulled back towards
-        ``q_prev``.
+        ``q_prev``. ``first``: that LM run from ``q_prev``, made already by the caller on this stage's boxed engine
+        (:mod:`.box_step`), then not made again; ``t0``: the ``time.perf_counter()`` the solve's clock starts at
+        (None: now).
         A :class:`Result` whose ``q`` is inside the box, ``success`` when every goal is met (and, with a scene, the
         answer collision-free)."""
-        t0 = time.perf_counter()
+        t0 = time.perf_counter() if t0 is None else t0
         lo, hi = self.box(q_prev, step, problem.lower, problem.upper)
         engine = self._engine(problem)
         engine.confine(lo, hi)
-        out = engine.run(q_prev, BOX_ITERATIONS)
+        out = engine.run(q_prev, BOX_ITERATIONS) if first is None else first
         evaluations = out.evaluations
         runs = 1
         if not out.converged:
