@@ -7,7 +7,7 @@ runs Levenberg-Marquardt from the last configuration inside its velocity box ``[
 (:mod:`evoik_pin.solvers.search.velocity_box`); after the first step of a goal structure (its frames, kinds, weights
 and tolerances; or a tip pose or position) the next ones of that structure take its prepared path
 (:mod:`evoik_pin.solvers.search.box_step`: the new targets and box written into the engine's own arrays, one
-compiled run, the same answers), the general one again whenever that run misses. The answer never leaves the box, so
+compiled run, the same answers; a miss goes on in the stage's search). The answer never leaves the box, so
 the commanded motion respects the robot's speed limits whatever the goals do; goals out of reach for one step give
 the answer closest to them inside the box and ``success=False``, and the loop catches up on the next steps.
 

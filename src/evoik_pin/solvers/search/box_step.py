@@ -3,10 +3,12 @@
 targets and the new box into the engine's own arrays and calls the compiled LM entry; the same answers as the stage's,
 bit for bit, and the stage itself whenever this path cannot give them (another structure, a run that misses).
 
-A step of a warm-started tracker costs a few microseconds of compiled LM; the general path around it (binding the goal
-list, building the problem, the box in NumPy, the outcome objects) cost several times that. What stays per step here:
-the structure's test (:func:`~evoik_pin.goals.stack.structure`, the key the goal binder itself trusts), the targets'
-copy, one compiled box write, one compiled run and the Result."""
+A warm-started tracker's step is a few microseconds of compiled LM on an arm (about 20 on a humanoid with four pose
+goals); the general path around it (binding the goal list, building the problem, the box in NumPy, the outcome
+objects) cost about 14 more on Panda, 23 on Talos. What stays per step here: the structure's key (:func:`step_key`:
+what the goal stack depends on), one array write per goal, one compiled write of the box and targets, one compiled
+run, the Result. Only the Tracker takes this path (``solve_within`` callers, such as ``solve_trajectory``, build
+their problem per call)."""
 
 from __future__ import annotations
 
