@@ -128,3 +128,23 @@ def test_bad_input_refused_after_a_structure_was_prepared(panda):
         tracker.step(np.full(3, np.nan))
     assert np.array_equal(tracker.q, q)  # a refused step leaves the tracker where it was
     assert tracker.step(panda.fk(Q[2])).success
+
+
+@pytest.mark.parametrize("rows", [[(1e-7, 2e-7), (3e-7, np.nan), (0.0, 5e-7)],
+                                  [(np.nan, 1e-3), (-0.0, 0.0), (2e-6, 1e-9)],
+                                  [(4e-7, np.nan), (np.nan, np.nan), (1e-6, 1e-6)]])
+def test_settle_is_the_python_verdict_and_summary(rows):
+    from evoik_pin.problem import goal_summary
+    from evoik_pin.solvers.search.box_step import settle
+
+    goals = [Pose("a", np.eye(4), weight=2.0), Position("b", np.zeros(3), weight=0.5),
+             Pose("c", np.eye(4), tolerance=1e-6, rotation_tolerance=1e-6)]
+    errors = [g.reported(p, r) for g, (p, r) in zip(goals, rows, strict=True)]
+    checks = np.array([(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance, g.weight) for g in goals],
+                      dtype=float)
+    q, box = np.array([0.5, -2.0, 3.0]), np.array([[0.0] * 3, [1.0] * 3, [0.0] * 3, [1.0] * 3, [0.0] * 3])
+    met, largest, angle, angled, cost = settle(q, box, np.array(rows, dtype=float), checks, 0.7)
+    pos, rot, expected_cost = goal_summary(goals, errors, 0.7)
+    assert met == all(g.met(p, r) for g, (p, r) in zip(goals, errors, strict=True))
+    assert repr((largest, angle if angled else None, cost)) == repr((pos, rot, expected_cost))
+    assert q.tolist() == [0.5, 0.0, 1.0]  # clipped into rows B_LO, B_HI

@@ -25,7 +25,7 @@ from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
 from ..lm.run_outcome import LMOutcome
 from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
 
-__all__ = ["BoxStep", "step_key", "write_step"]
+__all__ = ["BoxStep", "settle", "step_key", "write_step"]
 
 #: The one message of a step met by the run from the last configuration (the stage's, for one run).
 _MESSAGE = "velocity box: 1 LM run(s)"
@@ -76,6 +76,61 @@ def _write_step_entry():
             entry = write_step
         _WRITE_STEP.append(entry)
     return _WRITE_STEP[0]
+
+
+@njit(cache=True, nogil=True)
+def settle(q, box, g_err, checks, orientation_weight):  # pragma: no cover - compiled
+    """Clip the run's answer ``q`` (n,) into the box rows B_LO, B_HI of ``box`` (5, n) (``np.minimum(np.maximum(q,
+    lo), hi)``: a NaN stays) and judge each goal's row (position m, angle rad) of ``g_err`` (G, 2) against its
+    ``checks`` row (reports a position 0/1, reports an angle 0/1, tolerance m, rotation_tolerance rad, weight): the
+    Python of Goal.reported, Goal.met and :func:`~evoik_pin.problem.goal_summary` in their operations and order.
+
+    Returns:
+        (every goal met, the largest position error m (0 for none; NaN stays), the largest angle rad, whether some
+        goal reports an angle, the cost: the sum of weight x (position error + orientation_weight x angle))."""
+    for k in range(q.shape[0]):
+        v = q[k]
+        if not (v >= box[B_LO, k] or v != v):
+            v = box[B_LO, k]
+        if not (v <= box[B_HI, k] or v != v):
+            v = box[B_HI, k]
+        q[k] = v
+    met = True
+    largest = 0.0
+    angle = 0.0
+    angled = False
+    cost = 0.0
+    for g in range(g_err.shape[0]):
+        has_p, has_r = checks[g, 0] != 0.0, checks[g, 1] != 0.0
+        p, r = g_err[g, 0], g_err[g, 1]
+        met = met and (not has_p or p <= checks[g, 2]) and (not has_r or r <= checks[g, 3])
+        p0 = p if has_p and p != 0.0 else 0.0  # ``p or 0.0``: None, 0.0 and -0.0 give 0.0
+        r0 = r if has_r and r != 0.0 else 0.0
+        if largest == largest:
+            largest = p0 if p0 != p0 else (p0 if p0 > largest else largest)  # max(largest, p0)
+        cost += (p0 + orientation_weight * r0) * checks[g, 4]
+        if has_r:
+            angle = r if not angled or r > angle else angle  # max(angle, r)
+            angled = True
+    return met, largest, angle, angled, cost
+
+
+_SETTLE: list = []  # settle's compiled entry, once found
+
+
+def _settle_entry():
+    """:func:`settle`'s compiled entry for its one signature (as :func:`_write_step_entry`)."""
+    if not _SETTLE:
+        args = (np.zeros(1), np.zeros((5, 1)), np.zeros((1, 2)), np.zeros((1, 5)), 1.0)
+        settle(*args)
+        try:
+            from numba import typeof
+
+            entry = settle.overloads[tuple(typeof(a) for a in args)].entry_point
+        except (AttributeError, KeyError, ImportError):
+            entry = settle
+        _SETTLE.append(entry)
+    return _SETTLE[0]
 
 
 def step_key(target) -> tuple | None:
@@ -144,12 +199,14 @@ class BoxStep:
         self._thread = threading.get_ident()
         self._problem, self._list = problem, problem.target is None
         # what each goal reports and meets (Goal.reported, Goal.met), fixed by its kind and tolerances: the structure's
-        self._checks = [(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance, g.weight)
-                        for g in problem.goals]
-        self._orientation_weight = problem.orientation_weight
+        self._reports = [(g.has_position, g.reports_angle) for g in problem.goals]
+        self._checks = np.array([(g.has_position, g.reports_angle, g.tolerance, g.rotation_tolerance, g.weight)
+                                 for g in problem.goals], dtype=float)
+        self._orientation_weight = float(problem.orientation_weight)
+        self._one = len(problem.goals) == 1
+        self._settle = _settle_entry()
         self._engine, self._args = engine, engine._args
         self._pt, self._Rt, self._box = engine._pt, engine._Rt, engine._box
-        self._lo, self._hi = self._box[B_LO], self._box[B_HI]
         self._params = engine._params
         self._head = tuple(engine.kernel_arguments(BOX_ITERATIONS)[0])
         self._run = engine._direct or engine._kernel["lm_run_buffers"]
@@ -165,6 +222,7 @@ class BoxStep:
         G = len(problem.goals)
         self._posed = np.array([self._list and type(g.target) is pin.SE3 for g in problem.goals], dtype=bool)
         self._posed_list = self._posed.tolist()
+        self._all_posed = all(self._posed_list)
         self._poses = np.zeros((G, 4, 4))
 
     def usable(self) -> bool:
@@ -180,9 +238,12 @@ class BoxStep:
             if targets[1] is not None:
                 Rt[0] = targets[1]
             return
-        poses = self._poses
+        poses = self._poses  # copied into pt, Rt by the compiled write (one array write per goal here, not two)
+        if self._all_posed:
+            poses[:] = [g.target.homogeneous for g in targets]  # its length checked: the key's
+            return
         for i, (g, posed) in enumerate(zip(targets, self._posed_list, strict=True)):
-            if posed:  # copied into pt, Rt by the compiled write (one array write here, not two)
+            if posed:
                 poses[i] = g.target.homogeneous
             else:
                 pt[i], Rt[i] = g.encode()
@@ -201,31 +262,22 @@ class BoxStep:
         pos, rot, converged, it, evaluations, c = self._run(*self._head, q_prev, *self._args, self._params, q, g_err)
         if not converged:  # the stage's search from here: its problem, this run as its first
             first = LMOutcome(q, pos, rot if self._engine.oriented else None, False, it, evaluations,
-                              None if len(self._checks) == 1 else g_err.copy(), c)
+                              None if self._one else g_err.copy(), c)
             return self._stage.solve(self._solver.problem(target), q_prev, self._step, rng, first, t0)
-        np.minimum(np.maximum(q, self._lo, out=q), self._hi, out=q)  # the stage's clip: the kernel keeps q inside
-        # per goal Goal.reported and Goal.met, and a goal list's problem.goal_summary (its largest errors and cost),
-        # inline, in their operations and order (tests/test_tracker_prepared.py holds the Results equal)
-        errors, met, ow = [], True, self._orientation_weight
-        largest, angle, cost = 0.0, None, 0.0
-        for (has_p, has_r, tol, rtol, weight), (p, r) in zip(self._checks, ((pos, rot),) if len(self._checks) == 1
-                                                             else g_err.tolist(), strict=True):
-            p, r = float(p) if has_p else None, float(r) if has_r else None
-            errors.append((p, r))
-            met = met and (p is None or p <= tol) and (r is None or r <= rtol)
-            p0, r0 = p or 0.0, r or 0.0
-            largest = largest if largest != largest else (p0 if p0 != p0 else max(largest, p0))  # NaN stays NaN
-            cost += (p0 + ow * r0) * weight
-            if r is not None:
-                angle = r if angle is None else max(angle, r)
+        if self._one:  # the kernel's errors of one goal are its returned ones (what the stage reads)
+            g_err[0, 0], g_err[0, 1] = pos, rot
+        # the stage's clip (the kernel keeps q inside) and each goal's verdict and the goal list's summary, compiled
+        met, largest, angle, angled, cost = self._settle(q, self._box, g_err, self._checks, self._orientation_weight)
+        errors = [(p if has_p else None, r if has_r else None)  # Goal.reported
+                  for (has_p, has_r), (p, r) in zip(self._reports, g_err.tolist(), strict=True)]
         if self._list:
-            pos, rot = largest, angle
+            pos, rot = largest, angle if angled else None
         else:  # a tip target's cost is its objective's (of the errors: BoxStep.prepare)
             pos, rot, cost = self._problem.summary(q, errors)
         message = _MESSAGE if met else (_MESSAGE + "; the goals are not met within the velocity box (the answer "
                                         "closest to them inside it)")
         return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
-                      cost=float(cost), success=met, generations=0, evaluations=int(evaluations),
+                      cost=float(cost), success=bool(met), generations=0, evaluations=int(evaluations),
                       time_s=time.perf_counter() - t0, message=message, method="velocity-box",
                       goal_errors=errors if self._list else None,
                       chosen=[None] * len(errors) if self._list else None)
