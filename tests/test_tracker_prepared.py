@@ -1,4 +1,4 @@
-"""Tracker's prepared per-step path (solvers/search/box_step.py): every step's Result equal, field by field, to the
+"""Tracker's prepared per-step path (motion/tracker_step.py): every step's Result equal, field by field, to the
 general path's (IKSolver.solve_within with the same seed) for tip poses, 4 x 4 poses, positions and goal lists, with
 misses, structure changes and goal sets in between; bad input still refused after a structure was prepared."""
 
@@ -134,8 +134,8 @@ def test_bad_input_refused_after_a_structure_was_prepared(panda):
                                   [(np.nan, 1e-3), (-0.0, 0.0), (2e-6, 1e-9)],
                                   [(4e-7, np.nan), (np.nan, np.nan), (1e-6, 1e-6)]])
 def test_settle_is_the_python_verdict_and_summary(rows):
+    from evoik_pin.motion.tracker_step import settle
     from evoik_pin.problem import goal_summary
-    from evoik_pin.solvers.search.box_step import settle
 
     goals = [Pose("a", np.eye(4), weight=2.0), Position("b", np.zeros(3), weight=0.5),
              Pose("c", np.eye(4), tolerance=1e-6, rotation_tolerance=1e-6)]

@@ -6,7 +6,7 @@ humanoid) with goals that move a little every step. A :class:`Tracker` keeps the
 runs Levenberg-Marquardt from the last configuration inside its velocity box ``[q - v_max dt, q + v_max dt]``
 (:mod:`evoik_pin.solvers.search.velocity_box`); after the first step of a goal structure (its frames, kinds, weights
 and tolerances; or a tip pose or position) the next ones of that structure take its prepared path
-(:mod:`evoik_pin.solvers.search.box_step`: the new targets and box written into the engine's own arrays, one
+(:mod:`evoik_pin.motion.tracker_step`: the new targets and box written into the engine's own arrays, one
 compiled run, the same answers; a miss goes on in the stage's search). The answer never leaves the box, so
 the commanded motion respects the robot's speed limits whatever the goals do; goals out of reach for one step give
 the answer closest to them inside the box and ``success=False``, and the loop catches up on the next steps.
@@ -27,7 +27,7 @@ from ..call_setup import _rng
 from ..ik_solver import IKSolver
 from ..robot.velocity_limits import check_dt
 from ..robot.velocity_limits import velocity_limits as limits_of
-from ..solvers.search.box_step import BoxStep, step_key
+from .tracker_step import BoxStep, step_key
 
 __all__ = ["Tracker"]
 

@@ -1,7 +1,8 @@
-"""A control loop's per-step path through the velocity box (:class:`BoxStep`): the goal structure a
-:class:`~.velocity_box.VelocityBoxStage` solved once, bound to its engine, so that each later step only writes the new
-targets and the new box into the engine's own arrays and calls the compiled LM entry; the same answers as the stage's,
-bit for bit, and the stage itself whenever this path cannot give them (another structure, a run that misses).
+"""The Tracker's per-step path through the velocity box (:class:`BoxStep`): the goal structure a
+:class:`~evoik_pin.solvers.search.velocity_box.VelocityBoxStage` solved once, bound to its engine, so that each later
+step only writes the new targets and the new box into the engine's own arrays and calls the compiled LM entry; the same
+answers as the stage's, bit for bit, and the stage itself whenever this path cannot give them (another structure, a
+run that misses).
 
 A warm-started tracker's step is a few microseconds of compiled LM on an arm (about 20 on a humanoid with four pose
 goals); the general path around it (binding the goal list, building the problem, the box in NumPy, the outcome
@@ -19,11 +20,11 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from ...result import Result
-from ...target import pose_arrays
-from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
-from ..lm.run_outcome import LMOutcome
-from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
+from ..result import Result
+from ..solvers.lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
+from ..solvers.lm.run_outcome import LMOutcome
+from ..solvers.search.velocity_box import BOX_ITERATIONS, VelocityBoxStage
+from ..target import pose_arrays
 
 __all__ = ["BoxStep", "settle", "step_key", "write_step"]
 
