@@ -73,3 +73,20 @@ def test_g1s_balance_problems_need_few_lm_runs(g1, stance):
         ok, out = bb.judged(g1, r.q, SOLES, stance[:2] + hands)
         assert r.success and ok and out == 0.0
         assert bb.lm_runs(r.message) <= 2, (i, r.message)
+
+
+def test_a_run_the_kernel_calls_converged_with_a_goal_past_its_tolerance_is_no_answer(g1, stance):
+    """The kernel tests the goals before its finishing step, which may trade a sole's angle past its tolerance for the
+    CoM row (G1's problem 391 of seed 1: 1.1e-6 rad): LMRuns takes the goals' errors at q, not the stale flag."""
+    from evoik_pin.solvers.lm import LevenbergMarquardt, LMOutcome
+    from evoik_pin.solvers.search.memetic_runs import LMRuns
+
+    q = bb.stance_q(g1, SOLES, None)
+    problem = IKProblem(g1, stance + [Pose(f, g1.fk(q, f)) for f in HANDS])
+    runs = LMRuns(problem, LevenbergMarquardt(problem), None, 30, 1, 0)
+    errors = np.array([[3e-7, 1.1e-6], [1e-11, 1e-11], [3.7e-7, np.nan], [8e-8, 1.4e-7], [8e-8, 1.4e-7]])
+    stale = LMOutcome(q.copy(), 3.7e-7, 1.1e-6, True, 12, 13, errors, 1e-12)
+    assert not runs._keep(stale, 1) and not runs.best.converged
+    errors[0, 1] = 0.9e-6
+    met = LMOutcome(q.copy(), 3.7e-7, 0.9e-6, True, 12, 13, errors, 1e-12)
+    assert runs._keep(met, 1) and runs.best is met
