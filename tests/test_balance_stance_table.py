@@ -59,7 +59,8 @@ def test_the_stance_table_holds_standing_configurations_made_alike_and_kept(g1, 
     sub = IKProblem(g1, stance)
     for x in table.Q[::37]:
         assert g1.within_bounds(x) and sub.goals_met(sub.goal_errors(x))
-    ranked = table.ranked(IKProblem(g1, stance + [Pose(f, g1.fk(table.Q[17], f)) for f in HANDS]), [3, 4], 5)
+    at17 = IKProblem(g1, stance + [Pose(f, g1.fk(table.Q[17], f)) for f in HANDS])
+    ranked = table.ranked(at17.goals, *at17.goal_stack()[1:], [3, 4], 5)
     assert ranked[0] == 17 and len(ranked) == 5  # an entry's own hand poses rank it first
 
 
@@ -90,3 +91,31 @@ def test_a_run_the_kernel_calls_converged_with_a_goal_past_its_tolerance_is_no_a
     errors[0, 1] = 0.9e-6
     met = LMOutcome(q.copy(), 3.7e-7, 0.9e-6, True, 12, 13, errors, 1e-12)
     assert runs._keep(met, 1) and runs.best is met
+
+
+def test_the_same_stance_elsewhere_on_the_ground_takes_the_table_its_entries_moved(g1, stance):
+    """A stance turned about the vertical and moved on the ground (its hands with it) has the same key: the table made
+    for the first serves it, its entries' bases moved, standing on the moved soles with the CoM inside, and ranked
+    as for the first (the same entries first)."""
+    import itertools
+
+    import pinocchio as pin
+
+    from evoik_pin.solvers.search.stance_table import stance_starts
+
+    q = bb.stance_q(g1, SOLES, None)
+    rng = np.random.default_rng(3)
+    hands = [Pose(f, g1.fk(q, f) * pin.SE3(pin.rpy.rpyToMatrix(*rng.uniform(-0.3, 0.3, 3)), rng.uniform(-0.1, 0.1, 3)))
+             for f in HANDS]
+    here = IKProblem(g1, stance + hands)
+    move = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, 0.7), np.array([0.3, -0.2, 0.0]))
+    there = IKProblem(g1, [Pose(g.frame, move * g.target) for g in stance[:2]] + [stance[2]]
+                      + [Pose(g.frame, move * g.target) for g in hands])
+    table, indices = stance_table(here)
+    assert stance_table(there)[0] is table
+    sub = IKProblem(g1, there.goals[:3])
+    first = list(itertools.islice(stance_starts(here, (table, indices), iter(()), 8), 8))
+    moved = list(itertools.islice(stance_starts(there, (table, indices), iter(()), 8), 8))
+    for a, b in zip(first, moved, strict=True):
+        assert sub.goals_met(sub.goal_errors(b))  # standing on the moved soles, the CoM inside
+        assert np.allclose(g1.fk(b, HANDS[0]).homogeneous, (move * g1.fk(a, HANDS[0])).homogeneous, atol=1e-9)

@@ -17,7 +17,7 @@ from ...goals.pose import KIND_POSE
 from ...goals.registry import KIND_BEYOND_FRAME
 from ...lie import rpy
 
-__all__ = ["STANCE_TABLE_SIZE", "StanceTable", "stance_indices", "stance_starts", "stance_table"]
+__all__ = ["STANCE_TABLE_SIZE", "StanceTable", "stance_indices", "stance_key", "stance_starts", "stance_table"]
 
 #: Standing configurations a stance table holds.
 STANCE_TABLE_SIZE = 256
@@ -81,20 +81,19 @@ class StanceTable:
                     break
         self.Q = np.array(out).reshape(-1, robot.n)
         self._anchor = goals[0].frame
+        #: (heading rad, x, y m) of the first support frame's target: the ground frame the entries stand in
+        self.ground = _ground_frame(goals[0].target)
         self._features: dict = {}  # frames -> (P (size, G, 3), R (size, G, 3, 3), rotation scale m)
 
-    def ranked(self, problem, rest: list[int], k: int) -> np.ndarray:
-        """Indices of the (up to) ``k`` entries nearest the goals ``rest`` (indices into ``problem.goals``) of one
-        frame, nearest first: the sum over them of weight x (|p - p_t|^2 + s^2 |R - R_t|_F^2), over the goals' own
-        position and orientation (s: :data:`ROTATION_SHARE` x the frames' reach)."""
-        from .seed_table import seed_targets
-
-        goals = problem.goals
+    def ranked(self, goals, pt: np.ndarray, Rt: np.ndarray, rest: list[int], k: int) -> np.ndarray:
+        """Indices of the (up to) ``k`` entries nearest the goals ``rest`` (indices into ``goals``, targets pt (G, 3)
+        m, Rt (G, 3, 3) in the table's frame) of one frame, nearest first: the sum over them of weight x
+        (|p - p_t|^2 + s^2 |R - R_t|_F^2), over the goals' own position and orientation (s: :data:`ROTATION_SHARE` x
+        the frames' reach)."""
         rest = [g for g in rest if goals[g].kind < KIND_BEYOND_FRAME]
         if not rest or not self.Q.shape[0]:
             return np.arange(min(k, self.Q.shape[0]))
         P, R, s = self._poses(tuple(goals[g].frame for g in rest))
-        pt, Rt = seed_targets(problem)
         d = np.zeros(self.Q.shape[0])
         for j, g in enumerate(rest):
             goal = goals[g]
@@ -128,20 +127,49 @@ def _upright_base(robot, pose_goal, lower: np.ndarray, upper: np.ndarray) -> np.
     return np.minimum(np.maximum(base, lower[:6]), upper[:6])
 
 
+def _ground_frame(T) -> tuple[float, float, float]:
+    """(heading rad, x m, y m) of a pose ``T`` (pin.SE3) on the ground: its x axis's direction about the world's z,
+    its origin's x and y."""
+    R, p = T.rotation, T.translation
+    return float(np.arctan2(R[1, 0], R[0, 0])), float(p[0]), float(p[1])
+
+
+def _turn(heading: float) -> np.ndarray:
+    """The rotation (3, 3) by ``heading`` (rad) about the world's z."""
+    c, s = np.cos(heading), np.sin(heading)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def stance_key(problem, stance: tuple[int, ...]) -> tuple:
+    """What a stance table depends on: the box, each support frame's target seen from the first one's ground frame
+    (:func:`_ground_frame`; rounded to 1e-9: a stance moved on the ground, or turned about the vertical, has the same
+    key, its CoM support goal the same answers), the goals' weights and tolerances, the support goal's numbers."""
+    goals = problem.goals
+    heading, x, y = _ground_frame(goals[stance[0]].target)
+    turn = _turn(-heading)
+    seen = []
+    for g in (goals[i] for i in stance[:-1]):
+        M = np.eye(4)
+        M[:3, :3] = turn @ g.target.rotation
+        M[:3, 3] = turn @ (g.target.translation - [x, y, 0.0])
+        seen.append((g.frame, (np.round(M, 9) + 0.0).tobytes(), g.weight, g.tolerance, g.rotation_tolerance))
+    support = goals[stance[-1]]
+    return (problem.lower.tobytes(), problem.upper.tobytes(), *seen, support.batch_key(), support.weight,
+            support.tolerance)
+
+
 def stance_table(problem) -> tuple[StanceTable, tuple[int, ...]] | None:
     """(the cached :class:`StanceTable` of ``problem``'s stance, :func:`stance_indices`) for a goal list on a
     floating-base robot that holds a stance and other goals; None otherwise. Made on first use (one-time set-up:
-    ~256-400 LM runs, 30-70 ms on a humanoid), then kept per robot, box and stance targets."""
+    256-400 LM runs, 25-80 ms on a humanoid), then kept per robot and :func:`stance_key`: the same stance elsewhere on
+    the ground takes the same table (:func:`stance_starts` moves its entries)."""
     robot = problem.robot
     if problem.target is not None or not robot.floating_base:
         return None
     stance = stance_indices(problem.goals)
     if stance is None:
         return None
-    goals = problem.goals
-    key = (problem.lower.tobytes(), problem.upper.tobytes(), *(
-        (g.frame, g.target.homogeneous.tobytes(), g.weight, g.tolerance, g.rotation_tolerance)
-        for g in (goals[i] for i in stance[:-1])), goals[stance[-1]].batch_key(), goals[stance[-1]].tolerance)
+    key = stance_key(problem, stance)
     per_robot = _TABLES.setdefault(robot, {})
     table = per_robot.get(key)
     if table is None:
@@ -157,9 +185,27 @@ _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def stance_starts(problem, found: tuple[StanceTable, tuple[int, ...]], starts, k: int):
     """The starts of a goal list holding a stance (``found``: :func:`stance_table`'s), lazily: the stance table's
-    ``k`` entries nearest the other goals, then the seed table's ``starts`` (an iterable of (n,) configurations)."""
+    ``k`` entries nearest the other goals, then the seed table's ``starts`` (an iterable of (n,) configurations).
+    A table made for the same stance elsewhere on the ground: the goals' targets are seen from its ground frame, its
+    entries' bases moved onto this stance's (clipped into the box)."""
+    from .seed_table import seed_targets
+
     table, stance = found
-    rest = [g for g in range(len(problem.goals)) if g not in stance]
-    for i in table.ranked(problem, rest, k):
-        yield table.Q[i].copy()
+    goals = problem.goals
+    rest = [g for g in range(len(goals)) if g not in stance]
+    pt, Rt = seed_targets(problem)
+    here = _ground_frame(goals[stance[0]].target)
+    moved = here != table.ground
+    if moved:  # targets into the table's ground frame: T -> G_table G_here^-1 T
+        turn = _turn(table.ground[0] - here[0])
+        pt = (pt - [here[1], here[2], 0.0]) @ turn.T + [table.ground[1], table.ground[2], 0.0]
+        Rt = turn @ Rt
+        back = turn.T  # an entry's base back onto this stance: the inverse move
+    for i in table.ranked(goals, pt, Rt, rest, k):
+        q = table.Q[i].copy()
+        if moved:
+            q[:3] = (q[:3] - [table.ground[1], table.ground[2], 0.0]) @ back.T + [here[1], here[2], 0.0]
+            q[3] = (q[3] + here[0] - table.ground[0] + np.pi) % (2.0 * np.pi) - np.pi  # the yaw, one turn
+            q[:6] = np.minimum(np.maximum(q[:6], problem.lower[:6]), problem.upper[:6])
+        yield q
     yield from starts
