@@ -8,6 +8,7 @@ most 14 LM runs instead of 10 and 39; scripts/bench_balance_humanoids.py)."""
 
 from __future__ import annotations
 
+import threading
 import weakref
 
 import numpy as np
@@ -170,17 +171,19 @@ def stance_table(problem) -> tuple[StanceTable, tuple[int, ...]] | None:
     if stance is None:
         return None
     key = stance_key(problem, stance)
-    per_robot = _TABLES.setdefault(robot, {})
-    table = per_robot.get(key)
-    if table is None:
-        table = StanceTable(problem, stance)
-        if len(per_robot) >= TABLES_PER_ROBOT:
-            per_robot.pop(next(iter(per_robot)))
-        per_robot[key] = table
+    with _MAKING:  # solve_many's threads: one table made per stance, the cache changed by one at a time
+        per_robot = _TABLES.setdefault(robot, {})
+        table = per_robot.get(key)
+        if table is None:
+            table = StanceTable(problem, stance)
+            if len(per_robot) >= TABLES_PER_ROBOT:
+                per_robot.pop(next(iter(per_robot)))
+            per_robot[key] = table
     return table, stance
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_MAKING = threading.Lock()
 
 
 def stance_starts(problem, found: tuple[StanceTable, tuple[int, ...]], starts, k: int):
