@@ -116,7 +116,8 @@ def run_robot(name: str, n: int, seed: int, log, runs_n: int = 0) -> dict:
     problems, tries = make_problems(robot, stance, hands, q0[:6], n, seed)
     made = time.perf_counter() - t0
     log(f"{name}: {n} problems in {tries} attempts, {made:.1f} s")
-    ek.solve(robot, stance + problems[0], seed=0)  # one-time set-up of this goal list's kernel
+    # one-time set-up of this goal list's kernel and its stance table (stance_table.py), before any clock
+    setup_s = ek.solve(robot, stance + problems[0], seed=0).setup_s
     ek.solve(robot, stance[:2] + problems[0], seed=0)
     rows = {"com": [], "plain": []}
     misses, fails = [], []
@@ -147,7 +148,7 @@ def run_robot(name: str, n: int, seed: int, log, runs_n: int = 0) -> dict:
         m["long_stage"] = found.group(1) if found else "-"
     need = runs_needed(robot, stance, problems[:runs_n], q0) if runs_n else None
     return {"rows": rows, "misses": misses, "made": made, "tries": tries, "n_dof": robot.n,
-            "frames": (soles, hands), "z": q0[2], "need": need}
+            "frames": (soles, hands), "z": q0[2], "need": need, "setup_s": setup_s}
 
 
 def lm_runs(message: str) -> int:
@@ -200,13 +201,25 @@ def _miss_summary(misses) -> str:
         f"{k} {v:.1e}" for k, v in worst.items()) + ")"
 
 
+def _branch() -> str:
+    """The checkout's branch @ commit (git), or "unknown" outside a git checkout."""
+    import subprocess
+
+    try:
+        out = [subprocess.run(["git", "rev-parse", *how, "HEAD"], cwd=SCRIPTS, capture_output=True, text=True,
+                              check=True).stdout.strip() for how in (["--abbrev-ref"], ["--short"])]
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return " @ ".join(out)
+
+
 def report(res: dict, args, load0, load1, command: str) -> str:
     lines = [
         f"## Standing balance on four humanoids at the default budget (issue 32; scripts/bench_balance_humanoids.py, "
         f"{datetime.date.today().isoformat()})",
         "",
         f"Run {datetime.datetime.now(datetime.UTC).strftime('%Y-%m-%d %H:%M')} UTC, `{command}` (branch "
-        f"h2-balance); CPU: {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}. **Load "
+        f"{_branch()}); CPU: {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}. **Load "
         f"average {load0[0]:.1f} before and {load1[0]:.1f} after** (a shared machine, ~6 engineers' jobs on 2 "
         "cores: times are inflated; the peer alternates with the balance problem target by target). Problems: "
         "see the script's docstring; each robot floating-base, both soles fixed at a standing stance, CoM over their "
@@ -254,7 +267,9 @@ def report(res: dict, args, load0, load1, command: str) -> str:
                          f"{np.median(c):.2f}, {np.percentile(c, 99):.2f}, {c.max():.1f} | "
                          f"{100 * (c <= 5.0).sum() / ok.size:.1f} % | {100 * (c0 <= 5.0).mean():.1f} % | {pairs} |")
     lines += ["", "Problem making (not timed above): " + ", ".join(
-        f"{k} {v['tries']} attempts for {len(v['rows']['com'])} ({v['made']:.0f} s)" for k, v in res.items()) + "."]
+        f"{k} {v['tries']} attempts for {len(v['rows']['com'])} ({v['made']:.0f} s)" for k, v in res.items()) + ". "
+        "Set-up of the first balance solve (its kernel loaded, its stance table made; `Result.setup_s`, before the "
+        "clock): " + ", ".join(f"{k} {1e3 * v['setup_s']:.0f} ms" for k, v in res.items()) + "."]
     return "\n".join(lines) + "\n"
 
 

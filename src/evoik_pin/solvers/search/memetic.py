@@ -31,6 +31,7 @@ from .seed_table import (
     seed_table,
     seed_targets,
 )
+from .stance_table import stance_starts, stance_table
 
 __all__ = ["DEFAULT_TIMEOUT", "GUARANTEED_TABLE_RUNS", "MemeticSetup", "memetic", "prepare"]
 
@@ -254,13 +255,15 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         if frame is None:
             table.prepare_goals(problem.goals)
     lm = setup._engine(problem, engine)
+    # a stance (soles fixed, the CoM over them): standing starts, made once before the clock (stance_table.py)
+    stance = stance_table(problem) if use_table and frame is None and problem.scene is None else None
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     if resumed is not None:  # the guaranteed runs' state: the compiled first runs made them and none converged
         t0, resumed = resumed
         setup_s = 0.0
     elif (FIRST_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is None
-            and engine == "compiled" and batch == 1 and table_offset == 0):
+            and engine == "compiled" and batch == 1 and table_offset == 0 and stance is None):
         args = (setup, problem, table, lm, t0, setup_s, iterations, table_seeds)
         result, loading, resumed = _goal_first_runs(*args) if frame is None else _first_runs(*args, frame)
         if result is not None:
@@ -279,6 +282,8 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
                   else table.ranked(frame, table.target_point(problem, frame), k, free))
         ranked = itertools.islice(ranked, table_offset, None)
         starts = ranked if frame is None else (table.Q[i] for i in ranked)
+        if stance is not None:
+            starts = stance_starts(problem, stance, starts, table_seeds)
     q0 = problem.q0
     q0_first = q0 is not None
     if resumed is not None:
