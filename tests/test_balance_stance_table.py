@@ -14,6 +14,7 @@ import bench_balance_humanoids as bb  # noqa: E402
 import evoik_pin as ek  # noqa: E402
 from evoik_pin.goals import CenterOfMass, Pose, Position  # noqa: E402
 from evoik_pin.problem import IKProblem  # noqa: E402
+from evoik_pin.solvers.search.memetic import GUARANTEED_TABLE_RUNS  # noqa: E402
 from evoik_pin.solvers.search.stance_table import (  # noqa: E402
     STANCE_TABLE_SIZE,
     StanceTable,
@@ -66,14 +67,15 @@ def test_the_stance_table_holds_standing_configurations_made_alike_and_kept(g1, 
 
 def test_g1s_balance_problems_need_few_lm_runs(g1, stance):
     """The benchmark's first 20 G1 problems (seed 0): from the seed table's starts problems 4, 11 and 19 needed 13,
-    15 and 39 LM runs; the stance table's nearest entries solve each in at most 2."""
+    15 and 39 LM runs; after the guaranteed runs (the seed table's nearest: a problem met there never makes the stance
+    table) the stance table's nearest entries solve each in at most 2 more."""
     base = bb.stance_q(g1, SOLES, None)[:6]
     problems, _ = bb.make_problems(g1, stance, HANDS, base, 20, 0)
     for i, hands in enumerate(problems):
         r = ek.solve(g1, stance + hands, seed=i, timeout=None, max_restarts=0)
         ok, out = bb.judged(g1, r.q, SOLES, stance[:2] + hands)
         assert r.success and ok and out == 0.0
-        assert bb.lm_runs(r.message) <= 2, (i, r.message)
+        assert bb.lm_runs(r.message) <= GUARANTEED_TABLE_RUNS + 2, (i, r.message)
 
 
 def test_a_run_the_kernel_calls_converged_with_a_goal_past_its_tolerance_is_no_answer(g1, stance):
