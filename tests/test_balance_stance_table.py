@@ -67,8 +67,8 @@ def test_the_stance_table_holds_standing_configurations_made_alike_and_kept(g1, 
 
 def test_g1s_balance_problems_need_few_lm_runs(g1, stance):
     """The benchmark's first 20 G1 problems (seed 0): from the seed table's starts problems 4, 11 and 19 needed 13,
-    15 and 39 LM runs; after the guaranteed runs (the seed table's nearest: a problem met there never makes the stance
-    table) the stance table's nearest entries solve each in at most 2 more."""
+    15 and 39 LM runs; the stance table's nearest entries solve each in at most 2 (after the guaranteed runs, for the
+    problem that makes the table: a problem of a new stance met there never pays for it)."""
     base = bb.stance_q(g1, SOLES, None)[:6]
     problems, _ = bb.make_problems(g1, stance, HANDS, base, 20, 0)
     for i, hands in enumerate(problems):

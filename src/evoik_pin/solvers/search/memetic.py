@@ -255,23 +255,25 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         if frame is None:
             table.prepare_goals(problem.goals)
     lm = setup._engine(problem, engine)
+    # a stance (soles fixed, the CoM over them) whose table exists: its standing starts first (stance_table.py)
+    stands = use_table and frame is None and problem.scene is None
+    stance = stance_table(problem, make=False) if stands else None
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
     if resumed is not None:  # the guaranteed runs' state: the compiled first runs made them and none converged
         t0, resumed = resumed
         setup_s = 0.0
     elif (FIRST_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is None
-            and engine == "compiled" and batch == 1 and table_offset == 0):
+            and engine == "compiled" and batch == 1 and table_offset == 0 and stance is None):
         args = (setup, problem, table, lm, t0, setup_s, iterations, table_seeds)
         result, loading, resumed = _goal_first_runs(*args) if frame is None else _first_runs(*args, frame)
         if result is not None:
             return result
         t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
         setup_s += loading
-    # a stance (soles fixed, the CoM over them) the guaranteed runs left unsolved: standing starts next, from a table
-    # made once per stance (stance_table.py), set-up too; only then, so that a problem met at once never pays for it
-    stance = None
-    if use_table and frame is None and problem.scene is None:
+    # a stance without its table yet that the guaranteed runs left unsolved: the table made now (set-up, off the
+    # clock) and its starts next; only then, so that a problem of a new stance met at once never pays for it
+    if stands and stance is None:
         t_stance = time.perf_counter()
         stance = stance_table(problem)
         t_stance = time.perf_counter() - t_stance

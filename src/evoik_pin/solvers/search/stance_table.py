@@ -159,11 +159,12 @@ def stance_key(problem, stance: tuple[int, ...]) -> tuple:
             support.tolerance)
 
 
-def stance_table(problem) -> tuple[StanceTable, tuple[int, ...]] | None:
+def stance_table(problem, make: bool = True) -> tuple[StanceTable, tuple[int, ...]] | None:
     """(the cached :class:`StanceTable` of ``problem``'s stance, :func:`stance_indices`) for a goal list on a
-    floating-base robot that holds a stance and other goals; None otherwise. Made on first use (one-time set-up:
-    256-400 LM runs, 25-80 ms on a humanoid), then kept per robot and :func:`stance_key`: the same stance elsewhere on
-    the ground takes the same table (:func:`stance_starts` moves its entries)."""
+    floating-base robot that holds a stance and other goals; None otherwise. Made on first use when ``make`` (one-time
+    set-up: 256-400 LM runs, 25-80 ms on a humanoid; without ``make``, None until then), then kept per robot and
+    :func:`stance_key`: the same stance elsewhere on the ground takes the same table (:func:`stance_starts` moves its
+    entries)."""
     robot = problem.robot
     if problem.target is not None or not robot.floating_base:
         return None
@@ -175,6 +176,8 @@ def stance_table(problem) -> tuple[StanceTable, tuple[int, ...]] | None:
         per_robot = _TABLES.setdefault(robot, {})
         table = per_robot.get(key)
         if table is None:
+            if not make:
+                return None
             table = StanceTable(problem, stance)
             if len(per_robot) >= TABLES_PER_ROBOT:
                 per_robot.pop(next(iter(per_robot)))
