@@ -41,15 +41,24 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
     def at(t: float) -> np.ndarray:
         return np.where(joints, q_from + t * (q_to - q_from), q_to)
 
-    if scene.in_collision(at(0.0)):
+    # bisected on the hulls when they already leave t = 0 surely free: no mesh test (the dearest, near a contact),
+    # and the point found is as free as the meshes say (each mesh inside its hull); it stops where the hulls part,
+    # a little before the meshes would touch
+    surely_free = getattr(scene, "surely_free", None)
+    if surely_free is not None and surely_free(at(0.0)):
+        def collides(q: np.ndarray) -> bool:
+            return not surely_free(q)
+    elif scene.in_collision(at(0.0)):
         return -1.0, q_to
+    else:
+        collides = scene.in_collision
     span = float(np.max(np.abs(q_to - q_from), where=joints, initial=0.0))  # the most a moving entry travels
     lo, hi = 0.0, 1.0
     for _ in range(BISECTION_STEPS):
         if hi <= beat or (hi - lo) * span <= BISECTION_RESOLUTION:
             break
         mid = 0.5 * (lo + hi)
-        if scene.in_collision(at(mid)):
+        if collides(at(mid)):
             hi = mid
         else:
             lo = mid

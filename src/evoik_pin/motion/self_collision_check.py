@@ -188,6 +188,26 @@ class SelfCollisionCheck:
         self._pair_verdicts[k] = (key, verdict)
         return verdict
 
+    def surely_free(self, q) -> bool:
+        """True when no checked pair can touch at ``q`` (n,) without a mesh test: every pair whose boxes overlap is
+        either known apart (its last verdict, its two joints' placements unchanged) or has convex hulls farther
+        apart than :data:`HULL_MARGIN` (a mesh lies inside its hull: an exact verdict "apart", kept). False means
+        "maybe touching" (a pair's hulls touch): :meth:`in_collision` would need the meshes. Microseconds per pair
+        (GJK), against ~0.1-1 ms of a mesh test of two links a hair apart."""
+        candidates = self.candidate_pairs(q)
+        J, parent, kept = self._placements, self._parent, self._pair_verdicts
+        for k in candidates.tolist():
+            key = J[parent[self._a[k]]].tobytes() + J[parent[self._b[k]]].tobytes()
+            verdict = kept.get(k)
+            if verdict is not None and verdict[0] == key:
+                if verdict[1]:
+                    return False
+                continue
+            if pin.computeCollision(self._hulls, self._hdata, k):
+                return False
+            kept[k] = (key, False)
+        return True
+
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
         The last :data:`REMEMBERED` verdicts are kept by ``q``'s bytes: a frame's answer is checked again as the next
