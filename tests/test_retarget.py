@@ -372,12 +372,14 @@ def test_frame_stack_solve_is_the_solvers_run(walk_stacks):
 
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
-def test_first_colliding_pair_is_the_scene_first(g1_checks, seed):
-    """first_colliding_pair is the scene's first colliding pair (None when free) without the others' narrow phase."""
+def test_touching_pair_is_one_of_the_scene_pairs(g1_checks, seed):
+    """touching_pair is one of the scene's colliding pairs (None when free), before and after in_collision."""
     robot, scene, check = g1_checks
     q = np.clip(np.random.default_rng(seed).normal(0.0, 1.0, robot.n), robot.lower, robot.upper)
     pairs = scene.colliding_pairs(q)
-    assert check.first_colliding_pair(q) == (pairs[0] if pairs else None)
+    found = check.touching_pair(q)
+    assert (found in pairs) if pairs else found is None
+    assert check.in_collision(q) == bool(pairs) and check.touching_pair(q) == found
 
 
 def test_kept_pair_verdicts_follow_a_bisection(g1_checks):

@@ -8,7 +8,8 @@ held feet), so its answer never converges and the scene never steers it. Steppin
 the segment (the box is convex), and the exact mesh check decides.
 
 ``scene`` below is anything with ``in_collision(q)`` and ``colliding_pairs(q)``: a :class:`~evoik_pin.Scene` or
-the retargeter's :class:`~evoik_pin.motion.self_collision_check.SelfCollisionCheck` (the same verdicts, cheaper).
+the retargeter's :class:`~evoik_pin.motion.self_collision_check.SelfCollisionCheck` (the same verdicts, cheaper;
+its ``surely_free`` lets a bisection decide on the convex hulls, its ``touching_pair`` names the pair it found).
 """
 
 from __future__ import annotations
@@ -82,17 +83,19 @@ def _joints_moving(robot, link: str, others: str) -> np.ndarray:
 def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.ndarray | None = None
                    ) -> np.ndarray | None:
     """A collision-free configuration between collision-free ``q_prev`` and colliding ``q`` (n,), as near ``q`` as
-    bisection finds: the joints moving only one link of the first colliding pair step back towards ``q_prev`` (the
-    side that keeps more of the step; the checks cover every pair), else the joints moving only either link of
-    any colliding pair, else the whole configuration. ``keep`` (bool (n,)): joints that do not step back (those
-    placing a held foot: an arm gives way before a stance leg); when nothing else frees the pair, the answer is
-    ``q_prev`` itself (interpolating a leg's joints would slide its foot). None when ``q_prev`` itself collides."""
+    bisection finds: the joints moving only one link of a colliding pair (the check's :meth:`touching_pair` when it
+    has one, else the scene's first) step back towards ``q_prev`` (the side that keeps more of the step; the checks
+    cover every pair), else the joints moving only either link of any colliding pair, else the whole configuration.
+    ``keep`` (bool (n,)): joints that do not step back (those placing a held foot: an arm gives way before a stance
+    leg); when nothing else frees the pair, the answer is ``q_prev`` itself (interpolating a leg's joints would slide
+    its foot). None when ``q_prev`` itself collides."""
     movable = np.ones(robot.n, dtype=bool) if keep is None else ~np.asarray(keep, dtype=bool)
     if scene.in_collision(q_prev):
         return None
     q = np.asarray(q, dtype=float)
-    # the first colliding pair alone (the narrow phase of the others only if its links' joints do not free it)
-    first = (scene.first_colliding_pair(q) if hasattr(scene, "first_colliding_pair")
+    # one colliding pair alone (the one the check found: the narrow phase of the others only if its links' joints do
+    # not free it)
+    first = (scene.touching_pair(q) if hasattr(scene, "touching_pair")
              else next(iter(scene.colliding_pairs(q)), None))
     if first is None:
         return q.copy()

@@ -143,7 +143,7 @@ class SelfCollisionCheck:
         self._b = np.array([b for _, b in pairs], dtype=np.intp)
         # each object by its robot link's name (the scene's names: no obstacles here)
         self._names = [robot.model.frames[int(obj.parentFrame)].name for obj in geom.geometryObjects]
-        self._verdicts: dict[bytes, bool] = {}
+        self._verdicts: dict[bytes, int] = {}  # q's bytes -> the touching pair in_collision found, or -1
         self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its objects' placements, verdict)
         self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
         self._placements = np.zeros((0, 4, 4))  # (nj, 4, 4) the joints' placements at the last candidate_pairs
@@ -213,36 +213,37 @@ class SelfCollisionCheck:
         The last :data:`REMEMBERED` verdicts are kept by ``q``'s bytes: a frame's answer is checked again as the next
         frame's previous one. The pairs found touching last are tried first (a retargeted clip's contacts recur: an
         arm against the hips), so a colliding configuration is told after a few narrow-phase calls."""
+        return self._touching_pair(q) >= 0
+
+    def touching_pair(self, q) -> tuple[str, str] | None:
+        """A (link, link) pair in contact at ``q`` (n,) (one of :meth:`colliding_pairs`: the one :meth:`in_collision`
+        found, the recent contacts first), or None when none is; no narrow phase beyond :meth:`in_collision`'s."""
+        k = self._touching_pair(q)
+        return (self._names[self._a[k]], self._names[self._b[k]]) if k >= 0 else None
+
+    def _touching_pair(self, q) -> int:
+        """The checked pair :meth:`in_collision` finds touching at ``q`` (n,), or -1; kept by ``q``'s bytes."""
         key = np.asarray(q, dtype=float).tobytes()
-        verdict = self._verdicts.get(key)
-        if verdict is None:
+        hit = self._verdicts.get(key)
+        if hit is None:
             candidates = self.candidate_pairs(q)
-            verdict = False
+            hit = -1
             recent = [k for k in self._recent if k in candidates]  # np.ndarray membership: a few pairs
             for k in recent:
                 if self._touching(k):
-                    verdict = True
+                    hit = k
                     break
             else:
                 tried = set(recent)
                 for k in candidates.tolist():
                     if k not in tried and self._touching(k):
-                        verdict = True
+                        hit = k
                         self._recent = [k, *self._recent[:RECENT_PAIRS - 1]]
                         break
             if len(self._verdicts) >= REMEMBERED:
                 self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
-            self._verdicts[key] = verdict
-        return verdict
-
-    def first_colliding_pair(self, q) -> tuple[str, str] | None:
-        """``colliding_pairs(q)[0]`` (the first (link, link) pair in contact at ``q`` (n,) in the scene's pair order),
-        or None when none is, without the narrow phase of the pairs after it."""
-        names = self._names
-        for k in self.candidate_pairs(q).tolist():
-            if self._touching(k):
-                return names[self._a[k]], names[self._b[k]]
-        return None
+            self._verdicts[key] = hit
+        return hit
 
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
         """``scene.colliding_pairs(q)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the scene's
