@@ -132,15 +132,17 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
     """A collision-free configuration near colliding ``q`` (n,), inside [lower, upper], for :func:`step_back_free`
     to step from when no free previous frame exists (a clip's first frame): the joints moving only one link of a
     colliding pair (less ``keep``) drawn around ``q`` with a widening normal spread (:data:`NEARBY_DRAWS` a spread),
-    the free draw nearest ``q`` at the first spread that has one. None when no draw is free."""
+    the free draw nearest ``q`` at the first spread that has one. None when no draw is free (at once, without a
+    draw, when a colliding pair has no drawn joint moving one link and not the other: a stance leg against the
+    pelvis, whose contact every draw keeps)."""
     pairs = scene.colliding_pairs(q)
     movable = np.zeros(robot.n, dtype=bool)
+    kept = np.zeros(robot.n, dtype=bool) if keep is None else np.asarray(keep, dtype=bool)
     for a, b in pairs:
-        movable |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
-    if keep is not None:
-        movable &= ~np.asarray(keep, dtype=bool)
-    if not movable.any():
-        return None
+        apart = (_joints_moving(robot, a, b) | _joints_moving(robot, b, a)) & ~kept
+        if not apart.any():
+            return None
+        movable |= apart
     for spread in NEARBY_SPREADS:
         draws = np.minimum(np.maximum(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q),
                                       lower), upper)
