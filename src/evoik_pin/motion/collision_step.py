@@ -23,10 +23,11 @@ __all__ = ["BISECTION_RESOLUTION", "BISECTION_STEPS", "free_nearby", "step_back_
 #: Bisection steps on the segment at most (the last free point within 2^-8 of the segment's length of the contact).
 BISECTION_STEPS = 8
 #: The bisection stops once the interval left moves no entry of q more than this (rad or m): a step back then gives
-#: up at most 0.01 rad (1 cm) of the colliding joints' motion in that frame (the next frame takes it up again), and
-#: skips the last checks, the dearest ones (meshes a hair apart: ~1 ms each on G1). Measured on the ten clips: the
-#: limb angles within 0.25 degrees but Talos jump's arms (docs/BENCHMARKS.md, "The step back's resolution").
-BISECTION_RESOLUTION = 1e-2
+#: up at most 0.03 rad (3 cm) of the colliding joints' motion in that frame (the next frame takes it up again), and
+#: skips the last checks, the dearest ones (meshes a hair apart: ~1 ms each on G1). 0.01 before (docs/BENCHMARKS.md,
+#: "The step back's resolution"); 0.03 measured on walk, run, jump x G1, Talos: every group's mean limb angle within
+#: 0.3 degrees of 0.01's, steady rate up to 1.7x (Talos walk).
+BISECTION_RESOLUTION = 3e-2
 #: Colliding pairs whose links' joints step back together at most (the second attempt).
 MAX_PAIRS = 4
 
@@ -42,13 +43,13 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
     def at(t: float) -> np.ndarray:
         return np.where(joints, q_from + t * (q_to - q_from), q_to)
 
-    # bisected on the hulls when they already leave t = 0 surely free: no mesh test (the dearest, near a contact),
-    # and the point found is as free as the meshes say (each mesh inside its hull); it stops where the hulls part,
-    # a little before the meshes would touch
+    # the pairs these joints move bisected on their hulls when those already leave t = 0 surely free: no mesh test
+    # (the dearest, near a contact), and the point found is as free as the meshes say (each mesh inside its hull);
+    # it stops where the hulls part, a little before the meshes would touch
     surely_free = getattr(scene, "surely_free", None)
-    if surely_free is not None and surely_free(at(0.0)):
+    if surely_free is not None and surely_free(at(0.0), joints):
         def collides(q: np.ndarray) -> bool:
-            return not surely_free(q)
+            return not surely_free(q, joints)
     elif scene.in_collision(at(0.0)):
         return -1.0, q_to
     else:

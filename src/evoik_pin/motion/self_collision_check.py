@@ -143,6 +143,10 @@ class SelfCollisionCheck:
         self._b = np.array([b for _, b in pairs], dtype=np.intp)
         # each object by its robot link's name (the scene's names: no obstacles here)
         self._names = [robot.model.frames[int(obj.parentFrame)].name for obj in geom.geometryObjects]
+        #: (G, n) bool: the entries of q that move each object (its link), for surely_free
+        moves = [set(robot.moving_joints(name)) for name in self._names]
+        self._moved_by = np.array([[joint in m for joint in robot.joint_names] for m in moves],
+                                  dtype=bool).reshape(len(moves), robot.n)
         self._verdicts: dict[bytes, int] = {}  # q's bytes -> the touching pair in_collision found, or -1
         self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its objects' placements, verdict)
         self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
@@ -188,25 +192,22 @@ class SelfCollisionCheck:
         self._pair_verdicts[k] = (key, verdict)
         return verdict
 
-    def surely_free(self, q) -> bool:
-        """True when no checked pair can touch at ``q`` (n,) without a mesh test: every pair whose boxes overlap is
-        either known apart (its last verdict, its two joints' placements unchanged) or has convex hulls farther
-        apart than :data:`HULL_MARGIN` (a mesh lies inside its hull: an exact verdict "apart", kept). False means
-        "maybe touching" (a pair's hulls touch): :meth:`in_collision` would need the meshes. Microseconds per pair
-        (GJK), against ~0.1-1 ms of a mesh test of two links a hair apart."""
+    def surely_free(self, q, moving: np.ndarray | None = None) -> bool:
+        """True when no checked pair touches at ``q`` (n,), told without a mesh test of a pair that ``moving`` (bool
+        (n,): the entries of q a caller's segment changes, e.g. a bisection's; None: all) moves: every such pair whose
+        boxes overlap has convex hulls farther apart than :data:`HULL_MARGIN` (a mesh lies inside its hull). The
+        other pairs get the exact verdict (kept by placement: a segment does not move them). False means "touching,
+        or maybe": a moving pair's hulls touch, which only :meth:`in_collision` (its meshes) tells. Microseconds a
+        pair (GJK), where a mesh test of two links a hair apart costs ~0.1-1 ms."""
         candidates = self.candidate_pairs(q)
-        J, parent, kept = self._placements, self._parent, self._pair_verdicts
-        for k in candidates.tolist():
-            key = J[parent[self._a[k]]].tobytes() + J[parent[self._b[k]]].tobytes()
-            verdict = kept.get(k)
-            if verdict is not None and verdict[0] == key:
-                if verdict[1]:
-                    return False
-                continue
+        moved = self._moved_by.any(axis=1) if moving is None else (self._moved_by @ moving)  # (G,) bool
+        moved_pair = moved[self._a[candidates]] | moved[self._b[candidates]]
+        # the pairs the segment moves on their hulls first (the cheap test that most often says "maybe"), then the
+        # others' exact verdicts (kept from the segment's last point: the same placements)
+        for k in candidates[moved_pair].tolist():
             if pin.computeCollision(self._hulls, self._hdata, k):
                 return False
-            kept[k] = (key, False)
-        return True
+        return not any(self._touching(k) for k in candidates[~moved_pair].tolist())
 
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
