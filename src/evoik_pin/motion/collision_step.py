@@ -23,11 +23,11 @@ __all__ = ["BISECTION_RESOLUTION", "BISECTION_STEPS", "free_nearby", "step_back_
 #: Bisection steps on the segment at most (the last free point within 2^-8 of the segment's length of the contact).
 BISECTION_STEPS = 8
 #: The bisection stops once the interval left moves no entry of q more than this (rad or m): a step back then gives
-#: up at most 0.03 rad (3 cm) of the colliding joints' motion in that frame (the next frame takes it up again), and
-#: skips the last checks, the dearest ones (meshes a hair apart: ~1 ms each on G1). 0.01 before (docs/BENCHMARKS.md,
-#: "The step back's resolution"); 0.03 measured on walk, run, jump x G1, Talos: every group's mean limb angle within
-#: 0.3 degrees of 0.01's, steady rate up to 1.7x (Talos walk).
-BISECTION_RESOLUTION = 3e-2
+#: up at most 0.05 rad (5 cm) of the colliding joints' motion in that frame (the next frame takes it up again), and
+#: skips the last checks. 0.01 before (docs/BENCHMARKS.md, "The step back's resolution": the last checks were mesh
+#: tests a hair apart, ~1 ms each on G1; the hulls' now cost microseconds); 0.03 and 0.05 measured on walk, run, jump
+#: x G1, Talos: every group's mean limb angle within 0.3 degrees of 0.01's.
+BISECTION_RESOLUTION = 5e-2
 #: Colliding pairs whose links' joints step back together at most (the second attempt).
 MAX_PAIRS = 4
 
@@ -35,7 +35,9 @@ MAX_PAIRS = 4
 def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarray, beat: float = -1.0
                    ) -> tuple[float, np.ndarray]:
     """The largest t in [0, 1] (bisection, to :data:`BISECTION_RESOLUTION`) with ``q_to`` but ``joints`` (bool (n,))
-    at ``q_from + t (q_to - q_from)`` collision-free, and that configuration; (-1, q_to) when even t = 0 collides.
+    at ``q_from + t (q_to - q_from)`` collision-free (with a check that has ``surely_free``: free on the hulls of the
+    pairs the joints move, t = 0 when those touch at the start), and that configuration; (-1, q_to) when even t = 0
+    collides.
     ``beat``: the t another side already found; once the bisection's upper end is at or below it this side cannot
     find more, and it stops there (its t, then at most ``beat``, loses the comparison it was made for; a side that can
     beat it is bisected in full)."""
@@ -43,17 +45,22 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
     def at(t: float) -> np.ndarray:
         return np.where(joints, q_from + t * (q_to - q_from), q_to)
 
-    # the pairs these joints move bisected on their hulls when those already leave t = 0 surely free: no mesh test
-    # (the dearest, near a contact), and the point found is as free as the meshes say (each mesh inside its hull);
-    # it stops where the hulls part, a little before the meshes would touch
+    # with the retargeter's check, the pairs these joints move are bisected on their hulls (no mesh test: the
+    # dearest near a contact, ~1 ms on G1), so the point found is free as the meshes say (each mesh inside its hull),
+    # a little before they would touch; when the hulls already touch at t = 0 (a hand by the hip: the hulls of two
+    # concave links) the step stays at t = 0, the start, if that is free
     surely_free = getattr(scene, "surely_free", None)
-    if surely_free is not None and surely_free(at(0.0), joints):
+    if surely_free is None:  # a Scene: its exact verdicts
+        if scene.in_collision(at(0.0)):
+            return -1.0, q_to
+        collides = scene.in_collision
+    elif surely_free(at(0.0), joints):
         def collides(q: np.ndarray) -> bool:
             return not surely_free(q, joints)
     elif scene.in_collision(at(0.0)):
         return -1.0, q_to
     else:
-        collides = scene.in_collision
+        return 0.0, at(0.0)
     span = float(np.max(np.abs(q_to - q_from), where=joints, initial=0.0))  # the most a moving entry travels
     lo, hi = 0.0, 1.0
     for _ in range(BISECTION_STEPS):
