@@ -108,9 +108,13 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     if first is None:
         return q.copy()
     a, b = first
+    sides = [_joints_moving(robot, link, other) & movable for link, other in ((a, b), (b, a))]
+    if keep is not None and np.any(keep) and not (sides[0].any() or sides[1].any()):
+        # no joint that may step back moves one link of the pair and not the other (a stance leg against the
+        # pelvis): every step keeps this contact, and the answer is q_prev (below, after every pair's narrow phase)
+        return np.array(q_prev, dtype=float)
     best_t, best_q = -1.0, None
-    for link, other in ((a, b), (b, a)):
-        joints = _joints_moving(robot, link, other) & movable
+    for joints in sides:
         if joints.any():
             t, candidate = _farthest_free(scene, q_prev, q, joints, best_t)
             if t > best_t:
@@ -143,14 +147,20 @@ def free_nearby(robot, scene, q: np.ndarray, lower: np.ndarray, upper: np.ndarra
     the free draw nearest ``q`` at the first spread that has one. None when no draw is free (at once, without a
     draw, when a colliding pair has no drawn joint moving one link and not the other: a stance leg against the
     pelvis, whose contact every draw keeps)."""
-    pairs = scene.colliding_pairs(q)
-    movable = np.zeros(robot.n, dtype=bool)
     kept = np.zeros(robot.n, dtype=bool) if keep is None else np.asarray(keep, dtype=bool)
-    for a, b in pairs:
-        apart = (_joints_moving(robot, a, b) | _joints_moving(robot, b, a)) & ~kept
-        if not apart.any():
+
+    def apart(a: str, b: str) -> np.ndarray:
+        return (_joints_moving(robot, a, b) | _joints_moving(robot, b, a)) & ~kept
+
+    found = scene.touching_pair(q) if hasattr(scene, "touching_pair") else None
+    if found is not None and not apart(*found).any():
+        return None  # told before the other pairs' narrow phase
+    movable = np.zeros(robot.n, dtype=bool)
+    for a, b in scene.colliding_pairs(q):
+        joints = apart(a, b)
+        if not joints.any():
             return None
-        movable |= apart
+        movable |= joints
     for spread in NEARBY_SPREADS:
         draws = np.minimum(np.maximum(np.where(movable, q + rng.normal(0.0, spread, (NEARBY_DRAWS, robot.n)), q),
                                       lower), upper)
