@@ -16,7 +16,8 @@ link is far tighter than its world-aligned box; about 2.5 times fewer pairs reac
 pair's last verdict is kept with the placements of its two joints, so a check in which neither moved (a bisection
 stepping an arm back leaves the legs where they were) reuses it; the pairs found touching last are tried first, so a
 colliding configuration (most of a bisection's) is told after a few narrow-phase calls. None of these changes a
-verdict.
+verdict. :meth:`SelfCollisionCheck.surely_free` is a cheaper, one-sided test for a step back's bisection: hulls only
+for the pairs its joints move (True is exact, False may be "maybe").
 """
 
 from __future__ import annotations
