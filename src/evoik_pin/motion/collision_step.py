@@ -57,8 +57,8 @@ def _farthest_free(scene, q_from: np.ndarray, q_to: np.ndarray, joints: np.ndarr
             return -1.0, q_to
         collides = scene.in_collision
     elif surely_free(at(0.0), joints):
-        def collides(q: np.ndarray) -> bool:
-            return not surely_free(q, joints)
+        def collides(q: np.ndarray) -> bool:  # the pairs the joints do not move: as at t = 0, apart
+            return not surely_free(q, joints, others_free=True)
     elif scene.in_collision(at(0.0)):
         return -1.0, q_to
     else:

@@ -193,13 +193,14 @@ class SelfCollisionCheck:
         self._pair_verdicts[k] = (key, verdict)
         return verdict
 
-    def surely_free(self, q, moving: np.ndarray | None = None) -> bool:
+    def surely_free(self, q, moving: np.ndarray | None = None, others_free: bool = False) -> bool:
         """True when no checked pair touches at ``q`` (n,), told without a mesh test of a pair that ``moving`` (bool
         (n,): the entries of q a caller's segment changes, e.g. a bisection's; None: all) moves: every such pair whose
         boxes overlap has convex hulls farther apart than :data:`HULL_MARGIN` (a mesh lies inside its hull). The
         other pairs get the exact verdict (kept by placement: a segment does not move them). False means "touching,
         or maybe": a moving pair's hulls touch, which only :meth:`in_collision` (its meshes) tells. Microseconds a
-        pair (GJK), where a mesh test of two links a hair apart costs ~0.1-1 ms."""
+        pair (GJK), where a mesh test of two links a hair apart costs ~0.1-1 ms. ``others_free``: the pairs ``moving``
+        does not move are known apart (the caller found its segment's start surely free): not looked at."""
         candidates = self.candidate_pairs(q)
         moved = self._moved_by.any(axis=1) if moving is None else (self._moved_by @ moving)  # (G,) bool
         moved_pair = moved[self._a[candidates]] | moved[self._b[candidates]]
@@ -208,7 +209,7 @@ class SelfCollisionCheck:
         for k in candidates[moved_pair].tolist():
             if pin.computeCollision(self._hulls, self._hdata, k):
                 return False
-        return not any(self._touching(k) for k in candidates[~moved_pair].tolist())
+        return others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())
 
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
