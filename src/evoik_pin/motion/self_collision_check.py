@@ -13,11 +13,13 @@ one.
 The boxes come from the joints' placements in one compiled pass (:func:`_overlapping_pairs`), which also tests the
 pairs whose world boxes overlap on their turned boxes (the oriented boxes' separating axes: a box turned with its
 link is far tighter than its world-aligned box; about 2.5 times fewer pairs reach the hulls on G1 and Talos). A
-pair's last verdict is kept with the placements of its two joints, so a check in which neither moved (a bisection
-stepping an arm back leaves the legs where they were) reuses it; the pairs found touching last are tried first, so a
-colliding configuration (most of a bisection's) is told after a few narrow-phase calls. None of these changes a
-verdict. :meth:`SelfCollisionCheck.surely_free` is a cheaper, one-sided test for a step back's bisection: hulls only
-for the pairs its joints move (True is exact, False may be "maybe").
+pair's last verdict is kept with the values of the joints between its two links (those moving one and not the
+other: its relative placement), so a check in which those did not move (a bisection stepping an arm back leaves the
+legs where they were; a step back puts an arm where it was against a torso that moved with the pelvis) reuses it;
+the pairs found touching last are tried first, so a colliding configuration (most of a bisection's) is told after a
+few narrow-phase calls. None of these changes a verdict (a kept one may differ from a new one only by the world
+placements' rounding, 1e-15 m). :meth:`SelfCollisionCheck.surely_free` is a cheaper, one-sided test for a step
+back's bisection: hulls only for the pairs its joints move (True is exact, False may be "maybe").
 """
 
 from __future__ import annotations
@@ -148,8 +150,11 @@ class SelfCollisionCheck:
         moves = [set(robot.moving_joints(name)) for name in self._names]
         self._moved_by = np.array([[joint in m for joint in robot.joint_names] for m in moves],
                                   dtype=bool).reshape(len(moves), robot.n)
+        #: per checked pair, the entries of q that move one of its links and not the other (what its verdict reads)
+        self._pair_joints = [np.flatnonzero(self._moved_by[a] ^ self._moved_by[b]) for a, b in pairs]
+        self._q = np.zeros(robot.n)  # the q last placed (candidate_pairs)
         self._verdicts: dict[bytes, int] = {}  # q's bytes -> the touching pair in_collision found, or -1
-        self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its objects' placements, verdict)
+        self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its _pair_key, verdict)
         self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
         self._placements = np.zeros((0, 4, 4))  # (nj, 4, 4) the joints' placements at the last candidate_pairs
         centres, halves = [], []
@@ -169,6 +174,7 @@ class SelfCollisionCheck:
     def candidate_pairs(self, q) -> np.ndarray:
         """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated)."""
         robot = self.robot
+        self._q = np.array(q, dtype=float)
         q_pin = robot.to_pinocchio(robot.check_q(q))
         pin.updateGeometryPlacements(robot.model, self._data, self._geom, self._gdata, q_pin)
         pin.updateGeometryPlacements(robot.model, self._data, self._hulls, self._hdata)  # same joint placements
@@ -180,12 +186,17 @@ class SelfCollisionCheck:
                                    BOX_SLACK, out)
         return out[:count].copy()
 
+    def _pair_key(self, k: int) -> bytes:
+        """What checked pair k's verdict depends on at the q last placed: the entries of q that move one of its two
+        links and not the other (its relative placement: the joints between the links)."""
+        return self._q[self._pair_joints[k]].tobytes()
+
     def _touching(self, k: int) -> bool:
         """Whether checked pair k touches at the placements last updated: hulls (within HULL_MARGIN) first, then
-        meshes. The pair's last verdict is kept with its two objects' joints' placements: a check where both are the
-        same numbers (a bisection moving other links) reuses it."""
-        J, parent = self._placements, self._parent
-        key = J[parent[self._a[k]]].tobytes() + J[parent[self._b[k]]].tobytes()
+        meshes. The pair's last verdict is kept with :meth:`_pair_key`: a check where the joints between its links
+        have the same values (a bisection moving other links; a frame moving the legs, not the arm against the torso)
+        reuses it (the same relative placement, up to the rounding of the world placements: 1e-15 m)."""
+        key = self._pair_key(k)
         kept = self._pair_verdicts.get(k)
         if kept is not None and kept[0] == key:
             return kept[1]
@@ -206,9 +217,17 @@ class SelfCollisionCheck:
         moved_pair = moved[self._a[candidates]] | moved[self._b[candidates]]
         # the pairs the segment moves on their hulls first (the cheap test that most often says "maybe"), then the
         # others' exact verdicts (kept from the segment's last point: the same placements)
+        kept = self._pair_verdicts
         for k in candidates[moved_pair].tolist():
-            if pin.computeCollision(self._hulls, self._hdata, k):
+            key = self._pair_key(k)
+            verdict = kept.get(k)
+            if verdict is not None and verdict[0] == key:
+                if verdict[1]:
+                    return False
+            elif pin.computeCollision(self._hulls, self._hdata, k):
                 return False
+            else:
+                kept[k] = (key, False)  # hulls apart: meshes apart, the exact verdict
         return others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())
 
     def in_collision(self, q) -> bool:
