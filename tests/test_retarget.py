@@ -372,12 +372,30 @@ def test_frame_stack_solve_is_the_solvers_run(walk_stacks):
 
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
-def test_first_colliding_pair_is_the_scene_first(g1_checks, seed):
-    """first_colliding_pair is the scene's first colliding pair (None when free) without the others' narrow phase."""
+def test_touching_pair_is_one_of_the_scene_pairs(g1_checks, seed):
+    """touching_pair is one of the scene's colliding pairs (None when free), before and after in_collision."""
     robot, scene, check = g1_checks
     q = np.clip(np.random.default_rng(seed).normal(0.0, 1.0, robot.n), robot.lower, robot.upper)
     pairs = scene.colliding_pairs(q)
-    assert check.first_colliding_pair(q) == (pairs[0] if pairs else None)
+    found = check.touching_pair(q)
+    assert (found in pairs) if pairs else found is None
+    assert check.in_collision(q) == bool(pairs) and check.touching_pair(q) == found
+
+
+def test_surely_free_is_never_wrong(g1_checks):
+    """surely_free (the hulls of the pairs the given joints move, the exact verdict for the others) says True only
+    where the scene finds no contact, and it does say True (as well as False) on these configurations."""
+    robot, scene, check = g1_checks
+    rng = np.random.default_rng(3)
+    arm = np.array(["right_shoulder" in n or "right_elbow" in n or "right_wrist" in n for n in robot.joint_names])
+    said = []
+    for spread in (0.2, 0.5, 1.0):
+        for q in np.clip(rng.normal(0.0, spread, (20, robot.n)), robot.lower, robot.upper):
+            for moving in (None, arm):
+                said.append(check.surely_free(q, moving))
+                if said[-1]:
+                    assert not scene.in_collision(q)
+    assert any(said) and not all(said)
 
 
 def test_kept_pair_verdicts_follow_a_bisection(g1_checks):

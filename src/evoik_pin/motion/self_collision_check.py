@@ -13,10 +13,13 @@ one.
 The boxes come from the joints' placements in one compiled pass (:func:`_overlapping_pairs`), which also tests the
 pairs whose world boxes overlap on their turned boxes (the oriented boxes' separating axes: a box turned with its
 link is far tighter than its world-aligned box; about 2.5 times fewer pairs reach the hulls on G1 and Talos). A
-pair's last verdict is kept with the placements of its two joints, so a check in which neither moved (a bisection
-stepping an arm back leaves the legs where they were) reuses it; the pairs found touching last are tried first, so a
-colliding configuration (most of a bisection's) is told after a few narrow-phase calls. None of these changes a
-verdict.
+pair's last verdict is kept with the values of the joints between its two links (those moving one and not the
+other: its relative placement), so a check in which those did not move (a bisection stepping an arm back leaves the
+legs where they were; a step back puts an arm where it was against a torso that moved with the pelvis) reuses it;
+the pairs found touching last are tried first, so a colliding configuration (most of a bisection's) is told after a
+few narrow-phase calls. None of these changes a verdict (a kept one may differ from a new one only by the world
+placements' rounding, 1e-15 m). :meth:`SelfCollisionCheck.surely_free` is a cheaper, one-sided test for a step
+back's bisection: hulls only for the pairs its joints move (True is exact, False may be "maybe").
 """
 
 from __future__ import annotations
@@ -143,8 +146,15 @@ class SelfCollisionCheck:
         self._b = np.array([b for _, b in pairs], dtype=np.intp)
         # each object by its robot link's name (the scene's names: no obstacles here)
         self._names = [robot.model.frames[int(obj.parentFrame)].name for obj in geom.geometryObjects]
-        self._verdicts: dict[bytes, bool] = {}
-        self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its objects' placements, verdict)
+        #: (G, n) bool: the entries of q that move each object (its link), for surely_free
+        moves = [set(robot.moving_joints(name)) for name in self._names]
+        self._moved_by = np.array([[joint in m for joint in robot.joint_names] for m in moves],
+                                  dtype=bool).reshape(len(moves), robot.n)
+        #: per checked pair, the entries of q that move one of its links and not the other (what its verdict reads)
+        self._pair_joints = [np.flatnonzero(self._moved_by[a] ^ self._moved_by[b]) for a, b in pairs]
+        self._q = np.zeros(robot.n)  # the q last placed (candidate_pairs)
+        self._verdicts: dict[bytes, int] = {}  # q's bytes -> the touching pair in_collision found, or -1
+        self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its _pair_key, verdict)
         self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
         self._placements = np.zeros((0, 4, 4))  # (nj, 4, 4) the joints' placements at the last candidate_pairs
         centres, halves = [], []
@@ -164,6 +174,7 @@ class SelfCollisionCheck:
     def candidate_pairs(self, q) -> np.ndarray:
         """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated)."""
         robot = self.robot
+        self._q = np.array(q, dtype=float)
         q_pin = robot.to_pinocchio(robot.check_q(q))
         pin.updateGeometryPlacements(robot.model, self._data, self._geom, self._gdata, q_pin)
         pin.updateGeometryPlacements(robot.model, self._data, self._hulls, self._hdata)  # same joint placements
@@ -175,12 +186,17 @@ class SelfCollisionCheck:
                                    BOX_SLACK, out)
         return out[:count].copy()
 
+    def _pair_key(self, k: int) -> bytes:
+        """What checked pair k's verdict depends on at the q last placed: the entries of q that move one of its two
+        links and not the other (its relative placement: the joints between the links)."""
+        return self._q[self._pair_joints[k]].tobytes()
+
     def _touching(self, k: int) -> bool:
         """Whether checked pair k touches at the placements last updated: hulls (within HULL_MARGIN) first, then
-        meshes. The pair's last verdict is kept with its two objects' joints' placements: a check where both are the
-        same numbers (a bisection moving other links) reuses it."""
-        J, parent = self._placements, self._parent
-        key = J[parent[self._a[k]]].tobytes() + J[parent[self._b[k]]].tobytes()
+        meshes. The pair's last verdict is kept with :meth:`_pair_key`: a check where the joints between its links
+        have the same values (a bisection moving other links; a frame moving the legs, not the arm against the torso)
+        reuses it (the same relative placement, up to the rounding of the world placements: 1e-15 m)."""
+        key = self._pair_key(k)
         kept = self._pair_verdicts.get(k)
         if kept is not None and kept[0] == key:
             return kept[1]
@@ -188,41 +204,68 @@ class SelfCollisionCheck:
         self._pair_verdicts[k] = (key, verdict)
         return verdict
 
+    def surely_free(self, q, moving: np.ndarray | None = None, others_free: bool = False) -> bool:
+        """True when no checked pair touches at ``q`` (n,), told without a mesh test of a pair that ``moving`` (bool
+        (n,): the entries of q a caller's segment changes, e.g. a bisection's; None: all) moves: every such pair whose
+        boxes overlap has convex hulls farther apart than :data:`HULL_MARGIN` (a mesh lies inside its hull). The
+        other pairs get the exact verdict (kept by placement: a segment does not move them). False means "touching,
+        or maybe": a moving pair's hulls touch, which only :meth:`in_collision` (its meshes) tells. Microseconds a
+        pair (GJK), where a mesh test of two links a hair apart costs ~0.1-1 ms. ``others_free``: the pairs ``moving``
+        does not move are known apart (the caller found its segment's start surely free): not looked at."""
+        candidates = self.candidate_pairs(q)
+        moved = self._moved_by.any(axis=1) if moving is None else (self._moved_by @ moving)  # (G,) bool
+        moved_pair = moved[self._a[candidates]] | moved[self._b[candidates]]
+        # the pairs the segment moves on their hulls first (the cheap test that most often says "maybe"), then the
+        # others' exact verdicts (kept from the segment's last point: the same placements)
+        kept = self._pair_verdicts
+        for k in candidates[moved_pair].tolist():
+            key = self._pair_key(k)
+            verdict = kept.get(k)
+            if verdict is not None and verdict[0] == key:
+                if verdict[1]:
+                    return False
+            elif pin.computeCollision(self._hulls, self._hdata, k):
+                return False
+            else:
+                kept[k] = (key, False)  # hulls apart: meshes apart, the exact verdict
+        return others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())
+
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
         The last :data:`REMEMBERED` verdicts are kept by ``q``'s bytes: a frame's answer is checked again as the next
         frame's previous one. The pairs found touching last are tried first (a retargeted clip's contacts recur: an
         arm against the hips), so a colliding configuration is told after a few narrow-phase calls."""
+        return self._touching_pair(q) >= 0
+
+    def touching_pair(self, q) -> tuple[str, str] | None:
+        """A (link, link) pair in contact at ``q`` (n,) (one of :meth:`colliding_pairs`: the one :meth:`in_collision`
+        found, the recent contacts first), or None when none is; no narrow phase beyond :meth:`in_collision`'s."""
+        k = self._touching_pair(q)
+        return (self._names[self._a[k]], self._names[self._b[k]]) if k >= 0 else None
+
+    def _touching_pair(self, q) -> int:
+        """The checked pair :meth:`in_collision` finds touching at ``q`` (n,), or -1; kept by ``q``'s bytes."""
         key = np.asarray(q, dtype=float).tobytes()
-        verdict = self._verdicts.get(key)
-        if verdict is None:
+        hit = self._verdicts.get(key)
+        if hit is None:
             candidates = self.candidate_pairs(q)
-            verdict = False
+            hit = -1
             recent = [k for k in self._recent if k in candidates]  # np.ndarray membership: a few pairs
             for k in recent:
                 if self._touching(k):
-                    verdict = True
+                    hit = k
                     break
             else:
                 tried = set(recent)
                 for k in candidates.tolist():
                     if k not in tried and self._touching(k):
-                        verdict = True
+                        hit = k
                         self._recent = [k, *self._recent[:RECENT_PAIRS - 1]]
                         break
             if len(self._verdicts) >= REMEMBERED:
                 self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
-            self._verdicts[key] = verdict
-        return verdict
-
-    def first_colliding_pair(self, q) -> tuple[str, str] | None:
-        """``colliding_pairs(q)[0]`` (the first (link, link) pair in contact at ``q`` (n,) in the scene's pair order),
-        or None when none is, without the narrow phase of the pairs after it."""
-        names = self._names
-        for k in self.candidate_pairs(q).tolist():
-            if self._touching(k):
-                return names[self._a[k]], names[self._b[k]]
-        return None
+            self._verdicts[key] = hit
+        return hit
 
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
         """``scene.colliding_pairs(q)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the scene's
