@@ -59,8 +59,8 @@ def test_far_band_is_beyond_reach(panda):
 
 
 class _StallingLM:
-    """An LM stand-in over two exact solutions: from the answer itself it stalls (a singularity's band), from any
-    other start it converges to the solution nearer that start (``converges`` False: never)."""
+    """An LM stand-in over two solutions: from the answer itself it stalls (a singularity's band), from any other
+    start it converges to the solution nearer that start (``converges`` False: never)."""
 
     def __init__(self, answer, solutions, converges=True):
         from types import SimpleNamespace
@@ -76,10 +76,9 @@ class _StallingLM:
         return self._out(q=s, converged=True)
 
 
-def test_exact_takes_each_answer_to_the_exact_solution_nearest_it():
-    """An answer LM takes to an exact solution from itself: that solution (flag 0); one it stalls at: the exact
-    solution nearest it among LM's from starts around it (flag 1), not a farther one; none converging: the answer as
-    it is (flag 2)."""
+def test_exact_takes_an_answer_to_the_exact_solution_nearest_it():
+    """An answer LM takes to an exact solution from itself: LM's solution (flag 0); one it stalls at: the nearest of
+    LM's solutions from starts around it (flag 1), not a farther one; none converging: the answer as it is (flag 2)."""
     answer = np.array([0.1, 0.2, 0.3])
     near, far = answer + np.array([4e-3, 0.0, 0.0]), answer + np.array([0.0, 0.05, 0.0])
     q, how = bp.exact(_StallingLM(answer, [near, far]), answer, flag=True, seed=1)
