@@ -56,3 +56,35 @@ def test_far_band_is_beyond_reach(panda):
     positions, _ = sets[0][0].member_targets
     assert len(singles) == 2 and len(positions) == 10
     assert (np.linalg.norm(positions, axis=1) >= lo).sum() == 7
+
+
+class _StallingLM:
+    """An LM stand-in over two solutions: from the answer itself it stalls (a singularity's band), from any other
+    start it converges to the solution nearer that start (``converges`` False: never)."""
+
+    def __init__(self, answer, solutions, converges=True):
+        from types import SimpleNamespace
+
+        self.answer, self.solutions, self.converges = answer, solutions, converges
+        self.problem = SimpleNamespace(lower=np.full(3, -3.0), upper=np.full(3, 3.0))
+        self._out = SimpleNamespace
+
+    def run(self, q, iterations):
+        if not self.converges or np.array_equal(q, self.answer):
+            return self._out(q=q, converged=False)
+        s = min(self.solutions, key=lambda s: np.linalg.norm(s - q))
+        return self._out(q=s, converged=True)
+
+
+def test_exact_takes_an_answer_to_the_exact_solution_nearest_it():
+    """An answer LM takes to an exact solution from itself: LM's solution (flag 0); one it stalls at: the nearest of
+    LM's solutions from starts around it (flag 1), not a farther one; none converging: the answer as it is (flag 2)."""
+    answer = np.array([0.1, 0.2, 0.3])
+    near, far = answer + np.array([4e-3, 0.0, 0.0]), answer + np.array([0.0, 0.05, 0.0])
+    q, how = bp.exact(_StallingLM(answer, [near, far]), answer, flag=True, seed=1)
+    assert how == 1 and np.array_equal(q, near)
+    q, how = bp.exact(_StallingLM(answer, [near, far], converges=False), answer, flag=True)
+    assert how == 2 and np.array_equal(q, answer)
+    q, how = bp.exact(_StallingLM(answer + 1.0, [far]), answer, flag=True)
+    assert how == 0 and np.array_equal(q, far)
+    assert np.array_equal(bp.exact(_StallingLM(answer, [near, far]), answer), near)

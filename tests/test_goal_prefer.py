@@ -854,3 +854,38 @@ def test_descent_in_collision_keeps_answers_and_drops_flips(panda):
             assert min(np.abs(q - a).max() for a in Q) == 0.0
         checked += 1
     assert checked >= 3
+
+
+@pytest.mark.parametrize("name", ["panda", "so_arm", "pr2_torso"])
+def test_manipulability_gradient_in_closed_form_equals_central_differences(name):
+    """The descent's manipulability gradient (Jacobi's formula on the chain's Jacobian derivative) equals central
+    differences of the measure on a 7-joint arm, on a 5-joint one (sqrt(det(J^T J))) and on PR2's arm from its base,
+    whose torso lift is prismatic; the measure it returns is Pinocchio's Yoshikawa measure."""
+    from evoik_pin.robot import example_robot_data_dir
+    from evoik_pin.solvers.lm import LevenbergMarquardt
+    from evoik_pin.solvers.lm import nullspace as ns
+    from evoik_pin.solvers.lm.kernel import make_workspace, task_error, weighted_stack
+
+    if name == "pr2_torso":
+        robot = ev.load_robot(str(example_robot_data_dir() / "pr2_description/urdf/pr2.urdf"), base="base_link",
+                              tip="l_gripper_tool_frame")
+    else:
+        robot = ev.load_robot(name)
+    Q = robot.random_configurations(8, np.random.default_rng(5))
+    lm = LevenbergMarquardt(ev.make_problem(robot, robot.fk(Q[0]), q0=Q[0])[0])
+    kin, _, _, goals, pt, Rt = lm._args
+    n = robot.n
+    ws = make_workspace(kin, goals, n, 1)
+    J, JJ, M, g = np.empty((6, n)), np.empty((6, 6)), np.empty((6, n)), np.empty(n)
+
+    def measure(q):
+        task_error(True, kin, False, goals, weighted_stack(goals[0]), pt, Rt, q, ws.cur, ws)
+        return ns._manipulability(kin[3], goals[3], ws.cur.pg, ws.cur.Z, ws.cur.O, J, JJ)
+
+    h = 1e-6
+    for q in Q:
+        m = measure(q)
+        assert ns._manipulability_gradient(kin[3], goals[3], ws.cur.pg, ws.cur.Z, ws.cur.O, J, JJ, M, g) == m
+        assert m == pytest.approx(robot.manipulability(q, "full"), rel=1e-9)
+        central = np.array([(measure(q + h * e) - measure(q - h * e)) / (2 * h) for e in np.eye(n)])
+        assert np.abs(g - central).max() <= 1e-6 * np.abs(central).max()

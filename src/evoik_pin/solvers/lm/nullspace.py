@@ -79,6 +79,63 @@ def _manipulability(rev, support, pg, Z, O, J, JJ):
 
 
 @njit(cache=True, nogil=True, forceinline=False)
+def _manipulability_gradient(rev, support, pg, Z, O, J, JJ, M, v):
+    """The gradient (n,) of :func:`_manipulability` m at q to ``v`` in closed form, from q's kinematics buffers (as
+    :func:`_manipulability`'s) by Jacobi's formula: dm/dq_k = m <M, dJ/dq_k> with M = (J J^T)^-1 J (6, n), or
+    J (J^T J)^-1 for fewer than 6 joints, and dJ/dq_k from the columns themselves (the chain's derivative of its
+    Jacobian: a revolute joint k turns the columns of the joints it carries, z_k x J_i; it moves the frame's
+    origin under the joints before it, z_i x J_k's linear part). n operations per column pair instead of n
+    forward kinematics for forward differences. Returns m; at a singularity (m 0) ``v`` is left unset. JJ (6, 6),
+    M (6, n): scratch."""
+    m = _manipulability(rev, support, pg, Z, O, J, JJ)  # J and JJ's Cholesky factor (lower triangle) filled
+    if m <= 0.0:
+        return m
+    n = J.shape[1]
+    r = min(n, 6)
+    # M: the Cholesky factor's solves, column by column of J (n >= 6: A = J J^T, 6 x 6) or row by row (A = J^T J)
+    for c in range(n if n >= 6 else 6):
+        for i in range(r):  # forward: L y = b
+            s = J[i, c] if n >= 6 else J[c, i]
+            for k in range(i):
+                s -= JJ[i, k] * (M[k, c] if n >= 6 else M[c, k])
+            if n >= 6:
+                M[i, c] = s / JJ[i, i]
+            else:
+                M[c, i] = s / JJ[i, i]
+        for i in range(r - 1, -1, -1):  # back: L^T x = y
+            s = M[i, c] if n >= 6 else M[c, i]
+            for k in range(i + 1, r):
+                s -= JJ[k, i] * (M[k, c] if n >= 6 else M[c, k])
+            if n >= 6:
+                M[i, c] = s / JJ[i, i]
+            else:
+                M[c, i] = s / JJ[i, i]
+    frame = support[0]
+    for k in range(n):
+        g = 0.0
+        if frame[k]:
+            for i in range(n):
+                if not frame[i]:
+                    continue
+                # a frame's supporting joints form one path from the base, numbered parents first: i < k means i
+                # carries k
+                if i < k:  # k moves the frame's origin: a revolute i's column z_i x (p - o_i) by z_i x J_k,lin
+                    if rev[i]:
+                        d0 = Z[i, 1] * J[2, k] - Z[i, 2] * J[1, k]
+                        d1 = Z[i, 2] * J[0, k] - Z[i, 0] * J[2, k]
+                        d2 = Z[i, 0] * J[1, k] - Z[i, 1] * J[0, k]
+                        g += M[0, i] * d0 + M[1, i] * d1 + M[2, i] * d2
+                elif rev[k]:  # k turns column i (its linear and angular parts): z_k x J_i
+                    for h in range(0, 6, 3):
+                        d0 = Z[k, 1] * J[h + 2, i] - Z[k, 2] * J[h + 1, i]
+                        d1 = Z[k, 2] * J[h, i] - Z[k, 0] * J[h + 2, i]
+                        d2 = Z[k, 0] * J[h + 1, i] - Z[k, 1] * J[h, i]
+                        g += M[h, i] * d0 + M[h + 1, i] * d1 + M[h + 2, i] * d2
+        v[k] = m * g
+    return m
+
+
+@njit(cache=True, nogil=True, forceinline=False)
 def _turned(q, q0, box, k):
     """q[k] - q0[k], for a full-turn joint (``box``'s wrap row) from the turn of q[k] nearest q0[k] inside the
     limits (the same pose; :func:`~evoik_pin.solvers.search.prefer.nearest_turn`'s rule)."""
@@ -114,11 +171,11 @@ def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, re
     the longest step. The other arguments are :func:`.kernel.lm_run_buffers`'. Returns the kinematics evaluations."""
     N, n = Q.shape
     ws = make_workspace(kin, goals, n, 1)
-    JJ = np.empty((6, 6))
+    JJ, M = np.empty((6, 6)), np.empty((6, n))
     p, q_prev, p_prev = np.empty(n), np.empty(n), np.empty(n)
     evaluations = 0
     for i in range(N):
-        evaluations += _descend(ws, JJ, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
+        evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
                                 restore, max_step, Q_out[i], f_out, i)
     return evaluations
 
@@ -143,7 +200,7 @@ def _onto_goals(kin, mimic, goals, weighted, pt, Rt, q, state, ws, W, L, y, dq, 
 
 
 @njit(cache=True, nogil=True, forceinline=False)
-def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, Rt, iterations, restore, max_step,
+def _descend(ws, JJ, M, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, Rt, iterations, restore, max_step,
              q_out, f_out, i):
     """:func:`descend_batch` for one answer; returns its kinematics evaluations."""
     n = q_start.shape[0]
@@ -185,8 +242,8 @@ def _descend(ws, JJ, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, pt, 
             if mode == MODE_NEAREST:
                 for k in range(n):
                     v[k] = -_turned(q, q0, box, k)
-            else:
-                for k in range(n):
+            elif _manipulability_gradient(rev, support, cur.pg, cur.Z, cur.O, J, JJ, M, v) <= 0.0:
+                for k in range(n):  # a singularity: forward differences
                     _copy(q, qn)
                     qn[k] += MANIP_H
                     task_error(True, kin, mimic, goals, weighted, pt, Rt, qn, cand, ws)
