@@ -11,6 +11,7 @@ from numba import njit
 from ...goals.stack import G_JOINT
 from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers, lm_run_buffers_basic
+from ..lm.layout import B_HI, B_LO
 from ..lm.tree_kinematics import frame_pose, tree_forward
 from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_few, table_distances
 
@@ -28,13 +29,13 @@ _DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table en
     converges.
 
     Args:
-        buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``). lower, upper (n,): the
-            search box (q0's tip pose is taken at q0 clipped into it). gap: the table's typical squared gap. Q
-            (size, n): the table's configurations; F (size, D) their features (position, then the rotation's 9
-            entries: D = 12, 3 or 9), FT (D, size) transposed, sq (size,) their squared norms
-            (:func:`~.nearest.table_distances`). sp, sr: the features' scales of a position and of a rotation's
-            entries (:meth:`~.seed_table.SeedTable.one_goal_features`). oriented: a run's error is position +
-            orientation error (else position error). table_runs: the entries run at most (>= 1).
+        buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``; its tip pose is taken at q0
+            clipped into the search box, ``box``'s B_LO and B_HI rows). gap: the table's typical squared gap. Q
+            (size, n): the table's configurations; FT (D, size) their features transposed (position, then the
+            rotation's 9 entries: D = 12, 3 or 9), sq (size,) their squared norms (:func:`~.nearest.table_distances`).
+            sp, sr: the features' scales of a position and of a rotation's entries
+            (:meth:`~.seed_table.SeedTable.one_goal_features`). oriented: a run's error is position + orientation
+            error (else position error). table_runs: the entries run at most (>= 1).
         kin ... params: the kernel's arguments (:func:`~..lm.kernel.lm_run_buffers`), one goal on one frame.
         q_out (n,), g_out (1, 2): the converged run's configuration and errors. errors (>= runs,): each run's error
             (m + rad). best_q (n,), best (6,): when none converges, memetic's best run (the first of the lowest
@@ -51,12 +52,12 @@ def _first_runs(extra, name):
     """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s, a
     constant of the closure)."""
 
-    def runs(buf, held, q0, has_q0, lower, upper, gap, Q, F, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap,
-             goals, pt, Rt, params, q_out, g_out, errors, best_q, best):  # pragma: no cover - compiled
+    def runs(buf, held, q0, has_q0, gap, Q, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap, goals, pt, Rt,
+             params, q_out, g_out, errors, best_q, best):  # pragma: no cover - compiled
         parent, FR, Fp, rev, index, scale, offset = kin
         spec, gR, gp = goals[0], goals[1], goals[2]
         n = q0.shape[0]
-        D = F.shape[1]
+        D = FT.shape[0]
         has_position = D != 9
         ro = 3 if has_position else 0  # where the rotation's entries start (D > 3: they are features)
         # the target's features, the products SeedTable.one_goal_features makes
@@ -67,7 +68,7 @@ def _first_runs(extra, name):
         if D > 3:
             for j in range(9):
                 f[ro + j] = sr * Rt[0, j // 3, j % 3]
-        d = np.empty(F.shape[0])
+        d = np.empty(FT.shape[1])
         table_distances(FT, sq, f, d)
         # the nearest entries, nearest first (select_k's order), in one pass over the distances
         out = np.empty(max(table_runs, 1), dtype=np.int64)
@@ -77,7 +78,7 @@ def _first_runs(extra, name):
             # q0's tip pose (clipped into the box) and its squared distance to the target in the table's metric
             qc = np.empty(n)
             for i in range(n):
-                qc[i] = min(max(q0[i], lower[i]), upper[i])
+                qc[i] = min(max(q0[i], box[B_LO, i]), box[B_HI, i])
             m = parent.shape[0]
             Rj, pj, Z, O = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
             x = np.empty(m)
@@ -102,7 +103,7 @@ def _first_runs(extra, name):
                 first = out[0]  # nearest entry
                 de = 0.0
                 for j in range(D):
-                    c = f[j] - F[first, j]
+                    c = f[j] - FT[j, first]
                     de += c * c
                 q0_first = d0 <= de
         # the starts in memetic's order: q0 first or after the nearest entry, then the next entries (-1: q0)

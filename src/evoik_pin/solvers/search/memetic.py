@@ -143,7 +143,6 @@ class MemeticSetup:
         self._table = None
         self._lm: LevenbergMarquardt | None = None
         self._engines: list[LevenbergMarquardt] = []  # the last few engines made, newest first (_engine)
-        self._bounds: tuple = ()  # the box's (lower, upper) as our own float arrays (first_runs's argument types)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
         self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
         self._goal_entries: list[tuple] = []  # the same for goal_first_runs (goal lists of several goals), newest first
@@ -158,7 +157,6 @@ class MemeticSetup:
         if box is None or box[0] is not problem.lower or box[1] is not problem.upper or box[2] != size:
             self._table = prepare(self.robot, problem.lower, problem.upper, size, engine, kernel=False)[0]
             self._box = (problem.lower, problem.upper, size)
-            self._bounds = (np.array(problem.lower, dtype=float), np.array(problem.upper, dtype=float))
         table, scene = self._table, problem.scene
         return table, None if table is None or scene is None else table.free_mask(scene, problem.margin)
 
@@ -396,9 +394,8 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
     q_out = np.empty(problem.n)
     errors, g_out, zeros, best_q, best = setup._scratch
     (stage, runs, evaluations, pos, rot, _), loading = setup.first_runs(
-        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, *setup._bounds,
-         ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out,
-         errors, best_q, best), lm, table)
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, ff.gap, table.Q, ff.FT, ff.sq,
+         ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
     # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again

@@ -72,8 +72,7 @@ class RepeatCall:
         self._errors, self._g_out, self._zeros, self._best_q, self._best = setup._scratch
         self._head = tuple(buffers)
         table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if table_seeds is None else table_seeds)
-        self._box = (*setup._bounds, ff.gap, table.Q, ff.F, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args,
-                     self._params)
+        self._box = (ff.gap, table.Q, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, self._params)
         self._thread = threading.get_ident()
 
     def usable(self) -> bool:
@@ -100,7 +99,7 @@ class RepeatCall:
             *self._head, self._zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, *self._box, q,
             self._g_out, self._errors, self._best_q, self._best)
         if stage < 0:
-            return t0, resumed_state(self.setup, self._box[9], runs, evaluations, self._box[10])
+            return t0, resumed_state(self.setup, self._box[6], runs, evaluations, self._box[7])
         positioned, angled, tol, rtol = self._reports  # Goal.reported and Goal.met, inline
         errors = [(float(pos) if positioned else None, float(rot) if angled else None)]
         if not ((not positioned or errors[0][0] <= tol) and (not angled or errors[0][1] <= rtol)):
