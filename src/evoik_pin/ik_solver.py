@@ -96,13 +96,13 @@ class IKSolver:
         self._options = options
         check_prefer_method(self._prefer, method)
         info.check_options(options, n=robot.n)
-        self._plan = None
+        self._memetic = None
         if method == "memetic":
             from .solvers.search.memetic import MemeticSetup
 
-            self._plan = MemeticSetup(robot, **options)
+            self._memetic = MemeticSetup(robot, **options)
         # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
-        self._plain = self._plan is not None and not self._polish and self._prefer == "first"
+        self._plain = self._memetic is not None and not self._polish and self._prefer == "first"
         # the repeat calls: True (poses), False (positions), id(goal stack) (the last _GOAL_REPEAT_CALLS); only for
         # the default objective in a box that does not move with the target
         self._repeat_calls: dict = {}
@@ -155,10 +155,10 @@ class IKSolver:
             # a pose or a position on the repeat call of its kind, inline: its whole Python is a few us
             arrays = pose_arrays(target)
             if arrays is not None:
-                lane = self._repeat_calls.get(arrays[1] is not None)
-                if lane is not None and lane.usable():
+                repeat = self._repeat_calls.get(arrays[1] is not None)
+                if repeat is not None and repeat.usable():
                     q0 = self._repeat_call_q0(q0, seed)
-                    out = lane.solve(arrays[0], arrays[1], q0)
+                    out = repeat.solve(arrays[0], arrays[1], q0)
                     return out if type(out) is Result else self._resume_general(self.problem(target, q0), seed, out)
             else:
                 problem = self._goal_repeat_call(target, q0, seed)
@@ -198,14 +198,14 @@ class IKSolver:
         if not (type(target) is list and len(target) == 1 and isinstance(target[0], Goal) and self._objective is None):
             return None
         bound = bind(self.robot, target)  # the goal's checks; equal goals' stack (a goal set's members' too)
-        lane = self._repeat_calls.get(id(bound[1]))
-        if lane is None or lane.key is not bound[1] or not lane.usable():
+        repeat = self._repeat_calls.get(id(bound[1]))
+        if repeat is None or repeat.key is not bound[1] or not repeat.usable():
             return self._goal_problem(bound, q0)
         q0 = self._repeat_call_q0(q0, seed)
         if target[0].alternatives is not None:  # a goal set: the goal-set search when none of those members is met
-            out = lane.solve_set(target[0], q0)
+            out = repeat.solve_set(target[0], q0)
             return self._goal_problem(bound, q0) if out is None else out
-        out = lane.solve(bound[2][0], bound[3][0], q0)
+        out = repeat.solve(bound[2][0], bound[3][0], q0)
         return out if type(out) is Result else self._resume_general(self._goal_problem(bound, q0), seed, out)
 
     def _solve_choosing(self, target, q0, seed) -> Result:
@@ -252,7 +252,7 @@ class IKSolver:
         """Memetic after a repeat call's first runs met no tolerance: going on from their state ``out``, or from the
         start (``out`` None)."""
         rng = _rng(seed)
-        result = self._plan.solve(problem, rng) if out is None else self._plan.resume(problem, rng, out)
+        result = self._memetic.solve(problem, rng) if out is None else self._memetic.resume(problem, rng, out)
         result.chosen = problem.reported([None] * len(problem.goals))
         return result
 
@@ -264,25 +264,25 @@ class IKSolver:
         if kept is None or not kept.usable():
             from .solvers.search.repeat_call import RepeatCall
 
-            lane = RepeatCall.of_setup(self._plan, problem)
-            if lane is not None:
+            repeat = RepeatCall.of_setup(self._memetic, problem)
+            if repeat is not None:
                 if problem.target is None:
                     stacks = [k for k in self._repeat_calls if k is not True and k is not False]
                     if len(stacks) >= _GOAL_REPEAT_CALLS:
                         del self._repeat_calls[stacks[0]]
-                self._repeat_calls[key] = lane
+                self._repeat_calls[key] = repeat
 
     def run(self, problem: IKProblem, rng) -> Result:
         """The method on this solver's problem (:meth:`problem`), then ``polish``, the goals' and scene's verdicts."""
         goals = problem.goals
         if self._plain and problem.scene is None and not problem.goal_sets:
             # memetic's plan alone: without goal sets, scene or polish its verdict is the goals' verdict
-            result = self._plan.solve(problem, rng)
+            result = self._memetic.solve(problem, rng)
             result.chosen = problem.reported([None] * len(goals))
             if self._repeat_calls_open and len(goals) == 1:
                 self._open_repeat_call(problem)
             return result
-        solve = self._plan.solve if self._plan is not None else partial(self._info.func, **self._options)
+        solve = self._memetic.solve if self._memetic is not None else partial(self._info.func, **self._options)
         result = run_with_verdicts(problem, self.method, solve, self._polish, rng)
         if (self._repeat_calls_open and problem.target is None and len(goals) == 1 and problem.scene is None
                 and result.success and result.chosen[0] is not None):
