@@ -101,24 +101,31 @@ def test_kinds_check_their_inputs():
 
 
 # ------------------------------------------------------------------------------- residuals and Jacobians
+def _encoded(goal):
+    """(pt, Rt, aux) of ``goal`` as the kernel hands them to its compiled code: C-ordered and writable (rows of the
+    goal stack's arrays). As ``encode()`` and ``aux()`` give them (Rt in Fortran order from an SE3, aux read-only),
+    they would compile variants of axes_error and axes_jacobian that nothing but this test uses (seconds of numba's
+    time on a fresh clone); the values are the same."""
+    pt, Rt = goal.encode()
+    return np.ascontiguousarray(pt), np.ascontiguousarray(Rt), np.array(goal.aux())
+
+
 def _residual(robot, goal, q):
     """(rows e, errors (pos, rot)) of ``goal`` at q by the compiled code of its kind."""
-    pt, Rt = goal.encode()
     T = robot.fk(q, goal.frame)
     e = np.zeros(len(TASK_ROWS[goal.kind]))
-    c, pos, rot = axes_error(goal.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation), pt, Rt,
-                             goal.aux(), np.empty((3, 3)), np.empty(3), e)
+    c, pos, rot = axes_error(goal.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation),
+                             *_encoded(goal), np.empty((3, 3)), np.empty(3), e)
     assert c == pytest.approx(e @ e, rel=1e-12, abs=1e-300)
     return e, (pos, rot)
 
 
 def _jacobian(robot, goal, q):
-    pt, Rt = goal.encode()
     T = robot.fk(q, goal.frame)
     J = np.ascontiguousarray(robot.jacobian(q, "world", of=goal.frame))
     E = np.zeros((len(TASK_ROWS[goal.kind]), robot.n))
-    axes_jacobian(goal.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation), J, pt, Rt,
-                  goal.aux(), np.empty(3), np.empty((3, 3)), np.empty((3, 3)), E, 0)
+    axes_jacobian(goal.kind, np.ascontiguousarray(T.rotation), np.ascontiguousarray(T.translation), J,
+                  *_encoded(goal), np.empty(3), np.empty((3, 3)), np.empty((3, 3)), E, 0)
     return E
 
 
