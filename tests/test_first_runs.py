@@ -7,7 +7,7 @@ import pytest
 
 import evoik_pin as ek
 from evoik_pin.solvers.search import memetic
-from evoik_pin.solvers.search.nearest import select_k, table_distances
+from evoik_pin.solvers.search.nearest import select_few, select_k, table_distances
 from evoik_pin.solvers.search.repeat_call import RepeatCall
 from evoik_pin.solvers.search.seed_table import default_table_size, seed_table
 
@@ -19,9 +19,11 @@ def targets(robot, count, seed):
 
 @pytest.mark.parametrize("name", ["panda", "ur5", "redundant7r"])
 def test_compiled_ranking_is_the_tables_over_many_targets(name):
-    """table_distances + select_k (first_runs's ranking: the same formula summed in the features' order, where NumPy
-    uses BLAS) rank the entries as SeedTable.ranked does, over thousands of poses and positions; select_k on NumPy's
-    own distances too, with and without a mask."""
+    """table_distances + select_few (first_runs's ranking: the same formula summed in the features' order, where
+    NumPy uses BLAS) rank the entries as SeedTable.ranked does, over thousands of poses and positions; select_few on
+    NumPy's own distances too, with and without a mask. (select_few, the function first_runs calls on its float64
+    distances, is what select_k runs for these k; select_k itself is called on float32 distances only, and its
+    float64 variant would be compiled for this test alone.)"""
     robot = ek.load_robot(name)
     table = seed_table(robot, robot.lower, robot.upper, default_table_size(robot.n))
     poses, _ = targets(robot, 2000, 11)
@@ -37,18 +39,19 @@ def test_compiled_ranking_is_the_tables_over_many_targets(name):
             _, FT, sq = key[:3]
             table_distances(FT, sq, f, d)
             reference = list(table.ranked(key, f, 17))
-            m = select_k(d, every, 17, out)
+            m = select_few(d, every, 17, out)
             assert out[:m].tolist() == reference
             assert np.allclose(d, table.distances(key, f), rtol=0.0, atol=1e-12)
             if i % 10 == 0:
-                m = select_k(table.distances(key, f), every, 4, out)
+                m = select_few(table.distances(key, f), every, 4, out)
                 assert out[:m].tolist() == reference[:4]
-                m = select_k(table.distances(key, f), allowed, 17, out)
+                m = select_few(table.distances(key, f), allowed, 17, out)
                 assert out[:m].tolist() == list(table.ranked(key, f, 17, allowed))
 
 
 def test_selection_edge_cases():
-    d = np.array([3.0, 1.0, 2.0, 1.0, 0.5])
+    # float32 distances, as select_k's callers (the goal lists' rankings) pass them: the variant they compile
+    d = np.array([3.0, 1.0, 2.0, 1.0, 0.5], dtype=np.float32)
     out = np.empty(5, dtype=np.int64)
     every = np.zeros(0, dtype=bool)
     assert select_k(d, every, 0, out) == 0
