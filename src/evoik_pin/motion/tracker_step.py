@@ -21,6 +21,7 @@ import pinocchio as pin
 from numba import njit
 
 from ..result import Result
+from ..solvers.lm.compiling import compiled_entry
 from ..solvers.lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
 from ..solvers.lm.run_outcome import LMOutcome
 from ..solvers.search.velocity_box import BOX_ITERATIONS, VelocityBoxStage
@@ -69,13 +70,7 @@ def _write_step_entry():
         args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), mask, np.zeros((1, 4, 4)), mask,
                 np.zeros((1, 3)), np.zeros((1, 3, 3)))
         write_step(*args)
-        try:
-            from numba import typeof
-
-            entry = write_step.overloads[tuple(typeof(a) for a in args)].entry_point
-        except (AttributeError, KeyError, ImportError):
-            entry = write_step
-        _WRITE_STEP.append(entry)
+        _WRITE_STEP.append(compiled_entry(write_step, args) or write_step)
     return _WRITE_STEP[0]
 
 
@@ -124,13 +119,7 @@ def _settle_entry():
     if not _SETTLE:
         args = (np.zeros(1), np.zeros((5, 1)), np.zeros((1, 2)), np.zeros((1, 5)), 1.0)
         settle(*args)
-        try:
-            from numba import typeof
-
-            entry = settle.overloads[tuple(typeof(a) for a in args)].entry_point
-        except (AttributeError, KeyError, ImportError):
-            entry = settle
-        _SETTLE.append(entry)
+        _SETTLE.append(compiled_entry(settle, args) or settle)
     return _SETTLE[0]
 
 

@@ -8,7 +8,7 @@ import logging
 import sys
 import time
 
-__all__ = ["LOGGER", "announce", "load", "will_compile"]
+__all__ = ["LOGGER", "announce", "compiled_entry", "load", "will_compile"]
 
 #: The logger the compilation notice goes to (INFO).
 LOGGER = logging.getLogger("evoik_pin")
@@ -50,3 +50,15 @@ def load(what: str, calls: list[tuple], seconds: float) -> float:
     for dispatcher, args in calls:
         dispatcher(*args)
     return time.perf_counter() - t
+
+
+def compiled_entry(dispatcher, args: tuple):
+    """The machine-code entry of the numba ``dispatcher`` for ``args``' types (compiled or loaded already: call it on
+    them first), which a hot path calls without numba's dispatch typing every argument on every call; None where this
+    numba does not expose it (the caller then calls the dispatcher)."""
+    try:
+        from numba import typeof
+
+        return dispatcher.overloads[tuple(typeof(a) for a in args)].entry_point
+    except (AttributeError, KeyError, ImportError):
+        return None

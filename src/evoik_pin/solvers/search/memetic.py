@@ -16,7 +16,7 @@ from ...result import Result
 from .. import get_solver, register
 from ..collision_verdict import pairs_text
 from ..lm import DEFAULT_ITERATIONS, ENGINES, LevenbergMarquardt, LMOutcome, compiled_kernel, wrapping_joints
-from ..lm.compiling import load
+from ..lm.compiling import compiled_entry, load
 from ..lm.engine import later_kinds
 from ..options import check_choice, check_int, check_positive
 from .memetic_runs import LMRuns, de_restart, kernel_goal_errors
@@ -205,12 +205,7 @@ class MemeticSetup:
             loading = time.perf_counter() - t
         entry = None
         if lm._owned if goal_list else current[1] is not None:
-            from numba import typeof
-
-            try:
-                entry = function.overloads[tuple(typeof(a) for a in args)].entry_point
-            except (AttributeError, KeyError):  # pragma: no cover - a numba without overloads' entry points
-                entry = function
+            entry = compiled_entry(function, args) or function
         if not goal_list:
             self._entry = (lm._args, table, entry)
         if entry is not None and entry is not function:  # a compiled entry found
