@@ -542,13 +542,14 @@ def _run(extra, name, doc):
                 if lam > layout.LAMBDA_MAX:
                     break
         if converged and finish and c > layout.FINISHED:
-            # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better)
+            # one more, (almost) undamped step: quadratic convergence takes ~1e-6 to ~1e-12 (kept if better and
+            # every goal stays met: a lower weighted |e|^2 may trade one goal past its tolerance for another's rows)
             task_jacobian(extra, kin, mimic, goals, weighted, pt, Rt, cur, ws, E)
             lm_step(cur.q, False, cur.e, LAMBDA_MIN, box, any_wrap, max_step, ws, cand.q)
             cn = task_error(extra, kin, mimic, goals, weighted, pt, Rt, cand.q, cand, ws)
             it += 1
             evaluations += 1
-            if cn < c:
+            if cn < c and within(spec, cand.ge):
                 cur, c = cand, cn
         _copy(cur.q, q_out)
         pos, rot = _outcome(spec, cur.ge, g_out)

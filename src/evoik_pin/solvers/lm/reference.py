@@ -227,11 +227,11 @@ class ReferenceLM:
                 q, on_bound, e, extras, errors, c = qn, on_bound_n, en, extras_n, errors_n, cn
                 if self.within(errors):
                     if self.finish and c > layout.FINISHED:  # one more, (almost) undamped step, kept if better
-                        E = self.task_jacobian(q, extras)
+                        E = self.task_jacobian(q, extras)  # and every goal stays met (the kernel's rule)
                         qn, _ = self._step(q, False, E, self._normal(E), e, LAMBDA_MIN)
                         en, _, errors_n = self.error_at(qn)
                         it, evaluations, cn = it + 1, evaluations + 1, en.dot(en)
-                        if cn < c:
+                        if cn < c and self.within(errors_n):
                             q, errors, c = qn, errors_n, cn
                     return self.outcome(q, errors, True, it, evaluations, c)
                 E = None
