@@ -24,8 +24,8 @@ __all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bin
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
-#: Default budget (s) of ``prefer="nearest" | "manipulability"``: about 1 ms with the call's overhead.
-DEFAULT_PREFER_TIMEOUT = 0.0007
+#: Default budget (s) of ``prefer="nearest" | "manipulability"``: under 1 ms with the call's overhead.
+DEFAULT_PREFER_TIMEOUT = 0.0006
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4
 #: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
