@@ -29,6 +29,7 @@ from ...goals.bands import AUX_SIZE
 from ...goals.registry import BANDED_LOG6, FAMILY_FRAME, KINDS, LOG6, POINT
 from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW, GoalArrays, GoalStack, TargetArrays, owned, spec_row
 from . import layout
+from .compiling import compiled_entry
 from .layout import DEFAULT_DAMPING, DEFAULT_ITERATIONS, DEFAULT_MAX_STEP, DEFAULT_STALL_RATIO, DEFAULT_STALL_WINDOW
 from .run_outcome import LMOutcome, PairsOutcome
 
@@ -221,12 +222,7 @@ class LevenbergMarquardt:
         buffers = self._buffers or self._workspace(DEFAULT_ITERATIONS)
         g_err = self._g_scratch if self._one else np.empty((len(self.goals), 2))
         args = (*buffers, np.zeros(self.n), *self._args, self._params, np.empty(self.n), g_err)
-        try:
-            from numba import typeof
-
-            return self._kernel["lm_run_buffers"].overloads[tuple(typeof(a) for a in args)].entry_point
-        except (AttributeError, KeyError, ImportError):
-            return None
+        return compiled_entry(self._kernel["lm_run_buffers"], args)
 
     def _workspace(self, max_iterations: int) -> tuple[np.ndarray, np.ndarray]:
         """The kernel's buffers for runs of up to ``max_iterations`` steps: this thread's for this goal stack
