@@ -94,7 +94,7 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
     made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
     one_call, lane_call = memetic._first_runs, RepeatCall.solve
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
-    monkeypatch.setattr(RepeatCall, "solve", lambda *args: made.append(2) or lane_call(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append(2) or lane_call(*args, **kw))
     fast = [solver.solve(t, q0=q0, seed=i) for t, q0, i in calls]
     general = [ek.solve(robot, t, q0=q0, seed=i, **budget) for t, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general)
@@ -158,7 +158,7 @@ def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name,
     # five goal structures keeps a lane for each)
     one_call, lane_call = memetic._first_runs, RepeatCall.solve
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(args[-1] is not None) or one_call(*args))
-    monkeypatch.setattr(RepeatCall, "solve", lambda *args: made.append("lane") or lane_call(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append("lane") or lane_call(*args, **kw))
     fast = [solver.solve(g, q0=q0, seed=i) for g, q0, i in calls]
     general = [ek.solve(robot, g, q0=q0, seed=i, **budget) for g, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general) and set(made) == {True, "lane"}
@@ -184,7 +184,7 @@ def test_several_goals_take_the_goal_lists_first_runs(monkeypatch):
     made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
     one_call, lane_call, goal_call = memetic._first_runs, RepeatCall.solve, memetic._goal_first_runs
     monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
-    monkeypatch.setattr(RepeatCall, "solve", lambda *args: made.append(2) or lane_call(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append(2) or lane_call(*args, **kw))
     monkeypatch.setattr(memetic, "_goal_first_runs", lambda *args: made.append(3) or goal_call(*args))
     for goals in ([Pose(robot.tip, T), Position("panda_link4", robot.fk(np.zeros(robot.n)).translation)],
                   [Direction(robot.tip, [0, 0, 1], T.rotation[:, 2])], [Pose(robot.tip, [T, T])]):

@@ -16,8 +16,9 @@ import evoik_pin as ek
 from evoik_pin import api
 from evoik_pin.errors import ConfigurationError, OptionError, TargetError
 from evoik_pin.goals import Pose
+from evoik_pin.solvers.search.first_runs import _rotation_ok as compiled_rotation_ok
 from evoik_pin.solvers.search.repeat_call import RepeatCall
-from evoik_pin.target import pose_arrays
+from evoik_pin.target import pose_arrays, rotation_entries_ok
 
 BUDGET = {"timeout": None, "max_restarts": 2}  # deterministic: the clock cannot change an answer
 
@@ -50,7 +51,7 @@ def counted(monkeypatch):
     """The number of lane solves made (a list, one entry per call)."""
     calls = []
     lane_solve = RepeatCall.solve
-    monkeypatch.setattr(RepeatCall, "solve", lambda *args: calls.append(1) or lane_solve(*args))
+    monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: calls.append(1) or lane_solve(*args, **kw))
     return calls
 
 
@@ -216,10 +217,15 @@ def test_property_pose_arrays_accept_what_coerce_accepts(seed, log_eps, mirror, 
     else:
         target = pin.SE3(R, p)
     arrays = pose_arrays(target)
+    # the repeat call's check of a rotation, made inside its compiled first runs, is the same test as coerce's
+    entries = np.ascontiguousarray(R).reshape(9)
+    assert bool(compiled_rotation_ok(*entries)) == rotation_entries_ok(*entries.tolist())
     try:
         t = ek.Target.coerce(target)
     except TargetError:
         assert arrays is None
+        unchecked = pose_arrays(target, check_rotation=False)
+        assert unchecked is None or not rotation_entries_ok(*entries.tolist())
         return
     assert arrays is not None
     assert np.array_equal(arrays[0], t.position) and np.array_equal(arrays[1], t.rotation)

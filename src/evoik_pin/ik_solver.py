@@ -153,12 +153,12 @@ class IKSolver:
         problem = None
         if self._repeat_calls:
             # a pose or a position on the repeat call of its kind, inline: its whole Python is a few us
-            arrays = pose_arrays(target)
+            arrays = pose_arrays(target, check_rotation=False)  # the rotation checked in the compiled first runs
             if arrays is not None:
                 repeat = self._repeat_calls.get(arrays[1] is not None)
                 if repeat is not None and repeat.usable():
                     q0 = self._repeat_call_q0(q0, seed)
-                    out = repeat.solve(arrays[0], arrays[1], q0)
+                    out = repeat.solve(arrays[0], arrays[1], q0, rotation_checked=False)
                     return out if type(out) is Result else self._resume_general(self.problem(target, q0), seed, out)
             else:
                 problem = self._goal_repeat_call(target, q0, seed)

@@ -389,8 +389,8 @@ def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: L
     q_out = np.empty(problem.n)
     errors, g_out, zeros, best_q, best = setup._scratch
     (stage, runs, evaluations, pos, rot, _), loading = setup.first_runs(
-        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, ff.gap, table.Q, ff.FT, ff.sq,
-         ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best), lm, table)
+        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, False, ff.gap, table.Q, ff.FT,
+         ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
     # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again

@@ -14,6 +14,7 @@ from ...result import Result
 from ..lm.layout import P_ITERATIONS
 from . import memetic
 from .choose import member_distances
+from .first_runs import REFUSED
 from .memetic import GUARANTEED_TABLE_RUNS, first_runs_result, resumed_state
 from .seed_table import DEFAULT_TABLE_SEEDS, one_frame
 
@@ -79,15 +80,18 @@ class RepeatCall:
         """Whether the engine's arguments still hold, in the thread that made the path."""
         return self._lm._args is self._args and threading.get_ident() == self._thread
 
-    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None):
+    def solve(self, position: np.ndarray, rotation: np.ndarray | None, q0: np.ndarray | None,
+              rotation_checked: bool = True):
         """Solve a problem like the path's (a tip target, or a one-goal list bound to its stack) whose one target is
-        ``position`` (3,) m and ``rotation`` (3, 3) or None (checked), from ``q0`` (n,) float (checked; None: none);
-        the goal is judged on the kernel's errors, as memetic judges them.
+        ``position`` (3,) m and ``rotation`` (3, 3) or None (checked; with ``rotation_checked=False`` the compiled
+        first runs check the rotation before anything runs), from ``q0`` (n,) float (checked; None: none); the goal
+        is judged on the kernel's errors, as memetic judges them.
 
         Returns:
             The Result when a first run met the tolerances; else (clock start, the runs' state) for
             :meth:`~.memetic.MemeticSetup.resume`, or None when a run converged by the kernel's test but not by the
-            tolerances (the general path then solves the problem from the start).
+            tolerances, or the rotation is not a rotation matrix (the general path then solves the problem from the
+            start, or refuses its target).
         """
         t0 = time.perf_counter()
         self._pt[:] = position
@@ -96,10 +100,12 @@ class RepeatCall:
         self._params[P_ITERATIONS] = self._iterations  # another path may have run the engine with another budget
         q = np.empty(self._n)
         stage, runs, evaluations, pos, rot, _ = self._entry(
-            *self._head, self._zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, *self._box, q,
-            self._g_out, self._errors, self._best_q, self._best)
+            *self._head, self._zeros if q0 is None else np.array(q0, dtype=float), q0 is not None,
+            not rotation_checked and rotation is not None, *self._box, q, self._g_out, self._errors, self._best_q,
+            self._best)
         if stage < 0:
-            return t0, resumed_state(self.setup, self._box[6], runs, evaluations, self._box[7])
+            return None if stage == REFUSED else (t0, resumed_state(self.setup, self._box[6], runs, evaluations,
+                                                                    self._box[7]))
         positioned, angled, tol, rtol = self._reports  # Goal.reported and Goal.met, inline
         errors = [(float(pos) if positioned else None, float(rot) if angled else None)]
         if not ((not positioned or errors[0][0] <= tol) and (not angled or errors[0][1] <= rtol)):
