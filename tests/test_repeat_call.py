@@ -16,9 +16,10 @@ import evoik_pin as ek
 from evoik_pin import api
 from evoik_pin.errors import ConfigurationError, OptionError, TargetError
 from evoik_pin.goals import Pose
-from evoik_pin.solvers.search.first_runs import _rotation_ok as compiled_rotation_ok
+from evoik_pin.lie import compiled
+from evoik_pin.lie.so3 import is_rotation_entries
 from evoik_pin.solvers.search.repeat_call import RepeatCall
-from evoik_pin.target import pose_arrays, rotation_entries_ok
+from evoik_pin.target import pose_arrays
 
 BUDGET = {"timeout": None, "max_restarts": 2}  # deterministic: the clock cannot change an answer
 
@@ -219,13 +220,13 @@ def test_property_pose_arrays_accept_what_coerce_accepts(seed, log_eps, mirror, 
     arrays = pose_arrays(target)
     # the repeat call's check of a rotation, made inside its compiled first runs, is the same test as coerce's
     entries = np.ascontiguousarray(R).reshape(9)
-    assert bool(compiled_rotation_ok(*entries)) == rotation_entries_ok(*entries.tolist())
+    assert bool(compiled.is_rotation_entries(*entries)) == is_rotation_entries(*entries.tolist())
     try:
         t = ek.Target.coerce(target)
     except TargetError:
         assert arrays is None
         unchecked = pose_arrays(target, check_rotation=False)
-        assert unchecked is None or not rotation_entries_ok(*entries.tolist())
+        assert unchecked is None or not is_rotation_entries(*entries.tolist())
         return
     assert arrays is not None
     assert np.array_equal(arrays[0], t.position) and np.array_equal(arrays[1], t.rotation)

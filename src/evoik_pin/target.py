@@ -12,6 +12,7 @@ import pinocchio as pin
 
 from .errors import TargetError
 from .lie import is_rotation
+from .lie.so3 import is_rotation_entries
 
 __all__ = ["MAX_TARGET_NORM", "Target", "pose_arrays"]
 
@@ -57,7 +58,7 @@ def _rotation(value) -> np.ndarray:
         raise TargetError(f"target rotation must be a 3 x 3 matrix of numbers, got {value!r}") from exc
     if R.shape != (3, 3):
         raise TargetError(f"target rotation must be a 3 x 3 matrix, got shape {R.shape}")
-    if not rotation_entries_ok(*R.reshape(9).tolist()):
+    if not is_rotation_entries(*R.reshape(9).tolist()):
         # a NaN or inf fails the test's first line; which of the two it was is looked up only here
         if not np.isfinite(R).all():
             raise TargetError("target rotation contains NaN or inf")
@@ -65,25 +66,10 @@ def _rotation(value) -> np.ndarray:
     return R
 
 
-def rotation_entries_ok(a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float,
-                        i: float) -> bool:
-    """Whether the 9 numbers (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and det R >= 0
-    (False for NaN or inf). Plain arithmetic: run on Python floats here, and compiled by numba where the compiled
-    first runs check a target themselves (:mod:`evoik_pin.solvers.search.first_runs`)."""
-    # a rotation's squared Frobenius norm is 3: past the screen at 4 the products below only ever see entries of a
-    # near-rotation, so none overflows (a huge entry makes the screen's sum inf, a NaN makes it NaN: refused)
-    if not a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i <= 4.0:
-        return False
-    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
-    n0, n1, n2 = a * a + d * d + g * g - 1.0, b * b + e * e + h * h - 1.0, c * c + f * f + i * i - 1.0
-    m01, m02, m12 = a * b + d * e + g * h, a * c + d * f + g * i, b * c + e * f + h * i
-    return not (n0 * n0 + n1 * n1 + n2 * n2 + 2.0 * (m01 * m01 + m02 * m02 + m12 * m12) > 1e-12 or det < 0)
-
-
 def _pose_ok(position: np.ndarray, rotation: np.ndarray) -> bool:
     """Whether float arrays ``position`` (3,) m and ``rotation`` (3, 3) pass :class:`Target`'s checks (finite, within
     :data:`MAX_TARGET_NORM` of the base, a rotation matrix), on Python floats (about 1 us)."""
-    return math.hypot(*position.tolist()) <= MAX_TARGET_NORM and rotation_entries_ok(*rotation.reshape(9).tolist())
+    return math.hypot(*position.tolist()) <= MAX_TARGET_NORM and is_rotation_entries(*rotation.reshape(9).tolist())
 
 
 def _unchecked_pose(cls, position: np.ndarray, rotation: np.ndarray):
@@ -97,7 +83,7 @@ def pose_arrays(target, check_rotation: bool = True) -> tuple[np.ndarray, np.nda
     """(position (3,) m, rotation (3, 3) or None) of a ``pin.SE3``, a float64 (4, 4) pose (bottom row exactly
     [0 0 0 1]), a float64 3-vector or a 3-D :class:`Target` that passes :class:`Target`'s checks, without making a
     Target; None otherwise (:meth:`Target.coerce` then gives the verdict). The arrays may be views of ``target``.
-    ``check_rotation=False`` leaves a pose's rotation unchecked: the caller checks it (:func:`rotation_entries_ok`)
+    ``check_rotation=False`` leaves a pose's rotation unchecked: the caller checks it (:func:`is_rotation_entries`)
     before using it, as an IKSolver's repeat call does inside its compiled first runs."""
     kind = type(target)
     if kind is pin.SE3:

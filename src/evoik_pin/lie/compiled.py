@@ -7,11 +7,16 @@ import math
 
 from numba import njit
 
+from . import so3
 from .so3 import NEAR_PI, PREC2, PREC3
 
-__all__ = ["jlog3", "jlog6", "log3", "log6", "wrap_angle", "yaw"]
+__all__ = ["is_rotation_entries", "jlog3", "jlog6", "log3", "log6", "wrap_angle", "yaw"]
 
 _TWO_PI = 2.0 * math.pi
+
+
+#: :func:`.so3.is_rotation_entries` compiled (nine floats, row-major): the same operations, the same verdicts.
+is_rotation_entries = njit(cache=True, nogil=True)(so3.is_rotation_entries)
 
 
 @njit(cache=True, nogil=True, forceinline=False)

@@ -29,6 +29,21 @@ def is_rotation(R: np.ndarray, tol: float = 1e-6):
         return (ortho <= tol) & (np.linalg.det(np.nan_to_num(R, nan=0.0, posinf=0.0, neginf=0.0)) >= 0)
 
 
+def is_rotation_entries(a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float,
+                        i: float) -> bool:
+    """Whether the 9 numbers (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and det R >= 0
+    (False for NaN or inf): a target's test (:class:`evoik_pin.Target`). Plain arithmetic, on Python floats here (about
+    1 us) and compiled by numba in :mod:`.compiled` for kernels that check a target themselves."""
+    # a rotation's squared Frobenius norm is 3: past the screen at 4 the products below only ever see entries of a
+    # near-rotation, so none overflows (a huge entry makes the screen's sum inf, a NaN makes it NaN: refused)
+    if not a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i <= 4.0:
+        return False
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    n0, n1, n2 = a * a + d * d + g * g - 1.0, b * b + e * e + h * h - 1.0, c * c + f * f + i * i - 1.0
+    m01, m02, m12 = a * b + d * e + g * h, a * c + d * f + g * i, b * c + e * f + h * i
+    return not (n0 * n0 + n1 * n1 + n2 * n2 + 2.0 * (m01 * m01 + m02 * m02 + m12 * m12) > 1e-12 or det < 0)
+
+
 def skew(v: np.ndarray) -> np.ndarray:
     """Skew matrices (..., 3, 3) of vectors v (..., 3): ``skew(v) @ x = v x x``."""
     v = np.asarray(v, dtype=float)

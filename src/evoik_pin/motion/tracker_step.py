@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
+from ..lie.compiled import is_rotation_entries
 from ..result import Result
 from ..solvers.lm.compiling import compiled_entry
 from ..solvers.lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
@@ -34,13 +35,17 @@ _MESSAGE = "velocity box: 1 LM run(s)"
 
 
 @njit(cache=True, nogil=True)
-def write_step(box, q_prev, step, lower, upper, wrap, poses, posed, pt, Rt):  # pragma: no cover - compiled
+def write_step(box, q_prev, step, lower, upper, wrap, poses, posed, pt, Rt, check_rt):  # pragma: no cover - compiled
     """Write one step's box and targets into the LM kernel's arrays. The velocity box of ``q_prev`` (n,) with
     half-widths ``step`` (n,) (rad or m) into ``box`` (5, n) rows B_LO, B_CLO and B_HI, B_CHI:
     :meth:`~.velocity_box.VelocityBoxStage.box`'s values (clipped into ``lower``, ``upper`` (n,); joints where ``wrap``
     (n,) bool is set unclipped), its operations in its order, so the same floats. The targets of the goals where
     ``posed`` (G,) bool is set from their homogeneous poses ``poses`` (G, 4, 4) (m) into ``pt`` (G, 3) and ``Rt``
-    (G, 3, 3) (the others' rows untouched)."""
+    (G, 3, 3) (the others' rows untouched).
+
+    Returns:
+        Whether ``Rt[0]`` is a rotation matrix (:func:`~evoik_pin.lie.so3.is_rotation_entries`) when ``check_rt`` (a
+        tip pose :func:`step_key` left unchecked); True otherwise."""
     for k in range(q_prev.shape[0]):
         lo = q_prev[k] - step[k]
         hi = q_prev[k] + step[k]
@@ -56,6 +61,10 @@ def write_step(box, q_prev, step, lower, upper, wrap, poses, posed, pt, Rt):  # 
                 pt[i, r] = poses[i, r, 3]
                 for c in range(3):
                     Rt[i, r, c] = poses[i, r, c]
+    if not check_rt:
+        return True
+    T = Rt[0]
+    return is_rotation_entries(T[0, 0], T[0, 1], T[0, 2], T[1, 0], T[1, 1], T[1, 2], T[2, 0], T[2, 1], T[2, 2])
 
 
 _WRITE_STEP: list = []  # write_step's compiled entry, once found
@@ -68,7 +77,7 @@ def _write_step_entry():
     if not _WRITE_STEP:
         mask = np.zeros(1, dtype=bool)
         args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), mask, np.zeros((1, 4, 4)), mask,
-                np.zeros((1, 3)), np.zeros((1, 3, 3)))
+                np.zeros((1, 3)), np.zeros((1, 3, 3)), True)
         write_step(*args)
         _WRITE_STEP.append(compiled_entry(write_step, args) or write_step)
     return _WRITE_STEP[0]
@@ -128,9 +137,10 @@ def step_key(target) -> tuple | None:
     kind, weight, tolerances, aux row and whether it is a single target (not a goal set), what its goal stack depends
     on (:func:`~evoik_pin.goals.stack.structure`'s, which adds what goals beyond one frame pack: those are never
     prepared); its targets: the list. A tip pose or position given as a ``pin.SE3``, float (4, 4) or float (3,) array
-    that passes :class:`~evoik_pin.Target`'s checks (:func:`~evoik_pin.target.pose_arrays`): the key ``True`` /
-    ``False``, the targets (position (3,) m, rotation (3, 3) or None). None for anything else (the general path then
-    takes it, and refuses it if it is bad). Never raises."""
+    that passes :class:`~evoik_pin.Target`'s checks but the rotation's, which :func:`write_step` makes
+    (:func:`~evoik_pin.target.pose_arrays`): the key ``True`` / ``False``, the targets (position (3,) m, rotation
+    (3, 3) or None). None for anything else (the general path then takes it, and refuses it if it is bad). Never
+    raises."""
     kind = type(target)
     if kind is list or kind is tuple:
         try:
@@ -140,7 +150,7 @@ def step_key(target) -> tuple | None:
         except (AttributeError, TypeError):  # not goals: the general path's verdict
             return None
     if kind is pin.SE3 or kind is np.ndarray:
-        arrays = pose_arrays(target)
+        arrays = pose_arrays(target, check_rotation=False)
         return None if arrays is None else (arrays[1] is not None, arrays)
     return None
 
@@ -245,7 +255,9 @@ class BoxStep:
         ``rng``) on ``target``'s problem, that run not made again."""
         t0 = time.perf_counter()
         self._write_targets(targets)
-        self._write_step(self._box, q_prev, self._step, *self._bounds, self._poses, self._posed, self._pt, self._Rt)
+        if not self._write_step(self._box, q_prev, self._step, *self._bounds, self._poses, self._posed, self._pt,
+                                self._Rt, not self._list and targets[1] is not None):
+            return self._stage.solve(self._solver.problem(target), q_prev, self._step, rng)  # its TargetError
         self._params[P_ITERATIONS] = BOX_ITERATIONS  # another run of the engine may have set another budget
         q = np.empty(self._n)
         g_err = self._g_err

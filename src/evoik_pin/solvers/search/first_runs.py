@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit
 
 from ...goals.stack import G_JOINT
-from ...target import rotation_entries_ok
+from ...lie.compiled import is_rotation_entries
 from ..lm.chain import coupled, expand
 from ..lm.kernel import lm_run_buffers, lm_run_buffers_basic
 from ..lm.layout import B_HI, B_LO
@@ -25,8 +25,6 @@ STAGE_Q0, STAGE_TABLE, REFUSED = 0, 1, -2
 #: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``): as they are (a fixed base), from
 #: a floating base a goal sets, or from each composed start's table entry's base.
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
-#: Target's rotation test, compiled from its one definition.
-_rotation_ok = njit(cache=True)(rotation_entries_ok)
 
 
 _DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table entries, stopping at the first that
@@ -35,7 +33,7 @@ _DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table en
     Args:
         buf, held: the kernel's workspace. q0 (n,): the start given (read when ``has_q0``; its tip pose is taken at q0
             clipped into the search box, ``box``'s B_LO and B_HI rows). check_rt: first check that the target's
-            rotation ``Rt[0]`` is a rotation matrix (:func:`~evoik_pin.target.rotation_entries_ok`), else return
+            rotation ``Rt[0]`` is a rotation matrix (:func:`~evoik_pin.lie.so3.is_rotation_entries`), else return
             REFUSED having run nothing. gap: the table's typical squared gap. Q
             (size, n): the table's configurations; FT (D, size) their features transposed (position, then the
             rotation's 9 entries: D = 12, 3 or 9), sq (size,) their squared norms (:func:`~.nearest.table_distances`).
@@ -61,9 +59,10 @@ def _first_runs(extra, name):
 
     def runs(buf, held, q0, has_q0, check_rt, gap, Q, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap, goals,
              pt, Rt, params, q_out, g_out, errors, best_q, best):  # pragma: no cover - compiled
-        if check_rt and not _rotation_ok(Rt[0, 0, 0], Rt[0, 0, 1], Rt[0, 0, 2], Rt[0, 1, 0], Rt[0, 1, 1], Rt[0, 1, 2],
-                                         Rt[0, 2, 0], Rt[0, 2, 1], Rt[0, 2, 2]):
-            return REFUSED, 0, 0, np.nan, np.nan, np.nan
+        if check_rt:
+            T = Rt[0]
+            if not is_rotation_entries(T[0, 0], T[0, 1], T[0, 2], T[1, 0], T[1, 1], T[1, 2], T[2, 0], T[2, 1], T[2, 2]):
+                return REFUSED, 0, 0, np.nan, np.nan, np.nan
         parent, FR, Fp, rev, index, scale, offset = kin
         spec, gR, gp = goals[0], goals[1], goals[2]
         n = q0.shape[0]
