@@ -115,7 +115,7 @@ def bench_arm(name: str, n: int, seed: int) -> dict:
 # ---------------------------------------------------------------------- where the microseconds go
 class _Clock:
     """Accumulates the time spent in wrapped functions (perf_counter_ns), per stage name, exclusive: the time a
-    wrapped function spends in other wrapped functions is theirs (a Result made inside first_runs_result counts
+    wrapped function spends in other wrapped functions is theirs (a Result made inside guaranteed_runs_result counts
     once, the checks inside IKSolver.problem are the checks')."""
 
     def __init__(self) -> None:
@@ -153,10 +153,11 @@ STAGES = [
     ("q0's check", "IKSolver's q0 check: shape and finite"),
     ("problem", "the general path only: the template problem copied with the target and q0 (IKProblem)"),
     ("set-up look-ups", "the general path only: the memetic plan's cached seed table and LM engine (retargeted)"),
-    ("first runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, q0's tip "
-     "pose and nearness, the guaranteed LM runs (the lane's compiled entry, or MemeticSetup.first_runs)"),
-    ("memetic's later stages", "when no first run converged: the search going on (LM runs one by one, DE restarts), "
-     "rare but long"),
+    ("guaranteed runs (compiled)", "one numba call: the table's distances to the target and the nearest entries, "
+     "q0's tip pose and nearness, the guaranteed LM runs (the repeat call's compiled entry, or "
+     "MemeticSetup.guaranteed_runs)"),
+    ("memetic's later stages", "when no guaranteed run converged: the search going on (LM runs one by one, DE "
+     "restarts), rare but long"),
     ("cost and Result", "the cost from the errors (the objective's from_errors; problem.assess) and the Result"),
     ("the rest (Python)", "IKSolver.solve and the lane's own logic: the target written into the engine's arrays, "
      "q0's copy, the compiled call's arguments, the tolerances' test, the clock"),
@@ -189,12 +190,12 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         (ik_solver.IKSolver, "problem", clock.wrap(ik_solver.IKSolver, "problem", "problem")),
         (memetic.MemeticSetup, "_prepare", clock.wrap(memetic.MemeticSetup, "_prepare", "setup")),
         (memetic.MemeticSetup, "_engine", clock.wrap(memetic.MemeticSetup, "_engine", "setup")),
-        (memetic.MemeticSetup, "first_runs", clock.wrap(memetic.MemeticSetup, "first_runs", "first")),
+        (memetic.MemeticSetup, "guaranteed_runs", clock.wrap(memetic.MemeticSetup, "guaranteed_runs", "first")),
         (memetic.MemeticSetup, "resume", clock.wrap(memetic.MemeticSetup, "resume", "later")),
         (ek.IKProblem, "assess", clock.wrap(ek.IKProblem, "assess", "result")),
         (ek.IKProblem, "goal_summary", clock.wrap(ek.IKProblem, "goal_summary", "result")),  # a goal list's
         (memetic, "Result", clock.wrap(memetic, "Result", "result")),
-        (repeat_call, "first_runs_result", clock.wrap(repeat_call, "first_runs_result", "result")),
+        (repeat_call, "guaranteed_runs_result", clock.wrap(repeat_call, "guaranteed_runs_result", "result")),
     ]
     lanes = list(solver._repeat_calls.values())
     entries = [lane._entry for lane in lanes]
@@ -203,12 +204,13 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
         lane._objective.from_errors = clock.timed(lane._objective.from_errors, "result")
     ns = clock.ns
     ns["later"] = ns.get("later", 0)
-    # the general path's later stages: a _solve whose first runs did not converge, less the wrapped stages inside it
-    first_runs, solve = memetic._first_runs, memetic._solve
+    # the general path's later stages: a _solve whose guaranteed runs did not converge, less the wrapped stages inside
+    # it
+    guaranteed_runs, solve = memetic._guaranteed_runs, memetic._solve
     fell_back = [False]
 
     def first_timed(*args):
-        out = first_runs(*args)
+        out = guaranteed_runs(*args)
         fell_back[0] = out[0] is None
         return out
 
@@ -220,14 +222,14 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
             ns["later"] += time.perf_counter_ns() - t - (sum(ns.values()) - before)
         return out
 
-    memetic._first_runs, memetic._solve = first_timed, solve_timed
+    memetic._guaranteed_runs, memetic._solve = first_timed, solve_timed
     try:
         t0 = time.perf_counter()
         for i in range(n):
             solver.solve(targets[i], q0=Qs[i] if use_q0 else None, seed=i)
         wrapped = (time.perf_counter() - t0) / n * 1e6
     finally:
-        memetic._first_runs, memetic._solve = first_runs, solve
+        memetic._guaranteed_runs, memetic._solve = guaranteed_runs, solve
         for owner, attr, original in saved:
             setattr(owner, attr, original)
         for lane, entry in zip(lanes, entries, strict=True):
@@ -235,7 +237,7 @@ def profile_stages(robot: ek.Robot, targets, Qs, use_q0: bool) -> dict:
             del lane._objective.from_errors
     us = {k: v / n / 1e3 for k, v in ns.items()}
     stages = {"target's checks": us["target"], "q0's check": us["q0"], "problem": us["problem"],
-              "set-up look-ups": us["setup"], "first runs (compiled)": us["first"],
+              "set-up look-ups": us["setup"], "guaranteed runs (compiled)": us["first"],
               "memetic's later stages": us["later"], "cost and Result": us["result"]}
     stages["the rest (Python)"] = wrapped - sum(stages.values())
     return {"stages_us": stages, "wrapped_mean_us": wrapped, "plain_mean_us": plain, "q0": use_q0, "n": n,

@@ -1,6 +1,6 @@
 #!/usr/bin/env python
 """CPU and wall time of the numba code's first compilation, from an empty cache: the LM kernel's entries
-(``compiled_kernel``), memetic's compiled first runs (a first solve) and the null-space descent and task rows of
+(``compiled_kernel``), memetic's compiled guaranteed runs (a first solve) and the null-space descent and task rows of
 ``prefer=`` / preferences (``nullspace_kernel``).
 
     python scripts/compile_time.py     # compiles into a fresh temporary NUMBA_CACHE_DIR (the real cache untouched)
@@ -42,7 +42,7 @@ lap("LM kernel entries (compiled_kernel)")
 robot = ev.load_robot("panda")
 q = (robot.lower + robot.upper) / 2
 ev.solve(robot, robot.fk(q), seed=0)
-lap("first solve (seed table, memetic's first runs)")
+lap("first solve (seed table, memetic's guaranteed runs)")
 nullspace_kernel()
 lap("prefer= / preferences (nullspace_kernel)")
 for name, cs, ws in rows:

@@ -57,7 +57,7 @@ FIRST_SOLVES = textwrap.dedent("""
 
     Dispatcher.compile = compile
     ek.methods()  # the solver modules loaded, so that their clocks can be patched below
-    import evoik_pin.solvers.search.first_runs, evoik_pin.solvers.search.repeat_call
+    import evoik_pin.solvers.search.guaranteed_runs, evoik_pin.solvers.search.repeat_call
     clock = types.SimpleNamespace(**{k: v for k, v in vars(time).items() if not k.startswith("__")})
     clock.perf_counter = time.thread_time
     for name, module in list(sys.modules.items()):
@@ -104,7 +104,7 @@ def test_the_first_whole_robot_solve_of_a_fresh_process_succeeds_in_the_default_
 # ---------------------------------------------------------------------- the clock starts after the set-up
 @pytest.fixture
 def slow_loading(monkeypatch, thread_cpu_clock):
-    """Every compiled entry loaded anew (the process's loaded kernels, first runs and goal ranking forgotten) and
+    """Every compiled entry loaded anew (the process's loaded kernels, guaranteed runs and goal ranking forgotten) and
     each load made 0.2 s of CPU slower, as a first use's loading from disk or compiling is: what a solve charged to
     its budget would then exhaust it. The solvers' clock is the thread's CPU time (conftest's thread_cpu_clock), so
     that a loaded machine cannot exhaust a budget by keeping the process waiting; hence a busy wait, not a sleep."""
@@ -131,15 +131,15 @@ def slow_loading(monkeypatch, thread_cpu_clock):
 
 
 @pytest.mark.parametrize("position", [False, True])
-def test_loading_the_kernel_and_first_runs_is_set_up_not_budget(slow_loading, position):
+def test_loading_the_kernel_and_guaranteed_runs_is_set_up_not_budget(slow_loading, position):
     robot = ek.load_robot("ur10")
     T = robot.fk(robot.random_configurations(1, np.random.default_rng(5))[0])
     r = ek.IKSolver(robot).solve(T.translation if position else T, seed=0)  # a new plan and engine
     assert r.success, r.message
     assert slow_loading.loaded == ["the LM kernel for pose, position and planar goals",
-                                   "memetic's first runs for pose, position and planar goals"]
+                                   "memetic's guaranteed runs for pose, position and planar goals"]
     assert r.setup_s >= 2 * slow_loading.delay  # both loads reported as set-up
-    # neither load is on the solve's clock (the compiled first runs are made whatever the clock says, so success
+    # neither load is on the solve's clock (the compiled guaranteed runs are made whatever the clock says, so success
     # alone would not tell)
     assert r.time_s < slow_loading.delay
 
@@ -150,11 +150,11 @@ def test_loading_for_a_goal_list_is_set_up_not_budget(slow_loading):
     goals = [ek.goals.Pose(frame, robot.fk(q, frame)) for frame in FRAMES["talos"]]
     r = ek.IKSolver(robot).solve(goals, seed=0)  # the default budget (5 ms); several LM runs needed
     assert r.success, r.message
-    # goal_starts' ranking, the kernel's entries and the goal lists' compiled first runs, loaded before the clock
+    # goal_starts' ranking, the kernel's entries and the goal lists' compiled guaranteed runs, loaded before the clock
     # (the pose kinds' variant alone)
     assert slow_loading.loaded == ["the seed table's rankings for goal lists",
                                    "the LM kernel for pose, position and planar goals",
-                                   "memetic's first runs of goal lists for pose, position and planar goals"]
+                                   "memetic's guaranteed runs of goal lists for pose, position and planar goals"]
     assert r.setup_s >= 3 * slow_loading.delay
     assert r.time_s < slow_loading.delay
 
@@ -167,7 +167,8 @@ def test_goals_of_the_later_kinds_load_their_own_variant_only_then(slow_loading)
     assert not any("every goal kind" in what for what in slow_loading.loaded)  # a pose: never the later kinds'
     r = solver.solve([ek.goals.Pose(robot.tip, T, free="rz")], seed=0)
     assert r.success, r.message
-    assert slow_loading.loaded[-2:] == ["the LM kernel for every goal kind", "memetic's first runs for every goal kind"]
+    assert slow_loading.loaded[-2:] == ["the LM kernel for every goal kind",
+                                        "memetic's guaranteed runs for every goal kind"]
     assert r.time_s < slow_loading.delay
 
 

@@ -379,7 +379,7 @@ def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
     from numba import types
 
     from evoik_pin.solvers.lm import kernel
-    from evoik_pin.solvers.search import first_runs
+    from evoik_pin.solvers.search import guaranteed_runs
 
     panda = robots["panda"]
     rng = np.random.default_rng(3)
@@ -399,8 +399,8 @@ def test_read_only_arrays_do_not_make_the_kernel_compile_again(robots):
     lm.run_many(np.broadcast_to(frozen[2], (2, panda.n)), 30)
     solve_pairs(panda, np.broadcast_to(frozen[3], (1, panda.n)), [Target(H[0][:3, 3], H[0][:3, :3])],
                 panda.lower, panda.upper, 1e-6, 1e-6)
-    entries = [*kernel.BASIC, *kernel.ALL, kernel.lm_run_basic, kernel.lm_run_all, first_runs.first_runs,
-               first_runs.first_runs_basic]
+    entries = [*kernel.BASIC, *kernel.ALL, kernel.lm_run_basic, kernel.lm_run_all, guaranteed_runs.guaranteed_runs,
+               guaranteed_runs.guaranteed_runs_basic]
     for entry in entries:
         for sig in entry.signatures:
             assert not any(isinstance(t, types.Array) and not t.mutable for t in sig), (entry.__name__, sig)

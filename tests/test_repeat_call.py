@@ -1,7 +1,7 @@
 """IKSolver's per-call lane for single targets (issue 24, solvers/search/repeat_call.py): once a solver has
-solved a pose (or a position) through memetic's compiled first runs, the next ones of that kind take the lane. Its
+solved a pose (or a position) through memetic's compiled guaranteed runs, the next ones of that kind take the lane. Its
 answers are the general path's, bit for bit; it refuses exactly what the general path refuses, with the same
-errors; it hands a target none of its first runs solves to memetic, which goes on from their state."""
+errors; it hands a target none of its guaranteed runs solves to memetic, which goes on from their state."""
 
 import threading
 
@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_first_runs import same  # the Results equal bit for bit, history too
+from test_guaranteed_runs import same  # the Results equal bit for bit, history too
 
 import evoik_pin as ek
 from evoik_pin import api
@@ -58,7 +58,7 @@ def counted(monkeypatch):
 
 def test_lane_answers_are_the_general_paths(panda, counted):
     """Poses (SE3, 4x4, Target) and positions, with q0 near, far and none, and targets out of reach (memetic goes on
-    from the first runs' state: later entries, DE restarts): the general path's Results, bit for bit."""
+    from the guaranteed runs' state: later entries, DE restarts): the general path's Results, bit for bit."""
     rng = np.random.default_rng(5)
     solver = laned(panda, **BUDGET)
     counted.clear()
@@ -68,7 +68,7 @@ def test_lane_answers_are_the_general_paths(panda, counted):
         T = panda.fk(q)
         target = [T, T.homogeneous, ek.Target(T.translation, T.rotation), T.translation.copy()][i % 4]
         q0 = [None, Qs[i], np.clip(q + 0.02, panda.lower, panda.upper)][i % 3]
-        if i % 10 == 7:  # out of reach: none of the first runs converges
+        if i % 10 == 7:  # out of reach: none of the guaranteed runs converges
             target = [pin.SE3(T.rotation, 3.0 * T.translation), 3.0 * T.translation][i % 2]
         calls.append((target, q0, i))
     results = [solver.solve(t, q0, seed=i) for t, q0, i in calls]
@@ -182,7 +182,7 @@ def test_a_lane_follows_the_plan_and_the_thread(panda, counted):
         same(solver.solve(panda.fk(q), seed=i), general(panda, panda.fk(q), seed=i, **BUDGET))
 
 
-def test_no_lane_where_the_first_runs_do_not_serve(panda):
+def test_no_lane_where_the_guaranteed_runs_do_not_serve(panda):
     """A scene, a custom objective, a polish, another method: no lane (the general path's own)."""
     from evoik_pin.objectives import PoseError
     from evoik_pin.scene import Scene
@@ -218,7 +218,7 @@ def test_property_pose_arrays_accept_what_coerce_accepts(seed, log_eps, mirror, 
     else:
         target = pin.SE3(R, p)
     arrays = pose_arrays(target)
-    # the repeat call's check of a rotation, made inside its compiled first runs, is the same test as coerce's
+    # the repeat call's check of a rotation, made inside its compiled guaranteed runs, is the same test as coerce's
     entries = np.ascontiguousarray(R).reshape(9)
     assert bool(compiled.is_rotation_entries(*entries)) == is_rotation_entries(*entries.tolist())
     try:
@@ -300,7 +300,8 @@ def set_of(robot, rng, reachable: int, far: int):
 def test_goal_sets_alone_open_a_lane_and_meet_the_member_they_report(panda, counted):
     """A solver fed goal sets only opens the lane of their stack (after its first sets) and serves the sets there:
     each answer meets the member reported, whose errors are those the general verdict computes at the answer; the
-    sets whose nearest members none of the first runs meet go to the goal-set search, which finds a reachable one."""
+    sets whose nearest members none of the guaranteed runs meet go to the goal-set search, which finds a reachable
+    one."""
     from evoik_pin.problem import IKProblem
 
     rng = np.random.default_rng(33)

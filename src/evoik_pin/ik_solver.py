@@ -153,7 +153,7 @@ class IKSolver:
         problem = None
         if self._repeat_calls:
             # a pose or a position on the repeat call of its kind, inline: its whole Python is a few us
-            arrays = pose_arrays(target, check_rotation=False)  # the rotation checked in the compiled first runs
+            arrays = pose_arrays(target, check_rotation=False)  # the rotation checked in the compiled guaranteed runs
             if arrays is not None:
                 repeat = self._repeat_calls.get(arrays[1] is not None)
                 if repeat is not None and repeat.usable():
@@ -249,8 +249,8 @@ class IKSolver:
         return q0
 
     def _resume_general(self, problem: IKProblem, seed, out) -> Result:
-        """Memetic after a repeat call's first runs met no tolerance: going on from their state ``out``, or from the
-        start (``out`` None)."""
+        """Memetic after a repeat call's guaranteed runs met no tolerance: going on from their state ``out``, or from
+        the start (``out`` None)."""
         rng = _rng(seed)
         result = self._memetic.solve(problem, rng) if out is None else self._memetic.resume(problem, rng, out)
         result.chosen = problem.reported([None] * len(problem.goals))

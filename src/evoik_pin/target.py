@@ -84,7 +84,7 @@ def pose_arrays(target, check_rotation: bool = True) -> tuple[np.ndarray, np.nda
     [0 0 0 1]), a float64 3-vector or a 3-D :class:`Target` that passes :class:`Target`'s checks, without making a
     Target; None otherwise (:meth:`Target.coerce` then gives the verdict). The arrays may be views of ``target``.
     ``check_rotation=False`` leaves a pose's rotation unchecked: the caller checks it (:func:`is_rotation_entries`)
-    before using it, as an IKSolver's repeat call does inside its compiled first runs."""
+    before using it, as an IKSolver's repeat call does inside its compiled guaranteed runs."""
     kind = type(target)
     if kind is pin.SE3:
         position, rotation = target.translation, target.rotation

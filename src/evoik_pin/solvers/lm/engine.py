@@ -258,8 +258,8 @@ class LevenbergMarquardt:
 
     def kernel_arguments(self, max_iterations: int) -> tuple[tuple, tuple, np.ndarray]:
         """(workspace buffers, the kernel's constant arguments (kin, box, any_wrap, goals, pt, Rt), params with
-        ``max_iterations`` steps) for compiled code that makes :meth:`run`'s runs itself (:mod:`..search.first_runs`).
-        Compiled engine only."""
+        ``max_iterations`` steps) for compiled code that makes :meth:`run`'s runs itself
+        (:mod:`..search.guaranteed_runs`). Compiled engine only."""
         self._params[layout.P_ITERATIONS] = max_iterations
         return self._workspace(max_iterations), self._args, self._params
 

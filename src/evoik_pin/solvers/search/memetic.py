@@ -1,7 +1,7 @@
 """Memetic IK (``memetic``, the default method): each stage only while the tolerances are unmet, (1) LM from ``q0``,
 (2) LM from the seed table's nearest entries (:mod:`.seed_table`; q0 after the nearest when farther than it), (3) DE
 populations polished by LM (:mod:`.memetic_runs`). Stages 1-2's guaranteed runs are one compiled call where it serves
-(:mod:`.first_runs`); every random draw is stage 3's, from ``rng``."""
+(:mod:`.guaranteed_runs`); every random draw is stage 3's, from ``rng``."""
 
 from __future__ import annotations
 
@@ -42,10 +42,10 @@ GUARANTEED_TABLE_RUNS = 4
 #: Seed-table entries tried for one frame's target with a scene: converged answers may be rejected in collision, and
 #: the collision-free entries, farther ones included, stay better (cheaper) starts than stage 3's DE draws.
 DEFAULT_SCENE_TABLE_SEEDS = 48
-#: LM engines (and compiled first-runs entries) a MemeticSetup keeps, one per goal stack, retargeted, not rebuilt.
+#: LM engines (and compiled guaranteed-runs entries) a MemeticSetup keeps, one per goal stack, retargeted, not rebuilt.
 KEPT_ENGINES = 8
-#: About how long (s, one core) compiling a variant of the compiled first runs takes from an empty cache.
-FIRST_RUNS_COMPILE_SECONDS = 5.0
+#: About how long (s, one core) compiling a variant of the compiled guaranteed runs takes from an empty cache.
+GUARANTEED_RUNS_COMPILE_SECONDS = 5.0
 
 
 def prepare(robot, lower: np.ndarray, upper: np.ndarray, table_size: int, engine: str = "compiled", scene=None,
@@ -123,8 +123,8 @@ def memetic(problem: IKProblem, rng: np.random.Generator, *, timeout: float | No
 
 class MemeticSetup:
     """memetic's options checked once for one robot, and its per-problem set-up kept from solve to solve: the seed table
-    of the box, the LM engines retargeted in place, the compiled first-runs entries. :meth:`solve` is :func:`memetic`'s
-    body (the same answers). Not thread-safe: one per thread.
+    of the box, the LM engines retargeted in place, the compiled guaranteed-runs entries. :meth:`solve` is
+    :func:`memetic`'s body (the same answers). Not thread-safe: one per thread.
 
     Args:
         robot: the robot every problem is posed on.
@@ -143,10 +143,11 @@ class MemeticSetup:
         self._table = None
         self._lm: LevenbergMarquardt | None = None
         self._engines: list[LevenbergMarquardt] = []  # the last few engines made, newest first (_engine)
-        self._entry: tuple = (None, None, None)  # (engine arguments, table, first_runs's compiled entry)
+        self._entry: tuple = (None, None, None)  # (engine arguments, table, guaranteed_runs's compiled entry)
         self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
-        self._goal_entries: list[tuple] = []  # the same for goal_first_runs (goal lists of several goals), newest first
-        # first_runs' scratch: each run's error, the goal's errors, a q0 never read, the best failed run's q and numbers
+        self._goal_entries: list[tuple] = []  # the same for goal_guaranteed_runs (several goals), newest first
+        # guaranteed_runs' scratch: each run's error, the goal's errors, a q0 never read, the best failed run's q and
+        # numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
                          np.empty(6))
 
@@ -174,13 +175,14 @@ class MemeticSetup:
         self._engines = [lm, *self._engines[:KEPT_ENGINES - 1]]
         return lm
 
-    def first_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable,
-                   goal_list: bool = False) -> tuple[tuple, float]:
-        """(:func:`~.first_runs.first_runs`, or with ``goal_list`` :func:`~.first_runs.goal_first_runs`, in the
-        variant of ``lm``'s kernel, on ``args``; the seconds spent loading it: set-up). The first time in the process
-        it is compiled (once per install, with a notice) or loaded from numba's cache. Once the engine's arguments stay
-        (from the setup's second solve on; a goal list's engine owning its arrays), numba's compiled entry is kept per
-        engine arguments and table (the last ``KEPT_ENGINES``) and called directly, without typing every argument."""
+    def guaranteed_runs(self, args: tuple, lm: LevenbergMarquardt, table: SeedTable,
+                        goal_list: bool = False) -> tuple[tuple, float]:
+        """(:func:`~.guaranteed_runs.guaranteed_runs`, or with ``goal_list``
+        :func:`~.guaranteed_runs.goal_guaranteed_runs`, in the variant of ``lm``'s kernel, on ``args``; the seconds
+        spent loading it: set-up). The first time in the process it is compiled (once per install, with a notice) or
+        loaded from numba's cache. Once the engine's arguments stay (from the setup's second solve on; a goal list's
+        engine owning its arrays), numba's compiled entry is kept per engine arguments and table (the last
+        ``KEPT_ENGINES``) and called directly, without typing every argument."""
         kept = self._goal_entries if goal_list else self._entries
         current = self._entry
         if not goal_list and current[2] is not None and current[0] is lm._args and current[1] is table:
@@ -192,15 +194,15 @@ class MemeticSetup:
                     self._entry = entry
                 return entry[2](*args), 0.0
         t = time.perf_counter()
-        from . import first_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
+        from . import guaranteed_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
 
         extra = later_kinds(lm.goals)  # the variant of the engine's kernel
-        which = "goal_first_runs" if goal_list else "first_runs"
+        which = "goal_guaranteed_runs" if goal_list else "guaranteed_runs"
         function, loading = getattr(compiled, which if extra else which + "_basic"), 0.0
         if function not in _LOADED:
-            load(f"memetic's first runs{' of goal lists' if goal_list else ''} for "
+            load(f"memetic's guaranteed runs{' of goal lists' if goal_list else ''} for "
                  + ("every goal kind" if extra else "pose, position and planar goals"),
-                 [(function, args)], FIRST_RUNS_COMPILE_SECONDS)  # the runs made again below: args' buffers only
+                 [(function, args)], GUARANTEED_RUNS_COMPILE_SECONDS)  # the runs made again below: args' buffers only
             _LOADED.append(function)
             loading = time.perf_counter() - t
         entry = None
@@ -222,7 +224,7 @@ class MemeticSetup:
         return _solve(self, problem, rng, time.perf_counter() if t_setup is None else t_setup)
 
     def resume(self, problem: IKProblem, rng: np.random.Generator, resumed: tuple) -> Result:
-        """:meth:`solve` going on from the compiled first runs a :class:`~.repeat_call.RepeatCall` made for
+        """:meth:`solve` going on from the compiled guaranteed runs a :class:`~.repeat_call.RepeatCall` made for
         ``problem``, none of which converged (``resumed``: (clock start, :func:`resumed_state`))."""
         return _solve(self, problem, rng, resumed[0], resumed)
 
@@ -230,7 +232,7 @@ class MemeticSetup:
 def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_setup: float,
            resumed: tuple | None = None) -> Result:
     """memetic's search (:func:`memetic`) with ``setup``'s options and set-up; ``t_setup``: when the call began
-    (``perf_counter``); ``resumed``: (clock start, :func:`resumed_state`) when the first runs were already made."""
+    (``perf_counter``); ``resumed``: (clock start, :func:`resumed_state`) when the guaranteed runs were already made."""
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, table_offset, batch,
      iterations, engine) = setup.options
@@ -253,16 +255,16 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     stance = stance_table(problem, make=False) if stands else None
     t0 = time.perf_counter()
     setup_s = t0 - t_setup
-    if resumed is not None:  # the guaranteed runs' state: the compiled first runs made them and none converged
+    if resumed is not None:  # the guaranteed runs' state: made in one compiled call, none converged
         t0, resumed = resumed
         setup_s = 0.0
-    elif (FIRST_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is None
-            and engine == "compiled" and batch == 1 and table_offset == 0 and stance is None):
+    elif (COMPILED_GUARANTEED_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is
+            None and engine == "compiled" and batch == 1 and table_offset == 0 and stance is None):
         args = (setup, problem, table, lm, t0, setup_s, iterations, table_seeds)
-        result, loading, resumed = _goal_first_runs(*args) if frame is None else _first_runs(*args, frame)
+        result, loading, resumed = _goal_guaranteed_runs(*args) if frame is None else _guaranteed_runs(*args, frame)
         if result is not None:
             return result
-        t0 += loading  # loading (once: compiling) first_runs is set-up, not the budget's
+        t0 += loading  # loading (once: compiling) guaranteed_runs is set-up, not the budget's
         setup_s += loading
     # a stance without its table yet that the guaranteed runs left unsolved: the table made now (set-up, off the
     # clock) and its starts next; only then, so that a problem of a new stance met at once never pays for it
@@ -289,7 +291,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     q0 = problem.q0
     q0_first = q0 is not None
     if resumed is not None:
-        # the compiled first runs made the guaranteed runs in this order: on from there, the clock checked between runs
+        # the compiled call made the guaranteed runs in this order: on from there, the clock checked between runs
         search.attempts, search.evaluations, search.attempt_errors, search.best, made = resumed
         stage = "seed table"
         if not search.out_of_time():
@@ -365,43 +367,44 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
                   goal_errors=problem.reported(goal_errors))
 
 
-_LOADED: list = []  # the compiled variants of first_runs and goal_first_runs loaded in this process
-_FROM_Q0 = 0  # first_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
-BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # first_runs' base modes (goal_first_runs)
-_NO_BASE = np.zeros(6)  # goal_first_runs' base where no goal sets one (never read)
-_EVERY = np.zeros(0, dtype=bool)  # every table entry (goal_first_runs' allowed: no scene on that path)
+_LOADED: list = []  # the compiled variants of guaranteed_runs and goal_guaranteed_runs loaded in this process
+_FROM_Q0 = 0  # guaranteed_runs.STAGE_Q0 (that module imports numba: loaded on first use, as the kernel is)
+BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # guaranteed_runs' base modes (goal_guaranteed_runs)
+_NO_BASE = np.zeros(6)  # goal_guaranteed_runs' base where no goal sets one (never read)
+_EVERY = np.zeros(0, dtype=bool)  # every table entry (goal_guaranteed_runs' allowed: no scene on that path)
 
-#: Whether memetic makes its guaranteed runs in one compiled call where it serves (:func:`_first_runs`,
-#: :func:`_goal_first_runs`); the tests turn it off to compare with the runs made one by one.
-FIRST_RUNS = True
+#: Whether memetic makes its guaranteed runs in one compiled call where it serves (:func:`_guaranteed_runs`,
+#: :func:`_goal_guaranteed_runs`); the tests turn it off to compare with the runs made one by one.
+COMPILED_GUARANTEED_RUNS = True
 
 
-def _first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
-                setup_s: float, iterations: int, table_seeds: int,
-                ff: FrameFeatures) -> tuple[Result | None, float, tuple | None]:
+def _guaranteed_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
+                     setup_s: float, iterations: int, table_seeds: int,
+                     ff: FrameFeatures) -> tuple[Result | None, float, tuple | None]:
     """:func:`_solve`'s guaranteed runs for a problem searched as one frame's pose (``ff``:
-    :meth:`SeedTable.frame_search`'s; not planar) in one compiled call (:mod:`.first_runs`), with _solve's order and
-    decisions. Returns (the Result when one met the tolerances else None; the seconds spent loading the compiled
+    :meth:`SeedTable.frame_search`'s; not planar) in one compiled call (:mod:`.guaranteed_runs`), with _solve's order
+    and decisions. Returns (the Result when one met the tolerances else None; the seconds spent loading the compiled
     function; when none converged, the state _solve goes on from (:func:`resumed_state`), else None)."""
     buffers, args, params = lm.kernel_arguments(iterations)
     q0 = problem.q0
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
     q_out = np.empty(problem.n)
     errors, g_out, zeros, best_q, best = setup._scratch
-    (stage, runs, evaluations, pos, rot, _), loading = setup.first_runs(
+    (stage, runs, evaluations, pos, rot, _), loading = setup.guaranteed_runs(
         (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, False, ff.gap, table.Q, ff.FT,
          ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best), lm, table)
     if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
         return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
     # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
-    return _first_runs_answer(problem, q_out, [problem.goals[0].reported(pos, rot)], stage, runs, evaluations, errors,
-                              t0, setup_s, loading)
+    return _guaranteed_runs_answer(problem, q_out, [problem.goals[0].reported(pos, rot)], stage, runs, evaluations,
+                                   errors, t0, setup_s, loading)
 
 
-def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
-                     setup_s: float, iterations: int, table_seeds: int) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_first_runs` for a goal list of several goals (:func:`~.first_runs.goal_first_runs`: the ranking, the
-    composed starts and the LM runs of :meth:`SeedTable.goal_starts`'s first starts)."""
+def _goal_guaranteed_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt,
+                          t0: float, setup_s: float, iterations: int,
+                          table_seeds: int) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_guaranteed_runs` for a goal list of several goals (:func:`~.guaranteed_runs.goal_guaranteed_runs`: the
+    ranking, the composed starts and the LM runs of :meth:`SeedTable.goal_starts`'s first starts)."""
     goals = problem.goals
     robot = problem.robot
     layout = table.goal_layout(goals)
@@ -415,7 +418,7 @@ def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, 
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
     q_out, g_out, best_g = np.empty(problem.n), np.empty((len(goals), 2)), np.empty((len(goals), 2))
     errors, _, zeros, best_q, best = setup._scratch
-    (stage, runs, evaluations, pos, rot, cost), loading = setup.first_runs(
+    (stage, runs, evaluations, pos, rot, cost), loading = setup.guaranteed_runs(
         (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, table.Q, *layout[:8],
          table.weight, np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float), *layout[8:],
          base, base_mode, _EVERY, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best,
@@ -426,26 +429,26 @@ def _goal_first_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, 
     # the goals' errors: the kernel's at q_out where they are Goal.errors' (as _solve's), tested again
     goal_errors = ([g.reported(p, r) for g, (p, r) in zip(goals, g_out.tolist(), strict=True)]
                    if all(g.on_one_frame for g in goals) else problem.goal_errors(q_out))
-    return _first_runs_answer(problem, q_out, goal_errors, stage, runs, evaluations, errors, t0, setup_s, loading)
+    return _guaranteed_runs_answer(problem, q_out, goal_errors, stage, runs, evaluations, errors, t0, setup_s, loading)
 
 
-def _first_runs_answer(problem: IKProblem, q: np.ndarray, goal_errors: list, stage: int, runs: int, evaluations: int,
-                       errors: np.ndarray, t0: float, setup_s: float, loading: float) -> tuple:
-    """(:func:`first_runs_result` when the converged run's ``goal_errors`` meet the problem's tolerances, else None
+def _guaranteed_runs_answer(problem: IKProblem, q: np.ndarray, goal_errors: list, stage: int, runs: int,
+                            evaluations: int, errors: np.ndarray, t0: float, setup_s: float, loading: float) -> tuple:
+    """(:func:`guaranteed_runs_result` when the converged run's ``goal_errors`` meet the problem's tolerances, else None
     (converged by the kernel's test but not by the problem's: _solve says why); ``loading``; None)."""
     pos, rot, cost = problem.summary(q, goal_errors)
     if not problem.goals_met(goal_errors):
         return None, loading, None
-    return first_runs_result(q, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
+    return guaranteed_runs_result(q, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
                              time.perf_counter() - t0 - loading, setup_s + loading, problem.reported(goal_errors)
                              ), loading, None
 
 
 def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, made: int,
                   goal_errors: np.ndarray | None = None) -> tuple:
-    """The state :func:`_solve` goes on from after compiled first runs none of which converged, read from the setup's
-    scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome (its ``goal_errors`` (G, 2)
-    for several goals), the table's starts ``made``)."""
+    """The state :func:`_solve` goes on from after compiled guaranteed runs none of which converged, read from the
+    setup's scratch: (runs made, their evaluations, each run's error, the best run as an LMOutcome (its ``goal_errors``
+    (G, 2) for several goals), the table's starts ``made``)."""
     errors, _, _, best_q, best = setup._scratch
     b_pos, b_rot, b_cost, b_it, b_ev, _ = best.tolist()
     kept = LMOutcome(best_q.copy(), b_pos, b_rot if oriented else None, False, int(b_it), int(b_ev), goal_errors,
@@ -453,11 +456,11 @@ def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: i
     return runs, evaluations, errors[:runs].tolist(), kept, made
 
 
-def first_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float, stage: int, runs: int,
-                      evaluations: int, errors: np.ndarray, time_s: float, setup_s: float,
-                      goal_errors: list | None = None) -> Result:
-    """memetic's Result when a compiled first run met the tolerances: ``q`` (n,), its errors (m, rad or None) and cost,
-    ``stage`` (STAGE_Q0 or STAGE_TABLE), ``runs`` made, ``errors`` (>= runs,) each run's error (m + rad)."""
+def guaranteed_runs_result(q: np.ndarray, pos: float, rot: float | None, cost: float, stage: int, runs: int,
+                           evaluations: int, errors: np.ndarray, time_s: float, setup_s: float,
+                           goal_errors: list | None = None) -> Result:
+    """memetic's Result when a compiled guaranteed run met the tolerances: ``q`` (n,), its errors (m, rad or None) and
+    cost, ``stage`` (STAGE_Q0 or STAGE_TABLE), ``runs`` made, ``errors`` (>= runs,) each run's error (m + rad)."""
     history = {"best_cost": np.array([cost]), "mean_cost": np.array([cost]), "diversity": np.zeros(1),
                "attempt_error": errors[:runs].copy()}
     return Result(q=q, position_error=pos, orientation_error=rot, cost=cost, success=True, generations=0,

@@ -55,7 +55,7 @@ class LMRuns:
         if out.converged and out.goal_errors is not None and not self.problem.goals_met(
                 kernel_goal_errors(self.problem.goals, out)):
             # the kernel tests the goals before its finishing step, which may trade one goal past its tolerance for
-            # a lower |e|^2 (a sole's angle for the CoM row): not met at q, the search goes on (as the first runs')
+            # a lower |e|^2 (a sole's angle for the CoM row): not met at q, the search goes on (as the guaranteed runs')
             out.converged = False
         if out.converged and self.scene is not None:
             margin = self.problem.margin

@@ -1,4 +1,4 @@
-"""The seed table's rankings, compiled (numba): memetic's first runs and a goal list's starts rank the table with
+"""The seed table's rankings, compiled (numba): memetic's guaranteed runs and a goal list's starts rank the table with
 these. :func:`table_distances` sums each entry's product in the features' order (no fastmath), so it may differ
 from NumPy's BLAS product in the last bits only; :func:`select_k` keeps the k smallest in order, the lower index
 first between equal ones (``argmin``'s rule)."""

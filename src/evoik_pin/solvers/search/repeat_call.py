@@ -1,7 +1,7 @@
 """An :class:`~evoik_pin.IKSolver`'s per-call path (:class:`RepeatCall`) for problems its memetic set-up solved
-before: memetic's compiled first runs (:mod:`.first_runs`) on the engine's own target arrays, with nothing around them
-but the checks and the Result; the general path's answer, and when no first run converges its state goes on in
-:meth:`~.memetic.MemeticSetup.resume`."""
+before: memetic's compiled guaranteed runs (:mod:`.guaranteed_runs`) on the engine's own target arrays, with nothing
+around them but the checks and the Result; the general path's answer, and when no guaranteed run converges its state
+goes on in :meth:`~.memetic.MemeticSetup.resume`."""
 
 from __future__ import annotations
 
@@ -14,14 +14,14 @@ from ...result import Result
 from ..lm.layout import P_ITERATIONS
 from . import memetic
 from .choose import member_distances
-from .first_runs import REFUSED
-from .memetic import GUARANTEED_TABLE_RUNS, first_runs_result, resumed_state
+from .guaranteed_runs import REFUSED
+from .memetic import GUARANTEED_TABLE_RUNS, guaranteed_runs_result, resumed_state
 from .seed_table import DEFAULT_TABLE_SEEDS, one_frame
 
 __all__ = ["SET_MEMBERS", "RepeatCall"]
 
-#: A goal set's members tried on the compiled first runs (the nearest the seed table first) before the goal-set search
-#: takes the set over: as many as that search's last stage takes (its nearest variants).
+#: A goal set's members tried on the compiled guaranteed runs (the nearest the seed table first) before the goal-set
+#: search takes the set over: as many as that search's last stage takes (its nearest variants).
 SET_MEMBERS = 3
 
 
@@ -31,9 +31,9 @@ class RepeatCall:
     and objective; in the thread that made it.
 
     Args:
-        setup: the memetic setup. problem: a problem the setup has just solved through the compiled first runs (no
+        setup: the memetic setup. problem: a problem the setup has just solved through the compiled guaranteed runs (no
             scene). lm: the setup's engine for it. table: the setup's seed table. entry: the compiled entry of
-            :func:`~.first_runs.first_runs` for ``lm``'s arguments.
+            :func:`~.guaranteed_runs.guaranteed_runs` for ``lm``'s arguments.
 
     Attributes:
         key: what it serves: True (poses), False (positions), or the goal stack a one-goal list is bound to.
@@ -42,12 +42,12 @@ class RepeatCall:
     @classmethod
     def of_setup(cls, setup, problem) -> RepeatCall | None:
         """A path for problems like ``problem``, which the setup has just solved; None when such problems do not take
-        the compiled first runs (a scene, a planar target, several goals, a goal set, options that change the first
+        the compiled guaranteed runs (a scene, a planar target, several goals, a goal set, options that change the first
         runs), when the compiled entry is not known yet, or while the engine's target arrays are not its own."""
         table_size, table_seeds, table_offset, batch, _, engine = setup.options[5:]
         lm, table = setup._lm, setup._table
         args, kept_table, entry = setup._entry
-        if not (memetic.FIRST_RUNS and problem.scene is None and engine == "compiled" and batch == 1
+        if not (memetic.COMPILED_GUARANTEED_RUNS and problem.scene is None and engine == "compiled" and batch == 1
                 and table_offset == 0 and table_size > 0 and table_seeds != 0 and table is not None
                 and lm is not None and lm.problem is problem and lm._owned
                 and args is lm._args and kept_table is table and entry is not None
@@ -84,11 +84,11 @@ class RepeatCall:
               rotation_checked: bool = True):
         """Solve a problem like the path's (a tip target, or a one-goal list bound to its stack) whose one target is
         ``position`` (3,) m and ``rotation`` (3, 3) or None (checked; with ``rotation_checked=False`` the compiled
-        first runs check the rotation before anything runs), from ``q0`` (n,) float (checked; None: none); the goal
+        guaranteed runs check the rotation before anything runs), from ``q0`` (n,) float (checked; None: none); the goal
         is judged on the kernel's errors, as memetic judges them.
 
         Returns:
-            The Result when a first run met the tolerances; else (clock start, the runs' state) for
+            The Result when a guaranteed run met the tolerances; else (clock start, the runs' state) for
             :meth:`~.memetic.MemeticSetup.resume`, or None when a run converged by the kernel's test but not by the
             tolerances, or the rotation is not a rotation matrix (the general path then solves the problem from the
             start, or refuses its target).
@@ -111,8 +111,8 @@ class RepeatCall:
         if not ((not positioned or errors[0][0] <= tol) and (not angled or errors[0][1] <= rtol)):
             return None
         pos, rot, cost = self._summary(q, errors)
-        result = first_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
-                                   time.perf_counter() - t0, 0.0, errors if self._goal_list else None)
+        result = guaranteed_runs_result(q, pos, rot, cost, stage, runs, evaluations, self._errors,
+                                        time.perf_counter() - t0, 0.0, errors if self._goal_list else None)
         if self._goal_list:
             result.chosen = [None]
         return result
@@ -120,11 +120,11 @@ class RepeatCall:
     def solve_set(self, goal, q0: np.ndarray | None):
         """Solve the one-goal list ``[goal]`` of a goal set bound to the path's stack from ``q0`` (n,) float (checked;
         None: none): the member nearest the seed table (:func:`~.choose.member_distances`, the goal-set search's first
-        choice), then the next nearest, up to :data:`SET_MEMBERS`, each on the compiled first runs as :meth:`solve`
+        choice), then the next nearest, up to :data:`SET_MEMBERS`, each on the compiled guaranteed runs as :meth:`solve`
         solves it alone.
 
         Returns:
-            The Result, ``chosen`` the member met, when a first run met one (its time and evaluations those of the
+            The Result, ``chosen`` the member met, when a guaranteed run met one (its time and evaluations those of the
             members tried before too); else None (the goal-set search then solves the set from the start)."""
         t0 = time.perf_counter()
         P, R = goal.member_targets

@@ -294,9 +294,10 @@ class SeedTable:
 
     def goal_layout(self, goals, parts=None) -> tuple:
         """What the compiled rankings and compositions of a goal list read (:func:`~.nearest.rank_goal_entries`,
-        :func:`~.nearest.nearest_per_goal`, :func:`~.first_runs.goal_first_runs`), cached: (FT (D, size), sq (size,)
-        float32; PT (E, size), psq (G, size) float32, pstart (G + 1,): each goal's root-relative features stacked; scale
-        (G,); positioned, oriented (G,) bool; idx (I,), idx_start (G + 1,): the entries of q each goal's chain sets)."""
+        :func:`~.nearest.nearest_per_goal`, :func:`~.guaranteed_runs.goal_guaranteed_runs`), cached: (FT (D, size), sq
+        (size,) float32; PT (E, size), psq (G, size) float32, pstart (G + 1,): each goal's root-relative features
+        stacked; scale (G,); positioned, oriented (G,) bool; idx (I,), idx_start (G + 1,): the entries of q each goal's
+        chain sets)."""
         if parts is None:
             parts = self._goal_parts(goals)
         key = id(parts)

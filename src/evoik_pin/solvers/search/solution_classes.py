@@ -140,7 +140,7 @@ class SolutionClasses:
         labels = self.labels(Q)
         for label in labels[labels >= 0]:
             self.hits[label] += 1
-        # The rest (the first runs of each class, runs stopped along a flat near-singular valley), grouped around
+        # The rest (the guaranteed runs of each class, runs stopped along a flat near-singular valley), grouped around
         # leaders first so that one refinement serves a group.
         rest, rest_errors = Q[labels < 0], E[labels < 0]
         leaders, group = leader_clusters(rest, rest_errors, self.radius, self.wrap)

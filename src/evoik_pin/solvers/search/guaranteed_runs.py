@@ -1,7 +1,8 @@
 """memetic's guaranteed LM runs in one compiled call (numba), in memetic's order and with its decisions: for one goal
-on one frame :func:`first_runs` (q0's nearness, the table's ranking, the runs), for a goal list :func:`goal_first_runs`
-(the ranking, :meth:`~.seed_table.SeedTable.goal_starts`' composed starts, the runs). A decision may differ from
-memetic's within a few ulps only (tests/test_first_runs.py, tests/test_goal_first_runs.py hold the answers equal)."""
+on one frame :func:`guaranteed_runs` (q0's nearness, the table's ranking, the runs), for a goal list
+:func:`goal_guaranteed_runs` (the ranking, :meth:`~.seed_table.SeedTable.goal_starts`' composed starts, the runs). A
+decision may differ from memetic's within a few ulps only (tests/test_guaranteed_runs.py,
+tests/test_goal_guaranteed_runs.py hold the answers equal)."""
 
 from __future__ import annotations
 
@@ -16,14 +17,14 @@ from ..lm.layout import B_HI, B_LO
 from ..lm.tree_kinematics import frame_pose, tree_forward
 from .nearest import nearest_per_goal, rank_goal_entries, seen_from, select_few, table_distances
 
-__all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "REFUSED", "STAGE_Q0", "STAGE_TABLE", "first_runs",
-           "first_runs_basic", "goal_first_runs", "goal_first_runs_basic"]
+__all__ = ["BASE_EACH_ENTRY", "BASE_FIXED", "BASE_FROM_GOAL", "REFUSED", "STAGE_Q0", "STAGE_TABLE", "guaranteed_runs",
+           "guaranteed_runs_basic", "goal_guaranteed_runs", "goal_guaranteed_runs_basic"]
 
-#: Which start solved the problem (first_runs's first return value; -1: none did; REFUSED: the target's rotation is
+#: Which start solved the problem (guaranteed_runs's first return value; -1: none did; REFUSED: the target's rotation is
 #: not a rotation matrix, nothing run).
 STAGE_Q0, STAGE_TABLE, REFUSED = 0, 1, -2
-#: How a goal list's composed starts see the goals (goal_first_runs's ``base_mode``): as they are (a fixed base), from
-#: a floating base a goal sets, or from each composed start's table entry's base.
+#: How a goal list's composed starts see the goals (goal_guaranteed_runs's ``base_mode``): as they are (a fixed base),
+#: from a floating base a goal sets, or from each composed start's table entry's base.
 BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2
 
 
@@ -53,8 +54,8 @@ _DOC = """Up to ``has_q0 + table_runs`` LM runs from q0 and the nearest table en
     """
 
 
-def _first_runs(extra, name):
-    """:func:`first_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s, a
+def _guaranteed_runs(extra, name):
+    """:func:`guaranteed_runs` compiled for one variant of the kernel's run (``extra``: :func:`~..lm.kernel._run`'s, a
     constant of the closure)."""
 
     def runs(buf, held, q0, has_q0, check_rt, gap, Q, FT, sq, sp, sr, oriented, table_runs, kin, box, any_wrap, goals,
@@ -159,9 +160,9 @@ def _compiled(runs, name: str, doc: str):
     return njit(cache=True, nogil=True, forceinline=False)(runs)
 
 
-#: memetic's first runs per variant of the kernel's run (``lm_run_basic``, ``lm_run_all``).
-first_runs_basic = _first_runs(None, "first_runs_basic")
-first_runs = _first_runs(True, "first_runs")
+#: memetic's guaranteed runs per variant of the kernel's run (``lm_run_basic``, ``lm_run_all``).
+guaranteed_runs_basic = _guaranteed_runs(None, "guaranteed_runs_basic")
+guaranteed_runs = _guaranteed_runs(True, "guaranteed_runs")
 
 
 _GOAL_DOC = """q0's LM run, then up to ``table_runs`` of :meth:`~.seed_table.SeedTable.goal_starts`' starts in its
@@ -174,18 +175,18 @@ _GOAL_DOC = """q0's LM run, then up to ``table_runs`` of :meth:`~.seed_table.See
             table layout (:meth:`~.seed_table.SeedTable.goal_layout`). weight: the table's rotation weight (m). wpt
             (G, 3), wRt (G, 3, 3): the goals' targets as the table ranks them (:func:`~.seed_table.seed_targets`).
             base (6,), base_mode: BASE_FIXED, BASE_FROM_GOAL (``base``: every start's floating base) or
-            BASE_EACH_ENTRY. allowed: (N,) bool or (0,) for every entry. oriented, table_runs: as first_runs'.
+            BASE_EACH_ENTRY. allowed: (N,) bool or (0,) for every entry. oriented, table_runs: as guaranteed_runs'.
         kin ... params: the kernel's arguments (:func:`~..lm.kernel.lm_run_buffers`) for the goal list.
-        q_out (n,), g_out (G, 2), errors, best_q, best: as first_runs', the best by the lowest weighted |e|^2
+        q_out (n,), g_out (G, 2), errors, best_q, best: as guaranteed_runs', the best by the lowest weighted |e|^2
             (LMOutcome.rank for several goals); best_g (G, 2): its goals' errors.
 
     Returns:
-        first_runs'.
+        guaranteed_runs'.
     """
 
 
-def _goal_first_runs(extra, name):
-    """:func:`goal_first_runs` compiled for one variant of the kernel's run (as :func:`_first_runs`)."""
+def _goal_guaranteed_runs(extra, name):
+    """:func:`goal_guaranteed_runs` compiled for one variant of the kernel's run (as :func:`_guaranteed_runs`)."""
 
     def runs(buf, held, q0, has_q0, Q, FT, sq, PT, psq, pstart, gscale, gpos, gori, weight, wpt, wRt, idx,
              idx_start, base, base_mode, allowed, oriented, table_runs, kin, box, any_wrap, goals, pt, Rt, params,
@@ -247,6 +248,6 @@ def _goal_first_runs(extra, name):
     return _compiled(runs, name, _GOAL_DOC)
 
 
-#: memetic's first runs for goal lists of several goals, per variant of the kernel's run.
-goal_first_runs_basic = _goal_first_runs(None, "goal_first_runs_basic")
-goal_first_runs = _goal_first_runs(True, "goal_first_runs")
+#: memetic's guaranteed runs for goal lists of several goals, per variant of the kernel's run.
+goal_guaranteed_runs_basic = _goal_guaranteed_runs(None, "goal_guaranteed_runs_basic")
+goal_guaranteed_runs = _goal_guaranteed_runs(True, "goal_guaranteed_runs")

@@ -1,6 +1,6 @@
 """The compiled single-target fast path (issue 24): the compiled ranking of the seed table (solvers/search/nearest.py)
 gives the table's ranking, and memetic's guaranteed runs made in one compiled call
-(solvers/search/first_runs.py) give the Results of the runs made one by one, bit for bit, over many targets."""
+(solvers/search/guaranteed_runs.py) give the Results of the runs made one by one, bit for bit, over many targets."""
 
 import numpy as np
 import pytest
@@ -19,9 +19,9 @@ def targets(robot, count, seed):
 
 @pytest.mark.parametrize("name", ["panda", "ur5", "redundant7r"])
 def test_compiled_ranking_is_the_tables_over_many_targets(name):
-    """table_distances + select_few (first_runs's ranking: the same formula summed in the features' order, where
+    """table_distances + select_few (guaranteed_runs's ranking: the same formula summed in the features' order, where
     NumPy uses BLAS) rank the entries as SeedTable.ranked does, over thousands of poses and positions; select_few on
-    NumPy's own distances too, with and without a mask. (select_few, the function first_runs calls on its float64
+    NumPy's own distances too, with and without a mask. (select_few, the function guaranteed_runs calls on its float64
     distances, is what select_k runs for these k; select_k itself is called on float32 distances only, and its
     float64 variant would be compiled for this test alone.)"""
     robot = ek.load_robot(name)
@@ -71,10 +71,11 @@ def same(a, b):
 
 
 @pytest.mark.parametrize("name", ["panda", "ur5", "redundant7r"])
-def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
+def test_guaranteed_runs_give_the_one_by_one_results(name, monkeypatch):
     """Over many poses and positions, from random q0s, near q0s and none, on an IKSolver (the compiled entry) and
-    through evoik_pin.solve: the Results of the runs made one by one (FIRST_RUNS off), bit for bit; also where no
-    first run converges and memetic goes on from their state (later entries, DE restarts, out-of-reach targets)."""
+    through evoik_pin.solve: the Results of the runs made one by one (COMPILED_GUARANTEED_RUNS off), bit for bit; also
+    where no guaranteed run converges and memetic goes on from their state (later entries, DE restarts, out-of-reach
+    targets)."""
     robot = ek.load_robot(name)
     poses, Qs = targets(robot, 300, 23)
     budget = {"timeout": None, "max_restarts": 2}  # deterministic: the clock cannot change an answer
@@ -88,18 +89,18 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
             q0 = robot.random_configurations(1, rng)[0]
             target = robot.fk(q0)
             q0 = np.clip(q0 + 0.01, robot.lower, robot.upper)
-        if i % 50 == 1:  # out of reach: no first run converges, memetic searches from the start
+        if i % 50 == 1:  # out of reach: no guaranteed run converges, memetic searches from the start
             target = 3.0 * T.translation
         calls.append((target, q0, i))
-    made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
-    one_call, lane_call = memetic._first_runs, RepeatCall.solve
-    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
+    made = []  # every call makes the compiled guaranteed runs once: memetic's own, or an IKSolver lane's
+    one_call, lane_call = memetic._guaranteed_runs, RepeatCall.solve
+    monkeypatch.setattr(memetic, "_guaranteed_runs", lambda *args: made.append(1) or one_call(*args))
     monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append(2) or lane_call(*args, **kw))
     fast = [solver.solve(t, q0=q0, seed=i) for t, q0, i in calls]
     general = [ek.solve(robot, t, q0=q0, seed=i, **budget) for t, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general)
     assert made.count(2) >= len(calls) - 4  # the lanes (one per kind) open after a target of their kind
-    monkeypatch.setattr(memetic, "FIRST_RUNS", False)
+    monkeypatch.setattr(memetic, "COMPILED_GUARANTEED_RUNS", False)
     slow = [ek.IKSolver(robot, **budget).solve(t, q0=q0, seed=i) for t, q0, i in calls]
     for a, b in zip(fast, slow, strict=True):
         same(a, b)
@@ -111,7 +112,7 @@ def test_first_runs_give_the_one_by_one_results(name, monkeypatch):
     # and some solved after the guaranteed runs (memetic went on from the compiled runs' state)
     runs = [int(r.message.split(" LM run(s)")[0].split("(")[-1]) for r in fast if r.success]
     assert any(k > memetic.GUARANTEED_TABLE_RUNS + 1 for k in runs)
-    from evoik_pin.solvers.search.first_runs import STAGE_Q0
+    from evoik_pin.solvers.search.guaranteed_runs import STAGE_Q0
 
     assert memetic._FROM_Q0 == STAGE_Q0
 
@@ -132,11 +133,11 @@ def one_goal(kind, frame, T):
 
 
 @pytest.mark.parametrize("name, frame", [("ur5", None), ("panda", "panda_link6")])
-def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name, frame, monkeypatch):
+def test_one_goal_lists_take_the_guaranteed_runs_with_the_general_paths_answers(name, frame, monkeypatch):
     """A goal list of one goal on one frame (a Pose, with free axes or bands, a Position, an Orientation; on the tip
-    and on a frame before it) goes through the compiled first runs (issue 23 gap a), with the Results of memetic's
-    runs made one by one (FIRST_RUNS off), bit for bit, goal errors and chosen members included: from random q0s,
-    near ones and none, where a first run converges and where memetic goes on from their state."""
+    and on a frame before it) goes through the compiled guaranteed runs (issue 23 gap a), with the Results of memetic's
+    runs made one by one (COMPILED_GUARANTEED_RUNS off), bit for bit, goal errors and chosen members included: from
+    random q0s, near ones and none, where a guaranteed run converges and where memetic goes on from their state."""
     robot = ek.load_robot(name)
     frame = frame or robot.tip
     _, Qs = targets(robot, 150, 31)
@@ -150,20 +151,20 @@ def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name,
         q0 = None if i % 2 else Qs[i]
         if i % 5 == 0:  # a q0 near a solution: tried first
             q0 = np.clip(q + 0.01 * rng.standard_normal(robot.n), robot.lower, robot.upper)
-        if i % 30 == 1:  # out of reach: memetic goes on from the first runs' state
+        if i % 30 == 1:  # out of reach: memetic goes on from the guaranteed runs' state
             T = T.copy()
             T.translation = 3.0 * T.translation
         calls.append((one_goal(kinds[i % len(kinds)], frame, T), q0, i))
-    made = []  # each call's compiled first runs: memetic's own (one_goal True), or a goal lane's (a solver alternating
-    # five goal structures keeps a lane for each)
-    one_call, lane_call = memetic._first_runs, RepeatCall.solve
-    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(args[-1] is not None) or one_call(*args))
+    made = []  # each call's compiled guaranteed runs: memetic's own (one_goal True), or a goal lane's (a solver
+    # alternating five goal structures keeps a lane for each)
+    one_call, lane_call = memetic._guaranteed_runs, RepeatCall.solve
+    monkeypatch.setattr(memetic, "_guaranteed_runs", lambda *args: made.append(args[-1] is not None) or one_call(*args))
     monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append("lane") or lane_call(*args, **kw))
     fast = [solver.solve(g, q0=q0, seed=i) for g, q0, i in calls]
     general = [ek.solve(robot, g, q0=q0, seed=i, **budget) for g, q0, i in calls[::7]]
     assert len(made) == len(calls) + len(general) and set(made) == {True, "lane"}
     assert made.count("lane") >= len(calls) - 2 * len(kinds)  # each structure's lane open after its second solve
-    monkeypatch.setattr(memetic, "FIRST_RUNS", False)
+    monkeypatch.setattr(memetic, "COMPILED_GUARANTEED_RUNS", False)
     slow = [ek.IKSolver(robot, **budget).solve(g, q0=q0, seed=i) for g, q0, i in calls]
     for a, b in zip(fast + general, slow + slow[::7], strict=True):
         same(a, b)
@@ -173,19 +174,19 @@ def test_one_goal_lists_take_the_first_runs_with_the_general_paths_answers(name,
     assert sum(r.success for r in fast) >= 0.8 * len(fast) and sum(not r.success for r in fast) >= 3
 
 
-def test_several_goals_take_the_goal_lists_first_runs(monkeypatch):
-    """Two goals, a pointing goal: not one goal on one frame, so not the single target's compiled first runs but the
-    goal list's (memetic._goal_first_runs); a goal set: choose.py searches it, then the single target's first runs
-    from the member it met open the set's repeat call (IKSolver._open_set_repeat_call)."""
+def test_several_goals_take_the_goal_lists_guaranteed_runs(monkeypatch):
+    """Two goals, a pointing goal: not one goal on one frame, so not the single target's compiled guaranteed runs but
+    the goal list's (memetic._goal_guaranteed_runs); a goal set: choose.py searches it, then the single target's
+    guaranteed runs from the member it met open the set's repeat call (IKSolver._open_set_repeat_call)."""
     from evoik_pin.goals import Direction, Pose, Position
 
     robot = ek.load_robot("panda")
     T = robot.fk(robot.random_configurations(1, np.random.default_rng(0))[0])
-    made = []  # every call makes the compiled first runs once: memetic's own, or an IKSolver lane's
-    one_call, lane_call, goal_call = memetic._first_runs, RepeatCall.solve, memetic._goal_first_runs
-    monkeypatch.setattr(memetic, "_first_runs", lambda *args: made.append(1) or one_call(*args))
+    made = []  # every call makes the compiled guaranteed runs once: memetic's own, or an IKSolver lane's
+    one_call, lane_call, goal_call = memetic._guaranteed_runs, RepeatCall.solve, memetic._goal_guaranteed_runs
+    monkeypatch.setattr(memetic, "_guaranteed_runs", lambda *args: made.append(1) or one_call(*args))
     monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append(2) or lane_call(*args, **kw))
-    monkeypatch.setattr(memetic, "_goal_first_runs", lambda *args: made.append(3) or goal_call(*args))
+    monkeypatch.setattr(memetic, "_goal_guaranteed_runs", lambda *args: made.append(3) or goal_call(*args))
     for goals in ([Pose(robot.tip, T), Position("panda_link4", robot.fk(np.zeros(robot.n)).translation)],
                   [Direction(robot.tip, [0, 0, 1], T.rotation[:, 2])], [Pose(robot.tip, [T, T])]):
         ek.solve(robot, goals, seed=1)
@@ -231,7 +232,7 @@ def test_a_goal_frames_table_features_are_set_up_before_the_clock(monkeypatch):
 
     robot = ek.load_robot("panda")
     seen = []
-    one_call = memetic._first_runs
+    one_call = memetic._guaranteed_runs
 
     def checked(plan, problem, table, *rest):
         made = dict(table._frames)
@@ -239,7 +240,7 @@ def test_a_goal_frames_table_features_are_set_up_before_the_clock(monkeypatch):
         seen.append(table._frames == made and len(made) > 0)
         return one_call(plan, problem, table, *rest)
 
-    monkeypatch.setattr(memetic, "_first_runs", checked)
+    monkeypatch.setattr(memetic, "_guaranteed_runs", checked)
     q = np.full(robot.n, 0.2)
     for goals in ([Pose(robot.tip, robot.fk(q))], [Position("panda_link6", robot.fk(q, "panda_link6").translation,
                                                             weight=3.0)]):

@@ -1,8 +1,9 @@
-"""The compiled first runs of a goal list of several goals (issue 30): memetic's guaranteed runs of a whole robot (q0's,
-then SeedTable.goal_starts' first starts: composed goal by goal and ranked entries alternately) made in one compiled
-call (solvers/search/first_runs.py: goal_first_runs) give the Results of the runs made one by one, bit for bit, on a
-fixed base, on a floating base set by a goal, and on a floating base each composed start takes from its entry; and the
-compiled helpers they share with goal_starts (nearest.py: the ranking, seen_from) compute what they say."""
+"""The compiled guaranteed runs of a goal list of several goals (issue 30): memetic's guaranteed runs of a whole robot
+(q0's, then SeedTable.goal_starts' first starts: composed goal by goal and ranked entries alternately) made in one
+compiled call (solvers/search/guaranteed_runs.py: goal_guaranteed_runs) give the Results of the runs made one by one,
+bit for bit, on a fixed base, on a floating base set by a goal, and on a floating base each composed start takes from
+its entry; and the compiled helpers they share with goal_starts (nearest.py: the ranking, seen_from) compute what they
+say."""
 
 import numpy as np
 import pinocchio as pin
@@ -32,7 +33,7 @@ def whole_robot(name):
 
 def goal_lists(robot, goals, count, seed):
     """Goal lists met at random configurations (returned third), every fifth one with its first goal moved out of
-    reach (no first run converges: memetic goes on from their state, to its DE restarts), and as many random
+    reach (no guaranteed run converges: memetic goes on from their state, to its DE restarts), and as many random
     configurations (returned second)."""
     rng = np.random.default_rng(seed)
     out = []
@@ -59,25 +60,25 @@ def same(a, b):
 
 
 @pytest.mark.parametrize("name", list(WHOLE_ROBOTS))
-def test_goal_first_runs_give_the_one_by_one_results(name, monkeypatch):
+def test_goal_guaranteed_runs_give_the_one_by_one_results(name, monkeypatch):
     """Over many goal lists, from no q0, a random q0 and the answer's own configuration, on an IKSolver (its compiled
-    entry kept) and through evoik_pin.solve: the Results of the runs made one by one (FIRST_RUNS off), bit for bit,
-    also where no first run converges (out of reach); the compiled call is made on every solve."""
+    entry kept) and through evoik_pin.solve: the Results of the runs made one by one (COMPILED_GUARANTEED_RUNS off), bit
+    for bit, also where no guaranteed run converges (out of reach); the compiled call is made on every solve."""
     robot, goals = whole_robot(name)
     lists, Qs, generating = goal_lists(robot, goals, 25, 5)
     budget = {"timeout": None, "max_restarts": 1}  # deterministic: the clock cannot change an answer
     calls = []
-    made = memetic._goal_first_runs
-    monkeypatch.setattr(memetic, "_goal_first_runs", lambda *args: calls.append(1) or made(*args))
+    made = memetic._goal_guaranteed_runs
+    monkeypatch.setattr(memetic, "_goal_guaranteed_runs", lambda *args: calls.append(1) or made(*args))
     fast, slow = [], []
     for flag, results in ((True, fast), (False, slow)):
-        monkeypatch.setattr(memetic, "FIRST_RUNS", flag)
+        monkeypatch.setattr(memetic, "COMPILED_GUARANTEED_RUNS", flag)
         solver = ek.IKSolver(robot, **budget)
         for i, goal_list in enumerate(lists):
             q0 = None if i % 3 == 0 else Qs[i] if i % 3 == 1 else generating[i]
             results.append(solver.solve(goal_list, q0=q0, seed=i))
             results.append(ek.solve(robot, goal_list, seed=i, q0=q0, **budget))
-    assert len(calls) == 2 * len(lists)  # FIRST_RUNS on: every solve made the compiled first runs
+    assert len(calls) == 2 * len(lists)  # COMPILED_GUARANTEED_RUNS on: every solve made the compiled guaranteed runs
     for a, b in zip(fast, slow, strict=True):
         same(a, b)
     stages = {r.message.split(" (")[0] for r in fast}
@@ -182,7 +183,7 @@ def test_the_helpers_goal_starts_call_are_loaded_before_the_clock():
 def test_select_k_keeps_the_k_smallest_lower_index_first(k, seed, masked, dtype):
     """select_k, by insertion (k <= 64) or by a stable sort (larger k: memetic-all's goal starts rank the whole table),
     gives the k smallest allowed entries in (distance, index) order, as NumPy's stable argsort does, ties included;
-    so does its insertion alone (select_few, which memetic's first runs call directly) at any k."""
+    so does its insertion alone (select_few, which memetic's guaranteed runs call directly) at any k."""
     from evoik_pin.solvers.search.nearest import select_few, select_k
 
     rng = np.random.default_rng(seed)
