@@ -31,6 +31,8 @@ from .robot import Robot
 from .robot.locking import expand_result, kept_columns, locked_robot, shrink_q
 from .scene import Scene
 from .solvers import get_solver
+from .solvers.search import box_step
+from .solvers.search.box_step import step_key
 from .solvers.search.memetic import KEPT_ENGINES
 from .target import pose_arrays
 
@@ -108,6 +110,7 @@ class IKSolver:
         self._repeat_calls: dict = {}
         self._repeat_calls_open = self._plain and not self._target_box and self._objective is None
         self._box_stage = None  # solve_within's stage (velocity_box), made on its first call
+        self._box_steps: dict = {}  # solve_within's prepared steps: box_step.step_key's key -> BoxStep or None
 
     def _checked_q0(self, q0) -> np.ndarray:
         arr = np.asarray(q0, dtype=float)
@@ -175,22 +178,59 @@ class IKSolver:
     def solve_within(self, target, q_prev, step, seed=None) -> Result:
         """Solve one target (or goal list) inside the velocity box ``[q_prev - step, q_prev + step]`` (``step`` (n,)
         rad or m: ``v_max dt``) within the bounds (:mod:`evoik_pin.solvers.search.velocity_box`): the answer closest
-        to meeting the goals inside it, ``success=False`` when they cannot be met there.
+        to meeting the goals inside it, ``success=False`` when they cannot be met there. After the first call of a
+        goal structure (or tip-target kind), the next ones take its prepared step
+        (:mod:`evoik_pin.solvers.search.box_step`), with the same answers.
 
         Raises:
-            OptionError: goal lists holding preferences. :meth:`solve`'s errors for a bad target or ``q_prev``.
+            OptionError: goal lists holding preferences, a ``step`` not (n,) finite and >= 0. :meth:`solve`'s errors
+            for a bad target or ``q_prev``.
         """
         if self._locked is not None:
             return self._locked.solve_within(target, q_prev, step, seed)
+        # C-contiguous float64 arrays: the prepared step hands them to compiled code as they are
+        return self._within(target, np.ascontiguousarray(self._checked_q0(q_prev)), self._checked_step(step),
+                                None if seed is None else _rng(seed))
+
+    def _within(self, target, q_prev: np.ndarray, step: np.ndarray, rng) -> Result:
+        """:meth:`solve_within` on arguments checked already: ``q_prev`` and ``step`` float64 (n,) (rad or m), ``rng``
+        a Generator or None (a :class:`~evoik_pin.Tracker`'s step: its configuration, ``v_max dt`` and generator,
+        checked once); the target is checked here."""
+        if self._locked is not None:
+            return self._locked.solve_within(target, q_prev, step, rng)
+        keyed = step_key(target)
+        if keyed is not None and box_step.PREPARED:
+            prepared = self._box_steps.get(keyed[0])
+            if prepared is not None and prepared.usable():
+                return prepared.solve(target, keyed[1], q_prev, step, rng)
         check_no_preferences(target)
-        q_prev = self._checked_q0(q_prev)
         problem = self.problem(target)  # its q0 is not read: the stage starts from q_prev
         stage = self._box_stage
         if stage is None:
-            from .solvers.search.velocity_box import VelocityBoxStage
+            stage = self._box_stage = box_step.VelocityBoxStage(self.robot)
+        result = stage.solve(problem, q_prev, step, rng)
+        if keyed is not None and box_step.PREPARED and self._box_steps.get(keyed[0], False) is not None:
+            # the structure's prepared step (None where it has none: not sought again)
+            if len(self._box_steps) >= _KEPT_BOX_STEPS and keyed[0] not in self._box_steps:
+                self._box_steps.pop(next(iter(self._box_steps)))
+            self._box_steps[keyed[0]] = box_step.BoxStep.prepare(self, target)
+        return result
 
-            stage = self._box_stage = VelocityBoxStage(self.robot)
-        return stage.solve(problem, q_prev, step, None if seed is None else _rng(seed))
+    def _checked_step(self, step) -> np.ndarray:
+        """``step`` (n,) as float64, finite and >= 0 (rad or m); OptionError naming what is accepted."""
+        if type(step) is np.ndarray and step.dtype == np.float64 and step.shape == self._q_shape and (
+                step.flags.c_contiguous):
+            values = step.tolist()
+            if math.isfinite(sum(values)) and min(values) >= 0.0:
+                return step
+        try:
+            arr = np.ascontiguousarray(step, dtype=float)
+        except (TypeError, ValueError):
+            arr = None
+        if arr is None or arr.shape != self._q_shape or not (np.isfinite(arr).all() and (arr >= 0.0).all()):
+            raise OptionError(f"step must be {self.robot.n} finite half-widths >= 0 (rad or m: v_max dt), got "
+                              f"{step!r}")
+        return arr
 
     def _goal_repeat_call(self, target, q0, seed) -> Result | IKProblem | None:
         """A one-goal list (a goal set too: its members nearest the seed table) on the repeat call of its goal stack:
@@ -337,6 +377,8 @@ class _Locked:
 
 
 # ---------------------------------------------------------------------- evoik_pin.solve's solvers
+#: Goal structures whose prepared velocity-box step an IKSolver keeps (as many as its velocity-box stage keeps engines).
+_KEPT_BOX_STEPS = 8
 #: One-goal lists' repeat calls an IKSolver keeps (the last made): as many as memetic's set-up keeps engines.
 _GOAL_REPEAT_CALLS = KEPT_ENGINES
 _LOCAL = threading.local()

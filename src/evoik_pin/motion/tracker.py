@@ -4,9 +4,9 @@ Teleoperation, servoing and whole-body control call IK at control rate (1 kHz fo
 humanoid) with goals that move a little every step. A :class:`Tracker` keeps the robot's last configuration and an
 :class:`~evoik_pin.IKSolver` made once (options checked, goal stacks and LM engines cached); each :meth:`Tracker.step`
 runs Levenberg-Marquardt from the last configuration inside its velocity box ``[q - v_max dt, q + v_max dt]``
-(:mod:`evoik_pin.solvers.search.velocity_box`); after the first step of a goal structure (its frames, kinds, weights
-and tolerances; or a tip pose or position) the next ones of that structure take its prepared path
-(:mod:`evoik_pin.motion.tracker_step`: the new targets and box written into the engine's own arrays, one
+(:meth:`~evoik_pin.IKSolver.solve_within`); after the first step of a goal structure (its frames, kinds, weights and
+tolerances; or a tip pose or position) the next ones of that structure take the solver's prepared step
+(:mod:`evoik_pin.solvers.search.box_step`: the new targets and box written into the engine's own arrays, one
 compiled run, the same answers; a miss goes on in the stage's search). The answer never leaves the box, so
 the commanded motion respects the robot's speed limits whatever the goals do; goals out of reach for one step give
 the answer closest to them inside the box and ``success=False``, and the loop catches up on the next steps.
@@ -27,12 +27,8 @@ from ..call_setup import _rng
 from ..ik_solver import IKSolver
 from ..robot.velocity_limits import check_dt
 from ..robot.velocity_limits import velocity_limits as limits_of
-from .tracker_step import BoxStep, step_key
 
 __all__ = ["Tracker"]
-
-#: Goal structures whose prepared path a Tracker keeps (as many as its velocity-box stage keeps engines).
-_KEPT_STEPS = 8
 
 
 class Tracker:
@@ -63,7 +59,6 @@ class Tracker:
         self._step = self.velocity_limits * self.dt
         self._rng = _rng(seed)
         self._q = np.array(robot.check_q(q0), dtype=float)  # a float64 vector of our own: the compiled run's type
-        self._prepared: dict = {}  # step_key's key -> BoxStep, or None where there is none
 
     @property
     def q(self) -> np.ndarray:
@@ -84,24 +79,9 @@ class Tracker:
         list (:mod:`evoik_pin.goals`). Returns the :class:`~evoik_pin.Result`; its ``q`` (n,) lies within
         ``v_max dt`` of the last configuration, which it becomes (also when ``success`` is False: the closest the
         robot can get this step)."""
-        key, targets = step_key(goals) or (None, None)
-        prepared = None if key is None else self._prepared.get(key)
-        if prepared is not None and prepared.usable():
-            result = prepared.solve(goals, targets, self._q, self._rng)
-        else:
-            result = self._solver.solve_within(goals, self._q, self._step, self._rng)  # its checks; the stage
-            if key is not None and (prepared is not None or key not in self._prepared):  # new, or another thread
-                self._prepare(key, goals)
+        result = self._solver._within(goals, self._q, self._step, self._rng)  # q, step and rng checked
         self._q = result.q.copy()
         return result
-
-    def _prepare(self, key, goals) -> None:
-        """Keep the prepared path of ``goals``' structure ``key`` (the general path has just solved ``goals``), or
-        None when it has none (:meth:`BoxStep.prepare`: a scene, locked joints, goal sets, ...), so that it is not
-        sought again."""
-        if len(self._prepared) >= _KEPT_STEPS and key not in self._prepared:
-            self._prepared.pop(next(iter(self._prepared)))
-        self._prepared[key] = BoxStep.prepare(self._solver, goals, self._step)
 
     def __repr__(self) -> str:
         return f"Tracker({self.robot.name!r}, dt={self.dt:g})"

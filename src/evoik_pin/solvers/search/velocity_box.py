@@ -83,7 +83,7 @@ class VelocityBoxStage:
         misses, LM in the full bounds, its share inside the box, it clipped and :data:`EXTRA_STARTS` drawn by ``rng``
         (None: none) run in the box, the best winning. With a scene an answer in collision is pulled back towards
         ``q_prev``. ``first``: that LM run from ``q_prev``, made already by the caller on this stage's boxed engine
-        (:mod:`evoik_pin.motion.tracker_step`), then not made again; ``t0``: the ``time.perf_counter()`` the solve's
+        (:mod:`.box_step`), then not made again; ``t0``: the ``time.perf_counter()`` the solve's
         clock starts at (None: now).
         A :class:`Result` whose ``q`` is inside the box, ``success`` when every goal is met (and, with a scene, the
         answer collision-free)."""

@@ -1,15 +1,14 @@
-"""The Tracker's per-step path through the velocity box (:class:`BoxStep`): the goal structure a
-:class:`~evoik_pin.solvers.search.velocity_box.VelocityBoxStage` solved once, bound to its engine, so that each later
-step only writes the new targets and the new box into the engine's own arrays and calls the compiled LM entry; the same
-answers as the stage's, bit for bit, and the stage itself whenever this path cannot give them (another structure, a
-run that misses).
+"""An :class:`~evoik_pin.IKSolver`'s prepared velocity-box step (:class:`BoxStep`): the goal structure its
+:class:`~.velocity_box.VelocityBoxStage` solved once, bound to the stage's engine, so that each later
+:meth:`~evoik_pin.IKSolver.solve_within` of that structure (a Tracker's step, a trajectory's point) only writes the new
+targets and box into the engine's own arrays and calls the compiled LM entry; the stage's answers, bit for bit, and
+the stage itself whenever this path cannot give them (a run that misses).
 
-A warm-started tracker's step is a few microseconds of compiled LM on an arm (about 20 on a humanoid with four pose
-goals); the general path around it (binding the goal list, building the problem, the box in NumPy, the outcome
-objects) cost about 14 more on Panda, 23 on Talos. What stays per step here: the structure's key (:func:`step_key`:
-what the goal stack depends on), one array write per goal, one compiled write of the box and targets, one compiled
-run, the Result. Only the Tracker takes this path (``solve_within`` callers, such as ``solve_trajectory``, build
-their problem per call)."""
+A warm-started step is a few microseconds of compiled LM on an arm (about 20 on a humanoid with four pose goals); the
+general path around it (binding the goal list, building the problem, the box in NumPy, the outcome objects) costs
+about 14 more on Panda, 23 on Talos. What stays per call here: the structure's key (:func:`step_key`: what the goal
+stack depends on), one array write per goal, one compiled write of the box and targets, one compiled run, the
+Result."""
 
 from __future__ import annotations
 
@@ -20,15 +19,19 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from ..lie.compiled import is_rotation_entries
-from ..result import Result
-from ..solvers.lm.compiling import compiled_entry
-from ..solvers.lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
-from ..solvers.lm.run_outcome import LMOutcome
-from ..solvers.search.velocity_box import BOX_ITERATIONS, VelocityBoxStage
-from ..target import pose_arrays
+from ...lie.compiled import is_rotation_entries
+from ...result import Result
+from ...target import Target, pose_arrays
+from ..lm.compiling import compiled_entry
+from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
+from ..lm.run_outcome import LMOutcome
+from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
 
-__all__ = ["BoxStep", "settle", "step_key", "write_step"]
+__all__ = ["PREPARED", "BoxStep", "settle", "step_key", "write_step"]
+
+#: Whether an IKSolver's solve_within takes a structure's prepared step (the tests turn it off to compare with the
+#: general path).
+PREPARED = True
 
 #: The one message of a step met by the run from the last configuration (the stage's, for one run).
 _MESSAGE = "velocity box: 1 LM run(s)"
@@ -133,14 +136,14 @@ def _settle_entry():
 
 
 def step_key(target) -> tuple | None:
-    """(key, targets) of a Tracker's ``target`` for a :class:`BoxStep`. A goal list's key: per goal its class, frame,
+    """(key, targets) of a ``solve_within`` target for a :class:`BoxStep`. A goal list's key: per goal its class, frame,
     kind, weight, tolerances, aux row and whether it is a single target (not a goal set), what its goal stack depends
     on (:func:`~evoik_pin.goals.stack.structure`'s, which adds what goals beyond one frame pack: those are never
     prepared); its targets: the list. A tip pose or position given as a ``pin.SE3``, float (4, 4) or float (3,) array
-    that passes :class:`~evoik_pin.Target`'s checks but the rotation's, which :func:`write_step` makes
-    (:func:`~evoik_pin.target.pose_arrays`): the key ``True`` / ``False``, the targets (position (3,) m, rotation
-    (3, 3) or None). None for anything else (the general path then takes it, and refuses it if it is bad). Never
-    raises."""
+    (or a :class:`~evoik_pin.Target`) that passes :class:`~evoik_pin.Target`'s checks but the rotation's, which
+    :func:`write_step` makes (:func:`~evoik_pin.target.pose_arrays`): the key ``True`` / ``False``, the targets
+    (position (3,) m, rotation (3, 3) or None). None for anything else (the general path then takes it, and refuses it
+    if it is bad). Never raises."""
     kind = type(target)
     if kind is list or kind is tuple:
         try:
@@ -149,7 +152,7 @@ def step_key(target) -> tuple | None:
                           for g in target]), target
         except (AttributeError, TypeError):  # not goals: the general path's verdict
             return None
-    if kind is pin.SE3 or kind is np.ndarray:
+    if kind is pin.SE3 or kind is np.ndarray or kind is Target:
         arrays = pose_arrays(target, check_rotation=False)
         return None if arrays is None else (arrays[1] is not None, arrays)
     return None
@@ -165,11 +168,11 @@ class BoxStep:
         key: the :func:`step_key` of the targets it takes."""
 
     @classmethod
-    def prepare(cls, solver, target, step: np.ndarray) -> BoxStep | None:
-        """The per-step path of ``solver`` (an :class:`~evoik_pin.IKSolver`, after its ``solve_within`` took
-        ``target``) for targets like ``target`` and the half-widths ``step`` (n,) (rad or m); None where it would not
-        give the stage's answers: locked joints, a scene, goal sets, goals beyond one frame or two on one frame, a
-        target-dependent box or an objective other than the errors' (tip targets), or no :func:`step_key`."""
+    def prepare(cls, solver, target) -> BoxStep | None:
+        """The per-call path of ``solver`` (an :class:`~evoik_pin.IKSolver`, after its ``solve_within`` took
+        ``target``) for targets like ``target``; None where it would not give the stage's answers: locked joints, a
+        scene, goal sets, goals beyond one frame or two on one frame, a target-dependent box or an objective other
+        than the errors' (tip targets), or no :func:`step_key`."""
         keyed = step_key(target)
         if keyed is None or solver._locked is not None:  # a locked solver's stage is its inner solver's
             return None
@@ -191,9 +194,9 @@ class BoxStep:
         engine = stage._engine(problem)
         if not (engine._owned and engine._own_box):  # the stage's run made both: else a path not taken yet
             return None
-        return cls(keyed[0], solver, stage, problem, engine, step)
+        return cls(keyed[0], solver, stage, problem, engine)
 
-    def __init__(self, key, solver, stage: VelocityBoxStage, problem, engine, step: np.ndarray) -> None:
+    def __init__(self, key, solver, stage: VelocityBoxStage, problem, engine) -> None:
         self.key = key
         self._solver, self._stage = solver, stage
         self._thread = threading.get_ident()
@@ -212,7 +215,6 @@ class BoxStep:
         self._run = engine._direct or engine._kernel["lm_run_buffers"]
         self._g_err = np.empty((len(problem.goals), 2))
         self._n = problem.n
-        self._step = np.array(step, dtype=float)
         # C float64 copies (the entry's one signature) of the bounds the stage clips to, and its wrap mask of them
         lower, upper = problem.lower, problem.upper
         self._bounds = (np.array(lower, dtype=float), np.array(upper, dtype=float),
@@ -248,16 +250,17 @@ class BoxStep:
             else:
                 pt[i], Rt[i] = g.encode()
 
-    def solve(self, target, targets, q_prev: np.ndarray, rng: np.random.Generator | None) -> Result:
-        """The stage's :class:`Result` for ``target`` (a Tracker's step; ``targets``: its :func:`step_key`'s, of this
-        path's key) inside the velocity box of ``q_prev`` (n,) float (rad or m): the LM run from ``q_prev``, and when
-        it misses the stage's search (:meth:`~.velocity_box.VelocityBoxStage.solve`, its extra starts drawn by
-        ``rng``) on ``target``'s problem, that run not made again."""
+    def solve(self, target, targets, q_prev: np.ndarray, step: np.ndarray, rng: np.random.Generator | None) -> Result:
+        """The stage's :class:`Result` for ``target`` (``targets``: its :func:`step_key`'s, of this path's key) inside
+        the velocity box of ``q_prev`` (n,) with half-widths ``step`` (n,) (rad or m; both float64 and checked): the
+        LM run from ``q_prev``, and when it misses the stage's search
+        (:meth:`~.velocity_box.VelocityBoxStage.solve`, its extra starts drawn by ``rng``) on ``target``'s problem,
+        that run not made again."""
         t0 = time.perf_counter()
         self._write_targets(targets)
-        if not self._write_step(self._box, q_prev, self._step, *self._bounds, self._poses, self._posed, self._pt,
+        if not self._write_step(self._box, q_prev, step, *self._bounds, self._poses, self._posed, self._pt,
                                 self._Rt, not self._list and targets[1] is not None):
-            return self._stage.solve(self._solver.problem(target), q_prev, self._step, rng)  # its TargetError
+            return self._stage.solve(self._solver.problem(target), q_prev, step, rng)  # its TargetError
         self._params[P_ITERATIONS] = BOX_ITERATIONS  # another run of the engine may have set another budget
         q = np.empty(self._n)
         g_err = self._g_err
@@ -265,7 +268,7 @@ class BoxStep:
         if not converged:  # the stage's search from here: its problem, this run as its first
             first = LMOutcome(q, pos, rot if self._engine.oriented else None, False, it, evaluations,
                               None if self._one else g_err.copy(), c)
-            return self._stage.solve(self._solver.problem(target), q_prev, self._step, rng, first, t0)
+            return self._stage.solve(self._solver.problem(target), q_prev, step, rng, first, t0)
         if self._one:  # the kernel's errors of one goal are its returned ones (what the stage reads)
             g_err[0, 0], g_err[0, 1] = pos, rot
         # the stage's clip (the kernel keeps q inside) and each goal's verdict and the goal list's summary, compiled
