@@ -133,6 +133,8 @@ def _guaranteed_runs(extra, name):
         for s in range(count):
             row = order[s]
             start = q0 if row < 0 else Q[row]
+            # the kernel's variant by a constant branch: a dispatcher bound in the closure instead makes numba's cache
+            # miss in every new process (the variant compiled again each time)
             if extra is not None:
                 pos, rot, converged, it, ev, cost = lm_run_buffers(buf, held, start, kin, box, any_wrap, goals, pt, Rt,
                                                                    params, q_out, g_out)
