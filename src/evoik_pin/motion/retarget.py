@@ -78,6 +78,7 @@ import numpy as np
 
 from ..errors import MappingError, OptionError
 from ..goals import Direction, Orientation, Position, RelativePosition
+from ..robot.velocity_limits import without_urdf_speed
 from .clip import Clip
 from .collision_step import free_nearby, step_back_free
 from .contacts import DEFAULT_FEET, detect_contacts, ground_height
@@ -608,6 +609,13 @@ def _first_bounds(robot, plan: _Plan) -> tuple[np.ndarray, np.ndarray]:
     # yaw unwrapped along the clip, two turns either way (no bound at +-pi to flip across); a warm-started frame's
     # velocity box keeps it near the previous one
     lower[3], upper[3] = yaw - 4 * np.pi, yaw + 4 * np.pi
+    # a joint that moves no mapped frame and whose URDF gives it no speed (a hand's fingers) stays at rest: no goal
+    # asks it to move and no speed is known safe for it (the library's default would let it flap at 3 rad/s); idle
+    # joints with a speed limit (a wrist past the hand's frame) stay free, for the collision repairs
+    moving = set().union(*(robot.moving_joints(f) for f, _ in plan.pairs))
+    idle = np.array([name not in moving for name in robot.joint_names]) & without_urdf_speed(robot)
+    rest = np.minimum(np.maximum(0.0, lower), upper)
+    lower[idle] = upper[idle] = rest[idle]
     return lower, upper
 
 
@@ -729,7 +737,7 @@ def retarget(robot, motion: Motion, mapping="cmu", scale="auto", contacts="auto"
     # the frames' goal lists bound once per structure, their targets written per frame (the ones that do not depend
     # on the previous frame computed for every frame here)
     stacks = FrameStacks(robot, plan, functools.partial(_frame_goals, plan), FLOOR_BAND)
-    q_init = _initial_q(robot, plan)
+    q_init = np.minimum(np.maximum(_initial_q(robot, plan), first_lower), first_upper)
     box = np.maximum(q_init - v_max * dt, first_lower), np.minimum(q_init + v_max * dt, first_upper)
     stacks.prepare(TOLERANCES, WEIGHTS["contact"], *box)
     feet = _FootPoses(robot, plan.contacts)

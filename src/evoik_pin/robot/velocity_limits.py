@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import OptionError
 
 __all__ = ["DEFAULT_BASE_ANGULAR_SPEED", "DEFAULT_BASE_LINEAR_SPEED", "DEFAULT_JOINT_SPEED", "check_dt",
-           "urdf_velocity_limits", "velocity_limits"]
+           "urdf_velocity_limits", "velocity_limits", "without_urdf_speed"]
 
 #: Speed (rad/s, m/s for prismatic joints) of a joint whose URDF gives no velocity limit.
 DEFAULT_JOINT_SPEED = 3.0
@@ -26,6 +26,27 @@ DEFAULT_BASE_ANGULAR_SPEED = 2.0 * math.pi
 def urdf_velocity_limits(robot) -> np.ndarray:
     """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's (an entry gets the smallest ``v_j / |m|``
     of the physical joints following it), the defaults where it has none."""
+    limits, base = _urdf_limits(robot)
+    limits[~np.isfinite(limits) | (limits <= 0.0)] = DEFAULT_JOINT_SPEED
+    if robot.floating_base:  # x, y, z (m/s), yaw, pitch, roll (rad/s): a free flyer has no URDF limit
+        defaults = np.array([DEFAULT_BASE_LINEAR_SPEED] * 3 + [DEFAULT_BASE_ANGULAR_SPEED] * 3)
+        limits[:6] = np.where(np.isfinite(base) & (base > 0.0), base, defaults)
+    return limits
+
+
+def without_urdf_speed(robot) -> np.ndarray:
+    """(n,) bool: the entries of ``robot``'s ``q`` whose URDF gives no speed limit (0 or none), the floating base's
+    excepted (its defaults are the library's own)."""
+    limits = _urdf_limits(robot)[0]
+    out = ~np.isfinite(limits) | (limits <= 0.0)
+    if robot.floating_base:
+        out[:6] = False
+    return out
+
+
+def _urdf_limits(robot) -> tuple[np.ndarray, np.ndarray]:
+    """(the URDF's limits (n,) per entry of q, 0 or inf where it gives none; the floating base's six (inf when the
+    model has no entry per q))."""
     n, v = robot.n, np.asarray(robot.model.velocityLimit, dtype=float)
     index, scale = robot.tree_constants()[4:6]
     limits = v.copy() if v.shape[0] == n else np.full(n, np.inf)
@@ -34,11 +55,7 @@ def urdf_velocity_limits(robot) -> np.ndarray:
             if 0 <= k < n and scale[j] != 0.0:
                 limits[k] = min(limits[k], v[j] / abs(scale[j]))
     base = limits[:6].copy() if v.shape[0] == n else np.full(6, np.inf)
-    limits[~np.isfinite(limits) | (limits <= 0.0)] = DEFAULT_JOINT_SPEED
-    if robot.floating_base:  # x, y, z (m/s), yaw, pitch, roll (rad/s): a free flyer has no URDF limit
-        defaults = np.array([DEFAULT_BASE_LINEAR_SPEED] * 3 + [DEFAULT_BASE_ANGULAR_SPEED] * 3)
-        limits[:6] = np.where(np.isfinite(base) & (base > 0.0), base, defaults)
-    return limits
+    return limits, base
 
 
 def velocity_limits(robot, spec) -> np.ndarray:
