@@ -25,7 +25,7 @@ from .camera import CAMERA_FOV_DEG, Camera
 from .markers import MarkerDrawing
 from .obstacles import COLLISION_RGBA, OBSTACLE_RGBA, ObstacleDrawing, obstacle_model
 from .paths import PathDrawing
-from .robot import GHOST_COLORS, GHOST_MESH_BUDGET, RobotDrawing, _reach, _visual_model, skeleton_model
+from .robot_drawing import GHOST_COLORS, GHOST_MESH_BUDGET, RobotDrawing, _reach, _visual_model, skeleton_model
 from .server import _connect, _import_meshcat, _probe, _Server, _talks
 
 __all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGET", "KEYPOINT_COLOR", "KEYPOINT_RADIUS",

@@ -8,7 +8,7 @@ import pinocchio as pin
 
 from ..errors import ConfigurationError
 from .camera import checked_points
-from .robot import GHOST_COLORS
+from .robot_drawing import GHOST_COLORS
 from .server import _talks
 
 
