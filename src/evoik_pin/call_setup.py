@@ -8,6 +8,7 @@ import numpy as np
 
 from .errors import MethodError, OptionError
 from .goals import is_goal_list
+from .goals.stack import free_entries
 from .problem import IKProblem
 from .result import Result
 from .robot import Robot, load_robot
@@ -80,6 +81,24 @@ def make_problem(robot, target, **options) -> tuple[IKProblem, dict]:
 GOAL_METHODS = ("memetic", "memetic-all", "de", "isade", "pso", "mode", "ga", "ga-binary", "nsga2", "hga")
 
 
+def settle_free(problem: IKProblem, result: Result) -> Result:
+    """``result`` with the entries of q that no goal of a goal list depends on
+    (:func:`~evoik_pin.goals.stack.free_entries`: another arm, the head) at q0's values, or without q0 at the box's
+    point nearest the zero configuration, in place: they change no goal's error, and the values a start left there (a
+    seed-table entry's, a DE member's) are arbitrary. Kept as found with a scene (they move collision geometry) and
+    for a tip target."""
+    if problem.target is None and problem.scene is None:
+        free = free_entries(problem.robot, problem.goal_stack()[0])
+        if free is not None:
+            settle(result.q, free, problem.q0, problem.lower, problem.upper)
+    return result
+
+
+def settle(q: np.ndarray, free: np.ndarray, q0: np.ndarray | None, lower: np.ndarray, upper: np.ndarray) -> None:
+    """``q``'s ``free`` entries ((n,) bool) set to q0's, or without q0 to the point of [lower, upper] nearest 0."""
+    q[free] = (np.minimum(np.maximum(0.0, lower), upper) if q0 is None else q0)[free]
+
+
 def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dict) -> Result:
     """The registered ``method`` with ``options`` (``polish`` among them) on ``problem``, with its verdicts
     (:func:`run_with_verdicts`)."""
@@ -102,10 +121,10 @@ def run_with_verdicts(problem: IKProblem, method: str, solve, polish: bool, rng)
 
 
 def with_verdicts(problem: IKProblem, result: Result) -> Result:
-    """``result`` judged goal by goal (a goal list: :func:`_with_goal_verdict`), then against the scene
-    (:func:`~evoik_pin.solvers.collision_verdict.with_collision_verdict`)."""
+    """``result`` judged goal by goal (a goal list: :func:`_with_goal_verdict`, after :func:`settle_free`), then
+    against the scene (:func:`~evoik_pin.solvers.collision_verdict.with_collision_verdict`)."""
     if problem.target is None:
-        result = _with_goal_verdict(problem, result)
+        result = _with_goal_verdict(problem, settle_free(problem, result))
     return with_collision_verdict(problem, result)
 
 

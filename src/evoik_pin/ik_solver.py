@@ -16,6 +16,8 @@ from .call_setup import (
     _robot,
     make_problem,
     run_with_verdicts,
+    settle,
+    settle_free,
     split_options,
     with_verdicts,
 )
@@ -244,9 +246,15 @@ class IKSolver:
         q0 = self._repeat_call_q0(q0, seed)
         if target[0].alternatives is not None:  # a goal set: the goal-set search when none of those members is met
             out = repeat.solve_set(target[0], q0)
-            return self._goal_problem(bound, q0) if out is None else out
-        out = repeat.solve(bound[2][0], bound[3][0], q0)
-        return out if type(out) is Result else self._resume_general(self._goal_problem(bound, q0), seed, out)
+            if out is None:
+                return self._goal_problem(bound, q0)
+        else:
+            out = repeat.solve(bound[2][0], bound[3][0], q0)
+            if type(out) is not Result:
+                return self._resume_general(self._goal_problem(bound, q0), seed, out)
+        if repeat.free is not None:  # settle_free's rule (call_setup), its mask kept on the repeat call
+            settle(out.q, repeat.free, q0, *repeat.box)
+        return out
 
     def _solve_choosing(self, target, q0, seed) -> Result:
         """:meth:`solve` with ``prefer`` other than ``"first"`` or preferences among the goals (``target``: the goals
@@ -294,7 +302,7 @@ class IKSolver:
         rng = _rng(seed)
         result = self._memetic.solve(problem, rng) if out is None else self._memetic.resume(problem, rng, out)
         result.chosen = problem.reported([None] * len(problem.goals))
-        return result
+        return settle_free(problem, result)
 
     def _open_repeat_call(self, problem: IKProblem) -> None:
         """Make the repeat call of ``problem``'s kind (or goal stack) after memetic solved it, unless a usable one is
@@ -321,7 +329,7 @@ class IKSolver:
             result.chosen = problem.reported([None] * len(goals))
             if self._repeat_calls_open and len(goals) == 1:
                 self._open_repeat_call(problem)
-            return result
+            return settle_free(problem, result)
         solve = self._memetic.solve if self._memetic is not None else partial(self._info.func, **self._options)
         result = run_with_verdicts(problem, self.method, solve, self._polish, rng)
         if (self._repeat_calls_open and problem.target is None and len(goals) == 1 and problem.scene is None

@@ -26,7 +26,7 @@ from .registry import (
 
 __all__ = ["GOAL_SIZE", "G_ANGLE", "G_FAMILY", "G_JOINT", "G_KIND", "G_ROW", "G_ROWS", "G_RTOL", "G_TOL", "G_WEIGHT",
            "KIND_PLANAR", "KIND_PLANAR_YAW", "GoalArrays", "GoalStack", "TargetArrays", "bind", "encode_target",
-           "encode_targets", "is_goal_list", "owned", "spec_row", "structure", "target_kind",
+           "encode_targets", "free_entries", "is_goal_list", "owned", "spec_row", "structure", "target_kind",
            "tip_goals"]
 
 #: Columns of a goal's spec: kind, physical joint of its frame (-1: the base), sqrt(weight), tolerances (m, rad),
@@ -241,6 +241,25 @@ _CLASH = 1e-9
 def is_goal_list(value) -> bool:
     """True for a list or tuple of goals (an empty one too: :func:`bind` refuses it by name)."""
     return isinstance(value, (list, tuple)) and all(isinstance(g, Goal) for g in value)
+
+
+def free_entries(robot, stack: GoalStack) -> np.ndarray | None:
+    """(n,) bool: the entries of ``robot``'s q that move no goal of ``stack`` (no physical joint they drive is in a
+    goal's support: another arm, the head, a hand's fingers when only the other hand is posed); None when every entry
+    moves some goal. Such entries change no goal's error. Cached per stack (:func:`bind` shares equal goals' stacks)."""
+    kept = _FREE.get(id(stack))
+    if kept is not None and kept[0] is stack:
+        return kept[1]
+    index = robot.tree_constants()[4]  # physical joint -> the entry of q that drives it
+    used = np.zeros(robot.n, dtype=bool)
+    used[index[stack.support.any(axis=0)]] = True
+    if len(_FREE) >= 32:
+        _FREE.pop(next(iter(_FREE)))
+    _FREE[id(stack)] = (stack, None if used.all() else ~used)
+    return _FREE[id(stack)][1]
+
+
+_FREE: dict = {}  # id(goal stack) -> (the stack, its free_entries)
 
 
 def tip_goals(robot, target, tolerance: float, rotation_tolerance: float

@@ -16,7 +16,7 @@ import numpy as np
 
 from ...goals import is_goal_list
 from ...goals.preferences import holds_preferences, split_preferences
-from ...goals.stack import G_WEIGHT, GoalArrays, TargetArrays
+from ...goals.stack import G_WEIGHT, GoalArrays, TargetArrays, free_entries
 from ...objectives import default_cost
 from ...problem import Target, coerce_scene
 from ..lm import solve_pairs
@@ -261,6 +261,10 @@ class BatchSolver:
             self._rounds(arrays, rows, Q0, out, self._trees.get(key))
             if not block.tip:  # the goals' cost (IKProblem's): weighted sum of position + orientation_weight x angle
                 done = rows[out.source[rows] != SOURCE_SINGLE]
+                free = free_entries(self.robot, stack) if t.scene is None else None
+                if done.size and free is not None:  # call_setup.settle_free's rule, row by row
+                    rest = np.minimum(np.maximum(0.0, t.lower), t.upper)
+                    out.q[np.ix_(done, free)] = (rest[free] if Q0 is None else Q0[np.ix_(done, free)])
                 if done.size:
                     E = np.nan_to_num(np.stack(out.goal_errors[done]))  # (k, G, 2)
                     w = arrays.stack.spec[:, G_WEIGHT] ** 2

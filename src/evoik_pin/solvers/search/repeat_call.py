@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 
+from ...goals.stack import free_entries
 from ...result import Result
 from ..lm.layout import P_ITERATIONS
 from . import memetic
@@ -75,6 +76,10 @@ class RepeatCall:
         table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if table_seeds is None else table_seeds)
         self._box = (ff.gap, table.Q, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, self._params)
         self._thread = threading.get_ident()
+        #: a goal list's q entries no goal depends on (None: none, or a tip target) and its box (lower, upper):
+        #: IKSolver settles them (call_setup.settle_free's rule)
+        self.free = None if problem.target is not None else free_entries(problem.robot, problem.goal_stack()[0])
+        self.box = (problem.lower, problem.upper)
 
     def usable(self) -> bool:
         """Whether the engine's arguments still hold, in the thread that made the path."""
