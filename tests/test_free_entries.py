@@ -83,3 +83,17 @@ def test_a_scene_keeps_them_as_found(talos):
     q[right_arm(talos)] = 0.3
     r.q = q.copy()
     assert np.array_equal(settle_free(problem, r).q, q)
+
+
+def test_a_posture_preference_still_places_them(talos):
+    """A Posture among the goals refines the free joints towards it: the rule does not undo a preference."""
+    from evoik_pin.goals import Posture
+
+    rng = np.random.default_rng(9)
+    goals = hand_goals(talos, talos.random_configurations(1, rng))[0]
+    free = free_entries(talos, bind(talos, goals)[1])
+    wanted = np.clip(np.full(talos.n, 0.3), talos.lower, talos.upper)
+    r = ek.solve(talos, [*goals, Posture(wanted)], seed=0)
+    rest = np.clip(np.zeros(talos.n), talos.lower, talos.upper)
+    assert r.success
+    assert np.abs(r.q[free] - wanted[free]).max() < 0.5 * np.abs(rest[free] - wanted[free]).max()

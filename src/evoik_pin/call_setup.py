@@ -110,21 +110,21 @@ def _run(problem: IKProblem, method: str, rng: np.random.Generator, options: dic
 
 def run_with_verdicts(problem: IKProblem, method: str, solve, polish: bool, rng) -> Result:
     """``solve(problem, rng)`` (a goal list: on ``method``'s own problem of it, :func:`_goal_method_problem`), then
-    the LM ``polish`` when asked and the verdicts (:func:`with_verdicts`)."""
+    the LM ``polish`` when asked, :func:`settle_free` and the verdicts (:func:`with_verdicts`)."""
     solved = problem if problem.target is not None else _goal_method_problem(method, problem)
     result = solve(solved, rng)
     if polish:
         from .solvers.lm.polish import polish_result
 
         result = polish_result(solved, result, rng)
-    return with_verdicts(problem, result)
+    return with_verdicts(problem, settle_free(problem, result))
 
 
 def with_verdicts(problem: IKProblem, result: Result) -> Result:
-    """``result`` judged goal by goal (a goal list: :func:`_with_goal_verdict`, after :func:`settle_free`), then
-    against the scene (:func:`~evoik_pin.solvers.collision_verdict.with_collision_verdict`)."""
+    """``result`` judged goal by goal (a goal list: :func:`_with_goal_verdict`), then against the scene
+    (:func:`~evoik_pin.solvers.collision_verdict.with_collision_verdict`)."""
     if problem.target is None:
-        result = _with_goal_verdict(problem, settle_free(problem, result))
+        result = _with_goal_verdict(problem, result)
     return with_collision_verdict(problem, result)
 
 

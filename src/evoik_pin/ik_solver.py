@@ -271,7 +271,9 @@ class IKSolver:
             problem = self.problem(goals, q0)
         rng = _rng(seed)
         if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
-            return with_verdicts(problem, choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options))
+            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options)
+            # the free joints at q0 (settle_free) unless preferences among the terms placed them
+            return with_verdicts(problem, result if prefs else settle_free(problem, result))
         criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
         result = self.run(problem, rng)
         if not result.success:
