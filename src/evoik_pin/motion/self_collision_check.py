@@ -228,7 +228,10 @@ class SelfCollisionCheck:
                 return False
             else:
                 kept[k] = (key, False)  # hulls apart: meshes apart, the exact verdict
-        return others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())
+        if not (others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())):
+            return False
+        self._remember(self._q.tobytes(), -1)  # exact: in_collision(q) of a step back's answer is then a look-up
+        return True
 
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
@@ -262,10 +265,15 @@ class SelfCollisionCheck:
                         hit = k
                         self._recent = [k, *self._recent[:RECENT_PAIRS - 1]]
                         break
-            if len(self._verdicts) >= REMEMBERED:
-                self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
-            self._verdicts[key] = hit
+            self._remember(key, hit)
         return hit
+
+    def _remember(self, key: bytes, hit: int) -> None:
+        """Keep ``hit`` (a touching pair, or -1) as the verdict of the q whose bytes are ``key`` (the last
+        :data:`REMEMBERED`)."""
+        if len(self._verdicts) >= REMEMBERED:
+            self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
+        self._verdicts[key] = hit
 
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
         """``scene.colliding_pairs(q)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the scene's
