@@ -153,6 +153,7 @@ class SelfCollisionCheck:
         #: per checked pair, the entries of q that move one of its links and not the other (what its verdict reads)
         self._pair_joints = [np.flatnonzero(self._moved_by[a] ^ self._moved_by[b]) for a, b in pairs]
         self._q = np.zeros(robot.n)  # the q last placed (candidate_pairs)
+        self._candidates: np.ndarray | None = None  # its candidate pairs (None: nothing placed yet)
         self._verdicts: dict[bytes, int] = {}  # q's bytes -> the touching pair in_collision found, or -1
         self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its _pair_key, verdict)
         self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
@@ -174,8 +175,13 @@ class SelfCollisionCheck:
     def candidate_pairs(self, q) -> np.ndarray:
         """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated)."""
         robot = self.robot
-        self._q = np.array(q, dtype=float)
+        q = np.array(q, dtype=float)
+        if self._candidates is not None and np.array_equal(q, self._q):
+            # placed already (a step back's start tested on its hulls then on its meshes; a colliding answer's
+            # pairs listed after its check): the same placements and pairs
+            return self._candidates
         q_pin = robot.to_pinocchio(robot.check_q(q))
+        self._q = q  # once checked: a q that raises is never taken for placed
         pin.updateGeometryPlacements(robot.model, self._data, self._geom, self._gdata, q_pin)
         pin.updateGeometryPlacements(robot.model, self._data, self._hulls, self._hdata)  # same joint placements
         # the joints' placements (fewer than the objects, and the objects' true inputs: a pair's verdict is a
@@ -184,7 +190,9 @@ class SelfCollisionCheck:
         out = self._out
         count = _overlapping_pairs(J, self._parent, self._local, self._centre, self._half, self._a, self._b,
                                    BOX_SLACK, out)
-        return out[:count].copy()
+        self._candidates = out[:count].copy()
+        self._candidates.setflags(write=False)
+        return self._candidates
 
     def _pair_key(self, k: int) -> bytes:
         """What checked pair k's verdict depends on at the q last placed: the entries of q that move one of its two
