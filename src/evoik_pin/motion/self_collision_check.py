@@ -19,7 +19,8 @@ legs where they were; a step back puts an arm where it was against a torso that 
 the pairs found touching last are tried first, so a colliding configuration (most of a bisection's) is told after a
 few narrow-phase calls. None of these changes a verdict (a kept one may differ from a new one only by the world
 placements' rounding, 1e-15 m). :meth:`SelfCollisionCheck.surely_free` is a cheaper, one-sided test for a step
-back's bisection: hulls only for the pairs its joints move (True is exact, False may be "maybe").
+back's bisection: hulls only for the pairs its joints move (True is exact, False may be "maybe"; a True is kept as the
+configuration's verdict, so the step back's answer, checked again as the next frame's previous one, is a look-up).
 """
 
 from __future__ import annotations
@@ -173,7 +174,8 @@ class SelfCollisionCheck:
                                dtype=float).reshape(-1, 4, 4)  # (G, 4, 4) each object on its joint
 
     def candidate_pairs(self, q) -> np.ndarray:
-        """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated)."""
+        """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated; for the q
+        last placed, its pairs again without placing), read-only."""
         robot = self.robot
         q = np.array(q, dtype=float)
         if self._candidates is not None and np.array_equal(q, self._q):
@@ -219,7 +221,8 @@ class SelfCollisionCheck:
         other pairs get the exact verdict (kept by placement: a segment does not move them). False means "touching,
         or maybe": a moving pair's hulls touch, which only :meth:`in_collision` (its meshes) tells. Microseconds a
         pair (GJK), where a mesh test of two links a hair apart costs ~0.1-1 ms. ``others_free``: the pairs ``moving``
-        does not move are known apart (the caller found its segment's start surely free): not looked at."""
+        does not move are known apart (the caller found its segment's start surely free): not looked at. A True is
+        remembered as :meth:`in_collision`'s verdict on q."""
         candidates = self.candidate_pairs(q)
         moved = self._moved_by.any(axis=1) if moving is None else (self._moved_by @ moving)  # (G,) bool
         moved_pair = moved[self._a[candidates]] | moved[self._b[candidates]]
@@ -236,7 +239,7 @@ class SelfCollisionCheck:
                 return False
             else:
                 kept[k] = (key, False)  # hulls apart: meshes apart, the exact verdict
-        if not (others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())):
+        if not others_free and any(self._touching(k) for k in candidates[~moved_pair].tolist()):
             return False
         self._remember(self._q.tobytes(), -1)  # exact: in_collision(q) of a step back's answer is then a look-up
         return True
