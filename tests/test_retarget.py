@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 import evoik_pin as ek
 from evoik_pin.cli import main
-from evoik_pin.errors import MappingError, OptionError, OutputError
+from evoik_pin.errors import EvoikError, MappingError, OptionError, OutputError
 from evoik_pin.motion import Clip, detect_contacts, limb_pairs, load_clip, mapping_preset
 from evoik_pin.motion.retarget import BASE_ANGULAR_SPEED, BASE_LINEAR_SPEED, velocity_limits_of
 
@@ -414,3 +414,39 @@ def test_kept_pair_verdicts_follow_a_bisection(g1_checks):
             verdicts.append(check.in_collision(q))
             assert verdicts[-1] == scene.in_collision(q)
     assert any(verdicts) and not all(verdicts)
+
+
+def test_a_configuration_surely_free_is_then_a_look_up(g1_checks, monkeypatch):
+    """A configuration surely_free calls free is remembered free (True is exact): in_collision then tells it without a
+    narrow phase, and says what the scene says."""
+    robot, scene, check = g1_checks
+    rng = np.random.default_rng(11)
+    free = [q for q in np.clip(rng.normal(0.0, 0.3, (40, robot.n)), robot.lower, robot.upper)
+            if check.surely_free(q)]
+    assert free
+    assert not any(scene.in_collision(q) for q in free)
+
+    def no_narrow_phase(k):
+        raise AssertionError("narrow phase of a configuration known free")
+
+    monkeypatch.setattr(check, "_touching", no_narrow_phase)
+    assert not any(check.in_collision(q) for q in free)
+
+
+def test_candidate_pairs_of_the_same_configuration_again(g1_checks):
+    """candidate_pairs of the configuration last placed gives its pairs again (not placed twice); another
+    configuration gets its own; a configuration refused is refused every time."""
+    robot, _, check = g1_checks
+    rng = np.random.default_rng(12)
+    q1, q2 = np.clip(rng.normal(0.0, 0.8, (2, robot.n)), robot.lower, robot.upper)
+    first = check.candidate_pairs(q1).copy()
+    assert np.array_equal(check.candidate_pairs(q1.copy()), first)
+    second = check.candidate_pairs(q2).copy()
+    assert not np.array_equal(second, first)
+    assert np.array_equal(check.candidate_pairs(q1), first)
+    bad = q1.copy()
+    bad[0] = np.inf  # equal to itself: a refused configuration taken for placed would be answered the second time
+    for _ in range(2):
+        with pytest.raises(EvoikError):
+            check.candidate_pairs(bad)
+

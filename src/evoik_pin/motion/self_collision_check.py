@@ -19,7 +19,8 @@ legs where they were; a step back puts an arm where it was against a torso that 
 the pairs found touching last are tried first, so a colliding configuration (most of a bisection's) is told after a
 few narrow-phase calls. None of these changes a verdict (a kept one may differ from a new one only by the world
 placements' rounding, 1e-15 m). :meth:`SelfCollisionCheck.surely_free` is a cheaper, one-sided test for a step
-back's bisection: hulls only for the pairs its joints move (True is exact, False may be "maybe").
+back's bisection: hulls only for the pairs its joints move (True is exact, False may be "maybe"; a True is kept as the
+configuration's verdict, so the step back's answer, checked again as the next frame's previous one, is a look-up).
 """
 
 from __future__ import annotations
@@ -153,6 +154,7 @@ class SelfCollisionCheck:
         #: per checked pair, the entries of q that move one of its links and not the other (what its verdict reads)
         self._pair_joints = [np.flatnonzero(self._moved_by[a] ^ self._moved_by[b]) for a, b in pairs]
         self._q = np.zeros(robot.n)  # the q last placed (candidate_pairs)
+        self._candidates: np.ndarray | None = None  # its candidate pairs (None: nothing placed yet)
         self._verdicts: dict[bytes, int] = {}  # q's bytes -> the touching pair in_collision found, or -1
         self._pair_verdicts: dict[int, tuple[bytes, bool]] = {}  # pair -> (its _pair_key, verdict)
         self._recent: list[int] = []  # pairs found touching, the last first (RECENT_PAIRS)
@@ -172,10 +174,16 @@ class SelfCollisionCheck:
                                dtype=float).reshape(-1, 4, 4)  # (G, 4, 4) each object on its joint
 
     def candidate_pairs(self, q) -> np.ndarray:
-        """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated)."""
+        """Indices of the checked pairs whose bounding boxes overlap at ``q`` (n,) (placements updated; for the q
+        last placed, its pairs again without placing), read-only."""
         robot = self.robot
-        self._q = np.array(q, dtype=float)
+        q = np.array(q, dtype=float)
+        if self._candidates is not None and np.array_equal(q, self._q):
+            # placed already (a step back's start tested on its hulls then on its meshes; a colliding answer's
+            # pairs listed after its check): the same placements and pairs
+            return self._candidates
         q_pin = robot.to_pinocchio(robot.check_q(q))
+        self._q = q  # once checked: a q that raises is never taken for placed
         pin.updateGeometryPlacements(robot.model, self._data, self._geom, self._gdata, q_pin)
         pin.updateGeometryPlacements(robot.model, self._data, self._hulls, self._hdata)  # same joint placements
         # the joints' placements (fewer than the objects, and the objects' true inputs: a pair's verdict is a
@@ -184,7 +192,9 @@ class SelfCollisionCheck:
         out = self._out
         count = _overlapping_pairs(J, self._parent, self._local, self._centre, self._half, self._a, self._b,
                                    BOX_SLACK, out)
-        return out[:count].copy()
+        self._candidates = out[:count].copy()
+        self._candidates.setflags(write=False)
+        return self._candidates
 
     def _pair_key(self, k: int) -> bytes:
         """What checked pair k's verdict depends on at the q last placed: the entries of q that move one of its two
@@ -211,7 +221,8 @@ class SelfCollisionCheck:
         other pairs get the exact verdict (kept by placement: a segment does not move them). False means "touching,
         or maybe": a moving pair's hulls touch, which only :meth:`in_collision` (its meshes) tells. Microseconds a
         pair (GJK), where a mesh test of two links a hair apart costs ~0.1-1 ms. ``others_free``: the pairs ``moving``
-        does not move are known apart (the caller found its segment's start surely free): not looked at."""
+        does not move are known apart (the caller found its segment's start surely free): not looked at. A True is
+        remembered as :meth:`in_collision`'s verdict on q."""
         candidates = self.candidate_pairs(q)
         moved = self._moved_by.any(axis=1) if moving is None else (self._moved_by @ moving)  # (G,) bool
         moved_pair = moved[self._a[candidates]] | moved[self._b[candidates]]
@@ -228,7 +239,10 @@ class SelfCollisionCheck:
                 return False
             else:
                 kept[k] = (key, False)  # hulls apart: meshes apart, the exact verdict
-        return others_free or not any(self._touching(k) for k in candidates[~moved_pair].tolist())
+        if not others_free and any(self._touching(k) for k in candidates[~moved_pair].tolist()):
+            return False
+        self._remember(self._q.tobytes(), -1)  # exact: in_collision(q) of a step back's answer is then a look-up
+        return True
 
     def in_collision(self, q) -> bool:
         """True when a checked pair of the collision meshes is in contact at ``q`` (n,): ``scene.in_collision(q)``.
@@ -262,10 +276,15 @@ class SelfCollisionCheck:
                         hit = k
                         self._recent = [k, *self._recent[:RECENT_PAIRS - 1]]
                         break
-            if len(self._verdicts) >= REMEMBERED:
-                self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
-            self._verdicts[key] = hit
+            self._remember(key, hit)
         return hit
+
+    def _remember(self, key: bytes, hit: int) -> None:
+        """Keep ``hit`` (a touching pair, or -1) as the verdict of the q whose bytes are ``key`` (the last
+        :data:`REMEMBERED`)."""
+        if len(self._verdicts) >= REMEMBERED:
+            self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
+        self._verdicts[key] = hit
 
     def colliding_pairs(self, q) -> list[tuple[str, str]]:
         """``scene.colliding_pairs(q)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the scene's
