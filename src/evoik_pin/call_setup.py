@@ -85,9 +85,11 @@ def settle_free(problem: IKProblem, result: Result) -> Result:
     """``result`` with the entries of q that no goal of a goal list depends on
     (:func:`~evoik_pin.goals.stack.free_entries`: another arm, the head) at q0's values, or without q0 at the box's
     point nearest the zero configuration, in place: they change no goal's error, and the values a start left there (a
-    seed-table entry's, a DE member's) are arbitrary. Kept as found with a scene (they move collision geometry) and
-    for a tip target."""
-    if problem.target is None and problem.scene is None:
+    seed-table entry's, a DE member's) are arbitrary. A tip target is its one goal on the tip. Kept as found with a
+    scene (they move collision geometry) and under an objective that reads more than the target's errors."""
+    target = problem.target
+    if problem.scene is None and (target is None or problem.objective.from_errors(
+            target, 0.0, 0.0 if target.has_orientation else None) is not None):
         free = free_entries(problem.robot, problem.goal_stack()[0])
         if free is not None:
             settle(result.q, free, problem.q0, problem.lower, problem.upper)

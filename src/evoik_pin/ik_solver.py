@@ -164,7 +164,11 @@ class IKSolver:
                 if repeat is not None and repeat.usable():
                     q0 = self._repeat_call_q0(q0, seed)
                     out = repeat.solve(arrays[0], arrays[1], q0, rotation_checked=False)
-                    return out if type(out) is Result else self._resume_general(self.problem(target, q0), seed, out)
+                    if type(out) is not Result:
+                        return self._resume_general(self.problem(target, q0), seed, out)
+                    if repeat.free is not None:  # settle_free's rule (call_setup), its mask kept on the repeat call
+                        settle(out.q, repeat.free, q0, *repeat.box)
+                    return out
             else:
                 problem = self._goal_repeat_call(target, q0, seed)
                 if type(problem) is Result:

@@ -259,12 +259,12 @@ class BatchSolver:
                     if key not in self._trees:
                         self._trees[key] = GoalTree(self.robot, self.table, arrays.stack, self.free, block.tip)
             self._rounds(arrays, rows, Q0, out, self._trees.get(key))
+            done = rows[out.source[rows] != SOURCE_SINGLE]
+            free = free_entries(self.robot, stack) if t.scene is None else None
+            if done.size and free is not None:  # call_setup.settle_free's rule (batched: the errors' objective)
+                rest = np.minimum(np.maximum(0.0, t.lower), t.upper)
+                out.q[np.ix_(done, free)] = rest[free] if Q0 is None else Q0[np.ix_(done, free)]
             if not block.tip:  # the goals' cost (IKProblem's): weighted sum of position + orientation_weight x angle
-                done = rows[out.source[rows] != SOURCE_SINGLE]
-                free = free_entries(self.robot, stack) if t.scene is None else None
-                if done.size and free is not None:  # call_setup.settle_free's rule, row by row
-                    rest = np.minimum(np.maximum(0.0, t.lower), t.upper)
-                    out.q[np.ix_(done, free)] = (rest[free] if Q0 is None else Q0[np.ix_(done, free)])
                 if done.size:
                     E = np.nan_to_num(np.stack(out.goal_errors[done]))  # (k, G, 2)
                     w = arrays.stack.spec[:, G_WEIGHT] ** 2

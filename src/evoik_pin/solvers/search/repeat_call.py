@@ -76,9 +76,9 @@ class RepeatCall:
         table_runs = min(GUARANTEED_TABLE_RUNS, DEFAULT_TABLE_SEEDS if table_seeds is None else table_seeds)
         self._box = (ff.gap, table.Q, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, self._params)
         self._thread = threading.get_ident()
-        #: a goal list's q entries no goal depends on (None: none, or a tip target) and its box (lower, upper):
-        #: IKSolver settles them (call_setup.settle_free's rule)
-        self.free = None if problem.target is not None else free_entries(problem.robot, problem.goal_stack()[0])
+        #: the q entries no goal depends on (None: none) and the box (lower, upper): IKSolver settles them
+        #: (call_setup.settle_free's rule; a repeat call's objective is the errors' own)
+        self.free = free_entries(problem.robot, problem.goal_stack()[0])
         self.box = (problem.lower, problem.upper)
 
     def usable(self) -> bool:
