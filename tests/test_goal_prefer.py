@@ -160,6 +160,34 @@ def test_nearest_turn_same_pose_within_limits_and_no_farther(q, q0):
     assert np.all(np.abs(out - q0) <= np.abs(q - q0) + 1e-12)
 
 
+@pytest.mark.parametrize("name", ["ur5", "pr2_left"])
+def test_turned_rows_are_nearest_turn_bit_for_bit(name):
+    """The compiled nearest turns of prefer's hot path (turned_rows) are nearest_turn's numbers exactly, on UR5 (every
+    joint a full turn, +-2 pi) and on PR2's arm (two continuous joints among bounded ones), rows far and near q0, on
+    a bound and half a turn away."""
+    from evoik_pin.solvers.search.prefer import turned_rows
+
+    if name == "pr2_left":
+        from evoik_pin.robot import example_robot_data_dir
+
+        robot = ev.load_robot(str(example_robot_data_dir() / "pr2_description/urdf/pr2.urdf"), base="torso_lift_link",
+                              tip="l_gripper_tool_frame")
+    else:
+        robot = ev.load_robot(name)
+    lo, hi = robot.lower, robot.upper
+    wrap = wrapping_joints(robot, lo, hi)
+    assert wrap.any()
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q0 = robot.random_configurations(1, rng)[0]
+        near = np.clip(q0 + rng.normal(0, 0.1, (10, robot.n)), lo, hi)
+        Q = np.concatenate([robot.random_configurations(30, rng), near, np.tile(lo, (2, 1)), np.tile(hi, (2, 1)),
+                            np.clip(q0 + np.pi, lo, hi)[None]])
+        out = turned_rows(Q, q0, lo, hi, wrap)
+        assert np.array_equal(out, nearest_turn(Q, q0, lo, hi, wrap))
+        assert np.array_equal(out, np.array([nearest_turn(q, q0, lo, hi, wrap) for q in Q]))
+
+
 # ---------------------------------------------------------------------- preferences
 def test_preferences_keep_goals_and_lower_their_cost(panda):
     rng = np.random.default_rng(7)

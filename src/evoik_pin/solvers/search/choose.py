@@ -26,6 +26,7 @@ from .prefer import (
     REFINE_COUNT,
     REFINE_STEPS,
     TRIAL_STEPS,
+    answer_costs,
     check_prefer,
     descend,
     descent_mode,
@@ -35,6 +36,7 @@ from .prefer import (
     make_criterion,
     nearest_turn,
     refine,
+    turned_rows,
 )
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first, one_frame
 
@@ -224,6 +226,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         table.prepare_goals(problem.goals)
     if prefer != "first" and engine == "compiled":
         nullspace_kernel()  # compiled or loaded before the clock starts
+    mode = descent_mode(prefer, criterion, variants)  # the compiled descent's, or None (Python's refine)
     # prefer="nearest": the answers' flips (other branches of the same pose) descended too
     flips = euler_flips(robot, problem.goals[0].frame) if prefer == "nearest" and single else ()
     t0 = time.perf_counter()
@@ -262,7 +265,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         if prefer == "first" and not criterion:
             winner = (q, i, out)
             return True
-        answers.append((criterion.cost(q), q, i))
+        answers.append((float(answer_costs(criterion, mode, v.lm, q[None])[0]), q, i))
         return prefer == "first"
 
     def run_batch(i: int, Q: np.ndarray) -> None:
@@ -292,10 +295,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             v.best_rank = min(v.best_rank, float(rank.min()))
         if ok.any():
             A = Q_out[ok]
-            if q0 is not None:
-                A = nearest_turn(A, q0, problem.lower, problem.upper, wrap)
+            if q0 is not None:  # compiled (nullspace_kernel is loaded on this path): the same numbers
+                A = turned_rows(A, q0, problem.lower, problem.upper, wrap)
             v.best_rank = -1.0
-            answers.extend(zip(criterion.costs(A).tolist(), A, [i] * A.shape[0], strict=True))
+            answers.extend(zip(answer_costs(criterion, mode, lm, A).tolist(), A, [i] * A.shape[0], strict=True))
 
     def out_of(limit) -> bool:
         return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
@@ -380,7 +383,6 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 cost_r = criterion.cost(q_r)
             return cost_r, q_r, i
 
-        mode = descent_mode(prefer, criterion, variants)
         if redundant and mode is not None:  # compiled: a first pass over more answers, then the best further
             refined, ev = descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish, flips)
             evaluations += ev

@@ -19,8 +19,9 @@ from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 
-__all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bind_preferences", "check_prefer",
-           "check_prefer_method", "euler_flips", "flipped", "nearest_turn", "refine"]
+__all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "Nearness", "answer_costs",
+           "bind_preferences", "check_prefer", "check_prefer_method", "distinct_rows", "euler_flips", "flipped",
+           "nearest_turn", "refine", "turned_rows"]
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
@@ -131,6 +132,23 @@ def flipped(Q: np.ndarray, flips) -> np.ndarray:
         F[:, i + 2] += np.pi
         out.append(F)
     return np.concatenate(out) if out else Q[:0]
+
+
+class Nearness(Posture):
+    """prefer="nearest"'s term: ``Posture(q0)`` over every joint with plain differences (answers are taken to their
+    turn nearest q0 first, :func:`nearest_turn`), its costs and gradient written without Posture's joint mask and
+    turn wrapping, which do nothing here: the same numbers, a few NumPy calls instead of a dozen per batch of
+    answers (prefer's hot path)."""
+
+    def costs(self, Q):
+        d = Q - self._ref
+        return 0.5 * self.weight * (d * d).sum(axis=-1)
+
+    def cost(self, q):
+        return float(self.costs(q))
+
+    def gradient(self, q):
+        return self.weight * (q - self._ref)
 
 
 class Criterion:
@@ -285,6 +303,66 @@ def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
     return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
 
 
+def turned_rows(Q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
+    """:func:`nearest_turn` of each row of ``Q`` (N, n), the same numbers, by the compiled
+    :func:`..lm.nullspace.nearest_turn_rows` (loaded with :func:`..lm.nullspace.nullspace_kernel`, before the
+    clock): prefer's hot path, where NumPy's dozen calls per batch of a few rows cost more than the rows."""
+    if not wrap.any():
+        return Q
+    out = np.empty(Q.shape)
+    nullspace_kernel()["nearest_turn_rows"](owned(Q, float), owned(q0, float), owned(lower, float),
+                                            owned(upper, float), owned(wrap), out)
+    return out
+
+
+def answer_costs(criterion: Criterion, mode: int | None, lm: LevenbergMarquardt, Q: np.ndarray) -> np.ndarray:
+    """``criterion.costs(Q)`` (N,) of answers Q (N, n); for prefer="manipulability" alone on the compiled descent
+    (``mode`` :data:`..lm.nullspace.MODE_MANIPULABILITY`, ``lm`` an engine of the problem) the compiled
+    :func:`..lm.nullspace.log_manipulability_rows`: the same cost to about 1e-12, ~1 us a row instead of ~10 us
+    (prefer="manipulability" costs every answer it collects)."""
+    if mode != MODE_MANIPULABILITY:
+        return criterion.costs(Q)
+    out = np.empty(Q.shape[0])
+    nullspace_kernel()["log_manipulability_rows"](owned(Q, float), *lm._args, out)
+    return out
+
+
+class _Pool:
+    """Answers as arrays, best first: costs (N,), configurations Q (N, n), variant indices V (N,) int, and ``off``
+    (N,) bool, a flip off the goals until the descent takes it onto them."""
+
+    def __init__(self, costs: np.ndarray, Q: np.ndarray, V: np.ndarray, off: np.ndarray) -> None:
+        self.costs, self.Q, self.V, self.off = costs, Q, V, off
+
+    @classmethod
+    def of(cls, answers, n: int) -> _Pool:
+        """The pool of (cost, q, variant) tuples (best first)."""
+        return cls(np.array([a[0] for a in answers], dtype=float), np.array([a[1] for a in answers]).reshape(-1, n),
+                   np.array([a[2] for a in answers], dtype=np.intp), np.zeros(len(answers), dtype=bool))
+
+    def __len__(self) -> int:
+        return self.costs.shape[0]
+
+    def take(self, index) -> _Pool:
+        """The answers at ``index`` (an index array or a slice), in that order."""
+        return _Pool(self.costs[index], self.Q[index], self.V[index], self.off[index])
+
+    def merged(self, *others: _Pool) -> _Pool:
+        """This pool and ``others`` in one, best first; equal costs in the order given (a stable sort, as
+        ``sorted``)."""
+        if not others:
+            return self.take(np.argsort(self.costs, kind="stable"))
+        parts = (self, *others)
+        costs = np.concatenate([p.costs for p in parts])
+        order = np.argsort(costs, kind="stable")
+        return _Pool(costs[order], np.concatenate([p.Q for p in parts])[order],
+                     np.concatenate([p.V for p in parts])[order], np.concatenate([p.off for p in parts])[order])
+
+    def tuples(self) -> list:
+        """The answers as (cost, q, variant) tuples, best first."""
+        return list(zip(self.costs.tolist(), self.Q, self.V.tolist(), strict=True))
+
+
 def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
             finish: float | None, flips=()) -> tuple[list, int]:
     """prefer's answers (cost, q, variant), best first, taken along their self-motion by the compiled descent
@@ -294,83 +372,98 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
     (until ``finish``; the first round for the best :data:`SURE_FINAL` whatever it says). With ``flips``
     (:func:`euler_flips`, q0 given), the answers' flips inside the box are candidates too (the descent takes them
     onto the goals first). A descended answer in collision keeps its start (a flip is
-    dropped). Returns (the answers best first, evaluations)."""
+    dropped). Returns (the answers best first, evaluations). The answers are kept as arrays (:class:`_Pool`) in
+    between: this bookkeeping, done on lists of tuples, cost as much as the descent's compiled steps."""
     kernel = nullspace_kernel()["descend_batch"]
+    lower, upper = problem.lower, problem.upper
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
+    pool = _Pool.of(answers, target.shape[0])
     if flips and q0 is not None and answers:
-        F = nearest_turn(flipped(np.array([a[1] for a in answers]), flips), q0, problem.lower, problem.upper, wrap)
-        keep = np.all((F >= problem.lower) & (F <= problem.upper), axis=1)
-        index = np.tile([a[2] for a in answers], len(flips))[keep]
+        F = turned_rows(flipped(pool.Q, flips), q0, lower, upper, wrap)
+        keep = np.all((F >= lower) & (F <= upper), axis=1)
         F = F[keep]
-        # (cost, q, variant, True): a flip, off the goals until the descent takes it onto them
-        answers = sorted(answers + [(c, q, i, True) for c, q, i in zip(criterion.costs(F).tolist(), F,
-                                                                        index.tolist(), strict=True)],
-                         key=lambda a: a[0])
-    picked = distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
+        pool = pool.merged(_Pool(criterion.costs(F), F, np.tile(pool.V, len(flips))[keep],
+                                 np.ones(F.shape[0], dtype=bool)))
+    pool = pool.take(distinct_rows(pool.Q, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT))
     evaluations = 0
 
-    def run(batch, steps):
-        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant."""
+    def run(batch: _Pool, steps: int) -> _Pool:
+        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant; best first."""
         nonlocal evaluations
         out = []
-        for i in sorted({a[2] for a in batch}):
-            mine = [a for a in batch if a[2] == i]
-            Q = np.array([a[1] for a in mine])
+        for i in range(len(variants)) if len(variants) > 1 else (0,):
+            mine = batch.V == i
+            if not mine.any():
+                continue
+            Q = batch.Q if len(variants) == 1 else batch.Q[mine]
             Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
             evaluations += int(kernel(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
                                        DESCEND_MAX_STEP, Q_out, f))
             met = np.isfinite(f)  # a flip the descent could not take onto the goals is dropped
             if scene is not None:
+                off = batch.off[mine]
                 for k in range(Q.shape[0]):
                     if scene.in_collision(Q_out[k], problem.margin):
                         Q_out[k] = Q[k]
-                        met[k] &= len(mine[k]) == 3  # a flip's start is off the goals: no answer to keep
-            Q_out = Q_out[met]
+                        met[k] &= not off[k]  # a flip's start is off the goals: no answer to keep
+            if not met.all():
+                Q_out = Q_out[met]
             if q0 is not None:
-                Q_out = nearest_turn(Q_out, q0, problem.lower, problem.upper, wrap)
-            out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q_out.shape[0], strict=True))
-        return sorted(out, key=lambda a: a[0])
+                Q_out = turned_rows(Q_out, q0, lower, upper, wrap)
+            count = Q_out.shape[0]
+            out.append(_Pool(answer_costs(criterion, mode, variants[i].lm, Q_out), Q_out,
+                             np.full(count, i, dtype=np.intp), np.zeros(count, dtype=bool)))
+        return out[0].merged(*out[1:]) if out else batch
 
     if mode == MODE_NEAREST or finish is None:
-        picked = run(picked, DESCEND_TRIAL if mode == MODE_NEAREST else MANIP_TRIAL)
+        pool = run(pool, DESCEND_TRIAL if mode == MODE_NEAREST else MANIP_TRIAL)
     else:  # the best MANIP_FIRST whatever the clock says, then as many more as fit before the finish
         t = time.perf_counter()
-        trialled = run(picked[:MANIP_FIRST], MANIP_TRIAL)
-        per_answer = (time.perf_counter() - t) / max(min(MANIP_FIRST, len(picked)), 1)
+        trialled = run(pool.take(slice(0, MANIP_FIRST)), MANIP_TRIAL)
+        per_answer = (time.perf_counter() - t) / max(min(MANIP_FIRST, len(pool)), 1)
         # the best one's first round (SURE_FINAL) kept in the time: DESCEND_STEPS steps, MANIP_TRIAL an answer
         fit = int((finish - time.perf_counter()) / per_answer) - SURE_FINAL * DESCEND_STEPS // MANIP_TRIAL
-        if fit > 0 and len(picked) > MANIP_FIRST:
-            trialled += run(picked[MANIP_FIRST:MANIP_FIRST + fit], MANIP_TRIAL)
-        picked = sorted(trialled, key=lambda a: a[0])
+        if fit > 0 and len(pool) > MANIP_FIRST:
+            trialled = trialled.merged(run(pool.take(slice(MANIP_FIRST, MANIP_FIRST + fit)), MANIP_TRIAL))
+        pool = trialled
     for k in range(DESCEND_ROUNDS):  # rounds of the best on towards their optimum while the clock allows
         final = DESCEND_FINAL
         if finish is not None and time.perf_counter() >= finish:
             if k or not SURE_FINAL:
                 break
             final = SURE_FINAL  # the first round, for the best, whatever the clock says
-        before = [a[0] for a in picked[:final]]
-        picked = sorted(run(picked[:final], DESCEND_STEPS) + picked[final:], key=lambda a: a[0])
-        if [a[0] for a in picked[:final]] == before:  # converged
+        before = pool.costs[:final]
+        pool = run(pool.take(slice(0, final)), DESCEND_STEPS).merged(pool.take(slice(final, None)))
+        if np.array_equal(pool.costs[:final], before):  # converged
             break
-    return picked, evaluations
+    return pool.tuples(), evaluations
+
+
+def distinct_rows(Q: np.ndarray, count: int) -> list[int]:
+    """The indices of the first ``count`` rows of ``Q`` (N, n) no two within 1e-3 (rad or m) of each other, in
+    order: a row is taken unless it is near one taken before."""
+    N = Q.shape[0]
+    if N <= 1:
+        return list(range(min(N, count)))
+    G = Q @ Q.T
+    sq = np.diag(G)
+    close = (sq[:, None] + sq[None, :] - 2.0 * G) < 1e-6
+    picked: list[int] = []
+    blocked = np.zeros(N, dtype=bool)  # near a row taken: blocked[k] is close[k, j] for some taken j
+    for k in range(N):
+        if len(picked) >= count:
+            break
+        if not blocked[k]:
+            picked.append(k)
+            blocked |= close[:, k]
+    return picked
 
 
 def distinct(answers, count: int) -> list:
     """The first ``count`` of ``answers`` (cost, q, variant; best first) no two within 1e-3 (rad or m) of each other."""
     if len(answers) <= 1:
         return list(answers[:count])
-    Q = np.array([a[1] for a in answers])
-    G = Q @ Q.T
-    sq = np.diag(G)
-    close = ((sq[:, None] + sq[None, :] - 2.0 * G) < 1e-6).tolist()
-    picked, taken = [], []
-    for k, row in enumerate(close):
-        if len(picked) >= count:
-            break
-        if not any(row[j] for j in taken):
-            picked.append(answers[k])
-            taken.append(k)
-    return picked
+    return [answers[k] for k in distinct_rows(np.array([a[1] for a in answers]), count)]
 
 
 def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
@@ -382,7 +475,7 @@ def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Crite
         check_prefer(prefer, problem.q0 is not None)
         # plain differences: answers are taken to their turn nearest q0 inside the box first (nearest_turn), and
         # a difference modulo 2 pi would count turns the limits forbid
-        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
+        terms.append(Nearness(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
     elif prefer == "manipulability":
         terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
     for p in preferences:
