@@ -19,14 +19,21 @@ from ..lm import LevenbergMarquardt, wrapping_joints
 from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
 from ..options import check_choice
 
-__all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "Nearness", "answer_costs",
-           "bind_preferences", "check_prefer", "check_prefer_method", "distinct_rows", "euler_flips", "flipped",
-           "nearest_turn", "refine", "turned_rows"]
+__all__ = ["BRANCHES_PREFER_TIMEOUT", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "Nearness",
+           "answer_costs", "bind_preferences", "check_prefer", "check_prefer_method", "default_prefer_timeout",
+           "distinct_rows", "euler_flips", "flipped", "nearest_turn", "refine", "turned_rows"]
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
-#: Default budget (s) of ``prefer="nearest" | "manipulability"``: under 1 ms with the call's overhead.
-DEFAULT_PREFER_TIMEOUT = 0.0006
+#: Default budget (s) of ``prefer="nearest" | "manipulability"`` on goals with a null space (a redundant arm on a
+#: pose): the work done whatever the clock says (the first batch of LM runs, the descent's trial and the best answer's
+#: first round) about fills it; more of it went to the descent's later rounds, which changed few answers (0.6 ms: the
+#: same shares on 300 problems a row within a point). Under 0.7 ms with the call's overhead.
+DEFAULT_PREFER_TIMEOUT = 0.0004
+#: The default budgets (s) on goals without a null space (a 6-joint arm on a pose), where the whole budget collects IK
+#: branches (nothing to descend along): the share of answers nearest q0 grows with it (UR arms' fell 1-2 points at
+#: 0.45-0.5 ms on 300 random q0), the most dexterous branch is found sooner (the same shares at 0.45 ms).
+BRANCHES_PREFER_TIMEOUT = {"nearest": 0.0006, "manipulability": 0.00045}
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4
 #: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
@@ -37,7 +44,7 @@ MAX_REFINE_STEP = 0.5
 #: The compiled descent (:func:`descend`): the best DESCEND_COUNT distinct answers descended DESCEND_TRIAL steps
 #: each, the best DESCEND_FINAL of them on in rounds of DESCEND_STEPS while the clock allows (DESCEND_ROUNDS at
 #: most); steps of DESCEND_MAX_STEP (rad or m) at most.
-DESCEND_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 2, 10, 4
+DESCEND_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 6, 4, 2, 10, 4
 DESCEND_MAX_STEP = 1.0
 #: prefer="manipulability": the best MANIP_FIRST distinct answers descended MANIP_TRIAL steps whatever the clock
 #: says, then as many more as fit before the finish (MANIP_COUNT in all at most): the raw measure says little about
@@ -205,6 +212,12 @@ def _frame_rows(problem) -> list[tuple]:
 def has_null_space(problem) -> bool:
     """Whether the goals leave a null space to refine in: fewer task rows than joints."""
     return sum(len(rows) for _, rows in _frame_rows(problem)) < problem.robot.n
+
+
+def default_prefer_timeout(problem, prefer: str) -> float:
+    """The default budget (s) of ``prefer`` ("nearest" or "manipulability") for ``problem``:
+    :data:`DEFAULT_PREFER_TIMEOUT` with a null space to descend along, :data:`BRANCHES_PREFER_TIMEOUT`'s without."""
+    return DEFAULT_PREFER_TIMEOUT if has_null_space(problem) else BRANCHES_PREFER_TIMEOUT[prefer]
 
 
 def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
