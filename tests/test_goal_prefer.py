@@ -515,6 +515,29 @@ def test_descent_never_worsens_the_criterion_and_keeps_the_goals(panda, seed, pr
 
 
 @pytest.mark.parametrize("prefer", ["nearest", "manipulability"])
+def test_descent_then_best_is_the_trial_then_a_round_of_its_best(panda, prefer):
+    """descend_batch_then_best (prefer's trial and its best answer's first round in one call) gives exactly what the
+    two calls give: every answer descended, then the one of least criterion descended on from where it ended."""
+    from evoik_pin.solvers.lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
+
+    kernels = nullspace_kernel()
+    mode = MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        q_target, q0 = panda.random_configurations(2, rng)
+        problem = ev.make_problem(panda, panda.fk(q_target), q0=q0)[0]
+        lm, Q = _answers(panda, problem, rng, 4)
+        Q_fused, f_fused = np.empty_like(Q), np.empty(4)
+        kernels["descend_batch_then_best"](Q, q0, mode, *lm._args, 3, 10, 1.0, 10, Q_fused, f_fused)
+        Q_out, f = np.empty_like(Q), np.empty(4)
+        kernels["descend_batch"](Q, q0, mode, *lm._args, 3, 10, 1.0, Q_out, f)
+        best = int(np.argmin(f))
+        kernels["descend_batch"](Q_out[best:best + 1].copy(), q0, mode, *lm._args, 10, 10, 1.0, Q_out[best:best + 1],
+                                 f[best:best + 1])
+        assert np.array_equal(Q_fused, Q_out) and np.array_equal(f_fused, f)
+
+
+@pytest.mark.parametrize("prefer", ["nearest", "manipulability"])
 def test_descent_stays_within_the_limits_of_full_turn_joints(ur5, prefer):
     """UR5's joints span two full turns (+-2 pi), limits LM's clip box leaves open (it wraps them): the descent
     keeps every answer inside [lower, upper] all the same, q0 near the limits pulling it outward. Outside, an answer

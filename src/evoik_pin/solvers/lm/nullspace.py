@@ -25,8 +25,8 @@ from .kernel import _copy, damped_solve, make_workspace, task_error, task_jacobi
 from .layout import B_HI, B_LO, B_WRAP, LAMBDA_MIN, TWO_PI
 from .tree_kinematics import frame_jacobian
 
-__all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "log_manipulability_rows", "nearest_turn_rows",
-           "nullspace_kernel"]
+__all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "descend_batch_then_best", "log_manipulability_rows",
+           "nearest_turn_rows", "nullspace_kernel"]
 
 #: What :func:`descend_batch` minimises: ``|q - q0|^2`` (full-turn joints at their turn nearest q0 inside the limits,
 #: :func:`~evoik_pin.solvers.search.prefer.nearest_turn`'s rule) or ``-sqrt(det(J J^T))`` of the first goal's frame.
@@ -218,6 +218,31 @@ def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, re
     return evaluations
 
 
+@njit(cache=True, nogil=True, forceinline=False)
+def descend_batch_then_best(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, restore, max_step, further,
+                            Q_out, f_out):
+    """:func:`descend_batch`, then the answer of least criterion (the first of equals; none when every f_out is inf)
+    ``further`` steps on from where it ended, as a descent of its own (its step length starts again): prefer's trial
+    of its best answers and the best one's first round in one call. Returns the kinematics evaluations."""
+    N, n = Q.shape
+    ws = make_workspace(kin, goals, n, 1)
+    JJ, M = np.empty((6, 6)), np.empty((6, n))
+    p, q_prev, p_prev = np.empty(n), np.empty(n), np.empty(n)
+    evaluations = 0
+    for i in range(N):
+        evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
+                                restore, max_step, Q_out[i], f_out, i)
+    best = -1
+    for i in range(N):
+        if f_out[i] < np.inf and (best < 0 or f_out[i] < f_out[best]):
+            best = i
+    if best >= 0 and further > 0:
+        start = Q_out[best].copy()
+        evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, start, q0, mode, kin, box, goals, pt, Rt, further,
+                                restore, max_step, Q_out[best], f_out, best)
+    return evaluations
+
+
 @njit(cache=True, nogil=True)
 def _onto_goals(kin, mimic, goals, weighted, pt, Rt, q, state, ws, W, L, y, dq, box, spec, restore):
     """At most ``restore`` Gauss-Newton steps inside the box taking ``q`` (n,) (``state``: its task errors, evaluated)
@@ -369,7 +394,8 @@ NULLSPACE_COMPILE_SECONDS = 25.0
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch`, :func:`nearest_turn_rows`, :func:`log_manipulability_rows` and
+    """:func:`descend_batch` (and :func:`descend_batch_then_best`), :func:`nearest_turn_rows`,
+    :func:`log_manipulability_rows` and
     :func:`.population_rows.task_rows` (for :func:`~..search.prefer.refine`), loaded (or compiled) outside any time
     budget."""
     if not _KERNEL:
@@ -382,10 +408,13 @@ def nullspace_kernel() -> dict:
         load("the null-space descent of prefer= and preferences", [
             (descend_batch, (z, z[0], MODE_NEAREST, tree, box, False, goals, pt, Rt, 1, 1, 0.5, np.empty((1, 1)),
                              np.empty(1))),
+            (descend_batch_then_best, (z, z[0], MODE_NEAREST, tree, box, False, goals, pt, Rt, 1, 1, 0.5, 1,
+                                       np.empty((1, 1)), np.empty(1))),
             (nearest_turn_rows, (z, z[0], z[0], z[0], np.zeros(1, dtype=np.bool_), np.empty((1, 1)))),
             (log_manipulability_rows, (z, tree, box, False, goals, pt, Rt, np.empty(1))),
             (task_rows, (np.zeros(1), *tree, *goals, pt, Rt, np.empty(6), np.empty((6, 1)), np.empty((1, 2))))],
              NULLSPACE_COMPILE_SECONDS)
-        _KERNEL.update(descend_batch=descend_batch, task_rows=task_rows, nearest_turn_rows=nearest_turn_rows,
+        _KERNEL.update(descend_batch=descend_batch, descend_batch_then_best=descend_batch_then_best,
+                       task_rows=task_rows, nearest_turn_rows=nearest_turn_rows,
                        log_manipulability_rows=log_manipulability_rows)
     return _KERNEL

@@ -387,7 +387,7 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
     onto the goals first). A descended answer in collision keeps its start (a flip is
     dropped). Returns (the answers best first, evaluations). The answers are kept as arrays (:class:`_Pool`) in
     between: this bookkeeping, done on lists of tuples, cost as much as the descent's compiled steps."""
-    kernel = nullspace_kernel()["descend_batch"]
+    kernels = nullspace_kernel()
     lower, upper = problem.lower, problem.upper
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
     pool = _Pool.of(answers, target.shape[0])
@@ -400,8 +400,9 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
     pool = pool.take(distinct_rows(pool.Q, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT))
     evaluations = 0
 
-    def run(batch: _Pool, steps: int) -> _Pool:
-        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant; best first."""
+    def run(batch: _Pool, steps: int, further: int = 0) -> _Pool:
+        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant, and with ``further``
+        (one variant, no scene) the best of them that many more steps in the same call; best first."""
         nonlocal evaluations
         out = []
         for i in range(len(variants)) if len(variants) > 1 else (0,):
@@ -410,8 +411,13 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
                 continue
             Q = batch.Q if len(variants) == 1 else batch.Q[mine]
             Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
-            evaluations += int(kernel(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
-                                       DESCEND_MAX_STEP, Q_out, f))
+            if further:
+                evaluations += int(kernels["descend_batch_then_best"](
+                    Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS, DESCEND_MAX_STEP, further,
+                    Q_out, f))
+            else:
+                evaluations += int(kernels["descend_batch"](Q, target, mode, *variants[i].lm._args, steps,
+                                                            RESTORE_ITERATIONS, DESCEND_MAX_STEP, Q_out, f))
             met = np.isfinite(f)  # a flip the descent could not take onto the goals is dropped
             if scene is not None:
                 off = batch.off[mine]
@@ -428,8 +434,13 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
                              np.full(count, i, dtype=np.intp), np.zeros(count, dtype=bool)))
         return out[0].merged(*out[1:]) if out else batch
 
+    # the best one's first round in the trial's kernel call (a call and its bookkeeping fewer): one variant, no
+    # scene (whose check comes between the two)
+    fused = SURE_FINAL == 1 and len(variants) == 1 and scene is None
+    first_round = 0
     if mode == MODE_NEAREST or finish is None:
-        pool = run(pool, DESCEND_TRIAL if mode == MODE_NEAREST else MANIP_TRIAL)
+        pool = run(pool, DESCEND_TRIAL if mode == MODE_NEAREST else MANIP_TRIAL, DESCEND_STEPS if fused else 0)
+        first_round = int(fused)
     else:  # the best MANIP_FIRST whatever the clock says, then as many more as fit before the finish
         t = time.perf_counter()
         trialled = run(pool.take(slice(0, MANIP_FIRST)), MANIP_TRIAL)
@@ -439,7 +450,7 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
         if fit > 0 and len(pool) > MANIP_FIRST:
             trialled = trialled.merged(run(pool.take(slice(MANIP_FIRST, MANIP_FIRST + fit)), MANIP_TRIAL))
         pool = trialled
-    for k in range(DESCEND_ROUNDS):  # rounds of the best on towards their optimum while the clock allows
+    for k in range(first_round, DESCEND_ROUNDS):  # rounds of the best on towards their optimum while the clock allows
         final = DESCEND_FINAL
         if finish is not None and time.perf_counter() >= finish:
             if k or not SURE_FINAL:
