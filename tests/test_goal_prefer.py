@@ -188,6 +188,29 @@ def test_turned_rows_are_nearest_turn_bit_for_bit(name):
         assert np.array_equal(out, np.array([nearest_turn(q, q0, lo, hi, wrap) for q in Q]))
 
 
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 30), st.lists(st.integers(0, 12), min_size=1, max_size=4))
+def test_table_starts_follow_nearest_first(seed, k, sizes):
+    """prefer's table starts (choose._TableStarts, ranked once in arrays) come in nearest_first's order, taken a batch
+    at a time or one by one, with ties and entries at inf among the distances."""
+    from evoik_pin.solvers.search.choose import _TableStarts
+    from evoik_pin.solvers.search.seed_table import nearest_first
+
+    rng = np.random.default_rng(seed)
+    d = rng.integers(0, 8, size=40).astype(float)  # ties
+    d[rng.random(40) < 0.3] = np.inf
+    Q = np.arange(40.0)[:, None]
+    k_finite = min(k, int(np.isfinite(d).sum()))
+    expected = [float(i) for i in nearest_first(d, k_finite)]
+    starts, got = _TableStarts(Q, d, k), []
+    for size in sizes:
+        got += starts.take(size)[:, 0].tolist()
+    got += [q[0] for q in starts]
+    assert got == expected
+    one_by_one = _TableStarts(Q, d, k)
+    assert [q[0] for q in one_by_one] == expected
+
+
 # ---------------------------------------------------------------------- preferences
 def test_preferences_keep_goals_and_lower_their_cost(panda):
     rng = np.random.default_rng(7)

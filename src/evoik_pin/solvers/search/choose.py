@@ -38,7 +38,7 @@ from .prefer import (
     refine,
     turned_rows,
 )
-from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first, one_frame
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, one_frame
 
 __all__ = ["COLLECT_SHARE", "choose", "member_distances"]
 
@@ -97,7 +97,8 @@ class _Around:
 
     def __init__(self, starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, endless: bool) -> None:
         self.starts, self.rng, self.q0, self.lower, self.upper, self.endless = starts, rng, q0, lower, upper, endless
-        self.half = np.minimum(0.5 * (upper - lower), np.pi)
+        # the draws' standard deviations (len(NEAR_SCALES), n), cycled through
+        self.cycle = np.array(NEAR_SCALES)[:, None] * np.minimum(0.5 * (upper - lower), np.pi)
         self.k = 0  # near starts drawn so far (the scale cycles with it)
         self.done = False
 
@@ -107,7 +108,7 @@ class _Around:
         if self.done or size <= 0:
             return np.empty((0, n))
         m = -(-size // NEAR_EVERY)  # near q0: every NEAR_EVERY-th, the first included
-        scales = np.take(NEAR_SCALES, np.arange(self.k, self.k + m) % len(NEAR_SCALES))[:, None] * self.half
+        scales = self.cycle[np.arange(self.k, self.k + m) % len(NEAR_SCALES)]
         self.k += m
         near = np.minimum(np.maximum(self.q0 + self.rng.normal(size=(m, n)) * scales, self.lower), self.upper)
         rest = _take(self.starts, size - m, n)
@@ -128,21 +129,46 @@ def _take(starts, size: int, n: int) -> np.ndarray:
 
 
 class _TableStarts:
-    """The table's rows ``Q`` by ``d`` (T,), the nearest first, at most ``k`` and only finite ones, ranked lazily
-    (:func:`~.seed_table.nearest_first`): an iterator of rows, and :meth:`take` for a batch in one indexing."""
+    """The table's rows ``Q`` by ``d`` (T,), the nearest first, at most ``k`` and only finite ones, in
+    :func:`~.seed_table.nearest_first`'s order: an iterator of rows (the first costs an argmin), and :meth:`take` for a
+    batch in one indexing (the ranking made once, in arrays: prefer's batches take most of it at once)."""
 
     def __init__(self, Q: np.ndarray, d: np.ndarray, k: int) -> None:
-        self.Q, self.order = Q, nearest_first(d, min(k, int(np.count_nonzero(np.isfinite(d)))))
+        self.Q, self.d, self.k = Q, d, min(k, int(np.count_nonzero(np.isfinite(d))))
+        self.order: np.ndarray | None = None  # the ranking, made on first need
+        self.taken = 0
+
+    def _ranking(self) -> np.ndarray:
+        """Indices of the k nearest entries in nearest_first's order: the argmin, then the others by distance."""
+        if self.order is None:
+            d, k = self.d, self.k
+            if k <= 1:
+                self.order = np.array([int(d.argmin())] if k == 1 else [], dtype=np.intp)
+            else:
+                first = int(d.argmin())
+                part = np.argpartition(d, k - 1)[:k]
+                ranked = part[d[part].argsort()]
+                self.order = np.concatenate(([first], ranked[ranked != first]))
+        return self.order
 
     def take(self, size: int) -> np.ndarray:
         """Up to ``size`` entries (rows), the nearest not yet taken."""
-        return self.Q[list(itertools.islice(self.order, max(size, 0)))]
+        rows = self._ranking()[self.taken:self.taken + max(size, 0)]
+        self.taken += rows.shape[0]
+        return self.Q[rows]
 
     def __iter__(self):
         return self
 
     def __next__(self) -> np.ndarray:
-        return self.Q[next(self.order)]
+        if self.taken == 0 and self.order is None and self.k > 0:  # the nearest alone: no ranking yet
+            self.taken = 1
+            return self.Q[int(self.d.argmin())]
+        order = self._ranking()
+        if self.taken >= order.shape[0]:
+            raise StopIteration
+        self.taken += 1
+        return self.Q[order[self.taken - 1]]
 
 
 def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R=None) -> list[float]:
