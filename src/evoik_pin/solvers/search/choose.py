@@ -53,10 +53,11 @@ NEAR_SCALES, NEAR_EVERY = (0.1, 0.25, 0.5), 4
 #: table's weight squared (the term scales with the arm).
 NEAR_JOINT_WEIGHT = 0.1
 #: LM runs per kernel call while prefer collects answers; prefer="nearest"'s (with a null space): its answers nearest
-#: q0 come from more starts, and the first batch, made whatever the clock says, is most of its budget (8 more runs
+#: q0 come from more starts, and the first batch, made whatever the clock says, is most of its budget (7 more runs
 #: with 2 fewer descended, :data:`~.prefer.DESCEND_COUNT`: 1-2 points more of the answers no farther than TRAC-IK's
-#: on 300 random q0 of Panda, xArm and PR2, ~0.02 ms more).
-COLLECT_BATCH, NEAREST_BATCH = 16, 24
+#: on 300 random q0 of Panda, xArm and PR2, ~0.02 ms more). 23: 6 draws near q0 and the table's 17 nearest
+#: entries (:data:`~.seed_table.DEFAULT_TABLE_SEEDS`), no uniform draw to fill it (24 took one: no share more).
+COLLECT_BATCH, NEAREST_BATCH = 16, 23
 #: The batch on goals without a null space (UR10 on a pose), whose whole budget collects the branches.
 COLLECT_BATCH_BRANCHES = 32
 #: Table entries tried per variant of a goal set in the first rounds (at least).
