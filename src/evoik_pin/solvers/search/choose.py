@@ -242,7 +242,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     wrap = wrapping_joints(robot, problem.lower, problem.upper)
     criterion = make_criterion(problem, prefer, preferences, wrap)
     single = one_frame(problem)
-    choices, P, R = problem.variant_targets()
+    if single:  # one goal on one frame: one variant, the problem itself (its targets read from its engine, base_lm)
+        choices, P, R = [(None,)], [None], [None]
+    else:
+        choices, P, R = problem.variant_targets()
     base_lm = LevenbergMarquardt(problem, engine=engine) if setup is None else setup._engine(problem, engine)
     variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
     if len(variants) == 1:

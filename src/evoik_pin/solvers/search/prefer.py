@@ -305,14 +305,23 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
     return q, f, evaluations
 
 
+_COUPLED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
     """The compiled descent's mode (:mod:`..lm.nullspace`) for prefer="nearest" | "manipulability" alone (no
     further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
     if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
         return None
     lm = variants[0].lm
-    index, scale, offset = lm._tree[4:7]  # mimic joints (the tree's joints coupled to q): the descent leaves answers
-    if index.shape[0] != lm.n or np.any(index != np.arange(lm.n)) or np.any(scale != 1.0) or np.any(offset != 0.0):
+    robot = lm.problem.robot
+    coupled = _COUPLED.get(robot)  # kept per robot: its tree does not change
+    if coupled is None:
+        # mimic joints (the tree's joints coupled to q): the descent leaves answers as they are
+        index, scale, offset = lm._tree[4:7]
+        coupled = _COUPLED[robot] = bool(index.shape[0] != lm.n or np.any(index != np.arange(lm.n))
+                                         or np.any(scale != 1.0) or np.any(offset != 0.0))
+    if coupled:
         return None
     return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
 
