@@ -165,7 +165,7 @@ def test_turned_rows_are_nearest_turn_bit_for_bit(name):
     """The compiled nearest turns of prefer's hot path (turned_rows) are nearest_turn's numbers exactly, on UR5 (every
     joint a full turn, +-2 pi) and on PR2's arm (two continuous joints among bounded ones), rows far and near q0, on
     a bound and half a turn away."""
-    from evoik_pin.solvers.search.prefer import turned_rows
+    from evoik_pin.solvers.search.descent import turned_rows
 
     if name == "pr2_left":
         from evoik_pin.robot import example_robot_data_dir
@@ -629,7 +629,8 @@ def test_descent_mode_skips_mimic_trees(panda):
     from evoik_pin.robot import load_robot
     from evoik_pin.solvers.lm import LevenbergMarquardt
     from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
-    from evoik_pin.solvers.search.prefer import descent_mode, make_criterion
+    from evoik_pin.solvers.search.descent import descent_mode
+    from evoik_pin.solvers.search.prefer import make_criterion
 
     for robot, expected in ((load_robot(mimic_3r(), tip="tool"), None), (panda, MODE_NEAREST)):
         q = robot.random_configurations(1, np.random.default_rng(0))[0]
@@ -641,7 +642,7 @@ def test_descent_mode_skips_mimic_trees(panda):
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(1, 12), st.integers(1, 20))
 def test_distinct_keeps_the_order_and_drops_near_duplicates(seed, count, size):
-    from evoik_pin.solvers.search.prefer import distinct
+    from evoik_pin.solvers.search.descent import distinct
 
     rng = np.random.default_rng(seed)
     Q = rng.normal(size=(size, 3))
@@ -902,7 +903,8 @@ def test_descent_in_collision_keeps_answers_and_drops_flips(panda):
     from types import SimpleNamespace
 
     from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
-    from evoik_pin.solvers.search.prefer import descend, euler_flips, flipped, make_criterion
+    from evoik_pin.solvers.search.descent import descend
+    from evoik_pin.solvers.search.prefer import euler_flips, flipped, make_criterion
 
     class Everywhere:  # a scene every configuration collides with
         def in_collision(self, q, margin):

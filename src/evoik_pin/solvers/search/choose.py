@@ -1,7 +1,7 @@
 """memetic over goal sets (any one of several targets) and with ``prefer`` or preferences (:func:`choose`): the
 variants (combinations of members) tried nearest the seed table first, LM from q0 and their table starts, then
 memetic's search; with ``prefer`` other than "first", answers collected for :data:`COLLECT_SHARE` of the budget, the
-best taken along the goals' self-motion (:mod:`.prefer`)."""
+best taken along the goals' self-motion (:mod:`.prefer`, :mod:`.descent`)."""
 
 from __future__ import annotations
 
@@ -19,24 +19,20 @@ from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, wrapping_joints
 from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
 from ..lm.nullspace import nullspace_kernel
 from . import memetic as memetic_module
+from .descent import answer_costs, descend, descent_mode, distinct, turned_rows
 from .memetic_runs import kernel_goal_errors
 from .nearest import table_distances_many
 from .prefer import (
     REFINE_COUNT,
     REFINE_STEPS,
     TRIAL_STEPS,
-    answer_costs,
     check_prefer,
     default_prefer_timeout,
-    descend,
-    descent_mode,
-    distinct,
     euler_flips,
     has_null_space,
     make_criterion,
     nearest_turn,
     refine,
-    turned_rows,
 )
 from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, one_frame
 
@@ -54,7 +50,7 @@ NEAR_SCALES, NEAR_EVERY = (0.1, 0.25, 0.5), 4
 NEAR_JOINT_WEIGHT = 0.1
 #: LM runs per kernel call while prefer collects answers; prefer="nearest"'s (with a null space): its answers nearest
 #: q0 come from more starts, and the first batch, made whatever the clock says, is most of its budget (7 more runs
-#: with 2 fewer descended, :data:`~.prefer.DESCEND_COUNT`: 1-2 points more of the answers no farther than TRAC-IK's
+#: with 2 fewer descended, :data:`~.descent.DESCEND_COUNT`: 1-2 points more of the answers no farther than TRAC-IK's
 #: on 300 random q0 of Panda, xArm and PR2, ~0.02 ms more). 23: 6 draws near q0 and the table's 17 nearest
 #: entries (:data:`~.seed_table.DEFAULT_TABLE_SEEDS`), no uniform draw to fill it (24 took one: no share more).
 COLLECT_BATCH, NEAREST_BATCH = 16, 23
