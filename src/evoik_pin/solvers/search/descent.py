@@ -34,12 +34,14 @@ MANIP_COUNT, MANIP_FIRST, MANIP_TRIAL = 12, 4, 4
 #: leave the winner short of its optimum.
 SURE_FINAL = 1
 
+#: Per robot, whether its tree couples joints to q (mimic joints), which the compiled descent does not take.
+#: Per robot: whether its tree couples joints to q (mimic joints), which the compiled descent leaves to Python's refine.
 _COUPLED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
     """The compiled descent's mode (:mod:`..lm.nullspace`) for prefer="nearest" | "manipulability" alone (no
-    further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
+    further preferences) on the compiled engine; None otherwise (the Python :func:`.prefer.refine` then)."""
     if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
         return None
     lm = variants[0].lm
@@ -56,7 +58,7 @@ def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
 
 
 def turned_rows(Q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
-    """:func:`nearest_turn` of each row of ``Q`` (N, n), the same numbers, by the compiled
+    """:func:`.prefer.nearest_turn` of each row of ``Q`` (N, n), the same numbers, by the compiled
     :func:`..lm.nullspace.nearest_turn_rows` (loaded with :func:`..lm.nullspace.nullspace_kernel`, before the
     clock): prefer's hot path, where NumPy's dozen calls per batch of a few rows cost more than the rows."""
     if not wrap.any():
@@ -122,10 +124,12 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
     (manipulability: :data:`MANIP_FIRST` of them :data:`MANIP_TRIAL` steps, then as many more as fit before
     ``finish``, :data:`MANIP_COUNT` at most), then the best :data:`DESCEND_FINAL` on in rounds while the clock allows
     (until ``finish``; the first round for the best :data:`SURE_FINAL` whatever it says). With ``flips``
-    (:func:`euler_flips`, q0 given), the answers' flips inside the box are candidates too (the descent takes them
-    onto the goals first). A descended answer in collision keeps its start (a flip is
-    dropped). Returns (the answers best first, evaluations). The answers are kept as arrays (:class:`_Pool`) in
-    between: this bookkeeping, done on lists of tuples, cost as much as the descent's compiled steps."""
+    (:func:`.prefer.euler_flips`, q0 given), the answers' flips inside the box are candidates too (the descent takes
+    them onto the goals first). A descended answer in collision keeps its start (a flip is dropped). With one
+    variant and no scene, the trial and the best one's first round are one kernel call
+    (:func:`..lm.nullspace.descend_batch_then_best`). Returns (the answers best first, evaluations). The answers are
+    kept as arrays (:class:`_Pool`) in between: this bookkeeping, done on lists of tuples, cost as much as the
+    descent's compiled steps."""
     kernels = nullspace_kernel()
     lower, upper = problem.lower, problem.upper
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
