@@ -31,9 +31,9 @@ PREFER = ("first", "nearest", "manipulability")
 DEFAULT_PREFER_TIMEOUT = 0.0004
 #: The default budgets (s) on goals without a null space (a 6-joint arm on a pose), where the whole budget collects IK
 #: branches (nothing to descend along): the share of answers nearest q0 grows with it (on 300 random q0 of UR3, UR5,
-#: UR10, seeds 0 and 1: 97.6-100 % at 0.6 ms, 96.9-98.9 % at 0.55 ms, 95.8-98.6 % at 0.5 ms), the most dexterous
-#: branch is found sooner (the same shares at 0.45 ms as at 0.6 ms).
-BRANCHES_PREFER_TIMEOUT = {"nearest": 0.00055, "manipulability": 0.00045}
+#: UR10, seeds 0 and 1: 97.6-100 % at 0.6 ms, 96.9-98.9 % at 0.55 ms unloaded, but UR10's 94.7 % at 0.55 ms on a
+#: loaded machine), the most dexterous branch is found sooner (the same shares at 0.45 ms as at 0.6 ms).
+BRANCHES_PREFER_TIMEOUT = {"nearest": 0.0006, "manipulability": 0.00045}
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4
 #: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
