@@ -62,7 +62,7 @@ import pinocchio as pin
 import evoik_pin as ev
 from evoik_pin.goals import JointLimitMargin, Pose, Posture
 from evoik_pin.solvers.lm import LevenbergMarquardt, wrapping_joints
-from evoik_pin.solvers.search.prefer import DEFAULT_PREFER_TIMEOUT, nearest_turn
+from evoik_pin.solvers.search.prefer import BRANCHES_PREFER_TIMEOUT, DEFAULT_PREFER_TIMEOUT, nearest_turn
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_ik import ROBOTS, cpu_model, quiet_output, wrap_continuous  # noqa: E402
@@ -407,15 +407,16 @@ def run(args) -> str:
     if TRAC_EPS != 1e-5:
         command += f" --trac-eps {TRAC_EPS:g}"
     near_text = f"; near q0: the target configuration + N(0, {sigma:g} rad) per joint, clipped"
+    budget = (f"{args.prefer_timeout * 1e3:g} ms" if args.prefer_timeout else
+              f"{DEFAULT_PREFER_TIMEOUT * 1e3:g} ms with a null space, without "
+              + ", ".join(f"{t * 1e3:g} ms ({p})" for p, t in BRANCHES_PREFER_TIMEOUT.items()) + " (the defaults)")
     load = os.getloadavg()
     lines = ["### Goal sets, prefer and preferences (issues 23 and 32)", "",
              f"{datetime.date.today().isoformat()}, `{command}`, "
              f"{cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}; load average "
              f"{load[0]:.2f} at the start (a shared, loaded machine: times are indicative, ratios were taken in the "
              f"same run, target by target interleaved). prefer's budget: `timeout` "
-             f"{(args.prefer_timeout or DEFAULT_PREFER_TIMEOUT) * 1e3:g} ms"
-             f"{'' if args.prefer_timeout else ' (the default)'}"
-             f"{near_text if 'near' in q0s else ''}"
+             f"{budget}{near_text if 'near' in q0s else ''}"
              ". Bar (issue 32): success >= TRAC-IK's, share >= 95 %, time ratio <= 0.2x; goal set < 3x.", ""]
     if "prefer" in parts:
         lines += ["| robot | q0 | prefer vs TRAC-IK | our success | "

@@ -160,6 +160,57 @@ def test_nearest_turn_same_pose_within_limits_and_no_farther(q, q0):
     assert np.all(np.abs(out - q0) <= np.abs(q - q0) + 1e-12)
 
 
+@pytest.mark.parametrize("name", ["ur5", "pr2_left"])
+def test_turned_rows_are_nearest_turn_bit_for_bit(name):
+    """The compiled nearest turns of prefer's hot path (turned_rows) are nearest_turn's numbers exactly, on UR5 (every
+    joint a full turn, +-2 pi) and on PR2's arm (two continuous joints among bounded ones), rows far and near q0, on
+    a bound and half a turn away."""
+    from evoik_pin.solvers.search.descent import turned_rows
+
+    if name == "pr2_left":
+        from evoik_pin.robot import example_robot_data_dir
+
+        robot = ev.load_robot(str(example_robot_data_dir() / "pr2_description/urdf/pr2.urdf"), base="torso_lift_link",
+                              tip="l_gripper_tool_frame")
+    else:
+        robot = ev.load_robot(name)
+    lo, hi = robot.lower, robot.upper
+    wrap = wrapping_joints(robot, lo, hi)
+    assert wrap.any()
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q0 = robot.random_configurations(1, rng)[0]
+        near = np.clip(q0 + rng.normal(0, 0.1, (10, robot.n)), lo, hi)
+        Q = np.concatenate([robot.random_configurations(30, rng), near, np.tile(lo, (2, 1)), np.tile(hi, (2, 1)),
+                            np.clip(q0 + np.pi, lo, hi)[None]])
+        out = turned_rows(Q, q0, lo, hi, wrap)
+        assert np.array_equal(out, nearest_turn(Q, q0, lo, hi, wrap))
+        assert np.array_equal(out, np.array([nearest_turn(q, q0, lo, hi, wrap) for q in Q]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.integers(0, 30), st.lists(st.integers(0, 12), min_size=1, max_size=4))
+def test_table_starts_follow_nearest_first(seed, k, sizes):
+    """prefer's table starts (choose._TableStarts, ranked once in arrays) come in nearest_first's order, taken a batch
+    at a time or one by one, with ties and entries at inf among the distances."""
+    from evoik_pin.solvers.search.choose import _TableStarts
+    from evoik_pin.solvers.search.seed_table import nearest_first
+
+    rng = np.random.default_rng(seed)
+    d = rng.integers(0, 8, size=40).astype(float)  # ties
+    d[rng.random(40) < 0.3] = np.inf
+    Q = np.arange(40.0)[:, None]
+    k_finite = min(k, int(np.isfinite(d).sum()))
+    expected = [float(i) for i in nearest_first(d, k_finite)]
+    starts, got = _TableStarts(Q, d, k), []
+    for size in sizes:
+        got += starts.take(size)[:, 0].tolist()
+    got += [q[0] for q in starts]
+    assert got == expected
+    one_by_one = _TableStarts(Q, d, k)
+    assert [q[0] for q in one_by_one] == expected
+
+
 # ---------------------------------------------------------------------- preferences
 def test_preferences_keep_goals_and_lower_their_cost(panda):
     rng = np.random.default_rng(7)
@@ -487,6 +538,29 @@ def test_descent_never_worsens_the_criterion_and_keeps_the_goals(panda, seed, pr
 
 
 @pytest.mark.parametrize("prefer", ["nearest", "manipulability"])
+def test_descent_then_best_is_the_trial_then_a_round_of_its_best(panda, prefer):
+    """descend_batch_then_best (prefer's trial and its best answer's first round in one call) gives exactly what the
+    two calls give: every answer descended, then the one of least criterion descended on from where it ended."""
+    from evoik_pin.solvers.lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
+
+    kernels = nullspace_kernel()
+    mode = MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        q_target, q0 = panda.random_configurations(2, rng)
+        problem = ev.make_problem(panda, panda.fk(q_target), q0=q0)[0]
+        lm, Q = _answers(panda, problem, rng, 4)
+        Q_fused, f_fused = np.empty_like(Q), np.empty(4)
+        kernels["descend_batch_then_best"](Q, q0, mode, *lm._args, 3, 10, 1.0, 10, Q_fused, f_fused)
+        Q_out, f = np.empty_like(Q), np.empty(4)
+        kernels["descend_batch"](Q, q0, mode, *lm._args, 3, 10, 1.0, Q_out, f)
+        best = int(np.argmin(f))
+        kernels["descend_batch"](Q_out[best:best + 1].copy(), q0, mode, *lm._args, 10, 10, 1.0, Q_out[best:best + 1],
+                                 f[best:best + 1])
+        assert np.array_equal(Q_fused, Q_out) and np.array_equal(f_fused, f)
+
+
+@pytest.mark.parametrize("prefer", ["nearest", "manipulability"])
 def test_descent_stays_within_the_limits_of_full_turn_joints(ur5, prefer):
     """UR5's joints span two full turns (+-2 pi), limits LM's clip box leaves open (it wraps them): the descent
     keeps every answer inside [lower, upper] all the same, q0 near the limits pulling it outward. Outside, an answer
@@ -555,7 +629,8 @@ def test_descent_mode_skips_mimic_trees(panda):
     from evoik_pin.robot import load_robot
     from evoik_pin.solvers.lm import LevenbergMarquardt
     from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
-    from evoik_pin.solvers.search.prefer import descent_mode, make_criterion
+    from evoik_pin.solvers.search.descent import descent_mode
+    from evoik_pin.solvers.search.prefer import make_criterion
 
     for robot, expected in ((load_robot(mimic_3r(), tip="tool"), None), (panda, MODE_NEAREST)):
         q = robot.random_configurations(1, np.random.default_rng(0))[0]
@@ -567,7 +642,7 @@ def test_descent_mode_skips_mimic_trees(panda):
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(1, 12), st.integers(1, 20))
 def test_distinct_keeps_the_order_and_drops_near_duplicates(seed, count, size):
-    from evoik_pin.solvers.search.prefer import distinct
+    from evoik_pin.solvers.search.descent import distinct
 
     rng = np.random.default_rng(seed)
     Q = rng.normal(size=(size, 3))
@@ -828,7 +903,8 @@ def test_descent_in_collision_keeps_answers_and_drops_flips(panda):
     from types import SimpleNamespace
 
     from evoik_pin.solvers.lm.nullspace import MODE_NEAREST
-    from evoik_pin.solvers.search.prefer import descend, euler_flips, flipped, make_criterion
+    from evoik_pin.solvers.search.descent import descend
+    from evoik_pin.solvers.search.prefer import euler_flips, flipped, make_criterion
 
     class Everywhere:  # a scene every configuration collides with
         def in_collision(self, q, margin):

@@ -25,7 +25,8 @@ from .kernel import _copy, damped_solve, make_workspace, task_error, task_jacobi
 from .layout import B_HI, B_LO, B_WRAP, LAMBDA_MIN, TWO_PI
 from .tree_kinematics import frame_jacobian
 
-__all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "nullspace_kernel"]
+__all__ = ["MODE_MANIPULABILITY", "MODE_NEAREST", "descend_batch", "descend_batch_then_best", "log_manipulability_rows",
+           "nearest_turn_rows", "nullspace_kernel"]
 
 #: What :func:`descend_batch` minimises: ``|q - q0|^2`` (full-turn joints at their turn nearest q0 inside the limits,
 #: :func:`~evoik_pin.solvers.search.prefer.nearest_turn`'s rule) or ``-sqrt(det(J J^T))`` of the first goal's frame.
@@ -150,6 +151,43 @@ def _turned(q, q0, box, k):
     return s if box[B_LO, k] <= q0[k] + s <= box[B_HI, k] else d
 
 
+@njit(cache=True, nogil=True)
+def log_manipulability_rows(Q, kin, box, any_wrap, goals, pt, Rt, out):
+    """``-log(m)`` of each row of ``Q`` (N, n) into ``out`` (N,), m the descent's manipulability of the first goal's
+    frame (:func:`_manipulability`; 1e-300 at a singularity): the cost of
+    :class:`~evoik_pin.goals.preferences.Manipulability` (weight 1, the first goal's frame; equal to about 1e-12, the
+    Jacobian's frame aside), ~1 us a row instead of ~10 us of Pinocchio and NumPy. The other arguments are
+    :func:`descend_batch`'s (the engine's ``_args``)."""
+    n = Q.shape[1]
+    ws = make_workspace(kin, goals, n, 1)
+    J, JJ = np.empty((6, n)), np.empty((6, 6))
+    weighted = weighted_stack(goals[0])
+    cur = ws.cur
+    for i in range(Q.shape[0]):
+        _copy(Q[i], cur.q)
+        task_error(True, kin, False, goals, weighted, pt, Rt, cur.q, cur, ws)
+        out[i] = -math.log(max(_manipulability(kin[3], goals[3], cur.pg, cur.Z, cur.O, J, JJ), 1e-300))
+
+
+@njit(cache=True, nogil=True)
+def nearest_turn_rows(Q, q0, lower, upper, wrap, out):
+    """:func:`~evoik_pin.solvers.search.prefer.nearest_turn` of each row of ``Q`` (N, n) into ``out`` (N, n), the same
+    floating-point operations in the same order (the same numbers): one compiled pass instead of a dozen NumPy
+    calls on a handful of rows, where prefer's per-call overhead lies."""
+    for i in range(Q.shape[0]):
+        for k in range(Q.shape[1]):
+            q = Q[i, k]
+            out[i, k] = q
+            if wrap[k]:
+                s = q + TWO_PI * np.round((q0[k] - q) / TWO_PI)
+                if s > upper[k]:
+                    s = s - TWO_PI
+                if s < lower[k]:
+                    s = s + TWO_PI
+                if s >= lower[k] and s <= upper[k]:
+                    out[i, k] = s
+
+
 @njit(cache=True, nogil=True, forceinline=False)
 def _criterion(mode, q, q0, box, rev, support, pg, Z, O, J, JJ):
     """The criterion at q (lower is better), from q's kinematics buffers."""
@@ -177,6 +215,31 @@ def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, re
     for i in range(N):
         evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
                                 restore, max_step, Q_out[i], f_out, i)
+    return evaluations
+
+
+@njit(cache=True, nogil=True, forceinline=False)
+def descend_batch_then_best(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, restore, max_step, further,
+                            Q_out, f_out):
+    """:func:`descend_batch`, then the answer of least criterion (the first of equals; none when every f_out is inf)
+    ``further`` steps on from where it ended, as a descent of its own (its step length starts again): prefer's trial
+    of its best answers and the best one's first round in one call. Returns the kinematics evaluations."""
+    N, n = Q.shape
+    ws = make_workspace(kin, goals, n, 1)
+    JJ, M = np.empty((6, 6)), np.empty((6, n))
+    p, q_prev, p_prev = np.empty(n), np.empty(n), np.empty(n)
+    evaluations = 0
+    for i in range(N):
+        evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
+                                restore, max_step, Q_out[i], f_out, i)
+    best = -1
+    for i in range(N):
+        if f_out[i] < np.inf and (best < 0 or f_out[i] < f_out[best]):
+            best = i
+    if best >= 0 and further > 0:
+        start = Q_out[best].copy()
+        evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, start, q0, mode, kin, box, goals, pt, Rt, further,
+                                restore, max_step, Q_out[best], f_out, best)
     return evaluations
 
 
@@ -331,18 +394,27 @@ NULLSPACE_COMPILE_SECONDS = 25.0
 
 
 def nullspace_kernel() -> dict:
-    """:func:`descend_batch` and :func:`.population_rows.task_rows` (for :func:`~..search.prefer.refine`), loaded
-    (or compiled) outside any time budget."""
+    """:func:`descend_batch` (and :func:`descend_batch_then_best`), :func:`nearest_turn_rows`,
+    :func:`log_manipulability_rows` and
+    :func:`.population_rows.task_rows` (for :func:`~..search.prefer.refine`), loaded (or compiled) outside any time
+    budget."""
     if not _KERNEL:
         from .compiling import load
         from .engine import warmup_problem
         from .population_rows import task_rows
 
         tree, box, goals, pt, Rt = warmup_problem()
+        z = np.zeros((1, 1))
         load("the null-space descent of prefer= and preferences", [
-            (descend_batch, (np.zeros((1, 1)), np.zeros(1), MODE_NEAREST, tree, box, False, goals, pt, Rt, 1, 1, 0.5,
-                             np.empty((1, 1)), np.empty(1))),
+            (descend_batch, (z, z[0], MODE_NEAREST, tree, box, False, goals, pt, Rt, 1, 1, 0.5, np.empty((1, 1)),
+                             np.empty(1))),
+            (descend_batch_then_best, (z, z[0], MODE_NEAREST, tree, box, False, goals, pt, Rt, 1, 1, 0.5, 1,
+                                       np.empty((1, 1)), np.empty(1))),
+            (nearest_turn_rows, (z, z[0], z[0], z[0], np.zeros(1, dtype=np.bool_), np.empty((1, 1)))),
+            (log_manipulability_rows, (z, tree, box, False, goals, pt, Rt, np.empty(1))),
             (task_rows, (np.zeros(1), *tree, *goals, pt, Rt, np.empty(6), np.empty((6, 1)), np.empty((1, 2))))],
              NULLSPACE_COMPILE_SECONDS)
-        _KERNEL.update(descend_batch=descend_batch, task_rows=task_rows)
+        _KERNEL.update(descend_batch=descend_batch, descend_batch_then_best=descend_batch_then_best,
+                       task_rows=task_rows, nearest_turn_rows=nearest_turn_rows,
+                       log_manipulability_rows=log_manipulability_rows)
     return _KERNEL

@@ -1,7 +1,7 @@
 """memetic over goal sets (any one of several targets) and with ``prefer`` or preferences (:func:`choose`): the
 variants (combinations of members) tried nearest the seed table first, LM from q0 and their table starts, then
 memetic's search; with ``prefer`` other than "first", answers collected for :data:`COLLECT_SHARE` of the budget, the
-best taken along the goals' self-motion (:mod:`.prefer`)."""
+best taken along the goals' self-motion (:mod:`.prefer`, :mod:`.descent`)."""
 
 from __future__ import annotations
 
@@ -19,24 +19,22 @@ from ..lm import DEFAULT_ITERATIONS, LevenbergMarquardt, wrapping_joints
 from ..lm.layout import S_CONVERGED, S_COST, S_EVALUATIONS, S_POS, S_ROT, STATS_SIZE, kernel_params
 from ..lm.nullspace import nullspace_kernel
 from . import memetic as memetic_module
+from .descent import answer_costs, descend, descent_mode, distinct, turned_rows
 from .memetic_runs import kernel_goal_errors
 from .nearest import table_distances_many
 from .prefer import (
-    DEFAULT_PREFER_TIMEOUT,
     REFINE_COUNT,
     REFINE_STEPS,
     TRIAL_STEPS,
     check_prefer,
-    descend,
-    descent_mode,
-    distinct,
+    default_prefer_timeout,
     euler_flips,
     has_null_space,
     make_criterion,
     nearest_turn,
     refine,
 )
-from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_first, one_frame
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, one_frame
 
 __all__ = ["COLLECT_SHARE", "choose", "member_distances"]
 
@@ -50,8 +48,12 @@ NEAR_SCALES, NEAR_EVERY = (0.1, 0.25, 0.5), 4
 #: prefer="nearest" ranks the seed table by pose nearness plus this x the squared joint distance to q0 (rad^2) x the
 #: table's weight squared (the term scales with the arm).
 NEAR_JOINT_WEIGHT = 0.1
-#: LM runs per kernel call while prefer collects answers.
-COLLECT_BATCH = 16
+#: LM runs per kernel call while prefer collects answers; prefer="nearest"'s (with a null space): its answers nearest
+#: q0 come from more starts, and the first batch, made whatever the clock says, is most of its budget (7 more runs
+#: with 2 fewer descended, :data:`~.descent.DESCEND_COUNT`: 1-2 points more of the answers no farther than TRAC-IK's
+#: on 300 random q0 of Panda, xArm and PR2, ~0.02 ms more). 23: 6 draws near q0 and the table's 17 nearest
+#: entries (:data:`~.seed_table.DEFAULT_TABLE_SEEDS`), no uniform draw to fill it (24 took one: no share more).
+COLLECT_BATCH, NEAREST_BATCH = 16, 23
 #: The batch on goals without a null space (UR10 on a pose), whose whole budget collects the branches.
 COLLECT_BATCH_BRANCHES = 32
 #: Table entries tried per variant of a goal set in the first rounds (at least).
@@ -92,7 +94,8 @@ class _Around:
 
     def __init__(self, starts, rng, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, endless: bool) -> None:
         self.starts, self.rng, self.q0, self.lower, self.upper, self.endless = starts, rng, q0, lower, upper, endless
-        self.half = np.minimum(0.5 * (upper - lower), np.pi)
+        # the draws' standard deviations (len(NEAR_SCALES), n), cycled through
+        self.cycle = np.array(NEAR_SCALES)[:, None] * np.minimum(0.5 * (upper - lower), np.pi)
         self.k = 0  # near starts drawn so far (the scale cycles with it)
         self.done = False
 
@@ -102,7 +105,7 @@ class _Around:
         if self.done or size <= 0:
             return np.empty((0, n))
         m = -(-size // NEAR_EVERY)  # near q0: every NEAR_EVERY-th, the first included
-        scales = np.take(NEAR_SCALES, np.arange(self.k, self.k + m) % len(NEAR_SCALES))[:, None] * self.half
+        scales = self.cycle[np.arange(self.k, self.k + m) % len(NEAR_SCALES)]
         self.k += m
         near = np.minimum(np.maximum(self.q0 + self.rng.normal(size=(m, n)) * scales, self.lower), self.upper)
         rest = _take(self.starts, size - m, n)
@@ -123,21 +126,46 @@ def _take(starts, size: int, n: int) -> np.ndarray:
 
 
 class _TableStarts:
-    """The table's rows ``Q`` by ``d`` (T,), the nearest first, at most ``k`` and only finite ones, ranked lazily
-    (:func:`~.seed_table.nearest_first`): an iterator of rows, and :meth:`take` for a batch in one indexing."""
+    """The table's rows ``Q`` by ``d`` (T,), the nearest first, at most ``k`` and only finite ones, in
+    :func:`~.seed_table.nearest_first`'s order: an iterator of rows (the first costs an argmin), and :meth:`take` for a
+    batch in one indexing (the ranking made once, in arrays: prefer's batches take most of it at once)."""
 
     def __init__(self, Q: np.ndarray, d: np.ndarray, k: int) -> None:
-        self.Q, self.order = Q, nearest_first(d, min(k, int(np.count_nonzero(np.isfinite(d)))))
+        self.Q, self.d, self.k = Q, d, min(k, int(np.count_nonzero(np.isfinite(d))))
+        self.order: np.ndarray | None = None  # the ranking, made on first need
+        self.taken = 0
+
+    def _ranking(self) -> np.ndarray:
+        """Indices of the k nearest entries in nearest_first's order: the argmin, then the others by distance."""
+        if self.order is None:
+            d, k = self.d, self.k
+            if k <= 1:
+                self.order = np.array([int(d.argmin())] if k == 1 else [], dtype=np.intp)
+            else:
+                first = int(d.argmin())
+                part = np.argpartition(d, k - 1)[:k]
+                ranked = part[d[part].argsort()]
+                self.order = np.concatenate(([first], ranked[ranked != first]))
+        return self.order
 
     def take(self, size: int) -> np.ndarray:
         """Up to ``size`` entries (rows), the nearest not yet taken."""
-        return self.Q[list(itertools.islice(self.order, max(size, 0)))]
+        rows = self._ranking()[self.taken:self.taken + max(size, 0)]
+        self.taken += rows.shape[0]
+        return self.Q[rows]
 
     def __iter__(self):
         return self
 
     def __next__(self) -> np.ndarray:
-        return self.Q[next(self.order)]
+        if self.taken == 0 and self.order is None and self.k > 0:  # the nearest alone: no ranking yet
+            self.taken = 1
+            return self.Q[int(self.d.argmin())]
+        order = self._ranking()
+        if self.taken >= order.shape[0]:
+            raise StopIteration
+        self.taken += 1
+        return self.Q[order[self.taken - 1]]
 
 
 def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R=None) -> list[float]:
@@ -192,14 +220,14 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
            iterations: int = DEFAULT_ITERATIONS, engine: str = "compiled", setup=None) -> Result:
     """memetic over goal sets and with ``prefer`` / preferences (see the module docstring); memetic's options.
 
-    ``timeout`` (s): default memetic's for ``prefer="first"``, :data:`~.prefer.DEFAULT_PREFER_TIMEOUT` otherwise;
+    ``timeout`` (s): default memetic's for ``prefer="first"``, :func:`~.prefer.default_prefer_timeout` otherwise;
     ``table_offset`` is not used. ``setup``: the :class:`~.memetic.MemeticSetup` handing a goal set over, whose LM
     engine is retargeted instead of a new one made."""
     from .memetic import DEFAULT_TIMEOUT, check_options, memetic, prepare
 
     prefer = check_prefer(prefer)
     if timeout is None and max_restarts is None:
-        timeout = DEFAULT_TIMEOUT if prefer == "first" else DEFAULT_PREFER_TIMEOUT
+        timeout = DEFAULT_TIMEOUT if prefer == "first" else default_prefer_timeout(problem, prefer)
     t_setup = time.perf_counter()
     robot = problem.robot
     (timeout, max_restarts, population, generations, polish_count, table_size, table_seeds, _, batch, iterations,
@@ -210,7 +238,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
     wrap = wrapping_joints(robot, problem.lower, problem.upper)
     criterion = make_criterion(problem, prefer, preferences, wrap)
     single = one_frame(problem)
-    choices, P, R = problem.variant_targets()
+    if single:  # one goal on one frame: one variant, the problem itself (its targets read from its engine, base_lm)
+        choices, P, R = [(None,)], [None], [None]
+    else:
+        choices, P, R = problem.variant_targets()
     base_lm = LevenbergMarquardt(problem, engine=engine) if setup is None else setup._engine(problem, engine)
     variants = [_Variant(problem, c, P[v], R[v], base_lm, engine) for v, c in enumerate(choices)]
     if len(variants) == 1:
@@ -224,6 +255,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         table.prepare_goals(problem.goals)
     if prefer != "first" and engine == "compiled":
         nullspace_kernel()  # compiled or loaded before the clock starts
+    mode = descent_mode(prefer, criterion, variants)  # the compiled descent's, or None (Python's refine)
     # prefer="nearest": the answers' flips (other branches of the same pose) descended too
     flips = euler_flips(robot, problem.goals[0].frame) if prefer == "nearest" and single else ()
     t0 = time.perf_counter()
@@ -262,7 +294,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
         if prefer == "first" and not criterion:
             winner = (q, i, out)
             return True
-        answers.append((criterion.cost(q), q, i))
+        answers.append((float(answer_costs(criterion, mode, v.lm, q[None])[0]), q, i))
         return prefer == "first"
 
     def run_batch(i: int, Q: np.ndarray) -> None:
@@ -292,10 +324,10 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
             v.best_rank = min(v.best_rank, float(rank.min()))
         if ok.any():
             A = Q_out[ok]
-            if q0 is not None:
-                A = nearest_turn(A, q0, problem.lower, problem.upper, wrap)
+            if q0 is not None:  # compiled (nullspace_kernel is loaded on this path): the same numbers
+                A = turned_rows(A, q0, problem.lower, problem.upper, wrap)
             v.best_rank = -1.0
-            answers.extend(zip(criterion.costs(A).tolist(), A, [i] * A.shape[0], strict=True))
+            answers.extend(zip(answer_costs(criterion, mode, lm, A).tolist(), A, [i] * A.shape[0], strict=True))
 
     def out_of(limit) -> bool:
         return limit is not None and runs >= len(variants) and time.perf_counter() >= limit
@@ -312,7 +344,7 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 done = True
                 break
     if prefer != "first":  # collect: batches of starts per variant, all run to their end, until the budget
-        batch_size = COLLECT_BATCH
+        batch_size = NEAREST_BATCH if prefer == "nearest" else COLLECT_BATCH
         if not redundant:  # no null space to refine in: the whole budget collects
             limit, batch_size = finish, COLLECT_BATCH_BRANCHES
         if prefer == "nearest":  # every other start near q0: answers near q0 come from there
@@ -380,7 +412,6 @@ def choose(problem, rng, *, prefer: str = "first", preferences=(), timeout: floa
                 cost_r = criterion.cost(q_r)
             return cost_r, q_r, i
 
-        mode = descent_mode(prefer, criterion, variants)
         if redundant and mode is not None:  # compiled: a first pass over more answers, then the best further
             refined, ev = descend(answers, variants, q0, mode, criterion, scene, problem, wrap, finish, flips)
             evaluations += ev

@@ -14,18 +14,26 @@ import pinocchio as pin
 from ...errors import MethodError, OptionError
 from ...goals.preferences import Manipulability, Posture
 from ...goals.registry import TASK_ROWS
-from ...goals.stack import owned
 from ..lm import LevenbergMarquardt, wrapping_joints
-from ..lm.nullspace import MODE_MANIPULABILITY, MODE_NEAREST, nullspace_kernel
+from ..lm.nullspace import nullspace_kernel
 from ..options import check_choice
 
-__all__ = ["DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "bind_preferences", "check_prefer",
-           "check_prefer_method", "euler_flips", "flipped", "nearest_turn", "refine"]
+__all__ = ["BRANCHES_PREFER_TIMEOUT", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFINE_COUNT", "Criterion", "Nearness",
+           "bind_preferences", "check_prefer", "check_prefer_method", "default_prefer_timeout", "euler_flips",
+           "flipped", "has_null_space", "make_criterion", "nearest_turn", "refine"]
 
 #: The answers ``prefer`` picks among: the first found, the nearest q0, the most dexterous.
 PREFER = ("first", "nearest", "manipulability")
-#: Default budget (s) of ``prefer="nearest" | "manipulability"``: under 1 ms with the call's overhead.
-DEFAULT_PREFER_TIMEOUT = 0.0006
+#: Default budget (s) of ``prefer="nearest" | "manipulability"`` on goals with a null space (a redundant arm on a
+#: pose): the work done whatever the clock says (the first batch of LM runs, the descent's trial and the best answer's
+#: first round) about fills it; more of it went to the descent's later rounds, which changed few answers (0.6 ms: the
+#: same shares on 300 problems a row within a point). Under 0.7 ms with the call's overhead.
+DEFAULT_PREFER_TIMEOUT = 0.0004
+#: The default budgets (s) on goals without a null space (a 6-joint arm on a pose), where the whole budget collects IK
+#: branches (nothing to descend along): the share of answers nearest q0 grows with it (on 300 random q0 of UR3, UR5,
+#: UR10, seeds 0 and 1: 97.6-100 % at 0.6 ms, 96.9-98.9 % at 0.55 ms unloaded, but UR10's 94.7 % at 0.55 ms on a
+#: loaded machine), the most dexterous branch is found sooner (the same shares at 0.45 ms as at 0.6 ms).
+BRANCHES_PREFER_TIMEOUT = {"nearest": 0.0006, "manipulability": 0.00045}
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4
 #: Null-space steps of one refinement at most (the winner's; each of the best answers first gets TRIAL_STEPS); LM
@@ -33,21 +41,6 @@ REFINE_COUNT = 4
 REFINE_STEPS, TRIAL_STEPS, RESTORE_ITERATIONS = 12, 3, 10
 #: Largest null-space step (rad or m, Euclidean).
 MAX_REFINE_STEP = 0.5
-#: The compiled descent (:func:`descend`): the best DESCEND_COUNT distinct answers descended DESCEND_TRIAL steps
-#: each, the best DESCEND_FINAL of them on in rounds of DESCEND_STEPS while the clock allows (DESCEND_ROUNDS at
-#: most); steps of DESCEND_MAX_STEP (rad or m) at most.
-DESCEND_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 8, 4, 2, 10, 4
-DESCEND_MAX_STEP = 1.0
-#: prefer="manipulability": the best MANIP_FIRST distinct answers descended MANIP_TRIAL steps whatever the clock
-#: says, then as many more as fit before the finish (MANIP_COUNT in all at most): the raw measure says little about
-#: the local optimum an answer's self-motion reaches (on xArm the answer that reaches TRAC-IK's Manip1 optimum ranks
-#: 5th to 13th of ~15), and the closed-form gradient makes a step cheap (~4 kinematics evaluations). A fixed larger
-#: trial (6 x 3 steps) gained on warm caches but not in the bench, where our solve follows TRAC-IK's 5 ms with caches
-#: cold, and cost ~0.07 ms.
-MANIP_COUNT, MANIP_FIRST, MANIP_TRIAL = 12, 4, 4
-#: The best answers (this many) get the first round of DESCEND_STEPS whatever the clock says: a trial's few steps
-#: leave the winner short of its optimum.
-SURE_FINAL = 1
 
 
 def check_prefer(prefer, q0_given: bool = True) -> str:
@@ -133,6 +126,23 @@ def flipped(Q: np.ndarray, flips) -> np.ndarray:
     return np.concatenate(out) if out else Q[:0]
 
 
+class Nearness(Posture):
+    """prefer="nearest"'s term: ``Posture(q0)`` over every joint with plain differences (answers are taken to their
+    turn nearest q0 first, :func:`nearest_turn`), its costs and gradient written without Posture's joint mask and
+    turn wrapping, which do nothing here: the same numbers, a few NumPy calls instead of a dozen per batch of
+    answers (prefer's hot path)."""
+
+    def costs(self, Q):
+        d = Q - self._ref
+        return 0.5 * self.weight * (d * d).sum(axis=-1)
+
+    def cost(self, q):
+        return float(self.costs(q))
+
+    def gradient(self, q):
+        return self.weight * (q - self._ref)
+
+
 class Criterion:
     """The sum of bound preferences (``prefer``'s term first), what answers are ranked and refined by."""
 
@@ -187,6 +197,12 @@ def _frame_rows(problem) -> list[tuple]:
 def has_null_space(problem) -> bool:
     """Whether the goals leave a null space to refine in: fewer task rows than joints."""
     return sum(len(rows) for _, rows in _frame_rows(problem)) < problem.robot.n
+
+
+def default_prefer_timeout(problem, prefer: str) -> float:
+    """The default budget (s) of ``prefer`` ("nearest" or "manipulability") for ``problem``:
+    :data:`DEFAULT_PREFER_TIMEOUT` with a null space to descend along, :data:`BRANCHES_PREFER_TIMEOUT`'s without."""
+    return DEFAULT_PREFER_TIMEOUT if has_null_space(problem) else BRANCHES_PREFER_TIMEOUT[prefer]
 
 
 def _task_jacobian(problem, q: np.ndarray, lm: LevenbergMarquardt) -> np.ndarray:
@@ -273,106 +289,6 @@ def refine(problem, lm: LevenbergMarquardt, q: np.ndarray, criterion: Criterion,
     return q, f, evaluations
 
 
-def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
-    """The compiled descent's mode (:mod:`..lm.nullspace`) for prefer="nearest" | "manipulability" alone (no
-    further preferences) on the compiled engine; None otherwise (the Python :func:`refine` then)."""
-    if prefer == "first" or len(criterion.terms) != 1 or any(v.lm.engine != "compiled" for v in variants):
-        return None
-    lm = variants[0].lm
-    index, scale, offset = lm._tree[4:7]  # mimic joints (the tree's joints coupled to q): the descent leaves answers
-    if index.shape[0] != lm.n or np.any(index != np.arange(lm.n)) or np.any(scale != 1.0) or np.any(offset != 0.0):
-        return None
-    return MODE_NEAREST if prefer == "nearest" else MODE_MANIPULABILITY
-
-
-def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, problem, wrap: np.ndarray,
-            finish: float | None, flips=()) -> tuple[list, int]:
-    """prefer's answers (cost, q, variant), best first, taken along their self-motion by the compiled descent
-    (:func:`..lm.nullspace.descend_batch`): the best :data:`DESCEND_COUNT` distinct ones :data:`DESCEND_TRIAL` steps
-    (manipulability: :data:`MANIP_FIRST` of them :data:`MANIP_TRIAL` steps, then as many more as fit before
-    ``finish``, :data:`MANIP_COUNT` at most), then the best :data:`DESCEND_FINAL` on in rounds while the clock allows
-    (until ``finish``; the first round for the best :data:`SURE_FINAL` whatever it says). With ``flips``
-    (:func:`euler_flips`, q0 given), the answers' flips inside the box are candidates too (the descent takes them
-    onto the goals first). A descended answer in collision keeps its start (a flip is
-    dropped). Returns (the answers best first, evaluations)."""
-    kernel = nullspace_kernel()["descend_batch"]
-    target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
-    if flips and q0 is not None and answers:
-        F = nearest_turn(flipped(np.array([a[1] for a in answers]), flips), q0, problem.lower, problem.upper, wrap)
-        keep = np.all((F >= problem.lower) & (F <= problem.upper), axis=1)
-        index = np.tile([a[2] for a in answers], len(flips))[keep]
-        F = F[keep]
-        # (cost, q, variant, True): a flip, off the goals until the descent takes it onto them
-        answers = sorted(answers + [(c, q, i, True) for c, q, i in zip(criterion.costs(F).tolist(), F,
-                                                                        index.tolist(), strict=True)],
-                         key=lambda a: a[0])
-    picked = distinct(answers, DESCEND_COUNT if mode == MODE_NEAREST else MANIP_COUNT)
-    evaluations = 0
-
-    def run(batch, steps):
-        """Each answer of ``batch`` descended ``steps`` steps at most, one kernel call per variant."""
-        nonlocal evaluations
-        out = []
-        for i in sorted({a[2] for a in batch}):
-            mine = [a for a in batch if a[2] == i]
-            Q = np.array([a[1] for a in mine])
-            Q_out, f = np.empty_like(Q), np.empty(Q.shape[0])
-            evaluations += int(kernel(Q, target, mode, *variants[i].lm._args, steps, RESTORE_ITERATIONS,
-                                       DESCEND_MAX_STEP, Q_out, f))
-            met = np.isfinite(f)  # a flip the descent could not take onto the goals is dropped
-            if scene is not None:
-                for k in range(Q.shape[0]):
-                    if scene.in_collision(Q_out[k], problem.margin):
-                        Q_out[k] = Q[k]
-                        met[k] &= len(mine[k]) == 3  # a flip's start is off the goals: no answer to keep
-            Q_out = Q_out[met]
-            if q0 is not None:
-                Q_out = nearest_turn(Q_out, q0, problem.lower, problem.upper, wrap)
-            out.extend(zip(criterion.costs(Q_out).tolist(), Q_out, [i] * Q_out.shape[0], strict=True))
-        return sorted(out, key=lambda a: a[0])
-
-    if mode == MODE_NEAREST or finish is None:
-        picked = run(picked, DESCEND_TRIAL if mode == MODE_NEAREST else MANIP_TRIAL)
-    else:  # the best MANIP_FIRST whatever the clock says, then as many more as fit before the finish
-        t = time.perf_counter()
-        trialled = run(picked[:MANIP_FIRST], MANIP_TRIAL)
-        per_answer = (time.perf_counter() - t) / max(min(MANIP_FIRST, len(picked)), 1)
-        # the best one's first round (SURE_FINAL) kept in the time: DESCEND_STEPS steps, MANIP_TRIAL an answer
-        fit = int((finish - time.perf_counter()) / per_answer) - SURE_FINAL * DESCEND_STEPS // MANIP_TRIAL
-        if fit > 0 and len(picked) > MANIP_FIRST:
-            trialled += run(picked[MANIP_FIRST:MANIP_FIRST + fit], MANIP_TRIAL)
-        picked = sorted(trialled, key=lambda a: a[0])
-    for k in range(DESCEND_ROUNDS):  # rounds of the best on towards their optimum while the clock allows
-        final = DESCEND_FINAL
-        if finish is not None and time.perf_counter() >= finish:
-            if k or not SURE_FINAL:
-                break
-            final = SURE_FINAL  # the first round, for the best, whatever the clock says
-        before = [a[0] for a in picked[:final]]
-        picked = sorted(run(picked[:final], DESCEND_STEPS) + picked[final:], key=lambda a: a[0])
-        if [a[0] for a in picked[:final]] == before:  # converged
-            break
-    return picked, evaluations
-
-
-def distinct(answers, count: int) -> list:
-    """The first ``count`` of ``answers`` (cost, q, variant; best first) no two within 1e-3 (rad or m) of each other."""
-    if len(answers) <= 1:
-        return list(answers[:count])
-    Q = np.array([a[1] for a in answers])
-    G = Q @ Q.T
-    sq = np.diag(G)
-    close = ((sq[:, None] + sq[None, :] - 2.0 * G) < 1e-6).tolist()
-    picked, taken = [], []
-    for k, row in enumerate(close):
-        if len(picked) >= count:
-            break
-        if not any(row[j] for j in taken):
-            picked.append(answers[k])
-            taken.append(k)
-    return picked
-
-
 def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Criterion:
     """prefer's term and the bound preferences. OptionError: prefer="nearest" without q0."""
     robot = problem.robot
@@ -382,7 +298,7 @@ def make_criterion(problem, prefer: str, preferences, wrap: np.ndarray) -> Crite
         check_prefer(prefer, problem.q0 is not None)
         # plain differences: answers are taken to their turn nearest q0 inside the box first (nearest_turn), and
         # a difference modulo 2 pi would count turns the limits forbid
-        terms.append(Posture(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
+        terms.append(Nearness(problem.q0).bind(robot, problem.q0, problem.lower, problem.upper, np.zeros_like(wrap)))
     elif prefer == "manipulability":
         terms.append(Manipulability(first_frame).bind(robot, problem.q0, problem.lower, problem.upper, wrap))
     for p in preferences:
