@@ -275,7 +275,8 @@ class IKSolver:
             problem = self.problem(goals, q0)
         rng = _rng(seed)
         if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
-            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, **self._options)
+            # the solver's memetic set-up lends its LM engine (retargeted, not made anew every call)
+            result = choose(problem, rng, prefer=self._prefer, preferences=prefs, setup=self._memetic, **self._options)
             # the free joints at q0 (settle_free) unless preferences among the terms placed them
             return with_verdicts(problem, result if prefs else settle_free(problem, result))
         criterion = bind_preferences(problem, prefs)  # bad preferences fail before the solve
