@@ -60,7 +60,7 @@ def run(args) -> str:
         "",
         f"`python scripts/bench_batch_choices.py --n {args.n} --rounds {args.rounds}`; {machine}, {os.cpu_count()} "
         f"cores, load average {' '.join(load)} (after the run). Panda, {args.n} poses, prefer='nearest' at its "
-        "default budget (0.6 ms), q0 zero; ms per target (wall time).",
+        "default budget (0.4-0.6 ms), q0 zero; ms per target (wall time).",
         "",
         "| round | solve_many, workers=1 | loop of solve | loop of solve, 2 threads (robot copies) | loop / threads |",
         "|---|---|---|---|---|",

@@ -19,7 +19,7 @@ Talos's CoM inside its shrunk polygon, a goal set's reachable member) as well as
 middle of its +-1 m box). Two budgets, each over all the problems:
 
 * ``time``: each benchmark's own wall-clock budget (memetic's default 5 ms; Talos 20 ms and Baxter 50 ms as in
-  bench_goal_kinds_balance.py; ``prefer``'s default 0.6 ms);
+  bench_goal_kinds_balance.py; ``prefer``'s default budget, 0.4-0.6 ms);
 * ``fixed``: ``timeout=None, max_restarts=K`` (``--restarts``, default 5), no clock: the same work whatever the
   machine's load, so that a difference in success is the algorithm's.
 

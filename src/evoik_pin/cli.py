@@ -665,7 +665,8 @@ _COMMANDS = {
                        "one per line, drawn as ghosts by --html/--view; exit 1 when there is none")),
         "--scene", "--margin",
         ("--prefer", dict(help="which answer: first (default), nearest (nearest --q0) or manipulability (the most "
-                          "dexterous), among those found within --timeout (default 0.6 ms for the last two)")),
+                          "dexterous), among those found within --timeout (default 0.4 ms on redundant goals, else "
+                          "0.6 / 0.45 ms)")),
         ("--locked", dict(action="append", default=[], metavar="NAME=VALUE", help=f"hold joint NAME at VALUE "
                           f"(repeatable; {_JOINT_UNITS}); --q0 and the answer keep every joint"))]),
     "view": (_cmd_view, "meshcat web preview of a robot at a joint vector (tip pose as a triad)", [
