@@ -191,9 +191,9 @@ def test_turned_rows_are_nearest_turn_bit_for_bit(name):
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(0, 30), st.lists(st.integers(0, 12), min_size=1, max_size=4))
 def test_table_starts_follow_nearest_first(seed, k, sizes):
-    """prefer's table starts (choose._TableStarts, ranked once in arrays) come in nearest_first's order, taken a batch
-    at a time or one by one, with ties and entries at inf among the distances."""
-    from evoik_pin.solvers.search.choose import _TableStarts
+    """prefer's table starts (answer_choice._TableStarts, ranked once in arrays) come in nearest_first's order, taken a
+    batch at a time or one by one, with ties and entries at inf among the distances."""
+    from evoik_pin.solvers.search.answer_choice import _TableStarts
     from evoik_pin.solvers.search.seed_table import nearest_first
 
     rng = np.random.default_rng(seed)
@@ -712,7 +712,7 @@ def test_nearest_ranks_table_entries_near_q0_first(panda):
     it (the entries stay near the pose: within the pose-only ranking's first 200 of 4096)."""
     from types import SimpleNamespace
 
-    from evoik_pin.solvers.search.choose import NEAR_JOINT_WEIGHT, _variant_starts
+    from evoik_pin.solvers.search.answer_choice import NEAR_JOINT_WEIGHT, _variant_starts
     from evoik_pin.solvers.search.memetic import prepare
     from evoik_pin.solvers.search.seed_table import default_table_size
 
@@ -751,7 +751,7 @@ def test_manipulability_costs_equal_cost_row_by_row(panda, rows):
 def test_table_starts_hand_out_the_k_nearest_in_order(seed, size, k, chunks):
     """_TableStarts (prefer's table starts): the entry at d's argmin first, then the others of the k nearest by d,
     nearest first, entries at d = inf never; each once, whether taken in batches of any size or one by one."""
-    from evoik_pin.solvers.search.choose import _TableStarts
+    from evoik_pin.solvers.search.answer_choice import _TableStarts
 
     rng = np.random.default_rng(seed)
     Q = rng.normal(size=(size, 3))

@@ -176,7 +176,7 @@ def test_one_goal_lists_take_the_guaranteed_runs_with_the_general_paths_answers(
 
 def test_several_goals_take_the_goal_lists_guaranteed_runs(monkeypatch):
     """Two goals, a pointing goal: not one goal on one frame, so not the single target's compiled guaranteed runs but
-    the goal list's (memetic._goal_guaranteed_runs); a goal set: choose.py searches it, then the single target's
+    the goal list's (memetic._goal_guaranteed_runs); a goal set: answer_choice.py searches it, then the single target's
     guaranteed runs from the member it met open the set's repeat call (IKSolver._open_set_repeat_call)."""
     from evoik_pin.goals import Direction, Pose, Position
 

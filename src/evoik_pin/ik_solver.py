@@ -105,7 +105,7 @@ class IKSolver:
             from .solvers.search.memetic import MemeticSetup
 
             self._memetic = MemeticSetup(robot, **options)
-        # solve may call the plan directly (prefer= other than "first" chooses among answers: search.choose)
+        # solve may call the plan directly (prefer= other than "first" chooses among answers: search.answer_choice)
         self._plain = self._memetic is not None and not self._polish and self._prefer == "first"
         # the repeat calls: True (poses), False (positions), id(goal stack) (the last _GOAL_REPEAT_CALLS); only for
         # the default objective in a box that does not move with the target
@@ -265,7 +265,7 @@ class IKSolver:
         or their problem). With ``prefer="first"`` the preferences refine the method's answer in the goals' null
         space, a step kept only while every goal is still met."""
         from .goals.preferences import split_preferences
-        from .solvers.search.choose import choose
+        from .solvers.search.answer_choice import choose
         from .solvers.search.prefer import bind_preferences, refine
 
         if isinstance(target, IKProblem):
@@ -274,8 +274,9 @@ class IKSolver:
             goals, prefs = split_preferences(target)
             problem = self.problem(goals, q0)
         rng = _rng(seed)
-        if self._prefer != "first":  # memetic collecting answers (search.choose), the preferences among its terms
-            # the solver's memetic set-up lends its LM engine (retargeted, not made anew every call)
+        if self._prefer != "first":
+            # memetic collecting answers (search.answer_choice), the preferences among its terms; the solver's memetic
+            # set-up lends its LM engine (retargeted, not made anew every call)
             result = choose(problem, rng, prefer=self._prefer, preferences=prefs, setup=self._memetic, **self._options)
             # the free joints at q0 (settle_free) unless preferences among the terms placed them
             return with_verdicts(problem, result if prefs else settle_free(problem, result))

@@ -59,7 +59,7 @@ _REGISTRY: dict[str, SolverInfo] = {}
 
 # One module per solver family; each registers its methods on import (this order is methods()' order).
 _MODULES = ["paper.de", "paper.isade", "paper.pso", "paper.mode", "paper.ga", "paper.hga", "paper.nsga2",
-            "paper.analytic", "search.memetic", "search.choose", "search.all_solutions"]
+            "paper.analytic", "search.memetic", "search.answer_choice", "search.all_solutions"]
 
 
 def register(name: str, description: str, multi_solution: bool = False, multi_objective: bool = False,

@@ -117,7 +117,7 @@ class GoalSource:
         by_key: dict[tuple, list[int]] = {}
         for i in range(a, b):
             if i in self.preferences or any(g.alternatives is not None for g in self.raw[i]):
-                continue  # goal sets and preferences go to the one-by-one solver (search.choose)
+                continue  # goal sets and preferences go to the one-by-one solver (search.answer_choice)
             by_key.setdefault(self._keys[i], []).append(i)
         groups = []
         for key, rows in by_key.items():

@@ -1,7 +1,7 @@
 """prefer="nearest" | "manipulability"'s compiled descent (:func:`descend`): the answers collected
-(:mod:`.choose`), as arrays, taken along the goals' self-motion by :mod:`..lm.nullspace`'s kernels, best first; which
-answers it takes (:func:`distinct_rows`), how they are costed (:func:`answer_costs`) and turned (:func:`turned_rows`),
-and when the descent applies (:func:`descent_mode`)."""
+(:mod:`.answer_choice`), as arrays, taken along the goals' self-motion by :mod:`..lm.nullspace`'s kernels, best first;
+which answers it takes (:func:`distinct_rows`), how they are costed (:func:`answer_costs`) and turned
+(:func:`turned_rows`), and when the descent applies (:func:`descent_mode`)."""
 
 from __future__ import annotations
 

@@ -80,7 +80,7 @@ def check_options(*, timeout, max_restarts, population, generations, polish_coun
             check_choice("engine", engine, ENGINES))
 
 
-#: The search over goal sets (:func:`.choose.choose`), which puts itself here when imported (the solver registry
+#: The search over goal sets (:func:`.answer_choice.choose`), which puts itself here when imported (the solver registry
 #: imports it with the solvers): memetic cannot import it, choose builds on memetic.
 GOAL_SET_SEARCH: dict = {}
 
@@ -216,8 +216,8 @@ class MemeticSetup:
 
     def solve(self, problem: IKProblem, rng: np.random.Generator, t_setup: float | None = None) -> Result:
         """:func:`memetic` on ``problem`` with the setup's options; ``t_setup``: when the call began (``perf_counter``;
-        default now), for ``Result.setup_s``. Goal sets go to :func:`.choose.choose`."""
-        if problem.goal_sets:  # any one of several targets: tried in choose.py
+        default now), for ``Result.setup_s``. Goal sets go to :func:`.answer_choice.choose`."""
+        if problem.goal_sets:  # any one of several targets: tried in answer_choice.py
             if not GOAL_SET_SEARCH:  # memetic imported on its own: the registry loads every solver module, choose too
                 get_solver("memetic")
             return GOAL_SET_SEARCH["choose"](problem, rng, setup=self, **self.given)

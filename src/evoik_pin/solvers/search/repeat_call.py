@@ -14,7 +14,7 @@ from ...goals.stack import free_entries
 from ...result import Result
 from ..lm.layout import P_ITERATIONS
 from . import memetic
-from .choose import member_distances
+from .answer_choice import member_distances
 from .guaranteed_runs import REFUSED
 from .memetic import GUARANTEED_TABLE_RUNS, guaranteed_runs_result, resumed_state
 from .seed_table import DEFAULT_TABLE_SEEDS, one_frame
@@ -124,9 +124,9 @@ class RepeatCall:
 
     def solve_set(self, goal, q0: np.ndarray | None):
         """Solve the one-goal list ``[goal]`` of a goal set bound to the path's stack from ``q0`` (n,) float (checked;
-        None: none): the member nearest the seed table (:func:`~.choose.member_distances`, the goal-set search's first
-        choice), then the next nearest, up to :data:`SET_MEMBERS`, each on the compiled guaranteed runs as :meth:`solve`
-        solves it alone.
+        None: none): the member nearest the seed table (:func:`~.answer_choice.member_distances`, the goal-set search's
+        first choice), then the next nearest, up to :data:`SET_MEMBERS`, each on the compiled guaranteed runs as
+        :meth:`solve` solves it alone.
 
         Returns:
             The Result, ``chosen`` the member met, when a guaranteed run met one (its time and evaluations those of the
