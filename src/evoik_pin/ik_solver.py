@@ -196,7 +196,7 @@ class IKSolver:
             return self._locked.solve_within(target, q_prev, step, seed)
         # C-contiguous float64 arrays: the prepared step hands them to compiled code as they are
         return self._within(target, np.ascontiguousarray(self._checked_q0(q_prev)), self._checked_step(step),
-                                None if seed is None else _rng(seed))
+                            None if seed is None else _rng(seed))
 
     def _within(self, target, q_prev: np.ndarray, step: np.ndarray, rng) -> Result:
         """:meth:`solve_within` on arguments checked already: ``q_prev`` and ``step`` float64 (n,) (rad or m), ``rng``
