@@ -5,6 +5,7 @@ holds its kind's declaration (:mod:`.registry`): numba's disk cache would not se
 from __future__ import annotations
 
 import dataclasses
+import threading
 import weakref
 from dataclasses import dataclass, field
 
@@ -250,16 +251,19 @@ def free_entries(robot, stack: GoalStack) -> np.ndarray | None:
     kept = _FREE.get(id(stack))
     if kept is not None and kept[0] is stack:
         return kept[1]
-    index = robot.tree_constants()[4]  # physical joint -> the entry of q that drives it
+    driven = robot.tree_constants()[4][stack.support.any(axis=0)]  # the entries of q driving a goal's joints
     used = np.zeros(robot.n, dtype=bool)
-    used[index[stack.support.any(axis=0)]] = True
-    if len(_FREE) >= 32:
-        _FREE.pop(next(iter(_FREE)))
-    _FREE[id(stack)] = (stack, None if used.all() else ~used)
-    return _FREE[id(stack)][1]
+    used[driven[(driven >= 0) & (driven < robot.n)]] = True
+    free = None if used.all() else ~used
+    with _FREE_LOCK:  # solve_many's threads share the cache
+        if len(_FREE) >= 32:
+            _FREE.clear()
+        _FREE[id(stack)] = (stack, free)
+    return free
 
 
 _FREE: dict = {}  # id(goal stack) -> (the stack, its free_entries)
+_FREE_LOCK = threading.Lock()
 
 
 def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
