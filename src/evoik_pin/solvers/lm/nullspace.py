@@ -207,12 +207,9 @@ def descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, re
     no step was kept) and its criterion to f_out[i]. A Q[i] off the goals is first taken onto them by at most
     ``restore`` Gauss-Newton steps; where they fail, Q_out[i] is Q[i] and f_out[i] inf. ``max_step`` (rad or m):
     the longest step. The other arguments are :func:`.kernel.lm_run_buffers`'. Returns the kinematics evaluations."""
-    N, n = Q.shape
-    ws = make_workspace(kin, goals, n, 1)
-    JJ, M = np.empty((6, 6)), np.empty((6, n))
-    p, q_prev, p_prev = np.empty(n), np.empty(n), np.empty(n)
+    ws, JJ, M, p, q_prev, p_prev = _scratch(kin, goals, Q.shape[1])
     evaluations = 0
-    for i in range(N):
+    for i in range(Q.shape[0]):
         evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
                                 restore, max_step, Q_out[i], f_out, i)
     return evaluations
@@ -224,23 +221,25 @@ def descend_batch_then_best(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iter
     """:func:`descend_batch`, then the answer of least criterion (the first of equals; none when every f_out is inf)
     ``further`` steps on from where it ended, as a descent of its own (its step length starts again): prefer's trial
     of its best answers and the best one's first round in one call. Returns the kinematics evaluations."""
-    N, n = Q.shape
-    ws = make_workspace(kin, goals, n, 1)
-    JJ, M = np.empty((6, 6)), np.empty((6, n))
-    p, q_prev, p_prev = np.empty(n), np.empty(n), np.empty(n)
-    evaluations = 0
-    for i in range(N):
-        evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, Q[i], q0, mode, kin, box, goals, pt, Rt, iterations,
-                                restore, max_step, Q_out[i], f_out, i)
+    evaluations = descend_batch(Q, q0, mode, kin, box, any_wrap, goals, pt, Rt, iterations, restore, max_step, Q_out,
+                                f_out)
     best = -1
-    for i in range(N):
+    for i in range(Q.shape[0]):
         if f_out[i] < np.inf and (best < 0 or f_out[i] < f_out[best]):
             best = i
     if best >= 0 and further > 0:
+        ws, JJ, M, p, q_prev, p_prev = _scratch(kin, goals, Q.shape[1])
         start = Q_out[best].copy()
         evaluations += _descend(ws, JJ, M, p, q_prev, p_prev, start, q0, mode, kin, box, goals, pt, Rt, further,
                                 restore, max_step, Q_out[best], f_out, best)
     return evaluations
+
+
+@njit(cache=True, nogil=True)
+def _scratch(kin, goals, n):
+    """A descent's workspace (:func:`.kernel.make_workspace`) and its scratch arrays JJ (6, 6), M (6, n), p, q_prev,
+    p_prev (n,)."""
+    return make_workspace(kin, goals, n, 1), np.empty((6, 6)), np.empty((6, n)), np.empty(n), np.empty(n), np.empty(n)
 
 
 @njit(cache=True, nogil=True)
