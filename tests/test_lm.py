@@ -5,6 +5,7 @@ formulas the kernel uses are tested in test_lie.py.)"""
 import numpy as np
 import pinocchio as pin
 import pytest
+from kernel_helpers import compiled_frames
 
 import evoik_pin as ev
 from evoik_pin import lie
@@ -13,7 +14,6 @@ from evoik_pin.goals.stack import TargetArrays
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.robot import list_robots, load_robot
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs
-from evoik_pin.solvers.lm import chain as K
 from evoik_pin.solvers.lm.layout import STATS_SIZE
 from evoik_pin.solvers.lm.reference import ReferenceLM
 
@@ -27,12 +27,8 @@ def robots():
 def test_chain_kinematics_equal_pinocchio(robots, name):
     # every bundled and example arm: revolute, prismatic (vehicle_arm) and continuous (kinova) joints
     robot = robots[name]
-    FR, Fp, rev = robot.chain_constants()
-    n = robot.n
-    R, p, Z, O, J = np.empty((3, 3)), np.empty(3), np.empty((n, 3)), np.empty((n, 3)), np.empty((6, n))
     for q in robot.random_configurations(5, np.random.default_rng(3)):
-        K.forward(FR, Fp, rev, q, R, p, Z, O)
-        K.jacobian(rev, p, Z, O, J)
+        ((R, p, J),) = compiled_frames(robot, q, [robot.tip])
         T = robot.fk(q)
         assert np.abs(R - T.rotation).max() < 1e-12 and np.abs(p - T.translation).max() < 1e-12
         # base-frame axes and tip point velocity: Pinocchio's LOCAL_WORLD_ALIGNED Jacobian, i.e. "world"

@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
+from kernel_helpers import compiled_frames
 from urdf_helpers import gripper, joint_xml, mimic_3r, robot_xml, yourdfpy_pose
 
 import evoik_pin as ev
@@ -13,7 +14,6 @@ from evoik_pin.errors import FrameError, RobotLoadError, RobotLoadWarning
 from evoik_pin.problem import IKProblem, Target
 from evoik_pin.robot import load_robot
 from evoik_pin.solvers.lm import LevenbergMarquardt, solve_pairs
-from evoik_pin.solvers.lm import chain as K
 from evoik_pin.solvers.lm.reference import ReferenceLM
 
 ARMS = {
@@ -82,13 +82,8 @@ def test_compiled_chain_with_coupling(arm, rng):
     index, scale, offset = arm.chain_coupling()
     m = FR.shape[0] - 1
     assert index.dtype == np.int64 and index.shape == scale.shape == offset.shape == rev.shape == (m,)
-    R, p, Z, O, x = np.empty((3, 3)), np.empty(3), np.empty((m, 3)), np.empty((m, 3)), np.empty(m)
-    Jx, J = np.empty((6, m)), np.empty((6, arm.n))
     for q in arm.random_configurations(5, rng):
-        K.expand(index, scale, offset, q, x)
-        K.forward(FR, Fp, rev, x, R, p, Z, O)
-        K.jacobian(rev, p, Z, O, Jx)
-        K.fold(index, scale, Jx, J)
+        ((R, p, J),) = compiled_frames(arm, q, [arm.tip])
         T = arm.fk(q)
         assert np.abs(R - T.rotation).max() < 1e-12 and np.abs(p - T.translation).max() < 1e-12
         assert np.abs(J - arm.jacobian(q, "world")).max() < 1e-12

@@ -85,9 +85,8 @@ def _manipulability_gradient(rev, support, pg, Z, O, J, JJ, M, v):
     :func:`_manipulability`'s) by Jacobi's formula: dm/dq_k = m <M, dJ/dq_k> with M = (J J^T)^-1 J (6, n), or
     J (J^T J)^-1 for fewer than 6 joints, and dJ/dq_k from the columns themselves (the chain's derivative of its
     Jacobian: a revolute joint k turns the columns of the joints it carries, z_k x J_i; it moves the frame's
-    origin under the joints before it, z_i x J_k's linear part). n operations per column pair instead of n
-    forward kinematics for forward differences. Returns m; at a singularity (m 0) ``v`` is left unset. JJ (6, 6),
-    M (6, n): scratch."""
+    origin under the joints before it, z_i x J_k's linear part). Returns m; at a singularity (m 0) ``v`` is left
+    unset. JJ (6, 6), M (6, n): scratch."""
     m = _manipulability(rev, support, pg, Z, O, J, JJ)  # J and JJ's Cholesky factor (lower triangle) filled
     if m <= 0.0:
         return m
@@ -155,8 +154,7 @@ def _turned(q, q0, box, k):
 def log_manipulability_rows(Q, kin, box, any_wrap, goals, pt, Rt, out):
     """``-log(m)`` of each row of ``Q`` (N, n) into ``out`` (N,), m the descent's manipulability of the first goal's
     frame (:func:`_manipulability`; 1e-300 at a singularity): the cost of
-    :class:`~evoik_pin.goals.preferences.Manipulability` (weight 1, the first goal's frame; equal to about 1e-12, the
-    Jacobian's frame aside), ~1 us a row instead of ~10 us of Pinocchio and NumPy. The other arguments are
+    :class:`~evoik_pin.goals.preferences.Manipulability` (weight 1) to about 1e-12. The other arguments are
     :func:`descend_batch`'s (the engine's ``_args``)."""
     n = Q.shape[1]
     ws = make_workspace(kin, goals, n, 1)
@@ -172,8 +170,7 @@ def log_manipulability_rows(Q, kin, box, any_wrap, goals, pt, Rt, out):
 @njit(cache=True, nogil=True)
 def nearest_turn_rows(Q, q0, lower, upper, wrap, out):
     """:func:`~evoik_pin.solvers.search.prefer.nearest_turn` of each row of ``Q`` (N, n) into ``out`` (N, n), the same
-    floating-point operations in the same order (the same numbers): one compiled pass instead of a dozen NumPy
-    calls on a handful of rows, where prefer's per-call overhead lies."""
+    floating-point operations in the same order (the same numbers)."""
     for i in range(Q.shape[0]):
         for k in range(Q.shape[1]):
             q = Q[i, k]
@@ -280,18 +277,16 @@ def _descend(ws, JJ, M, p, q_prev, p_prev, q_start, q0, mode, kin, box, goals, p
     _copy(q_start, q)
     task_error(True, kin, mimic, goals, weighted, pt, Rt, q, cur, ws)
     evaluations = 1
-    f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
-    _copy(q, q_out)
-    f_out[i] = f
     if not within(spec, cur.ge):  # a start off the goals (a flipped answer): Gauss-Newton onto them first
         met, count = _onto_goals(kin, mimic, goals, weighted, pt, Rt, q, cur, ws, W, L, y, dq, box, spec, restore)
         evaluations += count
         if not met:
+            _copy(q_start, q_out)
             f_out[i] = np.inf  # left where it is: not an answer
             return evaluations
-        f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
-        _copy(q, q_out)
-        f_out[i] = f
+    f = _criterion(mode, q, q0, box, rev, support, cur.pg, cur.Z, cur.O, J, JJ)
+    _copy(q, q_out)
+    f_out[i] = f
     t0 = 1.0 if mode == MODE_NEAREST else -1.0  # -1: set from the first direction's length
     t = t0
     have_v = False
@@ -394,9 +389,8 @@ NULLSPACE_COMPILE_SECONDS = 25.0
 
 def nullspace_kernel() -> dict:
     """:func:`descend_batch` (and :func:`descend_batch_then_best`), :func:`nearest_turn_rows`,
-    :func:`log_manipulability_rows` and
-    :func:`.population_rows.task_rows` (for :func:`~..search.prefer.refine`), loaded (or compiled) outside any time
-    budget."""
+    :func:`log_manipulability_rows` and :func:`.population_rows.task_rows` (for :func:`~..search.prefer.refine`),
+    loaded (or compiled) outside any time budget."""
     if not _KERNEL:
         from .compiling import load
         from .engine import warmup_problem

@@ -150,6 +150,14 @@ class ReferenceLM:
             return E.T.dot(dposv(N + lam * self.eye, rhs, overwrite_a=1)[1])
         return dposv(N + lam * self.eye, E.T.dot(rhs), overwrite_a=1)[1]
 
+    def _trust_step(self, E: np.ndarray, N: np.ndarray, rhs: np.ndarray, lam: float) -> np.ndarray:
+        """:meth:`_solve`'s dq, scaled down to length ``max_step`` when longer (the trust region)."""
+        dq = self._solve(E, N, rhs, lam)
+        s2 = dq.dot(dq)
+        if s2 > self.max_step2:
+            dq *= self.max_step / math.sqrt(s2)
+        return dq
+
     def _step(self, q: np.ndarray, on_bound: bool, E: np.ndarray, N: np.ndarray, e: np.ndarray,
               lam: float) -> tuple[np.ndarray, bool]:
         """The next configuration and whether it rests on a bound (``N``: :meth:`_normal` of ``E``): the damped step
@@ -165,11 +173,7 @@ class ReferenceLM:
                 N = self._normal(E)
             else:
                 held = None
-        dq = self._solve(E, N, e, lam)  # the step is -dq
-        s2 = dq.dot(dq)
-        if s2 > self.max_step2:
-            dq *= self.max_step / math.sqrt(s2)
-        qn = q - dq
+        qn = q - self._trust_step(E, N, e, lam)
         qc = np.minimum(np.maximum(qn, lo), hi)
         fixed = qc != qn
         clipped = np.count_nonzero(fixed) > 0
@@ -178,10 +182,7 @@ class ReferenceLM:
                 fixed |= held
             dfix = np.where(fixed, qc - q, 0.0)
             Ef = E * ~fixed
-            dq = self._solve(Ef, self._normal(Ef), e + E.dot(dfix), lam)
-            s2 = dq.dot(dq)
-            if s2 > self.max_step2:
-                dq *= self.max_step / math.sqrt(s2)
+            dq = self._trust_step(Ef, self._normal(Ef), e + E.dot(dfix), lam)
             qc = np.minimum(np.maximum(q + dfix - dq, lo), hi)
         if self.any_wrap:
             qc = self._into_box(qc)

@@ -1,6 +1,6 @@
 """The folded kinematic tree (``Robot.tree_constants``: the m physical joints in topological order, each joint's
 placement in its parent's folded frame, every axis turned onto z) evaluated in numba: joint poses, axes and origins,
-frame poses and Jacobians. On a chain, :mod:`.chain`'s operations in the same order (the same bits)."""
+frame poses and Jacobians."""
 
 from __future__ import annotations
 
