@@ -21,7 +21,7 @@ from .call_setup import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, api._r
 from .errors import ConfigurationError, MethodError, OptionError
 from .goals.preferences import split_preferences
 from .ik_solver import IKSolver, check_no_preferences, solver_for
-from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta
+from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta, pro_box
 from .result import Result
 from .solvers import get_solver, methods
 from .solvers.batch import solve_many_call
@@ -153,8 +153,8 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
             point = {**options, "q0": previous}
             if pro and i > 0:  # the previous answer's box: that point's search box +- delta, q0 clipped into it
                 box = make_problem(robot, split_preferences(target)[0], q0=previous, **options)[0]
-                box = box.with_pro_box(previous, delta)
-                point.update(q0=box.q0, bounds=(box.lower, box.upper))
+                lower, upper = pro_box(box.lower, box.upper, previous, delta)
+                point.update(q0=np.clip(previous, lower, upper), bounds=(lower, upper))
             results.append(solve(robot, target, method, rng, **point))  # one generator for the whole trajectory
         previous = results[-1].q
     return results

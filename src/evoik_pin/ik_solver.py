@@ -417,8 +417,8 @@ def _key(robot, method: str, options: dict):
         elif name == "locked" and isinstance(value, dict) and all(
                 type(k) is str and isinstance(v, _PLAIN) for k, v in value.items()):
             parts.append((name, None, tuple(sorted((k, type(v), v) for k, v in value.items()))))
-        elif name == "bounds" and _bounds_key(value) is not None:  # by value: a solver copies its bounds
-            parts.append((name, None, _bounds_key(value)))
+        elif name == "bounds" and (bounds := _bounds_key(value)) is not None:  # by value: a solver copies its bounds
+            parts.append((name, None, bounds))
         elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
             # by identity: the cached solver keeps the object alive, so its id is not reused while cached
             parts.append((name, None, id(value)))

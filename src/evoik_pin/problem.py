@@ -15,6 +15,7 @@ from .goals import bind, is_goal_list
 from .goals.goal import FramePair
 from .goals.registry import KIND_BEYOND_FRAME
 from .goals.stack import owned, tip_goals
+from .io.datafile import naming
 from .objectives import (
     POSE_METRICS,
     Objective,
@@ -52,10 +53,8 @@ def check_pro_delta(delta) -> float:
 
 def check_q0(robot: Robot, q0) -> np.ndarray:
     """``q0`` as ``robot``'s (n,) joint vector (rad or m); ConfigurationError naming q0 otherwise."""
-    try:
+    with naming("q0", ConfigurationError):
         return robot.check_q(q0)
-    except ConfigurationError as exc:
-        raise ConfigurationError(f"q0: {exc}") from None
 
 
 def coerce_scene(robot: Robot, scene) -> Scene | None:
@@ -266,13 +265,9 @@ class IKProblem:
             Ta = frame_a_pose.get(id(g))
             return g.robot_errors(robot, q) if Ta is None else g.pair_errors(Ta, T)
 
-        poses = poses[:len(goals)]
-        if self.goal_sets:
-            picked = [(None, beyond(g, T)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
-                      for g, T in zip(goals, poses, strict=True)]
-            return [p[1] for p in picked], [p[0] for p in picked]
-        return ([beyond(g, T) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
-                 for g, T in zip(goals, poses, strict=True)], [None] * len(goals))
+        picked = [(None, beyond(g, T)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
+                  for g, T in zip(goals, poses[:len(goals)], strict=True)]
+        return [p[1] for p in picked], [p[0] for p in picked]
 
     # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal)
     @property
