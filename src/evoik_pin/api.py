@@ -117,7 +117,6 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     """
     robot = _robot(robot)
     rng = _rng(seed)
-    # every target and option checked before the first point is solved
     prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
     locked = options.pop("locked", None)
     solved_on = robot.locked(locked) if locked else robot  # an unknown joint, a value beyond its limits
@@ -187,7 +186,6 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
                                       choose=solve, prefer=prefer, locked=options.pop("locked", None), **options)
 
 
-# ------------------------------------------------ solve_trajectory within velocity limits
 def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
     """``v_max dt`` (n,) (rad or m), or None without ``dt`` and ``velocity_limits``; OptionError as solve_trajectory."""
     from .robot.velocity_limits import check_dt
@@ -204,7 +202,6 @@ def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
     return limits_of(robot, velocity_limits) * check_dt(dt)
 
 
-# ------------------------------------------------ solve's choices beyond one answer: prefer=, preferences, locked=
 def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
     """``prefer`` checked as :func:`solve` checks it: None for ``"first"``, else ``"nearest"`` or ``"manipulability"``.
     OptionError: an unknown value, "nearest" without q0; MethodError: a method other than memetic."""

@@ -596,22 +596,20 @@ _FLAGS = {
     "robot": dict(help="bundled or example-robot-data name, or a URDF or xacro path"),
     "--tip": dict(help="tip frame (default: the arm's tool frame)"),
     "--base": dict(help="base frame (default: the URDF root)"),
-    "--tips": dict(nargs="+", metavar="FRAME", help="frames whose chains from the base are the active joints; 'all' "
-                   "for every joint"),
-    "--floating-base": dict(action="store_true", help="a free-flying root: six more joints at the front of q"),
+    "--tips": dict(nargs="+", metavar="FRAME", help="frames whose chains are the active joints ('all': every joint)"),
+    "--floating-base": dict(action="store_true", help="a free-flying root: six more joints at the front of q (x, y, "
+                            "z in m; yaw, pitch, roll), poses in the world"),
     "--xacro-arg": dict(action="append", default=[], metavar="NAME=VALUE", help="a xacro argument (repeatable)"),
-    "--package-dir": dict(action="append", default=[], metavar="DIR",
-                          help="a folder holding the ROS packages the robot file names (repeatable)"),
+    "--package-dir": dict(action="append", default=[], metavar="DIR", help="a folder of ROS packages (repeatable)"),
     "--package-alias": dict(action="append", default=[], metavar="NAME=SHIPPED_AS",
-                            help="a package shipped under another name (repeatable)"),
+                            help="a package the robot file names, shipped under another name (repeatable)"),
     "--q": dict(type=float, nargs="+", help=f"joint values ({_JOINT_UNITS}); default 0"),
     "--rad": dict(action="store_true", help="joint values in radians (input and output)"),
     "--json": dict(action="store_true", help="machine-readable output"),
     "--html": dict(metavar="PATH", help="also write the result as a self-contained HTML page"),
     "--view": dict(action="store_true", help="show the result in meshcat until Ctrl-C"),
     "--seed": dict(type=int, default=0, help="seed of every random draw (default 0): same seed, same answer"),
-    "--scene": dict(metavar="FILE", help="collision scene (YAML or JSON): answers free of collisions with it and the "
-                    "robot itself"),
+    "--scene": dict(metavar="FILE", help="collision scene (YAML or JSON): answers free of collisions"),
     "--margin": dict(type=float, metavar="M", help="with --scene: clearance in m kept from collisions (default 0)"),
     "--no-progress": dict(action="store_true", help="no progress bar"),
     # the problem options every method takes
@@ -622,9 +620,8 @@ _FLAGS = {
     "--q0": dict(type=float, nargs="+", help=f"initial configuration ({_JOINT_UNITS})"),
     "--lower": dict(type=float, nargs="+", metavar="Q", help=f"lower search bounds ({_JOINT_UNITS}); default: robot's"),
     "--upper": dict(type=float, nargs="+", metavar="Q", help=f"upper search bounds ({_JOINT_UNITS}); default: robot's"),
-    "--option": dict(action="append", default=[], metavar="NAME=VALUE",
-                     help="any option of the method as its Python keyword, in SI units (repeatable); VALUE read as a "
-                     "Python literal, else a string"),
+    "--option": dict(action="append", default=[], metavar="NAME=VALUE", help="any option of the method as its Python "
+                     "keyword, in SI units (repeatable); VALUE read as a Python literal, else a string"),
 }
 _ROBOT = ["robot", "--tip", "--base", "--tips", "--floating-base", "--xacro-arg", "--package-dir", "--package-alias"]
 _PROBLEM = ["--tolerance", "--rotation-tolerance", "--orientation-weight", "--pose-metric"]
@@ -650,8 +647,7 @@ _COMMANDS = {
                            "memetic-all: 0.02), or none for no limit")),
         ("--count", dict(type=int, help="with --all: solutions wanted on a redundant arm (default 8)")),
         "--rad", "--json", "--html", "--view",
-        ("--all", dict(action="store_true", help="every distinct solution (solve_all), one per line; exit 1 when "
-                       "there is none")),
+        ("--all", dict(action="store_true", help="every distinct solution (solve_all); exit 1 when there is none")),
         "--scene", "--margin",
         ("--prefer", dict(help="which answer: first (default), nearest (nearest --q0) or manipulability, among "
                           "those found within --timeout (default 0.4 ms on redundant goals, else 0.6 / 0.45 ms)")),

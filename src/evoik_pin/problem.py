@@ -177,6 +177,13 @@ class IKProblem:
         """Number of joints."""
         return self.robot.n
 
+    def copy_with(self, **fields) -> IKProblem:
+        """This problem with ``fields`` replaced and no evaluation counted, the values taken as checked (no
+        ``__post_init__``): a new target's, goals' or box's problem sharing the rest."""
+        p = object.__new__(IKProblem)
+        p.__dict__ = {**self.__dict__, "evaluations": 0, **fields}
+        return p
+
     # ------------------------------------------------------------------ goal lists
     def goal_stack(self):
         """(the LM kernel's :class:`~evoik_pin.solvers.lm.layout.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)) of a goal
@@ -321,15 +328,10 @@ class IKProblem:
     def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:
         """The problem of one combination of goal-set members (:meth:`variant_targets`): those members as its goals,
         sharing this problem's box, q0 and scene."""
-        import copy
-
         if not self.goal_sets:
             return self
         goals = [g if m is None else g.alternatives[m] for g, m in zip(self.goals, choice, strict=True)]
-        v = copy.copy(self)
-        v.goals, v._goal_stack, v.evaluations = goals, [self._goal_stack[0], pt, Rt], 0
-        v.__dict__.pop("_goal_set_indices", None)
-        return v
+        return self.copy_with(goals=goals, _goal_stack=[self._goal_stack[0], pt, Rt])
 
     def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
         """The single-target problems of a goal list with goal sets, one per combination of their members (in
@@ -383,12 +385,10 @@ class IKProblem:
         own tolerances still judge answers); only the kernel's goal stack gets the smaller tolerances."""
         from .goals.stack import G_RTOL, G_TOL
 
-        tight = replace(self, goals=list(self.goals), evaluations=0)
-        stack, pt, Rt = tight._goal_stack
+        stack, pt, Rt = self._goal_stack
         spec = stack.spec.copy()
         spec[:, [G_TOL, G_RTOL]] = np.minimum(spec[:, [G_TOL, G_RTOL]], tolerance)
-        tight._goal_stack = [replace(stack, spec=spec), pt, Rt]
-        return tight
+        return self.copy_with(goals=list(self.goals), _goal_stack=[replace(stack, spec=spec), pt, Rt])
 
     def evaluate(self, Q: np.ndarray, count: bool = True) -> Evaluation:
         """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors
