@@ -1,11 +1,12 @@
-"""SE(3) maths in NumPy, vectorized over a batch of poses (R (N, 3, 3), t (N, 3) m; twists (N, 6) = (v m, w rad)):
-Pinocchio's closed forms (``pin.log6``, ``pin.exp6``, ``pin.Jlog6``); the numba twins are in :mod:`.compiled`."""
+"""SE(3) maths over a batch of poses (R (N, 3, 3), t (N, 3) m; twists (N, 6) = (v m, w rad)): Pinocchio's closed
+forms of ``pin.log6`` and ``pin.Jlog6`` in NumPy (their numba twins are in :mod:`.compiled`), ``pin.exp6``."""
 
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
-from .so3 import PREC2, PREC3, exp3, jlog3, log3, skew
+from .so3 import PREC2, PREC3, jlog3, log3, skew
 
 __all__ = ["exp6", "jlog6", "log6"]
 
@@ -35,18 +36,9 @@ def log6(R: np.ndarray, t: np.ndarray) -> np.ndarray:
 
 def exp6(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Poses (R (N, 3, 3), t (N, 3)) of twists xi (N, 6) = (v, w): ``pin.exp6`` row by row."""
-    xi = np.asarray(xi, dtype=float).reshape(-1, 6)
-    v, w = xi[:, :3], xi[:, 3:]
-    t2 = (w * w).sum(axis=1)
-    theta = np.sqrt(t2)
-    small = theta < PREC3
-    th = np.where(small, 1.0, theta)
-    # V = I + b [w]x + c [w]x^2 with b = (1 - cos) / theta^2, c = (theta - sin) / theta^3
-    b = np.where(small, 0.5 - t2 / 24.0, 2.0 * np.sin(0.5 * th) ** 2 / (th * th))
-    c = np.where(small, 1.0 / 6.0 - t2 / 120.0, (th - np.sin(th)) / (th * th * th))
-    K = skew(w)
-    V = np.eye(3) + b[:, None, None] * K + c[:, None, None] * (K @ K)
-    return exp3(w), (V @ v[:, :, None])[:, :, 0]
+    M = [pin.exp6(x).homogeneous for x in np.asarray(xi, dtype=float).reshape(-1, 6)]
+    H = np.array(M).reshape(-1, 4, 4)
+    return H[:, :3, :3].copy(), H[:, :3, 3].copy()
 
 
 def jlog6(R: np.ndarray, t: np.ndarray) -> np.ndarray:
