@@ -1,8 +1,6 @@
-"""A robot's speed limits per entry of ``q`` (rad/s or m/s), and the ``velocity_limits=`` / ``dt=`` options.
-
-Where the URDF gives none (0 or inf; a floating base), the defaults below stand in. A floating base's angular
-limit bounds each Euler rate (yaw, pitch, roll), not the body's angular velocity; its linear one each of x, y, z.
-"""
+"""A robot's speed limits per entry of ``q`` (rad/s or m/s), and the ``velocity_limits=`` / ``dt=`` options. Where
+the URDF gives none (0 or inf; a floating base), the defaults below stand in; a floating base's limits bound each of
+x, y, z and each Euler rate (yaw, pitch, roll)."""
 
 from __future__ import annotations
 
@@ -24,8 +22,7 @@ DEFAULT_BASE_ANGULAR_SPEED = 2.0 * math.pi
 
 
 def urdf_velocity_limits(robot) -> np.ndarray:
-    """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's (an entry gets the smallest ``v_j / |m|``
-    of the physical joints following it), the defaults where it has none."""
+    """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's, the defaults where it has none."""
     limits = _urdf_limits(robot)
     limits[~np.isfinite(limits) | (limits <= 0.0)] = DEFAULT_JOINT_SPEED
     if robot.floating_base:  # x, y, z (m/s), yaw, pitch, roll (rad/s): a free flyer has no URDF limit
@@ -34,8 +31,7 @@ def urdf_velocity_limits(robot) -> np.ndarray:
 
 
 def without_urdf_speed(robot) -> np.ndarray:
-    """(n,) bool: the entries of ``robot``'s ``q`` whose URDF gives no speed limit (0 or none), the floating base's
-    excepted (its defaults are the library's own)."""
+    """(n,) bool: the entries of ``robot``'s ``q`` whose URDF gives no speed limit, the floating base's excepted."""
     limits = _urdf_limits(robot)
     out = ~np.isfinite(limits) | (limits <= 0.0)
     if robot.floating_base:
