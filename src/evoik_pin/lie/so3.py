@@ -31,10 +31,8 @@ def is_rotation(R: np.ndarray, tol: float = 1e-6):
 def is_rotation_entries(a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float,
                         i: float) -> bool:
     """Whether the 9 numbers (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and det R >= 0
-    (False for NaN or inf): a target's test (:class:`evoik_pin.Target`). Plain arithmetic, on Python floats here (about
-    1 us) and compiled by numba in :mod:`.compiled` for kernels that check a target themselves."""
-    # a rotation's squared Frobenius norm is 3: past the screen at 4 the products below only ever see entries of a
-    # near-rotation, so none overflows (a huge entry makes the screen's sum inf, a NaN makes it NaN: refused)
+    (False for NaN or inf): a target's test (:class:`evoik_pin.Target`), compiled in :mod:`.compiled` for kernels."""
+    # a rotation's squared Frobenius norm is 3: past the screen at 4 no product below overflows (inf or NaN: refused)
     if not a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i <= 4.0:
         return False
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
