@@ -91,8 +91,7 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
             raise FrameError(f"joints {unknown} are not on {where}; its joints are "
                              f"{', '.join(dof_names) or '(none)'}{hint}")
         dofs = [d for d in dofs if kin.names[d] in joints]
-    # every joint q moves below the base (mimics of the active joints included): each link where full_configuration
-    # puts it
+    # every joint q moves below the base, mimics included: each link where full_configuration(q) puts it
     physical = [j for j in range(1, kin.njoints) if j not in above_base and follows(j)[0] in dofs]
     if not physical:
         raise RobotLoadError(f"{where} of {name} has no movable joint; pick another tip or base")

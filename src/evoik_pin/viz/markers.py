@@ -117,7 +117,7 @@ class MarkerDrawing:
             if labels:
                 label = root[frame]["label"]
                 label.set_object(_label(frame))
-                # above the marker along the base frame's z (the offset would turn with a pose's rotation)
+                # above the marker along the base frame's z (R^T: the offset would turn with the pose)
                 T = np.diag([s * 4 * GOAL_LABEL_HEIGHT] * 3 + [1.0])  # the 256 px canvas: text ~ a quarter of it
                 T[:3, 3] = (R.T if R is not None else np.eye(3)) @ np.array([0.0, 0.0, 0.6 * s])
                 label.set_transform(T)
