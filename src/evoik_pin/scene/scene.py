@@ -179,12 +179,6 @@ class Scene:
         self._margin = {id(self._gdata): 0.0, id(self._hdata): 0.0}
         self.version += 1
 
-    def _set_margin(self, gdata, margin: float) -> None:
-        if self._margin[id(gdata)] != margin:
-            for req in gdata.collisionRequests:
-                req.security_margin = margin
-            self._margin[id(gdata)] = margin
-
     def _q(self, q) -> np.ndarray:
         with naming("scene query", ConfigurationError):
             q = self.robot.check_q(q)
@@ -192,7 +186,10 @@ class Scene:
 
     def _check(self, q_pin: np.ndarray, margin: float, hulls: bool, stop_at_first: bool) -> bool:
         geom, gdata = (self._hulls, self._hdata) if hulls else (self._geom, self._gdata)
-        self._set_margin(gdata, margin)
+        if self._margin[id(gdata)] != margin:
+            for req in gdata.collisionRequests:
+                req.security_margin = margin
+            self._margin[id(gdata)] = margin
         pin.updateGeometryPlacements(self.robot.model, self._data, geom, gdata, q_pin)
         return bool(pin.computeCollisions(geom, gdata, stop_at_first))
 

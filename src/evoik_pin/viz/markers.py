@@ -19,16 +19,6 @@ _ORIGIN_COLOR = 0xF0C020
 _AXIS_COLORS = (("x", 0xE02020), ("y", 0x20C020), ("z", 0x2040F0))
 
 
-def _check_rotation(rotation, what: str) -> np.ndarray:
-    """``rotation`` as a (3, 3) rotation matrix, or a TargetError naming ``what``."""
-    R = np.asarray(rotation, dtype=float)
-    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
-        raise TargetError(f"{what} rotation must be a finite (3, 3) matrix, got shape {R.shape}")
-    if not is_rotation(R):
-        raise TargetError(f"{what} rotation is not a rotation matrix (R^T R != I or det R != 1)")
-    return R
-
-
 def _draw_marker(node, p: np.ndarray, R: np.ndarray | None, size: float) -> str:
     """Draw under meshcat node ``node`` a triad of axis length ``size`` (m) at (p, R), or a sphere of radius
     ``size / 4`` at ``p`` when ``R`` is None; returns "triad" or "point"."""
@@ -92,7 +82,12 @@ class MarkerDrawing:
         p = np.asarray(position, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise TargetError(f"target position must be 3 finite numbers (m), got shape {p.shape}: {p}")
-        R = None if rotation is None else _check_rotation(rotation, "target")
+        R = None if rotation is None else np.asarray(rotation, dtype=float)
+        if R is not None:
+            if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+                raise TargetError(f"target rotation must be a finite (3, 3) matrix, got shape {R.shape}")
+            if not is_rotation(R):
+                raise TargetError("target rotation is not a rotation matrix (R^T R != I or det R != 1)")
         node, name = self._fresh(name)
         self.scene[name] = "target " + _draw_marker(node, p, R, self._marker_size(size))
 
