@@ -226,8 +226,7 @@ class Robot(JointBounds, RobotGeometry):
     def chain_joints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Revolute mask (m,), unit axes (m, 3) and the lower and upper values (m,) (rad or m) of the m physical
         joints when q spans its bounds."""
-        a = self._phys_scale * self.lower[self._phys_index] + self._phys_offset
-        b = self._phys_scale * self.upper[self._phys_index] + self._phys_offset
+        a, b = self._physical(self.lower), self._physical(self.upper)
         return self.tree.revolute, self.tree.axes, np.minimum(a, b), np.maximum(a, b)
 
     def _physical(self, Q: np.ndarray) -> np.ndarray:
