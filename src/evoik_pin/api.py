@@ -21,7 +21,7 @@ from .call_setup import (  # noqa: F401  (api._run, api._PROBLEM_OPTIONS, api._r
 from .errors import ConfigurationError, MethodError, OptionError
 from .goals.preferences import split_preferences
 from .ik_solver import IKSolver, check_no_preferences, solver_for
-from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta
+from .problem import DEFAULT_PRO_DELTA, Target, check_pro_delta, pro_box
 from .result import Result
 from .solvers import get_solver, methods
 from .solvers.batch import solve_many_call
@@ -117,7 +117,6 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
     """
     robot = _robot(robot)
     rng = _rng(seed)
-    # every target and option checked before the first point is solved
     prefer = _checked_prefer(options.pop("prefer", None), method, q0 is not None)
     locked = options.pop("locked", None)
     solved_on = robot.locked(locked) if locked else robot  # an unknown joint, a value beyond its limits
@@ -153,8 +152,8 @@ def solve_trajectory(robot, targets, method: str = DEFAULT_METHOD, q0=None, pro:
             point = {**options, "q0": previous}
             if pro and i > 0:  # the previous answer's box: that point's search box +- delta, q0 clipped into it
                 box = make_problem(robot, split_preferences(target)[0], q0=previous, **options)[0]
-                box = box.with_pro_box(previous, delta)
-                point.update(q0=box.q0, bounds=(box.lower, box.upper))
+                lower, upper = pro_box(box.lower, box.upper, previous, delta)
+                point.update(q0=np.clip(previous, lower, upper), bounds=(lower, upper))
             results.append(solve(robot, target, method, rng, **point))  # one generator for the whole trajectory
         previous = results[-1].q
     return results
@@ -187,7 +186,6 @@ def solve_many(robot, targets, method: str = DEFAULT_METHOD, seed=None, q0=None,
                                       choose=solve, prefer=prefer, locked=options.pop("locked", None), **options)
 
 
-# ------------------------------------------------ solve_trajectory within velocity limits
 def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
     """``v_max dt`` (n,) (rad or m), or None without ``dt`` and ``velocity_limits``; OptionError as solve_trajectory."""
     from .robot.velocity_limits import check_dt
@@ -204,7 +202,6 @@ def _velocity_step(robot, dt, velocity_limits, pro: bool) -> np.ndarray | None:
     return limits_of(robot, velocity_limits) * check_dt(dt)
 
 
-# ------------------------------------------------ solve's choices beyond one answer: prefer=, preferences, locked=
 def _checked_prefer(prefer, method: str, q0_given: bool) -> str | None:
     """``prefer`` checked as :func:`solve` checks it: None for ``"first"``, else ``"nearest"`` or ``"manipulability"``.
     OptionError: an unknown value, "nearest" without q0; MethodError: a method other than memetic."""

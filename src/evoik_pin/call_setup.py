@@ -142,8 +142,6 @@ def _goal_method_problem(method: str, problem: IKProblem) -> IKProblem:
     """The problem ``method`` solves for a goal list: the list itself (:data:`GOAL_METHODS`), or, for the closed forms
     (``algebraic``), the one target on the tip that a single Pose or Position goal on the tip stands for; MethodError
     naming the methods that take goal lists otherwise."""
-    if method in GOAL_METHODS:
-        return problem
     if method == "algebraic":
         from .solvers.paper.analytic import tip_target_problem
 

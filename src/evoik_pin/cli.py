@@ -590,51 +590,38 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
 
 
 _JOINT_UNITS = "revolute joints in degrees, or radians with --rad; prismatic joints in m"
-#: The flags several sub-commands share, as ``add_argument`` takes them (a sub-command may replace their help).
+#: The flags several sub-commands share, as ``add_argument`` takes them (a sub-command may replace their help);
+#: docs/CLI.md says more.
 _FLAGS = {
     "robot": dict(help="bundled or example-robot-data name, or a URDF or xacro path"),
     "--tip": dict(help="tip frame (default: the arm's tool frame)"),
     "--base": dict(help="base frame (default: the URDF root)"),
-    "--tips": dict(nargs="+", metavar="FRAME", help="frames whose chains from the base are the active joints (their "
-                   "union), e.g. both grippers of a dual-arm robot; 'all' for every joint (what whole robots loaded by "
-                   "name get by default)"),
-    "--floating-base": dict(action="store_true", help="put a free-flying root in front of the URDF's root link: six "
-                            "more joints at the front of q (x, y, z in m; yaw, pitch, roll), poses in the world"),
-    "--xacro-arg": dict(action="append", default=[], metavar="NAME=VALUE",
-                        help="a <xacro:arg> value of a xacro file (repeatable); NAME:=VALUE also works"),
-    "--package-dir": dict(action="append", default=[], metavar="DIR",
-                          help="a folder holding the ROS packages a robot file names ($(find pkg), package://pkg/...), "
-                               "searched before ROS_PACKAGE_PATH and the file's own tree (repeatable)"),
+    "--tips": dict(nargs="+", metavar="FRAME", help="frames whose chains are the active joints ('all': every joint)"),
+    "--floating-base": dict(action="store_true", help="a free-flying root: six more joints at the front of q (x, y, "
+                            "z in m; yaw, pitch, roll), poses in the world"),
+    "--xacro-arg": dict(action="append", default=[], metavar="NAME=VALUE", help="a xacro argument (repeatable)"),
+    "--package-dir": dict(action="append", default=[], metavar="DIR", help="a folder of ROS packages (repeatable)"),
     "--package-alias": dict(action="append", default=[], metavar="NAME=SHIPPED_AS",
-                            help="a package the robot file names that is shipped under another name, e.g. "
-                                 "abb_irb140=abb_irb140_description (repeatable)"),
+                            help="a package the robot file names, shipped under another name (repeatable)"),
     "--q": dict(type=float, nargs="+", help=f"joint values ({_JOINT_UNITS}); default 0"),
     "--rad": dict(action="store_true", help="joint values in radians (input and output)"),
     "--json": dict(action="store_true", help="machine-readable output"),
     "--html": dict(metavar="PATH", help="also write the result as a self-contained HTML page"),
     "--view": dict(action="store_true", help="show the result in meshcat until Ctrl-C"),
     "--seed": dict(type=int, default=0, help="seed of every random draw (default 0): same seed, same answer"),
-    "--scene": dict(metavar="FILE", help="collision scene (YAML or JSON obstacles, Scene.from_file): answers must be "
-                    "free of collisions with it and the robot itself; links in collision drawn red"),
+    "--scene": dict(metavar="FILE", help="collision scene (YAML or JSON): answers free of collisions"),
     "--margin": dict(type=float, metavar="M", help="with --scene: clearance in m kept from collisions (default 0)"),
     "--no-progress": dict(action="store_true", help="no progress bar"),
     # the problem options every method takes
-    "--tolerance": dict(type=float, help="success threshold: position error in m (and orientation error in rad for "
-                        "pose targets); default 1e-6"),
-    "--rotation-tolerance": dict(type=float, metavar="RAD",
-                                 help="success threshold on the orientation error in rad (default: --tolerance)"),
-    "--orientation-weight": dict(type=float, metavar="M_PER_RAD",
-                                 help="m per rad of orientation error in the pose cost (default 1)"),
-    "--pose-metric": dict(help="how the pose cost combines the errors: sum (default) or euclidean"),
+    "--tolerance": dict(type=float, help="success threshold in m (and rad for pose targets); default 1e-6"),
+    "--rotation-tolerance": dict(type=float, metavar="RAD", help="orientation threshold (default: --tolerance)"),
+    "--orientation-weight": dict(type=float, metavar="M_PER_RAD", help="m per rad in the pose cost (default 1)"),
+    "--pose-metric": dict(help="the pose cost: sum (default) or euclidean"),
     "--q0": dict(type=float, nargs="+", help=f"initial configuration ({_JOINT_UNITS})"),
-    "--lower": dict(type=float, nargs="+", metavar="Q",
-                    help=f"lower joint bounds of the search ({_JOINT_UNITS}; default the robot's)"),
-    "--upper": dict(type=float, nargs="+", metavar="Q",
-                    help=f"upper joint bounds of the search ({_JOINT_UNITS}; default the robot's)"),
-    "--option": dict(action="append", default=[], metavar="NAME=VALUE",
-                     help="any option of the method (repeatable), as its Python keyword takes it, in SI units (m, "
-                     "rad, s); VALUE is read as a Python literal (3, 0.5, None, [1, 2]), else as a string; e.g. "
-                     "--option strategy=rand1bin --option max_restarts=4"),
+    "--lower": dict(type=float, nargs="+", metavar="Q", help=f"lower search bounds ({_JOINT_UNITS}); default: robot's"),
+    "--upper": dict(type=float, nargs="+", metavar="Q", help=f"upper search bounds ({_JOINT_UNITS}); default: robot's"),
+    "--option": dict(action="append", default=[], metavar="NAME=VALUE", help="any option of the method as its Python "
+                     "keyword, in SI units (repeatable); VALUE read as a Python literal, else a string"),
 }
 _ROBOT = ["robot", "--tip", "--base", "--tips", "--floating-base", "--xacro-arg", "--package-dir", "--package-alias"]
 _PROBLEM = ["--tolerance", "--rotation-tolerance", "--orientation-weight", "--pose-metric"]
@@ -650,38 +637,32 @@ _COMMANDS = {
         ("--xyz", dict(type=float, nargs=3, metavar=("X", "Y", "Z"), help="target tip position in m (base frame)")),
         ("--rpy", dict(type=float, nargs=3, metavar=("R", "P", "Y"),
                        help="target roll, pitch, yaw in degrees (R = Rz(Y) Ry(P) Rx(R)); omit for position only")),
-        ("--goals", dict(metavar="FILE", help="a goals file (YAML or JSON; evoik_pin.io.goals_file) instead of "
-                         "--xyz/--rpy: each goal's errors are printed; exit 1 when one is not met")),
+        ("--goals", dict(metavar="FILE", help="a goals file (YAML or JSON) instead of --xyz/--rpy")),
         ("--method", dict(help="solver (evoik_pin.methods(); default: the memetic solver)")),
         "--seed", *_PROBLEM, "--q0", "--lower", "--upper", "--option",
         ("--polish", dict(action="store_true", help="polish the method's answer with Levenberg-Marquardt")),
         ("--population", dict(type=int, help="population size of population-based solvers")),
         ("--max-generations", dict(type=int, help="generation budget of population-based solvers")),
         ("--timeout", dict(type=_seconds, metavar="S", help="wall-clock budget in s (memetic: default 0.005; "
-                           "memetic-all: 0.02), or none for no limit (then give --option max_restarts=K)")),
+                           "memetic-all: 0.02), or none for no limit")),
         ("--count", dict(type=int, help="with --all: solutions wanted on a redundant arm (default 8)")),
         "--rad", "--json", "--html", "--view",
-        ("--all", dict(action="store_true", help="every distinct solution (solve_all; default method memetic-all), "
-                       "one per line, drawn as ghosts by --html/--view; exit 1 when there is none")),
+        ("--all", dict(action="store_true", help="every distinct solution (solve_all); exit 1 when there is none")),
         "--scene", "--margin",
-        ("--prefer", dict(help="which answer: first (default), nearest (nearest --q0) or manipulability (the most "
-                          "dexterous), among those found within --timeout (default 0.4 ms on redundant goals, else "
-                          "0.6 / 0.45 ms)")),
-        ("--locked", dict(action="append", default=[], metavar="NAME=VALUE", help=f"hold joint NAME at VALUE "
-                          f"(repeatable; {_JOINT_UNITS}); --q0 and the answer keep every joint"))]),
+        ("--prefer", dict(help="which answer: first (default), nearest (nearest --q0) or manipulability, among "
+                          "those found within --timeout (default 0.4 ms on redundant goals, else 0.6 / 0.45 ms)")),
+        ("--locked", dict(action="append", default=[], metavar="NAME=VALUE",
+                          help=f"hold joint NAME at VALUE (repeatable; {_JOINT_UNITS})"))]),
     "view": (_cmd_view, "meshcat web preview of a robot at a joint vector (tip pose as a triad)", [
         *_ROBOT, "--q", "--rad", "--html", "--scene",
-        ("--no-block", dict(action="store_true",
-                            help="write --html PATH and return at once (the viewer's server stops with evoik)"))]),
+        ("--no-block", dict(action="store_true", help="write --html PATH and return at once"))]),
     "reach": (_cmd_reach, "reachability map: fraction of orientations IK reaches per voxel (npz, png, html)", [
         *_ROBOT,
         ("--voxel", dict(type=float, default=0.05, help="voxel edge in m (default 0.05)")),
         ("--out", dict(required=True, help="output directory: OUT/<robot>_reach.npz, .png and .html")),
-        ("--orientations", dict(type=int, default=32, help="orientations asked per voxel (6-D arms; default 32); "
-                                "position-only and planar arms: 1")),
+        ("--orientations", dict(type=int, default=32, help="orientations asked per voxel of 6-D arms (default 32)")),
         "--scene", "--margin", ("--seed", dict(help="seed of the workspace sampling (default 0)")),
-        ("--backend", dict(choices=["local", "ray"], default="local",
-                           help="local (threads, every core) or ray (actors; pip install 'evoik_pin[ray]')")),
+        ("--backend", dict(choices=["local", "ray"], default="local", help="local (threads) or ray (actors)")),
         ("--workers", dict(type=int, help="threads or Ray actors (default: every core / every CPU of the cluster)")),
         ("--address", dict(help="Ray cluster address (default: RAY_ADDRESS, else a local Ray instance)")),
         ("--batch-size", dict(type=int, default=50_000, help="targets per call of the batch engine (default 50000)")),
@@ -690,15 +671,13 @@ _COMMANDS = {
     "retarget": (_cmd_retarget, "retarget a human motion (BVH file or bundled clip) onto a humanoid: joint trajectory "
                  "as npz, csv or pkl", [
         ("file", dict(help="a BVH file, or a bundled clip's name (walk, run, jump, dance, getup)")),
-        ("--robot", dict(required=True, help="humanoid name (g1, talos, romeo, icub) or URDF path; loaded with a "
-                         "floating base")),
+        ("--robot", dict(required=True, help="humanoid name or URDF path; loaded with a floating base")),
         ("--mapping", dict(default="cmu", help="keypoint mapping preset: cmu (BVH skeletons, default) or smpl")),
         ("--out", dict(required=True, help="output file: .npz, .csv or .pkl (GMR's layout)")),
         ("--html", dict(help="also write a self-contained HTML page playing the clip")),
         ("--scale", dict(type=float, help="source-to-robot length factor (default: leg lengths' ratio)")),
         ("--no-self-collision", dict(action="store_true", help="do not keep the frames free of self-collision")),
-        ("--no-velocity-limits", dict(action="store_true",
-                                      help="do not bound each step by the joint velocity limits")),
+        ("--no-velocity-limits", dict(action="store_true", help="do not bound each step by the joint velocity limits")),
         "--seed", ("--progress", dict(action="store_true", help="print progress every 30 frames"))]),
     "reproduce": (_cmd_reproduce, "re-run a paper's experiments: tables (md, csv, json) and figures (png)", [
         ("paper", dict(nargs="+", help="paper id(s): 000 001 002 003 004 (those implemented), or all")),
@@ -706,8 +685,7 @@ _COMMANDS = {
         "--seed", ("--out", dict(default="reproduction", help="output directory; each paper writes OUT/<id>/")),
         "--no-progress",
         ("--jobs", dict(type=int, default=min(2, os.cpu_count() or 1),
-                        help="worker processes for independent parts; same numbers for any value (default: 2 if "
-                        "available)")),
+                        help="worker processes (default: 2 if available); any value, the same numbers")),
         ("--html", dict(help="save the paper's animation (002: Pro-ISADE spiral) as HTML")), "--view"]),
 }
 

@@ -44,11 +44,9 @@ __all__ = ["IKSolver"]
 class IKSolver:
     """One robot, method and set of options, checked and prepared once; :meth:`solve` per target.
 
-    The options are checked and the problem's constants built once into a template problem that each call copies with
-    its target; memetic's set-up (kernel, seed table, engine) is made once. After memetic has solved a pose, a position
-    or a one-goal list, the next ones of that kind take a repeat call (:mod:`evoik_pin.solvers.search.repeat_call`)
-    with the same answers, bit for bit; a one-goal set takes the repeat call of its goal stack on its members nearest
-    the seed table (the goal-set search when none of them is met).
+    The options are checked once into a template problem that each call copies with its target; memetic's set-up
+    (kernel, seed table, engine) is made once. After memetic has solved a pose, a position or a one-goal list (or set),
+    the next ones of that kind take a repeat call (:mod:`evoik_pin.solvers.search.repeat_call`): the same answers.
 
     Args:
         robot: a :class:`~evoik_pin.Robot` or anything :func:`~evoik_pin.load_robot` accepts.
@@ -128,13 +126,10 @@ class IKSolver:
                 return IKProblem(self.robot, list(target), **self._problem_kw)
             return self._goal_problem(bind(self.robot, target), q0)
         target = Target.coerce(target)
-        p = object.__new__(IKProblem)
         goals, *stack = tip_goals(self.robot, target, template.tolerance, template.rotation_tolerance)
-        # the template's fields with this call's: one dict built, no attribute set one by one
-        p.__dict__ = {**template.__dict__, "target": target, "objective": default_objective(
+        p = template.copy_with(target=target, goals=goals, _goal_stack=stack, objective=default_objective(
             target, template.orientation_weight, template.pose_metric) if objective is None else objective,
-            "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0, "goals": goals,
-            "_goal_stack": stack}
+            q0=self._q0 if q0 is None else self._checked_q0(q0))
         if self._target_box:
             p.lower, p.upper = target_box(self.robot, target, self.robot.lower, self.robot.upper)
         return p
@@ -143,12 +138,9 @@ class IKSolver:
         """:meth:`problem` of a goal list bound to the robot (``bound``: :func:`~evoik_pin.goals.stack.bind`'s
         (goals, stack, pt, Rt)); the box is the solver's own arrays, so the plan keeps its seed table and engine."""
         goals, stack, pt, Rt = bound
-        p = object.__new__(IKProblem)
         lower, upper = self._goal_box
-        p.__dict__ = {**self._template.__dict__, "target": None, "goals": goals, "_goal_stack": [stack, pt, Rt],
-                      "objective": None, "q0": self._q0 if q0 is None else self._checked_q0(q0), "evaluations": 0,
-                      "lower": lower, "upper": upper}
-        return p
+        return self._template.copy_with(target=None, goals=goals, _goal_stack=[stack, pt, Rt], objective=None,
+                                        q0=self._q0 if q0 is None else self._checked_q0(q0), lower=lower, upper=upper)
 
     def solve(self, target, q0=None, seed=None) -> Result:
         """The :class:`~evoik_pin.Result` of :func:`evoik_pin.solve` for ``target`` (any form it takes), ``q0`` (n,)
@@ -417,8 +409,8 @@ def _key(robot, method: str, options: dict):
         elif name == "locked" and isinstance(value, dict) and all(
                 type(k) is str and isinstance(v, _PLAIN) for k, v in value.items()):
             parts.append((name, None, tuple(sorted((k, type(v), v) for k, v in value.items()))))
-        elif name == "bounds" and _bounds_key(value) is not None:  # by value: a solver copies its bounds
-            parts.append((name, None, _bounds_key(value)))
+        elif name == "bounds" and (bounds := _bounds_key(value)) is not None:  # by value: a solver copies its bounds
+            parts.append((name, None, bounds))
         elif name == "objective" or (name == "scene" and isinstance(value, Scene)):
             # by identity: the cached solver keeps the object alive, so its id is not reused while cached
             parts.append((name, None, id(value)))

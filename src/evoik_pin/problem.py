@@ -15,6 +15,7 @@ from .goals import bind, is_goal_list
 from .goals.goal import FramePair
 from .goals.registry import KIND_BEYOND_FRAME
 from .goals.stack import owned, tip_goals
+from .io.datafile import naming
 from .objectives import (
     POSE_METRICS,
     Objective,
@@ -52,10 +53,8 @@ def check_pro_delta(delta) -> float:
 
 def check_q0(robot: Robot, q0) -> np.ndarray:
     """``q0`` as ``robot``'s (n,) joint vector (rad or m); ConfigurationError naming q0 otherwise."""
-    try:
+    with naming("q0", ConfigurationError):
         return robot.check_q(q0)
-    except ConfigurationError as exc:
-        raise ConfigurationError(f"q0: {exc}") from None
 
 
 def coerce_scene(robot: Robot, scene) -> Scene | None:
@@ -178,6 +177,13 @@ class IKProblem:
         """Number of joints."""
         return self.robot.n
 
+    def copy_with(self, **fields) -> IKProblem:
+        """This problem with ``fields`` replaced and no evaluation counted, the values taken as checked (no
+        ``__post_init__``): a new target's, goals' or box's problem sharing the rest."""
+        p = object.__new__(IKProblem)
+        p.__dict__ = {**self.__dict__, "evaluations": 0, **fields}
+        return p
+
     # ------------------------------------------------------------------ goal lists
     def goal_stack(self):
         """(the LM kernel's :class:`~evoik_pin.solvers.lm.layout.GoalStack`, targets pt (G, 3), Rt (G, 3, 3)) of a goal
@@ -266,13 +272,9 @@ class IKProblem:
             Ta = frame_a_pose.get(id(g))
             return g.robot_errors(robot, q) if Ta is None else g.pair_errors(Ta, T)
 
-        poses = poses[:len(goals)]
-        if self.goal_sets:
-            picked = [(None, beyond(g, T)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
-                      for g, T in zip(goals, poses, strict=True)]
-            return [p[1] for p in picked], [p[0] for p in picked]
-        return ([beyond(g, T) if g.kind >= KIND_BEYOND_FRAME else g.errors(T)
-                 for g, T in zip(goals, poses, strict=True)], [None] * len(goals))
+        picked = [(None, beyond(g, T)) if g.kind >= KIND_BEYOND_FRAME else self._member(g, T)
+                  for g, T in zip(goals, poses[:len(goals)], strict=True)]
+        return [p[1] for p in picked], [p[0] for p in picked]
 
     # ------------------------------------------------------------------ goal sets (evoik_pin.goals.goal)
     @property
@@ -326,15 +328,10 @@ class IKProblem:
     def variant(self, choice: tuple, pt: np.ndarray, Rt: np.ndarray) -> IKProblem:
         """The problem of one combination of goal-set members (:meth:`variant_targets`): those members as its goals,
         sharing this problem's box, q0 and scene."""
-        import copy
-
         if not self.goal_sets:
             return self
         goals = [g if m is None else g.alternatives[m] for g, m in zip(self.goals, choice, strict=True)]
-        v = copy.copy(self)
-        v.goals, v._goal_stack, v.evaluations = goals, [self._goal_stack[0], pt, Rt], 0
-        v.__dict__.pop("_goal_set_indices", None)
-        return v
+        return self.copy_with(goals=goals, _goal_stack=[self._goal_stack[0], pt, Rt])
 
     def variants(self, most: int = MAX_VARIANTS) -> list[tuple[tuple, IKProblem]]:
         """The single-target problems of a goal list with goal sets, one per combination of their members (in
@@ -388,12 +385,10 @@ class IKProblem:
         own tolerances still judge answers); only the kernel's goal stack gets the smaller tolerances."""
         from .goals.stack import G_RTOL, G_TOL
 
-        tight = replace(self, goals=list(self.goals), evaluations=0)
-        stack, pt, Rt = tight._goal_stack
+        stack, pt, Rt = self._goal_stack
         spec = stack.spec.copy()
         spec[:, [G_TOL, G_RTOL]] = np.minimum(spec[:, [G_TOL, G_RTOL]], tolerance)
-        tight._goal_stack = [replace(stack, spec=spec), pt, Rt]
-        return tight
+        return self.copy_with(goals=list(self.goals), _goal_stack=[replace(stack, spec=spec), pt, Rt])
 
     def evaluate(self, Q: np.ndarray, count: bool = True) -> Evaluation:
         """Cost and errors of a population ``Q`` (N, n), from one kinematics pass (a goal list: the largest errors

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .call_setup import _run, make_problem
+from .call_setup import _robot, _run, make_problem
 from .errors import OptionError, OutputError
 from .problem import Target, coerce_scene
 from .robot import Robot, load_robot
@@ -214,7 +214,7 @@ def reachability_map(robot, voxel: float = 0.05, orientations: int = 32, scene=N
         OptionError: a bad option (``backend``, ``workers``, ``voxel`` too small for :data:`MAX_VOXELS`, ...).
     """
     t0 = time.perf_counter()
-    robot = robot if isinstance(robot, Robot) else load_robot(robot)
+    robot = _robot(robot)
     voxel = check_positive("voxel (m)", voxel)
     orientations = check_int("orientations", orientations, 1)
     seed = check_int("seed", seed, 0)

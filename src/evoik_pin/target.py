@@ -98,9 +98,8 @@ def pose_arrays(target, check_rotation: bool = True) -> tuple[np.ndarray, np.nda
         return target.position, target.rotation  # checked when it was made
     else:
         return None
-    if not check_rotation:
-        return (position, rotation) if math.hypot(*position.tolist()) <= MAX_TARGET_NORM else None
-    return (position, rotation) if _pose_ok(position, rotation) else None
+    ok = _pose_ok(position, rotation) if check_rotation else math.hypot(*position.tolist()) <= MAX_TARGET_NORM
+    return (position, rotation) if ok else None
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,9 @@
-"""One home for rotation and rigid-motion maths: SO(3) and SE(3) logarithms, exponentials and their Jacobians, as
-Pinocchio's closed forms (and conventions), in NumPy vectorized over a batch (:mod:`.so3`, :mod:`.se3`) and in numba
-on caller-owned buffers (:mod:`.compiled`): ``log3(R)`` the rotation vector (rad), ``log6`` the twist ``(v, w)`` (m,
-rad), ``Jlog3`` / ``Jlog6`` the derivatives of ``log(M exp(d))`` at ``d = 0``."""
+"""One home for rotation and rigid-motion maths, Pinocchio's closed forms and conventions: over a batch (:mod:`.so3`,
+:mod:`.se3`) and in numba on caller-owned buffers (:mod:`.compiled`): ``log3(R)`` the rotation vector (rad), ``log6``
+the twist ``(v, w)`` (m, rad), ``Jlog3`` / ``Jlog6`` the derivatives of ``log(M exp(d))`` at ``d = 0``."""
 
-from .se3 import exp6, jlog6, log6
-from .so3 import angle, exp3, is_rotation, jlog3, log3, relative_angle, rotation_to_z, rpy, skew, wrap_angle, yaw
+from .se3 import exp6, jlog3, jlog6, log6
+from .so3 import angle, exp3, is_rotation, log3, relative_angle, rotation_to_z, rpy, skew, wrap_angle, yaw
 
 __all__ = ["angle", "exp3", "exp6", "is_rotation", "jlog3", "jlog6", "log3", "log6", "relative_angle",
            "rotation_to_z", "rpy", "skew", "wrap_angle", "yaw"]

@@ -1,12 +1,11 @@
-"""SO(3) maths in NumPy, vectorized over a batch of rotations (leading axis N): Pinocchio's closed forms
-(``pin.log3``, ``pin.exp3``, ``pin.Jlog3``), ``1 - cos`` as ``2 sin^2(theta / 2)`` (no digits lost at small angles);
-the numba twins are in :mod:`.compiled`."""
+"""SO(3) maths in NumPy, vectorized over a batch of rotations (leading axis N): Pinocchio's closed forms (``pin.log3``,
+``pin.exp3``), ``1 - cos`` as ``2 sin^2(theta / 2)`` (no digits lost at small angles)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["angle", "exp3", "is_rotation", "jlog3", "log3", "relative_angle", "rotation_to_z", "rpy", "skew",
+__all__ = ["angle", "exp3", "is_rotation", "log3", "relative_angle", "rotation_to_z", "rpy", "skew",
            "wrap_angle", "yaw"]
 
 #: Pinocchio's series thresholds (TaylorSeriesExpansion precision<3> and <2>: eps^(1/3), eps^(1/2)).
@@ -32,10 +31,8 @@ def is_rotation(R: np.ndarray, tol: float = 1e-6):
 def is_rotation_entries(a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float,
                         i: float) -> bool:
     """Whether the 9 numbers (a 3 x 3 matrix, row-major) are a rotation's: |R^T R - I|_F <= 1e-6 and det R >= 0
-    (False for NaN or inf): a target's test (:class:`evoik_pin.Target`). Plain arithmetic, on Python floats here (about
-    1 us) and compiled by numba in :mod:`.compiled` for kernels that check a target themselves."""
-    # a rotation's squared Frobenius norm is 3: past the screen at 4 the products below only ever see entries of a
-    # near-rotation, so none overflows (a huge entry makes the screen's sum inf, a NaN makes it NaN: refused)
+    (False for NaN or inf): a target's test (:class:`evoik_pin.Target`), compiled in :mod:`.compiled` for kernels."""
+    # a rotation's squared Frobenius norm is 3: past the screen at 4 no product below overflows (inf or NaN: refused)
     if not a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i <= 4.0:
         return False
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
@@ -134,20 +131,6 @@ def exp3(phi: np.ndarray) -> np.ndarray:
     b = np.where(small, 0.5 - t2 / 24.0, 2.0 * np.sin(0.5 * th) ** 2 / (th * th))  # (1 - cos) / theta^2
     K = skew(phi)
     return np.eye(3) + a[:, None, None] * K + b[:, None, None] * (K @ K)
-
-
-def jlog3(phi: np.ndarray) -> np.ndarray:
-    """``pin.Jlog3`` (N, 3, 3) from rotation vectors phi (N, 3) = ``log3(R)``: the derivative of
-    ``log3(R exp(dw))`` at dw = 0, ``alpha w w^T + d I + [w]x / 2``."""
-    w = np.asarray(phi, dtype=float).reshape(-1, 3)
-    theta = np.sqrt((w * w).sum(axis=1))
-    small = theta < PREC3
-    th = np.where(small, 1.0, theta)
-    cot = 1.0 / np.tan(0.5 * th)  # sin / (1 - cos), without the cancellation of 1 - cos
-    alpha = np.where(small, 1.0 / 12.0 + theta * theta / 720.0, 1.0 / (th * th) - cot / (2.0 * th))
-    d = np.where(small, 0.5 * (2.0 - theta * theta / 6.0), 0.5 * th * cot)
-    return (alpha[:, None, None] * w[:, :, None] * w[:, None, :] + d[:, None, None] * np.eye(3)
-            + 0.5 * skew(w))
 
 
 def rotation_to_z(axis) -> np.ndarray:

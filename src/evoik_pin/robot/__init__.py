@@ -1,6 +1,5 @@
-"""The robot layer: the active joints of a URDF (a serial chain or a whole tree) as Pinocchio sees them, the only
-code in evoik_pin that runs Pinocchio's kinematics: :func:`load_robot` (:mod:`.loading`) makes a :class:`Robot`
-(:mod:`.robot`)."""
+"""The robot layer, the only code in evoik_pin that runs Pinocchio's kinematics: :func:`load_robot` makes a
+:class:`Robot`, the active joints of a URDF (a serial chain or a whole tree)."""
 
 from .catalog import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS
 from .joints import DEFAULT_PRISMATIC_RANGE as DEFAULT_PRISMATIC_RANGE

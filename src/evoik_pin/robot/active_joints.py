@@ -1,5 +1,4 @@
-"""Which joints of a URDF a :class:`~evoik_pin.robot.Robot` moves (:func:`choose_joints`): the chains from the base
-frame to its tips, or the whole tree below it, the joints ``joints=[...]`` keeps and the mimic joints following them."""
+"""Which joints of a URDF a :class:`~evoik_pin.robot.Robot` moves (:func:`choose_joints`)."""
 
 from __future__ import annotations
 
@@ -12,17 +11,15 @@ from .frames import closest_hint, deepest_body, find_frame, frame_names, listed,
 
 __all__ = ["MAX_CHAIN_JOINTS", "ActiveJoints", "choose_joints"]
 
-#: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory (about
-#: 0.45 GB at 200 joints, 3.5 GB at 400), so a runaway URDF would exhaust the machine.
+#: Most physical joints a Robot accepts: Pinocchio's ``Data`` of an n-joint chain takes O(n^3) memory.
 MAX_CHAIN_JOINTS = 200
 
 
 @dataclass(frozen=True)
 class ActiveJoints:
-    """What :func:`choose_joints` chose (joint ids of the kinematic model): ``tip`` and ``tips`` (frame names),
-    ``base`` (the base frame's name), ``above_base`` (the joints holding the base: they never move), ``dofs`` (the
-    joints of q, in order), ``physical`` (every joint q moves) and ``follow``, for each physical joint, (the joint
-    of q it follows, multiplier, offset)."""
+    """What :func:`choose_joints` chose (joint ids of the kinematic model): frame names ``tip``, ``tips``, ``base``;
+    ``above_base`` (the joints holding the base), ``dofs`` (the joints of q), ``physical`` (every joint q moves) and
+    ``follow``, for each physical joint, (the joint of q it follows, multiplier, offset)."""
 
     tip: str
     tips: tuple[str, ...]
@@ -35,10 +32,10 @@ class ActiveJoints:
 
 def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | None, tips, base: str | None,
                   joints: list[str] | None, coupling: dict[int, tuple[int, float, float]]) -> ActiveJoints:
-    """The active joints of ``kin`` (``full_model``, behind a floating base's six joints if any) for the Robot
-    arguments ``tip``, ``tips``, ``base`` and ``joints`` (:func:`~evoik_pin.robot.load_robot`), ``coupling`` its
-    mimic couplings (:func:`~evoik_pin.robot.joints.couplings`). FrameError for unknown or unconnected frames and
-    joints; RobotLoadError for joints that are not 1-DOF, none to move, or more than :data:`MAX_CHAIN_JOINTS`."""
+    """The active joints of ``kin`` (``full_model``, behind a floating base's six joints if any) for
+    :func:`~evoik_pin.robot.load_robot`'s ``tip``, ``tips``, ``base``, ``joints``; ``coupling``: its mimics. FrameError
+    for unknown or unconnected frames and joints; RobotLoadError for joints that are not 1-DOF, none to move, or more
+    than :data:`MAX_CHAIN_JOINTS`."""
     whole = isinstance(tips, str) and tips == "all"
     if tips is None or whole:
         tip_names = None if whole else [tip if tip is not None else deepest_body(full_model)]
@@ -94,8 +91,7 @@ def choose_joints(kin: pin.Model, full_model: pin.Model, name: str, tip: str | N
             raise FrameError(f"joints {unknown} are not on {where}; its joints are "
                              f"{', '.join(dof_names) or '(none)'}{hint}")
         dofs = [d for d in dofs if kin.names[d] in joints]
-    # the physical joints: every joint q moves (below the base): the active ones, the joints their mimics follow
-    # and every other mimic of those, so that each link is where full_configuration(q) puts it
+    # every joint q moves below the base, mimics included: each link where full_configuration(q) puts it
     physical = [j for j in range(1, kin.njoints) if j not in above_base and follows(j)[0] in dofs]
     if not physical:
         raise RobotLoadError(f"{where} of {name} has no movable joint; pick another tip or base")

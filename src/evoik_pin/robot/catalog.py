@@ -1,6 +1,5 @@
-"""The robots :func:`~evoik_pin.robot.load_robot` takes by name (those of ``example_robot_data.load(name)``): the
-papers' arms shipped with evoik_pin, and the arms (loaded as the chain to their tool frame) and whole robots (loaded
-whole unless ``tip``, ``tips`` or ``joints`` say less) of ``example-robot-data``."""
+"""The robots :func:`~evoik_pin.robot.load_robot` takes by name: the papers' arms shipped with evoik_pin, and the arms
+(the chain to their tool frame) and whole robots of ``example-robot-data``."""
 
 from __future__ import annotations
 
@@ -21,8 +20,7 @@ BUNDLED_ROBOTS: dict[str, str] = {
 
 @dataclass(frozen=True)
 class CatalogRobot:
-    """A robot of example-robot-data: its URDF and SRDF (disabled collision pairs) below the package's ``robots/``
-    directory, what it is, and an arm's default tip frame."""
+    """A robot of example-robot-data: its URDF and SRDF below the package's ``robots/``, what it is, an arm's tip."""
 
     urdf: str
     what: str = ""

@@ -1,6 +1,5 @@
-"""Frame look-up in a Pinocchio model (names to ids, root and deepest links, whether the joints branch) and
-:func:`reduced_model`. A joint and a link may share a name; the BODY frame (the link) is then the one meant.
-"""
+"""Frame look-up in a Pinocchio model and :func:`reduced_model`. When a joint and a link share a name, the BODY frame
+(the link) is the one meant."""
 
 from __future__ import annotations
 
@@ -14,8 +13,7 @@ __all__ = ["closest_hint", "closest_names", "deepest_body", "find_frame", "frame
 
 
 def find_frame(model: pin.Model, name: str) -> int:
-    """Frame id of ``name`` in ``model``, preferring the BODY frame when a joint and a link share the name;
-    -1 when no frame has that name."""
+    """Frame id of ``name`` in ``model`` (the BODY frame first), or -1."""
     ids = [i for i, f in enumerate(model.frames) if f.name == name]
     if not ids:
         return -1
@@ -43,9 +41,8 @@ def deepest_body(model: pin.Model) -> str:
 
 
 def is_branched(model: pin.Model, coupling: dict[int, tuple[int, float, float]]) -> bool:
-    """True when no single chain holds every movable joint of ``model`` (legs and arms, independent fingers);
-    False for a serial chain, also one ending in fingers that mimic one joint (``coupling``:
-    :func:`~evoik_pin.robot.joints.couplings`; a mimic joint counts as the joint it follows)."""
+    """True when no single chain holds every movable joint of ``model``, a mimic joint counting as the joint it
+    follows (``coupling``: :func:`~evoik_pin.robot.joints.couplings`)."""
     def moved_by(j: int) -> frozenset[int]:  # the independent joints that move joint j's link
         return frozenset(coupling.get(k, (k,))[0] for k in list(model.supports[j])[1:])
 
@@ -56,8 +53,8 @@ def is_branched(model: pin.Model, coupling: dict[int, tuple[int, float, float]])
 
 def reduced_model(model: pin.Model, locked: list[int], q_ref, geometry_models: tuple = ()):
     """``pin.buildReducedModel(model, [geometry_models,] locked, q_ref)`` safe for frames sharing a name (Pinocchio
-    fails with "Several frames match the filter", e.g. anymal_c's ``LF_HAA``): it runs on
-    :func:`unique_frame_names`' copy. Returns the model, or (model, list of geometry models) when given some."""
+    fails with "Several frames match the filter", e.g. anymal_c's ``LF_HAA``). Returns the model, or (model, list of
+    geometry models) when given some."""
     work, renamed = unique_frame_names(model)
     if geometry_models:
         out, geoms = pin.buildReducedModel(work, list(geometry_models), locked, q_ref)
@@ -100,13 +97,12 @@ def restore_frame_names(model: pin.Model, renamed: dict[str, str]) -> None:
 
 
 def frame_names(model: pin.Model, bodies: bool = False) -> list[str]:
-    """Names of every frame of ``model`` but the universe (with ``bodies``: its BODY frames, the URDF's links), in
-    model order, each once."""
+    """Names of every frame (with ``bodies``: BODY frame) of ``model`` but the universe, in model order, each once."""
     return list(dict.fromkeys(f.name for f in list(model.frames)[1:] if not bodies or f.type == pin.FrameType.BODY))
 
 
 def closest_names(name: str, names: list[str], count: int = 5) -> list[str]:
-    """Up to ``count`` of ``names`` closest to ``name`` (difflib; containing or contained names too), closest first."""
+    """Up to ``count`` of ``names`` closest to ``name`` (difflib, then containing or contained names)."""
     close = difflib.get_close_matches(name, names, n=count, cutoff=0.6)
     low = name.lower()
     close += [x for x in names if x not in close and low and (low in x.lower() or x.lower() in low)]

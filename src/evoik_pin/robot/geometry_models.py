@@ -1,6 +1,4 @@
-"""The geometry of a robot's links for the viewer and collision scenes, as :class:`RobotGeometry`, a base class of
-:class:`~evoik_pin.robot.Robot`: the URDF's visual and collision models reduced like its model (``package://`` mesh
-URIs resolved), and their placements at a joint vector."""
+"""A robot's visual and collision geometry (:class:`RobotGeometry`, a base class of :class:`~evoik_pin.robot.Robot`)."""
 
 from __future__ import annotations
 
@@ -18,7 +16,7 @@ __all__ = ["RobotGeometry"]
 
 
 class RobotGeometry:
-    """The robot's visual and collision geometry; reads the attributes :class:`~evoik_pin.robot.Robot` sets up."""
+    """The URDF's visual and collision models reduced like the robot's model, and their placements."""
 
     @property
     def base_placement(self) -> pin.SE3:
@@ -26,8 +24,8 @@ class RobotGeometry:
         return self._oMbase.copy()
 
     def geometry_placements(self, geometry_model: pin.GeometryModel, q) -> list[pin.SE3]:
-        """Placements (new ``pin.SE3``, m, :attr:`model`'s world frame) of every object of ``geometry_model`` (attached
-        to :attr:`model`'s joints) at ``q`` (n,)."""
+        """Placements (new ``pin.SE3``, m, :attr:`model`'s world frame) of the objects of ``geometry_model`` on
+        :attr:`model`'s joints at ``q`` (n,)."""
         q = self.check_q(q)
         gdata = pin.GeometryData(geometry_model)
         pin.forwardKinematics(self.model, self.data, self.to_pinocchio(q))
@@ -36,7 +34,7 @@ class RobotGeometry:
 
     @cached_property
     def visual_model(self) -> pin.GeometryModel:
-        """Visual geometry of the active joints' model (meshes resolved through ``package_dirs``), for the viewer."""
+        """Visual geometry on :attr:`model`'s joints, for the viewer."""
         return self._geometry_model(pin.GeometryType.VISUAL)
 
     @cached_property
@@ -45,7 +43,7 @@ class RobotGeometry:
         return self._geometry_model(pin.GeometryType.COLLISION)
 
     def _geometry_model(self, kind) -> pin.GeometryModel:
-        """The URDF's geometry of one kind, reduced onto :attr:`model` like the model itself."""
+        """The URDF's geometry of one kind, reduced onto :attr:`model`."""
         if self.urdf_xml is None:  # pragma: no cover
             raise RobotLoadError("this robot has no URDF text to read geometry from")
         xml = MESH_URI.sub(self._mesh_file, self.urdf_xml) if self.packages else self.urdf_xml

@@ -1,6 +1,6 @@
-"""Joints: 1-DOF joint helpers on a Pinocchio model (values, rad or m, a continuous joint storing (cos, sin); motions,
-limits, mimic couplings; one joint at a time: a model-wide ``Data`` is large for big models), and a robot's bounds of
-``q`` and checks of joint vectors (:class:`JointBounds`, a base class of :class:`~evoik_pin.robot.Robot`)."""
+"""1-DOF joint helpers on a Pinocchio model (values in rad or m, a continuous joint storing (cos, sin); motions,
+limits, mimic couplings), and a robot's bounds and checks of joint vectors (:class:`JointBounds`, a base of
+:class:`~evoik_pin.robot.Robot`)."""
 
 from __future__ import annotations
 
@@ -20,8 +20,8 @@ UNBOUNDED = 1e10
 
 
 def couplings(model: pin.Model, mimic: dict | None) -> dict[int, tuple[int, float, float]]:
-    """``{mimic joint id: (followed joint id, multiplier, offset)}`` of the ``mimic`` entries (``{joint: (followed,
-    multiplier, offset)}`` or objects with those attributes) whose two joints are 1-DOF joints of ``model``."""
+    """``{mimic joint id: (followed joint id, multiplier, offset)}`` of the ``mimic`` entries (as for
+    :class:`~evoik_pin.robot.Robot`) whose two joints are 1-DOF joints of ``model``."""
     out: dict[int, tuple[int, float, float]] = {}
     for name, spec in (mimic or {}).items():
         driver, m, off = (spec.joint, spec.multiplier, spec.offset) if hasattr(spec, "joint") else spec
@@ -49,8 +49,7 @@ def set_joint_value(model: pin.Model, q: np.ndarray, j: int, value: float) -> No
 
 
 def joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
-    """(revolute (k,) bool, unit axes (k, 3) in each joint's own frame) of 1-DOF joints, from their motion
-    subspace at the neutral configuration."""
+    """(revolute (k,) bool, unit axes (k, 3) in each joint's own frame) of 1-DOF joints (their motion subspace)."""
     q, S = pin.neutral(model), []
     for j in joint_ids:
         jd = model.joints[j].createData()
@@ -62,8 +61,8 @@ def joint_motions(model: pin.Model, joint_ids) -> tuple[np.ndarray, np.ndarray]:
 
 
 def joint_limits(model: pin.Model, j: int) -> tuple[float, float, bool]:
-    """(lower, upper, limited) of 1-DOF joint j: not limited when continuous, or limits absent (lower == upper),
-    inverted or beyond :data:`UNBOUNDED`."""
+    """(lower, upper, limited) of 1-DOF joint j: not limited when continuous, or its limits are equal, inverted or
+    beyond :data:`UNBOUNDED`."""
     jm = model.joints[j]
     if jm.nq != 1:
         return -np.pi, np.pi, False
@@ -83,10 +82,9 @@ class JointBounds:
     lower: np.ndarray
     upper: np.ndarray
 
-    # ------------------------------------------------------------------ the bounds a robot starts with
     def _set_default_bounds(self, coupling: dict[int, tuple[int, float, float]]) -> None:
-        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE without), narrowed so that every
-        mimic joint following it stays inside its own."""
+        """URDF limits of each entry of q ([-pi, pi] or +-DEFAULT_PRISMATIC_RANGE without), narrowed to keep every
+        mimic joint following it inside its own."""
         fm, lower, upper = self._kin_model, np.empty(self.n), np.empty(self.n)
         for k, d in enumerate(self._dof_ids):
             lo, hi, limited = joint_limits(fm, d)
@@ -127,8 +125,8 @@ class JointBounds:
         self.lower, self.upper = self.checked_bounds(lower, upper)
 
     def checked_bounds(self, lower, upper) -> tuple[np.ndarray, np.ndarray]:
-        """``lower`` and ``upper`` as float arrays (n,) of their own (rad or m), or a BoundsError naming what is wrong:
-        a count other than n, NaN or inf, lower > upper."""
+        """``lower`` and ``upper`` as new float arrays (n,) (rad or m); BoundsError for a count other than n, NaN or
+        inf, lower > upper."""
         lower, upper = np.array(lower, dtype=float).reshape(-1), np.array(upper, dtype=float).reshape(-1)
         if lower.shape != (self.n,) or upper.shape != (self.n,):
             raise BoundsError(f"bounds need {self.n} values each (one per joint of {self.name}), got {lower.size} "
@@ -148,7 +146,7 @@ class JointBounds:
         if arr.ndim != 1 or arr.shape[0] != self.n:
             raise ConfigurationError(f"{self.name} has {self.n} joints ({listed(self.joint_names, 12)}); got a joint "
                                      f"vector of shape {arr.shape}, expected ({self.n},)")
-        if not np.isfinite(arr).all():  # the method: np.all's dispatch costs about a microsecond per solve
+        if not np.isfinite(arr).all():  # the method, not np.all: hot path
             raise ConfigurationError(f"joint vector contains NaN or inf: {arr}")
         return arr
 

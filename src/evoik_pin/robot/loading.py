@@ -1,6 +1,5 @@
-"""Finding and reading a robot (:func:`load_robot`, :func:`list_robots`): a source resolved to URDF text
-(:mod:`.urdf_text`), checked (:mod:`.urdf_checks`), built into a Pinocchio model and handed to
-:class:`~evoik_pin.robot.robot.Robot`. Bad input raises RobotLoadError or RobotNotFoundError naming the file."""
+"""Finding and reading a robot (:func:`load_robot`, :func:`list_robots`). Bad input raises RobotLoadError or
+RobotNotFoundError naming the file."""
 
 from __future__ import annotations
 
@@ -26,7 +25,7 @@ __all__ = ["bundled_robots_dir", "example_robot_data_dir", "list_robots", "load_
 
 
 def example_robot_data_dir() -> Path:
-    """The ``robots/`` directory of the installed ``example-robot-data`` wheel (a dependency; from its file list)."""
+    """The ``robots/`` directory of the installed ``example-robot-data`` wheel."""
     dist = importlib.metadata.distribution("example-robot-data")
     for f in dist.files or []:
         parts = Path(str(f)).parts
@@ -38,7 +37,7 @@ def example_robot_data_dir() -> Path:
 
 def bundled_robots_dir() -> Path:
     """Directory of the bundled paper arms: ``evoik_pin/robots`` in a wheel, ``robots/`` atop a source checkout."""
-    package = Path(__file__).resolve().parents[1]  # evoik_pin/ (this file is evoik_pin/robot/loading.py)
+    package = Path(__file__).resolve().parents[1]  # evoik_pin/
     for candidate in (package / "robots", package.parents[1] / "robots"):
         if (candidate / "ax18.urdf").is_file():
             return candidate
@@ -46,8 +45,8 @@ def bundled_robots_dir() -> Path:
 
 
 def list_robots(whole: bool = False, describe: bool = False) -> list[str] | dict[str, str]:
-    """Names :func:`load_robot` takes (:mod:`.catalog`): the bundled paper arms, the example-robot-data arms, and with
-    ``whole=True`` its whole robots. ``describe=True``: a dict of those names to what each is."""
+    """Names :func:`load_robot` takes: the bundled paper arms, the example-robot-data arms, and with ``whole=True``
+    its whole robots. ``describe=True``: a dict of those names to what each is."""
     what = {**BUNDLED_ROBOTS, **{k: f"example-robot-data arm, tip {a.tip}" for k, a in EXAMPLE_ARMS.items()}}
     if whole:
         what.update({k: f"example-robot-data whole robot: {w.what}" for k, w in WHOLE_ROBOTS.items()})
@@ -96,14 +95,14 @@ def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: 
     elif xacro_args:
         raise RobotLoadError(f"xacro_args given, but {where} is not a xacro file (*.xacro, or XML with <xacro:...> "
                              "elements or ${...} / $(...) expressions)")
-    if tip is None and named:  # a named arm's tool frame (the bundled paper arms': tool)
+    if tip is None and named:
         tip = EXAMPLE_ARMS[name].tip if name in EXAMPLE_ARMS else "tool" if name in BUNDLED_ROBOTS else None
     model, mimic = _parse_urdf(xml, path)
     if tip is None and tips is None and (named and name in WHOLE_ROBOTS
                                          or not named and is_branched(model, couplings(model, mimic))):
         tips = "all"  # a whole robot: never the chain to one arbitrary deepest link
-    # the mesh URIs' packages, found or not (an error raised only when meshes are loaded: IK needs none), and the
-    # folders Pinocchio tries the others in (example-robot-data's URDFs name package://example-robot-data/robots/...)
+    # the mesh URIs' packages (a missing one is an error only when meshes are loaded), and the folders Pinocchio
+    # tries the others in (example-robot-data's URDFs name package://example-robot-data/robots/...)
     folders = {pkg: resolver.find(pkg) for pkg in package_uris(xml)}
     missing = {p: resolver.not_found(p, where, f"package://{p}/... in a mesh URI") for p, f in folders.items()
                if f is None}
@@ -113,7 +112,7 @@ def load_robot(source: str | bytes | os.PathLike, tip: str | None = None, base: 
         robot = Robot(model, tip=tip, base=base, joints=joints, name=name, urdf_path=path, urdf_xml=xml, mimic=mimic,
                       package_dirs=dirs, packages={p: str(f) for p, f in folders.items() if f is not None},
                       missing_packages=missing, tips=tips, floating_base=floating_base, base_box=base_box)
-    except (RobotLoadError, FrameError, BoundsError) as exc:  # say which file the frames and joints were looked for in
+    except (RobotLoadError, FrameError, BoundsError) as exc:
         raise type(exc)(f"{where}: {exc}") from None
     if bounds is not None:
         robot.set_bounds(*bounds)
@@ -136,7 +135,7 @@ def _srdf_path(srdf, name: str | None) -> str | None:
 
 
 def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None, str, bool]:
-    """(name, path or None, URDF or xacro text, whether the source was a robot name) of a load_robot source."""
+    """(name, path or None, URDF or xacro text, whether it was a robot name) of a load_robot source."""
     if isinstance(source, (bytes, bytearray)):
         return "urdf", None, decode_xml(bytes(source), "URDF string"), False
     stripped = source.lstrip("\ufeff \t\r\n") if isinstance(source, str) else ""  # an XML declaration comes first
@@ -184,8 +183,8 @@ def _resolve_source(source: str | bytes | os.PathLike) -> tuple[str, Path | None
 
 
 def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, dict[str, Mimic]]:
-    """(Pinocchio model of the whole URDF ``xml`` read from ``path`` (None: a string), its :func:`check_urdf`
-    mimics), or a RobotLoadError saying what is wrong with it."""
+    """(Pinocchio model of the whole URDF ``xml`` read from ``path`` (None: a string), its mimics), or a
+    RobotLoadError saying what is wrong with it."""
     where = str(path) if path is not None else "URDF string"
     try:
         root = ET.fromstring(xml)
@@ -195,7 +194,7 @@ def _parse_urdf(xml: str, path: Path | None) -> tuple[pin.Model, dict[str, Mimic
     failure: Exception | None = None
     with captured_stderr() as err:  # urdfdom prints its reasons on stderr
         try:
-            model = pin.buildModelFromXML(xml)  # mimic couplings are folded in by Robot, not by Pinocchio
+            model = pin.buildModelFromXML(xml)  # Robot folds the mimics in
         except Exception as exc:  # RuntimeError, ValueError, ... from the C++ parsers
             failure = exc
     if failure is not None:  # urdfdom's reasons, without its "at line N in joint.cpp" locations

@@ -1,5 +1,5 @@
-"""Locking joints: :meth:`Robot.locked` builds a robot like the original whose ``q`` omits some joints, fixed at given
-values; the solvers' ``locked=`` option does it for one call and maps ``q`` back with these helpers."""
+"""Locking joints: :meth:`Robot.locked`, and the helpers mapping ``q`` between a robot and its locked copy (the
+solvers' ``locked=`` option)."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def _checked(robot, values) -> dict[str, float]:
 
 
 def locked_robot(robot, values):
-    """:meth:`Robot.locked` (see there); the robots made are cached per robot and values (weakly)."""
+    """:meth:`Robot.locked`, cached per robot (weakly) and values."""
     values = _checked(robot, values)
     if not values:
         return robot
@@ -50,7 +50,7 @@ def locked_robot(robot, values):
         return hit[1]
     keep = [j for j in robot.joint_names if j not in values]
     args = {**robot._init_args, "joints": keep, "base_box": None}  # the bounds are copied below
-    out = type(robot)(**args, rest={**robot.locked_values, **values})  # a Robot, without importing robot.py
+    out = type(robot)(**args, rest={**robot.locked_values, **values})
     out.srdf = robot.srdf
     idx = [robot.joint_names.index(j) for j in keep]
     out.set_bounds(robot.lower[idx], robot.upper[idx])
@@ -86,8 +86,7 @@ def locked_note(values: dict[str, float]) -> str:
 
 
 def expand_result(robot, sub, values: dict[str, float], result):
-    """A Result of ``sub`` (``robot.locked(values)``) put in ``robot``'s layout in place (its and its solutions' ``q``,
-    :func:`locked_note` on its message); returns it."""
+    """A Result of ``sub`` (``robot.locked(values)``) put in ``robot``'s layout in place; returns it."""
     result.q = expand_q(robot, sub, values, result.q)
     for s in result.solutions or ():
         s.q = expand_q(robot, sub, values, s.q)

@@ -1,6 +1,5 @@
-"""Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS, also for files
-copied out of their workspace: :class:`PackageResolver`, whose rules (a) to (d) docs/ROBOTS.md ("Packages without
-ROS") lists."""
+"""Finding the ROS packages a robot file names (``$(find pkg)``, ``package://pkg/...``) without ROS:
+:class:`PackageResolver` (docs/ROBOTS.md, "Packages without ROS")."""
 
 from __future__ import annotations
 
@@ -17,7 +16,7 @@ __all__ = ["CRAWL_DEPTH", "MESH_URI", "SIBLING_SUFFIXES", "PackageResolver", "ch
 
 #: How deep below a given folder (a) or a ROS_PACKAGE_PATH entry (b) package.xml files are looked for.
 CRAWL_DEPTH = 3
-#: A ``package://pkg/rel`` URI (its package name and relative path) in URDF text.
+#: A ``package://pkg/rel`` URI (groups: the package, the relative path).
 MESH_URI = re.compile(r"package://([^/\"'<>\s]+)/([^\"'<>]+)")
 
 
@@ -44,7 +43,7 @@ def check_package_dirs(package_dirs) -> list[Path]:
 
 
 def check_package_aliases(aliases) -> dict[str, str]:
-    """``aliases`` ({package named in the file: name to look for instead}, or None) checked."""
+    """``aliases`` ({package named in the file: name to look for instead}, or None), checked."""
     if aliases is None:
         return {}
     if not isinstance(aliases, dict):
@@ -67,13 +66,13 @@ def _package_name(folder: Path) -> str | None:
     """The ``<name>`` of ``folder/package.xml``, or None (no file, unreadable, no name)."""
     try:
         name = ET.parse(folder / "package.xml").getroot().findtext("name")
-    except (ET.ParseError, OSError):  # no file (FileNotFoundError), unreadable
+    except (ET.ParseError, OSError):
         return None
     return name.strip() if name else None
 
 
 def _crawl(folder: Path, pkg: str, depth: int) -> Path | None:
-    """A folder at most ``depth`` levels below ``folder`` whose package.xml names ``pkg`` (sorted order)."""
+    """The first folder (sorted order) at most ``depth`` levels below ``folder`` whose package.xml names ``pkg``."""
     if depth <= 0:
         return None
     try:
@@ -92,7 +91,7 @@ def _crawl(folder: Path, pkg: str, depth: int) -> Path | None:
     return None
 
 
-#: Suffixes of ROS package names that robot files and the folders shipping them use for one another.
+#: Suffixes of ROS package names that robot files and their folders use for one another.
 SIBLING_SUFFIXES = ("_support", "_description")
 
 
@@ -122,8 +121,7 @@ class PackageResolver:
         self._found: dict[str, Path | None] = {}
 
     def find(self, pkg: str) -> Path | None:
-        """The folder of package ``pkg`` (its alias's), by rules (a) to (d), then for its sibling names (none for an
-        aliased package), or None."""
+        """The folder of package ``pkg`` (or its alias, else its sibling names), or None."""
         if pkg not in self._found:
             name = self.aliases.get(pkg, pkg)
             names = [name] if name in self.aliases.values() else [name, *sibling_names(name)]
@@ -150,7 +148,7 @@ class PackageResolver:
         return None
 
     def not_found(self, pkg: str, named_in: str, how: str) -> str:
-        """Message of a package not found: the file naming it (``how``: as what), the folders searched, what to do."""
+        """Message of a package not found, named in file ``named_in`` as ``how``."""
         looked_for = f" (looked for as {self.aliases[pkg]!r}: package_aliases)" if pkg in self.aliases else ""
         searched = [f"package_dirs {[str(d) for d in self.user_dirs]}"] if self.user_dirs else []
         searched.append(f"ROS_PACKAGE_PATH {[str(d) for d in self.ros_dirs]}" if self.ros_dirs

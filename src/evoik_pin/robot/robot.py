@@ -1,7 +1,6 @@
-"""The robot: :class:`Robot`, the active joints of a URDF (a chain, several tips' chains, or the whole tree), the
-others locked: kinematics of any frame for one ``q`` (Pinocchio) or a population (NumPy), and the folded constants
-of compiled kernels. ``q``: one entry per independent degree of freedom (rad or m) in Pinocchio's order; mimic
-joints follow (:meth:`Robot.tree_constants`). Poses are in the base frame (the world frame when none is chosen).
+"""The robot: :class:`Robot`, the active joints of a URDF (the others locked), their kinematics for one ``q``
+(Pinocchio) or a population (NumPy), and the folded constants of compiled kernels. ``q``: one entry per independent
+degree of freedom (rad or m) in Pinocchio's order. Poses are in the base frame (the world frame when none is chosen).
 """
 
 from __future__ import annotations
@@ -65,17 +64,16 @@ class Robot(JointBounds, RobotGeometry):
                  tips: list[str] | str | None = None, floating_base: bool = False, base_box=None,
                  packages: dict[str, str] | None = None, missing_packages: dict[str, str] | None = None,
                  rest: dict[str, float] | None = None) -> None:
-        """``full_model``: the URDF's fixed-base model. ``tips``: frames whose chains make the active joints, or
-        ``"all"``. ``mimic``: ``{joint: (followed joint, multiplier, offset)}`` (or objects with those attributes;
-        :func:`~evoik_pin.robot.urdf_checks.check_urdf`). ``packages``: ``{pkg: folder}`` of mesh URIs,
-        ``missing_packages``: ``{pkg: error}``. ``rest``: ``{joint: value}`` where joints left out of ``q`` stay
+        """``full_model``: the URDF's fixed-base model. ``mimic``: ``{joint: (followed joint, multiplier, offset)}``
+        (or :class:`~evoik_pin.robot.urdf_checks.Mimic`). ``packages``: ``{pkg: folder}`` of mesh URIs,
+        ``missing_packages``: ``{pkg: error}``. ``rest``: ``{joint: value}`` of joints locked off rest
         (:meth:`locked`). The other arguments: :func:`~evoik_pin.robot.load_robot`'s."""
         self._init_args = {k: v for k, v in locals().items() if k not in ("self", "rest")}  # for Robot.locked
         self.locked_values: dict[str, float] = dict(rest or {})
         self.name, self.urdf_path, self.urdf_xml = name, urdf_path, urdf_xml
         self.package_dirs, self.packages = list(package_dirs or []), dict(packages or {})
         self.missing_packages = dict(missing_packages or {})
-        self.srdf: str | None = None  # an SRDF file (disabled collision pairs); load_robot sets it
+        self.srdf: str | None = None  # set by load_robot
         self.floating_base = bool(floating_base)
         kin = self.full_model = full_model  # kin: the model the reduced one is cut from (six joints + full_model)
         if self.floating_base:
@@ -105,18 +103,16 @@ class Robot(JointBounds, RobotGeometry):
         self._above_base = chosen.above_base  # kinematic-model joints that stay put whatever q is
         self.model = reduced_model(kin, self._locked, q_ref) if self._locked else pin.Model(kin)
         self.data = self.model.createData()
-        self._pin_q_key, self._pin_q_value = None, None  # memo of _pin_q
+        self._pin_q_key, self._pin_q_value = None, None
         self.tip, self.tips, self.base = chosen.tip, chosen.tips, chosen.base
         self._tip_id = find_frame(self.model, self.tip)
         self._base_id = 0 if base is None else find_frame(self.model, base)
         self.n, self.joint_names = len(dofs), [kin.names[d] for d in dofs]
         self._dof_ids = dofs  # kinematic-model joint ids of the entries of q
 
-        # Base placement is constant: every free joint is downstream of the base frame.
         pin.framesForwardKinematics(self.model, self.data, pin.neutral(self.model))
         self._oMbase = self.data.oMf[self._base_id].copy() if base is not None else pin.SE3.Identity()
         self._baseMo = self._oMbase.inverse()
-        self._identity = pin.SE3.Identity()
 
         # The physical joints: the reduced model's joints 1..m in topological order, and how each follows q.
         m_phys = self.model.njoints - 1
@@ -134,18 +130,16 @@ class Robot(JointBounds, RobotGeometry):
         self._G = np.zeros((m_phys, self.n))  # d(physical values)/dq
         self._G[np.arange(m_phys), self._phys_index] = self._phys_scale
         self._views: dict[int, tuple[int, np.ndarray, np.ndarray, ChainView]] = {}
-        self._frame_ids: dict[str, int] = {}  # name -> id: a goal list names its frames several times per solve
+        self._frame_ids: dict[str, int] = {}
         self._moving: dict[int, list[str]] = {}  # frame id -> moving_joints
         self._tip_view = self._frame_view(self._tip_id)[3]
 
-        # The entries of q: their own joint's motion (active, or the inactive joint mimics follow).
         self.revolute, self.joint_axes = joint_motions(kin, dofs)
         self.continuous = np.array([kin.joints[d].nq == 2 for d in dofs])
         self._set_default_bounds(coupling)
         if base_box is not None:
             self._set_base_box(base_box)
 
-    # ------------------------------------------------------------------ locked copies
     def locked(self, values: dict[str, float]) -> Robot:
         """A new Robot whose ``q`` omits the joints ``values`` names, fixed at those values (rad or m), this robot's
         bounds on the others. FrameError for no joint of ``q``, BoundsError outside its bounds, ConfigurationError
@@ -169,7 +163,7 @@ class Robot(JointBounds, RobotGeometry):
         if fid is None:
             if not isinstance(frame, str):
                 raise FrameError(f"a frame is named by a string, got {type(frame).__name__} {frame!r}")
-            fid = find_frame(self.model, frame)  # a scan of every frame
+            fid = find_frame(self.model, frame)
             if fid < 0:
                 raise FrameError(f"{self.name} has no frame {frame!r}{closest_hint(frame, self.frames)} (robot.frames "
                                  f"lists its {len(self.frames)} frames)")
@@ -194,16 +188,15 @@ class Robot(JointBounds, RobotGeometry):
         """Names of the entries of ``q`` that move a frame (None: the tip); empty when no active joint moves it."""
         fid = self.frame_id(frame)
         names = self._moving.get(fid)
-        if names is None:  # a goal list asks for each of its frames at every solve
+        if names is None:
             phys = self.tree.ancestors(self._frame_view(fid)[0])
             ks = sorted({int(self._phys_index[k]) for k in phys if self._phys_scale[k] != 0.0})
             names = self._moving[fid] = [self.joint_names[k] for k in ks]
         return list(names)
 
     def locked_joints(self, frame: str | None = None) -> list[str]:
-        """Names of the joints between the base and a frame (None: the tip) that ``q`` does not move (off the active
-        joints, left out by ``joints=[...]`` or :meth:`locked`); a mimic joint is named by the joint it follows.
-        :func:`~evoik_pin.goals.stack.bind` refuses goals on such frames with these names."""
+        """Names of the joints between the base and a frame (None: the tip) that ``q`` does not move; a mimic joint
+        is named by the joint it follows."""
         kin, locked = self._kin_model, set(self._locked) - self._above_base
         path = kin.supports[kin.frames[find_frame(kin, self.model.frames[self.frame_id(frame)].name)].parentJoint]
         drivers = [self._full_couplings.get(j, (j,))[0] for j in path if j in locked]
@@ -224,8 +217,7 @@ class Robot(JointBounds, RobotGeometry):
         return view.FR, view.Fp, view.revolute
 
     def chain_coupling(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """index (c,) int64, scale (c,), offset (c,) of the joints of :meth:`chain_constants`:
-        ``x_k = scale[k] * q[index[k]] + offset[k]``."""
+        """index (c,) int64, scale (c,), offset (c,): ``x_k = scale[k] * q[index[k]] + offset[k]``."""
         joints = self._tip_view.joints
         if joints.size == self.tree.m:  # the chain holds every physical joint (then 0..m-1 in order)
             return self._phys_index, self._phys_scale, self._phys_offset
@@ -234,8 +226,7 @@ class Robot(JointBounds, RobotGeometry):
     def chain_joints(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Revolute mask (m,), unit axes (m, 3) and the lower and upper values (m,) (rad or m) of the m physical
         joints when q spans its bounds."""
-        a = self._phys_scale * self.lower[self._phys_index] + self._phys_offset
-        b = self._phys_scale * self.upper[self._phys_index] + self._phys_offset
+        a, b = self._physical(self.lower), self._physical(self.upper)
         return self.tree.revolute, self.tree.axes, np.minimum(a, b), np.maximum(a, b)
 
     def _physical(self, Q: np.ndarray) -> np.ndarray:
@@ -264,16 +255,15 @@ class Robot(JointBounds, RobotGeometry):
         return out
 
     def full_configuration(self, q) -> np.ndarray:
-        """Configuration (full_model.nq,) of the whole URDF (``pin.buildModelFromUrdf(path)``'s order): ``q`` on its
-        joints, mimic joints coupled, the others at rest. With a floating base it starts with the position (m) and
-        unit quaternion (x, y, z, w), w >= 0, of Pinocchio's free-flyer joint."""
+        """Configuration (full_model.nq,) of the whole URDF: ``q`` on its joints, mimic joints coupled, the others at
+        rest. A floating base comes first as position (m) and unit quaternion (x, y, z, w), w >= 0."""
         q, out, fm = self.check_q(q), self._q_ref_full.copy(), self._kin_model
         for k, d in enumerate(self._dof_ids):
             set_joint_value(fm, out, d, q[k])
         for j, (d, m, off) in self._full_couplings.items():
             if d in self._dof_ids:
                 set_joint_value(fm, out, j, m * q[self._dof_ids.index(d)] + off)
-        if self.floating_base:  # the six base joints are the kinematic model's first six numbers
+        if self.floating_base:
             quat = np.array(pin.Quaternion(pin.rpy.rpyToMatrix(out[5], out[4], out[3])).coeffs())  # (x, y, z, w)
             out = np.concatenate([out[:3], quat if quat[3] >= 0 else -quat, out[6:]])
         return out
@@ -299,8 +289,7 @@ class Robot(JointBounds, RobotGeometry):
     # ------------------------------------------------------------------ hot path of local solvers
     @cached_property
     def _pin_gather(self) -> np.ndarray:
-        """(nq,) indices into ``[x, cos x, sin x]`` (3m,) of the physical values x (m,) that give Pinocchio's
-        configuration vector."""
+        """(nq,) indices into ``[x, cos x, sin x]`` (3m,) that give Pinocchio's configuration vector."""
         m_phys = self._phys_idx_q.size
         gather = np.empty(self.model.nq, dtype=np.intp)
         for k, i in enumerate(self._phys_idx_q):
@@ -311,8 +300,7 @@ class Robot(JointBounds, RobotGeometry):
         return gather
 
     def _pin_q(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`to_pinocchio` for the hot path: ``q`` itself when no conversion is needed, else the last one
-        memoized (local solvers ask for the pose, then the Jacobian, of one ``q``)."""
+        """:meth:`to_pinocchio`, or ``q`` itself when no conversion is needed; the last one memoized."""
         if not (self._has_continuous or self._coupled):
             return q
         key = q.tobytes()
@@ -323,16 +311,15 @@ class Robot(JointBounds, RobotGeometry):
         return out
 
     def fk_unchecked(self, q: np.ndarray) -> pin.SE3:
-        """:meth:`fk` of the tip without validation (``q`` a finite float array (n,)), for inner loops."""
-        return self.tip_pose_seen_from_unchecked(q, self._identity)
+        """:meth:`fk` of the tip without validation (``q`` a finite float array (n,))."""
+        return self.frame_poses_unchecked(q, [self._tip_id])[0]
 
     def tip_pose_seen_from_unchecked(self, q: np.ndarray, M: pin.SE3) -> pin.SE3:
         """``M * fk(q)`` (e.g. ``M = T_target^-1``: the tip seen from the target), unchecked, a new ``pin.SE3``."""
         return M * self.frame_poses_unchecked(q, [self._tip_id])[0]
 
     def frame_poses_unchecked(self, q: np.ndarray, frame_ids) -> list[pin.SE3]:
-        """Base-frame poses (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, one
-        kinematics pass, unchecked."""
+        """Base-frame poses (new ``pin.SE3``) of the frames ``frame_ids`` (:meth:`frame_id`) at ``q``, unchecked."""
         pin.framesForwardKinematics(self.model, self.data, self._pin_q(q))
         oMf = self.data.oMf
         if self._base_id == 0:
@@ -340,14 +327,13 @@ class Robot(JointBounds, RobotGeometry):
         return [self._baseMo * oMf[f] for f in frame_ids]
 
     def jacobian_local_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
-        """``jacobian(q, "local")`` (6, n) of the tip (or frame id ``frame_id``), unchecked:
-        ``T(q + dq) ~ T(q) exp(J dq)``."""
+        """``jacobian(q, "local")`` (6, n) of the tip (or frame id ``frame_id``), unchecked."""
         return self._frame_jacobian(q, frame_id, pin.ReferenceFrame.LOCAL)
 
     def _frame_jacobian(self, q: np.ndarray, frame_id: int | None, reference) -> np.ndarray:
         fid = self._tip_id if frame_id is None else frame_id
         J = pin.computeFrameJacobian(self.model, self.data, self._pin_q(q), fid, reference)
-        J = J.reshape(6, -1)  # eigenpy returns a (6,) array for a one-joint model
+        J = J.reshape(6, -1)  # (6,) for a one-joint model
         return J @ self._G if self._coupled else J
 
     def jacobian_world_unchecked(self, q: np.ndarray, frame_id: int | None = None) -> np.ndarray:
@@ -373,8 +359,7 @@ class Robot(JointBounds, RobotGeometry):
         return out
 
     def manipulability(self, q, rows="translation") -> float:
-        """Yoshikawa manipulability (:func:`yoshikawa`) of the rows :meth:`task_rows` picks of the tip's world
-        Jacobian."""
+        """:func:`yoshikawa` of the rows :meth:`task_rows` picks of the tip's world Jacobian."""
         return float(yoshikawa(self.jacobian(q, "world")[self.task_rows(rows)]))
 
     # ------------------------------------------------------------------ kinematics, whole populations
@@ -382,8 +367,8 @@ class Robot(JointBounds, RobotGeometry):
         return self._tip_view if frame is None else self._frame_view(self.frame_id(frame))[3]
 
     def fk_batch(self, Q, validate: bool = True, frames=None):
-        """Positions (N, 3) m and rotations (N, 3, 3) of the tip (or of one frame name) for a population ``Q``
-        (N, n); for a list of G frames (N, G, 3) and (N, G, 3, 3). ``validate=False`` skips the checks."""
+        """Positions (N, 3) m and rotations (N, 3, 3) of the tip (or one frame) for ``Q`` (N, n); for a list of G
+        frames (N, G, 3) and (N, G, 3, 3)."""
         if validate:
             Q = self.check_population(Q)
         X = self._physical(Q)
@@ -401,7 +386,7 @@ class Robot(JointBounds, RobotGeometry):
         return chain_positions(self._view(frame), self._physical(Q))
 
     def jacobian_batch(self, Q, validate: bool = True, frame: str | None = None) -> np.ndarray:
-        """World-frame Jacobians (N, 6, n) of the tip (or ``frame``): :meth:`jacobian` row by row."""
+        """World-frame Jacobians (N, 6, n) of the tip (or ``frame``)."""
         return self.fk_jacobian_batch(Q, validate, frame)[2]
 
     def fk_jacobian_batch(self, Q, validate: bool = True, frame: str | None = None):
@@ -417,7 +402,7 @@ class Robot(JointBounds, RobotGeometry):
 
     @cached_property
     def mass_constants(self):
-        """:class:`~evoik_pin.robot.tree.MassConstants` for compiled kernels (centre-of-mass goals). Read-only."""
+        """:class:`~evoik_pin.robot.tree.MassConstants` for compiled kernels. Read-only."""
         return mass_constants(self)
 
     def __repr__(self) -> str:

@@ -46,8 +46,7 @@ def with_floating_base(model: pin.Model) -> pin.Model:
 
 
 def _appended(base: pin.Model, model: pin.Model, frame: int) -> pin.Model:
-    """``pin.appendModel(base, model, frame, identity)`` safe for shared frame names
-    (:func:`.frames.unique_frame_names`)."""
+    """``pin.appendModel(base, model, frame, identity)`` safe for shared frame names."""
     work, renamed = unique_frame_names(model)
     out = pin.appendModel(base, work, frame, pin.SE3.Identity())
     restore_frame_names(out, renamed)
@@ -55,8 +54,7 @@ def _appended(base: pin.Model, model: pin.Model, frame: int) -> pin.Model:
 
 
 def free_flyer_model(model: pin.Model) -> pin.Model:
-    """``model`` behind Pinocchio's free-flyer ``root_joint``, as ``pin.buildModelFromUrdf(path,
-    pin.JointModelFreeFlyer())`` builds it."""
+    """``model`` behind Pinocchio's free-flyer ``root_joint`` (``pin.buildModelFromUrdf(path, free_flyer)``'s)."""
     base = pin.Model()
     joint = base.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "root_joint")
     frame = base.addFrame(pin.Frame("root_joint", joint, pin.SE3.Identity(), pin.FrameType.JOINT))
@@ -65,9 +63,8 @@ def free_flyer_model(model: pin.Model) -> pin.Model:
 
 @dataclass(eq=False)
 class ChainView:
-    """The serial chain from the base to one frame, folded: ``T = F_0 Z(x_a0) F_1 ... Z(x_ac) F_c+1``.
-    ``joints`` (c,): its physical joints, base to frame; ``FR`` (c+1, 3, 3), ``Fp`` (c+1, 3) m: the placements,
-    the last the frame's; ``revolute`` (c,) bool."""
+    """The folded serial chain from the base to one frame, ``T = F_0 Z(x_a0) F_1 ... Z(x_ac) F_c+1``: ``joints``
+    (c,), base to frame; ``FR`` (c+1, 3, 3), ``Fp`` (c+1, 3) m, the last the frame's; ``revolute`` (c,) bool."""
 
     joints: np.ndarray
     FR: np.ndarray
@@ -79,9 +76,9 @@ class ChainView:
 
     @cached_property
     def positions_operator(self) -> tuple[list[np.ndarray], np.ndarray]:
-        """(S3, y_tip) of :func:`chain_positions`: joint k's homogeneous map is ``H_k(x) = a A_k + b B_k
-        + C_k`` (a, b = cos x, sin x; or x, 0 for a prismatic joint), so ``H_k p = [A_k B_k C_k] [a p; b p; p]``.
-        S3: that (4, 12) block stacked three times per joint (12, 12); y_tip (12, 1): the frame's origin, thrice."""
+        """(S3, y_tip) of :func:`chain_positions`: joint k's homogeneous map is ``H_k(x) = a A_k + b B_k + C_k``
+        (a, b = cos x, sin x; or x, 0 if prismatic), so ``H_k p = [A_k B_k C_k] [a p; b p; p]``. S3: that (4, 12)
+        block stacked thrice per joint (12, 12); y_tip (12, 1): the frame's origin, thrice."""
         c = self.joints.size
         S = np.zeros((c, 4, 12))
         for k in range(c):
@@ -133,7 +130,7 @@ class KinematicTree:
                    np.array(baseMo.rotation), np.array(baseMo.translation))
 
     @property
-    def m(self) -> int:  # the number of physical joints
+    def m(self) -> int:
         return int(self.parent.size)
 
     @cached_property
@@ -142,8 +139,7 @@ class KinematicTree:
         return bool(np.array_equal(self.parent, np.arange(-1, self.m - 1)))
 
     def frame(self, model: pin.Model, frame_id: int) -> tuple[int, np.ndarray, np.ndarray]:
-        """(j_f or -1, R_f (3, 3), p_f (3,) m) of frame ``frame_id`` of the tree's ``model``: its folded placement
-        on its joint, or its base-frame pose when j_f = -1."""
+        """(j_f, R_f, p_f) of frame ``frame_id`` of the tree's ``model`` (:meth:`Robot.frame_constants`)."""
         f = model.frames[frame_id]
         j, M = int(f.parentJoint) - 1, f.placement
         if j < 0:
@@ -153,7 +149,7 @@ class KinematicTree:
 
     def ancestors(self, j: int) -> np.ndarray:
         """(c,) int64: the physical joints that move a frame on joint j (its ancestors and j), root first."""
-        parent, out = self.parent.tolist(), []  # Python ints: cheaper than indexing the array joint by joint
+        parent, out = self.parent.tolist(), []
         while j >= 0:
             out.append(j)
             j = parent[j]
@@ -189,8 +185,7 @@ class MassConstants:
 
 
 def mass_constants(robot) -> MassConstants:
-    """The :class:`MassConstants` of ``robot``, from its reduced model's inertias (which hold locked links' bodies).
-    Bodies the reduction leaves on the universe are a constant first moment; bodies welded to the world in
+    """The :class:`MassConstants` of ``robot``, from its reduced model's inertias; bodies welded to the world in
     ``full_model`` are left out, as ``pin.centerOfMass(full_model, ...)`` does."""
     model, tree = robot.model, robot.tree
     inertias = [model.inertias[k + 1] for k in range(tree.m)]
@@ -204,13 +199,12 @@ def mass_constants(robot) -> MassConstants:
     fixed_mass = float(held.mass - welded.mass)
     first = held.mass * np.asarray(held.lever) - welded.mass * np.asarray(welded.lever)  # world frame
     fixed_moment = tree.base_R @ first + fixed_mass * tree.base_p
-    if abs(fixed_mass) < 1e-12:  # the same bodies on both sides: no round-off left over
+    if abs(fixed_mass) < 1e-12:  # no round-off left over
         fixed_mass, fixed_moment = 0.0, np.zeros(3)
     return MassConstants(masses, moments, subtree, fixed_mass, fixed_moment, float(masses.sum() + fixed_mass))
 
 
 def _on_chain(view: ChainView, X: np.ndarray) -> np.ndarray:
-    """The columns of X (N, m) of the chain's joints."""
     return X if view.joints.size == X.shape[1] else X[:, view.joints]
 
 
@@ -242,7 +236,7 @@ def chain_forward(view: ChainView, X: np.ndarray, want_joints: bool):
 
 def chain_positions(view: ChainView, X: np.ndarray) -> np.ndarray:
     """The frame's positions (N, 3) m for X (N, m), walking back from the frame with two NumPy calls per joint
-    (:attr:`ChainView.positions_operator`); cheaper than :func:`chain_forward`."""
+    (:attr:`ChainView.positions_operator`)."""
     N = X.shape[0]
     XT = _on_chain(view, X).T
     c = XT.shape[0]

@@ -1,5 +1,5 @@
 """What a URDF must be before Pinocchio reads it (urdfdom accepts files giving NaN or wrong kinematics, or rejects
-them with a generic message): :func:`check_urdf`, which also collects the ``<mimic>`` couplings."""
+them with a generic message): :func:`check_urdf`."""
 
 from __future__ import annotations
 
@@ -73,7 +73,7 @@ def check_urdf(root: ET.Element, where: str) -> dict[str, Mimic]:
 
 def _names(elements: list[ET.Element], kind: str, where: str) -> list[str]:
     """The ``name`` of each element; a RobotLoadError for a missing or repeated one."""
-    names: dict[str, None] = {}  # in order, each once
+    names: dict[str, None] = {}
     for i, el in enumerate(elements):
         n = el.get("name")
         if not n:

@@ -1,5 +1,5 @@
-"""Turning a file's bytes into URDF text: :func:`decode_xml` (encodings, binary files), :func:`expand_xacro` (xacro
-without ROS) and :func:`captured_stderr` (the C++ parsers' messages put into our errors, not on the terminal)."""
+"""Turning a file's bytes into URDF text: :func:`decode_xml`, :func:`expand_xacro` (xacro without ROS) and
+:func:`captured_stderr` (the C++ parsers' messages, for our errors)."""
 
 from __future__ import annotations
 
@@ -74,9 +74,8 @@ def is_xacro(path: Path | None, text: str) -> bool:
 def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
                  packages: PackageResolver | None = None) -> str:
     """URDF text of the xacro document ``text`` (read from ``path``, or None for a string), ``args`` setting its
-    ``<xacro:arg>`` values, ``$(find pkg)`` found through ``packages``. Any failure is a RobotLoadError naming
-    ``where`` and what failed."""
-    import xacro  # xacrodoc's (a dependency), imported when a xacro file is first read
+    ``<xacro:arg>`` values, ``$(find pkg)`` found through ``packages``; RobotLoadError naming ``where`` on failure."""
+    import xacro  # xacrodoc's
     from xacrodoc import XacroDoc
     from xacrodoc import packages as xacro_packages
 
@@ -87,20 +86,20 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
     def find(pkg: str) -> str:
         found = resolver.find(pkg)
         if found is None:
-            naming = xacro.filestack[-1] if xacro.filestack else None  # the file whose $(find ...) this is
+            naming = xacro.filestack[-1] if xacro.filestack else None
             missing.append((pkg, str(naming) if naming else where))
             raise xacro_packages.PackageNotFoundError(pkg)
         return found.as_posix()
 
-    # xacro and xacrodoc keep module-level state: the stack of files being read (relative includes resolve
-    # against its top) and the package finders and cache; each expansion sets them up and restores them.
+    # xacro and xacrodoc keep module-level state (the stack of files being read, the package finders and cache):
+    # each expansion sets it up and restores it.
     finder = xacro_packages._finder
     saved_finders, saved_cache = list(finder.finder_funcs), dict(finder.package_cache)
     failure: Exception | None = None
     with captured_stderr() as err:  # which holds _STDERR_LOCK: xacro's state is this expansion's alone
         try:
             xacro.init_stacks(str(path) if path is not None else None)
-            finder.package_cache.clear()  # this file's packages, not those of an earlier expansion
+            finder.package_cache.clear()
             finder.finder_funcs.insert(0, (find, xacro_packages.PackageNotFoundError))
             doc = XacroDoc.from_string(text, subargs=mappings, resolve_packages=False,
                                        rootdir=path.parent if path is not None else None)
@@ -119,7 +118,7 @@ def expand_xacro(text: str, where: str, path: Path | None, args: dict | None,
 
 def _xacro_message(exc: Exception, where: str, err: str, resolver: PackageResolver,
                    missing: list[tuple[str, str]]) -> str:
-    """What went wrong while expanding the xacro document at ``where``, for a RobotLoadError."""
+    """The RobotLoadError message of a failed xacro expansion."""
     cause = getattr(exc, "exc", None) or exc
     if type(cause).__name__ == "PackageNotFoundError":
         pkg = cause.args[0] if cause.args else "?"

@@ -1,8 +1,6 @@
-"""A robot's speed limits per entry of ``q`` (rad/s or m/s), and the ``velocity_limits=`` / ``dt=`` options.
-
-Where the URDF gives none (0 or inf; a floating base), the defaults below stand in. A floating base's angular
-limit bounds each Euler rate (yaw, pitch, roll), not the body's angular velocity; its linear one each of x, y, z.
-"""
+"""A robot's speed limits per entry of ``q`` (rad/s or m/s), and the ``velocity_limits=`` / ``dt=`` options. Where
+the URDF gives none (0 or inf; a floating base), the defaults below stand in; a floating base's limits bound each of
+x, y, z and each Euler rate (yaw, pitch, roll)."""
 
 from __future__ import annotations
 
@@ -24,38 +22,32 @@ DEFAULT_BASE_ANGULAR_SPEED = 2.0 * math.pi
 
 
 def urdf_velocity_limits(robot) -> np.ndarray:
-    """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's (an entry gets the smallest ``v_j / |m|``
-    of the physical joints following it), the defaults where it has none."""
-    limits, base = _urdf_limits(robot)
+    """(n,) speed limits (rad/s or m/s) of ``robot``'s ``q``: the URDF's, the defaults where it has none."""
+    limits = _urdf_limits(robot)
     limits[~np.isfinite(limits) | (limits <= 0.0)] = DEFAULT_JOINT_SPEED
     if robot.floating_base:  # x, y, z (m/s), yaw, pitch, roll (rad/s): a free flyer has no URDF limit
-        defaults = np.array([DEFAULT_BASE_LINEAR_SPEED] * 3 + [DEFAULT_BASE_ANGULAR_SPEED] * 3)
-        limits[:6] = np.where(np.isfinite(base) & (base > 0.0), base, defaults)
+        limits[:6] = [DEFAULT_BASE_LINEAR_SPEED] * 3 + [DEFAULT_BASE_ANGULAR_SPEED] * 3
     return limits
 
 
 def without_urdf_speed(robot) -> np.ndarray:
-    """(n,) bool: the entries of ``robot``'s ``q`` whose URDF gives no speed limit (0 or none), the floating base's
-    excepted (its defaults are the library's own)."""
-    limits = _urdf_limits(robot)[0]
+    """(n,) bool: the entries of ``robot``'s ``q`` whose URDF gives no speed limit, the floating base's excepted."""
+    limits = _urdf_limits(robot)
     out = ~np.isfinite(limits) | (limits <= 0.0)
     if robot.floating_base:
         out[:6] = False
     return out
 
 
-def _urdf_limits(robot) -> tuple[np.ndarray, np.ndarray]:
-    """(the URDF's limits (n,) per entry of q, 0 or inf where it gives none; the floating base's six (inf when the
-    model has no entry per q))."""
-    n, v = robot.n, np.asarray(robot.model.velocityLimit, dtype=float)
-    index, scale = robot.tree_constants()[4:6]
-    limits = v.copy() if v.shape[0] == n else np.full(n, np.inf)
-    if v.shape[0] != n and v.shape[0] == index.shape[0]:  # one entry per physical joint of the folded tree
-        for j, k in enumerate(index):
-            if 0 <= k < n and scale[j] != 0.0:
-                limits[k] = min(limits[k], v[j] / abs(scale[j]))
-    base = limits[:6].copy() if v.shape[0] == n else np.full(6, np.inf)
-    return limits, base
+def _urdf_limits(robot) -> np.ndarray:
+    """The URDF's limits (n,) per entry of q (the smallest ``v_j / |m|`` of the physical joints following it; 0 or
+    inf where it gives none). The model has one velocity limit per physical joint (all 1-DOF)."""
+    v, (index, scale) = robot.model.velocityLimit, robot.tree_constants()[4:6]
+    limits = np.full(robot.n, np.inf)
+    for j, k in enumerate(index):
+        if scale[j] != 0.0:
+            limits[k] = min(limits[k], v[j] / abs(scale[j]))
+    return limits
 
 
 def velocity_limits(robot, spec) -> np.ndarray:

@@ -1,6 +1,5 @@
-"""Collision scenes: the robot's own body and obstacles around it (Pinocchio geometry models + coal):
-:class:`Scene` (:mod:`.scene`), the robot's geometry and pairs (:mod:`.geometry`), example scenes (:mod:`.examples`).
-"""
+"""Collision scenes: the robot's own body and obstacles around it (Pinocchio geometry models + coal): :class:`Scene`,
+the robot's geometry and pairs (:mod:`.geometry`), example scenes (:mod:`.examples`)."""
 
 from .scene import Obstacle, Scene
 

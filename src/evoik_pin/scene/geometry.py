@@ -1,5 +1,5 @@
-"""A robot's collision geometry (the URDF's ``<collision>`` on its reduced model), the pairs worth checking, a
-scene's obstacles as a geometry model, and convex-hull proxies."""
+"""A robot's collision geometry and the pairs worth checking, a scene's obstacles as a geometry model, and convex-hull
+proxies."""
 
 from __future__ import annotations
 
@@ -15,8 +15,7 @@ __all__ = ["convex_hulls", "obstacle_model", "robot_collision_model", "self_coll
 
 
 def robot_collision_model(robot) -> pin.GeometryModel:
-    """A fresh copy of the robot's collision geometry (``Robot.collision_model``), attached to ``robot.model``'s
-    joints; SceneError when the URDF has no ``<collision>`` element."""
+    """A copy of ``robot.collision_model``; SceneError when the URDF has no ``<collision>`` element."""
     geom = robot.collision_model
     if geom.ngeoms == 0:
         raise SceneError(f"{robot.name} has no <collision> geometry in its URDF: a scene needs the robot's "
@@ -47,7 +46,7 @@ def self_collision_pairs(robot, geom: pin.GeometryModel, srdf: str | None) -> li
 
 def obstacle_model(scene) -> pin.GeometryModel:
     """The obstacles of a :class:`~evoik_pin.scene.Scene` as a ``pin.GeometryModel`` on the universe of
-    ``scene.robot.model``, one object per obstacle, named as the obstacle, placed in the model's world frame."""
+    ``scene.robot.model`` (its world frame), one object per obstacle, named as the obstacle."""
     base, geom = scene.robot.base_placement, pin.GeometryModel()
     for ob in scene.obstacles.values():  # base frame -> the model's world frame
         geom.addGeometryObject(pin.GeometryObject(ob.name, 0, 0, base * ob.pose, ob.shape))
@@ -56,7 +55,7 @@ def obstacle_model(scene) -> pin.GeometryModel:
 
 def convex_hulls(geom: pin.GeometryModel) -> pin.GeometryModel:
     """A copy of ``geom`` whose meshes are replaced by their convex hulls: conservative checks and lower-bound
-    distances, much cheaper (GJK instead of BVH traversals)."""
+    distances, much cheaper."""
     hulls = geom.copy()
     for obj in hulls.geometryObjects:
         shape = obj.geometry

@@ -1,7 +1,6 @@
 """A collision scene: the robot's collision geometry and obstacles at poses in its base frame (m), checked with
-Pinocchio and coal on the robot's self-collision pairs (:func:`.geometry.self_collision_pairs`) and every (moving
-robot object, obstacle) pair: exactly on the meshes, or on convex-hull proxies.
-"""
+Pinocchio and coal on the robot's self-collision pairs and every (moving robot object, obstacle) pair: exactly on the
+meshes, or on convex-hull proxies."""
 
 from __future__ import annotations
 
@@ -23,8 +22,8 @@ __all__ = ["Obstacle", "Scene"]
 
 @dataclass(frozen=True)
 class Obstacle:
-    """One obstacle: ``kind`` (box, sphere, cylinder, capsule, mesh), its parameters (``size`` (3,) m for a box,
-    ``radius`` / ``length`` m, ``path`` and ``scale`` for a mesh), its ``pose`` in the base frame, its coal shape."""
+    """One obstacle: ``kind`` (box, sphere, cylinder, capsule, mesh), its ``params`` (``size`` (3,) m, ``radius`` /
+    ``length`` m, ``path`` and ``scale``), its ``pose`` in the base frame, its coal shape."""
 
     name: str
     kind: str
@@ -142,8 +141,8 @@ class Scene:
     # ------------------------------------------------------------------ scene files
     @classmethod
     def from_file(cls, robot, path: str | os.PathLike) -> Scene:
-        """A scene of ``robot`` read from a YAML or JSON scene file (format: :mod:`evoik_pin.io.scene_file`), checked
-        whole before the scene is built; SceneError naming the file, the obstacle and the problem."""
+        """A scene of ``robot`` read from a YAML or JSON scene file (:mod:`evoik_pin.io.scene_file`); SceneError
+        naming the file, the obstacle and the problem."""
         spec = read_scene(path)
         with naming(f"scene file {str(spec.path)!r}", SceneError):
             scene = cls(robot, self_collision=spec.self_collision, srdf=spec.srdf)
@@ -180,12 +179,6 @@ class Scene:
         self._margin = {id(self._gdata): 0.0, id(self._hdata): 0.0}
         self.version += 1
 
-    def _set_margin(self, gdata, margin: float) -> None:
-        if self._margin[id(gdata)] != margin:
-            for req in gdata.collisionRequests:
-                req.security_margin = margin
-            self._margin[id(gdata)] = margin
-
     def _q(self, q) -> np.ndarray:
         with naming("scene query", ConfigurationError):
             q = self.robot.check_q(q)
@@ -193,7 +186,10 @@ class Scene:
 
     def _check(self, q_pin: np.ndarray, margin: float, hulls: bool, stop_at_first: bool) -> bool:
         geom, gdata = (self._hulls, self._hdata) if hulls else (self._geom, self._gdata)
-        self._set_margin(gdata, margin)
+        if self._margin[id(gdata)] != margin:
+            for req in gdata.collisionRequests:
+                req.security_margin = margin
+            self._margin[id(gdata)] = margin
         pin.updateGeometryPlacements(self.robot.model, self._data, geom, gdata, q_pin)
         return bool(pin.computeCollisions(geom, gdata, stop_at_first))
 
@@ -213,7 +209,7 @@ class Scene:
         self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=False)
         pairs = [(self._object_name(a), self._object_name(b))
                  for (a, b), res in zip(self._pairs, self._gdata.collisionResults, strict=True) if res.isCollision()]
-        return list(dict.fromkeys(pairs))  # once per pair of names (a link may have several shapes)
+        return list(dict.fromkeys(pairs))  # a link may have several shapes
 
     def collides(self, Q, margin: float = 0.0, proxy: bool = False) -> np.ndarray:
         """(N,) bool: :meth:`in_collision` of each row of ``Q`` (N, n); ``proxy=True`` on the convex hulls
@@ -224,8 +220,7 @@ class Scene:
 
     def distance(self, q) -> float:
         """Signed distance (m) of the closest checked pair at ``q``: the exact mesh clearance when positive, the
-        convex hulls' penetration depth in contact, ``inf`` without pairs. The hull distances (lower bounds) order
-        the pairs; exact distances are computed until the next bound exceeds the best one."""
+        convex hulls' penetration depth in contact, ``inf`` without pairs."""
         if not self._pairs:
             return math.inf
         q_pin, model = self._q(q), self.robot.model
@@ -234,11 +229,11 @@ class Scene:
         lower = np.array([r.min_distance for r in self._hdata.distanceResults])
         pin.updateGeometryPlacements(model, self._data, self._geom, self._gdata, q_pin)
         best = math.inf
-        for k in np.argsort(lower):
+        for k in np.argsort(lower):  # the hull distances bound the exact ones from below
             if lower[k] >= best:
                 break
             d = pin.computeDistance(self._geom, self._gdata, int(k)).min_distance
-            if d <= 0.0:  # meshes in contact: coal reports 0 (or a depth for primitives); the hulls bound it
+            if d <= 0.0:  # in contact: coal reports 0 (or a depth for primitives)
                 d = min(d, lower[k])
             best = min(best, d)
         return float(best)

@@ -1,7 +1,6 @@
 """Meshcat web preview of a robot, targets and goals, solutions, trajectories, obstacles, and a static HTML export
-(docs/API.md): :class:`Viewer`, its life cycle, inputs and export, in the robot's base frame (m). Nodes: ``robot``,
-``solutions/<k>``, ``target``, ``goals/<frame>``, ``path``, ``scene/visuals/<obstacle>``; the drawing is the mixins'
-of the modules beside this one, the meshcat server :mod:`.server`'s (127.0.0.1 only, stopped by :meth:`Viewer.close`).
+(docs/API.md): :class:`Viewer`, in the robot's base frame (m). Nodes: ``robot``, ``solutions/<k>``, ``target``,
+``goals/<frame>``, ``path``, ``scene/visuals/<obstacle>``; the drawing is the mixins' of the modules beside this one.
 """
 
 from __future__ import annotations
@@ -34,8 +33,7 @@ __all__ = ["CAMERA_FOV_DEG", "COLLISION_RGBA", "GHOST_COLORS", "GHOST_MESH_BUDGE
 
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer one request.
 SERVER_TIMEOUT = 20.0
-#: Seconds after which a Viewer's own server that neither answers nor exits counts as wedged (a loaded machine
-#: slows it: while it runs, it is waited for).
+#: Seconds after which a Viewer's own server that neither answers nor exits counts as wedged.
 OWN_SERVER_HANG_S = 600.0
 #: Seconds to wait for an external server (``Viewer(zmq_url=...)``) to answer its first request.
 PROBE_TIMEOUT = 5.0
@@ -49,7 +47,7 @@ _COMMAND_RE = re.compile(r'fetch\("data:application/octet-binary;base64,([A-Za-z
 
 def html_commands(html: str) -> list[dict]:
     """The meshcat commands (dicts with ``type``, ``path`` and the payload) the static HTML ``html``
-    (:meth:`Viewer.save_html`) replays, in order, decoded from its base64 msgpack blobs."""
+    (:meth:`Viewer.save_html`) replays, in order."""
     import umsgpack
 
     return [umsgpack.unpackb(base64.b64decode(m)) for m in _COMMAND_RE.findall(html)]
@@ -124,7 +122,7 @@ class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera):
 
     def block(self, message: str | None = None, file=None) -> None:
         """Keep the server running until Ctrl-C (or its exit), then close the Viewer. ``message``: a line printed
-        to ``file`` (default stdout) inside the wait, so a Ctrl-C right after it still stops the Viewer cleanly."""
+        to ``file`` (default stdout) first."""
         if message is not None and not isinstance(message, str):
             raise OptionError(f"Viewer.block: message must be a str (a line to print) or None, not "
                               f"{type(message).__name__}")
@@ -149,9 +147,9 @@ class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera):
 
     def _qs(self, items) -> np.ndarray:
         """(N, n) configurations from joint vectors / results, an (N, n) array, a front or a multi-solution result."""
-        if getattr(items, "solutions", None) is not None:  # a Result of an all-solutions method
+        if getattr(items, "solutions", None) is not None:
             items = items.solutions
-        elif getattr(items, "front", None) is not None:  # a Result of a multi-objective method
+        elif getattr(items, "front", None) is not None:
             items = items.front.q
         elif hasattr(items, "q"):  # a Front (q is (M, n)) or a single Result
             items = items.q
@@ -204,8 +202,7 @@ class Viewer(RobotDrawing, MarkerDrawing, ObstacleDrawing, PathDrawing, Camera):
 def save_solution_html(robot: Robot, result, goals, path: str | os.PathLike, scene=None,
                        margin: float = 0.0) -> Path:
     """Write :meth:`Viewer.show_solution` of ``result`` (or a joint vector (n,)) for ``goals`` (and a collision
-    ``scene`` with its ``margin``, m) as one self-contained HTML file ``path`` (:meth:`Viewer.save_html`); return
-    its path. What ``evoik solve ... --html`` writes for a goal list."""
+    ``scene`` with its ``margin``, m) as one self-contained HTML file ``path``; return its path."""
     with Viewer(robot) as viewer:
         viewer.show_solution(result, goals, scene=scene, margin=margin)
         return viewer.save_html(path)
@@ -213,8 +210,7 @@ def save_solution_html(robot: Robot, result, goals, path: str | os.PathLike, sce
 
 def save_clip_html(robot, clip, path: str | os.PathLike, keypoints: bool = True) -> Path:
     """Write ``clip`` (a :class:`~evoik_pin.motion.Clip` of ``robot``) as a self-contained HTML page playing it at
-    its fps, and return the path. ``keypoints``: also the source keypoints the robot followed (``clip.keypoints``,
-    scaled into the robot's world), as orange spheres under ``keypoints/<name>``."""
+    its fps; return the path. ``keypoints``: also ``clip.keypoints``, as spheres under ``keypoints/<name>``."""
     import meshcat.geometry as mg
 
     with Viewer(robot) as viewer:

@@ -29,8 +29,8 @@ class Camera:
     @_talks
     def set_camera(self, position=None, target=None) -> None:
         """Place the camera at ``position`` (3,) m (default: in front of, beside and above ``target`` at the robot's
-        reach), looking at ``target`` (3,) m (default: the base). Meshcat's camera always looks at the world origin,
-        so the drawing (``/meshcat``, grid, axes) is translated by ``-target`` instead."""
+        reach), looking at ``target`` (3,) m (default: the base). Meshcat's camera looks at the origin: the drawing
+        is translated by ``-target`` instead."""
         vis = self._check_open()
         t = np.zeros(3) if target is None else np.asarray(target, dtype=float)
         if t.shape != (3,) or not np.all(np.isfinite(t)):
@@ -38,7 +38,7 @@ class Camera:
         c = t + self._reach * _VIEW_DIRECTION if position is None else np.asarray(position, dtype=float)
         if c.shape != (3,) or not np.all(np.isfinite(c)):
             raise ConfigurationError(f"camera position must be 3 finite numbers (m), got {c}")
-        if not np.array_equal(t, self._camera_target):  # unchanged: no command (the export stays as it was)
+        if not np.array_equal(t, self._camera_target):
             shift = np.eye(4)
             shift[:3, 3] = -t
             for node in ("/meshcat", "/Grid", "/Axes"):  # the grid's and the axes' own transforms are identities

@@ -1,5 +1,5 @@
-"""Markers of targets and goals in the base frame: a coordinate triad (x red, y green, z blue) for a pose, a sphere
-for a position, a goal's frame name as a label; and a goal-list answer with its goals (``show_solution``)."""
+"""Markers of targets and goals in the base frame: a triad (x red, y green, z blue) for a pose, a sphere for a
+position, a goal's frame name as a label; and a goal-list answer with its goals (``show_solution``)."""
 
 from __future__ import annotations
 
@@ -17,16 +17,6 @@ GOAL_LABEL_HEIGHT = 0.5
 _POINT_COLOR = 0xE02020
 _ORIGIN_COLOR = 0xF0C020
 _AXIS_COLORS = (("x", 0xE02020), ("y", 0x20C020), ("z", 0x2040F0))
-
-
-def _check_rotation(rotation, what: str) -> np.ndarray:
-    """``rotation`` as a (3, 3) rotation matrix, or a TargetError naming ``what``."""
-    R = np.asarray(rotation, dtype=float)
-    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
-        raise TargetError(f"{what} rotation must be a finite (3, 3) matrix, got shape {R.shape}")
-    if not is_rotation(R):
-        raise TargetError(f"{what} rotation is not a rotation matrix (R^T R != I or det R != 1)")
-    return R
 
 
 def _draw_marker(node, p: np.ndarray, R: np.ndarray | None, size: float) -> str:
@@ -50,7 +40,7 @@ def _draw_marker(node, p: np.ndarray, R: np.ndarray | None, size: float) -> str:
 
 
 def _label(text: str):
-    """A meshcat sprite showing ``text``, facing the camera (the viewer's ``_text`` texture, 256 x 256 px)."""
+    """A meshcat sprite showing ``text``, facing the camera (a ``_text`` texture, 256 x 256 px)."""
     import meshcat.geometry as mg
 
     class _TextTexture(mg.Texture):
@@ -92,34 +82,37 @@ class MarkerDrawing:
         p = np.asarray(position, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise TargetError(f"target position must be 3 finite numbers (m), got shape {p.shape}: {p}")
-        R = None if rotation is None else _check_rotation(rotation, "target")
+        R = None if rotation is None else np.asarray(rotation, dtype=float)
+        if R is not None:
+            if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+                raise TargetError(f"target rotation must be a finite (3, 3) matrix, got shape {R.shape}")
+            if not is_rotation(R):
+                raise TargetError("target rotation is not a rotation matrix (R^T R != I or det R != 1)")
         node, name = self._fresh(name)
         self.scene[name] = "target " + _draw_marker(node, p, R, self._marker_size(size))
 
     @_talks
     def show_goals(self, goals, name: str = "goals", size: float | None = None, labels: bool = True) -> list[str]:
-        """Draw a marker ``<name>/<frame>`` per goal of a goal list (checked by :func:`evoik_pin.goals.bind`) that
-        has a place (``goal.marker()``), ``size`` as for :meth:`show_target`, with ``labels`` its frame name
-        (``<name>/<frame>/label``); return the markers' node names in the goals' order."""
+        """Draw a marker ``<name>/<frame>`` per goal of a goal list that has a place (``goal.marker()``), ``size`` as
+        for :meth:`show_target`, with ``labels`` its frame name (``<name>/<frame>/label``); return the node names."""
         from ..goals import bind
 
         goals, s = bind(self.robot, goals)[0], self._marker_size(size)
         root, name = self._fresh(name)
         nodes = []
         for goal in goals:
-            marker = goal.marker()  # what the goal's kind declares: (node name, point, rotation or None) or None
-            if marker is None:  # an orientation, a direction, a support polygon, a relative pose: no place to mark
+            marker = goal.marker()  # (node name, point, rotation or None), or None: no place to mark
+            if marker is None:
                 continue
             frame, p, R = marker
             node = f"{name}/{frame}"
-            if node in nodes:  # the same frame twice with the same target (bind refuses clashing ones)
+            if node in nodes:  # the same frame twice (bind refuses clashing targets)
                 continue
             kind = _draw_marker(root[frame], p, R, s)
             if labels:
                 label = root[frame]["label"]
                 label.set_object(_label(frame))
-                # above the marker, in its own frame turned back to the base frame's axes (a sprite has no rotation
-                # of its own to keep, but its offset would turn with a pose's rotation)
+                # above the marker along the base frame's z (R^T: the offset would turn with the pose)
                 T = np.diag([s * 4 * GOAL_LABEL_HEIGHT] * 3 + [1.0])  # the 256 px canvas: text ~ a quarter of it
                 T[:3, 3] = (R.T if R is not None else np.eye(3)) @ np.array([0.0, 0.0, 0.6 * s])
                 label.set_transform(T)

@@ -23,7 +23,7 @@ class ObstacleDrawing:
     """The Viewer's scene nodes: obstacles, and the robot's links in collision painted red."""
 
     def _check_scene(self, scene) -> None:
-        """SceneError unless ``scene`` is a Scene of this Viewer's robot (the same object, or the same chain)."""
+        """SceneError unless ``scene`` is a Scene of this Viewer's robot (the same object or chain)."""
         from ..scene import Scene
 
         if not isinstance(scene, Scene):
@@ -31,12 +31,12 @@ class ObstacleDrawing:
         other = scene.robot
         if other is not self.robot and (other.name, other.base, list(other.joint_names)) != (
                 self.robot.name, self.robot.base, list(self.robot.joint_names)):
-            scene.check_robot(self.robot)  # raises, naming both robots
+            scene.check_robot(self.robot)  # raises
 
     def _paint_links(self, viz, links: set[str]) -> None:
         """Draw the visual geometry of ``links`` (link names) red and give the others their own colours back."""
         model = self.robot.model
-        if self.skeleton:  # skeleton parts hang on joints: the joints that carry the links
+        if self.skeleton:  # skeleton parts hang on the joints carrying the links
             joints = {model.frames[model.getFrameId(name)].parentJoint for name in links}
             red = {g.name for g in viz.visual_model.geometryObjects if g.parentJoint in joints}
         else:
@@ -46,7 +46,7 @@ class ObstacleDrawing:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)
                 for g in viz.visual_model.geometryObjects:
-                    if (g.name in red) != (g.name in before):  # reloaded: red plain geometry, or its own again
+                    if (g.name in red) != (g.name in before):
                         viz.plain_meshes = g.name in red
                         viz.loadViewerGeometryObject(g, pin.GeometryType.VISUAL,
                                                      list(COLLISION_RGBA) if g.name in red else None)

@@ -1,5 +1,5 @@
 """Point clouds (``show_points``), polylines (``draw_path``) and the robot animated along a trajectory (``animate``:
-one meshcat ``Animation`` of the geometry nodes' poses, which the static export keeps)."""
+one meshcat ``Animation``, which the static export keeps)."""
 
 from __future__ import annotations
 
@@ -52,8 +52,7 @@ class PathDrawing:
     @_talks
     def animate(self, trajectory, dt: float = 0.05, path: bool = True, repetitions: int = 1) -> None:
         """Animate the robot along ``trajectory`` (N, n) (joint vectors or results) at ``dt`` s per configuration,
-        ``repetitions`` times, and with ``path`` draw the tip's path (node ``path``). The robot is left at the
-        first configuration; a new animation replaces the last."""
+        ``repetitions`` times, with ``path`` the tip's path (node ``path``); the robot is left at the first."""
         Q = self._qs(trajectory)
         if not (np.isfinite(dt) and dt > 0):
             raise ConfigurationError(f"dt must be a positive number of seconds, got {dt}")
@@ -76,7 +75,7 @@ class PathDrawing:
         for k, q in enumerate(Q):
             with anim.at_frame(vis, k) as frame:
                 for node, M in zip(nodes, self.robot.geometry_placements(geom, q), strict=True):
-                    frame[node].set_transform(M.homogeneous)  # rigid poses: the mesh scale stays as loaded
+                    frame[node].set_transform(M.homogeneous)
                 if each_frame is not None:
                     each_frame(frame, k)
         self.show(Q[0])

@@ -1,6 +1,5 @@
 """Drawing a robot at a configuration, or at several as translucent ghosts (``<name>/<k>``, one colour each):
-``robot.visual_model`` (or :func:`skeleton_model`) on ``robot.model``, one ``pinocchio.visualize.MeshcatVisualizer``
-per node; placements come from the robot layer."""
+``robot.visual_model`` (or :func:`skeleton_model`), one ``pinocchio.visualize.MeshcatVisualizer`` per node."""
 
 from __future__ import annotations
 
@@ -29,7 +28,7 @@ GHOST_MESH_BUDGET = 50_000_000
 
 
 def _tip_frames(robot: Robot) -> list[str]:
-    """The frames a skeleton marks beyond the joint origins: the tip and ``tips``, each once."""
+    """The tip and ``tips``, each once."""
     return list(dict.fromkeys([robot.tip, *robot.tips]))
 
 
@@ -68,7 +67,7 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
         if length > 1e-9:
             add(name, joint, pin.SE3(rotation_to_z(p1 - p0), (p0 + p1) / 2), coal.Cylinder(radius, length), rgba)
 
-    revolute, axes, lower, upper = robot.chain_joints()  # model's joints: mimic joints on the chain included
+    revolute, axes, lower, upper = robot.chain_joints()
     tips = _tip_frames(robot)
     for k, (parent, M) in enumerate(_segments(robot)):
         is_tip = k >= model.njoints - 1
@@ -76,7 +75,6 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
             continue
         child = k + 1 if not is_tip else parent
         name = tips[k - (model.njoints - 1)] if is_tip else model.names[k + 1]
-        # sphere at this point, attached to the joint it moves with (the joint itself, or the tip's parent)
         add(f"skeleton_{name}", child, pin.SE3.Identity() if not is_tip else M,
             coal.Sphere(r * (0.8 if is_tip else 1.0)), joint_rgba)
         cylinder(f"skeleton_to_{name}", parent, np.zeros(3), M.translation, 0.6 * r, link_rgba)
@@ -88,8 +86,8 @@ def skeleton_model(robot: Robot, radius: float | None = None) -> pin.GeometryMod
 
 
 def _reach(robot: Robot) -> float:
-    """The robot's size (m, >= 0.1) for default marker sizes and the camera distance: the longest polyline from the
-    root through the joint origins to a tip frame, at rest, plus prismatic travel."""
+    """The robot's size (m, >= 0.1): the longest polyline from the root through the joint origins to a tip frame, at
+    rest, plus prismatic travel."""
     model = robot.model
     revolute, _, lower, upper = robot.chain_joints()
     travel = np.where(revolute, 0.0, np.maximum(np.abs(lower), np.abs(upper)))
@@ -135,7 +133,7 @@ def _meshcat_visualizer_class():
 
 
 class RobotDrawing:
-    """The Viewer's robot nodes: loading the robot's geometry under a node, showing it at a configuration or several."""
+    """The Viewer's robot nodes."""
 
     def _load(self, node: str, rgba=None, geom: pin.GeometryModel | None = None):
         """Load the robot's geometry (or ``geom``) under ``node``, once; ``rgba`` colours every part (a ghost)."""
@@ -146,7 +144,7 @@ class RobotDrawing:
         viz.plain_meshes = rgba is not None
         viz.initViewer(viewer=vis)
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # unsupported parts are skipped, as Pinocchio does
+            warnings.simplefilter("ignore", UserWarning)  # Pinocchio skips unsupported parts
             viz.loadViewerModel(rootNodeName=node, visual_color=None if rgba is None else list(rgba))
         vis[node].set_transform(self._baseMo.homogeneous)
         self._viz[node] = viz
@@ -180,8 +178,7 @@ class RobotDrawing:
         one colour each, at most ``limit`` (evenly spaced, with a warning); return their node names.
 
         ``style``: ``"mesh"``, ``"skeleton"``, or ``"auto"``: meshes unless the ghosts' mesh files exceed
-        :data:`GHOST_MESH_BUDGET` bytes in all (each ghost embeds a copy). ConfigurationError for nothing to draw
-        (quoting an empty :func:`evoik_pin.solve_all` list's ``message``)."""
+        :data:`GHOST_MESH_BUDGET` bytes in all (each ghost embeds a copy). ConfigurationError for nothing to draw."""
         empty = getattr(solutions, "solutions", solutions)
         if isinstance(empty, list) and not empty:
             why = getattr(solutions, "message", "")
@@ -198,7 +195,7 @@ class RobotDrawing:
             warnings.warn(f"{Q.shape[0]} solutions: drawing {keep.size} of them (limit={limit})", UserWarning,
                           stacklevel=3)
             Q = Q[keep]
-        if style == "auto":  # each ghost embeds a copy of the mesh files
+        if style == "auto":
             paths = [g.meshPath for g in self._geom.geometryObjects]
             mesh_bytes = sum(os.path.getsize(f) for f in paths if f and os.path.isfile(f))
             style = "skeleton" if Q.shape[0] * mesh_bytes > GHOST_MESH_BUDGET else "mesh"

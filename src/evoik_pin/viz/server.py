@@ -1,5 +1,5 @@
-"""The meshcat server a Viewer draws into: its own subprocess (bound to 127.0.0.1, ready once it printed both
-URLs, exiting with its parent) or an external one (probed first: a silent one is a ViewerError, not a hang)."""
+"""The meshcat server a Viewer draws into: its own subprocess (bound to 127.0.0.1, exiting with its parent) or an
+external one (probed first: a silent one is a ViewerError, not a hang)."""
 
 from __future__ import annotations
 
@@ -15,11 +15,10 @@ from pathlib import Path
 
 from ..errors import ViewerError
 
-#: Seconds between two looks at whether a Viewer's own server still runs, while an answer is waited for.
+#: Seconds between two looks at whether a Viewer's own server still runs.
 _LIVENESS_POLL = 0.25
 
-# Started with ``python -c``: meshcat's own server, with its HTTP socket bound to 127.0.0.1 (meshcat
-# binds every interface) and a watchdog that exits when the parent process is gone.
+# meshcat's own server, its HTTP socket bound to 127.0.0.1 (meshcat binds every interface), exiting with its parent.
 _SERVER_SCRIPT = r"""
 import os, sys, threading, time
 parent = int(sys.argv[1])
@@ -40,8 +39,7 @@ zmqserver.main()
 
 
 def _printed(f) -> str:
-    """What a subprocess has written so far to ``f`` (its stdout or stderr file), read without moving the shared
-    offset (a ``seek(0)`` would let its next line overwrite its first)."""
+    """What a subprocess has written so far to file ``f``, read without moving the shared offset."""
     fd = f.fileno()
     return os.pread(fd, os.fstat(fd).st_size, 0).decode(errors="replace")
 
@@ -79,14 +77,14 @@ class _Server:
                 break
             exited = self.proc.poll() is not None
             if exited or time.monotonic() > deadline:
-                printed = _printed(self._out).strip().splitlines()[-2:]  # what it did print, to diagnose
+                printed = _printed(self._out).strip().splitlines()[-2:]
                 detail = _printed(self._err).strip().splitlines()[-3:]
                 self.stop()
                 why = (f"exited (code {self.proc.returncode})" if exited
                        else f"ran {timeout:g} s without printing both of its URLs")
                 raise ViewerError(f"the meshcat server {why}: " + (" | ".join(detail) or "nothing on stderr")
                                   + f"; stdout: {' | '.join(printed) or 'nothing'}")
-            time.sleep(0.02)  # readiness is the URL lines; the deadline only catches a wedged server
+            time.sleep(0.02)
         self.zmq_url, self.web_url = urls["zmq_url"], urls["web_url"]
 
     def stop(self) -> None:
@@ -117,7 +115,7 @@ def _probe(zmq_url: str, timeout: float) -> str:
 
 class _OwnServerSocket:
     """The REQ socket to a Viewer's own server: ``recv`` waits while the server runs, raising ``zmq.ZMQError`` once
-    it exited (``zmq.Again`` after ``hang_s`` s); the rest is the wrapped socket's."""
+    it exited (``zmq.Again`` after ``hang_s`` s)."""
 
     def __init__(self, sock, proc: subprocess.Popen, hang_s: float):
         self._sock, self._proc, self._hang_s = sock, proc, hang_s
@@ -143,8 +141,7 @@ def _connect(zmq_url: str, web_url: str, proc: subprocess.Popen | None, answer_t
     import zmq
     from meshcat.visualizer import ViewerWindow, Visualizer
 
-    # ViewerWindow(zmq_url, start_server=False) would print the URL and leave a first socket open: the
-    # server's URL is already known (probed, or printed by our own server), so set the window up directly.
+    # ViewerWindow(zmq_url, start_server=False) would print the URL and leave a first socket open
     window = ViewerWindow.__new__(ViewerWindow)
     window.server_proc, window.zmq_url, window.web_url = None, zmq_url, web_url
     window.connect_zmq()
