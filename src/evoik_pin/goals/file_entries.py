@@ -13,14 +13,14 @@ from functools import partial
 
 import numpy as np
 
-from ..errors import FrameError, GoalsFileError, OptionError, TargetError
+from ..errors import GoalsFileError
 from ..io import datafile
 from ..io.datafile import Flow
 from ..target import Target
 from .bands import DEFAULT_GOAL_TOLERANCE
 
 __all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_entry", "number", "numbers",
-           "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",
+           "orientation_target", "pointing", "pose_target", "position_target", "position_text",
            "unknown_keys", "vector_target"]
 
 #: The data files' field readers (:mod:`evoik_pin.io.datafile`) raising GoalsFileError.
@@ -142,6 +142,8 @@ class FileKind:
     write: Callable[[object], dict] | None = None
     #: How the targets a goal set's ``targets:`` reads become the class's members (None: as read).
     set_member: Callable | None = None
+    #: A kind on two frames: ``frame_a`` and ``frame`` (frame b), read as ``cls(frame_a, frame, target, **fields)``.
+    pair: bool = False
 
 
 def pointing(cls) -> Callable:
@@ -173,29 +175,3 @@ def field_entries(goal, fields: tuple[str, ...]) -> dict:
         elif getattr(goal, key) != defaults[key]:
             entry[key] = float(getattr(goal, key))
     return entry
-
-
-def pair_kind(cls, name: str, fields: tuple[str, ...], read_target: Callable, write_target: Callable) -> FileKind:
-    """The ``kind: <name>`` of a two-frame goal class (:class:`RelativePose`, :class:`RelativePosition`):
-    ``frame_a``, ``frame`` (frame b) and a ``target`` (read by ``read_target``, written by ``write_target``), with
-    the optional ``fields``; read as ``cls(frame_a, frame, target, **fields)``."""
-
-    def read(entry: dict, what: str):
-        unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
-        for key in ("frame_a", "frame", "target"):
-            if key not in entry:
-                raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
-                                     "frame's placement relative to frame_a)")
-        if not isinstance(entry["target"], dict):
-            raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
-        options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
-        try:
-            return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
-        except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-            raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
-
-    def write(goal) -> dict:
-        return ({"frame_a": goal.frame_a, "frame": goal.frame, "kind": name, "target": write_target(goal)}
-                | field_entries(goal, fields))
-
-    return FileKind(name, cls, (), read_target, write_target, read=read, write=write)

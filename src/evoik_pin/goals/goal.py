@@ -131,12 +131,13 @@ class Goal:
     @classmethod
     def file_kind(cls):
         """This kind's :class:`.file_entries.FileKind` in goals files (:attr:`FILE_ENTRY`), or None."""
-        from .file_entries import FileKind, pair_kind
+        from .file_entries import FileKind
 
-        name, fields, read, write, *options = cls.FILE_ENTRY or (None,) * 4
-        if name is not None and issubclass(cls, FramePair):  # frame_a, frame and target
-            return pair_kind(cls, name, fields, read, write)
-        return None if name is None else FileKind(name, cls, fields, read, write, **(options[0] if options else {}))
+        if cls.FILE_ENTRY is None:
+            return None
+        name, fields, read, write, *options = cls.FILE_ENTRY
+        return FileKind(name, cls, fields, read, write, pair=issubclass(cls, FramePair),
+                        **(options[0] if options else {}))
 
     #: False for the kinds whose target is no place in the base frame (an orientation, a direction, two frames'
     #: placement): no viewer marker.

@@ -89,16 +89,19 @@ def _goal(entry, what: str) -> Goal:
     kind = GOAL_KINDS[kind_name]
     if kind.read is not None:  # kinds whose entries are not (frame, target, numbers)
         return kind.read(entry, what)
-    unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
+    frames = ("frame_a", "frame") if kind.pair else ("frame",)
+    unknown_keys(entry, (*frames, "kind", "target", *kind.fields, *(() if kind.pair else ("targets",))),
+                 f"{what}, a {kind_name} goal")
     several = "targets" in entry  # a goal set: any one of several targets
     if several and "target" in entry:
         raise GoalsFileError(f"{what}: give target (one) or targets (a goal set: any one will do), not both")
-    for key in ("frame", "targets" if several else "target"):
+    for key in (*frames, "targets" if several else "target"):
         if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target, or targets "
-                                 "for a goal set)")
-    if not isinstance(frame, str) or not frame:
-        raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
+            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has {', '.join(frames)}, kind and "
+                                 "target, or targets for a goal set)")
+    for key in frames:
+        if not isinstance(entry[key], str) or not entry[key]:
+            raise GoalsFileError(f"{what}: {key} must be a frame name (a non-empty string), got {entry[key]!r}")
     raw = entry["targets"] if several else [entry["target"]]
     if several and (not isinstance(raw, list) or not raw):
         raise GoalsFileError(f"{what}: targets must be a non-empty list of targets (a goal set), got {raw!r}")
@@ -116,8 +119,9 @@ def _goal(entry, what: str) -> Goal:
                if key in entry}
     if several and kind.set_member is not None:
         read = [kind.set_member(t) for t in read]
-    with naming(what, GoalsFileError, catch=(OptionError, TargetError)):
-        return (kind.cls if several else kind.make or kind.cls)(frame, read if several else read[0], **options)
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError, FrameError)):
+        return (kind.cls if several else kind.make or kind.cls)(*(entry[key] for key in frames),
+                                                                read if several else read[0], **options)
 
 
 def _preference(entry: dict, what: str, kind_name: str):
@@ -239,7 +243,8 @@ def _entry(goal: Goal) -> dict:
     name, kind = _kind_of(goal)
     if kind.write is not None:
         return kind.write(goal)
-    entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
+    entry = ({"frame_a": goal.frame_a} if kind.pair else {}) | {"frame": goal.frame, "kind": name,
+                                                                 "target": kind.write_target(goal)}
     if goal.alternatives is not None:  # a goal set
         del entry["target"]
         entry["targets"] = [kind.write_target(m) for m in goal.alternatives]
