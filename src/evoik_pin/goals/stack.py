@@ -5,7 +5,6 @@ holds its kind's declaration (:mod:`.registry`): numba's disk cache would not se
 from __future__ import annotations
 
 import dataclasses
-import threading
 import weakref
 from dataclasses import dataclass, field
 
@@ -141,10 +140,13 @@ class GoalStack:
     frames: tuple
     aux: np.ndarray = None
     any_oriented: bool = field(init=False)
+    #: :func:`free_entries`' answer once asked, as its one member.
+    _free: list = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
         object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)) if self.aux is None else self.aux)
+        object.__setattr__(self, "_free", [])
 
     @property
     def arrays(self) -> tuple:
@@ -247,23 +249,14 @@ def is_goal_list(value) -> bool:
 def free_entries(robot, stack: GoalStack) -> np.ndarray | None:
     """(n,) bool: the entries of ``robot``'s q that move no goal of ``stack`` (no physical joint they drive is in a
     goal's support: another arm, the head, a hand's fingers when only the other hand is posed); None when every entry
-    moves some goal. Such entries change no goal's error. Cached per stack (:func:`bind` shares equal goals' stacks)."""
-    kept = _FREE.get(id(stack))
-    if kept is not None and kept[0] is stack:
-        return kept[1]
+    moves some goal. Such entries change no goal's error. Kept on the stack (equal goal lists share one)."""
+    if stack._free:
+        return stack._free[0]
     driven = robot.tree_constants()[4][stack.support.any(axis=0)]  # the entries of q driving a goal's joints
     used = np.zeros(robot.n, dtype=bool)
     used[driven[(driven >= 0) & (driven < robot.n)]] = True
-    free = None if used.all() else ~used
-    with _FREE_LOCK:  # solve_many's threads share the cache
-        if len(_FREE) >= 32:
-            _FREE.clear()
-        _FREE[id(stack)] = (stack, free)
-    return free
-
-
-_FREE: dict = {}  # id(goal stack) -> (the stack, its free_entries)
-_FREE_LOCK = threading.Lock()
+    stack._free[:] = [None if used.all() else ~used]  # one assignment: solve_many's threads may race to it
+    return stack._free[0]
 
 
 def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
