@@ -21,7 +21,7 @@ from pathlib import Path
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
 from ..goals import Goal, bind, is_goal_list
-from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, number, unknown_keys
+from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, name_entry, number, unknown_keys
 from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from ..goals.registry import kind_classes
 from .datafile import data_format, naming, read_mapping, write_data
@@ -124,28 +124,27 @@ def _goal(entry, what: str) -> Goal:
                                                                 read if several else read[0], **options)
 
 
+def _joint_list(value, what: str) -> list[float]:
+    if not isinstance(value, list):
+        raise GoalsFileError(f"{what} must be a list of joint values (rad or m), got {value!r}")
+    return [number(v, f"{what}[{k}]") for k, v in enumerate(value)]
+
+
+def _joint_map(value, what: str) -> dict[str, float]:
+    if not isinstance(value, dict) or not value:
+        raise GoalsFileError(f"{what} must be a mapping {{joint name: value (rad or m)}}, got {value!r}")
+    return {str(k): number(v, f"{what}.{k}") for k, v in value.items()}
+
+
+#: How a preference's fields other than numbers are read.
+_PREFERENCE_READERS = {"q_ref": _joint_list, "joints": _joint_map, "frame": name_entry}
+
+
 def _preference(entry: dict, what: str, kind_name: str):
     """A preference entry (``kind: posture | joint_limit_margin | manipulability | minimal_displacement``)."""
     cls, fields = PREFERENCE_KINDS[kind_name]
     unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
-    args = {}
-    for key in (k for k in fields if k in entry):
-        value = entry[key]
-        if key == "q_ref":
-            if not isinstance(value, list):
-                raise GoalsFileError(f"{what}: q_ref must be a list of joint values (rad or m), got {value!r}")
-            value = [number(v, f"{what}: q_ref[{k}]") for k, v in enumerate(value)]
-        elif key == "joints":
-            if not isinstance(value, dict) or not value:
-                raise GoalsFileError(f"{what}: joints must be a mapping {{joint name: value (rad or m)}}, got "
-                                     f"{value!r}")
-            value = {str(k): number(v, f"{what}: joints.{k}") for k, v in value.items()}
-        elif key == "frame":
-            if not isinstance(value, str) or not value:
-                raise GoalsFileError(f"{what}: frame must be a frame name, got {value!r}")
-        else:
-            value = number(value, f"{what}: {key}")
-        args[key] = value
+    args = {key: _PREFERENCE_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
     if kind_name == "posture":
         if ("q_ref" in args) == ("joints" in args):
             raise GoalsFileError(f"{what}: a posture needs one of q_ref (a joint vector) and joints ({{name: value}})")
