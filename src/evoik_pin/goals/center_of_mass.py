@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
-from ..io.datafile import Flow
+from ..io.datafile import Flow, naming
 from .file_entries import FileKind, field_entries, number, position_target, unknown_keys
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
 from .goal import number as goal_number
@@ -115,7 +115,7 @@ class CenterOfMass(Goal):
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: center_of_mass`` (no frame): ``target: {position}`` (m) with optional ``axes``, or ``support:``
-        ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m); weight, tolerance."""
+        ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m)."""
         return FileKind("center_of_mass", cls, (), position_target, _file_entry, read=_file_goal, write=_file_entry)
 
     def batch_key(self) -> tuple:
@@ -308,19 +308,15 @@ def _file_goal(entry: dict, what: str) -> CenterOfMass:
                  f"{what}, a center_of_mass goal (it has no frame)")
     options = {key: number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "margin")
                if key in entry}
-    try:
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError, FrameError)):
         if "target" in entry:
             if not isinstance(entry["target"], dict):
                 raise GoalsFileError(f"target must be a mapping (position), got {entry['target']!r}")
-            if "axes" in entry:
-                options["axes"] = entry["axes"]
-            return CenterOfMass(point=position_target(entry["target"]), **options)
+            return CenterOfMass(point=position_target(entry["target"]), axes=entry.get("axes", _AXES), **options)
         if "support" not in entry:
             raise GoalsFileError("a center_of_mass goal needs target: {position: [x, y, z]} (m) or support: "
                                  "{frame: [[x, y, z], ...]} or [frames]")
         return CenterOfMass(support=entry["support"], **options)
-    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
 
 
 def _file_entry(goal: CenterOfMass) -> dict:

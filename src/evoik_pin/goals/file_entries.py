@@ -1,8 +1,6 @@
-"""The pieces of a goals file's entries (:mod:`evoik_pin.io.goals_file`) that goal kinds declare theirs with: each
-kind's :meth:`~evoik_pin.goals.goal.Goal.file_kind` returns a :class:`FileKind` (its ``kind:`` name, its optional
-fields, how its target is read and written) built from the readers and writers here. Every error is a
-:class:`~evoik_pin.errors.GoalsFileError` naming the field; :mod:`evoik_pin.io.goals_file` adds the file and the goal.
-"""
+"""The pieces goal kinds declare their goals-file entries (:mod:`evoik_pin.io.goals_file`) with: a kind's
+:meth:`~evoik_pin.goals.goal.Goal.file_kind` is a :class:`FileKind` built from the readers and writers here. Every
+error is a GoalsFileError naming the field; :mod:`evoik_pin.io.goals_file` adds the file and the goal."""
 
 from __future__ import annotations
 
@@ -23,7 +21,7 @@ __all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_en
            "orientation_target", "pointing", "pose_target", "position_target", "position_text",
            "unknown_keys", "vector_target"]
 
-#: The data files' field readers (:mod:`evoik_pin.io.datafile`) raising GoalsFileError.
+#: The data files' field readers raising GoalsFileError.
 number = partial(datafile.number, error=GoalsFileError)
 numbers = partial(datafile.numbers, error=GoalsFileError)
 unknown_keys = partial(datafile.unknown_keys, error=GoalsFileError)
@@ -125,10 +123,9 @@ def position_text(goal) -> dict:
 
 @dataclass(frozen=True)
 class FileKind:
-    """One ``kind:`` of a goals file, as a goal kind declares it (:meth:`~evoik_pin.goals.goal.Goal.file_kind`): its
-    ``name``, its goal class, the optional fields it takes (besides frame, kind and target), how its ``target:``
-    mapping is read and how a goal's target is written; ``make`` (frame, target, **fields) -> goal where the class
-    takes its arguments in another order (None: the class)."""
+    """One ``kind:`` of a goals file: its ``name``, its goal class, the optional fields it takes (besides frame, kind
+    and target), how its ``target:`` mapping is read and how a goal's target is written; ``make`` (frame, target,
+    **fields) -> goal where the class takes its arguments in another order (None: the class)."""
 
     name: str
     cls: type
@@ -156,8 +153,8 @@ def pointing(cls) -> Callable:
 
 
 def field_entries(goal, fields: tuple[str, ...]) -> dict:
-    """The entries of ``goal``'s optional ``fields`` as a goals file writes them: numbers where they differ from
-    their defaults, bands (per-axis half-widths, inf: free), free axes, a pointing axis."""
+    """The entries of ``goal``'s optional ``fields`` as a goals file writes them (numbers where they differ from
+    their defaults)."""
     entry: dict = {}
     defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
     band = getattr(goal, "band", None)

@@ -36,8 +36,8 @@ class Orientation(Goal):
     band: object = None
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
-    #: ``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free.
     MARKED = False
+    #: ``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3).
     FILE_ENTRY = ("orientation", ("weight", "tolerance", "free"), orientation_target,
                   lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]})
 

@@ -62,8 +62,7 @@ class Pose(Goal):
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_POSE, (0, 1, 2, 3, 4, 5), FAMILY_FRAME, oriented=True, angle=True),
                   KindCode(KIND_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_AXES, oriented=True, angle=True))
-    #: ``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; weight, tolerance (one number or 6
-    #: half-widths), rotation_tolerance, free; a goal set's members as poses.
+    #: ``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; a goal set's members as poses.
     FILE_ENTRY = ("pose", ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text,
                   {"set_member": lambda t: t.se3()})
 

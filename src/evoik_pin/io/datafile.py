@@ -35,10 +35,10 @@ def data_format(path: Path, where: str, error: type[Exception]) -> str:
 
 def read_mapping(path: Path, where: str, error: type[Exception], keys: tuple[str, ...], empty: str,
                  list_key: str | None = None) -> dict:
-    """The top-level mapping of the data file ``path``, parsed as its extension says (YAML with PyYAML's safe
-    loader), its keys among ``keys``; with ``list_key``, a top-level list stands for ``{list_key: the list}``.
-    ``error`` starting with ``where`` for a missing or unreadable file, a syntax error (with its line and column),
-    an empty file (``empty``: what it should hold), another top level, or an unknown key."""
+    """The top-level mapping of the data file ``path`` (YAML: PyYAML's safe loader), its keys among ``keys``; with
+    ``list_key``, a top-level list stands for ``{list_key: the list}``. ``error`` starting with ``where`` for a
+    missing or unreadable file, a syntax error, an empty file (``empty``: what it should hold), another top level,
+    or an unknown key."""
     data = _parse(path, where, error)
     if data is None:
         raise error(f"{where}: the file is empty; expected {empty}")

@@ -51,7 +51,7 @@ class GoalsFile:
                 bind(robot, goals)
             except (FrameError, TargetError) as exc:
                 where = f"goals file {str(self.path)!r}" + (f": problem {p}" if self.several else "")
-                for i, g in enumerate(goals):  # the goal that fails alone, when one does (a clash needs two)
+                for i, g in enumerate(goals):  # the goal that fails alone, when one does
                     try:
                         bind(robot, [g])
                     except (FrameError, TargetError):
@@ -61,11 +61,10 @@ class GoalsFile:
 
 
 # ------------------------------------------------------------------ reading
-#: The goal kinds a goals file takes, by ``kind:`` name: each kind class's ``file_kind()``.
+#: The goal kinds a goals file takes, by ``kind:`` name.
 GOAL_KINDS = {fk.name: fk for fk in (cls.file_kind() for cls in kind_classes()) if fk is not None}
 
-
-#: Preferences a goal list may hold (:mod:`evoik_pin.goals.preferences`), by their ``kind:`` name: (class, fields).
+#: Preferences a goal list may hold, by their ``kind:`` name: (class, fields).
 PREFERENCE_KINDS = {
     "posture": (Posture, ("q_ref", "joints", "weight")),
     "joint_limit_margin": (JointLimitMargin, ("margin", "weight")),
@@ -211,9 +210,9 @@ def load_problems(path: str | os.PathLike) -> list[list[Goal]]:
 
 # ------------------------------------------------------------------ writing
 def _kind_of(goal) -> tuple[str, FileKind]:
-    for name, kind in GOAL_KINDS.items():
-        if type(goal) is kind.cls:
-            return name, kind
+    kind = next((k for k in GOAL_KINDS.values() if type(goal) is k.cls), None)
+    if kind is not None:
+        return kind.name, kind
     raise GoalsFileError(f"cannot write a {type(goal).__name__} to a goals file; goals files take "
                          f"{', '.join(k.cls.__name__ for k in GOAL_KINDS.values())}")
 
