@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
-from ..io.datafile import Flow, naming
+from ..io.datafile import Flow, floats, naming
 from .file_entries import FileKind, field_entries, number, position_target, unknown_keys
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
 from .goal import number as goal_number
@@ -323,11 +323,11 @@ def _file_entry(goal: CenterOfMass) -> dict:
     """A centre-of-mass goal as a goals file writes it."""
     entry: dict = {"kind": "center_of_mass"}
     if goal.support is None:
-        entry["target"] = Flow(position=[float(v) + 0.0 for v in goal.point])
+        entry["target"] = Flow(position=floats(goal.point))
         entry["axes"] = goal.axes
     else:
         given = {f: p for f, p in goal.support.items() if p is not None}
-        entry["support"] = ({f: [[float(v) + 0.0 for v in row] for row in given.get(f, [])] for f in goal.support}
+        entry["support"] = ({f: [floats(row) for row in given.get(f, [])] for f in goal.support}
                             if given else list(goal.support))
         if goal.margin:
             entry["margin"] = float(goal.margin)

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import GoalsFileError
 from ..io import datafile
-from ..io.datafile import Flow
+from ..io.datafile import Flow, floats
 from ..target import Target
 from .bands import DEFAULT_GOAL_TOLERANCE
 
@@ -112,13 +112,13 @@ FIELD_READERS = {"tolerance": tolerance_entry, "free": free_entry, "axis": lambd
 
 
 def matrix_text(goal) -> dict:
-    """A pose target as its 4 x 4 ``matrix`` (m)."""
-    return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
+    """A pose target as its 4 x 4 ``matrix`` (m), a rotation as its 3 x 3 one."""
+    return {"matrix": [floats(row) for row in getattr(goal.target, "homogeneous", goal.target)]}
 
 
 def position_text(goal) -> dict:
     """A position target as its ``position`` (m)."""
-    return Flow(position=[float(v) + 0.0 for v in goal.target])
+    return Flow(position=floats(goal.target))
 
 
 @dataclass(frozen=True)
@@ -165,7 +165,7 @@ def field_entries(goal, fields: tuple[str, ...]) -> dict:
             if goal.free:
                 entry[key] = " ".join(goal.free)
         elif key == "axis":
-            entry[key] = [float(v) + 0.0 for v in goal.axis]
+            entry[key] = floats(goal.axis)
         elif key == "expressed_in":
             if goal.expressed_in != "a":
                 entry[key] = goal.expressed_in

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import TargetError
-from ..io.datafile import Flow
+from ..io.datafile import Flow, floats
 from .bands import AUX_SIZE, angles
 from .file_entries import FileKind, pointing, vector_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
@@ -75,7 +75,7 @@ class _Pointing(Goal):
     def file_kind(cls) -> FileKind:
         """``kind: direction | look_at``: ``axis`` and ``target: {direction | point}``; weight, tolerance (rad)."""
         return FileKind(cls.FILE_KIND, cls, ("weight", "tolerance", "axis"), vector_target(cls.TARGET),
-                        lambda g: Flow(**{cls.TARGET: [float(v) + 0.0 for v in g.encode()[0]]}), pointing(cls))
+                        lambda g: Flow(**{cls.TARGET: floats(g.encode()[0])}), pointing(cls))
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "

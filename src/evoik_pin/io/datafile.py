@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "naming", "number", "numbers", "read_mapping", "unknown_keys",
-           "write_data"]
+__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "floats", "naming", "number", "numbers", "read_mapping",
+           "unknown_keys", "write_data"]
 
 #: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
 _NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -23,6 +23,11 @@ DATA_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json"}
 
 class Flow(dict):
     """A mapping :func:`write_data` writes on one line in YAML (e.g. a pose)."""
+
+
+def floats(values) -> list[float]:
+    """The numbers of ``values`` (any shape, flattened) as plain floats to write, -0.0 as 0.0."""
+    return [float(v) + 0.0 for v in np.asarray(values, dtype=float).reshape(-1)]
 
 
 def data_format(path: Path, where: str, error: type[Exception]) -> str:
