@@ -242,12 +242,11 @@ class FramePair:
     both = 0.0
     MARKED = False
 
-    def _init_pair(self, frame_a, frame_b, kind: str) -> None:
-        """Set ``frame_a``; FrameError unless the frames are two different frame names (``kind`` names the goal)."""
-        for name, value in (("frame_a", frame_a), ("frame_b", frame_b)):
-            if not isinstance(value, str) or not value:
-                raise FrameError(f"{kind}'s {name} is a frame name (a non-empty string), got {value!r}")
-        if frame_a == frame_b:
+    def _init_pair(self, frame_a, kind: str) -> None:
+        """Set ``frame_a``: FrameError unless a frame name other than ``frame`` (``kind`` names the goal)."""
+        if not isinstance(frame_a, str) or not frame_a:
+            raise FrameError(f"{kind}'s frame_a is a frame name (a non-empty string), got {frame_a!r}")
+        if frame_a == self.frame:
             raise FrameError(f"{kind} needs two frames, got {frame_a!r} twice")
         self._set(frame_a=frame_a)
 

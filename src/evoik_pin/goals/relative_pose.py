@@ -63,7 +63,7 @@ class RelativePose(FramePair, Goal):
         where = f"RelativePose of {frame_b!r} seen from {frame_a!r}"
         self._init_axes(frame_b, weight, tolerance, rotation_tolerance, free, AXES,
                         (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES), where)
-        self._init_pair(frame_a, frame_b, "RelativePose")
+        self._init_pair(frame_a, "RelativePose")
         self._set(target=se3_target(target, where))
 
     def placement_errors(self, Ra, d, Rb) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +114,7 @@ class RelativePosition(FramePair, Goal):
                               f"(frame a's axes or the world's), got {expressed_in!r}")
         kind = KIND_RELATIVE_POSITION_IN_A if expressed_in == "a" else KIND_RELATIVE_POSITION
         self._init_common(frame_b, weight, tolerance, None, kind, False)
-        self._init_pair(frame_a, frame_b, "RelativePosition")
+        self._init_pair(frame_a, "RelativePosition")
         if not self.tolerance > 0:
             raise OptionError(f"tolerance (m) of the RelativePosition of {frame_b!r} from {frame_a!r} must be > 0, "
                               f"got {tolerance!r}")

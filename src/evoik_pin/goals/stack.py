@@ -302,11 +302,9 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     # goals beyond one frame pack their rows against the robot on every bind: only lists without them are kept
     key = None if any(_packs_itself(g) for g in goals) else structure(goals)
     stack = None if key is None else _recall(_BOUND, robot, key)
-    if stack is not None:
-        if len(stack.frames) > len(set(stack.frames)):
-            _check_frames(robot, goals)  # the clash test reads the targets
-    else:
+    if stack is None or len(stack.frames) > len(set(stack.frames)):  # a hit: the clash test reads the targets
         _check_frames(robot, goals)
+    if stack is None:
         # the goals beyond one frame pack their aux and support rows against the robot (checking their frames)
         packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
         stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
