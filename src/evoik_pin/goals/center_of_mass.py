@@ -1,5 +1,4 @@
-"""CenterOfMass: the whole robot's centre of mass at a point, or its ground projection over a support polygon (see
-:mod:`evoik_pin.goals`)."""
+"""CenterOfMass: the whole robot's centre of mass at a point, or its ground projection over a support polygon."""
 
 from __future__ import annotations
 
@@ -84,8 +83,8 @@ class CenterOfMass(Goal):
         return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout above). Raises
-        TargetError for a robot without mass, FrameError for an unknown support frame or one without geometry."""
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout). TargetError for a robot
+        without mass, FrameError for an unknown support frame or one without geometry."""
         mc = robot.mass_constants
         if not mc.total > 0.0:
             raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "

@@ -1,4 +1,4 @@
-"""Orientation: a frame's orientation at a target rotation, position free (see :mod:`evoik_pin.goals`)."""
+"""Orientation: a frame's orientation at a target rotation, position free."""
 
 from __future__ import annotations
 

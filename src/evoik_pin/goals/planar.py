@@ -59,7 +59,6 @@ class Planar(Goal):
             raise TargetError(f"Planar on {frame!r} takes finite numbers x, y (m) and yaw (rad) or None, got "
                               f"{x!r}, {y!r}, {yaw!r}")
         self._set(target=target, yaw=None if yaw is None else float(target[2]))
-        self._set_aux(None)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:
         """(distances (N,) m in the base xy-plane, |wrapped heading differences| (N,) rad, 0 without a yaw) of frame

@@ -1,4 +1,4 @@
-"""Pose: a frame's position and orientation at a target pose (see :mod:`evoik_pin.goals`)."""
+"""Pose: a frame's position and orientation at a target pose."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ KIND_POSE, KIND_POSE_AXES = LOG6, BANDED_LOG6
 
 def se3_target(target, where: str) -> pin.SE3:
     """``target`` (a (4, 4) homogeneous matrix, a ``pin.SE3`` or a Target with a rotation; m) as a ``pin.SE3``, or
-    a TargetError naming ``where`` (a 3-vector is a position, not a pose)."""
+    a TargetError naming ``where``."""
     arrays = pose_arrays(target)  # a checked pin.SE3 or float (4, 4) pose: no Target made
     if arrays is not None and arrays[1] is not None:
         return target.copy() if type(target) is pin.SE3 else pin.SE3(np.array(arrays[1]), np.array(arrays[0]))

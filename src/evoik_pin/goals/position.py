@@ -1,4 +1,4 @@
-"""Position: a frame's origin at a target point, orientation free (see :mod:`evoik_pin.goals`)."""
+"""Position: a frame's origin at a target point, orientation free."""
 
 from __future__ import annotations
 
