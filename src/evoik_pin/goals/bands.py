@@ -1,7 +1,6 @@
-"""Per-axis tolerance bands and free axes (:class:`Pose`, :class:`Position`, :class:`Orientation`,
-:class:`RelativePose`; their docstrings and docs/GOALS.md say what the error components are), their kernel ``aux``
-row, and the NumPy twin of the kernel's errors of the banded kinds (``solvers/lm/axes.py``): the norm of the excess
-over the bands (0 when met), with one free rotation axis the swing angle. LM aims half a tolerance inside each band."""
+"""Per-axis tolerance bands and free axes (Pose, Position, Orientation, RelativePose; docs/GOALS.md), their kernel
+``aux`` row, and the NumPy twin of the kernel's errors of the banded kinds (``solvers/lm/axes.py``): the norm of the
+excess over the bands (0 when met), with one free rotation axis the swing angle."""
 
 from __future__ import annotations
 
@@ -79,7 +78,8 @@ def pose_text(goal) -> str:
 
 def band_aux(band: np.ndarray | None, free: tuple[str, ...], axes: tuple[str, ...]) -> np.ndarray:
     """The kernel's aux row (AUX_SIZE,) of a goal whose error components are ``axes``: ``band`` (len(axes),) or None
-    (a norm tolerance), ``free`` the free axes; no band narrower than :data:`DEFAULT_GOAL_TOLERANCE` (m, rad)."""
+    (a norm tolerance), ``free`` the free axes; no band narrower than :data:`DEFAULT_GOAL_TOLERANCE` (m, rad), LM
+    aiming half of it inside each band."""
     aux = np.full(AUX_SIZE, np.inf)
     aux[AUX_SWING] = -1.0
     for i, name in enumerate(AXES):

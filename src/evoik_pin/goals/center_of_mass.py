@@ -1,5 +1,4 @@
-"""CenterOfMass: the whole robot's centre of mass at a point, or its ground projection over a support polygon (see
-:mod:`evoik_pin.goals`)."""
+"""CenterOfMass: the whole robot's centre of mass at a point, or its ground projection over a support polygon."""
 
 from __future__ import annotations
 
@@ -10,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
-from ..io.datafile import Flow
+from ..io.datafile import Flow, floats, naming
 from .file_entries import FileKind, field_entries, number, position_target, unknown_keys
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
 from .goal import number as goal_number
@@ -75,20 +74,17 @@ class CenterOfMass(Goal):
 
     @property
     def frames(self) -> list[str]:
-        """The frames this goal names (the support frames; none for a point)."""
-        return [] if self.support is None else list(self.support)
+        """The support frames (none for a point)."""
+        return list(self.support or ())
 
-    @property
-    def label(self) -> str:
-        """How messages name this goal (it has no frame)."""
-        return "center of mass"
+    label = "center of mass"  # how messages name this goal (it has no frame)
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
         return (np.zeros(3) if self.point is None else self.point.copy()), np.eye(3)
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout above). Raises
-        TargetError for a robot without mass, FrameError for an unknown support frame or one without geometry."""
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_COM_*`` layout). TargetError for a robot
+        without mass, FrameError for an unknown support frame or one without geometry."""
         mc = robot.mass_constants
         if not mc.total > 0.0:
             raise TargetError(f"{robot.name} has no mass (its URDF gives its links no inertial mass): a "
@@ -112,17 +108,17 @@ class CenterOfMass(Goal):
         return aux, mc.subtree > 0.0
 
     def marker(self) -> tuple[str, np.ndarray, None] | None:
-        """A sphere at the point (node ``center_of_mass``); None for a support polygon (no point to mark)."""
+        """A sphere at the point (node ``center_of_mass``); None for a support polygon."""
         return None if self.point is None else ("center_of_mass", self.point.copy(), None)
 
     @classmethod
     def file_kind(cls) -> FileKind:
         """``kind: center_of_mass`` (no frame): ``target: {position}`` (m) with optional ``axes``, or ``support:``
-        ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m); weight, tolerance."""
+        ({frame: [[x, y, z], ...]} in each frame, m, or [frames]) with optional ``margin`` (m)."""
         return FileKind("center_of_mass", cls, (), position_target, _file_entry, read=_file_goal, write=_file_entry)
 
     def batch_key(self) -> tuple:
-        """What this goal's kernel numbers depend on besides its target point (solve_many batches lists alike)."""
+        """What this goal's kernel numbers depend on besides its target point."""
         if self.support is None:
             return (self.axes,)
         return (self.margin, *((f, None if p is None else p.tobytes()) for f, p in self.support.items()))
@@ -154,12 +150,9 @@ class CenterOfMass(Goal):
         return _hull_violation(c[:, :2], self._ground(robot, Q), self.margin), np.zeros(len(Q))
 
     def __repr__(self) -> str:
-        if self.support is None:
-            return (f"CenterOfMass(point={np.round(self.point, 6).tolist()}, axes={self.axes!r}, "
-                    f"weight={self.weight:g}, tolerance={self.tolerance:g})")
-        frames = list(self.support)
-        return (f"CenterOfMass(support={frames}, margin={self.margin:g}, weight={self.weight:g}, "
-                f"tolerance={self.tolerance:g})")
+        where = (f"point={np.round(self.point, 6).tolist()}, axes={self.axes!r}" if self.support is None
+                 else f"support={self.frames}, margin={self.margin:g}")
+        return f"CenterOfMass({where}, weight={self.weight:g}, tolerance={self.tolerance:g})"
 
 
 def _support(support) -> dict:
@@ -194,7 +187,7 @@ def contact_points(robot, frame: str) -> np.ndarray:
     aligned with the frame's axes, that bounds every collision geometry on the frame's joint (a sole frame, z up:
     the foot's bottom). Raises FrameError when the frame's joint carries no collision geometry."""
     known = _CONTACTS.setdefault(robot, {})
-    if frame in known:  # every solve binds its goals and reports their errors: read the geometry once
+    if frame in known:  # read the geometry once: every solve binds its goals and reports their errors
         return known[frame].copy()
     f = robot.model.frames[robot.frame_id(frame)]
     fMj = f.placement.inverse()
@@ -212,9 +205,8 @@ def contact_points(robot, frame: str) -> np.ndarray:
         raise FrameError(f"frame {frame!r} of {robot.name} carries no collision geometry to take contact points "
                          f"from: give its points, support={{{frame!r}: points (k x 3, m)}}")
     c = np.concatenate(corners)
-    lo, hi = c.min(axis=0), c.max(axis=0)
-    known[frame] = np.array([[lo[0], lo[1], lo[2]], [hi[0], lo[1], lo[2]], [hi[0], hi[1], lo[2]],
-                             [lo[0], hi[1], lo[2]]])
+    (x0, y0, z), (x1, y1, _) = c.min(axis=0), c.max(axis=0)
+    known[frame] = np.array([[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]])
     return known[frame].copy()
 
 
@@ -231,7 +223,7 @@ def com_of(robot, q) -> np.ndarray:
     """The robot's centre of mass (m, base frame) at ``q`` (n,), Pinocchio's ``centerOfMass`` of the whole URDF
     (:attr:`~evoik_pin.robot.Robot.full_model` at ``full_configuration(q)``)."""
     data = _FULL_DATA.get(robot)
-    if data is None:  # a Talos data takes longer to make than the centre of mass
+    if data is None:
         data = _FULL_DATA[robot] = robot.full_model.createData()
     c = pin.centerOfMass(robot.full_model, data, robot.full_configuration(q))
     return robot.tree.base_R @ c + robot.tree.base_p
@@ -242,8 +234,8 @@ _FULL_DATA: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def com_batch(robot, Q) -> np.ndarray:
-    """Centres of mass (N, 3) (m, base frame) of a population Q (N, n): the folded tree's joint poses in one
-    vectorized pass (:mod:`evoik_pin.solvers.lm.tree_kinematics`'s recursion) and the :attr:`Robot.mass_constants`."""
+    """Centres of mass (N, 3) (m, base frame) of a population Q (N, n), from the folded tree's joint poses and the
+    :attr:`Robot.mass_constants`."""
     parent, FR, Fp, rev = robot.tree_constants()[:4]
     mc = robot.mass_constants
     X = robot._physical(np.asarray(Q, dtype=float))
@@ -315,30 +307,26 @@ def _file_goal(entry: dict, what: str) -> CenterOfMass:
                  f"{what}, a center_of_mass goal (it has no frame)")
     options = {key: number(entry[key], f"{what}: {key}") for key in ("weight", "tolerance", "margin")
                if key in entry}
-    try:
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError, FrameError)):
         if "target" in entry:
             if not isinstance(entry["target"], dict):
                 raise GoalsFileError(f"target must be a mapping (position), got {entry['target']!r}")
-            if "axes" in entry:
-                options["axes"] = entry["axes"]
-            return CenterOfMass(point=position_target(entry["target"]), **options)
+            return CenterOfMass(point=position_target(entry["target"]), axes=entry.get("axes", _AXES), **options)
         if "support" not in entry:
             raise GoalsFileError("a center_of_mass goal needs target: {position: [x, y, z]} (m) or support: "
                                  "{frame: [[x, y, z], ...]} or [frames]")
         return CenterOfMass(support=entry["support"], **options)
-    except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-        raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
 
 
 def _file_entry(goal: CenterOfMass) -> dict:
     """A centre-of-mass goal as a goals file writes it."""
     entry: dict = {"kind": "center_of_mass"}
     if goal.support is None:
-        entry["target"] = Flow(position=[float(v) + 0.0 for v in goal.point])
+        entry["target"] = Flow(position=floats(goal.point))
         entry["axes"] = goal.axes
     else:
         given = {f: p for f, p in goal.support.items() if p is not None}
-        entry["support"] = ({f: [[float(v) + 0.0 for v in row] for row in given.get(f, [])] for f in goal.support}
+        entry["support"] = ({f: [floats(row) for row in given.get(f, [])] for f in goal.support}
                             if given else list(goal.support))
         if goal.margin:
             entry["margin"] = float(goal.margin)

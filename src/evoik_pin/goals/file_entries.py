@@ -1,8 +1,6 @@
-"""The pieces of a goals file's entries (:mod:`evoik_pin.io.goals_file`) that goal kinds declare theirs with: each
-kind's :meth:`~evoik_pin.goals.goal.Goal.file_kind` returns a :class:`FileKind` (its ``kind:`` name, its optional
-fields, how its target is read and written) built from the readers and writers here. Every error is a
-:class:`~evoik_pin.errors.GoalsFileError` naming the field; :mod:`evoik_pin.io.goals_file` adds the file and the goal.
-"""
+"""The pieces goal kinds declare their goals-file entries (:mod:`evoik_pin.io.goals_file`) with: a kind's
+:meth:`~evoik_pin.goals.goal.Goal.file_kind` is a :class:`FileKind` built from the readers and writers here. Every
+error is a GoalsFileError naming the field; :mod:`evoik_pin.io.goals_file` adds the file and the goal."""
 
 from __future__ import annotations
 
@@ -13,17 +11,17 @@ from functools import partial
 
 import numpy as np
 
-from ..errors import FrameError, GoalsFileError, OptionError, TargetError
+from ..errors import GoalsFileError
 from ..io import datafile
-from ..io.datafile import Flow
+from ..io.datafile import Flow, floats
 from ..target import Target
 from .bands import DEFAULT_GOAL_TOLERANCE
 
 __all__ = ["FIELD_READERS", "FileKind", "field_entries", "matrix_text", "name_entry", "number", "numbers",
-           "orientation_target", "pair_kind", "pointing", "pose_target", "position_target", "position_text",
+           "orientation_target", "pointing", "pose_target", "position_target", "position_text",
            "unknown_keys", "vector_target"]
 
-#: The data files' field readers (:mod:`evoik_pin.io.datafile`) raising GoalsFileError.
+#: The data files' field readers raising GoalsFileError.
 number = partial(datafile.number, error=GoalsFileError)
 numbers = partial(datafile.numbers, error=GoalsFileError)
 unknown_keys = partial(datafile.unknown_keys, error=GoalsFileError)
@@ -114,21 +112,20 @@ FIELD_READERS = {"tolerance": tolerance_entry, "free": free_entry, "axis": lambd
 
 
 def matrix_text(goal) -> dict:
-    """A pose target as its 4 x 4 ``matrix`` (m)."""
-    return {"matrix": [[float(v) + 0.0 for v in row] for row in goal.target.homogeneous]}
+    """A pose target as its 4 x 4 ``matrix`` (m), a rotation as its 3 x 3 one."""
+    return {"matrix": [floats(row) for row in getattr(goal.target, "homogeneous", goal.target)]}
 
 
 def position_text(goal) -> dict:
     """A position target as its ``position`` (m)."""
-    return Flow(position=[float(v) + 0.0 for v in goal.target])
+    return Flow(position=floats(goal.target))
 
 
 @dataclass(frozen=True)
 class FileKind:
-    """One ``kind:`` of a goals file, as a goal kind declares it (:meth:`~evoik_pin.goals.goal.Goal.file_kind`): its
-    ``name``, its goal class, the optional fields it takes (besides frame, kind and target), how its ``target:``
-    mapping is read and how a goal's target is written; ``make`` (frame, target, **fields) -> goal where the class
-    takes its arguments in another order (None: the class)."""
+    """One ``kind:`` of a goals file: its ``name``, its goal class, the optional fields it takes (besides frame, kind
+    and target), how its ``target:`` mapping is read and how a goal's target is written; ``make`` (frame, target,
+    **fields) -> goal where the class takes its arguments in another order (None: the class)."""
 
     name: str
     cls: type
@@ -142,6 +139,8 @@ class FileKind:
     write: Callable[[object], dict] | None = None
     #: How the targets a goal set's ``targets:`` reads become the class's members (None: as read).
     set_member: Callable | None = None
+    #: A kind on two frames: ``frame_a`` and ``frame`` (frame b), read as ``cls(frame_a, frame, target, **fields)``.
+    pair: bool = False
 
 
 def pointing(cls) -> Callable:
@@ -154,8 +153,8 @@ def pointing(cls) -> Callable:
 
 
 def field_entries(goal, fields: tuple[str, ...]) -> dict:
-    """The entries of ``goal``'s optional ``fields`` as a goals file writes them: numbers where they differ from
-    their defaults, bands (per-axis half-widths, inf: free), free axes, a pointing axis."""
+    """The entries of ``goal``'s optional ``fields`` as a goals file writes them (numbers where they differ from
+    their defaults)."""
     entry: dict = {}
     defaults = {"weight": 1.0, "tolerance": DEFAULT_GOAL_TOLERANCE, "rotation_tolerance": goal.tolerance}
     band = getattr(goal, "band", None)
@@ -166,36 +165,10 @@ def field_entries(goal, fields: tuple[str, ...]) -> dict:
             if goal.free:
                 entry[key] = " ".join(goal.free)
         elif key == "axis":
-            entry[key] = [float(v) + 0.0 for v in goal.axis]
+            entry[key] = floats(goal.axis)
         elif key == "expressed_in":
             if goal.expressed_in != "a":
                 entry[key] = goal.expressed_in
         elif getattr(goal, key) != defaults[key]:
             entry[key] = float(getattr(goal, key))
     return entry
-
-
-def pair_kind(cls, name: str, fields: tuple[str, ...], read_target: Callable, write_target: Callable) -> FileKind:
-    """The ``kind: <name>`` of a two-frame goal class (:class:`RelativePose`, :class:`RelativePosition`):
-    ``frame_a``, ``frame`` (frame b) and a ``target`` (read by ``read_target``, written by ``write_target``), with
-    the optional ``fields``; read as ``cls(frame_a, frame, target, **fields)``."""
-
-    def read(entry: dict, what: str):
-        unknown_keys(entry, ("frame_a", "frame", "kind", "target", *fields), f"{what}, a {name} goal")
-        for key in ("frame_a", "frame", "target"):
-            if key not in entry:
-                raise GoalsFileError(f"{what}: missing field {key!r} (a {name} goal has frame_a, frame and target: "
-                                     "frame's placement relative to frame_a)")
-        if not isinstance(entry["target"], dict):
-            raise GoalsFileError(f"{what}: target must be a mapping, got {entry['target']!r}")
-        options = {key: FIELD_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
-        try:
-            return cls(entry["frame_a"], entry["frame"], read_target(entry["target"]), **options)
-        except (GoalsFileError, OptionError, TargetError, FrameError) as exc:
-            raise GoalsFileError(f"{what}: {str(exc).strip(chr(34))}") from None
-
-    def write(goal) -> dict:
-        return ({"frame_a": goal.frame_a, "frame": goal.frame, "kind": name, "target": write_target(goal)}
-                | field_entries(goal, fields))
-
-    return FileKind(name, cls, (), read_target, write_target, read=read, write=write)

@@ -90,10 +90,10 @@ class Goal:
 
     def _init_axes(self, frame, weight, tolerance, rotation_tolerance, free, axes: tuple[str, ...],
                    kinds: tuple[int | None, int], where: str) -> None:
-        """:meth:`_init_common` for a goal with bands and free axes on the error components ``axes``, with its
-        ``band``, ``free`` (:func:`.bands.parse_axes`; ``where`` names the goal) and aux row. ``kinds``: its code under
-        a norm tolerance with no free axis (None: it always reads its aux row), and with bands or free axes."""
-        # one number and no free axis (the common goal, made per call in a control loop): nothing to parse
+        """:meth:`_init_common` with ``band``, ``free`` (:func:`.bands.parse_axes` on the error components ``axes``;
+        ``where`` names the goal) and the aux row. ``kinds``: the code under a norm tolerance with no free axis (None:
+        always the second), and with bands or free axes."""
+        # one number and no free axis (made per call in a control loop): nothing to parse
         band, free = ((None, ()) if free is None and type(tolerance) in (float, int, type(None))
                       else parse_axes(tolerance, rotation_tolerance, free, axes, where))
         plain = band is None and not free and kinds[0] is not None
@@ -124,35 +124,33 @@ class Goal:
         aux = self.aux()
         return None if aux is None else band_errors(self.kind, P, R, pt, Rt, aux)
 
-    #: This kind's goals-file entry (:meth:`file_kind`): its ``kind:`` name, optional fields, target reader and writer
-    #: (:mod:`.file_entries`), then FileKind's further options as a dict; None: goals files do not take the kind.
+    #: (``kind:`` name, optional fields, target reader, target writer[, FileKind's options]) (:meth:`file_kind`).
     FILE_ENTRY = None
 
     @classmethod
     def file_kind(cls):
         """This kind's :class:`.file_entries.FileKind` in goals files (:attr:`FILE_ENTRY`), or None."""
-        from .file_entries import FileKind, pair_kind
+        from .file_entries import FileKind
 
-        name, fields, read, write, *options = cls.FILE_ENTRY or (None,) * 4
-        if name is not None and issubclass(cls, FramePair):  # frame_a, frame and target
-            return pair_kind(cls, name, fields, read, write)
-        return None if name is None else FileKind(name, cls, fields, read, write, **(options[0] if options else {}))
+        if cls.FILE_ENTRY is None:
+            return None
+        name, fields, read, write, *options = cls.FILE_ENTRY
+        return FileKind(name, cls, fields, read, write, pair=issubclass(cls, FramePair),
+                        **(options[0] if options else {}))
 
-    #: False for the kinds whose target is no place in the base frame (an orientation, a direction, two frames'
-    #: placement): no viewer marker.
+    #: False for the kinds whose target is no place in the base frame: no viewer marker.
     MARKED = True
 
     def marker(self) -> tuple[str, np.ndarray, np.ndarray | None] | None:
-        """This goal's viewer marker: (node name, position (3,) m in the base frame, rotation (3, 3) for a triad or
-        None for a sphere), or None (:attr:`MARKED`). Default: its frame's target."""
+        """(node name, position (3,) m in the base frame, rotation (3, 3) for a triad or None for a sphere) of this
+        goal's viewer marker, or None (:attr:`MARKED`)."""
         if not self.MARKED:
             return None
         p, R = self.encode()
         return self.frame, p, (R if self.has_orientation else None)
 
     def encode(self) -> tuple[np.ndarray, np.ndarray]:
-        """The kernel's target ``(pt (3,), Rt (3, 3))`` of this goal, new arrays: of a ``target`` pose its translation
-        (m) and rotation, of a rotation (3, 3) zeros and itself, of 3 numbers (a point, m) those and the identity."""
+        """The kernel's target ``(pt (3,) m, Rt (3, 3))`` of this goal, new arrays (identity or zeros where none)."""
         if isinstance(self.target, pin.SE3):
             return np.array(self.target.translation), np.array(self.target.rotation)
         return (np.zeros(3), self.target.copy()) if self.target.shape == (3, 3) else (self.target.copy(), np.eye(3))
@@ -169,27 +167,24 @@ class Goal:
         return pos, float(np.linalg.norm(pin.log3(Rt.T @ T.rotation)))
 
     def reported(self, position_error: float, rotation_error: float | None) -> tuple[float | None, float | None]:
-        """The errors :meth:`errors` reports from the LM kernel's (m, rad): the position None for a goal without
-        a position, the rotation None for one that reports no angle."""
+        """The kernel's errors (m, rad) as :meth:`errors` reports them: None where the kind has none."""
         return ((float(position_error) if self.has_position else None),
                 (float(rotation_error) if self.reports_angle else None))
 
     @property
     def has_position(self) -> bool:
-        """Whether the goal puts the frame's origin somewhere (its kind's declaration; False for orientation and
-        pointing goals, whose target position seed ranking leaves out)."""
+        """Whether the goal puts a point somewhere (its kind's declaration)."""
         return KINDS[self.kind].has_position
 
     @property
     def reports_angle(self) -> bool:
-        """Whether the goal's errors include an angle (rad) (its kind's declaration)."""
+        """Whether the goal's errors include an angle (rad)."""
         return KINDS[self.kind].angle
 
     @property
     def on_one_frame(self) -> bool:
         """Whether the goal matches a position or an orientation of its one frame (no pointing goal, no kind beyond
-        one frame): the seed table ranks it as one frame's pose, and the kernel's errors of it are its ``errors(T)``
-        (:meth:`reported`; a support polygon's distance, exactly 0 inside, is no kernel residual's)."""
+        one frame): the seed table ranks it as one frame's pose; the kernel's errors of it are its ``errors(T)``."""
         return self.kind < KIND_BEYOND_FRAME and (self.has_position or self.has_orientation)
 
     def met(self, position_error: float | None, orientation_error: float | None) -> bool:
@@ -200,9 +195,8 @@ class Goal:
 
 # ------------------------------------------------------------------ goal sets
 def is_set(target, single_shape: tuple[int, ...]) -> bool:
-    """Whether ``target`` is a list of targets rather than one: an array of shape (k, *single_shape), or a list
-    or tuple whose members are ``pin.SE3`` or arrays of ``single_shape`` (an empty one too, refused by
-    :func:`init_set`). A (4, 4) nested list is one pose, a 3-list of numbers one position."""
+    """Whether ``target`` is a list of targets rather than one: an array (k, *single_shape), or a list or tuple of
+    ``pin.SE3`` or arrays of ``single_shape`` (an empty one too, refused by :func:`init_set`)."""
     if isinstance(target, np.ndarray):
         return target.ndim == len(single_shape) + 1 and target.shape[1:] == single_shape
     if not isinstance(target, (list, tuple)):
@@ -211,10 +205,9 @@ def is_set(target, single_shape: tuple[int, ...]) -> bool:
 
 
 def init_set(goal, targets, single, what: str) -> None:
-    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``: any one will
-    do (``Pose(frame, [T1, ..., Tk])``). Packed for the kernel with its first member's target, its ``alternatives``
-    one single-target goal per member, in order; solvers try the members (:meth:`evoik_pin.problem.IKProblem.variants`)
-    and ``Result.chosen[i]`` is the member goal ``i`` meets. ``what`` names the kind and its members ("Pose poses").
+    """Make ``goal`` (being constructed) the set of ``single(t)`` for each member ``t`` of ``targets``, any one of
+    which will do: packed with its first member's target, its ``alternatives`` the members in order (solvers try
+    each: :meth:`evoik_pin.problem.IKProblem.variants`). ``what`` names the kind and its members ("Pose poses").
     TargetError for an empty set, naming the index of a bad member."""
     kind, members = what.split()
     if len(targets) == 0:
@@ -226,9 +219,8 @@ def init_set(goal, targets, single, what: str) -> None:
             made.append(single(t))
         except TargetError as exc:
             raise TargetError(f"{kind} on {goal.frame!r}, member {i} of the goal set: {exc}") from None
-    encoded = [m.encode() for m in made]  # the members' kernel targets, (k, 3) and (k, 3, 3), for vectorized use
-    goal._set(target=made[0].target, alternatives=tuple(made),
-              member_targets=(np.array([e[0] for e in encoded]), np.array([e[1] for e in encoded])))
+    pts, Rts = zip(*(m.encode() for m in made), strict=True)  # the members' kernel targets, (k, 3) and (k, 3, 3)
+    goal._set(target=made[0].target, alternatives=tuple(made), member_targets=(np.array(pts), np.array(Rts)))
 
 
 # ------------------------------------------------------------------ goals on two frames
@@ -243,31 +235,29 @@ BOTH = 2.0
 
 
 class FramePair:
-    """What the goals on two frames share (:class:`~.relative_pose.RelativePose`,
-    :class:`~.relative_pose.RelativePosition`): frame b is the goal's ``frame``, frame a its ``frame_a``. A kind
-    defines :meth:`placement_errors`; the errors of poses and of populations follow from it."""
+    """What the goals on two frames share: frame b is the goal's ``frame``, frame a its ``frame_a``. A kind defines
+    :meth:`placement_errors`; the errors of poses and of populations follow from it."""
 
     #: The aux row's sign of the joints moving both frames: :data:`BOTH` for a kind whose error sees them, else 0.
     both = 0.0
     MARKED = False
 
-    def _init_pair(self, frame_a, frame_b, kind: str) -> None:
-        """Set ``frame_a``; FrameError unless the frames are two different frame names (``kind`` names the goal)."""
-        for name, value in (("frame_a", frame_a), ("frame_b", frame_b)):
-            if not isinstance(value, str) or not value:
-                raise FrameError(f"{kind}'s {name} is a frame name (a non-empty string), got {value!r}")
-        if frame_a == frame_b:
+    def _init_pair(self, frame_a, kind: str) -> None:
+        """Set ``frame_a``: FrameError unless a frame name other than ``frame`` (``kind`` names the goal)."""
+        if not isinstance(frame_a, str) or not frame_a:
+            raise FrameError(f"{kind}'s frame_a is a frame name (a non-empty string), got {frame_a!r}")
+        if frame_a == self.frame:
             raise FrameError(f"{kind} needs two frames, got {frame_a!r} twice")
         self._set(frame_a=frame_a)
 
     @property
     def frame_b(self) -> str:
-        """The frame placed relative to ``frame_a`` (the goal's ``frame``)."""
+        """The goal's ``frame``."""
         return self.frame
 
     @property
     def frames(self) -> list[str]:
-        """The frames this goal names: frame_a, frame_b."""
+        """[frame_a, frame_b]."""
         return [self.frame_a, self.frame]
 
     @property
@@ -286,7 +276,7 @@ class FramePair:
 
     def pair_errors(self, Ta: pin.SE3, Tb: pin.SE3) -> tuple[float, float | None]:
         """The goal's errors (position m, rotation rad or None) for frame a's and frame b's poses ``Ta``, ``Tb``
-        (base frame): what :meth:`robot_errors` reports, from poses a caller already has."""
+        (base frame)."""
         pos, rot = self.placement_errors(Ta.rotation[None], (Tb.translation - Ta.translation)[None], Tb.rotation[None])
         return float(pos[0]), (float(rot[0]) if self.has_orientation else None)
 
@@ -300,10 +290,8 @@ class FramePair:
         return self.placement_errors(R[:, 0], P[:, 1] - P[:, 0], R[:, 1])
 
     def pack(self, robot) -> tuple[np.ndarray, np.ndarray]:
-        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_REL_*`` layout above): frame a's joint
-        and folded placement, the band columns of a goal with bands, and each joint's sign (:attr:`both` for the
-        joints moving both frames). Raises FrameError for an unknown frame, or two frames no joint moves apart (nor,
-        with :attr:`both`, turns together)."""
+        """(aux row, support row (m,) bool) of this goal on ``robot`` (the ``A_REL_*`` layout above). FrameError for
+        an unknown frame, or two frames no joint moves apart (nor, with :attr:`both`, turns together)."""
         ja, Ra, pa = robot.frame_constants(self.frame_a)
         jb = robot.frame_constants(self.frame)[0]
         tree = robot.tree

@@ -1,4 +1,4 @@
-"""Orientation: a frame's orientation at a target rotation, position free (see :mod:`evoik_pin.goals`)."""
+"""Orientation: a frame's orientation at a target rotation, position free."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pinocchio as pin
 from ..errors import TargetError
 from ..target import _rotation
 from .bands import AXES
-from .file_entries import orientation_target
+from .file_entries import matrix_text, orientation_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal
 from .registry import BANDED_ROTATION, FAMILY_AXES, KindCode
 
@@ -36,10 +36,9 @@ class Orientation(Goal):
     band: object = None
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_ORIENTATION, (3, 4, 5), FAMILY_AXES, oriented=True, has_position=False, angle=True),)
-    #: ``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3); weight, tolerance, free.
     MARKED = False
-    FILE_ENTRY = ("orientation", ("weight", "tolerance", "free"), orientation_target,
-                  lambda g: {"matrix": [[float(v) + 0.0 for v in row] for row in g.target]})
+    #: ``kind: orientation``: ``target: {rpy | rpy_rad}`` or ``{matrix}`` (3 x 3).
+    FILE_ENTRY = ("orientation", ("weight", "tolerance", "free"), orientation_target, matrix_text)
 
     def __init__(self, frame: str, target, weight: float = 1.0, tolerance: float | object = DEFAULT_GOAL_TOLERANCE,
                  free=None) -> None:

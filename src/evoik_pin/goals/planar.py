@@ -1,5 +1,4 @@
-"""Planar: a frame's (x, y) in the base xy-plane and optionally its heading, for arms that move in that plane (see
-:mod:`evoik_pin.goals`); what a planar :class:`~evoik_pin.Target` of the tip is once it enters a solve."""
+"""Planar: a frame's (x, y) in the base xy-plane and optionally its heading (also a planar Target of the tip)."""
 
 from __future__ import annotations
 
@@ -60,11 +59,10 @@ class Planar(Goal):
             raise TargetError(f"Planar on {frame!r} takes finite numbers x, y (m) and yaw (rad) or None, got "
                               f"{x!r}, {y!r}, {yaw!r}")
         self._set(target=target, yaw=None if yaw is None else float(target[2]))
-        self._set_aux(None)
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt, Rt) -> tuple[np.ndarray, np.ndarray]:
         """(distances (N,) m in the base xy-plane, |wrapped heading differences| (N,) rad, 0 without a yaw) of frame
-        poses P (N, 3), R (N, 3, 3): the kernel's planar errors."""
+        poses P (N, 3), R (N, 3, 3)."""
         d = P[:, :2] - self.target[:2]
         pos = np.sqrt((d * d).sum(axis=1))
         rot = (np.abs(lie.wrap_angle(lie.yaw(R) - self.yaw)) if self.yaw is not None else np.zeros_like(pos))

@@ -1,5 +1,4 @@
-"""The pointing kinds: Direction (a frame's axis along a direction) and LookAt (a frame's axis pointing at a point)
-(see :mod:`evoik_pin.goals`), and what they share."""
+"""The pointing kinds: Direction (a frame's axis along a direction) and LookAt (a frame's axis pointing at a point)."""
 
 from __future__ import annotations
 
@@ -8,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import TargetError
-from ..io.datafile import Flow
+from ..io.datafile import Flow, floats
 from .bands import AUX_SIZE, angles
 from .file_entries import FileKind, pointing, vector_target
 from .goal import DEFAULT_GOAL_TOLERANCE, Goal, point3
@@ -18,8 +17,7 @@ __all__ = ["AUX_AXIS", "KIND_DIRECTION", "KIND_LOOK_AT", "Direction", "LookAt", 
 
 #: A direction's kernel code: the frame's axis minus the wanted unit direction (3 rows, base frame).
 KIND_DIRECTION = AXIS_ALONG
-#: The ``aux`` row of a pointing goal (read by the compiled ``solvers/lm/axes.py``): AUX_AXIS (3,) the frame's unit
-#: axis.
+#: The ``aux`` row of a pointing goal (``solvers/lm/axes.py``): AUX_AXIS (3,) the frame's unit axis.
 AUX_AXIS = 0
 
 
@@ -46,13 +44,12 @@ class _Pointing(Goal):
     direction; the kernel's residual ``R a - d`` (3 rows, base frame) is zero only when they are aligned."""
 
     axis: object = None
-    #: The field holding the target (a unit direction, or a point), and its ``kind:`` in goals files.
+    #: The field holding the target, and the ``kind:`` in goals files.
     TARGET = FILE_KIND = ""
 
     def _init_pointing(self, frame: str, axis, target, weight, tolerance) -> None:
         name = type(self).__name__
-        # rad; the position error (None) is unused
-        self._init_common(frame, weight, tolerance, tolerance, self.KIND_CODES[0].code, False)
+        self._init_common(frame, weight, tolerance, tolerance, self.KIND_CODES[0].code, False)  # rad
         where = f"{name} on {frame!r}: {self.TARGET}"
         self._set(axis=unit_vector(axis, f"{name} on {frame!r}: axis"),
                   **{self.TARGET: point3(target, where) if self.has_point else unit_vector(target, where)})
@@ -65,8 +62,8 @@ class _Pointing(Goal):
 
     def population_errors(self, P: np.ndarray, R: np.ndarray, pt: np.ndarray, Rt: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
-        """(zeros (N,), angles (N,) rad) between the axis of the frames (N, 3, 3) and the wanted direction (for
-        a point pt: the line from each origin P (N, 3) to it; pi on the point), as the compiled kernel's."""
+        """(zeros (N,), angles (N,) rad) between the axis of the frames R (N, 3, 3) and the wanted direction (for
+        a point pt: the line from each origin P (N, 3) to it; pi on the point)."""
         A = R @ self.axis
         zeros = np.zeros(P.shape[0])
         if not self.has_point:
@@ -78,7 +75,7 @@ class _Pointing(Goal):
     def file_kind(cls) -> FileKind:
         """``kind: direction | look_at``: ``axis`` and ``target: {direction | point}``; weight, tolerance (rad)."""
         return FileKind(cls.FILE_KIND, cls, ("weight", "tolerance", "axis"), vector_target(cls.TARGET),
-                        lambda g: Flow(**{cls.TARGET: [float(v) + 0.0 for v in g.encode()[0]]}), pointing(cls))
+                        lambda g: Flow(**{cls.TARGET: floats(g.encode()[0])}), pointing(cls))
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({self.frame!r}, axis={np.round(self.axis, 6).tolist()}, "

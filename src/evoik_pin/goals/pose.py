@@ -1,4 +1,4 @@
-"""Pose: a frame's position and orientation at a target pose (see :mod:`evoik_pin.goals`)."""
+"""Pose: a frame's position and orientation at a target pose."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ KIND_POSE, KIND_POSE_AXES = LOG6, BANDED_LOG6
 
 def se3_target(target, where: str) -> pin.SE3:
     """``target`` (a (4, 4) homogeneous matrix, a ``pin.SE3`` or a Target with a rotation; m) as a ``pin.SE3``, or
-    a TargetError naming ``where`` (a 3-vector is a position, not a pose)."""
+    a TargetError naming ``where``."""
     arrays = pose_arrays(target)  # a checked pin.SE3 or float (4, 4) pose: no Target made
     if arrays is not None and arrays[1] is not None:
         return target.copy() if type(target) is pin.SE3 else pin.SE3(np.array(arrays[1]), np.array(arrays[0]))
@@ -62,8 +62,7 @@ class Pose(Goal):
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_POSE, (0, 1, 2, 3, 4, 5), FAMILY_FRAME, oriented=True, angle=True),
                   KindCode(KIND_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_AXES, oriented=True, angle=True))
-    #: ``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; weight, tolerance (one number or 6
-    #: half-widths), rotation_tolerance, free; a goal set's members as poses.
+    #: ``kind: pose``: ``target: {position, rpy | rpy_rad}`` or ``{matrix}``; a goal set's members as poses.
     FILE_ENTRY = ("pose", ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text,
                   {"set_member": lambda t: t.se3()})
 

@@ -1,4 +1,4 @@
-"""Position: a frame's origin at a target point, orientation free (see :mod:`evoik_pin.goals`)."""
+"""Position: a frame's origin at a target point, orientation free."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ class Position(Goal):
     band: object = None
     KIND_CODES = (KindCode(KIND_POSITION, (0, 1, 2), FAMILY_FRAME),
                   KindCode(KIND_POSITION_BAND, (0, 1, 2), FAMILY_AXES))
-    #: ``kind: position``: ``target: {position}`` (m); weight, tolerance (one number or 3 half-widths).
+    #: ``kind: position``: ``target: {position}`` (m).
     FILE_ENTRY = ("position", ("weight", "tolerance"), position_target, position_text)
 
     def __init__(self, frame: str, target, weight: float = 1.0,

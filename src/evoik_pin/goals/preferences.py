@@ -184,7 +184,7 @@ class Manipulability(Preference):
 
     def costs(self, Q):
         if Q.shape[0] <= SMALL_BATCH:
-            return np.array([self.cost(q) for q in Q], dtype=float).reshape(Q.shape[0])
+            return super().costs(Q)
         w = yoshikawa(self._robot.jacobian_batch(Q, validate=False, frame=self.frame))
         return -self.weight * np.log(np.maximum(w, 1e-300))
 

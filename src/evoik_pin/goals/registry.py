@@ -1,10 +1,5 @@
-"""The goal kinds' declarations and the tables derived from them.
-
-A goal kind (a :class:`~evoik_pin.goals.goal.Goal` subclass) declares its kernel codes with :class:`KindCode` in
-its ``KIND_CODES``, registered here when the class is made; :data:`TASK_ROWS`, :data:`ORIENTED_KINDS`,
-:data:`POSITIONLESS_KINDS` and :data:`ANGLE_KINDS` are filled from them. The compiled residuals are named by their
-maths (``LOG6``, ``POINT``, ...): a kind's code is the code of the residual that evaluates it.
-"""
+"""The goal kinds' declarations (a Goal subclass's ``KIND_CODES``, registered when the class is made) and the tables
+derived from them. A kind's code is the code of the compiled residual that evaluates it, named by its maths."""
 
 from __future__ import annotations
 
@@ -14,8 +9,7 @@ __all__ = ["ANGLE_KINDS", "FAMILY_AXES", "FAMILY_BEYOND_FRAME", "FAMILY_FRAME", 
            "ORIENTED_KINDS", "POSITIONLESS_KINDS", "TASK_ROWS", "KindCode", "kind_classes", "register"]
 
 #: The compiled families of the LM kernel (a goal's ``G_FAMILY`` spec column): the one-frame residuals of
-#: ``kernel.goal_error`` (position, pose, planar), those of ``solvers/lm/axes.py`` (bands, free axes, orientation,
-#: pointing) and those beyond one frame of ``solvers/lm/balance.py`` (centre of mass, two frames).
+#: ``kernel.goal_error``, those of ``solvers/lm/axes.py`` and those beyond one frame of ``solvers/lm/balance.py``.
 FAMILY_FRAME, FAMILY_AXES, FAMILY_BEYOND_FRAME = 0, 1, 2
 
 #: The compiled residuals (a goal's kind code, its spec's ``G_KIND`` column), by their maths. One frame: its
@@ -36,10 +30,9 @@ KIND_BEYOND_FRAME = 10
 
 @dataclass(frozen=True)
 class KindCode:
-    """One kernel code of a goal kind: ``code`` (a compiled residual above), ``rows`` (0-5: vx vy vz wx wy wz) of
-    the frame's base-frame Jacobian its residual stands on, the compiled ``family`` (``FAMILY_*``) that evaluates it;
-    whether it constrains orientation (``oriented``), puts a point somewhere (``has_position``) and reports an
-    ``angle`` (rad)."""
+    """One kernel code of a goal kind: ``code`` (a compiled residual above), the ``rows`` (0-5: vx vy vz wx wy wz) of
+    the frame's base-frame Jacobian its residual stands on, its ``family``; whether it constrains orientation, puts a
+    point somewhere and reports an ``angle`` (rad)."""
 
     code: int
     rows: tuple
@@ -52,8 +45,8 @@ class KindCode:
 #: Every registered code's declaration, and the class that declared it (None: a target kind without a goal class).
 KINDS: dict[int, KindCode] = {}
 _CLASSES: dict[int, type | None] = {}
-#: Derived from the declarations (filled by :func:`register`): the Jacobian rows of each code, and the codes that
-#: constrain orientation, put no point anywhere, report an angle.
+#: Derived from the declarations: the Jacobian rows of each code; the codes that constrain orientation, put no point
+#: anywhere, report an angle.
 TASK_ROWS: dict[int, tuple] = {}
 ORIENTED_KINDS: set[int] = set()
 POSITIONLESS_KINDS: set[int] = set()
@@ -61,8 +54,8 @@ ANGLE_KINDS: set[int] = set()
 
 
 def register(owner: type | None, *codes: KindCode) -> None:
-    """Record the declared ``codes`` of the goal class ``owner`` (None: a single-target problem's target kind) and
-    derive the tables. ValueError for a code declared twice or a family contradicting :data:`KIND_BEYOND_FRAME`."""
+    """Record the declared ``codes`` of the goal class ``owner`` and derive the tables. ValueError for a code declared
+    twice or a family contradicting :data:`KIND_BEYOND_FRAME`."""
     for c in codes:
         if c.code in KINDS and _CLASSES[c.code] is not owner and KINDS[c.code] != c:
             raise ValueError(f"kind code {c.code} declared twice: by {_CLASSES[c.code]} and {owner}")
@@ -77,5 +70,5 @@ def register(owner: type | None, *codes: KindCode) -> None:
 
 
 def kind_classes() -> list[type]:
-    """The registered goal classes, in the order they were registered (declared)."""
+    """The registered goal classes, in the order they were declared."""
     return list(dict.fromkeys(cls for cls in _CLASSES.values() if cls is not None))

@@ -26,8 +26,8 @@ from .registry import (
 __all__ = ["EXPRESSED_IN", "KIND_RELATIVE_POSE", "KIND_RELATIVE_POSE_AXES", "KIND_RELATIVE_POSITION",
            "KIND_RELATIVE_POSITION_IN_A", "RelativePose", "RelativePosition"]
 
-#: The kernel codes of one frame's pose seen from another (6 rows): under a norm tolerance (the SE(3) logarithm), and
-#: with bands or free axes. Their ``aux`` row: ``goal.A_REL_*``.
+#: The kernel codes of one frame's pose seen from another (6 rows): under a norm tolerance, and with bands or free
+#: axes. Their ``aux`` row: ``goal.A_REL_*``.
 KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES = RELATIVE_LOG6, RELATIVE_BANDED_LOG6
 
 
@@ -48,14 +48,13 @@ class RelativePose(FramePair, Goal):
 
     frame_a: str = ""
     target: object = None
-    #: The per-axis half-widths (6,) (m, rad; inf on free axes) of a banded goal, else None; the free axes' names.
+    #: As Pose's.
     band: object = None
     free: tuple = ()
     KIND_CODES = (KindCode(KIND_RELATIVE_POSE, (0, 1, 2, 3, 4, 5), FAMILY_BEYOND_FRAME, oriented=True, angle=True),
                   KindCode(KIND_RELATIVE_POSE_AXES, (0, 1, 2, 3, 4, 5), FAMILY_BEYOND_FRAME, oriented=True,
                            angle=True))
-    #: ``kind: relative_pose``: ``frame_a``, ``frame`` (frame b) and a pose ``target`` (b seen from a), with Pose's
-    #: optional fields.
+    #: ``kind: relative_pose``: ``frame_a``, ``frame`` (frame b), a pose ``target`` (b seen from a) and Pose's fields.
     FILE_ENTRY = ("relative_pose", ("weight", "tolerance", "rotation_tolerance", "free"), pose_target, matrix_text)
 
     def __init__(self, frame_a: str, frame_b: str, target, weight: float = 1.0,
@@ -64,12 +63,11 @@ class RelativePose(FramePair, Goal):
         where = f"RelativePose of {frame_b!r} seen from {frame_a!r}"
         self._init_axes(frame_b, weight, tolerance, rotation_tolerance, free, AXES,
                         (KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES), where)
-        self._init_pair(frame_a, frame_b, "RelativePose")
+        self._init_pair(frame_a, "RelativePose")
         self._set(target=se3_target(target, where))
 
     def placement_errors(self, Ra, d, Rb) -> tuple[np.ndarray, np.ndarray]:
-        """The distance and rotation angle of b's pose seen from a to the target, or with bands or free axes
-        Pose's errors (:func:`.bands.band_errors`)."""
+        """The distance and rotation angle of b's pose seen from a to the target; with bands or free axes Pose's."""
         p_rel = np.einsum("nji,nj->ni", Ra, d)
         R_rel = np.einsum("nji,njk->nik", Ra, Rb)
         pt, Rt = self.encode()
@@ -106,8 +104,7 @@ class RelativePosition(FramePair, Goal):
     expressed_in: str = "a"
     KIND_CODES = (KindCode(KIND_RELATIVE_POSITION, (0, 1, 2), FAMILY_BEYOND_FRAME),
                   KindCode(KIND_RELATIVE_POSITION_IN_A, (0, 1, 2), FAMILY_BEYOND_FRAME))
-    #: ``kind: relative_position``: ``frame_a``, ``frame`` (frame b) and ``target: {position: [x, y, z]}`` (m), with
-    #: optional ``expressed_in`` (a | world), ``weight`` and ``tolerance``.
+    #: ``kind: relative_position``: ``frame_a``, ``frame`` (frame b), ``target: {position: [x, y, z]}`` (m).
     FILE_ENTRY = ("relative_position", ("expressed_in", "weight", "tolerance"), position_target, position_text)
 
     def __init__(self, frame_a: str, frame_b: str, p, expressed_in: str = "a", weight: float = 1.0,
@@ -117,7 +114,7 @@ class RelativePosition(FramePair, Goal):
                               f"(frame a's axes or the world's), got {expressed_in!r}")
         kind = KIND_RELATIVE_POSITION_IN_A if expressed_in == "a" else KIND_RELATIVE_POSITION
         self._init_common(frame_b, weight, tolerance, None, kind, False)
-        self._init_pair(frame_a, frame_b, "RelativePosition")
+        self._init_pair(frame_a, "RelativePosition")
         if not self.tolerance > 0:
             raise OptionError(f"tolerance (m) of the RelativePosition of {frame_b!r} from {frame_a!r} must be > 0, "
                               f"got {tolerance!r}")
@@ -125,13 +122,12 @@ class RelativePosition(FramePair, Goal):
 
     @property
     def p(self) -> np.ndarray:
-        """The wanted position (3,) (m) of frame b's origin from frame a's, in the axes ``expressed_in`` names."""
+        """The target (3,) (m)."""
         return self.target
 
     @property
     def both(self) -> float:
-        """In the world's axes a joint moving both frames turns the vector (:data:`.goal.BOTH`); in frame a's it
-        moves them together (0)."""
+        """:data:`.goal.BOTH` in the world's axes (a joint moving both frames turns the vector), else 0."""
         return BOTH if self.expressed_in == "world" else 0.0
 
     def placement_errors(self, Ra, d, Rb) -> tuple[np.ndarray, np.ndarray]:

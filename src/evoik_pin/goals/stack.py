@@ -5,7 +5,6 @@ holds its kind's declaration (:mod:`.registry`): numba's disk cache would not se
 from __future__ import annotations
 
 import dataclasses
-import threading
 import weakref
 from dataclasses import dataclass, field
 
@@ -46,9 +45,8 @@ def spec_row(kind: int, joint: int, weight: float, tolerance: float, rotation_to
 
 
 def owned(a: np.ndarray, dtype=None) -> np.ndarray:
-    """``a`` as the kernel's entry points are compiled for it: a C-contiguous, writable array (of ``dtype`` when
-    given), ``a`` itself when it is one, else a copy (a read-only array is another numba type: it would recompile
-    the kernel)."""
+    """``a`` if it is a C-contiguous, writable array (of ``dtype`` when given), else such a copy: the type the
+    kernel's entry points are compiled for (a read-only array is another numba type)."""
     if a.flags.writeable and a.flags.c_contiguous and (dtype is None or a.dtype == dtype):
         return a
     return np.array(a, dtype=dtype, order="C")
@@ -79,7 +77,7 @@ def encode_targets(targets) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _Rows:
-    """What :class:`TargetArrays` and :class:`GoalArrays` share: N problems' targets ``P``, ``Rts``, by row."""
+    """N problems' targets ``P``, ``Rts``, by row (:class:`TargetArrays`, :class:`GoalArrays`)."""
 
     def __len__(self) -> int:
         return int(self.P.shape[0])
@@ -104,7 +102,7 @@ class TargetArrays(_Rows):
 
     @classmethod
     def of(cls, targets) -> TargetArrays:
-        """The arrays of a list of :class:`~evoik_pin.problem.Target` of one kind."""
+        """The arrays of a list of Target of one kind."""
         return cls(target_kind(targets[0]), *encode_targets(targets))
 
     @classmethod
@@ -115,7 +113,7 @@ class TargetArrays(_Rows):
 
     @property
     def oriented(self) -> bool:
-        """True when the targets constrain orientation (pose, planar with yaw)."""
+        """True when the targets constrain orientation."""
         return self.kind in ORIENTED_KINDS
 
 
@@ -141,10 +139,13 @@ class GoalStack:
     frames: tuple
     aux: np.ndarray = None
     any_oriented: bool = field(init=False)
+    #: :func:`free_entries`' answer once asked, as its one member.
+    _free: list = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "any_oriented", any(k in ORIENTED_KINDS for k in self.kinds))
         object.__setattr__(self, "aux", np.zeros((self.spec.shape[0], 1)) if self.aux is None else self.aux)
+        object.__setattr__(self, "_free", [])
 
     @property
     def arrays(self) -> tuple:
@@ -158,11 +159,11 @@ class GoalStack:
         goal its further numbers (a 1-d array or None), zero-padded into the (G, A) ``aux`` array.
 
         Cached per robot and these values (the last 64): a goal list solved again with new targets gets the same
-        stack, so an LM engine kept from solve to solve is retargeted, not rebuilt. A stack is never written."""
+        stack, so an LM engine kept from solve to solve is retargeted, not rebuilt."""
+        given = aux is not None and any(a is not None for a in aux)
         key = (tuple(frames), tuple(int(k) for k in kinds), tuple(float(w) for w in weights),
                tuple(float(t) for t in tolerances), tuple(float(t) for t in rotation_tolerances),
-               None if aux is None or all(a is None for a in aux)
-               else tuple(None if a is None else np.asarray(a, dtype=float).tobytes() for a in aux))
+               tuple(None if a is None else np.asarray(a, dtype=float).tobytes() for a in aux) if given else None)
         hit = _recall(_STACK_CACHE, robot, key)
         if hit is not None:
             return hit
@@ -171,7 +172,7 @@ class GoalStack:
         spec = np.array([spec_row(*args) for args in zip(kinds, joints, weights, tolerances, rotation_tolerances,
                                                           rows[:-1], strict=True)])
         packed = None
-        if aux is not None and any(a is not None for a in aux):
+        if given:
             packed = np.zeros((len(frames), max(len(a) for a in aux if a is not None)))
             for g, a in enumerate(aux):
                 if a is not None:
@@ -182,7 +183,7 @@ class GoalStack:
 
     @classmethod
     def single(cls, robot, kind: int, tolerance: float, rotation_tolerance: float) -> GoalStack:
-        """The one goal of a single-target problem: the tip, weight 1."""
+        """The tip's one goal of weight 1."""
         return cls.of(robot, [robot.tip], [kind], [1.0], [tolerance], [rotation_tolerance])
 
     def __len__(self) -> int:
@@ -194,11 +195,11 @@ class GoalStack:
         return np.array([k in ORIENTED_KINDS for k in self.kinds], dtype=bool)
 
 
-_STACK_CACHE: dict = {}  # GoalStack.of's (:func:`_remember`)
+_STACK_CACHE: dict = {}  # GoalStack.of's
 
 
 def _recall(cache: dict, robot, key):
-    """What ``cache`` holds for ``robot`` and ``key`` (:func:`_remember`), or None."""
+    """What ``cache`` holds for ``robot`` and ``key``, or None."""
     hit = cache.get((id(robot), key))
     return hit[1] if hit is not None and hit[0]() is robot else None  # a dead robot's id may be reused
 
@@ -229,7 +230,6 @@ class GoalArrays(_Rows):
 
     @property
     def oriented(self) -> bool:
-        """True when some goal constrains orientation."""
         return self.stack.any_oriented
 
 
@@ -247,31 +247,21 @@ def is_goal_list(value) -> bool:
 def free_entries(robot, stack: GoalStack) -> np.ndarray | None:
     """(n,) bool: the entries of ``robot``'s q that move no goal of ``stack`` (no physical joint they drive is in a
     goal's support: another arm, the head, a hand's fingers when only the other hand is posed); None when every entry
-    moves some goal. Such entries change no goal's error. Cached per stack (:func:`bind` shares equal goals' stacks)."""
-    kept = _FREE.get(id(stack))
-    if kept is not None and kept[0] is stack:
-        return kept[1]
+    moves some goal. Such entries change no goal's error. Kept on the stack (equal goal lists share one)."""
+    if stack._free:
+        return stack._free[0]
     driven = robot.tree_constants()[4][stack.support.any(axis=0)]  # the entries of q driving a goal's joints
     used = np.zeros(robot.n, dtype=bool)
     used[driven[(driven >= 0) & (driven < robot.n)]] = True
-    free = None if used.all() else ~used
-    with _FREE_LOCK:  # solve_many's threads share the cache
-        if len(_FREE) >= 32:
-            _FREE.clear()
-        _FREE[id(stack)] = (stack, free)
-    return free
-
-
-_FREE: dict = {}  # id(goal stack) -> (the stack, its free_entries)
-_FREE_LOCK = threading.Lock()
+    stack._free[:] = [None if used.all() else ~used]  # one assignment: solve_many's threads may race to it
+    return stack._free[0]
 
 
 def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
               ) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
-    """:func:`bind`'s answer for a tip :class:`~evoik_pin.Target` (checked already): its one goal on the robot's tip
-    (a :class:`~.pose.Pose`, :class:`~.position.Position` or :class:`~.planar.Planar`, weight 1, the problem's
-    ``tolerance`` m and ``rotation_tolerance`` rad), the tip's stack, pt (1, 3) and Rt (1, 3, 3). Nothing is checked
-    again (a control loop makes one per step)."""
+    """:func:`bind`'s answer for a tip Target (checked already): its one goal on the robot's tip (a Pose, Position or
+    Planar of weight 1, ``tolerance`` m, ``rotation_tolerance`` rad), the tip's stack, pt (1, 3) and Rt (1, 3, 3).
+    Nothing is checked again (a control loop makes one per step)."""
     kind = target_kind(target)
     key = (kind, tolerance, rotation_tolerance)
     hit = _recall(_TIP_GOALS, robot, key)
@@ -289,15 +279,14 @@ def tip_goals(robot, target, tolerance: float, rotation_tolerance: float
     return [goal], hit[0], pt[None], Rt[None]
 
 
-#: :func:`tip_goals`' per robot, kind and tolerances (:func:`_remember`): the tip's stack, the goal class, its fields
-#: but the target.
+#: :func:`tip_goals`' per robot, kind and tolerances: the tip's stack, the goal class, its fields but the target.
 _TIP_GOALS: dict = {}
 
 
 def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     """Check ``goals`` against ``robot`` and pack them for the LM kernel: (the goals as a list, their
     :class:`GoalStack`, targets pt (G, 3), Rt (G, 3, 3)). A list like one bound before on this robot (new targets)
-    takes its checked stack from :data:`_BOUND`.
+    takes its checked stack from the cache.
 
     Raises: TargetError for an empty list, a member that is no goal, or one frame given clashing targets;
     FrameError for an unknown frame (with the closest names) or a frame no active joint moves; LockedJointsError
@@ -313,11 +302,9 @@ def bind(robot, goals) -> tuple[list[Goal], GoalStack, np.ndarray, np.ndarray]:
     # goals beyond one frame pack their rows against the robot on every bind: only lists without them are kept
     key = None if any(_packs_itself(g) for g in goals) else structure(goals)
     stack = None if key is None else _recall(_BOUND, robot, key)
-    if stack is not None:
-        if len(stack.frames) > len(set(stack.frames)):
-            _check_frames(robot, goals)  # the clash test reads the targets
-    else:
+    if stack is None or len(stack.frames) > len(set(stack.frames)):  # a hit: the clash test reads the targets
         _check_frames(robot, goals)
+    if stack is None:
         # the goals beyond one frame pack their aux and support rows against the robot (checking their frames)
         packed = {g: goal.pack(robot) for g, goal in enumerate(goals) if _packs_itself(goal)}
         stack = GoalStack.of(robot, [g.frame for g in goals], [g.kind for g in goals], [g.weight for g in goals],
@@ -340,16 +327,14 @@ _BOUND: dict = {}
 
 def structure(goals) -> tuple:
     """What a goal list's stack depends on besides its targets: each goal's frame, kind, weight, tolerances and aux
-    row, in order, and for a goal beyond one frame its ``batch_key()`` (what its robot-bound ``aux`` row holds).
-    Lists of one structure share a stack (:func:`bind`'s cache, solve_many's groups)."""
+    row, and for a goal beyond one frame its ``batch_key()``. Lists of one structure share a stack."""
     return tuple((g.frame, g.kind, g.weight, g.tolerance, g.rotation_tolerance,
                   None if g.aux() is None else g.aux().tobytes())
                  + (g.batch_key() if _packs_itself(g) else ()) for g in goals)
 
 
 def _packs_itself(goal: Goal) -> bool:
-    """Whether ``goal`` is of a kind beyond one frame, which packs its own ``aux`` and ``support`` rows against the
-    robot (``goal.pack(robot)``), checking its frames."""
+    """Whether ``goal`` packs its own ``aux`` and ``support`` rows against the robot (``goal.pack(robot)``)."""
     return KINDS[goal.kind].family == FAMILY_BEYOND_FRAME
 
 

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "naming", "number", "numbers", "read_mapping", "unknown_keys",
-           "write_data"]
+__all__ = ["DATA_SUFFIXES", "Flow", "data_format", "floats", "naming", "number", "numbers", "read_mapping",
+           "unknown_keys", "write_data"]
 
 #: A number as YAML 1.2 writes it (PyYAML, a YAML 1.1 reader, returns ``1e-6`` as a string).
 _NUMBER_TEXT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -25,6 +25,11 @@ class Flow(dict):
     """A mapping :func:`write_data` writes on one line in YAML (e.g. a pose)."""
 
 
+def floats(values) -> list[float]:
+    """The numbers of ``values`` (any shape, flattened) as plain floats to write, -0.0 as 0.0."""
+    return [float(v) + 0.0 for v in np.asarray(values, dtype=float).reshape(-1)]
+
+
 def data_format(path: Path, where: str, error: type[Exception]) -> str:
     """``"yaml"`` or ``"json"`` by ``path``'s extension; ``error`` naming the accepted extensions otherwise."""
     fmt = DATA_SUFFIXES.get(path.suffix.lower())
@@ -35,10 +40,10 @@ def data_format(path: Path, where: str, error: type[Exception]) -> str:
 
 def read_mapping(path: Path, where: str, error: type[Exception], keys: tuple[str, ...], empty: str,
                  list_key: str | None = None) -> dict:
-    """The top-level mapping of the data file ``path``, parsed as its extension says (YAML with PyYAML's safe
-    loader), its keys among ``keys``; with ``list_key``, a top-level list stands for ``{list_key: the list}``.
-    ``error`` starting with ``where`` for a missing or unreadable file, a syntax error (with its line and column),
-    an empty file (``empty``: what it should hold), another top level, or an unknown key."""
+    """The top-level mapping of the data file ``path`` (YAML: PyYAML's safe loader), its keys among ``keys``; with
+    ``list_key``, a top-level list stands for ``{list_key: the list}``. ``error`` starting with ``where`` for a
+    missing or unreadable file, a syntax error, an empty file (``empty``: what it should hold), another top level,
+    or an unknown key."""
     data = _parse(path, where, error)
     if data is None:
         raise error(f"{where}: the file is empty; expected {empty}")

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from ..errors import FrameError, GoalsFileError, OptionError, TargetError
 from ..goals import Goal, bind, is_goal_list
-from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, number, unknown_keys
+from ..goals.file_entries import FIELD_READERS, FileKind, field_entries, name_entry, number, unknown_keys
 from ..goals.preferences import JointLimitMargin, Manipulability, MinimalDisplacement, Posture, Preference
 from ..goals.registry import kind_classes
 from .datafile import data_format, naming, read_mapping, write_data
@@ -51,7 +51,7 @@ class GoalsFile:
                 bind(robot, goals)
             except (FrameError, TargetError) as exc:
                 where = f"goals file {str(self.path)!r}" + (f": problem {p}" if self.several else "")
-                for i, g in enumerate(goals):  # the goal that fails alone, when one does (a clash needs two)
+                for i, g in enumerate(goals):  # the goal that fails alone, when one does
                     try:
                         bind(robot, [g])
                     except (FrameError, TargetError):
@@ -61,11 +61,10 @@ class GoalsFile:
 
 
 # ------------------------------------------------------------------ reading
-#: The goal kinds a goals file takes, by ``kind:`` name: each kind class's ``file_kind()``.
+#: The goal kinds a goals file takes, by ``kind:`` name.
 GOAL_KINDS = {fk.name: fk for fk in (cls.file_kind() for cls in kind_classes()) if fk is not None}
 
-
-#: Preferences a goal list may hold (:mod:`evoik_pin.goals.preferences`), by their ``kind:`` name: (class, fields).
+#: Preferences a goal list may hold, by their ``kind:`` name: (class, fields).
 PREFERENCE_KINDS = {
     "posture": (Posture, ("q_ref", "joints", "weight")),
     "joint_limit_margin": (JointLimitMargin, ("margin", "weight")),
@@ -89,16 +88,19 @@ def _goal(entry, what: str) -> Goal:
     kind = GOAL_KINDS[kind_name]
     if kind.read is not None:  # kinds whose entries are not (frame, target, numbers)
         return kind.read(entry, what)
-    unknown_keys(entry, ("frame", "kind", "target", *kind.fields, "targets"), f"{what}, a {kind_name} goal")
+    frames = ("frame_a", "frame") if kind.pair else ("frame",)
+    unknown_keys(entry, (*frames, "kind", "target", *kind.fields, *(() if kind.pair else ("targets",))),
+                 f"{what}, a {kind_name} goal")
     several = "targets" in entry  # a goal set: any one of several targets
     if several and "target" in entry:
         raise GoalsFileError(f"{what}: give target (one) or targets (a goal set: any one will do), not both")
-    for key in ("frame", "targets" if several else "target"):
+    for key in (*frames, "targets" if several else "target"):
         if key not in entry:
-            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has frame, kind and target, or targets "
-                                 "for a goal set)")
-    if not isinstance(frame, str) or not frame:
-        raise GoalsFileError(f"{what}: frame must be a frame name (a non-empty string), got {frame!r}")
+            raise GoalsFileError(f"{what}: missing field {key!r} (every goal has {', '.join(frames)}, kind and "
+                                 "target, or targets for a goal set)")
+    for key in frames:
+        if not isinstance(entry[key], str) or not entry[key]:
+            raise GoalsFileError(f"{what}: {key} must be a frame name (a non-empty string), got {entry[key]!r}")
     raw = entry["targets"] if several else [entry["target"]]
     if several and (not isinstance(raw, list) or not raw):
         raise GoalsFileError(f"{what}: targets must be a non-empty list of targets (a goal set), got {raw!r}")
@@ -116,32 +118,32 @@ def _goal(entry, what: str) -> Goal:
                if key in entry}
     if several and kind.set_member is not None:
         read = [kind.set_member(t) for t in read]
-    with naming(what, GoalsFileError, catch=(OptionError, TargetError)):
-        return (kind.cls if several else kind.make or kind.cls)(frame, read if several else read[0], **options)
+    with naming(what, GoalsFileError, catch=(OptionError, TargetError, FrameError)):
+        return (kind.cls if several else kind.make or kind.cls)(*(entry[key] for key in frames),
+                                                                read if several else read[0], **options)
+
+
+def _joint_list(value, what: str) -> list[float]:
+    if not isinstance(value, list):
+        raise GoalsFileError(f"{what} must be a list of joint values (rad or m), got {value!r}")
+    return [number(v, f"{what}[{k}]") for k, v in enumerate(value)]
+
+
+def _joint_map(value, what: str) -> dict[str, float]:
+    if not isinstance(value, dict) or not value:
+        raise GoalsFileError(f"{what} must be a mapping {{joint name: value (rad or m)}}, got {value!r}")
+    return {str(k): number(v, f"{what}.{k}") for k, v in value.items()}
+
+
+#: How a preference's fields other than numbers are read.
+_PREFERENCE_READERS = {"q_ref": _joint_list, "joints": _joint_map, "frame": name_entry}
 
 
 def _preference(entry: dict, what: str, kind_name: str):
     """A preference entry (``kind: posture | joint_limit_margin | manipulability | minimal_displacement``)."""
     cls, fields = PREFERENCE_KINDS[kind_name]
     unknown_keys(entry, ("kind", *fields), f"{what}, a {kind_name} preference")
-    args = {}
-    for key in (k for k in fields if k in entry):
-        value = entry[key]
-        if key == "q_ref":
-            if not isinstance(value, list):
-                raise GoalsFileError(f"{what}: q_ref must be a list of joint values (rad or m), got {value!r}")
-            value = [number(v, f"{what}: q_ref[{k}]") for k, v in enumerate(value)]
-        elif key == "joints":
-            if not isinstance(value, dict) or not value:
-                raise GoalsFileError(f"{what}: joints must be a mapping {{joint name: value (rad or m)}}, got "
-                                     f"{value!r}")
-            value = {str(k): number(v, f"{what}: joints.{k}") for k, v in value.items()}
-        elif key == "frame":
-            if not isinstance(value, str) or not value:
-                raise GoalsFileError(f"{what}: frame must be a frame name, got {value!r}")
-        else:
-            value = number(value, f"{what}: {key}")
-        args[key] = value
+    args = {key: _PREFERENCE_READERS.get(key, number)(entry[key], f"{what}: {key}") for key in fields if key in entry}
     if kind_name == "posture":
         if ("q_ref" in args) == ("joints" in args):
             raise GoalsFileError(f"{what}: a posture needs one of q_ref (a joint vector) and joints ({{name: value}})")
@@ -208,9 +210,9 @@ def load_problems(path: str | os.PathLike) -> list[list[Goal]]:
 
 # ------------------------------------------------------------------ writing
 def _kind_of(goal) -> tuple[str, FileKind]:
-    for name, kind in GOAL_KINDS.items():
-        if type(goal) is kind.cls:
-            return name, kind
+    kind = next((k for k in GOAL_KINDS.values() if type(goal) is k.cls), None)
+    if kind is not None:
+        return kind.name, kind
     raise GoalsFileError(f"cannot write a {type(goal).__name__} to a goals file; goals files take "
                          f"{', '.join(k.cls.__name__ for k in GOAL_KINDS.values())}")
 
@@ -239,7 +241,8 @@ def _entry(goal: Goal) -> dict:
     name, kind = _kind_of(goal)
     if kind.write is not None:
         return kind.write(goal)
-    entry = {"frame": goal.frame, "kind": name, "target": kind.write_target(goal)}
+    entry = ({"frame_a": goal.frame_a} if kind.pair else {}) | {"frame": goal.frame, "kind": name,
+                                                                 "target": kind.write_target(goal)}
     if goal.alternatives is not None:  # a goal set
         del entry["target"]
         entry["targets"] = [kind.write_target(m) for m in goal.alternatives]

@@ -35,7 +35,7 @@ import pinocchio as pin
 
 from ..errors import SceneError
 from ..scene.geometry import as_placement
-from .datafile import Flow, naming, number, numbers, read_mapping, unknown_keys, write_data
+from .datafile import Flow, floats, naming, number, numbers, read_mapping, unknown_keys, write_data
 
 __all__ = ["SceneFile", "read_scene", "write_scene"]
 
@@ -141,11 +141,6 @@ def _file_in(folder: Path, name, what: str) -> Path:
     return folder / Path(name).expanduser()  # an absolute path replaces the folder
 
 
-def _clean(values) -> list[float]:
-    """Plain floats, -0.0 written as 0.0."""
-    return [float(v) + 0.0 for v in np.asarray(values, dtype=float).reshape(-1)]
-
-
 def write_scene(scene, path: str | os.PathLike) -> Path:
     """Write ``scene`` to ``path`` (YAML or JSON; mesh paths relative to its folder when below it); return the path."""
     path = Path(os.fspath(path)).expanduser()
@@ -156,12 +151,12 @@ def write_scene(scene, path: str | os.PathLike) -> Path:
     for ob in scene.obstacles.values():
         entry = {"name": ob.name, "kind": ob.kind, **ob.params}  # a sphere's, cylinder's, capsule's lengths (m)
         if ob.kind == "box":
-            entry["size"] = _clean(ob.params["size"])
+            entry["size"] = floats(ob.params["size"])
         elif ob.kind == "mesh":
-            scale = _clean(ob.params["scale"])
+            scale = floats(ob.params["scale"])
             entry["path"] = _relative(Path(ob.params["path"]), path.parent)
             entry["scale"] = scale[0] if len(set(scale)) == 1 else scale
-        entry["pose"] = Flow(xyz=_clean(ob.pose.translation), rpy=_clean(pin.rpy.matrixToRpy(ob.pose.rotation)))
+        entry["pose"] = Flow(xyz=floats(ob.pose.translation), rpy=floats(pin.rpy.matrixToRpy(ob.pose.rotation)))
         data["obstacles"].append(entry)
     header = f"# evoik_pin scene of {scene.robot.name} (m, rad, robot base frame)\n"
     return write_data(path, data, header, "scene file", SceneError)
