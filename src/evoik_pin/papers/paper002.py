@@ -322,7 +322,7 @@ def run(ctx: RunContext) -> PaperReport:
                     "Fig. 9 analogue: Scenario 3.2 (Pro-, previous +- pi/100) per spiral point"),
     ]
 
-    report.notes += _notes(s, t3, s1, s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed)
+    report.notes += _notes(s, t3, s1, s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed, outside)
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,
         "scenario2_targets_m": p_s2_pin, "scenario3_targets_m": p_s3,
@@ -364,13 +364,13 @@ def _seed_check(s3_points: dict, p_s3: np.ndarray, seed: int, runs: int = 3) -> 
             f"it, {out['unseeded']}/{runs} unseeded runs do.")
 
 
-def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int) -> list[str]:
-    out = sorted({i for k in METHODS for i, pt in enumerate(s3_points[k]) if pt["status"] == "no solution"})
+def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int, out: list[int]) -> list[str]:
+    """Notes on the spiral: the points ``out`` (indices) with no solution in the full ranges, misses, Pro- losses."""
     notes = []
     if out:
         z = p_s3[out, 2] / MM
         shoulder = np.linalg.norm(p_s3[out] - [0.0, 0.0, 500 * MM], axis=1)
-        robot = load_robot(ROBOT)
+        robot = _robot()
         at_limit = set()
         for i in out:  # joints at a limit in the closest configuration our full-range solvers found
             q = min((s3_points[k][i] for k in METHODS), key=lambda pt: pt["error"])["q"]

@@ -228,10 +228,8 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
     return out
 
 
-#: Fixed joint vectors (rad) at which a loaded chain must match the closed form to be recognized.
+#: Fixed joint vectors (rad) at which a loaded chain must match the closed form (to 1e-9 m) to be recognized.
 _PROBES = np.array([[0.3, -0.7, 1.1, -0.4], [-1.2, 0.5, -0.2, 2.0], [2.5, 1.9, -2.2, 0.6]])
-#: Largest FK mismatch (m) tolerated between the loaded chain and the closed form.
-_MATCH_TOL = 1e-9
 
 
 def _closed_form_for(robot):
@@ -246,7 +244,7 @@ def _closed_form_for(robot):
         raise MethodError(f"method 'algebraic': robot {robot.name!r} has {robot.n} joints, its closed form {n}")
     probes = _PROBES[:, :n]
     mismatch = np.abs(robot.positions_batch(probes) - fk(probes)).max()
-    if mismatch > _MATCH_TOL:
+    if mismatch > 1e-9:
         raise MethodError(
             f"method 'algebraic': the loaded {robot.name!r} chain (tip {robot.tip!r}) does not match the paper's "
             f"closed form (forward kinematics differ by {mismatch:.3g} m); load the bundled robot unchanged"

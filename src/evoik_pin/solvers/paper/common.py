@@ -14,7 +14,6 @@ from ..options import check_callback, check_choice, check_int, check_number
 __all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",
            "run_with_restarts"]
 
-#: Accepted ``bound_handling`` option values.
 BOUND_HANDLING = ("clip", "reflect", "resample")
 
 
@@ -185,8 +184,7 @@ def run_with_restarts(solve_once, problem: IKProblem, runs: int, max_generations
     """Paper 002's rho (section 3.4): up to ``runs`` runs of ``solve_once(run)``, each on a fresh
     :class:`SolverRun` of the stopping options, until one meets the tolerances or is stopped by its callback;
     the best run's Result, with ``generations``, ``evaluations`` and ``time_s`` totals over the runs and
-    ``history`` their series concatenated, plus ``run`` (the run index of each entry).
-    """
+    ``history`` their series concatenated, plus ``run`` (the run index of each entry)."""
     runs = check_int("runs", runs)
     results = []
     for _ in range(runs):

@@ -31,7 +31,6 @@ __all__ = ["CROSSOVERS", "DE_MUTATIONS", "de", "greedy_selection", "parse_strate
 
 #: Mutations accepted by ``de``: paper 002's eight (also by number 1-8), paper 004's either-or, trigonometric.
 DE_MUTATIONS = (*MUTATIONS, "eitheror", "trig")
-#: Crossovers: binomial (``bin``) and exponential (``exp``).
 CROSSOVERS = ("bin", "exp")
 
 

@@ -19,7 +19,6 @@ from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_populatio
 
 __all__ = ["RANDOM_FACTORS", "TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
 
-#: Accepted ``topology`` values.
 TOPOLOGIES = ("global", "ring")
 #: Accepted ``random_factors`` values: how r1, r2 of eq. 11 are drawn.
 RANDOM_FACTORS = ("per-coordinate", "per-particle")
