@@ -322,7 +322,7 @@ def run(ctx: RunContext) -> PaperReport:
                     "Fig. 9 analogue: Scenario 3.2 (Pro-, previous +- pi/100) per spiral point"),
     ]
 
-    report.notes += _notes(s, t3, s1, s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed, outside)
+    report.notes += _notes(s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed, outside)
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,
         "scenario2_targets_m": p_s2_pin, "scenario3_targets_m": p_s3,
@@ -408,10 +408,10 @@ def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int, out: list[int]) 
     return notes
 
 
-def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
+def _notes(s2, s3, floor, ulp) -> list[str]:
     iso, de, pso = s2["ISADE"], s2["DE"], s2["PSO"]
     p4 = PAPER_TABLE4
-    notes = [
+    return [
         f"Floating-point floor: NumPy and Pinocchio FK of the same joint vector differ by {np.median(floor):.1e} m "
         f"(median, max {floor.max():.1e} m), and doubles near these coordinates are spaced {ulp.min():.1e}-"
         f"{ulp.max():.1e} m apart: a fitness value of 1e-17 m (ISADE) means an exactly zero computed distance, and "
@@ -431,7 +431,6 @@ def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
         "3.1 PSO; Table 5 prints Pro-ISADE's fitness value as 1e-12 m (Table 2: 1e-17 m); its ISADE errors (2e-14 m) "
         "sit above the 1e-17 m fitness value while its generations (85.6) sit below the 130 budget.",
     ]
-    return notes
 
 
 _COLORS = {"PSO": "tab:blue", "DE": "tab:orange", "ISADE": "tab:green"}
