@@ -84,11 +84,8 @@ def _order_like(reference_deg: list[tuple], ours: list[np.ndarray], cols=(0, 1))
 
 
 def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
-    """``spec["runs"]`` runs of ``ga`` or ``hga`` on one target (a top-level job for ``ctx.map_parallel``).
-
-    Returns the solutions (rad) each run returned and, when ``spec["history"]``, the first run's populations
-    by generation (from the GA's ``callback``).
-    """
+    """``spec["runs"]`` runs of ``ga`` or ``hga`` on one target (a top-level job for ``ctx.map_parallel``): the
+    solutions (rad) each run returned and, when ``spec["history"]``, the first run's populations by generation."""
     arm, k, method, cfg = spec["arm"], spec["k"], spec["method"], spec["cfg"]
     robot = load_robot(arm)
     target = np.array(spec["target"], float)
