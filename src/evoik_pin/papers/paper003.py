@@ -113,15 +113,12 @@ def run(ctx: RunContext) -> PaperReport:
              "runs; steps from point 1 on (the step from q_start is in the path, not in the mean)."))
 
     bound = vehicle_path_lower_bound(P, q_start)
-    rows = []
-    for K in GAINS:
-        es = runs[K]
-        totals = np.array([e["vehicle_total"] for e in es])
-        rows.append([K, len(es), float(totals.mean()) / CM, float(totals.std(ddof=1)) / CM if len(es) > 1 else 0.0,
-                     mean_step[K] / CM, float(max(e["vehicle_steps"][1:].max() for e in es)) / CM, arm[K],
-                     float(np.mean([e["manipulability"].mean() for e in es])),
-                     float(max(e["position_error"].max() for e in es)), all(e["feasible"] for e in es),
-                     float(np.mean([e["time"] for e in es]))])
+    rows = [[K, len(es), tot[K] / CM,
+             float(np.std([e["vehicle_total"] for e in es], ddof=1)) / CM if len(es) > 1 else 0.0,
+             mean_step[K] / CM, float(max(e["vehicle_steps"][1:].max() for e in es)) / CM, arm[K],
+             float(np.mean([e["manipulability"].mean() for e in es])),
+             float(max(e["position_error"].max() for e in es)), all(e["feasible"] for e in es),
+             float(np.mean([e["time"] for e in es]))] for K, es in runs.items()]
     report.tables.append(Table(
         "gains", "Vehicle and arm motion along the path for each gain K on the vehicle coordinates",
         ["K (vehicle)", "runs", "vehicle path (cm)", "sd (cm)", "mean vehicle step (cm)", "max vehicle step (cm)",
