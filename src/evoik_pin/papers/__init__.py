@@ -65,19 +65,13 @@ def _resolve_ids(papers) -> list[str]:
     return ids
 
 
-def _default_command(pid: str, quick: bool, seed: int, out: Path, jobs: int) -> str:
-    return shlex.join(["evoik", "reproduce", pid, *(["--quick"] if quick else []), "--seed", str(seed), "--out",
-                       str(out), *(["--jobs", str(jobs)] if jobs > 1 else [])])
-
-
 def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0, progress: bool = True,
                dpi: int = 90, command: str | None = None, jobs: int = 1) -> list[PaperReport]:
     """Reproduce one or more papers, each into ``out/<paper id>/``; returns their :class:`PaperReport` in order.
 
     Args:
         papers: a paper id (``"002"``, ``"2"``), a list of ids, or ``"all"``.
-        quick: reduced-size runs instead of the papers' settings.
-        seed: master seed (non-negative int) every random choice derives from.
+        quick: reduced-size runs instead of the papers' settings. seed: master seed every random choice derives from.
         progress, dpi: tqdm progress bars; the figures' resolution.
         command: command line recorded in the reports (default: the equivalent ``evoik reproduce``).
         jobs: worker processes a paper may use for its independent parts (the same numbers, faster).
@@ -98,8 +92,10 @@ def run_papers(papers="all", out=DEFAULT_OUT, quick: bool = False, seed: int = 0
         if getattr(module, "PAPER_ID", None) != pid or not callable(getattr(module, "run", None)):
             raise ReproductionError(f"module {PAPERS[pid]} does not follow the paper-module contract "
                                     "(PAPER_ID, TITLE, run(ctx) -> PaperReport)")
+        default_command = shlex.join(["evoik", "reproduce", pid, *(["--quick"] if quick else []), "--seed", str(seed),
+                                      "--out", str(out), *(["--jobs", str(jobs)] if jobs > 1 else [])])
         ctx = RunContext(out_dir=out / pid, quick=quick, seed=seed, progress=progress, dpi=dpi,
-                         command=command or _default_command(pid, quick, seed, out, jobs), jobs=jobs)
+                         command=command or default_command, jobs=jobs)
         machine = machine_info()
         t0 = time.perf_counter()
         report = module.run(ctx)

@@ -58,15 +58,21 @@ class DHRow:
             raise RobotLoadError(f"DH row limits are inverted: lower {self.lower} > upper {self.upper}")
 
 
-def dh_transform(row: DHRow, q: float = 0.0, convention: str = "standard") -> np.ndarray:
-    """Homogeneous transform (4, 4) of one DH row at joint value ``q`` (rad or m)."""
+def _split(row: DHRow, q: float, convention: str) -> tuple[np.ndarray, np.ndarray]:
+    """One DH row at joint value ``q`` as (transform up to the joint frame, transform after it), (4, 4) each."""
     theta = row.theta + (q if row.kind == "revolute" else 0.0)
     d = row.d + (q if row.kind == "prismatic" else 0.0)
     if convention == "standard":
-        return _rot("z", theta) @ translation("z", d) @ translation("x", row.a) @ _rot("x", row.alpha)
+        return _rot("z", theta) @ translation("z", d), translation("x", row.a) @ _rot("x", row.alpha)
     if convention == "modified":
-        return _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", theta) @ translation("z", d)
+        return _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", theta) @ translation("z", d), np.eye(4)
     raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
+
+
+def dh_transform(row: DHRow, q: float = 0.0, convention: str = "standard") -> np.ndarray:
+    """Homogeneous transform (4, 4) of one DH row at joint value ``q`` (rad or m)."""
+    before, after = _split(row, q, convention)
+    return before @ after
 
 
 @dataclass(frozen=True)
@@ -86,23 +92,15 @@ def dh_to_urdf(name: str, rows: list[DHRow], convention: str = "standard", link_
                comment: str = "") -> str:
     """URDF text of the arm ``name`` of DH ``rows`` (base to tool) in ``convention`` (``"standard"`` or
     ``"modified"``), first DH frame at ``base_link``; ``link_radius`` (m) of the visuals, ``comment`` on top."""
-    if convention not in ("standard", "modified"):
-        raise RobotLoadError(f"DH convention {convention!r} is not 'standard' or 'modified'")
     if not rows:
         raise RobotLoadError("a DH table needs at least one row")
     pending = np.eye(4)
     joints: list[JointSpec] = []
     for row in rows:
+        before, after = _split(row, 0.0, convention)  # the joint moves along / about z between the two
         if row.kind == "fixed":
-            pending = pending @ dh_transform(row, 0.0, convention)
+            pending = pending @ before @ after
             continue
-        # Split the row into (fixed part before the joint motion) * (motion along/about z) * (fixed after).
-        if convention == "standard":
-            before = _rot("z", row.theta) @ translation("z", row.d)
-            after = translation("x", row.a) @ _rot("x", row.alpha)
-        else:
-            before = _rot("x", row.alpha) @ translation("x", row.a) @ _rot("z", row.theta) @ translation("z", row.d)
-            after = np.eye(4)
         joints.append(JointSpec(row.name or f"joint{len(joints) + 1}", row.kind, pending @ before, lower=row.lower,
                                 upper=row.upper))
         pending = after

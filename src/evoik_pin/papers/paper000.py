@@ -61,10 +61,10 @@ def _part(spec: dict) -> list[dict]:
     rng = derive_rng(spec["seed"], "000", method, *map(str, t_cm))
     kw = ({"method": "ga-binary", **spec["ga_kw"]} if method == "GA"
           else {"method": "mode", "q0": np.zeros(robot.n), "variant": method, **spec["mode_kw"]})
-    return [_record(robot, solve(robot, target, seed=rng, tolerance=0.0, **kw), target) for _ in range(spec["runs"])]
+    return [_record(robot, solve(robot, target, seed=rng, tolerance=0.0, **kw)) for _ in range(spec["runs"])]
 
 
-def _record(robot, res, target) -> dict:
+def _record(robot, res) -> dict:
     p = np.asarray(robot.positions_batch(res.q[None])[0])
     return {"error": float(res.position_error), "reached": p, "q": res.q.copy(),
             "displacement": float(np.abs(res.q).max()), "generations": int(res.generations),
@@ -101,8 +101,7 @@ def run(ctx: RunContext) -> PaperReport:
     for spec, out in zip(specs, ctx.map_parallel(_part, specs, "000 Table 2 / Figs. 3-6"), strict=True):
         results.setdefault(spec["t_cm"], {})[spec["method"]] = out
     for t_cm in TARGETS_CM:
-        res = solve(robot, np.array(t_cm) * CM, method="algebraic", q0=q_init)
-        results[t_cm]["AM"] = [_record(robot, res, np.array(t_cm) * CM)]
+        results[t_cm]["AM"] = [_record(robot, solve(robot, np.array(t_cm) * CM, method="algebraic", q0=q_init))]
 
     rows, paper_rows, summary = [], [], {}
     for t_cm in TARGETS_CM:

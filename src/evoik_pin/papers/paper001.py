@@ -83,16 +83,9 @@ def _order_like(reference_deg: list[tuple], ours: list[np.ndarray], cols=(0, 1))
     return out + left
 
 
-def _angles(q) -> list:
-    return [None] * 3 if q is None else [float(v) for v in np.degrees(q)]
-
-
 def _part(spec: dict) -> tuple[list[list[np.ndarray]], dict[int, np.ndarray]]:
-    """``spec["runs"]`` runs of ``ga`` or ``hga`` on one target (a top-level job for ``ctx.map_parallel``).
-
-    Returns the solutions (rad) each run returned and, when ``spec["history"]``, the first run's populations
-    by generation (from the GA's ``callback``).
-    """
+    """``spec["runs"]`` runs of ``ga`` or ``hga`` on one target (a top-level job for ``ctx.map_parallel``): the
+    solutions (rad) each run returned and, when ``spec["history"]``, the first run's populations by generation."""
     arm, k, method, cfg = spec["arm"], spec["k"], spec["method"], spec["cfg"]
     robot = load_robot(arm)
     target = np.array(spec["target"], float)
@@ -123,7 +116,8 @@ def _solutions_table(key: str, title: str, res: dict, method: str, runs: int, cl
     rows = []
     for t_cm, e in res.items():
         stats = {id(q): st for q, st in zip(e["reference"], e[method]["stats"], strict=True)}
-        rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q), *_angles(st["first_q"])[:len(q)], st["first_error"],
+        rows += [[tuple_text(t_cm, "g"), j + 1, *np.degrees(q),
+                  *([None] * len(q) if st["first_q"] is None else np.degrees(st["first_q"])), st["first_error"],
                   runs, st["found"], st["median_error"], st["max_error"]]
                  for j, q in enumerate(order(t_cm, e["reference"])) for st in [stats[id(q)]]]
     joints = [f"t{i} (deg)" for i in range(1, len(next(iter(res.values()))["reference"][0]) + 1)]
@@ -225,14 +219,10 @@ def run(ctx: RunContext) -> PaperReport:
     return report
 
 
-def _collect(res: dict, method: str) -> np.ndarray:
-    return np.concatenate([st["errors"] for e in res.values() for st in e[method]["stats"]])
-
-
 def _notes(res2r, resp, misses, runs) -> list[str]:
     notes = []
     for arm, res in (("planar 2R", res2r), ("PUMA", resp)):
-        h, g = _collect(res, "hga"), _collect(res, "ga")
+        h, g = (np.concatenate([st["errors"] for e in res.values() for st in e[m]["stats"]]) for m in ("hga", "ga"))
         n_sol = sum(len(e["reference"]) for e in res.values())
         notes.append(
             f"{arm}: HGA found {np.mean(h <= FOUND_DEG['hga']):.0%} of the {n_sol} closed-form solutions x {runs} runs "

@@ -132,31 +132,6 @@ def _classify(points: list[dict], distance=lambda i: 0.0) -> list[dict]:
     return points
 
 
-def _classify_full(robot, variants: dict[str, list[dict]], targets: np.ndarray, rng, starts: int) -> None:
-    """:func:`_classify` full-range spiral points, the check run once per point for all variants, starting from
-    the closest configuration any variant found."""
-
-    @cache
-    def distance(i: int) -> float:
-        closest = min((v[i] for v in variants.values()), key=lambda x: x["error"])
-        return min(closest["error"], least_squares_distance(robot, targets[i], robot.lower, robot.upper, rng, starts,
-                                                            closest["q"]))
-
-    for pts in variants.values():
-        _classify(pts, distance)
-
-
-def _classify_pro(robot, points: list[dict], targets: np.ndarray, rng, starts: int) -> None:
-    """:func:`_classify` Pro-variant points, the check confined to each point's Pro box (the first: full range)."""
-
-    def distance(i: int) -> float:
-        x0 = points[i - 1]["q"] if i > 0 else points[0]["q"]
-        lo, hi = pro_box(robot.lower, robot.upper, x0, DEFAULT_PRO_DELTA) if i > 0 else (robot.lower, robot.upper)
-        return least_squares_distance(robot, targets[i], lo, hi, rng, starts, x0)
-
-    _classify(points, distance)
-
-
 def _smoothness(points: list[dict]) -> dict:
     Q = np.array([p["q"] for p in points])
     dq = np.abs(np.diff(Q, axis=0))
@@ -211,9 +186,15 @@ def _job(spec: dict):
             out.append(_solve_point(robot, p, cfg, rng, rho=s["rho_runs_per_point"], fitness=fitness, q0=q_prev,
                                     bounds=bounds, a=s["a_first"] if i == 0 else 0.0))
             q_prev = out[-1]["q"]
-        if pro:
-            _classify_pro(robot, out, spec["targets"], derive_rng(spec["seed"], "002", "oracle", label),
-                          s["oracle_starts_pro"])
+        if pro:  # the reachability check confined to each point's Pro box (the first point's: full range)
+            oracle = derive_rng(spec["seed"], "002", "oracle", label)
+
+            def distance(i: int) -> float:
+                x0 = out[max(i - 1, 0)]["q"]
+                lo, hi = pro_box(robot.lower, robot.upper, x0, DEFAULT_PRO_DELTA) if i else (robot.lower, robot.upper)
+                return least_squares_distance(robot, spec["targets"][i], lo, hi, oracle, s["oracle_starts_pro"], x0)
+
+            _classify(out, distance)
     if kind != "table3":
         for pt in out:
             pt.pop("result", None)  # keep what crosses the process boundary small
@@ -254,8 +235,16 @@ def run(ctx: RunContext) -> PaperReport:
     s2_points = {n: outputs[("scenario2", n)] for n in METHODS}
     s2 = {n: _stats(_classify(pts), METHODS[n]["fitness"]) for n, pts in s2_points.items()}
     s3_points = {label: outputs[("scenario3", label)] for label, _, _ in variants}
-    _classify_full(robot, {k: s3_points[k] for k in METHODS}, p_s3, ctx.rng("002", "oracle", "full range"),
-                   s["oracle_starts"])
+    oracle = ctx.rng("002", "oracle", "full range")
+
+    @cache
+    def distance(i: int) -> float:  # run once per full-range point for all variants, from the closest found
+        closest = min((s3_points[k][i] for k in METHODS), key=lambda x: x["error"])
+        return min(closest["error"], least_squares_distance(robot, p_s3[i], robot.lower, robot.upper, oracle,
+                                                            s["oracle_starts"], closest["q"]))
+
+    for k in METHODS:
+        _classify(s3_points[k], distance)
     # averages over points 2..N: the first point carries eq. 21's a-term and cannot stop on the fitness value
     s3 = {label: {**_stats(s3_points[label][1:] or s3_points[label], fitness), **_smoothness(s3_points[label])}
           for label, _, fitness in variants}
@@ -333,7 +322,7 @@ def run(ctx: RunContext) -> PaperReport:
                     "Fig. 9 analogue: Scenario 3.2 (Pro-, previous +- pi/100) per spiral point"),
     ]
 
-    report.notes += _notes(s, t3, s1, s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed)
+    report.notes += _notes(s2, s3, floor, ulp) + _spiral_notes(s3_points, p_s3, ctx.seed, outside)
     report.data.update({
         "scenario1_target_m": p_s1, "scenario1_q_true": q_s1,
         "scenario2_targets_m": p_s2_pin, "scenario3_targets_m": p_s3,
@@ -375,13 +364,13 @@ def _seed_check(s3_points: dict, p_s3: np.ndarray, seed: int, runs: int = 3) -> 
             f"it, {out['unseeded']}/{runs} unseeded runs do.")
 
 
-def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int) -> list[str]:
-    out = sorted({i for k in METHODS for i, pt in enumerate(s3_points[k]) if pt["status"] == "no solution"})
+def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int, out: list[int]) -> list[str]:
+    """Notes on the spiral: the points ``out`` (indices) with no solution in the full ranges, misses, Pro- losses."""
     notes = []
     if out:
         z = p_s3[out, 2] / MM
         shoulder = np.linalg.norm(p_s3[out] - [0.0, 0.0, 500 * MM], axis=1)
-        robot = load_robot(ROBOT)
+        robot = _robot()
         at_limit = set()
         for i in out:  # joints at a limit in the closest configuration our full-range solvers found
             q = min((s3_points[k][i] for k in METHODS), key=lambda pt: pt["error"])["q"]
@@ -419,10 +408,10 @@ def _spiral_notes(s3_points: dict, p_s3: np.ndarray, seed: int) -> list[str]:
     return notes
 
 
-def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
+def _notes(s2, s3, floor, ulp) -> list[str]:
     iso, de, pso = s2["ISADE"], s2["DE"], s2["PSO"]
     p4 = PAPER_TABLE4
-    notes = [
+    return [
         f"Floating-point floor: NumPy and Pinocchio FK of the same joint vector differ by {np.median(floor):.1e} m "
         f"(median, max {floor.max():.1e} m), and doubles near these coordinates are spaced {ulp.min():.1e}-"
         f"{ulp.max():.1e} m apart: a fitness value of 1e-17 m (ISADE) means an exactly zero computed distance, and "
@@ -442,7 +431,6 @@ def _notes(s, t3, s1, s2, s3, floor, ulp) -> list[str]:
         "3.1 PSO; Table 5 prints Pro-ISADE's fitness value as 1e-12 m (Table 2: 1e-17 m); its ISADE errors (2e-14 m) "
         "sit above the 1e-17 m fitness value while its generations (85.6) sit below the 130 budget.",
     ]
-    return notes
 
 
 _COLORS = {"PSO": "tab:blue", "DE": "tab:orange", "ISADE": "tab:green"}

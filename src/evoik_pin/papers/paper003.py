@@ -63,13 +63,6 @@ def vehicle_path_lower_bound(P: np.ndarray, q_start: np.ndarray) -> float:
     return float(np.max(np.maximum(np.linalg.norm(wrists - q_start[:2], axis=1) - (LINKS[0] + LINKS[1]), 0.0)))
 
 
-def _trajectory_stats(Q: np.ndarray, q_start: np.ndarray) -> dict:
-    allq = np.vstack([q_start, Q])
-    veh = np.linalg.norm(np.diff(allq[:, :2], axis=0), axis=1)
-    arm = np.abs(np.diff(allq[:, 2:], axis=0)).sum(axis=1)
-    return {"vehicle_steps": veh, "vehicle_total": float(veh.sum()), "arm_steps": arm, "arm_total": float(arm.sum())}
-
-
 def _part(spec: dict) -> list:
     """One trajectory for one gain K (a top-level job for ``ctx.map_parallel``): the Result of every point."""
     K, cfg = spec["K"], spec["cfg"]
@@ -94,8 +87,11 @@ def run(ctx: RunContext) -> PaperReport:
              for K in GAINS for i in range(s["runs_per_gain"])]
     for spec, res in zip(specs, ctx.map_parallel(_part, specs, "003 trajectories (K x runs)"), strict=True):
         Q = np.array([r.q for r in res])
+        steps = np.diff(np.vstack([q_start, Q]), axis=0)  # into each point, the first from q_start
+        veh, arm_steps = np.linalg.norm(steps[:, :2], axis=1), np.abs(steps[:, 2:]).sum(axis=1)
         runs.setdefault(spec["K"], []).append({
-            "results": res, "Q": Q, **_trajectory_stats(Q, q_start),
+            "results": res, "Q": Q, "vehicle_steps": veh, "vehicle_total": float(veh.sum()), "arm_steps": arm_steps,
+            "arm_total": float(arm_steps.sum()),
             "position_error": np.array([r.position_error for r in res]),
             "orientation_error": np.array([r.orientation_error for r in res]), "feasible": all(r.success for r in res),
             "manipulability": np.array([robot.manipulability(q, rows="planar") for q in Q]),
@@ -117,15 +113,12 @@ def run(ctx: RunContext) -> PaperReport:
              "runs; steps from point 1 on (the step from q_start is in the path, not in the mean)."))
 
     bound = vehicle_path_lower_bound(P, q_start)
-    rows = []
-    for K in GAINS:
-        es = runs[K]
-        totals = np.array([e["vehicle_total"] for e in es])
-        rows.append([K, len(es), float(totals.mean()) / CM, float(totals.std(ddof=1)) / CM if len(es) > 1 else 0.0,
-                     mean_step[K] / CM, float(max(e["vehicle_steps"][1:].max() for e in es)) / CM, arm[K],
-                     float(np.mean([e["manipulability"].mean() for e in es])),
-                     float(max(e["position_error"].max() for e in es)), all(e["feasible"] for e in es),
-                     float(np.mean([e["time"] for e in es]))])
+    rows = [[K, len(es), tot[K] / CM,
+             float(np.std([e["vehicle_total"] for e in es], ddof=1)) / CM if len(es) > 1 else 0.0,
+             mean_step[K] / CM, float(max(e["vehicle_steps"][1:].max() for e in es)) / CM, arm[K],
+             float(np.mean([e["manipulability"].mean() for e in es])),
+             float(max(e["position_error"].max() for e in es)), all(e["feasible"] for e in es),
+             float(np.mean([e["time"] for e in es]))] for K, es in runs.items()]
     report.tables.append(Table(
         "gains", "Vehicle and arm motion along the path for each gain K on the vehicle coordinates",
         ["K (vehicle)", "runs", "vehicle path (cm)", "sd (cm)", "mean vehicle step (cm)", "max vehicle step (cm)",

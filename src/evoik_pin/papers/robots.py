@@ -1,7 +1,6 @@
 """The five papers' arms as DH tables (or joint lists), turned into the URDFs bundled in ``robots/``
-(``scripts/make_paper_robots.py`` writes :data:`PAPER_ROBOTS` there; a test compares). Lengths in m, angles in rad:
-the papers' centimetre and degree values are converted here, once.
-"""
+(``scripts/make_paper_robots.py`` writes :data:`PAPER_ROBOTS` there; a test compares). Lengths in m, angles in rad;
+the AX-18, 2R and PUMA lengths are the closed forms' (:mod:`evoik_pin.solvers.paper.analytic`)."""
 
 from __future__ import annotations
 
@@ -9,6 +8,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..solvers.paper.analytic import AX18, PLANAR2R, PUMA3R
 from .dh import DHRow, JointSpec, chain_to_urdf, dh_to_urdf, translation
 
 __all__ = ["PAPER_ROBOTS", "VEHICLE_ARM_LENGTHS", "paper_robot_urdf"]
@@ -19,7 +19,7 @@ _HALF_PI = np.pi / 2
 
 
 def _ax18() -> str:
-    d1, a1, a2, a3, d2, a4 = 4.36 * _CM, 6.75 * _CM, 17.23 * _CM, 6.3 * _CM, 2.0 * _CM, 11.7 * _CM
+    d1, a1, a2, a3, d2, a4 = (AX18[k] for k in ("d1", "a1", "a2", "a3", "d2", "a4"))
     rows = [
         DHRow(0.0, _HALF_PI, d1, kind="revolute", lower=-150 * _DEG, upper=150 * _DEG),
         DHRow(a1, 0.0, 0.0, kind="revolute", lower=-60 * _DEG, upper=240 * _DEG),
@@ -37,8 +37,8 @@ def _ax18() -> str:
 
 def _planar2r() -> str:
     rows = [
-        DHRow(25 * _CM, 0.0, 0.0, lower=-np.pi, upper=np.pi),
-        DHRow(16 * _CM, 0.0, 0.0, lower=-np.pi, upper=np.pi),
+        DHRow(PLANAR2R["a1"], 0.0, 0.0, lower=-np.pi, upper=np.pi),
+        DHRow(PLANAR2R["a2"], 0.0, 0.0, lower=-np.pi, upper=np.pi),
     ]
     return dh_to_urdf("planar2r", rows, "standard", comment=(
         "Paper 001: planar 2R elbow arm, a1 = 25 cm, a2 = 16 cm, limits +-180 deg, joints about z. "
@@ -46,7 +46,7 @@ def _planar2r() -> str:
 
 
 def _puma3r() -> str:
-    a2, d, a3, d4 = 43.18 * _CM, 14.90 * _CM, 2.03 * _CM, 43.30 * _CM
+    a2, d, a3, d4 = (PUMA3R[k] for k in ("a2", "d", "a3", "d4"))
     # Modified (Craig) DH of the PUMA 560 positioning chain. The tool row twists by +pi/2 (Craig: -pi/2)
     # so the d4 terms carry the signs of the paper's eq. 20: Px = C1 (S23 d4 + a3 C23 + a2 C2) - d S1, ...
     rows = [

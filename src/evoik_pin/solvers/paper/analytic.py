@@ -188,20 +188,19 @@ def _into_limits(Q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndar
 
 
 def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, upper=None,
-                   fk=None) -> list[AX18Solution]:
+                   fk=ax18_fk) -> list[AX18Solution]:
     """Paper 000's algebraic method for tool position ``p`` (3,) m: the tool pitch phi of least position error.
 
     Every branch of :func:`ax18_ik` (clamped to its reach, joints moved into ``lower``, ``upper``: default the
     servo ranges) on a phi grid of step ``phi_step`` (rad), the best refined within one step; ties in error go
-    to the least maximum displacement from ``q0`` (default zeros). ``fk``: vectorized ``(N, 4) -> (N, 3)``
-    (default :func:`ax18_fk`). Returns one :class:`AX18Solution` per branch, least error first.
+    to the least maximum displacement from ``q0`` (default zeros). ``fk``: vectorized ``(N, 4) -> (N, 3)``.
+    Returns one :class:`AX18Solution` per branch, least error first.
     """
     p = _point(p, 3, "ax18_algebraic")
     phi_step = check_positive("phi_step (at most pi/4)", phi_step, np.pi / 4, unit="rad")
     lower = AX18_LIMITS[0] if lower is None else np.asarray(lower, float)
     upper = AX18_LIMITS[1] if upper is None else np.asarray(upper, float)
     q0 = np.zeros(4) if q0 is None else np.asarray(q0, float)
-    fk = ax18_fk if fk is None else fk
 
     def branch_q(phi: float, b: int) -> np.ndarray:
         return _into_limits(_ax18_branches(p, np.array([phi]))[0][b, 0], lower, upper)
@@ -228,10 +227,8 @@ def ax18_algebraic(p, q0=None, phi_step: float = np.radians(0.5), lower=None, up
     return out
 
 
-#: Fixed joint vectors (rad) at which a loaded chain must match the closed form to be recognized.
+#: Fixed joint vectors (rad) at which a loaded chain must match the closed form (to 1e-9 m) to be recognized.
 _PROBES = np.array([[0.3, -0.7, 1.1, -0.4], [-1.2, 0.5, -0.2, 2.0], [2.5, 1.9, -2.2, 0.6]])
-#: Largest FK mismatch (m) tolerated between the loaded chain and the closed form.
-_MATCH_TOL = 1e-9
 
 
 def _closed_form_for(robot):
@@ -246,7 +243,7 @@ def _closed_form_for(robot):
         raise MethodError(f"method 'algebraic': robot {robot.name!r} has {robot.n} joints, its closed form {n}")
     probes = _PROBES[:, :n]
     mismatch = np.abs(robot.positions_batch(probes) - fk(probes)).max()
-    if mismatch > _MATCH_TOL:
+    if mismatch > 1e-9:
         raise MethodError(
             f"method 'algebraic': the loaded {robot.name!r} chain (tip {robot.tip!r}) does not match the paper's "
             f"closed form (forward kinematics differ by {mismatch:.3g} m); load the bundled robot unchanged"
@@ -308,10 +305,8 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
     if name == "planar2r":
         cands, exact = _planar2r_candidates(p[0], p[1], **PLANAR2R, clamp=True)
         exact = exact and not abs(p[2]) > 0
-        Q = np.array(cands)
     elif name == "puma3r":
         cands, exact = _puma_candidates(p, **PUMA3R, clamp=True)
-        Q = np.array(cands)
     else:
         def counted_fk(Q):
             problem.evaluations += Q.shape[0]  # the phi search's forward kinematics are evaluations too
@@ -319,8 +314,8 @@ def algebraic(problem: IKProblem, rng: np.random.Generator, *, phi_step: float =
 
         sols = ax18_algebraic(p, q0=problem.q0, phi_step=phi_step, lower=problem.lower, upper=problem.upper,
                               fk=counted_fk)
-        Q = np.array([s.q for s in sols])
-        exact = sols[0].position_error <= problem.tolerance
+        cands, exact = [s.q for s in sols], sols[0].position_error <= problem.tolerance
+    Q = np.array(cands)
     lo, hi = problem.lower, problem.upper
     Q = np.where(robot.revolute, lo + np.mod(Q - lo, 2 * np.pi), Q)
     inside = np.all((Q >= lo - 1e-12) & (Q <= hi + 1e-12), axis=1)

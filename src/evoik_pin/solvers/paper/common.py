@@ -14,7 +14,6 @@ from ..options import check_callback, check_choice, check_int, check_number
 __all__ = ["BOUND_HANDLING", "SolverRun", "diversity", "enforce_bounds", "halton", "initial_population",
            "run_with_restarts"]
 
-#: Accepted ``bound_handling`` option values.
 BOUND_HANDLING = ("clip", "reflect", "resample")
 
 
@@ -133,19 +132,13 @@ class SolverRun:
             self._best_pos = float(ev.position_error[i])
             self._best_rot = None if ev.orientation_error is None else float(ev.orientation_error[i])
 
-    @property
-    def best_succeeded(self) -> bool:
-        if self.best_q is None:
-            return False
-        if self.problem.target is None:  # every goal within its own tolerances (not the problem's)
-            return bool(self.problem.rows_met(self.best_q[None])[0])
-        return bool(self.problem.succeeded(self._best_pos, self._best_rot))
-
     def stop_reason(self) -> str | None:
         """Why to stop now, or None to go on."""
         if self._stopped_by_callback:
             return "stopped by callback"
-        if self.best_succeeded:
+        problem, q = self.problem, self.best_q
+        if q is not None and (problem.rows_met(q[None])[0] if problem.target is None  # every goal's own tolerances
+                              else problem.succeeded(self._best_pos, self._best_rot)):
             return "tolerance reached"
         if self.cost_tolerance is not None and self.best_cost <= self.cost_tolerance:
             return f"cost <= cost_tolerance ({self.cost_tolerance:g})"
@@ -163,11 +156,8 @@ class SolverRun:
         ev = problem.evaluate(q[None], count=False)
         pos = float(ev.position_error[0])
         rot = None if ev.orientation_error is None else float(ev.orientation_error[0])
-        success = bool(problem.succeeded(pos, rot))
-        goal_errors = None
-        if problem.target is None:  # every goal within its own tolerances
-            goal_errors = problem.goal_errors(q)
-            success = problem.goals_met(goal_errors)
+        goal_errors = None if problem.target is not None else problem.goal_errors(q)  # each within its own tolerances
+        success = bool(problem.succeeded(pos, rot)) if goal_errors is None else problem.goals_met(goal_errors)
         if not success:  # "tolerance reached" by the best's errors, not by "cost <= cost_tolerance (...)"
             message = ("stopped" if message == "tolerance reached" else message) + "; " + shortfall_text(
                 problem, pos, rot, goal_errors)
@@ -185,8 +175,7 @@ def run_with_restarts(solve_once, problem: IKProblem, runs: int, max_generations
     """Paper 002's rho (section 3.4): up to ``runs`` runs of ``solve_once(run)``, each on a fresh
     :class:`SolverRun` of the stopping options, until one meets the tolerances or is stopped by its callback;
     the best run's Result, with ``generations``, ``evaluations`` and ``time_s`` totals over the runs and
-    ``history`` their series concatenated, plus ``run`` (the run index of each entry).
-    """
+    ``history`` their series concatenated, plus ``run`` (the run index of each entry)."""
     runs = check_int("runs", runs)
     results = []
     for _ in range(runs):

@@ -31,7 +31,6 @@ __all__ = ["CROSSOVERS", "DE_MUTATIONS", "de", "greedy_selection", "parse_strate
 
 #: Mutations accepted by ``de``: paper 002's eight (also by number 1-8), paper 004's either-or, trigonometric.
 DE_MUTATIONS = (*MUTATIONS, "eitheror", "trig")
-#: Crossovers: binomial (``bin``) and exponential (``exp``).
 CROSSOVERS = ("bin", "exp")
 
 
@@ -71,13 +70,12 @@ def de(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, ma
        mutation: str | int = "best1", crossover: str = "bin", F: float = 0.5, CR: float = 0.9, p_F: float = 0.5,
        K: float | None = None, trig_probability: float = 0.05, bound_handling: str = "clip", runs: int = 10,
        callback: Callable | None = None) -> Result:
-    """Differential evolution over the joint vector, vectorized over the population.
-
-    Defaults follow paper 002 (Table 2): DE/best/1, F = 0.5, CR = 0.9, binomial crossover, 600 generations;
-    paper 004's are ``mutation="rand1"``, ``F=0.9``, ``CR=0.95``.
+    """Differential evolution over the joint vector, vectorized over the population. Defaults follow paper 002
+    (Table 2): DE/best/1, F = 0.5, CR = 0.9, binomial crossover, 600 generations; paper 004's are
+    ``mutation="rand1"``, ``F=0.9``, ``CR=0.95``.
 
     Args:
-        population: number of individuals N (>= the mutation's indices + 1).
+        population: N (>= the mutation's indices + 1).
         max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
             :class:`~.common.SolverRun` (``callback(generation, population)``, population (N, n)).
         strategy: scipy-style name (:func:`parse_strategy`); overrides ``mutation`` and ``crossover``.

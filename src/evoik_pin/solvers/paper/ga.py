@@ -73,15 +73,11 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
                    niching: bool = True, archive: list | None = None, callback: Callable | None = None
                    ) -> tuple[SolverRun, np.ndarray, np.ndarray]:
     """Paper 001's real-coded GA for exactly ``max_generations`` generations (stopping at the first solution
-    would cut the other families short); returns the run and the final population (N, n) with its costs (N,).
-
-    Options as in :func:`ga` (checked here, for ``ga`` and ``hga``; ``niche_size`` None: paper 001's proportion,
-    n* = 200 per 750 individuals), niche distances measured in the unit hypercube of the bounds; ``archive`` (a
-    list) receives ``(Q, cost)`` of every generation; ``callback(generation, Q)``'s return value is ignored.
-    History adds ``mutation_probability`` (p_m of eq. 11) and ``mean_niche_count``.
-    """
+    would cut the other families short), options as in :func:`ga` and checked here; ``archive`` (a list) receives
+    ``(Q, cost)`` of every generation. Returns the run (history adds ``mutation_probability``, p_m of eq. 11, and
+    ``mean_niche_count``) and the final population (N, n) with its costs (N,)."""
     population = check_int("population", population, 4)
-    max_generations = check_int("max_generations", max_generations, 0)
+    run = SolverRun(problem, max_generations)
     niches = check_int("niches", niches, 1)
     niche_size = check_positive("niche_size (n*)", 200.0 * population / 750.0 if niche_size is None else niche_size)
     eta = check_nonnegative("eta (SBX distribution index)", eta)
@@ -90,7 +86,6 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
     n, lo, hi = problem.n, problem.lower, problem.upper
     scale = np.where(hi > lo, hi - lo, 1.0)
     sigma = sharing_radius(n, niches)
-    run = SolverRun(problem, max_generations)
     Q, p_m, half = initial_population(problem, rng, population), 1.0 / n, (population + 1) // 2
     while True:
         ev = problem.evaluate(Q)
@@ -100,7 +95,7 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
             archive.append((Q, ev.cost))
         if callback is not None:
             callback(run.generation, Q.copy())
-        if run.generation >= max_generations:
+        if run.generation >= run.max_generations:
             break
         t = run.generation
         winners = niching_tournament(ev.cost, nc, niche_size, rng.integers(0, population, (2 * half, 2)), niching)
@@ -109,7 +104,7 @@ def run_niching_ga(problem: IKProblem, rng: np.random.Generator, population: int
         cross = (rng.random(half) < crossover_probability)[:, None]
         children = np.concatenate([np.where(cross, C1, P1), np.where(cross, C2, P2)])[:population]
         # Eq. 11 (Deb 2000): p_m grows from 1/n to 1 while eta_m = 100 + t shrinks the perturbation.
-        p_m = 1.0 / n + (t / max(max_generations, 1)) * (1.0 - 1.0 / n)
+        p_m = 1.0 / n + (t / max(run.max_generations, 1)) * (1.0 - 1.0 / n)
         mask = rng.random(children.shape) < p_m
         Q = np.clip(basic_polynomial_mutation(children, lo, hi, 100.0 + t, mask, rng.random(children.shape)), lo, hi)
         run.generation += 1
@@ -125,16 +120,15 @@ def ga(problem: IKProblem, rng: np.random.Generator, *, population: int = 750, m
     """Paper 001's real-coded niching GA (section 3.1; defaults: its planar 2R settings, Table 1).
 
     Options:
-        population: individuals. max_generations: generations, always all run.
-        niches: expected number of solutions r, sets sigma_share (eq. 8).
+        max_generations: always all run. niches: expected number of solutions r, sets sigma_share (eq. 8).
         niche_size: n*, niche-count threshold of the tournament (default 200 x population / 750).
         eta: SBX distribution index. crossover_probability: per pair of parents.
         niching: False gives a plain binary tournament.
         cluster_radius: joint-space radius (rad, wrapped) grouping the final population into solutions.
         min_niche_fraction: share of the population a cluster needs to count as a solution.
         max_solutions: at most this many niche leaders are returned, best first.
-        callback: ``callback(generation, population)`` with a copy of the (N, n) population after every
-            generation (0 = initial); its return value is ignored.
+        callback: ``callback(generation, population)`` after every generation (0 = initial), a copy of the
+            (N, n) population; its return value is ignored.
 
     Returns:
         :class:`Result` with ``q`` the best individual and ``solutions`` one Result per populated niche, best
@@ -186,22 +180,17 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
               max_generations: int = 400, bits: int = 9, encoding: str = "sign-magnitude",
               crossover_probability: float = 0.9, mutation_probability: float | None = None,
               fitness_scale: float = 0.01) -> Result:
-    """Paper 000's binary GA (section III-B; defaults are its settings).
-
-    Options:
-        population: chromosomes per generation. elite: best chromosomes kept unchanged each generation.
-        max_generations: stops earlier when the best meets the tolerances.
-        bits: bits per joint. encoding: ``"sign-magnitude"`` (the paper's, revolute joints only) or
-            ``"bounds"`` (unsigned, linear over each joint's bounds); decoded values are clipped into the bounds.
-        crossover_probability: single-point crossover per pair. mutation_probability: per bit (default 1 /
-            chromosome length).
-        fitness_scale: roulette fitness ``exp(-cost / fitness_scale)`` (0.01 m: the paper's error in cm).
-    """
+    """Paper 000's binary GA (section III-B; defaults are its settings), stopped early when the best meets the
+    tolerances. ``elite``: best chromosomes kept unchanged each generation; ``bits`` per joint; ``encoding``
+    ``"sign-magnitude"`` (the paper's, revolute joints only) or ``"bounds"`` (unsigned, linear over each joint's
+    bounds), decoded values clipped into the bounds; ``crossover_probability`` of single-point crossover per pair;
+    ``mutation_probability`` per bit (default 1 / chromosome length); roulette fitness ``exp(-cost /
+    fitness_scale)`` (0.01 m: the paper's error in cm)."""
     population = check_int("population", population, 2)
     elite = check_int("elite", elite, 0)
     if elite >= population:
         raise OptionError(f"elite must be smaller than population ({population}) so offspring are made, got {elite}")
-    max_generations = check_int("max_generations", max_generations, 0)
+    run = SolverRun(problem, max_generations)
     bits = check_int("bits (per joint)", bits, 2, 62)
     check_choice("encoding", encoding, ENCODINGS)
     if encoding == "sign-magnitude" and not problem.robot.revolute.all():
@@ -213,8 +202,6 @@ def ga_binary(problem: IKProblem, rng: np.random.Generator, *, population: int =
     p_bit = 1.0 / length if mutation_probability is None else check_fraction("mutation_probability",
                                                                               mutation_probability)
     fitness_scale = check_positive("fitness_scale", fitness_scale, unit="m")
-
-    run = SolverRun(problem, max_generations)
     G = rng.integers(0, 2, size=(population, length), dtype=np.uint8)
     if problem.q0 is not None and encoding == "bounds":  # seed q0 as the other solvers do
         k = np.rint((np.clip(problem.q0, lo, hi) - lo) / np.where(hi > lo, hi - lo, 1.0) * (2 ** bits - 1))

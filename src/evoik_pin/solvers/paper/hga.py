@@ -22,21 +22,18 @@ __all__ = ["nelder_mead_polish"]
 
 def nelder_mead_polish(problem: IKProblem, q: np.ndarray, simplex_size: float = 0.05, xatol: float = 1e-10,
                        fatol: float = 1e-13, max_evaluations: int = 2000) -> np.ndarray:
-    """Nelder-Mead from ``q`` (n,) on the problem's cost, inside the search box; returns the polished q.
-
-    The initial simplex is ``q`` plus ``simplex_size`` (rad or m) along each joint axis (inwards at an upper
-    bound): it spans the GA's niche, where scipy's default 5 % of |q| collapses for joints near zero.
-    """
+    """Nelder-Mead from ``q`` (n,) on the problem's cost, inside the search box; returns the polished q. The
+    initial simplex is ``q`` plus ``simplex_size`` (rad or m) along each joint axis (inwards at an upper bound): it
+    spans the GA's niche, where scipy's default 5 % of |q| collapses for joints near zero."""
     lo, hi = problem.lower, problem.upper
     q = np.clip(np.asarray(q, float), lo, hi)
-    # A revolute joint whose box is a full turn has no real bound: -pi and +pi are the same angle. Leave it
-    # unbounded for the simplex (a solution at -170 deg reached from +179 deg must not stop on +180) and
-    # wrap the result back into the box.
+    # A revolute joint whose box is a full turn has no real bound (a solution at -170 deg reached from +179 deg
+    # must not stop on +180): unbounded for the simplex, the result wrapped back into the box.
     full_turn = problem.robot.revolute & (hi - lo >= 2 * np.pi - 1e-9)
     simplex = np.vstack([q, q + np.diag(np.where(full_turn | (q + simplex_size <= hi), simplex_size, -simplex_size))])
     simplex = np.where(full_turn, simplex, np.clip(simplex, lo, hi))
     bounds = [(None, None) if f else (a, b) for f, a, b in zip(full_turn, lo, hi, strict=True)]
-    from scipy.optimize import minimize  # lazy: importing scipy.optimize costs ~0.4 s
+    from scipy.optimize import minimize  # lazy: scipy.optimize is slow to import
 
     res = minimize(lambda x: float(problem.cost(x[None])[0]), q, method="Nelder-Mead", bounds=bounds,
                    options={"initial_simplex": simplex, "xatol": xatol, "fatol": fatol,

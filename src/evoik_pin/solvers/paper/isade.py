@@ -32,10 +32,8 @@ def sigmoid_by_rank(N: int, alpha: float) -> np.ndarray:
 def rank_scale_factors(costs: np.ndarray, alpha: float, table: np.ndarray | None = None) -> np.ndarray:
     """Eq. 17 per individual (N,): the sigmoid of its fitness rank, best (i = 1, largest F) to worst, ties in
     index order; ``table`` = ``sigmoid_by_rank(N, alpha)`` may be passed to save its cost."""
-    if table is None:
-        table = sigmoid_by_rank(costs.shape[0], alpha)
     F = np.empty(costs.shape[0])
-    F[np.argsort(costs, kind="stable")] = table
+    F[np.argsort(costs, kind="stable")] = sigmoid_by_rank(costs.shape[0], alpha) if table is None else table
     return F
 
 
@@ -93,16 +91,14 @@ def isade(problem: IKProblem, rng: np.random.Generator, *, population: int = 60,
     want a wider F (``F_max=0.9, F_min=0.3, n_iter=2``) and more generations.
 
     Args:
-        population: number of individuals N (>= 6).
+        population: N (>= 6).
         max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
             :class:`~.common.SolverRun`; ``max_generations`` also sets the F schedule (eq. 18).
-        F_min, F_max: bounds of the mean scale factor (eq. 18), 0 < F_min <= F_max <= 2.
-        n_iter: nonlinear modulation index of eq. 18 (> 0).
+        F_min, F_max, n_iter: bounds (0 < F_min <= F_max <= 2) and modulation index (> 0) of eq. 18's mean F.
         alpha: gain of the rank sigmoid (eq. 17), >= 0 (0 gives F_i = 0.5 for everyone).
-        tau: probability of re-drawing an individual's CR (eq. 20).
-        CR_init: every individual's crossover rate at the start, in [0, 1].
-        CR_low: lower end of the uniform re-draw of eq. 20 (the paper: 0; low rates barely move a
-            non-separable IK objective), in [0, 1].
+        tau, CR_init: probability of re-drawing an individual's CR (eq. 20); every CR at the start.
+        CR_low: lower end of eq. 20's uniform re-draw (the paper: 0; low rates barely move a non-separable IK
+            objective).
         learning_period: generations between updates of the strategy probabilities.
         bound_handling: ``clip``, ``reflect`` or ``resample`` (:func:`~.common.enforce_bounds`).
         runs: paper 002's rho (:func:`~.common.run_with_restarts`).
@@ -135,8 +131,7 @@ def isade(problem: IKProblem, rng: np.random.Generator, *, population: int = 60,
         c_jrand, c_strategy, c_tau, c_cr, c_perm, c_offsets = D, D + 1, D + 2, D + 3, D + 4, D + 5
         while (reason := run.stop_reason()) is None:
             g = run.generation + 1
-            # One uniform draw serves the generation: crossover (N x D), the crossover's forced coordinate,
-            # the strategy choice, the CR adaptation (3 x N) and the index sampling (2 x N).
+            # one uniform draw: crossover (N x D), its forced coordinate, strategy, CR (3 x N), indices (2 x N)
             u = rng.random((N, D + 6))
             E = np.empty((N, 5), dtype=np.intp)
             E[:, :4] = permutation_indices(u[:, c_perm], u[: N - 1, c_offsets], 4)

@@ -91,7 +91,6 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
         ``w1``, ``w2``, ``best_fitness`` (least weighted cost), ``best_position_error`` m, ``best_displacement`` rad.
     """
     population = check_int("population", population, 5)
-    max_generations = check_int("max_generations", max_generations, 0)
     check_choice("variant", variant, tuple(VARIANTS))
     M = check_fraction("mutation_probability", mutation_probability)
     Cr = check_fraction("crossover_rate", crossover_rate)
@@ -146,10 +145,9 @@ def mode(problem: IKProblem, rng: np.random.Generator, *, population: int = 150,
             archive = _merge_front(archive, trial, raw_t, front_size)
             better = F_t @ w <= cost[changed]
             rows = np.nonzero(changed)[0][better]
-            X[rows], Fx[rows], pos, disp = trial[better], F_t[better], pos.copy(), disp.copy()
+            X[rows], Fx[rows] = trial[better], F_t[better]
             pos[rows], disp[rows] = ev_t.position_error[better], raw_t[better, 1]
             if rot is not None:
-                rot = rot.copy()
                 rot[rows] = ev_t.orientation_error[better]
             cost = Fx @ w
         best = int(np.argmin(pos))

@@ -182,11 +182,10 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
                           task=(lambda Q: goal_task(problem, Q)) if goals else None)
 
     init = initial_population(problem, rng, population)
-    best_pick: list[float] = []
 
     def callback(g, X, F, cv):
         ok = cv <= 0
-        best_pick.append(float(F[ok, pick].min()) if ok.any() else np.nan)
+        run.history["best_cost"].append(float(F[ok, pick].min()) if ok.any() else np.nan)
         run.history["mean_cost"].append(float(np.mean(F[:, pick])))
         run.history["diversity"].append(diversity(X, problem.lower, problem.upper))
 
@@ -200,7 +199,6 @@ def nsga2(problem: IKProblem, rng: np.random.Generator, *, population: int = 200
     feasible = order[out.violation[order] <= 0]
     chosen = feasible[np.argmin(out.F[feasible, pick])] if feasible.size else order[np.argmin(out.violation[order])]
     run.best_q = out.X[chosen].copy()
-    run.history["best_cost"] = best_pick
     run.history.update({key: list(v) for key, v in out.history.items()})
     message = f"{max_generations} generations; " + (
         f"{len(order)} point(s) on the front, all feasible" if feasible.size

@@ -97,17 +97,13 @@ def nsga2_minimize(f: Callable, lower, upper, n_obj: int, rng: np.random.Generat
     Args:
         f: vectorized ``f(X)`` for a population X (N, n): objectives (N, n_obj), or a pair
             ``(objectives, violation)`` with violation (N,) >= 0 (0 = feasible) for constrained problems.
-        lower, upper: (n,) finite bounds.
-        n_obj: number of objectives.
-        rng: the only source of randomness.
-        population: N (even numbers pair up exactly). generations: offspring generations.
+        lower, upper: (n,) finite bounds. population: N (even numbers pair up exactly).
         eta_c, eta_m: distribution indices of SBX and polynomial mutation (15, 20: pymoo's defaults).
-        crossover_probability: per pair (0.9). mutation_probability: per variable (default 1/n).
-        initial: optional (N0, n) points for the first population (the rest uniform in the box).
-        repair: optional ``repair(X) -> X`` applied to every new point before evaluation (and to the
-            initial population), e.g. projecting onto an equality constraint.
-        callback: optional ``callback(generation, X, F, violation)`` with the survivors of every generation
-            (generation 0: the initial population).
+        crossover_probability: per pair. mutation_probability: per variable (default 1/n).
+        initial: (N0, n) points for the first population (the rest uniform in the box).
+        repair: ``repair(X) -> X`` applied to every new point before evaluation (and to the initial
+            population), e.g. projecting onto an equality constraint.
+        callback: ``callback(generation, X, F, violation)`` with the survivors of every generation (0: initial).
         eliminate_duplicates: breed again (up to 10 rounds, before ``repair`` and evaluation) the offspring that
             duplicate a population member or each other, as pymoo does.
 

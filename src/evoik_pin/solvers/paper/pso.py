@@ -19,7 +19,6 @@ from .common import BOUND_HANDLING, SolverRun, enforce_bounds, initial_populatio
 
 __all__ = ["RANDOM_FACTORS", "TOPOLOGIES", "inertia_weight", "pso", "pso_step", "ring_best"]
 
-#: Accepted ``topology`` values.
 TOPOLOGIES = ("global", "ring")
 #: Accepted ``random_factors`` values: how r1, r2 of eq. 11 are drawn.
 RANDOM_FACTORS = ("per-coordinate", "per-particle")
@@ -58,12 +57,10 @@ def pso(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, m
     """Particle swarm optimization over the joint vector, vectorized over the swarm (paper 002, eq. 11).
 
     Args:
-        population: number of particles N (>= 2).
-        max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
+        population: N (>= 2). max_generations, stall_generations, cost_tolerance, callback: the stopping rules of
             :class:`~.common.SolverRun`; ``max_generations`` also sets the inertia schedule.
-        w_start, w_end: inertia weight at the first and the last iteration (linear in between).
-        c1, c2: cognitive and social coefficients.
-        velocity_clamp: velocity limit as a fraction of each joint's search range, in (0, 1].
+        w_start, w_end: inertia weight at the first and the last iteration (linear in between); c1, c2: cognitive
+            and social coefficients; velocity_clamp: velocity limit as a fraction of each joint's range, (0, 1].
         topology: ``global`` (paper 002: the swarm's best guides) or ``ring`` (the best personal best among a
             particle and its two ring neighbours guides it, which slows the swarm's collapse).
         random_factors: ``per-coordinate`` (r1, r2 per particle and joint, eq. 11) or ``per-particle`` (one
@@ -75,8 +72,7 @@ def pso(problem: IKProblem, rng: np.random.Generator, *, population: int = 30, m
             ``reflect`` or ``resample`` (:func:`~.common.enforce_bounds`).
         runs: paper 002's rho (:func:`~.common.run_with_restarts`).
 
-    Returns:
-        A :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
+    Returns a :class:`Result` whose ``history`` adds the inertia weight ``w`` per iteration.
     """
     N = check_int("population", population, 2)
     w_start, w_end = (check_nonnegative(k, v, 2.0) for k, v in (("w_start", w_start), ("w_end", w_end)))
