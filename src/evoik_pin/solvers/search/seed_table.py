@@ -18,7 +18,7 @@ from ...lie import rpy
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
-           "load_goal_helpers", "nearest_first", "one_frame", "seed_table"]
+           "load_goal_helpers", "nearest_first", "nearest_order", "one_frame", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
@@ -247,10 +247,8 @@ class SeedTable:
         for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
             if goal.has_orientation and goal.has_position and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
                 s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
-                p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
-                R = Rt[g] @ R_f.T
-                base = np.concatenate([pt[g] - R @ p_f, rpy(R)[0, ::-1]])  # x, y, z, yaw, pitch, roll
-                return np.minimum(np.maximum(base, problem.lower[:6]), problem.upper[:6])
+                return base_onto(pt[g], Rt[g], F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight),
+                                 problem.lower, problem.upper)
         return None
 
     def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -432,6 +430,15 @@ def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
     return float(np.median(D.min(axis=1)))
 
 
+def base_onto(p_t: np.ndarray, R_t: np.ndarray, p_f: np.ndarray, R_f: np.ndarray, lower: np.ndarray,
+              upper: np.ndarray) -> np.ndarray:
+    """The floating base's six entries (x, y, z m, yaw, pitch, roll rad; clipped into ``lower[:6]``, ``upper[:6]``)
+    that put a frame whose pose relative to the base is (p_f (3,) m, R_f (3, 3)) on the target (p_t (3,) m, R_t)."""
+    R = R_t @ R_f.T
+    base = np.concatenate([p_t - R @ p_f, rpy(R)[0, ::-1]])
+    return np.minimum(np.maximum(base, lower[:6]), upper[:6])
+
+
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Targets pt (G, 3), Rt (G, 3, 3) seen from a floating base's pose (:func:`~.nearest.seen_from`)."""
     from .nearest import seen_from  # numba, loaded on first use (as the kernel is)
@@ -470,18 +477,23 @@ def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTa
 
 
 def nearest_first(d: np.ndarray, k: int):
-    """Indices of the (up to) ``k`` smallest of ``d`` (N,), smallest first, lazily: the first (the argmin) costs one
-    pass, the others are ranked only if asked for."""
-    k = min(k, d.shape[0])
-    if k <= 0:
+    """:func:`nearest_order` lazily: the first (the argmin) costs one pass, the others are ranked only if asked for."""
+    if min(k, d.shape[0]) <= 0:
         return
+    yield int(d.argmin())
+    if k > 1 and d.shape[0] > 1:
+        yield from nearest_order(d, k)[1:].tolist()
+
+
+def nearest_order(d: np.ndarray, k: int) -> np.ndarray:
+    """Indices of the (up to) ``k`` smallest of ``d`` (N,), smallest first: the argmin, then the others by value."""
+    k = min(k, d.shape[0])
+    if k <= 1:
+        return np.array([int(d.argmin())] if k == 1 else [], dtype=np.intp)
     first = int(d.argmin())
-    yield first
-    if k > 1:
-        part = np.argpartition(d, k - 1)[:k]
-        for i in part[d[part].argsort()]:
-            if i != first:
-                yield int(i)
+    part = np.argpartition(d, k - 1)[:k]
+    ranked = part[d[part].argsort()]
+    return np.concatenate(([first], ranked[ranked != first]))
 
 
 def one_frame(problem) -> bool:
