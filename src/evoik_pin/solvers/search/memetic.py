@@ -146,8 +146,7 @@ class MemeticSetup:
         self._entry: tuple = (None, None, None)  # (engine arguments, table, guaranteed_runs's compiled entry)
         self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
         self._goal_entries: list[tuple] = []  # the same for goal_guaranteed_runs (several goals), newest first
-        # guaranteed_runs' scratch: each run's error, the goal's errors, a q0 never read, the best failed run's q and
-        # numbers
+        # guaranteed_runs' scratch: each run's error, the goal's errors, a q0 never read, the best run's q and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
                          np.empty(6))
 
@@ -179,10 +178,8 @@ class MemeticSetup:
                         goal_list: bool = False) -> tuple[tuple, float]:
         """(:func:`~.guaranteed_runs.guaranteed_runs`, or with ``goal_list``
         :func:`~.guaranteed_runs.goal_guaranteed_runs`, in the variant of ``lm``'s kernel, on ``args``; the seconds
-        spent loading it: set-up). The first time in the process it is compiled (once per install, with a notice) or
-        loaded from numba's cache. Once the engine's arguments stay (from the setup's second solve on; a goal list's
-        engine owning its arrays), numba's compiled entry is kept per engine arguments and table (the last
-        ``KEPT_ENGINES``) and called directly, without typing every argument."""
+        spent loading it: set-up). Once the engine's arguments stay, numba's compiled entry is kept per engine
+        arguments and table (the last ``KEPT_ENGINES``) and called directly."""
         kept = self._goal_entries if goal_list else self._entries
         current = self._entry
         if not goal_list and current[2] is not None and current[0] is lm._args and current[1] is table:
@@ -194,7 +191,7 @@ class MemeticSetup:
                     self._entry = entry
                 return entry[2](*args), 0.0
         t = time.perf_counter()
-        from . import guaranteed_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
+        from . import guaranteed_runs as compiled  # its module and numba's imports: set-up too
 
         extra = later_kinds(lm.goals)  # the variant of the engine's kernel
         which = "goal_guaranteed_runs" if goal_list else "guaranteed_runs"
@@ -337,8 +334,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    # the kernel's errors of the best run, at q, trusted where they are Goal.errors' (its success test's numbers);
-    # a kinematics pass otherwise
+    # the best run's kernel errors where they are Goal.errors' (its success test's numbers), else a kinematics pass
     goal_errors = (kernel_goal_errors(problem.goals, search.best) if single or (
         search.best.goal_errors is not None and all(g.on_one_frame for g in problem.goals))
         else problem.goal_errors(q))

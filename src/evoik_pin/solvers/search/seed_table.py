@@ -160,10 +160,8 @@ class SeedTable:
         d += f @ f
         return d
 
-    def distances(self, key, f: np.ndarray) -> np.ndarray:
-        """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of
-        :meth:`frame_features` ``key`` (or of those features)."""
-        ff = key if isinstance(key, FrameFeatures) else self.frame_features(key)
+    def distances(self, ff: FrameFeatures, f: np.ndarray) -> np.ndarray:
+        """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of ``ff``."""
         return _less_norm(ff.F, ff.sq, f)
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
@@ -189,7 +187,7 @@ class SeedTable:
         self._goal_parts(goals)
         if len(goals) > 1:
             load_goal_helpers()
-        if "sets" not in _RANKING_LOADED and any(g.alternatives is not None for g in goals):
+        if "sets" not in _LOADED and any(g.alternatives is not None for g in goals):
             from ..lm.compiling import load
             from .nearest import table_distances_many
 
@@ -197,7 +195,7 @@ class SeedTable:
             load("the seed table's rankings for goal sets", [(table_distances_many, (
                 one, np.zeros(1, dtype=np.float32), one.copy(), np.empty((1, 1), dtype=np.float32)))],
                  RANKING_COMPILE_SECONDS)
-            _RANKING_LOADED.append("sets")
+            _LOADED.append("sets")
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
         """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed starts and table entries
@@ -382,13 +380,10 @@ class SeedTable:
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
 
 
-_GOAL_HELPERS_LOADED: list = []  # [True] once load_goal_helpers has run in this process
-
-
 def load_goal_helpers() -> None:
     """Load (once per process; after an install: compile) the compiled helpers a goal list's starts call, before a
     solve's clock."""
-    if _GOAL_HELPERS_LOADED:
+    if "lists" in _LOADED:
         return
     from ..lm.compiling import load
     from .nearest import nearest_per_goal, rank_goal_entries, seen_from
@@ -401,7 +396,7 @@ def load_goal_helpers() -> None:
         (nearest_per_goal, (FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
                             np.empty((1, 1), dtype=np.int64))),
         (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))], RANKING_COMPILE_SECONDS)
-    _GOAL_HELPERS_LOADED.append(True)
+    _LOADED.append("lists")
 
 
 def _kept(cache: dict, key, value, most: int = 8):
@@ -413,8 +408,7 @@ def _kept(cache: dict, key, value, most: int = 8):
 
 
 def _less_norm(F: np.ndarray, sq: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """``sq - 2 F f`` (N,): the squared distances of rows F (N, d), squared norms sq (N,), to f (d,) less ``|f|^2``;
-    in place (negation is exact: the same numbers as the formula, two fewer (N,) arrays)."""
+    """``sq - 2 F f`` (N,): the squared distances of rows F (N, d), squared norms sq (N,), to f (d,) less ``|f|^2``."""
     d = F @ f
     d *= -2.0
     d += sq
@@ -450,7 +444,7 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
 
 
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
-_RANKING_LOADED: list = []  # the compiled rankings prepare_goals has loaded in this process ("sets")
+_LOADED: list = []  # the compiled rankings loaded in this process: "lists" (load_goal_helpers), "sets" (prepare_goals)
 #: About how long (s, one core) compiling the goal lists' rankings (nearest.py) takes from an empty cache.
 RANKING_COMPILE_SECONDS = 1.0
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
