@@ -99,8 +99,6 @@ class _Pool:
     def merged(self, *others: _Pool) -> _Pool:
         """This pool and ``others`` in one, best first; equal costs in the order given (a stable sort, as
         ``sorted``)."""
-        if not others:
-            return self.take(np.argsort(self.costs, kind="stable"))
         parts = (self, *others)
         costs = np.concatenate([p.costs for p in parts])
         order = np.argsort(costs, kind="stable")

@@ -97,14 +97,10 @@ def euler_flips(robot, frame: str | None) -> tuple[tuple[int, float], ...]:
         if not moving[i:i + 3].all():
             continue
         for m in (0.0, np.pi):
-            ok = True
-            for q, T in zip(Q, poses, strict=True):
-                F = robot.frame_poses_unchecked(flipped(q[None], ((i, m),))[0], [fid])[0]
-                if (np.linalg.norm(F.translation - T.translation) > FLIP_TOLERANCE
-                        or np.linalg.norm(pin.log3(T.rotation.T @ F.rotation)) > FLIP_TOLERANCE):
-                    ok = False
-                    break
-            if ok:
+            moved = (robot.frame_poses_unchecked(q, [fid])[0] for q in flipped(Q, ((i, m),)))
+            if not any(np.linalg.norm(F.translation - T.translation) > FLIP_TOLERANCE
+                       or np.linalg.norm(pin.log3(T.rotation.T @ F.rotation)) > FLIP_TOLERANCE
+                       for F, T in zip(moved, poses, strict=True)):
                 flips.append((i, m))
                 break
     cache[frame] = tuple(flips)

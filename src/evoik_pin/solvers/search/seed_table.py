@@ -18,7 +18,7 @@ from ...lie import rpy
 from ..paper.common import halton
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
-           "load_goal_helpers", "nearest_first", "nearest_order", "one_frame", "seed_table"]
+           "kept_per_robot", "load_goal_helpers", "nearest_first", "nearest_order", "one_frame", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
@@ -459,15 +459,21 @@ def default_table_size(n: int) -> int:
 def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTable:
     """The cached :class:`SeedTable` of ``robot`` over [lower, upper] (built on first use; the last few boxes kept
     per robot)."""
-    per_robot = _TABLES.setdefault(robot, {})
-    key = (lower.tobytes(), upper.tobytes(), int(size))
-    table = per_robot.get(key)
-    if table is None:
-        table = SeedTable(robot, lower, upper, size)
-        if len(per_robot) >= _TABLES_PER_ROBOT:
+    return kept_per_robot(_TABLES, robot, (lower.tobytes(), upper.tobytes(), int(size)),
+                          lambda: SeedTable(robot, lower, upper, size), _TABLES_PER_ROBOT)
+
+
+def kept_per_robot(store: weakref.WeakKeyDictionary, robot, key, make, most: int):
+    """``store``'s value for ``robot`` and ``key``, made by ``make()`` on first use (None: none is made, None
+    returned) and kept with the robot's last ``most`` others."""
+    per_robot = store.setdefault(robot, {})
+    value = per_robot.get(key)
+    if value is None and make is not None:
+        value = make()
+        if len(per_robot) >= most:
             per_robot.pop(next(iter(per_robot)))
-        per_robot[key] = table
-    return table
+        per_robot[key] = value
+    return value
 
 
 def nearest_first(d: np.ndarray, k: int):

@@ -14,7 +14,7 @@ import numpy as np
 from ...goals.center_of_mass import KIND_COM_SUPPORT
 from ...goals.pose import KIND_POSE
 from ...goals.registry import KIND_BEYOND_FRAME
-from .seed_table import base_onto, seed_targets
+from .seed_table import base_onto, kept_per_robot, seed_targets
 
 __all__ = ["STANCE_TABLE_SIZE", "StanceTable", "stance_indices", "stance_key", "stance_starts", "stance_table"]
 
@@ -166,18 +166,10 @@ def stance_table(problem, make: bool = True) -> tuple[StanceTable, tuple[int, ..
     stance = stance_indices(problem.goals)
     if stance is None:
         return None
-    key = stance_key(problem, stance)
     with _MAKING:  # solve_many's threads: one table made per stance, the cache changed by one at a time
-        per_robot = _TABLES.setdefault(robot, {})
-        table = per_robot.get(key)
-        if table is None:
-            if not make:
-                return None
-            table = StanceTable(problem, stance)
-            if len(per_robot) >= TABLES_PER_ROBOT:
-                per_robot.pop(next(iter(per_robot)))
-            per_robot[key] = table
-    return table, stance
+        table = kept_per_robot(_TABLES, robot, stance_key(problem, stance),
+                               (lambda: StanceTable(problem, stance)) if make else None, TABLES_PER_ROBOT)
+    return None if table is None else (table, stance)
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
