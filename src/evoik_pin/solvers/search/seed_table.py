@@ -15,7 +15,9 @@ from ...goals.registry import KIND_BEYOND_FRAME
 from ...goals.relative_pose import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
 from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW
 from ...lie import rpy
+from ..lm import compiling
 from ..paper.common import halton
+from .nearest import nearest_per_goal, rank_goal_entries, seen_from, table_distances_many
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
            "kept_per_robot", "load_goal_helpers", "nearest_first", "nearest_order", "one_frame", "seed_table"]
@@ -168,8 +170,6 @@ class SeedTable:
         """:meth:`ranked` for a goal list (``problem.goals``): nearest in the goals' weighted summed nearness, each
         goal's frame posed by the entry (ties: the lower index first), by one compiled pass
         (:func:`~.nearest.rank_goal_entries`)."""
-        from .nearest import rank_goal_entries  # numba, loaded on first use (as the kernel is)
-
         layout = self.goal_layout(problem.goals)
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
         if k <= 0:
@@ -187,15 +187,8 @@ class SeedTable:
         self._goal_parts(goals)
         if len(goals) > 1:
             load_goal_helpers()
-        if "sets" not in _LOADED and any(g.alternatives is not None for g in goals):
-            from ..lm.compiling import load
-            from .nearest import table_distances_many
-
-            one = np.zeros((1, 1), dtype=np.float32)
-            load("the seed table's rankings for goal sets", [(table_distances_many, (
-                one, np.zeros(1, dtype=np.float32), one.copy(), np.empty((1, 1), dtype=np.float32)))],
-                 RANKING_COMPILE_SECONDS)
-            _LOADED.append("sets")
+        if any(g.alternatives is not None for g in goals):
+            load_goal_helpers(sets=True)
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
         """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed starts and table entries
@@ -278,8 +271,6 @@ class SeedTable:
                           allowed: np.ndarray | None) -> np.ndarray:
         """(G, <= k) indices of the entries nearest, goal by goal, targets pt (G, 3), Rt (G, 3, 3) relative to the root
         link, nearest first: one compiled call (:func:`~.nearest.nearest_per_goal`)."""
-        from .nearest import nearest_per_goal  # numba, loaded on first use (as the kernel is)
-
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
         FT, sq, start, scale, positioned, oriented = self.goal_layout(goals, parts)[2:8]
         out = np.empty((len(parts), k), dtype=np.int64)
@@ -380,23 +371,24 @@ class SeedTable:
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
 
 
-def load_goal_helpers() -> None:
-    """Load (once per process; after an install: compile) the compiled helpers a goal list's starts call, before a
-    solve's clock."""
-    if "lists" in _LOADED:
+def load_goal_helpers(sets: bool = False) -> None:
+    """Load (once per process; after an install: compile) the compiled rankings a goal list's starts call (``sets``:
+    a goal set's), before a solve's clock."""
+    what = "sets" if sets else "lists"
+    if what in _LOADED:
         return
-    from ..lm.compiling import load
-    from .nearest import nearest_per_goal, rank_goal_entries, seen_from
-
     FT, sq = np.zeros((3, 2), dtype=np.float32), np.zeros((1, 2), dtype=np.float32)
     scale, yes, no = np.ones(1), np.ones(1, dtype=bool), np.zeros(1, dtype=bool)
     pt, Rt = np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1))
-    load("the seed table's rankings for goal lists", [
-        (rank_goal_entries, (FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))),
-        (nearest_per_goal, (FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
-                            np.empty((1, 1), dtype=np.int64))),
-        (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))], RANKING_COMPILE_SECONDS)
-    _LOADED.append("lists")
+    if sets:
+        calls = [(table_distances_many, (FT, sq[0], FT.T.copy(), np.empty((2, 2), dtype=np.float32)))]
+    else:
+        calls = [(rank_goal_entries, (FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))),
+                 (nearest_per_goal, (FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
+                                     np.empty((1, 1), dtype=np.int64))),
+                 (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))]
+    compiling.load(f"the seed table's rankings for goal {what}", calls, RANKING_COMPILE_SECONDS)
+    _LOADED.append(what)
 
 
 def _kept(cache: dict, key, value, most: int = 8):
@@ -435,8 +427,6 @@ def base_onto(p_t: np.ndarray, R_t: np.ndarray, p_f: np.ndarray, R_f: np.ndarray
 
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Targets pt (G, 3), Rt (G, 3, 3) seen from a floating base's pose (:func:`~.nearest.seen_from`)."""
-    from .nearest import seen_from  # numba, loaded on first use (as the kernel is)
-
     P_out, R_out = np.empty((pt.shape[0], 3)), np.empty((pt.shape[0], 3, 3))
     seen_from(np.ascontiguousarray(base, dtype=float), np.ascontiguousarray(pt, dtype=float),
               np.ascontiguousarray(Rt, dtype=float), P_out, R_out)
