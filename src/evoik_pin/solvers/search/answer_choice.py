@@ -177,8 +177,7 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
             v.starts = table.goal_starts(v.problem, k, free)
         return [float(i) for i in range(len(variants))]
     spec = table.goal_spec(parent.goals)
-    g = parent.goals[0]  # the table's features of the goal's frame:
-    ff = table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1]))
+    ff = table.frame_features((parent.goals[0].frame, spec[0]))  # the table's features of the goal's frame
     D, near = member_distances(table, ff, spec, P, R, joint, free)
     for v, d in zip(variants, D, strict=True):
         v.starts = _TableStarts(table.Q, d, k)

@@ -219,6 +219,4 @@ def distinct_rows(Q: np.ndarray, count: int) -> list[int]:
 
 def distinct(answers, count: int) -> list:
     """The first ``count`` of ``answers`` (cost, q, variant; best first) no two within 1e-3 (rad or m) of each other."""
-    if len(answers) <= 1:
-        return list(answers[:count])
     return [answers[k] for k in distinct_rows(np.array([a[1] for a in answers]), count)]

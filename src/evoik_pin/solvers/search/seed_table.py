@@ -91,8 +91,7 @@ class SeedTable:
 
     def frame_features(self, key) -> FrameFeatures:
         """The table's :class:`FrameFeatures` (cached): of the tip for a target kind (``key`` "pose", "position",
-        "planar" or "planar_yaw"), or of a goal frame (``key`` (frame, sp, has_position, has_orientation): sp (a
-        goal's sqrt(weight): :meth:`goal_spec`) x its position, then sp x ``self.weight`` x its rotation's entries)."""
+        "planar" or "planar_yaw"), or of a goal frame (``key`` (frame, the goal's :meth:`goal_spec` entry))."""
         hit = self._frames.get(key)
         if hit is None:
             if isinstance(key, str):
@@ -101,10 +100,9 @@ class SeedTable:
                 F = np.array(_pose_rows(*shape, self.positions, self.rotations), order="C")  # a copy
                 sq = (F * F).sum(axis=1)
             else:
-                frame, sp, positioned, oriented = key
-                spec = ((sp, bool(oriented)) + (() if positioned else (False,)),)
-                F, sq = self.goal_table_features((frame,), spec)
-                shape = (spec[0][0], spec[0][0] * self.weight, bool(positioned), bool(oriented), False)
+                frame, entry = key
+                F, sq = self.goal_table_features((frame,), (entry,))
+                shape = (entry[0], entry[0] * self.weight, len(entry) < 3, entry[1], False)
                 if len(self._frames) > 12:  # the goal frames' go, the kinds' stay
                     self._frames = {k: v for k, v in self._frames.items() if isinstance(k, str)}
             hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
@@ -119,7 +117,8 @@ class SeedTable:
         g = problem.goals[0]
         if g.kind in _KIND_KEYS and g.weight == 1.0 and g.frame == self._robot.tip:
             return self.frame_features(_KIND_KEYS[g.kind])
-        return self.frame_features((g.frame, float(np.sqrt(g.weight)), g.has_position, g.has_orientation))
+        return self.frame_features((g.frame, (float(np.sqrt(g.weight)), bool(g.has_orientation))
+                                    + (() if g.has_position else (False,))))
 
     def target_point(self, problem, ff: FrameFeatures) -> np.ndarray:
         """The features (d,) of ``problem``'s one goal's target in ``ff``'s metric (:meth:`frame_search`'s)."""
