@@ -26,21 +26,17 @@ __all__ = ["PREPARED", "BoxStep", "settle", "step_key", "write_step"]
 #: general path).
 PREPARED = True
 
+_ENTRIES: dict = {}  # write_step's and settle's compiled entries, once found
 
 
-_WRITE_STEP: list = []  # write_step's compiled entry, once found
-
-
-def _write_step_entry():
-    """The compiled entry of :func:`write_step` for its one argument signature (float64 C arrays, bool masks), compiled
-    or loaded on first use (:func:`~..lm.compiling.compiled_entry`; the dispatcher where there is none)."""
-    if not _WRITE_STEP:
-        mask = np.zeros(1, dtype=bool)
-        args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), mask, np.zeros((1, 4, 4)), mask,
-                np.zeros((1, 3)), np.zeros((1, 3, 3)), True)
-        write_step(*args)
-        _WRITE_STEP.append(compiled_entry(write_step, args) or write_step)
-    return _WRITE_STEP[0]
+def _entry(function, args: tuple):
+    """``function``'s compiled entry for the argument signature of ``args`` (its one: float64 C arrays, bool masks),
+    compiled or loaded on first use (:func:`~..lm.compiling.compiled_entry`; the dispatcher where there is none)."""
+    hit = _ENTRIES.get(function)
+    if hit is None:
+        function(*args)
+        hit = _ENTRIES[function] = compiled_entry(function, args) or function
+    return hit
 
 
 @njit(cache=True, nogil=True)
@@ -78,18 +74,6 @@ def settle(q, box, g_err, checks, orientation_weight):  # pragma: no cover - com
             angle = r if not angled or r > angle else angle  # max(angle, r)
             angled = True
     return met, largest, angle, angled, cost
-
-
-_SETTLE: list = []  # settle's compiled entry, once found
-
-
-def _settle_entry():
-    """:func:`settle`'s compiled entry for its one signature (as :func:`_write_step_entry`)."""
-    if not _SETTLE:
-        args = (np.zeros(1), np.zeros((5, 1)), np.zeros((1, 2)), np.zeros((1, 5)), 1.0)
-        settle(*args)
-        _SETTLE.append(compiled_entry(settle, args) or settle)
-    return _SETTLE[0]
 
 
 def step_key(target) -> tuple | None:
@@ -164,7 +148,7 @@ class BoxStep:
                                  for g in problem.goals], dtype=float)
         self._orientation_weight = float(problem.orientation_weight)
         self._one = len(problem.goals) == 1
-        self._settle = _settle_entry()
+        self._settle = _entry(settle, (np.zeros(1), np.zeros((5, 1)), np.zeros((1, 2)), np.zeros((1, 5)), 1.0))
         self._engine, self._args = engine, engine._args
         self._pt, self._Rt, self._box = engine._pt, engine._Rt, engine._box
         self._params = engine._params
@@ -176,7 +160,9 @@ class BoxStep:
         lower, upper = problem.lower, problem.upper
         self._bounds = (np.array(lower, dtype=float), np.array(upper, dtype=float),
                         np.array(wrapping_joints(problem.robot, lower, upper), dtype=bool))
-        self._write_step = _write_step_entry()
+        one, mask = np.zeros(1), np.zeros(1, dtype=bool)
+        self._write_step = _entry(write_step, (np.zeros((5, 1)), one, one, one, one, mask, np.zeros((1, 4, 4)), mask,
+                                               np.zeros((1, 3)), np.zeros((1, 3, 3)), True))
         # the goals whose target is a pin.SE3 (a Pose's always is): their poses go through one (G, 4, 4) array
         G = len(problem.goals)
         self._posed = np.array([self._list and type(g.target) is pin.SE3 for g in problem.goals], dtype=bool)
