@@ -144,8 +144,8 @@ class MemeticSetup:
         self._lm: LevenbergMarquardt | None = None
         self._engines: list[LevenbergMarquardt] = []  # the last few engines made, newest first (_engine)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, guaranteed_runs's compiled entry)
-        self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
-        self._goal_entries: list[tuple] = []  # the same for goal_guaranteed_runs (several goals), newest first
+        # the last few such entries found, of both functions (a solver alternating goal stacks), newest first
+        self._entries: list[tuple] = []
         # guaranteed_runs' scratch: each run's error, the goal's errors, a q0 never read, the best run's q and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
                          np.empty(6))
@@ -180,8 +180,7 @@ class MemeticSetup:
         :func:`~.guaranteed_runs.goal_guaranteed_runs`, in the variant of ``lm``'s kernel, on ``args``; the seconds
         spent loading it: set-up). Once the engine's arguments stay, numba's compiled entry is kept per engine
         arguments and table (the last ``KEPT_ENGINES``) and called directly."""
-        kept = self._goal_entries if goal_list else self._entries
-        current = self._entry
+        kept, current = self._entries, self._entry
         if not goal_list and current[2] is not None and current[0] is lm._args and current[1] is table:
             return current[2](*args), 0.0
         for i, entry in enumerate(kept):
