@@ -256,9 +256,9 @@ class SeedTable:
             names = list(robot.joint_names)
             first = 6 if robot.floating_base else 0
             hit = []
+            spec = self.goal_spec(goals)
             for g, goal in enumerate(goals):
-                spec = self.goal_spec(goals)[g:g + 1]
-                F = self.goal_features(spec, P[:, g:g + 1], R[:, g:g + 1])
+                F = self.goal_features(spec[g:g + 1], P[:, g:g + 1], R[:, g:g + 1])
                 seeded = goal.kind < KIND_BEYOND_FRAME or _anchor(goal, goals) is not None
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
