@@ -192,10 +192,9 @@ def member_distances(table, ff, spec, P: np.ndarray, R: np.ndarray, joint=None,
     table's features of the goal's frame (:meth:`~.seed_table.SeedTable.frame_features`), ``spec``: the goal's
     :meth:`~.seed_table.SeedTable.goal_spec`; P (V, 1, 3) m, R (V, 1, 3, 3); ``joint`` (size,): added to every row."""
     f = table.goal_features(spec, P, R)  # (V, d)
-    FT, sq = table.features32(ff)
     # |F - f|^2 = sq - 2 F.f + |f|^2: the first two terms compiled, in single precision; |f|^2 to compare variants
-    D = np.empty((f.shape[0], FT.shape[1]), dtype=np.float32)
-    table_distances_many(FT, sq, f.astype(np.float32), D)
+    D = np.empty((f.shape[0], ff.FT32.shape[1]), dtype=np.float32)
+    table_distances_many(ff.FT32, ff.sq32, f.astype(np.float32), D)
     if joint is not None:
         D += joint
     if free is not None:

@@ -35,7 +35,8 @@ class FrameFeatures(NamedTuple):
     """The table's features of one frame's pose (the tip's for a target kind, or a goal frame's): F (size, d), FT
     (d, size), sq (size,) their squared norms, gap (the median squared distance from an entry to its nearest other:
     a start nearer the target than this is as good as the table's nearest entry), sp and sr (the scales of the
-    position and of the rotation's entries), positioned, oriented, planar (x, y and the heading only)."""
+    position and of the rotation's entries), positioned, oriented, planar (x, y and the heading only); FT32, sq32: FT
+    and sq in single precision (a goal set's ranking)."""
 
     F: np.ndarray
     FT: np.ndarray
@@ -46,10 +47,12 @@ class FrameFeatures(NamedTuple):
     positioned: bool
     oriented: bool
     planar: bool
+    FT32: np.ndarray
+    sq32: np.ndarray
 
     def point(self, p: np.ndarray, R: np.ndarray) -> np.ndarray:
         """The features (d,) of one pose of the frame (p (3,) m, R (3, 3))."""
-        return _pose_rows(*self[4:], p[None], R[None])[0]
+        return _pose_rows(*self[4:9], p[None], R[None])[0]
 
 
 def _pose_rows(sp: float, sr: float, positioned: bool, oriented: bool, planar: bool, P: np.ndarray,
@@ -83,7 +86,6 @@ class SeedTable:
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
-        self._frames32: dict = {}  # id(a FrameFeatures' FT) -> (that FT, its float32 copy, sq's)
         self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, goal_layout)
         if size:
             for key in _KIND_KEYS.values():  # one-time work here, not inside a solve's time budget
@@ -105,7 +107,9 @@ class SeedTable:
                 shape = (entry[0], entry[0] * self.weight, len(entry) < 3, entry[1], False)
                 if len(self._frames) > 12:  # the goal frames' go, the kinds' stay
                     self._frames = {k: v for k, v in self._frames.items() if isinstance(k, str)}
-            hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
+            FT = np.ascontiguousarray(F.T)
+            hit = self._frames[key] = FrameFeatures(F, FT, sq, _typical_gap(F, sq), *shape, FT.astype(np.float32),
+                                                    sq.astype(np.float32))
         return hit
 
     def frame_search(self, problem) -> FrameFeatures | None:
@@ -134,7 +138,7 @@ class SeedTable:
         if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
             yaw = P[:, 2]
             return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
-        return key, _pose_rows(*self.frame_features(key)[4:], P, Rts)
+        return key, _pose_rows(*self.frame_features(key)[4:9], P, Rts)
 
     def ranked(self, ff: FrameFeatures, point: np.ndarray, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k entries nearest a one-frame problem's target (:meth:`frame_search`'s features
@@ -340,13 +344,6 @@ class SeedTable:
         if hit is None or hit[0]() is not scene:
             hit = _kept(self._free, key, (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True)))
         return hit[1]
-
-    def features32(self, ff: FrameFeatures) -> tuple[np.ndarray, np.ndarray]:
-        """``ff``'s FT and sq in single precision (cached), for a goal set's ranking."""
-        hit = self._frames32.get(id(ff.FT))
-        if hit is None or hit[0] is not ff.FT:
-            hit = _kept(self._frames32, id(ff.FT), (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32)))
-        return hit[1], hit[2]
 
     def nearest(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
                 eps: float = 0.0) -> np.ndarray:
