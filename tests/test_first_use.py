@@ -125,8 +125,7 @@ def slow_loading(monkeypatch, thread_cpu_clock):
     monkeypatch.setattr(memetic, "load", load)
     monkeypatch.setattr(engine, "_KERNELS", {})
     monkeypatch.setattr(memetic, "_LOADED", [])
-    monkeypatch.setattr(seed_table, "_RANKING_LOADED", [])
-    monkeypatch.setattr(seed_table, "_GOAL_HELPERS_LOADED", [])
+    monkeypatch.setattr(seed_table, "_LOADED", [])
     return types.SimpleNamespace(delay=delay, loaded=loaded)
 
 

@@ -176,17 +176,18 @@ def test_one_goal_lists_take_the_guaranteed_runs_with_the_general_paths_answers(
 
 def test_several_goals_take_the_goal_lists_guaranteed_runs(monkeypatch):
     """Two goals, a pointing goal: not one goal on one frame, so not the single target's compiled guaranteed runs but
-    the goal list's (memetic._goal_guaranteed_runs); a goal set: answer_choice.py searches it, then the single target's
-    guaranteed runs from the member it met open the set's repeat call (IKSolver._open_set_repeat_call)."""
+    the goal list's (memetic._guaranteed_runs without a frame); a goal set: answer_choice.py searches it, then the
+    single target's guaranteed runs from the member it met open the set's repeat call
+    (IKSolver._open_set_repeat_call)."""
     from evoik_pin.goals import Direction, Pose, Position
 
     robot = ek.load_robot("panda")
     T = robot.fk(robot.random_configurations(1, np.random.default_rng(0))[0])
     made = []  # every call makes the compiled guaranteed runs once: memetic's own, or an IKSolver lane's
-    one_call, lane_call, goal_call = memetic._guaranteed_runs, RepeatCall.solve, memetic._goal_guaranteed_runs
-    monkeypatch.setattr(memetic, "_guaranteed_runs", lambda *args: made.append(1) or one_call(*args))
+    one_call, lane_call = memetic._guaranteed_runs, RepeatCall.solve
+    monkeypatch.setattr(memetic, "_guaranteed_runs",
+                        lambda *args: made.append(1 if args[-1] is not None else 3) or one_call(*args))
     monkeypatch.setattr(RepeatCall, "solve", lambda *args, **kw: made.append(2) or lane_call(*args, **kw))
-    monkeypatch.setattr(memetic, "_goal_guaranteed_runs", lambda *args: made.append(3) or goal_call(*args))
     for goals in ([Pose(robot.tip, T), Position("panda_link4", robot.fk(np.zeros(robot.n)).translation)],
                   [Direction(robot.tip, [0, 0, 1], T.rotation[:, 2])], [Pose(robot.tip, [T, T])]):
         ek.solve(robot, goals, seed=1)

@@ -29,7 +29,7 @@ from .solution_classes import (
 __all__ = ["DEFAULT_CLASS_RADIUS", "DEFAULT_COUNT", "DEFAULT_TIMEOUT", "REFINE_TOLERANCE", "SolutionList",
            "goal_moving_joints", "memetic_all"]
 
-#: Default time budget (s) of one search: a safety net (the stopping rule ends most UR5 pose searches in 1-4 ms).
+#: Default time budget (s) of one search: a safety net (the stopping rule ends most searches first).
 DEFAULT_TIMEOUT = 0.02
 #: Default class radius (rad, wrapped joint distance): converged configurations closer than this are one solution.
 DEFAULT_CLASS_RADIUS = 1e-3

@@ -34,7 +34,7 @@ from .prefer import (
     nearest_turn,
     refine,
 )
-from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, one_frame
+from .seed_table import DEFAULT_GOAL_TABLE_SEEDS, DEFAULT_TABLE_SEEDS, nearest_order, one_frame
 
 __all__ = ["COLLECT_SHARE", "choose", "member_distances"]
 
@@ -48,11 +48,8 @@ NEAR_SCALES, NEAR_EVERY = (0.1, 0.25, 0.5), 4
 #: prefer="nearest" ranks the seed table by pose nearness plus this x the squared joint distance to q0 (rad^2) x the
 #: table's weight squared (the term scales with the arm).
 NEAR_JOINT_WEIGHT = 0.1
-#: LM runs per kernel call while prefer collects answers; prefer="nearest"'s (with a null space): its answers nearest
-#: q0 come from more starts, and the first batch, made whatever the clock says, is most of its budget (7 more runs
-#: with 2 fewer descended, :data:`~.descent.DESCEND_COUNT`: 1-2 points more of the answers no farther than TRAC-IK's
-#: on 300 random q0 of Panda, xArm and PR2, ~0.02 ms more). 23: 6 draws near q0 and the table's 17 nearest
-#: entries (:data:`~.seed_table.DEFAULT_TABLE_SEEDS`), no uniform draw to fill it (24 took one: no share more).
+#: LM runs per kernel call while prefer collects answers; prefer="nearest"'s (with a null space, whose answers nearest
+#: q0 come from more starts): 6 draws near q0 and the table's :data:`~.seed_table.DEFAULT_TABLE_SEEDS` nearest entries.
 COLLECT_BATCH, NEAREST_BATCH = 16, 23
 #: The batch on goals without a null space (UR10 on a pose), whose whole budget collects the branches.
 COLLECT_BATCH_BRANCHES = 32
@@ -136,16 +133,9 @@ class _TableStarts:
         self.taken = 0
 
     def _ranking(self) -> np.ndarray:
-        """Indices of the k nearest entries in nearest_first's order: the argmin, then the others by distance."""
+        """Indices of the k nearest entries (:func:`~.seed_table.nearest_order`)."""
         if self.order is None:
-            d, k = self.d, self.k
-            if k <= 1:
-                self.order = np.array([int(d.argmin())] if k == 1 else [], dtype=np.intp)
-            else:
-                first = int(d.argmin())
-                part = np.argpartition(d, k - 1)[:k]
-                ranked = part[d[part].argsort()]
-                self.order = np.concatenate(([first], ranked[ranked != first]))
+            self.order = nearest_order(self.d, self.k)
         return self.order
 
     def take(self, size: int) -> np.ndarray:
@@ -187,8 +177,7 @@ def _variant_starts(table, parent, variants, k: int, free, joint=None, P=None, R
             v.starts = table.goal_starts(v.problem, k, free)
         return [float(i) for i in range(len(variants))]
     spec = table.goal_spec(parent.goals)
-    g = parent.goals[0]  # the table's features of the goal's frame:
-    ff = table.frame_features((g.frame, spec[0][0], len(spec[0]) < 3, spec[0][1]))
+    ff = table.frame_features((parent.goals[0].frame, spec[0]))  # the table's features of the goal's frame
     D, near = member_distances(table, ff, spec, P, R, joint, free)
     for v, d in zip(variants, D, strict=True):
         v.starts = _TableStarts(table.Q, d, k)
@@ -203,10 +192,9 @@ def member_distances(table, ff, spec, P: np.ndarray, R: np.ndarray, joint=None,
     table's features of the goal's frame (:meth:`~.seed_table.SeedTable.frame_features`), ``spec``: the goal's
     :meth:`~.seed_table.SeedTable.goal_spec`; P (V, 1, 3) m, R (V, 1, 3, 3); ``joint`` (size,): added to every row."""
     f = table.goal_features(spec, P, R)  # (V, d)
-    FT, sq = table.features32(ff)
     # |F - f|^2 = sq - 2 F.f + |f|^2: the first two terms compiled, in single precision; |f|^2 to compare variants
-    D = np.empty((f.shape[0], FT.shape[1]), dtype=np.float32)
-    table_distances_many(FT, sq, f.astype(np.float32), D)
+    D = np.empty((f.shape[0], ff.FT32.shape[1]), dtype=np.float32)
+    table_distances_many(ff.FT32, ff.sq32, f.astype(np.float32), D)
     if joint is not None:
         D += joint
     if free is not None:

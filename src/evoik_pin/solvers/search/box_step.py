@@ -2,13 +2,7 @@
 :class:`~.velocity_box.VelocityBoxStage` solved once, bound to the stage's engine, so that each later
 :meth:`~evoik_pin.IKSolver.solve_within` of that structure (a Tracker's step, a trajectory's point) only writes the new
 targets and box into the engine's own arrays and calls the compiled LM entry; the stage's answers, bit for bit, and
-the stage itself whenever this path cannot give them (a run that misses).
-
-A warm-started step is a few microseconds of compiled LM on an arm (about 20 on a humanoid with four pose goals); the
-general path around it (binding the goal list, building the problem, the box in NumPy, the outcome objects) costs
-about 14 more on Panda, 23 on Talos. What stays per call here: the structure's key (:func:`step_key`: what the goal
-stack depends on), one array write per goal, one compiled write of the box and targets, one compiled run, the
-Result."""
+the stage itself whenever this path cannot give them (a run that misses)."""
 
 from __future__ import annotations
 
@@ -19,13 +13,12 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from ...lie.compiled import is_rotation_entries
 from ...result import Result
 from ...target import Target, pose_arrays
 from ..lm.compiling import compiled_entry
-from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, P_ITERATIONS, wrapping_joints
+from ..lm.layout import B_HI, B_LO, P_ITERATIONS, wrapping_joints
 from ..lm.run_outcome import LMOutcome
-from .velocity_box import BOX_ITERATIONS, VelocityBoxStage
+from .velocity_box import BOX_ITERATIONS, NOT_MET, VelocityBoxStage, write_step
 
 __all__ = ["PREPARED", "BoxStep", "settle", "step_key", "write_step"]
 
@@ -33,57 +26,17 @@ __all__ = ["PREPARED", "BoxStep", "settle", "step_key", "write_step"]
 #: general path).
 PREPARED = True
 
-#: The one message of a step met by the run from the last configuration (the stage's, for one run).
-_MESSAGE = "velocity box: 1 LM run(s)"
+_ENTRIES: dict = {}  # write_step's and settle's compiled entries, once found
 
 
-@njit(cache=True, nogil=True)
-def write_step(box, q_prev, step, lower, upper, wrap, poses, posed, pt, Rt, check_rt):  # pragma: no cover - compiled
-    """Write one step's box and targets into the LM kernel's arrays. The velocity box of ``q_prev`` (n,) with
-    half-widths ``step`` (n,) (rad or m) into ``box`` (5, n) rows B_LO, B_CLO and B_HI, B_CHI:
-    :meth:`~.velocity_box.VelocityBoxStage.box`'s values (clipped into ``lower``, ``upper`` (n,); joints where ``wrap``
-    (n,) bool is set unclipped), its operations in its order, so the same floats. The targets of the goals where
-    ``posed`` (G,) bool is set from their homogeneous poses ``poses`` (G, 4, 4) (m) into ``pt`` (G, 3) and ``Rt``
-    (G, 3, 3) (the others' rows untouched).
-
-    Returns:
-        Whether ``Rt[0]`` is a rotation matrix (:func:`~evoik_pin.lie.so3.is_rotation_entries`) when ``check_rt`` (a
-        tip pose :func:`step_key` left unchecked); True otherwise."""
-    for k in range(q_prev.shape[0]):
-        lo = q_prev[k] - step[k]
-        hi = q_prev[k] + step[k]
-        if not wrap[k]:
-            lo, hi = min(max(lo, lower[k]), hi), max(min(hi, upper[k]), lo)
-        box[B_LO, k] = lo
-        box[B_CLO, k] = lo
-        box[B_HI, k] = hi
-        box[B_CHI, k] = hi
-    for i in range(posed.shape[0]):
-        if posed[i]:
-            for r in range(3):
-                pt[i, r] = poses[i, r, 3]
-                for c in range(3):
-                    Rt[i, r, c] = poses[i, r, c]
-    if not check_rt:
-        return True
-    T = Rt[0]
-    return is_rotation_entries(T[0, 0], T[0, 1], T[0, 2], T[1, 0], T[1, 1], T[1, 2], T[2, 0], T[2, 1], T[2, 2])
-
-
-_WRITE_STEP: list = []  # write_step's compiled entry, once found
-
-
-def _write_step_entry():
-    """The compiled entry of :func:`write_step` for its one argument signature (float64 C arrays, bool masks),
-    compiled or loaded on first use and called without numba's per-call typing of every argument; the dispatcher
-    itself where this numba does not expose the entry."""
-    if not _WRITE_STEP:
-        mask = np.zeros(1, dtype=bool)
-        args = (np.zeros((5, 1)), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1), mask, np.zeros((1, 4, 4)), mask,
-                np.zeros((1, 3)), np.zeros((1, 3, 3)), True)
-        write_step(*args)
-        _WRITE_STEP.append(compiled_entry(write_step, args) or write_step)
-    return _WRITE_STEP[0]
+def _entry(function, args: tuple):
+    """``function``'s compiled entry for the argument signature of ``args`` (its one: float64 C arrays, bool masks),
+    compiled or loaded on first use (:func:`~..lm.compiling.compiled_entry`; the dispatcher where there is none)."""
+    hit = _ENTRIES.get(function)
+    if hit is None:
+        function(*args)
+        hit = _ENTRIES[function] = compiled_entry(function, args) or function
+    return hit
 
 
 @njit(cache=True, nogil=True)
@@ -121,18 +74,6 @@ def settle(q, box, g_err, checks, orientation_weight):  # pragma: no cover - com
             angle = r if not angled or r > angle else angle  # max(angle, r)
             angled = True
     return met, largest, angle, angled, cost
-
-
-_SETTLE: list = []  # settle's compiled entry, once found
-
-
-def _settle_entry():
-    """:func:`settle`'s compiled entry for its one signature (as :func:`_write_step_entry`)."""
-    if not _SETTLE:
-        args = (np.zeros(1), np.zeros((5, 1)), np.zeros((1, 2)), np.zeros((1, 5)), 1.0)
-        settle(*args)
-        _SETTLE.append(compiled_entry(settle, args) or settle)
-    return _SETTLE[0]
 
 
 def step_key(target) -> tuple | None:
@@ -207,7 +148,7 @@ class BoxStep:
                                  for g in problem.goals], dtype=float)
         self._orientation_weight = float(problem.orientation_weight)
         self._one = len(problem.goals) == 1
-        self._settle = _settle_entry()
+        self._settle = _entry(settle, (np.zeros(1), np.zeros((5, 1)), np.zeros((1, 2)), np.zeros((1, 5)), 1.0))
         self._engine, self._args = engine, engine._args
         self._pt, self._Rt, self._box = engine._pt, engine._Rt, engine._box
         self._params = engine._params
@@ -219,7 +160,9 @@ class BoxStep:
         lower, upper = problem.lower, problem.upper
         self._bounds = (np.array(lower, dtype=float), np.array(upper, dtype=float),
                         np.array(wrapping_joints(problem.robot, lower, upper), dtype=bool))
-        self._write_step = _write_step_entry()
+        one, mask = np.zeros(1), np.zeros(1, dtype=bool)
+        self._write_step = _entry(write_step, (np.zeros((5, 1)), one, one, one, one, mask, np.zeros((1, 4, 4)), mask,
+                                               np.zeros((1, 3)), np.zeros((1, 3, 3)), True))
         # the goals whose target is a pin.SE3 (a Pose's always is): their poses go through one (G, 4, 4) array
         G = len(problem.goals)
         self._posed = np.array([self._list and type(g.target) is pin.SE3 for g in problem.goals], dtype=bool)
@@ -279,8 +222,7 @@ class BoxStep:
             pos, rot = largest, angle if angled else None
         else:  # a tip target's cost is its objective's (of the errors: BoxStep.prepare)
             pos, rot, cost = self._problem.summary(q, errors)
-        message = _MESSAGE if met else (_MESSAGE + "; the goals are not met within the velocity box (the answer "
-                                        "closest to them inside it)")
+        message = "velocity box: 1 LM run(s)" + ("" if met else NOT_MET)
         return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
                       cost=float(cost), success=bool(met), generations=0, evaluations=int(evaluations),
                       time_s=time.perf_counter() - t0, message=message, method="velocity-box",

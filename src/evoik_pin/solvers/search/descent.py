@@ -25,16 +25,12 @@ DESCEND_COUNT, DESCEND_TRIAL, DESCEND_FINAL, DESCEND_STEPS, DESCEND_ROUNDS = 6, 
 DESCEND_MAX_STEP = 1.0
 #: prefer="manipulability": the best MANIP_FIRST distinct answers descended MANIP_TRIAL steps whatever the clock
 #: says, then as many more as fit before the finish (MANIP_COUNT in all at most): the raw measure says little about
-#: the local optimum an answer's self-motion reaches (on xArm the answer that reaches TRAC-IK's Manip1 optimum ranks
-#: 5th to 13th of ~15), and the closed-form gradient makes a step cheap (~4 kinematics evaluations). 8 whatever the
-#: clock says: on a loaded machine the clock leaves no more, and with 4 xArm's share of answers at least as dexterous
-#: as TRAC-IK's fell to 94-96 % on 300 problems (8: 96.9-98.0 %, ~0.09 ms more).
+#: the local optimum an answer's self-motion reaches, and the closed-form gradient makes a step cheap.
 MANIP_COUNT, MANIP_FIRST, MANIP_TRIAL = 12, 8, 4
 #: The best answers (this many) get the first round of DESCEND_STEPS whatever the clock says: a trial's few steps
 #: leave the winner short of its optimum.
 SURE_FINAL = 1
 
-#: Per robot, whether its tree couples joints to q (mimic joints), which the compiled descent does not take.
 #: Per robot: whether its tree couples joints to q (mimic joints), which the compiled descent leaves to Python's refine.
 _COUPLED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -60,7 +56,7 @@ def descent_mode(prefer: str, criterion: Criterion, variants) -> int | None:
 def turned_rows(Q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndarray, wrap: np.ndarray) -> np.ndarray:
     """:func:`.prefer.nearest_turn` of each row of ``Q`` (N, n), the same numbers, by the compiled
     :func:`..lm.nullspace.nearest_turn_rows` (loaded with :func:`..lm.nullspace.nullspace_kernel`, before the
-    clock): prefer's hot path, where NumPy's dozen calls per batch of a few rows cost more than the rows."""
+    clock)."""
     if not wrap.any():
         return Q
     out = np.empty(Q.shape)
@@ -72,8 +68,7 @@ def turned_rows(Q: np.ndarray, q0: np.ndarray, lower: np.ndarray, upper: np.ndar
 def answer_costs(criterion: Criterion, mode: int | None, lm: LevenbergMarquardt, Q: np.ndarray) -> np.ndarray:
     """``criterion.costs(Q)`` (N,) of answers Q (N, n); for prefer="manipulability" alone on the compiled descent
     (``mode`` :data:`..lm.nullspace.MODE_MANIPULABILITY`, ``lm`` an engine of the problem) the compiled
-    :func:`..lm.nullspace.log_manipulability_rows`: the same cost to about 1e-12, ~1 us a row instead of ~10 us
-    (prefer="manipulability" costs every answer it collects)."""
+    :func:`..lm.nullspace.log_manipulability_rows`: the same cost to about 1e-12."""
     if mode != MODE_MANIPULABILITY:
         return criterion.costs(Q)
     out = np.empty(Q.shape[0])
@@ -104,8 +99,6 @@ class _Pool:
     def merged(self, *others: _Pool) -> _Pool:
         """This pool and ``others`` in one, best first; equal costs in the order given (a stable sort, as
         ``sorted``)."""
-        if not others:
-            return self.take(np.argsort(self.costs, kind="stable"))
         parts = (self, *others)
         costs = np.concatenate([p.costs for p in parts])
         order = np.argsort(costs, kind="stable")
@@ -127,9 +120,7 @@ def descend(answers, variants, q0, mode: int, criterion: Criterion, scene, probl
     (:func:`.prefer.euler_flips`, q0 given), the answers' flips inside the box are candidates too (the descent takes
     them onto the goals first). A descended answer in collision keeps its start (a flip is dropped). With one
     variant and no scene, the trial and the best one's first round are one kernel call
-    (:func:`..lm.nullspace.descend_batch_then_best`). Returns (the answers best first, evaluations). The answers are
-    kept as arrays (:class:`_Pool`) in between: this bookkeeping, done on lists of tuples, cost as much as the
-    descent's compiled steps."""
+    (:func:`..lm.nullspace.descend_batch_then_best`). Returns (the answers best first, evaluations)."""
     kernels = nullspace_kernel()
     lower, upper = problem.lower, problem.upper
     target = np.zeros(variants[0].lm.problem.robot.n) if q0 is None else owned(q0, float)
@@ -228,6 +219,4 @@ def distinct_rows(Q: np.ndarray, count: int) -> list[int]:
 
 def distinct(answers, count: int) -> list:
     """The first ``count`` of ``answers`` (cost, q, variant; best first) no two within 1e-3 (rad or m) of each other."""
-    if len(answers) <= 1:
-        return list(answers[:count])
     return [answers[k] for k in distinct_rows(np.array([a[1] for a in answers]), count)]

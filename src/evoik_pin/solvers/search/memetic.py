@@ -144,10 +144,9 @@ class MemeticSetup:
         self._lm: LevenbergMarquardt | None = None
         self._engines: list[LevenbergMarquardt] = []  # the last few engines made, newest first (_engine)
         self._entry: tuple = (None, None, None)  # (engine arguments, table, guaranteed_runs's compiled entry)
-        self._entries: list[tuple] = []  # the last few such entries found (a solver alternating goal stacks)
-        self._goal_entries: list[tuple] = []  # the same for goal_guaranteed_runs (several goals), newest first
-        # guaranteed_runs' scratch: each run's error, the goal's errors, a q0 never read, the best failed run's q and
-        # numbers
+        # the last few such entries found, of both functions (a solver alternating goal stacks), newest first
+        self._entries: list[tuple] = []
+        # guaranteed_runs' scratch: each run's error, the goal's errors, a q0 never read, the best run's q and numbers
         self._scratch = (np.empty(GUARANTEED_TABLE_RUNS + 1), np.empty((1, 2)), np.zeros(robot.n), np.empty(robot.n),
                          np.empty(6))
 
@@ -179,12 +178,9 @@ class MemeticSetup:
                         goal_list: bool = False) -> tuple[tuple, float]:
         """(:func:`~.guaranteed_runs.guaranteed_runs`, or with ``goal_list``
         :func:`~.guaranteed_runs.goal_guaranteed_runs`, in the variant of ``lm``'s kernel, on ``args``; the seconds
-        spent loading it: set-up). The first time in the process it is compiled (once per install, with a notice) or
-        loaded from numba's cache. Once the engine's arguments stay (from the setup's second solve on; a goal list's
-        engine owning its arrays), numba's compiled entry is kept per engine arguments and table (the last
-        ``KEPT_ENGINES``) and called directly, without typing every argument."""
-        kept = self._goal_entries if goal_list else self._entries
-        current = self._entry
+        spent loading it: set-up). Once the engine's arguments stay, numba's compiled entry is kept per engine
+        arguments and table (the last ``KEPT_ENGINES``) and called directly."""
+        kept, current = self._entries, self._entry
         if not goal_list and current[2] is not None and current[0] is lm._args and current[1] is table:
             return current[2](*args), 0.0
         for i, entry in enumerate(kept):
@@ -194,7 +190,7 @@ class MemeticSetup:
                     self._entry = entry
                 return entry[2](*args), 0.0
         t = time.perf_counter()
-        from . import guaranteed_runs as compiled  # the first time: its module and numba's imports, set-up too (~5 ms)
+        from . import guaranteed_runs as compiled  # its module and numba's imports: set-up too
 
         extra = later_kinds(lm.goals)  # the variant of the engine's kernel
         which = "goal_guaranteed_runs" if goal_list else "guaranteed_runs"
@@ -260,8 +256,8 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
         setup_s = 0.0
     elif (COMPILED_GUARANTEED_RUNS and table is not None and (frame is None or not frame.planar) and problem.scene is
             None and engine == "compiled" and batch == 1 and table_offset == 0 and stance is None):
-        args = (setup, problem, table, lm, t0, setup_s, iterations, table_seeds)
-        result, loading, resumed = _goal_guaranteed_runs(*args) if frame is None else _guaranteed_runs(*args, frame)
+        result, loading, resumed = _guaranteed_runs(setup, problem, table, lm, t0, setup_s, iterations, table_seeds,
+                                                    frame)
         if result is not None:
             return result
         t0 += loading  # loading (once: compiling) guaranteed_runs is set-up, not the budget's
@@ -337,8 +333,7 @@ def _solve(setup: MemeticSetup, problem: IKProblem, rng: np.random.Generator, t_
     if search.best is None:  # every stage disabled
         search.polish(0.5 * (problem.lower + problem.upper))
     q = search.best.q
-    # the kernel's errors of the best run, at q, trusted where they are Goal.errors' (its success test's numbers);
-    # a kinematics pass otherwise
+    # the best run's kernel errors where they are Goal.errors' (its success test's numbers), else a kinematics pass
     goal_errors = (kernel_goal_errors(problem.goals, search.best) if single or (
         search.best.goal_errors is not None and all(g.on_one_frame for g in problem.goals))
         else problem.goal_errors(q))
@@ -373,75 +368,59 @@ BASE_FIXED, BASE_FROM_GOAL, BASE_EACH_ENTRY = 0, 1, 2  # guaranteed_runs' base m
 _NO_BASE = np.zeros(6)  # goal_guaranteed_runs' base where no goal sets one (never read)
 _EVERY = np.zeros(0, dtype=bool)  # every table entry (goal_guaranteed_runs' allowed: no scene on that path)
 
-#: Whether memetic makes its guaranteed runs in one compiled call where it serves (:func:`_guaranteed_runs`,
-#: :func:`_goal_guaranteed_runs`); the tests turn it off to compare with the runs made one by one.
+#: Whether memetic makes its guaranteed runs in one compiled call where it serves (:func:`_guaranteed_runs`); the
+#: tests turn it off to compare with the runs made one by one.
 COMPILED_GUARANTEED_RUNS = True
 
 
 def _guaranteed_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt, t0: float,
                      setup_s: float, iterations: int, table_seeds: int,
-                     ff: FrameFeatures) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_solve`'s guaranteed runs for a problem searched as one frame's pose (``ff``:
-    :meth:`SeedTable.frame_search`'s; not planar) in one compiled call (:mod:`.guaranteed_runs`), with _solve's order
-    and decisions. Returns (the Result when one met the tolerances else None; the seconds spent loading the compiled
-    function; when none converged, the state _solve goes on from (:func:`resumed_state`), else None)."""
+                     ff: FrameFeatures | None) -> tuple[Result | None, float, tuple | None]:
+    """:func:`_solve`'s guaranteed runs in one compiled call (:mod:`.guaranteed_runs`), with _solve's order and
+    decisions: for a problem searched as one frame's pose (``ff``: :meth:`SeedTable.frame_search`'s; not planar)
+    :func:`~.guaranteed_runs.guaranteed_runs`, for a goal list of several goals (``ff`` None)
+    :func:`~.guaranteed_runs.goal_guaranteed_runs` (the ranking, the composed starts and the LM runs of
+    :meth:`SeedTable.goal_starts`' first starts). Returns (the Result when one met the tolerances else None; the
+    seconds spent loading the compiled function; when none converged, the state _solve goes on from
+    (:func:`resumed_state`), else None)."""
+    goals, q0 = problem.goals, problem.q0
     buffers, args, params = lm.kernel_arguments(iterations)
-    q0 = problem.q0
     table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
     q_out = np.empty(problem.n)
     errors, g_out, zeros, best_q, best = setup._scratch
-    (stage, runs, evaluations, pos, rot, _), loading = setup.guaranteed_runs(
-        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, False, ff.gap, table.Q, ff.FT,
-         ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best), lm, table)
-    if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them
-        return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, table_runs)
-    # the goal's errors are the kernel's at q_out (its success test's numbers, Goal.errors' maths), tested again
-    return _guaranteed_runs_answer(problem, q_out, [problem.goals[0].reported(pos, rot)], stage, runs, evaluations,
-                                   errors, t0, setup_s, loading)
-
-
-def _goal_guaranteed_runs(setup: MemeticSetup, problem: IKProblem, table: SeedTable, lm: LevenbergMarquardt,
-                          t0: float, setup_s: float, iterations: int,
-                          table_seeds: int) -> tuple[Result | None, float, tuple | None]:
-    """:func:`_guaranteed_runs` for a goal list of several goals (:func:`~.guaranteed_runs.goal_guaranteed_runs`: the
-    ranking, the composed starts and the LM runs of :meth:`SeedTable.goal_starts`'s first starts)."""
-    goals = problem.goals
-    robot = problem.robot
-    layout = table.goal_layout(goals)
-    pt, Rt = seed_targets(problem)
-    base_mode, base = BASE_FIXED, _NO_BASE
-    if robot.floating_base:
-        found = table._base_from_goals(problem, table._goal_parts(goals))
-        base_mode, base = (BASE_EACH_ENTRY, _NO_BASE) if found is None else (BASE_FROM_GOAL, found)
-    buffers, args, params = lm.kernel_arguments(iterations)
-    q0 = problem.q0
-    table_runs = min(GUARANTEED_TABLE_RUNS, table_seeds)
-    q_out, g_out, best_g = np.empty(problem.n), np.empty((len(goals), 2)), np.empty((len(goals), 2))
-    errors, _, zeros, best_q, best = setup._scratch
-    (stage, runs, evaluations, pos, rot, cost), loading = setup.guaranteed_runs(
-        (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None, table.Q, *layout[:8],
-         table.weight, np.ascontiguousarray(pt, dtype=float), np.ascontiguousarray(Rt, dtype=float), *layout[8:],
-         base, base_mode, _EVERY, lm.oriented, table_runs, *args, params, q_out, g_out, errors, best_q, best,
-         best_g), lm, table, goal_list=True)
-    if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them (ranked by
-        # its weighted |e|^2, as several goals' outcomes are: LMOutcome.rank), the starts after q0's made
-        return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, runs - (q0 is not None), best_g)
-    # the goals' errors: the kernel's at q_out where they are Goal.errors' (as _solve's), tested again
-    goal_errors = ([g.reported(p, r) for g, (p, r) in zip(goals, g_out.tolist(), strict=True)]
-                   if all(g.on_one_frame for g in goals) else problem.goal_errors(q_out))
-    return _guaranteed_runs_answer(problem, q_out, goal_errors, stage, runs, evaluations, errors, t0, setup_s, loading)
-
-
-def _guaranteed_runs_answer(problem: IKProblem, q: np.ndarray, goal_errors: list, stage: int, runs: int,
-                            evaluations: int, errors: np.ndarray, t0: float, setup_s: float, loading: float) -> tuple:
-    """(:func:`guaranteed_runs_result` when the converged run's ``goal_errors`` meet the problem's tolerances, else None
-    (converged by the kernel's test but not by the problem's: _solve says why); ``loading``; None)."""
-    pos, rot, cost = problem.summary(q, goal_errors)
-    if not problem.goals_met(goal_errors):
+    head = (*buffers, zeros if q0 is None else np.array(q0, dtype=float), q0 is not None)
+    if ff is not None:
+        call = (*head, False, ff.gap, table.Q, ff.FT, ff.sq, ff.sp, ff.sr, lm.oriented, table_runs, *args, params,
+                q_out, g_out, errors, best_q, best)
+    else:
+        layout = table.goal_layout(goals)
+        pt, Rt = seed_targets(problem)
+        base_mode, base = BASE_FIXED, _NO_BASE
+        if problem.robot.floating_base:
+            found = table._base_from_goals(problem, table._goal_parts(goals))
+            base_mode, base = (BASE_EACH_ENTRY, _NO_BASE) if found is None else (BASE_FROM_GOAL, found)
+        g_out, best_g = np.empty((len(goals), 2)), np.empty((len(goals), 2))
+        call = (*head, table.Q, *layout[:8], table.weight, np.ascontiguousarray(pt, dtype=float),
+                np.ascontiguousarray(Rt, dtype=float), *layout[8:], base, base_mode, _EVERY, lm.oriented, table_runs,
+                *args, params, q_out, g_out, errors, best_q, best, best_g)
+    (stage, runs, evaluations, pos, rot, _), loading = setup.guaranteed_runs(call, lm, table, goal_list=ff is None)
+    if stage < 0:  # _solve goes on from here: the runs made, their count and errors, the best of them (several goals:
+        # ranked by its weighted |e|^2, LMOutcome.rank), the table's starts made
+        made, best_g = (table_runs, None) if ff is not None else (runs - (q0 is not None), best_g)
+        return None, loading, resumed_state(setup, lm.oriented, runs, evaluations, made, best_g)
+    # the goals' errors: the kernel's at q_out where they are Goal.errors' (its success test's numbers), tested again
+    if ff is not None:
+        goal_errors = [goals[0].reported(pos, rot)]
+    elif all(g.on_one_frame for g in goals):
+        goal_errors = [g.reported(p, r) for g, (p, r) in zip(goals, g_out.tolist(), strict=True)]
+    else:
+        goal_errors = problem.goal_errors(q_out)
+    pos, rot, cost = problem.summary(q_out, goal_errors)
+    if not problem.goals_met(goal_errors):  # converged by the kernel's test, not by the problem's: _solve says why
         return None, loading, None
-    return guaranteed_runs_result(q, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
-                             time.perf_counter() - t0 - loading, setup_s + loading, problem.reported(goal_errors)
-                             ), loading, None
+    return guaranteed_runs_result(q_out, pos, rot, cost, stage, runs, evaluations + problem.evaluations, errors,
+                                  time.perf_counter() - t0 - loading, setup_s + loading, problem.reported(goal_errors)
+                                  ), loading, None
 
 
 def resumed_state(setup: MemeticSetup, oriented: bool, runs: int, evaluations: int, made: int,

@@ -26,13 +26,11 @@ __all__ = ["BRANCHES_PREFER_TIMEOUT", "DEFAULT_PREFER_TIMEOUT", "PREFER", "REFIN
 PREFER = ("first", "nearest", "manipulability")
 #: Default budget (s) of ``prefer="nearest" | "manipulability"`` on goals with a null space (a redundant arm on a
 #: pose): the work done whatever the clock says (the first batch of LM runs, the descent's trial and the best answer's
-#: first round) about fills it; more of it went to the descent's later rounds, which changed few answers (0.6 ms: the
-#: same shares on 300 problems a row within a point). Under 0.7 ms with the call's overhead.
+#: first round) about fills it.
 DEFAULT_PREFER_TIMEOUT = 0.0004
 #: The default budgets (s) on goals without a null space (a 6-joint arm on a pose), where the whole budget collects IK
-#: branches (nothing to descend along): the share of answers nearest q0 grows with it (on 300 random q0 of UR3, UR5,
-#: UR10, seeds 0 and 1: 97.6-100 % at 0.6 ms, 96.9-98.9 % at 0.55 ms unloaded, but UR10's 94.7 % at 0.55 ms on a
-#: loaded machine), the most dexterous branch is found sooner (the same shares at 0.45 ms as at 0.6 ms).
+#: branches (nothing to descend along): the share of answers nearest q0 grows with it; the most dexterous branch is
+#: found sooner.
 BRANCHES_PREFER_TIMEOUT = {"nearest": 0.0006, "manipulability": 0.00045}
 #: Answers refined in the null space (best first; two closer than 1e-3 rad count once).
 REFINE_COUNT = 4
@@ -99,14 +97,10 @@ def euler_flips(robot, frame: str | None) -> tuple[tuple[int, float], ...]:
         if not moving[i:i + 3].all():
             continue
         for m in (0.0, np.pi):
-            ok = True
-            for q, T in zip(Q, poses, strict=True):
-                F = robot.frame_poses_unchecked(flipped(q[None], ((i, m),))[0], [fid])[0]
-                if (np.linalg.norm(F.translation - T.translation) > FLIP_TOLERANCE
-                        or np.linalg.norm(pin.log3(T.rotation.T @ F.rotation)) > FLIP_TOLERANCE):
-                    ok = False
-                    break
-            if ok:
+            moved = (robot.frame_poses_unchecked(q, [fid])[0] for q in flipped(Q, ((i, m),)))
+            if not any(np.linalg.norm(F.translation - T.translation) > FLIP_TOLERANCE
+                       or np.linalg.norm(pin.log3(T.rotation.T @ F.rotation)) > FLIP_TOLERANCE
+                       for F, T in zip(moved, poses, strict=True)):
                 flips.append((i, m))
                 break
     cache[frame] = tuple(flips)
@@ -128,9 +122,7 @@ def flipped(Q: np.ndarray, flips) -> np.ndarray:
 
 class Nearness(Posture):
     """prefer="nearest"'s term: ``Posture(q0)`` over every joint with plain differences (answers are taken to their
-    turn nearest q0 first, :func:`nearest_turn`), its costs and gradient written without Posture's joint mask and
-    turn wrapping, which do nothing here: the same numbers, a few NumPy calls instead of a dozen per batch of
-    answers (prefer's hot path)."""
+    turn nearest q0 first, :func:`nearest_turn`): the same numbers without Posture's joint mask and turn wrapping."""
 
     def costs(self, Q):
         d = Q - self._ref

@@ -34,7 +34,8 @@ class RepeatCall:
     Args:
         setup: the memetic setup. problem: a problem the setup has just solved through the compiled guaranteed runs (no
             scene). lm: the setup's engine for it. table: the setup's seed table. entry: the compiled entry of
-            :func:`~.guaranteed_runs.guaranteed_runs` for ``lm``'s arguments.
+            :func:`~.guaranteed_runs.guaranteed_runs` for ``lm``'s arguments. ff: the table's features of the problem's
+            frame (:meth:`~.seed_table.SeedTable.frame_search`).
 
     Attributes:
         key: what it serves: True (poses), False (positions), or the goal stack a one-goal list is bound to.
@@ -53,13 +54,13 @@ class RepeatCall:
                 and lm is not None and lm.problem is problem and lm._owned
                 and args is lm._args and kept_table is table and entry is not None
                 and not hasattr(entry, "overloads")  # a compiled entry, not numba's dispatcher
-                and one_frame(problem) and not table.frame_search(problem).planar):
+                and one_frame(problem)):
             return None
-        return cls(setup, problem, lm, table, entry)
-
-    def __init__(self, setup, problem, lm, table, entry) -> None:
-        self.setup = setup
         ff = table.frame_search(problem)
+        return None if ff.planar else cls(setup, problem, lm, table, entry, ff)
+
+    def __init__(self, setup, problem, lm, table, entry, ff) -> None:
+        self.setup = setup
         self.key = ff.oriented if problem.target is not None else problem.goal_stack()[0]
         # its problems' verdict and cost are the first one's (IKProblem.summary reads the goals' weights and the
         # objective, not the targets); a goal set bound to the same stack ranks its members by the frame's features

@@ -15,10 +15,12 @@ from ...goals.registry import KIND_BEYOND_FRAME
 from ...goals.relative_pose import KIND_RELATIVE_POSE, KIND_RELATIVE_POSE_AXES
 from ...goals.stack import KIND_PLANAR, KIND_PLANAR_YAW
 from ...lie import rpy
+from ..lm import compiling
 from ..paper.common import halton
+from .nearest import nearest_per_goal, rank_goal_entries, seen_from, table_distances_many
 
 __all__ = ["DEFAULT_GOAL_TABLE_SEEDS", "DEFAULT_TABLE_SEEDS", "FrameFeatures", "SeedTable", "default_table_size",
-           "load_goal_helpers", "nearest_first", "one_frame", "seed_table"]
+           "kept_per_robot", "load_goal_helpers", "nearest_first", "nearest_order", "one_frame", "seed_table"]
 
 
 #: Seed-table entries tried per target, nearest first (memetic's stage 2 and solve_many's batched rounds).
@@ -33,7 +35,8 @@ class FrameFeatures(NamedTuple):
     """The table's features of one frame's pose (the tip's for a target kind, or a goal frame's): F (size, d), FT
     (d, size), sq (size,) their squared norms, gap (the median squared distance from an entry to its nearest other:
     a start nearer the target than this is as good as the table's nearest entry), sp and sr (the scales of the
-    position and of the rotation's entries), positioned, oriented, planar (x, y and the heading only)."""
+    position and of the rotation's entries), positioned, oriented, planar (x, y and the heading only); FT32, sq32: FT
+    and sq in single precision (a goal set's ranking)."""
 
     F: np.ndarray
     FT: np.ndarray
@@ -44,10 +47,12 @@ class FrameFeatures(NamedTuple):
     positioned: bool
     oriented: bool
     planar: bool
+    FT32: np.ndarray
+    sq32: np.ndarray
 
     def point(self, p: np.ndarray, R: np.ndarray) -> np.ndarray:
         """The features (d,) of one pose of the frame (p (3,) m, R (3, 3))."""
-        return _pose_rows(*self[4:], p[None], R[None])[0]
+        return _pose_rows(*self[4:9], p[None], R[None])[0]
 
 
 def _pose_rows(sp: float, sr: float, positioned: bool, oriented: bool, planar: bool, P: np.ndarray,
@@ -81,7 +86,6 @@ class SeedTable:
         self._trees: dict = {}  # feature key -> scipy.spatial.cKDTree
         self._free: dict = {}  # (scene id, version, margin) -> (weakref to the scene, free mask)
         self._joint_features: dict = {}  # wrap mask bytes -> (joint features (size, d), squared norms)
-        self._frames32: dict = {}  # id(a FrameFeatures' FT) -> (that FT, its float32 copy, sq's)
         self._stacked: dict = {}  # id(a _goal_parts list) -> (that list, goal_layout)
         if size:
             for key in _KIND_KEYS.values():  # one-time work here, not inside a solve's time budget
@@ -89,8 +93,7 @@ class SeedTable:
 
     def frame_features(self, key) -> FrameFeatures:
         """The table's :class:`FrameFeatures` (cached): of the tip for a target kind (``key`` "pose", "position",
-        "planar" or "planar_yaw"), or of a goal frame (``key`` (frame, sp, has_position, has_orientation): sp (a
-        goal's sqrt(weight): :meth:`goal_spec`) x its position, then sp x ``self.weight`` x its rotation's entries)."""
+        "planar" or "planar_yaw"), or of a goal frame (``key`` (frame, the goal's :meth:`goal_spec` entry))."""
         hit = self._frames.get(key)
         if hit is None:
             if isinstance(key, str):
@@ -99,13 +102,14 @@ class SeedTable:
                 F = np.array(_pose_rows(*shape, self.positions, self.rotations), order="C")  # a copy
                 sq = (F * F).sum(axis=1)
             else:
-                frame, sp, positioned, oriented = key
-                spec = ((sp, bool(oriented)) + (() if positioned else (False,)),)
-                F, sq = self.goal_table_features((frame,), spec)
-                shape = (spec[0][0], spec[0][0] * self.weight, bool(positioned), bool(oriented), False)
+                frame, entry = key
+                F, sq = self.goal_table_features((frame,), (entry,))
+                shape = (entry[0], entry[0] * self.weight, len(entry) < 3, entry[1], False)
                 if len(self._frames) > 12:  # the goal frames' go, the kinds' stay
                     self._frames = {k: v for k, v in self._frames.items() if isinstance(k, str)}
-            hit = self._frames[key] = FrameFeatures(F, np.ascontiguousarray(F.T), sq, _typical_gap(F, sq), *shape)
+            FT = np.ascontiguousarray(F.T)
+            hit = self._frames[key] = FrameFeatures(F, FT, sq, _typical_gap(F, sq), *shape, FT.astype(np.float32),
+                                                    sq.astype(np.float32))
         return hit
 
     def frame_search(self, problem) -> FrameFeatures | None:
@@ -117,7 +121,8 @@ class SeedTable:
         g = problem.goals[0]
         if g.kind in _KIND_KEYS and g.weight == 1.0 and g.frame == self._robot.tip:
             return self.frame_features(_KIND_KEYS[g.kind])
-        return self.frame_features((g.frame, float(np.sqrt(g.weight)), g.has_position, g.has_orientation))
+        return self.frame_features((g.frame, (float(np.sqrt(g.weight)), bool(g.has_orientation))
+                                    + (() if g.has_position else (False,))))
 
     def target_point(self, problem, ff: FrameFeatures) -> np.ndarray:
         """The features (d,) of ``problem``'s one goal's target in ``ff``'s metric (:meth:`frame_search`'s)."""
@@ -133,7 +138,7 @@ class SeedTable:
         if kind == KIND_PLANAR_YAW:  # P[:, 2] is the yaw (rad): the heading, scaled like rotations
             yaw = P[:, 2]
             return key, np.concatenate([P[:, :2], self.weight * np.stack([np.cos(yaw), np.sin(yaw)], 1)], 1)
-        return key, _pose_rows(*self.frame_features(key)[4:], P, Rts)
+        return key, _pose_rows(*self.frame_features(key)[4:9], P, Rts)
 
     def ranked(self, ff: FrameFeatures, point: np.ndarray, k: int, allowed: np.ndarray | None = None):
         """Indices of the (up to) k entries nearest a one-frame problem's target (:meth:`frame_search`'s features
@@ -160,18 +165,14 @@ class SeedTable:
         d += f @ f
         return d
 
-    def distances(self, key, f: np.ndarray) -> np.ndarray:
-        """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of
-        :meth:`frame_features` ``key`` (or of those features)."""
-        ff = key if isinstance(key, FrameFeatures) else self.frame_features(key)
+    def distances(self, ff: FrameFeatures, f: np.ndarray) -> np.ndarray:
+        """The table's squared distances (size,) to features ``f`` (d,) less ``|f|^2``, in the metric of ``ff``."""
         return _less_norm(ff.F, ff.sq, f)
 
     def ranked_goals(self, problem, k: int, allowed: np.ndarray | None = None):
         """:meth:`ranked` for a goal list (``problem.goals``): nearest in the goals' weighted summed nearness, each
         goal's frame posed by the entry (ties: the lower index first), by one compiled pass
         (:func:`~.nearest.rank_goal_entries`)."""
-        from .nearest import rank_goal_entries  # numba, loaded on first use (as the kernel is)
-
         layout = self.goal_layout(problem.goals)
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
         if k <= 0:
@@ -189,15 +190,8 @@ class SeedTable:
         self._goal_parts(goals)
         if len(goals) > 1:
             load_goal_helpers()
-        if "sets" not in _RANKING_LOADED and any(g.alternatives is not None for g in goals):
-            from ..lm.compiling import load
-            from .nearest import table_distances_many
-
-            one = np.zeros((1, 1), dtype=np.float32)
-            load("the seed table's rankings for goal sets", [(table_distances_many, (
-                one, np.zeros(1, dtype=np.float32), one.copy(), np.empty((1, 1), dtype=np.float32)))],
-                 RANKING_COMPILE_SECONDS)
-            _RANKING_LOADED.append("sets")
+        if any(g.alternatives is not None for g in goals):
+            load_goal_helpers(sets=True)
 
     def goal_starts(self, problem, k: int, allowed: np.ndarray | None = None):
         """Up to ``k`` starting configurations (n,) for a goal list, lazily: composed starts and table entries
@@ -247,10 +241,8 @@ class SeedTable:
         for g, (goal, (F, _, idx)) in enumerate(zip(problem.goals, parts, strict=True)):
             if goal.has_orientation and goal.has_position and idx.size == 0 and goal.kind < KIND_BEYOND_FRAME:
                 s = np.sqrt(goal.weight)  # the features hold sqrt(weight) x the frame's pose relative to the root
-                p_f, R_f = F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight)
-                R = Rt[g] @ R_f.T
-                base = np.concatenate([pt[g] - R @ p_f, rpy(R)[0, ::-1]])  # x, y, z, yaw, pitch, roll
-                return np.minimum(np.maximum(base, problem.lower[:6]), problem.upper[:6])
+                return base_onto(pt[g], Rt[g], F[0, :3] / s, F[0, 3:].reshape(3, 3) / (s * self.weight),
+                                 problem.lower, problem.upper)
         return None
 
     def _goal_parts(self, goals) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -268,9 +260,9 @@ class SeedTable:
             names = list(robot.joint_names)
             first = 6 if robot.floating_base else 0
             hit = []
+            spec = self.goal_spec(goals)
             for g, goal in enumerate(goals):
-                spec = self.goal_spec(goals)[g:g + 1]
-                F = self.goal_features(spec, P[:, g:g + 1], R[:, g:g + 1])
+                F = self.goal_features(spec[g:g + 1], P[:, g:g + 1], R[:, g:g + 1])
                 seeded = goal.kind < KIND_BEYOND_FRAME or _anchor(goal, goals) is not None
                 idx = np.array([i for i in map(names.index, robot.moving_joints(goal.frame)) if i >= first
                                 and seeded], dtype=np.intp)  # the other goals beyond one frame compose nothing
@@ -282,8 +274,6 @@ class SeedTable:
                           allowed: np.ndarray | None) -> np.ndarray:
         """(G, <= k) indices of the entries nearest, goal by goal, targets pt (G, 3), Rt (G, 3, 3) relative to the root
         link, nearest first: one compiled call (:func:`~.nearest.nearest_per_goal`)."""
-        from .nearest import nearest_per_goal  # numba, loaded on first use (as the kernel is)
-
         k = min(k, self.Q.shape[0] if allowed is None else int(np.count_nonzero(allowed)))
         FT, sq, start, scale, positioned, oriented = self.goal_layout(goals, parts)[2:8]
         out = np.empty((len(parts), k), dtype=np.int64)
@@ -355,13 +345,6 @@ class SeedTable:
             hit = _kept(self._free, key, (weakref.ref(scene), ~scene.collides(self.Q, margin, proxy=True)))
         return hit[1]
 
-    def features32(self, ff: FrameFeatures) -> tuple[np.ndarray, np.ndarray]:
-        """``ff``'s FT and sq in single precision (cached), for a goal set's ranking."""
-        hit = self._frames32.get(id(ff.FT))
-        if hit is None or hit[0] is not ff.FT:
-            hit = _kept(self._frames32, id(ff.FT), (ff.FT, ff.FT.astype(np.float32), ff.sq.astype(np.float32)))
-        return hit[1], hit[2]
-
     def nearest(self, kind: int, P: np.ndarray, Rts: np.ndarray, k: int, allowed: np.ndarray | None = None,
                 eps: float = 0.0) -> np.ndarray:
         """Indices (N, k) of the k entries nearest each of N tip targets of one ``KIND_*`` (P (N, 3), Rts (N, 3, 3)),
@@ -384,26 +367,24 @@ class SeedTable:
         return index[np.asarray(idx, dtype=np.intp).reshape(N, k)]
 
 
-_GOAL_HELPERS_LOADED: list = []  # [True] once load_goal_helpers has run in this process
-
-
-def load_goal_helpers() -> None:
-    """Load (once per process; after an install: compile) the compiled helpers a goal list's starts call, before a
-    solve's clock."""
-    if _GOAL_HELPERS_LOADED:
+def load_goal_helpers(sets: bool = False) -> None:
+    """Load (once per process; after an install: compile) the compiled rankings a goal list's starts call (``sets``:
+    a goal set's), before a solve's clock."""
+    what = "sets" if sets else "lists"
+    if what in _LOADED:
         return
-    from ..lm.compiling import load
-    from .nearest import nearest_per_goal, rank_goal_entries, seen_from
-
     FT, sq = np.zeros((3, 2), dtype=np.float32), np.zeros((1, 2), dtype=np.float32)
     scale, yes, no = np.ones(1), np.ones(1, dtype=bool), np.zeros(1, dtype=bool)
     pt, Rt = np.zeros((1, 3)), np.tile(np.eye(3), (1, 1, 1))
-    load("the seed table's rankings for goal lists", [
-        (rank_goal_entries, (FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))),
-        (nearest_per_goal, (FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
-                            np.empty((1, 1), dtype=np.int64))),
-        (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))], RANKING_COMPILE_SECONDS)
-    _GOAL_HELPERS_LOADED.append(True)
+    if sets:
+        calls = [(table_distances_many, (FT, sq[0], FT.T.copy(), np.empty((2, 2), dtype=np.float32)))]
+    else:
+        calls = [(rank_goal_entries, (FT, sq[0], scale, yes, no, 1.0, pt, Rt, _EVERY, 1, np.empty(1, dtype=np.int64))),
+                 (nearest_per_goal, (FT, sq, np.array([0, 3], dtype=np.int64), scale, yes, no, 1.0, pt, Rt, _EVERY, 1,
+                                     np.empty((1, 1), dtype=np.int64))),
+                 (seen_from, (np.zeros(6), pt, Rt, np.empty((1, 3)), np.empty((1, 3, 3))))]
+    compiling.load(f"the seed table's rankings for goal {what}", calls, RANKING_COMPILE_SECONDS)
+    _LOADED.append(what)
 
 
 def _kept(cache: dict, key, value, most: int = 8):
@@ -415,8 +396,7 @@ def _kept(cache: dict, key, value, most: int = 8):
 
 
 def _less_norm(F: np.ndarray, sq: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """``sq - 2 F f`` (N,): the squared distances of rows F (N, d), squared norms sq (N,), to f (d,) less ``|f|^2``;
-    in place (negation is exact: the same numbers as the formula, two fewer (N,) arrays)."""
+    """``sq - 2 F f`` (N,): the squared distances of rows F (N, d), squared norms sq (N,), to f (d,) less ``|f|^2``."""
     d = F @ f
     d *= -2.0
     d += sq
@@ -432,10 +412,17 @@ def _typical_gap(F: np.ndarray, sq: np.ndarray) -> float:
     return float(np.median(D.min(axis=1)))
 
 
+def base_onto(p_t: np.ndarray, R_t: np.ndarray, p_f: np.ndarray, R_f: np.ndarray, lower: np.ndarray,
+              upper: np.ndarray) -> np.ndarray:
+    """The floating base's six entries (x, y, z m, yaw, pitch, roll rad; clipped into ``lower[:6]``, ``upper[:6]``)
+    that put a frame whose pose relative to the base is (p_f (3,) m, R_f (3, 3)) on the target (p_t (3,) m, R_t)."""
+    R = R_t @ R_f.T
+    base = np.concatenate([p_t - R @ p_f, rpy(R)[0, ::-1]])
+    return np.minimum(np.maximum(base, lower[:6]), upper[:6])
+
+
 def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Targets pt (G, 3), Rt (G, 3, 3) seen from a floating base's pose (:func:`~.nearest.seen_from`)."""
-    from .nearest import seen_from  # numba, loaded on first use (as the kernel is)
-
     P_out, R_out = np.empty((pt.shape[0], 3)), np.empty((pt.shape[0], 3, 3))
     seen_from(np.ascontiguousarray(base, dtype=float), np.ascontiguousarray(pt, dtype=float),
               np.ascontiguousarray(Rt, dtype=float), P_out, R_out)
@@ -443,7 +430,7 @@ def _seen_from(base: np.ndarray, pt: np.ndarray, Rt: np.ndarray) -> tuple[np.nda
 
 
 _EVERY = np.zeros(0, dtype=bool)  # nearest_per_goal's mask for every entry
-_RANKING_LOADED: list = []  # the compiled rankings prepare_goals has loaded in this process ("sets")
+_LOADED: list = []  # the compiled rankings loaded in this process: "lists" (load_goal_helpers), "sets" (prepare_goals)
 #: About how long (s, one core) compiling the goal lists' rankings (nearest.py) takes from an empty cache.
 RANKING_COMPILE_SECONDS = 1.0
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -458,30 +445,41 @@ def default_table_size(n: int) -> int:
 def seed_table(robot, lower: np.ndarray, upper: np.ndarray, size: int) -> SeedTable:
     """The cached :class:`SeedTable` of ``robot`` over [lower, upper] (built on first use; the last few boxes kept
     per robot)."""
-    per_robot = _TABLES.setdefault(robot, {})
-    key = (lower.tobytes(), upper.tobytes(), int(size))
-    table = per_robot.get(key)
-    if table is None:
-        table = SeedTable(robot, lower, upper, size)
-        if len(per_robot) >= _TABLES_PER_ROBOT:
+    return kept_per_robot(_TABLES, robot, (lower.tobytes(), upper.tobytes(), int(size)),
+                          lambda: SeedTable(robot, lower, upper, size), _TABLES_PER_ROBOT)
+
+
+def kept_per_robot(store: weakref.WeakKeyDictionary, robot, key, make, most: int):
+    """``store``'s value for ``robot`` and ``key``, made by ``make()`` on first use (None: none is made, None
+    returned) and kept with the robot's last ``most`` others."""
+    per_robot = store.setdefault(robot, {})
+    value = per_robot.get(key)
+    if value is None and make is not None:
+        value = make()
+        if len(per_robot) >= most:
             per_robot.pop(next(iter(per_robot)))
-        per_robot[key] = table
-    return table
+        per_robot[key] = value
+    return value
 
 
 def nearest_first(d: np.ndarray, k: int):
-    """Indices of the (up to) ``k`` smallest of ``d`` (N,), smallest first, lazily: the first (the argmin) costs one
-    pass, the others are ranked only if asked for."""
-    k = min(k, d.shape[0])
-    if k <= 0:
+    """:func:`nearest_order` lazily: the first (the argmin) costs one pass, the others are ranked only if asked for."""
+    if min(k, d.shape[0]) <= 0:
         return
+    yield int(d.argmin())
+    if k > 1 and d.shape[0] > 1:
+        yield from nearest_order(d, k)[1:].tolist()
+
+
+def nearest_order(d: np.ndarray, k: int) -> np.ndarray:
+    """Indices of the (up to) ``k`` smallest of ``d`` (N,), smallest first: the argmin, then the others by value."""
+    k = min(k, d.shape[0])
+    if k <= 1:
+        return np.array([int(d.argmin())] if k == 1 else [], dtype=np.intp)
     first = int(d.argmin())
-    yield first
-    if k > 1:
-        part = np.argpartition(d, k - 1)[:k]
-        for i in part[d[part].argsort()]:
-            if i != first:
-                yield int(i)
+    part = np.argpartition(d, k - 1)[:k]
+    ranked = part[d[part].argsort()]
+    return np.concatenate(([first], ranked[ranked != first]))
 
 
 def one_frame(problem) -> bool:

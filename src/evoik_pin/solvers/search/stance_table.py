@@ -1,10 +1,8 @@
 """Standing starts for a goal list that holds a stance (issue 32): a :class:`~evoik_pin.goals.CenterOfMass` support
 goal whose every support frame is fixed by a :class:`~evoik_pin.goals.Pose` goal (soles on the ground), on a floating
-base. The seed table's entries have random bases and legs: from them LM must stand the whole body up and place the
-hands at once, which on G1 took up to 40 LM runs. A :class:`StanceTable` holds configurations that already meet the
-stance goals (made once per stance by LM on those goals alone, before any clock), ranked by the other goals'
-nearness: LM from the nearest has little more than the hands to move (on G1's 300 benchmark problems, p95 3 and at
-most 14 LM runs instead of 10 and 39; scripts/bench_balance_humanoids.py)."""
+base. A :class:`StanceTable` holds configurations that already meet the stance goals (made once per stance by LM on
+those goals alone, before any clock), ranked by the other goals' nearness: LM from the nearest has little more than
+the hands to move, where from the seed table's random bases and legs it must stand the whole body up too."""
 
 from __future__ import annotations
 
@@ -16,7 +14,7 @@ import numpy as np
 from ...goals.center_of_mass import KIND_COM_SUPPORT
 from ...goals.pose import KIND_POSE
 from ...goals.registry import KIND_BEYOND_FRAME
-from ...lie import rpy
+from .seed_table import base_onto, kept_per_robot, seed_targets
 
 __all__ = ["STANCE_TABLE_SIZE", "StanceTable", "stance_indices", "stance_key", "stance_starts", "stance_table"]
 
@@ -31,8 +29,7 @@ TABLE_SEED = 0x57A9CE
 #: Stance tables kept per robot (the last ones made).
 TABLES_PER_ROBOT = 4
 #: The rotation's features are this share of the ranked frames' largest distance (m) from the first support frame
-#: times the rotation matrix's entries (on G1, 0.1 started 84 % of the problems at an entry one LM run solves, the
-#: seed table's quarter reach 74 %; 0.05 83 %).
+#: times the rotation matrix's entries.
 ROTATION_SHARE = 0.1
 
 
@@ -118,14 +115,12 @@ class StanceTable:
 
 
 def _upright_base(robot, pose_goal, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """The floating base's six entries (x, y, z, yaw, pitch, roll; clipped into the box) that put ``pose_goal``'s frame
-    on its target when every other joint is 0 clipped into the box."""
+    """The floating base's six entries (:func:`~.seed_table.base_onto`) that put ``pose_goal``'s frame on its target
+    when every other joint is 0 clipped into the box."""
     q = np.minimum(np.maximum(0.0, lower), upper)
     q[:6] = 0.0
     T = robot.fk(q, pose_goal.frame)  # relative to the base: the base is at the origin
-    R = pose_goal.target.rotation @ T.rotation.T
-    base = np.concatenate([pose_goal.target.translation - R @ T.translation, rpy(R)[0, ::-1]])
-    return np.minimum(np.maximum(base, lower[:6]), upper[:6])
+    return base_onto(pose_goal.target.translation, pose_goal.target.rotation, T.translation, T.rotation, lower, upper)
 
 
 def _ground_frame(T) -> tuple[float, float, float]:
@@ -171,18 +166,10 @@ def stance_table(problem, make: bool = True) -> tuple[StanceTable, tuple[int, ..
     stance = stance_indices(problem.goals)
     if stance is None:
         return None
-    key = stance_key(problem, stance)
     with _MAKING:  # solve_many's threads: one table made per stance, the cache changed by one at a time
-        per_robot = _TABLES.setdefault(robot, {})
-        table = per_robot.get(key)
-        if table is None:
-            if not make:
-                return None
-            table = StanceTable(problem, stance)
-            if len(per_robot) >= TABLES_PER_ROBOT:
-                per_robot.pop(next(iter(per_robot)))
-            per_robot[key] = table
-    return table, stance
+        table = kept_per_robot(_TABLES, robot, stance_key(problem, stance),
+                               (lambda: StanceTable(problem, stance)) if make else None, TABLES_PER_ROBOT)
+    return None if table is None else (table, stance)
 
 
 _TABLES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -194,8 +181,6 @@ def stance_starts(problem, found: tuple[StanceTable, tuple[int, ...]], starts, k
     ``k`` entries nearest the other goals, then the seed table's ``starts`` (an iterable of (n,) configurations).
     A table made for the same stance elsewhere on the ground: the goals' targets are seen from its ground frame, its
     entries' bases moved onto this stance's (clipped into the box)."""
-    from .seed_table import seed_targets
-
     table, stance = found
     goals = problem.goals
     rest = [g for g in range(len(goals)) if g not in stance]

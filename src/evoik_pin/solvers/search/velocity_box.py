@@ -7,14 +7,16 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from numba import njit
 
+from ...lie.compiled import is_rotation_entries
 from ...result import Result
 from ..lm.engine import LevenbergMarquardt
-from ..lm.layout import wrapping_joints
+from ..lm.layout import B_CHI, B_CLO, B_HI, B_LO, wrapping_joints
 from ..lm.run_outcome import LMOutcome
 from .memetic_runs import kernel_goal_errors
 
-__all__ = ["EXTRA_STARTS", "VelocityBoxStage"]
+__all__ = ["EXTRA_STARTS", "NOT_MET", "VelocityBoxStage", "write_step"]
 
 #: Starts drawn inside the box after the run from q_prev did not meet the goals.
 EXTRA_STARTS = 4
@@ -26,6 +28,45 @@ BOX_DAMPING = 1e-6
 COLLISION_BISECTIONS = 8
 #: Goal stacks whose engines a stage keeps (a tracker alternating a few goal structures).
 _KEPT = 8
+#: The message's end when the goals are unmet.
+NOT_MET = "; the goals are not met within the velocity box (the answer closest to them inside it)"
+
+
+@njit(cache=True, nogil=True)
+def write_step(box, q_prev, step, lower, upper, wrap, poses, posed, pt, Rt, check_rt):  # pragma: no cover - compiled
+    """Write one step's box and targets into the LM kernel's arrays. The velocity box of ``q_prev`` (n,) with
+    half-widths ``step`` (n,) (rad or m) into ``box`` (5, n) rows B_LO, B_CLO and B_HI, B_CHI: clipped into ``lower``,
+    ``upper`` (n,), joints where ``wrap`` (n,) bool is set unclipped (:meth:`VelocityBoxStage.box`). The targets of the
+    goals where ``posed`` (G,) bool is set from their homogeneous poses ``poses`` (G, 4, 4) (m) into ``pt`` (G, 3) and
+    ``Rt`` (G, 3, 3) (the others' rows untouched).
+
+    Returns:
+        Whether ``Rt[0]`` is a rotation matrix (:func:`~evoik_pin.lie.so3.is_rotation_entries`) when ``check_rt`` (a
+        tip pose :func:`~.box_step.step_key` left unchecked); True otherwise."""
+    for k in range(q_prev.shape[0]):
+        lo = q_prev[k] - step[k]
+        hi = q_prev[k] + step[k]
+        if not wrap[k]:
+            lo, hi = min(max(lo, lower[k]), hi), max(min(hi, upper[k]), lo)
+        box[B_LO, k] = lo
+        box[B_CLO, k] = lo
+        box[B_HI, k] = hi
+        box[B_CHI, k] = hi
+    for i in range(posed.shape[0]):
+        if posed[i]:
+            for r in range(3):
+                pt[i, r] = poses[i, r, 3]
+                for c in range(3):
+                    Rt[i, r, c] = poses[i, r, c]
+    if not check_rt:
+        return True
+    T = Rt[0]
+    return is_rotation_entries(T[0, 0], T[0, 1], T[0, 2], T[1, 0], T[1, 1], T[1, 2], T[2, 0], T[2, 1], T[2, 2])
+
+
+# write_step's targets when it writes a box only
+_NO_POSES, _NO_POSED = np.zeros((0, 4, 4)), np.zeros(0, dtype=bool)
+_NO_PT, _NO_RT = np.zeros((0, 3)), np.zeros((0, 3, 3))
 
 
 class VelocityBoxStage:
@@ -40,7 +81,6 @@ class VelocityBoxStage:
         self._engines: dict = {}  # id(goal stack) -> (stack, engine)
         self._wrap_for = None  # (lower, upper) arrays the wrap mask is of
         self._wrap = np.zeros(robot.n, dtype=bool)
-        self._any_wrap = False
 
     def box(self, q_prev: np.ndarray, step: np.ndarray, lower: np.ndarray, upper: np.ndarray
             ) -> tuple[np.ndarray, np.ndarray]:
@@ -50,15 +90,10 @@ class VelocityBoxStage:
         limit holds first, the joint returns towards its range at full speed."""
         if self._wrap_for is None or self._wrap_for[0] is not lower or self._wrap_for[1] is not upper:
             self._wrap = wrapping_joints(self.robot, lower, upper)
-            self._any_wrap = bool(self._wrap.any())
             self._wrap_for = (lower, upper)
-        lo = q_prev - step
-        hi = q_prev + step
-        lo_b = np.minimum(np.maximum(lo, lower), hi)
-        hi_b = np.maximum(np.minimum(hi, upper), lo)
-        if not self._any_wrap:
-            return lo_b, hi_b
-        return np.where(self._wrap, lo, lo_b), np.where(self._wrap, hi, hi_b)
+        box = np.empty((5, q_prev.shape[0]))
+        write_step(box, q_prev, step, lower, upper, self._wrap, _NO_POSES, _NO_POSED, _NO_PT, _NO_RT, False)
+        return box[B_LO], box[B_HI]
 
     def _engine(self, problem, free: bool = False) -> LevenbergMarquardt:
         """The engine of ``problem``'s goal stack, its targets written in: the boxed one (``confine`` per call), or
@@ -137,7 +172,7 @@ class VelocityBoxStage:
         met = problem.goals_met(goal_errors)
         success = bool(met and collision_free is not False)
         if not met:
-            message += "; the goals are not met within the velocity box (the answer closest to them inside it)"
+            message += NOT_MET
         return Result(q=q, position_error=float(pos), orientation_error=None if rot is None else float(rot),
                       cost=float(cost), success=success, generations=0, evaluations=int(evaluations),
                       time_s=time.perf_counter() - t0, message=message, method="velocity-box",
