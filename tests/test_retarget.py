@@ -212,6 +212,13 @@ def test_cli_writes_the_clip(tmp_path, capsys):
     assert "accepted file types" in capsys.readouterr().err
 
 
+def test_cli_names_the_bundled_clips_for_a_name_that_is_neither(tmp_path, capsys):
+    assert main(["retarget", "wlak", "--robot", "g1", "--out", str(tmp_path / "walk.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "'wlak' is neither a BVH file nor a bundled clip" in err and "walk" in err and "jump" in err
+    assert not (tmp_path / "walk.npz").exists()
+
+
 def test_clip_is_exported_from_the_package():
     assert ek.retarget is ek.motion.retarget and Clip.__module__ == "evoik_pin.motion.clip"
 

@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from .errors import ConfigurationError, EvoikError, GoalsFileError, OptionError, RobotLoadWarning
+from .errors import BvhError, ConfigurationError, EvoikError, GoalsFileError, OptionError, RobotLoadWarning
 from .io.datafile import naming
 from .robot import BUNDLED_ROBOTS, EXAMPLE_ARMS, WHOLE_ROBOTS, load_robot
 
@@ -568,6 +568,8 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in SAVE_FORMATS:  # before the work: a wrong suffix fails at once
         raise OptionError(f"--out {args.out!r}: accepted file types {', '.join(SAVE_FORMATS)}")
     source = Path(args.file)
+    if not source.exists() and args.file not in list_clips():  # a mistyped clip name as much as a missing file
+        raise BvhError(f"{args.file!r} is neither a BVH file nor a bundled clip ({', '.join(list_clips())})")
     motion = load_clip(args.file) if args.file in list_clips() and not source.is_file() else load_bvh(source)
     robot = load_robot(args.robot, floating_base=True)
     scale = "auto" if args.scale is None else args.scale
