@@ -57,3 +57,20 @@ def quick_runs(tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduction")
     assert main(["reproduce", "all", "--quick", "--seed", "3", "--out", str(out), "--no-progress", "--jobs", "2"]) == 0
     return out
+
+
+#: Test files that share a session-scoped fixture, run on one pytest-xdist worker so that it is made once.
+SHARED_SESSION_FIXTURES = {"test_reproduce.py": "quick_runs", "test_reproduce_000_001_003.py": "quick_runs"}
+
+
+def pytest_collection_modifyitems(config, items):
+    """For pytest-xdist's ``--dist loadgroup`` (pyproject.toml's addopts): every test file's tests on one worker, so
+    that a module-scoped fixture (a robot, a solver, a seed table, a clip) is made once as without xdist, and the
+    files sharing a session fixture (SHARED_SESSION_FIXTURES: ``quick_runs``) on one worker together. A test's own
+    ``xdist_group`` marker, if any, wins."""
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            name = item.path.name
+            item.add_marker(pytest.mark.xdist_group(SHARED_SESSION_FIXTURES.get(name, name)))
