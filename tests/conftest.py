@@ -59,18 +59,24 @@ def quick_runs(tmp_path_factory):
     return out
 
 
-#: Test files that share a session-scoped fixture, run on one pytest-xdist worker so that it is made once.
-SHARED_SESSION_FIXTURES = {"test_reproduce.py": "quick_runs", "test_reproduce_000_001_003.py": "quick_runs"}
+#: Test files that share a session-scoped fixture: one pytest-xdist work unit, so that the fixture is made once.
+SHARED_SESSION_FIXTURES = {"tests/test_reproduce.py": "quick_runs", "tests/test_reproduce_000_001_003.py": "quick_runs"}
 
 
-def pytest_collection_modifyitems(config, items):
-    """For pytest-xdist's ``--dist loadgroup`` (pyproject.toml's addopts): every test file's tests on one worker, so
-    that a module-scoped fixture (a robot, a solver, a seed table, a clip) is made once as without xdist, and the
-    files sharing a session fixture (SHARED_SESSION_FIXTURES: ``quick_runs``) on one worker together. A test's own
-    ``xdist_group`` marker, if any, wins."""
-    if not config.pluginmanager.hasplugin("xdist"):
-        return
-    for item in items:
-        if item.get_closest_marker("xdist_group") is None:
-            name = item.path.name
-            item.add_marker(pytest.mark.xdist_group(SHARED_SESSION_FIXTURES.get(name, name)))
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """pytest-xdist's ``--dist loadfile`` (pyproject.toml's addopts: ``-n 2 --dist loadfile``) with the files of
+    SHARED_SESSION_FIXTURES in one work unit: every test file runs on one worker, so that its module-scoped fixtures
+    (robots, solvers, seed tables, clips) are made once as without xdist, and ``quick_runs`` is made once for both
+    reproduction files. (``--dist loadgroup`` would need ``xdist_group`` markers, which pytest-xdist 3.8 cannot apply
+    under pytest 9: its renaming of the test ids has no effect there.)"""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class SharedFixtureFileScheduling(LoadFileScheduling):
+        def _split_scope(self, nodeid):
+            path = super()._split_scope(nodeid)
+            return SHARED_SESSION_FIXTURES.get(path, path)
+
+    return SharedFixtureFileScheduling(config, log)
