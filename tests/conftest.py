@@ -1,3 +1,4 @@
+import subprocess
 import sys
 import time
 import types
@@ -57,3 +58,58 @@ def quick_runs(tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduction")
     assert main(["reproduce", "all", "--quick", "--seed", "3", "--out", str(out), "--no-progress", "--jobs", "2"]) == 0
     return out
+
+
+#: Test files that share a session-scoped fixture: one pytest-xdist work unit, so that the fixture is made once.
+SHARED_SESSION_FIXTURES = {"tests/test_reproduce.py": "quick_runs", "tests/test_reproduce_000_001_003.py": "quick_runs"}
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """pytest-xdist's ``--dist loadfile`` (pyproject.toml's addopts: ``-n 2 --dist loadfile``) with the files of
+    SHARED_SESSION_FIXTURES in one work unit: every test file runs on one worker, so that its module-scoped fixtures
+    (robots, solvers, seed tables, clips) are made once as without xdist, and ``quick_runs`` is made once for both
+    reproduction files. (``--dist loadgroup`` would need ``xdist_group`` markers, which pytest-xdist 3.8 cannot apply
+    under pytest 9: its renaming of the test ids has no effect there.)"""
+    if config.getvalue("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    class SharedFixtureFileScheduling(LoadFileScheduling):
+        def _split_scope(self, nodeid):
+            path = super()._split_scope(nodeid)
+            return SHARED_SESSION_FIXTURES.get(path, path)
+
+    return SharedFixtureFileScheduling(config, log)
+
+
+#: What two fresh processes compile (or load from numba's cache) side by side before pytest-xdist's workers start
+#: (:func:`pytest_sessionstart`): the null-space descent of prefer= and preferences (about 50 s of CPU on a cold
+#: cache), and the LM kernel's entries with memetic's guaranteed runs (about 20 s; scripts/compile_time.py). On a cold
+#: cache both workers would otherwise compile the same kernels at the same time; on a warm one this loads them (~2 s).
+WARM_UP = (
+    "from evoik_pin.solvers.lm.nullspace import nullspace_kernel\n"
+    "nullspace_kernel()\n",
+    "import evoik_pin as ev\n"
+    "from evoik_pin.solvers.lm.engine import compiled_kernel\n"
+    "compiled_kernel(False)\n"
+    "compiled_kernel(True)\n"
+    "robot = ev.load_robot('panda')\n"
+    "ev.solve(robot, robot.fk((robot.lower + robot.upper) / 2), seed=0)\n",
+)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session):
+    """In pytest-xdist's controller of two or more workers, before it starts them: numba's kernels compiled once
+    into its disk cache (WARM_UP), from which every worker then loads them. A warm-up that fails is reported and the
+    run goes on (the workers compile what they need; the tests say what is broken). Its compile notices are shown."""
+    config = session.config
+    workers = getattr(config.option, "numprocesses", None)
+    if hasattr(config, "workerinput") or not isinstance(workers, int) or workers < 2 or config.option.collectonly:
+        return
+    runs = [subprocess.Popen([sys.executable, "-c", code], cwd=config.rootpath) for code in WARM_UP]  # notices shown
+    for run in runs:
+        if run.wait() != 0:
+            config.pluginmanager.get_plugin("terminalreporter").write_line(
+                f"numba warm-up failed (exit {run.returncode}, above); the workers compile what they need")
