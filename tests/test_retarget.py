@@ -302,6 +302,16 @@ def test_broad_phase_colliding_pairs_are_the_scene_ones(g1_checks, seed):
     assert check.colliding_pairs(q) == scene.colliding_pairs(q)
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), most=st.integers(1, 6))
+def test_the_first_colliding_pairs_are_the_scene_ones(g1_checks, seed, most):
+    """``most``: the narrow phase stops at the most-th pair found, the same pairs as the whole list's first ones."""
+    robot, scene, check = g1_checks
+    q = np.clip(np.random.default_rng(seed).normal(0.0, 1.0, robot.n), robot.lower, robot.upper)
+    first = scene.colliding_pairs(q)[:most]
+    assert check.colliding_pairs(q, most=most) == first == scene.colliding_pairs(q, most=most)
+
+
 def test_broad_phase_finds_a_contact_the_hulls_alone_miss(g1_checks):
     """At this configuration the left knee's mesh is 70 um into the left shoulder roll link's while their Qhull hulls
     are apart: the hull filter's margin keeps the pair, and the verdict is the scene's."""

@@ -118,6 +118,9 @@ def test_colliding_pairs_name_links_and_obstacles_and_distance_is_signed(panda, 
         assert (d <= 0.0) == bool(pairs) or abs(d) < 1e-9
         seen_obstacle |= any(b in shelf_scene.obstacles for _, b in pairs)
     assert seen_obstacle
+    for bad in (0, -1, 1.5, "2"):
+        with pytest.raises(SceneError, match="most must be None or an int >= 1"):
+            shelf_scene.colliding_pairs(Q[0], most=bad)
     free = Q[~shelf_scene.collides(Q)][0]
     d = shelf_scene.distance(free)
     assert d > 0

@@ -124,7 +124,7 @@ def step_back_free(robot, scene, q_prev: np.ndarray, q: np.ndarray, keep: np.nda
     if best_q is not None and best_t >= 0:
         return best_q
     either = np.zeros(robot.n, dtype=bool)
-    for a, b in scene.colliding_pairs(q)[:MAX_PAIRS]:
+    for a, b in scene.colliding_pairs(q, most=MAX_PAIRS):
         either |= _joints_moving(robot, a, b) | _joints_moving(robot, b, a)
     either &= movable
     if either.any():

@@ -286,9 +286,13 @@ class SelfCollisionCheck:
             self._verdicts.pop(next(iter(self._verdicts)))  # the oldest (dicts keep insertion order)
         self._verdicts[key] = hit
 
-    def colliding_pairs(self, q) -> list[tuple[str, str]]:
-        """``scene.colliding_pairs(q)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the scene's
-        pair order."""
-        names = self._names
-        pairs = [(names[self._a[k]], names[self._b[k]]) for k in self.candidate_pairs(q).tolist() if self._touching(k)]
-        return list(dict.fromkeys(pairs))  # once per pair of names (a link may have several shapes)
+    def colliding_pairs(self, q, most: int | None = None) -> list[tuple[str, str]]:
+        """``scene.colliding_pairs(q, most=most)``: the (link, link) pairs in contact at ``q`` (n,), each once, in the
+        scene's pair order; with ``most``, the first ``most`` of them, the narrow phase stopping there."""
+        names, pairs = self._names, {}  # once per pair of names (a link may have several shapes), in order
+        for k in self.candidate_pairs(q).tolist():
+            if self._touching(k):
+                pairs[(names[self._a[k]], names[self._b[k]])] = None
+                if most is not None and len(pairs) >= most:
+                    break
+        return list(pairs)

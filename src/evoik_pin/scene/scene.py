@@ -203,13 +203,16 @@ class Scene:
         """True when a checked pair of the collision meshes is in contact at ``q`` (or closer than ``margin`` m)."""
         return self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=True)
 
-    def colliding_pairs(self, q, margin: float = 0.0) -> list[tuple[str, str]]:
+    def colliding_pairs(self, q, margin: float = 0.0, most: int | None = None) -> list[tuple[str, str]]:
         """The (name, name) pairs in contact at ``q`` (closer than ``margin`` m), each once: robot links by link
-        name, obstacles by their name."""
+        name, obstacles by their name; with ``most`` (an int >= 1), the first ``most`` of them. SceneError for
+        another ``most``."""
+        if most is not None and not (isinstance(most, int) and most >= 1):
+            raise SceneError(f"most must be None or an int >= 1 (pairs listed at most), got {most!r}")
         self._check(self._q(q), _length(margin, "margin", zero=True), hulls=False, stop_at_first=False)
         pairs = [(self._object_name(a), self._object_name(b))
                  for (a, b), res in zip(self._pairs, self._gdata.collisionResults, strict=True) if res.isCollision()]
-        return list(dict.fromkeys(pairs))  # a link may have several shapes
+        return list(dict.fromkeys(pairs))[:most]  # a link may have several shapes
 
     def collides(self, Q, margin: float = 0.0, proxy: bool = False) -> np.ndarray:
         """(N,) bool: :meth:`in_collision` of each row of ``Q`` (N, n); ``proxy=True`` on the convex hulls
